@@ -1,0 +1,102 @@
+"""The ``lyapcheck`` command line: parse, call the library, map errors to exit codes.
+
+Exit codes (DESIGN.md): 0 success, 1 ran correctly but the answer is negative, 2 bad input or
+usage (one line on stderr, no traceback). Heavy libraries (sympy, cvxpy, numpy) are imported
+inside the commands so that ``lyapcheck --help`` is instant.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import sys
+from typing import Any, Callable, TypeVar
+
+import click
+
+from lyapcheck.errors import InputFileError, InvalidParameter, LyapcheckError
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+EXIT_OK, EXIT_NEGATIVE, EXIT_USAGE = 0, 1, 2
+
+
+def _fail(message: str, code: int) -> None:
+    click.echo(f"lyapcheck: error: {message}", err=True)
+    sys.exit(code)
+
+
+def one_line_errors(func: F) -> F:
+    """Map library errors to a one-line message and an exit code (never a traceback)."""
+
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return func(*args, **kwargs)
+        except (InvalidParameter, InputFileError) as exc:
+            _fail(str(exc), EXIT_USAGE)
+        except LyapcheckError as exc:
+            _fail(str(exc), EXIT_NEGATIVE)
+        except KeyboardInterrupt:
+            _fail("interrupted", 130)
+
+    return wrapper  # type: ignore[return-value]
+
+
+class _Group(click.Group):
+    """Click group whose usage errors also end in exit code 2 with one line."""
+
+    def main(self, *args: Any, **kwargs: Any) -> Any:  # pragma: no cover - exercised via CLI tests
+        kwargs.setdefault("standalone_mode", False)
+        try:
+            return super().main(*args, **kwargs)
+        except click.exceptions.NoArgsIsHelpError as exc:
+            click.echo(exc.ctx.get_help() if exc.ctx else str(exc))
+            sys.exit(EXIT_OK)
+        except click.UsageError as exc:
+            _fail(exc.format_message().splitlines()[0], EXIT_USAGE)
+        except click.exceptions.Exit as exc:
+            sys.exit(exc.exit_code)
+        except click.Abort:
+            _fail("aborted", 130)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="lyapcheck")
+def cli() -> None:
+    """Machine-checked stability answers for the ILOS/ODS microswimmer paper."""
+
+
+def emit_json(payload: Any) -> None:
+    click.echo(json.dumps(payload, indent=2, sort_keys=False))
+
+
+@cli.command()
+@click.option("--json", "as_json", is_flag=True, help="Print the claims ledger as JSON.")
+@one_line_errors
+def derive(as_json: bool) -> None:
+    """Derive the paper's equations and compare them with the printed ones."""
+    from lyapcheck.ledger_view import ledger_entries, print_ledger
+
+    entries = ledger_entries()
+    if as_json:
+        emit_json({"ledger": [e.to_json() for e in entries]})
+    else:
+        print_ledger(entries)
+
+
+def _register_later_commands() -> None:
+    """Commands implemented in their own modules, imported only when invoked."""
+    from lyapcheck import cli_certify, cli_simulate
+
+    cli_certify.register(cli)
+    cli_simulate.register(cli)
+
+
+def main() -> None:
+    _register_later_commands()
+    cli()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
