@@ -1,9 +1,118 @@
-"""``lyapcheck certify`` and ``lyapcheck verify`` (filled in by the certificate work)."""
+"""``lyapcheck certify`` and ``lyapcheck verify`` (contract in DESIGN.md)."""
 
 from __future__ import annotations
 
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
 import click
+
+from lyapcheck.cli import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
+
+#: command-line flag -> parameter key (lyapcheck.params.FIELDS)
+FLAG_KEYS = {
+    "alpha_d": "gains.alpha_d", "sigma0": "gains.sigma0", "kd": "gains.k_d", "delta_los": "gains.delta_los",
+    "e11": "swimmer.e11", "omega_so": "actuation.omega_so", "d_max": "disturbance.d_max",
+}
+
+STATUS_STYLE = {"certified": "bold green", "refuted": "bold red", "not_certified": "yellow",
+                "inconclusive": "magenta", "holds": "green", "fails": "red"}
+
+
+def atomic_write(path: str | Path, text: str) -> None:
+    """Write via a temporary file and rename, so a failure leaves nothing half-written."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as handle:
+            handle.write(text)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _print_table(doc: dict[str, Any]) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console()
+    table = Table(title=f"lyapcheck certify - dynamics: {doc['dynamics']}", show_lines=True)
+    table.add_column("condition", style="cyan", no_wrap=True)
+    table.add_column("status", no_wrap=True)
+    table.add_column("what it means")
+    for name, cond in doc["conditions"].items():
+        style = STATUS_STYLE.get(cond["status"], "white")
+        table.add_row(name, f"[{style}]{cond['status']}[/]", cond["summary"])
+    console.print(table)
+    style = "bold green" if doc["verdict"] == "certified" else "bold yellow"
+    console.print(f"verdict: [{style}]{doc['verdict']}[/]  (certified = an exact check of a stability certificate passed)")
 
 
 def register(group: click.Group) -> None:
-    return None
+    @group.command()
+    @click.argument("gains", required=False, type=click.Path(dir_okay=False))
+    @click.option("--alpha-d", help="ILOS gain alpha_d (1/s).")
+    @click.option("--sigma0", help="Integral gain sigma0.")
+    @click.option("--kd", help="Damping gain k_d (1/s).")
+    @click.option("--delta-los", help='Look-ahead distance, e.g. "0.75 mm".')
+    @click.option("--e11", help='Propulsion constant, e.g. "9.3e-5 m".')
+    @click.option("--omega-so", help='Step-out frequency, e.g. "2.8 Hz".')
+    @click.option("--d-max", help='Disturbance bound, e.g. "0.088 mm/s".')
+    @click.option("--dynamics", type=click.Choice(["derived", "printed"]), default="derived", show_default=True,
+                  help="Error dynamics as derived by lyapcheck or as printed in the paper.")
+    @click.option("--json", "as_json", is_flag=True, help="Print the certificate document as JSON.")
+    @click.option("--out", type=click.Path(dir_okay=False), help="Write the certificate JSON here.")
+    @click.option("--report", type=click.Path(dir_okay=False), help="Write an HTML or PDF report (by extension).")
+    @one_line_errors
+    def certify(gains: str | None, dynamics: str, as_json: bool, out: str | None, report: str | None,
+                **flags: str | None) -> None:
+        """Certify a gain set: every condition class, each checked exactly."""
+        from lyapcheck.certificate import build_document
+        from lyapcheck.certify import run_conditions, verdict
+        from lyapcheck.errors import InvalidParameter
+        from lyapcheck.params import problem_from_sources
+
+        if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
+            raise InvalidParameter("report", "a file name ending in .html or .pdf", report)
+        overrides = {FLAG_KEYS[k]: v for k, v in flags.items() if v is not None}
+        problem = problem_from_sources(gains, overrides)
+        results = run_conditions(problem, dynamics)
+        doc = build_document(problem, dynamics, results, verdict(results))
+        if out:
+            atomic_write(out, json.dumps(doc, indent=2) + "\n")
+        if report:
+            from lyapcheck.errors import LyapcheckError
+
+            try:
+                from reports import render  # type: ignore[attr-defined]
+            except ImportError:
+                raise LyapcheckError("reports are not available in this version (issue 6)") from None
+            render.certificate_report(doc, report)  # pragma: no cover
+        if as_json:
+            emit_json(doc)
+        else:
+            _print_table(doc)
+        raise SystemExit(EXIT_OK if doc["verdict"] == "certified" else EXIT_NEGATIVE)
+
+    @group.command()
+    @click.argument("certificate", type=click.Path(dir_okay=False))
+    @click.option("--json", "as_json", is_flag=True, help="Print the check results as JSON.")
+    @one_line_errors
+    def verify(certificate: str, as_json: bool) -> None:
+        """Re-check a certificate file exactly (no solver involved)."""
+        from lyapcheck.certificate import read_document, verify_document
+
+        rows = verify_document(read_document(certificate))
+        ok = all(r[1] for r in rows)
+        if as_json:
+            emit_json({"valid": ok, "checks": [{"check": n, "ok": good, "message": m} for n, good, m in rows]})
+        else:
+            for name, good, message in rows:
+                click.echo(f"{'ok  ' if good else 'FAIL'} {name}: {message}")
+            click.echo("certificate verified" if ok else "certificate FAILS its exact re-check")
+        raise SystemExit(EXIT_OK if ok else EXIT_NEGATIVE)

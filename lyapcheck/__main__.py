@@ -1,0 +1,3 @@
+from lyapcheck.cli import main
+
+main()

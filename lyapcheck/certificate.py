@@ -1,0 +1,150 @@
+"""Certificate documents: write, read, and re-check exactly without a solver.
+
+Schema (version 1)::
+
+    {
+      "schema_version": 1,
+      "kind": "lyapcheck-certificate",
+      "inputs": {"given": {"gains.alpha_d": "600", ...}, "exact_si": {"alpha_d": "600", ...}},
+      "dynamics": "derived" | "printed",
+      "system": {"A": [[..]], "B": [[..]], "E": [..], "rho_sup": "..", "sigma0": "..", ...},
+      "conditions": {"prop41_ges": {"status": .., "certificate": {"P": [[..]]}, ...}, ...},
+      "verdict": "certified" | "not_certified",
+      "versions": {...}
+    }
+
+Rational numbers are strings ``"p/q"``. :func:`verify_document` re-derives the system from the
+inputs (through :mod:`symbolic.closed_loop`), compares it with the stored one, and re-runs
+every exact check (certificates and refutations); it never imports cvxpy.
+"""
+
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from lyapcheck.errors import CertificateError, InputFileError
+
+SCHEMA_VERSION = 1
+KIND = "lyapcheck-certificate"
+
+
+def package_versions() -> dict[str, str]:
+    out = {}
+    for name in ("lyapcheck", "sympy", "numpy", "cvxpy", "clarabel", "control"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:  # pragma: no cover
+            out[name] = "absent"
+    return out
+
+
+def system_to_json(system: Any) -> dict[str, Any]:
+    from lyapcheck import exact
+
+    return {
+        "A": exact.to_json(system.A), "B": exact.to_json(system.B), "E": [str(x) for x in system.E],
+        "rho_sup": str(system.rho_sup), "sigma0": str(system.sigma0), "delta": str(system.delta),
+        "speed": str(system.speed), "d_max": str(system.d_max),
+    }
+
+
+def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict: str) -> dict[str, Any]:
+    from lyapcheck.certify import build_system, exact_values
+
+    system = build_system(problem, dynamics)
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "kind": KIND,
+        "inputs": {"given": dict(problem.given),
+                   "exact_si": {k: str(v) for k, v in exact_values(problem).items()} | {"d_max": str(problem.d_max)}},
+        "dynamics": dynamics,
+        "system": system_to_json(system),
+        "conditions": {name: res.to_json() for name, res in results.items()},
+        "verdict": verdict,
+        "versions": package_versions(),
+    }
+
+
+def read_document(path: str | Path) -> dict[str, Any]:
+    p = Path(path)
+    try:
+        doc = json.loads(p.read_text())
+    except FileNotFoundError:
+        raise InputFileError(f"certificate file '{p}' does not exist") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputFileError(f"certificate file '{p}' is not valid JSON: {exc}") from None
+    if not isinstance(doc, dict) or doc.get("kind") != KIND:
+        raise InputFileError(f"'{p}' is not a lyapcheck certificate (missing kind '{KIND}')")
+    if doc.get("schema_version") != SCHEMA_VERSION:
+        raise InputFileError(f"'{p}' has schema_version {doc.get('schema_version')!r}; this lyapcheck reads {SCHEMA_VERSION}")
+    return doc
+
+
+def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
+    """Exact re-check of every claim in the document; returns (condition, ok, message) rows."""
+    from lyapcheck import exact
+    from lyapcheck.conditions import prop41, sector, ultimate
+    from lyapcheck.conditions.base import System
+    from lyapcheck.conditions.stabcond2 import run as stabcond2_run
+    from symbolic.closed_loop import evaluate
+
+    try:
+        values = {k: Fraction(v) for k, v in doc["inputs"]["exact_si"].items()}
+        d_max = values.pop("d_max")
+        system = System.from_numeric(evaluate(doc["dynamics"], values), d_max)
+        conditions = doc["conditions"]
+    except (KeyError, ValueError, ZeroDivisionError, TypeError) as exc:
+        raise CertificateError(f"certificate is malformed: {exc}") from None
+
+    rows: list[tuple[str, bool, str]] = []
+    rows.append(("system", system_to_json(system) == doc.get("system"),
+                 "stored system matrices match the derivation at the stored inputs"
+                 if system_to_json(system) == doc.get("system") else "stored system matrices differ from the derivation"))
+
+    def ok_row(name: str, ok: bool, good: str, bad: str) -> None:
+        rows.append((name, ok, good if ok else bad))
+
+    try:
+        for name in ("prop41_ges", "prop41_iss"):
+            c = conditions[name]
+            iss = name == "prop41_iss"
+            if c["status"] == "certified":
+                ok, why = prop41.exact_check(system, exact.from_json(c["certificate"]["P"]), iss)
+                ok_row(name, ok, why, f"{name}: {why}")
+            elif c["status"] == "refuted":
+                ok = prop41.check_refutation(system, c["refutation"])
+                ok_row(name, ok, "refutation re-derived exactly", f"{name}: the Gamma_22 refutation does not hold")
+        c = conditions["sector_ges"]
+        if c["status"] == "certified":
+            cert = c["certificate"]
+            verts = [system.vertex(Fraction(cert["rho_lo"])), system.vertex(system.rho_sup)]
+            ok, why = sector.exact_check(verts, exact.from_json(cert["P"]), Fraction(cert["decay_rate"]))
+            ok_row("sector_ges", ok, why, f"sector_ges: {why}")
+        elif c["status"] == "refuted":
+            fresh = sector.refutation([system.vertex(Fraction(0)), system.vertex(system.rho_sup)])
+            ok_row("sector_ges", fresh is not None and fresh["A0A1"] == c["refutation"]["A0A1"],
+                   "Shorten-Narendra refutation re-derived exactly", "sector_ges: the refutation does not hold")
+        c = conditions["ultimate_bound"]
+        if c["status"] == "certified":
+            ok, why = ultimate.verify(system, c["certificate"])
+            ok_row("ultimate_bound", ok, why, f"ultimate_bound: {why}")
+        c = conditions["stabcond2"]
+        s2 = stabcond2_run(values["alpha_d"], values["sigma0"], values["k_d"], values["delta_los"], "undecided")
+        ok_row("stabcond2", s2.status == c["status"], f"eq:stabCond2 {s2.status}, as stated",
+               f"stabcond2: stated '{c['status']}' but the arithmetic gives '{s2.status}'")
+    except (KeyError, ValueError, ZeroDivisionError, TypeError, IndexError) as exc:
+        raise CertificateError(f"certificate is malformed: {exc!r}") from None
+
+    from lyapcheck.conditions.base import STABILITY_CLASSES
+
+    stated = doc.get("verdict")
+    proven = any(conditions[c]["status"] == "certified" and all(ok for n, ok, _ in rows if n == c)
+                 for c in STABILITY_CLASSES)
+    expected = "certified" if proven else "not_certified"
+    ok_row("verdict", stated == expected, f"verdict '{stated}' is supported",
+           f"verdict: stated '{stated}' but the re-checked conditions support '{expected}'")
+    return rows

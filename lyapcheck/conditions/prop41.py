@@ -1,0 +1,142 @@
+"""Proposition 4.1's conditions (eq. ``eq:stabCond`` and its ISS variant), as stated.
+
+``prop41_ges``: find ``P > 0`` with ``Gamma = -(A^T P + P A)`` and
+``lambda_min(Gamma) > (p12 + sqrt(p12^2 + p22^2)) * g``, ``g = U/Delta`` (``1/Delta`` in the
+paper; ``U`` makes the units explicit, see :mod:`symbolic.ilos`).
+
+``prop41_iss``: ``lambda_min(Gamma) > p12 g + sqrt(p12^2 + p22^2) (e + g)``, where ``e`` is the
+disturbance input gain of the dynamics used (``alpha_d`` as printed, 1 as derived; the paper
+writes ``alpha_d`` because its eq. ``eq:xCrossdyn`` has that gain).
+
+Both are one convex program: with an epigraph variable ``t >= ||(p12, p22)||`` (a second-order
+cone) the condition is the LMI ``Gamma - (g p12 + (g + e) t + m) I >= 0``; the problem is
+homogeneous in ``P``, so ``trace P = 1`` normalises it and the margin ``m`` is maximised. The
+data are divided by their own scale so that ``m`` is a relative margin. Certification is the
+exact check of the rounded ``P``; refutation is an exact necessary condition (Gamma_22 bound).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from lyapcheck import exact
+from lyapcheck.conditions.base import ConditionResult, System
+from lyapcheck.conditions.sdp import solve
+
+
+class _Prop41Program:
+    """The DPP-compiled program, built once per process and re-solved with new data."""
+
+    def __init__(self) -> None:
+        import cvxpy as cp
+
+        self.A = cp.Parameter((2, 2), name="A")
+        self.g = cp.Parameter(nonneg=True, name="g")
+        self.ge = cp.Parameter(nonneg=True, name="g_plus_e")
+        self.P = cp.Variable((2, 2), symmetric=True, name="P")
+        self.t = cp.Variable(name="t")
+        self.m = cp.Variable(name="m")
+        gamma = -(self.A.T @ self.P + self.P @ self.A)
+        rhs = self.g * self.P[0, 1] + self.ge * self.t + self.m
+        constraints = [
+            cp.trace(self.P) == 1,
+            self.P >> 0,
+            cp.SOC(self.t, cp.hstack([self.P[0, 1], self.P[1, 1]])),
+            (gamma + gamma.T) / 2 - rhs * np.eye(2) >> 0,
+            self.m <= 10,  # keeps the program bounded when A is very stable
+        ]
+        self.problem = cp.Problem(cp.Maximize(self.m), constraints)
+
+
+@lru_cache(maxsize=1)
+def program() -> _Prop41Program:
+    return _Prop41Program()
+
+
+def exact_check(system: System, P: exact.Matrix, iss: bool) -> tuple[bool, str]:
+    """Exactly check eq. ``eq:stabCond`` (or the ISS inequality) for a rational ``P``."""
+    if not exact.is_positive_definite(P):
+        return False, "P is not positive definite (leading minors)"
+    gamma = exact.scale(Fraction(-1), exact.lyapunov_form(system.A, P))
+    g = system.rho_sup
+    e = abs(system.E[0]) if iss else Fraction(0)
+    p12, p22 = P[0][1], P[1][1]
+    if not exact.min_eig_exceeds_2x2(gamma, g * p12, g + e, p12 * p12 + p22 * p22):
+        which = "p12 g + sqrt(p12^2+p22^2)(e+g)" if iss else "(p12 + sqrt(p12^2+p22^2)) g"
+        return False, f"lambda_min(Gamma) > {which} fails"
+    return True, "P > 0 and lambda_min(Gamma) exceeds the right-hand side, exactly"
+
+
+def refutation(system: System) -> dict[str, Any] | None:
+    """Exact proof that eq. ``eq:stabCond`` has no solution, when the Gamma_22 bound shows it."""
+    import sympy as sp
+
+    from symbolic.ilos import stabcond_gamma22_bound
+
+    a = system.A
+    if not (a[1][0] == 0 and a[0][1] < 0 and a[1][1] < 0):
+        return None
+    bound, gain = stabcond_gamma22_bound(sp.Rational(str(a[0][1])), sp.Rational(str(a[1][1])),
+                                         sp.Rational(str(system.rho_sup)))
+    if not (bound.is_Rational and gain.is_Rational):  # pragma: no cover - rational inputs give rationals
+        return None
+    bound_q = Fraction(int(bound.p), int(bound.q))
+    gain_q = Fraction(int(gain.p), int(gain.q))
+    if gain_q < bound_q:
+        return None
+    return {
+        "argument": "gamma22_bound",
+        "statement": ("lambda_min(Gamma) <= Gamma_22 = 2 p22 (k - c t) with t = -p12/p22, and the right-hand side "
+                      "is g p22/(t + sqrt(1+t^2)); a solution needs 2(k - c t)(t + sqrt(1+t^2)) > g for some t, "
+                      "whose supremum is at most the bound below"),
+        "k": str(-a[1][1]), "c": str(-a[0][1]), "sup_bound": str(bound_q), "g": str(gain_q),
+    }
+
+
+def check_refutation(system: System, data: dict[str, Any]) -> bool:
+    """Re-derive the refutation from the system alone (used by ``verify``)."""
+    fresh = refutation(system)
+    return fresh is not None and fresh["sup_bound"] == data.get("sup_bound") and fresh["g"] == data.get("g")
+
+
+def run(system: System, *, iss: bool) -> ConditionResult:
+    """Search, check exactly, or refute; see the module docstring."""
+    name = "prop41_iss" if iss else "prop41_ges"
+    refuted = refutation(system)
+    A = exact.to_float(system.A)
+    g = float(system.rho_sup)
+    e = float(abs(system.E[0])) if iss else 0.0
+    scale = max(np.abs(A).max(), g, 1e-300)
+    prog = program()
+    prog.A.value = np.array(A) / scale
+    prog.g.value = g / scale
+    prog.ge.value = (g + e) / scale
+    report = solve(prog.problem)
+    margin = float(prog.m.value) if report.outcome == "optimal" and prog.m.value is not None else None
+    numbers: dict[str, Any] = {"relative_margin": margin, "rhs_gain_g": g, "iss_gain_e": e}
+    if refuted is not None:
+        # a refutation is exact and final; the solver's margin is shown as evidence beside it
+        return ConditionResult(
+            name, "refuted",
+            "no P satisfies the condition (exact Gamma_22 bound)" + (" - so the ISS condition fails too" if iss else ""),
+            numbers=numbers, refutation=refuted, solver=report.to_json(),
+        )
+    if report.outcome != "optimal" or margin is None:
+        return ConditionResult(name, "inconclusive", f"solver outcome '{report.outcome}', nothing proved",
+                               numbers=numbers, solver=report.to_json())
+    if margin <= 0:
+        return ConditionResult(name, "not_certified",
+                               "no certificate of this class was found (best margin <= 0); this is not a proof of instability",
+                               numbers=numbers, solver=report.to_json())
+    P = exact.symmetrize(exact.rational_matrix(prog.P.value))
+    ok, why = exact_check(system, P, iss)
+    if not ok:
+        return ConditionResult(name, "inconclusive", f"solver found a candidate but its exact check failed: {why}",
+                               numbers=numbers, solver=report.to_json())
+    numbers["lambda_max_over_min_P"] = float(np.linalg.cond(np.array(exact.to_float(P))))
+    return ConditionResult(name, "certified", why, numbers=numbers,
+                           certificate={"P": exact.to_json(P)}, solver=report.to_json())

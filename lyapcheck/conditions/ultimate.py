@@ -1,0 +1,216 @@
+"""``ultimate_bound``: a certified bound on ``limsup |eps|`` for ``|d_perp| <= d*``.
+
+Stage 0 (box, comparison lemma; exact arithmetic, global). Write ``y = eps + sigma0 s``. Then
+``rho(y) eps = psi(y) - sigma0 rho(y) s`` with ``psi(y) = U Delta y / (y^2 + Delta^2)``,
+``|psi| <= U/2``. Hence ``D+|s| <= a22 |s| + U/2`` (``a22 < 0``, the ``-sigma0 rho s`` term only
+helps), so ``|s| <= S = (U/2)/|a22|`` (inflated by a factor ``1 + 1e-6`` so that the box is reached
+in finite time) is eventually invariant; then ``D+|eps| <= a11 |eps| + |a12| S + |e| d*`` gives
+``|eps| <= Ebox = (|a12| S + |e| d*)/|a11|`` (inflated), also eventually invariant.
+
+Stage k >= 1 (invariant ellipsoid, refined). On the eventually-invariant set ``K`` of the
+previous stage, ``|y| <= ybar`` and so ``rho >= rho_lo = U Delta/(ybar^2 + Delta^2)``. If ``P > 0``,
+``lambda > 0`` satisfy, at both vertices ``r in {rho_lo, rho_sup}``,
+
+    [[ A_r^T P + P A_r + lambda P,  P e d* ],
+     [ d* e^T P,                    -lambda ]]  <  0,
+
+then along trajectories in ``K`` with ``|w| <= d*``, ``V_dot <= -lambda (V - 1)``; so ``V <= 1 + delta``
+intersected with ``K`` is eventually invariant and ``limsup |eps| <= sqrt(e1^T P^-1 e1)``. Each stage
+is checked exactly; the next stage uses ``ybar^2 <= c^T P^-1 c`` (``c = (1, sigma0)``). ``P`` is
+found by minimising ``e1^T P^-1 e1`` (Schur complement) over a line search in ``lambda``.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from lyapcheck import exact
+from lyapcheck.conditions import scaling
+from lyapcheck.conditions.base import ConditionResult, System
+from lyapcheck.conditions.sdp import solve
+
+#: the eventually-invariant sets are inflated by this factor (exact, tiny)
+INFLATE = Fraction(1_000_001, 1_000_000)
+#: decay rates tried, in the scaled time unit (the fastest vertex entry is 1 there)
+LAMBDA_GRID = np.geomspace(1e-6, 4.0, 23)
+MAX_STAGES = 5
+#: relative strictness built into the LMIs (see _EllipsoidProgram)
+STRICTNESS = 1e-3
+
+
+def box_stage(system: System) -> dict[str, Any] | None:
+    """Exact stage-0 box (module docstring); None when the structure does not apply."""
+    a = system.A
+    if not (a[1][0] == 0 and a[0][0] < 0 and a[1][1] < 0 and system.B == ((0, 0), (1, 0))):
+        return None
+    s_bar = system.speed / 2 / (-a[1][1]) * INFLATE
+    e_bar = (abs(a[0][1]) * s_bar + abs(system.E[0]) * system.d_max) / (-a[0][0]) * INFLATE
+    y_bar = e_bar + system.sigma0 * s_bar
+    return {"s_bound": str(s_bar), "eps_bound": str(e_bar), "y_bound": str(y_bar)}
+
+
+def check_box(system: System, data: dict[str, Any]) -> bool:
+    fresh = box_stage(system)
+    return fresh is not None and all(Fraction(fresh[k]) <= Fraction(data[k]) for k in ("s_bound", "eps_bound", "y_bound"))
+
+
+def rho_lower(system: System, y_bar: Fraction) -> Fraction:
+    return system.speed * system.delta / (y_bar * y_bar + system.delta * system.delta)
+
+
+class _EllipsoidProgram:
+    """min t  s.t. vertex LMIs, [[t, e1^T], [e1, P]] >= 0  (DPP, scaled data).
+
+    The LMIs are solved with ``lambda (1 + STRICTNESS)`` in the top block and
+    ``lambda (1 - STRICTNESS)`` in the bottom one; the exact check then uses ``lambda`` and
+    finds the original LMI negative definite with margin ``STRICTNESS * lambda * diag(P, 1)``,
+    far above the rounding error of the rational certificate.
+    """
+
+    def __init__(self) -> None:
+        import cvxpy as cp
+
+        self.A_lo = cp.Parameter((2, 2), name="A_lo")
+        self.A_hi = cp.Parameter((2, 2), name="A_hi")
+        self.e = cp.Parameter((2, 1), name="e_dstar")
+        self.lam_top = cp.Parameter(nonneg=True, name="lambda_top")
+        self.lam_bottom = cp.Parameter(nonneg=True, name="lambda_bottom")
+        self.P = cp.Variable((2, 2), symmetric=True, name="P")
+        self.t = cp.Variable(name="t")
+        e1 = np.array([[1.0], [0.0]])
+        lmis = []
+        for a in (self.A_lo, self.A_hi):
+            top = a.T @ self.P + self.P @ a + self.lam_top * self.P
+            lmi = cp.bmat([[top, self.P @ self.e], [self.e.T @ self.P, -self.lam_bottom * np.eye(1)]])
+            lmis.append((lmi + lmi.T) / 2)
+        schur = cp.bmat([[cp.reshape(self.t, (1, 1), order="C"), e1.T], [e1, self.P]])
+        self.bound = cp.Problem(cp.Minimize(self.t), [self.P >> 0, (schur + schur.T) / 2 >> 0] + [lmi << 0 for lmi in lmis])
+
+    def set_lambda(self, lam: float) -> None:
+        self.lam_top.value = lam * (1 + STRICTNESS)
+        self.lam_bottom.value = lam * (1 - STRICTNESS)
+
+
+@lru_cache(maxsize=1)
+def program() -> _EllipsoidProgram:
+    return _EllipsoidProgram()
+
+
+def lmi_matrix(a: exact.Matrix, P: exact.Matrix, lam: Fraction, e: tuple[Fraction, Fraction], d: Fraction) -> exact.Matrix:
+    top = exact.add(exact.lyapunov_form(a, P), exact.scale(lam, P))
+    pe = exact.matmul(P, ((e[0] * d,), (e[1] * d,)))
+    return exact.block([[top, pe], [exact.transpose(pe), ((-lam,),)]])
+
+
+def check_ellipsoid(system: System, stage: dict[str, Any], rho_lo: Fraction) -> tuple[bool, str]:
+    """Exact check of one ellipsoid stage (module docstring)."""
+    P = exact.from_json(stage["P"])
+    lam = Fraction(stage["lambda"])
+    if Fraction(stage["rho_lo"]) > rho_lo:
+        return False, "stage uses a larger rho_lo than its predecessor proves"
+    if lam <= 0 or not exact.is_positive_definite(P):
+        return False, "lambda > 0 and P > 0 fail"
+    for r in (Fraction(stage["rho_lo"]), system.rho_sup):
+        if not exact.is_negative_definite(lmi_matrix(system.vertex(r), P, lam, system.E, system.d_max)):
+            return False, f"the invariant-ellipsoid LMI fails at rho = {float(r):.6g}"
+    det = P[0][0] * P[1][1] - P[0][1] ** 2
+    eps_sq = P[1][1] / det  # e1^T P^-1 e1
+    y_sq = (P[1][1] - 2 * system.sigma0 * P[0][1] + system.sigma0**2 * P[0][0]) / det  # c^T P^-1 c
+    if Fraction(stage["eps_bound_sq"]) < eps_sq or Fraction(stage["y_bound_sq"]) < y_sq:
+        return False, "stated bounds are smaller than e1^T P^-1 e1 or c^T P^-1 c"
+    return True, "ok"
+
+
+def _ellipsoid_stage(system: System, rho_lo: Fraction) -> tuple[dict[str, Any] | None, dict[str, Any]]:
+    vertices = [system.vertex(rho_lo), system.vertex(system.rho_sup)]
+    sc = scaling.choose(vertices)
+    prog = program()
+    prog.A_lo.value = sc.matrix_to_scaled(vertices[0])
+    prog.A_hi.value = sc.matrix_to_scaled(vertices[1])
+    e_scaled = sc.vector_to_scaled((system.E[0] * system.d_max, system.E[1] * system.d_max))
+    prog.e.value = e_scaled.reshape(2, 1)
+    best: tuple[float, float, np.ndarray] | None = None
+    solves = 0
+    for lam in LAMBDA_GRID:
+        prog.set_lambda(float(lam))
+        report = solve(prog.bound)
+        solves += 1
+        if report.outcome == "optimal" and prog.t.value is not None and prog.t.value > 0 and prog.P.value is not None:
+            if best is None or prog.t.value < best[0]:
+                best = (float(prog.t.value), float(lam), np.array(prog.P.value))
+    meta: dict[str, Any] = {"solves": solves, "beta": str(sc.beta), "time_scale": str(sc.time)}
+    if best is None:
+        return None, meta
+    P = sc.p_from_scaled(exact.symmetrize(exact.rational_matrix(best[2])))
+    lam_q = exact.to_rational(best[1], 6) * sc.time
+    det = P[0][0] * P[1][1] - P[0][1] ** 2
+    if det <= 0:
+        return None, meta
+    stage = {
+        "P": exact.to_json(P), "lambda": str(lam_q), "rho_lo": str(rho_lo),
+        "eps_bound_sq": str(P[1][1] / det),
+        "y_bound_sq": str((P[1][1] - 2 * system.sigma0 * P[0][1] + system.sigma0**2 * P[0][0]) / det),
+    }
+    ok, _ = check_ellipsoid(system, stage, rho_lo)
+    return (stage if ok else None), meta
+
+
+def run(system: System) -> ConditionResult:
+    """Certified ultimate bound on ``|eps|`` (metres), tightened stage by stage."""
+    box = box_stage(system)
+    if box is None:
+        return ConditionResult("ultimate_bound", "not_certified",
+                               "the comparison-lemma box needs A = [[a11, a12], [0, a22]] with a11, a22 < 0")
+    stages: list[dict[str, Any]] = []
+    metas: list[dict[str, Any]] = []
+    eps_bound = Fraction(box["eps_bound"])
+    y_bar = Fraction(box["y_bound"])
+    if system.d_max > 0:
+        for _ in range(MAX_STAGES):
+            rho_lo = rho_lower(system, y_bar)
+            stage, meta = _ellipsoid_stage(system, rho_lo)
+            metas.append(meta)
+            if stage is None:
+                break
+            stages.append(stage)
+            new_eps = exact.sqrt_upper(Fraction(stage["eps_bound_sq"]))
+            new_y = exact.sqrt_upper(Fraction(stage["y_bound_sq"])) * INFLATE
+            improved = new_y < y_bar * Fraction(99, 100)
+            eps_bound = min(eps_bound, new_eps)
+            y_bar = min(y_bar, new_y)
+            if not improved:
+                break
+    numbers = {
+        "eps_bound_m": float(eps_bound), "eps_bound_exact": str(eps_bound),
+        "box_eps_bound_m": float(Fraction(box["eps_bound"])), "box_s_bound": float(Fraction(box["s_bound"])),
+        "ellipsoid_stages": len(stages), "d_max_m_per_s": float(system.d_max),
+    }
+    how = "box + %d ellipsoid stage(s)" % len(stages) if stages else "comparison-lemma box only (no ellipsoid LMI was feasible)"
+    return ConditionResult(
+        "ultimate_bound", "certified", f"limsup |eps| <= {float(eps_bound):.4g} m ({how})",
+        numbers=numbers, certificate={"box": box, "stages": stages, "eps_bound": str(eps_bound)},
+        solver={"stages": metas},
+    )
+
+
+def verify(system: System, cert: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check the whole chain exactly (used by ``lyapcheck verify``)."""
+    box = cert["box"]
+    if not check_box(system, box):
+        return False, "box bounds do not follow from the system (comparison lemma)"
+    y_bar = Fraction(box["y_bound"])
+    best = Fraction(box["eps_bound"])
+    for i, stage in enumerate(cert["stages"]):
+        ok, why = check_ellipsoid(system, stage, rho_lower(system, y_bar))
+        if not ok:
+            return False, f"ellipsoid stage {i + 1}: {why}"
+        best = min(best, exact.sqrt_upper(Fraction(stage["eps_bound_sq"])))
+        y_bar = min(y_bar, exact.sqrt_upper(Fraction(stage["y_bound_sq"])) * INFLATE)
+    claimed = Fraction(cert["eps_bound"])
+    if claimed < best:
+        return False, f"stated eps bound {float(claimed):.6g} m is below what the stages prove ({float(best):.6g} m)"
+    return True, f"limsup |eps| <= {float(claimed):.6g} m follows exactly"

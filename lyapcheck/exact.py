@@ -1,0 +1,195 @@
+"""Exact rational linear algebra for certificate checks.
+
+Every ``certified`` and every ``refuted`` verdict is decided here, in
+:class:`fractions.Fraction` arithmetic, never by a floating-point comparison. Matrices are
+tuples of tuples of Fractions.
+"""
+
+from __future__ import annotations
+
+import math
+from decimal import Decimal
+from fractions import Fraction
+from typing import Iterable, Sequence
+
+Matrix = tuple[tuple[Fraction, ...], ...]
+
+
+def to_rational(x: float, digits: int = 15) -> Fraction:
+    """Round a float to `digits` significant decimal digits, as an exact Fraction."""
+    if not math.isfinite(x):
+        raise ValueError(f"cannot round a non-finite number to a rational: {x}")
+    return Fraction(Decimal(f"{x:.{digits - 1}e}"))
+
+
+def matrix(rows: Iterable[Iterable[object]]) -> Matrix:
+    return tuple(tuple(Fraction(v) for v in row) for row in rows)  # type: ignore[arg-type]
+
+
+def rational_matrix(values: Sequence[Sequence[float]], digits: int = 15) -> Matrix:
+    return tuple(tuple(to_rational(float(v), digits) for v in row) for row in values)
+
+
+def symmetrize(m: Matrix) -> Matrix:
+    n = len(m)
+    return tuple(tuple((m[i][j] + m[j][i]) / 2 for j in range(n)) for i in range(n))
+
+
+def transpose(m: Matrix) -> Matrix:
+    return tuple(zip(*m))
+
+
+def matmul(a: Matrix, b: Matrix) -> Matrix:
+    bt = transpose(b)
+    return tuple(tuple(sum((x * y for x, y in zip(row, col)), Fraction(0)) for col in bt) for row in a)
+
+
+def add(a: Matrix, b: Matrix) -> Matrix:
+    return tuple(tuple(x + y for x, y in zip(ra, rb)) for ra, rb in zip(a, b))
+
+
+def scale(c: Fraction, a: Matrix) -> Matrix:
+    return tuple(tuple(c * x for x in row) for row in a)
+
+
+def identity(n: int) -> Matrix:
+    return tuple(tuple(Fraction(int(i == j)) for j in range(n)) for i in range(n))
+
+
+def block(rows: Sequence[Sequence[Matrix]]) -> Matrix:
+    """Assemble a block matrix from blocks of compatible shapes."""
+    out: list[tuple[Fraction, ...]] = []
+    for block_row in rows:
+        height = len(block_row[0])
+        for i in range(height):
+            out.append(tuple(x for blk in block_row for x in blk[i]))
+    return tuple(out)
+
+
+def lyapunov_form(a: Matrix, p: Matrix) -> Matrix:
+    """``A^T P + P A``."""
+    return add(matmul(transpose(a), p), matmul(p, a))
+
+
+def det(m: Matrix) -> Fraction:
+    """Determinant by fraction-exact Gaussian elimination."""
+    n = len(m)
+    work = [list(row) for row in m]
+    result = Fraction(1)
+    for col in range(n):
+        pivot = next((r for r in range(col, n) if work[r][col] != 0), None)
+        if pivot is None:
+            return Fraction(0)
+        if pivot != col:
+            work[col], work[pivot] = work[pivot], work[col]
+            result = -result
+        result *= work[col][col]
+        for r in range(col + 1, n):
+            factor = work[r][col] / work[col][col]
+            if factor:
+                for c in range(col, n):
+                    work[r][c] -= factor * work[col][c]
+    return result
+
+
+def leading_minors(m: Matrix) -> list[Fraction]:
+    return [det(tuple(row[:k] for row in m[:k])) for k in range(1, len(m) + 1)]
+
+
+def is_symmetric(m: Matrix) -> bool:
+    return all(m[i][j] == m[j][i] for i in range(len(m)) for j in range(len(m)))
+
+
+def is_positive_definite(m: Matrix) -> bool:
+    """Sylvester's criterion: a symmetric matrix is PD iff all leading minors are > 0."""
+    return is_symmetric(m) and all(minor > 0 for minor in leading_minors(m))
+
+
+def is_negative_definite(m: Matrix) -> bool:
+    return is_positive_definite(scale(Fraction(-1), m))
+
+
+def sign_a_plus_b_sqrt(a: Fraction, b: Fraction, q: Fraction) -> int:
+    """Exact sign of ``a + b*sqrt(q)`` for ``q >= 0`` (isolate, then square with signs)."""
+    if q < 0:
+        raise ValueError("q must be non-negative")
+    sa = (a > 0) - (a < 0)
+    sb = (b > 0) - (b < 0)
+    if q == 0 or sb == 0:
+        return sa
+    if sa == 0 or sa == sb:
+        return sb
+    # opposite signs: compare a^2 with b^2 q
+    diff = a * a - b * b * q
+    if diff == 0:
+        return 0
+    return sa if diff > 0 else sb
+
+
+def min_eig_exceeds_2x2(m: Matrix, a: Fraction, b: Fraction, q: Fraction) -> bool:
+    """Exactly decide ``lambda_min(M) > a + b sqrt(q)`` for a symmetric 2x2 rational M.
+
+    ``lambda_min(M) > r`` iff ``M - r I`` is positive definite iff ``m11 - r > 0`` and
+    ``det(M - r I) = r^2 - tr(M) r + det(M) > 0``. With ``r = a + b sqrt(q)`` both are of the
+    form ``X + Y sqrt(q)``, whose signs :func:`sign_a_plus_b_sqrt` decides exactly.
+    """
+    if not is_symmetric(m) or len(m) != 2:
+        raise ValueError("expected a symmetric 2x2 matrix")
+    m11, m22, m12 = m[0][0], m[1][1], m[0][1]
+    first = sign_a_plus_b_sqrt(m11 - a, -b, q)
+    tr, dt = m11 + m22, m11 * m22 - m12 * m12
+    # r^2 = a^2 + b^2 q + 2ab sqrt(q)
+    x = a * a + b * b * q - tr * a + dt
+    y = 2 * a * b - tr * b
+    second = sign_a_plus_b_sqrt(x, y, q)
+    return first > 0 and second > 0
+
+
+def sqrt_upper(q: Fraction, digits: int = 30) -> Fraction:
+    """A rational ``r >= sqrt(q)``, checked exactly (``r*r >= q``)."""
+    if q < 0:
+        raise ValueError("q must be non-negative")
+    if q == 0:
+        return Fraction(0)
+    guess = Fraction(Decimal(q.numerator).sqrt() / Decimal(q.denominator).sqrt()) if digits else Fraction(0)
+    step = guess / 10**digits + Fraction(1, 10**digits)
+    r = guess
+    while r * r < q:
+        r += step
+    return r
+
+
+def has_negative_real_eigenvalue_2x2(m: Matrix) -> bool:
+    """Exact: does the real 2x2 matrix M have a real eigenvalue < 0?"""
+    tr = m[0][0] + m[1][1]
+    dt = m[0][0] * m[1][1] - m[0][1] * m[1][0]
+    disc = tr * tr - 4 * dt
+    if disc < 0:
+        return False
+    if dt < 0:
+        return True  # real roots of opposite signs
+    return tr < 0  # roots of equal sign (or one zero): negative iff their sum is
+
+
+def inverse_2x2(m: Matrix) -> Matrix:
+    d = m[0][0] * m[1][1] - m[0][1] * m[1][0]
+    if d == 0:
+        raise ZeroDivisionError("singular matrix")
+    return ((m[1][1] / d, -m[0][1] / d), (-m[1][0] / d, m[0][0] / d))
+
+
+def is_hurwitz_2x2(m: Matrix) -> bool:
+    """Exact: both eigenvalues in the open left half-plane iff trace < 0 and det > 0."""
+    return (m[0][0] + m[1][1]) < 0 and (m[0][0] * m[1][1] - m[0][1] * m[1][0]) > 0
+
+
+def to_json(m: Matrix) -> list[list[str]]:
+    return [[str(x) for x in row] for row in m]
+
+
+def from_json(rows: Sequence[Sequence[str]]) -> Matrix:
+    return tuple(tuple(Fraction(x) for x in row) for row in rows)
+
+
+def to_float(m: Matrix) -> list[list[float]]:
+    return [[float(x) for x in row] for row in m]

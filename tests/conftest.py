@@ -1,0 +1,26 @@
+"""Shared fixtures: the paper's problem and a gain set where Proposition 4.1 is certifiable."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from lyapcheck.params import Problem, problem_from_sources
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER_TOML = ROOT / "examples" / "paper.toml"
+
+#: gains far from the paper's where eq:stabCond is feasible (k_d Delta large against 1/U)
+EASY_GAINS = {"gains.alpha_d": "1", "gains.sigma0": "0.1", "gains.k_d": "5", "gains.delta_los": "1 m",
+              "swimmer.e11": "1 m"}
+
+
+@pytest.fixture(scope="session")
+def paper_problem() -> Problem:
+    return problem_from_sources(PAPER_TOML, {})
+
+
+@pytest.fixture(scope="session")
+def easy_problem() -> Problem:
+    return problem_from_sources(PAPER_TOML, EASY_GAINS)

@@ -1,0 +1,117 @@
+"""Certificate classes: verdicts at the paper's gains and elsewhere, all checked exactly."""
+
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from lyapcheck import exact
+from lyapcheck.certificate import build_document, verify_document
+from lyapcheck.certify import build_system, run_conditions, verdict
+from lyapcheck.conditions import prop41, sector
+from lyapcheck.params import problem_from_sources
+from tests.conftest import PAPER_TOML
+
+PAPER_EXPECTED = {
+    "derived": {"prop41_ges": "refuted", "prop41_iss": "refuted", "stabcond2": "holds",
+                "sector_ges": "refuted", "ultimate_bound": "certified"},
+    "printed": {"prop41_ges": "refuted", "prop41_iss": "refuted", "stabcond2": "holds",
+                "sector_ges": "certified", "ultimate_bound": "certified"},
+}
+
+
+@pytest.mark.parametrize("dynamics", ["derived", "printed"])
+def test_paper_gains_verdicts(paper_problem, dynamics: str) -> None:
+    results = run_conditions(paper_problem, dynamics)
+    assert {k: v.status for k, v in results.items()} == PAPER_EXPECTED[dynamics]
+    assert results["stabcond2"].numbers["implies_stabcond_here"] == "fails"
+    doc = build_document(paper_problem, dynamics, results, verdict(results))
+    assert all(ok for _, ok, _ in verify_document(doc))
+
+
+def test_paper_ultimate_bounds(paper_problem) -> None:
+    derived = run_conditions(paper_problem, "derived")["ultimate_bound"]
+    printed = run_conditions(paper_problem, "printed")["ultimate_bound"]
+    # derived: only the comparison box, |eps| <= sigma0 U/(2 k_d) + d*/(e11 alpha_d) (inflated)
+    box = 0.01 * 1 / (2 * 0.15) + 88e-6 / (93e-6 * 600)
+    assert derived.numbers["eps_bound_m"] == pytest.approx(box, rel=1e-5)
+    assert printed.numbers["ellipsoid_stages"] >= 1 and printed.numbers["eps_bound_m"] < 0.01
+
+
+def test_easy_gains_are_certified_by_every_class(easy_problem) -> None:
+    results = run_conditions(easy_problem, "derived")
+    assert {k: v.status for k, v in results.items()} == {
+        "prop41_ges": "certified", "prop41_iss": "certified", "stabcond2": "fails",
+        "sector_ges": "certified", "ultimate_bound": "certified"}
+    assert verdict(results) == "certified"
+    ub = results["ultimate_bound"]
+    assert ub.numbers["ellipsoid_stages"] >= 1 and ub.numbers["eps_bound_m"] < ub.numbers["box_eps_bound_m"]
+    assert ub.numbers["paper_ball_radius_as_printed"] is not None
+
+
+def test_prop41_exact_check_rejects_a_perturbed_certificate(easy_problem) -> None:
+    system = build_system(easy_problem, "derived")
+    P = exact.from_json(run_conditions(easy_problem, "derived")["prop41_ges"].certificate["P"])
+    assert prop41.exact_check(system, P, iss=False)[0]
+    assert not prop41.exact_check(system, exact.scale(Fraction(-1), P), iss=False)[0]
+    skewed = ((P[0][0], P[0][1] + 10 * P[1][1]), (P[0][1] + 10 * P[1][1], P[1][1] * 200))
+    assert not prop41.exact_check(system, skewed, iss=False)[0]
+
+
+def test_shorten_narendra_refutation_agrees_with_the_sdp(paper_problem) -> None:
+    system = build_system(paper_problem, "derived")
+    verts = [system.vertex(Fraction(0)), system.vertex(system.rho_sup)]
+    assert sector.refutation(verts) is not None
+    _, _, margin, report = sector.certify_polytope(verts)
+    assert report.outcome == "optimal" and margin is not None and margin < 0
+
+
+def test_programs_are_dpp() -> None:
+    from lyapcheck.conditions import ultimate
+
+    assert prop41.program().problem.is_dpp()
+    assert sector.program().problem.is_dpp()
+    assert ultimate.program().bound.is_dpp()
+
+
+def test_tampered_number_fails_verify(easy_problem) -> None:
+    results = run_conditions(easy_problem, "derived")
+    doc = json.loads(json.dumps(build_document(easy_problem, "derived", results, verdict(results))))
+    assert all(ok for _, ok, _ in verify_document(doc))
+    P = doc["conditions"]["sector_ges"]["certificate"]["P"]
+    P[1][1] = str(-Fraction(P[1][1]))
+    rows = {name: (ok, msg) for name, ok, msg in verify_document(doc)}
+    assert not rows["sector_ges"][0] and "positive definite" in rows["sector_ges"][1]
+    doc2 = json.loads(json.dumps(build_document(easy_problem, "derived", results, verdict(results))))
+    doc2["inputs"]["exact_si"]["k_d"] = "1/2"
+    rows2 = {name: ok for name, ok, _ in verify_document(doc2)}
+    assert not rows2["system"]
+
+
+gain_sets = st.fixed_dictionaries({
+    "gains.alpha_d": st.sampled_from(["0.5", "1", "3", "20", "600"]),
+    "gains.sigma0": st.sampled_from(["0.01", "0.1", "0.5", "2"]),
+    "gains.k_d": st.sampled_from(["0.15", "1", "5", "40"]),
+    "gains.delta_los": st.sampled_from(["0.75 mm", "10 mm", "0.5 m", "3 m"]),
+    "swimmer.e11": st.sampled_from(["9.3e-5 m", "0.01 m", "1 m"]),
+    "disturbance.d_max": st.sampled_from(["0 mm/s", "0.088 mm/s", "5 mm/s"]),
+})
+
+
+@pytest.mark.slow
+@settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(gain_sets, st.sampled_from(["derived", "printed"]))
+def test_no_certified_or_refuted_verdict_fails_its_exact_recheck(overrides: dict[str, str], dynamics: str) -> None:
+    problem = problem_from_sources(PAPER_TOML, overrides)
+    results = run_conditions(problem, dynamics)
+    doc = json.loads(json.dumps(build_document(problem, dynamics, results, verdict(results))))
+    rows = verify_document(doc)
+    assert all(ok for _, ok, _ in rows), rows
+    for name, res in results.items():
+        assert res.status in ("certified", "refuted", "not_certified", "inconclusive", "holds", "fails")
+        if res.status == "certified" and name != "ultimate_bound":
+            assert res.certificate

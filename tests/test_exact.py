@@ -1,0 +1,59 @@
+"""Exact arithmetic: the judge of every certified / refuted verdict."""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction as Q
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lyapcheck import exact
+
+small = st.fractions(min_value=-50, max_value=50, max_denominator=40)
+
+
+@settings(max_examples=300, derandomize=True)
+@given(small, small, st.fractions(min_value=0, max_value=50, max_denominator=40))
+def test_sign_of_a_plus_b_sqrt_q_matches_high_precision(a: Q, b: Q, q: Q) -> None:
+    from decimal import Decimal, getcontext
+
+    getcontext().prec = 80
+    value = Decimal(a.numerator) / Decimal(a.denominator) + Decimal(b.numerator) / Decimal(b.denominator) * (
+        Decimal(q.numerator) / Decimal(q.denominator)).sqrt()
+    expected = (value > 0) - (value < 0)
+    if abs(value) > Decimal("1e-60"):
+        assert exact.sign_a_plus_b_sqrt(a, b, q) == expected
+
+
+@settings(max_examples=200, derandomize=True)
+@given(small, small, small, small, small, st.fractions(min_value=0, max_value=30, max_denominator=20))
+def test_min_eigenvalue_comparison_matches_numpy(m11: Q, m12: Q, m22: Q, a: Q, b: Q, q: Q) -> None:
+    m = exact.matrix([[m11, m12], [m12, m22]])
+    lam_min = float(np.linalg.eigvalsh(np.array(exact.to_float(m))).min())
+    r = float(a) + float(b) * math.sqrt(float(q))
+    if abs(lam_min - r) > 1e-9 * (1 + abs(r)):
+        assert exact.min_eig_exceeds_2x2(m, a, b, q) == (lam_min > r)
+
+
+def test_sylvester_and_determinant() -> None:
+    assert exact.is_positive_definite(exact.matrix([[2, 1], [1, 2]]))
+    assert not exact.is_positive_definite(exact.matrix([[1, 2], [2, 1]]))
+    assert not exact.is_positive_definite(exact.matrix([[1, 0], [1, 1]]))  # not symmetric
+    m = exact.matrix([[1, 2, 3], [4, 5, 6], [7, 8, 10]])
+    assert exact.det(m) == Q(-3)
+
+
+def test_sqrt_upper_is_an_upper_bound_and_tight() -> None:
+    for q in (Q(2), Q(1, 3), Q(10**12 + 7, 10**6)):
+        r = exact.sqrt_upper(q)
+        assert r * r >= q
+        assert float(r) - math.sqrt(float(q)) < 1e-12 * (1 + math.sqrt(float(q)))
+
+
+def test_negative_real_eigenvalue_detection() -> None:
+    assert exact.has_negative_real_eigenvalue_2x2(exact.matrix([[-1, 0], [0, 2]]))
+    assert not exact.has_negative_real_eigenvalue_2x2(exact.matrix([[0, -1], [1, 0]]))  # +-i
+    assert not exact.has_negative_real_eigenvalue_2x2(exact.matrix([[1, 0], [0, 2]]))
+    assert exact.has_negative_real_eigenvalue_2x2(exact.matrix([[-1, 0], [0, -2]]))
