@@ -61,7 +61,11 @@ def registry() -> "pint.UnitRegistry[Any]":
     """The toolkit's pint registry (created on first use: pint costs ~0.3 s to import)."""
     import pint
 
-    return pint.UnitRegistry()
+    # the parsed-definitions cache turns ~1 s of registry construction into ~0.1 s
+    try:
+        return pint.UnitRegistry(cache_folder=":auto:")
+    except OSError:  # pragma: no cover - read-only home: build without the cache
+        return pint.UnitRegistry()
 
 
 def _exact_decimal(text: str) -> Fraction:

@@ -107,9 +107,17 @@ def run(system: System, *, iss: bool) -> ConditionResult:
     """Search, check exactly, or refute; see the module docstring."""
     name = "prop41_iss" if iss else "prop41_ges"
     refuted = refutation(system)
-    A = exact.to_float(system.A)
     g = float(system.rho_sup)
     e = float(abs(system.E[0])) if iss else 0.0
+    numbers: dict[str, Any] = {"relative_margin": None, "rhs_gain_g": g, "iss_gain_e": e}
+    if refuted is not None:
+        # an exact refutation is final: no numerical search can change it
+        return ConditionResult(
+            name, "refuted",
+            "no P satisfies the condition (exact Gamma_22 bound)" + (" - so the ISS condition fails too" if iss else ""),
+            numbers=numbers, refutation=refuted,
+        )
+    A = exact.to_float(system.A)
     scale = max(np.abs(A).max(), g, 1e-300)
     prog = program()
     prog.A.value = np.array(A) / scale
@@ -117,14 +125,7 @@ def run(system: System, *, iss: bool) -> ConditionResult:
     prog.ge.value = (g + e) / scale
     report = solve(prog.problem)
     margin = float(prog.m.value) if report.outcome == "optimal" and prog.m.value is not None else None
-    numbers: dict[str, Any] = {"relative_margin": margin, "rhs_gain_g": g, "iss_gain_e": e}
-    if refuted is not None:
-        # a refutation is exact and final; the solver's margin is shown as evidence beside it
-        return ConditionResult(
-            name, "refuted",
-            "no P satisfies the condition (exact Gamma_22 bound)" + (" - so the ISS condition fails too" if iss else ""),
-            numbers=numbers, refutation=refuted, solver=report.to_json(),
-        )
+    numbers["relative_margin"] = margin
     if report.outcome != "optimal" or margin is None:
         return ConditionResult(name, "inconclusive", f"solver outcome '{report.outcome}', nothing proved",
                                numbers=numbers, solver=report.to_json())

@@ -35,8 +35,10 @@ from lyapcheck.conditions.sdp import solve
 
 #: the eventually-invariant sets are inflated by this factor (exact, tiny)
 INFLATE = Fraction(1_000_001, 1_000_000)
-#: decay rates tried, in the scaled time unit (the fastest vertex entry is 1 there)
-LAMBDA_GRID = np.geomspace(1e-6, 4.0, 23)
+#: decay rates tried, in the scaled time unit (the fastest vertex entry is 1 there); the best
+#: grid point is then refined by a few golden-section steps in log(lambda)
+LAMBDA_GRID = np.geomspace(1e-6, 4.0, 16)
+LAMBDA_REFINE_STEPS = 6
 MAX_STAGES = 5
 #: relative strictness built into the LMIs (see _EllipsoidProgram)
 STRICTNESS = 1e-3
@@ -133,15 +135,38 @@ def _ellipsoid_stage(system: System, rho_lo: Fraction) -> tuple[dict[str, Any] |
     prog.A_hi.value = sc.matrix_to_scaled(vertices[1])
     e_scaled = sc.vector_to_scaled((system.E[0] * system.d_max, system.E[1] * system.d_max))
     prog.e.value = e_scaled.reshape(2, 1)
-    best: tuple[float, float, np.ndarray] | None = None
     solves = 0
-    for lam in LAMBDA_GRID:
-        prog.set_lambda(float(lam))
+
+    def attempt(lam: float) -> tuple[float, float, np.ndarray] | None:
+        nonlocal solves
+        prog.set_lambda(lam)
         report = solve(prog.bound)
         solves += 1
         if report.outcome == "optimal" and prog.t.value is not None and prog.t.value > 0 and prog.P.value is not None:
-            if best is None or prog.t.value < best[0]:
-                best = (float(prog.t.value), float(lam), np.array(prog.P.value))
+            return float(prog.t.value), lam, np.array(prog.P.value)
+        return None
+
+    tried = [(lam, attempt(float(lam))) for lam in LAMBDA_GRID]
+    feasible = [(lam, r) for lam, r in tried if r is not None]
+    best = min((r for _, r in feasible), key=lambda r: r[0], default=None)
+    if best is not None:
+        # golden-section refinement between the neighbours of the best grid point (log scale)
+        i = int(np.argmin([r[0] if r is not None else np.inf for _, r in tried]))
+        lo = np.log(LAMBDA_GRID[max(i - 1, 0)])
+        hi = np.log(LAMBDA_GRID[min(i + 1, len(LAMBDA_GRID) - 1)])
+        ratio = (np.sqrt(5) - 1) / 2
+        for _ in range(LAMBDA_REFINE_STEPS):
+            a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+            ra, rb = attempt(float(np.exp(a))), attempt(float(np.exp(b)))
+            va = ra[0] if ra is not None else np.inf
+            vb = rb[0] if rb is not None else np.inf
+            for r in (ra, rb):
+                if r is not None and r[0] < best[0]:
+                    best = r
+            if va < vb:
+                hi = b
+            else:
+                lo = a
     meta: dict[str, Any] = {"solves": solves, "beta": str(sc.beta), "time_scale": str(sc.time)}
     if best is None:
         return None, meta
