@@ -8,6 +8,7 @@ condition classes, and assembles the certificate document (see :mod:`lyapcheck.c
 from __future__ import annotations
 
 import logging
+from fractions import Fraction
 from typing import Any
 
 from lyapcheck.conditions.base import STABILITY_CLASSES, ConditionResult, System
@@ -24,11 +25,23 @@ def exact_values(problem: Problem) -> dict[str, Any]:
             "los_speed": g.los_speed, "e11": sw.e11, "e11_hat": sw.e11_hat}
 
 
+def system_from_values(dynamics: str, values: dict[str, Any], d_max: Any) -> System:
+    """Exact structured error dynamics from the code generated out of the sympy derivation."""
+    from symbolic import _generated
+
+    if dynamics not in ("derived", "printed"):
+        from lyapcheck.errors import InvalidParameter
+
+        raise InvalidParameter("dynamics", "one of 'derived', 'printed'", dynamics)
+    data = getattr(_generated, dynamics)(**values)
+    return System(dynamics=dynamics, A=data["A"], B=data["B"], E=data["E"], rho_sup=data["rho_sup"],
+                  sigma0=values["sigma0"], delta=values["delta_los"],
+                  speed=values["los_speed"] if dynamics == "derived" else Fraction(1), d_max=d_max)
+
+
 def build_system(problem: Problem, dynamics: str) -> System:
     """The exact structured error dynamics at this parameter point."""
-    from symbolic.closed_loop import evaluate
-
-    return System.from_numeric(evaluate(dynamics, exact_values(problem)), problem.d_max)  # type: ignore[arg-type]
+    return system_from_values(dynamics, exact_values(problem), problem.d_max)
 
 
 def run_conditions(problem: Problem, dynamics: str) -> dict[str, ConditionResult]:

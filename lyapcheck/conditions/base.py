@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Literal
 
-from lyapcheck.exact import Matrix, matrix
+from lyapcheck.exact import Matrix
 
 Status = Literal["certified", "refuted", "not_certified", "inconclusive", "holds", "fails"]
 STABILITY_CLASSES = ("prop41_ges", "prop41_iss", "sector_ges")
@@ -28,13 +28,6 @@ class System:
 
     def vertex(self, rho: Fraction) -> Matrix:
         return tuple(tuple(a + rho * b for a, b in zip(ra, rb)) for ra, rb in zip(self.A, self.B))
-
-    @staticmethod
-    def from_numeric(numeric: Any, d_max: Fraction) -> "System":
-        return System(
-            dynamics=numeric.name, A=matrix(numeric.A), B=matrix(numeric.B), E=tuple(numeric.E),  # type: ignore[arg-type]
-            rho_sup=numeric.rho_sup, sigma0=numeric.sigma0, delta=numeric.delta, speed=numeric.speed, d_max=d_max,
-        )
 
 
 @dataclass
