@@ -68,9 +68,10 @@ def register(group: click.Group) -> None:
     @click.option("--json", "as_json", is_flag=True, help="Print the certificate document as JSON.")
     @click.option("--out", type=click.Path(dir_okay=False), help="Write the certificate JSON here.")
     @click.option("--report", type=click.Path(dir_okay=False), help="Write an HTML or PDF report (by extension).")
+    @click.option("--linear-views", is_flag=True, help="Add python-control views: poles, P from Gamma = I (slower).")
     @one_line_errors
     def certify(gains: str | None, dynamics: str, as_json: bool, out: str | None, report: str | None,
-                **flags: str | None) -> None:
+                linear_views: bool, **flags: str | None) -> None:
         """Certify a gain set: every condition class, each checked exactly."""
         from lyapcheck.certificate import build_document
         from lyapcheck.certify import run_conditions, verdict
@@ -83,6 +84,11 @@ def register(group: click.Group) -> None:
         problem = problem_from_sources(gains, overrides)
         results = run_conditions(problem, dynamics)
         doc = build_document(problem, dynamics, results, verdict(results))
+        if linear_views:
+            from lyapcheck.certify import build_system
+            from lyapcheck.linalg_views import linear_views as views
+
+            doc["linear_views"] = views(build_system(problem, dynamics))
         if out:
             atomic_write(out, json.dumps(doc, indent=2) + "\n")
         if report:
