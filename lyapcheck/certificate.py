@@ -60,7 +60,8 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
         "schema_version": SCHEMA_VERSION,
         "kind": KIND,
         "inputs": {"given": dict(problem.given),
-                   "exact_si": {k: str(v) for k, v in exact_values(problem).items()} | {"d_max": str(problem.d_max)}},
+                   "exact_si": {k: str(v) for k, v in exact_values(problem).items()}
+                   | {"d_max": str(problem.d_max), "omega_so": str(problem.actuation.omega_so)}},
         "dynamics": dynamics,
         "system": system_to_json(system),
         "conditions": {name: res.to_json() for name, res in results.items()},
@@ -94,6 +95,7 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     try:
         values = {k: Fraction(v) for k, v in doc["inputs"]["exact_si"].items()}
         d_max = values.pop("d_max")
+        omega_so = values.pop("omega_so", None)
         system = system_from_values(doc["dynamics"], values, d_max)
         conditions = doc["conditions"]
     except (KeyError, ValueError, ZeroDivisionError, TypeError, AttributeError) as exc:
@@ -131,6 +133,19 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         if c["status"] == "certified":
             ok, why = ultimate.verify(system, c["certificate"])
             ok_row("ultimate_bound", ok, why, f"ultimate_bound: {why}")
+        c = conditions.get("sos_gas", {"status": "absent"})
+        if c["status"] == "certified":
+            from lyapcheck.conditions import sos
+
+            ok, why = sos.verify(system, c["certificate"])
+            ok_row("sos_gas", ok, why, f"sos_gas: {why}")
+            sat = conditions.get("saturated_loop", {"status": "absent"})
+            if sat["status"] == "certified" and omega_so is not None:
+                from lyapcheck.conditions import saturated
+
+                ok, why = saturated.verify(system, c["certificate"], sat["certificate"], alpha_d=values["alpha_d"],
+                                           e11_hat=values["e11_hat"], omega_so=omega_so)
+                ok_row("saturated_loop", ok, why, f"saturated_loop: {why}")
         c = conditions["stabcond2"]
         s2 = stabcond2_run(values["alpha_d"], values["sigma0"], values["k_d"], values["delta_los"], "undecided")
         ok_row("stabcond2", s2.status == c["status"], f"eq:stabCond2 {s2.status}, as stated",
@@ -141,8 +156,8 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     from lyapcheck.conditions.base import STABILITY_CLASSES
 
     stated = doc.get("verdict")
-    proven = any(conditions[c]["status"] == "certified" and all(ok for n, ok, _ in rows if n == c)
-                 for c in STABILITY_CLASSES)
+    proven = any(conditions.get(c, {}).get("status") == "certified" and any(n == c for n, _, _ in rows)
+                 and all(ok for n, ok, _ in rows if n == c) for c in STABILITY_CLASSES)
     expected = "certified" if proven else "not_certified"
     ok_row("verdict", stated == expected, f"verdict '{stated}' is supported",
            f"verdict: stated '{stated}' but the re-checked conditions support '{expected}'")

@@ -16,7 +16,7 @@ from lyapcheck.params import Problem
 
 log = logging.getLogger(__name__)
 
-CONDITION_ORDER = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound")
+CONDITION_ORDER = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound", "sos_gas", "saturated_loop")
 
 
 def exact_values(problem: Problem) -> dict[str, Any]:
@@ -45,7 +45,7 @@ def build_system(problem: Problem, dynamics: str) -> System:
 
 
 def run_conditions(problem: Problem, dynamics: str) -> dict[str, ConditionResult]:
-    from lyapcheck.conditions import prop41, sector, stabcond2, ultimate
+    from lyapcheck.conditions import prop41, saturated, sector, sos, stabcond2, ultimate
 
     system = build_system(problem, dynamics)
     results: dict[str, ConditionResult] = {}
@@ -57,6 +57,10 @@ def run_conditions(problem: Problem, dynamics: str) -> dict[str, ConditionResult
     results["stabcond2"] = stabcond2.run(g.alpha_d, g.sigma0, g.k_d, g.delta_los, printed_status)
     results["sector_ges"] = sector.run(system)
     results["ultimate_bound"] = ultimate.run(system)
+    results["sos_gas"] = sos.run(system)
+    results["saturated_loop"] = saturated.run(
+        system, results["sos_gas"], alpha_d=g.alpha_d, e11=problem.swimmer.e11, e11_hat=problem.swimmer.e11_hat,
+        omega_so=problem.actuation.omega_so, k_d=g.k_d)
     _add_paper_ball(results, problem)
     return results
 

@@ -105,6 +105,35 @@ def is_positive_definite(m: Matrix) -> bool:
     return is_symmetric(m) and all(minor > 0 for minor in leading_minors(m))
 
 
+def ldl_pivots(m: Matrix) -> list[Fraction] | None:
+    """Pivots of the exact symmetric elimination ``M = L D L^T`` (None if a pivot is zero).
+
+    A symmetric matrix is positive definite iff every pivot is positive; this costs
+    O(n^3) exact operations instead of the n determinants of Sylvester's criterion.
+    """
+    n = len(m)
+    work = [list(row) for row in m]
+    pivots: list[Fraction] = []
+    for k in range(n):
+        pivot = work[k][k]
+        if pivot == 0:
+            return None
+        pivots.append(pivot)
+        for i in range(k + 1, n):
+            factor = work[i][k] / pivot
+            if factor:
+                for j in range(k + 1, n):
+                    work[i][j] -= factor * work[k][j]
+    return pivots
+
+
+def is_positive_definite_ldl(m: Matrix) -> bool:
+    if not is_symmetric(m):
+        return False
+    pivots = ldl_pivots(m)
+    return pivots is not None and all(p > 0 for p in pivots)
+
+
 def is_negative_definite(m: Matrix) -> bool:
     return is_positive_definite(scale(Fraction(-1), m))
 

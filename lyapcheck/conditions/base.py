@@ -9,7 +9,8 @@ from typing import Any, Literal
 from lyapcheck.exact import Matrix
 
 Status = Literal["certified", "refuted", "not_certified", "inconclusive", "holds", "fails"]
-STABILITY_CLASSES = ("prop41_ges", "prop41_iss", "sector_ges")
+#: classes whose exact pass proves stability of the error dynamics (the verdict "certified")
+STABILITY_CLASSES = ("prop41_ges", "prop41_iss", "sector_ges", "sos_gas")
 
 
 @dataclass(frozen=True)

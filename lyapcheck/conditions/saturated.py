@@ -1,0 +1,276 @@
+"""``saturated_loop``: what the certified polynomial V proves for the loop users run.
+
+The ODS law of eq. ``eq:solFinal`` is unsaturated exactly when ``|v_d - d_hat| / e11_hat <
+Omega_SO``. With ``d_hat = 0`` (Remark rem:Estimates) and ``|v_d| = alpha_d sqrt(Delta^2 + y^2)``
+(``y = eps + sigma0 s``, eq. ``eq:los2``), that is the strip
+
+    |y| < Y_sat,   Y_sat^2 = (e11_hat Omega_SO / alpha_d)^2 - Delta^2.
+
+Inside the strip the saturated loop IS the nominal error dynamics of ``sos_gas``.
+
+What is proved (each step exact, with ``V`` from ``sos_gas``, in its scaled coordinates):
+
+1. Invariance (no disturbance). ``V >= l (y^2 + r^2)`` with an exact ``l <= lambda_min(Q_V)``. The
+   level ``c = l * Ysat^2 * (1 - 1e-6)`` gives ``{V <= c}`` inside the strip; there ``V' <= -mu V``.
+   Hence every trajectory of the saturated loop that starts in ``{V <= c}`` never saturates and
+   converges to the path exponentially.
+2. With a disturbance ``|d_perp| <= d*`` (scaled ``k_d = |E_0| d* / (Delta |a11|)``): on
+   ``{V <= v}``, ``|y|, |r| <= R = sqrt(v/l)`` and ``|dV/dy| <= G(R)`` (sum of ``|coefficient| R^degree``),
+   so ``V' <= -R h(R)`` with the concave ``h(R) = mu l R - k_d (g1 + g2 R + g3 R^2)``. If ``h > 0`` at
+   ``R_lo`` and at ``R_hi >= Ysat``, ``{V <= c}`` is invariant and every trajectory from it ends in
+   ``{V <= l R_lo^2}``: ``limsup |eps| <= sqrt(2) Delta R_lo``.
+3. Reaching from anywhere is claimed only if an exact sufficient condition holds (assumption:
+   H1/H2 hold under saturation, i.e. the swimmer keeps ``p_dot = e11 u + d``): the s-dynamics do
+   not depend on the controller, so ``|s| <= U/(2 k_d)`` eventually (box of ``ultimate_bound``); in
+   saturation ``eps`` moves toward the path at speed ``e11 Omega_SO |y| / sqrt(Delta^2 + y^2) - d*``.
+   If ``e11 Omega_SO > d* + sigma0 (k_d S + U/2)`` with ``S = U/(2 k_d)`` the strip is reached; the
+   reaching condition is evaluated and reported, never assumed.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from lyapcheck import exact, poly
+from lyapcheck.conditions.base import ConditionResult, System
+from lyapcheck.conditions.sos import bases, scaled_dynamics
+
+SQRT2_UPPER = Fraction(141422, 100000)
+#: relative shrink of Omega_SO (given as a float-derived Fraction) to a safe lower bound
+OMEGA_ROUNDING = Fraction(1, 10**12)
+
+
+class _LevelProgram:
+    """max c s.t. V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p, sigma = z_s^T S z_s, Q_p, S >= t I (DPP)."""
+
+    def __init__(self, deg_v: int) -> None:
+        import cvxpy as cp
+
+        half = deg_v // 2
+        self.z_s = poly.monomials(0, half - 1)
+        self.z_p = poly.monomials(0, half)
+        ns, n_p = len(self.z_s), len(self.z_p)
+        self.S = cp.Variable((ns, ns), symmetric=True, name="S")
+        self.Qp = cp.Variable((n_p, n_p), symmetric=True, name="Q_p")
+        self.c = cp.Variable(name="c")
+        self.y_sq = cp.Parameter(nonneg=True, name="Y_sq")
+        monos = poly.monomials(0, deg_v)
+        self.v = {m: cp.Parameter(name=f"v_{m[0]}_{m[1]}") for m in monos}
+        classes = poly.gram_classes(self.z_p)
+        s_classes = poly.gram_classes(self.z_s)
+        cons = [self.S >> 1e-9 * np.eye(ns), self.Qp >> 1e-9 * np.eye(n_p)]
+        for m in monos:
+            lhs = sum(self.Qp[i, j] for i, j in classes.get(m, [])) if m in classes else 0
+            # sigma * y^2 contributes S entries of monomial (m - (2, 0)); sigma * (-Y^2) those of m
+            shifted = (m[0] - 2, m[1])
+            times_y2 = sum(self.S[i, j] for i, j in s_classes.get(shifted, [])) if shifted in s_classes else 0
+            plain = sum(self.S[i, j] for i, j in s_classes.get(m, [])) if m in s_classes else 0
+            rhs = self.v[m] - (self.c if m == (0, 0) else 0) - times_y2 + self.y_sq * plain
+            cons.append(lhs == rhs)
+        self.problem = cp.Problem(cp.Maximize(self.c), cons)
+
+
+_LEVEL_PROGRAMS: dict[int, _LevelProgram] = {}
+
+
+def level_residual(V: poly.Poly, c: Fraction, S: exact.Matrix, z_s: list[poly.Monomial], Y_sq: Fraction) -> poly.Poly:
+    """``V - c - sigma (y^2 - Y^2)`` exactly."""
+    sigma = poly.gram_form(z_s, S)
+    shifted = poly.mul(sigma, {(2, 0): Fraction(1), (0, 0): -Y_sq})
+    return poly.add(V, {(0, 0): -c}, poly.scale(Fraction(-1), shifted))
+
+
+def check_level(V: poly.Poly, deg_v: int, level: dict[str, Any], Y_sq: Fraction) -> tuple[bool, str]:
+    """Exact: S > 0, Q_p > 0 and V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p, so V > c wherever |y| >= Y."""
+    prog_z_s = poly.monomials(0, deg_v // 2 - 1)
+    prog_z_p = poly.monomials(0, deg_v // 2)
+    S, Qp, c = exact.from_json(level["S"]), exact.from_json(level["Q_p"]), Fraction(level["c"])
+    if not (exact.is_positive_definite_ldl(S) and exact.is_positive_definite_ldl(Qp)):
+        return False, "multiplier or Gram matrix of the level certificate is not positive definite"
+    if level_residual(V, c, S, prog_z_s, Y_sq) != poly.gram_form(prog_z_p, Qp):
+        return False, "the level identity does not hold exactly"
+    return True, "V > c wherever |y| >= Y_sat (exact S-procedure)"
+
+
+def certified_level(V: poly.Poly, deg_v: int, Y_sq: Fraction) -> dict[str, Any] | None:
+    """Largest level ``c`` (found numerically, checked exactly) with ``{V <= c}`` inside the strip."""
+    from lyapcheck.conditions.sdp import solve
+    from lyapcheck.conditions.sos import project_gram
+
+    prog = _LEVEL_PROGRAMS.setdefault(deg_v, _LevelProgram(deg_v))
+    prog.y_sq.value = float(Y_sq)
+    for m, par in prog.v.items():
+        par.value = float(V.get(m, 0))
+    report = solve(prog.problem)
+    if report.outcome != "optimal" or prog.c.value is None or prog.c.value <= 0:
+        return None
+    c = exact.to_rational(float(prog.c.value) * (1 - 1e-4), 8)
+    S = exact.symmetrize(exact.rational_matrix(prog.S.value))
+    target_poly = level_residual(V, c, S, prog.z_s, Y_sq)
+    Qp = project_gram(prog.z_p, exact.symmetrize(exact.rational_matrix(prog.Qp.value)), target_poly)
+    if Qp is None:
+        return None
+    level = {"c": str(c), "S": exact.to_json(S), "Q_p": exact.to_json(Qp)}
+    return level if check_level(V, deg_v, level, Y_sq)[0] else None
+
+
+def lambda_min_lower(Q: exact.Matrix) -> Fraction | None:
+    lam = float(np.linalg.eigvalsh(np.array(exact.to_float(Q))).min())
+    if lam <= 0:
+        return None
+    ell = exact.to_rational(lam * 0.99, 6)
+    n = len(Q)
+    for _ in range(40):
+        shifted = tuple(tuple(Q[i][j] - (ell if i == j else 0) for j in range(n)) for i in range(n))
+        if exact.is_positive_definite_ldl(shifted):
+            return ell
+        ell /= 2
+    return None
+
+
+def gradient_bound_coefficients(V: poly.Poly) -> list[Fraction]:
+    """``[g0, g1, g2, ...]`` with ``|dV/dy| <= sum g_k R^k`` whenever ``|y|, |r| <= R``."""
+    dv = poly.deriv(V, 0)
+    coeffs: list[Fraction] = [Fraction(0)] * (max((sum(m) for m in dv), default=0) + 1)
+    for m, c in dv.items():
+        coeffs[sum(m)] += abs(Fraction(c))
+    return coeffs
+
+
+def h_value(R: Fraction, mu: Fraction, ell: Fraction, kd: Fraction, g: list[Fraction]) -> Fraction:
+    """``h(R) = mu l R - kd * sum_{k>=1} g_k R^{k-1}`` (``g_0 = 0``: V has no linear term)."""
+    return mu * ell * R - kd * sum((gk * R ** (k - 1) for k, gk in enumerate(g) if k >= 1), Fraction(0))
+
+
+def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: Fraction, e11_hat: Fraction,
+        omega_so: Fraction, k_d: Fraction) -> ConditionResult:
+    if system.dynamics != "derived":
+        return ConditionResult("saturated_loop", "not_certified",
+                               "not applicable: the printed error dynamics are not the plant's (see ledger eq:los3)")
+    if sos_result.status != "certified":
+        return ConditionResult("saturated_loop", "not_certified",
+                               "needs a certified polynomial V (sos_gas), which was not found")
+    dyn = scaled_dynamics(system)
+    assert dyn is not None  # sos_gas was certified on the same structure
+    cert = sos_result.certificate
+    QV = exact.from_json(cert["Q_V"])
+    mu = Fraction(cert["mu_scaled"])
+    z_v, _ = bases(int(cert["degree"]))
+    V = poly.gram_form(z_v, QV)
+    ell = lambda_min_lower(QV)
+    omega_lo = omega_so * (1 - OMEGA_ROUNDING)
+    y_sat_sq = (e11_hat * omega_lo / alpha_d) ** 2 - system.delta**2
+    if ell is None or y_sat_sq <= 0:
+        return ConditionResult("saturated_loop", "not_certified",
+                               "the ODS law saturates everywhere (Omega_SO e11_hat <= alpha_d Delta) or V's bound failed")
+    Y_sq = y_sat_sq / system.delta**2  # scaled strip half-width, squared
+    # level from V >= l (y^2 + r^2) (always valid), improved by the exact S-procedure when it passes
+    c = ell * Y_sq * (1 - Fraction(1, 10**6))
+    level = certified_level(V, int(cert["degree"]), Y_sq)
+    if level is not None and Fraction(level["c"]) > c:
+        c = Fraction(level["c"])
+    data: dict[str, Any] = {"lambda_min_lower": str(ell), "strip_half_width_sq_scaled": str(Y_sq), "level_c": str(c),
+                            "level_certificate": level}
+    numbers: dict[str, Any] = {
+        "strip_half_width_m": math.sqrt(float(y_sat_sq)),
+        "invariant_eps_radius_m_at_s0": None,
+        "ultimate_eps_bound_m": None,
+        "global_reach": None,
+    }
+    # an inner estimate: with s = 0 (r = 0), |V(y, 0)| <= sum_k |a_k| Y0^k for |y| <= Y0
+    on_axis = [abs(Fraction(v)) for m, v in V.items() if m[1] == 0]
+    degs = [m[0] for m in V if m[1] == 0]
+
+    def axis_bound(y0: Fraction) -> Fraction:
+        return sum((a * y0**d for a, d in zip(on_axis, degs)), Fraction(0))
+
+    lo_y, hi_y = Fraction(0), exact.sqrt_upper(Y_sq)
+    for _ in range(40):
+        mid = (lo_y + hi_y) / 2
+        lo_y, hi_y = (mid, hi_y) if axis_bound(mid) <= c else (lo_y, mid)
+    y0 = Fraction(math.floor(float(lo_y) * 10**6), 10**6)  # rounded down: still inside
+    if axis_bound(y0) > c:  # pragma: no cover - y0 <= lo_y, which satisfies it
+        y0 = Fraction(0)
+    numbers["invariant_eps_radius_m_at_s0"] = float(y0 * system.delta)
+    data["axis_radius_scaled"] = str(y0)
+    summary = (f"{{V <= c}} lies in the unsaturated strip |eps + sigma0 s| < {numbers['strip_half_width_m'] * 1e3:.3g} mm: "
+               "from there the saturated loop never saturates and converges")
+    # with disturbance
+    kd = abs(system.E[0]) * system.d_max / (system.delta * dyn.time_scale)
+    g = gradient_bound_coefficients(V)
+    R_hi = exact.sqrt_upper(Y_sq)
+    if system.d_max > 0:
+        a = float(kd * g[3]) if len(g) > 3 else 0.0
+        bcoef = float(kd * g[2]) - float(mu * ell) if len(g) > 2 else -float(mu * ell)
+        c0 = float(kd * g[1]) if len(g) > 1 else 0.0
+        disc = bcoef * bcoef - 4 * a * c0
+        ok_bound = False
+        if a > 0 and disc > 0 and bcoef < 0:
+            R_lo = exact.to_rational((-bcoef - math.sqrt(disc)) / (2 * a) * 1.001, 6)
+            if h_value(R_lo, mu, ell, kd, g) > 0 and h_value(R_hi, mu, ell, kd, g) > 0 and R_lo < R_hi:
+                ok_bound = True
+                eps_bound = SQRT2_UPPER * system.delta * R_lo
+                numbers["ultimate_eps_bound_m"] = float(eps_bound)
+                data.update({"R_lo": str(R_lo), "R_hi": str(R_hi), "kd_scaled": str(kd),
+                             "eps_bound": str(eps_bound)})
+                summary += f"; with |d_perp| <= d* it stays there and ends within |eps| <= {float(eps_bound) * 1e3:.3g} mm"
+        if not ok_bound:
+            summary += "; the disturbance bound d* is too large for this V to keep {V <= c} invariant"
+            data["disturbance"] = "not proved"
+
+    # global reach (exact sufficient condition; see module docstring): once |s| <= S (1 + delta),
+    # in saturation y moves toward the strip at a speed of at least `rate`
+    S = system.speed / (2 * k_d) * (1 + Fraction(1, 10**6))
+    rho_sat = system.speed * system.delta / (y_sat_sq + system.delta**2)
+    # e11 Omega_SO Y / sqrt(Delta^2 + Y^2), bounded below exactly by squaring
+    pull_sq = (e11 * omega_lo) ** 2 * y_sat_sq / (system.delta**2 + y_sat_sq)
+    # the physical plant: d_perp enters eps_dot with gain 1 (eq:varepsilonDot, as derived)
+    push = system.d_max + system.sigma0 * ((k_d + system.sigma0 * rho_sat) * S + system.speed / 2)
+    proved = pull_sq > push * push
+    numbers["global_reach"] = "proved" if proved else "not_proved"
+    numbers["reach_condition"] = (
+        f"in saturation the swimmer pulls y toward the strip at {math.sqrt(float(pull_sq)):.3g} m/s; disturbance and "
+        f"integrator push at most {float(push):.3g} m/s (wind-up bound |s| <= U/(2 k_d) = {float(S):.3g} m)")
+    data["reach"] = {"pull_sq": str(pull_sq), "push": str(push), "s_bound": str(S)}
+    if proved:
+        summary += ("; from ANY start the strip is reached (after |s| <= U/(2k_d)) and never left again"
+                    + ("" if system.d_max > 0 else ", so every trajectory converges to the path"))
+    else:
+        summary += "; reaching the strip from anywhere is not proved (" + (
+            "the integrator's wind-up bound sigma0 U/(2 k_d) is too large)" if e11 * omega_lo > system.d_max
+            else "the swimmer cannot out-swim the disturbance bound)")
+    summary = summary.replace("{V <= c} lies", f"{{V <= c}} (contains every start with s = 0, |eps| <= "
+                              f"{numbers['invariant_eps_radius_m_at_s0'] * 1e3:.3g} mm) lies", 1)
+    return ConditionResult("saturated_loop", "certified", summary, numbers=numbers, certificate=data)
+
+
+def verify(system: System, sos_cert: dict[str, Any], cert: dict[str, Any], *, alpha_d: Fraction,
+           e11_hat: Fraction, omega_so: Fraction) -> tuple[bool, str]:
+    """Exact re-check of the invariance part (the level inside the strip) and the axis radius."""
+    z_v, _ = bases(int(sos_cert["degree"]))
+    V = poly.gram_form(z_v, exact.from_json(sos_cert["Q_V"]))
+    Y_sq = ((e11_hat * omega_so * (1 - OMEGA_ROUNDING) / alpha_d) ** 2 - system.delta**2) / system.delta**2
+    if Fraction(cert["strip_half_width_sq_scaled"]) != Y_sq:
+        return False, "stored strip width does not follow from the inputs"
+    c = Fraction(cert["level_c"])
+    ell = Fraction(cert["lambda_min_lower"])
+    QV = exact.from_json(sos_cert["Q_V"])
+    n = len(QV)
+    if not exact.is_positive_definite_ldl(tuple(tuple(QV[i][j] - (ell if i == j else 0) for j in range(n)) for i in range(n))):
+        return False, "lambda_min lower bound of Q_V fails"
+    if c > ell * Y_sq:
+        level = cert.get("level_certificate")
+        if level is None or Fraction(level["c"]) != c:
+            return False, "level c exceeds what lambda_min proves and has no S-procedure certificate"
+        ok, why = check_level(V, int(sos_cert["degree"]), level, Y_sq)
+        if not ok:
+            return False, why
+    y0 = Fraction(cert["axis_radius_scaled"])
+    axis = sum((abs(Fraction(v)) * y0 ** m[0] for m, v in V.items() if m[1] == 0), Fraction(0))
+    if axis > c:
+        return False, "the stated axis radius is not inside {V <= c}"
+    return True, "{V <= c} lies in the unsaturated strip and contains the stated starts, exactly"

@@ -1,0 +1,244 @@
+"""``sos_gas``: a polynomial Lyapunov function for the rational error dynamics (sum of squares).
+
+Coordinates. With ``y = (eps + sigma0 s)/Delta``, ``r = sigma0 s/Delta``, ``e = y - r`` and time
+``tau = |a11| t``, the error dynamics ``eps_dot = a11 eps + a12 s``,
+``s_dot = a22 s + U Delta eps/((eps + sigma0 s)^2 + Delta^2)`` become
+
+    e' = -e + c r,     r' = -a r + b e / q(y),     q(y) = y^2 + 1,
+
+with exact rationals ``c = a12/(sigma0 |a11|)``, ``a = -a22/|a11|``, ``b = sigma0 U/(Delta |a11|)``.
+Multiplying by ``q > 0`` gives a polynomial field ``g = q * (y', r')``.
+
+Certificate. Polynomials ``V = z_V^T Q_V z_V`` and ``W = z_W^T Q_W z_W`` with exact rational Gram
+matrices, both positive definite (exact LDL^T pivots), and the exact identity
+
+    -grad V . g - mu V q = W.
+
+Then ``V >= lambda_min(Q_V) (y^2 + r^2)`` (radially unbounded, positive definite) and
+``V' = grad V . g / q = -mu V - W/q``, so ``V' <= -mu V`` and ``V' < 0`` for ``x != 0``: the origin is
+globally asymptotically stable, and for ``mu > 0`` ``V`` decays like ``exp(-mu |a11| t)`` from every
+initial condition (exponential stability on every bounded set of initial conditions; the
+quartic ``V`` does not give a bound linear in ``|x0|``, so this is not claimed to be GES).
+
+Why the basis omits ``r^k`` at top degree: the cubic part of ``g`` vanishes on the line
+``y = 0`` (there ``q = 1`` does not grow), so the top-degree part of ``W`` has the factor ``y^2``
+and a strictly positive Gram matrix needs the Newton-polytope-reduced basis.
+
+Exactness (rounding and projection): ``Q_V`` from the solver is rounded to rationals, which
+fixes ``V`` and hence the exact target ``p = -grad V . g - mu V q``; ``Q_W`` is rounded and then
+projected orthogonally onto ``{Q : z_W^T Q z_W = p}``. Each monomial constrains a disjoint set of
+Gram entries, so the projection spreads each coefficient's residual equally over its entries,
+in exact arithmetic. Positive definiteness of both matrices is then checked exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from lyapcheck import exact, poly
+from lyapcheck.conditions.base import ConditionResult, System
+from lyapcheck.conditions.sdp import solve
+
+DEGREES = (4, 6)
+#: decay-rate search in scaled time (the far-field rate of eps is 1 there)
+MU_MAX = Fraction(4)
+MU_MIN = Fraction(1, 10**7)
+MU_BISECTION_STEPS = 4
+
+
+@dataclass(frozen=True)
+class ScaledDynamics:
+    time_scale: Fraction
+    c: Fraction
+    a: Fraction
+    b: Fraction
+
+    def fields(self) -> tuple[poly.Poly, poly.Poly, poly.Poly]:
+        """Exact polynomial field ``(g_y, g_r)`` (cleared of ``q``) and ``q``, in (y, r)."""
+        q = {(2, 0): Fraction(1), (0, 0): Fraction(1)}
+        e = {(1, 0): Fraction(1), (0, 1): Fraction(-1)}
+        e_dot = poly.add(poly.scale(Fraction(-1), e), {(0, 1): self.c})
+        r_dot_linear = {(0, 1): -self.a}
+        g_r = poly.add(poly.mul(r_dot_linear, q), poly.scale(self.b, e))
+        g_y = poly.add(poly.mul(e_dot, q), g_r)
+        return g_y, g_r, q
+
+
+def scaled_dynamics(system: System) -> ScaledDynamics | None:
+    a = system.A
+    if not (a[1][0] == 0 and a[0][0] < 0 and a[1][1] < 0 and system.sigma0 > 0
+            and system.B == ((0, 0), (1, 0))):
+        return None
+    ts = -a[0][0]
+    return ScaledDynamics(time_scale=ts, c=a[0][1] / (system.sigma0 * ts), a=-a[1][1] / ts,
+                          b=system.sigma0 * system.speed / (system.delta * ts))
+
+
+def bases(deg_v: int) -> tuple[list[poly.Monomial], list[poly.Monomial]]:
+    half = deg_v // 2
+    z_v = poly.monomials(1, half)
+    z_w = [m for m in poly.monomials(1, half + 1) if m != (0, half + 1)]
+    return z_v, z_w
+
+
+def target(V: poly.Poly, g_y: poly.Poly, g_r: poly.Poly, q: poly.Poly, mu: Any) -> poly.Poly:
+    """``p = -grad V . g - mu V q`` (exact for Fraction input)."""
+    flow = poly.add(poly.mul(poly.deriv(V, 0), g_y), poly.mul(poly.deriv(V, 1), g_r))
+    return poly.add(poly.scale(-1, flow), poly.scale(-mu, poly.mul(V, q)))
+
+
+class _SosProgram:
+    """max t s.t. trace Q_V = 1, Q_V >= tI, Q_W >= tI, coefficient matching (DPP in the data)."""
+
+    def __init__(self, deg_v: int) -> None:
+        import cvxpy as cp
+
+        self.z_v, self.z_w = bases(deg_v)
+        nv, nw = len(self.z_v), len(self.z_w)
+        self.QV = cp.Variable((nv, nv), symmetric=True, name="Q_V")
+        self.QW = cp.Variable((nw, nw), symmetric=True, name="Q_W")
+        self.t = cp.Variable(name="t")
+        classes = poly.gram_classes(self.z_w)
+        top = deg_v + 2
+        self.monos = [m for m in poly.monomials(2, top)]
+        self.C = {m: cp.Parameter((nv, nv), name=f"C_{m[0]}_{m[1]}") for m in self.monos}
+        cons = [cp.trace(self.QV) == 1, self.QV >> self.t * np.eye(nv), self.QW >> self.t * np.eye(nw), self.t <= 1]
+        for m in self.monos:
+            lhs = sum(self.QW[i, j] for i, j in classes.get(m, [])) if m in classes else 0
+            cons.append(lhs == cp.sum(cp.multiply(self.C[m], self.QV)))
+        self.problem = cp.Problem(cp.Maximize(self.t), cons)
+
+    def set_data(self, dyn: ScaledDynamics, mu: float) -> None:
+        g_y, g_r, q = (
+            {m: float(c) for m, c in p.items()} for p in dyn.fields()
+        )
+        nv = len(self.z_v)
+        mats = {m: np.zeros((nv, nv)) for m in self.monos}
+        for i in range(nv):
+            for j in range(nv):
+                zz = poly.monomial((self.z_v[i][0] + self.z_v[j][0], self.z_v[i][1] + self.z_v[j][1]))
+                for m, c in target(zz, g_y, g_r, q, mu).items():
+                    mats[m][i, j] += c
+        for m in self.monos:
+            self.C[m].value = mats[m]
+
+
+@lru_cache(maxsize=4)
+def program(deg_v: int) -> _SosProgram:
+    return _SosProgram(deg_v)
+
+
+def project_gram(basis: list[poly.Monomial], Q: exact.Matrix, p: poly.Poly) -> exact.Matrix | None:
+    """Exact orthogonal projection of ``Q`` onto ``{Q : z^T Q z = p}`` (None if p is not representable)."""
+    classes = poly.gram_classes(basis)
+    if any(m not in classes for m, c in p.items() if c != 0):
+        return None
+    work = [list(row) for row in Q]
+    for m, entries in classes.items():
+        residual = Fraction(p.get(m, 0)) - sum((work[i][j] for i, j in entries), Fraction(0))
+        if residual:
+            share = residual / len(entries)
+            for i, j in entries:
+                work[i][j] += share
+    return tuple(tuple(row) for row in work)
+
+
+def exact_check(dyn: ScaledDynamics, deg_v: int, QV: exact.Matrix, QW: exact.Matrix, mu: Fraction) -> tuple[bool, str]:
+    """Exact: Q_V > 0, Q_W > 0 and -grad V . g - mu V q == z_W^T Q_W z_W identically."""
+    z_v, z_w = bases(deg_v)
+    if not exact.is_positive_definite_ldl(QV):
+        return False, "Q_V is not positive definite (exact LDL^T)"
+    if not exact.is_positive_definite_ldl(QW):
+        return False, "Q_W is not positive definite (exact LDL^T)"
+    g_y, g_r, q = dyn.fields()
+    p = target(poly.gram_form(z_v, QV), g_y, g_r, q, mu)
+    if p != poly.gram_form(z_w, QW):
+        return False, "the polynomial identity -grad V . g - mu V q = z^T Q_W z does not hold exactly"
+    return True, "Q_V > 0, Q_W > 0 and the SOS identity holds, exactly"
+
+
+def _attempt(dyn: ScaledDynamics, deg_v: int, mu: Fraction) -> tuple[dict[str, Any] | None, Any]:
+    prog = program(deg_v)
+    prog.set_data(dyn, float(mu))
+    report = solve(prog.problem)
+    if report.outcome != "optimal" or prog.t.value is None or prog.t.value <= 0:
+        return None, report
+    QV = exact.symmetrize(exact.rational_matrix(prog.QV.value))
+    g_y, g_r, q = dyn.fields()
+    p = target(poly.gram_form(prog.z_v, QV), g_y, g_r, q, mu)
+    QW = project_gram(prog.z_w, exact.symmetrize(exact.rational_matrix(prog.QW.value)), p)
+    if QW is None:
+        return None, report
+    ok, _ = exact_check(dyn, deg_v, QV, QW, mu)
+    if not ok:
+        return None, report
+    return {"degree": deg_v, "mu_scaled": str(mu), "Q_V": exact.to_json(QV), "Q_W": exact.to_json(QW),
+            "basis_V": [list(m) for m in prog.z_v], "basis_W": [list(m) for m in prog.z_w],
+            "margin": float(prog.t.value)}, report
+
+
+def run(system: System) -> ConditionResult:
+    """Search a polynomial V of degree 4, then 6; then the largest decay rate mu it certifies."""
+    dyn = scaled_dynamics(system)
+    if dyn is None:
+        return ConditionResult("sos_gas", "not_certified", "the dynamics do not have the structure this class needs")
+    scaling = {"y": "(eps + sigma0 s)/Delta", "r": "sigma0 s/Delta", "tau": "|a11| t",
+               "time_scale": str(dyn.time_scale), "c": str(dyn.c), "a": str(dyn.a), "b": str(dyn.b)}
+    solver_log: list[dict[str, Any]] = []
+    for deg_v in DEGREES:
+        cert, report = _attempt(dyn, deg_v, Fraction(0))
+        solver_log.append(report.to_json())
+        if cert is None:
+            continue
+        # decay rates span orders of magnitude (scaled time): step down geometrically from the
+        # largest plausible rate to the first success, then bisect geometrically above it
+        lo, hi = Fraction(0), MU_MAX
+        candidate = MU_MAX
+        while candidate > MU_MIN:
+            better, report = _attempt(dyn, deg_v, candidate)
+            solver_log.append(report.to_json())
+            if better is not None:
+                cert, lo = better, candidate
+                break
+            hi = candidate
+            candidate = candidate / 4
+        if lo > 0:
+            for _ in range(MU_BISECTION_STEPS):
+                mid = exact.to_rational(float(np.sqrt(float(lo) * float(hi))), 3)
+                better, report = _attempt(dyn, deg_v, mid)
+                solver_log.append(report.to_json())
+                if better is not None:
+                    cert, lo = better, mid
+                else:
+                    hi = mid
+        mu = Fraction(cert["mu_scaled"])
+        rate = mu * dyn.time_scale
+        numbers = {"degree": deg_v, "decay_rate_V_per_s": float(rate), "relative_margin": cert["margin"],
+                   "proves": "GAS" + (", V decays like exp(-%.4g t)" % float(rate) if rate > 0 else "")}
+        summary = (f"polynomial V of degree {deg_v}: global asymptotic stability"
+                   + (f", V' <= -{float(rate):.3g} V (exponential decay from every start)" if rate > 0 else "")
+                   + ", exactly checked")
+        return ConditionResult("sos_gas", "certified", summary, numbers=numbers,
+                               certificate={**cert, "scaling": scaling}, solver={"solves": solver_log})
+    return ConditionResult("sos_gas", "not_certified",
+                           f"no SOS certificate of degree <= {DEGREES[-1]} was found; this is not a proof of instability",
+                           numbers={"scaling": scaling}, solver={"solves": solver_log})
+
+
+def verify(system: System, cert: dict[str, Any]) -> tuple[bool, str]:
+    dyn = scaled_dynamics(system)
+    if dyn is None:
+        return False, "the dynamics do not have the structure this class needs"
+    for key in ("c", "a", "b", "time_scale"):
+        if Fraction(cert["scaling"][key]) != getattr(dyn, key):
+            return False, f"the stored scaled coefficient {key} does not match the system"
+    deg_v = int(cert["degree"])
+    z_v, z_w = bases(deg_v)
+    if [list(m) for m in z_v] != cert["basis_V"] or [list(m) for m in z_w] != cert["basis_W"]:
+        return False, "stored monomial bases differ from this version's"
+    return exact_check(dyn, deg_v, exact.from_json(cert["Q_V"]), exact.from_json(cert["Q_W"]), Fraction(cert["mu_scaled"]))
