@@ -19,6 +19,8 @@ from lyapcheck.errors import InputFileError, InvalidParameter, LyapcheckError
 F = TypeVar("F", bound=Callable[..., Any])
 
 EXIT_OK, EXIT_NEGATIVE, EXIT_USAGE = 0, 1, 2
+#: a bug in lyapcheck itself (not in the input): one line, and the traceback with LYAPCHECK_DEBUG=1
+EXIT_INTERNAL = 3
 
 
 def _fail(message: str, code: int) -> None:
@@ -39,6 +41,15 @@ def one_line_errors(func: F) -> F:
             _fail(str(exc), EXIT_NEGATIVE)
         except KeyboardInterrupt:
             _fail("interrupted", 130)
+        except (SystemExit, click.exceptions.Exit, click.ClickException):
+            raise
+        except Exception as exc:  # noqa: BLE001 - last resort: a user never sees a traceback
+            import os
+
+            if os.environ.get("LYAPCHECK_DEBUG"):
+                raise
+            _fail(f"internal error ({type(exc).__name__}: {exc}); rerun with LYAPCHECK_DEBUG=1 and report it",
+                  EXIT_INTERNAL)
 
     return wrapper  # type: ignore[return-value]
 

@@ -19,10 +19,10 @@ from tests.conftest import PAPER_TOML
 PAPER_EXPECTED = {
     "derived": {"prop41_ges": "refuted", "prop41_iss": "refuted", "stabcond2": "holds",
                 "sector_ges": "refuted", "ultimate_bound": "certified", "sos_gas": "certified",
-                "saturated_loop": "certified"},
+                "saturated_loop": "certified", "sos_bound": "certified"},
     "printed": {"prop41_ges": "refuted", "prop41_iss": "refuted", "stabcond2": "holds",
                 "sector_ges": "certified", "ultimate_bound": "certified", "sos_gas": "certified",
-                "saturated_loop": "not_certified"},
+                "saturated_loop": "not_certified", "sos_bound": "certified"},
 }
 
 

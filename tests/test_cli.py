@@ -85,3 +85,12 @@ def test_corrupt_certificate_is_one_line_exit_2(tmp_path: Path) -> None:
     bad.write_text("{not json")
     done = run("verify", str(bad))
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+
+
+def test_quick_classes_and_unknown_class() -> None:
+    done = run("certify", str(PAPER_TOML), "--classes", "quick", "--json")
+    assert done.returncode == 1  # no quadratic certificate exists at the paper's gains
+    assert list(json.loads(done.stdout)["conditions"]) == [
+        "prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound"]
+    bad = run("certify", str(PAPER_TOML), "--classes", "prop41_ges,magic")
+    assert bad.returncode == 2 and "'classes'" in bad.stderr and "Traceback" not in bad.stderr

@@ -147,3 +147,38 @@ def test_sos_and_saturated_verdicts_survive_exact_recheck(overrides: dict[str, s
     assert all(ok for _, ok, _ in rows), rows
     if results["sos_gas"].status == "certified":
         assert any(name == "sos_gas" for name, _, _ in rows)
+
+
+@pytest.mark.slow
+def test_sos_bound_is_tight_and_never_exceeded_in_simulation(paper_problem, paper_results) -> None:
+    res = paper_results["sos_bound"]
+    assert res.status == "certified"
+    bound = res.numbers["eps_bound_m"]
+    quadratic = paper_results["ultimate_bound"].numbers["eps_bound_m"]
+    assert bound < quadratic / 50  # 0.35 mm against the 34.9 mm comparison box
+    system = build_system(paper_problem, "derived")
+    A = np.array(exact.to_float(system.A))
+    U, delta, sigma, d = float(system.speed), float(system.delta), float(system.sigma0), float(system.d_max)
+    disturbances = [lambda t: d, lambda t: -d, lambda t: d * np.sin(0.5 * t), lambda t: d * np.sign(np.sin(0.8 * t))]
+    worst = 0.0
+    for w in disturbances:
+        def f(t: float, x: np.ndarray, w=w) -> list[float]:
+            eps, s = x
+            rho = U * delta / ((eps + sigma * s) ** 2 + delta**2)
+            return [A[0, 0] * eps + A[0, 1] * s + w(t), A[1, 1] * s + rho * eps]
+
+        sol = solve_ivp(f, (0, 400), [0.02, 0.0], method="LSODA", rtol=1e-9, atol=1e-13, max_step=0.5,
+                        t_eval=np.linspace(200, 400, 4001))
+        worst = max(worst, float(np.abs(sol.y[0]).max()))
+    assert 0 < worst <= bound  # a simulated trajectory above a certified bound is a soundness violation
+    assert bound / worst < 10  # and the bound is not vacuous
+
+
+def test_sos_bound_tamper_is_caught(paper_problem, paper_results) -> None:
+    from lyapcheck.conditions import sos_bound
+
+    cert = dict(paper_results["sos_bound"].certificate)
+    system = build_system(paper_problem, "derived")
+    assert sos_bound.verify(system, cert)[0]
+    assert not sos_bound.verify(system, {**cert, "B": str(Fraction(cert["B"]) / 4)})[0]
+    assert not sos_bound.verify(system, {**cert, "eps_bound": str(Fraction(cert["eps_bound"]) / 2)})[0]

@@ -1,0 +1,246 @@
+"""A global ultimate bound on ``|eps|`` from a polynomial certificate (a stage of ``ultimate_bound``).
+
+In the scaled coordinates of :mod:`lyapcheck.conditions.sos` a disturbance ``|d_perp| <= d*``
+adds ``w`` to ``y'`` with ``|w| <= k = |E_0| d* / (Delta |a11|)``. Exact rational certificates:
+
+* ``V = z^T Q_V z`` over ``z = (1, y, r, y^2, y r, r^2)`` with ``Q_V - delta diag(0,0,0,1,1,1) > 0``
+  (so ``V >= delta (y^4 + y^2 r^2 + r^4)``: radially unbounded);
+* dissipation, in ``(y, r, w)``: ``-grad V . g - q (dV/dy) w - lam (V - 1) - tau (k^2 - w^2) = z_D^T Q_D z_D``
+  with ``tau = z_T^T T z_T`` and ``Q_D, T > 0``;
+* output: ``V - (y - r)^2 + (B - 1) = z_E^T Q_E z_E`` with ``Q_E > 0``.
+
+For conditioning the certificate is written with ``r = beta r~`` and time divided by ``omega``
+(both exact rationals near ``sqrt(b)``, the ILOS oscillation frequency in scaled time); the
+argument is unchanged in those coordinates.
+
+Proof. Wherever ``V >= 1`` and ``|w| <= k``: ``q V' = grad V . g + q (dV/dy) w <= -lam (V - 1) <= 0``.
+If ``V >= 1 + delta`` held for ever, the trajectory would stay in the compact set
+``{1 + delta <= V <= V(t0)}``, where ``q`` is bounded, so ``V' <= -lam delta / q_max`` would drive
+``V`` below ``1 + delta``, a contradiction; and ``V = 1 + delta`` cannot be crossed upwards. So
+``limsup V <= 1`` from EVERY initial condition, and by the output certificate
+``(y - r)^2 <= V + B - 1``, hence ``limsup |eps| = Delta limsup |y - r| <= Delta sqrt(B)``.
+This speaks of the error dynamics (unsaturated ODS law), as Proposition 4.1 does.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from lyapcheck import exact, poly
+from lyapcheck.conditions.base import System
+from lyapcheck.conditions.sdp import solve
+from lyapcheck.conditions.sos import ScaledDynamics, project_gram, scaled_dynamics
+
+#: strictness margins of the numerical search, so the exact checks survive rounding
+ETA = 1e-7
+TOP_DELTA = Fraction(1, 10**4)
+#: decay rates tried (balanced time); each costs one solve of ~1 s
+LAMBDA_GRID = (0.03, 0.3, 1.0)
+
+Z_V = poly.monomials(0, 2)
+Z_E = poly.monomials(0, 2)
+Z_T = poly.monomials(0, 2, 3)
+#: r^3 is left out: the top-degree part of the dissipation form vanishes to second order on y = 0
+Z_D = [m for m in poly.monomials(0, 3, 3) if m != (0, 3, 0)]
+TOP = [i for i, m in enumerate(Z_V) if sum(m) == 2]
+
+
+def balanced_fields(dyn: ScaledDynamics, beta: Fraction, omega: Fraction) -> tuple[poly.Poly, poly.Poly, poly.Poly]:
+    """The field in ``(y, r~)`` with ``r = beta r~`` and time divided by ``omega`` (exact)."""
+    g_y, g_r, q = dyn.fields()
+
+    def sub(p: poly.Poly) -> poly.Poly:
+        return {m: c * beta ** m[1] for m, c in p.items()}
+
+    return poly.scale(1 / omega, sub(g_y)), poly.scale(1 / (beta * omega), sub(g_r)), sub(q)
+
+
+def dissipation(V: poly.Poly, tau: poly.Poly, fields: tuple[poly.Poly, poly.Poly, poly.Poly], k: Any, lam: Any) -> poly.Poly:
+    """``-grad V . g - q (dV/dy) w - lam (V - 1) - tau (k^2 - w^2)`` in (y, r~, w)."""
+    g_y, g_r, q = (poly.embed(p, 3) for p in fields)
+    V3 = poly.embed(V, 3)
+    flow = poly.add(poly.mul(poly.deriv(V3, 0), g_y), poly.mul(poly.deriv(V3, 1), g_r))
+    push = poly.mul(poly.mul(q, poly.deriv(V3, 0)), {(0, 0, 1): 1})
+    level = poly.scale(lam, poly.add(V3, {(0, 0, 0): -1}))
+    s_proc = poly.mul(tau, {(0, 0, 0): k * k, (0, 0, 2): -1})
+    return poly.add(poly.scale(-1, flow), poly.scale(-1, push), poly.scale(-1, level), poly.scale(-1, s_proc))
+
+
+def output_form(V: poly.Poly, B: Any, beta: Any) -> poly.Poly:
+    """``V - (y - beta r~)^2 + (B - 1)``."""
+    return poly.add(V, {(2, 0): -1, (1, 1): 2 * beta, (0, 2): -beta * beta}, {(0, 0): B - 1})
+
+
+class _BoundProgram:
+    def __init__(self) -> None:
+        import cvxpy as cp
+
+        self.QV = cp.Variable((len(Z_V), len(Z_V)), symmetric=True)
+        self.T = cp.Variable((len(Z_T), len(Z_T)), symmetric=True)
+        self.QD = cp.Variable((len(Z_D), len(Z_D)), symmetric=True)
+        self.QE = cp.Variable((len(Z_E), len(Z_E)), symmetric=True)
+        self.B = cp.Variable()
+        self.lam = cp.Parameter(nonneg=True)
+        self.k2 = cp.Parameter(nonneg=True)
+        self.beta = cp.Parameter(nonneg=True)
+        self.beta2 = cp.Parameter(nonneg=True)
+        # the dynamics enter through fixed coefficient tables built per solve (parameters)
+        top = np.zeros((len(Z_V), len(Z_V)))
+        for i in TOP:
+            top[i, i] = float(TOP_DELTA)
+        d_classes = poly.gram_classes(Z_D)
+        e_classes = poly.gram_classes(Z_E)
+        t_classes = poly.gram_classes(Z_T)
+        monos_d = poly.monomials(0, 6, 3)
+        # coefficient of monomial m of -grad V . g - q dV/dy w - lam V  is  <C_m, Q_V> + lam <L_m, Q_V>
+        self.C = {m: cp.Parameter((len(Z_V), len(Z_V))) for m in monos_d}
+        self.Lv = {m: np.zeros((len(Z_V), len(Z_V))) for m in monos_d}
+        v_classes = poly.gram_classes(Z_V)
+        for m2, entries in v_classes.items():
+            m3 = (*m2, 0)
+            for i, j in entries:
+                self.Lv[m3][i, j] += 1.0
+        cons = [self.QV - top >> ETA * np.eye(len(Z_V)), self.T >> ETA * np.eye(len(Z_T)),
+                self.QD >> ETA * np.eye(len(Z_D)), self.QE >> ETA * np.eye(len(Z_E))]
+        for m in monos_d:
+            lhs = sum(self.QD[i, j] for i, j in d_classes.get(m, [])) if m in d_classes else 0
+            rhs = cp.sum(cp.multiply(self.C[m], self.QV)) - self.lam * cp.sum(cp.multiply(self.Lv[m], self.QV))
+            if m == (0, 0, 0):
+                rhs = rhs + self.lam
+            # - tau (k^2 - w^2): tau coefficient of m times -k^2, and of m - (0,0,2) times +1
+            if m in t_classes:
+                rhs = rhs - self.k2 * sum(self.T[i, j] for i, j in t_classes[m])
+            shifted = (m[0], m[1], m[2] - 2)
+            if shifted in t_classes:
+                rhs = rhs + sum(self.T[i, j] for i, j in t_classes[shifted])
+            cons.append(lhs == rhs)
+        for m in poly.monomials(0, 4):
+            lhs = sum(self.QE[i, j] for i, j in e_classes.get(m, [])) if m in e_classes else 0
+            v_part = sum(self.QV[i, j] for i, j in v_classes.get(m, [])) if m in v_classes else 0
+            extra = {(2, 0): -1.0, (1, 1): 2.0 * self.beta, (0, 2): -self.beta2}.get(m, 0.0)
+            const = (self.B - 1) if m == (0, 0) else 0
+            cons.append(lhs == v_part + extra + const)
+        self.problem = cp.Problem(cp.Minimize(self.B), cons)
+
+    def set_dynamics(self, fields: tuple[poly.Poly, poly.Poly, poly.Poly], beta: Fraction) -> None:
+        self.beta.value, self.beta2.value = float(beta), float(beta * beta)
+        g_y, g_r, q = (poly.embed({m: float(c) for m, c in p.items()}, 3) for p in fields)
+        n = len(Z_V)
+        mats = {m: np.zeros((n, n)) for m in self.C}
+        for i in range(n):
+            for j in range(n):
+                zz = poly.embed(poly.monomial(tuple(a + b for a, b in zip(Z_V[i], Z_V[j]))), 3)
+                flow = poly.add(poly.mul(poly.deriv(zz, 0), g_y), poly.mul(poly.deriv(zz, 1), g_r))
+                push = poly.mul(poly.mul(q, poly.deriv(zz, 0)), {(0, 0, 1): 1.0})
+                for m, c in poly.add(poly.scale(-1.0, flow), poly.scale(-1.0, push)).items():
+                    mats[m][i, j] += c
+        for m, par in self.C.items():
+            par.value = mats[m]
+
+
+@lru_cache(maxsize=1)
+def program() -> _BoundProgram:
+    return _BoundProgram()
+
+
+def scales(dyn: ScaledDynamics) -> tuple[Fraction, Fraction]:
+    """Rational ``beta = omega ~ sqrt(b)``: balances the ILOS oscillation (frequency ~ sqrt(b))."""
+    root = exact.to_rational(float(np.sqrt(float(dyn.b))), 4) if dyn.b > 0 else Fraction(1)
+    return max(root, Fraction(1)), max(root, Fraction(1))
+
+
+def check(dyn: ScaledDynamics, k: Fraction, cert: dict[str, Any]) -> tuple[bool, str]:
+    """Exact re-check of a bound certificate (see module docstring)."""
+    QV, T, QD, QE = (exact.from_json(cert[key]) for key in ("Q_V", "T", "Q_D", "Q_E"))
+    lam, B = Fraction(cert["lambda"]), Fraction(cert["B"])
+    beta, omega = Fraction(cert["beta"]), Fraction(cert["omega"])
+    if beta <= 0 or omega <= 0:
+        return False, "scales must be positive"
+    shifted = tuple(tuple(QV[i][j] - (TOP_DELTA if i == j and i in TOP else 0) for j in range(len(QV)))
+                    for i in range(len(QV)))
+    if lam <= 0 or not all(exact.is_positive_definite_ldl(m) for m in (shifted, T, QD, QE)):
+        return False, "a Gram matrix or multiplier of the bound certificate is not positive definite"
+    V = poly.gram_form(Z_V, QV)
+    tau = poly.gram_form(Z_T, T)
+    fields = balanced_fields(dyn, beta, omega)
+    if dissipation(V, tau, fields, k / omega, lam) != poly.gram_form(Z_D, QD):
+        return False, "the dissipation identity does not hold exactly"
+    if output_form(V, B, beta) != poly.gram_form(Z_E, QE):
+        return False, "the output identity does not hold exactly"
+    return True, "ok"
+
+
+def run(system: System) -> dict[str, Any] | None:
+    """Search and exactly check the bound; returns the certificate (with ``eps_bound``) or None."""
+    dyn = scaled_dynamics(system)
+    if dyn is None or system.d_max <= 0:
+        return None
+    k = abs(system.E[0]) * system.d_max / (system.delta * dyn.time_scale)
+    beta, omega = scales(dyn)
+    fields = balanced_fields(dyn, beta, omega)
+    prog = program()
+    prog.set_dynamics(fields, beta)
+    prog.k2.value = float((k / omega) ** 2)
+    best: dict[str, Any] | None = None
+    for lam in LAMBDA_GRID:
+        prog.lam.value = lam
+        report = solve(prog.problem)
+        # an inaccurate solution is still a candidate: the exact check below is the judge
+        if report.outcome not in ("optimal", "inaccurate") or prog.B.value is None or prog.QV.value is None:
+            continue
+        lam_q = exact.to_rational(lam, 6)
+        B = exact.to_rational(float(prog.B.value) * (1 + 1e-6) + 1e-9, 9)
+        QV = exact.symmetrize(exact.rational_matrix(prog.QV.value))
+        T = exact.symmetrize(exact.rational_matrix(prog.T.value))
+        V, tau = poly.gram_form(Z_V, QV), poly.gram_form(Z_T, T)
+        QD = project_gram(Z_D, exact.symmetrize(exact.rational_matrix(prog.QD.value)),
+                          dissipation(V, tau, fields, k / omega, lam_q))
+        QE = project_gram(Z_E, exact.symmetrize(exact.rational_matrix(prog.QE.value)), output_form(V, B, beta))
+        if QD is None or QE is None:
+            continue
+        cert = {"lambda": str(lam_q), "B": str(B), "beta": str(beta), "omega": str(omega),
+                "Q_V": exact.to_json(QV), "T": exact.to_json(T), "Q_D": exact.to_json(QD), "Q_E": exact.to_json(QE),
+                "k_scaled": str(k)}
+        if not check(dyn, k, cert)[0]:
+            continue
+        eps_bound = system.delta * exact.sqrt_upper(B)
+        if best is None or eps_bound < Fraction(best["eps_bound"]):
+            best = {**cert, "eps_bound": str(eps_bound)}
+    return best
+
+
+def run_class(system: System) -> "ConditionResult":
+    """The ``sos_bound`` condition class (see module docstring)."""
+    from lyapcheck.conditions.base import ConditionResult
+
+    if system.d_max <= 0:
+        return ConditionResult("sos_bound", "not_certified", "d* = 0: nothing to bound (see sos_gas for convergence)")
+    cert = run(system)
+    if cert is None:
+        return ConditionResult("sos_bound", "not_certified",
+                               "no polynomial dissipation certificate was found; this is not a proof that the bound fails")
+    bound = Fraction(cert["eps_bound"])
+    return ConditionResult(
+        "sos_bound", "certified",
+        f"from every initial condition limsup |eps| <= {float(bound) * 1e3:.4g} mm (polynomial V, exactly checked)",
+        numbers={"eps_bound_m": float(bound), "eps_bound_exact": str(bound), "d_max_m_per_s": float(system.d_max)},
+        certificate=cert)
+
+
+def verify(system: System, cert: dict[str, Any]) -> tuple[bool, str]:
+    dyn = scaled_dynamics(system)
+    if dyn is None:
+        return False, "the dynamics do not have the structure this stage needs"
+    k = abs(system.E[0]) * system.d_max / (system.delta * dyn.time_scale)
+    if Fraction(cert["k_scaled"]) != k:
+        return False, "the stored disturbance scale does not match the system"
+    ok, why = check(dyn, k, cert)
+    if not ok:
+        return False, why
+    if Fraction(cert["eps_bound"]) < system.delta * exact.sqrt_upper(Fraction(cert["B"])):
+        return False, "the stated eps bound is below Delta sqrt(B)"
+    return True, "ok"
