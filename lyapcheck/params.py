@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import Any, Mapping
@@ -250,12 +250,7 @@ def problem_from_sources(toml_path: str | Path | None, overrides: Mapping[str, o
     return build_problem(values, source=source)
 
 
-def problem_to_given(problem: Problem) -> dict[str, str]:
-    """The inputs as given, for certificate files and reports."""
-    return dict(problem.given)
-
-
 __all__ = [
     "FIELDS", "FieldSpec", "Interval", "GainSet", "Swimmer", "Actuation", "Problem",
-    "build_problem", "problem_from_sources", "load_toml", "validate_field", "fields",
+    "build_problem", "problem_from_sources", "load_toml", "validate_field",
 ]

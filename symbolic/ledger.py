@@ -25,6 +25,11 @@ import sympy as sp
 
 Status = Literal["holds", "discrepancy", "unverifiable"]
 
+#: spot checks: evaluations with transcendental parts use this many digits, and a difference
+#: counts as non-zero above this fraction of the printed value's magnitude
+SPOT_CHECK_DIGITS = 50
+SPOT_CHECK_REL_TOL = sp.Float("1e-30", SPOT_CHECK_DIGITS)
+
 #: default sampler: positive rationals with small numerators/denominators
 SymbolSampler = Callable[[random.Random], sp.Rational]
 
@@ -114,7 +119,7 @@ def _spot_value(expr: sp.Expr, point: Mapping[sp.Symbol, sp.Expr]) -> sp.Expr | 
             return None
         if value.is_Rational:
             return value
-        return sp.N(value, 50)
+        return sp.N(value, SPOT_CHECK_DIGITS)
     except (ZeroDivisionError, TypeError, ValueError):
         return None
 
@@ -122,7 +127,7 @@ def _spot_value(expr: sp.Expr, point: Mapping[sp.Symbol, sp.Expr]) -> sp.Expr | 
 def _numeric_nonzero(value: sp.Expr, scale: sp.Expr) -> bool:
     if value.is_Rational:
         return value != 0
-    return bool(abs(value) > sp.Float("1e-30", 50) * max(abs(sp.N(scale, 50)), 1))
+    return bool(abs(value) > SPOT_CHECK_REL_TOL * max(abs(sp.N(scale, SPOT_CHECK_DIGITS)), 1))
 
 
 def _is_zero(expr: sp.Expr) -> bool:
