@@ -86,6 +86,7 @@ def register(group: click.Group) -> None:
         problem = problem_from_sources(gains, overrides)
         from lyapcheck.certify import CONDITION_ORDER, QUICK_CLASSES
 
+        chosen: tuple[str, ...]
         if classes is None:
             chosen = CONDITION_ORDER
         elif classes.strip() == "quick":

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from decimal import Decimal
 from fractions import Fraction
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 Matrix = tuple[tuple[Fraction, ...], ...]
 
@@ -22,11 +22,12 @@ def to_rational(x: float, digits: int = 15) -> Fraction:
     return Fraction(Decimal(f"{x:.{digits - 1}e}"))
 
 
-def matrix(rows: Iterable[Iterable[object]]) -> Matrix:
-    return tuple(tuple(Fraction(v) for v in row) for row in rows)  # type: ignore[arg-type]
+def matrix(rows: Iterable[Iterable[int | str | Fraction]]) -> Matrix:
+    return tuple(tuple(Fraction(v) for v in row) for row in rows)
 
 
-def rational_matrix(values: Sequence[Sequence[float]], digits: int = 15) -> Matrix:
+def rational_matrix(values: Any, digits: int = 15) -> Matrix:
+    """Round a 2-D float array (numpy or nested sequences) entrywise to exact rationals."""
     return tuple(tuple(to_rational(float(v), digits) for v in row) for row in values)
 
 

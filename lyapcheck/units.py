@@ -89,14 +89,17 @@ def _si_factor(field: str, unit_text: str, kind: Kind, got: object) -> Fraction:
 
     if kind is Kind.ROTATION:
         names = {name for name, _ in (1 * unit).unit_items()}
-        if names & {"radian", "revolution", "turn", "cycle", "revolutions_per_minute", "degree"}:
-            # pint carries the 2*pi of revolutions itself; radians pass through
-            factor = (1 * unit).to("rad/s").magnitude
-        elif "hertz" in names:
-            # Hz is cycles per second: the 2*pi that pint does not apply (it maps Hz to 1/s)
-            factor = (1 * unit).to("Hz").magnitude * 2 * math.pi
-        else:
-            raise InvalidParameter(field, kind.example + " (a bare 1/s is ambiguous for a rotation)", got)
+        try:
+            if names & {"radian", "revolution", "turn", "cycle", "revolutions_per_minute", "degree"}:
+                # pint carries the 2*pi of revolutions itself; radians pass through
+                factor = (1 * unit).to("rad/s").magnitude
+            elif "hertz" in names:
+                # Hz is cycles per second: the 2*pi that pint does not apply (it maps Hz to 1/s)
+                factor = (1 * unit).to("Hz").magnitude * 2 * math.pi
+            else:
+                raise InvalidParameter(field, kind.example + " (a bare 1/s is ambiguous for a rotation)", got)
+        except pint.errors.DimensionalityError:  # e.g. "2 rad": an angle, not a rate
+            raise InvalidParameter(field, kind.example, got) from None
         return Fraction(factor)
 
     expected = ureg.get_dimensionality(kind.dimensionality) if kind.dimensionality else ureg.dimensionless.dimensionality

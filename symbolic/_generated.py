@@ -25,4 +25,4 @@ def printed(alpha_d: Fraction, sigma0: Fraction, k_d: Fraction, delta_los: Fract
 
 def stabcond_gamma22_bound(a12: Fraction, a22: Fraction) -> Fraction:
     """Upper bound of sup_t phi(t) (see symbolic.ilos.stabcond_gamma22_bound)."""
-    return max(Fraction(3)*max(-a12, -a22), ((-Fraction(1, 4)*(-a12 - Fraction(2)*a22)**Fraction(2)/a12) if (a12 >= Fraction(2)*a22) else (-Fraction(2)*a22)))
+    return max(Fraction(3)*max(-a12, -a22), ((-Fraction(1, 4)*(-a12 - Fraction(2)*a22)**2/a12) if (a12 >= Fraction(2)*a22) else (-Fraction(2)*a22)))

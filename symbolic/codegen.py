@@ -35,6 +35,12 @@ class _ExactPrinter(PythonCodePrinter):
     def _print_Integer(self, expr: sp.Integer) -> str:
         return f"Fraction({expr.p})"
 
+    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
+        # integer powers stay integers, so Fraction ** int is a Fraction (exact, and typed so)
+        if expr.exp.is_Integer and expr.exp > 0:
+            return f"({self._print(expr.base)})**{int(expr.exp)}"
+        return str(super()._print_Pow(expr, rational=rational))
+
     def _print_Max(self, expr: sp.Max) -> str:
         return "max(" + ", ".join(self._print(a) for a in expr.args) + ")"
 

@@ -16,13 +16,14 @@ reads the paper's equation in SI, and every downstream result states which ``U``
 
 from __future__ import annotations
 
+import random
 from dataclasses import dataclass
 from functools import lru_cache
 
 import sympy as sp
 
 from symbolic import symbols as S
-from symbolic.ledger import Claim, Verdict
+from symbolic.ledger import Claim, Status, Verdict
 
 
 def rotation(angle: sp.Expr) -> sp.Matrix:
@@ -85,7 +86,7 @@ def derive() -> IlosDerivation:
     return IlosDerivation(v_d_polar, v_d, s_dot, p_dot, eps_dot_general, eps_dot, z_dot)
 
 
-def _angle_sampler(rng: "random.Random") -> sp.Rational:  # noqa: F821
+def _angle_sampler(rng: random.Random) -> sp.Rational:
     return sp.Rational(rng.randint(-300, 300), 100)
 
 
@@ -303,7 +304,7 @@ def _proposition_claims(x: sp.Matrix, B: sp.Matrix, H: sp.Matrix, A_printed: sp.
         xv = sp.Matrix([1, 0])
         V = (xv.T * Pn * xv)[0]
         printed_upper = sp.Rational(1, 2) * max(Pn.eigenvals()) * (xv.T * xv)[0]
-        status = "discrepancy" if V > printed_upper else "holds"
+        status: Status = "discrepancy" if V > printed_upper else "holds"
         return Verdict(
             status, "lambda_min(P)|x|^2 <= V(x) <= lambda_max(P)|x|^2",
             "The factor 1/2 is wrong: for P = diag(2, 1), x = (1, 0), V = 2 exceeds (1/2) lambda_max |x|^2 = 1; "
@@ -320,7 +321,7 @@ def _proposition_claims(x: sp.Matrix, B: sp.Matrix, H: sp.Matrix, A_printed: sp.
         xv, dv = sp.Matrix([1, 0]), sp.Matrix([1, 0])
         lhs = (2 * xv.T * P.subs(Pn) * dv)[0]
         rhs = sp.sqrt(S.p12**2 + S.p22**2).subs(Pn) * (xv.T * xv)[0]
-        status = "discrepancy" if lhs > rhs else "holds"
+        status: Status = "discrepancy" if lhs > rhs else "holds"
         return Verdict(
             status, "2 x^T P (d, 0) <= 2 sqrt(p11^2 + p12^2) |x| |d|",
             "The ISS step bounds 2 x^T P d_perp with the wrong column of P and no factor 2: for P = diag(10, 1), "
@@ -373,7 +374,7 @@ def _proposition_claims(x: sp.Matrix, B: sp.Matrix, H: sp.Matrix, A_printed: sp.
         bound, gain = stabcond_gamma22_bound(a12.subs(vals), a22.subs(vals), 1 / delta)
         refuted = bool(gain >= bound)
         holds2 = bool(lhs <= 1)
-        status = "discrepancy" if (holds2 and refuted) else "unverifiable"
+        status: Status = "discrepancy" if (holds2 and refuted) else "unverifiable"
         return Verdict(
             status,
             f"at alpha_d=600, sigma0=0.01, k_d=0.15, Delta=0.75 mm: eq:stabCond2 gives {lhs} = {float(lhs):.5f} <= 1, "

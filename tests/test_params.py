@@ -44,6 +44,7 @@ def test_rotation_frequency_in_hz_becomes_angular_velocity(paper_problem) -> Non
         ("gains.alpha_d", True, "alpha_d", "rate"),
         ("actuation.omega_so", "3 1/s", "omega_so", "ambiguous"),
         ("actuation.omega_so", "2.8 m", "omega_so", "rotation"),
+        ("actuation.omega_so", "2 rad", "omega_so", "rotation"),
         ("disturbance.d_max", "-1 mm/s", "d_max", "[0, inf)"),
         ("swimmer.e11", "9.3e-5 parsec/fortnight", "e11", "length"),
         ("gains.bogus", 1, "gains.bogus", "known parameter"),

@@ -60,10 +60,10 @@ class ScaledDynamics:
 
     def fields(self) -> tuple[poly.Poly, poly.Poly, poly.Poly]:
         """Exact polynomial field ``(g_y, g_r)`` (cleared of ``q``) and ``q``, in (y, r)."""
-        q = {(2, 0): Fraction(1), (0, 0): Fraction(1)}
-        e = {(1, 0): Fraction(1), (0, 1): Fraction(-1)}
+        q: poly.Poly = {(2, 0): Fraction(1), (0, 0): Fraction(1)}
+        e: poly.Poly = {(1, 0): Fraction(1), (0, 1): Fraction(-1)}
         e_dot = poly.add(poly.scale(Fraction(-1), e), {(0, 1): self.c})
-        r_dot_linear = {(0, 1): -self.a}
+        r_dot_linear: poly.Poly = {(0, 1): -self.a}
         g_r = poly.add(poly.mul(r_dot_linear, q), poly.scale(self.b, e))
         g_y = poly.add(poly.mul(e_dot, q), g_r)
         return g_y, g_r, q

@@ -30,10 +30,15 @@ from typing import Any
 
 import numpy as np
 
+from typing import TYPE_CHECKING
+
 from lyapcheck import exact, poly
 from lyapcheck.conditions.base import System
 from lyapcheck.conditions.sdp import solve
 from lyapcheck.conditions.sos import ScaledDynamics, project_gram, scaled_dynamics
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.conditions.base import ConditionResult
 
 #: strictness margins of the numerical search, so the exact checks survive rounding
 ETA = 1e-7
@@ -99,7 +104,7 @@ class _BoundProgram:
         # coefficient of monomial m of -grad V . g - q dV/dy w - lam V  is  <C_m, Q_V> + lam <L_m, Q_V>
         self.C = {m: cp.Parameter((len(Z_V), len(Z_V))) for m in monos_d}
         self.Lv = {m: np.zeros((len(Z_V), len(Z_V))) for m in monos_d}
-        v_classes = poly.gram_classes(Z_V)
+        v_classes: dict[poly.Monomial, list[tuple[int, int]]] = poly.gram_classes(Z_V)
         for m2, entries in v_classes.items():
             m3 = (*m2, 0)
             for i, j in entries:
@@ -121,7 +126,8 @@ class _BoundProgram:
         for m in poly.monomials(0, 4):
             lhs = sum(self.QE[i, j] for i, j in e_classes.get(m, [])) if m in e_classes else 0
             v_part = sum(self.QV[i, j] for i, j in v_classes.get(m, [])) if m in v_classes else 0
-            extra = {(2, 0): -1.0, (1, 1): 2.0 * self.beta, (0, 2): -self.beta2}.get(m, 0.0)
+            # -(y - beta r~)^2 written out monomial by monomial
+            extra: Any = {(2, 0): -1.0, (1, 1): 2.0 * self.beta, (0, 2): -self.beta2}.get((m[0], m[1]), 0.0)
             const = (self.B - 1) if m == (0, 0) else 0
             cons.append(lhs == v_part + extra + const)
         self.problem = cp.Problem(cp.Minimize(self.B), cons)
