@@ -1,0 +1,24 @@
+"""``lyapcheck report``: a certificate or a sweep store as a self-contained HTML page and/or PDF."""
+
+from __future__ import annotations
+
+import click
+
+from lyapcheck.cli import one_line_errors
+
+
+def register(group: click.Group) -> None:
+    @group.command()
+    @click.argument("source", type=click.Path(dir_okay=True))
+    @click.option("--html", "html", type=click.Path(dir_okay=False), help="Write the HTML report here.")
+    @click.option("--pdf", "pdf", type=click.Path(dir_okay=False), help="Write the PDF report here.")
+    @one_line_errors
+    def report(source: str, html: str | None, pdf: str | None) -> None:
+        """Report on CERT.json (from certify --out) or RESULTS.zarr (from sweep).
+
+        Without --html or --pdf, writes SOURCE's name with .html in the current directory.
+        """
+        from reports.render import report_files
+
+        for path in report_files(source, html, pdf):
+            click.echo(f"wrote {path}")

@@ -1,0 +1,130 @@
+"""Public entry points: a certificate or a sweep store -> HTML and/or PDF files.
+
+The PDF is the HTML page translated into Typst and compiled (:mod:`reports.pdf`), so both
+formats always carry the same content; see ``reports/README.md`` for the choice.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from lyapcheck.errors import InputFileError, InvalidParameter, LyapcheckError
+
+log = logging.getLogger(__name__)
+
+FORMATS = (".html", ".pdf")
+
+
+def _check_format(path: str | Path) -> str:
+    suffix = Path(path).suffix.lower()
+    if suffix not in FORMATS:
+        raise InvalidParameter("report", "a file name ending in .html or .pdf", str(path))
+    return suffix
+
+
+def _atomic_write(path: str | Path, data: bytes) -> Path:
+    """Write via a temporary file and rename, so that a failure leaves nothing half-written."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+        # mkstemp creates the file private (0600); a report is an ordinary file: honour the umask
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def html_to_pdf(html: str) -> bytes:
+    """The PDF of a report page (:mod:`reports.pdf`: the page translated to Typst)."""
+    from reports.pdf import html_to_pdf as typst_pdf
+
+    return typst_pdf(html)
+
+
+def write_page(html: str, path: str | Path) -> Path:
+    """Write a rendered page as HTML or PDF, chosen by the file extension."""
+    if _check_format(path) == ".pdf":
+        return _atomic_write(path, html_to_pdf(html))
+    return _atomic_write(path, html.encode("utf-8"))
+
+
+def certificate_html(doc: dict[str, Any], *, ledger: bool = True, simulate: bool = True) -> str:
+    """The certificate report as one self-contained HTML page."""
+    from reports.certificate_page import certificate_context
+    from reports.html import render_html
+
+    if not isinstance(doc, dict):
+        raise InputFileError("a certificate must be a JSON object")
+    return render_html("certificate.html.j2", certificate_context(doc, ledger=ledger, simulate=simulate))
+
+
+def certificate_report(doc: dict[str, Any], path: str | Path) -> Path:
+    """Write the report of a certificate document to ``path`` (``.html`` or ``.pdf``).
+
+    This is what ``lyapcheck certify --report FILE`` calls.
+    """
+    _check_format(path)
+    return write_page(certificate_html(doc), path)
+
+
+def sweep_html(store: Any) -> str:
+    """The sweep report as one self-contained HTML page (``store``: a path or an xarray Dataset)."""
+    from reports.html import render_html
+    from reports.sweep_page import open_store, sweep_context
+
+    dataset = open_store(store) if isinstance(store, (str, Path)) else store
+    return render_html("sweep.html.j2", sweep_context(dataset))
+
+
+def sweep_report(store: Any, path: str | Path) -> Path:
+    """Write the report of a sweep store (path to a Zarr store, or a Dataset) to ``path``."""
+    _check_format(path)
+    return write_page(sweep_html(store), path)
+
+
+def is_sweep_store(path: str | Path) -> bool:
+    """A Zarr store is a directory (or ends in ``.zarr``); a certificate is a JSON file."""
+    p = Path(path)
+    return p.is_dir() or p.suffix.lower() == ".zarr"
+
+
+def report_files(source: str | Path, html: str | Path | None, pdf: str | Path | None) -> list[Path]:
+    """The ``lyapcheck report`` command: read a certificate or a sweep store, write the outputs.
+
+    With neither ``html`` nor ``pdf``, writes ``<source stem>.html`` in the current directory.
+    """
+    from lyapcheck.certificate import read_document
+
+    for name, value, suffix in (("html", html, ".html"), ("pdf", pdf, ".pdf")):
+        if value is not None and Path(value).suffix.lower() != suffix:
+            raise InvalidParameter(name, f"a file name ending in {suffix}", str(value))
+    src = Path(source)
+    if not src.exists():
+        raise InputFileError(f"input file '{src}' does not exist")
+    if html is None and pdf is None:
+        html = Path(src.name).with_suffix(".html")
+    if is_sweep_store(src):
+        page = sweep_html(src)
+    else:
+        page = certificate_html(read_document(src))
+    written = []
+    if html is not None:
+        written.append(write_page(page, html))
+    if pdf is not None:
+        written.append(write_page(page, pdf))
+    return written
+
+
+__all__ = ["certificate_report", "certificate_html", "sweep_report", "sweep_html", "report_files", "html_to_pdf",
+           "write_page"]
