@@ -59,6 +59,9 @@ def solve(problem: Any) -> SolveReport:
             warnings.simplefilter("ignore")
             problem.solve(
                 solver=cp.CLARABEL,
+                # cvxpy warm-starts re-solves by default; a certificate search must not depend on
+                # what this process solved before (results must be reproducible point by point)
+                warm_start=False,
                 tol_gap_abs=tol.SOLVER_TOL_GAP_ABS, tol_gap_rel=tol.SOLVER_TOL_GAP_REL,
                 tol_feas=tol.SOLVER_TOL_FEAS, max_iter=tol.SOLVER_MAX_ITER,
             )
