@@ -12,7 +12,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from lyapcheck.errors import InputFileError, InvalidParameter, LyapcheckError
+from lyapcheck.errors import InputFileError, InvalidParameter
 
 log = logging.getLogger(__name__)
 

@@ -18,7 +18,6 @@ from pathlib import Path
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from symbolic import symbols as S
 from symbolic.closed_loop import DYNAMICS, PARAMETER_SYMBOLS, error_dynamics
 from symbolic.ilos import stabcond_gamma22_bound
 

@@ -231,7 +231,6 @@ def claims() -> list[Claim]:
     H = sp.Matrix([[1, S.sigma0], [S.sigma0, S.sigma0**2]])
     B = sp.Matrix([[0, 0], [1, 0]])
     A_printed = -S.alpha_d * sp.Matrix([[1, S.sigma0], [0, S.k_d / S.alpha_d]])
-    kappa = S.e11 * S.alpha_d / S.e11_hat
     rhs_derived = sp.Matrix([D.eps_dot.subs(S.d_perp, 0), D.s_dot])
     A_derived = rhs_derived.subs(S.U, 0).jacobian(x)  # linear part: the nonlinearity is the U term
     out.append(Claim(

@@ -556,7 +556,7 @@ def _e_constancy() -> Verdict:
     derived = (
         "A does not depend on gamma; helix part of B over b11: "
         + ", ".join(f"{name}/b11 = {value}" for name, value in in_b11.items())
-        + f" (the head adds +-xi_vm|k_h| to b23, b32); E entries varying with gamma: "
+        + " (the head adds +-xi_vm|k_h| to b23, b32); E entries varying with gamma: "
         + (", ".join(f"E[{i + 1},{j + 1}]" for i, j in varying) or "none")
     )
     if not varying:

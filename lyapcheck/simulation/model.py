@@ -30,7 +30,7 @@ from typing import Any, Callable, Final, Literal, Mapping, Sequence, cast
 import numpy as np
 import numpy.typing as npt
 
-from lyapcheck.simulation.disturbances import Disturbance, NoDisturbance
+from lyapcheck.simulation.disturbances import Disturbance
 from lyapcheck.simulation.integrator import Evaluation
 
 FloatArray = npt.NDArray[np.float64]

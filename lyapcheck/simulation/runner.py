@@ -12,7 +12,7 @@ import numpy.typing as npt
 from lyapcheck.simulation.disturbances import Disturbance, NoDisturbance
 from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, IntegrationResult, integrate
 from lyapcheck.simulation.metrics import Recorder, TailObserver, Trajectory
-from lyapcheck.simulation.model import PX, PZ, Q_EPS, Q_U, Q_Z, S, ClosedLoop, Form, LoopParams
+from lyapcheck.simulation.model import PX, PZ, Q_EPS, Q_U, Q_Z, ClosedLoop, Form, LoopParams
 
 FloatArray = npt.NDArray[np.float64]
 
