@@ -98,10 +98,11 @@ def derive(as_json: bool) -> None:
 
 def _register_later_commands() -> None:
     """Commands implemented in their own modules, imported only when invoked."""
-    from lyapcheck import cli_certify, cli_report, cli_simulate
+    from lyapcheck import cli_certify, cli_report, cli_simulate, cli_sweep
 
     cli_certify.register(cli)
     cli_simulate.register(cli)
+    cli_sweep.register(cli)
     cli_report.register(cli)
 
 

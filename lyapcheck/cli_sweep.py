@@ -1,0 +1,143 @@
+"""``lyapcheck sweep SPEC.toml --out RESULTS.zarr`` (contract in DESIGN.md).
+
+Runs or resumes a parameter sweep (:mod:`sweeps`), shows a progress bar with rate and ETA on
+stderr (unless ``--quiet``), prints the summary, and exits with 1 when any soundness violation
+is in the store (printed loudly on stderr even with ``--quiet``), else 0. Running the same
+command again on a finished store computes nothing and prints the summary again; with
+``--export FILE.nc`` / ``--export FILE.csv`` it also writes those files.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import click
+
+from lyapcheck.cli import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
+
+
+def _progress_bar() -> Any:
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TaskProgressColumn, TextColumn,
+        TimeElapsedColumn, TimeRemainingColumn,
+    )
+    from rich.text import Text
+
+    class RateColumn(ProgressColumn):
+        """Points per second: rich's recent-window estimate, else the mean since the start (units
+        complete in chunks, so the window often holds too few samples)."""
+
+        def render(self, task: Any) -> Text:
+            speed = task.finished_speed or task.speed
+            if speed is None and task.elapsed:
+                speed = task.completed / task.elapsed
+            return Text("-- pts/s" if not speed else f"{speed:.2f} pts/s", style="cyan")
+
+    return Progress(TextColumn("sweep"), BarColumn(), MofNCompleteColumn(), TaskProgressColumn(), RateColumn(),
+                    TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+                    console=Console(stderr=True), transient=False)
+
+
+def _print_summary(summary: Any, report: Any) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console()
+    console.print(f"[bold]{report.path}[/]: {summary.computed} of {summary.points} points stored "
+                  f"({report.computed_now} computed in this run, {report.wall_seconds:.1f} s)")
+    if report.refinement is not None:
+        r = report.refinement
+        console.print(f"refinement on '{r.cls}', {r.levels} levels: {r.points_computed} points computed against "
+                      f"{r.full_grid_points} for the full grid ({100 * r.saved_fraction:.1f}% saved)")
+    table = Table(title=f"certified among the {summary.simulated_stable} simulated-stable points")
+    table.add_column("class", style="cyan")
+    table.add_column("fraction", justify="right")
+    for cls, frac in summary.certified_fraction.items():
+        label = cls + (" (holds)" if cls == "stabcond2" else "")
+        table.add_row(label, "n/a" if math.isnan(frac) else f"{frac:.3f}")
+    console.print(table)
+    med = summary.median_ratio
+    console.print("median certified/simulated ultimate bound: " + ("n/a" if math.isnan(med) else f"{med:.3g}"))
+
+
+def _shout(summary: Any) -> None:
+    from rich.console import Console
+
+    err = Console(stderr=True)
+    listed = [v for v in summary.violations if "more" not in v]
+    more = sum(v.get("more", 0) for v in summary.violations)
+    err.print(f"[bold white on red] SOUNDNESS VIOLATION [/] {len(listed) + more} point(s) where simulation "
+              "leaves a certified bound or diverges under a stability certificate:")
+    for v in listed:
+        err.print("[bold red]  " + ", ".join(f"{k}={val:.6g}" if isinstance(val, float) else f"{k}={val}"
+                                             for k, val in v.items()) + "[/]")
+    if more:
+        err.print(f"[bold red]  ... and {more} more[/]")
+
+
+def register(group: click.Group) -> None:
+    @group.command()
+    @click.argument("spec", type=click.Path(dir_okay=False))
+    @click.option("--out", required=True, type=click.Path(), help="Zarr store to create or resume.")
+    @click.option("--scheduler", help="Address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786.")
+    @click.option("--workers", type=int, help="Local worker processes (default: all cores; 0: in this process).")
+    @click.option("--export", "exports", multiple=True, type=click.Path(dir_okay=False),
+                  help="Also write the results to FILE.nc (NetCDF) or FILE.csv; repeatable.")
+    @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+    @click.option("--quiet", is_flag=True, help="No progress bar and no summary (violations are still printed).")
+    @one_line_errors
+    def sweep(spec: str, out: str, scheduler: str | None, workers: int | None, exports: tuple[str, ...],
+              as_json: bool, quiet: bool) -> None:
+        """Map certified regions over 1-3 parameters and cross-check them with simulation."""
+        from lyapcheck.errors import InvalidParameter
+        from sweeps.export import EXPORT_SUFFIXES, export
+        from sweeps.run import run_sweep
+        from sweeps.spec import load_spec
+        from sweeps.store import Store
+        from sweeps.summary import summarize, violation_count
+
+        if workers is not None and workers < 0:
+            raise InvalidParameter("workers", "an integer >= 0", workers)
+        for target in exports:
+            if Path(target).suffix.lower() not in EXPORT_SUFFIXES:
+                raise InvalidParameter("export", "a file name ending in .nc or .csv", target)
+        parsed = load_spec(spec)
+        bar = None if quiet else _progress_bar()
+        task: list[Any] = []
+
+        def on_ready() -> None:
+            if bar is not None:
+                bar.start()
+                task.append(bar.add_task("sweep", total=None))
+
+        def progress(advance: int, total: int) -> None:
+            if bar is not None and task:
+                bar.update(task[0], advance=advance, total=total)
+
+        try:
+            report = run_sweep(parsed, out, scheduler=scheduler, workers=workers, progress=progress,
+                               on_ready=on_ready)
+        finally:
+            if bar is not None:
+                bar.stop()
+        summary = summarize(Store.open_or_create(out, parsed))
+        for target in exports:
+            export(out, target)
+        if as_json:
+            payload = summary.to_json()
+            payload.update({"store": str(report.path), "computed_now": report.computed_now,
+                            "wall_seconds": report.wall_seconds})
+            if report.refinement is not None:
+                r = report.refinement
+                payload["refinement"] = {"class": r.cls, "levels": r.levels, "points_computed": r.points_computed,
+                                         "full_grid_points": r.full_grid_points, "saved_fraction": r.saved_fraction}
+            emit_json(payload)
+        elif not quiet:
+            _print_summary(summary, report)
+        if violation_count(summary):
+            _shout(summary)
+            raise SystemExit(EXIT_NEGATIVE)
+        raise SystemExit(EXIT_OK)

@@ -1,0 +1,116 @@
+"""The sweep store's schema: variable names, dtypes, fill values and status codes.
+
+This is the contract between :mod:`sweeps` (which writes a store) and ``reports`` (which
+renders one). One place says what every variable means; nothing else hard-codes a name.
+
+Layout (an xarray Dataset in a Zarr v3 store):
+
+* dimensions: the swept parameter names, 1 to 3 of :data:`SWEEPABLE`, in the spec's order;
+  one coordinate per dimension, in SI (``alpha_d`` and ``k_d`` in 1/s, ``delta_los`` in m,
+  ``d_max`` in m/s, ``sigma0`` dimensionless);
+* ``status_<class>`` int8 per condition class of :data:`CLASSES` (:data:`STATUS_CODES`;
+  ``-1`` not computed; for ``stabcond2`` 1 holds, 0 fails);
+* ``margin_<class>`` float64 (NaN when the class has no margin at that point, see
+  :data:`MARGIN_SOURCE`);
+* ``eps_bound_m`` certified ultimate bound on ``|eps|``: the smallest of those certified by
+  ``ultimate_bound`` and ``sos_bound`` (NaN where none);
+* ``sim_eps_sup_m`` simulated ultimate bound: the largest tail sup of ``|eps|`` over the
+  disturbance scenarios (not over ``nominal``, the divergence probe), and
+  ``sim_eps_sup_m_<scenario>`` per scenario of :data:`SCENARIOS`;
+* ``ratio_certified_over_simulated`` = ``eps_bound_m / sim_eps_sup_m``;
+* ``sim_diverged``, ``soundness_violation``, ``done`` (bool);
+* attributes ``spec_toml`` (the spec as given), ``versions`` (JSON text) and
+  ``paper_point`` (JSON text: the paper's gains in SI, keyed like the dimensions).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+
+from lyapcheck.conditions import base as _base
+
+#: parameters a sweep may vary, mapped to their key in :data:`lyapcheck.params.FIELDS`
+SWEEPABLE: Final[dict[str, str]] = {
+    "alpha_d": "gains.alpha_d",
+    "sigma0": "gains.sigma0",
+    "k_d": "gains.k_d",
+    "delta_los": "gains.delta_los",
+    "d_max": "disturbance.d_max",
+}
+
+#: condition classes a sweep can run, in the order of :data:`lyapcheck.certify.CONDITION_ORDER`
+#: (a test keeps the two equal; spelled out here so that reading a store needs no solver import)
+CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound", "sos_gas",
+                  "saturated_loop", "sos_bound")
+#: run when the spec does not say: lyapcheck.certify.QUICK_CLASSES (the polynomial classes
+#: sos_gas, saturated_loop and sos_bound cost 0.1-3 s per point)
+DEFAULT_CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound")
+#: classes whose exact pass proves stability of the error dynamics (lyapcheck.conditions.base)
+STABILITY_CLASSES: Final = _base.STABILITY_CLASSES
+#: classes that certify an ultimate bound on |eps| (numbers["eps_bound_m"]); eps_bound_m is the
+#: smallest certified one
+BOUND_CLASSES: Final = ("ultimate_bound", "sos_bound")
+
+NOT_COMPUTED: Final = -1
+STATUS_CODES: Final[dict[str, int]] = {
+    "not_certified": 0, "certified": 1, "refuted": 2, "inconclusive": 3,
+    "fails": 0, "holds": 1,  # stabcond2 is plain arithmetic
+}
+
+#: where each class's margin comes from (``numbers`` key of its ConditionResult); stabcond2's
+#: margin is ``1 - lhs`` (positive when it holds); None: the class has no margin
+MARGIN_SOURCE: Final[dict[str, str | None]] = {
+    "prop41_ges": "relative_margin", "prop41_iss": "relative_margin", "stabcond2": "lhs_value",
+    "sector_ges": "relative_margin", "ultimate_bound": None, "sos_gas": "relative_margin",
+    "saturated_loop": None, "sos_bound": None,
+}
+
+#: simulation scenarios: ``nominal`` (no disturbance, started off the path) probes divergence;
+#: the other three are the disturbance scenarios of the issue, all with ``|d_perp| <= d*``
+SCENARIOS: Final = ("nominal", "constant", "weight", "adversarial")
+DISTURBANCE_SCENARIOS: Final = ("constant", "weight", "adversarial")
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One data variable of the store."""
+
+    name: str
+    dtype: np.dtype
+    fill: object
+    description: str
+
+
+def variables() -> tuple[Variable, ...]:
+    """Every data variable, in a fixed order (coordinates excluded)."""
+    i8, f8, b1 = np.dtype("int8"), np.dtype("float64"), np.dtype("bool")
+    out: list[Variable] = []
+    for c in CLASSES:
+        out.append(Variable(f"status_{c}", i8, NOT_COMPUTED,
+                            f"{c}: 0 not_certified, 1 certified, 2 refuted, 3 inconclusive, -1 not computed"
+                            + (" (1 holds, 0 fails)" if c == "stabcond2" else "")))
+    for c in CLASSES:
+        out.append(Variable(f"margin_{c}", f8, np.nan, f"{c}: margin behind the status (NaN: none)"))
+    out.append(Variable("eps_bound_m", f8, np.nan, "certified ultimate bound on |eps| (smallest certified), m"))
+    out.append(Variable("sim_eps_sup_m", f8, np.nan,
+                        "simulated ultimate bound: max over disturbance scenarios of the tail sup of |eps|, m"))
+    for s in SCENARIOS:
+        out.append(Variable(f"sim_eps_sup_m_{s}", f8, np.nan, f"tail sup of |eps| in scenario '{s}', m"))
+    out.append(Variable("ratio_certified_over_simulated", f8, np.nan, "eps_bound_m / sim_eps_sup_m"))
+    out.append(Variable("sim_diverged", b1, False, "a simulation diverged or failed"))
+    out.append(Variable("soundness_violation", b1, False,
+                        "simulation left a certified bound, or diverged where stability is certified"))
+    out.append(Variable("done", b1, False, "this point was computed and stored"))
+    return tuple(out)
+
+
+VARIABLES: Final = variables()
+VARIABLE_BY_NAME: Final = {v.name: v for v in VARIABLES}
+
+
+def status_code(status: str) -> int:
+    """The int8 code of a ConditionResult status."""
+    return STATUS_CODES[status]

@@ -1,0 +1,348 @@
+"""Sweep specs: a TOML file read into a validated, immutable :class:`SweepSpec`.
+
+A spec is a parameter file (the sections of ``examples/paper.toml``) without the swept
+parameters, plus a ``[sweep]`` and a ``[simulation]`` table::
+
+    [sweep]
+    classes = ["prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound"]
+    chunk_size = 100              # points per unit of work (and per Zarr chunk)
+
+    [[sweep.axes]]                # one to three axes
+    name = "alpha_d"              # alpha_d, sigma0, k_d, delta_los or d_max
+    start = 150                   # with units where the parameter has one ("0.2 mm")
+    stop = 2400
+    num = 17
+    scale = "log"                 # "linear" (default) or "log"
+    # values = [300, 600, 1200]   # instead of start/stop/num/scale
+
+    [sweep.refine]                # optional: quadtree refinement on a 2-D sweep
+    class = "sector_ges"          # refine where this class's certified/not status changes
+    levels = 3                    # each axis's num must be k * 2**levels + 1
+
+    [simulation]
+    horizon = "100 s"
+    tail = "10 s"                 # the simulated ultimate bound is the sup of |eps| over the tail
+    rtol = 1e-8
+    scenarios = ["nominal", "constant", "weight", "adversarial"]
+    initial_position = ["0 mm", "-40 mm"]   # start of the 'nominal' divergence probe
+
+Every number goes through :func:`lyapcheck.params.validate_field` (the one validation path,
+with units and ranges from :data:`lyapcheck.params.FIELDS`); every error is an
+:class:`~lyapcheck.errors.InvalidParameter` with the one message template, and unknown keys
+are errors.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, replace
+from fractions import Fraction
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Final, Mapping, Sequence
+
+import numpy as np
+
+from lyapcheck.errors import InputFileError, InvalidParameter
+from lyapcheck.params import (
+    FIELD_BY_KEY, FIELDS, POSITIVE, SECTIONS, FieldSpec, Interval, Problem, build_problem,
+    validate_field,
+)
+from lyapcheck.units import Kind
+from sweeps.schema import CLASSES, DEFAULT_CLASSES, SCENARIOS, SWEEPABLE
+
+#: largest grid a spec may ask for (the store is streamed, but one spec should stay a sweep)
+MAX_POINTS: Final = 10_000_000
+MAX_CHUNK: Final = 100_000
+DEFAULT_CHUNK: Final = 64
+MAX_REFINE_LEVELS: Final = 10
+_SCALES: Final = ("linear", "log")
+_AXIS_KEYS: Final = ("name", "start", "stop", "num", "scale", "values")
+_SWEEP_KEYS: Final = ("classes", "chunk_size", "axes", "refine")
+_REFINE_KEYS: Final = ("class", "levels")
+_SIM_KEYS: Final = ("horizon", "tail", "rtol", "scenarios", "initial_position")
+
+_SIM_FIELDS: Final[Mapping[str, FieldSpec]] = {
+    "horizon": FieldSpec("simulation", "horizon", Kind.TIME, POSITIVE, "100 s", "simulated time"),
+    "tail": FieldSpec("simulation", "tail", Kind.TIME, POSITIVE, "10 s", "final window of the measurements"),
+    "rtol": FieldSpec("simulation", "rtol", Kind.DIMENSIONLESS, Interval(0, 1e-3, closed_high=True), "1e-8",
+                      "integrator tolerance"),
+}
+_ANY_LENGTH: Final = FieldSpec("simulation", "initial_position", Kind.LENGTH, Interval(-math.inf, math.inf),
+                               None, "initial position")
+DEFAULT_INITIAL_POSITION: Final = ("0 mm", "-40 mm")
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One swept parameter: its name (a key of :data:`SWEEPABLE`) and SI values, increasing."""
+
+    name: str
+    values: tuple[float, ...]
+    scale: str  # "linear", "log" or "list"
+
+    @property
+    def size(self) -> int:
+        return len(self.values)
+
+
+@dataclass(frozen=True)
+class SimulationSettings:
+    """How each point is simulated (SI)."""
+
+    horizon: float
+    tail: float
+    rtol: float
+    scenarios: tuple[str, ...]
+    initial_position: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """Quadtree refinement on a 2-D sweep (see :mod:`sweeps.refine`)."""
+
+    cls: str
+    levels: int
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep spec; ``text`` is the TOML exactly as given (stored in the results)."""
+
+    text: str
+    axes: tuple[Axis, ...]
+    base: Problem
+    classes: tuple[str, ...]
+    simulation: SimulationSettings
+    refine: Refinement | None
+    chunk_size: int
+
+    @property
+    def dims(self) -> tuple[str, ...]:
+        return tuple(a.name for a in self.axes)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(a.size for a in self.axes)
+
+    @property
+    def n_points(self) -> int:
+        return int(np.prod(self.shape))
+
+    def problem_at(self, coords: Sequence[float]) -> Problem:
+        """The exact problem at one grid point (coordinates in SI, in the order of :attr:`dims`).
+
+        The float coordinate is taken exactly (``Fraction(float)``): the certificate is about the
+        number stored in the results, not a decimal neighbour of it.
+        """
+        gains: dict[str, Fraction] = {}
+        problem = self.base
+        for name, value in zip(self.dims, coords):
+            exact = Fraction(float(value))
+            if name == "d_max":
+                problem = replace(problem, d_max=exact)
+            else:
+                gains[name] = exact
+        return problem.with_gains(**gains) if gains else problem
+
+
+def _int(field: str, raw: object, low: int, high: int) -> int:
+    if isinstance(raw, bool) or not isinstance(raw, int) or not low <= raw <= high:
+        raise InvalidParameter(field, f"an integer in [{low}, {high}]", raw)
+    return raw
+
+
+def _known(table: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
+    for key in table:
+        if key not in allowed:
+            raise InvalidParameter(f"{where}.{key}", f"a known key of [{where}] ({', '.join(allowed)})", key)
+
+
+def _table(raw: object, where: str) -> Mapping[str, Any]:
+    if not isinstance(raw, Mapping):
+        raise InvalidParameter(where, "a table", raw)
+    return raw
+
+
+def _axis(index: int, raw: object) -> tuple[Axis, object]:
+    """Validate one ``[[sweep.axes]]`` table; also returns a raw value for the base problem."""
+    where = f"sweep.axes[{index}]"
+    table = _table(raw, where)
+    _known(table, _AXIS_KEYS, where)
+    name = table.get("name")
+    if name not in SWEEPABLE:
+        raise InvalidParameter(f"{where}.name", "one of " + ", ".join(repr(n) for n in SWEEPABLE), name)
+    spec = FIELD_BY_KEY[SWEEPABLE[name]]
+    if "values" in table:
+        extra = [k for k in ("start", "stop", "num", "scale") if k in table]
+        if extra:
+            raise InvalidParameter(f"{where}.{extra[0]}", "absent when 'values' is given", table[extra[0]])
+        raw_values = table["values"]
+        if not isinstance(raw_values, list) or not raw_values:
+            raise InvalidParameter(f"{where}.values", "a non-empty list of values", raw_values)
+        exact = [validate_field(replace(spec, name=name), v) for v in raw_values]
+        if any(b <= a for a, b in zip(exact, exact[1:])):
+            raise InvalidParameter(f"{where}.values", "strictly increasing", raw_values)
+        return Axis(name, tuple(float(v) for v in exact), "list"), raw_values[0]
+    for key in ("start", "stop", "num"):
+        if key not in table:
+            raise InvalidParameter(f"{where}.{key}", "given (or give 'values')", None)
+    start = validate_field(replace(spec, name=name), table["start"])
+    stop = validate_field(replace(spec, name=name), table["stop"])
+    num = _int(f"{where}.num", table["num"], 1, MAX_POINTS)
+    scale = table.get("scale", "linear")
+    if scale not in _SCALES:
+        raise InvalidParameter(f"{where}.scale", "one of 'linear', 'log'", scale)
+    if stop < start or (stop == start and num > 1):
+        raise InvalidParameter(f"{where}.stop", f"larger than start ({table['start']})", table["stop"])
+    if scale == "log" and start <= 0:
+        raise InvalidParameter(f"{where}.start", "positive for a log axis", table["start"])
+    if num == 1:
+        values = np.array([float(start)])
+    elif scale == "log":
+        values = np.geomspace(float(start), float(stop), num)
+    else:
+        values = np.linspace(float(start), float(stop), num)
+    if np.any(np.diff(values) <= 0):
+        raise InvalidParameter(f"{where}.num", "small enough that the grid values are distinct floats", num)
+    return Axis(name, tuple(float(v) for v in values), scale), table["start"]
+
+
+def _flatten_parameters(data: Mapping[str, Any], source: str) -> dict[str, object]:
+    """The fixed parameters as ``{"section.name": raw}`` (the shape build_problem reads)."""
+    flat: dict[str, object] = {}
+    for section, content in data.items():
+        if section in ("sweep", "simulation", "meta"):
+            continue
+        if section not in SECTIONS:
+            raise InvalidParameter(section, f"one of the sections {', '.join(SECTIONS)}, sweep, simulation in {source}",
+                                   section)
+        table = _table(content, section)
+        for name, value in table.items():
+            key = f"{section}.{name}"
+            if key not in FIELD_BY_KEY:
+                known = ", ".join(s.name for s in FIELDS if s.section == section)
+                raise InvalidParameter(key, f"a known key of [{section}] ({known})", name)
+            flat[key] = value
+    return flat
+
+
+def _simulation(raw: object) -> SimulationSettings:
+    table = _table({} if raw is None else raw, "simulation")
+    _known(table, _SIM_KEYS, "simulation")
+    values = {k: float(validate_field(spec, table.get(k, spec.default))) for k, spec in _SIM_FIELDS.items()}
+    if values["tail"] > values["horizon"]:
+        raise InvalidParameter("tail", f"at most the horizon ({values['horizon']:g} s)", table.get("tail"))
+    scenarios = table.get("scenarios", list(SCENARIOS))
+    if (not isinstance(scenarios, list) or not scenarios or any(s not in SCENARIOS for s in scenarios)
+            or len(set(scenarios)) != len(scenarios)):
+        raise InvalidParameter("simulation.scenarios", "a list of distinct names from "
+                               + ", ".join(repr(s) for s in SCENARIOS), scenarios)
+    position = table.get("initial_position", list(DEFAULT_INITIAL_POSITION))
+    if not isinstance(position, list) or len(position) != 2:
+        raise InvalidParameter("initial_position", "a list of two lengths such as ['0 mm', '-40 mm']", position)
+    p0 = tuple(float(validate_field(_ANY_LENGTH, v)) for v in position)
+    return SimulationSettings(horizon=values["horizon"], tail=values["tail"], rtol=values["rtol"],
+                              scenarios=tuple(s for s in SCENARIOS if s in scenarios),  # canonical order
+                              initial_position=(p0[0], p0[1]))
+
+
+def _classes(raw: object) -> tuple[str, ...]:
+    if raw is None:
+        return DEFAULT_CLASSES
+    if not isinstance(raw, list) or not raw or any(c not in CLASSES for c in raw) or len(set(raw)) != len(raw):
+        raise InvalidParameter("sweep.classes", "a list of distinct names from " + ", ".join(repr(c) for c in CLASSES),
+                               raw)
+    return tuple(c for c in CLASSES if c in raw)  # canonical order
+
+
+def _refinement(raw: object, axes: tuple[Axis, ...], classes: tuple[str, ...]) -> Refinement | None:
+    if raw is None:
+        return None
+    table = _table(raw, "sweep.refine")
+    _known(table, _REFINE_KEYS, "sweep.refine")
+    cls = table.get("class")
+    if cls not in classes:
+        raise InvalidParameter("sweep.refine.class", "one of the classes the sweep runs ("
+                               + ", ".join(classes) + ")", cls)
+    levels = _int("sweep.refine.levels", table.get("levels"), 1, MAX_REFINE_LEVELS)
+    if len(axes) != 2:
+        raise InvalidParameter("sweep.refine", "used with exactly two swept axes (a 2-D slice)",
+                               f"{len(axes)} axes")
+    step = 2**levels
+    for i, axis in enumerate(axes):
+        if axis.size < step + 1 or (axis.size - 1) % step:
+            raise InvalidParameter(f"sweep.axes[{i}].num", f"k * 2**levels + 1 = k * {step} + 1 with k >= 1 "
+                                   "(the finest grid of the refinement)", axis.size)
+    return Refinement(str(cls), levels)
+
+
+def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
+    """Validate a spec given as TOML text (see the module docstring)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputFileError(f"sweep spec '{source}' is not valid TOML: {exc}") from None
+    if "sweep" not in data:
+        raise InvalidParameter("sweep", f"a [sweep] table in {source}", None)
+    sweep = _table(data["sweep"], "sweep")
+    _known(sweep, _SWEEP_KEYS, "sweep")
+    raw_axes = sweep.get("axes")
+    if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
+        raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",
+                               None if raw_axes is None else f"{len(raw_axes) if isinstance(raw_axes, list) else raw_axes}")
+    parsed = [_axis(i, a) for i, a in enumerate(raw_axes)]
+    axes = tuple(a for a, _ in parsed)
+    names = [a.name for a in axes]
+    if len(set(names)) != len(names):
+        raise InvalidParameter("sweep.axes", "distinct parameter names", names)
+    n_points = int(np.prod([a.size for a in axes]))
+    if n_points > MAX_POINTS:
+        raise InvalidParameter("sweep.axes", f"at most {MAX_POINTS} points in all", n_points)
+
+    values = _flatten_parameters(data, source)
+    for axis, first in parsed:
+        key = SWEEPABLE[axis.name]
+        if key in values:
+            raise InvalidParameter(key, "either fixed or swept, not both", values[key])
+        values[key] = first  # a valid placeholder; problem_at() sets the exact value per point
+    base = build_problem(values, source=source)
+
+    classes = _classes(sweep.get("classes"))
+    chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
+    simulation = _simulation(data.get("simulation"))
+    if "weight" in simulation.scenarios:
+        _check_weight_inputs(base)
+    refine = _refinement(sweep.get("refine"), axes, classes)
+    return SweepSpec(text=text, axes=axes, base=base, classes=classes, simulation=simulation, refine=refine,
+                     chunk_size=chunk)
+
+
+def _check_weight_inputs(problem: Problem) -> None:
+    """The 'weight' scenario needs the helix geometry and the weight (fail now, naming the field)."""
+    sw = problem.swimmer
+    for name in ("n_turns", "pitch_angle", "helix_radius", "weight"):
+        if getattr(sw, name) is None:
+            raise InvalidParameter(name, "given in [swimmer] for the 'weight' scenario", None)
+
+
+def load_spec(path: str | Path) -> SweepSpec:
+    """Read and validate a spec file; every failure is one line (InputFileError/InvalidParameter)."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputFileError(f"sweep spec '{p}' does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputFileError(f"sweep spec '{p}' cannot be read: {exc}") from None
+    return parse_spec(text, source=str(p))
+
+
+@lru_cache(maxsize=4)
+def cached_spec(text: str) -> SweepSpec:
+    """Parse once per worker process (units are parsed with pint, which is not free)."""
+    return parse_spec(text)
+
+
+__all__ = ["Axis", "SimulationSettings", "Refinement", "SweepSpec", "parse_spec", "load_spec", "cached_spec"]
