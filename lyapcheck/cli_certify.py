@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import click
 
 from lyapcheck.cli import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
+from lyapcheck.fileio import atomic_write
 
 #: command-line flag -> parameter key (lyapcheck.params.FIELDS)
 FLAG_KEYS = {
@@ -20,20 +19,6 @@ FLAG_KEYS = {
 
 STATUS_STYLE = {"certified": "bold green", "refuted": "bold red", "not_certified": "yellow",
                 "inconclusive": "magenta", "holds": "green", "fails": "red"}
-
-
-def atomic_write(path: str | Path, text: str) -> None:
-    """Write via a temporary file and rename, so a failure leaves nothing half-written."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _print_table(doc: dict[str, Any]) -> None:

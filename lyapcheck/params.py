@@ -161,7 +161,12 @@ class Problem:
         return replace(self, gains=replace(self.gains, **changes))
 
 
-def _flatten(data: Mapping[str, Any], source: str) -> dict[str, object]:
+def flatten_tables(data: Mapping[str, Any], source: str) -> dict[str, object]:
+    """TOML tables as ``{"section.name": raw}``; unknown sections and keys are errors.
+
+    The sections of other readers (``simulation``, ``sweep``, ``meta``) are skipped: the
+    scenario and sweep readers validate those themselves.
+    """
     flat: dict[str, object] = {}
     for section, content in data.items():
         if section not in SECTIONS:
@@ -244,7 +249,7 @@ def problem_from_sources(toml_path: str | Path | None, overrides: Mapping[str, o
     values: dict[str, object] = {}
     source = "command-line flags"
     if toml_path is not None:
-        values.update(_flatten(load_toml(toml_path), str(toml_path)))
+        values.update(flatten_tables(load_toml(toml_path), str(toml_path)))
         source = str(toml_path)
     values.update({k: v for k, v in overrides.items() if v is not None})
     return build_problem(values, source=source)
@@ -252,5 +257,5 @@ def problem_from_sources(toml_path: str | Path | None, overrides: Mapping[str, o
 
 __all__ = [
     "FIELDS", "FieldSpec", "Interval", "GainSet", "Swimmer", "Actuation", "Problem",
-    "build_problem", "problem_from_sources", "load_toml", "validate_field",
+    "build_problem", "problem_from_sources", "load_toml", "validate_field", "flatten_tables",
 ]

@@ -7,12 +7,11 @@ formats always carry the same content; see ``reports/README.md`` for the choice.
 from __future__ import annotations
 
 import logging
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 from lyapcheck.errors import InputFileError, InvalidParameter
+from lyapcheck.fileio import atomic_write
 
 log = logging.getLogger(__name__)
 
@@ -26,25 +25,6 @@ def _check_format(path: str | Path) -> str:
     return suffix
 
 
-def _atomic_write(path: str | Path, data: bytes) -> Path:
-    """Write via a temporary file and rename, so that a failure leaves nothing half-written."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(data)
-        # mkstemp creates the file private (0600); a report is an ordinary file: honour the umask
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
-
-
 def html_to_pdf(html: str) -> bytes:
     """The PDF of a report page (:mod:`reports.pdf`: the page translated to Typst)."""
     from reports.pdf import html_to_pdf as typst_pdf
@@ -55,8 +35,8 @@ def html_to_pdf(html: str) -> bytes:
 def write_page(html: str, path: str | Path) -> Path:
     """Write a rendered page as HTML or PDF, chosen by the file extension."""
     if _check_format(path) == ".pdf":
-        return _atomic_write(path, html_to_pdf(html))
-    return _atomic_write(path, html.encode("utf-8"))
+        return atomic_write(path, html_to_pdf(html))
+    return atomic_write(path, html.encode("utf-8"))
 
 
 def certificate_html(doc: dict[str, Any], *, ledger: bool = True, simulate: bool = True) -> str:

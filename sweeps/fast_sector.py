@@ -235,21 +235,6 @@ def certify(system: System, solver: SectorBatchSolver | None = None,
             for _ in range(_RATE_HALVINGS):
                 ok, why = sector.exact_check(vertices, P, rate)  # also checks P > 0
                 if ok:
-                    numbers["decay_rate_per_s"] = float(rate)
-                    return ConditionResult(
-                        "sector_ges", "certified", why, numbers=numbers,
-                        certificate={"P": exact.to_json(P), "decay_rate": str(rate), "rho_lo": str(rho_lo)},
-                        solver=raw.to_json())
+                    return sector.certified_result(P, rate, rho_lo, why, numbers, raw.to_json())
                 rate /= 2
-    # not certified: an exact refutation is final; otherwise say what the solver said
-    refuted = sector.refutation(vertices)
-    if refuted is not None:
-        return ConditionResult("sector_ges", "refuted", refuted["statement"], numbers=numbers,
-                               refutation=refuted, solver=raw.to_json())
-    if raw.outcome != "optimal":
-        return ConditionResult("sector_ges", "inconclusive", f"solver outcome '{raw.outcome}', nothing proved",
-                               numbers=numbers, solver=raw.to_json())
-    status = "not_certified" if (raw.margin is not None and raw.margin <= 0) else "inconclusive"
-    return ConditionResult("sector_ges", status,  # type: ignore[arg-type]
-                           "no common quadratic Lyapunov function was found; this is not a proof of instability",
-                           numbers=numbers, solver=raw.to_json())
+    return sector.uncertified_result(vertices, numbers, raw.outcome, raw.margin, raw.to_json())

@@ -46,8 +46,7 @@ import numpy as np
 
 from lyapcheck.errors import InputFileError, InvalidParameter
 from lyapcheck.params import (
-    FIELD_BY_KEY, FIELDS, POSITIVE, SECTIONS, FieldSpec, Interval, Problem, build_problem,
-    validate_field,
+    FIELD_BY_KEY, POSITIVE, FieldSpec, Interval, Problem, build_problem, flatten_tables, validate_field,
 )
 from lyapcheck.units import Kind
 from sweeps.schema import CLASSES, DEFAULT_CLASSES, SCENARIOS, SWEEPABLE
@@ -209,25 +208,6 @@ def _axis(index: int, raw: object) -> tuple[Axis, object]:
     return Axis(name, tuple(float(v) for v in values), scale), table["start"]
 
 
-def _flatten_parameters(data: Mapping[str, Any], source: str) -> dict[str, object]:
-    """The fixed parameters as ``{"section.name": raw}`` (the shape build_problem reads)."""
-    flat: dict[str, object] = {}
-    for section, content in data.items():
-        if section in ("sweep", "simulation", "meta"):
-            continue
-        if section not in SECTIONS:
-            raise InvalidParameter(section, f"one of the sections {', '.join(SECTIONS)}, sweep, simulation in {source}",
-                                   section)
-        table = _table(content, section)
-        for name, value in table.items():
-            key = f"{section}.{name}"
-            if key not in FIELD_BY_KEY:
-                known = ", ".join(s.name for s in FIELDS if s.section == section)
-                raise InvalidParameter(key, f"a known key of [{section}] ({known})", name)
-            flat[key] = value
-    return flat
-
-
 def _simulation(raw: object) -> SimulationSettings:
     table = _table({} if raw is None else raw, "simulation")
     _known(table, _SIM_KEYS, "simulation")
@@ -301,7 +281,7 @@ def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
     if n_points > MAX_POINTS:
         raise InvalidParameter("sweep.axes", f"at most {MAX_POINTS} points in all", n_points)
 
-    values = _flatten_parameters(data, source)
+    values = flatten_tables(data, source)
     for axis, first in parsed:
         key = SWEEPABLE[axis.name]
         if key in values:

@@ -109,28 +109,40 @@ def certify_polytope(vertices: list[exact.Matrix]) -> tuple[exact.Matrix | None,
     return (P if exact_check(vertices, P, Fraction(0))[0] else None), Fraction(0), margin, report
 
 
-def run(system: System, rho_lo: Fraction = Fraction(0)) -> ConditionResult:
-    """GES of the error dynamics from the polytope ``rho in [rho_lo, rho_sup]``."""
-    vertices = [system.vertex(rho_lo), system.vertex(system.rho_sup)]
+def certified_result(P: exact.Matrix, rate: Fraction, rho_lo: Fraction, why: str, numbers: dict[str, Any],
+                     solver: dict[str, Any]) -> ConditionResult:
+    """The ``certified`` result; call only with ``why`` from a passed :func:`exact_check`."""
+    numbers["decay_rate_per_s"] = float(rate)
+    return ConditionResult("sector_ges", "certified", why, numbers=numbers,
+                           certificate={"P": exact.to_json(P), "decay_rate": str(rate), "rho_lo": str(rho_lo)},
+                           solver=solver)
+
+
+def uncertified_result(vertices: list[exact.Matrix], numbers: dict[str, Any], outcome: str,
+                       margin: float | None, solver: dict[str, Any]) -> ConditionResult:
+    """No certificate passed its exact check: refuted (exactly), inconclusive or not_certified."""
     refuted = refutation(vertices)
-    P, rate, margin, report = certify_polytope(vertices)
-    numbers: dict[str, Any] = {"relative_margin": margin, "rho_interval": [str(rho_lo), str(system.rho_sup)]}
-    if P is not None and rate is not None and rate > 0:
-        if refuted is not None:  # pragma: no cover - both exact: would be a bug in one of them
-            raise AssertionError("a certificate and a refutation both passed their exact checks")
-        numbers["decay_rate_per_s"] = float(rate)
-        return ConditionResult(
-            "sector_ges", "certified", exact_check(vertices, P, rate)[1], numbers=numbers,
-            certificate={"P": exact.to_json(P), "decay_rate": str(rate), "rho_lo": str(rho_lo)},
-            solver=report.to_json(),
-        )
     if refuted is not None:
         return ConditionResult("sector_ges", "refuted", refuted["statement"], numbers=numbers,
-                               refutation=refuted, solver=report.to_json())
-    if report.outcome != "optimal":
-        return ConditionResult("sector_ges", "inconclusive", f"solver outcome '{report.outcome}', nothing proved",
-                               numbers=numbers, solver=report.to_json())
+                               refutation=refuted, solver=solver)
+    if outcome != "optimal":
+        return ConditionResult("sector_ges", "inconclusive", f"solver outcome '{outcome}', nothing proved",
+                               numbers=numbers, solver=solver)
     status = "not_certified" if (margin is not None and margin <= 0) else "inconclusive"
     return ConditionResult("sector_ges", status,  # type: ignore[arg-type]
                            "no common quadratic Lyapunov function was found; this is not a proof of instability",
-                           numbers=numbers, solver=report.to_json())
+                           numbers=numbers, solver=solver)
+
+
+def run(system: System, rho_lo: Fraction = Fraction(0)) -> ConditionResult:
+    """GES of the error dynamics from the polytope ``rho in [rho_lo, rho_sup]``."""
+    vertices = [system.vertex(rho_lo), system.vertex(system.rho_sup)]
+    P, rate, margin, report = certify_polytope(vertices)
+    numbers: dict[str, Any] = {"relative_margin": margin, "rho_interval": [str(rho_lo), str(system.rho_sup)]}
+    if P is not None and rate is not None and rate > 0:
+        ok, why = exact_check(vertices, P, rate)
+        if ok:
+            if refutation(vertices) is not None:  # pragma: no cover - both exact: a bug in one of them
+                raise AssertionError("a certificate and a refutation both passed their exact checks")
+            return certified_result(P, rate, rho_lo, why, numbers, report.to_json())
+    return uncertified_result(vertices, numbers, report.outcome, margin, report.to_json())
