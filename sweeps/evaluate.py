@@ -125,28 +125,9 @@ def _weight_constants(spec_text: str) -> tuple[float, float]:
     return float(w.a1[0]), float(w.a2[0])
 
 
-def _adversarial_class() -> Any:
-    """:class:`~lyapcheck.simulation.disturbances.Adversarial`, answering a one-row shape probe.
-
-    Work-around, to remove once the simulator handles it: ``ClosedLoop.switch_atol`` calls
-    ``disturbance.switching`` on one row to count the switching functions, which a per-row ``P``
-    cannot broadcast to. The probe is answered with the first row; the integration itself always
-    calls it with every row.
-    """
-    from lyapcheck.simulation.disturbances import Adversarial
-
-    class BatchedAdversarial(Adversarial):
-        def switching(self, eps: FloatArray, s: FloatArray) -> FloatArray | None:
-            if eps.shape[0] == 1 and self.P.shape[0] > 1:
-                return self.take(np.array([0])).switching(eps, s)
-            return super().switching(eps, s)
-
-    return BatchedAdversarial
-
-
 def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatArray | None]) -> dict[str, Any]:
     """Tail sup of ``|eps|``, integrator status and divergence, per scenario, for every point."""
-    from lyapcheck.simulation.disturbances import ADVERSARIAL_LAYER_FRACTION, Constant, Weight
+    from lyapcheck.simulation.disturbances import ADVERSARIAL_LAYER_FRACTION, Adversarial, Constant, Weight
     from lyapcheck.simulation.integrator import STATUS_OK
     from lyapcheck.simulation.model import LoopParams
     from lyapcheck.simulation.runner import simulate
@@ -183,8 +164,7 @@ def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatAr
             P = np.stack([a if a is not None and _usable(a) else np.eye(2) for a in adversary])
             P = (P + np.swapaxes(P, 1, 2)) / 2
             layer = ADVERSARIAL_LAYER_FRACTION * params.delta_los
-            adversarial = _adversarial_class()
-            run(name, adversarial(d_max, P, layer, np.full(n, theta)), layer[:, None] * across[None, :])
+            run(name, Adversarial(d_max, P, layer, np.full(n, theta)), layer[:, None] * across[None, :])
     return out
 
 
