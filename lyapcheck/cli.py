@@ -43,6 +43,9 @@ def one_line_errors(func: F) -> F:
             _fail("interrupted", 130)
         except (SystemExit, click.exceptions.Exit, click.ClickException):
             raise
+        except OSError as exc:  # an output or input path the system refuses: the user's to fix
+            where = f" '{exc.filename}'" if getattr(exc, "filename", None) else ""
+            _fail(f"cannot access{where}: {exc.strerror or exc}", EXIT_USAGE)
         except Exception as exc:  # noqa: BLE001 - last resort: a user never sees a traceback
             import os
 

@@ -121,7 +121,7 @@ def register(group: click.Group) -> None:
             report = run_sweep(parsed, out, scheduler=scheduler, workers=workers, progress=progress,
                                on_ready=on_ready)
         finally:
-            if bar is not None:
+            if bar is not None and task:  # a bar that never started would still print a newline
                 bar.stop()
         summary = summarize(Store.open_or_create(out, parsed))
         for target in exports:

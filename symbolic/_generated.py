@@ -23,6 +23,16 @@ def printed(alpha_d: Fraction, sigma0: Fraction, k_d: Fraction, delta_los: Fract
     }
 
 
+def rho_of_y_sq(y_sq: Fraction, delta_los: Fraction, los_speed: Fraction) -> Fraction:
+    """The coefficient rho at (eps + sigma0 s)^2 = y_sq (eq:xCrossdyn2; printed: los_speed = 1)."""
+    return delta_los*los_speed/((delta_los)**2 + y_sq)
+
+
+def unsaturated_strip_sq(alpha_d: Fraction, delta_los: Fraction, e11_hat: Fraction, omega_so: Fraction) -> Fraction:
+    """Y_sat^2: the ODS law is unsaturated iff (eps + sigma0 s)^2 < Y_sat^2 (symbolic.ilos)."""
+    return -(delta_los)**2 + (e11_hat)**2*(omega_so)**2/(alpha_d)**2
+
+
 def stabcond_gamma22_bound(a12: Fraction, a22: Fraction) -> Fraction:
     """Upper bound of sup_t phi(t) (see symbolic.ilos.stabcond_gamma22_bound)."""
     return max(Fraction(3)*max(-a12, -a22), ((-Fraction(1, 4)*(-a12 - Fraction(2)*a22)**2/a12) if (a12 >= Fraction(2)*a22) else (-Fraction(2)*a22)))

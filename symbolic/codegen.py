@@ -18,8 +18,9 @@ from pathlib import Path
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
+from symbolic import symbols as S
 from symbolic.closed_loop import DYNAMICS, PARAMETER_SYMBOLS, error_dynamics
-from symbolic.ilos import stabcond_gamma22_bound
+from symbolic.ilos import stabcond_gamma22_bound, unsaturated_strip_sq
 
 TARGET = Path(__file__).with_name("_generated.py")
 ARGS = tuple(PARAMETER_SYMBOLS)  # alpha_d, sigma0, k_d, delta_los, los_speed, e11, e11_hat
@@ -75,6 +76,20 @@ def render() -> str:
             "    }",
             "",
         ]
+    y_sq = sp.Symbol("y_sq")
+    rho = error_dynamics("derived").rho.xreplace({S.eps: sp.sqrt(y_sq) - S.sigma0 * S.s})
+    lines += [
+        "",
+        "def rho_of_y_sq(y_sq: Fraction, delta_los: Fraction, los_speed: Fraction) -> Fraction:",
+        '    """The coefficient rho at (eps + sigma0 s)^2 = y_sq (eq:xCrossdyn2; printed: los_speed = 1)."""',
+        f"    return {_code(sp.simplify(rho), names | {y_sq: 'y_sq'})}",
+        "",
+        "",
+        "def unsaturated_strip_sq(alpha_d: Fraction, delta_los: Fraction, e11_hat: Fraction, omega_so: Fraction) -> Fraction:",
+        '    """Y_sat^2: the ODS law is unsaturated iff (eps + sigma0 s)^2 < Y_sat^2 (symbolic.ilos)."""',
+        f"    return {_code(unsaturated_strip_sq(), names | {S.Omega_SO: 'omega_so'})}",
+        "",
+    ]
     a12, a22, gain = sp.symbols("a12 a22 gain")
     bound, _ = stabcond_gamma22_bound(a12, a22, gain)
     lines += [

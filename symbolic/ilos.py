@@ -86,6 +86,20 @@ def derive() -> IlosDerivation:
     return IlosDerivation(v_d_polar, v_d, s_dot, p_dot, eps_dot_general, eps_dot, z_dot)
 
 
+def unsaturated_strip_sq() -> sp.Expr:
+    """``Y_sat^2``: the ODS law (eq. ``eq:solFinal``, ``d_hat = 0``) is unsaturated iff ``y^2 < Y_sat^2``.
+
+    Derived from ``|v_d| / e11_hat < Omega_SO`` with ``v_d`` of eq. ``eq:los2`` written in
+    ``y = eps + sigma0 s``: ``|v_d|^2 = alpha_d^2 (Delta^2 + y^2)``.
+    """
+    y_sq = sp.Symbol("y_sq", nonnegative=True)
+    y = sp.Symbol("y", real=True)
+    v = derive().v_d.subs(S.eps, y - S.sigma0 * S.s)
+    speed_sq = sp.expand(sp.simplify((v.T * v)[0])).subs(y**2, y_sq)
+    (solution,) = sp.solve(sp.Eq(speed_sq / S.e11_hat**2, S.Omega_SO**2), y_sq)
+    return sp.expand(solution)
+
+
 def _angle_sampler(rng: random.Random) -> sp.Rational:
     return sp.Rational(rng.randint(-300, 300), 100)
 

@@ -24,3 +24,20 @@ def paper_problem() -> Problem:
 @pytest.fixture(scope="session")
 def easy_problem() -> Problem:
     return problem_from_sources(PAPER_TOML, EASY_GAINS)
+
+#: fixed (non-swept) parameters of the sweep test specs: the paper's values
+SWEEP_FIXED = """
+[gains]
+sigma0 = 0.01
+delta_los = "0.75 mm"
+[swimmer]
+e11 = "9.3e-5 m"
+n_turns = 3.5
+pitch_angle = "45 deg"
+helix_radius = "420 um"
+weight = "8.7e-5 N"
+[actuation]
+omega_so = "2.8 Hz"
+[disturbance]
+d_max = "0.088 mm/s"
+"""

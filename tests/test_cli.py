@@ -94,3 +94,9 @@ def test_quick_classes_and_unknown_class() -> None:
         "prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound"]
     bad = run("certify", str(PAPER_TOML), "--classes", "prop41_ges,magic")
     assert bad.returncode == 2 and "'classes'" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_unwritable_output_is_one_line_exit_2() -> None:
+    done = run("certify", str(PAPER_TOML), "--classes", "quick", "--out", "/proc/no-such-dir/c.json")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "cannot access" in done.stderr and "Traceback" not in done.stderr

@@ -24,26 +24,12 @@ from sweeps.schema import CLASSES, SCENARIOS, VARIABLES
 from sweeps.spec import cached_spec, load_spec, parse_spec
 from sweeps.store import Store, block_regions, chunk_shape, open_results
 from sweeps.summary import summarize, violation_count
+from tests.conftest import SWEEP_FIXED
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = [ROOT / "examples" / name for name in
             ("sweep-alpha-sigma.toml", "sweep-kd-delta.toml", "sweep-dmax-alpha.toml")]
 
-FIXED = """
-[gains]
-sigma0 = 0.01
-delta_los = "0.75 mm"
-[swimmer]
-e11 = "9.3e-5 m"
-n_turns = 3.5
-pitch_angle = "45 deg"
-helix_radius = "420 um"
-weight = "8.7e-5 N"
-[actuation]
-omega_so = "2.8 Hz"
-[disturbance]
-d_max = "0.088 mm/s"
-"""
 
 
 def spec_text(axes: str = "", sweep: str = "", simulation: str = "") -> str:
@@ -62,7 +48,7 @@ stop = 2
 num = 5
 scale = "log"
 """
-    return FIXED + "[sweep]\n" + (sweep or "chunk_size = 6\n") + axes + "\n[simulation]\n" + (
+    return SWEEP_FIXED + "[sweep]\n" + (sweep or "chunk_size = 6\n") + axes + "\n[simulation]\n" + (
         simulation or 'horizon = "20 s"\ntail = "5 s"\n')
 
 
@@ -121,7 +107,7 @@ BAD_SPECS = [
     (spec_text().replace('weight = "8.7e-5 N"', ""), r"'weight' parameter must be given in \[swimmer\] for the"),
     (spec_text(sweep='chunk_size = 6\n[sweep.refine]\nclass = "sector_ges"\nlevels = 3\n'),
      r"'sweep\.axes\[0\]\.num' parameter must be k \* 2\*\*levels \+ 1"),
-    (FIXED, r"'sweep' parameter must be a \[sweep\] table"),
+    (SWEEP_FIXED, r"'sweep' parameter must be a \[sweep\] table"),
 ]
 
 

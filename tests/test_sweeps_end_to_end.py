@@ -22,25 +22,12 @@ from sweeps.run import run_sweep
 from sweeps.runners import InlineRunner
 from sweeps.spec import load_spec, parse_spec
 from sweeps.store import Store, open_results
+from tests.conftest import SWEEP_FIXED
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ("sweep-alpha-sigma.toml", "sweep-kd-delta.toml", "sweep-dmax-alpha.toml")
 
-SMALL = """
-[gains]
-sigma0 = 0.01
-delta_los = "0.75 mm"
-[swimmer]
-e11 = "9.3e-5 m"
-n_turns = 3.5
-pitch_angle = "45 deg"
-helix_radius = "420 um"
-weight = "8.7e-5 N"
-[actuation]
-omega_so = "2.8 Hz"
-[disturbance]
-d_max = "0.088 mm/s"
-[sweep]
+SMALL = SWEEP_FIXED + """[sweep]
 chunk_size = {chunk}
 [[sweep.axes]]
 name = "alpha_d"

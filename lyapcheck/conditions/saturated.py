@@ -38,6 +38,7 @@ import numpy as np
 from lyapcheck import exact, poly
 from lyapcheck.conditions.base import ConditionResult, System
 from lyapcheck.conditions.sos import bases, scaled_dynamics
+from symbolic._generated import rho_of_y_sq, unsaturated_strip_sq
 
 SQRT2_UPPER = Fraction(141422, 100000)
 #: relative shrink of Omega_SO (given as a float-derived Fraction) to a safe lower bound
@@ -163,7 +164,7 @@ def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: 
     V = poly.gram_form(z_v, QV)
     ell = lambda_min_lower(QV)
     omega_lo = omega_so * (1 - OMEGA_ROUNDING)
-    y_sat_sq = (e11_hat * omega_lo / alpha_d) ** 2 - system.delta**2
+    y_sat_sq = unsaturated_strip_sq(alpha_d, system.delta, e11_hat, omega_lo)
     if ell is None or y_sat_sq <= 0:
         return ConditionResult("saturated_loop", "not_certified",
                                "the ODS law saturates everywhere (Omega_SO e11_hat <= alpha_d Delta) or V's bound failed")
@@ -225,7 +226,7 @@ def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: 
     # global reach (exact sufficient condition; see module docstring): once |s| <= S (1 + delta),
     # in saturation y moves toward the strip at a speed of at least `rate`
     S = system.speed / (2 * k_d) * (1 + Fraction(1, 10**6))
-    rho_sat = system.speed * system.delta / (y_sat_sq + system.delta**2)
+    rho_sat = rho_of_y_sq(y_sat_sq, system.delta, system.speed)
     # e11 Omega_SO Y / sqrt(Delta^2 + Y^2), bounded below exactly by squaring
     pull_sq = (e11 * omega_lo) ** 2 * y_sat_sq / (system.delta**2 + y_sat_sq)
     # the physical plant: d_perp enters eps_dot with gain 1 (eq:varepsilonDot, as derived)
@@ -253,7 +254,7 @@ def verify(system: System, sos_cert: dict[str, Any], cert: dict[str, Any], *, al
     """Exact re-check of the invariance part (the level inside the strip) and the axis radius."""
     z_v, _ = bases(int(sos_cert["degree"]))
     V = poly.gram_form(z_v, exact.from_json(sos_cert["Q_V"]))
-    Y_sq = ((e11_hat * omega_so * (1 - OMEGA_ROUNDING) / alpha_d) ** 2 - system.delta**2) / system.delta**2
+    Y_sq = unsaturated_strip_sq(alpha_d, system.delta, e11_hat, omega_so * (1 - OMEGA_ROUNDING)) / system.delta**2
     if Fraction(cert["strip_half_width_sq_scaled"]) != Y_sq:
         return False, "stored strip width does not follow from the inputs"
     c = Fraction(cert["level_c"])

@@ -61,7 +61,10 @@ def check_box(system: System, data: dict[str, Any]) -> bool:
 
 
 def rho_lower(system: System, y_bar: Fraction) -> Fraction:
-    return system.speed * system.delta / (y_bar * y_bar + system.delta * system.delta)
+    """``rho`` at ``|eps + sigma0 s| = y_bar``: its smallest value wherever ``|y| <= y_bar``."""
+    from symbolic._generated import rho_of_y_sq
+
+    return rho_of_y_sq(y_bar * y_bar, system.delta, system.speed)
 
 
 class _EllipsoidProgram:
