@@ -82,7 +82,7 @@ def main() -> None:
     print(f"  ratio fresh / re-solve           : {fresh / resolve:8.1f} x")
     print(f"  Clarabel's own solve time        : {clarabel * 1e3:8.2f} ms  (re-solve / Clarabel = {resolve / clarabel:.1f} x)")
 
-    from lyapcheck.certify import CONDITION_ORDER, QUICK_CLASSES, run_conditions
+    from lyapcheck.certification import CONDITION_ORDER, QUICK_CLASSES, run_conditions
     from lyapcheck.params import problem_from_sources
 
     problem = problem_from_sources("examples/paper.toml", {})

@@ -40,7 +40,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _systems(n: int, seed: int) -> list[Any]:
     """Random gain sets around the paper's (alpha_d, k_d, sigma0, Delta_LOS), exact."""
-    from lyapcheck.certify import build_system
+    from lyapcheck.certification import build_system
     from lyapcheck.params import problem_from_sources
 
     base = problem_from_sources(ROOT / "examples" / "paper.toml", {})

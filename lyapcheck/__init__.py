@@ -1,0 +1,16 @@
+"""lyapcheck: machine-checked stability answers for the ILOS/ODS microswimmer paper.
+
+The Python API (``docs/api.md``)::
+
+    from lyapcheck import certify, verify, simulate, sweep, report
+
+Each function does what the command of the same name does and returns a typed result with
+``to_json()``; heavy libraries load only when a function runs.
+"""
+
+from lyapcheck.api import (
+    CertifyResult, Check, SimulationReport, SweepResult, VerifyResult, certify, report, simulate, sweep, verify,
+)
+
+__all__ = ["certify", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
+           "SimulationReport", "SweepResult"]

@@ -52,8 +52,12 @@ def system_to_json(system: Any) -> dict[str, Any]:
     }
 
 
+def _exact_or_none(value: Fraction | None) -> str | None:
+    return None if value is None else str(value)
+
+
 def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict: str) -> dict[str, Any]:
-    from lyapcheck.certify import build_system, exact_values
+    from lyapcheck.certification import build_system, exact_values
 
     system = build_system(problem, dynamics)
     return {
@@ -61,7 +65,7 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
         "kind": KIND,
         "inputs": {"given": dict(problem.given),
                    "exact_si": {k: str(v) for k, v in exact_values(problem).items()}
-                   | {"d_max": str(problem.d_max), "omega_so": str(problem.actuation.omega_so)}},
+                   | {"d_max": _exact_or_none(problem.d_max), "omega_so": _exact_or_none(problem.actuation.omega_so)}},
         "dynamics": dynamics,
         "system": system_to_json(system),
         "conditions": {name: res.to_json() for name, res in results.items()},
@@ -78,10 +82,16 @@ def read_document(path: str | Path) -> dict[str, Any]:
         raise InputFileError(f"certificate file '{p}' does not exist") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputFileError(f"certificate file '{p}' is not valid JSON: {exc}") from None
+    return check_document(doc, f"'{p}'")
+
+
+def check_document(doc: Any, source: str) -> dict[str, Any]:
+    """``doc`` if it is a certificate document this version reads (kind and schema), else a one-line error."""
     if not isinstance(doc, dict) or doc.get("kind") != KIND:
-        raise InputFileError(f"'{p}' is not a lyapcheck certificate (missing kind '{KIND}')")
+        raise InputFileError(f"{source} is not a lyapcheck certificate (missing kind '{KIND}')")
     if doc.get("schema_version") != SCHEMA_VERSION:
-        raise InputFileError(f"'{p}' has schema_version {doc.get('schema_version')!r}; this lyapcheck reads {SCHEMA_VERSION}")
+        raise InputFileError(f"{source} has schema_version {doc.get('schema_version')!r}; "
+                             f"this lyapcheck reads {SCHEMA_VERSION}")
     return doc
 
 
@@ -89,13 +99,16 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     """Exact re-check of every claim in the document; returns (condition, ok, message) rows."""
     from lyapcheck import exact
     from lyapcheck.conditions import prop41, sector, ultimate
-    from lyapcheck.certify import system_from_values
+    from lyapcheck.certification import system_from_values
     from lyapcheck.conditions.stabcond2 import run as stabcond2_run
 
     try:
-        values = {k: Fraction(v) for k, v in doc["inputs"]["exact_si"].items()}
-        d_max = values.pop("d_max")
-        omega_so = values.pop("omega_so", None)
+        stored = dict(doc["inputs"]["exact_si"])
+        # an input not given is null; the classes that need it must then be not_applicable
+        given_d_max = None if stored.get("d_max") is None else Fraction(stored["d_max"])
+        omega_so = None if stored.get("omega_so") is None else Fraction(stored["omega_so"])
+        values = {k: Fraction(v) for k, v in stored.items() if k not in ("d_max", "omega_so")}
+        d_max = given_d_max if given_d_max is not None else Fraction(0)
         system = system_from_values(doc["dynamics"], values, d_max)
         conditions = doc["conditions"]
     except (KeyError, ValueError, ZeroDivisionError, TypeError, AttributeError) as exc:
@@ -108,6 +121,15 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
 
     def ok_row(name: str, ok: bool, good: str, bad: str) -> None:
         rows.append((name, ok, good if ok else bad))
+
+    from lyapcheck.certification import NEEDS
+
+    absent = {"disturbance.d_max": given_d_max is None, "actuation.omega_so": omega_so is None}
+    for name, needs in NEEDS.items():
+        status = conditions.get(name, {}).get("status") if isinstance(conditions.get(name), dict) else None
+        lacking = [key for key, _ in needs if absent[key]]
+        if lacking and status not in (None, "not_applicable"):
+            ok_row(name, False, "", f"{name}: stated '{status}' but its input {', '.join(lacking)} is null")
 
     try:
         for name in ("prop41_ges", "prop41_iss"):

@@ -1,4 +1,4 @@
-"""Builds the claims ledger from every symbolic module and renders it for the terminal."""
+"""Builds the claims ledger from every symbolic module (the command line renders it)."""
 
 from __future__ import annotations
 
@@ -28,23 +28,3 @@ def ledger_entries() -> "list[LedgerEntry]":
     from symbolic.ledger import build_ledger
 
     return build_ledger(all_claims())  # type: ignore[arg-type]
-
-
-STATUS_STYLE = {"holds": "green", "discrepancy": "bold red", "unverifiable": "yellow"}
-
-
-def print_ledger(entries: "list[LedgerEntry]") -> None:
-    from rich.console import Console
-    from rich.table import Table
-
-    table = Table(title="Claims ledger: the paper's equations, as printed vs as derived", show_lines=True)
-    table.add_column("label", style="cyan", no_wrap=True)
-    table.add_column("claim")
-    table.add_column("status", no_wrap=True)
-    table.add_column("explanation")
-    for e in entries:
-        table.add_row(e.label, e.title, f"[{STATUS_STYLE[e.status]}]{e.status}[/]", e.explanation)
-    console = Console()
-    console.print(table)
-    counts = {s: sum(1 for e in entries if e.status == s) for s in STATUS_STYLE}
-    console.print(", ".join(f"{n} {s}" for s, n in counts.items()))

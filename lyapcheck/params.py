@@ -134,14 +134,25 @@ class Swimmer:
 
 @dataclass(frozen=True)
 class Actuation:
-    """Rotation limits as angular velocities in rad/s (Hz inputs are multiplied by 2*pi)."""
+    """Rotation limits as angular velocities in rad/s (Hz inputs are multiplied by 2*pi).
 
-    omega_so: Fraction
+    ``omega_so`` is ``None`` when it was not given: the classes that need it report
+    ``not_applicable``, and simulations ask for it through :meth:`step_out`.
+    """
+
+    omega_so: Fraction | None
     omega_0: Fraction = Fraction(2 * math.pi)
+
+    def step_out(self) -> Fraction:
+        """Omega_SO in rad/s, or a one-line :class:`InvalidParameter` when it was not given."""
+        if self.omega_so is None:
+            raise InvalidParameter("omega_so", f"given ({FIELD_BY_KEY['actuation.omega_so'].help}, e.g. '2.8 Hz')",
+                                   None)
+        return self.omega_so
 
     @property
     def omega_so_hz(self) -> float:
-        return float(self.omega_so) / (2 * math.pi)
+        return float(self.step_out()) / (2 * math.pi)
 
 
 @dataclass(frozen=True)
@@ -152,9 +163,22 @@ class Problem:
     swimmer: Swimmer
     actuation: Actuation
     theta_r: Fraction = Fraction(0)
-    d_max: Fraction = Fraction(0)
+    #: ``None`` when not given (the classes that need it report ``not_applicable``)
+    d_max: Fraction | None = None
     #: the inputs exactly as given (text), keyed "section.name", for certificates
     given: Mapping[str, str] = field(default_factory=dict, compare=False)
+
+    def disturbance_bound(self) -> Fraction:
+        """d* in m/s, or a one-line :class:`InvalidParameter` when it was not given."""
+        if self.d_max is None:
+            raise InvalidParameter("d_max", f"given ({FIELD_BY_KEY['disturbance.d_max'].help}, e.g. '0.088 mm/s')",
+                                   None)
+        return self.d_max
+
+    def missing_inputs(self) -> tuple[str, ...]:
+        """Keys of the optional inputs that were not given (``actuation.omega_so``, ``disturbance.d_max``)."""
+        return tuple(key for key, value in (("actuation.omega_so", self.actuation.omega_so),
+                                            ("disturbance.d_max", self.d_max)) if value is None)
 
     def with_gains(self, **changes: Fraction) -> "Problem":
         """A copy with some gains replaced (used by sweeps); values must already be valid."""
@@ -201,7 +225,9 @@ def load_toml(path: str | Path) -> dict[str, Any]:
 def build_problem(values: Mapping[str, object], *, source: str = "input") -> Problem:
     """Validate a flat mapping ``{"section.name": value}`` into a :class:`Problem`.
 
-    Missing required fields raise :class:`InvalidParameter` naming the field.
+    Missing required fields raise :class:`InvalidParameter` naming the field. The step-out
+    frequency and the disturbance bound are optional: only some classes and the simulations
+    need them (see :meth:`Problem.disturbance_bound`, :meth:`Actuation.step_out`).
     """
     parsed: dict[str, Fraction | None] = {}
     given: dict[str, str] = {}
@@ -237,10 +263,10 @@ def build_problem(values: Mapping[str, object], *, source: str = "input") -> Pro
         weight=opt("swimmer.weight"), xi_par=opt("swimmer.xi_par"), xi_perp=opt("swimmer.xi_perp"),
         xi_head=req("swimmer.xi_head"), head_offset=req("swimmer.head_offset"),
     )
-    actuation = Actuation(omega_so=req("actuation.omega_so"), omega_0=req("actuation.omega_0"))
+    actuation = Actuation(omega_so=opt("actuation.omega_so"), omega_0=req("actuation.omega_0"))
     return Problem(
         gains=gains, swimmer=swimmer, actuation=actuation, theta_r=req("path.theta_r"),
-        d_max=req("disturbance.d_max"), given=given,
+        d_max=opt("disturbance.d_max"), given=given,
     )
 
 

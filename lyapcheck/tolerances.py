@@ -22,3 +22,16 @@ SOLVER_MAX_ITER: Final = 200
 
 #: Simulator accuracy contract (relative to the state scale), tested against solve_ivp.
 SIM_REL_TOL: Final = 1e-6
+
+#: Switching search (``switched_ges``): a periodic switching law counts as a candidate for the
+#: exact instability proof when its numerically estimated growth per period exceeds
+#: ``1 + SWITCHING_MIN_GROWTH``. Only steers the search; the proof is an exact interval check.
+SWITCHING_MIN_GROWTH: Final = 1e-9
+#: Relative precision (bits) of the outward-rounded interval enclosures of ``expm(A t)``
+#: tried in turn by the exact switching check; more bits only matter when the growth margin
+#: ``rho(M) - 1`` is within a few orders of magnitude of ``SWITCHING_MIN_GROWTH``.
+SWITCHING_ENCLOSURE_BITS: Final = (96, 192, 384)
+
+#: Wall-time limit of one condition class at one point (``certify``): past it the class reports
+#: ``inconclusive`` naming this limit. Far above the 1-6 s the slowest class takes at sane gains.
+CLASS_TIME_LIMIT_S: Final = 120.0

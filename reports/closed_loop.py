@@ -53,7 +53,7 @@ def simulate_certificate(doc: dict[str, Any]) -> LoopRun:
         When the inputs do not describe a problem the simulator accepts (the report shows why).
     """
     from lyapcheck.params import build_problem
-    from lyapcheck.simulation.command import INTEGRATOR_NAME
+    from lyapcheck.simulation.integrator import INTEGRATOR_NAME
     from lyapcheck.simulation.disturbances import Constant
     from lyapcheck.simulation.model import LoopParams
     from lyapcheck.simulation.runner import simulate
@@ -67,7 +67,7 @@ def simulate_certificate(doc: dict[str, Any]) -> LoopRun:
     except ValueError as exc:
         raise LyapcheckError(f"cannot simulate the certificate's inputs: {exc}") from None
     theta = float(problem.theta_r)
-    d_max = float(problem.d_max)
+    d_max = float(problem.disturbance_bound())
     # perpendicular to the path, to its right: (sin theta, -cos theta) d*
     push = (d_max * math.sin(theta), -d_max * math.cos(theta))
     n = len(INITIAL_POSITIONS)
@@ -88,5 +88,5 @@ def simulate_certificate(doc: dict[str, Any]) -> LoopRun:
         "tail_window_s": [HORIZON_S - TAIL_S, HORIZON_S],
         "disturbance_m_per_s": list(push),
     }
-    return LoopRun(result.trajectories, rows, float(problem.actuation.omega_so), theta, HORIZON_S, TAIL_S,
+    return LoopRun(result.trajectories, rows, float(problem.actuation.step_out()), theta, HORIZON_S, TAIL_S,
                    settings)

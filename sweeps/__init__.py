@@ -16,5 +16,5 @@ Modules, one concern each:
 ``export``          NetCDF and CSV
 ==================  =========================================================================
 
-Entry points: :func:`sweeps.run.run_sweep` and ``lyapcheck sweep`` (:mod:`lyapcheck.cli_sweep`).
+Entry points: :func:`sweeps.run.run_sweep` and ``lyapcheck sweep`` (:mod:`lyapcheck.cli.sweep`).
 """

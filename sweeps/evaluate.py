@@ -59,11 +59,11 @@ def empty_result(n: int) -> Result:
 def certify_point(problem: Problem, classes: tuple[str, ...]) -> dict[str, ConditionResult]:
     """The requested condition classes at one point, on the derived dynamics.
 
-    Everything but ``sector_ges`` goes through :func:`lyapcheck.certify.run_conditions` (which
+    Everything but ``sector_ges`` goes through :func:`lyapcheck.certification.run_conditions` (which
     runs only the requested classes); ``sector_ges`` goes through the direct Clarabel path of
     :mod:`sweeps.fast_sector`, decided by the same exact check.
     """
-    from lyapcheck.certify import build_system, run_conditions
+    from lyapcheck.certification import build_system, run_conditions
     from sweeps import fast_sector
 
     others = tuple(c for c in classes if c != "sector_ges")
@@ -138,7 +138,7 @@ def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatAr
     columns = {name: coords[:, i] for i, name in enumerate(spec.dims)}
     gains = {k: v for k, v in columns.items() if k != "d_max"}
     params = LoopParams.from_problem(base, controller="ilos", n=n, **gains)
-    d_max = columns.get("d_max", np.full(n, float(base.d_max)))
+    d_max = columns.get("d_max", np.full(n, float(base.disturbance_bound())))
     theta = float(base.theta_r)
     across = np.array([-math.sin(theta), math.cos(theta)])  # e_perp (eq:ehatThetarPerp)
     origin = np.zeros((n, 2))

@@ -288,6 +288,9 @@ def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
             raise InvalidParameter(key, "either fixed or swept, not both", values[key])
         values[key] = first  # a valid placeholder; problem_at() sets the exact value per point
     base = build_problem(values, source=source)
+    # every point is simulated under the saturated command and a bounded disturbance
+    base.actuation.step_out()
+    base.disturbance_bound()
 
     classes = _classes(sweep.get("classes"))
     chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)

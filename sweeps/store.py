@@ -57,7 +57,7 @@ def paper_point() -> dict[str, float]:
     p = paper_problem()
     g = p.gains
     return {"alpha_d": float(g.alpha_d), "sigma0": float(g.sigma0), "k_d": float(g.k_d),
-            "delta_los": float(g.delta_los), "d_max": float(p.d_max)}
+            "delta_los": float(g.delta_los), "d_max": float(p.disturbance_bound())}
 
 
 def chunk_shape(shape: Sequence[int], chunk_size: int) -> tuple[int, ...]:

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from lyapcheck import exact
 from lyapcheck.certificate import build_document, verify_document
-from lyapcheck.certify import build_system, run_conditions, verdict
+from lyapcheck.certification import build_system, run_conditions, verdict
 from lyapcheck.conditions import prop41, sector
 from lyapcheck.params import problem_from_sources
 from tests.conftest import PAPER_TOML

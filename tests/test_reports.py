@@ -89,7 +89,7 @@ def _colour_pixels(image: Any, rgb: tuple[int, int, int], tol: int = 40) -> int:
 @pytest.fixture(scope="module")
 def easy_doc() -> dict[str, Any]:
     from lyapcheck.certificate import build_document
-    from lyapcheck.certify import run_conditions, verdict
+    from lyapcheck.certification import run_conditions, verdict
     from lyapcheck.params import problem_from_sources
 
     problem = problem_from_sources(PAPER_TOML, EASY_GAINS)
@@ -303,13 +303,13 @@ def test_sweep_store_without_status_is_refused() -> None:
 def _cli() -> Any:
     import click
 
-    from lyapcheck import cli, cli_report
+    from lyapcheck.cli import app, report
 
-    @click.group(cls=cli._Group)
+    @click.group(cls=app._Group)
     def group() -> None:
         """Test group with only the report command."""
 
-    cli_report.register(group)
+    report.register(group)
     return group
 
 

@@ -14,7 +14,8 @@ import pytest
 
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.params import Problem, problem_from_sources
-from lyapcheck.simulation.command import report, run, run_scenarios
+from lyapcheck.api import simulate as api_simulate
+from lyapcheck.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
 from lyapcheck.simulation.disturbances import Adversarial, Constant, NoDisturbance, PiecewiseConstant, Sinusoid
 from lyapcheck.simulation.model import ClosedLoop, LoopParams
 from lyapcheck.simulation.runner import SimulationResult, simulate
@@ -59,7 +60,7 @@ def test_presets_state_the_reported_numbers() -> None:
 @pytest.mark.slow
 def test_report_names_the_disturbance_and_compares_with_the_paper(section5: SimulationResult) -> None:
     i = PRESETS.index("paper-ilos")
-    doc = report(preset("paper-ilos"), section5, i)
+    doc = simulation_document(preset("paper-ilos"), section5, i)
     assert doc["disturbance"]["kind"] == "constant"
     assert doc["disturbance"]["velocity_m_s"] == pytest.approx([0.0, -0.088e-3])
     assert "inferred" in doc["disturbance"]["note"]
@@ -327,9 +328,9 @@ def test_bad_scenario_values_name_the_field(paper_problem: Problem, table: dict[
 
 def test_run_without_preset_or_scenario_names_preset() -> None:
     with pytest.raises(InvalidParameter, match="'preset' parameter"):
-        run(scenario=None, preset=None, as_json=True, plot=None)
+        scenario_batch(None, None)
     with pytest.raises(InvalidParameter, match="'preset' parameter"):
-        run(scenario="x.toml", preset="paper-ilos", as_json=True, plot=None)
+        scenario_batch("x.toml", "paper-ilos")
     with pytest.raises(InvalidParameter, match="'preset' parameter"):
         preset("paper-ilos-2000")
 
@@ -366,7 +367,7 @@ def test_cli_exit_codes(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_plot_writes_the_section5_png(tmp_path: Path) -> None:
     out = tmp_path / "s5.png"
-    assert run(scenario=None, preset="paper-ilos", as_json=True, plot=str(out)) == 0
+    assert not api_simulate(preset="paper-ilos", plot=out).diverged
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert out.stat().st_size > 50_000
 

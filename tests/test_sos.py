@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 
 from lyapcheck import exact, poly
 from lyapcheck.certificate import build_document, verify_document
-from lyapcheck.certify import build_system, run_conditions, verdict
+from lyapcheck.certification import build_system, run_conditions, verdict
 from lyapcheck.conditions import sos
 from lyapcheck.params import problem_from_sources
 from tests.conftest import PAPER_TOML

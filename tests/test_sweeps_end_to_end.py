@@ -164,11 +164,10 @@ def test_example_specs_reduced_have_no_soundness_violation(tmp_path: Path, name:
 
 
 def _cli() -> object:
-    from lyapcheck import cli as cli_module
-    from lyapcheck import cli_sweep
+    from lyapcheck.cli import app, sweep
 
-    cli_sweep.register(cli_module.cli)
-    return cli_module.cli
+    sweep.register(app.cli)
+    return app.cli
 
 
 def test_cli_bad_spec_is_one_line_exit_2(tmp_path: Path) -> None:

@@ -8,9 +8,19 @@ from typing import Any, Literal
 
 from lyapcheck.exact import Matrix
 
-Status = Literal["certified", "refuted", "not_certified", "inconclusive", "holds", "fails"]
+Status = Literal["certified", "refuted", "not_certified", "inconclusive", "holds", "fails", "not_applicable",
+                 "counterexample"]
 #: classes whose exact pass proves stability of the error dynamics (the verdict "certified")
 STABILITY_CLASSES = ("prop41_ges", "prop41_iss", "sector_ges", "sos_gas")
+
+Property = Literal["GES", "GAS", "ISS", "ultimate_bound", "invariant_set"]
+#: what a class proves when it is certified (DESIGN.md: every stability class states it, so that a
+#: GAS certificate is never read as GES). ``stabcond2`` is arithmetic, not a certificate: absent.
+PROPERTY: dict[str, Property] = {
+    "prop41_ges": "GES", "prop41_iss": "ISS", "sector_ges": "GES", "switched_ges": "GES",
+    "ultimate_bound": "ultimate_bound", "sos_gas": "GAS", "ges": "GES", "saturated_loop": "invariant_set",
+    "sos_bound": "ultimate_bound",
+}
 
 
 @dataclass(frozen=True)
@@ -49,7 +59,10 @@ class ConditionResult:
     solver: dict[str, Any] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"status": self.status, "summary": self.summary, **self.numbers}
+        out: dict[str, Any] = {"status": self.status, "summary": self.summary}
+        if self.name in PROPERTY:
+            out["property"] = PROPERTY[self.name]
+        out.update(self.numbers)
         if self.certificate:
             out["certificate"] = self.certificate
         if self.refutation:

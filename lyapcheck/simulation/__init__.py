@@ -14,7 +14,7 @@ Modules (one concern each; nothing is imported here, so ``lyapcheck --help`` sta
 * :mod:`~lyapcheck.simulation.scenarios` -- the Section 5 presets and scenario TOML files;
 * :mod:`~lyapcheck.simulation.inference` -- the disturbance inferred from the paper's numbers;
 * :mod:`~lyapcheck.simulation.plots` -- the Section 5 figures;
-* :mod:`~lyapcheck.simulation.command` -- ``lyapcheck simulate``.
+* :mod:`~lyapcheck.simulation.scenario_run` -- run scenarios, the ``simulate`` JSON document.
 
 See ``docs/simulation.md``.
 """

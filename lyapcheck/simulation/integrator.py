@@ -38,6 +38,10 @@ from dataclasses import dataclass
 from typing import Final, NamedTuple, Protocol
 
 import numpy as np
+
+#: how simulation documents and reports name this integrator
+INTEGRATOR_NAME: Final = ("Dormand-Prince 5(4), adaptive step per trajectory, batched "
+                          "(lyapcheck.simulation.integrator)")
 import numpy.typing as npt
 
 logger = logging.getLogger(__name__)

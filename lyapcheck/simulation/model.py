@@ -121,7 +121,7 @@ class LoopParams:
             "alpha_d": float(g.alpha_d), "sigma0": float(g.sigma0), "k_d": float(g.k_d),
             "delta_los": float(g.delta_los), "los_speed": float(g.los_speed),
             "e11": float(sw.e11), "e11_hat": float(sw.e11_hat),
-            "omega_so": float(act.omega_so), "omega_0": float(act.omega_0),
+            "omega_so": float(act.step_out()), "omega_0": float(act.omega_0),
             "theta_r": float(problem.theta_r),
             "integral": 1.0 if controller == "ilos" else 0.0,
             "d_hat": d_hat,

@@ -84,7 +84,7 @@ def section5_figure(scenarios: Sequence[Scenario], result: SimulationResult, pat
         ax.plot(tr.t, np.hypot(tr.u[:, 0], tr.u[:, 1]) / two_pi, color="0.6", lw=4, alpha=0.7, label="|u|")
         ax.plot(tr.t, tr.u[:, 0] / two_pi, color="C0", lw=1.2, label="u_x")
         ax.plot(tr.t, tr.u[:, 1] / two_pi, color="C1", lw=1.2, label="u_z")
-        so = float(sc.problem.actuation.omega_so) / two_pi
+        so = float(sc.problem.actuation.step_out()) / two_pi
         ax.axhline(so, color="C3", ls="--", lw=1, label=f"Omega_SO = {so:g} Hz")
         ax.axhline(-so, color="C3", ls="--", lw=1)
         ax.set_xlabel("t (s)")

@@ -240,7 +240,7 @@ def parse_disturbance(table: object, problem: Problem) -> DisturbanceSpec:
             if kind == "weight":
                 continue  # drag coefficients may come from [swimmer]; checked in weight_disturbance
             if kind == "adversarial" and key == "bound":
-                values["bound"] = float(problem.d_max)
+                values["bound"] = float(problem.disturbance_bound())
                 continue
             if kind == "adversarial" and key == "layer":
                 values["layer"] = ADVERSARIAL_LAYER_FRACTION * float(problem.gains.delta_los)
@@ -381,7 +381,7 @@ def problem_summary(problem: Problem) -> dict[str, Any]:
     return {
         "alpha_d_1_s": f(g.alpha_d), "sigma0": f(g.sigma0), "k_d_1_s": f(g.k_d), "delta_los_m": f(g.delta_los),
         "los_speed_m_s": f(g.los_speed), "e11_m": f(sw.e11), "e11_hat_m": f(sw.e11_hat),
-        "omega_so_rad_s": f(act.omega_so), "omega_so_hz": f(act.omega_so) / two_pi,
+        "omega_so_rad_s": f(act.step_out()), "omega_so_hz": f(act.step_out()) / two_pi,
         "omega_0_rad_s": f(act.omega_0), "omega_0_hz": f(act.omega_0) / two_pi,
         "theta_r_rad": f(problem.theta_r),
     }

@@ -1,4 +1,4 @@
-"""The ``lyapcheck`` command line: parse, call the library, map errors to exit codes.
+"""The ``lyapcheck`` command group: parse, call :mod:`lyapcheck.api`, map errors to exit codes.
 
 Exit codes (DESIGN.md): 0 success, 1 ran correctly but the answer is negative, 2 bad input or
 usage (one line on stderr, no traceback). Heavy libraries (sympy, cvxpy, numpy) are imported
@@ -85,32 +85,16 @@ def emit_json(payload: Any) -> None:
     click.echo(json.dumps(payload, indent=2, sort_keys=False))
 
 
-@cli.command()
-@click.option("--json", "as_json", is_flag=True, help="Print the claims ledger as JSON.")
-@one_line_errors
-def derive(as_json: bool) -> None:
-    """Derive the paper's equations and compare them with the printed ones."""
-    from lyapcheck.ledger_view import ledger_entries, print_ledger
+def _register_commands() -> None:
+    """One module per command; each imports its libraries only when the command runs."""
+    from lyapcheck.cli import certify, derive, report, simulate, sweep
 
-    entries = ledger_entries()
-    if as_json:
-        emit_json({"ledger": [e.to_json() for e in entries]})
-    else:
-        print_ledger(entries)
-
-
-def _register_later_commands() -> None:
-    """Commands implemented in their own modules, imported only when invoked."""
-    from lyapcheck import cli_certify, cli_report, cli_simulate, cli_sweep
-
-    cli_certify.register(cli)
-    cli_simulate.register(cli)
-    cli_sweep.register(cli)
-    cli_report.register(cli)
+    for module in (derive, certify, simulate, sweep, report):
+        module.register(cli)
 
 
 def main() -> None:
-    _register_later_commands()
+    _register_commands()
     cli()
 
 

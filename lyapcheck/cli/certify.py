@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import click
 
-from lyapcheck.cli import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
-from lyapcheck.fileio import atomic_write
+from lyapcheck.cli.app import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
 
 #: command-line flag -> parameter key (lyapcheck.params.FIELDS)
 FLAG_KEYS = {
@@ -18,7 +16,8 @@ FLAG_KEYS = {
 }
 
 STATUS_STYLE = {"certified": "bold green", "refuted": "bold red", "not_certified": "yellow",
-                "inconclusive": "magenta", "holds": "green", "fails": "red"}
+                "inconclusive": "magenta", "holds": "green", "fails": "red", "not_applicable": "dim",
+                "counterexample": "bold red"}
 
 
 def _print_table(doc: dict[str, Any]) -> None:
@@ -29,10 +28,11 @@ def _print_table(doc: dict[str, Any]) -> None:
     table = Table(title=f"lyapcheck certify - dynamics: {doc['dynamics']}", show_lines=True)
     table.add_column("condition", style="cyan", no_wrap=True)
     table.add_column("status", no_wrap=True)
+    table.add_column("property", no_wrap=True)
     table.add_column("what it means")
     for name, cond in doc["conditions"].items():
         style = STATUS_STYLE.get(cond["status"], "white")
-        table.add_row(name, f"[{style}]{cond['status']}[/]", cond["summary"])
+        table.add_row(name, f"[{style}]{cond['status']}[/]", cond.get("property", ""), cond["summary"])
     console.print(table)
     style = "bold green" if doc["verdict"] == "certified" else "bold yellow"
     console.print(f"verdict: [{style}]{doc['verdict']}[/]  (certified = an exact check of a stability certificate passed)")
@@ -60,46 +60,26 @@ def register(group: click.Group) -> None:
     def certify(gains: str | None, dynamics: str, as_json: bool, out: str | None, report: str | None,
                 linear_views: bool, classes: str | None, **flags: str | None) -> None:
         """Certify a gain set: every condition class, each checked exactly."""
-        from lyapcheck.certificate import build_document
-        from lyapcheck.certify import run_conditions, verdict
+        from lyapcheck.api import certify as certify_gains
+        from lyapcheck.api import report as write_report
         from lyapcheck.errors import InvalidParameter
-        from lyapcheck.params import problem_from_sources
 
         if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
             raise InvalidParameter("report", "a file name ending in .html or .pdf", report)
         overrides = {FLAG_KEYS[k]: v for k, v in flags.items() if v is not None}
-        problem = problem_from_sources(gains, overrides)
-        from lyapcheck.certify import CONDITION_ORDER, QUICK_CLASSES
-
-        chosen: tuple[str, ...]
-        if classes is None:
-            chosen = CONDITION_ORDER
-        elif classes.strip() == "quick":
-            chosen = QUICK_CLASSES
-        else:
-            chosen = tuple(c.strip() for c in classes.split(",") if c.strip())
-        results = run_conditions(problem, dynamics, chosen)
-        doc = build_document(problem, dynamics, results, verdict(results))
-        if linear_views:
-            from lyapcheck.certify import build_system
-            from lyapcheck.linalg_views import linear_views as views
-
-            doc["linear_views"] = views(build_system(problem, dynamics))
+        result = certify_gains(gains, dynamics=dynamics, classes=classes, linear_views=linear_views,
+                               overrides=overrides)
         if out:
-            atomic_write(out, json.dumps(doc, indent=2) + "\n")
+            result.write(out)
         if report:
-            from lyapcheck.errors import LyapcheckError
-
-            try:
-                from reports import render  # type: ignore[attr-defined]
-            except ImportError:
-                raise LyapcheckError("reports are not available in this version (issue 6)") from None
-            render.certificate_report(doc, report)  # pragma: no cover
+            as_pdf = Path(report).suffix.lower() == ".pdf"
+            write_report(result, html=None if as_pdf else report, pdf=report if as_pdf else None)
+        doc = result.to_json()
         if as_json:
             emit_json(doc)
         else:
             _print_table(doc)
-        raise SystemExit(EXIT_OK if doc["verdict"] == "certified" else EXIT_NEGATIVE)
+        raise SystemExit(EXIT_OK if result.verdict == "certified" else EXIT_NEGATIVE)
 
     @group.command()
     @click.argument("certificate", type=click.Path(dir_okay=False))
@@ -107,14 +87,13 @@ def register(group: click.Group) -> None:
     @one_line_errors
     def verify(certificate: str, as_json: bool) -> None:
         """Re-check a certificate file exactly (no solver involved)."""
-        from lyapcheck.certificate import read_document, verify_document
+        from lyapcheck.api import verify as verify_certificate
 
-        rows = verify_document(read_document(certificate))
-        ok = all(r[1] for r in rows)
+        result = verify_certificate(certificate)
         if as_json:
-            emit_json({"valid": ok, "checks": [{"check": n, "ok": good, "message": m} for n, good, m in rows]})
+            emit_json(result.to_json())
         else:
-            for name, good, message in rows:
-                click.echo(f"{'ok  ' if good else 'FAIL'} {name}: {message}")
-            click.echo("certificate verified" if ok else "certificate FAILS its exact re-check")
-        raise SystemExit(EXIT_OK if ok else EXIT_NEGATIVE)
+            for check in result.checks:
+                click.echo(f"{'ok  ' if check.ok else 'FAIL'} {check.check}: {check.message}")
+            click.echo("certificate verified" if result.valid else "certificate FAILS its exact re-check")
+        raise SystemExit(EXIT_OK if result.valid else EXIT_NEGATIVE)

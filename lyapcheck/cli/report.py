@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from lyapcheck.cli import one_line_errors
+from lyapcheck.cli.app import one_line_errors
 
 
 def register(group: click.Group) -> None:
@@ -18,7 +18,7 @@ def register(group: click.Group) -> None:
 
         Without --html or --pdf, writes SOURCE's name with .html in the current directory.
         """
-        from reports.render import report_files
+        from lyapcheck.api import report as write_report
 
-        for path in report_files(source, html, pdf):
+        for path in write_report(source, html=html, pdf=pdf):
             click.echo(f"wrote {path}")

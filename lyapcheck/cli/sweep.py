@@ -10,12 +10,11 @@ command again on a finished store computes nothing and prints the summary again;
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Any
 
 import click
 
-from lyapcheck.cli import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
+from lyapcheck.cli.app import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
 
 
 def _progress_bar() -> Any:
@@ -92,19 +91,8 @@ def register(group: click.Group) -> None:
     def sweep(spec: str, out: str, scheduler: str | None, workers: int | None, exports: tuple[str, ...],
               as_json: bool, quiet: bool) -> None:
         """Map certified regions over 1-3 parameters and cross-check them with simulation."""
-        from lyapcheck.errors import InvalidParameter
-        from sweeps.export import EXPORT_SUFFIXES, export
-        from sweeps.run import run_sweep
-        from sweeps.spec import load_spec
-        from sweeps.store import Store
-        from sweeps.summary import summarize, violation_count
+        from lyapcheck.api import sweep as run_sweep
 
-        if workers is not None and workers < 0:
-            raise InvalidParameter("workers", "an integer >= 0", workers)
-        for target in exports:
-            if Path(target).suffix.lower() not in EXPORT_SUFFIXES:
-                raise InvalidParameter("export", "a file name ending in .nc or .csv", target)
-        parsed = load_spec(spec)
         bar = None if quiet else _progress_bar()
         task: list[Any] = []
 
@@ -118,26 +106,16 @@ def register(group: click.Group) -> None:
                 bar.update(task[0], advance=advance, total=total)
 
         try:
-            report = run_sweep(parsed, out, scheduler=scheduler, workers=workers, progress=progress,
+            result = run_sweep(spec, out, scheduler=scheduler, workers=workers, exports=exports, progress=progress,
                                on_ready=on_ready)
         finally:
             if bar is not None and task:  # a bar that never started would still print a newline
                 bar.stop()
-        summary = summarize(Store.open_or_create(out, parsed))
-        for target in exports:
-            export(out, target)
         if as_json:
-            payload = summary.to_json()
-            payload.update({"store": str(report.path), "computed_now": report.computed_now,
-                            "wall_seconds": report.wall_seconds})
-            if report.refinement is not None:
-                r = report.refinement
-                payload["refinement"] = {"class": r.cls, "levels": r.levels, "points_computed": r.points_computed,
-                                         "full_grid_points": r.full_grid_points, "saved_fraction": r.saved_fraction}
-            emit_json(payload)
+            emit_json(result.to_json())
         elif not quiet:
-            _print_summary(summary, report)
-        if violation_count(summary):
-            _shout(summary)
+            _print_summary(result.summary, result.run)
+        if result.violations:
+            _shout(result.summary)
             raise SystemExit(EXIT_NEGATIVE)
         raise SystemExit(EXIT_OK)

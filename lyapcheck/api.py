@@ -1,0 +1,340 @@
+"""The Python API: what ``lyapcheck certify | verify | simulate | sweep | report`` do, as functions.
+
+For the notebook user who will not shell out::
+
+    from lyapcheck import certify, verify
+
+    result = certify({"alpha_d": "0.0558", "sigma0": 0.01, "k_d": "0.15 1/s",
+                      "delta_los": "0.75 mm", "e11": "9.3e-5 m"}, classes="quick")
+    result.verdict                       # "certified" or "not_certified"
+    result.conditions["sector_ges"].status
+    verify(result.to_json()).valid       # exact re-check, no solver
+
+Every function takes what the command line takes (a parameters object, a mapping with unit
+strings, or a TOML path), returns a typed result whose ``to_json()`` is exactly the command's
+``--json`` document, and raises :class:`~lyapcheck.errors.LyapcheckError` subclasses on bad
+input (the command line maps them to exit codes). The command line calls these functions and
+nothing else; ``docs/api.md`` is the user's guide.
+
+This module sits above the core, :mod:`sweeps` and :mod:`reports` (DESIGN.md's layering): it
+is the only place besides :mod:`lyapcheck.cli` that imports the two, and it imports them (and
+every heavy library) inside the functions, so ``import lyapcheck`` stays instant.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from lyapcheck.errors import InputFileError, InvalidParameter
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.conditions.base import ConditionResult
+    from lyapcheck.params import Problem
+
+#: short names accepted in a parameters mapping (and the command-line flags) -> parameter key
+SHORT_KEYS: dict[str, str] = {
+    "alpha_d": "gains.alpha_d", "sigma0": "gains.sigma0", "k_d": "gains.k_d", "kd": "gains.k_d",
+    "delta_los": "gains.delta_los", "los_speed": "gains.los_speed", "e11": "swimmer.e11",
+    "e11_hat": "swimmer.e11_hat", "omega_so": "actuation.omega_so", "omega_0": "actuation.omega_0",
+    "theta_r": "path.theta_r", "d_max": "disturbance.d_max",
+}
+
+def flat_parameters(params: Mapping[str, Any]) -> dict[str, object]:
+    """``{"section.name": value}`` from a nested (TOML-shaped), dotted or short-named mapping."""
+    from lyapcheck.params import flatten_tables
+
+    flat: dict[str, object] = {}
+    nested = {k: v for k, v in params.items() if isinstance(v, Mapping)}
+    flat.update(flatten_tables(nested, "the parameters mapping"))
+    for key, value in params.items():
+        if key in nested:
+            continue
+        if not isinstance(key, str):
+            raise InvalidParameter("parameters", "string keys", key)
+        flat[SHORT_KEYS.get(key, key)] = value
+    return flat
+
+
+def problem_from(params: Any, overrides: Mapping[str, object] | None = None) -> "Problem":
+    """A validated :class:`~lyapcheck.params.Problem` from any accepted parameters form.
+
+    Parameters
+    ----------
+    params
+        A ``Problem`` (returned as is when there are no overrides), a mapping (nested like the
+        TOML file, dotted ``"gains.alpha_d"`` keys, or short names ``"alpha_d"``; values are
+        numbers or strings with units), a path to a gains TOML file, or ``None``.
+    overrides
+        Values laid over ``params`` (keys as in a mapping), as the command-line flags are.
+    """
+    from lyapcheck.params import Problem, build_problem, problem_from_sources
+
+    extra = flat_parameters(overrides or {})
+    if isinstance(params, Problem):
+        if not extra:
+            return params
+        params = {k: v for k, v in params.given.items()}
+    if params is None or isinstance(params, (str, Path)):
+        return problem_from_sources(params, extra)
+    if not isinstance(params, Mapping):
+        raise InvalidParameter("params", "a Problem, a mapping or a TOML path", type(params).__name__)
+    return build_problem({**flat_parameters(params), **extra}, source="the parameters mapping")
+
+
+# -- certify -------------------------------------------------------------------------------------
+def class_selection(classes: str | Sequence[str] | None) -> tuple[str, ...]:
+    """``None`` (all), ``"quick"``, a comma-separated string or a sequence of class names."""
+    from lyapcheck.certification import CONDITION_ORDER, QUICK_CLASSES
+
+    if classes is None:
+        return CONDITION_ORDER
+    if isinstance(classes, str):
+        if classes.strip() == "quick":
+            return QUICK_CLASSES
+        classes = classes.split(",")
+    chosen = tuple(c.strip() for c in classes if isinstance(c, str) and c.strip())
+    if not chosen:
+        raise InvalidParameter("classes", "'quick' or names among " + ", ".join(CONDITION_ORDER), classes)
+    return chosen
+
+
+@dataclass(frozen=True)
+class CertifyResult:
+    """What ``lyapcheck certify`` found: the same content as its ``--json`` document.
+
+    Attributes
+    ----------
+    verdict
+        ``certified`` when some stability certificate passed its exact check.
+    dynamics
+        ``derived`` or ``printed``.
+    conditions
+        Condition name -> :class:`~lyapcheck.conditions.base.ConditionResult` (status,
+        property, summary, numbers, exact certificate).
+    document
+        The certificate document (``to_json()``), which :func:`verify` re-checks.
+    """
+
+    verdict: str
+    dynamics: str
+    conditions: "Mapping[str, ConditionResult]"
+    document: dict[str, Any] = field(repr=False)
+
+    def to_json(self) -> dict[str, Any]:
+        return self.document
+
+    def write(self, path: str | Path) -> Path:
+        """Write the certificate file (atomically: a reader never sees half a file)."""
+        from lyapcheck.fileio import atomic_write
+
+        return atomic_write(path, json.dumps(self.document, indent=2) + "\n")
+
+
+def certify(params: Any = None, *, dynamics: str = "derived", classes: str | Sequence[str] | None = None,
+            linear_views: bool = False, overrides: Mapping[str, object] | None = None) -> CertifyResult:
+    """Certify a gain set: run the condition classes, each checked exactly.
+
+    Parameters
+    ----------
+    params
+        The parameters (see :func:`problem_from`). Without ``omega_so`` or ``d_max`` the
+        classes that need them are ``not_applicable`` and the others still run.
+    dynamics
+        ``"derived"`` (lyapcheck's derivation) or ``"printed"`` (the paper's eqs. ``los3``,
+        ``xCrossdyn2`` as printed).
+    classes
+        ``None`` for all, ``"quick"`` for the quadratic and arithmetic classes, or names.
+    linear_views
+        Add python-control views (poles, the Lyapunov P for Gamma = I) under ``linear_views``.
+    overrides
+        Values laid over ``params`` (as the command-line flags are laid over the TOML file).
+    """
+    from lyapcheck.certificate import build_document
+    from lyapcheck.certification import run_conditions, verdict
+
+    problem = problem_from(params, overrides)
+    results = run_conditions(problem, dynamics, class_selection(classes))
+    outcome = verdict(results)
+    doc = build_document(problem, dynamics, results, outcome)
+    if linear_views:
+        from lyapcheck.certification import build_system
+        from lyapcheck.linalg_views import linear_views as views
+
+        doc["linear_views"] = views(build_system(problem, dynamics))
+    return CertifyResult(verdict=outcome, dynamics=dynamics, conditions=results, document=doc)
+
+
+# -- verify --------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Check:
+    """One exact re-check of a certificate file."""
+
+    check: str
+    ok: bool
+    message: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {"check": self.check, "ok": self.ok, "message": self.message}
+
+
+@dataclass(frozen=True)
+class VerifyResult:
+    """``valid`` when every claim of the certificate passes its exact re-check."""
+
+    valid: bool
+    checks: tuple[Check, ...]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"valid": self.valid, "checks": [c.to_json() for c in self.checks]}
+
+
+def verify(certificate: str | Path | Mapping[str, Any] | CertifyResult) -> VerifyResult:
+    """Re-check a certificate exactly, without a solver (file path, document or result)."""
+    from lyapcheck.certificate import check_document, read_document, verify_document
+
+    if isinstance(certificate, CertifyResult):
+        doc = certificate.document
+    elif isinstance(certificate, (str, Path)):
+        doc = read_document(certificate)
+    elif isinstance(certificate, Mapping):
+        doc = check_document(dict(certificate), "the certificate mapping")
+    else:
+        raise InvalidParameter("certificate", "a path, a certificate document or a CertifyResult",
+                               type(certificate).__name__)
+    checks = tuple(Check(n, ok, m) for n, ok, m in verify_document(doc))
+    return VerifyResult(valid=all(c.ok for c in checks), checks=checks)
+
+
+# -- simulate ------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SimulationReport:
+    """What ``lyapcheck simulate`` measured (SI; the keys of DESIGN.md come first)."""
+
+    diverged: bool
+    document: dict[str, Any] = field(repr=False)
+
+    def __getitem__(self, key: str) -> Any:
+        return self.document[key]
+
+    def to_json(self) -> dict[str, Any]:
+        return self.document
+
+
+def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
+             plot: str | Path | None = None) -> SimulationReport:
+    """Simulate the saturated ILOS/ODS closed loop: a scenario TOML or one of the paper's presets.
+
+    Parameters
+    ----------
+    scenario
+        Path of a scenario TOML (``examples/scenario-*.toml``); or give ``preset``.
+    preset
+        ``paper-ilos``, ``paper-los-600`` or ``paper-los-1200`` (the paper's Section 5).
+    plot
+        Also write the Section 5 figures to this PNG.
+    """
+    from lyapcheck.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
+
+    if plot is not None and Path(plot).suffix.lower() != ".png":
+        raise InvalidParameter("plot", "a file name ending in .png", str(plot))
+    chosen, batch, index = scenario_batch(None if scenario is None else str(scenario), preset,
+                                          with_all_presets=plot is not None)
+    result = run_scenarios(batch, record=plot is not None)
+    doc = simulation_document(chosen, result, index)
+    if plot is not None:
+        from lyapcheck.simulation.plots import section5_figure
+
+        section5_figure(batch, result, str(plot))
+        doc["plot"] = str(plot)
+    return SimulationReport(diverged=bool(doc["diverged"]), document=doc)
+
+
+# -- sweep ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SweepResult:
+    """A finished (or resumed) sweep: the store's summary and what this run computed."""
+
+    summary: Any  # sweeps.summary.Summary
+    run: Any  # sweeps.run.SweepReport
+
+    @property
+    def violations(self) -> int:
+        from sweeps.summary import violation_count
+
+        return violation_count(self.summary)
+
+    def to_json(self) -> dict[str, Any]:
+        payload: dict[str, Any] = self.summary.to_json()
+        payload.update({"store": str(self.run.path), "computed_now": self.run.computed_now,
+                        "wall_seconds": self.run.wall_seconds})
+        if self.run.refinement is not None:
+            r = self.run.refinement
+            payload["refinement"] = {"class": r.cls, "levels": r.levels, "points_computed": r.points_computed,
+                                     "full_grid_points": r.full_grid_points, "saved_fraction": r.saved_fraction}
+        return payload
+
+
+def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, workers: int | None = None,
+          exports: Sequence[str | Path] = (), progress: Callable[[int, int], None] | None = None,
+          on_ready: Callable[[], None] | None = None) -> SweepResult:
+    """Run or resume the sweep ``spec`` (TOML) into the Zarr store ``out``.
+
+    Parameters
+    ----------
+    spec, out
+        The sweep spec and the store; rerunning on a finished store computes nothing.
+    scheduler, workers
+        A Dask scheduler address, or the number of local worker processes (0: in-process).
+    exports
+        Also write the results to these ``.nc`` / ``.csv`` files.
+    progress, on_ready
+        Callbacks for a progress display: (points finished, total), and "workers are up".
+    """
+    from sweeps.export import EXPORT_SUFFIXES, export
+    from sweeps.run import run_sweep
+    from sweeps.spec import load_spec
+    from sweeps.store import Store
+    from sweeps.summary import summarize
+
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
+        raise InvalidParameter("workers", "an integer >= 0", workers)
+    for target in exports:
+        if Path(target).suffix.lower() not in EXPORT_SUFFIXES:
+            raise InvalidParameter("export", "a file name ending in .nc or .csv", str(target))
+    parsed = load_spec(spec)
+    report_ = run_sweep(parsed, out, scheduler=scheduler, workers=workers, progress=progress, on_ready=on_ready)
+    summary = summarize(Store.open_or_create(out, parsed))
+    for target in exports:
+        export(out, target)
+    return SweepResult(summary=summary, run=report_)
+
+
+# -- report --------------------------------------------------------------------------------------
+def report(source: str | Path | CertifyResult, *, html: str | Path | None = None,
+           pdf: str | Path | None = None) -> list[Path]:
+    """Render a certificate (file or :class:`CertifyResult`) or a sweep store as HTML and/or PDF.
+
+    Without ``html`` or ``pdf``, writes the source's name with ``.html`` in the current
+    directory (a :class:`CertifyResult` needs an explicit target). Returns the files written.
+    """
+    from reports.render import certificate_report, report_files
+
+    if isinstance(source, CertifyResult):
+        targets = [t for t in (html, pdf) if t is not None]
+        if not targets:
+            raise InvalidParameter("html", "a target file for a certificate held in memory", None)
+        for name, value, suffix in (("html", html, ".html"), ("pdf", pdf, ".pdf")):
+            if value is not None and Path(value).suffix.lower() != suffix:
+                raise InvalidParameter(name, f"a file name ending in {suffix}", str(value))
+        return [certificate_report(source.document, t) for t in targets]
+    if not isinstance(source, (str, Path)):
+        raise InputFileError(f"cannot report on a {type(source).__name__}: give a path or a CertifyResult")
+    return report_files(source, html, pdf)
+
+
+__all__ = ["certify", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
+           "SimulationReport", "SweepResult", "problem_from", "class_selection"]

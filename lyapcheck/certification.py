@@ -1,0 +1,199 @@
+"""Certify one gain set: run every condition class on the chosen dynamics.
+
+This is the library entry point behind ``lyapcheck certify``. It evaluates the structured
+closed loop of :mod:`symbolic.closed_loop` exactly at the given parameters, runs the
+condition classes, and assembles the certificate document (see :mod:`lyapcheck.certificate`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import signal
+import threading
+from collections.abc import Callable, Iterator
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from lyapcheck.conditions.base import STABILITY_CLASSES, ConditionResult, System
+from lyapcheck.params import Problem
+
+log = logging.getLogger(__name__)
+
+CONDITION_ORDER = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound", "sos_gas",
+                   "saturated_loop", "sos_bound")
+#: the polynomial classes cost seconds per point; everything else tens of milliseconds
+QUICK_CLASSES = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound")
+
+
+#: inputs a class needs beyond the gains and e11: (problem key, command-line flag)
+NEEDS: dict[str, tuple[tuple[str, str], ...]] = {
+    "ultimate_bound": (("disturbance.d_max", "--d-max"),),
+    "sos_bound": (("disturbance.d_max", "--d-max"),),
+    "saturated_loop": (("actuation.omega_so", "--omega-so"), ("disturbance.d_max", "--d-max")),
+}
+
+
+def not_applicable(name: str, missing: tuple[str, ...]) -> ConditionResult:
+    """The result of a class whose inputs were not given: which flag (or TOML key) to add."""
+    flags = [flag for key, flag in NEEDS[name] if key in missing]
+    keys = [key for key, _ in NEEDS[name] if key in missing]
+    return ConditionResult(name, "not_applicable",
+                           f"needs {' and '.join(flags)} (or {', '.join(keys)} in the TOML file); not run",
+                           numbers={"missing_inputs": keys})
+
+
+def exact_values(problem: Problem) -> dict[str, Any]:
+    g, sw = problem.gains, problem.swimmer
+    return {"alpha_d": g.alpha_d, "sigma0": g.sigma0, "k_d": g.k_d, "delta_los": g.delta_los,
+            "los_speed": g.los_speed, "e11": sw.e11, "e11_hat": sw.e11_hat}
+
+
+def system_from_values(dynamics: str, values: dict[str, Any], d_max: Any) -> System:
+    """Exact structured error dynamics from the code generated out of the sympy derivation."""
+    from symbolic import _generated
+
+    if dynamics not in ("derived", "printed"):
+        from lyapcheck.errors import InvalidParameter
+
+        raise InvalidParameter("dynamics", "one of 'derived', 'printed'", dynamics)
+    data = getattr(_generated, dynamics)(**values)
+    return System(dynamics=dynamics, A=data["A"], B=data["B"], E=data["E"], rho_sup=data["rho_sup"],
+                  sigma0=values["sigma0"], delta=values["delta_los"],
+                  speed=values["los_speed"] if dynamics == "derived" else Fraction(1), d_max=d_max)
+
+
+def build_system(problem: Problem, dynamics: str) -> System:
+    """The exact structured error dynamics at this parameter point."""
+    # without a disturbance bound only the d-free classes run (NEEDS); d* = 0 in their System
+    # changes nothing they compute
+    d_max = problem.d_max if problem.d_max is not None else Fraction(0)
+    return system_from_values(dynamics, exact_values(problem), d_max)
+
+
+def run_conditions(problem: Problem, dynamics: str,
+                   classes: tuple[str, ...] = CONDITION_ORDER) -> dict[str, ConditionResult]:
+    """Run the requested condition classes (all by default), in :data:`CONDITION_ORDER`."""
+    from lyapcheck.conditions import prop41, saturated, sector, sos, sos_bound, stabcond2, ultimate
+    from lyapcheck.errors import InvalidParameter
+
+    unknown = [c for c in classes if c not in CONDITION_ORDER]
+    if unknown:
+        raise InvalidParameter("classes", f"names among {', '.join(CONDITION_ORDER)}", ",".join(unknown))
+    missing = problem.missing_inputs()
+    results: dict[str, ConditionResult] = {}
+    for name, needs in NEEDS.items():
+        if name in classes and any(key in missing for key, _ in needs):
+            results[name] = not_applicable(name, missing)
+    runnable = set(classes) - set(results)
+    wanted = runnable | ({"sos_gas"} if "saturated_loop" in runnable else set())
+    system = build_system(problem, dynamics)
+    g = problem.gains
+
+    def run(name: str, compute: Callable[[], ConditionResult]) -> None:
+        results[name] = guarded(name, compute)
+
+    if "prop41_ges" in wanted or "stabcond2" in wanted:
+        run("prop41_ges", lambda: prop41.run(system, iss=False))
+    if "prop41_iss" in wanted:
+        run("prop41_iss", lambda: prop41.run(system, iss=True))
+    if "stabcond2" in wanted:
+        printed_status = (results["prop41_ges"].status if dynamics == "printed"
+                          else guarded("prop41_ges", lambda: prop41.run(build_system(problem, "printed"),
+                                                                        iss=False)).status)
+        run("stabcond2", lambda: stabcond2.run(g.alpha_d, g.sigma0, g.k_d, g.delta_los, printed_status))
+    if "sector_ges" in wanted:
+        run("sector_ges", lambda: sector.run(system))
+    if "ultimate_bound" in wanted:
+        run("ultimate_bound", lambda: ultimate.run(system))
+    if "sos_gas" in wanted:
+        run("sos_gas", lambda: sos.run(system))
+    if "saturated_loop" in wanted:
+        run("saturated_loop", lambda: saturated.run(
+            system, results["sos_gas"], alpha_d=g.alpha_d, e11=problem.swimmer.e11,
+            e11_hat=problem.swimmer.e11_hat, omega_so=problem.actuation.step_out(), k_d=g.k_d))
+    if "sos_bound" in wanted:
+        run("sos_bound", lambda: sos_bound.run_class(system))
+    if "ultimate_bound" in wanted and "prop41_iss" in wanted and problem.d_max is not None:
+        with contextlib.suppress(ArithmeticError, ValueError, np.linalg.LinAlgError):  # a side figure only
+            _add_paper_ball(results, problem)
+    return {name: results[name] for name in CONDITION_ORDER if name in results and name in classes}
+
+
+class ClassTimeLimit(Exception):
+    """A condition class ran past :data:`lyapcheck.tolerances.CLASS_TIME_LIMIT_S`."""
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float) -> Iterator[None]:
+    """Raise :class:`ClassTimeLimit` in this block after ``seconds`` (main thread, POSIX only).
+
+    Elsewhere (sweep workers run in threads or processes with their own limits) the block runs
+    unbounded; every class also bounds its own iterations and solver time.
+    """
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "setitimer"):
+        yield
+        return
+
+    def expire(signum: int, frame: Any) -> None:
+        raise ClassTimeLimit(f"time limit of {seconds:g} s reached")
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def guarded(name: str, compute: Callable[[], ConditionResult]) -> ConditionResult:
+    """Run one class; numerical trouble at extreme scales becomes ``inconclusive`` with its reason.
+
+    Bad input has been rejected before any class runs, so what reaches here is a valid gain set
+    that a floating-point search cannot handle (overflow, underflow to a singular problem, a
+    solver failure) or a class that ran out of time. Those are honest "cannot decide here"
+    answers, never a proof either way, and the other classes still run.
+    """
+    from lyapcheck import tolerances as tol
+    from lyapcheck.errors import InputFileError, InvalidParameter, SolverError
+
+    try:
+        with time_limit(tol.CLASS_TIME_LIMIT_S):
+            return compute()
+    except (InvalidParameter, InputFileError):
+        raise
+    except ClassTimeLimit as exc:
+        reason = f"{exc} (lyapcheck.tolerances.CLASS_TIME_LIMIT_S)"
+    except (SolverError, ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        reason = f"{type(exc).__name__}: {exc}"
+    log.info("%s inconclusive: %s", name, reason)
+    return ConditionResult(name, "inconclusive", f"could not be decided at these numbers: {reason}",
+                           numbers={"reason": reason})
+
+
+def _add_paper_ball(results: dict[str, ConditionResult], problem: Problem) -> None:
+    """The paper's ultimate-bound formula, reported beside the certified bound where it applies."""
+    import numpy as np
+
+    from lyapcheck import exact
+
+    iss = results["prop41_iss"]
+    ub = results["ultimate_bound"]
+    if iss.status == "certified":
+        P = np.array(exact.to_float(exact.from_json(iss.certificate["P"])))
+        eig = np.linalg.eigvalsh(P)
+        ub.numbers["paper_ball_radius_as_printed"] = float(problem.disturbance_bound()) * float(eig.max() / eig.min())
+        ub.numbers["paper_ball_note"] = ("d* lambda_max(P)/lambda_min(P) with the prop41_iss P; the formula's unit "
+                                         "is that of d* (a velocity) and its derivation is flawed (see ledger prop:los)")
+    else:
+        ub.numbers["paper_ball_radius_as_printed"] = None
+        ub.numbers["paper_ball_note"] = "not applicable: the paper's ISS condition has no solution here"
+
+
+def verdict(results: dict[str, ConditionResult]) -> str:
+    """``certified`` iff some stability certificate passed its exact check."""
+    return "certified" if any(c in results and results[c].status == "certified" for c in STABILITY_CLASSES) \
+        else "not_certified"

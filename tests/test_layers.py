@@ -1,0 +1,108 @@
+"""DESIGN.md's layering, checked on the source: no module imports a layer above its own.
+
+Layers, bottom to top: ``symbolic`` < the ``lyapcheck`` core < ``sweeps`` < ``reports`` <
+the Python API (``lyapcheck.api`` and the package's ``__init__``) < the command line
+(``lyapcheck.cli``, and the ``__main__`` entry points). Imports are read with :mod:`ast`,
+including those inside functions (a lazy import is still a dependency).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import ROOT
+
+PACKAGES = ("symbolic", "lyapcheck", "sweeps", "reports")
+LAYER_NAMES = ("symbolic", "core", "sweeps", "reports", "api", "cli")
+
+
+def layer_of(module: str) -> int:
+    """The layer index of a dotted module name inside the project."""
+    parts = module.split(".")
+    if parts[-1] == "__main__" or parts[:2] == ["lyapcheck", "cli"]:
+        return LAYER_NAMES.index("cli")
+    if module in ("lyapcheck", "lyapcheck.api"):
+        return LAYER_NAMES.index("api")
+    return LAYER_NAMES.index({"symbolic": "symbolic", "lyapcheck": "core", "sweeps": "sweeps",
+                              "reports": "reports"}[parts[0]])
+
+
+def module_name(path: Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def is_module(name: str) -> bool:
+    base = ROOT.joinpath(*name.split("."))
+    return base.with_suffix(".py").exists() or (base / "__init__.py").exists()
+
+
+def project_imports(path: Path) -> list[tuple[int, str]]:
+    """(line, imported project module) for every import statement in ``path``."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    me = module_name(path)
+    package = me if path.name == "__init__.py" else me.rpartition(".")[0]
+    found: list[tuple[int, str]] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = ".".join(package.split(".")[: len(package.split(".")) - node.level + 1])
+                source = f"{base}.{node.module}" if node.module else base
+            else:
+                source = node.module or ""
+            # "from lyapcheck import exact" imports the module lyapcheck.exact, not the package
+            names = [f"{source}.{a.name}" if is_module(f"{source}.{a.name}") else source for a in node.names]
+        else:
+            continue
+        found.extend((node.lineno, n) for n in names if n.split(".")[0] in PACKAGES)
+    return found
+
+
+def sources() -> list[Path]:
+    return sorted(p for pkg in PACKAGES for p in (ROOT / pkg).rglob("*.py"))
+
+
+def test_the_layer_map_knows_every_source_file() -> None:
+    files = sources()
+    assert len(files) > 50
+    assert {layer_of(module_name(p)) for p in files} == set(range(len(LAYER_NAMES)))
+
+
+@pytest.mark.parametrize("path", sources(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_module_imports_a_higher_layer(path: Path) -> None:
+    mine = layer_of(module_name(path))
+    upward = [f"line {line}: {name} ({LAYER_NAMES[layer_of(name)]})" for line, name in project_imports(path)
+              if layer_of(name) > mine]
+    assert not upward, f"{path.relative_to(ROOT)} ({LAYER_NAMES[mine]}) imports a higher layer: {upward}"
+
+
+@pytest.mark.parametrize("path", sources(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_only_the_command_line_uses_click(path: Path) -> None:
+    if layer_of(module_name(path)) == LAYER_NAMES.index("cli"):
+        return
+    tree = ast.parse(path.read_text())
+    uses = [n.lineno for n in ast.walk(tree)
+            if (isinstance(n, ast.Import) and any(a.name.split(".")[0] == "click" for a in n.names))
+            or (isinstance(n, ast.ImportFrom) and (n.module or "").split(".")[0] == "click")]
+    assert not uses, f"{path.relative_to(ROOT)} imports click (lines {uses}); command-line code lives in lyapcheck.cli"
+
+
+def test_the_checker_catches_an_upward_import() -> None:
+    """The rule is not vacuous: a core module importing sweeps is reported."""
+    probe = ROOT / "lyapcheck" / "_layer_probe_tmp.py"
+    probe.write_text("def f():\n    from sweeps.run import run_sweep\n    from lyapcheck import exact\n")
+    try:
+        names = project_imports(probe)
+        assert (2, "sweeps.run") in names and (3, "lyapcheck.exact") in names
+        assert layer_of("sweeps.run") > layer_of(module_name(probe))
+        assert layer_of("lyapcheck.exact") == layer_of(module_name(probe))
+    finally:
+        probe.unlink()
