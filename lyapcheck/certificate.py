@@ -153,6 +153,18 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
             fresh = sector.refutation([system.vertex(Fraction(0)), system.vertex(system.rho_sup)])
             ok_row("sector_ges", fresh is not None and fresh["A0A1"] == c["refutation"]["A0A1"],
                    "Shorten-Narendra refutation re-derived exactly", "sector_ges: the refutation does not hold")
+        c = conditions.get("switched_ges", {"status": "absent"})
+        if c["status"] in ("certified", "refuted"):
+            from lyapcheck.conditions import switching
+
+            ok, why = switching.verify(system, c["certificate"] if c["status"] == "certified" else c["refutation"])
+            ok_row("switched_ges", ok, why, f"switched_ges: {why}")
+        c = conditions.get("ges", {"status": "absent"})
+        if c["status"] == "certified":
+            from lyapcheck.conditions import ges
+
+            ok, why = ges.verify(system, c["certificate"])
+            ok_row("ges", ok, why, f"ges: {why}")
         c = conditions.get("ultimate_bound", {"status": "absent"})
         if c["status"] == "certified":
             ok, why = ultimate.verify(system, c["certificate"])

@@ -22,10 +22,10 @@ from lyapcheck.params import Problem
 
 log = logging.getLogger(__name__)
 
-CONDITION_ORDER = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound", "sos_gas",
-                   "saturated_loop", "sos_bound")
-#: the polynomial classes cost seconds per point; everything else tens of milliseconds
-QUICK_CLASSES = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound")
+CONDITION_ORDER = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound",
+                   "sos_gas", "ges", "saturated_loop", "sos_bound")
+#: the polynomial and state-dependent classes cost longer per point; these tens of milliseconds
+QUICK_CLASSES = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound")
 
 
 #: inputs a class needs beyond the gains and e11: (problem key, command-line flag)
@@ -76,7 +76,7 @@ def build_system(problem: Problem, dynamics: str) -> System:
 def run_conditions(problem: Problem, dynamics: str,
                    classes: tuple[str, ...] = CONDITION_ORDER) -> dict[str, ConditionResult]:
     """Run the requested condition classes (all by default), in :data:`CONDITION_ORDER`."""
-    from lyapcheck.conditions import prop41, saturated, sector, sos, sos_bound, stabcond2, ultimate
+    from lyapcheck.conditions import ges, prop41, saturated, sector, sos, sos_bound, stabcond2, switching, ultimate
     from lyapcheck.errors import InvalidParameter
 
     unknown = [c for c in classes if c not in CONDITION_ORDER]
@@ -106,10 +106,14 @@ def run_conditions(problem: Problem, dynamics: str,
         run("stabcond2", lambda: stabcond2.run(g.alpha_d, g.sigma0, g.k_d, g.delta_los, printed_status))
     if "sector_ges" in wanted:
         run("sector_ges", lambda: sector.run(system))
+    if "switched_ges" in wanted:
+        run("switched_ges", lambda: switching.run(system))
     if "ultimate_bound" in wanted:
         run("ultimate_bound", lambda: ultimate.run(system))
     if "sos_gas" in wanted:
         run("sos_gas", lambda: sos.run(system))
+    if "ges" in wanted:
+        run("ges", lambda: ges.run(system))
     if "saturated_loop" in wanted:
         run("saturated_loop", lambda: saturated.run(
             system, results["sos_gas"], alpha_d=g.alpha_d, e11=problem.swimmer.e11,

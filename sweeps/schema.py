@@ -43,11 +43,11 @@ SWEEPABLE: Final[dict[str, str]] = {
 
 #: condition classes a sweep can run, in the order of :data:`lyapcheck.certification.CONDITION_ORDER`
 #: (a test keeps the two equal; spelled out here so that reading a store needs no solver import)
-CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound", "sos_gas",
-                  "saturated_loop", "sos_bound")
+CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound",
+                  "sos_gas", "ges", "saturated_loop", "sos_bound")
 #: run when the spec does not say: lyapcheck.certification.QUICK_CLASSES (the polynomial classes
-#: sos_gas, saturated_loop and sos_bound cost 0.1-3 s per point)
-DEFAULT_CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound")
+#: sos_gas, ges, saturated_loop and sos_bound cost 0.1-3 s per point)
+DEFAULT_CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound")
 #: classes whose exact pass proves stability of the error dynamics (lyapcheck.conditions.base)
 STABILITY_CLASSES: Final = _base.STABILITY_CLASSES
 #: classes that certify an ultimate bound on |eps| (numbers["eps_bound_m"]); eps_bound_m is the
@@ -58,14 +58,15 @@ NOT_COMPUTED: Final = -1
 STATUS_CODES: Final[dict[str, int]] = {
     "not_certified": 0, "certified": 1, "refuted": 2, "inconclusive": 3,
     "fails": 0, "holds": 1,  # stabcond2 is plain arithmetic
+    "not_applicable": 4, "counterexample": 5,
 }
 
 #: where each class's margin comes from (``numbers`` key of its ConditionResult); stabcond2's
 #: margin is ``1 - lhs`` (positive when it holds); None: the class has no margin
 MARGIN_SOURCE: Final[dict[str, str | None]] = {
     "prop41_ges": "relative_margin", "prop41_iss": "relative_margin", "stabcond2": "lhs_value",
-    "sector_ges": "relative_margin", "ultimate_bound": None, "sos_gas": "relative_margin",
-    "saturated_loop": None, "sos_bound": None,
+    "sector_ges": "relative_margin", "switched_ges": None, "ultimate_bound": None, "sos_gas": "relative_margin",
+    "ges": None, "saturated_loop": None, "sos_bound": None,
 }
 
 #: simulation scenarios: ``nominal`` (no disturbance, started off the path) probes divergence;

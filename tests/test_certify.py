@@ -18,11 +18,11 @@ from tests.conftest import PAPER_TOML
 
 PAPER_EXPECTED = {
     "derived": {"prop41_ges": "refuted", "prop41_iss": "refuted", "stabcond2": "holds",
-                "sector_ges": "refuted", "ultimate_bound": "certified", "sos_gas": "certified",
-                "saturated_loop": "certified", "sos_bound": "certified"},
+                "sector_ges": "refuted", "switched_ges": "refuted", "ultimate_bound": "certified",
+                "sos_gas": "certified", "ges": "certified", "saturated_loop": "certified", "sos_bound": "certified"},
     "printed": {"prop41_ges": "refuted", "prop41_iss": "refuted", "stabcond2": "holds",
-                "sector_ges": "certified", "ultimate_bound": "certified", "sos_gas": "certified",
-                "saturated_loop": "not_certified", "sos_bound": "certified"},
+                "sector_ges": "certified", "switched_ges": "certified", "ultimate_bound": "certified",
+                "sos_gas": "certified", "ges": "certified", "saturated_loop": "not_certified", "sos_bound": "certified"},
 }
 
 

@@ -91,7 +91,7 @@ def test_quick_classes_and_unknown_class() -> None:
     done = run("certify", str(PAPER_TOML), "--classes", "quick", "--json")
     assert done.returncode == 1  # no quadratic certificate exists at the paper's gains
     assert list(json.loads(done.stdout)["conditions"]) == [
-        "prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound"]
+        "prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound"]
     bad = run("certify", str(PAPER_TOML), "--classes", "prop41_ges,magic")
     assert bad.returncode == 2 and "'classes'" in bad.stderr and "Traceback" not in bad.stderr
 

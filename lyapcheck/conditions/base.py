@@ -11,7 +11,7 @@ from lyapcheck.exact import Matrix
 Status = Literal["certified", "refuted", "not_certified", "inconclusive", "holds", "fails", "not_applicable",
                  "counterexample"]
 #: classes whose exact pass proves stability of the error dynamics (the verdict "certified")
-STABILITY_CLASSES = ("prop41_ges", "prop41_iss", "sector_ges", "sos_gas")
+STABILITY_CLASSES = ("prop41_ges", "prop41_iss", "sector_ges", "switched_ges", "sos_gas", "ges")
 
 Property = Literal["GES", "GAS", "ISS", "ultimate_bound", "invariant_set"]
 #: what a class proves when it is certified (DESIGN.md: every stability class states it, so that a
