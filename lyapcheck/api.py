@@ -135,7 +135,8 @@ class CertifyResult:
 
 
 def certify(params: Any = None, *, dynamics: str = "derived", classes: str | Sequence[str] | None = None,
-            linear_views: bool = False, overrides: Mapping[str, object] | None = None) -> CertifyResult:
+            linear_views: bool = False, overrides: Mapping[str, object] | None = None,
+            worst_case: bool = False, worst_case_budget_s: float = 20.0) -> CertifyResult:
     """Certify a gain set: run the condition classes, each checked exactly.
 
     Parameters
@@ -152,12 +153,18 @@ def certify(params: Any = None, *, dynamics: str = "derived", classes: str | Seq
         Add python-control views (poles, the Lyapunov P for Gamma = I) under ``linear_views``.
     overrides
         Values laid over ``params`` (as the command-line flags are laid over the TOML file).
+    worst_case
+        Also search the worst disturbance ``|d| <= d*`` in simulation (about 10-20 s) and report,
+        beside each certified ultimate bound, the worst simulated tail ``sup |eps|`` and
+        ``tightness_ratio`` = certified / simulated (>= 1 unless the bound is unsound).
     """
     from lyapcheck.certificate import build_document
     from lyapcheck.certification import run_conditions, verdict
 
     problem = problem_from(params, overrides)
     results = run_conditions(problem, dynamics, class_selection(classes))
+    if worst_case:
+        add_tightness(results, problem, budget_s=worst_case_budget_s)
     outcome = verdict(results)
     doc = build_document(problem, dynamics, results, outcome)
     if linear_views:
@@ -166,6 +173,30 @@ def certify(params: Any = None, *, dynamics: str = "derived", classes: str | Seq
 
         doc["linear_views"] = views(build_system(problem, dynamics))
     return CertifyResult(verdict=outcome, dynamics=dynamics, conditions=results, document=doc)
+
+
+def add_tightness(results: "Mapping[str, ConditionResult]", problem: "Problem", *, budget_s: float) -> None:
+    """Put the worst simulated tail ``sup |eps|`` beside every certified ultimate bound.
+
+    The search runs on the real loop (saturated ODS command, the paper-ilos settings) with
+    ``|d_mu| <= d*``; a ratio below 1 would be a soundness violation and is said so.
+    """
+    from lyapcheck.simulation.worst_case import search_worst_case
+
+    bounds = [r for name, r in results.items() if name in ("ultimate_bound", "sos_bound") and r.status == "certified"]
+    if not bounds or problem.d_max is None:
+        return
+    storage = results["sos_bound"].certificate if "sos_bound" in results and \
+        results["sos_bound"].status == "certified" else None
+    found = search_worst_case(problem, budget_s=budget_s, storage=storage)
+    for result in bounds:
+        certified = float(result.numbers["eps_bound_m"])
+        ratio = found.tightness_ratio(certified)
+        result.numbers["worst_case_sup_abs_eps_tail_m"] = found.sup_abs_eps_tail_m
+        result.numbers["tightness_ratio"] = ratio
+        result.numbers["worst_case_disturbance"] = found.disturbance
+        if ratio < 1:
+            result.numbers["soundness_violation"] = True
 
 
 # -- verify --------------------------------------------------------------------------------------
@@ -225,7 +256,7 @@ class SimulationReport:
 
 
 def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
-             plot: str | Path | None = None) -> SimulationReport:
+             plot: str | Path | None = None, worst_case: bool = False, budget_s: float = 20.0) -> SimulationReport:
     """Simulate the saturated ILOS/ODS closed loop: a scenario TOML or one of the paper's presets.
 
     Parameters
@@ -236,11 +267,27 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
         ``paper-ilos``, ``paper-los-600`` or ``paper-los-1200`` (the paper's Section 5).
     plot
         Also write the Section 5 figures to this PNG.
+    worst_case
+        Instead of the scenario's own disturbance, search the worst ``|d_mu| <= d*`` (constant,
+        feedback, periodic at the loop's resonances, Pontryagin bang-bang, then a local search
+        over the switching law) within ``budget_s`` seconds; the document gives
+        ``sup_abs_eps_tail_m`` and the ``disturbance`` that produced it.
     """
     from lyapcheck.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
 
     if plot is not None and Path(plot).suffix.lower() != ".png":
         raise InvalidParameter("plot", "a file name ending in .png", str(plot))
+    if not (isinstance(budget_s, (int, float)) and 0 < budget_s < 3600):
+        raise InvalidParameter("budget", "a number of seconds in (0, 3600)", budget_s)
+    if worst_case:
+        if plot is not None:
+            raise InvalidParameter("plot", "not combined with --worst-case", str(plot))
+        from lyapcheck.simulation.worst_case import search_worst_case
+
+        chosen, _, _ = scenario_batch(None if scenario is None else str(scenario), preset)
+        found = search_worst_case(chosen, budget_s=float(budget_s))
+        return SimulationReport(diverged=False, document={"scenario": chosen.name, "mode": "worst_case",
+                                                          **found.to_json()})
     chosen, batch, index = scenario_batch(None if scenario is None else str(scenario), preset,
                                           with_all_presets=plot is not None)
     result = run_scenarios(batch, record=plot is not None)

@@ -92,3 +92,18 @@ def test_verify_rejects_a_certified_claim_whose_input_is_missing() -> None:
     checked = verify(doc)
     assert not checked.valid
     assert any(not c.ok and "is null" in c.message for c in checked.checks)
+
+
+@pytest.mark.slow
+def test_worst_case_search_from_the_command_line_and_tightness_in_certify(tmp_path: Path) -> None:
+    done = subprocess.run([sys.executable, "-m", "lyapcheck", "simulate", "--preset", "paper-ilos", "--worst-case",
+                           "--budget", "1", "--json"], capture_output=True, text=True, cwd=tmp_path, timeout=600)
+    assert done.returncode == 0, done.stderr
+    doc = json.loads(done.stdout)
+    assert doc["mode"] == "worst_case" and doc["disturbance"]["kind"]
+    # the search includes the constant disturbance, so it can only find more
+    assert doc["sup_abs_eps_tail_m"] >= doc["constant_sup_abs_eps_tail_m"] > 0
+    result = certify(PAPER_TOML, classes=("ultimate_bound",), worst_case=True, worst_case_budget_s=1)
+    bound = result.conditions["ultimate_bound"].numbers
+    assert bound["tightness_ratio"] == pytest.approx(bound["eps_bound_m"] / bound["worst_case_sup_abs_eps_tail_m"])
+    assert bound["tightness_ratio"] >= 1 and "soundness_violation" not in bound
