@@ -343,5 +343,7 @@ def certificate_context(doc: dict[str, Any], *, ledger: bool = True, simulate: b
         "hash_inputs": hashlib.sha256(inputs).hexdigest(),
         "command": command,
         "toml": toml,
+        # every typeset equation, for reports.html to put on shared sheets (one glyph set per sheet)
+        "equations": [eq.result for eq in eqs.items if eq.result is not None],
     }
 

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tests.conftest import EASY_GAINS, PAPER_TOML
 
@@ -222,6 +224,310 @@ def test_certificate_report_picks_the_format_by_extension(easy_doc: dict[str, An
 
 
 # ------------------------------------------------------------------------------------------------
+# page size: equations on shared sheets, figures simplified
+# ------------------------------------------------------------------------------------------------
+#: what `lyapcheck certify examples/paper.toml --report paper.html` may weigh (it was 3.8 MB when
+#: every equation image carried its own glyph outlines)
+PAGE_BUDGET_BYTES = 1_000_000
+
+
+@pytest.fixture(scope="module")
+def paper_html() -> str:
+    from lyapcheck.certificate import build_document
+    from lyapcheck.certification import run_conditions, verdict
+    from lyapcheck.params import problem_from_sources
+    from reports.render import certificate_html
+
+    problem = problem_from_sources(PAPER_TOML, {})
+    results = run_conditions(problem, "derived")
+    return certificate_html(build_document(problem, "derived", results, verdict(results)))
+
+
+def _css(html: str) -> str:
+    return html[html.index("<style>"):html.index("</style>")]
+
+
+def _sheets(html: str) -> dict[str, str]:
+    """Sheet class -> the sheet's SVG, read back from the page's stylesheet."""
+    import re
+    from urllib.parse import unquote
+
+    rule = r'img\.math\.(sheet-\d+) \{ background-image: url\("data:image/svg\+xml,([^"]*)"\); \}'
+    rules = re.findall(rule, _css(html))
+    return {name: unquote(data) for name, data in rules}
+
+
+@pytest.mark.slow
+def test_paper_certificate_page_is_under_budget_and_self_contained(paper_html: str) -> None:
+    import re
+
+    size = len(paper_html.encode("utf-8"))
+    assert size < PAGE_BUDGET_BYTES, f"the paper's certificate page is {size} bytes"
+    page = Page(paper_html)
+    _no_network(page)
+    urls = re.findall(r"url\(([^)]{0,40})", _css(paper_html))
+    assert urls and all(u.startswith('"data:image/svg+xml,') for u in urls)  # the stylesheet loads nothing either
+    maths = page.find("img", "math")
+    assert len(maths) > 100
+    # every equation is on a sheet, and each keeps what a reader and the PDF need
+    assert all("on-sheet" in a["class"] and a["alt"] and a["data-typst"] and a["width"] for a in maths)
+    sheets = _sheets(paper_html)
+    assert {a["class"].split()[2] for a in maths} == set(sheets)
+    # glyph outlines are shared: far fewer definitions than glyphs drawn
+    outlines = sum(svg.count("<path id=") for svg in sheets.values())
+    glyphs = sum(svg.count("<use ") for svg in sheets.values())
+    assert glyphs > 10 * outlines
+    assert len([a for a in page.find("img") if "math" not in a.get("class", "")]) == 4  # the figures
+
+
+#: 2 device pixels per CSS px (96 ppi is 1): whole-px offsets stay whole, as in a browser
+CHECK_PPI = 192
+
+
+def _typst_png(source: str, root: Path) -> list[Any]:
+    import io
+
+    import typst
+    from PIL import Image
+
+    (root / "check.typ").write_text(source)
+    pages = typst.compile(str(root / "check.typ"), root=str(root), format="png", ppi=CHECK_PPI,
+                          ignore_system_fonts=True)
+    pages = pages if isinstance(pages, list) else [pages]
+    return [np.asarray(Image.open(io.BytesIO(p)).convert("L"), dtype=float) / 255 for p in pages]
+
+
+def _whole_px_canvas(svg: bytes, width_pt: float, height_pt: float) -> tuple[bytes, float, float]:
+    """``svg`` on a canvas widened (top left fixed, drawing untouched) to whole CSS px.
+
+    Typst rasterises an SVG image into a whole-pixel pixmap and resamples it to the image's
+    size, so an image of 180.48 px would be drawn slightly blurred and scaled; a sheet (whole px
+    by construction) is not. On whole-px canvases both are drawn alike.
+    """
+    import math
+    import re
+
+    width, height = (math.ceil(v / PT_PER_PX) * PT_PER_PX for v in (width_pt, height_pt))
+    size = f'viewBox="0 0 {width} {height}" width="{width}pt" height="{height}pt"'.encode()
+    return re.sub(rb'viewBox="[^"]*" width="[^"]*" height="[^"]*"', size, svg, count=1), width, height
+
+
+#: typographic points per CSS px
+PT_PER_PX = 0.75
+
+
+def test_every_equation_cell_draws_the_typst_equation(easy_html: str, tmp_path: Path) -> None:
+    """Each <img class="math">, cut from its sheet as the page's CSS says, draws Typst's own SVG.
+
+    Residual check, no browser needed: the cell is read from the img's background-size and
+    background-position percentages (CSS: the offset is (box - image) * p) and cut out of the
+    sheet as a viewBox window; it and the original SVG are rasterised by the same renderer,
+    Typst's, and compared.
+    """
+    import html as html_lib
+    import re
+
+    from reports.typeset import render
+
+    sheets = _sheets(easy_html)
+    maths = Page(easy_html).find("img", "math")
+    pages = []
+    for k, a in enumerate(maths):
+        sheet = sheets[a["class"].split()[2]]
+        view_w, view_h = (float(v) for v in re.findall(r"viewBox='0 0 ([\d.]+) ([\d.]+)'", sheet)[0])
+        w, h = float(a["width"]), float(a["height"])  # the box, CSS px
+        size = [float(v) for v in re.findall(r"background-size:([\d.]+)% ([\d.]+)%", a["style"])[0]]
+        pos = [float(v) for v in re.findall(r"background-position:([\d.]+)% ([\d.]+)%", a["style"])[0]]
+        sheet_w, sheet_h = w * size[0] / 100, h * size[1] / 100
+        dx, dy = (w - sheet_w) * pos[0] / 100, (h - sheet_h) * pos[1] / 100
+        source = html_lib.unescape(a["data-typst"])
+        original = render([source])[source]
+        assert original is not None
+        svg, page_w, page_h = _whole_px_canvas(original.svg, original.width_pt, original.height_pt)
+        (tmp_path / f"eq{k}.svg").write_bytes(svg)
+        unit_x, unit_y = view_w / sheet_w, view_h / sheet_h  # sheet units per CSS px
+        # to the sheet's own precision, 0.001 pt, as a browser snaps to pixels: Typst copies an
+        # image exactly at a whole-pixel offset but resamples (blurs) it at 1e-4 px off
+        window = " ".join(f"{v:.3f}" for v in (-dx * unit_x, -dy * unit_y, page_w / PT_PER_PX * unit_x,
+                                                page_h / PT_PER_PX * unit_y))
+        cell = sheet.replace(f"viewBox='0 0 {view_w:g} {view_h:g}'", f"viewBox='{window}'")
+        (tmp_path / f"cell{k}.svg").write_text(cell)
+        page = f"#page(width: {page_w}pt, height: {page_h}pt, margin: 0pt)"
+        pages.append(f'{page}[#image("eq{k}.svg", width: 100%, height: 100%)]')
+        pages.append(f'{page}[#image("cell{k}.svg", width: 100%, height: 100%, fit: "stretch")]')
+    images = _typst_png("\n".join(pages), tmp_path)
+    assert len(images) == 2 * len(maths) > 30
+    for k in range(len(maths)):
+        _assert_same_drawing(1 - images[2 * k], 1 - images[2 * k + 1], maths[k]["alt"])
+
+
+def _assert_same_drawing(want: Any, got: Any, what: str) -> None:
+    """Two renderings (ink in [0, 1]) show the same drawing, up to antialiasing.
+
+    Coordinates rounded to 0.001 pt move an edge by 1/1000 of a pixel, yet the renderer's
+    quarter-pixel scanlines can turn that into a different row of edge pixels: about 1 % of
+    the ink at worst. A shift of half a pixel already costs 30 % or more; a missing glyph, even a
+    minus sign, leaves solid pixels with no ink near them in the other image.
+    """
+    ink = float(np.sum(want))
+    assert ink > 5, what  # the original draws something
+    assert float(np.sum(np.abs(want - got))) < 0.05 * ink, what
+    for a, b in ((want, got), (got, want)):
+        near = np.zeros_like(b, dtype=bool)  # some ink within one pixel (3 x 3 neighbourhood)
+        padded = np.pad(b > 0.25, 1)
+        for dy in range(3):
+            for dx in range(3):
+                near |= padded[dy:dy + b.shape[0], dx:dx + b.shape[1]]
+        assert not np.any((a > 0.5) & ~near), what
+
+
+def test_equations_typst_writes_otherwise_keep_their_own_svg() -> None:
+    from reports.html import MathImages, parse_typst_svg, svg_uri
+    from reports.typeset import Typeset, render
+
+    typst_eq = render(["x^2 + 1/2"])["x^2 + 1/2"]
+    assert typst_eq is not None and parse_typst_svg(typst_eq.svg) is not None
+    foreign = [
+        b'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><circle r="4"/></svg>',
+        b'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path d="M0 0a5 5 0 1 0 1 1"/></svg>',  # an arc
+        b'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path d="M0 0h1" onclick="x()"/></svg>',
+        b"not xml",
+    ]
+    for svg in foreign:
+        assert parse_typst_svg(svg) is None, svg
+    images = MathImages([typst_eq] + [Typeset(svg, 7.5, 7.5) for svg in foreign])
+    assert images.sheet_count == 1
+    assert "on-sheet" in images.image(typst_eq).cls
+    for svg in foreign:
+        shown = images.image(Typeset(svg, 7.5, 7.5))
+        assert shown.cls == "math" and shown.src == svg_uri(svg) and not shown.style
+    # no size in Typst's header: not placed by percentages of an empty box, shown on its own
+    sizeless = Typeset(typst_eq.svg, 0.0, 0.0)
+    shown = MathImages([sizeless]).image(sizeless)
+    assert shown.cls == "math" and shown.src.startswith("data:image/svg+xml,%3Csvg") and "<use" not in shown.src
+
+
+@settings(max_examples=200, derandomize=True)
+@given(st.lists(st.tuples(st.floats(0.1, 1400.0), st.floats(0.1, 1100.0)), max_size=60))
+def test_sheets_hold_every_box_apart_and_in_page_order(boxes: list[tuple[float, float]]) -> None:
+    import math
+
+    from reports.html import SHEET_GAP_PX, SHEET_HEIGHT_PX, SHEET_WIDTH_PX, pack
+
+    boxes = [(round(w, 1), round(h, 1)) for w, h in boxes]  # the template's 0.1 px sizes
+    sheets = pack(boxes)
+    placed = [k for cells, _, _ in sheets for k, _, _ in cells]
+    assert placed == list(range(len(boxes)))  # each box once, in page order
+    for cells, width, height in sheets:
+        assert width == max([SHEET_WIDTH_PX] + [math.ceil(w) for w, _ in boxes])
+        assert height <= max([SHEET_HEIGHT_PX] + [math.ceil(boxes[k][1]) for k, _, _ in cells])  # or its tallest box
+        rects = [(x, y, x + boxes[k][0], y + boxes[k][1]) for k, x, y in cells]
+        assert all(isinstance(v, int) for _, x, y in cells for v in (x, y))  # whole px: no resampling
+        assert all(0 <= x0 and 0 <= y0 and x1 <= width and y1 <= height for x0, y0, x1, y1 in rects)
+        for i, a in enumerate(rects):  # a neighbour never within the gap, even with a pixel of rounding
+            for b in rects[i + 1:]:
+                assert a[2] + SHEET_GAP_PX <= b[0] or b[2] + SHEET_GAP_PX <= a[0] \
+                    or a[3] + SHEET_GAP_PX <= b[1] or b[3] + SHEET_GAP_PX <= a[1], (a, b)
+
+
+def test_svg_uris_are_inert_in_attributes_and_css() -> None:
+    from reports.html import svg_text_uri
+
+    uri = str(svg_text_uri("<svg a='1' b=\"2\">&amp; \\ # % </style></svg>"))
+    assert uri.startswith("data:image/svg+xml,")
+    assert not set(uri) & set('"<>&\\#\n')
+
+
+def _path_points(d: str) -> list[tuple[str, float, float]]:
+    """Every point of SVG path data (M m L l H h V v C c Z z), absolute: (command, x, y)."""
+    import re
+
+    # the SVG number grammar: "1.5.5" is 1.5 and .5, "2-1" is 2 and -1
+    tokens = re.findall(r"[A-Za-z]|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?", d)
+    points: list[tuple[str, float, float]] = []
+    x = y = x0 = y0 = 0.0
+    i, cmd = 0, ""
+    while i < len(tokens):
+        if tokens[i].isalpha():
+            cmd, i = tokens[i], i + 1
+            if cmd in "Zz":
+                x, y = x0, y0
+                points.append(("z", x, y))
+                continue
+        rel = cmd.islower()
+        if cmd in "Hh":
+            x, i = (x if rel else 0.0) + float(tokens[i]), i + 1
+            points.append(("l", x, y))
+            continue
+        if cmd in "Vv":
+            y, i = (y if rel else 0.0) + float(tokens[i]), i + 1
+            points.append(("l", x, y))
+            continue
+        pairs = 3 if cmd in "Cc" else 1
+        bx, by = (x, y) if rel else (0.0, 0.0)
+        for _ in range(pairs):
+            px, py, i = bx + float(tokens[i]), by + float(tokens[i + 1]), i + 2
+            points.append((cmd.lower(), px, py))
+        x, y = px, py
+        if cmd in "Mm":
+            x0, y0, cmd = x, y, "l" if rel else "L"
+    return points
+
+
+def test_compact_path_data_draws_the_same_path() -> None:
+    from reports.html import compact_path_data
+
+    # a superscript glyph as Typst writes it (4 decimals), then absolute and implicit commands
+    d = ("M 0 0m 0.9996 3.5616c 0.2688 0 0.4704 0.2016 0.4704 0.4704c 0 0.3024 -0.1596 0.462 -0.4704 0.4704"
+         + "l 0.0003 0.0003" * 40 + "Z m 1 1 2 2 h 3 v -1.00049z L 15 0.5 0.25 -0.5 M 1e-3 2.0004")
+    short = compact_path_data(d)
+    assert len(short) < 0.8 * len(d)
+    before, after = _path_points(d), _path_points(short)
+    assert [c for c, _, _ in before] == [c for c, _, _ in after]
+    # every point within half a unit of the last decimal kept, however long the path
+    assert max(max(abs(a[1] - b[1]), abs(a[2] - b[2])) for a, b in zip(before, after)) <= 5e-4 + 1e-12
+    assert compact_path_data("M0 0a5 5 0 1 0 1 1") == "M0 0a5 5 0 1 0 1 1"  # arcs: left as they are
+
+
+@pytest.mark.parametrize("simplify", [True, False])
+def test_figures_are_simplified_whatever_the_user_configuration(simplify: bool) -> None:
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    from reports.figures import to_svg
+
+    t = np.linspace(0.0, 100.0, 2001)  # a simulated trajectory's sampling
+    fig = Figure(figsize=(6.6, 3.0))
+    fig.subplots().plot(t, np.exp(-t / 30) * np.cos(t / 3))
+    with matplotlib.rc_context({"path.simplify": simplify}):
+        svg = to_svg(fig).decode()
+    line = max(svg.split(' d="')[1:], key=len)
+    assert line.count("L") < 500  # drawn smooth with a fraction of the 2001 samples
+
+
+def test_inputs_table_stacks_its_cells_under_their_names_on_a_phone(easy_html: str) -> None:
+    import re
+
+    section = easy_html[easy_html.index('<section id="inputs">'):]
+    table = section[:section.index("</table>")]
+    headers = re.findall(r"<th[^>]*>([^<]*)</th>", table[:table.index("</thead>")])
+    assert headers == ["parameter", "as given", "SI", "meaning"]
+    assert 'class="inputs stack" role="table"' in table
+    rows = re.findall(r"<tr role=\"row\">(.*?)</tr>", table[table.index("<tbody"):], re.S)
+    assert len(rows) > 10
+    for row in rows:  # every value is labelled with its own column's name
+        assert re.findall(r'<td role="cell"[^>]* data-label="([^"]*)"', row) == headers
+    css = _css(easy_html)
+    phone = css[css.index("@media screen and (max-width: 40rem)"):]
+    phone = phone[:phone.index("\n}\n")]
+    for rule in ("table.stack, table.stack tbody, table.stack tr, table.stack td { display: block;",
+                 'table.stack td[data-label]::before { content: attr(data-label) ": ";',
+                 "table.stack thead { position: absolute;"):
+        assert rule in phone, rule
+    assert ".math-wrap { display: block; max-width: 100%; overflow-x: auto;" in css
+
+
+# ------------------------------------------------------------------------------------------------
 # sweep report
 # ------------------------------------------------------------------------------------------------
 def make_sweep(dims: tuple[str, ...] = ("alpha_d", "sigma0"), *, violations: int = 1) -> Any:
@@ -357,8 +663,11 @@ def test_chromium_draws_mathematics_and_figures(easy_doc: dict[str, Any], tmp_pa
 
     # the conditions (equations) and the figures, without the long ledger, fit one tall screenshot
     html = certificate_html(easy_doc, ledger=False)
+    # without the sheets (the equations' backgrounds) and any equation's own image
     blank = "data:image/svg+xml;base64,PHN2ZyB4bWxucz0iaHR0cDovL3d3dy53My5vcmcvMjAwMC9zdmciLz4="
-    no_math = re.sub(r'(<img class="math" src=")[^"]+', lambda m: m.group(1) + blank, html)
+    no_math = re.sub(r'background-image: url\("[^"]+"\)', "background-image: none", html)
+    no_math = re.sub(r'(<img class="math[^"]*" src=")[^"]+', lambda m: m.group(1) + blank, no_math)
+    assert no_math.count("background-image: none") >= 1
     shots = []
     for name, text in (("report", html), ("no-math", no_math)):
         (tmp_path / f"{name}.html").write_text(text)
@@ -369,3 +678,56 @@ def test_chromium_draws_mathematics_and_figures(easy_doc: dict[str, Any], tmp_pa
     assert _colour_pixels(full, (31, 119, 180)) > 2000, "the trajectory figures are not drawn"
     assert _colour_pixels(full, (26, 127, 55), tol=20) > 500, "the status badges are not drawn"
 
+
+
+#: what a report reader's phone shows: a CSS px width
+PHONE_WIDTH_PX = 375
+_LAYOUT_PROBE = """<script>
+window.addEventListener("load", () => {
+  const root = document.documentElement, table = document.querySelector("#inputs table");
+  const cells = [...table.querySelectorAll("td")].filter(c => c.offsetParent !== null && c.textContent.trim());
+  parent.document.getElementById("probe").textContent = JSON.stringify({
+    viewport: root.clientWidth, page: root.scrollWidth,
+    wrap: [table.parentElement.clientWidth, table.parentElement.scrollWidth],
+    clipped: cells.filter(c => c.scrollWidth > c.clientWidth + 1).length,
+    labels: cells.map(c => getComputedStyle(c, "::before").content),
+    header_shown: table.querySelector("thead").getBoundingClientRect().height > 1,
+  });
+});
+</script>"""
+
+
+def _layout(html: str, width: int, tmp_path: Path) -> dict[str, Any]:
+    """Layout facts of a page at ``width`` CSS px, measured by Chromium (a probe script added to a copy).
+
+    The page sits in an iframe of that width: headless Chromium's window cannot be that narrow.
+    """
+    import html as html_lib
+    import re
+
+    inner = html.replace("</body>", _LAYOUT_PROBE + "</body>")
+    outer = (f'<!DOCTYPE html><html><body style="margin:0"><pre id="probe"></pre><iframe style="width:{width}px;'
+             f'height:1500px;border:0" srcdoc="{html_lib.escape(inner, quote=True)}"></iframe></body></html>')
+    (tmp_path / "outer.html").write_text(outer)
+    command = [str(CHROMIUM), "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+               "--disable-component-update", "--no-first-run", "--disable-sync",
+               f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=10000", "--dump-dom",
+               (tmp_path / "outer.html").as_uri()]
+    dom = subprocess.run(command, check=True, capture_output=True, text=True, timeout=120).stdout
+    found = re.search(r'<pre id="probe">(.+?)</pre>', dom, re.S)
+    assert found, dom[-500:]
+    return dict(json.loads(html_lib.unescape(found.group(1))))
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not CHROMIUM.exists(), reason="headless Chromium not installed (Debian package 'chromium')")
+def test_chromium_phone_width_inputs_readable_page_not_wider(easy_html: str, tmp_path: Path) -> None:
+    phone = _layout(easy_html, PHONE_WIDTH_PX, tmp_path)
+    assert phone["viewport"] <= PHONE_WIDTH_PX
+    assert phone["page"] <= phone["viewport"], phone  # nothing makes the whole page scroll sideways
+    assert phone["wrap"][1] <= phone["wrap"][0], phone  # the inputs need no sideways scroll either
+    assert phone["clipped"] == 0 and not phone["header_shown"]
+    # each value shows its column's name ("as given: 600"); the parameter's name heads its block
+    assert {'"as given: "', '"SI: "', '"meaning: "'} <= set(phone["labels"]) and "none" in phone["labels"]
+    desk = _layout(easy_html, 900, tmp_path)
+    assert desk["header_shown"] and set(desk["labels"]) == {"none"}  # a plain table where it fits
