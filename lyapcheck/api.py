@@ -199,6 +199,49 @@ def add_tightness(results: "Mapping[str, ConditionResult]", problem: "Problem", 
             result.numbers["soundness_violation"] = True
 
 
+def certify_box(params: Any = None, box: Sequence[str] | Any = (), *, dynamics: str = "derived",
+                overrides: Mapping[str, object] | None = None) -> CertifyResult:
+    """GES for every gain set in a box (``["alpha_d=540..660", "k_d=0.1..0.2"]``), one exact proof.
+
+    The parameters not in the box are taken from ``params`` / ``overrides``; see
+    :mod:`lyapcheck.boxes` for why a check at the corners covers the whole box. The result's
+    document is a certificate that :func:`verify` re-checks without a solver.
+    """
+    from lyapcheck.boxes import ParameterBox, certify_box as prove_box, parse_box
+    from lyapcheck.certificate import build_box_document
+    from lyapcheck.conditions.base import ConditionResult
+
+    parsed = box if isinstance(box, ParameterBox) else parse_box(list(box))
+    problem = problem_from(_box_filled(params, overrides, parsed))
+    if dynamics not in ("derived", "printed"):
+        raise InvalidParameter("dynamics", "one of 'derived', 'printed'", dynamics)
+    result = prove_box(problem, parsed, dynamics)
+    doc = build_box_document(problem, parsed, dynamics, result)
+    condition = ConditionResult("ges", result["status"], result["summary"],
+                                numbers={k: v for k, v in result.items()
+                                         if k not in ("status", "summary", "certificate", "solver", "property")},
+                                certificate=result.get("certificate", {}), solver=result.get("solver", {}))
+    return CertifyResult(verdict=doc["verdict"], dynamics=dynamics, conditions={"ges": condition}, document=doc)
+
+
+def _box_filled(params: Any, overrides: Mapping[str, object] | None, box: Any) -> Any:
+    """Parameters with each boxed one set to its interval's low end (a valid placeholder)."""
+    from lyapcheck.boxes import BOX_FIELDS
+    from lyapcheck.params import FIELD_BY_KEY, Problem
+
+    def placeholder(key: str, value: Any) -> str:  # the corners set the exact values
+        return f"{float(value)!r} {FIELD_BY_KEY[key].kind.si_unit or ''}".strip()
+
+    lows = {BOX_FIELDS[name]: placeholder(BOX_FIELDS[name], lo) for name, lo, _ in box.bounds}
+    if isinstance(params, Problem):
+        params = dict(params.given)
+    if params is None or isinstance(params, (str, Path)):
+        from lyapcheck.params import flatten_tables, load_toml
+
+        params = {} if params is None else flatten_tables(load_toml(params), str(params))
+    return {**flat_parameters(params), **flat_parameters(overrides or {}), **lows}
+
+
 # -- verify --------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Check:
@@ -383,5 +426,5 @@ def report(source: str | Path | CertifyResult, *, html: str | Path | None = None
     return report_files(source, html, pdf)
 
 
-__all__ = ["certify", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
+__all__ = ["certify", "certify_box", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
            "SimulationReport", "SweepResult", "problem_from", "class_selection"]

@@ -74,6 +74,55 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
     }
 
 
+def build_box_document(problem: Any, box: Any, dynamics: str, result: dict[str, Any]) -> dict[str, Any]:
+    """A certificate for every gain set in ``box`` (:mod:`lyapcheck.boxes`; class ``ges``)."""
+    from lyapcheck.certification import exact_values
+
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "kind": KIND,
+        "inputs": {"given": dict(problem.given),
+                   "exact_si": {k: str(v) for k, v in exact_values(problem).items()}
+                   | {"d_max": _exact_or_none(problem.d_max), "omega_so": _exact_or_none(problem.actuation.omega_so)}},
+        "box": box.to_json(),
+        "dynamics": dynamics,
+        "conditions": {"ges": result},
+        "verdict": "certified" if result["status"] == "certified" else "not_certified",
+        "versions": package_versions(),
+    }
+
+
+def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
+    """Exact re-check of a box certificate: the (c, a, b) hull from the box, every vertex."""
+    from dataclasses import replace
+
+    from lyapcheck.boxes import ParameterBox, verify_box
+    from lyapcheck.params import Actuation, GainSet, Problem, Swimmer
+
+    try:
+        v = {k: Fraction(x) for k, x in doc["inputs"]["exact_si"].items() if x is not None}
+        problem = Problem(gains=GainSet(alpha_d=v["alpha_d"], sigma0=v["sigma0"], k_d=v["k_d"],
+                                        delta_los=v["delta_los"], los_speed=v["los_speed"]),
+                          swimmer=Swimmer(e11=v["e11"], e11_hat=v["e11_hat"]), actuation=Actuation(omega_so=None))
+        problem = replace(problem, d_max=v.get("d_max"))
+        box = ParameterBox.from_json(doc["box"])
+        if any(lo <= 0 or lo > hi for _, lo, hi in box.bounds):
+            raise ValueError("box bounds must satisfy 0 < lo <= hi")
+        result = doc["conditions"]["ges"]
+        rows: list[tuple[str, bool, str]] = []
+        if result.get("status") == "certified":
+            ok, why = verify_box(problem, box, doc["dynamics"], result)
+            rows.append(("ges", ok, why if ok else f"ges: {why}"))
+        proven = any(ok for n, ok, _ in rows if n == "ges")
+        expected = "certified" if proven else "not_certified"
+        rows.append(("verdict", doc.get("verdict") == expected,
+                     f"verdict '{doc.get('verdict')}' is supported" if doc.get("verdict") == expected
+                     else f"verdict: stated '{doc.get('verdict')}' but the re-checked box supports '{expected}'"))
+        return rows
+    except (KeyError, ValueError, ZeroDivisionError, TypeError, AttributeError, IndexError) as exc:
+        raise CertificateError(f"certificate is malformed: {exc!r}") from None
+
+
 def read_document(path: str | Path) -> dict[str, Any]:
     p = Path(path)
     try:
@@ -97,6 +146,8 @@ def check_document(doc: Any, source: str) -> dict[str, Any]:
 
 def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     """Exact re-check of every claim in the document; returns (condition, ok, message) rows."""
+    if isinstance(doc, dict) and "box" in doc:
+        return verify_box_document(doc)
     from lyapcheck import exact
     from lyapcheck.conditions import prop41, sector, ultimate
     from lyapcheck.certification import system_from_values

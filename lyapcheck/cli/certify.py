@@ -58,9 +58,12 @@ def register(group: click.Group) -> None:
                   "quadratic and arithmetic classes, about 20x faster).")
     @click.option("--worst-case", is_flag=True, help="Also search the worst disturbance in simulation and report "
                   "tightness_ratio = certified / simulated beside each certified bound (10-20 s).")
+    @click.option("--box", "boxes", multiple=True, help='Certify GES for a whole box of gains, e.g. --box '
+                  '"alpha_d=540..660" --box "k_d=0.1..0.2" (repeatable; class ges).')
     @one_line_errors
     def certify(gains: str | None, dynamics: str, as_json: bool, out: str | None, report: str | None,
-                linear_views: bool, classes: str | None, worst_case: bool, **flags: str | None) -> None:
+                linear_views: bool, classes: str | None, worst_case: bool, boxes: tuple[str, ...],
+                **flags: str | None) -> None:
         """Certify a gain set: every condition class, each checked exactly."""
         from lyapcheck.api import certify as certify_gains
         from lyapcheck.api import report as write_report
@@ -69,6 +72,20 @@ def register(group: click.Group) -> None:
         if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
             raise InvalidParameter("report", "a file name ending in .html or .pdf", report)
         overrides = {FLAG_KEYS[k]: v for k, v in flags.items() if v is not None}
+        if boxes:
+            from lyapcheck.api import certify_box
+
+            if classes not in (None, "ges") or worst_case or linear_views or report:
+                raise InvalidParameter("box", "used alone: boxes are certified by the class ges only "
+                                       "(no --classes, --worst-case, --linear-views or --report)", " ".join(boxes))
+            result = certify_box(gains, boxes, dynamics=dynamics, overrides=overrides)
+            if out:
+                result.write(out)
+            if as_json:
+                emit_json(result.to_json())
+            else:
+                _print_table(result.to_json())
+            raise SystemExit(EXIT_OK if result.verdict == "certified" else EXIT_NEGATIVE)
         result = certify_gains(gains, dynamics=dynamics, classes=classes, linear_views=linear_views,
                                overrides=overrides, worst_case=worst_case)
         if out:

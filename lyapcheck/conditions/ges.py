@@ -228,13 +228,15 @@ class _Program:
     program is canonicalised once per process and only its data change.
     """
 
-    def __init__(self, terms: int, points: int) -> None:
+    def __init__(self, terms: int, points: int, vertices: int = 1) -> None:
         import cvxpy as cp
 
         self.terms = terms
+        self.vertices = vertices
         self.nodes = 0.5 - 0.5 * np.cos(np.pi * np.arange(points) / (points - 1))  # Chebyshev, ends included
         self.n = 3 + 2 * terms + 1
-        rows = 3 * points  # cones
+        self.per_node = 2 + vertices  # M - I, t I - M, and one decay cone per vertex
+        rows = self.per_node * points  # cones
         self.F = cp.Parameter((3 * rows, self.n), name="F")
         self.f0 = cp.Parameter(3 * rows, name="f0")
         self.z = cp.Variable(self.n, name="z")
@@ -246,33 +248,41 @@ class _Program:
         P = np.array([[z[0], z[1]], [z[1], z[2]]])
         return P, z[3:3 + 2 * self.terms].reshape(self.terms, 2)
 
-    def set_data(self, dyn: ScaledDynamics, mu: float) -> None:
-        c, a, b = float(dyn.c), float(dyn.a), float(dyn.b)
-        F = np.zeros((3, 3 * len(self.nodes), self.n))
-        f0 = np.zeros((3, 3 * len(self.nodes)))
+    def set_data(self, dyns: Sequence[ScaledDynamics], mu: float) -> None:
+        F = np.zeros((3, self.per_node * len(self.nodes), self.n))
+        f0 = np.zeros((3, self.per_node * len(self.nodes)))
         eye = np.eye(self.n)
+        coefficients = [(float(d.c), float(d.a), float(d.b)) for d in dyns]
         for j, wv in enumerate(self.nodes):
+            row = self.per_node * j
             for i in range(self.n - 1):  # M and D are linear in (P, l): evaluate on the unit vectors
-                M, D = float_matrices(c, a, b, *self._unpack(eye[i]), wv)
-                for cone, G in enumerate((M, -M, -(D + mu * M))):
-                    F[:, 3 * j + cone, i] = G[0, 0], G[0, 1], G[1, 1]
-            F[:, 3 * j + 1, self.n - 1] = 1.0, 0.0, 1.0  # + t I
-            f0[:, 3 * j] = -1.0, 0.0, -1.0  # M - I
-            f0[:, 3 * j + 2] = -MARGIN, 0.0, -MARGIN
+                for v, (c, a, b) in enumerate(coefficients):
+                    M, D = float_matrices(c, a, b, *self._unpack(eye[i]), wv)
+                    if v == 0:
+                        F[:, row, i] = M[0, 0], M[0, 1], M[1, 1]
+                        F[:, row + 1, i] = -M[0, 0], -M[0, 1], -M[1, 1]
+                    G = -(D + mu * M)
+                    F[:, row + 2 + v, i] = G[0, 0], G[0, 1], G[1, 1]
+            F[:, row + 1, self.n - 1] = 1.0, 0.0, 1.0  # + t I
+            f0[:, row] = -1.0, 0.0, -1.0  # M - I
+            for v in range(len(coefficients)):
+                f0[:, row + 2 + v] = -MARGIN, 0.0, -MARGIN
         self.F.value = F.transpose(1, 0, 2).reshape(-1, self.n)
         self.f0.value = f0.T.reshape(-1)
 
-    def attempt(self, dyn: ScaledDynamics, mu: float) -> tuple[Any, Any]:
-        self.set_data(dyn, mu)
+    def attempt(self, dyns: Sequence[ScaledDynamics], mu: float) -> tuple[Any, Any]:
+        if len(dyns) != self.vertices:
+            raise ValueError(f"The 'dyns' parameter must hold {self.vertices} systems. Got {len(dyns)} instead.")
+        self.set_data(dyns, mu)
         report = solve(self.problem)
         if report.outcome not in ("optimal", "inaccurate") or self.z.value is None:
             return None, report
         return self._unpack(self.z.value), report
 
 
-@lru_cache(maxsize=2)
-def program(terms: int = TERMS, points: int = GRID_POINTS) -> _Program:
-    return _Program(terms, points)
+@lru_cache(maxsize=8)
+def program(terms: int = TERMS, points: int = GRID_POINTS, vertices: int = 1) -> _Program:
+    return _Program(terms, points, vertices)
 
 
 def _bounds(dyn: ScaledDynamics, P: exact.Matrix, ells: Sequence[Sequence[Fraction]]) -> tuple[Fraction, Fraction]:
@@ -300,15 +310,46 @@ def _from_json(cert: dict[str, Any]) -> tuple[exact.Matrix, list[list[Fraction]]
             Fraction(cert["mu_scaled"]), Fraction(cert["c1"]), Fraction(cert["c2"]))
 
 
-def _exact_candidate(dyn: ScaledDynamics, found: Any, mu: float) -> dict[str, Any] | None:
+def _exact_candidate(dyns: Sequence[ScaledDynamics], found: Any, mu: float) -> dict[str, Any] | None:
     P = exact.symmetrize(exact.rational_matrix(found[0], 8))
     ells = [[exact.to_rational(float(v), 8) for v in ell] for ell in found[1]]
-    c1, c2 = _bounds(dyn, P, ells)
+    c1, c2 = _bounds(dyns[0], P, ells)
     for share in BACK_OFF:
         mu_q = exact.to_rational(mu * share, 4)
-        if exact_check(dyn, P, ells, mu_q, c1, c2)[0]:
+        if all(exact_check(dyn, P, ells, mu_q, c1, c2)[0] for dyn in dyns):
             return certificate_json(P, ells, mu_q, c1, c2)
     return None
+
+
+def search(dyns: Sequence[ScaledDynamics], log: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The exactly checked certificate with the largest decay rate found, common to ``dyns``.
+
+    Bisection on mu (geometric), each step decided by the exact check of the rounded solver
+    point, never by the solver's status: the solver often stops at "inaccurate" on these badly
+    scaled data, and its point is still a fine candidate.
+    """
+    prog = program(vertices=len(dyns))
+
+    def proved(mu: float) -> dict[str, Any] | None:
+        candidate, report = prog.attempt(dyns, mu)
+        log.append(report.to_json())
+        return None if candidate is None else _exact_candidate(dyns, candidate, mu)
+
+    cert = proved(MU_LOW)
+    lo, hi = MU_LOW, MU_HIGH
+    if cert is None:
+        cert = proved(MU_FLOOR)
+        lo, hi = MU_FLOOR, MU_LOW
+    if cert is None:
+        return None
+    for _ in range(MU_BISECTION_STEPS):
+        mid = float(np.sqrt(lo * hi))
+        better = proved(mid)
+        if better is not None:
+            lo, cert = mid, better
+        else:
+            hi = mid
+    return cert
 
 
 def _numbers(system: System, dyn: ScaledDynamics, cert: dict[str, Any]) -> dict[str, Any]:
@@ -327,33 +368,13 @@ def run(system: System) -> ConditionResult:
     dyn = scaled_dynamics(system)
     if dyn is None:
         return ConditionResult("ges", "not_certified", "the dynamics do not have the structure this class needs")
-    prog = program()
     log: list[dict[str, Any]] = []
-
-    def proved(mu: float) -> dict[str, Any] | None:
-        # the solver often stops at "inaccurate" on these badly scaled data: its point is still a
-        # fine candidate, because only the exact check below decides
-        candidate, report = prog.attempt(dyn, mu)
-        log.append(report.to_json())
-        return None if candidate is None else _exact_candidate(dyn, candidate, mu)
-
-    cert = proved(MU_LOW)
-    lo, hi = MU_LOW, MU_HIGH
-    if cert is None:
-        cert = proved(MU_FLOOR)
-        lo, hi = MU_FLOOR, MU_LOW
+    cert = search([dyn], log)
     if cert is None:
         return ConditionResult("ges", "not_certified",
                                f"no state-dependent quadratic V with {TERMS} terms passed the exact check (decay "
-                               f"rate >= {MU_LOW:g} in scaled time); this is not a proof that GES fails",
+                               f"rate >= {MU_FLOOR:g} in scaled time); this is not a proof that GES fails",
                                solver={"solves": log})
-    for _ in range(MU_BISECTION_STEPS):
-        mid = float(np.sqrt(lo * hi))
-        better = proved(mid)
-        if better is not None:
-            lo, cert = mid, better
-        else:
-            hi = mid
     numbers = _numbers(system, dyn, cert)
     summary = (f"GES: |x(t)| <= {numbers['k']:.3g} |x0| exp(-{numbers['decay_rate_per_s']:.3g} t) for every start "
                f"(x = (eps, sigma0 s)/Delta; k = {numbers['k_eps_s']:.3g} for |(eps, s)|), from a quadratic form "

@@ -1,0 +1,204 @@
+"""Certificates for whole boxes of gain space: one proof for every gain set in the box.
+
+Why it is exact. In the scaled coordinates of :mod:`lyapcheck.conditions.ges` the error dynamics
+depend on the gains only through three numbers,
+
+    c = a12/(sigma0 |a11|),   a = -a22/|a11|,   b = sigma0 U/(Delta |a11|),
+
+and the generated dynamics (:mod:`symbolic._generated`) make each entry ``a11``, ``a12``,
+``a22`` a signed monomial in the positive parameters (``tests/test_boxes.py`` checks this on the
+derivation). So ``c``, ``a`` and ``b`` are monomials too, hence monotone in every parameter, and
+over a box their ranges are the intervals spanned by their values at the box's corners. The
+``ges`` conditions are affine in ``(c, a, b)`` for a fixed certificate (``A(w)`` is affine in
+them, ``M(w)`` does not depend on them), and positive definiteness is preserved by convex
+combinations, so a certificate checked exactly at the eight corners of the ``(c, a, b)`` box
+holds at every gain set of the parameter box. The decay rate in seconds is
+``mu |a11| / 2 >= mu min|a11| / 2`` and ``k = sqrt(c2/c1)`` does not depend on the point.
+
+Statuses of a box: ``certified`` (for every point), ``not_certified`` (no common certificate
+found), and in :func:`refine` a box that is not certified is split until its relative width is
+below the given minimum.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Mapping, Sequence
+
+from lyapcheck.errors import InvalidParameter
+from lyapcheck.params import FIELD_BY_KEY, Problem, validate_field
+
+#: parameters a box may span -> the key of the FIELDS table
+BOX_FIELDS: dict[str, str] = {
+    "alpha_d": "gains.alpha_d", "sigma0": "gains.sigma0", "k_d": "gains.k_d", "delta_los": "gains.delta_los",
+    "los_speed": "gains.los_speed", "e11": "swimmer.e11",
+}
+
+
+@dataclass(frozen=True)
+class ParameterBox:
+    """Closed intervals ``[lo, hi]`` (SI, exact) of some gain parameters; the others are fixed."""
+
+    bounds: tuple[tuple[str, Fraction, Fraction], ...]
+
+    def to_json(self) -> dict[str, list[str]]:
+        return {name: [str(lo), str(hi)] for name, lo, hi in self.bounds}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Sequence[str]]) -> "ParameterBox":
+        return cls(tuple((name, Fraction(lo), Fraction(hi)) for name, (lo, hi) in data.items()))
+
+    def corners(self) -> list[dict[str, Fraction]]:
+        return [dict(zip((n for n, _, _ in self.bounds), values))
+                for values in itertools.product(*((lo, hi) for _, lo, hi in self.bounds))]
+
+    def split(self) -> tuple["ParameterBox", "ParameterBox"]:
+        """Halve the widest interval (relative width, the parameters span decades)."""
+        widest = max(range(len(self.bounds)), key=lambda i: self.bounds[i][2] / self.bounds[i][1])
+        name, lo, hi = self.bounds[widest]
+        mid = (lo + hi) / 2
+        left = self.bounds[:widest] + ((name, lo, mid),) + self.bounds[widest + 1:]
+        right = self.bounds[:widest] + ((name, mid, hi),) + self.bounds[widest + 1:]
+        return ParameterBox(left), ParameterBox(right)
+
+    def relative_width(self) -> float:
+        return max(float(hi / lo) - 1 for _, lo, hi in self.bounds)
+
+    def describe(self) -> str:
+        return ", ".join(f"{name} in [{float(lo):.6g}, {float(hi):.6g}]" for name, lo, hi in self.bounds)
+
+
+def parse_box(specs: Sequence[str]) -> ParameterBox:
+    """``["alpha_d=540..660", "delta_los=0.5 mm..1 mm"]`` -> :class:`ParameterBox` (one-line errors)."""
+    bounds: list[tuple[str, Fraction, Fraction]] = []
+    for spec in specs:
+        name, sep, interval = spec.partition("=")
+        name = name.strip()
+        if not sep or ".." not in interval:
+            raise InvalidParameter("box", "NAME=LO..HI, e.g. 'alpha_d=540..660'", spec)
+        if name not in BOX_FIELDS:
+            raise InvalidParameter("box", f"a parameter among {', '.join(BOX_FIELDS)}", name)
+        if any(name == b[0] for b in bounds):
+            raise InvalidParameter(name, "given once in --box", spec)
+        lo_text, _, hi_text = interval.partition("..")
+        field = FIELD_BY_KEY[BOX_FIELDS[name]]
+        lo, hi = validate_field(field, lo_text.strip()), validate_field(field, hi_text.strip())
+        if lo > hi:
+            raise InvalidParameter(name, f"an interval with low <= high (box '{spec}')", interval)
+        bounds.append((name, lo, hi))
+    if not bounds:
+        raise InvalidParameter("box", "at least one NAME=LO..HI", "")
+    return ParameterBox(tuple(bounds))
+
+
+def corner_problems(problem: Problem, box: ParameterBox) -> list[Problem]:
+    """The problem at every corner of the box (the other parameters as in ``problem``)."""
+    from dataclasses import replace
+
+    out = []
+    for corner in box.corners():
+        gains = {k: v for k, v in corner.items() if k != "e11"}
+        p = problem.with_gains(**gains) if gains else problem
+        if "e11" in corner:
+            p = replace(p, swimmer=replace(p.swimmer, e11=corner["e11"]))
+        out.append(p)
+    return out
+
+
+def scaled_hull(problem: Problem, box: ParameterBox, dynamics: str) -> tuple[list[Any], Fraction] | None:
+    """Vertices of the ``(c, a, b)`` box over the parameter box, and ``min |a11|`` (exact)."""
+    from lyapcheck.certification import build_system
+    from lyapcheck.conditions.sos import ScaledDynamics, scaled_dynamics
+
+    points = []
+    for p in corner_problems(problem, box):
+        dyn = scaled_dynamics(build_system(p, dynamics))
+        if dyn is None:
+            return None
+        points.append(dyn)
+    ranges = [(min(getattr(d, k) for d in points), max(getattr(d, k) for d in points)) for k in ("c", "a", "b")]
+    vertices = [ScaledDynamics(time_scale=Fraction(1), c=c, a=a, b=b) for c, a, b in itertools.product(*ranges)]
+    unique = list({(v.c, v.a, v.b): v for v in vertices}.values())
+    return unique, min(d.time_scale for d in points)
+
+
+def certify_box(problem: Problem, box: ParameterBox, dynamics: str = "derived") -> dict[str, Any]:
+    """GES (class ``ges``) for every gain set in ``box``; a JSON-ready result with its certificate."""
+    from lyapcheck.conditions import ges
+
+    hull = scaled_hull(problem, box, dynamics)
+    if hull is None:
+        return {"status": "not_certified", "property": "GES",
+                "summary": "the dynamics at some corner do not have the structure this class needs"}
+    vertices, ts_min = hull
+    log: list[dict[str, Any]] = []
+    cert = ges.search(vertices, log)
+    if cert is None:
+        return {"status": "not_certified", "property": "GES", "box": box.to_json(),
+                "summary": f"no state-dependent quadratic V common to the box was found ({box.describe()}); "
+                           "this is not a proof that GES fails anywhere in it", "solver": {"solves": log}}
+    mu, c1, c2 = (Fraction(cert[k]) for k in ("mu_scaled", "c1", "c2"))
+    k = math.sqrt(float(c2 / c1))
+    rate = float(mu * ts_min) / 2
+    summary = (f"GES for every gain set with {box.describe()}: |x(t)| <= {k:.3g} |x0| exp(-{rate:.3g} t) "
+               "(x = (eps, sigma0 s)/Delta), one state-dependent quadratic V checked exactly at the corners")
+    return {"status": "certified", "property": "GES", "summary": summary, "box": box.to_json(), "k": k,
+            "decay_rate_per_s": rate,
+            "certificate": {**cert, "vertices": [[str(v.c), str(v.a), str(v.b)] for v in vertices],
+                            "time_scale_min": str(ts_min)},
+            "solver": {"solves": log}}
+
+
+def verify_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any]) -> tuple[bool, str]:
+    """Re-derive the ``(c, a, b)`` box from the parameter box and re-check every vertex exactly."""
+    from lyapcheck import exact
+    from lyapcheck.conditions import ges
+
+    hull = scaled_hull(problem, box, dynamics)
+    if hull is None:
+        return False, "the dynamics at some corner do not have the structure this class needs"
+    vertices, ts_min = hull
+    cert = result["certificate"]
+    stored = {tuple(Fraction(x) for x in v) for v in cert["vertices"]}
+    if stored != {(v.c, v.a, v.b) for v in vertices} or Fraction(cert["time_scale_min"]) != ts_min:
+        return False, "the stored (c, a, b) vertices or min |a11| do not match the box"
+    P = exact.from_json(cert["P"])
+    ells = [[Fraction(x) for x in ell] for ell in cert["l"]]
+    mu, c1, c2 = (Fraction(cert[k]) for k in ("mu_scaled", "c1", "c2"))
+    for v in vertices:
+        ok, why = ges.exact_check(v, P, ells, mu, c1, c2)
+        if not ok:
+            return False, f"at (c, a, b) = ({float(v.c):.6g}, {float(v.a):.6g}, {float(v.b):.6g}): {why}"
+    return True, f"the ges conditions hold exactly at all {len(vertices)} vertices of the (c, a, b) box"
+
+
+@dataclass(frozen=True)
+class BoxOutcome:
+    box: ParameterBox
+    status: str
+    result: dict[str, Any]
+
+
+def refine(problem: Problem, box: ParameterBox, *, min_relative_width: float, dynamics: str = "derived",
+           max_boxes: int = 256) -> list[BoxOutcome]:
+    """Certify ``box``; split what is not certified until its relative width is below the minimum.
+
+    Returns the leaves: ``certified`` boxes (each with its own exact certificate) and
+    ``not_certified`` boxes that reached the minimum width (or the ``max_boxes`` budget).
+    """
+    if not (min_relative_width > 0):
+        raise InvalidParameter("min_relative_width", "a number > 0", min_relative_width)
+    todo: list[ParameterBox] = [box]
+    leaves: list[BoxOutcome] = []
+    while todo:
+        current = todo.pop(0)
+        result = certify_box(problem, current, dynamics)
+        if result["status"] == "certified" or current.relative_width() <= min_relative_width \
+                or len(leaves) + len(todo) + 2 > max_boxes:
+            leaves.append(BoxOutcome(current, result["status"], result))
+        else:
+            todo.extend(current.split())
+    return leaves

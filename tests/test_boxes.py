@@ -1,0 +1,122 @@
+"""Box certificates (class ges over a box of gains): the covering argument and the exact re-check."""
+
+from __future__ import annotations
+
+import json
+import random
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+import sympy as sp
+from click.testing import CliRunner
+
+from lyapcheck import boxes, verify
+from lyapcheck.api import certify_box
+from lyapcheck.certification import build_system
+from lyapcheck.conditions import ges
+from lyapcheck.conditions.sos import scaled_dynamics
+from lyapcheck.errors import InvalidParameter
+from lyapcheck.params import problem_from_sources
+from symbolic import _generated
+from tests.conftest import PAPER_TOML
+
+#: a box the paper's window certifies (found by boxes.refine over alpha_d 60..6000, k_d 0.015..1.5)
+CERTIFIED_BOX = ["alpha_d=1545..3030", "k_d=0.7575..1.5"]
+
+
+@pytest.mark.parametrize("dynamics", ["derived", "printed"])
+def test_scaled_coefficients_are_monomials_in_the_parameters(dynamics: str) -> None:
+    """The covering argument: c, a, b are signed monomials, hence monotone in every parameter."""
+    names = ("alpha_d", "sigma0", "k_d", "delta_los", "los_speed", "e11", "e11_hat")
+    symbols = {n: sp.Symbol(n, positive=True) for n in names}
+    data = getattr(_generated, dynamics)(**symbols)
+    A, B = data["A"], data["B"]
+    assert A[1][0] == 0 and B == ((0, 0), (1, 0))
+    speed = symbols["los_speed"] if dynamics == "derived" else 1
+    ts = -A[0][0]
+    c = sp.simplify(A[0][1] / (symbols["sigma0"] * ts))
+    a = sp.simplify(-A[1][1] / ts)
+    b = sp.simplify(symbols["sigma0"] * speed / (symbols["delta_los"] * ts))
+    for expr in (c, a, b, ts):
+        coefficient, rest = sp.sympify(expr).as_coeff_Mul()
+        powers = rest.as_powers_dict()
+        assert coefficient != 0 and all(base in symbols.values() and exponent.is_integer
+                                        for base, exponent in powers.items() if base != 1), expr
+
+
+@pytest.fixture(scope="module")
+def certified() -> tuple:
+    result = certify_box(PAPER_TOML, CERTIFIED_BOX)
+    return result, problem_from_sources(PAPER_TOML, {})
+
+
+def test_a_certified_box_rechecks_and_holds_at_interior_points(certified: tuple) -> None:
+    result, problem = certified
+    assert result.verdict == "certified", result.conditions["ges"].summary
+    assert verify(result.to_json()).valid
+    cert = result.document["conditions"]["ges"]["certificate"]
+    P = ((Fraction(cert["P"][0][0]), Fraction(cert["P"][0][1])), (Fraction(cert["P"][1][0]), Fraction(cert["P"][1][1])))
+    ells = [[Fraction(x) for x in ell] for ell in cert["l"]]
+    mu, c1, c2 = (Fraction(cert[k]) for k in ("mu_scaled", "c1", "c2"))
+    rng = random.Random(3)
+    for _ in range(4):  # the same certificate at gain sets strictly inside the box
+        alpha = Fraction(1545) + Fraction(rng.randint(1, 999), 1000) * (3030 - 1545)
+        kd = Fraction(7575, 10000) + Fraction(rng.randint(1, 999), 1000) * (Fraction(15, 10) - Fraction(7575, 10000))
+        dyn = scaled_dynamics(build_system(problem.with_gains(alpha_d=alpha, k_d=kd), "derived"))
+        assert dyn is not None
+        assert ges.exact_check(dyn, P, ells, mu, c1, c2)[0]
+
+
+def test_a_widened_box_fails_its_recheck(certified: tuple) -> None:
+    result, _ = certified
+    doc = json.loads(json.dumps(result.to_json()))
+    doc["box"]["k_d"][0] = "0.015"  # the certificate was not computed for this box
+    checked = verify(doc)
+    assert not checked.valid and any("vertices" in c.message for c in checked.checks if not c.ok)
+
+
+@pytest.mark.parametrize("spec, field", [
+    (["alpha_d=660..540"], "alpha_d"),
+    (["omega=1..2"], "box"),
+    (["alpha_d=-1..2"], "alpha_d"),
+    (["alpha_d=1..2", "alpha_d=3..4"], "alpha_d"),
+    (["alpha_d 1..2"], "box"),
+    (["delta_los=1..2"], "delta_los"),  # a length needs its unit
+])
+def test_bad_boxes_name_the_field(spec: list[str], field: str) -> None:
+    with pytest.raises(InvalidParameter, match=f"The '{field}' parameter must be"):
+        boxes.parse_box(spec)
+
+
+def test_box_units_are_si_inside() -> None:
+    box = boxes.parse_box(["delta_los=0.5 mm..1 mm", "alpha_d=540..660"])
+    assert box.to_json() == {"delta_los": ["1/2000", "1/1000"], "alpha_d": ["540", "660"]}
+
+
+def test_command_line_box_and_bad_input(tmp_path: Path) -> None:
+    from lyapcheck.cli import app
+
+    app._register_commands()
+    out = tmp_path / "box.json"
+    done = CliRunner().invoke(app.cli, ["certify", str(PAPER_TOML), *sum((["--box", b] for b in CERTIFIED_BOX), []),
+                                        "--json", "--out", str(out)])
+    assert done.exit_code == 0, done.output
+    assert json.loads(out.read_text())["conditions"]["ges"]["status"] == "certified"
+    assert CliRunner().invoke(app.cli, ["verify", str(out)]).exit_code == 0
+    bad = CliRunner().invoke(app.cli, ["certify", str(PAPER_TOML), "--box", "k_d=2..1"])
+    assert bad.exit_code == 2 and bad.stderr.count("\n") == 1 and "'k_d'" in bad.stderr
+
+
+@pytest.mark.slow
+def test_refinement_resolves_a_window_into_certified_and_undecided_boxes() -> None:
+    problem = problem_from_sources(PAPER_TOML, {})
+    window = boxes.parse_box(["alpha_d=800..3200", "k_d=0.4..1.6"])
+    leaves = boxes.refine(problem, window, min_relative_width=1.0)
+    statuses = {leaf.status for leaf in leaves}
+    assert "certified" in statuses
+    for leaf in leaves:
+        if leaf.status == "certified":
+            assert boxes.verify_box(problem, leaf.box, "derived", leaf.result)[0]
+        else:
+            assert leaf.box.relative_width() <= 1.0
