@@ -197,8 +197,11 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         c = conditions.get("sector_ges", {"status": "absent"})
         if c["status"] == "certified":
             cert = c["certificate"]
-            verts = [system.vertex(Fraction(cert["rho_lo"])), system.vertex(system.rho_sup)]
+            rho_lo = Fraction(cert["rho_lo"])
+            verts = [system.vertex(rho_lo), system.vertex(system.rho_sup)]
             ok, why = sector.exact_check(verts, exact.from_json(cert["P"]), Fraction(cert["decay_rate"]))
+            if rho_lo > 0:  # the vertices must span the whole sector (0, rho_sup]
+                ok, why = False, f"rho_lo = {rho_lo} > 0: the vertices do not cover rho in (0, rho_sup]"
             ok_row("sector_ges", ok, why, f"sector_ges: {why}")
         elif c["status"] == "refuted":
             fresh = sector.refutation([system.vertex(Fraction(0)), system.vertex(system.rho_sup)])

@@ -132,3 +132,12 @@ def test_linear_views_cross_check(paper_problem, easy_problem) -> None:
     assert not paper["lyap_gamma_identity"]["satisfies_stabcond_exactly"]  # consistent with the refutation
     easy = linear_views(build_system(easy_problem, "derived"))
     assert easy["lyap_gamma_identity"]["residual"] < 1e-9
+
+
+def test_verify_rejects_a_sector_certificate_that_does_not_cover_the_sector(easy_problem) -> None:
+    results = run_conditions(easy_problem, "derived", ("sector_ges",))
+    doc = build_document(easy_problem, "derived", results, verdict(results))
+    assert all(ok for _, ok, _ in verify_document(doc))
+    doc["conditions"]["sector_ges"]["certificate"]["rho_lo"] = "1/1000"
+    rows = verify_document(doc)
+    assert any(name == "sector_ges" and not ok and "rho_lo" in message for name, ok, message in rows)
