@@ -13,8 +13,6 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
-import numpy as np
-
 from lyapcheck.errors import LyapcheckError
 from reports import figures
 from reports.typeset import Equation, Equations, parse_fraction, parse_matrix, typst_float, versions
@@ -29,7 +27,12 @@ CONDITION_TITLES = {
     "stabcond2": "The simpler sufficient condition eq:stabCond2",
     "sector_ges": "Common quadratic Lyapunov function over the sector of rho (GES)",
     "ultimate_bound": "Certified ultimate bound on the cross-track error",
+    "sos_bound": "Certified ultimate bound on the cross-track error from a polynomial storage function (SOS)",
 }
+#: condition classes that certify ``limsup |eps| <= eps_bound_m`` (the certified sets of the phase portrait)
+BOUND_CLASSES = ("ultimate_bound", "sos_bound")
+#: numbers ``lyapcheck certify --worst-case`` puts on those classes, shown in their own table
+TIGHTNESS_KEYS = ("worst_case_sup_abs_eps_tail_m", "tightness_ratio", "soundness_violation")
 #: one sentence per status (DESIGN.md)
 STATUS_MEANING = {
     "certified": "a certificate exists and passed its exact check",
@@ -56,6 +59,9 @@ class ConditionView:
     items: list[Item]
     extra: list[Item] = field(default_factory=list)
     comparison: list[tuple[str, Equation | None, str]] = field(default_factory=list)
+    #: certified against the worst simulated disturbance: (what, value) rows, or why there are none
+    tightness: list[tuple[str, str]] = field(default_factory=list)
+    tightness_note: str = ""
 
 
 @dataclass
@@ -165,6 +171,54 @@ def _ultimate_comparison(cond: dict[str, Any], eqs: Equations) -> list[tuple[str
     return out
 
 
+def _number(value: object) -> float | None:
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+
+
+def describe_disturbance(desc: dict[str, Any]) -> str:
+    """A short reading of a stored disturbance description (lyapcheck.simulation.disturbances)."""
+    kind = _str(desc.get("kind", "unknown"))
+    hz = _number(desc.get("frequency_hz"))
+    text = {"square_wave": "square wave of amplitude d* across the path",
+            "sinusoid": "sinusoid across the path", "bang_bang": "bang-bang of amplitude d* across the path",
+            "constant": "constant", "feedback": "state feedback of amplitude d* across the path",
+            "none": "no disturbance"}.get(kind, kind.replace("_", " "))
+    if hz is not None:
+        text += f" at {hz:.3g} Hz"
+    times = desc.get("switch_times_s")
+    if kind == "bang_bang" and isinstance(times, list):
+        text += f", {len(times)} switches"
+    family = desc.get("family")
+    return text + (f" (search family: {_str(family)})" if family is not None else "")
+
+
+def _tightness(cond: dict[str, Any]) -> tuple[list[tuple[str, str]], str]:
+    """Rows comparing a certified bound with the worst simulated disturbance (``certify --worst-case``)."""
+    bound = _number(cond.get("eps_bound_m"))
+    worst = _number(cond.get("worst_case_sup_abs_eps_tail_m"))
+    if bound is None or cond.get("status") != "certified":
+        return [], ""
+    if worst is None:
+        return [], ("No worst-case search in this certificate: `lyapcheck certify --worst-case` adds the worst "
+                    "disturbance found in simulation and the ratio certified / simulated.")
+    ratio = _number(cond.get("tightness_ratio"))
+    if ratio is None and worst > 0:
+        ratio = bound / worst
+    desc = cond.get("worst_case_disturbance")
+    how = describe_disturbance(desc) if isinstance(desc, dict) else "not stored"
+    if ratio is None:
+        verdict = "—"
+    elif ratio < 1:
+        verdict = f"{ratio:.4g}: BELOW 1, the simulation exceeds the certified bound"
+    else:
+        verdict = f"{ratio:.4g} (>= 1: the bound holds for every disturbance tried; 1 would be tight)"
+    rows = [("certified limsup |eps|", f"{bound * 1e3:.4g} mm"),
+            ("worst simulated tail sup |eps| (|d| <= d*, full saturated loop)", f"{worst * 1e3:.4g} mm"),
+            ("worst disturbance found", how),
+            ("tightness ratio = certified / worst simulated", verdict)]
+    return rows, ""
+
+
 def _conditions(doc: dict[str, Any], eqs: Equations) -> list[ConditionView]:
     conditions = _dict(doc.get("conditions"))
     views = []
@@ -178,9 +232,12 @@ def _conditions(doc: dict[str, Any], eqs: Equations) -> list[ConditionView]:
         shown_elsewhere = {"status", "summary", "solver"}
         if name == "ultimate_bound":
             shown_elsewhere |= {"paper_ball_note", "paper_ball_radius_as_printed"}
+        tightness, tightness_note = _tightness(cond) if name in BOUND_CLASSES else ([], "")
+        if tightness:
+            shown_elsewhere |= set(TIGHTNESS_KEYS)
         rest = {k: v for k, v in cond.items() if k not in shown_elsewhere}
         view = ConditionView(name, CONDITION_TITLES.get(name, name), status, _str(cond.get("summary", "")),
-                             dict_items(rest, eqs))
+                             dict_items(rest, eqs), tightness=tightness, tightness_note=tightness_note)
         if name.startswith("prop41") and status == "certified":
             view.extra = _gamma(doc, cond, eqs)
         if name == "ultimate_bound":
@@ -219,8 +276,20 @@ def _ledger(eqs: Equations) -> tuple[list[LedgerCard], str]:
     return cards, ""
 
 
+def tightest_bound(doc: dict[str, Any]) -> tuple[float, str] | None:
+    """The smallest certified ``limsup |eps|`` of the document and its class."""
+    found = []
+    for name in BOUND_CLASSES:
+        cond = _dict(_dict(doc.get("conditions")).get(name))
+        bound = _number(cond.get("eps_bound_m"))
+        if cond.get("status") == "certified" and bound is not None and bound > 0:
+            found.append((bound, name))
+    return min(found, default=None)
+
+
 def _figures(doc: dict[str, Any]) -> tuple[list[figures.Figure], dict[str, Any], str]:
     """Simulation figures (path, eps, rotation, phase portrait); (figures, settings, reason if none)."""
+    from reports.certified_sets import certified_sets
     from reports.closed_loop import simulate_certificate
 
     try:
@@ -228,44 +297,62 @@ def _figures(doc: dict[str, Any]) -> tuple[list[figures.Figure], dict[str, Any],
     except (LyapcheckError, ValueError, ArithmeticError) as exc:
         log.warning("no simulation for the report: %s", exc)
         return [], {}, str(exc)
-    ub = _dict(_dict(doc.get("conditions")).get("ultimate_bound"))
-    certified = ub.get("status") == "certified"
-    bound = ub.get("eps_bound_m") if certified and isinstance(ub.get("eps_bound_m"), (int, float)) else None
-    cert = _dict(ub.get("certificate"))
-    stages = cert.get("stages") if isinstance(cert.get("stages"), list) else []
-    ellipse = None
-    if certified and stages and isinstance(stages[-1], dict):
-        P = parse_matrix(stages[-1].get("P"))
-        if P is not None and len(P) == 2 and len(P[0]) == 2:
-            ellipse = np.array([[float(x) for x in r] for r in P])
-    box = None
-    box_data = _dict(cert.get("box"))
-    e_box, s_box = parse_fraction(box_data.get("eps_bound")), parse_fraction(box_data.get("s_bound"))
-    if certified and e_box is not None and s_box is not None:
-        box = (float(e_box), float(s_box))
-    if not certified:
+    tight = tightest_bound(doc)
+    sets, set_notes = certified_sets(doc)
+    if not sets:
         note = "No ultimate bound is certified for these numbers, so no set is drawn."
     elif doc.get("dynamics") == "printed":
-        note = ("The certificate is for the dynamics as printed in the paper, while the simulation is of the real "
-                "(derived) loop: the set need not contain its trajectories.")
+        note = ("The certificates are for the dynamics as printed in the paper, while the simulation is of the real "
+                "(derived) loop: the sets need not contain its trajectories.")
     else:
-        note = "Every trajectory must end inside the certified set; one that does not would be a soundness violation."
-    figs = [figures.path_figure(run), figures.eps_figure(run, bound), figures.rotation_figure(run),
-            figures.phase_figure(run, ellipse, box, note)]
-    return figs, {**run.settings, "measurements": run.measurements[0]}, ""
+        note = ("Every trajectory must end inside every certified set (limsup: the certificates speak of the "
+                "unsaturated error dynamics, which the simulated saturated loop follows once |u| stays below the "
+                "step-out frequency); a tail outside the eps-extent of a set would be a soundness violation.")
+    worst_label = worst_text = ""
+    if run.worst is not None:
+        desc = run.worst.disturbance
+        worst_text = describe_disturbance(desc)
+        kind = _str(desc.get("kind", "")).replace("_", " ").replace("bang bang", "bang-bang")
+        hz = _number(desc.get("frequency_hz"))
+        worst_label = (f"worst case found: {kind}{f' {hz:.3g} Hz' if hz is not None else ''}, "
+                       f"tail sup $|\\varepsilon|$ = {run.worst.sup_abs_eps_tail_m * 1e3:.4g} mm")
+    phase = figures.phase_figure(run, sets, " ".join([note, *set_notes]), worst_label, worst_text)
+    figs = [figures.path_figure(run), figures.eps_figure(run, tight[0] if tight else None, tight[1] if tight else ""),
+            figures.rotation_figure(run), phase]
+    settings: dict[str, Any] = {**run.settings, "measurements": run.measurements[0]}
+    if run.worst is not None:
+        settings["worst_case_measured"] = {"start": run.worst.start,
+                                           "sup_abs_eps_tail_m": run.worst.sup_abs_eps_tail_m}
+    return figs, settings, ""
 
 
 def _soundness(doc: dict[str, Any], settings: dict[str, Any]) -> str:
-    """A loud message when the simulated tail leaves the certified bound of the derived dynamics."""
-    ub = _dict(_dict(doc.get("conditions")).get("ultimate_bound"))
-    bound = ub.get("eps_bound_m")
-    m = settings.get("measurements")
-    if doc.get("dynamics") != "derived" or ub.get("status") != "certified" or not m or not isinstance(bound, float):
+    """A loud message when a simulation exceeds a certified bound of the derived dynamics.
+
+    Checked: the constant-disturbance tail from the paper's start and the re-simulated worst case
+    against every certified bound, and the ratio ``lyapcheck certify --worst-case`` stored.
+    """
+    if doc.get("dynamics") != "derived":
         return ""
-    if m["sup_abs_eps_tail_m"] > bound:
-        return (f"SOUNDNESS VIOLATION: the simulated sup |eps| over the tail ({m['sup_abs_eps_tail_m']:.6g} m) exceeds "
-                f"the certified ultimate bound ({bound:.6g} m).")
-    return ""
+    m = settings.get("measurements")
+    worst = settings.get("worst_case_measured")
+    messages = []
+    for name in BOUND_CLASSES:
+        cond = _dict(_dict(doc.get("conditions")).get(name))
+        bound = _number(cond.get("eps_bound_m"))
+        if cond.get("status") != "certified" or bound is None:
+            continue
+        if m and m["sup_abs_eps_tail_m"] > bound:
+            messages.append(f"the simulated sup |eps| over the tail ({m['sup_abs_eps_tail_m']:.6g} m) exceeds the "
+                            f"certified ultimate bound of {name} ({bound:.6g} m)")
+        if worst and worst["sup_abs_eps_tail_m"] > bound:
+            messages.append(f"the re-simulated worst case's sup |eps| over the tail ({worst['sup_abs_eps_tail_m']:.6g} m) "
+                            f"exceeds the certified ultimate bound of {name} ({bound:.6g} m)")
+        ratio = _number(cond.get("tightness_ratio"))
+        if cond.get("soundness_violation") is True or (ratio is not None and ratio < 1):
+            found = f"tightness_ratio {ratio:.4g} < 1" if ratio is not None else "a soundness violation"
+            messages.append(f"the certificate's own worst-case search found {found} for {name}")
+    return ("SOUNDNESS VIOLATION: " + "; ".join(messages) + ".") if messages else ""
 
 
 def _command(doc: dict[str, Any]) -> tuple[str, str]:

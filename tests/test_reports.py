@@ -9,6 +9,7 @@ from __future__ import annotations
 import copy
 import json
 import subprocess
+from fractions import Fraction
 from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
@@ -232,15 +233,43 @@ PAGE_BUDGET_BYTES = 1_000_000
 
 
 @pytest.fixture(scope="module")
-def paper_html() -> str:
-    from lyapcheck.certificate import build_document
-    from lyapcheck.certification import run_conditions, verdict
+def paper_results() -> tuple[Any, dict[str, Any]]:
+    """The paper's problem and its condition results (derived dynamics), all classes."""
+    from lyapcheck.certification import run_conditions
     from lyapcheck.params import problem_from_sources
-    from reports.render import certificate_html
 
     problem = problem_from_sources(PAPER_TOML, {})
-    results = run_conditions(problem, "derived")
-    return certificate_html(build_document(problem, "derived", results, verdict(results)))
+    return problem, run_conditions(problem, "derived")
+
+
+@pytest.fixture(scope="module")
+def paper_doc(paper_results: tuple[Any, dict[str, Any]]) -> dict[str, Any]:
+    """What `lyapcheck certify examples/paper.toml` writes."""
+    from lyapcheck.certificate import build_document
+    from lyapcheck.certification import verdict
+
+    problem, results = paper_results
+    return build_document(problem, "derived", results, verdict(results))
+
+
+@pytest.fixture(scope="module")
+def paper_worst_doc(paper_results: tuple[Any, dict[str, Any]]) -> dict[str, Any]:
+    """What `lyapcheck certify examples/paper.toml --worst-case` writes (the real search, smallest budget)."""
+    from lyapcheck.api import add_tightness
+    from lyapcheck.certificate import build_document
+    from lyapcheck.certification import verdict
+
+    problem, results = paper_results
+    results = copy.deepcopy(results)
+    add_tightness(results, problem, budget_s=1.0)
+    return build_document(problem, "derived", results, verdict(results))
+
+
+@pytest.fixture(scope="module")
+def paper_html(paper_doc: dict[str, Any]) -> str:
+    from reports.render import certificate_html
+
+    return certificate_html(paper_doc)
 
 
 def _css(html: str) -> str:
@@ -278,6 +307,210 @@ def test_paper_certificate_page_is_under_budget_and_self_contained(paper_html: s
     glyphs = sum(svg.count("<use ") for svg in sheets.values())
     assert glyphs > 10 * outlines
     assert len([a for a in page.find("img") if "math" not in a.get("class", "")]) == 4  # the figures
+
+
+# ------------------------------------------------------------------------------------------------
+# the phase portrait: certified sets from the exact certificates, the worst case beside them
+# ------------------------------------------------------------------------------------------------
+def _polygon_contains(boundary: tuple[Any, ...], points: Any) -> Any:
+    from matplotlib.path import Path as MplPath
+
+    inside = np.zeros(len(points), dtype=bool)
+    for line in boundary:
+        inside ^= MplPath(line).contains_points(points)  # even-odd: a hole would be a second line
+    return inside
+
+
+@pytest.mark.slow
+def test_sos_bound_contour_spans_exactly_the_certified_eps_bound(paper_doc: dict[str, Any]) -> None:
+    """The drawn {V <= 1}: V = 1 on it, inside the certified strip, touching it at the paper's gains."""
+    from reports.certified_sets import certified_sets, sos_bound_set, storage_polynomial
+
+    cset, why = sos_bound_set(paper_doc)
+    assert cset is not None, why
+    bound = paper_doc["conditions"]["sos_bound"]["eps_bound_m"]
+    assert cset.eps_bound_m == bound and 1e-4 < bound < 1e-3  # 0.3455 mm
+    h = cset.resolution_eps_m
+    assert 0 < h < 1e-2 * bound
+    # never beyond the certified bound by more than the grid step, and at these gains the set
+    # reaches it (the output certificate is tight here)
+    assert cset.max_abs_eps_m <= bound + h
+    assert cset.max_abs_eps_m >= bound - h
+    # residual: the storage function of the certificate is 1 on the drawn boundary, to the
+    # accuracy of linear interpolation on the grid; V itself is the exact Gram form, rounded once
+    V = storage_polynomial(paper_doc)
+    assert V is not None
+    u, r = V.to_scaled(cset.points)
+    np.testing.assert_allclose(V.from_scaled(u, r), cset.points, rtol=1e-12, atol=0)
+    assert np.max(np.abs(cset.gauge(cset.points) - 1.0)) < 1e-3
+    # and above 1 just outside the strip |eps| <= bound, along the set's whole height (the exact
+    # output identity V - (eps/Delta)^2 + B - 1 >= 0, evaluated in floats)
+    lo, hi = cset.bbox
+    s = np.linspace(2 * lo[1], 2 * hi[1], 2001)
+    for sign in (-1.0, 1.0):
+        outside = np.column_stack([np.full_like(s, sign * bound * (1 + 1e-6)), s])
+        assert np.min(cset.gauge(outside)) > 1.0
+    # the tightest first; the quadratic box of ultimate_bound (34.9 mm) after it
+    sets, notes = certified_sets(paper_doc)
+    assert [c.key for c in sets] == ["sos_bound sublevel", "ultimate_bound box"] and not notes
+
+
+def test_sos_bound_contour_stays_inside_its_bound_where_it_is_not_tight(easy_doc: dict[str, Any]) -> None:
+    from reports.certified_sets import certified_sets
+
+    sets, _ = certified_sets(easy_doc)
+    assert [c.key for c in sets] == ["ultimate_bound ellipsoid", "sos_bound sublevel", "ultimate_bound box"]
+    for c in sets:
+        assert c.max_abs_eps_m <= c.eps_bound_m + c.resolution_eps_m + 1e-12 * c.eps_bound_m, c.key
+    sos = sets[1]
+    assert sos.max_abs_eps_m < 0.8 * sos.eps_bound_m  # strictly inside here: B is not the set's extent
+    ellipse = sets[0]  # exact shape: its extent is its bound
+    assert ellipse.max_abs_eps_m == pytest.approx(ellipse.eps_bound_m, rel=1e-4)
+    assert ellipse.eps_bound_m == pytest.approx(easy_doc["conditions"]["ultimate_bound"]["eps_bound_m"], rel=1e-9)
+
+
+def test_malformed_sos_bound_certificate_is_not_drawn_and_says_why(easy_doc: dict[str, Any]) -> None:
+    from reports.certified_sets import certified_sets
+
+    doc = copy.deepcopy(easy_doc)
+    doc["conditions"]["sos_bound"]["certificate"]["Q_V"] = [["1/0", "x"]]
+    sets, notes = certified_sets(doc)
+    assert "sos_bound sublevel" not in [c.key for c in sets] and len(sets) == 2
+    assert len(notes) == 1 and "lacks V" in notes[0]
+    # a V whose level set would leave the strip its own output certificate proves: refused
+    doc = copy.deepcopy(easy_doc)
+    cert = doc["conditions"]["sos_bound"]["certificate"]
+    cert["B"] = str(Fraction(cert["B"]) / 16)  # claims a quarter of the set's true eps-extent
+    sets, notes = certified_sets(doc)
+    assert "sos_bound sublevel" not in [c.key for c in sets] and "reaches beyond" in notes[0]
+
+
+@pytest.fixture(scope="module")
+def paper_worst_run(paper_worst_doc: dict[str, Any]) -> Any:
+    from reports.closed_loop import simulate_certificate
+
+    return simulate_certificate(paper_worst_doc)
+
+
+@pytest.mark.slow
+def test_worst_case_is_resimulated_as_stored_and_ends_inside_the_sos_set(paper_worst_doc: dict[str, Any],
+                                                                          paper_worst_run: Any) -> None:
+    from reports.certified_sets import certified_sets
+    from reports.figures import phase_figure
+
+    cond = paper_worst_doc["conditions"]["sos_bound"]
+    stored = cond["worst_case_sup_abs_eps_tail_m"]
+    worst = paper_worst_run.worst
+    assert worst is not None, paper_worst_run.worst_reason
+    # the batched re-simulation is the search's own figure (per-trajectory steps), from the start it won at
+    assert worst.sup_abs_eps_tail_m == pytest.approx(stored, rel=1e-9)
+    assert worst.disturbance == cond["worst_case_disturbance"]
+    assert set(worst.per_start) == {"origin", "preset"}
+    assert worst.sup_abs_eps_tail_m == max(worst.per_start.values())
+    bound = cond["eps_bound_m"]
+    assert 0.7 * bound < stored < bound  # about 0.28 mm of 0.3455: the bound is within 25 % of the worst
+    # soundness cross-check on the drawn data: the worst tail lies inside the contour, and V <= 1 on it
+    sets, _ = certified_sets(paper_worst_doc)
+    sos = sets[0]
+    tr = worst.trajectory
+    tail = np.column_stack([tr.eps, tr.s])[tr.t >= paper_worst_run.horizon_s - paper_worst_run.tail_s]
+    assert len(tail) > 100
+    assert np.all(_polygon_contains(sos.boundary, tail))
+    assert np.max(sos.gauge(tail)) <= 1.0
+    fig = phase_figure(paper_worst_run, sets, "", "worst case", "a square wave")
+    data = fig.data
+    assert data["zoom"] and data["worst_case"]["panel"] == "zoom"
+    assert data["worst_case"]["max_gauge_tail"]["sos_bound sublevel"] == pytest.approx(np.max(sos.gauge(tail)))
+    assert data["worst_case"]["max_abs_eps_tail_samples_m"] <= worst.sup_abs_eps_tail_m * (1 + 1e-9)
+    assert data["sets"]["sos_bound sublevel"]["panels"] == ["transient", "zoom"]
+    assert data["omitted"] == ["ultimate_bound box"]  # 70 mm x 6.7 m: named in the caption instead
+    assert "Not drawn, far larger than the view: the box" in fig.caption
+    assert "as stored in the certificate" in fig.caption and "inside the filled set" in fig.caption
+    # the constant-disturbance tails are inside too
+    assert data["tails_max_gauge"]["sos_bound sublevel"] <= 1.0
+
+
+@pytest.mark.slow
+def test_page_shows_certified_against_worst_simulated(paper_worst_doc: dict[str, Any]) -> None:
+    from reports.render import certificate_html
+
+    html = certificate_html(paper_worst_doc, ledger=False)
+    assert len(html.encode("utf-8")) < PAGE_BUDGET_BYTES
+    page = Page(html)
+    for name in ("sos_bound", "ultimate_bound"):
+        cond = paper_worst_doc["conditions"][name]
+        bound, worst, ratio = cond["eps_bound_m"], cond["worst_case_sup_abs_eps_tail_m"], cond["tightness_ratio"]
+        assert ratio == pytest.approx(bound / worst)
+        row = (f"certified limsup |eps| {bound * 1e3:.4g} mm worst simulated tail sup |eps| (|d| <= d*, full saturated "
+               f"loop) {worst * 1e3:.4g} mm")
+        assert row in page.text, name
+        assert f"tightness ratio = certified / worst simulated {ratio:.4g} (>= 1" in page.text
+    assert page.text.count("Certified bound against the worst disturbance found in simulation") == 2
+    assert "SOUNDNESS VIOLATION" not in page.text
+    caption = page.text[page.text.index("Phase portrait in (eps, s)"):]
+    assert "Orange: the worst disturbance found by the certificate's search" in caption
+    assert f"tail sup |eps| = {paper_worst_doc['conditions']['sos_bound']['worst_case_sup_abs_eps_tail_m'] * 1e3:.4g} mm" \
+        in caption
+
+
+def test_page_without_worst_case_says_how_to_get_it_and_flags_a_ratio_below_one(easy_doc: dict[str, Any]) -> None:
+    from reports.render import certificate_html
+
+    page = Page(certificate_html(easy_doc, ledger=False, simulate=False))
+    assert page.text.count("No worst-case search in this certificate") == 2  # ultimate_bound and sos_bound
+    bad = copy.deepcopy(easy_doc)
+    bound = bad["conditions"]["sos_bound"]["eps_bound_m"]
+    bad["conditions"]["sos_bound"].update({"worst_case_sup_abs_eps_tail_m": 2 * bound, "tightness_ratio": 0.5,
+                                            "soundness_violation": True,
+                                            "worst_case_disturbance": {"kind": "constant", "family": "constant"}})
+    page = Page(certificate_html(bad, ledger=False, simulate=False))
+    assert "SOUNDNESS VIOLATION" in page.text and "tightness_ratio 0.5 < 1 for sos_bound" in page.text
+    assert "0.5: BELOW 1, the simulation exceeds the certified bound" in page.text
+
+
+@pytest.mark.slow
+def test_paper_page_draws_the_sos_set_without_a_worst_case(paper_html: str) -> None:
+    caption = Page(paper_html).text
+    caption = caption[caption.index("Phase portrait in (eps, s)"):]
+    assert "Filled green: the sublevel set V <= 1 of the polynomial storage function of sos_bound" in caption
+    assert "certified limsup |eps| <= 0.3455 mm" in caption
+    assert "No worst-case trajectory: the certificate carries no worst-case search" in caption
+
+
+def test_resampled_boundary_and_compact_svg_draw_the_same(tmp_path: Path) -> None:
+    import io
+
+    from matplotlib.figure import Figure
+
+    from reports.certified_sets import ellipse_points
+    from reports.figures import compact_svg, resample_closed
+
+    # resampling: evenly spaced at the shape's own proportions, on the original curve
+    P = np.array([[1 / 0.0003**2, 0.0], [0.0, 1 / 0.2**2]])  # 0.6 mm x 400 mm, like the sos set
+    dense = ellipse_points(P, 4001)
+    drawn = resample_closed(dense, 240)
+    assert len(drawn) == 241 and np.array_equal(drawn[0], drawn[-1])
+    assert np.max(np.abs(np.einsum("ni,ij,nj->n", drawn, P, drawn) - 1)) < 1e-3
+    steps = np.hypot(*(np.diff(drawn, axis=0) / np.ptp(drawn, axis=0)).T)
+    assert steps.max() < 1.01 * steps.min()
+    # compaction: fewer bytes, the same pixels (Typst rasterises both)
+    fig = Figure(figsize=(4, 3))
+    ax = fig.subplots()
+    t = np.linspace(0, 100, 2001)
+    ax.plot(t, np.sin(t / 7) * np.exp(-t / 50), label="$\\varepsilon$")
+    ax.fill(drawn[:, 0] * 1e5, drawn[:, 1] * 100, alpha=0.2)
+    ax.legend()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="svg")
+    raw = buf.getvalue()
+    small = compact_svg(raw)
+    assert len(small) < 0.9 * len(raw) and b"<!--" not in small
+    for name, svg in (("raw", raw), ("small", small)):
+        (tmp_path / f"{name}.svg").write_bytes(svg)
+    pages = _typst_png('#set page(width: 4in, height: 3in, margin: 0pt)\n#image("raw.svg", width: 100%)\n'
+                       '#pagebreak()\n#image("small.svg", width: 100%)', tmp_path)
+    assert len(pages) == 2
+    _assert_same_drawing(1 - pages[0], 1 - pages[1], "compact_svg")
 
 
 #: 2 device pixels per CSS px (96 ppi is 1): whole-px offsets stay whole, as in a browser
