@@ -131,6 +131,12 @@ def read_document(path: str | Path) -> dict[str, Any]:
         raise InputFileError(f"certificate file '{p}' does not exist") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputFileError(f"certificate file '{p}' is not valid JSON: {exc}") from None
+    except ValueError as exc:  # valid JSON syntax that Python will not read: an integer of > 4300 digits
+        raise InputFileError(f"certificate file '{p}' cannot be read: {exc}") from None
+    except RecursionError:
+        raise InputFileError(f"certificate file '{p}' is nested too deeply to be a certificate") from None
+    except OSError as exc:  # a directory, a device, no permission
+        raise InputFileError(f"certificate file '{p}' cannot be read: {exc.strerror or exc}") from None
     return check_document(doc, f"'{p}'")
 
 
@@ -144,6 +150,58 @@ def check_document(doc: Any, source: str) -> dict[str, Any]:
     return doc
 
 
+def _short(value: object, limit: int = 200) -> str:
+    """``repr(value)`` cut to ``limit`` characters (an error message is one readable line)."""
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
+
+
+def _check_skeleton(doc: dict[str, Any]) -> None:
+    """The parts of a certificate every re-check reads, each of the right type and range.
+
+    ``inputs.exact_si`` holds exact rationals as text, each within its field's accepted range
+    (:data:`lyapcheck.params.FIELDS`, as ``certify`` validated them); ``conditions`` maps names
+    to objects with a text ``status``. Anything else is a :class:`CertificateError` naming the
+    field, before an exact check would stumble over it.
+    """
+    from lyapcheck.errors import InvalidParameter
+    from lyapcheck.params import FIELDS
+    from lyapcheck.units import Kind, parse_quantity, representable
+
+    def malformed(where: str, expected: str, got: object) -> CertificateError:
+        return CertificateError(f"certificate is malformed: '{where}' must be {expected}. Got {_short(got)} instead.")
+
+    inputs = doc.get("inputs")
+    exact_si = inputs.get("exact_si") if isinstance(inputs, dict) else None
+    if not isinstance(exact_si, dict):
+        raise malformed("inputs.exact_si", "an object of exact SI values", exact_si)
+    specs = {spec.name: spec for spec in FIELDS}
+    for key, value in exact_si.items():
+        if value is None and key in ("d_max", "omega_so"):
+            continue  # not given: the classes that need it are not_applicable
+        if not isinstance(value, str):
+            raise malformed(f"inputs.exact_si.{key}", "an exact rational as text ('p/q')", value)
+        try:
+            number = Fraction(value)
+        except (ValueError, ZeroDivisionError):
+            raise malformed(f"inputs.exact_si.{key}", "an exact rational as text ('p/q')", value) from None
+        if key in specs:
+            spec = specs[key]
+            try:  # the size of the rational, as for any input (lyapcheck.units)
+                parse_quantity(f"inputs.exact_si.{key}", number, Kind.DIMENSIONLESS)
+            except InvalidParameter as exc:
+                raise CertificateError(f"certificate is malformed: {exc}") from None
+            if not (spec.interval.contains(number) and representable(number)):
+                raise malformed(f"inputs.exact_si.{key}", f"{spec.interval.accepted()} {spec.kind.si_unit}".rstrip(),
+                                value)
+    conditions = doc.get("conditions")
+    if not isinstance(conditions, dict):
+        raise malformed("conditions", "an object of condition results", conditions)
+    for name, result in conditions.items():
+        if not isinstance(result, dict) or not isinstance(result.get("status"), str):
+            raise malformed(f"conditions.{name}", "an object with a text 'status'", result)
+
+
 def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     """Exact re-check of every claim in the document; returns (condition, ok, message) rows."""
     if isinstance(doc, dict) and "box" in doc:
@@ -153,6 +211,7 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     from lyapcheck.certification import system_from_values
     from lyapcheck.conditions.stabcond2 import run as stabcond2_run
 
+    _check_skeleton(doc)
     try:
         stored = dict(doc["inputs"]["exact_si"])
         # an input not given is null; the classes that need it must then be not_applicable
@@ -162,7 +221,7 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         d_max = given_d_max if given_d_max is not None else Fraction(0)
         system = system_from_values(doc["dynamics"], values, d_max)
         conditions = doc["conditions"]
-    except (KeyError, ValueError, ZeroDivisionError, TypeError, AttributeError) as exc:
+    except (KeyError, ValueError, ArithmeticError, TypeError, AttributeError) as exc:
         raise CertificateError(f"certificate is malformed: {exc!r}") from None
 
     rows: list[tuple[str, bool, str]] = []
@@ -247,8 +306,10 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
             s2 = stabcond2_run(values["alpha_d"], values["sigma0"], values["k_d"], values["delta_los"], "undecided")
             ok_row("stabcond2", s2.status == c["status"], f"eq:stabCond2 {s2.status}, as stated",
                    f"stabcond2: stated '{c['status']}' but the arithmetic gives '{s2.status}'")
-    except (KeyError, ValueError, ZeroDivisionError, TypeError, IndexError) as exc:
-        raise CertificateError(f"certificate is malformed: {exc!r}") from None
+    except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError, RecursionError) as exc:
+        # what a field of the wrong type or scale does to an exact check that reads it (a float
+        # view of '1e400', a string where a matrix belongs): the file is malformed, in one line
+        raise CertificateError(f"certificate is malformed: {_short(exc)}") from None
 
     from lyapcheck.conditions.base import STABILITY_CLASSES
 

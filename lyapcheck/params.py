@@ -8,6 +8,12 @@ passes through :func:`build_problem`, which checks it against the declarative ta
 
 Values are stored in SI as exact :class:`~fractions.Fraction` (decimal input is exact);
 ``float(...)`` gives the floating-point view.
+
+Besides its interval, every value is 0 or has the magnitude of a normal double,
+:data:`lyapcheck.units.MAGNITUDES` (from 2.2e-308 to 1.8e308, in SI): the classes, the
+simulation and the JSON output read the floating-point view, which outside that range is
+``inf`` or has lost precision. Within it, a class that cannot decide at an extreme scale
+reports ``inconclusive`` with its reason, and the others still run.
 """
 
 from __future__ import annotations
@@ -20,7 +26,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from lyapcheck.errors import InputFileError, InvalidParameter
-from lyapcheck.units import Kind, parse_quantity
+from lyapcheck.units import FLOAT_MAX, FLOAT_MIN_NORMAL, Kind, parse_quantity, representable
 
 INF = math.inf
 
@@ -45,6 +51,37 @@ class Interval:
         fmt = lambda v: "inf" if v == INF else ("-inf" if v == -INF else f"{v:g}")  # noqa: E731
         return f"{lo}{fmt(self.low)}, {fmt(self.high)}{hi}"
 
+    def _part(self, low: float, high: float) -> tuple[float, bool, float, bool] | None:
+        """This interval cut to ``[low, high]`` (closed): (low, closed, high, closed), or None if empty."""
+        lo, lo_closed = (low, True) if self.low < low else (self.low, self.closed_low)
+        hi, hi_closed = (high, True) if self.high > high else (self.high, self.closed_high)
+        if lo > hi or (lo == hi and not (lo_closed and hi_closed)):
+            return None
+        return lo, lo_closed, hi, hi_closed
+
+    def accepted(self) -> str:
+        """What this interval accepts once values must be 0 or normal doubles (units.MAGNITUDES).
+
+        ``(0, inf)`` accepts ``[2.2250738585072014e-308, 1.7976931348623157e+308]``; the extreme
+        bounds are written exactly (repr), the others like :meth:`__str__`.
+        """
+        def fmt(v: float) -> str:
+            return repr(v) if abs(v) in (FLOAT_MAX, FLOAT_MIN_NORMAL) else f"{v:g}"
+
+        def text(part: tuple[float, bool, float, bool]) -> str:
+            lo, lo_closed, hi, hi_closed = part
+            return f"{'[' if lo_closed else '('}{fmt(lo)}, {fmt(hi)}{']' if hi_closed else ')'}"
+
+        pos = self._part(FLOAT_MIN_NORMAL, FLOAT_MAX)
+        neg = self._part(-FLOAT_MAX, -FLOAT_MIN_NORMAL)
+        if pos and neg and (-neg[2], neg[3], -neg[0], neg[1]) == pos:
+            pieces = [f"of magnitude in {text(pos)}"]
+        else:
+            pieces = [f"in {text(p)}" for p in (neg, pos) if p is not None]
+        if self.contains(Fraction(0)):
+            pieces.insert(0, "0")
+        return " or ".join(pieces)
+
 
 POSITIVE = Interval(0, INF)
 NONNEGATIVE = Interval(0, INF, closed_low=True)
@@ -67,6 +104,9 @@ class FieldSpec:
         return f"{self.section}.{self.name}"
 
 
+#: Every input field. Accepted values: the field's interval, in the SI unit of its kind, and
+#: (for every field) 0 or a magnitude in the normal double range, 2.2250738585072014e-308 to
+#: 1.7976931348623157e+308 (lyapcheck.units.MAGNITUDES; the module docstring says why).
 FIELDS: tuple[FieldSpec, ...] = (
     FieldSpec("gains", "alpha_d", Kind.RATE, POSITIVE, None, "ILOS gain alpha_d in 1/s (eq:los)"),
     FieldSpec("gains", "sigma0", Kind.DIMENSIONLESS, POSITIVE, None, "integral gain sigma_0 (eq:los)"),
@@ -99,9 +139,11 @@ SECTIONS: tuple[str, ...] = tuple(dict.fromkeys(spec.section for spec in FIELDS)
 def validate_field(spec: FieldSpec, value: object) -> Fraction:
     """Parse `value` for `spec` and check its range; the single validation path."""
     parsed = parse_quantity(spec.name, value, spec.kind, bare_allowed=spec.bare_allowed)
+    unit = f" {spec.kind.si_unit}" if spec.kind.si_unit else ""
     if not spec.interval.contains(parsed):
-        unit = f" {spec.kind.si_unit}" if spec.kind.si_unit else ""
         raise InvalidParameter(spec.name, f"in {spec.interval}{unit}", value)
+    if not representable(parsed):  # in the interval, yet beyond the normal double range
+        raise InvalidParameter(spec.name, f"{spec.interval.accepted()}{unit} (normal doubles)", value)
     return parsed
 
 
@@ -218,6 +260,8 @@ def load_toml(path: str | Path) -> dict[str, Any]:
         raise InputFileError(f"input file '{p}' does not exist") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputFileError(f"input file '{p}' is not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:  # TOML is UTF-8
+        raise InputFileError(f"input file '{p}' is not UTF-8 text: {exc.reason} at byte {exc.start}") from None
     except OSError as exc:
         raise InputFileError(f"input file '{p}' cannot be read: {exc.strerror}") from None
 

@@ -4,6 +4,14 @@ Everything inside the toolkit is SI. Magnitudes are parsed as exact decimals and
 :class:`fractions.Fraction`, so that exact certificate checks see the number the user typed,
 not its binary floating-point neighbour.
 
+Every number is finite, and its exact SI value is 0 or has the magnitude of a *normal*
+double (:data:`MAGNITUDES`): the classes, the simulation and the JSON output all read the
+floating-point view ``float(x)`` of a value, which beyond :data:`FLOAT_MAX` is ``inf`` (no
+JSON number, no arithmetic) and below :data:`FLOAT_MIN_NORMAL` a subnormal with fewer
+significant bits than the number given (0 below 5e-324). A decimal carries at most
+:data:`MAX_SIGNIFICANT_DIGITS` significant digits (see there). :func:`representable` checks
+the magnitude; :func:`lyapcheck.params.validate_field` applies it to every field.
+
 Rotation is handled apart from pint's own conversion: pint treats ``Hz`` and ``rad/s`` as the
 same dimension (1/s) and would turn ``2.8 Hz`` into ``2.8 rad/s``. A rotation *frequency* in
 Hz is cycles per second; the toolkit converts it to an angular velocity with a factor 2*pi,
@@ -14,16 +22,36 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 from decimal import Decimal, InvalidOperation
 from enum import Enum
 from fractions import Fraction
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Final
 
 from lyapcheck.errors import InvalidParameter
 
 if TYPE_CHECKING:  # pragma: no cover
     import pint
+
+#: the largest magnitude of a value (SI): the largest finite double
+FLOAT_MAX: Final = sys.float_info.max
+#: the smallest non-zero magnitude of a value (SI): the smallest normal double
+FLOAT_MIN_NORMAL: Final = sys.float_info.min
+#: the accepted magnitudes, as error messages state them
+MAGNITUDES: Final = f"0 or of magnitude in [{FLOAT_MIN_NORMAL!r}, {FLOAT_MAX!r}] (a normal double)"
+#: Significant digits of a decimal input. Exact values are stored in certificates as "p/q"
+#: text, and Python writes and reads integers of at most 4300 digits
+#: (``sys.get_int_max_str_digits``); a matrix entry multiplies a few inputs, each of which has
+#: up to ~430 digits at the ends of the double range with 100 significant digits. A double
+#: holds 17; no measured or designed value carries 100.
+MAX_SIGNIFICANT_DIGITS: Final = 100
+#: A decimal exponent beyond this cannot come back into the double range with any unit (unit
+#: factors are doubles, within 1e-324..1e309): rejected before building 10**exponent exactly.
+_MAX_DECIMAL_EXPONENT: Final = 700
+#: numerator / denominator size of a Fraction given through the Python API (the same budget
+#: as MAX_SIGNIFICANT_DIGITS digits at the ends of the double range: about 450 digits)
+_MAX_FRACTION_BITS: Final = 1500
 
 _NUMBER = re.compile(r"^\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
 
@@ -68,11 +96,21 @@ def registry() -> "pint.UnitRegistry[Any]":
         return pint.UnitRegistry()
 
 
-def _exact_decimal(text: str) -> Fraction:
-    try:
-        return Fraction(Decimal(text))
-    except (InvalidOperation, ValueError) as exc:  # pragma: no cover - regex guards this
-        raise ValueError(text) from exc
+def representable(value: Fraction) -> bool:
+    """Whether ``value`` is 0 or has the magnitude of a normal double (:data:`MAGNITUDES`)."""
+    return value == 0 or FLOAT_MIN_NORMAL <= abs(value) <= FLOAT_MAX
+
+
+def _exact_decimal(field: str, number: Decimal, got: object) -> Fraction:
+    """The exact value of a finite decimal, refusing what no unit brings into range or too many digits."""
+    if not number:
+        return Fraction(0)
+    if abs(number.adjusted()) > _MAX_DECIMAL_EXPONENT:
+        raise InvalidParameter(field, MAGNITUDES, got)
+    digits = "".join(map(str, number.as_tuple().digits)).strip("0")
+    if len(digits) > MAX_SIGNIFICANT_DIGITS:
+        raise InvalidParameter(field, f"a number with at most {MAX_SIGNIFICANT_DIGITS} significant digits", got)
+    return Fraction(number)
 
 
 def _si_factor(field: str, unit_text: str, kind: Kind, got: object) -> Fraction:
@@ -86,6 +124,23 @@ def _si_factor(field: str, unit_text: str, kind: Kind, got: object) -> Fraction:
         raise InvalidParameter(field, kind.example, got) from None
     except Exception:  # pint raises a zoo of parser errors on odd strings
         raise InvalidParameter(field, kind.example, got) from None
+    try:
+        factor = _float_factor(field, unit, kind, got)
+    except (ArithmeticError, pint.errors.PintError):  # e.g. "(Ym/um)**20*m": 1e720 overflows pint's float
+        raise InvalidParameter(field, kind.example, got) from None
+    if not math.isfinite(factor) or factor == 0:
+        raise InvalidParameter(field, kind.example, got)
+    # pint returns floats; the prefixes and units we accept have short exact decimal factors
+    # (1e-3, 1e-6, ...), and repr() gives that shortest decimal back. A rotation factor carries
+    # 2*pi as a double: taken exactly as that double.
+    return Fraction(factor) if kind is Kind.ROTATION else Fraction(Decimal(repr(factor)))
+
+
+def _float_factor(field: str, unit: Any, kind: Kind, got: object) -> float:
+    """The float factor that turns one ``unit`` into SI for ``kind`` (wrong dimension: InvalidParameter)."""
+    import pint
+
+    ureg = registry()
 
     if kind is Kind.ROTATION:
         names = {name for name, _ in (1 * unit).unit_items()}
@@ -100,15 +155,12 @@ def _si_factor(field: str, unit_text: str, kind: Kind, got: object) -> Fraction:
                 raise InvalidParameter(field, kind.example + " (a bare 1/s is ambiguous for a rotation)", got)
         except pint.errors.DimensionalityError:  # e.g. "2 rad": an angle, not a rate
             raise InvalidParameter(field, kind.example, got) from None
-        return Fraction(factor)
+        return float(factor)
 
     expected = ureg.get_dimensionality(kind.dimensionality) if kind.dimensionality else ureg.dimensionless.dimensionality
     if unit.dimensionality != expected:
         raise InvalidParameter(field, kind.example, got)
-    factor = (1 * unit).to(kind.si_unit or ureg.dimensionless).magnitude
-    # pint returns floats; the prefixes and units we accept have short exact decimal factors
-    # (1e-3, 1e-6, ...), and repr() gives that shortest decimal back.
-    return Fraction(Decimal(repr(float(factor))))
+    return float((1 * unit).to(kind.si_unit or ureg.dimensionless).magnitude)
 
 
 def parse_quantity(field: str, value: object, kind: Kind, *, bare_allowed: bool = False) -> Fraction:
@@ -133,25 +185,36 @@ def parse_quantity(field: str, value: object, kind: Kind, *, bare_allowed: bool 
     Raises
     ------
     InvalidParameter
-        Wrong type, not finite, wrong dimension, or a bare number where a unit is required.
+        Wrong type, not finite, wrong dimension, a bare number where a unit is required, more
+        than :data:`MAX_SIGNIFICANT_DIGITS` digits, or an exponent that no unit brings back
+        into the range of :data:`MAGNITUDES` (the range itself is checked by
+        :func:`lyapcheck.params.validate_field`, which knows the field's interval).
     """
     if isinstance(value, bool) or value is None:
         raise InvalidParameter(field, kind.example, value)
-    if isinstance(value, (int, Fraction)):
-        magnitude, unit_text = Fraction(value), ""
+    if isinstance(value, int):
+        magnitude, unit_text = _exact_decimal(field, Decimal(value), value), ""
+    elif isinstance(value, Fraction):
+        if max(value.numerator.bit_length(), value.denominator.bit_length()) > _MAX_FRACTION_BITS:
+            raise InvalidParameter(field, f"a fraction of at most {_MAX_FRACTION_BITS} bits above and below", value)
+        magnitude, unit_text = value, ""
     elif isinstance(value, float):
         if not math.isfinite(value):
             raise InvalidParameter(field, "a finite number", value)
-        magnitude, unit_text = Fraction(Decimal(repr(value))), ""
+        magnitude, unit_text = _exact_decimal(field, Decimal(repr(value)), value), ""
     elif isinstance(value, Decimal):
         if not value.is_finite():
             raise InvalidParameter(field, "a finite number", value)
-        magnitude, unit_text = Fraction(value), ""
+        magnitude, unit_text = _exact_decimal(field, value, value), ""
     elif isinstance(value, str):
         match = _NUMBER.match(value)
         if match is None:
             raise InvalidParameter(field, "a finite number" + (f", {kind.example}" if kind.si_unit else ""), value)
-        magnitude, unit_text = _exact_decimal(match.group(1)), match.group(2)
+        try:
+            number = Decimal(match.group(1))
+        except (InvalidOperation, ValueError):  # pragma: no cover - the pattern admits decimals only
+            raise InvalidParameter(field, "a finite number", value) from None
+        magnitude, unit_text = _exact_decimal(field, number, value), match.group(2)
     else:
         raise InvalidParameter(field, kind.example, value)
 

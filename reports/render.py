@@ -10,7 +10,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from lyapcheck.errors import InputFileError, InvalidParameter
+from lyapcheck.errors import InputFileError, InvalidParameter, LyapcheckError
 from lyapcheck.fileio import atomic_write
 
 log = logging.getLogger(__name__)
@@ -58,12 +58,32 @@ def certificate_report(doc: dict[str, Any], path: str | Path) -> Path:
     return write_page(certificate_html(doc), path)
 
 
+def read_store(path: str | Path) -> Any:
+    """A sweep store, loaded and checked against :mod:`sweeps.schema` (one-line errors if it is not one).
+
+    The data chunks are decoded when the store is loaded, so a truncated or edited chunk (a
+    codec error, a JSON error, a missing key) surfaces here, where it is a bad input file.
+    """
+    from reports.sweep_page import open_store
+    from sweeps.schema import check_dataset
+
+    try:
+        dataset = open_store(path)
+    except LyapcheckError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - zarr and its codecs raise many types for a corrupt store
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputFileError(f"'{path}' is not a readable sweep store (Zarr): {first}") from None
+    check_dataset(dataset, str(path))
+    return dataset
+
+
 def sweep_html(store: Any) -> str:
     """The sweep report as one self-contained HTML page (``store``: a path or an xarray Dataset)."""
     from reports.html import render_html
-    from reports.sweep_page import open_store, sweep_context
+    from reports.sweep_page import sweep_context
 
-    dataset = open_store(store) if isinstance(store, (str, Path)) else store
+    dataset = read_store(store) if isinstance(store, (str, Path)) else store
     return render_html("sweep.html.j2", sweep_context(dataset))
 
 
@@ -93,7 +113,10 @@ def report_files(source: str | Path, html: str | Path | None, pdf: str | Path | 
     if not src.exists():
         raise InputFileError(f"input file '{src}' does not exist")
     if html is None and pdf is None:
-        html = Path(src.name).with_suffix(".html")
+        name = src.resolve().name  # "." and ".." name their directory
+        if not name or name in (".", ".."):
+            raise InvalidParameter("html", f"given: '{source}' has no name to call the report after", None)
+        html = Path(name).with_suffix(".html")
     if is_sweep_store(src):
         page = sweep_html(src)
     else:
@@ -106,5 +129,5 @@ def report_files(source: str | Path, html: str | Path | None, pdf: str | Path | 
     return written
 
 
-__all__ = ["certificate_report", "certificate_html", "sweep_report", "sweep_html", "report_files", "html_to_pdf",
-           "write_page"]
+__all__ = ["certificate_report", "certificate_html", "sweep_report", "sweep_html", "read_store", "report_files",
+           "html_to_pdf", "write_page"]

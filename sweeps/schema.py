@@ -26,11 +26,12 @@ Layout (an xarray Dataset in a Zarr v3 store):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
 from lyapcheck.conditions import base as _base
+from lyapcheck.errors import InputFileError
 
 #: parameters a sweep may vary, mapped to their key in :data:`lyapcheck.params.FIELDS`
 SWEEPABLE: Final[dict[str, str]] = {
@@ -115,3 +116,36 @@ VARIABLE_BY_NAME: Final = {v.name: v for v in VARIABLES}
 def status_code(status: str) -> int:
     """The int8 code of a ConditionResult status."""
     return STATUS_CODES[status]
+
+
+def check_dataset(ds: Any, source: str) -> None:
+    """Check a loaded store (an xarray Dataset) against this schema, before anything reads it.
+
+    The dimensions are 1 to 3 names of :data:`SWEEPABLE`, each with a finite, strictly
+    increasing coordinate; every variable of :data:`VARIABLES` that is present has its dtype
+    and the grid's dimensions (a store of an older version may lack the newer classes' variables),
+    and ``done`` is present. Anything else is an :class:`~lyapcheck.errors.InputFileError`
+    naming ``source`` and what is wrong (a truncated or edited store, or not a sweep at all).
+    """
+    def bad(what: str) -> InputFileError:
+        return InputFileError(f"'{source}' is not a sweep store this lyapcheck reads: {what}")
+
+    dims = tuple(str(d) for d in ds.dims)
+    if not 1 <= len(dims) <= 3 or any(d not in SWEEPABLE for d in dims):
+        raise bad(f"dimensions {list(dims)}, expected one to three of {', '.join(SWEEPABLE)}")
+    for dim in dims:
+        if dim not in ds.coords:
+            raise bad(f"no coordinate '{dim}'")
+        values = np.asarray(ds.coords[dim].values)
+        if (values.ndim != 1 or values.dtype.kind != "f" or not np.all(np.isfinite(values))
+                or np.any(np.diff(values) <= 0)):
+            raise bad(f"coordinate '{dim}' is not a finite, strictly increasing list of numbers")
+    if "done" not in ds.data_vars:
+        raise bad("no 'done' variable")
+    for var in VARIABLES:
+        if var.name not in ds.data_vars:
+            continue
+        data = ds[var.name]
+        if data.dtype != var.dtype or set(map(str, data.dims)) != set(dims):
+            raise bad(f"variable '{var.name}' is {data.dtype} over {list(map(str, data.dims))}, expected {var.dtype} "
+                      f"over {list(dims)}")

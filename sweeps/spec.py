@@ -48,6 +48,7 @@ from lyapcheck.errors import InputFileError, InvalidParameter
 from lyapcheck.params import (
     FIELD_BY_KEY, POSITIVE, FieldSpec, Interval, Problem, build_problem, flatten_tables, validate_field,
 )
+from lyapcheck.simulation.scenarios import RTOL_RANGE
 from lyapcheck.units import Kind
 from sweeps.schema import CLASSES, DEFAULT_CLASSES, SCENARIOS, SWEEPABLE
 
@@ -65,8 +66,7 @@ _SIM_KEYS: Final = ("horizon", "tail", "rtol", "scenarios", "initial_position")
 _SIM_FIELDS: Final[Mapping[str, FieldSpec]] = {
     "horizon": FieldSpec("simulation", "horizon", Kind.TIME, POSITIVE, "100 s", "simulated time"),
     "tail": FieldSpec("simulation", "tail", Kind.TIME, POSITIVE, "10 s", "final window of the measurements"),
-    "rtol": FieldSpec("simulation", "rtol", Kind.DIMENSIONLESS, Interval(0, 1e-3, closed_high=True), "1e-8",
-                      "integrator tolerance"),
+    "rtol": FieldSpec("simulation", "rtol", Kind.DIMENSIONLESS, RTOL_RANGE, "1e-8", "integrator tolerance"),
 }
 _ANY_LENGTH: Final = FieldSpec("simulation", "initial_position", Kind.LENGTH, Interval(-math.inf, math.inf),
                                None, "initial position")
