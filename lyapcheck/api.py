@@ -35,6 +35,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.conditions.base import ConditionResult
     from lyapcheck.params import Problem
 
+#: local worker processes a sweep may start (each is a process with its own solver state; far
+#: beyond any machine's cores, and below the limits a process pool can represent)
+MAX_LOCAL_WORKERS = 1024
+
 #: short names accepted in a parameters mapping (and the command-line flags) -> parameter key
 SHORT_KEYS: dict[str, str] = {
     "alpha_d": "gains.alpha_d", "sigma0": "gains.sigma0", "k_d": "gains.k_d", "kd": "gains.k_d",
@@ -390,8 +394,9 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
     from sweeps.store import Store
     from sweeps.summary import summarize
 
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
-        raise InvalidParameter("workers", "an integer >= 0", workers)
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or not 0 <= workers <= MAX_LOCAL_WORKERS):
+        raise InvalidParameter("workers", f"an integer in [0, {MAX_LOCAL_WORKERS}]", workers)
     for target in exports:
         if Path(target).suffix.lower() not in EXPORT_SUFFIXES:
             raise InvalidParameter("export", "a file name ending in .nc or .csv", str(target))
