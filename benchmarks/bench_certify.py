@@ -1,96 +1,114 @@
-"""Compiled-once re-solve versus fresh build-and-solve, for the certificate programs.
+"""Wall time of ``lyapcheck certify examples/paper.toml``, imports included, before and after issue 11.
 
-Prints, for the polytopic ``sector_ges`` program and the ``prop41`` program, the wall time per
-re-solve of the DPP-compiled problem (new parameter values, same problem object) next to the
-time of building a fresh cvxpy problem with constants and solving it, and their ratio, all
-measured in this one run over the same random gain sets. Also prints the end-to-end time of
-one ``certify`` call (all five classes) inside this process.
+Prints the median of ``--runs`` fresh processes of
 
-Run:  python benchmarks/bench_certify.py [--points 60]
+* ``lyapcheck certify examples/paper.toml``                  (all classes, derived dynamics; aim < 1 s)
+* ``lyapcheck certify examples/paper.toml --classes quick``  (aim < 0.4 s)
+
+for this tree and, with ``--before-tree DIR`` (a worktree of the commit before issue 11:
+``git worktree add --detach /tmp/before 73f5967``), for that tree, runs interleaved so that the
+load of a shared machine hits both alike; without it the medians stored in :data:`BEFORE` are
+printed. Then where the time goes in this tree: the import time of the heavy packages (each in a
+fresh interpreter, numpy subtracted), and the time of each class in a warm process (imports and
+one-time setup excluded).
+
+Run:  python benchmarks/bench_certify.py [--runs 7] [--before-tree /tmp/before]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import statistics
+import subprocess
+import sys
 import time
-from fractions import Fraction
+from pathlib import Path
+from typing import Any
 
-import numpy as np
-
-
-def random_systems(n: int, seed: int) -> list:
-    from lyapcheck.conditions.base import System
-
-    rng = np.random.default_rng(seed)
-    out = []
-    for _ in range(n):
-        kappa, sigma, k, delta = (Fraction(float(x)).limit_denominator(10**6) for x in
-                                  (rng.uniform(0.02, 2), rng.uniform(0.005, 1), rng.uniform(0.1, 5), rng.uniform(0.05, 2)))
-        A = ((-kappa, -kappa * sigma), (Fraction(0), -k))
-        out.append(System("derived", A, ((Fraction(0), Fraction(0)), (Fraction(1), Fraction(0))), (Fraction(1), Fraction(0)),
-                          1 / delta, sigma, delta, Fraction(1), Fraction(0)))
-    return out
+ROOT = Path(__file__).resolve().parents[1]
+COMMANDS = {"all": ["certify", "examples/paper.toml"], "quick": ["certify", "examples/paper.toml", "--classes", "quick"]}
+AIM = {"all": 1.0, "quick": 0.4}
+#: medians of 3 runs at commit 73f5967 (before issue 11) on this 2-core machine, load 0.5-1
+BEFORE: dict[str, Any] = {"commit": "73f5967", "all": 4.79, "quick": 1.56}
 
 
-def fresh_sector(a_lo: np.ndarray, a_hi: np.ndarray) -> None:
-    import cvxpy as cp
+def wall(tree: Path, args: list[str]) -> float:
+    """One fresh ``python -m lyapcheck ...`` in ``tree`` (its own sources first on the path)."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "lyapcheck", *args], cwd=tree, env=env, capture_output=True)
+    elapsed = time.perf_counter() - t0
+    if proc.returncode not in (0, 1):
+        raise RuntimeError(f"{' '.join(args)} in {tree} exited {proc.returncode}: {proc.stderr.decode()[-500:]}")
+    return elapsed
 
-    P = cp.Variable((2, 2), symmetric=True)
-    m = cp.Variable()
-    cons = [cp.trace(P) == 1, P >> m * np.eye(2), m <= 1]
-    for a in (a_lo, a_hi):
-        q = -(a.T @ P + P @ a)
-        cons.append((q + q.T) / 2 >> m * np.eye(2))
-    cp.Problem(cp.Maximize(m), cons).solve(solver=cp.CLARABEL)
+
+def import_cost(module: str) -> float:
+    """Seconds to import ``module`` in a fresh interpreter, beyond numpy (median of 3)."""
+    code = ("import time, numpy; t = time.perf_counter(); import {m}; print(time.perf_counter() - t)").format(m=module)
+    runs = [float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                                 cwd=ROOT).stdout) for _ in range(3)]
+    return statistics.median(runs)
+
+
+def class_times() -> dict[str, float]:
+    """Seconds per class at the paper's gains (derived), warm process, median of 3."""
+    sys.path.insert(0, str(ROOT))
+    from lyapcheck import certification
+    from lyapcheck.params import problem_from_sources
+
+    problem = problem_from_sources(ROOT / "examples" / "paper.toml", {})
+    spent: dict[str, list[float]] = {}
+    guarded = certification.guarded
+
+    def timed(name: str, compute: Any) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return guarded(name, compute)
+        finally:
+            spent.setdefault(name, []).append(time.perf_counter() - t0)
+
+    certification.run_conditions(problem, "derived")  # one-time: programs, solver, imports
+    certification.guarded = timed  # type: ignore[assignment]
+    try:
+        for _ in range(3):
+            certification.run_conditions(problem, "derived")
+    finally:
+        certification.guarded = guarded  # type: ignore[assignment]
+    return {name: statistics.median(t) for name, t in spent.items()}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--points", type=int, default=60)
+    parser.add_argument("--runs", type=int, default=7)
+    parser.add_argument("--before-tree", type=Path, default=None)
     args = parser.parse_args()
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
+    trees = {"after": ROOT} | ({"before": args.before_tree.resolve()} if args.before_tree else {})
+    times: dict[tuple[str, str], list[float]] = {}
+    for tree in trees.values():  # warm the file cache and the bytecode of both trees
+        wall(tree, COMMANDS["quick"])
+    for _ in range(args.runs):
+        for label, tree in trees.items():
+            for name, command in COMMANDS.items():
+                times.setdefault((label, name), []).append(wall(tree, command))
+    for name in COMMANDS:
+        after = statistics.median(times[("after", name)])
+        before = statistics.median(times[("before", name)]) if args.before_tree else BEFORE[name]
+        where = "measured now" if args.before_tree else f"stored, commit {BEFORE['commit']}"
+        print(f"certify {name:5}: median {after:5.2f} s after, {before:5.2f} s before ({where}); "
+              f"before/after {before / after:4.1f} x; after/aim {after / AIM[name]:4.2f} (aim < {AIM[name]} s)")
 
-    from lyapcheck.conditions import scaling, sector
-    from lyapcheck.conditions.sdp import solve
-
-    systems = random_systems(args.points, seed=7)
-    data = []
-    for s in systems:
-        verts = [s.vertex(Fraction(0)), s.vertex(s.rho_sup)]
-        sc = scaling.choose(verts)
-        data.append((sc.matrix_to_scaled(verts[0]), sc.matrix_to_scaled(verts[1])))
-
-    prog = sector.program()  # compile once (first solve compiles)
-    prog.A_lo.value, prog.A_hi.value = data[0]
-    solve(prog.problem)
-
-    t0 = time.perf_counter()
-    clarabel = 0.0
-    for a_lo, a_hi in data:
-        prog.A_lo.value, prog.A_hi.value = a_lo, a_hi
-        clarabel += solve(prog.problem).solve_seconds
-    resolve = (time.perf_counter() - t0) / len(data)
-    clarabel /= len(data)
-
-    t0 = time.perf_counter()
-    for a_lo, a_hi in data:
-        fresh_sector(a_lo, a_hi)
-    fresh = (time.perf_counter() - t0) / len(data)
-
-    print(f"sector_ges program, {len(data)} gain sets")
-    print(f"  re-solve of the compiled problem : {resolve * 1e3:8.2f} ms per point")
-    print(f"  fresh build + solve              : {fresh * 1e3:8.2f} ms per point")
-    print(f"  ratio fresh / re-solve           : {fresh / resolve:8.1f} x")
-    print(f"  Clarabel's own solve time        : {clarabel * 1e3:8.2f} ms  (re-solve / Clarabel = {resolve / clarabel:.1f} x)")
-
-    from lyapcheck.certification import CONDITION_ORDER, QUICK_CLASSES, run_conditions
-    from lyapcheck.params import problem_from_sources
-
-    problem = problem_from_sources("examples/paper.toml", {})
-    for label, classes in (("quick classes (issue 3)", QUICK_CLASSES), ("all classes", CONDITION_ORDER)):
-        run_conditions(problem, "derived", classes)  # warm: compile the programs
-        t0 = time.perf_counter()
-        run_conditions(problem, "derived", classes)
-        print(f"certify, {label}, paper gains, warm process: {(time.perf_counter() - t0) * 1e3:.0f} ms")
+    print("import cost in a fresh interpreter, beyond numpy (median of 3):")
+    for module, why in (("cvxpy", "no longer imported by certify (compiled programs)"),
+                        ("pint", "lyapcheck.units parses '0.75 mm' etc.; pulls in dask"),
+                        ("scipy.linalg.cython_blas", "Clarabel loads it at its first PSD-cone solve"),
+                        ("scipy.sparse", "not imported: Clarabel is handed index arrays")):
+        print(f"  {module:26} {import_cost(module) * 1e3:6.0f} ms  {why}")
+    print("per class, paper gains, derived, warm process (median of 3):")
+    for name, seconds in class_times().items():
+        print(f"  {name:16} {seconds * 1e3:8.1f} ms")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Sweep throughput and memory, every ratio measured in this one run.
 
 1. ``sector_ges`` certified points per second: the sweep's path (compiled conic data, Clarabel
-   called directly, exact check; :mod:`sweeps.fast_sector`) in one process and on every core,
+   called directly, exact check; :mod:`sweeps.fast_sector`, :mod:`lyapcheck.conditions.compiled`) in one process and on every core,
    against a naive loop that builds a fresh cvxpy problem per point, solves it and runs the same
    rounding and exact check; and against Clarabel's own solve time per problem.
 2. Simulated trajectories per second: one batched call of the toolkit's integrator against a
@@ -12,8 +12,14 @@
    simulation work is replaced by a cheap stub (every variable filled from the coordinates),
    so that what is measured is the sweep loop and the Zarr store alone: streamed to disk, the
    peak should not grow with the grid.
+4. Peak RSS of a REAL sweep (issue 11): 10^3 against 10^4 points, nothing stubbed, each in a
+   fresh process with local worker processes (``--workers``). Configuration, said here because
+   10^4 real points must finish in minutes: the shipped ``sweep-dmax-alpha.toml`` (its classes
+   prop41_ges, prop41_iss, stabcond2, sector_ges, ultimate_bound and its d* x alpha_d axes) with
+   a cheap simulation (one scenario, ``constant``, 2 s horizon, 1 s tail). Aim: the 10^4 peak
+   within 10 % of the 10^3 one, for the main process and for the largest worker.
 
-Run:  python benchmarks/bench_sweep.py [--points 400] [--trajectories 512] [--ivp 6]
+Run:  python benchmarks/bench_sweep.py [--points 400] [--trajectories 512] [--ivp 6] [--skip real-memory]
 Note: on a shared machine the wall-clock figures depend on the load; CPU times are printed too.
 """
 
@@ -233,13 +239,74 @@ def bench_memory() -> None:
               f"{rss:6.0f} MiB, {wall:5.1f} s ({spec.n_points / wall:.0f} points/s through the store)")
 
 
+def _real_spec(points: int) -> str:
+    text = (ROOT / "examples" / "sweep-dmax-alpha.toml").read_text()
+    head = text[:text.index("[sweep]")]
+    side = int(round(np.sqrt(points)))
+    return head + f"""[sweep]
+classes = ["prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "ultimate_bound"]
+chunk_size = 100
+[[sweep.axes]]
+name = "d_max"
+start = "0 mm/s"
+stop = "0.5 mm/s"
+num = {side}
+[[sweep.axes]]
+name = "alpha_d"
+start = 150
+stop = 2400
+num = {points // side}
+scale = "log"
+[simulation]
+horizon = "2 s"
+tail = "1 s"
+scenarios = ["constant"]
+initial_position = ["0 mm", "-40 mm"]
+"""
+
+
+def real_sweep_rss(points: int, workers: int) -> dict[str, Any]:
+    """Run a real sweep of ``points`` points in this process; peak RSS of this process and its workers."""
+    from sweeps.run import run_sweep
+    from sweeps.spec import parse_spec
+
+    spec = parse_spec(_real_spec(points))
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        run_sweep(spec, Path(tmp) / "r.zarr", workers=workers)
+        wall = time.perf_counter() - t0
+    return {"points": spec.n_points, "wall_s": wall,
+            "self_max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+            "worker_max_rss_mib": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024}
+
+
+def bench_real_memory(workers: int) -> None:
+    import json
+    import subprocess
+    import sys
+
+    print(f"4. peak RSS of a real sweep (dmax-alpha classes, 'constant' scenario, 2 s horizon; {workers} workers)")
+    runs = {}
+    for points in (10**3, 10**4):
+        code = (f"import json, sys; sys.path.insert(0, {str(ROOT)!r}); sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); "
+                f"import bench_sweep as b; print(json.dumps(b.real_sweep_rss({points}, {workers})))")
+        out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
+        r = json.loads(out.stdout.strip().splitlines()[-1])
+        runs[points] = r
+        print(f"   {r['points']:>6} points: main process {r['self_max_rss_mib']:6.0f} MiB, largest worker "
+              f"{r['worker_max_rss_mib']:6.0f} MiB, {r['wall_s']:6.1f} s ({r['points'] / r['wall_s']:.1f} points/s)")
+    small, big = runs[10**3], runs[10**4]
+    for key, label in (("self_max_rss_mib", "main process"), ("worker_max_rss_mib", "largest worker")):
+        print(f"   ratio 10^4/10^3 peak RSS, {label:14}: {big[key] / small[key]:5.3f}   aim <= 1.10")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=int, default=400, help="gain sets for the sector_ges rate")
     parser.add_argument("--trajectories", type=int, default=512, help="batch size of the simulation rate")
     parser.add_argument("--ivp", type=int, default=6, help="trajectories of the solve_ivp loop")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    parser.add_argument("--skip", nargs="*", default=[], choices=["sector", "simulation", "memory"])
+    parser.add_argument("--skip", nargs="*", default=[], choices=["sector", "simulation", "memory", "real-memory"])
     args = parser.parse_args()
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
     if "sector" not in args.skip:
@@ -248,6 +315,8 @@ def main() -> None:
         bench_simulation(args.trajectories, args.ivp)
     if "memory" not in args.skip:
         bench_memory()
+    if "real-memory" not in args.skip:
+        bench_real_memory(args.workers)
 
 
 if __name__ == "__main__":

@@ -8,11 +8,14 @@ tuples of tuples of Fractions.
 from __future__ import annotations
 
 import math
-from decimal import Decimal
+from decimal import ROUND_CEILING, ROUND_HALF_EVEN, Context, Decimal, localcontext
 from fractions import Fraction
 from typing import Any, Iterable, Sequence
 
 Matrix = tuple[tuple[Fraction, ...], ...]
+
+#: Python's default decimal context (28 digits), fixed here: see sqrt_upper
+_GUESS_CONTEXT = Context(prec=28, rounding=ROUND_HALF_EVEN)
 
 
 def to_rational(x: float, digits: int = 15) -> Fraction:
@@ -103,7 +106,7 @@ def is_symmetric(m: Matrix) -> bool:
 
 def is_positive_definite(m: Matrix) -> bool:
     """Sylvester's criterion: a symmetric matrix is PD iff all leading minors are > 0."""
-    return is_symmetric(m) and all(minor > 0 for minor in leading_minors(m))
+    return is_symmetric(m) and _leading_minors_positive(m)
 
 
 def ldl_pivots(m: Matrix) -> list[Fraction] | None:
@@ -128,11 +131,47 @@ def ldl_pivots(m: Matrix) -> list[Fraction] | None:
     return pivots
 
 
+def _integer_matrix(m: Matrix) -> list[list[int]]:
+    """``D M`` with ``D > 0`` the least common denominator of the entries (exact integers)."""
+    den = 1
+    for row in m:
+        for x in row:
+            den = math.lcm(den, Fraction(x).denominator)
+    return [[int(Fraction(x) * den) for x in row] for row in m]
+
+
+def _leading_minors_positive(m: Matrix) -> bool:
+    """Exact: every leading principal minor of the symmetric ``m`` is > 0 (positive definiteness).
+
+    Fraction-free (Bareiss) elimination on ``D m`` in Python integers: the k-th pivot is the
+    k-th leading principal minor of ``D m`` (``D^k`` times that of ``m``, the same sign), and
+    every division is exact. It decides exactly what :func:`ldl_pivots` and Sylvester's
+    criterion decide (``LDL^T`` pivot ``k`` is the ratio of minors ``k`` and ``k - 1``), without
+    a gcd after every operation. The elimination keeps the trailing block symmetric, so only
+    its upper triangle is updated.
+    """
+    a = _integer_matrix(m)
+    n = len(a)
+    prev = 1
+    for k in range(n):
+        pivot = a[k][k]
+        if pivot <= 0:
+            return False
+        row_k = a[k]
+        for i in range(k + 1, n):
+            row_i = a[i]
+            f = row_i[k]
+            for j in range(i, n):
+                row_i[j] = (row_i[j] * pivot - f * row_k[j]) // prev
+            for j in range(k + 1, i):  # the lower part mirrors the upper (symmetric)
+                row_i[j] = a[j][i]
+        prev = pivot
+    return True
+
+
 def is_positive_definite_ldl(m: Matrix) -> bool:
-    if not is_symmetric(m):
-        return False
-    pivots = ldl_pivots(m)
-    return pivots is not None and all(p > 0 for p in pivots)
+    """Exact positive definiteness of a symmetric rational matrix (see :func:`_leading_minors_positive`)."""
+    return is_symmetric(m) and _leading_minors_positive(m)
 
 
 def is_negative_definite(m: Matrix) -> bool:
@@ -181,12 +220,28 @@ def sqrt_upper(q: Fraction, digits: int = 30) -> Fraction:
         raise ValueError("q must be non-negative")
     if q == 0:
         return Fraction(0)
-    guess = Fraction(Decimal(q.numerator).sqrt() / Decimal(q.denominator).sqrt()) if digits else Fraction(0)
+    # the first guess in Python's default decimal context, whatever the caller's context is (a
+    # changed global precision made the certified bound depend on what ran before)
+    with localcontext(_GUESS_CONTEXT):
+        guess = Fraction(Decimal(q.numerator).sqrt() / Decimal(q.denominator).sqrt()) if digits else Fraction(0)
     step = guess / 10**digits + Fraction(1, 10**digits)
-    r = guess
-    while r * r < q:
-        r += step
-    return r
+    # r = guess + k step with the least k >= 0 such that r^2 >= q (what stepping up one step at a
+    # time finds, in hundreds of big-rational steps): k estimated in 80-digit decimals, then
+    # settled exactly, so the result is the same rational
+    if guess * guess >= q:
+        return guess
+    with localcontext() as ctx:
+        ctx.prec = 80
+
+        def dec(x: Fraction) -> Decimal:
+            return Decimal(x.numerator) / Decimal(x.denominator)
+
+        k = max(int(((dec(q).sqrt() - dec(guess)) / dec(step)).to_integral_value(rounding=ROUND_CEILING)), 1)
+    while k > 1 and (guess + (k - 1) * step) ** 2 >= q:
+        k -= 1
+    while (guess + k * step) ** 2 < q:
+        k += 1
+    return guess + k * step
 
 
 def has_negative_real_eigenvalue_2x2(m: Matrix) -> bool:

@@ -1,8 +1,8 @@
 """One unit of sweep work: certify and simulate a batch of grid points.
 
-Runs in a worker process (local pool or Dask). The certificate programs are the module-level
-cached cvxpy programs of :mod:`lyapcheck.conditions` (compiled on first use in each process, then
-re-solved with new parameter values); ``sector_ges`` goes through :mod:`sweeps.fast_sector`. The
+Runs in a worker process (local pool or Dask). The certificate programs are the compiled
+programs of :mod:`lyapcheck.conditions.compiled` (read once per process, then solved by Clarabel
+with new parameter values, no cvxpy); ``sector_ges`` goes through :mod:`sweeps.fast_sector`. The
 simulation is one batched call of :func:`lyapcheck.simulation.runner.simulate` per scenario for
 the whole unit; its rows are independent of the batch they sit in, so a point's result does
 not depend on how points were grouped (which is what makes a resumed sweep identical to an
@@ -46,8 +46,9 @@ from sweeps.spec import SweepSpec, cached_spec
 FloatArray = npt.NDArray[np.float64]
 Result = dict[str, np.ndarray]
 
-#: one unit at a time per process: the cached cvxpy programs hold parameter values between
-#: "set" and "solve", so two threads of one Dask worker must not interleave on them
+#: one unit at a time per process: the ``ges`` class still solves a cached cvxpy program, which
+#: holds parameter values between "set" and "solve", so two threads of one Dask worker must not
+#: interleave on it (the compiled programs are stateless)
 _LOCK = threading.Lock()
 
 
@@ -206,8 +207,7 @@ def evaluate(spec: SweepSpec, coords: FloatArray) -> Result:
 
 def evaluate_unit(spec_text: str, coords: FloatArray) -> Result:
     """Worker entry point (picklable arguments only): parse the spec once per process, evaluate."""
-    # the compiled cvxpy programs are cached per process and hold mutable parameters: one unit
-    # at a time per process (Dask may run several threads in one worker)
+    # one unit at a time per process (Dask may run several threads in one worker): see _LOCK
     with _LOCK:
         return evaluate(cached_spec(spec_text), coords)
 

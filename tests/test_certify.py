@@ -74,11 +74,11 @@ def test_shorten_narendra_refutation_agrees_with_the_sdp(paper_problem) -> None:
 
 
 def test_programs_are_dpp() -> None:
-    from lyapcheck.conditions import ultimate
+    from lyapcheck.conditions import compiled
 
-    assert prop41.program().problem.is_dpp()
-    assert sector.program().problem.is_dpp()
-    assert ultimate.program().bound.is_dpp()
+    for key in compiled.PROGRAMS:
+        problem, _, _ = compiled.build(key)
+        assert problem.is_dpp(), key
 
 
 def test_tampered_number_fails_verify(easy_problem) -> None:

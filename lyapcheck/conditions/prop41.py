@@ -18,43 +18,39 @@ exact check of the rounded ``P``; refutation is an exact necessary condition (Ga
 from __future__ import annotations
 
 from fractions import Fraction
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from lyapcheck import exact
 from lyapcheck.conditions.base import ConditionResult, System
-from lyapcheck.conditions.sdp import solve
+from lyapcheck.conditions.sdp import CompiledProgram
 
 
-class _Prop41Program:
-    """The DPP-compiled program, built once per process and re-solved with new data."""
-
-    def __init__(self) -> None:
-        import cvxpy as cp
-
-        self.A = cp.Parameter((2, 2), name="A")
-        self.g = cp.Parameter(nonneg=True, name="g")
-        self.ge = cp.Parameter(nonneg=True, name="g_plus_e")
-        self.P = cp.Variable((2, 2), symmetric=True, name="P")
-        self.t = cp.Variable(name="t")
-        self.m = cp.Variable(name="m")
-        gamma = -(self.A.T @ self.P + self.P @ self.A)
-        rhs = self.g * self.P[0, 1] + self.ge * self.t + self.m
-        constraints = [
-            cp.trace(self.P) == 1,
-            self.P >> 0,
-            cp.SOC(self.t, cp.hstack([self.P[0, 1], self.P[1, 1]])),
-            (gamma + gamma.T) / 2 - rhs * np.eye(2) >> 0,
-            self.m <= 10,  # keeps the program bounded when A is very stable
-        ]
-        self.problem = cp.Problem(cp.Maximize(self.m), constraints)
+def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """The DPP program of the module docstring (compiled once: :mod:`lyapcheck.conditions.compiled`)."""
+    A = cp.Parameter((2, 2), name="A")
+    g = cp.Parameter(nonneg=True, name="g")
+    ge = cp.Parameter(nonneg=True, name="g_plus_e")
+    P = cp.Variable((2, 2), symmetric=True, name="P")
+    t = cp.Variable(name="t")
+    m = cp.Variable(name="m")
+    gamma = -(A.T @ P + P @ A)
+    rhs = g * P[0, 1] + ge * t + m
+    constraints = [
+        cp.trace(P) == 1,
+        P >> 0,
+        cp.SOC(t, cp.hstack([P[0, 1], P[1, 1]])),
+        (gamma + gamma.T) / 2 - rhs * np.eye(2) >> 0,
+        m <= 10,  # keeps the program bounded when A is very stable
+    ]
+    return cp.Problem(cp.Maximize(m), constraints), {"A": A, "g": g, "g_plus_e": ge}, {"P": P, "t": t, "m": m}
 
 
-@lru_cache(maxsize=1)
-def program() -> _Prop41Program:
-    return _Prop41Program()
+def program() -> CompiledProgram:
+    from lyapcheck.conditions import compiled
+
+    return compiled.load("prop41")
 
 
 def exact_check(system: System, P: exact.Matrix, iss: bool) -> tuple[bool, str]:
@@ -113,12 +109,9 @@ def run(system: System, *, iss: bool) -> ConditionResult:
         )
     A = exact.to_float(system.A)
     scale = max(np.abs(A).max(), g, 1e-300)
-    prog = program()
-    prog.A.value = np.array(A) / scale
-    prog.g.value = g / scale
-    prog.ge.value = (g + e) / scale
-    report = solve(prog.problem)
-    margin = float(prog.m.value) if report.outcome == "optimal" and prog.m.value is not None else None
+    solved = program().solve({"A": np.array(A) / scale, "g": g / scale, "g_plus_e": (g + e) / scale})
+    report = solved.report
+    margin = float(solved.values["m"]) if report.outcome == "optimal" and solved.values is not None else None
     numbers["relative_margin"] = margin
     if report.outcome != "optimal" or margin is None:
         return ConditionResult(name, "inconclusive", f"solver outcome '{report.outcome}', nothing proved",
@@ -127,7 +120,8 @@ def run(system: System, *, iss: bool) -> ConditionResult:
         return ConditionResult(name, "not_certified",
                                "no certificate of this class was found (best margin <= 0); this is not a proof of instability",
                                numbers=numbers, solver=report.to_json())
-    P = exact.symmetrize(exact.rational_matrix(prog.P.value))
+    assert solved.values is not None  # margin is not None
+    P = exact.symmetrize(exact.rational_matrix(solved.values["P"]))
     ok, why = exact_check(system, P, iss)
     if not ok:
         return ConditionResult(name, "inconclusive", f"solver found a candidate but its exact check failed: {why}",

@@ -45,37 +45,38 @@ SQRT2_UPPER = Fraction(141422, 100000)
 OMEGA_ROUNDING = Fraction(1, 10**12)
 
 
-class _LevelProgram:
-    """max c s.t. V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p, sigma = z_s^T S z_s, Q_p, S >= t I (DPP)."""
-
-    def __init__(self, deg_v: int) -> None:
-        import cvxpy as cp
-
-        half = deg_v // 2
-        self.z_s = poly.monomials(0, half - 1)
-        self.z_p = poly.monomials(0, half)
-        ns, n_p = len(self.z_s), len(self.z_p)
-        self.S = cp.Variable((ns, ns), symmetric=True, name="S")
-        self.Qp = cp.Variable((n_p, n_p), symmetric=True, name="Q_p")
-        self.c = cp.Variable(name="c")
-        self.y_sq = cp.Parameter(nonneg=True, name="Y_sq")
-        monos = poly.monomials(0, deg_v)
-        self.v = {m: cp.Parameter(name=f"v_{m[0]}_{m[1]}") for m in monos}
-        classes = poly.gram_classes(self.z_p)
-        s_classes = poly.gram_classes(self.z_s)
-        cons = [self.S >> 1e-9 * np.eye(ns), self.Qp >> 1e-9 * np.eye(n_p)]
-        for m in monos:
-            lhs = sum(self.Qp[i, j] for i, j in classes.get(m, [])) if m in classes else 0
-            # sigma * y^2 contributes S entries of monomial (m - (2, 0)); sigma * (-Y^2) those of m
-            shifted = (m[0] - 2, m[1])
-            times_y2 = sum(self.S[i, j] for i, j in s_classes.get(shifted, [])) if shifted in s_classes else 0
-            plain = sum(self.S[i, j] for i, j in s_classes.get(m, [])) if m in s_classes else 0
-            rhs = self.v[m] - (self.c if m == (0, 0) else 0) - times_y2 + self.y_sq * plain
-            cons.append(lhs == rhs)
-        self.problem = cp.Problem(cp.Maximize(self.c), cons)
+def build_level_program(cp: Any, deg_v: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """max c s.t. V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p, sigma = z_s^T S z_s, Q_p, S >= t I (DPP; compiled once)."""
+    z_s, z_p = level_bases(deg_v)
+    ns, n_p = len(z_s), len(z_p)
+    S = cp.Variable((ns, ns), symmetric=True, name="S")
+    Qp = cp.Variable((n_p, n_p), symmetric=True, name="Q_p")
+    c = cp.Variable(name="c")
+    y_sq = cp.Parameter(nonneg=True, name="Y_sq")
+    v = {m: cp.Parameter(name=_param_name(m)) for m in poly.monomials(0, deg_v)}
+    classes = poly.gram_classes(z_p)
+    s_classes = poly.gram_classes(z_s)
+    cons = [S >> 1e-9 * np.eye(ns), Qp >> 1e-9 * np.eye(n_p)]
+    for m, vm in v.items():
+        lhs = sum(Qp[i, j] for i, j in classes.get(m, [])) if m in classes else 0
+        # sigma * y^2 contributes S entries of monomial (m - (2, 0)); sigma * (-Y^2) those of m
+        shifted = (m[0] - 2, m[1])
+        times_y2 = sum(S[i, j] for i, j in s_classes.get(shifted, [])) if shifted in s_classes else 0
+        plain = sum(S[i, j] for i, j in s_classes.get(m, [])) if m in s_classes else 0
+        rhs = vm - (c if m == (0, 0) else 0) - times_y2 + y_sq * plain
+        cons.append(lhs == rhs)
+    params = {"Y_sq": y_sq, **{_param_name(m): p for m, p in v.items()}}
+    return cp.Problem(cp.Maximize(c), cons), params, {"S": S, "Q_p": Qp, "c": c}
 
 
-_LEVEL_PROGRAMS: dict[int, _LevelProgram] = {}
+def _param_name(m: poly.Monomial) -> str:
+    return f"v_{m[0]}_{m[1]}"
+
+
+def level_bases(deg_v: int) -> tuple[list[poly.Monomial], list[poly.Monomial]]:
+    """Monomial vectors of the multiplier ``sigma`` and of the level's Gram form."""
+    half = deg_v // 2
+    return poly.monomials(0, half - 1), poly.monomials(0, half)
 
 
 def level_residual(V: poly.Poly, c: Fraction, S: exact.Matrix, z_s: list[poly.Monomial], Y_sq: Fraction) -> poly.Poly:
@@ -87,8 +88,7 @@ def level_residual(V: poly.Poly, c: Fraction, S: exact.Matrix, z_s: list[poly.Mo
 
 def check_level(V: poly.Poly, deg_v: int, level: dict[str, Any], Y_sq: Fraction) -> tuple[bool, str]:
     """Exact: S > 0, Q_p > 0 and V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p, so V > c wherever |y| >= Y."""
-    prog_z_s = poly.monomials(0, deg_v // 2 - 1)
-    prog_z_p = poly.monomials(0, deg_v // 2)
+    prog_z_s, prog_z_p = level_bases(deg_v)
     S, Qp, c = exact.from_json(level["S"]), exact.from_json(level["Q_p"]), Fraction(level["c"])
     if not (exact.is_positive_definite_ldl(S) and exact.is_positive_definite_ldl(Qp)):
         return False, "multiplier or Gram matrix of the level certificate is not positive definite"
@@ -99,20 +99,20 @@ def check_level(V: poly.Poly, deg_v: int, level: dict[str, Any], Y_sq: Fraction)
 
 def certified_level(V: poly.Poly, deg_v: int, Y_sq: Fraction) -> dict[str, Any] | None:
     """Largest level ``c`` (found numerically, checked exactly) with ``{V <= c}`` inside the strip."""
-    from lyapcheck.conditions.sdp import solve
     from lyapcheck.conditions.sos import project_gram
 
-    prog = _LEVEL_PROGRAMS.setdefault(deg_v, _LevelProgram(deg_v))
-    prog.y_sq.value = float(Y_sq)
-    for m, par in prog.v.items():
-        par.value = float(V.get(m, 0))
-    report = solve(prog.problem)
-    if report.outcome != "optimal" or prog.c.value is None or prog.c.value <= 0:
+    from lyapcheck.conditions import compiled
+
+    values = {"Y_sq": float(Y_sq), **{_param_name(m): float(V.get(m, 0)) for m in poly.monomials(0, deg_v)}}
+    solved = compiled.load(f"level_{deg_v}").solve(values)
+    v = solved.values
+    if solved.report.outcome != "optimal" or v is None or v["c"] <= 0:
         return None
-    c = exact.to_rational(float(prog.c.value) * (1 - 1e-4), 8)
-    S = exact.symmetrize(exact.rational_matrix(prog.S.value))
-    target_poly = level_residual(V, c, S, prog.z_s, Y_sq)
-    Qp = project_gram(prog.z_p, exact.symmetrize(exact.rational_matrix(prog.Qp.value)), target_poly)
+    z_s, z_p = level_bases(deg_v)
+    c = exact.to_rational(float(v["c"]) * (1 - 1e-4), 8)
+    S = exact.symmetrize(exact.rational_matrix(v["S"]))
+    target_poly = level_residual(V, c, S, z_s, Y_sq)
+    Qp = project_gram(z_p, exact.symmetrize(exact.rational_matrix(v["Q_p"])), target_poly)
     if Qp is None:
         return None
     level = {"c": str(c), "S": exact.to_json(S), "Q_p": exact.to_json(Qp)}

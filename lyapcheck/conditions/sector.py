@@ -20,7 +20,6 @@ exists if and only if neither ``A_0 A_1`` nor ``A_0 A_1^{-1}`` has a negative re
 from __future__ import annotations
 
 from fractions import Fraction
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -28,30 +27,27 @@ import numpy as np
 from lyapcheck import exact
 from lyapcheck.conditions import scaling
 from lyapcheck.conditions.base import ConditionResult, System
-from lyapcheck.conditions.sdp import solve
+from lyapcheck.conditions.sdp import CompiledProgram, SolveReport
 
 
-class _PolytopeProgram:
-    """max m s.t. -(A_i^T P + P A_i) >= m I (i = lo, hi), P >= m I, trace P = 1 (DPP)."""
-
-    def __init__(self) -> None:
-        import cvxpy as cp
-
-        self.A_lo = cp.Parameter((2, 2), name="A_lo")
-        self.A_hi = cp.Parameter((2, 2), name="A_hi")
-        self.P = cp.Variable((2, 2), symmetric=True, name="P")
-        self.m = cp.Variable(name="m")
-        eye = np.eye(2)
-        cons = [cp.trace(self.P) == 1, self.P >> self.m * eye, self.m <= 1]
-        for a in (self.A_lo, self.A_hi):
-            q = -(a.T @ self.P + self.P @ a)
-            cons.append((q + q.T) / 2 >> self.m * eye)
-        self.problem = cp.Problem(cp.Maximize(self.m), cons)
+def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """max m s.t. -(A_i^T P + P A_i) >= m I (i = lo, hi), P >= m I, trace P = 1 (DPP; compiled once)."""
+    A_lo = cp.Parameter((2, 2), name="A_lo")
+    A_hi = cp.Parameter((2, 2), name="A_hi")
+    P = cp.Variable((2, 2), symmetric=True, name="P")
+    m = cp.Variable(name="m")
+    eye = np.eye(2)
+    cons = [cp.trace(P) == 1, P >> m * eye, m <= 1]
+    for a in (A_lo, A_hi):
+        q = -(a.T @ P + P @ a)
+        cons.append((q + q.T) / 2 >> m * eye)
+    return cp.Problem(cp.Maximize(m), cons), {"A_lo": A_lo, "A_hi": A_hi}, {"P": P, "m": m}
 
 
-@lru_cache(maxsize=1)
-def program() -> _PolytopeProgram:
-    return _PolytopeProgram()
+def program() -> CompiledProgram:
+    from lyapcheck.conditions import compiled
+
+    return compiled.load("sector")
 
 
 def exact_check(vertices: list[exact.Matrix], P: exact.Matrix, rate: Fraction) -> tuple[bool, str]:
@@ -86,16 +82,14 @@ def refutation(vertices: list[exact.Matrix]) -> dict[str, Any] | None:
 def certify_polytope(vertices: list[exact.Matrix]) -> tuple[exact.Matrix | None, Fraction | None, float | None, Any]:
     """Search and exactly check a common quadratic Lyapunov function; returns (P, rate, margin, report)."""
     sc = scaling.choose(vertices)
-    prog = program()
-    prog.A_lo.value = sc.matrix_to_scaled(vertices[0])
-    prog.A_hi.value = sc.matrix_to_scaled(vertices[1])
-    report = solve(prog.problem)
-    if report.outcome != "optimal" or prog.m.value is None:
+    solved = program().solve({"A_lo": sc.matrix_to_scaled(vertices[0]), "A_hi": sc.matrix_to_scaled(vertices[1])})
+    report: SolveReport = solved.report
+    if report.outcome != "optimal" or solved.values is None:
         return None, None, None, report
-    margin = float(prog.m.value)
+    margin = float(solved.values["m"])
     if margin <= 0:
         return None, None, margin, report
-    P = sc.p_from_scaled(exact.symmetrize(exact.rational_matrix(prog.P.value)))
+    P = sc.p_from_scaled(exact.symmetrize(exact.rational_matrix(solved.values["P"])))
     Pf = np.array(exact.to_float(P))
     lam_max = float(np.linalg.eigvalsh(Pf).max())
     rate_f = min(float(np.linalg.eigvalsh(-np.array(exact.to_float(exact.lyapunov_form(a, P)))).min())

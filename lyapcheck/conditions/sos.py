@@ -35,14 +35,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from lyapcheck import exact, poly
 from lyapcheck.conditions.base import ConditionResult, System
-from lyapcheck.conditions.sdp import solve
+from lyapcheck.conditions.sdp import CompiledProgram, SolveReport
 
 DEGREES = (4, 6)
 #: decay-rate search in scaled time (the far-field rate of eps is 1 there)
@@ -92,45 +91,50 @@ def target(V: poly.Poly, g_y: poly.Poly, g_r: poly.Poly, q: poly.Poly, mu: Any) 
     return poly.add(poly.scale(-1, flow), poly.scale(-mu, poly.mul(V, q)))
 
 
-class _SosProgram:
-    """max t s.t. trace Q_V = 1, Q_V >= tI, Q_W >= tI, coefficient matching (DPP in the data)."""
-
-    def __init__(self, deg_v: int) -> None:
-        import cvxpy as cp
-
-        self.z_v, self.z_w = bases(deg_v)
-        nv, nw = len(self.z_v), len(self.z_w)
-        self.QV = cp.Variable((nv, nv), symmetric=True, name="Q_V")
-        self.QW = cp.Variable((nw, nw), symmetric=True, name="Q_W")
-        self.t = cp.Variable(name="t")
-        classes = poly.gram_classes(self.z_w)
-        top = deg_v + 2
-        self.monos = [m for m in poly.monomials(2, top)]
-        self.C = {m: cp.Parameter((nv, nv), name=f"C_{m[0]}_{m[1]}") for m in self.monos}
-        cons = [cp.trace(self.QV) == 1, self.QV >> self.t * np.eye(nv), self.QW >> self.t * np.eye(nw), self.t <= 1]
-        for m in self.monos:
-            lhs = sum(self.QW[i, j] for i, j in classes.get(m, [])) if m in classes else 0
-            cons.append(lhs == cp.sum(cp.multiply(self.C[m], self.QV)))
-        self.problem = cp.Problem(cp.Maximize(self.t), cons)
-
-    def set_data(self, dyn: ScaledDynamics, mu: float) -> None:
-        g_y, g_r, q = (
-            {m: float(c) for m, c in p.items()} for p in dyn.fields()
-        )
-        nv = len(self.z_v)
-        mats = {m: np.zeros((nv, nv)) for m in self.monos}
-        for i in range(nv):
-            for j in range(nv):
-                zz = poly.monomial((self.z_v[i][0] + self.z_v[j][0], self.z_v[i][1] + self.z_v[j][1]))
-                for m, c in target(zz, g_y, g_r, q, mu).items():
-                    mats[m][i, j] += c
-        for m in self.monos:
-            self.C[m].value = mats[m]
+def build_program(cp: Any, deg_v: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """max t s.t. trace Q_V = 1, Q_V >= tI, Q_W >= tI, coefficient matching (DPP; compiled once per degree)."""
+    z_v, z_w = bases(deg_v)
+    nv, nw = len(z_v), len(z_w)
+    QV = cp.Variable((nv, nv), symmetric=True, name="Q_V")
+    QW = cp.Variable((nw, nw), symmetric=True, name="Q_W")
+    t = cp.Variable(name="t")
+    classes = poly.gram_classes(z_w)
+    C = {m: cp.Parameter((nv, nv), name=_param_name(m)) for m in target_monomials(deg_v)}
+    cons = [cp.trace(QV) == 1, QV >> t * np.eye(nv), QW >> t * np.eye(nw), t <= 1]
+    for m, par in C.items():
+        lhs = sum(QW[i, j] for i, j in classes.get(m, [])) if m in classes else 0
+        cons.append(lhs == cp.sum(cp.multiply(par, QV)))
+    return cp.Problem(cp.Maximize(t), cons), {_param_name(m): p for m, p in C.items()}, {"Q_V": QV, "Q_W": QW, "t": t}
 
 
-@lru_cache(maxsize=4)
-def program(deg_v: int) -> _SosProgram:
-    return _SosProgram(deg_v)
+def _param_name(m: poly.Monomial) -> str:
+    return f"C_{m[0]}_{m[1]}"
+
+
+def target_monomials(deg_v: int) -> list[poly.Monomial]:
+    """Monomials of ``-grad V . g - mu V q`` (degrees 2 to deg_v + 2), one equality each."""
+    return poly.monomials(2, deg_v + 2)
+
+
+def program_data(dyn: ScaledDynamics, deg_v: int, mu: float) -> dict[str, np.ndarray]:
+    """Parameter values: ``C_m[i, j]`` = coefficient of monomial m in the target of ``z_i z_j`` (floats)."""
+    g_y, g_r, q = ({m: float(c) for m, c in p.items()} for p in dyn.fields())
+    z_v, _ = bases(deg_v)
+    nv = len(z_v)
+    monos = target_monomials(deg_v)
+    mats = {m: np.zeros((nv, nv)) for m in monos}
+    for i in range(nv):
+        for j in range(nv):
+            zz = poly.monomial((z_v[i][0] + z_v[j][0], z_v[i][1] + z_v[j][1]))
+            for m, c in target(zz, g_y, g_r, q, mu).items():
+                mats[m][i, j] += c
+    return {_param_name(m): mats[m] for m in monos}
+
+
+def program(deg_v: int) -> CompiledProgram:
+    from lyapcheck.conditions import compiled
+
+    return compiled.load(f"sos_{deg_v}")
 
 
 def project_gram(basis: list[poly.Monomial], Q: exact.Matrix, p: poly.Poly) -> exact.Matrix | None:
@@ -162,24 +166,24 @@ def exact_check(dyn: ScaledDynamics, deg_v: int, QV: exact.Matrix, QW: exact.Mat
     return True, "Q_V > 0, Q_W > 0 and the SOS identity holds, exactly"
 
 
-def _attempt(dyn: ScaledDynamics, deg_v: int, mu: Fraction) -> tuple[dict[str, Any] | None, Any]:
-    prog = program(deg_v)
-    prog.set_data(dyn, float(mu))
-    report = solve(prog.problem)
-    if report.outcome != "optimal" or prog.t.value is None or prog.t.value <= 0:
+def _attempt(dyn: ScaledDynamics, deg_v: int, mu: Fraction) -> tuple[dict[str, Any] | None, SolveReport]:
+    solved = program(deg_v).solve(program_data(dyn, deg_v, float(mu)))
+    report, v = solved.report, solved.values
+    if report.outcome != "optimal" or v is None or v["t"] <= 0:
         return None, report
-    QV = exact.symmetrize(exact.rational_matrix(prog.QV.value))
+    z_v, z_w = bases(deg_v)
+    QV = exact.symmetrize(exact.rational_matrix(v["Q_V"]))
     g_y, g_r, q = dyn.fields()
-    p = target(poly.gram_form(prog.z_v, QV), g_y, g_r, q, mu)
-    QW = project_gram(prog.z_w, exact.symmetrize(exact.rational_matrix(prog.QW.value)), p)
+    p = target(poly.gram_form(z_v, QV), g_y, g_r, q, mu)
+    QW = project_gram(z_w, exact.symmetrize(exact.rational_matrix(v["Q_W"])), p)
     if QW is None:
         return None, report
     ok, _ = exact_check(dyn, deg_v, QV, QW, mu)
     if not ok:
         return None, report
     return {"degree": deg_v, "mu_scaled": str(mu), "Q_V": exact.to_json(QV), "Q_W": exact.to_json(QW),
-            "basis_V": [list(m) for m in prog.z_v], "basis_W": [list(m) for m in prog.z_w],
-            "margin": float(prog.t.value)}, report
+            "basis_V": [list(m) for m in z_v], "basis_W": [list(m) for m in z_w],
+            "margin": float(v["t"])}, report
 
 
 def run(system: System) -> ConditionResult:

@@ -25,16 +25,13 @@ This speaks of the error dynamics (unsaturated ODS law), as Proposition 4.1 does
 from __future__ import annotations
 
 from fractions import Fraction
-from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from typing import TYPE_CHECKING
-
 from lyapcheck import exact, poly
 from lyapcheck.conditions.base import System
-from lyapcheck.conditions.sdp import solve
+from lyapcheck.conditions.sdp import CompiledProgram
 from lyapcheck.conditions.sos import ScaledDynamics, project_gram, scaled_dynamics
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -80,77 +77,83 @@ def output_form(V: poly.Poly, B: Any, beta: Any) -> poly.Poly:
     return poly.add(V, {(2, 0): -1, (1, 1): 2 * beta, (0, 2): -beta * beta}, {(0, 0): B - 1})
 
 
-class _BoundProgram:
-    def __init__(self) -> None:
-        import cvxpy as cp
-
-        self.QV = cp.Variable((len(Z_V), len(Z_V)), symmetric=True)
-        self.T = cp.Variable((len(Z_T), len(Z_T)), symmetric=True)
-        self.QD = cp.Variable((len(Z_D), len(Z_D)), symmetric=True)
-        self.QE = cp.Variable((len(Z_E), len(Z_E)), symmetric=True)
-        self.B = cp.Variable()
-        self.lam = cp.Parameter(nonneg=True)
-        self.k2 = cp.Parameter(nonneg=True)
-        self.beta = cp.Parameter(nonneg=True)
-        self.beta2 = cp.Parameter(nonneg=True)
-        # the dynamics enter through fixed coefficient tables built per solve (parameters)
-        top = np.zeros((len(Z_V), len(Z_V)))
-        for i in TOP:
-            top[i, i] = float(TOP_DELTA)
-        d_classes = poly.gram_classes(Z_D)
-        e_classes = poly.gram_classes(Z_E)
-        t_classes = poly.gram_classes(Z_T)
-        monos_d = poly.monomials(0, 6, 3)
-        # coefficient of monomial m of -grad V . g - q dV/dy w - lam V  is  <C_m, Q_V> + lam <L_m, Q_V>
-        self.C = {m: cp.Parameter((len(Z_V), len(Z_V))) for m in monos_d}
-        self.Lv = {m: np.zeros((len(Z_V), len(Z_V))) for m in monos_d}
-        v_classes: dict[poly.Monomial, list[tuple[int, int]]] = poly.gram_classes(Z_V)
-        for m2, entries in v_classes.items():
-            m3 = (*m2, 0)
-            for i, j in entries:
-                self.Lv[m3][i, j] += 1.0
-        cons = [self.QV - top >> ETA * np.eye(len(Z_V)), self.T >> ETA * np.eye(len(Z_T)),
-                self.QD >> ETA * np.eye(len(Z_D)), self.QE >> ETA * np.eye(len(Z_E))]
-        for m in monos_d:
-            lhs = sum(self.QD[i, j] for i, j in d_classes.get(m, [])) if m in d_classes else 0
-            rhs = cp.sum(cp.multiply(self.C[m], self.QV)) - self.lam * cp.sum(cp.multiply(self.Lv[m], self.QV))
-            if m == (0, 0, 0):
-                rhs = rhs + self.lam
-            # - tau (k^2 - w^2): tau coefficient of m times -k^2, and of m - (0,0,2) times +1
-            if m in t_classes:
-                rhs = rhs - self.k2 * sum(self.T[i, j] for i, j in t_classes[m])
-            shifted = (m[0], m[1], m[2] - 2)
-            if shifted in t_classes:
-                rhs = rhs + sum(self.T[i, j] for i, j in t_classes[shifted])
-            cons.append(lhs == rhs)
-        for m in poly.monomials(0, 4):
-            lhs = sum(self.QE[i, j] for i, j in e_classes.get(m, [])) if m in e_classes else 0
-            v_part = sum(self.QV[i, j] for i, j in v_classes.get(m, [])) if m in v_classes else 0
-            # -(y - beta r~)^2 written out monomial by monomial
-            extra: Any = {(2, 0): -1.0, (1, 1): 2.0 * self.beta, (0, 2): -self.beta2}.get((m[0], m[1]), 0.0)
-            const = (self.B - 1) if m == (0, 0) else 0
-            cons.append(lhs == v_part + extra + const)
-        self.problem = cp.Problem(cp.Minimize(self.B), cons)
-
-    def set_dynamics(self, fields: tuple[poly.Poly, poly.Poly, poly.Poly], beta: Fraction) -> None:
-        self.beta.value, self.beta2.value = float(beta), float(beta * beta)
-        g_y, g_r, q = (poly.embed({m: float(c) for m, c in p.items()}, 3) for p in fields)
-        n = len(Z_V)
-        mats = {m: np.zeros((n, n)) for m in self.C}
-        for i in range(n):
-            for j in range(n):
-                zz = poly.embed(poly.monomial(tuple(a + b for a, b in zip(Z_V[i], Z_V[j]))), 3)
-                flow = poly.add(poly.mul(poly.deriv(zz, 0), g_y), poly.mul(poly.deriv(zz, 1), g_r))
-                push = poly.mul(poly.mul(q, poly.deriv(zz, 0)), {(0, 0, 1): 1.0})
-                for m, c in poly.add(poly.scale(-1.0, flow), poly.scale(-1.0, push)).items():
-                    mats[m][i, j] += c
-        for m, par in self.C.items():
-            par.value = mats[m]
+MONOS_D = poly.monomials(0, 6, 3)
 
 
-@lru_cache(maxsize=1)
-def program() -> _BoundProgram:
-    return _BoundProgram()
+def _param_name(m: poly.Monomial) -> str:
+    return "C_" + "_".join(str(e) for e in m)
+
+
+def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """The three certificates of the module docstring at given scales and lambda (DPP; compiled once)."""
+    QV = cp.Variable((len(Z_V), len(Z_V)), symmetric=True)
+    T = cp.Variable((len(Z_T), len(Z_T)), symmetric=True)
+    QD = cp.Variable((len(Z_D), len(Z_D)), symmetric=True)
+    QE = cp.Variable((len(Z_E), len(Z_E)), symmetric=True)
+    B = cp.Variable()
+    lam = cp.Parameter(nonneg=True)
+    k2 = cp.Parameter(nonneg=True)
+    beta = cp.Parameter(nonneg=True)
+    beta2 = cp.Parameter(nonneg=True)
+    # the dynamics enter through fixed coefficient tables built per solve (parameters)
+    top = np.zeros((len(Z_V), len(Z_V)))
+    for i in TOP:
+        top[i, i] = float(TOP_DELTA)
+    d_classes = poly.gram_classes(Z_D)
+    e_classes = poly.gram_classes(Z_E)
+    t_classes = poly.gram_classes(Z_T)
+    # coefficient of monomial m of -grad V . g - q dV/dy w - lam V  is  <C_m, Q_V> + lam <L_m, Q_V>
+    C = {m: cp.Parameter((len(Z_V), len(Z_V))) for m in MONOS_D}
+    Lv = {m: np.zeros((len(Z_V), len(Z_V))) for m in MONOS_D}
+    v_classes: dict[poly.Monomial, list[tuple[int, int]]] = poly.gram_classes(Z_V)
+    for m2, entries in v_classes.items():
+        m3 = (*m2, 0)
+        for i, j in entries:
+            Lv[m3][i, j] += 1.0
+    cons = [QV - top >> ETA * np.eye(len(Z_V)), T >> ETA * np.eye(len(Z_T)),
+            QD >> ETA * np.eye(len(Z_D)), QE >> ETA * np.eye(len(Z_E))]
+    for m in MONOS_D:
+        lhs = sum(QD[i, j] for i, j in d_classes.get(m, [])) if m in d_classes else 0
+        rhs = cp.sum(cp.multiply(C[m], QV)) - lam * cp.sum(cp.multiply(Lv[m], QV))
+        if m == (0, 0, 0):
+            rhs = rhs + lam
+        # - tau (k^2 - w^2): tau coefficient of m times -k^2, and of m - (0,0,2) times +1
+        if m in t_classes:
+            rhs = rhs - k2 * sum(T[i, j] for i, j in t_classes[m])
+        shifted = (m[0], m[1], m[2] - 2)
+        if shifted in t_classes:
+            rhs = rhs + sum(T[i, j] for i, j in t_classes[shifted])
+        cons.append(lhs == rhs)
+    for m in poly.monomials(0, 4):
+        lhs = sum(QE[i, j] for i, j in e_classes.get(m, [])) if m in e_classes else 0
+        v_part = sum(QV[i, j] for i, j in v_classes.get(m, [])) if m in v_classes else 0
+        # -(y - beta r~)^2 written out monomial by monomial
+        extra: Any = {(2, 0): -1.0, (1, 1): 2.0 * beta, (0, 2): -beta2}.get((m[0], m[1]), 0.0)
+        const = (B - 1) if m == (0, 0) else 0
+        cons.append(lhs == v_part + extra + const)
+    params = {"lambda": lam, "k2": k2, "beta": beta, "beta2": beta2, **{_param_name(m): C[m] for m in MONOS_D}}
+    return cp.Problem(cp.Minimize(B), cons), params, {"Q_V": QV, "T": T, "Q_D": QD, "Q_E": QE, "B": B}
+
+
+def dynamics_data(fields: tuple[poly.Poly, poly.Poly, poly.Poly], beta: Fraction) -> dict[str, Any]:
+    """Parameter values for the dynamics: the scales and the tables ``C_m`` (floats)."""
+    g_y, g_r, q = (poly.embed({m: float(c) for m, c in p.items()}, 3) for p in fields)
+    n = len(Z_V)
+    mats = {m: np.zeros((n, n)) for m in MONOS_D}
+    for i in range(n):
+        for j in range(n):
+            zz = poly.embed(poly.monomial(tuple(a + b for a, b in zip(Z_V[i], Z_V[j]))), 3)
+            flow = poly.add(poly.mul(poly.deriv(zz, 0), g_y), poly.mul(poly.deriv(zz, 1), g_r))
+            push = poly.mul(poly.mul(q, poly.deriv(zz, 0)), {(0, 0, 1): 1.0})
+            for m, c in poly.add(poly.scale(-1.0, flow), poly.scale(-1.0, push)).items():
+                mats[m][i, j] += c
+    return {"beta": float(beta), "beta2": float(beta * beta), **{_param_name(m): mats[m] for m in MONOS_D}}
+
+
+def program() -> CompiledProgram:
+    from lyapcheck.conditions import compiled
+
+    return compiled.load("sos_bound")
 
 
 def scales(dyn: ScaledDynamics) -> tuple[Fraction, Fraction]:
@@ -189,23 +192,22 @@ def run(system: System) -> dict[str, Any] | None:
     beta, omega = scales(dyn)
     fields = balanced_fields(dyn, beta, omega)
     prog = program()
-    prog.set_dynamics(fields, beta)
-    prog.k2.value = float((k / omega) ** 2)
+    data = {**dynamics_data(fields, beta), "k2": float((k / omega) ** 2)}
     best: dict[str, Any] | None = None
     for lam in LAMBDA_GRID:
-        prog.lam.value = lam
-        report = solve(prog.problem)
+        solved = prog.solve({**data, "lambda": lam})
+        v = solved.values
         # an inaccurate solution is still a candidate: the exact check below is the judge
-        if report.outcome not in ("optimal", "inaccurate") or prog.B.value is None or prog.QV.value is None:
+        if solved.report.outcome not in ("optimal", "inaccurate") or v is None:
             continue
         lam_q = exact.to_rational(lam, 6)
-        B = exact.to_rational(float(prog.B.value) * (1 + 1e-6) + 1e-9, 9)
-        QV = exact.symmetrize(exact.rational_matrix(prog.QV.value))
-        T = exact.symmetrize(exact.rational_matrix(prog.T.value))
+        B = exact.to_rational(float(v["B"]) * (1 + 1e-6) + 1e-9, 9)
+        QV = exact.symmetrize(exact.rational_matrix(v["Q_V"]))
+        T = exact.symmetrize(exact.rational_matrix(v["T"]))
         V, tau = poly.gram_form(Z_V, QV), poly.gram_form(Z_T, T)
-        QD = project_gram(Z_D, exact.symmetrize(exact.rational_matrix(prog.QD.value)),
+        QD = project_gram(Z_D, exact.symmetrize(exact.rational_matrix(v["Q_D"])),
                           dissipation(V, tau, fields, k / omega, lam_q))
-        QE = project_gram(Z_E, exact.symmetrize(exact.rational_matrix(prog.QE.value)), output_form(V, B, beta))
+        QE = project_gram(Z_E, exact.symmetrize(exact.rational_matrix(v["Q_E"])), output_form(V, B, beta))
         if QD is None or QE is None:
             continue
         cert = {"lambda": str(lam_q), "B": str(B), "beta": str(beta), "omega": str(omega),

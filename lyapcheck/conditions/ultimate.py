@@ -23,7 +23,6 @@ found by minimising ``e1^T P^-1 e1`` (Schur complement) over a line search in ``
 from __future__ import annotations
 
 from fractions import Fraction
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -31,7 +30,7 @@ import numpy as np
 from lyapcheck import exact
 from lyapcheck.conditions import scaling
 from lyapcheck.conditions.base import ConditionResult, System
-from lyapcheck.conditions.sdp import solve
+from lyapcheck.conditions.sdp import CompiledProgram
 
 #: the eventually-invariant sets are inflated by this factor (exact, tiny)
 INFLATE = Fraction(1_000_001, 1_000_000)
@@ -67,42 +66,42 @@ def rho_lower(system: System, y_bar: Fraction) -> Fraction:
     return rho_of_y_sq(y_bar * y_bar, system.delta, system.speed)
 
 
-class _EllipsoidProgram:
-    """min t  s.t. vertex LMIs, [[t, e1^T], [e1, P]] >= 0  (DPP, scaled data).
+def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """min t  s.t. vertex LMIs, [[t, e1^T], [e1, P]] >= 0  (DPP, scaled data; compiled once).
 
     The LMIs are solved with ``lambda (1 + STRICTNESS)`` in the top block and
-    ``lambda (1 - STRICTNESS)`` in the bottom one; the exact check then uses ``lambda`` and
-    finds the original LMI negative definite with margin ``STRICTNESS * lambda * diag(P, 1)``,
-    far above the rounding error of the rational certificate.
+    ``lambda (1 - STRICTNESS)`` in the bottom one (:func:`lambda_values`); the exact check then
+    uses ``lambda`` and finds the original LMI negative definite with margin
+    ``STRICTNESS * lambda * diag(P, 1)``, far above the rounding error of the rational certificate.
     """
-
-    def __init__(self) -> None:
-        import cvxpy as cp
-
-        self.A_lo = cp.Parameter((2, 2), name="A_lo")
-        self.A_hi = cp.Parameter((2, 2), name="A_hi")
-        self.e = cp.Parameter((2, 1), name="e_dstar")
-        self.lam_top = cp.Parameter(nonneg=True, name="lambda_top")
-        self.lam_bottom = cp.Parameter(nonneg=True, name="lambda_bottom")
-        self.P = cp.Variable((2, 2), symmetric=True, name="P")
-        self.t = cp.Variable(name="t")
-        e1 = np.array([[1.0], [0.0]])
-        lmis = []
-        for a in (self.A_lo, self.A_hi):
-            top = a.T @ self.P + self.P @ a + self.lam_top * self.P
-            lmi = cp.bmat([[top, self.P @ self.e], [self.e.T @ self.P, -self.lam_bottom * np.eye(1)]])
-            lmis.append((lmi + lmi.T) / 2)
-        schur = cp.bmat([[cp.reshape(self.t, (1, 1), order="C"), e1.T], [e1, self.P]])
-        self.bound = cp.Problem(cp.Minimize(self.t), [self.P >> 0, (schur + schur.T) / 2 >> 0] + [lmi << 0 for lmi in lmis])
-
-    def set_lambda(self, lam: float) -> None:
-        self.lam_top.value = lam * (1 + STRICTNESS)
-        self.lam_bottom.value = lam * (1 - STRICTNESS)
+    A_lo = cp.Parameter((2, 2), name="A_lo")
+    A_hi = cp.Parameter((2, 2), name="A_hi")
+    e = cp.Parameter((2, 1), name="e_dstar")
+    lam_top = cp.Parameter(nonneg=True, name="lambda_top")
+    lam_bottom = cp.Parameter(nonneg=True, name="lambda_bottom")
+    P = cp.Variable((2, 2), symmetric=True, name="P")
+    t = cp.Variable(name="t")
+    e1 = np.array([[1.0], [0.0]])
+    lmis = []
+    for a in (A_lo, A_hi):
+        top = a.T @ P + P @ a + lam_top * P
+        lmi = cp.bmat([[top, P @ e], [e.T @ P, -lam_bottom * np.eye(1)]])
+        lmis.append((lmi + lmi.T) / 2)
+    schur = cp.bmat([[cp.reshape(t, (1, 1), order="C"), e1.T], [e1, P]])
+    problem = cp.Problem(cp.Minimize(t), [P >> 0, (schur + schur.T) / 2 >> 0] + [lmi << 0 for lmi in lmis])
+    params = {"A_lo": A_lo, "A_hi": A_hi, "e_dstar": e, "lambda_top": lam_top, "lambda_bottom": lam_bottom}
+    return problem, params, {"P": P, "t": t}
 
 
-@lru_cache(maxsize=1)
-def program() -> _EllipsoidProgram:
-    return _EllipsoidProgram()
+def lambda_values(lam: float) -> dict[str, float]:
+    """The two decay-rate parameters of the program at ``lambda`` (see :func:`build_program`)."""
+    return {"lambda_top": lam * (1 + STRICTNESS), "lambda_bottom": lam * (1 - STRICTNESS)}
+
+
+def program() -> CompiledProgram:
+    from lyapcheck.conditions import compiled
+
+    return compiled.load("ultimate")
 
 
 def lmi_matrix(a: exact.Matrix, P: exact.Matrix, lam: Fraction, e: tuple[Fraction, Fraction], d: Fraction) -> exact.Matrix:
@@ -134,19 +133,18 @@ def _ellipsoid_stage(system: System, rho_lo: Fraction) -> tuple[dict[str, Any] |
     vertices = [system.vertex(rho_lo), system.vertex(system.rho_sup)]
     sc = scaling.choose(vertices)
     prog = program()
-    prog.A_lo.value = sc.matrix_to_scaled(vertices[0])
-    prog.A_hi.value = sc.matrix_to_scaled(vertices[1])
     e_scaled = sc.vector_to_scaled((system.E[0] * system.d_max, system.E[1] * system.d_max))
-    prog.e.value = e_scaled.reshape(2, 1)
+    data = {"A_lo": sc.matrix_to_scaled(vertices[0]), "A_hi": sc.matrix_to_scaled(vertices[1]),
+            "e_dstar": e_scaled.reshape(2, 1)}
     solves = 0
 
     def attempt(lam: float) -> tuple[float, float, np.ndarray] | None:
         nonlocal solves
-        prog.set_lambda(lam)
-        report = solve(prog.bound)
+        solved = prog.solve({**data, **lambda_values(lam)})
         solves += 1
-        if report.outcome == "optimal" and prog.t.value is not None and prog.t.value > 0 and prog.P.value is not None:
-            return float(prog.t.value), lam, np.array(prog.P.value)
+        v = solved.values
+        if solved.report.outcome == "optimal" and v is not None and v["t"] > 0:
+            return float(v["t"]), lam, np.array(v["P"])
         return None
 
     tried = [(lam, attempt(float(lam))) for lam in LAMBDA_GRID]

@@ -1,0 +1,140 @@
+"""Sweep points per second with every condition class, before and after issue 11, in one run.
+
+The spec is ``examples/sweep-alpha-sigma.toml`` with ``classes`` set to every class, on a
+sub-grid of its own grid (every other value of each 12-value axis: 6 x 6 = 36 points, one
+unit of ``chunk_size = 36`` as shipped), so a point costs what it costs in the shipped sweep.
+Units run in this process (``InlineRunner``), and the certificate and simulation shares of
+the time are printed apart.
+
+"Before" is the same measurement on the code of an older commit: pass ``--before-tree DIR``
+with a worktree of it (``git worktree add --detach /tmp/before e3b9d99``); the measurement runs
+there in a subprocess. Without it the figure stored in :data:`BEFORE` is printed (measured on
+this machine at commit 73f5967, the parent of issue 11's changes, in an otherwise idle run).
+
+Run:  python benchmarks/bench_sweep_speed.py [--before-tree /tmp/before] [--repeats 1]
+Note: the machine is shared; the ratio of two medians measured back to back is the figure to read.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+
+ALL_CLASSES = ["prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound",
+               "sos_gas", "ges", "saturated_loop", "sos_bound"]
+#: measured by :func:`measure` on a worktree of commit 73f5967 (one run, 2 cores, load average
+#: about 1, before any change of issue 11): points per second of the sweep and its two parts
+BEFORE: dict[str, Any] = {"commit": "73f5967", "points": 36, "points_per_s": 0.263,
+                          "certify_s_per_point": 1.876, "simulate_s_per_point": 1.910}
+
+
+def spec_text(root: Path) -> str:
+    """The shipped alpha-sigma spec with every class and a 6 x 6 sub-grid of its own grid."""
+    import numpy as np
+
+    text = (root / "examples" / "sweep-alpha-sigma.toml").read_text()
+    head, _, rest = text.partition("[sweep]")
+    sim = rest[rest.index("[simulation]"):]
+    alpha = np.geomspace(150, 2400, 12)[::2]
+    sigma = np.geomspace(0.001, 1, 12)[::2]
+    fmt = ", ".join
+    return (head + "[sweep]\nclasses = " + json.dumps(ALL_CLASSES) + "\nchunk_size = 36\n"
+            + "[[sweep.axes]]\nname = \"alpha_d\"\nvalues = [" + fmt(repr(float(v)) for v in alpha) + "]\n"
+            + "[[sweep.axes]]\nname = \"sigma0\"\nvalues = [" + fmt(repr(float(v)) for v in sigma) + "]\n\n" + sim)
+
+
+def measure(root: Path) -> dict[str, Any]:
+    """One sweep of the sub-grid in this process, with the certify and simulate shares apart."""
+    sys.path.insert(0, str(root))
+    from sweeps import evaluate
+    from sweeps.run import run_sweep
+    from sweeps.runners import InlineRunner
+    from sweeps.spec import parse_spec
+
+    spent = {"certify": 0.0, "simulate": 0.0}
+    certify_point, simulate_points = evaluate.certify_point, evaluate.simulate_points
+
+    def timed_certify(*args: Any, **kwargs: Any) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return certify_point(*args, **kwargs)
+        finally:
+            spent["certify"] += time.perf_counter() - t0
+
+    def timed_simulate(*args: Any, **kwargs: Any) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return simulate_points(*args, **kwargs)
+        finally:
+            spent["simulate"] += time.perf_counter() - t0
+
+    evaluate.certify_point, evaluate.simulate_points = timed_certify, timed_simulate  # type: ignore[assignment]
+    spec = parse_spec(spec_text(root))
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        run_sweep(spec, Path(tmp) / "s.zarr", runner=InlineRunner())
+        wall = time.perf_counter() - t0
+        import xarray as xr
+
+        ds = xr.open_zarr(str(Path(tmp) / "s.zarr"), consolidated=False)
+        statuses = {c: ds[f"status_{c}"].values.ravel().tolist() for c in ALL_CLASSES}
+        violations = int(ds["soundness_violation"].values.sum())
+    n = spec.n_points
+    return {"points": n, "wall_s": wall, "points_per_s": n / wall, "certify_s_per_point": spent["certify"] / n,
+            "simulate_s_per_point": spent["simulate"] / n, "statuses": statuses, "violations": violations}
+
+
+def run_in(tree: Path, repeats: int) -> list[dict[str, Any]]:
+    """``measure`` in a fresh interpreter whose imports come from ``tree``."""
+    out = []
+    for _ in range(repeats):
+        code = (f"import json, sys; sys.path.insert(0, {str(tree)!r}); "
+                f"sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); import bench_sweep_speed as b; "
+                f"print(json.dumps(b.measure(__import__('pathlib').Path({str(tree)!r}))))")
+        env = {**os.environ, "PYTHONPATH": str(tree)}
+        proc = subprocess.run([sys.executable, "-c", code], cwd=tree, env=env, capture_output=True, text=True,
+                              check=True)
+        out.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--before-tree", type=Path, default=None,
+                        help="a worktree of the 'before' commit (measured there in a subprocess)")
+    parser.add_argument("--repeats", type=int, default=1)
+    args = parser.parse_args()
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
+    after = run_in(ROOT, args.repeats)
+    if args.before_tree is not None:
+        before = run_in(args.before_tree.resolve(), args.repeats)
+        label = f"measured now in {args.before_tree}"
+    else:
+        before = [BEFORE]
+        label = f"stored figure, commit {BEFORE['commit']}"
+
+    def med(runs: list[dict[str, Any]], key: str) -> float:
+        return statistics.median(float(r[key]) for r in runs)
+
+    for name, runs, where in (("before", before, label), ("after", after, "this tree")):
+        print(f"{name:6}: {med(runs, 'points_per_s'):7.3f} points/s  (certify {med(runs, 'certify_s_per_point') * 1e3:7.1f} ms"
+              f"/point, simulate {med(runs, 'simulate_s_per_point') * 1e3:6.1f} ms/point; {where})")
+    print(f"ratio after/before: {med(after, 'points_per_s') / med(before, 'points_per_s'):.1f} x   aim >= 10 x")
+    if args.before_tree is not None:
+        same = all(b["statuses"] == a["statuses"] for b, a in zip(before, after))
+        print(f"statuses identical before/after on all {after[0]['points']} points and classes: {same}")
+    print(f"soundness violations (after): {after[0]['violations']}")
+
+
+if __name__ == "__main__":
+    main()
