@@ -58,9 +58,10 @@ FAMILIES: Final[dict[str, tuple[str, str]]] = {
     "sos": ("lyapcheck.conditions.sos", "build_program"),
     "sos_bound": ("lyapcheck.conditions.sos_bound", "build_program"),
     "level": ("lyapcheck.conditions.saturated", "build_level_program"),
+    "ges": ("lyapcheck.conditions.ges", "build_program"),
 }
 #: the programs stored in ``_compiled/`` (others are compiled in-process on first use)
-PROGRAMS: Final = ("prop41", "sector", "ultimate", "sos_4", "sos_6", "sos_bound", "level_4", "level_6")
+PROGRAMS: Final = ("prop41", "sector", "ultimate", "sos_4", "sos_6", "sos_bound", "level_4", "level_6", "ges_4_24_1")
 
 
 def key_of(family: str, *args: int) -> str:

@@ -47,7 +47,6 @@ import numpy as np
 
 from lyapcheck import exact
 from lyapcheck.conditions.base import ConditionResult, System
-from lyapcheck.conditions.sdp import solve
 from lyapcheck.conditions.sos import ScaledDynamics, scaled_dynamics
 
 #: number of y-weighted terms w^k y l_k^T x (the decay rate it certifies grows with K: 3 gives
@@ -218,66 +217,88 @@ def float_matrices(c: float, a: float, b: float, P: np.ndarray, ells: np.ndarray
     return M, D
 
 
+def build_program(cp: Any, terms: int, points: int, vertices: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """The grid LMIs of :class:`_Program` as 2x2 second-order cones (DPP; compiled once per size)."""
+    n = 3 + 2 * terms + 1
+    rows = (2 + vertices) * points  # cones
+    F = cp.Parameter((3 * rows, n), name="F")
+    f0 = cp.Parameter(3 * rows, name="f0")
+    z = cp.Variable(n, name="z")
+    g = cp.reshape(F @ z + f0, (3, rows), order="F")  # rows of (g11, g12, g22)
+    cone = cp.SOC(g[0] + g[2], cp.vstack([g[0] - g[2], 2 * g[1]]), axis=0)
+    return cp.Problem(cp.Minimize(z[n - 1]), [cone]), {"F": F, "f0": f0}, {"z": z}
+
+
 class _Program:
-    """Grid LMIs at a given mu as 2x2 second-order cones, compiled once (DPP), re-solved.
+    """Grid LMIs at a given mu as 2x2 second-order cones, compiled once, re-solved.
 
     Unknowns ``z = (P11, P12, P22, l_1, .., l_K, t)``. At each grid point ``w`` three 2x2
     inequalities ``M >= I``, ``t I - M >= 0``, ``-(D + mu M) - MARGIN I >= 0``, each affine in
     ``z``: ``G = G0 + sum_i z_i G_i``, ``G >= 0`` iff ``g11 + g22 >= ||(g11 - g22, 2 g12)||``.
-    The matrices ``G_i`` depend on the system and on mu; they are numeric parameters, so the
-    program is canonicalised once per process and only its data change.
+    The matrices ``G_i`` depend on the system and on mu; they are the numeric parameters of
+    :func:`build_program`, compiled once (:mod:`lyapcheck.conditions.compiled`). ``M`` and ``D``
+    at the grid do not depend on mu: they are computed once per system and kept.
     """
 
     def __init__(self, terms: int, points: int, vertices: int = 1) -> None:
-        import cvxpy as cp
+        from lyapcheck.conditions import compiled
 
         self.terms = terms
         self.vertices = vertices
         self.nodes = 0.5 - 0.5 * np.cos(np.pi * np.arange(points) / (points - 1))  # Chebyshev, ends included
         self.n = 3 + 2 * terms + 1
         self.per_node = 2 + vertices  # M - I, t I - M, and one decay cone per vertex
-        rows = self.per_node * points  # cones
-        self.F = cp.Parameter((3 * rows, self.n), name="F")
-        self.f0 = cp.Parameter(3 * rows, name="f0")
-        self.z = cp.Variable(self.n, name="z")
-        g = cp.reshape(self.F @ self.z + self.f0, (3, rows), order="F")  # rows of (g11, g12, g22)
-        cone = cp.SOC(g[0] + g[2], cp.vstack([g[0] - g[2], 2 * g[1]]), axis=0)
-        self.problem = cp.Problem(cp.Minimize(self.z[self.n - 1]), [cone])
+        self.key = compiled.key_of("ges", terms, points, vertices)
+        self._tables: dict[tuple[tuple[float, float, float], ...], tuple[np.ndarray, np.ndarray]] = {}
 
     def _unpack(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         P = np.array([[z[0], z[1]], [z[1], z[2]]])
         return P, z[3:3 + 2 * self.terms].reshape(self.terms, 2)
 
-    def set_data(self, dyns: Sequence[ScaledDynamics], mu: float) -> None:
+    def _grid(self, coefficients: tuple[tuple[float, float, float], ...]) -> tuple[np.ndarray, np.ndarray]:
+        """``M`` and ``D`` at every node, vertex and unit vector: shape (nodes, vertices, n - 1, 2, 2)."""
+        cached = self._tables.get(coefficients)
+        if cached is None:
+            eye = np.eye(self.n)
+            shape = (len(self.nodes), len(coefficients), self.n - 1, 2, 2)
+            Ms, Ds = np.zeros(shape), np.zeros(shape)
+            for j, wv in enumerate(self.nodes):
+                for i in range(self.n - 1):  # M and D are linear in (P, l): evaluate on the unit vectors
+                    for v, (c, a, b) in enumerate(coefficients):
+                        Ms[j, v, i], Ds[j, v, i] = float_matrices(c, a, b, *self._unpack(eye[i]), wv)
+            cached = self._tables.setdefault(coefficients, (Ms, Ds))
+            if len(self._tables) > 8:  # a few systems at a time (a box's vertices, a point)
+                self._tables.pop(next(iter(self._tables)))
+        return cached
+
+    def set_data(self, dyns: Sequence[ScaledDynamics], mu: float) -> dict[str, np.ndarray]:
         F = np.zeros((3, self.per_node * len(self.nodes), self.n))
         f0 = np.zeros((3, self.per_node * len(self.nodes)))
-        eye = np.eye(self.n)
-        coefficients = [(float(d.c), float(d.a), float(d.b)) for d in dyns]
-        for j, wv in enumerate(self.nodes):
-            row = self.per_node * j
-            for i in range(self.n - 1):  # M and D are linear in (P, l): evaluate on the unit vectors
-                for v, (c, a, b) in enumerate(coefficients):
-                    M, D = float_matrices(c, a, b, *self._unpack(eye[i]), wv)
-                    if v == 0:
-                        F[:, row, i] = M[0, 0], M[0, 1], M[1, 1]
-                        F[:, row + 1, i] = -M[0, 0], -M[0, 1], -M[1, 1]
-                    G = -(D + mu * M)
-                    F[:, row + 2 + v, i] = G[0, 0], G[0, 1], G[1, 1]
-            F[:, row + 1, self.n - 1] = 1.0, 0.0, 1.0  # + t I
-            f0[:, row] = -1.0, 0.0, -1.0  # M - I
+        coefficients = tuple((float(d.c), float(d.a), float(d.b)) for d in dyns)
+        Ms, Ds = self._grid(coefficients)
+        G = -(Ds + mu * Ms)  # elementwise, as -(D + mu * M) on each 2x2
+        rows = self.per_node * np.arange(len(self.nodes))
+        M0 = Ms[:, 0]  # (nodes, n - 1, 2, 2)
+        for r, (p, q) in enumerate(((0, 0), (0, 1), (1, 1))):
+            F[r, rows, : self.n - 1] = M0[:, :, p, q]
+            F[r, rows + 1, : self.n - 1] = -M0[:, :, p, q]
             for v in range(len(coefficients)):
-                f0[:, row + 2 + v] = -MARGIN, 0.0, -MARGIN
-        self.F.value = F.transpose(1, 0, 2).reshape(-1, self.n)
-        self.f0.value = f0.T.reshape(-1)
+                F[r, rows + 2 + v, : self.n - 1] = G[:, v, :, p, q]
+        F[:, rows + 1, self.n - 1] = np.array([1.0, 0.0, 1.0])[:, None]  # + t I
+        f0[:, rows] = np.array([-1.0, 0.0, -1.0])[:, None]  # M - I
+        for v in range(len(coefficients)):
+            f0[:, rows + 2 + v] = np.array([-MARGIN, 0.0, -MARGIN])[:, None]
+        return {"F": F.transpose(1, 0, 2).reshape(-1, self.n), "f0": f0.T.reshape(-1)}
 
     def attempt(self, dyns: Sequence[ScaledDynamics], mu: float) -> tuple[Any, Any]:
+        from lyapcheck.conditions import compiled
+
         if len(dyns) != self.vertices:
             raise ValueError(f"The 'dyns' parameter must hold {self.vertices} systems. Got {len(dyns)} instead.")
-        self.set_data(dyns, mu)
-        report = solve(self.problem)
-        if report.outcome not in ("optimal", "inaccurate") or self.z.value is None:
-            return None, report
-        return self._unpack(self.z.value), report
+        solved = compiled.load(self.key).solve(self.set_data(dyns, mu))
+        if solved.report.outcome not in ("optimal", "inaccurate") or solved.values is None:
+            return None, solved.report
+        return self._unpack(solved.values["z"]), solved.report
 
 
 @lru_cache(maxsize=8)
@@ -288,14 +309,15 @@ def program(terms: int = TERMS, points: int = GRID_POINTS, vertices: int = 1) ->
 def _bounds(dyn: ScaledDynamics, P: exact.Matrix, ells: Sequence[Sequence[Fraction]]) -> tuple[Fraction, Fraction]:
     """Rational c1 < min and c2 > max of the eigenvalues of M(w) over a fine grid of [0, 1]."""
     Pf = np.array(exact.to_float(P))
-    lo, hi = np.inf, -np.inf
-    for wv in np.linspace(0, 1, 401):
-        M = Pf.copy()
-        for k, ell in enumerate(ells, start=1):
-            l = np.array([float(v) for v in ell])
-            M += wv**k * (np.outer(np.ones(2), l) + np.outer(l, np.ones(2))) / 2
-        eig = np.linalg.eigvalsh(M)
-        lo, hi = min(lo, eig[0]), max(hi, eig[-1])
+    grid = np.linspace(0, 1, 401)
+    M = np.broadcast_to(Pf, (grid.size, 2, 2)).copy()
+    for k, ell in enumerate(ells, start=1):
+        l = np.array([float(v) for v in ell])
+        S = np.outer(np.ones(2), l) + np.outer(l, np.ones(2))
+        wk = np.array([wv**k for wv in grid])  # the scalar powers, as one node at a time computed them
+        M += wk[:, None, None] * S / 2
+    eig = np.linalg.eigvalsh(M)
+    lo, hi = float(eig[:, 0].min()), float(eig[:, -1].max())
     return exact.to_rational(lo * 0.99, 6), exact.to_rational(hi * 1.01, 6)
 
 
