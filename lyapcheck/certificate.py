@@ -56,16 +56,23 @@ def _exact_or_none(value: Fraction | None) -> str | None:
     return None if value is None else str(value)
 
 
+def document_inputs(problem: Any) -> dict[str, Any]:
+    """The inputs as given (text) and exactly in SI; an input not given is null."""
+    from lyapcheck.certification import exact_values
+
+    return {"given": dict(problem.given),
+            "exact_si": {k: str(v) for k, v in exact_values(problem).items()}
+            | {"d_max": _exact_or_none(problem.d_max), "omega_so": _exact_or_none(problem.actuation.omega_so)}}
+
+
 def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict: str) -> dict[str, Any]:
-    from lyapcheck.certification import build_system, exact_values
+    from lyapcheck.certification import build_system
 
     system = build_system(problem, dynamics)
     return {
         "schema_version": SCHEMA_VERSION,
         "kind": KIND,
-        "inputs": {"given": dict(problem.given),
-                   "exact_si": {k: str(v) for k, v in exact_values(problem).items()}
-                   | {"d_max": _exact_or_none(problem.d_max), "omega_so": _exact_or_none(problem.actuation.omega_so)}},
+        "inputs": document_inputs(problem),
         "dynamics": dynamics,
         "system": system_to_json(system),
         "conditions": {name: res.to_json() for name, res in results.items()},
@@ -76,14 +83,10 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
 
 def build_box_document(problem: Any, box: Any, dynamics: str, result: dict[str, Any]) -> dict[str, Any]:
     """A certificate for every gain set in ``box`` (:mod:`lyapcheck.boxes`; class ``ges``)."""
-    from lyapcheck.certification import exact_values
-
     return {
         "schema_version": SCHEMA_VERSION,
         "kind": KIND,
-        "inputs": {"given": dict(problem.given),
-                   "exact_si": {k: str(v) for k, v in exact_values(problem).items()}
-                   | {"d_max": _exact_or_none(problem.d_max), "omega_so": _exact_or_none(problem.actuation.omega_so)}},
+        "inputs": document_inputs(problem),
         "box": box.to_json(),
         "dynamics": dynamics,
         "conditions": {"ges": result},

@@ -234,13 +234,21 @@ def run(system: System) -> ConditionResult:
                            numbers={"scaling": scaling}, solver={"solves": solver_log})
 
 
-def verify(system: System, cert: dict[str, Any]) -> tuple[bool, str]:
+def stored_scaling_mismatch(system: System, cert: dict[str, Any]) -> tuple[ScaledDynamics | None, str | None]:
+    """The system's scaled dynamics, and why the certificate's stored scaling disagrees (None: it agrees)."""
     dyn = scaled_dynamics(system)
     if dyn is None:
-        return False, "the dynamics do not have the structure this class needs"
+        return None, "the dynamics do not have the structure this class needs"
     for key in ("c", "a", "b", "time_scale"):
         if Fraction(cert["scaling"][key]) != getattr(dyn, key):
-            return False, f"the stored scaled coefficient {key} does not match the system"
+            return dyn, f"the stored scaled coefficient {key} does not match the system"
+    return dyn, None
+
+
+def verify(system: System, cert: dict[str, Any]) -> tuple[bool, str]:
+    dyn, mismatch = stored_scaling_mismatch(system, cert)
+    if dyn is None or mismatch is not None:
+        return False, mismatch or ""
     deg_v = int(cert["degree"])
     z_v, z_w = bases(deg_v)
     if [list(m) for m in z_v] != cert["basis_V"] or [list(m) for m in z_w] != cert["basis_W"]:
