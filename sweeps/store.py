@@ -139,7 +139,36 @@ class Store:
             changed = sorted(k for k in set(stored) | set(versions()) if stored.get(k) != versions().get(k))
             raise InputFileError(f"'{target}' was written with other package versions ({', '.join(changed)}); "
                                  "resuming would mix results: choose another --out")
-        return cls(target, group, spec)
+        store = cls(target, group, spec)
+        store.check_readable()
+        return store
+
+    def check_readable(self) -> None:
+        """Read every array of the store once, chunk by chunk, before resuming into it.
+
+        A store damaged on disk (a truncated or deleted chunk or metadata file) would otherwise
+        be resumed silently: a missing chunk reads as its fill value (so ``done`` would be
+        false and the points recomputed, which is fine), but a truncated one raises deep inside
+        zarr in the middle of a run, or a damaged data chunk of a finished unit would stay in
+        the results. Reading costs one pass over the store (a few ms per thousand points) and
+        memory of one chunk at a time.
+        """
+        axis_sizes = {axis.name: axis.size for axis in self.spec.axes}
+        for name in [*axis_sizes, *(var.name for var in VARIABLES)]:
+            try:
+                array = self.group[name]
+                expected = (axis_sizes[name],) if name in axis_sizes else tuple(self.spec.shape)
+                if tuple(array.shape) != expected:
+                    raise ValueError(f"shape {tuple(array.shape)}, expected {expected}")
+                if name in axis_sizes:
+                    array[...]
+                else:
+                    for region in block_regions(self.spec.shape, self.chunks):
+                        array[region]
+            except Exception as exc:  # zarr and its codecs raise many types for damaged bytes
+                detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                raise InputFileError(f"'{self.path}' is damaged and cannot be resumed: array '{name}' is unreadable "
+                                     f"({detail[:120]}); remove it or choose another --out") from None
 
     def done(self) -> np.ndarray:
         """The ``done`` flags of every point (a bool array of the grid's shape)."""
