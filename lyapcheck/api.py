@@ -352,17 +352,29 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
 class SweepResult:
     """A finished (or resumed) sweep: the store's summary and what this run computed."""
 
-    summary: Any  # sweeps.summary.Summary
-    run: Any  # sweeps.run.SweepReport
+    summary: Any  # sweeps.summary.Summary, or sweeps.box_summary.BoxSummary for mode = "boxes"
+    run: Any  # sweeps.run.SweepReport, or sweeps.boxes_run.BoxSweepReport
+
+    @property
+    def mode(self) -> str:
+        return "boxes" if hasattr(self.run, "boxes_computed_now") else "points"
 
     @property
     def violations(self) -> int:
+        if self.mode == "boxes":
+            from sweeps.box_summary import violation_count as box_violations
+
+            return box_violations(self.summary)
         from sweeps.summary import violation_count
 
         return violation_count(self.summary)
 
     def to_json(self) -> dict[str, Any]:
         payload: dict[str, Any] = self.summary.to_json()
+        if self.mode == "boxes":
+            payload.update({"store": str(self.run.path), "computed_now": self.run.boxes_computed_now,
+                            "wall_seconds": self.run.wall_seconds})
+            return payload
         payload.update({"store": str(self.run.path), "computed_now": self.run.computed_now,
                         "wall_seconds": self.run.wall_seconds})
         if self.run.refinement is not None:
@@ -401,6 +413,18 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
         if Path(target).suffix.lower() not in EXPORT_SUFFIXES:
             raise InvalidParameter("export", "a file name ending in .nc or .csv", str(target))
     parsed = load_spec(spec)
+    if parsed.mode == "boxes":
+        from sweeps.box_store import BoxStore
+        from sweeps.box_summary import summarize_boxes
+        from sweeps.boxes_run import run_boxes
+        from sweeps.runners import make_runner
+
+        if exports:
+            raise InvalidParameter("export", "absent for a box sweep (its store is one table of boxes: read it "
+                                   "with xarray, or render it with lyapcheck report)", str(exports[0]))
+        boxes_run = run_boxes(parsed, out, runner=make_runner(scheduler=scheduler, workers=workers),
+                              progress=progress, on_ready=on_ready)
+        return SweepResult(summary=summarize_boxes(BoxStore.open_or_create(out, parsed)), run=boxes_run)
     report_ = run_sweep(parsed, out, scheduler=scheduler, workers=workers, progress=progress, on_ready=on_ready)
     summary = summarize(Store.open_or_create(out, parsed))
     for target in exports:

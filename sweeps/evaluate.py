@@ -49,7 +49,7 @@ Result = dict[str, np.ndarray]
 #: one unit at a time per process: the ``ges`` class still solves a cached cvxpy program, which
 #: holds parameter values between "set" and "solve", so two threads of one Dask worker must not
 #: interleave on it (the compiled programs are stateless)
-_LOCK = threading.Lock()
+UNIT_LOCK = threading.Lock()
 
 
 def empty_result(n: int) -> Result:
@@ -207,8 +207,8 @@ def evaluate(spec: SweepSpec, coords: FloatArray) -> Result:
 
 def evaluate_unit(spec_text: str, coords: FloatArray) -> Result:
     """Worker entry point (picklable arguments only): parse the spec once per process, evaluate."""
-    # one unit at a time per process (Dask may run several threads in one worker): see _LOCK
-    with _LOCK:
+    # one unit at a time per process (Dask may run several threads in one worker): see UNIT_LOCK
+    with UNIT_LOCK:
         return evaluate(cached_spec(spec_text), coords)
 
 

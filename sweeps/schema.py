@@ -118,6 +118,65 @@ def status_code(status: str) -> int:
     return STATUS_CODES[status]
 
 
+# -- box sweeps (mode = "boxes"): one row per box ---------------------------------------------------
+#: status of a box: certified for every point, refuted at a point of it (exactly), split into two
+#: halves (an inner node of the refinement tree), or not certified (a leaf: minimum width or budget)
+BOX_STATUS_CODES: Final[dict[str, int]] = {"not_certified": 0, "certified": 1, "refuted": 2, "split": 3}
+#: the dimension of a box store
+BOX_DIM: Final = "box"
+
+
+def box_variables(dims: tuple[str, ...]) -> tuple[Variable, ...]:
+    """Every variable of a box store over the swept parameters ``dims``, in a fixed order."""
+    i8, i16, i32, f8, b1 = (np.dtype(t) for t in ("int8", "int16", "int32", "float64", "bool"))
+    out = []
+    for d in dims:
+        out.append(Variable(f"lo_{d}", f8, np.nan, f"lower edge of the box in {d} (SI)"))
+        out.append(Variable(f"hi_{d}", f8, np.nan, f"upper edge of the box in {d} (SI)"))
+    out += [
+        Variable("status", i8, NOT_COMPUTED, "0 not_certified, 1 certified, 2 refuted, 3 split, -1 not computed"),
+        Variable("level", i16, -1, "refinement depth (0: a cell of the axes' grid)"),
+        Variable("parent", i32, -1, "row of the box this one is a half of (-1: none)"),
+        Variable("k", f8, np.nan, "GES constant of the box's certificate: |x(t)| <= k |x0| exp(-rate t)"),
+        Variable("decay_rate_per_s", f8, np.nan, "GES decay rate of the box's certificate, 1/s"),
+        Variable("cross_check_runs", i16, 0, "random points of the box simulated against its envelope"),
+        Variable("cross_check_worst_ratio", f8, np.nan,
+                 "largest |x(t)| / (k |x0| exp(-rate t)) seen in those simulations (<= 1: inside)"),
+        Variable("soundness_violation", b1, False, "a simulation left the certified envelope"),
+        Variable("done", b1, False, "this box was computed and stored"),
+    ]
+    return tuple(out)
+
+
+def is_box_dataset(ds: Any) -> bool:
+    """A box store (``mode = "boxes"``) rather than a grid of points."""
+    return str(getattr(ds, "attrs", {}).get("mode", "points")) == "boxes"
+
+
+def check_box_dataset(ds: Any, source: str) -> None:
+    """:func:`check_dataset` for a box store: one dimension ``box``, the variables of
+    :func:`box_variables` over the parameters named in the ``dims`` attribute."""
+    import json
+
+    def bad(what: str) -> InputFileError:
+        return InputFileError(f"'{source}' is not a box sweep store this lyapcheck reads: {what}")
+
+    try:
+        dims = tuple(json.loads(str(ds.attrs.get("dims"))))
+    except (TypeError, ValueError):
+        raise bad("its 'dims' attribute is not a JSON list") from None
+    if not 1 <= len(dims) <= 3 or any(d not in SWEEPABLE for d in dims):
+        raise bad(f"dims {list(dims)}, expected one to three of {', '.join(SWEEPABLE)}")
+    if tuple(map(str, ds.dims)) != (BOX_DIM,):
+        raise bad(f"dimensions {list(map(str, ds.dims))}, expected ['{BOX_DIM}']")
+    for var in box_variables(dims):
+        if var.name not in ds.data_vars:
+            raise bad(f"no variable '{var.name}'")
+        data = ds[var.name]
+        if data.dtype != var.dtype or tuple(map(str, data.dims)) != (BOX_DIM,):
+            raise bad(f"variable '{var.name}' is {data.dtype} over {list(map(str, data.dims))}, expected {var.dtype}")
+
+
 def check_dataset(ds: Any, source: str) -> None:
     """Check a loaded store (an xarray Dataset) against this schema, before anything reads it.
 
@@ -127,6 +186,10 @@ def check_dataset(ds: Any, source: str) -> None:
     and ``done`` is present. Anything else is an :class:`~lyapcheck.errors.InputFileError`
     naming ``source`` and what is wrong (a truncated or edited store, or not a sweep at all).
     """
+    if is_box_dataset(ds):
+        check_box_dataset(ds, source)
+        return
+
     def bad(what: str) -> InputFileError:
         return InputFileError(f"'{source}' is not a sweep store this lyapcheck reads: {what}")
 

@@ -15,7 +15,7 @@ parameters, plus a ``[sweep]`` and a ``[simulation]`` table::
     scale = "log"                 # "linear" (default) or "log"
     # values = [300, 600, 1200]   # instead of start/stop/num/scale
 
-    [sweep.refine]                # optional: quadtree refinement on a 2-D sweep
+    [sweep.refine]                # optional: quadtree refinement on a 2-D sweep (mode "points")
     class = "sector_ges"          # refine where this class's certified/not status changes
     levels = 3                    # each axis's num must be k * 2**levels + 1
 
@@ -25,6 +25,16 @@ parameters, plus a ``[sweep]`` and a ``[simulation]`` table::
     rtol = 1e-8
     scenarios = ["nominal", "constant", "weight", "adversarial"]
     initial_position = ["0 mm", "-40 mm"]   # start of the 'nominal' divergence probe
+
+A box sweep (``mode = "boxes"`` in ``[sweep]``, :mod:`sweeps.boxes_run`) proves whole boxes
+instead of sampling points: the axes' values are the edges of the first boxes (``num >= 2`` per
+axis gives ``num - 1`` cells), ``classes`` is ``["ges"]`` (the class with box certificates), and::
+
+    [sweep.boxes]
+    min_relative_width = 0.05     # split undecided boxes until max(hi/lo - 1) is below this
+    max_boxes = 400               # budget of boxes computed (leaves and split ones)
+    cross_check_points = 2        # random points simulated in every certified box (0: none)
+    seed = 0                      # of those random points (per box: independent of run order)
 
 Every number goes through :func:`lyapcheck.params.validate_field` (the one validation path,
 with units and ranges from :data:`lyapcheck.params.FIELDS`); every error is an
@@ -59,7 +69,14 @@ DEFAULT_CHUNK: Final = 64
 MAX_REFINE_LEVELS: Final = 10
 _SCALES: Final = ("linear", "log")
 _AXIS_KEYS: Final = ("name", "start", "stop", "num", "scale", "values")
-_SWEEP_KEYS: Final = ("classes", "chunk_size", "axes", "refine")
+_SWEEP_KEYS: Final = ("mode", "classes", "chunk_size", "axes", "refine", "boxes")
+_MODES: Final = ("points", "boxes")
+_BOX_KEYS: Final = ("min_relative_width", "max_boxes", "cross_check_points", "seed")
+#: classes with box certificates (:mod:`lyapcheck.boxes`); the default of a box sweep
+BOX_CLASSES: Final = ("ges",)
+#: largest box budget of one spec (the store preallocates one row per box)
+MAX_BOXES: Final = 100_000
+MAX_CROSS_CHECK_POINTS: Final = 100
 _REFINE_KEYS: Final = ("class", "levels")
 _SIM_KEYS: Final = ("horizon", "tail", "rtol", "scenarios", "initial_position")
 
@@ -106,6 +123,16 @@ class Refinement:
 
 
 @dataclass(frozen=True)
+class BoxSettings:
+    """How a box sweep refines and cross-checks (``[sweep.boxes]``)."""
+
+    min_relative_width: float
+    max_boxes: int
+    cross_check_points: int
+    seed: int
+
+
+@dataclass(frozen=True)
 class SweepSpec:
     """A validated sweep spec; ``text`` is the TOML exactly as given (stored in the results)."""
 
@@ -116,6 +143,8 @@ class SweepSpec:
     simulation: SimulationSettings
     refine: Refinement | None
     chunk_size: int
+    mode: str = "points"
+    boxes: BoxSettings | None = None
 
     @property
     def dims(self) -> tuple[str, ...]:
@@ -258,6 +287,30 @@ def _refinement(raw: object, axes: tuple[Axis, ...], classes: tuple[str, ...]) -
     return Refinement(str(cls), levels)
 
 
+def _box_settings(raw: object, axes: tuple[Axis, ...]) -> BoxSettings:
+    table = _table({} if raw is None else raw, "sweep.boxes")
+    _known(table, _BOX_KEYS, "sweep.boxes")
+    width = table.get("min_relative_width", 0.05)
+    if isinstance(width, bool) or not isinstance(width, (int, float)) or not 1e-9 <= width <= 100:
+        raise InvalidParameter("sweep.boxes.min_relative_width", "a number in [1e-9, 100]", width)
+    first = int(np.prod([a.size - 1 for a in axes]))
+    max_boxes = table.get("max_boxes", max(400, first))
+    if isinstance(max_boxes, bool) or not isinstance(max_boxes, int) or not first <= max_boxes <= MAX_BOXES:
+        raise InvalidParameter("sweep.boxes.max_boxes", f"an integer in [{first}, {MAX_BOXES}] (at least the {first} "
+                               "first boxes of the axes' grid)", max_boxes)
+    points = _int("sweep.boxes.cross_check_points", table.get("cross_check_points", 2), 0, MAX_CROSS_CHECK_POINTS)
+    seed = _int("sweep.boxes.seed", table.get("seed", 0), 0, 2**63 - 1)
+    for i, axis in enumerate(axes):
+        if axis.size < 2:
+            raise InvalidParameter(f"sweep.axes[{i}].num", "at least 2 in a box sweep (the values are box edges)",
+                                   axis.size)
+    return BoxSettings(min_relative_width=float(width), max_boxes=max_boxes, cross_check_points=points, seed=seed)
+
+
+#: parameters a box sweep may span (the gains: the box certificate's monomial argument covers them)
+BOX_AXES: Final = ("alpha_d", "sigma0", "k_d", "delta_los")
+
+
 def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
     """Validate a spec given as TOML text (see the module docstring)."""
     try:
@@ -272,7 +325,14 @@ def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",
                                None if raw_axes is None else f"{len(raw_axes) if isinstance(raw_axes, list) else raw_axes}")
+    mode = sweep.get("mode", "points")
+    if mode not in _MODES:
+        raise InvalidParameter("sweep.mode", "one of " + ", ".join(repr(m) for m in _MODES), mode)
     parsed = [_axis(i, a) for i, a in enumerate(raw_axes)]
+    for i, (axis, _) in enumerate(parsed):
+        if mode == "boxes" and axis.name not in BOX_AXES:
+            raise InvalidParameter(f"sweep.axes[{i}].name", "one of " + ", ".join(repr(n) for n in BOX_AXES)
+                                   + " in a box sweep (the ges class does not depend on d_max)", axis.name)
     axes = tuple(a for a, _ in parsed)
     names = [a.name for a in axes]
     if len(set(names)) != len(names):
@@ -288,9 +348,16 @@ def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
             raise InvalidParameter(key, "either fixed or swept, not both", values[key])
         values[key] = first  # a valid placeholder; problem_at() sets the exact value per point
     base = build_problem(values, source=source)
+    if mode == "boxes":
+        if "simulation" in data:
+            raise InvalidParameter("simulation", "absent in a box sweep (its cross-check simulates the error "
+                                   "dynamics with the box's own envelope)", "a [simulation] table")
+        return _box_spec(text, sweep, axes, base)
     # every point is simulated under the saturated command and a bounded disturbance
     base.actuation.step_out()
     base.disturbance_bound()
+    if "boxes" in sweep:
+        raise InvalidParameter("sweep.boxes", "absent unless mode = \"boxes\"", "a [sweep.boxes] table")
 
     classes = _classes(sweep.get("classes"))
     chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
@@ -300,6 +367,21 @@ def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
     refine = _refinement(sweep.get("refine"), axes, classes)
     return SweepSpec(text=text, axes=axes, base=base, classes=classes, simulation=simulation, refine=refine,
                      chunk_size=chunk)
+
+
+def _box_spec(text: str, sweep: Mapping[str, Any], axes: tuple[Axis, ...], base: Problem) -> SweepSpec:
+    """The rest of a ``mode = "boxes"`` spec (module docstring)."""
+    raw = sweep.get("classes", list(BOX_CLASSES))
+    if not isinstance(raw, list) or not raw or any(c not in BOX_CLASSES for c in raw) or len(set(raw)) != len(raw):
+        raise InvalidParameter("sweep.classes", "in a box sweep, a list of classes with box certificates ("
+                               + ", ".join(repr(c) for c in BOX_CLASSES) + ")", raw)
+    if "refine" in sweep:
+        raise InvalidParameter("sweep.refine", "absent in a box sweep (boxes refine by [sweep.boxes])",
+                               "a [sweep.refine] table")
+    chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
+    boxes = _box_settings(sweep.get("boxes"), axes)
+    return SweepSpec(text=text, axes=axes, base=base, classes=tuple(raw), simulation=_simulation(None), refine=None,
+                     chunk_size=chunk, mode="boxes", boxes=boxes)
 
 
 def _check_weight_inputs(problem: Problem) -> None:
@@ -328,4 +410,4 @@ def cached_spec(text: str) -> SweepSpec:
     return parse_spec(text)
 
 
-__all__ = ["Axis", "SimulationSettings", "Refinement", "SweepSpec", "parse_spec", "load_spec", "cached_spec"]
+__all__ = ["Axis", "SimulationSettings", "Refinement", "BoxSettings", "SweepSpec", "parse_spec", "load_spec", "cached_spec"]

@@ -23,7 +23,7 @@ import platform
 import shutil
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Final, Mapping, Sequence
+from typing import Any, Callable, Final, Mapping, Sequence
 
 import numpy as np
 
@@ -104,6 +104,59 @@ def _build(path: Path, spec: SweepSpec) -> None:
                            fill_value=var.fill, attributes={"description": var.description})
 
 
+def open_or_build(target: Path, spec: SweepSpec, build: Callable[[Path], None]) -> Any:
+    """The zarr group at ``target``, created by ``build`` in a staging directory and renamed into
+    place when it does not exist; an existing one must hold ``spec`` and these package versions.
+    Shared by the point store and the box store (:mod:`sweeps.box_store`)."""
+    import zarr
+
+    if not target.exists():
+        staging = target.with_name(f".{target.name}.creating")
+        if staging.exists():  # left by a run killed while creating: never visible as a store
+            shutil.rmtree(staging)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        build(staging)
+        os.replace(staging, target)
+    try:
+        group = zarr.open_group(str(target), mode="r+", zarr_format=3)
+        attrs = dict(group.attrs)
+    except Exception as exc:  # zarr raises several types for a foreign or corrupt directory
+        raise InputFileError(f"'{target}' exists and is not a sweep store ({type(exc).__name__}); "
+                             "choose another --out") from None
+    if attrs.get("spec_toml") != spec.text:
+        raise InputFileError(f"'{target}' holds a sweep of a different spec; choose another --out or remove it")
+    stored = json.loads(str(attrs.get("versions", "{}")))
+    if stored != versions():
+        changed = sorted(k for k in set(stored) | set(versions()) if stored.get(k) != versions().get(k))
+        raise InputFileError(f"'{target}' was written with other package versions ({', '.join(changed)}); "
+                             "resuming would mix results: choose another --out")
+    return group
+
+
+def check_arrays_readable(group: Any, path: Path, arrays: Mapping[str, tuple[int, ...]],
+                          regions: Sequence[Region]) -> None:
+    """Read every array of ``arrays`` (name -> expected shape) once, region by region.
+
+    A store damaged on disk (a truncated or deleted chunk or metadata file) would otherwise be
+    resumed silently: a missing chunk reads as its fill value (so ``done`` is false and the
+    points are recomputed, which is fine), but a truncated one raises deep inside zarr in the
+    middle of a run, and a damaged data chunk of a finished unit would stay in the results.
+    Reading costs one pass over the store and memory of one region at a time. Arrays of one
+    dimension are read whole (coordinates); the others region by region.
+    """
+    for name, expected in arrays.items():
+        try:
+            array = group[name]
+            if tuple(array.shape) != tuple(expected):
+                raise ValueError(f"shape {tuple(array.shape)}, expected {tuple(expected)}")
+            for region in regions if len(expected) == len(regions[0]) else [(slice(None),)]:
+                array[region]
+        except Exception as exc:  # zarr and its codecs raise many types for damaged bytes
+            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputFileError(f"'{path}' is damaged and cannot be resumed: array '{name}' is unreadable "
+                                 f"({detail[:120]}); remove it or choose another --out") from None
+
+
 class Store:
     """An open results store (see the module docstring)."""
 
@@ -116,59 +169,17 @@ class Store:
     @classmethod
     def open_or_create(cls, path: str | Path, spec: SweepSpec) -> "Store":
         """Open ``path`` to resume, or create it; refuse a store made from another spec."""
-        import zarr
-
         target = Path(path)
-        if not target.exists():
-            staging = target.with_name(f".{target.name}.creating")
-            if staging.exists():  # left by a run killed while creating: never visible as a store
-                shutil.rmtree(staging)
-            target.parent.mkdir(parents=True, exist_ok=True)
-            _build(staging, spec)
-            os.replace(staging, target)
-        try:
-            group = zarr.open_group(str(target), mode="r+", zarr_format=3)
-            attrs = dict(group.attrs)
-        except Exception as exc:  # zarr raises several types for a foreign or corrupt directory
-            raise InputFileError(f"'{target}' exists and is not a sweep store ({type(exc).__name__}); "
-                                 "choose another --out") from None
-        if attrs.get("spec_toml") != spec.text:
-            raise InputFileError(f"'{target}' holds a sweep of a different spec; choose another --out or remove it")
-        stored = json.loads(str(attrs.get("versions", "{}")))
-        if stored != versions():
-            changed = sorted(k for k in set(stored) | set(versions()) if stored.get(k) != versions().get(k))
-            raise InputFileError(f"'{target}' was written with other package versions ({', '.join(changed)}); "
-                                 "resuming would mix results: choose another --out")
+        group = open_or_build(target, spec, lambda staging: _build(staging, spec))
         store = cls(target, group, spec)
         store.check_readable()
         return store
 
     def check_readable(self) -> None:
-        """Read every array of the store once, chunk by chunk, before resuming into it.
-
-        A store damaged on disk (a truncated or deleted chunk or metadata file) would otherwise
-        be resumed silently: a missing chunk reads as its fill value (so ``done`` would be
-        false and the points recomputed, which is fine), but a truncated one raises deep inside
-        zarr in the middle of a run, or a damaged data chunk of a finished unit would stay in
-        the results. Reading costs one pass over the store (a few ms per thousand points) and
-        memory of one chunk at a time.
-        """
-        axis_sizes = {axis.name: axis.size for axis in self.spec.axes}
-        for name in [*axis_sizes, *(var.name for var in VARIABLES)]:
-            try:
-                array = self.group[name]
-                expected = (axis_sizes[name],) if name in axis_sizes else tuple(self.spec.shape)
-                if tuple(array.shape) != expected:
-                    raise ValueError(f"shape {tuple(array.shape)}, expected {expected}")
-                if name in axis_sizes:
-                    array[...]
-                else:
-                    for region in block_regions(self.spec.shape, self.chunks):
-                        array[region]
-            except Exception as exc:  # zarr and its codecs raise many types for damaged bytes
-                detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-                raise InputFileError(f"'{self.path}' is damaged and cannot be resumed: array '{name}' is unreadable "
-                                     f"({detail[:120]}); remove it or choose another --out") from None
+        """Read every array once before resuming (:func:`check_arrays_readable`)."""
+        arrays: dict[str, tuple[int, ...]] = {axis.name: (axis.size,) for axis in self.spec.axes}
+        arrays.update({var.name: tuple(self.spec.shape) for var in VARIABLES})
+        check_arrays_readable(self.group, self.path, arrays, block_regions(self.spec.shape, self.chunks))
 
     def done(self) -> np.ndarray:
         """The ``done`` flags of every point (a bool array of the grid's shape)."""

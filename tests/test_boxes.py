@@ -43,6 +43,9 @@ def test_scaled_coefficients_are_monomials_in_the_parameters(dynamics: str) -> N
         powers = rest.as_powers_dict()
         assert coefficient != 0 and all(base in symbols.values() and exponent.is_integer
                                         for base, exponent in powers.items() if base != 1), expr
+    # why no GES box is ever 'refuted' (lyapcheck.boxes): the linearisation [[-1, c], [b, -a]]
+    # at the origin has det = a - b c = a + b > 0 at every positive gain set
+    assert c == -1 and sp.simplify(a - b * c).is_positive
 
 
 @pytest.fixture(scope="module")
@@ -120,3 +123,20 @@ def test_refinement_resolves_a_window_into_certified_and_undecided_boxes() -> No
             assert boxes.verify_box(problem, leaf.box, "derived", leaf.result)[0]
         else:
             assert leaf.box.relative_width() <= 1.0
+
+
+def test_cross_check_accepts_the_certified_envelope_and_catches_a_false_one(certified: tuple) -> None:
+    """The simulation cross-check is a real check: the box's envelope holds at random interior
+    points, and the same envelope with a ten times faster rate is caught as violated."""
+    result, problem = certified
+    ges_result = result.document["conditions"]["ges"]
+    box = boxes.parse_box(CERTIFIED_BOX)
+    runs, worst = boxes.cross_check(problem, box, ges_result, 3, (0, 7))
+    assert runs == 3 and 0 < worst <= 1
+    assert all(p_in(box, point) for point in boxes.sample_points(box, 20, (0, 7)))
+    false_claim = {"k": ges_result["k"], "decay_rate_per_s": 10 * ges_result["decay_rate_per_s"]}
+    assert boxes.cross_check(problem, box, false_claim, 1, (0, 7))[1] > 1
+
+
+def p_in(box: boxes.ParameterBox, point: dict) -> bool:
+    return all(lo <= point[name] <= hi for name, lo, hi in box.bounds)

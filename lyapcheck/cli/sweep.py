@@ -62,14 +62,33 @@ def _print_summary(summary: Any, report: Any) -> None:
     console.print("median certified/simulated ultimate bound: " + ("n/a" if math.isnan(med) else f"{med:.3g}"))
 
 
+def _print_box_summary(summary: Any, report: Any) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console()
+    console.print(f"[bold]{report.path}[/]: {summary.boxes} boxes stored, {summary.leaves} leaves "
+                  f"({report.boxes_computed_now} computed in this run, {report.wall_seconds:.1f} s)")
+    table = Table(title="share of the parameter window (log measure on log axes)")
+    table.add_column("status", style="cyan")
+    table.add_column("share", justify="right")
+    for status, share in summary.area_fraction.items():
+        table.add_row(status + (" (GES proved for every point)" if status == "certified" else ""), f"{share:.3f}")
+    console.print(table)
+    worst = summary.worst_envelope_ratio
+    console.print(f"cross-check: {summary.cross_checked_points} random points of {summary.certified_boxes} certified "
+                  "boxes simulated; worst |x(t)| / envelope = " + ("n/a" if math.isnan(worst) else f"{worst:.3g}"))
+
+
 def _shout(summary: Any) -> None:
     from rich.console import Console
 
     err = Console(stderr=True)
     listed = [v for v in summary.violations if "more" not in v]
     more = sum(v.get("more", 0) for v in summary.violations)
-    err.print(f"[bold white on red] SOUNDNESS VIOLATION [/] {len(listed) + more} point(s) where simulation "
-              "leaves a certified bound or diverges under a stability certificate:")
+    what = ("box(es) where a simulated point leaves the certified GES envelope" if summary.to_json().get("mode") == "boxes"
+            else "point(s) where simulation leaves a certified bound or diverges under a stability certificate")
+    err.print(f"[bold white on red] SOUNDNESS VIOLATION [/] {len(listed) + more} {what}:")
     for v in listed:
         err.print("[bold red]  " + ", ".join(f"{k}={val:.6g}" if isinstance(val, float) else f"{k}={val}"
                                              for k, val in v.items()) + "[/]")
@@ -114,7 +133,10 @@ def register(group: click.Group) -> None:
         if as_json:
             emit_json(result.to_json())
         elif not quiet:
-            _print_summary(result.summary, result.run)
+            if result.mode == "boxes":
+                _print_box_summary(result.summary, result.run)
+            else:
+                _print_summary(result.summary, result.run)
         if result.violations:
             _shout(result.summary)
             raise SystemExit(EXIT_NEGATIVE)

@@ -1,0 +1,182 @@
+"""Box sweeps (``mode = "boxes"``): the spec, the refinement tree, the store, resume and Dask."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from lyapcheck import boxes
+from lyapcheck.errors import InvalidParameter
+from lyapcheck.params import problem_from_sources
+from sweeps.box_store import BoxStore
+from sweeps.box_summary import summarize_boxes
+from sweeps.boxes_run import initial_boxes, run_boxes
+from sweeps.runners import InlineRunner
+from sweeps.schema import BOX_STATUS_CODES
+from sweeps.spec import parse_spec
+from tests.conftest import PAPER_TOML, SWEEP_FIXED
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: one first box over a window that is not certified whole: it is split, and so are its halves
+SPEC = SWEEP_FIXED + """[sweep]
+mode = "boxes"
+chunk_size = 2
+[[sweep.axes]]
+name = "alpha_d"
+start = 150
+stop = 2400
+num = 2
+scale = "log"
+[[sweep.axes]]
+name = "k_d"
+start = 0.05
+stop = 0.8
+num = 2
+scale = "log"
+[sweep.boxes]
+min_relative_width = 0.5
+max_boxes = {max_boxes}
+cross_check_points = 1
+"""
+
+
+def _files(root: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize(("edit", "field"), [
+    (lambda s: s.replace('mode = "boxes"', 'mode = "cubes"'), "sweep.mode"),
+    (lambda s: s.replace("num = 2\nscale = \"log\"\n[[", "num = 1\nscale = \"log\"\n[[", 1), "sweep.axes[0].num"),
+    (lambda s: s.replace('name = "k_d"\nstart = 0.05\nstop = 0.8',
+                         'name = "d_max"\nstart = "0.01 mm/s"\nstop = "0.1 mm/s"').replace(
+                             'd_max = "0.088 mm/s"\n', ''), "sweep.axes[1].name"),
+    (lambda s: s.replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["sector_ges"]'), "sweep.classes"),
+    (lambda s: s + "[sweep.refine]\nclass = \"ges\"\nlevels = 1\n", "sweep.refine"),
+    (lambda s: s + "[simulation]\nhorizon = \"1 s\"\n", "simulation"),
+    (lambda s: s.replace("max_boxes = 7", "max_boxes = 0"), "sweep.boxes.max_boxes"),
+    (lambda s: s.replace("min_relative_width = 0.5", "min_relative_width = -1"), "sweep.boxes.min_relative_width"),
+    (lambda s: s.replace("cross_check_points = 1", "cross_check_points = 1\nsize = 3"), "sweep.boxes.size"),
+])
+def test_bad_box_specs_name_the_field(edit, field: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(InvalidParameter) as info:
+        parse_spec(edit(SPEC.format(max_boxes=7)))
+    assert info.value.field == field, str(info.value)
+
+
+def test_points_specs_refuse_a_boxes_table() -> None:
+    text = SPEC.format(max_boxes=7).replace('mode = "boxes"\n', "")
+    with pytest.raises(InvalidParameter) as info:
+        parse_spec(text)
+    assert info.value.field == "sweep.boxes"
+
+
+def test_first_boxes_tile_the_window_exactly() -> None:
+    spec = parse_spec(SPEC.format(max_boxes=9).replace("num = 2", "num = 4"))
+    cells = initial_boxes(spec)
+    assert len(cells) == 9
+    alpha = sorted({(b.bounds[0][1], b.bounds[0][2]) for b in cells})
+    assert alpha[0][0] == Fraction(150) and alpha[-1][1] == Fraction(2400)
+    assert all(left[1] == right[0] for left, right in zip(alpha, alpha[1:]))  # no gap, no overlap
+
+
+@pytest.fixture(scope="module")
+def swept(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, BoxStore]:
+    spec = parse_spec(SPEC.format(max_boxes=7))
+    out = tmp_path_factory.mktemp("boxes") / "whole.zarr"
+    run_boxes(spec, out, runner=InlineRunner())
+    return out, BoxStore.open_or_create(out, spec)
+
+
+@pytest.mark.slow
+def test_the_tree_refines_and_certified_boxes_recheck_exactly(swept: tuple[Path, BoxStore]) -> None:
+    out, store = swept
+    status = store.read("status")
+    done = store.read("done")
+    parent = store.read("parent")
+    assert done.all() and len(status) == 7
+    # the window is not certified whole: box 0 split, its halves ids 1, 2, and so on
+    assert status[0] == BOX_STATUS_CODES["split"] and list(parent[1:3]) == [0, 0]
+    assert all(status[p] == BOX_STATUS_CODES["split"] for p in parent[1:])
+    problem = problem_from_sources(PAPER_TOML, {})
+    lo_a, hi_a, lo_k, hi_k = (store.read(n) for n in ("lo_alpha_d", "hi_alpha_d", "lo_k_d", "hi_k_d"))
+    certified = np.flatnonzero(status == BOX_STATUS_CODES["certified"])
+    assert certified.size >= 1
+    for row in certified:  # the stored box is provable again, from scratch, and rechecks exactly
+        box = boxes.ParameterBox((("alpha_d", Fraction(lo_a[row]), Fraction(hi_a[row])),
+                                  ("k_d", Fraction(lo_k[row]), Fraction(hi_k[row]))))
+        result = boxes.certify_box(problem, box)
+        assert result["status"] == "certified"
+        assert boxes.verify_box(problem, box, "derived", result)[0]
+        assert result["k"] == pytest.approx(store.read("k")[row])
+    assert (store.read("cross_check_runs")[certified] == 1).all()
+    assert (store.read("cross_check_worst_ratio")[certified] <= 1).all()
+    assert not store.read("soundness_violation").any()
+    summary = summarize_boxes(store)
+    fractions = summary.area_fraction
+    assert sum(fractions.values()) == pytest.approx(1.0)  # the leaves tile the window
+    assert 0 < fractions["certified"] < 1 and fractions["refuted"] == 0
+
+
+@pytest.mark.slow
+def test_interrupted_box_sweep_resumes_to_the_same_bytes(swept: tuple[Path, BoxStore], tmp_path: Path) -> None:
+    spec = parse_spec(SPEC.format(max_boxes=7))
+    out = tmp_path / "resumed.zarr"
+    seen: list[int] = []
+
+    def stop_after_three(advance: int, _total: int) -> None:
+        seen.append(advance)
+        if sum(seen) >= 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_boxes(spec, out, runner=InlineRunner(), progress=stop_after_three)
+    assert 0 < int(BoxStore.open_or_create(out, spec).read("done").sum()) < 7  # kept, not lost
+    report = run_boxes(spec, out, runner=InlineRunner())
+    assert report.boxes_computed_now == 7 - sum(seen)
+    assert _files(out) == _files(swept[0])
+
+
+@pytest.mark.slow
+def test_dask_gives_the_same_box_store(swept: tuple[Path, BoxStore], tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    from sweeps.runners import make_runner
+
+    spec = parse_spec(SPEC.format(max_boxes=7))
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
+        run_boxes(spec, tmp_path / "dask.zarr", runner=make_runner(scheduler=cluster.scheduler_address))
+    assert _files(tmp_path / "dask.zarr") == _files(swept[0])
+
+
+@pytest.mark.slow
+def test_command_line_box_sweep_json_and_export_refusal(tmp_path: Path) -> None:
+    import json
+
+    from lyapcheck.cli import app
+
+    app._register_commands()
+    cli = app.cli
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC.format(max_boxes=1))
+    runner = CliRunner()
+    result = runner.invoke(cli, ["sweep", str(spec), "--out", str(tmp_path / "a.zarr"), "--workers", "0", "--json"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    assert doc["mode"] == "boxes" and doc["boxes"] == 1 and doc["leaves"] == 1
+    assert doc["area_fraction"]["not_certified"] == pytest.approx(1.0)  # the whole window, no budget to split
+    result = runner.invoke(cli, ["sweep", str(spec), "--out", str(tmp_path / "b.zarr"), "--export", "x.csv"])
+    assert result.exit_code == 2 and "export" in result.stderr and not (tmp_path / "b.zarr").exists()
+
+
+def test_shipped_box_example_parses() -> None:
+    spec = parse_spec((ROOT / "examples" / "boxes-paper.toml").read_text())
+    assert spec.mode == "boxes" and spec.boxes is not None and spec.classes == ("ges",)
+    window = {a.name: (a.values[0], a.values[-1]) for a in spec.axes}
+    paper = problem_from_sources(PAPER_TOML, {}).gains
+    assert window["alpha_d"][0] < paper.alpha_d < window["alpha_d"][1]  # the window holds the paper's gains
+    assert window["k_d"][0] < paper.k_d < window["k_d"][1]
