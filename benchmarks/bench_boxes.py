@@ -1,76 +1,79 @@
-"""Box certificates against point certificates at equal wall time (class ges).
+"""Box sweep against point certificates at equal wall time (class ges).
 
-Refines a window of (alpha_d, k_d) around the paper's gains into boxes (lyapcheck.boxes.refine),
-then spends the same wall time certifying grid points one at a time, and prints:
+Runs the shipped box sweep ``examples/boxes-paper.toml`` (``mode = "boxes"``, in this process,
+into a temporary store), then spends the same wall time certifying points of the same window one
+at a time (a uniform random order over a log grid), and prints, from this one run:
 
-- boxes per second;
-- the certified share of the window's area by boxes (every point of a certified box is proved),
-  measured in log(alpha_d) x log(k_d) coordinates because the window spans decades;
-- the share of grid points certified by the point certificates in the same time (each proves
-  only its own point).
+- boxes per second (every box computed: leaves and split ones);
+- the certified share of the window's area by boxes (each certified box is proved for every
+  point in it), in the axes' log measure, as the sweep's summary reports it;
+- the share of points certified by point certificates in the same time (each a proof for its own
+  point only), and the ratio of the two shares.
 
-Run:  python benchmarks/bench_boxes.py [--min-width 1.0]
+Run:  python benchmarks/bench_boxes.py [--spec examples/boxes-paper.toml]
 """
 
 from __future__ import annotations
 
 import argparse
-import math
+import tempfile
 import time
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
-
-WINDOW = ["alpha_d=150..2400", "k_d=0.05..0.8"]
-
-
-def log_area(box) -> float:  # type: ignore[no-untyped-def]
-    return math.prod(math.log(float(hi / lo)) for _, lo, hi in box.bounds)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser()
-    parser.add_argument("--min-width", type=float, default=1.0, help="minimum relative width of a box")
+    parser.add_argument("--spec", default="examples/boxes-paper.toml", help="a box sweep spec with two axes")
     args = parser.parse_args()
 
-    from lyapcheck import boxes
     from lyapcheck.certification import build_system
     from lyapcheck.conditions import ges
-    from lyapcheck.params import problem_from_sources
+    from sweeps.box_store import BoxStore
+    from sweeps.box_summary import summarize_boxes
+    from sweeps.boxes_run import run_boxes
+    from sweeps.runners import InlineRunner
+    from sweeps.spec import load_spec
 
-    problem = problem_from_sources("examples/paper.toml", {})
-    window = boxes.parse_box(WINDOW)
-    ges.run(build_system(problem, "derived"))  # warm: imports and program compilation, for both sides
-    boxes.certify_box(problem, window)
+    spec = load_spec(args.spec)
+    problem = spec.base
+    ges.run(build_system(problem, "derived"))  # warm: imports and stored programs, for both sides
 
-    start = time.perf_counter()
-    leaves = boxes.refine(problem, window, min_relative_width=args.min_width)
-    box_seconds = time.perf_counter() - start
-    certified_area = sum(log_area(leaf.box) for leaf in leaves if leaf.status == "certified")
-    box_share = certified_area / log_area(window)
+    with tempfile.TemporaryDirectory() as scratch:
+        out = Path(scratch) / "boxes.zarr"
+        start = time.perf_counter()
+        report = run_boxes(spec, out, runner=InlineRunner())
+        box_seconds = time.perf_counter() - start
+        summary = summarize_boxes(BoxStore.open_or_create(out, spec))
+    box_share = summary.area_fraction["certified"]
 
-    (_, a_lo, a_hi), (_, k_lo, k_hi) = window.bounds
-    side = 1
-    while (side + 1) ** 2 <= 10**4:
-        side += 1
-    grid = [(a, k) for a in np.geomspace(float(a_lo), float(a_hi), side) for k in np.geomspace(float(k_lo), float(k_hi), side)]
-    order = np.random.default_rng(0).permutation(len(grid))  # a uniform sample of the window in the time budget
+    (a_axis, k_axis) = spec.axes
+    side = 100
+    grid = [(a, k) for a in np.geomspace(a_axis.values[0], a_axis.values[-1], side)
+            for k in np.geomspace(k_axis.values[0], k_axis.values[-1], side)]
+    order = np.random.default_rng(0).permutation(len(grid))
     done = certified = 0
     start = time.perf_counter()
     for i in order:
         if time.perf_counter() - start >= box_seconds:
             break
         a, k = grid[i]
-        system = build_system(problem.with_gains(alpha_d=Fraction(a).limit_denominator(10**6),
-                                                 k_d=Fraction(k).limit_denominator(10**6)), "derived")
-        certified += ges.run(system).status == "certified"
+        gains = {a_axis.name: Fraction(a), k_axis.name: Fraction(k)}
+        certified += ges.run(build_system(problem.with_gains(**gains), "derived")).status == "certified"
         done += 1
-    print(f"window {', '.join(WINDOW)}; minimum relative box width {args.min_width}")
-    print(f"boxes: {len(leaves)} leaves in {box_seconds:.1f} s = {len(leaves) / box_seconds:.2f} leaf boxes/s "
-          f"(split boxes cost one call each too; {sum(leaf.status == 'certified' for leaf in leaves)} certified)")
+    point_share = certified / max(done, 1)
+    print(f"spec {args.spec}: window {a_axis.name} {a_axis.values[0]:g}..{a_axis.values[-1]:g} x "
+          f"{k_axis.name} {k_axis.values[0]:g}..{k_axis.values[-1]:g}")
+    print(f"boxes: {report.boxes_in_tree} computed in {box_seconds:.1f} s = {report.boxes_in_tree / box_seconds:.2f} "
+          f"boxes/s; {summary.leaves} leaves, {summary.certified_boxes} certified")
     print(f"certified share of the window (log-area), proved for every point: {box_share:.3f}")
-    print(f"points in the same {box_seconds:.1f} s: {done} certified one by one, share certified "
-          f"{certified / max(done, 1):.3f} (each a proof for its own point only)")
+    print(f"points in the same {box_seconds:.1f} s: {done} certified one by one, share certified {point_share:.3f} "
+          "(each a proof for its own point only)")
+    print(f"ratio proved-area share / sampled-point share: {box_share / point_share if point_share else float('nan'):.3f}")
+    print(f"cross-check: {summary.cross_checked_points} simulated points, worst envelope ratio "
+          f"{summary.worst_envelope_ratio:.3g}")
 
 
 if __name__ == "__main__":
