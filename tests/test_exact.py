@@ -17,11 +17,11 @@ small = st.fractions(min_value=-50, max_value=50, max_denominator=40)
 @settings(max_examples=300, derandomize=True)
 @given(small, small, st.fractions(min_value=0, max_value=50, max_denominator=40))
 def test_sign_of_a_plus_b_sqrt_q_matches_high_precision(a: Q, b: Q, q: Q) -> None:
-    from decimal import Decimal, getcontext
+    from decimal import Decimal, localcontext
 
-    getcontext().prec = 80
-    value = Decimal(a.numerator) / Decimal(a.denominator) + Decimal(b.numerator) / Decimal(b.denominator) * (
-        Decimal(q.numerator) / Decimal(q.denominator)).sqrt()
+    with localcontext(prec=80):  # the process-wide context stays as other tests expect it
+        value = Decimal(a.numerator) / Decimal(a.denominator) + Decimal(b.numerator) / Decimal(b.denominator) * (
+            Decimal(q.numerator) / Decimal(q.denominator)).sqrt()
     expected = (value > 0) - (value < 0)
     if abs(value) > Decimal("1e-60"):
         assert exact.sign_a_plus_b_sqrt(a, b, q) == expected
