@@ -204,28 +204,44 @@ def add_tightness(results: "Mapping[str, ConditionResult]", problem: "Problem", 
 
 
 def certify_box(params: Any = None, box: Sequence[str] | Any = (), *, dynamics: str = "derived",
-                overrides: Mapping[str, object] | None = None) -> CertifyResult:
+                overrides: Mapping[str, object] | None = None, classes: str | Sequence[str] | None = None
+                ) -> CertifyResult:
     """GES for every gain set in a box (``["alpha_d=540..660", "k_d=0.1..0.2"]``), one exact proof.
 
     The parameters not in the box are taken from ``params`` / ``overrides``; see
-    :mod:`lyapcheck.boxes` for why a check at the corners covers the whole box. The result's
-    document is a certificate that :func:`verify` re-checks without a solver.
+    :mod:`lyapcheck.boxes` for why a check at the corners covers the whole box. ``classes``:
+    names among :data:`lyapcheck.boxes.BOX_CLASSES` (comma-separated or a list; default all).
+    The result's document is a certificate that :func:`verify` re-checks without a solver.
     """
-    from lyapcheck.boxes import ParameterBox, certify_box as prove_box, parse_box
+    from lyapcheck.boxes import BOX_CLASSES, ParameterBox, certify_box as prove_box, parse_box
     from lyapcheck.certificate import build_box_document
     from lyapcheck.conditions.base import ConditionResult
 
+    chosen = _box_classes(classes, BOX_CLASSES)
     parsed = box if isinstance(box, ParameterBox) else parse_box(list(box))
     problem = problem_from(_box_filled(params, overrides, parsed))
     if dynamics not in ("derived", "printed"):
         raise InvalidParameter("dynamics", "one of 'derived', 'printed'", dynamics)
-    result = prove_box(problem, parsed, dynamics)
-    doc = build_box_document(problem, parsed, dynamics, result)
-    condition = ConditionResult("ges", result["status"], result["summary"],
-                                numbers={k: v for k, v in result.items()
-                                         if k not in ("status", "summary", "certificate", "solver", "property")},
-                                certificate=result.get("certificate", {}), solver=result.get("solver", {}))
-    return CertifyResult(verdict=doc["verdict"], dynamics=dynamics, conditions={"ges": condition}, document=doc)
+    results = {cls: prove_box(problem, parsed, dynamics, cls) for cls in chosen}
+    doc = build_box_document(problem, parsed, dynamics, results)
+    conditions = {
+        cls: ConditionResult(cls, result["status"], result["summary"],
+                             numbers={k: v for k, v in result.items()
+                                      if k not in ("status", "summary", "certificate", "solver", "property", "refutation")},
+                             certificate=result.get("certificate", {}), solver=result.get("solver", {}),
+                             refutation=result.get("refutation") or {})
+        for cls, result in results.items()}
+    return CertifyResult(verdict=doc["verdict"], dynamics=dynamics, conditions=conditions, document=doc)
+
+
+def _box_classes(classes: str | Sequence[str] | None, allowed: Sequence[str]) -> list[str]:
+    """The box classes asked for, in the order of ``allowed`` (one-line error naming the field)."""
+    if classes is None:
+        return list(allowed)
+    names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes)]
+    if not names or any(n not in allowed for n in names):
+        raise InvalidParameter("classes", "box classes among " + ", ".join(allowed), ",".join(map(str, names)))
+    return [c for c in allowed if c in names]
 
 
 def _box_filled(params: Any, overrides: Mapping[str, object] | None, box: Any) -> Any:

@@ -132,8 +132,30 @@ def scaled_hull(problem: Problem, box: ParameterBox, dynamics: str) -> tuple[lis
     return unique, min(d.time_scale for d in points)
 
 
-def certify_box(problem: Problem, box: ParameterBox, dynamics: str = "derived") -> dict[str, Any]:
-    """GES (class ``ges``) for every gain set in ``box``; a JSON-ready result with its certificate."""
+#: classes with box certificates, cheapest first
+BOX_CLASSES: tuple[str, ...] = ("sector_ges", "ges")
+
+
+def certify_box(problem: Problem, box: ParameterBox, dynamics: str = "derived", cls: str = "ges") -> dict[str, Any]:
+    """GES for every gain set in ``box`` by class ``cls`` (:data:`BOX_CLASSES`); a JSON-ready result."""
+    if cls == "sector_ges":
+        return _certify_sector_box(problem, box, dynamics)
+    if cls != "ges":
+        raise InvalidParameter("classes", "box classes among " + ", ".join(BOX_CLASSES), cls)
+    return _certify_ges_box(problem, box, dynamics)
+
+
+def verify_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any],
+               cls: str = "ges") -> tuple[bool, str]:
+    """Re-check a box certificate of class ``cls`` exactly (no solver)."""
+    if cls == "sector_ges":
+        return _verify_sector_box(problem, box, dynamics, result)
+    if cls != "ges":
+        return False, f"'{cls}' has no box certificates"
+    return _verify_ges_box(problem, box, dynamics, result)
+
+
+def _certify_ges_box(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any]:
     from lyapcheck.conditions import ges
 
     hull = scaled_hull(problem, box, dynamics)
@@ -159,7 +181,7 @@ def certify_box(problem: Problem, box: ParameterBox, dynamics: str = "derived") 
             "solver": {"solves": log}}
 
 
-def verify_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any]) -> tuple[bool, str]:
+def _verify_ges_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-derive the ``(c, a, b)`` box from the parameter box and re-check every vertex exactly."""
     from lyapcheck import exact
     from lyapcheck.conditions import ges
@@ -180,6 +202,166 @@ def verify_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mappi
         if not ok:
             return False, f"at (c, a, b) = ({float(v.c):.6g}, {float(v.a):.6g}, {float(v.b):.6g}): {why}"
     return True, f"the ges conditions hold exactly at all {len(vertices)} vertices of the (c, a, b) box"
+
+
+# -- sector_ges over a box: one quadratic V for the whole polytope ------------------------------------
+#: vertices of the box's matrix polytope handed to the solver (repeated to this count: the
+#: stored program ``sector_8`` has eight vertex parameters)
+SECTOR_BOX_VERTICES = 8
+
+
+def sector_polytope(vertices: Sequence[Any]) -> list[Any]:
+    """The matrices ``[[-1, c], [r, -a]]`` at the corners of ``c, a`` ranges and ``r in {0, b_max}``.
+
+    In scaled coordinates the sector system is ``x' = [[-1, c], [r, -a]] x`` with ``0 < r <= b``
+    (:mod:`lyapcheck.conditions.sector` in the coordinates of :mod:`lyapcheck.conditions.ges`), and
+    over the box ``c``, ``a``, ``b`` range over the intervals spanned by the ``(c, a, b)`` hull. The
+    matrix is affine in ``(c, a, r)``, so every matrix of every gain set in the box lies in the
+    convex hull of these, and a quadratic form decreasing at them decreases at every one.
+    """
+    from lyapcheck import exact
+
+    cs = sorted({v.c for v in vertices})
+    as_ = sorted({v.a for v in vertices})
+    b_max = max(v.b for v in vertices)
+    out = []
+    for c in (cs[0], cs[-1]):
+        for a in (as_[0], as_[-1]):
+            for r in (Fraction(0), b_max):
+                m = exact.matrix([[-1, c], [r, -a]])
+                if m not in out:
+                    out.append(m)
+    return out
+
+
+def _eigen_bounds(P: Any) -> tuple[Fraction, Fraction] | None:
+    """Rationals ``c1 <= lambda_min(P)``, ``c2 >= lambda_max(P)``, checked exactly (``c1 > 0``)."""
+    import numpy as np
+
+    from lyapcheck import exact
+
+    lam = np.linalg.eigvalsh(np.array(exact.to_float(P)))
+    c1 = exact.to_rational(float(lam[0]) * (1 - 1e-6), 8)
+    c2 = exact.to_rational(float(lam[1]) * (1 + 1e-6), 8)
+    eye = exact.matrix([[1, 0], [0, 1]])
+    if c1 <= 0 or not exact.is_positive_definite(exact.add(P, exact.scale(-c1, eye))) \
+            or not exact.is_positive_definite(exact.add(exact.scale(c2, eye), exact.scale(-1, P))):
+        return None
+    return c1, c2
+
+
+def _certify_sector_box(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any]:
+    """``sector_ges`` for every gain set in ``box``: a common ``P`` over :func:`sector_polytope`.
+
+    Refuted (exactly) when a corner's own two sector matrices have no common quadratic Lyapunov
+    function (Shorten-Narendra): that corner is a gain set of the box, so no ``P`` serves the box.
+    """
+    from lyapcheck import exact
+    from lyapcheck.certification import build_system
+    from lyapcheck.conditions import sector
+    from lyapcheck.conditions.sos import scaled_dynamics
+
+    hull = scaled_hull(problem, box, dynamics)
+    if hull is None:
+        return {"status": "not_certified", "property": "GES",
+                "summary": "the dynamics at some corner do not have the structure this class needs"}
+    vertices, ts_min = hull
+    # the corners of the parameter box are gain sets of the box (the (c, a, b) hull's vertices
+    # need not be: they combine the ranges independently)
+    for corner, p in zip(box.corners(), corner_problems(problem, box)):
+        v = scaled_dynamics(build_system(p, dynamics))
+        assert v is not None  # scaled_hull succeeded at every corner
+        refuted = sector.refutation([exact.matrix([[-1, v.c], [0, -v.a]]), exact.matrix([[-1, v.c], [v.b, -v.a]])])
+        if refuted is not None:
+            where = ", ".join(f"{name} = {float(value):.6g}" for name, value in corner.items())
+            return {"status": "refuted", "property": "GES", "box": box.to_json(),
+                    "refutation": {**refuted, "point": {name: str(value) for name, value in corner.items()}},
+                    "summary": f"no quadratic V common to the box: at its corner {where}, {refuted['statement']}"}
+    polytope = sector_polytope(vertices)
+    padded = (polytope * SECTOR_BOX_VERTICES)[:SECTOR_BOX_VERTICES]
+    P, rate, margin, report = sector.certify_polytope(padded)
+    bounds = None if P is None or not rate else _eigen_bounds(P)
+    if P is None or not rate or bounds is None:
+        return {"status": "not_certified", "property": "GES", "box": box.to_json(),
+                "summary": f"no quadratic V common to the box was found ({box.describe()}, margin "
+                           f"{margin if margin is not None else 'n/a'}); this is not a proof that GES fails",
+                "solver": {"solves": [report.to_json()]}}
+    c1, c2 = bounds
+    k = math.sqrt(float(c2 / c1))
+    decay = float(rate * ts_min)
+    summary = (f"GES for every gain set with {box.describe()}: |x(t)| <= {k:.3g} |x0| exp(-{decay:.3g} t) "
+               "(x = (eps, sigma0 s)/Delta), one quadratic V = x^T P x checked exactly at the polytope's "
+               f"{len(polytope)} vertices")
+    return {"status": "certified", "property": "GES", "summary": summary, "box": box.to_json(), "k": k,
+            "decay_rate_per_s": decay,
+            "certificate": {"P": exact.to_json(P), "decay_rate_scaled": str(rate), "c1": str(c1), "c2": str(c2),
+                            "vertices": [[str(v.c), str(v.a), str(v.b)] for v in vertices],
+                            "time_scale_min": str(ts_min)},
+            "solver": {"solves": [report.to_json()]}}
+
+
+def _verify_sector_box(problem: Problem, box: ParameterBox, dynamics: str,
+                       result: Mapping[str, Any]) -> tuple[bool, str]:
+    from lyapcheck import exact
+    from lyapcheck.conditions import sector
+
+    hull = scaled_hull(problem, box, dynamics)
+    if hull is None:
+        return False, "the dynamics at some corner do not have the structure this class needs"
+    vertices, ts_min = hull
+    cert = result["certificate"]
+    stored = {tuple(Fraction(x) for x in v) for v in cert["vertices"]}
+    if stored != {(v.c, v.a, v.b) for v in vertices} or Fraction(cert["time_scale_min"]) != ts_min:
+        return False, "the stored (c, a, b) vertices or min |a11| do not match the box"
+    P = exact.from_json(cert["P"])
+    if len(P) != 2 or not exact.is_symmetric(P):
+        return False, "P must be a symmetric 2x2 matrix"
+    rate, c1, c2 = (Fraction(cert[k]) for k in ("decay_rate_scaled", "c1", "c2"))
+    if rate <= 0 or c1 <= 0:
+        return False, "the decay rate and c1 must be positive"
+    eye = exact.matrix([[1, 0], [0, 1]])
+    if not (exact.is_positive_definite(exact.add(P, exact.scale(-c1, eye)))
+            and exact.is_positive_definite(exact.add(exact.scale(c2, eye), exact.scale(-1, P)))):
+        return False, "c1 I < P < c2 I does not hold"
+    polytope = sector_polytope(vertices)
+    ok, why = sector.exact_check(polytope, P, rate)
+    if not ok:
+        return False, why
+    k = math.sqrt(float(c2 / c1))
+    if "k" in result and not float(result["k"]) >= k * (1 - 1e-12):
+        return False, f"the stated k = {result['k']} is below sqrt(c2/c1) = {k}"
+    if "decay_rate_per_s" in result and not float(result["decay_rate_per_s"]) <= float(rate * ts_min) * (1 + 1e-12):
+        return False, f"the stated decay rate {result['decay_rate_per_s']} exceeds the certified {float(rate * ts_min)}"
+    return True, f"one P > 0 decreases at all {len(polytope)} vertices of the box's matrix polytope, exactly"
+
+
+def verify_box_refutation(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any],
+                          cls: str) -> tuple[bool, str]:
+    """Re-check a box's refutation: its point lies in the box and is refuted there, exactly."""
+    from dataclasses import replace
+
+    from lyapcheck import exact
+    from lyapcheck.certification import build_system
+    from lyapcheck.conditions import sector
+    from lyapcheck.conditions.sos import scaled_dynamics
+
+    if cls != "sector_ges":
+        return False, f"'{cls}' has no box refutations"
+    point = {name: Fraction(value) for name, value in result["refutation"]["point"].items()}
+    bounds = {name: (lo, hi) for name, lo, hi in box.bounds}
+    if set(point) != set(bounds) or any(not bounds[n][0] <= x <= bounds[n][1] for n, x in point.items()):
+        return False, "the refuting point is not a point of the box"
+    gains = {n: x for n, x in point.items() if n != "e11"}
+    p = problem.with_gains(**gains) if gains else problem
+    if "e11" in point:
+        p = replace(p, swimmer=replace(p.swimmer, e11=point["e11"]))
+    v = scaled_dynamics(build_system(p, dynamics))
+    if v is None:
+        return False, "the dynamics at the refuting point do not have the structure this class needs"
+    refuted = sector.refutation([exact.matrix([[-1, v.c], [0, -v.a]]), exact.matrix([[-1, v.c], [v.b, -v.a]])])
+    if refuted is None:
+        return False, "the stated point is not refuted (Shorten-Narendra does not apply there)"
+    return True, f"refuted at a point of the box: {refuted['statement']}"
 
 
 @dataclass(frozen=True)

@@ -81,25 +81,27 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
     }
 
 
-def build_box_document(problem: Any, box: Any, dynamics: str, result: dict[str, Any]) -> dict[str, Any]:
-    """A certificate for every gain set in ``box`` (:mod:`lyapcheck.boxes`; class ``ges``)."""
+def build_box_document(problem: Any, box: Any, dynamics: str, results: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """A certificate for every gain set in ``box`` (:mod:`lyapcheck.boxes`), one entry per class."""
+    certified = any(r["status"] == "certified" for r in results.values())
     return {
         "schema_version": SCHEMA_VERSION,
         "kind": KIND,
         "inputs": document_inputs(problem),
         "box": box.to_json(),
         "dynamics": dynamics,
-        "conditions": {"ges": result},
-        "verdict": "certified" if result["status"] == "certified" else "not_certified",
+        "conditions": results,
+        "verdict": "certified" if certified else "not_certified",
         "versions": package_versions(),
     }
 
 
 def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
-    """Exact re-check of a box certificate: the (c, a, b) hull from the box, every vertex."""
+    """Exact re-check of a box certificate: every certified class from the box alone, and every
+    refutation at its stated point (which must lie in the box)."""
     from dataclasses import replace
 
-    from lyapcheck.boxes import ParameterBox, verify_box
+    from lyapcheck.boxes import BOX_CLASSES, ParameterBox, verify_box, verify_box_refutation
     from lyapcheck.params import Actuation, GainSet, Problem, Swimmer
 
     try:
@@ -111,12 +113,18 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         box = ParameterBox.from_json(doc["box"])
         if any(lo <= 0 or lo > hi for _, lo, hi in box.bounds):
             raise ValueError("box bounds must satisfy 0 < lo <= hi")
-        result = doc["conditions"]["ges"]
+        conditions = doc["conditions"]
+        if not isinstance(conditions, dict) or any(cls not in BOX_CLASSES for cls in conditions):
+            raise ValueError(f"conditions must be classes among {', '.join(BOX_CLASSES)}")
         rows: list[tuple[str, bool, str]] = []
-        if result.get("status") == "certified":
-            ok, why = verify_box(problem, box, doc["dynamics"], result)
-            rows.append(("ges", ok, why if ok else f"ges: {why}"))
-        proven = any(ok for n, ok, _ in rows if n == "ges")
+        for cls, result in conditions.items():
+            if result.get("status") == "certified":
+                ok, why = verify_box(problem, box, doc["dynamics"], result, cls)
+                rows.append((cls, ok, why if ok else f"{cls}: {why}"))
+            elif result.get("status") == "refuted":
+                ok, why = verify_box_refutation(problem, box, doc["dynamics"], result, cls)
+                rows.append((cls, ok, why if ok else f"{cls}: {why}"))
+        proven = any(ok and conditions[n].get("status") == "certified" for n, ok, _ in rows)
         expected = "certified" if proven else "not_certified"
         rows.append(("verdict", doc.get("verdict") == expected,
                      f"verdict '{doc.get('verdict')}' is supported" if doc.get("verdict") == expected

@@ -61,7 +61,7 @@ FAMILIES: Final[dict[str, tuple[str, str]]] = {
     "ges": ("lyapcheck.conditions.ges", "build_program"),
 }
 #: the programs stored in ``_compiled/`` (others are compiled in-process on first use)
-PROGRAMS: Final = ("prop41", "sector", "ultimate", "sos_4", "sos_6", "sos_bound", "level_4", "level_6", "ges_4_24_1")
+PROGRAMS: Final = ("prop41", "sector", "sector_8", "ultimate", "sos_4", "sos_6", "sos_bound", "level_4", "level_6", "ges_4_24_1")
 
 
 def key_of(family: str, *args: int) -> str:

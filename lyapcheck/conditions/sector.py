@@ -30,24 +30,29 @@ from lyapcheck.conditions.base import ConditionResult, System
 from lyapcheck.conditions.sdp import CompiledProgram, SolveReport
 
 
-def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
-    """max m s.t. -(A_i^T P + P A_i) >= m I (i = lo, hi), P >= m I, trace P = 1 (DPP; compiled once)."""
-    A_lo = cp.Parameter((2, 2), name="A_lo")
-    A_hi = cp.Parameter((2, 2), name="A_hi")
+def vertex_names(vertices: int) -> list[str]:
+    """Parameter names of the vertex matrices: ``A_lo, A_hi`` for the sector's two end points,
+    ``A_0 .. A_{n-1}`` for a polytope of ``n`` (the box certificates of :mod:`lyapcheck.boxes`)."""
+    return ["A_lo", "A_hi"] if vertices == 2 else [f"A_{i}" for i in range(vertices)]
+
+
+def build_program(cp: Any, vertices: int = 2) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """max m s.t. -(A_i^T P + P A_i) >= m I at every vertex, P >= m I, trace P = 1 (DPP; compiled once)."""
+    params = {name: cp.Parameter((2, 2), name=name) for name in vertex_names(vertices)}
     P = cp.Variable((2, 2), symmetric=True, name="P")
     m = cp.Variable(name="m")
     eye = np.eye(2)
     cons = [cp.trace(P) == 1, P >> m * eye, m <= 1]
-    for a in (A_lo, A_hi):
+    for a in params.values():
         q = -(a.T @ P + P @ a)
         cons.append((q + q.T) / 2 >> m * eye)
-    return cp.Problem(cp.Maximize(m), cons), {"A_lo": A_lo, "A_hi": A_hi}, {"P": P, "m": m}
+    return cp.Problem(cp.Maximize(m), cons), params, {"P": P, "m": m}
 
 
-def program() -> CompiledProgram:
+def program(vertices: int = 2) -> CompiledProgram:
     from lyapcheck.conditions import compiled
 
-    return compiled.load("sector")
+    return compiled.load("sector" if vertices == 2 else compiled.key_of("sector", vertices))
 
 
 def exact_check(vertices: list[exact.Matrix], P: exact.Matrix, rate: Fraction) -> tuple[bool, str]:
@@ -80,9 +85,13 @@ def refutation(vertices: list[exact.Matrix]) -> dict[str, Any] | None:
 
 
 def certify_polytope(vertices: list[exact.Matrix]) -> tuple[exact.Matrix | None, Fraction | None, float | None, Any]:
-    """Search and exactly check a common quadratic Lyapunov function; returns (P, rate, margin, report)."""
+    """Search and exactly check a common quadratic Lyapunov function; returns (P, rate, margin, report).
+
+    Two vertices (the sector's end points) or eight (a box's polytope, repeated vertices allowed).
+    """
     sc = scaling.choose(vertices)
-    solved = program().solve({"A_lo": sc.matrix_to_scaled(vertices[0]), "A_hi": sc.matrix_to_scaled(vertices[1])})
+    names = vertex_names(len(vertices))
+    solved = program(len(vertices)).solve({n: sc.matrix_to_scaled(v) for n, v in zip(names, vertices)})
     report: SolveReport = solved.report
     if report.outcome != "optimal" or solved.values is None:
         return None, None, None, report
