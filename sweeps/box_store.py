@@ -37,7 +37,7 @@ class BoxStore:
         self.group = group
         self.spec = spec
         self.capacity = spec.boxes.max_boxes
-        self.variables = box_variables(spec.dims)
+        self.variables = box_variables(spec.dims, spec.classes)
 
     @classmethod
     def open_or_create(cls, path: str | Path, spec: SweepSpec) -> "BoxStore":
@@ -81,7 +81,7 @@ def _build(path: Path, spec: SweepSpec) -> None:
                         "classes": json.dumps(list(spec.classes)),
                         "axis_scales": json.dumps({a.name: a.scale for a in spec.axes})})
     n = spec.boxes.max_boxes
-    for var in box_variables(spec.dims):
+    for var in box_variables(spec.dims, spec.classes):
         group.create_array(var.name, shape=(n,), dtype=var.dtype, chunks=(min(BOX_CHUNK, n),),
                            dimension_names=[BOX_DIM], fill_value=var.fill,
                            attributes={"description": var.description})

@@ -31,10 +31,12 @@ class BoxSummary:
     cross_checked_points: int
     worst_envelope_ratio: float
     violations: list[dict[str, Any]] = field(default_factory=list)
+    certified_by: dict[str, int] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         return {"mode": "boxes", "dims": list(self.dims), "boxes": self.boxes, "leaves": self.leaves,
                 "area_fraction": self.area_fraction, "certified_boxes": self.certified_boxes,
+                "certified_boxes_by_class": self.certified_by,
                 "cross_checked_points": self.cross_checked_points,
                 "worst_envelope_ratio": None if math.isnan(self.worst_envelope_ratio) else self.worst_envelope_ratio,
                 "soundness_violations": self.violations}
@@ -80,8 +82,10 @@ def summarize_arrays(dims: Sequence[str], scales: Mapping[str, str], window: Map
         listed.append(entry)
     if len(bad) > MAX_LISTED:
         listed.append({"more": int(len(bad) - MAX_LISTED)})
+    by_class = {name[len("status_"):]: int(np.sum(done & (np.asarray(values) == BOX_STATUS_CODES["certified"])))
+                for name, values in data.items() if name.startswith("status_")}
     return BoxSummary(tuple(dims), int(done.sum()), int(leaf.sum()), fractions, int(certified.sum()), runs,
-                      float(ratios.max()) if ratios.size else math.nan, listed)
+                      float(ratios.max()) if ratios.size else math.nan, listed, by_class)
 
 
 def summarize_boxes(store: Any) -> BoxSummary:

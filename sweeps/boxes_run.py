@@ -60,8 +60,8 @@ def initial_boxes(spec: SweepSpec) -> list[ParameterBox]:
 def evaluate_boxes(spec_text: str, boxes: Sequence[tuple[int, dict[str, list[str]]]]) -> dict[str, np.ndarray]:
     """One unit of work (runs in a worker): certify and cross-check each ``(id, box)``.
 
-    Returns per box: ``status`` code, ``k``, ``decay_rate_per_s``, ``cross_check_runs``,
-    ``cross_check_worst_ratio`` and ``soundness_violation``. A box's random points are drawn
+    Returns per box: ``status`` code, ``status_<class>``, ``k``, ``decay_rate_per_s`` (of the
+    certifying class), ``cross_check_runs``, ``cross_check_worst_ratio`` and ``soundness_violation``. A box's random points are drawn
     from ``(seed, id)``, so its result does not depend on the unit it was grouped in.
     """
     from lyapcheck.boxes import certify_box, cross_check
@@ -72,13 +72,21 @@ def evaluate_boxes(spec_text: str, boxes: Sequence[tuple[int, dict[str, list[str
     n = len(boxes)
     out = {"status": np.zeros(n, np.int8), "k": np.full(n, np.nan), "decay_rate_per_s": np.full(n, np.nan),
            "cross_check_runs": np.zeros(n, np.int16), "cross_check_worst_ratio": np.full(n, np.nan),
-           "soundness_violation": np.zeros(n, bool)}
+           "soundness_violation": np.zeros(n, bool),
+           **{f"status_{c}": np.full(n, -1, np.int8) for c in spec.classes}}
     for j, (box_id, data) in enumerate(boxes):
         box = ParameterBox.from_json(data)
-        with UNIT_LOCK:  # two threads of one Dask worker take turns (as sweeps.evaluate does)
-            result = certify_box(spec.base, box)
-        out["status"][j] = BOX_STATUS_CODES[result["status"]]
-        if result["status"] != "certified":
+        result: dict[str, Any] = {}
+        for cls in spec.classes:  # cheapest first; the first certificate decides the box
+            with UNIT_LOCK:  # two threads of one Dask worker take turns (as sweeps.evaluate does)
+                result = certify_box(spec.base, box, cls=cls)
+            out[f"status_{cls}"][j] = BOX_STATUS_CODES[result["status"]]
+            if result["status"] == "certified":
+                break
+        # a class's refutation is of that class's certificate, not of GES: the box stays undecided
+        status = "certified" if result.get("status") == "certified" else "not_certified"
+        out["status"][j] = BOX_STATUS_CODES[status]
+        if status != "certified":
             continue
         out["k"][j], out["decay_rate_per_s"][j] = result["k"], result["decay_rate_per_s"]
         runs, worst = cross_check(spec.base, box, result, spec.boxes.cross_check_points, (spec.boxes.seed, box_id))

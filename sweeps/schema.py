@@ -120,14 +120,21 @@ def status_code(status: str) -> int:
 
 # -- box sweeps (mode = "boxes"): one row per box ---------------------------------------------------
 #: status of a box: certified for every point, refuted at a point of it (exactly), split into two
-#: halves (an inner node of the refinement tree), or not certified (a leaf: minimum width or budget)
+#: halves (an inner node of the refinement tree), or not certified (a leaf: minimum width or budget).
+#: A box's GES is never refuted (lyapcheck.boxes explains why no exact obstruction exists); the
+#: code is kept for classes' own statuses (``status_sector_ges``: no common quadratic V)
 BOX_STATUS_CODES: Final[dict[str, int]] = {"not_certified": 0, "certified": 1, "refuted": 2, "split": 3}
 #: the dimension of a box store
 BOX_DIM: Final = "box"
 
 
-def box_variables(dims: tuple[str, ...]) -> tuple[Variable, ...]:
-    """Every variable of a box store over the swept parameters ``dims``, in a fixed order."""
+def box_variables(dims: tuple[str, ...], classes: tuple[str, ...] = ()) -> tuple[Variable, ...]:
+    """Every variable of a box store over the swept parameters ``dims`` with box ``classes``.
+
+    ``status`` is the box's: certified when one class certifies (the classes run cheapest first
+    and stop at the first certificate, so later classes stay ``-1`` there); ``status_<class>``
+    is each class's own (``refuted`` there is that class's exact refutation, not of GES).
+    """
     i8, i16, i32, f8, b1 = (np.dtype(t) for t in ("int8", "int16", "int32", "float64", "bool"))
     out = []
     for d in dims:
@@ -135,6 +142,8 @@ def box_variables(dims: tuple[str, ...]) -> tuple[Variable, ...]:
         out.append(Variable(f"hi_{d}", f8, np.nan, f"upper edge of the box in {d} (SI)"))
     out += [
         Variable("status", i8, NOT_COMPUTED, "0 not_certified, 1 certified, 2 refuted, 3 split, -1 not computed"),
+        *(Variable(f"status_{c}", i8, NOT_COMPUTED, f"{c} over the box: 0 not_certified, 1 certified, 2 refuted, "
+                   "-1 not computed") for c in classes),
         Variable("level", i16, -1, "refinement depth (0: a cell of the axes' grid)"),
         Variable("parent", i32, -1, "row of the box this one is a half of (-1: none)"),
         Variable("k", f8, np.nan, "GES constant of the box's certificate: |x(t)| <= k |x0| exp(-rate t)"),
@@ -169,7 +178,11 @@ def check_box_dataset(ds: Any, source: str) -> None:
         raise bad(f"dims {list(dims)}, expected one to three of {', '.join(SWEEPABLE)}")
     if tuple(map(str, ds.dims)) != (BOX_DIM,):
         raise bad(f"dimensions {list(map(str, ds.dims))}, expected ['{BOX_DIM}']")
-    for var in box_variables(dims):
+    try:
+        classes = tuple(json.loads(str(ds.attrs.get("classes", "[]"))))
+    except (TypeError, ValueError):
+        raise bad("its 'classes' attribute is not a JSON list") from None
+    for var in box_variables(dims, tuple(map(str, classes))):
         if var.name not in ds.data_vars:
             raise bad(f"no variable '{var.name}'")
         data = ds[var.name]

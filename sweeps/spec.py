@@ -72,8 +72,9 @@ _AXIS_KEYS: Final = ("name", "start", "stop", "num", "scale", "values")
 _SWEEP_KEYS: Final = ("mode", "classes", "chunk_size", "axes", "refine", "boxes")
 _MODES: Final = ("points", "boxes")
 _BOX_KEYS: Final = ("min_relative_width", "max_boxes", "cross_check_points", "seed")
-#: classes with box certificates (:mod:`lyapcheck.boxes`); the default of a box sweep
-BOX_CLASSES: Final = ("ges",)
+#: classes with box certificates (:mod:`lyapcheck.boxes.BOX_CLASSES`, cheapest first); the default
+#: of a box sweep
+BOX_CLASSES: Final = ("sector_ges", "ges")
 #: largest box budget of one spec (the store preallocates one row per box)
 MAX_BOXES: Final = 100_000
 MAX_CROSS_CHECK_POINTS: Final = 100
@@ -380,7 +381,8 @@ def _box_spec(text: str, sweep: Mapping[str, Any], axes: tuple[Axis, ...], base:
                                "a [sweep.refine] table")
     chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
     boxes = _box_settings(sweep.get("boxes"), axes)
-    return SweepSpec(text=text, axes=axes, base=base, classes=tuple(raw), simulation=_simulation(None), refine=None,
+    classes = tuple(c for c in BOX_CLASSES if c in raw)  # canonical order: cheapest first
+    return SweepSpec(text=text, axes=axes, base=base, classes=classes, simulation=_simulation(None), refine=None,
                      chunk_size=chunk, mode="boxes", boxes=boxes)
 
 

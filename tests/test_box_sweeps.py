@@ -55,7 +55,7 @@ def _files(root: Path) -> dict[str, bytes]:
     (lambda s: s.replace('name = "k_d"\nstart = 0.05\nstop = 0.8',
                          'name = "d_max"\nstart = "0.01 mm/s"\nstop = "0.1 mm/s"').replace(
                              'd_max = "0.088 mm/s"\n', ''), "sweep.axes[1].name"),
-    (lambda s: s.replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["sector_ges"]'), "sweep.classes"),
+    (lambda s: s.replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["prop41_ges"]'), "sweep.classes"),
     (lambda s: s + "[sweep.refine]\nclass = \"ges\"\nlevels = 1\n", "sweep.refine"),
     (lambda s: s + "[simulation]\nhorizon = \"1 s\"\n", "simulation"),
     (lambda s: s.replace("max_boxes = 7", "max_boxes = 0"), "sweep.boxes.max_boxes"),
@@ -113,6 +113,10 @@ def test_the_tree_refines_and_certified_boxes_recheck_exactly(swept: tuple[Path,
         assert result["status"] == "certified"
         assert boxes.verify_box(problem, box, "derived", result)[0]
         assert result["k"] == pytest.approx(store.read("k")[row])
+    by_sector, by_ges = store.read("status_sector_ges"), store.read("status_ges")
+    assert ((by_sector[certified] == 1) | (by_ges[certified] == 1)).all()
+    assert (by_ges[by_sector == 1] == -1).all()  # the cheaper class decided: ges not run there
+    assert (by_ges[done & (by_sector != 1)] != -1).all()  # elsewhere ges was tried
     assert (store.read("cross_check_runs")[certified] == 1).all()
     assert (store.read("cross_check_worst_ratio")[certified] <= 1).all()
     assert not store.read("soundness_violation").any()
@@ -175,7 +179,7 @@ def test_command_line_box_sweep_json_and_export_refusal(tmp_path: Path) -> None:
 
 def test_shipped_box_example_parses() -> None:
     spec = parse_spec((ROOT / "examples" / "boxes-paper.toml").read_text())
-    assert spec.mode == "boxes" and spec.boxes is not None and spec.classes == ("ges",)
+    assert spec.mode == "boxes" and spec.boxes is not None and spec.classes == ("sector_ges", "ges")
     window = {a.name: (a.values[0], a.values[-1]) for a in spec.axes}
     paper = problem_from_sources(PAPER_TOML, {}).gains
     assert window["alpha_d"][0] < paper.alpha_d < window["alpha_d"][1]  # the window holds the paper's gains
