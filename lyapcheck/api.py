@@ -210,14 +210,15 @@ def certify_box(params: Any = None, box: Sequence[str] | Any = (), *, dynamics: 
 
     The parameters not in the box are taken from ``params`` / ``overrides``; see
     :mod:`lyapcheck.boxes` for why a check at the corners covers the whole box. ``classes``:
-    names among :data:`lyapcheck.boxes.BOX_CLASSES` (comma-separated or a list; default all).
+    names among :data:`lyapcheck.boxes.BOX_CLASSES` (comma-separated or a list; default the two
+    GES classes; ``sos_bound`` adds a bound on ``|eps|`` for the whole box, 20-30 s).
     The result's document is a certificate that :func:`verify` re-checks without a solver.
     """
-    from lyapcheck.boxes import BOX_CLASSES, ParameterBox, certify_box as prove_box, parse_box
+    from lyapcheck.boxes import BOX_CLASSES, DEFAULT_BOX_CLASSES, ParameterBox, certify_box as prove_box, parse_box
     from lyapcheck.certificate import build_box_document
     from lyapcheck.conditions.base import ConditionResult
 
-    chosen = _box_classes(classes, BOX_CLASSES)
+    chosen = _box_classes(classes, BOX_CLASSES) if classes is not None else list(DEFAULT_BOX_CLASSES)
     parsed = box if isinstance(box, ParameterBox) else parse_box(list(box))
     problem = problem_from(_box_filled(params, overrides, parsed))
     if dynamics not in ("derived", "printed"):

@@ -132,14 +132,23 @@ def scaled_hull(problem: Problem, box: ParameterBox, dynamics: str) -> tuple[lis
     return unique, min(d.time_scale for d in points)
 
 
-#: classes with box certificates, cheapest first
-BOX_CLASSES: tuple[str, ...] = ("sector_ges", "ges")
+#: classes with box certificates, cheapest first: two prove GES, ``sos_bound`` (20-30 s a box) an
+#: ultimate bound on |eps| (:mod:`lyapcheck.box_bounds`)
+BOX_CLASSES: tuple[str, ...] = ("sector_ges", "ges", "sos_bound")
+#: the classes whose certificate proves stability (GES): a box's verdict
+BOX_STABILITY_CLASSES: tuple[str, ...] = ("sector_ges", "ges")
+#: run by ``certify --box`` unless ``--classes`` says otherwise
+DEFAULT_BOX_CLASSES: tuple[str, ...] = ("sector_ges", "ges")
 
 
 def certify_box(problem: Problem, box: ParameterBox, dynamics: str = "derived", cls: str = "ges") -> dict[str, Any]:
     """GES for every gain set in ``box`` by class ``cls`` (:data:`BOX_CLASSES`); a JSON-ready result."""
     if cls == "sector_ges":
         return _certify_sector_box(problem, box, dynamics)
+    if cls == "sos_bound":
+        from lyapcheck.box_bounds import certify_bound_box
+
+        return certify_bound_box(problem, box, dynamics)
     if cls != "ges":
         raise InvalidParameter("classes", "box classes among " + ", ".join(BOX_CLASSES), cls)
     return _certify_ges_box(problem, box, dynamics)
@@ -150,6 +159,10 @@ def verify_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mappi
     """Re-check a box certificate of class ``cls`` exactly (no solver)."""
     if cls == "sector_ges":
         return _verify_sector_box(problem, box, dynamics, result)
+    if cls == "sos_bound":
+        from lyapcheck.box_bounds import verify_bound_box
+
+        return verify_bound_box(problem, box, dynamics, result)
     if cls != "ges":
         return False, f"'{cls}' has no box certificates"
     return _verify_ges_box(problem, box, dynamics, result)
@@ -245,7 +258,7 @@ def _eigen_bounds(P: Any) -> tuple[Fraction, Fraction] | None:
     c2 = exact.to_rational(float(lam[1]) * (1 + 1e-6), 8)
     eye = exact.matrix([[1, 0], [0, 1]])
     if c1 <= 0 or not exact.is_positive_definite(exact.add(P, exact.scale(-c1, eye))) \
-            or not exact.is_positive_definite(exact.add(exact.scale(c2, eye), exact.scale(-1, P))):
+            or not exact.is_positive_definite(exact.add(exact.scale(c2, eye), exact.scale(Fraction(-1), P))):
         return None
     return c1, c2
 
@@ -321,7 +334,7 @@ def _verify_sector_box(problem: Problem, box: ParameterBox, dynamics: str,
         return False, "the decay rate and c1 must be positive"
     eye = exact.matrix([[1, 0], [0, 1]])
     if not (exact.is_positive_definite(exact.add(P, exact.scale(-c1, eye)))
-            and exact.is_positive_definite(exact.add(exact.scale(c2, eye), exact.scale(-1, P)))):
+            and exact.is_positive_definite(exact.add(exact.scale(c2, eye), exact.scale(Fraction(-1), P)))):
         return False, "c1 I < P < c2 I does not hold"
     polytope = sector_polytope(vertices)
     ok, why = sector.exact_check(polytope, P, rate)

@@ -83,7 +83,9 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
 
 def build_box_document(problem: Any, box: Any, dynamics: str, results: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """A certificate for every gain set in ``box`` (:mod:`lyapcheck.boxes`), one entry per class."""
-    certified = any(r["status"] == "certified" for r in results.values())
+    from lyapcheck.boxes import BOX_STABILITY_CLASSES
+
+    certified = any(r["status"] == "certified" for c, r in results.items() if c in BOX_STABILITY_CLASSES)
     return {
         "schema_version": SCHEMA_VERSION,
         "kind": KIND,
@@ -101,7 +103,7 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     refutation at its stated point (which must lie in the box)."""
     from dataclasses import replace
 
-    from lyapcheck.boxes import BOX_CLASSES, ParameterBox, verify_box, verify_box_refutation
+    from lyapcheck.boxes import BOX_CLASSES, BOX_STABILITY_CLASSES, ParameterBox, verify_box, verify_box_refutation
     from lyapcheck.params import Actuation, GainSet, Problem, Swimmer
 
     try:
@@ -124,7 +126,8 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
             elif result.get("status") == "refuted":
                 ok, why = verify_box_refutation(problem, box, doc["dynamics"], result, cls)
                 rows.append((cls, ok, why if ok else f"{cls}: {why}"))
-        proven = any(ok and conditions[n].get("status") == "certified" for n, ok, _ in rows)
+        proven = any(ok and n in BOX_STABILITY_CLASSES and conditions[n].get("status") == "certified"
+                     for n, ok, _ in rows)
         expected = "certified" if proven else "not_certified"
         rows.append(("verdict", doc.get("verdict") == expected,
                      f"verdict '{doc.get('verdict')}' is supported" if doc.get("verdict") == expected
