@@ -82,8 +82,13 @@ def sweep_html(store: Any) -> str:
     """The sweep report as one self-contained HTML page (``store``: a path or an xarray Dataset)."""
     from reports.html import render_html
     from reports.sweep_page import sweep_context
+    from sweeps.schema import is_box_dataset
 
     dataset = read_store(store) if isinstance(store, (str, Path)) else store
+    if is_box_dataset(dataset):  # mode = "boxes": one row per box, not a grid of points
+        from reports.box_page import box_context
+
+        return render_html("boxes.html.j2", box_context(dataset))
     return render_html("sweep.html.j2", sweep_context(dataset))
 
 
