@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -45,11 +46,14 @@ def open_store(path: str | Path) -> Any:
     if not p.exists():
         raise InputFileError(f"sweep store '{p}' does not exist")
     try:
-        ds = xr.open_zarr(p, consolidated=False)
+        # zarr warns (e.g. an array directory without metadata) before it fails or skips: the
+        # checks after loading say what is wrong in one line, so its warnings are not printed
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return xr.open_zarr(p, consolidated=False).load()
     except Exception as exc:  # noqa: BLE001 - zarr/xarray raise many types for a corrupt store
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputFileError(f"'{p}' is not a readable sweep store (Zarr): {first}") from None
-    return ds.load()
 
 
 def _mpl(text: str) -> str:
