@@ -32,11 +32,13 @@ class BoxSummary:
     worst_envelope_ratio: float
     violations: list[dict[str, Any]] = field(default_factory=list)
     certified_by: dict[str, int] = field(default_factory=dict)
+    #: with sos_bound: boxes bounded, range of their certified bounds and of bound / worst simulated
+    bound: dict[str, Any] | None = None
 
     def to_json(self) -> dict[str, Any]:
         return {"mode": "boxes", "dims": list(self.dims), "boxes": self.boxes, "leaves": self.leaves,
                 "area_fraction": self.area_fraction, "certified_boxes": self.certified_boxes,
-                "certified_boxes_by_class": self.certified_by,
+                "certified_boxes_by_class": self.certified_by, **({"bound": self.bound} if self.bound else {}),
                 "cross_checked_points": self.cross_checked_points,
                 "worst_envelope_ratio": None if math.isnan(self.worst_envelope_ratio) else self.worst_envelope_ratio,
                 "soundness_violations": self.violations}
@@ -84,8 +86,16 @@ def summarize_arrays(dims: Sequence[str], scales: Mapping[str, str], window: Map
         listed.append({"more": int(len(bad) - MAX_LISTED)})
     by_class = {name[len("status_"):]: int(np.sum(done & (np.asarray(values) == BOX_STATUS_CODES["certified"])))
                 for name, values in data.items() if name.startswith("status_")}
+    bound = None
+    if "eps_bound_m" in data:
+        eps = np.asarray(data["eps_bound_m"])[done]
+        tight = np.asarray(data["tightness_ratio"])[done]
+        eps, tight = eps[np.isfinite(eps)], tight[np.isfinite(tight)]
+        bound = {"boxes_bounded": int(eps.size),
+                 "eps_bound_m_range": [float(eps.min()), float(eps.max())] if eps.size else None,
+                 "tightness_ratio_range": [float(tight.min()), float(tight.max())] if tight.size else None}
     return BoxSummary(tuple(dims), int(done.sum()), int(leaf.sum()), fractions, int(certified.sum()), runs,
-                      float(ratios.max()) if ratios.size else math.nan, listed, by_class)
+                      float(ratios.max()) if ratios.size else math.nan, listed, by_class, bound)
 
 
 def summarize_boxes(store: Any) -> BoxSummary:

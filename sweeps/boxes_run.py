@@ -74,25 +74,66 @@ def evaluate_boxes(spec_text: str, boxes: Sequence[tuple[int, dict[str, list[str
            "cross_check_runs": np.zeros(n, np.int16), "cross_check_worst_ratio": np.full(n, np.nan),
            "soundness_violation": np.zeros(n, bool),
            **{f"status_{c}": np.full(n, -1, np.int8) for c in spec.classes}}
+    ges_classes = [c for c in spec.classes if c != "sos_bound"]
+    if "sos_bound" in spec.classes:
+        out.update({"eps_bound_m": np.full(n, np.nan), "sim_worst_eps_m": np.full(n, np.nan),
+                    "tightness_ratio": np.full(n, np.nan)})
     for j, (box_id, data) in enumerate(boxes):
         box = ParameterBox.from_json(data)
         result: dict[str, Any] = {}
-        for cls in spec.classes:  # cheapest first; the first certificate decides the box
+        for cls in ges_classes:  # cheapest first; the first certificate decides the box
             with UNIT_LOCK:  # two threads of one Dask worker take turns (as sweeps.evaluate does)
                 result = certify_box(spec.base, box, cls=cls)
             out[f"status_{cls}"][j] = BOX_STATUS_CODES[result["status"]]
             if result["status"] == "certified":
                 break
+        bound = _bound(spec, box, box_id, out, j) if "sos_bound" in spec.classes else None
+        if not ges_classes:  # a bound-only sweep refines on the bound
+            result = bound or {}
         # a class's refutation is of that class's certificate, not of GES: the box stays undecided
         status = "certified" if result.get("status") == "certified" else "not_certified"
         out["status"][j] = BOX_STATUS_CODES[status]
-        if status != "certified":
+        if status != "certified" or "k" not in result:
             continue
         out["k"][j], out["decay_rate_per_s"][j] = result["k"], result["decay_rate_per_s"]
         runs, worst = cross_check(spec.base, box, result, spec.boxes.cross_check_points, (spec.boxes.seed, box_id))
         out["cross_check_runs"][j], out["cross_check_worst_ratio"][j] = runs, worst
-        out["soundness_violation"][j] = runs > 0 and not worst <= 1 + ENVELOPE_REL_TOL
+        out["soundness_violation"][j] |= runs > 0 and not worst <= 1 + ENVELOPE_REL_TOL
     return out
+
+
+def _bound(spec: SweepSpec, box: ParameterBox, box_id: int, out: dict[str, np.ndarray], j: int) -> dict[str, Any]:
+    """``sos_bound`` over the box, and the worst-case disturbance search at its random points.
+
+    The search is its deterministic screening round only (a vanishing time budget: no
+    refinement round fits), so a box's figures do not depend on the machine's speed.
+    """
+    from lyapcheck.boxes import certify_box, sample_points
+    from lyapcheck.simulation.worst_case import search_worst_case
+    from sweeps.soundness import BOUND_REL_TOL
+
+    assert spec.boxes is not None
+    with UNIT_LOCK:
+        result = certify_box(spec.base, box, cls="sos_bound")
+    out["status_sos_bound"][j] = BOX_STATUS_CODES.get(result["status"], BOX_STATUS_CODES["not_certified"])
+    if result["status"] != "certified":
+        return result
+    bound = float(result["eps_bound_m"])
+    out["eps_bound_m"][j] = bound
+    worst = -math.inf
+    for point in sample_points(box, spec.boxes.cross_check_points, (spec.boxes.seed, box_id, 1)):
+        found = search_worst_case(spec.base.with_gains(**point), budget_s=WORST_CASE_SCREENING_ONLY)
+        worst = max(worst, found.sup_abs_eps_tail_m)
+    if math.isfinite(worst):
+        out["sim_worst_eps_m"][j] = worst
+        out["tightness_ratio"][j] = bound / worst if worst > 0 else math.inf
+        out["soundness_violation"][j] |= worst > bound * (1 + BOUND_REL_TOL)
+    return result
+
+
+#: the worst-case search's time budget in a box sweep: below any round's cost, so only its
+#: (deterministic) screening round and final re-simulation run (about 8 s a point)
+WORST_CASE_SCREENING_ONLY = 1e-9
 
 
 def _units(todo: list[Node], workers: int, largest: int) -> Iterator[list[Node]]:

@@ -144,6 +144,11 @@ def box_variables(dims: tuple[str, ...], classes: tuple[str, ...] = ()) -> tuple
         Variable("status", i8, NOT_COMPUTED, "0 not_certified, 1 certified, 2 refuted, 3 split, -1 not computed"),
         *(Variable(f"status_{c}", i8, NOT_COMPUTED, f"{c} over the box: 0 not_certified, 1 certified, 2 refuted, "
                    "-1 not computed") for c in classes),
+        *((Variable("eps_bound_m", f8, np.nan, "sos_bound: limsup |eps| <= this for every gain set of the box, m"),
+           Variable("sim_worst_eps_m", f8, np.nan, "largest worst-case-search tail sup of |eps| at the box's random "
+                    "points, m"),
+           Variable("tightness_ratio", f8, np.nan, "eps_bound_m / sim_worst_eps_m"))
+          if "sos_bound" in classes else ()),
         Variable("level", i16, -1, "refinement depth (0: a cell of the axes' grid)"),
         Variable("parent", i32, -1, "row of the box this one is a half of (-1: none)"),
         Variable("k", f8, np.nan, "GES constant of the box's certificate: |x(t)| <= k |x0| exp(-rate t)"),
@@ -151,7 +156,7 @@ def box_variables(dims: tuple[str, ...], classes: tuple[str, ...] = ()) -> tuple
         Variable("cross_check_runs", i16, 0, "random points of the box simulated against its envelope"),
         Variable("cross_check_worst_ratio", f8, np.nan,
                  "largest |x(t)| / (k |x0| exp(-rate t)) seen in those simulations (<= 1: inside)"),
-        Variable("soundness_violation", b1, False, "a simulation left the certified envelope"),
+        Variable("soundness_violation", b1, False, "a simulation left the certified envelope or bound"),
         Variable("done", b1, False, "this box was computed and stored"),
     ]
     return tuple(out)

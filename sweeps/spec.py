@@ -28,7 +28,9 @@ parameters, plus a ``[sweep]`` and a ``[simulation]`` table::
 
 A box sweep (``mode = "boxes"`` in ``[sweep]``, :mod:`sweeps.boxes_run`) proves whole boxes
 instead of sampling points: the axes' values are the edges of the first boxes (``num >= 2`` per
-axis gives ``num - 1`` cells), ``classes`` is ``["ges"]`` (the class with box certificates), and::
+axis gives ``num - 1`` cells), ``classes`` are among ``["sector_ges", "ges", "sos_bound"]`` (the
+classes with box certificates; default the two GES ones, run cheapest first until one certifies;
+``sos_bound`` bounds ``limsup |eps|`` over each box and needs ``d_max`` and ``omega_so``), and::
 
     [sweep.boxes]
     min_relative_width = 0.05     # split undecided boxes until max(hi/lo - 1) is below this
@@ -72,9 +74,11 @@ _AXIS_KEYS: Final = ("name", "start", "stop", "num", "scale", "values")
 _SWEEP_KEYS: Final = ("mode", "classes", "chunk_size", "axes", "refine", "boxes")
 _MODES: Final = ("points", "boxes")
 _BOX_KEYS: Final = ("min_relative_width", "max_boxes", "cross_check_points", "seed")
-#: classes with box certificates (:mod:`lyapcheck.boxes.BOX_CLASSES`, cheapest first); the default
-#: of a box sweep
-BOX_CLASSES: Final = ("sector_ges", "ges")
+#: classes with box certificates (:mod:`lyapcheck.boxes.BOX_CLASSES`, cheapest first); the GES
+#: ones are the default of a box sweep; ``sos_bound`` (20-30 s a box, plus the worst-case search at
+#: the cross-check points) adds a certified bound on |eps| for every box
+BOX_CLASSES: Final = ("sector_ges", "ges", "sos_bound")
+BOX_GES_CLASSES: Final = ("sector_ges", "ges")
 #: largest box budget of one spec (the store preallocates one row per box)
 MAX_BOXES: Final = 100_000
 MAX_CROSS_CHECK_POINTS: Final = 100
@@ -372,7 +376,7 @@ def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
 
 def _box_spec(text: str, sweep: Mapping[str, Any], axes: tuple[Axis, ...], base: Problem) -> SweepSpec:
     """The rest of a ``mode = "boxes"`` spec (module docstring)."""
-    raw = sweep.get("classes", list(BOX_CLASSES))
+    raw = sweep.get("classes", list(BOX_GES_CLASSES))
     if not isinstance(raw, list) or not raw or any(c not in BOX_CLASSES for c in raw) or len(set(raw)) != len(raw):
         raise InvalidParameter("sweep.classes", "in a box sweep, a list of classes with box certificates ("
                                + ", ".join(repr(c) for c in BOX_CLASSES) + ")", raw)
@@ -382,6 +386,9 @@ def _box_spec(text: str, sweep: Mapping[str, Any], axes: tuple[Axis, ...], base:
     chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
     boxes = _box_settings(sweep.get("boxes"), axes)
     classes = tuple(c for c in BOX_CLASSES if c in raw)  # canonical order: cheapest first
+    if "sos_bound" in classes:  # its cross-check simulates the saturated loop under |d| <= d*
+        base.actuation.step_out()
+        base.disturbance_bound()
     return SweepSpec(text=text, axes=axes, base=base, classes=classes, simulation=_simulation(None), refine=None,
                      chunk_size=chunk, mode="boxes", boxes=boxes)
 

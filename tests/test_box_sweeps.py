@@ -184,3 +184,23 @@ def test_shipped_box_example_parses() -> None:
     paper = problem_from_sources(PAPER_TOML, {}).gains
     assert window["alpha_d"][0] < paper.alpha_d < window["alpha_d"][1]  # the window holds the paper's gains
     assert window["k_d"][0] < paper.k_d < window["k_d"][1]
+
+
+@pytest.mark.slow
+def test_bound_box_sweep_certifies_a_bound_and_the_worst_case_search_stays_inside(tmp_path: Path) -> None:
+    """classes = ["sos_bound"]: one box around the paper's gains gets limsup |eps| <= bound for
+    every gain set in it; the worst-case disturbance search at a random point stays below it."""
+    text = (SPEC.format(max_boxes=1).replace("start = 150\nstop = 2400", "start = 588\nstop = 612")
+            .replace("start = 0.05\nstop = 0.8", "start = 0.147\nstop = 0.153")
+            .replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["sos_bound"]'))
+    spec = parse_spec(text)
+    out = tmp_path / "bound.zarr"
+    run_boxes(spec, out, runner=InlineRunner())
+    store = BoxStore.open_or_create(out, spec)
+    assert store.read("status_sos_bound")[0] == BOX_STATUS_CODES["certified"]
+    bound, worst = store.read("eps_bound_m")[0], store.read("sim_worst_eps_m")[0]
+    assert 0.3455e-3 < bound < 0.5e-3  # above the paper point's own certified bound, as it must be
+    assert 0 < worst <= bound and store.read("tightness_ratio")[0] == pytest.approx(bound / worst)
+    assert not store.read("soundness_violation")[0]
+    summary = summarize_boxes(store).to_json()
+    assert summary["bound"]["boxes_bounded"] == 1 and summary["area_fraction"]["certified"] == pytest.approx(1.0)
