@@ -307,7 +307,7 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
                 from lyapcheck.conditions import saturated
 
                 ok, why = saturated.verify(system, c["certificate"], sat["certificate"], alpha_d=values["alpha_d"],
-                                           e11_hat=values["e11_hat"], omega_so=omega_so)
+                                           e11_hat=values["e11_hat"], omega_so=omega_so, k_d=values["k_d"])
                 ok_row("saturated_loop", ok, why, f"saturated_loop: {why}")
         c = conditions.get("sos_bound", {"status": "absent"})
         if c["status"] == "certified":

@@ -11,6 +11,10 @@ Cases: the paper's gains (derived and printed dynamics), the test suite's gain s
 points (corners and centre) of each shipped sweep spec through the sweep's own path
 (:func:`sweeps.evaluate.certify_point`, every class).
 
+Regenerated once on purpose since: when ``saturated_loop``'s reach argument replaced the crude
+wind-up box by the damped bound (issue 12), ``global_reach`` went from ``not_proved`` to
+``proved`` in six cases (the paper's gains and five sweep points) and nothing else differed.
+
 Regenerate only on purpose, from the code whose verdicts are the reference:
 ``PYTHONPATH=<tree> python tests/test_verdicts_unchanged.py --write``.
 """

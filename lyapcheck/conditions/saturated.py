@@ -19,12 +19,37 @@ What is proved (each step exact, with ``V`` from ``sos_gas``, in its scaled coor
    so ``V' <= -R h(R)`` with the concave ``h(R) = mu l R - k_d (g1 + g2 R + g3 R^2)``. If ``h > 0`` at
    ``R_lo`` and at ``R_hi >= Ysat``, ``{V <= c}`` is invariant and every trajectory from it ends in
    ``{V <= l R_lo^2}``: ``limsup |eps| <= sqrt(2) Delta R_lo``.
-3. Reaching from anywhere is claimed only if an exact sufficient condition holds (assumption:
-   H1/H2 hold under saturation, i.e. the swimmer keeps ``p_dot = e11 u + d``): the s-dynamics do
-   not depend on the controller, so ``|s| <= U/(2 k_d)`` eventually (box of ``ultimate_bound``); in
-   saturation ``eps`` moves toward the path at speed ``e11 Omega_SO |y| / sqrt(Delta^2 + y^2) - d*``.
-   If ``e11 Omega_SO > d* + sigma0 (k_d S + U/2)`` with ``S = U/(2 k_d)`` the strip is reached; the
-   reaching condition is evaluated and reported, never assumed.
+3. Reaching from anywhere (:func:`global_reach`; assumption: H1/H2 hold under saturation, i.e.
+   the swimmer keeps ``p_dot = e11 u + d`` with ``u`` radially saturated at ``Omega_SO``). In the
+   physical coordinates ``y = eps + sigma0 s``:
+
+   ``eps' = -phi(y) + E_0 d``,  ``s' = -(k_d + sigma0 U Delta / q) s + U Delta y / q``,  ``q = y^2 + Delta^2``,
+
+   with ``phi(y) = t_s y`` in the strip (``t_s = alpha_d e11 / e11_hat``) and ``e11 Omega_SO y /
+   sqrt(q)`` outside; ``|phi|`` grows with ``|y|`` and ``|phi(y)| >= t_s Y`` for ``|y| >= Y`` whenever
+   ``Y <= Y_sat`` (at the strip's edge the two laws agree). The s-dynamics do not depend on the
+   controller.
+
+   a. Wind-up. ``d|s|/dt <= -(1/q) [(k_d q + sigma0 U Delta) |s| - U Delta |y|]
+      <= -k_d (|s| - S*)`` with ``S* = max_y U Delta |y| / (k_d q + sigma0 U Delta)
+      = U Delta / (2 sqrt(k_d^2 Delta^2 + k_d sigma0 U Delta))``: the damping that the integrator
+      gets near the path (``sigma0 U / Delta``) caps it far below the box ``U / (2 k_d)`` of
+      ``ultimate_bound``. So for a rational ``S_1 > S*`` (checked by squaring), ``|s| <= S_1`` is
+      reached in finite time and never left.
+   b. Pull. For ``|s| <= S_1`` and ``|y| >= Y_q`` (a rational ``Delta <= Y_q <= Y_sat``, checked by
+      squaring; ``|y| / q`` and ``1 / q`` decrease for ``|y| >= Delta``):
+      ``sign(y) y' <= -t_s Y_q + |E_0| d* + sigma0 k_d S_1 + sigma0 U Delta Y_q / q_q
+      + sigma0^2 U Delta S_1 / q_q = -gamma``. When ``gamma > 0`` (exact), ``|y|`` falls at rate
+      ``>= gamma`` until ``|y| <= Y_q``, and the set ``K = {|y| <= Y_q, |s| <= S_1}`` is entered in
+      finite time and never left.
+   c. Inside ``K`` the loop is unsaturated: it IS the error dynamics of the other classes from the
+      entry time on, so every conclusion they prove from ANY initial condition (``sos_gas``:
+      convergence with ``d = 0``; ``sos_bound``: ``limsup |eps|`` under ``|d| <= d*``) holds for
+      the real, saturated loop from ANY initial condition.
+
+   The real loop is never GES, whatever the gains: ``|eps'| <= e11 Omega_SO + |E_0| d*`` bounds the
+   speed, so from ``|eps(0)| = E`` the error needs time ``>= E / (2 e11 Omega_SO)`` to halve,
+   while ``k |x0| exp(-lambda t)`` would halve it in a time independent of ``E``.
 """
 
 from __future__ import annotations
@@ -38,7 +63,7 @@ import numpy as np
 from lyapcheck import exact, poly
 from lyapcheck.conditions.base import ConditionResult, System
 from lyapcheck.conditions.sos import bases, scaled_dynamics
-from symbolic._generated import rho_of_y_sq, unsaturated_strip_sq
+from symbolic._generated import unsaturated_strip_sq
 
 SQRT2_UPPER = Fraction(141422, 100000)
 #: relative shrink of Omega_SO (given as a float-derived Fraction) to a safe lower bound
@@ -147,6 +172,30 @@ def h_value(R: Fraction, mu: Fraction, ell: Fraction, kd: Fraction, g: list[Frac
     return mu * ell * R - kd * sum((gk * R ** (k - 1) for k, gk in enumerate(g) if k >= 1), Fraction(0))
 
 
+def global_reach(system: System, *, k_d: Fraction, y_sat_sq: Fraction, time_scale: Fraction) -> dict[str, str] | None:
+    """Step 3 of the module docstring: rationals ``S_1 > S*``, ``Delta <= Y_q <= Y_sat`` and the
+    margin ``gamma`` (exact; reach is proved when ``gamma > 0``). None if ``Y_sat < Delta``."""
+    U, delta, sigma0 = system.speed, system.delta, system.sigma0
+    if y_sat_sq < delta**2:
+        return None
+    # S*^2 = U^2 Delta^2 / (4 k_d (k_d Delta^2 + sigma0 U Delta))
+    s_star_sq = U**2 * delta**2 / (4 * k_d * (k_d * delta**2 + sigma0 * U * delta))
+    S1 = exact.to_rational(math.sqrt(float(s_star_sq)) * (1 + 1e-6), 8)
+    while S1 * S1 <= s_star_sq:
+        S1 *= 1 + Fraction(1, 10**6)
+    Yq = exact.to_rational(math.sqrt(float(y_sat_sq)) * (1 - 1e-9), 8)
+    while Yq * Yq > y_sat_sq:
+        Yq *= 1 - Fraction(1, 10**9)
+    if Yq < delta:
+        return None
+    q = Yq**2 + delta**2
+    pull = time_scale * Yq
+    push = (abs(system.E[0]) * system.d_max + sigma0 * k_d * S1 + sigma0 * U * delta * Yq / q
+            + sigma0**2 * U * delta * S1 / q)
+    return {"S_star_sq": str(s_star_sq), "S_1": str(S1), "Y_q": str(Yq), "pull": str(pull), "push": str(push),
+            "gamma": str(pull - push)}
+
+
 def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: Fraction, e11_hat: Fraction,
         omega_so: Fraction, k_d: Fraction) -> ConditionResult:
     if system.dynamics != "derived":
@@ -220,29 +269,33 @@ def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: 
                              "eps_bound": str(eps_bound)})
                 summary += f"; with |d_perp| <= d* it stays there and ends within |eps| <= {float(eps_bound) * 1e3:.3g} mm"
         if not ok_bound:
-            summary += "; the disturbance bound d* is too large for this V to keep {V <= c} invariant"
+            summary += "; under d* this level set is not shown invariant (the reach argument below does not need it)"
             data["disturbance"] = "not proved"
 
-    # global reach (exact sufficient condition; see module docstring): once |s| <= S (1 + delta),
-    # in saturation y moves toward the strip at a speed of at least `rate`
-    S = system.speed / (2 * k_d) * (1 + Fraction(1, 10**6))
-    rho_sat = rho_of_y_sq(y_sat_sq, system.delta, system.speed)
-    # e11 Omega_SO Y / sqrt(Delta^2 + Y^2), bounded below exactly by squaring
-    pull_sq = (e11 * omega_lo) ** 2 * y_sat_sq / (system.delta**2 + y_sat_sq)
-    # the physical plant: d_perp enters eps_dot with gain 1 (eq:varepsilonDot, as derived)
-    push = system.d_max + system.sigma0 * ((k_d + system.sigma0 * rho_sat) * S + system.speed / 2)
-    proved = pull_sq > push * push
+    # global reach (module docstring, step 3)
+    reach = global_reach(system, k_d=k_d, y_sat_sq=y_sat_sq, time_scale=dyn.time_scale)
+    proved = reach is not None and Fraction(reach["gamma"]) > 0
     numbers["global_reach"] = "proved" if proved else "not_proved"
-    numbers["reach_condition"] = (
-        f"in saturation the swimmer pulls y toward the strip at {math.sqrt(float(pull_sq)):.3g} m/s; disturbance and "
-        f"integrator push at most {float(push):.3g} m/s (wind-up bound |s| <= U/(2 k_d) = {float(S):.3g} m)")
-    data["reach"] = {"pull_sq": str(pull_sq), "push": str(push), "s_bound": str(S)}
+    numbers["not_ges"] = (f"the real loop is not GES: |eps'| <= e11 Omega_SO + d* = "
+                          f"{float(e11 * omega_so + abs(system.E[0]) * system.d_max) * 1e3:.4g} mm/s bounds its speed")
+    if reach is not None:
+        data["reach"] = reach
+        numbers["windup_bound_s_m"] = float(Fraction(reach["S_1"]))
+        numbers["reach_set_y_half_width_m"] = float(Fraction(reach["Y_q"]))
+        numbers["reach_margin_m_per_s"] = float(Fraction(reach["gamma"]))
+        numbers["reach_condition"] = (
+            f"with |s| <= {float(Fraction(reach['S_1'])):.4g} m (wind-up, damped near the path) the swimmer pulls y "
+            f"toward the strip at >= {float(Fraction(reach['pull'])):.4g} m/s against pushes <= "
+            f"{float(Fraction(reach['push'])):.4g} m/s (disturbance and integrator)")
     if proved:
-        summary += ("; from ANY start the strip is reached (after |s| <= U/(2k_d)) and never left again"
-                    + ("" if system.d_max > 0 else ", so every trajectory converges to the path"))
+        assert reach is not None
+        summary += (f"; from ANY start the loop enters {{|eps + sigma0 s| <= {float(Fraction(reach['Y_q'])) * 1e3:.4g} mm, "
+                    f"|s| <= {float(Fraction(reach['S_1'])):.3g} m}} in finite time and never leaves it; there it is "
+                    "unsaturated, so the sos_gas and sos_bound conclusions hold for the real loop from any start "
+                    "(not GES: its speed is bounded)")
     else:
         summary += "; reaching the strip from anywhere is not proved (" + (
-            "the integrator's wind-up bound sigma0 U/(2 k_d) is too large)" if e11 * omega_lo > system.d_max
+            "the integrator's wind-up pushes y harder than the saturated swimmer pulls)" if e11 * omega_lo > system.d_max
             else "the swimmer cannot out-swim the disturbance bound)")
     summary = summary.replace("{V <= c} lies", f"{{V <= c}} (contains every start with s = 0, |eps| <= "
                               f"{numbers['invariant_eps_radius_m_at_s0'] * 1e3:.3g} mm) lies", 1)
@@ -250,7 +303,7 @@ def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: 
 
 
 def verify(system: System, sos_cert: dict[str, Any], cert: dict[str, Any], *, alpha_d: Fraction,
-           e11_hat: Fraction, omega_so: Fraction) -> tuple[bool, str]:
+           e11_hat: Fraction, omega_so: Fraction, k_d: Fraction | None = None) -> tuple[bool, str]:
     """Exact re-check of the invariance part (the level inside the strip) and the axis radius."""
     z_v, _ = bases(int(sos_cert["degree"]))
     V = poly.gram_form(z_v, exact.from_json(sos_cert["Q_V"]))
@@ -274,4 +327,29 @@ def verify(system: System, sos_cert: dict[str, Any], cert: dict[str, Any], *, al
     axis = sum((abs(Fraction(v)) * y0 ** m[0] for m, v in V.items() if m[1] == 0), Fraction(0))
     if axis > c:
         return False, "the stated axis radius is not inside {V <= c}"
+    if "reach" in cert and k_d is not None:
+        ok, why = verify_reach(system, cert["reach"], k_d=k_d, alpha_d=alpha_d, e11_hat=e11_hat, omega_so=omega_so)
+        if not ok:
+            return False, why
+        return True, "{V <= c} lies in the unsaturated strip and contains the stated starts; " + why
     return True, "{V <= c} lies in the unsaturated strip and contains the stated starts, exactly"
+
+
+def verify_reach(system: System, reach: dict[str, str], *, k_d: Fraction, alpha_d: Fraction, e11_hat: Fraction,
+                 omega_so: Fraction) -> tuple[bool, str]:
+    """Re-check step 3 from the inputs: ``S_1 > S*``, ``Delta <= Y_q <= Y_sat`` and ``gamma``."""
+    U, delta, sigma0 = system.speed, system.delta, system.sigma0
+    S1, Yq, gamma = Fraction(reach["S_1"]), Fraction(reach["Y_q"]), Fraction(reach["gamma"])
+    y_sat_sq = unsaturated_strip_sq(alpha_d, delta, e11_hat, omega_so * (1 - OMEGA_ROUNDING))
+    if not S1 * S1 * 4 * k_d * (k_d * delta**2 + sigma0 * U * delta) > U**2 * delta**2:
+        return False, "the wind-up bound S_1 is not above S*"
+    if not (delta <= Yq and Yq * Yq <= y_sat_sq):
+        return False, "Y_q is not between Delta and the strip's half-width"
+    q = Yq**2 + delta**2
+    time_scale = -system.A[0][0]
+    push = (abs(system.E[0]) * system.d_max + sigma0 * k_d * S1 + sigma0 * U * delta * Yq / q
+            + sigma0**2 * U * delta * S1 / q)
+    if gamma != time_scale * Yq - push:
+        return False, "the stated reach margin does not follow from the inputs"
+    return True, (f"global reach re-checked: margin {float(gamma):.4g} m/s" if gamma > 0
+                  else "global reach not proved (margin <= 0), as stated")
