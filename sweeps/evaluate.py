@@ -126,8 +126,13 @@ def _weight_constants(spec_text: str) -> tuple[float, float]:
     return float(w.a1[0]), float(w.a2[0])
 
 
-def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatArray | None]) -> dict[str, Any]:
-    """Tail sup of ``|eps|``, integrator status and divergence, per scenario, for every point."""
+def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatArray | None],
+                    storage: list[dict[str, Any] | None] | None = None) -> dict[str, Any]:
+    """Tail sup of ``|eps|``, integrator status and divergence, per scenario, for every point.
+
+    ``storage``: per point, the ``sos_bound`` certificate (for the worst-case search's
+    storage-gradient family), or None.
+    """
     from lyapcheck.simulation.disturbances import ADVERSARIAL_LAYER_FRACTION, Adversarial, Constant, Weight
     from lyapcheck.simulation.integrator import STATUS_OK
     from lyapcheck.simulation.model import LoopParams
@@ -166,7 +171,36 @@ def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatAr
             P = (P + np.swapaxes(P, 1, 2)) / 2
             layer = ADVERSARIAL_LAYER_FRACTION * params.delta_los
             run(name, Adversarial(d_max, P, layer, np.full(n, theta)), layer[:, None] * across[None, :])
+        elif name == "worst_case":
+            out[name] = _worst_case(spec, coords, storage or [None] * n)
     return out
+
+
+#: the worst-case search's time budget in a sweep: below any refinement round's cost, so only its
+#: deterministic screening round and final re-simulation run (a point's figure does not depend
+#: on the machine's speed, which resuming a sweep byte-for-byte needs)
+WORST_CASE_SCREENING_ONLY = 1e-9
+
+
+def _worst_case(spec: SweepSpec, coords: FloatArray, storage: list[dict[str, Any] | None]) -> dict[str, Any]:
+    """The worst-case disturbance search at every point, started on the path like the other
+    disturbance scenarios (inside every invariant set of the certificates)."""
+    from lyapcheck.errors import InvalidParameter
+    from lyapcheck.simulation.scenarios import Scenario
+    from lyapcheck.simulation.worst_case import search_worst_case
+
+    sim = spec.simulation
+    sups, failed = np.full(len(coords), np.nan), np.zeros(len(coords), dtype=bool)
+    for i, point in enumerate(coords):
+        scenario = Scenario(name="sweep-worst-case", problem=spec.problem_at(point), p0=(0.0, 0.0),
+                            horizon=sim.horizon, tail=sim.tail, rtol=sim.rtol)
+        try:
+            found = search_worst_case(scenario, budget_s=WORST_CASE_SCREENING_ONLY, storage=storage[i])
+        except InvalidParameter:  # an unusable storage certificate: search without that family
+            found = search_worst_case(scenario, budget_s=WORST_CASE_SCREENING_ONLY)
+        sups[i] = found.sup_abs_eps_tail_m
+        failed[i] = not math.isfinite(found.sup_abs_eps_tail_m)
+    return {"sup": np.where(failed, np.nan, sups), "failed": failed, "diverged": failed}
 
 
 def evaluate(spec: SweepSpec, coords: FloatArray) -> Result:
@@ -176,6 +210,7 @@ def evaluate(spec: SweepSpec, coords: FloatArray) -> Result:
     out = empty_result(n)
     eps_bound = np.full(n, np.nan)
     adversary: list[FloatArray | None] = []
+    storage: list[dict[str, Any] | None] = []
     for i in range(n):
         results = certify_point(spec.problem_at(coords[i]), spec.classes)
         for cls, res in results.items():
@@ -183,9 +218,11 @@ def evaluate(spec: SweepSpec, coords: FloatArray) -> Result:
             out[f"margin_{cls}"][i] = _margin(cls, res)
         eps_bound[i] = certified_bound(results)
         adversary.append(adversary_matrix(results))
+        bound = results.get("sos_bound")
+        storage.append(bound.certificate if bound is not None and bound.status == "certified" else None)
     out["eps_bound_m"] = eps_bound
 
-    sims = simulate_points(spec, coords, adversary)
+    sims = simulate_points(spec, coords, adversary, storage)
     sups = [sims[s]["sup"] for s in DISTURBANCE_SCENARIOS if s in sims]
     for name, r in sims.items():
         out[f"sim_eps_sup_m_{name}"] = r["sup"]

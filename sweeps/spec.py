@@ -23,7 +23,7 @@ parameters, plus a ``[sweep]`` and a ``[simulation]`` table::
     horizon = "100 s"
     tail = "10 s"                 # the simulated ultimate bound is the sup of |eps| over the tail
     rtol = 1e-8
-    scenarios = ["nominal", "constant", "weight", "adversarial"]
+    scenarios = ["nominal", "constant", "weight", "adversarial"]   # and "worst_case" (opt-in, ~8 s a point)
     initial_position = ["0 mm", "-40 mm"]   # start of the 'nominal' divergence probe
 
 A box sweep (``mode = "boxes"`` in ``[sweep]``, :mod:`sweeps.boxes_run`) proves whole boxes
@@ -62,7 +62,7 @@ from lyapcheck.params import (
 )
 from lyapcheck.simulation.scenarios import RTOL_RANGE
 from lyapcheck.units import Kind
-from sweeps.schema import CLASSES, DEFAULT_CLASSES, SCENARIOS, SWEEPABLE
+from sweeps.schema import CLASSES, DEFAULT_CLASSES, DEFAULT_SCENARIOS, SCENARIOS, SWEEPABLE
 
 #: largest grid a spec may ask for (the store is streamed, but one spec should stay a sweep)
 MAX_POINTS: Final = 10_000_000
@@ -248,7 +248,7 @@ def _simulation(raw: object) -> SimulationSettings:
     values = {k: float(validate_field(spec, table.get(k, spec.default))) for k, spec in _SIM_FIELDS.items()}
     if values["tail"] > values["horizon"]:
         raise InvalidParameter("tail", f"at most the horizon ({values['horizon']:g} s)", table.get("tail"))
-    scenarios = table.get("scenarios", list(SCENARIOS))
+    scenarios = table.get("scenarios", list(DEFAULT_SCENARIOS))
     if (not isinstance(scenarios, list) or not scenarios or any(s not in SCENARIOS for s in scenarios)
             or len(set(scenarios)) != len(scenarios)):
         raise InvalidParameter("simulation.scenarios", "a list of distinct names from "

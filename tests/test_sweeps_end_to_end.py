@@ -197,3 +197,30 @@ def test_cli_soundness_violation_exits_1_and_says_so(tmp_path: Path, monkeypatch
                                          "--workers", "0", "--quiet"])
     assert result.exit_code == 1
     assert "SOUNDNESS VIOLATION" in result.stderr and "alpha_d=300" in result.stderr
+
+
+@pytest.mark.slow
+def test_worst_case_scenario_makes_the_sweep_ratio_a_tightness_ratio(tmp_path: Path) -> None:
+    """scenarios = [..., "worst_case"]: the worst-case search (on the path, screening round only)
+    beats the constant push, stays under the certified bound, and sets the ratio (issue 12)."""
+    text = SWEEP_FIXED + """[sweep]
+classes = ["sos_bound"]
+[[sweep.axes]]
+name = "alpha_d"
+values = [600]
+[[sweep.axes]]
+name = "k_d"
+values = [0.15]
+[simulation]
+scenarios = ["constant", "worst_case"]
+"""
+    spec = parse_spec(text)
+    run_sweep(spec, tmp_path / "w.zarr", runner=InlineRunner())
+    ds = open_results(tmp_path / "w.zarr")
+    bound = float(ds["eps_bound_m"].values.ravel()[0])
+    worst = float(ds["sim_eps_sup_m_worst_case"].values.ravel()[0])
+    constant = float(ds["sim_eps_sup_m_constant"].values.ravel()[0])
+    assert constant < worst <= bound  # the search finds more than a constant push, never more than proved
+    ratio = float(ds["ratio_certified_over_simulated"].values.ravel()[0])
+    assert ratio == pytest.approx(bound / worst) and 1 <= ratio <= 1.5
+    assert not bool(ds["soundness_violation"].any())
