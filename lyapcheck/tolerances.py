@@ -22,6 +22,14 @@ SOLVER_MAX_ITER: Final = 200
 
 #: Simulator accuracy contract (relative to the state scale), tested against solve_ivp.
 SIM_REL_TOL: Final = 1e-6
+#: Step budget of one simulated trajectory (steps tried: accepted, rejected or retried at a
+#: kink). Past it the trajectory fails with "step budget exhausted" (``simulate`` exit 1): at
+#: extreme but valid scales the loop is stiff and the explicit integrator's step is bounded by
+#: stability, so the run would otherwise take hours. Deterministic, unlike a wall-time limit.
+#: The shipped scenarios take ~200 steps; the most the shipped sweeps need is ~16,000 (the
+#: adversarial disturbance chattering at alpha_d = 2400 over 60 s), hence 3x that. One step of
+#: one trajectory costs ~3 ms, so the budget bounds a single simulation to about three minutes.
+SIM_MAX_STEPS: Final = 50_000
 
 #: Switching search (``switched_ges``): a periodic switching law counts as a candidate for the
 #: exact instability proof when its numerically estimated growth per period exceeds

@@ -38,11 +38,13 @@ from dataclasses import dataclass
 from typing import Final, NamedTuple, Protocol
 
 import numpy as np
+import numpy.typing as npt
+
+from lyapcheck.tolerances import SIM_MAX_STEPS
 
 #: how simulation documents and reports name this integrator
 INTEGRATOR_NAME: Final = ("Dormand-Prince 5(4), adaptive step per trajectory, batched "
                           "(lyapcheck.simulation.integrator)")
-import numpy.typing as npt
 
 logger = logging.getLogger(__name__)
 
@@ -149,35 +151,81 @@ class IntegrationResult:
     n_iterations: int
     n_rhs_rows: int
     n_events: int = 0
+    #: the ``max_iterations`` of the call (the step budget a ``STATUS_MAX_ITERATIONS`` row hit)
+    max_iterations: int = SIM_MAX_STEPS
 
     @property
     def ok(self) -> npt.NDArray[np.bool_]:
         return np.asarray(self.status == STATUS_OK)
+
+    def failure(self, i: int, t_end: float) -> str | None:
+        """Why trajectory ``i`` stopped before ``t_end`` (None when it reached it).
+
+        Parameters
+        ----------
+        i
+            Row of the batch.
+        t_end
+            The end time that row was integrated to, s (for the message only).
+
+        Returns
+        -------
+        str or None
+            One sentence naming the limit that was hit, the time reached and what it means.
+        """
+        status, t = int(self.status[i]), float(self.t[i])
+        reached = f"at t = {t:.6g} s of {t_end:g} s"
+        if status == STATUS_OK:
+            return None
+        if status == STATUS_NONFINITE:
+            return (f"state or derivative not finite in double precision {reached} (overflow): "
+                    "the loop cannot be simulated numerically at this scale")
+        if status == STATUS_STEP_TOO_SMALL:
+            return (f"step size below {_MIN_STEP_ULPS:g} ulps of t {reached}: "
+                    "the loop is too fast (stiff) to simulate at this scale")
+        if status == STATUS_MAX_ITERATIONS:
+            return (f"step budget exhausted: {self.max_iterations} steps (lyapcheck.tolerances.SIM_MAX_STEPS) "
+                    f"{reached}, stiff at this scale")
+        return f"integrator status {status} {reached}"
 
 
 def _rms(x: FloatArray) -> FloatArray:
     return np.sqrt(np.mean(x * x, axis=1))
 
 
+def _min_step(t: FloatArray) -> FloatArray:
+    """The smallest step a trajectory may take at ``t`` (below it, it is declared failed)."""
+    return _MIN_STEP_ULPS * np.spacing(np.maximum(np.abs(t), 1.0))
+
+
 def _initial_step(system: BatchedSystem, t0: FloatArray, y0: FloatArray, f0: FloatArray,
                   atol: FloatArray, rtol: float, max_step: FloatArray) -> FloatArray:
-    """Hairer–Nørsett–Wanner's starting-step heuristic (Solving ODEs I, II.4), per row."""
-    scale = atol + rtol * np.abs(y0)
-    d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
-    h0 = np.where((d0 < 1e-5) | (d1 < 1e-5), 1e-6, 0.01 * d0 / np.maximum(d1, 1e-300))
-    h0 = np.minimum(h0, max_step)
-    f1 = system.rhs(t0 + h0, y0 + h0[:, None] * f0, t0).dy
-    d2 = _rms((f1 - f0) / scale) / h0
-    dmax = np.maximum(d1, d2)
-    with np.errstate(divide="ignore"):
+    """Hairer–Nørsett–Wanner's starting-step heuristic (Solving ODEs I, II.4), per row.
+
+    At extreme scales the scaled norms overflow (``|f| / atol`` beyond the double range, or
+    ``|f(y0 + h0 f0) - f0| / h0`` for a very stiff row): the heuristic then gives 0 or NaN. A
+    zero step has zero error and would be accepted forever without advancing ``t``, a NaN step
+    poisons the state; such rows start at the smallest allowed step instead, where the step
+    control either proceeds or declares the row failed (step too small / not finite).
+    """
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+        scale = atol + rtol * np.abs(y0)
+        d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
+        h0 = np.where((d0 < 1e-5) | (d1 < 1e-5), 1e-6, 0.01 * d0 / np.maximum(d1, 1e-300))
+        h0 = np.minimum(h0, max_step)
+        h0 = np.where(np.isfinite(h0) & (h0 > 0), h0, np.minimum(_min_step(t0), max_step))
+        f1 = system.rhs(t0 + h0, y0 + h0[:, None] * f0, t0).dy
+        d2 = _rms((f1 - f0) / scale) / h0
+        dmax = np.maximum(d1, d2)
         h1 = np.where(dmax <= 1e-15, np.maximum(1e-6, 1e-3 * h0), (0.01 / dmax) ** 0.2)
-    return np.minimum(np.minimum(100 * h0, h1), max_step)
+        h = np.minimum(np.minimum(100 * h0, h1), max_step)
+    return np.where(np.isfinite(h) & (h > 0), h, np.minimum(_min_step(t0), max_step))
 
 
 def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_end: float | FloatArray,
               *, rtol: float = DEFAULT_RTOL, atol: FloatArray | float, max_step: float | FloatArray = np.inf,
               observer: StepObserver | None = None, switch_atol: FloatArray | float = 0.0,
-              max_iterations: int = 1_000_000) -> IntegrationResult:
+              max_iterations: int = SIM_MAX_STEPS) -> IntegrationResult:
     """Integrate every row of ``system`` from ``t0`` to ``t_end`` with DOPRI5 (see module doc).
 
     Parameters
@@ -203,7 +251,10 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
         converging to a switching surface, e.g. eps -> 0, would trigger endless retries).
         Scalar, ``(k,)`` or ``(n, k)``.
     max_iterations
-        Safety bound on loop iterations; rows unfinished after it get ``STATUS_MAX_ITERATIONS``.
+        Step budget: bound on loop iterations, i.e. on the steps (accepted, rejected or retried
+        at a kink) of any one trajectory; rows unfinished after it get ``STATUS_MAX_ITERATIONS``.
+        The default :data:`~lyapcheck.tolerances.SIM_MAX_STEPS` bounds the cost of a loop that
+        is stiff at extreme scales (its explicit step is bounded by stability, not accuracy).
 
     Returns
     -------
@@ -240,7 +291,8 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
     f, g = ev.dy, ev.switch
     sw_tol = np.broadcast_to(sw_all, g.shape).copy()
     rows_evaluated += n
-    monitor = np.maximum(monitor, ev.monitor)
+    # fmax: a row whose trial state overflowed has a NaN monitor, which must not stick
+    monitor = np.fmax(monitor, ev.monitor)
     n_events = 0
     if observer is not None:
         observer.start(gidx, t, y, f)
@@ -275,7 +327,7 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
                 if a != 0.0:
                     yi += (step * a)[:, None] * k[j]
             ev = sys_w.rhs(t + _C[i] * step, yi, t)
-            monitor[gidx] = np.maximum(monitor[gidx], np.where(done, -np.inf, ev.monitor))
+            monitor[gidx] = np.fmax(monitor[gidx], np.where(done, -np.inf, ev.monitor))
             k.append(ev.dy)
         rows_evaluated += 6 * gidx.size
         y_new = yi  # the 7th stage point is the 5th-order solution (FSAL)
@@ -332,9 +384,9 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
             rows_evaluated += sel.size
             f[sel] = ev.dy
             g[sel] = ev.switch
-            monitor[gidx[sel]] = np.maximum(monitor[gidx[sel]], ev.monitor)
+            monitor[gidx[sel]] = np.fmax(monitor[gidx[sel]], ev.monitor)
 
-        too_small = ~accept & ~done & ~retry & (h < _MIN_STEP_ULPS * np.spacing(np.maximum(np.abs(t), 1.0)))
+        too_small = ~accept & ~done & ~retry & (h < _min_step(t))
         status[gidx[too_small & finite]] = STATUS_STEP_TOO_SMALL
         status[gidx[too_small & ~finite]] = STATUS_NONFINITE
         done = done | (t >= t_end_w) | too_small
@@ -354,7 +406,7 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
         write_back(np.ones(gidx.size, dtype=bool))
     return IntegrationResult(t=t_all, y=y_all, status=status, n_accepted=n_acc, n_rejected=n_rej,
                              monitor_max=monitor, n_iterations=iterations, n_rhs_rows=rows_evaluated,
-                             n_events=n_events)
+                             n_events=n_events, max_iterations=max_iterations)
 
 
 def hermite(theta: float | FloatArray, h: FloatArray, y0: FloatArray, y1: FloatArray, f0: FloatArray,

@@ -153,6 +153,36 @@ class LoopParams:
         return self.e11 * np.minimum(along, self.omega_so)
 
 
+def _on_finite_rows(v_d: FloatArray, fn: Callable[[IntArray | slice], FloatArray]) -> FloatArray:
+    """``fn(rows)`` on the rows where the reference ``v_d`` is finite, NaN on the other rows.
+
+    The ODS functions of :mod:`symbolic.ods` reject a non-finite reference (``ValueError``). At
+    extreme but valid scales a trial stage of the integrator can overflow the state; NaN in the
+    derivative then makes the integrator reject that step (and fail the row as not finite, if
+    it persists) instead of aborting the whole batch with an internal error.
+
+    Parameters
+    ----------
+    v_d
+        Reference field, ``(n, 2)``.
+    fn
+        Evaluates the rows given as an index array (or ``slice(None)`` for all); returns ``(k, 2)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 2)``.
+    """
+    finite = np.all(np.isfinite(v_d), axis=1)
+    if finite.all():  # the normal case: one call, no copies
+        return fn(slice(None))
+    out = np.full(v_d.shape, np.nan)
+    rows = np.flatnonzero(finite)
+    if rows.size:
+        out[rows] = fn(rows)
+    return out
+
+
 @dataclass(frozen=True)
 class ClosedLoop:
     """Batched right-hand side of the closed loop (implements the integrator's protocol)."""
@@ -209,7 +239,8 @@ class ClosedLoop:
         sigma = pr.sigma0 * pr.integral
         vx, vz = v_d_fn(eps, s, pr.alpha_d, sigma, pr.delta_los, pr.theta_r)
         v_d = np.stack(np.broadcast_arrays(vx, vz), axis=1)
-        u = ods_control(v_d, pr.d_hat, pr.e11_hat, pr.omega_0, pr.omega_so, form=self.form)
+        u = _on_finite_rows(v_d, lambda r: ods_control(v_d[r], pr.d_hat[r], pr.e11_hat[r], pr.omega_0[r],
+                                                       pr.omega_so[r], form=self.form))
         return u, v_d, eps
 
     def rhs(self, t: FloatArray, y: FloatArray, t_segment: FloatArray) -> Evaluation:
@@ -236,7 +267,8 @@ class ClosedLoop:
         # kinks, for step placement only (the control itself is ods_control's): the ODS
         # saturation boundary |G_mu| = Omega_SO/Omega_0 of eq:solFinal, |eps| = 0 in the tail
         # integral, and the disturbance's own kinks
-        G = ods_gradient(v_d, pr.d_hat, pr.e11_hat, pr.omega_0, form=self.form)
+        G = _on_finite_rows(v_d, lambda r: ods_gradient(v_d[r], pr.d_hat[r], pr.e11_hat[r], pr.omega_0[r],
+                                                        form=self.form))
         switches = [pr.omega_0 * np.hypot(G[:, 0], G[:, 1]) - pr.omega_so, eps]
         extra = self.disturbance.switching(eps, s)
         if extra is not None:

@@ -66,8 +66,11 @@ def simulation_document(scenario: Scenario, result: SimulationResult, i: int = 0
     if scenario.reported:
         out["paper"] = {key: {"reported": rep, "simulated": m[key], "relative_deviation": m[key] / rep - 1.0}
                         for key, rep in scenario.reported.items()}
+    # "failure" says which limit stopped a failed run (None when it reached the horizon): at
+    # extreme scales the loop overflows or is too stiff, and "diverged" alone would not say so
     out["integrator"] = {"method": INTEGRATOR_NAME, "rtol": result.rtol,
-                         "ok": bool(result.integration.status[i] == STATUS_OK)}
+                         "ok": bool(result.integration.status[i] == STATUS_OK),
+                         "failure": result.integration.failure(i, result.horizon_s)}
     return out
 
 

@@ -45,6 +45,8 @@ from lyapcheck.simulation.disturbances import (
     Sinusoid, Weight,
 )
 from lyapcheck.simulation.model import Controller, Form
+from lyapcheck.simulation.runner import STEPS_PER_TAIL
+from lyapcheck.tolerances import SIM_MAX_STEPS
 from lyapcheck.units import Kind
 
 ANY_REAL = Interval(-INF, INF)
@@ -339,6 +341,13 @@ def parse_simulation(table: object, problem: Problem, name: str) -> Scenario:
     choice = {k: _choice(k, opts, table.get(k, default)) for k, (opts, default) in _CHOICE_FIELDS.items()}
     if parsed["tail"] > parsed["horizon"]:  # type: ignore[operator]
         raise InvalidParameter("tail", f"at most the horizon ({parsed['horizon']:g} s)", table.get("tail"))
+    # the largest step is tail / STEPS_PER_TAIL: a tail so short that even the smoothest run needs
+    # more steps than the budget could only end in "step budget exhausted"; say so now, for free
+    min_tail = parsed["horizon"] * STEPS_PER_TAIL / SIM_MAX_STEPS  # type: ignore[operator]
+    if parsed["tail"] < min_tail:  # type: ignore[operator]
+        raise InvalidParameter("tail", f"at least horizon * {STEPS_PER_TAIL} / {SIM_MAX_STEPS} = {min_tail:.6g} s (a "
+                               f"step is at most tail / {STEPS_PER_TAIL} and a run at most {SIM_MAX_STEPS} steps, "
+                               "lyapcheck.tolerances.SIM_MAX_STEPS)", table.get("tail"))
     dist = parse_disturbance(table["disturbance"], problem) if "disturbance" in table else DisturbanceSpec("none")
     return Scenario(
         name=name, problem=problem, controller=cast(Controller, choice["controller"]),
