@@ -65,6 +65,7 @@ import numpy as np
 import numpy.typing as npt
 
 from lyapcheck.errors import InvalidParameter
+from lyapcheck.tolerances import SIM_MAX_STEPS
 from lyapcheck.params import Problem
 from lyapcheck.simulation.disturbances import (
     ADVERSARIAL_LAYER_FRACTION, Constant, Disturbance, Feedback, NoDisturbance, Sinusoid, SquareWave, BangBang,
@@ -102,6 +103,11 @@ N_PHASES_SINE: Final = 2
 FREQUENCY_SPAN: Final = (0.35, 1.6)
 #: random bang-bang candidates per initial state
 N_RANDOM: Final = 16
+#: a periodic or random switching disturbance is a candidate only if it switches at most this many
+#: times over the horizon: each switch restarts the integrator, whose step budget per trajectory
+#: is lyapcheck.tolerances.SIM_MAX_STEPS (at extreme gains the loop's resonances are so fast that
+#: a switching table would not even fit in memory)
+MAX_SWITCHES: Final = SIM_MAX_STEPS // 4
 #: rounds after the screening (each one batched call)
 MAX_ROUNDS: Final = 3
 #: costate sweeps run in parallel, started from the best candidates of these families
@@ -467,6 +473,13 @@ def _screening(setting: _Setting, freqs: FloatArray, storage: Mapping[str, Any] 
                 setting, exps, coefs, "pushes the certified storage function V of sos_bound up")))
     else:
         skipped["storage_gradient"] = "no sos_bound storage certificate was given (storage=None)"
+    resolvable = freqs[freqs * H / math.pi <= MAX_SWITCHES]
+    if resolvable.size < freqs.size:
+        why = (f"{freqs.size - resolvable.size} of {freqs.size} resonance frequencies switch more than "
+               f"{MAX_SWITCHES} times over the horizon (the integrator's step budget)")
+        for family in ("sinusoid", "square_wave", "random_bang_bang"):
+            skipped[family] = why
+    freqs = resolvable
     for om in freqs:
         for ph in np.linspace(0.0, span, N_PHASES_SINE, endpoint=False):
             per_start.append(_Candidate("sinusoid", "", Sinusoid(np.zeros(2), d * across, np.array(om), np.array(ph))))
@@ -476,7 +489,7 @@ def _screening(setting: _Setting, freqs: FloatArray, storage: Mapping[str, Any] 
     for start in setting.starts:
         out.extend(_Candidate(c.family, start, c.disturbance) for c in per_start
                    if start == START_ORIGIN or c.family in BOTH_STARTS_FAMILIES)
-    for _ in range(N_RANDOM):
+    for _ in range(N_RANDOM if freqs.size else 0):
         half_period = math.pi / float(rng.choice(freqs))
         dwell = half_period * rng.uniform(0.5, 1.5, size=int(2 * H / half_period) + 2)
         times = np.cumsum(dwell)
@@ -550,6 +563,8 @@ def search_worst_case(target: Problem | Scenario, *, budget_s: float = 20.0, see
 
     def run_round(name: str, cands: list[_Candidate], *, recorded: int = 0,
                   tol: float = SEARCH_RTOL) -> list[_Evaluated]:
+        if not cands:  # nothing left to refine (e.g. every periodic family was skipped)
+            return []
         t0 = time.perf_counter()
         ev = _run(setting, cands, rtol=tol, record_rows=range(recorded))
         rounds.append({"round": name, "candidates": len(cands), "rtol": tol,
