@@ -315,6 +315,20 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
 
             ok, why = sos_bound.verify(system, c["certificate"])
             ok_row("sos_bound", ok, "limsup |eps| bound follows exactly from the polynomial certificate", f"sos_bound: {why}")
+        sat = conditions.get("saturated_loop", {"status": "absent"})
+        if sat.get("real_loop_limsup_eps_m") is not None:
+            # the conjunction of two re-checked results: reach proved, and sos_bound's number
+            from lyapcheck.conditions.saturated import verify_reach
+
+            reach = sat.get("certificate", {}).get("reach") or {}
+            bound = conditions.get("sos_bound", {})
+            ok = (bound.get("status") == "certified" and omega_so is not None and "gamma" in reach
+                  and Fraction(reach["gamma"]) > 0
+                  and verify_reach(system, reach, k_d=values["k_d"], alpha_d=values["alpha_d"],
+                                   e11_hat=values["e11_hat"], omega_so=omega_so)[0]
+                  and float(sat["real_loop_limsup_eps_m"]) >= float(Fraction(bound["certificate"]["eps_bound"])))
+            ok_row("saturated_loop", ok, "the real loop's limsup |eps| is sos_bound's, by the proved global reach",
+                   "saturated_loop: real_loop_limsup_eps_m needs a proved reach and a certified sos_bound at least as large")
         if "stabcond2" in conditions:
             c = conditions["stabcond2"]
             s2 = stabcond2_run(values["alpha_d"], values["sigma0"], values["k_d"], values["delta_los"], "undecided")

@@ -128,7 +128,21 @@ def run_conditions(problem: Problem, dynamics: str,
     if "ultimate_bound" in wanted and "prop41_iss" in wanted and problem.d_max is not None:
         with contextlib.suppress(ArithmeticError, ValueError, np.linalg.LinAlgError):  # a side figure only
             _add_paper_ball(results, problem)
+    _real_loop_bound(results)
     return {name: results[name] for name in CONDITION_ORDER if name in results and name in classes}
+
+
+def _real_loop_bound(results: dict[str, ConditionResult]) -> None:
+    """With global reach (saturated_loop) the real loop ends inside an unsaturated invariant set,
+    where it is the error dynamics: the sos_bound bound (from ANY start) is then its bound too.
+    Both certificates are re-checked by verify; this is their conjunction, stated as a number."""
+    sat, bound = results.get("saturated_loop"), results.get("sos_bound")
+    if sat is None or bound is None or sat.status != "certified" or bound.status != "certified":
+        return
+    if sat.numbers.get("global_reach") == "proved":
+        sat.numbers["real_loop_limsup_eps_m"] = bound.numbers["eps_bound_m"]
+        sat.summary += (f"; so the real loop's limsup |eps| <= {bound.numbers['eps_bound_m'] * 1e3:.4g} mm "
+                        "(sos_bound) from every start")
 
 
 class ClassTimeLimit(Exception):

@@ -82,3 +82,22 @@ def test_simulated_real_loop_enters_the_reach_set_and_stays() -> None:
         inside = (np.abs(trajectory.eps + sigma0 * trajectory.s) <= y_q) & (np.abs(trajectory.s) <= s_check)
         assert inside.any(), "never entered"
         assert inside[int(np.argmax(inside)):].all(), "left the set after entering it"
+
+
+def test_certify_states_the_real_loops_bound_and_verify_rechecks_it(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import json
+
+    from lyapcheck import certify, verify
+    from tests.conftest import PAPER_TOML
+
+    result = certify(PAPER_TOML, classes="saturated_loop,sos_bound")
+    doc = result.to_json()
+    sat, bound = doc["conditions"]["saturated_loop"], doc["conditions"]["sos_bound"]
+    assert sat["global_reach"] == "proved" and sat["real_loop_limsup_eps_m"] == bound["eps_bound_m"]
+    assert verify(doc).valid
+    forged = json.loads(json.dumps(doc))
+    forged["conditions"]["saturated_loop"]["certificate"]["reach"]["gamma"] = "1"  # a margin that does not follow
+    assert not verify(forged).valid
+    smaller = json.loads(json.dumps(doc))
+    smaller["conditions"]["saturated_loop"]["real_loop_limsup_eps_m"] = bound["eps_bound_m"] / 2
+    assert not verify(smaller).valid
