@@ -416,6 +416,7 @@ def box_context(ds: Any) -> dict[str, Any]:
                                               f"{summary.certified_boxes}"),
             ("random gain sets simulated", str(summary.cross_checked_points)),
             ("worst |x(t)| / (k |x0| exp(-rate t))", "—" if math.isnan(worst) else fmt_float(worst, 4)),
+            *_bound_rows(summary),
         ],
         "violation_count": violation_count(summary),
         "violations": violations,
@@ -429,3 +430,19 @@ def box_context(ds: Any) -> dict[str, Any]:
                      else ({"versions": versions_text} if versions_text else {})),
         "summary": summary,
     }
+
+
+def _bound_rows(summary: Any) -> list[tuple[str, str]]:
+    """With ``sos_bound`` in the sweep: the certified bounds over boxes and their tightness against
+    the worst-case disturbance search at the boxes' random gain sets."""
+    bound = summary.bound
+    if not bound:
+        return []
+    rows = [("boxes with a certified limsup |eps| (sos_bound)", str(bound["boxes_bounded"]))]
+    if bound["eps_bound_m_range"]:
+        lo, hi = bound["eps_bound_m_range"]
+        rows.append(("certified limsup |eps| over those boxes", f"{fmt_float(lo * 1e3, 4)} to {fmt_float(hi * 1e3, 4)} mm"))
+    if bound["tightness_ratio_range"]:
+        lo, hi = bound["tightness_ratio_range"]
+        rows.append(("certified bound / worst simulated (tightness)", f"{fmt_float(lo, 4)} to {fmt_float(hi, 4)}"))
+    return rows

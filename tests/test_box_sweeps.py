@@ -204,3 +204,7 @@ def test_bound_box_sweep_certifies_a_bound_and_the_worst_case_search_stays_insid
     assert not store.read("soundness_violation")[0]
     summary = summarize_boxes(store).to_json()
     assert summary["bound"]["boxes_bounded"] == 1 and summary["area_fraction"]["certified"] == pytest.approx(1.0)
+    from reports.render import sweep_html
+
+    page = sweep_html(out)  # the report states the bound and its tightness
+    assert "certified limsup |eps| over those boxes" in page and f"{bound * 1e3:.4g}"[:4] in page
