@@ -101,18 +101,33 @@ def parse_box(specs: Sequence[str]) -> ParameterBox:
     return ParameterBox(tuple(bounds))
 
 
-def corner_problems(problem: Problem, box: ParameterBox) -> list[Problem]:
-    """The problem at every corner of the box (the other parameters as in ``problem``)."""
+def problem_at_point(problem: Problem, point: Mapping[str, Fraction]) -> Problem:
+    """``problem`` with the parameters of ``point`` (names of :data:`BOX_FIELDS`) set."""
     from dataclasses import replace
 
-    out = []
-    for corner in box.corners():
-        gains = {k: v for k, v in corner.items() if k != "e11"}
-        p = problem.with_gains(**gains) if gains else problem
-        if "e11" in corner:
-            p = replace(p, swimmer=replace(p.swimmer, e11=corner["e11"]))
-        out.append(p)
-    return out
+    gains = {k: v for k, v in point.items() if k != "e11"}
+    p = problem.with_gains(**gains) if gains else problem
+    if "e11" in point:
+        p = replace(p, swimmer=replace(p.swimmer, e11=point["e11"]))
+    return p
+
+
+def corner_problems(problem: Problem, box: ParameterBox) -> list[Problem]:
+    """The problem at every corner of the box (the other parameters as in ``problem``)."""
+    return [problem_at_point(problem, corner) for corner in box.corners()]
+
+
+def stored_hull(problem: Problem, box: ParameterBox, dynamics: str,
+                cert: Mapping[str, Any]) -> tuple[list[Any], Fraction] | str:
+    """The ``(c, a, b)`` hull re-derived from the box, or why the certificate's stored copy differs."""
+    hull = scaled_hull(problem, box, dynamics)
+    if hull is None:
+        return "the dynamics at some corner do not have the structure this class needs"
+    vertices, ts_min = hull
+    stored = {tuple(Fraction(x) for x in v) for v in cert["vertices"]}
+    if stored != {(v.c, v.a, v.b) for v in vertices} or Fraction(cert["time_scale_min"]) != ts_min:
+        return "the stored (c, a, b) vertices or min |a11| do not match the box"
+    return hull
 
 
 def scaled_hull(problem: Problem, box: ParameterBox, dynamics: str) -> tuple[list[Any], Fraction] | None:
@@ -199,14 +214,11 @@ def _verify_ges_box(problem: Problem, box: ParameterBox, dynamics: str, result: 
     from lyapcheck import exact
     from lyapcheck.conditions import ges
 
-    hull = scaled_hull(problem, box, dynamics)
-    if hull is None:
-        return False, "the dynamics at some corner do not have the structure this class needs"
-    vertices, ts_min = hull
     cert = result["certificate"]
-    stored = {tuple(Fraction(x) for x in v) for v in cert["vertices"]}
-    if stored != {(v.c, v.a, v.b) for v in vertices} or Fraction(cert["time_scale_min"]) != ts_min:
-        return False, "the stored (c, a, b) vertices or min |a11| do not match the box"
+    hull = stored_hull(problem, box, dynamics, cert)
+    if isinstance(hull, str):
+        return False, hull
+    vertices, ts_min = hull
     P = exact.from_json(cert["P"])
     ells = [[Fraction(x) for x in ell] for ell in cert["l"]]
     mu, c1, c2 = (Fraction(cert[k]) for k in ("mu_scaled", "c1", "c2"))
@@ -318,14 +330,11 @@ def _verify_sector_box(problem: Problem, box: ParameterBox, dynamics: str,
     from lyapcheck import exact
     from lyapcheck.conditions import sector
 
-    hull = scaled_hull(problem, box, dynamics)
-    if hull is None:
-        return False, "the dynamics at some corner do not have the structure this class needs"
-    vertices, ts_min = hull
     cert = result["certificate"]
-    stored = {tuple(Fraction(x) for x in v) for v in cert["vertices"]}
-    if stored != {(v.c, v.a, v.b) for v in vertices} or Fraction(cert["time_scale_min"]) != ts_min:
-        return False, "the stored (c, a, b) vertices or min |a11| do not match the box"
+    hull = stored_hull(problem, box, dynamics, cert)
+    if isinstance(hull, str):
+        return False, hull
+    vertices, ts_min = hull
     P = exact.from_json(cert["P"])
     if len(P) != 2 or not exact.is_symmetric(P):
         return False, "P must be a symmetric 2x2 matrix"
@@ -351,8 +360,6 @@ def _verify_sector_box(problem: Problem, box: ParameterBox, dynamics: str,
 def verify_box_refutation(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any],
                           cls: str) -> tuple[bool, str]:
     """Re-check a box's refutation: its point lies in the box and is refuted there, exactly."""
-    from dataclasses import replace
-
     from lyapcheck import exact
     from lyapcheck.certification import build_system
     from lyapcheck.conditions import sector
@@ -364,11 +371,7 @@ def verify_box_refutation(problem: Problem, box: ParameterBox, dynamics: str, re
     bounds = {name: (lo, hi) for name, lo, hi in box.bounds}
     if set(point) != set(bounds) or any(not bounds[n][0] <= x <= bounds[n][1] for n, x in point.items()):
         return False, "the refuting point is not a point of the box"
-    gains = {n: x for n, x in point.items() if n != "e11"}
-    p = problem.with_gains(**gains) if gains else problem
-    if "e11" in point:
-        p = replace(p, swimmer=replace(p.swimmer, e11=point["e11"]))
-    v = scaled_dynamics(build_system(p, dynamics))
+    v = scaled_dynamics(build_system(problem_at_point(problem, point), dynamics))
     if v is None:
         return False, "the dynamics at the refuting point do not have the structure this class needs"
     refuted = sector.refutation([exact.matrix([[-1, v.c], [0, -v.a]]), exact.matrix([[-1, v.c], [v.b, -v.a]])])
@@ -477,14 +480,9 @@ def cross_check(problem: Problem, box: ParameterBox, result: Mapping[str, Any], 
                 seed: Sequence[int], dynamics: str = "derived") -> tuple[int, float]:
     """Simulate ``count`` random points of a certified ``box`` (:func:`sample_points`) against
     its envelope; returns (points simulated, worst :func:`envelope_ratio`)."""
-    from dataclasses import replace
-
     worst = -math.inf
     points = sample_points(box, count, seed)
     for point in points:
-        gains = {n: v for n, v in point.items() if n != "e11"}
-        p = problem.with_gains(**gains) if gains else problem
-        if "e11" in point:
-            p = replace(p, swimmer=replace(p.swimmer, e11=point["e11"]))
+        p = problem_at_point(problem, point)
         worst = max(worst, envelope_ratio(p, float(result["k"]), float(result["decay_rate_per_s"]), dynamics))
     return len(points), (worst if points else math.nan)
