@@ -72,34 +72,11 @@ def _build(cp: Any, tables: list[dict[str, Any]], k2s: list[float], lam: float, 
     QE = cp.Variable((ne, ne), symmetric=True)
     QDs = [cp.Variable((nd, nd), symmetric=True) for _ in tables]
     B = cp.Variable()
-    top = np.zeros((nv, nv))
-    for i in sb.TOP:
-        top[i, i] = float(sb.TOP_DELTA)
-    d_classes, e_classes = poly.gram_classes(sb.Z_D), poly.gram_classes(sb.Z_E)
-    t_classes, v_classes = poly.gram_classes(sb.Z_T), poly.gram_classes(sb.Z_V)
-    Lv = {m: np.zeros((nv, nv)) for m in sb.MONOS_D}
-    for m2, entries in v_classes.items():
-        for i, j in entries:
-            Lv[(*m2, 0)][i, j] += 1.0
-    cons = [QV - top >> sb.ETA * np.eye(nv), T >> sb.ETA * np.eye(nt), QE >> sb.ETA * np.eye(ne)]
-    for QD, table, k2 in zip(QDs, tables, k2s):
+    cons = [QV - sb.top_shift() >> sb.ETA * np.eye(nv), T >> sb.ETA * np.eye(nt), QE >> sb.ETA * np.eye(ne)]
+    for QD, table, k2 in zip(QDs, tables, k2s):  # one dissipation block per vertex
         cons.append(QD >> sb.ETA * np.eye(nd))
-        for m in sb.MONOS_D:
-            lhs = sum(QD[i, j] for i, j in d_classes[m]) if m in d_classes else 0
-            rhs = cp.sum(cp.multiply(table[sb._param_name(m)], QV)) - lam * cp.sum(cp.multiply(Lv[m], QV))
-            if m == (0, 0, 0):
-                rhs = rhs + lam
-            if m in t_classes:
-                rhs = rhs - k2 * sum(T[i, j] for i, j in t_classes[m])
-            shifted = (m[0], m[1], m[2] - 2)
-            if shifted in t_classes:
-                rhs = rhs + sum(T[i, j] for i, j in t_classes[shifted])
-            cons.append(lhs == rhs)
-    for m in poly.monomials(0, 4):
-        lhs = sum(QE[i, j] for i, j in e_classes[m]) if m in e_classes else 0
-        v_part = sum(QV[i, j] for i, j in v_classes[m]) if m in v_classes else 0
-        extra: Any = {(2, 0): -1.0, (1, 1): 2.0 * beta, (0, 2): -beta * beta}.get((m[0], m[1]), 0.0)
-        cons.append(lhs == v_part + extra + ((B - 1) if m == (0, 0) else 0))
+        cons += sb.dissipation_constraints(QD, QV, T, {m: table[sb._param_name(m)] for m in sb.MONOS_D}, lam, k2, cp)
+    cons += sb.output_constraints(QE, QV, B, beta, beta * beta)
     problem = cp.Problem(cp.Minimize(B), cons)
     return problem, {"Q_V": QV, "T": T, "Q_E": QE, "Q_D": QDs, "B": B}
 

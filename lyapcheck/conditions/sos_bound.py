@@ -25,7 +25,7 @@ This speaks of the error dynamics (unsaturated ODS law), as Proposition 4.1 does
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
@@ -84,34 +84,24 @@ def _param_name(m: poly.Monomial) -> str:
     return "C_" + "_".join(str(e) for e in m)
 
 
-def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
-    """The three certificates of the module docstring at given scales and lambda (DPP; compiled once)."""
-    QV = cp.Variable((len(Z_V), len(Z_V)), symmetric=True)
-    T = cp.Variable((len(Z_T), len(Z_T)), symmetric=True)
-    QD = cp.Variable((len(Z_D), len(Z_D)), symmetric=True)
-    QE = cp.Variable((len(Z_E), len(Z_E)), symmetric=True)
-    B = cp.Variable()
-    lam = cp.Parameter(nonneg=True)
-    k2 = cp.Parameter(nonneg=True)
-    beta = cp.Parameter(nonneg=True)
-    beta2 = cp.Parameter(nonneg=True)
-    # the dynamics enter through fixed coefficient tables built per solve (parameters)
-    top = np.zeros((len(Z_V), len(Z_V)))
-    for i in TOP:
-        top[i, i] = float(TOP_DELTA)
-    d_classes = poly.gram_classes(Z_D)
-    e_classes = poly.gram_classes(Z_E)
-    t_classes = poly.gram_classes(Z_T)
-    # coefficient of monomial m of -grad V . g - q dV/dy w - lam V  is  <C_m, Q_V> + lam <L_m, Q_V>
-    C = {m: cp.Parameter((len(Z_V), len(Z_V))) for m in MONOS_D}
-    Lv = {m: np.zeros((len(Z_V), len(Z_V))) for m in MONOS_D}
-    v_classes: dict[poly.Monomial, list[tuple[int, int]]] = poly.gram_classes(Z_V)
-    for m2, entries in v_classes.items():
-        m3 = (*m2, 0)
+def value_tables() -> dict[poly.Monomial, np.ndarray]:
+    """``L_m``: the coefficient of monomial ``m`` (in ``(y, r~, w)``) of ``V`` is ``<L_m, Q_V>``."""
+    n = len(Z_V)
+    tables = {m: np.zeros((n, n)) for m in MONOS_D}
+    for m2, entries in poly.gram_classes(Z_V).items():
         for i, j in entries:
-            Lv[m3][i, j] += 1.0
-    cons = [QV - top >> ETA * np.eye(len(Z_V)), T >> ETA * np.eye(len(Z_T)),
-            QD >> ETA * np.eye(len(Z_D)), QE >> ETA * np.eye(len(Z_E))]
+            tables[(*m2, 0)][i, j] += 1.0
+    return tables
+
+
+def dissipation_constraints(QD: Any, QV: Any, T: Any, C: Mapping[poly.Monomial, Any], lam: Any, k2: Any,
+                            cp: Any) -> list[Any]:
+    """``z_D^T Q_D z_D == -grad V . g - q (dV/dy) w - lam (V - 1) - tau (k^2 - w^2)``, monomial by
+    monomial; the dynamics enter through ``C[m]`` (``<C_m, Q_V>`` is the flow's part of monomial
+    ``m``, a Parameter or an array). Shared with the box version (:mod:`lyapcheck.box_bounds`)."""
+    d_classes, t_classes = poly.gram_classes(Z_D), poly.gram_classes(Z_T)
+    Lv = value_tables()
+    cons = []
     for m in MONOS_D:
         lhs = sum(QD[i, j] for i, j in d_classes.get(m, [])) if m in d_classes else 0
         rhs = cp.sum(cp.multiply(C[m], QV)) - lam * cp.sum(cp.multiply(Lv[m], QV))
@@ -124,6 +114,13 @@ def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
         if shifted in t_classes:
             rhs = rhs + sum(T[i, j] for i, j in t_classes[shifted])
         cons.append(lhs == rhs)
+    return cons
+
+
+def output_constraints(QE: Any, QV: Any, B: Any, beta: Any, beta2: Any) -> list[Any]:
+    """``z_E^T Q_E z_E == V - (y - beta r~)^2 + (B - 1)``, monomial by monomial."""
+    e_classes, v_classes = poly.gram_classes(Z_E), poly.gram_classes(Z_V)
+    cons = []
     for m in poly.monomials(0, 4):
         lhs = sum(QE[i, j] for i, j in e_classes.get(m, [])) if m in e_classes else 0
         v_part = sum(QV[i, j] for i, j in v_classes.get(m, [])) if m in v_classes else 0
@@ -131,6 +128,34 @@ def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
         extra: Any = {(2, 0): -1.0, (1, 1): 2.0 * beta, (0, 2): -beta2}.get((m[0], m[1]), 0.0)
         const = (B - 1) if m == (0, 0) else 0
         cons.append(lhs == v_part + extra + const)
+    return cons
+
+
+def top_shift() -> np.ndarray:
+    """``delta diag(0, 0, 0, 1, 1, 1)``: ``Q_V`` minus it must stay positive definite."""
+    top = np.zeros((len(Z_V), len(Z_V)))
+    for i in TOP:
+        top[i, i] = float(TOP_DELTA)
+    return top
+
+
+def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """The three certificates of the module docstring at given scales and lambda (DPP; compiled once)."""
+    QV = cp.Variable((len(Z_V), len(Z_V)), symmetric=True)
+    T = cp.Variable((len(Z_T), len(Z_T)), symmetric=True)
+    QD = cp.Variable((len(Z_D), len(Z_D)), symmetric=True)
+    QE = cp.Variable((len(Z_E), len(Z_E)), symmetric=True)
+    B = cp.Variable()
+    lam = cp.Parameter(nonneg=True)
+    k2 = cp.Parameter(nonneg=True)
+    beta = cp.Parameter(nonneg=True)
+    beta2 = cp.Parameter(nonneg=True)
+    # coefficient of monomial m of -grad V . g - q dV/dy w is <C_m, Q_V>: tables built per solve
+    C = {m: cp.Parameter((len(Z_V), len(Z_V))) for m in MONOS_D}
+    cons = [QV - top_shift() >> ETA * np.eye(len(Z_V)), T >> ETA * np.eye(len(Z_T)),
+            QD >> ETA * np.eye(len(Z_D)), QE >> ETA * np.eye(len(Z_E))]
+    cons += dissipation_constraints(QD, QV, T, C, lam, k2, cp)
+    cons += output_constraints(QE, QV, B, beta, beta2)
     params = {"lambda": lam, "k2": k2, "beta": beta, "beta2": beta2, **{_param_name(m): C[m] for m in MONOS_D}}
     return cp.Problem(cp.Minimize(B), cons), params, {"Q_V": QV, "T": T, "Q_D": QD, "Q_E": QE, "B": B}
 
