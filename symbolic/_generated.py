@@ -33,6 +33,17 @@ def unsaturated_strip_sq(alpha_d: Fraction, delta_los: Fraction, e11_hat: Fracti
     return -(delta_los)**2 + (e11_hat)**2*(omega_so)**2/(alpha_d)**2
 
 
+def integrator_rates(y: Fraction, sigma0: Fraction, k_d: Fraction, delta_los: Fraction,
+                     los_speed: Fraction) -> tuple[Fraction, Fraction]:
+    """(damping, forcing) of s_dot = -damping s + forcing at y = eps + sigma0 s (symbolic.ilos)."""
+    return ((delta_los*los_speed*sigma0 + k_d*((delta_los)**2 + (y)**2))/((delta_los)**2 + (y)**2), delta_los*los_speed*y/((delta_los)**2 + (y)**2))
+
+
+def windup_bound_sq(sigma0: Fraction, k_d: Fraction, delta_los: Fraction, los_speed: Fraction) -> Fraction:
+    """S*^2, S* = max_y forcing/damping: |s| > S* always decreases (symbolic.ilos)."""
+    return (Fraction(1, 4))*delta_los*(los_speed)**2/(k_d*(delta_los*k_d + los_speed*sigma0))
+
+
 def stabcond_gamma22_bound(a12: Fraction, a22: Fraction) -> Fraction:
     """Upper bound of sup_t phi(t) (see symbolic.ilos.stabcond_gamma22_bound)."""
     return max(Fraction(3)*max(-a12, -a22), ((-Fraction(1, 4)*(-a12 - Fraction(2)*a22)**2/a12) if (a12 >= Fraction(2)*a22) else (-Fraction(2)*a22)))

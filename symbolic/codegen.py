@@ -20,7 +20,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from symbolic import symbols as S
 from symbolic.closed_loop import DYNAMICS, PARAMETER_SYMBOLS, error_dynamics
-from symbolic.ilos import stabcond_gamma22_bound, unsaturated_strip_sq
+from symbolic.ilos import Y_LOS, integrator_rates, stabcond_gamma22_bound, unsaturated_strip_sq, windup_bound_sq
 
 TARGET = Path(__file__).with_name("_generated.py")
 ARGS = tuple(PARAMETER_SYMBOLS)  # alpha_d, sigma0, k_d, delta_los, los_speed, e11, e11_hat
@@ -88,6 +88,20 @@ def render() -> str:
         "def unsaturated_strip_sq(alpha_d: Fraction, delta_los: Fraction, e11_hat: Fraction, omega_so: Fraction) -> Fraction:",
         '    """Y_sat^2: the ODS law is unsaturated iff (eps + sigma0 s)^2 < Y_sat^2 (symbolic.ilos)."""',
         f"    return {_code(unsaturated_strip_sq(), names | {S.Omega_SO: 'omega_so'})}",
+        "",
+    ]
+    damping, forcing = integrator_rates()
+    lines += [
+        "",
+        "def integrator_rates(y: Fraction, sigma0: Fraction, k_d: Fraction, delta_los: Fraction,",
+        "                     los_speed: Fraction) -> tuple[Fraction, Fraction]:",
+        '    """(damping, forcing) of s_dot = -damping s + forcing at y = eps + sigma0 s (symbolic.ilos)."""',
+        f"    return ({_code(damping, names | {Y_LOS: 'y'})}, {_code(forcing, names | {Y_LOS: 'y'})})",
+        "",
+        "",
+        "def windup_bound_sq(sigma0: Fraction, k_d: Fraction, delta_los: Fraction, los_speed: Fraction) -> Fraction:",
+        '    """S*^2, S* = max_y forcing/damping: |s| > S* always decreases (symbolic.ilos)."""',
+        f"    return {_code(windup_bound_sq(), names)}",
         "",
     ]
     a12, a22, gain = sp.symbols("a12 a22 gain")

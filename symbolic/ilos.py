@@ -100,6 +100,36 @@ def unsaturated_strip_sq() -> sp.Expr:
     return sp.expand(solution)
 
 
+#: the LOS error ``y = eps + sigma0 s`` as a free symbol (positive: the functions below are even or odd in it)
+Y_LOS = sp.Symbol("y", positive=True)
+
+
+def integrator_rates() -> tuple[sp.Expr, sp.Expr]:
+    """``s_dot = -damping(y) s + forcing(y)`` (eq. ``eq:losdynvar`` written in ``y = eps + sigma0 s``).
+
+    ``s_dot`` is affine in ``s`` at fixed ``y``; both parts are read off the derivation:
+    ``damping = -d s_dot / d s``, ``forcing = s_dot at s = 0``.
+    """
+    s_dot = derive().s_dot.subs(S.eps, Y_LOS - S.sigma0 * S.s)
+    damping = sp.simplify(-sp.diff(s_dot, S.s))
+    forcing = sp.simplify(s_dot.subs(S.s, 0))
+    assert sp.simplify(s_dot - (-damping * S.s + forcing)) == 0
+    return damping, forcing
+
+
+def windup_bound_sq() -> sp.Expr:
+    """``S*^2`` with ``S* = max_y forcing(y) / damping(y)``: ``|s|`` above ``S*`` always decreases.
+
+    ``forcing / damping`` vanishes at ``y = 0`` and as ``y -> oo`` and has one critical point on
+    ``y > 0`` (asserted), its maximum.
+    """
+    damping, forcing = integrator_rates()
+    ratio = sp.simplify(forcing / damping)
+    critical = sp.solve(sp.diff(ratio, Y_LOS), Y_LOS)
+    assert len(critical) == 1, critical
+    return sp.factor(sp.simplify(ratio.subs(Y_LOS, critical[0]) ** 2))
+
+
 def _angle_sampler(rng: random.Random) -> sp.Rational:
     return sp.Rational(rng.randint(-300, 300), 100)
 

@@ -63,7 +63,7 @@ import numpy as np
 from lyapcheck import exact, poly
 from lyapcheck.conditions.base import ConditionResult, System
 from lyapcheck.conditions.sos import bases, scaled_dynamics
-from symbolic._generated import unsaturated_strip_sq
+from symbolic._generated import integrator_rates, unsaturated_strip_sq, windup_bound_sq
 
 SQRT2_UPPER = Fraction(141422, 100000)
 #: relative shrink of Omega_SO (given as a float-derived Fraction) to a safe lower bound
@@ -172,14 +172,21 @@ def h_value(R: Fraction, mu: Fraction, ell: Fraction, kd: Fraction, g: list[Frac
     return mu * ell * R - kd * sum((gk * R ** (k - 1) for k, gk in enumerate(g) if k >= 1), Fraction(0))
 
 
+def reach_push(system: System, k_d: Fraction, S1: Fraction, Yq: Fraction) -> Fraction:
+    """Largest push away from the strip for ``|y| >= Y_q``, ``|s| <= S_1``: ``|E_0| d* + sigma0
+    (damping(Y_q) S_1 + forcing(Y_q))`` with the integrator's rates from the derivation (both
+    decrease in ``|y|`` for ``|y| >= Delta``)."""
+    damping, forcing = integrator_rates(Yq, system.sigma0, k_d, system.delta, system.speed)
+    return abs(system.E[0]) * system.d_max + system.sigma0 * (damping * S1 + forcing)
+
+
 def global_reach(system: System, *, k_d: Fraction, y_sat_sq: Fraction, time_scale: Fraction) -> dict[str, str] | None:
     """Step 3 of the module docstring: rationals ``S_1 > S*``, ``Delta <= Y_q <= Y_sat`` and the
     margin ``gamma`` (exact; reach is proved when ``gamma > 0``). None if ``Y_sat < Delta``."""
-    U, delta, sigma0 = system.speed, system.delta, system.sigma0
+    delta = system.delta
     if y_sat_sq < delta**2:
         return None
-    # S*^2 = U^2 Delta^2 / (4 k_d (k_d Delta^2 + sigma0 U Delta))
-    s_star_sq = U**2 * delta**2 / (4 * k_d * (k_d * delta**2 + sigma0 * U * delta))
+    s_star_sq = windup_bound_sq(system.sigma0, k_d, delta, system.speed)
     S1 = exact.to_rational(math.sqrt(float(s_star_sq)) * (1 + 1e-6), 8)
     while S1 * S1 <= s_star_sq:
         S1 *= 1 + Fraction(1, 10**6)
@@ -188,10 +195,8 @@ def global_reach(system: System, *, k_d: Fraction, y_sat_sq: Fraction, time_scal
         Yq *= 1 - Fraction(1, 10**9)
     if Yq < delta:
         return None
-    q = Yq**2 + delta**2
     pull = time_scale * Yq
-    push = (abs(system.E[0]) * system.d_max + sigma0 * k_d * S1 + sigma0 * U * delta * Yq / q
-            + sigma0**2 * U * delta * S1 / q)
+    push = reach_push(system, k_d, S1, Yq)
     return {"S_star_sq": str(s_star_sq), "S_1": str(S1), "Y_q": str(Yq), "pull": str(pull), "push": str(push),
             "gamma": str(pull - push)}
 
@@ -338,18 +343,14 @@ def verify(system: System, sos_cert: dict[str, Any], cert: dict[str, Any], *, al
 def verify_reach(system: System, reach: dict[str, str], *, k_d: Fraction, alpha_d: Fraction, e11_hat: Fraction,
                  omega_so: Fraction) -> tuple[bool, str]:
     """Re-check step 3 from the inputs: ``S_1 > S*``, ``Delta <= Y_q <= Y_sat`` and ``gamma``."""
-    U, delta, sigma0 = system.speed, system.delta, system.sigma0
+    delta = system.delta
     S1, Yq, gamma = Fraction(reach["S_1"]), Fraction(reach["Y_q"]), Fraction(reach["gamma"])
     y_sat_sq = unsaturated_strip_sq(alpha_d, delta, e11_hat, omega_so * (1 - OMEGA_ROUNDING))
-    if not S1 * S1 * 4 * k_d * (k_d * delta**2 + sigma0 * U * delta) > U**2 * delta**2:
+    if not S1 * S1 > windup_bound_sq(system.sigma0, k_d, delta, system.speed):
         return False, "the wind-up bound S_1 is not above S*"
     if not (delta <= Yq and Yq * Yq <= y_sat_sq):
         return False, "Y_q is not between Delta and the strip's half-width"
-    q = Yq**2 + delta**2
-    time_scale = -system.A[0][0]
-    push = (abs(system.E[0]) * system.d_max + sigma0 * k_d * S1 + sigma0 * U * delta * Yq / q
-            + sigma0**2 * U * delta * S1 / q)
-    if gamma != time_scale * Yq - push:
+    if gamma != -system.A[0][0] * Yq - reach_push(system, k_d, S1, Yq):
         return False, "the stated reach margin does not follow from the inputs"
     return True, (f"global reach re-checked: margin {float(gamma):.4g} m/s" if gamma > 0
                   else "global reach not proved (margin <= 0), as stated")
