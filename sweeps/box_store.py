@@ -22,7 +22,7 @@ import numpy as np
 
 from sweeps.schema import BOX_DIM, box_variables
 from sweeps.spec import SweepSpec
-from sweeps.store import check_arrays_readable, open_or_build, paper_point, versions
+from sweeps.store import block_regions, check_arrays_readable, open_or_build, paper_point, versions
 
 #: rows per Zarr chunk (the main process rewrites a whole chunk to update some of its rows)
 BOX_CHUNK: Final = 256
@@ -44,7 +44,7 @@ class BoxStore:
         target = Path(path)
         group = open_or_build(target, spec, lambda staging: _build(staging, spec))
         store = cls(target, group, spec)
-        regions = [(slice(i, min(i + BOX_CHUNK, store.capacity)),) for i in range(0, store.capacity, BOX_CHUNK)]
+        regions = block_regions((store.capacity,), (BOX_CHUNK,))
         check_arrays_readable(group, target, {v.name: (store.capacity,) for v in store.variables}, regions)
         return store
 

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from lyapcheck.params import Problem, problem_from_sources
+from lyapcheck.simulation.integrator import Evaluation
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER_TOML = ROOT / "examples" / "paper.toml"
@@ -41,3 +43,24 @@ omega_so = "2.8 Hz"
 [disturbance]
 d_max = "0.088 mm/s"
 """
+
+
+class DecaySystem:
+    """``y' = -lam y``, one row per rate: a minimal batched system for the integrator's contract
+    (stiff for a large ``lam``)."""
+
+    def __init__(self, lam: np.ndarray) -> None:
+        self.lam = lam
+
+    @property
+    def size(self) -> int:
+        return int(self.lam.size)
+
+    def rhs(self, t: np.ndarray, y: np.ndarray, t_segment: np.ndarray) -> Evaluation:
+        return Evaluation(-self.lam[:, None] * y, np.abs(y[:, 0]), np.empty((y.shape[0], 0)))
+
+    def take(self, index: np.ndarray) -> "DecaySystem":
+        return DecaySystem(self.lam[index])
+
+    def next_breakpoint(self, t: np.ndarray) -> np.ndarray:
+        return np.full(t.shape, np.inf)

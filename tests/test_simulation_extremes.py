@@ -17,10 +17,11 @@ import pytest
 
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.simulation.integrator import (
-    STATUS_MAX_ITERATIONS, STATUS_OK, Evaluation, IntegrationResult, integrate,
+    STATUS_MAX_ITERATIONS, STATUS_OK, IntegrationResult, integrate,
 )
 from lyapcheck.simulation.runner import STEPS_PER_TAIL
 from lyapcheck.tolerances import SIM_MAX_STEPS
+from tests.conftest import DecaySystem
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -28,26 +29,6 @@ ROOT = Path(__file__).resolve().parents[1]
 FP_WARNINGS = pytest.mark.filterwarnings(
     "ignore:overflow encountered:RuntimeWarning", "ignore:invalid value encountered:RuntimeWarning",
     "ignore:divide by zero encountered:RuntimeWarning", "ignore:underflow encountered:RuntimeWarning")
-
-
-class _Decay:
-    """``y' = -lam y``, one row per rate: stiff for a large ``lam``."""
-
-    def __init__(self, lam: np.ndarray) -> None:
-        self.lam = lam
-
-    @property
-    def size(self) -> int:
-        return int(self.lam.size)
-
-    def rhs(self, t: np.ndarray, y: np.ndarray, t_segment: np.ndarray) -> Evaluation:
-        return Evaluation(-self.lam[:, None] * y, np.abs(y[:, 0]), np.empty((y.shape[0], 0)))
-
-    def take(self, index: np.ndarray) -> "_Decay":
-        return _Decay(self.lam[index])
-
-    def next_breakpoint(self, t: np.ndarray) -> np.ndarray:
-        return np.full(t.shape, np.inf)
 
 
 def _scenario(tmp_path: Path, key: str, value: str) -> Path:
@@ -69,7 +50,7 @@ def test_the_step_budget_is_the_named_limit() -> None:
 def test_stiff_rows_stop_at_the_step_budget_and_the_others_finish() -> None:
     """A stiff row (rate 1e6/s over 1 s: ~3e5 explicit steps) stops at the budget (small here,
     to keep the test fast; SIM_MAX_STEPS by default), a mild one in the same batch finishes."""
-    res = integrate(_Decay(np.array([1.0, 1e6])), 0.0, np.ones((2, 1)), 1.0, atol=1e-12, max_iterations=2000)
+    res = integrate(DecaySystem(np.array([1.0, 1e6])), 0.0, np.ones((2, 1)), 1.0, atol=1e-12, max_iterations=2000)
     assert res.status.tolist() == [STATUS_OK, STATUS_MAX_ITERATIONS]
     assert res.n_iterations == 2001 and res.max_iterations == 2000
     assert res.y[0, 0] == pytest.approx(np.exp(-1.0), rel=1e-6)
@@ -85,7 +66,7 @@ def test_stiff_rows_stop_at_the_step_budget_and_the_others_finish() -> None:
 def test_overflowing_first_step_fails_at_once(lam: float) -> None:
     """Before issue 14 the starting-step heuristic gave 0 (or NaN) when its scaled norms
     overflowed, and zero steps were accepted without advancing t until the iteration limit."""
-    res = integrate(_Decay(np.array([lam])), 0.0, np.ones((1, 1)), 1.0, atol=1e-9)
+    res = integrate(DecaySystem(np.array([lam])), 0.0, np.ones((1, 1)), 1.0, atol=1e-9)
     assert res.status[0] != STATUS_OK and res.n_iterations < 10
     assert res.failure(0, 1.0) is not None
 

@@ -12,9 +12,10 @@ from scipy.integrate import solve_ivp
 
 from lyapcheck.params import Problem
 from lyapcheck.simulation.disturbances import Constant, PiecewiseConstant
-from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, Evaluation, integrate
+from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, integrate
 from lyapcheck.simulation.model import N_STATE, ClosedLoop, ErrorDynamics, LoopParams
 from lyapcheck.tolerances import SIM_REL_TOL
+from tests.conftest import DecaySystem
 
 P0 = (0.0, -0.040)
 SINK = Constant(np.array([0.0, -0.088e-3]))
@@ -123,39 +124,19 @@ def test_piecewise_constant_breakpoints_match_reference(paper_problem: Problem) 
         assert err.max() < SIM_REL_TOL, (i, err.max())
 
 
-class _Decay:
-    """y' = -lam y: a minimal system for the integrator's own contract."""
-
-    def __init__(self, lam: np.ndarray) -> None:
-        self.lam = lam
-
-    @property
-    def size(self) -> int:
-        return int(self.lam.size)
-
-    def rhs(self, t: np.ndarray, y: np.ndarray, t_segment: np.ndarray) -> Evaluation:
-        return Evaluation(-self.lam[:, None] * y, np.abs(y[:, 0]), np.empty((y.shape[0], 0)))
-
-    def take(self, index: np.ndarray) -> "_Decay":
-        return _Decay(self.lam[index])
-
-    def next_breakpoint(self, t: np.ndarray) -> np.ndarray:
-        return np.full(t.shape, np.inf)
-
-
 def test_integrator_converges_on_exact_solution() -> None:
     lam = np.linspace(0.1, 50.0, 200)
     y0 = np.ones((200, 1))
     errs = []
     for rtol in (1e-6, 1e-9):
-        res = integrate(_Decay(lam), 0.0, y0, 2.0, rtol=rtol, atol=1e-14)
+        res = integrate(DecaySystem(lam), 0.0, y0, 2.0, rtol=rtol, atol=1e-14)
         errs.append(np.max(np.abs(res.y[:, 0] - np.exp(-2.0 * lam)) / np.maximum(np.exp(-2.0 * lam), 1e-14 / rtol)))
         assert np.all(res.monitor_max == 1.0)
     assert errs[1] < errs[0] and errs[1] < 1e-7
 
 
 def test_integrator_rejects_bad_arguments() -> None:
-    sys_ = _Decay(np.ones(2))
+    sys_ = DecaySystem(np.ones(2))
     with pytest.raises(ValueError, match="'y0' parameter"):
         integrate(sys_, 0.0, np.ones(2), 1.0, atol=1e-9)
     with pytest.raises(ValueError, match="'rtol' parameter"):
