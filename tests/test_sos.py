@@ -186,3 +186,38 @@ def test_sos_bound_tamper_is_caught(paper_problem, paper_results) -> None:
     assert sos_bound.verify(system, cert)[0]
     assert not sos_bound.verify(system, {**cert, "B": str(Fraction(cert["B"]) / 4)})[0]
     assert not sos_bound.verify(system, {**cert, "eps_bound": str(Fraction(cert["eps_bound"]) / 2)})[0]
+
+
+def test_a_negative_decay_rate_is_refused_even_where_its_identity_holds() -> None:
+    """With mu < 0 the SOS identity only gives V' <= |mu| V, and such identities exist for a
+    saddle (c = 1, a = 1, b = 5: det = a - b c < 0). The exact check must refuse them."""
+    from lyapcheck import exact, poly
+    from lyapcheck.conditions import sos
+    from lyapcheck.conditions.sos import ScaledDynamics
+
+    saddle = ScaledDynamics(time_scale=Fraction(1), c=Fraction(1), a=Fraction(1), b=Fraction(5))
+    mu = Fraction(-5)
+    solved = sos.program(4).solve(sos.program_data(saddle, 4, float(mu)))
+    assert solved.values is not None
+    z_v, z_w = sos.bases(4)
+    QV = exact.symmetrize(exact.rational_matrix(solved.values["Q_V"]))
+    g_y, g_r, q = saddle.fields()
+    QW = sos.project_gram(z_w, exact.symmetrize(exact.rational_matrix(solved.values["Q_W"])),
+                          sos.target(poly.gram_form(z_v, QV), g_y, g_r, q, mu))
+    assert QW is not None
+    # everything but the sign of mu passes: positive definite Gram matrices, exact identity
+    assert exact.is_positive_definite_ldl(QV) and exact.is_positive_definite_ldl(QW)
+    assert sos.target(poly.gram_form(z_v, QV), g_y, g_r, q, mu) == poly.gram_form(z_w, QW)
+    ok, why = sos.exact_check(saddle, 4, QV, QW, mu)
+    assert not ok and "mu" in why
+
+
+def test_the_sector_check_refuses_a_negative_decay_rate() -> None:
+    """``A^T P + P A + 2 rate P < 0`` with ``rate < 0`` holds for the unstable A = I/2, P = I."""
+    from lyapcheck import exact
+    from lyapcheck.conditions import sector
+
+    unstable = exact.matrix([[Fraction(1, 2), 0], [0, Fraction(1, 2)]])
+    ok, why = sector.exact_check([unstable], exact.matrix([[1, 0], [0, 1]]), Fraction(-1))
+    assert not ok and "rate" in why
+    assert not sector.exact_check([unstable], exact.matrix([[1, 0], [0, 1]]), Fraction(0))[0]

@@ -56,7 +56,10 @@ def program(vertices: int = 2) -> CompiledProgram:
 
 
 def exact_check(vertices: list[exact.Matrix], P: exact.Matrix, rate: Fraction) -> tuple[bool, str]:
-    """``P > 0`` and ``A_i^T P + P A_i + 2 rate P < 0`` at every vertex, exactly."""
+    """``P > 0`` and ``A_i^T P + P A_i + 2 rate P < 0`` at every vertex, exactly (``rate >= 0``:
+    with a negative rate the inequality allows growth and proves nothing)."""
+    if rate < 0:
+        return False, "the decay rate must be >= 0"
     if not exact.is_positive_definite(P):
         return False, "P is not positive definite (leading minors)"
     for i, a in enumerate(vertices):

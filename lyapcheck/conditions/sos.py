@@ -153,7 +153,12 @@ def project_gram(basis: list[poly.Monomial], Q: exact.Matrix, p: poly.Poly) -> e
 
 
 def exact_check(dyn: ScaledDynamics, deg_v: int, QV: exact.Matrix, QW: exact.Matrix, mu: Fraction) -> tuple[bool, str]:
-    """Exact: Q_V > 0, Q_W > 0 and -grad V . g - mu V q == z_W^T Q_W z_W identically."""
+    """Exact: mu >= 0, Q_V > 0, Q_W > 0 and -grad V . g - mu V q == z_W^T Q_W z_W identically.
+
+    ``mu < 0`` is refused: the identity then gives ``V' <= |mu| V``, which allows growth (such
+    "certificates" exist for saddles, so a forged file must not pass)."""
+    if mu < 0:
+        return False, "the decay rate mu must be >= 0"
     z_v, z_w = bases(deg_v)
     if not exact.is_positive_definite_ldl(QV):
         return False, "Q_V is not positive definite (exact LDL^T)"
