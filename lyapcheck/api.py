@@ -129,7 +129,11 @@ class CertifyResult:
     document: dict[str, Any] = field(repr=False)
 
     def to_json(self) -> dict[str, Any]:
-        return self.document
+        """The certificate document, as a copy: editing it (as a test that forges a certificate
+        does) leaves this result and its later ``to_json()`` untouched."""
+        import copy
+
+        return copy.deepcopy(self.document)
 
     def write(self, path: str | Path) -> Path:
         """Write the certificate file (atomically: a reader never sees half a file)."""
@@ -206,12 +210,14 @@ def add_tightness(results: "Mapping[str, ConditionResult]", problem: "Problem", 
 def certify_box(params: Any = None, box: Sequence[str] | Any = (), *, dynamics: str = "derived",
                 overrides: Mapping[str, object] | None = None, classes: str | Sequence[str] | None = None
                 ) -> CertifyResult:
-    """GES for every gain set in a box (``["alpha_d=540..660", "k_d=0.1..0.2"]``), one exact proof.
+    """Condition classes for every gain set in a box (``["alpha_d=540..660", "k_d=0.1..0.2"]``), one exact proof each.
 
     The parameters not in the box are taken from ``params`` / ``overrides``; see
     :mod:`lyapcheck.boxes` for why a check at the corners covers the whole box. ``classes``:
-    names among :data:`lyapcheck.boxes.BOX_CLASSES` (comma-separated or a list; default the two
-    GES classes; ``sos_bound`` adds a bound on ``|eps|`` for the whole box, 20-30 s).
+    names among :data:`lyapcheck.boxes.BOX_CLASSES` (comma-separated or a list, or ``"all"``;
+    default :data:`lyapcheck.boxes.DEFAULT_BOX_CLASSES`, the paper's eq. ``stabCond`` and the GES
+    classes; ``sos_bound`` adds a bound on ``|eps|`` for the whole box, 20-30 s, and with
+    ``saturated_loop`` that bound holds for the real, saturated loop).
     The result's document is a certificate that :func:`verify` re-checks without a solver.
     """
     from lyapcheck.boxes import BOX_CLASSES, DEFAULT_BOX_CLASSES, ParameterBox, certify_box as prove_box, parse_box
@@ -237,7 +243,7 @@ def certify_box(params: Any = None, box: Sequence[str] | Any = (), *, dynamics: 
 
 def _box_classes(classes: str | Sequence[str] | None, allowed: Sequence[str]) -> list[str]:
     """The box classes asked for, in the order of ``allowed`` (one-line error naming the field)."""
-    if classes is None:
+    if classes is None or classes == "all":
         return list(allowed)
     names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes)]
     if not names or any(n not in allowed for n in names):
