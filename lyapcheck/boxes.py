@@ -16,9 +16,11 @@ holds at every gain set of the parameter box. The decay rate in seconds is
 ``mu |a11| / 2 >= mu min|a11| / 2`` and ``k = sqrt(c2/c1)`` does not depend on the point.
 
 Statuses of a box: ``certified`` (for every point), ``not_certified`` (no common certificate
-found), and in :func:`refine` a box that is not certified is split until its relative width is
-below the given minimum. No box is ever ``refuted`` for GES, and that is a fact of the model,
-not a gap: ``c = -1`` identically (``tests/test_boxes.py`` checks it on the derivation), so the
+found), ``refuted`` (a class's own condition is proved impossible at a point of the box: the
+paper's eq. ``stabCond`` by the exact ``Gamma_22`` bound, ``sector_ges`` by Shorten-Narendra), and
+in :func:`refine` a box that is not certified is split until its relative width is below the
+given minimum. The other classes over a box live in their own modules (:data:`BOX_CLASSES`).
+No box is ever ``refuted`` for GES itself, and that is a fact of the model, not a gap: ``c = -1`` identically (``tests/test_boxes.py`` checks it on the derivation), so the
 linearisation ``[[-1, c], [b, -a]]`` at the origin has ``det = a + b > 0`` at every positive gain
 set, and the one exact local obstruction to GES (a non-Hurwitz linearisation) never occurs. A
 refutation would need a global argument (trajectories whose decay has no uniform exponential
@@ -147,40 +149,64 @@ def scaled_hull(problem: Problem, box: ParameterBox, dynamics: str) -> tuple[lis
     return unique, min(d.time_scale for d in points)
 
 
-#: classes with box certificates, cheapest first: two prove GES, ``sos_bound`` (20-30 s a box) an
-#: ultimate bound on |eps| (:mod:`lyapcheck.box_bounds`)
-BOX_CLASSES: tuple[str, ...] = ("sector_ges", "ges", "sos_bound")
-#: the classes whose certificate proves stability (GES): a box's verdict
-BOX_STABILITY_CLASSES: tuple[str, ...] = ("sector_ges", "ges")
-#: run by ``certify --box`` unless ``--classes`` says otherwise
-DEFAULT_BOX_CLASSES: tuple[str, ...] = ("sector_ges", "ges")
+#: classes with box certificates, in the order of :data:`lyapcheck.certification.CONDITION_ORDER`:
+#: ``prop41_*`` (:mod:`lyapcheck.box_prop41`), ``sector_ges`` and ``ges`` (here), ``ultimate_bound``
+#: (:mod:`lyapcheck.box_ultimate`), ``sos_gas`` (:mod:`lyapcheck.box_sos_gas`), ``saturated_loop``
+#: (:mod:`lyapcheck.box_saturated`) and ``sos_bound`` (:mod:`lyapcheck.box_bounds`, 20-30 s a box)
+BOX_CLASSES: tuple[str, ...] = ("prop41_ges", "prop41_iss", "sector_ges", "ultimate_bound", "sos_gas", "ges",
+                                "saturated_loop", "sos_bound")
+#: the classes whose certificate proves stability (GES, ISS or GAS): a box's verdict
+BOX_STABILITY_CLASSES: tuple[str, ...] = ("prop41_ges", "prop41_iss", "sector_ges", "sos_gas", "ges")
+#: run by ``certify --box`` unless ``--classes`` says otherwise (the cheap ones: well under a second)
+DEFAULT_BOX_CLASSES: tuple[str, ...] = ("prop41_ges", "prop41_iss", "sector_ges", "ges")
+
+
+def _class_functions(cls: str) -> tuple[Any, Any]:
+    """``(certify(problem, box, dynamics), verify(problem, box, dynamics, result))`` of a box class."""
+    from functools import partial
+
+    if cls in ("prop41_ges", "prop41_iss"):
+        from lyapcheck.box_prop41 import certify_prop41_box, verify_prop41_box
+
+        iss = cls == "prop41_iss"
+        return partial(certify_prop41_box, iss=iss), partial(verify_prop41_box, iss=iss)
+    if cls == "ultimate_bound":
+        from lyapcheck.box_ultimate import certify_ultimate_box, verify_ultimate_box
+
+        return certify_ultimate_box, verify_ultimate_box
+    if cls == "sos_gas":
+        from lyapcheck.box_sos_gas import certify_gas_box, verify_gas_box
+
+        return certify_gas_box, verify_gas_box
+    if cls == "saturated_loop":
+        from lyapcheck.box_saturated import certify_saturated_box, verify_saturated_box
+
+        return certify_saturated_box, verify_saturated_box
+    if cls == "sos_bound":
+        from lyapcheck.box_bounds import certify_bound_box, verify_bound_box
+
+        return certify_bound_box, verify_bound_box
+    return {"sector_ges": (_certify_sector_box, _verify_sector_box),
+            "ges": (_certify_ges_box, _verify_ges_box)}[cls]
 
 
 def certify_box(problem: Problem, box: ParameterBox, dynamics: str = "derived", cls: str = "ges") -> dict[str, Any]:
-    """GES for every gain set in ``box`` by class ``cls`` (:data:`BOX_CLASSES`); a JSON-ready result."""
-    if cls == "sector_ges":
-        return _certify_sector_box(problem, box, dynamics)
-    if cls == "sos_bound":
-        from lyapcheck.box_bounds import certify_bound_box
-
-        return certify_bound_box(problem, box, dynamics)
-    if cls != "ges":
+    """Class ``cls`` (:data:`BOX_CLASSES`) for every gain set in ``box``; a JSON-ready result."""
+    if cls not in BOX_CLASSES:
         raise InvalidParameter("classes", "box classes among " + ", ".join(BOX_CLASSES), cls)
-    return _certify_ges_box(problem, box, dynamics)
+    certify, _ = _class_functions(cls)
+    result: dict[str, Any] = certify(problem, box, dynamics)
+    return result
 
 
 def verify_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any],
                cls: str = "ges") -> tuple[bool, str]:
     """Re-check a box certificate of class ``cls`` exactly (no solver)."""
-    if cls == "sector_ges":
-        return _verify_sector_box(problem, box, dynamics, result)
-    if cls == "sos_bound":
-        from lyapcheck.box_bounds import verify_bound_box
-
-        return verify_bound_box(problem, box, dynamics, result)
-    if cls != "ges":
+    if cls not in BOX_CLASSES:
         return False, f"'{cls}' has no box certificates"
-    return _verify_ges_box(problem, box, dynamics, result)
+    _, verify = _class_functions(cls)
+    checked: tuple[bool, str] = verify(problem, box, dynamics, result)
+    return checked
 
 
 def _certify_ges_box(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any]:
@@ -365,12 +391,16 @@ def verify_box_refutation(problem: Problem, box: ParameterBox, dynamics: str, re
     from lyapcheck.conditions import sector
     from lyapcheck.conditions.sos import scaled_dynamics
 
-    if cls != "sector_ges":
+    if cls not in ("sector_ges", "prop41_ges", "prop41_iss"):
         return False, f"'{cls}' has no box refutations"
     point = {name: Fraction(value) for name, value in result["refutation"]["point"].items()}
     bounds = {name: (lo, hi) for name, lo, hi in box.bounds}
     if set(point) != set(bounds) or any(not bounds[n][0] <= x <= bounds[n][1] for n, x in point.items()):
         return False, "the refuting point is not a point of the box"
+    if cls != "sector_ges":
+        from lyapcheck.box_prop41 import verify_prop41_refutation
+
+        return verify_prop41_refutation(problem, point, dynamics, result["refutation"])
     v = scaled_dynamics(build_system(problem_at_point(problem, point), dynamics))
     if v is None:
         return False, "the dynamics at the refuting point do not have the structure this class needs"

@@ -83,8 +83,10 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
 
 def build_box_document(problem: Any, box: Any, dynamics: str, results: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """A certificate for every gain set in ``box`` (:mod:`lyapcheck.boxes`), one entry per class."""
+    from lyapcheck.box_saturated import real_loop_bound
     from lyapcheck.boxes import BOX_STABILITY_CLASSES
 
+    real_loop_bound(results)
     certified = any(r["status"] == "certified" for c, r in results.items() if c in BOX_STABILITY_CLASSES)
     return {
         "schema_version": SCHEMA_VERSION,
@@ -110,7 +112,8 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         v = {k: Fraction(x) for k, x in doc["inputs"]["exact_si"].items() if x is not None}
         problem = Problem(gains=GainSet(alpha_d=v["alpha_d"], sigma0=v["sigma0"], k_d=v["k_d"],
                                         delta_los=v["delta_los"], los_speed=v["los_speed"]),
-                          swimmer=Swimmer(e11=v["e11"], e11_hat=v["e11_hat"]), actuation=Actuation(omega_so=None))
+                          swimmer=Swimmer(e11=v["e11"], e11_hat=v["e11_hat"]),
+                          actuation=Actuation(omega_so=v.get("omega_so")))
         problem = replace(problem, d_max=v.get("d_max"))
         box = ParameterBox.from_json(doc["box"])
         if any(lo <= 0 or lo > hi for _, lo, hi in box.bounds):
@@ -126,6 +129,15 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
             elif result.get("status") == "refuted":
                 ok, why = verify_box_refutation(problem, box, doc["dynamics"], result, cls)
                 rows.append((cls, ok, why if ok else f"{cls}: {why}"))
+        sat = conditions.get("saturated_loop", {})
+        if "real_loop_limsup_eps_m" in sat:  # the conjunction of reach and sos_bound, both re-checked above
+            bound = conditions.get("sos_bound", {})
+            ok = (any(n == "saturated_loop" and good for n, good, _ in rows)
+                  and any(n == "sos_bound" and good for n, good, _ in rows)
+                  and float(sat["real_loop_limsup_eps_m"]) >= float(Fraction(bound["certificate"]["eps_bound"])) * (1 - 1e-15))
+            rows.append(("real_loop_bound", ok, "the real loop's bound is the re-checked sos_bound under re-checked reach"
+                         if ok else "real_loop_limsup_eps_m: needs verified saturated_loop reach and a verified sos_bound "
+                         "bound no larger than it"))
         proven = any(ok and n in BOX_STABILITY_CLASSES and conditions[n].get("status") == "certified"
                      for n, ok, _ in rows)
         expected = "certified" if proven else "not_certified"

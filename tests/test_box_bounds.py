@@ -22,7 +22,7 @@ NEAR_PAPER = ["alpha_d=588..612", "k_d=0.147..0.153"]
 
 @pytest.fixture(scope="module")
 def certified() -> object:
-    return certify_box(PAPER_TOML, NEAR_PAPER, classes="sos_bound")
+    return certify_box(PAPER_TOML, NEAR_PAPER, classes="saturated_loop,sos_bound")
 
 
 @pytest.mark.slow
@@ -83,3 +83,19 @@ def test_a_tampered_box_bound_fails_verify(certified) -> None:  # type: ignore[n
     doc = certified.to_json()
     doc["box"]["alpha_d"] = ["500", "612"]  # a wider box than the one certified
     assert not verify(doc).valid
+
+
+@pytest.mark.slow
+def test_with_reach_over_the_box_the_bound_is_the_real_loops_and_verify_rechecks_the_conjunction(certified) -> None:  # type: ignore[no-untyped-def]
+    doc = certified.to_json()
+    sat, bound = doc["conditions"]["saturated_loop"], doc["conditions"]["sos_bound"]
+    assert sat["status"] == "certified" and sat["real_loop_limsup_eps_m"] == bound["eps_bound_m"]
+    assert "real loop's limsup" in sat["summary"]
+    checks = {c.check: c.ok for c in verify(doc).checks}
+    assert checks["real_loop_bound"] and checks["saturated_loop"]
+    forged = certified.to_json()
+    forged["conditions"]["saturated_loop"]["real_loop_limsup_eps_m"] = bound["eps_bound_m"] / 2
+    assert not verify(forged).valid
+    without_reach = certified.to_json()  # a real-loop bound whose reach argument does not re-check
+    without_reach["conditions"]["saturated_loop"]["certificate"]["reach"]["gamma"] = "1"
+    assert not {c.check: c.ok for c in verify(without_reach).checks}["real_loop_bound"]

@@ -185,5 +185,5 @@ def test_sector_box_refutation_names_a_point_of_the_box_and_rechecks() -> None:
 
 def test_box_classes_are_validated() -> None:
     with pytest.raises(InvalidParameter) as info:
-        certify_box(PAPER_TOML, SECTOR_BOX, classes="prop41_ges")
+        certify_box(PAPER_TOML, SECTOR_BOX, classes="switched_ges")
     assert info.value.field == "classes"

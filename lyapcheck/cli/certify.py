@@ -58,8 +58,9 @@ def register(group: click.Group) -> None:
                   "quadratic and arithmetic classes, about 20x faster).")
     @click.option("--worst-case", is_flag=True, help="Also search the worst disturbance in simulation and report "
                   "tightness_ratio = certified / simulated beside each certified bound (10-20 s).")
-    @click.option("--box", "boxes", multiple=True, help='Certify GES for a whole box of gains, e.g. --box '
-                  '"alpha_d=540..660" --box "k_d=0.1..0.2" (repeatable; classes sector_ges and ges, --classes sos_bound for a bound on |eps|).')
+    @click.option("--box", "boxes", multiple=True, help='Certify a whole box of gains, e.g. --box '
+                  '"alpha_d=540..660" --box "k_d=0.1..0.2" (repeatable; classes prop41_ges, prop41_iss, sector_ges and '
+                  'ges by default; --classes all adds ultimate_bound, sos_gas, saturated_loop and sos_bound).')
     @one_line_errors
     def certify(gains: str | None, dynamics: str, as_json: bool, out: str | None, report: str | None,
                 linear_views: bool, classes: str | None, worst_case: bool, boxes: tuple[str, ...],
