@@ -102,7 +102,7 @@ def main() -> None:
 
     print("import cost in a fresh interpreter, beyond numpy (median of 3):")
     for module, why in (("cvxpy", "no longer imported by certify (compiled programs)"),
-                        ("pint", "lyapcheck.units parses '0.75 mm' etc.; pulls in dask"),
+                        ("pint", "first run only: lyapcheck.units remembers pint's unit factors (it pulls in dask)"),
                         ("scipy.linalg.cython_blas", "Clarabel loads it at its first PSD-cone solve"),
                         ("scipy.sparse", "not imported: Clarabel is handed index arrays")):
         print(f"  {module:26} {import_cost(module) * 1e3:6.0f} ms  {why}")

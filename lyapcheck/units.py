@@ -27,6 +27,7 @@ from decimal import Decimal, InvalidOperation
 from enum import Enum
 from fractions import Fraction
 from functools import lru_cache
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
 from lyapcheck.errors import InvalidParameter
@@ -113,8 +114,79 @@ def _exact_decimal(field: str, number: Decimal, got: object) -> Fraction:
     return Fraction(number)
 
 
+#: unit factors remembered across runs (:func:`_remembered_factors`), at most this many
+FACTOR_MEMO_SIZE: Final = 512
+
+
+def _factor_memo_path() -> Path | None:
+    """The memo of unit factors: one file per version of pint and of this module, so that a
+    change of either recomputes every factor. None when the version cannot be read."""
+    import hashlib
+    import os
+    from importlib import metadata
+
+    try:
+        version = metadata.version("pint")
+        source = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
+    except (OSError, metadata.PackageNotFoundError):  # pragma: no cover - a broken install
+        return None
+    root = os.environ.get("LYAPCHECK_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lyapcheck")
+    return Path(root) / f"unit-factors-{source}-pint-{version}.json"
+
+
+@lru_cache(maxsize=1)
+def _remembered_factors() -> dict[str, str]:
+    """``"KIND|unit text" -> exact factor`` as pint computed it in an earlier run.
+
+    Why: importing pint and building its registry costs about 0.35 s, most of a quick
+    ``certify``; the factors of the handful of unit strings a user types never change for one
+    version of pint and of this module (the file name carries both). Only successful
+    conversions are remembered; an unreadable or malformed memo is ignored (pint decides).
+    """
+    import json
+
+    path = _factor_memo_path()
+    try:
+        data = json.loads(path.read_text()) if path is not None else {}
+        return {str(k): str(v) for k, v in data.items()} if isinstance(data, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def _remember_factor(key: str, factor: Fraction) -> None:
+    """Add one factor to the memo (atomically; a read-only or full memo is left as it is)."""
+    import json
+
+    from lyapcheck.fileio import atomic_write
+
+    memo = _remembered_factors()
+    path = _factor_memo_path()
+    if path is None or len(memo) >= FACTOR_MEMO_SIZE:
+        return
+    memo[key] = str(factor)
+    try:
+        atomic_write(path, json.dumps(memo, sort_keys=True))
+    except OSError:  # pragma: no cover - a read-only home: pint is asked again next time
+        pass
+
+
 def _si_factor(field: str, unit_text: str, kind: Kind, got: object) -> Fraction:
-    """Exact factor that turns one `unit_text` into SI for `kind`."""
+    """Exact factor that turns one `unit_text` into SI for `kind` (pint's, remembered across runs)."""
+    key = f"{kind.name}|{unit_text}"
+    remembered = _remembered_factors().get(key)
+    if remembered is not None:
+        try:
+            return Fraction(remembered)
+        except (ValueError, ZeroDivisionError):  # a damaged memo entry: ask pint
+            pass
+    factor = _pint_factor(field, unit_text, kind, got)
+    _remember_factor(key, factor)
+    return factor
+
+
+def _pint_factor(field: str, unit_text: str, kind: Kind, got: object) -> Fraction:
+    """Exact factor that turns one `unit_text` into SI for `kind`, from pint."""
     ureg = registry()
     import pint
 

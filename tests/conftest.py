@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +11,10 @@ import pytest
 
 from lyapcheck.params import Problem, problem_from_sources
 from lyapcheck.simulation.integrator import Evaluation
+
+# the suite's unit-factor memo (lyapcheck.units) lives in a fresh directory, not the user's cache:
+# the fuzz tests parse hundreds of odd unit strings (subprocesses inherit this)
+os.environ.setdefault("LYAPCHECK_CACHE_DIR", tempfile.mkdtemp(prefix="lyapcheck-test-cache-"))
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER_TOML = ROOT / "examples" / "paper.toml"
