@@ -44,7 +44,8 @@ STATUS_MEANING: Final = {
                "obstruction exists for these dynamics)",
 }
 #: what a class's own ``refuted`` means over a box: that class's certificate cannot exist, not that GES fails
-CLASS_REFUTED: Final = {"sector_ges": "no quadratic V common to the box's matrix polytope (exact, at a corner)"}
+CLASS_REFUTED: Final = {"sector_ges": "no quadratic V common to the box's matrix polytope (exact, at a corner)",
+                        "prop41_ges": "eq. stabCond has no solution at a corner of the box (exact Gamma_22 bound)"}
 #: a partial store leaves part of the window uncovered; below this the rest is rounding
 COVERED_TOL: Final = 1e-9
 #: leaves listed row by row when there is no figure (three swept parameters)

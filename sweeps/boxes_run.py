@@ -81,21 +81,30 @@ def evaluate_boxes(spec_text: str, boxes: Sequence[tuple[int, dict[str, list[str
     for j, (box_id, data) in enumerate(boxes):
         box = ParameterBox.from_json(data)
         result: dict[str, Any] = {}
-        for cls in ges_classes:  # cheapest first; the first certificate decides the box
+        envelope: dict[str, Any] | None = None
+        for cls in ges_classes:  # cheapest first; the first certificate decides the box, and the
+            # next classes run only while no certificate has given an envelope k, rate to
+            # cross-check (eq. stabCond's, prop41_ges, gives none)
             with UNIT_LOCK:  # two threads of one Dask worker take turns (as sweeps.evaluate does)
-                result = certify_box(spec.base, box, cls=cls)
-            out[f"status_{cls}"][j] = BOX_STATUS_CODES[result["status"]]
-            if result["status"] == "certified":
-                break
+                here = certify_box(spec.base, box, cls=cls)
+            out[f"status_{cls}"][j] = BOX_STATUS_CODES[here["status"]]
+            if here["status"] == "certified":
+                result = result if result.get("status") == "certified" else here
+                if "k" in here:
+                    envelope = here
+                    break
+            elif result.get("status") != "certified":
+                result = here
         bound = _bound(spec, box, box_id, out, j) if "sos_bound" in spec.classes else None
         if not ges_classes:  # a bound-only sweep refines on the bound
             result = bound or {}
         # a class's refutation is of that class's certificate, not of GES: the box stays undecided
         status = "certified" if result.get("status") == "certified" else "not_certified"
         out["status"][j] = BOX_STATUS_CODES[status]
-        if status != "certified" or "k" not in result:
+        if status != "certified" or envelope is None:
             continue
-        out["k"][j], out["decay_rate_per_s"][j] = result["k"], result["decay_rate_per_s"]
+        out["k"][j], out["decay_rate_per_s"][j] = envelope["k"], envelope["decay_rate_per_s"]
+        result = envelope
         runs, worst = cross_check(spec.base, box, result, spec.boxes.cross_check_points, (spec.boxes.seed, box_id))
         out["cross_check_runs"][j], out["cross_check_worst_ratio"][j] = runs, worst
         out["soundness_violation"][j] |= runs > 0 and not worst <= 1 + ENVELOPE_REL_TOL

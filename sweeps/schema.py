@@ -136,7 +136,8 @@ def box_variables(dims: tuple[str, ...], classes: tuple[str, ...] = ()) -> tuple
     """Every variable of a box store over the swept parameters ``dims`` with box ``classes``.
 
     ``status`` is the box's: certified when one class certifies (the classes run cheapest first
-    and stop at the first certificate, so later classes stay ``-1`` there); ``status_<class>``
+    and stop at the first certificate with a GES envelope ``k``, rate, so later classes stay
+    ``-1`` there; ``prop41_ges``'s has none, and the next classes run for one); ``status_<class>``
     is each class's own (``refuted`` there is that class's exact refutation, not of GES).
     """
     i8, i16, i32, f8, b1 = (np.dtype(t) for t in ("int8", "int16", "int32", "float64", "bool"))

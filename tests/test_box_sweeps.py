@@ -55,7 +55,7 @@ def _files(root: Path) -> dict[str, bytes]:
     (lambda s: s.replace('name = "k_d"\nstart = 0.05\nstop = 0.8',
                          'name = "d_max"\nstart = "0.01 mm/s"\nstop = "0.1 mm/s"').replace(
                              'd_max = "0.088 mm/s"\n', ''), "sweep.axes[1].name"),
-    (lambda s: s.replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["prop41_ges"]'), "sweep.classes"),
+    (lambda s: s.replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["switched_ges"]'), "sweep.classes"),
     (lambda s: s + "[sweep.refine]\nclass = \"ges\"\nlevels = 1\n", "sweep.refine"),
     (lambda s: s + "[simulation]\nhorizon = \"1 s\"\n", "simulation"),
     (lambda s: s.replace("max_boxes = 7", "max_boxes = 0"), "sweep.boxes.max_boxes"),
@@ -208,3 +208,34 @@ def test_bound_box_sweep_certifies_a_bound_and_the_worst_case_search_stays_insid
 
     page = sweep_html(out)  # the report states the bound and its tightness
     assert "certified limsup |eps| over those boxes" in page and f"{bound * 1e3:.4g}"[:4] in page
+
+
+def test_the_papers_condition_is_mapped_per_box_and_envelopes_come_from_the_next_class(tmp_path: Path) -> None:
+    """prop41_ges (eq. stabCond) is certified or refuted per box; its certificate has no envelope
+    k, rate, so the next class runs for one and the box is cross-checked against it."""
+    text = SPEC.format(max_boxes=2).replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["prop41_ges", "sector_ges", "ges"]')
+    text = text.replace('delta_los = "0.75 mm"\n', "alpha_d = 600\n").replace(
+        'name = "alpha_d"\nstart = 150\nstop = 2400\nnum = 2',
+        'name = "delta_los"\nstart = "0.01 m"\nstop = "0.1 m"\nnum = 2').replace(
+        'name = "k_d"\nstart = 0.05\nstop = 0.8\nnum = 2', 'name = "k_d"\nstart = 0.05\nstop = 5\nnum = 3')
+    spec = parse_spec(text)
+    out = tmp_path / "p41.zarr"
+    run_boxes(spec, out, runner=InlineRunner())
+    store = BoxStore.open_or_create(out, spec)
+    p41, sector, ges = (store.read(f"status_{c}") for c in ("prop41_ges", "sector_ges", "ges"))
+    status, k, runs = store.read("status"), store.read("k"), store.read("cross_check_runs")
+    codes = BOX_STATUS_CODES
+    assert set(p41) == {codes["refuted"], codes["certified"]}  # slow integrator: refuted; fast: certified
+    certified = status == codes["certified"]
+    assert certified[p41 == codes["certified"]].all()
+    # every certified box has an envelope from sector_ges or ges and was simulated against it
+    assert np.isfinite(k[certified]).all() and (runs[certified] > 0).all()
+    assert ((sector == codes["certified"]) | (ges == codes["certified"]))[certified].all()
+    summary = summarize_boxes(store)
+    assert summary.certified_by["prop41_ges"] == int(np.sum(p41 == codes["certified"]))
+    for row in np.flatnonzero(p41 == codes["refuted"]):
+        box = boxes.ParameterBox((("delta_los", Fraction(store.read("lo_delta_los")[row]), Fraction(store.read("hi_delta_los")[row])),
+                                  ("k_d", Fraction(store.read("lo_k_d")[row]), Fraction(store.read("hi_k_d")[row]))))
+        result = boxes.certify_box(spec.base, box, cls="prop41_ges")  # refuted at a point of the box
+        assert result["status"] == "refuted"
+        assert boxes.verify_box_refutation(spec.base, box, "derived", result, "prop41_ges")[0]
