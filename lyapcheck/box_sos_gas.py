@@ -247,7 +247,7 @@ def verify_gas_box(problem: Problem, box: ParameterBox, dynamics: str,
     if [list(m) for m in z_v] != cert["basis_V"] or [list(m) for m in z_w] != cert["basis_W"]:
         return False, "stored monomial bases differ from this version's"
     mu = Fraction(cert["mu_scaled"])
-    # sos.exact_check takes mu as given; with mu < 0 the identity would not make V decrease
+    # with mu < 0 the identity would not make V decrease (sos.exact_check refuses it too; said here first)
     if mu < 0:
         return False, "the decay rate mu must be >= 0"
     if len(cert["Q_W"]) != len(cert["vertices"]):
