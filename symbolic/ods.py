@@ -791,7 +791,20 @@ def ods_control(
     omega_so: npt.ArrayLike,
     form: Form = "derived",
 ) -> FloatArray:
-    """The ODS angular-velocity command of eq:solFinal, |u| <= omega_so exactly.
+    """The ODS angular-velocity command of eq:solFinal; see :func:`ods_control_and_gradient`."""
+    return ods_control_and_gradient(v_d, d_hat, e11_hat, omega_0, omega_so, form)[0]
+
+
+def ods_control_and_gradient(
+    v_d: npt.ArrayLike,
+    d_hat: npt.ArrayLike,
+    e11_hat: npt.ArrayLike,
+    omega_0: npt.ArrayLike,
+    omega_so: npt.ArrayLike,
+    form: Form = "derived",
+) -> tuple[FloatArray, FloatArray]:
+    """The ODS angular-velocity command of eq:solFinal, |u| <= omega_so exactly, and the G_mu it
+    came from (the simulator needs both at every step: G_mu places the saturation's kink).
 
     ``u = -Omega_0 G_mu`` if ``|G_mu| < Omega_SO/Omega_0``, else ``-Omega_SO G_mu/|G_mu|``,
     with G_mu from :func:`ods_gradient` and both branches lambdified from the derivation.
@@ -805,10 +818,11 @@ def ods_control(
 
     Returns
     -------
-    numpy.ndarray
+    tuple of numpy.ndarray
         u with shape (..., 2), rad/s. Every row satisfies ``hypot(u) <= omega_so`` and
         ``sqrt(u_x^2 + u_z^2) <= omega_so`` in floating point (rounding overshoot is removed).
         With the derived form and no saturation this is eq:nomCont, (v_d - d_hat)/e11_hat.
+        Then G_mu, exactly :func:`ods_gradient`'s value.
     """
     G = ods_gradient(v_d, d_hat, e11_hat, omega_0, form)
     w0 = np.broadcast_to(_positive("omega_0", omega_0), G.shape[:-1])
@@ -832,7 +846,7 @@ def ods_control(
         ],
         axis=-1,
     ).astype(np.float64)
-    return _clip_to_ball(u, om)
+    return _clip_to_ball(u, om), G
 
 
 def trs_solve_diag(

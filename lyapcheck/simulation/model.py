@@ -153,7 +153,7 @@ class LoopParams:
         return self.e11 * np.minimum(along, self.omega_so)
 
 
-def _on_finite_rows(v_d: FloatArray, fn: Callable[[IntArray | slice], FloatArray]) -> FloatArray:
+def _on_finite_rows(v_d: FloatArray, fn: Callable[[IntArray | slice], FloatArray], width: int = 2) -> FloatArray:
     """``fn(rows)`` on the rows where the reference ``v_d`` is finite, NaN on the other rows.
 
     The ODS functions of :mod:`symbolic.ods` reject a non-finite reference (``ValueError``). At
@@ -166,17 +166,19 @@ def _on_finite_rows(v_d: FloatArray, fn: Callable[[IntArray | slice], FloatArray
     v_d
         Reference field, ``(n, 2)``.
     fn
-        Evaluates the rows given as an index array (or ``slice(None)`` for all); returns ``(k, 2)``.
+        Evaluates the rows given as an index array (or ``slice(None)`` for all); returns ``(k, width)``.
+    width
+        Columns of ``fn``'s result.
 
     Returns
     -------
     numpy.ndarray
-        ``(n, 2)``.
+        ``(n, width)``.
     """
     finite = np.all(np.isfinite(v_d), axis=1)
     if finite.all():  # the normal case: one call, no copies
         return fn(slice(None))
-    out = np.full(v_d.shape, np.nan)
+    out = np.full((v_d.shape[0], width), np.nan)
     rows = np.flatnonzero(finite)
     if rows.size:
         out[rows] = fn(rows)
@@ -230,8 +232,14 @@ class ClosedLoop:
 
     def control(self, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Rotation command ``u`` (rad/s, eq:solFinal), reference field ``v_d`` and ``eps``."""
+        u, _, v_d, eps = self._control_and_gradient(y)
+        return u, v_d, eps
+
+    def _control_and_gradient(self, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """``u``, ``G_mu`` (eq:ODS2; NaN where ``v_d`` is not finite), ``v_d`` and ``eps``: one ODS
+        evaluation serves the command and the saturation's switching function."""
         from symbolic.closed_loop import guidance_functions
-        from symbolic.ods import ods_control
+        from symbolic.ods import ods_control_and_gradient
 
         pr = self.params
         v_d_fn = cast(Callable[..., tuple[FloatArray, FloatArray]], guidance_functions(self.form)[0])
@@ -239,17 +247,16 @@ class ClosedLoop:
         sigma = pr.sigma0 * pr.integral
         vx, vz = v_d_fn(eps, s, pr.alpha_d, sigma, pr.delta_los, pr.theta_r)
         v_d = np.stack(np.broadcast_arrays(vx, vz), axis=1)
-        u = _on_finite_rows(v_d, lambda r: ods_control(v_d[r], pr.d_hat[r], pr.e11_hat[r], pr.omega_0[r],
-                                                       pr.omega_so[r], form=self.form))
-        return u, v_d, eps
+        both = _on_finite_rows(v_d, lambda r: np.concatenate(ods_control_and_gradient(
+            v_d[r], pr.d_hat[r], pr.e11_hat[r], pr.omega_0[r], pr.omega_so[r], form=self.form), axis=1), width=4)
+        return both[:, :2], both[:, 2:], v_d, eps
 
     def rhs(self, t: FloatArray, y: FloatArray, t_segment: FloatArray) -> Evaluation:
         from symbolic.closed_loop import guidance_functions
-        from symbolic.ods import ods_gradient
 
         pr = self.params
         s_dot_fn = cast(Callable[..., FloatArray], guidance_functions(self.form)[1])
-        u, v_d, eps = self.control(y)
+        u, G, v_d, eps = self._control_and_gradient(y)
         along, _ = self.frame()
         s = y[:, S] * pr.integral
         d = self.disturbance.velocity(t, t_segment, eps, s, u)
@@ -267,8 +274,6 @@ class ClosedLoop:
         # kinks, for step placement only (the control itself is ods_control's): the ODS
         # saturation boundary |G_mu| = Omega_SO/Omega_0 of eq:solFinal, |eps| = 0 in the tail
         # integral, and the disturbance's own kinks
-        G = _on_finite_rows(v_d, lambda r: ods_gradient(v_d[r], pr.d_hat[r], pr.e11_hat[r], pr.omega_0[r],
-                                                        form=self.form))
         switches = [pr.omega_0 * np.hypot(G[:, 0], G[:, 1]) - pr.omega_so, eps]
         extra = self.disturbance.switching(eps, s)
         if extra is not None:
