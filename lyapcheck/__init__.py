@@ -2,15 +2,16 @@
 
 The Python API (``docs/api.md``)::
 
-    from lyapcheck import certify, verify, simulate, sweep, report
+    from lyapcheck import certify, certify_box, verify, simulate, sweep, report
 
 Each function does what the command of the same name does and returns a typed result with
 ``to_json()``; heavy libraries load only when a function runs.
 """
 
 from lyapcheck.api import (
-    CertifyResult, Check, SimulationReport, SweepResult, VerifyResult, certify, report, simulate, sweep, verify,
+    CertifyResult, Check, SimulationReport, SweepResult, VerifyResult, certify, certify_box, report, simulate, sweep,
+    verify,
 )
 
-__all__ = ["certify", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
+__all__ = ["certify", "certify_box", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
            "SimulationReport", "SweepResult"]
