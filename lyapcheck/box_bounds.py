@@ -98,15 +98,20 @@ def certify_bound_box(problem: Problem, box: ParameterBox, dynamics: str = "deri
     if problem.d_max is None:
         return {"status": "not_applicable", "property": "ultimate_bound",
                 "summary": "needs the disturbance bound d* (--d-max or [disturbance] d_max)"}
-    data = _box_data(problem, box, dynamics)
-    if data is None:
-        return {"status": "not_certified", "property": "ultimate_bound",
-                "summary": "d* is zero or the dynamics at some corner do not have the structure this class needs"}
-    beta, omega = data["beta"], data["omega"]
-    vertices = _vertices(data["ranges"])
-    fields = [_fields(v, beta, omega) for v in vertices]
-    tables = [sb.dynamics_data(f, beta) for f in fields]
-    k2s = [float((v[3] / omega) ** 2) for v in vertices]
+    try:
+        data = _box_data(problem, box, dynamics)
+        if data is None:
+            return {"status": "not_certified", "property": "ultimate_bound",
+                    "summary": "d* is zero or the dynamics at some corner do not have the structure this class needs"}
+        beta, omega = data["beta"], data["omega"]
+        vertices = _vertices(data["ranges"])
+        fields = [_fields(v, beta, omega) for v in vertices]
+        tables = [sb.dynamics_data(f, beta) for f in fields]
+        k2s = [float((v[3] / omega) ** 2) for v in vertices]
+    except OverflowError:  # the solver works in doubles; the exact data are fine, the search is not
+        return {"status": "not_certified", "property": "ultimate_bound", "box": box.to_json(),
+                "summary": f"the box's scaled dynamics leave the double range ({box.describe()}); no search was "
+                           "run (a narrower box may fit)"}
     best: dict[str, Any] | None = None
     log: list[dict[str, Any]] = []
     for lam in sb.LAMBDA_GRID:

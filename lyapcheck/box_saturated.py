@@ -31,13 +31,31 @@ set of the box (:func:`real_loop_bound` states the conjunction with ``sos_bound`
 
 from __future__ import annotations
 
-import math
 from fractions import Fraction
 from typing import Any, Mapping
 
 from lyapcheck import exact
 from lyapcheck.boxes import ParameterBox, corner_problems
 from lyapcheck.params import Problem
+
+
+#: digits of the exact square roots, and the relative margin that keeps S_1 > S* and Y_q < Y_sat strict
+ROOT_DIGITS = 12
+SQRT_MARGIN = Fraction(1, 10**9)
+
+
+def _float(x: Fraction) -> float | None:
+    """``x`` as a double, or None beyond the double range (a box's corners can combine extreme
+    gains into figures no double holds; the exact values stay in the certificate)."""
+    try:
+        return float(x)
+    except OverflowError:
+        return None
+
+
+def _text(x: Fraction) -> str:
+    value = _float(x)
+    return f"{value:.4g}" if value is not None else ("-" if x < 0 else "") + "beyond 1.8e308"
 
 
 def _corner_data(problem: Problem, box: ParameterBox, dynamics: str) -> list[dict[str, Any]] | str:
@@ -83,15 +101,17 @@ def certify_saturated_box(problem: Problem, box: ParameterBox, dynamics: str = "
     if isinstance(rows, str):
         status = "not_applicable" if rows.startswith(("needs", "not applicable")) else "not_certified"
         return {"status": status, "property": "invariant_set", "summary": rows}
-    s_star_sq = _windup_max(rows)
-    S1 = exact.to_rational(math.sqrt(float(s_star_sq)) * (1 + 1e-6), 8)
-    while S1 * S1 <= s_star_sq:
-        S1 *= 1 + Fraction(1, 10**6)
     y_sat_sq = min(r["y_sat_sq"] for r in rows)
     delta_max = max(r["system"].delta for r in rows)
-    Yq = exact.to_rational(math.sqrt(float(y_sat_sq)) * (1 - 1e-9), 8) if y_sat_sq > 0 else Fraction(0)
-    while Yq * Yq > y_sat_sq:
-        Yq *= 1 - Fraction(1, 10**9)
+    if y_sat_sq < delta_max**2:
+        return {"status": "not_certified", "property": "invariant_set", "box": box.to_json(),
+                "summary": f"at some gain set of the box ({box.describe()}) the ODS law saturates inside |y| < Delta "
+                           "(Omega_SO e11_hat <= alpha_d Delta sqrt(2)); this argument needs Y_sat >= Delta"}
+    # exact square roots (the corners' values may lie beyond the double range): S_1 just above
+    # sqrt(S*^2) and Y_q just below sqrt(Y_sat^2), since q / sqrt_upper(q) <= sqrt(q)
+    s_star_sq = _windup_max(rows)
+    S1 = exact.sqrt_upper(s_star_sq, ROOT_DIGITS) * (1 + SQRT_MARGIN)
+    Yq = y_sat_sq / exact.sqrt_upper(y_sat_sq, ROOT_DIGITS) * (1 - SQRT_MARGIN)
     if Yq < delta_max:
         return {"status": "not_certified", "property": "invariant_set", "box": box.to_json(),
                 "summary": f"at some gain set of the box ({box.describe()}) the ODS law saturates inside |y| < Delta "
@@ -100,19 +120,19 @@ def certify_saturated_box(problem: Problem, box: ParameterBox, dynamics: str = "
     gamma = pull - push
     reach = {"S_star_sq_max": str(s_star_sq), "S_1": str(S1), "Y_q": str(Yq), "delta_max": str(delta_max),
              "pull_min": str(pull), "push_max": str(push), "gamma": str(gamma)}
-    numbers = {"windup_bound_s_m": float(S1), "reach_set_y_half_width_m": float(Yq),
-               "reach_margin_m_per_s": float(gamma)}
+    numbers = {"windup_bound_s_m": _float(S1), "reach_set_y_half_width_m": _float(Yq),
+               "reach_margin_m_per_s": _float(gamma)}
     if gamma <= 0:
         return {"status": "not_certified", "property": "invariant_set", "box": box.to_json(), **numbers,
                 "summary": f"global reach is not proved for the box ({box.describe()}): the weakest pull "
-                           f"{float(pull):.4g} m/s does not beat the strongest push {float(push):.4g} m/s over its corners "
+                           f"{_text(pull)} m/s does not beat the strongest push {_text(push)} m/s over its corners "
                            "(a smaller box may succeed; this is not a proof that reach fails)",
                 "certificate": {"reach": reach}}
     return {"status": "certified", "property": "invariant_set", "box": box.to_json(), **numbers,
             "summary": f"for every gain set with {box.describe()}, from ANY start and every |d_perp| <= d*, the real "
-                       f"(saturated) loop enters {{|eps + sigma0 s| <= {float(Yq) * 1e3:.4g} mm, |s| <= {float(S1):.3g} m}} "
+                       f"(saturated) loop enters {{|eps + sigma0 s| <= {_text(Yq)} m, |s| <= {_text(S1)} m}} "
                        "in finite time and never leaves it; there it is unsaturated, so the box's sos_gas and sos_bound "
-                       f"conclusions hold for the real loop (reach margin >= {float(gamma) * 1e3:.3g} mm/s)",
+                       f"conclusions hold for the real loop (reach margin >= {_text(gamma)} m/s)",
             "certificate": {"reach": reach}}
 
 
@@ -131,9 +151,10 @@ def verify_saturated_box(problem: Problem, box: ParameterBox, dynamics: str,
     pull, push = _margin(rows, S1, Yq)
     if gamma != pull - push or gamma <= 0:
         return False, "the stated reach margin does not follow from the box, or is not positive"
-    if "reach_margin_m_per_s" in result and not float(result["reach_margin_m_per_s"]) <= float(gamma) * (1 + 1e-12):
+    stated = result.get("reach_margin_m_per_s")
+    if stated is not None and not Fraction(stated) <= gamma * (1 + Fraction(1, 10**12)):
         return False, "the stated reach margin exceeds the certified one"
-    return True, f"global reach re-checked over the box's corners: margin {float(gamma):.4g} m/s"
+    return True, f"global reach re-checked over the box's corners: margin {_text(gamma)} m/s"
 
 
 def real_loop_bound(results: dict[str, dict[str, Any]]) -> None:

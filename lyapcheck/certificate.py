@@ -145,7 +145,7 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
                      f"verdict '{doc.get('verdict')}' is supported" if doc.get("verdict") == expected
                      else f"verdict: stated '{doc.get('verdict')}' but the re-checked box supports '{expected}'"))
         return rows
-    except (KeyError, ValueError, ZeroDivisionError, TypeError, AttributeError, IndexError) as exc:
+    except (KeyError, ValueError, ArithmeticError, TypeError, AttributeError, IndexError) as exc:
         raise CertificateError(f"certificate is malformed: {exc!r}") from None
 
 
