@@ -348,6 +348,48 @@ def test_certify_class_selection(classes: str, flag: str, value: str) -> None:
         _certify_and_check(directory, [str(PAPER_TOML), "--classes", ",".join(chosen) or "x", flag, value, "--json"])
 
 
+#: box parameter -> units of the right dimension ("" = a bare number)
+BOX_UNITS = {"alpha_d": ("", "1/s", "Hz"), "sigma0": ("",), "k_d": ("", "1/s"), "delta_los": ("m", "mm", "um"),
+             "los_speed": ("m/s", "mm/s"), "e11": ("m", "um")}
+#: box ends: the whole double range, but mostly numbers that pass validation (so that the classes run)
+BOX_SCALES = st.one_of(st.sampled_from([1e-300, 1e-20, 1e-6, 1e-3, 0.1, 1.0, 10.0, 1e3, 1e6, 1e20, 1e300]),
+                       st.floats(min_value=1e-4, max_value=1e4), SCALES)
+#: the box classes drawn (sos_bound, 3-30 s a box, is left to tests/test_boxes.py)
+BOX_CLASS_CHOICES = ("prop41_ges", "prop41_iss", "sector_ges", "ultimate_bound", "sos_gas", "ges", "saturated_loop")
+
+
+@st.composite
+def box_specs(draw: st.DrawFn) -> list[str]:
+    """One to three ``--box NAME=LO..HI``: mostly valid intervals over the whole double range,
+    sometimes reversed, unknown, repeated, unit-less or any text."""
+    specs = []
+    for name in draw(st.lists(st.sampled_from([*BOX_UNITS, *BOX_UNITS, "bogus"]), min_size=1, max_size=2)):
+        kind = draw(st.integers(0, 19))
+        if kind == 0:
+            specs.append(draw(st.text(max_size=40)))
+            continue
+        unit = draw(st.sampled_from(BOX_UNITS.get(name, ("",))))
+        lo, hi = sorted((draw(BOX_SCALES), draw(BOX_SCALES)), reverse=kind == 1)
+        ends = [number_text(v, draw(st.integers(0, 2))) + (f" {unit}" if unit else "") for v in (lo, hi)]
+        specs.append(f"{name}={ends[0]}..{ends[1]}" if kind != 2 else f"{name}={ends[0]}")
+    return specs
+
+
+@pytest.mark.slow
+@fuzz(40)
+@given(specs=box_specs(), classes=st.lists(st.sampled_from(BOX_CLASS_CHOICES), min_size=1, max_size=3, unique=True))
+def test_certify_box_any_box_any_class(specs: list[str], classes: list[str]) -> None:
+    """Every box class on any box: exit 0/1 with a certificate that verify accepts, or one line and exit 2."""
+    args = [str(PAPER_TOML), "--classes", ",".join(classes), "--json"]
+    for spec in specs:
+        args += ["--box", spec]
+    with scratch() as directory:
+        result = _certify_and_check(directory, args)
+        if result.exit_code in (0, 1):
+            check_result = run_checked(["verify", str(directory / "cert.json")])
+            assert check_result.exit_code == 0, check_result.stdout[-2000:]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(("flag", "value"), [
     ("--alpha-d", "1e300"), ("--kd", "1e-300"), ("--delta-los", "1e300 m"), ("--e11", "2.2250738585072014e-308 m"),
@@ -411,6 +453,12 @@ def certificates(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str
         result = invoke("certify", str(PAPER_TOML), *classes, "--out", str(path))
         assert result.exit_code in (0, 1), result.stderr
         out[name] = json.loads(path.read_text())
+    # a box certificate with every box class (+-2 % around the paper's gains, about 15 s)
+    path = tmp_path_factory.mktemp("certs") / "box.json"
+    result = invoke("certify", str(PAPER_TOML), "--box", "alpha_d=588..612", "--box", "k_d=0.147..0.153",
+                    "--classes", "all", "--out", str(path))
+    assert result.exit_code == 0, result.stderr
+    out["box"] = json.loads(path.read_text())
     return out
 
 
@@ -464,6 +512,21 @@ def test_verify_every_field_of_a_certificate_with_a_wrong_type(certificates: dic
         for i, path in enumerate(paths):
             for value in (WRONG_VALUES[i % len(WRONG_VALUES)], WRONG_VALUES[(7 * i + 3) % len(WRONG_VALUES)]):
                 _verify_and_report(directory, dump(mutate(doc, path, value)), report=False)
+
+
+@pytest.mark.slow
+@fuzz(40)
+@given(data=st.data())
+def test_verify_mutated_box_certificate(certificates: dict[str, dict[str, Any]], data: st.DataObject) -> None:
+    """A box certificate with every box class, fields given wrong values: verify answers, exit 0/1/2."""
+    doc = certificates["box"]
+    paths = list(json_paths(doc))
+    for _ in range(data.draw(st.integers(1, 3))):
+        path = data.draw(st.sampled_from(paths))
+        value = data.draw(st.one_of(st.sampled_from(WRONG_VALUES), SHORT_QUANTITIES))
+        doc = mutate(doc, path, value)
+    with scratch() as directory:
+        _verify_and_report(directory, dump(doc), report=False)
 
 
 @pytest.mark.slow
