@@ -195,7 +195,16 @@ def certify_box(problem: Problem, box: ParameterBox, dynamics: str = "derived", 
     if cls not in BOX_CLASSES:
         raise InvalidParameter("classes", "box classes among " + ", ".join(BOX_CLASSES), cls)
     certify, _ = _class_functions(cls)
-    result: dict[str, Any] = certify(problem, box, dynamics)
+    try:
+        result: dict[str, Any] = certify(problem, box, dynamics)
+    except OverflowError:
+        # the corners are exact, but the searches work in doubles: a box whose corners combine
+        # into figures beyond 1.8e308 gets no search (claiming nothing is always sound)
+        from lyapcheck.conditions.base import PROPERTY
+
+        return {"status": "not_certified", "property": PROPERTY[cls], "box": box.to_json(),
+                "summary": f"the box's data leave the double range ({box.describe()}): no search was run "
+                           "(a narrower box may fit)"}
     return result
 
 
@@ -252,6 +261,12 @@ def _verify_ges_box(problem: Problem, box: ParameterBox, dynamics: str, result: 
         ok, why = ges.exact_check(v, P, ells, mu, c1, c2)
         if not ok:
             return False, f"at (c, a, b) = ({float(v.c):.6g}, {float(v.a):.6g}, {float(v.b):.6g}): {why}"
+    # the stated envelope is the claim users read: k no smaller, the rate no larger than proved
+    if "k" in result and not Fraction(float(result["k"])) ** 2 >= c2 / c1 * (1 - Fraction(1, 10**12)):
+        return False, f"the stated k = {result['k']} is below sqrt(c2/c1) = {math.sqrt(float(c2 / c1))}"
+    if "decay_rate_per_s" in result and \
+            not Fraction(float(result["decay_rate_per_s"])) <= mu * ts_min / 2 * (1 + Fraction(1, 10**12)):
+        return False, f"the stated decay rate {result['decay_rate_per_s']} exceeds the certified {float(mu * ts_min) / 2}"
     return True, f"the ges conditions hold exactly at all {len(vertices)} vertices of the (c, a, b) box"
 
 

@@ -228,6 +228,65 @@ def _check_skeleton(doc: dict[str, Any]) -> None:
             raise malformed(f"conditions.{name}", "an object with a text 'status'", result)
 
 
+def _at_least(stated: Any, proved: Fraction) -> bool:
+    """A bound (``k``, ``eps_bound_m``) stated no smaller than proved (floats round: 1e-12)."""
+    return stated is None or Fraction(float(stated)) >= proved - abs(proved) / 10**12
+
+
+def _at_most(stated: Any, proved: Fraction) -> bool:
+    """A rate or margin stated no larger than proved."""
+    return stated is None or Fraction(float(stated)) <= proved + abs(proved) / 10**12
+
+
+def _stated_figures(conditions: dict[str, Any], system: Any) -> list[tuple[str, bool, str]]:
+    """The figures stated beside each certified class, against what its certificate proves: a
+    bound stated lower, or a rate or margin stated higher, is a claim the file does not prove."""
+    from lyapcheck.conditions import ges
+    from lyapcheck.conditions.sos import scaled_dynamics
+
+    checks: list[tuple[str, str, bool]] = []  # (class, figure, holds)
+
+    def certified(name: str) -> dict[str, Any] | None:
+        c = conditions.get(name)
+        return c if isinstance(c, dict) and c.get("status") == "certified" else None
+
+    if (c := certified("ges")) is not None and (dyn := scaled_dynamics(system)) is not None:
+        _, _, mu, c1, c2 = ges._from_json(c["certificate"])
+        k_sq, rate = c2 / c1, mu * dyn.time_scale / 2
+        sigma0 = system.sigma0
+        spread = max(Fraction(1), sigma0) / min(Fraction(1), sigma0)
+        checks += [("ges", "k", c.get("k") is None or Fraction(float(c["k"])) ** 2 >= k_sq * (1 - Fraction(1, 10**12))),
+                   ("ges", "k_eps_s", c.get("k_eps_s") is None
+                    or Fraction(float(c["k_eps_s"])) ** 2 >= k_sq * spread**2 * (1 - Fraction(1, 10**12))),
+                   ("ges", "decay_rate_per_s", _at_most(c.get("decay_rate_per_s"), rate)),
+                   ("ges", "decay_rate_V_per_s", _at_most(c.get("decay_rate_V_per_s"), 2 * rate))]
+    if (c := certified("sos_gas")) is not None:
+        cert = c["certificate"]
+        rate = Fraction(cert["mu_scaled"]) * Fraction(cert["scaling"]["time_scale"])
+        checks.append(("sos_gas", "decay_rate_V_per_s", _at_most(c.get("decay_rate_V_per_s"), rate)))
+    for name in ("ultimate_bound", "sos_bound"):
+        if (c := certified(name)) is not None:
+            checks.append((name, "eps_bound_m", _at_least(c.get("eps_bound_m"), Fraction(c["certificate"]["eps_bound"]))))
+    if (c := certified("saturated_loop")) is not None:
+        cert = c["certificate"]
+        checks.append(("saturated_loop", "ultimate_eps_bound_m",
+                       _at_least(c.get("ultimate_eps_bound_m"), Fraction(cert["eps_bound"])) if "eps_bound" in cert
+                       else c.get("ultimate_eps_bound_m") is None))
+        checks.append(("saturated_loop", "invariant_eps_radius_m_at_s0",
+                       _at_most(c.get("invariant_eps_radius_m_at_s0"),
+                                Fraction(cert["axis_radius_scaled"]) * system.delta)))
+        if "reach" in cert:
+            reach = cert["reach"]
+            checks += [("saturated_loop", "windup_bound_s_m", _at_least(c.get("windup_bound_s_m"), Fraction(reach["S_1"]))),
+                       ("saturated_loop", "reach_set_y_half_width_m",
+                        _at_least(c.get("reach_set_y_half_width_m"), Fraction(reach["Y_q"]))),
+                       ("saturated_loop", "reach_margin_m_per_s",
+                        _at_most(c.get("reach_margin_m_per_s"), Fraction(reach["gamma"])))]
+    return [(name, ok, f"{name}: the stated {figure} follows from the certificate" if ok else
+             f"{name}: the stated {figure} is not what the certificate proves (a bound stated too small or a rate "
+             "too large)") for name, figure, ok in checks]
+
+
 def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     """Exact re-check of every claim in the document; returns (condition, ok, message) rows."""
     if isinstance(doc, dict) and "box" in doc:
@@ -341,6 +400,7 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
                   and float(sat["real_loop_limsup_eps_m"]) >= float(Fraction(bound["certificate"]["eps_bound"])))
             ok_row("saturated_loop", ok, "the real loop's limsup |eps| is sos_bound's, by the proved global reach",
                    "saturated_loop: real_loop_limsup_eps_m needs a proved reach and a certified sos_bound at least as large")
+        rows += _stated_figures(conditions, system)
         if "stabcond2" in conditions:
             c = conditions["stabcond2"]
             s2 = stabcond2_run(values["alpha_d"], values["sigma0"], values["k_d"], values["delta_los"], "undecided")

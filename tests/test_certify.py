@@ -141,3 +141,32 @@ def test_verify_rejects_a_sector_certificate_that_does_not_cover_the_sector(easy
     doc["conditions"]["sector_ges"]["certificate"]["rho_lo"] = "1/1000"
     rows = verify_document(doc)
     assert any(name == "sector_ges" and not ok and "rho_lo" in message for name, ok, message in rows)
+
+
+#: the figures stated beside certificates, and the factor that forges each to claim more than is
+#: proved: a bound made ten times smaller, a rate or margin ten times larger
+FORGED_FIGURES = [("ges", "k", 0.1), ("ges", "k_eps_s", 0.1), ("ges", "decay_rate_per_s", 10),
+                  ("ges", "decay_rate_V_per_s", 10), ("sos_gas", "decay_rate_V_per_s", 10),
+                  ("ultimate_bound", "eps_bound_m", 0.1), ("sos_bound", "eps_bound_m", 0.1),
+                  ("saturated_loop", "ultimate_eps_bound_m", 0.1), ("saturated_loop", "invariant_eps_radius_m_at_s0", 10),
+                  ("saturated_loop", "windup_bound_s_m", 0.1), ("saturated_loop", "reach_set_y_half_width_m", 0.1),
+                  ("saturated_loop", "reach_margin_m_per_s", 10)]
+
+
+@pytest.mark.slow
+def test_a_figure_stated_beyond_what_its_certificate_proves_fails_verify(easy_problem) -> None:
+    """k, rates and bounds are claims too: each must follow from its exact certificate."""
+    results = run_conditions(easy_problem, "derived")
+    document = build_document(easy_problem, "derived", results, verdict(results))
+    assert all(ok for _, ok, _ in verify_document(json.loads(json.dumps(document))))
+    for cls, key, factor in FORGED_FIGURES:
+        doc = json.loads(json.dumps(document))
+        assert doc["conditions"][cls].get(key), (cls, key)  # the figure is stated here, and not 0
+        doc["conditions"][cls][key] *= factor
+        failed = [name for name, ok, _ in verify_document(doc) if not ok]
+        assert cls in failed, (cls, key)
+    # the disturbance step of saturated_loop is re-checked too (it used to be taken as stated)
+    doc = json.loads(json.dumps(document))
+    cert = doc["conditions"]["saturated_loop"]["certificate"]
+    cert["R_lo"] = str(Fraction(cert["R_lo"]) / 4)
+    assert "saturated_loop" in [name for name, ok, _ in verify_document(doc) if not ok]

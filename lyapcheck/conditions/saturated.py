@@ -332,6 +332,19 @@ def verify(system: System, sos_cert: dict[str, Any], cert: dict[str, Any], *, al
     axis = sum((abs(Fraction(v)) * y0 ** m[0] for m, v in V.items() if m[1] == 0), Fraction(0))
     if axis > c:
         return False, "the stated axis radius is not inside {V <= c}"
+    if "R_lo" in cert:  # step 2: the bound under the disturbance, from the concave h
+        dyn = scaled_dynamics(system)
+        if dyn is None:
+            return False, "the dynamics do not have the structure this class needs"
+        kd = abs(system.E[0]) * system.d_max / (system.delta * dyn.time_scale)
+        g = gradient_bound_coefficients(V)
+        mu = Fraction(sos_cert["mu_scaled"])
+        R_lo, R_hi = Fraction(cert["R_lo"]), Fraction(cert["R_hi"])
+        if not (Fraction(cert["kd_scaled"]) == kd and 0 < R_lo < R_hi and R_hi * R_hi >= Y_sq
+                and h_value(R_lo, mu, ell, kd, g) > 0 and h_value(R_hi, mu, ell, kd, g) > 0):
+            return False, "the disturbance step (h(R_lo) > 0, h(R_hi) > 0, R_hi >= Y) does not hold"
+        if Fraction(cert["eps_bound"]) < SQRT2_UPPER * system.delta * R_lo:
+            return False, "the stated eps bound under d* is below sqrt(2) Delta R_lo"
     if "reach" in cert and k_d is not None:
         ok, why = verify_reach(system, cert["reach"], k_d=k_d, alpha_d=alpha_d, e11_hat=e11_hat, omega_so=omega_so)
         if not ok:
