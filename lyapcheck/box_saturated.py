@@ -154,6 +154,9 @@ def verify_saturated_box(problem: Problem, box: ParameterBox, dynamics: str,
     stated = result.get("reach_margin_m_per_s")
     if stated is not None and not Fraction(stated) <= gamma * (1 + Fraction(1, 10**12)):
         return False, "the stated reach margin exceeds the certified one"
+    for key, proved in (("windup_bound_s_m", S1), ("reach_set_y_half_width_m", Yq)):  # bounds: not smaller
+        if result.get(key) is not None and not Fraction(result[key]) >= proved * (1 - Fraction(1, 10**12)):
+            return False, f"the stated {key} is below the certificate's"
     return True, f"global reach re-checked over the box's corners: margin {_text(gamma)} m/s"
 
 

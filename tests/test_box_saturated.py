@@ -97,6 +97,8 @@ def test_a_forged_margin_or_another_box_fails_and_a_wide_box_is_not_claimed(prob
     reach = result["certificate"]["reach"]
     forged = {**result, "certificate": {"reach": {**reach, "gamma": str(Fraction(reach["gamma"]) * 2)}}}
     assert not verify_saturated_box(problem, box, "derived", forged)[0]
+    for key in ("windup_bound_s_m", "reach_set_y_half_width_m"):  # stated smaller than proved
+        assert not verify_saturated_box(problem, box, "derived", {**result, key: result[key] / 10})[0], key
     low_s = {**result, "certificate": {"reach": {**reach, "S_1": "0.3"}}}
     assert not verify_saturated_box(problem, box, "derived", low_s)[0]
     wider = parse_box(["alpha_d=540..660", "k_d=0.05..0.2"])  # a smaller k_d winds the integrator up further
