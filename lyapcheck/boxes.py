@@ -20,7 +20,8 @@ found), ``refuted`` (a class's own condition is proved impossible at a point of 
 paper's eq. ``stabCond`` by the exact ``Gamma_22`` bound, ``sector_ges`` by Shorten-Narendra), and
 in :func:`refine` a box that is not certified is split until its relative width is below the
 given minimum. The other classes over a box live in their own modules (:data:`BOX_CLASSES`).
-No box is ever ``refuted`` for GES itself, and that is a fact of the model, not a gap: ``c = -1`` identically (``tests/test_boxes.py`` checks it on the derivation), so the
+No box is ever ``refuted`` for GES itself, and that is a fact of the model, not a gap:
+``c = -1`` identically (``tests/test_boxes.py`` checks it on the derivation), so the
 linearisation ``[[-1, c], [b, -a]]`` at the origin has ``det = a + b > 0`` at every positive gain
 set, and the one exact local obstruction to GES (a non-Hurwitz linearisation) never occurs. A
 refutation would need a global argument (trajectories whose decay has no uniform exponential
