@@ -734,6 +734,11 @@ def ods_gradient(
     d = _vectors("d_hat", d_hat)
     e = _positive("e11_hat", e11_hat)
     w0 = _positive("omega_0", omega_0)
+    return _gradient(v, d, e, w0, form)
+
+
+def _gradient(v: FloatArray, d: FloatArray, e: FloatArray, w0: FloatArray, form: Form) -> FloatArray:
+    """:func:`ods_gradient` on validated arrays (shared with :class:`BatchODS`)."""
     try:
         parts = np.broadcast_arrays(v[..., 0], v[..., 1], d[..., 0], d[..., 1], e, w0)
     except ValueError as exc:
@@ -825,8 +830,13 @@ def ods_control_and_gradient(
         Then G_mu, exactly :func:`ods_gradient`'s value.
     """
     G = ods_gradient(v_d, d_hat, e11_hat, omega_0, form)
-    w0 = np.broadcast_to(_positive("omega_0", omega_0), G.shape[:-1])
-    om = np.broadcast_to(_positive("omega_so", omega_so), G.shape[:-1])
+    return _control(G, _positive("omega_0", omega_0), _positive("omega_so", omega_so)), G
+
+
+def _control(G: FloatArray, omega_0: FloatArray, omega_so: FloatArray) -> FloatArray:
+    """The command of eq:solFinal from G_mu and validated rates (shared with :class:`BatchODS`)."""
+    w0 = np.broadcast_to(omega_0, G.shape[:-1])
+    om = np.broadcast_to(omega_so, G.shape[:-1])
     interior, boundary, threshold = _solfinal_callables()
     gx, gz = G[..., 0], G[..., 1]
     with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
@@ -846,7 +856,33 @@ def ods_control_and_gradient(
         ],
         axis=-1,
     ).astype(np.float64)
-    return _clip_to_ball(u, om), G
+    return _clip_to_ball(u, om)
+
+
+class BatchODS:
+    """:func:`ods_control_and_gradient` for a batch whose constant inputs are validated once.
+
+    The simulator evaluates the command at every stage of every step with the same ``d_hat``,
+    ``e11_hat``, ``Omega_0``, ``Omega_SO`` and form; validating them at each call was a sixth of
+    a sweep's simulation time. A call takes the reference ``v_d`` (finite rows: the caller's
+    contract, as the simulator's ``_on_finite_rows`` ensures) and the rows of the batch it
+    belongs to, and returns what :func:`ods_control_and_gradient` returns, bit for bit
+    (``tests/test_ods.py``).
+    """
+
+    def __init__(self, d_hat: npt.ArrayLike, e11_hat: npt.ArrayLike, omega_0: npt.ArrayLike,
+                 omega_so: npt.ArrayLike, form: Form = "derived") -> None:
+        _check_form(form)
+        self.form: Form = form
+        self.d_hat = _vectors("d_hat", d_hat)
+        self.e11_hat = _positive("e11_hat", e11_hat)
+        self.omega_0 = _positive("omega_0", omega_0)
+        self.omega_so = _positive("omega_so", omega_so)
+
+    def __call__(self, v_d: FloatArray, rows: Any = slice(None)) -> tuple[FloatArray, FloatArray]:
+        G = _gradient(np.asarray(v_d, dtype=np.float64), self.d_hat[rows], self.e11_hat[rows], self.omega_0[rows],
+                      self.form)
+        return _control(G, self.omega_0[rows], self.omega_so[rows]), G
 
 
 def trs_solve_diag(

@@ -313,3 +313,29 @@ def test_import_is_cheap_and_layered() -> None:
         "assert not bad, bad"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize("form", ["derived", "printed"])
+def test_the_batch_ods_is_the_validated_function_bit_for_bit(form: str) -> None:
+    """BatchODS (constants validated once, as the simulator uses it) returns exactly what
+    ods_control_and_gradient returns, on rows that saturate and rows that do not, whole or a subset."""
+    from symbolic.ods import BatchODS, ods_control_and_gradient
+
+    rng = np.random.default_rng(5)
+    n = 64
+    v_d = rng.normal(size=(n, 2)) * np.geomspace(1e-6, 1e-1, n)[:, None]
+    d_hat = rng.normal(size=(n, 2)) * 1e-4
+    e11_hat = np.geomspace(1e-5, 1e-3, n)
+    omega_0 = np.full(n, 2 * np.pi)
+    omega_so = np.geomspace(1.0, 100.0, n)
+    batch = BatchODS(d_hat, e11_hat, omega_0, omega_so, form=form)
+    u, G = batch(v_d)
+    u_ref, G_ref = ods_control_and_gradient(v_d, d_hat, e11_hat, omega_0, omega_so, form=form)
+    assert np.array_equal(u, u_ref) and np.array_equal(G, G_ref)
+    saturated = np.hypot(u[:, 0], u[:, 1]) >= omega_so * (1 - 1e-12)
+    assert saturated.any() and not saturated.all()  # both branches of eq:solFinal are exercised
+    rows = np.flatnonzero(np.arange(n) % 3 == 0)
+    u_rows, G_rows = batch(v_d[rows], rows)
+    assert np.array_equal(u_rows, u_ref[rows]) and np.array_equal(G_rows, G_ref[rows])
+    with pytest.raises(ValueError):
+        BatchODS(d_hat, -e11_hat, omega_0, omega_so)

@@ -206,6 +206,11 @@ class ClosedLoop:
         th = self.params.theta_r
         object.__setattr__(self, "_along", np.stack([np.cos(th), np.sin(th)], axis=1))
         object.__setattr__(self, "_across", np.stack([-np.sin(th), np.cos(th)], axis=1))
+        # the ODS law's constant inputs, validated once for the batch (not at every evaluation)
+        from symbolic.ods import BatchODS
+
+        pr = self.params
+        object.__setattr__(self, "_ods", BatchODS(pr.d_hat, pr.e11_hat, pr.omega_0, pr.omega_so, form=self.form))
 
     @property
     def size(self) -> int:
@@ -239,7 +244,6 @@ class ClosedLoop:
         """``u``, ``G_mu`` (eq:ODS2; NaN where ``v_d`` is not finite), ``v_d`` and ``eps``: one ODS
         evaluation serves the command and the saturation's switching function."""
         from symbolic.closed_loop import guidance_functions
-        from symbolic.ods import ods_control_and_gradient
 
         pr = self.params
         v_d_fn = cast(Callable[..., tuple[FloatArray, FloatArray]], guidance_functions(self.form)[0])
@@ -247,8 +251,8 @@ class ClosedLoop:
         sigma = pr.sigma0 * pr.integral
         vx, vz = v_d_fn(eps, s, pr.alpha_d, sigma, pr.delta_los, pr.theta_r)
         v_d = np.stack(np.broadcast_arrays(vx, vz), axis=1)
-        both = _on_finite_rows(v_d, lambda r: np.concatenate(ods_control_and_gradient(
-            v_d[r], pr.d_hat[r], pr.e11_hat[r], pr.omega_0[r], pr.omega_so[r], form=self.form), axis=1), width=4)
+        ods = self._ods  # type: ignore[attr-defined]
+        both = _on_finite_rows(v_d, lambda r: np.concatenate(ods(v_d[r], r), axis=1), width=4)
         return both[:, :2], both[:, 2:], v_d, eps
 
     def rhs(self, t: FloatArray, y: FloatArray, t_segment: FloatArray) -> Evaluation:
