@@ -146,26 +146,7 @@ def _search(cp: Any, vertices: Sequence[ScaledDynamics], deg_v: int,
     cert = _attempt(prog, var, vertices, deg_v, Fraction(0), log)
     if cert is None:
         return None
-    # decay rates span orders of magnitude (scaled time): step down geometrically from the
-    # largest plausible rate to the first success, then bisect geometrically above it
-    lo, hi = Fraction(0), sos.MU_MAX
-    candidate = sos.MU_MAX
-    while candidate > sos.MU_MIN:
-        better = _attempt(prog, var, vertices, deg_v, candidate, log)
-        if better is not None:
-            cert, lo = better, candidate
-            break
-        hi = candidate
-        candidate = candidate / 4
-    if lo > 0:
-        for _ in range(sos.MU_BISECTION_STEPS):
-            mid = exact.to_rational(float(np.sqrt(float(lo) * float(hi))), 3)
-            better = _attempt(prog, var, vertices, deg_v, mid, log)
-            if better is not None:
-                cert, lo = better, mid
-            else:
-                hi = mid
-    return cert
+    return sos.best_decay_rate(lambda mu: _attempt(prog, var, vertices, deg_v, mu, log), cert)
 
 
 def certify_gas_box(problem: Problem, box: ParameterBox, dynamics: str = "derived") -> dict[str, Any]:

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -191,6 +191,34 @@ def _attempt(dyn: ScaledDynamics, deg_v: int, mu: Fraction) -> tuple[dict[str, A
             "margin": float(v["t"])}, report
 
 
+def best_decay_rate(attempt: Callable[[Fraction], dict[str, Any] | None], cert: dict[str, Any]) -> dict[str, Any]:
+    """The certificate of the largest decay rate ``mu`` found, from ``cert`` (``mu = 0``).
+
+    Decay rates span orders of magnitude (scaled time): step down geometrically from
+    :data:`MU_MAX` to the first ``mu`` that ``attempt`` proves (it returns a certificate, or
+    None), then bisect geometrically above it :data:`MU_BISECTION_STEPS` times. Shared by the
+    point class and the box class (:mod:`lyapcheck.box_sos_gas`).
+    """
+    lo, hi = Fraction(0), MU_MAX
+    candidate = MU_MAX
+    while candidate > MU_MIN:
+        better = attempt(candidate)
+        if better is not None:
+            cert, lo = better, candidate
+            break
+        hi = candidate
+        candidate = candidate / 4
+    if lo > 0:
+        for _ in range(MU_BISECTION_STEPS):
+            mid = exact.to_rational(float(np.sqrt(float(lo) * float(hi))), 3)
+            better = attempt(mid)
+            if better is not None:
+                cert, lo = better, mid
+            else:
+                hi = mid
+    return cert
+
+
 def run(system: System) -> ConditionResult:
     """Search a polynomial V of degree 4, then 6; then the largest decay rate mu it certifies."""
     dyn = scaled_dynamics(system)
@@ -204,27 +232,13 @@ def run(system: System) -> ConditionResult:
         solver_log.append(report.to_json())
         if cert is None:
             continue
-        # decay rates span orders of magnitude (scaled time): step down geometrically from the
-        # largest plausible rate to the first success, then bisect geometrically above it
-        lo, hi = Fraction(0), MU_MAX
-        candidate = MU_MAX
-        while candidate > MU_MIN:
-            better, report = _attempt(dyn, deg_v, candidate)
+
+        def attempt(mu: Fraction, deg_v: int = deg_v) -> dict[str, Any] | None:
+            better, report = _attempt(dyn, deg_v, mu)
             solver_log.append(report.to_json())
-            if better is not None:
-                cert, lo = better, candidate
-                break
-            hi = candidate
-            candidate = candidate / 4
-        if lo > 0:
-            for _ in range(MU_BISECTION_STEPS):
-                mid = exact.to_rational(float(np.sqrt(float(lo) * float(hi))), 3)
-                better, report = _attempt(dyn, deg_v, mid)
-                solver_log.append(report.to_json())
-                if better is not None:
-                    cert, lo = better, mid
-                else:
-                    hi = mid
+            return better
+
+        cert = best_decay_rate(attempt, cert)
         mu = Fraction(cert["mu_scaled"])
         rate = mu * dyn.time_scale
         numbers = {"degree": deg_v, "decay_rate_V_per_s": float(rate), "relative_margin": cert["margin"],
