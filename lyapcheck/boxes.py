@@ -245,17 +245,28 @@ def _certify_ges_box(problem: Problem, box: ParameterBox, dynamics: str) -> dict
             "solver": {"solves": log}}
 
 
-def _verify_ges_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any]) -> tuple[bool, str]:
-    """Re-derive the ``(c, a, b)`` box from the parameter box and re-check every vertex exactly."""
+def _stored_quadratic(problem: Problem, box: ParameterBox, dynamics: str,
+                      result: Mapping[str, Any]) -> tuple[Mapping[str, Any], list[Any], Fraction, Any] | str:
+    """The certificate, its ``(c, a, b)`` vertices re-derived from the box, ``min |a11|`` and ``P``
+    (the common start of the ``ges`` and ``sector_ges`` box checks), or why the hull differs."""
     from lyapcheck import exact
-    from lyapcheck.conditions import ges
 
     cert = result["certificate"]
     hull = stored_hull(problem, box, dynamics, cert)
     if isinstance(hull, str):
-        return False, hull
+        return hull
     vertices, ts_min = hull
-    P = exact.from_json(cert["P"])
+    return cert, vertices, ts_min, exact.from_json(cert["P"])
+
+
+def _verify_ges_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any]) -> tuple[bool, str]:
+    """Re-derive the ``(c, a, b)`` box from the parameter box and re-check every vertex exactly."""
+    from lyapcheck.conditions import ges
+
+    stored = _stored_quadratic(problem, box, dynamics, result)
+    if isinstance(stored, str):
+        return False, stored
+    cert, vertices, ts_min, P = stored
     ells = [[Fraction(x) for x in ell] for ell in cert["l"]]
     mu, c1, c2 = (Fraction(cert[k]) for k in ("mu_scaled", "c1", "c2"))
     for v in vertices:
@@ -372,12 +383,10 @@ def _verify_sector_box(problem: Problem, box: ParameterBox, dynamics: str,
     from lyapcheck import exact
     from lyapcheck.conditions import sector
 
-    cert = result["certificate"]
-    hull = stored_hull(problem, box, dynamics, cert)
-    if isinstance(hull, str):
-        return False, hull
-    vertices, ts_min = hull
-    P = exact.from_json(cert["P"])
+    stored = _stored_quadratic(problem, box, dynamics, result)
+    if isinstance(stored, str):
+        return False, stored
+    cert, vertices, ts_min, P = stored
     if len(P) != 2 or not exact.is_symmetric(P):
         return False, "P must be a symmetric 2x2 matrix"
     rate, c1, c2 = (Fraction(cert[k]) for k in ("decay_rate_scaled", "c1", "c2"))
