@@ -227,6 +227,21 @@ class DirectSolve:
     values: dict[str, "np.ndarray"] | None
 
 
+def _settings(max_iter: int) -> Any:
+    """Clarabel's settings for a direct solve: the options :func:`solve` passes through cvxpy
+    (the rest are Clarabel's defaults, as there)."""
+    import clarabel
+
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.tol_gap_abs = tol.SOLVER_TOL_GAP_ABS
+    settings.tol_gap_rel = tol.SOLVER_TOL_GAP_REL
+    settings.tol_feas = tol.SOLVER_TOL_FEAS
+    settings.max_iter = max_iter
+    settings.max_threads = SOLVER_THREADS
+    return settings
+
+
 class CompiledProgram:
     """A program compiled once (:mod:`lyapcheck.conditions.compiled`), solved by Clarabel directly.
 
@@ -252,23 +267,19 @@ class CompiledProgram:
         cones += [clarabel.SecondOrderConeT(d) for d in soc]
         cones += [clarabel.PSDTriangleConeT(d) for d in psd]
         self._cones = cones
-        # the options sdp.solve passes through cvxpy (the rest are Clarabel's defaults, as there)
-        settings = clarabel.DefaultSettings()
-        settings.verbose = False
-        settings.tol_gap_abs = tol.SOLVER_TOL_GAP_ABS
-        settings.tol_gap_rel = tol.SOLVER_TOL_GAP_REL
-        settings.tol_feas = tol.SOLVER_TOL_FEAS
-        settings.max_iter = tol.SOLVER_MAX_ITER
-        settings.max_threads = SOLVER_THREADS
-        self._settings = settings
+        self._settings = _settings(tol.SOLVER_MAX_ITER)
 
-    def solve(self, values: Mapping[str, Any]) -> DirectSolve:
-        """Solve at these parameter values; never raises for solver failures (as :func:`solve`)."""
+    def solve(self, values: Mapping[str, Any], *, max_iter: int | None = None) -> DirectSolve:
+        """Solve at these parameter values; never raises for solver failures (as :func:`solve`).
+
+        ``max_iter`` replaces :data:`~lyapcheck.tolerances.SOLVER_MAX_ITER` for this solve only.
+        """
         import clarabel
         import numpy as np
 
         if self._cones is None:
             self._setup()
+        settings = self._settings if max_iter is None else _settings(max_iter)
         start = time.perf_counter()
         A, b = self.data.matrices(self.data.parameter_vector(values))
         n = self.data.n
@@ -278,11 +289,10 @@ class CompiledProgram:
             try:
                 if not self._duck:
                     raise TypeError("scipy matrices")
-                solver = clarabel.DefaultSolver(P, self.data.q, A, b, self._cones, self._settings)
+                solver = clarabel.DefaultSolver(P, self.data.q, A, b, self._cones, settings)
             except (TypeError, AttributeError):  # pragma: no cover - a binding that wants scipy itself
                 self._duck = False
-                solver = clarabel.DefaultSolver(P.as_scipy(), self.data.q, A.as_scipy(), b, self._cones,
-                                                self._settings)
+                solver = clarabel.DefaultSolver(P.as_scipy(), self.data.q, A.as_scipy(), b, self._cones, settings)
             result = solver.solve()
             raw = _CLARABEL_TO_CVXPY.get(str(result.status), "solver_error")
         except (ValueError, ArithmeticError, RuntimeError) as exc:
