@@ -75,3 +75,40 @@ def test_a_stale_stored_program_is_recompiled(monkeypatch: pytest.MonkeyPatch) -
         assert np.array_equal(program.data.arrays["R_data"], stored["R_data"])
     finally:
         compiled.load.cache_clear()
+
+
+_LEAN_SOLVE = """
+import json, sys
+import numpy as np
+from lyapcheck.conditions import sdp
+sdp.LEAN_LAPACK_IMPORT = {lean}
+from lyapcheck.certification import run_conditions
+from lyapcheck.params import problem_from_sources
+# ultimate_bound solves 3x3 LMIs: Clarabel needs BLAS and LAPACK for them
+result = run_conditions(problem_from_sources({toml!r}, {{}}), "derived", ("ultimate_bound",))["ultimate_bound"]
+linalg_loaded = "scipy.linalg" in sys.modules
+import scipy.linalg  # the real package still imports and works afterwards
+eig = scipy.linalg.eigh(np.diag([2.0, 1.0]))[0].tolist()
+print(json.dumps({{"linalg_loaded": linalg_loaded, "eig": eig, "status": result.status,
+                  "numbers": result.numbers, "certificate": result.certificate}}, default=str))
+"""
+
+
+def test_the_command_lines_lean_lapack_import_solves_bit_for_bit_like_the_usual_one() -> None:
+    """``certify`` on the command line loads SciPy's BLAS/LAPACK modules for Clarabel without the
+    ``scipy.linalg`` package (sdp._load_lapack_modules): same solution bit for bit, scipy.linalg
+    not imported by the solve, and a later ``import scipy.linalg`` still works."""
+    import json
+    import subprocess
+    import sys
+
+    from tests.conftest import PAPER_TOML
+
+    runs = {lean: json.loads(subprocess.run([sys.executable, "-c", _LEAN_SOLVE.format(lean=lean, toml=str(PAPER_TOML))],
+                                            check=True, capture_output=True, text=True).stdout)
+            for lean in (True, False)}
+    assert runs[True]["linalg_loaded"] is False and runs[False]["linalg_loaded"] is True
+    assert runs[True]["eig"] == [1.0, 2.0]
+    assert runs[True]["certificate"] and runs[True]["numbers"]["eps_bound_m"] > 0
+    for key in ("status", "numbers", "certificate"):
+        assert runs[True][key] == runs[False][key], key

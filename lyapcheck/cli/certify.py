@@ -68,7 +68,10 @@ def register(group: click.Group) -> None:
         """Certify a gain set: every condition class, each checked exactly."""
         from lyapcheck.api import certify as certify_gains
         from lyapcheck.api import report as write_report
+        from lyapcheck.conditions import sdp
         from lyapcheck.errors import InvalidParameter
+
+        sdp.LEAN_LAPACK_IMPORT = True  # this process is the command's own (see sdp._load_lapack_modules)
 
         if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
             raise InvalidParameter("report", "a file name ending in .html or .pdf", report)

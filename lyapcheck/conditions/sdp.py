@@ -11,10 +11,15 @@ which hands Clarabel the same data cvxpy would without importing cvxpy (see ther
 
 from __future__ import annotations
 
+import importlib
 import logging
+import sys
+import threading
 import time
+import types
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, Mapping
 
 from lyapcheck import tolerances as tol
@@ -227,6 +232,52 @@ class DirectSolve:
     values: dict[str, "np.ndarray"] | None
 
 
+#: Set by ``lyapcheck certify`` on the command line only (see :func:`_load_lapack_modules`).
+LEAN_LAPACK_IMPORT = False
+_LAPACK_MODULES = ("scipy.linalg.cython_blas", "scipy.linalg.cython_lapack")
+_lapack_lock = threading.Lock()
+
+
+def _load_lapack_modules() -> None:
+    """Load the two SciPy modules Clarabel takes BLAS and LAPACK from, without ``scipy.linalg``.
+
+    Clarabel's first PSD-cone solve imports ``scipy.linalg.cython_blas`` and ``cython_lapack``
+    for their function pointers. The usual import runs ``scipy.linalg``'s package first, 0.15-0.2 s
+    (a third of ``certify --classes quick``) spent on a Python API nothing here uses. The two
+    extension modules need nothing from that package, so they are imported under a bare stand-in
+    for it, which is removed at once: a later ``import scipy.linalg`` runs as usual. What differs
+    afterwards is only that ``scipy.linalg.cython_blas`` is not bound as an attribute of the
+    package (``import scipy.linalg.cython_blas`` still works), which is why only the command
+    line, whose process lyapcheck owns, turns this on (:data:`LEAN_LAPACK_IMPORT`). Any failure
+    leaves the usual import to Clarabel.
+    """
+    if not LEAN_LAPACK_IMPORT:
+        return
+    with _lapack_lock:
+        if "scipy.linalg" in sys.modules or all(name in sys.modules for name in _LAPACK_MODULES):
+            return
+        try:
+            import scipy
+        except ImportError:  # pragma: no cover - Clarabel will report it
+            return
+        stand_in = types.ModuleType("scipy.linalg")
+        stand_in.__path__ = [str(Path(scipy.__file__).with_name("linalg"))]
+        sys.modules["scipy.linalg"] = stand_in
+        try:
+            for name in _LAPACK_MODULES:
+                importlib.import_module(name)
+        except Exception as exc:  # noqa: BLE001 - any failure: the usual import happens later
+            log.debug("lean LAPACK import failed (%s); Clarabel imports scipy.linalg itself", exc)
+            for name in _LAPACK_MODULES:
+                sys.modules.pop(name, None)
+        finally:
+            if sys.modules.get("scipy.linalg") is stand_in:
+                del sys.modules["scipy.linalg"]
+            # vars(), not getattr(): scipy's module __getattr__ would import scipy.linalg for real
+            if vars(scipy).get("linalg") is stand_in:
+                delattr(scipy, "linalg")
+
+
 def _settings(max_iter: int) -> Any:
     """Clarabel's settings for a direct solve: the options :func:`solve` passes through cvxpy
     (the rest are Clarabel's defaults, as there)."""
@@ -266,6 +317,8 @@ class CompiledProgram:
             cones.append(clarabel.NonnegativeConeT(nonneg))
         cones += [clarabel.SecondOrderConeT(d) for d in soc]
         cones += [clarabel.PSDTriangleConeT(d) for d in psd]
+        if psd:
+            _load_lapack_modules()
         self._cones = cones
         self._settings = _settings(tol.SOLVER_MAX_ITER)
 
