@@ -174,6 +174,32 @@ def is_positive_definite_ldl(m: Matrix) -> bool:
     return is_symmetric(m) and _leading_minors_positive(m)
 
 
+def surely_not_positive_definite(m: Matrix) -> bool:
+    """True only if the symmetric rational ``m`` is certainly not positive definite: a float screen
+    that lets a search skip an exact check bound to fail. It never shows definiteness.
+
+    ``m`` rounded to floats is ``m + E`` with ``|E_ij| <= 2^-53 |m_ij|``, and ``eigvalsh`` is
+    backward stable, so each computed eigenvalue is within about ``n 2^-52 ||m||`` (below
+    ``1e-13 ||m||`` for the sizes here) of an exact one. An eigenvalue computed below
+    ``-SCREEN_MARGIN ||m||`` (four orders of magnitude beyond that) therefore means an exact
+    eigenvalue below zero, and :func:`is_positive_definite_ldl` would return False. Anything
+    else, including a float overflow or a non-symmetric ``m``, returns False (check exactly).
+    """
+    import numpy as np
+
+    from lyapcheck.tolerances import SCREEN_MARGIN
+
+    if not is_symmetric(m):
+        return False
+    try:
+        values = np.linalg.eigvalsh(np.array(to_float(m), dtype=np.float64))
+    except (OverflowError, np.linalg.LinAlgError):
+        return False
+    if not np.all(np.isfinite(values)):
+        return False
+    return bool(values[0] < -SCREEN_MARGIN * float(np.abs(values).max()))
+
+
 def is_negative_definite(m: Matrix) -> bool:
     return is_positive_definite(scale(Fraction(-1), m))
 

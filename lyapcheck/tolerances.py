@@ -19,6 +19,10 @@ SOLVER_MAX_ITER: Final = 200
 #: result passes the exact check takes 20-40 iterations (74 at most on 102 points of the shipped
 #: sweeps), while one that runs on rarely passes; a failed solve is retried in other coordinates
 SOS_BOUND_MAX_ITER: Final = 60
+#: an eigenvalue computed in floats below -SCREEN_MARGIN ||m|| shows that the rational matrix m is
+#: not positive definite (float error is below 1e-13 ||m|| at the sizes here): a search may then
+#: skip the exact check that would fail (lyapcheck.exact.surely_not_positive_definite). Speed only
+SCREEN_MARGIN: Final = 1e-9
 
 
 

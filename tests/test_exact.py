@@ -57,3 +57,29 @@ def test_negative_real_eigenvalue_detection() -> None:
     assert not exact.has_negative_real_eigenvalue_2x2(exact.matrix([[0, -1], [1, 0]]))  # +-i
     assert not exact.has_negative_real_eigenvalue_2x2(exact.matrix([[1, 0], [0, 2]]))
     assert exact.has_negative_real_eigenvalue_2x2(exact.matrix([[-1, 0], [0, -2]]))
+
+
+_entries = st.fractions(min_value=-1000, max_value=1000, max_denominator=10**6)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(st.integers(min_value=1, max_value=6).flatmap(lambda n: st.lists(_entries, min_size=n * n, max_size=n * n)),
+       st.fractions(min_value=-2, max_value=2, max_denominator=10**12))
+def test_the_float_screen_never_rejects_a_positive_definite_matrix(flat: list[Q], shift: Q) -> None:
+    """surely_not_positive_definite lets the searches skip exact checks: it must never say so of a
+    matrix the exact check accepts, including ones shifted to within rounding of singular."""
+    n = math.isqrt(len(flat))
+    a = [[flat[i * n + j] for j in range(n)] for i in range(n)]
+    gram = [[sum(a[k][i] * a[k][j] for k in range(n)) for j in range(n)] for i in range(n)]  # A^T A >= 0
+    m = exact.matrix([[gram[i][j] + (shift if i == j else 0) for j in range(n)] for i in range(n)])
+    if exact.surely_not_positive_definite(m):
+        assert not exact.is_positive_definite_ldl(m)
+
+
+def test_the_float_screen_sees_a_clear_negative_eigenvalue_and_leaves_close_calls_to_the_exact_check() -> None:
+    assert exact.surely_not_positive_definite(exact.matrix([[1, 2], [2, 1]]))  # eigenvalues 3, -1
+    assert not exact.surely_not_positive_definite(exact.matrix([[2, 1], [1, 2]]))
+    # eigenvalue -1e-20 next to 1: not positive definite, but far below float resolution
+    close = exact.matrix([[1, 0], [0, Q(-1, 10**20)]])
+    assert not exact.is_positive_definite_ldl(close) and not exact.surely_not_positive_definite(close)
+    assert not exact.surely_not_positive_definite(exact.matrix([[1, 2], [3, 1]]))  # not symmetric: exact decides

@@ -206,6 +206,12 @@ def scales(dyn: ScaledDynamics) -> tuple[Fraction, Fraction]:
     return max(root, Fraction(1)), max(root, Fraction(1))
 
 
+def top_shifted(QV: exact.Matrix) -> exact.Matrix:
+    """``Q_V - delta diag(0, 0, 0, 1, 1, 1)`` (exact): positive definite makes ``V`` radially unbounded."""
+    return tuple(tuple(QV[i][j] - (TOP_DELTA if i == j and i in TOP else 0) for j in range(len(QV)))
+                 for i in range(len(QV)))
+
+
 def check(dyn: ScaledDynamics, k: Fraction, cert: dict[str, Any]) -> tuple[bool, str]:
     """Exact re-check of a bound certificate (see module docstring)."""
     QV, T, QD, QE = (exact.from_json(cert[key]) for key in ("Q_V", "T", "Q_D", "Q_E"))
@@ -213,8 +219,7 @@ def check(dyn: ScaledDynamics, k: Fraction, cert: dict[str, Any]) -> tuple[bool,
     beta, omega = Fraction(cert["beta"]), Fraction(cert["omega"])
     if beta <= 0 or omega <= 0:
         return False, "scales must be positive"
-    shifted = tuple(tuple(QV[i][j] - (TOP_DELTA if i == j and i in TOP else 0) for j in range(len(QV)))
-                    for i in range(len(QV)))
+    shifted = top_shifted(QV)
     if lam <= 0 or not all(exact.is_positive_definite_ldl(m) for m in (shifted, T, QD, QE)):
         return False, "a Gram matrix or multiplier of the bound certificate is not positive definite"
     V = poly.gram_form(Z_V, QV)
@@ -262,6 +267,10 @@ def _certificate(dyn: ScaledDynamics, k: Fraction, v: Mapping[str, Any], lam: fl
                       dissipation(V, tau, search_fields, k / omega / kappa, lam_q))
     QE = project_gram(Z_E, exact.symmetrize(exact.rational_matrix(v["Q_E"])), output_form(V, B, beta))
     if QD is None or QE is None:
+        return None
+    # the exact check below would fail on a matrix the float screen shows indefinite (the
+    # unscaling is a congruence: it keeps definiteness); skipping it changes no result
+    if any(exact.surely_not_positive_definite(m) for m in (QD, top_shifted(QV), T, QE)):
         return None
     cert = {"lambda": str(lam_q), "B": str(B), "beta": str(beta), "omega": str(omega),
             "Q_V": exact.to_json(QV), "T": exact.to_json(unscaled(T, Z_T, kappa, 2)),
