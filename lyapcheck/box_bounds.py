@@ -18,6 +18,10 @@ positive definite Gram matrix of the dissipation polynomial give the identity at
 with the same convex combination of the Gram matrices, which is positive definite. Hence
 ``limsup |eps| <= Delta sqrt(B) <= Delta_max sqrt(B)`` for every gain set in the box, from every
 initial condition and every ``|d_perp| <= d*`` (the unsaturated loop, as in the point class).
+
+The search runs in the point class's conditioned coordinates (``sos_bound``'s "Conditioning":
+``beta`` a fraction of the box's ``sqrt(b)``, the disturbance scaled by one ``kappa`` for the box,
+the multipliers mapped back exactly), so the certificate and :func:`check` are in ``w``.
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ from lyapcheck.params import Problem
 
 
 def _box_data(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any] | None:
-    """Ranges of ``c, a, b, k`` over the box (exact), ``Delta_max`` and the box's scales."""
+    """Ranges of ``c, a, b, k`` over the box (exact), ``Delta_max`` and the box's ``root ~ sqrt(b)``."""
     from lyapcheck.certification import build_system
     from lyapcheck.conditions.sos import scaled_dynamics
 
@@ -52,8 +56,7 @@ def _box_data(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, A
     ranges = [(min(r[i] for r in rows), max(r[i] for r in rows)) for i in range(4)]
     b_lo, b_hi = ranges[2]
     root = exact.to_rational(math.sqrt(math.sqrt(float(b_lo) * float(b_hi))), 4)  # ~ sqrt(b), geometric middle
-    scale = max(root, Fraction(1))
-    return {"ranges": ranges, "delta_max": max(r[4] for r in rows), "beta": scale, "omega": scale}
+    return {"ranges": ranges, "delta_max": max(r[4] for r in rows), "root": max(root, Fraction(1))}
 
 
 def _vertices(ranges: list[tuple[Fraction, Fraction]]) -> list[tuple[Fraction, ...]]:
@@ -62,8 +65,9 @@ def _vertices(ranges: list[tuple[Fraction, Fraction]]) -> list[tuple[Fraction, .
     return list(dict.fromkeys(itertools.product(*((lo, hi) for lo, hi in ranges))))
 
 
-def _build(cp: Any, tables: list[dict[str, Any]], k2s: list[float], lam: float, beta: float) -> tuple[Any, dict]:
-    """The point program of ``sos_bound`` with one dissipation block per vertex (common V, tau, B)."""
+def _build(cp: Any, tables: list[dict[str, Any]], k2s: list[float], beta: float) -> tuple[Any, dict, Any]:
+    """The point program of ``sos_bound`` with one dissipation block per vertex (common V, tau, B);
+    the decay rate is a Parameter, so the program is compiled once for the rates of LAMBDA_GRID."""
     from lyapcheck.conditions import sos_bound as sb
 
     nv, nt, nd, ne = len(sb.Z_V), len(sb.Z_T), len(sb.Z_D), len(sb.Z_E)
@@ -72,13 +76,14 @@ def _build(cp: Any, tables: list[dict[str, Any]], k2s: list[float], lam: float, 
     QE = cp.Variable((ne, ne), symmetric=True)
     QDs = [cp.Variable((nd, nd), symmetric=True) for _ in tables]
     B = cp.Variable()
+    lam = cp.Parameter(nonneg=True)
     cons = [QV - sb.top_shift() >> sb.ETA * np.eye(nv), T >> sb.ETA * np.eye(nt), QE >> sb.ETA * np.eye(ne)]
     for QD, table, k2 in zip(QDs, tables, k2s):  # one dissipation block per vertex
         cons.append(QD >> sb.ETA * np.eye(nd))
         cons += sb.dissipation_constraints(QD, QV, T, {m: table[sb._param_name(m)] for m in sb.MONOS_D}, lam, k2, cp)
     cons += sb.output_constraints(QE, QV, B, beta, beta * beta)
     problem = cp.Problem(cp.Minimize(B), cons)
-    return problem, {"Q_V": QV, "T": T, "Q_E": QE, "Q_D": QDs, "B": B}
+    return problem, {"Q_V": QV, "T": T, "Q_E": QE, "Q_D": QDs, "B": B}, lam
 
 
 def _fields(vertex: tuple[Fraction, ...], beta: Fraction, omega: Fraction) -> tuple[poly.Poly, poly.Poly, poly.Poly]:
@@ -86,6 +91,66 @@ def _fields(vertex: tuple[Fraction, ...], beta: Fraction, omega: Fraction) -> tu
 
     c, a, b, _ = vertex
     return balanced_fields(ScaledDynamics(time_scale=Fraction(1), c=c, a=a, b=b), beta, omega)
+
+
+class _Search:
+    """The box program in one set of search coordinates (``sos_bound``'s "Conditioning"), compiled
+    once, and the rounding of its solutions to exact certificates in ``w``."""
+
+    def __init__(self, cp: Any, vertices: list[tuple[Fraction, ...]],
+                 coords: tuple[Fraction, Fraction, Fraction]) -> None:
+        from lyapcheck.conditions import sos_bound as sb
+
+        self.vertices = vertices
+        self.beta, self.omega, self.kappa = coords
+        # the push q (dV/dy) w = (kappa q) (dV/dy) w~, and |w~| <= k / kappa
+        self.fields = [(g_y, g_r, poly.scale(self.kappa, q))
+                       for g_y, g_r, q in (_fields(v, self.beta, self.omega) for v in vertices)]
+        self.k_scaled = [v[3] / self.omega / self.kappa for v in vertices]
+        tables = [sb.dynamics_data(f, self.beta) for f in self.fields]
+        self.program, self.variables, self.lam = _build(cp, tables, [float(k * k) for k in self.k_scaled],
+                                                        float(self.beta))
+
+    def attempt(self, cp: Any, lam: float, delta_max: Fraction) -> tuple[dict[str, Any] | None, str]:
+        """Solve at decay rate ``lam``; the exactly checked certificate (or None) and the solver's word."""
+        from lyapcheck import tolerances as tol
+        from lyapcheck.conditions import sos_bound as sb
+        from lyapcheck.conditions.sos import project_gram
+
+        var = self.variables
+        self.lam.value = lam
+        try:
+            with warnings.catch_warnings():  # "may be inaccurate": the exact check below is the judge
+                warnings.simplefilter("ignore", UserWarning)
+                self.program.solve(solver=cp.CLARABEL, warm_start=False, max_iter=tol.SOS_BOUND_MAX_ITER,
+                                   tol_gap_abs=tol.SOLVER_TOL_GAP_ABS, tol_gap_rel=tol.SOLVER_TOL_GAP_REL,
+                                   tol_feas=tol.SOLVER_TOL_FEAS)
+        except cp.error.SolverError as exc:
+            return None, f"solver error: {exc}"
+        outcome = str(self.program.status)
+        if var["B"].value is None:
+            return None, outcome
+        lam_q = exact.to_rational(lam, 6)
+        B = exact.to_rational(float(var["B"].value) * (1 + 1e-6) + 1e-9, 9)
+        QV = exact.symmetrize(exact.rational_matrix(var["Q_V"].value))
+        T = exact.symmetrize(exact.rational_matrix(var["T"].value))
+        V, tau = poly.gram_form(sb.Z_V, QV), poly.gram_form(sb.Z_T, T)
+        QE = project_gram(sb.Z_E, exact.symmetrize(exact.rational_matrix(var["Q_E"].value)),
+                          sb.output_form(V, B, self.beta))
+        QDs = [project_gram(sb.Z_D, exact.symmetrize(exact.rational_matrix(QD.value)),
+                            sb.dissipation(V, tau, f, k, lam_q))
+               for QD, f, k in zip(var["Q_D"], self.fields, self.k_scaled)]
+        if QE is None or any(QD is None for QD in QDs):
+            return None, outcome
+        grams = [QD for QD in QDs if QD is not None]
+        # the exact check would fail on a matrix the float screen shows indefinite
+        if any(exact.surely_not_positive_definite(m) for m in (sb.top_shifted(QV), T, QE, *grams)):
+            return None, outcome
+        cert = {"lambda": str(lam_q), "B": str(B), "beta": str(self.beta), "omega": str(self.omega),
+                "Q_V": exact.to_json(QV), "T": exact.to_json(sb.unscaled(T, sb.Z_T, self.kappa, 2)),
+                "Q_E": exact.to_json(QE), "Q_D": [exact.to_json(sb.unscaled(QD, sb.Z_D, self.kappa, 0)) for QD in grams],
+                "vertices": [[str(x) for x in v] for v in self.vertices], "delta_max": str(delta_max)}
+        return (cert, outcome) if check(cert)[0] else (None, outcome)
 
 
 def certify_bound_box(problem: Problem, box: ParameterBox, dynamics: str = "derived") -> dict[str, Any]:
@@ -103,50 +168,32 @@ def certify_bound_box(problem: Problem, box: ParameterBox, dynamics: str = "deri
         if data is None:
             return {"status": "not_certified", "property": "ultimate_bound",
                     "summary": "d* is zero or the dynamics at some corner do not have the structure this class needs"}
-        beta, omega = data["beta"], data["omega"]
         vertices = _vertices(data["ranges"])
-        fields = [_fields(v, beta, omega) for v in vertices]
-        tables = [sb.dynamics_data(f, beta) for f in fields]
-        k2s = [float((v[3] / omega) ** 2) for v in vertices]
+        searches = {scale: _Search(cp, vertices, sb.coordinates_at(data["root"], data["ranges"][3][1], scale))
+                    for scale in sb.SEARCH_SCALES[:1]}
     except OverflowError:  # the solver works in doubles; the exact data are fine, the search is not
         return {"status": "not_certified", "property": "ultimate_bound", "box": box.to_json(),
                 "summary": f"the box's scaled dynamics leave the double range ({box.describe()}); no search was "
                            "run (a narrower box may fit)"}
     best: dict[str, Any] | None = None
     log: list[dict[str, Any]] = []
+    # as the point class: per decay rate, the coordinates of SEARCH_SCALES in order until one
+    # certifies; each program is compiled once (the rate is a Parameter)
     for lam in sb.LAMBDA_GRID:
-        prog, var = _build(cp, tables, k2s, lam, float(beta))
-        try:
-            with warnings.catch_warnings():  # "may be inaccurate": the exact check below is the judge
-                warnings.simplefilter("ignore", UserWarning)
-                prog.solve(solver=cp.CLARABEL)
-        except cp.error.SolverError as exc:
-            log.append({"lambda": lam, "outcome": f"solver error: {exc}"})
-            continue
-        log.append({"lambda": lam, "outcome": str(prog.status)})
-        if var["B"].value is None:
-            continue
-        lam_q = exact.to_rational(lam, 6)
-        B = exact.to_rational(float(var["B"].value) * (1 + 1e-6) + 1e-9, 9)
-        QV = exact.symmetrize(exact.rational_matrix(var["Q_V"].value))
-        T = exact.symmetrize(exact.rational_matrix(var["T"].value))
-        V, tau = poly.gram_form(sb.Z_V, QV), poly.gram_form(sb.Z_T, T)
-        QE = project_gram(sb.Z_E, exact.symmetrize(exact.rational_matrix(var["Q_E"].value)), sb.output_form(V, B, beta))
-        QDs = [project_gram(sb.Z_D, exact.symmetrize(exact.rational_matrix(QD.value)),
-                            sb.dissipation(V, tau, f, v[3] / omega, lam_q))
-               for QD, f, v in zip(var["Q_D"], fields, vertices)]
-        if QE is None or any(QD is None for QD in QDs):
-            continue
-        grams = [QD for QD in QDs if QD is not None]
-        cert = {"lambda": str(lam_q), "B": str(B), "beta": str(beta), "omega": str(omega),
-                "Q_V": exact.to_json(QV), "T": exact.to_json(T), "Q_E": exact.to_json(QE),
-                "Q_D": [exact.to_json(QD) for QD in grams],
-                "vertices": [[str(x) for x in v] for v in vertices], "delta_max": str(data["delta_max"])}
-        if not check(cert)[0]:
-            continue
-        bound = data["delta_max"] * exact.sqrt_upper(B)
-        if best is None or bound < Fraction(best["eps_bound"]):
-            best = {**cert, "eps_bound": str(bound)}
+        for scale in sb.SEARCH_SCALES:
+            if scale not in searches:
+                try:
+                    searches[scale] = _Search(cp, vertices, sb.coordinates_at(data["root"], data["ranges"][3][1], scale))
+                except OverflowError:
+                    continue
+            cert, outcome = searches[scale].attempt(cp, lam, data["delta_max"])
+            log.append({"lambda": lam, "beta": str(searches[scale].beta), "outcome": outcome})
+            if cert is None:
+                continue
+            bound = data["delta_max"] * exact.sqrt_upper(Fraction(cert["B"]))
+            if best is None or bound < Fraction(best["eps_bound"]):
+                best = {**cert, "eps_bound": str(bound)}
+            break
     if best is None:
         return {"status": "not_certified", "property": "ultimate_bound", "box": box.to_json(),
                 "summary": f"no polynomial dissipation certificate common to the box was found ({box.describe()}); "

@@ -78,7 +78,7 @@ _MODES: Final = ("points", "boxes")
 _BOX_KEYS: Final = ("min_relative_width", "max_boxes", "cross_check_points", "seed")
 #: classes a box sweep runs (among :data:`lyapcheck.boxes.BOX_CLASSES`, cheapest first); the GES
 #: ones are the default of a box sweep; ``prop41_ges`` (eq. stabCond, the paper's own condition)
-#: is certified or refuted per box; ``sos_bound`` (20-30 s a box, plus the worst-case search at
+#: is certified or refuted per box; ``sos_bound`` (10-20 s a box, plus the worst-case search at
 #: the cross-check points) adds a certified bound on |eps| for every box
 BOX_CLASSES: Final = ("prop41_ges", "sector_ges", "ges", "sos_bound")
 BOX_GES_CLASSES: Final = ("sector_ges", "ges")

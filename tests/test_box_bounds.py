@@ -37,6 +37,9 @@ def test_box_bound_is_certified_rechecked_and_above_the_point_bound(certified) -
     point = sos_bound.run(build_system(problem, "derived"))
     assert point is not None
     assert result.numbers["eps_bound_m"] >= float(Fraction(point["eps_bound"])) * 0.999
+    # and +-2 % of gains cost little: 0.3525 mm against 0.3326 mm (0.3895 mm before the box search
+    # moved to sos_bound's conditioned coordinates)
+    assert result.numbers["eps_bound_m"] <= float(Fraction(point["eps_bound"])) * 1.1
 
 
 @pytest.mark.slow
@@ -69,7 +72,8 @@ def test_the_convex_combination_of_vertex_grams_certifies_interior_gain_sets(cer
                 w *= t if at_hi and hi != lo else (1 - t if hi != lo else 1)
             weights[vertex] = w
         assert sum(weights.values()) == 1
-        mixed = tuple(tuple(sum(weights[v] * grams[v][i][j] for v in vertices) for j in range(len(grams[vertices[0]])))
+        mixed = tuple(tuple(sum((weights[v] * grams[v][i][j] for v in vertices), Fraction(0))
+                            for j in range(len(grams[vertices[0]])))
                       for i in range(len(grams[vertices[0]])))
         ok, why = sos_bound.check(dyn, k, {**cert, "Q_D": exact.to_json(mixed)})
         assert ok, why

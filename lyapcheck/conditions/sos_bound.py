@@ -236,13 +236,18 @@ def check(dyn: ScaledDynamics, k: Fraction, cert: dict[str, Any]) -> tuple[bool,
 SearchScale = tuple[Fraction, float | None]
 
 
-def search_coordinates(dyn: ScaledDynamics, k: Fraction, scale: SearchScale) -> tuple[Fraction, Fraction, Fraction]:
-    """``(beta, omega, kappa)`` of one search scale (module docstring, "Conditioning")."""
-    root, omega = scales(dyn)
+def coordinates_at(root: Fraction, k: Fraction, scale: SearchScale) -> tuple[Fraction, Fraction, Fraction]:
+    """``(beta, omega, kappa)`` of one search scale (module docstring, "Conditioning") around the
+    rational ``root ~ sqrt(b)``, for the disturbance scale ``k`` (the largest, over a box)."""
     factor, kappa_floor = scale
     if kappa_floor is None:
-        return root * factor, omega, Fraction(1)
-    return root * factor, omega, exact.to_rational(min(max(float(k / omega), kappa_floor), 1.0), 6)
+        return root * factor, root, Fraction(1)
+    return root * factor, root, exact.to_rational(min(max(float(k / root), kappa_floor), 1.0), 6)
+
+
+def search_coordinates(dyn: ScaledDynamics, k: Fraction, scale: SearchScale) -> tuple[Fraction, Fraction, Fraction]:
+    """:func:`coordinates_at` around this point's ``sqrt(b)`` (:func:`scales`)."""
+    return coordinates_at(scales(dyn)[0], k, scale)
 
 
 def unscaled(Q: exact.Matrix, basis: list[poly.Monomial], kappa: Fraction, extra: int) -> exact.Matrix:
