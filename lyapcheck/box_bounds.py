@@ -115,7 +115,6 @@ class _Search:
         """Solve at decay rate ``lam``; the exactly checked certificate (or None) and the solver's word."""
         from lyapcheck import tolerances as tol
         from lyapcheck.conditions import sos_bound as sb
-        from lyapcheck.conditions.sos import project_gram
 
         var = self.variables
         self.lam.value = lam
@@ -130,25 +129,14 @@ class _Search:
         outcome = str(self.program.status)
         if var["B"].value is None:
             return None, outcome
-        lam_q = exact.to_rational(lam, 6)
-        B = exact.to_rational(float(var["B"].value) * (1 + 1e-6) + 1e-9, 9)
-        QV = exact.symmetrize(exact.rational_matrix(var["Q_V"].value))
-        T = exact.symmetrize(exact.rational_matrix(var["T"].value))
-        V, tau = poly.gram_form(sb.Z_V, QV), poly.gram_form(sb.Z_T, T)
-        QE = project_gram(sb.Z_E, exact.symmetrize(exact.rational_matrix(var["Q_E"].value)),
-                          sb.output_form(V, B, self.beta))
-        QDs = [project_gram(sb.Z_D, exact.symmetrize(exact.rational_matrix(QD.value)),
-                            sb.dissipation(V, tau, f, k, lam_q))
-               for QD, f, k in zip(var["Q_D"], self.fields, self.k_scaled)]
-        if QE is None or any(QD is None for QD in QDs):
+        values = {name: var[name].value for name in ("B", "Q_V", "T", "Q_E")}
+        r = sb.round_solution(values, [QD.value for QD in var["Q_D"]], lam, self.beta,
+                              list(zip(self.fields, self.k_scaled)))
+        if r is None:
             return None, outcome
-        grams = [QD for QD in QDs if QD is not None]
-        # the exact check would fail on a matrix the float screen shows indefinite
-        if any(exact.surely_not_positive_definite(m) for m in (sb.top_shifted(QV), T, QE, *grams)):
-            return None, outcome
-        cert = {"lambda": str(lam_q), "B": str(B), "beta": str(self.beta), "omega": str(self.omega),
-                "Q_V": exact.to_json(QV), "T": exact.to_json(sb.unscaled(T, sb.Z_T, self.kappa, 2)),
-                "Q_E": exact.to_json(QE), "Q_D": [exact.to_json(sb.unscaled(QD, sb.Z_D, self.kappa, 0)) for QD in grams],
+        cert = {"lambda": str(r.lam), "B": str(r.B), "beta": str(self.beta), "omega": str(self.omega),
+                "Q_V": exact.to_json(r.QV), "T": exact.to_json(sb.unscaled(r.T, sb.Z_T, self.kappa, 2)),
+                "Q_E": exact.to_json(r.QE), "Q_D": [exact.to_json(sb.unscaled(QD, sb.Z_D, self.kappa, 0)) for QD in r.QDs],
                 "vertices": [[str(x) for x in v] for v in self.vertices], "delta_max": str(delta_max)}
         return (cert, outcome) if check(cert)[0] else (None, outcome)
 
@@ -158,7 +146,6 @@ def certify_bound_box(problem: Problem, box: ParameterBox, dynamics: str = "deri
     import cvxpy as cp
 
     from lyapcheck.conditions import sos_bound as sb
-    from lyapcheck.conditions.sos import project_gram
 
     if problem.d_max is None:
         return {"status": "not_applicable", "property": "ultimate_bound",

@@ -36,8 +36,9 @@ This speaks of the error dynamics (unsaturated ODS law), as Proposition 4.1 does
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping
+from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 import numpy as np
 
@@ -257,29 +258,55 @@ def unscaled(Q: exact.Matrix, basis: list[poly.Monomial], kappa: Fraction, extra
                  for i in range(len(basis)))
 
 
+@dataclass(frozen=True)
+class RoundedSolution:
+    """A solver's solution rounded to exact matrices (search coordinates) whose identities hold."""
+
+    lam: Fraction
+    B: Fraction
+    QV: exact.Matrix
+    T: exact.Matrix
+    QE: exact.Matrix
+    QDs: tuple[exact.Matrix, ...]
+
+
+def round_solution(v: Mapping[str, Any], QD_values: Sequence[Any], lam: float, beta: Fraction,
+                   blocks: Sequence[tuple[tuple[poly.Poly, poly.Poly, poly.Poly], Fraction]]) -> RoundedSolution | None:
+    """Round ``B`` up, ``Q_V`` and ``T`` to rationals, and project ``Q_E`` and each dissipation Gram
+    matrix (one per block: its search fields and disturbance scale) onto its identity, exactly.
+
+    None if an identity is not representable, or if the float screen shows a Gram matrix
+    indefinite (the exact check would then fail; the unscaling to ``w`` is a congruence, which
+    keeps definiteness). Shared by the point search and the box search (:mod:`lyapcheck.box_bounds`).
+    """
+    lam_q = exact.to_rational(lam, 6)
+    B = exact.to_rational(float(v["B"]) * (1 + 1e-6) + 1e-9, 9)
+    QV = exact.symmetrize(exact.rational_matrix(v["Q_V"]))
+    T = exact.symmetrize(exact.rational_matrix(v["T"]))
+    V, tau = poly.gram_form(Z_V, QV), poly.gram_form(Z_T, T)
+    QE = project_gram(Z_E, exact.symmetrize(exact.rational_matrix(v["Q_E"])), output_form(V, B, beta))
+    QDs = [project_gram(Z_D, exact.symmetrize(exact.rational_matrix(QD)), dissipation(V, tau, fields, k, lam_q))
+           for QD, (fields, k) in zip(QD_values, blocks)]
+    if QE is None or any(QD is None for QD in QDs):
+        return None
+    grams = tuple(QD for QD in QDs if QD is not None)
+    if any(exact.surely_not_positive_definite(m) for m in (top_shifted(QV), T, QE, *grams)):
+        return None
+    return RoundedSolution(lam_q, B, QV, T, QE, grams)
+
+
 def _certificate(dyn: ScaledDynamics, k: Fraction, v: Mapping[str, Any], lam: float,
                  coords: tuple[Fraction, Fraction, Fraction]) -> dict[str, Any] | None:
     """Round a solution found in ``coords`` to an exact certificate in ``w``; None unless it checks."""
     beta, omega, kappa = coords
     g_y, g_r, q = balanced_fields(dyn, beta, omega)
     search_fields = (g_y, g_r, poly.scale(kappa, q))  # the push q (dV/dy) w = (kappa q) (dV/dy) w~
-    lam_q = exact.to_rational(lam, 6)
-    B = exact.to_rational(float(v["B"]) * (1 + 1e-6) + 1e-9, 9)
-    QV = exact.symmetrize(exact.rational_matrix(v["Q_V"]))
-    T = exact.symmetrize(exact.rational_matrix(v["T"]))
-    V, tau = poly.gram_form(Z_V, QV), poly.gram_form(Z_T, T)
-    QD = project_gram(Z_D, exact.symmetrize(exact.rational_matrix(v["Q_D"])),
-                      dissipation(V, tau, search_fields, k / omega / kappa, lam_q))
-    QE = project_gram(Z_E, exact.symmetrize(exact.rational_matrix(v["Q_E"])), output_form(V, B, beta))
-    if QD is None or QE is None:
+    r = round_solution(v, [v["Q_D"]], lam, beta, [(search_fields, k / omega / kappa)])
+    if r is None:
         return None
-    # the exact check below would fail on a matrix the float screen shows indefinite (the
-    # unscaling is a congruence: it keeps definiteness); skipping it changes no result
-    if any(exact.surely_not_positive_definite(m) for m in (QD, top_shifted(QV), T, QE)):
-        return None
-    cert = {"lambda": str(lam_q), "B": str(B), "beta": str(beta), "omega": str(omega),
-            "Q_V": exact.to_json(QV), "T": exact.to_json(unscaled(T, Z_T, kappa, 2)),
-            "Q_D": exact.to_json(unscaled(QD, Z_D, kappa, 0)), "Q_E": exact.to_json(QE), "k_scaled": str(k)}
+    cert = {"lambda": str(r.lam), "B": str(r.B), "beta": str(beta), "omega": str(omega),
+            "Q_V": exact.to_json(r.QV), "T": exact.to_json(unscaled(r.T, Z_T, kappa, 2)),
+            "Q_D": exact.to_json(unscaled(r.QDs[0], Z_D, kappa, 0)), "Q_E": exact.to_json(r.QE), "k_scaled": str(k)}
     return cert if check(dyn, k, cert)[0] else None
 
 
