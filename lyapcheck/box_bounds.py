@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import warnings
 from fractions import Fraction
 from typing import Any, Mapping
 
@@ -103,31 +102,24 @@ class _Search:
 
         self.vertices = vertices
         self.beta, self.omega, self.kappa = coords
-        # the push q (dV/dy) w = (kappa q) (dV/dy) w~, and |w~| <= k / kappa
-        self.fields = [(g_y, g_r, poly.scale(self.kappa, q))
-                       for g_y, g_r, q in (_fields(v, self.beta, self.omega) for v in vertices)]
+        # |w~| <= k / kappa at each vertex
+        self.fields = [sb.search_fields(_fields(v, self.beta, self.omega), self.kappa) for v in vertices]
         self.k_scaled = [v[3] / self.omega / self.kappa for v in vertices]
         tables = [sb.dynamics_data(f, self.beta) for f in self.fields]
         self.program, self.variables, self.lam = _build(cp, tables, [float(k * k) for k in self.k_scaled],
                                                         float(self.beta))
 
-    def attempt(self, cp: Any, lam: float, delta_max: Fraction) -> tuple[dict[str, Any] | None, str]:
+    def attempt(self, lam: float, delta_max: Fraction) -> tuple[dict[str, Any] | None, str]:
         """Solve at decay rate ``lam``; the exactly checked certificate (or None) and the solver's word."""
         from lyapcheck import tolerances as tol
+        from lyapcheck.conditions import sdp
         from lyapcheck.conditions import sos_bound as sb
 
         var = self.variables
         self.lam.value = lam
-        try:
-            with warnings.catch_warnings():  # "may be inaccurate": the exact check below is the judge
-                warnings.simplefilter("ignore", UserWarning)
-                self.program.solve(solver=cp.CLARABEL, warm_start=False, max_iter=tol.SOS_BOUND_MAX_ITER,
-                                   tol_gap_abs=tol.SOLVER_TOL_GAP_ABS, tol_gap_rel=tol.SOLVER_TOL_GAP_REL,
-                                   tol_feas=tol.SOLVER_TOL_FEAS)
-        except cp.error.SolverError as exc:
-            return None, f"solver error: {exc}"
-        outcome = str(self.program.status)
-        if var["B"].value is None:
+        outcome = sdp.solve(self.program, max_iter=tol.SOS_BOUND_MAX_ITER).raw_status
+        # an inaccurate solution is still a candidate: the exact check below is the judge
+        if var["B"].value is None or outcome == "solver_error":
             return None, outcome
         values = {name: var[name].value for name in ("B", "Q_V", "T", "Q_E")}
         r = sb.round_solution(values, [QD.value for QD in var["Q_D"]], lam, self.beta,
@@ -156,8 +148,12 @@ def certify_bound_box(problem: Problem, box: ParameterBox, dynamics: str = "deri
             return {"status": "not_certified", "property": "ultimate_bound",
                     "summary": "d* is zero or the dynamics at some corner do not have the structure this class needs"}
         vertices = _vertices(data["ranges"])
-        searches = {scale: _Search(cp, vertices, sb.coordinates_at(data["root"], data["ranges"][3][1], scale))
-                    for scale in sb.SEARCH_SCALES[:1]}
+
+        def search_at(scale: sb.SearchScale) -> _Search:
+            return _Search(cp, vertices, sb.coordinates_at(data["root"], data["ranges"][3][1], scale))
+
+        # the first is built here, so that a box out of the double range is said so
+        searches = {sb.SEARCH_SCALES[0]: search_at(sb.SEARCH_SCALES[0])}
     except OverflowError:  # the solver works in doubles; the exact data are fine, the search is not
         return {"status": "not_certified", "property": "ultimate_bound", "box": box.to_json(),
                 "summary": f"the box's scaled dynamics leave the double range ({box.describe()}); no search was "
@@ -170,10 +166,10 @@ def certify_bound_box(problem: Problem, box: ParameterBox, dynamics: str = "deri
         for scale in sb.SEARCH_SCALES:
             if scale not in searches:
                 try:
-                    searches[scale] = _Search(cp, vertices, sb.coordinates_at(data["root"], data["ranges"][3][1], scale))
+                    searches[scale] = search_at(scale)
                 except OverflowError:
                     continue
-            cert, outcome = searches[scale].attempt(cp, lam, data["delta_max"])
+            cert, outcome = searches[scale].attempt(lam, data["delta_max"])
             log.append({"lambda": lam, "beta": str(searches[scale].beta), "outcome": outcome})
             if cert is None:
                 continue

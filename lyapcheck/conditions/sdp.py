@@ -60,7 +60,7 @@ class SolveReport:
         }
 
 
-def solve(problem: Any) -> SolveReport:
+def solve(problem: Any, *, max_iter: int = tol.SOLVER_MAX_ITER) -> SolveReport:
     """Solve a compiled cvxpy problem with Clarabel; never raises for solver failures."""
     import cvxpy as cp
 
@@ -75,7 +75,7 @@ def solve(problem: Any) -> SolveReport:
                 # what this process solved before (results must be reproducible point by point)
                 warm_start=False,
                 tol_gap_abs=tol.SOLVER_TOL_GAP_ABS, tol_gap_rel=tol.SOLVER_TOL_GAP_REL,
-                tol_feas=tol.SOLVER_TOL_FEAS, max_iter=tol.SOLVER_MAX_ITER,
+                tol_feas=tol.SOLVER_TOL_FEAS, max_iter=max_iter,
             )
         raw = str(problem.status)
     except (cp.error.SolverError, ValueError, ArithmeticError) as exc:

@@ -251,6 +251,12 @@ def search_coordinates(dyn: ScaledDynamics, k: Fraction, scale: SearchScale) -> 
     return coordinates_at(scales(dyn)[0], k, scale)
 
 
+def search_fields(fields: tuple[poly.Poly, poly.Poly, poly.Poly], kappa: Fraction) -> tuple[poly.Poly, poly.Poly, poly.Poly]:
+    """The fields with ``w = kappa w~``: the push ``q (dV/dy) w`` is ``(kappa q) (dV/dy) w~`` (exact)."""
+    g_y, g_r, q = fields
+    return g_y, g_r, poly.scale(kappa, q)
+
+
 def unscaled(Q: exact.Matrix, basis: list[poly.Monomial], kappa: Fraction, extra: int) -> exact.Matrix:
     """A Gram matrix over ``basis`` in ``w`` from one found in ``w~ = w / kappa``: entry ``(i, j)``
     divided by ``kappa^(d_i + d_j + extra)``, ``d`` the degree in ``w`` (exact)."""
@@ -299,9 +305,8 @@ def _certificate(dyn: ScaledDynamics, k: Fraction, v: Mapping[str, Any], lam: fl
                  coords: tuple[Fraction, Fraction, Fraction]) -> dict[str, Any] | None:
     """Round a solution found in ``coords`` to an exact certificate in ``w``; None unless it checks."""
     beta, omega, kappa = coords
-    g_y, g_r, q = balanced_fields(dyn, beta, omega)
-    search_fields = (g_y, g_r, poly.scale(kappa, q))  # the push q (dV/dy) w = (kappa q) (dV/dy) w~
-    r = round_solution(v, [v["Q_D"]], lam, beta, [(search_fields, k / omega / kappa)])
+    fields = search_fields(balanced_fields(dyn, beta, omega), kappa)
+    r = round_solution(v, [v["Q_D"]], lam, beta, [(fields, k / omega / kappa)])
     if r is None:
         return None
     cert = {"lambda": str(r.lam), "B": str(r.B), "beta": str(beta), "omega": str(omega),
@@ -332,8 +337,7 @@ def run(system: System, search: tuple[SearchScale, ...] = SEARCH_SCALES,
         if scale not in data:
             coords = search_coordinates(dyn, k, scale)
             beta, omega, kappa = coords
-            g_y, g_r, q = balanced_fields(dyn, beta, omega)
-            data[scale] = coords, {**dynamics_data((g_y, g_r, poly.scale(kappa, q)), beta),
+            data[scale] = coords, {**dynamics_data(search_fields(balanced_fields(dyn, beta, omega), kappa), beta),
                                    "k2": float((k / omega / kappa) ** 2)}
         return data[scale]
 
