@@ -133,7 +133,8 @@ def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatAr
     ``storage``: per point, the ``sos_bound`` certificate (for the worst-case search's
     storage-gradient family), or None.
     """
-    from lyapcheck.simulation.disturbances import ADVERSARIAL_LAYER_FRACTION, Adversarial, Constant, Weight
+    from lyapcheck.simulation.disturbances import (ADVERSARIAL_LAYER_FRACTION, Adversarial, Constant, NoDisturbance,
+                                                   Stacked, Weight)
     from lyapcheck.simulation.integrator import STATUS_OK
     from lyapcheck.simulation.model import LoopParams
     from lyapcheck.simulation.runner import simulate
@@ -150,29 +151,42 @@ def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatAr
     origin = np.zeros((n, 2))
     out: dict[str, Any] = {}
 
-    def run(name: str, disturbance: Any, p0: npt.ArrayLike) -> None:
-        res = simulate(params, p0=p0, disturbance=disturbance, horizon=sim.horizon, tail=sim.tail, rtol=sim.rtol)
-        m = res.measurements
-        failed = (m.status != STATUS_OK) | ~np.isfinite(m.sup_abs_eps_tail_m)
-        out[name] = {"sup": np.where(failed, np.nan, m.sup_abs_eps_tail_m), "failed": failed,
-                     "diverged": np.asarray(m.diverged) | failed}
-
+    # every simulated scenario in one batch: the integrator's cost is mostly per loop iteration
+    # (numpy calls), and a batch runs as many iterations as its slowest row needs, so the
+    # scenarios in one batch cost about what the slowest of them costs alone. Rows are
+    # independent (own step sizes; tests/test_simulation_integrator.py), so every figure is the
+    # one a separate run gives, bit for bit (tests/test_sweeps.py)
+    batch: list[tuple[str, Any, FloatArray]] = []
     for name in sim.scenarios:
         if name == "nominal":
-            run(name, None, sim.initial_position)
+            batch.append((name, NoDisturbance(), np.broadcast_to(np.asarray(sim.initial_position, dtype=np.float64),
+                                                                 (n, 2))))
         elif name == "constant":
-            run(name, Constant(-d_max[:, None] * across[None, :]), origin)
+            batch.append((name, Constant(-d_max[:, None] * across[None, :]), origin))
         elif name == "weight":
             a1, a2 = _weight_constants(spec.text)
             scale = max(1.0 / a1, 1.0 / a2)
-            run(name, Weight(d_max / scale, np.full(n, a1), np.full(n, a2), np.full(n, theta)), origin)
+            batch.append((name, Weight(d_max / scale, np.full(n, a1), np.full(n, a2), np.full(n, theta)), origin))
         elif name == "adversarial":
             P = np.stack([a if a is not None and _usable(a) else np.eye(2) for a in adversary])
             P = (P + np.swapaxes(P, 1, 2)) / 2
             layer = ADVERSARIAL_LAYER_FRACTION * params.delta_los
-            run(name, Adversarial(d_max, P, layer, np.full(n, theta)), layer[:, None] * across[None, :])
-        elif name == "worst_case":
-            out[name] = _worst_case(spec, coords, storage or [None] * n)
+            batch.append((name, Adversarial(d_max, P, layer, np.full(n, theta)), layer[:, None] * across[None, :]))
+    if batch:
+        k = len(batch)
+        res = simulate(LoopParams.concat([params] * k), p0=np.concatenate([p0 for _, _, p0 in batch]),
+                       disturbance=Stacked.concat([(d, n) for _, d, _ in batch]),
+                       horizon=sim.horizon, tail=sim.tail, rtol=sim.rtol)
+        m = res.measurements
+        failed_all = (m.status != STATUS_OK) | ~np.isfinite(m.sup_abs_eps_tail_m)
+        diverged_all = np.asarray(m.diverged) | failed_all
+        for j, (name, _, _) in enumerate(batch):
+            rows = slice(j * n, (j + 1) * n)
+            failed = failed_all[rows]
+            out[name] = {"sup": np.where(failed, np.nan, m.sup_abs_eps_tail_m[rows]), "failed": failed,
+                         "diverged": diverged_all[rows]}
+    if "worst_case" in sim.scenarios:
+        out["worst_case"] = _worst_case(spec, coords, storage or [None] * n)
     return out
 
 

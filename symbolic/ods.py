@@ -767,14 +767,17 @@ def _exceeds(u: FloatArray, radius: FloatArray) -> npt.NDArray[np.bool_]:
     return np.asarray(by_hypot | by_naive)
 
 
-def _clip_to_ball(u: FloatArray, radius: FloatArray) -> FloatArray:
+def _clip_to_ball(u: FloatArray, radius: FloatArray, *, copy: bool = True) -> FloatArray:
     """Shrink the rows of u that exceed ``radius`` by rounding, until |u| <= radius exactly.
 
     Each pass scales by (radius/|u|)(1 - 2^(k-52)): k = 0 is a one-ulp backoff, and k grows
     so that the loop terminates even for subnormal entries, where one-ulp factors round back.
+    ``copy=False`` shrinks a float64 array the caller owns in place.
     """
-    u = np.array(u, dtype=np.float64, copy=True)
-    radius = np.broadcast_to(radius, u.shape[:-1])
+    if copy:
+        u = np.array(u, dtype=np.float64, copy=True)
+    if radius.shape != u.shape[:-1]:
+        radius = np.broadcast_to(radius, u.shape[:-1])
     for k in range(53):
         over = _exceeds(u, radius)
         if not np.any(over):
@@ -834,29 +837,33 @@ def ods_control_and_gradient(
 
 
 def _control(G: FloatArray, omega_0: FloatArray, omega_so: FloatArray) -> FloatArray:
-    """The command of eq:solFinal from G_mu and validated rates (shared with :class:`BatchODS`)."""
-    w0 = np.broadcast_to(omega_0, G.shape[:-1])
-    om = np.broadcast_to(omega_so, G.shape[:-1])
+    """The command of eq:solFinal from G_mu and validated rates (shared with :class:`BatchODS`).
+
+    The simulator calls this at every stage of every step, mostly on a handful of rows, so the
+    numpy calls are what costs: the saturated branch is evaluated only when some row saturates,
+    and the result is built in place. Every entry is the same floating-point expression either way.
+    """
+    w0 = omega_0 if omega_0.shape == G.shape[:-1] else np.broadcast_to(omega_0, G.shape[:-1])
+    om = omega_so if omega_so.shape == G.shape[:-1] else np.broadcast_to(omega_so, G.shape[:-1])
     interior, boundary, threshold = _solfinal_callables()
     gx, gz = G[..., 0], G[..., 1]
+    u = np.empty(G.shape)
     with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-        norm = np.hypot(gx, gz)
-        saturated = norm >= threshold(gx, gz, w0, om)
-        # the saturated branch is homogeneous of degree 0 in G_mu: rescale so that |G| ~ 1
-        # (no overflow in |G|, no underflow to 0/0)
-        scale = np.maximum(np.abs(gx), np.abs(gz))
-        safe = np.where(scale > 0, scale, 1.0)
+        saturated = np.hypot(gx, gz) >= threshold(gx, gz, w0, om)
         ux_i, uz_i = interior(gx, gz, w0, om)
-        ux_b, uz_b = boundary(gx / safe, gz / safe, w0, om)
-    sat_ok = saturated & (scale > 0)
-    u = np.stack(
-        [
-            np.where(sat_ok, ux_b, np.where(saturated, 0.0, ux_i)),
-            np.where(sat_ok, uz_b, np.where(saturated, 0.0, uz_i)),
-        ],
-        axis=-1,
-    ).astype(np.float64)
-    return _clip_to_ball(u, om)
+        if saturated.any():
+            # the saturated branch is homogeneous of degree 0 in G_mu: rescale so that |G| ~ 1
+            # (no overflow in |G|, no underflow to 0/0)
+            scale = np.maximum(np.abs(gx), np.abs(gz))
+            safe = np.where(scale > 0, scale, 1.0)
+            ux_b, uz_b = boundary(gx / safe, gz / safe, w0, om)
+            sat_ok = saturated & (scale > 0)
+            u[..., 0] = np.where(sat_ok, ux_b, np.where(saturated, 0.0, ux_i))
+            u[..., 1] = np.where(sat_ok, uz_b, np.where(saturated, 0.0, uz_i))
+        else:
+            u[..., 0] = ux_i
+            u[..., 1] = uz_i
+    return _clip_to_ball(u, om, copy=False)
 
 
 class BatchODS:
@@ -880,9 +887,29 @@ class BatchODS:
         self.omega_so = _positive("omega_so", omega_so)
 
     def __call__(self, v_d: FloatArray, rows: Any = slice(None)) -> tuple[FloatArray, FloatArray]:
-        G = _gradient(np.asarray(v_d, dtype=np.float64), self.d_hat[rows], self.e11_hat[rows], self.omega_0[rows],
-                      self.form)
-        return _control(G, self.omega_0[rows], self.omega_so[rows]), G
+        v = np.asarray(v_d, dtype=np.float64)
+        d, e, w0 = self.d_hat[rows], self.e11_hat[rows], self.omega_0[rows]
+        if v.ndim == 2 and d.shape == v.shape and e.shape == w0.shape == v.shape[:1]:
+            G = self._gradient_rows(v, d, e, w0)
+        else:
+            G = _gradient(v, d, e, w0, self.form)
+        return _control(G, w0, self.omega_so[rows]), G
+
+    def _gradient_rows(self, v: FloatArray, d: FloatArray, e: FloatArray, w0: FloatArray) -> FloatArray:
+        """:func:`_gradient` on ``(n, 2)`` rows whose shapes already match: the same lambdified
+        expressions, without the broadcasting and stacking that cost more than they compute."""
+        fx, fz = _gradient_callables(self.form)
+        parts = (v[:, 0], v[:, 1], d[:, 0], d[:, 1], e, w0)
+        G = np.empty(v.shape)
+        with np.errstate(over="ignore", under="ignore"):
+            G[:, 0] = fx(*parts)
+            G[:, 1] = fz(*parts)
+        if not np.isfinite(G).all():
+            raise ValueError(
+                "The 'e11_hat' and 'omega_0' parameters must keep G_mu finite. "
+                "Got values for which (d_hat - v_d)/(Omega_0 e11_hat) overflows instead."
+            )
+        return G
 
 
 def trs_solve_diag(

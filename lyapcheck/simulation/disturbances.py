@@ -182,6 +182,10 @@ class Weight(Disturbance):
             object.__setattr__(self, name, _rows(name, arr, n))
         if np.any(self.weight < 0) or np.any(self.a1 <= 0) or np.any(self.a2 <= 0):
             raise ValueError("The 'weight', 'a1' and 'a2' parameters must be >= 0, > 0, > 0. Got other values instead.")
+        # rft.disturbance_velocity takes scalar a1, a2: one call per distinct pair (usually
+        # one), grouped once here rather than at every evaluation
+        pairs, inverse = np.unique(np.stack([self.a1, self.a2], axis=1), axis=0, return_inverse=True)
+        object.__setattr__(self, "_pairs", (pairs, inverse.reshape(-1)))
 
     @property
     def size(self) -> int | None:
@@ -199,14 +203,10 @@ class Weight(Disturbance):
         axis = np.where((norm > 0)[:, None], u / safe[:, None], fallback)
         force = np.zeros((n, 2))
         force[:, 1] = -np.broadcast_to(self.weight, (n,))
-        a1 = np.broadcast_to(self.a1, (n,))
-        a2 = np.broadcast_to(self.a2, (n,))
-        # rft.disturbance_velocity takes scalar a1, a2: one call per distinct pair (usually one)
-        pairs, inverse = np.unique(np.stack([a1, a2], axis=1), axis=0, return_inverse=True)
+        pairs, inverse = self._pairs  # type: ignore[attr-defined]
         if pairs.shape[0] == 1:
             return disturbance_velocity(force, axis, float(pairs[0, 0]), float(pairs[0, 1]))
         out = np.empty((n, 2))
-        inverse = inverse.reshape(-1)
         for g, (p1, p2) in enumerate(pairs):
             rows = inverse == g
             out[rows] = disturbance_velocity(force[rows], axis[rows], float(p1), float(p2))
@@ -399,6 +399,9 @@ class Adversarial(Disturbance):
             object.__setattr__(self, name, _rows(name, arr, n))
         if np.any(self.bound_m_s < 0) or np.any(self.layer <= 0):
             raise ValueError("The 'bound' and 'layer' parameters must be >= 0 and > 0. Got other values instead.")
+        # constant per row, evaluated at every stage of every step: computed once (same values)
+        object.__setattr__(self, "_slope", self.P[:, 0, 1] / self.P[:, 0, 0])
+        object.__setattr__(self, "_across", (-np.sin(self.theta_r), np.cos(self.theta_r)))
 
     @property
     def size(self) -> int | None:
@@ -406,23 +409,24 @@ class Adversarial(Disturbance):
 
     def switching_function(self, eps: FloatArray, s: FloatArray) -> FloatArray:
         """``sigma = (P x)_1 / P_11`` in metres (its sign is that of dV/d eps)."""
-        n = eps.shape[0]
-        P = np.broadcast_to(self.P, (n, 2, 2))
-        return eps + (P[:, 0, 1] / P[:, 0, 0]) * s
+        return eps + self._slope * s  # type: ignore[attr-defined,no-any-return]
 
     def switching(self, eps: FloatArray, s: FloatArray) -> FloatArray | None:
         # the edges of the boundary layer are kinks of the saturation
         sigma = self.switching_function(eps, s)
-        layer = np.broadcast_to(self.layer, sigma.shape)
-        return np.stack([sigma - layer, sigma + layer], axis=1)
+        out = np.empty((sigma.shape[0], 2))
+        out[:, 0] = sigma - self.layer
+        out[:, 1] = sigma + self.layer
+        return out
 
     def velocity(self, t: FloatArray, t_segment: FloatArray, eps: FloatArray, s: FloatArray,
                  u: FloatArray) -> FloatArray:
-        n = t.shape[0]
-        push = np.clip(self.switching_function(eps, s) / np.broadcast_to(self.layer, (n,)), -1.0, 1.0)
-        w = np.broadcast_to(self.bound_m_s, (n,)) * push
-        theta = np.broadcast_to(self.theta_r, (n,))
-        return np.stack([-np.sin(theta) * w, np.cos(theta) * w], axis=1)
+        w = self.bound_m_s * np.clip(self.switching_function(eps, s) / self.layer, -1.0, 1.0)
+        across_x, across_z = self._across  # type: ignore[attr-defined]
+        out = np.empty((eps.shape[0], 2))
+        out[:, 0] = across_x * w
+        out[:, 1] = across_z * w
+        return out
 
     def take(self, index: IntArray) -> "Adversarial":
         if self.P.shape[0] == 1:
@@ -785,8 +789,16 @@ class Stacked(Disturbance):
     def _each(self) -> "list[tuple[Disturbance, IntArray]]":
         return self._parts_rows  # type: ignore[attr-defined,no-any-return]
 
+    def _alone(self) -> Disturbance | None:
+        """The part that serves every row in order, when there is one (a batch whose other
+        parts have finished): the calls go to it directly, without gathering rows."""
+        return self.parts[0] if len(self.parts) == 1 else None
+
     def velocity(self, t: FloatArray, t_segment: FloatArray, eps: FloatArray, s: FloatArray,
                  u: FloatArray) -> FloatArray:
+        alone = self._alone()
+        if alone is not None:
+            return alone.velocity(t, t_segment, eps, s, u)
         out = np.empty((t.shape[0], 2))
         for part, rows in self._each():
             if rows.size:
@@ -794,6 +806,9 @@ class Stacked(Disturbance):
         return out
 
     def next_breakpoint(self, t: FloatArray) -> FloatArray:
+        alone = self._alone()
+        if alone is not None:
+            return alone.next_breakpoint(t)
         out = np.full(t.shape, np.inf)
         for part, rows in self._each():
             if rows.size:
@@ -803,6 +818,9 @@ class Stacked(Disturbance):
     def switching(self, eps: FloatArray, s: FloatArray) -> FloatArray | None:
         if self.n_switches == 0:
             return None
+        alone = self._alone()
+        if alone is not None and alone.n_switches == self.n_switches:
+            return alone.switching(eps, s)
         out = np.ones((eps.shape[0], self.n_switches))
         for part, rows in self._each():
             if rows.size and part.n_switches:

@@ -321,14 +321,17 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
         step = np.where(done, 0.0, step)
 
         k = [f]
+        stage_monitor = np.full(gidx.size, -np.inf)
         for i in range(1, 7):
             yi = y.copy()
             for j, a in enumerate(_A[i]):
                 if a != 0.0:
                     yi += (step * a)[:, None] * k[j]
             ev = sys_w.rhs(t + _C[i] * step, yi, t)
-            monitor[gidx] = np.fmax(monitor[gidx], np.where(done, -np.inf, ev.monitor))
+            stage_monitor = np.fmax(stage_monitor, ev.monitor)
             k.append(ev.dy)
+        # one update per step (fmax is associative and ignores NaN like the per-stage updates did)
+        monitor[gidx] = np.fmax(monitor[gidx], np.where(done, -np.inf, stage_monitor))
         rows_evaluated += 6 * gidx.size
         y_new = yi  # the 7th stage point is the 5th-order solution (FSAL)
         f_new, g_new = k[6], ev.switch

@@ -211,6 +211,9 @@ class ClosedLoop:
 
         pr = self.params
         object.__setattr__(self, "_ods", BatchODS(pr.d_hat, pr.e11_hat, pr.omega_0, pr.omega_so, form=self.form))
+        from symbolic.closed_loop import guidance_functions
+
+        object.__setattr__(self, "_guidance", guidance_functions(self.form))
 
     @property
     def size(self) -> int:
@@ -243,23 +246,22 @@ class ClosedLoop:
     def _control_and_gradient(self, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """``u``, ``G_mu`` (eq:ODS2; NaN where ``v_d`` is not finite), ``v_d`` and ``eps``: one ODS
         evaluation serves the command and the saturation's switching function."""
-        from symbolic.closed_loop import guidance_functions
-
         pr = self.params
-        v_d_fn = cast(Callable[..., tuple[FloatArray, FloatArray]], guidance_functions(self.form)[0])
+        v_d_fn: Callable[..., tuple[FloatArray, FloatArray]] = self._guidance[0]  # type: ignore[attr-defined]
         eps, _, s = self.errors(y)
         sigma = pr.sigma0 * pr.integral
-        vx, vz = v_d_fn(eps, s, pr.alpha_d, sigma, pr.delta_los, pr.theta_r)
-        v_d = np.stack(np.broadcast_arrays(vx, vz), axis=1)
+        v_d = np.empty((y.shape[0], 2))
+        v_d[:, 0], v_d[:, 1] = v_d_fn(eps, s, pr.alpha_d, sigma, pr.delta_los, pr.theta_r)
         ods = self._ods  # type: ignore[attr-defined]
+        if np.isfinite(v_d).all():  # the normal case: one call, no copies
+            u, G = ods(v_d)
+            return u, G, v_d, eps
         both = _on_finite_rows(v_d, lambda r: np.concatenate(ods(v_d[r], r), axis=1), width=4)
         return both[:, :2], both[:, 2:], v_d, eps
 
     def rhs(self, t: FloatArray, y: FloatArray, t_segment: FloatArray) -> Evaluation:
-        from symbolic.closed_loop import guidance_functions
-
         pr = self.params
-        s_dot_fn = cast(Callable[..., FloatArray], guidance_functions(self.form)[1])
+        s_dot_fn: Callable[..., FloatArray] = self._guidance[1]  # type: ignore[attr-defined]
         u, G, v_d, eps = self._control_and_gradient(y)
         along, _ = self.frame()
         s = y[:, S] * pr.integral
@@ -278,11 +280,13 @@ class ClosedLoop:
         # kinks, for step placement only (the control itself is ods_control's): the ODS
         # saturation boundary |G_mu| = Omega_SO/Omega_0 of eq:solFinal, |eps| = 0 in the tail
         # integral, and the disturbance's own kinks
-        switches = [pr.omega_0 * np.hypot(G[:, 0], G[:, 1]) - pr.omega_so, eps]
         extra = self.disturbance.switching(eps, s)
+        switches = np.empty((y.shape[0], 2 + (0 if extra is None else extra.shape[1])))
+        switches[:, 0] = pr.omega_0 * np.hypot(G[:, 0], G[:, 1]) - pr.omega_so
+        switches[:, 1] = eps
         if extra is not None:
-            switches.extend(extra.T)
-        return Evaluation(dy, u_norm, np.stack(switches, axis=1))
+            switches[:, 2:] = extra
+        return Evaluation(dy, u_norm, switches)
 
     def disturbance_at(self, t: FloatArray, y: FloatArray) -> FloatArray:
         """``d_mu`` at given states (for plots and checks)."""
