@@ -238,6 +238,46 @@ def test_the_conditioned_search_is_faster_and_no_looser_than_the_plain_one(paper
     assert Fraction(conditioned["eps_bound"]) <= Fraction(plain["eps_bound"])
 
 
+def test_the_sign_symmetric_search_finds_the_full_programs_solution(paper_problem) -> None:  # type: ignore[no-untyped-def]
+    """The ILOS field is odd and q even, so the search may look among block-diagonal Gram
+    matrices (even against even monomials, odd against odd) without losing anything: at the
+    paper's gains and every decay rate, the reduced program's B equals the full program's within
+    the solver's tolerance, the full program's off-diagonal blocks come out negligible, and the
+    reduced program's matrices, assembled with exact zeros between the blocks, still satisfy the
+    equality constraints that the reduced program leaves out."""
+    from lyapcheck.conditions import sos_bound as sb
+
+    system = build_system(paper_problem, "derived")
+    dyn = sos.scaled_dynamics(system)
+    assert sb.is_sign_symmetric(dyn.fields())
+    assert not sb.is_sign_symmetric((*dyn.fields()[:2], {(1, 0): Fraction(1)}))  # an odd q breaks it
+    k = abs(system.E[0]) * system.d_max / (system.delta * dyn.time_scale)
+    beta, omega, kappa = sb.search_coordinates(dyn, k, sb.SEARCH_SCALES[0])
+    fields = sb.search_fields(sb.balanced_fields(dyn, beta, omega), kappa)
+    values = {**sb.dynamics_data(fields, beta), "k2": float((k / omega / kappa) ** 2)}
+    full, reduced = sb.program(), sb.program(parity_reduced=True)
+    assert set(reduced.data.params) < set(full.data.params)
+    for lam in sb.LAMBDA_GRID:
+        a = full.solve({**values, "lambda": lam})
+        b = reduced.solve({**{n: v for n, v in values.items() if n in reduced.data.params}, "lambda": lam})
+        assert a.values is not None and b.values is not None
+        assert float(b.values["B"]) == pytest.approx(float(a.values["B"]), rel=1e-3, abs=1e-7)
+        assembled = sb.full_from_parity_blocks(b.values)
+        for name, basis in sb.GRAMS:
+            even, odd = sb.parity_blocks(basis)
+            assert np.all(assembled[name][np.ix_(even, odd)] == 0)
+            assert np.abs(a.values[name][np.ix_(even, odd)]).max() <= 1e-6 * np.abs(a.values[name]).max()
+        # the whole identity (odd monomials included) holds for the assembled matrices, to float accuracy
+        V = poly.gram_form(sb.Z_V, assembled["Q_V"].tolist())
+        tau = poly.gram_form(sb.Z_T, assembled["T"].tolist())
+        residual = poly.add(sb.dissipation(V, tau, tuple({m: float(c) for m, c in p.items()} for p in fields),
+                                           float(k / omega / kappa), lam),
+                            poly.scale(-1.0, poly.gram_form(sb.Z_D, assembled["Q_D"].tolist())))
+        assert max(abs(c) for c in residual.values()) <= 1e-6 * np.abs(assembled["Q_D"]).max()
+    cert = sb.run(system)
+    assert cert is not None and sb.verify(system, cert)[0]
+
+
 def test_a_negative_decay_rate_is_refused_even_where_its_identity_holds() -> None:
     """With mu < 0 the SOS identity only gives V' <= |mu| V, and such identities exist for a
     saddle (c = 1, a = 1, b = 5: det = a - b c < 0). The exact check must refuse them."""
