@@ -35,7 +35,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Callable
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -76,6 +76,65 @@ def scaled_dynamics(system: System) -> ScaledDynamics | None:
     ts = -a[0][0]
     return ScaledDynamics(time_scale=ts, c=a[0][1] / (system.sigma0 * ts), a=-a[1][1] / ts,
                           b=system.sigma0 * system.speed / (system.delta * ts))
+
+
+# -- sign symmetry (used by sos_bound's search) -----------------------------------------------
+# The field g is odd and q even (ScaledDynamics.fields: e, e' and r' are odd, q = y^2 + 1), so an
+# SOS program built on it is invariant under x -> -x, which acts on a Gram basis as the diagonal sign
+# matrix S (+1 on even monomials, -1 on odd ones). With any feasible point its mirror Q -> S Q S
+# is feasible with the same objective, and so is their mean, which is block diagonal: searching
+# block-diagonal Gram matrices (even monomials against even, odd against odd) loses nothing, and
+# the identities of odd monomials then hold by symmetry. The interior-point path of the full
+# program is mirror-invariant too (sos_bound's off-diagonal blocks come out at 1e-15), so the solver
+# reaches the same optimum from PSD blocks about half as large. Where the optimal set is not a
+# point, it may stop elsewhere in it: sos_gas's margin program was tried this way and kept full,
+# as its certificates then moved (tests/test_verdicts_unchanged.py). Certificates and exact
+# checks stay in the full matrices.
+
+def parity(m: poly.Monomial) -> int:
+    """0 for a monomial of even total degree, 1 for odd: its sign under ``x -> -x``."""
+    return sum(m) % 2
+
+
+def parity_blocks(basis: Sequence[poly.Monomial]) -> tuple[list[int], list[int]]:
+    """Indices of the even and of the odd monomials of a Gram basis."""
+    return ([i for i, m in enumerate(basis) if parity(m) == 0], [i for i, m in enumerate(basis) if parity(m) == 1])
+
+
+def is_sign_symmetric(fields: tuple[poly.Poly, poly.Poly, poly.Poly]) -> bool:
+    """The polynomial field ``(g_y, g_r)`` is odd and ``q`` even (see the note above)."""
+    g_y, g_r, q = fields
+    return (all(parity(m) == 1 for m, c in g_y.items() if c) and all(parity(m) == 1 for m, c in g_r.items() if c)
+            and all(parity(m) == 0 for m, c in q.items() if c))
+
+
+def parity_gram(cp: Any, basis: Sequence[poly.Monomial], name: str) -> tuple[Any, dict[str, Any]]:
+    """A symmetric Gram matrix over ``basis`` that is block diagonal by parity, as a cvxpy expression
+    of two block variables ``<name>_even`` and ``<name>_odd`` (returned by name)."""
+    n = len(basis)
+    full: Any = 0
+    blocks: dict[str, Any] = {}
+    for label, idx in zip(("even", "odd"), parity_blocks(basis)):
+        X = cp.Variable((len(idx), len(idx)), symmetric=True, name=f"{name}_{label}")
+        blocks[f"{name}_{label}"] = X
+        embed = np.zeros((len(idx), n))
+        embed[np.arange(len(idx)), idx] = 1.0
+        full = full + embed.T @ X @ embed
+    return full, blocks
+
+
+def assemble_parity_blocks(values: Mapping[str, Any], grams: Sequence[tuple[str, Sequence[poly.Monomial]]]
+                           ) -> dict[str, Any]:
+    """The solved variables with each Gram matrix of ``grams`` assembled from its two blocks
+    (:func:`parity_gram`), exactly zero between even and odd monomials; other variables as they are."""
+    block_names = {f"{name}_{label}" for name, _ in grams for label in ("even", "odd")}
+    out: dict[str, Any] = {key: v for key, v in values.items() if key not in block_names}
+    for name, basis in grams:
+        Q = np.zeros((len(basis), len(basis)))
+        for label, idx in zip(("even", "odd"), parity_blocks(basis)):
+            Q[np.ix_(idx, idx)] = values[f"{name}_{label}"]
+        out[name] = Q
+    return out
 
 
 def bases(deg_v: int) -> tuple[list[poly.Monomial], list[poly.Monomial]]:
