@@ -135,10 +135,14 @@ def main() -> None:
               f"/point, simulate {med(runs, 'simulate_s_per_point') * 1e3:6.1f} ms/point; {where})")
     print(f"ratio after/before: {med(after, 'points_per_s') / med(before, 'points_per_s'):.1f} x   aim >= 10 x")
     if args.before_tree is not None:
-        same = all(b["statuses"] == a["statuses"] for b, a in zip(before, after))
-        print(f"statuses identical before/after on all {after[0]['points']} points and classes: {same}")
-        sims = all(b.get("simulated") == a["simulated"] for b, a in zip(before, after))
-        print(f"simulated sup |eps| identical bit for bit, every scenario: {sims}")
+        b0, a0 = before[0], after[0]
+        changed = {c: sum(x != y for x, y in zip(b0["statuses"][c], a0["statuses"][c])) for c in ALL_CLASSES}
+        print(f"statuses identical before/after on all {a0['points']} points and classes: {not any(changed.values())}"
+              + "".join(f"; {c}: {k} point(s) differ" for c, k in changed.items() if k))
+        sims = {v: sum(x != y for x, y in zip(b0.get("simulated", {}).get(v, []), a0["simulated"][v]))
+                for v in a0["simulated"]}
+        print(f"simulated sup |eps| identical bit for bit, every scenario: {not any(sims.values())}"
+              + "".join(f"; {v}: {k} point(s) differ" for v, k in sims.items() if k))
     print(f"soundness violations (after): {after[0]['violations']}")
 
 
