@@ -778,9 +778,19 @@ def _clip_to_ball(u: FloatArray, radius: FloatArray, *, copy: bool = True) -> Fl
         u = np.array(u, dtype=np.float64, copy=True)
     if radius.shape != u.shape[:-1]:
         radius = np.broadcast_to(radius, u.shape[:-1])
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        # the common case, decided cheaply: |u|^2 below radius^2 (1 - 1e-12) in floating point,
+        # with radius^2 a normal finite number, means |u| < radius exactly (the rounding of each
+        # side, underflow included, is far below the 1e-12 margin), so neither hypot nor the naive
+        # norm can exceed it; anything else (overflow, NaN, tiny radii) goes the long way
+        limit = (radius * radius) * (1.0 - 1e-12)
+        inside = ((u[..., 0] * u[..., 0] + u[..., 1] * u[..., 1] <= limit) & (limit >= np.finfo(np.float64).tiny)
+                  & (limit < np.inf))
+    if inside.all():
+        return u
     for k in range(53):
         over = _exceeds(u, radius)
-        if not np.any(over):
+        if not over.any():
             return u
         rows = u[over]
         with np.errstate(over="ignore", under="ignore"):

@@ -276,6 +276,26 @@ def test_clip_to_ball_is_minimal() -> None:
     assert out[0, 0] >= np.nextafter(1.0, 0.0) - 2e-16
 
 
+def test_clip_to_balls_quick_acceptance_never_passes_a_row_the_full_test_would_clip() -> None:
+    """_clip_to_ball returns u untouched when |u|^2 <= radius^2 (1 - 1e-12) in floating point: on
+    rows a few ulps either side of that margin and of the radius itself, at radii from near the
+    underflow to near the overflow threshold, whatever it returns passes both norms, and it
+    changes no row that the full test (hypot and the naive norm) finds within the radius."""
+    rng = np.random.default_rng(11)
+    n = 4000
+    radius = 10.0 ** rng.uniform(-160, 150, n)
+    radius[:50] = 10.0 ** rng.uniform(-320, -300, 50)  # radius^2 underflows: the long way
+    angle = rng.uniform(0, 2 * np.pi, n)
+    rel = np.concatenate([1 - 5e-13 + rng.uniform(-2e-15, 2e-15, n // 2), 1 + rng.uniform(-4e-16, 4e-16, n - n // 2)])
+    u = np.stack([np.cos(angle), np.sin(angle)], axis=1) * (radius * rel)[:, None]
+    # one row per call: the quick acceptance returns only when every row of the call passes it
+    out = np.concatenate([ods._clip_to_ball(u[i:i + 1], radius[i:i + 1]) for i in range(n)])
+    assert _norm_ok(out, radius).all()
+    untouched_before = ~ods._exceeds(u, radius)
+    assert 0.3 < untouched_before.mean() < 0.9  # both kinds of row are exercised
+    np.testing.assert_array_equal(out[untouched_before], u[untouched_before])
+
+
 # --- validation and layering ----------------------------------------------------------
 
 

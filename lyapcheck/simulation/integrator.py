@@ -312,7 +312,7 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
             write_back(np.ones(gidx.size, dtype=bool))
             break
         bp = np.minimum(sys_w.next_breakpoint(t), t_end_w)
-        if np.any((bp <= t) & ~done):
+        if ((bp <= t) & ~done).any():
             raise RuntimeError("The system's 'next_breakpoint' must return times after t. Got one at or before t instead.")
         step = np.minimum(h, hmax)
         # land exactly on a breakpoint when the step would reach it (or nearly)
@@ -339,7 +339,7 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
         scale = atol_w + rtol * np.maximum(np.abs(y), np.abs(y_new))
         with np.errstate(over="ignore", invalid="ignore"):
             err_norm = _rms(err / scale)
-        finite = np.isfinite(err_norm) & np.all(np.isfinite(y_new), axis=1)
+        finite = np.isfinite(err_norm) & np.isfinite(y_new).all(axis=1)
         accept = finite & (err_norm <= 1.0) & ~done
         with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
             factor = np.where(err_norm > 0, _SAFETY * err_norm ** -0.2, _MAX_FACTOR)
@@ -354,12 +354,12 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
                 theta = np.where(crossed, g / (g - g_new), np.inf)
             theta = theta.min(axis=1)
             event = accept & (theta > _EVENT_MARGIN) & (theta < 1 - _EVENT_MARGIN)
-            if np.any(event):
+            if event.any():
                 accept = accept & ~event
                 event_step = np.where(event, np.where(event, theta, 0.0) * step, np.inf)
                 n_events += int(event.sum())
 
-        if observer is not None and np.any(accept):
+        if observer is not None and accept.any():
             a = accept
             t_next = np.where(land[a], bp[a], t[a] + step[a])
             observer.step(gidx[a], t[a], t_next, y[a], y_new[a], f[a], f_new[a])
@@ -380,7 +380,7 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
 
         # after a breakpoint the segment changed: re-evaluate f there with the new segment time
         fresh = accept & land
-        if np.any(fresh):
+        if fresh.any():
             sel = np.flatnonzero(fresh)
             sub = sys_w.take(sel)
             ev = sub.rhs(t[sel], y[sel], t[sel])
@@ -394,7 +394,7 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
         status[gidx[too_small & ~finite]] = STATUS_NONFINITE
         done = done | (t >= t_end_w) | too_small
 
-        if np.any(done) and (done.mean() >= _COMPACT_FRACTION or done.all()):
+        if done.any() and (done.mean() >= _COMPACT_FRACTION or done.all()):
             write_back(done)
             keep = np.flatnonzero(~done)
             gidx = gidx[keep]

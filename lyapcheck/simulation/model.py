@@ -248,7 +248,9 @@ class ClosedLoop:
         evaluation serves the command and the saturation's switching function."""
         pr = self.params
         v_d_fn: Callable[..., tuple[FloatArray, FloatArray]] = self._guidance[0]  # type: ignore[attr-defined]
-        eps, _, s = self.errors(y)
+        across = self._across  # type: ignore[attr-defined]
+        eps = across[:, 0] * y[:, PX] + across[:, 1] * y[:, PZ]  # as errors() computes it (z is not needed)
+        s = y[:, S] * pr.integral
         sigma = pr.sigma0 * pr.integral
         v_d = np.empty((y.shape[0], 2))
         v_d[:, 0], v_d[:, 1] = v_d_fn(eps, s, pr.alpha_d, sigma, pr.delta_los, pr.theta_r)
