@@ -22,6 +22,8 @@ def to_rational(x: float, digits: int = 15) -> Fraction:
     """Round a float to `digits` significant decimal digits, as an exact Fraction."""
     if not math.isfinite(x):
         raise ValueError(f"cannot round a non-finite number to a rational: {x}")
+    if x == 0.0:  # the same value without the decimal round trip (zero blocks of sparse certificates)
+        return Fraction(0)
     return Fraction(Decimal(f"{x:.{digits - 1}e}"))
 
 
@@ -35,8 +37,10 @@ def rational_matrix(values: Any, digits: int = 15) -> Matrix:
 
 
 def symmetrize(m: Matrix) -> Matrix:
+    """``(m + m^T) / 2``, exactly (an entry equal to its mirror is kept as it is: the same value)."""
     n = len(m)
-    return tuple(tuple((m[i][j] + m[j][i]) / 2 for j in range(n)) for i in range(n))
+    return tuple(tuple(m[i][j] if m[i][j] == m[j][i] else (m[i][j] + m[j][i]) / 2 for j in range(n))
+                 for i in range(n))
 
 
 def transpose(m: Matrix) -> Matrix:
@@ -169,9 +173,42 @@ def _leading_minors_positive(m: Matrix) -> bool:
     return True
 
 
+def diagonal_blocks(m: Matrix) -> list[list[int]]:
+    """The index sets of the diagonal blocks of a symmetric ``m`` up to a permutation: the
+    connected components of the graph with an edge ``i - j`` wherever ``m[i][j] != 0``."""
+    n = len(m)
+    parent = list(range(n))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i in range(n):
+        for j in range(i + 1, n):
+            if m[i][j] != 0:
+                parent[root(i)] = root(j)
+    blocks: dict[int, list[int]] = {}
+    for i in range(n):
+        blocks.setdefault(root(i), []).append(i)
+    return list(blocks.values())
+
+
 def is_positive_definite_ldl(m: Matrix) -> bool:
-    """Exact positive definiteness of a symmetric rational matrix (see :func:`_leading_minors_positive`)."""
-    return is_symmetric(m) and _leading_minors_positive(m)
+    """Exact positive definiteness of a symmetric rational matrix (see :func:`_leading_minors_positive`).
+
+    A matrix that is block diagonal up to a permutation (e.g. a Gram matrix of a sign-symmetric
+    certificate: even monomials against odd ones are exactly zero) is positive definite if and
+    only if each of its diagonal blocks is, so each block is checked on its own (a 12 x 12 and a
+    7 x 7 elimination cost about a third of a 19 x 19 one).
+    """
+    if not is_symmetric(m):
+        return False
+    blocks = diagonal_blocks(m)
+    if len(blocks) == 1:
+        return _leading_minors_positive(m)
+    return all(_leading_minors_positive(tuple(tuple(m[i][j] for j in idx) for i in idx)) for idx in blocks)
 
 
 def surely_not_positive_definite(m: Matrix) -> bool:

@@ -83,3 +83,36 @@ def test_the_float_screen_sees_a_clear_negative_eigenvalue_and_leaves_close_call
     close = exact.matrix([[1, 0], [0, Q(-1, 10**20)]])
     assert not exact.is_positive_definite_ldl(close) and not exact.surely_not_positive_definite(close)
     assert not exact.surely_not_positive_definite(exact.matrix([[1, 2], [3, 1]]))  # not symmetric: exact decides
+
+
+@settings(max_examples=100, deadline=None, derandomize=True)
+@given(st.integers(min_value=2, max_value=7).flatmap(
+    lambda n: st.tuples(st.just(n), st.lists(_entries, min_size=n * n, max_size=n * n),
+                        st.lists(st.booleans(), min_size=n, max_size=n), st.permutations(range(n)),
+                        st.fractions(min_value=-1, max_value=2, max_denominator=8))))
+def test_the_block_by_block_check_decides_as_the_whole_elimination(case: tuple) -> None:  # type: ignore[type-arg]
+    """is_positive_definite_ldl checks each diagonal block (up to a permutation) on its own; it must
+    decide exactly what the elimination of the whole matrix decides, on matrices made block
+    diagonal by zeroing the entries between two index classes, then permuted. The diagonal shift
+    (a fraction of the smallest diagonal entry) makes both answers common."""
+    n, flat, side, order, t = case
+    a = np.array(flat, dtype=object).reshape(n, n)
+    m = a @ a.T
+    for i in range(n):
+        for j in range(n):
+            if side[i] != side[j]:
+                m[i, j] = Q(0)
+    shift = t * min(m[i, i] for i in range(n))
+    m = (m - np.diag([shift] * n))[np.ix_(order, order)]
+    rational = tuple(tuple(Q(v) for v in row) for row in m)
+    blocks = exact.diagonal_blocks(rational)
+    assert sorted(i for b in blocks for i in b) == list(range(n))
+    assert exact.is_positive_definite_ldl(rational) == exact._leading_minors_positive(rational)
+
+
+def test_the_block_by_block_check_sees_a_failing_block() -> None:
+    """An indefinite block among definite ones, interleaved by a permutation, is found."""
+    m = exact.matrix([[2, 0, 1, 0], [0, 1, 0, 3], [1, 0, 2, 0], [0, 3, 0, 1]])  # blocks {0, 2} and {1, 3}
+    assert sorted(map(sorted, exact.diagonal_blocks(m))) == [[0, 2], [1, 3]]
+    assert not exact.is_positive_definite_ldl(m)
+    assert exact.is_positive_definite_ldl(exact.matrix([[2, 0, 1, 0], [0, 4, 0, 3], [1, 0, 2, 0], [0, 3, 0, 4]]))
