@@ -107,3 +107,19 @@ def test_simulated_trajectories_respect_the_certified_envelope(paper: tuple) -> 
             envelope = k * radius * np.exp(-mu * sol.t / 2)
             worst = max(worst, float(np.max(norms / envelope)))
     assert worst <= 1.0 + 1e-6
+
+
+def test_the_grid_of_the_search_is_the_node_by_node_model_bit_for_bit() -> None:
+    """float_matrices_on_grid (one pass over nodes and unit vectors) must give exactly what
+    float_matrices gives node by node, so the search's data, and every verdict, are unchanged."""
+    rng = np.random.default_rng(3)
+    prog = ges._Program(ges.TERMS, ges.GRID_POINTS)
+    eye = np.eye(prog.n)
+    for _ in range(8):
+        c, a, b = rng.normal(size=3) * 10.0 ** rng.uniform(-3, 3, 3)
+        M, D = ges.float_matrices_on_grid(c, a, b, prog.nodes, ges.TERMS)
+        for j, w in enumerate(prog.nodes):
+            for i in range(prog.n - 1):
+                m, d = ges.float_matrices(c, a, b, *prog._unpack(eye[i]), w)
+                np.testing.assert_array_equal(M[j, i], m)
+                np.testing.assert_array_equal(D[j, i], d)

@@ -217,6 +217,42 @@ def float_matrices(c: float, a: float, b: float, P: np.ndarray, ells: np.ndarray
     return M, D
 
 
+def float_matrices_on_grid(c: float, a: float, b: float, nodes: np.ndarray, terms: int
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`float_matrices` at every node and every unit vector of ``(P, l)``, in one pass.
+
+    Shape ``(nodes, 3 + 2 terms, 2, 2)``. The same floating-point operations, entry by entry, as
+    calling :func:`float_matrices` node by node on the unit vectors (the search's model is
+    linear in ``(P, l)``): every matrix product here has at most two nonzero terms, whose sum
+    does not depend on order, and the scalar factors are formed as there. A test compares the
+    two bit for bit.
+    """
+    n1 = 3 + 2 * terms
+    unit = np.eye(n1)
+    P = np.empty((n1, 2, 2))
+    P[:, 0, 0], P[:, 0, 1], P[:, 1, 0], P[:, 1, 1] = unit[:, 0], unit[:, 1], unit[:, 1], unit[:, 2]
+    ells = unit[:, 3:].reshape(n1, terms, 2)
+    w = np.asarray(nodes, dtype=np.float64)
+    A = np.empty((w.size, 2, 2))
+    A[:, 0, 0], A[:, 0, 1], A[:, 1, 0], A[:, 1, 1] = -1.0, c, b * w, -a
+    At = A.transpose(0, 2, 1)
+    M = np.broadcast_to(P, (w.size, n1, 2, 2)).copy()
+    D = At[:, None] @ P[None] + P[None] @ A[:, None]
+    one = np.ones(2)
+    At_one = At @ one  # (nodes, 2)
+    for k in range(1, terms + 1):
+        ell = ells[:, k - 1]  # (n1, 2)
+        R = np.broadcast_to(ell[:, None, :], (n1, 2, 2))  # outer(one, ell)
+        wk = w**k
+        M = M + wk[:, None, None, None] * (R + R.transpose(0, 2, 1)) / 2
+        T1 = At_one[:, None, :, None] * ell[None, :, None, :]  # outer(A^T 1, ell)
+        T2 = np.broadcast_to((ell[None, :, None, :] @ A[:, None])[:, :, 0][:, :, None, :], T1.shape)  # outer(1, ell A)
+        f = wk * (1 - 2 * k * (1 - w))
+        D = (D + f[:, None, None, None] * (T1 + T1.transpose(0, 1, 3, 2)) / 2
+             + wk[:, None, None, None] * (T2 + T2.transpose(0, 1, 3, 2)) / 2)
+    return M, D
+
+
 def build_program(cp: Any, terms: int, points: int, vertices: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     """The grid LMIs of :class:`_Program` as 2x2 second-order cones (DPP; compiled once per size)."""
     n = 3 + 2 * terms + 1
@@ -259,13 +295,10 @@ class _Program:
         """``M`` and ``D`` at every node, vertex and unit vector: shape (nodes, vertices, n - 1, 2, 2)."""
         cached = self._tables.get(coefficients)
         if cached is None:
-            eye = np.eye(self.n)
             shape = (len(self.nodes), len(coefficients), self.n - 1, 2, 2)
             Ms, Ds = np.zeros(shape), np.zeros(shape)
-            for j, wv in enumerate(self.nodes):
-                for i in range(self.n - 1):  # M and D are linear in (P, l): evaluate on the unit vectors
-                    for v, (c, a, b) in enumerate(coefficients):
-                        Ms[j, v, i], Ds[j, v, i] = float_matrices(c, a, b, *self._unpack(eye[i]), wv)
+            for v, (c, a, b) in enumerate(coefficients):  # M, D are linear in (P, l): on the unit vectors
+                Ms[:, v], Ds[:, v] = float_matrices_on_grid(c, a, b, self.nodes, self.terms)
             cached = self._tables.setdefault(coefficients, (Ms, Ds))
             if len(self._tables) > 8:  # a few systems at a time (a box's vertices, a point)
                 self._tables.pop(next(iter(self._tables)))
