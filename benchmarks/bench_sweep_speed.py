@@ -135,10 +135,17 @@ def main() -> None:
               f"/point, simulate {med(runs, 'simulate_s_per_point') * 1e3:6.1f} ms/point; {where})")
     print(f"ratio after/before: {med(after, 'points_per_s') / med(before, 'points_per_s'):.1f} x   aim >= 10 x")
     if args.before_tree is not None:
+        from collections import Counter
+
+        from sweeps.schema import STATUS_CODES
+
+        names = {code: name for name, code in STATUS_CODES.items()}
         b0, a0 = before[0], after[0]
-        changed = {c: sum(x != y for x, y in zip(b0["statuses"][c], a0["statuses"][c])) for c in ALL_CLASSES}
+        changed = {c: Counter(f"{names.get(x, x)} -> {names.get(y, y)}"
+                              for x, y in zip(b0["statuses"][c], a0["statuses"][c]) if x != y) for c in ALL_CLASSES}
         print(f"statuses identical before/after on all {a0['points']} points and classes: {not any(changed.values())}"
-              + "".join(f"; {c}: {k} point(s) differ" for c, k in changed.items() if k))
+              + "".join(f"; {c}: " + ", ".join(f"{k} point(s) {t}" for t, k in moves.items())
+                        for c, moves in changed.items() if moves))
         sims = {v: sum(x != y for x, y in zip(b0.get("simulated", {}).get(v, []), a0["simulated"][v]))
                 for v in a0["simulated"]}
         print(f"simulated sup |eps| identical bit for bit, every scenario: {not any(sims.values())}"
