@@ -360,9 +360,9 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
                 n_events += int(event.sum())
 
         if observer is not None and accept.any():
-            a = accept
-            t_next = np.where(land[a], bp[a], t[a] + step[a])
-            observer.step(gidx[a], t[a], t_next, y[a], y_new[a], f[a], f_new[a])
+            rows = accept
+            t_next = np.where(land[rows], bp[rows], t[rows] + step[rows])
+            observer.step(gidx[rows], t[rows], t_next, y[rows], y_new[rows], f[rows], f_new[rows])
 
         t_next = np.where(land, bp, t + step)
         new_h = step * factor
