@@ -155,7 +155,7 @@ def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatAr
     # (numpy calls), and a batch runs as many iterations as its slowest row needs, so the
     # scenarios in one batch cost about what the slowest of them costs alone. Rows are
     # independent (own step sizes; tests/test_simulation_integrator.py), so every figure is the
-    # one a separate run gives, bit for bit (tests/test_sweeps.py)
+    # one a separate run gives, bit for bit (tests/test_sweeps_end_to_end.py)
     batch: list[tuple[str, Any, FloatArray]] = []
     for name in sim.scenarios:
         if name == "nominal":

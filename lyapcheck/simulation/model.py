@@ -25,7 +25,7 @@ do.
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
-from typing import Any, Callable, Final, Literal, Mapping, Sequence, cast
+from typing import Any, Callable, Final, Literal, Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
