@@ -139,7 +139,9 @@ def main() -> None:
 
         from sweeps.schema import STATUS_CODES
 
-        names = {code: name for name, code in STATUS_CODES.items()}
+        names: dict[int, str] = {}
+        for name, code in STATUS_CODES.items():  # the first name of a code (stabcond2's alias "holds" comes later)
+            names.setdefault(code, name)
         b0, a0 = before[0], after[0]
         changed = {c: Counter(f"{names.get(x, x)} -> {names.get(y, y)}"
                               for x, y in zip(b0["statuses"][c], a0["statuses"][c]) if x != y) for c in ALL_CLASSES}
