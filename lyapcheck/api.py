@@ -216,7 +216,7 @@ def certify_box(params: Any = None, box: Sequence[str] | Any = (), *, dynamics: 
     :mod:`lyapcheck.boxes` for why a check at the corners covers the whole box. ``classes``:
     names among :data:`lyapcheck.boxes.BOX_CLASSES` (comma-separated or a list, or ``"all"``;
     default :data:`lyapcheck.boxes.DEFAULT_BOX_CLASSES`, the paper's eq. ``stabCond`` and the GES
-    classes; ``sos_bound`` adds a bound on ``|eps|`` for the whole box, 10-20 s, and with
+    classes; ``sos_bound`` adds a bound on ``|eps|`` for the whole box, 5-10 s, and with
     ``saturated_loop`` that bound holds for the real, saturated loop).
     The result's document is a certificate that :func:`verify` re-checks without a solver.
     """

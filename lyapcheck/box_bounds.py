@@ -35,7 +35,7 @@ import numpy as np
 
 from lyapcheck import exact, poly
 from lyapcheck.boxes import ParameterBox, corner_problems
-from lyapcheck.conditions.sos import ScaledDynamics
+from lyapcheck.conditions.sos import ScaledDynamics, is_sign_symmetric
 from lyapcheck.params import Problem
 
 
@@ -65,22 +65,36 @@ def _vertices(ranges: list[tuple[Fraction, Fraction]]) -> list[tuple[Fraction, .
 
 
 def _build(cp: Any, tables: list[dict[str, Any]], k2s: list[float], beta: float) -> tuple[Any, dict, Any]:
-    """The point program of ``sos_bound`` with one dissipation block per vertex (common V, tau, B);
-    the decay rate is a Parameter, so the program is compiled once for the rates of LAMBDA_GRID."""
+    """The point program of ``sos_bound`` with one dissipation block per vertex (common V, tau, B),
+    over sign-symmetric certificates as the point search (``sos_bound.build_parity_program``: at
+    +-2 % around the paper the same bound to 9 digits, in 5.6 s instead of 10.1 s); the decay rate
+    is a Parameter, so the program is compiled once for the rates of LAMBDA_GRID."""
     from lyapcheck.conditions import sos_bound as sb
 
-    nv, nt, nd, ne = len(sb.Z_V), len(sb.Z_T), len(sb.Z_D), len(sb.Z_E)
-    QV = cp.Variable((nv, nv), symmetric=True)
-    T = cp.Variable((nt, nt), symmetric=True)
-    QE = cp.Variable((ne, ne), symmetric=True)
-    QDs = [cp.Variable((nd, nd), symmetric=True) for _ in tables]
+    from lyapcheck.conditions.sos import parity, parity_blocks, parity_gram
+
+    # sign-symmetric certificates only (sos_bound.build_parity_program: the same optimum, Gram
+    # matrices block diagonal by monomial parity, the odd monomials' identities hold by symmetry)
+    shift = sb.top_shift()
+    cons: list[Any] = []
+
+    def gram(basis: list[poly.Monomial], name: str, margin: np.ndarray | None = None) -> Any:
+        full, blocks = parity_gram(cp, basis, name)
+        for idx, X in zip(parity_blocks(basis), blocks.values()):
+            m = np.zeros((len(idx), len(idx))) if margin is None else margin[np.ix_(idx, idx)]
+            cons.append(X - m >> sb.ETA * np.eye(len(idx)))
+        return full
+
+    QV, T, QE = gram(sb.Z_V, "Q_V", shift), gram(sb.Z_T, "T"), gram(sb.Z_E, "Q_E")
+    QDs = [gram(sb.Z_D, f"Q_D{i}") for i in range(len(tables))]
     B = cp.Variable()
     lam = cp.Parameter(nonneg=True)
-    cons = [QV - sb.top_shift() >> sb.ETA * np.eye(nv), T >> sb.ETA * np.eye(nt), QE >> sb.ETA * np.eye(ne)]
+    even_d = [m for m in sb.MONOS_D if parity(m) == 0]
     for QD, table, k2 in zip(QDs, tables, k2s):  # one dissipation block per vertex
-        cons.append(QD >> sb.ETA * np.eye(nd))
-        cons += sb.dissipation_constraints(QD, QV, T, {m: table[sb._param_name(m)] for m in sb.MONOS_D}, lam, k2, cp)
-    cons += sb.output_constraints(QE, QV, B, beta, beta * beta)
+        cons += sb.dissipation_constraints(QD, QV, T, {m: table[sb._param_name(m)] for m in even_d}, lam, k2, cp,
+                                           monomials=even_d)
+    cons += [c for m, c in zip(poly.monomials(0, 4), sb.output_constraints(QE, QV, B, beta, beta * beta))
+             if parity(m) == 0]
     problem = cp.Problem(cp.Minimize(B), cons)
     return problem, {"Q_V": QV, "T": T, "Q_E": QE, "Q_D": QDs, "B": B}, lam
 
@@ -104,6 +118,8 @@ class _Search:
         self.beta, self.omega, self.kappa = coords
         # |w~| <= k / kappa at each vertex
         self.fields = [sb.search_fields(_fields(v, self.beta, self.omega), self.kappa) for v in vertices]
+        # the program searches sign-symmetric certificates (_build): ScaledDynamics.fields are odd, q even
+        assert all(is_sign_symmetric(f) for f in self.fields)
         self.k_scaled = [v[3] / self.omega / self.kappa for v in vertices]
         tables = [sb.dynamics_data(f, self.beta) for f in self.fields]
         self.program, self.variables, self.lam = _build(cp, tables, [float(k * k) for k in self.k_scaled],

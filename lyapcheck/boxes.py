@@ -153,7 +153,7 @@ def scaled_hull(problem: Problem, box: ParameterBox, dynamics: str) -> tuple[lis
 #: classes with box certificates, in the order of :data:`lyapcheck.certification.CONDITION_ORDER`:
 #: ``prop41_*`` (:mod:`lyapcheck.box_prop41`), ``sector_ges`` and ``ges`` (here), ``ultimate_bound``
 #: (:mod:`lyapcheck.box_ultimate`), ``sos_gas`` (:mod:`lyapcheck.box_sos_gas`), ``saturated_loop``
-#: (:mod:`lyapcheck.box_saturated`) and ``sos_bound`` (:mod:`lyapcheck.box_bounds`, 10-20 s a box)
+#: (:mod:`lyapcheck.box_saturated`) and ``sos_bound`` (:mod:`lyapcheck.box_bounds`, 5-10 s a box)
 BOX_CLASSES: tuple[str, ...] = ("prop41_ges", "prop41_iss", "sector_ges", "ultimate_bound", "sos_gas", "ges",
                                 "saturated_loop", "sos_bound")
 #: the classes whose certificate proves stability (GES, ISS or GAS): a box's verdict
