@@ -71,30 +71,19 @@ def _build(cp: Any, tables: list[dict[str, Any]], k2s: list[float], beta: float)
     is a Parameter, so the program is compiled once for the rates of LAMBDA_GRID."""
     from lyapcheck.conditions import sos_bound as sb
 
-    from lyapcheck.conditions.sos import parity, parity_blocks, parity_gram
-
     # sign-symmetric certificates only (sos_bound.build_parity_program: the same optimum, Gram
     # matrices block diagonal by monomial parity, the odd monomials' identities hold by symmetry)
-    shift = sb.top_shift()
     cons: list[Any] = []
-
-    def gram(basis: list[poly.Monomial], name: str, margin: np.ndarray | None = None) -> Any:
-        full, blocks = parity_gram(cp, basis, name)
-        for idx, X in zip(parity_blocks(basis), blocks.values()):
-            m = np.zeros((len(idx), len(idx))) if margin is None else margin[np.ix_(idx, idx)]
-            cons.append(X - m >> sb.ETA * np.eye(len(idx)))
-        return full
-
-    QV, T, QE = gram(sb.Z_V, "Q_V", shift), gram(sb.Z_T, "T"), gram(sb.Z_E, "Q_E")
-    QDs = [gram(sb.Z_D, f"Q_D{i}") for i in range(len(tables))]
+    blocks: dict[str, Any] = {}
+    QV, T, QE = (sb.positive_parity_gram(cp, basis, name, cons, blocks)
+                 for name, basis in (("Q_V", sb.Z_V), ("T", sb.Z_T), ("Q_E", sb.Z_E)))
+    QDs = [sb.positive_parity_gram(cp, sb.Z_D, f"Q_D{i}", cons, blocks) for i in range(len(tables))]
     B = cp.Variable()
     lam = cp.Parameter(nonneg=True)
-    even_d = [m for m in sb.MONOS_D if parity(m) == 0]
     for QD, table, k2 in zip(QDs, tables, k2s):  # one dissipation block per vertex
-        cons += sb.dissipation_constraints(QD, QV, T, {m: table[sb._param_name(m)] for m in even_d}, lam, k2, cp,
-                                           monomials=even_d)
-    cons += [c for m, c in zip(poly.monomials(0, 4), sb.output_constraints(QE, QV, B, beta, beta * beta))
-             if parity(m) == 0]
+        cons += sb.dissipation_constraints(QD, QV, T, {m: table[sb._param_name(m)] for m in sb.EVEN_MONOS_D}, lam, k2,
+                                           cp, monomials=sb.EVEN_MONOS_D)
+    cons += sb.even_output_constraints(QE, QV, B, beta, beta * beta)
     problem = cp.Problem(cp.Minimize(B), cons)
     return problem, {"Q_V": QV, "T": T, "Q_E": QE, "Q_D": QDs, "B": B}, lam
 

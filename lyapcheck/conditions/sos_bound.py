@@ -106,6 +106,9 @@ def output_form(V: poly.Poly, B: Any, beta: Any) -> poly.Poly:
 
 
 MONOS_D = poly.monomials(0, 6, 3)
+#: the dissipation identity's monomials that a sign-symmetric certificate must match (the odd
+#: ones hold by symmetry)
+EVEN_MONOS_D: Final = [m for m in MONOS_D if parity(m) == 0]
 
 
 def _param_name(m: poly.Monomial) -> str:
@@ -206,30 +209,39 @@ def build_parity_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     a quarter of the time. The exact check is the full one, on the full matrices (zero off the
     blocks).
     """
-    blocks: dict[str, Any] = {}
+    cons: list[Any] = []
     variables: dict[str, Any] = {}
-    for name, basis in GRAMS:
-        blocks[name], parts = parity_gram(cp, basis, name)
-        variables.update(parts)
-    QV, T, QD, QE = (blocks[name] for name, _ in GRAMS)
+    QV, T, QD, QE = (positive_parity_gram(cp, basis, name, cons, variables) for name, basis in GRAMS)
     B = cp.Variable()
     variables["B"] = B
     lam = cp.Parameter(nonneg=True)
     k2 = cp.Parameter(nonneg=True)
     beta = cp.Parameter(nonneg=True)
     beta2 = cp.Parameter(nonneg=True)
-    even_d = [m for m in MONOS_D if parity(m) == 0]
-    C = {m: cp.Parameter((len(Z_V), len(Z_V))) for m in even_d}
-    shift = top_shift()
-    cons = []
-    for name, basis in GRAMS:
-        for label, idx in zip(("even", "odd"), parity_blocks(basis)):
-            margin = shift[np.ix_(idx, idx)] if name == "Q_V" else np.zeros((len(idx), len(idx)))
-            cons.append(variables[f"{name}_{label}"] - margin >> ETA * np.eye(len(idx)))
-    cons += dissipation_constraints(QD, QV, T, C, lam, k2, cp, monomials=even_d)
-    cons += [c for m, c in zip(poly.monomials(0, 4), output_constraints(QE, QV, B, beta, beta2)) if parity(m) == 0]
-    params = {"lambda": lam, "k2": k2, "beta": beta, "beta2": beta2, **{_param_name(m): C[m] for m in even_d}}
+    C = {m: cp.Parameter((len(Z_V), len(Z_V))) for m in EVEN_MONOS_D}
+    cons += dissipation_constraints(QD, QV, T, C, lam, k2, cp, monomials=EVEN_MONOS_D)
+    cons += even_output_constraints(QE, QV, B, beta, beta2)
+    params = {"lambda": lam, "k2": k2, "beta": beta, "beta2": beta2, **{_param_name(m): C[m] for m in EVEN_MONOS_D}}
     return cp.Problem(cp.Minimize(B), cons), params, variables
+
+
+def positive_parity_gram(cp: Any, basis: Sequence[poly.Monomial], name: str, cons: list[Any],
+                         variables: dict[str, Any]) -> Any:
+    """A Gram matrix block diagonal by parity (:func:`~lyapcheck.conditions.sos.parity_gram`) with
+    each block ``>= ETA I`` (``Q_V`` minus :func:`top_shift`) appended to ``cons`` and the block
+    variables added to ``variables``; returns the full matrix expression. Shared with the box
+    program (:mod:`lyapcheck.box_bounds`)."""
+    full, blocks = parity_gram(cp, basis, name)
+    shift = top_shift() if name == "Q_V" else np.zeros((len(basis), len(basis)))
+    for idx, X in zip(parity_blocks(basis), blocks.values()):
+        cons.append(X - shift[np.ix_(idx, idx)] >> ETA * np.eye(len(idx)))
+    variables.update(blocks)
+    return full
+
+
+def even_output_constraints(QE: Any, QV: Any, B: Any, beta: Any, beta2: Any) -> list[Any]:
+    """:func:`output_constraints` of the even monomials (the others hold by symmetry)."""
+    return [c for m, c in zip(poly.monomials(0, 4), output_constraints(QE, QV, B, beta, beta2)) if parity(m) == 0]
 
 
 def dynamics_data(fields: tuple[poly.Poly, poly.Poly, poly.Poly], beta: Fraction) -> dict[str, Any]:
