@@ -203,7 +203,9 @@ def exact_check(dyn: ScaledDynamics, P: exact.Matrix, ells: Sequence[Sequence[Fr
 # -- numerical search --------------------------------------------------------------------------
 def float_matrices(c: float, a: float, b: float, P: np.ndarray, ells: np.ndarray, w: float
                    ) -> tuple[np.ndarray, np.ndarray]:
-    """``M(w)`` and ``D(w)`` in floating point (the search's model of :func:`lyapunov_matrices`)."""
+    """``M(w)`` and ``D(w)`` in floating point (the search's model of :func:`lyapunov_matrices`), at
+    one node: the readable form of the model. The search uses :func:`float_matrices_on_grid`,
+    which must equal it bit for bit (``tests/test_ges.py`` holds the two together)."""
     A = np.array([[-1.0, c], [b * w, -a]])
     one = np.ones(2)
     M = P.copy()
