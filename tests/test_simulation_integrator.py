@@ -6,13 +6,15 @@ Accuracy contract: with the default rtol, every state component stays within
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
 from lyapcheck.params import Problem
 from lyapcheck.simulation.disturbances import Constant, PiecewiseConstant
-from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, integrate
+from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, Evaluation, integrate
 from lyapcheck.simulation.model import N_STATE, ClosedLoop, ErrorDynamics, LoopParams
 from lyapcheck.tolerances import SIM_REL_TOL
 from tests.conftest import DecaySystem
@@ -133,6 +135,57 @@ def test_integrator_converges_on_exact_solution() -> None:
         errs.append(np.max(np.abs(res.y[:, 0] - np.exp(-2.0 * lam)) / np.maximum(np.exp(-2.0 * lam), 1e-14 / rtol)))
         assert np.all(res.monitor_max == 1.0)
     assert errs[1] < errs[0] and errs[1] < 1e-7
+
+
+class KinkedOscillator:
+    """``x'' = -w^2 x`` with ``w = w_pos`` for ``x > 0`` and ``w_neg`` for ``x < 0``: continuous,
+    its derivative kinked on ``x = 0`` (the switching function), crossed twice a period."""
+
+    def __init__(self, w_pos: float, w_neg: float, rows: int) -> None:
+        self.w_pos, self.w_neg, self.rows = w_pos, w_neg, rows
+
+    @property
+    def size(self) -> int:
+        return self.rows
+
+    def rhs(self, t: np.ndarray, y: np.ndarray, t_segment: np.ndarray) -> Evaluation:
+        w2 = np.where(y[:, 0] > 0, self.w_pos ** 2, self.w_neg ** 2)
+        return Evaluation(np.stack([y[:, 1], -w2 * y[:, 0]], axis=1), np.abs(y[:, 0]), y[:, :1].copy())
+
+    def take(self, index: np.ndarray) -> "KinkedOscillator":
+        return KinkedOscillator(self.w_pos, self.w_neg, int(index.size))
+
+    def next_breakpoint(self, t: np.ndarray) -> np.ndarray:
+        return np.full(t.shape, np.inf)
+
+    def exact(self, t: float) -> tuple[float, float]:
+        """The state at ``t`` from ``(x, x') = (0, 1)``: half sine waves of alternating frequency."""
+        halves = (math.pi / self.w_pos, math.pi / self.w_neg)
+        sign, k = 1.0, 0
+        while t > halves[k % 2]:
+            t -= halves[k % 2]
+            sign, k = -sign, k + 1
+        w = (self.w_pos, self.w_neg)[k % 2]  # |x'| = 1 at every crossing: amplitude 1 / w
+        return sign * math.sin(w * t) / w, sign * math.cos(w * t)
+
+
+@pytest.mark.parametrize("w_pos", [3.0, 10.0])
+def test_steps_land_on_kinks_accurately_and_cheaply(w_pos: float) -> None:
+    """A kink crossed 20 times. Steps end on it (the method keeps its order); a step found to
+    straddle it is retried up to it whether or not it passed the error test, and the step size
+    then resumes. Measured (rtol 1e-8): 0 and 10 rejections, 818 and 852 iterations, errors
+    4e-8 and 1.4e-7; before, a straddling step was shrunk by the error controller a few tries
+    at a time: 199 and 257 rejections, 1054 and 1150 iterations, the same errors. Retrying
+    from a rejected step's less accurate secant needs the tight event margin: with 1e-3 the
+    error at w_pos = 10 was 2.9e-6."""
+    sys_ = KinkedOscillator(w_pos, 1.0, rows=1)
+    t_end = 10 * (math.pi / w_pos + math.pi / 1.0) + 0.5  # 20 crossings, then half a second
+    res = integrate(sys_, 0.0, np.array([[0.0, 1.0]]), t_end, rtol=1e-8, atol=1e-9)
+    assert res.status[0] == STATUS_OK
+    x, v = sys_.exact(t_end)
+    assert max(abs(res.y[0, 0] - x), abs(res.y[0, 1] - v)) < 5e-7
+    assert res.n_events >= 20  # every crossing located
+    assert int(res.n_rejected[0]) <= 20, int(res.n_rejected[0])
 
 
 def test_integrator_rejects_bad_arguments() -> None:
