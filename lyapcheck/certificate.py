@@ -33,7 +33,12 @@ KIND = "lyapcheck-certificate"
 
 
 def package_versions() -> dict[str, str]:
-    out = {}
+    """The packages whose versions decide what a search finds, and the floating-point platform
+    (:func:`lyapcheck.numerics.describe`): a figure from another machine compares only when
+    both were pinned."""
+    from lyapcheck import numerics
+
+    out = {"floating_point": numerics.describe()}
     for name in ("lyapcheck", "sympy", "numpy", "cvxpy", "clarabel", "control"):
         try:
             out[name] = metadata.version(name)

@@ -40,8 +40,11 @@ Region = tuple[slice, ...]
 
 
 def versions() -> dict[str, str]:
-    """Versions of Python and of :data:`VERSIONED_PACKAGES` (deterministic on one machine)."""
-    out = {"python": platform.python_version()}
+    """Versions of Python and of :data:`VERSIONED_PACKAGES`, and whether the floating-point platform
+    is pinned (:mod:`lyapcheck.numerics`): a resumed sweep must not mix pinned and native figures."""
+    from lyapcheck import numerics
+
+    out = {"python": platform.python_version(), "floating_point": numerics.describe()}
     for name in VERSIONED_PACKAGES:
         try:
             out[name] = metadata.version(name)

@@ -6,6 +6,7 @@ import os
 import tempfile
 from pathlib import Path
 
+import lyapcheck  # noqa: F401  (first: it pins the floating-point platform before numpy loads)
 import numpy as np
 import pytest
 
