@@ -66,15 +66,18 @@ def _cpu_has_avx2_and_fma() -> bool:
     return False
 
 
-def pin() -> str:
+def pin(*, override: bool = False) -> str:
     """Pin numpy's SIMD loops and OpenBLAS's kernel, if it can still take effect.
 
-    Returns the state, also given by :func:`describe`. Idempotent; called when
-    :mod:`lyapcheck` is imported.
+    Returns the state, also given by :func:`describe`. Called when :mod:`lyapcheck` is
+    imported; a second call does nothing unless ``override``, which also replaces values the
+    environment already holds (the test suite compares figures with a snapshot, so it must not
+    take a kernel from the machine's environment: a sandbox may set ``OPENBLAS_CORETYPE``).
     """
     global _state
-    if _state != "not pinned yet":
-        return _state
+    if _state != "not pinned yet" and (not override or "numpy" in sys.modules):
+        return _state  # once numpy runs, its platform is what the first call decided
+    put = os.environ.__setitem__ if override else os.environ.setdefault
     if os.environ.get(OPT_OUT, "") not in ("", "0"):
         _state = f"native ({OPT_OUT} is set)"
     elif "numpy" in sys.modules:
@@ -84,9 +87,9 @@ def pin() -> str:
     else:
         pinned = []
         if _numpy_at_least_2_4():
-            os.environ.setdefault("NPY_DISABLE_CPU_FEATURES", NUMPY_GROUPS_ABOVE_AVX2)
+            put("NPY_DISABLE_CPU_FEATURES", NUMPY_GROUPS_ABOVE_AVX2)
             pinned.append(f"numpy NPY_DISABLE_CPU_FEATURES={os.environ['NPY_DISABLE_CPU_FEATURES']!r}")
-        os.environ.setdefault("OPENBLAS_CORETYPE", OPENBLAS_KERNEL)
+        put("OPENBLAS_CORETYPE", OPENBLAS_KERNEL)
         pinned.append(f"OpenBLAS OPENBLAS_CORETYPE={os.environ['OPENBLAS_CORETYPE']!r}")
         _state = "pinned: " + ", ".join(pinned)
     return _state

@@ -49,8 +49,11 @@ def test_importing_lyapcheck_pins_numpy_to_avx2_and_openblas_to_haswell() -> Non
 
 
 @pytest.mark.skipif(not X86_WITH_AVX2, reason="the pin acts on x86-64 machines with AVX2 and FMA")
-def test_the_pin_yields_to_the_user_and_cannot_act_after_numpy() -> None:
+def test_the_pin_yields_to_the_user_unless_overridden_and_cannot_act_after_numpy() -> None:
     assert _probe({"OPENBLAS_CORETYPE": "Zen"})["openblas"] == "Zen"  # the user's choice stands
+    # ... unless overridden, as the test suite does (its snapshot needs the pinned kernel)
+    forced = _probe({"OPENBLAS_CORETYPE": "Zen"}, before="from lyapcheck import numerics; numerics.pin(override=True)")
+    assert forced["openblas"] == numerics.OPENBLAS_KERNEL and str(forced["state"]).startswith("pinned")
     off = _probe({numerics.OPT_OUT: "1"})
     assert off["state"] == f"native ({numerics.OPT_OUT} is set)" and off["openblas"] is None
     late = _probe({}, before="import numpy")
