@@ -8,23 +8,25 @@ differ in the last bit between x86-64 machines:
 - numpy dispatches its array loops by CPU: with AVX-512 (numpy's ``X86_V4``,
   ``AVX512_ICL``, ``AVX512_SPR`` groups) ``w**k`` over an array is a SIMD power that differs
   in the last bit from the scalar one, and from the AVX2 loop;
-- OpenBLAS (bundled with numpy and scipy; Clarabel's semidefinite cones use scipy's) picks a
-  kernel by CPU, and its small products round differently with the SkylakeX kernel than with
-  the Haswell one.
+- OpenBLAS (bundled with numpy and with scipy) picks a kernel by CPU, and its small products
+  round differently with the SkylakeX kernel than with the Haswell one.
 
 Measured with ``tests/test_verdicts_unchanged.py`` (every class at 29 cases: the paper's gains,
 the test suite's gain sets, 15 sweep points), against the figures of an AVX2 machine: an Intel
 AVX-512 machine (numpy's AVX-512 loops, OpenBLAS's SkylakeX kernel) differed in 6 statuses
-and 47 figures, an AMD AVX-512 machine (numpy's AVX-512 loops) in 19 figures. With the pin
-below, the AMD machine gives every figure of the AVX2 one; the Intel machine then runs the same
-numpy loops and the same OpenBLAS kernel.
+and 47 figures, an AMD AVX-512 machine (numpy's AVX-512 loops, the Haswell kernel) in 19
+figures. The statuses were all ``sos_gas`` (and ``saturated_loop``, which quotes it) refusing a
+solve that ended "inaccurate" on one machine only; it now lets the exact check judge such a
+solve, and no status differs. With the pin below, the AMD machine gives every figure of the
+AVX2 one; the Intel machine then runs the same numpy loops and the same OpenBLAS kernel.
 
 So, before numpy is first imported, :func:`pin` asks numpy for its AVX2 (``X86_V3``) loops
 and OpenBLAS for its Haswell kernel, which every x86-64 machine with AVX2 and FMA runs. An
-environment variable the user has set is never overridden; ``LYAPCHECK_NATIVE_FLOATS=1``
-turns the pin off. When numpy was imported before lyapcheck (a notebook, a Dask worker), the
-pin cannot act and :func:`describe` says so; results stay sound, figures may then differ
-from another machine's in the ways above.
+environment variable the user has set is kept (the test suite alone overrides it:
+``pin(override=True)``); ``LYAPCHECK_NATIVE_FLOATS=1`` turns the pin off. When numpy was
+imported before lyapcheck (a notebook, a Dask worker), the pin cannot act and
+:func:`describe` says so; results stay sound, figures may then differ from another machine's
+in the ways above.
 """
 
 from __future__ import annotations
