@@ -174,25 +174,25 @@ def check_stage(stage: Mapping[str, Any], vertices: Sequence[Vertex], rho_lo: Fr
 
 # -- the search ----------------------------------------------------------------------------------
 def build_program(cp: Any, count: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
-    """min t  s.t. the LMI at ``count`` vertices, ``[[t, e1^T], [e1, P]] >= 0`` (DPP: the vertex
-    data and the two decay-rate parameters of :func:`ultimate.lambda_values` are parameters)."""
+    """min Q11  s.t. ``Q > 0`` and the LMI at ``count`` vertices written in ``Q = P^-1`` (DPP: the
+    vertex data and the two decay-rate parameters of :func:`ultimate.lambda_values` are parameters).
+
+    As in :func:`lyapcheck.conditions.ultimate.build_program`: the congruence ``diag(Q, 1)`` gives
+    ``[[Q A^T + A Q + lambda Q, e d*], [(e d*)^T, -lambda]] < 0``, still affine in ``(A, e d*)``
+    for fixed ``Q``, so the vertex argument of the module docstring holds for it as it is."""
     As = [cp.Parameter((2, 2), name=f"A_{i}") for i in range(count)]
     es = [cp.Parameter((2, 1), name=f"e_dstar_{i}") for i in range(count)]
     lam_top = cp.Parameter(nonneg=True, name="lambda_top")
     lam_bottom = cp.Parameter(nonneg=True, name="lambda_bottom")
-    P = cp.Variable((2, 2), symmetric=True, name="P")
-    t = cp.Variable(name="t")
-    e1 = np.array([[1.0], [0.0]])
-    constraints = [P >> 0]
+    Q = cp.Variable((2, 2), symmetric=True, name="Q")
+    constraints = [Q >> 0]
     for a, e in zip(As, es):
-        top = a.T @ P + P @ a + lam_top * P
-        lmi = cp.bmat([[top, P @ e], [e.T @ P, -lam_bottom * np.eye(1)]])
+        top = Q @ a.T + a @ Q + lam_top * Q
+        lmi = cp.bmat([[top, e], [e.T, -lam_bottom * np.eye(1)]])
         constraints.append((lmi + lmi.T) / 2 << 0)
-    schur = cp.bmat([[cp.reshape(t, (1, 1), order="C"), e1.T], [e1, P]])
-    constraints.append((schur + schur.T) / 2 >> 0)
-    problem = cp.Problem(cp.Minimize(t), constraints)
+    problem = cp.Problem(cp.Minimize(Q[0, 0]), constraints)
     params = {"A": As, "e": es, "lambda_top": lam_top, "lambda_bottom": lam_bottom}
-    return problem, params, {"P": P, "t": t}
+    return problem, params, {"Q": Q}
 
 
 class _Programs:
@@ -219,56 +219,44 @@ def _ellipsoid_stage(programs: _Programs, vertices: list[Vertex], rho_lo: Fracti
     start = time.perf_counter()
     sc = scaling.choose([a for a, _ in vertices])
     problem, params, var = programs.get(len(vertices))
+    # solved with the longest disturbance column of unit length (Q = kappa^2 Q~), as the point class
+    norm = max(float(np.linalg.norm(sc.vector_to_scaled(e))) for _, e in vertices)
+    kappa = exact.to_rational(norm, 6) if norm > 0 else Fraction(1)
     for (a, e), pa, pe in zip(vertices, params["A"], params["e"]):
         pa.value = sc.matrix_to_scaled(a)
-        pe.value = sc.vector_to_scaled(e).reshape(2, 1)
+        pe.value = (sc.vector_to_scaled(e) / float(kappa)).reshape(2, 1)
     solves = 0
     outcomes: dict[str, int] = {}
 
-    def attempt(lam: float) -> tuple[float, float, np.ndarray] | None:
+    def attempt(lam: float) -> ultimate.Candidate | None:
         nonlocal solves
         for name, value in ultimate.lambda_values(lam).items():
             params[name].value = value
         report = sdp.solve(problem)
         solves += 1
         outcomes[report.outcome] = outcomes.get(report.outcome, 0) + 1
-        t, P = var["t"].value, var["P"].value
-        if report.outcome == "optimal" and t is not None and P is not None and float(t) > 0:
-            return float(t), lam, np.array(P)
+        Q = var["Q"].value
+        if report.outcome in ("optimal", "inaccurate") and Q is not None and float(Q[0, 0]) > 0:
+            return float(Q[0, 0]), lam, np.array(Q), report.outcome == "optimal"
         return None
 
-    grid = ultimate.LAMBDA_GRID
-    tried = [attempt(float(lam)) for lam in grid]
-    best = min((r for r in tried if r is not None), key=lambda r: r[0], default=None)
-    if best is not None:
-        # golden-section refinement between the neighbours of the best grid point (log scale)
-        i = int(np.argmin([r[0] if r is not None else np.inf for r in tried]))
-        lo, hi = np.log(grid[max(i - 1, 0)]), np.log(grid[min(i + 1, len(grid) - 1)])
-        ratio = (np.sqrt(5) - 1) / 2
-        for _ in range(ultimate.LAMBDA_REFINE_STEPS):
-            a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
-            ra, rb = attempt(float(np.exp(a))), attempt(float(np.exp(b)))
-            for r in (ra, rb):
-                if r is not None and r[0] < best[0]:
-                    best = r
-            if (ra[0] if ra is not None else np.inf) < (rb[0] if rb is not None else np.inf):
-                hi = b
-            else:
-                lo = a
+    candidates = ultimate.line_search(attempt)
     meta: dict[str, Any] = {"solves": solves, "outcomes": outcomes, "vertices": len(vertices),
                             "beta": str(sc.beta), "time_scale": str(sc.time)}
     stage: dict[str, Any] | None = None
-    if best is not None:
-        P = sc.p_from_scaled(exact.symmetrize(exact.rational_matrix(best[2])))
-        lam_q = exact.to_rational(best[1], 6) * sc.time
-        if P[0][0] * P[1][1] - P[0][1] ** 2 > 0:
-            eps_sq, y_sq = _bounds_of(P, sigma0)
-            candidate = {"P": exact.to_json(P), "lambda": str(lam_q), "rho_lo": str(rho_lo),
-                         "eps_bound_sq": str(eps_sq), "y_bound_sq": str(y_sq),
-                         "vertices": vertices_to_json(vertices)}
-            ok, why = check_stage(candidate, vertices, rho_lo, sigma0)
-            meta["exact_check"] = why
-            stage = candidate if ok else None
+    for _, lam, q_scaled, _ in candidates:
+        P = ultimate.p_from_q(sc, kappa, q_scaled)
+        if P is None or P[0][0] * P[1][1] - P[0][1] ** 2 <= 0:
+            continue
+        eps_sq, y_sq = _bounds_of(P, sigma0)
+        candidate = {"P": exact.to_json(P), "lambda": str(exact.to_rational(lam, 6) * sc.time),
+                     "rho_lo": str(rho_lo), "eps_bound_sq": str(eps_sq), "y_bound_sq": str(y_sq),
+                     "vertices": vertices_to_json(vertices)}
+        ok, why = check_stage(candidate, vertices, rho_lo, sigma0)
+        meta["exact_check"] = why
+        if ok:
+            stage = candidate
+            break
     meta["wall_seconds"] = time.perf_counter() - start
     return stage, meta
 

@@ -107,9 +107,10 @@ def test_a_degenerate_box_gives_about_the_point_bound(problem: Problem, dynamics
     point = ultimate.run(build_system(problem, dynamics))
     assert result["certificate"]["box_stage"] == point.certificate["box"]  # stage 0 is the point's own
     ratio = result["eps_bound_m"] / point.numbers["eps_bound_m"]
-    # measured: 1.000 (derived, stage 0 only) and 0.930 (printed: 5 stages each, the line searches
-    # of the two programs land at different lambdas, and the chain has not converged at 5 stages)
-    assert 1 / 1.5 < ratio < 1.5
+    # measured: 1.000 for both (derived: stage 0 only; printed: 5 stages each). The two classes share
+    # the line search and the Q = P^-1 program; with the P-form's Schur complement, whose solves near
+    # the optimum ended "inaccurate", the printed ratio was 0.930
+    assert abs(ratio - 1) < 0.01
 
 
 def test_without_d_max_the_class_does_not_apply(problem: Problem) -> None:

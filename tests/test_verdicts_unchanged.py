@@ -33,6 +33,13 @@ exact check judges it, as the box class already did): 4 cases went from ``not_ce
 them), the certified decay rate rose at 4 sweep points (0.017 -> 0.213 1/s at the centre of
 sweep-alpha-sigma), nothing was lost. Those solves had decided statuses by machine: see below.
 
+And when ``ultimate_bound``'s ellipsoid stages moved to ``Q = P^-1`` (the bound ``Q11`` linear,
+no Schur complement, the disturbance column of unit length): every status is the same, and every
+bound that moved fell, at 11 cases, e.g. the paper's gains with the printed dynamics 4.13 -> 0.377
+mm, slow_k (printed) 0.723 -> 0.160 mm, sweep-kd-delta@19,0 3.04 -> 1.73 mm. The P-form's solves
+near the optimum had ended "inaccurate", so its bounds followed the machine (at the easy gain
+set: 0.120 mm on one, 0.092 mm on another; now 0.0864 mm on both).
+
 The snapshot holds on the pinned floating-point platform (:mod:`lyapcheck.numerics`; the suite
 runs pinned because conftest imports lyapcheck before numpy). The solver's path starts from
 numbers that differ in the last bit between machines, and at marginal gain sets that moves a

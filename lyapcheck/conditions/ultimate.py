@@ -17,11 +17,13 @@ previous stage, ``|y| <= ybar`` and so ``rho >= rho_lo = U Delta/(ybar^2 + Delta
 then along trajectories in ``K`` with ``|w| <= d*``, ``V_dot <= -lambda (V - 1)``; so ``V <= 1 + delta``
 intersected with ``K`` is eventually invariant and ``limsup |eps| <= sqrt(e1^T P^-1 e1)``. Each stage
 is checked exactly; the next stage uses ``ybar^2 <= c^T P^-1 c`` (``c = (1, sigma0)``). ``P`` is
-found by minimising ``e1^T P^-1 e1`` (Schur complement) over a line search in ``lambda``.
+found as ``Q^-1``, ``Q`` minimising ``Q11 = e1^T P^-1 e1`` under the same LMIs written in ``Q``
+(:func:`build_program`), over a line search in ``lambda``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from fractions import Fraction
 from typing import Any
 
@@ -67,11 +69,16 @@ def rho_lower(system: System, y_bar: Fraction) -> Fraction:
 
 
 def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
-    """min t  s.t. vertex LMIs, [[t, e1^T], [e1, P]] >= 0  (DPP, scaled data; compiled once).
+    """min Q11  s.t. Q > 0 and the vertex LMIs in ``Q = P^-1`` (DPP, scaled data; compiled once).
+
+    The congruence ``diag(Q, 1)`` turns each LMI of the module docstring into
+    ``[[Q A_r^T + A_r Q + lambda Q, e d*], [d* e^T, -lambda]] < 0``, and ``e1^T P^-1 e1 = Q11``
+    is linear: no Schur complement, and ``Q`` is of the order of the bound squared where ``P`` was
+    of its inverse (the P-form's solves near the optimum ended "inaccurate", some at ``t < 0``).
 
     The LMIs are solved with ``lambda (1 + STRICTNESS)`` in the top block and
     ``lambda (1 - STRICTNESS)`` in the bottom one (:func:`lambda_values`); the exact check then
-    uses ``lambda`` and finds the original LMI negative definite with margin
+    uses ``lambda`` and ``P = Q^-1`` and finds the original LMI negative definite with margin
     ``STRICTNESS * lambda * diag(P, 1)``, far above the rounding error of the rational certificate.
     """
     A_lo = cp.Parameter((2, 2), name="A_lo")
@@ -79,18 +86,15 @@ def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     e = cp.Parameter((2, 1), name="e_dstar")
     lam_top = cp.Parameter(nonneg=True, name="lambda_top")
     lam_bottom = cp.Parameter(nonneg=True, name="lambda_bottom")
-    P = cp.Variable((2, 2), symmetric=True, name="P")
-    t = cp.Variable(name="t")
-    e1 = np.array([[1.0], [0.0]])
+    Q = cp.Variable((2, 2), symmetric=True, name="Q")
     lmis = []
     for a in (A_lo, A_hi):
-        top = a.T @ P + P @ a + lam_top * P
-        lmi = cp.bmat([[top, P @ e], [e.T @ P, -lam_bottom * np.eye(1)]])
+        top = Q @ a.T + a @ Q + lam_top * Q
+        lmi = cp.bmat([[top, e], [e.T, -lam_bottom * np.eye(1)]])
         lmis.append((lmi + lmi.T) / 2)
-    schur = cp.bmat([[cp.reshape(t, (1, 1), order="C"), e1.T], [e1, P]])
-    problem = cp.Problem(cp.Minimize(t), [P >> 0, (schur + schur.T) / 2 >> 0] + [lmi << 0 for lmi in lmis])
+    problem = cp.Problem(cp.Minimize(Q[0, 0]), [Q >> 0] + [lmi << 0 for lmi in lmis])
     params = {"A_lo": A_lo, "A_hi": A_hi, "e_dstar": e, "lambda_top": lam_top, "lambda_bottom": lam_bottom}
-    return problem, params, {"P": P, "t": t}
+    return problem, params, {"Q": Q}
 
 
 def lambda_values(lam: float) -> dict[str, float]:
@@ -129,60 +133,93 @@ def check_ellipsoid(system: System, stage: dict[str, Any], rho_lo: Fraction) -> 
     return True, "ok"
 
 
+#: a solve of the line search: (Q11, lambda, Q~ as the solver gave it, whether it ended "optimal")
+Candidate = tuple[float, float, np.ndarray, bool]
+
+
+def line_search(attempt: Callable[[float], Candidate | None]) -> list[Candidate]:
+    """Minimise ``Q11`` over ``lambda``: :data:`LAMBDA_GRID`, then a golden-section refinement
+    (log scale) between the neighbours of its best point; shared with the box class.
+
+    An "inaccurate" solve steers the search too (refusing them lost the best decay rates where
+    the solves stop just short of the tolerances: sweep-kd-delta@19,0's bound was 3.6e-3 m
+    instead of 1.7e-3 m), but its ``Q`` may fail the exact check. So the candidates to check, in
+    order, are the best solve and, if that one was inaccurate, the best "optimal" one.
+    """
+    tried = [attempt(float(lam)) for lam in LAMBDA_GRID]
+    found = [r for r in tried if r is not None]
+    if not found:
+        return []
+    i = int(np.argmin([r[0] if r is not None else np.inf for r in tried]))
+    lo = np.log(LAMBDA_GRID[max(i - 1, 0)])
+    hi = np.log(LAMBDA_GRID[min(i + 1, len(LAMBDA_GRID) - 1)])
+    ratio = (np.sqrt(5) - 1) / 2
+    for _ in range(LAMBDA_REFINE_STEPS):
+        a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+        ra, rb = attempt(float(np.exp(a))), attempt(float(np.exp(b)))
+        found += [r for r in (ra, rb) if r is not None]
+        if (ra[0] if ra is not None else np.inf) < (rb[0] if rb is not None else np.inf):
+            hi = b
+        else:
+            lo = a
+    best = min(found, key=lambda r: r[0])
+    accurate = [r for r in found if r[3]]
+    if best[3] or not accurate:
+        return [best]
+    return [best, min(accurate, key=lambda r: r[0])]
+
+
+def p_from_q(sc: scaling.Scaling, kappa: Fraction, q_scaled: np.ndarray) -> exact.Matrix | None:
+    """``P = Q^-1`` in the original coordinates, exactly, from the solver's ``Q~`` found with the
+    disturbance divided by ``kappa`` (``Q = kappa^2 Q~``) in the scaled ones; None if the rounded
+    ``Q`` is not invertible (the exact check would refuse it anyway)."""
+    Q = exact.scale(kappa * kappa, exact.symmetrize(exact.rational_matrix(q_scaled)))
+    det = Q[0][0] * Q[1][1] - Q[0][1] ** 2
+    if det == 0:
+        return None
+    return sc.p_from_scaled(((Q[1][1] / det, -Q[0][1] / det), (-Q[0][1] / det, Q[0][0] / det)))
+
+
 def _ellipsoid_stage(system: System, rho_lo: Fraction) -> tuple[dict[str, Any] | None, dict[str, Any]]:
     vertices = [system.vertex(rho_lo), system.vertex(system.rho_sup)]
     sc = scaling.choose(vertices)
     prog = program()
     e_scaled = sc.vector_to_scaled((system.E[0] * system.d_max, system.E[1] * system.d_max))
+    # the LMIs are homogeneous of degree 2 in (Q, e d*): solved with the disturbance column of unit
+    # length, Q~ = Q / kappa^2 is of the order of (bound / kappa)^2, not of bound^2 (1e-8 and less,
+    # under the solver's absolute tolerances, which then ate the strictness margin)
+    norm = float(np.linalg.norm(e_scaled))
+    kappa = exact.to_rational(norm, 6) if norm > 0 else Fraction(1)
     data = {"A_lo": sc.matrix_to_scaled(vertices[0]), "A_hi": sc.matrix_to_scaled(vertices[1]),
-            "e_dstar": e_scaled.reshape(2, 1)}
+            "e_dstar": (e_scaled / float(kappa)).reshape(2, 1)}
     solves = 0
 
-    def attempt(lam: float) -> tuple[float, float, np.ndarray] | None:
+    def attempt(lam: float) -> Candidate | None:
         nonlocal solves
         solved = prog.solve({**data, **lambda_values(lam)})
         solves += 1
         v = solved.values
-        if solved.report.outcome == "optimal" and v is not None and v["t"] > 0:
-            return float(v["t"]), lam, np.array(v["P"])
+        if solved.report.outcome in ("optimal", "inaccurate") and v is not None and v["Q"][0][0] > 0:
+            return float(v["Q"][0][0]), lam, np.array(v["Q"]), solved.report.outcome == "optimal"
         return None
 
-    tried = [(lam, attempt(float(lam))) for lam in LAMBDA_GRID]
-    feasible = [(lam, r) for lam, r in tried if r is not None]
-    best = min((r for _, r in feasible), key=lambda r: r[0], default=None)
-    if best is not None:
-        # golden-section refinement between the neighbours of the best grid point (log scale)
-        i = int(np.argmin([r[0] if r is not None else np.inf for _, r in tried]))
-        lo = np.log(LAMBDA_GRID[max(i - 1, 0)])
-        hi = np.log(LAMBDA_GRID[min(i + 1, len(LAMBDA_GRID) - 1)])
-        ratio = (np.sqrt(5) - 1) / 2
-        for _ in range(LAMBDA_REFINE_STEPS):
-            a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
-            ra, rb = attempt(float(np.exp(a))), attempt(float(np.exp(b)))
-            va = ra[0] if ra is not None else np.inf
-            vb = rb[0] if rb is not None else np.inf
-            for r in (ra, rb):
-                if r is not None and r[0] < best[0]:
-                    best = r
-            if va < vb:
-                hi = b
-            else:
-                lo = a
+    candidates = line_search(attempt)
     meta: dict[str, Any] = {"solves": solves, "beta": str(sc.beta), "time_scale": str(sc.time)}
-    if best is None:
-        return None, meta
-    P = sc.p_from_scaled(exact.symmetrize(exact.rational_matrix(best[2])))
-    lam_q = exact.to_rational(best[1], 6) * sc.time
-    det = P[0][0] * P[1][1] - P[0][1] ** 2
-    if det <= 0:
-        return None, meta
-    stage = {
-        "P": exact.to_json(P), "lambda": str(lam_q), "rho_lo": str(rho_lo),
-        "eps_bound_sq": str(P[1][1] / det),
-        "y_bound_sq": str((P[1][1] - 2 * system.sigma0 * P[0][1] + system.sigma0**2 * P[0][0]) / det),
-    }
-    ok, _ = check_ellipsoid(system, stage, rho_lo)
-    return (stage if ok else None), meta
+    for _, lam, q_scaled, _ in candidates:
+        P = p_from_q(sc, kappa, q_scaled)
+        if P is None:
+            continue
+        det = P[0][0] * P[1][1] - P[0][1] ** 2
+        if det <= 0:
+            continue
+        stage = {
+            "P": exact.to_json(P), "lambda": str(exact.to_rational(lam, 6) * sc.time), "rho_lo": str(rho_lo),
+            "eps_bound_sq": str(P[1][1] / det),
+            "y_bound_sq": str((P[1][1] - 2 * system.sigma0 * P[0][1] + system.sigma0**2 * P[0][0]) / det),
+        }
+        if check_ellipsoid(system, stage, rho_lo)[0]:
+            return stage, meta
+    return None, meta
 
 
 def run(system: System) -> ConditionResult:
