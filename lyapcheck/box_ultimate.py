@@ -53,8 +53,10 @@ the LMI is checked exactly at every vertex (:func:`check_stage`); stages repeat,
 class, while ``ybar`` improves by 1 %.
 
 The search. One cvxpy program per vertex count, with the vertex matrices, the vectors ``e d*``
-and ``lambda`` as parameters, is compiled once per box and re-solved along the point class's line
-search in ``lambda`` (its grid, golden-section refinement and strictness margin). The data are
+and ``lambda`` as parameters, written in ``Q = P^-1`` (:func:`build_program`), is compiled once
+per box and re-solved along the point class's line search in ``lambda``
+(:func:`lyapcheck.conditions.ultimate.line_search`: its grid, golden-section refinement and
+strictness margin). The data are
 scaled by :func:`lyapcheck.conditions.scaling.choose` applied to the box's vertex matrices: an exact
 state scaling ``T = diag(1, beta)`` and time unit ``s`` fixed per stage, mapped back exactly
 (``P = T^-T P~ T^-1``, ``lambda = s lambda~``) before the exact check in the original coordinates.
