@@ -30,7 +30,7 @@ def main() -> None:
     args = parser.parse_args()
 
     from lyapcheck.certification import build_system
-    from lyapcheck.conditions import ges
+    from lyapcheck.paper.conditions import ges
     from sweeps.box_store import BoxStore
     from sweeps.box_summary import summarize_boxes
     from sweeps.boxes_run import run_boxes

@@ -64,7 +64,7 @@ def bounds_in(tree: Path, per_axis: int, before: bool) -> tuple[dict[str, float 
     the code of ``tree`` (``before``: the old coordinates and cap, in this tree only)."""
     sys.path.insert(0, str(tree))
     from lyapcheck.certification import build_system
-    from lyapcheck.conditions import sos_bound
+    from lyapcheck.paper.conditions import sos_bound
 
     sos_bound.program()  # loaded once, outside the timing
     systems = [(label, build_system(problem, "derived")) for label, problem in points(per_axis)]

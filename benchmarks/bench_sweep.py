@@ -1,7 +1,7 @@
 """Sweep throughput and memory, every ratio measured in this one run.
 
 1. ``sector_ges`` certified points per second: the sweep's path (compiled conic data, Clarabel
-   called directly, exact check; :mod:`sweeps.fast_sector`, :mod:`lyapcheck.conditions.compiled`) in one process and on every core,
+   called directly, exact check; :mod:`sweeps.fast_sector`, :mod:`lyapcheck.paper.conditions.compiled`) in one process and on every core,
    against a naive loop that builds a fresh cvxpy problem per point, solves it and runs the same
    rounding and exact check; and against Clarabel's own solve time per problem.
 2. Simulated trajectories per second: one batched call of the toolkit's integrator against a
@@ -82,7 +82,7 @@ def _naive(system: Any) -> str:
 
     from lyapcheck import exact
     from lyapcheck import tolerances as tol
-    from lyapcheck.conditions import scaling, sector
+    from lyapcheck.paper.conditions import scaling, sector
 
     vertices = [system.vertex(Fraction(0)), system.vertex(system.rho_sup)]
     sc = scaling.choose(vertices)

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 from lyapcheck.errors import InputFileError, InvalidParameter
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.conditions.base import ConditionResult
+    from lyapcheck.results import ConditionResult
     from lyapcheck.params import Problem
 
 #: local worker processes a sweep may start (each is a process with its own solver state; far
@@ -117,7 +117,7 @@ class CertifyResult:
     dynamics
         ``derived`` or ``printed``.
     conditions
-        Condition name -> :class:`~lyapcheck.conditions.base.ConditionResult` (status,
+        Condition name -> :class:`~lyapcheck.paper.conditions.base.ConditionResult` (status,
         property, summary, numbers, exact certificate).
     document
         The certificate document (``to_json()``), which :func:`verify` re-checks.
@@ -213,16 +213,17 @@ def certify_box(params: Any = None, box: Sequence[str] | Any = (), *, dynamics: 
     """Condition classes for every gain set in a box (``["alpha_d=540..660", "k_d=0.1..0.2"]``), one exact proof each.
 
     The parameters not in the box are taken from ``params`` / ``overrides``; see
-    :mod:`lyapcheck.boxes` for why a check at the corners covers the whole box. ``classes``:
-    names among :data:`lyapcheck.boxes.BOX_CLASSES` (comma-separated or a list, or ``"all"``;
-    default :data:`lyapcheck.boxes.DEFAULT_BOX_CLASSES`, the paper's eq. ``stabCond`` and the GES
+    :mod:`lyapcheck.paper.boxes.quadratic` for why a check at the corners covers the whole box. ``classes``:
+    names among :data:`lyapcheck.paper.boxes.classes.BOX_CLASSES` (comma-separated or a list, or ``"all"``;
+    default :data:`lyapcheck.paper.boxes.classes.DEFAULT_BOX_CLASSES`, the paper's eq. ``stabCond`` and the GES
     classes; ``sos_bound`` adds a bound on ``|eps|`` for the whole box, 5-10 s, and with
     ``saturated_loop`` that bound holds for the real, saturated loop).
     The result's document is a certificate that :func:`verify` re-checks without a solver.
     """
-    from lyapcheck.boxes import BOX_CLASSES, DEFAULT_BOX_CLASSES, ParameterBox, certify_box as prove_box, parse_box
+    from lyapcheck.paper.boxes.classes import BOX_CLASSES, DEFAULT_BOX_CLASSES, certify_box as prove_box
+    from lyapcheck.paper.boxes.box import ParameterBox, parse_box
     from lyapcheck.certificate import build_box_document
-    from lyapcheck.conditions.base import ConditionResult
+    from lyapcheck.results import ConditionResult
 
     chosen = _box_classes(classes, BOX_CLASSES) if classes is not None else list(DEFAULT_BOX_CLASSES)
     parsed = box if isinstance(box, ParameterBox) else parse_box(list(box))
@@ -253,7 +254,7 @@ def _box_classes(classes: str | Sequence[str] | None, allowed: Sequence[str]) ->
 
 def _box_filled(params: Any, overrides: Mapping[str, object] | None, box: Any) -> Any:
     """Parameters with each boxed one set to its interval's low end (a valid placeholder)."""
-    from lyapcheck.boxes import BOX_FIELDS
+    from lyapcheck.paper.boxes.box import BOX_FIELDS
     from lyapcheck.params import FIELD_BY_KEY, Problem
 
     def placeholder(key: str, value: Any) -> str:  # the corners set the exact values

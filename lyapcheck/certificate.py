@@ -87,9 +87,9 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
 
 
 def build_box_document(problem: Any, box: Any, dynamics: str, results: dict[str, dict[str, Any]]) -> dict[str, Any]:
-    """A certificate for every gain set in ``box`` (:mod:`lyapcheck.boxes`), one entry per class."""
-    from lyapcheck.box_saturated import real_loop_bound
-    from lyapcheck.boxes import BOX_STABILITY_CLASSES
+    """A certificate for every gain set in ``box`` (:mod:`lyapcheck.paper.boxes`), one entry per class."""
+    from lyapcheck.paper.boxes.saturated import real_loop_bound
+    from lyapcheck.paper.boxes.classes import BOX_STABILITY_CLASSES
 
     real_loop_bound(results)
     certified = any(r["status"] == "certified" for c, r in results.items() if c in BOX_STABILITY_CLASSES)
@@ -110,7 +110,8 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     refutation at its stated point (which must lie in the box)."""
     from dataclasses import replace
 
-    from lyapcheck.boxes import BOX_CLASSES, BOX_STABILITY_CLASSES, ParameterBox, verify_box, verify_box_refutation
+    from lyapcheck.paper.boxes.classes import BOX_CLASSES, BOX_STABILITY_CLASSES, verify_box, verify_box_refutation
+    from lyapcheck.paper.boxes.box import ParameterBox
     from lyapcheck.params import Actuation, GainSet, Problem, Swimmer
 
     try:
@@ -246,8 +247,8 @@ def _at_most(stated: Any, proved: Fraction) -> bool:
 def _stated_figures(conditions: dict[str, Any], system: Any) -> list[tuple[str, bool, str]]:
     """The figures stated beside each certified class, against what its certificate proves: a
     bound stated lower, or a rate or margin stated higher, is a claim the file does not prove."""
-    from lyapcheck.conditions import ges
-    from lyapcheck.conditions.sos import scaled_dynamics
+    from lyapcheck.paper.conditions import ges
+    from lyapcheck.paper.conditions.sos import scaled_dynamics
 
     checks: list[tuple[str, str, bool]] = []  # (class, figure, holds)
 
@@ -297,9 +298,9 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     if isinstance(doc, dict) and "box" in doc:
         return verify_box_document(doc)
     from lyapcheck import exact
-    from lyapcheck.conditions import prop41, sector, ultimate
+    from lyapcheck.paper.conditions import prop41, sector, ultimate
     from lyapcheck.certification import system_from_values
-    from lyapcheck.conditions.stabcond2 import run as stabcond2_run
+    from lyapcheck.paper.conditions.stabcond2 import run as stabcond2_run
 
     _check_skeleton(doc)
     try:
@@ -358,13 +359,13 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
                    "Shorten-Narendra refutation re-derived exactly", "sector_ges: the refutation does not hold")
         c = conditions.get("switched_ges", {"status": "absent"})
         if c["status"] in ("certified", "refuted"):
-            from lyapcheck.conditions import switching
+            from lyapcheck.paper.conditions import switching
 
             ok, why = switching.verify(system, c["certificate"] if c["status"] == "certified" else c["refutation"])
             ok_row("switched_ges", ok, why, f"switched_ges: {why}")
         c = conditions.get("ges", {"status": "absent"})
         if c["status"] == "certified":
-            from lyapcheck.conditions import ges
+            from lyapcheck.paper.conditions import ges
 
             ok, why = ges.verify(system, c["certificate"])
             ok_row("ges", ok, why, f"ges: {why}")
@@ -374,27 +375,27 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
             ok_row("ultimate_bound", ok, why, f"ultimate_bound: {why}")
         c = conditions.get("sos_gas", {"status": "absent"})
         if c["status"] == "certified":
-            from lyapcheck.conditions import sos
+            from lyapcheck.paper.conditions import sos
 
             ok, why = sos.verify(system, c["certificate"])
             ok_row("sos_gas", ok, why, f"sos_gas: {why}")
             sat = conditions.get("saturated_loop", {"status": "absent"})
             if sat["status"] == "certified" and omega_so is not None:
-                from lyapcheck.conditions import saturated
+                from lyapcheck.paper.conditions import saturated
 
                 ok, why = saturated.verify(system, c["certificate"], sat["certificate"], alpha_d=values["alpha_d"],
                                            e11_hat=values["e11_hat"], omega_so=omega_so, k_d=values["k_d"])
                 ok_row("saturated_loop", ok, why, f"saturated_loop: {why}")
         c = conditions.get("sos_bound", {"status": "absent"})
         if c["status"] == "certified":
-            from lyapcheck.conditions import sos_bound
+            from lyapcheck.paper.conditions import sos_bound
 
             ok, why = sos_bound.verify(system, c["certificate"])
             ok_row("sos_bound", ok, "limsup |eps| bound follows exactly from the polynomial certificate", f"sos_bound: {why}")
         sat = conditions.get("saturated_loop", {"status": "absent"})
         if sat.get("real_loop_limsup_eps_m") is not None:
             # the conjunction of two re-checked results: reach proved, and sos_bound's number
-            from lyapcheck.conditions.saturated import verify_reach
+            from lyapcheck.paper.conditions.saturated import verify_reach
 
             reach = sat.get("certificate", {}).get("reach") or {}
             bound = conditions.get("sos_bound", {})
@@ -416,7 +417,7 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         # view of '1e400', a string where a matrix belongs): the file is malformed, in one line
         raise CertificateError(f"certificate is malformed: {_short(exc)}") from None
 
-    from lyapcheck.conditions.base import STABILITY_CLASSES
+    from lyapcheck.paper.conditions.base import STABILITY_CLASSES
 
     stated = doc.get("verdict")
     proven = any(conditions.get(c, {}).get("status") == "certified" and any(n == c for n, _, _ in rows)

@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from lyapcheck.conditions.base import STABILITY_CLASSES, ConditionResult, System
+from lyapcheck.paper.conditions.base import STABILITY_CLASSES, System
+from lyapcheck.results import ConditionResult
 from lyapcheck.params import Problem
 
 log = logging.getLogger(__name__)
@@ -77,7 +78,7 @@ def run_conditions(problem: Problem, dynamics: str,
                    classes: tuple[str, ...] = CONDITION_ORDER) -> dict[str, ConditionResult]:
     """Run the requested condition classes (all by default), in :data:`CONDITION_ORDER`."""
     # the polynomial classes' modules are imported where they run (--classes quick skips them)
-    from lyapcheck.conditions import prop41, sector, stabcond2, switching, ultimate
+    from lyapcheck.paper.conditions import prop41, sector, stabcond2, switching, ultimate
     from lyapcheck.errors import InvalidParameter
 
     unknown = [c for c in classes if c not in CONDITION_ORDER]
@@ -112,18 +113,18 @@ def run_conditions(problem: Problem, dynamics: str,
     if "ultimate_bound" in wanted:
         run("ultimate_bound", lambda: ultimate.run(system))
     if "sos_gas" in wanted:
-        from lyapcheck.conditions import sos
+        from lyapcheck.paper.conditions import sos
         run("sos_gas", lambda: sos.run(system))
     if "ges" in wanted:
-        from lyapcheck.conditions import ges
+        from lyapcheck.paper.conditions import ges
         run("ges", lambda: ges.run(system))
     if "saturated_loop" in wanted:
-        from lyapcheck.conditions import saturated
+        from lyapcheck.paper.conditions import saturated
         run("saturated_loop", lambda: saturated.run(
             system, results["sos_gas"], alpha_d=g.alpha_d, e11=problem.swimmer.e11,
             e11_hat=problem.swimmer.e11_hat, omega_so=problem.actuation.step_out(), k_d=g.k_d))
     if "sos_bound" in wanted:
-        from lyapcheck.conditions import sos_bound
+        from lyapcheck.paper.conditions import sos_bound
         run("sos_bound", lambda: sos_bound.run_class(system))
     if "ultimate_bound" in wanted and "prop41_iss" in wanted and problem.d_max is not None:
         with contextlib.suppress(ArithmeticError, ValueError, np.linalg.LinAlgError):  # a side figure only

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from lyapcheck import exact
-from lyapcheck.conditions.base import System
+from lyapcheck.paper.conditions.base import System
 from lyapcheck.errors import LyapcheckError
 
 
@@ -74,7 +74,7 @@ def _lyap_view(system: System) -> dict[str, Any]:
     """``P`` from ``A^T P + P A = -I`` (python-control), then the exact eq. ``eq:stabCond`` check."""
     import control
 
-    from lyapcheck.conditions import prop41
+    from lyapcheck.paper.conditions import prop41
 
     try:
         A = _to_floats(system.A, "A")

@@ -52,7 +52,7 @@ SWITCHING_ENCLOSURE_BITS: Final = (96, 192, 384)
 #: ``inconclusive`` naming this limit. Far above the 1-6 s the slowest class takes at sane gains.
 CLASS_TIME_LIMIT_S: Final = 120.0
 
-#: Box cross-check (``lyapcheck.boxes.cross_check``): a simulated ``|x(t)|`` counts as leaving a
+#: Box cross-check (``lyapcheck.paper.boxes.cross_check.cross_check``): a simulated ``|x(t)|`` counts as leaving a
 #: certified GES envelope ``k |x0| exp(-rate t)`` only beyond this relative slack, which absorbs
 #: the integrator's error (it runs at ``rtol = 1e-10``), never a modelling slack.
 ENVELOPE_REL_TOL: Final = 1e-6

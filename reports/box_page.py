@@ -40,7 +40,7 @@ STATUS_MEANING: Final = {
     "certified": "one exactly checked certificate proves GES at every gain set of the box",
     "not_certified": "no common certificate was found before the box reached the minimum width or the sweep its "
                      "box budget; this proves nothing either way",
-    "refuted": "proved exactly that a gain set of the box is not GES (lyapcheck.boxes explains why no such "
+    "refuted": "proved exactly that a gain set of the box is not GES (lyapcheck.paper.boxes.quadratic explains why no such "
                "obstruction exists for these dynamics)",
 }
 #: what a class's own ``refuted`` means over a box: that class's certificate cannot exist, not that GES fails

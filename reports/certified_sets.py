@@ -4,7 +4,7 @@ Each certified ultimate bound says where every trajectory ends; the phase portra
 regions beside the simulated trajectories. Three are read from a certificate document:
 
 ``sos_bound``          the sublevel set ``{V <= 1}`` of the polynomial storage function ``V`` of
-                       :mod:`lyapcheck.conditions.sos_bound` (``limsup V <= 1`` from every start):
+                       :mod:`lyapcheck.paper.conditions.sos_bound` (``limsup V <= 1`` from every start):
                        a contour of the exact certificate, see :func:`sos_bound_set`;
 ``ultimate_bound``     the ellipsoid ``x^T P x <= 1`` of its last stage, exact;
 ``ultimate_bound``     the comparison-lemma box ``|eps| <= E, |s| <= S`` (stage 0), exact.
@@ -176,7 +176,7 @@ class StoragePolynomial:
 def storage_polynomial(doc: dict[str, Any]) -> StoragePolynomial | None:
     """``V`` of the document's certified ``sos_bound`` (exact composition, then floats)."""
     from lyapcheck import exact, poly
-    from lyapcheck.conditions.sos_bound import Z_V
+    from lyapcheck.paper.conditions.sos_bound import Z_V
 
     cert = _dict(_certified(doc, "sos_bound").get("certificate"))
     system = _dict(doc.get("system"))

@@ -2,11 +2,11 @@
 
 The tree. The axes' values are the edges of the first boxes (``num - 1`` cells per axis, in C
 order: ids ``0 .. n0 - 1``, level 0). Level by level, every box of the level is certified
-(:func:`lyapcheck.boxes.certify_box`, one exact certificate for every gain set of the box) and
-cross-checked (:func:`lyapcheck.boxes.cross_check`, random points of a certified box simulated
+(:func:`lyapcheck.paper.boxes.classes.certify_box`, one exact certificate for every gain set of the box) and
+cross-checked (:func:`lyapcheck.paper.boxes.cross_check.cross_check`, random points of a certified box simulated
 against its envelope); then, in id order, each box that is not certified, wider than
 ``min_relative_width`` and within the ``max_boxes`` budget is marked ``split`` and its two
-halves (:meth:`~lyapcheck.boxes.ParameterBox.split`) get the next two ids. The ids are
+halves (:meth:`~lyapcheck.paper.boxes.box.ParameterBox.split`) get the next two ids. The ids are
 therefore a function of the spec and of earlier statuses alone, and a resumed run replays the
 tree, reads the statuses of the boxes that are ``done`` and computes only the others.
 
@@ -27,7 +27,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
-from lyapcheck.boxes import ParameterBox
+from lyapcheck.paper.boxes.box import ParameterBox
 from sweeps.box_store import BoxStore
 from sweeps.evaluate import UNIT_LOCK
 from sweeps.runners import Runner
@@ -64,7 +64,8 @@ def evaluate_boxes(spec_text: str, boxes: Sequence[tuple[int, dict[str, list[str
     certifying class), ``cross_check_runs``, ``cross_check_worst_ratio`` and ``soundness_violation``. A box's random points are drawn
     from ``(seed, id)``, so its result does not depend on the unit it was grouped in.
     """
-    from lyapcheck.boxes import certify_box, cross_check
+    from lyapcheck.paper.boxes.classes import certify_box
+    from lyapcheck.paper.boxes.cross_check import cross_check
     from lyapcheck.tolerances import ENVELOPE_REL_TOL
 
     spec = cached_spec(spec_text)
@@ -117,7 +118,8 @@ def _bound(spec: SweepSpec, box: ParameterBox, box_id: int, out: dict[str, np.nd
     The search is its deterministic screening round only (a vanishing time budget: no
     refinement round fits), so a box's figures do not depend on the machine's speed.
     """
-    from lyapcheck.boxes import certify_box, sample_points
+    from lyapcheck.paper.boxes.classes import certify_box
+    from lyapcheck.paper.boxes.box import sample_points
     from lyapcheck.simulation.worst_case import search_worst_case
     from sweeps.soundness import BOUND_REL_TOL
 

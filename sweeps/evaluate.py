@@ -1,7 +1,7 @@
 """One unit of sweep work: certify and simulate a batch of grid points.
 
 Runs in a worker process (local pool or Dask). The certificate programs are the compiled
-programs of :mod:`lyapcheck.conditions.compiled` (read once per process, then solved by Clarabel
+programs of :mod:`lyapcheck.paper.conditions.compiled` (read once per process, then solved by Clarabel
 with new parameter values, no cvxpy); ``sector_ges`` goes through :mod:`sweeps.fast_sector`. The
 simulation is one batched call of :func:`lyapcheck.simulation.runner.simulate` per scenario for
 the whole unit; its rows are independent of the batch they sit in, so a point's result does
@@ -37,7 +37,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import numpy.typing as npt
 
-from lyapcheck.conditions.base import ConditionResult
+from lyapcheck.results import ConditionResult
 from lyapcheck.params import Problem
 from sweeps.schema import BOUND_CLASSES, DISTURBANCE_SCENARIOS, MARGIN_SOURCE, VARIABLES, status_code
 from sweeps.soundness import violations

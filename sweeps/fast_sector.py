@@ -1,17 +1,17 @@
 """``sector_ges`` at sweep speed: a shorter rational certificate and a well-conditioned decay rate.
 
-The program is :func:`lyapcheck.conditions.sector.program`, compiled once and solved by Clarabel
-directly (:mod:`lyapcheck.conditions.compiled`; before issue 11 this module built that direct
+The program is :func:`lyapcheck.paper.conditions.sector.program`, compiled once and solved by Clarabel
+directly (:mod:`lyapcheck.paper.conditions.compiled`; before issue 11 this module built that direct
 path for itself, now every class has it). What stays here is the sweep's cheaper route to the
 same verdict: the solver's ``P`` is rounded to :data:`RATIONAL_DIGITS` significant digits, and
 the decay rate handed to the exact check is computed as a generalised eigenvalue problem in the
 scaled coordinates (the condition ``A^T P + P A + 2 mu P < 0`` is invariant under the congruence
-of :mod:`lyapcheck.conditions.scaling`), which is well conditioned, so the first exact check
-usually passes; :func:`lyapcheck.conditions.sector.certify_polytope` bounds the rate through
+of :mod:`lyapcheck.paper.conditions.scaling`), which is well conditioned, so the first exact check
+usually passes; :func:`lyapcheck.paper.conditions.sector.certify_polytope` bounds the rate through
 eigenvalues in the original coordinates instead and may halve it many times.
 
-Nothing about the verdict changes: :func:`lyapcheck.conditions.sector.exact_check` decides every
-``certified``; :func:`lyapcheck.conditions.sector.refutation` decides every ``refuted``.
+Nothing about the verdict changes: :func:`lyapcheck.paper.conditions.sector.exact_check` decides every
+``certified``; :func:`lyapcheck.paper.conditions.sector.refutation` decides every ``refuted``.
 """
 
 from __future__ import annotations
@@ -23,8 +23,9 @@ from typing import Any, Final, Sequence
 import numpy as np
 
 from lyapcheck import exact
-from lyapcheck.conditions import scaling, sector
-from lyapcheck.conditions.base import ConditionResult, System
+from lyapcheck.paper.conditions import scaling, sector
+from lyapcheck.paper.conditions.base import System
+from lyapcheck.results import ConditionResult
 
 #: the rate handed to the exact check is this fraction of the floating-point optimum; halved
 #: on failure at most this many times (as in sector.certify_polytope)

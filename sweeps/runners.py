@@ -8,7 +8,7 @@ child re-imports the parent's ``__main__``, and ``python -m lyapcheck`` runs the
 at import. The pool is started, and every worker forked, before the progress bar's thread
 exists (:meth:`ProcessRunner.start`), so no thread is ever duplicated into a worker. Each
 worker reads the compiled certificate programs once, on its first unit, and re-solves them
-afterwards (:mod:`lyapcheck.conditions.compiled`).
+afterwards (:mod:`lyapcheck.paper.conditions.compiled`).
 """
 
 from __future__ import annotations

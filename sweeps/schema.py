@@ -30,7 +30,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from lyapcheck.conditions import base as _base
+from lyapcheck.paper.conditions import base as _base
 from lyapcheck.errors import InputFileError
 
 #: parameters a sweep may vary, mapped to their key in :data:`lyapcheck.params.FIELDS`
@@ -49,7 +49,7 @@ CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switch
 #: run when the spec does not say: lyapcheck.certification.QUICK_CLASSES (the polynomial classes
 #: sos_gas, ges, saturated_loop and sos_bound cost 0.1-3 s per point)
 DEFAULT_CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound")
-#: classes whose exact pass proves stability of the error dynamics (lyapcheck.conditions.base)
+#: classes whose exact pass proves stability of the error dynamics (lyapcheck.paper.conditions.base)
 STABILITY_CLASSES: Final = _base.STABILITY_CLASSES
 #: classes that certify an ultimate bound on |eps| (numbers["eps_bound_m"]); eps_bound_m is the
 #: smallest certified one
@@ -125,7 +125,7 @@ def status_code(status: str) -> int:
 # -- box sweeps (mode = "boxes"): one row per box ---------------------------------------------------
 #: status of a box: certified for every point, refuted at a point of it (exactly), split into two
 #: halves (an inner node of the refinement tree), or not certified (a leaf: minimum width or budget).
-#: A box's GES is never refuted (lyapcheck.boxes explains why no exact obstruction exists); the
+#: A box's GES is never refuted (lyapcheck.paper.boxes.quadratic explains why no exact obstruction exists); the
 #: code is kept for classes' own statuses (``status_sector_ges``: no common quadratic V)
 BOX_STATUS_CODES: Final[dict[str, int]] = {"not_certified": 0, "certified": 1, "refuted": 2, "split": 3}
 #: the dimension of a box store

@@ -76,7 +76,7 @@ _AXIS_KEYS: Final = ("name", "start", "stop", "num", "scale", "values")
 _SWEEP_KEYS: Final = ("mode", "classes", "chunk_size", "axes", "refine", "boxes")
 _MODES: Final = ("points", "boxes")
 _BOX_KEYS: Final = ("min_relative_width", "max_boxes", "cross_check_points", "seed")
-#: classes a box sweep runs (among :data:`lyapcheck.boxes.BOX_CLASSES`, cheapest first); the GES
+#: classes a box sweep runs (among :data:`lyapcheck.paper.boxes.classes.BOX_CLASSES`, cheapest first); the GES
 #: ones are the default of a box sweep; ``prop41_ges`` (eq. stabCond, the paper's own condition)
 #: is certified or refuted per box; ``sos_bound`` (10-20 s a box, plus the worst-case search at
 #: the cross-check points) adds a certified bound on |eps| for every box

@@ -8,11 +8,11 @@ import pytest
 
 from lyapcheck import exact, verify
 from lyapcheck.api import certify_box
-from lyapcheck.box_bounds import _box_data, _vertices
-from lyapcheck.boxes import parse_box
+from lyapcheck.paper.boxes.bounds import _box_data, _vertices
+from lyapcheck.paper.boxes.box import parse_box
 from lyapcheck.certification import build_system
-from lyapcheck.conditions import sos_bound
-from lyapcheck.conditions.sos import scaled_dynamics
+from lyapcheck.paper.conditions import sos_bound
+from lyapcheck.paper.conditions.sos import scaled_dynamics
 from lyapcheck.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 

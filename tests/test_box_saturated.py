@@ -8,10 +8,10 @@ from fractions import Fraction
 import pytest
 import sympy as sp
 
-from lyapcheck.box_saturated import certify_saturated_box, verify_saturated_box
-from lyapcheck.boxes import parse_box, problem_at_point
+from lyapcheck.paper.boxes.saturated import certify_saturated_box, verify_saturated_box
+from lyapcheck.paper.boxes.box import parse_box, problem_at_point
 from lyapcheck.certification import build_system
-from lyapcheck.conditions.saturated import OMEGA_ROUNDING, global_reach, reach_push
+from lyapcheck.paper.conditions.saturated import OMEGA_ROUNDING, global_reach, reach_push
 from lyapcheck.params import problem_from_sources
 from symbolic._generated import integrator_rates, unsaturated_strip_sq, windup_bound_sq
 from tests.conftest import PAPER_TOML
@@ -38,7 +38,7 @@ def _sign_of(expr: sp.Expr) -> int:
 
 
 def test_every_quantity_of_the_reach_argument_is_monotone_in_every_parameter() -> None:
-    """The covering argument of lyapcheck.box_saturated, on the generated code of the derivation."""
+    """The covering argument of lyapcheck.paper.boxes.saturated, on the generated code of the derivation."""
     sigma0, k_d, delta, U, S1, w, alpha, e11_hat, omega = sp.symbols(
         "sigma0 k_d delta U S1 w alpha e11_hat omega", positive=True)
     s_star_sq = windup_bound_sq(sigma0, k_d, delta, U)

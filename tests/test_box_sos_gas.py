@@ -11,11 +11,11 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from lyapcheck import exact, poly
-from lyapcheck.box_sos_gas import certify_gas_box, verify_gas_box
-from lyapcheck.boxes import corner_problems, parse_box, scaled_hull
+from lyapcheck.paper.boxes.sos_gas import certify_gas_box, verify_gas_box
+from lyapcheck.paper.boxes.box import corner_problems, parse_box, scaled_hull
 from lyapcheck.certification import build_system
-from lyapcheck.conditions import sos
-from lyapcheck.conditions.sos import ScaledDynamics, scaled_dynamics
+from lyapcheck.paper.conditions import sos
+from lyapcheck.paper.conditions.sos import ScaledDynamics, scaled_dynamics
 from lyapcheck.params import Problem, problem_from_sources
 from tests.conftest import PAPER_TOML
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from lyapcheck import boxes
+from lyapcheck.paper.boxes.box import ParameterBox
+from lyapcheck.paper.boxes.classes import certify_box, verify_box, verify_box_refutation
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.params import problem_from_sources
 from sweeps.box_store import BoxStore
@@ -107,11 +108,11 @@ def test_the_tree_refines_and_certified_boxes_recheck_exactly(swept: tuple[Path,
     certified = np.flatnonzero(status == BOX_STATUS_CODES["certified"])
     assert certified.size >= 1
     for row in certified:  # the stored box is provable again, from scratch, and rechecks exactly
-        box = boxes.ParameterBox((("alpha_d", Fraction(lo_a[row]), Fraction(hi_a[row])),
+        box = ParameterBox((("alpha_d", Fraction(lo_a[row]), Fraction(hi_a[row])),
                                   ("k_d", Fraction(lo_k[row]), Fraction(hi_k[row]))))
-        result = boxes.certify_box(problem, box)
+        result = certify_box(problem, box)
         assert result["status"] == "certified"
-        assert boxes.verify_box(problem, box, "derived", result)[0]
+        assert verify_box(problem, box, "derived", result)[0]
         assert result["k"] == pytest.approx(store.read("k")[row])
     by_sector, by_ges = store.read("status_sector_ges"), store.read("status_ges")
     assert ((by_sector[certified] == 1) | (by_ges[certified] == 1)).all()
@@ -234,8 +235,8 @@ def test_the_papers_condition_is_mapped_per_box_and_envelopes_come_from_the_next
     summary = summarize_boxes(store)
     assert summary.certified_by["prop41_ges"] == int(np.sum(p41 == codes["certified"]))
     for row in np.flatnonzero(p41 == codes["refuted"]):
-        box = boxes.ParameterBox((("delta_los", Fraction(store.read("lo_delta_los")[row]), Fraction(store.read("hi_delta_los")[row])),
+        box = ParameterBox((("delta_los", Fraction(store.read("lo_delta_los")[row]), Fraction(store.read("hi_delta_los")[row])),
                                   ("k_d", Fraction(store.read("lo_k_d")[row]), Fraction(store.read("hi_k_d")[row]))))
-        result = boxes.certify_box(spec.base, box, cls="prop41_ges")  # refuted at a point of the box
+        result = certify_box(spec.base, box, cls="prop41_ges")  # refuted at a point of the box
         assert result["status"] == "refuted"
-        assert boxes.verify_box_refutation(spec.base, box, "derived", result, "prop41_ges")[0]
+        assert verify_box_refutation(spec.base, box, "derived", result, "prop41_ges")[0]

@@ -11,11 +11,11 @@ import pytest
 import sympy as sp
 
 from lyapcheck import exact
-from lyapcheck.box_ultimate import (certify_ultimate_box, corner_systems, entry_ranges, rho_lower_box,
+from lyapcheck.paper.boxes.ultimate import (certify_ultimate_box, corner_systems, entry_ranges, rho_lower_box,
                                     verify_ultimate_box)
-from lyapcheck.boxes import ParameterBox, parse_box
+from lyapcheck.paper.boxes.box import ParameterBox, parse_box
 from lyapcheck.certification import build_system
-from lyapcheck.conditions import ultimate
+from lyapcheck.paper.conditions import ultimate
 from lyapcheck.params import Problem, problem_from_sources
 from symbolic import _generated
 from tests.conftest import PAPER_TOML

@@ -11,17 +11,20 @@ import pytest
 import sympy as sp
 from click.testing import CliRunner
 
-from lyapcheck import boxes, verify
+from lyapcheck import verify
+from lyapcheck.paper.boxes.box import ParameterBox, parse_box, sample_points
+from lyapcheck.paper.boxes.classes import refine, verify_box
+from lyapcheck.paper.boxes.cross_check import cross_check
 from lyapcheck.api import certify_box
 from lyapcheck.certification import build_system
-from lyapcheck.conditions import ges
-from lyapcheck.conditions.sos import scaled_dynamics
+from lyapcheck.paper.conditions import ges
+from lyapcheck.paper.conditions.sos import scaled_dynamics
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.params import problem_from_sources
 from symbolic import _generated
 from tests.conftest import PAPER_TOML
 
-#: a box the paper's window certifies (found by boxes.refine over alpha_d 60..6000, k_d 0.015..1.5)
+#: a box the paper's window certifies (found by refine over alpha_d 60..6000, k_d 0.015..1.5)
 CERTIFIED_BOX = ["alpha_d=1545..3030", "k_d=0.7575..1.5"]
 
 
@@ -43,7 +46,7 @@ def test_scaled_coefficients_are_monomials_in_the_parameters(dynamics: str) -> N
         powers = rest.as_powers_dict()
         assert coefficient != 0 and all(base in symbols.values() and exponent.is_integer
                                         for base, exponent in powers.items() if base != 1), expr
-    # why no GES box is ever 'refuted' (lyapcheck.boxes): the linearisation [[-1, c], [b, -a]]
+    # why no GES box is ever 'refuted' (lyapcheck.paper.boxes.quadratic): the linearisation [[-1, c], [b, -a]]
     # at the origin has det = a - b c = a + b > 0 at every positive gain set
     assert c == -1 and sp.simplify(a - b * c).is_positive
 
@@ -89,11 +92,11 @@ def test_a_widened_box_fails_its_recheck(certified: tuple) -> None:
 ])
 def test_bad_boxes_name_the_field(spec: list[str], field: str) -> None:
     with pytest.raises(InvalidParameter, match=f"The '{field}' parameter must be"):
-        boxes.parse_box(spec)
+        parse_box(spec)
 
 
 def test_box_units_are_si_inside() -> None:
-    box = boxes.parse_box(["delta_los=0.5 mm..1 mm", "alpha_d=540..660"])
+    box = parse_box(["delta_los=0.5 mm..1 mm", "alpha_d=540..660"])
     assert box.to_json() == {"delta_los": ["1/2000", "1/1000"], "alpha_d": ["540", "660"]}
 
 
@@ -114,13 +117,13 @@ def test_command_line_box_and_bad_input(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_refinement_resolves_a_window_into_certified_and_undecided_boxes() -> None:
     problem = problem_from_sources(PAPER_TOML, {})
-    window = boxes.parse_box(["alpha_d=800..3200", "k_d=0.4..1.6"])
-    leaves = boxes.refine(problem, window, min_relative_width=1.0)
+    window = parse_box(["alpha_d=800..3200", "k_d=0.4..1.6"])
+    leaves = refine(problem, window, min_relative_width=1.0)
     statuses = {leaf.status for leaf in leaves}
     assert "certified" in statuses
     for leaf in leaves:
         if leaf.status == "certified":
-            assert boxes.verify_box(problem, leaf.box, "derived", leaf.result)[0]
+            assert verify_box(problem, leaf.box, "derived", leaf.result)[0]
         else:
             assert leaf.box.relative_width() <= 1.0
 
@@ -130,15 +133,15 @@ def test_cross_check_accepts_the_certified_envelope_and_catches_a_false_one(cert
     points, and the same envelope with a ten times faster rate is caught as violated."""
     result, problem = certified
     ges_result = result.document["conditions"]["ges"]
-    box = boxes.parse_box(CERTIFIED_BOX)
-    runs, worst = boxes.cross_check(problem, box, ges_result, 3, (0, 7))
+    box = parse_box(CERTIFIED_BOX)
+    runs, worst = cross_check(problem, box, ges_result, 3, (0, 7))
     assert runs == 3 and 0 < worst <= 1
-    assert all(p_in(box, point) for point in boxes.sample_points(box, 20, (0, 7)))
+    assert all(p_in(box, point) for point in sample_points(box, 20, (0, 7)))
     false_claim = {"k": ges_result["k"], "decay_rate_per_s": 10 * ges_result["decay_rate_per_s"]}
-    assert boxes.cross_check(problem, box, false_claim, 1, (0, 7))[1] > 1
+    assert cross_check(problem, box, false_claim, 1, (0, 7))[1] > 1
 
 
-def p_in(box: boxes.ParameterBox, point: dict) -> bool:
+def p_in(box: ParameterBox, point: dict) -> bool:
     return all(lo <= point[name] <= hi for name, lo, hi in box.bounds)
 
 
@@ -150,7 +153,7 @@ def test_sector_box_certificate_is_exact_and_covers_interior_points() -> None:
     """sector_ges over a box: the stored P decreases at every vertex of the box's matrix polytope,
     and (the covering argument) at both sector end points of gain sets strictly inside the box."""
     from lyapcheck import exact
-    from lyapcheck.conditions import sector
+    from lyapcheck.paper.conditions import sector
 
     result = certify_box(PAPER_TOML, SECTOR_BOX, classes="sector_ges")
     assert result.verdict == "certified" and list(result.conditions) == ["sector_ges"]

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from lyapcheck import exact
 from lyapcheck.certificate import build_document, verify_document
 from lyapcheck.certification import build_system, run_conditions, verdict
-from lyapcheck.conditions import prop41, sector
+from lyapcheck.paper.conditions import prop41, sector
 from lyapcheck.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 
@@ -74,7 +74,7 @@ def test_shorten_narendra_refutation_agrees_with_the_sdp(paper_problem) -> None:
 
 
 def test_programs_are_dpp() -> None:
-    from lyapcheck.conditions import compiled
+    from lyapcheck.paper.conditions import compiled
 
     for key in compiled.PROGRAMS:
         problem, _, _ = compiled.build(key)

@@ -1,9 +1,9 @@
 """The stored compiled programs are current, and solve exactly as cvxpy would (issue 11).
 
-:mod:`lyapcheck.conditions.compiled` stores each certificate program's conic data as arrays so
+:mod:`lyapcheck.paper.conditions.compiled` stores each certificate program's conic data as arrays so
 that ``certify`` needs no cvxpy at run time. These tests recompile every program with cvxpy:
 the stored arrays must be the ones cvxpy produces now (else run
-``python -m lyapcheck.conditions.compiled``), and the compiler itself checks, on random data,
+``python -m lyapcheck.paper.conditions.compiled``), and the compiler itself checks, on random data,
 that Clarabel receives cvxpy's data bit for bit and that the variables read back as cvxpy reads
 them.
 """
@@ -13,16 +13,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lyapcheck.conditions import compiled
+from lyapcheck.paper.conditions import compiled
 
 
 @pytest.mark.parametrize("key", sorted(compiled.PROGRAMS))
 def test_stored_program_is_current(key: str) -> None:
     path = compiled.STORE / f"{key}.npz"
-    assert path.exists(), f"missing {path}: run python -m lyapcheck.conditions.compiled"
+    assert path.exists(), f"missing {path}: run python -m lyapcheck.paper.conditions.compiled"
     with np.load(path, allow_pickle=False) as stored:
         assert str(stored["source_hash"]) == compiled.source_hash(key), \
-            f"{key} is stale: run python -m lyapcheck.conditions.compiled"
+            f"{key} is stale: run python -m lyapcheck.paper.conditions.compiled"
         fresh = compiled.compile_program(key).arrays  # also checks itself against cvxpy
         assert set(fresh) == set(stored.files) - {"source_hash"}
         for name, value in fresh.items():
@@ -34,8 +34,8 @@ def test_loaded_program_solves_like_cvxpy() -> None:
     from fractions import Fraction
 
     from lyapcheck.certification import build_system
-    from lyapcheck.conditions import scaling, sector
-    from lyapcheck.conditions.sdp import solve
+    from lyapcheck.paper.conditions import scaling, sector
+    from lyapcheck.sos.sdp import solve
     from lyapcheck.params import problem_from_sources
     from tests.conftest import EASY_GAINS, PAPER_TOML
 
@@ -56,7 +56,7 @@ def test_loaded_program_solves_like_cvxpy() -> None:
 
 
 def test_parameters_are_checked_by_name_and_shape() -> None:
-    from lyapcheck.conditions import sector
+    from lyapcheck.paper.conditions import sector
 
     prog = sector.program()
     with pytest.raises(ValueError, match="missing"):
@@ -80,7 +80,7 @@ def test_a_stale_stored_program_is_recompiled(monkeypatch: pytest.MonkeyPatch) -
 _LEAN_SOLVE = """
 import json, sys
 import numpy as np
-from lyapcheck.conditions import sdp
+from lyapcheck.sos import sdp
 sdp.LEAN_LAPACK_IMPORT = {lean}
 from lyapcheck.certification import run_conditions
 from lyapcheck.params import problem_from_sources

@@ -10,8 +10,8 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 from lyapcheck.certification import build_system
-from lyapcheck.conditions import ges
-from lyapcheck.conditions.sos import scaled_dynamics
+from lyapcheck.paper.conditions import ges
+from lyapcheck.paper.conditions.sos import scaled_dynamics
 from lyapcheck.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 

@@ -22,7 +22,7 @@ import json, sys
 {before}
 import lyapcheck, numpy as np, os
 from numpy._core._multiarray_umath import __cpu_features__
-from lyapcheck.conditions import ges
+from lyapcheck.paper.conditions import ges
 w = ges._Program(ges.TERMS, ges.GRID_POINTS).nodes
 same = all(bool(np.array_equal(w ** k, np.array([x ** k for x in w]))) for k in range(1, 9))
 print(json.dumps({{"state": lyapcheck.numerics.describe(), "x86_v4": __cpu_features__.get("X86_V4"),

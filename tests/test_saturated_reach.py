@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from lyapcheck.certification import build_system
-from lyapcheck.conditions.saturated import OMEGA_ROUNDING, global_reach, verify_reach
+from lyapcheck.paper.conditions.saturated import OMEGA_ROUNDING, global_reach, verify_reach
 from lyapcheck.simulation.scenarios import paper_problem
 from symbolic._generated import unsaturated_strip_sq
 

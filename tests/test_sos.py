@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 from lyapcheck import exact, poly
 from lyapcheck.certificate import build_document, verify_document
 from lyapcheck.certification import build_system, run_conditions, verdict
-from lyapcheck.conditions import sos
+from lyapcheck.paper.conditions import sos
 from lyapcheck.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 
@@ -180,7 +180,7 @@ def test_sos_bound_is_tight_and_never_exceeded_in_simulation(paper_problem, pape
 
 
 def test_sos_bound_tamper_is_caught(paper_problem, paper_results) -> None:
-    from lyapcheck.conditions import sos_bound
+    from lyapcheck.paper.conditions import sos_bound
 
     cert = dict(paper_results["sos_bound"].certificate)
     system = build_system(paper_problem, "derived")
@@ -193,7 +193,7 @@ def test_multipliers_found_in_scaled_w_give_the_identity_in_w_exactly() -> None:
     """The search writes ``w = kappa w~``; ``unscaled`` maps its ``T`` and ``Q_D`` back. The
     dissipation form in ``w~`` with the push ``kappa q`` and ``|w~| <= k / kappa``, evaluated at
     ``w~ = w / kappa``, must be the form in ``w`` with the mapped matrices, term for term."""
-    from lyapcheck.conditions import sos_bound as sb
+    from lyapcheck.paper.conditions import sos_bound as sb
 
     rng = np.random.default_rng(7)
 
@@ -219,7 +219,7 @@ def test_the_conditioned_search_is_faster_and_no_looser_than_the_plain_one(paper
     decay rate, where ``r = sqrt(b) r~`` with w unscaled ran into the 200-iteration cap; its bound
     is no larger, and both certificates pass the exact check."""
     from lyapcheck import tolerances as tol
-    from lyapcheck.conditions import sos_bound as sb
+    from lyapcheck.paper.conditions import sos_bound as sb
 
     system = build_system(paper_problem, "derived")
     dyn = sos.scaled_dynamics(system)
@@ -246,7 +246,7 @@ def test_the_sign_symmetric_search_finds_the_full_programs_solution(paper_proble
     the solver's tolerance, the full program's off-diagonal blocks come out negligible, and the
     reduced program's matrices, assembled with exact zeros between the blocks, still satisfy the
     equality constraints that the reduced program leaves out."""
-    from lyapcheck.conditions import sos_bound as sb
+    from lyapcheck.paper.conditions import sos_bound as sb
 
     system = build_system(paper_problem, "derived")
     dyn = sos.scaled_dynamics(system)
@@ -286,7 +286,7 @@ def test_a_rate_the_symmetric_solution_fails_gets_the_full_programs_attempt(monk
     against 0.800 mm). The search must end within 0.1 % of the full program's own search."""
     from sweeps.spec import load_spec
 
-    from lyapcheck.conditions import sos_bound as sb
+    from lyapcheck.paper.conditions import sos_bound as sb
 
     spec = load_spec(Path(__file__).resolve().parents[1] / "examples" / "sweep-alpha-sigma.toml")
     system = build_system(spec.problem_at([248.3259839654433, 0.012328467394420659]), "derived")
@@ -302,8 +302,8 @@ def test_a_negative_decay_rate_is_refused_even_where_its_identity_holds() -> Non
     """With mu < 0 the SOS identity only gives V' <= |mu| V, and such identities exist for a
     saddle (c = 1, a = 1, b = 5: det = a - b c < 0). The exact check must refuse them."""
     from lyapcheck import exact, poly
-    from lyapcheck.conditions import sos
-    from lyapcheck.conditions.sos import ScaledDynamics
+    from lyapcheck.paper.conditions import sos
+    from lyapcheck.paper.conditions.sos import ScaledDynamics
 
     saddle = ScaledDynamics(time_scale=Fraction(1), c=Fraction(1), a=Fraction(1), b=Fraction(5))
     mu = Fraction(-5)
@@ -325,7 +325,7 @@ def test_a_negative_decay_rate_is_refused_even_where_its_identity_holds() -> Non
 def test_the_sector_check_refuses_a_negative_decay_rate() -> None:
     """``A^T P + P A + 2 rate P < 0`` with ``rate < 0`` holds for the unstable A = I/2, P = I."""
     from lyapcheck import exact
-    from lyapcheck.conditions import sector
+    from lyapcheck.paper.conditions import sector
 
     unstable = exact.matrix([[Fraction(1, 2), 0], [0, Fraction(1, 2)]])
     ok, why = sector.exact_check([unstable], exact.matrix([[1, 0], [0, 1]]), Fraction(-1))

@@ -282,7 +282,7 @@ def test_classes_follow_the_certify_module() -> None:
 
 def test_fast_sector_agrees_with_the_condition_module(paper_problem) -> None:  # type: ignore[no-untyped-def]
     from lyapcheck.certification import build_system
-    from lyapcheck.conditions import sector
+    from lyapcheck.paper.conditions import sector
     from sweeps import fast_sector
 
     statuses = []

@@ -15,9 +15,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lyapcheck import exact
-from lyapcheck.conditions import sector
-from lyapcheck.conditions import switching as sw
-from lyapcheck.conditions.base import System
+from lyapcheck.paper.conditions import sector
+from lyapcheck.paper.conditions import switching as sw
+from lyapcheck.paper.conditions.base import System
 from lyapcheck.errors import CertificateError
 from tests.conftest import ROOT
 
@@ -217,7 +217,7 @@ def test_verification_needs_neither_numpy_nor_scipy(paper_result: sw.ConditionRe
         "sys.modules['numpy'] = None; sys.modules['scipy'] = None  # any import of them now fails\n"
         "from fractions import Fraction as Q\n"
         "from lyapcheck import exact\n"
-        "from lyapcheck.conditions import switching as sw\n"
+        "from lyapcheck.paper.conditions import switching as sw\n"
         "cert = json.loads(sys.stdin.read())\n"
         "ok, why = sw.verify_unstable_switching([exact.from_json(v) for v in cert['vertices']], cert)\n"
         "assert ok, why\n"

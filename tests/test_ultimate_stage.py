@@ -9,7 +9,7 @@ import pytest
 
 from lyapcheck import exact
 from lyapcheck.certification import build_system
-from lyapcheck.conditions import scaling, ultimate
+from lyapcheck.paper.conditions import scaling, ultimate
 from lyapcheck.params import Problem
 
 

@@ -123,7 +123,7 @@ def test_storage_switching_is_the_gradient_of_v_along_eps() -> None:
     """The composed polynomial has the sign of dV/d eps (central differences of V itself) for a
     made-up positive definite Gram matrix in the sos_bound basis."""
     from lyapcheck import exact, poly
-    from lyapcheck.conditions.sos_bound import Z_V
+    from lyapcheck.paper.conditions.sos_bound import Z_V
 
     rng = np.random.default_rng(3)
     M = rng.normal(size=(len(Z_V), len(Z_V)))

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from lyapcheck.cli.app import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
+from lyapcheck.cli.common import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
 
 #: command-line flag -> parameter key (lyapcheck.params.FIELDS)
 FLAG_KEYS = {
@@ -68,7 +68,7 @@ def register(group: click.Group) -> None:
         """Certify a gain set: every condition class, each checked exactly."""
         from lyapcheck.api import certify as certify_gains
         from lyapcheck.api import report as write_report
-        from lyapcheck.conditions import sdp
+        from lyapcheck.sos import sdp
         from lyapcheck.errors import InvalidParameter
 
         sdp.LEAN_LAPACK_IMPORT = True  # this process is the command's own (see sdp._load_lapack_modules)

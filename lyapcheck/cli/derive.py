@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from lyapcheck.cli.app import emit_json, one_line_errors
+from lyapcheck.cli.common import emit_json, one_line_errors
 
 if TYPE_CHECKING:  # pragma: no cover
     from symbolic.ledger import LedgerEntry

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from lyapcheck.cli.app import one_line_errors
+from lyapcheck.cli.common import one_line_errors
 
 
 def register(group: click.Group) -> None:

@@ -11,7 +11,7 @@ from typing import Any
 
 import click
 
-from lyapcheck.cli.app import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
+from lyapcheck.cli.common import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
 
 
 def _print_table(doc: dict[str, Any]) -> None:

@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from lyapcheck.cli.app import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
+from lyapcheck.cli.common import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
 
 
 def _progress_bar() -> Any:

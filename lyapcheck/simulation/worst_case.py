@@ -417,12 +417,12 @@ def storage_switching(storage: Mapping[str, Any], sigma0: Fraction) -> tuple[Int
     factor) for the ``sos_bound`` certificate ``storage``.
 
     ``V = z^T Q_V z`` is a polynomial in ``y = (eps + sigma0 s)/Delta`` and ``r~ = sigma0 s/(Delta beta)``
-    (:mod:`lyapcheck.conditions.sos_bound`); ``eps`` enters ``y`` only, so ``dV/d eps = (1/Delta)
+    (:mod:`lyapcheck.paper.conditions.sos_bound`); ``eps`` enters ``y`` only, so ``dV/d eps = (1/Delta)
     dV/dy``. The polynomial is composed exactly and normalised so that the coefficient of ``eps``
     is ``+-1`` (the switching function is then ``eps`` near the origin, in metres).
     """
     from lyapcheck import exact, poly
-    from lyapcheck.conditions.sos_bound import Z_V
+    from lyapcheck.paper.conditions.sos_bound import Z_V
 
     missing = [key for key in ("Q_V", "beta") if key not in storage]
     if missing:
@@ -679,6 +679,6 @@ def simulate_disturbance(target: Problem | Scenario, disturbance: Disturbance | 
 def storage_certificate(problem: Problem) -> dict[str, Any] | None:
     """The ``sos_bound`` certificate of the derived dynamics of ``problem`` (seconds of SDP)."""
     from lyapcheck.certification import build_system
-    from lyapcheck.conditions import sos_bound
+    from lyapcheck.paper.conditions import sos_bound
 
     return sos_bound.run(build_system(problem, "derived"))
