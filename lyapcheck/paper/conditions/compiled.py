@@ -36,17 +36,16 @@ import logging
 import sys
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Callable, Final, Mapping
+from typing import Any, Callable, Final
 
 import numpy as np
 
+from lyapcheck.sos.compile import FORMAT_VERSION, compile_problem
 from lyapcheck.sos.sdp import CompiledProgram, ProgramData
 
 log = logging.getLogger(__name__)
 
 STORE: Final = Path(__file__).with_name("_compiled")
-#: bump when the stored layout changes (older files are then ignored)
-FORMAT_VERSION: Final = 1
 
 #: program family -> (module, builder function). A builder takes the cvxpy module and integer
 #: arguments (a degree, a size) and returns ``(problem, {name: Parameter}, {name: Variable})``.
@@ -124,149 +123,10 @@ def build(key: str) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     return builder(cp, *args)
 
 
-def _random_values(params: Mapping[str, Any], rng: np.random.Generator) -> dict[str, np.ndarray]:
-    out = {}
-    for name, p in params.items():
-        v = rng.uniform(0.5, 1.5, size=p.shape) if p.is_nonneg() else rng.normal(size=p.shape)
-        out[name] = np.asarray(v, dtype=np.float64)
-    return out
-
-
 def compile_program(key: str) -> ProgramData:
     """Compile ``key`` with cvxpy into :class:`ProgramData`, checked against cvxpy on random data."""
-    import cvxpy as cp
-    from cvxpy.lin_ops import lin_op
-    from types import SimpleNamespace
-
     problem, params, variables = build(key)
-    if not problem.is_dpp():
-        raise ValueError(f"program {key} is not DPP")
-    rng = np.random.default_rng(20240611)
-    values = _random_values(params, rng)
-    for name, p in params.items():
-        p.value = values[name]
-    data, chain, inverse = problem.get_problem_data(cp.CLARABEL)
-    pp = data[cp.settings.PARAM_PROB]
-    n = int(data["c"].size)
-    by_id = {p.id: name for name, p in params.items()}
-    layout: list[tuple[str, int, tuple[int, ...]]] = []
-    constant_col = -1
-    for pid, col in pp.param_id_to_col.items():
-        if pid == lin_op.CONSTANT_ID:
-            constant_col = int(col)
-            continue
-        if pid not in by_id:
-            raise ValueError(f"program {key}: a parameter without a name")
-        layout.append((by_id[pid], int(col), tuple(params[by_id[pid]].shape)))
-    size = int(pp.total_param_size) + 1
-    if constant_col != size - 1:
-        raise ValueError(f"program {key}: unexpected parameter layout")
-
-    # the data tensor, reduced as cvxpy reduces it: values = R @ param_vec, placed by (indices, indptr)
-    pp.reduced_A.cache(False)
-    R = pp.reduced_A.reduced_mat.tocsr()
-    indices, indptr, shape = pp.reduced_A.problem_data_index
-    indices, indptr = np.asarray(indices, dtype=np.int64), np.asarray(indptr, dtype=np.int64)
-    m = int(shape[0])
-    if int(shape[1]) != n + 1:
-        raise ValueError(f"program {key}: unexpected data shape")
-    split = int(indptr[n])  # entries before: A's columns; from there: the offset column b
-    a_order = np.arange(split)
-    # cvxpy hands Clarabel A = -M[:, :n] (re-sorted by scipy if needed) and b = M[:, n]
-    for j in range(n):
-        seg = slice(int(indptr[j]), int(indptr[j + 1]))
-        a_order[seg] = a_order[seg][np.argsort(indices[seg], kind="stable")]
-    cones = data["dims"]
-    if cones.exp or cones.p3d or cones.pnd:
-        raise ValueError(f"program {key}: only zero, nonnegative, second-order and PSD cones are supported")
-
-    q_tensor = pp.q.tocsc() if hasattr(pp.q, "tocsc") else pp.q
-    q_full = np.asarray(q_tensor[:, [size - 1]].toarray()).ravel()
-    if q_tensor[:, : size - 1].count_nonzero():
-        raise ValueError(f"program {key}: a parameter enters the objective; not supported")
-
-    # variables: the linear map from Clarabel's x, probed through cvxpy's own inversion
-    inverse[-1].solver_options = {}
-    zeros = np.zeros(m)
-    columns: dict[str, list[np.ndarray]] = {name: [] for name in variables}
-    for j in range(n + 1):
-        x = np.zeros(n)
-        if j < n:
-            x[j] = 1.0
-        fake = SimpleNamespace(status="Solved", solve_time=0.0, iterations=0, x=x, z=zeros, s=zeros, obj_val=0.0)
-        problem.unpack_results(fake, chain, inverse)
-        for name, var in variables.items():
-            columns[name].append(np.asarray(var.value, dtype=np.float64).ravel(order="C"))
-    unpack: dict[str, np.ndarray] = {}
-    for name, cols in columns.items():
-        mat = np.array(cols).T  # (size of var, n + 1)
-        if np.any(mat[:, -1]):
-            raise ValueError(f"program {key}: variable {name} is not linear in the solver's x")
-        rows, xs = np.nonzero(mat[:, :-1])
-        unpack[f"var_{name}_rows"] = rows.astype(np.int64)
-        unpack[f"var_{name}_cols"] = xs.astype(np.int64)
-        unpack[f"var_{name}_coef"] = mat[rows, xs]
-        unpack[f"var_{name}_shape"] = np.array(variables[name].shape, dtype=np.int64)
-
-    arrays: dict[str, np.ndarray] = {
-        "format": np.array(FORMAT_VERSION),
-        "n": np.array(n), "m": np.array(m), "param_size": np.array(size),
-        "param_names": np.array([name for name, _, _ in layout]),
-        "param_cols": np.array([col for _, col, _ in layout], dtype=np.int64),
-        "param_shapes": np.array([list(s) + [-1] * (2 - len(s)) for _, _, s in layout], dtype=np.int64).reshape(-1, 2),
-        "R_data": np.asarray(R.data, dtype=np.float64), "R_indices": np.asarray(R.indices, dtype=np.int64),
-        "R_indptr": np.asarray(R.indptr, dtype=np.int64),
-        "M_indices": indices, "M_indptr": indptr, "A_order": a_order,
-        "q": q_full[:n].astype(np.float64), "q_offset": np.array(float(q_full[n])),
-        "objective_sign": np.array(-1.0 if isinstance(problem.objective, cp.Maximize) else 1.0),
-        "cone_zero": np.array(int(cones.zero)), "cone_nonneg": np.array(int(cones.nonneg)),
-        "cone_soc": np.array(list(cones.soc), dtype=np.int64), "cone_psd": np.array(list(cones.psd), dtype=np.int64),
-        "variables": np.array(list(variables)),
-        **unpack,
-    }
-    program = ProgramData.from_arrays(key, arrays)
-    _check_against_cvxpy(key, program, problem, params, variables, rng, chain, inverse)
-    return program
-
-
-def _check_against_cvxpy(key: str, program: ProgramData, problem: Any, params: Mapping[str, Any],
-                         variables: Mapping[str, Any], rng: np.random.Generator, chain: Any, inverse: Any) -> None:
-    """The stored form gives Clarabel cvxpy's data bit for bit, reads variables back as cvxpy does,
-    and one solve both ways gives the same status and point."""
-    import cvxpy as cp
-    from types import SimpleNamespace
-
-    from lyapcheck.sos.sdp import solve
-
-    for _ in range(2):
-        values = _random_values(params, rng)
-        for name, p in params.items():
-            p.value = values[name]
-        data, _, _ = problem.get_problem_data(cp.CLARABEL)
-        A, b = program.matrices(program.parameter_vector(values))
-        ref = data["A"].tocsc()
-        ref.sort_indices()
-        same = (np.array_equal(A.indptr, ref.indptr) and np.array_equal(A.indices, ref.indices)
-                and np.array_equal(A.data, ref.data) and np.array_equal(b, data["b"])
-                and np.array_equal(program.q, data["c"]))
-        if not same:
-            raise ValueError(f"program {key}: the compiled data differ from cvxpy's")
-    x = rng.normal(size=program.n)
-    zeros = np.zeros(program.m)
-    problem.unpack_results(SimpleNamespace(status="Solved", solve_time=0.0, iterations=0, x=x, z=zeros, s=zeros,
-                                           obj_val=0.0), chain, inverse)
-    mine = program.unpack(x)
-    for name, var in variables.items():
-        if not np.array_equal(np.asarray(var.value, dtype=np.float64), mine[name]):
-            raise ValueError(f"program {key}: variable {name} is read back differently from cvxpy")
-    report = solve(problem)
-    direct = CompiledProgram(program).solve(values)
-    if report.raw_status != direct.report.raw_status:
-        raise ValueError(f"program {key}: status {direct.report.raw_status} directly, {report.raw_status} via cvxpy")
-    if direct.values is not None and report.outcome in ("optimal", "inaccurate"):
-        for name, var in variables.items():
-            if not np.array_equal(np.asarray(var.value, dtype=np.float64), direct.values[name]):
-                raise ValueError(f"program {key}: variable {name} differs from cvxpy's solution")
+    return compile_problem(key, problem, params, variables)
 
 
 def write_all(keys: list[str] | None = None) -> list[Path]:
