@@ -5,6 +5,7 @@
     LyapcheckError                      base of everything the toolkit raises on purpose
     ├── InvalidParameter (ValueError)   a number, unit or key from outside is out of its range
     ├── InputFileError (ValueError)     a TOML / JSON / store file is missing or corrupt
+    │   └── ModelFileError              a model file breaks its contract (file, key, what)
     ├── DerivationError (RuntimeError)  the symbolic engine could not produce a required form
     ├── SolverError (RuntimeError)      a conic solver failed in a way we could not classify
     └── CertificateError (ValueError)   a certificate file fails its schema or exact re-check
@@ -36,6 +37,18 @@ class InvalidParameter(LyapcheckError, ValueError):
 
 class InputFileError(LyapcheckError, ValueError):
     """An input file is missing, unreadable or not in the expected format."""
+
+
+class ModelFileError(InputFileError):
+    """A model file (or a ``--set`` / ``--candidate`` / ``--box`` given with it) breaks the contract.
+
+    The message is one line: the file, the key (``[dynamics] x2``) and what is wrong there.
+    """
+
+    def __init__(self, source: str, key: str, message: str) -> None:
+        self.source = source
+        self.key = key
+        super().__init__(f"{source}: {key}: {message}")
 
 
 class DerivationError(LyapcheckError, RuntimeError):

@@ -295,3 +295,59 @@ def parse_quantity(field: str, value: object, kind: Kind, *, bare_allowed: bool 
             return magnitude
         raise InvalidParameter(field, kind.example + " with its unit", value)
     return magnitude * _si_factor(field, unit_text, kind, value)
+
+
+def _base_factor(field: str, unit_text: str, got: object) -> Fraction:
+    """Exact factor that turns ``unit_text`` into SI base units, whatever its dimension (pint's,
+    remembered across runs like :func:`_si_factor`'s)."""
+    key = f"SI_BASE|{unit_text}"
+    remembered = _remembered_factors().get(key)
+    if remembered is not None:
+        try:
+            return Fraction(remembered)
+        except (ValueError, ZeroDivisionError):
+            pass
+    ureg = registry()
+    import pint
+
+    expected = "a number, or a number with a unit such as '0.75 mm' or '2.8 Hz'"
+    try:
+        unit = ureg.Unit(unit_text)
+        one, two = (1 * unit).to_base_units(), (2 * unit).to_base_units()
+    except Exception:  # noqa: BLE001 - pint raises a zoo of parser errors on odd strings
+        raise InvalidParameter(field, expected, got) from None
+    factor = float(one.magnitude)
+    if not math.isfinite(factor) or factor == 0 or float(two.magnitude) != 2 * factor:
+        # an offset unit (degC) has no factor: 2 degC is not twice 1 degC in kelvin
+        raise InvalidParameter(field, expected + " (a unit with an offset, such as degC, has no SI factor)", got)
+    del pint
+    exact = Fraction(Decimal(repr(factor)))
+    _remember_factor(key, exact)
+    return exact
+
+
+def parse_si_quantity(field: str, value: object) -> Fraction:
+    """A quantity of any dimension, exactly, in SI base units: what a model file's parameters,
+    disturbance bounds, equilibrium and domain are read with.
+
+    A number without a unit is taken as it is (already SI). A unit is converted to SI base units
+    by pint: ``"0.75 mm"`` is ``3/4000``, ``"0.088 mm/s"`` is ``11/125000``. A model file does not
+    say which of its parameters is a rotation, so ``Hz`` stays cycles per second (``"2.8 Hz"`` is
+    2.8 1/s) while ``rad/s`` and ``rpm`` are angular velocities (``"60 rpm"`` is 2 pi rad/s, a
+    radian being dimensionless): give an angular velocity in rad/s.
+    """
+    if isinstance(value, bool) or value is None:
+        raise InvalidParameter(field, "a number, or a number with a unit such as '0.75 mm'", value)
+    if isinstance(value, str):
+        match = _NUMBER.match(value)
+        if match is None:
+            raise InvalidParameter(field, "a finite number, or a number with a unit such as '0.75 mm'", value)
+        number = _exact_decimal(field, Decimal(match.group(1)), value)
+        unit_text = match.group(2)
+        if unit_text:
+            number *= _base_factor(field, unit_text, value)
+    else:
+        number = parse_quantity(field, value, Kind.DIMENSIONLESS)
+    if not representable(number):
+        raise InvalidParameter(field, MAGNITUDES, value)
+    return number

@@ -278,7 +278,7 @@ def _load_lapack_modules() -> None:
                 delattr(scipy, "linalg")
 
 
-def _settings(max_iter: int) -> Any:
+def _settings(max_iter: int, time_limit: float | None = None) -> Any:
     """Clarabel's settings for a direct solve: the options :func:`solve` passes through cvxpy
     (the rest are Clarabel's defaults, as there)."""
     import clarabel
@@ -289,6 +289,8 @@ def _settings(max_iter: int) -> Any:
     settings.tol_gap_rel = tol.SOLVER_TOL_GAP_REL
     settings.tol_feas = tol.SOLVER_TOL_FEAS
     settings.max_iter = max_iter
+    if time_limit is not None:
+        settings.time_limit = float(time_limit)
     settings.max_threads = SOLVER_THREADS
     return settings
 
@@ -322,17 +324,20 @@ class CompiledProgram:
         self._cones = cones
         self._settings = _settings(tol.SOLVER_MAX_ITER)
 
-    def solve(self, values: Mapping[str, Any], *, max_iter: int | None = None) -> DirectSolve:
+    def solve(self, values: Mapping[str, Any], *, max_iter: int | None = None,
+              time_limit: float | None = None) -> DirectSolve:
         """Solve at these parameter values; never raises for solver failures (as :func:`solve`).
 
-        ``max_iter`` replaces :data:`~lyapcheck.tolerances.SOLVER_MAX_ITER` for this solve only.
+        ``max_iter`` replaces :data:`~lyapcheck.tolerances.SOLVER_MAX_ITER` for this solve only;
+        ``time_limit`` (seconds) makes Clarabel stop there (status ``user_limit``: no certificate).
         """
         import clarabel
         import numpy as np
 
         if self._cones is None:
             self._setup()
-        settings = self._settings if max_iter is None else _settings(max_iter)
+        settings = self._settings if max_iter is None and time_limit is None else \
+            _settings(tol.SOLVER_MAX_ITER if max_iter is None else max_iter, time_limit)
         start = time.perf_counter()
         A, b = self.data.matrices(self.data.parameter_vector(values))
         n = self.data.n

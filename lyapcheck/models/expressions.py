@@ -1,0 +1,268 @@
+"""The expression language of model files: a whitelist over Python's ``ast``, built into exact
+rational functions.
+
+A user's string is data, never code. It is parsed by :func:`ast.parse` (which builds a tree and
+runs nothing), and the tree is walked by :func:`_build`, which accepts exactly the contract's
+small language (DESIGN.md, "Model files"):
+
+- numbers: integer, decimal and exponent literals, read exactly from their source text
+  (``0.1`` is ``1/10``, not its binary neighbour);
+- the names the file declares (states, parameters, disturbances);
+- ``+ - * /``, unary ``-`` and ``+``, parentheses;
+- ``**`` with a non-negative integer literal exponent of at most :data:`MAX_EXPONENT`.
+
+Everything else is refused with one line that says what was found and what to write instead: a
+function call (``sqrt``, ``sin``: the field must be polynomial or rational; recast it), ``^``
+(write ``**``), a non-integer, negative or huge exponent, an unknown name, a non-finite number.
+Nothing reaches ``eval``, ``exec``, ``sympify`` or ``parse_expr``.
+
+The result is a :class:`Rational`: numerator and denominator polynomials with exact rational
+coefficients in all the file's names. Sizes are bounded while the tree is built (degree, number
+of terms), so an expression like ``(x1 + ... + x12)**12`` is refused before it is expanded.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Final
+
+from lyapcheck.sos.polynomials import Poly, Ring, total_degree
+
+#: the largest exponent literal after ``**``
+MAX_EXPONENT: Final = 12
+#: the largest total degree of a numerator or a denominator, in all the file's names
+MAX_TOTAL_DEGREE: Final = 12
+#: the most terms a numerator or denominator may have while it is built
+MAX_TERMS: Final = 2000
+#: the longest expression, in characters
+MAX_EXPRESSION_LENGTH: Final = 4000
+#: the deepest nesting of the expression's tree (parentheses, operators)
+MAX_DEPTH: Final = 60
+#: a number's magnitude must be finite as a double, and a non-zero one at least the smallest normal
+NUMBER_RANGE: Final = "finite as a double (magnitude at most 1.8e308) and, if not 0, at least 2.2e-308"
+
+#: functions users write, and what to do instead (every call is refused; these get a hint)
+_RECAST_HINT: Final = ("the field must be polynomial or rational in the states: recast it (introduce a new state "
+                       "for the function, e.g. for sin(x1): states s = sin(x1), c = cos(x1) with s' = c*x1', "
+                       "c' = -s*x1')")
+
+
+class ExpressionError(ValueError):
+    """An expression outside the language; the message says what and what to write instead."""
+
+
+@dataclass(frozen=True)
+class Rational:
+    """``numerator / denominator``: exact polynomials in one :class:`Ring` (denominator non-zero)."""
+
+    ring: Ring
+    numerator: Poly
+    denominator: Poly
+
+    @classmethod
+    def polynomial(cls, ring: Ring, p: Poly) -> "Rational":
+        return cls(ring, p, ring.constant(1))
+
+    def is_polynomial(self) -> bool:
+        return self.denominator.is_constant()
+
+    def normalized(self) -> "Rational":
+        """Common factors cancelled and a constant denominator folded into the numerator."""
+        num, den = self.numerator, self.denominator
+        if num.is_zero():
+            return Rational(self.ring, num, self.ring.constant(1))
+        g = num.gcd(den)
+        if not g.is_constant():
+            num, den = num / g, den / g
+        if den.is_constant():
+            c = den.leading_coefficient()
+            return Rational(self.ring, num * (1 / c), self.ring.constant(1))
+        # a positive leading coefficient, so that equal rational functions look alike
+        lead = den.leading_coefficient()
+        return Rational(self.ring, num * (1 / lead), den * (1 / lead))
+
+    def __add__(self, other: "Rational") -> "Rational":
+        if self.denominator == other.denominator:
+            return Rational(self.ring, self.numerator + other.numerator, self.denominator)
+        return Rational(self.ring, self.numerator * other.denominator + other.numerator * self.denominator,
+                        self.denominator * other.denominator)
+
+    def __neg__(self) -> "Rational":
+        return Rational(self.ring, -self.numerator, self.denominator)
+
+    def __sub__(self, other: "Rational") -> "Rational":
+        return self + (-other)
+
+    def __mul__(self, other: "Rational") -> "Rational":
+        return Rational(self.ring, self.numerator * other.numerator, self.denominator * other.denominator)
+
+    def divide(self, other: "Rational") -> "Rational":
+        if other.numerator.is_zero():
+            raise ExpressionError("division by zero")
+        return Rational(self.ring, self.numerator * other.denominator, self.denominator * other.numerator)
+
+    def power(self, k: int) -> "Rational":
+        return Rational(self.ring, self.numerator ** k, self.denominator ** k)
+
+
+def parse_expression(text: str, ring: Ring) -> Rational:
+    """The exact rational function of ``text``, over ``ring`` (whose names are the declared ones).
+
+    Raises
+    ------
+    ExpressionError
+        Anything outside the language, or beyond the size limits; the message is one line.
+    """
+    if not isinstance(text, str):
+        raise ExpressionError(f"an expression must be a string, got {type(text).__name__} {text!r}")
+    if len(text) > MAX_EXPRESSION_LENGTH:
+        raise ExpressionError(f"the expression has {len(text)} characters; the limit is {MAX_EXPRESSION_LENGTH} "
+                              "(MAX_EXPRESSION_LENGTH)")
+    if not text.strip():
+        raise ExpressionError("the expression is empty")
+    if "\n" in text.strip() or ";" in text:
+        raise ExpressionError("an expression is one line, without ';'")
+    depth = 0
+    for ch in text:  # ast.parse itself recurses: refuse absurd nesting before it does
+        depth += ch == "("
+        depth -= ch == ")"
+        if depth > MAX_DEPTH:
+            raise ExpressionError(f"parentheses nested deeper than {MAX_DEPTH} (MAX_DEPTH)")
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as exc:
+        raise ExpressionError(f"not a valid expression ({exc.msg}{_where(exc.offset)})") from None
+    except (RecursionError, MemoryError, ValueError):
+        raise ExpressionError("not a valid expression (too deeply nested)") from None
+    builder = _Builder(text.strip(), ring)
+    result = builder.build(tree.body, 0)
+    return result.normalized()
+
+
+def _where(offset: int | None) -> str:
+    return f" at character {offset}" if offset else ""
+
+
+class _Builder:
+    """Walks a parsed tree, accepting only the contract's nodes (see the module docstring)."""
+
+    def __init__(self, source: str, ring: Ring) -> None:
+        self.source = source
+        self.ring = ring
+
+    def build(self, node: ast.AST, depth: int) -> Rational:
+        if depth > MAX_DEPTH:
+            raise ExpressionError(f"the expression is nested deeper than {MAX_DEPTH} (MAX_DEPTH)")
+        if isinstance(node, ast.Constant):
+            return Rational.polynomial(self.ring, self.ring.constant(self._number(node)))
+        if isinstance(node, ast.Name):
+            if node.id not in self.ring.names:
+                declared = ", ".join(self.ring.names) or "none"
+                raise ExpressionError(f"unknown name '{node.id}' (declared names: {declared}; functions and "
+                                      "constants such as pi are not part of the language)")
+            return Rational.polynomial(self.ring, self.ring.gen(node.id))
+        if isinstance(node, ast.UnaryOp):
+            if isinstance(node.op, ast.USub):
+                return -self.build(node.operand, depth + 1)
+            if isinstance(node.op, ast.UAdd):
+                return self.build(node.operand, depth + 1)
+            raise ExpressionError(f"the operator '{_OPERATOR_TEXT.get(type(node.op), type(node.op).__name__)}' "
+                                  "is not part of the language (use + - * / **)")
+        if isinstance(node, ast.BinOp):
+            return self._binary(node, depth)
+        if isinstance(node, ast.Call):
+            name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)
+            raise ExpressionError(f"function call '{name}(...)' is not allowed: {_RECAST_HINT}")
+        raise ExpressionError(f"'{ast.unparse(node)}' is not part of the language (numbers, declared names, "
+                              "+ - * /, ** with a non-negative integer, parentheses)")
+
+    def _number(self, node: ast.Constant) -> Fraction:
+        value = node.value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ExpressionError(f"'{ast.unparse(node)}' is not a number of the language")
+        if isinstance(value, int):
+            number = Fraction(value)
+        else:
+            if not math.isfinite(value):
+                raise ExpressionError(f"the number '{ast.get_source_segment(self.source, node)}' is not finite "
+                                      f"(numbers must be {NUMBER_RANGE})")
+            text = ast.get_source_segment(self.source, node) or repr(value)
+            try:
+                number = Fraction(text)
+            except (ValueError, ZeroDivisionError):
+                number = Fraction(repr(value))
+        if number and not (2.2250738585072014e-308 <= abs(number) <= 1.7976931348623157e308):
+            raise ExpressionError(f"the number '{ast.get_source_segment(self.source, node)}' is out of range "
+                                  f"(numbers must be {NUMBER_RANGE})")
+        return number
+
+    def _binary(self, node: ast.BinOp, depth: int) -> Rational:
+        op = node.op
+        if isinstance(op, ast.BitXor):
+            raise ExpressionError(f"'^' in '{ast.unparse(node)}' is not a power: write '**' "
+                                  f"(e.g. {ast.unparse(node.left)}**{ast.unparse(node.right)})")
+        if isinstance(op, ast.Pow):
+            base = self.build(node.left, depth + 1)
+            k = self._exponent(node.right)
+            limit = MAX_TOTAL_DEGREE
+            if (total_degree(base.numerator) * k > limit or total_degree(base.denominator) * k > limit):
+                raise ExpressionError(f"'{ast.unparse(node)}' has total degree above {limit} (MAX_TOTAL_DEGREE)")
+            return self._checked(base.power(k), node)
+        if not isinstance(op, (ast.Add, ast.Sub, ast.Mult, ast.Div)):
+            raise ExpressionError(f"the operator '{_OPERATOR_TEXT.get(type(op), type(op).__name__)}' is not part "
+                                  "of the language (use + - * / **)")
+        left = self.build(node.left, depth + 1)
+        right = self.build(node.right, depth + 1)
+        if isinstance(op, ast.Add):
+            return self._checked(left + right, node)
+        if isinstance(op, ast.Sub):
+            return self._checked(left - right, node)
+        if isinstance(op, ast.Mult):
+            return self._checked(left * right, node)
+        try:
+            return self._checked(left.divide(right), node)
+        except ExpressionError:
+            raise ExpressionError(f"division by zero in '{ast.unparse(node)}'") from None
+
+    def _exponent(self, node: ast.AST) -> int:
+        text = ast.unparse(node)
+        if isinstance(node, ast.Constant) and isinstance(node.value, int) and not isinstance(node.value, bool):
+            k = int(node.value)
+            if k > MAX_EXPONENT:
+                raise ExpressionError(f"the exponent {k} is above the limit {MAX_EXPONENT} (MAX_EXPONENT)")
+            return k
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+            raise ExpressionError(f"the exponent '{text}' is negative: write a division (1/x**k) instead")
+        if isinstance(node, ast.Constant) and isinstance(node.value, float):
+            raise ExpressionError(f"the exponent '{text}' is not an integer: the field must be polynomial or "
+                                  "rational in the states")
+        raise ExpressionError(f"the exponent '{text}' must be a non-negative integer literal (at most {MAX_EXPONENT})")
+
+    def _checked(self, r: Rational, node: ast.AST) -> Rational:
+        """Cancel common factors now and then, and refuse sizes beyond the limits."""
+        if len(r.denominator) > 1 and not r.denominator.is_constant() and \
+                (len(r.numerator) > 50 or len(r.denominator) > 50):
+            r = r.normalized()
+        for part in (r.numerator, r.denominator):
+            if total_degree(part) > MAX_TOTAL_DEGREE:
+                r = r.normalized()
+                if total_degree(r.numerator) > MAX_TOTAL_DEGREE or total_degree(r.denominator) > MAX_TOTAL_DEGREE:
+                    raise ExpressionError(f"'{_short(ast.unparse(node))}' has total degree above {MAX_TOTAL_DEGREE} "
+                                          "(MAX_TOTAL_DEGREE)")
+            if len(part) > MAX_TERMS:
+                raise ExpressionError(f"'{_short(ast.unparse(node))}' expands to more than {MAX_TERMS} terms "
+                                      "(MAX_TERMS)")
+        return r
+
+
+def _short(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+_OPERATOR_TEXT: Final[dict[type, str]] = {
+    ast.FloorDiv: "//", ast.Mod: "%", ast.MatMult: "@", ast.LShift: "<<", ast.RShift: ">>", ast.BitOr: "|",
+    ast.BitAnd: "&", ast.BitXor: "^", ast.Invert: "~", ast.Not: "not",
+}

@@ -1,0 +1,282 @@
+"""``quadratic`` and ``sos_gas``: a global polynomial Lyapunov function, found by SOS and checked exactly.
+
+The certificate (kind Lyapunov of :mod:`lyapcheck.sos.certificates`), in the scaled coordinates of
+:mod:`lyapcheck.models.field`: ``V = z_V^T Q_V z_V`` over the monomials of degree 1 to ``k``,
+``Q_V > 0``, and
+
+    -grad V . g - mu V D = z_W^T Q_W z_W,   Q_W > 0,   mu >= 0,
+
+with a pure power of every state in ``z_W``. Then ``V >= lambda |z|^2`` (positive definite and
+radially unbounded) and ``V' = grad V . g / D = -mu V - sigma / D < 0`` away from 0: the equilibrium
+is globally asymptotically stable, and ``V`` decays at least like ``exp(-mu t)``. For a quadratic
+``V = z^T P z`` with ``mu > 0`` this is GES: ``|x(t)| <= sqrt(c2/c1) |x0| exp(-mu t / 2)`` with
+``c1 I <= P <= c2 I`` (exact rational bounds). For a ``V`` of higher degree the decay of ``V`` is not
+a bound linear in ``|x0|``, so only GAS (and the decay rate of ``V``) is claimed.
+
+The search (a cvxpy program per structure, :mod:`lyapcheck.sos.program`): maximize the smallest
+eigenvalue ``t`` of ``Q_V`` and ``Q_W`` with ``trace Q_V = 1``; ``z_W`` is reduced by the Newton
+polytope; where the field has sign symmetries the Gram matrices are block diagonal
+(:mod:`lyapcheck.sos.bases`). First ``mu = 0`` (GAS), then the largest ``mu`` found by a geometric
+search, each candidate decided by the exact check.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import Any, Callable, Final, Sequence
+
+from lyapcheck.models.field import ScaledField, StateField, state_field, unscale_polynomial
+from lyapcheck.models.search import BudgetExhausted, ParameterValues, Search, one, param
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos import bases
+from lyapcheck.sos.certificates import GramPoly, check_lyapunov
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials
+from lyapcheck.sos.program import Gram, Identity, Solution, Structure, Term
+
+#: degrees of V that ``sos_gas`` tries, in turn (``quadratic`` is degree 2 alone)
+SOS_GAS_DEGREES: Final = (2, 4, 6, 8)
+#: the largest Gram basis a search builds (rows); a degree that needs more is skipped, named
+MAX_GRAM_ROWS: Final = 160
+#: decay-rate search in scaled time: geometric steps down from MU_MAX to the first mu proved, then
+#: MU_BISECTION_STEPS geometric bisections (the rate is a figure: a few per cent resolve it)
+MU_MAX: Final = Fraction(4)
+MU_MIN: Final = Fraction(1, 10**6)
+MU_BISECTION_STEPS: Final = 4
+#: facial reduction: a remainder's basis monomial whose diagonal is below this fraction of the
+#: largest is dropped and the search repeated, at most FACIAL_ROUNDS times
+FACIAL_TOL: Final = 1e-7
+FACIAL_ROUNDS: Final = 3
+
+
+def symmetry(field: StateField) -> list[tuple[int, ...]]:
+    """The sign changes of the states that map the field to itself (``g_i`` like ``z_i``, ``D`` invariant)."""
+    return bases.sign_symmetries(field.n, [(field.ring.support(gi), i) for i, gi in enumerate(field.g)]
+                                 + [(field.ring.support(field.D), None)])
+
+
+def _products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) -> set[Monomial]:
+    return {tuple(a + b for a, b in zip(basis[i], basis[j])) for idx in blocks for i in idx for j in idx}
+
+
+def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequence[int]],
+                       drop: frozenset[Monomial] = frozenset()) -> Structure | None:
+    """The program for a ``V`` of this degree, or None when no strict certificate can exist in it
+    (the remainder's reduced basis lacks a pure power of some state). ``drop``: monomials the
+    remainder's basis leaves out (facial reduction, :func:`vanishing_monomials`)."""
+    n = field.n
+    ring = field.ring
+    z_v = monomials(n, 1, degree // 2)
+    v_blocks = bases.character_blocks(z_v, generators)
+    products = _products(z_v, v_blocks)
+    target: set[Monomial] = set()
+    for i, gi in enumerate(field.g):
+        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
+    target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+    z_w = [m for m in bases.sos_basis(n, target) if m not in drop]
+    if not z_w or not bases.has_pure_powers(z_w, range(n)) or len(z_w) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
+        return None
+    w_blocks = bases.character_blocks(z_w, generators)
+    terms = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in enumerate(field.g)]
+    terms.append(Term(param("muD", ring.support(field.D)), "V"))
+    terms.append(Term(one(ring, -1), "W"))
+    return Structure(
+        nvars=n,
+        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks)))),
+        scalars=(),
+        identities=(Identity("lyapunov", tuple(terms), None, "W"),),
+        objective=("max_margin",), trace_one=("V",))
+
+
+def lyapunov_values(field: StateField, structure: Structure, mu: Fraction) -> ParameterValues:
+    values = ParameterValues()
+    ring = field.ring
+    for i, gi in enumerate(field.g):
+        values.set_poly(ring, f"g{i}", -gi, ring.support(gi))
+    values.set_poly(ring, "muD", field.D * _fmpq(-mu), ring.support(field.D))
+    return values
+
+
+def _fmpq(x: Fraction) -> Any:
+    import flint
+
+    return flint.fmpq(x.numerator, x.denominator)
+
+
+def attempt(field: StateField, structure: Structure, mu: Fraction, search: Search) -> dict[str, Any] | None:
+    """One solve at decay rate ``mu``; the exact certificate if it passes the exact check."""
+    return attempt_with_solution(field, structure, mu, search)[0]
+
+
+def attempt_with_solution(field: StateField, structure: Structure, mu: Fraction, search: Search
+                          ) -> tuple[dict[str, Any] | None, Solution]:
+    values = lyapunov_values(field, structure, mu)
+    solution = search.solve(structure, values)
+    if not solution.usable or solution.scalars.get("t", 0.0) <= 0:
+        return None, solution
+    point = search.exact(structure, solution, values)
+    if point is None:
+        return None, solution
+    V = GramPoly.of(structure.gram("V").basis, point.grams["V"])
+    W = GramPoly.of(structure.gram("W").basis, point.grams["W"])
+    ok, _ = check_lyapunov(field.ring, field.g, field.D, V, W, mu)
+    if not ok:
+        return None, solution
+    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"]}, solution
+
+
+def vanishing_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
+    """Facial reduction: the basis monomials whose diagonal entry the solver drove to (nearly) 0.
+
+    A positive semidefinite Gram matrix with a zero diagonal entry has a zero row, so its monomial
+    contributes nothing and keeps the matrix from being positive definite, which the exact check
+    needs; the search is repeated without it (the generic Newton polytope cannot see cancellations
+    that the identity forces, e.g. a coefficient that must vanish with another)."""
+    import numpy as np
+
+    Q = solution.grams.get(gram.name)
+    if Q is None or not solution.usable:
+        return frozenset()
+    diag = np.abs(np.diag(Q))
+    peak = float(diag.max()) if diag.size else 0.0
+    if peak <= 0:
+        return frozenset()
+    return frozenset(m for m, d in zip(gram.basis, diag) if d <= FACIAL_TOL * peak)
+
+
+def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], found: dict[str, Any]) -> dict[str, Any]:
+    """The certificate of the largest ``mu`` found, starting from ``found`` (``mu = 0``): step down
+    geometrically from :data:`MU_MAX` to the first ``mu`` proved, then bisect geometrically."""
+    lo, hi = Fraction(0), MU_MAX
+    candidate = MU_MAX
+    while candidate >= MU_MIN:
+        better = attempt_at(candidate)
+        if better is not None:
+            found, lo = better, candidate
+            break
+        hi = candidate
+        candidate = candidate / 4
+    if lo > 0:
+        for _ in range(MU_BISECTION_STEPS):
+            mid = Fraction(math.sqrt(float(lo) * float(hi))).limit_denominator(10**6)
+            if not lo < mid < hi:
+                break
+            better = attempt_at(mid)
+            if better is not None:
+                found, lo = better, mid
+            else:
+                hi = mid
+    return found
+
+
+def search_degree(field: StateField, degree: int, search: Search) -> tuple[dict[str, Any] | None, str]:
+    """A certificate with ``V`` of this degree (and its best decay rate), or None and why not."""
+    generators = symmetry(field)
+    drop: frozenset[Monomial] = frozenset()
+    for _ in range(FACIAL_ROUNDS + 1):
+        structure = lyapunov_structure(field, degree, generators, drop)
+        if structure is None:
+            return None, f"degree {degree}: no strict certificate fits (Newton polytope, or above {MAX_GRAM_ROWS} rows)"
+        found, solution = attempt_with_solution(field, structure, Fraction(0), search)
+        if found is not None:
+            break
+        vanishing = vanishing_monomials(structure.gram("W"), solution)
+        if not vanishing:
+            return None, f"degree {degree}: none found"
+        drop = drop | vanishing
+    else:
+        return None, f"degree {degree}: none found"
+    found = best_decay_rate(lambda mu: attempt(field, structure, mu, search), found)
+    found["degree"] = degree
+    return found, f"degree {degree}: found"
+
+
+def certificate_json(scaled: ScaledField, found: dict[str, Any]) -> dict[str, Any]:
+    """The exact certificate: V in the declared (shifted) states, and the Gram matrices in the
+    scaled ones (the scaling is at the document's top)."""
+    field = state_field(scaled)
+    v_scaled = found["V"].poly(field.ring)
+    v_orig = unscale_polynomial(field.ring, v_scaled, scaled.scaling, field.n)
+    return {"kind": "lyapunov", "degree": found["degree"], "mu_scaled": str(found["mu"]),
+            "V": terms_json(field.ring, v_orig), "gram_V": found["V"].to_json(), "gram_sigma": found["W"].to_json()}
+
+
+def terms_json(ring: Ring, p: Poly) -> dict[str, Any]:
+    """The contract's exact polynomial: ``{"terms": [["3/2", [2, 0]], ...]}``."""
+    return {"terms": [[str(c), list(m)] for m, c in sorted(ring.terms(p).items(), key=lambda t: (sum(t[0]), t[0]),
+                                                          reverse=False)]}
+
+
+def ges_bounds(scaled: ScaledField, found: dict[str, Any]) -> tuple[Fraction, Fraction] | None:
+    """Exact ``c1 <= lambda_min(P) <= lambda_max(P) <= c2`` of the quadratic ``V = x^T P x`` in the
+    declared (shifted) states, or None (only for degree 2)."""
+    import numpy as np
+
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    if found["degree"] != 2:
+        return None
+    n = scaled.n
+    s = scaled.scaling.states
+    Qv = found["V"].Q
+    order = [found["V"].basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
+    P = [[Qv[order[i]][order[j]] / (s[i] * s[j]) for j in range(n)] for i in range(n)]
+    lam = np.linalg.eigvalsh(np.array([[float(x) for x in row] for row in P]))
+    c1 = Fraction(float(lam[0]) * (1 - 1e-6)).limit_denominator(10**12) if lam[0] > 0 else Fraction(0)
+    c2 = Fraction(float(lam[-1]) * (1 + 1e-6))
+    if c1 <= 0:
+        return None
+    eye = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    if not is_positive_definite([[P[i][j] - c1 * eye[i][j] for j in range(n)] for i in range(n)]):
+        return None
+    if not is_positive_definite([[c2 * eye[i][j] - P[i][j] for j in range(n)] for i in range(n)]):
+        return None
+    return c1, c2
+
+
+def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search) -> ConditionResult:
+    """``quadratic`` (degrees ``(2,)``) or ``sos_gas`` (rising degrees)."""
+    field = state_field(scaled)
+    tried: list[str] = []
+    try:
+        for degree in degrees:
+            found, why = search_degree(field, degree, search)
+            tried.append(why)
+            if found is not None:
+                return _certified(scaled, name, found, search)
+    except BudgetExhausted as exc:
+        return ConditionResult(name, "inconclusive", f"{exc}; tried: {'; '.join(tried) or 'nothing finished'}",
+                               numbers={"reason": str(exc), "tried": tried}, solver={"solves": search.log})
+    what = "quadratic V" if name == "quadratic" else f"polynomial V of degree up to {max(degrees)}"
+    return ConditionResult(name, "not_certified",
+                           f"no {what} with V' < 0 everywhere was found ({'; '.join(tried)}); this is not a proof that "
+                           "none exists", numbers={"tried": tried}, solver={"solves": search.log},
+                           property="GAS" if name != "quadratic" else None)
+
+
+def _certified(scaled: ScaledField, name: str, found: dict[str, Any], search: Search) -> ConditionResult:
+    mu = found["mu"]
+    T = scaled.scaling.time
+    rate_v = float(mu / T)
+    cert = certificate_json(scaled, found)
+    numbers: dict[str, Any] = {"degree": found["degree"], "decay_rate_V_per_s": rate_v,
+                               "relative_margin": found["margin"]}
+    if name == "quadratic" and mu > 0:
+        bounds = ges_bounds(scaled, found)
+        if bounds is not None:
+            from lyapcheck import exact
+
+            c1, c2 = bounds
+            k_bound = exact.sqrt_upper(c2 / c1, 12)
+            cert.update({"c1": str(c1), "c2": str(c2), "k": str(k_bound)})
+            numbers.update({"k": float(k_bound), "decay_rate_per_s": rate_v / 2})
+            return ConditionResult(name, "certified",
+                                   f"GES: |x(t)| <= {float(k_bound):.4g} |x0| exp(-{rate_v / 2:.4g} t) from every start "
+                                   "(a quadratic V with V' <= -mu V, checked exactly)", numbers=numbers,
+                                   certificate=cert, solver={"solves": search.log}, property="GES")
+    tail = f", and V' <= -{rate_v:.4g} V (V decays exponentially from every start)" if mu > 0 else ""
+    what = "a quadratic V" if found["degree"] == 2 else f"a polynomial V of degree {found['degree']}"
+    return ConditionResult(name, "certified", f"GAS: {what} with V' < 0 away from the equilibrium{tail} "
+                                              "(checked exactly)",
+                           numbers=numbers, certificate=cert, solver={"solves": search.log}, property="GAS")

@@ -1,0 +1,365 @@
+"""Model files: any polynomial or rational closed loop ``x' = f(x, p, d)``, read and validated.
+
+The format is DESIGN.md's "Model files (contract)"::
+
+    [model]          name, states (the order of the state vector), source (optional)
+    [parameters]     name = number or "number unit" (SI inside)
+    [disturbances]   name = bound b, meaning |d(t)| <= b
+    [dynamics]       one entry per state: its time derivative, an expression
+    [equilibrium]    optional; default every state 0; checked exactly
+    [outputs]        optional; default each state
+    [domain]         optional: a box of initial states, name = [lo, hi]
+
+Every error is one line naming the file, the key and what is wrong (:class:`ModelFileError`,
+exit code 2 on the command line). The file's text is kept as it was read, with its SHA-256:
+a certificate carries both, so that ``verify`` re-derives the field from the same text.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import keyword
+import tomllib
+from dataclasses import dataclass, field, replace
+from fractions import Fraction
+from pathlib import Path
+from typing import Any, Final, Mapping, Sequence
+
+from lyapcheck.errors import InvalidParameter, ModelFileError
+from lyapcheck.models.expressions import ExpressionError, Rational, parse_expression
+from lyapcheck.sos.polynomials import Ring, degree_in
+
+#: the most states a model may have
+MAX_STATES: Final = 12
+#: the most parameters and the most disturbances
+MAX_PARAMETERS: Final = 64
+MAX_DISTURBANCES: Final = 6
+#: the largest model file, in bytes
+MAX_FILE_BYTES: Final = 256 * 1024
+
+SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibrium", "outputs", "domain")
+MODEL_KEYS: Final = ("name", "states", "source")
+
+
+@dataclass(frozen=True)
+class Model:
+    """A validated model file: names, exact SI values and the exact field.
+
+    ``ring`` has every declared name: the states, then the disturbances, then the parameters.
+    ``dynamics[i]`` is the right-hand side of ``states[i]`` with the parameters still symbols
+    (:meth:`with_parameters` gives other values); ``parameters`` are their exact SI values.
+    """
+
+    source: str
+    text: str
+    name: str
+    origin: str
+    states: tuple[str, ...]
+    parameters: dict[str, Fraction]
+    parameters_given: dict[str, str]
+    disturbances: dict[str, Fraction]
+    ring: Ring
+    dynamics: tuple[Rational, ...]
+    equilibrium: tuple[Fraction, ...]
+    outputs: dict[str, Rational]
+    output_text: dict[str, str]
+    domain: dict[str, tuple[Fraction, Fraction]] | None
+    overrides: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def sha256(self) -> str:
+        return hashlib.sha256(self.text.encode()).hexdigest()
+
+    @property
+    def state_ring(self) -> Ring:
+        """The states and the disturbances: the variables of the field once parameters are set."""
+        return Ring(self.states + tuple(self.disturbances))
+
+    @property
+    def n(self) -> int:
+        return len(self.states)
+
+
+def load_model(path: str | Path, overrides: Mapping[str, object] | None = None) -> Model:
+    """Read and validate a model file; ``overrides`` are ``--set NAME=VALUE`` (parameters or
+    disturbance bounds)."""
+    source = str(path)
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise ModelFileError(source, "file", f"is {size} bytes; the limit is {MAX_FILE_BYTES} (MAX_FILE_BYTES)")
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ModelFileError(source, "file", "not found") from None
+    except IsADirectoryError:
+        raise ModelFileError(source, "file", "is a directory, not a model file") from None
+    except UnicodeDecodeError:
+        raise ModelFileError(source, "file", "is not UTF-8 text") from None
+    return parse_model(text, source, overrides)
+
+
+def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, object] | None = None) -> Model:
+    """Validate a model file's text (see :func:`load_model`)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelFileError(source, "file", f"is not valid TOML ({exc})") from None
+    return _Reader(source, text, data, dict(overrides or {})).model()
+
+
+class _Reader:
+    def __init__(self, source: str, text: str, data: dict[str, Any], overrides: dict[str, object]) -> None:
+        self.source, self.text, self.data, self.overrides = source, text, data, overrides
+
+    def fail(self, key: str, message: str) -> ModelFileError:
+        return ModelFileError(self.source, key, message)
+
+    def table(self, name: str) -> dict[str, Any]:
+        value = self.data.get(name, {})
+        if not isinstance(value, dict):
+            raise self.fail(f"[{name}]", f"must be a table, got {type(value).__name__}")
+        return value
+
+    def model(self) -> Model:
+        unknown = [k for k in self.data if k not in SECTIONS]
+        if unknown:
+            raise self.fail(f"[{unknown[0]}]", f"unknown section (sections: {', '.join(SECTIONS)})")
+        head = self.table("model")
+        if "model" not in self.data:
+            raise self.fail("[model]", "missing (it declares the states)")
+        bad = [k for k in head if k not in MODEL_KEYS]
+        if bad:
+            raise self.fail(f"[model] {bad[0]}", f"unknown key (keys: {', '.join(MODEL_KEYS)})")
+        name = head.get("name", Path(self.source).stem)
+        origin = head.get("source", "")
+        for key, value in (("name", name), ("source", origin)):
+            if not isinstance(value, str):
+                raise self.fail(f"[model] {key}", f"must be text, got {value!r}")
+        states = self.states(head)
+        params, params_given = self.quantities("parameters", MAX_PARAMETERS)
+        dists, _ = self.quantities("disturbances", MAX_DISTURBANCES)
+        for key, b in dists.items():
+            if b < 0:
+                raise self.fail(f"[disturbances] {key}", f"is a bound |d| <= b and must be >= 0, got {float(b)!r}")
+        self.check_unique(states, params, dists)
+        params, params_given, dists = self.apply_overrides(params, params_given, dists)
+        ring = Ring(states + tuple(dists) + tuple(params))
+        dynamics = self.dynamics(states, ring, dists)
+        equilibrium = self.equilibrium(states, ring)
+        outputs, output_text = self.outputs(states, ring, dists, params)
+        domain = self.domain(states)
+        model = Model(source=self.source, text=self.text, name=name, origin=origin, states=states,
+                      parameters=params, parameters_given=params_given, disturbances=dists, ring=ring,
+                      dynamics=dynamics, equilibrium=equilibrium, outputs=outputs, output_text=output_text,
+                      domain=domain, overrides={k: str(v) for k, v in self.overrides.items()})
+        check_equilibrium(model)
+        return model
+
+    def states(self, head: dict[str, Any]) -> tuple[str, ...]:
+        states = head.get("states")
+        if not isinstance(states, list) or not states or not all(isinstance(s, str) for s in states):
+            raise self.fail("[model] states", f"must be a non-empty list of names, got {states!r}")
+        if len(states) > MAX_STATES:
+            raise self.fail("[model] states", f"has {len(states)} states; the limit is {MAX_STATES} (MAX_STATES)")
+        for s in states:
+            self.check_name("[model] states", s)
+        seen: set[str] = set()
+        for s in states:
+            if s in seen:
+                raise self.fail("[model] states", f"the name '{s}' is declared twice")
+            seen.add(s)
+        return tuple(states)
+
+    def check_name(self, key: str, name: str) -> None:
+        if not name.isidentifier() or keyword.iskeyword(name) or not name.isascii():
+            raise self.fail(key, f"'{name}' is not a valid name (letters, digits and _, not starting with a digit, "
+                                 "not a Python keyword)")
+
+    def quantities(self, section: str, limit: int) -> tuple[dict[str, Fraction], dict[str, str]]:
+        from lyapcheck.units import parse_si_quantity
+
+        table = self.table(section)
+        if len(table) > limit:
+            raise self.fail(f"[{section}]", f"has {len(table)} entries; the limit is {limit}")
+        values, given = {}, {}
+        for key, value in table.items():
+            self.check_name(f"[{section}] {key}", key)
+            if isinstance(value, dict):
+                raise self.fail(f"[{section}] {key}", "must be a number or a string with a unit, not a table")
+            try:
+                values[key] = parse_si_quantity(key, value)
+            except InvalidParameter as exc:
+                raise self.fail(f"[{section}] {key}", _unprefixed(exc)) from None
+            given[key] = str(value)
+        return values, given
+
+    def check_unique(self, states: Sequence[str], params: Mapping[str, Fraction], dists: Mapping[str, Fraction]) -> None:
+        kinds = {s: "a state" for s in states}
+        for section, names in (("parameters", params), ("disturbances", dists)):
+            for name in names:
+                if name in kinds:
+                    raise self.fail(f"[{section}] {name}", f"the name '{name}' is declared twice (also {kinds[name]})")
+                kinds[name] = "a parameter" if section == "parameters" else "a disturbance"
+
+    def apply_overrides(self, params: dict[str, Fraction], given: dict[str, str], dists: dict[str, Fraction]
+                        ) -> tuple[dict[str, Fraction], dict[str, str], dict[str, Fraction]]:
+        from lyapcheck.units import parse_si_quantity
+
+        params, given, dists = dict(params), dict(given), dict(dists)
+        for key, value in self.overrides.items():
+            if key in params:
+                target = params
+            elif key in dists:
+                target = dists
+            else:
+                names = ", ".join(list(params) + list(dists)) or "none"
+                raise self.fail(f"--set {key}", f"no parameter or disturbance named '{key}' (declared: {names})")
+            try:
+                target[key] = parse_si_quantity(key, value)
+            except InvalidParameter as exc:
+                raise self.fail(f"--set {key}", _unprefixed(exc)) from None
+            if target is dists and target[key] < 0:
+                raise self.fail(f"--set {key}", f"is a bound |d| <= b and must be >= 0, got {value!r}")
+            if target is params:
+                given[key] = str(value)
+        return params, given, dists
+
+    def expression(self, key: str, text: object, ring: Ring) -> Rational:
+        if not isinstance(text, (str, int, float)) or isinstance(text, bool):
+            raise self.fail(key, f"must be an expression in a string, got {text!r}")
+        try:
+            return parse_expression(str(text), ring)
+        except ExpressionError as exc:
+            raise self.fail(key, str(exc)) from None
+
+    def dynamics(self, states: tuple[str, ...], ring: Ring, dists: Mapping[str, Fraction]) -> tuple[Rational, ...]:
+        table = self.table("dynamics")
+        for key in table:
+            if key not in states:
+                raise self.fail(f"[dynamics] {key}", f"an equation without a state: no state named '{key}' "
+                                                     f"(states: {', '.join(states)})")
+        out = []
+        for s in states:
+            if s not in table:
+                raise self.fail("[dynamics]", f"the state '{s}' has no equation")
+            rhs = self.expression(f"[dynamics] {s}", table[s], ring)
+            den_vars = [v for v in dists if degree_in(ring, rhs.denominator, [v]) > 0]
+            if den_vars:
+                raise self.fail(f"[dynamics] {s}", f"the disturbance '{den_vars[0]}' appears in a denominator; "
+                                                   "disturbances may enter numerators only")
+            out.append(rhs)
+        return tuple(out)
+
+    def equilibrium(self, states: tuple[str, ...], ring: Ring) -> tuple[Fraction, ...]:
+        from lyapcheck.units import parse_si_quantity
+
+        table = self.table("equilibrium")
+        values = {s: Fraction(0) for s in states}
+        for key, value in table.items():
+            if key not in states:
+                raise self.fail(f"[equilibrium] {key}", f"no state named '{key}' (states: {', '.join(states)})")
+            try:
+                values[key] = parse_si_quantity(key, value)
+            except InvalidParameter as exc:
+                raise self.fail(f"[equilibrium] {key}", _unprefixed(exc)) from None
+        return tuple(values[s] for s in states)
+
+    def outputs(self, states: tuple[str, ...], ring: Ring, dists: Mapping[str, Fraction],
+                params: Mapping[str, Fraction]) -> tuple[dict[str, Rational], dict[str, str]]:
+        table = self.table("outputs")
+        if not table:
+            return ({s: Rational.polynomial(ring, ring.gen(s)) for s in states}, {s: s for s in states})
+        out, texts = {}, {}
+        for key, text in table.items():
+            self.check_name(f"[outputs] {key}", key)
+            if key in params or key in dists:
+                raise self.fail(f"[outputs] {key}", f"the name '{key}' is declared twice (also a "
+                                                    f"{'parameter' if key in params else 'disturbance'})")
+            expr = self.expression(f"[outputs] {key}", text, ring)
+            if not expr.is_polynomial() and degree_in(ring, expr.denominator, states) > 0:
+                raise self.fail(f"[outputs] {key}", "an output must be polynomial in the states (a bound on it is "
+                                                    "proved through its square)")
+            if any(degree_in(ring, expr.numerator, [d]) > 0 for d in dists):
+                raise self.fail(f"[outputs] {key}", "an output may not depend on a disturbance")
+            out[key], texts[key] = expr, str(text)
+        return out, texts
+
+    def domain(self, states: tuple[str, ...]) -> dict[str, tuple[Fraction, Fraction]] | None:
+        from lyapcheck.units import parse_si_quantity
+
+        if "domain" not in self.data:
+            return None
+        table = self.table("domain")
+        box = {}
+        for key, value in table.items():
+            if key not in states:
+                raise self.fail(f"[domain] {key}", f"no state named '{key}' (states: {', '.join(states)})")
+            if not isinstance(value, list) or len(value) != 2:
+                raise self.fail(f"[domain] {key}", f"must be [lo, hi], got {value!r}")
+            try:
+                lo, hi = (parse_si_quantity(key, v) for v in value)
+            except InvalidParameter as exc:
+                raise self.fail(f"[domain] {key}", _unprefixed(exc)) from None
+            if not lo < hi:
+                raise self.fail(f"[domain] {key}", f"must be [lo, hi] with lo < hi, got {value!r}")
+            box[key] = (lo, hi)
+        missing = [s for s in states if s not in box]
+        if missing:
+            raise self.fail("[domain]", f"the state '{missing[0]}' has no interval (the domain is a box over every "
+                                        "state)")
+        return box
+
+
+def _unprefixed(exc: InvalidParameter) -> str:
+    """The message of a field error without its "The 'x' parameter" opening (the key says it)."""
+    return f"must be {exc.expected}, got {exc.got!r}"
+
+
+def field_at(model: Model, parameters: Mapping[str, Fraction] | None = None) -> tuple[Rational, ...]:
+    """The right-hand sides with the parameters set (default: the model's), in :attr:`Model.state_ring`."""
+    values = model.parameters if parameters is None else parameters
+    ring = model.state_ring
+    out = []
+    for rhs in model.dynamics:
+        num = model.ring.restrict(model.ring.substitute(rhs.numerator, values), ring)
+        den = model.ring.restrict(model.ring.substitute(rhs.denominator, values), ring)
+        out.append(Rational(ring, num, den).normalized())
+    return tuple(out)
+
+
+def check_equilibrium(model: Model) -> None:
+    """The stated equilibrium is one, exactly: every denominator non-zero and every right-hand side
+    zero there, with the disturbances 0 (else a :class:`ModelFileError` naming the state)."""
+    ring = model.state_ring
+    point = list(model.equilibrium) + [Fraction(0)] * len(model.disturbances)
+    where = "[equilibrium]" if any(model.equilibrium) else "[equilibrium] (default: every state 0)"
+    for s, rhs in zip(model.states, field_at(model)):
+        den = ring.evaluate(rhs.denominator, point)
+        if den == 0:
+            raise ModelFileError(model.source, where, f"the right-hand side of {s} is not defined there "
+                                                      "(its denominator is 0)")
+        value = ring.evaluate(rhs.numerator, point) / den
+        if value != 0:
+            raise ModelFileError(model.source, where, f"is not an equilibrium: {s}' = {value} there, not 0 "
+                                                      f"(checked exactly, with the disturbances 0)")
+
+
+def with_parameters(model: Model, values: Mapping[str, Fraction]) -> Model:
+    """The model with some parameter values replaced (exact SI), the equilibrium re-checked."""
+    params = {**model.parameters, **values}
+    out = replace(model, parameters=params, parameters_given={**model.parameters_given,
+                                                              **{k: str(v) for k, v in values.items()}})
+    check_equilibrium(out)
+    return out
+
+
+def degree_of_field(model: Model) -> int:
+    """The largest total degree of a numerator or denominator in the states and disturbances."""
+    names = model.states + tuple(model.disturbances)
+    return max(max(degree_in(model.ring, r.numerator, names), degree_in(model.ring, r.denominator, names))
+               for r in model.dynamics)
+
+
+__all__ = ["Model", "load_model", "parse_model", "field_at", "check_equilibrium", "with_parameters",
+           "degree_of_field", "MAX_STATES"]

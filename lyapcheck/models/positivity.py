@@ -1,0 +1,124 @@
+"""Denominators proved positive everywhere, exactly: ``p - c = sigma`` with ``c > 0``, ``sigma`` SOS.
+
+A rational field is multiplied through by its denominators only after each is proved positive
+(or negative, whose sign then moves to the numerator) for every state: certificate kind
+Positivity of :mod:`lyapcheck.sos.certificates`. The search scales the denominator's variables
+first (the same least-squares powers of two as the field, :mod:`lyapcheck.models.field`), so a
+denominator such as ``(eps + sigma0 s)^2 + Delta^2`` with ``Delta = 7.5e-4`` is handled as it
+comes; the certificate is stored in those coordinates with the scaling, and checked exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import Any, Sequence
+
+from lyapcheck.models.search import Budget, ParameterValues, Search, one, param
+from lyapcheck.sos import bases
+from lyapcheck.sos.certificates import GramPoly, check_positivity
+from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
+from lyapcheck.sos.program import Gram, Identity, Scalar, Structure, Term
+from lyapcheck.sos.rounding import project, round_scalar, rounded_point
+
+
+def _variable_scales(ring: Ring, p: Poly) -> list[Fraction]:
+    """Powers of two ``s_i`` that bring ``p(s * z)``'s coefficients near each other (least squares)."""
+    import numpy as np
+
+    terms = ring.float_terms(p)
+    n = ring.nvars
+    rows, rhs = [], []
+    for m, c in terms.items():
+        rows.append(list(m) + [-1.0])
+        rhs.append(-math.log2(abs(c)))
+    for i in range(n):
+        rows.append([1e-3 * (k == i) for k in range(n)] + [0.0])
+        rhs.append(0.0)
+    x, *_ = np.linalg.lstsq(np.array(rows), np.array(rhs), rcond=None)
+    return [Fraction(2) ** int(round(v)) for v in x[:n]]
+
+
+def positivity_structure(ring: Ring, p: Poly) -> Structure | None:
+    n = ring.nvars
+    support = set(ring.support(p)) | {tuple([0] * n)}
+    basis = bases.sos_basis(n, support)
+    if not basis:
+        return None
+    generators = bases.sign_symmetries(n, [(ring.support(p), None)])
+    blocks = bases.character_blocks(basis, generators)
+    terms = (Term(one(ring, -1), "c"), Term(one(ring, -1), "sigma"))
+    return Structure(nvars=n, grams=(Gram("sigma", tuple(basis), tuple(map(tuple, blocks)), margin=False),),
+                     scalars=(Scalar("c", "zero"),),
+                     identities=(Identity("positivity", terms, param("p", support), "sigma"),),
+                     objective=("max", "c"))
+
+
+def prove_positive(ring: Ring, p: Poly, budget: Budget) -> dict[str, Any] | None:
+    """An exact certificate that ``p > 0`` everywhere (in scaled variables, with the scales), or None."""
+    if p.is_constant():
+        c = ring.evaluate(p, [Fraction(0)] * ring.nvars)
+        return {"kind": "constant", "value": str(c)} if c > 0 else None
+    scales = _variable_scales(ring, p)
+    gens = ring.gens()
+    scaled = ring.compose(p, [g * to_fmpq(s) for g, s in zip(gens, scales)])
+    peak = max(abs(c) for c in ring.terms(scaled).values())
+    norm = Fraction(2) ** math.floor(math.log2(peak))
+    scaled = scaled * to_fmpq(1 / norm)
+    structure = positivity_structure(ring, scaled)
+    if structure is None:
+        return None
+    values = ParameterValues()
+    values.set_poly(ring, "p", scaled, structure.identities[0].constant.support)  # type: ignore[union-attr]
+    search = Search(ring, budget)
+    solution = search.solve(structure, values)
+    c_max = solution.scalars.get("c", 0.0)
+    if not solution.usable or not c_max > 0:
+        return None
+    # the largest c makes sigma's constant entry 0; half of it leaves room for the rounding
+    point = rounded_point(solution)
+    point.scalars["c"] = round_scalar(c_max / 2)
+    point = project(ring, structure, point, values.exact)
+    if point is None:
+        return None
+    sigma = GramPoly.of(structure.gram("sigma").basis, point.grams["sigma"])
+    c = point.scalars["c"]
+    ok, _ = check_positivity(ring, scaled, c, sigma)
+    if not ok:
+        return None
+    return {"kind": "sos", "scales": [str(s) for s in scales], "normalization": str(norm), "c": str(c),
+            "gram_sigma": sigma.to_json()}
+
+
+def check_certificate(ring: Ring, p: Poly, cert: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a positivity certificate of ``p`` exactly."""
+    if cert.get("kind") == "constant":
+        c = ring.evaluate(p, [Fraction(0)] * ring.nvars)
+        ok = p.is_constant() and c > 0 and Fraction(cert["value"]) == c
+        return ok, "a positive constant" if ok else "not the positive constant stated"
+    scales = [Fraction(s) for s in cert["scales"]]
+    norm = Fraction(cert["normalization"])
+    if len(scales) != ring.nvars or any(s <= 0 for s in scales) or norm <= 0:
+        return False, "the scales and the normalization must be positive, one scale per variable"
+    gens = ring.gens()
+    scaled = ring.compose(p, [g * to_fmpq(s) for g, s in zip(gens, scales)]) * to_fmpq(1 / norm)
+    sigma = GramPoly.from_json(cert["gram_sigma"], ring.nvars)
+    return check_positivity(ring, scaled, Fraction(cert["c"]), sigma)
+
+
+def prove_denominators(ring: Ring, denominators: Sequence[Poly], budget: Budget
+                       ) -> tuple[list[int], list[dict[str, Any]], Poly | None]:
+    """For each distinct denominator: its sign (+1 / -1) and certificate; or the first one that
+    could not be proved of one sign (the third value; then the signs are incomplete)."""
+    signs, certs = [], []
+    for d in denominators:
+        cert = prove_positive(ring, d, budget)
+        sign = 1
+        if cert is None:
+            cert = prove_positive(ring, -d, budget)
+            sign = -1
+        if cert is None:
+            return signs, certs, d
+        signs.append(sign)
+        certs.append({**cert, "sign": sign})
+    return signs, certs, None

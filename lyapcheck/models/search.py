@@ -1,0 +1,122 @@
+"""What every generic class's search shares: its time budget, its solver log, and the way from a
+polynomial's coefficients to a program's parameters and back to an exact point.
+
+A class's search is bounded by a wall-time budget (:class:`Budget`): every solve gets at most
+the time left (Clarabel's own time limit), and a search that runs out raises
+:class:`BudgetExhausted`, which the class reports as ``inconclusive`` naming the limit.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring
+from lyapcheck.sos.program import Coefficients, SOSProgram, Solution, Structure
+from lyapcheck.sos.rounding import ExactPoint, exact_point
+
+
+class BudgetExhausted(Exception):
+    """A class's search reached its time limit."""
+
+
+@dataclass
+class Budget:
+    """A wall-time limit for one class (``limit_name`` names the constant, for the message)."""
+
+    seconds: float
+    limit_name: str
+    start: float = field(default_factory=time.perf_counter)
+
+    def left(self) -> float:
+        return self.seconds - (time.perf_counter() - self.start)
+
+    def check(self) -> None:
+        if self.left() <= 0:
+            raise BudgetExhausted(f"time limit of {self.seconds:g} s reached ({self.limit_name})")
+
+
+@dataclass
+class Search:
+    """One class's search: the ring of its polynomials, its budget and its log of solves."""
+
+    ring: Ring
+    budget: Budget
+    log: list[dict[str, Any]] = field(default_factory=list)
+
+    def solve(self, structure: Structure, values: "ParameterValues") -> Solution:
+        self.budget.check()
+        program = SOSProgram.of(structure)
+        self.budget.check()
+        solution = program.solve(values.floats, time_limit=max(self.budget.left(), 0.05))
+        entry = solution.report.to_json()
+        entry["program"] = structure.key()
+        if "t" in solution.scalars:
+            entry["margin"] = solution.scalars["t"]
+        self.log.append(entry)
+        return solution
+
+    def exact(self, structure: Structure, solution: Solution, values: "ParameterValues") -> ExactPoint | None:
+        if not solution.usable:
+            return None
+        return exact_point(self.ring, structure, solution, values.exact)
+
+
+@dataclass
+class ParameterValues:
+    """Every parameter of a program, as floats (for the solver) and exactly (for the rounding)."""
+
+    floats: dict[str, np.ndarray] = field(default_factory=dict)
+    exact: dict[str, list[Fraction]] = field(default_factory=dict)
+
+    def set_poly(self, ring: Ring, name: str, p: Poly, support: Sequence[Monomial]) -> None:
+        """Parameter ``name`` = ``p``'s coefficients over ``support`` in :func:`canonical` order (the
+        order :func:`param` declares)."""
+        support = canonical(support)
+        terms = ring.terms(p)
+        unknown = [m for m in terms if m not in set(support)]
+        if unknown:
+            raise ValueError(f"parameter {name}: the polynomial has monomials outside its support: {unknown[:3]}")
+        exact = [terms.get(tuple(m), Fraction(0)) for m in support]
+        self.exact[name] = exact
+        self.floats[name] = np.array([float(c) for c in exact])
+
+    def set_matrix(self, name: str, M: np.ndarray) -> None:
+        self.floats[name] = np.asarray(M, dtype=np.float64)
+
+    def set_scalar(self, name: str, value: float) -> None:
+        self.floats[name] = np.asarray(float(value), dtype=np.float64)
+
+
+def canonical(support: Sequence[Monomial]) -> list[Monomial]:
+    """A support's one order: sorted, without repeats."""
+    return sorted(set(tuple(m) for m in support))
+
+
+def param(name: str, support: Sequence[Monomial]) -> Coefficients:
+    """Coefficients given by parameter ``name``, one entry per monomial of ``support`` (canonical order)."""
+    return Coefficients.parameter(name, canonical(support))
+
+
+def literal(ring: Ring, terms: Mapping[Monomial, Fraction | int]) -> Coefficients:
+    return Coefficients.literal(terms)
+
+
+def one(ring: Ring, c: int | Fraction = 1) -> Coefficients:
+    """The constant polynomial ``c`` as literal coefficients."""
+    return Coefficients.literal({tuple([0] * ring.nvars): c})
+
+
+def support_of(ring: Ring, *polys: Poly) -> list[Monomial]:
+    out: set[Monomial] = set()
+    for p in polys:
+        out |= set(ring.support(p))
+    return sorted(out)
+
+
+def poly_times_support(ring: Ring, p_support: Sequence[Monomial], q_support: Sequence[Monomial]) -> set[Monomial]:
+    return {tuple(a + b for a, b in zip(m1, m2)) for m1 in p_support for m2 in q_support}

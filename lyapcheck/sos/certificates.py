@@ -1,0 +1,202 @@
+"""The SOS certificate kinds, as exact objects with their exact checks.
+
+Every kind is a polynomial identity whose unknown parts are Gram matrices ``z^T Q z``; the check
+verifies the identity exactly (FLINT polynomials over the rationals) and each ``Q`` positive
+definite exactly (:mod:`lyapcheck.sos.definiteness`). It reads only the certificate and the field,
+never solver state. ``g`` is a polynomial field with ``z' = g / D`` and ``D > 0``; ``sigma``,
+``s``, ``tau`` are the certificate's Gram polynomials.
+
+=============  ==================================================  =========================  ================
+kind           identity (all Gram matrices positive definite)      where it holds             proves
+=============  ==================================================  =========================  ================
+Positivity     ``p - c = sigma``, ``c > 0`` (``Q >= 0`` suffices)     everywhere                 ``p >= c > 0``
+Lyapunov       ``-grad V . g - mu V D = sigma``, ``mu >= 0``         everywhere                 GAS; ``V' <= -mu V``
+Sublevel       ``-grad V . g - s (c - V) = sigma``                   ``{V <= c}``               ``{V <= c}`` in the ROA
+Dissipation    ``-grad V . g - lam (V - 1) D - sum tau_k (b_k^2      every ``|d_k| <= b_k``      ``limsup V <= 1``
+               - d_k^2) = sigma``, ``lam > 0``
+OutputBound    ``V - y^2 + B - 1 = sigma``                           everywhere                 ``y^2 <= V + B - 1``
+Containment    ``c - V - s (r^2 - p) = sigma``                       ``{p <= r^2}``             ``{p <= r^2}`` in ``{V <= c}``
+=============  ==================================================  =========================  ================
+
+Strictness. ``V`` positive definite and radially unbounded needs a pure power of every state in
+its basis and no constant (``V >= lambda_min(Q_V) sum_i z_i^(2 k_i)``). ``sigma > 0`` away from 0 (so ``V' < 0`` there) needs a pure
+power of every state in its basis (:func:`lyapcheck.sos.bases.has_pure_powers`); the checks
+demand both where the conclusion needs them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Mapping, Sequence
+
+from lyapcheck.sos.bases import has_pure_powers
+from lyapcheck.sos.definiteness import is_positive_definite
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, gram_form
+
+ExactMatrix = Sequence[Sequence[Fraction]]
+
+
+@dataclass(frozen=True)
+class GramPoly:
+    """``z^T Q z`` over a monomial basis, exactly."""
+
+    basis: tuple[Monomial, ...]
+    Q: tuple[tuple[Fraction, ...], ...]
+
+    def poly(self, ring: Ring) -> Poly:
+        return gram_form(ring, self.basis, self.Q)
+
+    def positive_definite(self) -> bool:
+        return is_positive_definite(self.Q)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"basis": [list(m) for m in self.basis], "Q": [[str(x) for x in row] for row in self.Q]}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any], nvars: int) -> "GramPoly":
+        basis = tuple(tuple(int(e) for e in m) for m in data["basis"])
+        Q = tuple(tuple(Fraction(x) for x in row) for row in data["Q"])
+        if any(len(m) != nvars or min(m, default=0) < 0 for m in basis):
+            raise ValueError(f"a basis monomial must have {nvars} non-negative exponents")
+        if len(Q) != len(basis) or any(len(row) != len(basis) for row in Q):
+            raise ValueError("a Gram matrix must be square, one row per basis monomial")
+        return cls(basis, Q)
+
+    @classmethod
+    def of(cls, basis: Sequence[Monomial], Q: ExactMatrix) -> "GramPoly":
+        return cls(tuple(tuple(m) for m in basis), tuple(tuple(Fraction(x) for x in row) for row in Q))
+
+
+def lie_derivative(ring: Ring, V: Poly, g: Sequence[Poly]) -> Poly:
+    """``grad V . g`` (the states are the ring's first ``len(g)`` variables)."""
+    total = ring.zero()
+    for i, gi in enumerate(g):
+        total += V.derivative(i) * gi
+    return total
+
+
+def check_positive_definite_v(V: GramPoly, n: int) -> tuple[bool, str]:
+    """``V = z^T Q z`` with ``Q > 0``, no constant monomial and a pure power of every state in the
+    basis: ``V >= lambda sum_i z_i^(2 k_i)``, so ``V`` is positive definite and radially unbounded
+    (``V(0) = 0``, sublevel sets compact)."""
+    if not V.basis or not has_pure_powers(V.basis, range(n)):
+        return False, "V's basis must hold a pure power of every state (so that V is radially unbounded)"
+    if any(sum(m) == 0 for m in V.basis):
+        return False, "V's basis may not hold the constant monomial (V(0) must be 0)"
+    if not V.positive_definite():
+        return False, "Q_V is not positive definite (exact)"
+    return True, "Q_V > 0 with a pure power of every state in its basis: V is positive definite, radially unbounded"
+
+
+def check_lyapunov(ring: Ring, g: Sequence[Poly], D: Poly, V: GramPoly, sigma: GramPoly, mu: Fraction
+                   ) -> tuple[bool, str]:
+    """Lyapunov: ``-grad V . g - mu V D = sigma``, ``V``, ``sigma`` as strict as GAS needs."""
+    n = len(g)
+    if mu < 0:
+        return False, "the decay rate mu must be >= 0"
+    ok, why = check_positive_definite_v(V, n)
+    if not ok:
+        return False, why
+    if not has_pure_powers(sigma.basis, range(n)):
+        return False, "sigma's basis must hold a pure power of every state (so that V' < 0 away from 0)"
+    if not sigma.positive_definite():
+        return False, "Q_sigma is not positive definite (exact)"
+    v = V.poly(ring)
+    if -lie_derivative(ring, v, g) - v * D * _q(mu) != sigma.poly(ring):
+        return False, "the identity -grad V . g - mu V D = sigma does not hold exactly"
+    return True, "Q_V > 0, Q_sigma > 0 and -grad V . g - mu V D = sigma, exactly"
+
+
+def check_sublevel(ring: Ring, g: Sequence[Poly], V: GramPoly, level: Fraction, s: GramPoly, sigma: GramPoly
+                   ) -> tuple[bool, str]:
+    """Sublevel: ``-grad V . g - s (c - V) = sigma`` with ``s``, ``sigma`` > 0 and ``V`` positive
+    definite, radially unbounded: ``V' < 0`` on ``{V <= c}`` minus 0, a compact set."""
+    n = len(g)
+    if level <= 0:
+        return False, "the level c must be > 0"
+    ok, why = check_positive_definite_v(V, n)
+    if not ok:
+        return False, why
+    if not has_pure_powers(sigma.basis, range(n)):
+        return False, "sigma's basis must hold a pure power of every state (so that V' < 0 away from 0)"
+    if any(sum(m) == 0 for m in s.basis):
+        return False, "the multiplier s may not have a constant monomial (s(0) must be 0)"
+    if not s.positive_definite() or not sigma.positive_definite():
+        return False, "Q_s or Q_sigma is not positive definite (exact)"
+    v = V.poly(ring)
+    if -lie_derivative(ring, v, g) - s.poly(ring) * (ring.constant(level) - v) != sigma.poly(ring):
+        return False, "the identity -grad V . g - s (c - V) = sigma does not hold exactly"
+    return True, "Q_V, Q_s, Q_sigma > 0 and -grad V . g - s (c - V) = sigma, exactly"
+
+
+def check_positivity(ring: Ring, p: Poly, c: Fraction, sigma: GramPoly) -> tuple[bool, str]:
+    """Positivity: ``p - c = sigma`` with ``c > 0`` and ``Q_sigma >= 0`` (semidefinite suffices:
+    ``sigma >= 0``, so ``p >= c``; a denominator such as ``(x + y)^2 + 1`` has no definite Gram)."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    if c <= 0:
+        return False, "the constant c must be > 0"
+    if not is_positive_semidefinite(sigma.Q):
+        return False, "Q_sigma is not positive semidefinite (exact)"
+    if p - ring.constant(c) != sigma.poly(ring):
+        return False, "the identity p - c = sigma does not hold exactly"
+    return True, "p - c = sigma with c > 0 and Q_sigma >= 0, exactly"
+
+
+def check_dissipation(ring: Ring, g: Sequence[Poly], D: Poly, bounds: Sequence[Fraction], V: GramPoly,
+                      lam: Fraction, taus: Sequence[GramPoly], sigma: GramPoly) -> tuple[bool, str]:
+    """Dissipation, in the ring of (states, disturbances): ``V >= lambda (1 + |z|^2)`` (radially
+    unbounded), ``lam > 0``, every ``tau_k`` and ``sigma`` > 0, and the identity exactly."""
+    n = len(g)
+    if lam <= 0:
+        return False, "the rate lam must be > 0"
+    if len(taus) != len(bounds):
+        return False, "one multiplier tau per disturbance is needed"
+    if not V.basis or not has_pure_powers(V.basis, range(n)) or any(any(m[n:]) for m in V.basis):
+        return False, "V's basis must hold a pure power of every state and no disturbance"
+    if not V.positive_definite():
+        return False, "Q_V is not positive definite (exact)"
+    for tau in taus:
+        if not tau.positive_definite():
+            return False, "a multiplier tau is not positive definite (exact)"
+    if not sigma.positive_definite():
+        return False, "Q_sigma is not positive definite (exact)"
+    v = V.poly(ring)
+    lhs = -lie_derivative(ring, v, g) - (v - ring.constant(1)) * D * _q(lam)
+    gens = ring.gens()
+    for k, (tau, b) in enumerate(zip(taus, bounds)):
+        d = gens[n + k]
+        lhs -= tau.poly(ring) * (ring.constant(b * b) - d * d)
+    if lhs != sigma.poly(ring):
+        return False, "the dissipation identity does not hold exactly"
+    return True, "V > 0, tau > 0, sigma > 0 and the dissipation identity holds, exactly"
+
+
+def check_output_bound(ring: Ring, V: GramPoly, y: Poly, B: Fraction, sigma: GramPoly) -> tuple[bool, str]:
+    """OutputBound: ``V - y^2 + B - 1 = sigma`` with ``Q_sigma > 0`` (so ``y^2 <= V + B - 1``)."""
+    if not sigma.positive_definite():
+        return False, "Q_sigma is not positive definite (exact)"
+    if V.poly(ring) - y * y + ring.constant(B - 1) != sigma.poly(ring):
+        return False, "the identity V - y^2 + B - 1 = sigma does not hold exactly"
+    return True, "V - y^2 + B - 1 = sigma with Q_sigma > 0, exactly"
+
+
+def check_containment(ring: Ring, V: GramPoly, level: Fraction, p: Poly, radius_sq: Fraction, s: GramPoly,
+                      sigma: GramPoly) -> tuple[bool, str]:
+    """Containment: ``c - V - s (r^2 - p) = sigma``, ``s``, ``sigma`` > 0: ``{p <= r^2}`` lies in
+    ``{V <= c}``."""
+    if radius_sq <= 0:
+        return False, "r^2 must be > 0"
+    if not s.positive_definite() or not sigma.positive_definite():
+        return False, "Q_s or Q_sigma is not positive definite (exact)"
+    lhs = ring.constant(level) - V.poly(ring) - s.poly(ring) * (ring.constant(radius_sq) - p)
+    if lhs != sigma.poly(ring):
+        return False, "the identity c - V - s (r^2 - p) = sigma does not hold exactly"
+    return True, "c - V - s (r^2 - p) = sigma with Q_s, Q_sigma > 0, exactly"
+
+
+def _q(x: Fraction) -> Any:
+    import flint
+
+    return flint.fmpq(x.numerator, x.denominator)

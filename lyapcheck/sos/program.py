@@ -1,0 +1,387 @@
+"""SOS programs as data: declared once per structure, compiled once by cvxpy, cached, re-solved.
+
+A program is a list of polynomial identities, each linear in the decision variables:
+
+    sum_t  P_t(z) * L_t(X_t)(z)  +  P_0(z)  =  0          (every coefficient of z)
+
+where ``X_t`` is a Gram polynomial ``z_G^T Q z_G`` (a positive semidefinite ``Q``, block diagonal
+by the blocks given) or a scalar, ``L_t`` is the identity or a partial derivative, and ``P_t``,
+``P_0`` are polynomials whose coefficients are either literals of the structure or the entries of
+a named parameter vector (one entry per monomial of a declared support). Everything numerical that
+changes from one solve to the next (the field's coefficients, a decay rate, a level) is a
+parameter, so the program's *structure* (bases, blocks, supports, identities, objective) is all
+that cvxpy compiles. The structure is a frozen dataclass; its hash names the compiled form, which
+is kept in memory and on disk (``$LYAPCHECK_CACHE_DIR/programs`` or ``~/.cache/lyapcheck/programs``)
+and loaded by later runs without importing cvxpy (:mod:`lyapcheck.sos.compile`).
+
+The solver's answer is only a candidate: :mod:`lyapcheck.sos.rounding` turns it into exact
+rationals that satisfy the identities exactly, and the classes decide with exact checks.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import threading
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any, Final, Literal, Mapping, Sequence
+
+import numpy as np
+
+from lyapcheck.sos.polynomials import Monomial
+from lyapcheck.sos.sdp import CompiledProgram, ProgramData, SolveReport
+
+log = logging.getLogger(__name__)
+
+#: bump when the meaning of a structure changes (older cached programs are then ignored)
+STRUCTURE_VERSION: Final = 1
+
+
+# -- the structure ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Gram:
+    """A Gram polynomial ``z^T Q z`` over ``basis``; ``Q`` is block diagonal with ``blocks`` (index
+    sets into ``basis``; every index in exactly one block), each block PSD, and ``>= t I`` when
+    ``margin`` is True (``t`` the program's margin variable), ``>= phi I`` when it names a scalar
+    parameter ``phi``, ``>= 0`` when False."""
+
+    name: str
+    basis: tuple[Monomial, ...]
+    blocks: tuple[tuple[int, ...], ...]
+    margin: bool | str = True
+
+
+@dataclass(frozen=True)
+class Scalar:
+    """A scalar decision variable; ``lower``: ``None`` (free), ``"zero"`` (>= 0) or ``"margin"`` (>= t)."""
+
+    name: str
+    lower: Literal["zero", "margin"] | None = None
+
+
+@dataclass(frozen=True)
+class Coefficients:
+    """The coefficients of a known polynomial: a parameter vector (one entry per monomial of
+    ``support``, in that order) when ``param`` is set, else the literal ``values``."""
+
+    support: tuple[Monomial, ...]
+    param: str | None = None
+    values: tuple[Fraction, ...] = ()
+
+    @classmethod
+    def parameter(cls, name: str, support: Sequence[Monomial]) -> "Coefficients":
+        return cls(tuple(tuple(m) for m in support), param=name)
+
+    @classmethod
+    def literal(cls, terms: Mapping[Monomial, Fraction | int]) -> "Coefficients":
+        items = sorted((tuple(m), Fraction(c)) for m, c in terms.items() if c != 0)
+        return cls(tuple(m for m, _ in items), values=tuple(c for _, c in items))
+
+
+@dataclass(frozen=True)
+class Term:
+    """``coefficients * L(decision)``: ``decision`` names a :class:`Gram` or a :class:`Scalar`;
+    ``derivative`` is the variable index of ``L = d/dz_i`` (None: ``L`` is the identity)."""
+
+    coefficients: Coefficients
+    decision: str
+    derivative: int | None = None
+
+
+@dataclass(frozen=True)
+class Identity:
+    """``sum(terms) + constant == 0`` as polynomials; ``remainder`` names the Gram that absorbs
+    rounding (:mod:`lyapcheck.sos.rounding`)."""
+
+    name: str
+    terms: tuple[Term, ...]
+    constant: Coefficients | None
+    remainder: str
+
+
+@dataclass(frozen=True)
+class Structure:
+    """A whole program. ``objective``: ``("max_margin",)``, ``("min", scalar)`` or ``("max", scalar)``.
+    ``trace_one``: Gram names normalized by ``trace(Q) = 1``. ``inner``: ``(scalar, gram, param)``
+    constraints ``scalar == <Q_gram, P>`` with ``P`` a symmetric parameter matrix (an objective
+    that weighs a Gram polynomial at sample points)."""
+
+    nvars: int
+    grams: tuple[Gram, ...]
+    scalars: tuple[Scalar, ...]
+    identities: tuple[Identity, ...]
+    objective: tuple[str, ...]
+    trace_one: tuple[str, ...] = ()
+    inner: tuple[tuple[str, str, str], ...] = ()
+
+    def key(self) -> str:
+        digest = hashlib.sha256(repr((STRUCTURE_VERSION, _engine_hash(), self)).encode())
+        return "sos-" + digest.hexdigest()[:32]
+
+    def gram(self, name: str) -> Gram:
+        return next(g for g in self.grams if g.name == name)
+
+    def parameters(self) -> dict[str, tuple[int, ...]]:
+        """Every parameter's shape (a vector per :class:`Coefficients`, a matrix per ``inner``)."""
+        out: dict[str, tuple[int, ...]] = {}
+        for ident in self.identities:
+            sources = [t.coefficients for t in ident.terms] + ([ident.constant] if ident.constant else [])
+            for c in sources:
+                if c.param is not None:
+                    shape = (len(c.support),)
+                    if out.setdefault(c.param, shape) != shape:
+                        raise ValueError(f"parameter {c.param} declared with two supports")
+        for _, gram, param in self.inner:
+            n = len(self.gram(gram).basis)
+            out[param] = (n, n)
+        for g in self.grams:
+            if isinstance(g.margin, str):
+                out[g.margin] = ()
+        return out
+
+
+def _engine_hash() -> str:
+    return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
+
+
+def full_blocks(basis: Sequence[Monomial]) -> tuple[tuple[int, ...], ...]:
+    return (tuple(range(len(basis))),) if basis else ()
+
+
+# -- cvxpy construction ----------------------------------------------------------------------------
+
+def _block_name(gram: str, b: int) -> str:
+    return f"{gram}__b{b}"
+
+
+def _gram_terms(gram: Gram, derivative: int | None) -> list[tuple[Monomial, int, int, float]]:
+    """``(monomial, block, entry of vec(X_block), coefficient)`` of ``L(z^T Q z)``."""
+    out = []
+    for b, idx in enumerate(gram.blocks):
+        k = len(idx)
+        for jj, j in enumerate(idx):
+            for ii, i in enumerate(idx):
+                m = tuple(x + y for x, y in zip(gram.basis[i], gram.basis[j]))
+                coef = 1.0
+                if derivative is not None:
+                    e = m[derivative]
+                    if e == 0:
+                        continue
+                    coef = float(e)
+                    m = m[:derivative] + (e - 1,) + m[derivative + 1:]
+                out.append((m, b, ii + jj * k, coef))
+    return out
+
+
+def build_cvxpy(structure: Structure) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """The cvxpy problem of ``structure`` with its named parameters and variables (DPP)."""
+    import cvxpy as cp
+    import scipy.sparse as sp
+
+    params = {name: cp.Parameter(shape, name=name) for name, shape in structure.parameters().items()}
+    variables: dict[str, Any] = {}
+    t = cp.Variable(name="t")
+    variables["t"] = t
+    cons: list[Any] = [t <= 1]
+    blocks: dict[str, list[Any]] = {}
+    for g in structure.grams:
+        blocks[g.name] = []
+        for b, idx in enumerate(g.blocks):
+            X = cp.Variable((len(idx), len(idx)), symmetric=True, name=_block_name(g.name, b))
+            variables[_block_name(g.name, b)] = X
+            blocks[g.name].append(X)
+            if g.margin is True:
+                cons.append(X >> t * np.eye(len(idx)))
+            elif isinstance(g.margin, str):
+                cons.append(X >> params[g.margin] * np.eye(len(idx)))
+            else:
+                cons.append(X >> 0)
+    scalars: dict[str, Any] = {}
+    for s in structure.scalars:
+        v = cp.Variable(name=s.name)
+        variables[s.name] = v
+        scalars[s.name] = v
+        if s.lower == "zero":
+            cons.append(v >= 0)
+        elif s.lower == "margin":
+            cons.append(v >= t)
+    for name in structure.trace_one:
+        cons.append(sum(cp.trace(X) for X in blocks[name]) == 1)
+    for scalar, gram, param in structure.inner:
+        g = structure.gram(gram)
+        total = 0
+        for b, idx in enumerate(g.blocks):
+            sel = np.zeros((len(idx), len(g.basis)))
+            sel[np.arange(len(idx)), idx] = 1.0
+            total = total + cp.sum(cp.multiply(sel @ params[param] @ sel.T, blocks[gram][b]))
+        cons.append(scalars[scalar] == total)
+
+    for ident in structure.identities:
+        rows: dict[Monomial, int] = {}
+
+        def row(m: Monomial) -> int:
+            return rows.setdefault(m, len(rows))
+
+        # pass 1: every target monomial; pass 2: the expressions
+        contributions = []  # (coefficients, k, kind, data)
+        for term in ident.terms:
+            if term.decision in blocks:
+                base = _gram_terms(structure.gram(term.decision), term.derivative)
+                for k, a in enumerate(term.coefficients.support):
+                    entries = [(row(tuple(x + y for x, y in zip(m, a))), b, e, c) for m, b, e, c in base]
+                    contributions.append((term.coefficients, k, "gram", (term.decision, entries)))
+            else:
+                if term.derivative is not None:
+                    raise ValueError("a scalar has no derivative")
+                for k, a in enumerate(term.coefficients.support):
+                    contributions.append((term.coefficients, k, "scalar", (term.decision, row(a))))
+        const_rows = [row(a) for a in ident.constant.support] if ident.constant else []
+        n_rows = len(rows)
+        literal_total: Any = 0
+        param_terms: dict[tuple[str, int], Any] = {}
+        for coeffs, k, kind, data in contributions:
+            name, spec = data
+            if kind == "gram":
+                expr: Any = 0
+                per_block: dict[int, list[tuple[int, int, float]]] = {}
+                for r, b, e, c in spec:
+                    per_block.setdefault(b, []).append((r, e, c))
+                for b, entries in per_block.items():
+                    X = blocks[name][b]
+                    rr, ee, cc = zip(*entries)
+                    M = sp.csr_matrix((cc, (rr, ee)), shape=(n_rows, X.shape[0] * X.shape[1]))
+                    expr = expr + M @ cp.vec(X, order="F")
+            else:
+                e_row = np.zeros(n_rows)
+                e_row[spec] = 1.0
+                expr = e_row * scalars[name]
+            if coeffs.param is None:
+                literal_total = literal_total + float(coeffs.values[k]) * expr
+            else:
+                key = (coeffs.param, k)
+                param_terms[key] = param_terms.get(key, 0) + expr
+        total: Any = literal_total
+        for (pname, k), expr in param_terms.items():
+            total = total + params[pname][k] * expr
+        if ident.constant is not None:
+            place = np.zeros((n_rows, len(const_rows)))
+            place[const_rows, np.arange(len(const_rows))] = 1.0
+            if ident.constant.param is None:
+                total = total + place @ np.array([float(v) for v in ident.constant.values])
+            else:
+                total = total + place @ params[ident.constant.param]
+        cons.append(total == 0)
+
+    kind = structure.objective[0]
+    if kind == "max_margin":
+        objective = cp.Maximize(t)
+    elif kind == "min":
+        objective = cp.Minimize(scalars[structure.objective[1]])
+    elif kind == "max":
+        objective = cp.Maximize(scalars[structure.objective[1]])
+    else:  # pragma: no cover - a programming error
+        raise ValueError(f"unknown objective {structure.objective}")
+    return cp.Problem(objective, cons), params, variables
+
+
+# -- the compiled program, cached --------------------------------------------------------------------
+
+def cache_dir() -> Path:
+    root = os.environ.get("LYAPCHECK_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lyapcheck")
+    return Path(root) / "programs"
+
+
+_memory: dict[str, "SOSProgram"] = {}
+_lock = threading.Lock()
+
+
+@dataclass
+class Solution:
+    """A solve: the report, and the decision values (full Gram matrices, scalars, ``t``) when the
+    solver returned a point."""
+
+    report: SolveReport
+    grams: dict[str, np.ndarray] = field(default_factory=dict)
+    scalars: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def usable(self) -> bool:
+        """A point the exact checks may judge: 'optimal' or 'inaccurate' (never a proof by itself)."""
+        return self.report.outcome in ("optimal", "inaccurate") and bool(self.grams or self.scalars)
+
+
+class SOSProgram:
+    """A compiled :class:`Structure`; :meth:`solve` takes every parameter value, returns every variable."""
+
+    def __init__(self, structure: Structure, compiled: CompiledProgram) -> None:
+        self.structure = structure
+        self.compiled = compiled
+
+    @classmethod
+    def of(cls, structure: Structure) -> "SOSProgram":
+        """The compiled program of ``structure``: from memory, from the disk cache, or compiled now."""
+        key = structure.key()
+        with _lock:
+            hit = _memory.get(key)
+        if hit is not None:
+            return hit
+        data = _load(key) or _compile(key, structure)
+        program = cls(structure, CompiledProgram(data))
+        with _lock:
+            _memory[key] = program
+        return program
+
+    def solve(self, values: Mapping[str, Any], *, max_iter: int | None = None,
+              time_limit: float | None = None) -> Solution:
+        solved = self.compiled.solve(values, max_iter=max_iter, time_limit=time_limit)
+        out = Solution(solved.report)
+        if solved.values is None:
+            return out
+        v = solved.values
+        for g in self.structure.grams:
+            Q = np.zeros((len(g.basis), len(g.basis)))
+            for b, idx in enumerate(g.blocks):
+                Q[np.ix_(idx, idx)] = v[_block_name(g.name, b)]
+            out.grams[g.name] = (Q + Q.T) / 2
+        out.scalars = {s.name: float(v[s.name]) for s in self.structure.scalars}
+        out.scalars["t"] = float(v["t"])
+        return out
+
+
+def _path(key: str) -> Path:
+    return cache_dir() / f"{key}.npz"
+
+
+def _load(key: str) -> ProgramData | None:
+    path = _path(key)
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            arrays = {name: f[name] for name in f.files}
+    except (OSError, ValueError, EOFError):
+        return None
+    try:
+        return ProgramData.from_arrays(key, arrays)
+    except (KeyError, ValueError, IndexError):  # a damaged cache file: compile again
+        log.warning("cached program %s is unreadable; compiling it again", path)
+        return None
+
+
+def _compile(key: str, structure: Structure) -> ProgramData:
+    from lyapcheck.sos.compile import compile_problem
+
+    problem, params, variables = build_cvxpy(structure)
+    data = compile_problem(key, problem, params, variables, check=False)
+    path = _path(key)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp.npz")
+        np.savez_compressed(tmp, **data.arrays)
+        os.replace(tmp, path)
+    except OSError as exc:  # a read-only cache: compile again next time
+        log.info("could not cache program %s: %s", key, exc)
+    return data
