@@ -32,8 +32,9 @@ from typing import TYPE_CHECKING, Any
 from lyapcheck.errors import InputFileError, InvalidParameter
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.results import ConditionResult
+    from lyapcheck.models.modelfile import Model
     from lyapcheck.params import Problem
+    from lyapcheck.results import ConditionResult
 
 #: local worker processes a sweep may start (each is a process with its own solver state; far
 #: beyond any machine's cores, and below the limits a process pool can represent)
@@ -86,7 +87,7 @@ def problem_from(params: Any, overrides: Mapping[str, object] | None = None) -> 
         return problem_from_sources(params, extra)
     if not isinstance(params, Mapping):
         raise InvalidParameter("params", "a Problem, a mapping or a TOML path", type(params).__name__)
-    return build_problem({**flat_parameters(params), **extra}, source="the parameters mapping")
+    return build_problem({**flat_parameters(params), **extra}, source="the parameters mapping", numbers_in_si=True)
 
 
 # -- certify -------------------------------------------------------------------------------------
@@ -142,16 +143,28 @@ class CertifyResult:
         return atomic_write(path, json.dumps(self.document, indent=2) + "\n")
 
 
-def certify(params: Any = None, *, dynamics: str = "derived", classes: str | Sequence[str] | None = None,
+def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
+            settings: Mapping[str, object] | Sequence[str] | None = None, candidate: str | None = None,
+            dynamics: str = "derived", classes: str | Sequence[str] | None = None,
             linear_views: bool = False, overrides: Mapping[str, object] | None = None,
             worst_case: bool = False, worst_case_budget_s: float = 20.0) -> CertifyResult:
-    """Certify a gain set: run the condition classes, each checked exactly.
+    """Certify a gain set of the paper's loop, or any closed loop from a model file; every class
+    is checked exactly.
 
     Parameters
     ----------
     params
-        The parameters (see :func:`problem_from`). Without ``omega_so`` or ``d_max`` the
+        The paper's parameters (see :func:`problem_from`). Without ``omega_so`` or ``d_max`` the
         classes that need them are ``not_applicable`` and the others still run.
+    model
+        Instead of ``params``: a model file (DESIGN.md, "Model files"), as a path or a loaded
+        :class:`lyapcheck.models.modelfile.Model`. Its classes are ``linearization``,
+        ``quadratic``, ``sos_gas``, ``roa``, ``candidate`` and ``sos_bound``.
+    settings
+        With ``model``: parameter (or disturbance-bound) values laid over the file's, as a mapping
+        ``{"mu": 2}`` or ``["mu=2"]`` (the command line's ``--set``).
+    candidate
+        With ``model``: the user's own ``V`` (an expression in the states), for class ``candidate``.
     dynamics
         ``"derived"`` (lyapcheck's derivation) or ``"printed"`` (the paper's eqs. ``los3``,
         ``xCrossdyn2`` as printed).
@@ -166,6 +179,14 @@ def certify(params: Any = None, *, dynamics: str = "derived", classes: str | Seq
         beside each certified ultimate bound, the worst simulated tail ``sup |eps|`` and
         ``tightness_ratio`` = certified / simulated (>= 1 unless the bound is unsound).
     """
+    if model is not None:
+        if params is not None or overrides:
+            raise InvalidParameter("model", "given without the paper's parameters (a model file carries its own)",
+                                   str(params if params is not None else overrides))
+        return certify_model_file(model, settings=settings, candidate=candidate, classes=classes)
+    if settings or candidate is not None:
+        raise InvalidParameter("set" if settings else "candidate", "used with a model file (model=...)",
+                               settings if settings else candidate)
     from lyapcheck.certificate import build_document
     from lyapcheck.certification import run_conditions, verdict
 
@@ -181,6 +202,51 @@ def certify(params: Any = None, *, dynamics: str = "derived", classes: str | Seq
 
         doc["linear_views"] = views(build_system(problem, dynamics))
     return CertifyResult(verdict=outcome, dynamics=dynamics, conditions=results, document=doc)
+
+
+def model_settings(settings: Mapping[str, object] | Sequence[str] | None) -> dict[str, object]:
+    """``{"mu": 2}`` or ``["mu=2"]`` (``--set``) as a mapping (one-line error on a malformed entry)."""
+    if settings is None:
+        return {}
+    if isinstance(settings, Mapping):
+        return {str(k): v for k, v in settings.items()}
+    out: dict[str, object] = {}
+    for item in settings:
+        name, sep, value = str(item).partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise InvalidParameter("set", "NAME=VALUE, e.g. 'mu=2' or 'd=0.1 mm/s'", item)
+        if name.strip() in out:
+            raise InvalidParameter("set", f"each name once (got '{name.strip()}' twice)", item)
+        out[name.strip()] = value.strip()
+    return out
+
+
+def load_model_file(model: "str | Path | Model", settings: Mapping[str, object] | Sequence[str] | None = None
+                    ) -> "Model":
+    """A validated model (a path is read; a loaded model gets ``settings`` laid over its parameters)."""
+    from lyapcheck.models.modelfile import Model, load_model, parse_model
+
+    extra = model_settings(settings)
+    if isinstance(model, Model):
+        if not extra:
+            return model
+        return parse_model(model.text, model.source, {**model.overrides, **extra})
+    if not isinstance(model, (str, Path)):
+        raise InvalidParameter("model", "a model file path or a Model", type(model).__name__)
+    return load_model(model, extra)
+
+
+def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
+                       candidate: str | None = None, classes: str | Sequence[str] | None = None,
+                       time_limit_s: float | None = None) -> CertifyResult:
+    """:func:`certify` for a model file (``certify(model=...)`` calls this)."""
+    from lyapcheck.models.certificate import build_document
+    from lyapcheck.models.certify import certify_model
+
+    loaded = load_model_file(model, settings)
+    found = certify_model(loaded, classes=classes, candidate=candidate, time_limit_s=time_limit_s)
+    return CertifyResult(verdict=found.verdict, dynamics="model", conditions=found.results,
+                         document=build_document(found))
 
 
 def add_tightness(results: "Mapping[str, ConditionResult]", problem: "Problem", *, budget_s: float) -> None:
@@ -295,19 +361,26 @@ class VerifyResult:
 
 
 def verify(certificate: str | Path | Mapping[str, Any] | CertifyResult) -> VerifyResult:
-    """Re-check a certificate exactly, without a solver (file path, document or result)."""
-    from lyapcheck.certificate import check_document, read_document, verify_document
+    """Re-check a certificate exactly, without a solver (file path, document or result): the
+    paper's certificates and model-file certificates alike."""
+    from lyapcheck.certificate import check_document, verify_document
+    from lyapcheck.models import certificate as model_certificate
 
     if isinstance(certificate, CertifyResult):
         doc = certificate.document
     elif isinstance(certificate, (str, Path)):
-        doc = read_document(certificate)
+        doc = model_certificate.read_json(certificate)
+        if not model_certificate.is_model_document(doc):
+            doc = check_document(doc, f"'{certificate}'")
     elif isinstance(certificate, Mapping):
-        doc = check_document(dict(certificate), "the certificate mapping")
+        doc = dict(certificate)
+        if not model_certificate.is_model_document(doc):
+            doc = check_document(doc, "the certificate mapping")
     else:
         raise InvalidParameter("certificate", "a path, a certificate document or a CertifyResult",
                                type(certificate).__name__)
-    checks = tuple(Check(n, ok, m) for n, ok, m in verify_document(doc))
+    rows = model_certificate.verify_document(doc) if model_certificate.is_model_document(doc) else verify_document(doc)
+    checks = tuple(Check(n, ok, m) for n, ok, m in rows)
     return VerifyResult(valid=all(c.ok for c in checks), checks=checks)
 
 
@@ -479,5 +552,5 @@ def report(source: str | Path | CertifyResult, *, html: str | Path | None = None
     return report_files(source, html, pdf)
 
 
-__all__ = ["certify", "certify_box", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
+__all__ = ["certify", "certify_box", "certify_model_file", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
            "SimulationReport", "SweepResult", "problem_from", "class_selection"]

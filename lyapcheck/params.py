@@ -136,9 +136,15 @@ FIELD_BY_KEY: dict[str, FieldSpec] = {spec.key: spec for spec in FIELDS}
 SECTIONS: tuple[str, ...] = tuple(dict.fromkeys(spec.section for spec in FIELDS))
 
 
-def validate_field(spec: FieldSpec, value: object) -> Fraction:
-    """Parse `value` for `spec` and check its range; the single validation path."""
-    parsed = parse_quantity(spec.name, value, spec.kind, bare_allowed=spec.bare_allowed)
+def validate_field(spec: FieldSpec, value: object, *, numbers_in_si: bool = False) -> Fraction:
+    """Parse `value` for `spec` and check its range; the single validation path.
+
+    ``numbers_in_si``: a plain number (not a string) is read in the field's SI unit (the Python
+    API's promise, ``docs/api.md``); TOML files and command-line flags keep requiring units for
+    the fields that have one.
+    """
+    bare = spec.bare_allowed or (numbers_in_si and not isinstance(value, (str, bool)))
+    parsed = parse_quantity(spec.name, value, spec.kind, bare_allowed=bare)
     unit = f" {spec.kind.si_unit}" if spec.kind.si_unit else ""
     if not spec.interval.contains(parsed):
         raise InvalidParameter(spec.name, f"in {spec.interval}{unit}", value)
@@ -266,12 +272,13 @@ def load_toml(path: str | Path) -> dict[str, Any]:
         raise InputFileError(f"input file '{p}' cannot be read: {exc.strerror}") from None
 
 
-def build_problem(values: Mapping[str, object], *, source: str = "input") -> Problem:
+def build_problem(values: Mapping[str, object], *, source: str = "input", numbers_in_si: bool = False) -> Problem:
     """Validate a flat mapping ``{"section.name": value}`` into a :class:`Problem`.
 
     Missing required fields raise :class:`InvalidParameter` naming the field. The step-out
     frequency and the disturbance bound are optional: only some classes and the simulations
     need them (see :meth:`Problem.disturbance_bound`, :meth:`Actuation.step_out`).
+    ``numbers_in_si``: plain numbers are SI values (see :func:`validate_field`).
     """
     parsed: dict[str, Fraction | None] = {}
     given: dict[str, str] = {}
@@ -280,8 +287,9 @@ def build_problem(values: Mapping[str, object], *, source: str = "input") -> Pro
         if raw is None:
             parsed[spec.key] = None
             continue
-        parsed[spec.key] = validate_field(spec, raw)
-        given[spec.key] = str(raw)
+        parsed[spec.key] = validate_field(spec, raw, numbers_in_si=numbers_in_si)
+        given[spec.key] = str(raw) if isinstance(raw, str) or not numbers_in_si or spec.bare_allowed \
+            else f"{raw} {spec.kind.si_unit}".rstrip()
     unknown = set(values) - set(FIELD_BY_KEY)
     if unknown:
         key = sorted(unknown)[0]

@@ -56,3 +56,8 @@ CLASS_TIME_LIMIT_S: Final = 120.0
 #: certified GES envelope ``k |x0| exp(-rate t)`` only beyond this relative slack, which absorbs
 #: the integrator's error (it runs at ``rtol = 1e-10``), never a modelling slack.
 ENVELOPE_REL_TOL: Final = 1e-6
+
+#: Wall-time limit of one generic class on a model file (``certify --model``): its search stops
+#: there and the class reports ``inconclusive`` naming this limit; the other classes still run.
+#: The examples' slowest class (roa on the reversed Van der Pol with mu = 3) takes about 10 s.
+MODEL_CLASS_TIME_LIMIT_S: Final = 60.0

@@ -25,7 +25,9 @@ def _print_table(doc: dict[str, Any]) -> None:
     from rich.table import Table
 
     console = Console()
-    table = Table(title=f"lyapcheck certify - dynamics: {doc['dynamics']}", show_lines=True)
+    title = (f"lyapcheck certify - model: {doc['model']['name']}" if "model" in doc
+             else f"lyapcheck certify - dynamics: {doc['dynamics']}")
+    table = Table(title=title, show_lines=True)
     table.add_column("condition", style="cyan", no_wrap=True)
     table.add_column("status", no_wrap=True)
     table.add_column("property", no_wrap=True)
@@ -36,6 +38,21 @@ def _print_table(doc: dict[str, Any]) -> None:
     console.print(table)
     style = "bold green" if doc["verdict"] == "certified" else "bold yellow"
     console.print(f"verdict: [{style}]{doc['verdict']}[/]  (certified = an exact check of a stability certificate passed)")
+
+
+def _finish(result: Any, out: str | None, report: str | None, as_json: bool, write_report: Any) -> None:
+    """Write what was asked, print the table or the JSON, exit 0 (certified) or 1."""
+    if out:
+        result.write(out)
+    if report:
+        as_pdf = Path(report).suffix.lower() == ".pdf"
+        write_report(result, html=None if as_pdf else report, pdf=report if as_pdf else None)
+    doc = result.to_json()
+    if as_json:
+        emit_json(doc)
+    else:
+        _print_table(doc)
+    raise SystemExit(EXIT_OK if result.verdict == "certified" else EXIT_NEGATIVE)
 
 
 def register(group: click.Group) -> None:
@@ -58,14 +75,21 @@ def register(group: click.Group) -> None:
                   "quadratic and arithmetic classes, about 20x faster).")
     @click.option("--worst-case", is_flag=True, help="Also search the worst disturbance in simulation and report "
                   "tightness_ratio = certified / simulated beside each certified bound (10-20 s).")
+    @click.option("--model", "model_file", type=click.Path(dir_okay=False),
+                  help="Certify any polynomial or rational closed loop from a model file (DESIGN.md, 'Model files').")
+    @click.option("--set", "settings", multiple=True, metavar="NAME=VALUE",
+                  help="With --model: override a parameter or disturbance bound, e.g. --set mu=2 (repeatable).")
+    @click.option("--candidate", help='With --model: your own Lyapunov function, e.g. "x1**2 + x2**2".')
     @click.option("--box", "boxes", multiple=True, help='Certify a whole box of gains, e.g. --box '
                   '"alpha_d=540..660" --box "k_d=0.1..0.2" (repeatable; classes prop41_ges, prop41_iss, sector_ges and '
                   'ges by default; --classes all adds ultimate_bound, sos_gas, saturated_loop and sos_bound).')
     @one_line_errors
     def certify(gains: str | None, dynamics: str, as_json: bool, out: str | None, report: str | None,
                 linear_views: bool, classes: str | None, worst_case: bool, boxes: tuple[str, ...],
+                model_file: str | None, settings: tuple[str, ...], candidate: str | None,
                 **flags: str | None) -> None:
-        """Certify a gain set: every condition class, each checked exactly."""
+        """Certify a gain set of the paper's loop, or any closed loop from a model file (--model):
+        every condition class, each checked exactly."""
         from lyapcheck.api import certify as certify_gains
         from lyapcheck.api import report as write_report
         from lyapcheck.sos import sdp
@@ -76,6 +100,19 @@ def register(group: click.Group) -> None:
         if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
             raise InvalidParameter("report", "a file name ending in .html or .pdf", report)
         overrides = {FLAG_KEYS[k]: v for k, v in flags.items() if v is not None}
+        if model_file is not None:
+            paper_only = [name for name, given in (("GAINS", gains), ("--linear-views", linear_views),
+                                                   ("--worst-case", worst_case), ("--box", boxes),
+                                                   ("--dynamics", dynamics != "derived"))
+                          if given] + [f"--{k.replace('_', '-')}" for k, v in flags.items() if v is not None]
+            if paper_only:
+                raise InvalidParameter("model", "given without the paper's gains and flags (a model file carries its "
+                                       "own parameters; use --set NAME=VALUE)", paper_only[0])
+            result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes)
+            _finish(result, out, report, as_json, write_report)
+        if settings or candidate is not None:
+            raise InvalidParameter("set" if settings else "candidate", "used with --model FILE",
+                                   settings[0] if settings else candidate)
         if boxes:
             from lyapcheck.api import certify_box
 
@@ -92,17 +129,7 @@ def register(group: click.Group) -> None:
             raise SystemExit(EXIT_OK if result.verdict == "certified" else EXIT_NEGATIVE)
         result = certify_gains(gains, dynamics=dynamics, classes=classes, linear_views=linear_views,
                                overrides=overrides, worst_case=worst_case)
-        if out:
-            result.write(out)
-        if report:
-            as_pdf = Path(report).suffix.lower() == ".pdf"
-            write_report(result, html=None if as_pdf else report, pdf=report if as_pdf else None)
-        doc = result.to_json()
-        if as_json:
-            emit_json(doc)
-        else:
-            _print_table(doc)
-        raise SystemExit(EXIT_OK if result.verdict == "certified" else EXIT_NEGATIVE)
+        _finish(result, out, report, as_json, write_report)
 
     @group.command()
     @click.argument("certificate", type=click.Path(dir_okay=False))

@@ -63,6 +63,12 @@ ROA_FLOOR: Final = 1e-6
 #: reversed Van der Pol oscillator the least one stalled the enlargement at 70 % of the simulated
 #: region of attraction, one more reached 99.8 % (301 x 301 grid)
 MULTIPLIER_EXTRA: Final = 1
+#: the V step weighs the samples outside the current set nearest to it (this share of them, by V)
+VSTEP_NEAREST: Final = 0.25
+#: ... each sample's monomial vector normalized (far samples do not outweigh near ones); on the
+#: reversed Van der Pol (101 x 101 grid) the two together took the covered share from 96.6 % in
+#: 10.4 s (every outside sample, unnormalized) to 99.5 % in 4.8 s
+VSTEP_NORMALIZE: Final = True
 #: the largest Gram basis the region searches build (rows)
 MAX_GRAM_ROWS: Final = 120
 #: sample points drawn to estimate the supremum of the level (per state: a grid of this many)
@@ -281,7 +287,12 @@ def vstep(field: StateField, v_degree: int, current: LevelCertificate, samples: 
     v_now = NumericPoly(ring, current.V.poly(ring))(samples) / float(current.level)
     outside = samples[v_now > 1]
     weighted = outside if outside.shape[0] else samples
+    if VSTEP_NEAREST < 1.0 and outside.shape[0]:
+        order = np.argsort(v_now[v_now > 1])
+        weighted = outside[order[:max(1, int(np.ceil(VSTEP_NEAREST * outside.shape[0])))]]
     Z = _monomial_vectors(z_v, weighted)
+    if VSTEP_NORMALIZE:
+        Z = Z / np.linalg.norm(Z, axis=1, keepdims=True)
     M = Z.T @ Z / max(weighted.shape[0], 1)
     values.set_matrix("M", (M + M.T) / 2)
     values.set_scalar("floor", ROA_FLOOR)

@@ -1,0 +1,303 @@
+"""Certificate files of model files: write, and re-check exactly without a solver.
+
+Schema (version 1)::
+
+    {
+      "schema_version": 1,
+      "kind": "lyapcheck-model-certificate",
+      "model": {"name": .., "file": .., "sha256": .., "text": "<the model file, verbatim>"},
+      "overrides": {"mu": "2"},                      # --set, as given
+      "candidate": "x1**2 + x2**2" | null,            # --candidate, as given
+      "states": [..], "equilibrium": {"x1": "0", ..}, "parameters": {"mu": "2"},  # exact SI
+      "field": {"denominators": [..], "scaling": {..}},
+      "conditions": {"linearization": {..}, "roa": {"status": .., "level": .., "certificate":
+                     {"V": {"terms": [["3/2", [2, 0]], ..]}, "level": "p/q", ..}}, ..},
+      "verdict": "certified" | "not_certified",
+      "versions": {..}
+    }
+
+Polynomials are exact (rationals as ``"p/q"``). ``V`` is in the states as declared, shifted so
+that the equilibrium is 0 (the contract); the Gram matrices behind it are in the scaled states of
+``field.scaling`` (powers of two), which :func:`verify_document` re-applies to the field it
+re-derives from ``model.text``. The check fails when the text does not match its SHA-256, when a
+coefficient, level or bound was changed, or when a stated figure claims more than the certificate
+proves. It never imports cvxpy or calls a solver.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from fractions import Fraction
+from pathlib import Path
+from typing import Any, Callable
+
+from lyapcheck.errors import CertificateError, InputFileError
+from lyapcheck.models.certify import ModelCertification
+from lyapcheck.results import ConditionResult
+
+SCHEMA_VERSION = 1
+KIND = "lyapcheck-model-certificate"
+
+Row = tuple[str, bool, str]
+
+
+def build_document(result: ModelCertification) -> dict[str, Any]:
+    from lyapcheck.certificate import package_versions
+
+    model = result.model
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "kind": KIND,
+        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text},
+        "overrides": dict(model.overrides),
+        "candidate": result.candidate.text if result.candidate is not None else None,
+        "states": list(model.states),
+        "equilibrium": {s: str(v) for s, v in zip(model.states, model.equilibrium)},
+        "parameters": {k: str(v) for k, v in model.parameters.items()},
+        "disturbances": {k: str(v) for k, v in model.disturbances.items()},
+        "field": {"denominators": result.denominators,
+                  "scaling": result.scaling.to_json() if result.scaling is not None else None},
+        "conditions": {name: r.to_json() for name, r in result.results.items()},
+        "verdict": result.verdict,
+        "versions": package_versions(),
+    }
+
+
+def is_model_document(doc: Any) -> bool:
+    return isinstance(doc, dict) and doc.get("kind") == KIND
+
+
+def read_json(path: str | Path) -> Any:
+    """A JSON file, with one-line errors (missing, not JSON, unreadable)."""
+    p = Path(path)
+    try:
+        return json.loads(p.read_text())
+    except FileNotFoundError:
+        raise InputFileError(f"certificate file '{p}' does not exist") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputFileError(f"certificate file '{p}' is not valid JSON: {exc}") from None
+    except (ValueError, RecursionError) as exc:
+        raise InputFileError(f"certificate file '{p}' cannot be read: {exc}") from None
+    except OSError as exc:
+        raise InputFileError(f"certificate file '{p}' cannot be read: {exc.strerror or exc}") from None
+
+
+def verify_document(doc: dict[str, Any]) -> list[Row]:
+    """Re-check every claim of a model certificate exactly; (check, ok, message) rows."""
+    if doc.get("schema_version") != SCHEMA_VERSION:
+        raise InputFileError(f"model certificate has schema_version {doc.get('schema_version')!r}; this lyapcheck "
+                             f"reads {SCHEMA_VERSION}")
+    try:
+        return _verify(doc)
+    except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError, RecursionError) as exc:
+        text = repr(exc)
+        raise CertificateError(f"certificate is malformed: {text[:200]}") from None
+
+
+def _verify(doc: dict[str, Any]) -> list[Row]:
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.field import Scaling, apply_scaling, clear, shifted_field
+    from lyapcheck.models.modelfile import parse_model
+
+    rows: list[Row] = []
+    model_part = doc["model"]
+    text = model_part["text"]
+    digest = hashlib.sha256(text.encode()).hexdigest()
+    if digest != model_part["sha256"]:
+        return [("model", False, "the model text does not match its SHA-256: the text was changed")]
+    try:
+        model = parse_model(text, model_part.get("file", "<certificate>"), doc.get("overrides") or {})
+    except ModelFileError as exc:
+        return [("model", False, f"the stored model text no longer parses: {exc}")]
+    rows.append(("model", True, "the model text matches its SHA-256 and parses"))
+    same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
+            and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
+    rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
+                 "the stated parameters or equilibrium differ from the model text's"))
+    shifted = shifted_field(model)
+    conditions: dict[str, Any] = doc["conditions"]
+
+    def row(name: str, check: Callable[[], tuple[bool, str]]) -> None:
+        ok, why = check()
+        rows.append((name, ok, why if ok else f"{name}: {why}"))
+
+    lin = conditions.get("linearization")
+    if isinstance(lin, dict) and lin.get("status") in ("certified", "refuted"):
+        from lyapcheck.models import linearization
+
+        data = lin.get("certificate") if lin["status"] == "certified" else lin.get("refutation")
+        row("linearization", lambda: linearization.verify(shifted, lin["status"], data or {}))
+
+    needs_field = [n for n, c in conditions.items() if n != "linearization" and isinstance(c, dict)
+                   and c.get("status") == "certified"]
+    if needs_field:
+        from lyapcheck.models.positivity import check_certificate
+
+        distinct = shifted.distinct_denominators()
+        stored = doc["field"]["denominators"]
+        if len(stored) != len(distinct):
+            rows.append(("denominators", False, "one positivity certificate per denominator is needed"))
+            return _with_verdict(doc, rows)
+        signs = []
+        for d, cert in zip(distinct, stored):
+            sign = int(cert["sign"])
+            if sign not in (1, -1):
+                rows.append(("denominators", False, "a denominator's sign must be +1 or -1"))
+                return _with_verdict(doc, rows)
+            ok, why = check_certificate(shifted.ring, d * sign, cert)
+            rows.append(("denominators", ok, f"denominator {cert.get('denominator')}: {why}"))
+            if not ok:
+                return _with_verdict(doc, rows)
+            signs.append(sign)
+        scaling = Scaling.from_json(doc["field"]["scaling"])
+        if not scaling.positive() or len(scaling.states) != model.n or len(scaling.disturbances) != \
+                len(model.disturbances) or len(scaling.outputs) != len(model.outputs):
+            rows.append(("scaling", False, "the scaling must have one positive factor per state, disturbance, output"))
+            return _with_verdict(doc, rows)
+        scaled = apply_scaling(clear(shifted, signs), scaling)
+        for name in needs_field:
+            c = conditions[name]
+            row(name, lambda c=c, name=name: _verify_class(name, c, scaled))
+    return _with_verdict(doc, rows)
+
+
+def _with_verdict(doc: dict[str, Any], rows: list[Row]) -> list[Row]:
+    conditions = doc["conditions"]
+    proven = any(isinstance(c, dict) and c.get("status") == "certified" and any(n == name for n, _, _ in rows)
+                 and all(ok for n, ok, _ in rows if n == name) for name, c in conditions.items())
+    prerequisites = all(ok for n, ok, _ in rows if n in ("model", "parameters", "denominators", "scaling"))
+    expected = "certified" if proven and prerequisites else "not_certified"
+    stated = doc.get("verdict")
+    rows.append(("verdict", stated == expected, f"verdict '{stated}' is supported" if stated == expected else
+                 f"verdict: stated '{stated}' but the re-checked conditions support '{expected}'"))
+    return rows
+
+
+def _gram(data: dict[str, Any], nvars: int) -> Any:
+    from lyapcheck.sos.certificates import GramPoly
+
+    return GramPoly.from_json(data, nvars)
+
+
+def _v_matches(scaled: Any, ring: Any, V: Any, stated: dict[str, Any]) -> bool:
+    """The stated V (declared states) is the Gram V (scaled states) unscaled, exactly."""
+    from lyapcheck.models.field import unscale_polynomial
+    from lyapcheck.models.lyapunov import terms_json
+
+    return terms_json(ring, unscale_polynomial(ring, V.poly(ring), scaled.scaling, scaled.n)) == stated
+
+
+def _at_most(stated: Any, proved: Fraction) -> bool:
+    return stated is None or Fraction(float(stated)) <= proved + abs(proved) / 10**12
+
+
+def _at_least(stated: Any, proved: Fraction) -> bool:
+    return stated is None or Fraction(float(stated)) >= proved - abs(proved) / 10**12
+
+
+def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]:
+    from lyapcheck.models.field import state_field
+    from lyapcheck.sos.certificates import check_containment, check_dissipation, check_lyapunov, check_output_bound, \
+        check_sublevel
+
+    cert = c["certificate"]
+    if name == "sos_bound":
+        ring = scaled.ring
+        nv = ring.nvars
+        names = list(scaled.outputs)
+        for out, data in cert["outputs"].items():
+            if out not in scaled.outputs:
+                return False, f"no output named {out}"
+            y = scaled.outputs[out]
+            s_y = scaled.scaling.outputs[names.index(out)]
+            V = _gram(data["gram_V"], nv)
+            taus = [_gram(t, nv) for t in data["gram_tau"]]
+            lam, B = Fraction(data["lam_scaled"]), Fraction(data["B_scaled"])
+            ok, why = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, V, lam, taus, _gram(data["gram_sigma_D"], nv))
+            if not ok:
+                return False, f"output {out}: {why}"
+            ok, why = check_output_bound(ring, V, y, B, _gram(data["gram_sigma_E"], nv))
+            if not ok:
+                return False, f"output {out}: {why}"
+            bound = Fraction(data["bound"])
+            if bound < 0 or bound * bound < B * s_y * s_y:
+                return False, f"output {out}: the stated bound {data['bound']} is below s_y sqrt(B)"
+            if not _at_least(c.get("bounds", {}).get(out), bound):
+                return False, f"output {out}: the stated figure is below the certified bound"
+            if not _v_matches(scaled, ring, V, data["V"]):
+                return False, f"output {out}: the stated V is not the certificate's"
+        return True, "every output's dissipation and output identities hold exactly"
+    field = state_field(scaled)
+    ring, n = field.ring, field.n
+    V = _gram(cert["gram_V"], n)
+    if not _v_matches(scaled, ring, V, cert["V"]):
+        return False, "the stated V (declared states) is not the certificate's Gram V unscaled"
+    kind = cert.get("kind")
+    T = scaled.scaling.time
+    if kind == "lyapunov":
+        mu = Fraction(cert["mu_scaled"])
+        ok, why = check_lyapunov(ring, field.g, field.D, V, _gram(cert["gram_sigma"], n), mu)
+        if not ok:
+            return False, why
+        if not _at_most(c.get("decay_rate_V_per_s"), mu / T):
+            return False, "the stated decay rate of V exceeds the certified one"
+        if c.get("property") == "GES":
+            return _verify_ges(scaled, V, mu, cert, c)
+        if c.get("property") not in ("GAS", None):
+            return False, f"a Lyapunov certificate proves GAS (or GES), not {c.get('property')}"
+        return True, why
+    if kind == "sublevel":
+        level = Fraction(cert["level_scaled"])
+        if Fraction(cert["level"]) != level or not _at_most(c.get("level"), level):
+            return False, "the stated level is not the certified one"
+        ok, why = check_sublevel(ring, field.g, V, level, _gram(cert["gram_s"], n), _gram(cert["gram_sigma"], n))
+        if not ok:
+            return False, why
+        if "ball" in cert:
+            from lyapcheck.models.regions import radius_polynomial
+
+            r = Fraction(cert["ball"]["radius"])
+            ok, why2 = check_containment(ring, V, level, radius_polynomial(ring, scaled.scaling.states), r * r,
+                                         _gram(cert["ball"]["gram_s"], n), _gram(cert["ball"]["gram_sigma"], n))
+            if not ok or not _at_most(c.get("ball_radius"), r):
+                return False, f"the ball: {why2 if not ok else 'the stated radius exceeds the certified one'}"
+        elif c.get("ball_radius") is not None:
+            return False, "a ball radius is stated without its certificate"
+        if c.get("property") != "ROA":
+            return False, "a sublevel certificate proves a region of attraction (ROA)"
+        return True, why
+    return False, f"unknown certificate kind {kind!r}"
+
+
+def _verify_ges(scaled: Any, V: Any, mu: Fraction, cert: dict[str, Any], c: dict[str, Any]) -> tuple[bool, str]:
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    n = scaled.n
+    if mu <= 0 or any(sum(m) != 1 for m in V.basis) or len(V.basis) != n:
+        return False, "GES needs a quadratic V (every state, degree 1) and mu > 0"
+    s = scaled.scaling.states
+    order = [V.basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
+    P = [[V.Q[order[i]][order[j]] / (s[i] * s[j]) for j in range(n)] for i in range(n)]
+    c1, c2, k = Fraction(cert["c1"]), Fraction(cert["c2"]), Fraction(cert["k"])
+    eye = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    if not (c1 > 0 and is_positive_definite([[P[i][j] - c1 * eye[i][j] for j in range(n)] for i in range(n)])
+            and is_positive_definite([[c2 * eye[i][j] - P[i][j] for j in range(n)] for i in range(n)])):
+        return False, "c1 I < P < c2 I does not hold"
+    if k * k < c2 / c1 or not _at_least(c.get("k"), k):
+        return False, "k is below sqrt(c2/c1)"
+    if not _at_most(c.get("decay_rate_per_s"), mu / scaled.scaling.time / 2):
+        return False, "the stated decay rate of |x| exceeds mu / 2"
+    return True, "a quadratic V with V' <= -mu V and c1 I < P < c2 I: GES, exactly"
+
+
+def result_conditions(doc: dict[str, Any]) -> dict[str, ConditionResult]:
+    """The document's conditions as results (for the API's typed view)."""
+    out = {}
+    for name, c in doc["conditions"].items():
+        numbers = {k: v for k, v in c.items() if k not in ("status", "summary", "property", "certificate",
+                                                           "refutation", "solver")}
+        out[name] = ConditionResult(name, c["status"], c["summary"], numbers=numbers,
+                                    certificate=c.get("certificate") or {}, refutation=c.get("refutation") or {},
+                                    solver=c.get("solver") or {}, property=c.get("property"))
+    return out

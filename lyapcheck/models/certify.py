@@ -1,0 +1,353 @@
+"""Certify a model file: every generic class that applies, each bounded in time, each checked exactly.
+
+The classes (DESIGN.md, "Model files"), in this order:
+
+==============  ===========  =============================================================
+class           property     what a ``certified`` proves
+==============  ===========  =============================================================
+linearization   LES          the Jacobian at the equilibrium is Hurwitz (``refuted``: it has an
+                             eigenvalue with positive real part, so the equilibrium is unstable)
+quadratic       GES or GAS   a quadratic ``V`` decreasing everywhere (GES when ``V' <= -mu V``)
+sos_gas         GAS          a polynomial ``V`` decreasing everywhere (and the decay rate of ``V``)
+roa             ROA          ``{V <= c}`` lies in the region of attraction
+candidate       ROA or GAS   the same for the user's ``V`` (``--candidate``); GAS when it holds
+                             everywhere
+sos_bound       ult. bound   ``limsup |y| <= B`` for each output, every start, every disturbance
+                             within its bounds
+==============  ===========  =============================================================
+
+Every class but ``linearization`` needs the field multiplied through by its denominators, which
+needs each denominator proved of one sign everywhere (:mod:`lyapcheck.models.positivity`); if one
+cannot be, those classes are ``not_applicable`` and name it. A class that cannot apply for another
+reason (no disturbances for ``sos_bound``, no ``--candidate``) says so. Each class runs within
+:data:`~lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S`; past it, it is ``inconclusive`` naming the
+limit, and the others still run.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any, Callable, Final, Sequence
+
+import numpy as np
+
+from lyapcheck.errors import InvalidParameter, ModelFileError
+from lyapcheck.models.field import ScaledField, Scaling, ShiftedField, apply_scaling, choose_scaling, clear, \
+    shifted_field, state_field
+from lyapcheck.models.modelfile import Model
+from lyapcheck.models.search import Budget, BudgetExhausted, Search
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.polynomials import Poly
+
+log = logging.getLogger(__name__)
+
+MODEL_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+#: the classes that need the field multiplied through (every denominator of one sign proved)
+CLEARED_CLASSES: Final = ("quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+#: grid of simulated starts per state for the roa share, by number of states (beyond: random starts)
+ROA_GRID: Final = {1: 401, 2: 101, 3: 21}
+ROA_RANDOM_STARTS: Final = 4000
+#: simulated time of the roa cross-check, in units of the loop's typical time
+ROA_HORIZON: Final = 60.0
+
+
+@dataclass
+class Candidate:
+    """The user's ``V``: the text as given, and the polynomial in the declared (unshifted) states."""
+
+    text: str
+    poly: Poly
+
+
+@dataclass
+class ModelCertification:
+    """What ``certify --model`` found (the document is :func:`lyapcheck.models.certificate.build_document`)."""
+
+    model: Model
+    candidate: Candidate | None
+    results: dict[str, ConditionResult]
+    denominators: list[dict[str, Any]] = field(default_factory=list)
+    scaling: Scaling | None = None
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def verdict(self) -> str:
+        return "certified" if any(r.status == "certified" for r in self.results.values()) else "not_certified"
+
+
+def parse_candidate(model: Model, text: str) -> Candidate:
+    """The user's ``V`` (``--candidate``): an expression in the states and parameters, polynomial in
+    the states, zero at the equilibrium (one-line errors naming ``--candidate``)."""
+    from lyapcheck.models.expressions import ExpressionError, parse_expression
+
+    try:
+        expr = parse_expression(text, model.ring)
+    except ExpressionError as exc:
+        raise ModelFileError(model.source, "--candidate", str(exc)) from None
+    ring = model.ring
+    num = ring.substitute(expr.numerator, model.parameters)
+    den = ring.substitute(expr.denominator, model.parameters)
+    state_ring = model.state_ring
+    if not den.is_constant():
+        raise ModelFileError(model.source, "--candidate", "V must be a polynomial in the states (no state in a "
+                                                          "denominator)")
+    try:
+        poly = ring.restrict(num * (1 / den.leading_coefficient()), state_ring)
+    except ValueError:
+        raise ModelFileError(model.source, "--candidate", "V may depend on the states and parameters only, not on a "
+                                                          "disturbance") from None
+    value = state_ring.evaluate(poly, list(model.equilibrium) + [Fraction(0)] * len(model.disturbances))
+    if value != 0:
+        raise ModelFileError(model.source, "--candidate", f"V must be 0 at the equilibrium; it is {value} there")
+    if any(any(m[model.n:]) for m in state_ring.support(poly)):
+        raise ModelFileError(model.source, "--candidate", "V may not depend on a disturbance")
+    return Candidate(text=text, poly=poly)
+
+
+def class_selection(classes: str | Sequence[str] | None, model: Model, candidate: Candidate | None) -> tuple[str, ...]:
+    """``None`` (every class that applies), a comma-separated string or names."""
+    if classes is None or classes == "all":
+        chosen = [c for c in MODEL_CLASSES if (c != "candidate" or candidate is not None)
+                  and (c != "sos_bound" or model.disturbances)]
+        return tuple(chosen)
+    names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes) if c and c.strip()]
+    unknown = [c for c in names if c not in MODEL_CLASSES]
+    if not names or unknown:
+        raise InvalidParameter("classes", "names among " + ", ".join(MODEL_CLASSES), ",".join(unknown) or classes)
+    return tuple(c for c in MODEL_CLASSES if c in names)
+
+
+def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, candidate: str | None = None,
+                  time_limit_s: float | None = None) -> ModelCertification:
+    """Run the chosen classes on ``model`` (see the module docstring)."""
+    import time
+
+    from lyapcheck import tolerances as tol
+
+    limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
+    cand = parse_candidate(model, candidate) if candidate is not None else None
+    chosen = class_selection(classes, model, cand)
+    out = ModelCertification(model=model, candidate=cand, results={})
+    shifted = shifted_field(model)
+
+    def run(name: str, compute: Callable[[Budget], ConditionResult]) -> None:
+        start = time.perf_counter()
+        budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+        out.results[name] = _guarded(name, lambda: compute(budget), limit)
+        out.seconds[name] = time.perf_counter() - start
+
+    if "linearization" in chosen:
+        from lyapcheck.models import linearization
+
+        run("linearization", lambda budget: linearization.run(shifted))
+    needing = [c for c in chosen if c in CLEARED_CLASSES]
+    scaled: ScaledField | None = None
+    if needing:
+        from lyapcheck.models.positivity import prove_denominators
+
+        distinct = shifted.distinct_denominators()
+        budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+        try:
+            signs, certs, failed = prove_denominators(shifted.ring, distinct, budget)
+        except BudgetExhausted as exc:
+            signs, certs, failed = [], [], distinct[0] if distinct else None
+            log.info("denominators: %s", exc)
+        out.denominators = [{"denominator": _text(shifted, d), **cert} for d, cert in zip(distinct, certs)]
+        if failed is not None:
+            why = (f"the denominator {_text(shifted, failed)} (in x - x_eq) could not be proved of one sign for every "
+                   "state, so the field cannot be multiplied through")
+            for name in needing:
+                out.results[name] = ConditionResult(name, "not_applicable", why, numbers={"denominator":
+                                                                                          _text(shifted, failed)})
+        else:
+            cleared = clear(shifted, signs)
+            out.scaling = choose_scaling(cleared, model.domain)
+            scaled = apply_scaling(cleared, out.scaling)
+    if scaled is not None:
+        sc = scaled
+        from lyapcheck.models import lyapunov
+
+        if "quadratic" in chosen:
+            run("quadratic", lambda budget: lyapunov.run(sc, "quadratic", (2,), Search(state_field(sc).ring, budget)))
+        if "sos_gas" in chosen:
+            run("sos_gas", lambda budget: lyapunov.run(sc, "sos_gas", lyapunov.SOS_GAS_DEGREES,
+                                                       Search(state_field(sc).ring, budget)))
+        if "roa" in chosen:
+            lin = out.results.get("linearization")
+            run("roa", lambda budget: run_roa(sc, budget, lin))
+        if "candidate" in chosen:
+            run("candidate", lambda budget: run_candidate(sc, cand, budget))
+        if "sos_bound" in chosen:
+            from lyapcheck.models import bounds
+
+            if not model.disturbances:
+                out.results["sos_bound"] = ConditionResult("sos_bound", "not_applicable",
+                                                           "the model has no [disturbances]: add one (name = bound) to "
+                                                           "bound its outputs")
+            else:
+                run("sos_bound", lambda budget: bounds.run(sc, Search(sc.ring, budget)))
+    if "candidate" in chosen and cand is None:
+        out.results["candidate"] = ConditionResult("candidate", "not_applicable", "needs --candidate \"EXPR\" (the "
+                                                                                   "user's V); not run")
+    out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
+    return out
+
+
+def _text(shifted: ShiftedField, p: Poly) -> str:
+    return str(p).replace("^", "**")
+
+
+def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) -> ConditionResult:
+    """Numerical trouble or the time limit becomes ``inconclusive`` with its reason; bad input and
+    bugs propagate (the command line reports them)."""
+    from lyapcheck.certification import ClassTimeLimit, time_limit
+    from lyapcheck.errors import SolverError
+
+    try:
+        # a hard stop a little beyond the cooperative budget (a solve or check that overruns it)
+        with time_limit(limit * 1.5 + 5):
+            return compute()
+    except BudgetExhausted as exc:
+        reason = str(exc)
+    except ClassTimeLimit as exc:
+        reason = f"{exc} (lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S, hard stop)"
+    except (SolverError, ArithmeticError, np.linalg.LinAlgError, OverflowError) as exc:
+        reason = f"{type(exc).__name__}: {exc}"
+    log.info("%s inconclusive: %s", name, reason)
+    return ConditionResult(name, "inconclusive", f"could not be decided: {reason}", numbers={"reason": reason})
+
+
+# -- roa and candidate -------------------------------------------------------------------------------
+
+def simulated_region(scaled: ScaledField, samples_declared: np.ndarray) -> np.ndarray:
+    """Which declared starts converge to the equilibrium (disturbances 0)."""
+    from lyapcheck.models.numeric import converges, typical_time
+
+    model = scaled.cleared.shifted.model
+    T = typical_time(model)
+    half = _half_widths(model)
+    conv = converges(model, samples_declared, t_end=ROA_HORIZON * T, radius=half * 1e-3, escape=half * 1e3)
+    return conv.converged
+
+
+def _half_widths(model: Model) -> np.ndarray:
+    if model.domain:
+        return np.array([max(abs(float(model.domain[s][0] - e)), abs(float(model.domain[s][1] - e)))
+                         for s, e in zip(model.states, model.equilibrium)])
+    return np.ones(model.n)
+
+
+def roa_starts(model: Model, seed: int = 0) -> np.ndarray:
+    from lyapcheck.models.numeric import grid_starts
+
+    assert model.domain is not None
+    per_axis = ROA_GRID.get(model.n, 2)
+    return grid_starts(model.domain, model.states, per_axis, ROA_RANDOM_STARTS if model.n > 3 else per_axis ** model.n,
+                       seed=seed)
+
+
+def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult | None) -> ConditionResult:
+    from lyapcheck.models import regions
+
+    model = scaled.cleared.shifted.model
+    field_ = state_field(scaled)
+    search = Search(field_.ring, budget)
+    S = np.array([float(s) for s in scaled.scaling.states])
+    eq = np.array([float(v) for v in model.equilibrium])
+    if regions.lyapunov_quadratic(field_) is None:
+        return ConditionResult("roa", "not_certified", "the Jacobian at the equilibrium is not Hurwitz, so no quadratic "
+                                                       "Lyapunov function starts the search (see linearization)",
+                               property="ROA")
+    if model.domain:
+        starts = roa_starts(model)
+    else:
+        rng = np.random.default_rng(0)
+        starts = eq + S * rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n))
+    converged = simulated_region(scaled, starts)
+    samples = (starts - eq) / S
+    outcome = regions.enlarge(field_, search, samples, converged)
+    if outcome.certificate is None:
+        return ConditionResult("roa", "not_certified", "no sublevel set passed the exact check", property="ROA",
+                               solver={"solves": search.log}, numbers={"history": outcome.history})
+    cert = outcome.certificate
+    inside = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))(samples) <= float(cert.level)
+    numbers: dict[str, Any] = {"degree": 2 * max(sum(m) for m in cert.V.basis), "simulated_starts": int(len(starts))}
+    if model.domain:
+        numbers["roa_share"] = float(np.mean(inside[converged])) if converged.any() else 0.0
+        numbers["simulated_roa_share_of_domain"] = float(np.mean(converged))
+    suspicious = inside & ~converged
+    if suspicious.any():  # a start in a proved set that did not converge: simulate it far longer
+        again = simulated_region_long(scaled, starts[suspicious])
+        numbers["starts_in_set_not_converged"] = int(np.sum(~again))
+        if (~again).any():
+            numbers["soundness_violation"] = True
+    numbers["rounds"] = outcome.history
+    return regions.level_result("roa", scaled, cert, search, numbers, "region of attraction")
+
+
+def simulated_region_long(scaled: ScaledField, starts: np.ndarray) -> np.ndarray:
+    from lyapcheck.models.numeric import converges, typical_time
+
+    model = scaled.cleared.shifted.model
+    half = _half_widths(model)
+    return converges(model, starts, t_end=20 * ROA_HORIZON * typical_time(model), radius=half * 1e-3,
+                     escape=half * 1e3, max_iterations=200_000).converged
+
+
+def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -> ConditionResult:
+    from lyapcheck.models import regions
+    from lyapcheck.models.lyapunov import best_decay_rate, terms_json
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    assert cand is not None
+    model = scaled.cleared.shifted.model
+    field_ = state_field(scaled)
+    ring = field_.ring
+    search = Search(ring, budget)
+    full = model.state_ring
+    # V(x_eq + S z): the candidate in the scaled states
+    gens = full.gens()
+    images = [g * to_fmpq(s) + to_fmpq(e) for g, s, e in zip(gens[:model.n], scaled.scaling.states, model.equilibrium)]
+    images += list(gens[model.n:])
+    v_scaled = full.restrict(full.compose(cand.poly, images), ring)
+    V = regions.gram_of(field_, v_scaled, search)
+    if V is None:
+        return ConditionResult("candidate", "not_certified", "V could not be shown positive definite and radially "
+                                                             "unbounded (no positive definite Gram matrix over its "
+                                                             "reduced basis with a pure power of every state)",
+                               solver={"solves": search.log}, property="ROA")
+    sigma = regions.global_decrease(field_, V, Fraction(0), search)
+    if sigma is not None:
+        def attempt(mu: Fraction) -> dict[str, Any] | None:
+            s = regions.global_decrease(field_, V, mu, search)
+            return None if s is None else {"sigma": s, "mu": mu}
+
+        best = best_decay_rate(attempt, {"sigma": sigma, "mu": Fraction(0)})
+        rate = float(best["mu"] / scaled.scaling.time)
+        tail = f", V' <= -{rate:.4g} V" if best["mu"] > 0 else ""
+        v_orig = regions.unscale_polynomial(ring, V.poly(ring), scaled.scaling, field_.n)
+        return ConditionResult("candidate", "certified", f"GAS: V' < 0 away from the equilibrium everywhere{tail} "
+                                                         "(checked exactly)",
+                               numbers={"decay_rate_V_per_s": rate},
+                               certificate={"kind": "lyapunov", "mu_scaled": str(best["mu"]), "V": terms_json(ring, v_orig),
+                                            "gram_V": V.to_json(), "gram_sigma": best["sigma"].to_json()},
+                               solver={"solves": search.log}, property="GAS")
+    radius = float(np.max(np.abs(_half_widths(model) / np.array([float(s) for s in scaled.scaling.states])))) * 4
+    top = regions.supremum_estimate(field_, V, radius)
+    if top is None:
+        return ConditionResult("candidate", "not_certified", "V' < 0 everywhere could not be proved, and no point "
+                                                             "with V' >= 0 was sampled to bound a level",
+                               solver={"solves": search.log}, property="ROA")
+    cert = regions.largest_level(field_, V, search, top, regions.symmetry(field_))
+    if cert is None:
+        return ConditionResult("candidate", "not_certified", f"no level of V passed the exact check (sampled supremum "
+                                                             f"{top:.6g})", numbers={"level_supremum_estimate": top},
+                               solver={"solves": search.log}, property="ROA")
+    return regions.level_result("candidate", scaled, cert, search,
+                                {"level_supremum_estimate": top, "level_ratio_to_estimate": float(cert.level) / top},
+                                "the user's V")
+
+
+__all__ = ["MODEL_CLASSES", "ModelCertification", "certify_model", "parse_candidate", "class_selection"]
