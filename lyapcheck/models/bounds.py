@@ -26,16 +26,18 @@ from fractions import Fraction
 from typing import Any, Final
 
 from lyapcheck.models.field import ScaledField, unscale_polynomial
-from lyapcheck.models.lyapunov import terms_json
+from lyapcheck.models.lyapunov import TARGET_LIMIT, affordable, terms_json
 from lyapcheck.models.search import BudgetExhausted, ParameterValues, Search, one, param
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_dissipation, check_output_bound
 from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
-from lyapcheck.sos.program import Gram, Identity, Scalar, Structure, Term
+from lyapcheck.sos.program import Gram, Identity, Scalar, Solution, Structure, Term
 
 #: decay rates ``lam`` of the dissipation inequality tried, in scaled time
 LAMBDA_GRID: Final = (0.05, 0.2, 0.6, 1.5, 4.0)
+#: factors around the best grid rate tried next (a geometric refinement of lam)
+LAMBDA_REFINE: Final = (0.5, 0.7, 1.4, 2.0)
 #: degrees of V tried, in turn
 BOUND_DEGREES: Final = (2, 4)
 #: the smallest eigenvalue every Gram matrix keeps in the search (scaled coordinates), so that the
@@ -51,7 +53,10 @@ def _symmetry(scaled: ScaledField, y: Poly) -> list[tuple[int, ...]]:
     return bases.sign_symmetries(ring.nvars, odd, [ring.support(y)])
 
 
-def bound_structure(scaled: ScaledField, y: Poly, degree: int) -> Structure | None:
+def bound_structure(scaled: ScaledField, y: Poly, degree: int,
+                    drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | None:
+    """The program for ``V`` of this degree; ``drop``: (Gram, monomial) pairs left out of the
+    remainders' bases (facial reduction, :func:`lyapcheck.models.lyapunov.vanishing_monomials`)."""
     ring = scaled.ring
     n, m = scaled.n, scaled.m
     nv = ring.nvars
@@ -59,21 +64,25 @@ def bound_structure(scaled: ScaledField, y: Poly, degree: int) -> Structure | No
     z_v = [tuple(list(a) + [0] * m) for a in monomials(n, 0, degree // 2)]
     v_blocks = bases.character_blocks(z_v, generators)
     v_products = {tuple(a + b for a, b in zip(z_v[i], z_v[j])) for idx in v_blocks for i in idx for j in idx}
-    z_tau = monomials(nv, 0, max(degree // 2 - 1, 0))
-    tau_blocks = bases.character_blocks(z_tau, generators)
-    tau_products = {tuple(a + b for a, b in zip(z_tau[i], z_tau[j])) for idx in tau_blocks for i in idx for j in idx}
     target: set[Monomial] = set()
     for i, gi in enumerate(scaled.g):
         derived = {q[:i] + (q[i] - 1,) + q[i + 1:] for q in v_products if q[i] > 0}
         target |= {tuple(a + b for a, b in zip(q, s)) for q in derived for s in ring.support(gi)}
     d_support = set(ring.support(scaled.D))
     target |= {tuple(a + b for a, b in zip(q, s)) for q in v_products for s in d_support} | d_support
+    # tau_k (b_k^2 - d_k^2) must reach the flow's degree: the disturbance enters it, times D
+    top = max((sum(q) for q in target), default=2)
+    z_tau = monomials(nv, 0, max((top - 1) // 2, 0))
+    tau_blocks = bases.character_blocks(z_tau, generators)
+    tau_products = {tuple(a + b for a, b in zip(z_tau[i], z_tau[j])) for idx in tau_blocks for i in idx for j in idx}
     for k in range(m):
         sq = tuple(2 * int(j == n + k) for j in range(nv))
         target |= {tuple(a + b for a, b in zip(q, s)) for q in tau_products for s in (sq, tuple([0] * nv))}
-    z_d = bases.sos_basis(nv, target)
+    if len(target) > TARGET_LIMIT:
+        return None
+    z_d = [q for q in bases.sos_basis(nv, target) if ("sigD", q) not in drop]
     e_target = set(v_products) | set(ring.support(y * y)) | {tuple([0] * nv)}
-    z_e = bases.sos_basis(nv, e_target)
+    z_e = [q for q in bases.sos_basis(nv, e_target) if ("sigE", q) not in drop]
     if not z_d or not z_e or max(len(z_d), len(z_e), len(z_v)) > MAX_GRAM_ROWS:
         return None
     d_blocks = bases.character_blocks(z_d, generators)
@@ -89,11 +98,11 @@ def bound_structure(scaled: ScaledField, y: Poly, degree: int) -> Structure | No
         terms_d.append(Term(param(f"b{k}", [sq, tuple([0] * nv)]), f"tau{k}"))
     terms_d.append(Term(one(ring, -1), "sigD"))
     terms_e = (Term(one(ring, 1), "V"), Term(one(ring, 1), "B"), Term(one(ring, -1), "sigE"))
-    return Structure(nvars=nv, grams=tuple(grams), scalars=(Scalar("B"),),
+    return affordable(Structure(nvars=nv, grams=tuple(grams), scalars=(Scalar("B"),),
                      identities=(Identity("dissipation", tuple(terms_d), param("lamD0", d_support), "sigD"),
                                  Identity("output", terms_e, param("E0", set(ring.support(y * y)) | {tuple([0] * nv)}),
                                           "sigE")),
-                     objective=("min", "B"))
+                     objective=("min", "B")))
 
 
 def bound_values(scaled: ScaledField, structure: Structure, y: Poly, lam: Fraction) -> ParameterValues:
@@ -116,39 +125,77 @@ def bound_values(scaled: ScaledField, structure: Structure, y: Poly, lam: Fracti
 
 
 def attempt(scaled: ScaledField, structure: Structure, y: Poly, lam: Fraction, search: Search) -> dict[str, Any] | None:
+    return attempt_with_solution(scaled, structure, y, lam, search)[0]
+
+
+def attempt_with_solution(scaled: ScaledField, structure: Structure, y: Poly, lam: Fraction, search: Search
+                          ) -> tuple[dict[str, Any] | None, Solution]:
+    """One solve at decay rate ``lam``; the exact certificate if it passes (and the solve)."""
     values = bound_values(scaled, structure, y, lam)
     solution = search.solve(structure, values)
     if not solution.usable:
-        return None
+        return None, solution
     point = search.exact(structure, solution, values)
     if point is None:
-        return None
+        return None, solution
     ring = scaled.ring
     grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
     taus = [grams[f"tau{k}"] for k in range(scaled.m)]
     B = point.scalars["B"]
     ok, _ = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, grams["V"], lam, taus, grams["sigD"])
     if not ok:
-        return None
+        return None, solution
     ok, _ = check_output_bound(ring, grams["V"], y, B, grams["sigE"])
     if not ok:
-        return None
-    return {"V": grams["V"], "taus": taus, "sigD": grams["sigD"], "sigE": grams["sigE"], "B": B, "lam": lam}
+        return None, solution
+    return {"V": grams["V"], "taus": taus, "sigD": grams["sigD"], "sigE": grams["sigE"], "B": B, "lam": lam}, solution
 
 
 def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, Any] | None, list[str]]:
+    """The smallest certified ``B`` over the degrees and decay rates (module docstring), with
+    facial reduction of the remainders where a solve shows vanishing diagonal entries, and a
+    geometric refinement of ``lam`` around the best one found on :data:`LAMBDA_GRID`."""
+    from lyapcheck.models.lyapunov import FACIAL_ROUNDS, vanishing_monomials
+
     best: dict[str, Any] | None = None
     tried: list[str] = []
     for degree in BOUND_DEGREES:
+        drop: frozenset[tuple[str, Monomial]] = frozenset()
         structure = bound_structure(scaled, y, degree)
         if structure is None:
             tried.append(f"degree {degree}: too large")
             continue
-        for lam in LAMBDA_GRID:
-            found = attempt(scaled, structure, y, Fraction(lam).limit_denominator(1000), search)
-            if found is not None and (best is None or found["B"] < best["B"]):
-                best = {**found, "degree": degree}
-        tried.append(f"degree {degree}: {'found' if best is not None else 'none'}")
+        found_here: list[tuple[Fraction, Fraction]] = []
+
+        def try_lam(lam: Fraction) -> dict[str, Any] | None:
+            nonlocal structure, drop
+            for _ in range(FACIAL_ROUNDS + 1):
+                assert structure is not None
+                found, solution = attempt_with_solution(scaled, structure, y, lam, search)
+                if found is not None or not solution.usable:
+                    return found
+                vanishing = frozenset((name, q) for name in ("sigD", "sigE")
+                                      for q in vanishing_monomials(structure.gram(name), solution))
+                reduced = bound_structure(scaled, y, degree, drop | vanishing) if vanishing else None
+                if reduced is None:
+                    return None
+                drop, structure = drop | vanishing, reduced
+            return None
+
+        for lam in (Fraction(x).limit_denominator(1000) for x in LAMBDA_GRID):
+            found = try_lam(lam)
+            if found is not None:
+                found_here.append((found["B"], lam))
+                if best is None or found["B"] < best["B"]:
+                    best = {**found, "degree": degree}
+        if found_here:
+            _, lam0 = min(found_here)
+            for factor in LAMBDA_REFINE:
+                lam = (lam0 * Fraction(factor).limit_denominator(1000)).limit_denominator(10**6)
+                found = try_lam(lam)
+                if found is not None and best is not None and found["B"] < best["B"]:
+                    best = {**found, "degree": degree}
+        tried.append(f"degree {degree}: {'found' if found_here else 'none'}")
     return best, tried
 
 

@@ -258,7 +258,7 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
             from lyapcheck.models.regions import radius_polynomial
 
             r = Fraction(cert["ball"]["radius"])
-            ok, why2 = check_containment(ring, V, level, radius_polynomial(ring, scaled.scaling.states), r * r,
+            ok, why2 = check_containment(ring, V, level, radius_polynomial(ring, scaled.scaling), r * r,
                                          _gram(cert["ball"]["gram_s"], n), _gram(cert["ball"]["gram_sigma"], n))
             if not ok or not _at_most(c.get("ball_radius"), r):
                 return False, f"the ball: {why2 if not ok else 'the stated radius exceeds the certified one'}"
@@ -276,9 +276,10 @@ def _verify_ges(scaled: Any, V: Any, mu: Fraction, cert: dict[str, Any], c: dict
     n = scaled.n
     if mu <= 0 or any(sum(m) != 1 for m in V.basis) or len(V.basis) != n:
         return False, "GES needs a quadratic V (every state, degree 1) and mu > 0"
-    s = scaled.scaling.states
+    from lyapcheck.models.field import declared_quadratic
+
     order = [V.basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
-    P = [[V.Q[order[i]][order[j]] / (s[i] * s[j]) for j in range(n)] for i in range(n)]
+    P = declared_quadratic(scaled.scaling, [[V.Q[order[i]][order[j]] for j in range(n)] for i in range(n)])
     c1, c2, k = Fraction(cert["c1"]), Fraction(cert["c2"]), Fraction(cert["k"])
     eye = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
     if not (c1 > 0 and is_positive_definite([[P[i][j] - c1 * eye[i][j] for j in range(n)] for i in range(n)])

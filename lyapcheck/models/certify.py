@@ -176,7 +176,14 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                                                        Search(state_field(sc).ring, budget)))
         if "roa" in chosen:
             lin = out.results.get("linearization")
-            run("roa", lambda budget: run_roa(sc, budget, lin))
+            gas = next((name for name in ("quadratic", "sos_gas") if name in out.results
+                        and out.results[name].status == "certified"), None)
+            if gas is not None:
+                out.results["roa"] = ConditionResult(
+                    "roa", "not_applicable", f"global asymptotic stability is certified ({gas}): the region of "
+                    "attraction is the whole state space", property="ROA")
+            else:
+                run("roa", lambda budget: run_roa(sc, budget, lin))
         if "candidate" in chosen:
             run("candidate", lambda budget: run_candidate(sc, cand, budget))
         if "sos_bound" in chosen:
@@ -254,7 +261,7 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
     model = scaled.cleared.shifted.model
     field_ = state_field(scaled)
     search = Search(field_.ring, budget)
-    S = np.array([float(s) for s in scaled.scaling.states])
+    A = np.array([[float(x) for x in row] for row in scaled.scaling.matrix()])
     eq = np.array([float(v) for v in model.equilibrium])
     if regions.lyapunov_quadratic(field_) is None:
         return ConditionResult("roa", "not_certified", "the Jacobian at the equilibrium is not Hurwitz, so no quadratic "
@@ -264,9 +271,9 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
         starts = roa_starts(model)
     else:
         rng = np.random.default_rng(0)
-        starts = eq + S * rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n))
+        starts = eq + rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n)) @ A.T
     converged = simulated_region(scaled, starts)
-    samples = (starts - eq) / S
+    samples = scaled.scaling.to_scaled(starts - eq)
     outcome = regions.enlarge(field_, search, samples, converged)
     if outcome.certificate is None:
         return ConditionResult("roa", "not_certified", "no sublevel set passed the exact check", property="ROA",
@@ -308,9 +315,10 @@ def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -
     search = Search(ring, budget)
     full = model.state_ring
     # V(x_eq + S z): the candidate in the scaled states
-    gens = full.gens()
-    images = [g * to_fmpq(s) + to_fmpq(e) for g, s, e in zip(gens[:model.n], scaled.scaling.states, model.equilibrium)]
-    images += list(gens[model.n:])
+    from lyapcheck.models.field import linear_images
+
+    images = linear_images(full, model.n, scaled.scaling.matrix())
+    images = [im + to_fmpq(e) for im, e in zip(images[:model.n], model.equilibrium)] + images[model.n:]
     v_scaled = full.restrict(full.compose(cand.poly, images), ring)
     V = regions.gram_of(field_, v_scaled, search)
     if V is None:
@@ -334,7 +342,7 @@ def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -
                                certificate={"kind": "lyapunov", "mu_scaled": str(best["mu"]), "V": terms_json(ring, v_orig),
                                             "gram_V": V.to_json(), "gram_sigma": best["sigma"].to_json()},
                                solver={"solves": search.log}, property="GAS")
-    radius = float(np.max(np.abs(_half_widths(model) / np.array([float(s) for s in scaled.scaling.states])))) * 4
+    radius = float(np.max(np.abs(scaled.scaling.to_scaled(np.diag(_half_widths(model)))))) * 4
     top = regions.supremum_estimate(field_, V, radius)
     if top is None:
         return ConditionResult("candidate", "not_certified", "V' < 0 everywhere could not be proved, and no point "

@@ -9,7 +9,9 @@ Steps, each exact:
    sign then moves into the numerator). With ``D = prod_j D_j > 0`` the polynomial field is
    ``g_i = N_i D / D_i`` and ``z' = g(z, d) / D(z)``: a Lyapunov inequality on ``grad V . g``
    is one on ``V'`` times ``D > 0``.
-3. **Scale** (:func:`choose_scaling`): ``z = S z~`` (``S`` diagonal), ``d = S_d d~``, time
+3. **Scale** (:func:`choose_scaling`): ``z = A z~`` with ``A = N^-1 S`` (``S`` diagonal; ``N``
+   the identity unless a denominator depends on the states through a linear form, which then
+   becomes a coordinate: :func:`adapted_transform`), ``d = S_d d~``, time
    ``t = T tau``, and ``D = c_D D~``, all powers of two (exact, and exactly invertible), chosen so
    that the scaled coefficients are of order one: the least-squares fit of their base-2
    logarithms to 0. States of 1e-4 m and gains of 600 are thus handled as they come; the user
@@ -35,28 +37,102 @@ from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
 
 @dataclass(frozen=True)
 class Scaling:
-    """``z = S z~``, ``d = S_d d~``, ``t = T tau``, ``D = c_D D~``, outputs ``y = s_y y~`` (exact, > 0)."""
+    """The coordinates the classes work in: ``z = x - x_eq = A w~`` with ``A = N^-1 S``,
+    ``d = S_d d~``, ``t = T tau``, ``D = c_D D~``, outputs ``y = s_y y~`` (exact; the diagonal
+    factors > 0, ``N`` unit upper... any invertible rational matrix; identity unless a denominator
+    depends on a linear form, see :func:`adapted_transform`)."""
 
     states: tuple[Fraction, ...]
     disturbances: tuple[Fraction, ...]
     time: Fraction
     denominator: Fraction
     outputs: tuple[Fraction, ...]
+    #: ``w = N z``: rows of N (None: the identity)
+    transform: tuple[tuple[Fraction, ...], ...] | None = None
 
     def to_json(self) -> dict[str, Any]:
-        return {"states": [str(s) for s in self.states], "disturbances": [str(s) for s in self.disturbances],
-                "time": str(self.time), "denominator": str(self.denominator),
-                "outputs": [str(s) for s in self.outputs]}
+        out: dict[str, Any] = {"states": [str(s) for s in self.states],
+                               "disturbances": [str(s) for s in self.disturbances],
+                               "time": str(self.time), "denominator": str(self.denominator),
+                               "outputs": [str(s) for s in self.outputs]}
+        if self.transform is not None:
+            out["transform"] = [[str(x) for x in row] for row in self.transform]
+        return out
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> "Scaling":
+        transform = data.get("transform")
         return cls(states=tuple(Fraction(s) for s in data["states"]),
                    disturbances=tuple(Fraction(s) for s in data["disturbances"]),
                    time=Fraction(data["time"]), denominator=Fraction(data["denominator"]),
-                   outputs=tuple(Fraction(s) for s in data["outputs"]))
+                   outputs=tuple(Fraction(s) for s in data["outputs"]),
+                   transform=None if transform is None else tuple(tuple(Fraction(x) for x in row)
+                                                                  for row in transform))
 
     def positive(self) -> bool:
-        return all(x > 0 for x in (*self.states, *self.disturbances, self.time, self.denominator, *self.outputs))
+        """The diagonal factors are > 0 and the transform (if any) is square and invertible."""
+        if not all(x > 0 for x in (*self.states, *self.disturbances, self.time, self.denominator, *self.outputs)):
+            return False
+        if self.transform is None:
+            return True
+        n = len(self.states)
+        if len(self.transform) != n or any(len(row) != n for row in self.transform):
+            return False
+        from lyapcheck import exact
+
+        return exact.det(self.transform) != 0
+
+    def matrix(self) -> list[list[Fraction]]:
+        """``A`` with ``z = A w~``: ``N^-1 S``."""
+        n = len(self.states)
+        inv = _inverse(self.transform) if self.transform is not None else _identity(n)
+        return [[inv[i][j] * self.states[j] for j in range(n)] for i in range(n)]
+
+    def inverse_matrix(self) -> list[list[Fraction]]:
+        """``A^-1`` with ``w~ = A^-1 z``: ``S^-1 N``."""
+        n = len(self.states)
+        N = [list(row) for row in self.transform] if self.transform is not None else _identity(n)
+        return [[N[i][j] / self.states[i] for j in range(n)] for i in range(n)]
+
+    def to_scaled(self, z: Any) -> Any:
+        """Float points ``z = x - x_eq`` (rows) in the scaled coordinates ``w~``."""
+        import numpy as np
+
+        Ainv = np.array([[float(x) for x in row] for row in self.inverse_matrix()])
+        return np.asarray(z, dtype=np.float64) @ Ainv.T
+
+
+def _identity(n: int) -> list[list[Fraction]]:
+    return [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+
+
+def _inverse(m: Sequence[Sequence[Fraction]]) -> list[list[Fraction]]:
+    """Exact inverse by Gauss-Jordan elimination (small matrices)."""
+    n = len(m)
+    a = [list(row) + _identity(n)[i] for i, row in enumerate(m)]
+    for c in range(n):
+        pivot = next(r for r in range(c, n) if a[r][c] != 0)
+        a[c], a[pivot] = a[pivot], a[c]
+        p = a[c][c]
+        a[c] = [x / p for x in a[c]]
+        for r in range(n):
+            if r != c and a[r][c]:
+                f = a[r][c]
+                a[r] = [x - f * y for x, y in zip(a[r], a[c])]
+    return [row[n:] for row in a]
+
+
+def linear_images(ring: Ring, n: int, matrix: Sequence[Sequence[Fraction]]) -> list[Poly]:
+    """The images ``v_i = sum_j M_ij u_j`` of the first ``n`` variables (the others unchanged)."""
+    gens = ring.gens()
+    images = []
+    for i in range(n):
+        p = ring.zero()
+        for j in range(n):
+            if matrix[i][j]:
+                p += gens[j] * to_fmpq(matrix[i][j])
+        images.append(p)
+    return images + list(gens[n:])
 
 
 @dataclass(frozen=True)
@@ -165,13 +241,67 @@ def _pow2(x: float) -> Fraction:
     return Fraction(2) ** int(round(x))
 
 
+def adapted_transform(cleared: ClearedField) -> tuple[tuple[Fraction, ...], ...] | None:
+    """``N`` (``w = N z``) that makes a linear form a coordinate where a denominator depends on the
+    states through it: a denominator whose quadratic part is ``c l(z)^2`` (rank one, exact) gets
+    ``w_k = l(z) / l_k`` for a pivot state ``k``. The paper's ``(eps + sigma0 s)^2 + Delta^2`` thus
+    becomes ``w_eps^2 + Delta^2``: in ``z`` no monomial basis shows that the remainder's top-degree
+    part vanishes on the line ``eps + sigma0 s = 0`` (its Gram matrix cannot be positive definite),
+    in ``w`` the Newton polytope does. None when no denominator has such a form."""
+    shifted = cleared.shifted
+    ring = shifted.ring
+    n = shifted.n
+    rows = _identity(n)
+    used: set[int] = set()
+    for den in shifted.distinct_denominators():
+        quad = {m: c for m, c in ring.terms(den).items() if sum(m) == 2 and not any(m[n:])}
+        if not quad:
+            continue
+        Q = [[Fraction(0)] * n for _ in range(n)]
+        for m, c in quad.items():
+            idx = [i for i in range(n) for _ in range(m[i])]
+            i, j = idx
+            if i == j:
+                Q[i][i] += c
+            else:
+                Q[i][j] += c / 2
+                Q[j][i] += c / 2
+        k = next((i for i in range(n) if Q[i][i] != 0 and i not in used), None)
+        if k is None:
+            continue
+        row = Q[k]
+        if all(Q[i][j] * Q[k][k] == Q[i][k] * Q[k][j] for i in range(n) for j in range(n)):  # rank one
+            if sum(1 for x in row if x) < 2:
+                continue  # already a coordinate
+            rows[k] = [x / row[k] for x in row]
+            used.add(k)
+    if not used:
+        return None
+    from lyapcheck import exact
+
+    if exact.det(tuple(tuple(r) for r in rows)) == 0:
+        return None
+    return tuple(tuple(r) for r in rows)
+
+
 def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, Fraction]] | None = None) -> Scaling:
-    """Powers of two that bring the field's coefficients near 1 (see the module docstring)."""
+    """An adapted linear transform (:func:`adapted_transform`), then powers of two that bring the
+    field's coefficients near 1 (see the module docstring)."""
     import numpy as np
 
     model = cleared.shifted.model
     n, m = model.n, len(model.disturbances)
     ring = cleared.ring
+    transform = adapted_transform(cleared)
+    if transform is not None:
+        images = linear_images(ring, n, _inverse(transform))
+        g_w = [sum((ring.compose(gj, images) * to_fmpq(transform[i][j]) for j, gj in enumerate(cleared.g)
+                    if transform[i][j]), ring.zero()) for i in range(n)]
+        D_w = ring.compose(cleared.D, images)
+        outputs_w = [ring.compose(y, images) for y in cleared.shifted.outputs.values()]
+        domain = None  # a box in z is not a box in w
+    else:
+        g_w, D_w, outputs_w = list(cleared.g), cleared.D, list(cleared.shifted.outputs.values())
     bounds = list(model.disturbances.values())
     dist_log = [math.log2(float(b)) if b > 0 else 0.0 for b in bounds]
     fixed_states: list[float | None] = [None] * n
@@ -188,7 +318,7 @@ def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, F
         rows.append([weight * r for r in row])
         rhs.append(weight * value)
 
-    for i, gi in enumerate(cleared.g):
+    for i, gi in enumerate(g_w):
         for mono, c in ring.float_terms(gi).items():
             row = [0.0] * (n + 2)
             for k in range(n):
@@ -198,7 +328,7 @@ def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, F
             row[n + 1] = -1.0
             value = -math.log2(abs(c)) - sum(mono[n + k] * dist_log[k] for k in range(m))
             add(row, value)
-    for mono, c in ring.float_terms(cleared.D).items():
+    for mono, c in ring.float_terms(D_w).items():
         row = [0.0] * (n + 2)
         for k in range(n):
             row[k] += mono[k]
@@ -218,14 +348,14 @@ def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, F
     x, *_ = np.linalg.lstsq(A, b, rcond=None)
     states = tuple(_pow2(v) for v in x[:n])
     time = _pow2(x[n])
-    denominator = _pow2(x[n + 1]) if not cleared.D.is_constant() else Fraction(1)
+    denominator = _pow2(x[n + 1]) if not D_w.is_constant() else Fraction(1)
     disturbances = tuple(_pow2(v) if bounds[k] > 0 else Fraction(1) for k, v in enumerate(dist_log))
     outputs = []
-    for y in cleared.shifted.outputs.values():
+    for y in outputs_w:
         logs = [math.log2(abs(c)) + sum(mono[k] * x[k] for k in range(n)) for mono, c in ring.float_terms(y).items()]
         outputs.append(_pow2(max(logs)) if logs else Fraction(1))
     return Scaling(states=states, disturbances=disturbances, time=time, denominator=denominator,
-                   outputs=tuple(outputs))
+                   outputs=tuple(outputs), transform=transform)
 
 
 @dataclass(frozen=True)
@@ -257,15 +387,19 @@ class ScaledField:
 
 
 def apply_scaling(cleared: ClearedField, scaling: Scaling) -> ScaledField:
-    """The exact scaled field (see the module docstring)."""
+    """The exact field in the scaled coordinates: ``g~ = (T / c_D) A^-1 g(A w~, S_d d~)``,
+    ``D~ = D(A w~) / c_D``, ``y~ = y(A w~) / s_y`` (see :class:`Scaling`)."""
     ring = cleared.ring
     n = cleared.n
     model = cleared.shifted.model
+    A = scaling.matrix()
+    Ainv = scaling.inverse_matrix()
     gens = ring.gens()
-    images = ([g * to_fmpq(s) for g, s in zip(gens[:n], scaling.states)]
-              + [g * to_fmpq(s) for g, s in zip(gens[n:], scaling.disturbances)])
-    g = tuple(ring.compose(gi, images) * to_fmpq(scaling.time / (s * scaling.denominator))
-              for gi, s in zip(cleared.g, scaling.states))
+    images = linear_images(ring, n, A)[:n] + [g * to_fmpq(s) for g, s in zip(gens[n:], scaling.disturbances)]
+    composed = [ring.compose(gi, images) for gi in cleared.g]
+    factor = to_fmpq(scaling.time / scaling.denominator)
+    g = tuple(sum((composed[j] * to_fmpq(Ainv[i][j]) for j in range(n) if Ainv[i][j]), ring.zero()) * factor
+              for i in range(n))
     D = ring.compose(cleared.D, images) * to_fmpq(1 / scaling.denominator)
     bounds = tuple(b / s for b, s in zip(model.disturbances.values(), scaling.disturbances))
     outputs = {name: ring.compose(y, images) * to_fmpq(1 / s)
@@ -274,10 +408,16 @@ def apply_scaling(cleared: ClearedField, scaling: Scaling) -> ScaledField:
 
 
 def unscale_polynomial(ring: Ring, p: Poly, scaling: Scaling, n: int) -> Poly:
-    """``p(S^-1 z)``: a polynomial in the scaled states as one in the (shifted) declared states."""
-    gens = ring.gens()
-    images = [g * to_fmpq(1 / s) for g, s in zip(gens[:n], scaling.states)] + list(gens[n:])
-    return ring.compose(p, images)
+    """``p(A^-1 z)``: a polynomial in the scaled states as one in the (shifted) declared states."""
+    return ring.compose(p, linear_images(ring, n, scaling.inverse_matrix()))
+
+
+def declared_quadratic(scaling: Scaling, P_scaled: Sequence[Sequence[Fraction]]) -> list[list[Fraction]]:
+    """``P`` of ``V = z^T P z`` from ``V = w~^T P~ w~``: ``A^-T P~ A^-1``."""
+    Ainv = scaling.inverse_matrix()
+    n = len(Ainv)
+    tmp = [[sum((P_scaled[i][k] * Ainv[k][j] for k in range(n)), Fraction(0)) for j in range(n)] for i in range(n)]
+    return [[sum((Ainv[k][i] * tmp[k][j] for k in range(n)), Fraction(0)) for j in range(n)] for i in range(n)]
 
 
 @dataclass(frozen=True)

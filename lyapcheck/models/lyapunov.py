@@ -26,7 +26,7 @@ import math
 from fractions import Fraction
 from typing import Any, Callable, Final, Sequence
 
-from lyapcheck.models.field import ScaledField, StateField, state_field, unscale_polynomial
+from lyapcheck.models.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
 from lyapcheck.models.search import BudgetExhausted, ParameterValues, Search, one, param
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
@@ -36,8 +36,9 @@ from lyapcheck.sos.program import Gram, Identity, Solution, Structure, Term
 
 #: degrees of V that ``sos_gas`` tries, in turn (``quadratic`` is degree 2 alone)
 SOS_GAS_DEGREES: Final = (2, 4, 6, 8)
-#: the largest Gram basis a search builds (rows); a degree that needs more is skipped, named
-MAX_GRAM_ROWS: Final = 160
+#: the largest Gram basis a search builds (rows); a degree that needs more is skipped, named. A
+#: solve with Gram matrices of 65 and 150 rows (degree 4 in 10 states) takes 5-7 s here
+MAX_GRAM_ROWS: Final = 120
 #: decay-rate search in scaled time: geometric steps down from MU_MAX to the first mu proved, then
 #: MU_BISECTION_STEPS geometric bisections (the rate is a figure: a few per cent resolve it)
 MU_MAX: Final = Fraction(4)
@@ -46,13 +47,32 @@ MU_BISECTION_STEPS: Final = 4
 #: facial reduction: a remainder's basis monomial whose diagonal is below this fraction of the
 #: largest is dropped and the search repeated, at most FACIAL_ROUNDS times
 FACIAL_TOL: Final = 1e-7
+#: a remainder whose unreduced candidate basis (the monomials up to half the target's degree)
+#: has more than this many monomials is not attempted: building its Newton-reduced basis alone
+#: takes seconds, and its program could not be solved within the class's time
+CANDIDATE_LIMIT: Final = 500
+#: the most monomials an identity may have (one equality each): degree 4 in 10 states has about
+#: 3000, and a solve took 6-20 s here
+TARGET_LIMIT: Final = 1500
+#: the largest program a search solves (:meth:`~lyapcheck.sos.program.Structure.cost`): degree 4
+#: in 10 states, with two Gram matrices in PSD blocks of 47 and 18 rows (cost 2.9e9), took 12-21 s
+#: a solve here; one such Gram matrix (the 10-state level step, 1.4e9) about 2 s
+BLOCK_COST_LIMIT: Final = 2_000_000_000
 FACIAL_ROUNDS: Final = 3
+#: ... and only when the solve's margin is not clearly negative (an infeasible program has no face)
+FACIAL_MARGIN: Final = 1e-6
 
 
 def symmetry(field: StateField) -> list[tuple[int, ...]]:
     """The sign changes of the states that map the field to itself (``g_i`` like ``z_i``, ``D`` invariant)."""
     return bases.sign_symmetries(field.n, [(field.ring.support(gi), i) for i, gi in enumerate(field.g)]
                                  + [(field.ring.support(field.D), None)])
+
+
+def field_degree(field: StateField) -> int:
+    """The largest total degree of ``g`` and ``D``."""
+    return max([sum(m) for gi in field.g for m in field.ring.support(gi)]
+               + [sum(m) for m in field.ring.support(field.D)] + [1])
 
 
 def _products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) -> set[Monomial]:
@@ -66,6 +86,8 @@ def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequ
     remainder's basis leaves out (facial reduction, :func:`vanishing_monomials`)."""
     n = field.n
     ring = field.ring
+    if bases.candidate_count(n, degree - 1 + field_degree(field)) > CANDIDATE_LIMIT:
+        return None
     z_v = monomials(n, 1, degree // 2)
     v_blocks = bases.character_blocks(z_v, generators)
     products = _products(z_v, v_blocks)
@@ -74,6 +96,8 @@ def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequ
         derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
         target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
     target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+    if len(target) > TARGET_LIMIT:
+        return None
     z_w = [m for m in bases.sos_basis(n, target) if m not in drop]
     if not z_w or not bases.has_pure_powers(z_w, range(n)) or len(z_w) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
         return None
@@ -81,12 +105,17 @@ def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequ
     terms = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in enumerate(field.g)]
     terms.append(Term(param("muD", ring.support(field.D)), "V"))
     terms.append(Term(one(ring, -1), "W"))
-    return Structure(
+    return affordable(Structure(
         nvars=n,
         grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks)))),
         scalars=(),
         identities=(Identity("lyapunov", tuple(terms), None, "W"),),
-        objective=("max_margin",), trace_one=("V",))
+        objective=("max_margin",), trace_one=("V",)))
+
+
+def affordable(structure: Structure) -> Structure | None:
+    """``structure`` unless its blocks cost more than :data:`BLOCK_COST_LIMIT`."""
+    return structure if structure.cost() <= BLOCK_COST_LIMIT else None
 
 
 def lyapunov_values(field: StateField, structure: Structure, mu: Fraction) -> ParameterValues:
@@ -136,8 +165,8 @@ def vanishing_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
     import numpy as np
 
     Q = solution.grams.get(gram.name)
-    if Q is None or not solution.usable:
-        return frozenset()
+    if Q is None or not solution.usable or solution.scalars.get("t", 0.0) < -FACIAL_MARGIN:
+        return frozenset()  # infeasible (a clearly negative margin): no face to reduce to
     diag = np.abs(np.diag(Q))
     peak = float(diag.max()) if diag.size else 0.0
     if peak <= 0:
@@ -218,10 +247,9 @@ def ges_bounds(scaled: ScaledField, found: dict[str, Any]) -> tuple[Fraction, Fr
     if found["degree"] != 2:
         return None
     n = scaled.n
-    s = scaled.scaling.states
     Qv = found["V"].Q
     order = [found["V"].basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
-    P = [[Qv[order[i]][order[j]] / (s[i] * s[j]) for j in range(n)] for i in range(n)]
+    P = declared_quadratic(scaled.scaling, [[Qv[order[i]][order[j]] for j in range(n)] for i in range(n)])
     lam = np.linalg.eigvalsh(np.array([[float(x) for x in row] for row in P]))
     c1 = Fraction(float(lam[0]) * (1 - 1e-6)).limit_denominator(10**12) if lam[0] > 0 else Fraction(0)
     c2 = Fraction(float(lam[-1]) * (1 + 1e-6))

@@ -36,8 +36,9 @@ from typing import Any, Final, Sequence
 
 import numpy as np
 
-from lyapcheck.models.field import ScaledField, StateField, state_field, unscale_polynomial
-from lyapcheck.models.lyapunov import FACIAL_ROUNDS, symmetry, terms_json, vanishing_monomials
+from lyapcheck.models.field import ScaledField, Scaling, StateField, linear_images, state_field, unscale_polynomial
+from lyapcheck.models.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
+    symmetry, terms_json, vanishing_monomials
 from lyapcheck.models.numeric import NumericPoly
 from lyapcheck.models.search import BudgetExhausted, ParameterValues, Search, one, param
 from lyapcheck.results import ConditionResult
@@ -57,6 +58,9 @@ ROA_DEGREES: Final = (4, 6, 8)
 #: ROA_STALE_ROUNDS rounds)
 ROA_ROUNDS: Final = 30
 ROA_STALE_ROUNDS: Final = 3
+#: the enlarging rounds stop when less than this share of the class's time is left, which is kept
+#: for the exact check of the best set and its ball
+ROA_RESERVE: Final = 0.35
 #: the V step keeps Q_V >= ROA_FLOOR I (V positive definite with room for the exact check)
 ROA_FLOOR: Final = 1e-6
 #: extra half-degree of the multiplier s beyond the least that balances the degrees: on the
@@ -88,35 +92,50 @@ class LevelCertificate:
                 "gram_s": self.s.to_json(), "gram_sigma": self.sigma.to_json()}
 
 
-def multiplier_half_degree(field: StateField, v_degree: int) -> int:
-    """``s`` of degree ``2k``: ``deg(s V) >= deg(grad V . g)`` at least, and ``k >= 1``."""
+def multiplier_half_degree(field: StateField, v_degree: int, extra: int = MULTIPLIER_EXTRA) -> int:
+    """``s`` of degree ``2k``: ``deg(s V) >= deg(grad V . g)`` at least, and ``k >= 1``, plus ``extra``."""
     dg = max((sum(m) for gi in field.g for m in field.ring.support(gi)), default=1)
-    return max(1, math.ceil((dg - 1) / 2)) + MULTIPLIER_EXTRA
+    return max(1, math.ceil((dg - 1) / 2)) + extra
 
 
 def level_structure(field: StateField, V: GramPoly, generators: Sequence[Sequence[int]],
                     drop: frozenset[Monomial] = frozenset()) -> Structure | None:
+    """The level step's program; the multiplier one degree richer than needed where that fits in
+    :data:`MAX_GRAM_ROWS` (many states), else the least."""
+    for extra in sorted({MULTIPLIER_EXTRA, 0}, reverse=True):
+        structure = _level_structure(field, V, generators, drop, extra)
+        if structure is not None:
+            return structure
+    return None
+
+
+def _level_structure(field: StateField, V: GramPoly, generators: Sequence[Sequence[int]],
+                     drop: frozenset[Monomial], extra: int) -> Structure | None:
     ring = field.ring
     n = field.n
     v_poly = V.poly(ring)
     v_degree = max(sum(m) for m in V.basis) * 2
-    ks = multiplier_half_degree(field, v_degree)
+    ks = multiplier_half_degree(field, v_degree, extra)
+    if bases.candidate_count(n, max(v_degree - 1 + field_degree(field), v_degree + 2 * ks)) > CANDIDATE_LIMIT:
+        return None
     z_s = monomials(n, 1, ks)
     s_blocks = bases.character_blocks(z_s, generators)
     lv = lie_derivative(ring, v_poly, field.g)
     v_support = set(ring.support(v_poly)) | {tuple([0] * n)}
     s_products = {tuple(a + b for a, b in zip(z_s[i], z_s[j])) for idx in s_blocks for i in idx for j in idx}
     target = set(ring.support(lv)) | {tuple(a + b for a, b in zip(m, v)) for m in s_products for v in v_support}
+    if len(target) > TARGET_LIMIT:
+        return None
     z_sigma = [m for m in bases.sos_basis(n, target) if m not in drop]
-    if not z_sigma or not bases.has_pure_powers(z_sigma, range(n)) or len(z_sigma) > MAX_GRAM_ROWS:
+    if not z_sigma or not bases.has_pure_powers(z_sigma, range(n)) or max(len(z_sigma), len(z_s)) > MAX_GRAM_ROWS:
         return None
     sigma_blocks = bases.character_blocks(z_sigma, generators)
     terms = (Term(param("Vc", v_support), "s"), Term(one(ring, -1), "sigma"))
-    return Structure(nvars=n, grams=(Gram("s", tuple(z_s), tuple(map(tuple, s_blocks))),
+    return affordable(Structure(nvars=n, grams=(Gram("s", tuple(z_s), tuple(map(tuple, s_blocks))),
                                      Gram("sigma", tuple(z_sigma), tuple(map(tuple, sigma_blocks)))),
                      scalars=(), identities=(Identity("sublevel", terms, param("LV", ring.support(lv) or
                                                                                    [tuple([0] * n)]), "sigma"),),
-                     objective=("max_margin",))
+                     objective=("max_margin",)))
 
 
 def level_values(field: StateField, structure: Structure, V: GramPoly, c: Fraction) -> ParameterValues:
@@ -235,6 +254,9 @@ def vstep_structure(field: StateField, v_degree: int, s: GramPoly, generators: S
     """With ``s`` fixed: ``-grad V . g - s (1 - V) = sigma``, ``Q_V >= floor I``, minimize ``<Q_V, M>``."""
     ring = field.ring
     n = field.n
+    s_degree = 2 * max((sum(m) for m in s.basis), default=0)
+    if bases.candidate_count(n, max(v_degree - 1 + field_degree(field), v_degree + s_degree)) > CANDIDATE_LIMIT:
+        return None
     z_v = monomials(n, 1, v_degree // 2)
     v_blocks = bases.character_blocks(z_v, generators)
     s_poly = s.poly(ring)
@@ -245,18 +267,20 @@ def vstep_structure(field: StateField, v_degree: int, s: GramPoly, generators: S
         derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
         target |= {tuple(a + b for a, b in zip(m, q)) for m in derived for q in ring.support(gi)}
     target |= {tuple(a + b for a, b in zip(m, q)) for m in products for q in s_support}
+    if len(target) > TARGET_LIMIT:
+        return None
     z_sigma = bases.sos_basis(n, target)
     if not z_sigma or len(z_sigma) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
         return None
     sigma_blocks = bases.character_blocks(z_sigma, generators)
     terms = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in enumerate(field.g)]
     terms += [Term(param("s1", s_support), "V"), Term(one(ring, -1), "sigma")]
-    return Structure(nvars=n,
+    return affordable(Structure(nvars=n,
                      grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks)), margin="floor"),
                             Gram("sigma", tuple(z_sigma), tuple(map(tuple, sigma_blocks)), margin=False)),
                      scalars=(Scalar("J"),),
                      identities=(Identity("sublevel_1", tuple(terms), param("negs1", s_support), "sigma"),),
-                     objective=("min", "J"), inner=(("J", "V", "M"),))
+                     objective=("min", "J"), inner=(("J", "V", "M"),)))
 
 
 def _monomial_vectors(basis: Sequence[Monomial], points: np.ndarray) -> np.ndarray:
@@ -292,7 +316,8 @@ def vstep(field: StateField, v_degree: int, current: LevelCertificate, samples: 
         weighted = outside[order[:max(1, int(np.ceil(VSTEP_NEAREST * outside.shape[0])))]]
     Z = _monomial_vectors(z_v, weighted)
     if VSTEP_NORMALIZE:
-        Z = Z / np.linalg.norm(Z, axis=1, keepdims=True)
+        norms = np.linalg.norm(Z, axis=1, keepdims=True)
+        Z = Z[norms[:, 0] > 0] / norms[norms[:, 0] > 0]
     M = Z.T @ Z / max(weighted.shape[0], 1)
     values.set_matrix("M", (M + M.T) / 2)
     values.set_scalar("floor", ROA_FLOOR)
@@ -351,6 +376,9 @@ def enlarge(field: StateField, search: Search, samples: np.ndarray, converged: n
                 continue
             stale = 0
             for _ in range(ROA_ROUNDS):
+                if search.budget.left() < ROA_RESERVE * search.budget.seconds:
+                    outcome.history.append({"stopped": "time reserved for the exact check"})
+                    break
                 new_V = vstep(field, degree, LevelCertificate(V, Fraction(1), s, best.sigma, 0.0), target, search,
                               generators)
                 if new_V is None:
@@ -411,8 +439,8 @@ def ball_radius(scaled: ScaledField, cert: LevelCertificate, search: Search) -> 
     field = state_field(scaled)
     ring = field.ring
     n = field.n
-    s = np.array([float(x) for x in scaled.scaling.states])
     v_num = NumericPoly(ring, cert.V.poly(ring))
+    to_scaled = scaled.scaling.to_scaled
     level = float(cert.level)
     rng = np.random.default_rng(7)
     directions = rng.normal(size=(2000, n))
@@ -421,21 +449,24 @@ def ball_radius(scaled: ScaledField, cert: LevelCertificate, search: Search) -> 
     lo = np.zeros(len(directions))
     hi = np.full(len(directions), 1.0)
     for _ in range(60):  # grow hi until outside
-        out = v_num(hi[:, None] * directions / s) > level
+        out = v_num(to_scaled(hi[:, None] * directions)) > level
         if np.all(out):
             break
         hi = np.where(out, hi, hi * 2)
     for _ in range(50):
         mid = (lo + hi) / 2
-        inside = v_num(mid[:, None] * directions / s) <= level
+        inside = v_num(to_scaled(mid[:, None] * directions)) <= level
         lo, hi = np.where(inside, mid, lo), np.where(inside, hi, mid)
     estimate = float(np.min(lo))
-    if not estimate > 0:
-        return None, None
-    p = radius_polynomial(ring, scaled.scaling.states)
+    if not estimate > 0 or search.budget.left() < 0.1 * search.budget.seconds:
+        return (estimate if estimate > 0 else None), None
+    p = radius_polynomial(ring, scaled.scaling)
     for factor in (Fraction(99, 100), Fraction(9, 10), Fraction(1, 2)):
         r = Fraction(estimate).limit_denominator(10**9) * factor
-        found = _containment(field, cert, p, r * r, search)
+        try:
+            found = _containment(field, cert, p, r * r, search)
+        except BudgetExhausted:
+            return estimate, None
         if found is not None:
             return estimate, {"radius": str(r), **found}
     return estimate, None
@@ -482,11 +513,11 @@ def bases_full(basis: Sequence[Monomial]) -> tuple[tuple[int, ...], ...]:
     return (tuple(range(len(basis))),)
 
 
-def radius_polynomial(ring: Ring, scaling_states: Sequence[Fraction]) -> Poly:
-    """``|x|^2`` (declared states) in the scaled coordinates: ``sum (s_i z_i)^2``."""
+def radius_polynomial(ring: Ring, scaling: Scaling) -> Poly:
+    """``|x - x_eq|^2`` (declared states) in the scaled coordinates: ``|A w~|^2``."""
     p = ring.zero()
-    for g, si in zip(ring.gens(), scaling_states):
-        p += g * g * to_fmpq(si * si)
+    for component in linear_images(ring, ring.nvars, scaling.matrix())[:len(scaling.states)]:
+        p += component * component
     return p
 
 

@@ -69,17 +69,38 @@ def newton_reduce(candidates: Sequence[Monomial], support: Iterable[Monomial]) -
 def diagonally_consistent(basis: Sequence[Monomial], support: Iterable[Monomial]) -> list[Monomial]:
     """Drop ``a`` while ``2a`` is neither in ``support`` nor a sum ``b + c`` of two different basis
     monomials (then ``Q_aa`` is forced to 0 and ``a`` cannot be used)."""
-    supp = set(support)
     kept = list(basis)
+    if not kept:
+        return kept
+    nvars = len(kept[0])
+    supp = [tuple(m) for m in support]
+    top = 2 * max(max(max(m) for m in kept), max((max(m) for m in supp), default=0)) + 1
+    radix = np.array([top ** k for k in range(nvars)], dtype=np.int64)
+
+    def code(ms: Sequence[Monomial]) -> np.ndarray:
+        return np.array(ms, dtype=np.int64).reshape(-1, nvars) @ radix
+
+    supp_codes = set(code(supp).tolist()) if supp else set()
     while True:
-        sums: set[Monomial] = set()
-        for i, b in enumerate(kept):
-            for c in kept[i + 1:]:
-                sums.add(tuple(x + y for x, y in zip(b, c)))
-        drop = [a for a in kept if tuple(2 * x for x in a) not in supp and tuple(2 * x for x in a) not in sums]
-        if not drop:
+        c = code(kept)
+        pair = c[:, None] + c[None, :]
+        off = pair[~np.eye(len(kept), dtype=bool)]
+        sums = set(np.unique(off).tolist())
+        twice = (2 * c).tolist()
+        keep = [x in supp_codes or x in sums for x in twice]
+        if all(keep):
             return kept
-        kept = [a for a in kept if a not in drop]
+        kept = [m for m, k in zip(kept, keep) if k]
+        if not kept:
+            return kept
+
+
+def candidate_count(nvars: int, top_degree: int) -> int:
+    """How many monomials of degree at most ``top_degree // 2`` there are (a cheap size guard
+    before a basis is built)."""
+    from math import comb
+
+    return comb(nvars + top_degree // 2, nvars)
 
 
 def half_degree_candidates(nvars: int, support: Iterable[Monomial]) -> list[Monomial]:
@@ -165,11 +186,9 @@ def character(m: Monomial, generators: Sequence[Sequence[int]]) -> tuple[int, ..
     return tuple(sum(b_k * e for b_k, e in zip(b, m)) % 2 for b in generators)
 
 
-def character_blocks(basis: Sequence[Monomial], generators: Sequence[Sequence[int]],
-                     invariant_only: bool = False) -> list[list[int]]:
+def character_blocks(basis: Sequence[Monomial], generators: Sequence[Sequence[int]]) -> list[list[int]]:
     """Index sets of the basis grouped by character: an invariant ``z^T Q z`` has ``Q`` block
-    diagonal with these blocks. With ``invariant_only`` the polynomial must also be invariant term
-    by term, which any block satisfies (products of equal characters are invariant)."""
+    diagonal with these blocks (products of monomials of equal character are invariant)."""
     groups: dict[tuple[int, ...], list[int]] = {}
     for i, m in enumerate(basis):
         groups.setdefault(character(m, generators), []).append(i)

@@ -125,6 +125,13 @@ class Structure:
     def gram(self, name: str) -> Gram:
         return next(g for g in self.grams if g.name == name)
 
+    def cost(self) -> int:
+        """The sum over the PSD blocks of ``(k (k + 1) / 2)^3`` for a block of ``k`` rows: an
+        interior-point iteration factors each block's dense scaling matrix (side ``k (k + 1) / 2``),
+        so this is what a solve costs up to a constant (the searches skip a structure above their
+        limit)."""
+        return sum((len(idx) * (len(idx) + 1) // 2) ** 3 for g in self.grams for idx in g.blocks)
+
     def parameters(self) -> dict[str, tuple[int, ...]]:
         """Every parameter's shape (a vector per :class:`Coefficients`, a matrix per ``inner``)."""
         out: dict[str, tuple[int, ...]] = {}
