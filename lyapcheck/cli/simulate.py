@@ -1,8 +1,10 @@
-"""``lyapcheck simulate``: run a preset or a scenario TOML through :func:`lyapcheck.api.simulate`.
+"""``lyapcheck simulate``: run a preset or a scenario TOML through :func:`lyapcheck.api.simulate`,
+or any closed loop of a model file (``--model FILE``) through :mod:`lyapcheck.models.simulate`.
 
 Exit codes (DESIGN.md): 0 the simulation ran and the loop did not diverge; 1 it ran but the
 loop diverged (the tail of ``|eps|`` went beyond the initial error, or the integrator failed,
-e.g. the printed ODS controller); 2 bad input.
+e.g. the printed ODS controller; with ``--model``: a trajectory left the escape box or the
+integrator failed, or a simulated tail sup exceeded a certified bound); 2 bad input.
 """
 
 from __future__ import annotations
@@ -74,6 +76,144 @@ def _print_worst_case(doc: dict[str, Any]) -> None:
     console.print(f"{doc['candidates_tried']} candidates; a search, not a proof: the certified bound is the proof")
 
 
+def _figure(x: Any) -> str:
+    return "-" if x is None else f"{x:.6g}"
+
+
+def _print_model_table(doc: dict[str, Any]) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = Console()
+    outputs = list(doc["outputs"])
+    w0, w1 = doc["tail_window_s"]
+    table = Table(title=escape(f"lyapcheck simulate --model: {doc['model']['name']} (tail window {w0:.4g}-{w1:.4g} s)"))
+    table.add_column("scenario")
+    table.add_column("trajectories", justify="right")
+    table.add_column("converged", justify="right")
+    table.add_column("diverged", justify="right")
+    for y in outputs:
+        table.add_column(f"tail sup |{y}|", justify="right")
+    for name, sc in doc["scenarios"].items():
+        style = "bold red" if sc["diverged"] else ""
+        table.add_row(name, str(sc["trajectories"]), str(sc["converged"]),
+                      f"[{style}]{sc['diverged']}[/]" if style else "0",
+                      *(_figure(sc["sup_abs_output_tail"][y]) for y in outputs))
+    table.add_row("[bold]all[/]", str(doc["n_trajectories"]), str(doc["n_converged"]), str(doc["n_diverged"]),
+                  *(_figure(doc["sup_abs_output_tail"][y]) for y in outputs))
+    console.print(table)
+    console.print(escape(f"starts: {len(doc['starts'])} ({doc['starts_from']}); converged = final state within "
+                         "1e-3 state scales of the equilibrium"))
+    failed = [t for t in doc["trajectories"] if t["diverged"]]
+    if failed:
+        first = failed[0]
+        start = ", ".join(f"{k}={v:.6g}" for k, v in doc["starts"][first["start"]].items())
+        console.print(f"[bold red]{len(failed)} trajectories diverged[/], e.g. from ({escape(start)}) under "
+                      f"{first['scenario']}: {escape(first['failure'] or '')}")
+
+
+def _model_disturbance_text(d: dict[str, Any]) -> str:
+    """One line for a model disturbance's JSON description (lyapcheck.models.simulate)."""
+    def values(v: dict[str, float]) -> str:
+        return ", ".join(f"{k} = {x:.6g}" for k, x in v.items())
+
+    if d["kind"] == "constant":
+        return f"constant {values(d['d'])}"
+    if d["kind"] == "square":
+        return (f"square wave {values(d['amplitude'])} (amplitudes), {d['angular_frequency_rad_s']:.4g} rad/s "
+                f"({d['frequency_hz']:.4g} Hz), phase {d['phase_rad']:.3g} rad")
+    if d["kind"] == "bang-bang":
+        return f"bang-bang feedback pushing |{d['output']}| up (direction {d['direction']:+d})"
+    return d["kind"]
+
+
+def _print_model_worst_case(doc: dict[str, Any]) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = Console()
+    table = Table(title=escape(f"lyapcheck simulate --model --worst-case: {doc['model']['name']}"))
+    table.add_column("output")
+    table.add_column("worst tail sup", justify="right")
+    table.add_column("disturbance")
+    tight = doc.get("tightness")
+    if tight is not None:
+        table.add_column("certified bound", justify="right")
+        table.add_column("tightness_ratio", justify="right")
+    for y, found in doc["worst"].items():
+        what = _model_disturbance_text(found["disturbance"])
+        row = [escape(y), _figure(found["sup_abs_output_tail"]), escape(what)]
+        if tight is not None:
+            t = tight.get(y)
+            if t is None:
+                row += ["-", "-"]
+            else:
+                ratio = _figure(t["tightness_ratio"])
+                row += [_figure(t["certified_bound"]),
+                        f"[bold red]{ratio} SOUNDNESS VIOLATION[/]" if t["soundness_violation"] else ratio]
+        table.add_row(*row)
+    console.print(table)
+    console.print(escape(f"{doc['candidates_tried']} candidates in {doc['wall_time_s']:.1f} s; {doc['note']}"))
+    if doc["diverged"]:
+        console.print(f"[bold red]{doc['n_diverged']} candidate trajectories diverged under bounded disturbances[/]")
+        for ex in doc["divergence_examples"][:1]:
+            console.print(escape(f"e.g. {_model_disturbance_text(ex['disturbance'])}: {ex['failure']}"))
+    for y, t in (tight or {}).items():
+        if t["soundness_violation"]:
+            console.print(f"[bold red]SOUNDNESS VIOLATION[/]: output {escape(y)}: the simulated tail sup "
+                          f"{t['worst_simulated']:.6g} exceeds the certified bound {t['certified_bound']:.6g} "
+                          f"(tightness_ratio {_figure(t['tightness_ratio'])} < 1)")
+    if doc.get("soundness_violation"):
+        click.echo("lyapcheck: SOUNDNESS VIOLATION: a simulated tail sup exceeds a certified bound (tightness_ratio "
+                   "< 1); please report it", err=True)
+
+
+def _run_model(model_file: str, settings: tuple[str, ...], x0: tuple[str, ...], grid: int | None,
+               t_end: str | None, scenario_kinds: tuple[str, ...], frequencies: str | None, worst_case: bool,
+               budget: float, certificate: str | None, plot: str | None, as_json: bool) -> None:
+    """``simulate --model``: parse, call the library, print, exit (0, or 1 on divergence or violation)."""
+    import numpy as np
+
+    from lyapcheck.api import load_model_file
+    from lyapcheck.errors import InvalidParameter
+    from lyapcheck.models import simulate as sim
+
+    if plot is not None and not plot.lower().endswith(".png"):
+        raise InvalidParameter("plot", "a file name ending in .png", plot)
+    if certificate is not None and not worst_case:
+        raise InvalidParameter("certificate", "used with --worst-case (the tightness ratio compares the certified "
+                               "bound with the worst case found)", certificate)
+    if worst_case and scenario_kinds:
+        raise InvalidParameter("scenario", "left out with --worst-case (the search tries every family)",
+                               ",".join(scenario_kinds))
+    model = load_model_file(model_file, settings)
+    prepared = sim.prepare(model)
+    starts = [sim.parse_start(model, text) for text in x0]
+    if grid is not None:
+        starts += list(sim.grid_over_domain(model, grid))
+    start_arr = np.array(starts) if starts else None
+    horizon = sim.parse_horizon(t_end) if t_end is not None else None
+    band = sim.parse_frequencies(frequencies) if frequencies is not None else None
+    if worst_case:
+        bounds = sim.certified_bounds_of(model, certificate) if certificate is not None else None
+        doc = sim.search_worst_case(model, starts=start_arr, t_end=horizon, frequencies=band, budget_s=budget,
+                                    certified_bounds=bounds, plot=plot, prepared=prepared)
+        if as_json:
+            emit_json(doc)
+        else:
+            _print_model_worst_case(doc)
+        raise SystemExit(EXIT_NEGATIVE if doc["diverged"] or doc.get("soundness_violation") else EXIT_OK)
+    doc = sim.simulate_model(model, starts=start_arr, scenarios=scenario_kinds or None, t_end=horizon,
+                             frequencies=band, plot=plot, prepared=prepared)
+    if as_json:
+        emit_json(doc)
+    else:
+        _print_model_table(doc)
+    raise SystemExit(EXIT_NEGATIVE if doc["diverged"] else EXIT_OK)
+
+
 def register(group: click.Group) -> None:
     @group.command()
     @click.argument("scenario", required=False, type=click.Path(dir_okay=False))
@@ -84,11 +224,50 @@ def register(group: click.Group) -> None:
     @click.option("--worst-case", is_flag=True, help="Search the worst disturbance |d| <= d* (tail sup |eps|).")
     @click.option("--budget", type=float, default=20.0, show_default=True,
                   help="Wall-time target of --worst-case, seconds.")
+    @click.option("--model", "model_file", type=click.Path(dir_okay=False),
+                  help="Simulate any polynomial or rational closed loop from a model file (DESIGN.md, 'Model files').")
+    @click.option("--set", "settings", multiple=True, metavar="NAME=VALUE",
+                  help="With --model: override a parameter or disturbance bound, e.g. --set mu=2 (repeatable).")
+    @click.option("--x0", multiple=True, metavar='"x1=1,x2=0"',
+                  help="With --model: an initial state (numbers or unit strings, SI inside; missing states take "
+                       "the equilibrium's value). Repeatable.")
+    @click.option("--grid", type=int, metavar="N",
+                  help="With --model: also start from an N-per-state grid over the model's [domain].")
+    @click.option("--t-end", metavar="SECONDS",
+                  help="With --model: the horizon (default 40 slowest time constants of the linearisation); "
+                       "the tail window is its last 20 %.")
+    @click.option("--scenario", "scenario_kinds", multiple=True,
+                  type=click.Choice(["none", "constant", "bang-bang", "square"]),
+                  help="With --model: disturbance scenarios to run (repeatable; default all that apply).")
+    @click.option("--frequencies", metavar='"LO..HI"',
+                  help="With --model: the square waves' angular frequencies, rad/s (or with a unit: "
+                       '"0.1 Hz..2 Hz"), 8 log-spaced.')
+    @click.option("--certificate", type=click.Path(dir_okay=False),
+                  help="With --model --worst-case: a certificate with sos_bound certified; prints tightness_ratio "
+                       "= certified bound / worst simulated per output (exit 1 if one is below 1).")
     @one_line_errors
     def simulate(scenario: str | None, preset: str | None, as_json: bool, plot: str | None, worst_case: bool,
-                 budget: float) -> None:
-        """Simulate the saturated ILOS/ODS closed loop (or a paper preset)."""
+                 budget: float, model_file: str | None, settings: tuple[str, ...], x0: tuple[str, ...],
+                 grid: int | None, t_end: str | None, scenario_kinds: tuple[str, ...], frequencies: str | None,
+                 certificate: str | None) -> None:
+        """Simulate the saturated ILOS/ODS closed loop (or a paper preset), or any closed loop from a
+        model file (--model)."""
         from lyapcheck.api import simulate as run_simulation
+        from lyapcheck.errors import InvalidParameter
+
+        model_given = {"--set": settings, "--x0": x0, "--grid": grid, "--t-end": t_end,
+                       "--scenario": scenario_kinds, "--frequencies": frequencies, "--certificate": certificate}
+        if model_file is not None:
+            if scenario is not None or preset is not None:
+                raise InvalidParameter("model", "given without a scenario file or --preset (a model file carries "
+                                       "its own loop)", scenario if scenario is not None else f"--preset {preset}")
+            _run_model(model_file, settings, x0, grid, t_end, scenario_kinds, frequencies, worst_case, budget,
+                       certificate, plot, as_json)
+        used = [flag for flag, value in model_given.items() if value not in (None, ())]
+        if used:
+            value = model_given[used[0]]
+            raise InvalidParameter(used[0].lstrip("-"), "used with --model FILE",
+                                   value[0] if isinstance(value, tuple) else value)
 
         result = run_simulation(scenario, preset=preset, plot=plot, worst_case=worst_case, budget_s=budget)
         if as_json:
