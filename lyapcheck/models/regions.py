@@ -50,6 +50,10 @@ from lyapcheck.sos.program import Gram, Identity, Scalar, Solution, Structure, T
 #: relative width at which the level bisection stops (the certified level is within this of the
 #: largest level the solver finds feasible)
 LEVEL_REL_TOL: Final = 1e-3
+#: a level counts as feasible in the bisection when the solve's margin (smallest eigenvalue of the
+#: Gram matrices, scaled coordinates) exceeds this: at the supremum itself the margin is 0 and the
+#: solver returns noise of either sign (1e-13 seen), which the exact check then refuses
+LEVEL_MARGIN_MIN: Final = 1e-8
 #: at most this many bisection solves per level
 LEVEL_MAX_SOLVES: Final = 24
 #: degrees of V that ``roa`` enlarges to after the quadratic start, in turn (rounds each)
@@ -203,7 +207,7 @@ def largest_level(field: StateField, V: GramPoly, search: Search, c_top: float,
         search.budget.check()
         cert, solution = level_attempt(field, structure, V, c, search, exact=False)
         solves += 1
-        ok = solution.usable and solution.scalars.get("t", 0.0) > 0
+        ok = solution.usable and solution.scalars.get("t", 0.0) > LEVEL_MARGIN_MIN
         if not ok and not feasible and solves <= FACIAL_ROUNDS:
             vanishing = vanishing_monomials(structure.gram("sigma"), solution)
             if vanishing:
