@@ -400,8 +400,13 @@ class SimulationReport:
 
 
 def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
-             plot: str | Path | None = None, worst_case: bool = False, budget_s: float = 20.0) -> SimulationReport:
-    """Simulate the saturated ILOS/ODS closed loop: a scenario TOML or one of the paper's presets.
+             plot: str | Path | None = None, worst_case: bool = False, budget_s: float = 20.0,
+             model: "str | Path | Model | None" = None, settings: Mapping[str, object] | Sequence[str] | None = None,
+             x0: Sequence[str] = (), grid: int | None = None, t_end: str | float | None = None,
+             scenarios: Sequence[str] | None = None, frequencies: str | None = None,
+             certificate: str | Path | None = None) -> SimulationReport:
+    """Simulate the saturated ILOS/ODS closed loop (a scenario TOML or one of the paper's presets),
+    or any closed loop from a model file (``model=``, see :func:`simulate_model_file`).
 
     Parameters
     ----------
@@ -417,6 +422,13 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
         over the switching law) within ``budget_s`` seconds; the document gives
         ``sup_abs_eps_tail_m`` and the ``disturbance`` that produced it.
     """
+    if model is not None:
+        if scenario is not None or preset is not None:
+            raise InvalidParameter("model", "given without a scenario or a preset (a model file is its own loop)",
+                                   str(scenario if scenario is not None else preset))
+        return simulate_model_file(model, settings=settings, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios,
+                                   frequencies=frequencies, worst_case=worst_case, budget_s=budget_s,
+                                   certificate=certificate, plot=plot)
     from lyapcheck.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
 
     if plot is not None and Path(plot).suffix.lower() != ".png":
@@ -442,6 +454,63 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
         section5_figure(batch, result, str(plot))
         doc["plot"] = str(plot)
     return SimulationReport(diverged=bool(doc["diverged"]), document=doc)
+
+
+def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
+                        x0: Sequence[str] = (), grid: int | None = None, t_end: str | float | None = None,
+                        scenarios: Sequence[str] | None = None, frequencies: str | None = None,
+                        worst_case: bool = False, budget_s: float = 20.0, certificate: str | Path | None = None,
+                        plot: str | Path | None = None) -> SimulationReport:
+    """``lyapcheck simulate --model``: the model's closed loop from its starts under its disturbance
+    scenarios, batched (:mod:`lyapcheck.models.simulate`; docs/simulation.md has the JSON keys).
+
+    Parameters
+    ----------
+    model, settings
+        The model file (or a loaded model) and ``--set`` values laid over its parameters.
+    x0
+        Starts as ``"x1=1,x2=0"`` texts (numbers or unit strings; missing states at the equilibrium).
+    grid
+        Also a grid of this many points per state over the model's ``[domain]``.
+    t_end, frequencies
+        The horizon (seconds, or a unit string) and the square waves' band (``"0.1..10"``: rad/s, or Hz).
+    scenarios
+        Among ``none``, ``constant``, ``bang-bang``, ``square`` (default: all that apply).
+    worst_case, budget_s, certificate
+        Search the worst disturbance within ``budget_s`` seconds instead; with a certificate file of
+        class ``sos_bound``, report ``tightness_ratio`` = certified / worst simulated per output.
+    plot
+        Also write the figures to this PNG.
+    """
+    import numpy as np
+
+    from lyapcheck.models import simulate as sim
+
+    if plot is not None and Path(plot).suffix.lower() != ".png":
+        raise InvalidParameter("plot", "a file name ending in .png", str(plot))
+    if certificate is not None and not worst_case:
+        raise InvalidParameter("certificate", "used with --worst-case (the tightness ratio compares the certified "
+                               "bound with the worst case found)", str(certificate))
+    if worst_case and scenarios:
+        raise InvalidParameter("scenario", "left out with --worst-case (the search tries every family)",
+                               ",".join(scenarios))
+    loaded = load_model_file(model, settings)
+    prepared = sim.prepare(loaded)
+    starts = [sim.parse_start(loaded, text) for text in x0]
+    if grid is not None:
+        starts += list(sim.grid_over_domain(loaded, grid))
+    start_arr = np.array(starts) if starts else None
+    horizon = sim.parse_horizon(str(t_end)) if t_end is not None else None
+    band = sim.parse_frequencies(frequencies) if frequencies is not None else None
+    plot_path = None if plot is None else str(plot)
+    if worst_case:
+        bounds = sim.certified_bounds_of(loaded, str(certificate)) if certificate is not None else None
+        doc = sim.search_worst_case(loaded, starts=start_arr, t_end=horizon, frequencies=band, budget_s=budget_s,
+                                    certified_bounds=bounds, plot=plot_path, prepared=prepared)
+    else:
+        doc = sim.simulate_model(loaded, starts=start_arr, scenarios=list(scenarios) if scenarios else None,
+                                 t_end=horizon, frequencies=band, plot=plot_path, prepared=prepared)
+    return SimulationReport(diverged=bool(doc["diverged"] or doc.get("soundness_violation", False)), document=doc)
 
 
 # -- sweep ---------------------------------------------------------------------------------------
@@ -552,5 +621,5 @@ def report(source: str | Path | CertifyResult, *, html: str | Path | None = None
     return report_files(source, html, pdf)
 
 
-__all__ = ["certify", "certify_box", "certify_model_file", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
+__all__ = ["certify", "certify_box", "certify_model_file", "verify", "simulate", "simulate_model_file", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
            "SimulationReport", "SweepResult", "problem_from", "class_selection"]

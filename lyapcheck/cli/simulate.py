@@ -173,45 +173,20 @@ def _print_model_worst_case(doc: dict[str, Any]) -> None:
 def _run_model(model_file: str, settings: tuple[str, ...], x0: tuple[str, ...], grid: int | None,
                t_end: str | None, scenario_kinds: tuple[str, ...], frequencies: str | None, worst_case: bool,
                budget: float, certificate: str | None, plot: str | None, as_json: bool) -> None:
-    """``simulate --model``: parse, call the library, print, exit (0, or 1 on divergence or violation)."""
-    import numpy as np
+    """``simulate --model``: call the API, print, exit (0, or 1 on divergence or a violation)."""
+    from lyapcheck.api import simulate_model_file
 
-    from lyapcheck.api import load_model_file
-    from lyapcheck.errors import InvalidParameter
-    from lyapcheck.models import simulate as sim
-
-    if plot is not None and not plot.lower().endswith(".png"):
-        raise InvalidParameter("plot", "a file name ending in .png", plot)
-    if certificate is not None and not worst_case:
-        raise InvalidParameter("certificate", "used with --worst-case (the tightness ratio compares the certified "
-                               "bound with the worst case found)", certificate)
-    if worst_case and scenario_kinds:
-        raise InvalidParameter("scenario", "left out with --worst-case (the search tries every family)",
-                               ",".join(scenario_kinds))
-    model = load_model_file(model_file, settings)
-    prepared = sim.prepare(model)
-    starts = [sim.parse_start(model, text) for text in x0]
-    if grid is not None:
-        starts += list(sim.grid_over_domain(model, grid))
-    start_arr = np.array(starts) if starts else None
-    horizon = sim.parse_horizon(t_end) if t_end is not None else None
-    band = sim.parse_frequencies(frequencies) if frequencies is not None else None
-    if worst_case:
-        bounds = sim.certified_bounds_of(model, certificate) if certificate is not None else None
-        doc = sim.search_worst_case(model, starts=start_arr, t_end=horizon, frequencies=band, budget_s=budget,
-                                    certified_bounds=bounds, plot=plot, prepared=prepared)
-        if as_json:
-            emit_json(doc)
-        else:
-            _print_model_worst_case(doc)
-        raise SystemExit(EXIT_NEGATIVE if doc["diverged"] or doc.get("soundness_violation") else EXIT_OK)
-    doc = sim.simulate_model(model, starts=start_arr, scenarios=scenario_kinds or None, t_end=horizon,
-                             frequencies=band, plot=plot, prepared=prepared)
+    result = simulate_model_file(model_file, settings=settings, x0=x0, grid=grid, t_end=t_end,
+                                 scenarios=scenario_kinds or None, frequencies=frequencies, worst_case=worst_case,
+                                 budget_s=budget, certificate=certificate, plot=plot)
+    doc = result.to_json()
     if as_json:
         emit_json(doc)
+    elif worst_case:
+        _print_model_worst_case(doc)
     else:
         _print_model_table(doc)
-    raise SystemExit(EXIT_NEGATIVE if doc["diverged"] else EXIT_OK)
+    raise SystemExit(EXIT_NEGATIVE if result.diverged else EXIT_OK)
 
 
 def register(group: click.Group) -> None:
