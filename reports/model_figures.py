@@ -1,0 +1,604 @@
+"""The phase portrait of a 2-state model certificate, and the simulation cross-checks behind it.
+
+What is drawn (declared coordinates, SI):
+
+- every certified set ``{V <= c}`` of ``roa`` and ``candidate``, filled, with ``V`` evaluated
+  from the certificate's exact terms (each coefficient converted to the nearest float once, in
+  the certificate's scaled coordinates ``x = x_eq + S u``, where the coefficients are of moderate
+  size) on a grid, and contoured at ``c`` (contourpy, which matplotlib ships);
+- the model's ``[domain]`` box, when it has one;
+- trajectories with every disturbance 0 from rings of starts around the equilibrium and from
+  the boundary of the largest certified set, coloured by how they end (converged, escaped,
+  neither);
+- for a model with disturbances and a certified ``sos_bound``, a second panel: each output's
+  attracting set ``{V_y <= 1}`` and the band ``|y| <= B`` where the output is a state, with
+  trajectories under constant disturbances at their bounds (``d = +b`` and ``d = -b``).
+
+The view is decided beforehand: each set's extent is found along rays from the equilibrium
+(bisection on the first crossing of the level, in ``u``), then joined with the domain.
+
+The trajectories are also *checked against the certificates* (:class:`CrossCheck`): along
+every simulated trajectory that starts in a certified region of attraction ``V`` must not rise
+and the start must not escape; a global certificate's ``V`` must not rise (and must decay at
+the certified rate) along every trajectory; a storage function must stay below its certified
+envelope ``1 + (V(0) - 1) exp(-lam t)``. A failed check is a soundness alarm on the page.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any, Final, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from lyapcheck.models.modelfile import Model
+from reports.figures import Figure, resample_closed, to_svg
+from reports.model_polynomials import ExactPolynomial, FloatPolynomial
+from reports.model_simulation import Trajectory, horizon, jacobian_eigenvalues, simulate
+from reports.views import fmt_float
+
+FloatArray = npt.NDArray[np.float64]
+
+#: rays from the equilibrium along which each set's extent is found, and the radii tried (in the
+#: scaled coordinates u, where the certified sets are of order 1)
+RAYS: Final = 360
+RAY_RADII: Final = np.geomspace(1e-6, 1e4, 400)
+BISECTIONS: Final = 48
+#: grid points per axis on which V is evaluated and contoured
+GRID: Final = 241
+#: padding of a view, as a fraction of its span on each side
+PAD: Final = 0.08
+#: rings of starts (fractions of the view's half-widths about the equilibrium) and starts per ring
+RINGS: Final = (0.3, 0.6, 0.9)
+RING_STARTS: Final = 10
+#: starts on the boundary of the largest certified region of attraction (just inside it)
+BOUNDARY_STARTS: Final = 8
+BOUNDARY_INSIDE: Final = 0.999
+#: a drawn trajectory ends where it leaves its panel widened by this fraction on every side, and
+#: is resampled every DRAW_STEP of the panel (about 0.8 pt of a 6.6-inch figure), with at most
+#: PANEL_POINTS points per panel (about 120 kB of SVG before matplotlib's simplification)
+DRAW_MARGIN: Final = 0.05
+DRAW_STEP: Final = 0.002
+PANEL_POINTS: Final = 12_000
+#: starts per sign of the constant disturbance in the disturbed panel
+DISTURBED_STARTS: Final = 8
+#: relative tolerance of the cross-checks (the integration is at rtol 1e-7; V is a polynomial of
+#: the state, so its float value along a trajectory is good to about its degree times that)
+CHECK_TOL: Final = 1e-5
+#: colours: the certified status colour for regions of attraction, one colour per output bound
+SET_COLOURS: Final = {"roa": "#1a7f37", "candidate": "#0969da"}
+OUTPUT_COLOURS: Final = ("#8250df", "#bc4c00", "#bf3989", "#116329", "#0550ae", "#953800")
+OUTCOME_STYLE: Final = {"converged": ("#0969da", "converged to the equilibrium"),
+                        "escaped": ("#cf222e", "escaped (ran far out of view)"),
+                        "other": ("#9a6700", "neither, by the end")}
+
+
+@dataclass(frozen=True)
+class LevelSet:
+    """A certified set ``{V <= level}`` of the document.
+
+    ``kind`` is ``"region"`` (roa, candidate: invariant, every start converges) or
+    ``"attracting"`` (sos_bound: every trajectory enters it, for every admissible disturbance;
+    ``rate`` is its certified decay rate ``lam`` per second, ``output`` and ``bound`` the output
+    it bounds and the certified ``limsup |y|``).
+    """
+
+    name: str
+    label: str
+    poly: ExactPolynomial
+    level: Fraction
+    kind: str
+    colour: str
+    rate: float = 0.0
+    output: str = ""
+    bound: float | None = None
+
+
+@dataclass(frozen=True)
+class GlobalV:
+    """A global Lyapunov function of ``quadratic`` or ``sos_gas``, with its certified decay rate of V."""
+
+    name: str
+    poly: ExactPolynomial
+    rate: float
+
+
+@dataclass(frozen=True)
+class Extent:
+    """A set's extent in ``u`` (min, max per axis) and its boundary along the rays (``(RAYS, 2)``)."""
+
+    lo: FloatArray
+    hi: FloatArray
+    boundary: FloatArray
+
+
+@dataclass(frozen=True)
+class CrossCheck:
+    """One simulation cross-check of a certificate: what was checked, whether it held, the figures."""
+
+    what: str
+    ok: bool
+    detail: str
+
+
+@dataclass
+class PhasePortrait:
+    """The figure (or None, with the reason), the cross-checks and notes for the page."""
+
+    figure: Figure | None
+    reason: str = ""
+    checks: list[CrossCheck] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+def _dict(value: object) -> dict[str, Any]:
+    return value if isinstance(value, dict) else {}
+
+
+def _fraction(value: object) -> Fraction | None:
+    if isinstance(value, bool) or not isinstance(value, (str, int)) or len(str(value)) > 4000:
+        return None
+    try:
+        return Fraction(str(value))
+    except (ValueError, ZeroDivisionError):
+        return None
+
+
+def _number(value: object) -> float | None:
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
+        and math.isfinite(value) else None
+
+
+def certificate_scaling(doc: dict[str, Any], model: Model) -> tuple[list[Fraction], Fraction]:
+    """The certificate's state scales ``S`` and time scale ``T`` (``t = T tau``), exact; ones when absent."""
+    scaling = _dict(_dict(doc.get("field")).get("scaling"))
+    states = scaling.get("states")
+    scales = [_fraction(s) for s in states] if isinstance(states, list) and len(states) == model.n else []
+    time = _fraction(scaling.get("time"))
+    ok = len(scales) == model.n and all(s is not None and s > 0 for s in scales)
+    return ([s for s in scales if s is not None] if ok else [Fraction(1)] * model.n,
+            time if time is not None and time > 0 else Fraction(1))
+
+
+def level_sets(doc: dict[str, Any], model: Model) -> tuple[list[LevelSet], list[GlobalV], list[str]]:
+    """The certified sets and global Lyapunov functions of a model document; notes for the unreadable."""
+    conditions = _dict(doc.get("conditions"))
+    _, time = certificate_scaling(doc, model)
+    sets: list[LevelSet] = []
+    globals_: list[GlobalV] = []
+    notes: list[str] = []
+    for name, cond in conditions.items():
+        cond = _dict(cond)
+        if cond.get("status") != "certified":
+            continue
+        cert = _dict(cond.get("certificate"))
+        try:
+            if name in ("roa", "candidate") and "level" in cert and "V" in cert:
+                level = _fraction(cert["level"])
+                if level is None:
+                    raise ValueError("its level is not a rational")
+                poly = ExactPolynomial.from_json(cert["V"], model.n)
+                sets.append(LevelSet(name, f"{name}: {{V ≤ {fmt_float(float(level))}}}", poly, level, "region",
+                                     SET_COLOURS.get(name, "#1a7f37")))
+            elif name in ("quadratic", "sos_gas", "candidate") and "V" in cert:
+                rate = _number(cond.get("decay_rate_V_per_s")) or 0.0
+                globals_.append(GlobalV(name, ExactPolynomial.from_json(cert["V"], model.n), max(rate, 0.0)))
+            elif name == "sos_bound":
+                for k, (output, data) in enumerate(_dict(cert.get("outputs")).items()):
+                    data = _dict(data)
+                    lam = _fraction(data.get("lam_scaled"))
+                    poly = ExactPolynomial.from_json(data.get("V"), model.n)
+                    bound = _number(_dict(cond.get("bounds")).get(output))
+                    sets.append(LevelSet(name, f"sos_bound ({output}): {{V ≤ 1}}", poly, Fraction(1), "attracting",
+                                         OUTPUT_COLOURS[k % len(OUTPUT_COLOURS)],
+                                         rate=float(lam / time) if lam is not None and lam > 0 else 0.0,
+                                         output=str(output), bound=bound))
+        except ValueError as exc:
+            notes.append(f"The polynomial of {name} cannot be drawn: {exc}.")
+    return sets, globals_, notes
+
+
+def set_extent(poly_u: FloatPolynomial, level: float) -> Extent | None:
+    """The extent of ``{V <= level}`` along rays from the equilibrium (``u = 0``), or None.
+
+    None when the equilibrium is not in the set or a ray does not leave it within the largest
+    radius tried (the set is unbounded, or far larger than anything else drawn).
+    """
+    if not poly_u(np.zeros((1, 2)))[0] <= level:
+        return None
+    theta = np.linspace(0.0, 2 * math.pi, RAYS, endpoint=False)
+    directions = np.column_stack([np.cos(theta), np.sin(theta)])
+    values = poly_u(RAY_RADII[:, None, None] * directions[None, :, :])
+    outside = ~(values <= level)  # NaN counts as outside
+    if not outside.any(axis=0).all():
+        return None
+    first = np.argmax(outside, axis=0)
+    lo = np.where(first > 0, RAY_RADII[np.maximum(first - 1, 0)], 0.0)
+    hi = RAY_RADII[first]
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        inside = poly_u(mid[:, None] * directions) <= level
+        lo = np.where(inside, mid, lo)
+        hi = np.where(inside, hi, mid)
+    boundary = lo[:, None] * directions
+    return Extent(boundary.min(axis=0), boundary.max(axis=0), boundary)
+
+
+# -- the figure ------------------------------------------------------------------------------------
+@dataclass
+class _Drawn:
+    """A set with its float polynomial in ``u`` and its extent."""
+
+    spec: LevelSet
+    poly_u: FloatPolynomial
+    extent: Extent | None
+
+
+def _view(boxes: Sequence[tuple[FloatArray, FloatArray]], eq: FloatArray) -> tuple[FloatArray, FloatArray]:
+    lo = np.minimum(np.min([b[0] for b in boxes], axis=0), eq)
+    hi = np.maximum(np.max([b[1] for b in boxes], axis=0), eq)
+    span = np.maximum(hi - lo, 1e-300)
+    return lo - PAD * span, hi + PAD * span
+
+
+def _ring(eq: FloatArray, semi: FloatArray, fractions: Sequence[float], count: int) -> FloatArray:
+    points = []
+    for k, f in enumerate(fractions):
+        theta = np.linspace(0.0, 2 * math.pi, count, endpoint=False) + k * math.pi / count
+        points.append(eq + f * semi * np.column_stack([np.cos(theta), np.sin(theta)]))
+    return np.vstack(points)
+
+
+def _label(text: str) -> str:
+    """Text for a matplotlib label: a '$' must not switch on mathtext."""
+    return text.replace("$", r"\$")
+
+
+def _draw_set(ax: Any, drawn: _Drawn, eq: FloatArray, scales: FloatArray, lo: FloatArray, hi: FloatArray,
+              label: bool = True) -> int:
+    """Fill ``{V <= level}`` within the view; the number of closed boundary lines drawn."""
+    import contourpy
+    from matplotlib.colors import to_rgba
+
+    x = np.linspace(lo[0], hi[0], GRID)
+    y = np.linspace(lo[1], hi[1], GRID)
+    X, Y = np.meshgrid(x, y)
+    U = np.stack([(X - eq[0]) / scales[0], (Y - eq[1]) / scales[1]], axis=-1)
+    Z = drawn.poly_u(U)
+    level = float(drawn.spec.level)
+    finite = Z[np.isfinite(Z)]
+    if not finite.size or not finite.min() < level < finite.max():
+        return 0
+    lines = contourpy.contour_generator(x, y, np.where(np.isfinite(Z), Z, np.inf)).lines(level)
+    count = 0
+    colour = drawn.spec.colour
+    for line in lines:
+        pts = np.asarray(line, dtype=np.float64)
+        if len(pts) < 3:
+            continue
+        closed = bool(np.allclose(pts[0], pts[-1]))
+        text = _label(drawn.spec.label) if label and count == 0 else None
+        if closed:
+            pts = resample_closed(pts)
+            ax.fill(pts[:, 0], pts[:, 1], facecolor=to_rgba(colour, 0.16), edgecolor=colour, lw=1.4, label=text,
+                    zorder=1)
+        else:  # the set reaches past the view: its boundary in view, unfilled
+            ax.plot(pts[:, 0], pts[:, 1], color=colour, lw=1.4, label=text, zorder=1)
+        count += 1
+    return count
+
+
+def drawable(paths: Sequence[FloatArray], lo: FloatArray, hi: FloatArray,
+             budget: int = PANEL_POINTS) -> list[FloatArray]:
+    """The parts of trajectories a panel shows, as polylines of evenly spaced points.
+
+    Each ends where it first leaves the panel (widened by :data:`DRAW_MARGIN`): an escaping start
+    runs to three view widths, which no reader sees but the SVG would carry. The rest is
+    resampled by arc length in the panel's own proportions, one point every :data:`DRAW_STEP`,
+    with at most ``budget`` points over the panel (shared in proportion to length): a start that
+    winds round a limit cycle for many turns costs what the figure shows, not what was stored.
+    """
+    span = np.maximum(hi - lo, 1e-300)
+    cut: list[FloatArray] = []
+    arcs: list[FloatArray] = []
+    for x in paths:
+        w = (np.asarray(x, dtype=np.float64) - lo) / span
+        bad = np.any((w < -DRAW_MARGIN) | (w > 1 + DRAW_MARGIN) | ~np.isfinite(w), axis=1)
+        if bad.any():
+            w = w[: int(np.argmax(bad)) + 1]
+            w = w[np.all(np.isfinite(w), axis=1)]
+        cut.append(w)
+        arcs.append(np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(w, axis=0).T))]) if len(w) else np.zeros(0))
+    wanted = [max(2, math.ceil(a[-1] / DRAW_STEP) + 1) if len(a) > 1 else len(a) for a in arcs]
+    shrink = min(1.0, budget / max(sum(wanted), 1))
+    out = []
+    for w, arc, count in zip(cut, arcs, wanted):
+        if len(w) < 2:
+            out.append(lo + span * w)
+            continue
+        at = np.linspace(0.0, arc[-1], max(2, int(count * shrink)))
+        out.append(lo + span * np.column_stack([np.interp(at, arc, w[:, 0]), np.interp(at, arc, w[:, 1])]))
+    return out
+
+
+def _draw_trajectories(ax: Any, runs: Sequence[Trajectory], starts: FloatArray, lo: FloatArray, hi: FloatArray,
+                       by_outcome: bool, colour: str = "#57606a", label: str = "") -> None:
+    labelled: set[str] = set()
+    lines = drawable([tr.x for tr in runs], lo, hi)
+    for tr, x0, line in zip(runs, starts, lines):
+        c, text = (OUTCOME_STYLE[tr.outcome] if by_outcome else (colour, label))
+        key = tr.outcome if by_outcome else label
+        ax.plot(line[:, 0], line[:, 1], color=c, lw=0.8, alpha=0.85, zorder=3,
+                label=_label(f"{text} ({sum(r.outcome == tr.outcome for r in runs)})" if by_outcome else text)
+                if key not in labelled else None)
+        labelled.add(key)
+        ax.plot([x0[0]], [x0[1]], "o", ms=2.6, color=c, zorder=4)
+
+
+def _domain_box(ax: Any, model: Model) -> bool:
+    if not model.domain:
+        return False
+    from matplotlib.patches import Rectangle
+
+    (a0, b0), (a1, b1) = (tuple(float(v) for v in model.domain[s]) for s in model.states)
+    ax.add_patch(Rectangle((a0, a1), b0 - a0, b1 - a1, fill=False, ls="--", lw=1.0, color="k", zorder=2,
+                           label="[domain] of the model file"))
+    return True
+
+
+def _state_output(model: Model, output: str) -> int | None:
+    """The state index an output is (its text is exactly a state's name), else None."""
+    text = model.output_text.get(output, "").strip()
+    return model.states.index(text) if text in model.states else None
+
+
+# -- the cross-checks ------------------------------------------------------------------------------
+def _rise(values: FloatArray) -> float:
+    """The largest rise of a sequence above its running minimum so far, relative to its first value."""
+    if values.size < 2:
+        return 0.0
+    before = np.minimum.accumulate(values)[:-1]
+    return float(np.max(values[1:] - before) / max(abs(values[0]), 1e-300))
+
+
+def _region_check(drawn: _Drawn, runs: Sequence[Trajectory], eq: FloatArray, scales: FloatArray) -> CrossCheck | None:
+    level = float(drawn.spec.level)
+    inside = [tr for tr in runs if drawn.poly_u((tr.x[:1] - eq) / scales)[0] <= level]
+    if not inside:
+        return None
+    rises = [max(_rise(drawn.poly_u((tr.nodes[1] - eq) / scales)), 0.0) for tr in inside]
+    escaped = sum(tr.outcome == "escaped" for tr in inside)
+    converged = sum(tr.outcome == "converged" for tr in inside)
+    ok = escaped == 0 and max(rises) <= CHECK_TOL
+    detail = (f"{len(inside)} simulated starts lie in the set; V never rose along them (largest rise "
+              f"{max(rises):.2g} of V(0)); {converged} reached the equilibrium within the horizon, {escaped} escaped")
+    what = f"{drawn.spec.name}: trajectories from inside {{V ≤ c}} stay in it and do not escape"
+    return CrossCheck(what, ok, detail)
+
+
+def _global_check(g: GlobalV, runs: Sequence[Trajectory], t_end: float, eq: FloatArray,
+                  scales: FloatArray) -> CrossCheck:
+    poly_u = g.poly.scaled([Fraction(s) for s in scales]).evaluator()
+    worst_rise, worst_envelope = 0.0, 0.0
+    for tr in runs:
+        t, x = tr.nodes
+        v = poly_u((x - eq) / scales)
+        worst_rise = max(worst_rise, _rise(v))
+        if g.rate > 0 and v.size:
+            envelope = v[0] * np.exp(-g.rate * t)
+            worst_envelope = max(worst_envelope, float(np.max(v - envelope) / max(abs(v[0]), 1e-300)))
+    escaped = sum(tr.outcome == "escaped" for tr in runs)
+    ok = escaped == 0 and worst_rise <= CHECK_TOL and worst_envelope <= CHECK_TOL
+    rate = (f"; V(t) ≤ V(0) exp(-{fmt_float(g.rate, 4)} t) held (largest excess {worst_envelope:.2g} of V(0))"
+            if g.rate > 0 else "")
+    detail = (f"{len(runs)} trajectories over {fmt_float(t_end, 4)} s: V never rose (largest rise {worst_rise:.2g} of "
+              f"V(0)){rate}; {escaped} escaped")
+    return CrossCheck(f"{g.name}: the global Lyapunov function decreases along every simulated trajectory", ok, detail)
+
+
+def _storage_check(drawn: _Drawn, runs: Sequence[Trajectory], eq: FloatArray, scales: FloatArray) -> CrossCheck:
+    spec = drawn.spec
+    worst = 0.0
+    for tr in runs:
+        t, x = tr.nodes
+        v = drawn.poly_u((x - eq) / scales)
+        envelope = 1.0 + (v[0] - 1.0) * np.exp(-spec.rate * t)
+        worst = max(worst, float(np.max(v - envelope) / max(1.0, abs(v[0]))))
+    ok = worst <= CHECK_TOL
+    detail = (f"{len(runs)} trajectories (disturbances 0 and constant at ±their bounds): V(t) ≤ 1 + (V(0) - 1) "
+              f"exp(-{fmt_float(spec.rate, 4)} t) held (largest excess {worst:.2g})")
+    return CrossCheck(f"sos_bound ({spec.output}): the storage function stays below its certified envelope", ok, detail)
+
+
+# -- the portrait ----------------------------------------------------------------------------------
+def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
+    """The phase portrait of a 2-state model certificate (see the module docstring)."""
+    if model.n != 2:
+        return PhasePortrait(None, f"the model has {model.n} state{'s' if model.n != 1 else ''}: a phase portrait is "
+                                   "drawn for 2 states only, so this report shows tables")
+    sets, globals_, notes = level_sets(doc, model)
+    exact_scales, _ = certificate_scaling(doc, model)
+    scales = np.array([float(s) for s in exact_scales])
+    eq = np.array([float(v) for v in model.equilibrium])
+    drawn = [_Drawn(s, s.poly.scaled(exact_scales).evaluator(), None) for s in sets]
+    for d in drawn:
+        d.extent = set_extent(d.poly_u, float(d.spec.level))
+        if d.extent is None:
+            notes.append(f"The set {d.spec.label} is not drawn whole: it does not contain the equilibrium or reaches "
+                         "beyond the largest radius tried.")
+    regions = [d for d in drawn if d.spec.kind == "region"]
+    storages = [d for d in drawn if d.spec.kind == "attracting"]
+
+    boxes = [(eq + scales * d.extent.lo, eq + scales * d.extent.hi) for d in regions if d.extent is not None]
+    if model.domain:
+        boxes.append((np.array([float(model.domain[s][0]) for s in model.states]),
+                      np.array([float(model.domain[s][1]) for s in model.states])))
+    if not boxes:  # nothing bounds the view: the storage functions' sets give the scale, else S
+        boxes = [(eq + scales * d.extent.lo, eq + scales * d.extent.hi) for d in storages if d.extent is not None]
+    if not boxes:
+        boxes.append((eq - 2 * scales, eq + 2 * scales))
+    base_lo = np.minimum(np.min([b[0] for b in boxes], axis=0), eq)
+    base_hi = np.maximum(np.max([b[1] for b in boxes], axis=0), eq)
+    lo, hi = _view(boxes, eq)
+    half = np.maximum(np.maximum(eq - lo, hi - eq), 1e-300)
+    semi = np.minimum(eq - base_lo, base_hi - eq)
+    semi = np.where(semi > 0, semi, np.maximum(eq - base_lo, base_hi - eq))
+    starts = [_ring(eq, semi, RINGS, RING_STARTS)]
+    bounded = [d for d in regions if d.extent is not None]
+    largest = max(bounded, key=lambda d: float(np.prod(d.extent.hi - d.extent.lo)) if d.extent else 0.0, default=None)
+    if largest is not None and largest.extent is not None:
+        pick = np.linspace(0, RAYS, BOUNDARY_STARTS, endpoint=False).astype(int)
+        starts.append(eq + scales * BOUNDARY_INSIDE * largest.extent.boundary[pick])
+    x0 = np.vstack(starts)
+    disturbed = bool(storages) and len(model.disturbances) > 0
+    lower = _disturbed_view(model, storages, eq, scales, half) if disturbed else None
+    t_end = horizon(jacobian_eigenvalues(_evaluator(model), eq, half))
+    # the escape box (three half-widths) must hold every start of both panels
+    reach = half if lower is None else np.maximum(half, np.maximum(np.abs(lower.lo - eq), np.abs(lower.hi - eq)))
+    # one batch: the starts with every disturbance 0, then the lower panel's at +b and at -b
+    rows = [x0]
+    values = [np.zeros((len(x0), len(model.disturbances)))]
+    if lower is not None:
+        bound = np.array([float(b) for b in model.disturbances.values()])
+        rows += [lower.starts, lower.starts]
+        values += [np.tile(bound, (len(lower.starts), 1)), np.tile(-bound, (len(lower.starts), 1))]
+    every = simulate(model, np.vstack(rows), t_end=t_end, half_widths=reach,
+                     disturbances=np.vstack(values) if model.disturbances else None)
+    runs, pushed = every[:len(x0)], every[len(x0):]
+
+    fig, axes = _new_figure(2 if lower is not None else 1)
+    ax = axes[0]
+    for d in regions:
+        _draw_set(ax, d, eq, scales, lo, hi)
+    has_domain = _domain_box(ax, model)
+    _draw_trajectories(ax, runs, x0, lo, hi, by_outcome=True)
+    ax.plot([eq[0]], [eq[1]], "k+", ms=9, mew=1.5, zorder=5, label="equilibrium")
+    _axes(ax, model, lo, hi, "disturbances 0" if model.disturbances else "")
+
+    checks = [c for c in (_region_check(d, runs, eq, scales) for d in regions) if c is not None]
+    checks += [_global_check(g, runs, t_end, eq, scales) for g in globals_]
+    data: dict[str, Any] = {
+        "view": (lo.tolist(), hi.tolist()), "t_end_s": t_end, "starts": int(len(x0)),
+        "boundary_starts": int(len(x0) - RING_STARTS * len(RINGS)),
+        "outcomes": {k: sum(tr.outcome == k for tr in runs) for k in OUTCOME_STYLE},
+        "sets": [{"class": d.spec.name, "level": float(d.spec.level), "kind": d.spec.kind,
+                  "extent_declared": None if d.extent is None else
+                  ((eq + scales * d.extent.lo).tolist(), (eq + scales * d.extent.hi).tolist())} for d in drawn],
+    }
+    if lower is not None:
+        _draw_disturbed(axes[1], model, storages, lower, pushed, eq, scales)
+        data["disturbed"] = {"view": (lower.lo.tolist(), lower.hi.tolist()), "starts": len(pushed),
+                             "ends": [tr.x[-1].tolist() for tr in pushed],
+                             "bands": [(model.states[i], b) for i, b, _, _ in lower.bands]}
+    checks += [_storage_check(d, list(runs) + list(pushed), eq, scales) for d in storages]
+    data["checks"] = [(c.what, c.ok) for c in checks]
+    caption = _caption(model, regions, runs, t_end, has_domain, lower is not None, storages, notes)
+    alt = (f"phase portrait of {model.states[0]} and {model.states[1]} with {len(regions)} certified region(s) of "
+           f"attraction and {len(runs)} simulated trajectories")
+    return PhasePortrait(Figure(to_svg(fig), caption, alt, data), "", checks, notes)
+
+
+def _evaluator(model: Model) -> Any:
+    from lyapcheck.models.numeric import FieldEvaluator
+
+    return FieldEvaluator.of(model)
+
+
+def _new_figure(panels: int) -> tuple[Any, list[Any]]:
+    from matplotlib.figure import Figure as MplFigure
+
+    from reports.figures import WIDTH_IN
+
+    # one panel 4.4 in tall, two of 3.7 in: a figure and its caption fit an A4 page of the PDF
+    fig = MplFigure(figsize=(WIDTH_IN, 4.4 if panels == 1 else 3.7 * panels), layout="constrained")
+    axes = fig.subplots(panels, 1, squeeze=False)
+    return fig, [a for a in axes[:, 0]]
+
+
+def _axes(ax: Any, model: Model, lo: FloatArray, hi: FloatArray, title: str) -> None:
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_xlabel(_label(model.states[0]))
+    ax.set_ylabel(_label(model.states[1]))
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(_label(title), fontsize=9)
+    ax.legend(loc="upper right", fontsize=7, framealpha=0.85)
+
+
+@dataclass(frozen=True)
+class _Lower:
+    """The lower panel's view, its starts and the bands ``|y| <= B`` of outputs that are states."""
+
+    lo: FloatArray
+    hi: FloatArray
+    starts: FloatArray
+    bands: list[tuple[int, float, str, str]]
+
+
+def _disturbed_view(model: Model, storages: Sequence[_Drawn], eq: FloatArray, scales: FloatArray,
+                    half: FloatArray) -> _Lower:
+    """Around sos_bound's attracting sets and bands, with a ring of starts inside the view's edge."""
+    boxes = [(eq + scales * d.extent.lo, eq + scales * d.extent.hi) for d in storages if d.extent is not None]
+    bands = []
+    for d in storages:
+        i = _state_output(model, d.spec.output)
+        if i is not None and d.spec.bound is not None:
+            bands.append((i, d.spec.bound, d.spec.colour, d.spec.output))
+            box_lo, box_hi = eq.copy(), eq.copy()
+            box_lo[i], box_hi[i] = -d.spec.bound, d.spec.bound
+            boxes.append((box_lo, box_hi))
+    if not boxes:
+        boxes.append((eq - half, eq + half))
+    lo, hi = _view(boxes, eq)
+    lo, hi = lo - 0.15 * (hi - lo), hi + 0.15 * (hi - lo)
+    centre, semi = 0.5 * (lo + hi), 0.45 * (hi - lo)
+    return _Lower(lo, hi, _ring(centre, semi, (1.0,), DISTURBED_STARTS), bands)
+
+
+def _draw_disturbed(ax: Any, model: Model, storages: Sequence[_Drawn], lower: _Lower, pushed: Sequence[Trajectory],
+                    eq: FloatArray, scales: FloatArray) -> None:
+    """The lower panel: sos_bound's attracting sets and bands, trajectories under constant +b and -b."""
+    for d in storages:
+        _draw_set(ax, d, eq, scales, lower.lo, lower.hi)
+    for i, b, colour, output in lower.bands:
+        line = ax.axvline if i == 0 else ax.axhline
+        line(b, color=colour, ls="--", lw=1.1, label=_label(f"|{output}| = {fmt_float(b, 4)} (certified limsup)"))
+        line(-b, color=colour, ls="--", lw=1.1)
+    k = len(lower.starts)
+    _draw_trajectories(ax, pushed[:k], lower.starts, lower.lo, lower.hi, by_outcome=False, colour="#0969da",
+                       label="constant d = +b")
+    _draw_trajectories(ax, pushed[k:], lower.starts, lower.lo, lower.hi, by_outcome=False, colour="#cf222e",
+                       label="constant d = -b")
+    _axes(ax, model, lower.lo, lower.hi, "disturbances constant at their bounds")
+
+
+def _caption(model: Model, regions: Sequence[_Drawn], runs: Sequence[Trajectory], t_end: float,
+             has_domain: bool, disturbed: bool, storages: Sequence[_Drawn], notes: Sequence[str]) -> str:
+    counts = {k: sum(tr.outcome == k for tr in runs) for k in OUTCOME_STYLE}
+    parts = [f"Phase portrait of the model in its declared coordinates ({model.states[0]}, {model.states[1]})."]
+    if regions:
+        shown = "; ".join(f"{d.spec.name}: {{V ≤ {fmt_float(float(d.spec.level))}}}" for d in regions)
+        parts.append(f"Filled: the certified regions of attraction ({shown}); every start in them converges to the "
+                     "equilibrium (checked exactly), V evaluated from the certificate's exact polynomial.")
+    else:
+        parts.append("No region of attraction is certified, so no set is filled.")
+    parts.append(f"Lines: {len(runs)} trajectories with every disturbance 0, over {fmt_float(t_end, 4)} s, from rings "
+                 f"of starts around the equilibrium"
+                 + (f" and {len(runs) - RING_STARTS * len(RINGS)} starts just inside the largest certified set"
+                    if len(runs) > RING_STARTS * len(RINGS) else "")
+                 + f": {counts['converged']} converged (blue), {counts['escaped']} escaped (red), {counts['other']} "
+                   "neither by the end (amber).")
+    if has_domain:
+        parts.append("Dashed box: the model's [domain].")
+    if disturbed:
+        parts.append("Lower panel: the same loop with every disturbance held at +b (blue) or -b (red), and for each "
+                     "output the attracting set {V ≤ 1} of sos_bound's storage function, which every trajectory "
+                     "enters for every disturbance within its bounds; dashed lines: the certified bound on an output "
+                     "that is a state.")
+    elif storages:
+        parts.append("sos_bound's sets are not drawn: the model has no disturbance to simulate them with.")
+    return " ".join(parts + list(notes))
