@@ -46,6 +46,10 @@ def certificate_html(doc: dict[str, Any], *, ledger: bool = True, simulate: bool
 
     if not isinstance(doc, dict):
         raise InputFileError("a certificate must be a JSON object")
+    if doc.get("kind") == "lyapcheck-model-certificate":  # a model file's certificate: reports.model_page
+        from reports.model_page import model_html
+
+        return model_html(doc, simulate=simulate)
     return render_html("certificate.html.j2", certificate_context(doc, ledger=ledger, simulate=simulate))
 
 
@@ -109,7 +113,7 @@ def report_files(source: str | Path, html: str | Path | None, pdf: str | Path | 
 
     With neither ``html`` nor ``pdf``, writes ``<source stem>.html`` in the current directory.
     """
-    from lyapcheck.certificate import read_document
+    from reports.model_page import read_certificate
 
     for name, value, suffix in (("html", html, ".html"), ("pdf", pdf, ".pdf")):
         if value is not None and Path(value).suffix.lower() != suffix:
@@ -125,7 +129,7 @@ def report_files(source: str | Path, html: str | Path | None, pdf: str | Path | 
     if is_sweep_store(src):
         page = sweep_html(src)
     else:
-        page = certificate_html(read_document(src))
+        page = certificate_html(read_certificate(src))
     written = []
     if html is not None:
         written.append(write_page(page, html))
