@@ -1,0 +1,510 @@
+"""Reports of model certificates (``certify --model``): HTML and PDF as a reader meets them.
+
+Three real certificates, each certified once per module: the reversed Van der Pol oscillator
+(2 states, a certified region of attraction: phase portrait), the disturbed linear cascade
+(2 states, ``sos_bound``: a second panel under constant disturbances) and SOSTOOLS' rational
+SOSDEMO2 (3 states: tables only). Synthetic certificates (a true one and a false one, made here
+from the shipped model texts) test the figure's geometry against exact answers and the soundness
+alarm, in well under a second each.
+"""
+
+from __future__ import annotations
+
+import base64
+import copy
+import json
+import os
+import re
+import subprocess
+import sys
+from fractions import Fraction
+from html.parser import HTMLParser
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from tests.conftest import ROOT
+
+MODELS = ROOT / "examples" / "models"
+
+
+class Page(HTMLParser):
+    """Tags, attributes and visible text of a page (the stdlib parser: what a browser sees)."""
+
+    def __init__(self, html: str) -> None:
+        super().__init__(convert_charrefs=True)
+        self.tags: list[tuple[str, dict[str, str]]] = []
+        self.parts: list[str] = []
+        self._hidden = 0
+        self.feed(html)
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        self.tags.append((tag, {k: v or "" for k, v in attrs}))
+        if tag in ("style", "script"):
+            self._hidden += 1
+
+    def handle_endtag(self, tag: str) -> None:
+        if tag in ("style", "script"):
+            self._hidden -= 1
+
+    def handle_data(self, data: str) -> None:
+        if not self._hidden:
+            self.parts.append(data)
+
+    @property
+    def text(self) -> str:
+        return " ".join(" ".join(self.parts).split())
+
+    def find(self, tag: str, cls: str | None = None) -> list[dict[str, str]]:
+        return [a for t, a in self.tags if t == tag and (cls is None or cls in a.get("class", "").split())]
+
+
+def pdf_text(pdf: bytes) -> str:
+    """The text of every page (zero-width break opportunities removed, whitespace collapsed)."""
+    import pypdfium2 as pdfium
+
+    doc = pdfium.PdfDocument(pdf)
+    try:
+        out = []
+        for i in range(len(doc)):
+            textpage = doc[i].get_textpage()
+            out.append(textpage.get_text_range())
+            textpage.close()
+    finally:
+        doc.close()
+    return " ".join(" ".join(out).replace("\u200b", "").split())
+
+
+def pdf_pages(pdf: bytes) -> list[Any]:
+    import pypdfium2 as pdfium
+
+    doc = pdfium.PdfDocument(pdf)
+    try:
+        return [np.asarray(doc[i].render(scale=0.5).to_pil().convert("RGB")) for i in range(len(doc))]
+    finally:
+        doc.close()
+
+
+def figures_of(page: Page) -> list[dict[str, str]]:
+    """The ``<img>`` of each ``<figure>`` (equations are ``img.math``, figures are not)."""
+    return [a for a in page.find("img") if "math" not in a.get("class", "").split()]
+
+
+def svg_of(img: dict[str, str]) -> bytes:
+    prefix = "data:image/svg+xml;base64,"
+    assert img["src"].startswith(prefix)
+    return base64.b64decode(img["src"][len(prefix):])
+
+
+def no_network(page: Page) -> None:
+    for tag, attrs in page.tags:
+        for name in ("src", "href"):
+            value = attrs.get(name, "").strip().lower()
+            assert not value.startswith(("http:", "https:", "//", "file:")), (tag, value[:60])
+    assert not any(t in ("script", "link", "iframe", "object", "embed") for t, _ in page.tags)
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "lyapcheck", *args], capture_output=True, text=True, cwd=ROOT,
+                          env={**os.environ, "COLUMNS": "200"}, timeout=600)
+
+
+# ------------------------------------------------------------------------------------------------
+# certified once per module
+# ------------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def vdp() -> Any:
+    from lyapcheck.api import certify
+
+    result = certify(model=MODELS / "van-der-pol-reversed.toml")
+    assert result.conditions["roa"].status == "certified"
+    return result
+
+
+@pytest.fixture(scope="module")
+def vdp_context(vdp: Any) -> dict[str, Any]:
+    from reports.model_page import model_context
+
+    return model_context(vdp.document)
+
+
+@pytest.fixture(scope="module")
+def vdp_html(vdp_context: dict[str, Any]) -> str:
+    from reports.html import render_html
+
+    return render_html("model.html.j2", vdp_context)
+
+
+@pytest.fixture(scope="module")
+def l1() -> Any:
+    from lyapcheck.api import certify
+
+    result = certify(model=MODELS / "linear-disturbed-l1.toml")
+    assert result.conditions["sos_bound"].status == "certified"
+    return result
+
+
+@pytest.fixture(scope="module")
+def l1_context(l1: Any) -> dict[str, Any]:
+    from reports.model_page import model_context
+
+    return model_context(l1.document)
+
+
+@pytest.fixture(scope="module")
+def rational(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], bytes, str]:
+    """SOSDEMO2 through the command line: ``certify --model --out --report F.pdf``, then ``report --html``."""
+    where = tmp_path_factory.mktemp("rational")
+    cert, pdf, html = where / "cert.json", where / "report.pdf", where / "report.html"
+    done = run_cli("certify", "--model", str(MODELS / "sosdemo2-rational.toml"), "--out", str(cert),
+                   "--report", str(pdf))
+    assert done.returncode == 0, done.stderr
+    again = run_cli("report", str(cert), "--html", str(html))
+    assert again.returncode == 0, again.stderr
+    assert f"wrote {html}" in again.stdout
+    return json.loads(cert.read_text()), pdf.read_bytes(), html.read_text(encoding="utf-8")
+
+
+# ------------------------------------------------------------------------------------------------
+# 2 states, a region of attraction: the reversed Van der Pol oscillator
+# ------------------------------------------------------------------------------------------------
+@pytest.mark.slow
+def test_vdp_page_shows_every_class_the_exact_v_and_the_phase_portrait(vdp: Any, vdp_context: dict[str, Any],
+                                                                       vdp_html: str) -> None:
+    doc = vdp.document
+    page = Page(vdp_html)
+    no_network(page)
+    text = page.text
+    assert "Verdict: certified" in text and "reversed Van der Pol oscillator (mu = 1)" in text
+    badges = [a["class"].split()[1] for a in page.find("span", "badge")]
+    for name, cond in doc["conditions"].items():
+        assert f"{name}" in text
+        assert cond["status"] in badges
+    # the level: its digits in the table of classes, and exactly
+    roa = doc["conditions"]["roa"]
+    assert f"level c = {roa['level']:.6g}" in text
+    assert roa["certificate"]["level"] in text
+    # V exactly: every term of the certificate's V is in the plain text, coefficient for coefficient
+    for coefficient, _ in roa["certificate"]["V"]["terms"]:
+        assert coefficient.lstrip("-") in text
+    (shown,) = [c for c in vdp_context["classes"] if c.name == "roa"]
+    (v,) = shown.polynomials
+    assert v.terms == len(roa["certificate"]["V"]["terms"]) and v.degree == roa["degree"]
+    assert any(e["alt"] == v.plain for e in page.find("img", "math"))  # the typeset V, with its exact text
+    # the model as stored: source, dynamics as written, parameter, SHA-256, domain
+    assert doc["model"]["sha256"] in text and "x1 - mu*(1 - x1**2)*x2" in text and "[-2.5, 2.5]" in text
+    assert "LyZNet" in text and "the stored text matches it" in text
+    # the exact re-check ran and holds; the simulation cross-check holds
+    assert "Re-checked exactly while this report was made: every claim holds" in text
+    assert "THE EXACT RE-CHECK FAILS" not in text and "SOUNDNESS" not in text
+    # one figure, an SVG with the set and the trajectories
+    figs = figures_of(page)
+    assert len(figs) == 1 and len(page.find("figure")) == 1
+    svg = svg_of(figs[0])
+    assert svg.startswith(b"<?xml") and svg.count(b"<path") > 40
+    assert "Phase portrait of the model in its declared coordinates (x1, x2)" in text
+    assert 100_000 < len(vdp_html) < 1_500_000
+
+
+@pytest.mark.slow
+def test_vdp_portrait_draws_the_certified_set_inside_the_true_region(vdp_context: dict[str, Any]) -> None:
+    """The drawn set lies inside the limit cycle (x1-crossing 2.0086) and is most of it; every start
+    in it converges, V never rises along those trajectories, and starts beyond the cycle escape."""
+    portrait = vdp_context["portrait"]
+    data = portrait.data
+    (roa,) = [s for s in data["sets"] if s["class"] == "roa"]
+    lo, hi = roa["extent_declared"]
+    assert 1.95 < hi[0] < 2.0086 and -2.0086 < lo[0] < -1.95
+    assert data["boundary_starts"] == 8
+    assert data["outcomes"]["converged"] >= data["boundary_starts"] and data["outcomes"]["escaped"] > 0
+    assert [ok for _, ok in data["checks"]] == [True]
+    assert all(c.ok for c in vdp_context["checks"])
+    # the view holds the domain box [-2.5, 2.5] x [-3.5, 3.5]
+    view_lo, view_hi = data["view"]
+    assert view_lo[0] < -2.5 and view_hi[0] > 2.5 and view_lo[1] < -3.5 and view_hi[1] > 3.5
+
+
+@pytest.mark.slow
+def test_vdp_pdf_opens_and_carries_the_page(vdp_html: str) -> None:
+    from reports.render import html_to_pdf
+
+    pdf = html_to_pdf(vdp_html)
+    assert pdf.startswith(b"%PDF")
+    text = pdf_text(pdf)
+    assert "Stability certificate: reversed Van der Pol oscillator (mu = 1)" in text
+    assert "level c = 0.999692" in text and "certified" in text and "not certified" in text
+    assert "855587873/855851079" in text or "0.999692" in text
+    assert "Phase portrait" in text and "Exact re-check" in text
+    # the figure is drawn: the filled set's light green is on the page of the portrait
+    pages = pdf_pages(pdf)
+    greenish = [int(np.sum((p[..., 1].astype(int) - p[..., 0] > 12) & (p[..., 1].astype(int) - p[..., 2] > 6)))
+                for p in pages]
+    assert max(greenish) > 2000
+
+
+@pytest.mark.slow
+def test_certify_report_path_of_the_api_writes_html_and_pdf(vdp: Any, tmp_path: Path) -> None:
+    """What ``lyapcheck certify --model FILE --report F`` calls: api.report on the result."""
+    from lyapcheck.api import report
+
+    written = report(vdp, html=tmp_path / "vdp.html", pdf=tmp_path / "vdp.pdf")
+    assert [p.name for p in written] == ["vdp.html", "vdp.pdf"]
+    assert "Stability certificate: reversed Van der Pol" in Page((tmp_path / "vdp.html").read_text()).text
+    assert "Phase portrait" in pdf_text((tmp_path / "vdp.pdf").read_bytes())
+
+
+# ------------------------------------------------------------------------------------------------
+# 2 states with disturbances: sos_bound
+# ------------------------------------------------------------------------------------------------
+@pytest.mark.slow
+def test_sos_bound_page_shows_bounds_storage_functions_and_the_disturbed_panel(l1: Any,
+                                                                                l1_context: dict[str, Any]) -> None:
+    from reports.html import render_html
+
+    doc = l1.document
+    page = Page(render_html("model.html.j2", l1_context))
+    text = page.text
+    bounds = doc["conditions"]["sos_bound"]["bounds"]
+    for output, bound in bounds.items():
+        assert f"limsup |{output}| <= {bound:.6g}" in text
+        assert f"storage function for the output {output}, exactly" in text
+        for coefficient, _ in doc["conditions"]["sos_bound"]["certificate"]["outputs"][output]["V"]["terms"]:
+            assert coefficient.lstrip("-") in text
+    assert "ultimate_bound" in text and "|d(t)| ≤ b" in text
+    assert len(figures_of(page)) == 1
+    data = l1_context["portrait"].data
+    assert sorted(s for s, _ in data["disturbed"]["bands"]) == ["x1", "x2"]
+    # every disturbed run ends at its equilibrium (+-1/2, +-1/2): the exact worst case, which the
+    # certified bounds must not undercut (the exact check guarantees it; the simulation shows it)
+    ends = np.abs(np.array(data["disturbed"]["ends"]))
+    np.testing.assert_allclose(ends, 0.5, rtol=1e-3)
+    assert bounds["y"] >= 0.5 and bounds["w"] >= 0.5
+    names = [c.what for c in l1_context["checks"]]
+    assert any(n.startswith("sos_bound (y)") for n in names) and any(n.startswith("quadratic") for n in names)
+    assert all(c.ok for c in l1_context["checks"])
+
+
+@pytest.mark.slow
+def test_report_command_renders_a_model_certificate_to_html_and_pdf(l1: Any, tmp_path: Path) -> None:
+    cert = tmp_path / "l1.json"
+    l1.write(cert)
+    html, pdf = tmp_path / "l1.html", tmp_path / "l1.pdf"
+    done = run_cli("report", str(cert), "--html", str(html), "--pdf", str(pdf))
+    assert done.returncode == 0, done.stderr
+    page = Page(html.read_text(encoding="utf-8"))
+    assert "disturbed linear cascade with exact worst-case bound 1/2" in page.text
+    assert len(figures_of(page)) == 1
+    text = pdf_text(pdf.read_bytes())
+    bound = l1.document["conditions"]["sos_bound"]["bounds"]["y"]
+    assert f"limsup |y| <= {bound:.6g}" in text and "sos_bound" in text and "Ultimate bound on each output" in text
+
+
+# ------------------------------------------------------------------------------------------------
+# 3 states, rational: tables only
+# ------------------------------------------------------------------------------------------------
+@pytest.mark.slow
+def test_three_state_model_has_tables_and_no_figure(rational: tuple[dict[str, Any], bytes, str]) -> None:
+    doc, pdf, html = rational
+    page = Page(html)
+    no_network(page)
+    text = page.text
+    assert not figures_of(page) and not page.find("figure")
+    assert "the model has 3 states: a phase portrait is drawn for 2 states only, so this report shows tables" in text
+    assert doc["conditions"]["sos_gas"]["status"] == "certified" and "not certified" in text
+    # the denominator and its positivity certificate, named
+    assert "x3**2 + 1" in text and "sum of squares" in text and "c = 1/2" in text
+    for coefficient, _ in doc["conditions"]["sos_gas"]["certificate"]["V"]["terms"]:
+        assert coefficient in text
+    assert "x1 = 0, x2 = 0, x3 = 0" not in text  # the equilibrium is listed per state
+    assert "x1 = 0" in text and "-x3 - 3*x3/(x3**2 + 1) + 3*x1**2*x3" in text
+    # the PDF written by certify --report
+    assert pdf.startswith(b"%PDF")
+    ptext = pdf_text(pdf)
+    assert "Stability certificate: SOSTOOLS SOSDEMO2 rational system" in ptext
+    assert "so this report shows tables" in ptext and "certified" in ptext and "x3**2 + 1" in ptext
+
+
+# ------------------------------------------------------------------------------------------------
+# tampered documents and hostile text
+# ------------------------------------------------------------------------------------------------
+@pytest.mark.slow
+def test_a_changed_level_or_model_text_raises_the_alarm(vdp: Any) -> None:
+    from reports.model_page import model_html
+
+    doc = copy.deepcopy(vdp.document)
+    level = Fraction(doc["conditions"]["roa"]["certificate"]["level"])
+    doc["conditions"]["roa"]["certificate"]["level"] = str(level * 2)
+    text = Page(model_html(doc, simulate=False)).text
+    assert "THE EXACT RE-CHECK FAILS" in text and "Do not trust this certificate" in text
+    doc = copy.deepcopy(vdp.document)
+    doc["model"]["text"] = doc["model"]["text"].replace("mu = 1\n", "mu = 2\n")
+    text = Page(model_html(doc, simulate=False)).text
+    assert "does not match its SHA-256" in text and "the stored text does NOT match it" in text
+
+
+def _synthetic(model_file: str, conditions: dict[str, Any], **extra: Any) -> dict[str, Any]:
+    """A model document around a shipped model text, with conditions made up by the test."""
+    import hashlib
+
+    from lyapcheck.models.certificate import KIND, SCHEMA_VERSION
+    from lyapcheck.models.modelfile import parse_model
+
+    text = (MODELS / model_file).read_text() if not model_file.startswith("[") else model_file
+    model = parse_model(text, model_file[:40])
+    return {"schema_version": SCHEMA_VERSION, "kind": KIND,
+            "model": {"name": model.name, "file": model_file[:40], "sha256": hashlib.sha256(text.encode()).hexdigest(),
+                      "text": text},
+            "overrides": {}, "candidate": None, "states": list(model.states),
+            "equilibrium": {s: str(v) for s, v in zip(model.states, model.equilibrium)},
+            "parameters": {k: str(v) for k, v in model.parameters.items()},
+            "disturbances": {k: str(v) for k, v in model.disturbances.items()},
+            "field": {"denominators": [], "scaling": None}, "conditions": conditions, "verdict": "certified",
+            "versions": {"lyapcheck": "test"}, **extra}
+
+
+def _disc(level: str) -> dict[str, Any]:
+    return {"status": "certified", "summary": "made up by the test", "property": "ROA", "level": float(Fraction(level)),
+            "certificate": {"kind": "sublevel", "V": {"terms": [["1", [2, 0]], ["1", [0, 2]]]}, "level": level}}
+
+
+def test_input_text_reaches_the_page_as_text(tmp_path: Path) -> None:
+    from reports.model_page import model_html
+    from reports.render import html_to_pdf
+
+    doc = _synthetic("fossil-poly2.toml", {"roa": {**_disc("1"), "summary": "<script>alert(1)</script> & <b>x</b>"}})
+    doc["model"]["name"] = "<img src=x onerror=alert(1)> #set page(width: 1pt)"
+    html = model_html(doc, simulate=False, recheck=False)
+    page = Page(html)
+    no_network(page)
+    assert "<script>alert(1)</script> & <b>x</b>" in page.text
+    assert not any(a.get("src") == "x" for a in page.find("img"))
+    assert "<img src=x onerror=alert(1)> #set page(width: 1pt)" in pdf_text(html_to_pdf(html))
+
+
+def test_the_portrait_of_a_true_certificate_matches_the_exact_set() -> None:
+    """x**2 + y**2 <= 1 for FOSSIL's Poly2 (V' = -2x^4 - 2y^2): the drawn set is the unit disc and
+    every simulated trajectory that starts in it stays there; the domain box [-5, 5]^2 is in view."""
+    from lyapcheck.models.modelfile import parse_model
+    from reports.model_figures import phase_portrait
+
+    doc = _synthetic("fossil-poly2.toml", {"roa": _disc("1")})
+    portrait = phase_portrait(doc, parse_model(doc["model"]["text"], "poly2"))
+    assert portrait.figure is not None and not portrait.reason
+    (s,) = portrait.figure.data["sets"]
+    lo, hi = s["extent_declared"]
+    np.testing.assert_allclose(lo, [-1, -1], atol=1e-9)
+    np.testing.assert_allclose(hi, [1, 1], atol=1e-9)
+    view_lo, view_hi = portrait.figure.data["view"]
+    assert view_lo[0] < -5 < 5 < view_hi[0]
+    assert [c.ok for c in portrait.checks] == [True]
+    assert portrait.figure.data["outcomes"]["escaped"] == 0
+
+
+def test_a_false_region_of_attraction_raises_the_soundness_alarm() -> None:
+    """The reversed Van der Pol oscillator's true region of attraction crosses the x1-axis at
+    2.0086: a made-up "certified" disc of radius 5 contains escaping starts, and the page says so."""
+    from reports.model_page import model_context
+
+    doc = _synthetic("van-der-pol-reversed.toml", {"roa": _disc("25")})
+    context = model_context(doc, recheck=False)
+    (check,) = context["checks"]
+    assert not check.ok and "escaped" in check.detail
+    assert context["soundness"].startswith("SOUNDNESS: a simulation contradicts a certificate")
+
+
+def test_a_shifted_equilibrium_is_drawn_where_it_is() -> None:
+    """V is stored in x - x_eq: the set {(x1 - 1)^2 + x2^2 <= 1/4} is drawn around (1, 0)."""
+    from lyapcheck.models.modelfile import parse_model
+    from reports.model_figures import phase_portrait
+    from reports.model_page import model_context
+
+    text = ('[model]\nname = "shifted"\nstates = ["x1", "x2"]\n[dynamics]\nx1 = "-(x1 - 1)"\nx2 = "-x2"\n'
+            "[equilibrium]\nx1 = 1\n")
+    doc = _synthetic(text, {"roa": _disc("1/4")})
+    portrait = phase_portrait(doc, parse_model(text, "shifted"))
+    assert portrait.figure is not None
+    lo, hi = portrait.figure.data["sets"][0]["extent_declared"]
+    np.testing.assert_allclose(lo, [0.5, -0.5], atol=1e-9)
+    np.testing.assert_allclose(hi, [1.5, 0.5], atol=1e-9)
+    context = model_context(doc, simulate=False, recheck=False)
+    (view,) = context["classes"][0].polynomials
+    assert view.plain == "(x1 - 1)**2 + x2**2"
+
+
+# ------------------------------------------------------------------------------------------------
+# the polynomials, exactly
+# ------------------------------------------------------------------------------------------------
+def test_plain_text_parses_back_to_the_same_polynomial() -> None:
+    """The text the page prints is the model-file language: the project's parser reads it back to
+    exactly the stored terms (shifted by the equilibrium where it is not 0)."""
+    from lyapcheck.models.expressions import parse_expression
+    from lyapcheck.sos.polynomials import Ring
+    from reports.model_polynomials import ExactPolynomial
+
+    rng = np.random.default_rng(7)
+    ring = Ring(("x1", "x2", "x3"))
+    for shifts in ([Fraction(0)] * 3, [Fraction(1, 3), Fraction(0), Fraction(-5, 2)]):
+        terms = []
+        for _ in range(25):
+            e = [int(v) for v in rng.integers(0, 4, size=3)]
+            c = Fraction(int(rng.integers(-10**9, 10**9)), int(rng.integers(1, 10**9)))
+            terms.append([str(c), e])
+        poly = ExactPolynomial.from_json({"terms": terms}, 3)
+        parsed = parse_expression(poly.plain_text(ring.names, shifts), ring)
+        assert parsed.is_polynomial()
+        # compare with the stored terms composed with the shift, exactly
+        gens = ring.gens()
+        expected = ring.constant(0)
+        for c, m in poly.terms:
+            term = ring.constant(c)
+            for g, s, k in zip(gens, shifts, m):
+                term = term * (g - ring.constant(s)) ** k
+            expected = expected + term
+        assert ring.terms(parsed.numerator * (1 / parsed.denominator.leading_coefficient())) == ring.terms(expected)
+
+
+def test_storage_functions_over_states_and_disturbances_are_read_over_the_states() -> None:
+    from reports.model_polynomials import ExactPolynomial
+
+    poly = ExactPolynomial.from_json({"terms": [["1/2", [2, 0, 0]], ["-3", [1, 1, 0]]]}, 2)
+    assert poly.plain_text(["a", "b"], [Fraction(0)] * 2) == "1/2*a**2 - 3*a*b"
+    with pytest.raises(ValueError, match="other than the states"):
+        ExactPolynomial.from_json({"terms": [["1", [0, 0, 2]]]}, 2)
+    with pytest.raises(ValueError, match="not a rational"):
+        ExactPolynomial.from_json({"terms": [["__import__('os')", [1, 0]]]}, 2)
+
+
+def test_a_long_polynomial_is_typeset_truncated_and_compiles() -> None:
+    from reports.model_polynomials import MAX_TYPESET_TERMS, ExactPolynomial
+    from reports.typeset import render
+
+    terms = [[f"{k + 1}/{k + 7}", [a, b, c]] for k, (a, b, c) in
+             enumerate((a, b, c) for a in range(5) for b in range(5) for c in range(5))]
+    poly = ExactPolynomial.from_json({"terms": terms}, 3)
+    source, shown = poly.typst(["x1", "x2", "x3"], [Fraction(0)] * 3, "V(x)")
+    assert shown == MAX_TYPESET_TERMS < len(poly.terms) == 125
+    assert source.rstrip().endswith("dots.c") and source.count("\\\n") >= 3
+    (typeset,) = render([source]).values()
+    assert typeset is not None and typeset.width_pt < 520
+
+
+def test_reading_a_certificate_keeps_the_papers_messages(tmp_path: Path) -> None:
+    from lyapcheck.errors import InputFileError
+    from reports.model_page import read_certificate
+
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps({"kind": "something else"}))
+    with pytest.raises(InputFileError, match=re.escape("is not a lyapcheck certificate (missing kind "
+                                                       "'lyapcheck-certificate')")):
+        read_certificate(other)
+    with pytest.raises(InputFileError, match="does not exist"):
+        read_certificate(tmp_path / "absent.json")
+    doc = _synthetic("fossil-poly2.toml", {})
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps({**doc, "schema_version": 99}))
+    with pytest.raises(InputFileError, match="schema_version 99"):
+        read_certificate(model)
+    model.write_text(json.dumps(doc))
+    assert read_certificate(model) == doc
