@@ -157,8 +157,8 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             return _with_verdict(doc, rows)
         scaled = apply_scaling(clear(shifted, signs), scaling)
         for name in needs_field:
-            c = conditions[name]
-            row(name, lambda c=c, name=name: _verify_class(name, c, scaled))
+            ok, why = _verify_class(name, conditions[name], scaled)
+            rows.append((name, ok, why if ok else f"{name}: {why}"))
     return _with_verdict(doc, rows)
 
 

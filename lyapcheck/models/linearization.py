@@ -54,7 +54,7 @@ def lyapunov_solution(J: Matrix) -> Matrix | None:
 
     n = len(J)
     pairs = [(i, j) for i in range(n) for j in range(i, n)]
-    index = {p: k for k, p in enumerate(pairs)}
+    index: dict[tuple[int, ...], int] = {p: k for k, p in enumerate(pairs)}
     rows, rhs = [], []
     for a in range(n):
         for b in range(a, n):
@@ -112,7 +112,8 @@ def right_half_plane_root(coeffs: Sequence[Fraction]) -> str | None:
     import flint
 
     poly = flint.fmpq_poly([flint.fmpq(c.numerator, c.denominator) for c in coeffs])
-    for root, multiplicity in poly.complex_roots():
+    roots: Any = poly.complex_roots()  # (acb, multiplicity) pairs at run time, whatever the stubs say
+    for root, multiplicity in roots:
         if root.real > 0:
             return f"{root} (multiplicity {multiplicity})"
     return None
@@ -140,7 +141,8 @@ def imaginary_axis_roots(coeffs: Sequence[Fraction]) -> bool:
         return False
     # Arb isolates the roots of an integer polynomial and gives the real ones an exactly zero
     # imaginary part (arb_fmpz_poly_complex_roots)
-    return any(root.imag.is_zero() for root, _ in G.numer().complex_roots())
+    roots: Any = G.numer().complex_roots()
+    return any(root.imag.is_zero() for root, _ in roots)
 
 
 def run(shifted: ShiftedField) -> ConditionResult:

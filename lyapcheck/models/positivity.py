@@ -76,9 +76,9 @@ def prove_positive(ring: Ring, p: Poly, budget: Budget) -> dict[str, Any] | None
     if not solution.usable or not c_max > 0:
         return None
     # the largest c makes sigma's constant entry 0; half of it leaves room for the rounding
-    point = rounded_point(solution)
-    point.scalars["c"] = round_scalar(c_max / 2)
-    point = project(ring, structure, point, values.exact)
+    rounded = rounded_point(solution)
+    rounded.scalars["c"] = round_scalar(c_max / 2)
+    point = project(ring, structure, rounded, values.exact)
     if point is None:
         return None
     sigma = GramPoly.of(structure.gram("sigma").basis, point.grams["sigma"])
@@ -110,7 +110,8 @@ def prove_denominators(ring: Ring, denominators: Sequence[Poly], budget: Budget
                        ) -> tuple[list[int], list[dict[str, Any]], Poly | None]:
     """For each distinct denominator: its sign (+1 / -1) and certificate; or the first one that
     could not be proved of one sign (the third value; then the signs are incomplete)."""
-    signs, certs = [], []
+    signs: list[int] = []
+    certs: list[dict[str, Any]] = []
     for d in denominators:
         cert = prove_positive(ring, d, budget)
         sign = 1

@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -73,7 +73,7 @@ class ParameterValues:
     floats: dict[str, np.ndarray] = field(default_factory=dict)
     exact: dict[str, list[Fraction]] = field(default_factory=dict)
 
-    def set_poly(self, ring: Ring, name: str, p: Poly, support: Sequence[Monomial]) -> None:
+    def set_poly(self, ring: Ring, name: str, p: Poly, support: Iterable[Monomial]) -> None:
         """Parameter ``name`` = ``p``'s coefficients over ``support`` in :func:`canonical` order (the
         order :func:`param` declares)."""
         support = canonical(support)
@@ -92,12 +92,12 @@ class ParameterValues:
         self.floats[name] = np.asarray(float(value), dtype=np.float64)
 
 
-def canonical(support: Sequence[Monomial]) -> list[Monomial]:
+def canonical(support: Iterable[Monomial]) -> list[Monomial]:
     """A support's one order: sorted, without repeats."""
     return sorted(set(tuple(m) for m in support))
 
 
-def param(name: str, support: Sequence[Monomial]) -> Coefficients:
+def param(name: str, support: Iterable[Monomial]) -> Coefficients:
     """Coefficients given by parameter ``name``, one entry per monomial of ``support`` (canonical order)."""
     return Coefficients.parameter(name, canonical(support))
 

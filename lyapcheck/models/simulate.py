@@ -667,7 +667,6 @@ def _run(prepared: Prepared, starts: FloatArray, disturbances: Sequence[ModelDis
          rtol: float, scale: FloatArray, record: Sequence[int] | None = None) -> _Batch:
     """Integrate every (start, disturbance) pair in one call and measure it."""
     begin = time.perf_counter()
-    model = prepared.model
     starts = np.atleast_2d(np.asarray(starts, dtype=np.float64))
     dists = list(disturbances)
     S, J = starts.shape[0], len(dists)

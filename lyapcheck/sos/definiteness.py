@@ -159,8 +159,8 @@ def is_positive_definite(m: Matrix) -> bool:
     return True
 
 
-def _rational(x: object) -> Fraction:
-    return x if isinstance(x, Fraction) else Fraction(x)  # type: ignore[arg-type]
+def _rational(x: Fraction | int) -> Fraction:
+    return x if isinstance(x, Fraction) else Fraction(x)
 
 
 def _block_positive_definite(block: list[list[Fraction]]) -> bool:

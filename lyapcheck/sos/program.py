@@ -234,7 +234,7 @@ def build_cvxpy(structure: Structure) -> tuple[Any, dict[str, Any], dict[str, An
             return rows.setdefault(m, len(rows))
 
         # pass 1: every target monomial; pass 2: the expressions
-        contributions = []  # (coefficients, k, kind, data)
+        contributions: list[tuple[Coefficients, int, str, tuple[str, Any]]] = []  # (coefficients, k, kind, data)
         for term in ident.terms:
             if term.decision in blocks:
                 base = _gram_terms(structure.gram(term.decision), term.derivative)
@@ -252,14 +252,14 @@ def build_cvxpy(structure: Structure) -> tuple[Any, dict[str, Any], dict[str, An
         param_terms: dict[tuple[str, int], Any] = {}
         for coeffs, k, kind, data in contributions:
             name, spec = data
+            expr: Any = 0
             if kind == "gram":
-                expr: Any = 0
                 per_block: dict[int, list[tuple[int, int, float]]] = {}
                 for r, b, e, c in spec:
                     per_block.setdefault(b, []).append((r, e, c))
-                for b, entries in per_block.items():
+                for b, block_entries in per_block.items():
                     X = blocks[name][b]
-                    rr, ee, cc = zip(*entries)
+                    rr, ee, cc = zip(*block_entries)
                     M = sp.csr_matrix((cc, (rr, ee)), shape=(n_rows, X.shape[0] * X.shape[1]))
                     expr = expr + M @ cp.vec(X, order="F")
             else:
@@ -271,19 +271,20 @@ def build_cvxpy(structure: Structure) -> tuple[Any, dict[str, Any], dict[str, An
             else:
                 key = (coeffs.param, k)
                 param_terms[key] = param_terms.get(key, 0) + expr
-        total: Any = literal_total
+        identity_total: Any = literal_total
         for (pname, k), expr in param_terms.items():
-            total = total + params[pname][k] * expr
+            identity_total = identity_total + params[pname][k] * expr
         if ident.constant is not None:
             place = np.zeros((n_rows, len(const_rows)))
             place[const_rows, np.arange(len(const_rows))] = 1.0
             if ident.constant.param is None:
-                total = total + place @ np.array([float(v) for v in ident.constant.values])
+                identity_total = identity_total + place @ np.array([float(v) for v in ident.constant.values])
             else:
-                total = total + place @ params[ident.constant.param]
-        cons.append(total == 0)
+                identity_total = identity_total + place @ params[ident.constant.param]
+        cons.append(identity_total == 0)
 
     kind = structure.objective[0]
+    objective: Any
     if kind == "max_margin":
         objective = cp.Maximize(t)
     elif kind == "min":
@@ -387,7 +388,7 @@ def _compile(key: str, structure: Structure) -> ProgramData:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp.npz")
-        np.savez_compressed(tmp, **data.arrays)
+        np.savez_compressed(tmp, **data.arrays)  # type: ignore[arg-type]
         os.replace(tmp, path)
     except OSError as exc:  # a read-only cache: compile again next time
         log.info("could not cache program %s: %s", key, exc)
