@@ -34,6 +34,7 @@ def test_docs_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caps
     out = capsys.readouterr().out
     assert "limsup |eps| <=" in out and "The 'sigma0' parameter must be" in out
     assert (tmp_path / "paper-cert.json").exists()
+    assert "lies in the region of attraction" in out and (tmp_path / "cubic.toml").exists()
 
 
 def test_every_parameter_form_gives_the_same_problem() -> None:
@@ -107,3 +108,23 @@ def test_worst_case_search_from_the_command_line_and_tightness_in_certify(tmp_pa
     bound = result.conditions["ultimate_bound"].numbers
     assert bound["tightness_ratio"] == pytest.approx(bound["eps_bound_m"] / bound["worst_case_sup_abs_eps_tail_m"])
     assert bound["tightness_ratio"] >= 1 and "soundness_violation" not in bound
+
+
+def test_plain_numbers_are_read_in_si_as_the_docs_promise() -> None:
+    """``certify({..., "delta_los": 0.00075})`` asked for a unit string before issue 23; the API
+    reads a plain number in the field's SI unit (TOML files and flags still want units)."""
+    from fractions import Fraction
+
+    from lyapcheck.api import problem_from
+    from lyapcheck.errors import InvalidParameter
+    from lyapcheck.params import problem_from_sources
+
+    numbers = problem_from({"alpha_d": 600, "sigma0": 0.01, "k_d": 0.15, "delta_los": 0.00075, "e11": 9.3e-5,
+                            "omega_so": 17.59})
+    units = problem_from({"alpha_d": 600, "sigma0": 0.01, "k_d": "0.15 1/s", "delta_los": "0.75 mm",
+                          "e11": "9.3e-5 m", "omega_so": "17.59 rad/s"})
+    assert numbers.gains == units.gains and numbers.swimmer.e11 == units.swimmer.e11 == Fraction(93, 10**6)
+    assert numbers.actuation.omega_so == units.actuation.omega_so
+    with pytest.raises(InvalidParameter, match="delta_los"):
+        problem_from_sources(None, {"gains.alpha_d": "600", "gains.sigma0": "0.01", "gains.k_d": "0.15",
+                                    "gains.delta_los": "0.00075", "swimmer.e11": "9.3e-5 m"})
