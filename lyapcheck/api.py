@@ -145,6 +145,7 @@ class CertifyResult:
 
 def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
             settings: Mapping[str, object] | Sequence[str] | None = None, candidate: str | None = None,
+            box: Sequence[str] | Mapping[str, Any] | None = None,
             dynamics: str = "derived", classes: str | Sequence[str] | None = None,
             linear_views: bool = False, overrides: Mapping[str, object] | None = None,
             worst_case: bool = False, worst_case_budget_s: float = 20.0) -> CertifyResult:
@@ -165,6 +166,10 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
         ``{"mu": 2}`` or ``["mu=2"]`` (the command line's ``--set``).
     candidate
         With ``model``: the user's own ``V`` (an expression in the states), for class ``candidate``.
+    box
+        With ``model``: a box of its parameters, ``["mu=0.8..1.2"]`` or ``{"mu": (0.8, 1.2)}``: each
+        certified class then holds for every parameter value of the box (``quadratic``, ``sos_gas``,
+        ``roa``, ``sos_bound``).
     dynamics
         ``"derived"`` (lyapcheck's derivation) or ``"printed"`` (the paper's eqs. ``los3``,
         ``xCrossdyn2`` as printed).
@@ -183,7 +188,7 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
         if params is not None or overrides:
             raise InvalidParameter("model", "given without the paper's parameters (a model file carries its own)",
                                    str(params if params is not None else overrides))
-        return certify_model_file(model, settings=settings, candidate=candidate, classes=classes)
+        return certify_model_file(model, settings=settings, candidate=candidate, classes=classes, box=box)
     if settings or candidate is not None:
         raise InvalidParameter("set" if settings else "candidate", "used with a model file (model=...)",
                                settings if settings else candidate)
@@ -238,13 +243,16 @@ def load_model_file(model: "str | Path | Model", settings: Mapping[str, object] 
 
 def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
                        candidate: str | None = None, classes: str | Sequence[str] | None = None,
-                       time_limit_s: float | None = None) -> CertifyResult:
+                       time_limit_s: float | None = None, box: Sequence[str] | Mapping[str, Any] | None = None
+                       ) -> CertifyResult:
     """:func:`certify` for a model file (``certify(model=...)`` calls this)."""
+    from lyapcheck.models.boxes import parse_model_box
     from lyapcheck.models.certificate import build_document
     from lyapcheck.models.certify import certify_model
 
     loaded = load_model_file(model, settings)
-    found = certify_model(loaded, classes=classes, candidate=candidate, time_limit_s=time_limit_s)
+    parsed = parse_model_box(loaded, box) if box else None
+    found = certify_model(loaded, classes=classes, candidate=candidate, time_limit_s=time_limit_s, box=parsed)
     return CertifyResult(verdict=found.verdict, dynamics="model", conditions=found.results,
                          document=build_document(found))
 

@@ -80,7 +80,8 @@ def register(group: click.Group) -> None:
     @click.option("--set", "settings", multiple=True, metavar="NAME=VALUE",
                   help="With --model: override a parameter or disturbance bound, e.g. --set mu=2 (repeatable).")
     @click.option("--candidate", help='With --model: your own Lyapunov function, e.g. "x1**2 + x2**2".')
-    @click.option("--box", "boxes", multiple=True, help='Certify a whole box of gains, e.g. --box '
+    @click.option("--box", "boxes", multiple=True, help='Certify a whole box of gains (or, with --model, of the model\'s '
+                  'parameters, e.g. --box "mu=0.8..1.2"), e.g. --box '
                   '"alpha_d=540..660" --box "k_d=0.1..0.2" (repeatable; classes prop41_ges, prop41_iss, sector_ges and '
                   'ges by default; --classes all adds ultimate_bound, sos_gas, saturated_loop and sos_bound).')
     @one_line_errors
@@ -102,13 +103,14 @@ def register(group: click.Group) -> None:
         overrides = {FLAG_KEYS[k]: v for k, v in flags.items() if v is not None}
         if model_file is not None:
             paper_only = [name for name, given in (("GAINS", gains), ("--linear-views", linear_views),
-                                                   ("--worst-case", worst_case), ("--box", boxes),
+                                                   ("--worst-case", worst_case),
                                                    ("--dynamics", dynamics != "derived"))
                           if given] + [f"--{k.replace('_', '-')}" for k, v in flags.items() if v is not None]
             if paper_only:
                 raise InvalidParameter("model", "given without the paper's gains and flags (a model file carries its "
                                        "own parameters; use --set NAME=VALUE)", paper_only[0])
-            result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes)
+            result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes,
+                                   box=list(boxes) or None)
             _finish(result, out, report, as_json, write_report)
         if settings or candidate is not None:
             raise InvalidParameter("set" if settings else "candidate", "used with --model FILE",

@@ -27,7 +27,8 @@ from typing import Any, Final
 
 from lyapcheck.models.field import ScaledField, unscale_polynomial
 from lyapcheck.models.lyapunov import TARGET_LIMIT, affordable, terms_json
-from lyapcheck.models.search import BudgetExhausted, ParameterValues, Search, one, param
+from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
+                                     box_support, multiplier_grams, one, param)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_dissipation, check_output_bound
@@ -61,7 +62,7 @@ def bound_structure(scaled: ScaledField, y: Poly, degree: int,
     n, m = scaled.n, scaled.m
     nv = ring.nvars
     generators = _symmetry(scaled, y)
-    z_v = [tuple(list(a) + [0] * m) for a in monomials(n, 0, degree // 2)]
+    z_v = [tuple(list(a) + [0] * (nv - n)) for a in monomials(n, 0, degree // 2)]  # V of the states alone
     v_blocks = bases.character_blocks(z_v, generators)
     v_products = {tuple(a + b for a, b in zip(z_v[i], z_v[j])) for idx in v_blocks for i in idx for j in idx}
     target: set[Monomial] = set()
@@ -78,10 +79,17 @@ def bound_structure(scaled: ScaledField, y: Poly, degree: int,
     for k in range(m):
         sq = tuple(2 * int(j == n + k) for j in range(nv))
         target |= {tuple(a + b for a, b in zip(q, s)) for q in tau_products for s in (sq, tuple([0] * nv))}
+    box_vars = list(range(n + m, nv))
+    d_box_grams, d_box_terms = box_multipliers(nv, n, target, with_states=False, generators=generators, prefix="rD",
+                                               box_vars=box_vars)
+    target |= box_support(d_box_grams, nv)
     if len(target) > TARGET_LIMIT:
         return None
     z_d = [q for q in bases.sos_basis(nv, target) if ("sigD", q) not in drop]
     e_target = set(v_products) | set(ring.support(y * y)) | {tuple([0] * nv)}
+    e_box_grams, e_box_terms = box_multipliers(nv, n, e_target, with_states=False, generators=generators, prefix="rE",
+                                               box_vars=[j for j in box_vars if any(q[j] for q in ring.support(y))])
+    e_target |= box_support(e_box_grams, nv)
     z_e = [q for q in bases.sos_basis(nv, e_target) if ("sigE", q) not in drop]
     if not z_d or not z_e or max(len(z_d), len(z_e), len(z_v)) > MAX_GRAM_ROWS:
         return None
@@ -96,8 +104,10 @@ def bound_structure(scaled: ScaledField, y: Poly, degree: int,
     for k in range(m):
         sq = tuple(2 * int(j == n + k) for j in range(nv))
         terms_d.append(Term(param(f"b{k}", [sq, tuple([0] * nv)]), f"tau{k}"))
+    terms_d.extend(d_box_terms)
     terms_d.append(Term(one(ring, -1), "sigD"))
-    terms_e = (Term(one(ring, 1), "V"), Term(one(ring, 1), "B"), Term(one(ring, -1), "sigE"))
+    terms_e = (Term(one(ring, 1), "V"), Term(one(ring, 1), "B"), *e_box_terms, Term(one(ring, -1), "sigE"))
+    grams += d_box_grams + e_box_grams
     return affordable(Structure(nvars=nv, grams=tuple(grams), scalars=(Scalar("B"),),
                      identities=(Identity("dissipation", tuple(terms_d), param("lamD0", d_support), "sigD"),
                                  Identity("output", terms_e, param("E0", set(ring.support(y * y)) | {tuple([0] * nv)}),
@@ -142,13 +152,16 @@ def attempt_with_solution(scaled: ScaledField, structure: Structure, y: Poly, la
     grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
     taus = [grams[f"tau{k}"] for k in range(scaled.m)]
     B = point.scalars["B"]
-    ok, _ = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, grams["V"], lam, taus, grams["sigD"])
+    box_d = box_multipliers_of(point.grams, multiplier_grams(structure, "rD"))
+    box_e = box_multipliers_of(point.grams, multiplier_grams(structure, "rE"))
+    ok, _ = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, grams["V"], lam, taus, grams["sigD"], box_d)
     if not ok:
         return None, solution
-    ok, _ = check_output_bound(ring, grams["V"], y, B, grams["sigE"])
+    ok, _ = check_output_bound(ring, grams["V"], y, B, grams["sigE"], box_e)
     if not ok:
         return None, solution
-    return {"V": grams["V"], "taus": taus, "sigD": grams["sigD"], "sigE": grams["sigE"], "B": B, "lam": lam}, solution
+    return {"V": grams["V"], "taus": taus, "sigD": grams["sigD"], "sigE": grams["sigE"], "B": B, "lam": lam,
+            "box_D": box_d, "box_E": box_e}, solution
 
 
 def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, Any] | None, list[str]]:
@@ -223,6 +236,9 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
                            "gram_sigma_E": found["sigE"].to_json(),
                            "V": terms_json(scaled.ring, unscale_polynomial(scaled.ring, found["V"].poly(scaled.ring),
                                                                            scaled.scaling, scaled.n))}
+            if found["box_D"] or found["box_E"]:
+                certs[name]["box_multipliers_D"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box_D"]]
+                certs[name]["box_multipliers_E"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box_E"]]
     except BudgetExhausted as exc:
         return ConditionResult("sos_bound", "inconclusive", f"{exc}; bounds found so far: {bounds}",
                                numbers={"reason": str(exc), "bounds": bounds}, solver={"solves": search.log})

@@ -58,6 +58,7 @@ def build_document(result: ModelCertification) -> dict[str, Any]:
         "disturbances": {k: str(v) for k, v in model.disturbances.items()},
         "field": {"denominators": result.denominators,
                   "scaling": result.scaling.to_json() if result.scaling is not None else None},
+        **({"box": result.box.to_json()} if result.box is not None else {}),
         "conditions": {name: r.to_json() for name, r in result.results.items()},
         "verdict": result.verdict,
         "versions": package_versions(),
@@ -115,7 +116,20 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
     rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
                  "the stated parameters or equilibrium differ from the model text's"))
-    shifted = shifted_field(model)
+    box = None
+    if "box" in doc:
+        from lyapcheck.models.boxes import ModelBox, check_box
+
+        box = ModelBox.from_json(doc["box"])
+        if not all(name in model.parameters and lo < hi for name, lo, hi in box.bounds) or \
+                list(box.names) != [p for p in model.parameters if p in box.names]:
+            return [*rows, ("box", False, "the box must name the model's parameters, in its order, with lo < hi")]
+        try:
+            check_box(model, box)
+        except ModelFileError as exc:
+            return [*rows, ("box", False, f"the box is not valid for the model: {exc}")]
+        rows.append(("box", True, f"the box {box.describe()} is valid for the model"))
+    shifted = shifted_field(model, box=box)
     conditions: dict[str, Any] = doc["conditions"]
 
     def row(name: str, check: Callable[[], tuple[bool, str]]) -> None:
@@ -145,7 +159,7 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             if sign not in (1, -1):
                 rows.append(("denominators", False, "a denominator's sign must be +1 or -1"))
                 return _with_verdict(doc, rows)
-            ok, why = check_certificate(shifted.ring, d * sign, cert)
+            ok, why = check_certificate(shifted.ring, d * sign, cert, _box_start(model, box))
             rows.append(("denominators", ok, f"denominator {cert.get('denominator')}: {why}"))
             if not ok:
                 return _with_verdict(doc, rows)
@@ -162,11 +176,26 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
     return _with_verdict(doc, rows)
 
 
+def _box_start(model: Any, box: Any) -> int | None:
+    return None if box is None else model.n + len(model.disturbances)
+
+
+def _multipliers(data: Any, nvars: int, first: int) -> list[tuple[int, Any]]:
+    """A certificate's box multipliers, each on a box parameter (index >= ``first``): a multiplier on
+    a state would restrict the states, so any other index makes the certificate malformed."""
+    from lyapcheck.models.search import box_multipliers_from_json
+
+    out = box_multipliers_from_json(data or [], nvars)
+    if any(not first <= j < nvars for j, _ in out):
+        raise ValueError("a box multiplier must act on a box parameter")
+    return out
+
+
 def _with_verdict(doc: dict[str, Any], rows: list[Row]) -> list[Row]:
     conditions = doc["conditions"]
     proven = any(isinstance(c, dict) and c.get("status") == "certified" and any(n == name for n, _, _ in rows)
                  and all(ok for n, ok, _ in rows if n == name) for name, c in conditions.items())
-    prerequisites = all(ok for n, ok, _ in rows if n in ("model", "parameters", "denominators", "scaling"))
+    prerequisites = all(ok for n, ok, _ in rows if n in ("model", "parameters", "box", "denominators", "scaling"))
     expected = "certified" if proven and prerequisites else "not_certified"
     stated = doc.get("verdict")
     rows.append(("verdict", stated == expected, f"verdict '{stated}' is supported" if stated == expected else
@@ -185,7 +214,8 @@ def _v_matches(scaled: Any, ring: Any, V: Any, stated: dict[str, Any]) -> bool:
     from lyapcheck.models.field import unscale_polynomial
     from lyapcheck.models.lyapunov import terms_json
 
-    return terms_json(ring, unscale_polynomial(ring, V.poly(ring), scaled.scaling, scaled.n)) == stated
+    box = scaled.cleared.shifted.box
+    return terms_json(ring, unscale_polynomial(ring, V.poly(ring), scaled.scaling, scaled.n, box)) == stated
 
 
 def _at_most(stated: Any, proved: Fraction) -> bool:
@@ -214,10 +244,16 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
             V = _gram(data["gram_V"], nv)
             taus = [_gram(t, nv) for t in data["gram_tau"]]
             lam, B = Fraction(data["lam_scaled"]), Fraction(data["B_scaled"])
-            ok, why = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, V, lam, taus, _gram(data["gram_sigma_D"], nv))
+            first = scaled.n + scaled.m
+            box_d = _multipliers(data.get("box_multipliers_D"), nv, first)
+            box_e = _multipliers(data.get("box_multipliers_E"), nv, first)
+            if any(any(m[scaled.n:]) for m in V.basis):
+                return False, f"output {out}: V may depend on the states only"
+            ok, why = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, V, lam, taus,
+                                        _gram(data["gram_sigma_D"], nv), box_d)
             if not ok:
                 return False, f"output {out}: {why}"
-            ok, why = check_output_bound(ring, V, y, B, _gram(data["gram_sigma_E"], nv))
+            ok, why = check_output_bound(ring, V, y, B, _gram(data["gram_sigma_E"], nv), box_e)
             if not ok:
                 return False, f"output {out}: {why}"
             bound = Fraction(data["bound"])
@@ -230,14 +266,16 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
         return True, "every output's dissipation and output identities hold exactly"
     field = state_field(scaled)
     ring, n = field.ring, field.n
-    V = _gram(cert["gram_V"], n)
+    nv = ring.nvars
+    V = _gram(cert["gram_V"], nv)
+    box = _multipliers(cert.get("box_multipliers"), nv, n)
     if not _v_matches(scaled, ring, V, cert["V"]):
         return False, "the stated V (declared states) is not the certificate's Gram V unscaled"
     kind = cert.get("kind")
     T = scaled.scaling.time
     if kind == "lyapunov":
         mu = Fraction(cert["mu_scaled"])
-        ok, why = check_lyapunov(ring, field.g, field.D, V, _gram(cert["gram_sigma"], n), mu)
+        ok, why = check_lyapunov(ring, field.g, field.D, V, _gram(cert["gram_sigma"], nv), mu, box)
         if not ok:
             return False, why
         if not _at_most(c.get("decay_rate_V_per_s"), mu / T):
@@ -251,14 +289,16 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
         level = Fraction(cert["level_scaled"])
         if Fraction(cert["level"]) != level or not _at_most(c.get("level"), level):
             return False, "the stated level is not the certified one"
-        ok, why = check_sublevel(ring, field.g, V, level, _gram(cert["gram_s"], n), _gram(cert["gram_sigma"], n))
+        ok, why = check_sublevel(ring, field.g, V, level, _gram(cert["gram_s"], nv), _gram(cert["gram_sigma"], nv), box)
         if not ok:
             return False, why
         if "ball" in cert:
-            from lyapcheck.models.regions import radius_polynomial
+            from lyapcheck.models.regions import radius_polynomial, states_only
+            from lyapcheck.sos.polynomials import Ring
 
+            sring = Ring(ring.names[:n])
             r = Fraction(cert["ball"]["radius"])
-            ok, why2 = check_containment(ring, V, level, radius_polynomial(ring, scaled.scaling), r * r,
+            ok, why2 = check_containment(sring, states_only(V, n), level, radius_polynomial(sring, scaled.scaling), r * r,
                                          _gram(cert["ball"]["gram_s"], n), _gram(cert["ball"]["gram_sigma"], n))
             if not ok or not _at_most(c.get("ball_radius"), r):
                 return False, f"the ball: {why2 if not ok else 'the stated radius exceeds the certified one'}"
@@ -274,11 +314,12 @@ def _verify_ges(scaled: Any, V: Any, mu: Fraction, cert: dict[str, Any], c: dict
     from lyapcheck.sos.definiteness import is_positive_definite
 
     n = scaled.n
-    if mu <= 0 or any(sum(m) != 1 for m in V.basis) or len(V.basis) != n:
-        return False, "GES needs a quadratic V (every state, degree 1) and mu > 0"
+    if mu <= 0 or any(sum(m) != 1 or any(m[n:]) for m in V.basis) or len(V.basis) != n:
+        return False, "GES needs a quadratic V (every state, degree 1, common to a box) and mu > 0"
     from lyapcheck.models.field import declared_quadratic
 
-    order = [V.basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
+    nv = len(V.basis[0])
+    order = [V.basis.index(tuple(int(k == i) for k in range(nv))) for i in range(n)]
     P = declared_quadratic(scaled.scaling, [[V.Q[order[i]][order[j]] for j in range(n)] for i in range(n)])
     c1, c2, k = Fraction(cert["c1"]), Fraction(cert["c2"]), Fraction(cert["k"])
     eye = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]

@@ -29,7 +29,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Callable, Final, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
 import numpy as np
 
@@ -41,6 +41,9 @@ from lyapcheck.models.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly
 
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.boxes import ModelBox
+
 log = logging.getLogger(__name__)
 
 MODEL_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
@@ -51,6 +54,8 @@ ROA_GRID: Final = {1: 401, 2: 101, 3: 21}
 ROA_RANDOM_STARTS: Final = 4000
 #: simulated time of the roa cross-check, in units of the loop's typical time
 ROA_HORIZON: Final = 60.0
+#: over a box, sos_gas's V may depend on the parameters up to these degrees, in turn
+BOX_PARAM_DEGREES: Final = (0, 1)
 
 
 @dataclass
@@ -71,6 +76,7 @@ class ModelCertification:
     denominators: list[dict[str, Any]] = field(default_factory=list)
     scaling: Scaling | None = None
     seconds: dict[str, float] = field(default_factory=dict)
+    box: "ModelBox | None" = None
 
     @property
     def verdict(self) -> str:
@@ -120,17 +126,21 @@ def class_selection(classes: str | Sequence[str] | None, model: Model, candidate
 
 
 def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, candidate: str | None = None,
-                  time_limit_s: float | None = None) -> ModelCertification:
-    """Run the chosen classes on ``model`` (see the module docstring)."""
+                  time_limit_s: float | None = None, box: "ModelBox | None" = None) -> ModelCertification:
+    """Run the chosen classes on ``model`` (see the module docstring); with a ``box`` of parameters,
+    each certified class holds for every parameter value in it (:mod:`lyapcheck.models.boxes`:
+    ``quadratic``, ``sos_gas``, ``roa`` and ``sos_bound``; the others are not_applicable)."""
     import time
 
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
+    if box is not None and candidate is not None:
+        raise ModelFileError(model.source, "--candidate", "not over a --box (the candidate class certifies a point)")
     cand = parse_candidate(model, candidate) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
-    out = ModelCertification(model=model, candidate=cand, results={})
-    shifted = shifted_field(model)
+    out = ModelCertification(model=model, candidate=cand, results={}, box=box)
+    shifted = shifted_field(model, box=box)
 
     def run(name: str, compute: Callable[[Budget], ConditionResult]) -> None:
         start = time.perf_counter()
@@ -138,7 +148,11 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         out.results[name] = _guarded(name, lambda: compute(budget), limit)
         out.seconds[name] = time.perf_counter() - start
 
-    if "linearization" in chosen:
+    if "linearization" in chosen and box is not None:
+        out.results["linearization"] = ConditionResult(
+            "linearization", "not_applicable", "over a box the Jacobian depends on the parameters: certify a point "
+            "(--set NAME=VALUE) for the linearization")
+    elif "linearization" in chosen:
         from lyapcheck.models import linearization
 
         run("linearization", lambda budget: linearization.run(shifted))
@@ -150,7 +164,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         distinct = shifted.distinct_denominators()
         budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
         try:
-            signs, certs, failed = prove_denominators(shifted.ring, distinct, budget)
+            signs, certs, failed = prove_denominators(shifted.ring, distinct, budget, box_start(model, box))
         except BudgetExhausted as exc:
             signs, certs, failed = [], [], distinct[0] if distinct else None
             log.info("denominators: %s", exc)
@@ -173,7 +187,8 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
             run("quadratic", lambda budget: lyapunov.run(sc, "quadratic", (2,), Search(state_field(sc).ring, budget)))
         if "sos_gas" in chosen:
             run("sos_gas", lambda budget: lyapunov.run(sc, "sos_gas", lyapunov.SOS_GAS_DEGREES,
-                                                       Search(state_field(sc).ring, budget)))
+                                                       Search(state_field(sc).ring, budget),
+                                                       param_degrees=BOX_PARAM_DEGREES))
         if "roa" in chosen:
             lin = out.results.get("linearization")
             gas = next((name for name in ("quadratic", "sos_gas") if name in out.results
@@ -195,11 +210,20 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                                                            "bound its outputs")
             else:
                 run("sos_bound", lambda budget: bounds.run(sc, Search(sc.ring, budget)))
-    if "candidate" in chosen and cand is None:
+    if "candidate" in chosen and box is not None:
+        out.results["candidate"] = ConditionResult("candidate", "not_applicable", "not over a box (the candidate "
+                                                                                   "class certifies a point)")
+    elif "candidate" in chosen and cand is None:
         out.results["candidate"] = ConditionResult("candidate", "not_applicable", "needs --candidate \"EXPR\" (the "
                                                                                    "user's V); not run")
     out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
     return out
+
+
+def box_start(model: Model, box: "ModelBox | None") -> int | None:
+    """The index of a box's first parameter in the shifted field's ring (after the states and the
+    disturbances), or None without a box."""
+    return None if box is None else model.n + len(model.disturbances)
 
 
 def _text(shifted: ShiftedField, p: Poly) -> str:
@@ -229,14 +253,28 @@ def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) ->
 # -- roa and candidate -------------------------------------------------------------------------------
 
 def simulated_region(scaled: ScaledField, samples_declared: np.ndarray) -> np.ndarray:
-    """Which declared starts converge to the equilibrium (disturbances 0)."""
+    """Which declared starts converge to the equilibrium (disturbances 0); over a box, at every
+    parameter point of :func:`parameter_points` (its centre and corners)."""
     from lyapcheck.models.numeric import converges, typical_time
 
     model = scaled.cleared.shifted.model
-    T = typical_time(model)
     half = _half_widths(model)
-    conv = converges(model, samples_declared, t_end=ROA_HORIZON * T, radius=half * 1e-3, escape=half * 1e3)
-    return conv.converged
+    converged = np.ones(len(samples_declared), dtype=bool)
+    for params in parameter_points(scaled):
+        T = typical_time(model, params)
+        converged &= converges(model, samples_declared, t_end=ROA_HORIZON * T, radius=half * 1e-3, escape=half * 1e3,
+                               parameters=params).converged
+    return converged
+
+
+def parameter_points(scaled: ScaledField) -> list[dict[str, Fraction]]:
+    """The model's parameters, and over a box those at its centre and corners."""
+    model = scaled.cleared.shifted.model
+    box = scaled.cleared.shifted.box
+    if box is None:
+        return [dict(model.parameters)]
+    centre = {name: box.center(name) for name in box.names}
+    return [{**model.parameters, **centre}] + [{**model.parameters, **corner} for corner in box.corners()]
 
 
 def _half_widths(model: Model) -> np.ndarray:
@@ -264,9 +302,10 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
     A = np.array([[float(x) for x in row] for row in scaled.scaling.matrix()])
     eq = np.array([float(v) for v in model.equilibrium])
     if regions.lyapunov_quadratic(field_) is None:
-        return ConditionResult("roa", "not_certified", "the Jacobian at the equilibrium is not Hurwitz, so no quadratic "
-                                                       "Lyapunov function starts the search (see linearization)",
-                               property="ROA")
+        return ConditionResult("roa", "not_certified", "the Jacobian at the equilibrium is not Hurwitz"
+                                                       + (" at the box's centre" if field_.p else "")
+                                                       + ", so no quadratic Lyapunov function starts the search "
+                                                       "(see linearization)", property="ROA")
     if model.domain:
         starts = roa_starts(model)
     else:
@@ -279,7 +318,8 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
         return ConditionResult("roa", "not_certified", "no sublevel set passed the exact check", property="ROA",
                                solver={"solves": search.log}, numbers={"history": outcome.history})
     cert = outcome.certificate
-    inside = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))(samples) <= float(cert.level)
+    inside = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))(regions.on_states(field_, samples)) \
+        <= float(cert.level)
     numbers: dict[str, Any] = {"degree": 2 * max(sum(m) for m in cert.V.basis), "simulated_starts": int(len(starts))}
     if model.domain:
         numbers["roa_share"] = float(np.mean(inside[converged])) if converged.any() else 0.0
@@ -299,8 +339,11 @@ def simulated_region_long(scaled: ScaledField, starts: np.ndarray) -> np.ndarray
 
     model = scaled.cleared.shifted.model
     half = _half_widths(model)
-    return converges(model, starts, t_end=20 * ROA_HORIZON * typical_time(model), radius=half * 1e-3,
-                     escape=half * 1e3, max_iterations=200_000).converged
+    converged = np.ones(len(starts), dtype=bool)
+    for params in parameter_points(scaled):
+        converged &= converges(model, starts, t_end=20 * ROA_HORIZON * typical_time(model, params), radius=half * 1e-3,
+                               escape=half * 1e3, max_iterations=200_000, parameters=params).converged
+    return converged
 
 
 def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -> ConditionResult:

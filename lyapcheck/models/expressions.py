@@ -18,7 +18,15 @@ Nothing reaches ``eval``, ``exec``, ``sympify`` or ``parse_expr``.
 
 The result is a :class:`Rational`: numerator and denominator polynomials with exact rational
 coefficients in all the file's names. Sizes are bounded while the tree is built (degree, number
-of terms), so an expression like ``(x1 + ... + x12)**12`` is refused before it is expanded.
+of terms), so an expression like ``(x1 + ... + x12)**12`` is refused before it is expanded: a
+power is multiplied out one factor at a time and refused at the first product beyond
+:data:`MAX_TERMS`, as the same factors written out with ``*`` would be.
+
+Nothing here walks the tree by recursion deeper than :data:`MAX_DEPTH` levels of real nesting: a
+long sum or product (``a + b + c + ...``, which Python parses as a tree as deep as it is long) is
+folded in a loop, and messages quote what the user wrote by its position in the text instead of
+re-printing a subtree (``ast.unparse`` recurses, and a chain like ``x1**x1**...`` or
+``x1.a.a.a...`` of a thousand links would exceed Python's recursion limit).
 """
 
 from __future__ import annotations
@@ -26,6 +34,7 @@ from __future__ import annotations
 import ast
 import math
 from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation
 from fractions import Fraction
 from typing import Final
 
@@ -39,7 +48,8 @@ MAX_TOTAL_DEGREE: Final = 12
 MAX_TERMS: Final = 2000
 #: the longest expression, in characters
 MAX_EXPRESSION_LENGTH: Final = 4000
-#: the deepest nesting of the expression's tree (parentheses, operators)
+#: the deepest nesting of the expression's tree (parentheses, unary signs, powers; the terms of one
+#: sum or the factors of one product are one level, however many there are)
 MAX_DEPTH: Final = 60
 #: a number's magnitude must be finite as a double, and a non-zero one at least the smallest normal
 NUMBER_RANGE: Final = "finite as a double (magnitude at most 1.8e308) and, if not 0, at least 2.2e-308"
@@ -138,7 +148,10 @@ def parse_expression(text: str, ring: Ring) -> Rational:
     except (RecursionError, MemoryError, ValueError):
         raise ExpressionError("not a valid expression (too deeply nested)") from None
     builder = _Builder(text.strip(), ring)
-    result = builder.build(tree.body, 0)
+    try:
+        result = builder.build(tree.body, 0)
+    except RecursionError:  # a backstop only: the builder's own depth limit comes first
+        raise ExpressionError(f"the expression is nested too deeply (the limit is {MAX_DEPTH}, MAX_DEPTH)") from None
     return result.normalized()
 
 
@@ -152,6 +165,9 @@ class _Builder:
     def __init__(self, source: str, ring: Ring) -> None:
         self.source = source
         self.ring = ring
+        # node positions are UTF-8 byte offsets; on one line they slice these bytes directly
+        # (ast.get_source_segment splits the whole text on every call: a second for 1000 numbers)
+        self.source_bytes = source.encode("utf-8")
 
     def build(self, node: ast.AST, depth: int) -> Rational:
         if depth > MAX_DEPTH:
@@ -172,63 +188,107 @@ class _Builder:
             raise ExpressionError(f"the operator '{_OPERATOR_TEXT.get(type(node.op), type(node.op).__name__)}' "
                                   "is not part of the language (use + - * / **)")
         if isinstance(node, ast.BinOp):
+            if isinstance(node.op, _CHAIN_OPERATORS):
+                return self._chain(node, depth)
             return self._binary(node, depth)
         if isinstance(node, ast.Call):
-            name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)
+            name = node.func.id if isinstance(node.func, ast.Name) else self._text(node.func)
             raise ExpressionError(f"function call '{name}(...)' is not allowed: {_RECAST_HINT}")
-        raise ExpressionError(f"'{ast.unparse(node)}' is not part of the language (numbers, declared names, "
+        raise ExpressionError(f"'{self._text(node)}' is not part of the language (numbers, declared names, "
                               "+ - * /, ** with a non-negative integer, parentheses)")
+
+    def _text(self, node: ast.AST) -> str:
+        """What the user wrote for ``node``, on one line and shortened: read from the source by
+        position (``ast.unparse`` would recurse through a subtree of any depth)."""
+        return _short(" ".join((self._segment(node) or type(node).__name__).split()))
+
+    def _segment(self, node: ast.AST) -> str | None:
+        """The source text of ``node``, exactly."""
+        if getattr(node, "lineno", None) == 1 and getattr(node, "end_lineno", None) == 1:
+            return self.source_bytes[node.col_offset:node.end_col_offset].decode("utf-8")  # type: ignore[attr-defined]
+        return ast.get_source_segment(self.source, node)
 
     def _number(self, node: ast.Constant) -> Fraction:
         value = node.value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ExpressionError(f"'{ast.unparse(node)}' is not a number of the language")
+            raise ExpressionError(f"'{self._text(node)}' is not a number of the language")
         if isinstance(value, int):
             number = Fraction(value)
         else:
             if not math.isfinite(value):
-                raise ExpressionError(f"the number '{ast.get_source_segment(self.source, node)}' is not finite "
+                raise ExpressionError(f"the number '{self._text(node)}' is not finite "
                                       f"(numbers must be {NUMBER_RANGE})")
-            text = ast.get_source_segment(self.source, node) or repr(value)
+            # exactly as written (0.1 is 1/10), read as a Decimal first: Fraction("1e-9999999") builds
+            # 10**9999999 (seconds; "0e999999999" would take hours), so a decimal exponent beyond any
+            # double's is refused before any power of ten is built
             try:
-                number = Fraction(text)
-            except (ValueError, ZeroDivisionError):
-                number = Fraction(repr(value))
+                decimal = Decimal(self._segment(node) or repr(value))
+            except InvalidOperation:
+                decimal = Decimal(repr(value))
+            if decimal.is_zero():
+                return Fraction(0)
+            if abs(decimal.adjusted()) > _MAX_DECIMAL_EXPONENT:
+                raise ExpressionError(f"the number '{self._text(node)}' is out of range "
+                                      f"(numbers must be {NUMBER_RANGE})")
+            number = Fraction(decimal)
         if number and not (2.2250738585072014e-308 <= abs(number) <= 1.7976931348623157e308):
-            raise ExpressionError(f"the number '{ast.get_source_segment(self.source, node)}' is out of range "
+            raise ExpressionError(f"the number '{self._text(node)}' is out of range "
                                   f"(numbers must be {NUMBER_RANGE})")
         return number
 
     def _binary(self, node: ast.BinOp, depth: int) -> Rational:
+        """``**``, and the operators outside the language (``+ - * /`` are :meth:`_chain`'s)."""
         op = node.op
         if isinstance(op, ast.BitXor):
-            raise ExpressionError(f"'^' in '{ast.unparse(node)}' is not a power: write '**' "
-                                  f"(e.g. {ast.unparse(node.left)}**{ast.unparse(node.right)})")
+            raise ExpressionError(f"'^' in '{self._text(node)}' is not a power: write '**' "
+                                  f"(e.g. {self._text(node.left)}**{self._text(node.right)})")
         if isinstance(op, ast.Pow):
             base = self.build(node.left, depth + 1)
             k = self._exponent(node.right)
             limit = MAX_TOTAL_DEGREE
             if (total_degree(base.numerator) * k > limit or total_degree(base.denominator) * k > limit):
-                raise ExpressionError(f"'{ast.unparse(node)}' has total degree above {limit} (MAX_TOTAL_DEGREE)")
-            return self._checked(base.power(k), node)
-        if not isinstance(op, (ast.Add, ast.Sub, ast.Mult, ast.Div)):
-            raise ExpressionError(f"the operator '{_OPERATOR_TEXT.get(type(op), type(op).__name__)}' is not part "
-                                  "of the language (use + - * / **)")
-        left = self.build(node.left, depth + 1)
-        right = self.build(node.right, depth + 1)
-        if isinstance(op, ast.Add):
-            return self._checked(left + right, node)
-        if isinstance(op, ast.Sub):
-            return self._checked(left - right, node)
-        if isinstance(op, ast.Mult):
-            return self._checked(left * right, node)
-        try:
-            return self._checked(left.divide(right), node)
-        except ExpressionError:
-            raise ExpressionError(f"division by zero in '{ast.unparse(node)}'") from None
+                raise ExpressionError(f"'{self._text(node)}' has total degree above {limit} (MAX_TOTAL_DEGREE)")
+            return self._checked(self._power(base, k, node), node)
+        raise ExpressionError(f"the operator '{_OPERATOR_TEXT.get(type(op), type(op).__name__)}' is not part "
+                              "of the language (use + - * / **)")
+
+    def _chain(self, node: ast.BinOp, depth: int) -> Rational:
+        """``a + b - c * d / e ...``: Python parses it as a tree leaning left, one level per operator,
+        so a polynomial of 70 terms would be 70 levels deep. Its left spine is walked in a loop and
+        folded in the order Python would evaluate it: every operand is one level below the chain."""
+        spine: list[ast.BinOp] = []
+        left: ast.expr = node
+        while isinstance(left, ast.BinOp) and isinstance(left.op, _CHAIN_OPERATORS):
+            spine.append(left)
+            left = left.left
+        result = self.build(left, depth + 1)
+        for step in reversed(spine):
+            right = self.build(step.right, depth + 1)
+            if isinstance(step.op, ast.Add):
+                result = self._checked(result + right, step)
+            elif isinstance(step.op, ast.Sub):
+                result = self._checked(result - right, step)
+            elif isinstance(step.op, ast.Mult):
+                result = self._checked(result * right, step)
+            else:
+                if right.numerator.is_zero():
+                    raise ExpressionError(f"division by zero in '{self._text(step)}'")
+                result = self._checked(result.divide(right), step)
+        return result
+
+    def _power(self, base: Rational, k: int, node: ast.AST) -> Rational:
+        """``base**k``, one factor at a time, each product's size checked: ``(x1 + ... + x12)**12``
+        (1,352,078 terms) is refused at its fifth power (4,368 terms) within microseconds, instead of
+        after a second or more of expansion. The same factors written out with ``*`` meet the same
+        limit at the same product."""
+        result = Rational.polynomial(self.ring, self.ring.constant(1))
+        for _ in range(k):
+            result = Rational(self.ring, result.numerator * base.numerator, result.denominator * base.denominator)
+            self._check_terms(result, node)
+        return result
 
     def _exponent(self, node: ast.AST) -> int:
-        text = ast.unparse(node)
+        text = self._text(node)
         if isinstance(node, ast.Constant) and isinstance(node.value, int) and not isinstance(node.value, bool):
             k = int(node.value)
             if k > MAX_EXPONENT:
@@ -250,17 +310,25 @@ class _Builder:
             if total_degree(part) > MAX_TOTAL_DEGREE:
                 r = r.normalized()
                 if total_degree(r.numerator) > MAX_TOTAL_DEGREE or total_degree(r.denominator) > MAX_TOTAL_DEGREE:
-                    raise ExpressionError(f"'{_short(ast.unparse(node))}' has total degree above {MAX_TOTAL_DEGREE} "
+                    raise ExpressionError(f"'{self._text(node)}' has total degree above {MAX_TOTAL_DEGREE} "
                                           "(MAX_TOTAL_DEGREE)")
-            if len(part) > MAX_TERMS:
-                raise ExpressionError(f"'{_short(ast.unparse(node))}' expands to more than {MAX_TERMS} terms "
-                                      "(MAX_TERMS)")
+            self._check_terms(r, node)
         return r
+
+    def _check_terms(self, r: Rational, node: ast.AST) -> None:
+        if len(r.numerator) > MAX_TERMS or len(r.denominator) > MAX_TERMS:
+            raise ExpressionError(f"'{self._text(node)}' expands to more than {MAX_TERMS} terms (MAX_TERMS)")
 
 
 def _short(text: str, limit: int = 60) -> str:
     return text if len(text) <= limit else text[:limit] + "..."
 
+
+#: the operators of one left-leaning chain (:meth:`_Builder._chain`)
+_CHAIN_OPERATORS: Final = (ast.Add, ast.Sub, ast.Mult, ast.Div)
+
+#: the largest decimal exponent (of the leading digit) a literal may have: beyond every double's
+_MAX_DECIMAL_EXPONENT: Final = 309
 
 _OPERATOR_TEXT: Final[dict[type, str]] = {
     ast.FloorDiv: "//", ast.Mod: "%", ast.MatMult: "@", ast.LShift: "<<", ast.RShift: ">>", ast.BitOr: "|",

@@ -29,10 +29,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
+from lyapcheck.models.expressions import Rational
 from lyapcheck.models.modelfile import Model, field_at
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.boxes import ModelBox
 
 
 @dataclass(frozen=True)
@@ -144,10 +148,16 @@ class ShiftedField:
     numerators: tuple[Poly, ...]
     denominators: tuple[Poly, ...]
     outputs: dict[str, Poly]
+    #: the box of parameters the ring's last variables range over (normalized to [-1, 1]), if any
+    box: "ModelBox | None" = None
 
     @property
     def n(self) -> int:
         return self.model.n
+
+    @property
+    def box_names(self) -> tuple[str, ...]:
+        return self.box.names if self.box is not None else ()
 
     def distinct_denominators(self) -> list[Poly]:
         """The distinct non-constant denominators (each up to a positive constant factor)."""
@@ -167,10 +177,24 @@ def _same_up_to_constant(a: Poly, b: Poly) -> bool:
     return a == b * ratio
 
 
-def shifted_field(model: Model, parameters: Mapping[str, Fraction] | None = None) -> ShiftedField:
-    """Step 1: the field at ``parameters`` (default: the model's) with the equilibrium moved to 0."""
-    ring = model.state_ring
-    rhs = field_at(model, parameters)
+def shifted_field(model: Model, parameters: Mapping[str, Fraction] | None = None,
+                  box: "ModelBox | None" = None) -> ShiftedField:
+    """Step 1: the field at ``parameters`` (default: the model's) with the equilibrium moved to 0.
+
+    With a ``box``, its parameters stay variables of the ring, normalized: a box parameter
+    ``theta_i in [lo_i, hi_i]`` is ``c_i + h_i u_i`` with ``u_i in [-1, 1]`` (the ring's variable of
+    the parameter's name is ``u_i``), and the others take their values.
+    """
+    values = dict(model.parameters if parameters is None else parameters)
+    if box is None:
+        ring = model.state_ring
+        rhs = field_at(model, values)
+        outputs_src = {name: _at(model, expr, values, ring) for name, expr in model.outputs.items()}
+    else:
+        ring = Ring(model.state_ring.names + box.names)
+        fixed = {k: v for k, v in values.items() if k not in box.names}
+        rhs = tuple(_boxed(model, r, fixed, box, ring) for r in model.dynamics)
+        outputs_src = {name: _boxed(model, expr, fixed, box, ring) for name, expr in model.outputs.items()}
     gens = ring.gens()
     images = [g + to_fmpq(c) for g, c in zip(gens[:model.n], model.equilibrium)] + list(gens[model.n:])
 
@@ -184,13 +208,33 @@ def shifted_field(model: Model, parameters: Mapping[str, Fraction] | None = None
             num, den = num * (1 / den.leading_coefficient()), ring.constant(1)
         nums.append(num)
         dens.append(den)
-    values = model.parameters if parameters is None else parameters
     outputs = {}
-    for name, expr in model.outputs.items():
-        num = model.ring.restrict(model.ring.substitute(expr.numerator, values), ring)
-        den = model.ring.restrict(model.ring.substitute(expr.denominator, values), ring)
-        outputs[name] = shift(num) * (1 / den.leading_coefficient())
-    return ShiftedField(model=model, ring=ring, numerators=tuple(nums), denominators=tuple(dens), outputs=outputs)
+    for name, r in outputs_src.items():
+        if not r.denominator.is_constant():
+            raise ValueError(f"output {name} has a denominator depending on a box parameter; not supported")
+        outputs[name] = shift(r.numerator) * (1 / r.denominator.leading_coefficient())
+    return ShiftedField(model=model, ring=ring, numerators=tuple(nums), denominators=tuple(dens), outputs=outputs,
+                        box=box)
+
+
+def _at(model: Model, expr: Rational, values: Mapping[str, Fraction], ring: Ring) -> Rational:
+    num = model.ring.restrict(model.ring.substitute(expr.numerator, values), ring)
+    den = model.ring.restrict(model.ring.substitute(expr.denominator, values), ring)
+    return Rational(ring, num, den)
+
+
+def _boxed(model: Model, expr: Rational, fixed: Mapping[str, Fraction], box: "ModelBox", ring: Ring) -> Rational:
+    """``expr`` with the fixed parameters set and each box parameter ``c + h u`` (exact)."""
+    full = model.ring
+    images = []
+    for name, g in zip(full.names, full.gens()):
+        if name in box.names:
+            images.append(g * to_fmpq(box.half(name)) + to_fmpq(box.center(name)))
+        else:
+            images.append(g)
+    num = full.restrict(full.compose(full.substitute(expr.numerator, fixed), images), ring)
+    den = full.restrict(full.compose(full.substitute(expr.denominator, fixed), images), ring)
+    return Rational(ring, num, den).normalized()
 
 
 @dataclass(frozen=True)
@@ -395,7 +439,9 @@ def apply_scaling(cleared: ClearedField, scaling: Scaling) -> ScaledField:
     A = scaling.matrix()
     Ainv = scaling.inverse_matrix()
     gens = ring.gens()
-    images = linear_images(ring, n, A)[:n] + [g * to_fmpq(s) for g, s in zip(gens[n:], scaling.disturbances)]
+    m = len(scaling.disturbances)
+    images = (linear_images(ring, n, A)[:n] + [g * to_fmpq(s) for g, s in zip(gens[n:n + m], scaling.disturbances)]
+              + list(gens[n + m:]))
     composed = [ring.compose(gi, images) for gi in cleared.g]
     factor = to_fmpq(scaling.time / scaling.denominator)
     g = tuple(sum((composed[j] * to_fmpq(Ainv[i][j]) for j in range(n) if Ainv[i][j]), ring.zero()) * factor
@@ -407,9 +453,15 @@ def apply_scaling(cleared: ClearedField, scaling: Scaling) -> ScaledField:
     return ScaledField(cleared=cleared, scaling=scaling, g=g, D=D, bounds=bounds, outputs=outputs)
 
 
-def unscale_polynomial(ring: Ring, p: Poly, scaling: Scaling, n: int) -> Poly:
-    """``p(A^-1 z)``: a polynomial in the scaled states as one in the (shifted) declared states."""
-    return ring.compose(p, linear_images(ring, n, scaling.inverse_matrix()))
+def unscale_polynomial(ring: Ring, p: Poly, scaling: Scaling, n: int, box: "ModelBox | None" = None) -> Poly:
+    """``p(A^-1 z)``: a polynomial in the scaled states as one in the (shifted) declared states; with
+    a box, its normalized parameters ``u`` become the declared ones, ``u = (theta - c) / h``."""
+    images = linear_images(ring, n, scaling.inverse_matrix())
+    if box is not None:
+        for k, name in enumerate(ring.names):
+            if name in box.names:
+                images[k] = (images[k] - to_fmpq(box.center(name))) * to_fmpq(1 / box.half(name))
+    return ring.compose(p, images)
 
 
 def declared_quadratic(scaling: Scaling, P_scaled: Sequence[Sequence[Fraction]]) -> list[list[Fraction]]:
@@ -433,10 +485,17 @@ class StateField:
     def n(self) -> int:
         return len(self.g)
 
+    @property
+    def p(self) -> int:
+        """How many box parameters follow the states in the ring."""
+        return self.ring.nvars - len(self.g)
+
 
 def state_field(scaled: ScaledField) -> StateField:
-    ring = Ring(scaled.states)
+    """The disturbances set to 0; the ring keeps the states and the box's parameters (if any)."""
+    box_names = scaled.cleared.shifted.box_names
+    ring = Ring(scaled.states + box_names)
     full = scaled.ring
-    zero = {name: Fraction(0) for name in full.names[scaled.n:]}
+    zero = {name: Fraction(0) for name in full.names[scaled.n:] if name not in box_names}
     g = tuple(full.restrict(full.substitute(gi, zero), ring) for gi in scaled.g)
     return StateField(ring=ring, g=g, D=full.restrict(scaled.D, ring))

@@ -27,7 +27,8 @@ from fractions import Fraction
 from typing import Any, Callable, Final, Sequence
 
 from lyapcheck.models.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
-from lyapcheck.models.search import BudgetExhausted, ParameterValues, Search, one, param
+from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
+                                     multiplier_grams, multiplier_variable, one, param)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_lyapunov
@@ -64,8 +65,9 @@ FACIAL_MARGIN: Final = 1e-6
 
 
 def symmetry(field: StateField) -> list[tuple[int, ...]]:
-    """The sign changes of the states that map the field to itself (``g_i`` like ``z_i``, ``D`` invariant)."""
-    return bases.sign_symmetries(field.n, [(field.ring.support(gi), i) for i, gi in enumerate(field.g)]
+    """The sign changes of the states (and box parameters) that map the field to itself (``g_i``
+    like ``z_i``, ``D`` invariant; a box's ``1 - u_j^2`` is invariant anyway)."""
+    return bases.sign_symmetries(field.ring.nvars, [(field.ring.support(gi), i) for i, gi in enumerate(field.g)]
                                  + [(field.ring.support(field.D), None)])
 
 
@@ -80,15 +82,19 @@ def _products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) -> set
 
 
 def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequence[int]],
-                       drop: frozenset[Monomial] = frozenset()) -> Structure | None:
+                       drop: frozenset[Monomial] = frozenset(), param_degree: int = 0) -> Structure | None:
     """The program for a ``V`` of this degree, or None when no strict certificate can exist in it
     (the remainder's reduced basis lacks a pure power of some state). ``drop``: monomials the
-    remainder's basis leaves out (facial reduction, :func:`vanishing_monomials`)."""
+    remainder's basis leaves out (facial reduction, :func:`vanishing_monomials`). Over a box of
+    parameters (the ring's variables after the states) ``V``'s basis monomials may carry the
+    parameters up to ``param_degree`` and the box's multipliers join the identity."""
     n = field.n
     ring = field.ring
-    if bases.candidate_count(n, degree - 1 + field_degree(field)) > CANDIDATE_LIMIT:
+    nv = ring.nvars
+    if bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree) > CANDIDATE_LIMIT:
         return None
-    z_v = monomials(n, 1, degree // 2)
+    z_v = [m for m in monomials(nv, 1, degree // 2 + param_degree)
+           if 1 <= sum(m[:n]) <= degree // 2 and sum(m[n:]) <= param_degree]
     v_blocks = bases.character_blocks(z_v, generators)
     products = _products(z_v, v_blocks)
     target: set[Monomial] = set()
@@ -96,18 +102,24 @@ def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequ
         derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
         target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
     target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+    box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators)
+    for g in box_grams:
+        sq = {tuple(2 * int(k == multiplier_variable(g.name)) for k in range(nv)), tuple([0] * nv)}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in _products(g.basis, g.blocks) for s in sq}
     if len(target) > TARGET_LIMIT:
         return None
-    z_w = [m for m in bases.sos_basis(n, target) if m not in drop]
+    z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
     if not z_w or not bases.has_pure_powers(z_w, range(n)) or len(z_w) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
         return None
     w_blocks = bases.character_blocks(z_w, generators)
     terms = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in enumerate(field.g)]
     terms.append(Term(param("muD", ring.support(field.D)), "V"))
+    terms.extend(box_terms)
     terms.append(Term(one(ring, -1), "W"))
     return affordable(Structure(
-        nvars=n,
-        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks)))),
+        nvars=nv,
+        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))),
+               *box_grams),
         scalars=(),
         identities=(Identity("lyapunov", tuple(terms), None, "W"),),
         objective=("max_margin",), trace_one=("V",)))
@@ -149,10 +161,11 @@ def attempt_with_solution(field: StateField, structure: Structure, mu: Fraction,
         return None, solution
     V = GramPoly.of(structure.gram("V").basis, point.grams["V"])
     W = GramPoly.of(structure.gram("W").basis, point.grams["W"])
-    ok, _ = check_lyapunov(field.ring, field.g, field.D, V, W, mu)
+    box = box_multipliers_of(point.grams, multiplier_grams(structure))
+    ok, _ = check_lyapunov(field.ring, field.g, field.D, V, W, mu, box)
     if not ok:
         return None, solution
-    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"]}, solution
+    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"], "box": box}, solution
 
 
 def vanishing_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
@@ -199,26 +212,29 @@ def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], fou
     return found
 
 
-def search_degree(field: StateField, degree: int, search: Search) -> tuple[dict[str, Any] | None, str]:
+def search_degree(field: StateField, degree: int, search: Search, param_degree: int = 0
+                  ) -> tuple[dict[str, Any] | None, str]:
     """A certificate with ``V`` of this degree (and its best decay rate), or None and why not."""
     generators = symmetry(field)
     drop: frozenset[Monomial] = frozenset()
+    label = f"degree {degree}" + (f" ({param_degree} in the parameters)" if field.p else "")
     for _ in range(FACIAL_ROUNDS + 1):
-        structure = lyapunov_structure(field, degree, generators, drop)
+        structure = lyapunov_structure(field, degree, generators, drop, param_degree)
         if structure is None:
-            return None, f"degree {degree}: no strict certificate fits (Newton polytope, or above {MAX_GRAM_ROWS} rows)"
+            return None, f"{label}: no strict certificate fits (Newton polytope, or above the size limits)"
         found, solution = attempt_with_solution(field, structure, Fraction(0), search)
         if found is not None:
             break
         vanishing = vanishing_monomials(structure.gram("W"), solution)
         if not vanishing:
-            return None, f"degree {degree}: none found"
+            return None, f"{label}: none found"
         drop = drop | vanishing
     else:
-        return None, f"degree {degree}: none found"
+        return None, f"{label}: none found"
     found = best_decay_rate(lambda mu: attempt(field, structure, mu, search), found)
     found["degree"] = degree
-    return found, f"degree {degree}: found"
+    found["param_degree"] = param_degree
+    return found, f"{label}: found"
 
 
 def certificate_json(scaled: ScaledField, found: dict[str, Any]) -> dict[str, Any]:
@@ -226,9 +242,13 @@ def certificate_json(scaled: ScaledField, found: dict[str, Any]) -> dict[str, An
     scaled ones (the scaling is at the document's top)."""
     field = state_field(scaled)
     v_scaled = found["V"].poly(field.ring)
-    v_orig = unscale_polynomial(field.ring, v_scaled, scaled.scaling, field.n)
-    return {"kind": "lyapunov", "degree": found["degree"], "mu_scaled": str(found["mu"]),
-            "V": terms_json(field.ring, v_orig), "gram_V": found["V"].to_json(), "gram_sigma": found["W"].to_json()}
+    v_orig = unscale_polynomial(field.ring, v_scaled, scaled.scaling, field.n, scaled.cleared.shifted.box)
+    out = {"kind": "lyapunov", "degree": found["degree"], "mu_scaled": str(found["mu"]),
+           "V": terms_json(field.ring, v_orig), "gram_V": found["V"].to_json(), "gram_sigma": found["W"].to_json()}
+    if found.get("box"):
+        out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]
+        out["param_degree"] = found.get("param_degree", 0)
+    return out
 
 
 def terms_json(ring: Ring, p: Poly) -> dict[str, Any]:
@@ -244,11 +264,13 @@ def ges_bounds(scaled: ScaledField, found: dict[str, Any]) -> tuple[Fraction, Fr
 
     from lyapcheck.sos.definiteness import is_positive_definite
 
-    if found["degree"] != 2:
-        return None
     n = scaled.n
+    basis = found["V"].basis
+    if found["degree"] != 2 or any(any(m[n:]) for m in basis):
+        return None  # GES is claimed for a quadratic V common to the box only
+    nv = len(basis[0])
     Qv = found["V"].Q
-    order = [found["V"].basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
+    order = [basis.index(tuple(int(k == i) for k in range(nv))) for i in range(n)]
     P = declared_quadratic(scaled.scaling, [[Qv[order[i]][order[j]] for j in range(n)] for i in range(n)])
     lam = np.linalg.eigvalsh(np.array([[float(x) for x in row] for row in P]))
     c1 = Fraction(float(lam[0]) * (1 - 1e-6)).limit_denominator(10**12) if lam[0] > 0 else Fraction(0)
@@ -263,16 +285,20 @@ def ges_bounds(scaled: ScaledField, found: dict[str, Any]) -> tuple[Fraction, Fr
     return c1, c2
 
 
-def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search) -> ConditionResult:
-    """``quadratic`` (degrees ``(2,)``) or ``sos_gas`` (rising degrees)."""
+def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
+        param_degrees: Sequence[int] = (0,)) -> ConditionResult:
+    """``quadratic`` (degrees ``(2,)``) or ``sos_gas`` (rising degrees); over a box, ``V`` may
+    depend on the parameters up to each of ``param_degrees`` in turn."""
     field = state_field(scaled)
     tried: list[str] = []
     try:
         for degree in degrees:
-            found, why = search_degree(field, degree, search)
-            tried.append(why)
-            if found is not None:
-                return _certified(scaled, name, found, search)
+            for param_degree in (param_degrees if field.p else (0,)):
+                search.budget.check()  # also before a degree whose program is skipped unsolved
+                found, why = search_degree(field, degree, search, param_degree)
+                tried.append(why)
+                if found is not None:
+                    return _certified(scaled, name, found, search)
     except BudgetExhausted as exc:
         return ConditionResult(name, "inconclusive", f"{exc}; tried: {'; '.join(tried) or 'nothing finished'}",
                                numbers={"reason": str(exc), "tried": tried}, solver={"solves": search.log})

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import keyword
+import math
 import tomllib
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
@@ -26,7 +27,7 @@ from pathlib import Path
 from typing import Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
-from lyapcheck.models.expressions import ExpressionError, Rational, parse_expression
+from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_expression
 from lyapcheck.sos.polynomials import Ring, degree_in
 
 #: the most states a model may have
@@ -88,14 +89,16 @@ def load_model(path: str | Path, overrides: Mapping[str, object] | None = None) 
     try:
         size = p.stat().st_size
         if size > MAX_FILE_BYTES:
-            raise ModelFileError(source, "file", f"is {size} bytes; the limit is {MAX_FILE_BYTES} (MAX_FILE_BYTES)")
-        text = p.read_text(encoding="utf-8")
+            raise _error(source, "file", f"is {size} bytes; the limit is {MAX_FILE_BYTES} (MAX_FILE_BYTES)")
+        # the bytes decoded as they are: read_text would turn CRLF line ends into LF, and the text
+        # (and the SHA-256 a certificate carries) would no longer be the file's, verbatim
+        text = p.read_bytes().decode("utf-8")
     except FileNotFoundError:
-        raise ModelFileError(source, "file", "not found") from None
+        raise _error(source, "file", "not found") from None
     except IsADirectoryError:
-        raise ModelFileError(source, "file", "is a directory, not a model file") from None
+        raise _error(source, "file", "is a directory, not a model file") from None
     except UnicodeDecodeError:
-        raise ModelFileError(source, "file", "is not UTF-8 text") from None
+        raise _error(source, "file", "is not UTF-8 text") from None
     return parse_model(text, source, overrides)
 
 
@@ -104,7 +107,7 @@ def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, obje
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ModelFileError(source, "file", f"is not valid TOML ({exc})") from None
+        raise _error(source, "file", f"is not valid TOML ({exc})") from None
     return _Reader(source, text, data, dict(overrides or {})).model()
 
 
@@ -113,7 +116,7 @@ class _Reader:
         self.source, self.text, self.data, self.overrides = source, text, data, overrides
 
     def fail(self, key: str, message: str) -> ModelFileError:
-        return ModelFileError(self.source, key, message)
+        return _error(self.source, key, message)
 
     def table(self, name: str) -> dict[str, Any]:
         value = self.data.get(name, {})
@@ -228,6 +231,8 @@ class _Reader:
     def expression(self, key: str, text: object, ring: Ring) -> Rational:
         if not isinstance(text, (str, int, float)) or isinstance(text, bool):
             raise self.fail(key, f"must be an expression in a string, got {text!r}")
+        if isinstance(text, float) and not math.isfinite(text):  # TOML's inf and nan, unquoted
+            raise self.fail(key, f"the number {text!r} is not finite (numbers must be {NUMBER_RANGE})")
         try:
             return parse_expression(str(text), ring)
         except ExpressionError as exc:
@@ -311,6 +316,17 @@ class _Reader:
         return box
 
 
+def _error(source: str, key: str, message: str) -> ModelFileError:
+    """The one-line error of the contract. A character that is not printable is shown escaped: a
+    quoted TOML key (``"a\\nb" = 1``) or ``--set`` name may hold a line break, which would
+    otherwise split the message over several lines."""
+    return ModelFileError(_printable(source), _printable(key), _printable(message))
+
+
+def _printable(text: str) -> str:
+    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text)
+
+
 def _unprefixed(exc: InvalidParameter) -> str:
     """The message of a field error without its "The 'x' parameter" opening (the key says it)."""
     return f"must be {exc.expected}, got {exc.got!r}"
@@ -321,9 +337,16 @@ def field_at(model: Model, parameters: Mapping[str, Fraction] | None = None) -> 
     values = model.parameters if parameters is None else parameters
     ring = model.state_ring
     out = []
-    for rhs in model.dynamics:
+    for s, rhs in zip(model.states, model.dynamics):
         num = model.ring.restrict(model.ring.substitute(rhs.numerator, values), ring)
         den = model.ring.restrict(model.ring.substitute(rhs.denominator, values), ring)
+        if den.is_zero():
+            # a denominator in the parameters alone that these values make 0 ("x1/mu" with mu = 0):
+            # the parser cannot see it (mu is a symbol there), and normalizing would divide by 0
+            used = [p for p in model.parameters if degree_in(model.ring, rhs.denominator, [p]) > 0]
+            at = ", ".join(f"{p} = {values[p]}" for p in used if p in values)
+            raise _error(model.source, f"[dynamics] {s}", f"division by zero: a denominator is 0 with {at} "
+                                                          "(the parameters' values)")
         out.append(Rational(ring, num, den).normalized())
     return tuple(out)
 

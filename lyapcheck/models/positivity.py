@@ -14,7 +14,8 @@ import math
 from fractions import Fraction
 from typing import Any, Sequence
 
-from lyapcheck.models.search import Budget, ParameterValues, Search, one, param
+from lyapcheck.models.search import (Budget, ParameterValues, Search, box_multipliers, box_multipliers_from_json,
+                                     box_multipliers_of, multiplier_grams, multiplier_variable, one, param)
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_positivity
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
@@ -39,33 +40,45 @@ def _variable_scales(ring: Ring, p: Poly) -> list[Fraction]:
     return [Fraction(2) ** int(round(v)) for v in x[:n]]
 
 
-def positivity_structure(ring: Ring, p: Poly) -> Structure | None:
+def positivity_structure(ring: Ring, p: Poly, free: int | None = None) -> Structure | None:
+    """``p - c - sum_j r_j (1 - u_j^2) = sigma``: the ring's variables from index ``free`` on are a
+    box's normalized parameters (none by default)."""
     n = ring.nvars
+    free = n if free is None else free
     support = set(ring.support(p)) | {tuple([0] * n)}
+    generators = bases.sign_symmetries(n, [(ring.support(p), None)])
+    box_grams, box_terms = box_multipliers(n, free, support, with_states=False, generators=generators)
+    for g in box_grams:
+        j = multiplier_variable(g.name)
+        sq = {tuple(2 * int(k == j) for k in range(n)), tuple([0] * n)}
+        support |= {tuple(a + b + c for a, b, c in zip(x, y, s)) for x in g.basis for y in g.basis for s in sq}
     basis = bases.sos_basis(n, support)
     if not basis:
         return None
-    generators = bases.sign_symmetries(n, [(ring.support(p), None)])
     blocks = bases.character_blocks(basis, generators)
-    terms = (Term(one(ring, -1), "c"), Term(one(ring, -1), "sigma"))
-    return Structure(nvars=n, grams=(Gram("sigma", tuple(basis), tuple(map(tuple, blocks)), margin=False),),
+    terms = (Term(one(ring, -1), "c"), *box_terms, Term(one(ring, -1), "sigma"))
+    return Structure(nvars=n, grams=(Gram("sigma", tuple(basis), tuple(map(tuple, blocks)), margin=False), *box_grams),
                      scalars=(Scalar("c", "zero"),),
-                     identities=(Identity("positivity", terms, param("p", support), "sigma"),),
+                     identities=(Identity("positivity", terms, param("p", ring.support(p) + [tuple([0] * n)]),
+                                          "sigma"),),
                      objective=("max", "c"))
 
 
-def prove_positive(ring: Ring, p: Poly, budget: Budget) -> dict[str, Any] | None:
-    """An exact certificate that ``p > 0`` everywhere (in scaled variables, with the scales), or None."""
+def prove_positive(ring: Ring, p: Poly, budget: Budget, free: int | None = None) -> dict[str, Any] | None:
+    """An exact certificate that ``p > 0`` everywhere (in scaled variables, with the scales), or
+    None; the ring's variables from index ``free`` on are a box's normalized parameters, where
+    ``p > 0`` is proved for ``u`` in ``[-1, 1]`` only (and they keep scale 1)."""
     if p.is_constant():
         c = ring.evaluate(p, [Fraction(0)] * ring.nvars)
         return {"kind": "constant", "value": str(c)} if c > 0 else None
-    scales = _variable_scales(ring, p)
+    free = ring.nvars if free is None else free
+    scales = [s if k < free else Fraction(1) for k, s in enumerate(_variable_scales(ring, p))]
     gens = ring.gens()
     scaled = ring.compose(p, [g * to_fmpq(s) for g, s in zip(gens, scales)])
     peak = max(abs(c) for c in ring.terms(scaled).values())
     norm = Fraction(2) ** math.floor(math.log2(peak))
     scaled = scaled * to_fmpq(1 / norm)
-    structure = positivity_structure(ring, scaled)
+    structure = positivity_structure(ring, scaled, free)
     if structure is None:
         return None
     values = ParameterValues()
@@ -83,15 +96,25 @@ def prove_positive(ring: Ring, p: Poly, budget: Budget) -> dict[str, Any] | None
         return None
     sigma = GramPoly.of(structure.gram("sigma").basis, point.grams["sigma"])
     c = point.scalars["c"]
-    ok, _ = check_positivity(ring, scaled, c, sigma)
+    box = box_multipliers_of(point.grams, multiplier_grams(structure))
+    ok, _ = check_positivity(ring, scaled, c, sigma, box)
     if not ok:
         return None
-    return {"kind": "sos", "scales": [str(s) for s in scales], "normalization": str(norm), "c": str(c),
-            "gram_sigma": sigma.to_json()}
+    out = {"kind": "sos", "scales": [str(s) for s in scales], "normalization": str(norm), "c": str(c),
+           "gram_sigma": sigma.to_json()}
+    if box:
+        out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in box]
+    return out
 
 
-def check_certificate(ring: Ring, p: Poly, cert: dict[str, Any]) -> tuple[bool, str]:
-    """Re-check a positivity certificate of ``p`` exactly."""
+def prove_positive_on_box(ring: Ring, p: Poly, budget: Budget) -> dict[str, Any] | None:
+    """``p > 0`` for every point of ``[-1, 1]^k`` (every variable of ``ring`` a box parameter)."""
+    return prove_positive(ring, p, budget, free=0)
+
+
+def check_certificate(ring: Ring, p: Poly, cert: dict[str, Any], free: int | None = None) -> tuple[bool, str]:
+    """Re-check a positivity certificate of ``p`` exactly (``free``: as in :func:`prove_positive`)."""
+    free = ring.nvars if free is None else free
     if cert.get("kind") == "constant":
         c = ring.evaluate(p, [Fraction(0)] * ring.nvars)
         ok = p.is_constant() and c > 0 and Fraction(cert["value"]) == c
@@ -103,20 +126,23 @@ def check_certificate(ring: Ring, p: Poly, cert: dict[str, Any]) -> tuple[bool, 
     gens = ring.gens()
     scaled = ring.compose(p, [g * to_fmpq(s) for g, s in zip(gens, scales)]) * to_fmpq(1 / norm)
     sigma = GramPoly.from_json(cert["gram_sigma"], ring.nvars)
-    return check_positivity(ring, scaled, Fraction(cert["c"]), sigma)
+    box = box_multipliers_from_json(cert.get("box_multipliers", []), ring.nvars)
+    if any(not (free <= j < ring.nvars) or scales[j] != 1 for j, _ in box):
+        return False, "a box multiplier on a variable that is not a box parameter, or a scaled box parameter"
+    return check_positivity(ring, scaled, Fraction(cert["c"]), sigma, box)
 
 
-def prove_denominators(ring: Ring, denominators: Sequence[Poly], budget: Budget
+def prove_denominators(ring: Ring, denominators: Sequence[Poly], budget: Budget, free: int | None = None
                        ) -> tuple[list[int], list[dict[str, Any]], Poly | None]:
     """For each distinct denominator: its sign (+1 / -1) and certificate; or the first one that
     could not be proved of one sign (the third value; then the signs are incomplete)."""
     signs: list[int] = []
     certs: list[dict[str, Any]] = []
     for d in denominators:
-        cert = prove_positive(ring, d, budget)
+        cert = prove_positive(ring, d, budget, free)
         sign = 1
         if cert is None:
-            cert = prove_positive(ring, -d, budget)
+            cert = prove_positive(ring, -d, budget, free)
             sign = -1
         if cert is None:
             return signs, certs, d

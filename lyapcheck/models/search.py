@@ -11,12 +11,15 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring
 from lyapcheck.sos.program import Coefficients, SOSProgram, Solution, Structure
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.sos.program import Gram, Term
 from lyapcheck.sos.rounding import ExactPoint, exact_point
 
 
@@ -120,3 +123,76 @@ def support_of(ring: Ring, *polys: Poly) -> list[Monomial]:
 
 def poly_times_support(ring: Ring, p_support: Sequence[Monomial], q_support: Sequence[Monomial]) -> set[Monomial]:
     return {tuple(a + b for a, b in zip(m1, m2)) for m1 in p_support for m2 in q_support}
+
+
+def box_multipliers(nvars: int, n_states: int, target: Iterable[Monomial], with_states: bool,
+                    generators: Sequence[Sequence[int]] = (), prefix: str = "r",
+                    box_vars: Sequence[int] | None = None) -> tuple[list["Gram"], list["Term"]]:
+    """The S-procedure terms of a box: for each box variable ``u_j`` (by default the ring's variables
+    after the first ``n_states``), a Gram ``r_j`` and the term ``-r_j (1 - u_j^2)``.
+
+    ``r_j``'s basis matches the identity's other terms (``target``, their generic support): half
+    its degree in the states, and half its degree in the box's parameters less one (the
+    multiplier's ``u_j^2`` adds two), so that ``r_j (1 - u_j^2)`` produces no monomial the other
+    terms cannot balance. With ``with_states`` every basis monomial holds a state (``r_j`` vanishes
+    at ``z = 0``, as an identity whose other terms vanish there needs). Empty lists when the ring
+    has no box variables.
+    """
+    from lyapcheck.sos import bases
+    from lyapcheck.sos.polynomials import monomials
+    from lyapcheck.sos.program import Gram, Term
+
+    box_vars = list(range(n_states, nvars)) if box_vars is None else list(box_vars)
+    if not box_vars:
+        return [], []
+    support = list(target)
+    state_half = max((sum(m[:n_states]) for m in support), default=2) // 2
+    param_half = max(max((sum(m[n_states:]) for m in support), default=0) - 2, 0) // 2
+    basis = [m for m in monomials(nvars, 0, state_half + param_half)
+             if sum(m[:n_states]) <= state_half and sum(m[n_states:]) <= param_half
+             and (not with_states or sum(m[:n_states]) >= 1)]
+    if not basis:
+        return [], []
+    blocks = tuple(map(tuple, bases.character_blocks(basis, generators)))
+    grams, terms = [], []
+    for j in box_vars:
+        name = f"{prefix}{j}"
+        sq = tuple(2 * int(k == j) for k in range(nvars))
+        grams.append(Gram(name, tuple(basis), blocks, margin=False))
+        terms.append(Term(Coefficients.literal({tuple([0] * nvars): -1, sq: 1}), name))
+    return grams, terms
+
+
+def multiplier_variable(name: str) -> int:
+    """The box variable a multiplier Gram is named after (``r3``, ``rD3`` -> 3)."""
+    digits = name[len(name.rstrip("0123456789")):]
+    return int(digits)
+
+
+def multiplier_grams(structure: Structure, prefix: str = "r") -> list["Gram"]:
+    """The structure's box multipliers of one identity (named ``<prefix><variable>``)."""
+    return [g for g in structure.grams if g.name.startswith(prefix) and g.name[len(prefix):].isdigit()]
+
+
+def box_multipliers_of(point_grams: Mapping[str, Any], grams: Sequence["Gram"]) -> list[tuple[int, Any]]:
+    """The exact multipliers ``(variable, Gram)`` of a solved box program."""
+    from lyapcheck.sos.certificates import GramPoly
+
+    return [(multiplier_variable(g.name), GramPoly.of(g.basis, point_grams[g.name])) for g in grams]
+
+
+def box_multipliers_from_json(data: Sequence[Mapping[str, Any]], nvars: int) -> list[tuple[int, Any]]:
+    from lyapcheck.sos.certificates import GramPoly
+
+    return [(int(item["variable"]), GramPoly.from_json(item["gram"], nvars)) for item in data]
+
+
+def box_support(box_grams: Sequence["Gram"], nv: int) -> set[Monomial]:
+    """The monomials the box's multiplier terms ``r_j (1 - u_j^2)`` can produce."""
+    out: set[Monomial] = set()
+    for g in box_grams:
+        j = multiplier_variable(g.name)
+        shifts = (tuple([0] * nv), tuple(2 * int(k == j) for k in range(nv)))
+        products = {tuple(a + b for a, b in zip(g.basis[i], g.basis[k])) for idx in g.blocks for i in idx for k in idx}
+        out |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in shifts}
+    return out

@@ -18,6 +18,10 @@ OutputBound    ``V - y^2 + B - 1 = sigma``                           everywhere 
 Containment    ``c - V - s (r^2 - p) = sigma``                       ``{p <= r^2}``             ``{p <= r^2}`` in ``{V <= c}``
 =============  ==================================================  =========================  ================
 
+Boxes of parameters. Each identity may carry ``- sum_j r_j (1 - u_j^2)`` with ``r_j`` sums of
+squares and ``u_j`` normalized parameters: then it holds for every ``u`` in ``[-1, 1]^p``
+(:func:`box_terms`); strictness stays in the states alone (the pure powers carry no ``u``).
+
 Strictness. ``V`` positive definite and radially unbounded needs a pure power of every state in
 its basis and no constant (``V >= lambda_min(Q_V) sum_i z_i^(2 k_i)``). ``sigma > 0`` away from 0 (so ``V' < 0`` there) needs a pure
 power of every state in its basis (:func:`lyapcheck.sos.bases.has_pure_powers`); the checks
@@ -68,6 +72,27 @@ class GramPoly:
         return cls(tuple(tuple(m) for m in basis), tuple(tuple(Fraction(x) for x in row) for row in Q))
 
 
+BoxMultipliers = Sequence[tuple[int, GramPoly]]
+
+
+def box_terms(ring: Ring, multipliers: BoxMultipliers) -> tuple[Poly, str | None]:
+    """``sum_j r_j (1 - u_j^2)`` over the multipliers ``(j, r_j)`` of a box (``u_j`` the ring's
+    variable ``j``, normalized to ``[-1, 1]``): the S-procedure term that makes an identity hold on
+    the box. The second value says why the multipliers are not acceptable (not positive
+    semidefinite), or None."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    total = ring.zero()
+    gens = ring.gens()
+    for j, r in multipliers:
+        if not 0 <= j < ring.nvars:
+            return total, f"a box multiplier names variable {j}, not one of the ring's"
+        if not is_positive_semidefinite(r.Q):
+            return total, "a box multiplier is not positive semidefinite (exact)"
+        total += r.poly(ring) * (ring.constant(1) - gens[j] * gens[j])
+    return total, None
+
+
 def lie_derivative(ring: Ring, V: Poly, g: Sequence[Poly]) -> Poly:
     """``grad V . g`` (the states are the ring's first ``len(g)`` variables)."""
     total = ring.zero()
@@ -89,9 +114,10 @@ def check_positive_definite_v(V: GramPoly, n: int) -> tuple[bool, str]:
     return True, "Q_V > 0 with a pure power of every state in its basis: V is positive definite, radially unbounded"
 
 
-def check_lyapunov(ring: Ring, g: Sequence[Poly], D: Poly, V: GramPoly, sigma: GramPoly, mu: Fraction
-                   ) -> tuple[bool, str]:
-    """Lyapunov: ``-grad V . g - mu V D = sigma``, ``V``, ``sigma`` as strict as GAS needs."""
+def check_lyapunov(ring: Ring, g: Sequence[Poly], D: Poly, V: GramPoly, sigma: GramPoly, mu: Fraction,
+                   box: BoxMultipliers = ()) -> tuple[bool, str]:
+    """Lyapunov: ``-grad V . g - mu V D - sum_j r_j (1 - u_j^2) = sigma``, ``V``, ``sigma`` as strict
+    as GAS needs (``box``: the multipliers of a box of parameters, none for a point)."""
     n = len(g)
     if mu < 0:
         return False, "the decay rate mu must be >= 0"
@@ -103,13 +129,16 @@ def check_lyapunov(ring: Ring, g: Sequence[Poly], D: Poly, V: GramPoly, sigma: G
     if not sigma.positive_definite():
         return False, "Q_sigma is not positive definite (exact)"
     v = V.poly(ring)
-    if -lie_derivative(ring, v, g) - v * D * _q(mu) != sigma.poly(ring):
+    boxed, why = box_terms(ring, box)
+    if why is not None:
+        return False, why
+    if -lie_derivative(ring, v, g) - v * D * _q(mu) - boxed != sigma.poly(ring):
         return False, "the identity -grad V . g - mu V D = sigma does not hold exactly"
-    return True, "Q_V > 0, Q_sigma > 0 and -grad V . g - mu V D = sigma, exactly"
+    return True, "Q_V > 0, Q_sigma > 0 and -grad V . g - mu V D = sigma, exactly" + (" (on the box)" if box else "")
 
 
-def check_sublevel(ring: Ring, g: Sequence[Poly], V: GramPoly, level: Fraction, s: GramPoly, sigma: GramPoly
-                   ) -> tuple[bool, str]:
+def check_sublevel(ring: Ring, g: Sequence[Poly], V: GramPoly, level: Fraction, s: GramPoly, sigma: GramPoly,
+                   box: BoxMultipliers = ()) -> tuple[bool, str]:
     """Sublevel: ``-grad V . g - s (c - V) = sigma`` with ``s``, ``sigma`` > 0 and ``V`` positive
     definite, radially unbounded: ``V' < 0`` on ``{V <= c}`` minus 0, a compact set."""
     n = len(g)
@@ -125,12 +154,15 @@ def check_sublevel(ring: Ring, g: Sequence[Poly], V: GramPoly, level: Fraction, 
     if not s.positive_definite() or not sigma.positive_definite():
         return False, "Q_s or Q_sigma is not positive definite (exact)"
     v = V.poly(ring)
-    if -lie_derivative(ring, v, g) - s.poly(ring) * (ring.constant(level) - v) != sigma.poly(ring):
+    boxed, why = box_terms(ring, box)
+    if why is not None:
+        return False, why
+    if -lie_derivative(ring, v, g) - s.poly(ring) * (ring.constant(level) - v) - boxed != sigma.poly(ring):
         return False, "the identity -grad V . g - s (c - V) = sigma does not hold exactly"
-    return True, "Q_V, Q_s, Q_sigma > 0 and -grad V . g - s (c - V) = sigma, exactly"
+    return True, "Q_V, Q_s, Q_sigma > 0 and -grad V . g - s (c - V) = sigma, exactly" + (" (on the box)" if box else "")
 
 
-def check_positivity(ring: Ring, p: Poly, c: Fraction, sigma: GramPoly) -> tuple[bool, str]:
+def check_positivity(ring: Ring, p: Poly, c: Fraction, sigma: GramPoly, box: BoxMultipliers = ()) -> tuple[bool, str]:
     """Positivity: ``p - c = sigma`` with ``c > 0`` and ``Q_sigma >= 0`` (semidefinite suffices:
     ``sigma >= 0``, so ``p >= c``; a denominator such as ``(x + y)^2 + 1`` has no definite Gram)."""
     from lyapcheck.sos.definiteness import is_positive_semidefinite
@@ -139,13 +171,17 @@ def check_positivity(ring: Ring, p: Poly, c: Fraction, sigma: GramPoly) -> tuple
         return False, "the constant c must be > 0"
     if not is_positive_semidefinite(sigma.Q):
         return False, "Q_sigma is not positive semidefinite (exact)"
-    if p - ring.constant(c) != sigma.poly(ring):
+    boxed, why = box_terms(ring, box)
+    if why is not None:
+        return False, why
+    if p - ring.constant(c) - boxed != sigma.poly(ring):
         return False, "the identity p - c = sigma does not hold exactly"
     return True, "p - c = sigma with c > 0 and Q_sigma >= 0, exactly"
 
 
 def check_dissipation(ring: Ring, g: Sequence[Poly], D: Poly, bounds: Sequence[Fraction], V: GramPoly,
-                      lam: Fraction, taus: Sequence[GramPoly], sigma: GramPoly) -> tuple[bool, str]:
+                      lam: Fraction, taus: Sequence[GramPoly], sigma: GramPoly, box: BoxMultipliers = ()
+                      ) -> tuple[bool, str]:
     """Dissipation, in the ring of (states, disturbances): ``V >= lambda (1 + |z|^2)`` (radially
     unbounded), ``lam > 0``, every ``tau_k`` and ``sigma`` > 0, and the identity exactly."""
     n = len(g)
@@ -168,16 +204,23 @@ def check_dissipation(ring: Ring, g: Sequence[Poly], D: Poly, bounds: Sequence[F
     for k, (tau, b) in enumerate(zip(taus, bounds)):
         d = gens[n + k]
         lhs -= tau.poly(ring) * (ring.constant(b * b) - d * d)
-    if lhs != sigma.poly(ring):
+    boxed, why = box_terms(ring, box)
+    if why is not None:
+        return False, why
+    if lhs - boxed != sigma.poly(ring):
         return False, "the dissipation identity does not hold exactly"
     return True, "V > 0, tau > 0, sigma > 0 and the dissipation identity holds, exactly"
 
 
-def check_output_bound(ring: Ring, V: GramPoly, y: Poly, B: Fraction, sigma: GramPoly) -> tuple[bool, str]:
+def check_output_bound(ring: Ring, V: GramPoly, y: Poly, B: Fraction, sigma: GramPoly, box: BoxMultipliers = ()
+                       ) -> tuple[bool, str]:
     """OutputBound: ``V - y^2 + B - 1 = sigma`` with ``Q_sigma > 0`` (so ``y^2 <= V + B - 1``)."""
     if not sigma.positive_definite():
         return False, "Q_sigma is not positive definite (exact)"
-    if V.poly(ring) - y * y + ring.constant(B - 1) != sigma.poly(ring):
+    boxed, why = box_terms(ring, box)
+    if why is not None:
+        return False, why
+    if V.poly(ring) - y * y + ring.constant(B - 1) - boxed != sigma.poly(ring):
         return False, "the identity V - y^2 + B - 1 = sigma does not hold exactly"
     return True, "V - y^2 + B - 1 = sigma with Q_sigma > 0, exactly"
 
