@@ -30,7 +30,7 @@ import math
 from fractions import Fraction
 from typing import Any, Mapping, Sequence
 
-from lyapcheck.paper.boxes.box import ParameterBox, corner_problems, problem_at_point, scaled_hull, stored_hull
+from lyapcheck.paper.boxes.box import ParameterBox, corner_problems, scaled_hull, stored_hull
 from lyapcheck.params import Problem
 
 
