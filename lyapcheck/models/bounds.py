@@ -73,7 +73,9 @@ def bound_structure(scaled: ScaledField, y: Poly, degree: int,
     target |= {tuple(a + b for a, b in zip(q, s)) for q in v_products for s in d_support} | d_support
     # tau_k (b_k^2 - d_k^2) must reach the flow's degree: the disturbance enters it, times D
     top = max((sum(q) for q in target), default=2)
-    z_tau = monomials(nv, 0, max((top - 1) // 2, 0))
+    # tau_k depends on the states (and a box's parameters), not on the disturbances: a d in its basis
+    # would bring -tau_dd d^4, which no sum of squares can balance
+    z_tau = [q for q in monomials(nv, 0, max((top - 1) // 2, 0)) if not any(q[n:n + m])]
     tau_blocks = bases.character_blocks(z_tau, generators)
     tau_products = {tuple(a + b for a, b in zip(z_tau[i], z_tau[j])) for idx in tau_blocks for i in idx for j in idx}
     for k in range(m):
@@ -81,14 +83,15 @@ def bound_structure(scaled: ScaledField, y: Poly, degree: int,
         target |= {tuple(a + b for a, b in zip(q, s)) for q in tau_products for s in (sq, tuple([0] * nv))}
     box_vars = list(range(n + m, nv))
     d_box_grams, d_box_terms = box_multipliers(nv, n, target, with_states=False, generators=generators, prefix="rD",
-                                               box_vars=box_vars)
+                                               box_vars=box_vars, margin="floor")
     target |= box_support(d_box_grams, nv)
     if len(target) > TARGET_LIMIT:
         return None
     z_d = [q for q in bases.sos_basis(nv, target) if ("sigD", q) not in drop]
     e_target = set(v_products) | set(ring.support(y * y)) | {tuple([0] * nv)}
     e_box_grams, e_box_terms = box_multipliers(nv, n, e_target, with_states=False, generators=generators, prefix="rE",
-                                               box_vars=[j for j in box_vars if any(q[j] for q in ring.support(y))])
+                                               box_vars=[j for j in box_vars if any(q[j] for q in ring.support(y))],
+                                               margin="floor")
     e_target |= box_support(e_box_grams, nv)
     z_e = [q for q in bases.sos_basis(nv, e_target) if ("sigE", q) not in drop]
     if not z_d or not z_e or max(len(z_d), len(z_e), len(z_v)) > MAX_GRAM_ROWS:
@@ -101,14 +104,16 @@ def bound_structure(scaled: ScaledField, y: Poly, degree: int,
               Gram("sigE", tuple(z_e), tuple(map(tuple, e_blocks)), margin="floor")]
     terms_d = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in enumerate(scaled.g)]
     terms_d.append(Term(param("lamD", d_support), "V"))
+    terms_d.append(Term(param("lamD", d_support), "v0"))  # V's free constant: -lam v0 D
     for k in range(m):
         sq = tuple(2 * int(j == n + k) for j in range(nv))
         terms_d.append(Term(param(f"b{k}", [sq, tuple([0] * nv)]), f"tau{k}"))
     terms_d.extend(d_box_terms)
     terms_d.append(Term(one(ring, -1), "sigD"))
-    terms_e = (Term(one(ring, 1), "V"), Term(one(ring, 1), "B"), *e_box_terms, Term(one(ring, -1), "sigE"))
+    terms_e = (Term(one(ring, 1), "V"), Term(one(ring, 1), "v0"), Term(one(ring, 1), "B"), *e_box_terms,
+               Term(one(ring, -1), "sigE"))
     grams += d_box_grams + e_box_grams
-    return affordable(Structure(nvars=nv, grams=tuple(grams), scalars=(Scalar("B"),),
+    return affordable(Structure(nvars=nv, grams=tuple(grams), scalars=(Scalar("B"), Scalar("v0")),
                      identities=(Identity("dissipation", tuple(terms_d), param("lamD0", d_support), "sigD"),
                                  Identity("output", terms_e, param("E0", set(ring.support(y * y)) | {tuple([0] * nv)}),
                                           "sigE")),
@@ -151,17 +156,17 @@ def attempt_with_solution(scaled: ScaledField, structure: Structure, y: Poly, la
     ring = scaled.ring
     grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
     taus = [grams[f"tau{k}"] for k in range(scaled.m)]
-    B = point.scalars["B"]
+    B, v0 = point.scalars["B"], point.scalars["v0"]
     box_d = box_multipliers_of(point.grams, multiplier_grams(structure, "rD"))
     box_e = box_multipliers_of(point.grams, multiplier_grams(structure, "rE"))
-    ok, _ = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, grams["V"], lam, taus, grams["sigD"], box_d)
+    ok, _ = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, grams["V"], lam, taus, grams["sigD"], box_d, v0)
     if not ok:
         return None, solution
-    ok, _ = check_output_bound(ring, grams["V"], y, B, grams["sigE"], box_e)
+    ok, _ = check_output_bound(ring, grams["V"], y, B, grams["sigE"], box_e, v0)
     if not ok:
         return None, solution
-    return {"V": grams["V"], "taus": taus, "sigD": grams["sigD"], "sigE": grams["sigE"], "B": B, "lam": lam,
-            "box_D": box_d, "box_E": box_e}, solution
+    return {"V": grams["V"], "v0": v0, "taus": taus, "sigD": grams["sigD"], "sigE": grams["sigE"], "B": B,
+            "lam": lam, "box_D": box_d, "box_E": box_e}, solution
 
 
 def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, Any] | None, list[str]]:
@@ -231,11 +236,12 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
             bound = exact.sqrt_upper(found["B"], 12) * s_y
             bounds[name] = float(bound)
             certs[name] = {"degree": found["degree"], "lam_scaled": str(found["lam"]), "B_scaled": str(found["B"]),
-                           "bound": str(bound), "gram_V": found["V"].to_json(),
+                           "bound": str(bound), "gram_V": found["V"].to_json(), "V_constant": str(found["v0"]),
                            "gram_tau": [t.to_json() for t in found["taus"]], "gram_sigma_D": found["sigD"].to_json(),
                            "gram_sigma_E": found["sigE"].to_json(),
-                           "V": terms_json(scaled.ring, unscale_polynomial(scaled.ring, found["V"].poly(scaled.ring),
-                                                                           scaled.scaling, scaled.n))}
+                           "V": terms_json(scaled.ring, unscale_polynomial(
+                               scaled.ring, found["V"].poly(scaled.ring) + scaled.ring.constant(found["v0"]),
+                               scaled.scaling, scaled.n))}
             if found["box_D"] or found["box_E"]:
                 certs[name]["box_multipliers_D"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box_D"]]
                 certs[name]["box_multipliers_E"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box_E"]]

@@ -209,13 +209,14 @@ def _gram(data: dict[str, Any], nvars: int) -> Any:
     return GramPoly.from_json(data, nvars)
 
 
-def _v_matches(scaled: Any, ring: Any, V: Any, stated: dict[str, Any]) -> bool:
-    """The stated V (declared states) is the Gram V (scaled states) unscaled, exactly."""
+def _v_matches(scaled: Any, ring: Any, V: Any, stated: dict[str, Any], v0: Fraction = Fraction(0)) -> bool:
+    """The stated V (declared states) is the Gram V (scaled states, plus a constant) unscaled, exactly."""
     from lyapcheck.models.field import unscale_polynomial
     from lyapcheck.models.lyapunov import terms_json
 
     box = scaled.cleared.shifted.box
-    return terms_json(ring, unscale_polynomial(ring, V.poly(ring), scaled.scaling, scaled.n, box)) == stated
+    poly = V.poly(ring) + ring.constant(v0)
+    return terms_json(ring, unscale_polynomial(ring, poly, scaled.scaling, scaled.n, box)) == stated
 
 
 def _at_most(stated: Any, proved: Fraction) -> bool:
@@ -244,16 +245,17 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
             V = _gram(data["gram_V"], nv)
             taus = [_gram(t, nv) for t in data["gram_tau"]]
             lam, B = Fraction(data["lam_scaled"]), Fraction(data["B_scaled"])
+            v0 = Fraction(data.get("V_constant", "0"))
             first = scaled.n + scaled.m
             box_d = _multipliers(data.get("box_multipliers_D"), nv, first)
             box_e = _multipliers(data.get("box_multipliers_E"), nv, first)
             if any(any(m[scaled.n:]) for m in V.basis):
                 return False, f"output {out}: V may depend on the states only"
             ok, why = check_dissipation(ring, scaled.g, scaled.D, scaled.bounds, V, lam, taus,
-                                        _gram(data["gram_sigma_D"], nv), box_d)
+                                        _gram(data["gram_sigma_D"], nv), box_d, v0)
             if not ok:
                 return False, f"output {out}: {why}"
-            ok, why = check_output_bound(ring, V, y, B, _gram(data["gram_sigma_E"], nv), box_e)
+            ok, why = check_output_bound(ring, V, y, B, _gram(data["gram_sigma_E"], nv), box_e, v0)
             if not ok:
                 return False, f"output {out}: {why}"
             bound = Fraction(data["bound"])
@@ -261,7 +263,7 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
                 return False, f"output {out}: the stated bound {data['bound']} is below s_y sqrt(B)"
             if not _at_least(c.get("bounds", {}).get(out), bound):
                 return False, f"output {out}: the stated figure is below the certified bound"
-            if not _v_matches(scaled, ring, V, data["V"]):
+            if not _v_matches(scaled, ring, V, data["V"], v0):
                 return False, f"output {out}: the stated V is not the certificate's"
         return True, "every output's dissipation and output identities hold exactly"
     field = state_field(scaled)

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import ast
 import math
+import warnings
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from fractions import Fraction
@@ -142,7 +143,12 @@ def parse_expression(text: str, ring: Ring) -> Rational:
         if depth > MAX_DEPTH:
             raise ExpressionError(f"parentheses nested deeper than {MAX_DEPTH} (MAX_DEPTH)")
     try:
-        tree = ast.parse(text.strip(), mode="eval")
+        # Python's tokenizer warns about some texts outside the language ("1if x1 else 2": invalid
+        # decimal literal) by printing to stderr, a second line beside the one-line error; the
+        # builder refuses every such text anyway, with its own message
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
         raise ExpressionError(f"not a valid expression ({exc.msg}{_where(exc.offset)})") from None
     except (RecursionError, MemoryError, ValueError):

@@ -27,7 +27,7 @@ from fractions import Fraction
 from typing import Any, Callable, Final, Sequence
 
 from lyapcheck.models.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
-from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
+from lyapcheck.models.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      multiplier_grams, multiplier_variable, one, param)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
@@ -154,7 +154,7 @@ def attempt_with_solution(field: StateField, structure: Structure, mu: Fraction,
                           ) -> tuple[dict[str, Any] | None, Solution]:
     values = lyapunov_values(field, structure, mu)
     solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) <= 0:
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
         return None, solution
     point = search.exact(structure, solution, values)
     if point is None:

@@ -47,7 +47,8 @@ def positivity_structure(ring: Ring, p: Poly, free: int | None = None) -> Struct
     free = n if free is None else free
     support = set(ring.support(p)) | {tuple([0] * n)}
     generators = bases.sign_symmetries(n, [(ring.support(p), None)])
-    box_grams, box_terms = box_multipliers(n, free, support, with_states=False, generators=generators)
+    box_grams, box_terms = box_multipliers(n, free, support, with_states=False, generators=generators,
+                                           margin=False)  # its objective is c, not the margin
     for g in box_grams:
         j = multiplier_variable(g.name)
         sq = {tuple(2 * int(k == j) for k in range(n)), tuple([0] * n)}

@@ -40,7 +40,7 @@ from lyapcheck.models.field import ScaledField, Scaling, StateField, linear_imag
 from lyapcheck.models.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
     symmetry, terms_json, vanishing_monomials
 from lyapcheck.models.numeric import NumericPoly
-from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
+from lyapcheck.models.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      box_support, multiplier_grams, one, param)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
@@ -174,7 +174,7 @@ def level_attempt(field: StateField, structure: Structure, V: GramPoly, c: Fract
                   exact: bool) -> tuple[LevelCertificate | None, Solution]:
     values = level_values(field, structure, V, c)
     solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) <= 0 or not exact:
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN or not exact:
         return None, solution
     point = search.exact(structure, solution, values)
     if point is None:
@@ -330,7 +330,8 @@ def vstep_structure(field: StateField, v_degree: int, s: GramPoly, generators: S
         derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
         target |= {tuple(a + b for a, b in zip(m, q)) for m in derived for q in ring.support(gi)}
     target |= {tuple(a + b for a, b in zip(m, q)) for m in products for q in s_support}
-    box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators)
+    box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators,
+                                           margin="floor")  # its objective is J, not the margin
     target |= box_support(box_grams, nv)
     if len(target) > TARGET_LIMIT:
         return None
@@ -497,7 +498,7 @@ def multiplier_at(field: StateField, V: GramPoly, c: Fraction, search: Search,
     if structure is None:
         return None
     _, solution = level_attempt(field, structure, V, c, search, exact=False)
-    if not solution.usable or solution.scalars.get("t", 0.0) <= 0:
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
         return None
     return GramPoly.of(structure.gram("s").basis, round_matrix(solution.grams["s"]))
 
@@ -575,7 +576,7 @@ def _containment(field: StateField, cert: LevelCertificate, p: Poly, r2: Fractio
     values.set_poly(ring, "pr", p - ring.constant(r2), structure.identities[0].terms[0].coefficients.support)
     values.set_poly(ring, "cV", ring.constant(cert.level) - v_poly, structure.identities[0].constant.support)  # type: ignore[union-attr]
     solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) <= 0:
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
         return None
     point = search.exact(structure, solution, values)
     if point is None:
@@ -678,7 +679,7 @@ def gram_of(field: StateField, p: Poly, search: Search) -> GramPoly | None:
     values = ParameterValues()
     values.set_poly(ring, "P", p, structure.identities[0].constant.support)  # type: ignore[union-attr]
     solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) <= 0:
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
         return None
     point = search.exact(structure, solution, values)
     if point is None:

@@ -23,6 +23,12 @@ if TYPE_CHECKING:  # pragma: no cover
 from lyapcheck.sos.rounding import ExactPoint, exact_point
 
 
+#: a solve whose margin (smallest Gram eigenvalue, scaled coordinates) is above minus this is handed
+#: to the exact check: on a degenerate face the solver's margin is 0 give or take 1e-12, and the
+#: rounded, projected point may still be exactly feasible (the check decides, never the margin)
+EXACT_TRY_MARGIN = 1e-9
+
+
 class BudgetExhausted(Exception):
     """A class's search reached its time limit."""
 
@@ -127,7 +133,8 @@ def poly_times_support(ring: Ring, p_support: Sequence[Monomial], q_support: Seq
 
 def box_multipliers(nvars: int, n_states: int, target: Iterable[Monomial], with_states: bool,
                     generators: Sequence[Sequence[int]] = (), prefix: str = "r",
-                    box_vars: Sequence[int] | None = None) -> tuple[list["Gram"], list["Term"]]:
+                    box_vars: Sequence[int] | None = None, margin: bool | str = True
+                    ) -> tuple[list["Gram"], list["Term"]]:
     """The S-procedure terms of a box: for each box variable ``u_j`` (by default the ring's variables
     after the first ``n_states``), a Gram ``r_j`` and the term ``-r_j (1 - u_j^2)``.
 
@@ -136,7 +143,9 @@ def box_multipliers(nvars: int, n_states: int, target: Iterable[Monomial], with_
     multiplier's ``u_j^2`` adds two), so that ``r_j (1 - u_j^2)`` produces no monomial the other
     terms cannot balance. With ``with_states`` every basis monomial holds a state (``r_j`` vanishes
     at ``z = 0``, as an identity whose other terms vanish there needs). Empty lists when the ring
-    has no box variables.
+    has no box variables. ``margin`` as :class:`~lyapcheck.sos.program.Gram`'s: the program's margin
+    variable (a program that maximizes it), or a floor parameter (a program with another objective,
+    where the margin variable is free and would let the multipliers go indefinite).
     """
     from lyapcheck.sos import bases
     from lyapcheck.sos.polynomials import monomials
@@ -148,9 +157,13 @@ def box_multipliers(nvars: int, n_states: int, target: Iterable[Monomial], with_
     support = list(target)
     state_half = max((sum(m[:n_states]) for m in support), default=2) // 2
     param_half = max(max((sum(m[n_states:]) for m in support), default=0) - 2, 0) // 2
-    basis = [m for m in monomials(nvars, 0, state_half + param_half)
-             if sum(m[:n_states]) <= state_half and sum(m[n_states:]) <= param_half
-             and (not with_states or sum(m[:n_states]) >= 1)]
+    candidates = [m for m in monomials(nvars, 0, state_half + param_half)
+                  if sum(m[:n_states]) <= state_half and sum(m[n_states:]) <= param_half
+                  and (not with_states or sum(m[:n_states]) >= 1)]
+    # r_j (1 - u_j^2) subtracts z^(2a): keep a only where the other terms' Newton polytope holds 2a
+    # (else that entry is forced to 0, and no margin is possible); the z^(2a) u_j^2 it adds is what
+    # the multiplier is for (it balances the terms odd in u_j)
+    basis = [m for m, inside in zip(candidates, bases.inside_half_polytope(candidates, support)) if inside]
     if not basis:
         return [], []
     blocks = tuple(map(tuple, bases.character_blocks(basis, generators)))
@@ -158,7 +171,7 @@ def box_multipliers(nvars: int, n_states: int, target: Iterable[Monomial], with_
     for j in box_vars:
         name = f"{prefix}{j}"
         sq = tuple(2 * int(k == j) for k in range(nvars))
-        grams.append(Gram(name, tuple(basis), blocks, margin=False))
+        grams.append(Gram(name, tuple(basis), blocks, margin=margin))
         terms.append(Term(Coefficients.literal({tuple([0] * nvars): -1, sq: 1}), name))
     return grams, terms
 

@@ -49,20 +49,25 @@ def _directions(nvars: int) -> np.ndarray:
     return np.array(out, dtype=np.int64).reshape(-1, nvars)
 
 
-def newton_reduce(candidates: Sequence[Monomial], support: Iterable[Monomial]) -> list[Monomial]:
-    """The candidates ``a`` whose ``2a`` no tested hyperplane separates from ``support``'s hull,
-    then diagonally consistent (see the module docstring). Order is kept."""
+def inside_half_polytope(candidates: Sequence[Monomial], support: Iterable[Monomial]) -> list[bool]:
+    """Whether no tested hyperplane separates ``2a`` from ``support``'s hull, per candidate ``a``."""
     pts = np.array(sorted(set(support)), dtype=np.int64)
     if pts.size == 0 or not candidates:
-        return []
+        return [False] * len(candidates)
     nvars = pts.shape[1]
     dirs = _directions(nvars)
     proj = pts @ dirs.T  # (points, directions)
     hi, lo = proj.max(axis=0), proj.min(axis=0)
     cand = np.array(candidates, dtype=np.int64).reshape(-1, nvars)
     twice = 2 * cand @ dirs.T
-    inside = np.all((twice <= hi) & (twice >= lo), axis=1)
-    kept = [m for m, ok in zip(candidates, inside) if ok]
+    return [bool(x) for x in np.all((twice <= hi) & (twice >= lo), axis=1)]
+
+
+def newton_reduce(candidates: Sequence[Monomial], support: Iterable[Monomial]) -> list[Monomial]:
+    """The candidates ``a`` whose ``2a`` no tested hyperplane separates from ``support``'s hull,
+    then diagonally consistent (see the module docstring). Order is kept."""
+    support = list(support)
+    kept = [m for m, ok in zip(candidates, inside_half_polytope(candidates, support)) if ok]
     return diagonally_consistent(kept, support)
 
 

@@ -180,10 +180,11 @@ def check_positivity(ring: Ring, p: Poly, c: Fraction, sigma: GramPoly, box: Box
 
 
 def check_dissipation(ring: Ring, g: Sequence[Poly], D: Poly, bounds: Sequence[Fraction], V: GramPoly,
-                      lam: Fraction, taus: Sequence[GramPoly], sigma: GramPoly, box: BoxMultipliers = ()
-                      ) -> tuple[bool, str]:
-    """Dissipation, in the ring of (states, disturbances): ``V >= lambda (1 + |z|^2)`` (radially
-    unbounded), ``lam > 0``, every ``tau_k`` and ``sigma`` > 0, and the identity exactly."""
+                      lam: Fraction, taus: Sequence[GramPoly], sigma: GramPoly, box: BoxMultipliers = (),
+                      v0: Fraction = Fraction(0)) -> tuple[bool, str]:
+    """Dissipation, in the ring of (states, disturbances): ``V = z^T Q_V z + v0`` with ``Q_V > 0``
+    (``V >= lambda_min |z|^2 + v0``: radially unbounded; ``v0`` any constant), ``lam > 0``, every
+    ``tau_k`` and ``sigma`` > 0, and the identity exactly."""
     n = len(g)
     if lam <= 0:
         return False, "the rate lam must be > 0"
@@ -198,7 +199,7 @@ def check_dissipation(ring: Ring, g: Sequence[Poly], D: Poly, bounds: Sequence[F
             return False, "a multiplier tau is not positive definite (exact)"
     if not sigma.positive_definite():
         return False, "Q_sigma is not positive definite (exact)"
-    v = V.poly(ring)
+    v = V.poly(ring) + ring.constant(v0)
     lhs = -lie_derivative(ring, v, g) - (v - ring.constant(1)) * D * _q(lam)
     gens = ring.gens()
     for k, (tau, b) in enumerate(zip(taus, bounds)):
@@ -212,15 +213,16 @@ def check_dissipation(ring: Ring, g: Sequence[Poly], D: Poly, bounds: Sequence[F
     return True, "V > 0, tau > 0, sigma > 0 and the dissipation identity holds, exactly"
 
 
-def check_output_bound(ring: Ring, V: GramPoly, y: Poly, B: Fraction, sigma: GramPoly, box: BoxMultipliers = ()
-                       ) -> tuple[bool, str]:
-    """OutputBound: ``V - y^2 + B - 1 = sigma`` with ``Q_sigma > 0`` (so ``y^2 <= V + B - 1``)."""
+def check_output_bound(ring: Ring, V: GramPoly, y: Poly, B: Fraction, sigma: GramPoly, box: BoxMultipliers = (),
+                       v0: Fraction = Fraction(0)) -> tuple[bool, str]:
+    """OutputBound: ``V - y^2 + B - 1 = sigma`` with ``Q_sigma > 0`` (so ``y^2 <= V + B - 1``;
+    ``V = z^T Q_V z + v0`` as in :func:`check_dissipation`)."""
     if not sigma.positive_definite():
         return False, "Q_sigma is not positive definite (exact)"
     boxed, why = box_terms(ring, box)
     if why is not None:
         return False, why
-    if V.poly(ring) - y * y + ring.constant(B - 1) - boxed != sigma.poly(ring):
+    if V.poly(ring) + ring.constant(v0) - y * y + ring.constant(B - 1) - boxed != sigma.poly(ring):
         return False, "the identity V - y^2 + B - 1 = sigma does not hold exactly"
     return True, "V - y^2 + B - 1 = sigma with Q_sigma > 0, exactly"
 
