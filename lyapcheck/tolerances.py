@@ -61,3 +61,13 @@ ENVELOPE_REL_TOL: Final = 1e-6
 #: there and the class reports ``inconclusive`` naming this limit; the other classes still run.
 #: The examples' slowest class (roa on the reversed Van der Pol with mu = 3) takes about 10 s.
 MODEL_CLASS_TIME_LIMIT_S: Final = 60.0
+
+
+# -- simulation cross-checks of model certificates (lyapcheck.models.crosscheck) -------------------
+#: a simulated trajectory breaks a model certificate's claim (V rises along it, V or |x| leaves its
+#: certified envelope) only beyond this relative slack: the trajectories are integrated at rtol 1e-7
+#: (lyapcheck.models.trajectories.RTOL) and V is a polynomial of the state, so its float value along
+#: a trajectory is good to about its degree times that; 1e-5 leaves a decade over a degree-8 V and
+#: stays far below any modelling error a false certificate would show (moved from the report's
+#: reports.model_figures.CHECK_TOL, now shared with the sweeps of model files)
+TRAJECTORY_CHECK_REL_TOL: Final = 1e-5

@@ -34,7 +34,10 @@ from typing import Any, Final, Sequence
 import numpy as np
 import numpy.typing as npt
 
+from lyapcheck.models.crosscheck import BISECTIONS, RAY_RADII, check_global, check_region, check_storage, \
+    ray_boundary
 from lyapcheck.models.modelfile import Model
+from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 from reports.figures import Figure, resample_closed, to_svg
 from reports.model_polynomials import ExactPolynomial, FloatPolynomial
 from reports.model_simulation import Trajectory, horizon, jacobian_eigenvalues, simulate
@@ -42,11 +45,10 @@ from reports.views import fmt_float
 
 FloatArray = npt.NDArray[np.float64]
 
-#: rays from the equilibrium along which each set's extent is found, and the radii tried (in the
-#: scaled coordinates u, where the certified sets are of order 1)
+#: rays from the equilibrium along which each set's extent is found (the radii tried, in the
+#: scaled coordinates u, and the bisection steps are lyapcheck.models.crosscheck's RAY_RADII and
+#: BISECTIONS)
 RAYS: Final = 360
-RAY_RADII: Final = np.geomspace(1e-6, 1e4, 400)
-BISECTIONS: Final = 48
 #: grid points per axis on which V is evaluated and contoured
 GRID: Final = 241
 #: padding of a view, as a fraction of its span on each side
@@ -65,9 +67,9 @@ DRAW_STEP: Final = 0.002
 PANEL_POINTS: Final = 12_000
 #: starts per sign of the constant disturbance in the disturbed panel
 DISTURBED_STARTS: Final = 8
-#: relative tolerance of the cross-checks (the integration is at rtol 1e-7; V is a polynomial of
-#: the state, so its float value along a trajectory is good to about its degree times that)
-CHECK_TOL: Final = 1e-5
+#: relative tolerance of the cross-checks (lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL: the checks
+#: themselves are lyapcheck.models.crosscheck's, shared with the sweeps of model files)
+CHECK_TOL: Final = TRAJECTORY_CHECK_REL_TOL
 #: colours: the certified status colour for regions of attraction, one colour per output bound
 SET_COLOURS: Final = {"roa": "#1a7f37", "candidate": "#0969da"}
 OUTPUT_COLOURS: Final = ("#8250df", "#bc4c00", "#bf3989", "#116329", "#0550ae", "#953800")
@@ -207,23 +209,11 @@ def set_extent(poly_u: FloatPolynomial, level: float) -> Extent | None:
     None when the equilibrium is not in the set or a ray does not leave it within the largest
     radius tried (the set is unbounded, or far larger than anything else drawn).
     """
-    if not poly_u(np.zeros((1, 2)))[0] <= level:
-        return None
     theta = np.linspace(0.0, 2 * math.pi, RAYS, endpoint=False)
     directions = np.column_stack([np.cos(theta), np.sin(theta)])
-    values = poly_u(RAY_RADII[:, None, None] * directions[None, :, :])
-    outside = ~(values <= level)  # NaN counts as outside
-    if not outside.any(axis=0).all():
+    boundary = ray_boundary(poly_u, level, directions, RAY_RADII, BISECTIONS)
+    if boundary is None:
         return None
-    first = np.argmax(outside, axis=0)
-    lo = np.where(first > 0, RAY_RADII[np.maximum(first - 1, 0)], 0.0)
-    hi = RAY_RADII[first]
-    for _ in range(BISECTIONS):
-        mid = 0.5 * (lo + hi)
-        inside = poly_u(mid[:, None] * directions) <= level
-        lo = np.where(inside, mid, lo)
-        hi = np.where(inside, hi, mid)
-    boundary = lo[:, None] * directions
     return Extent(boundary.min(axis=0), boundary.max(axis=0), boundary)
 
 
@@ -355,58 +345,36 @@ def _state_output(model: Model, output: str) -> int | None:
     return model.states.index(text) if text in model.states else None
 
 
-# -- the cross-checks ------------------------------------------------------------------------------
-def _rise(values: FloatArray) -> float:
-    """The largest rise of a sequence above its running minimum so far, relative to its first value."""
-    if values.size < 2:
-        return 0.0
-    before = np.minimum.accumulate(values)[:-1]
-    return float(np.max(values[1:] - before) / max(abs(values[0]), 1e-300))
-
-
+# -- the cross-checks (lyapcheck.models.crosscheck: one home for them) ----------------------------
 def _region_check(drawn: _Drawn, runs: Sequence[Trajectory], eq: FloatArray, scales: FloatArray) -> CrossCheck | None:
     level = float(drawn.spec.level)
     inside = [tr for tr in runs if drawn.poly_u((tr.x[:1] - eq) / scales)[0] <= level]
     if not inside:
         return None
-    rises = [max(_rise(drawn.poly_u((tr.nodes[1] - eq) / scales)), 0.0) for tr in inside]
-    escaped = sum(tr.outcome == "escaped" for tr in inside)
-    converged = sum(tr.outcome == "converged" for tr in inside)
-    ok = escaped == 0 and max(rises) <= CHECK_TOL
-    detail = (f"{len(inside)} simulated starts lie in the set; V never rose along them (largest rise "
-              f"{max(rises):.2g} of V(0)); {converged} reached the equilibrium within the horizon, {escaped} escaped")
+    found = check_region([drawn.poly_u((tr.nodes[1] - eq) / scales) for tr in inside], [tr.outcome for tr in inside])
+    detail = (f"{found.starts} simulated starts lie in the set; V never rose along them (largest rise "
+              f"{found.worst_rise:.2g} of V(0)); {found.converged} reached the equilibrium within the horizon, "
+              f"{found.escaped} escaped")
     what = f"{drawn.spec.name}: trajectories from inside {{V ≤ c}} stay in it and do not escape"
-    return CrossCheck(what, ok, detail)
+    return CrossCheck(what, found.ok, detail)
 
 
 def _global_check(g: GlobalV, runs: Sequence[Trajectory], t_end: float, eq: FloatArray,
                   scales: FloatArray) -> CrossCheck:
     poly_u = g.poly.scaled([Fraction(s) for s in scales]).evaluator()
-    worst_rise, worst_envelope = 0.0, 0.0
-    for tr in runs:
-        t, x = tr.nodes
-        v = poly_u((x - eq) / scales)
-        worst_rise = max(worst_rise, _rise(v))
-        if g.rate > 0 and v.size:
-            envelope = v[0] * np.exp(-g.rate * t)
-            worst_envelope = max(worst_envelope, float(np.max(v - envelope) / max(abs(v[0]), 1e-300)))
-    escaped = sum(tr.outcome == "escaped" for tr in runs)
-    ok = escaped == 0 and worst_rise <= CHECK_TOL and worst_envelope <= CHECK_TOL
-    rate = (f"; V(t) ≤ V(0) exp(-{fmt_float(g.rate, 4)} t) held (largest excess {worst_envelope:.2g} of V(0))"
+    series = [(tr.nodes[0], poly_u((tr.nodes[1] - eq) / scales)) for tr in runs]
+    found = check_global(series, [tr.outcome for tr in runs], g.rate)
+    rate = (f"; V(t) ≤ V(0) exp(-{fmt_float(g.rate, 4)} t) held (largest excess {found.worst_envelope:.2g} of V(0))"
             if g.rate > 0 else "")
-    detail = (f"{len(runs)} trajectories over {fmt_float(t_end, 4)} s: V never rose (largest rise {worst_rise:.2g} of "
-              f"V(0)){rate}; {escaped} escaped")
-    return CrossCheck(f"{g.name}: the global Lyapunov function decreases along every simulated trajectory", ok, detail)
+    detail = (f"{len(runs)} trajectories over {fmt_float(t_end, 4)} s: V never rose (largest rise "
+              f"{found.worst_rise:.2g} of V(0)){rate}; {found.escaped} escaped")
+    return CrossCheck(f"{g.name}: the global Lyapunov function decreases along every simulated trajectory", found.ok,
+                      detail)
 
 
 def _storage_check(drawn: _Drawn, runs: Sequence[Trajectory], eq: FloatArray, scales: FloatArray) -> CrossCheck:
     spec = drawn.spec
-    worst = 0.0
-    for tr in runs:
-        t, x = tr.nodes
-        v = drawn.poly_u((x - eq) / scales)
-        envelope = 1.0 + (v[0] - 1.0) * np.exp(-spec.rate * t)
-        worst = max(worst, float(np.max(v - envelope) / max(1.0, abs(v[0]))))
+    worst = check_storage([(tr.nodes[0], drawn.poly_u((tr.nodes[1] - eq) / scales)) for tr in runs], spec.rate)
     ok = worst <= CHECK_TOL
     detail = (f"{len(runs)} trajectories (disturbances 0 and constant at ±their bounds): V(t) ≤ 1 + (V(0) - 1) "
               f"exp(-{fmt_float(spec.rate, 4)} t) held (largest excess {worst:.2g})")

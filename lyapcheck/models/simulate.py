@@ -1266,6 +1266,8 @@ def tightness(certified_bounds: Mapping[str, float], worst: Mapping[str, float])
     dict
         ``{output: {"certified_bound", "worst_simulated", "tightness_ratio", "soundness_violation"}}``.
     """
+    from lyapcheck.models.crosscheck import bound_exceeded
+
     out: dict[str, dict[str, Any]] = {}
     for name, bound in certified_bounds.items():
         if name not in worst:
@@ -1273,7 +1275,7 @@ def tightness(certified_bounds: Mapping[str, float], worst: Mapping[str, float])
         b, w = float(bound), float(worst[name])
         ratio = b / w if w > 0 else None
         out[name] = {"certified_bound": b, "worst_simulated": w, "tightness_ratio": ratio,
-                     "soundness_violation": bool(w > b * (1 + SIM_REL_TOL))}
+                     "soundness_violation": bound_exceeded(b, w, SIM_REL_TOL)}
     return out
 
 
