@@ -80,12 +80,6 @@ def class_times() -> dict[str, float]:
 
 
 def main() -> None:
-    # both trees on one floating-point platform: the pin (lyapcheck.numerics) goes into this
-    # process's environment, which the measured subprocesses inherit; an older tree has no pin
-    sys.path.insert(0, str(ROOT))
-    from lyapcheck import numerics
-
-    numerics.pin()
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=7)
     parser.add_argument("--before-tree", type=Path, default=None)

@@ -31,15 +31,9 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
-# both trees on one floating-point platform: the pin (lyapcheck.numerics) must precede numpy, and
-# it goes into the environment, which the measured subprocesses inherit (an older tree has no pin)
-sys.path.insert(0, str(ROOT))
-from lyapcheck import numerics  # noqa: E402
-
-numerics.pin()
-
-import numpy as np  # noqa: E402
 SPECS = ("sweep-alpha-sigma.toml", "sweep-kd-delta.toml", "sweep-dmax-alpha.toml")
 BEFORE_SEARCH = ((Fraction(1), None),)
 BEFORE_MAX_ITER = 200

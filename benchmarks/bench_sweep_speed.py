@@ -122,12 +122,6 @@ def run_in(tree: Path, repeats: int, cpus: int) -> list[dict[str, Any]]:
 
 
 def main() -> None:
-    # both trees on one floating-point platform: the pin (lyapcheck.numerics) goes into this
-    # process's environment, which the measured subprocesses inherit; an older tree has no pin
-    sys.path.insert(0, str(ROOT))
-    from lyapcheck import numerics
-
-    numerics.pin()
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--before-tree", type=Path, default=None,
                         help="a worktree of the 'before' commit (measured there in a subprocess)")

@@ -6,16 +6,9 @@ The Python API (``docs/api.md``)::
 
 Each function does what the command of the same name does and returns a typed result with
 ``to_json()``; heavy libraries load only when a function runs.
-
-Importing the package pins the floating-point platform (:mod:`lyapcheck.numerics`) before
-numpy loads, so that two x86-64 machines find the same certificates.
 """
 
-from lyapcheck import numerics
-
-numerics.pin()
-
-from lyapcheck.api import (  # noqa: E402  (after the pin: numpy must not load before it)
+from lyapcheck.api import (
     CertifyResult, Check, SimulationReport, SweepResult, VerifyResult, certify, certify_box, report, simulate, sweep,
     verify,
 )

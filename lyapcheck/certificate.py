@@ -34,8 +34,8 @@ KIND = "lyapcheck-certificate"
 
 def package_versions() -> dict[str, str]:
     """The packages whose versions decide what a search finds, and the floating-point platform
-    (:func:`lyapcheck.numerics.describe`): a figure from another machine compares only when
-    both were pinned."""
+    (:func:`lyapcheck.numerics.describe`), for information only: a certificate re-checks exactly
+    anywhere, and figures from two platforms agree within :mod:`lyapcheck.tolerances`."""
     from lyapcheck import numerics
 
     out = {"floating_point": numerics.describe()}

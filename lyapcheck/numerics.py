@@ -1,102 +1,78 @@
-"""The floating-point platform the searches run on, pinned so that machines agree.
+"""The floating-point platform a search ran on: recorded beside a result, for information only.
 
-Why: every ``certified`` is decided by an exact rational check, so it is sound on any
-machine. But *which* certificate a search finds, and so a figure or, at a marginal gain set,
-a status, follows the solver's floating-point path, and that path starts from numbers that
-differ in the last bit between x86-64 machines:
+Every ``certified`` is decided by an exact rational check, so it is sound on any machine. The
+searches that find the certificates start from floating-point numbers whose last bits differ
+between machines: numpy dispatches its array loops by CPU (SSE, AVX2, AVX-512), and OpenBLAS
+(bundled with numpy and with scipy, whose copy Clarabel uses for its PSD cones) picks a kernel by
+CPU (Nehalem, Haswell, SkylakeX, an ARM one, ...). lyapcheck leaves both as the host process has
+them: it sets no environment variable and no numpy option. Instead each search is built so that
+its status does not depend on those last bits and its figures move at most by the tolerances of
+:mod:`lyapcheck.tolerances` (``tests/test_verdicts_unchanged.py`` runs the verdict snapshot on a
+second, emulated platform). A certificate file, re-checked exactly by ``lyapcheck verify``, is
+what reproduces a result on another machine.
 
-- numpy dispatches its array loops by CPU: with AVX-512 (numpy's ``X86_V4``,
-  ``AVX512_ICL``, ``AVX512_SPR`` groups) ``w**k`` over an array is a SIMD power that differs
-  in the last bit from the scalar one, and from the AVX2 loop;
-- OpenBLAS (bundled with numpy and with scipy) picks a kernel by CPU, and its small products
-  round differently with the SkylakeX kernel than with the Haswell one.
-
-Measured with ``tests/test_verdicts_unchanged.py`` (every class at 29 cases: the paper's gains,
-the test suite's gain sets, 15 sweep points), against the figures of an AVX2 machine: an Intel
-AVX-512 machine (numpy's AVX-512 loops, OpenBLAS's SkylakeX kernel) differed in 6 statuses
-and 47 figures, an AMD AVX-512 machine (numpy's AVX-512 loops, the Haswell kernel) in 19
-figures. The statuses were all ``sos_gas`` (and ``saturated_loop``, which quotes it) refusing a
-solve that ended "inaccurate" on one machine only; it now lets the exact check judge such a
-solve, and no status differs. With the pin below, the AMD machine gives every figure of the
-AVX2 one; the Intel machine then runs the same numpy loops and the same OpenBLAS kernel.
-
-So, before numpy is first imported, :func:`pin` asks numpy for its AVX2 (``X86_V3``) loops
-and OpenBLAS for its Haswell kernel, which every x86-64 machine with AVX2 and FMA runs. An
-environment variable the user has set is kept (the test suite alone overrides it:
-``pin(override=True)``); ``LYAPCHECK_NATIVE_FLOATS=1`` turns the pin off. When numpy was
-imported before lyapcheck (a notebook, a Dask worker), the pin cannot act and
-:func:`describe` says so; results stay sound, figures may then differ from another machine's
-in the ways above.
+:func:`describe` names the platform for certificates and sweep stores (``versions.floating_point``):
+numpy's SIMD groups in use and the OpenBLAS kernels. Nothing compares it.
 """
 
 from __future__ import annotations
 
+import ctypes
+import importlib
 import os
-import platform
 import sys
-from importlib import metadata
 from pathlib import Path
 
-#: numpy's dispatch groups above AVX2 (numpy >= 2.4 names them so; naming one numpy does not
-#: dispatch makes it warn at import, so older numpy is left alone)
-NUMPY_GROUPS_ABOVE_AVX2 = "X86_V4 AVX512_ICL AVX512_SPR"
-#: the OpenBLAS kernel every AVX2 + FMA machine runs
-OPENBLAS_KERNEL = "Haswell"
-OPT_OUT = "LYAPCHECK_NATIVE_FLOATS"
-
-_state = "not pinned yet"
+#: OpenBLAS's "which kernel" function in the libraries numpy and scipy bundle (and plain OpenBLAS)
+_CORENAME_FUNCTIONS = ("scipy_openblas_get_corename64_", "scipy_openblas_get_corename", "openblas_get_corename")
 
 
-def _numpy_at_least_2_4() -> bool:
+def _numpy_simd() -> str:
+    """numpy's baseline and the dispatched SIMD groups this CPU (and ``NPY_DISABLE_CPU_FEATURES``) enables."""
     try:
-        major, minor = (int(part) for part in metadata.version("numpy").split(".")[:2])
-    except (metadata.PackageNotFoundError, ValueError):
-        return False
-    return (major, minor) >= (2, 4)
+        umath = importlib.import_module("numpy._core._multiarray_umath")
+    except ImportError:  # pragma: no cover - numpy < 2 or an unusual build
+        return "unknown"
+    features = getattr(umath, "__cpu_features__", {})
+    used = [*getattr(umath, "__cpu_baseline__", []),
+            *(name for name in getattr(umath, "__cpu_dispatch__", []) if features.get(name))]
+    return "+".join(used) or "none"
 
 
-def _cpu_has_avx2_and_fma() -> bool:
-    """From ``/proc/cpuinfo`` (Linux); elsewhere unknown, so False and nothing is pinned."""
-    try:
-        text = Path("/proc/cpuinfo").read_text(errors="replace")
-    except OSError:
-        return False
-    for line in text.splitlines():
-        if line.startswith("flags"):
-            flags = set(line.split(":", 1)[1].split())
-            return {"avx2", "fma"} <= flags
-    return False
+def _openblas_kernels() -> list[str]:
+    """The kernel of each OpenBLAS already loaded from numpy's or scipy's bundled libraries.
 
-
-def pin(*, override: bool = False) -> str:
-    """Pin numpy's SIMD loops and OpenBLAS's kernel, if it can still take effect.
-
-    Returns the state, also given by :func:`describe`. Called when :mod:`lyapcheck` is
-    imported; a second call does nothing unless ``override``, which also replaces values the
-    environment already holds (the test suite compares figures with a snapshot, so it must not
-    take a kernel from the machine's environment: a sandbox may set ``OPENBLAS_CORETYPE``).
+    Only libraries this process has loaded are asked (``RTLD_NOLOAD``): describing the platform
+    loads nothing. Empty where the names or the flag do not exist (another BLAS, macOS' Accelerate).
     """
-    global _state
-    if _state != "not pinned yet" and (not override or "numpy" in sys.modules):
-        return _state  # once numpy runs, its platform is what the first call decided
-    put = os.environ.__setitem__ if override else os.environ.setdefault
-    if os.environ.get(OPT_OUT, "") not in ("", "0"):
-        _state = f"native ({OPT_OUT} is set)"
-    elif "numpy" in sys.modules:
-        _state = "native (numpy was imported before lyapcheck)"
-    elif platform.machine().lower() not in ("x86_64", "amd64") or not _cpu_has_avx2_and_fma():
-        _state = "native (not an x86-64 machine with AVX2 and FMA)"
-    else:
-        pinned = []
-        if _numpy_at_least_2_4():
-            put("NPY_DISABLE_CPU_FEATURES", NUMPY_GROUPS_ABOVE_AVX2)
-            pinned.append(f"numpy NPY_DISABLE_CPU_FEATURES={os.environ['NPY_DISABLE_CPU_FEATURES']!r}")
-        put("OPENBLAS_CORETYPE", OPENBLAS_KERNEL)
-        pinned.append(f"OpenBLAS OPENBLAS_CORETYPE={os.environ['OPENBLAS_CORETYPE']!r}")
-        _state = "pinned: " + ", ".join(pinned)
-    return _state
+    noload = getattr(os, "RTLD_NOLOAD", None)
+    if noload is None:  # pragma: no cover - not on Linux or macOS
+        return []
+    out = []
+    for package in ("numpy", "scipy"):
+        module = sys.modules.get(package)
+        location = getattr(module, "__file__", None)
+        if location is None:
+            continue
+        for lib in sorted(Path(location).parent.parent.joinpath(f"{package}.libs").glob("lib*openblas*")):
+            try:
+                handle = ctypes.CDLL(str(lib), mode=noload)
+            except OSError:
+                continue  # not loaded in this process
+            for name in _CORENAME_FUNCTIONS:
+                function = getattr(handle, name, None)
+                if function is not None:
+                    function.restype = ctypes.c_char_p
+                    out.append(f"{function().decode(errors='replace')} ({package})")
+                    break
+    return out
 
 
 def describe() -> str:
-    """One line: whether the floating-point platform is pinned, and how (or why not)."""
-    return _state
+    """One line: numpy's SIMD groups in use and the OpenBLAS kernels (for information only)."""
+    if "numpy" not in sys.modules:
+        return "numpy not loaded"
+    import numpy
+
+    kernels = _openblas_kernels()
+    return f"numpy {numpy.__version__} SIMD {_numpy_simd()}; OpenBLAS " + (", ".join(kernels) or "not identified")

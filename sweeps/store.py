@@ -33,6 +33,10 @@ from sweeps.spec import SweepSpec
 
 #: packages whose versions can change a sweep's numbers (stored, and checked on resume)
 VERSIONED_PACKAGES: Final = ("lyapcheck", "numpy", "scipy", "sympy", "cvxpy", "clarabel", "zarr", "xarray")
+#: recorded in ``versions`` but not checked on resume: another floating-point platform (numpy's
+#: SIMD loops, the OpenBLAS kernel) gives the same statuses and figures within lyapcheck.tolerances,
+#: so a sweep started on one machine may be finished on another (a Dask cluster mixes them anyway)
+RESUME_IGNORES: Final = ("floating_point",)
 #: units of the coordinates (SI), stored as the coordinate's "units" attribute
 COORD_UNITS: Final = {"alpha_d": "1/s", "sigma0": "1", "k_d": "1/s", "delta_los": "m", "d_max": "m/s"}
 
@@ -40,8 +44,8 @@ Region = tuple[slice, ...]
 
 
 def versions() -> dict[str, str]:
-    """Versions of Python and of :data:`VERSIONED_PACKAGES`, and whether the floating-point platform
-    is pinned (:mod:`lyapcheck.numerics`): a resumed sweep must not mix pinned and native figures."""
+    """Versions of Python and of :data:`VERSIONED_PACKAGES`, and the floating-point platform
+    (:func:`lyapcheck.numerics.describe`, for information only: :data:`RESUME_IGNORES`)."""
     from lyapcheck import numerics
 
     out = {"python": platform.python_version(), "floating_point": numerics.describe()}
@@ -129,8 +133,9 @@ def open_or_build(target: Path, spec: SweepSpec, build: Callable[[Path], None]) 
     if attrs.get("spec_toml") != spec.text:
         raise InputFileError(f"'{target}' holds a sweep of a different spec; choose another --out or remove it")
     stored = json.loads(str(attrs.get("versions", "{}")))
-    if stored != versions():
-        changed = sorted(k for k in set(stored) | set(versions()) if stored.get(k) != versions().get(k))
+    now = versions()
+    changed = sorted(k for k in set(stored) | set(now) if stored.get(k) != now.get(k) and k not in RESUME_IGNORES)
+    if changed:
         raise InputFileError(f"'{target}' was written with other package versions ({', '.join(changed)}); "
                              "resuming would mix results: choose another --out")
     return group

@@ -6,13 +6,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from lyapcheck import numerics  # first: the floating-point platform is pinned before numpy loads
-
-# the verdict snapshot's platform, whatever the machine's environment holds (a machine may set
-# OPENBLAS_CORETYPE for every process: this sandbox does)
-numerics.pin(override=True)
-
-import numpy as np  # noqa: E402
+import numpy as np
 import pytest
 
 from lyapcheck.params import Problem, problem_from_sources
