@@ -58,10 +58,12 @@ FAMILIES: Final[dict[str, tuple[str, str]]] = {
     "sos_bound": ("lyapcheck.paper.conditions.sos_bound", "build_program"),
     "sos_bound_parity": ("lyapcheck.paper.conditions.sos_bound", "build_parity_program"),
     "level": ("lyapcheck.paper.conditions.saturated", "build_level_program"),
+    "level_margin": ("lyapcheck.paper.conditions.saturated", "build_level_margin_program"),
     "ges": ("lyapcheck.paper.conditions.ges", "build_program"),
 }
 #: the programs stored in ``_compiled/`` (others are compiled in-process on first use)
-PROGRAMS: Final = ("prop41", "sector", "sector_8", "ultimate", "sos_4", "sos_6", "sos_bound", "sos_bound_parity", "level_4", "level_6", "ges_4_24_1")
+PROGRAMS: Final = ("prop41", "sector", "sector_8", "ultimate", "sos_4", "sos_6", "sos_bound", "sos_bound_parity", "level_4", "level_6",
+                   "level_margin_4", "level_margin_6", "ges_4_24_1")
 
 
 def key_of(family: str, *args: int) -> str:

@@ -13,7 +13,12 @@ What is proved (each step exact, with ``V`` from ``sos_gas``, in its scaled coor
 1. Invariance (no disturbance). ``V >= l (y^2 + r^2)`` with an exact ``l <= lambda_min(Q_V)``. The
    level ``c = l * Ysat^2 * (1 - 1e-6)`` gives ``{V <= c}`` inside the strip; there ``V' <= -mu V``.
    Hence every trajectory of the saturated loop that starts in ``{V <= c}`` never saturates and
-   converges to the path exponentially.
+   converges to the path exponentially. A larger level comes from the S-procedure
+   ``V - c - sigma (y^2 - Y^2) = SOS`` (:func:`certified_level`): its largest ``c`` is found first,
+   where the Gram matrix is singular (so whether a rounded solution there passes the exact check
+   would be decided by the solver's last bits); the level used is that ``c`` backed off by
+   :data:`LEVEL_BACK_OFF` and rounded down to :data:`LEVEL_DIGITS` significant digits, a point of a
+   fixed grid, where the Gram matrices are solved again for the largest margin before the check.
 2. With a disturbance ``|d_perp| <= d*`` (scaled ``k_d = |E_0| d* / (Delta |a11|)``): on
    ``{V <= v}``, ``|y|, |r| <= R = sqrt(v/l)`` and ``|dV/dy| <= G(R)`` (sum of ``|coefficient| R^degree``),
    so ``V' <= -R h(R)`` with the concave ``h(R) = mu l R - k_d (g1 + g2 R + g3 R^2)``. If ``h > 0`` at
@@ -67,22 +72,48 @@ from lyapcheck.paper.conditions.sos import bases, scaled_dynamics
 from symbolic._generated import integrator_rates, unsaturated_strip_sq, windup_bound_sq
 
 SQRT2_UPPER = Fraction(141422, 100000)
+#: the S-procedure level (step 1 of the module docstring): the solver's largest c, backed off by
+#: this fraction and rounded down to LEVEL_DIGITS significant digits (a fixed grid, so every
+#: platform checks the same level unless the solvers' c straddle a grid point: then one step)
+LEVEL_BACK_OFF = 1e-3
+LEVEL_DIGITS = 4
 #: relative shrink of Omega_SO (given as a float-derived Fraction) to a safe lower bound
 OMEGA_ROUNDING = Fraction(1, 10**12)
 
 
 def build_level_program(cp: Any, deg_v: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
-    """max c s.t. V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p, sigma = z_s^T S z_s, Q_p, S >= t I (DPP; compiled once)."""
-    z_s, z_p = level_bases(deg_v)
-    ns, n_p = len(z_s), len(z_p)
-    S = cp.Variable((ns, ns), symmetric=True, name="S")
-    Qp = cp.Variable((n_p, n_p), symmetric=True, name="Q_p")
+    """max c s.t. V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p, sigma = z_s^T S z_s, Q_p, S >= 1e-9 I (DPP; compiled once)."""
     c = cp.Variable(name="c")
+    S, Qp, y_sq, v, cons = _level_identity(cp, deg_v, c)
+    ns, n_p = S.shape[0], Qp.shape[0]
+    cons += [S >> 1e-9 * np.eye(ns), Qp >> 1e-9 * np.eye(n_p)]
+    params = {"Y_sq": y_sq, **{_param_name(m): p for m, p in v.items()}}
+    return cp.Problem(cp.Maximize(c), cons), params, {"S": S, "Q_p": Qp, "c": c}
+
+
+def build_level_margin_program(cp: Any, deg_v: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """max t s.t. V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p, Q_p, S >= t I at a given level ``c``
+    (DPP; compiled once): the Gram matrices with the largest margin, for the exact check."""
+    c = cp.Parameter(nonneg=True, name="c")
+    t = cp.Variable(name="t")
+    S, Qp, y_sq, v, cons = _level_identity(cp, deg_v, c)
+    ns, n_p = S.shape[0], Qp.shape[0]
+    cons += [S >> t * np.eye(ns), Qp >> t * np.eye(n_p)]
+    params = {"c": c, "Y_sq": y_sq, **{_param_name(m): p for m, p in v.items()}}
+    return cp.Problem(cp.Maximize(t), cons), params, {"S": S, "Q_p": Qp, "t": t}
+
+
+def _level_identity(cp: Any, deg_v: int, c: Any) -> tuple[Any, Any, Any, dict[poly.Monomial, Any], list[Any]]:
+    """``S``, ``Q_p``, the parameters ``Y_sq`` and ``v_m`` (V's coefficients) and the coefficient
+    identity ``V - c - sigma (y^2 - Y^2) = z_p^T Q_p z_p``, monomial by monomial."""
+    z_s, z_p = level_bases(deg_v)
+    S = cp.Variable((len(z_s), len(z_s)), symmetric=True, name="S")
+    Qp = cp.Variable((len(z_p), len(z_p)), symmetric=True, name="Q_p")
     y_sq = cp.Parameter(nonneg=True, name="Y_sq")
     v = {m: cp.Parameter(name=_param_name(m)) for m in poly.monomials(0, deg_v)}
     classes = poly.gram_classes(z_p)
     s_classes = poly.gram_classes(z_s)
-    cons = [S >> 1e-9 * np.eye(ns), Qp >> 1e-9 * np.eye(n_p)]
+    cons = []
     for m, vm in v.items():
         lhs = sum(Qp[i, j] for i, j in classes.get(m, [])) if m in classes else 0
         # sigma * y^2 contributes S entries of monomial (m - (2, 0)); sigma * (-Y^2) those of m
@@ -91,8 +122,7 @@ def build_level_program(cp: Any, deg_v: int) -> tuple[Any, dict[str, Any], dict[
         plain = sum(S[i, j] for i, j in s_classes.get(m, [])) if m in s_classes else 0
         rhs = vm - (c if m == (0, 0) else 0) - times_y2 + y_sq * plain
         cons.append(lhs == rhs)
-    params = {"Y_sq": y_sq, **{_param_name(m): p for m, p in v.items()}}
-    return cp.Problem(cp.Maximize(c), cons), params, {"S": S, "Q_p": Qp, "c": c}
+    return S, Qp, y_sq, v, cons
 
 
 def _param_name(m: poly.Monomial) -> str:
@@ -123,26 +153,61 @@ def check_level(V: poly.Poly, deg_v: int, level: dict[str, Any], Y_sq: Fraction)
     return True, "V > c wherever |y| >= Y_sat (exact S-procedure)"
 
 
-def certified_level(V: poly.Poly, deg_v: int, Y_sq: Fraction) -> dict[str, Any] | None:
-    """Largest level ``c`` (found numerically, checked exactly) with ``{V <= c}`` inside the strip."""
+def certified_level(V: poly.Poly, deg_v: int, Y_sq: Fraction, floor: Fraction = Fraction(0)) -> dict[str, Any] | None:
+    """A level ``c > floor`` on the grid of :data:`LEVEL_DIGITS` digits, near the largest with
+    ``{V <= c}`` inside the strip (module docstring, step 1), checked exactly; None if there is none.
+
+    The first solve finds the largest ``c`` (an "inaccurate" one too: it only proposes); the second
+    solves the Gram matrices at the grid level with the largest margin ``t``, and that solution is
+    mapped back, rounded, projected onto the identity and checked exactly. Both solves run in
+    coordinates ``(y, r) = L (u, v)`` with ``L ~ Y`` and ``V`` divided by ``N``, its largest
+    coefficient there (:func:`_level_scales`): the strip is ``|u| < ~1`` and every number of the
+    program of order one (unscaled, a wide strip, as at ``Y = 88`` with ``V ~ y^4``, put the level
+    near 1e7 and the Gram entries from 1e-9 to 1e7, and the solver stopped with an error on some
+    platforms only). ``floor``: a level already proved (no second solve below it).
+    """
+    from lyapcheck.paper.conditions import compiled
+    from lyapcheck.paper.conditions.rounding import floor_to_digits
     from lyapcheck.paper.conditions.sos import project_gram
 
-    from lyapcheck.paper.conditions import compiled
-
-    values = {"Y_sq": float(Y_sq), **{_param_name(m): float(V.get(m, 0)) for m in poly.monomials(0, deg_v)}}
-    solved = compiled.load(f"level_{deg_v}").solve(values)
+    L, N = _level_scales(V, Y_sq)
+    V_s = {m: Fraction(a) * L ** sum(m) / N for m, a in V.items()}
+    values = {"Y_sq": float(Y_sq / L**2), **{_param_name(m): float(V_s.get(m, 0)) for m in poly.monomials(0, deg_v)}}
+    largest = compiled.load(f"level_{deg_v}").solve(values)
+    if largest.report.outcome not in ("optimal", "inaccurate") or largest.values is None:
+        return None
+    c_max = float(largest.values["c"]) * (1 - LEVEL_BACK_OFF) * float(N)
+    if not (math.isfinite(c_max) and c_max > 0):
+        return None
+    c = floor_to_digits(c_max, LEVEL_DIGITS)
+    if c <= floor:
+        return None
+    solved = compiled.load(f"level_margin_{deg_v}").solve({**values, "c": float(c / N)})
     v = solved.values
-    if solved.report.outcome != "optimal" or v is None or v["c"] <= 0:
+    if solved.report.outcome not in ("optimal", "inaccurate") or v is None or not v["t"] > 0:
         return None
     z_s, z_p = level_bases(deg_v)
-    c = exact.to_rational(float(v["c"]) * (1 - 1e-4), 8)
-    S = exact.symmetrize(exact.rational_matrix(v["S"]))
-    target_poly = level_residual(V, c, S, z_s, Y_sq)
-    Qp = project_gram(z_p, exact.symmetrize(exact.rational_matrix(v["Q_p"])), target_poly)
+    # back to (y, r): sigma(y, r) = N / L^2 sigma_s(y / L, r / L), z_p^T Q_p z_p = N (z_p^T Q_p,s z_p)(y / L, r / L)
+    S = _unscaled(exact.symmetrize(exact.rational_matrix(v["S"])), z_s, L, N / L**2)
+    Qp_s = _unscaled(exact.symmetrize(exact.rational_matrix(v["Q_p"])), z_p, L, N)
+    Qp = project_gram(z_p, Qp_s, level_residual(V, c, S, z_s, Y_sq))
     if Qp is None:
         return None
     level = {"c": str(c), "S": exact.to_json(S), "Q_p": exact.to_json(Qp)}
     return level if check_level(V, deg_v, level, Y_sq)[0] else None
+
+
+def _level_scales(V: poly.Poly, Y_sq: Fraction) -> tuple[Fraction, Fraction]:
+    """Rationals ``L ~ sqrt(Y_sq)`` and ``N``, the largest coefficient of ``V(L u, L v)`` (3 digits each)."""
+    L = exact.to_rational(math.sqrt(float(Y_sq)), 3)
+    largest = max((abs(float(Fraction(a) * L ** sum(m))) for m, a in V.items()), default=1.0)
+    return L, exact.to_rational(largest, 3) if largest > 0 else Fraction(1)
+
+
+def _unscaled(Q: exact.Matrix, basis: list[poly.Monomial], L: Fraction, factor: Fraction) -> exact.Matrix:
+    """The Gram matrix over ``basis`` in ``(y, r)`` of ``factor * (z^T Q z)(y / L, r / L)`` (exact congruence)."""
+    d = [L ** -sum(m) for m in basis]
+    return tuple(tuple(factor * d[i] * Q[i][j] * d[j] for j in range(len(basis))) for i in range(len(basis)))
 
 
 def lambda_min_lower(Q: exact.Matrix) -> Fraction | None:
@@ -226,8 +291,8 @@ def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: 
     Y_sq = y_sat_sq / system.delta**2  # scaled strip half-width, squared
     # level from V >= l (y^2 + r^2) (always valid), improved by the exact S-procedure when it passes
     c = ell * Y_sq * (1 - Fraction(1, 10**6))
-    level = certified_level(V, int(cert["degree"]), Y_sq)
-    if level is not None and Fraction(level["c"]) > c:
+    level = certified_level(V, int(cert["degree"]), Y_sq, floor=c)
+    if level is not None:
         c = Fraction(level["c"])
     data: dict[str, Any] = {"lambda_min_lower": str(ell), "strip_half_width_sq_scaled": str(Y_sq), "level_c": str(c),
                             "level_certificate": level}
