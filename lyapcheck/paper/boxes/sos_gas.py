@@ -103,28 +103,41 @@ def _build(cp: Any, vertices: Sequence[ScaledDynamics], deg_v: int) -> tuple[Any
     return cp.Problem(cp.Maximize(t), cons), {"Q_V": QV, "Q_W": QWs, "t": t, "mu": mu}
 
 
-def _attempt(prog: Any, var: Mapping[str, Any], vertices: Sequence[ScaledDynamics], deg_v: int,
-             mu: Fraction, log: list[dict[str, Any]]) -> dict[str, Any] | None:
-    """Solve at ``mu``, round and project, and check every vertex exactly (None unless all pass)."""
+def _trial(prog: Any, var: Mapping[str, Any], vertices: Sequence[ScaledDynamics], deg_v: int,
+           mu: Fraction, log: list[dict[str, Any]]) -> sos.Trial:
+    """Solve at ``mu``: the solver's margin, and the exact check at every vertex of the rounded
+    solution (:func:`_checked`), run when called (:func:`sos.best_decay_rate`)."""
     from lyapcheck.sos import sdp
 
     var["mu"].value = float(mu)
     report = sdp.solve(prog)  # Clarabel, no warm start, "may be inaccurate" warnings recorded as status
     entry: dict[str, Any] = {"degree": deg_v, "mu_scaled": str(mu), **report.to_json()}
     log.append(entry)
-    # an inaccurate solution is still worth rounding: the exact check below is the judge
+    # an inaccurate solution is still worth rounding: the exact check is the judge
     t = var["t"].value
-    if report.raw_status not in ("optimal", "optimal_inaccurate") or t is None or t <= 0:
+    if report.raw_status not in ("optimal", "optimal_inaccurate") or t is None:
+        entry["exact_check"] = "not attempted: the solver returned no point"
+        return None, lambda: None
+    entry["exact_check"] = "not run: a larger decay rate passed first"
+    # the program's variables are overwritten by the next solve: the check keeps its own copies
+    solution = {"t": float(t), "Q_V": np.array(var["Q_V"].value), "Q_W": [np.array(QW.value) for QW in var["Q_W"]]}
+    return float(t), lambda: _checked(solution, vertices, deg_v, mu, entry)
+
+
+def _checked(solution: Mapping[str, Any], vertices: Sequence[ScaledDynamics], deg_v: int, mu: Fraction,
+             entry: dict[str, Any]) -> dict[str, Any] | None:
+    """Round and project a solution, and check every vertex exactly (None unless all pass)."""
+    t = solution["t"]
+    if not t > 0:
         entry["exact_check"] = "not attempted: the solver returned no point with t > 0"
         return None
     z_v, z_w = sos.bases(deg_v)
-    QV = exact.symmetrize(exact.rational_matrix(var["Q_V"].value))
+    QV = exact.symmetrize(exact.rational_matrix(solution["Q_V"]))
     V = poly.gram_form(z_v, QV)
     grams = []
-    for v, QW_var in zip(vertices, var["Q_W"]):
+    for v, QW_value in zip(vertices, solution["Q_W"]):
         g_y, g_r, q = v.fields()
-        QW = sos.project_gram(z_w, exact.symmetrize(exact.rational_matrix(QW_var.value)),
-                              sos.target(V, g_y, g_r, q, mu))
+        QW = sos.project_gram(z_w, exact.symmetrize(exact.rational_matrix(QW_value)), sos.target(V, g_y, g_r, q, mu))
         if QW is None:
             entry["exact_check"] = "the target is not representable in the W basis"
             return None
@@ -143,10 +156,11 @@ def _search(cp: Any, vertices: Sequence[ScaledDynamics], deg_v: int,
             log: list[dict[str, Any]]) -> dict[str, Any] | None:
     """A common V at ``mu = 0``, then the largest decay rate found as in :func:`sos.run`."""
     prog, var = _build(cp, vertices, deg_v)
-    cert = _attempt(prog, var, vertices, deg_v, Fraction(0), log)
+    _, check = _trial(prog, var, vertices, deg_v, Fraction(0), log)
+    cert = check()
     if cert is None:
         return None
-    return sos.best_decay_rate(lambda mu: _attempt(prog, var, vertices, deg_v, mu, log), cert)
+    return sos.best_decay_rate(lambda mu: _trial(prog, var, vertices, deg_v, mu, log), cert)
 
 
 def certify_gas_box(problem: Problem, box: ParameterBox, dynamics: str = "derived") -> dict[str, Any]:

@@ -49,6 +49,13 @@ DEGREES = (4, 6)
 MU_MAX = Fraction(4)
 MU_MIN = Fraction(1, 10**7)
 MU_BISECTION_STEPS = 4
+#: the decay-rate search counts a rate as reached when the solver's margin t there is at least this
+#: fraction of the margin at mu = 0 (see best_decay_rate)
+MU_MARGIN_FRACTION = 1e-3
+
+#: one trial of the decay-rate search at a rate mu: the solver's margin t (None: no point), and the
+#: exact check of its rounded solution, run only when called (a certificate, or None)
+Trial = tuple[float | None, Callable[[], "dict[str, Any] | None"]]
 
 
 @dataclass(frozen=True)
@@ -231,55 +238,82 @@ def exact_check(dyn: ScaledDynamics, deg_v: int, QV: exact.Matrix, QW: exact.Mat
     return True, "Q_V > 0, Q_W > 0 and the SOS identity holds, exactly"
 
 
-def _attempt(dyn: ScaledDynamics, deg_v: int, mu: Fraction) -> tuple[dict[str, Any] | None, SolveReport]:
+def _trial(dyn: ScaledDynamics, deg_v: int, mu: Fraction) -> tuple[Trial, SolveReport]:
+    """Solve at ``mu``; the exact check of the rounded solution is the trial's second part."""
     solved = program(deg_v).solve(program_data(dyn, deg_v, float(mu)))
     report, v = solved.report, solved.values
     # an "inaccurate" solve (Clarabel stopped close to, not at, its tolerances) is still a
-    # candidate: the exact check below is the judge, as in the box class. Refusing it made the
+    # candidate: the exact check is the judge, as in the box class. Refusing it made the
     # verdict follow the solver's last iteration: at 3 of the verdict snapshot's gain sets one
     # machine's solve ended "optimal" and certified, another's "inaccurate" and did not
-    if report.outcome not in ("optimal", "inaccurate") or v is None or v["t"] <= 0:
-        return None, report
+    if report.outcome not in ("optimal", "inaccurate") or v is None:
+        return (None, lambda: None), report
+    return (float(v["t"]), lambda: _checked(dyn, deg_v, mu, v)), report
+
+
+def _checked(dyn: ScaledDynamics, deg_v: int, mu: Fraction, v: Mapping[str, Any]) -> dict[str, Any] | None:
+    """Round a solution at ``mu`` to an exact certificate; None unless it passes :func:`exact_check`."""
+    if not v["t"] > 0:
+        return None
     z_v, z_w = bases(deg_v)
     QV = exact.symmetrize(exact.rational_matrix(v["Q_V"]))
     g_y, g_r, q = dyn.fields()
     p = target(poly.gram_form(z_v, QV), g_y, g_r, q, mu)
     QW = project_gram(z_w, exact.symmetrize(exact.rational_matrix(v["Q_W"])), p)
     if QW is None:
-        return None, report
+        return None
     ok, _ = exact_check(dyn, deg_v, QV, QW, mu)
     if not ok:
-        return None, report
+        return None
     return {"degree": deg_v, "mu_scaled": str(mu), "Q_V": exact.to_json(QV), "Q_W": exact.to_json(QW),
             "basis_V": [list(m) for m in z_v], "basis_W": [list(m) for m in z_w],
-            "margin": float(v["t"])}, report
+            "margin": float(v["t"])}
 
 
-def best_decay_rate(attempt: Callable[[Fraction], dict[str, Any] | None], cert: dict[str, Any]) -> dict[str, Any]:
-    """The certificate of the largest decay rate ``mu`` found, from ``cert`` (``mu = 0``).
+def best_decay_rate(trial: Callable[[Fraction], Trial], cert: dict[str, Any]) -> dict[str, Any]:
+    """The certificate of the largest decay rate ``mu`` found, from ``cert`` (``mu = 0``, with its
+    solver margin ``cert["margin"]``).
 
     Decay rates span orders of magnitude (scaled time): step down geometrically from
-    :data:`MU_MAX` to the first ``mu`` that ``attempt`` proves (it returns a certificate, or
-    None), then bisect geometrically above it :data:`MU_BISECTION_STEPS` times. Shared by the
-    point class and the box class (:mod:`lyapcheck.paper.boxes.sos_gas`).
+    :data:`MU_MAX` to the first ``mu`` reached, then bisect geometrically above it
+    :data:`MU_BISECTION_STEPS` times, on rates rounded to 3 significant digits. A rate counts as
+    reached when the solver's margin there is at least :data:`MU_MARGIN_FRACTION` of the margin at
+    ``mu = 0``: the steps follow a number every platform's solver gives to far better than that
+    (its optimum), not whether a rounded solution passes the exact check, which at badly scaled
+    gains (margins near 1e-6, "inaccurate" solves) the solver's last bits decide; one such
+    failure in the first step had moved the rate by 40 %. Then the rates reached are checked
+    exactly, the largest first, and the first that passes is the result (else ``cert``). Shared by
+    the point class and the box class (:mod:`lyapcheck.paper.boxes.sos_gas`).
     """
+    threshold = MU_MARGIN_FRACTION * float(cert["margin"])
+    reached: list[tuple[Fraction, Callable[[], dict[str, Any] | None]]] = []
+
+    def attempt(mu: Fraction) -> bool:
+        margin, check = trial(mu)
+        if margin is None or not margin >= threshold:
+            return False
+        reached.append((mu, check))
+        return True
+
     lo, hi = Fraction(0), MU_MAX
     candidate = MU_MAX
     while candidate > MU_MIN:
-        better = attempt(candidate)
-        if better is not None:
-            cert, lo = better, candidate
+        if attempt(candidate):
+            lo = candidate
             break
         hi = candidate
         candidate = candidate / 4
     if lo > 0:
         for _ in range(MU_BISECTION_STEPS):
             mid = exact.to_rational(float(np.sqrt(float(lo) * float(hi))), 3)
-            better = attempt(mid)
-            if better is not None:
-                cert, lo = better, mid
+            if attempt(mid):
+                lo = mid
             else:
                 hi = mid
+    for _, check in sorted(reached, key=lambda r: r[0], reverse=True):
+        better = check()
+        if better is not None:
+            return better
     return cert
 
 
@@ -292,17 +326,18 @@ def run(system: System) -> ConditionResult:
                "time_scale": str(dyn.time_scale), "c": str(dyn.c), "a": str(dyn.a), "b": str(dyn.b)}
     solver_log: list[dict[str, Any]] = []
     for deg_v in DEGREES:
-        cert, report = _attempt(dyn, deg_v, Fraction(0))
+        (_, check), report = _trial(dyn, deg_v, Fraction(0))
         solver_log.append(report.to_json())
+        cert = check()
         if cert is None:
             continue
 
-        def attempt(mu: Fraction, deg_v: int = deg_v) -> dict[str, Any] | None:
-            better, report = _attempt(dyn, deg_v, mu)
+        def trial(mu: Fraction, deg_v: int = deg_v) -> Trial:
+            found, report = _trial(dyn, deg_v, mu)
             solver_log.append(report.to_json())
-            return better
+            return found
 
-        cert = best_decay_rate(attempt, cert)
+        cert = best_decay_rate(trial, cert)
         mu = Fraction(cert["mu_scaled"])
         rate = mu * dyn.time_scale
         numbers = {"degree": deg_v, "decay_rate_V_per_s": float(rate), "relative_margin": cert["margin"],
