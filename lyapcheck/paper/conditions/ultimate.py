@@ -41,6 +41,10 @@ INFLATE = Fraction(1_000_001, 1_000_000)
 #: grid point is then refined by a few golden-section steps in log(lambda)
 LAMBDA_GRID = np.geomspace(1e-6, 4.0, 16)
 LAMBDA_REFINE_STEPS = 6
+#: two values of Q11 within this relative difference are equal to the line search (then the
+#: smaller lambda is taken): its steps then follow differences the solves resolve (their optima
+#: agree to ~1e-9), not the last bits of two solves near the flat minimum
+LINE_SEARCH_TIE = 1e-6
 MAX_STAGES = 5
 #: relative strictness built into the LMIs (see _EllipsoidProgram)
 STRICTNESS = 1e-3
@@ -138,9 +142,23 @@ def check_ellipsoid(system: System, stage: dict[str, Any], rho_lo: Fraction) -> 
 Candidate = tuple[float, float, np.ndarray, bool]
 
 
+def _less(a: Candidate | None, b: Candidate | None) -> bool:
+    """``a`` is better than ``b``: a smaller ``Q11`` beyond :data:`LINE_SEARCH_TIE` (a missing solve is worst)."""
+    if a is None:
+        return False
+    return b is None or a[0] < b[0] * (1 - LINE_SEARCH_TIE)
+
+
+def _best(candidates: list[Candidate]) -> Candidate:
+    """The candidate of smallest ``Q11``; among those within :data:`LINE_SEARCH_TIE` of it, the smallest lambda."""
+    low = min(r[0] for r in candidates)
+    return min((r for r in candidates if r[0] <= low * (1 + LINE_SEARCH_TIE)), key=lambda r: r[1])
+
+
 def line_search(attempt: Callable[[float], Candidate | None]) -> list[Candidate]:
     """Minimise ``Q11`` over ``lambda``: :data:`LAMBDA_GRID`, then a golden-section refinement
-    (log scale) between the neighbours of its best point; shared with the box class.
+    (log scale) between the neighbours of its best point; shared with the box class. Values within
+    :data:`LINE_SEARCH_TIE` count as equal, the smaller lambda winning, in every comparison.
 
     An "inaccurate" solve steers the search too (refusing them lost the best decay rates where
     the solves stop just short of the tolerances: sweep-kd-delta@19,0's bound was 3.6e-3 m
@@ -151,7 +169,7 @@ def line_search(attempt: Callable[[float], Candidate | None]) -> list[Candidate]
     found = [r for r in tried if r is not None]
     if not found:
         return []
-    i = int(np.argmin([r[0] if r is not None else np.inf for r in tried]))
+    i = tried.index(_best(found))
     lo = np.log(LAMBDA_GRID[max(i - 1, 0)])
     hi = np.log(LAMBDA_GRID[min(i + 1, len(LAMBDA_GRID) - 1)])
     ratio = (np.sqrt(5) - 1) / 2
@@ -159,15 +177,15 @@ def line_search(attempt: Callable[[float], Candidate | None]) -> list[Candidate]
         a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
         ra, rb = attempt(float(np.exp(a))), attempt(float(np.exp(b)))
         found += [r for r in (ra, rb) if r is not None]
-        if (ra[0] if ra is not None else np.inf) < (rb[0] if rb is not None else np.inf):
-            hi = b
-        else:
+        if _less(rb, ra):
             lo = a
-    best = min(found, key=lambda r: r[0])
+        else:  # a better, or a tie: the smaller lambdas
+            hi = b
+    best = _best(found)
     accurate = [r for r in found if r[3]]
     if best[3] or not accurate:
         return [best]
-    return [best, min(accurate, key=lambda r: r[0])]
+    return [best, _best(accurate)]
 
 
 def p_from_q(sc: scaling.Scaling, kappa: Fraction, q_scaled: np.ndarray) -> exact.Matrix | None:
