@@ -63,7 +63,7 @@ FAMILIES: Final[dict[str, tuple[str, str]]] = {
 }
 #: the programs stored in ``_compiled/`` (others are compiled in-process on first use)
 PROGRAMS: Final = ("prop41", "sector", "sector_8", "ultimate", "sos_4", "sos_6", "sos_bound", "sos_bound_parity", "level_4", "level_6",
-                   "level_margin_4", "level_margin_6", "ges_4_24_1")
+                   "level_margin_4", "level_margin_6", "ges_4_1")
 
 
 def key_of(family: str, *args: int) -> str:

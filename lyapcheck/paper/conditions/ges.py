@@ -34,6 +34,16 @@ positive on ``[0, 1]`` by Bernstein expansion with subdivision in rational arith
 
 for every initial condition: GES, with ``k`` and ``lambda`` reported (also for ``(eps, s)``).
 The scope is that of ``sos_gas``: the unsaturated error dynamics without disturbance.
+
+Search (:func:`search`). The same three inequalities, with ``c1 = 1``, ``c2 = t`` minimised and a
+margin in the third, are imposed on ALL of ``[0, 1]`` as sums of squares (:func:`build_program`,
+Lukacs' theorem), with coefficients computed exactly from the dynamics. Until issue 24 they were
+imposed at 24 grid points of ``w``: the optimal solutions then formed a face, and which point of
+it the solver stopped at decided whether the exact check passed between the grid points, so the
+decay-rate bisection followed the platform's last bits (a relative perturbation of 1e-13 in the
+data made the first rate fail at the paper's gains, and at the centre of sweep-kd-delta dropped the
+certified rate from 0.051 to 9e-7 1/s). Every solution of the interval program passes the exact
+check with the margin to spare.
 """
 
 from __future__ import annotations
@@ -47,25 +57,29 @@ import numpy as np
 
 from lyapcheck import exact
 from lyapcheck.paper.conditions.base import System
+from lyapcheck.paper.conditions.rounding import ceil_to_digits, floor_to_digits
 from lyapcheck.results import ConditionResult
 from lyapcheck.paper.conditions.sos import ScaledDynamics, scaled_dynamics
 
 #: number of y-weighted terms w^k y l_k^T x (the decay rate it certifies grows with K: 3 gives
 #: about 0.06, 4 about 0.9, 6 about 1.9 in scaled time at the paper's gains)
 TERMS = 4
-#: points of w in [0, 1] where the search imposes its matrix inequalities (Chebyshev nodes)
-GRID_POINTS = 24
 #: decay-rate search of mu in scaled time: geometric bisection between these, then a back-off
 MU_LOW, MU_HIGH = 1 / 64, 4.0
 #: tried when MU_LOW fails: a slow certified decay is still GES (e.g. the printed dynamics,
 #: whose scaled time runs 1/e11 times faster)
 MU_FLOOR = 1e-7
 MU_BISECTION_STEPS = 6
-#: the search asks for D + mu M <= -MARGIN I on the grid (M >= I), so that the exact check
-#: between grid points and after rounding has room
-MARGIN = 1e-3
-#: fractions of mu tried in turn when the exact check of the rounded candidate fails at mu itself
-BACK_OFF = (1.0, 0.8)
+#: the search asks for -(D + mu M) >= MARGIN s t I on all of [0, 1] (M <= t I; s the largest of
+#: 1, |a|, |b|, |c|, the scale of D / t): a margin proportional to D, 300 times the rounding of P
+#: and l to 8 digits and above the residual of an "inaccurate" solve (with 1e-6, such solves
+#: near the largest feasible rate failed the exact check on some platforms; with 1e-4 the
+#: margin cost certificates: two points of the snapshot)
+MARGIN = 3e-6
+#: the certificate's bounds c1 I < M(w) < c2 I: c1 = C1 below the program's M >= I, c2 this share
+#: above its optimum t, rounded up to 6 digits (see _bounds)
+C1 = Fraction(99, 100)
+BOUND_SLACK = 1e-2
 #: Bernstein subdivision depth for the exact positivity proofs on [0, 1]
 MAX_SUBDIVISIONS = 14
 
@@ -202,131 +216,139 @@ def exact_check(dyn: ScaledDynamics, P: exact.Matrix, ells: Sequence[Sequence[Fr
 
 
 # -- numerical search --------------------------------------------------------------------------
-def float_matrices(c: float, a: float, b: float, P: np.ndarray, ells: np.ndarray, w: float
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """``M(w)`` and ``D(w)`` in floating point (the search's model of :func:`lyapunov_matrices`), at
-    one node: the readable form of the model. The search uses :func:`float_matrices_on_grid`,
-    which must equal it bit for bit (``tests/test_ges.py`` holds the two together)."""
-    A = np.array([[-1.0, c], [b * w, -a]])
-    one = np.ones(2)
-    M = P.copy()
-    D = A.T @ P + P @ A
-    for k, ell in enumerate(ells, start=1):
-        R = np.outer(one, ell)
-        M = M + w**k * (R + R.T) / 2
-        T1 = np.outer(A.T @ one, ell)
-        T2 = np.outer(one, ell @ A)
-        D = D + w**k * (1 - 2 * k * (1 - w)) * (T1 + T1.T) / 2 + w**k * (T2 + T2.T) / 2
-    return M, D
+def polynomial_tables(dyn: ScaledDynamics, terms: int = TERMS) -> tuple[np.ndarray, np.ndarray]:
+    """The coefficients of ``M(w)`` and ``D(w)`` as linear maps of the unknowns ``(P, l)``.
 
-
-def float_matrices_on_grid(c: float, a: float, b: float, nodes: np.ndarray, terms: int
-                           ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`float_matrices` at every node and every unit vector of ``(P, l)``, in one pass.
-
-    Shape ``(nodes, 3 + 2 terms, 2, 2)``. The same floating-point operations, entry by entry, as
-    calling :func:`float_matrices` node by node on the unit vectors (the search's model is
-    linear in ``(P, l)``): every matrix product here has at most two nonzero terms, whose sum
-    does not depend on order, and the scalar factors are formed as there. A test compares the
-    two bit for bit.
+    Shape ``(3 + 2 terms, degree + 1, 2, 2)``: entry ``[i, j]`` is the coefficient of ``w^j`` with
+    the ``i``-th unknown set to 1 and the others to 0 (both are linear in ``(P, l)``), computed
+    exactly by :func:`lyapunov_matrices` and then rounded to doubles: the same numbers on every
+    floating-point platform. ``M`` has degree ``terms``, ``D`` degree ``terms + 2``.
     """
+    return _tables(dyn.c, dyn.a, dyn.b, terms)
+
+
+@lru_cache(maxsize=32)
+def _tables(c: Fraction, a: Fraction, b: Fraction, terms: int) -> tuple[np.ndarray, np.ndarray]:
+    dyn = ScaledDynamics(time_scale=Fraction(1), c=c, a=a, b=b)
     n1 = 3 + 2 * terms
-    unit = np.eye(n1)
-    P = np.empty((n1, 2, 2))
-    P[:, 0, 0], P[:, 0, 1], P[:, 1, 0], P[:, 1, 1] = unit[:, 0], unit[:, 1], unit[:, 1], unit[:, 2]
-    ells = unit[:, 3:].reshape(n1, terms, 2)
-    w = np.asarray(nodes, dtype=np.float64)
-    A = np.empty((w.size, 2, 2))
-    A[:, 0, 0], A[:, 0, 1], A[:, 1, 0], A[:, 1, 1] = -1.0, c, b * w, -a
-    At = A.transpose(0, 2, 1)
-    M = np.broadcast_to(P, (w.size, n1, 2, 2)).copy()
-    D = At[:, None] @ P[None] + P[None] @ A[:, None]
-    one = np.ones(2)
-    At_one = At @ one  # (nodes, 2)
-    for k in range(1, terms + 1):
-        ell = ells[:, k - 1]  # (n1, 2)
-        R = np.broadcast_to(ell[:, None, :], (n1, 2, 2))  # outer(one, ell)
-        wk = w**k
-        M = M + wk[:, None, None, None] * (R + R.transpose(0, 2, 1)) / 2
-        T1 = At_one[:, None, :, None] * ell[None, :, None, :]  # outer(A^T 1, ell)
-        T2 = np.broadcast_to((ell[None, :, None, :] @ A[:, None])[:, :, 0][:, :, None, :], T1.shape)  # outer(1, ell A)
-        f = wk * (1 - 2 * k * (1 - w))
-        D = (D + f[:, None, None, None] * (T1 + T1.transpose(0, 1, 3, 2)) / 2
-             + wk[:, None, None, None] * (T2 + T2.transpose(0, 1, 3, 2)) / 2)
-    return M, D
+    Ms, Ds = np.zeros((n1, terms + 1, 2, 2)), np.zeros((n1, terms + 3, 2, 2))
+    for i in range(n1):
+        z = [Fraction(int(i == k)) for k in range(n1)]
+        P = ((z[0], z[1]), (z[1], z[2]))
+        ells = [z[3 + 2 * k: 5 + 2 * k] for k in range(terms)]
+        M, D = lyapunov_matrices(dyn, P, ells)
+        for out, poly_matrix in ((Ms, M), (Ds, D)):
+            for p in range(2):
+                for q in range(2):
+                    for j, coefficient in enumerate(poly_matrix[p][q]):
+                        out[i, j, p, q] = float(coefficient)
+    Ms.flags.writeable = Ds.flags.writeable = False
+    return Ms, Ds
 
 
-def build_program(cp: Any, terms: int, points: int, vertices: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
-    """The grid LMIs of :class:`_Program` as 2x2 second-order cones (DPP; compiled once per size)."""
+def inequalities(terms: int, vertices: int) -> list[tuple[str, int]]:
+    """The polynomial matrix inequalities of the search and their degrees in ``w``: ``M - I``,
+    ``t I - M`` and, at each vertex, the decay inequality (:func:`build_program`)."""
+    return [("lower", terms), ("upper", terms)] + [(f"decay_{v}", terms + 2) for v in range(vertices)]
+
+
+#: entries (p, q) of a symmetric 2x2 matrix, in the order of the coefficient rows
+_ENTRIES = ((0, 0), (0, 1), (1, 1))
+
+
+def _gram_side(X: Any, Y: Any, half: int) -> Any:
+    """The coefficients of ``Z(w)^T X Z(w) + w (1 - w) Z'(w)^T Y Z'(w)``, ``Z = (I, w I, .., w^half I)``,
+    ``Z'`` up to ``w^(half - 1)``: row ``3 j + e`` is entry ``_ENTRIES[e]`` of the ``w^j`` coefficient."""
+    rows = []
+    for j in range(2 * half + 1):
+        for p, q in _ENTRIES:
+            terms = [X[2 * u + p, 2 * (j - u) + q] for u in range(half + 1) if 0 <= j - u <= half]
+            terms += [Y[2 * u + p, 2 * (j - 1 - u) + q] for u in range(half) if 0 <= j - 1 - u <= half - 1]
+            terms += [-Y[2 * u + p, 2 * (j - 2 - u) + q] for u in range(half) if 0 <= j - 2 - u <= half - 1]
+            rows.append(sum(terms[1:], terms[0]))
+    return rows
+
+
+def build_program(cp: Any, terms: int, vertices: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """min t s.t. every inequality of :func:`inequalities` holds on all of ``[0, 1]`` (DPP; compiled
+    once per size; see :func:`search`).
+
+    A symmetric 2x2 polynomial matrix ``G(w)`` of degree ``<= 2h`` is positive semidefinite on
+    ``[0, 1]`` when ``G = Z^T X Z + w (1 - w) Z'^T Y Z'`` with ``X, Y >= 0`` (the matrix form of
+    Lukacs' theorem; :func:`_gram_side`): so the search asks for each inequality on the whole
+    interval, not at grid points. Its coefficients are affine in the unknowns
+    ``z = (P11, P12, P22, l_1, .., l_K, t)``: ``C z + c0``, with ``C`` and ``c0`` the parameters.
+    """
     n = 3 + 2 * terms + 1
-    rows = (2 + vertices) * points  # cones
-    F = cp.Parameter((3 * rows, n), name="F")
-    f0 = cp.Parameter(3 * rows, name="f0")
     z = cp.Variable(n, name="z")
-    g = cp.reshape(F @ z + f0, (3, rows), order="F")  # rows of (g11, g12, g22)
-    cone = cp.SOC(g[0] + g[2], cp.vstack([g[0] - g[2], 2 * g[1]]), axis=0)
-    return cp.Problem(cp.Minimize(z[n - 1]), [cone]), {"F": F, "f0": f0}, {"z": z}
+    cons: list[Any] = []
+    params: dict[str, Any] = {}
+    for name, degree in inequalities(terms, vertices):
+        half = (degree + 1) // 2
+        C = cp.Parameter((3 * (2 * half + 1), n), name=f"C_{name}")
+        c0 = cp.Parameter(3 * (2 * half + 1), name=f"c0_{name}")
+        X = cp.Variable((2 * half + 2, 2 * half + 2), symmetric=True, name=f"X_{name}")
+        Y = cp.Variable((2 * half, 2 * half), symmetric=True, name=f"Y_{name}")
+        gram = _gram_side(X, Y, half)
+        cons += [X >> 0, Y >> 0]
+        cons += [C[r] @ z + c0[r] == gram[r] for r in range(len(gram))]
+        params[f"C_{name}"], params[f"c0_{name}"] = C, c0
+    return cp.Problem(cp.Minimize(z[n - 1]), cons), params, {"z": z}
 
 
 class _Program:
-    """Grid LMIs at a given mu as 2x2 second-order cones, compiled once, re-solved.
+    """The search program of :func:`build_program` for ``terms`` and ``vertices``, compiled once,
+    re-solved with the data of :meth:`set_data`."""
 
-    Unknowns ``z = (P11, P12, P22, l_1, .., l_K, t)``. At each grid point ``w`` three 2x2
-    inequalities ``M >= I``, ``t I - M >= 0``, ``-(D + mu M) - MARGIN I >= 0``, each affine in
-    ``z``: ``G = G0 + sum_i z_i G_i``, ``G >= 0`` iff ``g11 + g22 >= ||(g11 - g22, 2 g12)||``.
-    The matrices ``G_i`` depend on the system and on mu; they are the numeric parameters of
-    :func:`build_program`, compiled once (:mod:`lyapcheck.paper.conditions.compiled`). ``M`` and ``D``
-    at the grid do not depend on mu: they are computed once per system and kept.
-    """
-
-    def __init__(self, terms: int, points: int, vertices: int = 1) -> None:
+    def __init__(self, terms: int, vertices: int = 1) -> None:
         from lyapcheck.paper.conditions import compiled
 
         self.terms = terms
         self.vertices = vertices
-        self.nodes = 0.5 - 0.5 * np.cos(np.pi * np.arange(points) / (points - 1))  # Chebyshev, ends included
         self.n = 3 + 2 * terms + 1
-        self.per_node = 2 + vertices  # M - I, t I - M, and one decay cone per vertex
-        self.key = compiled.key_of("ges", terms, points, vertices)
-        self._tables: dict[tuple[tuple[float, float, float], ...], tuple[np.ndarray, np.ndarray]] = {}
+        self.key = compiled.key_of("ges", terms, vertices)
 
     def _unpack(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         P = np.array([[z[0], z[1]], [z[1], z[2]]])
         return P, z[3:3 + 2 * self.terms].reshape(self.terms, 2)
 
-    def _grid(self, coefficients: tuple[tuple[float, float, float], ...]) -> tuple[np.ndarray, np.ndarray]:
-        """``M`` and ``D`` at every node, vertex and unit vector: shape (nodes, vertices, n - 1, 2, 2)."""
-        cached = self._tables.get(coefficients)
-        if cached is None:
-            shape = (len(self.nodes), len(coefficients), self.n - 1, 2, 2)
-            Ms, Ds = np.zeros(shape), np.zeros(shape)
-            for v, (c, a, b) in enumerate(coefficients):  # M, D are linear in (P, l): on the unit vectors
-                Ms[:, v], Ds[:, v] = float_matrices_on_grid(c, a, b, self.nodes, self.terms)
-            cached = self._tables.setdefault(coefficients, (Ms, Ds))
-            if len(self._tables) > 8:  # a few systems at a time (a box's vertices, a point)
-                self._tables.pop(next(iter(self._tables)))
-        return cached
-
     def set_data(self, dyns: Sequence[ScaledDynamics], mu: float) -> dict[str, np.ndarray]:
-        F = np.zeros((3, self.per_node * len(self.nodes), self.n))
-        f0 = np.zeros((3, self.per_node * len(self.nodes)))
-        coefficients = tuple((float(d.c), float(d.a), float(d.b)) for d in dyns)
-        Ms, Ds = self._grid(coefficients)
-        G = -(Ds + mu * Ms)  # elementwise, as -(D + mu * M) on each 2x2
-        rows = self.per_node * np.arange(len(self.nodes))
-        M0 = Ms[:, 0]  # (nodes, n - 1, 2, 2)
-        for r, (p, q) in enumerate(((0, 0), (0, 1), (1, 1))):
-            F[r, rows, : self.n - 1] = M0[:, :, p, q]
-            F[r, rows + 1, : self.n - 1] = -M0[:, :, p, q]
-            for v in range(len(coefficients)):
-                F[r, rows + 2 + v, : self.n - 1] = G[:, v, :, p, q]
-        F[:, rows + 1, self.n - 1] = np.array([1.0, 0.0, 1.0])[:, None]  # + t I
-        f0[:, rows] = np.array([-1.0, 0.0, -1.0])[:, None]  # M - I
-        for v in range(len(coefficients)):
-            f0[:, rows + 2 + v] = np.array([-MARGIN, 0.0, -MARGIN])[:, None]
-        return {"F": F.transpose(1, 0, 2).reshape(-1, self.n), "f0": f0.T.reshape(-1)}
+        """The coefficients ``C z + c0`` of every inequality at ``mu`` (:func:`build_program`):
+        ``M - I``, ``t I - M`` and ``-(D_v + mu M) - margin t I`` at each vertex ``v``, with the
+        margin :data:`MARGIN` times the vertex's largest coefficient (``D`` scales with it)."""
+        values: dict[str, np.ndarray] = {}
+        Ms, _ = polynomial_tables(dyns[0], self.terms)
+        diagonal = np.array([1.0, 0.0, 1.0])
+
+        def coefficients(table: np.ndarray, degree: int) -> np.ndarray:
+            """``(unknowns, degree + 1, 2, 2)`` -> rows ``3 j + e`` by unknown (zero-padded to the even degree)."""
+            half = (degree + 1) // 2
+            out = np.zeros((3 * (2 * half + 1), self.n))
+            for j in range(table.shape[1]):
+                for e, (p, q) in enumerate(_ENTRIES):
+                    out[3 * j + e, : self.n - 1] = table[:, j, p, q]
+            return out
+
+        def constant(degree: int, diagonal_at_0: float) -> np.ndarray:
+            out = np.zeros(3 * ((degree + 1) // 2 * 2 + 1))
+            out[:3] = diagonal_at_0 * diagonal
+            return out
+
+        values["C_lower"], values["c0_lower"] = coefficients(Ms, self.terms), constant(self.terms, -1.0)
+        upper = -coefficients(Ms, self.terms)
+        upper[:3, self.n - 1] = diagonal
+        values["C_upper"], values["c0_upper"] = upper, constant(self.terms, 0.0)
+        for v, dyn in enumerate(dyns):
+            _, Ds = polynomial_tables(dyn, self.terms)
+            # divided by its scale (the same inequality), so that its Gram matrices are of the order of t
+            scale = max(1.0, abs(float(dyn.a)), abs(float(dyn.b)), abs(float(dyn.c)))
+            decay = -(coefficients(Ds, self.terms + 2) + mu * coefficients(Ms, self.terms + 2)) / scale
+            decay[:3, self.n - 1] = -MARGIN * diagonal
+            values[f"C_decay_{v}"], values[f"c0_decay_{v}"] = decay, constant(self.terms + 2, 0.0)
+        return values
 
     def attempt(self, dyns: Sequence[ScaledDynamics], mu: float) -> tuple[Any, Any]:
+        """Solve at ``mu``: ``((P, l, t), report)``, or ``(None, report)`` without a point."""
         from lyapcheck.paper.conditions import compiled
 
         if len(dyns) != self.vertices:
@@ -334,27 +356,22 @@ class _Program:
         solved = compiled.load(self.key).solve(self.set_data(dyns, mu))
         if solved.report.outcome not in ("optimal", "inaccurate") or solved.values is None:
             return None, solved.report
-        return self._unpack(solved.values["z"]), solved.report
+        z = solved.values["z"]
+        return (*self._unpack(z), float(z[self.n - 1])), solved.report
 
 
 @lru_cache(maxsize=8)
-def program(terms: int = TERMS, points: int = GRID_POINTS, vertices: int = 1) -> _Program:
-    return _Program(terms, points, vertices)
+def program(terms: int = TERMS, vertices: int = 1) -> _Program:
+    return _Program(terms, vertices)
 
 
-def _bounds(dyn: ScaledDynamics, P: exact.Matrix, ells: Sequence[Sequence[Fraction]]) -> tuple[Fraction, Fraction]:
-    """Rational c1 < min and c2 > max of the eigenvalues of M(w) over a fine grid of [0, 1]."""
-    Pf = np.array(exact.to_float(P))
-    grid = np.linspace(0, 1, 401)
-    M = np.broadcast_to(Pf, (grid.size, 2, 2)).copy()
-    for k, ell in enumerate(ells, start=1):
-        l = np.array([float(v) for v in ell])
-        S = np.outer(np.ones(2), l) + np.outer(l, np.ones(2))
-        wk = np.array([wv**k for wv in grid])  # the scalar powers, as one node at a time computed them
-        M += wk[:, None, None] * S / 2
-    eig = np.linalg.eigvalsh(M)
-    lo, hi = float(eig[:, 0].min()), float(eig[:, -1].max())
-    return exact.to_rational(lo * 0.99, 6), exact.to_rational(hi * 1.01, 6)
+def _bounds(t: float) -> tuple[Fraction, Fraction]:
+    """Rational ``c1 < 1`` and ``c2 > t`` for a solution with ``I <= M(w) <= t I`` on ``[0, 1]``.
+
+    Fixed shares of the program's own bounds (1 % each side, far above the rounding of ``P`` and
+    ``l``), not ``M``'s extreme eigenvalues: where the optimal solutions form a face, those move
+    within it from one solve to the next, while ``t``, the optimum, does not."""
+    return C1, ceil_to_digits(t * (1 + BOUND_SLACK), 6)
 
 
 def certificate_json(P: exact.Matrix, ells: Sequence[Sequence[Fraction]], mu: Fraction, c1: Fraction,
@@ -371,20 +388,22 @@ def _from_json(cert: dict[str, Any]) -> tuple[exact.Matrix, list[list[Fraction]]
 def _exact_candidate(dyns: Sequence[ScaledDynamics], found: Any, mu: float) -> dict[str, Any] | None:
     P = exact.symmetrize(exact.rational_matrix(found[0], 8))
     ells = [[exact.to_rational(float(v), 8) for v in ell] for ell in found[1]]
-    c1, c2 = _bounds(dyns[0], P, ells)
-    for share in BACK_OFF:
-        mu_q = exact.to_rational(mu * share, 4)
-        if all(exact_check(dyn, P, ells, mu_q, c1, c2)[0] for dyn in dyns):
-            return certificate_json(P, ells, mu_q, c1, c2)
+    c1, c2 = _bounds(found[2])
+    mu_q = floor_to_digits(mu, 4)  # down: the solution holds at mu, so at any smaller rate
+    if all(exact_check(dyn, P, ells, mu_q, c1, c2)[0] for dyn in dyns):
+        return certificate_json(P, ells, mu_q, c1, c2)
     return None
 
 
 def search(dyns: Sequence[ScaledDynamics], log: list[dict[str, Any]]) -> dict[str, Any] | None:
     """The exactly checked certificate with the largest decay rate found, common to ``dyns``.
 
-    Bisection on mu (geometric), each step decided by the exact check of the rounded solver
-    point, never by the solver's status: the solver often stops at "inaccurate" on these badly
-    scaled data, and its point is still a fine candidate.
+    Bisection on mu (geometric, :data:`MU_BISECTION_STEPS` steps), each step decided by the exact
+    check of the rounded solver point, never by the solver's status: the solver often stops at
+    "inaccurate" on these badly scaled data, and its point is still a fine candidate. The rate
+    checked is ``mu`` rounded down to 4 digits, never a fraction of it: a solve just beyond the
+    feasible rates (reported infeasible on one platform, "inaccurate" with a point on another)
+    once passed at 0.8 ``mu`` and moved the bisection on that platform only.
     """
     prog = program(vertices=len(dyns))
 
