@@ -57,12 +57,15 @@ FAMILIES: Final[dict[str, tuple[str, str]]] = {
     "sos": ("lyapcheck.paper.conditions.sos", "build_program"),
     "sos_bound": ("lyapcheck.paper.conditions.sos_bound", "build_program"),
     "sos_bound_parity": ("lyapcheck.paper.conditions.sos_bound", "build_parity_program"),
+    "sos_bound_fixed": ("lyapcheck.paper.conditions.sos_bound", "build_fixed_program"),
+    "sos_bound_parity_fixed": ("lyapcheck.paper.conditions.sos_bound", "build_parity_fixed_program"),
     "level": ("lyapcheck.paper.conditions.saturated", "build_level_program"),
     "level_margin": ("lyapcheck.paper.conditions.saturated", "build_level_margin_program"),
     "ges": ("lyapcheck.paper.conditions.ges", "build_program"),
 }
 #: the programs stored in ``_compiled/`` (others are compiled in-process on first use)
-PROGRAMS: Final = ("prop41", "sector", "sector_8", "ultimate", "sos_4", "sos_6", "sos_bound", "sos_bound_parity", "level_4", "level_6",
+PROGRAMS: Final = ("prop41", "sector", "sector_8", "ultimate", "sos_4", "sos_6", "sos_bound", "sos_bound_parity",
+                   "sos_bound_fixed", "sos_bound_parity_fixed", "level_4", "level_6",
                    "level_margin_4", "level_margin_6", "ges_4_1")
 
 

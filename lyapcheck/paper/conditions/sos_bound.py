@@ -64,6 +64,12 @@ ETA = 1e-7
 TOP_DELTA = Fraction(1, 10**4)
 #: decay rates tried (balanced time); each costs one solve of ~0.1 s (see SEARCH_SCALES)
 LAMBDA_GRID = (0.03, 0.3, 1.0)
+#: the bound stated at a decay rate: the solver's smallest B raised by this fraction and rounded
+#: up to BOUND_DIGITS significant digits (a fixed grid: two platforms state the same bound unless
+#: their smallest B straddle a grid point, one step apart then); where the smallest B's own
+#: solution fails the exact check, the Gram matrices are solved again at that level (see run)
+BOUND_BACK_OFF = 1e-3
+BOUND_DIGITS = 4
 #: coordinates of the search, tried in this order for each decay rate until a solution passes the
 #: exact check: (``beta`` over ``sqrt(b)``, floor of ``kappa``; ``kappa = k / omega`` clipped to
 #: [floor, 1]). Chosen on 102 points of the shipped sweeps: the first alone certified 16 points
@@ -172,12 +178,24 @@ def top_shift() -> np.ndarray:
 
 
 def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
-    """The three certificates of the module docstring at given scales and lambda (DPP; compiled once)."""
+    """The three certificates of the module docstring at given scales and lambda, ``B`` minimised
+    (DPP; compiled once)."""
+    return _build_full(cp, fixed=False)
+
+
+def build_fixed_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """:func:`build_program` at a given bound ``B`` (a parameter), a feasibility program: the
+    solver stops near the centre of the feasible set, away from the singular Gram matrices of the
+    smallest ``B`` (:func:`run` uses it when the smallest ``B``'s solution fails the exact check)."""
+    return _build_full(cp, fixed=True)
+
+
+def _build_full(cp: Any, fixed: bool) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     QV = cp.Variable((len(Z_V), len(Z_V)), symmetric=True)
     T = cp.Variable((len(Z_T), len(Z_T)), symmetric=True)
     QD = cp.Variable((len(Z_D), len(Z_D)), symmetric=True)
     QE = cp.Variable((len(Z_E), len(Z_E)), symmetric=True)
-    B = cp.Variable()
+    B = cp.Parameter(nonneg=True) if fixed else cp.Variable()
     lam = cp.Parameter(nonneg=True)
     k2 = cp.Parameter(nonneg=True)
     beta = cp.Parameter(nonneg=True)
@@ -189,7 +207,10 @@ def build_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     cons += dissipation_constraints(QD, QV, T, C, lam, k2, cp)
     cons += output_constraints(QE, QV, B, beta, beta2)
     params = {"lambda": lam, "k2": k2, "beta": beta, "beta2": beta2, **{_param_name(m): C[m] for m in MONOS_D}}
-    return cp.Problem(cp.Minimize(B), cons), params, {"Q_V": QV, "T": T, "Q_D": QD, "Q_E": QE, "B": B}
+    variables = {"Q_V": QV, "T": T, "Q_D": QD, "Q_E": QE}
+    if fixed:
+        return cp.Problem(cp.Minimize(0), cons), {**params, "B": B}, variables
+    return cp.Problem(cp.Minimize(B), cons), params, {**variables, "B": B}
 
 
 #: the Gram matrices of a certificate: (variable name, basis)
@@ -209,11 +230,19 @@ def build_parity_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     a quarter of the time. The exact check is the full one, on the full matrices (zero off the
     blocks).
     """
+    return _build_parity(cp, fixed=False)
+
+
+def build_parity_fixed_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
+    """:func:`build_parity_program` at a given ``B`` (as :func:`build_fixed_program`)."""
+    return _build_parity(cp, fixed=True)
+
+
+def _build_parity(cp: Any, fixed: bool) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     cons: list[Any] = []
     variables: dict[str, Any] = {}
     QV, T, QD, QE = (positive_parity_gram(cp, basis, name, cons, variables) for name, basis in GRAMS)
-    B = cp.Variable()
-    variables["B"] = B
+    B = cp.Parameter(nonneg=True) if fixed else cp.Variable()
     lam = cp.Parameter(nonneg=True)
     k2 = cp.Parameter(nonneg=True)
     beta = cp.Parameter(nonneg=True)
@@ -222,7 +251,9 @@ def build_parity_program(cp: Any) -> tuple[Any, dict[str, Any], dict[str, Any]]:
     cons += dissipation_constraints(QD, QV, T, C, lam, k2, cp, monomials=EVEN_MONOS_D)
     cons += even_output_constraints(QE, QV, B, beta, beta2)
     params = {"lambda": lam, "k2": k2, "beta": beta, "beta2": beta2, **{_param_name(m): C[m] for m in EVEN_MONOS_D}}
-    return cp.Problem(cp.Minimize(B), cons), params, variables
+    if fixed:
+        return cp.Problem(cp.Minimize(0), cons), {**params, "B": B}, variables
+    return cp.Problem(cp.Minimize(B), cons), params, {**variables, "B": B}
 
 
 def positive_parity_gram(cp: Any, basis: Sequence[poly.Monomial], name: str, cons: list[Any],
@@ -259,11 +290,12 @@ def dynamics_data(fields: tuple[poly.Poly, poly.Poly, poly.Poly], beta: Fraction
     return {"beta": float(beta), "beta2": float(beta * beta), **{_param_name(m): mats[m] for m in MONOS_D}}
 
 
-def program(parity_reduced: bool = False) -> CompiledProgram:
-    """The compiled search: the full program, or the sign-symmetric one (:func:`build_parity_program`)."""
+def program(parity_reduced: bool = False, fixed: bool = False) -> CompiledProgram:
+    """The compiled search: the full program or the sign-symmetric one (:func:`build_parity_program`),
+    minimising ``B`` or, with ``fixed``, at a given ``B`` (:func:`build_fixed_program`)."""
     from lyapcheck.paper.conditions import compiled
 
-    return compiled.load("sos_bound_parity" if parity_reduced else "sos_bound")
+    return compiled.load("sos_bound" + ("_parity" if parity_reduced else "") + ("_fixed" if fixed else ""))
 
 
 def scales(dyn: ScaledDynamics) -> tuple[Fraction, Fraction]:
@@ -342,8 +374,10 @@ class RoundedSolution:
 
 
 def round_solution(v: Mapping[str, Any], QD_values: Sequence[Any], lam: float, beta: Fraction,
-                   blocks: Sequence[tuple[tuple[poly.Poly, poly.Poly, poly.Poly], Fraction]]) -> RoundedSolution | None:
-    """Round ``B`` up, ``Q_V`` and ``T`` to rationals, and project ``Q_E`` and each dissipation Gram
+                   blocks: Sequence[tuple[tuple[poly.Poly, poly.Poly, poly.Poly], Fraction]],
+                   bound: Fraction | None = None) -> RoundedSolution | None:
+    """Round ``B`` up (or take ``bound``, the level a margin solve was given), ``Q_V`` and ``T`` to
+    rationals, and project ``Q_E`` and each dissipation Gram
     matrix (one per block: its search fields and disturbance scale) onto its identity, exactly.
 
     None if an identity is not representable, or if the float screen shows a Gram matrix
@@ -351,7 +385,7 @@ def round_solution(v: Mapping[str, Any], QD_values: Sequence[Any], lam: float, b
     keeps definiteness). Shared by the point search and the box search (:mod:`lyapcheck.paper.boxes.bounds`).
     """
     lam_q = exact.to_rational(lam, 6)
-    B = exact.to_rational(float(v["B"]) * (1 + 1e-6) + 1e-9, 9)
+    B = bound if bound is not None else exact.to_rational(float(v["B"]) * (1 + 1e-6) + 1e-9, 9)
     QV = exact.symmetrize(exact.rational_matrix(v["Q_V"]))
     T = exact.symmetrize(exact.rational_matrix(v["T"]))
     V, tau = poly.gram_form(Z_V, QV), poly.gram_form(Z_T, T)
@@ -367,11 +401,12 @@ def round_solution(v: Mapping[str, Any], QD_values: Sequence[Any], lam: float, b
 
 
 def _certificate(dyn: ScaledDynamics, k: Fraction, v: Mapping[str, Any], lam: float,
-                 coords: tuple[Fraction, Fraction, Fraction]) -> dict[str, Any] | None:
-    """Round a solution found in ``coords`` to an exact certificate in ``w``; None unless it checks."""
+                 coords: tuple[Fraction, Fraction, Fraction], bound: Fraction | None = None) -> dict[str, Any] | None:
+    """Round a solution found in ``coords`` (at the level ``bound``, for a margin solve) to an
+    exact certificate in ``w``; None unless it checks."""
     beta, omega, kappa = coords
     fields = search_fields(balanced_fields(dyn, beta, omega), kappa)
-    r = round_solution(v, [v["Q_D"]], lam, beta, [(fields, k / omega / kappa)])
+    r = round_solution(v, [v["Q_D"]], lam, beta, [(fields, k / omega / kappa)], bound)
     if r is None:
         return None
     cert = {"lambda": str(r.lam), "B": str(r.B), "beta": str(beta), "omega": str(omega),
@@ -386,16 +421,22 @@ def run(system: System, search: tuple[SearchScale, ...] = SEARCH_SCALES,
 
     For each decay rate of :data:`LAMBDA_GRID` the coordinates of ``search`` are tried in order
     until one gives a certificate, with the sign-symmetric program (:func:`build_parity_program`)
-    when the field allows it. Both programs have the same optimum, but where Clarabel stops short
-    of it ("inaccurate") whether the rounded solution passes the exact check depends on where it
-    stopped. So at a point where some decay rate is certified, a rate whose attempts all failed
-    although the solver promised a smaller ``B`` than the best certified one gets one more
-    attempt, with the full program in the first coordinates. The result is the best bound over
-    the rates. Every solve is independent of the others (no warm start), so
-    the first coordinates' solves run side by side in threads (Clarabel releases the GIL) while
-    this thread checks the finished ones: the result does not depend on their timing.
+    when the field allows it. In each, the smallest ``B`` is solved for and its solution rounded
+    and checked exactly. That solution lies where Gram matrices are singular, and where Clarabel
+    stops short of the optimum ("inaccurate") whether it passes depends on where it stopped, so on
+    the platform's last bits; when it fails, the Gram matrices are solved again at the level
+    ``B1 (1 + BOUND_BACK_OFF)`` rounded up to :data:`BOUND_DIGITS` digits (:func:`build_fixed_program`:
+    the solver then stops near the centre of that set), sign-symmetric and then full. The bound
+    stated for a rate is that grid level whichever of the two passed (a certificate with a smaller
+    ``B`` proves it too), so platforms that pass by different routes state the same bound; the
+    result is the best over the rates (the first of equal ones). The first coordinates' solves run
+    side by side in threads (Clarabel releases the GIL) while this thread checks the finished
+    ones; every solve is independent of the others (no warm start), so the result does not depend
+    on their timing.
     """
     from concurrent.futures import ThreadPoolExecutor
+
+    from lyapcheck.paper.conditions.rounding import ceil_to_digits
 
     dyn = scaled_dynamics(system)
     if dyn is None or system.d_max <= 0:
@@ -403,10 +444,10 @@ def run(system: System, search: tuple[SearchScale, ...] = SEARCH_SCALES,
     k = abs(system.E[0]) * system.d_max / (system.delta * dyn.time_scale)
     # the field's symmetry does not depend on the coordinates (scalings keep each monomial's parity)
     symmetric = is_sign_symmetric(dyn.fields())
-    attempts = [(scale, symmetric) for scale in search]
     data: dict[SearchScale, tuple[tuple[Fraction, Fraction, Fraction], dict[str, Any]]] = {}
 
-    def prepared(scale: SearchScale, reduced: bool) -> tuple[tuple[Fraction, Fraction, Fraction], dict[str, Any]]:
+    def prepared(scale: SearchScale, reduced: bool, fixed: bool = False) -> tuple[tuple[Fraction, Fraction, Fraction],
+                                                                                  dict[str, Any]]:
         if scale not in data:
             coords = search_coordinates(dyn, k, scale)
             beta, omega, kappa = coords
@@ -414,57 +455,60 @@ def run(system: System, search: tuple[SearchScale, ...] = SEARCH_SCALES,
                                    "k2": float((k / omega / kappa) ** 2)}
         coords, values = data[scale]
         if reduced:  # the odd monomials' tables belong to identities the reduced program leaves out
-            params = program(parity_reduced=True).data.params
+            params = program(parity_reduced=True, fixed=fixed).data.params
             values = {name: v for name, v in values.items() if name in params}
         return coords, values
 
-    def solve(attempt: tuple[SearchScale, bool], lam: float) -> Any:
-        return program(parity_reduced=attempt[1]).solve({**prepared(*attempt)[1], "lambda": lam}, max_iter=max_iter)
+    def solve(scale: SearchScale, lam: float) -> Any:
+        return program(parity_reduced=symmetric).solve({**prepared(scale, symmetric)[1], "lambda": lam},
+                                                       max_iter=max_iter)
 
-    def certificate(solved: Any, lam: float, attempt: tuple[SearchScale, bool]) -> dict[str, Any] | None:
-        # an inaccurate solution is still a candidate: the exact check is the judge
+    def rounded(values: Any, reduced: bool, lam: float, scale: SearchScale, bound: Fraction | None = None
+                ) -> dict[str, Any] | None:
+        full = assemble_parity_blocks(values, GRAMS) if reduced else values
+        return _certificate(dyn, k, full, lam, prepared(scale, reduced)[0], bound)
+
+    def at_level(scale: SearchScale, reduced: bool, lam: float, level: Fraction) -> dict[str, Any] | None:
+        solved = program(parity_reduced=reduced, fixed=True).solve(
+            {**prepared(scale, reduced, fixed=True)[1], "lambda": lam, "B": float(level)}, max_iter=max_iter)
         if solved.report.outcome not in ("optimal", "inaccurate") or solved.values is None:
             return None
-        values = assemble_parity_blocks(solved.values, GRAMS) if attempt[1] else solved.values
-        return _certificate(dyn, k, values, lam, prepared(*attempt)[0])
+        return rounded(solved.values, reduced, lam, scale, level)
 
-    found: dict[float, dict[str, Any]] = {}
-    #: per decay rate whose attempts all failed, the smallest B a solver reported (its promise)
-    promised: dict[float, float] = {}
-
-    def attempt_at(solved: Any, lam: float, attempt: tuple[SearchScale, bool]) -> dict[str, Any] | None:
-        cert = certificate(solved, lam, attempt)
-        if cert is None and solved.report.objective is not None:
-            promised[lam] = min(promised.get(lam, math.inf), float(solved.report.objective))
-        return cert
-
-    prepared(*attempts[0])  # once, before the threads use it
-    with ThreadPoolExecutor(max_workers=min(len(LAMBDA_GRID), os.cpu_count() or 1)) as pool:
-        first = [pool.submit(solve, attempts[0], lam) for lam in LAMBDA_GRID]
-        for lam, pending in zip(LAMBDA_GRID, first):
-            cert = attempt_at(pending.result(), lam, attempts[0])
-            for attempt in attempts[1:]:
-                if cert is not None:
-                    break
-                cert = attempt_at(solve(attempt, lam), lam, attempt)
+    def attempt(solved: Any, scale: SearchScale, lam: float) -> tuple[Fraction, dict[str, Any]] | None:
+        """(the bound stated at ``lam``, a certificate proving it) from a smallest-B solve, or None."""
+        b = solved.report.objective
+        # an inaccurate solution is still a candidate: the exact check is the judge
+        if solved.report.outcome not in ("optimal", "inaccurate") or solved.values is None or b is None \
+                or not (math.isfinite(b) and b > 0):
+            return None
+        level = ceil_to_digits(float(b) * (1 + BOUND_BACK_OFF), BOUND_DIGITS)
+        cert = rounded(solved.values, symmetric, lam, scale)
+        for reduced in ((True, False) if symmetric else (False,)):
             if cert is not None:
-                found[lam] = cert
-    if symmetric and found:
-        # a decay rate whose sign-symmetric solutions failed the check although the solver promised
-        # a smaller B than the best certified one: the full program's solution may pass (see above)
-        best_B = min(float(Fraction(c["B"])) for c in found.values())
-        for lam in LAMBDA_GRID:
-            if lam not in found and promised.get(lam, math.inf) < best_B:
-                cert = certificate(solve((search[0], False), lam), lam, (search[0], False))
-                if cert is not None:
-                    found[lam] = cert
-    best: dict[str, Any] | None = None
-    for lam in LAMBDA_GRID:
-        if lam in found:
-            eps_bound = system.delta * exact.sqrt_upper(Fraction(found[lam]["B"]))
-            if best is None or eps_bound < Fraction(best["eps_bound"]):
-                best = {**found[lam], "eps_bound": str(eps_bound)}
-    return best
+                break
+            cert = at_level(scale, reduced, lam, level)
+        return None if cert is None else (max(level, Fraction(cert["B"])), cert)
+
+    for scale in search:
+        prepared(scale, symmetric)  # once, before the threads use them
+        prepared(scale, symmetric, fixed=True)
+    found: dict[float, tuple[Fraction, dict[str, Any]]] = {}
+    with ThreadPoolExecutor(max_workers=min(len(LAMBDA_GRID), os.cpu_count() or 1)) as pool:
+        first = [pool.submit(solve, search[0], lam) for lam in LAMBDA_GRID]
+        for lam, pending in zip(LAMBDA_GRID, first):
+            result = attempt(pending.result(), search[0], lam)
+            for scale in search[1:]:
+                if result is not None:
+                    break
+                result = attempt(solve(scale, lam), scale, lam)
+            if result is not None:
+                found[lam] = result
+    if not found:
+        return None
+    lam = min(found, key=lambda x: (found[x][0], LAMBDA_GRID.index(x)))
+    level, cert = found[lam]
+    return {**cert, "eps_bound": str(system.delta * exact.sqrt_upper(level))}
 
 
 def run_class(system: System) -> "ConditionResult":
