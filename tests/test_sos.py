@@ -331,3 +331,92 @@ def test_the_sector_check_refuses_a_negative_decay_rate() -> None:
     ok, why = sector.exact_check([unstable], exact.matrix([[1, 0], [0, 1]]), Fraction(-1))
     assert not ok and "rate" in why
     assert not sector.exact_check([unstable], exact.matrix([[1, 0], [0, 1]]), Fraction(0))[0]
+
+
+def _noisy_solves(monkeypatch: pytest.MonkeyPatch, seed: int, size: float = 1e-13) -> None:
+    """Every compiled program solves data perturbed by ``size`` relative (far above the last-bit
+    differences another platform's rounding makes in the data): an emulated second platform."""
+    from lyapcheck.sos.sdp import CompiledProgram
+
+    rng = np.random.default_rng(seed)
+    real = CompiledProgram.solve
+
+    def solve(self: CompiledProgram, values: dict, **kw: object) -> object:
+        noisy = {k: np.asarray(v, dtype=float) * (1 + size * rng.standard_normal(np.shape(v))) for k, v in values.items()}
+        return real(self, noisy, **kw)
+
+    monkeypatch.setattr(CompiledProgram, "solve", solve)
+
+
+def test_the_invariant_level_sits_on_a_fixed_grid_below_the_largest_and_does_not_follow_the_platform(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 24: at the centre of examples/sweep-dmax-alpha.toml the S-procedure level passed its
+    exact check on one platform (radius 0.01146 m) and not on another (0.000547 m). It is now the
+    solver's largest level backed off 1e-3 and rounded down to 4 digits, re-solved there: the same
+    level, and so the same radius, under perturbed solves."""
+    from lyapcheck.paper.conditions import saturated
+    from lyapcheck.paper.conditions.rounding import floor_to_digits
+    from sweeps.spec import load_spec
+
+    spec = load_spec(Path(__file__).resolve().parents[1] / "examples" / "sweep-dmax-alpha.toml")
+    problem = spec.problem_at([a.values[a.size // 2] for a in spec.axes])
+    clean = run_conditions(problem, "derived", ("sos_gas", "saturated_loop"))["saturated_loop"]
+    level = Fraction(clean.certificate["level_certificate"]["c"])
+    assert level == floor_to_digits(float(level), saturated.LEVEL_DIGITS)  # a point of the grid
+    assert clean.numbers["invariant_eps_radius_m_at_s0"] > 0.011
+    for seed in (1, 2):
+        with monkeypatch.context() as m:
+            _noisy_solves(m, seed)
+            noisy = run_conditions(problem, "derived", ("sos_gas", "saturated_loop"))["saturated_loop"]
+        assert Fraction(noisy.certificate["level_certificate"]["c"]) == level
+        assert noisy.numbers["invariant_eps_radius_m_at_s0"] == pytest.approx(
+            clean.numbers["invariant_eps_radius_m_at_s0"], rel=1e-4)
+
+
+def test_the_decay_rate_bisection_is_steered_by_the_margin_not_by_the_last_bits() -> None:
+    """Issue 24: at sweep-alpha-sigma@0,11 (margins near 1e-6, every solve "inaccurate") the exact
+    check of one bisection step failed on one platform only and the certified rate moved 40 %.
+    best_decay_rate now steps on the solver's margin and checks the rates reached from the largest
+    down: a check that fails at the top rate costs one step, not the bracket."""
+    checks: list[Fraction] = []
+
+    def trial(mu: Fraction) -> sos.Trial:
+        margin = 1e-6 if mu < Fraction(31, 10) else -1e-12  # the margin vanishes between 3.08 and 3.36
+
+        def check() -> dict | None:
+            checks.append(mu)
+            return None if mu == Fraction(283, 100) else {"mu_scaled": str(mu), "margin": margin}
+        return margin, check
+
+    cert = sos.best_decay_rate(trial, {"mu_scaled": "0", "margin": 1e-6})
+    # steps 4 (no), 1, 2, 2.83 (reached), 3.36 (no), 3.08 (reached): the largest reached, 3.08, checks
+    assert Fraction(cert["mu_scaled"]) == Fraction(308, 100) and checks == [Fraction(308, 100)]
+    # its check failing, the next largest is checked; 2.83 failing too, 2
+    checks.clear()
+    never = {Fraction(308, 100), Fraction(283, 100)}
+
+    def trial2(mu: Fraction) -> sos.Trial:
+        margin, _ = trial(mu)
+        return margin, lambda: checks.append(mu) or (None if mu in never else {"mu_scaled": str(mu)})
+    assert sos.best_decay_rate(trial2, {"mu_scaled": "0", "margin": 1e-6})["mu_scaled"] == "2"
+    assert checks == [Fraction(308, 100), Fraction(283, 100), Fraction(2)]
+
+
+def test_the_sos_bound_states_a_grid_level_that_perturbed_solves_share(monkeypatch: pytest.MonkeyPatch) -> None:
+    """sos_bound states Delta sqrt(B) for B the solver's smallest bound raised 1e-3 and rounded up
+    to 4 digits, whichever route passed the exact check: perturbed solves state the same bound."""
+    from lyapcheck.paper.conditions import sos_bound as sb
+    from lyapcheck.paper.conditions.rounding import ceil_to_digits
+
+    system = build_system(problem_from_sources(PAPER_TOML, {}), "derived")
+    clean = sb.run(system)
+    assert clean is not None and sb.verify(system, clean)[0]
+    stated = Fraction(clean["eps_bound"]) / system.delta  # sqrt of the grid level, rounded up
+    assert Fraction(clean["B"]) <= stated**2
+    with monkeypatch.context() as m:
+        _noisy_solves(m, 3)
+        noisy = sb.run(system)
+    assert noisy is not None and sb.verify(system, noisy)[0]
+    assert noisy["eps_bound"] == clean["eps_bound"] or Fraction(noisy["eps_bound"]) == pytest.approx(
+        Fraction(clean["eps_bound"]), rel=1e-3)
+    assert ceil_to_digits(float(stated**2), sb.BOUND_DIGITS) >= Fraction(clean["B"])
