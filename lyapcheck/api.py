@@ -526,15 +526,22 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
 class SweepResult:
     """A finished (or resumed) sweep: the store's summary and what this run computed."""
 
-    summary: Any  # sweeps.summary.Summary, or sweeps.box_summary.BoxSummary for mode = "boxes"
-    run: Any  # sweeps.run.SweepReport, or sweeps.boxes_run.BoxSweepReport
+    summary: Any  # sweeps.summary.Summary, BoxSummary for mode = "boxes", ModelSweepSummary for a model file
+    run: Any  # sweeps.run.SweepReport, sweeps.boxes_run.BoxSweepReport, or sweeps.model_run.ModelSweepReport
 
     @property
     def mode(self) -> str:
+        """``points`` or ``boxes`` (the paper's loop), ``model_points`` or ``model_boxes`` (a model file)."""
+        if hasattr(self.run, "model_sha256"):
+            return str(self.run.mode)
         return "boxes" if hasattr(self.run, "boxes_computed_now") else "points"
 
     @property
     def violations(self) -> int:
+        if self.mode in ("model_points", "model_boxes"):
+            from sweeps.model_summary import violation_count as model_violations
+
+            return model_violations(self.summary)
         if self.mode == "boxes":
             from sweeps.box_summary import violation_count as box_violations
 
@@ -545,6 +552,10 @@ class SweepResult:
 
     def to_json(self) -> dict[str, Any]:
         payload: dict[str, Any] = self.summary.to_json()
+        if self.mode in ("model_points", "model_boxes"):
+            payload.update({"store": str(self.run.path), "computed_now": self.run.computed_now,
+                            "wall_seconds": self.run.wall_seconds})
+            return payload
         if self.mode == "boxes":
             payload.update({"store": str(self.run.path), "computed_now": self.run.boxes_computed_now,
                             "wall_seconds": self.run.wall_seconds})
@@ -573,10 +584,14 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
         Also write the results to these ``.nc`` / ``.csv`` files.
     progress, on_ready
         Callbacks for a progress display: (points finished, total), and "workers are up".
+
+    A spec whose ``[sweep]`` names a model file (``model = "FILE.toml"``) sweeps that model's
+    parameters (:mod:`sweeps.model_spec`, ``docs/model-sweeps.md``); the summary is then a
+    :class:`sweeps.model_summary.ModelSweepSummary`.
     """
     from sweeps.export import EXPORT_SUFFIXES, export
+    from sweeps.model_spec import ModelSweepSpec, load_any_spec
     from sweeps.run import run_sweep
-    from sweeps.spec import load_spec
     from sweeps.store import Store
     from sweeps.summary import summarize
 
@@ -586,7 +601,18 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
     for target in exports:
         if Path(target).suffix.lower() not in EXPORT_SUFFIXES:
             raise InvalidParameter("export", "a file name ending in .nc or .csv", str(target))
-    parsed = load_spec(spec)
+    parsed = load_any_spec(spec)
+    if isinstance(parsed, ModelSweepSpec):
+        from sweeps.model_run import run_model_sweep
+        from sweeps.model_summary import open_summary
+        from sweeps.runners import make_runner
+
+        if exports:
+            raise InvalidParameter("export", "absent for a model sweep (its store holds certificates as text: read it "
+                                   "with xarray, or render it with lyapcheck report)", str(exports[0]))
+        model_run = run_model_sweep(parsed, out, runner=make_runner(scheduler=scheduler, workers=workers),
+                                    progress=progress, on_ready=on_ready)
+        return SweepResult(summary=open_summary(out, parsed), run=model_run)
     if parsed.mode == "boxes":
         from sweeps.box_store import BoxStore
         from sweeps.box_summary import summarize_boxes

@@ -1,6 +1,7 @@
 """``lyapcheck sweep SPEC.toml --out RESULTS.zarr`` (contract in DESIGN.md).
 
-Runs or resumes a parameter sweep (:mod:`sweeps`), shows a progress bar with rate and ETA on
+Runs or resumes a parameter sweep (:mod:`sweeps`; of a model file's parameters when the spec's
+``[sweep]`` names one, :mod:`sweeps.model_spec`), shows a progress bar with rate and ETA on
 stderr (unless ``--quiet``), prints the summary, and exits with 1 when any soundness violation
 is in the store (printed loudly on stderr even with ``--quiet``), else 0. Running the same
 command again on a finished store computes nothing and prints the summary again; with
@@ -80,13 +81,50 @@ def _print_box_summary(summary: Any, report: Any) -> None:
                   "boxes simulated; worst |x(t)| / envelope = " + ("n/a" if math.isnan(worst) else f"{worst:.3g}"))
 
 
+def _print_model_summary(summary: Any, report: Any) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console()
+    boxes = summary.mode == "model_boxes"
+    what = "boxes" if boxes else "points"
+    console.print(f"[bold]{report.path}[/]: model {summary.model.get('name') or summary.model.get('file')} "
+                  f"(SHA-256 {summary.model.get('sha256', '')[:12]}...), {summary.computed} {what} stored, "
+                  f"{summary.leaves} {'leaves' if boxes else 'points'} ({report.computed_now} computed in this run, "
+                  f"{report.wall_seconds:.1f} s)")
+    measure = ", ".join(f"{d} {'log' if s == 'log' else 'linear'}" for d, s in summary.scales.items())
+    table = Table(title=f"share of the parameter window ({measure})")
+    table.add_column("status", style="cyan")
+    table.add_column("share", justify="right")
+    table.add_column(what, justify="right")
+    for status, share in summary.share.items():
+        label = status + (" (proved for every value of its box)" if boxes and status == "certified" else
+                          " (at the grid point)" if status == "certified" else "")
+        table.add_row(label, f"{share:.3f}", str(summary.counts.get(status, "")))
+    console.print(table)
+    by_class = Table(title="certified, per class")
+    by_class.add_column("class", style="cyan")
+    by_class.add_column("share", justify="right")
+    by_class.add_column(what, justify="right")
+    for cls, share in summary.share_by_class.items():
+        by_class.add_row(cls, f"{share:.3f}", str(summary.counts_by_class.get(cls, 0)))
+    console.print(by_class)
+    cross = summary.cross_check
+    console.print(f"cross-check: {cross['parameter_points']} parameter points and {cross['trajectories']} trajectories "
+                  f"of {cross['checked']} certified {what} simulated; worst V rise "
+                  + ("n/a" if cross["worst_rise"] is None else f"{cross['worst_rise']:.3g}") + " of V(0)")
+
+
 def _shout(summary: Any) -> None:
     from rich.console import Console
 
     err = Console(stderr=True)
     listed = [v for v in summary.violations if "more" not in v]
     more = sum(v.get("more", 0) for v in summary.violations)
-    what = ("box(es) where a simulated point leaves the certified GES envelope" if summary.to_json().get("mode") == "boxes"
+    mode = summary.to_json().get("mode")
+    what = ("box(es) where a simulated point leaves the certified GES envelope" if mode == "boxes"
+            else "certified point(s) or box(es) of the model where a simulated trajectory leaves a certified set, "
+                 "envelope or bound" if mode in ("model_points", "model_boxes")
             else "point(s) where simulation leaves a certified bound or diverges under a stability certificate")
     err.print(f"[bold white on red] SOUNDNESS VIOLATION [/] {len(listed) + more} {what}:")
     for v in listed:
@@ -133,7 +171,9 @@ def register(group: click.Group) -> None:
         if as_json:
             emit_json(result.to_json())
         elif not quiet:
-            if result.mode == "boxes":
+            if result.mode in ("model_points", "model_boxes"):
+                _print_model_summary(result.summary, result.run)
+            elif result.mode == "boxes":
                 _print_box_summary(result.summary, result.run)
             else:
                 _print_summary(result.summary, result.run)
