@@ -69,6 +69,7 @@ def read_store(path: str | Path) -> Any:
     codec error, a JSON error, a missing key) surfaces here, where it is a bad input file.
     """
     from reports.sweep_page import open_store
+    from sweeps.model_schema import check_model_dataset, is_model_dataset
     from sweeps.schema import check_dataset
 
     try:
@@ -78,7 +79,10 @@ def read_store(path: str | Path) -> Any:
     except Exception as exc:  # noqa: BLE001 - zarr and its codecs raise many types for a corrupt store
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputFileError(f"'{path}' is not a readable sweep store (Zarr): {first}") from None
-    check_dataset(dataset, str(path))
+    if is_model_dataset(dataset):  # a model file's sweep (sweeps.model_schema)
+        check_model_dataset(dataset, str(path))
+    else:
+        check_dataset(dataset, str(path))
     return dataset
 
 
@@ -86,9 +90,14 @@ def sweep_html(store: Any) -> str:
     """The sweep report as one self-contained HTML page (``store``: a path or an xarray Dataset)."""
     from reports.html import render_html
     from reports.sweep_page import sweep_context
+    from sweeps.model_schema import is_model_dataset
     from sweeps.schema import is_box_dataset
 
     dataset = read_store(store) if isinstance(store, (str, Path)) else store
+    if is_model_dataset(dataset):  # a model file's points or boxes: reports.model_sweep_page
+        from reports.model_sweep_page import model_sweep_context
+
+        return render_html("model_sweep.html.j2", model_sweep_context(dataset))
     if is_box_dataset(dataset):  # mode = "boxes": one row per box, not a grid of points
         from reports.box_page import box_context
 

@@ -1,0 +1,254 @@
+"""The report of a model sweep: the map of certified, refuted and undecided points or boxes.
+
+A model sweep's store (:mod:`sweeps.model_schema`) holds, per grid point or per box of a
+refinement tree, the status (``certified``: a class of the model proved its property, for every
+parameter value of a box; ``refuted``: the equilibrium is proved unstable there, exactly;
+``not_certified``: nothing decided), each class's status and key figures, the certificate document
+and the simulation cross-check. The page draws the map over the swept parameters:
+
+* boxes, one or two parameters: every leaf of the tree as a rectangle (an interval of a strip
+  with one parameter), coloured by status, with the SVG id ``box-<row>-<status>``;
+* points, one to three parameters: :func:`reports.figures.category_map` (three: slices);
+* boxes over three parameters: no map (a note), the leaves are listed instead;
+
+then the summary table (the same numbers as ``lyapcheck sweep`` prints, from
+:func:`sweeps.model_summary.summarize_dataset`), the classes' figures, the cross-check and its
+violations, the model file verbatim with its SHA-256, and the spec.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from typing import Any, Final, Mapping, Sequence
+
+import numpy as np
+
+from reports import figures
+from reports.sweep_page import _json_attr, _mpl
+from reports.views import fmt_float
+from sweeps.model_schema import BOXES_MODE, box_variables, json_list
+from sweeps.model_summary import LEAF_STATUSES, ModelSweepSummary, stored_window, summarize_dataset, violation_count
+from sweeps.schema import BOX_STATUS_CODES
+
+#: code -> status name of a leaf or point
+NAMES: Final = {BOX_STATUS_CODES[s]: s for s in LEAF_STATUSES}
+#: what each status means on this page
+MEANING: Final = {
+    "certified": "a class of the model proved its property (a region of attraction, GAS, GES or an ultimate bound) "
+                 "with a certificate checked exactly: at the grid point, or for every parameter value of the box",
+    "not_certified": "no class certified; nothing is proved either way (the box may be at the minimum width or the "
+                     "sweep at its box budget)",
+    "refuted": "the equilibrium is proved unstable, exactly (the linearization has an eigenvalue with positive real "
+               "part) at the point or at a corner of the box: no stability certificate can exist there",
+}
+#: leaves listed when there is no map (three swept parameters)
+MAX_LEAF_ROWS: Final = 200
+MAX_VIOLATION_ROWS: Final = 50
+VIEW_PAD: Final = 0.04
+
+
+def _view(lo: float, hi: float, log: bool) -> tuple[float, float]:
+    if log:
+        a, b = math.log10(lo), math.log10(hi)
+        pad = VIEW_PAD * (b - a)
+        return 10 ** (a - pad), 10 ** (b + pad)
+    pad = VIEW_PAD * (hi - lo)
+    return lo - pad, hi + pad
+
+
+def box_map(dims: Sequence[str], scales: Mapping[str, str], window: Mapping[str, tuple[float, float]],
+            rows: np.ndarray, codes: np.ndarray, lo: np.ndarray, hi: np.ndarray, *, partial: bool, title: str) -> bytes:
+    """SVG of the leaves over one or two parameters: one rectangle per leaf, id ``box-<row>-<status>``."""
+    from matplotlib.patches import Patch, Rectangle
+
+    one_d = len(dims) == 1
+    fig, grid = figures._new(1.9 if one_d else 3.6)
+    ax = grid[0, 0]
+    x_lo, x_hi = window[dims[0]]
+    y_lo, y_hi = (0.0, 1.0) if one_d else window[dims[1]]
+    if partial:
+        ax.add_patch(Rectangle((x_lo, y_lo), x_hi - x_lo, y_hi - y_lo, zorder=0, gid="not-computed",
+                               facecolor="white", edgecolor="#8c959f", hatch="///", lw=0.0))
+    for row, code, a, b in zip(rows, codes, lo, hi):
+        name = NAMES.get(int(code), "not_certified")
+        b_lo, b_hi = (0.0, 1.0) if one_d else (a[1], b[1])
+        ax.add_patch(Rectangle((a[0], b_lo), b[0] - a[0], b_hi - b_lo, facecolor=figures.STATUS_COLOURS[name],
+                               edgecolor="white", lw=0.4, zorder=1, gid=f"box-{int(row)}-{name}"))
+    ax.add_patch(Rectangle((x_lo, y_lo), x_hi - x_lo, y_hi - y_lo, fill=False, edgecolor="k", lw=0.8, zorder=2,
+                           gid="window"))
+    if scales[dims[0]] == "log":
+        ax.set_xscale("log")
+    ax.set_xlim(*_view(x_lo, x_hi, scales[dims[0]] == "log"))
+    ax.set_xlabel(_mpl(dims[0]))
+    if one_d:
+        ax.set_ylim(-0.15, 1.15)
+        ax.set_yticks([])
+    else:
+        if scales[dims[1]] == "log":
+            ax.set_yscale("log")
+        ax.set_ylim(*_view(y_lo, y_hi, scales[dims[1]] == "log"))
+        ax.set_ylabel(_mpl(dims[1]))
+    present = [s for s in LEAF_STATUSES if np.any(codes == BOX_STATUS_CODES[s])] or ["certified"]
+    handles: list[Any] = [Patch(facecolor=figures.STATUS_COLOURS[s], edgecolor="0.5", label=s.replace("_", " "))
+                          for s in present]
+    if partial:
+        handles.append(Patch(facecolor="white", edgecolor="#8c959f", hatch="///", label="not computed"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(5, len(handles)), fontsize=7, frameon=False)
+    fig.suptitle(_mpl(title), fontsize=10)
+    return figures.to_svg(fig)
+
+
+def _percent(share: float) -> str:
+    if 0 < share < 0.0005:
+        return "< 0.1 %"
+    return f"{100 * share:.1f} %"
+
+
+def _span(values: list[float] | None, unit: str = "") -> str:
+    if not values:
+        return "—"
+    lo, hi = values
+    return f"{fmt_float(lo, 4)}{unit}" if lo == hi else f"{fmt_float(lo, 4)} … {fmt_float(hi, 4)}{unit}"
+
+
+def _where_box(dims: Sequence[str], lo: Sequence[float], hi: Sequence[float]) -> str:
+    return ", ".join(f"{d} in [{fmt_float(float(a), 5)}, {fmt_float(float(b), 5)}]" for d, a, b in zip(dims, lo, hi))
+
+
+def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
+    dims, classes, outputs = summary.dims, summary.classes, tuple(json_list(ds, "outputs"))
+    data = {v.name: np.asarray(ds[v.name].values) for v in box_variables(dims, classes, outputs)}
+    done = data["done"].astype(bool)
+    leaf = done & (data["status"] != BOX_STATUS_CODES["split"])
+    rows = np.flatnonzero(leaf)
+    lo = np.column_stack([data[f"lo_{d}"][rows].astype(float) for d in dims]) if rows.size else np.zeros((0, len(dims)))
+    hi = np.column_stack([data[f"hi_{d}"][rows].astype(float) for d in dims]) if rows.size else np.zeros((0, len(dims)))
+    codes = data["status"][rows].astype(int)
+    window = stored_window(ds, dims, data)
+    partial = summary.share["not_computed"] > 1e-9
+    figure = None
+    if len(dims) <= 2 and all(math.isfinite(v) for w in window.values() for v in w):
+        svg = box_map(dims, summary.scales, window, rows, codes, lo, hi, partial=partial,
+                      title=f"{summary.model.get('name') or 'model'}: proved boxes of parameters")
+        scales = ", ".join(f"{d} {'logarithmic' if summary.scales[d] == 'log' else 'linear'}" for d in dims)
+        figure = figures.Figure(svg, f"Every leaf of the refinement tree ({rows.size} boxes), coloured by status; the "
+                                     f"black outline is the swept window; axes: {scales}."
+                                     + (" Hatched: not computed yet (the store is partial)." if partial else ""),
+                                "map of the boxes of parameters coloured by status",
+                                {"leaf_rows": [int(r) for r in rows]})
+    leaf_rows = []
+    if figure is None:
+        for row, code, a, b in list(zip(rows, codes, lo, hi))[:MAX_LEAF_ROWS]:
+            leaf_rows.append((str(int(row)), NAMES.get(int(code), "not_certified"), _where_box(dims, a, b),
+                              str(data["note"][row])))
+    return {"map": figure, "leaf_rows": leaf_rows, "leaf_rows_more": max(0, rows.size - MAX_LEAF_ROWS)
+            if figure is None else 0,
+            "tree": [("boxes computed", f"{summary.computed} (of {int(ds.sizes['box'])} rows in the store)"),
+                     ("leaves (boxes not split further)", str(summary.leaves)),
+                     ("deepest refinement level", str(int(data["level"][done].max())) if done.any() else "—")]}
+
+
+def _point_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
+    dims = summary.dims
+    axes = [figures.Axis(d, _mpl(d), np.asarray(ds.coords[d].values, dtype=float), summary.scales[d] == "log")
+            for d in dims]
+    codes = np.asarray(ds["status"].transpose(*dims).values).astype(int)
+    violation = np.asarray(ds["soundness_violation"].transpose(*dims).values).astype(bool)
+    legend = [(1, "certified", figures.STATUS_COLOURS["certified"]),
+              (0, "not certified", figures.STATUS_COLOURS["not_certified"]),
+              (2, "refuted (unstable)", figures.STATUS_COLOURS["refuted"]),
+              (-1, "not computed", figures.STATUS_COLOURS["not_computed"])]
+    present = [entry for entry in legend if np.any(codes == entry[0])] or legend[:1]
+    svg = figures.category_map(codes, axes, title=_mpl(f"{summary.model.get('name') or 'model'}: status at each grid "
+                                                       "point"), legend=present,
+                               marks=[(violation, "SOUNDNESS VIOLATION", "o")], paper=None)
+    figure = figures.Figure(svg, "Status at each grid point (a certificate at that point only; the cells between "
+                                 "the points are not proved); red rings: soundness violations"
+                            + (". Three parameters: slices of the third." if len(dims) == 3 else "."),
+                            "map of the grid points coloured by status", {"codes": codes.tolist()})
+    return {"map": figure, "leaf_rows": [], "leaf_rows_more": 0,
+            "tree": [("grid points", f"{summary.total} ({' x '.join(str(a.values.size) for a in axes)})"),
+                     ("points computed", str(summary.computed))]}
+
+
+def _violations(summary: ModelSweepSummary) -> tuple[list[tuple[str, str]], int]:
+    rows, more = [], 0
+    for entry in summary.violations:
+        if "more" in entry:
+            more += int(entry["more"])
+            continue
+        where = ", ".join(f"{k} in [{fmt_float(v[0], 5)}, {fmt_float(v[1], 5)}]" if isinstance(v, list) else
+                          f"{k} = {fmt_float(float(v), 6)}" for k, v in entry.items() if k not in ("box", "detail"))
+        if "box" in entry:
+            where = f"box {entry['box']}: {where}"
+        rows.append((where, str(entry.get("detail", ""))))
+    return rows[:MAX_VIOLATION_ROWS], more + max(0, len(rows) - MAX_VIOLATION_ROWS)
+
+
+def model_sweep_context(ds: Any) -> dict[str, Any]:
+    """Everything ``model_sweep.html.j2`` shows, as plain strings (the template escapes them). ``ds``
+    is a model sweep store, loaded and checked by :func:`sweeps.model_schema.check_model_dataset`."""
+    summary = summarize_dataset(ds)
+    boxes = summary.mode == BOXES_MODE
+    part = _box_part(ds, summary) if boxes else _point_part(ds, summary)
+    cross = summary.cross_check
+    cross_rows = [
+        ("certified " + ("boxes" if boxes else "points") + " cross-checked", f"{cross['checked']} of "
+                                                                              f"{summary.counts['certified']}"),
+        ("parameter points simulated", str(cross["parameter_points"])),
+        ("trajectories simulated", str(cross["trajectories"])),
+        ("largest rise of a certified V along a trajectory (of V(0))",
+         "—" if cross["worst_rise"] is None else fmt_float(cross["worst_rise"], 3)),
+        ("largest excess of V over V(0) exp(-rate t) (of V(0))",
+         "—" if cross["worst_envelope"] is None else fmt_float(cross["worst_envelope"], 3)),
+        ("largest |x(t)| / GES envelope", "—" if cross["worst_ges_ratio"] is None else fmt_float(cross["worst_ges_ratio"], 6)),
+        ("trajectories not at the equilibrium by the horizon (a figure, not a violation)",
+         str(cross["not_converged"])),
+    ]
+    for y, span in (cross.get("sim_worst") or {}).items():
+        cross_rows.append((f"worst-case search: tail sup of |{y}|", _span(span)))
+    for y, span in (cross.get("tightness") or {}).items():
+        cross_rows.append((f"certified bound on |{y}| / worst found", _span(span)))
+    violations, more = _violations(summary)
+    spec = str(ds.attrs.get("spec_toml", ""))
+    model_text = str(ds.attrs.get("model_toml", ""))
+    versions_raw, versions_text = _json_attr(ds, "versions")
+    sha_ok = hashlib.sha256(model_text.encode()).hexdigest() == str(ds.attrs.get("model_sha256"))
+    what = "boxes" if boxes else "points"
+    return {
+        "kind": "model_sweep",
+        "title": "lyapcheck model sweep report",
+        "boxes": boxes,
+        "what": what,
+        "model_name": summary.model.get("name") or str(ds.attrs.get("model_file", "")),
+        "model_file": str(ds.attrs.get("model_file", "")),
+        "model_sha256": str(ds.attrs.get("model_sha256", "")),
+        "model_sha_ok": sha_ok,
+        "model_toml": model_text,
+        "dims": list(summary.dims),
+        "classes": list(summary.classes),
+        "proved_share": summary.proved_share,
+        "proved_percent": _percent(summary.proved_share),
+        "measure": ", ".join(f"{d}: {'log(hi/lo)' if s == 'log' else 'hi - lo'}" for d, s in summary.scales.items()),
+        "shares": [(s, _percent(summary.share[s]), fmt_float(summary.share[s], 4), summary.counts[s])
+                   for s in LEAF_STATUSES],
+        "not_computed": _percent(summary.share["not_computed"]) if summary.share["not_computed"] > 1e-9 else "",
+        "class_rows": [(c, _percent(summary.share_by_class[c]), str(summary.counts_by_class[c]))
+                       for c in summary.classes],
+        "figure_rows": [(k, _span(v)) for k, v in summary.figures.items()],
+        "meaning": MEANING,
+        "cross_check": cross_rows,
+        "violation_count": violation_count(summary),
+        "violations": violations,
+        "violations_more": more,
+        "spec_toml": spec,
+        "spec_hash": hashlib.sha256(spec.encode()).hexdigest(),
+        "versions": ({str(k): str(v) for k, v in versions_raw.items()} if isinstance(versions_raw, dict)
+                     else ({"versions": versions_text} if versions_text else {})),
+        "summary": summary,
+        **part,
+    }
+
+
+__all__ = ["model_sweep_context", "box_map"]
