@@ -102,18 +102,24 @@ def compile_problem(key: str, problem: Any, params: Mapping[str, Any], variables
     # variables: the linear map from Clarabel's x, probed through cvxpy's own inversion
     inverse[-1].solver_options = {}
     zeros = np.zeros(m)
-    columns: dict[str, list[np.ndarray]] = {name: [] for name in variables}
-    for j in range(n + 1):
-        x = np.zeros(n)
-        if j < n:
-            x[j] = 1.0
+
+    def probe(x: np.ndarray) -> dict[str, np.ndarray]:
         fake = SimpleNamespace(status="Solved", solve_time=0.0, iterations=0, x=x, z=zeros, s=zeros, obj_val=0.0)
         problem.unpack_results(fake, chain, inverse)
-        for name, var in variables.items():
-            columns[name].append(np.asarray(var.value, dtype=np.float64).ravel(order="C"))
+        return {name: np.asarray(var.value, dtype=np.float64).ravel(order="C") for name, var in variables.items()}
+
+    maps = _direct_maps(inverse, variables, n, probe, rng)
+    if maps is None:  # one probe per coordinate of x (each inverts every constraint's dual: slow)
+        columns: dict[str, list[np.ndarray]] = {name: [] for name in variables}
+        for j in range(n + 1):
+            x = np.zeros(n)
+            if j < n:
+                x[j] = 1.0
+            for name, value in probe(x).items():
+                columns[name].append(value)
+        maps = {name: np.array(cols).T for name, cols in columns.items()}
     unpack: dict[str, np.ndarray] = {}
-    for name, cols in columns.items():
-        mat = np.array(cols).T  # (size of var, n + 1)
+    for name, mat in maps.items():  # (size of var, n + 1)
         if np.any(mat[:, -1]):
             raise ValueError(f"program {key}: variable {name} is not linear in the solver's x")
         rows, xs = np.nonzero(mat[:, :-1])
@@ -142,6 +148,43 @@ def compile_problem(key: str, problem: Any, params: Mapping[str, Any], variables
     if check:
         check_against_cvxpy(key, program, problem, params, variables, rng, chain, inverse)
     return program
+
+
+def _direct_maps(inverse: Any, variables: Mapping[str, Any], n: int, probe: Any,
+                 rng: np.random.Generator) -> dict[str, np.ndarray] | None:
+    """The variables' maps from the solver's ``x`` when each is a plain block of it, or None.
+
+    A variable that no reduction rewrote sits at an offset of ``x`` in column-major order
+    (the stuffing's ``var_offsets``): then its map is a selection, confirmed by probing ``x = 0``
+    and one random ``x`` through cvxpy's own inversion (a different linear map agrees with a
+    selection on a random vector with probability 0). Probing each coordinate instead costs a
+    full inversion per coordinate, minutes for programs with a few thousand of them.
+    """
+    offsets = None
+    for data in reversed(list(inverse)):
+        found = getattr(data, "var_offsets", None)
+        if found is not None:
+            offsets = found
+            break
+    if offsets is None or any(var.id not in offsets for var in variables.values()):
+        return None
+    maps: dict[str, np.ndarray] = {}
+    for name, var in variables.items():
+        size = int(np.prod(var.shape)) if var.shape else 1
+        start = int(offsets[var.id])
+        if start + size > n:
+            return None
+        # entry i of the C-order ravel is x[start + (its column-major index)]
+        column_major = np.arange(size).reshape(var.shape or (1,), order="F").ravel(order="C")
+        mat = np.zeros((size, n + 1))
+        mat[np.arange(size), start + column_major] = 1.0
+        maps[name] = mat
+    x = rng.normal(size=n)
+    at_zero, at_x = probe(np.zeros(n)), probe(x)
+    for name, mat in maps.items():
+        if np.any(at_zero[name]) or not np.array_equal(at_x[name], mat[:, :n] @ x):
+            return None
+    return maps
 
 
 def check_against_cvxpy(key: str, program: ProgramData, problem: Any, params: Mapping[str, Any],
