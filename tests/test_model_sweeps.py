@@ -216,6 +216,21 @@ def test_boxes_are_proved_on_the_stable_side_and_refuted_across_the_unstable_one
     assert not verify(faster).valid
 
 
+def test_a_box_of_two_parameters_swept_out_of_the_models_order_verifies(tmp_path: Path) -> None:
+    """The certificate states its box in the model's order of parameters (``verify`` checks it),
+    whatever the order of the spec's axes."""
+    from lyapcheck.api import verify
+
+    model = '[model]\nstates = ["x", "y"]\n[parameters]\na = 1\nb = 1\n[dynamics]\nx = "-a*x"\ny = "-b*y"\n'
+    spec = write(tmp_path, '[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["quadratic"]\n'
+                           '[[sweep.axes]]\nname = "b"\nvalues = [1, 2]\n[[sweep.axes]]\nname = "a"\nvalues = [1, 2]\n'
+                           "[sweep.boxes]\nmin_relative_width = 10\ncross_check_points = 1\n", model)
+    result = run(spec, tmp_path / "out.zarr")
+    data = arrays(tmp_path / "out.zarr")
+    doc = json.loads(str(data["certificate"][0]))
+    assert result.summary.proved_share == 1.0 and list(doc["box"]) == ["a", "b"] and verify(doc).valid
+
+
 def test_rerunning_a_finished_store_computes_nothing(boxes_store: tuple[Path, Any]) -> None:
     path, first = boxes_store
     again = run(path.parent / "spec.toml", path)
@@ -254,7 +269,7 @@ def test_a_resumed_sweep_is_byte_for_byte_an_uninterrupted_one(tmp_path: Path, s
     assert files_a.keys() == files_b.keys() and all(files_a[k] == files_b[k] for k in files_a)
 
 
-def test_a_changed_model_file_is_not_resumed(boxes_store: tuple[Path, Any], tmp_path: Path) -> None:
+def test_a_changed_model_file_is_not_resumed(tmp_path: Path) -> None:
     spec = write(tmp_path, BOXES)
     interrupted(spec, tmp_path / "out.zarr", after=1)
     (tmp_path / "m.toml").write_text(LINEAR.replace("a = 1", "a = 3"))
