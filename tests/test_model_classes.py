@@ -137,6 +137,16 @@ def test_sos_gas_on_the_rational_sosdemo2_field_decreases_everywhere() -> None:
     del v_fn, vdot_fn
 
 
+@pytest.mark.parametrize("dynamics", [{"x": "0*x"}, {"x": "-a*x", "y": "-y"}])
+def test_a_state_whose_derivative_is_identically_zero_gets_no_stability_class(dynamics: dict[str, str]) -> None:
+    """x' = 0 (every point an equilibrium, no asymptotic stability): the classes run (a polynomial with
+    no terms is data of size 0 for the solver) and none certifies; it once stopped with exit 3."""
+    result = run(model_text(list(dynamics), dynamics, "[parameters]\na = 0" if "y" in dynamics else ""))
+    assert result.results["linearization"].status == "not_certified"
+    for name in ("quadratic", "sos_gas", "roa"):
+        assert result.results[name].status != "certified"
+
+
 def test_no_polynomial_lyapunov_function_is_never_certified_globally() -> None:
     """Ahmadi, Krstic and Parrilo's GAS field has no polynomial Lyapunov function at all."""
     result = certify_model(load_model(MODELS / "ahmadi-no-polynomial-lyapunov.toml"))

@@ -184,9 +184,12 @@ class ProgramData:
         """cvxpy's parameter vector: each value flattened column-major at its column, then a 1."""
         import numpy as np
 
-        if set(values) != set(self.params):
-            missing = sorted(set(self.params) - set(values))
-            extra = sorted(set(values) - set(self.params))
+        # a parameter of size 0 (a polynomial with no terms, e.g. a state whose derivative is 0)
+        # carries no data, and cvxpy drops it from the compiled program
+        given = {name for name in values if name in self.params or np.asarray(values[name]).size}
+        if given != set(self.params):
+            missing = sorted(set(self.params) - given)
+            extra = sorted(given - set(self.params))
             raise ValueError(f"program {self.key}: parameters missing {missing}, unknown {extra}")
         vec = np.zeros(self.param_size)
         for name, (col, shape) in self.params.items():
