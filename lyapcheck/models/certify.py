@@ -42,7 +42,7 @@ from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.models.boxes import ModelBox
+    from lyapcheck.models.parameter_box import ModelBox
 
 log = logging.getLogger(__name__)
 

@@ -36,7 +36,7 @@ from lyapcheck.models.modelfile import Model, field_at
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.models.boxes import ModelBox
+    from lyapcheck.models.parameter_box import ModelBox
 
 
 @dataclass(frozen=True)
