@@ -12,7 +12,8 @@ second, emulated platform). A certificate file, re-checked exactly by ``lyapchec
 what reproduces a result on another machine.
 
 :func:`describe` names the platform for certificates and sweep stores (``versions.floating_point``):
-numpy's SIMD groups in use and the OpenBLAS kernels. Nothing compares it.
+numpy's SIMD groups in use and the kernel of numpy's OpenBLAS (scipy's copy, loaded later if at
+all, picks its kernel by the same rules). Nothing compares it.
 """
 
 from __future__ import annotations
@@ -40,31 +41,29 @@ def _numpy_simd() -> str:
 
 
 def _openblas_kernels() -> list[str]:
-    """The kernel of each OpenBLAS already loaded from numpy's or scipy's bundled libraries.
+    """The kernel of the OpenBLAS bundled with numpy (loaded with numpy itself).
 
-    Only libraries this process has loaded are asked (``RTLD_NOLOAD``): describing the platform
-    loads nothing. Empty where the names or the flag do not exist (another BLAS, macOS' Accelerate).
+    Only a library this process has loaded is asked (``RTLD_NOLOAD``): describing the platform
+    loads nothing, and says the same whatever else was imported before (a sweep store records it,
+    and its bytes must not depend on that). Empty where the names or the flag do not exist (another
+    BLAS, macOS' Accelerate).
     """
     noload = getattr(os, "RTLD_NOLOAD", None)
-    if noload is None:  # pragma: no cover - not on Linux or macOS
+    location = getattr(sys.modules.get("numpy"), "__file__", None)
+    if noload is None or location is None:  # pragma: no cover - not on Linux or macOS
         return []
     out = []
-    for package in ("numpy", "scipy"):
-        module = sys.modules.get(package)
-        location = getattr(module, "__file__", None)
-        if location is None:
-            continue
-        for lib in sorted(Path(location).parent.parent.joinpath(f"{package}.libs").glob("lib*openblas*")):
-            try:
-                handle = ctypes.CDLL(str(lib), mode=noload)
-            except OSError:
-                continue  # not loaded in this process
-            for name in _CORENAME_FUNCTIONS:
-                function = getattr(handle, name, None)
-                if function is not None:
-                    function.restype = ctypes.c_char_p
-                    out.append(f"{function().decode(errors='replace')} ({package})")
-                    break
+    for lib in sorted(Path(location).parent.parent.joinpath("numpy.libs").glob("lib*openblas*")):
+        try:
+            handle = ctypes.CDLL(str(lib), mode=noload)
+        except OSError:
+            continue  # not loaded in this process
+        for name in _CORENAME_FUNCTIONS:
+            function = getattr(handle, name, None)
+            if function is not None:
+                function.restype = ctypes.c_char_p
+                out.append(f"{function().decode(errors='replace')} (numpy)")
+                break
     return out
 
 
