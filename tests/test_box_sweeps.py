@@ -13,6 +13,7 @@ from lyapcheck.paper.boxes.box import ParameterBox
 from lyapcheck.paper.boxes.classes import certify_box, verify_box, verify_box_refutation
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.params import problem_from_sources
+from lyapcheck.tolerances import FIGURE_GES_K_RTOL
 from sweeps.box_store import BoxStore
 from sweeps.box_summary import summarize_boxes
 from sweeps.boxes_run import initial_boxes, run_boxes
@@ -113,7 +114,9 @@ def test_the_tree_refines_and_certified_boxes_recheck_exactly(swept: tuple[Path,
         result = certify_box(problem, box)
         assert result["status"] == "certified"
         assert verify_box(problem, box, "derived", result)[0]
-        assert result["k"] == pytest.approx(store.read("k")[row])
+        # the store holds the box's edges as doubles, so this box differs from the one the sweep
+        # certified in the last bits: k within the tolerance ges documents for that (issue 24)
+        assert result["k"] == pytest.approx(store.read("k")[row], rel=FIGURE_GES_K_RTOL)
     by_sector, by_ges = store.read("status_sector_ges"), store.read("status_ges")
     assert ((by_sector[certified] == 1) | (by_ges[certified] == 1)).all()
     assert (by_ges[by_sector == 1] == -1).all()  # the cheaper class decided: ges not run there
