@@ -101,8 +101,8 @@ def prove_positive(ring: Ring, p: Poly, budget: Budget, free: int | None = None)
     ok, _ = check_positivity(ring, scaled, c, sigma, box)
     if not ok:
         return None
-    out = {"kind": "sos", "scales": [str(s) for s in scales], "normalization": str(norm), "c": str(c),
-           "gram_sigma": sigma.to_json()}
+    out: dict[str, Any] = {"kind": "sos", "scales": [str(s) for s in scales], "normalization": str(norm),
+                           "c": str(c), "gram_sigma": sigma.to_json()}
     if box:
         out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in box]
     return out

@@ -129,9 +129,9 @@ def check_lyapunov(ring: Ring, g: Sequence[Poly], D: Poly, V: GramPoly, sigma: G
     if not sigma.positive_definite():
         return False, "Q_sigma is not positive definite (exact)"
     v = V.poly(ring)
-    boxed, why = box_terms(ring, box)
-    if why is not None:
-        return False, why
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
     if -lie_derivative(ring, v, g) - v * D * _q(mu) - boxed != sigma.poly(ring):
         return False, "the identity -grad V . g - mu V D = sigma does not hold exactly"
     return True, "Q_V > 0, Q_sigma > 0 and -grad V . g - mu V D = sigma, exactly" + (" (on the box)" if box else "")
@@ -154,9 +154,9 @@ def check_sublevel(ring: Ring, g: Sequence[Poly], V: GramPoly, level: Fraction, 
     if not s.positive_definite() or not sigma.positive_definite():
         return False, "Q_s or Q_sigma is not positive definite (exact)"
     v = V.poly(ring)
-    boxed, why = box_terms(ring, box)
-    if why is not None:
-        return False, why
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
     if -lie_derivative(ring, v, g) - s.poly(ring) * (ring.constant(level) - v) - boxed != sigma.poly(ring):
         return False, "the identity -grad V . g - s (c - V) = sigma does not hold exactly"
     return True, "Q_V, Q_s, Q_sigma > 0 and -grad V . g - s (c - V) = sigma, exactly" + (" (on the box)" if box else "")
@@ -171,9 +171,9 @@ def check_positivity(ring: Ring, p: Poly, c: Fraction, sigma: GramPoly, box: Box
         return False, "the constant c must be > 0"
     if not is_positive_semidefinite(sigma.Q):
         return False, "Q_sigma is not positive semidefinite (exact)"
-    boxed, why = box_terms(ring, box)
-    if why is not None:
-        return False, why
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
     if p - ring.constant(c) - boxed != sigma.poly(ring):
         return False, "the identity p - c = sigma does not hold exactly"
     return True, "p - c = sigma with c > 0 and Q_sigma >= 0, exactly"
@@ -205,9 +205,9 @@ def check_dissipation(ring: Ring, g: Sequence[Poly], D: Poly, bounds: Sequence[F
     for k, (tau, b) in enumerate(zip(taus, bounds)):
         d = gens[n + k]
         lhs -= tau.poly(ring) * (ring.constant(b * b) - d * d)
-    boxed, why = box_terms(ring, box)
-    if why is not None:
-        return False, why
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
     if lhs - boxed != sigma.poly(ring):
         return False, "the dissipation identity does not hold exactly"
     return True, "V > 0, tau > 0, sigma > 0 and the dissipation identity holds, exactly"
@@ -219,9 +219,9 @@ def check_output_bound(ring: Ring, V: GramPoly, y: Poly, B: Fraction, sigma: Gra
     ``V = z^T Q_V z + v0`` as in :func:`check_dissipation`)."""
     if not sigma.positive_definite():
         return False, "Q_sigma is not positive definite (exact)"
-    boxed, why = box_terms(ring, box)
-    if why is not None:
-        return False, why
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
     if V.poly(ring) + ring.constant(v0) - y * y + ring.constant(B - 1) - boxed != sigma.poly(ring):
         return False, "the identity V - y^2 + B - 1 = sigma does not hold exactly"
     return True, "V - y^2 + B - 1 = sigma with Q_sigma > 0, exactly"
