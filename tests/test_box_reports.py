@@ -28,8 +28,10 @@ from tests.test_reports import Page
 app._register_commands()
 RUNNER = CliRunner()
 #: one log-scale cell that the paper's other gains split into a certified and a not certified half
-#: (min_relative_width 1: the cell, 4x wide, is halved; the budget of 3 boxes stops there); sector_ges
-#: is refuted on all three boxes and ges certifies the right half
+#: (min_relative_width 1: the cell, 4x wide in k_d, is halved there at 0.125; the budget of 3 boxes
+#: stops there); ges certifies the upper half in k_d and finds no certificate for the lower one
+#: (its corner alpha_d = 2000, k_d = 0.05 is past what ges's certificate form proves); the paper's
+#: gains are outside the window
 SPEC = """
 [gains]
 sigma0 = 0.01
@@ -43,14 +45,14 @@ mode = "boxes"
 classes = ["sector_ges", "ges"]
 [[sweep.axes]]
 name = "alpha_d"
-start = 150
-stop = 600
+start = 700
+stop = 2000
 num = 2
 scale = "log"
 [[sweep.axes]]
 name = "k_d"
-start = "0.2 1/s"
-stop = "0.8 1/s"
+start = "0.05 1/s"
+stop = "0.2 1/s"
 num = 2
 scale = "log"
 [sweep.boxes]
@@ -162,7 +164,7 @@ def test_classes_table_is_the_summarys(box_store: tuple[Path, Any], box_page: st
 
 @pytest.mark.slow
 def test_paper_point_marked_even_outside_the_window(box_page: str) -> None:
-    # the paper's k_d = 0.15 1/s is below this window (0.2 .. 0.8 1/s): the view widens to show it
+    # the paper's alpha_d = 600 is left of this window (700 .. 2000): the view widens to show it
     svg = map_svg(box_page)
     assert svg is not None and svg.count(b'id="paper-point"') == 1
     text = Page(box_page).text

@@ -1,6 +1,11 @@
-"""``ges`` and ``sector_ges`` for every gain set of a box: one quadratic certificate for all of it.
+"""``ges`` and ``sector_ges`` for every gain set of a box.
 
-Why it is exact. In the scaled coordinates of :mod:`lyapcheck.paper.conditions.ges` the error dynamics
+``ges`` first searches a certificate whose matrices are polynomials in the gains
+(:mod:`lyapcheck.paper.boxes.ges_param`, the stronger form), then one certificate common to the
+whole box (below); ``verify`` re-checks either form. ``sector_ges`` is one quadratic ``V`` for the
+whole box.
+
+Why the common certificate is exact. In the scaled coordinates of :mod:`lyapcheck.paper.conditions.ges` the error dynamics
 depend on the gains only through three numbers,
 
     c = a12/(sigma0 |a11|),   a = -a22/|a11|,   b = sigma0 U/(Delta |a11|),
@@ -35,6 +40,21 @@ from lyapcheck.params import Problem
 
 
 def certify_ges_box(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any]:
+    """``ges`` over ``box``: a certificate polynomial in the gains, else a common one (module docstring)."""
+    from lyapcheck.paper.boxes import ges_param
+
+    result = ges_param.certify(problem, box, dynamics)
+    if result["status"] == "certified":
+        return result
+    common = certify_common_ges_box(problem, box, dynamics)
+    if common["status"] != "certified":
+        common["summary"] = f"{result['summary']}; {common['summary']}"
+        common.setdefault("solver", {}).setdefault("solves", [])[:0] = result.get("solver", {}).get("solves", [])
+    return common
+
+
+def certify_common_ges_box(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any]:
+    """``ges`` over ``box`` with one state-dependent quadratic ``V`` common to the whole box."""
     from lyapcheck.paper.conditions import ges
 
     hull = scaled_hull(problem, box, dynamics)
@@ -75,8 +95,15 @@ def _stored_quadratic(problem: Problem, box: ParameterBox, dynamics: str,
 
 
 def verify_ges_box(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any]) -> tuple[bool, str]:
-    """Re-derive the ``(c, a, b)`` box from the parameter box and re-check every vertex exactly."""
+    """Re-check a ``ges`` box certificate exactly: a parametric one over the whole box
+    (:func:`lyapcheck.paper.boxes.ges_param.verify`), a common one at every vertex of the
+    ``(c, a, b)`` box re-derived from the parameter box."""
     from lyapcheck.paper.conditions import ges
+
+    if result["certificate"].get("form") == "parametric":
+        from lyapcheck.paper.boxes import ges_param
+
+        return ges_param.verify(problem, box, dynamics, result)
 
     stored = _stored_quadratic(problem, box, dynamics, result)
     if isinstance(stored, str):
