@@ -191,6 +191,25 @@ def test_shipped_box_example_parses() -> None:
 
 
 @pytest.mark.slow
+def test_shipped_box_of_25_percent_is_proved_whole_and_simulations_stay_inside(tmp_path: Path) -> None:
+    """Issue 25: examples/boxes-paper-point.toml, alpha_d and k_d within +-25 % of the paper's, is
+    one certified box (ges, a certificate polynomial in the gains) whose rate is within 2x of the
+    pointwise rates, and its 20 random gain sets stay inside the envelope in simulation."""
+    spec = parse_spec((ROOT / "examples" / "boxes-paper-point.toml").read_text())
+    out = tmp_path / "box25.zarr"
+    run_boxes(spec, out, runner=InlineRunner())
+    store = BoxStore.open_or_create(out, spec)
+    assert list(store.read("status")) == [BOX_STATUS_CODES["certified"]]
+    assert (store.read("lo_alpha_d")[0], store.read("hi_alpha_d")[0]) == (450, 750)
+    assert (store.read("lo_k_d")[0], store.read("hi_k_d")[0]) == (0.1125, 0.1875)
+    # the smallest rate proved point by point on a 3 x 3 grid of the box is 0.029 1/s
+    # (benchmarks/bench_paper_box.py): the box's rate must be at least half of it
+    assert 0.0146 < store.read("decay_rate_per_s")[0] and 1 < store.read("k")[0] < 50
+    assert store.read("cross_check_runs")[0] == 20 and store.read("cross_check_worst_ratio")[0] <= 1
+    assert not store.read("soundness_violation")[0]
+
+
+@pytest.mark.slow
 def test_bound_box_sweep_certifies_a_bound_and_the_worst_case_search_stays_inside(tmp_path: Path) -> None:
     """classes = ["sos_bound"]: one box around the paper's gains gets limsup |eps| <= bound for
     every gain set in it; the worst-case disturbance search at a random point stays below it."""
