@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from lyapcheck.errors import InputFileError, InvalidParameter
+from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.modelfile import Model
@@ -209,19 +209,30 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
     return CertifyResult(verdict=outcome, dynamics=dynamics, conditions=results, document=doc)
 
 
-def model_settings(settings: Mapping[str, object] | Sequence[str] | None) -> dict[str, object]:
-    """``{"mu": 2}`` or ``["mu=2"]`` (``--set``) as a mapping (one-line error on a malformed entry)."""
+def model_settings(settings: Mapping[str, object] | Sequence[str] | None, source: str | None = None
+                   ) -> dict[str, object]:
+    """``{"mu": 2}`` or ``["mu=2"]`` (``--set``) as a mapping.
+
+    A malformed or repeated entry is a one-line error: a :class:`ModelFileError` naming ``source``
+    (the model file the settings go with) when given, else an :class:`InvalidParameter`.
+    """
     if settings is None:
         return {}
     if isinstance(settings, Mapping):
         return {str(k): v for k, v in settings.items()}
+
+    def refuse(expected: str, item: object) -> Exception:
+        if source is None:
+            return InvalidParameter("set", expected, item)
+        return ModelFileError(source, "set", f"must be {expected}, got {item!r}")
+
     out: dict[str, object] = {}
     for item in settings:
         name, sep, value = str(item).partition("=")
         if not sep or not name.strip() or not value.strip():
-            raise InvalidParameter("set", "NAME=VALUE, e.g. 'mu=2' or 'd=0.1 mm/s'", item)
+            raise refuse("NAME=VALUE, e.g. 'mu=2' or 'd=0.1 mm/s'", item)
         if name.strip() in out:
-            raise InvalidParameter("set", f"each name once (got '{name.strip()}' twice)", item)
+            raise refuse(f"each name once (got '{name.strip()}' twice)", item)
         out[name.strip()] = value.strip()
     return out
 
@@ -231,7 +242,8 @@ def load_model_file(model: "str | Path | Model", settings: Mapping[str, object] 
     """A validated model (a path is read; a loaded model gets ``settings`` laid over its parameters)."""
     from lyapcheck.models.modelfile import Model, load_model, parse_model
 
-    extra = model_settings(settings)
+    source = model.source if isinstance(model, Model) else str(model) if isinstance(model, (str, Path)) else None
+    extra = model_settings(settings, source)
     if isinstance(model, Model):
         if not extra:
             return model
