@@ -369,7 +369,13 @@ def check_equilibrium(model: Model) -> None:
 
 
 def with_parameters(model: Model, values: Mapping[str, Fraction]) -> Model:
-    """The model with some parameter values replaced (exact SI), the equilibrium re-checked."""
+    """The model with some parameter values replaced (exact SI), the equilibrium re-checked.
+
+    For computing only: ``overrides`` (what a certificate records to re-read the model) are left as
+    they were, so a certificate of the result would not re-read to it. Where a certificate is
+    written, read the model with the values as ``--set`` overrides instead (``parse_model(text,
+    source, overrides)``, as :mod:`sweeps.model_spec` does with exact decimals).
+    """
     params = {**model.parameters, **values}
     out = replace(model, parameters=params, parameters_given={**model.parameters_given,
                                                               **{k: str(v) for k, v in values.items()}})
