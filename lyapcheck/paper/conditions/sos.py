@@ -10,7 +10,7 @@ with exact rationals ``c = a12/(sigma0 |a11|)``, ``a = -a22/|a11|``, ``b = sigma
 Multiplying by ``q > 0`` gives a polynomial field ``g = q * (y', r')``.
 
 Certificate. Polynomials ``V = z_V^T Q_V z_V`` and ``W = z_W^T Q_W z_W`` with exact rational Gram
-matrices, both positive definite (exact LDL^T pivots), and the exact identity
+matrices, both positive definite (exact, :mod:`lyapcheck.sos.definiteness`), and the exact identity
 
     -grad V . g - mu V q = W.
 
@@ -42,6 +42,7 @@ import numpy as np
 from lyapcheck import exact, poly
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
+from lyapcheck.sos.definiteness import is_positive_definite
 from lyapcheck.sos.sdp import CompiledProgram, SolveReport
 
 DEGREES = (4, 6)
@@ -227,10 +228,10 @@ def exact_check(dyn: ScaledDynamics, deg_v: int, QV: exact.Matrix, QW: exact.Mat
     if mu < 0:
         return False, "the decay rate mu must be >= 0"
     z_v, z_w = bases(deg_v)
-    if not exact.is_positive_definite_ldl(QV):
-        return False, "Q_V is not positive definite (exact LDL^T)"
-    if not exact.is_positive_definite_ldl(QW):
-        return False, "Q_W is not positive definite (exact LDL^T)"
+    if not is_positive_definite(QV):
+        return False, "Q_V is not positive definite (exact)"
+    if not is_positive_definite(QW):
+        return False, "Q_W is not positive definite (exact)"
     g_y, g_r, q = dyn.fields()
     p = target(poly.gram_form(z_v, QV), g_y, g_r, q, mu)
     if p != poly.gram_form(z_w, QW):

@@ -52,6 +52,7 @@ import numpy as np
 from lyapcheck import exact, poly
 from lyapcheck import tolerances as tol
 from lyapcheck.paper.conditions.base import System
+from lyapcheck.sos.definiteness import is_positive_definite
 from lyapcheck.sos.sdp import CompiledProgram
 from lyapcheck.paper.conditions.sos import (ScaledDynamics, assemble_parity_blocks, is_sign_symmetric, parity, parity_blocks,
                                       parity_gram, project_gram, scaled_dynamics)
@@ -318,7 +319,7 @@ def check(dyn: ScaledDynamics, k: Fraction, cert: dict[str, Any]) -> tuple[bool,
     if beta <= 0 or omega <= 0:
         return False, "scales must be positive"
     shifted = top_shifted(QV)
-    if lam <= 0 or not all(exact.is_positive_definite_ldl(m) for m in (shifted, T, QD, QE)):
+    if lam <= 0 or not all(is_positive_definite(m) for m in (shifted, T, QD, QE)):
         return False, "a Gram matrix or multiplier of the bound certificate is not positive definite"
     V = poly.gram_form(Z_V, QV)
     tau = poly.gram_form(Z_T, T)
