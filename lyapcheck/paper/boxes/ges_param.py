@@ -530,7 +530,8 @@ def certify(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any
     k, rate = envelope(eb, found.mu, found.c1, found.c2)
     summary = (f"GES for every gain set with {box.describe()}: |x(t)| <= {k:.3g} |x0| exp(-{rate:.3g} t) "
                "(x = (eps, sigma0 s)/Delta), from V(x; gains) whose matrices are polynomials of degree "
-               f"{found.degree} in the gains, checked exactly over the whole box")
+               f"{found.degree} in the coefficients of the dynamics (e11 alpha_d, k_d, sigma0 U/Delta), checked "
+               "exactly over the whole box")
     return {"status": "certified", "property": "GES", "summary": summary, "box": box.to_json(), "k": k,
             "decay_rate_per_s": rate, "certificate": certificate_json(eb, found), "solver": {"solves": log}}
 
