@@ -166,6 +166,19 @@ def test_a_widened_or_edited_box_certificate_fails(paper_box: tuple) -> None:
     assert not verify(doc).valid
 
 
+def test_a_forged_degree_or_shape_is_refused_without_work(paper_box: tuple) -> None:
+    """A degree of 10^9 would list (10^9 + 1)^2 monomials: refused by its bound first; a P row of the
+    wrong length is a failed check, not an internal error."""
+    result, _ = paper_box
+    doc = json.loads(json.dumps(result.to_json()))
+    doc["conditions"]["ges"]["certificate"]["degree"] = 10**9
+    checked = verify(doc)
+    assert not checked.valid and any("degree in the gains" in c.message for c in checked.checks if not c.ok)
+    doc = json.loads(json.dumps(result.to_json()))
+    doc["conditions"]["ges"]["certificate"]["P"][0][0] = ["1"]
+    assert not verify(doc).valid
+
+
 def test_the_box_envelope_holds_in_simulation_at_random_gain_sets(paper_box: tuple) -> None:
     result, problem = paper_box
     ges_result = result.document["conditions"]["ges"]

@@ -82,6 +82,9 @@ C1 = Fraction(99, 100)
 BOUND_SLACK = 1e-2
 #: largest number of pieces of the u box in the exact check (halvings of its widest axis)
 MAX_PIECES = 64
+#: the largest degree in the gains that ``verify`` accepts from a file (the search uses PARAM_DEGREES;
+#: a forged degree of 10^9 must be refused before the monomials are listed)
+MAX_VERIFIED_DEGREE = 4
 
 Poly1 = list[Fraction]
 #: entries (p, q) of a symmetric 2x2 matrix in the order of the program's coefficient rows
@@ -538,7 +541,9 @@ def certify(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any
 
 def verify(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-derive the entry box from the gain box and re-check the certificate exactly (no solver)."""
-    cert = result["certificate"]
+    cert = result.get("certificate")
+    if not isinstance(cert, Mapping):
+        return False, "the certificate is malformed: not a table"
     eb = entry_box(problem, box, dynamics)
     if isinstance(eb, str):
         return False, eb
@@ -552,9 +557,11 @@ def verify(problem: Problem, box: ParameterBox, dynamics: str, result: Mapping[s
         mu, c1, c2 = (Fraction(cert[k]) for k in ("mu_scaled", "c1", "c2"))
     except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
         return False, f"the certificate is malformed: {exc}"
+    if not 0 <= degree <= MAX_VERIFIED_DEGREE:
+        return False, f"the degree in the gains must be 0..{MAX_VERIFIED_DEGREE}, got {degree}"
     count = len(unknown_monomials(q, degree))
-    if not (0 <= degree <= 4 and len(P) == count and len(ells) == count
-            and all(len(m) == 2 and exact.is_symmetric(m) for m in P)
+    if not (len(P) == count and len(ells) == count
+            and all(len(m) == 2 and all(len(row) == 2 for row in m) and exact.is_symmetric(m) for m in P)
             and len({len(block) for block in ells}) == 1
             and all(len(ell) == 2 for block in ells for ell in block)):
         return False, "P(u) and l_k(u) must have one symmetric 2x2 matrix and one set of 2-vectors per monomial"

@@ -100,7 +100,8 @@ def verify_ges_box(problem: Problem, box: ParameterBox, dynamics: str, result: M
     ``(c, a, b)`` box re-derived from the parameter box."""
     from lyapcheck.paper.conditions import ges
 
-    if result["certificate"].get("form") == "parametric":
+    cert = result.get("certificate")
+    if isinstance(cert, Mapping) and cert.get("form") == "parametric":
         from lyapcheck.paper.boxes import ges_param
 
         return ges_param.verify(problem, box, dynamics, result)
