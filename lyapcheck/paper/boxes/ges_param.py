@@ -57,6 +57,7 @@ import numpy as np
 
 from lyapcheck import exact
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
+from lyapcheck.paper.conditions.rate_search import largest_proved_rate
 from lyapcheck.params import Problem
 from lyapcheck.sos.polynomials import Poly, Ring
 
@@ -487,21 +488,9 @@ def search(box: EntryBox, log: list[dict[str, Any]], *, terms: int = TERMS,
             ok, _ = exact_check(box, P, ells, degree, mu_q, c1, c2)
             return Found(P, ells, degree, mu_q, c1, c2) if ok else None
 
-        found = proved(MU_LOW)
-        lo, hi = MU_LOW, MU_HIGH
-        if found is None:
-            found = proved(MU_FLOOR)
-            lo, hi = MU_FLOOR, MU_LOW
-        if found is None:
-            continue
-        for _ in range(MU_BISECTION_STEPS):
-            mid = math.sqrt(lo * hi)
-            better = proved(mid)
-            if better is not None:
-                lo, found = mid, better
-            else:
-                hi = mid
-        return found
+        found = largest_proved_rate(proved, low=MU_LOW, high=MU_HIGH, floor=MU_FLOOR, steps=MU_BISECTION_STEPS)
+        if found is not None:
+            return found
     return None
 
 

@@ -57,6 +57,7 @@ import numpy as np
 
 from lyapcheck import exact
 from lyapcheck.paper.conditions.base import System
+from lyapcheck.paper.conditions.rate_search import largest_proved_rate
 from lyapcheck.paper.conditions.rounding import ceil_to_digits, floor_to_digits
 from lyapcheck.results import ConditionResult
 from lyapcheck.paper.conditions.sos import ScaledDynamics, scaled_dynamics
@@ -412,21 +413,7 @@ def search(dyns: Sequence[ScaledDynamics], log: list[dict[str, Any]]) -> dict[st
         log.append(report.to_json())
         return None if candidate is None else _exact_candidate(dyns, candidate, mu)
 
-    cert = proved(MU_LOW)
-    lo, hi = MU_LOW, MU_HIGH
-    if cert is None:
-        cert = proved(MU_FLOOR)
-        lo, hi = MU_FLOOR, MU_LOW
-    if cert is None:
-        return None
-    for _ in range(MU_BISECTION_STEPS):
-        mid = float(np.sqrt(lo * hi))
-        better = proved(mid)
-        if better is not None:
-            lo, cert = mid, better
-        else:
-            hi = mid
-    return cert
+    return largest_proved_rate(proved, low=MU_LOW, high=MU_HIGH, floor=MU_FLOOR, steps=MU_BISECTION_STEPS)
 
 
 def _numbers(system: System, dyn: ScaledDynamics, cert: dict[str, Any]) -> dict[str, Any]:
