@@ -42,7 +42,9 @@ import numpy as np
 from lyapcheck import exact, poly
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
+from lyapcheck.sos.certificates import GramPoly, check_lyapunov
 from lyapcheck.sos.definiteness import is_positive_definite
+from lyapcheck.sos.polynomials import Ring
 from lyapcheck.sos.sdp import CompiledProgram, SolveReport
 
 DEGREES = (4, 6)
@@ -227,15 +229,18 @@ def exact_check(dyn: ScaledDynamics, deg_v: int, QV: exact.Matrix, QW: exact.Mat
     "certificates" exist for saddles, so a forged file must not pass)."""
     if mu < 0:
         return False, "the decay rate mu must be >= 0"
-    z_v, z_w = bases(deg_v)
     if not is_positive_definite(QV):
         return False, "Q_V is not positive definite (exact)"
     if not is_positive_definite(QW):
         return False, "Q_W is not positive definite (exact)"
-    g_y, g_r, q = dyn.fields()
-    p = target(poly.gram_form(z_v, QV), g_y, g_r, q, mu)
-    if p != poly.gram_form(z_w, QW):
-        return False, "the polynomial identity -grad V . g - mu V q = z^T Q_W z does not hold exactly"
+    # the identity is the SOS engine's Lyapunov check (lyapcheck.sos.certificates, FLINT polynomials),
+    # the one the generic sos_gas class passes: W = sigma, q = D
+    z_v, z_w = bases(deg_v)
+    ring = Ring(("y", "r"))
+    g_y, g_r, q = (ring.from_terms(p) for p in dyn.fields())
+    ok, why = check_lyapunov(ring, (g_y, g_r), q, GramPoly.of(z_v, QV), GramPoly.of(z_w, QW), mu)
+    if not ok:
+        return False, why
     return True, "Q_V > 0, Q_W > 0 and the SOS identity holds, exactly"
 
 
