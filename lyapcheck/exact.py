@@ -104,13 +104,15 @@ def leading_minors(m: Matrix) -> list[Fraction]:
     return [det(tuple(row[:k] for row in m[:k])) for k in range(1, len(m) + 1)]
 
 
-def is_symmetric(m: Matrix) -> bool:
-    return all(m[i][j] == m[j][i] for i in range(len(m)) for j in range(len(m)))
+def is_symmetric(m: Sequence[Sequence[Any]]) -> bool:
+    """Square (every row as long as the matrix) and equal to its transpose."""
+    n = len(m)
+    return all(len(row) == n for row in m) and all(m[i][j] == m[j][i] for i in range(n) for j in range(i + 1, n))
 
 
 def is_positive_definite(m: Matrix) -> bool:
     """Sylvester's criterion: a symmetric matrix is PD iff all leading minors are > 0."""
-    return is_symmetric(m) and _leading_minors_positive(m)
+    return is_symmetric(m) and leading_minors_positive(m)
 
 
 def ldl_pivots(m: Matrix) -> list[Fraction] | None:
@@ -135,16 +137,14 @@ def ldl_pivots(m: Matrix) -> list[Fraction] | None:
     return pivots
 
 
-def _integer_matrix(m: Matrix) -> list[list[int]]:
-    """``D M`` with ``D > 0`` the least common denominator of the entries (exact integers)."""
-    den = 1
-    for row in m:
-        for x in row:
-            den = math.lcm(den, Fraction(x).denominator)
-    return [[int(Fraction(x) * den) for x in row] for row in m]
+def integer_matrix(m: Sequence[Sequence[Fraction | int]]) -> list[list[int]]:
+    """``D M`` in Python integers, ``D > 0`` the least common denominator of the entries."""
+    rows = [[Fraction(x) for x in row] for row in m]
+    den = math.lcm(*(x.denominator for row in rows for x in row)) if rows else 1
+    return [[x.numerator * (den // x.denominator) for x in row] for row in rows]
 
 
-def _leading_minors_positive(m: Matrix) -> bool:
+def leading_minors_positive(m: Sequence[Sequence[Fraction | int]]) -> bool:
     """Exact: every leading principal minor of the symmetric ``m`` is > 0 (positive definiteness).
 
     Fraction-free (Bareiss) elimination on ``D m`` in Python integers: the k-th pivot is the
@@ -154,7 +154,7 @@ def _leading_minors_positive(m: Matrix) -> bool:
     a gcd after every operation. The elimination keeps the trailing block symmetric, so only
     its upper triangle is updated.
     """
-    a = _integer_matrix(m)
+    a = integer_matrix(m)
     n = len(a)
     prev = 1
     for k in range(n):
@@ -173,7 +173,7 @@ def _leading_minors_positive(m: Matrix) -> bool:
     return True
 
 
-def diagonal_blocks(m: Matrix) -> list[list[int]]:
+def diagonal_blocks(m: Sequence[Sequence[Any]]) -> list[list[int]]:
     """The index sets of the diagonal blocks of a symmetric ``m`` up to a permutation: the
     connected components of the graph with an edge ``i - j`` wherever ``m[i][j] != 0``."""
     n = len(m)
@@ -196,7 +196,7 @@ def diagonal_blocks(m: Matrix) -> list[list[int]]:
 
 
 def is_positive_definite_ldl(m: Matrix) -> bool:
-    """Exact positive definiteness of a symmetric rational matrix (see :func:`_leading_minors_positive`).
+    """Exact positive definiteness of a symmetric rational matrix (see :func:`leading_minors_positive`).
 
     A matrix that is block diagonal up to a permutation (e.g. a Gram matrix of a sign-symmetric
     certificate: even monomials against odd ones are exactly zero) is positive definite if and
@@ -207,8 +207,8 @@ def is_positive_definite_ldl(m: Matrix) -> bool:
         return False
     blocks = diagonal_blocks(m)
     if len(blocks) == 1:
-        return _leading_minors_positive(m)
-    return all(_leading_minors_positive(tuple(tuple(m[i][j] for j in idx) for i in idx)) for idx in blocks)
+        return leading_minors_positive(m)
+    return all(leading_minors_positive(tuple(tuple(m[i][j] for j in idx) for i in idx)) for idx in blocks)
 
 
 def surely_not_positive_definite(m: Matrix) -> bool:

@@ -107,7 +107,7 @@ def test_the_block_by_block_check_decides_as_the_whole_elimination(case: tuple) 
     rational = tuple(tuple(Q(v) for v in row) for row in m)
     blocks = exact.diagonal_blocks(rational)
     assert sorted(i for b in blocks for i in b) == list(range(n))
-    assert exact.is_positive_definite_ldl(rational) == exact._leading_minors_positive(rational)
+    assert exact.is_positive_definite_ldl(rational) == exact.leading_minors_positive(rational)
 
 
 def test_the_block_by_block_check_sees_a_failing_block() -> None:

@@ -5,8 +5,9 @@ Three exact tests, cheapest first; each decides in integer arithmetic, none trus
 1. **Blocks.** A matrix that is block diagonal up to a permutation (a sign-symmetric Gram matrix)
    is positive definite iff each diagonal block is; each block is decided on its own.
 2. **Small blocks** (at most :data:`BAREISS_MAX` rows): fraction-free (Bareiss) elimination on
-   the integer matrix ``D M``; its k-th pivot is the k-th leading principal minor (times
-   ``D^k``), so all pivots > 0 is Sylvester's criterion. Decides both ways.
+   the integer matrix ``D M`` (:func:`lyapcheck.exact.leading_minors_positive`); its k-th pivot is
+   the k-th leading principal minor (times ``D^k``), so all pivots > 0 is Sylvester's criterion.
+   Decides both ways.
 3. **Large blocks**: a congruence. From a floating-point Cholesky factor ``M ~ L L^T`` we take
    ``X``, the inverse of ``L``'s unit-diagonal part rounded to a dyadic grid (so ``X`` is an exact
    unit lower triangular rational matrix, hence invertible), and form ``B = X M X^T`` exactly
@@ -24,9 +25,10 @@ Python-integer Bareiss 1.1 s at 80 rows; FLINT's characteristic polynomial 0.11 
 
 from __future__ import annotations
 
-import math
 from fractions import Fraction
 from typing import Final, Sequence
+
+from lyapcheck.exact import diagonal_blocks, integer_matrix, is_symmetric, leading_minors_positive
 
 #: blocks up to this size are decided by Bareiss elimination in Python integers (fast enough)
 BAREISS_MAX: Final = 24
@@ -37,61 +39,6 @@ CONGRUENCE_BITS: Final = 40
 CHARPOLY_MAX: Final = 220
 
 Matrix = Sequence[Sequence[Fraction]]
-
-
-def is_symmetric(m: Matrix) -> bool:
-    n = len(m)
-    return all(len(row) == n for row in m) and all(m[i][j] == m[j][i] for i in range(n) for j in range(i + 1, n))
-
-
-def diagonal_blocks(m: Matrix) -> list[list[int]]:
-    """Index sets of the diagonal blocks of a symmetric ``m`` up to a permutation (the connected
-    components of the graph with an edge ``i - j`` wherever ``m[i][j] != 0``)."""
-    n = len(m)
-    parent = list(range(n))
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for i in range(n):
-        row = m[i]
-        for j in range(i + 1, n):
-            if row[j] != 0:
-                parent[root(i)] = root(j)
-    blocks: dict[int, list[int]] = {}
-    for i in range(n):
-        blocks.setdefault(root(i), []).append(i)
-    return list(blocks.values())
-
-
-def _integer_rows(m: Matrix) -> list[list[int]]:
-    """``D m`` in Python integers, ``D > 0`` the least common denominator."""
-    den = math.lcm(*(x.denominator for row in m for x in row)) if m else 1
-    return [[x.numerator * (den // x.denominator) for x in row] for row in m]
-
-
-def bareiss_positive_definite(m: Matrix) -> bool:
-    """Exact: every leading principal minor of the symmetric ``m`` is > 0 (fraction-free elimination)."""
-    a = _integer_rows(m)
-    n = len(a)
-    prev = 1
-    for k in range(n):
-        pivot = a[k][k]
-        if pivot <= 0:
-            return False
-        row_k = a[k]
-        for i in range(k + 1, n):
-            row_i = a[i]
-            f = row_i[k]
-            for j in range(i, n):
-                row_i[j] = (row_i[j] * pivot - f * row_k[j]) // prev
-            for j in range(k + 1, i):
-                row_i[j] = a[j][i]
-        prev = pivot
-    return True
 
 
 def _congruence_positive_definite(m: Matrix) -> bool | None:
@@ -119,7 +66,7 @@ def _congruence_positive_definite(m: Matrix) -> bool | None:
     for i in range(n):
         rows[i][i] = scale  # exactly unit diagonal: X is invertible whatever the rounding did
     X = flint.fmpz_mat(rows)
-    M = flint.fmpz_mat(_integer_rows(m))
+    M = flint.fmpz_mat(integer_matrix(m))
     B = X * M * X.transpose()
     entries = [[int(v) for v in row] for row in B.tolist()]
     for i in range(n):
@@ -135,7 +82,7 @@ def _charpoly_positive_definite(m: Matrix) -> bool:
     import flint
 
     n = len(m)
-    coeffs = [int(c) for c in flint.fmpz_mat(_integer_rows(m)).charpoly().coeffs()]
+    coeffs = [int(c) for c in flint.fmpz_mat(integer_matrix(m)).charpoly().coeffs()]
     coeffs += [0] * (n + 1 - len(coeffs))
     # det(tI - M) = sum c_k t^k; all n roots real and positive iff (-1)^(n-k) c_k > 0 for every k
     return all((c > 0) if (n - k) % 2 == 0 else (c < 0) for k, c in enumerate(coeffs))
@@ -166,7 +113,7 @@ def _rational(x: Fraction | int) -> Fraction:
 def _block_positive_definite(block: list[list[Fraction]]) -> bool:
     n = len(block)
     if n <= BAREISS_MAX:
-        return bareiss_positive_definite(block)
+        return leading_minors_positive(block)
     if any(block[i][i] <= 0 for i in range(n)):
         return False
     shown = _congruence_positive_definite(block)
