@@ -57,7 +57,7 @@ import numpy as np
 
 from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
 from lyapcheck.models.modelfile import Model
-from sweeps.spec import BoxSettings, SweepSpec
+from sweeps.spec import BoxSettings, SweepSpec, box_settings, int_field, known_keys, table_field
 
 #: classes of a points sweep (every class of a model file but the user's own candidate V)
 POINT_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "sos_bound")
@@ -71,10 +71,8 @@ MAX_CHUNK: Final = 1_000
 DEFAULT_CHUNK: Final = {"points": 4, "boxes": 8}
 MAX_STARTS: Final = 256
 DEFAULT_STARTS: Final = 8
-MAX_CROSS_CHECK_POINTS: Final = 100
 _SWEEP_KEYS: Final = ("model", "mode", "classes", "chunk_size", "axes", "set", "boxes")
 _AXIS_KEYS: Final = ("name", "start", "stop", "num", "scale", "values")
-_BOX_KEYS: Final = ("min_relative_width", "max_boxes", "cross_check_points", "seed")
 _SIM_KEYS: Final = ("starts", "seed", "worst_case")
 _TABLES: Final = ("sweep", "simulation")
 
@@ -177,24 +175,6 @@ def exact_decimal(value: float) -> str:
 
 
 # -- small validators (one message template: InvalidParameter) ------------------------------------
-def _table(raw: object, where: str) -> Mapping[str, Any]:
-    if not isinstance(raw, Mapping):
-        raise InvalidParameter(where, "a table", raw)
-    return raw
-
-
-def _known(table: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
-    for key in table:
-        if key not in allowed:
-            raise InvalidParameter(f"{where}.{key}", f"a known key of [{where}] ({', '.join(allowed)})", key)
-
-
-def _int(field: str, raw: object, low: int, high: int) -> int:
-    if isinstance(raw, bool) or not isinstance(raw, int) or not low <= raw <= high:
-        raise InvalidParameter(field, f"an integer in [{low}, {high}]", raw)
-    return raw
-
-
 def _quantity(field: str, raw: object) -> Fraction:
     """A number or unit string, read as the model file reads its parameters (SI, exact)."""
     from lyapcheck.units import parse_si_quantity
@@ -217,7 +197,7 @@ def _model(sweep: Mapping[str, Any], source: str, model_text: str | None) -> tup
 
 def _overrides(raw: object, declared: Model) -> dict[str, str]:
     """``[sweep.set]``: names declared in the model (parameters or disturbance bounds), values checked."""
-    table = _table({} if raw is None else raw, "sweep.set")
+    table = table_field({} if raw is None else raw, "sweep.set")
     known = list(declared.parameters) + list(declared.disturbances)
     out = {}
     for key, value in table.items():
@@ -236,8 +216,8 @@ def _overrides(raw: object, declared: Model) -> dict[str, str]:
 
 def _axis(index: int, raw: object, model: Model, fixed: Mapping[str, str]) -> ModelAxis:
     where = f"sweep.axes[{index}]"
-    table = _table(raw, where)
-    _known(table, _AXIS_KEYS, where)
+    table = table_field(raw, where)
+    known_keys(table, _AXIS_KEYS, where)
     name = table.get("name")
     if not isinstance(name, str) or name not in model.parameters:
         raise InvalidParameter(f"{where}.name", "a parameter declared in the model ("
@@ -261,7 +241,7 @@ def _axis(index: int, raw: object, model: Model, fixed: Mapping[str, str]) -> Mo
             raise InvalidParameter(f"{where}.{key}", "given (or give 'values')", None)
     start = _quantity(f"{where}.start", table["start"])
     stop = _quantity(f"{where}.stop", table["stop"])
-    num = _int(f"{where}.num", table["num"], 1, MAX_MODEL_POINTS)
+    num = int_field(f"{where}.num", table["num"], 1, MAX_MODEL_POINTS)
     scale = table.get("scale", "linear")
     if scale not in ("linear", "log"):
         raise InvalidParameter(f"{where}.scale", "one of 'linear', 'log'", scale)
@@ -307,31 +287,11 @@ def _classes(raw: object, mode: str, model: Model) -> tuple[str, ...]:
     return tuple(c for c in allowed if c in raw)  # canonical order: cheapest first
 
 
-def _box_settings(raw: object, axes: Sequence[ModelAxis]) -> BoxSettings:
-    table = _table({} if raw is None else raw, "sweep.boxes")
-    _known(table, _BOX_KEYS, "sweep.boxes")
-    width = table.get("min_relative_width", 0.05)
-    if isinstance(width, bool) or not isinstance(width, (int, float)) or not 1e-9 <= width <= 100:
-        raise InvalidParameter("sweep.boxes.min_relative_width", "a number in [1e-9, 100]", width)
-    for i, axis in enumerate(axes):
-        if axis.size < 2:
-            raise InvalidParameter(f"sweep.axes[{i}].num", "at least 2 in a box sweep (the values are box edges)",
-                                   axis.size)
-    first = int(np.prod([a.size - 1 for a in axes]))
-    max_boxes = table.get("max_boxes", max(100, first))
-    if isinstance(max_boxes, bool) or not isinstance(max_boxes, int) or not first <= max_boxes <= MAX_MODEL_BOXES:
-        raise InvalidParameter("sweep.boxes.max_boxes", f"an integer in [{first}, {MAX_MODEL_BOXES}] (at least the "
-                               f"{first} first boxes of the axes' grid)", max_boxes)
-    points = _int("sweep.boxes.cross_check_points", table.get("cross_check_points", 2), 0, MAX_CROSS_CHECK_POINTS)
-    seed = _int("sweep.boxes.seed", table.get("seed", 0), 0, 2**63 - 1)
-    return BoxSettings(min_relative_width=float(width), max_boxes=max_boxes, cross_check_points=points, seed=seed)
-
-
 def _simulation(raw: object) -> ModelSimulation:
-    table = _table({} if raw is None else raw, "simulation")
-    _known(table, _SIM_KEYS, "simulation")
-    starts = _int("simulation.starts", table.get("starts", DEFAULT_STARTS), 1, MAX_STARTS)
-    seed = _int("simulation.seed", table.get("seed", 0), 0, 2**63 - 1)
+    table = table_field({} if raw is None else raw, "simulation")
+    known_keys(table, _SIM_KEYS, "simulation")
+    starts = int_field("simulation.starts", table.get("starts", DEFAULT_STARTS), 1, MAX_STARTS)
+    seed = int_field("simulation.seed", table.get("seed", 0), 0, 2**63 - 1)
     worst = table.get("worst_case", True)
     if not isinstance(worst, bool):
         raise InvalidParameter("simulation.worst_case", "true or false", worst)
@@ -412,8 +372,8 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
         if key not in _TABLES:
             raise InvalidParameter(key, "absent in a model sweep (the model file and [sweep.set] give the parameters; "
                                    "tables: [sweep], [simulation])", f"a [{key}] table")
-    sweep = _table(data.get("sweep"), "sweep")
-    _known(sweep, _SWEEP_KEYS, "sweep")
+    sweep = table_field(data.get("sweep"), "sweep")
+    known_keys(sweep, _SWEEP_KEYS, "sweep")
     model_file, model_text = _model(sweep, source, model_text)
     declared = parse_model(model_text, model_file)
     fixed = _overrides(sweep.get("set"), declared)
@@ -430,10 +390,10 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     if len(set(names)) != len(names):
         raise InvalidParameter("sweep.axes", "distinct parameter names", names)
     classes = _classes(sweep.get("classes"), str(mode), model)
-    chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK[str(mode)]), 1, MAX_CHUNK)
+    chunk = int_field("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK[str(mode)]), 1, MAX_CHUNK)
     boxes = None
     if mode == "boxes":
-        boxes = _box_settings(sweep.get("boxes"), axes)
+        boxes = box_settings(sweep.get("boxes"), axes, default_max_boxes=100, max_boxes_limit=MAX_MODEL_BOXES)
     else:
         if "boxes" in sweep:
             raise InvalidParameter("sweep.boxes", "absent unless mode = \"boxes\"", "a [sweep.boxes] table")

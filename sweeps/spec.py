@@ -183,19 +183,19 @@ class SweepSpec:
         return problem.with_gains(**gains) if gains else problem
 
 
-def _int(field: str, raw: object, low: int, high: int) -> int:
+def int_field(field: str, raw: object, low: int, high: int) -> int:
     if isinstance(raw, bool) or not isinstance(raw, int) or not low <= raw <= high:
         raise InvalidParameter(field, f"an integer in [{low}, {high}]", raw)
     return raw
 
 
-def _known(table: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
+def known_keys(table: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
     for key in table:
         if key not in allowed:
             raise InvalidParameter(f"{where}.{key}", f"a known key of [{where}] ({', '.join(allowed)})", key)
 
 
-def _table(raw: object, where: str) -> Mapping[str, Any]:
+def table_field(raw: object, where: str) -> Mapping[str, Any]:
     if not isinstance(raw, Mapping):
         raise InvalidParameter(where, "a table", raw)
     return raw
@@ -204,8 +204,8 @@ def _table(raw: object, where: str) -> Mapping[str, Any]:
 def _axis(index: int, raw: object) -> tuple[Axis, object]:
     """Validate one ``[[sweep.axes]]`` table; also returns a raw value for the base problem."""
     where = f"sweep.axes[{index}]"
-    table = _table(raw, where)
-    _known(table, _AXIS_KEYS, where)
+    table = table_field(raw, where)
+    known_keys(table, _AXIS_KEYS, where)
     name = table.get("name")
     if name not in SWEEPABLE:
         raise InvalidParameter(f"{where}.name", "one of " + ", ".join(repr(n) for n in SWEEPABLE), name)
@@ -226,7 +226,7 @@ def _axis(index: int, raw: object) -> tuple[Axis, object]:
             raise InvalidParameter(f"{where}.{key}", "given (or give 'values')", None)
     start = validate_field(replace(spec, name=name), table["start"])
     stop = validate_field(replace(spec, name=name), table["stop"])
-    num = _int(f"{where}.num", table["num"], 1, MAX_POINTS)
+    num = int_field(f"{where}.num", table["num"], 1, MAX_POINTS)
     scale = table.get("scale", "linear")
     if scale not in _SCALES:
         raise InvalidParameter(f"{where}.scale", "one of 'linear', 'log'", scale)
@@ -246,8 +246,8 @@ def _axis(index: int, raw: object) -> tuple[Axis, object]:
 
 
 def _simulation(raw: object) -> SimulationSettings:
-    table = _table({} if raw is None else raw, "simulation")
-    _known(table, _SIM_KEYS, "simulation")
+    table = table_field({} if raw is None else raw, "simulation")
+    known_keys(table, _SIM_KEYS, "simulation")
     values = {k: float(validate_field(spec, table.get(k, spec.default))) for k, spec in _SIM_FIELDS.items()}
     if values["tail"] > values["horizon"]:
         raise InvalidParameter("tail", f"at most the horizon ({values['horizon']:g} s)", table.get("tail"))
@@ -277,13 +277,13 @@ def _classes(raw: object) -> tuple[str, ...]:
 def _refinement(raw: object, axes: tuple[Axis, ...], classes: tuple[str, ...]) -> Refinement | None:
     if raw is None:
         return None
-    table = _table(raw, "sweep.refine")
-    _known(table, _REFINE_KEYS, "sweep.refine")
+    table = table_field(raw, "sweep.refine")
+    known_keys(table, _REFINE_KEYS, "sweep.refine")
     cls = table.get("class")
     if cls not in classes:
         raise InvalidParameter("sweep.refine.class", "one of the classes the sweep runs ("
                                + ", ".join(classes) + ")", cls)
-    levels = _int("sweep.refine.levels", table.get("levels"), 1, MAX_REFINE_LEVELS)
+    levels = int_field("sweep.refine.levels", table.get("levels"), 1, MAX_REFINE_LEVELS)
     if len(axes) != 2:
         raise InvalidParameter("sweep.refine", "used with exactly two swept axes (a 2-D slice)",
                                f"{len(axes)} axes")
@@ -295,19 +295,22 @@ def _refinement(raw: object, axes: tuple[Axis, ...], classes: tuple[str, ...]) -
     return Refinement(str(cls), levels)
 
 
-def _box_settings(raw: object, axes: tuple[Axis, ...]) -> BoxSettings:
-    table = _table({} if raw is None else raw, "sweep.boxes")
-    _known(table, _BOX_KEYS, "sweep.boxes")
+def box_settings(raw: object, axes: Sequence[Any], *, default_max_boxes: int = 400,
+                 max_boxes_limit: int = MAX_BOXES) -> BoxSettings:
+    """``[sweep.boxes]`` of a box sweep over ``axes`` (anything with a ``size``: the values are box
+    edges), one-line errors naming the field; shared by the paper's specs and model specs."""
+    table = table_field({} if raw is None else raw, "sweep.boxes")
+    known_keys(table, _BOX_KEYS, "sweep.boxes")
     width = table.get("min_relative_width", 0.05)
     if isinstance(width, bool) or not isinstance(width, (int, float)) or not 1e-9 <= width <= 100:
         raise InvalidParameter("sweep.boxes.min_relative_width", "a number in [1e-9, 100]", width)
     first = int(np.prod([a.size - 1 for a in axes]))
-    max_boxes = table.get("max_boxes", max(400, first))
-    if isinstance(max_boxes, bool) or not isinstance(max_boxes, int) or not first <= max_boxes <= MAX_BOXES:
-        raise InvalidParameter("sweep.boxes.max_boxes", f"an integer in [{first}, {MAX_BOXES}] (at least the {first} "
-                               "first boxes of the axes' grid)", max_boxes)
-    points = _int("sweep.boxes.cross_check_points", table.get("cross_check_points", 2), 0, MAX_CROSS_CHECK_POINTS)
-    seed = _int("sweep.boxes.seed", table.get("seed", 0), 0, 2**63 - 1)
+    max_boxes = table.get("max_boxes", max(default_max_boxes, first))
+    if isinstance(max_boxes, bool) or not isinstance(max_boxes, int) or not first <= max_boxes <= max_boxes_limit:
+        raise InvalidParameter("sweep.boxes.max_boxes", f"an integer in [{first}, {max_boxes_limit}] (at least the "
+                               f"{first} first boxes of the axes' grid)", max_boxes)
+    points = int_field("sweep.boxes.cross_check_points", table.get("cross_check_points", 2), 0, MAX_CROSS_CHECK_POINTS)
+    seed = int_field("sweep.boxes.seed", table.get("seed", 0), 0, 2**63 - 1)
     for i, axis in enumerate(axes):
         if axis.size < 2:
             raise InvalidParameter(f"sweep.axes[{i}].num", "at least 2 in a box sweep (the values are box edges)",
@@ -327,8 +330,8 @@ def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
         raise InputFileError(f"sweep spec '{source}' is not valid TOML: {exc}") from None
     if "sweep" not in data:
         raise InvalidParameter("sweep", f"a [sweep] table in {source}", None)
-    sweep = _table(data["sweep"], "sweep")
-    _known(sweep, _SWEEP_KEYS, "sweep")
+    sweep = table_field(data["sweep"], "sweep")
+    known_keys(sweep, _SWEEP_KEYS, "sweep")
     raw_axes = sweep.get("axes")
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",
@@ -368,7 +371,7 @@ def parse_spec(text: str, *, source: str = "spec") -> SweepSpec:
         raise InvalidParameter("sweep.boxes", "absent unless mode = \"boxes\"", "a [sweep.boxes] table")
 
     classes = _classes(sweep.get("classes"))
-    chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
+    chunk = int_field("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
     simulation = _simulation(data.get("simulation"))
     if "weight" in simulation.scenarios:
         _check_weight_inputs(base)
@@ -386,8 +389,8 @@ def _box_spec(text: str, sweep: Mapping[str, Any], axes: tuple[Axis, ...], base:
     if "refine" in sweep:
         raise InvalidParameter("sweep.refine", "absent in a box sweep (boxes refine by [sweep.boxes])",
                                "a [sweep.refine] table")
-    chunk = _int("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
-    boxes = _box_settings(sweep.get("boxes"), axes)
+    chunk = int_field("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_CHUNK), 1, MAX_CHUNK)
+    boxes = box_settings(sweep.get("boxes"), axes)
     classes = tuple(c for c in BOX_CLASSES if c in raw)  # canonical order: cheapest first
     if "sos_bound" in classes:  # its cross-check simulates the saturated loop under |d| <= d*
         base.actuation.step_out()
