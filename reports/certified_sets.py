@@ -35,6 +35,7 @@ import numpy as np
 import numpy.typing as npt
 
 from reports.typeset import parse_fraction, parse_matrix
+from reports.views import as_dict
 
 log = logging.getLogger(__name__)
 
@@ -107,12 +108,8 @@ class CertifiedSet:
         return pts.min(axis=0), pts.max(axis=0)
 
 
-def _dict(value: object) -> dict[str, Any]:
-    return value if isinstance(value, dict) else {}
-
-
 def _certified(doc: dict[str, Any], name: str) -> dict[str, Any]:
-    cond = _dict(_dict(doc.get("conditions")).get(name))
+    cond = as_dict(as_dict(doc.get("conditions")).get(name))
     return cond if cond.get("status") == "certified" else {}
 
 
@@ -178,8 +175,8 @@ def storage_polynomial(doc: dict[str, Any]) -> StoragePolynomial | None:
     from lyapcheck import exact, poly
     from lyapcheck.paper.conditions.sos_bound import Z_V
 
-    cert = _dict(_certified(doc, "sos_bound").get("certificate"))
-    system = _dict(doc.get("system"))
+    cert = as_dict(_certified(doc, "sos_bound").get("certificate"))
+    system = as_dict(doc.get("system"))
     beta, b = parse_fraction(cert.get("beta")), parse_fraction(cert.get("B"))
     delta, sigma0 = parse_fraction(system.get("delta")), parse_fraction(system.get("sigma0"))
     try:  # not parse_matrix: exact entries of any length
@@ -264,10 +261,10 @@ def ellipse_points(P: FloatArray, n: int = 361) -> FloatArray:
 
 def ellipsoid_set(doc: dict[str, Any]) -> CertifiedSet | None:
     cond = _certified(doc, "ultimate_bound")
-    stages = _dict(cond.get("certificate")).get("stages")
+    stages = as_dict(cond.get("certificate")).get("stages")
     found: list[tuple[float, FloatArray, int]] = []
     for k, stage in enumerate(stages if isinstance(stages, list) else []):
-        rows = parse_matrix(_dict(stage).get("P"))
+        rows = parse_matrix(as_dict(stage).get("P"))
         if rows is None or len(rows) != 2 or len(rows[0]) != 2:
             continue
         P = np.array([[float(x) for x in r] for r in rows])
@@ -289,7 +286,7 @@ def ellipsoid_set(doc: dict[str, Any]) -> CertifiedSet | None:
 
 def box_set(doc: dict[str, Any]) -> CertifiedSet | None:
     cond = _certified(doc, "ultimate_bound")
-    box = _dict(_dict(cond.get("certificate")).get("box"))
+    box = as_dict(as_dict(cond.get("certificate")).get("box"))
     e, s = parse_fraction(box.get("eps_bound")), parse_fraction(box.get("s_bound"))
     if e is None or s is None or e <= 0 or s <= 0:
         return None

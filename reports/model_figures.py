@@ -41,7 +41,7 @@ from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 from reports.figures import Figure, resample_closed, to_svg
 from reports.model_polynomials import ExactPolynomial, FloatPolynomial
 from reports.model_simulation import Trajectory, horizon, jacobian_eigenvalues, simulate
-from reports.views import fmt_float
+from reports.views import as_dict, as_fraction, as_number, fmt_float
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -136,30 +136,12 @@ class PhasePortrait:
     notes: list[str] = field(default_factory=list)
 
 
-def _dict(value: object) -> dict[str, Any]:
-    return value if isinstance(value, dict) else {}
-
-
-def _fraction(value: object) -> Fraction | None:
-    if isinstance(value, bool) or not isinstance(value, (str, int)) or len(str(value)) > 4000:
-        return None
-    try:
-        return Fraction(str(value))
-    except (ValueError, ZeroDivisionError):
-        return None
-
-
-def _number(value: object) -> float | None:
-    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
-        and math.isfinite(value) else None
-
-
 def certificate_scaling(doc: dict[str, Any], model: Model) -> tuple[list[Fraction], Fraction]:
     """The certificate's state scales ``S`` and time scale ``T`` (``t = T tau``), exact; ones when absent."""
-    scaling = _dict(_dict(doc.get("field")).get("scaling"))
+    scaling = as_dict(as_dict(doc.get("field")).get("scaling"))
     states = scaling.get("states")
-    scales = [_fraction(s) for s in states] if isinstance(states, list) and len(states) == model.n else []
-    time = _fraction(scaling.get("time"))
+    scales = [as_fraction(s) for s in states] if isinstance(states, list) and len(states) == model.n else []
+    time = as_fraction(scaling.get("time"))
     ok = len(scales) == model.n and all(s is not None and s > 0 for s in scales)
     return ([s for s in scales if s is not None] if ok else [Fraction(1)] * model.n,
             time if time is not None and time > 0 else Fraction(1))
@@ -167,33 +149,33 @@ def certificate_scaling(doc: dict[str, Any], model: Model) -> tuple[list[Fractio
 
 def level_sets(doc: dict[str, Any], model: Model) -> tuple[list[LevelSet], list[GlobalV], list[str]]:
     """The certified sets and global Lyapunov functions of a model document; notes for the unreadable."""
-    conditions = _dict(doc.get("conditions"))
+    conditions = as_dict(doc.get("conditions"))
     _, time = certificate_scaling(doc, model)
     sets: list[LevelSet] = []
     globals_: list[GlobalV] = []
     notes: list[str] = []
     for name, cond in conditions.items():
-        cond = _dict(cond)
+        cond = as_dict(cond)
         if cond.get("status") != "certified":
             continue
-        cert = _dict(cond.get("certificate"))
+        cert = as_dict(cond.get("certificate"))
         try:
             if name in ("roa", "candidate") and "level" in cert and "V" in cert:
-                level = _fraction(cert["level"])
+                level = as_fraction(cert["level"])
                 if level is None:
                     raise ValueError("its level is not a rational")
                 poly = ExactPolynomial.from_json(cert["V"], model.n)
                 sets.append(LevelSet(name, f"{name}: {{V ≤ {fmt_float(float(level))}}}", poly, level, "region",
                                      SET_COLOURS.get(name, "#1a7f37")))
             elif name in ("quadratic", "sos_gas", "candidate") and "V" in cert:
-                rate = _number(cond.get("decay_rate_V_per_s")) or 0.0
+                rate = as_number(cond.get("decay_rate_V_per_s")) or 0.0
                 globals_.append(GlobalV(name, ExactPolynomial.from_json(cert["V"], model.n), max(rate, 0.0)))
             elif name == "sos_bound":
-                for k, (output, data) in enumerate(_dict(cert.get("outputs")).items()):
-                    data = _dict(data)
-                    lam = _fraction(data.get("lam_scaled"))
+                for k, (output, data) in enumerate(as_dict(cert.get("outputs")).items()):
+                    data = as_dict(data)
+                    lam = as_fraction(data.get("lam_scaled"))
                     poly = ExactPolynomial.from_json(data.get("V"), model.n)
-                    bound = _number(_dict(cond.get("bounds")).get(output))
+                    bound = as_number(as_dict(cond.get("bounds")).get(output))
                     sets.append(LevelSet(name, f"sos_bound ({output}): {{V ≤ 1}}", poly, Fraction(1), "attracting",
                                          OUTPUT_COLOURS[k % len(OUTPUT_COLOURS)],
                                          rate=float(lam / time) if lam is not None and lam > 0 else 0.0,

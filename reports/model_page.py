@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import math
 import shlex
 import tomllib
 from dataclasses import dataclass, field
@@ -41,7 +40,7 @@ from reports.figures import Figure
 from reports.model_figures import CrossCheck, phase_portrait
 from reports.model_polynomials import MAX_PLAIN_CHARS, ExactPolynomial
 from reports.typeset import Equation, Equations, parse_matrix, typst_symbol, versions
-from reports.views import Item, fmt_float, matrix_item, scalar_text, value_items
+from reports.views import Item, as_dict, as_fraction, as_number, fmt_float, matrix_item, scalar_text, value_items
 
 log = logging.getLogger(__name__)
 
@@ -108,26 +107,8 @@ def read_certificate(path: str | Path) -> dict[str, Any]:
     return doc
 
 
-def _dict(value: object) -> dict[str, Any]:
-    return value if isinstance(value, dict) else {}
-
-
 def _str(value: object) -> str:
     return value if isinstance(value, str) else ("—" if value is None else str(value))
-
-
-def _fraction(value: object) -> Fraction | None:
-    if isinstance(value, bool) or not isinstance(value, (str, int)) or len(str(value)) > 4000:
-        return None
-    try:
-        return Fraction(str(value))
-    except (ValueError, ZeroDivisionError):
-        return None
-
-
-def _number(value: object) -> float | None:
-    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
-        and math.isfinite(value) else None
 
 
 def _percent(value: float) -> str:
@@ -185,35 +166,35 @@ class Denominator:
 def key_figures(cond: dict[str, Any]) -> list[str]:
     """The figures a reader looks for first, one short phrase each (the table of classes)."""
     out = []
-    level = _number(cond.get("level"))
+    level = as_number(cond.get("level"))
     if level is not None:
         out.append(f"level c = {fmt_float(level)}")
-    radius = _number(cond.get("ball_radius"))
+    radius = as_number(cond.get("ball_radius"))
     if radius is not None:
         out.append(f"holds the ball |x - x_eq| <= {fmt_float(radius, 4)}")
-    share = _number(cond.get("roa_share"))
+    share = as_number(cond.get("roa_share"))
     if share is not None:
         out.append(f"covers {_percent(share)} of the simulated region of attraction in the domain")
-    domain_share = _number(cond.get("simulated_roa_share_of_domain"))
+    domain_share = as_number(cond.get("simulated_roa_share_of_domain"))
     if domain_share is not None:
         out.append(f"simulated region of attraction: {_percent(domain_share)} of the domain")
-    k, rate = _number(cond.get("k")), _number(cond.get("decay_rate_per_s"))
+    k, rate = as_number(cond.get("k")), as_number(cond.get("decay_rate_per_s"))
     if k is not None and rate is not None:
         out.append(f"|x(t)| <= {fmt_float(k, 4)} |x0| exp(-{fmt_float(rate, 4)} t)")
-    rate_v = _number(cond.get("decay_rate_V_per_s"))
+    rate_v = as_number(cond.get("decay_rate_V_per_s"))
     if rate_v is not None and rate_v > 0:
         out.append(f"V' <= -{fmt_float(rate_v, 4)} V")
-    for output, bound in _dict(cond.get("bounds")).items():
-        b = _number(bound)
+    for output, bound in as_dict(cond.get("bounds")).items():
+        b = as_number(bound)
         if b is not None:
             out.append(f"limsup |{output}| <= {fmt_float(b)}")
     degree = cond.get("degree")
     if isinstance(degree, int) and not isinstance(degree, bool) and cond.get("status") == "certified":
         out.append(f"V of degree {degree}")
-    supremum = _number(cond.get("level_supremum_estimate"))
+    supremum = as_number(cond.get("level_supremum_estimate"))
     if supremum is not None:
         out.append(f"sampled supremum of the level {fmt_float(supremum)}")
-    real = _number(cond.get("max_real_part_estimate"))
+    real = as_number(cond.get("max_real_part_estimate"))
     if real is not None:
         out.append(f"largest real part of an eigenvalue {fmt_float(real, 4)}")
     return out
@@ -262,7 +243,7 @@ def _class_view(name: str, cond: dict[str, Any], index: int, states: list[str], 
         view.items.extend(value_items(str(key), value, eqs))
     rounds = cond.get("rounds")
     if isinstance(rounds, list) and rounds:
-        shares = [_number(_dict(r).get("share")) for r in rounds]
+        shares = [as_number(as_dict(r).get("share")) for r in rounds]
         known = [s for s in shares if s is not None]
         span = ""
         if known and max(known) > known[0]:
@@ -273,23 +254,23 @@ def _class_view(name: str, cond: dict[str, Any], index: int, states: list[str], 
         view.notes.append(f"{len(rounds)} rounds of the search enlarged V{span}.")
     # a refutation carries its exact data as a certificate does; so does the critical case of the
     # linearization (its Jacobian and characteristic polynomial)
-    cert = _dict(cond.get("certificate")) or _dict(cond.get("refutation"))
+    cert = as_dict(cond.get("certificate")) or as_dict(cond.get("refutation"))
     if not cert:
         return view
     if "V" in cert:
         lead = "V(x)" if all(s == 0 for s in shifts) else "V"
         view.polynomials.append(_polynomial("V, exactly", cert["V"], lead, states, shifts, eqs))
-    level = _fraction(cert.get("level"))
+    level = as_fraction(cert.get("level"))
     if level is not None:
         view.exact.append(("certified level c", f"≈ {fmt_float(float(level))}", str(level)))
-    ball = _dict(cert.get("ball"))
-    radius = _fraction(ball.get("radius"))
+    ball = as_dict(cert.get("ball"))
+    radius = as_fraction(ball.get("radius"))
     if radius is not None:
         text, exact = scalar_text(str(radius))
         view.exact.append(("radius r of a ball |x - x_eq| <= r inside {V <= c}", text, exact))
     for key, what in (("c1", "c1 in c1 I < P"), ("c2", "c2 in P < c2 I"), ("k", "k = sqrt(c2 / c1), rounded up"),
                       ("mu_scaled", "mu in V' <= -mu V (scaled time)")):
-        value = _fraction(cert.get(key))
+        value = as_fraction(cert.get(key))
         if value is not None:
             text, exact = scalar_text(str(value))
             view.exact.append((what, text, exact))
@@ -304,18 +285,18 @@ def _class_view(name: str, cond: dict[str, Any], index: int, states: list[str], 
     charpoly = cert.get("characteristic_polynomial")
     if charpoly is not None:
         view.items.extend(value_items("characteristic polynomial (coefficients, exact)", charpoly, eqs))
-    for output, data in _dict(cert.get("outputs")).items():
-        data = _dict(data)
+    for output, data in as_dict(cert.get("outputs")).items():
+        data = as_dict(data)
         lead = typst_symbol(f"V_{output}") + ("(x)" if all(s == 0 for s in shifts) else "")
         view.polynomials.append(_polynomial(f"storage function for the output {output}, exactly", data.get("V"), lead,
                                             states, shifts, eqs))
-        bound = _fraction(data.get("bound"))
+        bound = as_fraction(data.get("bound"))
         if bound is not None:
             text, exact = scalar_text(str(bound))
             view.exact.append((f"certified limsup |{output}|", text, exact))
         for key, what in (("lam_scaled", f"lambda of {output} in V' <= -lambda (V - 1) (scaled time)"),
                           ("B_scaled", f"B of {output} in y^2 <= V + B - 1 (scaled)")):
-            value = _fraction(data.get(key))
+            value = as_fraction(data.get(key))
             if value is not None:
                 text, exact = scalar_text(str(value))
                 view.exact.append((what, text, exact))
@@ -328,7 +309,7 @@ def _class_view(name: str, cond: dict[str, Any], index: int, states: list[str], 
 def _quantities(exact_si: dict[str, Any], given: dict[str, Any], overrides: dict[str, Any]) -> list[Quantity]:
     rows = []
     for name, value in exact_si.items():
-        exact = _fraction(value)
+        exact = as_fraction(value)
         note = ""
         if name in overrides:
             raw, note = overrides[name], f"set on the command line (--set {name}=...)"
@@ -343,14 +324,14 @@ def _quantities(exact_si: dict[str, Any], given: dict[str, Any], overrides: dict
 def _denominators(fld: dict[str, Any]) -> list[Denominator]:
     out = []
     for cert in fld.get("denominators") or []:
-        cert = _dict(cert)
+        cert = as_dict(cert)
         text = _str(cert.get("denominator", "a denominator"))
         sign = cert.get("sign", 1)
         kind = cert.get("kind")
         if kind == "constant":
             how = f"a positive constant ({_str(cert.get('value'))}), exactly"
         elif kind == "sos":
-            basis = _dict(cert.get("gram_sigma")).get("basis")
+            basis = as_dict(cert.get("gram_sigma")).get("basis")
             size = len(basis) if isinstance(basis, list) else 0
             scales = ", ".join(map(_str, cert.get("scales") or []))
             c, norm = _str(cert.get("c")), _str(cert.get("normalization"))
@@ -368,7 +349,7 @@ def _denominators(fld: dict[str, Any]) -> list[Denominator]:
 
 def _scaling(fld: dict[str, Any], states: list[str], disturbances: list[str],
              outputs: list[str]) -> list[tuple[str, str]]:
-    scaling = _dict(fld.get("scaling"))
+    scaling = as_dict(fld.get("scaling"))
     rows: list[tuple[str, str]] = []
     for key, names, what in (("states", states, "state"), ("disturbances", disturbances, "disturbance"),
                              ("outputs", outputs, "output")):
@@ -386,17 +367,17 @@ def _solvers(conditions: dict[str, Any]) -> list[tuple[str, str]]:
     """Per class: how many solves, their outcomes and the solver time (the full log is in the file)."""
     out = []
     for name, cond in conditions.items():
-        solves = _dict(_dict(cond).get("solver")).get("solves")
+        solves = as_dict(as_dict(cond).get("solver")).get("solves")
         if not isinstance(solves, list) or not solves:
             continue
         outcomes: dict[str, int] = {}
         seconds = 0.0
         solvers = set()
         for s in solves:
-            s = _dict(s)
+            s = as_dict(s)
             outcomes[_str(s.get("outcome", s.get("status", "?")))] = outcomes.get(
                 _str(s.get("outcome", s.get("status", "?"))), 0) + 1
-            seconds += _number(s.get("solve_seconds")) or 0.0
+            seconds += as_number(s.get("solve_seconds")) or 0.0
             solvers.add(_str(s.get("solver", "?")))
         counts = ", ".join(f"{n} {k}" for k, n in sorted(outcomes.items()))
         out.append((str(name), f"{len(solves)} solves with {', '.join(sorted(solvers))} ({counts}), "
@@ -405,14 +386,14 @@ def _solvers(conditions: dict[str, Any]) -> list[tuple[str, str]]:
 
 
 def _command(doc: dict[str, Any]) -> str:
-    model = _dict(doc.get("model"))
+    model = as_dict(doc.get("model"))
     file = _str(model.get("file") or "model.toml")
     parts = ["lyapcheck", "certify", "--model", shlex.quote(file)]
-    for name, value in _dict(doc.get("overrides")).items():
+    for name, value in as_dict(doc.get("overrides")).items():
         parts += ["--set", shlex.quote(f"{name}={value}")]
     if isinstance(doc.get("candidate"), str):
         parts += ["--candidate", shlex.quote(doc["candidate"])]
-    names = [str(n) for n in _dict(doc.get("conditions"))]
+    names = [str(n) for n in as_dict(doc.get("conditions"))]
     if names:
         parts += ["--classes", shlex.quote(",".join(names))]
     parts += ["--out", "certificate.json"]
@@ -460,10 +441,10 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
     if not is_model_document(doc):
         raise InputFileError(f"not a model certificate (missing kind '{KIND}')")
     eqs = Equations()
-    model_part = _dict(doc.get("model"))
+    model_part = as_dict(doc.get("model"))
     stored_text = model_part.get("text")
     text = stored_text if isinstance(stored_text, str) else ""
-    overrides = {str(k): v for k, v in _dict(doc.get("overrides")).items()}
+    overrides = {str(k): v for k, v in as_dict(doc.get("overrides")).items()}
     model: Model | None = None
     model_error = ""
     try:
@@ -477,22 +458,22 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
     states = [str(s) for s in doc.get("states") or []] if isinstance(doc.get("states"), list) else []
     if model is not None and not states:
         states = list(model.states)
-    equilibrium = _dict(doc.get("equilibrium"))
-    shifts = [_fraction(equilibrium.get(s)) or Fraction(0) for s in states]
-    conditions = _dict(doc.get("conditions"))
-    classes = [_class_view(str(name), _dict(cond), k + 1, states, shifts, eqs)
+    equilibrium = as_dict(doc.get("equilibrium"))
+    shifts = [as_fraction(equilibrium.get(s)) or Fraction(0) for s in states]
+    conditions = as_dict(doc.get("conditions"))
+    classes = [_class_view(str(name), as_dict(cond), k + 1, states, shifts, eqs)
                for k, (name, cond) in enumerate(conditions.items())]
     figure, figure_reason, checks = _figure(doc, model, simulate)
     eqs.typeset()
     rows, recheck_error = _recheck(doc) if recheck else ([], "not requested")
     digest = hashlib.sha256(text.encode()).hexdigest()
     stated = _str(model_part.get("sha256", ""))
-    fld = _dict(doc.get("field"))
-    disturbances = [str(d) for d in _dict(doc.get("disturbances"))]
+    fld = as_dict(doc.get("field"))
+    disturbances = [str(d) for d in as_dict(doc.get("disturbances"))]
     outputs_text = dict(model.output_text) if model is not None else {
-        str(k): _str(v) for k, v in _dict(raw.get("outputs")).items()}
-    dynamics = [(s, _str(_dict(raw.get("dynamics")).get(s, "—"))) for s in states]
-    domain = [(str(k), _str(v)) for k, v in _dict(raw.get("domain")).items()]
+        str(k): _str(v) for k, v in as_dict(raw.get("outputs")).items()}
+    dynamics = [(s, _str(as_dict(raw.get("dynamics")).get(s, "—"))) for s in states]
+    domain = [(str(k), _str(v)) for k, v in as_dict(raw.get("domain")).items()]
     verdict = _str(doc.get("verdict", "unknown"))
     failed_checks = [c for c in checks if not c.ok]
     soundness = ""
@@ -505,7 +486,7 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
         "title": f"lyapcheck model certificate report: {_str(model_part.get('name', 'model'))}",
         "name": _str(model_part.get("name", "model")),
         "file": _str(model_part.get("file", "")),
-        "origin": model.origin if model is not None else _str(_dict(raw.get("model")).get("source", "")),
+        "origin": model.origin if model is not None else _str(as_dict(raw.get("model")).get("source", "")),
         "verdict": verdict,
         "verdict_meaning": ("an exact check of a stability certificate passed" if verdict == "certified"
                             else "no stability certificate passed an exact check"),
@@ -513,8 +494,8 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
         "status_meaning": {**STATUS_MEANING, **EXTRA_STATUS_MEANING},
         "states": states,
         "equilibrium": [(s, _str(equilibrium.get(s, "0"))) for s in states],
-        "parameters": _quantities(_dict(doc.get("parameters")), _dict(raw.get("parameters")), overrides),
-        "disturbances": _quantities(_dict(doc.get("disturbances")), _dict(raw.get("disturbances")), overrides),
+        "parameters": _quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), overrides),
+        "disturbances": _quantities(as_dict(doc.get("disturbances")), as_dict(raw.get("disturbances")), overrides),
         "outputs": list(outputs_text.items()),
         "domain": domain,
         "dynamics": dynamics,
@@ -536,7 +517,7 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
         "solvers": _solvers(conditions),
         "command": _command(doc),
         "hash_document": hashlib.sha256(canonical_json(doc)).hexdigest(),
-        "versions": {**{str(k): _str(v) for k, v in _dict(doc.get("versions")).items()}, **versions()},
+        "versions": {**{str(k): _str(v) for k, v in as_dict(doc.get("versions")).items()}, **versions()},
         # every typeset equation, for reports.html to put on shared sheets (one glyph set per sheet)
         "equations": [eq.result for eq in eqs.items if eq.result is not None],
     }

@@ -31,6 +31,28 @@ MAX_DEPTH = 6
 DIGITS = 6
 
 
+def as_dict(value: object) -> dict[str, Any]:
+    """``value`` if it is a mapping, else an empty one: a malformed section of a document shows as empty."""
+    return value if isinstance(value, dict) else {}
+
+
+def as_fraction(value: object) -> Fraction | None:
+    """An exact number stored as a string or an integer, or None for anything else (a bool, a float, a
+    text that is not a fraction, or one longer than 4000 characters)."""
+    if isinstance(value, bool) or not isinstance(value, (str, int)) or len(str(value)) > 4000:
+        return None
+    try:
+        return Fraction(str(value))
+    except (ValueError, ZeroDivisionError):
+        return None
+
+
+def as_number(value: object) -> float | None:
+    """A finite JSON number as a float, or None (a bool is not a number here)."""
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
+        and math.isfinite(value) else None
+
+
 def fmt_float(x: float, digits: int = DIGITS) -> str:
     """A float for reading: ``digits`` significant digits, ``inf``/``NaN`` spelled out."""
     if math.isnan(x):
