@@ -25,6 +25,7 @@ from typing import Any, Final, Mapping, Sequence
 import numpy as np
 
 from reports import figures
+from reports.box_page import _view  # the map's limits, as the paper's box map draws them
 from reports.sweep_page import _json_attr, _mpl
 from reports.views import fmt_float
 from sweeps.model_schema import BOXES_MODE, box_variables, json_list
@@ -45,16 +46,6 @@ MEANING: Final = {
 #: leaves listed when there is no map (three swept parameters)
 MAX_LEAF_ROWS: Final = 200
 MAX_VIOLATION_ROWS: Final = 50
-VIEW_PAD: Final = 0.04
-
-
-def _view(lo: float, hi: float, log: bool) -> tuple[float, float]:
-    if log:
-        a, b = math.log10(lo), math.log10(hi)
-        pad = VIEW_PAD * (b - a)
-        return 10 ** (a - pad), 10 ** (b + pad)
-    pad = VIEW_PAD * (hi - lo)
-    return lo - pad, hi + pad
 
 
 def box_map(dims: Sequence[str], scales: Mapping[str, str], window: Mapping[str, tuple[float, float]],
