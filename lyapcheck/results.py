@@ -18,6 +18,11 @@ Status = Literal["certified", "refuted", "not_certified", "inconclusive", "holds
                  "counterexample"]
 
 Property = Literal["GES", "GAS", "ISS", "LES", "ROA", "ultimate_bound", "invariant_set"]
+
+#: which disturbances a claim of a model with ``[disturbances]`` covers (DESIGN.md, "Disturbances in
+#: claims"): ``"zero"``, proved with every disturbance held at 0 (the nominal loop); ``"all"``, it
+#: holds for every disturbance signal within its bounds
+Disturbances = Literal["zero", "all"]
 #: what a class proves when it is certified, by class name (DESIGN.md: every stability class states
 #: it, so that a GAS certificate is never read as GES). A class whose property depends on what its
 #: certificate shows (``quadratic``: GES or GAS; ``candidate``: ROA or GAS) sets
@@ -39,7 +44,8 @@ class ConditionResult:
     ``numbers`` holds the figures behind the status (margins, bounds, rates); ``certificate``
     holds the exact objects (rational matrices and polynomials as strings) that ``verify``
     re-checks; ``solver`` the numerical search's metadata; ``property`` what a ``certified``
-    proves, when it is not the class's default (:data:`PROPERTY`).
+    proves, when it is not the class's default (:data:`PROPERTY`); ``disturbances`` which
+    disturbances it covers, for a model that declares some (:data:`Disturbances`).
     """
 
     name: str
@@ -50,6 +56,8 @@ class ConditionResult:
     refutation: dict[str, Any] = field(default_factory=dict)
     solver: dict[str, Any] = field(default_factory=dict)
     property: Property | None = None
+    #: for a model with disturbances: which of them the claim covers (None: the model has none)
+    disturbances: Disturbances | None = None
 
     def proves(self) -> Property | None:
         """The property a ``certified`` of this result proves (None for arithmetic classes)."""
@@ -59,6 +67,8 @@ class ConditionResult:
         out: dict[str, Any] = {"status": self.status, "summary": self.summary}
         if self.proves() is not None:
             out["property"] = self.proves()
+        if self.disturbances is not None:
+            out["disturbances"] = self.disturbances
         out.update(self.numbers)
         if self.certificate:
             out["certificate"] = self.certificate

@@ -34,6 +34,7 @@ from typing import Any, Final
 
 from lyapcheck.errors import InputFileError, LyapcheckError
 from lyapcheck.models.certificate import KIND, SCHEMA_VERSION, is_model_document
+from lyapcheck.models.certify import VERDICT_MEANING
 from lyapcheck.models.modelfile import Model
 from reports.certificate_page import STATUS_MEANING, canonical_json
 from reports.figures import Figure
@@ -232,12 +233,25 @@ def _gram_sizes(cert: dict[str, Any], prefix: str = "") -> list[str]:
     return out
 
 
+def shown_summary(name: str, cond: dict[str, Any], outputs: tuple[str, ...]) -> str:
+    """The sentence a reader sees: for a decided class, the one its figures give
+    (:func:`lyapcheck.models.claims.summary`, as ``verify`` regenerates it), never the file's own
+    text; for the others, the file's reason."""
+    from lyapcheck.models.claims import summary
+
+    try:
+        text = summary(name, cond, outputs)
+    except (KeyError, TypeError, ValueError):
+        return "(no sentence: the figures of this condition are malformed)"
+    return text if text is not None else _str(cond.get("summary", ""))
+
+
 def _class_view(name: str, cond: dict[str, Any], index: int, states: list[str], shifts: list[Fraction],
-                eqs: Equations) -> ClassView:
+                eqs: Equations, outputs: tuple[str, ...] = ()) -> ClassView:
     status = _str(cond.get("status", "unknown"))
     prop = _str(cond.get("property") or "")
     view = ClassView(name, f"class-{index}", CLASS_TITLES.get(name, name), status, prop,
-                     PROPERTY_MEANING.get(prop, ""), _str(cond.get("summary", "")), key_figures(cond))
+                     PROPERTY_MEANING.get(prop, ""), shown_summary(name, cond, outputs), key_figures(cond))
     rest = {k: v for k, v in cond.items() if k not in SHOWN_ELSEWHERE}
     for key, value in rest.items():
         view.items.extend(value_items(str(key), value, eqs))
@@ -461,7 +475,8 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
     equilibrium = as_dict(doc.get("equilibrium"))
     shifts = [as_fraction(equilibrium.get(s)) or Fraction(0) for s in states]
     conditions = as_dict(doc.get("conditions"))
-    classes = [_class_view(str(name), as_dict(cond), k + 1, states, shifts, eqs)
+    outputs = tuple(model.outputs) if model is not None else ()
+    classes = [_class_view(str(name), as_dict(cond), k + 1, states, shifts, eqs, outputs)
                for k, (name, cond) in enumerate(conditions.items())]
     figure, figure_reason, checks = _figure(doc, model, simulate)
     eqs.typeset()
@@ -488,8 +503,7 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
         "file": _str(model_part.get("file", "")),
         "origin": model.origin if model is not None else _str(as_dict(raw.get("model")).get("source", "")),
         "verdict": verdict,
-        "verdict_meaning": ("an exact check of a stability certificate passed" if verdict == "certified"
-                            else "no stability certificate passed an exact check"),
+        "verdict_meaning": VERDICT_MEANING.get(verdict, "no stability certificate passed an exact check"),
         "classes": classes,
         "status_meaning": {**STATUS_MEANING, **EXTRA_STATUS_MEANING},
         "states": states,

@@ -155,8 +155,8 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             return _with_verdict(doc, rows)
         signs = []
         for d, cert in zip(distinct, stored):
-            sign = int(cert["sign"])
-            if sign not in (1, -1):
+            sign = cert["sign"]
+            if isinstance(sign, bool) or not isinstance(sign, int) or sign not in (1, -1):
                 rows.append(("denominators", False, "a denominator's sign must be +1 or -1"))
                 return _with_verdict(doc, rows)
             ok, why = check_certificate(shifted.ring, d * sign, cert, _box_start(model, box))
@@ -171,9 +171,97 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             return _with_verdict(doc, rows)
         scaled = apply_scaling(clear(shifted, signs), scaling)
         for name in needs_field:
-            ok, why = _verify_class(name, conditions[name], scaled)
+            try:
+                ok, why = _verify_class(name, conditions[name], scaled)
+            except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
+                ok, why = False, f"malformed certificate: {_describe(exc)}"
             rows.append((name, ok, why if ok else f"{name}: {why}"))
+    _check_disturbance_keys(model, conditions, rows)
+    _check_candidate(doc, model, conditions, rows)
+    _check_summaries(model, conditions, rows)
     return _with_verdict(doc, rows)
+
+
+def _describe(exc: BaseException) -> str:
+    return f"missing key {exc}" if isinstance(exc, KeyError) else str(exc)[:200]
+
+
+def _check_disturbance_keys(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
+    """Every condition of a model with disturbances says which it covers, and only such a model's
+    conditions carry the key (DESIGN.md, "Disturbances in claims"). Whether an ``"all"`` claim
+    holds is checked with its class (:func:`_verify_class`)."""
+    for name, c in conditions.items():
+        if not isinstance(c, dict):
+            continue
+        stated = c.get("disturbances")
+        if model.disturbances and stated not in ("zero", "all"):
+            rows.append((name, False, f"{name}: the model has disturbances, so the key 'disturbances' must be 'zero' "
+                                      f"or 'all'; it is {stated!r}"))
+        elif not model.disturbances and stated is not None:
+            rows.append((name, False, f"{name}: the key 'disturbances' is {stated!r}, but the model has none"))
+        elif name in ("linearization", "candidate") and stated == "all" and c.get("status") == "certified" \
+                and _disturbances_enter(model):
+            rows.append((name, False, f"{name}: this class proves its claim with the disturbances at 0 only, not "
+                                      "'all'"))
+
+
+def _disturbances_enter(model: Any) -> bool:
+    from lyapcheck.models.field import shifted_field
+
+    shifted = shifted_field(model)
+    n, m = model.n, len(model.disturbances)
+    bounds = list(model.disturbances.values())
+    return any(m_[n + k] and bounds[k] > 0 for p in (*shifted.numerators, *shifted.denominators)
+               for m_ in shifted.ring.support(p) for k in range(m))
+
+
+def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
+    """The top-level ``candidate`` text is the user's V: parsed with the model's expression rules,
+    it must be the ``V`` of a certified ``candidate`` condition (shifted to the equilibrium)."""
+    c = conditions.get("candidate")
+    if not isinstance(c, dict) or c.get("status") != "certified":
+        return
+    text = doc.get("candidate")
+    if not isinstance(text, str):
+        rows.append(("candidate", False, "candidate: a certified candidate condition needs the candidate text"))
+        return
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.certify import parse_candidate
+    from lyapcheck.models.lyapunov import terms_json
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    try:
+        cand = parse_candidate(model, text)
+    except ModelFileError as exc:
+        rows.append(("candidate", False, f"candidate: the candidate text does not parse: {exc}"))
+        return
+    ring = model.state_ring
+    gens = ring.gens()
+    images = [g + to_fmpq(e) for g, e in zip(gens[:model.n], model.equilibrium)] + list(gens[model.n:])
+    shifted_v = ring.compose(cand.poly, images)
+    from lyapcheck.sos.polynomials import Ring
+
+    states = Ring(ring.names[:model.n])
+    same = terms_json(states, ring.restrict(shifted_v, states)) == (c.get("certificate") or {}).get("V")
+    rows.append(("candidate", same, "the candidate text is the certified V" if same else
+                 "candidate: the candidate text is not the V of the certified candidate condition"))
+
+
+def _check_summaries(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
+    """Each decided condition's summary is the one its checked figures give (:mod:`claims`)."""
+    from lyapcheck.models.claims import summary
+
+    for name, c in conditions.items():
+        if not isinstance(c, dict):
+            continue
+        try:
+            expected = summary(name, c, tuple(model.outputs))
+        except (KeyError, ValueError, TypeError) as exc:
+            rows.append((name, False, f"{name}: the summary's figures are malformed: {_describe(exc)}"))
+            continue
+        if expected is not None and c.get("summary") != expected:
+            rows.append((name, False, f"{name}: the summary is not what the checked figures say; they say: "
+                                      f"{expected!r}"))
 
 
 def _box_start(model: Any, box: Any) -> int | None:
@@ -192,11 +280,14 @@ def _multipliers(data: Any, nvars: int, first: int) -> list[tuple[int, Any]]:
 
 
 def _with_verdict(doc: dict[str, Any], rows: list[Row]) -> list[Row]:
+    from lyapcheck.models.certify import verdict_of
+
     conditions = doc["conditions"]
-    proven = any(isinstance(c, dict) and c.get("status") == "certified" and any(n == name for n, _, _ in rows)
-                 and all(ok for n, ok, _ in rows if n == name) for name, c in conditions.items())
+    proven = {name: c for name, c in conditions.items()
+              if isinstance(c, dict) and c.get("status") == "certified" and any(n == name for n, _, _ in rows)
+              and all(ok for n, ok, _ in rows if n == name)}
     prerequisites = all(ok for n, ok, _ in rows if n in ("model", "parameters", "box", "denominators", "scaling"))
-    expected = "certified" if proven and prerequisites else "not_certified"
+    expected = verdict_of(proven) if prerequisites else "not_certified"
     stated = doc.get("verdict")
     rows.append(("verdict", stated == expected, f"verdict '{stated}' is supported" if stated == expected else
                  f"verdict: stated '{stated}' but the re-checked conditions support '{expected}'"))
@@ -209,14 +300,27 @@ def _gram(data: dict[str, Any], nvars: int) -> Any:
     return GramPoly.from_json(data, nvars)
 
 
-def _v_matches(scaled: Any, ring: Any, V: Any, stated: dict[str, Any], v0: Fraction = Fraction(0)) -> bool:
-    """The stated V (declared states) is the Gram V (scaled states, plus a constant) unscaled, exactly."""
-    from lyapcheck.models.field import unscale_polynomial
-    from lyapcheck.models.lyapunov import terms_json
+def _v_matches(scaled: Any, field: Any, V: Any, stated: dict[str, Any], v0: Fraction = Fraction(0)) -> bool:
+    """The stated V (declared states) is the Gram V (scaled states, plus a constant) unscaled, exactly,
+    and its exponents are integers (a JSON ``2.0`` equals ``2`` in Python; it is refused here)."""
+    from lyapcheck.models.lyapunov import stated_v
 
-    box = scaled.cleared.shifted.box
-    poly = V.poly(ring) + ring.constant(v0)
-    return terms_json(ring, unscale_polynomial(ring, poly, scaled.scaling, scaled.n, box)) == stated
+    _check_terms(stated)
+    return stated_v(scaled, field, V.poly(field.ring) + field.ring.constant(v0)) == stated
+
+
+def _check_terms(stated: Any) -> None:
+    """A stated polynomial's form: ``{"terms": [[coefficient, [exponent, ...]], ...]}`` with
+    non-negative integer exponents (ValueError naming the key otherwise)."""
+    from lyapcheck.sos.certificates import exponent
+
+    if not isinstance(stated, dict) or not isinstance(stated.get("terms"), list):
+        raise ValueError("V must be a table with a list 'terms'")
+    for term in stated["terms"]:
+        if not isinstance(term, list) or len(term) != 2 or not isinstance(term[1], list):
+            raise ValueError(f"V: a term must be [coefficient, [exponents]], got {term!r}")
+        for e in term[1]:
+            exponent(e, "V.terms")
 
 
 def _at_most(stated: Any, proved: Fraction) -> bool:
@@ -228,7 +332,7 @@ def _at_least(stated: Any, proved: Fraction) -> bool:
 
 
 def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]:
-    from lyapcheck.models.field import state_field
+    from lyapcheck.models.field import StateField, state_field
     from lyapcheck.sos.certificates import check_containment, check_dissipation, check_lyapunov, check_output_bound, \
         check_sublevel
 
@@ -263,15 +367,27 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
                 return False, f"output {out}: the stated bound {data['bound']} is below s_y sqrt(B)"
             if not _at_least(c.get("bounds", {}).get(out), bound):
                 return False, f"output {out}: the stated figure is below the certified bound"
-            if not _v_matches(scaled, ring, V, data["V"], v0):
+            if not _v_matches(scaled, StateField(ring=ring, g=scaled.g, D=scaled.D), V, data["V"], v0):
                 return False, f"output {out}: the stated V is not the certificate's"
         return True, "every output's dissipation and output identities hold exactly"
     field = state_field(scaled)
+    if c.get("disturbances") == "all":
+        from lyapcheck.models.certify import robust_field
+        from lyapcheck.models.field import active_disturbances
+
+        if active_disturbances(scaled):
+            robust = robust_field(scaled)
+            if robust is None:
+                return False, ("'disturbances': 'all' is claimed, but a disturbance moves the equilibrium, so no "
+                               "stability claim can hold for every disturbance")
+            field = robust
     ring, n = field.ring, field.n
     nv = ring.nvars
     V = _gram(cert["gram_V"], nv)
     box = _multipliers(cert.get("box_multipliers"), nv, n)
-    if not _v_matches(scaled, ring, V, cert["V"]):
+    if any(any(m[n:n + field.disturbances]) for m in V.basis):
+        return False, "V may not depend on a disturbance"
+    if not _v_matches(scaled, field, V, cert["V"]):
         return False, "the stated V (declared states) is not the certificate's Gram V unscaled"
     kind = cert.get("kind")
     T = scaled.scaling.time

@@ -29,13 +29,13 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 import numpy as np
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
-from lyapcheck.models.field import ScaledField, Scaling, ShiftedField, apply_scaling, choose_scaling, clear, \
-    shifted_field, state_field
+from lyapcheck.models.field import ScaledField, Scaling, ShiftedField, StateField, active_disturbances, \
+    apply_scaling, choose_scaling, clear, disturbances_vanish, shifted_field, state_field
 from lyapcheck.models.modelfile import Model
 from lyapcheck.models.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
@@ -80,7 +80,29 @@ class ModelCertification:
 
     @property
     def verdict(self) -> str:
-        return "certified" if any(r.status == "certified" for r in self.results.values()) else "not_certified"
+        """:func:`verdict_of` the results."""
+        return verdict_of({name: r.to_json() for name, r in self.results.items()})
+
+
+#: the verdicts of a model's certification: ``certified`` when a certified claim covers the declared
+#: disturbances (``"all"``, or the model has none), ``certified_nominal`` when every certified claim
+#: holds with the disturbances held at 0 only, else ``not_certified``; the first two exit 0
+VERDICTS: Final = ("certified", "certified_nominal", "not_certified")
+#: what each verdict means, printed beside it
+VERDICT_MEANING: Final = {
+    "certified": "an exact check of a stability certificate passed",
+    "certified_nominal": "exact checks passed only with every disturbance held at 0; no certified claim covers the "
+                         "declared disturbances",
+    "not_certified": "no stability certificate passed an exact check",
+}
+
+
+def verdict_of(conditions: Mapping[str, Any]) -> str:
+    """The verdict of conditions in their JSON form (one rule for ``certify`` and ``verify``)."""
+    certified = [c for c in conditions.values() if isinstance(c, dict) and c.get("status") == "certified"]
+    if any(c.get("disturbances") in (None, "all") for c in certified):
+        return "certified"
+    return "certified_nominal" if certified else "not_certified"
 
 
 def parse_candidate(model: Model, text: str) -> Candidate:
@@ -183,24 +205,49 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         sc = scaled
         from lyapcheck.models import lyapunov
 
+        robust = robust_field(sc)
+        nominal = state_field(sc)
+        enters = bool(active_disturbances(sc))
+        #: what a claim on the nominal field covers
+        nominal_covers = ("all" if not enters else "zero") if model.disturbances else None
+
+        def stability(name: str, attempt: Callable[[StateField, Search], ConditionResult]
+                      ) -> Callable[[Budget], ConditionResult]:
+            return lambda budget: covering_disturbances(
+                model, robust, nominal, enters, lambda f: attempt(f, Search(f.ring, budget)))
+
         if "quadratic" in chosen:
-            run("quadratic", lambda budget: lyapunov.run(sc, "quadratic", (2,), Search(state_field(sc).ring, budget)))
+            run("quadratic", stability("quadratic", lambda f, search: lyapunov.run(sc, "quadratic", (2,), search,
+                                                                                   field=f)))
         if "sos_gas" in chosen:
-            run("sos_gas", lambda budget: lyapunov.run(sc, "sos_gas", lyapunov.SOS_GAS_DEGREES,
-                                                       Search(state_field(sc).ring, budget),
-                                                       param_degrees=BOX_PARAM_DEGREES))
+            run("sos_gas", stability("sos_gas", lambda f, search: lyapunov.run(
+                sc, "sos_gas", lyapunov.SOS_GAS_DEGREES, search, param_degrees=BOX_PARAM_DEGREES, field=f)))
         if "roa" in chosen:
             lin = out.results.get("linearization")
-            gas = next((name for name in ("quadratic", "sos_gas") if name in out.results
-                        and out.results[name].status == "certified"), None)
-            if gas is not None:
+            gas = {r.disturbances: name for name, r in out.results.items()
+                   if name in ("quadratic", "sos_gas") and r.status == "certified"}
+            covering = "all" if model.disturbances else None
+            if covering in gas:
                 out.results["roa"] = ConditionResult(
-                    "roa", "not_applicable", f"global asymptotic stability is certified ({gas}): the region of "
-                    "attraction is the whole state space", property="ROA")
+                    "roa", "not_applicable", f"global asymptotic stability is certified ({gas[covering]}): the region "
+                    "of attraction is the whole state space", property="ROA", disturbances=covering)
             else:
-                run("roa", lambda budget: run_roa(sc, budget, lin))
+                def roa(budget: Budget) -> ConditionResult:
+                    if robust is not None:
+                        found = run_roa(sc, budget, lin, robust)
+                        if found.status == "certified":
+                            return _covers(found, "all")
+                    if "zero" in gas:
+                        return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified "
+                                               f"({gas['zero']}, d = 0): with every disturbance held at 0 the region "
+                                               "of attraction is the whole state space", property="ROA",
+                                               disturbances="zero")
+                    return _covers(run_roa(sc, budget, lin, nominal), nominal_covers)
+
+                run("roa", roa)
         if "candidate" in chosen:
-            run("candidate", lambda budget: run_candidate(sc, cand, budget))
+            # the user's V is tried on the nominal loop (its global test has no box multipliers yet)
+            run("candidate", lambda budget: _covers(run_candidate(sc, cand, budget), nominal_covers))
         if "sos_bound" in chosen:
             from lyapcheck.models import bounds
 
@@ -210,6 +257,10 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                                                            "bound its outputs")
             else:
                 run("sos_bound", lambda budget: bounds.run(sc, Search(sc.ring, budget)))
+    if "linearization" in out.results and model.disturbances:
+        out.results["linearization"].disturbances = "zero"  # the Jacobian at d = 0
+    if "sos_bound" in out.results and model.disturbances:
+        out.results["sos_bound"].disturbances = "all"
     if "candidate" in chosen and box is not None:
         out.results["candidate"] = ConditionResult("candidate", "not_applicable", "not over a box (the candidate "
                                                                                    "class certifies a point)")
@@ -217,7 +268,53 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         out.results["candidate"] = ConditionResult("candidate", "not_applicable", "needs --candidate \"EXPR\" (the "
                                                                                    "user's V); not run")
     out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
+    from lyapcheck.models.claims import summary
+
+    for name, r in out.results.items():
+        text = summary(name, r.to_json(), tuple(model.outputs))
+        if text is not None:
+            r.summary = text
     return out
+
+
+def robust_field(scaled: ScaledField) -> StateField | None:
+    """The field with every disturbance a box coordinate (:func:`state_field`, robust), where a
+    robust stability claim can exist: the model has disturbances that enter the field, and they
+    vanish at the equilibrium. None otherwise (no disturbance enters: the nominal claim covers them
+    all; or one moves the equilibrium: only ``sos_bound`` can speak of it)."""
+    if not active_disturbances(scaled) or not disturbances_vanish(scaled):
+        return None
+    return state_field(scaled, robust=True)
+
+
+def covering_disturbances(model: Model, robust: StateField | None, nominal: StateField, enters: bool,
+                          attempt: Callable[[StateField], ConditionResult]) -> ConditionResult:
+    """A stability class on a model, saying which disturbances its claim covers (DESIGN.md,
+    "Disturbances in claims"): without disturbances, the plain claim; where no disturbance enters
+    the field (``enters`` false: a bound of 0, or one that acts on an output only), the nominal claim,
+    which then covers them all; with disturbances that vanish at the equilibrium (``robust``), first
+    the robust claim (``V`` common to every disturbance value, so it holds for every disturbance
+    signal: ``"all"``), and only if that is not found the nominal one (``"zero"``, saying that the
+    robust one was tried); otherwise (a disturbance moves the equilibrium) the nominal one
+    (``"zero"``)."""
+    if not model.disturbances:
+        return attempt(nominal)
+    if not enters:
+        return _covers(attempt(nominal), "all")
+    if robust is not None:
+        found = attempt(robust)
+        if found.status in ("certified", "inconclusive"):
+            return _covers(found, "all")
+        fallback = _covers(attempt(nominal), "zero")
+        if fallback.status == "certified":
+            fallback.numbers["robust_attempt"] = found.summary
+        return fallback
+    return _covers(attempt(nominal), "zero")
+
+
+def _covers(result: ConditionResult, disturbances: str | None) -> ConditionResult:
+    result.disturbances = disturbances  # type: ignore[assignment]
+    return result
 
 
 def box_start(model: Model, box: "ModelBox | None") -> int | None:
@@ -293,17 +390,22 @@ def roa_starts(model: Model, seed: int = 0) -> np.ndarray:
                        seed=seed)
 
 
-def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult | None) -> ConditionResult:
+def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult | None,
+            field_: StateField | None = None) -> ConditionResult:
+    """The ``roa`` class on ``field_`` (default: the nominal :func:`state_field`; the robust one
+    proves a set common to every disturbance value)."""
     from lyapcheck.models import regions
 
     model = scaled.cleared.shifted.model
-    field_ = state_field(scaled)
+    if field_ is None:
+        field_ = state_field(scaled)
     search = Search(field_.ring, budget)
     A = np.array([[float(x) for x in row] for row in scaled.scaling.matrix()])
     eq = np.array([float(v) for v in model.equilibrium])
     if regions.lyapunov_quadratic(field_) is None:
         return ConditionResult("roa", "not_certified", "the Jacobian at the equilibrium is not Hurwitz"
-                                                       + (" at the box's centre" if field_.p else "")
+                                                       + (" at the box's centre" if field_.p > field_.disturbances
+                                                          else " with the disturbances at 0" if field_.p else "")
                                                        + ", so no quadratic Lyapunov function starts the search "
                                                        "(see linearization)", property="ROA")
     if model.domain:
@@ -331,7 +433,7 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
         if (~again).any():
             numbers["soundness_violation"] = True
     numbers["rounds"] = outcome.history
-    return regions.level_result("roa", scaled, cert, search, numbers, "region of attraction")
+    return regions.level_result("roa", scaled, field_, cert, search, numbers, "region of attraction")
 
 
 def simulated_region_long(scaled: ScaledField, starts: np.ndarray) -> np.ndarray:
@@ -348,7 +450,7 @@ def simulated_region_long(scaled: ScaledField, starts: np.ndarray) -> np.ndarray
 
 def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -> ConditionResult:
     from lyapcheck.models import regions
-    from lyapcheck.models.lyapunov import best_decay_rate, terms_json
+    from lyapcheck.models.lyapunov import best_decay_rate, stated_v
     from lyapcheck.sos.polynomials import to_fmpq
 
     assert cand is not None
@@ -378,12 +480,12 @@ def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -
         best = best_decay_rate(attempt, {"sigma": sigma, "mu": Fraction(0)})
         rate = float(best["mu"] / scaled.scaling.time)
         tail = f", V' <= -{rate:.4g} V" if best["mu"] > 0 else ""
-        v_orig = regions.unscale_polynomial(ring, V.poly(ring), scaled.scaling, field_.n)
         return ConditionResult("candidate", "certified", f"GAS: V' < 0 away from the equilibrium everywhere{tail} "
                                                          "(checked exactly)",
                                numbers={"decay_rate_V_per_s": rate},
-                               certificate={"kind": "lyapunov", "mu_scaled": str(best["mu"]), "V": terms_json(ring, v_orig),
-                                            "gram_V": V.to_json(), "gram_sigma": best["sigma"].to_json()},
+                               certificate={"kind": "lyapunov", "mu_scaled": str(best["mu"]),
+                                            "V": stated_v(scaled, field_, V.poly(ring)), "gram_V": V.to_json(),
+                                            "gram_sigma": best["sigma"].to_json()},
                                solver={"solves": search.log}, property="GAS")
     radius = float(np.max(np.abs(scaled.scaling.to_scaled(np.diag(_half_widths(model)))))) * 4
     top = regions.supremum_estimate(field_, V, radius)
@@ -396,7 +498,7 @@ def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -
         return ConditionResult("candidate", "not_certified", f"no level of V passed the exact check (sampled supremum "
                                                              f"{top:.6g})", numbers={"level_supremum_estimate": top},
                                solver={"solves": search.log}, property="ROA")
-    return regions.level_result("candidate", scaled, cert, search,
+    return regions.level_result("candidate", scaled, field_, cert, search,
                                 {"level_supremum_estimate": top, "level_ratio_to_estimate": float(cert.level) / top},
                                 "the user's V")
 

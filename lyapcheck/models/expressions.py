@@ -120,7 +120,14 @@ class Rational:
 
 
 def parse_expression(text: str, ring: Ring) -> Rational:
-    """The exact rational function of ``text``, over ``ring`` (whose names are the declared ones).
+    """The exact rational function of ``text`` (see :func:`parse_with_divisors`)."""
+    return parse_with_divisors(text, ring)[0]
+
+
+def parse_with_divisors(text: str, ring: Ring) -> tuple[Rational, tuple[Poly, ...]]:
+    """The exact rational function of ``text``, over ``ring`` (whose names are the declared ones),
+    and every non-constant divisor as written (the numerator of each ``/``'s right operand, before
+    any common factor is cancelled: ``-x**2/x`` gives ``-x`` and the divisor ``x``).
 
     Raises
     ------
@@ -158,7 +165,7 @@ def parse_expression(text: str, ring: Ring) -> Rational:
         result = builder.build(tree.body, 0)
     except RecursionError:  # a backstop only: the builder's own depth limit comes first
         raise ExpressionError(f"the expression is nested too deeply (the limit is {MAX_DEPTH}, MAX_DEPTH)") from None
-    return result.normalized()
+    return result.normalized(), tuple(builder.divisors)
 
 
 def _where(offset: int | None) -> str:
@@ -174,6 +181,9 @@ class _Builder:
         # node positions are UTF-8 byte offsets; on one line they slice these bytes directly
         # (ast.get_source_segment splits the whole text on every call: a second for 1000 numbers)
         self.source_bytes = source.encode("utf-8")
+        #: every non-constant divisor as written (its numerator), before any cancellation: where one
+        #: is 0 the expression is undefined, even if a common factor cancels it ("-x**2/x")
+        self.divisors: list[Poly] = []
 
     def build(self, node: ast.AST, depth: int) -> Rational:
         if depth > MAX_DEPTH:
@@ -279,6 +289,8 @@ class _Builder:
             else:
                 if right.numerator.is_zero():
                     raise ExpressionError(f"division by zero in '{self._text(step)}'")
+                if not right.numerator.is_constant():
+                    self.divisors.append(right.numerator)
                 result = self._checked(result.divide(right), step)
         return result
 

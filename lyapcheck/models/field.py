@@ -474,12 +474,18 @@ def declared_quadratic(scaling: Scaling, P_scaled: Sequence[Sequence[Fraction]])
 
 @dataclass(frozen=True)
 class StateField:
-    """The scaled field with the disturbances set to 0, in the ring of the states alone: what the
-    stability classes (``quadratic``, ``sos_gas``, ``roa``, ``candidate``) work on."""
+    """The scaled field as the stability classes (``quadratic``, ``sos_gas``, ``roa``, ``candidate``)
+    see it: in the ring of the states, then (robust form) the disturbances that enter it, each
+    normalized to ``u in [-1, 1]``, then a box's parameters (normalized the same way). Every variable
+    after the states is a box coordinate of :func:`lyapcheck.models.search.box_multipliers`; a ``V``
+    that depends on none of the first :attr:`disturbances` of them is a common Lyapunov function for
+    every disturbance signal within its bounds."""
 
     ring: Ring
     g: tuple[Poly, ...]
     D: Poly
+    #: how many disturbances follow the states in the ring (0: disturbances set to 0, the nominal loop)
+    disturbances: int = 0
 
     @property
     def n(self) -> int:
@@ -487,15 +493,64 @@ class StateField:
 
     @property
     def p(self) -> int:
-        """How many box parameters follow the states in the ring."""
+        """How many box coordinates (disturbances, then a box's parameters) follow the states."""
         return self.ring.nvars - len(self.g)
 
+    @property
+    def claim_ring(self) -> Ring:
+        """The ring a certificate's ``V`` is stated in: the states and a box's parameters (a ``V``
+        never depends on a disturbance)."""
+        if not self.disturbances:
+            return self.ring
+        names = self.ring.names
+        return Ring(names[:self.n] + names[self.n + self.disturbances:])
 
-def state_field(scaled: ScaledField) -> StateField:
-    """The disturbances set to 0; the ring keeps the states and the box's parameters (if any)."""
+
+def active_disturbances(scaled: ScaledField) -> list[int]:
+    """The disturbances (indices) with a bound > 0 that enter the field's right-hand side or its
+    denominator: the ones a robust claim has to cover."""
+    ring = scaled.ring
+    n = scaled.n
+    used = set()
+    for p in (*scaled.g, scaled.D):
+        for m in ring.support(p):
+            used |= {k for k in range(scaled.m) if m[n + k]}
+    return [k for k in sorted(used) if scaled.bounds[k] > 0]
+
+
+def disturbances_vanish(scaled: ScaledField) -> bool:
+    """Whether every disturbance leaves the equilibrium in place: ``g(0, d) = 0`` for every ``d``
+    (they enter multiplied by the states, as in ``x' = -x + d x``). Then a stability property can
+    hold for every disturbance signal (:func:`state_field` with ``robust=True``); otherwise a
+    disturbance moves the equilibrium and only an ultimate bound can speak of it (``sos_bound``)."""
+    ring = scaled.ring
+    zero = {name: Fraction(0) for name in ring.names[:scaled.n]}
+    return all(ring.substitute(gi, zero) == ring.zero() for gi in scaled.g)
+
+
+def state_field(scaled: ScaledField, robust: bool = False) -> StateField:
+    """The field the stability classes work on. Nominal (``robust=False``): the disturbances set
+    to 0, the ring keeps the states and the box's parameters (if any). Robust: each disturbance of
+    :func:`active_disturbances` stays, as ``d~_k = b_k u_k`` with ``u_k in [-1, 1]`` (``b_k`` its
+    scaled bound), the others set to 0; sound only where :func:`disturbances_vanish` (the caller
+    checks)."""
     box_names = scaled.cleared.shifted.box_names
-    ring = Ring(scaled.states + box_names)
     full = scaled.ring
-    zero = {name: Fraction(0) for name in full.names[scaled.n:] if name not in box_names}
-    g = tuple(full.restrict(full.substitute(gi, zero), ring) for gi in scaled.g)
-    return StateField(ring=ring, g=g, D=full.restrict(scaled.D, ring))
+    n = scaled.n
+    kept = active_disturbances(scaled) if robust else []
+    kept_names = tuple(full.names[n + k] for k in kept)
+    ring = Ring(scaled.states + kept_names + box_names)
+    zero = {name: Fraction(0) for name in full.names[n:] if name not in box_names and name not in kept_names}
+    gens = full.gens()
+    images = list(gens)
+    for k in kept:
+        images[n + k] = gens[n + k] * to_fmpq(scaled.bounds[k])
+
+    def restricted(p: Poly) -> Poly:
+        p = full.substitute(p, zero)
+        if kept:
+            p = full.compose(p, images)
+        return full.restrict(p, ring)
+
+    return StateField(ring=ring, g=tuple(restricted(gi) for gi in scaled.g), D=restricted(scaled.D),
+                      disturbances=len(kept))

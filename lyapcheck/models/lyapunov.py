@@ -217,7 +217,7 @@ def search_degree(field: StateField, degree: int, search: Search, param_degree: 
     """A certificate with ``V`` of this degree (and its best decay rate), or None and why not."""
     generators = symmetry(field)
     drop: frozenset[Monomial] = frozenset()
-    label = f"degree {degree}" + (f" ({param_degree} in the parameters)" if field.p else "")
+    label = f"degree {degree}" + (f" ({param_degree} in the parameters)" if field.p > field.disturbances else "")
     for _ in range(FACIAL_ROUNDS + 1):
         structure = lyapunov_structure(field, degree, generators, drop, param_degree)
         if structure is None:
@@ -237,14 +237,20 @@ def search_degree(field: StateField, degree: int, search: Search, param_degree: 
     return found, f"{label}: found"
 
 
-def certificate_json(scaled: ScaledField, found: dict[str, Any]) -> dict[str, Any]:
-    """The exact certificate: V in the declared (shifted) states, and the Gram matrices in the
-    scaled ones (the scaling is at the document's top)."""
-    field = state_field(scaled)
-    v_scaled = found["V"].poly(field.ring)
+def stated_v(scaled: ScaledField, field: StateField, v_scaled: Poly) -> dict[str, Any]:
+    """The contract's ``V``: the scaled ``V`` in the declared (shifted) states and a box's
+    parameters (never a disturbance: :attr:`StateField.claim_ring`)."""
     v_orig = unscale_polynomial(field.ring, v_scaled, scaled.scaling, field.n, scaled.cleared.shifted.box)
+    return terms_json(field.claim_ring, field.ring.restrict(v_orig, field.claim_ring))
+
+
+def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, Any]) -> dict[str, Any]:
+    """The exact certificate: V in the declared (shifted) states, and the Gram matrices in the
+    scaled ones (the scaling is at the document's top) over ``field``'s ring."""
+    v_scaled = found["V"].poly(field.ring)
     out = {"kind": "lyapunov", "degree": found["degree"], "mu_scaled": str(found["mu"]),
-           "V": terms_json(field.ring, v_orig), "gram_V": found["V"].to_json(), "gram_sigma": found["W"].to_json()}
+           "V": stated_v(scaled, field, v_scaled), "gram_V": found["V"].to_json(),
+           "gram_sigma": found["W"].to_json()}
     if found.get("box"):
         out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]
         out["param_degree"] = found.get("param_degree", 0)
@@ -286,19 +292,23 @@ def ges_bounds(scaled: ScaledField, found: dict[str, Any]) -> tuple[Fraction, Fr
 
 
 def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
-        param_degrees: Sequence[int] = (0,)) -> ConditionResult:
-    """``quadratic`` (degrees ``(2,)``) or ``sos_gas`` (rising degrees); over a box, ``V`` may
-    depend on the parameters up to each of ``param_degrees`` in turn."""
-    field = state_field(scaled)
+        param_degrees: Sequence[int] = (0,), field: StateField | None = None) -> ConditionResult:
+    """``quadratic`` (degrees ``(2,)``) or ``sos_gas`` (rising degrees) on ``field`` (default: the
+    nominal :func:`state_field`; the robust one makes every disturbance a box coordinate); over a
+    box, ``V`` may depend on the parameters up to each of ``param_degrees`` in turn (not with
+    disturbances in the ring: the basis' parameter degree counts them too, and V must not depend
+    on a disturbance)."""
+    if field is None:
+        field = state_field(scaled)
     tried: list[str] = []
     try:
         for degree in degrees:
-            for param_degree in (param_degrees if field.p else (0,)):
+            for param_degree in (param_degrees if field.p and not field.disturbances else (0,)):
                 search.budget.check()  # also before a degree whose program is skipped unsolved
                 found, why = search_degree(field, degree, search, param_degree)
                 tried.append(why)
                 if found is not None:
-                    return _certified(scaled, name, found, search)
+                    return _certified(scaled, field, name, found, search)
     except BudgetExhausted as exc:
         return ConditionResult(name, "inconclusive", f"{exc}; tried: {'; '.join(tried) or 'nothing finished'}",
                                numbers={"reason": str(exc), "tried": tried}, solver={"solves": search.log})
@@ -309,11 +319,12 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                            property="GAS" if name != "quadratic" else None)
 
 
-def _certified(scaled: ScaledField, name: str, found: dict[str, Any], search: Search) -> ConditionResult:
+def _certified(scaled: ScaledField, field: StateField, name: str, found: dict[str, Any], search: Search
+               ) -> ConditionResult:
     mu = found["mu"]
     T = scaled.scaling.time
     rate_v = float(mu / T)
-    cert = certificate_json(scaled, found)
+    cert = certificate_json(scaled, field, found)
     numbers: dict[str, Any] = {"degree": found["degree"], "decay_rate_V_per_s": rate_v,
                                "relative_margin": found["margin"]}
     if name == "quadratic" and mu > 0:

@@ -27,8 +27,8 @@ from pathlib import Path
 from typing import Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
-from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_expression
-from lyapcheck.sos.polynomials import Ring, degree_in
+from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_with_divisors
+from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 
 #: the most states a model may have
 MAX_STATES: Final = 12
@@ -66,6 +66,9 @@ class Model:
     output_text: dict[str, str]
     domain: dict[str, tuple[Fraction, Fraction]] | None
     overrides: dict[str, str] = field(default_factory=dict)
+    #: per state, each non-constant divisor of its right-hand side as written (before cancelling):
+    #: none may vanish at the equilibrium (:func:`check_equilibrium`)
+    divisors: tuple[tuple[Poly, ...], ...] = ()
 
     @property
     def sha256(self) -> str:
@@ -114,6 +117,7 @@ def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, obje
 class _Reader:
     def __init__(self, source: str, text: str, data: dict[str, Any], overrides: dict[str, object]) -> None:
         self.source, self.text, self.data, self.overrides = source, text, data, overrides
+        self.divisors: list[tuple[Poly, ...]] = []
 
     def fail(self, key: str, message: str) -> ModelFileError:
         return _error(self.source, key, message)
@@ -155,7 +159,8 @@ class _Reader:
         model = Model(source=self.source, text=self.text, name=name, origin=origin, states=states,
                       parameters=params, parameters_given=params_given, disturbances=dists, ring=ring,
                       dynamics=dynamics, equilibrium=equilibrium, outputs=outputs, output_text=output_text,
-                      domain=domain, overrides={k: str(v) for k, v in self.overrides.items()})
+                      domain=domain, overrides={k: str(v) for k, v in self.overrides.items()},
+                      divisors=tuple(self.divisors))
         check_equilibrium(model)
         return model
 
@@ -229,12 +234,15 @@ class _Reader:
         return params, given, dists
 
     def expression(self, key: str, text: object, ring: Ring) -> Rational:
+        return self.expression_with_divisors(key, text, ring)[0]
+
+    def expression_with_divisors(self, key: str, text: object, ring: Ring) -> tuple[Rational, tuple[Poly, ...]]:
         if not isinstance(text, (str, int, float)) or isinstance(text, bool):
             raise self.fail(key, f"must be an expression in a string, got {text!r}")
         if isinstance(text, float) and not math.isfinite(text):  # TOML's inf and nan, unquoted
             raise self.fail(key, f"the number {text!r} is not finite (numbers must be {NUMBER_RANGE})")
         try:
-            return parse_expression(str(text), ring)
+            return parse_with_divisors(str(text), ring)
         except ExpressionError as exc:
             raise self.fail(key, str(exc)) from None
 
@@ -248,7 +256,8 @@ class _Reader:
         for s in states:
             if s not in table:
                 raise self.fail("[dynamics]", f"the state '{s}' has no equation")
-            rhs = self.expression(f"[dynamics] {s}", table[s], ring)
+            rhs, divisors = self.expression_with_divisors(f"[dynamics] {s}", table[s], ring)
+            self.divisors.append(divisors)
             den_vars = [v for v in dists if degree_in(ring, rhs.denominator, [v]) > 0]
             if den_vars:
                 raise self.fail(f"[dynamics] {s}", f"the disturbance '{den_vars[0]}' appears in a denominator; "
@@ -357,6 +366,15 @@ def check_equilibrium(model: Model) -> None:
     ring = model.state_ring
     point = list(model.equilibrium) + [Fraction(0)] * len(model.disturbances)
     where = "[equilibrium]" if any(model.equilibrium) else "[equilibrium] (default: every state 0)"
+    full_point = point + [model.parameters[p] for p in model.ring.names[len(point):]]
+    for s, divisors in zip(model.states, model.divisors):
+        for divisor in divisors:
+            # a divisor in the parameters alone that is 0 is a division by zero (field_at says so)
+            if degree_in(model.ring, divisor, model.states) > 0 and model.ring.evaluate(divisor, full_point) == 0:
+                text = str(divisor).replace("^", "**")
+                raise ModelFileError(model.source, f"[dynamics] {s}", f"divides by {text}, which is 0 at the "
+                                     "equilibrium: the right-hand side is not defined there (a common factor is "
+                                     "not cancelled; write the field without the division)")
     for s, rhs in zip(model.states, field_at(model)):
         den = ring.evaluate(rhs.denominator, point)
         if den == 0:

@@ -36,9 +36,9 @@ from typing import Any, Final, Sequence
 
 import numpy as np
 
-from lyapcheck.models.field import ScaledField, Scaling, StateField, linear_images, state_field, unscale_polynomial
+from lyapcheck.models.field import ScaledField, Scaling, StateField, linear_images
 from lyapcheck.models.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
-    symmetry, terms_json, vanishing_monomials
+    symmetry, vanishing_monomials
 from lyapcheck.models.numeric import NumericPoly
 from lyapcheck.models.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      box_support, multiplier_grams, one, param)
@@ -505,11 +505,11 @@ def multiplier_at(field: StateField, V: GramPoly, c: Fraction, search: Search,
 
 # -- the largest ball inside a certified set --------------------------------------------------------
 
-def ball_radius(scaled: ScaledField, cert: LevelCertificate, search: Search) -> tuple[float | None, dict[str, Any] | None]:
+def ball_radius(scaled: ScaledField, field: StateField, cert: LevelCertificate, search: Search
+                ) -> tuple[float | None, dict[str, Any] | None]:
     """The radius (declared states, SI, Euclidean) of the largest ball around the equilibrium in
     ``{V <= c}``: a numerical estimate along rays, and a certified lower bound (Containment, exact)
-    just below it, or None."""
-    field = state_field(scaled)
+    just below it, or None (``V`` over ``field``'s ring)."""
     ring = field.ring
     n = field.n
     v_num = NumericPoly(ring, cert.V.poly(ring))
@@ -609,13 +609,13 @@ def radius_polynomial(ring: Ring, scaling: Scaling) -> Poly:
 
 # -- the classes -------------------------------------------------------------------------------------
 
-def level_result(name: str, scaled: ScaledField, cert: LevelCertificate, search: Search,
+def level_result(name: str, scaled: ScaledField, field: StateField, cert: LevelCertificate, search: Search,
                  numbers: dict[str, Any], what: str) -> ConditionResult:
     """A certified ``roa`` / ``candidate``: the set, its level, V in declared states, the ball."""
-    field = state_field(scaled)
-    v_orig = unscale_polynomial(field.ring, cert.V.poly(field.ring), scaled.scaling, field.n)
-    certificate = {**cert.to_json(), "V": terms_json(field.ring, v_orig), "level": str(cert.level)}
-    estimate, ball = ball_radius(scaled, cert, search)
+    from lyapcheck.models.lyapunov import stated_v
+
+    certificate = {**cert.to_json(), "V": stated_v(scaled, field, cert.V.poly(field.ring)), "level": str(cert.level)}
+    estimate, ball = ball_radius(scaled, field, cert, search)
     numbers = {"level": float(cert.level), **numbers}
     if ball is not None:
         certificate["ball"] = ball

@@ -197,7 +197,10 @@ def box_multipliers_of(point_grams: Mapping[str, Any], grams: Sequence["Gram"]) 
 def box_multipliers_from_json(data: Sequence[Mapping[str, Any]], nvars: int) -> list[tuple[int, Any]]:
     from lyapcheck.sos.certificates import GramPoly
 
-    return [(int(item["variable"]), GramPoly.from_json(item["gram"], nvars)) for item in data]
+    from lyapcheck.sos.certificates import exponent
+
+    return [(exponent(item["variable"], "box_multipliers.variable", nvars), GramPoly.from_json(item["gram"], nvars))
+            for item in data]
 
 
 def box_support(box_grams: Sequence["Gram"], nv: int) -> set[Monomial]:

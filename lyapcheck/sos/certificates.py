@@ -59,10 +59,15 @@ class GramPoly:
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any], nvars: int) -> "GramPoly":
-        basis = tuple(tuple(int(e) for e in m) for m in data["basis"])
+        """A Gram polynomial from its JSON form; ValueError naming the key where an exponent is not a
+        non-negative integer (``1.4`` is refused, never truncated) or a size does not fit."""
+        if not isinstance(data, Mapping) or not isinstance(data.get("basis"), list) or \
+                not isinstance(data.get("Q"), list):
+            raise ValueError("a Gram matrix must be a table with lists 'basis' and 'Q'")
+        if any(not isinstance(m, list) or len(m) != nvars for m in data["basis"]):
+            raise ValueError(f"basis: a basis monomial must have {nvars} exponents")
+        basis = tuple(tuple(exponent(e, "basis") for e in m) for m in data["basis"])
         Q = tuple(tuple(Fraction(x) for x in row) for row in data["Q"])
-        if any(len(m) != nvars or min(m, default=0) < 0 for m in basis):
-            raise ValueError(f"a basis monomial must have {nvars} non-negative exponents")
         if len(Q) != len(basis) or any(len(row) != len(basis) for row in Q):
             raise ValueError("a Gram matrix must be square, one row per basis monomial")
         return cls(basis, Q)
@@ -70,6 +75,15 @@ class GramPoly:
     @classmethod
     def of(cls, basis: Sequence[Monomial], Q: ExactMatrix) -> "GramPoly":
         return cls(tuple(tuple(m) for m in basis), tuple(tuple(Fraction(x) for x in row) for row in Q))
+
+
+def exponent(value: Any, key: str, limit: int | None = None) -> int:
+    """``value`` as an exponent, index or size read from a certificate: a JSON integer >= 0 (below
+    ``limit`` where given); ValueError naming ``key`` otherwise."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0 or (limit is not None and value >= limit):
+        where = f" below {limit}" if limit is not None else ""
+        raise ValueError(f"{key}: {value!r} is not a non-negative integer{where}")
+    return value
 
 
 BoxMultipliers = Sequence[tuple[int, GramPoly]]

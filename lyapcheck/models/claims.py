@@ -1,0 +1,115 @@
+"""The sentence each decided class of a model file prints, made from its checked figures alone.
+
+A certificate's ``summary`` is what a reader believes, so it must never say more than the figures
+beside it, which ``verify`` re-checks against the exact certificate. This module is the one place
+that writes those sentences: :func:`lyapcheck.models.certify.certify_model` sets each ``certified``
+or ``refuted`` condition's summary with :func:`summary`, and
+:func:`lyapcheck.models.certificate.verify_document` regenerates it from the figures it has just
+re-checked and fails where the file's text differs (an edited summary, ``limsup |y| <= 0.1`` where
+0.52 was proved, is caught there). Reports print the regenerated text.
+
+The disturbances (DESIGN.md, "Disturbances in claims"): a claim proved with every disturbance
+held at 0 says ``(d = 0)``; a stability claim proved for every disturbance signal within its bounds
+says so. ``not_certified``, ``inconclusive`` and ``not_applicable`` conditions claim nothing; their
+text is a reason, not a summary of figures, and is left as the class wrote it.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping, Sequence
+
+#: what a ``certified`` sublevel set of each class is called in its sentence
+SET_NAMES = {"roa": "region of attraction", "candidate": "the user's V"}
+#: the prefix of a claim by the disturbances it covers (a stability class of a disturbed model)
+DISTURBANCE_PREFIX = {"zero": "(d = 0) ", "all": "for every disturbance signal within its bounds: "}
+#: said of a nominal claim whose robust form was tried and not found
+ROBUST_NOT_FOUND = "; with the declared disturbances acting, no certificate of this class was found"
+
+
+def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()) -> str | None:
+    """The sentence of a ``certified`` or ``refuted`` condition (its JSON form), or None for the
+    other statuses. ``outputs``: the model's output names (``sos_bound`` names those it did not
+    bound). Raises KeyError, TypeError or ValueError on figures of the wrong form (verify reports
+    them as a failed check)."""
+    status = condition.get("status")
+    if status not in ("certified", "refuted"):
+        return None
+    if name == "linearization":
+        text = _linearization(status, condition)
+    elif status != "certified":
+        return None
+    elif name == "sos_bound":
+        text = _bounds(condition, outputs)
+    else:
+        text = _stability(name, condition)
+    disturbances = condition.get("disturbances")
+    if name != "sos_bound" and disturbances is not None:
+        text = DISTURBANCE_PREFIX[disturbances] + text
+    if "robust_attempt" in condition:
+        text += ROBUST_NOT_FOUND
+    return text
+
+
+def _number(condition: Mapping[str, Any], key: str) -> float:
+    value = condition[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"figure '{key}' must be a number, got {value!r}")
+    return float(value)
+
+
+def _linearization(status: str, condition: Mapping[str, Any]) -> str:
+    data = condition.get("certificate" if status == "certified" else "refutation") or {}
+    method = data.get("method")
+    if status == "certified" and method == "lyapunov_equation":
+        return ("the Jacobian at the equilibrium is Hurwitz (J^T P + P J = -I with P > 0, exact): locally "
+                "exponentially stable")
+    if status == "certified" and method == "routh_hurwitz":
+        return "the Jacobian is Hurwitz (every Hurwitz determinant > 0, exact): locally exponentially stable"
+    if status == "refuted" and method == "lyapunov_inertia":
+        return ("the Jacobian has an eigenvalue with positive real part (J^T P + P J = -I with P not positive "
+                "definite, exact; inertia theorem): the equilibrium is unstable")
+    if status == "refuted" and method == "root_isolation":
+        return (f"the Jacobian has an eigenvalue with positive real part (rigorous enclosure {data['root']}): the "
+                "equilibrium is unstable")
+    raise ValueError(f"unknown linearization method {method!r} for status {status!r}")
+
+
+def _stability(name: str, condition: Mapping[str, Any]) -> str:
+    cert = condition.get("certificate") or {}
+    kind = cert.get("kind")
+    if kind == "sublevel":
+        what = SET_NAMES.get(name, name)
+        level = _number(condition, "level")
+        ball = (f"; it holds the ball |x - x_eq| <= {_number(condition, 'ball_radius'):.4g}"
+                if "ball_radius" in condition else "")
+        return f"{what}: every start in {{V <= {level:.6g}}} converges to the equilibrium (checked exactly){ball}"
+    if kind != "lyapunov":
+        raise ValueError(f"unknown certificate kind {kind!r}")
+    if condition.get("property") == "GES":
+        return (f"GES: |x(t)| <= {_number(condition, 'k'):.4g} |x0| exp(-{_number(condition, 'decay_rate_per_s'):.4g} "
+                "t) from every start (a quadratic V with V' <= -mu V, checked exactly)")
+    rate = _number(condition, "decay_rate_V_per_s")
+    if name == "candidate":
+        tail = f", V' <= -{rate:.4g} V" if rate > 0 else ""
+        return f"GAS: V' < 0 away from the equilibrium everywhere{tail} (checked exactly)"
+    degree = condition["degree"]
+    if isinstance(degree, bool) or not isinstance(degree, int):
+        raise TypeError(f"figure 'degree' must be an integer, got {degree!r}")
+    tail = f", and V' <= -{rate:.4g} V (V decays exponentially from every start)" if rate > 0 else ""
+    what = "a quadratic V" if degree == 2 else f"a polynomial V of degree {degree}"
+    return f"GAS: {what} with V' < 0 away from the equilibrium{tail} (checked exactly)"
+
+
+def _bounds(condition: Mapping[str, Any], outputs: Sequence[str]) -> str:
+    bounds = condition["bounds"]
+    if not isinstance(bounds, dict):
+        raise TypeError("figure 'bounds' must be a table of outputs")
+    text = ", ".join(f"limsup |{k}| <= {_number(bounds, k):.4g}" for k in bounds)
+    out = f"for every disturbance within its bounds and every start: {text} (checked exactly)"
+    missing = [k for k in outputs if k not in bounds]
+    if missing:
+        out += f"; no bound for {', '.join(missing)}"
+    return out
+
+
+__all__ = ["summary", "SET_NAMES", "DISTURBANCE_PREFIX"]
