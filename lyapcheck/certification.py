@@ -9,9 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import signal
-import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from fractions import Fraction
 from typing import Any
 
@@ -20,6 +18,7 @@ import numpy as np
 from lyapcheck.paper.conditions.base import STABILITY_CLASSES, System
 from lyapcheck.results import ConditionResult
 from lyapcheck.params import Problem
+from lyapcheck.timing import ClassTimeLimit, time_limit  # re-exported: the paper's classes use them here
 
 log = logging.getLogger(__name__)
 
@@ -144,33 +143,6 @@ def _real_loop_bound(results: dict[str, ConditionResult]) -> None:
         sat.numbers["real_loop_limsup_eps_m"] = bound.numbers["eps_bound_m"]
         sat.summary += (f"; so the real loop's limsup |eps| <= {bound.numbers['eps_bound_m'] * 1e3:.4g} mm "
                         "(sos_bound) from every start")
-
-
-class ClassTimeLimit(Exception):
-    """A condition class ran past :data:`lyapcheck.tolerances.CLASS_TIME_LIMIT_S`."""
-
-
-@contextlib.contextmanager
-def time_limit(seconds: float) -> Iterator[None]:
-    """Raise :class:`ClassTimeLimit` in this block after ``seconds`` (main thread, POSIX only).
-
-    Elsewhere (sweep workers run in threads or processes with their own limits) the block runs
-    unbounded; every class also bounds its own iterations and solver time.
-    """
-    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "setitimer"):
-        yield
-        return
-
-    def expire(signum: int, frame: Any) -> None:
-        raise ClassTimeLimit(f"time limit of {seconds:g} s reached")
-
-    previous = signal.signal(signal.SIGALRM, expire)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
 
 
 def guarded(name: str, compute: Callable[[], ConditionResult]) -> ConditionResult:

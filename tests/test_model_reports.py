@@ -373,12 +373,17 @@ def test_input_text_reaches_the_page_as_text(tmp_path: Path) -> None:
     from reports.model_page import model_html
     from reports.render import html_to_pdf
 
-    doc = _synthetic("fossil-poly2.toml", {"roa": {**_disc("1"), "summary": "<script>alert(1)</script> & <b>x</b>"}})
+    # a certified class's sentence is regenerated from its figures (the file's text is never shown),
+    # so the hostile text rides on an undecided class's reason, which is shown as the file has it
+    doc = _synthetic("fossil-poly2.toml", {"roa": {**_disc("1"), "summary": "<script>alert(1)</script> & <b>x</b>"},
+                                           "quadratic": {"status": "not_certified",
+                                                         "summary": "<script>alert(2)</script> & <b>y</b>"}})
     doc["model"]["name"] = "<img src=x onerror=alert(1)> #set page(width: 1pt)"
     html = model_html(doc, simulate=False, recheck=False)
     page = Page(html)
     no_network(page)
-    assert "<script>alert(1)</script> & <b>x</b>" in page.text
+    assert "<script>alert(2)</script> & <b>y</b>" in page.text
+    assert "alert(1)</script>" not in page.text and "every start in {V <= 1}" in page.text
     assert not any(a.get("src") == "x" for a in page.find("img"))
     assert "<img src=x onerror=alert(1)> #set page(width: 1pt)" in pdf_text(html_to_pdf(html))
 

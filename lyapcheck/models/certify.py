@@ -40,6 +40,7 @@ from lyapcheck.models.modelfile import Model
 from lyapcheck.models.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly
+from lyapcheck.timing import ClassTimeLimit, time_limit
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.parameter_box import ModelBox
@@ -56,6 +57,11 @@ ROA_RANDOM_STARTS: Final = 4000
 ROA_HORIZON: Final = 60.0
 #: over a box, sos_gas's V may depend on the parameters up to these degrees, in turn
 BOX_PARAM_DEGREES: Final = (0, 1)
+#: a class's hard stop (:func:`lyapcheck.timing.time_limit`) comes at its limit times this plus
+#: HARD_STOP_GRACE_S: past the cooperative budget, for a solve, exact check or simulation that
+#: overruns it. With the 60 s limit: 95 s
+HARD_STOP_FACTOR: Final = 1.5
+HARD_STOP_GRACE_S: Final = 5.0
 
 
 @dataclass
@@ -186,8 +192,9 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         distinct = shifted.distinct_denominators()
         budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
         try:
-            signs, certs, failed = prove_denominators(shifted.ring, distinct, budget, box_start(model, box))
-        except BudgetExhausted as exc:
+            with time_limit(limit * HARD_STOP_FACTOR + HARD_STOP_GRACE_S):
+                signs, certs, failed = prove_denominators(shifted.ring, distinct, budget, box_start(model, box))
+        except (BudgetExhausted, ClassTimeLimit) as exc:
             signs, certs, failed = [], [], distinct[0] if distinct else None
             log.info("denominators: %s", exc)
         out.denominators = [{"denominator": _text(shifted, d), **cert} for d, cert in zip(distinct, certs)]
@@ -233,8 +240,9 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                     "of attraction is the whole state space", property="ROA", disturbances=covering)
             else:
                 def roa(budget: Budget) -> ConditionResult:
+                    memo: dict[str, Any] = {}
                     if robust is not None:
-                        found = run_roa(sc, budget, lin, robust)
+                        found = run_roa(sc, budget, lin, robust, memo)
                         if found.status == "certified":
                             return _covers(found, "all")
                     if "zero" in gas:
@@ -242,7 +250,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                                                f"({gas['zero']}, d = 0): with every disturbance held at 0 the region "
                                                "of attraction is the whole state space", property="ROA",
                                                disturbances="zero")
-                    return _covers(run_roa(sc, budget, lin, nominal), nominal_covers)
+                    return _covers(run_roa(sc, budget, lin, nominal, memo), nominal_covers)
 
                 run("roa", roa)
         if "candidate" in chosen:
@@ -330,12 +338,11 @@ def _text(shifted: ShiftedField, p: Poly) -> str:
 def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) -> ConditionResult:
     """Numerical trouble or the time limit becomes ``inconclusive`` with its reason; bad input and
     bugs propagate (the command line reports them)."""
-    from lyapcheck.certification import ClassTimeLimit, time_limit
     from lyapcheck.errors import SolverError
 
     try:
         # a hard stop a little beyond the cooperative budget (a solve or check that overruns it)
-        with time_limit(limit * 1.5 + 5):
+        with time_limit(limit * HARD_STOP_FACTOR + HARD_STOP_GRACE_S):
             return compute()
     except BudgetExhausted as exc:
         reason = str(exc)
@@ -391,9 +398,10 @@ def roa_starts(model: Model, seed: int = 0) -> np.ndarray:
 
 
 def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult | None,
-            field_: StateField | None = None) -> ConditionResult:
+            field_: StateField | None = None, memo: dict[str, Any] | None = None) -> ConditionResult:
     """The ``roa`` class on ``field_`` (default: the nominal :func:`state_field`; the robust one
-    proves a set common to every disturbance value)."""
+    proves a set common to every disturbance value). ``memo`` keeps the simulated starts between
+    the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0)."""
     from lyapcheck.models import regions
 
     model = scaled.cleared.shifted.model
@@ -408,12 +416,15 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
                                                           else " with the disturbances at 0" if field_.p else "")
                                                        + ", so no quadratic Lyapunov function starts the search "
                                                        "(see linearization)", property="ROA")
-    if model.domain:
-        starts = roa_starts(model)
-    else:
-        rng = np.random.default_rng(0)
-        starts = eq + rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n)) @ A.T
-    converged = simulated_region(scaled, starts)
+    memo = {} if memo is None else memo
+    if "starts" not in memo:
+        if model.domain:
+            starts = roa_starts(model)
+        else:
+            rng = np.random.default_rng(0)
+            starts = eq + rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n)) @ A.T
+        memo["starts"], memo["converged"] = starts, simulated_region(scaled, starts)
+    starts, converged = memo["starts"], memo["converged"]
     samples = scaled.scaling.to_scaled(starts - eq)
     outcome = regions.enlarge(field_, search, samples, converged)
     if outcome.certificate is None:
@@ -428,10 +439,14 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
         numbers["simulated_roa_share_of_domain"] = float(np.mean(converged))
     suspicious = inside & ~converged
     if suspicious.any():  # a start in a proved set that did not converge: simulate it far longer
-        again = simulated_region_long(scaled, starts[suspicious])
-        numbers["starts_in_set_not_converged"] = int(np.sum(~again))
-        if (~again).any():
-            numbers["soundness_violation"] = True
+        try:
+            again = simulated_region_long(scaled, starts[suspicious])
+        except ClassTimeLimit:  # the hard stop may end this check, never the proof before it
+            numbers["long_simulation"] = "stopped by the class's hard time limit"
+        else:
+            numbers["starts_in_set_not_converged"] = int(np.sum(~again))
+            if (~again).any():
+                numbers["soundness_violation"] = True
     numbers["rounds"] = outcome.history
     return regions.level_result("roa", scaled, field_, cert, search, numbers, "region of attraction")
 
