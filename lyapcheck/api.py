@@ -155,10 +155,11 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
     Parameters
     ----------
     params
-        The paper's parameters (see :func:`problem_from`). Without ``omega_so`` or ``d_max`` the
-        classes that need them are ``not_applicable`` and the others still run.
+        A model file's path (recognised by its ``[model]`` or ``[dynamics]`` table, as ``model``), or
+        the paper's parameters (see :func:`problem_from`). Without ``omega_so`` or ``d_max`` the
+        paper's classes that need them are ``not_applicable`` and the others still run.
     model
-        Instead of ``params``: a model file (DESIGN.md, "Model files"), as a path or a loaded
+        Instead of ``params``: a model file (docs/model-files.md), as a path or a loaded
         :class:`lyapcheck.models.modelfile.Model`. Its classes are ``linearization``,
         ``quadratic``, ``sos_gas``, ``roa``, ``candidate`` and ``sos_bound``.
     settings
@@ -184,6 +185,10 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
         beside each certified ultimate bound, the worst simulated tail ``sup |eps|`` and
         ``tightness_ratio`` = certified / simulated (>= 1 unless the bound is unsound).
     """
+    from lyapcheck.models.modelfile import is_model_file
+
+    if model is None and is_model_file(params):  # a model file given where the paper's gain file would be
+        model, params = params, None
     if model is not None:
         if params is not None or overrides:
             raise InvalidParameter("model", "given without the paper's parameters (a model file carries its own)",
@@ -431,7 +436,8 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
     Parameters
     ----------
     scenario
-        Path of a scenario TOML (``examples/scenario-*.toml``); or give ``preset``.
+        Path of a scenario TOML (``examples/scenario-*.toml``), or of a model file (recognised by its
+        content, as ``model``); or give ``preset``.
     preset
         ``paper-ilos``, ``paper-los-600`` or ``paper-los-1200`` (the paper's Section 5).
     plot
@@ -442,6 +448,10 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
         over the switching law) within ``budget_s`` seconds; the document gives
         ``sup_abs_eps_tail_m`` and the ``disturbance`` that produced it.
     """
+    from lyapcheck.models.modelfile import is_model_file
+
+    if model is None and is_model_file(scenario):  # a model file given where a scenario would be
+        model, scenario = scenario, None
     if model is not None:
         if scenario is not None or preset is not None:
             raise InvalidParameter("model", "given without a scenario or a preset (a model file is its own loop)",
@@ -613,6 +623,12 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
     for target in exports:
         if Path(target).suffix.lower() not in EXPORT_SUFFIXES:
             raise InvalidParameter("export", "a file name ending in .nc or .csv", str(target))
+    from lyapcheck.models.modelfile import is_model_file
+
+    if is_model_file(spec):  # a model file is what a sweep spec names, not a spec
+        raise InputFileError(f"{spec} is a model file; a sweep reads a spec that names it: [sweep] model = "
+                             f"\"{Path(spec).name}\", mode = \"points\" or \"boxes\", and [[sweep.axes]] with name = \"PARAMETER\", "
+                             "start, stop, num (docs/model-sweeps.md)")
     parsed = load_any_spec(spec)
     if isinstance(parsed, ModelSweepSpec):
         from sweeps.model_run import run_model_sweep
@@ -647,7 +663,8 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
 # -- report --------------------------------------------------------------------------------------
 def report(source: str | Path | CertifyResult, *, html: str | Path | None = None,
            pdf: str | Path | None = None) -> list[Path]:
-    """Render a certificate (file or :class:`CertifyResult`) or a sweep store as HTML and/or PDF.
+    """Render a certificate (file or :class:`CertifyResult`) or a sweep store as HTML and/or PDF;
+    a model file is certified first (every class, as ``certify FILE``) and its certificate rendered.
 
     Without ``html`` or ``pdf``, writes the source's name with ``.html`` in the current
     directory (a :class:`CertifyResult` needs an explicit target). Returns the files written.
@@ -664,6 +681,11 @@ def report(source: str | Path | CertifyResult, *, html: str | Path | None = None
         return [certificate_report(source.document, t) for t in targets]
     if not isinstance(source, (str, Path)):
         raise InputFileError(f"cannot report on a {type(source).__name__}: give a path or a CertifyResult")
+    from lyapcheck.models.modelfile import is_model_file
+
+    if is_model_file(source):  # a model file: certify it with every class, then report on that
+        target_html = html if html is not None or pdf is not None else Path(Path(source).stem + ".html")
+        return report(certify(model=source), html=target_html, pdf=pdf)
     return report_files(source, html, pdf)
 
 

@@ -36,7 +36,15 @@ class _Group(click.Group):
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="lyapcheck")
 def cli() -> None:
-    """Machine-checked stability answers for the ILOS/ODS microswimmer paper."""
+    """Machine-checked stability answers for any polynomial or rational closed loop, from a model
+    file (docs/model-files.md); every `certified` is an exact check that `verify` repeats without a
+    solver. Worked example: the ILOS/ODS microswimmer paper (its gain files and flags).
+
+    \b
+    lyapcheck certify examples/models/van-der-pol-reversed.toml --out vdp.json
+    lyapcheck verify vdp.json
+    lyapcheck certify examples/paper.toml
+    """
 
 
 def _register_commands() -> None:

@@ -67,40 +67,44 @@ def _finish(result: Any, out: str | None, report: str | None, as_json: bool, wri
 
 def register(group: click.Group) -> None:
     @group.command()
-    @click.argument("gains", required=False, type=click.Path(dir_okay=False))
-    @click.option("--alpha-d", help="ILOS gain alpha_d (1/s).")
-    @click.option("--sigma0", help="Integral gain sigma0.")
-    @click.option("--kd", help="Damping gain k_d (1/s).")
-    @click.option("--delta-los", help='Look-ahead distance, e.g. "0.75 mm".')
-    @click.option("--e11", help='Propulsion constant, e.g. "9.3e-5 m".')
-    @click.option("--omega-so", help='Step-out frequency, e.g. "2.8 Hz".')
-    @click.option("--d-max", help='Disturbance bound, e.g. "0.088 mm/s".')
-    @click.option("--dynamics", type=click.Choice(["derived", "printed"]), default="derived", show_default=True,
-                  help="Error dynamics as derived by lyapcheck or as printed in the paper.")
+    @click.argument("files", nargs=-1, type=click.Path(dir_okay=False), metavar="[FILE]")
+    @click.option("--model", "model_file", type=click.Path(dir_okay=False),
+                  help="The model file (the same as giving it as FILE, which is recognised by its [model] or "
+                       "[dynamics] table). Format: docs/model-files.md.")
+    @click.option("--set", "settings", multiple=True, metavar="NAME=VALUE",
+                  help="A model's parameter or disturbance bound, e.g. --set mu=2 (repeatable).")
+    @click.option("--candidate", help='Your own Lyapunov function for a model, e.g. "x1**2 + x2**2".')
+    @click.option("--classes", help="Comma-separated condition classes to run (default: all that apply; for the "
+                  "paper, 'quick' = the quadratic and arithmetic classes, about 20x faster).")
+    @click.option("--box", "boxes", multiple=True, help='Certify a whole box of a model\'s parameters, e.g. --box '
+                  '"mu=0.8..1.2" (repeatable), or of the paper\'s gains, e.g. --box "alpha_d=540..660" --box '
+                  '"k_d=0.1..0.2" (classes prop41_ges, prop41_iss, sector_ges and ges by default; --classes all '
+                  'adds ultimate_bound, sos_gas, saturated_loop and sos_bound).')
     @click.option("--json", "as_json", is_flag=True, help="Print the certificate document as JSON.")
     @click.option("--out", type=click.Path(dir_okay=False), help="Write the certificate JSON here.")
     @click.option("--report", type=click.Path(dir_okay=False), help="Write an HTML or PDF report (by extension).")
-    @click.option("--linear-views", is_flag=True, help="Add python-control views: poles, P from Gamma = I (slower).")
-    @click.option("--classes", help="Comma-separated condition classes to run (default: all; 'quick' = the "
-                  "quadratic and arithmetic classes, about 20x faster).")
-    @click.option("--worst-case", is_flag=True, help="Also search the worst disturbance in simulation and report "
-                  "tightness_ratio = certified / simulated beside each certified bound (10-20 s).")
-    @click.option("--model", "model_file", type=click.Path(dir_okay=False),
-                  help="Certify any polynomial or rational closed loop from a model file (DESIGN.md, 'Model files').")
-    @click.option("--set", "settings", multiple=True, metavar="NAME=VALUE",
-                  help="With --model: override a parameter or disturbance bound, e.g. --set mu=2 (repeatable).")
-    @click.option("--candidate", help='With --model: your own Lyapunov function, e.g. "x1**2 + x2**2".')
-    @click.option("--box", "boxes", multiple=True, help='Certify a whole box of gains (or, with --model, of the model\'s '
-                  'parameters, e.g. --box "mu=0.8..1.2"), e.g. --box '
-                  '"alpha_d=540..660" --box "k_d=0.1..0.2" (repeatable; classes prop41_ges, prop41_iss, sector_ges and '
-                  'ges by default; --classes all adds ultimate_bound, sos_gas, saturated_loop and sos_bound).')
+    @click.option("--alpha-d", help="The paper's loop: ILOS gain alpha_d (1/s).")
+    @click.option("--sigma0", help="The paper's loop: integral gain sigma0.")
+    @click.option("--kd", help="The paper's loop: damping gain k_d (1/s).")
+    @click.option("--delta-los", help='The paper\'s loop: look-ahead distance, e.g. "0.75 mm".')
+    @click.option("--e11", help='The paper\'s loop: propulsion constant, e.g. "9.3e-5 m".')
+    @click.option("--omega-so", help='The paper\'s loop: step-out frequency, e.g. "2.8 Hz".')
+    @click.option("--d-max", help='The paper\'s loop: disturbance bound, e.g. "0.088 mm/s".')
+    @click.option("--dynamics", type=click.Choice(["derived", "printed"]), default="derived", show_default=True,
+                  help="The paper's loop: error dynamics as derived by lyapcheck or as printed in the paper.")
+    @click.option("--linear-views", is_flag=True, help="The paper's loop: add python-control views: poles, P from "
+                  "Gamma = I (slower).")
+    @click.option("--worst-case", is_flag=True, help="The paper's loop: also search the worst disturbance in "
+                  "simulation and report tightness_ratio = certified / simulated beside each certified bound "
+                  "(10-20 s).")
     @one_line_errors
-    def certify(gains: str | None, dynamics: str, as_json: bool, out: str | None, report: str | None,
+    def certify(files: tuple[str, ...], dynamics: str, as_json: bool, out: str | None, report: str | None,
                 linear_views: bool, classes: str | None, worst_case: bool, boxes: tuple[str, ...],
                 model_file: str | None, settings: tuple[str, ...], candidate: str | None,
                 **flags: str | None) -> None:
-        """Certify a gain set of the paper's loop, or any closed loop from a model file (--model):
-        every condition class, each checked exactly.
+        """Certify any closed loop from a model file (FILE or --model FILE), or a gain set of the
+        paper's ILOS/ODS loop (its worked example: a gain file, flags, or both): every condition
+        class, each checked exactly.
 
         Disturbances of a model file: every claim says which disturbances it covers, "all" (for
         every disturbance signal within its bounds: sos_bound, and a stability class whose V
@@ -110,9 +114,9 @@ def register(group: click.Group) -> None:
         certified_nominal (exit 0) when only "(d = 0)" claims passed; else not_certified (exit 1).
 
         Time: each class of a model file stops searching at MODEL_CLASS_TIME_LIMIT_S (60 s) and is then
-        inconclusive, the others still run; a solve that overruns it is stopped at 1.5 x 60 + 5 =
-        95 s. One certify --model therefore takes at most about 8 minutes (five searching classes and
-        the denominators' proof), and seconds on the shipped examples."""
+        inconclusive, the others still run; work that overruns it is stopped at 1.5 x 60 + 5 = 95 s.
+        One certify --model therefore takes at most about 11 minutes (six classes and the
+        denominators' proof, 95 s each, before any --report), and seconds on the shipped examples."""
         from lyapcheck.api import certify as certify_gains
         from lyapcheck.api import report as write_report
         from lyapcheck.sos import sdp
@@ -123,19 +127,22 @@ def register(group: click.Group) -> None:
         if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
             raise InvalidParameter("report", "a file name ending in .html or .pdf", report)
         overrides = {FLAG_KEYS[k]: v for k, v in flags.items() if v is not None}
+        from lyapcheck.cli.inputs import check_model_flags, split_model_argument
+
+        model_file, gains = split_model_argument(files[0] if files else None, model_file)
+        # a word beside the model file, or after the first file: a value that lost its --set, or a second file
+        stray = gains if model_file is not None and gains is not None else files[1] if len(files) > 1 else None
         if model_file is not None:
-            paper_only = [name for name, given in (("GAINS", gains), ("--linear-views", linear_views),
-                                                   ("--worst-case", worst_case),
-                                                   ("--dynamics", dynamics != "derived"))
-                          if given] + [f"--{k.replace('_', '-')}" for k, v in flags.items() if v is not None]
-            if paper_only:
-                raise InvalidParameter("model", "given without the paper's gains and flags (a model file carries its "
-                                       "own parameters; use --set NAME=VALUE)", paper_only[0])
+            check_model_flags(stray, settings, {"--linear-views": linear_views, "--worst-case": worst_case,
+                                                "--dynamics": dynamics != "derived",
+                                                **{f"--{k.replace('_', '-')}": v is not None for k, v in flags.items()}})
             result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes,
                                    box=list(boxes) or None)
             _finish(result, out, report, as_json, write_report)
+        if stray is not None:
+            raise InvalidParameter("FILE", "one gain file or model file", " ".join(files))
         if settings or candidate is not None:
-            raise InvalidParameter("set" if settings else "candidate", "used with --model FILE",
+            raise InvalidParameter("set" if settings else "candidate", "used with a model file",
                                    settings[0] if settings else candidate)
         if boxes:
             from lyapcheck.api import certify_box

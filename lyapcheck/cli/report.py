@@ -14,7 +14,8 @@ def register(group: click.Group) -> None:
     @click.option("--pdf", "pdf", type=click.Path(dir_okay=False), help="Write the PDF report here.")
     @one_line_errors
     def report(source: str, html: str | None, pdf: str | None) -> None:
-        """Report on CERT.json (from certify --out) or RESULTS.zarr (from sweep).
+        """Report on CERT.json (from certify --out), RESULTS.zarr (from sweep), or a model file
+        (certified first with every class).
 
         Without --html or --pdf, writes SOURCE's name with .html in the current directory.
         """

@@ -191,7 +191,7 @@ def _run_model(model_file: str, settings: tuple[str, ...], x0: tuple[str, ...], 
 
 def register(group: click.Group) -> None:
     @group.command()
-    @click.argument("scenario", required=False, type=click.Path(dir_okay=False))
+    @click.argument("files", nargs=-1, type=click.Path(dir_okay=False), metavar="[FILE]")
     @click.option("--preset", type=click.Choice(["paper-ilos", "paper-los-600", "paper-los-1200"]),
                   help="One of the paper's Section 5 simulations.")
     @click.option("--json", "as_json", is_flag=True, help="Print the measured quantities as JSON (SI units).")
@@ -200,7 +200,8 @@ def register(group: click.Group) -> None:
     @click.option("--budget", type=float, default=20.0, show_default=True,
                   help="Wall-time target of --worst-case, seconds.")
     @click.option("--model", "model_file", type=click.Path(dir_okay=False),
-                  help="Simulate any polynomial or rational closed loop from a model file (DESIGN.md, 'Model files').")
+                  help="The model file (the same as giving it as FILE, recognised by its [model] or [dynamics] table; "
+                       "format: docs/model-files.md).")
     @click.option("--set", "settings", multiple=True, metavar="NAME=VALUE",
                   help="With --model: override a parameter or disturbance bound, e.g. --set mu=2 (repeatable).")
     @click.option("--x0", multiple=True, metavar='"x1=1,x2=0"',
@@ -221,27 +222,35 @@ def register(group: click.Group) -> None:
                   help="With --model --worst-case: a certificate with sos_bound certified; prints tightness_ratio "
                        "= certified bound / worst simulated per output (exit 1 if one is below 1).")
     @one_line_errors
-    def simulate(scenario: str | None, preset: str | None, as_json: bool, plot: str | None, worst_case: bool,
+    def simulate(files: tuple[str, ...], preset: str | None, as_json: bool, plot: str | None, worst_case: bool,
                  budget: float, model_file: str | None, settings: tuple[str, ...], x0: tuple[str, ...],
                  grid: int | None, t_end: str | None, scenario_kinds: tuple[str, ...], frequencies: str | None,
                  certificate: str | None) -> None:
-        """Simulate the saturated ILOS/ODS closed loop (or a paper preset), or any closed loop from a
-        model file (--model)."""
+        """Simulate any closed loop from a model file (FILE or --model FILE), or the paper's
+        saturated ILOS/ODS loop (a scenario FILE or a --preset)."""
         from lyapcheck.api import simulate as run_simulation
+        from lyapcheck.cli.inputs import check_model_flags, split_model_argument
         from lyapcheck.errors import InvalidParameter
 
         model_given = {"--set": settings, "--x0": x0, "--grid": grid, "--t-end": t_end,
                        "--scenario": scenario_kinds, "--frequencies": frequencies, "--certificate": certificate}
+        model_file, scenario = split_model_argument(files[0] if files else None, model_file)
+        # a word beside the model file, or after the first file: a value split from --set or --x0, or a second file
+        stray = scenario if model_file is not None and scenario is not None else files[1] if len(files) > 1 else None
         if model_file is not None:
-            if scenario is not None or preset is not None:
-                raise InvalidParameter("model", "given without a scenario file or --preset (a model file carries "
-                                       "its own loop)", scenario if scenario is not None else f"--preset {preset}")
+            if stray is not None and "=" in stray and x0 and not settings:
+                # --x0 x1=1 x2=0: the shell split one start in two words
+                raise InvalidParameter("x0", f'one start in one word: use --x0 "{x0[-1]} {stray}"',
+                                       f"--x0 {x0[-1]} {stray}")
+            check_model_flags(stray, settings, {"--preset": preset is not None})
             _run_model(model_file, settings, x0, grid, t_end, scenario_kinds, frequencies, worst_case, budget,
                        certificate, plot, as_json)
+        if stray is not None:
+            raise InvalidParameter("FILE", "one scenario file or model file", " ".join(files))
         used = [flag for flag, value in model_given.items() if value not in (None, ())]
         if used:
             value = model_given[used[0]]
-            raise InvalidParameter(used[0].lstrip("-"), "used with --model FILE",
+            raise InvalidParameter(used[0].lstrip("-"), "used with a model file (FILE or --model FILE)",
                                    value[0] if isinstance(value, tuple) else value)
 
         result = run_simulation(scenario, preset=preset, plot=plot, worst_case=worst_case, budget_s=budget)

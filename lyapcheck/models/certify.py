@@ -149,7 +149,9 @@ def class_selection(classes: str | Sequence[str] | None, model: Model, candidate
     names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes) if c and c.strip()]
     unknown = [c for c in names if c not in MODEL_CLASSES]
     if not names or unknown:
-        raise InvalidParameter("classes", "names among " + ", ".join(MODEL_CLASSES), ",".join(unknown) or classes)
+        paper = " ('quick' is the paper's selection of its own classes)" if "quick" in unknown else ""
+        raise InvalidParameter("classes", "names among " + ", ".join(MODEL_CLASSES) + paper,
+                               ",".join(unknown) or classes)
     return tuple(c for c in MODEL_CLASSES if c in names)
 
 

@@ -105,6 +105,22 @@ def load_model(path: str | Path, overrides: Mapping[str, object] | None = None) 
     return parse_model(text, source, overrides)
 
 
+def is_model_file(path: object) -> bool:
+    """Whether ``path`` names a model file, by its content: a TOML file with a ``[model]`` or a
+    ``[dynamics]`` table (a paper gain file has ``[gains]``, a scenario ``[scenario]``, a sweep spec
+    ``[sweep]``). Anything unreadable is not one (the caller's own reader then says why)."""
+    if not isinstance(path, (str, Path)):
+        return False
+    p = Path(path)
+    try:
+        if not p.is_file() or p.stat().st_size > MAX_FILE_BYTES:
+            return False
+        data = tomllib.loads(p.read_bytes().decode("utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False
+    return "sweep" not in data and (isinstance(data.get("model"), dict) or isinstance(data.get("dynamics"), dict))
+
+
 def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, object] | None = None) -> Model:
     """Validate a model file's text (see :func:`load_model`)."""
     try:
@@ -408,5 +424,5 @@ def degree_of_field(model: Model) -> int:
                for r in model.dynamics)
 
 
-__all__ = ["Model", "load_model", "parse_model", "field_at", "check_equilibrium", "with_parameters",
+__all__ = ["Model", "is_model_file", "load_model", "parse_model", "field_at", "check_equilibrium", "with_parameters",
            "degree_of_field", "MAX_STATES"]

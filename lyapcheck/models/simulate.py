@@ -745,16 +745,20 @@ def _gain_scales(prepared: Prepared, starts: FloatArray, scale: FloatArray) -> F
 # -- inputs -------------------------------------------------------------------------------------
 
 def parse_start(model: Model, text: str) -> FloatArray:
-    """One ``--x0`` start, ``"x1=1,x2=0"``: values are numbers or unit strings (SI inside);
-    missing states take the equilibrium's value."""
+    """One ``--x0`` start, ``"x1=1,x2=0"`` or ``"x1=1 x2=0"``: values are numbers or unit strings
+    (SI inside; ``"x1=1 mm x2=0"`` splits before each ``NAME=``); missing states take the
+    equilibrium's value."""
+    import re
+
     from lyapcheck.units import parse_si_quantity
 
-    expected = f"NAME=VALUE pairs separated by commas naming the model's states ({', '.join(model.states)})"
+    expected = (f"NAME=VALUE pairs separated by commas or spaces naming the model's states "
+                f"({', '.join(model.states)})")
     if not isinstance(text, str) or not text.strip():
         raise InvalidParameter("x0", expected, text)
     values = dict(zip(model.states, model.equilibrium))
     seen: set[str] = set()
-    for item in text.split(","):
+    for item in re.split(r",|\s+(?=[A-Za-z_]\w*\s*=)", text.strip()):
         name, sep, value = item.partition("=")
         name = name.strip()
         if not sep or not name or not value.strip():

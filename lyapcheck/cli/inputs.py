@@ -1,0 +1,57 @@
+"""What the command line reads as a model file, and what it says when the paper's flags meet one.
+
+A model file is recognised by its content (:func:`lyapcheck.models.modelfile.is_model_file`), so
+``lyapcheck certify FILE`` and ``lyapcheck simulate FILE`` take one where the paper's gain or
+scenario file would stand; ``--model FILE`` keeps working. On a model's path every message speaks
+of the model: ``--set mu 1`` says ``use --set mu=1``, and a flag of the paper's loop names itself
+as the paper's and says what to use instead.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+from lyapcheck.errors import InvalidParameter
+
+#: what to do instead of a paper flag, on a model's path (the gain flags share the default)
+PAPER_FLAG_HINTS: Mapping[str, str] = {
+    "--worst-case": "for a model file, the worst-case disturbance search is `lyapcheck simulate FILE --worst-case`",
+    "--linear-views": "for a model file, the linearization class gives the Jacobian and its exact verdict",
+    "--dynamics": "it picks the paper's derived or printed equations; a model file states its own",
+    "--preset": "the presets are the paper's Section 5 simulations; a model file states its own loop",
+    "--budget": "for a model file, --worst-case's budget is given with `lyapcheck simulate FILE --worst-case`",
+}
+GAIN_FLAG_HINT = "a model file carries its own parameters: use --set NAME=VALUE"
+
+
+def split_model_argument(positional: str | None, model_file: str | None) -> tuple[str | None, str | None]:
+    """``(model_file, positional)``: a positional file that is a model file becomes the model."""
+    from lyapcheck.models.modelfile import is_model_file
+
+    if positional is not None and is_model_file(positional):
+        if model_file is not None:
+            raise InvalidParameter("model", "given once (FILE or --model FILE, not both)", positional)
+        return positional, None
+    return model_file, positional
+
+
+def check_model_flags(positional: str | None, settings: Sequence[str], paper_flags: Mapping[str, bool]) -> None:
+    """Refuse, in the model's words, what does not belong with a model file: a ``--set`` whose value
+    was given as a separate word (it then stands as the positional argument), a second input file,
+    and the paper's flags (``paper_flags``: flag -> given)."""
+    bare = [s for s in settings if "=" not in s]
+    if bare:
+        value = positional if positional is not None else "VALUE"
+        words = f"--set {bare[0]}" + (f" {positional}" if positional is not None else "")
+        raise InvalidParameter("set", f"NAME=VALUE in one word: use --set {bare[0]}={value}", words)
+    if positional is not None:
+        raise InvalidParameter("model", "the only input file (a model file is given; this second argument has no "
+                               "use with it)", positional)
+    for flag, given in paper_flags.items():
+        if given:
+            hint = PAPER_FLAG_HINTS.get(flag, GAIN_FLAG_HINT)
+            raise InvalidParameter(flag.lstrip("-"), f"left out with a model file: {flag} is a flag of the paper's "
+                                   f"loop ({hint})", flag)
+
+
+__all__ = ["split_model_argument", "check_model_flags", "PAPER_FLAG_HINTS"]
