@@ -172,3 +172,15 @@ _FIGURE_RTOL: Final[dict[tuple[str, str], float]] = {
 #: stays far below any modelling error a false certificate would show (moved from the report's
 #: reports.model_figures.CHECK_TOL, now shared with the sweeps of model files)
 TRAJECTORY_CHECK_REL_TOL: Final = 1e-5
+
+
+# -- figures of model certificates across floating-point platforms (issue 28) ----------------------
+#: the level c of a model's certified region of attraction ``{V <= c}`` (``roa``, after its V steps):
+#: each V step builds V with the level-1 condition feasible, and the last level step bisects on the
+#: solver's feasibility up to a relative width of 1e-3 (lyapcheck.models.regions.LEVEL_REL_TOL), so
+#: c is within that width of the largest level the solver finds feasible, 1 or just above; which
+#: side of a bisection step a solve falls on follows the platform's last bits, and so does V itself.
+#: Measured at the reversed Van der Pol (mu = 1) on five x86-64 platforms (numpy's AVX-512, AVX2 or
+#: SSE loops with OpenBLAS's SkylakeX, Haswell or Nehalem kernel): 0.999656 to 1.000008, 3.5e-4
+#: apart. Not for a level certified straight from the quadratic start (any level there)
+FIGURE_MODEL_ROA_LEVEL_RTOL: Final = 1e-3

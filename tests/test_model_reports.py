@@ -227,15 +227,21 @@ def test_vdp_portrait_draws_the_certified_set_inside_the_true_region(vdp_context
 
 
 @pytest.mark.slow
-def test_vdp_pdf_opens_and_carries_the_page(vdp_html: str) -> None:
+def test_vdp_pdf_opens_and_carries_the_page(vdp: Any, vdp_html: str) -> None:
+    from lyapcheck.tolerances import FIGURE_MODEL_ROA_LEVEL_RTOL
     from reports.render import html_to_pdf
 
     pdf = html_to_pdf(vdp_html)
     assert pdf.startswith(b"%PDF")
     text = pdf_text(pdf)
     assert "Stability certificate: reversed Van der Pol oscillator (mu = 1)" in text
-    assert "level c = 0.999692" in text and "certified" in text and "not certified" in text
-    assert "855587873/855851079" in text or "0.999692" in text
+    # the certified level starts from the solver's answers: its digits follow the platform (0.999656
+    # to 1.000008 measured on five x86-64 ones) within the level search's resolution; the page
+    # carries this run's level
+    roa = vdp.document["conditions"]["roa"]
+    assert roa["level"] == pytest.approx(0.999692, rel=FIGURE_MODEL_ROA_LEVEL_RTOL)
+    assert f"level c = {roa['level']:.6g}" in text and "certified" in text and "not certified" in text
+    assert roa["certificate"]["level"] in text or f"{roa['level']:.6g}" in text
     assert "Phase portrait" in text and "Exact re-check" in text
     # the figure is drawn: the filled set's light green is on the page of the portrait
     pages = pdf_pages(pdf)
