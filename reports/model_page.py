@@ -233,25 +233,25 @@ def _gram_sizes(cert: dict[str, Any], prefix: str = "") -> list[str]:
     return out
 
 
-def shown_summary(name: str, cond: dict[str, Any], outputs: tuple[str, ...]) -> str:
+def shown_summary(name: str, cond: dict[str, Any], outputs: tuple[str, ...], box: Any = None) -> str:
     """The sentence a reader sees: for a decided class, the one its figures give
     (:func:`lyapcheck.models.claims.summary`, as ``verify`` regenerates it), never the file's own
     text; for the others, the file's reason."""
     from lyapcheck.models.claims import summary
 
     try:
-        text = summary(name, cond, outputs)
-    except (KeyError, TypeError, ValueError):
+        text = summary(name, cond, outputs, box if isinstance(box, dict) else None)
+    except (KeyError, TypeError, ValueError, ArithmeticError):
         return "(no sentence: the figures of this condition are malformed)"
     return text if text is not None else _str(cond.get("summary", ""))
 
 
 def _class_view(name: str, cond: dict[str, Any], index: int, states: list[str], shifts: list[Fraction],
-                eqs: Equations, outputs: tuple[str, ...] = ()) -> ClassView:
+                eqs: Equations, outputs: tuple[str, ...] = (), box: Any = None) -> ClassView:
     status = _str(cond.get("status", "unknown"))
     prop = _str(cond.get("property") or "")
     view = ClassView(name, f"class-{index}", CLASS_TITLES.get(name, name), status, prop,
-                     PROPERTY_MEANING.get(prop, ""), shown_summary(name, cond, outputs), key_figures(cond))
+                     PROPERTY_MEANING.get(prop, ""), shown_summary(name, cond, outputs, box), key_figures(cond))
     rest = {k: v for k, v in cond.items() if k not in SHOWN_ELSEWHERE}
     for key, value in rest.items():
         view.items.extend(value_items(str(key), value, eqs))
@@ -320,9 +320,22 @@ def _class_view(name: str, cond: dict[str, Any], index: int, states: list[str], 
     return view
 
 
-def _quantities(exact_si: dict[str, Any], given: dict[str, Any], overrides: dict[str, Any]) -> list[Quantity]:
+def _quantities(exact_si: dict[str, Any], given: dict[str, Any], overrides: dict[str, Any],
+                box: dict[str, Any] | None = None) -> list[Quantity]:
+    """One row per quantity; a parameter of the certificate's box shows its range (every value in
+    it is covered), not the file's nominal value."""
     rows = []
+    box = box or {}
     for name, value in exact_si.items():
+        bounds = box.get(name)
+        if isinstance(bounds, list) and len(bounds) == 2:
+            lo, hi = (as_fraction(b) for b in bounds)
+            if lo is not None and hi is not None:
+                rows.append(Quantity(str(name), _str(given.get(name, "—")), f"[{fmt_float(float(lo))}, "
+                                     f"{fmt_float(float(hi))}]", f"[{lo}, {hi}]",
+                                     f"the box: every value in this range is covered (--box {name}=...); the file's "
+                                     "value is not used"))
+                continue
         exact = as_fraction(value)
         note = ""
         if name in overrides:
@@ -399,6 +412,26 @@ def _solvers(conditions: dict[str, Any]) -> list[tuple[str, str]]:
     return out
 
 
+def _decimal(value: Fraction | None) -> str:
+    """A box bound as the command line reads it: the exact decimal where it terminates (every box
+    that ``--box`` or a sweep makes), else 17 significant digits."""
+    if value is None:
+        return "?"
+    q = value.denominator
+    twos_fives = q
+    for p in (2, 5):
+        while twos_fives % p == 0:
+            twos_fives //= p
+    if twos_fives != 1:
+        return f"{float(value):.17g}"
+    digits = 0
+    while (value * 10 ** digits).denominator != 1:
+        digits += 1
+    text = f"{abs(value.numerator) * 10 ** digits // value.denominator:0{digits + 1}d}"
+    body = text if digits == 0 else f"{text[:-digits]}.{text[-digits:]}"
+    return ("-" if value < 0 else "") + body
+
+
 def _command(doc: dict[str, Any]) -> str:
     model = as_dict(doc.get("model"))
     file = _str(model.get("file") or "model.toml")
@@ -407,6 +440,10 @@ def _command(doc: dict[str, Any]) -> str:
         parts += ["--set", shlex.quote(f"{name}={value}")]
     if isinstance(doc.get("candidate"), str):
         parts += ["--candidate", shlex.quote(doc["candidate"])]
+    for name, bounds in as_dict(doc.get("box")).items():
+        if isinstance(bounds, list) and len(bounds) == 2:
+            lo, hi = (_decimal(as_fraction(b)) for b in bounds)
+            parts += ["--box", shlex.quote(f"{name}={lo}..{hi}")]
     names = [str(n) for n in as_dict(doc.get("conditions"))]
     if names:
         parts += ["--classes", shlex.quote(",".join(names))]
@@ -476,7 +513,13 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
     shifts = [as_fraction(equilibrium.get(s)) or Fraction(0) for s in states]
     conditions = as_dict(doc.get("conditions"))
     outputs = tuple(model.outputs) if model is not None else ()
-    classes = [_class_view(str(name), as_dict(cond), k + 1, states, shifts, eqs, outputs)
+    try:
+        from lyapcheck.models.claims import box_words
+
+        box_text = box_words(as_dict(doc.get("box"))) if as_dict(doc.get("box")) else ""
+    except (TypeError, ValueError, ArithmeticError):
+        box_text = "a box of parameters (its bounds are malformed)"
+    classes = [_class_view(str(name), as_dict(cond), k + 1, states, shifts, eqs, outputs, doc.get("box"))
                for k, (name, cond) in enumerate(conditions.items())]
     figure, figure_reason, checks = _figure(doc, model, simulate)
     eqs.typeset()
@@ -508,7 +551,9 @@ def model_context(doc: dict[str, Any], *, simulate: bool = True, recheck: bool =
         "status_meaning": {**STATUS_MEANING, **EXTRA_STATUS_MEANING},
         "states": states,
         "equilibrium": [(s, _str(equilibrium.get(s, "0"))) for s in states],
-        "parameters": _quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), overrides),
+        "parameters": _quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), overrides,
+                                  as_dict(doc.get("box"))),
+        "box_words": box_text,
         "disturbances": _quantities(as_dict(doc.get("disturbances")), as_dict(raw.get("disturbances")), overrides),
         "outputs": list(outputs_text.items()),
         "domain": domain,

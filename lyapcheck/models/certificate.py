@@ -176,14 +176,35 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
                 ok, why = False, f"malformed certificate: {_describe(exc)}"
             rows.append((name, ok, why if ok else f"{name}: {why}"))
+    _check_stated_v(model, box, conditions, rows)
     _check_disturbance_keys(model, conditions, rows)
     _check_candidate(doc, model, conditions, rows)
-    _check_summaries(model, conditions, rows)
+    _check_summaries(model, conditions, rows, doc.get("box"))
     return _with_verdict(doc, rows)
 
 
 def _describe(exc: BaseException) -> str:
     return f"missing key {exc}" if isinstance(exc, KeyError) else str(exc)[:200]
+
+
+def _check_stated_v(model: Any, box: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
+    """A certified V's ``variables`` name its exponents (the states, then for ``sos_bound`` the
+    disturbances, then a box's parameters) and its ``V_text`` is V written readably, as
+    ``certify`` writes them: a V_text edited to show another V fails here (both are optional:
+    the exact V is the one checked)."""
+    from lyapcheck.models.certify import readable_v, stated_polynomials
+
+    for name, c in conditions.items():
+        if not isinstance(c, dict) or c.get("status") != "certified" or not isinstance(c.get("certificate"), dict):
+            continue
+        try:
+            for data, variables in stated_polynomials(model, box, name, c["certificate"]):
+                if "variables" in data and data["variables"] != variables:
+                    rows.append((name, False, f"{name}: 'variables' must be {variables}"))
+                elif "V_text" in data and data["V_text"] != readable_v(model, data["V"], variables):
+                    rows.append((name, False, f"{name}: V_text is not the certified V written out"))
+        except (KeyError, ValueError, TypeError, ArithmeticError) as exc:
+            rows.append((name, False, f"{name}: the stated V is malformed: {_describe(exc)}"))
 
 
 def _check_disturbance_keys(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
@@ -247,15 +268,16 @@ def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any]
                  "candidate: the candidate text is not the V of the certified candidate condition"))
 
 
-def _check_summaries(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
-    """Each decided condition's summary is the one its checked figures give (:mod:`claims`)."""
+def _check_summaries(model: Any, conditions: dict[str, Any], rows: list[Row], box: Any) -> None:
+    """Each decided condition's summary is the one its checked figures (and the checked box) give
+    (:mod:`lyapcheck.models.claims`)."""
     from lyapcheck.models.claims import summary
 
     for name, c in conditions.items():
         if not isinstance(c, dict):
             continue
         try:
-            expected = summary(name, c, tuple(model.outputs))
+            expected = summary(name, c, tuple(model.outputs), box)
         except (KeyError, ValueError, TypeError) as exc:
             rows.append((name, False, f"{name}: the summary's figures are malformed: {_describe(exc)}"))
             continue

@@ -281,10 +281,37 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
     from lyapcheck.models.claims import summary
 
     for name, r in out.results.items():
-        text = summary(name, r.to_json(), tuple(model.outputs))
+        if r.status == "certified":
+            for data, variables in stated_polynomials(model, box, name, r.certificate):
+                data["variables"] = variables
+                data["V_text"] = readable_v(model, data["V"], variables)
+        text = summary(name, r.to_json(), tuple(model.outputs), box.to_json() if box is not None else None)
         if text is not None:
             r.summary = text
     return out
+
+
+def stated_polynomials(model: Model, box: "ModelBox | None", name: str, certificate: dict[str, Any]
+                       ) -> list[tuple[dict[str, Any], list[str]]]:
+    """The parts of a certified condition's certificate that state a ``V`` (``sos_bound``: one per
+    output), each with the names of its exponents: the states, then (``sos_bound``) the
+    disturbances, then a box's parameters."""
+    box_names = list(box.names) if box is not None else []
+    if name == "sos_bound":
+        outputs = certificate.get("outputs")
+        if not isinstance(outputs, dict):
+            return []
+        names = list(model.states) + list(model.disturbances) + box_names
+        return [(data, names) for data in outputs.values() if isinstance(data, dict) and "V" in data]
+    return [(certificate, list(model.states) + box_names)] if "V" in certificate else []
+
+
+def readable_v(model: Model, terms: dict[str, Any], variables: list[str]) -> str:
+    """``V_text``: :func:`lyapcheck.models.claims.v_text` in the declared states (shifted where the
+    equilibrium is not 0)."""
+    from lyapcheck.models.claims import v_text
+
+    return v_text(terms, variables, dict(zip(model.states, model.equilibrium)))
 
 
 def robust_field(scaled: ScaledField) -> StateField | None:

@@ -26,11 +26,13 @@ DISTURBANCE_PREFIX = {"zero": "(d = 0) ", "all": "for every disturbance signal w
 ROBUST_NOT_FOUND = "; with the declared disturbances acting, no certificate of this class was found"
 
 
-def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()) -> str | None:
+def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = (),
+            box: Mapping[str, Sequence[Any]] | None = None) -> str | None:
     """The sentence of a ``certified`` or ``refuted`` condition (its JSON form), or None for the
     other statuses. ``outputs``: the model's output names (``sos_bound`` names those it did not
-    bound). Raises KeyError, TypeError or ValueError on figures of the wrong form (verify reports
-    them as a failed check)."""
+    bound); ``box``: the document's box of parameters (``{"mu": ["4/5", "6/5"]}``), which a claim
+    over it names first. Raises KeyError, TypeError or ValueError on figures of the wrong form
+    (verify reports them as a failed check)."""
     status = condition.get("status")
     if status not in ("certified", "refuted"):
         return None
@@ -47,7 +49,21 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
         text = DISTURBANCE_PREFIX[disturbances] + text
     if "robust_attempt" in condition:
         text += ROBUST_NOT_FOUND
+    if box:
+        text = f"for every {box_words(box)}: {text}"
     return text
+
+
+def box_words(box: Mapping[str, Sequence[Any]]) -> str:
+    """``mu in [0.8, 1.2] and k in [1, 2]``: a box of parameters (exact bounds as in a certificate's
+    ``box``) as a reader reads it, each bound to :data:`V_DIGITS` significant digits."""
+    from fractions import Fraction
+
+    parts = []
+    for name, bounds in box.items():
+        lo, hi = (Fraction(str(b)) for b in bounds)
+        parts.append(f"{name} in [{float(lo):.{V_DIGITS}g}, {float(hi):.{V_DIGITS}g}]")
+    return " and ".join(parts)
 
 
 def _number(condition: Mapping[str, Any], key: str) -> float:
@@ -112,4 +128,61 @@ def _bounds(condition: Mapping[str, Any], outputs: Sequence[str]) -> str:
     return out
 
 
-__all__ = ["summary", "SET_NAMES", "DISTURBANCE_PREFIX"]
+# -- V as a reader sees it ------------------------------------------------------------------------
+
+#: significant digits of a coefficient in ``V_text`` and in the table's short form of V
+V_DIGITS = 6
+#: the table's short form of V shows this many terms, then how many more there are
+V_SHORT_TERMS = 6
+
+
+def v_text(terms: Mapping[str, Any], variables: Sequence[str], shifts: Mapping[str, Any] | None = None,
+           limit: int | None = None) -> str:
+    """``V`` (the contract's exact ``{"terms": [[coefficient, [exponents]], ...]}``, in ``z = x -
+    x_eq``) as a readable polynomial in the declared names: coefficients to :data:`V_DIGITS`
+    significant digits, each state with a non-zero equilibrium value written ``(x1 - 1.5)``; with
+    ``limit``, only the first terms (by degree) and how many more. The exact V is ``terms``."""
+    from fractions import Fraction
+
+    shifts = shifts or {}
+    rows = []
+    for coefficient, exponents in terms["terms"]:
+        if len(exponents) != len(variables):
+            raise ValueError(f"V: a term has {len(exponents)} exponents for {len(variables)} variables")
+        rows.append((Fraction(coefficient), exponents))
+    parts = []
+    for k, (c, exponents) in enumerate(rows):
+        if limit is not None and k == limit:
+            parts.append(f"+ ... ({len(rows) - limit} more terms)")
+            break
+        factors = []
+        for name, e in zip(variables, exponents):
+            if e == 0:
+                continue
+            shift = Fraction(str(shifts.get(name, 0)))
+            base = name if shift == 0 else f"({name} {'-' if shift > 0 else '+'} {float(abs(shift)):.{V_DIGITS}g})"
+            factors.append(base if e == 1 else f"{base}**{e}")
+        magnitude = f"{float(abs(c)):.{V_DIGITS}g}"
+        body = "*".join(factors) if magnitude == "1" and factors else "*".join([magnitude] + factors)
+        sign = "-" if c < 0 else "+"
+        parts.append(body if not parts and sign == "+" else f"{sign} {body}" if parts else f"-{body}")
+    return " ".join(parts) if parts else "0"
+
+
+def v_expression(terms: Mapping[str, Any], variables: Sequence[str], shifts: Mapping[str, Any] | None = None) -> Any:
+    """``V`` exactly, as a sympy expression in the declared names (``x - x_eq`` where the
+    equilibrium is not 0); the numbers are the certificate's rationals."""
+    import sympy as sp
+
+    shifts = shifts or {}
+    symbols = [sp.Symbol(name) - sp.Rational(str(shifts.get(name, 0))) for name in variables]
+    total = sp.Integer(0)
+    for coefficient, exponents in terms["terms"]:
+        term = sp.Rational(str(coefficient))
+        for base, e in zip(symbols, exponents):
+            term *= base ** int(e)
+        total += term
+    return total
+
+
+__all__ = ["summary", "box_words", "v_text", "v_expression", "SET_NAMES", "DISTURBANCE_PREFIX"]

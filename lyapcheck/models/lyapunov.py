@@ -83,8 +83,16 @@ def _products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) -> set
 
 def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequence[int]],
                        drop: frozenset[Monomial] = frozenset(), param_degree: int = 0) -> Structure | None:
-    """The program for a ``V`` of this degree, or None when no strict certificate can exist in it
-    (the remainder's reduced basis lacks a pure power of some state). ``drop``: monomials the
+    """The program for a ``V`` of this degree, or None (:func:`lyapunov_program` says why)."""
+    found = lyapunov_program(field, degree, generators, drop, param_degree)
+    return found if isinstance(found, Structure) else None
+
+
+def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequence[int]],
+                     drop: frozenset[Monomial] = frozenset(), param_degree: int = 0) -> Structure | str:
+    """The program for a ``V`` of this degree, or why there is none: a size limit (named), or no
+    strict certificate can exist in this form (the remainder's reduced basis lacks a pure power of
+    some state: the Newton polytope of ``-V'`` leaves no room for one). ``drop``: monomials the
     remainder's basis leaves out (facial reduction, :func:`vanishing_monomials`). Over a box of
     parameters (the ring's variables after the states) ``V``'s basis monomials may carry the
     parameters up to ``param_degree`` and the box's multipliers join the identity."""
@@ -92,7 +100,7 @@ def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequ
     ring = field.ring
     nv = ring.nvars
     if bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree) > CANDIDATE_LIMIT:
-        return None
+        return f"the size limit CANDIDATE_LIMIT = {CANDIDATE_LIMIT} candidate monomials was reached"
     z_v = [m for m in monomials(nv, 1, degree // 2 + param_degree)
            if 1 <= sum(m[:n]) <= degree // 2 and sum(m[n:]) <= param_degree]
     v_blocks = bases.character_blocks(z_v, generators)
@@ -107,22 +115,28 @@ def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequ
         sq = {tuple(2 * int(k == multiplier_variable(g.name)) for k in range(nv)), tuple([0] * nv)}
         target |= {tuple(a + b for a, b in zip(m, s)) for m in _products(g.basis, g.blocks) for s in sq}
     if len(target) > TARGET_LIMIT:
-        return None
+        return f"the size limit TARGET_LIMIT = {TARGET_LIMIT} monomials of the identity was reached"
     z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
-    if not z_w or not bases.has_pure_powers(z_w, range(n)) or len(z_w) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
-        return None
+    if len(z_w) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
+        return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+    if not z_w or not bases.has_pure_powers(z_w, range(n)):
+        return ("no strict certificate of this form exists (the Newton polytope of -V' leaves no pure power of "
+                "every state in its basis)")
     w_blocks = bases.character_blocks(z_w, generators)
     terms = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in enumerate(field.g)]
     terms.append(Term(param("muD", ring.support(field.D)), "V"))
     terms.extend(box_terms)
     terms.append(Term(one(ring, -1), "W"))
-    return affordable(Structure(
+    structure = Structure(
         nvars=nv,
         grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))),
                *box_grams),
         scalars=(),
         identities=(Identity("lyapunov", tuple(terms), None, "W"),),
-        objective=("max_margin",), trace_one=("V",)))
+        objective=("max_margin",), trace_one=("V",))
+    if affordable(structure) is None:
+        return f"the size limit BLOCK_COST_LIMIT = {BLOCK_COST_LIMIT:.1e} of a program's cost was reached"
+    return structure
 
 
 def affordable(structure: Structure) -> Structure | None:
@@ -217,25 +231,51 @@ def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], fou
     return found
 
 
+#: a solve's margin (the smallest Gram eigenvalue it maximized) below minus this says the strict
+#: program is infeasible: no certificate of this form; between it and 0 the program sits on the
+#: boundary of feasibility, where only a certificate with a singular Gram matrix might exist
+INFEASIBLE_MARGIN: Final = FACIAL_MARGIN
+
+
+def failure(solution: Solution, exact_tried: bool) -> str:
+    """Why one solve gave no certificate, in the words of the not-certified reasons: the solver
+    failed, the program is infeasible (margin clearly negative), it sits on the boundary of
+    feasibility, or its solution failed the exact check."""
+    margin = solution.scalars.get("t")
+    if not solution.usable or margin is None:
+        return f"the solver returned no usable point (status {solution.report.raw_status})"
+    if margin < -INFEASIBLE_MARGIN:
+        return f"the solver proved the program infeasible (best margin {margin:.2g} < 0)"
+    if exact_tried:
+        return f"the solver's solution failed the exact check (margin {margin:.2g})"
+    return (f"the program is on the boundary of feasibility (best margin {margin:.2g}): no strictly positive "
+            "certificate of this form was found")
+
+
 def search_degree(field: StateField, degree: int, search: Search, param_degree: int = 0
                   ) -> tuple[dict[str, Any] | None, str]:
-    """A certificate with ``V`` of this degree (and its best decay rate), or None and why not."""
+    """A certificate with ``V`` of this degree (and its best decay rate), or None and why not: the
+    size limit that was reached, no strict certificate of the form, the solver's verdict on the
+    program, or the exact check that refused its solution."""
     generators = symmetry(field)
     drop: frozenset[Monomial] = frozenset()
     label = f"degree {degree}" + (f" ({param_degree} in the parameters)" if field.p > field.disturbances else "")
+    why = "none found"
     for _ in range(FACIAL_ROUNDS + 1):
-        structure = lyapunov_structure(field, degree, generators, drop, param_degree)
-        if structure is None:
-            return None, f"{label}: no strict certificate fits (Newton polytope, or above the size limits)"
+        structure = lyapunov_program(field, degree, generators, drop, param_degree)
+        if isinstance(structure, str):
+            return None, f"{label}: {structure}"
         found, solution = attempt_with_solution(field, structure, Fraction(0), search)
         if found is not None:
             break
+        why = failure(solution, exact_tried=solution.usable
+                      and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
         vanishing = vanishing_monomials(structure.gram("W"), solution)
         if not vanishing:
-            return None, f"{label}: none found"
+            return None, f"{label}: {why}"
         drop = drop | vanishing
     else:
-        return None, f"{label}: none found"
+        return None, f"{label}: {why} (after {FACIAL_ROUNDS} rounds of facial reduction)"
     found = best_decay_rate(lambda mu: attempt(field, structure, mu, search), found)
     found["degree"] = degree
     found["param_degree"] = param_degree
@@ -319,8 +359,8 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                                numbers={"reason": str(exc), "tried": tried}, solver={"solves": search.log})
     what = "quadratic V" if name == "quadratic" else f"polynomial V of degree up to {max(degrees)}"
     return ConditionResult(name, "not_certified",
-                           f"no {what} with V' < 0 everywhere was found ({'; '.join(tried)}); this is not a proof that "
-                           "none exists", numbers={"tried": tried}, solver={"solves": search.log},
+                           f"no {what} with V' < 0 everywhere was found ({'; '.join(tried)}); a V of another form "
+                           "may still exist", numbers={"tried": tried}, solver={"solves": search.log},
                            property="GAS" if name != "quadratic" else None)
 
 
