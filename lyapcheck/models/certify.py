@@ -421,9 +421,10 @@ def roa_starts(model: Model, seed: int = 0) -> np.ndarray:
     from lyapcheck.models.numeric import grid_starts
 
     assert model.domain is not None
-    per_axis = ROA_GRID.get(model.n, 2)
-    return grid_starts(model.domain, model.states, per_axis, ROA_RANDOM_STARTS if model.n > 3 else per_axis ** model.n,
-                       seed=seed)
+    per_axis = ROA_GRID.get(model.n)
+    if per_axis is None:  # beyond ROA_GRID: random starts (two per axis would be the domain's corners alone)
+        return grid_starts(model.domain, model.states, ROA_RANDOM_STARTS, ROA_RANDOM_STARTS, seed=seed)
+    return grid_starts(model.domain, model.states, per_axis, per_axis ** model.n, seed=seed)
 
 
 def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult | None,
