@@ -78,7 +78,9 @@ def _record(spec: ModelSweepSpec, result: Any, out: dict[str, np.ndarray], j: in
                 out[f"sos_bound_{y}"][j] = float(value)
     if certified:
         status = "certified"
-        out["note"][j] = "certified by " + ", ".join(f"{c} ({result.results[c].proves()})" for c in certified)
+        out["note"][j] = "certified by " + ", ".join(
+            f"{c} ({result.results[c].proves()}{', d = 0' if result.results[c].disturbances == 'zero' else ''})"
+            for c in certified)
     elif refuted is not None or statuses.get("linearization") == "refuted":
         status = "refuted"
         out["note"][j] = (refuted or {}).get("note") or result.results["linearization"].summary
