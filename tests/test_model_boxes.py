@@ -56,6 +56,12 @@ def test_a_box_where_the_equilibrium_moves_or_the_model_is_undefined_is_refused(
     parse_model_box(undefined, ["a=1.5..3"])  # the same model is defined on this box
 
 
+def test_an_output_divided_by_a_box_parameter_is_a_one_line_error() -> None:
+    text = '[model]\nname = "o"\nstates = ["x"]\n[parameters]\na = 1\n[outputs]\ny = "x/a"\n[dynamics]\nx = "-a*x"\n'
+    with pytest.raises(ModelFileError, match=r"--box a: output y has a denominator depending on a box parameter"):
+        parse_model_box(parse_model(text, "<test>"), ["a=1..2"])
+
+
 def test_the_command_line_says_so_in_one_line(tmp_path: Any) -> None:
     from click.testing import CliRunner
 

@@ -72,10 +72,13 @@ def check_box(model: Model, box: ModelBox) -> None:
     from lyapcheck.models.field import shifted_field
     from lyapcheck.sos.polynomials import Ring
 
-    shifted = shifted_field(model, box=box)
+    where = f"--box {', '.join(box.names)}"
+    try:
+        shifted = shifted_field(model, box=box)
+    except ValueError as exc:  # an output divided by a box parameter: not supported over a box
+        raise ModelFileError(model.source, where, str(exc)) from None
     ring = shifted.ring
     n = model.n
-    where = f"--box {', '.join(box.names)}"
     origin = {name: Fraction(0) for name in ring.names[:n]} | {d: Fraction(0) for d in model.disturbances}
     u_ring = Ring(box.names)
     for s, num, den in zip(model.states, shifted.numerators, shifted.denominators):
