@@ -10,9 +10,10 @@ Schema (version 1)::
       "candidate": "x1**2 + x2**2" | null,            # --candidate, as given
       "states": [..], "equilibrium": {"x1": "0", ..}, "parameters": {"mu": "2"},  # exact SI
       "field": {"denominators": [..], "scaling": {..}},
-      "conditions": {"linearization": {..}, "roa": {"status": .., "level": .., "certificate":
-                     {"V": {"terms": [["3/2", [2, 0]], ..]}, "level": "p/q", ..}}, ..},
-      "verdict": "certified" | "not_certified",
+      "conditions": {"linearization": {..}, "roa": {"status": .., "level": .., "disturbances": "all",
+                     "certificate": {"V": {"terms": [["3/2", [2, 0]], ..]}, "variables": ["x1", "x2"],
+                                     "V_text": "1.5*x1**2 - ...", "level": "p/q", ..}}, ..},
+      "verdict": "certified" | "certified_nominal" | "not_certified",
       "versions": {..}
     }
 

@@ -1,6 +1,6 @@
 """Model files: any polynomial or rational closed loop ``x' = f(x, p, d)``, read and validated.
 
-The format is DESIGN.md's "Model files (contract)"::
+The format (docs/model-files.md, the reference; DESIGN.md's "Model files (contract)")::
 
     [model]          name, states (the order of the state vector), source (optional)
     [parameters]     name = number or "number unit" (SI inside)
