@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -107,34 +107,64 @@ def class_selection(classes: str | Sequence[str] | None) -> tuple[str, ...]:
     return chosen
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CertifyResult:
     """What ``lyapcheck certify`` found: the same content as its ``--json`` document.
+
+    Its ``repr`` is a few lines (the verdict, one line per class); in a notebook it shows as a
+    small table (``_repr_html_``); ``to_dict()`` is the whole document.
 
     Attributes
     ----------
     verdict
-        ``certified`` when some stability certificate passed its exact check.
+        ``certified`` when some stability certificate passed its exact check (a model with
+        disturbances: ``certified_nominal`` when only claims with them held at 0 passed).
     dynamics
-        ``derived`` or ``printed``.
+        ``derived`` or ``printed`` (the paper's loop); ``model`` for a model file.
     conditions
-        Condition name -> :class:`~lyapcheck.paper.conditions.base.ConditionResult` (status,
-        property, summary, numbers, exact certificate).
+        Condition name -> :class:`~lyapcheck.results.ConditionResult`: ``status``, ``property``,
+        ``disturbances``, ``summary``, ``numbers``, the exact ``certificate``; each attribute is
+        what the document says under ``conditions[name]`` (``cond.to_json()`` is that entry).
     document
-        The certificate document (``to_json()``), which :func:`verify` re-checks.
+        The certificate document (``to_dict()``), which :func:`verify` re-checks.
     """
 
     verdict: str
     dynamics: str
     conditions: "Mapping[str, ConditionResult]"
-    document: dict[str, Any] = field(repr=False)
+    document: dict[str, Any]
 
-    def to_json(self) -> dict[str, Any]:
-        """The certificate document, as a copy: editing it (as a test that forges a certificate
-        does) leaves this result and its later ``to_json()`` untouched."""
+    def __post_init__(self) -> None:
+        # the attributes say what the document says: a class's default property (PROPERTY) and
+        # which disturbances a claim covers are set on every condition, not only in its JSON
+        from dataclasses import replace
+
+        described = self.document.get("conditions", {})
+        aligned = {name: replace(cond, property=described.get(name, {}).get("property", cond.proves()),
+                                 disturbances=described.get(name, {}).get("disturbances", cond.disturbances))
+                   for name, cond in self.conditions.items()}
+        object.__setattr__(self, "conditions", aligned)
+
+    def __repr__(self) -> str:
+        from lyapcheck.notebook import certify_repr
+
+        return certify_repr(self.document)
+
+    def _repr_html_(self) -> str:
+        from lyapcheck.notebook import certify_html
+
+        return certify_html(self.document)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The certificate document (what ``certify --json`` prints), as a copy: editing it (as a
+        test that forges a certificate does) leaves this result untouched."""
         import copy
 
         return copy.deepcopy(self.document)
+
+    def to_json(self) -> dict[str, Any]:
+        """The same as :meth:`to_dict` (a dict, not a string: ``json.dumps`` it to write it)."""
+        return self.to_dict()
 
     def write(self, path: str | Path) -> Path:
         """Write the certificate file (atomically: a reader never sees half a file)."""
@@ -374,15 +404,31 @@ class Check:
         return {"check": self.check, "ok": self.ok, "message": self.message}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class VerifyResult:
-    """``valid`` when every claim of the certificate passes its exact re-check."""
+    """``valid`` when every claim of the certificate passes its exact re-check; ``checks`` says
+    which (a short ``repr`` lists the failing ones; ``to_dict()`` has all)."""
 
     valid: bool
     checks: tuple[Check, ...]
 
-    def to_json(self) -> dict[str, Any]:
+    def __repr__(self) -> str:
+        from lyapcheck.notebook import verify_repr
+
+        return verify_repr(self.to_dict())
+
+    def _repr_html_(self) -> str:
+        from lyapcheck.notebook import verify_html
+
+        return verify_html(self.to_dict())
+
+    def to_dict(self) -> dict[str, Any]:
+        """What ``verify --json`` prints."""
         return {"valid": self.valid, "checks": [c.to_json() for c in self.checks]}
+
+    def to_json(self) -> dict[str, Any]:
+        """The same as :meth:`to_dict`."""
+        return self.to_dict()
 
 
 def verify(certificate: str | Path | Mapping[str, Any] | CertifyResult) -> VerifyResult:
@@ -410,28 +456,59 @@ def verify(certificate: str | Path | Mapping[str, Any] | CertifyResult) -> Verif
 
 
 # -- simulate ------------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class SimulationReport:
-    """What ``lyapcheck simulate`` measured (SI; the keys of DESIGN.md come first)."""
+    """What ``lyapcheck simulate`` measured (SI; the keys of DESIGN.md come first).
+
+    Attributes
+    ----------
+    diverged
+        A trajectory diverged (or, with a certificate, a simulated figure exceeds a certified bound).
+    document
+        The ``--json`` document (``to_dict()``; ``result["key"]`` reads one key).
+    series
+        The simulated time series as an :class:`xarray.Dataset` with ``time`` (s) as a coordinate:
+        for a model, ``x`` (trajectory, time, state) and ``y`` (trajectory, time, output), the
+        trajectories numbered as ``document["trajectories"]`` (:mod:`lyapcheck.models.series`); for
+        the paper's loop, ``p_x``, ``p_z``, ``s``, ``eps``, ``u_x``, ``u_z``, ``v_x``, ``v_z``, ``d_x``,
+        ``d_z`` over time. None for a worst-case search, or with ``series=False``.
+    """
 
     diverged: bool
-    document: dict[str, Any] = field(repr=False)
+    document: dict[str, Any]
+    series: Any = None
 
     def __getitem__(self, key: str) -> Any:
         return self.document[key]
 
+    def __repr__(self) -> str:
+        from lyapcheck.notebook import simulation_repr
+
+        return simulation_repr(self.document, self.series)
+
+    def _repr_html_(self) -> str:
+        from lyapcheck.notebook import simulation_html
+
+        return simulation_html(self.document)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``--json`` document (the object itself, not a copy)."""
+        return self.document
+
     def to_json(self) -> dict[str, Any]:
+        """The same as :meth:`to_dict`."""
         return self.document
 
 
 def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
              plot: str | Path | None = None, worst_case: bool = False, budget_s: float = 20.0,
              model: "str | Path | Model | None" = None, settings: Mapping[str, object] | Sequence[str] | None = None,
-             x0: Sequence[str] = (), grid: int | None = None, t_end: str | float | None = None,
+             x0: Any = (), grid: int | None = None, t_end: str | float | None = None,
              scenarios: Sequence[str] | None = None, frequencies: str | None = None,
-             certificate: str | Path | None = None) -> SimulationReport:
+             certificate: str | Path | None = None, series: bool = True) -> SimulationReport:
     """Simulate the saturated ILOS/ODS closed loop (a scenario TOML or one of the paper's presets),
-    or any closed loop from a model file (``model=``, see :func:`simulate_model_file`).
+    or any closed loop from a model file (``model=``; its arguments ``settings``, ``x0``, ``grid``,
+    ``t_end``, ``scenarios``, ``frequencies`` and ``certificate`` are :func:`simulate_model_file`'s).
 
     Parameters
     ----------
@@ -447,6 +524,9 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
         feedback, periodic at the loop's resonances, Pontryagin bang-bang, then a local search
         over the switching law) within ``budget_s`` seconds; the document gives
         ``sup_abs_eps_tail_m`` and the ``disturbance`` that produced it.
+    series
+        Keep the time series (:attr:`SimulationReport.series`, an :class:`xarray.Dataset`); False
+        skips the sampling. A worst-case search keeps none.
     """
     from lyapcheck.models.modelfile import is_model_file
 
@@ -458,16 +538,22 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
                                    str(scenario if scenario is not None else preset))
         return simulate_model_file(model, settings=settings, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios,
                                    frequencies=frequencies, worst_case=worst_case, budget_s=budget_s,
-                                   certificate=certificate, plot=plot)
+                                   certificate=certificate, plot=plot, series=series)
+    model_only = {"settings": settings, "x0": x0, "grid": grid, "t_end": t_end, "scenarios": scenarios,
+                  "frequencies": frequencies, "certificate": certificate}
+    given = [k for k, v in model_only.items() if v is not None and not (isinstance(v, (list, tuple)) and not v)]
+    if given:
+        raise InvalidParameter(given[0], "used with a model file (model=...; the paper's loop takes a scenario or a "
+                               "preset)", model_only[given[0]])
     from lyapcheck.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
 
     if plot is not None and Path(plot).suffix.lower() != ".png":
         raise InvalidParameter("plot", "a file name ending in .png", str(plot))
     if not (isinstance(budget_s, (int, float)) and 0 < budget_s < 3600):
-        raise InvalidParameter("budget", "a number of seconds in (0, 3600)", budget_s)
+        raise InvalidParameter("budget_s", "a number of seconds in (0, 3600)", budget_s)
     if worst_case:
         if plot is not None:
-            raise InvalidParameter("plot", "not combined with --worst-case", str(plot))
+            raise InvalidParameter("plot", "left out with worst_case=True", str(plot))
         from lyapcheck.simulation.worst_case import search_worst_case
 
         chosen, _, _ = scenario_batch(None if scenario is None else str(scenario), preset)
@@ -476,30 +562,55 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
                                                           **found.to_json()})
     chosen, batch, index = scenario_batch(None if scenario is None else str(scenario), preset,
                                           with_all_presets=plot is not None)
-    result = run_scenarios(batch, record=plot is not None)
+    result = run_scenarios(batch, record=plot is not None or series)
     doc = simulation_document(chosen, result, index)
     if plot is not None:
         from lyapcheck.simulation.plots import section5_figure
 
         section5_figure(batch, result, str(plot))
         doc["plot"] = str(plot)
-    return SimulationReport(diverged=bool(doc["diverged"]), document=doc)
+    dataset = _paper_series(result.trajectories[index], doc) if series and result.trajectories else None
+    return SimulationReport(diverged=bool(doc["diverged"]), document=doc, series=dataset)
+
+
+def _paper_series(trajectory: Any, doc: Mapping[str, Any]) -> Any:
+    """The paper loop's recorded trajectory as an :class:`xarray.Dataset` over ``time`` (SI)."""
+    import xarray as xr
+
+    variables = {"p_x": (trajectory.p[:, 0], "m"), "p_z": (trajectory.p[:, 1], "m"), "s": (trajectory.s, "m"),
+                 "eps": (trajectory.eps, "m"), "u_x": (trajectory.u[:, 0], "rad/s"),
+                 "u_z": (trajectory.u[:, 1], "rad/s"), "v_x": (trajectory.v[:, 0], "m/s"),
+                 "v_z": (trajectory.v[:, 1], "m/s"), "d_x": (trajectory.d[:, 0], "m/s"),
+                 "d_z": (trajectory.d[:, 1], "m/s")}
+    return xr.Dataset({name: ("time", values, {"units": unit}) for name, (values, unit) in variables.items()},
+                      coords={"time": ("time", trajectory.t, {"units": "s"})},
+                      attrs={"scenario": str(doc["scenario"]), "controller": str(doc["controller"]),
+                             "ods_form": str(doc["ods_form"])})
 
 
 def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
-                        x0: Sequence[str] = (), grid: int | None = None, t_end: str | float | None = None,
+                        x0: Any = (), grid: int | None = None, t_end: str | float | None = None,
                         scenarios: Sequence[str] | None = None, frequencies: str | None = None,
                         worst_case: bool = False, budget_s: float = 20.0, certificate: str | Path | None = None,
-                        plot: str | Path | None = None) -> SimulationReport:
+                        plot: str | Path | None = None, series: bool = True) -> SimulationReport:
     """``lyapcheck simulate --model``: the model's closed loop from its starts under its disturbance
     scenarios, batched (:mod:`lyapcheck.models.simulate`; docs/simulation.md has the JSON keys).
+
+    Errors name these arguments (``x0``, ``t_end``, ``settings``, ...): an
+    :class:`~lyapcheck.errors.InvalidParameter`, or a :class:`~lyapcheck.errors.ModelFileError` for
+    the model file and the ``settings`` laid over it.
 
     Parameters
     ----------
     model, settings
-        The model file (or a loaded model) and ``--set`` values laid over its parameters.
+        The model file (or a loaded model) and values laid over its parameters (``{"mu": 2}`` or
+        ``["mu=2"]``, the command line's ``--set``).
     x0
-        Starts as ``"x1=1,x2=0"`` texts (numbers or unit strings; missing states at the equilibrium).
+        The starts (missing states at the equilibrium; values are numbers or unit strings): one start
+        as a mapping ``{"x1": 1, "x2": 0}``, a sequence of one number per state ``[1, 0]`` or a text
+        ``"x1=1 x2=0"``; or a list of such starts (a 2-D array: one row per start). Default: the
+        equilibrium and a grid over the model's ``[domain]`` (without one, a start on each side of the
+        equilibrium along each state).
     grid
         Also a grid of this many points per state over the model's ``[domain]``.
     t_end, frequencies
@@ -511,6 +622,9 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
         class ``sos_bound``, report ``tightness_ratio`` = certified / worst simulated per output.
     plot
         Also write the figures to this PNG.
+    series
+        Keep the time series (:attr:`SimulationReport.series`: :mod:`lyapcheck.models.series`);
+        a worst-case search keeps none.
     """
     import numpy as np
 
@@ -519,14 +633,14 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     if plot is not None and Path(plot).suffix.lower() != ".png":
         raise InvalidParameter("plot", "a file name ending in .png", str(plot))
     if certificate is not None and not worst_case:
-        raise InvalidParameter("certificate", "used with --worst-case (the tightness ratio compares the certified "
-                               "bound with the worst case found)", str(certificate))
+        raise InvalidParameter("certificate", "used with worst_case=True (the tightness ratio compares the "
+                               "certified bound with the worst case found)", str(certificate))
     if worst_case and scenarios:
-        raise InvalidParameter("scenario", "left out with --worst-case (the search tries every family)",
+        raise InvalidParameter("scenarios", "left out with worst_case=True (the search tries every family)",
                                ",".join(scenarios))
-    loaded = load_model_file(model, settings)
+    loaded = _load_with_settings(model, settings)
     prepared = sim.prepare(loaded)
-    starts = [sim.parse_start(loaded, text) for text in x0]
+    starts = model_starts(loaded, x0)
     if grid is not None:
         starts += list(sim.grid_over_domain(loaded, grid))
     start_arr = np.array(starts) if starts else None
@@ -537,10 +651,95 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
         bounds = sim.certified_bounds_of(loaded, str(certificate)) if certificate is not None else None
         doc = sim.search_worst_case(loaded, starts=start_arr, t_end=horizon, frequencies=band, budget_s=budget_s,
                                     certified_bounds=bounds, plot=plot_path, prepared=prepared)
+        dataset = None
     else:
-        doc = sim.simulate_model(loaded, starts=start_arr, scenarios=list(scenarios) if scenarios else None,
-                                 t_end=horizon, frequencies=band, plot=plot_path, prepared=prepared)
-    return SimulationReport(diverged=bool(doc["diverged"] or doc.get("soundness_violation", False)), document=doc)
+        run = sim.run_model(loaded, starts=start_arr, scenarios=list(scenarios) if scenarios else None, t_end=horizon,
+                            frequencies=band, plot=plot_path, prepared=prepared, series=series)
+        doc, dataset = run.document, run.series
+    return SimulationReport(diverged=bool(doc["diverged"] or doc.get("soundness_violation", False)), document=doc,
+                            series=dataset)
+
+
+def _load_with_settings(model: "str | Path | Model", settings: Mapping[str, object] | Sequence[str] | None
+                        ) -> "Model":
+    """:func:`load_model_file`, its errors about a setting naming the argument ``settings`` (the
+    model file's reader names the command line's ``--set``)."""
+    try:
+        return load_model_file(model, settings)
+    except ModelFileError as exc:
+        prefix = f"{exc.source}: {exc.key}: "
+        message = str(exc)[len(prefix):] if str(exc).startswith(prefix) else str(exc)
+        if exc.key == "set":
+            raise ModelFileError(exc.source, "settings", message) from None
+        if exc.key.startswith("--set "):
+            raise ModelFileError(exc.source, f"settings[{exc.key[len('--set '):]!r}]", message) from None
+        raise
+
+
+def model_starts(model: "Model", x0: Any) -> list[Any]:
+    """The starts ``x0`` gives (see :func:`simulate_model_file`), each an array over the model's
+    states; a one-line :class:`InvalidParameter` naming ``x0`` for anything else."""
+    import numpy as np
+
+    if x0 is None:
+        return []
+    if isinstance(x0, (str, Mapping)) or _is_number_vector(x0):
+        return [_one_start(model, x0)]
+    if isinstance(x0, np.ndarray) and x0.ndim == 2 or isinstance(x0, (list, tuple)):
+        return [_one_start(model, item) for item in x0]
+    raise InvalidParameter("x0", _x0_expected(model), x0)
+
+
+def _x0_expected(model: "Model") -> str:
+    return (f"a start, or a list of starts, each a mapping {{state: value}}, a sequence of {model.n} numbers (one "
+            f"per state: {', '.join(model.states)}) or a text 'NAME=VALUE ...'")
+
+
+def _is_real(v: Any) -> bool:
+    from numbers import Real
+
+    return isinstance(v, Real) and not isinstance(v, bool)
+
+
+def _is_number_vector(v: Any) -> bool:
+    import numpy as np
+
+    if isinstance(v, np.ndarray):
+        return v.ndim == 1 and v.size > 0 and all(_is_real(x) for x in v.tolist())
+    return isinstance(v, (list, tuple)) and len(v) > 0 and all(_is_real(x) for x in v)
+
+
+def _one_start(model: "Model", item: Any) -> Any:
+    import math
+
+    import numpy as np
+
+    from lyapcheck.models.simulate import parse_start
+    from lyapcheck.units import parse_si_quantity
+
+    if isinstance(item, str):
+        return parse_start(model, item)
+    values = [float(v) for v in model.equilibrium]
+    if isinstance(item, Mapping):
+        for name, value in item.items():
+            if name not in model.states:
+                raise InvalidParameter("x0", f"a mapping from the model's states ({', '.join(model.states)}) to "
+                                       f"numbers or unit strings; {name!r} is not one", dict(item))
+            try:
+                number = float(value) if _is_real(value) else float(parse_si_quantity(str(name), value))
+            except InvalidParameter as exc:
+                raise InvalidParameter("x0", f"{exc.expected} for the state '{name}'", dict(item)) from None
+            if not math.isfinite(number):
+                raise InvalidParameter("x0", f"a finite number for the state '{name}'", dict(item))
+            values[model.states.index(name)] = number
+        return np.array(values)
+    if _is_number_vector(item):
+        numbers = [float(v) for v in (item.tolist() if isinstance(item, np.ndarray) else item)]
+        if len(numbers) != model.n or not all(math.isfinite(v) for v in numbers):
+            raise InvalidParameter("x0", f"{model.n} finite numbers, one per state ({', '.join(model.states)})",
+                                   list(numbers))
+        return np.array(numbers)
+    raise InvalidParameter("x0", _x0_expected(model), item)
 
 
 # -- sweep ---------------------------------------------------------------------------------------

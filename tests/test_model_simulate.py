@@ -273,7 +273,7 @@ def test_bad_input_is_exit_2_with_one_line(args: list[str], names: str) -> None:
 def test_library_checks_its_arguments(linear: sim.Prepared) -> None:
     with pytest.raises(InvalidParameter, match="'starts'"):
         sim.simulate_model(linear.model, starts=[[0.0, 0.0, 0.0]], prepared=linear)
-    with pytest.raises(InvalidParameter, match="'scenario'"):
+    with pytest.raises(InvalidParameter, match="'scenarios'"):
         sim.simulate_model(linear.model, scenarios=["gusts"], prepared=linear)
-    with pytest.raises(InvalidParameter, match="'t-end'"):
+    with pytest.raises(InvalidParameter, match="'t_end'"):
         sim.simulate_model(linear.model, t_end=-1.0, prepared=linear)

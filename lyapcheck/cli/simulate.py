@@ -9,7 +9,8 @@ integrator failed, or a simulated tail sup exceeded a certified bound); 2 bad in
 
 from __future__ import annotations
 
-from typing import Any
+from contextlib import contextmanager
+from typing import Any, Iterator
 
 import click
 
@@ -170,15 +171,48 @@ def _print_model_worst_case(doc: dict[str, Any]) -> None:
                    "< 1); please report it", err=True)
 
 
+#: the API's argument names -> this command's flags: the API's errors name its arguments (``t_end``,
+#: ``settings``), the command's name what the user typed (``--t-end``, ``--set``)
+API_FLAGS = {"t_end": "t-end", "scenarios": "scenario", "budget_s": "budget", "worst_case": "worst-case",
+             "settings": "set"}
+#: phrases of the API's messages that name an argument -> the same in flags
+API_PHRASES = {"worst_case=True": "--worst-case", "as x0)": "with --x0)"}
+
+
+@contextmanager
+def _flag_names() -> Iterator[None]:
+    """Re-raise the API's errors in the command's words (:data:`API_FLAGS`, :data:`API_PHRASES`)."""
+    from lyapcheck.errors import InvalidParameter, ModelFileError
+
+    try:
+        yield
+    except InvalidParameter as exc:
+        expected = exc.expected
+        for phrase, flag in API_PHRASES.items():
+            expected = expected.replace(phrase, flag)
+        if exc.field not in API_FLAGS and expected == exc.expected:
+            raise
+        raise InvalidParameter(API_FLAGS.get(exc.field, exc.field), expected, exc.got) from None
+    except ModelFileError as exc:
+        # settings['mu'] -> --set mu
+        if not exc.key.startswith("settings"):
+            raise
+        message = str(exc).removeprefix(f"{exc.source}: {exc.key}: ")
+        name = exc.key[len("settings"):].strip("[]'\"")
+        raise ModelFileError(exc.source, f"--set {name}".strip() if name else "set", message) from None
+
+
 def _run_model(model_file: str, settings: tuple[str, ...], x0: tuple[str, ...], grid: int | None,
                t_end: str | None, scenario_kinds: tuple[str, ...], frequencies: str | None, worst_case: bool,
                budget: float, certificate: str | None, plot: str | None, as_json: bool) -> None:
     """``simulate --model``: call the API, print, exit (0, or 1 on divergence or a violation)."""
     from lyapcheck.api import simulate_model_file
 
-    result = simulate_model_file(model_file, settings=settings, x0=x0, grid=grid, t_end=t_end,
-                                 scenarios=scenario_kinds or None, frequencies=frequencies, worst_case=worst_case,
-                                 budget_s=budget, certificate=certificate, plot=plot)
+    with _flag_names():
+        result = simulate_model_file(model_file, settings=settings, x0=x0, grid=grid, t_end=t_end,
+                                     scenarios=scenario_kinds or None, frequencies=frequencies,
+                                     worst_case=worst_case, budget_s=budget, certificate=certificate, plot=plot,
+                                     series=False)
     doc = result.to_json()
     if as_json:
         emit_json(doc)
@@ -253,7 +287,9 @@ def register(group: click.Group) -> None:
             raise InvalidParameter(used[0].lstrip("-"), "used with a model file (FILE or --model FILE)",
                                    value[0] if isinstance(value, tuple) else value)
 
-        result = run_simulation(scenario, preset=preset, plot=plot, worst_case=worst_case, budget_s=budget)
+        with _flag_names():
+            result = run_simulation(scenario, preset=preset, plot=plot, worst_case=worst_case, budget_s=budget,
+                                    series=False)
         if as_json:
             emit_json(result.to_json())
         elif worst_case:

@@ -454,7 +454,7 @@ def scenario_disturbances(prepared: Prepared, scenarios: Sequence[str], frequenc
             out += [ModelDisturbance("square", tuple(float(v) for v in np.array(s) * b), float(w), float(ph))
                     for s in _sign_patterns(len(b), first_positive=True) for w in frequencies for ph in phases]
         else:
-            raise InvalidParameter("scenario", "one of " + ", ".join(SCENARIOS), name)
+            raise InvalidParameter("scenarios", "one of " + ", ".join(SCENARIOS), name)
     return out
 
 
@@ -664,8 +664,9 @@ class _Batch:
 
 
 def _run(prepared: Prepared, starts: FloatArray, disturbances: Sequence[ModelDisturbance], *, t_end: float,
-         rtol: float, scale: FloatArray, record: Sequence[int] | None = None) -> _Batch:
-    """Integrate every (start, disturbance) pair in one call and measure it."""
+         rtol: float, scale: FloatArray, record: Sequence[int] | None = None, series: Any | None = None) -> _Batch:
+    """Integrate every (start, disturbance) pair in one call and measure it (``series``: a
+    :class:`lyapcheck.models.series.SeriesRecorder` that also watches the steps)."""
     begin = time.perf_counter()
     starts = np.atleast_2d(np.asarray(starts, dtype=np.float64))
     dists = list(disturbances)
@@ -709,8 +710,11 @@ def _run(prepared: Prepared, starts: FloatArray, disturbances: Sequence[ModelDis
     system = _ScenarioSystem(prepared, rows, np.tile(init, S), t_tail, escape, gain_scale)
     y0 = np.repeat(starts, J, axis=0)
     observer = _TailObserver(prepared, R, t_tail, None if record is None else np.asarray(record, dtype=np.intp))
+    if series is not None:
+        from lyapcheck.models.series import Fanout
     result = integrate(system, 0.0, y0, t_end, rtol=rtol, atol=ATOL_PER_RTOL * rtol * scale,
-                       max_step=TAIL_FRACTION * t_end / STEPS_PER_TAIL, observer=observer,
+                       max_step=TAIL_FRACTION * t_end / STEPS_PER_TAIL,
+                       observer=observer if series is None else Fanout(observer, series),
                        max_iterations=SIM_MAX_STEPS)
     final = result.y
     offset = np.abs(final - prepared.equilibrium)
@@ -778,8 +782,8 @@ def parse_start(model: Model, text: str) -> FloatArray:
 def grid_over_domain(model: Model, per_state: int) -> FloatArray:
     """``per_state`` evenly spaced points per state over the model's ``[domain]`` (every combination)."""
     if model.domain is None:
-        raise InvalidParameter("grid", "used with a model that has a [domain] (this one has none: give starts "
-                                       "with --x0)", per_state)
+        raise InvalidParameter("grid", "used with a model that has a [domain] (this one has none: give the starts "
+                                       "as x0)", per_state)
     n = model.n
     if isinstance(per_state, bool) or not isinstance(per_state, int) or not 2 <= per_state <= MAX_GRID_PER_STATE:
         raise InvalidParameter("grid", f"an integer in [2, {MAX_GRID_PER_STATE}] (points per state)", per_state)
@@ -839,11 +843,11 @@ def parse_horizon(text: str) -> float:
     from lyapcheck.units import Kind, parse_quantity
 
     try:
-        value = float(parse_quantity("t-end", text, Kind.TIME, bare_allowed=True))
+        value = float(parse_quantity("t_end", text, Kind.TIME, bare_allowed=True))
     except InvalidParameter:
-        raise InvalidParameter("t-end", "a duration in seconds, e.g. 100 or '2 min'", text) from None
+        raise InvalidParameter("t_end", "a duration in seconds, e.g. 100 or '2 min'", text) from None
     if not (math.isfinite(value) and value > 0):
-        raise InvalidParameter("t-end", "a duration in seconds in (0, inf)", text)
+        raise InvalidParameter("t_end", "a duration in seconds in (0, inf)", text)
     return value
 
 
@@ -854,7 +858,7 @@ def check_horizon(prepared: Prepared, t_end: float | None) -> float:
     slow = prepared.linearization.slowest_time() or default_horizon(prepared) / HORIZON_TIME_CONSTANTS
     top = MAX_HORIZON_TIME_CONSTANTS * slow
     if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (0 < float(t_end) <= top):
-        raise InvalidParameter("t-end", f"a number of seconds in (0, {top:.6g}] ({MAX_HORIZON_TIME_CONSTANTS:g} "
+        raise InvalidParameter("t_end", f"a number of seconds in (0, {top:.6g}] ({MAX_HORIZON_TIME_CONSTANTS:g} "
                                         "slowest time constants)", t_end)
     return float(t_end)
 
@@ -882,9 +886,9 @@ def _check_scenarios(model: Model, scenarios: Sequence[str] | None) -> tuple[str
     chosen = []
     for s in scenarios:
         if s not in SCENARIOS:
-            raise InvalidParameter("scenario", "one of " + ", ".join(SCENARIOS), s)
+            raise InvalidParameter("scenarios", "one of " + ", ".join(SCENARIOS), s)
         if s != "none" and not model.disturbances:
-            raise InvalidParameter("scenario", "'none' for a model without [disturbances] (add one, name = bound)", s)
+            raise InvalidParameter("scenarios", "'none' for a model without [disturbances] (add one, name = bound)", s)
         if s not in chosen:
             chosen.append(s)
     return tuple(c for c in SCENARIOS if c in chosen)
@@ -915,10 +919,28 @@ def _finite_or_none(x: float) -> float | None:
 
 # -- simulate -----------------------------------------------------------------------------------
 
+@dataclass(frozen=True)
+class ModelRun:
+    """A scenarios run: its ``--json`` document and, when asked, its time series (an
+    :class:`xarray.Dataset`, :mod:`lyapcheck.models.series`)."""
+
+    document: dict[str, Any]
+    series: Any | None = None
+
+
 def simulate_model(model: Model, *, starts: Any | None = None, scenarios: Sequence[str] | None = None,
                    t_end: float | None = None, frequencies: tuple[float, float] | None = None,
                    rtol: float = DEFAULT_RTOL, plot: str | Path | None = None,
                    prepared: Prepared | None = None) -> dict[str, Any]:
+    """The ``--json`` document of :func:`run_model` (the same arguments, without the series)."""
+    return run_model(model, starts=starts, scenarios=scenarios, t_end=t_end, frequencies=frequencies, rtol=rtol,
+                     plot=plot, prepared=prepared).document
+
+
+def run_model(model: Model, *, starts: Any | None = None, scenarios: Sequence[str] | None = None,
+              t_end: float | None = None, frequencies: tuple[float, float] | None = None,
+              rtol: float = DEFAULT_RTOL, plot: str | Path | None = None,
+              prepared: Prepared | None = None, series: bool = False) -> ModelRun:
     """Simulate every start under every disturbance of the chosen scenarios, in one batched call.
 
     Parameters
@@ -940,13 +962,16 @@ def simulate_model(model: Model, *, starts: Any | None = None, scenarios: Sequen
         The integrator's relative tolerance (absolute: ``rtol`` times the state scale).
     plot
         Also write the time histories (and for two states the phase plane) to this PNG.
+    series
+        Also sample the trajectories on a common time grid (:mod:`lyapcheck.models.series`).
 
     Returns
     -------
-    dict
-        The ``--json`` document (SI): ``sup_abs_output_tail`` per output overall and per scenario,
-        ``trajectories`` (one entry per start and disturbance: its tail sups, ``final_state``,
-        ``converged``, ``diverged``, ``failure``), ``diverged`` (any row), and the settings.
+    ModelRun
+        ``document``: the ``--json`` document (SI): ``sup_abs_output_tail`` per output overall and
+        per scenario, ``trajectories`` (one entry per start and disturbance: its tail sups,
+        ``final_state``, ``converged``, ``diverged``, ``failure``), ``diverged`` (any row), and the
+        settings; ``series``: the :class:`xarray.Dataset` with ``series``, else None.
     """
     begin = time.perf_counter()
     p = prepared if prepared is not None else prepare(model)
@@ -963,7 +988,12 @@ def simulate_model(model: Model, *, starts: Any | None = None, scenarios: Sequen
     rows_total = start_arr.shape[0] * J
     record = (sorted(set(np.linspace(0, rows_total - 1, min(rows_total, MAX_PLOTTED_ROWS)).round().astype(int).tolist()))
               if plot is not None else None)
-    batch = _run(p, start_arr, dists, t_end=horizon, rtol=rtol, scale=scale, record=record)
+    recorder = None
+    if series:
+        from lyapcheck.models.series import SeriesRecorder, recorded_rows
+
+        recorder = SeriesRecorder(recorded_rows(rows_total), rows_total, model.n, horizon)
+    batch = _run(p, start_arr, dists, t_end=horizon, rtol=rtol, scale=scale, record=record, series=recorder)
     names = p.output_names
     per_scenario: dict[str, Any] = {}
     for sc in chosen:
@@ -1019,7 +1049,18 @@ def simulate_model(model: Model, *, starts: Any | None = None, scenarios: Sequen
                    title=f"lyapcheck simulate --model: {model.name}")
         doc["plot"] = str(plot)
     doc["wall_time_s"] = time.perf_counter() - begin
-    return doc
+    dataset = None
+    if recorder is not None:
+        from lyapcheck.models.series import model_dataset
+
+        dataset = model_dataset(recorder, states=model.states, outputs=names, output_values=p.output_values,
+                                starts_per_row=np.arange(rows_total) // J,
+                                scenarios_per_row=[dists[r % J].kind for r in range(rows_total)],
+                                converged=batch.converged, diverged=batch.diverged,
+                                escape=(p.equilibrium, ESCAPE_FACTOR * scale), attrs={"model": model.name, "file": str(model.source), "t_end_s": horizon,
+                                       "tail_window_start_s": batch.t_tail, "integrator": INTEGRATOR_NAME,
+                                       "rtol": rtol})
+    return ModelRun(document=doc, series=dataset)
 
 
 # -- worst case ---------------------------------------------------------------------------------
@@ -1105,9 +1146,9 @@ def search_worst_case(model: Model, *, starts: Any | None = None, t_end: float |
     """
     begin = time.perf_counter()
     if isinstance(budget_s, bool) or not isinstance(budget_s, (int, float)) or not 0 < budget_s <= MAX_BUDGET_S:
-        raise InvalidParameter("budget", f"a number of seconds in (0, {MAX_BUDGET_S:g}]", budget_s)
+        raise InvalidParameter("budget_s", f"a number of seconds in (0, {MAX_BUDGET_S:g}]", budget_s)
     if not model.disturbances:
-        raise InvalidParameter("worst-case", "used with a model that has [disturbances] (name = bound)",
+        raise InvalidParameter("worst_case", "used with a model that has [disturbances] (name = bound)",
                                model.source)
     p = prepared if prepared is not None else prepare(model)
     start_arr = p.equilibrium[None, :] if starts is None else _check_starts(model, starts)
@@ -1291,10 +1332,10 @@ def certified_bounds_of(model: Model, path: str | Path) -> dict[str, float]:
     try:
         doc = read_json(path)
     except Exception as exc:  # noqa: BLE001 - any unreadable file is the user's input to fix
-        raise InvalidParameter("certificate", "a readable model certificate JSON (certify --model --out)",
+        raise InvalidParameter("certificate", "a readable model certificate JSON (one written by certify)",
                                f"{path} ({exc})") from None
     if not is_model_document(doc):
-        raise InvalidParameter("certificate", "a model certificate (from certify --model FILE --out CERT.json)",
+        raise InvalidParameter("certificate", "a model certificate (one written by certify for a model file)",
                                str(path))
     if doc.get("model", {}).get("sha256") != model.sha256:
         raise InvalidParameter("certificate", f"a certificate of this model file ({model.source}, same text)",
@@ -1303,7 +1344,7 @@ def certified_bounds_of(model: Model, path: str | Path) -> dict[str, float]:
             and doc.get("disturbances") == {k: str(v) for k, v in model.disturbances.items()})
     if not same:
         raise InvalidParameter("certificate", "a certificate for the same parameters and disturbance bounds "
-                                              "(the same --set)", str(path))
+                                              "(the same settings)", str(path))
     bound = doc.get("conditions", {}).get("sos_bound", {})
     if not isinstance(bound, dict) or bound.get("status") != "certified" or not isinstance(bound.get("bounds"), dict):
         raise InvalidParameter("certificate", "a certificate whose class sos_bound is certified", str(path))
@@ -1421,6 +1462,7 @@ def _plot_worst(prepared: Prepared, batches: Sequence[tuple[_Batch, int, int]], 
     plt.close(fig)
 
 
-__all__ = ["SCENARIOS", "ModelDisturbance", "Prepared", "prepare", "simulate_model", "search_worst_case",
+__all__ = ["SCENARIOS", "ModelDisturbance", "Prepared", "prepare", "simulate_model", "run_model", "ModelRun",
+           "search_worst_case",
            "tightness", "certified_bounds_of", "parse_start", "parse_frequencies", "parse_horizon", "grid_over_domain",
            "default_starts", "default_horizon", "default_frequencies", "state_scale", "scenario_disturbances"]
