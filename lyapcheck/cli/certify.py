@@ -19,27 +19,17 @@ FLAG_KEYS = {
 #: claims hold with its disturbances held at 0 only, which the verdict says)
 OK_VERDICTS = ("certified", "certified_nominal")
 
-STATUS_STYLE = {"certified": "bold green", "refuted": "bold red", "not_certified": "yellow",
-                "inconclusive": "magenta", "holds": "green", "fails": "red", "not_applicable": "dim",
-                "counterexample": "bold red"}
-
 
 def _print_table(doc: dict[str, Any]) -> None:
+    """The conditions as a table that fits the terminal (no cell cut inside a word or a number:
+    :mod:`lyapcheck.cli.tables`), then the verdict and what it means."""
     from rich.console import Console
-    from rich.table import Table
+    from rich.text import Text
+
+    from lyapcheck.cli.tables import print_conditions, say
 
     console = Console()
-    title = (f"lyapcheck certify - model: {doc['model']['name']}" if "model" in doc
-             else f"lyapcheck certify - dynamics: {doc['dynamics']}")
-    table = Table(title=title, show_lines=True)
-    table.add_column("condition", style="cyan", no_wrap=True)
-    table.add_column("status", no_wrap=True)
-    table.add_column("property", no_wrap=True)
-    table.add_column("what it means")
-    for name, cond in doc["conditions"].items():
-        style = STATUS_STYLE.get(cond["status"], "white")
-        table.add_row(name, f"[{style}]{cond['status']}[/]", cond.get("property", ""), cond["summary"])
-    console.print(table)
+    print_conditions(console, doc)
     style = "bold green" if doc["verdict"] == "certified" else "bold yellow"
     if doc["verdict"] == "certified_nominal":
         from lyapcheck.models.certify import VERDICT_MEANING
@@ -47,7 +37,7 @@ def _print_table(doc: dict[str, Any]) -> None:
         meaning = VERDICT_MEANING["certified_nominal"]
     else:
         meaning = "certified = an exact check of a stability certificate passed"
-    console.print(f"verdict: [{style}]{doc['verdict']}[/]  ({meaning})")
+    say(console, Text.assemble("verdict: ", (str(doc["verdict"]), style), f"  ({meaning})"))
 
 
 def _finish(result: Any, out: str | None, report: str | None, as_json: bool, write_report: Any) -> None:

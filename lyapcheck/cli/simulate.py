@@ -19,42 +19,10 @@ from lyapcheck.cli.common import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_err
 
 def _print_table(doc: dict[str, Any]) -> None:
     from rich.console import Console
-    from rich.table import Table
 
-    console = Console()
-    paper = doc.get("paper", {})
-    table = Table(title=f"lyapcheck simulate: {doc['scenario']} ({doc['controller']}, ODS {doc['ods_form']})")
-    table.add_column("quantity")
-    table.add_column("value", justify="right")
-    table.add_column("paper (deviation)" if paper else "reference", justify="right")
+    from lyapcheck.cli.tables import print_paper_simulation
 
-    def mm(x: float) -> str:
-        return f"{x * 1e3:.4g} mm"
-
-    def ref(key: str, fmt: Any) -> str:
-        if key not in paper:
-            return ""
-        p = paper[key]
-        return f"{fmt(p['reported'])} ({p['relative_deviation']:+.1%})"
-
-    w0, w1 = doc["tail_window_s"]
-    conv = doc["convergence_time_s"]
-    table.add_row(f"mean |eps| over {w0:g}-{w1:g} s", mm(doc["mean_abs_eps_tail_m"]),
-                  ref("mean_abs_eps_tail_m", mm))
-    table.add_row(f"sup |eps| over {w0:g}-{w1:g} s", mm(doc["sup_abs_eps_tail_m"]), "")
-    table.add_row(f"sup |(eps, s)| over {w0:g}-{w1:g} s", mm(doc["sup_norm_eps_s_tail_m"]), "")
-    table.add_row("final eps", mm(doc["final_eps_m"]), "")
-    table.add_row("steady rotation (mean |u| over the tail)", f"{doc['steady_rotation_hz']:.4g} Hz",
-                  ref("steady_rotation_hz", lambda x: f"{x:.3g} Hz"))
-    table.add_row("max rotation |u| (every controller call)",
-                  f"{doc['max_rotation_hz']:.4g} Hz (limit {doc['omega_so_hz']:.4g} Hz)", "")
-    table.add_row("steady speed along the path", f"{doc['steady_speed_m_s'] * 1e3:.4g} mm/s",
-                  f"e11 alpha_d Delta = {doc['speed_star_m_s'] * 1e3:.4g} mm/s")
-    table.add_row(f"convergence time to |eps| <= {mm(doc['band_m'])}",
-                  "not converged" if conv is None else f"{conv:.4g} s", "")
-    table.add_row("diverged", "yes" if doc["diverged"] else "no", "")
-    console.print(table)
-    console.print(f"disturbance: {_disturbance_text(doc['disturbance'])}")
+    print_paper_simulation(Console(), doc, _disturbance_text(doc["disturbance"]))
 
 
 def _disturbance_text(d: dict[str, Any]) -> str:
@@ -68,50 +36,35 @@ def _disturbance_text(d: dict[str, Any]) -> str:
 
 def _print_worst_case(doc: dict[str, Any]) -> None:
     from rich.console import Console
+    from rich.text import Text
+
+    from lyapcheck.cli.tables import say
 
     console = Console()
-    console.print(f"[bold]worst disturbance found[/] ({doc['scenario']}, |d| <= {doc['d_max_m_s'] * 1e3:.4g} mm/s): "
-                  f"tail sup |eps| = {doc['sup_abs_eps_tail_m'] * 1e3:.4g} mm "
-                  f"(constant d*: {doc['constant_sup_abs_eps_tail_m'] * 1e3:.4g} mm)")
-    console.print(f"disturbance: {_disturbance_text(doc['disturbance'])}")
-    console.print(f"{doc['candidates_tried']} candidates; a search, not a proof: the certified bound is the proof")
-
-
-def _figure(x: Any) -> str:
-    return "-" if x is None else f"{x:.6g}"
+    say(console, Text.assemble(("worst disturbance found", "bold"),
+                               f" ({doc['scenario']}, |d| <= {doc['d_max_m_s'] * 1e3:.4g} mm/s): tail sup |eps| = "
+                               f"{doc['sup_abs_eps_tail_m'] * 1e3:.4g} mm (constant d*: "
+                               f"{doc['constant_sup_abs_eps_tail_m'] * 1e3:.4g} mm)"))
+    say(console, f"disturbance: {_disturbance_text(doc['disturbance'])}")
+    say(console, f"{doc['candidates_tried']} candidates; a search, not a proof: the certified bound is the proof")
 
 
 def _print_model_table(doc: dict[str, Any]) -> None:
     from rich.console import Console
-    from rich.markup import escape
-    from rich.table import Table
+    from rich.text import Text
+
+    from lyapcheck.cli.tables import figure, print_model_simulation, say
 
     console = Console()
-    outputs = list(doc["outputs"])
-    w0, w1 = doc["tail_window_s"]
-    table = Table(title=escape(f"lyapcheck simulate --model: {doc['model']['name']} (tail window {w0:.4g}-{w1:.4g} s)"))
-    table.add_column("scenario")
-    table.add_column("trajectories", justify="right")
-    table.add_column("converged", justify="right")
-    table.add_column("diverged", justify="right")
-    for y in outputs:
-        table.add_column(f"tail sup |{y}|", justify="right")
-    for name, sc in doc["scenarios"].items():
-        style = "bold red" if sc["diverged"] else ""
-        table.add_row(name, str(sc["trajectories"]), str(sc["converged"]),
-                      f"[{style}]{sc['diverged']}[/]" if style else "0",
-                      *(_figure(sc["sup_abs_output_tail"][y]) for y in outputs))
-    table.add_row("[bold]all[/]", str(doc["n_trajectories"]), str(doc["n_converged"]), str(doc["n_diverged"]),
-                  *(_figure(doc["sup_abs_output_tail"][y]) for y in outputs))
-    console.print(table)
-    console.print(escape(f"starts: {len(doc['starts'])} ({doc['starts_from']}); converged = final state within "
-                         "1e-3 state scales of the equilibrium"))
+    print_model_simulation(console, doc)
+    say(console, f"starts: {len(doc['starts'])} ({doc['starts_from']}); converged = final state within "
+                 "1e-3 state scales of the equilibrium")
     failed = [t for t in doc["trajectories"] if t["diverged"]]
     if failed:
         first = failed[0]
-        start = ", ".join(f"{k}={v:.6g}" for k, v in doc["starts"][first["start"]].items())
-        console.print(f"[bold red]{len(failed)} trajectories diverged[/], e.g. from ({escape(start)}) under "
-                      f"{first['scenario']}: {escape(first['failure'] or '')}")
+        start = ", ".join(f"{k}={figure(v)}" for k, v in doc["starts"][first["start"]].items())
+        say(console, Text.assemble((f"{len(failed)} trajectories diverged", "bold red"),
+                                   f", e.g. from ({start}) under {first['scenario']}: {first['failure'] or ''}"))
 
 
 def _model_disturbance_text(d: dict[str, Any]) -> str:
@@ -131,41 +84,25 @@ def _model_disturbance_text(d: dict[str, Any]) -> str:
 
 def _print_model_worst_case(doc: dict[str, Any]) -> None:
     from rich.console import Console
-    from rich.markup import escape
-    from rich.table import Table
+    from rich.text import Text
+
+    from lyapcheck.cli.tables import figure, print_model_worst_case, say
 
     console = Console()
-    table = Table(title=escape(f"lyapcheck simulate --model --worst-case: {doc['model']['name']}"))
-    table.add_column("output")
-    table.add_column("worst tail sup", justify="right")
-    table.add_column("disturbance")
     tight = doc.get("tightness")
-    if tight is not None:
-        table.add_column("certified bound", justify="right")
-        table.add_column("tightness_ratio", justify="right")
-    for y, found in doc["worst"].items():
-        what = _model_disturbance_text(found["disturbance"])
-        row = [escape(y), _figure(found["sup_abs_output_tail"]), escape(what)]
-        if tight is not None:
-            t = tight.get(y)
-            if t is None:
-                row += ["-", "-"]
-            else:
-                ratio = _figure(t["tightness_ratio"])
-                row += [_figure(t["certified_bound"]),
-                        f"[bold red]{ratio} SOUNDNESS VIOLATION[/]" if t["soundness_violation"] else ratio]
-        table.add_row(*row)
-    console.print(table)
-    console.print(escape(f"{doc['candidates_tried']} candidates in {doc['wall_time_s']:.1f} s; {doc['note']}"))
+    print_model_worst_case(console, doc, _model_disturbance_text)
+    say(console, f"{doc['candidates_tried']} candidates in {doc['wall_time_s']:.1f} s; {doc['note']}")
     if doc["diverged"]:
-        console.print(f"[bold red]{doc['n_diverged']} candidate trajectories diverged under bounded disturbances[/]")
+        say(console, Text(f"{doc['n_diverged']} candidate trajectories diverged under bounded disturbances",
+                          style="bold red"))
         for ex in doc["divergence_examples"][:1]:
-            console.print(escape(f"e.g. {_model_disturbance_text(ex['disturbance'])}: {ex['failure']}"))
+            say(console, f"e.g. {_model_disturbance_text(ex['disturbance'])}: {ex['failure']}")
     for y, t in (tight or {}).items():
         if t["soundness_violation"]:
-            console.print(f"[bold red]SOUNDNESS VIOLATION[/]: output {escape(y)}: the simulated tail sup "
-                          f"{t['worst_simulated']:.6g} exceeds the certified bound {t['certified_bound']:.6g} "
-                          f"(tightness_ratio {_figure(t['tightness_ratio'])} < 1)")
+            say(console, Text.assemble(("SOUNDNESS VIOLATION", "bold red"),
+                                       f": output {y}: the simulated tail sup {figure(t['worst_simulated'])} exceeds "
+                                       f"the certified bound {figure(t['certified_bound'])} (tightness_ratio "
+                                       f"{figure(t['tightness_ratio'])} < 1)"))
     if doc.get("soundness_violation"):
         click.echo("lyapcheck: SOUNDNESS VIOLATION: a simulated tail sup exceeds a certified bound (tightness_ratio "
                    "< 1); please report it", err=True)
