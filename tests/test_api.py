@@ -35,6 +35,11 @@ def test_docs_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caps
     assert "limsup |eps| <=" in out and "The 'sigma0' parameter must be" in out
     assert (tmp_path / "paper-cert.json").exists()
     assert "lies in the region of attraction" in out and (tmp_path / "cubic.toml").exists()
+    # the notebook, box, series and errors sections (docs/api.md runs them all, in order)
+    assert "over the box a in [1, 2]" in out and "  candidate      certified       ROA" in out
+    assert "series: xarray.Dataset of x, y over 2 trajectories x 501 times" in out
+    assert "The 'x0' parameter must be" in out and "cubic.toml: settings['b']: no parameter" in out
+    assert "broken.toml: [dynamics] x: unknown name 'z'" in out
 
 
 def test_every_parameter_form_gives_the_same_problem() -> None:
