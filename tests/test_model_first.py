@@ -84,13 +84,13 @@ def test_a_sweep_of_a_model_file_says_what_a_spec_is(tmp_path: Path) -> None:
     (("certify", "--model", "MODEL", "--set", "mu", "1"), "use --set mu=1"),
     (("simulate", "MODEL", "--set", "mu", "2"), "use --set mu=2"),
     (("simulate", "MODEL", "--x0", "x=1", "y=0"), 'use --x0 "x=1 y=0"'),
-    (("certify", "MODEL", "--worst-case"), "--worst-case is a flag of the paper's loop"),
+    (("certify", "MODEL", "--worst-case"), "--worst-case: is a flag of the paper's loop"),
     (("certify", "MODEL", "--alpha-d", "3"), "use --set NAME=VALUE"),
-    (("certify", "MODEL", "--dynamics", "printed"), "--dynamics is a flag of the paper's loop"),
+    (("certify", "MODEL", "--dynamics", "printed"), "--dynamics: is a flag of the paper's loop"),
     (("certify", "MODEL", "--classes", "quick"), "'quick' is the paper's selection"),
-    (("simulate", "MODEL", "--preset", "paper-ilos"), "--preset is a flag of the paper's loop"),
+    (("simulate", "MODEL", "--preset", "paper-ilos"), "--preset: is a flag of the paper's loop"),
     (("certify", "MODEL", "--model", "MODEL"), "FILE or --model FILE, not both"),
-    (("certify", "MODEL", "PAPER"), "the only input file"),
+    (("certify", "MODEL", "PAPER"), "is the only input file"),
 ])
 def test_messages_on_a_models_path_speak_of_the_model(args: tuple[str, ...], says: str) -> None:
     words = [str(MODEL) if a == "MODEL" else str(PAPER_TOML) if a == "PAPER" else a for a in args]

@@ -254,7 +254,7 @@ BAD_INPUTS: list[tuple[list[str], str]] = [
     (["--model", str(LINEAR), "--worst-case", "--budget", "0"], "'budget'"),
     (["--model", str(LINEAR), "--certificate", "cert.json"], "--worst-case"),
     (["--model", str(LINEAR), "--plot", "out.pdf"], ".png"),
-    (["--model", str(LINEAR), "--preset", "paper-ilos"], "'model'"),
+    (["--model", str(LINEAR), "--preset", "paper-ilos"], "--preset: is a flag of the paper's loop"),
     (["--model", str(LINEAR), "--set", "q=1"], "--set q"),
     (["--model", "missing.toml"], "not found"),
     (["--preset", "paper-ilos", "--x0", "x1=1"], "--model"),

@@ -123,9 +123,9 @@ def register(group: click.Group) -> None:
         # a word beside the model file, or after the first file: a value that lost its --set, or a second file
         stray = gains if model_file is not None and gains is not None else files[1] if len(files) > 1 else None
         if model_file is not None:
-            check_model_flags(stray, settings, {"--linear-views": linear_views, "--worst-case": worst_case,
-                                                "--dynamics": dynamics != "derived",
-                                                **{f"--{k.replace('_', '-')}": v is not None for k, v in flags.items()}})
+            paper_flags = {"--linear-views": linear_views, "--worst-case": worst_case, "--dynamics": dynamics != "derived",
+                           **{f"--{k.replace('_', '-')}": v is not None for k, v in flags.items()}}
+            check_model_flags(model_file, stray, settings, paper_flags)
             result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes,
                                    box=list(boxes) or None)
             _finish(result, out, report, as_json, write_report)

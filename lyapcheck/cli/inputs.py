@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Mapping, Sequence
 
-from lyapcheck.errors import InvalidParameter
+from lyapcheck.errors import InvalidParameter, ModelFileError
 
 #: what to do instead of a paper flag, on a model's path (the gain flags share the default)
 PAPER_FLAG_HINTS: Mapping[str, str] = {
@@ -35,23 +35,24 @@ def split_model_argument(positional: str | None, model_file: str | None) -> tupl
     return model_file, positional
 
 
-def check_model_flags(positional: str | None, settings: Sequence[str], paper_flags: Mapping[str, bool]) -> None:
-    """Refuse, in the model's words, what does not belong with a model file: a ``--set`` whose value
-    was given as a separate word (it then stands as the positional argument), a second input file,
-    and the paper's flags (``paper_flags``: flag -> given)."""
+def check_model_flags(source: str, positional: str | None, settings: Sequence[str],
+                      paper_flags: Mapping[str, bool]) -> None:
+    """Refuse, in the model's words and naming the model file ``source``, what does not belong with
+    it: a ``--set`` whose value was given as a separate word (it then stands as the positional
+    argument), a second input file, and the paper's flags (``paper_flags``: flag -> given)."""
     bare = [s for s in settings if "=" not in s]
     if bare:
         value = positional if positional is not None else "VALUE"
         words = f"--set {bare[0]}" + (f" {positional}" if positional is not None else "")
-        raise InvalidParameter("set", f"NAME=VALUE in one word: use --set {bare[0]}={value}", words)
+        raise ModelFileError(source, "set", f"must be NAME=VALUE in one word: use --set {bare[0]}={value} "
+                                            f"(got '{words}')")
     if positional is not None:
-        raise InvalidParameter("model", "the only input file (a model file is given; this second argument has no "
-                               "use with it)", positional)
+        raise ModelFileError(source, "FILE", f"the model file is the only input file; '{positional}' has no use "
+                                             "with it")
     for flag, given in paper_flags.items():
         if given:
             hint = PAPER_FLAG_HINTS.get(flag, GAIN_FLAG_HINT)
-            raise InvalidParameter(flag.lstrip("-"), f"left out with a model file: {flag} is a flag of the paper's "
-                                   f"loop ({hint})", flag)
+            raise ModelFileError(source, flag, f"is a flag of the paper's loop, left out with a model file ({hint})")
 
 
 __all__ = ["split_model_argument", "check_model_flags", "PAPER_FLAG_HINTS"]

@@ -213,7 +213,7 @@ def register(group: click.Group) -> None:
                 # --x0 x1=1 x2=0: the shell split one start in two words
                 raise InvalidParameter("x0", f'one start in one word: use --x0 "{x0[-1]} {stray}"',
                                        f"--x0 {x0[-1]} {stray}")
-            check_model_flags(stray, settings, {"--preset": preset is not None})
+            check_model_flags(model_file, stray, settings, {"--preset": preset is not None})
             _run_model(model_file, settings, x0, grid, t_end, scenario_kinds, frequencies, worst_case, budget,
                        certificate, plot, as_json)
         if stray is not None:

@@ -762,7 +762,7 @@ def parse_start(model: Model, text: str) -> FloatArray:
         raise InvalidParameter("x0", expected, text)
     values = dict(zip(model.states, model.equilibrium))
     seen: set[str] = set()
-    for item in re.split(r",|\s+(?=[A-Za-z_]\w*\s*=)", text.strip()):
+    for item in re.split(r"\s*,\s*|\s+(?=[A-Za-z_]\w*\s*=)", text.strip()):
         name, sep, value = item.partition("=")
         name = name.strip()
         if not sep or not name or not value.strip():
