@@ -23,8 +23,9 @@ every heavy library) inside the functions, so ``import lyapcheck`` stays instant
 
 from __future__ import annotations
 
+import contextlib
 import json
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -297,9 +298,10 @@ def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, ob
     from lyapcheck.models.certificate import build_document
     from lyapcheck.models.certify import certify_model
 
-    loaded = load_model_file(model, settings)
-    parsed = parse_model_box(loaded, box) if box else None
-    found = certify_model(loaded, classes=classes, candidate=candidate, time_limit_s=time_limit_s, box=parsed)
+    loaded = _load_with_settings(model, settings)
+    with _argument_names():
+        parsed = parse_model_box(loaded, box) if box else None
+        found = certify_model(loaded, classes=classes, candidate=candidate, time_limit_s=time_limit_s, box=parsed)
     return CertifyResult(verdict=found.verdict, dynamics="model", conditions=found.results,
                          document=build_document(found))
 
@@ -660,6 +662,22 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
                             series=dataset)
 
 
+@contextlib.contextmanager
+def _argument_names() -> Iterator[None]:
+    """A model's errors about ``--candidate`` and ``--box NAME`` (the model code speaks the command
+    line's words) re-raised naming this API's arguments, ``candidate`` and ``box['NAME']``."""
+    try:
+        yield
+    except ModelFileError as exc:
+        message = str(exc).removeprefix(f"{exc.source}: {exc.key}: ")
+        if exc.key == "--candidate":
+            raise ModelFileError(exc.source, "candidate", message) from None
+        if exc.key.startswith("--box"):
+            name = exc.key[len("--box"):].strip()
+            raise ModelFileError(exc.source, f"box['{name}']" if name else "box", message) from None
+        raise
+
+
 def _load_with_settings(model: "str | Path | Model", settings: Mapping[str, object] | Sequence[str] | None
                         ) -> "Model":
     """:func:`load_model_file`, its errors about a setting naming the argument ``settings`` (the
@@ -672,7 +690,8 @@ def _load_with_settings(model: "str | Path | Model", settings: Mapping[str, obje
         if exc.key == "set":
             raise ModelFileError(exc.source, "settings", message) from None
         if exc.key.startswith("--set "):
-            raise ModelFileError(exc.source, f"settings[{exc.key[len('--set '):]!r}]", message) from None
+            # the reader's key already shows the name escaped (a line break as \\n): quoted, not repr'd again
+            raise ModelFileError(exc.source, f"settings['{exc.key[len('--set '):]}']", message) from None
         raise
 
 

@@ -117,7 +117,7 @@ def register(group: click.Group) -> None:
         if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
             raise InvalidParameter("report", "a file name ending in .html or .pdf", report)
         overrides = {FLAG_KEYS[k]: v for k, v in flags.items() if v is not None}
-        from lyapcheck.cli.inputs import check_model_flags, split_model_argument
+        from lyapcheck.cli.inputs import check_model_flags, flag_names, split_model_argument
 
         model_file, gains = split_model_argument(files[0] if files else None, model_file)
         # a word beside the model file, or after the first file: a value that lost its --set, or a second file
@@ -126,8 +126,9 @@ def register(group: click.Group) -> None:
             paper_flags = {"--linear-views": linear_views, "--worst-case": worst_case, "--dynamics": dynamics != "derived",
                            **{f"--{k.replace('_', '-')}": v is not None for k, v in flags.items()}}
             check_model_flags(model_file, stray, settings, paper_flags)
-            result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes,
-                                   box=list(boxes) or None)
+            with flag_names():
+                result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes,
+                                       box=list(boxes) or None)
             _finish(result, out, report, as_json, write_report)
         if stray is not None:
             raise InvalidParameter("FILE", "one gain file or model file", " ".join(files))

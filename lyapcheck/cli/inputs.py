@@ -9,7 +9,8 @@ as the paper's and says what to use instead.
 
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+import contextlib
+from typing import Iterator, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 
@@ -55,4 +56,21 @@ def check_model_flags(source: str, positional: str | None, settings: Sequence[st
             raise ModelFileError(source, flag, f"is a flag of the paper's loop, left out with a model file ({hint})")
 
 
-__all__ = ["split_model_argument", "check_model_flags", "PAPER_FLAG_HINTS"]
+@contextlib.contextmanager
+def flag_names() -> Iterator[None]:
+    """The API's errors about a model's arguments re-raised in the command line's words:
+    ``settings['mu']`` as ``--set mu``, ``candidate`` as ``--candidate``, ``box['mu']`` as ``--box mu``."""
+    try:
+        yield
+    except ModelFileError as exc:
+        message = str(exc).removeprefix(f"{exc.source}: {exc.key}: ")
+        key = exc.key
+        for argument, flag in (("settings", "--set"), ("candidate", "--candidate"), ("box", "--box")):
+            if key == argument or key.startswith(argument + "['") and key.endswith("']"):
+                name = key[len(argument) + 2:-2] if key != argument else ""
+                raise ModelFileError(exc.source, f"{flag} {name}".strip() if name or flag != "--set" else "set",
+                                     message) from None
+        raise
+
+
+__all__ = ["split_model_argument", "check_model_flags", "flag_names", "PAPER_FLAG_HINTS"]

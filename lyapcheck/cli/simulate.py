@@ -119,10 +119,12 @@ API_PHRASES = {"worst_case=True": "--worst-case", "as x0)": "with --x0)"}
 @contextmanager
 def _flag_names() -> Iterator[None]:
     """Re-raise the API's errors in the command's words (:data:`API_FLAGS`, :data:`API_PHRASES`)."""
-    from lyapcheck.errors import InvalidParameter, ModelFileError
+    from lyapcheck.cli.inputs import flag_names
+    from lyapcheck.errors import InvalidParameter
 
     try:
-        yield
+        with flag_names():  # settings['mu'] -> --set mu, as certify says it
+            yield
     except InvalidParameter as exc:
         expected = exc.expected
         for phrase, flag in API_PHRASES.items():
@@ -130,13 +132,6 @@ def _flag_names() -> Iterator[None]:
         if exc.field not in API_FLAGS and expected == exc.expected:
             raise
         raise InvalidParameter(API_FLAGS.get(exc.field, exc.field), expected, exc.got) from None
-    except ModelFileError as exc:
-        # settings['mu'] -> --set mu
-        if not exc.key.startswith("settings"):
-            raise
-        message = str(exc).removeprefix(f"{exc.source}: {exc.key}: ")
-        name = exc.key[len("settings"):].strip("[]'\"")
-        raise ModelFileError(exc.source, f"--set {name}".strip() if name else "set", message) from None
 
 
 def _run_model(model_file: str, settings: tuple[str, ...], x0: tuple[str, ...], grid: int | None,
