@@ -92,3 +92,17 @@ def test_a_not_certified_reason_says_what_stopped_the_search() -> None:
     # -V' of a quadratic V has x1**4 but no x1**2 term: no strict quadratic certificate can exist
     assert found.status == "not_certified"
     assert "degree 2: no strict certificate of this form exists (the Newton polytope" in found.summary
+
+
+def test_the_table_shows_each_certified_v_and_the_box(tmp_path: Any) -> None:
+    from click.testing import CliRunner
+
+    from lyapcheck.cli import app
+
+    app._register_commands()
+    done = CliRunner().invoke(app.cli, ["certify", str(OSCILLATOR), "--box", "k=0.5..2", "--classes", "quadratic"],
+                              env={"COLUMNS": "120"})
+    assert done.exit_code == 0, done.output
+    assert "for every k in [0.5, 2]" in done.output.splitlines()[0]
+    flat = " ".join(line.strip("│ ") for line in done.output.splitlines())
+    assert "V = " in flat and "x**2" in flat

@@ -208,6 +208,29 @@ def figure(x: Any) -> str:
 
 # -- certify ---------------------------------------------------------------------------------------
 
+def what_it_means(doc: Mapping[str, Any], cond: Mapping[str, Any]) -> str:
+    """A condition's summary and, for a certified V, its short form (the first terms to six
+    significant digits; the exact V is in the JSON): ``V = ...``, one line per output for
+    ``sos_bound``."""
+    from lyapcheck.models.claims import V_SHORT_TERMS, v_text
+
+    text = str(cond["summary"])
+    cert = cond.get("certificate")
+    if cond.get("status") != "certified" or not isinstance(cert, Mapping):
+        return text
+    shifts = doc.get("equilibrium") if isinstance(doc.get("equilibrium"), Mapping) else {}
+    parts = [("V", cert)] if "V_text" in cert else []
+    outputs = cert.get("outputs")
+    if isinstance(outputs, Mapping):
+        parts += [(f"V_{name}", data) for name, data in outputs.items() if isinstance(data, Mapping) and "V_text" in data]
+    for label, data in parts:
+        try:
+            text += f"\n{label} = {v_text(data['V'], data['variables'], shifts, limit=V_SHORT_TERMS)}"
+        except (KeyError, TypeError, ValueError, ArithmeticError):
+            continue  # a malformed V is verify's to report; the table shows the summary alone
+    return text
+
+
 def print_conditions(console: "Console", doc: Mapping[str, Any]) -> None:
     """The conditions of a certificate document (``certify --json``): one row per class with its
     status, property and summary; at narrow widths the status and property go under the name."""
@@ -215,7 +238,11 @@ def print_conditions(console: "Console", doc: Mapping[str, Any]) -> None:
 
     title = (f"lyapcheck certify - model: {doc['model']['name']}" if "model" in doc
              else f"lyapcheck certify - dynamics: {doc['dynamics']}")
-    conditions = doc["conditions"]
+    if "model" in doc and isinstance(doc.get("box"), dict) and doc["box"]:
+        from lyapcheck.models.claims import box_words
+
+        title += f", for every {box_words(doc['box'])}"
+    conditions = {name: {**c, "summary": what_it_means(doc, c)} for name, c in doc["conditions"].items()}
 
     def status(cond: Mapping[str, Any]) -> Text:
         return Text(str(cond["status"]), style=STATUS_STYLE.get(str(cond["status"]), ""))

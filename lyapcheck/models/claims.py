@@ -152,7 +152,7 @@ def v_text(terms: Mapping[str, Any], variables: Sequence[str], shifts: Mapping[s
         rows.append((Fraction(coefficient), exponents))
     parts = []
     for k, (c, exponents) in enumerate(rows):
-        if limit is not None and k == limit:
+        if limit is not None and k == limit and len(rows) > limit + 1:  # one term more is shown, not counted
             parts.append(f"+ ... ({len(rows) - limit} more terms)")
             break
         factors = []
