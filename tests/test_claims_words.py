@@ -105,4 +105,4 @@ def test_the_table_shows_each_certified_v_and_the_box(tmp_path: Any) -> None:
     assert done.exit_code == 0, done.output
     assert "for every k in [0.5, 2]" in done.output.splitlines()[0]
     flat = " ".join(line.strip("│ ") for line in done.output.splitlines())
-    assert "V = " in flat and "x**2" in flat
+    assert "V = " in flat and "x1**2" in flat

@@ -11,7 +11,7 @@ Four families:
   :class:`~lyapcheck.errors.ModelFileError`), exactly one line on stderr naming the file and the
   key, what is wrong, and no traceback.
 - **Exactness.** Decimals are read from their text (``0.1`` is ``1/10``), units become SI
-  exactly, ``Hz`` stays cycles per second, the equilibrium is checked exactly.
+  exactly, ``Hz`` is refused as ambiguous (tests/test_model_units.py), the equilibrium is checked exactly.
 - **Security.** Property-based (hypothesis, derandomized): random strings and random trees
   written as text (``__import__('os')``, attributes, lambdas, comprehensions, f-strings, walrus,
   starred, subscripts, very long and deeply nested inputs) either parse or raise
@@ -349,7 +349,7 @@ def test_a_field_of_decimals_that_cancel_is_exactly_zero() -> None:
 
 
 def test_parameters_with_units_are_si_exactly(tmp_path: Path) -> None:
-    text = edit("mu = 1", 'mu = "0.75 mm"\nv = "0.088 mm/s"\nf = "2.8 Hz"\nc = 0.1')
+    text = edit("mu = 1", 'mu = "0.75 mm"\nv = "0.088 mm/s"\nf = "2.8 1/s"\nc = 0.1')
     model = parse_model(text)
     assert model.parameters == {"mu": Fraction(3, 4000), "v": Fraction(11, 125000), "f": Fraction(14, 5),
                                 "c": Fraction(1, 10)}
@@ -366,13 +366,13 @@ def test_parameters_with_units_are_si_exactly(tmp_path: Path) -> None:
     assert doc["parameters"]["mu"] == "1/400000" and doc["parameters"]["f"] == "14/5"
 
 
-def test_hz_stays_cycles_per_second_in_a_model_file() -> None:
-    """A model file does not say which parameter is a rotation: "2.8 Hz" is 2.8 1/s, not 2 pi 2.8
-    rad/s (the behaviour parse_si_quantity documents)."""
-    assert parse_si_quantity("f", "2.8 Hz") == Fraction(14, 5)
-    assert parse_si_quantity("f", "1 kHz") == 1000
+def test_hz_is_refused_in_a_model_file() -> None:
+    """A model file does not say which parameter is a rotation: "2.8 Hz" is refused, the message
+    giving both readings (2.8 1/s, or 2 pi 2.8 rad/s); tests/test_model_units.py has the rest."""
+    with pytest.raises(InvalidParameter, match=r"'2\.8 1/s'.*'17\.5929188601028 rad/s'"):
+        parse_si_quantity("f", "2.8 Hz")
     doc = " ".join((parse_si_quantity.__doc__ or "").split())
-    assert "``Hz`` stays cycles per second" in doc
+    assert "``Hz``" in doc and "refused" in doc
 
 
 def test_the_equilibrium_is_checked_exactly() -> None:
