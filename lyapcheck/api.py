@@ -146,6 +146,27 @@ class CertifyResult:
                    for name, cond in self.conditions.items()}
         object.__setattr__(self, "conditions", aligned)
 
+    def V(self, condition: str, output: str | None = None) -> Any:
+        """The certified ``V`` of a model's ``condition`` exactly, as a sympy expression in the
+        declared states (``x - x_eq`` where the equilibrium is not 0; a box's parameters by name);
+        ``sos_bound`` has one per ``output``. A one-line :class:`InvalidParameter` where there is
+        none (the condition is not certified, or states no V)."""
+        from lyapcheck.models.claims import v_expression
+
+        cond = self.document.get("conditions", {}).get(condition)
+        if not isinstance(cond, dict) or cond.get("status") != "certified":
+            raise InvalidParameter("condition", "a certified condition of this result",
+                                   condition if cond is None else f"{condition} ({cond.get('status')})")
+        cert = cond.get("certificate") or {}
+        if output is not None or "outputs" in cert:
+            outputs = cert.get("outputs") or {}
+            if output not in outputs:
+                raise InvalidParameter("output", f"one of {', '.join(outputs) or 'no outputs'}", output)
+            cert = outputs[output]
+        if "V" not in cert or "variables" not in cert:
+            raise InvalidParameter("condition", "a condition whose certificate states a V", condition)
+        return v_expression(cert["V"], cert["variables"], self.document.get("equilibrium") or {})
+
     def __repr__(self) -> str:
         from lyapcheck.notebook import certify_repr
 
