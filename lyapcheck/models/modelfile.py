@@ -9,6 +9,8 @@ The format (docs/model-files.md, the reference; DESIGN.md's "Model files (contra
     [equilibrium]    optional; default every state 0; checked exactly
     [outputs]        optional; default each state
     [domain]         optional: a box of initial states, name = [lo, hi]
+    [units]          optional: a unit per state and time = "s"; every right-hand side is then
+                     dimension-checked term by term (lyapcheck.models.dimensions)
 
 Every error is one line naming the file, the key and what is wrong (:class:`ModelFileError`,
 exit code 2 on the command line). The file's text is kept as it was read, with its SHA-256:
@@ -24,11 +26,15 @@ import tomllib
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_with_divisors
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.dimensions import UnitTable
+    from lyapcheck.units import SIQuantity
 
 #: the most states a model may have
 MAX_STATES: Final = 12
@@ -38,7 +44,7 @@ MAX_DISTURBANCES: Final = 6
 #: the largest model file, in bytes
 MAX_FILE_BYTES: Final = 256 * 1024
 
-SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibrium", "outputs", "domain")
+SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibrium", "outputs", "domain", "units")
 MODEL_KEYS: Final = ("name", "states", "source")
 
 
@@ -69,6 +75,8 @@ class Model:
     #: per state, each non-constant divisor of its right-hand side as written (before cancelling):
     #: none may vanish at the equilibrium (:func:`check_equilibrium`)
     divisors: tuple[tuple[Poly, ...], ...] = ()
+    #: the ``[units]`` table as written (empty when the model declares none: nothing was dimension-checked)
+    units: dict[str, str] = field(default_factory=dict)
 
     @property
     def sha256(self) -> str:
@@ -134,6 +142,8 @@ class _Reader:
     def __init__(self, source: str, text: str, data: dict[str, Any], overrides: dict[str, object]) -> None:
         self.source, self.text, self.data, self.overrides = source, text, data, overrides
         self.divisors: list[tuple[Poly, ...]] = []
+        #: each parameter's and disturbance's quantity as the file gives it (its dimension, for [units])
+        self.read: dict[str, dict[str, SIQuantity]] = {"parameters": {}, "disturbances": {}}
 
     def fail(self, key: str, message: str) -> ModelFileError:
         return _error(self.source, key, message)
@@ -172,11 +182,12 @@ class _Reader:
         equilibrium = self.equilibrium(states, ring)
         outputs, output_text = self.outputs(states, ring, dists, params)
         domain = self.domain(states)
+        units = self.units(states)
         model = Model(source=self.source, text=self.text, name=name, origin=origin, states=states,
                       parameters=params, parameters_given=params_given, disturbances=dists, ring=ring,
                       dynamics=dynamics, equilibrium=equilibrium, outputs=outputs, output_text=output_text,
                       domain=domain, overrides={k: str(v) for k, v in self.overrides.items()},
-                      divisors=tuple(self.divisors))
+                      divisors=tuple(self.divisors), units=units)
         check_equilibrium(model)
         return model
 
@@ -201,7 +212,7 @@ class _Reader:
                                  "not a Python keyword)")
 
     def quantities(self, section: str, limit: int) -> tuple[dict[str, Fraction], dict[str, str]]:
-        from lyapcheck.units import parse_si_quantity
+        from lyapcheck.units import parse_si_with_dimension
 
         table = self.table(section)
         if len(table) > limit:
@@ -212,10 +223,11 @@ class _Reader:
             if isinstance(value, dict):
                 raise self.fail(f"[{section}] {key}", "must be a number or a string with a unit, not a table")
             try:
-                values[key] = parse_si_quantity(key, value)
+                quantity = parse_si_with_dimension(key, value)
             except InvalidParameter as exc:
                 raise self.fail(f"[{section}] {key}", _unprefixed(exc)) from None
-            given[key] = str(value)
+            values[key], given[key] = quantity.value, str(value)
+            self.read[section][key] = quantity
         return values, given
 
     def check_unique(self, states: Sequence[str], params: Mapping[str, Fraction], dists: Mapping[str, Fraction]) -> None:
@@ -339,6 +351,50 @@ class _Reader:
             raise self.fail("[domain]", f"the state '{missing[0]}' has no interval (the domain is a box over every "
                                         "state)")
         return box
+
+    def units(self, states: tuple[str, ...]) -> dict[str, str]:
+        """``[units]``, when the file declares it: the table read (SI units only), then every
+        right-hand side checked term by term against its state per time, every output's sums for
+        consistency, and every quantity given with a unit where a dimension is known (a state's
+        ``[equilibrium]`` and ``[domain]`` values, a ``--set``) against it. Runs after the language
+        checks, so a text is dimension-checked only once it parses. Returns the table as written."""
+        from lyapcheck.models import dimensions as dims
+
+        if "units" not in self.data:
+            return {}
+        table = self.table("units")
+        file_given = {key: str(value) for section in ("parameters", "disturbances")
+                      for key, value in self.table(section).items()}
+        try:
+            units = dims.read_units(table, states, list(self.read["parameters"]) + list(self.read["disturbances"]))
+            names: dict[str, dims.Named] = {}
+            for s in states:
+                unit, dimension = units.states[s]
+                names[s] = dims.Named("state", dimension, unit, bool(unit))
+            for key, quantity in self.read["parameters"].items():
+                names[key] = dims.Named("parameter", quantity.dimension, file_given[key], bool(quantity.unit))
+            for key, quantity in self.read["disturbances"].items():
+                names[key] = dims.Named("disturbance", quantity.dimension, file_given[key], bool(quantity.unit))
+            for key, value in self.overrides.items():
+                dims.check_value(f"--set {key}", value, names[key].dimension,
+                                 f"{key} (given as '{file_given[key]}' in the file)")
+            for s in states:
+                dims.check_dynamics(s, str(self.table("dynamics")[s]), units, names)
+            for key, text in self.table("outputs").items():
+                dims.check_output(key, str(text), names)
+            for key, value in self.table("equilibrium").items():
+                dims.check_value(f"[equilibrium] {key}", value, units.dimension(key), _state_unit(key, units))
+            for key, pair in self.table("domain").items():
+                for value in pair:
+                    dims.check_value(f"[domain] {key}", value, units.dimension(key), _state_unit(key, units))
+        except dims.DimensionError as exc:
+            raise self.fail(exc.key, exc.message) from None
+        return {str(key): str(value) for key, value in table.items()}
+
+
+def _state_unit(state: str, units: "UnitTable") -> str:
+    unit = units.states[state][0]
+    return f"the state {state} (in {unit})" if unit else f"the state {state} (dimensionless)"
 
 
 def _error(source: str, key: str, message: str) -> ModelFileError:
