@@ -1,6 +1,6 @@
 """Units in model files are converted exactly and, with ``[units]``, dimension-checked (issue 29, item 3).
 
-Families (docs/model-files-units.md):
+Families (docs/model-files.md (its Units section)):
 
 - **Exact conversion.** ``1/min`` is 1/60, ``mm`` 1/1000, the litre 1/1000 m^3, a furlong
   792000/3937 m: pint's decimal definitions read as fractions, never a double's neighbour.
@@ -12,7 +12,7 @@ Families (docs/model-files-units.md):
   (exit 0) and verifies; a mismatched term is exit 2 naming the equation, the term and both
   dimensions, through the command line and through the library; bare numbers, nested sums,
   outputs, equilibrium, domain and ``--set`` follow the documented rules.
-- **The page.** Every TOML block of docs/model-files-units.md loads, or is refused with the text
+- **The page.** Every TOML block of docs/model-files.md (its Units section) loads, or is refused with the text
   its ``# refused:`` line quotes.
 """
 
@@ -38,7 +38,7 @@ from tests.conftest import ROOT
 app._register_commands()
 RUNNER = CliRunner()
 EXAMPLE = ROOT / "examples" / "models" / "damped-oscillator-units.toml"
-PAGE = ROOT / "docs" / "model-files-units.md"
+PAGE = ROOT / "docs" / "model-files.md"
 
 LENGTH = Dimension.of({"[length]": 1})
 TIME = Dimension.of({"[time]": 1})
