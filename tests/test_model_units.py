@@ -405,3 +405,13 @@ def test_every_toml_block_of_the_page_loads_or_is_refused_as_it_says() -> None:
 def test_the_shipped_example_is_listed() -> None:
     readme = (ROOT / "examples" / "models" / "README.md").read_text(encoding="utf-8")
     assert f"`{EXAMPLE.name}`" in readme
+
+
+def test_a_set_value_keeps_the_dimension_the_file_gives_even_without_units(tmp_path: Path) -> None:
+    """``k = "2 1/s^2"`` in the file: ``--set k="2 mm"`` is refused naming both, ``"3 1/s^2"`` and a
+    plain number (read in SI) are taken."""
+    text = oscillator(units_table=None)
+    with pytest.raises(ModelFileError, match=r"--set k: must be a value of dimension 1 / \[time\] \*\* 2"):
+        parse_model(text, "model.toml", {"k": "2 mm"})
+    assert parse_model(text, "model.toml", {"k": "3 1/s^2"}).parameters["k"] == 3
+    assert parse_model(text, "model.toml", {"k": "3"}).parameters["k"] == 3

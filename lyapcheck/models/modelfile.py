@@ -253,6 +253,7 @@ class _Reader:
                 raise self.fail(f"--set {key}", f"no parameter or disturbance named '{key}' (declared: {names})")
             try:
                 target[key] = parse_si_quantity(key, value)
+                self.check_same_dimension(key, value, "parameters" if target is params else "disturbances")
             except InvalidParameter as exc:
                 raise self.fail(f"--set {key}", _unprefixed(exc)) from None
             if target is dists and target[key] < 0:
@@ -260,6 +261,19 @@ class _Reader:
             if target is params:
                 given[key] = str(value)
         return params, given, dists
+
+    def check_same_dimension(self, key: str, value: object, section: str) -> None:
+        """A ``--set`` value with a unit has the dimension of the file's own value where that has a
+        unit too (``k = "2 1/s^2"`` set to ``"2 mm"`` is refused), with or without ``[units]``."""
+        from lyapcheck.units import parse_si_with_dimension
+
+        raw = self.table(section).get(key)
+        if not isinstance(value, str) or not isinstance(raw, str):
+            return
+        given, declared = parse_si_with_dimension(key, value), parse_si_with_dimension(key, raw)
+        if given.unit and declared.unit and given.dimension != declared.dimension:
+            raise InvalidParameter(key, f"a value of dimension {declared.dimension}, as the file gives {key} "
+                                        f"('{raw}')", value)
 
     def expression(self, key: str, text: object, ring: Ring) -> Rational:
         return self.expression_with_divisors(key, text, ring)[0]
