@@ -268,8 +268,8 @@ class _Reader:
         from lyapcheck.units import parse_si_with_dimension
 
         raw = self.table(section).get(key)
-        if not isinstance(value, str) or not isinstance(raw, str):
-            return
+        if "units" in self.data or not isinstance(value, str) or not isinstance(raw, str):
+            return  # with [units] the dimension check of every name says it (lyapcheck.models.dimensions)
         given, declared = parse_si_with_dimension(key, value), parse_si_with_dimension(key, raw)
         if given.unit and declared.unit and given.dimension != declared.dimension:
             raise InvalidParameter(key, f"a value of dimension {declared.dimension}, as the file gives {key} "
