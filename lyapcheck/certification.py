@@ -140,9 +140,10 @@ def _real_loop_bound(results: dict[str, ConditionResult]) -> None:
     if sat is None or bound is None or sat.status != "certified" or bound.status != "certified":
         return
     if sat.numbers.get("global_reach") == "proved":
+        from lyapcheck.paper.claims import real_loop_clause
+
         sat.numbers["real_loop_limsup_eps_m"] = bound.numbers["eps_bound_m"]
-        sat.summary += (f"; so the real loop's limsup |eps| <= {bound.numbers['eps_bound_m'] * 1e3:.4g} mm "
-                        "(sos_bound) from every start")
+        sat.summary += real_loop_clause(bound.numbers["eps_bound_m"])
 
 
 def guarded(name: str, compute: Callable[[], ConditionResult]) -> ConditionResult:

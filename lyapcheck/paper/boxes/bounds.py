@@ -186,13 +186,13 @@ def certify_bound_box(problem: Problem, box: ParameterBox, dynamics: str = "deri
         return {"status": "not_certified", "property": "ultimate_bound", "box": box.to_json(),
                 "summary": f"no polynomial dissipation certificate common to the box was found ({box.describe()}); "
                            "this is not a proof that the bound fails", "solver": {"solves": log}}
+    from lyapcheck.paper import claims
+
     bound = Fraction(best["eps_bound"])
-    return {"status": "certified", "property": "ultimate_bound", "box": box.to_json(),
-            "summary": f"for every gain set with {box.describe()}: limsup |eps| <= {float(bound) * 1e3:.4g} mm from "
-                       f"every initial condition and every |d_perp| <= d* (one polynomial V, checked exactly at the "
-                       f"{len(vertices)} vertices of the (c, a, b, k) box)",
-            "eps_bound_m": float(bound), "eps_bound_exact": str(bound), "certificate": best,
-            "solver": {"solves": log}}
+    return claims.decided_box("sos_bound", {
+        "status": "certified", "property": "ultimate_bound", "box": box.to_json(), "summary": "",
+        "eps_bound_m": float(bound), "eps_bound_exact": str(bound), "certificate": best,
+        "solver": {"solves": log}}, box)
 
 
 def check(cert: Mapping[str, Any]) -> tuple[bool, str]:

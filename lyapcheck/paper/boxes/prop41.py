@@ -30,6 +30,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from lyapcheck import exact
+from lyapcheck.paper import claims
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems, problem_at_point
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.params import Problem
@@ -98,6 +99,7 @@ def certify_prop41_box(problem: Problem, box: ParameterBox, dynamics: str = "der
     from lyapcheck.paper.conditions import prop41
 
     prop = "ISS" if iss else "GES"
+    cls = "prop41_iss" if iss else "prop41_ges"
     systems = _corner_systems(problem, box, dynamics)
     if systems is None:
         return {"status": "not_certified", "property": prop,
@@ -105,11 +107,10 @@ def certify_prop41_box(problem: Problem, box: ParameterBox, dynamics: str = "der
     for corner, system in zip(box.corners(), systems):
         refuted = prop41.refutation(system)
         if refuted is not None:
-            where = ", ".join(f"{name} = {float(value):.6g}" for name, value in corner.items())
-            return {"status": "refuted", "property": prop, "box": box.to_json(),
-                    "refutation": {**refuted, "point": {name: str(value) for name, value in corner.items()}},
-                    "summary": f"no P satisfies eq. stabCond at the box's corner {where} (exact Gamma_22 bound), "
-                               "so none serves the box" + (": the ISS condition fails too" if iss else "")}
+            return claims.decided_box(cls, {
+                "status": "refuted", "property": prop, "box": box.to_json(),
+                "refutation": {**refuted, "point": {name: str(value) for name, value in corner.items()}},
+                "summary": ""}, box)
     vertices = box_vertices(systems, iss)
     P_float, margin, outcome = _solve(vertices)
     log = [{"vertices": len(vertices), "outcome": outcome, "relative_margin": margin}]
@@ -125,11 +126,8 @@ def certify_prop41_box(problem: Problem, box: ParameterBox, dynamics: str = "der
         return {"status": "inconclusive", "property": prop, "box": box.to_json(),
                 "summary": f"the solver found a candidate but its exact check failed: {why}",
                 "relative_margin": margin, "solver": {"solves": log}}
-    which = "its ISS variant" if iss else "eq. stabCond"
-    return {"status": "certified", "property": prop, "box": box.to_json(),
-            "summary": f"{which} holds for every gain set with {box.describe()}: one P, checked exactly at the "
-                       f"{len(vertices)} vertices of the (a11, a12, a22, g{', e' if iss else ''}) box",
-            "relative_margin": margin, "certificate": cert, "solver": {"solves": log}}
+    return claims.decided_box(cls, {"status": "certified", "property": prop, "box": box.to_json(), "summary": "",
+                                     "relative_margin": margin, "certificate": cert, "solver": {"solves": log}}, box)
 
 
 def check(template: System, cert: Mapping[str, Any]) -> tuple[bool, str]:
@@ -152,8 +150,9 @@ def verify_prop41_box(problem: Problem, box: ParameterBox, dynamics: str, result
                       *, iss: bool = False) -> tuple[bool, str]:
     """Re-derive the vertices from the box and re-check the stored ``P`` exactly at each."""
     cert = result["certificate"]
-    if bool(cert.get("iss")) != iss:
-        return False, "the certificate is for the other variant of the condition"
+    if cert.get("iss") is not iss:  # a JSON true or false, as certify writes it ("no" is not false)
+        which = "prop41_iss" if iss else "prop41_ges"
+        return False, f"'iss' must be {str(iss).lower()} for {which}; got {cert.get('iss')!r}"
     systems = _corner_systems(problem, box, dynamics)
     if systems is None:
         return False, "the dynamics at some corner do not have the structure this class needs"

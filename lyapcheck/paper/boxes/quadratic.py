@@ -35,6 +35,7 @@ import math
 from fractions import Fraction
 from typing import Any, Mapping, Sequence
 
+from lyapcheck.paper import claims
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems, scaled_hull, stored_hull
 from lyapcheck.params import Problem
 
@@ -71,13 +72,12 @@ def certify_common_ges_box(problem: Problem, box: ParameterBox, dynamics: str) -
     mu, c1, c2 = (Fraction(cert[k]) for k in ("mu_scaled", "c1", "c2"))
     k = math.sqrt(float(c2 / c1))
     rate = float(mu * ts_min) / 2
-    summary = (f"GES for every gain set with {box.describe()}: |x(t)| <= {k:.3g} |x0| exp(-{rate:.3g} t) "
-               "(x = (eps, sigma0 s)/Delta), one state-dependent quadratic V checked exactly at the corners")
-    return {"status": "certified", "property": "GES", "summary": summary, "box": box.to_json(), "k": k,
-            "decay_rate_per_s": rate,
-            "certificate": {**cert, "vertices": [[str(v.c), str(v.a), str(v.b)] for v in vertices],
-                            "time_scale_min": str(ts_min)},
-            "solver": {"solves": log}}
+    return claims.decided_box("ges", {
+        "status": "certified", "property": "GES", "summary": "", "box": box.to_json(), "k": k,
+        "decay_rate_per_s": rate,
+        "certificate": {**cert, "vertices": [[str(v.c), str(v.a), str(v.b)] for v in vertices],
+                        "time_scale_min": str(ts_min)},
+        "solver": {"solves": log}}, box)
 
 
 def _stored_quadratic(problem: Problem, box: ParameterBox, dynamics: str,
@@ -194,10 +194,10 @@ def certify_sector_box(problem: Problem, box: ParameterBox, dynamics: str) -> di
         assert v is not None  # scaled_hull succeeded at every corner
         refuted = sector.refutation([exact.matrix([[-1, v.c], [0, -v.a]]), exact.matrix([[-1, v.c], [v.b, -v.a]])])
         if refuted is not None:
-            where = ", ".join(f"{name} = {float(value):.6g}" for name, value in corner.items())
-            return {"status": "refuted", "property": "GES", "box": box.to_json(),
-                    "refutation": {**refuted, "point": {name: str(value) for name, value in corner.items()}},
-                    "summary": f"no quadratic V common to the box: at its corner {where}, {refuted['statement']}"}
+            return claims.decided_box("sector_ges", {
+                "status": "refuted", "property": "GES", "box": box.to_json(),
+                "refutation": {**refuted, "point": {name: str(value) for name, value in corner.items()}},
+                "summary": ""}, box)
     polytope = sector_polytope(vertices)
     padded = (polytope * SECTOR_BOX_VERTICES)[:SECTOR_BOX_VERTICES]
     P, rate, margin, report = sector.certify_polytope(padded)
@@ -208,17 +208,13 @@ def certify_sector_box(problem: Problem, box: ParameterBox, dynamics: str) -> di
                            f"{margin if margin is not None else 'n/a'}); this is not a proof that GES fails",
                 "solver": {"solves": [report.to_json()]}}
     c1, c2 = bounds
-    k = math.sqrt(float(c2 / c1))
-    decay = float(rate * ts_min)
-    summary = (f"GES for every gain set with {box.describe()}: |x(t)| <= {k:.3g} |x0| exp(-{decay:.3g} t) "
-               "(x = (eps, sigma0 s)/Delta), one quadratic V = x^T P x checked exactly at the polytope's "
-               f"{len(polytope)} vertices")
-    return {"status": "certified", "property": "GES", "summary": summary, "box": box.to_json(), "k": k,
-            "decay_rate_per_s": decay,
-            "certificate": {"P": exact.to_json(P), "decay_rate_scaled": str(rate), "c1": str(c1), "c2": str(c2),
-                            "vertices": [[str(v.c), str(v.a), str(v.b)] for v in vertices],
-                            "time_scale_min": str(ts_min)},
-            "solver": {"solves": [report.to_json()]}}
+    return claims.decided_box("sector_ges", {
+        "status": "certified", "property": "GES", "summary": "", "box": box.to_json(),
+        "k": math.sqrt(float(c2 / c1)), "decay_rate_per_s": float(rate * ts_min),
+        "certificate": {"P": exact.to_json(P), "decay_rate_scaled": str(rate), "c1": str(c1), "c2": str(c2),
+                        "vertices": [[str(v.c), str(v.a), str(v.b)] for v in vertices],
+                        "time_scale_min": str(ts_min)},
+        "solver": {"solves": [report.to_json()]}}, box)
 
 
 def verify_sector_box(problem: Problem, box: ParameterBox, dynamics: str,

@@ -35,6 +35,7 @@ from fractions import Fraction
 from typing import Any, Mapping
 
 from lyapcheck import exact
+from lyapcheck.paper import claims
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
 from lyapcheck.params import Problem
 
@@ -53,7 +54,8 @@ def _float(x: Fraction) -> float | None:
         return None
 
 
-def _text(x: Fraction) -> str:
+def figure_text(x: Fraction) -> str:
+    """``x`` to 4 significant digits, or what it is beyond the double range."""
     value = _float(x)
     return f"{value:.4g}" if value is not None else ("-" if x < 0 else "") + "beyond 1.8e308"
 
@@ -125,15 +127,12 @@ def certify_saturated_box(problem: Problem, box: ParameterBox, dynamics: str = "
     if gamma <= 0:
         return {"status": "not_certified", "property": "invariant_set", "box": box.to_json(), **numbers,
                 "summary": f"global reach is not proved for the box ({box.describe()}): the weakest pull "
-                           f"{_text(pull)} m/s does not beat the strongest push {_text(push)} m/s over its corners "
-                           "(a smaller box may succeed; this is not a proof that reach fails)",
+                           f"{figure_text(pull)} m/s does not beat the strongest push {figure_text(push)} m/s over its "
+                           "corners (a smaller box may succeed; this is not a proof that reach fails)",
                 "certificate": {"reach": reach}}
-    return {"status": "certified", "property": "invariant_set", "box": box.to_json(), **numbers,
-            "summary": f"for every gain set with {box.describe()}, from ANY start and every |d_perp| <= d*, the real "
-                       f"(saturated) loop enters {{|eps + sigma0 s| <= {_text(Yq)} m, |s| <= {_text(S1)} m}} "
-                       "in finite time and never leaves it; there it is unsaturated, so the box's sos_gas and sos_bound "
-                       f"conclusions hold for the real loop (reach margin >= {_text(gamma)} m/s)",
-            "certificate": {"reach": reach}}
+    return claims.decided_box("saturated_loop", {"status": "certified", "property": "invariant_set",
+                                                 "box": box.to_json(), **numbers, "summary": "",
+                                                 "certificate": {"reach": reach}}, box)
 
 
 def verify_saturated_box(problem: Problem, box: ParameterBox, dynamics: str,
@@ -157,7 +156,7 @@ def verify_saturated_box(problem: Problem, box: ParameterBox, dynamics: str,
     for key, proved in (("windup_bound_s_m", S1), ("reach_set_y_half_width_m", Yq)):  # bounds: not smaller
         if result.get(key) is not None and not Fraction(result[key]) >= proved * (1 - Fraction(1, 10**12)):
             return False, f"the stated {key} is below the certificate's"
-    return True, f"global reach re-checked over the box's corners: margin {_text(gamma)} m/s"
+    return True, f"global reach re-checked over the box's corners: margin {figure_text(gamma)} m/s"
 
 
 def real_loop_bound(results: dict[str, dict[str, Any]]) -> None:
@@ -167,5 +166,4 @@ def real_loop_bound(results: dict[str, dict[str, Any]]) -> None:
     if sat is None or bound is None or sat["status"] != "certified" or bound["status"] != "certified":
         return
     sat["real_loop_limsup_eps_m"] = bound["eps_bound_m"]
-    sat["summary"] += (f"; so the real loop's limsup |eps| <= {bound['eps_bound_m'] * 1e3:.4g} mm (sos_bound) "
-                       "at every gain set of the box, from every start")
+    sat["summary"] += claims.real_loop_clause(bound["eps_bound_m"], box=True)

@@ -298,16 +298,14 @@ def certify_ultimate_box(problem: Problem, box: ParameterBox, dynamics: str = "d
             eps_bound, y_bar, improved = _advance(stage, eps_bound, y_bar)
             if not improved:
                 break
-    how = (f"box + {len(stages)} ellipsoid stage(s), one P per stage checked exactly at the "
-           f"{len(stages[0]['vertices'])} vertices of the box's (A_r, e d*) polytope" if stages
-           else "comparison-lemma box only (no ellipsoid common to the box was feasible)")
-    return {"status": "certified", "property": "ultimate_bound", "box": box.to_json(),
-            "summary": f"for every gain set with {box.describe()}: limsup |eps| <= {float(eps_bound) * 1e3:.4g} mm "
-                       f"for every |d_perp| <= d* ({how})",
-            "eps_bound_m": float(eps_bound), "eps_bound_exact": str(eps_bound),
-            "box_eps_bound_m": float(Fraction(box0["eps_bound"])), "ellipsoid_stages": len(stages),
-            "certificate": {"box_stage": box0, "stages": stages, "eps_bound": str(eps_bound)},
-            "solver": {"stages": metas, "wall_seconds": time.perf_counter() - start}}
+    from lyapcheck.paper import claims
+
+    return claims.decided_box("ultimate_bound", {
+        "status": "certified", "property": "ultimate_bound", "box": box.to_json(), "summary": "",
+        "eps_bound_m": float(eps_bound), "eps_bound_exact": str(eps_bound),
+        "box_eps_bound_m": float(Fraction(box0["eps_bound"])), "ellipsoid_stages": len(stages),
+        "certificate": {"box_stage": box0, "stages": stages, "eps_bound": str(eps_bound)},
+        "solver": {"stages": metas, "wall_seconds": time.perf_counter() - start}}, box)
 
 
 def verify_ultimate_box(problem: Problem, box: ParameterBox, dynamics: str,

@@ -48,14 +48,16 @@ check with the margin to spare.
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 from functools import lru_cache
 from math import comb
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from lyapcheck import exact
+from lyapcheck.paper import claims
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.paper.conditions.rate_search import largest_proved_rate
 from lyapcheck.paper.conditions.rounding import ceil_to_digits, floor_to_digits
@@ -416,15 +418,25 @@ def search(dyns: Sequence[ScaledDynamics], log: list[dict[str, Any]]) -> dict[st
     return largest_proved_rate(proved, low=MU_LOW, high=MU_HIGH, floor=MU_FLOOR, steps=MU_BISECTION_STEPS)
 
 
-def _numbers(system: System, dyn: ScaledDynamics, cert: dict[str, Any]) -> dict[str, Any]:
-    _, _, mu, c1, c2 = _from_json(cert)
-    k = float(np.sqrt(float(c2 / c1)))
-    lam = float(mu * dyn.time_scale) / 2
-    sigma0 = float(system.sigma0)
+def envelope(cert: Mapping[str, Any], sigma0: Fraction,
+             time_scale: Fraction | None = None) -> tuple[float, float, float]:
+    """``(k, rate, k_eps_s)`` of ``|x(t)| <= k |x0| exp(-rate t)`` (``x = (eps, sigma0 s)/Delta``,
+    rate in 1/s) and the constant for ``|(eps, s)|``, from a certificate's ``mu_scaled``, ``c1``,
+    ``c2`` and its scaling's time scale (or ``time_scale``, before the scaling is stored)."""
+    mu, c1, c2 = (Fraction(cert[key]) for key in ("mu_scaled", "c1", "c2"))
+    if time_scale is None:
+        time_scale = Fraction(cert["scaling"]["time_scale"])
+    k = math.sqrt(float(c2 / c1))
+    lam = float(mu * time_scale) / 2
+    s0 = float(sigma0)
     # x = diag(1, sigma0) (eps, s)/Delta: the constant for |(eps, s)| pays the conditioning of that map
-    k_eps_s = k * max(1.0, sigma0) / min(1.0, sigma0)
+    return k, lam, k * max(1.0, s0) / min(1.0, s0)
+
+
+def _numbers(system: System, dyn: ScaledDynamics, cert: dict[str, Any]) -> dict[str, Any]:
+    k, lam, k_eps_s = envelope(cert, system.sigma0, dyn.time_scale)
     return {"k": k, "decay_rate_per_s": lam, "k_eps_s": k_eps_s, "decay_rate_V_per_s": 2 * lam,
-            "norm": "|(eps, sigma0 s)|/Delta for k; |(eps, s)| for k_eps_s", "terms": len(cert["l"])}
+            "norm": claims.GES_NORM, "terms": len(cert["l"])}
 
 
 def run(system: System) -> ConditionResult:
@@ -440,12 +452,10 @@ def run(system: System) -> ConditionResult:
                                f"rate >= {MU_FLOOR:g} in scaled time); this is not a proof that GES fails",
                                solver={"solves": log})
     numbers = _numbers(system, dyn, cert)
-    summary = (f"GES: |x(t)| <= {numbers['k']:.3g} |x0| exp(-{numbers['decay_rate_per_s']:.3g} t) for every start "
-               f"(x = (eps, sigma0 s)/Delta; k = {numbers['k_eps_s']:.3g} for |(eps, s)|), from a quadratic form "
-               "whose matrix depends on (eps + sigma0 s)/Delta, exactly checked")
     scaling = {"time_scale": str(dyn.time_scale), "c": str(dyn.c), "a": str(dyn.a), "b": str(dyn.b)}
-    return ConditionResult("ges", "certified", summary, numbers=numbers,
-                           certificate={**cert, "scaling": scaling}, solver={"solves": log})
+    return claims.decided(ConditionResult("ges", "certified", "", numbers=numbers,
+                                          certificate={**cert, "scaling": scaling}, solver={"solves": log}),
+                          {"sigma0": system.sigma0})
 
 
 def verify(system: System, cert: dict[str, Any]) -> tuple[bool, str]:

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from lyapcheck import exact
+from lyapcheck.paper import claims
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.sdp import CompiledProgram
@@ -65,7 +66,7 @@ def exact_check(system: System, P: exact.Matrix, iss: bool) -> tuple[bool, str]:
     if not exact.min_eig_exceeds_2x2(gamma, g * p12, g + e, p12 * p12 + p22 * p22):
         which = "p12 g + sqrt(p12^2+p22^2)(e+g)" if iss else "(p12 + sqrt(p12^2+p22^2)) g"
         return False, f"lambda_min(Gamma) > {which} fails"
-    return True, "P > 0 and lambda_min(Gamma) exceeds the right-hand side, exactly"
+    return True, claims.PROP41_HOLDS
 
 
 def refutation(system: System) -> dict[str, Any] | None:
@@ -89,9 +90,10 @@ def refutation(system: System) -> dict[str, Any] | None:
 
 
 def check_refutation(system: System, data: dict[str, Any]) -> bool:
-    """Re-derive the refutation from the system alone (used by ``verify``)."""
+    """Re-derive the refutation from the system alone (used by ``verify``): every stated field
+    (the bound, its data and the statement) is the fresh one's."""
     fresh = refutation(system)
-    return fresh is not None and fresh["sup_bound"] == data.get("sup_bound") and fresh["g"] == data.get("g")
+    return fresh is not None and all(data.get(key) == value for key, value in fresh.items())
 
 
 def run(system: System, *, iss: bool) -> ConditionResult:
@@ -103,11 +105,7 @@ def run(system: System, *, iss: bool) -> ConditionResult:
     numbers: dict[str, Any] = {"relative_margin": None, "rhs_gain_g": g, "iss_gain_e": e}
     if refuted is not None:
         # an exact refutation is final: no numerical search can change it
-        return ConditionResult(
-            name, "refuted",
-            "no P satisfies the condition (exact Gamma_22 bound)" + (" - so the ISS condition fails too" if iss else ""),
-            numbers=numbers, refutation=refuted,
-        )
+        return claims.decided(ConditionResult(name, "refuted", "", numbers=numbers, refutation=refuted))
     A = exact.to_float(system.A)
     scale = max(np.abs(A).max(), g, 1e-300)
     solved = program().solve({"A": np.array(A) / scale, "g": g / scale, "g_plus_e": (g + e) / scale})
@@ -128,5 +126,5 @@ def run(system: System, *, iss: bool) -> ConditionResult:
         return ConditionResult(name, "inconclusive", f"solver found a candidate but its exact check failed: {why}",
                                numbers=numbers, solver=report.to_json())
     numbers["lambda_max_over_min_P"] = float(np.linalg.cond(np.array(exact.to_float(P))))
-    return ConditionResult(name, "certified", why, numbers=numbers,
-                           certificate={"P": exact.to_json(P)}, solver=report.to_json())
+    return claims.decided(ConditionResult(name, "certified", "", numbers=numbers,
+                                          certificate={"P": exact.to_json(P)}, solver=report.to_json()))

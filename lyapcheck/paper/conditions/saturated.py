@@ -66,6 +66,7 @@ from typing import Any
 import numpy as np
 
 from lyapcheck import exact, poly
+from lyapcheck.paper import claims
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
 from lyapcheck.paper.conditions.sos import bases, scaled_dynamics
@@ -318,8 +319,6 @@ def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: 
         y0 = Fraction(0)
     numbers["invariant_eps_radius_m_at_s0"] = float(y0 * system.delta)
     data["axis_radius_scaled"] = str(y0)
-    summary = (f"{{V <= c}} lies in the unsaturated strip |eps + sigma0 s| < {numbers['strip_half_width_m'] * 1e3:.3g} mm: "
-               "from there the saturated loop never saturates and converges")
     # with disturbance
     kd = abs(system.E[0]) * system.d_max / (system.delta * dyn.time_scale)
     g = gradient_bound_coefficients(V)
@@ -338,45 +337,33 @@ def run(system: System, sos_result: ConditionResult, *, alpha_d: Fraction, e11: 
                 numbers["ultimate_eps_bound_m"] = float(eps_bound)
                 data.update({"R_lo": str(R_lo), "R_hi": str(R_hi), "kd_scaled": str(kd),
                              "eps_bound": str(eps_bound)})
-                summary += f"; with |d_perp| <= d* it stays there and ends within |eps| <= {float(eps_bound) * 1e3:.3g} mm"
         if not ok_bound:
-            summary += "; under d* this level set is not shown invariant (the reach argument below does not need it)"
             data["disturbance"] = "not proved"
 
     # global reach (module docstring, step 3)
     reach = global_reach(system, k_d=k_d, y_sat_sq=y_sat_sq, time_scale=dyn.time_scale)
     proved = reach is not None and Fraction(reach["gamma"]) > 0
     numbers["global_reach"] = "proved" if proved else "not_proved"
-    numbers["not_ges"] = (f"the real loop is not GES: |eps'| <= e11 Omega_SO + d* = "
-                          f"{float(e11 * omega_so + abs(system.E[0]) * system.d_max) * 1e3:.4g} mm/s bounds its speed")
+    numbers["not_ges"] = claims.not_ges(e11 * omega_so + abs(system.E[0]) * system.d_max)
     if reach is not None:
         data["reach"] = reach
         numbers["windup_bound_s_m"] = float(Fraction(reach["S_1"]))
         numbers["reach_set_y_half_width_m"] = float(Fraction(reach["Y_q"]))
         numbers["reach_margin_m_per_s"] = float(Fraction(reach["gamma"]))
-        numbers["reach_condition"] = (
-            f"with |s| <= {float(Fraction(reach['S_1'])):.4g} m (wind-up, damped near the path) the swimmer pulls y "
-            f"toward the strip at >= {float(Fraction(reach['pull'])):.4g} m/s against pushes <= "
-            f"{float(Fraction(reach['push'])):.4g} m/s (disturbance and integrator)")
-    if proved:
-        assert reach is not None
-        summary += (f"; from ANY start the loop enters {{|eps + sigma0 s| <= {float(Fraction(reach['Y_q'])) * 1e3:.4g} mm, "
-                    f"|s| <= {float(Fraction(reach['S_1'])):.3g} m}} in finite time and never leaves it; there it is "
-                    "unsaturated, so the sos_gas and sos_bound conclusions hold for the real loop from any start "
-                    "(not GES: its speed is bounded)")
-    else:
-        summary += "; reaching the strip from anywhere is not proved (" + (
-            "the integrator's wind-up pushes y harder than the saturated swimmer pulls)" if e11 * omega_lo > system.d_max
-            else "the swimmer cannot out-swim the disturbance bound)")
-    summary = summary.replace("{V <= c} lies", f"{{V <= c}} (contains every start with s = 0, |eps| <= "
-                              f"{numbers['invariant_eps_radius_m_at_s0'] * 1e3:.3g} mm) lies", 1)
-    return ConditionResult("saturated_loop", "certified", summary, numbers=numbers, certificate=data)
+        numbers["reach_condition"] = claims.reach_condition(reach)
+    return claims.decided(ConditionResult("saturated_loop", "certified", "", numbers=numbers, certificate=data),
+                          {"delta_los": system.delta, "d_max": system.d_max, "e11": e11, "omega_so": omega_so})
 
 
 def verify(system: System, sos_cert: dict[str, Any], cert: dict[str, Any], *, alpha_d: Fraction,
            e11_hat: Fraction, omega_so: Fraction, k_d: Fraction | None = None) -> tuple[bool, str]:
     """Exact re-check of the invariance part (the level inside the strip) and the axis radius."""
-    z_v, _ = bases(int(sos_cert["degree"]))
+    from lyapcheck.paper.conditions.sos import stored_degree_and_bases
+
+    deg_v, why = stored_degree_and_bases(sos_cert)
+    if why is not None:
+        return False, f"the V of sos_gas: {why}"
+    z_v, _ = bases(deg_v)
     V = poly.gram_form(z_v, exact.from_json(sos_cert["Q_V"]))
     Y_sq = unsaturated_strip_sq(alpha_d, system.delta, e11_hat, omega_so * (1 - OMEGA_ROUNDING)) / system.delta**2
     if Fraction(cert["strip_half_width_sq_scaled"]) != Y_sq:
@@ -391,7 +378,7 @@ def verify(system: System, sos_cert: dict[str, Any], cert: dict[str, Any], *, al
         level = cert.get("level_certificate")
         if level is None or Fraction(level["c"]) != c:
             return False, "level c exceeds what lambda_min proves and has no S-procedure certificate"
-        ok, why = check_level(V, int(sos_cert["degree"]), level, Y_sq)
+        ok, why = check_level(V, deg_v, level, Y_sq)
         if not ok:
             return False, why
     y0 = Fraction(cert["axis_radius_scaled"])
@@ -431,5 +418,9 @@ def verify_reach(system: System, reach: dict[str, str], *, k_d: Fraction, alpha_
         return False, "Y_q is not between Delta and the strip's half-width"
     if gamma != -system.A[0][0] * Yq - reach_push(system, k_d, S1, Yq):
         return False, "the stated reach margin does not follow from the inputs"
+    fresh = {"S_star_sq": windup_bound_sq(system.sigma0, k_d, delta, system.speed), "pull": -system.A[0][0] * Yq,
+             "push": reach_push(system, k_d, S1, Yq)}
+    if any(key in reach and Fraction(reach[key]) != value for key, value in fresh.items()):
+        return False, "the stated S_star_sq, pull or push does not follow from the inputs"
     return True, (f"global reach re-checked: margin {float(gamma):.4g} m/s" if gamma > 0
                   else "global reach not proved (margin <= 0), as stated")

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from lyapcheck import exact
+from lyapcheck.paper import claims
 from lyapcheck.paper.conditions import scaling
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
@@ -67,7 +68,7 @@ def exact_check(vertices: list[exact.Matrix], P: exact.Matrix, rate: Fraction) -
         q = exact.add(exact.lyapunov_form(a, P), exact.scale(2 * rate, P))
         if not exact.is_negative_definite(q):
             return False, f"A_{i}^T P + P A_{i} + 2 mu P is not negative definite at vertex {i}"
-    return True, f"P > 0 and the vertex LMIs hold with decay rate mu = {float(rate):.4g} 1/s, exactly"
+    return True, claims.lmi_decay(rate)
 
 
 def refutation(vertices: list[exact.Matrix]) -> dict[str, Any] | None:
@@ -82,8 +83,7 @@ def refutation(vertices: list[exact.Matrix]) -> dict[str, Any] | None:
         return None
     return {
         "argument": "shorten_narendra_2x2",
-        "statement": (f"{' and '.join(bad)} has a negative real eigenvalue, so the two Hurwitz vertex matrices "
-                      "have no common quadratic Lyapunov function (Shorten & Narendra 2003)"),
+        "statement": claims.shorten_narendra(prod, quot),
         "A0A1": exact.to_json(prod), "A0A1inv": exact.to_json(quot),
     }
 
@@ -118,11 +118,13 @@ def certify_polytope(vertices: list[exact.Matrix]) -> tuple[exact.Matrix | None,
 
 def certified_result(P: exact.Matrix, rate: Fraction, rho_lo: Fraction, why: str, numbers: dict[str, Any],
                      solver: dict[str, Any]) -> ConditionResult:
-    """The ``certified`` result; call only with ``why`` from a passed :func:`exact_check`."""
+    """The ``certified`` result; call only with ``why`` from a passed :func:`exact_check` (its
+    summary is :mod:`lyapcheck.paper.claims`' sentence, the same text for the same rate)."""
     numbers["decay_rate_per_s"] = float(rate)
-    return ConditionResult("sector_ges", "certified", why, numbers=numbers,
-                           certificate={"P": exact.to_json(P), "decay_rate": str(rate), "rho_lo": str(rho_lo)},
-                           solver=solver)
+    return claims.decided(ConditionResult("sector_ges", "certified", why, numbers=numbers,
+                                          certificate={"P": exact.to_json(P), "decay_rate": str(rate),
+                                                       "rho_lo": str(rho_lo)},
+                                          solver=solver))
 
 
 def uncertified_result(vertices: list[exact.Matrix], numbers: dict[str, Any], outcome: str,
@@ -130,8 +132,8 @@ def uncertified_result(vertices: list[exact.Matrix], numbers: dict[str, Any], ou
     """No certificate passed its exact check: refuted (exactly), inconclusive or not_certified."""
     refuted = refutation(vertices)
     if refuted is not None:
-        return ConditionResult("sector_ges", "refuted", refuted["statement"], numbers=numbers,
-                               refutation=refuted, solver=solver)
+        return claims.decided(ConditionResult("sector_ges", "refuted", "", numbers=numbers,
+                                              refutation=refuted, solver=solver))
     if outcome != "optimal":
         return ConditionResult("sector_ges", "inconclusive", f"solver outcome '{outcome}', nothing proved",
                                numbers=numbers, solver=solver)

@@ -346,13 +346,12 @@ def run(system: System) -> ConditionResult:
         cert = best_decay_rate(trial, cert)
         mu = Fraction(cert["mu_scaled"])
         rate = mu * dyn.time_scale
+        from lyapcheck.paper import claims
+
         numbers = {"degree": deg_v, "decay_rate_V_per_s": float(rate), "relative_margin": cert["margin"],
-                   "proves": "GAS" + (", V decays like exp(-%.4g t)" % float(rate) if rate > 0 else "")}
-        summary = (f"polynomial V of degree {deg_v}: global asymptotic stability"
-                   + (f", V' <= -{float(rate):.3g} V (exponential decay from every start)" if rate > 0 else "")
-                   + ", exactly checked")
-        return ConditionResult("sos_gas", "certified", summary, numbers=numbers,
-                               certificate={**cert, "scaling": scaling}, solver={"solves": solver_log})
+                   "proves": claims.sos_gas_proves(rate)}
+        return claims.decided(ConditionResult("sos_gas", "certified", "", numbers=numbers,
+                                              certificate={**cert, "scaling": scaling}, solver={"solves": solver_log}))
     return ConditionResult("sos_gas", "not_certified",
                            f"no SOS certificate of degree <= {DEGREES[-1]} was found; this is not a proof of instability",
                            numbers={"scaling": scaling}, solver={"solves": solver_log})
@@ -369,12 +368,36 @@ def stored_scaling_mismatch(system: System, cert: dict[str, Any]) -> tuple[Scale
     return dyn, None
 
 
+def stored_degree_and_bases(cert: Mapping[str, Any]) -> tuple[int, str | None]:
+    """The certificate's degree of V, and why it or its stored Gram bases are not this version's
+    (None: they are). Every exponent must be a JSON integer (:func:`~lyapcheck.sos.certificates.exponent`):
+    ``2.0`` equals ``2`` in Python and ``True`` equals ``1``, and a ``2.5`` must not be truncated; the
+    reason names the key."""
+    from lyapcheck.sos.certificates import exponent
+
+    try:
+        deg_v = exponent(cert["degree"], "degree")
+        if deg_v not in DEGREES:
+            return deg_v, f"degree {deg_v} is not among this version's {DEGREES}"
+        stored = {}
+        for key in ("basis_V", "basis_W"):
+            rows = cert[key]
+            if not isinstance(rows, list) or not all(isinstance(row, list) for row in rows):
+                raise ValueError(f"{key}: must be a list of exponent lists, got {rows!r:.80}")
+            stored[key] = [[exponent(e, f"{key}[{i}][{j}]") for j, e in enumerate(row)] for i, row in enumerate(rows)]
+    except ValueError as exc:
+        return -1, str(exc)
+    z_v, z_w = bases(deg_v)
+    if [list(m) for m in z_v] != stored["basis_V"] or [list(m) for m in z_w] != stored["basis_W"]:
+        return deg_v, "stored monomial bases differ from this version's"
+    return deg_v, None
+
+
 def verify(system: System, cert: dict[str, Any]) -> tuple[bool, str]:
     dyn, mismatch = stored_scaling_mismatch(system, cert)
     if dyn is None or mismatch is not None:
         return False, mismatch or ""
-    deg_v = int(cert["degree"])
-    z_v, z_w = bases(deg_v)
-    if [list(m) for m in z_v] != cert["basis_V"] or [list(m) for m in z_w] != cert["basis_W"]:
-        return False, "stored monomial bases differ from this version's"
+    deg_v, why = stored_degree_and_bases(cert)
+    if why is not None:
+        return False, why
     return exact_check(dyn, deg_v, exact.from_json(cert["Q_V"]), exact.from_json(cert["Q_W"]), Fraction(cert["mu_scaled"]))

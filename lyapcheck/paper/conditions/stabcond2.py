@@ -48,10 +48,10 @@ def run(alpha_d: Fraction, sigma0: Fraction, k_d: Fraction, delta: Fraction,
         implication = "consistent"
     else:
         implication = "not_applicable" if not holds else "undecided"
-    return ConditionResult(
-        "stabcond2", "holds" if holds else "fails",
-        f"(sigma0 alpha_d Delta)^2 + 2 alpha_d Delta (1 + k_d/alpha_d) = {significant(value)} "
-        + ("<= 1" if value <= 1 else "> 1"),
+    from lyapcheck.paper import claims
+
+    return claims.decided(ConditionResult(
+        "stabcond2", "holds" if holds else "fails", "",
         numbers={"lhs_value": float_or_none(value), "lhs_exact": str(value),
                  "implies_stabcond_here": implication, "printed_prop41_ges": printed_ges_status},
-    )
+    ))

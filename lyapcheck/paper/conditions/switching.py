@@ -50,6 +50,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 from lyapcheck import exact
 from lyapcheck import tolerances as tol
+from lyapcheck.paper import claims
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
 from lyapcheck.errors import CertificateError, InvalidParameter, SolverError
@@ -361,10 +362,24 @@ def certify_unstable_switching(vertices: Sequence[exact.Matrix], t0: Fraction, t
             "trace": [str(trace[0]), str(trace[1])], "det": [str(det[0]), str(det[1])],
             "criterion": criterion,
             "growth_lower_bound": str(bound),
-            "statement": (f"rho(expm(A0 t0) expm(A1 t1)) >= {float(bound):.6g} > 1 with t0 = {float(t0):.6g}, "
-                          f"t1 = {float(t1):.6g} ({criterion} on rigorous enclosures of T and D)"),
+            "statement": _statement(bound, t0, t1, criterion),
         }
     return None
+
+
+def _statement(bound: Fraction, t0: Fraction, t1: Fraction, criterion: str) -> str:
+    """What a periodic-switching certificate states (``verify`` regenerates it)."""
+    return (f"rho(expm(A0 t0) expm(A1 t1)) >= {float(bound):.6g} > 1 with t0 = {float(t0):.6g}, "
+            f"t1 = {float(t1):.6g} ({criterion} on rigorous enclosures of T and D)")
+
+
+def growth_upper_bound(trace: Interval, det: Interval) -> float:
+    """An upper bound (in floating point) on the spectral radius of any real 2x2 matrix whose trace
+    and determinant lie in the intervals: the roots of ``z^2 - T z + D`` have modulus at most
+    ``(|T| + sqrt(T^2 + 4 |D|)) / 2``. ``verify`` holds the search's estimate of the growth to it."""
+    t = float(max(abs(trace[0]), abs(trace[1])))
+    d = float(max(abs(det[0]), abs(det[1])))
+    return (t + math.sqrt(t * t + 4 * d)) / 2
 
 
 def _fraction_field(cert: dict[str, Any], key: str) -> Fraction:
@@ -447,6 +462,9 @@ def verify_unstable_switching(vertices: Sequence[exact.Matrix], certificate: dic
     if claimed > bound:
         return False, f"the stated growth bound {float(claimed):.6g} exceeds what the enclosures prove ({float(bound):.6g})"
     criterion = "|T| > 1 + D" if _abs_lower(trace) - 1 - det[1] > 0 else "|D| > 1"
+    stated = _statement(claimed, t0, t1, criterion)
+    if certificate.get("criterion") != criterion or certificate.get("statement") != stated:
+        return False, f"the stated criterion or statement is not the enclosures'; they give: {stated!r}"
     return True, (f"rho(expm(A0 t0) expm(A1 t1)) >= {float(claimed):.6g} > 1 proven exactly "
                   f"(t0 = {float(t0):.6g}, t1 = {float(t1):.6g}; {criterion} on the enclosures of T and D)")
 
@@ -779,21 +797,23 @@ def verify(system: System, certificate: dict[str, Any]) -> tuple[bool, str]:
     if not all(0 < r <= system.rho_sup for r in rhos):
         return False, "a switching value of rho lies outside the sector (0, rho_sup]"
     if argument == ARGUMENT_VERTEX:
-        if exact.is_hurwitz_2x2(system.vertex(rhos[0])):
+        vertex = system.vertex(rhos[0])
+        if exact.is_hurwitz_2x2(vertex):
             return False, "the stated vertex is Hurwitz"
+        try:
+            stated = exact.from_json(certificate["vertex"])
+        except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+            raise CertificateError(f"switched_ges certificate is malformed: {exc}") from None
+        if stated != vertex or certificate.get("statement") != claims.vertex_not_hurwitz(rhos[0], vertex):
+            return False, "the stated vertex matrix or statement is not that of A + rho B at the stated rho"
         return True, f"A + rho B at rho = {float(rhos[0]):.6g} is not Hurwitz (exact trace/determinant test)"
     return verify_unstable_switching([system.vertex(r) for r in rhos], certificate)
 
 
 def _vertex_refutation(rho: Fraction, vertex: exact.Matrix, numbers: dict[str, Any]) -> ConditionResult:
-    tr = vertex[0][0] + vertex[1][1]
-    dt = vertex[0][0] * vertex[1][1] - vertex[0][1] * vertex[1][0]
-    statement = (f"A + rho B is not Hurwitz at the admissible rho = {float(rho):.6g} (trace {float(tr):.4g}, "
-                 f"determinant {float(dt):.4g}), so holding rho there gives a trajectory that does not decay: "
-                 "the inclusion is not GES and no Lyapunov function that uses only the sector can prove GES.")
     refutation = {"argument": ARGUMENT_VERTEX, "rho": str(rho), "vertex": exact.to_json(vertex),
-                  "statement": statement}
-    return ConditionResult(NAME, "refuted", statement, numbers=numbers, refutation=refutation)
+                  "statement": claims.vertex_not_hurwitz(rho, vertex)}
+    return claims.decided(ConditionResult(NAME, "refuted", "", numbers=numbers, refutation=refutation))
 
 
 def run(system: System) -> ConditionResult:
@@ -836,16 +856,9 @@ def run(system: System) -> ConditionResult:
         if not ok:  # pragma: no cover - a fresh certificate failing its own re-check is a bug
             return ConditionResult(NAME, "inconclusive", f"exact re-check failed: {why}", numbers=numbers,
                                    solver=solver)
-        bound = Fraction(cert["growth_lower_bound"])
-        numbers["growth_per_period_lower_bound"] = float(bound)
-        summary = (f"Switching rho periodically, {float(t1):.4g} s at rho_sup = {float(system.rho_sup):.4g} then "
-                   f"{float(t0):.4g} s at rho = {float(rho_lo):.3g}, multiplies the state by "
-                   f"{found['growth_per_period']:.4g} per {float(t0 + t1):.4g} s period (proved exactly: >= "
-                   f"{float(bound):.4g}; growth rate {found['growth_rate']:.3g} 1/s), so the inclusion "
-                   "rho in (0, rho_sup] is unstable and no Lyapunov function of any form that uses only "
-                   "this sector can prove GES. The actual closed loop, where rho depends on the state, "
-                   "is not shown unstable by this.")
-        return ConditionResult(NAME, "refuted", summary, numbers=numbers, refutation=refutation, solver=solver)
+        numbers["growth_per_period_lower_bound"] = float(Fraction(cert["growth_lower_bound"]))
+        return claims.decided(ConditionResult(NAME, "refuted", "", numbers=numbers, refutation=refutation,
+                                              solver=solver))
     closed = [system.vertex(Fraction(0)), system.vertex(system.rho_sup)]
     from lyapcheck.paper.conditions import sector
 
@@ -858,10 +871,8 @@ def run(system: System) -> ConditionResult:
         if ok:
             numbers["decay_rate_per_s"] = float(rate)
             certificate = {"argument": ARGUMENT_CQLF, "P": exact.to_json(p), "decay_rate": str(rate), "rho_lo": "0"}
-            return ConditionResult(NAME, "certified",
-                                   f"a common quadratic Lyapunov function for rho in [0, rho_sup] proves GES for "
-                                   f"every variation of rho in the sector: {why}",
-                                   numbers=numbers, certificate=certificate, solver=solver)
+            return claims.decided(ConditionResult(NAME, "certified", "", numbers=numbers, certificate=certificate,
+                                                  solver=solver))
     why_not = ("no common quadratic Lyapunov function exists (Shorten-Narendra), "
                if no_quadratic is not None else "no common quadratic Lyapunov function was found, ")
     return ConditionResult(NAME, "not_certified",
