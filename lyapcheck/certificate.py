@@ -135,6 +135,10 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
             elif result.get("status") == "refuted":
                 ok, why = verify_box_refutation(problem, box, doc["dynamics"], result, cls)
                 rows.append((cls, ok, why if ok else f"{cls}: {why}"))
+        for cls, result in conditions.items():  # each result speaks of the document's box, no other
+            if isinstance(result, dict) and "box" in result and result["box"] != doc["box"]:
+                rows.append((cls, False, f"{cls}: its box {_short(result['box'], 120)} is not the document's "
+                                         f"{_short(doc['box'], 120)}"))
         sat = conditions.get("saturated_loop", {})
         if "real_loop_limsup_eps_m" in sat:  # the conjunction of reach and sos_bound, both re-checked above
             bound = conditions.get("sos_bound", {})
@@ -144,8 +148,9 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
             rows.append(("real_loop_bound", ok, "the real loop's bound is the re-checked sos_bound under re-checked reach"
                          if ok else "real_loop_limsup_eps_m: needs verified saturated_loop reach and a verified sos_bound "
                          "bound no larger than it"))
-        proven = any(ok and n in BOX_STABILITY_CLASSES and conditions[n].get("status") == "certified"
-                     for n, ok, _ in rows)
+        _check_summaries(conditions, rows, doc["inputs"]["exact_si"], doc["box"])
+        proven = any(conditions.get(c, {}).get("status") == "certified" and any(n == c for n, _, _ in rows)
+                     and all(ok for n, ok, _ in rows if n == c) for c in BOX_STABILITY_CLASSES)
         expected = "certified" if proven else "not_certified"
         rows.append(("verdict", doc.get("verdict") == expected,
                      f"verdict '{doc.get('verdict')}' is supported" if doc.get("verdict") == expected
@@ -234,6 +239,29 @@ def _check_skeleton(doc: dict[str, Any]) -> None:
             raise malformed(f"conditions.{name}", "an object with a text 'status'", result)
 
 
+def _check_summaries(conditions: dict[str, Any], rows: list[tuple[str, bool, str]], inputs: Any,
+                     box: Any = None) -> None:
+    """Each decided condition's summary is the sentence its re-checked data give
+    (:func:`lyapcheck.paper.claims.summary`, which also wrote it): an edited summary, or data from
+    which no sentence can be made, is a failed check of that condition. A condition whose exact
+    check has already failed is not judged again on its sentence (one failure names it)."""
+    from lyapcheck.paper import claims
+
+    failed = {n for n, ok, _ in rows if not ok}
+    for name, c in conditions.items():
+        if not isinstance(c, dict) or name in failed:
+            continue
+        try:
+            expected = claims.summary(str(name), c, inputs if isinstance(inputs, dict) else {}, box)
+        except claims.MALFORMED as exc:
+            reason = f"missing key {exc}" if isinstance(exc, KeyError) else _short(str(exc), 200)[1:-1]
+            rows.append((name, False, f"{name}: no summary follows from its data ({reason})"))
+            continue
+        if expected is not None and c.get("summary") != expected:
+            rows.append((name, False, f"{name}: the summary is not what the re-checked data say; they say: "
+                                      f"{expected!r}"))
+
+
 def _at_least(stated: Any, proved: Fraction) -> bool:
     """A bound (``k``, ``eps_bound_m``) stated no smaller than proved (floats round: 1e-12)."""
     return stated is None or Fraction(float(stated)) >= proved - abs(proved) / 10**12
@@ -244,13 +272,20 @@ def _at_most(stated: Any, proved: Fraction) -> bool:
     return stated is None or Fraction(float(stated)) <= proved + abs(proved) / 10**12
 
 
-def _stated_figures(conditions: dict[str, Any], system: Any) -> list[tuple[str, bool, str]]:
+def _stated_figures(conditions: dict[str, Any], system: Any, speed_bound: Fraction | None = None
+                    ) -> list[tuple[str, bool, str]]:
     """The figures stated beside each certified class, against what its certificate proves: a
-    bound stated lower, or a rate or margin stated higher, is a claim the file does not prove."""
+    bound stated lower, or a rate or margin stated higher, is a claim the file does not prove; a
+    count is the certificate's, and a text figure (:mod:`lyapcheck.paper.claims`) is the one its
+    data give. ``speed_bound``: ``e11 Omega_SO + |E_0| d*`` (m/s), when Omega_SO is given."""
+    from lyapcheck.paper import claims
     from lyapcheck.paper.conditions import ges
     from lyapcheck.paper.conditions.sos import scaled_dynamics
 
     checks: list[tuple[str, str, bool]] = []  # (class, figure, holds)
+    # checks added with the summaries (issue 28): a row only where one fails, so that verify's
+    # report of a sound certificate reads as before
+    quiet: list[tuple[str, str, bool]] = []
 
     def certified(name: str) -> dict[str, Any] | None:
         c = conditions.get(name)
@@ -266,15 +301,38 @@ def _stated_figures(conditions: dict[str, Any], system: Any) -> list[tuple[str, 
                     or Fraction(float(c["k_eps_s"])) ** 2 >= k_sq * spread**2 * (1 - Fraction(1, 10**12))),
                    ("ges", "decay_rate_per_s", _at_most(c.get("decay_rate_per_s"), rate)),
                    ("ges", "decay_rate_V_per_s", _at_most(c.get("decay_rate_V_per_s"), 2 * rate))]
+        quiet.append(("ges", "terms", _count(c.get("terms"), len(c["certificate"]["l"]))))
+        quiet.append(("ges", "norm", c.get("norm") in (None, claims.GES_NORM)))
+    for name in ("sector_ges", "switched_ges"):
+        if (c := certified(name)) is not None:
+            quiet.append((name, "decay_rate_per_s",
+                           _at_most(c.get("decay_rate_per_s"), Fraction(c["certificate"]["decay_rate"]))))
+    c = conditions.get("switched_ges")
+    if isinstance(c, dict) and c.get("status") == "refuted" and isinstance(c.get("refutation"), dict) \
+            and c["refutation"].get("argument") == "periodic_switching_2x2":
+        quiet += _switching_figures(c, system)
     if (c := certified("sos_gas")) is not None:
         cert = c["certificate"]
         rate = Fraction(cert["mu_scaled"]) * Fraction(cert["scaling"]["time_scale"])
         checks.append(("sos_gas", "decay_rate_V_per_s", _at_most(c.get("decay_rate_V_per_s"), rate)))
+        quiet.append(("sos_gas", "degree", _count(c.get("degree"), cert.get("degree"))))
+        quiet.append(("sos_gas", "proves", c.get("proves") in (None, claims.sos_gas_proves(rate))))
     for name in ("ultimate_bound", "sos_bound"):
         if (c := certified(name)) is not None:
             checks.append((name, "eps_bound_m", _at_least(c.get("eps_bound_m"), Fraction(c["certificate"]["eps_bound"]))))
+    if (c := certified("ultimate_bound")) is not None:
+        quiet.append(("ultimate_bound", "ellipsoid_stages",
+                       _count(c.get("ellipsoid_stages"), len(c["certificate"]["stages"]))))
     if (c := certified("saturated_loop")) is not None:
         cert = c["certificate"]
+        reach_proved = isinstance(cert.get("reach"), dict) and Fraction(cert["reach"]["gamma"]) > 0
+        quiet.append(("saturated_loop", "global_reach", c.get("global_reach") in
+                       (None, "proved" if reach_proved else "not_proved")))
+        quiet.append(("saturated_loop", "not_ges", c.get("not_ges") is None
+                       or (speed_bound is not None and c["not_ges"] == claims.not_ges(speed_bound))))
+        strip_sq = Fraction(cert["strip_half_width_sq_scaled"]) * system.delta**2
+        quiet.append(("saturated_loop", "strip_half_width_m", c.get("strip_half_width_m") is None
+                       or Fraction(float(c["strip_half_width_m"])) ** 2 >= strip_sq * (1 - Fraction(1, 10**12))))
         checks.append(("saturated_loop", "ultimate_eps_bound_m",
                        _at_least(c.get("ultimate_eps_bound_m"), Fraction(cert["eps_bound"])) if "eps_bound" in cert
                        else c.get("ultimate_eps_bound_m") is None))
@@ -283,14 +341,58 @@ def _stated_figures(conditions: dict[str, Any], system: Any) -> list[tuple[str, 
                                 Fraction(cert["axis_radius_scaled"]) * system.delta)))
         if "reach" in cert:
             reach = cert["reach"]
+            quiet.append(("saturated_loop", "reach_condition",
+                           c.get("reach_condition") in (None, claims.reach_condition(reach))))
             checks += [("saturated_loop", "windup_bound_s_m", _at_least(c.get("windup_bound_s_m"), Fraction(reach["S_1"]))),
                        ("saturated_loop", "reach_set_y_half_width_m",
                         _at_least(c.get("reach_set_y_half_width_m"), Fraction(reach["Y_q"]))),
                        ("saturated_loop", "reach_margin_m_per_s",
                         _at_most(c.get("reach_margin_m_per_s"), Fraction(reach["gamma"])))]
     return [(name, ok, f"{name}: the stated {figure} follows from the certificate" if ok else
-             f"{name}: the stated {figure} is not what the certificate proves (a bound stated too small or a rate "
-             "too large)") for name, figure, ok in checks]
+             f"{name}: the stated {figure} is not what the certificate proves (a bound stated too small, a rate "
+             "too large, or a count or value that is not the certificate's)")
+            for name, figure, ok in checks + [q for q in quiet if not q[2]]]
+
+
+def _count(stated: Any, actual: Any) -> bool:
+    """A stated count or degree (``ellipsoid_stages``, ``terms``, ``degree``) is absent or the JSON
+    integer ``actual`` (a float ``2.0`` or a bool is not a count, though Python finds them equal)."""
+    return stated is None or (isinstance(stated, int) and not isinstance(stated, bool) and stated == actual)
+
+
+#: a search's estimate of the growth per period, against the exact enclosures (floating point)
+ESTIMATE_RTOL = 1e-6
+
+
+def _switching_figures(c: dict[str, Any], system: Any) -> list[tuple[str, str, bool]]:
+    """The figures a periodic-switching refutation states and its sentence prints: the dwell times
+    and period are the certificate's, the proved lower bound no higher than proved, the search's
+    estimate of the growth between that bound and the enclosures' upper bound (and the growth
+    rate its logarithm per period), and the high value of rho is rho_sup."""
+    import math
+
+    from lyapcheck.paper.conditions.switching import growth_upper_bound
+
+    ref = c["refutation"]
+    t0, t1 = Fraction(ref["t0"]), Fraction(ref["t1"])
+    lower = Fraction(ref["growth_lower_bound"])
+    trace, det = ((Fraction(ref[k][0]), Fraction(ref[k][1])) for k in ("trace", "det"))
+    upper = growth_upper_bound(trace, det)
+
+    def same(key: str, value: Fraction) -> bool:
+        return c.get(key) is None or math.isclose(float(c[key]), float(value), rel_tol=1e-12)
+
+    estimate, rate = c.get("growth_per_period"), c.get("growth_rate_per_s")
+    estimate_ok = estimate is None or (float(lower) * (1 - ESTIMATE_RTOL) <= float(estimate)
+                                       <= upper * (1 + ESTIMATE_RTOL))
+    rate_ok = rate is None or estimate is None or (
+        float(estimate) > 0 and math.isclose(float(rate), math.log(float(estimate)) / float(t0 + t1),
+                                             rel_tol=ESTIMATE_RTOL, abs_tol=1e-300))
+    return [("switched_ges", "t0_s", same("t0_s", t0)), ("switched_ges", "t1_s", same("t1_s", t1)),
+            ("switched_ges", "period_s", same("period_s", t0 + t1)),
+            ("switched_ges", "growth_per_period_lower_bound", _at_most(c.get("growth_per_period_lower_bound"), lower)),
+            ("switched_ges", "growth_per_period", estimate_ok), ("switched_ges", "growth_rate_per_s", rate_ok),
+            ("switched_ges", "rho", Fraction(ref["rho"][1]) == system.rho_sup)]
 
 
 def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
@@ -355,8 +457,9 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
             ok_row("sector_ges", ok, why, f"sector_ges: {why}")
         elif c["status"] == "refuted":
             fresh = sector.refutation([system.vertex(Fraction(0)), system.vertex(system.rho_sup)])
-            ok_row("sector_ges", fresh is not None and fresh["A0A1"] == c["refutation"]["A0A1"],
-                   "Shorten-Narendra refutation re-derived exactly", "sector_ges: the refutation does not hold")
+            ok_row("sector_ges", fresh is not None and all(c["refutation"].get(k) == v for k, v in fresh.items()),
+                   "Shorten-Narendra refutation re-derived exactly",
+                   "sector_ges: the refutation (A0A1, A0A1inv and its statement) is not the one re-derived")
         c = conditions.get("switched_ges", {"status": "absent"})
         if c["status"] in ("certified", "refuted"):
             from lyapcheck.paper.conditions import switching
@@ -406,16 +509,21 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
                   and float(sat["real_loop_limsup_eps_m"]) >= float(Fraction(bound["certificate"]["eps_bound"])))
             ok_row("saturated_loop", ok, "the real loop's limsup |eps| is sos_bound's, by the proved global reach",
                    "saturated_loop: real_loop_limsup_eps_m needs a proved reach and a certified sos_bound at least as large")
-        rows += _stated_figures(conditions, system)
+        speed_bound = None if omega_so is None else values["e11"] * omega_so + abs(system.E[0]) * system.d_max
+        rows += _stated_figures(conditions, system, speed_bound)
         if "stabcond2" in conditions:
             c = conditions["stabcond2"]
             s2 = stabcond2_run(values["alpha_d"], values["sigma0"], values["k_d"], values["delta_los"], "undecided")
-            ok_row("stabcond2", s2.status == c["status"], f"eq:stabCond2 {s2.status}, as stated",
-                   f"stabcond2: stated '{c['status']}' but the arithmetic gives '{s2.status}'")
+            ok_row("stabcond2", s2.status == c["status"] and s2.numbers["lhs_exact"] == c.get("lhs_exact"),
+                   f"eq:stabCond2 {s2.status}, as stated",
+                   f"stabcond2: stated '{c['status']}' with left-hand side {_short(c.get('lhs_exact'), 80)}, but the "
+                   f"arithmetic gives '{s2.status}' with {s2.numbers['lhs_exact']}")
     except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError, RecursionError) as exc:
         # what a field of the wrong type or scale does to an exact check that reads it (a float
         # view of '1e400', a string where a matrix belongs): the file is malformed, in one line
         raise CertificateError(f"certificate is malformed: {_short(exc)}") from None
+
+    _check_summaries(conditions, rows, stored)
 
     from lyapcheck.paper.conditions.base import STABILITY_CLASSES
 

@@ -117,6 +117,8 @@ def verify_box_refutation(problem: Problem, box: ParameterBox, dynamics: str, re
     refuted = sector.refutation([exact.matrix([[-1, v.c], [0, -v.a]]), exact.matrix([[-1, v.c], [v.b, -v.a]])])
     if refuted is None:
         return False, "the stated point is not refuted (Shorten-Narendra does not apply there)"
+    if any(result["refutation"].get(key) != value for key, value in refuted.items()):
+        return False, "the stated A0A1, A0A1inv or statement are not those re-derived at the point"
     return True, f"refuted at a point of the box: {refuted['statement']}"
 
 
