@@ -219,6 +219,28 @@ def _tightness(cond: dict[str, Any]) -> tuple[list[tuple[str, str]], str]:
     return rows, ""
 
 
+#: said before the text of a decided class this version does not know (``verify`` fails it)
+UNKNOWN_CLASS = "(not checked: lyapcheck knows no such class) "
+
+
+def shown_summary(name: str, cond: dict[str, Any], doc: dict[str, Any]) -> str:
+    """The sentence a reader sees: for a decided class, the one its data give
+    (:func:`lyapcheck.paper.claims.summary`, as ``verify`` regenerates it), never the file's own
+    text; for the others, the file's reason. A class this version does not know is shown as
+    written, said to be unchecked."""
+    from lyapcheck.paper import claims
+
+    box = doc.get("box")
+    if cond.get("status") in claims.DECIDED and not claims.known(name, isinstance(box, dict)):
+        return UNKNOWN_CLASS + _str(cond.get("summary", ""))
+    try:
+        text = claims.summary(name, cond, _dict(_dict(doc.get("inputs")).get("exact_si")),
+                              box if isinstance(box, dict) else None)
+    except claims.MALFORMED:
+        return "(no sentence: the data of this condition are malformed)"
+    return text if text is not None else _str(cond.get("summary", ""))
+
+
 def _conditions(doc: dict[str, Any], eqs: Equations) -> list[ConditionView]:
     conditions = _dict(doc.get("conditions"))
     views = []
@@ -236,7 +258,7 @@ def _conditions(doc: dict[str, Any], eqs: Equations) -> list[ConditionView]:
         if tightness:
             shown_elsewhere |= set(TIGHTNESS_KEYS)
         rest = {k: v for k, v in cond.items() if k not in shown_elsewhere}
-        view = ConditionView(name, CONDITION_TITLES.get(name, name), status, _str(cond.get("summary", "")),
+        view = ConditionView(name, CONDITION_TITLES.get(name, name), status, shown_summary(name, cond, doc),
                              dict_items(rest, eqs), tightness=tightness, tightness_note=tightness_note)
         if name.startswith("prop41") and status == "certified":
             view.extra = _gamma(doc, cond, eqs)
