@@ -48,6 +48,12 @@ SWITCHING_MIN_GROWTH: Final = 1e-9
 #: ``rho(M) - 1`` is within a few orders of magnitude of ``SWITCHING_MIN_GROWTH``.
 SWITCHING_ENCLOSURE_BITS: Final = (96, 192, 384)
 
+#: The paper's ultimate_bound over a box: where every candidate ellipsoid of a stage fails its exact
+#: check as solved, each candidate's Q is retried inflated by 1 + d for these d in turn (the exact
+#: check decides each). On numpy's SSE loops with OpenBLAS's Nehalem kernel every rounded Q of the
+#: +-2 % box fails by about 5e-11 relative; 1e-4 recovers the bound (0.4236 mm, 5 stages). Search only
+BOX_STAGE_Q_INFLATIONS: Final = (1e-4, 1e-3, 1e-2, 1e-1)
+
 #: Wall-time limit of one condition class at one point (``certify``): past it the class reports
 #: ``inconclusive`` naming this limit. Far above the 1-6 s the slowest class takes at sane gains.
 CLASS_TIME_LIMIT_S: Final = 120.0
