@@ -18,7 +18,8 @@ import numpy as np
 from lyapcheck.paper.conditions.base import STABILITY_CLASSES, System
 from lyapcheck.results import ConditionResult
 from lyapcheck.params import Problem
-from lyapcheck.timing import ClassTimeLimit, time_limit  # re-exported: the paper's classes use them here
+from lyapcheck.paper.system import build_system, exact_values, system_from_values  # noqa: F401 (re-exported)
+from lyapcheck.timing import ClassTimeLimit, time_limit  # noqa: F401 (re-exported: the paper's classes use them)
 
 log = logging.getLogger(__name__)
 
@@ -43,34 +44,6 @@ def not_applicable(name: str, missing: tuple[str, ...]) -> ConditionResult:
     return ConditionResult(name, "not_applicable",
                            f"needs {' and '.join(flags)} (or {', '.join(keys)} in the TOML file); not run",
                            numbers={"missing_inputs": keys})
-
-
-def exact_values(problem: Problem) -> dict[str, Any]:
-    g, sw = problem.gains, problem.swimmer
-    return {"alpha_d": g.alpha_d, "sigma0": g.sigma0, "k_d": g.k_d, "delta_los": g.delta_los,
-            "los_speed": g.los_speed, "e11": sw.e11, "e11_hat": sw.e11_hat}
-
-
-def system_from_values(dynamics: str, values: dict[str, Any], d_max: Any) -> System:
-    """Exact structured error dynamics from the code generated out of the sympy derivation."""
-    from symbolic import _generated
-
-    if dynamics not in ("derived", "printed"):
-        from lyapcheck.errors import InvalidParameter
-
-        raise InvalidParameter("dynamics", "one of 'derived', 'printed'", dynamics)
-    data = getattr(_generated, dynamics)(**values)
-    return System(dynamics=dynamics, A=data["A"], B=data["B"], E=data["E"], rho_sup=data["rho_sup"],
-                  sigma0=values["sigma0"], delta=values["delta_los"],
-                  speed=values["los_speed"] if dynamics == "derived" else Fraction(1), d_max=d_max)
-
-
-def build_system(problem: Problem, dynamics: str) -> System:
-    """The exact structured error dynamics at this parameter point."""
-    # without a disturbance bound only the d-free classes run (NEEDS); d* = 0 in their System
-    # changes nothing they compute
-    d_max = problem.d_max if problem.d_max is not None else Fraction(0)
-    return system_from_values(dynamics, exact_values(problem), d_max)
 
 
 def run_conditions(problem: Problem, dynamics: str,

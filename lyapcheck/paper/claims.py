@@ -79,6 +79,7 @@ it cannot show.
 
 from __future__ import annotations
 
+import decimal
 import math
 from dataclasses import dataclass
 from fractions import Fraction
@@ -118,6 +119,51 @@ class Context:
 
 
 Sentence = Callable[[Mapping[str, Any], str, Context], str]
+
+
+# -- figures as the sentences print them (the classes import these from here) --------------------------
+
+def significant(value: Fraction, digits: int = 6) -> str:
+    """``value`` with ``digits`` significant digits (like ``:.6g``), exactly rounded at any magnitude."""
+    with decimal.localcontext() as ctx:
+        ctx.prec = digits
+        ctx.Emax, ctx.Emin = decimal.MAX_EMAX, decimal.MIN_EMIN
+        # one correctly rounded division; Decimal exponents do not overflow where floats do
+        rounded = (decimal.Decimal(value.numerator) / decimal.Decimal(value.denominator)).normalize()
+        return format(rounded, "g")
+
+
+#: the arguments a switched_ges refutation states (its ``argument`` key)
+ARGUMENT_SWITCHING = "periodic_switching_2x2"
+ARGUMENT_VERTEX = "vertex_not_hurwitz"
+
+
+def envelope(cert: Mapping[str, Any], sigma0: Fraction,
+             time_scale: Fraction | None = None) -> tuple[float, float, float]:
+    """``(k, rate, k_eps_s)`` of ``|x(t)| <= k |x0| exp(-rate t)`` (``x = (eps, sigma0 s)/Delta``,
+    rate in 1/s) and the constant for ``|(eps, s)|``, from a certificate's ``mu_scaled``, ``c1``,
+    ``c2`` and its scaling's time scale (or ``time_scale``, before the scaling is stored)."""
+    mu, c1, c2 = (Fraction(cert[key]) for key in ("mu_scaled", "c1", "c2"))
+    if time_scale is None:
+        time_scale = Fraction(cert["scaling"]["time_scale"])
+    k = math.sqrt(float(c2 / c1))
+    lam = float(mu * time_scale) / 2
+    s0 = float(sigma0)
+    # x = diag(1, sigma0) (eps, s)/Delta: the constant for |(eps, s)| pays the conditioning of that map
+    return k, lam, k * max(1.0, s0) / min(1.0, s0)
+
+
+#: relative shrink of Omega_SO (given as a float-derived Fraction) to a safe lower bound
+OMEGA_ROUNDING = Fraction(1, 10**12)
+
+
+def figure_text(x: Fraction) -> str:
+    """``x`` to 4 significant digits, or what it is beyond the double range."""
+    try:
+        value: float | None = float(x)
+    except OverflowError:  # beyond the double range (extreme corners of a box)
+        value = None
+    return f"{value:.4g}" if value is not None else ("-" if x < 0 else "") + "beyond 1.8e308"
 
 
 def summary(name: str, condition: Mapping[str, Any], inputs: Mapping[str, Any] | None = None,
@@ -276,8 +322,6 @@ def _prop41_refuted(c: Mapping[str, Any], name: str, ctx: Context) -> str:
 
 
 def _stabcond2(c: Mapping[str, Any], name: str, ctx: Context) -> str:
-    from lyapcheck.paper.conditions.stabcond2 import significant
-
     value = _exact(c, "lhs_exact")
     return (f"(sigma0 alpha_d Delta)^2 + 2 alpha_d Delta (1 + k_d/alpha_d) = {significant(value)} "
             + ("<= 1" if value <= 1 else "> 1"))
@@ -300,7 +344,6 @@ def _switched_certified(c: Mapping[str, Any], name: str, ctx: Context) -> str:
 
 def _switched_refuted(c: Mapping[str, Any], name: str, ctx: Context) -> str:
     from lyapcheck import exact
-    from lyapcheck.paper.conditions.switching import ARGUMENT_SWITCHING, ARGUMENT_VERTEX
 
     ref = _table(c, "refutation")
     if ref.get("argument") == ARGUMENT_VERTEX:
@@ -347,8 +390,6 @@ def _sos_gas(c: Mapping[str, Any], name: str, ctx: Context) -> str:
 
 
 def _ges(c: Mapping[str, Any], name: str, ctx: Context) -> str:
-    from lyapcheck.paper.conditions.ges import envelope
-
     k, rate, k_eps_s = envelope(_table(c, "certificate"), ctx.value("sigma0"))
     return (f"GES: |x(t)| <= {k:.3g} |x0| exp(-{rate:.3g} t) for every start "
             f"(x = (eps, sigma0 s)/Delta; k = {k_eps_s:.3g} for |(eps, s)|), from a quadratic form "
@@ -356,8 +397,6 @@ def _ges(c: Mapping[str, Any], name: str, ctx: Context) -> str:
 
 
 def _saturated(c: Mapping[str, Any], name: str, ctx: Context) -> str:
-    from lyapcheck.paper.conditions.saturated import OMEGA_ROUNDING
-
     cert = _table(c, "certificate")
     delta = ctx.value("delta_los")
     d_max = ctx.value("d_max") if ctx.inputs.get("d_max") is not None else Fraction(0)
@@ -423,8 +462,7 @@ def _box_prop41_refuted(c: Mapping[str, Any], name: str, ctx: Context) -> str:
 
 
 def _box_sector_certified(c: Mapping[str, Any], name: str, ctx: Context) -> str:
-    from lyapcheck.paper.boxes.quadratic import sector_polytope
-    from lyapcheck.paper.conditions.sos import ScaledDynamics
+    from lyapcheck.paper.conditions.base import ScaledDynamics, sector_polytope
 
     cert = _table(c, "certificate")
     k = math.sqrt(float(_exact(cert, "c2") / _exact(cert, "c1")))
@@ -479,8 +517,6 @@ def _box_ultimate(c: Mapping[str, Any], name: str, ctx: Context) -> str:
 
 
 def _box_saturated(c: Mapping[str, Any], name: str, ctx: Context) -> str:
-    from lyapcheck.paper.boxes.saturated import figure_text
-
     reach = _table(_table(c, "certificate"), "reach")
     text = (f"for every gain set with {ctx.describe()}, from ANY start and every |d_perp| <= d*, the real "
             f"(saturated) loop enters {{|eps + sigma0 s| <= {figure_text(_exact(reach, 'Y_q'))} m, "

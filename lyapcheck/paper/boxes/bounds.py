@@ -37,11 +37,11 @@ from lyapcheck import exact, poly
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
 from lyapcheck.paper.conditions.sos import ScaledDynamics, is_sign_symmetric
 from lyapcheck.params import Problem
+from lyapcheck.paper.system import build_system
 
 
 def _box_data(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any] | None:
     """Ranges of ``c, a, b, k`` over the box (exact), ``Delta_max`` and the box's ``root ~ sqrt(b)``."""
-    from lyapcheck.certification import build_system
     from lyapcheck.paper.conditions.sos import scaled_dynamics
 
     rows = []

@@ -17,6 +17,8 @@ from typing import Any, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.params import FIELD_BY_KEY, Problem, validate_field
+from lyapcheck.paper.conditions.base import ScaledDynamics, scaled_dynamics
+from lyapcheck.paper.system import build_system
 
 
 #: parameters a box may span -> the key of the FIELDS table
@@ -113,8 +115,6 @@ def stored_hull(problem: Problem, box: ParameterBox, dynamics: str,
 
 def scaled_hull(problem: Problem, box: ParameterBox, dynamics: str) -> tuple[list[Any], Fraction] | None:
     """Vertices of the ``(c, a, b)`` box over the parameter box, and ``min |a11|`` (exact)."""
-    from lyapcheck.certification import build_system
-    from lyapcheck.paper.conditions.sos import ScaledDynamics, scaled_dynamics
 
     points = []
     for p in corner_problems(problem, box):

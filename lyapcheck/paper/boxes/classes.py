@@ -16,6 +16,7 @@ from typing import Any, Mapping
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.paper.boxes.box import ParameterBox, problem_at_point
 from lyapcheck.params import Problem
+from lyapcheck.paper.system import build_system
 
 
 #: classes with box certificates, in the order of :data:`lyapcheck.certification.CONDITION_ORDER`:
@@ -97,7 +98,6 @@ def verify_box_refutation(problem: Problem, box: ParameterBox, dynamics: str, re
                           cls: str) -> tuple[bool, str]:
     """Re-check a box's refutation: its point lies in the box and is refuted there, exactly."""
     from lyapcheck import exact
-    from lyapcheck.certification import build_system
     from lyapcheck.paper.conditions import sector
     from lyapcheck.paper.conditions.sos import scaled_dynamics
 

@@ -7,6 +7,7 @@ from typing import Any, Mapping, Sequence
 
 from lyapcheck.paper.boxes.box import ParameterBox, problem_at_point, sample_points
 from lyapcheck.params import Problem
+from lyapcheck.paper.system import build_system
 
 
 #: starting radii (in x = (eps, sigma0 s)/Delta) and directions of the cross-check trajectories:
@@ -36,7 +37,6 @@ def envelope_ratio(problem: Problem, k: float, rate_per_s: float, dynamics: str 
     import numpy as np
     from scipy.integrate import solve_ivp
 
-    from lyapcheck.certification import build_system
     from lyapcheck.paper.conditions.sos import scaled_dynamics
 
     dyn = scaled_dynamics(build_system(problem, dynamics))

@@ -60,6 +60,7 @@ from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
 from lyapcheck.paper.conditions.rate_search import largest_proved_rate
 from lyapcheck.params import Problem
 from lyapcheck.sos.polynomials import Poly, Ring
+from lyapcheck.paper.system import build_system
 
 #: terms ``w^k y l_k^T x`` of the certificate: 6, not the point class's 4 (with 4, no certificate of
 #: this form exists at alpha_d = 750, k_d = 0.1125, a corner of the +-25 % box around the paper's
@@ -119,7 +120,6 @@ class EntryBox:
 
 def entry_box(problem: Problem, box: ParameterBox, dynamics: str) -> EntryBox | str:
     """The :class:`EntryBox` of ``box`` from its corners, or why the class does not apply."""
-    from lyapcheck.certification import build_system
     from lyapcheck.paper.conditions.sos import scaled_dynamics
 
     values = []

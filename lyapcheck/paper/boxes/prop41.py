@@ -34,6 +34,7 @@ from lyapcheck.paper import claims
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems, problem_at_point
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.params import Problem
+from lyapcheck.paper.system import build_system
 
 #: the entries that vary over a box, in the order a stored vertex lists them
 VERTEX_KEYS: tuple[str, ...] = ("a11", "a12", "a22", "g", "e")
@@ -48,7 +49,6 @@ def _entries(system: System, iss: bool) -> tuple[Fraction, ...]:
 
 def _corner_systems(problem: Problem, box: ParameterBox, dynamics: str) -> list[System] | None:
     """The exact system at every corner, or None where ``A`` is not upper triangular."""
-    from lyapcheck.certification import build_system
 
     systems = [build_system(p, dynamics) for p in corner_problems(problem, box)]
     return None if any(s.A[1][0] != 0 for s in systems) else systems
@@ -165,7 +165,6 @@ def verify_prop41_box(problem: Problem, box: ParameterBox, dynamics: str, result
 def verify_prop41_refutation(problem: Problem, point: Mapping[str, Fraction], dynamics: str,
                              data: Mapping[str, Any]) -> tuple[bool, str]:
     """The stated refutation, re-derived at ``point`` (a gain set the caller has checked is in the box)."""
-    from lyapcheck.certification import build_system
     from lyapcheck.paper.conditions import prop41
 
     system = build_system(problem_at_point(problem, point), dynamics)

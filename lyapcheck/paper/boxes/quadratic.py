@@ -37,7 +37,9 @@ from typing import Any, Mapping, Sequence
 
 from lyapcheck.paper import claims
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems, scaled_hull, stored_hull
+from lyapcheck.paper.conditions.base import sector_polytope
 from lyapcheck.params import Problem
+from lyapcheck.paper.system import build_system
 
 
 def certify_ges_box(problem: Problem, box: ParameterBox, dynamics: str) -> dict[str, Any]:
@@ -131,30 +133,6 @@ def verify_ges_box(problem: Problem, box: ParameterBox, dynamics: str, result: M
 SECTOR_BOX_VERTICES = 8
 
 
-def sector_polytope(vertices: Sequence[Any]) -> list[Any]:
-    """The matrices ``[[-1, c], [r, -a]]`` at the corners of ``c, a`` ranges and ``r in {0, b_max}``.
-
-    In scaled coordinates the sector system is ``x' = [[-1, c], [r, -a]] x`` with ``0 < r <= b``
-    (:mod:`lyapcheck.paper.conditions.sector` in the coordinates of :mod:`lyapcheck.paper.conditions.ges`), and
-    over the box ``c``, ``a``, ``b`` range over the intervals spanned by the ``(c, a, b)`` hull. The
-    matrix is affine in ``(c, a, r)``, so every matrix of every gain set in the box lies in the
-    convex hull of these, and a quadratic form decreasing at them decreases at every one.
-    """
-    from lyapcheck import exact
-
-    cs = sorted({v.c for v in vertices})
-    as_ = sorted({v.a for v in vertices})
-    b_max = max(v.b for v in vertices)
-    out = []
-    for c in (cs[0], cs[-1]):
-        for a in (as_[0], as_[-1]):
-            for r in (Fraction(0), b_max):
-                m = exact.matrix([[-1, c], [r, -a]])
-                if m not in out:
-                    out.append(m)
-    return out
-
-
 def _eigen_bounds(P: Any) -> tuple[Fraction, Fraction] | None:
     """Rationals ``c1 <= lambda_min(P)``, ``c2 >= lambda_max(P)``, checked exactly (``c1 > 0``)."""
     import numpy as np
@@ -178,7 +156,6 @@ def certify_sector_box(problem: Problem, box: ParameterBox, dynamics: str) -> di
     function (Shorten-Narendra): that corner is a gain set of the box, so no ``P`` serves the box.
     """
     from lyapcheck import exact
-    from lyapcheck.certification import build_system
     from lyapcheck.paper.conditions import sector
     from lyapcheck.paper.conditions.sos import scaled_dynamics
 

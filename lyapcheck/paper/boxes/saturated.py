@@ -36,8 +36,10 @@ from typing import Any, Mapping
 
 from lyapcheck import exact
 from lyapcheck.paper import claims
+from lyapcheck.paper.claims import OMEGA_ROUNDING, figure_text
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
 from lyapcheck.params import Problem
+from lyapcheck.paper.system import build_system
 
 
 #: digits of the exact square roots, and the relative margin that keeps S_1 > S* and Y_q < Y_sat strict
@@ -54,16 +56,8 @@ def _float(x: Fraction) -> float | None:
         return None
 
 
-def figure_text(x: Fraction) -> str:
-    """``x`` to 4 significant digits, or what it is beyond the double range."""
-    value = _float(x)
-    return f"{value:.4g}" if value is not None else ("-" if x < 0 else "") + "beyond 1.8e308"
-
-
 def _corner_data(problem: Problem, box: ParameterBox, dynamics: str) -> list[dict[str, Any]] | str:
     """Per corner: the system, its k_d, alpha_d and Y_sat^2; or why the class does not apply."""
-    from lyapcheck.certification import build_system
-    from lyapcheck.paper.conditions.saturated import OMEGA_ROUNDING
     from symbolic._generated import unsaturated_strip_sq
 
     if dynamics != "derived":

@@ -58,6 +58,7 @@ import numpy as np
 
 from lyapcheck import exact
 from lyapcheck.paper import claims
+from lyapcheck.paper.claims import envelope
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.paper.conditions.rate_search import largest_proved_rate
 from lyapcheck.paper.conditions.rounding import ceil_to_digits, floor_to_digits
@@ -416,21 +417,6 @@ def search(dyns: Sequence[ScaledDynamics], log: list[dict[str, Any]]) -> dict[st
         return None if candidate is None else _exact_candidate(dyns, candidate, mu)
 
     return largest_proved_rate(proved, low=MU_LOW, high=MU_HIGH, floor=MU_FLOOR, steps=MU_BISECTION_STEPS)
-
-
-def envelope(cert: Mapping[str, Any], sigma0: Fraction,
-             time_scale: Fraction | None = None) -> tuple[float, float, float]:
-    """``(k, rate, k_eps_s)`` of ``|x(t)| <= k |x0| exp(-rate t)`` (``x = (eps, sigma0 s)/Delta``,
-    rate in 1/s) and the constant for ``|(eps, s)|``, from a certificate's ``mu_scaled``, ``c1``,
-    ``c2`` and its scaling's time scale (or ``time_scale``, before the scaling is stored)."""
-    mu, c1, c2 = (Fraction(cert[key]) for key in ("mu_scaled", "c1", "c2"))
-    if time_scale is None:
-        time_scale = Fraction(cert["scaling"]["time_scale"])
-    k = math.sqrt(float(c2 / c1))
-    lam = float(mu * time_scale) / 2
-    s0 = float(sigma0)
-    # x = diag(1, sigma0) (eps, s)/Delta: the constant for |(eps, s)| pays the conditioning of that map
-    return k, lam, k * max(1.0, s0) / min(1.0, s0)
 
 
 def _numbers(system: System, dyn: ScaledDynamics, cert: dict[str, Any]) -> dict[str, Any]:

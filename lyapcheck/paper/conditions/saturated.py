@@ -67,6 +67,7 @@ import numpy as np
 
 from lyapcheck import exact, poly
 from lyapcheck.paper import claims
+from lyapcheck.paper.claims import OMEGA_ROUNDING
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
 from lyapcheck.paper.conditions.sos import bases, scaled_dynamics
@@ -78,8 +79,6 @@ SQRT2_UPPER = Fraction(141422, 100000)
 #: platform checks the same level unless the solvers' c straddle a grid point: then one step)
 LEVEL_BACK_OFF = 1e-3
 LEVEL_DIGITS = 4
-#: relative shrink of Omega_SO (given as a float-derived Fraction) to a safe lower bound
-OMEGA_ROUNDING = Fraction(1, 10**12)
 
 
 def build_level_program(cp: Any, deg_v: int) -> tuple[Any, dict[str, Any], dict[str, Any]]:

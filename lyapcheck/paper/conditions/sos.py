@@ -40,7 +40,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from lyapcheck import exact, poly
-from lyapcheck.paper.conditions.base import System
+from lyapcheck.paper.conditions.base import ScaledDynamics, System, scaled_dynamics  # noqa: F401 (re-exported)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.certificates import GramPoly, check_lyapunov
 from lyapcheck.sos.definiteness import is_positive_definite
@@ -59,34 +59,6 @@ MU_MARGIN_FRACTION = 1e-3
 #: one trial of the decay-rate search at a rate mu: the solver's margin t (None: no point), and the
 #: exact check of its rounded solution, run only when called (a certificate, or None)
 Trial = tuple[float | None, Callable[[], "dict[str, Any] | None"]]
-
-
-@dataclass(frozen=True)
-class ScaledDynamics:
-    time_scale: Fraction
-    c: Fraction
-    a: Fraction
-    b: Fraction
-
-    def fields(self) -> tuple[poly.Poly, poly.Poly, poly.Poly]:
-        """Exact polynomial field ``(g_y, g_r)`` (cleared of ``q``) and ``q``, in (y, r)."""
-        q: poly.Poly = {(2, 0): Fraction(1), (0, 0): Fraction(1)}
-        e: poly.Poly = {(1, 0): Fraction(1), (0, 1): Fraction(-1)}
-        e_dot = poly.add(poly.scale(Fraction(-1), e), {(0, 1): self.c})
-        r_dot_linear: poly.Poly = {(0, 1): -self.a}
-        g_r = poly.add(poly.mul(r_dot_linear, q), poly.scale(self.b, e))
-        g_y = poly.add(poly.mul(e_dot, q), g_r)
-        return g_y, g_r, q
-
-
-def scaled_dynamics(system: System) -> ScaledDynamics | None:
-    a = system.A
-    if not (a[1][0] == 0 and a[0][0] < 0 and a[1][1] < 0 and system.sigma0 > 0
-            and system.B == ((0, 0), (1, 0))):
-        return None
-    ts = -a[0][0]
-    return ScaledDynamics(time_scale=ts, c=a[0][1] / (system.sigma0 * ts), a=-a[1][1] / ts,
-                          b=system.sigma0 * system.speed / (system.delta * ts))
 
 
 # -- sign symmetry (used by sos_bound's search) -----------------------------------------------

@@ -7,9 +7,9 @@ out of range; it is then ``None`` and ``lhs_exact`` still carries the number.
 
 from __future__ import annotations
 
-import decimal
 from fractions import Fraction
 
+from lyapcheck.paper.claims import significant  # noqa: F401 (where it was; claims writes the sentences)
 from lyapcheck.results import ConditionResult
 
 
@@ -19,16 +19,6 @@ def float_or_none(value: Fraction) -> float | None:
         return float(value)
     except OverflowError:
         return None
-
-
-def significant(value: Fraction, digits: int = 6) -> str:
-    """``value`` with ``digits`` significant digits (like ``:.6g``), exactly rounded at any magnitude."""
-    with decimal.localcontext() as ctx:
-        ctx.prec = digits
-        ctx.Emax, ctx.Emin = decimal.MAX_EMAX, decimal.MIN_EMIN
-        # one correctly rounded division; Decimal exponents do not overflow where floats do
-        rounded = (decimal.Decimal(value.numerator) / decimal.Decimal(value.denominator)).normalize()
-        return format(rounded, "g")
 
 
 def run(alpha_d: Fraction, sigma0: Fraction, k_d: Fraction, delta: Fraction,

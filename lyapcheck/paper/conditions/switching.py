@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 from lyapcheck import exact
 from lyapcheck import tolerances as tol
 from lyapcheck.paper import claims
+from lyapcheck.paper.claims import ARGUMENT_SWITCHING, ARGUMENT_VERTEX
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
 from lyapcheck.errors import CertificateError, InvalidParameter, SolverError
@@ -65,8 +66,6 @@ Interval = tuple[Fraction, Fraction]
 IntervalMatrix = tuple[tuple[Interval, ...], ...]
 
 NAME = "switched_ges"
-ARGUMENT_SWITCHING = "periodic_switching_2x2"
-ARGUMENT_VERTEX = "vertex_not_hurwitz"
 ARGUMENT_CQLF = "common_quadratic_lyapunov"
 
 #: the low end of the switching, as a fraction of ``rho_sup``: ``rho = 0`` itself is not in the
