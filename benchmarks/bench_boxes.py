@@ -29,7 +29,7 @@ def main() -> None:
     parser.add_argument("--spec", default="examples/boxes-paper.toml", help="a box sweep spec with two axes")
     args = parser.parse_args()
 
-    from lyapcheck.certification import build_system
+    from lyapcheck.paper.certification import build_system
     from lyapcheck.paper.conditions import ges
     from sweeps.box_store import BoxStore
     from sweeps.box_summary import summarize_boxes

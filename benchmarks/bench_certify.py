@@ -55,8 +55,8 @@ def import_cost(module: str) -> float:
 def class_times() -> dict[str, float]:
     """Seconds per class at the paper's gains (derived), warm process, median of 3."""
     sys.path.insert(0, str(ROOT))
-    from lyapcheck import certification
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper import certification
+    from lyapcheck.paper.params import problem_from_sources
 
     problem = problem_from_sources(ROOT / "examples" / "paper.toml", {})
     spent: dict[str, list[float]] = {}

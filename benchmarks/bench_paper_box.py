@@ -50,7 +50,7 @@ def main() -> None:
 
     from lyapcheck.paper.boxes import ges_param
     from lyapcheck.paper.boxes.quadratic import certify_common_ges_box, verify_ges_box
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.params import problem_from_sources
 
     problem = problem_from_sources("examples/paper.toml", {})
     print("== the box of +-25 % around the paper's gains (alpha_d = 600 1/s, k_d = 0.15 1/s)")

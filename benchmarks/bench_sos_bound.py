@@ -57,7 +57,7 @@ def bounds_in(tree: Path, per_axis: int, before: bool) -> tuple[dict[str, float 
     """Per point the certified bound (None if none) and the total wall time of the search, with
     the code of ``tree`` (``before``: the old coordinates and cap, in this tree only)."""
     sys.path.insert(0, str(tree))
-    from lyapcheck.certification import build_system
+    from lyapcheck.paper.certification import build_system
     from lyapcheck.paper.conditions import sos_bound
 
     sos_bound.program()  # loaded once, outside the timing

@@ -46,8 +46,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _systems(n: int, seed: int) -> list[Any]:
     """Random gain sets around the paper's (alpha_d, k_d, sigma0, Delta_LOS), exact."""
-    from lyapcheck.certification import build_system
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.certification import build_system
+    from lyapcheck.paper.params import problem_from_sources
 
     base = problem_from_sources(ROOT / "examples" / "paper.toml", {})
     rng = np.random.default_rng(seed)
@@ -139,7 +139,7 @@ def bench_sector(points: int, workers: int) -> None:
 def bench_simulation(trajectories: int, ivp: int) -> None:
     from scipy.integrate import solve_ivp
 
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.params import problem_from_sources
     from lyapcheck.simulation.disturbances import Constant
     from lyapcheck.simulation.integrator import DEFAULT_RTOL
     from lyapcheck.simulation.model import ClosedLoop, LoopParams

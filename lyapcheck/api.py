@@ -34,7 +34,7 @@ from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.modelfile import Model
-    from lyapcheck.params import Problem
+    from lyapcheck.paper.params import Problem
     from lyapcheck.results import ConditionResult
 
 #: local worker processes a sweep may start (each is a process with its own solver state; far
@@ -51,7 +51,7 @@ SHORT_KEYS: dict[str, str] = {
 
 def flat_parameters(params: Mapping[str, Any]) -> dict[str, object]:
     """``{"section.name": value}`` from a nested (TOML-shaped), dotted or short-named mapping."""
-    from lyapcheck.params import flatten_tables
+    from lyapcheck.paper.params import flatten_tables
 
     flat: dict[str, object] = {}
     nested = {k: v for k, v in params.items() if isinstance(v, Mapping)}
@@ -66,7 +66,7 @@ def flat_parameters(params: Mapping[str, Any]) -> dict[str, object]:
 
 
 def problem_from(params: Any, overrides: Mapping[str, object] | None = None) -> "Problem":
-    """A validated :class:`~lyapcheck.params.Problem` from any accepted parameters form.
+    """A validated :class:`~lyapcheck.paper.params.Problem` from any accepted parameters form.
 
     Parameters
     ----------
@@ -77,7 +77,7 @@ def problem_from(params: Any, overrides: Mapping[str, object] | None = None) -> 
     overrides
         Values laid over ``params`` (keys as in a mapping), as the command-line flags are.
     """
-    from lyapcheck.params import Problem, build_problem, problem_from_sources
+    from lyapcheck.paper.params import Problem, build_problem, problem_from_sources
 
     extra = flat_parameters(overrides or {})
     if isinstance(params, Problem):
@@ -94,7 +94,7 @@ def problem_from(params: Any, overrides: Mapping[str, object] | None = None) -> 
 # -- certify -------------------------------------------------------------------------------------
 def class_selection(classes: str | Sequence[str] | None) -> tuple[str, ...]:
     """``None`` (all), ``"quick"``, a comma-separated string or a sequence of class names."""
-    from lyapcheck.certification import CONDITION_ORDER, QUICK_CLASSES
+    from lyapcheck.paper.certification import CONDITION_ORDER, QUICK_CLASSES
 
     if classes is None:
         return CONDITION_ORDER
@@ -249,8 +249,8 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
     if settings or candidate is not None:
         raise InvalidParameter("set" if settings else "candidate", "used with a model file (model=...)",
                                settings if settings else candidate)
-    from lyapcheck.certificate import build_document
-    from lyapcheck.certification import run_conditions, verdict
+    from lyapcheck.paper.certificate import build_document
+    from lyapcheck.paper.certification import run_conditions, verdict
 
     problem = problem_from(params, overrides)
     results = run_conditions(problem, dynamics, class_selection(classes))
@@ -259,8 +259,8 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
     outcome = verdict(results)
     doc = build_document(problem, dynamics, results, outcome)
     if linear_views:
-        from lyapcheck.certification import build_system
-        from lyapcheck.linalg_views import linear_views as views
+        from lyapcheck.paper.certification import build_system
+        from lyapcheck.paper.linalg_views import linear_views as views
 
         doc["linear_views"] = views(build_system(problem, dynamics))
     return CertifyResult(verdict=outcome, dynamics=dynamics, conditions=results, document=doc)
@@ -366,7 +366,7 @@ def certify_box(params: Any = None, box: Sequence[str] | Any = (), *, dynamics: 
     """
     from lyapcheck.paper.boxes.classes import BOX_CLASSES, DEFAULT_BOX_CLASSES, certify_box as prove_box
     from lyapcheck.paper.boxes.box import ParameterBox, parse_box
-    from lyapcheck.certificate import build_box_document
+    from lyapcheck.paper.certificate import build_box_document
     from lyapcheck.results import ConditionResult
 
     chosen = _box_classes(classes, BOX_CLASSES) if classes is not None else list(DEFAULT_BOX_CLASSES)
@@ -399,7 +399,7 @@ def _box_classes(classes: str | Sequence[str] | None, allowed: Sequence[str]) ->
 def _box_filled(params: Any, overrides: Mapping[str, object] | None, box: Any) -> Any:
     """Parameters with each boxed one set to its interval's low end (a valid placeholder)."""
     from lyapcheck.paper.boxes.box import BOX_FIELDS
-    from lyapcheck.params import FIELD_BY_KEY, Problem
+    from lyapcheck.paper.params import FIELD_BY_KEY, Problem
 
     def placeholder(key: str, value: Any) -> str:  # the corners set the exact values
         return f"{float(value)!r} {FIELD_BY_KEY[key].kind.si_unit or ''}".strip()
@@ -408,7 +408,7 @@ def _box_filled(params: Any, overrides: Mapping[str, object] | None, box: Any) -
     if isinstance(params, Problem):
         params = dict(params.given)
     if params is None or isinstance(params, (str, Path)):
-        from lyapcheck.params import flatten_tables, load_toml
+        from lyapcheck.paper.params import flatten_tables, load_toml
 
         params = {} if params is None else flatten_tables(load_toml(params), str(params))
     return {**flat_parameters(params), **flat_parameters(overrides or {}), **lows}
@@ -457,7 +457,7 @@ class VerifyResult:
 def verify(certificate: str | Path | Mapping[str, Any] | CertifyResult) -> VerifyResult:
     """Re-check a certificate exactly, without a solver (file path, document or result): the
     paper's certificates and model-file certificates alike."""
-    from lyapcheck.certificate import check_document, verify_document
+    from lyapcheck.paper.certificate import check_document, verify_document
     from lyapcheck.models import certificate as model_certificate
 
     if isinstance(certificate, CertifyResult):

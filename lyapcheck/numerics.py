@@ -75,3 +75,18 @@ def describe() -> str:
 
     kernels = _openblas_kernels()
     return f"numpy {numpy.__version__} SIMD {_numpy_simd()}; OpenBLAS " + (", ".join(kernels) or "not identified")
+
+
+def package_versions() -> dict[str, str]:
+    """The packages whose versions decide what a search finds, and the floating-point platform
+    (:func:`lyapcheck.numerics.describe`), for information only: a certificate re-checks exactly
+    anywhere, and figures from two platforms agree within :mod:`lyapcheck.tolerances`."""
+    from importlib import metadata
+
+    out = {"floating_point": describe()}
+    for name in ("lyapcheck", "sympy", "numpy", "cvxpy", "clarabel", "control"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:  # pragma: no cover
+            out[name] = "absent"
+    return out

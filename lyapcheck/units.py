@@ -10,7 +10,7 @@ floating-point view ``float(x)`` of a value, which beyond :data:`FLOAT_MAX` is `
 JSON number, no arithmetic) and below :data:`FLOAT_MIN_NORMAL` a subnormal with fewer
 significant bits than the number given (0 below 5e-324). A decimal carries at most
 :data:`MAX_SIGNIFICANT_DIGITS` significant digits (see there). :func:`representable` checks
-the magnitude; :func:`lyapcheck.params.validate_field` applies it to every field.
+the magnitude; :func:`lyapcheck.paper.params.validate_field` applies it to every field.
 
 Rotation is handled apart from pint's own conversion: pint treats ``Hz`` and ``rad/s`` as the
 same dimension (1/s) and would turn ``2.8 Hz`` into ``2.8 rad/s``. A rotation *frequency* in
@@ -255,7 +255,7 @@ def parse_quantity(field: str, value: object, kind: Kind, *, bare_allowed: bool 
         Wrong type, not finite, wrong dimension, a bare number where a unit is required, more
         than :data:`MAX_SIGNIFICANT_DIGITS` digits, or an exponent that no unit brings back
         into the range of :data:`MAGNITUDES` (the range itself is checked by
-        :func:`lyapcheck.params.validate_field`, which knows the field's interval).
+        :func:`lyapcheck.paper.params.validate_field`, which knows the field's interval).
     """
     if isinstance(value, bool) or value is None:
         raise InvalidParameter(field, kind.example, value)

@@ -1,6 +1,6 @@
 """The certificate report's content: inputs, conditions, ultimate bound, figures, ledger, provenance.
 
-:func:`certificate_context` turns a certificate document (``lyapcheck.certificate`` schema)
+:func:`certificate_context` turns a certificate document (``lyapcheck.paper.certificate`` schema)
 into the data the template shows. Every string in it is plain text: the template escapes it.
 """
 
@@ -103,7 +103,7 @@ def _str(value: object) -> str:
 
 
 def _inputs(doc: dict[str, Any]) -> list[InputRow]:
-    from lyapcheck.params import FIELD_BY_KEY, validate_field
+    from lyapcheck.paper.params import FIELD_BY_KEY, validate_field
 
     inputs = _dict(doc.get("inputs"))
     given, exact_si = _dict(inputs.get("given")), _dict(inputs.get("exact_si"))
@@ -273,7 +273,7 @@ def _ledger(eqs: Equations) -> tuple[list[LedgerCard], str]:
     import re
 
     try:
-        from lyapcheck.ledger_view import all_claims
+        from lyapcheck.paper.ledger_view import all_claims
         from symbolic.ledger import build_ledger
 
         claims = all_claims()
@@ -409,7 +409,7 @@ def certificate_context(doc: dict[str, Any], *, ledger: bool = True, simulate: b
     Parameters
     ----------
     doc
-        A certificate document (``lyapcheck.certificate`` schema, version 1); unknown keys and
+        A certificate document (``lyapcheck.paper.certificate`` schema, version 1); unknown keys and
         condition classes are shown generically.
     ledger, simulate
         Include the claims ledger and the simulation figures (both on for real reports).

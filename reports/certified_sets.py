@@ -172,7 +172,8 @@ class StoragePolynomial:
 
 def storage_polynomial(doc: dict[str, Any]) -> StoragePolynomial | None:
     """``V`` of the document's certified ``sos_bound`` (exact composition, then floats)."""
-    from lyapcheck import exact, poly
+    from lyapcheck import exact
+    from lyapcheck.paper import poly
     from lyapcheck.paper.conditions.sos_bound import Z_V
 
     cert = as_dict(_certified(doc, "sos_bound").get("certificate"))

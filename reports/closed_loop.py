@@ -113,7 +113,7 @@ def simulate_certificate(doc: dict[str, Any]) -> LoopRun:
     LyapcheckError
         When the inputs do not describe a problem the simulator accepts (the report shows why).
     """
-    from lyapcheck.params import build_problem
+    from lyapcheck.paper.params import build_problem
     from lyapcheck.simulation.integrator import INTEGRATOR_NAME, STATUS_OK
     from lyapcheck.simulation.disturbances import Constant, Disturbance, from_description, stack_rows
     from lyapcheck.simulation.model import LoopParams

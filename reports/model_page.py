@@ -88,7 +88,7 @@ def read_certificate(path: str | Path) -> dict[str, Any]:
     InputFileError
         One line: missing, not JSON, not a certificate, or a schema this version does not read.
     """
-    from lyapcheck.certificate import read_document
+    from lyapcheck.paper.certificate import read_document
     from lyapcheck.models.certificate import read_json
 
     try:

@@ -3,7 +3,7 @@
 Modules, one concern each:
 
 ====================  =========================================================================
-``spec``              the sweep spec (TOML), validated through ``lyapcheck.params``
+``spec``              the sweep spec (TOML), validated through ``lyapcheck.paper.params``
 ``schema``            the store's variables, dtypes, fill values and status codes
 ``evaluate``          one unit of work: certify and simulate a batch of points
 ``fast_sector``       ``sector_ges`` with compiled conic data and Clarabel called directly

@@ -38,7 +38,7 @@ import numpy as np
 import numpy.typing as npt
 
 from lyapcheck.results import ConditionResult
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from sweeps.schema import BOUND_CLASSES, DISTURBANCE_SCENARIOS, MARGIN_SOURCE, VARIABLES, status_code
 from sweeps.soundness import violations
 from sweeps.spec import SweepSpec, cached_spec
@@ -60,11 +60,11 @@ def empty_result(n: int) -> Result:
 def certify_point(problem: Problem, classes: tuple[str, ...]) -> dict[str, ConditionResult]:
     """The requested condition classes at one point, on the derived dynamics.
 
-    Everything but ``sector_ges`` goes through :func:`lyapcheck.certification.run_conditions` (which
+    Everything but ``sector_ges`` goes through :func:`lyapcheck.paper.certification.run_conditions` (which
     runs only the requested classes); ``sector_ges`` goes through the direct Clarabel path of
     :mod:`sweeps.fast_sector`, decided by the same exact check.
     """
-    from lyapcheck.certification import build_system, run_conditions
+    from lyapcheck.paper.certification import build_system, run_conditions
     from sweeps import fast_sector
 
     others = tuple(c for c in classes if c != "sector_ges")

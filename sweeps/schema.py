@@ -33,7 +33,7 @@ import numpy as np
 from lyapcheck.paper.conditions import base as _base
 from lyapcheck.errors import InputFileError
 
-#: parameters a sweep may vary, mapped to their key in :data:`lyapcheck.params.FIELDS`
+#: parameters a sweep may vary, mapped to their key in :data:`lyapcheck.paper.params.FIELDS`
 SWEEPABLE: Final[dict[str, str]] = {
     "alpha_d": "gains.alpha_d",
     "sigma0": "gains.sigma0",
@@ -42,11 +42,11 @@ SWEEPABLE: Final[dict[str, str]] = {
     "d_max": "disturbance.d_max",
 }
 
-#: condition classes a sweep can run, in the order of :data:`lyapcheck.certification.CONDITION_ORDER`
+#: condition classes a sweep can run, in the order of :data:`lyapcheck.paper.certification.CONDITION_ORDER`
 #: (a test keeps the two equal; spelled out here so that reading a store needs no solver import)
 CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound",
                   "sos_gas", "ges", "saturated_loop", "sos_bound")
-#: run when the spec does not say: lyapcheck.certification.QUICK_CLASSES (the polynomial classes
+#: run when the spec does not say: lyapcheck.paper.certification.QUICK_CLASSES (the polynomial classes
 #: sos_gas, ges, saturated_loop and sos_bound cost 0.1-3 s per point)
 DEFAULT_CLASSES: Final = ("prop41_ges", "prop41_iss", "stabcond2", "sector_ges", "switched_ges", "ultimate_bound")
 #: classes whose exact pass proves stability of the error dynamics (lyapcheck.paper.conditions.base)

@@ -40,8 +40,8 @@ certified or refuted per box; ``sos_bound`` bounds ``limsup |eps|`` over each bo
     cross_check_points = 2        # random points simulated in every certified box (0: none)
     seed = 0                      # of those random points (per box: independent of run order)
 
-Every number goes through :func:`lyapcheck.params.validate_field` (the one validation path,
-with units and ranges from :data:`lyapcheck.params.FIELDS`); every error is an
+Every number goes through :func:`lyapcheck.paper.params.validate_field` (the one validation path,
+with units and ranges from :data:`lyapcheck.paper.params.FIELDS`); every error is an
 :class:`~lyapcheck.errors.InvalidParameter` with the one message template, and unknown keys
 are errors.
 """
@@ -59,7 +59,7 @@ from typing import Any, Final, Mapping, Sequence
 import numpy as np
 
 from lyapcheck.errors import InputFileError, InvalidParameter
-from lyapcheck.params import (
+from lyapcheck.paper.params import (
     FIELD_BY_KEY, POSITIVE, FieldSpec, Interval, Problem, build_problem, flatten_tables, validate_field,
 )
 from lyapcheck.simulation.scenarios import RTOL_RANGE

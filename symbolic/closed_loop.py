@@ -33,7 +33,7 @@ from symbolic.ilos import derive
 DynamicsName = Literal["derived", "printed"]
 DYNAMICS: tuple[DynamicsName, ...] = ("derived", "printed")
 
-#: the symbols a numeric evaluation needs, by parameter name used in lyapcheck.params
+#: the symbols a numeric evaluation needs, by parameter name used in lyapcheck.paper.params
 PARAMETER_SYMBOLS: dict[str, sp.Symbol] = {
     "alpha_d": S.alpha_d, "sigma0": S.sigma0, "k_d": S.k_d, "delta_los": S.Delta,
     "los_speed": S.U, "e11": S.e11, "e11_hat": S.e11_hat,

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lyapcheck.params import Problem, problem_from_sources
+from lyapcheck.paper.params import Problem, problem_from_sources
 from lyapcheck.simulation.integrator import Evaluation
 
 # the suite's unit-factor memo (lyapcheck.units) lives in a fresh directory, not the user's cache:

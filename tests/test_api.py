@@ -122,7 +122,7 @@ def test_plain_numbers_are_read_in_si_as_the_docs_promise() -> None:
 
     from lyapcheck.api import problem_from
     from lyapcheck.errors import InvalidParameter
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.params import problem_from_sources
 
     numbers = problem_from({"alpha_d": 600, "sigma0": 0.01, "k_d": 0.15, "delta_los": 0.00075, "e11": 9.3e-5,
                             "omega_so": 17.59})

@@ -10,10 +10,10 @@ from lyapcheck import exact, verify
 from lyapcheck.api import certify_box
 from lyapcheck.paper.boxes.bounds import _box_data, _vertices
 from lyapcheck.paper.boxes.box import parse_box
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions import sos_bound
 from lyapcheck.paper.conditions.sos import scaled_dynamics
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 
 #: the paper's gains +-2 %: the point bound is 0.3326 mm

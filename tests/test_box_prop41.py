@@ -13,9 +13,9 @@ from lyapcheck import exact, verify
 from lyapcheck.api import certify_box
 from lyapcheck.paper.boxes.prop41 import box_vertices, certify_prop41_box, verify_prop41_box
 from lyapcheck.paper.boxes.box import corner_problems, parse_box, problem_at_point
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions import prop41
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from symbolic import _generated
 from tests.conftest import PAPER_TOML
 

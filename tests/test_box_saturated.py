@@ -10,9 +10,9 @@ import sympy as sp
 
 from lyapcheck.paper.boxes.saturated import certify_saturated_box, verify_saturated_box
 from lyapcheck.paper.boxes.box import parse_box, problem_at_point
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions.saturated import OMEGA_ROUNDING, global_reach, reach_push
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from symbolic._generated import integrator_rates, unsaturated_strip_sq, windup_bound_sq
 from tests.conftest import PAPER_TOML
 

@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from lyapcheck import exact, poly
+from lyapcheck import exact
+from lyapcheck.paper import poly
 from lyapcheck.paper.boxes.sos_gas import certify_gas_box, verify_gas_box
 from lyapcheck.paper.boxes.box import corner_problems, parse_box, scaled_hull
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions import sos
 from lyapcheck.paper.conditions.sos import ScaledDynamics, scaled_dynamics
-from lyapcheck.params import Problem, problem_from_sources
+from lyapcheck.paper.params import Problem, problem_from_sources
 from tests.conftest import PAPER_TOML
 
 #: the paper's gains +-2 %

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from lyapcheck.paper.boxes.box import ParameterBox
 from lyapcheck.paper.boxes.classes import certify_box, verify_box, verify_box_refutation
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from lyapcheck.tolerances import FIGURE_GES_K_RTOL
 from sweeps.box_store import BoxStore
 from sweeps.box_summary import summarize_boxes

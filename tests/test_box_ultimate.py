@@ -14,9 +14,9 @@ from lyapcheck import exact
 from lyapcheck.paper.boxes.ultimate import (certify_ultimate_box, corner_systems, entry_ranges, rho_lower_box,
                                     verify_ultimate_box)
 from lyapcheck.paper.boxes.box import ParameterBox, parse_box
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions import ultimate
-from lyapcheck.params import Problem, problem_from_sources
+from lyapcheck.paper.params import Problem, problem_from_sources
 from symbolic import _generated
 from tests.conftest import PAPER_TOML
 

@@ -16,11 +16,11 @@ from lyapcheck.paper.boxes.box import ParameterBox, parse_box, sample_points
 from lyapcheck.paper.boxes.classes import refine, verify_box
 from lyapcheck.paper.boxes.cross_check import cross_check
 from lyapcheck.api import certify_box
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions import ges
 from lyapcheck.paper.conditions.sos import scaled_dynamics
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from symbolic import _generated
 from tests.conftest import PAPER_TOML
 

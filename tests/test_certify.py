@@ -10,10 +10,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from lyapcheck import exact
-from lyapcheck.certificate import build_document, verify_document
-from lyapcheck.certification import build_system, run_conditions, verdict
+from lyapcheck.paper.certificate import build_document, verify_document
+from lyapcheck.paper.certification import build_system, run_conditions, verdict
 from lyapcheck.paper.conditions import prop41, sector
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 
 PAPER_EXPECTED = {
@@ -121,7 +121,7 @@ def test_no_certified_or_refuted_verdict_fails_its_exact_recheck(overrides: dict
 
 
 def test_linear_views_cross_check(paper_problem, easy_problem) -> None:
-    from lyapcheck.linalg_views import linear_views
+    from lyapcheck.paper.linalg_views import linear_views
 
     paper = linear_views(build_system(paper_problem, "derived"))
     assert paper["A"]["hurwitz_exact"] and paper["linearisation_at_0"]["hurwitz_exact"]

@@ -33,10 +33,10 @@ def test_loaded_program_solves_like_cvxpy() -> None:
     """The sector program at the paper's derived vertices: same status, same point, bit for bit."""
     from fractions import Fraction
 
-    from lyapcheck.certification import build_system
+    from lyapcheck.paper.certification import build_system
     from lyapcheck.paper.conditions import scaling, sector
     from lyapcheck.sos.sdp import solve
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.params import problem_from_sources
     from tests.conftest import EASY_GAINS, PAPER_TOML
 
     system = build_system(problem_from_sources(PAPER_TOML, EASY_GAINS), "derived")
@@ -82,8 +82,8 @@ import json, sys
 import numpy as np
 from lyapcheck.sos import sdp
 sdp.LEAN_LAPACK_IMPORT = {lean}
-from lyapcheck.certification import run_conditions
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.certification import run_conditions
+from lyapcheck.paper.params import problem_from_sources
 # ultimate_bound solves 3x3 LMIs: Clarabel needs BLAS and LAPACK for them
 result = run_conditions(problem_from_sources({toml!r}, {{}}), "derived", ("ultimate_bound",))["ultimate_bound"]
 linalg_loaded = "scipy.linalg" in sys.modules

@@ -613,9 +613,9 @@ def test_simulate_horizon_tail_rtol(key: str, value: str) -> None:
     text = re.sub(rf"(?m)^{key} = .*$", lambda _: f"{key} = {value}", scenario_text("constant"))
     if key in ("horizon", "tail"):
         try:  # a valid horizon (tail) of more than 2 s would be slow, not wrong: keep the case cheap
-            from lyapcheck.params import FieldSpec, Interval
+            from lyapcheck.paper.params import FieldSpec, Interval
             from lyapcheck.units import Kind
-            from lyapcheck.params import validate_field
+            from lyapcheck.paper.params import validate_field
             seconds = validate_field(FieldSpec("simulation", key, Kind.TIME, Interval(0, math.inf), None, ""),
                                      json.loads(value) if value.startswith('"') else value)
             if key == "horizon" and seconds > 2:

@@ -9,10 +9,10 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions import ges
 from lyapcheck.paper.conditions.sos import scaled_dynamics
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 
 

@@ -19,7 +19,7 @@ from lyapcheck.api import certify_box
 from lyapcheck.paper.boxes import ges_param
 from lyapcheck.paper.boxes.box import parse_box, sample_points
 from lyapcheck.paper.boxes.cross_check import cross_check
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 
 #: +-25 % in alpha_d and k_d around the paper's gains (600 1/s, 0.15 1/s): issue 25's target box
@@ -135,7 +135,7 @@ def test_the_box_certificate_passes_the_point_class_check_inside_the_box(paper_b
     """At gain sets strictly inside the box, P(u) and l(u) evaluated there pass the point class's own
     exact check (lyapcheck.paper.conditions.ges.exact_check) at the box's rate: an independent check
     of the Bernstein argument."""
-    from lyapcheck.certification import build_system
+    from lyapcheck.paper.certification import build_system
     from lyapcheck.paper.conditions import ges
     from lyapcheck.paper.conditions.sos import scaled_dynamics
     from tests.test_boxes import certificate_at_point

@@ -60,7 +60,7 @@ def test_the_platform_description_follows_the_host_settings() -> None:
 
 def test_certificates_and_stores_record_the_platform_beside_the_versions() -> None:
     from lyapcheck import numerics
-    from lyapcheck.certificate import package_versions
+    from lyapcheck.paper.certificate import package_versions
     from sweeps.store import versions
 
     assert package_versions()["floating_point"] == numerics.describe() == versions()["floating_point"]

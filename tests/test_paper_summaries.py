@@ -18,13 +18,13 @@ from typing import Any
 import pytest
 from click.testing import CliRunner, Result
 
-from lyapcheck.certificate import build_box_document, build_document, verify_document
-from lyapcheck.certification import CONDITION_ORDER, run_conditions, verdict
+from lyapcheck.paper.certificate import build_box_document, build_document, verify_document
+from lyapcheck.paper.certification import CONDITION_ORDER, run_conditions, verdict
 from lyapcheck.cli import app
 from lyapcheck.paper import claims
 from lyapcheck.paper.boxes.box import parse_box
 from lyapcheck.paper.boxes.classes import BOX_CLASSES
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from tests.conftest import EASY_GAINS, PAPER_TOML
 
 app._register_commands()

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from lyapcheck.errors import InputFileError, InvalidParameter
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 
 

@@ -91,9 +91,9 @@ def _colour_pixels(image: Any, rgb: tuple[int, int, int], tol: int = 40) -> int:
 
 @pytest.fixture(scope="module")
 def easy_doc() -> dict[str, Any]:
-    from lyapcheck.certificate import build_document
-    from lyapcheck.certification import run_conditions, verdict
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.certificate import build_document
+    from lyapcheck.paper.certification import run_conditions, verdict
+    from lyapcheck.paper.params import problem_from_sources
 
     problem = problem_from_sources(PAPER_TOML, EASY_GAINS)
     results = run_conditions(problem, "derived")
@@ -235,8 +235,8 @@ PAGE_BUDGET_BYTES = 1_000_000
 @pytest.fixture(scope="module")
 def paper_results() -> tuple[Any, dict[str, Any]]:
     """The paper's problem and its condition results (derived dynamics), all classes."""
-    from lyapcheck.certification import run_conditions
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.certification import run_conditions
+    from lyapcheck.paper.params import problem_from_sources
 
     problem = problem_from_sources(PAPER_TOML, {})
     return problem, run_conditions(problem, "derived")
@@ -245,8 +245,8 @@ def paper_results() -> tuple[Any, dict[str, Any]]:
 @pytest.fixture(scope="module")
 def paper_doc(paper_results: tuple[Any, dict[str, Any]]) -> dict[str, Any]:
     """What `lyapcheck certify examples/paper.toml` writes."""
-    from lyapcheck.certificate import build_document
-    from lyapcheck.certification import verdict
+    from lyapcheck.paper.certificate import build_document
+    from lyapcheck.paper.certification import verdict
 
     problem, results = paper_results
     return build_document(problem, "derived", results, verdict(results))
@@ -256,8 +256,8 @@ def paper_doc(paper_results: tuple[Any, dict[str, Any]]) -> dict[str, Any]:
 def paper_worst_doc(paper_results: tuple[Any, dict[str, Any]]) -> dict[str, Any]:
     """What `lyapcheck certify examples/paper.toml --worst-case` writes (the real search, smallest budget)."""
     from lyapcheck.api import add_tightness
-    from lyapcheck.certificate import build_document
-    from lyapcheck.certification import verdict
+    from lyapcheck.paper.certificate import build_document
+    from lyapcheck.paper.certification import verdict
 
     problem, results = paper_results
     results = copy.deepcopy(results)

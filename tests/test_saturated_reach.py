@@ -10,7 +10,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions.saturated import OMEGA_ROUNDING, global_reach, verify_reach
 from lyapcheck.simulation.scenarios import paper_problem
 from symbolic._generated import unsaturated_strip_sq

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.params import Problem, problem_from_sources
+from lyapcheck.paper.params import Problem, problem_from_sources
 from lyapcheck.api import simulate as api_simulate
 from lyapcheck.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
 from lyapcheck.simulation.disturbances import Adversarial, Constant, NoDisturbance, PiecewiseConstant, Sinusoid

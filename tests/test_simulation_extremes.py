@@ -137,8 +137,8 @@ def test_a_tail_too_short_for_the_step_budget_is_refused(tmp_path: Path) -> None
 # -- linear views (certify --linear-views) -------------------------------------------------------
 def test_linear_views_beyond_the_double_range_are_not_computed_but_exact_hurwitz_is() -> None:
     from lyapcheck.api import problem_from
-    from lyapcheck.certification import build_system
-    from lyapcheck.linalg_views import linear_views
+    from lyapcheck.paper.certification import build_system
+    from lyapcheck.paper.linalg_views import linear_views
 
     views = linear_views(build_system(problem_from(ROOT / "examples" / "paper.toml",
                                                    {"alpha_d": "1e300", "e11": "1e300 m"}), "derived"))

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.simulation.disturbances import Constant, PiecewiseConstant
 from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, Evaluation, integrate
 from lyapcheck.simulation.model import N_STATE, ClosedLoop, ErrorDynamics, LoopParams

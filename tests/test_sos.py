@@ -12,11 +12,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from lyapcheck import exact, poly
-from lyapcheck.certificate import build_document, verify_document
-from lyapcheck.certification import build_system, run_conditions, verdict
+from lyapcheck import exact
+from lyapcheck.paper import poly
+from lyapcheck.paper.certificate import build_document, verify_document
+from lyapcheck.paper.certification import build_system, run_conditions, verdict
 from lyapcheck.paper.conditions import sos
-from lyapcheck.params import problem_from_sources
+from lyapcheck.paper.params import problem_from_sources
 from tests.conftest import PAPER_TOML
 
 
@@ -301,7 +302,8 @@ def test_a_rate_the_symmetric_solution_fails_gets_the_full_programs_attempt(monk
 def test_a_negative_decay_rate_is_refused_even_where_its_identity_holds() -> None:
     """With mu < 0 the SOS identity only gives V' <= |mu| V, and such identities exist for a
     saddle (c = 1, a = 1, b = 5: det = a - b c < 0). The exact check must refuse them."""
-    from lyapcheck import exact, poly
+    from lyapcheck import exact
+    from lyapcheck.paper import poly
     from lyapcheck.paper.conditions import sos
     from lyapcheck.paper.conditions.sos import ScaledDynamics
 

@@ -271,7 +271,7 @@ def test_summary_counts_violations(tmp_path: Path) -> None:
 
 
 def test_classes_follow_the_certify_module() -> None:
-    from lyapcheck.certification import CONDITION_ORDER, QUICK_CLASSES
+    from lyapcheck.paper.certification import CONDITION_ORDER, QUICK_CLASSES
     from sweeps.schema import DEFAULT_CLASSES
 
     assert CLASSES == CONDITION_ORDER
@@ -281,7 +281,7 @@ def test_classes_follow_the_certify_module() -> None:
 # -- fast sector_ges path ----------------------------------------------------------------------
 
 def test_fast_sector_agrees_with_the_condition_module(paper_problem) -> None:  # type: ignore[no-untyped-def]
-    from lyapcheck.certification import build_system
+    from lyapcheck.paper.certification import build_system
     from lyapcheck.paper.conditions import sector
     from sweeps import fast_sector
 

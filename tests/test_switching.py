@@ -141,7 +141,7 @@ def test_paper_gains_refuted_exactly(paper_system: System, paper_result: sw.Cond
 
 
 def test_paper_gains_from_the_toml_file(paper_problem) -> None:
-    from lyapcheck.certification import build_system
+    from lyapcheck.paper.certification import build_system
 
     system = build_system(paper_problem, "derived")
     assert (system.A, system.B, system.rho_sup) == (PAPER_A, PAPER_B, PAPER_RHO_SUP)
@@ -269,8 +269,8 @@ def test_time_scaling_moves_dwell_times_not_growth(paper_system: System, factor:
 
 @pytest.mark.parametrize(("factor", "expected"), [("1e-6", "refuted"), ("1e6", "certified")])
 def test_gains_far_from_the_paper(factor: str, expected: str) -> None:
-    from lyapcheck.certification import build_system
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.certification import build_system
+    from lyapcheck.paper.params import problem_from_sources
     from tests.conftest import PAPER_TOML
 
     gains = {"gains.alpha_d": str(600 * float(factor)), "gains.k_d": str(0.15 * float(factor))}

@@ -7,7 +7,7 @@
   (Clarabel's own time limit, status ``user_limit``), and the next solve past the limit raises
   :class:`~lyapcheck.models.search.BudgetExhausted`; the class is ``inconclusive`` naming the limit;
 * the hard stop of :func:`lyapcheck.models.certify._guarded`, a SIGALRM at ``limit * 1.5 + 5`` s
-  (:func:`lyapcheck.certification.time_limit`), for work between solves that never consults the
+  (:func:`lyapcheck.paper.certification.time_limit`), for work between solves that never consults the
   budget (compiling a program, an exact check, the roa class's simulations).
 
 tests/test_model_classes.py covers a limit already reached before the first solve (0) and one

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from lyapcheck import exact
-from lyapcheck.certification import build_system
+from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions import scaling, ultimate
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 
 
 def test_p_from_q_is_the_exact_inverse_in_the_original_coordinates() -> None:

@@ -58,7 +58,7 @@ def test_a_damaged_memo_is_ignored_and_errors_are_never_remembered(memo_dir: Pat
 
 
 def test_with_the_memo_a_quick_run_does_not_import_pint(memo_dir: Path) -> None:
-    code = ("import sys; from lyapcheck.params import problem_from_sources; "
+    code = ("import sys; from lyapcheck.paper.params import problem_from_sources; "
             "problem_from_sources('examples/paper.toml', {}); print('pint' in sys.modules)")
     env = {"LYAPCHECK_CACHE_DIR": str(memo_dir), "PATH": "/usr/bin:/bin"}
     runs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env,

@@ -117,7 +117,7 @@ SWEEP_SPECS = ("sweep-alpha-sigma.toml", "sweep-kd-delta.toml", "sweep-dmax-alph
 
 
 def _case_problem(overrides: dict[str, str], with_toml: bool) -> Any:
-    from lyapcheck.params import problem_from_sources
+    from lyapcheck.paper.params import problem_from_sources
 
     return problem_from_sources(ROOT / "examples" / "paper.toml" if with_toml else None, overrides)
 
@@ -144,7 +144,7 @@ def _summary(results: dict[str, Any]) -> dict[str, Any]:
 
 
 def compute_cases() -> dict[str, Any]:
-    from lyapcheck.certification import CONDITION_ORDER, run_conditions
+    from lyapcheck.paper.certification import CONDITION_ORDER, run_conditions
     from sweeps.evaluate import certify_point
 
     out: dict[str, Any] = {}
@@ -279,7 +279,7 @@ def test_a_count_of_search_steps_is_not_compared_but_the_figure_is() -> None:
 
 def _point_json(label: str) -> dict[str, Any]:
     """Full JSON of every class at one case, without the wall-clock fields."""
-    from lyapcheck.certification import run_conditions
+    from lyapcheck.paper.certification import run_conditions
 
     overrides = {name: o for name, o, _ in GAIN_CASES}[label]
     results = run_conditions(_case_problem(overrides, True), "derived")

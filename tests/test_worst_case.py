@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.simulation.disturbances import (
     Adversarial, BangBang, Constant, Feedback, Sinusoid, SquareWave, Stacked, from_description, stack_rows,
 )
@@ -122,7 +122,8 @@ def test_bad_inputs_name_the_field(short_scenario: Scenario) -> None:
 def test_storage_switching_is_the_gradient_of_v_along_eps() -> None:
     """The composed polynomial has the sign of dV/d eps (central differences of V itself) for a
     made-up positive definite Gram matrix in the sos_bound basis."""
-    from lyapcheck import exact, poly
+    from lyapcheck import exact
+    from lyapcheck.paper import poly
     from lyapcheck.paper.conditions.sos_bound import Z_V
 
     rng = np.random.default_rng(3)

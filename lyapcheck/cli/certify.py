@@ -9,7 +9,7 @@ import click
 
 from lyapcheck.cli.common import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
 
-#: command-line flag -> parameter key (lyapcheck.params.FIELDS)
+#: command-line flag -> parameter key (lyapcheck.paper.params.FIELDS)
 FLAG_KEYS = {
     "alpha_d": "gains.alpha_d", "sigma0": "gains.sigma0", "kd": "gains.k_d", "delta_los": "gains.delta_los",
     "e11": "swimmer.e11", "omega_so": "actuation.omega_so", "d_max": "disturbance.d_max",

@@ -37,7 +37,7 @@ def register(group: click.Group) -> None:
     @one_line_errors
     def derive(as_json: bool) -> None:
         """Derive the paper's equations and compare them with the printed ones."""
-        from lyapcheck.ledger_view import ledger_entries
+        from lyapcheck.paper.ledger_view import ledger_entries
 
         entries = ledger_entries()
         if as_json:

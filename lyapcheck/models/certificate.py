@@ -44,7 +44,7 @@ Row = tuple[str, bool, str]
 
 
 def build_document(result: ModelCertification) -> dict[str, Any]:
-    from lyapcheck.certificate import package_versions
+    from lyapcheck.numerics import package_versions
 
     model = result.model
     return {

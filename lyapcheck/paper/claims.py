@@ -5,7 +5,7 @@ data beside it, which ``verify`` re-checks. This module is the one place that wr
 sentences (the model files' twin is :mod:`lyapcheck.models.claims`): every class of
 :mod:`lyapcheck.paper.conditions` and :mod:`lyapcheck.paper.boxes` sets the summary of a decided
 result with :func:`summary` (through :func:`decided` or :func:`decided_box`);
-:func:`lyapcheck.certificate.verify_document` and ``verify_box_document`` regenerate it from the
+:func:`lyapcheck.paper.certificate.verify_document` and ``verify_box_document`` regenerate it from the
 data they have just re-checked and fail where the file's text differs (``limsup |eps| <= 0.001 m``
 where 0.03491 m was proved, a refutation turned into a claim, a box summary naming a wider box);
 :mod:`reports.certificate_page` prints the regenerated text.

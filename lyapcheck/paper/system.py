@@ -1,7 +1,7 @@
 """The paper's loop at one parameter point: its exact structured error dynamics.
 
 Its own module, below the condition classes and the box classes, so that every one of them can
-import :func:`build_system` at its top (it used to live in :mod:`lyapcheck.certification`, which
+import :func:`build_system` at its top (it used to live in :mod:`lyapcheck.paper.certification`, which
 runs the classes, so the box classes imported it inside functions to hide the cycle).
 """
 
@@ -11,7 +11,7 @@ from fractions import Fraction
 from typing import Any
 
 from lyapcheck.paper.conditions.base import System
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 
 
 def exact_values(problem: Problem) -> dict[str, Any]:

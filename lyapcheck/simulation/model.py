@@ -110,7 +110,7 @@ class LoopParams:
     @classmethod
     def from_problem(cls, problem: Any, *, controller: Controller = "ilos", n: int = 1,
                      d_hat: npt.ArrayLike = (0.0, 0.0), **overrides: npt.ArrayLike) -> "LoopParams":
-        """Parameters of a validated :class:`lyapcheck.params.Problem` (exact SI -> float).
+        """Parameters of a validated :class:`lyapcheck.paper.params.Problem` (exact SI -> float).
 
         ``overrides`` replace single fields by arrays, e.g. ``alpha_d=np.linspace(...)``.
         """

@@ -1,7 +1,7 @@
 """Simulation scenarios: the paper's Section 5 presets and scenario TOML files.
 
 A scenario TOML is a parameter file (the sections of ``examples/paper.toml``, read by
-:func:`lyapcheck.params.problem_from_sources`) plus a ``[simulation]`` table and an optional
+:func:`lyapcheck.paper.params.problem_from_sources`) plus a ``[simulation]`` table and an optional
 ``[simulation.disturbance]`` table::
 
     [simulation]
@@ -19,7 +19,7 @@ A scenario TOML is a parameter file (the sections of ``examples/paper.toml``, re
     kind = "constant"                    # none | constant | weight | sinusoid | piecewise | adversarial
     velocity = ["0 mm/s", "-0.088 mm/s"] # world frame (x, z), z up
 
-Every value goes through :func:`lyapcheck.params.validate_field` (same units machinery, same
+Every value goes through :func:`lyapcheck.paper.params.validate_field` (same units machinery, same
 one-line message ``The 'horizon' parameter must be ... Got ... instead.``); a rotation
 frequency in Hz becomes an angular velocity in rad/s (factor 2 pi), never 1 Hz = 1 rad/s.
 """
@@ -36,7 +36,7 @@ from typing import Any, Callable, Final, Mapping, cast
 import numpy as np
 
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.params import (
+from lyapcheck.paper.params import (
     INF, NONNEGATIVE, POSITIVE, FieldSpec, Interval, Problem, build_problem, load_toml,
     problem_from_sources, validate_field,
 )
@@ -187,7 +187,7 @@ _DISTURBANCE_FIELDS: Final[Mapping[str, Mapping[str, tuple[str, Kind, Interval, 
 
 
 def _validate(spec: FieldSpec, raw: object) -> Fraction:
-    """:func:`lyapcheck.params.validate_field`, with any stray units-library error mapped to the
+    """:func:`lyapcheck.paper.params.validate_field`, with any stray units-library error mapped to the
     same one-line message (pint raises DimensionalityError for, e.g., "2 rad" as a rotation)."""
     try:
         return validate_field(spec, raw)

@@ -66,7 +66,7 @@ import numpy.typing as npt
 
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.tolerances import SIM_MAX_STEPS
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.simulation.disturbances import (
     ADVERSARIAL_LAYER_FRACTION, Constant, Disturbance, Feedback, NoDisturbance, Sinusoid, SquareWave, BangBang,
     from_description, stack_rows,
@@ -421,7 +421,8 @@ def storage_switching(storage: Mapping[str, Any], sigma0: Fraction) -> tuple[Int
     dV/dy``. The polynomial is composed exactly and normalised so that the coefficient of ``eps``
     is ``+-1`` (the switching function is then ``eps`` near the origin, in metres).
     """
-    from lyapcheck import exact, poly
+    from lyapcheck import exact
+    from lyapcheck.paper import poly
     from lyapcheck.paper.conditions.sos_bound import Z_V
 
     missing = [key for key in ("Q_V", "beta") if key not in storage]
@@ -525,7 +526,7 @@ def search_worst_case(target: Problem | Scenario, *, budget_s: float = 20.0, see
     target
         A :class:`~lyapcheck.simulation.scenarios.Scenario` (its controller, ODS form, horizon,
         tail, initial state, ``d_hat`` and ``rtol`` are used) or a
-        :class:`~lyapcheck.params.Problem` (then the ``paper-ilos`` preset's settings: ILOS,
+        :class:`~lyapcheck.paper.params.Problem` (then the ``paper-ilos`` preset's settings: ILOS,
         ``p(0) = (0, -40 mm)``, 100 s, tail 10 s, ``rtol = 1e-8``). ``d*`` is the problem's
         ``d_max``.
     budget_s
@@ -678,7 +679,7 @@ def simulate_disturbance(target: Problem | Scenario, disturbance: Disturbance | 
 
 def storage_certificate(problem: Problem) -> dict[str, Any] | None:
     """The ``sos_bound`` certificate of the derived dynamics of ``problem`` (seconds of SDP)."""
-    from lyapcheck.certification import build_system
+    from lyapcheck.paper.certification import build_system
     from lyapcheck.paper.conditions import sos_bound
 
     return sos_bound.run(build_system(problem, "derived"))

@@ -154,7 +154,7 @@ def gram_form(ring: Ring, basis: Sequence[Monomial], Q: Sequence[Sequence[Fracti
 
 def monomials(nvars: int, dmin: int, dmax: int) -> list[Monomial]:
     """All monomials of total degree ``dmin..dmax`` in ``nvars`` variables, degree by degree, the
-    first variable's power descending (the order of :func:`lyapcheck.poly.monomials`)."""
+    first variable's power descending (the order of :func:`lyapcheck.paper.poly.monomials`)."""
     def of_degree(d: int, n: int) -> list[Monomial]:
         if n == 0:
             return [()] if d == 0 else []

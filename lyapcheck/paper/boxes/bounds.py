@@ -33,10 +33,11 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from lyapcheck import exact, poly
+from lyapcheck import exact
+from lyapcheck.paper import poly
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
 from lyapcheck.paper.conditions.sos import ScaledDynamics, is_sign_symmetric
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.paper.system import build_system
 
 

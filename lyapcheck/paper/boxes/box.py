@@ -16,7 +16,7 @@ from fractions import Fraction
 from typing import Any, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.params import FIELD_BY_KEY, Problem, validate_field
+from lyapcheck.paper.params import FIELD_BY_KEY, Problem, validate_field
 from lyapcheck.paper.conditions.base import ScaledDynamics, scaled_dynamics
 from lyapcheck.paper.system import build_system
 

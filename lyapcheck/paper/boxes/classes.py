@@ -15,11 +15,11 @@ from typing import Any, Mapping
 
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.paper.boxes.box import ParameterBox, problem_at_point
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.paper.system import build_system
 
 
-#: classes with box certificates, in the order of :data:`lyapcheck.certification.CONDITION_ORDER`:
+#: classes with box certificates, in the order of :data:`lyapcheck.paper.certification.CONDITION_ORDER`:
 #: ``prop41_*`` (:mod:`lyapcheck.paper.boxes.prop41`), ``sector_ges`` and ``ges`` (here), ``ultimate_bound``
 #: (:mod:`lyapcheck.paper.boxes.ultimate`), ``sos_gas`` (:mod:`lyapcheck.paper.boxes.sos_gas`), ``saturated_loop``
 #: (:mod:`lyapcheck.paper.boxes.saturated`) and ``sos_bound`` (:mod:`lyapcheck.paper.boxes.bounds`, 5-10 s a box)

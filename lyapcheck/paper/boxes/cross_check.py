@@ -6,7 +6,7 @@ import math
 from typing import Any, Mapping, Sequence
 
 from lyapcheck.paper.boxes.box import ParameterBox, problem_at_point, sample_points
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.paper.system import build_system
 
 

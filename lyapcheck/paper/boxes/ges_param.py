@@ -58,7 +58,7 @@ import numpy as np
 from lyapcheck import exact
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
 from lyapcheck.paper.conditions.rate_search import largest_proved_rate
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.sos.polynomials import Poly, Ring
 from lyapcheck.paper.system import build_system
 

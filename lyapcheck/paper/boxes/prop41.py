@@ -33,7 +33,7 @@ from lyapcheck import exact
 from lyapcheck.paper import claims
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems, problem_at_point
 from lyapcheck.paper.conditions.base import System
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.paper.system import build_system
 
 #: the entries that vary over a box, in the order a stored vertex lists them

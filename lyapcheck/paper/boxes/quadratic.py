@@ -38,7 +38,7 @@ from typing import Any, Mapping, Sequence
 from lyapcheck.paper import claims
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems, scaled_hull, stored_hull
 from lyapcheck.paper.conditions.base import sector_polytope
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.paper.system import build_system
 
 

@@ -38,7 +38,7 @@ from lyapcheck import exact
 from lyapcheck.paper import claims
 from lyapcheck.paper.claims import OMEGA_ROUNDING, figure_text
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.paper.system import build_system
 
 

@@ -39,11 +39,12 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from lyapcheck import exact, poly
+from lyapcheck import exact
+from lyapcheck.paper import poly
 from lyapcheck.paper.boxes.box import ParameterBox, scaled_hull, stored_hull
 from lyapcheck.paper.conditions import sos
 from lyapcheck.paper.conditions.sos import ScaledDynamics
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 
 
 def _coefficient_rows(dyn: ScaledDynamics, deg_v: int) -> np.ndarray:
@@ -173,7 +174,7 @@ def certify_gas_box(problem: Problem, box: ParameterBox, dynamics: str = "derive
     box
         The box of gains.
     dynamics
-        Which error dynamics (as :func:`lyapcheck.certification.build_system`).
+        Which error dynamics (as :func:`lyapcheck.paper.certification.build_system`).
 
     Returns
     -------

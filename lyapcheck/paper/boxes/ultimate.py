@@ -4,7 +4,7 @@ The point class (:mod:`lyapcheck.paper.conditions.ultimate`) proves the bound at
 in stages: an exact comparison-lemma box, then invariant ellipsoids. Over a box of gains each
 stage is replaced by one that serves every ``theta`` of the box at once.
 
-What the box rests on. :func:`lyapcheck.certification.build_system` evaluates the generated
+What the box rests on. :func:`lyapcheck.paper.certification.build_system` evaluates the generated
 dynamics, whose entries ``a11``, ``a12``, ``a22``, ``E_0``, ``rho_sup`` and the speed ``U`` are
 signed monomials in the positive parameters (``a21 = 0``, ``E_1 = 0`` and ``B = [[0, 0], [1, 0]]``
 identically; ``d*`` is not a box parameter; ``tests/test_box_ultimate.py`` checks all of this on
@@ -78,7 +78,7 @@ from lyapcheck import tolerances as tol
 from lyapcheck.paper.boxes.box import ParameterBox, corner_problems
 from lyapcheck.paper.conditions import scaling, ultimate
 from lyapcheck.paper.conditions.base import System
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.paper.system import build_system
 
 #: a vertex of the box's (A_r, e d*) polytope: the matrix A_r and the vector e d*

@@ -7,7 +7,7 @@ from fractions import Fraction
 
 from typing import Any, Sequence
 
-from lyapcheck import poly
+from lyapcheck.paper import poly
 from lyapcheck.exact import Matrix
 
 #: classes whose exact pass proves stability of the error dynamics (the verdict "certified")

@@ -65,7 +65,8 @@ from typing import Any
 
 import numpy as np
 
-from lyapcheck import exact, poly
+from lyapcheck import exact
+from lyapcheck.paper import poly
 from lyapcheck.paper import claims
 from lyapcheck.paper.claims import OMEGA_ROUNDING
 from lyapcheck.paper.conditions.base import System

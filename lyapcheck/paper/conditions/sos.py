@@ -39,7 +39,8 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from lyapcheck import exact, poly
+from lyapcheck import exact
+from lyapcheck.paper import poly
 from lyapcheck.paper.conditions.base import ScaledDynamics, System, scaled_dynamics  # noqa: F401 (re-exported)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.certificates import GramPoly, check_lyapunov

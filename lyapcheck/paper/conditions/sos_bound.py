@@ -49,7 +49,8 @@ from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 import numpy as np
 
-from lyapcheck import exact, poly
+from lyapcheck import exact
+from lyapcheck.paper import poly
 from lyapcheck import tolerances as tol
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.sos.definiteness import is_positive_definite

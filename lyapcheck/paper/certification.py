@@ -2,7 +2,7 @@
 
 This is the library entry point behind ``lyapcheck certify``. It evaluates the structured
 closed loop of :mod:`symbolic.closed_loop` exactly at the given parameters, runs the
-condition classes, and assembles the certificate document (see :mod:`lyapcheck.certificate`).
+condition classes, and assembles the certificate document (see :mod:`lyapcheck.paper.certificate`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 
 from lyapcheck.paper.conditions.base import STABILITY_CLASSES, System
 from lyapcheck.results import ConditionResult
-from lyapcheck.params import Problem
+from lyapcheck.paper.params import Problem
 from lyapcheck.paper.system import build_system, exact_values, system_from_values  # noqa: F401 (re-exported)
 from lyapcheck.timing import ClassTimeLimit, time_limit  # noqa: F401 (re-exported: the paper's classes use them)
 

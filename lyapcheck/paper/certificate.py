@@ -22,29 +22,15 @@ from __future__ import annotations
 
 import json
 from fractions import Fraction
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 from lyapcheck.errors import CertificateError, InputFileError
 
+from lyapcheck.numerics import package_versions  # noqa: F401 (re-exported)
+
 SCHEMA_VERSION = 1
 KIND = "lyapcheck-certificate"
-
-
-def package_versions() -> dict[str, str]:
-    """The packages whose versions decide what a search finds, and the floating-point platform
-    (:func:`lyapcheck.numerics.describe`), for information only: a certificate re-checks exactly
-    anywhere, and figures from two platforms agree within :mod:`lyapcheck.tolerances`."""
-    from lyapcheck import numerics
-
-    out = {"floating_point": numerics.describe()}
-    for name in ("lyapcheck", "sympy", "numpy", "cvxpy", "clarabel", "control"):
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:  # pragma: no cover
-            out[name] = "absent"
-    return out
 
 
 def system_to_json(system: Any) -> dict[str, Any]:
@@ -63,7 +49,7 @@ def _exact_or_none(value: Fraction | None) -> str | None:
 
 def document_inputs(problem: Any) -> dict[str, Any]:
     """The inputs as given (text) and exactly in SI; an input not given is null."""
-    from lyapcheck.certification import exact_values
+    from lyapcheck.paper.certification import exact_values
 
     return {"given": dict(problem.given),
             "exact_si": {k: str(v) for k, v in exact_values(problem).items()}
@@ -71,7 +57,7 @@ def document_inputs(problem: Any) -> dict[str, Any]:
 
 
 def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict: str) -> dict[str, Any]:
-    from lyapcheck.certification import build_system
+    from lyapcheck.paper.certification import build_system
 
     system = build_system(problem, dynamics)
     return {
@@ -112,7 +98,7 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
 
     from lyapcheck.paper.boxes.classes import BOX_CLASSES, BOX_STABILITY_CLASSES, verify_box, verify_box_refutation
     from lyapcheck.paper.boxes.box import ParameterBox
-    from lyapcheck.params import Actuation, GainSet, Problem, Swimmer
+    from lyapcheck.paper.params import Actuation, GainSet, Problem, Swimmer
 
     try:
         v = {k: Fraction(x) for k, x in doc["inputs"]["exact_si"].items() if x is not None}
@@ -197,12 +183,12 @@ def _check_skeleton(doc: dict[str, Any]) -> None:
     """The parts of a certificate every re-check reads, each of the right type and range.
 
     ``inputs.exact_si`` holds exact rationals as text, each within its field's accepted range
-    (:data:`lyapcheck.params.FIELDS`, as ``certify`` validated them); ``conditions`` maps names
+    (:data:`lyapcheck.paper.params.FIELDS`, as ``certify`` validated them); ``conditions`` maps names
     to objects with a text ``status``. Anything else is a :class:`CertificateError` naming the
     field, before an exact check would stumble over it.
     """
     from lyapcheck.errors import InvalidParameter
-    from lyapcheck.params import FIELDS
+    from lyapcheck.paper.params import FIELDS
     from lyapcheck.units import Kind, parse_quantity, representable
 
     def malformed(where: str, expected: str, got: object) -> CertificateError:
@@ -401,7 +387,7 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         return verify_box_document(doc)
     from lyapcheck import exact
     from lyapcheck.paper.conditions import prop41, sector, ultimate
-    from lyapcheck.certification import system_from_values
+    from lyapcheck.paper.certification import system_from_values
     from lyapcheck.paper.conditions.stabcond2 import run as stabcond2_run
 
     _check_skeleton(doc)
@@ -425,7 +411,7 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     def ok_row(name: str, ok: bool, good: str, bad: str) -> None:
         rows.append((name, ok, good if ok else bad))
 
-    from lyapcheck.certification import NEEDS
+    from lyapcheck.paper.certification import NEEDS
 
     absent = {"disturbance.d_max": given_d_max is None, "actuation.omega_so": omega_so is None}
     for name, needs in NEEDS.items():
