@@ -224,3 +224,12 @@ def test_a_divisor_that_cancels_away_from_the_equilibrium_is_accepted() -> None:
     text = '[model]\nname = "s"\nstates = ["x"]\n[equilibrium]\nx = 1\n[dynamics]\nx = "-(x - 1)*x/x"\n'
     model = parse_model(text, "<test>")
     assert model.dynamics[0].is_polynomial()
+
+
+def test_every_condition_of_a_disturbed_model_says_which_disturbances_even_when_not_applicable() -> None:
+    # a denominator that cannot be proved of one sign makes the cleared classes not_applicable
+    text = scalar("0.5", "-x/(x - 1) + d*x")
+    doc = certify(text.replace('[dynamics]', '[equilibrium]\nx = 0\n[dynamics]'), classes="quadratic,candidate")
+    assert all(c["disturbances"] in ("zero", "all") for c in doc["conditions"].values()), doc["conditions"]
+    assert "candidate" in doc["conditions"] and doc["conditions"]["candidate"]["status"] == "not_applicable"
+    assert failed(doc) == []

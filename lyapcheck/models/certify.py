@@ -278,6 +278,9 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         out.results["candidate"] = ConditionResult("candidate", "not_applicable", "needs --candidate \"EXPR\" (the "
                                                                                    "user's V); not run")
     out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
+    for r in out.results.values():  # every condition of a disturbed model says which it covers
+        if model.disturbances and r.disturbances is None:
+            r.disturbances = "all" if r.name == "sos_bound" else "zero"  # e.g. not_applicable ones
     from lyapcheck.models.claims import summary
 
     for name, r in out.results.items():
