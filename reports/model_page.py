@@ -415,21 +415,19 @@ def _solvers(conditions: dict[str, Any]) -> list[tuple[str, str]]:
 def _decimal(value: Fraction | None) -> str:
     """A box bound as the command line reads it: the exact decimal where it terminates (every box
     that ``--box`` or a sweep makes), else 17 significant digits."""
+    from decimal import Decimal, localcontext
+
     if value is None:
         return "?"
-    q = value.denominator
-    twos_fives = q
+    rest = value.denominator
     for p in (2, 5):
-        while twos_fives % p == 0:
-            twos_fives //= p
-    if twos_fives != 1:
+        while rest % p == 0:
+            rest //= p
+    if rest != 1:
         return f"{float(value):.17g}"
-    digits = 0
-    while (value * 10 ** digits).denominator != 1:
-        digits += 1
-    text = f"{abs(value.numerator) * 10 ** digits // value.denominator:0{digits + 1}d}"
-    body = text if digits == 0 else f"{text[:-digits]}.{text[-digits:]}"
-    return ("-" if value < 0 else "") + body
+    with localcontext() as ctx:  # a terminating decimal: enough digits to be exact
+        ctx.prec = len(str(value.numerator)) + 2 * len(str(value.denominator)) + 2
+        return format((Decimal(value.numerator) / Decimal(value.denominator)).normalize(), "f")
 
 
 def _command(doc: dict[str, Any]) -> str:

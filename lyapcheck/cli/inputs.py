@@ -20,7 +20,6 @@ PAPER_FLAG_HINTS: Mapping[str, str] = {
     "--linear-views": "for a model file, the linearization class gives the Jacobian and its exact verdict",
     "--dynamics": "it picks the paper's derived or printed equations; a model file states its own",
     "--preset": "the presets are the paper's Section 5 simulations; a model file states its own loop",
-    "--budget": "for a model file, --worst-case's budget is given with `lyapcheck simulate FILE --worst-case`",
 }
 GAIN_FLAG_HINT = "a model file carries its own parameters: use --set NAME=VALUE"
 

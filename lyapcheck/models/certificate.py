@@ -228,13 +228,12 @@ def _check_disturbance_keys(model: Any, conditions: dict[str, Any], rows: list[R
 
 
 def _disturbances_enter(model: Any) -> bool:
-    from lyapcheck.models.field import shifted_field
+    """Whether a disturbance with a bound > 0 occurs in the field (:func:`field.entering`)."""
+    from lyapcheck.models.field import entering, shifted_field
 
     shifted = shifted_field(model)
-    n, m = model.n, len(model.disturbances)
-    bounds = list(model.disturbances.values())
-    return any(m_[n + k] and bounds[k] > 0 for p in (*shifted.numerators, *shifted.denominators)
-               for m_ in shifted.ring.support(p) for k in range(m))
+    return bool(entering(shifted.ring, model.n, (*shifted.numerators, *shifted.denominators),
+                         list(model.disturbances.values())))
 
 
 def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
@@ -279,7 +278,7 @@ def _check_summaries(model: Any, conditions: dict[str, Any], rows: list[Row], bo
             continue
         try:
             expected = summary(name, c, tuple(model.outputs), box)
-        except (KeyError, ValueError, TypeError) as exc:
+        except (KeyError, ValueError, TypeError, ArithmeticError) as exc:
             rows.append((name, False, f"{name}: the summary's figures are malformed: {_describe(exc)}"))
             continue
         if expected is not None and c.get("summary") != expected:

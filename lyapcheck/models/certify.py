@@ -38,7 +38,7 @@ from lyapcheck.models.field import ScaledField, Scaling, ShiftedField, StateFiel
     apply_scaling, choose_scaling, clear, disturbances_vanish, shifted_field, state_field
 from lyapcheck.models.modelfile import Model
 from lyapcheck.models.search import Budget, BudgetExhausted, Search
-from lyapcheck.results import ConditionResult
+from lyapcheck.results import ConditionResult, Disturbances
 from lyapcheck.sos.polynomials import Poly
 from lyapcheck.timing import ClassTimeLimit, time_limit
 
@@ -218,18 +218,17 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         nominal = state_field(sc)
         enters = bool(active_disturbances(sc))
         #: what a claim on the nominal field covers
-        nominal_covers = ("all" if not enters else "zero") if model.disturbances else None
+        nominal_covers: Disturbances | None = ("all" if not enters else "zero") if model.disturbances else None
 
-        def stability(name: str, attempt: Callable[[StateField, Search], ConditionResult]
-                      ) -> Callable[[Budget], ConditionResult]:
+        def stability(attempt: Callable[[StateField, Search], ConditionResult]) -> Callable[[Budget], ConditionResult]:
             return lambda budget: covering_disturbances(
                 model, robust, nominal, enters, lambda f: attempt(f, Search(f.ring, budget)))
 
         if "quadratic" in chosen:
-            run("quadratic", stability("quadratic", lambda f, search: lyapunov.run(sc, "quadratic", (2,), search,
+            run("quadratic", stability(lambda f, search: lyapunov.run(sc, "quadratic", (2,), search,
                                                                                    field=f)))
         if "sos_gas" in chosen:
-            run("sos_gas", stability("sos_gas", lambda f, search: lyapunov.run(
+            run("sos_gas", stability(lambda f, search: lyapunov.run(
                 sc, "sos_gas", lyapunov.SOS_GAS_DEGREES, search, param_degrees=BOX_PARAM_DEGREES, field=f)))
         if "roa" in chosen:
             lin = out.results.get("linearization")
@@ -352,8 +351,8 @@ def covering_disturbances(model: Model, robust: StateField | None, nominal: Stat
     return _covers(attempt(nominal), "zero")
 
 
-def _covers(result: ConditionResult, disturbances: str | None) -> ConditionResult:
-    result.disturbances = disturbances  # type: ignore[assignment]
+def _covers(result: ConditionResult, disturbances: "Disturbances | None") -> ConditionResult:
+    result.disturbances = disturbances
     return result
 
 

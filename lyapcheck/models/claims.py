@@ -16,6 +16,7 @@ text is a reason, not a summary of figures, and is left as the class wrote it.
 
 from __future__ import annotations
 
+from fractions import Fraction
 from typing import Any, Mapping, Sequence
 
 #: what a ``certified`` sublevel set of each class is called in its sentence
@@ -56,14 +57,10 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
 
 def box_words(box: Mapping[str, Sequence[Any]]) -> str:
     """``mu in [0.8, 1.2] and k in [1, 2]``: a box of parameters (exact bounds as in a certificate's
-    ``box``) as a reader reads it, each bound to :data:`V_DIGITS` significant digits."""
-    from fractions import Fraction
+    ``box``) as a reader reads it (:meth:`~lyapcheck.models.parameter_box.ModelBox.describe`)."""
+    from lyapcheck.models.parameter_box import ModelBox
 
-    parts = []
-    for name, bounds in box.items():
-        lo, hi = (Fraction(str(b)) for b in bounds)
-        parts.append(f"{name} in [{float(lo):.{V_DIGITS}g}, {float(hi):.{V_DIGITS}g}]")
-    return " and ".join(parts)
+    return ModelBox.from_json({name: [str(lo), str(hi)] for name, (lo, hi) in box.items()}).describe(" and ")
 
 
 def _number(condition: Mapping[str, Any], key: str) -> float:
@@ -142,7 +139,6 @@ def v_text(terms: Mapping[str, Any], variables: Sequence[str], shifts: Mapping[s
     x_eq``) as a readable polynomial in the declared names: coefficients to :data:`V_DIGITS`
     significant digits, each state with a non-zero equilibrium value written ``(x1 - 1.5)``; with
     ``limit``, only the first terms (by degree) and how many more. The exact V is ``terms``."""
-    from fractions import Fraction
 
     shifts = shifts or {}
     rows = []
@@ -175,10 +171,14 @@ def v_expression(terms: Mapping[str, Any], variables: Sequence[str], shifts: Map
     import sympy as sp
 
     shifts = shifts or {}
-    symbols = [sp.Symbol(name) - sp.Rational(str(shifts.get(name, 0))) for name in variables]
+    def rational(value: Any) -> Any:  # through Fraction's own reader: no text reaches sympy's parser
+        exact = Fraction(str(value))
+        return sp.Rational(exact.numerator, exact.denominator)
+
+    symbols = [sp.Symbol(name) - rational(shifts.get(name, 0)) for name in variables]
     total = sp.Integer(0)
     for coefficient, exponents in terms["terms"]:
-        term = sp.Rational(str(coefficient))
+        term = rational(coefficient)
         for base, e in zip(symbols, exponents):
             term *= base ** int(e)
         total += term

@@ -509,13 +509,17 @@ class StateField:
 def active_disturbances(scaled: ScaledField) -> list[int]:
     """The disturbances (indices) with a bound > 0 that enter the field's right-hand side or its
     denominator: the ones a robust claim has to cover."""
-    ring = scaled.ring
-    n = scaled.n
+    return entering(scaled.ring, scaled.n, (*scaled.g, scaled.D), scaled.bounds)
+
+
+def entering(ring: Ring, n: int, polys: Sequence[Poly], bounds: Sequence[Fraction]) -> list[int]:
+    """The disturbances (indices; the ring's variables after the ``n`` states) with a bound > 0
+    that occur in one of ``polys``."""
     used = set()
-    for p in (*scaled.g, scaled.D):
+    for p in polys:
         for m in ring.support(p):
-            used |= {k for k in range(scaled.m) if m[n + k]}
-    return [k for k in sorted(used) if scaled.bounds[k] > 0]
+            used |= {k for k in range(len(bounds)) if m[n + k]}
+    return [k for k in sorted(used) if bounds[k] > 0]
 
 
 def disturbances_vanish(scaled: ScaledField) -> bool:

@@ -124,7 +124,7 @@ def is_model_file(path: object) -> bool:
         if not p.is_file() or p.stat().st_size > MAX_FILE_BYTES:
             return False
         data = tomllib.loads(p.read_bytes().decode("utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+    except (OSError, ValueError, RecursionError):  # unreadable, not UTF-8, not TOML, absurd numbers
         return False
     return "sweep" not in data and (isinstance(data.get("model"), dict) or isinstance(data.get("dynamics"), dict))
 

@@ -82,8 +82,9 @@ class ModelBox:
         right = self.bounds[:i] + ((name, mid, hi),) + self.bounds[i + 1:]
         return ModelBox(left), ModelBox(right)
 
-    def describe(self) -> str:
-        return ", ".join(f"{name} in [{float(lo):.6g}, {float(hi):.6g}]" for name, lo, hi in self.bounds)
+    def describe(self, separator: str = ", ") -> str:
+        """``mu in [0.8, 1.2], k in [1, 2]``: each bound to 6 significant digits."""
+        return separator.join(f"{name} in [{float(lo):.6g}, {float(hi):.6g}]" for name, lo, hi in self.bounds)
 
     def __iter__(self) -> Iterator[tuple[str, Fraction, Fraction]]:
         return iter(self.bounds)

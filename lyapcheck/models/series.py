@@ -92,21 +92,6 @@ class SeriesRecorder:
         self.x[slots[rows], k] = hermite(theta, h, y0[rows], y1[rows], f0[rows], f1[rows])
 
 
-class Fanout:
-    """Forward the integrator's callbacks to several observers (the tail sups and a recorder)."""
-
-    def __init__(self, *observers: Any) -> None:
-        self.observers = [o for o in observers if o is not None]
-
-    def start(self, *args: Any) -> None:
-        for o in self.observers:
-            o.start(*args)
-
-    def step(self, *args: Any) -> None:
-        for o in self.observers:
-            o.step(*args)
-
-
 def model_dataset(recorder: SeriesRecorder, *, states: Sequence[str], outputs: Sequence[str],
                   output_values: Any, starts_per_row: npt.ArrayLike, scenarios_per_row: Sequence[str],
                   converged: npt.ArrayLike, diverged: npt.ArrayLike, escape: tuple[FloatArray, FloatArray],
@@ -140,4 +125,4 @@ def model_dataset(recorder: SeriesRecorder, *, states: Sequence[str], outputs: S
         attrs=attrs)
 
 
-__all__ = ["SERIES_SAMPLES", "MAX_SERIES_ROWS", "SeriesRecorder", "Fanout", "recorded_rows", "model_dataset"]
+__all__ = ["SERIES_SAMPLES", "MAX_SERIES_ROWS", "SeriesRecorder", "recorded_rows", "model_dataset"]

@@ -711,7 +711,7 @@ def _run(prepared: Prepared, starts: FloatArray, disturbances: Sequence[ModelDis
     y0 = np.repeat(starts, J, axis=0)
     observer = _TailObserver(prepared, R, t_tail, None if record is None else np.asarray(record, dtype=np.intp))
     if series is not None:
-        from lyapcheck.models.series import Fanout
+        from lyapcheck.simulation.integrator import Fanout
     result = integrate(system, 0.0, y0, t_end, rtol=rtol, atol=ATOL_PER_RTOL * rtol * scale,
                        max_step=TAIL_FRACTION * t_end / STEPS_PER_TAIL,
                        observer=observer if series is None else Fanout(observer, series),

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
-from typing import Final, NamedTuple, Protocol
+from typing import Any, Final, NamedTuple, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -141,6 +141,21 @@ class StepObserver(Protocol):
 
     def step(self, index: IntArray, t0: FloatArray, t1: FloatArray, y0: FloatArray, y1: FloatArray,
              f0: FloatArray, f1: FloatArray) -> None: ...
+
+
+class Fanout:
+    """A :class:`StepObserver` that forwards every callback to several observers (None ones left out)."""
+
+    def __init__(self, *observers: Any) -> None:
+        self.observers = [o for o in observers if o is not None]
+
+    def start(self, *args: Any) -> None:
+        for o in self.observers:
+            o.start(*args)
+
+    def step(self, *args: Any) -> None:
+        for o in self.observers:
+            o.step(*args)
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from lyapcheck.simulation.disturbances import Disturbance, NoDisturbance
-from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, IntegrationResult, integrate
+from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, Fanout, IntegrationResult, integrate
 from lyapcheck.simulation.metrics import Recorder, TailObserver, Trajectory
 from lyapcheck.simulation.model import PX, PZ, Q_EPS, Q_U, Q_Z, ClosedLoop, Form, LoopParams
 
@@ -19,21 +19,6 @@ FloatArray = npt.NDArray[np.float64]
 #: the largest step, as a fraction of the tail window: at least this many steps (x4 samples)
 #: fall into the tail, which sets the sampling of the sup-norms there
 STEPS_PER_TAIL: Final = 20
-
-
-class _Fanout:
-    """Forward the integrator's callbacks to several observers."""
-
-    def __init__(self, *observers: Any) -> None:
-        self._observers = [o for o in observers if o is not None]
-
-    def start(self, *args: Any) -> None:
-        for o in self._observers:
-            o.start(*args)
-
-    def step(self, *args: Any) -> None:
-        for o in self._observers:
-            o.step(*args)
 
 
 @dataclass(frozen=True)
@@ -148,7 +133,7 @@ def simulate(params: LoopParams, *, p0: npt.ArrayLike, s0: npt.ArrayLike = 0.0,
     recorder = Recorder(record, n) if record else None
     result = integrate(loop, 0.0, y0, horizon, rtol=rtol, atol=loop.atol(rtol, scale),
                        max_step=max_step if max_step is not None else tail / STEPS_PER_TAIL,
-                       observer=_Fanout(tails, recorder), switch_atol=loop.switch_atol(rtol, scale))
+                       observer=Fanout(tails, recorder), switch_atol=loop.switch_atol(rtol, scale))
     y = result.y
     eps, _, s = loop.errors(y)
     final_abs = np.abs(eps)
