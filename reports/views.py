@@ -48,9 +48,15 @@ def as_fraction(value: object) -> Fraction | None:
 
 
 def as_number(value: object) -> float | None:
-    """A finite JSON number as a float, or None (a bool is not a number here)."""
-    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
-        and math.isfinite(value) else None
+    """A finite JSON number as a float, or None (a bool is not a number here, nor an integer beyond
+    the double range, which a hand-edited file may hold)."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
 
 
 def fmt_float(x: float, digits: int = DIGITS) -> str:

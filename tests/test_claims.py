@@ -233,3 +233,23 @@ def test_every_condition_of_a_disturbed_model_says_which_disturbances_even_when_
     assert all(c["disturbances"] in ("zero", "all") for c in doc["conditions"].values()), doc["conditions"]
     assert "candidate" in doc["conditions"] and doc["conditions"]["candidate"]["status"] == "not_applicable"
     assert failed(doc) == []
+
+
+def test_a_candidate_text_that_is_no_candidate_fails_even_where_nothing_certified_it() -> None:
+    doc = certify(scalar("0.5"), classes="quadratic")
+    given = copy.deepcopy(doc)
+    given["candidate"] = "x**2"  # given with --candidate while only other classes ran: shown, must parse
+    assert failed(given) == []
+    for text in ("y**2", "import os", 3):
+        forged = copy.deepcopy(doc)
+        forged["candidate"] = text
+        assert "candidate" in failed(forged), text
+
+
+def test_a_report_of_a_figure_beyond_doubles_is_written_not_an_internal_error(tmp_path: Path) -> None:
+    from reports.model_page import model_html
+
+    doc = certify(scalar("0.5"), classes="quadratic")
+    doc["conditions"]["quadratic"]["k"] = 10**400
+    assert "quadratic" in failed(doc)
+    assert "Stability certificate" in model_html(doc, simulate=False, recheck=False)

@@ -239,22 +239,26 @@ def _disturbances_enter(model: Any) -> bool:
 def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
     """The top-level ``candidate`` text is the user's V: parsed with the model's expression rules,
     it must be the ``V`` of a certified ``candidate`` condition (shifted to the equilibrium)."""
-    c = conditions.get("candidate")
-    if not isinstance(c, dict) or c.get("status") != "certified":
-        return
-    text = doc.get("candidate")
-    if not isinstance(text, str):
-        rows.append(("candidate", False, "candidate: a certified candidate condition needs the candidate text"))
-        return
     from lyapcheck.errors import ModelFileError
     from lyapcheck.models.certify import parse_candidate
     from lyapcheck.models.lyapunov import terms_json
     from lyapcheck.sos.polynomials import to_fmpq
 
-    try:
+    c = conditions.get("candidate")
+    text = doc.get("candidate")
+    certified = isinstance(c, dict) and c.get("status") == "certified"
+    if text is None and not certified:
+        return
+    if not isinstance(text, str):
+        rows.append(("candidate", False, "candidate: the candidate text must be text"
+                     + (", and a certified candidate condition needs it" if certified else "")))
+        return
+    try:  # a text the report shows must be a candidate of this model, even where nothing certified it
         cand = parse_candidate(model, text)
     except ModelFileError as exc:
         rows.append(("candidate", False, f"candidate: the candidate text does not parse: {exc}"))
+        return
+    if not isinstance(c, dict) or not certified:
         return
     ring = model.state_ring
     gens = ring.gens()
