@@ -82,18 +82,22 @@ def _products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) -> set
 
 
 def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequence[int]],
-                       drop: frozenset[Monomial] = frozenset(), param_degree: int = 0) -> Structure | None:
+                       drop: frozenset[Monomial] = frozenset(), param_degree: int = 0,
+                       drop_v: frozenset[Monomial] = frozenset()) -> Structure | None:
     """The program for a ``V`` of this degree, or None (:func:`lyapunov_program` says why)."""
-    found = lyapunov_program(field, degree, generators, drop, param_degree)
+    found = lyapunov_program(field, degree, generators, drop, param_degree, drop_v)
     return found if isinstance(found, Structure) else None
 
 
 def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequence[int]],
-                     drop: frozenset[Monomial] = frozenset(), param_degree: int = 0) -> Structure | str:
+                     drop: frozenset[Monomial] = frozenset(), param_degree: int = 0,
+                     drop_v: frozenset[Monomial] = frozenset()) -> Structure | str:
     """The program for a ``V`` of this degree, or why there is none: a size limit (named), or no
     strict certificate can exist in this form (the remainder's reduced basis lacks a pure power of
     some state: the Newton polytope of ``-V'`` leaves no room for one). ``drop``: monomials the
-    remainder's basis leaves out (facial reduction, :func:`vanishing_monomials`). Over a box of
+    remainder's basis leaves out, ``drop_v`` those ``V``'s basis leaves out (facial reduction,
+    :func:`vanishing_monomials`: a ``V`` whose Gram matrix must be singular over the full basis,
+    e.g. one without ``x1^4`` where an ``x1^4`` would leave odd terms in ``-V'``). Over a box of
     parameters (the ring's variables after the states) ``V``'s basis monomials may carry the
     parameters up to ``param_degree`` and the box's multipliers join the identity."""
     n = field.n
@@ -102,7 +106,10 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     if bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree) > CANDIDATE_LIMIT:
         return f"the size limit CANDIDATE_LIMIT = {CANDIDATE_LIMIT} candidate monomials was reached"
     z_v = [m for m in monomials(nv, 1, degree // 2 + param_degree)
-           if 1 <= sum(m[:n]) <= degree // 2 and sum(m[n:]) <= param_degree]
+           if 1 <= sum(m[:n]) <= degree // 2 and sum(m[n:]) <= param_degree and m not in drop_v]
+    if not bases.has_pure_powers(z_v, range(n)):
+        return ("no strict certificate of this form exists (V's basis, reduced to the face the solver found, "
+                "keeps no pure power of some state)")
     v_blocks = bases.character_blocks(z_v, generators)
     products = _products(z_v, v_blocks)
     target: set[Monomial] = set()
@@ -259,21 +266,24 @@ def search_degree(field: StateField, degree: int, search: Search, param_degree: 
     program, or the exact check that refused its solution."""
     generators = symmetry(field)
     drop: frozenset[Monomial] = frozenset()
+    drop_v: frozenset[Monomial] = frozenset()
     label = f"degree {degree}" + (f" ({param_degree} in the parameters)" if field.p > field.disturbances else "")
     why = "none found"
     for _ in range(FACIAL_ROUNDS + 1):
-        structure = lyapunov_program(field, degree, generators, drop, param_degree)
+        structure = lyapunov_program(field, degree, generators, drop, param_degree, drop_v)
         if isinstance(structure, str):
-            return None, f"{label}: {structure}"
+            return None, f"{label}: {structure}" + (f" (after facial reduction, where {why})" if drop or drop_v else "")
         found, solution = attempt_with_solution(field, structure, Fraction(0), search)
         if found is not None:
             break
         why = failure(solution, exact_tried=solution.usable
                       and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
         vanishing = vanishing_monomials(structure.gram("W"), solution)
-        if not vanishing:
+        vanishing_v = vanishing_monomials(structure.gram("V"), solution)
+        if not vanishing and not vanishing_v:
             return None, f"{label}: {why}"
         drop = drop | vanishing
+        drop_v = drop_v | vanishing_v
     else:
         return None, f"{label}: {why} (after {FACIAL_ROUNDS} rounds of facial reduction)"
     found = best_decay_rate(lambda mu: attempt(field, structure, mu, search), found)
