@@ -26,7 +26,7 @@ from fractions import Fraction
 from typing import Any, Final
 
 from lyapcheck.models.field import ScaledField, unscale_polynomial
-from lyapcheck.models.lyapunov import TARGET_LIMIT, affordable, terms_json
+from lyapcheck.models.lyapunov import TARGET_LIMIT, affordable, face_probe, terms_json
 from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      box_support, multiplier_grams, one, param)
 from lyapcheck.results import ConditionResult
@@ -57,12 +57,15 @@ def _symmetry(scaled: ScaledField, y: Poly) -> list[tuple[int, ...]]:
 def bound_structure(scaled: ScaledField, y: Poly, degree: int,
                     drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | None:
     """The program for ``V`` of this degree; ``drop``: (Gram, monomial) pairs left out of the
-    remainders' bases (facial reduction, :func:`lyapcheck.models.lyapunov.vanishing_monomials`)."""
+    bases of ``V`` and the remainders (facial reduction, :func:`lyapcheck.models.lyapunov.vanishing_monomials`)."""
     ring = scaled.ring
     n, m = scaled.n, scaled.m
     nv = ring.nvars
     generators = _symmetry(scaled, y)
-    z_v = [tuple(list(a) + [0] * (nv - n)) for a in monomials(n, 0, degree // 2)]  # V of the states alone
+    z_v = [q for q in (tuple(list(a) + [0] * (nv - n)) for a in monomials(n, 0, degree // 2))  # V of the states alone
+           if ("V", q) not in drop]
+    if not bases.has_pure_powers(z_v, range(n)):
+        return None  # the face the solver found keeps no pure power of some state: no strict V there
     v_blocks = bases.character_blocks(z_v, generators)
     v_products = {tuple(a + b for a, b in zip(z_v[i], z_v[j])) for idx in v_blocks for i in idx for j in idx}
     target: set[Monomial] = set()
@@ -178,26 +181,39 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
     best: dict[str, Any] | None = None
     tried: list[str] = []
     for degree in BOUND_DEGREES:
-        drop: frozenset[tuple[str, Monomial]] = frozenset()
-        structure = bound_structure(scaled, y, degree)
-        if structure is None:
+        full = bound_structure(scaled, y, degree)
+        if full is None:
             tried.append(f"degree {degree}: too large")
             continue
         found_here: list[tuple[Fraction, Fraction]] = []
+        # the full program first at every rate, then its facial reductions in turn: each found by a
+        # probe (:func:`face_probe`) once per degree, when a rate fails on every program so far. The
+        # floor on every Gram matrix makes a program whose V must be singular over the full basis
+        # infeasible, and its solution says nothing of the face (the margin variable is unused)
+        chain: list[tuple[Structure, frozenset[tuple[str, Monomial]]]] = [(full, frozenset())]
+        exhausted = False
 
         def try_lam(lam: Fraction) -> dict[str, Any] | None:
-            nonlocal structure, drop
-            for _ in range(FACIAL_ROUNDS + 1):
-                assert structure is not None
-                found, solution = attempt_with_solution(scaled, structure, y, lam, search)
-                if found is not None or not solution.usable:
+            nonlocal exhausted
+            for i in range(FACIAL_ROUNDS + 1):
+                if i == len(chain):
+                    if exhausted:
+                        return None
+                    structure, drop = chain[-1]
+                    probe = face_probe(structure, "V")
+                    values = bound_values(scaled, structure, y, lam)
+                    values.floats = {k: v for k, v in values.floats.items() if k in probe.parameters()}
+                    solution = search.solve(probe, values)
+                    vanishing = frozenset((name, q) for name in ("V", "sigD", "sigE")
+                                          for q in vanishing_monomials(structure.gram(name), solution))
+                    reduced = bound_structure(scaled, y, degree, drop | vanishing) if vanishing else None
+                    if reduced is None:
+                        exhausted = True
+                        return None
+                    chain.append((reduced, drop | vanishing))
+                found, _ = attempt_with_solution(scaled, chain[i][0], y, lam, search)
+                if found is not None:
                     return found
-                vanishing = frozenset((name, q) for name in ("sigD", "sigE")
-                                      for q in vanishing_monomials(structure.gram(name), solution))
-                reduced = bound_structure(scaled, y, degree, drop | vanishing) if vanishing else None
-                if reduced is None:
-                    return None
-                drop, structure = drop | vanishing, reduced
             return None
 
         for lam in (Fraction(x).limit_denominator(1000) for x in LAMBDA_GRID):

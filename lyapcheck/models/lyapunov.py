@@ -208,6 +208,18 @@ def vanishing_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
     return frozenset(m for m, d in zip(gram.basis, diag) if d <= FACIAL_TOL * peak)
 
 
+def face_probe(structure: Structure, normalized: str) -> Structure:
+    """``structure`` with every Gram matrix's floor replaced by the program's margin and the margin
+    maximized (``normalized``'s trace 1): its solution lies in the relative interior of the face of
+    the feasible set, where the diagonal entries that must vanish are (nearly) 0, so that
+    :func:`vanishing_monomials` can name them; a program with floors that is infeasible only
+    because some Gram matrix must be singular is infeasible, and shows no face."""
+    from dataclasses import replace
+
+    return replace(structure, grams=tuple(replace(g, margin=True) for g in structure.grams),
+                   objective=("max_margin",), trace_one=(normalized,))
+
+
 def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], found: dict[str, Any]) -> dict[str, Any]:
     """The certificate of the largest ``mu`` found, starting from ``found`` (``mu = 0``): step down
     geometrically from :data:`MU_MAX` to the first ``mu`` proved, then bisect geometrically. The
