@@ -7,8 +7,9 @@ formats always carry the same content; see ``reports/README.md`` for the choice.
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Final
 
 from lyapcheck.errors import InputFileError, InvalidParameter, LyapcheckError
 from lyapcheck.fileio import atomic_write
@@ -39,18 +40,88 @@ def write_page(html: str, path: str | Path) -> Path:
     return atomic_write(path, html.encode("utf-8"))
 
 
-def certificate_html(doc: dict[str, Any], *, ledger: bool = True, simulate: bool = True) -> str:
-    """The certificate report as one self-contained HTML page."""
+@dataclass(frozen=True)
+class PageKind:
+    """One kind of report page: which input it shows, how its context is built, its template.
+
+    ``accepts`` sees the input (a certificate document, or a loaded sweep store); ``context``
+    builds the page's data (``**options`` are the keywords of :func:`certificate_html`, which a
+    store's page does not take).
+    """
+
+    name: str
+    accepts: Callable[[Any], bool]
+    context: Callable[..., dict[str, Any]]
+    template: str
+
+
+def _is_model_certificate(doc: Any) -> bool:
+    return isinstance(doc, dict) and doc.get("kind") == "lyapcheck-model-certificate"
+
+
+def _certificate_context(doc: dict[str, Any], **options: Any) -> dict[str, Any]:
     from reports.certificate_page import certificate_context
+
+    return certificate_context(doc, **options)
+
+
+def _is_model_store(ds: Any) -> bool:
+    from sweeps.model_schema import is_model_dataset
+
+    return bool(is_model_dataset(ds))
+
+
+def _is_box_store(ds: Any) -> bool:
+    from sweeps.schema import is_box_dataset
+
+    return bool(is_box_dataset(ds))
+
+
+def _model_store_context(ds: Any) -> dict[str, Any]:
+    from reports.store_page import model_store_context
+
+    return model_store_context(ds)
+
+
+def _box_store_context(ds: Any) -> dict[str, Any]:
+    from reports.box_page import box_context
+
+    return box_context(ds)
+
+
+def _grid_store_context(ds: Any) -> dict[str, Any]:
+    from reports.sweep_page import sweep_context
+
+    return sweep_context(ds)
+
+
+#: every page a report can be, tried in order: the first that accepts its input renders it. The
+#: two certificate kinds are one page (reports.certificate_page) with the subject of their model.
+CERTIFICATE_PAGES: Final = (
+    PageKind("model certificate", _is_model_certificate, _certificate_context, "certificate.html.j2"),
+    PageKind("paper certificate", lambda doc: isinstance(doc, dict), _certificate_context, "certificate.html.j2"),
+)
+STORE_PAGES: Final = (
+    PageKind("model sweep store", _is_model_store, _model_store_context, "model_sweep.html.j2"),
+    PageKind("paper box store", _is_box_store, _box_store_context, "boxes.html.j2"),
+    PageKind("paper sweep store", lambda ds: True, _grid_store_context, "sweep.html.j2"),
+)
+
+
+def page_kind(value: Any, kinds: tuple[PageKind, ...]) -> PageKind:
+    """The first page kind of ``kinds`` that accepts ``value``."""
+    for kind in kinds:
+        if kind.accepts(value):
+            return kind
+    raise InputFileError("a certificate must be a JSON object")
+
+
+def certificate_html(doc: dict[str, Any], *, ledger: bool = True, simulate: bool = True, recheck: bool = True) -> str:
+    """The certificate report (any model's) as one self-contained HTML page."""
     from reports.html import render_html
 
-    if not isinstance(doc, dict):
-        raise InputFileError("a certificate must be a JSON object")
-    if doc.get("kind") == "lyapcheck-model-certificate":  # a model file's certificate: reports.model_page
-        from reports.model_page import model_html
-
-        return model_html(doc, simulate=simulate)
-    return render_html("certificate.html.j2", certificate_context(doc, ledger=ledger, simulate=simulate))
+    kind = page_kind(doc, CERTIFICATE_PAGES)
+    return render_html(kind.template, kind.context(doc, ledger=ledger, simulate=simulate, recheck=recheck))
 
 
 def certificate_report(doc: dict[str, Any], path: str | Path) -> Path:
@@ -89,20 +160,10 @@ def read_store(path: str | Path) -> Any:
 def sweep_html(store: Any) -> str:
     """The sweep report as one self-contained HTML page (``store``: a path or an xarray Dataset)."""
     from reports.html import render_html
-    from reports.sweep_page import sweep_context
-    from sweeps.model_schema import is_model_dataset
-    from sweeps.schema import is_box_dataset
 
     dataset = read_store(store) if isinstance(store, (str, Path)) else store
-    if is_model_dataset(dataset):  # a model file's points or boxes: reports.model_sweep_page
-        from reports.model_sweep_page import model_sweep_context
-
-        return render_html("model_sweep.html.j2", model_sweep_context(dataset))
-    if is_box_dataset(dataset):  # mode = "boxes": one row per box, not a grid of points
-        from reports.box_page import box_context
-
-        return render_html("boxes.html.j2", box_context(dataset))
-    return render_html("sweep.html.j2", sweep_context(dataset))
+    kind = page_kind(dataset, STORE_PAGES)
+    return render_html(kind.template, kind.context(dataset))
 
 
 def sweep_report(store: Any, path: str | Path) -> Path:
@@ -122,7 +183,7 @@ def report_files(source: str | Path, html: str | Path | None, pdf: str | Path | 
 
     With neither ``html`` nor ``pdf``, writes ``<source stem>.html`` in the current directory.
     """
-    from reports.model_page import read_certificate
+    from reports.certificate_page import read_certificate
 
     for name, value, suffix in (("html", html, ".html"), ("pdf", pdf, ".pdf")):
         if value is not None and Path(value).suffix.lower() != suffix:
@@ -147,5 +208,5 @@ def report_files(source: str | Path, html: str | Path | None, pdf: str | Path | 
     return written
 
 
-__all__ = ["certificate_report", "certificate_html", "sweep_report", "sweep_html", "read_store", "report_files",
+__all__ = ["PageKind", "CERTIFICATE_PAGES", "STORE_PAGES", "page_kind", "certificate_report", "certificate_html", "sweep_report", "sweep_html", "read_store", "report_files",
            "html_to_pdf", "write_page"]

@@ -125,16 +125,16 @@ def vdp() -> Any:
 
 @pytest.fixture(scope="module")
 def vdp_context(vdp: Any) -> dict[str, Any]:
-    from reports.model_page import model_context
+    from reports.certificate_page import certificate_context
 
-    return model_context(vdp.document)
+    return certificate_context(vdp.document)
 
 
 @pytest.fixture(scope="module")
 def vdp_html(vdp_context: dict[str, Any]) -> str:
     from reports.html import render_html
 
-    return render_html("model.html.j2", vdp_context)
+    return render_html("certificate.html.j2", vdp_context)
 
 
 @pytest.fixture(scope="module")
@@ -148,9 +148,9 @@ def l1() -> Any:
 
 @pytest.fixture(scope="module")
 def l1_context(l1: Any) -> dict[str, Any]:
-    from reports.model_page import model_context
+    from reports.certificate_page import certificate_context
 
-    return model_context(l1.document)
+    return certificate_context(l1.document)
 
 
 @pytest.fixture(scope="module")
@@ -189,7 +189,7 @@ def test_vdp_page_shows_every_class_the_exact_v_and_the_phase_portrait(vdp: Any,
     # V exactly: every term of the certificate's V is in the plain text, coefficient for coefficient
     for coefficient, _ in roa["certificate"]["V"]["terms"]:
         assert coefficient.lstrip("-") in text
-    (shown,) = [c for c in vdp_context["classes"] if c.name == "roa"]
+    (shown,) = [c for c in vdp_context["conditions"] if c.name == "roa"]
     (v,) = shown.polynomials
     assert v.terms == len(roa["certificate"]["V"]["terms"]) and v.degree == roa["degree"]
     assert any(e["alt"] == v.plain for e in page.find("img", "math"))  # the typeset V, with its exact text
@@ -270,7 +270,7 @@ def test_sos_bound_page_shows_bounds_storage_functions_and_the_disturbed_panel(l
     from reports.html import render_html
 
     doc = l1.document
-    page = Page(render_html("model.html.j2", l1_context))
+    page = Page(render_html("certificate.html.j2", l1_context))
     text = page.text
     bounds = doc["conditions"]["sos_bound"]["bounds"]
     for output, bound in bounds.items():
@@ -337,16 +337,16 @@ def test_three_state_model_has_tables_and_no_figure(rational: tuple[dict[str, An
 # ------------------------------------------------------------------------------------------------
 @pytest.mark.slow
 def test_a_changed_level_or_model_text_raises_the_alarm(vdp: Any) -> None:
-    from reports.model_page import model_html
+    from reports.render import certificate_html
 
     doc = copy.deepcopy(vdp.document)
     level = Fraction(doc["conditions"]["roa"]["certificate"]["level"])
     doc["conditions"]["roa"]["certificate"]["level"] = str(level * 2)
-    text = Page(model_html(doc, simulate=False)).text
+    text = Page(certificate_html(doc, simulate=False)).text
     assert "THE EXACT RE-CHECK FAILS" in text and "Do not trust this certificate" in text
     doc = copy.deepcopy(vdp.document)
     doc["model"]["text"] = doc["model"]["text"].replace("mu = 1\n", "mu = 2\n")
-    text = Page(model_html(doc, simulate=False)).text
+    text = Page(certificate_html(doc, simulate=False)).text
     assert "does not match its SHA-256" in text and "the stored text does NOT match it" in text
 
 
@@ -376,7 +376,7 @@ def _disc(level: str) -> dict[str, Any]:
 
 
 def test_input_text_reaches_the_page_as_text(tmp_path: Path) -> None:
-    from reports.model_page import model_html
+    from reports.render import certificate_html
     from reports.render import html_to_pdf
 
     # a certified class's sentence is regenerated from its figures (the file's text is never shown),
@@ -385,7 +385,7 @@ def test_input_text_reaches_the_page_as_text(tmp_path: Path) -> None:
                                            "quadratic": {"status": "not_certified",
                                                          "summary": "<script>alert(2)</script> & <b>y</b>"}})
     doc["model"]["name"] = "<img src=x onerror=alert(1)> #set page(width: 1pt)"
-    html = model_html(doc, simulate=False, recheck=False)
+    html = certificate_html(doc, simulate=False, recheck=False)
     page = Page(html)
     no_network(page)
     assert "<script>alert(2)</script> & <b>y</b>" in page.text
@@ -398,7 +398,7 @@ def test_the_portrait_of_a_true_certificate_matches_the_exact_set() -> None:
     """x**2 + y**2 <= 1 for FOSSIL's Poly2 (V' = -2x^4 - 2y^2): the drawn set is the unit disc and
     every simulated trajectory that starts in it stays there; the domain box [-5, 5]^2 is in view."""
     from lyapcheck.models.modelfile import parse_model
-    from reports.model_figures import phase_portrait
+    from reports.phase_portrait import phase_portrait
 
     doc = _synthetic("fossil-poly2.toml", {"roa": _disc("1")})
     portrait = phase_portrait(doc, parse_model(doc["model"]["text"], "poly2"))
@@ -416,10 +416,10 @@ def test_the_portrait_of_a_true_certificate_matches_the_exact_set() -> None:
 def test_a_false_region_of_attraction_raises_the_soundness_alarm() -> None:
     """The reversed Van der Pol oscillator's true region of attraction crosses the x1-axis at
     2.0086: a made-up "certified" disc of radius 5 contains escaping starts, and the page says so."""
-    from reports.model_page import model_context
+    from reports.certificate_page import certificate_context
 
     doc = _synthetic("van-der-pol-reversed.toml", {"roa": _disc("25")})
-    context = model_context(doc, recheck=False)
+    context = certificate_context(doc, recheck=False)
     (check,) = context["checks"]
     assert not check.ok and "escaped" in check.detail
     assert context["soundness"].startswith("SOUNDNESS: a simulation contradicts a certificate")
@@ -428,8 +428,8 @@ def test_a_false_region_of_attraction_raises_the_soundness_alarm() -> None:
 def test_a_shifted_equilibrium_is_drawn_where_it_is() -> None:
     """V is stored in x - x_eq: the set {(x1 - 1)^2 + x2^2 <= 1/4} is drawn around (1, 0)."""
     from lyapcheck.models.modelfile import parse_model
-    from reports.model_figures import phase_portrait
-    from reports.model_page import model_context
+    from reports.phase_portrait import phase_portrait
+    from reports.certificate_page import certificate_context
 
     text = ('[model]\nname = "shifted"\nstates = ["x1", "x2"]\n[dynamics]\nx1 = "-(x1 - 1)"\nx2 = "-x2"\n'
             "[equilibrium]\nx1 = 1\n")
@@ -439,8 +439,8 @@ def test_a_shifted_equilibrium_is_drawn_where_it_is() -> None:
     lo, hi = portrait.figure.data["sets"][0]["extent_declared"]
     np.testing.assert_allclose(lo, [0.5, -0.5], atol=1e-9)
     np.testing.assert_allclose(hi, [1.5, 0.5], atol=1e-9)
-    context = model_context(doc, simulate=False, recheck=False)
-    (view,) = context["classes"][0].polynomials
+    context = certificate_context(doc, simulate=False, recheck=False)
+    (view,) = context["conditions"][0].polynomials
     assert view.plain == "(x1 - 1)**2 + x2**2"
 
 
@@ -452,7 +452,7 @@ def test_plain_text_parses_back_to_the_same_polynomial() -> None:
     exactly the stored terms (shifted by the equilibrium where it is not 0)."""
     from lyapcheck.models.expressions import parse_expression
     from lyapcheck.sos.polynomials import Ring
-    from reports.model_polynomials import ExactPolynomial
+    from reports.polynomials import ExactPolynomial
 
     rng = np.random.default_rng(7)
     ring = Ring(("x1", "x2", "x3"))
@@ -477,7 +477,7 @@ def test_plain_text_parses_back_to_the_same_polynomial() -> None:
 
 
 def test_storage_functions_over_states_and_disturbances_are_read_over_the_states() -> None:
-    from reports.model_polynomials import ExactPolynomial
+    from reports.polynomials import ExactPolynomial
 
     poly = ExactPolynomial.from_json({"terms": [["1/2", [2, 0, 0]], ["-3", [1, 1, 0]]]}, 2)
     assert poly.plain_text(["a", "b"], [Fraction(0)] * 2) == "1/2*a**2 - 3*a*b"
@@ -488,7 +488,7 @@ def test_storage_functions_over_states_and_disturbances_are_read_over_the_states
 
 
 def test_a_long_polynomial_is_typeset_truncated_and_compiles() -> None:
-    from reports.model_polynomials import MAX_TYPESET_TERMS, ExactPolynomial
+    from reports.polynomials import MAX_TYPESET_TERMS, ExactPolynomial
     from reports.typeset import render
 
     terms = [[f"{k + 1}/{k + 7}", [a, b, c]] for k, (a, b, c) in
@@ -503,7 +503,7 @@ def test_a_long_polynomial_is_typeset_truncated_and_compiles() -> None:
 
 def test_reading_a_certificate_keeps_the_papers_messages(tmp_path: Path) -> None:
     from lyapcheck.errors import InputFileError
-    from reports.model_page import read_certificate
+    from reports.certificate_page import read_certificate
 
     other = tmp_path / "other.json"
     other.write_text(json.dumps({"kind": "something else"}))

@@ -1,6 +1,7 @@
 """The phase portrait of a 2-state model certificate, and the simulation cross-checks behind it.
 
-What is drawn (declared coordinates, SI):
+What is drawn (declared coordinates, SI): the sets and functions each certified class's report
+section contributes (:meth:`reports.sections.base.Section.portrait`), which are today
 
 - every certified set ``{V <= c}`` of ``roa`` and ``candidate``, filled, with ``V`` evaluated
   from the certificate's exact terms (each coefficient converted to the nearest float once, in
@@ -17,7 +18,8 @@ What is drawn (declared coordinates, SI):
 The view is decided beforehand: each set's extent is found along rays from the equilibrium
 (bisection on the first crossing of the level, in ``u``), then joined with the domain.
 
-The trajectories are also *checked against the certificates* (:class:`CrossCheck`): along
+The simulation is :mod:`lyapcheck.models.trajectories` (the core's cross-checks of certificates
+use the same one). The trajectories are also *checked against the certificates* (:class:`CrossCheck`): along
 every simulated trajectory that starts in a certified region of attraction ``V`` must not rise
 and the start must not escape; a global certificate's ``V`` must not rise (and must decay at
 the certified rate) along every trajectory; a storage function must stay below its certified
@@ -39,8 +41,10 @@ from lyapcheck.models.crosscheck import BISECTIONS, RAY_RADII, check_global, che
 from lyapcheck.models.modelfile import Model
 from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 from reports.figures import Figure, resample_closed, to_svg
-from reports.model_polynomials import ExactPolynomial, FloatPolynomial
-from reports.model_simulation import Trajectory, horizon, jacobian_eigenvalues, simulate
+from lyapcheck.models.trajectories import Trajectory, horizon, jacobian_eigenvalues, simulate
+from reports.polynomials import FloatPolynomial
+from reports.sections import MODEL_FILE, section_for
+from reports.sections.base import GlobalV, LevelSet
 from reports.views import as_dict, as_fraction, as_number, fmt_float
 
 FloatArray = npt.NDArray[np.float64]
@@ -70,42 +74,9 @@ DISTURBED_STARTS: Final = 8
 #: relative tolerance of the cross-checks (lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL: the checks
 #: themselves are lyapcheck.models.crosscheck's, shared with the sweeps of model files)
 CHECK_TOL: Final = TRAJECTORY_CHECK_REL_TOL
-#: colours: the certified status colour for regions of attraction, one colour per output bound
-SET_COLOURS: Final = {"roa": "#1a7f37", "candidate": "#0969da"}
-OUTPUT_COLOURS: Final = ("#8250df", "#bc4c00", "#bf3989", "#116329", "#0550ae", "#953800")
 OUTCOME_STYLE: Final = {"converged": ("#0969da", "converged to the equilibrium"),
                         "escaped": ("#cf222e", "escaped (ran far out of view)"),
                         "other": ("#9a6700", "neither, by the end")}
-
-
-@dataclass(frozen=True)
-class LevelSet:
-    """A certified set ``{V <= level}`` of the document.
-
-    ``kind`` is ``"region"`` (roa, candidate: invariant, every start converges) or
-    ``"attracting"`` (sos_bound: every trajectory enters it, for every admissible disturbance;
-    ``rate`` is its certified decay rate ``lam`` per second, ``output`` and ``bound`` the output
-    it bounds and the certified ``limsup |y|``).
-    """
-
-    name: str
-    label: str
-    poly: ExactPolynomial
-    level: Fraction
-    kind: str
-    colour: str
-    rate: float = 0.0
-    output: str = ""
-    bound: float | None = None
-
-
-@dataclass(frozen=True)
-class GlobalV:
-    """A global Lyapunov function of ``quadratic`` or ``sos_gas``, with its certified decay rate of V."""
-
-    name: str
-    poly: ExactPolynomial
-    rate: float
 
 
 @dataclass(frozen=True)
@@ -158,30 +129,13 @@ def level_sets(doc: dict[str, Any], model: Model) -> tuple[list[LevelSet], list[
         cond = as_dict(cond)
         if cond.get("status") != "certified":
             continue
-        cert = as_dict(cond.get("certificate"))
         try:
-            if name in ("roa", "candidate") and "level" in cert and "V" in cert:
-                level = as_fraction(cert["level"])
-                if level is None:
-                    raise ValueError("its level is not a rational")
-                poly = ExactPolynomial.from_json(cert["V"], model.n)
-                sets.append(LevelSet(name, f"{name}: {{V ≤ {fmt_float(float(level))}}}", poly, level, "region",
-                                     SET_COLOURS.get(name, "#1a7f37")))
-            elif name in ("quadratic", "sos_gas", "candidate") and "V" in cert:
-                rate = as_number(cond.get("decay_rate_V_per_s")) or 0.0
-                globals_.append(GlobalV(name, ExactPolynomial.from_json(cert["V"], model.n), max(rate, 0.0)))
-            elif name == "sos_bound":
-                for k, (output, data) in enumerate(as_dict(cert.get("outputs")).items()):
-                    data = as_dict(data)
-                    lam = as_fraction(data.get("lam_scaled"))
-                    poly = ExactPolynomial.from_json(data.get("V"), model.n)
-                    bound = as_number(as_dict(cond.get("bounds")).get(output))
-                    sets.append(LevelSet(name, f"sos_bound ({output}): {{V ≤ 1}}", poly, Fraction(1), "attracting",
-                                         OUTPUT_COLOURS[k % len(OUTPUT_COLOURS)],
-                                         rate=float(lam / time) if lam is not None and lam > 0 else 0.0,
-                                         output=str(output), bound=bound))
+            part = section_for(MODEL_FILE, str(name)).portrait(str(name), cond, model.n, time)
         except ValueError as exc:
             notes.append(f"The polynomial of {name} cannot be drawn: {exc}.")
+            continue
+        sets.extend(part.sets)
+        globals_.extend(part.globals)
     return sets, globals_, notes
 
 

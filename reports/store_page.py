@@ -177,7 +177,7 @@ def _violations(summary: ModelSweepSummary) -> tuple[list[tuple[str, str]], int]
     return rows[:MAX_VIOLATION_ROWS], more + max(0, len(rows) - MAX_VIOLATION_ROWS)
 
 
-def model_sweep_context(ds: Any) -> dict[str, Any]:
+def model_store_context(ds: Any) -> dict[str, Any]:
     """Everything ``model_sweep.html.j2`` shows, as plain strings (the template escapes them). ``ds``
     is a model sweep store, loaded and checked by :func:`sweeps.model_schema.check_model_dataset`."""
     summary = summarize_dataset(ds)
@@ -242,4 +242,4 @@ def model_sweep_context(ds: Any) -> dict[str, Any]:
     }
 
 
-__all__ = ["model_sweep_context", "box_map"]
+__all__ = ["model_store_context", "box_map"]

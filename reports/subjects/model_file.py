@@ -1,0 +1,324 @@
+"""A model file (``lyapcheck certify --model FILE``) as a certificate page's subject.
+
+Its parts: the model as the certificate stores it (name, source, states, parameters as given and
+SI, a box's ranges, disturbances, equilibrium, outputs, domain, the dynamics as written, the
+SHA-256 of the text); the field the certificates use (each denominator's positivity certificate,
+the scaling); for 2 states the phase portrait with the certified sets and simulated trajectories
+and the simulation cross-checks of the certificates (:mod:`reports.phase_portrait`); the
+certificate **re-checked exactly** on the spot (:func:`lyapcheck.models.certificate.verify_document`,
+no solver, well under a second; a failure is an alarm at the top); the command line and the
+model file verbatim.
+
+The model text is re-read only by the model-file parser (:func:`lyapcheck.models.modelfile.parse_model`,
+a whitelist over Python's ``ast``) and by :mod:`tomllib`; nothing from it is evaluated.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import shlex
+import tomllib
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Final
+
+from markupsafe import Markup
+
+from lyapcheck.errors import InputFileError, LyapcheckError
+from lyapcheck.models.certificate import KIND, is_model_document
+from lyapcheck.models.certify import VERDICT_MEANING
+from lyapcheck.models.modelfile import Model
+from reports.figures import Figure
+from reports.phase_portrait import CrossCheck, phase_portrait
+from reports.sections.base import MODEL_FILE, ClassContext, ClassView, text_of
+from reports.subjects.base import STATUS_MEANING, Glance, Quantity, Subject
+from reports.typeset import Equations
+from reports.views import as_dict, as_fraction, as_number, fmt_float
+
+log = logging.getLogger(__name__)
+
+#: statuses of model classes beyond the paper's (DESIGN.md)
+EXTRA_STATUS_MEANING: Final = {
+    "not_applicable": "the class needs something the model or the command did not give (the summary says what)",
+    "counterexample": "numerical evidence against the property (a reproducible trajectory), not an exact proof",
+}
+
+
+@dataclass
+class Denominator:
+    text: str
+    how: str
+
+
+def quantities(exact_si: dict[str, Any], given: dict[str, Any], overrides: dict[str, Any],
+               box: dict[str, Any] | None = None) -> list[Quantity]:
+    """One row per quantity; a parameter of the certificate's box shows its range (every value in
+    it is covered), not the file's nominal value."""
+    rows = []
+    box = box or {}
+    for name, value in exact_si.items():
+        bounds = box.get(name)
+        if isinstance(bounds, list) and len(bounds) == 2:
+            lo, hi = (as_fraction(b) for b in bounds)
+            if lo is not None and hi is not None:
+                rows.append(Quantity(str(name), text_of(given.get(name, "—")), f"[{fmt_float(float(lo))}, "
+                                     f"{fmt_float(float(hi))}]", f"[{lo}, {hi}]",
+                                     f"the box: every value in this range is covered (--box {name}=...); the file's "
+                                     "value is not used"))
+                continue
+        exact = as_fraction(value)
+        note = ""
+        if name in overrides:
+            raw, note = overrides[name], f"set on the command line (--set {name}=...)"
+        else:
+            raw = given.get(name, "—")
+        si = "—" if exact is None else fmt_float(float(exact))
+        rows.append(Quantity(str(name), text_of(raw), si,
+                             "" if exact is None or exact.denominator == 1 else str(exact), note))
+    return rows
+
+
+def denominators(fld: dict[str, Any]) -> list[Denominator]:
+    out = []
+    for cert in fld.get("denominators") or []:
+        cert = as_dict(cert)
+        text = text_of(cert.get("denominator", "a denominator"))
+        sign = cert.get("sign", 1)
+        kind = cert.get("kind")
+        if kind == "constant":
+            how = f"a positive constant ({text_of(cert.get('value'))}), exactly"
+        elif kind == "sos":
+            basis = as_dict(cert.get("gram_sigma")).get("basis")
+            size = len(basis) if isinstance(basis, list) else 0
+            scales = ", ".join(map(text_of, cert.get("scales") or []))
+            c, norm = text_of(cert.get("c")), text_of(cert.get("normalization"))
+            how = (f"positive everywhere: after the scaling of its variables by ({scales}) and division by {norm}, it "
+                   f"equals c + sigma with c = {c} > 0 and sigma a sum of squares (its {size} x {size} Gram matrix "
+                   "positive semidefinite); checked exactly")
+        else:
+            how = f"certificate of kind {kind!r}"
+        if sign == -1:
+            how = ("negative everywhere (the certificate is for its negative), so its sign moves to the "
+                   "numerator: " + how)
+        out.append(Denominator(text, how))
+    return out
+
+
+def scaling(fld: dict[str, Any], states: list[str], disturbances: list[str], outputs: list[str]) -> list[tuple[str, str]]:
+    stored = as_dict(fld.get("scaling"))
+    rows: list[tuple[str, str]] = []
+    for key, names, what in (("states", states, "state"), ("disturbances", disturbances, "disturbance"),
+                             ("outputs", outputs, "output")):
+        values = stored.get(key)
+        if isinstance(values, list):
+            for name, value in zip(names, values):
+                rows.append((f"{what} {name}", text_of(value)))
+    for key, what in (("time", "time: t = T tau, T"), ("denominator", "denominator factor")):
+        if key in stored:
+            rows.append((what, text_of(stored[key])))
+    return rows
+
+
+def solvers(conditions: dict[str, Any]) -> list[tuple[str, str]]:
+    """Per class: how many solves, their outcomes and the solver time (the full log is in the file)."""
+    out = []
+    for name, cond in conditions.items():
+        solves = as_dict(as_dict(cond).get("solver")).get("solves")
+        if not isinstance(solves, list) or not solves:
+            continue
+        outcomes: dict[str, int] = {}
+        seconds = 0.0
+        names = set()
+        for s in solves:
+            s = as_dict(s)
+            outcome = text_of(s.get("outcome", s.get("status", "?")))
+            outcomes[outcome] = outcomes.get(outcome, 0) + 1
+            seconds += as_number(s.get("solve_seconds")) or 0.0
+            names.add(text_of(s.get("solver", "?")))
+        counts = ", ".join(f"{n} {k}" for k, n in sorted(outcomes.items()))
+        out.append((str(name), f"{len(solves)} solves with {', '.join(sorted(names))} ({counts}), "
+                               f"{fmt_float(seconds, 3)} s in the solver"))
+    return out
+
+
+def exact_decimal(value: Fraction | None) -> str:
+    """A box bound as the command line reads it: the exact decimal where it terminates (every box
+    that ``--box`` or a sweep makes), else 17 significant digits."""
+    from decimal import Decimal, localcontext
+
+    if value is None:
+        return "?"
+    rest = value.denominator
+    for p in (2, 5):
+        while rest % p == 0:
+            rest //= p
+    if rest != 1:
+        return f"{float(value):.17g}"
+    with localcontext() as ctx:  # a terminating decimal: enough digits to be exact
+        ctx.prec = len(str(value.numerator)) + 2 * len(str(value.denominator)) + 2
+        return format((Decimal(value.numerator) / Decimal(value.denominator)).normalize(), "f")
+
+
+def command(doc: dict[str, Any]) -> str:
+    model = as_dict(doc.get("model"))
+    file = text_of(model.get("file") or "model.toml")
+    parts = ["lyapcheck", "certify", "--model", shlex.quote(file)]
+    for name, value in as_dict(doc.get("overrides")).items():
+        parts += ["--set", shlex.quote(f"{name}={value}")]
+    if isinstance(doc.get("candidate"), str):
+        parts += ["--candidate", shlex.quote(doc["candidate"])]
+    for name, bounds in as_dict(doc.get("box")).items():
+        if isinstance(bounds, list) and len(bounds) == 2:
+            lo, hi = (exact_decimal(as_fraction(b)) for b in bounds)
+            parts += ["--box", shlex.quote(f"{name}={lo}..{hi}")]
+    names = [str(n) for n in as_dict(doc.get("conditions"))]
+    if names:
+        parts += ["--classes", shlex.quote(",".join(names))]
+    parts += ["--out", "certificate.json"]
+    return (" ".join(parts) + "\nlyapcheck verify certificate.json   # exact re-check, no solver\n"
+            "lyapcheck report certificate.json --html report.html --pdf report.pdf")
+
+
+def recheck_rows(doc: dict[str, Any]) -> tuple[list[tuple[str, bool, str]], str]:
+    """Re-check every claim exactly (no solver); (rows, error if it could not run)."""
+    from lyapcheck.models.certificate import verify_document
+
+    try:
+        return verify_document(doc), ""
+    except LyapcheckError as exc:
+        return [], str(exc)
+
+
+def portrait(doc: dict[str, Any], model: Model | None, simulate: bool) -> tuple[Figure | None, str, list[CrossCheck]]:
+    if not simulate:
+        return None, "not requested", []
+    if model is None:
+        return None, "the stored model text does not parse, so nothing can be simulated", []
+    try:
+        drawn = phase_portrait(doc, model)
+    except (LyapcheckError, ValueError, ArithmeticError, FloatingPointError) as exc:
+        log.warning("no phase portrait for the report: %s", exc)
+        return None, f"the simulation failed: {exc}", []
+    return drawn.figure, drawn.reason, drawn.checks
+
+
+class ModelFileSubject(Subject):
+    model = MODEL_FILE
+    template = "model_file.html.j2"
+
+    def __init__(self, doc: dict[str, Any]) -> None:
+        from lyapcheck.models.modelfile import parse_model
+
+        if not is_model_document(doc):
+            raise InputFileError(f"not a model certificate (missing kind '{KIND}')")
+        super().__init__(doc)
+        stored = as_dict(doc.get("model")).get("text")
+        self.text = stored if isinstance(stored, str) else ""
+        self.overrides = {str(k): v for k, v in as_dict(doc.get("overrides")).items()}
+        self.parsed: Model | None = None
+        self.error = ""
+        try:
+            self.parsed = parse_model(self.text, text_of(as_dict(doc.get("model")).get("file", "<certificate>")),
+                                      self.overrides)
+        except LyapcheckError as exc:
+            self.error = str(exc)
+        try:
+            self.raw = tomllib.loads(self.text)
+        except tomllib.TOMLDecodeError:
+            self.raw = {}
+        states = [str(s) for s in doc.get("states") or []] if isinstance(doc.get("states"), list) else []
+        if self.parsed is not None and not states:
+            states = list(self.parsed.states)
+        self.states = states
+
+    def class_context(self, eqs: Equations) -> ClassContext:
+        equilibrium = as_dict(self.doc.get("equilibrium"))
+        shifts = [as_fraction(equilibrium.get(s)) or Fraction(0) for s in self.states]
+        outputs = tuple(self.parsed.outputs) if self.parsed is not None else ()
+        return ClassContext(self.doc, eqs, self.states, shifts, outputs, self.doc.get("box"))
+
+    def parts(self, eqs: Equations, classes: list[ClassView], *, ledger: bool, simulate: bool) -> dict[str, Any]:
+        doc, model, raw = self.doc, self.parsed, self.raw
+        model_part = as_dict(doc.get("model"))
+        try:
+            from lyapcheck.models.claims import box_words
+
+            box_text = box_words(as_dict(doc.get("box"))) if as_dict(doc.get("box")) else ""
+        except (TypeError, ValueError, ArithmeticError):
+            box_text = "a box of parameters (its bounds are malformed)"
+        figure, figure_reason, checks = portrait(doc, model, simulate)
+        digest = hashlib.sha256(self.text.encode()).hexdigest()
+        stated = text_of(model_part.get("sha256", ""))
+        fld = as_dict(doc.get("field"))
+        disturbances = [str(d) for d in as_dict(doc.get("disturbances"))]
+        outputs_text = dict(model.output_text) if model is not None else {
+            str(k): text_of(v) for k, v in as_dict(raw.get("outputs")).items()}
+        verdict = text_of(doc.get("verdict", "unknown"))
+        failed_checks = [c for c in checks if not c.ok]
+        alarm = ""
+        if failed_checks:
+            alarm = ("SOUNDNESS: a simulation contradicts a certificate: "
+                     + "; ".join(f"{c.what} ({c.detail})" for c in failed_checks) + ".")
+        equilibrium = as_dict(doc.get("equilibrium"))
+        name = text_of(model_part.get("name", "model"))
+        return {
+            "kind": "model-certificate",
+            "title": f"lyapcheck model certificate report: {name}",
+            "name": name,
+            "file": text_of(model_part.get("file", "")),
+            "origin": model.origin if model is not None else text_of(as_dict(raw.get("model")).get("source", "")),
+            "verdict": verdict,
+            "verdict_meaning": VERDICT_MEANING.get(verdict, "no stability certificate passed an exact check"),
+            "status_meaning": {**STATUS_MEANING, **EXTRA_STATUS_MEANING},
+            "glance": Glance(("class", "status", "property", "what it found", "key figures"), True,
+                             ("certified", "refuted", "not_certified", "inconclusive", "not_applicable")),
+            "toc": [("model", "The model"), ("field", "The field the certificates use"),
+                    ("classes", "Classes, one by one"), ("phase", "Phase portrait"), ("recheck", "Exact re-check"),
+                    ("reproduce", "Reproducibility")],
+            "classes_anchor": "classes",
+            "classes_heading": "Classes, one by one",
+            "states": self.states,
+            "equilibrium": [(s, text_of(equilibrium.get(s, "0"))) for s in self.states],
+            "parameters": quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), self.overrides,
+                                     as_dict(doc.get("box"))),
+            "box_words": box_text,
+            "disturbances": quantities(as_dict(doc.get("disturbances")), as_dict(raw.get("disturbances")),
+                                       self.overrides),
+            "outputs": list(outputs_text.items()),
+            "domain": [(str(k), text_of(v)) for k, v in as_dict(raw.get("domain")).items()],
+            "dynamics": [(s, text_of(as_dict(raw.get("dynamics")).get(s, "—"))) for s in self.states],
+            "candidate": doc.get("candidate") if isinstance(doc.get("candidate"), str) else "",
+            "model_error": self.error,
+            "model_text": self.text,
+            "sha256_stated": stated,
+            "sha256_text": digest,
+            "sha256_matches": digest == stated,
+            "denominators": denominators(fld),
+            "scaling": scaling(fld, self.states, disturbances, list(outputs_text)),
+            "portrait": figure,
+            "figure_reason": figure_reason,
+            "checks": checks,
+            "soundness": alarm,
+            "command": command(doc),
+            "verbatim_title": "The model file, verbatim (as stored in the certificate)",
+            "verbatim": self.text,
+            "solvers": solvers(as_dict(doc.get("conditions"))),
+            "solvers_title": "Solver outcomes",
+            "solvers_exact": False,
+            "solvers_note": Markup("A solver's outcome is never a verdict: every status above comes from an exact check. "
+                   "The full solver log of each class is in the certificate file."),
+        }
+
+    def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:
+        return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
+                ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
+                ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
+
+    def checked(self, recheck: bool) -> dict[str, Any]:
+        rows, error = recheck_rows(self.doc) if recheck else ([], "not requested")
+        return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
+
+
+__all__ = ["ModelFileSubject", "EXTRA_STATUS_MEANING", "quantities", "denominators", "scaling", "solvers",
+           "command", "recheck_rows", "portrait"]
