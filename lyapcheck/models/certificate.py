@@ -360,7 +360,7 @@ def _at_least(stated: Any, proved: Fraction) -> bool:
 def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]:
     from lyapcheck.models.field import StateField, state_field
     from lyapcheck.sos.certificates import check_containment, check_dissipation, check_lyapunov, check_output_bound, \
-        check_sublevel
+        check_quadratic_ball, check_sublevel
 
     cert = c["certificate"]
     if name == "sos_bound":
@@ -429,11 +429,18 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
         if c.get("property") not in ("GAS", None):
             return False, f"a Lyapunov certificate proves GAS (or GES), not {c.get('property')}"
         return True, why
-    if kind == "sublevel":
+    if kind in ("sublevel", "quadratic_ball"):
         level = Fraction(cert["level_scaled"])
         if Fraction(cert["level"]) != level or not _at_most(c.get("level"), level):
             return False, "the stated level is not the certified one"
-        ok, why = check_sublevel(ring, field.g, V, level, _gram(cert["gram_s"], nv), _gram(cert["gram_sigma"], nv), box)
+        if kind == "sublevel":
+            ok, why = check_sublevel(ring, field.g, V, level, _gram(cert["gram_s"], nv), _gram(cert["gram_sigma"], nv),
+                                     box)
+        elif box:
+            return False, "a quadratic-ball certificate has no box multipliers"
+        else:
+            ok, why = check_quadratic_ball(ring, field.g, V, level, Fraction(cert["radius_scaled"]),
+                                           Fraction(cert["lambda"]), Fraction(cert["p_bar"]), Fraction(cert["m"]))
         if not ok:
             return False, why
         if "ball" in cert:
@@ -449,7 +456,7 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
         elif c.get("ball_radius") is not None:
             return False, "a ball radius is stated without its certificate"
         if c.get("property") != "ROA":
-            return False, "a sublevel certificate proves a region of attraction (ROA)"
+            return False, f"a {kind} certificate proves a region of attraction (ROA)"
         return True, why
     return False, f"unknown certificate kind {kind!r}"
 

@@ -90,7 +90,7 @@ def _linearization(status: str, condition: Mapping[str, Any]) -> str:
 def _stability(name: str, condition: Mapping[str, Any]) -> str:
     cert = condition.get("certificate") or {}
     kind = cert.get("kind")
-    if kind == "sublevel":
+    if kind in ("sublevel", "quadratic_ball"):
         what = SET_NAMES.get(name, name)
         level = _number(condition, "level")
         ball = (f"; it holds the ball |x - x_eq| <= {_number(condition, 'ball_radius'):.4g}"

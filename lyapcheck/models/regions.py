@@ -108,6 +108,89 @@ class LevelCertificate:
         return out
 
 
+@dataclass
+class BallCertificate:
+    """A level of the linearization's quadratic ``V`` proved by norm bounds (kind QuadraticBall of
+    :mod:`lyapcheck.sos.certificates`): the start of ``roa`` where the SOS level step does not fit
+    (many states) or finds nothing. It has no multiplier, so it does not seed the V step."""
+
+    V: GramPoly
+    level: Fraction
+    radius: Fraction
+    lam: Fraction
+    p_bar: Fraction
+    m: Fraction
+    margin: float = 0.0
+    box: list[tuple[int, GramPoly]] = dc_field(default_factory=list)
+    s: GramPoly | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"kind": "quadratic_ball", "level_scaled": str(self.level), "gram_V": self.V.to_json(),
+                "radius_scaled": str(self.radius), "lambda": str(self.lam), "p_bar": str(self.p_bar), "m": str(self.m)}
+
+
+#: the quadratic ball's radius is this share of the largest one the numerical bound allows
+BALL_RADIUS_SHARE: Final = Fraction(99, 100)
+
+
+def quadratic_ball(field: StateField, V: GramPoly) -> BallCertificate | None:
+    """The largest level of the quadratic ``V`` that :func:`~lyapcheck.sos.certificates.check_quadratic_ball`
+    proves (a point of parameters only: over a box the linear part depends on the parameters)."""
+    from lyapcheck.sos.certificates import check_quadratic_ball, sphere_bound
+
+    ring = field.ring
+    n = field.n
+    if ring.nvars != n or any(sum(m) != 1 for m in V.basis):
+        return None
+    idx = [V.basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
+    P = np.array([[float(V.Q[idx[i]][idx[j]]) for j in range(n)] for i in range(n)])
+    L = np.zeros((n, n))
+    coefficients: list[list[tuple[int, float]]] = []
+    for i, gi in enumerate(field.g):
+        row = []
+        for mono, c in ring.terms(gi).items():
+            if sum(mono) == 1:
+                L[i, mono.index(1)] = float(c)
+            elif sum(mono) >= 2:
+                row.append((sum(mono), abs(float(c)) * float(sphere_bound(mono))))
+        coefficients.append(row)
+    M = -(P @ L + L.T @ P)
+    eig_p = np.linalg.eigvalsh(P)
+    eig_m = np.linalg.eigvalsh(M)
+    if eig_p[0] <= 0 or eig_m[0] <= 0:
+        return None
+
+    def below(x: float) -> Fraction:
+        return Fraction(x * (1 - 1e-6)).limit_denominator(10**9)
+
+    lam, m = below(float(eig_p[0])), below(float(eig_m[0]))
+    p_bar = Fraction(float(eig_p[-1]) * (1 + 1e-6)).limit_denominator(10**9) + Fraction(1, 10**9)
+
+    def room(r: float) -> float:  # m r - 2 p_bar |b(r)|: positive while the decrease is proved
+        b = [sum(c * r ** d for d, c in row) for row in coefficients]
+        return float(m) * r - 2 * float(p_bar) * math.sqrt(sum(x * x for x in b))
+
+    if not any(coefficients):  # a linear field: any radius; the level is a figure, pick a large one
+        r_top = 1e6
+    else:
+        lo, hi = 0.0, 1.0
+        while room(hi) > 0 and hi < 1e12:
+            lo, hi = hi, hi * 2
+        for _ in range(60):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if room(mid) > 0 else (lo, mid)
+        r_top = lo
+    if not r_top > 0:
+        return None
+    for share in (BALL_RADIUS_SHARE, Fraction(9, 10), Fraction(1, 2)):
+        radius = Fraction(r_top).limit_denominator(10**9) * share
+        level = lam * radius * radius
+        ok, _ = check_quadratic_ball(ring, field.g, V, level, radius, lam, p_bar, m)
+        if ok:
+            return BallCertificate(V, level, radius, lam, p_bar, m)
+    return None
+
+
 def multiplier_half_degree(field: StateField, v_degree: int, extra: int = MULTIPLIER_EXTRA) -> int:
     """``s`` of degree ``2k``: ``deg(s V) >= deg(grad V . g)`` at least, and ``k >= 1``, plus ``extra``."""
     dg = max((sum(m) for gi in field.g for m in field.ring.support(gi)), default=1)
@@ -427,9 +510,13 @@ def enlarge(field: StateField, search: Search, samples: np.ndarray, converged: n
     if top is None:
         top = float(np.max(NumericPoly(field.ring, V0.poly(field.ring))(on_states(field, samples)))) * 4 \
             if samples.size else 10.0
-    best = largest_level(field, V0, search, top, generators)
+    best: LevelCertificate | BallCertificate | None = largest_level(field, V0, search, top, generators)
     if best is None:
-        return RegionOutcome(None)
+        # no SOS level (its program is too large at many states, or the solves found none): the
+        # linearization's V with a level proved by norm bounds; it carries no multiplier for the V step
+        best = quadratic_ball(field, V0) if field.p == 0 else None
+        if best is None:
+            return RegionOutcome(None)
     target = samples[converged] if converged is not None else samples
     if not target.shape[0]:
         target = samples
@@ -445,14 +532,14 @@ def enlarge(field: StateField, search: Search, samples: np.ndarray, converged: n
     candidate: tuple[GramPoly, float] | None = None
     try:
         for degree in degrees:
-            if degree <= 2:
+            if degree <= 2 or s is None:
                 continue
             stale = 0
             for _ in range(rounds):
                 if search.budget.left() < ROA_RESERVE * search.budget.seconds:
                     outcome.history.append({"stopped": "time reserved for the exact check"})
                     break
-                new_V = vstep(field, degree, LevelCertificate(V, Fraction(1), s, best.sigma, 0.0), target, search,
+                new_V = vstep(field, degree, LevelCertificate(V, Fraction(1), s, s, 0.0), target, search,
                               generators)
                 if new_V is None:
                     break

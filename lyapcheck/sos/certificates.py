@@ -16,7 +16,13 @@ Dissipation    ``-grad V . g - lam (V - 1) D - sum tau_k (b_k^2      every ``|d_
                - d_k^2) = sigma``, ``lam > 0``
 OutputBound    ``V - y^2 + B - 1 = sigma``                           everywhere                 ``y^2 <= V + B - 1``
 Containment    ``c - V - s (r^2 - p) = sigma``                       ``{p <= r^2}``             ``{p <= r^2}`` in ``{V <= c}``
+QuadraticBall  ``V = z^T P z``; norm bounds, no Gram remainder         ``{V <= c}``               ``{V <= c}`` in the ROA
 =============  ==================================================  =========================  ================
+
+QuadraticBall (:func:`check_quadratic_ball`) is the one kind without an SOS identity: the
+linearization's quadratic ``V`` and a level proved by norm bounds of the field's terms of degree 2
+and more, which costs nothing at any number of states (the SOS level step needs a Gram matrix over
+every monomial of degree 2 and less: 66 rows in 10 states).
 
 Boxes of parameters. Each identity may carry ``- sum_j r_j (1 - u_j^2)`` with ``r_j`` sums of
 squares and ``u_j`` normalized parameters: then it holds for every ``u`` in ``[-1, 1]^p``
@@ -253,6 +259,78 @@ def check_containment(ring: Ring, V: GramPoly, level: Fraction, p: Poly, radius_
     if lhs != sigma.poly(ring):
         return False, "the identity c - V - s (r^2 - p) = sigma does not hold exactly"
     return True, "c - V - s (r^2 - p) = sigma with Q_s, Q_sigma > 0, exactly"
+
+
+def sphere_bound(a: Monomial) -> Fraction:
+    """A rational ``k >= max |z^a|`` over the unit sphere ``|z| = 1``: the maximum is
+    ``sqrt(prod_j a_j^a_j / |a|^|a|)`` (at ``z_j^2 = a_j / |a|``, by the weighted AM-GM inequality),
+    rounded up exactly; 1 for a pure power."""
+    from lyapcheck.exact import sqrt_upper
+
+    total = sum(a)
+    if max(a) == total:
+        return Fraction(1)
+    square = Fraction(1)
+    for e in a:
+        if e:
+            square *= Fraction(e, total) ** e
+    return min(Fraction(1), sqrt_upper(square, 6))
+
+
+def check_quadratic_ball(ring: Ring, g: Sequence[Poly], V: GramPoly, level: Fraction, radius: Fraction,
+                         lam: Fraction, p_bar: Fraction, m: Fraction) -> tuple[bool, str]:
+    """QuadraticBall: ``{V <= c}`` minus the equilibrium has ``grad V . g > 0`` nowhere.
+
+    With ``V = z^T P z`` (``P`` over the states' degree-1 monomials), ``g = L z + h(z)`` (``h``: the
+    terms of degree 2 and more; ``g(0) = 0``) and ``M = -(P L + L^T P)``, the certificate states
+    rationals with ``P >= lam I``, ``P <= p_bar I``, ``M >= m I`` (``lam, m > 0``), and ``r``. Then
+
+        -grad V . g = z^T M z - 2 (P z) . h(z) >= |z| (m |z| - 2 p_bar |h(z)|),
+
+    and ``|h_i(z)| <= b_i(|z|) = sum_a |h_ia| k_a |z|^|a|`` (:func:`sphere_bound`: ``|z^a| <= k_a
+    |z|^|a|``); as every ``b_i(rho) /
+    rho`` grows with ``rho``, ``m^2 r^2 > 4 p_bar^2 sum_i b_i(r)^2`` gives ``-grad V . g > 0`` for
+    ``0 < |z| <= r``. With ``c <= lam r^2`` the compact set ``{V <= c}`` lies in ``{|z| <= r}``, so
+    ``V' < 0`` on it away from 0 (``D > 0``): every start in it converges to the equilibrium."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    n = len(g)
+    if ring.nvars != n:
+        return False, "a quadratic-ball certificate is for a point of parameters with no disturbance ring"
+    if not (level > 0 and radius > 0 and lam > 0 and m > 0 and p_bar > 0):
+        return False, "the level, the radius and the bounds lam, p_bar, m must be > 0"
+    order = [tuple(int(k == i) for k in range(n)) for i in range(n)]
+    if sorted(V.basis) != sorted(order) or len(V.basis) != n:
+        return False, "V must be quadratic: its basis is the states, once each"
+    idx = [V.basis.index(e) for e in order]
+    P = [[V.Q[idx[i]][idx[j]] for j in range(n)] for i in range(n)]
+    L = [[Fraction(0)] * n for _ in range(n)]
+    b_sq = Fraction(0)
+    for i, gi in enumerate(g):
+        bound = Fraction(0)
+        for mono, c in ring.terms(gi).items():
+            degree = sum(mono)
+            if degree == 0:
+                return False, "the field does not vanish at the equilibrium"
+            if degree == 1:
+                L[i][mono.index(1)] = Fraction(c)
+            else:
+                bound += abs(Fraction(c)) * sphere_bound(mono) * radius ** degree
+        b_sq += bound * bound
+    M = [[-sum(P[i][k] * L[k][j] + L[k][i] * P[k][j] for k in range(n)) for j in range(n)] for i in range(n)]
+    eye = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    if not is_positive_semidefinite([[P[i][j] - lam * eye[i][j] for j in range(n)] for i in range(n)]):
+        return False, "P >= lam I does not hold (exact)"
+    if not is_positive_semidefinite([[p_bar * eye[i][j] - P[i][j] for j in range(n)] for i in range(n)]):
+        return False, "P <= p_bar I does not hold (exact)"
+    if not is_positive_semidefinite([[M[i][j] - m * eye[i][j] for j in range(n)] for i in range(n)]):
+        return False, "-(P L + L^T P) >= m I does not hold (exact)"
+    if not m * m * radius * radius > 4 * p_bar * p_bar * b_sq:
+        return False, "m^2 r^2 > 4 p_bar^2 sum_i b_i(r)^2 does not hold: the radius is too large"
+    if level > lam * radius * radius:
+        return False, "the level exceeds lam r^2: the set is not inside the ball |z| <= r"
+    return True, ("P >= lam I, P <= p_bar I, -(P L + L^T P) >= m I and m^2 r^2 > 4 p_bar^2 sum b_i(r)^2, "
+                  "exactly: V' < 0 on {V <= c} minus the equilibrium")
 
 
 def _q(x: Fraction) -> Any:
