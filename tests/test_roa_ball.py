@@ -78,3 +78,17 @@ def test_ten_state_les_system_gets_a_certified_set_that_verify_rechecks(tmp_path
     forged.write_text(json.dumps(doc))
     result = run_cli("verify", str(forged))
     assert result.exit_code == 1 and "radius is too large" in result.output
+
+
+def test_candidate_level_without_a_sampled_boundary_is_found_upwards_by_sos(tmp_path: Path) -> None:
+    # x' = -x + x^3/1000, V = x^2: V' >= 0 only where x^2 >= 1000, far beyond the sampled region
+    # (4 scales); the exact largest level is 1000, which the SOS lower bounds approach from below
+    model = tmp_path / "far.toml"
+    model.write_text('[model]\nname = "far"\nstates = ["x"]\n[dynamics]\nx = "-x + x**3/1000"\n')
+    out = tmp_path / "far.json"
+    result = run_cli("certify", str(model), "--classes", "candidate", "--candidate", "x**2", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    cand = json.loads(out.read_text())["conditions"]["candidate"]
+    assert cand["status"] == "certified"
+    assert 990 <= Fraction(cand["certificate"]["level"]) <= 1000
+    assert run_cli("verify", str(out)).exit_code == 0

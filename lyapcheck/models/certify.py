@@ -537,9 +537,20 @@ def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -
     radius = float(np.max(np.abs(scaled.scaling.to_scaled(np.diag(_half_widths(model)))))) * 4
     top = regions.supremum_estimate(field_, V, radius)
     if top is None:
-        return ConditionResult("candidate", "not_certified", "V' < 0 everywhere could not be proved, and no point "
-                                                             "with V' >= 0 was sampled to bound a level",
-                               solver={"solves": search.log}, property="ROA")
+        # no sample with V' >= 0 out to 4 half-widths: search the level upwards from V's largest
+        # value there, each step an SOS lower bound of min {V : V' >= 0} (no sample needed)
+        rng = np.random.default_rng(0)
+        ball = rng.normal(size=(200, field_.n))
+        ball *= radius / np.linalg.norm(ball, axis=1, keepdims=True)
+        guess = float(np.max(regions.NumericPoly(ring, V.poly(ring))(regions.on_states(field_, ball))))
+        cert = regions.largest_level(field_, V, search, guess, regions.symmetry(field_), grow=True)
+        if cert is None:
+            return ConditionResult("candidate", "not_certified", "V' < 0 everywhere could not be proved, no point with "
+                                                                 "V' >= 0 was sampled, and no level from "
+                                                                 f"{guess:.6g} upwards passed the level program",
+                                   solver={"solves": search.log}, property="ROA")
+        return regions.level_result("candidate", scaled, field_, cert, search, {"level_search": "upwards, by SOS"},
+                                    "the user's V")
     cert = regions.largest_level(field_, V, search, top, regions.symmetry(field_))
     if cert is None:
         return ConditionResult("candidate", "not_certified", f"no level of V passed the exact check (sampled supremum "

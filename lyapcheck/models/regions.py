@@ -310,9 +310,20 @@ def on_states(field: StateField, points: np.ndarray) -> np.ndarray:
     return np.hstack([points, np.zeros((points.shape[0], field.p))]) if field.p else points
 
 
+#: the upward search of a level without a sampled top (:func:`largest_level` with ``grow``): the
+#: level is multiplied by this while the solver finds it feasible, at most LEVEL_GROW_STEPS times
+LEVEL_GROWTH: Final = 8.0
+LEVEL_GROW_STEPS: Final = 16
+
+
 def largest_level(field: StateField, V: GramPoly, search: Search, c_top: float,
-                  generators: Sequence[Sequence[int]]) -> LevelCertificate | None:
-    """The largest certified level below ``c_top`` (bisection on feasibility, then exact checks)."""
+                  generators: Sequence[Sequence[int]], grow: bool = False) -> LevelCertificate | None:
+    """The largest certified level below ``c_top`` (bisection on feasibility, then exact checks).
+
+    With ``grow``, ``c_top`` is only a first guess (no sample had ``V' >= 0``): while the level
+    program is feasible there the level is multiplied by :data:`LEVEL_GROWTH`, and the bisection
+    runs between the last feasible and the first infeasible level. Each feasible level is an SOS
+    lower bound of ``min {V : V' >= 0, x != 0}``, so the set needs no sample of the boundary."""
     drop: frozenset[Monomial] = frozenset()
     structure = level_structure(field, V, generators)
     if structure is None:
@@ -321,6 +332,19 @@ def largest_level(field: StateField, V: GramPoly, search: Search, c_top: float,
     lo, hi = 0.0, c_top
     c = Fraction(c_top).limit_denominator(10**9)
     solves = 0
+    if grow:
+        for _ in range(LEVEL_GROW_STEPS):
+            search.budget.check()
+            _, solution = level_attempt(field, structure, V, c, search, exact=False)
+            solves += 1
+            if not (solution.usable and solution.scalars.get("t", 0.0) > LEVEL_MARGIN_MIN):
+                break
+            feasible.append(c)
+            c = Fraction(float(c) * LEVEL_GROWTH).limit_denominator(10**9)
+        lo, hi = (float(feasible[-1]) if feasible else 0.0), float(c)
+        if feasible and lo < hi:
+            c = Fraction(math.sqrt(lo * hi)).limit_denominator(10**9)
+        solves = 0
     # the top itself first (often feasible when the estimate is of a V' < 0 set with no boundary)
     while solves < LEVEL_MAX_SOLVES and (hi - lo) > LEVEL_REL_TOL * hi:
         search.budget.check()
