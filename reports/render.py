@@ -78,19 +78,19 @@ def _is_box_store(ds: Any) -> bool:
 
 
 def _model_store_context(ds: Any) -> dict[str, Any]:
-    from reports.store_page import model_store_context
+    from reports.stores.model_file import model_store_context
 
     return model_store_context(ds)
 
 
 def _box_store_context(ds: Any) -> dict[str, Any]:
-    from reports.box_page import box_context
+    from reports.stores.paper_boxes import box_context
 
     return box_context(ds)
 
 
 def _grid_store_context(ds: Any) -> dict[str, Any]:
-    from reports.sweep_page import sweep_context
+    from reports.stores.paper_grid import sweep_context
 
     return sweep_context(ds)
 
@@ -139,7 +139,7 @@ def read_store(path: str | Path) -> Any:
     The data chunks are decoded when the store is loaded, so a truncated or edited chunk (a
     codec error, a JSON error, a missing key) surfaces here, where it is a bad input file.
     """
-    from reports.sweep_page import open_store
+    from reports.stores.common import open_store
     from sweeps.model_schema import check_model_dataset, is_model_dataset
     from sweeps.schema import check_dataset
 

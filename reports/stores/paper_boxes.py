@@ -16,25 +16,21 @@ tie every rectangle of the picture to its row of the store.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
-from dataclasses import dataclass
 from typing import Any, Final, Mapping, Sequence
 
 import numpy as np
 
 from lyapcheck.errors import InputFileError, LyapcheckError
 from reports import figures
-from reports.sweep_page import PARAMETERS, _json_attr, _mpl
+from reports.stores.common import (
+    LEAF_NAMES, LEAF_STATUSES, BoxAxis, Leaves, box_map, json_attr, mpl, provenance, value_range, window_percent,
+)
+from reports.stores.paper_grid import PARAMETERS
 from reports.views import fmt_float
 from sweeps.box_summary import BoxSummary, summarize_arrays, violation_count
 from sweeps.schema import BOX_DIM, BOX_STATUS_CODES, box_variables
 
-#: the statuses a leaf can have, in the order the page lists them
-LEAF_STATUSES: Final = ("certified", "not_certified", "refuted")
-#: code -> status name, for leaves
-LEAF_NAMES: Final = {BOX_STATUS_CODES[s]: s for s in LEAF_STATUSES}
 #: what each status means, in words (the page's legend)
 STATUS_MEANING: Final = {
     "certified": "one exactly checked certificate proves GES at every gain set of the box",
@@ -50,49 +46,18 @@ CLASS_REFUTED: Final = {"sector_ges": "no quadratic V common to the box's matrix
 COVERED_TOL: Final = 1e-9
 #: leaves listed row by row when there is no figure (three swept parameters)
 MAX_LEAF_ROWS: Final = 200
-#: empty margin around the drawn window, as a fraction of its extent in the axis's scale
-VIEW_PAD: Final = 0.04
-#: the hatched background of a partial store
-NOT_COMPUTED_STYLE: Final[dict[str, Any]] = {"facecolor": "white", "edgecolor": "#8c959f", "hatch": "///", "lw": 0.0}
-
-
-@dataclass(frozen=True)
-class BoxAxis:
-    """A swept parameter of a box store, in display units (:data:`reports.sweep_page.PARAMETERS`)."""
-
-    name: str
-    label: str
-    factor: float
-    scale: str  # "log" or "linear": how summarize_arrays measures it and how it is drawn
-    window: tuple[float, float]  # SI
-
-    @property
-    def log(self) -> bool:
-        return self.scale == "log"
-
-
-@dataclass(frozen=True)
-class Leaves:
-    """The drawable leaves of the tree: store rows, status codes and edges (display units)."""
-
-    rows: np.ndarray
-    codes: np.ndarray
-    lo: np.ndarray  # (n, dims)
-    hi: np.ndarray
-
-
 # ----------------------------------------------------------------------------------------------
 # reading the store
 # ----------------------------------------------------------------------------------------------
 def _dims(ds: Any) -> tuple[str, ...]:
     """The swept parameters (``check_box_dataset`` has validated the attribute already)."""
-    dims, _ = _json_attr(ds, "dims")
+    dims, _ = json_attr(ds, "dims")
     return tuple(str(d) for d in dims)
 
 
 def _classes(ds: Any) -> tuple[str, ...]:
     """The box classes run, cheapest first (``check_box_dataset`` has validated the attribute)."""
-    classes, _ = _json_attr(ds, "classes")
+    classes, _ = json_attr(ds, "classes")
     return tuple(str(c) for c in classes) if isinstance(classes, list) else ()
 
 
@@ -136,7 +101,7 @@ def _spec_window(ds: Any, dims: tuple[str, ...]) -> tuple[dict[str, tuple[float,
 def _store_window(ds: Any, dims: tuple[str, ...], data: Mapping[str, np.ndarray]
                   ) -> tuple[dict[str, tuple[float, float]], dict[str, str]]:
     """Window and scales without a usable spec: the level-0 boxes tile the window (the axes' grid)."""
-    raw, _ = _json_attr(ds, "axis_scales")
+    raw, _ = json_attr(ds, "axis_scales")
     if not isinstance(raw, dict) or any(d not in raw for d in dims):
         raise InputFileError("the box store has neither a readable spec nor an 'axis_scales' attribute naming "
                              f"{', '.join(dims)}: its window cannot be measured")
@@ -166,7 +131,7 @@ def _check_edges(axes: Sequence[BoxAxis], data: Mapping[str, np.ndarray], leaf: 
 def _axes(dims: tuple[str, ...], window: Mapping[str, tuple[float, float]], scales: Mapping[str, str]) -> list[BoxAxis]:
     out = []
     for d in dims:
-        label, factor = PARAMETERS.get(d, (_mpl(d), 1.0))
+        label, factor = PARAMETERS.get(d, (mpl(d), 1.0))
         out.append(BoxAxis(d, label, factor, scales[d], window[d]))
     return out
 
@@ -196,95 +161,9 @@ def _paper(axes: Sequence[BoxAxis], paper: Any) -> list[float] | None:
 # ----------------------------------------------------------------------------------------------
 # the figure
 # ----------------------------------------------------------------------------------------------
-def _view(lo: float, hi: float, log: bool) -> tuple[float, float]:
-    """Limits around ``[lo, hi]`` with a small margin, measured in the axis's own scale."""
-    if log:
-        a, b = math.log10(lo), math.log10(hi)
-        pad = VIEW_PAD * (b - a)
-        return 10 ** (a - pad), 10 ** (b + pad)
-    pad = VIEW_PAD * (hi - lo)
-    return lo - pad, hi + pad
-
-
-def _extent(ax: BoxAxis, paper: float | None) -> tuple[float, float]:
-    """The window in display units, widened to the paper's value so that its marker is always shown."""
-    lo, hi = ax.window[0] * ax.factor, ax.window[1] * ax.factor
-    if paper is not None:
-        lo, hi = min(lo, paper), max(hi, paper)
-    return _view(lo, hi, ax.log)
-
-
-def box_map(axes: Sequence[BoxAxis], leaves: Leaves, paper: Sequence[float] | None, *, partial: bool) -> bytes:
-    """SVG of the leaves over one or two swept parameters (one rectangle per leaf, id ``box-<row>-<status>``).
-
-    With one parameter the boxes are intervals drawn as a strip; the window is outlined, the paper's
-    gains are a star, and the part of the window a partial store has not covered yet is hatched.
-    """
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch, Rectangle
-
-    one_d = len(axes) == 1
-    # figures._new: the same column width and constrained layout as every figure of the reports
-    fig, grid = figures._new(1.9 if one_d else 3.6)
-    ax = grid[0, 0]
-    x = axes[0]
-    y_lo, y_hi = (0.0, 1.0) if one_d else (axes[1].window[0] * axes[1].factor, axes[1].window[1] * axes[1].factor)
-    x_lo, x_hi = x.window[0] * x.factor, x.window[1] * x.factor
-    if partial:  # under the leaves: what shows through is the window not computed yet
-        ax.add_patch(Rectangle((x_lo, y_lo), x_hi - x_lo, y_hi - y_lo, zorder=0, gid="not-computed",
-                               **NOT_COMPUTED_STYLE))
-    for row, code, lo, hi in zip(leaves.rows, leaves.codes, leaves.lo, leaves.hi):
-        name = LEAF_NAMES.get(int(code), "not_certified")
-        b_lo, b_hi = (0.0, 1.0) if one_d else (lo[1], hi[1])
-        ax.add_patch(Rectangle((lo[0], b_lo), hi[0] - lo[0], b_hi - b_lo, facecolor=figures.STATUS_COLOURS[name],
-                               edgecolor="white", lw=0.4, zorder=1, gid=f"box-{int(row)}-{name}"))
-    ax.add_patch(Rectangle((x_lo, y_lo), x_hi - x_lo, y_hi - y_lo, fill=False, edgecolor="k", lw=0.8, zorder=2,
-                           gid="window"))
-    if x.log:
-        ax.set_xscale("log")
-    ax.set_xlim(*_extent(x, None if paper is None else paper[0]))
-    ax.set_xlabel(x.label)
-    if one_d:
-        ax.set_ylim(-0.15, 1.15)
-        ax.set_yticks([])
-    else:
-        y = axes[1]
-        if y.log:
-            ax.set_yscale("log")
-        ax.set_ylim(*_extent(y, None if paper is None else paper[1]))
-        ax.set_ylabel(y.label)
-    if paper is not None:
-        ax.plot([paper[0]], [0.5 if one_d else paper[1]], "*", ms=13, mfc="#ffd33d", mec="k", mew=1.0, zorder=3,
-                gid="paper-point")
-    present = [s for s in LEAF_STATUSES if np.any(leaves.codes == BOX_STATUS_CODES[s])] or ["certified"]
-    handles: list[Any] = [Patch(facecolor=figures.STATUS_COLOURS[s], edgecolor="0.5", label=s.replace("_", " "))
-                          for s in present]
-    if partial:
-        handles.append(Patch(label="not computed", **{**NOT_COMPUTED_STYLE, "lw": 0.5}))
-    if paper is not None:
-        handles.append(Line2D([], [], marker="*", ls="", mfc="#ffd33d", mec="k", ms=11, label="paper's gains"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=min(5, len(handles)), fontsize=7, frameon=False)
-    fig.suptitle("GES certified for whole boxes of gains", fontsize=10)
-    return figures.to_svg(fig)
-
-
 # ----------------------------------------------------------------------------------------------
 # the page's text
 # ----------------------------------------------------------------------------------------------
-def _percent(share: float) -> str:
-    """A share of the window for reading; a tiny non-zero share is not rounded to 0 %."""
-    if 0 < share < 0.0005:
-        return "< 0.1 %"
-    return f"{100 * share:.1f} %"
-
-
-def _range(values: np.ndarray, unit: str = "") -> str:
-    finite = values[np.isfinite(values)]
-    if not finite.size:
-        return "—"
-    return f"{fmt_float(float(finite.min()), 4)} … {fmt_float(float(finite.max()), 4)}{unit}"
-
-
 def _box_text(axes: Sequence[BoxAxis], lo: Sequence[float], hi: Sequence[float]) -> str:
     """``alpha_d (1/s) in [150, 375], ...`` (display units)."""
     return ", ".join(f"{a.label} in [{fmt_float(float(l), 5)}, {fmt_float(float(h), 5)}]"
@@ -351,7 +230,7 @@ def _figure(axes: Sequence[BoxAxis], leaves: Leaves, paper: Sequence[float] | No
                                                  ", outside the swept window (the view is widened to show them)."
                                                  if outside else ".")
                   if paper is not None else ""))
-    return figures.Figure(box_map(axes, leaves, paper, partial=partial), caption,
+    return figures.Figure(box_map(axes, leaves, paper, partial=partial, title="GES certified for whole boxes of gains"), caption,
                           "map of the boxes of gain space coloured by certification status",
                           {"leaf_rows": [int(r) for r in leaves.rows], "paper": paper, "partial": partial})
 
@@ -374,27 +253,24 @@ def box_context(ds: Any) -> dict[str, Any]:
     leaves = _leaves(axes, data, leaf)
     covered = sum(summary.area_fraction.values())
     partial = covered < 1 - COVERED_TOL
-    paper_raw, paper_text = _json_attr(ds, "paper_point")
+    paper_raw, paper_text = json_attr(ds, "paper_point")
     paper = _paper(axes, paper_raw)
     at_paper, at_paper_detail = _at_paper(axes, leaves, paper, data)
     certified = done & (data["status"] == BOX_STATUS_CODES["certified"])
     violations, violations_more = _violation_rows(axes, summary)
     worst = summary.worst_envelope_ratio
-    versions_raw, versions_text = _json_attr(ds, "versions")
-    spec = ds.attrs.get("spec_toml", "")
-    spec_text = spec if isinstance(spec, str) else json.dumps(spec, default=str)
     share = summary.area_fraction["certified"]
-    shares = [(s, _percent(summary.area_fraction[s]), fmt_float(summary.area_fraction[s], 4),
+    shares = [(s, window_percent(summary.area_fraction[s]), fmt_float(summary.area_fraction[s], 4),
                int(np.sum(leaves.codes == BOX_STATUS_CODES[s]))) for s in LEAF_STATUSES]
     return {
         "kind": "boxes",
         "title": "lyapcheck box sweep report",
         "dims": [a.label for a in axes],
         "certified_share": share,
-        "certified_percent": _percent(share),
+        "certified_percent": window_percent(share),
         "certified_fraction": fmt_float(share, 4),
         "shares": shares,
-        "not_computed": _percent(max(0.0, 1 - covered)) if partial else "",
+        "not_computed": window_percent(max(0.0, 1 - covered)) if partial else "",
         "measure": ", ".join(f"{a.label}: {'log(hi/lo)' if a.log else 'hi - lo'}" for a in axes),
         "overall": [
             ("swept window", "; ".join(f"{a.label} from {fmt_float(a.window[0] * a.factor, 5)} to "
@@ -404,8 +280,8 @@ def box_context(ds: Any) -> dict[str, Any]:
             ("leaves (boxes not split further)", str(summary.leaves)),
             ("deepest refinement level", str(int(data["level"][done].max())) if done.any() else "—"),
             ("certified boxes", str(summary.certified_boxes)),
-            ("k over certified boxes", _range(np.where(certified, data["k"], np.nan))),
-            ("decay rate over certified boxes", _range(np.where(certified, data["decay_rate_per_s"], np.nan), " 1/s")),
+            ("k over certified boxes", value_range(np.where(certified, data["k"], np.nan))),
+            ("decay rate over certified boxes", value_range(np.where(certified, data["decay_rate_per_s"], np.nan), " 1/s")),
         ],
         "at_paper": at_paper,
         "at_paper_detail": at_paper_detail,
@@ -425,10 +301,7 @@ def box_context(ds: Any) -> dict[str, Any]:
         "status_meaning": STATUS_MEANING,
         "class_rows": _class_rows(classes, summary, data, done),
         "paper_text": paper_text,
-        "spec_toml": spec_text,
-        "spec_hash": hashlib.sha256(spec_text.encode()).hexdigest(),
-        "versions": ({str(k): str(v) for k, v in versions_raw.items()} if isinstance(versions_raw, dict)
-                     else ({"versions": versions_text} if versions_text else {})),
+        **provenance(ds),
         "summary": summary,
     }
 

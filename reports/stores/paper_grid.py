@@ -1,4 +1,4 @@
-"""The sweep report's content: region maps, ratio map, soundness violations, summary table.
+"""The paper's point sweep (a grid of gains): region maps, ratio map, soundness violations, summary table.
 
 Store schema (issue 5): an xarray Dataset (Zarr) with 1 to 3 dimensions named after swept
 parameters (``alpha_d``, ``sigma0``, ``k_d``, ``delta_los``, ``d_max``; SI coordinates) and
@@ -13,17 +13,14 @@ Missing optional variables are reported as missing, never guessed.
 
 from __future__ import annotations
 
-import hashlib
-import json
-import warnings
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Final
 
 import numpy as np
 
 from lyapcheck.errors import InputFileError
 from reports import figures
+from reports.stores.common import json_attr, mpl, provenance, value_range
 from reports.views import fmt_float
 
 #: status codes of the store -> (name used by certificates, colour)
@@ -36,41 +33,6 @@ PARAMETERS: Final = {
 MAX_VIOLATION_ROWS: Final = 50
 #: classes that are arithmetic conditions: their codes 1/0 mean holds/fails
 ARITHMETIC_CLASSES: Final = ("stabcond2",)
-
-
-def open_store(path: str | Path) -> Any:
-    """Open a sweep store (Zarr), with one-line errors for a missing or unreadable one."""
-    import xarray as xr
-
-    p = Path(path)
-    if not p.exists():
-        raise InputFileError(f"sweep store '{p}' does not exist")
-    try:
-        # zarr warns (e.g. an array directory without metadata) before it fails or skips: the
-        # checks after loading say what is wrong in one line, so its warnings are not printed
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return xr.open_zarr(p, consolidated=False).load()
-    except Exception as exc:  # noqa: BLE001 - zarr/xarray raise many types for a corrupt store
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise InputFileError(f"'{p}' is not a readable sweep store (Zarr): {first}") from None
-
-
-def _mpl(text: str) -> str:
-    """Text for a matplotlib label: a '$' from input must not switch on mathtext."""
-    return text.replace("$", r"\$")
-
-
-def _json_attr(ds: Any, key: str) -> tuple[Any, str]:
-    """(parsed JSON attribute or None, raw text)."""
-    raw = ds.attrs.get(key)
-    if raw is None:
-        return None, ""
-    text = raw if isinstance(raw, str) else json.dumps(raw, default=str)
-    try:
-        return json.loads(text), text
-    except (json.JSONDecodeError, TypeError):
-        return None, text
 
 
 @dataclass
@@ -88,7 +50,7 @@ def _classes(ds: Any) -> list[str]:
 def _axes(ds: Any, dims: tuple[str, ...]) -> list[figures.Axis]:
     out = []
     for d in dims:
-        label, factor = PARAMETERS.get(d, (_mpl(d), 1.0))
+        label, factor = PARAMETERS.get(d, (mpl(d), 1.0))
         values = np.asarray(ds[d].values, dtype=float) * factor if d in ds.coords else np.arange(ds.sizes[d], dtype=float)
         positive = values.size > 1 and bool(np.all(values > 0))
         log = positive and float(values.max() / values.min()) >= 20.0
@@ -133,13 +95,6 @@ def _float(ds: Any, name: str, dims: tuple[str, ...], shape: tuple[int, ...]) ->
     return np.asarray(ds[name].transpose(*dims).values, dtype=float)
 
 
-def _range(values: np.ndarray) -> str:
-    finite = values[np.isfinite(values)]
-    if not finite.size:
-        return "—"
-    return f"{fmt_float(float(finite.min()), 4)} … {fmt_float(float(finite.max()), 4)}"
-
-
 def sweep_context(ds: Any) -> dict[str, Any]:
     """Everything the sweep template shows (plain strings; the template escapes them)."""
     classes = _classes(ds)
@@ -150,7 +105,7 @@ def sweep_context(ds: Any) -> dict[str, Any]:
         raise InputFileError(f"a sweep store must have 1 to 3 swept parameters; this one has {len(dims)}: {dims}")
     shape = tuple(int(ds.sizes[d]) for d in dims)
     axes = _axes(ds, dims)
-    paper_raw, paper_text = _json_attr(ds, "paper_point")
+    paper_raw, paper_text = json_attr(ds, "paper_point")
     paper = _paper(axes, paper_raw)
     nearest = _nearest(axes, paper)
     diverged = _bool(ds, "sim_diverged", dims, shape)
@@ -178,12 +133,12 @@ def sweep_context(ds: Any) -> dict[str, Any]:
             shown = [(1, "holds", figures.STATUS_COLOURS["certified"]), (0, "fails", figures.STATUS_COLOURS["refuted"])] \
                 + legend[4:]
         present = [entry for entry in shown if np.any(codes == entry[0])] or shown[:1]
-        svg = figures.category_map(codes, axes, title=_mpl(f"{cls}: where a certificate exists"), legend=present,
+        svg = figures.category_map(codes, axes, title=mpl(f"{cls}: where a certificate exists"), legend=present,
                                    marks=marks, paper=paper)
         counts = {STATUS_CODES.get(c, "unknown"): int(np.sum(codes == c)) for c in (1, 0, 2, 3, -1, 99)}
         margin = _float(ds, f"margin_{cls}", dims, shape)
         at_paper = "—" if nearest is None else names.get(int(codes[nearest]), "unknown")
-        summaries.append(ClassSummary(cls, counts, _range(np.where(codes == 1, margin, np.nan)), at_paper))
+        summaries.append(ClassSummary(cls, counts, value_range(np.where(codes == 1, margin, np.nan)), at_paper))
         maps.append(figures.Figure(
             svg, f"{cls}: status at each grid point; crosses: the simulated loop diverged; red rings: soundness "
                  "violations; star: the paper's gains" + (" (filled on the slice that contains them)." if len(dims) == 3 else "."),
@@ -204,22 +159,19 @@ def sweep_context(ds: Any) -> dict[str, Any]:
     finite_ratio = ratio[np.isfinite(ratio)]
     overall = [
         ("grid points", str(int(np.prod(shape)))),
-        ("swept parameters", ", ".join(f"{ax.label}: {ax.values.size} values, {_range(ax.values)}" for ax in axes)),
+        ("swept parameters", ", ".join(f"{ax.label}: {ax.values.size} values, {value_range(ax.values)}" for ax in axes)),
         ("points done", f"{int(done.sum())} of {int(np.prod(shape))}"),
         ("diverged in simulation", str(int(diverged.sum()))),
         ("soundness violations", str(int(violation.sum()))),
         ("certified / simulated ratio", "—" if not finite_ratio.size else
          f"min {fmt_float(float(finite_ratio.min()), 4)}, median {fmt_float(float(np.median(finite_ratio)), 4)}, "
          f"max {fmt_float(float(finite_ratio.max()), 4)}"),
-        ("certified ultimate bound (m)", _range(eps_bound)),
-        ("simulated ultimate bound (m)", _range(sim_sup)),
+        ("certified ultimate bound (m)", value_range(eps_bound)),
+        ("simulated ultimate bound (m)", value_range(sim_sup)),
     ]
     if nearest is not None:
         where = ", ".join(f"{ax.label} = {fmt_float(float(ax.values[i]), 4)}" for ax, i in zip(axes, nearest))
         overall.append(("nearest grid point to the paper's gains", where))
-    versions_raw, versions_text = _json_attr(ds, "versions")
-    spec = ds.attrs.get("spec_toml", "")
-    spec_text = spec if isinstance(spec, str) else json.dumps(spec, default=str)
     return {
         "kind": "sweep",
         "title": "lyapcheck sweep report",
@@ -233,10 +185,7 @@ def sweep_context(ds: Any) -> dict[str, Any]:
         "overall": overall,
         "paper_text": paper_text,
         "paper_marked": paper is not None,
-        "spec_toml": spec_text,
-        "spec_hash": hashlib.sha256(spec_text.encode()).hexdigest(),
-        "versions": ({str(k): str(v) for k, v in versions_raw.items()} if isinstance(versions_raw, dict)
-                     else ({"versions": versions_text} if versions_text else {})),
+        **provenance(ds),
         "missing": [v for v in ("sim_diverged", "soundness_violation", "ratio_certified_over_simulated", "done",
                                 "eps_bound_m", "sim_eps_sup_m") if v not in ds],
         "status_meaning": {"certified": "a certificate exists and passed its exact check",

@@ -1,4 +1,4 @@
-"""The report of a model sweep: the map of certified, refuted and undecided points or boxes.
+"""The sweep of a model file (``[sweep] model = FILE``): the map of certified, refuted and undecided points or boxes.
 
 A model sweep's store (:mod:`sweeps.model_schema`) holds, per grid point or per box of a
 refinement tree, the status (``certified``: a class of the model proved its property, for every
@@ -20,20 +20,17 @@ from __future__ import annotations
 
 import hashlib
 import math
-from typing import Any, Final, Mapping, Sequence
+from typing import Any, Final, Sequence
 
 import numpy as np
 
 from reports import figures
-from reports.box_page import _view  # the map's limits, as the paper's box map draws them
-from reports.sweep_page import _json_attr, _mpl
+from reports.stores.common import LEAF_NAMES, BoxAxis, Leaves, box_map, mpl, provenance, window_percent
 from reports.views import fmt_float
 from sweeps.model_schema import BOXES_MODE, box_variables, json_list
 from sweeps.model_summary import LEAF_STATUSES, ModelSweepSummary, stored_window, summarize_dataset, violation_count
 from sweeps.schema import BOX_STATUS_CODES
 
-#: code -> status name of a leaf or point
-NAMES: Final = {BOX_STATUS_CODES[s]: s for s in LEAF_STATUSES}
 #: what each status means on this page
 MEANING: Final = {
     "certified": "a class of the model proved its property (a region of attraction, GAS, GES or an ultimate bound) "
@@ -46,54 +43,6 @@ MEANING: Final = {
 #: leaves listed when there is no map (three swept parameters)
 MAX_LEAF_ROWS: Final = 200
 MAX_VIOLATION_ROWS: Final = 50
-
-
-def box_map(dims: Sequence[str], scales: Mapping[str, str], window: Mapping[str, tuple[float, float]],
-            rows: np.ndarray, codes: np.ndarray, lo: np.ndarray, hi: np.ndarray, *, partial: bool, title: str) -> bytes:
-    """SVG of the leaves over one or two parameters: one rectangle per leaf, id ``box-<row>-<status>``."""
-    from matplotlib.patches import Patch, Rectangle
-
-    one_d = len(dims) == 1
-    fig, grid = figures._new(1.9 if one_d else 3.6)
-    ax = grid[0, 0]
-    x_lo, x_hi = window[dims[0]]
-    y_lo, y_hi = (0.0, 1.0) if one_d else window[dims[1]]
-    if partial:
-        ax.add_patch(Rectangle((x_lo, y_lo), x_hi - x_lo, y_hi - y_lo, zorder=0, gid="not-computed",
-                               facecolor="white", edgecolor="#8c959f", hatch="///", lw=0.0))
-    for row, code, a, b in zip(rows, codes, lo, hi):
-        name = NAMES.get(int(code), "not_certified")
-        b_lo, b_hi = (0.0, 1.0) if one_d else (a[1], b[1])
-        ax.add_patch(Rectangle((a[0], b_lo), b[0] - a[0], b_hi - b_lo, facecolor=figures.STATUS_COLOURS[name],
-                               edgecolor="white", lw=0.4, zorder=1, gid=f"box-{int(row)}-{name}"))
-    ax.add_patch(Rectangle((x_lo, y_lo), x_hi - x_lo, y_hi - y_lo, fill=False, edgecolor="k", lw=0.8, zorder=2,
-                           gid="window"))
-    if scales[dims[0]] == "log":
-        ax.set_xscale("log")
-    ax.set_xlim(*_view(x_lo, x_hi, scales[dims[0]] == "log"))
-    ax.set_xlabel(_mpl(dims[0]))
-    if one_d:
-        ax.set_ylim(-0.15, 1.15)
-        ax.set_yticks([])
-    else:
-        if scales[dims[1]] == "log":
-            ax.set_yscale("log")
-        ax.set_ylim(*_view(y_lo, y_hi, scales[dims[1]] == "log"))
-        ax.set_ylabel(_mpl(dims[1]))
-    present = [s for s in LEAF_STATUSES if np.any(codes == BOX_STATUS_CODES[s])] or ["certified"]
-    handles: list[Any] = [Patch(facecolor=figures.STATUS_COLOURS[s], edgecolor="0.5", label=s.replace("_", " "))
-                          for s in present]
-    if partial:
-        handles.append(Patch(facecolor="white", edgecolor="#8c959f", hatch="///", label="not computed"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=min(5, len(handles)), fontsize=7, frameon=False)
-    fig.suptitle(_mpl(title), fontsize=10)
-    return figures.to_svg(fig)
-
-
-def _percent(share: float) -> str:
-    if 0 < share < 0.0005:
-        return "< 0.1 %"
-    return f"{100 * share:.1f} %"
 
 
 def _span(values: list[float] | None, unit: str = "") -> str:
@@ -120,8 +69,9 @@ def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
     partial = summary.share["not_computed"] > 1e-9
     figure = None
     if len(dims) <= 2 and all(math.isfinite(v) for w in window.values() for v in w):
-        svg = box_map(dims, summary.scales, window, rows, codes, lo, hi, partial=partial,
-                      title=f"{summary.model.get('name') or 'model'}: proved boxes of parameters")
+        axes = [BoxAxis(d, mpl(d), 1.0, summary.scales[d], window[d]) for d in dims]
+        svg = box_map(axes, Leaves(rows, codes, lo, hi), None, partial=partial,
+                      title=mpl(f"{summary.model.get('name') or 'model'}: proved boxes of parameters"))
         scales = ", ".join(f"{d} {'logarithmic' if summary.scales[d] == 'log' else 'linear'}" for d in dims)
         figure = figures.Figure(svg, f"Every leaf of the refinement tree ({rows.size} boxes), coloured by status; the "
                                      f"black outline is the swept window; axes: {scales}."
@@ -131,7 +81,7 @@ def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
     leaf_rows = []
     if figure is None:
         for row, code, a, b in list(zip(rows, codes, lo, hi))[:MAX_LEAF_ROWS]:
-            leaf_rows.append((str(int(row)), NAMES.get(int(code), "not_certified"), _where_box(dims, a, b),
+            leaf_rows.append((str(int(row)), LEAF_NAMES.get(int(code), "not_certified"), _where_box(dims, a, b),
                               str(data["note"][row])))
     return {"map": figure, "leaf_rows": leaf_rows, "leaf_rows_more": max(0, rows.size - MAX_LEAF_ROWS)
             if figure is None else 0,
@@ -142,7 +92,7 @@ def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
 
 def _point_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
     dims = summary.dims
-    axes = [figures.Axis(d, _mpl(d), np.asarray(ds.coords[d].values, dtype=float), summary.scales[d] == "log")
+    axes = [figures.Axis(d, mpl(d), np.asarray(ds.coords[d].values, dtype=float), summary.scales[d] == "log")
             for d in dims]
     codes = np.asarray(ds["status"].transpose(*dims).values).astype(int)
     violation = np.asarray(ds["soundness_violation"].transpose(*dims).values).astype(bool)
@@ -151,7 +101,7 @@ def _point_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
               (2, "refuted (unstable)", figures.STATUS_COLOURS["refuted"]),
               (-1, "not computed", figures.STATUS_COLOURS["not_computed"])]
     present = [entry for entry in legend if np.any(codes == entry[0])] or legend[:1]
-    svg = figures.category_map(codes, axes, title=_mpl(f"{summary.model.get('name') or 'model'}: status at each grid "
+    svg = figures.category_map(codes, axes, title=mpl(f"{summary.model.get('name') or 'model'}: status at each grid "
                                                        "point"), legend=present,
                                marks=[(violation, "SOUNDNESS VIOLATION", "o")], paper=None)
     figure = figures.Figure(svg, "Status at each grid point (a certificate at that point only; the cells between "
@@ -202,9 +152,7 @@ def model_store_context(ds: Any) -> dict[str, Any]:
     for y, span in (cross.get("tightness") or {}).items():
         cross_rows.append((f"certified bound on |{y}| / worst found", _span(span)))
     violations, more = _violations(summary)
-    spec = str(ds.attrs.get("spec_toml", ""))
     model_text = str(ds.attrs.get("model_toml", ""))
-    versions_raw, versions_text = _json_attr(ds, "versions")
     sha_ok = hashlib.sha256(model_text.encode()).hexdigest() == str(ds.attrs.get("model_sha256"))
     what = "boxes" if boxes else "points"
     return {
@@ -220,12 +168,12 @@ def model_store_context(ds: Any) -> dict[str, Any]:
         "dims": list(summary.dims),
         "classes": list(summary.classes),
         "proved_share": summary.proved_share,
-        "proved_percent": _percent(summary.proved_share),
+        "proved_percent": window_percent(summary.proved_share),
         "measure": ", ".join(f"{d}: {'log(hi/lo)' if s == 'log' else 'hi - lo'}" for d, s in summary.scales.items()),
-        "shares": [(s, _percent(summary.share[s]), fmt_float(summary.share[s], 4), summary.counts[s])
+        "shares": [(s, window_percent(summary.share[s]), fmt_float(summary.share[s], 4), summary.counts[s])
                    for s in LEAF_STATUSES],
-        "not_computed": _percent(summary.share["not_computed"]) if summary.share["not_computed"] > 1e-9 else "",
-        "class_rows": [(c, _percent(summary.share_by_class[c]), str(summary.counts_by_class[c]))
+        "not_computed": window_percent(summary.share["not_computed"]) if summary.share["not_computed"] > 1e-9 else "",
+        "class_rows": [(c, window_percent(summary.share_by_class[c]), str(summary.counts_by_class[c]))
                        for c in summary.classes],
         "figure_rows": [(k, _span(v)) for k, v in summary.figures.items()],
         "meaning": MEANING,
@@ -233,13 +181,10 @@ def model_store_context(ds: Any) -> dict[str, Any]:
         "violation_count": violation_count(summary),
         "violations": violations,
         "violations_more": more,
-        "spec_toml": spec,
-        "spec_hash": hashlib.sha256(spec.encode()).hexdigest(),
-        "versions": ({str(k): str(v) for k, v in versions_raw.items()} if isinstance(versions_raw, dict)
-                     else ({"versions": versions_text} if versions_text else {})),
+        **provenance(ds),
         "summary": summary,
         **part,
     }
 
 
-__all__ = ["model_store_context", "box_map"]
+__all__ = ["model_store_context"]
