@@ -519,3 +519,63 @@ def test_reading_a_certificate_keeps_the_papers_messages(tmp_path: Path) -> None
         read_certificate(model)
     model.write_text(json.dumps(doc))
     assert read_certificate(model) == doc
+
+
+# -- the registry of report sections (reports.sections) ----------------------------------------------
+def test_every_class_has_one_section_per_model() -> None:
+    """Each class of the paper's loop and of model files is shown by the section that names it;
+    an unnamed class falls back to its model's generic section, and a model the registry does not
+    know is refused."""
+    from lyapcheck.paper.certification import CONDITION_ORDER
+    from reports.sections import BY_CLASS, FALLBACK, MODEL_FILE, PAPER, SECTIONS, section_for
+    from reports.sections.output_bound import OutputBoundSection
+    from reports.sections.paper import PaperSection
+    from reports.sections.stability import StabilitySection
+
+    for name in ("linearization", "quadratic", "sos_gas", "roa", "candidate"):
+        assert isinstance(section_for(MODEL_FILE, name), StabilitySection)
+    assert isinstance(section_for(MODEL_FILE, "sos_bound"), OutputBoundSection)
+    assert section_for(MODEL_FILE, "no_such_class") is FALLBACK[MODEL_FILE]
+    for name in CONDITION_ORDER:  # the paper's sos_bound is the paper's, not the model files'
+        assert isinstance(section_for(PAPER, name), PaperSection)
+    assert len(BY_CLASS) == sum(len(s.titles) for s in SECTIONS)
+    with pytest.raises(ValueError, match="model of a report section"):
+        section_for("some-other-model", "roa")
+
+
+def test_a_new_family_of_classes_is_one_section(monkeypatch: pytest.MonkeyPatch) -> None:
+    """What a later family (barrier certificates) needs from the reports: a Section subclass in one
+    module and its entry in the registry. Its view reaches the table and its own section, its set
+    the phase portrait; nothing else of the page changes."""
+    from fractions import Fraction
+
+    from reports.certificate_page import certificate_context
+    from reports.html import render_html
+    from reports.phase_portrait import level_sets
+    from reports.polynomials import ExactPolynomial
+    from reports.sections import BY_CLASS, MODEL_FILE
+    from reports.sections.base import LevelSet, PortraitPart
+    from reports.sections.model_file import ModelFileSection
+    from lyapcheck.models.modelfile import parse_model
+
+    class BarrierSection(ModelFileSection):
+        titles = {"barrier": "Barrier certificate: the unsafe set is never reached"}
+
+        def portrait(self, name: str, cond: dict[str, Any], n: int, time_scale: Fraction) -> PortraitPart:
+            b = ExactPolynomial.from_json(cond["certificate"]["B"], n)
+            return PortraitPart(sets=(LevelSet(name, "{B <= 0}", b, Fraction(0), "region", "#cf222e"),))
+
+    barrier = {"status": "certified", "summary": "made up by the test", "property": "invariant_set",
+               "certificate": {"B": {"terms": [["1", [2, 0]], ["1", [0, 2]], ["-1", [0, 0]]]}}}
+    doc = _synthetic("fossil-poly2.toml", {"barrier": barrier})
+    before = certificate_context(doc, simulate=False, recheck=False)
+    assert before["conditions"][0].title == "barrier"  # the fallback: shown generically, under its key
+    monkeypatch.setitem(BY_CLASS, (MODEL_FILE, "barrier"), BarrierSection())
+    context = certificate_context(doc, simulate=False, recheck=False)
+    (view,) = context["conditions"]
+    assert view.title == "Barrier certificate: the unsafe set is never reached"
+    assert view.property == "invariant_set" and view.anchor == "class-1"
+    page = Page(render_html("certificate.html.j2", context))
+    assert "Barrier certificate: the unsafe set is never reached" in page.text
+    sets, globals_, notes = level_sets(doc, parse_model(doc["model"]["text"], "m.toml"))
+    assert [(s.name, s.level, s.kind) for s in sets] == [("barrier", 0, "region")] and not globals_ and not notes

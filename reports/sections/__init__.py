@@ -22,7 +22,8 @@ certified sets to draw. A new family of classes is one module with a subclass of
     class BarrierSection(ModelFileSection):
         titles = {"barrier": "Barrier certificate: the unsafe set is never reached"}
         def portrait(self, name, cond, n, time_scale):
-            return PortraitPart(sets=(LevelSet(name, "{B <= 0}", ..., Fraction(0), "region", "#cf222e"),))
+            B = ExactPolynomial.from_json(cond["certificate"]["B"], n)
+            return PortraitPart(sets=(LevelSet(name, "{B <= 0}", B, Fraction(0), "region", "#cf222e"),))
 
     # here: SECTIONS = (..., BarrierSection())
 """
