@@ -62,6 +62,10 @@ BLOCK_COST_LIMIT: Final = 2_000_000_000
 FACIAL_ROUNDS: Final = 3
 #: ... and only when the solve's margin is not clearly negative (an infeasible program has no face)
 FACIAL_MARGIN: Final = 1e-6
+#: rounds of facial reduction in the Lyapunov search (quadratic, sos_gas), where the programs
+#: shrink with every round: on a 6-state system (Papachristodoulou & Prajna) the face of the
+#: quartic V took 6 rounds
+LYAPUNOV_FACIAL_ROUNDS: Final = 8
 
 
 def symmetry(field: StateField) -> list[tuple[int, ...]]:
@@ -220,6 +224,33 @@ def face_probe(structure: Structure, normalized: str) -> Structure:
                    objective=("max_margin",), trace_one=(normalized,))
 
 
+#: the kernel of a Gram matrix at the solver's point: eigenvalues below this share of the largest
+KERNEL_TOL: Final = 1e-7
+#: ... and a kernel vector's support: its entries above this share of its largest
+KERNEL_SUPPORT_TOL: Final = 1e-3
+
+
+def kernel_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
+    """The basis monomials in the support of the numerical kernel of ``gram``'s matrix, when the
+    solve ends on the boundary (margin about 0) with no vanishing diagonal entry: a face that is
+    not a coordinate one (e.g. ``-V'`` whose quadratic part must be a multiple of ``(x1 + x2)^2``).
+    Leaving the whole support out asks for a smaller, coordinate face inside it (there, the
+    quadratic part 0), which a certificate may well have; if none does, the next solve says so."""
+    import numpy as np
+
+    Q = solution.grams.get(gram.name)
+    if Q is None or not solution.usable or abs(solution.scalars.get("t", 1.0)) > FACIAL_MARGIN:
+        return frozenset()
+    w, U = np.linalg.eigh(Q)
+    if not w.size or w[-1] <= 0:
+        return frozenset()
+    out: set[Monomial] = set()
+    for k in np.flatnonzero(w <= KERNEL_TOL * w[-1]):
+        v = np.abs(U[:, k])
+        out |= {m for m, x in zip(gram.basis, v) if x > KERNEL_SUPPORT_TOL * v.max()}
+    return frozenset(out)
+
+
 def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], found: dict[str, Any]) -> dict[str, Any]:
     """The certificate of the largest ``mu`` found, starting from ``found`` (``mu = 0``): step down
     geometrically from :data:`MU_MAX` to the first ``mu`` proved, then bisect geometrically. The
@@ -281,7 +312,7 @@ def search_degree(field: StateField, degree: int, search: Search, param_degree: 
     drop_v: frozenset[Monomial] = frozenset()
     label = f"degree {degree}" + (f" ({param_degree} in the parameters)" if field.p > field.disturbances else "")
     why = "none found"
-    for _ in range(FACIAL_ROUNDS + 1):
+    for _ in range(LYAPUNOV_FACIAL_ROUNDS + 1):
         structure = lyapunov_program(field, degree, generators, drop, param_degree, drop_v)
         if isinstance(structure, str):
             return None, f"{label}: {structure}" + (f" (after facial reduction, where {why})" if drop or drop_v else "")
@@ -292,12 +323,15 @@ def search_degree(field: StateField, degree: int, search: Search, param_degree: 
                       and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
         vanishing = vanishing_monomials(structure.gram("W"), solution)
         vanishing_v = vanishing_monomials(structure.gram("V"), solution)
+        if not vanishing and not vanishing_v:  # no zero diagonal: try the kernels' supports
+            vanishing = kernel_monomials(structure.gram("W"), solution)
+            vanishing_v = kernel_monomials(structure.gram("V"), solution)
         if not vanishing and not vanishing_v:
             return None, f"{label}: {why}"
         drop = drop | vanishing
         drop_v = drop_v | vanishing_v
     else:
-        return None, f"{label}: {why} (after {FACIAL_ROUNDS} rounds of facial reduction)"
+        return None, f"{label}: {why} (after {LYAPUNOV_FACIAL_ROUNDS} rounds of facial reduction)"
     found = best_decay_rate(lambda mu: attempt(field, structure, mu, search), found)
     found["degree"] = degree
     found["param_degree"] = param_degree
