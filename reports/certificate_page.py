@@ -67,7 +67,7 @@ def certificate_context(doc: dict[str, Any], *, ledger: bool = True, simulate: b
     conditions = [section_for(subject.model, str(name)).view(str(name), cond, k + 1, ctx)
                   for k, (name, cond) in enumerate(as_dict(doc.get("conditions")).items())]
     context: dict[str, Any] = {"status_meaning": STATUS_MEANING}
-    context.update(subject.parts(eqs, conditions, ledger=ledger, simulate=simulate))
+    context.update(subject.parts(eqs, ledger=ledger, simulate=simulate))
     eqs.typeset()
     context.update(subject.checked(recheck))
     context.update({

@@ -55,10 +55,6 @@ class PageKind:
     template: str
 
 
-def _is_model_certificate(doc: Any) -> bool:
-    return isinstance(doc, dict) and doc.get("kind") == "lyapcheck-model-certificate"
-
-
 def _certificate_context(doc: dict[str, Any], **options: Any) -> dict[str, Any]:
     from reports.certificate_page import certificate_context
 
@@ -95,11 +91,12 @@ def _grid_store_context(ds: Any) -> dict[str, Any]:
     return sweep_context(ds)
 
 
-#: every page a report can be, tried in order: the first that accepts its input renders it. The
-#: two certificate kinds are one page (reports.certificate_page) with the subject of their model.
+#: the pages a report can be, tried in order: the first that accepts its input renders it. Every
+#: certificate, the paper's or a model file's, is one page (reports.certificate_page), which takes
+#: the subject of its model from the document's kind (reports.subjects); a sweep store's page
+#: depends on its schema (reports.stores).
 CERTIFICATE_PAGES: Final = (
-    PageKind("model certificate", _is_model_certificate, _certificate_context, "certificate.html.j2"),
-    PageKind("paper certificate", lambda doc: isinstance(doc, dict), _certificate_context, "certificate.html.j2"),
+    PageKind("certificate", lambda doc: isinstance(doc, dict), _certificate_context, "certificate.html.j2"),
 )
 STORE_PAGES: Final = (
     PageKind("model sweep store", _is_model_store, _model_store_context, "model_sweep.html.j2"),

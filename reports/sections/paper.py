@@ -18,7 +18,7 @@ from typing import Any, Final
 
 from reports.sections.base import PAPER, ClassContext, ClassView, Section
 from reports.typeset import Equation, Equations, parse_matrix, typst_float
-from reports.views import Item, dict_items, fmt_float, matrix_item
+from reports.views import Item, as_dict, dict_items, fmt_float, matrix_item
 
 #: condition classes that certify ``limsup |eps| <= eps_bound_m`` (the certified sets of the phase portrait)
 BOUND_CLASSES: Final = ("ultimate_bound", "sos_bound")
@@ -28,17 +28,13 @@ TIGHTNESS_KEYS: Final = ("worst_case_sup_abs_eps_tail_m", "tightness_ratio", "so
 UNKNOWN_CLASS: Final = "(not checked: lyapcheck knows no such class) "
 
 
-def as_dict(value: object) -> dict[str, Any]:
-    """``value`` if it is a mapping, else an empty one: a malformed section shows as empty."""
-    return value if isinstance(value, dict) else {}
-
-
 def text(value: object) -> str:
     """A document value as page text: strings as they are, anything else as JSON."""
     return value if isinstance(value, str) else json.dumps(value, default=str)
 
 
 def number(value: object) -> float | None:
+    """A JSON number as a float (not a bool), or None."""
     return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
 
 

@@ -6,7 +6,7 @@ import json
 from dataclasses import dataclass
 from typing import Any, Final
 
-from reports.sections.base import ClassContext, ClassView
+from reports.sections.base import ClassContext
 from reports.typeset import Equations
 
 #: one sentence per status (DESIGN.md)
@@ -71,9 +71,10 @@ class Subject:
         """What the sections read beside each condition."""
         return ClassContext(self.doc, eqs)
 
-    def parts(self, eqs: Equations, classes: list[ClassView], *, ledger: bool, simulate: bool) -> dict[str, Any]:
+    def parts(self, eqs: Equations, *, ledger: bool, simulate: bool) -> dict[str, Any]:
         """The subject's entries of the page context, built after the classes' views (whose
-        equations come first on the page's sheets). Equations go to ``eqs``."""
+        equations come first on the page's sheets). Equations go to ``eqs``; ``ledger`` and
+        ``simulate`` ask for the parts that take time (a subject without them ignores them)."""
         raise NotImplementedError
 
     def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:

@@ -31,7 +31,7 @@ from lyapcheck.models.certify import VERDICT_MEANING
 from lyapcheck.models.modelfile import Model
 from reports.figures import Figure
 from reports.phase_portrait import CrossCheck, phase_portrait
-from reports.sections.base import MODEL_FILE, ClassContext, ClassView, text_of
+from reports.sections.base import MODEL_FILE, ClassContext, text_of
 from reports.subjects.base import STATUS_MEANING, Glance, Quantity, Subject
 from reports.typeset import Equations
 from reports.views import as_dict, as_fraction, as_number, fmt_float
@@ -238,7 +238,7 @@ class ModelFileSubject(Subject):
         outputs = tuple(self.parsed.outputs) if self.parsed is not None else ()
         return ClassContext(self.doc, eqs, self.states, shifts, outputs, self.doc.get("box"))
 
-    def parts(self, eqs: Equations, classes: list[ClassView], *, ledger: bool, simulate: bool) -> dict[str, Any]:
+    def parts(self, eqs: Equations, *, ledger: bool, simulate: bool) -> dict[str, Any]:
         doc, model, raw = self.doc, self.parsed, self.raw
         model_part = as_dict(doc.get("model"))
         try:
@@ -306,6 +306,7 @@ class ModelFileSubject(Subject):
             "solvers": solvers(as_dict(doc.get("conditions"))),
             "solvers_title": "Solver outcomes",
             "solvers_exact": False,
+            # Markup: the page's own words (not input), printed as written
             "solvers_note": Markup("A solver's outcome is never a verdict: every status above comes from an exact check. "
                    "The full solver log of each class is in the certificate file."),
         }

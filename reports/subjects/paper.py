@@ -23,11 +23,11 @@ from markupsafe import Markup
 
 from lyapcheck.errors import LyapcheckError
 from reports import figures
-from reports.sections.base import PAPER, ClassView
-from reports.sections.paper import BOUND_CLASSES, as_dict, describe_disturbance, number, text
+from reports.sections.base import PAPER
+from reports.sections.paper import BOUND_CLASSES, describe_disturbance, number, text
 from reports.subjects.base import Glance, Quantity, Subject, canonical_json
 from reports.typeset import Equation, Equations, parse_fraction, parse_matrix
-from reports.views import Item, dict_items, fmt_float, matrix_item
+from reports.views import Item, as_dict, dict_items, fmt_float, matrix_item
 
 log = logging.getLogger(__name__)
 
@@ -230,7 +230,7 @@ class PaperSubject(Subject):
     model = PAPER
     template = "paper.html.j2"
 
-    def parts(self, eqs: Equations, classes: list[ClassView], *, ledger: bool, simulate: bool) -> dict[str, Any]:
+    def parts(self, eqs: Equations, *, ledger: bool, simulate: bool) -> dict[str, Any]:
         doc = self.doc
         dynamics = system(doc, eqs)
         cards, ledger_reason = ledger_cards(eqs) if ledger else ([], "not requested")
@@ -249,6 +249,7 @@ class PaperSubject(Subject):
             "dynamics": text(doc.get("dynamics", "unknown")),
             "glance": Glance(("condition", "status", "what it means"), False,
                              ("certified", "refuted", "not_certified", "inconclusive")),
+            # Markup: the page's own words (not input), printed as written
             "toc": [("inputs", "Gains and swimmer"), ("conditions", "Conditions, one by one"),
                     ("simulation", "The closed loop in simulation"),
                     ("ledger", Markup("Claims ledger: the paper's equations")), ("reproduce", "Reproducibility")],
