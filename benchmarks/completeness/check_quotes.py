@@ -33,6 +33,7 @@ Exit 0 when every check passes, 1 otherwise.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import subprocess
 import sys
@@ -42,11 +43,39 @@ from pathlib import Path
 from typing import Any
 
 import sympy as sp
-from sympy.parsing.sympy_parser import parse_expr, rationalize, standard_transformations
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-TRANSFORMS = standard_transformations + (rationalize,)
+#: the operators the quoted expressions use, to sympy (read by an ast whitelist: no string is
+#: evaluated, as for every expression lyapcheck reads; this checker keeps its own reader so that
+#: it does not share lyapcheck's parser)
+BINARY = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: lambda a, b: a * b,
+          ast.Div: lambda a, b: a / b, ast.Pow: lambda a, b: a ** b}
+FUNCTIONS = {"log": sp.log, "exp": sp.exp, "sqrt": sp.sqrt}
+
+
+def to_sympy(node: ast.AST, names: dict[str, Any]) -> sp.Expr:
+    """An expression tree of numbers, names, + - * / ** and log/exp/sqrt calls, exactly (decimals
+    as the fractions they spell); ValueError for anything else."""
+    if isinstance(node, ast.Expression):
+        return to_sympy(node.body, names)
+    if isinstance(node, ast.BinOp) and type(node.op) in BINARY:
+        return BINARY[type(node.op)](to_sympy(node.left, names), to_sympy(node.right, names))
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        inner = to_sympy(node.operand, names)
+        return -inner if isinstance(node.op, ast.USub) else inner
+    if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
+        return sp.Rational(ast.get_source_segment(SOURCE[-1], node) or repr(node.value))
+    if isinstance(node, ast.Name):  # a declared name, else a free constant (a solution's a, b)
+        return names.get(node.id, sp.Symbol(node.id))
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS \
+            and len(node.args) == 1 and not node.keywords:
+        return FUNCTIONS[node.func.id](to_sympy(node.args[0], names))
+    raise ValueError(f"not in the checker's expression language: {ast.dump(node)[:80]}")
+
+
+#: the text being read (for the exact spelling of decimal literals)
+SOURCE: list[str] = []
 #: the candidate class refuses longer expressions (MAX_EXPRESSION_LENGTH in docs/model-files.md)
 CANDIDATE_MAX_CHARS = 4000
 
@@ -61,11 +90,15 @@ class Model:
         self.names: dict[str, Any] = {str(s): s for s in self.states}
         for name, value in doc.get("parameters", {}).items():
             self.names[name] = sp.Rational(str(value))
-        self.names.update({"log": sp.log, "exp": sp.exp, "sqrt": sp.sqrt, "t": sp.Symbol("t")})
+        self.names.update({"t": sp.Symbol("t")})
         self.f = [self.parse(str(doc["dynamics"][str(s)])) for s in self.states]
 
     def parse(self, text: str) -> sp.Expr:
-        return parse_expr(text, local_dict=dict(self.names), transformations=TRANSFORMS)
+        SOURCE.append(text.strip())
+        try:
+            return to_sympy(ast.parse(SOURCE[-1], mode="eval"), self.names)
+        finally:
+            SOURCE.pop()
 
     def derivative(self, expr: sp.Expr) -> sp.Expr:
         return sp.cancel(sum(sp.diff(expr, s) * fi for s, fi in zip(self.states, self.f)))
