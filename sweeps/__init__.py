@@ -1,27 +1,28 @@
 """Parameter-space sweeps: where each certificate class holds, cross-checked by simulation.
 
-Modules, one concern each:
+One pipeline for every target (:mod:`sweeps.targets`: a model file, with the classes of
+``lyapcheck.models``; the paper's model, with its own condition classes). Modules, one concern each:
 
 ====================  =========================================================================
-``spec``              the sweep spec (TOML), validated through ``lyapcheck.paper.params``
-``schema``            the store's variables, dtypes, fill values and status codes
-``evaluate``          one unit of work: certify and simulate a batch of points
-``fast_sector``       ``sector_ges`` with compiled conic data and Clarabel called directly
-``soundness``         the soundness-violation flag and its tolerance
-``refine``            quadtree refinement on a 2-D slice
-``store``             the Zarr store: atomic creation, chunk writes, resume checks
+``targets``           what a sweep runs on: the targets' table, the one spec reader, ``sweep_any``
+``spec``              specs of every target: axes, ``[sweep.boxes]``, the paper's and a model file's
+``schema``            the store's variables, dtypes, fill values and status codes, per target
+``evaluate``          one unit of work: certify points or boxes, cross-check them by simulation
+``crosscheck``        the simulation cross-check of a model file's certified point or box
+``fast_sector``       the paper's ``sector_ges`` with compiled conic data and Clarabel called directly
+``soundness``         the soundness-violation flag and its tolerances
+``refine``            the paper's quadtree refinement on a 2-D slice
+``store``             the Zarr stores (a grid, a table of boxes): atomic creation, writes, resume
 ``runners``           in-process, local worker processes, or a Dask cluster
-``run``               the loop that feeds runners and streams results into the store
-``summary``           figures read back from a store
+``run``               the one loop: grid of points, quadtree, refinement tree of boxes
+``summary``           figures read back from a store of any target
 ``export``            NetCDF and CSV
-``model_spec``        a spec that names a model file: its parameters swept as points or boxes
-``model_schema``      a model sweep store's variables and attributes
-``model_store``       its Zarr store (on ``store``'s helpers)
-``model_evaluate``    one unit of a model sweep: certify points or boxes, store certificates
-``model_crosscheck``  the simulation cross-check of a certified point or box
-``model_run``         the grid or the refinement tree of a model sweep
-``model_summary``     shares of the window proved, per status and class
 ====================  =========================================================================
 
-Entry points: :func:`sweeps.run.run_sweep` and ``lyapcheck sweep`` (:mod:`lyapcheck.cli.sweep`).
+Old paths, kept as re-exports while other packages import them (delete each once nothing does):
+``model_spec``, ``model_schema``, ``model_store``, ``model_summary``, ``model_run``,
+``model_crosscheck``, ``box_store``, ``box_summary``, ``boxes_run``.
+
+Entry points: :func:`sweeps.targets.sweep_any`, :func:`sweeps.run.run_sweep` and ``lyapcheck sweep``
+(:mod:`lyapcheck.cli.sweep`).
 """

@@ -1,6 +1,11 @@
-"""One unit of sweep work: certify and simulate a batch of grid points.
+"""One unit of sweep work, of every target: certify a batch of points or boxes, cross-check them by simulation.
 
-Runs in a worker process (local pool or Dask). The certificate programs are the compiled
+Every unit runs in a worker process (local pool or Dask), receives the spec as text (never a
+path; parsed once per process) and the points' coordinates or the boxes' exact edges, and returns
+one array per variable of the target's store (:mod:`sweeps.schema`); :mod:`sweeps.run` writes it.
+One unit at a time per process (:data:`UNIT_LOCK`).
+
+The paper's model, points (:func:`evaluate_unit`). The certificate programs are the compiled
 programs of :mod:`lyapcheck.paper.conditions.compiled` (read once per process, then solved by Clarabel
 with new parameter values, no cvxpy); ``sector_ges`` goes through :mod:`sweeps.fast_sector`. The
 simulation is one batched call of :func:`lyapcheck.simulation.runner.simulate` per scenario for
@@ -25,23 +30,53 @@ Scenarios (all with ``|d_perp| <= d*`` except ``nominal``, which has no disturba
 
 The three disturbance scenarios start on the path, where every invariant set of the
 certificates contains the state, so the certified bound holds over the whole tail window.
+
+The paper's model, boxes (:func:`evaluate_boxes`): the box classes of
+:mod:`lyapcheck.paper.boxes.classes`, cheapest first until one certifies with a GES envelope, whose
+random points are simulated against it (:func:`lyapcheck.paper.boxes.cross_check.cross_check`).
+
+A model file, points or boxes (:func:`evaluate_model_points`, :func:`evaluate_model_boxes`): the
+classes of :data:`lyapcheck.models.certify.MODEL_CLASSES` the spec asks for, and the seconds each item
+took (which the store does not keep: a wall time would make a resumed store differ from an
+uninterrupted one).
+
+* A point: :func:`lyapcheck.models.certify.certify_model` on the model with the point's exact
+  parameters (``Fraction`` of the stored float).
+* A box: first the linearization, exactly, at the box's corners (milliseconds): an unstable corner
+  proves that no stability class can certify the box (its status is ``refuted``, and the stability
+  classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box.
+
+A point or box is ``certified`` when any class certified; ``refuted`` when the equilibrium is proved
+unstable there (the linearization, exactly) and nothing certified; else ``not_certified``. Every
+certified one is cross-checked by simulation (:mod:`sweeps.crosscheck`) and its certificate
+document is returned as JSON, without the solver logs (their wall times would make the store's
+bytes depend on the machine's load; ``verify`` does not read them). A class's figures are stored
+from the per-class tables of :mod:`sweeps.schema`, so a class registered in ``lyapcheck.models``
+is swept without a change here.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import threading
+import time
+from fractions import Fraction
 from functools import lru_cache
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Final, Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
 from lyapcheck.results import ConditionResult
 from lyapcheck.paper.params import Problem
-from sweeps.schema import BOUND_CLASSES, DISTURBANCE_SCENARIOS, MARGIN_SOURCE, VARIABLES, status_code
-from sweeps.soundness import violations
-from sweeps.spec import SweepSpec, cached_spec
+from lyapcheck.paper.boxes.box import ParameterBox
+from sweeps.schema import (
+    BOUND_CLASSES, BOX_STATUS_CODES, DISTURBANCE_SCENARIOS, FIGURES, MARGIN_SOURCE, OUTPUT_FIGURES, STATUS_CODES,
+    VARIABLES, point_variables, status_code,
+)
+from sweeps.soundness import BOUND_REL_TOL, WORST_CASE_SCREENING_ONLY, violations
+from sweeps.spec import ModelSweepSpec, SweepSpec, cached_model_spec, cached_spec, window_box
 
 FloatArray = npt.NDArray[np.float64]
 Result = dict[str, np.ndarray]
@@ -190,12 +225,6 @@ def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatAr
     return out
 
 
-#: the worst-case search's time budget in a sweep: below any refinement round's cost, so only its
-#: deterministic screening round and final re-simulation run (a point's figure does not depend
-#: on the machine's speed, which resuming a sweep byte-for-byte needs)
-WORST_CASE_SCREENING_ONLY = 1e-9
-
-
 def _worst_case(spec: SweepSpec, coords: FloatArray, storage: list[dict[str, Any] | None]) -> dict[str, Any]:
     """The worst-case disturbance search at every point, started on the path like the other
     disturbance scenarios (inside every invariant set of the certificates)."""
@@ -266,4 +295,258 @@ def evaluate_unit(spec_text: str, coords: FloatArray) -> Result:
 #: signature of a unit evaluator (tests and the memory benchmark substitute a cheap one)
 Evaluator = Callable[[str, FloatArray], Result]
 
-__all__ = ["evaluate", "evaluate_unit", "certify_point", "simulate_points", "empty_result", "Evaluator"]
+
+# -- the paper's model, boxes ---------------------------------------------------------------------
+def evaluate_boxes(spec_text: str, boxes: Sequence[tuple[int, dict[str, list[str]]]]) -> dict[str, np.ndarray]:
+    """One unit of work (runs in a worker): certify and cross-check each ``(id, box)``.
+
+    Returns per box: ``status`` code, ``status_<class>``, ``k``, ``decay_rate_per_s`` (of the
+    certifying class), ``cross_check_runs``, ``cross_check_worst_ratio`` and ``soundness_violation``. A box's random points are drawn
+    from ``(seed, id)``, so its result does not depend on the unit it was grouped in.
+    """
+    from lyapcheck.paper.boxes.classes import certify_box
+    from lyapcheck.paper.boxes.cross_check import cross_check
+    from lyapcheck.tolerances import ENVELOPE_REL_TOL
+
+    spec = cached_spec(spec_text)
+    assert spec.boxes is not None
+    n = len(boxes)
+    out = {"status": np.zeros(n, np.int8), "k": np.full(n, np.nan), "decay_rate_per_s": np.full(n, np.nan),
+           "cross_check_runs": np.zeros(n, np.int16), "cross_check_worst_ratio": np.full(n, np.nan),
+           "soundness_violation": np.zeros(n, bool),
+           **{f"status_{c}": np.full(n, -1, np.int8) for c in spec.classes}}
+    ges_classes = [c for c in spec.classes if c != "sos_bound"]
+    if "sos_bound" in spec.classes:
+        out.update({"eps_bound_m": np.full(n, np.nan), "sim_worst_eps_m": np.full(n, np.nan),
+                    "tightness_ratio": np.full(n, np.nan)})
+    for j, (box_id, data) in enumerate(boxes):
+        box = ParameterBox.from_json(data)
+        result: dict[str, Any] = {}
+        envelope: dict[str, Any] | None = None
+        for cls in ges_classes:  # cheapest first; the first certificate decides the box, and the
+            # next classes run only while no certificate has given an envelope k, rate to
+            # cross-check (eq. stabCond's, prop41_ges, gives none)
+            with UNIT_LOCK:  # two threads of one Dask worker take turns
+                here = certify_box(spec.base, box, cls=cls)
+            out[f"status_{cls}"][j] = BOX_STATUS_CODES[here["status"]]
+            if here["status"] == "certified":
+                result = result if result.get("status") == "certified" else here
+                if "k" in here:
+                    envelope = here
+                    break
+            elif result.get("status") != "certified":
+                result = here
+        bound = _box_bound(spec, box, box_id, out, j) if "sos_bound" in spec.classes else None
+        if not ges_classes:  # a bound-only sweep refines on the bound
+            result = bound or {}
+        # a class's refutation is of that class's certificate, not of GES: the box stays undecided
+        status = "certified" if result.get("status") == "certified" else "not_certified"
+        out["status"][j] = BOX_STATUS_CODES[status]
+        if status != "certified" or envelope is None:
+            continue
+        out["k"][j], out["decay_rate_per_s"][j] = envelope["k"], envelope["decay_rate_per_s"]
+        result = envelope
+        runs, worst = cross_check(spec.base, box, result, spec.boxes.cross_check_points, (spec.boxes.seed, box_id))
+        out["cross_check_runs"][j], out["cross_check_worst_ratio"][j] = runs, worst
+        out["soundness_violation"][j] |= runs > 0 and not worst <= 1 + ENVELOPE_REL_TOL
+    return out
+
+
+def _box_bound(spec: SweepSpec, box: ParameterBox, box_id: int, out: dict[str, np.ndarray], j: int) -> dict[str, Any]:
+    """``sos_bound`` over the box, and the worst-case disturbance search at its random points.
+
+    The search is its deterministic screening round only (a vanishing time budget: no
+    refinement round fits), so a box's figures do not depend on the machine's speed.
+    """
+    from lyapcheck.paper.boxes.classes import certify_box
+    from lyapcheck.paper.boxes.box import sample_points
+    from lyapcheck.simulation.worst_case import search_worst_case
+
+    assert spec.boxes is not None
+    with UNIT_LOCK:
+        result = certify_box(spec.base, box, cls="sos_bound")
+    out["status_sos_bound"][j] = BOX_STATUS_CODES.get(result["status"], BOX_STATUS_CODES["not_certified"])
+    if result["status"] != "certified":
+        return result
+    bound = float(result["eps_bound_m"])
+    out["eps_bound_m"][j] = bound
+    worst = -math.inf
+    for point in sample_points(box, spec.boxes.cross_check_points, (spec.boxes.seed, box_id, 1)):
+        found = search_worst_case(spec.base.with_gains(**point), budget_s=WORST_CASE_SCREENING_ONLY)
+        worst = max(worst, found.sup_abs_eps_tail_m)
+    if math.isfinite(worst):
+        out["sim_worst_eps_m"][j] = worst
+        out["tightness_ratio"][j] = bound / worst if worst > 0 else math.inf
+        out["soundness_violation"][j] |= worst > bound * (1 + BOUND_REL_TOL)
+    return result
+
+
+# -- a model file, points or boxes ----------------------------------------------------------------
+#: the classes whose certificate proves a stability property (an unstable point refutes them)
+MODEL_STABILITY_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa")
+
+
+def _model_empty(spec: ModelSweepSpec, n: int) -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {}
+    for var in point_variables(spec.classes, spec.outputs):
+        if var.dtype.kind == "T":
+            out[var.name] = np.full(n, "", dtype=object)
+        else:
+            out[var.name] = np.full(n, var.fill, dtype=var.dtype)
+    out["seconds_certify"] = np.zeros(n)
+    out["seconds_cross_check"] = np.zeros(n)
+    return out
+
+
+def certificate_json(document: dict[str, Any]) -> str:
+    """The document as stored: its conditions without solver logs. Keys stay in the document's own
+    order (deterministic: the builder's), never sorted: a box lists the model's parameters in the
+    model's order, which ``verify`` checks."""
+    doc = dict(document)
+    doc["conditions"] = {name: {k: v for k, v in cond.items() if k != "solver"}
+                         for name, cond in document["conditions"].items()}
+    return json.dumps(doc, separators=(",", ":"))
+
+
+def _model_record(spec: ModelSweepSpec, result: Any, out: dict[str, np.ndarray], j: int,
+            refuted: dict[str, str] | None = None) -> str:
+    """Statuses, figures and note of one point or box; returns its status name."""
+    statuses = {name: r.status for name, r in result.results.items()}
+    if refuted is not None:
+        statuses.update({c: "refuted" for c in spec.classes if c in MODEL_STABILITY_CLASSES})
+    for c in spec.classes:
+        if c in statuses:
+            out[f"status_{c}"][j] = STATUS_CODES.get(statuses[c], STATUS_CODES["inconclusive"])
+    certified = [c for c in spec.classes if statuses.get(c) == "certified"]
+    for c in certified:
+        numbers = result.results[c].numbers
+        for suffix, key, _ in FIGURES.get(c, ()):
+            if numbers.get(key) is not None:
+                out[f"{c}_{suffix}"][j] = float(numbers[key])
+        if c in OUTPUT_FIGURES:
+            for y, value in (numbers.get(OUTPUT_FIGURES[c][0]) or {}).items():
+                out[f"{c}_{y}"][j] = float(value)
+    if certified:
+        status = "certified"
+        out["note"][j] = "certified by " + ", ".join(
+            f"{c} ({result.results[c].proves()}{', d = 0' if result.results[c].disturbances == 'zero' else ''})"
+            for c in certified)
+    elif refuted is not None or statuses.get("linearization") == "refuted":
+        status = "refuted"
+        out["note"][j] = (refuted or {}).get("note") or result.results["linearization"].summary
+    else:
+        status = "not_certified"
+        out["note"][j] = "no class certified: " + ", ".join(f"{c} {statuses.get(c, 'not computed')}"
+                                                             for c in spec.classes)
+    out["status"][j] = BOX_STATUS_CODES[status]
+    return status
+
+
+def _cross(spec: ModelSweepSpec, document: dict[str, Any], points: Sequence[dict[str, Fraction]], seed: Sequence[int],
+           out: dict[str, np.ndarray], j: int) -> None:
+    from sweeps.crosscheck import cross_check
+
+    found = cross_check(spec.model, document, points, starts=spec.simulation.starts, seed=seed,
+                        worst_case=spec.simulation.worst_case)
+    out["cross_check_points"][j] = found.points
+    out["cross_check_trajectories"][j] = found.trajectories
+    out["cross_check_worst_rise"][j] = found.worst_rise
+    out["cross_check_worst_envelope"][j] = found.worst_envelope
+    out["cross_check_ges_ratio"][j] = found.ges_ratio
+    out["cross_check_not_converged"][j] = found.not_converged
+    for y, sup in found.sim_worst.items():
+        if f"sim_worst_{y}" in out:
+            out[f"sim_worst_{y}"][j] = sup
+            bound = out[f"sos_bound_{y}"][j]
+            out[f"tightness_{y}"][j] = bound / sup if sup > 0 else np.inf
+    out["soundness_violation"][j] = found.violation
+    out["violation_detail"][j] = "; ".join(found.violations)
+
+
+def evaluate_model_points(worker_text: str, coords: np.ndarray) -> dict[str, np.ndarray]:
+    """Certify and cross-check each grid point (rows of ``coords``, SI, in the spec's axis order)."""
+    from lyapcheck.models.certificate import build_document
+    from lyapcheck.models.certify import certify_model
+
+    spec = cached_model_spec(worker_text)
+    coords = np.atleast_2d(np.asarray(coords, dtype=np.float64))
+    out = _model_empty(spec, len(coords))
+    for j, row in enumerate(coords):
+        begin = time.perf_counter()
+        with UNIT_LOCK:  # two threads of one Dask worker take turns
+            result = certify_model(spec.model_at(row), classes=spec.classes)
+        middle = time.perf_counter()
+        if _model_record(spec, result, out, j) == "certified":
+            document = build_document(result)
+            out["certificate"][j] = certificate_json(document)
+            index = int(np.ravel_multi_index(tuple(int(np.searchsorted(a.values, v)) for a, v in zip(spec.axes, row)),
+                                             spec.shape))
+            _cross(spec, document, [spec.parameters_at(row)], (spec.simulation.seed, index), out, j)
+        out["seconds_certify"][j] = middle - begin
+        out["seconds_cross_check"][j] = time.perf_counter() - middle
+        out["done"][j] = True
+    return out
+
+
+def unstable_corners(spec: ModelSweepSpec, box: Any) -> tuple[int, dict[str, str] | None]:
+    """How many corners of ``box`` have an unstable equilibrium (the linearization refuted, exactly),
+    and the first as ``{"note": ...}`` (None when none); ``(-1, None)`` when no stability class is asked."""
+    from lyapcheck.models.certify import certify_model
+    from lyapcheck.models.modelfile import with_parameters
+
+    if not any(c in MODEL_STABILITY_CLASSES for c in spec.classes):
+        return -1, None
+    count, first = 0, None
+    for corner in box.corners():
+        lin = certify_model(with_parameters(spec.model, corner), classes=("linearization",)).results["linearization"]
+        if lin.status == "refuted":
+            count += 1
+            if first is None:
+                where = ", ".join(f"{k} = {float(v):.6g}" for k, v in corner.items())
+                first = {"note": f"unstable at the corner {where}: {lin.summary}"}
+    return count, first
+
+
+def box_seed(seed: int, box_id: int) -> int:
+    """The seed of a box's random parameter points: a function of ``(seed, box id)`` alone."""
+    return int(np.random.SeedSequence([seed, box_id]).generate_state(1, dtype=np.uint64)[0])
+
+
+def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, list[str]]]]) -> dict[str, np.ndarray]:
+    """Certify and cross-check each ``(id, {name: [lo, hi]})`` box (exact edges as ``"p/q"`` text)."""
+    from lyapcheck.models.certificate import build_document
+    from lyapcheck.models.certify import certify_model
+
+    spec = cached_model_spec(worker_text)
+    assert spec.boxes is not None
+    out = _model_empty(spec, len(boxes))
+    out["unstable_corners"] = np.full(len(boxes), -1, dtype=np.int8)
+    for j, (box_id, edges) in enumerate(boxes):
+        begin = time.perf_counter()
+        box = window_box(spec, {name: (Fraction(lo), Fraction(hi)) for name, (lo, hi) in edges.items()})
+        with UNIT_LOCK:
+            corners, unstable = unstable_corners(spec, box)
+            classes = spec.classes if unstable is None else tuple(c for c in spec.classes if c == "sos_bound")
+            result = certify_model(spec.model, classes=classes, box=box) if classes else None
+        middle = time.perf_counter()
+        if result is None:  # only stability classes, refuted at a corner
+            for c in spec.classes:
+                out[f"status_{c}"][j] = STATUS_CODES["refuted"]
+            out["status"][j] = BOX_STATUS_CODES["refuted"]
+            out["note"][j] = (unstable or {}).get("note", "")
+        elif _model_record(spec, result, out, j, unstable) == "certified":
+            document = build_document(result)
+            out["certificate"][j] = certificate_json(document)
+            points = box.points(spec.boxes.cross_check_points, box_seed(spec.boxes.seed, box_id))
+            if points:
+                _cross(spec, document, points, (spec.simulation.seed, box_id), out, j)
+        out["unstable_corners"][j] = corners
+        out["seconds_certify"][j] = middle - begin
+        out["seconds_cross_check"][j] = time.perf_counter() - middle
+        out["done"][j] = True
+    return out
+
+
+__all__ = ["evaluate", "evaluate_unit", "certify_point", "simulate_points", "empty_result", "Evaluator", "evaluate_boxes",
+           "evaluate_model_points", "evaluate_model_boxes", "certificate_json", "box_seed", "unstable_corners",
+           "MODEL_STABILITY_CLASSES", "UNIT_LOCK"]

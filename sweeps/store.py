@@ -1,4 +1,11 @@
-"""The results store: a Zarr v3 group that xarray opens as the Dataset of :mod:`sweeps.schema`.
+"""The results store of every target: a Zarr v3 group that xarray opens as the Dataset of :mod:`sweeps.schema`.
+
+Two layouts, whatever the target: a grid of points (:class:`GridStore`: one dimension per swept
+parameter, one Zarr chunk per unit of work) and a table of boxes (:class:`TreeStore`: one row per
+box of the refinement tree, preallocated to ``max_boxes`` rows). A target's store is one of them
+with its variables (:mod:`sweeps.schema`), its attributes and its checks on resume: the paper's
+:class:`Store` (points) and :class:`BoxStore`, a model file's :class:`ModelPointStore` and
+:class:`ModelBoxStore` (which also check the model's SHA-256 and the layout).
 
 Writing goes through zarr directly (one region per unit of work, from the main process only);
 reading for users goes through xarray (:func:`open_results`). Properties the sweep relies on:
@@ -12,7 +19,8 @@ reading for users goes through xarray (:func:`open_results`). Properties the swe
 * **Determinism.** Metadata holds no timestamp or path; chunk bytes depend only on the values,
   so a resumed sweep ends byte-for-byte identical to an uninterrupted one.
 * **Resume.** Opening an existing store checks that it was made from the same spec text and the
-  same package versions (otherwise the results would mix two sweeps) and then reads ``done``.
+  same package versions (otherwise the results would mix two sweeps), reads every array once
+  (:func:`check_arrays_readable`) and then reads ``done``.
 """
 
 from __future__ import annotations
@@ -28,8 +36,11 @@ from typing import Any, Callable, Final, Mapping, Sequence
 import numpy as np
 
 from lyapcheck.errors import InputFileError
-from sweeps.schema import SWEEPABLE, VARIABLES
-from sweeps.spec import SweepSpec
+from sweeps.schema import (
+    BOX_DIM, BOXES_MODE, POINTS_MODE, STRING, SWEEPABLE, VARIABLES, Variable, box_variables, model_box_variables,
+    point_variables,
+)
+from sweeps.spec import ModelSweepSpec, SweepSpec
 
 #: packages whose versions can change a sweep's numbers (stored, and checked on resume)
 VERSIONED_PACKAGES: Final = ("lyapcheck", "numpy", "scipy", "sympy", "cvxpy", "clarabel", "zarr", "xarray")
@@ -41,6 +52,8 @@ RESUME_IGNORES: Final = ("floating_point",)
 COORD_UNITS: Final = {"alpha_d": "1/s", "sigma0": "1", "k_d": "1/s", "delta_los": "m", "d_max": "m/s"}
 
 Region = tuple[slice, ...]
+#: rows per Zarr chunk of a box store (the main process rewrites a whole chunk to update some of its rows)
+BOX_CHUNK: Final = 256
 
 
 def versions() -> dict[str, str]:
@@ -88,33 +101,10 @@ def block_regions(shape: Sequence[int], chunks: Sequence[int]) -> list[Region]:
     return regions
 
 
-def _attrs(spec: SweepSpec) -> dict[str, Any]:
-    return {"spec_toml": spec.text, "versions": json.dumps(versions(), sort_keys=True),
-            "paper_point": json.dumps(paper_point(), sort_keys=True)}
-
-
-def _build(path: Path, spec: SweepSpec) -> None:
-    import zarr
-
-    group = zarr.open_group(str(path), mode="w", zarr_format=3)
-    group.attrs.update(_attrs(spec))
-    dims = list(spec.dims)
-    for axis in spec.axes:
-        coord = group.create_array(axis.name, shape=(axis.size,), dtype="float64", chunks=(axis.size,),
-                                   dimension_names=[axis.name], fill_value=np.nan,
-                                   attributes={"units": COORD_UNITS[axis.name], "scale": axis.scale,
-                                               "parameter": SWEEPABLE[axis.name]})
-        coord[:] = np.asarray(axis.values, dtype=np.float64)
-    chunks = chunk_shape(spec.shape, spec.chunk_size)
-    for var in VARIABLES:
-        group.create_array(var.name, shape=spec.shape, dtype=var.dtype, chunks=chunks, dimension_names=dims,
-                           fill_value=var.fill, attributes={"description": var.description})
-
-
-def open_or_build(target: Path, spec: SweepSpec, build: Callable[[Path], None]) -> Any:
+def open_or_build(target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
     """The zarr group at ``target``, created by ``build`` in a staging directory and renamed into
     place when it does not exist; an existing one must hold ``spec`` and these package versions.
-    Shared by the point store and the box store (:mod:`sweeps.box_store`)."""
+    Shared by every store of every target."""
     import zarr
 
     if not target.exists():
@@ -165,20 +155,68 @@ def check_arrays_readable(group: Any, path: Path, arrays: Mapping[str, tuple[int
                                  f"({detail[:120]}); remove it or choose another --out") from None
 
 
-class Store:
-    """An open results store (see the module docstring)."""
+def _create(group: Any, var: Variable, shape: tuple[int, ...], chunks: tuple[int, ...], dims: list[str]) -> None:
+    group.create_array(var.name, shape=shape, dtype=var.dtype, chunks=chunks, dimension_names=dims,
+                       fill_value=var.fill, attributes={"description": var.description})
 
-    def __init__(self, path: Path, group: Any, spec: SweepSpec) -> None:
+
+def _as(values: Any, var: Variable) -> np.ndarray:
+    if var.dtype == STRING:
+        return np.asarray([str(v) for v in np.asarray(values, dtype=object).ravel()], dtype=STRING)
+    return np.asarray(values, dtype=var.dtype)
+
+
+class GridStore:
+    """A grid of points: every variable over the swept parameters, one coordinate each (module
+    docstring). A target's store says which variables, attributes and coordinate attributes."""
+
+    def __init__(self, path: Path, group: Any, spec: Any) -> None:
         self.path = path
         self.group = group
         self.spec = spec
         self.chunks = chunk_shape(spec.shape, spec.chunk_size)
+        self.variables = self.variables_of(spec)
+        self.by_name = {v.name: v for v in self.variables}
+
+    # -- what a target says -----------------------------------------------------------------------
+    @classmethod
+    def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
+        raise NotImplementedError
 
     @classmethod
-    def open_or_create(cls, path: str | Path, spec: SweepSpec) -> "Store":
+    def attrs_of(cls, spec: Any) -> dict[str, Any]:
+        raise NotImplementedError
+
+    @classmethod
+    def coord_attributes(cls, axis: Any) -> dict[str, Any]:
+        raise NotImplementedError
+
+    @classmethod
+    def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
+        """The group, created or checked for resuming (:func:`open_or_build`)."""
+        return open_or_build(target, spec, build)
+
+    # -- the layout -----------------------------------------------------------------------------
+    @classmethod
+    def open_or_create(cls, path: str | Path, spec: Any) -> Any:
         """Open ``path`` to resume, or create it; refuse a store made from another spec."""
         target = Path(path)
-        group = open_or_build(target, spec, lambda staging: _build(staging, spec))
+
+        def build(staging: Path) -> None:
+            import zarr
+
+            group = zarr.open_group(str(staging), mode="w", zarr_format=3)
+            group.attrs.update(cls.attrs_of(spec))
+            for axis in spec.axes:
+                coord = group.create_array(axis.name, shape=(axis.size,), dtype="float64", chunks=(axis.size,),
+                                           dimension_names=[axis.name], fill_value=np.nan,
+                                           attributes=cls.coord_attributes(axis))
+                coord[:] = np.asarray(axis.values, dtype=np.float64)
+            chunks = chunk_shape(spec.shape, spec.chunk_size)
+            for var in cls.variables_of(spec):
+                _create(group, var, tuple(spec.shape), chunks, list(spec.dims))
+
+        group = cls.open_group(target, spec, build)
         store = cls(target, group, spec)
         store.check_readable()
         return store
@@ -186,8 +224,11 @@ class Store:
     def check_readable(self) -> None:
         """Read every array once before resuming (:func:`check_arrays_readable`)."""
         arrays: dict[str, tuple[int, ...]] = {axis.name: (axis.size,) for axis in self.spec.axes}
-        arrays.update({var.name: tuple(self.spec.shape) for var in VARIABLES})
+        arrays.update({var.name: tuple(self.spec.shape) for var in self.variables})
         check_arrays_readable(self.group, self.path, arrays, block_regions(self.spec.shape, self.chunks))
+
+    def read(self, name: str) -> np.ndarray:
+        return np.asarray(self.group[name][...])
 
     def done(self) -> np.ndarray:
         """The ``done`` flags of every point (a bool array of the grid's shape)."""
@@ -196,12 +237,12 @@ class Store:
     def region_done(self, region: Region) -> bool:
         return bool(np.all(self.group["done"][region]))
 
-    def write_region(self, region: Region, result: Mapping[str, np.ndarray]) -> None:
+    def write_region(self, region: Region, result: Mapping[str, Any]) -> None:
         """Write one unit's flat results (C order of ``region``); ``done`` last."""
         shape = tuple(s.stop - s.start for s in region)
-        for var in VARIABLES:
+        for var in self.variables:
             if var.name != "done":
-                self.group[var.name][region] = np.asarray(result[var.name], dtype=var.dtype).reshape(shape)
+                self.group[var.name][region] = _as(result[var.name], var).reshape(shape)
         self.group["done"][region] = np.asarray(result["done"], dtype=bool).reshape(shape)
 
     def write_points(self, index: np.ndarray, result: Mapping[str, np.ndarray]) -> None:
@@ -223,7 +264,7 @@ class Store:
             region = tuple(slice(int(k * c), int(min((k + 1) * c, n)))
                            for k, c, n in zip(key, chunks, self.spec.shape))
             local = tuple((index[rows] - np.array([r.start for r in region])).T)
-            for var in VARIABLES:
+            for var in self.variables:
                 if var.name == "done":
                     continue
                 block = np.asarray(self.group[var.name][region])
@@ -232,6 +273,211 @@ class Store:
             block = np.asarray(self.group["done"][region])
             block[local] = values["done"][rows]
             self.group["done"][region] = block
+
+
+class TreeStore:
+    """A table of boxes: one row per box of the refinement tree (:func:`sweeps.run.run_box_tree`),
+    preallocated to the spec's ``max_boxes`` rows (module docstring)."""
+
+    def __init__(self, path: Path, group: Any, spec: Any) -> None:
+        assert spec.boxes is not None
+        self.path = path
+        self.group = group
+        self.spec = spec
+        self.capacity = spec.boxes.max_boxes
+        self.variables = self.variables_of(spec)
+        self.by_name = {v.name: v for v in self.variables}
+
+    @classmethod
+    def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
+        raise NotImplementedError
+
+    @classmethod
+    def attrs_of(cls, spec: Any) -> dict[str, Any]:
+        raise NotImplementedError
+
+    @classmethod
+    def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
+        return open_or_build(target, spec, build)
+
+    @classmethod
+    def open_or_create(cls, path: str | Path, spec: Any) -> Any:
+        assert spec.boxes is not None
+        target = Path(path)
+        rows = spec.boxes.max_boxes
+
+        def build(staging: Path) -> None:
+            import zarr
+
+            group = zarr.open_group(str(staging), mode="w", zarr_format=3)
+            group.attrs.update(cls.attrs_of(spec))
+            for var in cls.variables_of(spec):
+                _create(group, var, (rows,), (min(BOX_CHUNK, rows),), [BOX_DIM])
+
+        group = cls.open_group(target, spec, build)
+        store = cls(target, group, spec)
+        check_arrays_readable(group, target, {v.name: (rows,) for v in store.variables},
+                              block_regions((rows,), (BOX_CHUNK,)))
+        return store
+
+    def read(self, name: str) -> np.ndarray:
+        return np.asarray(self.group[name][...])
+
+    def write_rows(self, rows: np.ndarray, values: Mapping[str, Any]) -> None:
+        """Set ``values[name][j]`` at row ``rows[j]`` for every stored variable of ``values``, chunk
+        by chunk: data first, ``done`` last.
+
+        Each touched chunk is read, updated and written back whole, so every chunk file on disk
+        is a consistent state of the sweep (zarr writes a chunk through a temporary file).
+        """
+        rows = np.asarray(rows, dtype=np.int64)
+        if rows.size == 0:
+            return
+        names = [n for n in values if n != "done" and n in self.by_name] + (["done"] if "done" in values else [])
+        for key in np.unique(rows // BOX_CHUNK):
+            region = slice(int(key) * BOX_CHUNK, min((int(key) + 1) * BOX_CHUNK, self.capacity))
+            mask = rows // BOX_CHUNK == key
+            local = rows[mask] - region.start
+            for name in names:
+                var = self.by_name[name]
+                block = np.asarray(self.group[name][region])
+                block[local] = _as(values[name], var)[mask]
+                self.group[name][region] = block
+
+
+# -- the paper's model ----------------------------------------------------------------------------
+def _paper_attrs(spec: SweepSpec) -> dict[str, Any]:
+    return {"spec_toml": spec.text, "versions": json.dumps(versions(), sort_keys=True),
+            "paper_point": json.dumps(paper_point(), sort_keys=True)}
+
+
+class Store(GridStore):
+    """The paper's points store: every variable of :data:`sweeps.schema.VARIABLES` over the grid."""
+
+    spec: SweepSpec
+
+    @classmethod
+    def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
+        return VARIABLES
+
+    @classmethod
+    def attrs_of(cls, spec: Any) -> dict[str, Any]:
+        return _paper_attrs(spec)
+
+    @classmethod
+    def coord_attributes(cls, axis: Any) -> dict[str, Any]:
+        return {"units": COORD_UNITS[axis.name], "scale": axis.scale, "parameter": SWEEPABLE[axis.name]}
+
+    @classmethod
+    def open_or_create(cls, path: str | Path, spec: Any) -> "Store":
+        store: Store = super().open_or_create(path, spec)
+        return store
+
+
+class BoxStore(TreeStore):
+    """The paper's box store (``mode = "boxes"``): :func:`sweeps.schema.box_variables`; attributes
+    ``mode``, ``spec_toml``, ``versions``, ``paper_point``, ``dims``, ``classes`` and ``axis_scales``."""
+
+    spec: SweepSpec
+
+    @classmethod
+    def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
+        return box_variables(spec.dims, spec.classes)
+
+    @classmethod
+    def attrs_of(cls, spec: Any) -> dict[str, Any]:
+        return {"mode": "boxes", **_paper_attrs(spec), "dims": json.dumps(list(spec.dims)),
+                "classes": json.dumps(list(spec.classes)),
+                "axis_scales": json.dumps({a.name: a.scale for a in spec.axes})}
+
+    @classmethod
+    def open_or_create(cls, path: str | Path, spec: Any) -> "BoxStore":
+        store: BoxStore = super().open_or_create(path, spec)
+        return store
+
+
+# -- a model file ---------------------------------------------------------------------------------
+def _model_attrs(spec: ModelSweepSpec) -> dict[str, Any]:
+    return {"mode": POINTS_MODE if spec.mode == "points" else BOXES_MODE, "spec_toml": spec.text,
+            "model_toml": spec.model_text, "model_file": spec.model_file, "model_sha256": spec.model_sha256,
+            "model_name": spec.model.name,
+            "versions": json.dumps(versions(), sort_keys=True), "dims": json.dumps(list(spec.dims)),
+            "classes": json.dumps(list(spec.classes)), "outputs": json.dumps(list(spec.outputs)),
+            "axis_scales": json.dumps({a.name: a.scale for a in spec.axes})}
+
+
+def _open_model_group(path: Path, spec: ModelSweepSpec, build: Callable[[Path], None]) -> Any:
+    """:func:`open_or_build`, then a model sweep's checks: the layout, and the model's SHA-256 (the
+    model file may have changed since; every certificate would then be of another model)."""
+    group = open_or_build(path, spec, build)
+    attrs = dict(group.attrs)
+    expected = _model_attrs(spec)["mode"]
+    if attrs.get("mode") != expected:
+        raise InputFileError(f"'{path}' is a store of another kind ({attrs.get('mode', 'a paper sweep')}); choose "
+                             "another --out")
+    if attrs.get("model_sha256") != spec.model_sha256:
+        raise InputFileError(f"'{path}' was computed from another text of the model file {spec.model_file} (SHA-256 "
+                             f"{str(attrs.get('model_sha256'))[:12]}..., now {spec.model_sha256[:12]}...); resuming "
+                             "would mix two models: choose another --out")
+    return group
+
+
+class ModelPointStore(GridStore):
+    """A model file's points store (:func:`sweeps.schema.point_variables`). Certificates are stored
+    without their solver logs (wall times), so a resumed sweep ends byte-for-byte identical."""
+
+    spec: ModelSweepSpec
+
+    @classmethod
+    def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
+        return point_variables(spec.classes, spec.outputs)
+
+    @classmethod
+    def attrs_of(cls, spec: Any) -> dict[str, Any]:
+        return _model_attrs(spec)
+
+    @classmethod
+    def coord_attributes(cls, axis: Any) -> dict[str, Any]:
+        return {"scale": axis.scale, "parameter": axis.name, "units": "SI (as the model file reads its parameters)"}
+
+    @classmethod
+    def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
+        return _open_model_group(target, spec, build)
+
+    @classmethod
+    def open_or_create(cls, path: str | Path, spec: Any) -> "ModelPointStore":
+        store: ModelPointStore = super().open_or_create(path, spec)
+        return store
+
+
+class ModelBoxStore(TreeStore):
+    """A model file's boxes store (:func:`sweeps.schema.model_box_variables`)."""
+
+    spec: ModelSweepSpec
+
+    @classmethod
+    def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
+        return model_box_variables(spec.dims, spec.classes, spec.outputs)
+
+    @classmethod
+    def attrs_of(cls, spec: Any) -> dict[str, Any]:
+        return _model_attrs(spec)
+
+    @classmethod
+    def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
+        return _open_model_group(target, spec, build)
+
+    @classmethod
+    def open_or_create(cls, path: str | Path, spec: Any) -> "ModelBoxStore":
+        store: ModelBoxStore = super().open_or_create(path, spec)
+        return store
+
+
+def open_model_store(path: str | Path, spec: ModelSweepSpec) -> ModelPointStore | ModelBoxStore:
+    """The store of ``spec`` at ``path``: created, or opened to resume."""
+    if spec.mode == "boxes":
+        return ModelBoxStore.open_or_create(path, spec)
+    return ModelPointStore.open_or_create(path, spec)
 
 
 def open_results(path: str | Path) -> Any:

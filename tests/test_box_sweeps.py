@@ -14,12 +14,12 @@ from lyapcheck.paper.boxes.classes import certify_box, verify_box, verify_box_re
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.paper.params import problem_from_sources
 from lyapcheck.tolerances import FIGURE_GES_K_RTOL
-from sweeps.box_store import BoxStore
-from sweeps.box_summary import summarize_boxes
-from sweeps.boxes_run import initial_boxes, run_boxes
+from sweeps.run import run_boxes
 from sweeps.runners import InlineRunner
 from sweeps.schema import BOX_STATUS_CODES
-from sweeps.spec import parse_spec
+from sweeps.spec import initial_boxes, parse_spec
+from sweeps.store import BoxStore
+from sweeps.summary import summarize_boxes
 from tests.conftest import PAPER_TOML, SWEEP_FIXED
 
 ROOT = Path(__file__).resolve().parents[1]

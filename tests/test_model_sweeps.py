@@ -278,8 +278,8 @@ def test_a_changed_model_file_is_not_resumed(tmp_path: Path) -> None:
 
 
 def test_workers_need_the_spec_text_only(tmp_path: Path) -> None:
-    from sweeps.model_evaluate import evaluate_model_points
-    from sweeps.model_spec import load_model_spec
+    from sweeps.evaluate import evaluate_model_points
+    from sweeps.spec import load_model_spec
 
     spec = load_model_spec(write(tmp_path, POINTS))
     (tmp_path / "m.toml").unlink()  # a worker on another machine has no model file
@@ -294,7 +294,7 @@ def doc_with(conditions: dict[str, Any], scale: str = "1") -> dict[str, Any]:
 
 def check(model_text: str, doc: dict[str, Any], a: str = "1") -> Any:
     from lyapcheck.models.modelfile import parse_model
-    from sweeps.model_crosscheck import cross_check
+    from sweeps.crosscheck import cross_check
 
     model = parse_model(model_text, "m.toml")
     return cross_check(model, doc, [{"a": Fraction(a)}], starts=6, seed=(0,), worst_case=True)
@@ -369,7 +369,7 @@ def hand_made(mode: str, status: list[int], n: int, **extra: Any) -> dict[str, n
 
 
 def test_box_shares_are_measured_exactly_in_each_axis_scale() -> None:
-    from sweeps.model_summary import summarize_arrays
+    from sweeps.summary import summarize_model_arrays as summarize_arrays
 
     # window [1, 16] on a log axis; leaves [1, 4] certified, [4, 8] refuted, [8, 16] not certified; [4, 16] split
     data = hand_made("boxes", [1, 3, 2, 0], 4, lo_p=[1.0, 4.0, 4.0, 8.0], hi_p=[4.0, 16.0, 8.0, 16.0])
@@ -383,7 +383,7 @@ def test_box_shares_are_measured_exactly_in_each_axis_scale() -> None:
 
 
 def test_point_shares_are_their_cells_in_each_axis_scale() -> None:
-    from sweeps.model_summary import cell_fractions, summarize_arrays
+    from sweeps.summary import cell_fractions, summarize_model_arrays as summarize_arrays
 
     # log values 1, 2, 4: cell edges at sqrt(2) and 2 sqrt(2), so the cells are 1/4, 1/2, 1/4 of log(4)
     assert cell_fractions([np.array([1.0, 2.0, 4.0])], ["log"]) == pytest.approx([0.25, 0.5, 0.25], abs=1e-15)

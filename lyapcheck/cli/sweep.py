@@ -1,8 +1,8 @@
 """``lyapcheck sweep SPEC.toml --out RESULTS.zarr`` (contract in DESIGN.md).
 
-Runs or resumes a parameter sweep (:mod:`sweeps`; of a model file's parameters when the spec's
-``[sweep]`` names one, :mod:`sweeps.model_spec`), shows a progress bar with rate and ETA on
-stderr (unless ``--quiet``), prints the summary, and exits with 1 when any soundness violation
+Runs or resumes a parameter sweep (:mod:`sweeps`, of any target: a model file's parameters when the
+spec's ``[sweep]`` names one, else the paper's; :mod:`sweeps.targets`), shows a progress bar with rate
+and ETA on stderr (unless ``--quiet``), prints the summary, and exits with 1 when any soundness violation
 is in the store (printed loudly on stderr even with ``--quiet``), else 0. Running the same
 command again on a finished store computes nothing and prints the summary again; with
 ``--export FILE.nc`` / ``--export FILE.csv`` it also writes those files.
