@@ -409,7 +409,7 @@ def certificate_json(document: dict[str, Any]) -> str:
 
 
 def _model_record(spec: ModelSweepSpec, result: Any, out: dict[str, np.ndarray], j: int,
-            refuted: dict[str, str] | None = None) -> str:
+                  refuted: dict[str, str] | None = None) -> str:
     """Statuses, figures and note of one point or box; returns its status name."""
     statuses = {name: r.status for name, r in result.results.items()}
     if refuted is not None:

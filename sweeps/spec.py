@@ -50,7 +50,8 @@ with units and ranges from :data:`lyapcheck.paper.params.FIELDS`); every error i
 :class:`~lyapcheck.errors.InvalidParameter` with the one message template, and unknown keys
 are errors.
 
-A model file (:class:`ModelSweepSpec`): its parameters swept point by point or box by box. A spec with ``model`` in its ``[sweep]`` table::
+A model file (:class:`ModelSweepSpec`): its parameters swept point by point or box by box. A spec
+with ``model`` in its ``[sweep]`` table::
 
     [sweep]
     model = "../van-der-pol-reversed.toml"   # relative to this spec's directory
@@ -872,7 +873,7 @@ def cached_model_spec(worker_text: str) -> ModelSweepSpec:
     return parse_model_spec(payload["spec"], source="the stored spec", model_text=payload["model_text"], check=False)
 
 
-__all__ = ["Axis", "SimulationSettings", "Refinement", "BoxSettings", "SweepSpec", "parse_spec", "load_spec", "cached_spec",
-           "read_spec_text", "axis_values", "ModelAxis", "ModelSimulation", "ModelSweepSpec", "parse_model_spec",
-           "load_model_spec", "cached_model_spec", "initial_cells", "window_box", "exact_decimal", "MODEL_POINT_CLASSES",
-           "MODEL_BOX_CLASSES", "initial_boxes", "relative_width", "split_cell", "Cell"]
+__all__ = ["Axis", "SimulationSettings", "Refinement", "BoxSettings", "SweepSpec", "parse_spec", "load_spec",
+           "cached_spec", "read_spec_text", "axis_values", "ModelAxis", "ModelSimulation", "ModelSweepSpec",
+           "parse_model_spec", "load_model_spec", "cached_model_spec", "initial_cells", "window_box", "exact_decimal",
+           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "initial_boxes", "relative_width", "split_cell", "Cell"]

@@ -139,7 +139,7 @@ def leaf_fractions(lo: Mapping[str, np.ndarray], hi: Mapping[str, np.ndarray], s
 
 
 def summarize_box_arrays(dims: Sequence[str], scales: Mapping[str, str], window: Mapping[str, tuple[float, float]],
-                     data: Mapping[str, np.ndarray]) -> BoxSummary:
+                         data: Mapping[str, np.ndarray]) -> BoxSummary:
     """The summary from the store's arrays (``data[name]`` for every box variable)."""
     done = np.asarray(data["done"], bool)
     status = np.asarray(data["status"])
@@ -249,10 +249,10 @@ def _worst(values: np.ndarray) -> float | None:
 
 
 def summarize_model_arrays(mode: str, dims: Sequence[str], scales: Mapping[str, str], classes: Sequence[str],
-                     outputs: Sequence[str], data: Mapping[str, np.ndarray], *,
-                     window: Mapping[str, tuple[float, float]] | None = None,
-                     coords: Mapping[str, np.ndarray] | None = None, model: Mapping[str, str] | None = None,
-                     total: int | None = None) -> ModelSweepSummary:
+                           outputs: Sequence[str], data: Mapping[str, np.ndarray], *,
+                           window: Mapping[str, tuple[float, float]] | None = None,
+                           coords: Mapping[str, np.ndarray] | None = None, model: Mapping[str, str] | None = None,
+                           total: int | None = None) -> ModelSweepSummary:
     """The summary from a store's arrays: ``data[name]`` for every variable (flat per box, or over
     the grid), with the window (boxes) or the coordinates (points)."""
     done = np.asarray(data["done"], bool).ravel()
