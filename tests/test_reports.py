@@ -396,7 +396,7 @@ def paper_worst_run(paper_worst_doc: dict[str, Any]) -> Any:
 def test_worst_case_is_resimulated_as_stored_and_ends_inside_the_sos_set(paper_worst_doc: dict[str, Any],
                                                                           paper_worst_run: Any) -> None:
     from reports.certified_sets import certified_sets
-    from reports.figures import phase_figure
+    from reports.paper_figures import phase_figure
 
     cond = paper_worst_doc["conditions"]["sos_bound"]
     stored = cond["worst_case_sup_abs_eps_tail_m"]

@@ -22,7 +22,7 @@ from typing import Any, Final
 from markupsafe import Markup
 
 from lyapcheck.errors import LyapcheckError
-from reports import figures
+from reports import figures, paper_figures
 from reports.sections.base import PAPER
 from reports.sections.paper import BOUND_CLASSES, describe_disturbance, number, text
 from reports.subjects.base import Glance, Quantity, Subject, canonical_json
@@ -160,9 +160,10 @@ def simulation_figures(doc: dict[str, Any]) -> tuple[list[figures.Figure], dict[
         hz = number(desc.get("frequency_hz"))
         worst_label = (f"worst case found: {kind}{f' {hz:.3g} Hz' if hz is not None else ''}, "
                        f"tail sup $|\\varepsilon|$ = {run.worst.sup_abs_eps_tail_m * 1e3:.4g} mm")
-    phase = figures.phase_figure(run, sets, " ".join([note, *set_notes]), worst_label, worst_text)
-    figs = [figures.path_figure(run), figures.eps_figure(run, tight[0] if tight else None, tight[1] if tight else ""),
-            figures.rotation_figure(run), phase]
+    phase = paper_figures.phase_figure(run, sets, " ".join([note, *set_notes]), worst_label, worst_text)
+    figs = [paper_figures.path_figure(run),
+            paper_figures.eps_figure(run, tight[0] if tight else None, tight[1] if tight else ""),
+            paper_figures.rotation_figure(run), phase]
     settings: dict[str, Any] = {**run.settings, "measurements": run.measurements[0]}
     if run.worst is not None:
         settings["worst_case_measured"] = {"start": run.worst.start,
