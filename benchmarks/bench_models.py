@@ -6,9 +6,9 @@ processes and prints, per example:
 * each class's status (``lin`` linearization, ``quad``, ``gas`` sos_gas, ``roa``, ``bound``
   sos_bound; ``C`` certified, ``R`` refuted, ``n`` not_certified, ``-`` not_applicable, ``?``
   inconclusive) and the key figures (roa share of the simulated region of attraction, bounds);
-* ``cold``: the wall time of the first run with an empty program cache (cvxpy compiles each
-  program structure once, about 1.5 s of import plus the compilation);
-* ``wall``: the wall time of a fresh process with the cache warm, imports included (what a user
+* ``cold``: the wall time of the first run with an empty ``LYAPCHECK_CACHE_DIR`` (the unit
+  conversions' memo; the SOS programs are built in every run, ``lyapcheck/sos/direct.py``);
+* ``wall``: the wall time of a fresh process with that memo warm, imports included (what a user
   sees from the second run of a model on);
 * ``warm``: the time of the same certification repeated inside one process (no imports);
 * the anchors: the peer tools' published figures for the same system, with their source

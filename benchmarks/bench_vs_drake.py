@@ -7,10 +7,14 @@ model reading, build, solve):
 * ``drake``: ``benchmarks/completeness/drake_lyapunov.py FILE`` under ``--drake-python``: a strict
   SOS Lyapunov search in pydrake's MathematicalProgram with Clarabel (``V - eps|x|^2`` and
   ``-V' - eps|x|^2`` SOS, degree 2 then 4), lyapcheck not imported; its answer is floating point;
-* ``cold``: ``lyapcheck certify FILE --classes sos_gas --json`` with an empty program cache (a
-  fresh ``LYAPCHECK_CACHE_DIR``: every SOS program structure compiled in the run);
-* ``warm``: the same command again on that cache (the programs compiled, what a user sees from
-  the second run of a model on). Its ``certified`` is an exact check in rationals.
+* ``cold``: ``lyapcheck certify FILE --classes sos_gas --json`` with an empty
+  ``LYAPCHECK_CACHE_DIR`` (a new user's first run; the SOS programs are built from their structure
+  in every run, so only the unit conversions' memo is empty);
+* ``warm``: the same command again on that directory (what a user sees from the second run of a
+  model on). Its ``certified`` is an exact check in rationals.
+
+Both tools run with Python's bytecode cache allowed (``PYTHONDONTWRITEBYTECODE`` is removed from
+their environment), as on a user's machine.
 
 Per system it prints the medians of ``--runs`` rounds, whether each certified, and the ratios
 ``cold/drake`` and ``warm/drake``; then the summary over the systems both certify against the
@@ -58,9 +62,12 @@ def drake_python(requested: str | None) -> str | None:
 
 
 def timed(cmd: list[str], env: dict[str, str] | None = None, timeout: float = 300.0) -> tuple[float, str, int]:
+    # as on a user's machine, Python keeps its bytecode (a CI or sandbox environment may forbid it
+    # with PYTHONDONTWRITEBYTECODE, which makes every process compile its sources again)
+    base = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout,
-                          env={**os.environ, **(env or {})})
+                          env={**base, **(env or {})})
     return time.perf_counter() - t0, proc.stdout, proc.returncode
 
 

@@ -1,4 +1,4 @@
-"""SOS programs as data: declared once per structure, compiled once by cvxpy, cached, re-solved.
+"""SOS programs as data: declared once per structure, built once per process, re-solved.
 
 A program is a list of polynomial identities, each linear in the decision variables:
 
@@ -9,10 +9,11 @@ by the blocks given) or a scalar, ``L_t`` is the identity or a partial derivativ
 ``P_0`` are polynomials whose coefficients are either literals of the structure or the entries of
 a named parameter vector (one entry per monomial of a declared support). Everything numerical that
 changes from one solve to the next (the field's coefficients, a decay rate, a level) is a
-parameter, so the program's *structure* (bases, blocks, supports, identities, objective) is all
-that cvxpy compiles. The structure is a frozen dataclass; its hash names the compiled form, which
-is kept in memory and on disk (``$LYAPCHECK_CACHE_DIR/programs`` or ``~/.cache/lyapcheck/programs``)
-and loaded by later runs without importing cvxpy (:mod:`lyapcheck.sos.compile`).
+parameter, so the program's *structure* (bases, blocks, supports, identities, objective) is a
+frozen dataclass that :mod:`lyapcheck.sos.direct` turns into Clarabel's conic data once per
+process (kept in memory by the structure's hash); each solve fills in the parameters.
+:func:`build_cvxpy` states the same program in cvxpy: the tests solve both and compare, so the
+direct construction is checked against an independent one.
 
 The solver's answer is only a candidate: :mod:`lyapcheck.sos.rounding` turns it into exact
 rationals that satisfy the identities exactly, and the classes decide with exact checks.
@@ -22,7 +23,6 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import os
 import threading
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -31,8 +31,9 @@ from typing import Any, Final, Literal, Mapping, Sequence
 
 import numpy as np
 
+from lyapcheck.sos.direct import DirectProgram
 from lyapcheck.sos.polynomials import Monomial
-from lyapcheck.sos.sdp import CompiledProgram, ProgramData, SolveReport
+from lyapcheck.sos.sdp import SolveReport
 
 log = logging.getLogger(__name__)
 
@@ -296,13 +297,7 @@ def build_cvxpy(structure: Structure) -> tuple[Any, dict[str, Any], dict[str, An
     return cp.Problem(objective, cons), params, variables
 
 
-# -- the compiled program, cached --------------------------------------------------------------------
-
-def cache_dir() -> Path:
-    root = os.environ.get("LYAPCHECK_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lyapcheck")
-    return Path(root) / "programs"
-
+# -- the program, built once per process -------------------------------------------------------------
 
 _memory: dict[str, "SOSProgram"] = {}
 _lock = threading.Lock()
@@ -324,22 +319,22 @@ class Solution:
 
 
 class SOSProgram:
-    """A compiled :class:`Structure`; :meth:`solve` takes every parameter value, returns every variable."""
+    """A :class:`Structure` as Clarabel's data (:class:`~lyapcheck.sos.direct.DirectProgram`);
+    :meth:`solve` takes every parameter value, returns every variable."""
 
-    def __init__(self, structure: Structure, compiled: CompiledProgram) -> None:
+    def __init__(self, structure: Structure, compiled: Any) -> None:
         self.structure = structure
         self.compiled = compiled
 
     @classmethod
     def of(cls, structure: Structure) -> "SOSProgram":
-        """The compiled program of ``structure``: from memory, from the disk cache, or compiled now."""
+        """The program of ``structure``: from memory, or built now."""
         key = structure.key()
         with _lock:
             hit = _memory.get(key)
         if hit is not None:
             return hit
-        data = _load(key) or _compile(key, structure)
-        program = cls(structure, CompiledProgram(data))
+        program = cls(structure, DirectProgram(structure))
         with _lock:
             _memory[key] = program
         return program
@@ -359,37 +354,3 @@ class SOSProgram:
         out.scalars = {s.name: float(v[s.name]) for s in self.structure.scalars}
         out.scalars["t"] = float(v["t"])
         return out
-
-
-def _path(key: str) -> Path:
-    return cache_dir() / f"{key}.npz"
-
-
-def _load(key: str) -> ProgramData | None:
-    path = _path(key)
-    try:
-        with np.load(path, allow_pickle=False) as f:
-            arrays = {name: f[name] for name in f.files}
-    except (OSError, ValueError, EOFError):
-        return None
-    try:
-        return ProgramData.from_arrays(key, arrays)
-    except (KeyError, ValueError, IndexError):  # a damaged cache file: compile again
-        log.warning("cached program %s is unreadable; compiling it again", path)
-        return None
-
-
-def _compile(key: str, structure: Structure) -> ProgramData:
-    from lyapcheck.sos.compile import compile_problem
-
-    problem, params, variables = build_cvxpy(structure)
-    data = compile_problem(key, problem, params, variables, check=False)
-    path = _path(key)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp.npz")
-        np.savez_compressed(tmp, **data.arrays)  # type: ignore[arg-type]
-        os.replace(tmp, path)
-    except OSError as exc:  # a read-only cache: compile again next time
-        log.info("could not cache program %s: %s", key, exc)
-    return data

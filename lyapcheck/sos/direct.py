@@ -1,0 +1,310 @@
+"""An SOS program's conic data for Clarabel, built from its :class:`~lyapcheck.sos.program.Structure` alone.
+
+The generic classes' programs are small (Gram blocks of a few to a hundred rows) and their
+structure is known exactly, so nothing is gained by handing them to a modelling layer: cvxpy
+took about a second to import and a fraction of one to canonicalize each new structure, more
+than the solves themselves on the 2-3-state systems a user starts with (issue 30: a first run
+was 0.8-1.3 s, pydrake's whole process 0.13-0.20 s). Here the structure becomes Clarabel's
+
+    minimize q^T x   subject to   A x + s = b,   s in K
+
+directly, with the parameters (the field's coefficients, a level, a floor) entering ``A`` and
+``b`` linearly, as in :mod:`lyapcheck.sos.program`'s declaration:
+
+* the decisions ``x``: every Gram block's entries ``X_ij``, ``i <= j`` (one variable per pair), the
+  scalars, and the margin ``t``;
+* zero cone: each identity's coefficient of each monomial (``sum(terms) + constant = 0``), the
+  ``trace_one`` normalizations and the ``inner`` products;
+* nonnegative cone: ``t <= 1`` and the scalars' lower bounds (``>= 0`` or ``>= t``);
+* one PSD-triangle cone per Gram block: ``X - t I`` (or ``X - phi I``, or ``X``), the upper
+  triangle column by column with off-diagonal entries times ``sqrt 2`` (Clarabel's convention).
+
+A structure's data is built once per process (a few milliseconds) and kept in memory; each
+solve fills in the parameter values (:meth:`DirectProgram.solve`). The answer is evidence only,
+as every solver's: the classes round it and decide by exact checks.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, Mapping
+
+import numpy as np
+
+from lyapcheck import tolerances as tol
+from lyapcheck.sos.sdp import _CSC, DirectSolve, SolveReport, _CLARABEL_TO_CVXPY, _STATUS_MAP, _load_lapack_modules, \
+    _settings
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.sos.program import Structure
+
+SQRT2 = math.sqrt(2.0)
+
+
+class _Entries:
+    """Entries ``(row, column, factor, parameter slot)`` of a matrix linear in the parameters:
+    the value is ``factor * p[slot]`` summed over duplicates, with ``p``'s last slot the constant 1."""
+
+    def __init__(self) -> None:
+        self.rows: list[int] = []
+        self.cols: list[int] = []
+        self.factors: list[float] = []
+        self.slots: list[int] = []
+
+    def add(self, row: int, col: int, factor: float, slot: int) -> None:
+        self.rows.append(row)
+        self.cols.append(col)
+        self.factors.append(factor)
+        self.slots.append(slot)
+
+
+class DirectProgram:
+    """A :class:`~lyapcheck.sos.program.Structure` as Clarabel's data, re-solved at any parameters."""
+
+    def __init__(self, structure: "Structure") -> None:
+        self.structure = structure
+        shapes = structure.parameters()
+        # the parameter vector: every parameter flattened (matrices column-major), then a 1
+        self._slots: dict[str, tuple[int, tuple[int, ...]]] = {}
+        at = 0
+        for name, shape in shapes.items():
+            self._slots[name] = (at, shape)
+            at += int(np.prod(shape)) if shape else 1
+        self._param_size = at + 1
+        one = at  # the slot of the constant 1
+
+        # -- the decisions ----------------------------------------------------------------------
+        n_vars = 0
+        #: per Gram, per block: (size, {(i, j) with i <= j within the block: column})
+        self._blocks: dict[str, list[tuple[tuple[int, ...], dict[tuple[int, int], int]]]] = {}
+        for g in structure.grams:
+            blocks = []
+            for idx in g.blocks:
+                cols = {}
+                for j in range(len(idx)):
+                    for i in range(j + 1):
+                        cols[(i, j)] = n_vars
+                        n_vars += 1
+                blocks.append((idx, cols))
+            self._blocks[g.name] = blocks
+        self._scalars = {s.name: n_vars + k for k, s in enumerate(structure.scalars)}
+        n_vars += len(structure.scalars)
+        self._t = n_vars
+        n_vars += 1
+        self.n = n_vars
+
+        A = _Entries()
+        b = _Entries()
+        row = 0
+
+        # -- zero cone: the identities, the normalizations, the inner products -------------------
+        def slot_of(coeffs: Any, k: int) -> tuple[int, float]:
+            if coeffs.param is None:
+                return one, float(coeffs.values[k])
+            return self._slots[coeffs.param][0] + k, 1.0
+
+        for ident in structure.identities:
+            rows: dict[tuple[int, ...], int] = {}
+
+            def row_of(m: tuple[int, ...]) -> int:
+                if m not in rows:
+                    rows[m] = row + len(rows)
+                return rows[m]
+
+            for term in ident.terms:
+                if term.decision in self._blocks:
+                    entries = self._gram_entries(term.decision, term.derivative)
+                    for k, a in enumerate(term.coefficients.support):
+                        slot, scale = slot_of(term.coefficients, k)
+                        for m, col, c in entries:
+                            A.add(row_of(tuple(x + y for x, y in zip(m, a))), col, scale * c, slot)
+                else:
+                    if term.derivative is not None:
+                        raise ValueError("a scalar has no derivative")
+                    col = self._scalars[term.decision]
+                    for k, a in enumerate(term.coefficients.support):
+                        slot, scale = slot_of(term.coefficients, k)
+                        A.add(row_of(tuple(a)), col, scale, slot)
+            if ident.constant is not None:
+                for k, a in enumerate(ident.constant.support):
+                    slot, scale = slot_of(ident.constant, k)
+                    b.add(row_of(tuple(a)), 0, -scale, slot)  # A x = -constant
+            row += len(rows)
+        for name in structure.trace_one:
+            for idx, cols in self._blocks[name]:
+                for j in range(len(idx)):
+                    A.add(row, cols[(j, j)], 1.0, one)
+            b.add(row, 0, 1.0, one)
+            row += 1
+        for scalar, gram, param in structure.inner:
+            # scalar - <Q, P> = 0, P a symmetric parameter matrix over the Gram's whole basis
+            A.add(row, self._scalars[scalar], 1.0, one)
+            start, (size, _) = self._slots[param]
+            for idx, cols in self._blocks[gram]:
+                for (i, j), col in cols.items():
+                    bi, bj = idx[i], idx[j]
+                    if i == j:
+                        A.add(row, col, -1.0, start + bi + bj * size)
+                    else:  # X_ij and X_ji, one variable: P_ij + P_ji
+                        A.add(row, col, -1.0, start + bi + bj * size)
+                        A.add(row, col, -1.0, start + bj + bi * size)
+            row += 1
+        self._zero = row
+
+        # -- nonnegative cone: t <= 1, the scalars' lower bounds ---------------------------------
+        A.add(row, self._t, 1.0, one)
+        b.add(row, 0, 1.0, one)
+        row += 1
+        for s in structure.scalars:
+            if s.lower is None:
+                continue
+            A.add(row, self._scalars[s.name], -1.0, one)  # s = v (- t) >= 0
+            if s.lower == "margin":
+                A.add(row, self._t, 1.0, one)
+            row += 1
+        self._nonneg = row - self._zero
+
+        # -- PSD cones: X - t I, X - phi I or X, per block ----------------------------------------
+        self._psd: list[int] = []
+        for g in structure.grams:
+            for idx, cols in self._blocks[g.name]:
+                for j in range(len(idx)):
+                    for i in range(j + 1):
+                        if i < j:
+                            A.add(row, cols[(i, j)], -SQRT2, one)
+                        else:
+                            A.add(row, cols[(j, j)], -1.0, one)
+                            if g.margin is True:
+                                A.add(row, self._t, 1.0, one)
+                            elif isinstance(g.margin, str):
+                                b.add(row, 0, -1.0, self._slots[g.margin][0])
+                        row += 1
+                self._psd.append(len(idx))
+        self.m = row
+
+        # -- the objective -------------------------------------------------------------------------
+        self.q = np.zeros(self.n)
+        kind = structure.objective[0]
+        #: the objective as stated (``max`` ones are solved as ``min`` of the negative)
+        self._sign = -1.0 if kind in ("max_margin", "max") else 1.0
+        if kind == "max_margin":
+            self.q[self._t] = -1.0
+        elif kind == "min":
+            self.q[self._scalars[structure.objective[1]]] = 1.0
+        elif kind == "max":
+            self.q[self._scalars[structure.objective[1]]] = -1.0
+        else:  # pragma: no cover - a programming error
+            raise ValueError(f"unknown objective {structure.objective}")
+
+        # -- the sparsity of A once (column-major, rows sorted, duplicates merged) ---------------
+        a_rows, a_cols = np.asarray(A.rows, dtype=np.int64), np.asarray(A.cols, dtype=np.int64)
+        keys = a_cols * self.m + a_rows
+        unique, self._a_slot = np.unique(keys, return_inverse=True)
+        self._a_indices = unique % self.m
+        self._a_indptr = np.searchsorted(unique // self.m, np.arange(self.n + 1)).astype(np.int64)
+        self._a_factors = np.asarray(A.factors)
+        self._a_params = np.asarray(A.slots, dtype=np.int64)
+        self._a_size = int(unique.size)
+        self._b_rows = np.asarray(b.rows, dtype=np.int64)
+        self._b_factors = np.asarray(b.factors)
+        self._b_params = np.asarray(b.slots, dtype=np.int64)
+        self._cones: list[Any] | None = None
+
+    def _gram_entries(self, name: str, derivative: int | None) -> list[tuple[tuple[int, ...], int, float]]:
+        """``(monomial, column, coefficient)`` of ``L(z^T X z)`` in the block variables."""
+        gram = self.structure.gram(name)
+        out = []
+        for idx, cols in self._blocks[name]:
+            for (i, j), col in cols.items():
+                m = tuple(x + y for x, y in zip(gram.basis[idx[i]], gram.basis[idx[j]]))
+                c = 1.0 if i == j else 2.0  # X_ij and X_ji
+                if derivative is not None:
+                    e = m[derivative]
+                    if e == 0:
+                        continue
+                    c *= e
+                    m = m[:derivative] + (e - 1,) + m[derivative + 1:]
+                out.append((m, col, c))
+        return out
+
+    def parameter_vector(self, values: Mapping[str, Any]) -> np.ndarray:
+        """The parameter values in their slots (matrices column-major), then the constant 1."""
+        given = {name for name in values if name in self._slots or np.asarray(values[name]).size}
+        if given != set(self._slots):
+            missing = sorted(set(self._slots) - given)
+            extra = sorted(given - set(self._slots))
+            raise ValueError(f"program {self.structure.key()}: parameters missing {missing}, unknown {extra}")
+        vec = np.zeros(self._param_size)
+        for name, (start, shape) in self._slots.items():
+            v = np.asarray(values[name], dtype=np.float64)
+            if v.shape != shape:
+                raise ValueError(f"The '{name}' parameter of program {self.structure.key()} must have shape {shape}. "
+                                 f"Got {v.shape} instead.")
+            vec[start:start + v.size] = v.ravel(order="F")
+        vec[-1] = 1.0
+        return vec
+
+    def matrices(self, p: np.ndarray) -> tuple[_CSC, np.ndarray]:
+        """Clarabel's ``A`` and ``b`` at the parameter vector ``p``."""
+        data = np.bincount(self._a_slot, weights=self._a_factors * p[self._a_params], minlength=self._a_size)
+        b = np.bincount(self._b_rows, weights=self._b_factors * p[self._b_params], minlength=self.m)
+        return _CSC(data, self._a_indices, self._a_indptr, (self.m, self.n)), b
+
+    def unpack(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Every variable by the names :class:`~lyapcheck.sos.program.SOSProgram` reads: each Gram
+        block as a symmetric matrix (``<gram>__b<k>``), the scalars, and ``t``."""
+        out: dict[str, np.ndarray] = {}
+        for name, blocks in self._blocks.items():
+            for k, (idx, cols) in enumerate(blocks):
+                X = np.zeros((len(idx), len(idx)))
+                for (i, j), col in cols.items():
+                    X[i, j] = X[j, i] = x[col]
+                out[f"{name}__b{k}"] = X
+        for name, col in self._scalars.items():
+            out[name] = np.asarray(x[col])
+        out["t"] = np.asarray(x[self._t])
+        return out
+
+    def solve(self, values: Mapping[str, Any], *, max_iter: int | None = None,
+              time_limit: float | None = None) -> DirectSolve:
+        """Solve at these parameter values; never raises for solver failures (as
+        :meth:`lyapcheck.sos.sdp.CompiledProgram.solve`, whose statuses it records)."""
+        import time
+
+        import clarabel
+
+        if self._cones is None:
+            cones: list[Any] = []
+            if self._zero:
+                cones.append(clarabel.ZeroConeT(self._zero))
+            if self._nonneg:
+                cones.append(clarabel.NonnegativeConeT(self._nonneg))
+            cones += [clarabel.PSDTriangleConeT(k) for k in self._psd]
+            if self._psd:
+                _load_lapack_modules()
+            self._cones = cones
+        settings = _settings(tol.SOLVER_MAX_ITER if max_iter is None else max_iter, time_limit)
+        start = time.perf_counter()
+        A, b = self.matrices(self.parameter_vector(values))
+        P = _CSC(np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(self.n + 1, dtype=np.int64), (self.n, self.n))
+        result: Any = None
+        try:
+            try:
+                solver = clarabel.DefaultSolver(P, self.q, A, b, self._cones, settings)
+            except (TypeError, AttributeError):  # pragma: no cover - a binding that wants scipy itself
+                solver = clarabel.DefaultSolver(P.as_scipy(), self.q, A.as_scipy(), b, self._cones, settings)
+            result = solver.solve()
+            raw = _CLARABEL_TO_CVXPY.get(str(result.status), "solver_error")
+        except (ValueError, ArithmeticError, RuntimeError):
+            raw = "solver_error"
+        wall = time.perf_counter() - start
+        variables = None
+        objective = None
+        if result is not None and raw in ("optimal", "optimal_inaccurate", "user_limit"):
+            variables = self.unpack(np.asarray(result.x, dtype=np.float64))
+            if raw != "user_limit":
+                objective = self._sign * float(result.obj_val)
+        report = SolveReport(outcome=_STATUS_MAP.get(raw, "error"), raw_status=raw, objective=objective,
+                             iterations=int(result.iterations) if result is not None else None,
+                             solve_seconds=float(result.solve_time) if result is not None else wall, wall_seconds=wall)
+        return DirectSolve(report, variables)
