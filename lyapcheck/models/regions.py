@@ -505,7 +505,7 @@ def vstep(field: StateField, v_degree: int, current: LevelCertificate, samples: 
 
 @dataclass
 class RegionOutcome:
-    certificate: LevelCertificate | None
+    certificate: LevelCertificate | BallCertificate | None
     share: float | None = None
     supremum: float | None = None
     history: list[dict[str, Any]] = dc_field(default_factory=list)
@@ -616,7 +616,7 @@ def multiplier_at(field: StateField, V: GramPoly, c: Fraction, search: Search,
 
 # -- the largest ball inside a certified set --------------------------------------------------------
 
-def ball_radius(scaled: ScaledField, field: StateField, cert: LevelCertificate, search: Search
+def ball_radius(scaled: ScaledField, field: StateField, cert: LevelCertificate | BallCertificate, search: Search
                 ) -> tuple[float | None, dict[str, Any] | None]:
     """The radius (declared states, SI, Euclidean) of the largest ball around the equilibrium in
     ``{V <= c}``: a numerical estimate along rays, and a certified lower bound (Containment, exact)
@@ -656,7 +656,7 @@ def ball_radius(scaled: ScaledField, field: StateField, cert: LevelCertificate, 
     return estimate, None
 
 
-def _containment(field: StateField, cert: LevelCertificate, p: Poly, r2: Fraction, search: Search
+def _containment(field: StateField, cert: LevelCertificate | BallCertificate, p: Poly, r2: Fraction, search: Search
                  ) -> dict[str, Any] | None:
     """Containment in the ring of the states alone (``V`` and the ball do not depend on a box's
     parameters)."""
@@ -720,7 +720,7 @@ def radius_polynomial(ring: Ring, scaling: Scaling) -> Poly:
 
 # -- the classes -------------------------------------------------------------------------------------
 
-def level_result(name: str, scaled: ScaledField, field: StateField, cert: LevelCertificate, search: Search,
+def level_result(name: str, scaled: ScaledField, field: StateField, cert: LevelCertificate | BallCertificate, search: Search,
                  numbers: dict[str, Any], what: str) -> ConditionResult:
     """A certified ``roa`` / ``candidate``: the set, its level, V in declared states, the ball."""
     from lyapcheck.models.lyapunov import stated_v

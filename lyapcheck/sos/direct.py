@@ -1,4 +1,4 @@
-"""An SOS program's conic data for Clarabel, built from its :class:`~lyapcheck.sos.program.Structure` alone.
+"""An SOS program's conic data for Clarabel, built from its :class:`~lyapcheck.sos.structure.Structure` alone.
 
 The generic classes' programs are small (Gram blocks of a few to a hundred rows) and their
 structure is known exactly, so nothing is gained by handing them to a modelling layer: cvxpy
@@ -27,16 +27,14 @@ as every solver's: the classes round it and decide by exact checks.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
 from lyapcheck import tolerances as tol
 from lyapcheck.sos.sdp import _CSC, DirectSolve, SolveReport, _CLARABEL_TO_CVXPY, _STATUS_MAP, _load_lapack_modules, \
     _settings
-
-if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.sos.program import Structure
+from lyapcheck.sos.structure import Structure
 
 SQRT2 = math.sqrt(2.0)
 
@@ -59,9 +57,9 @@ class _Entries:
 
 
 class DirectProgram:
-    """A :class:`~lyapcheck.sos.program.Structure` as Clarabel's data, re-solved at any parameters."""
+    """A :class:`~lyapcheck.sos.structure.Structure` as Clarabel's data, re-solved at any parameters."""
 
-    def __init__(self, structure: "Structure") -> None:
+    def __init__(self, structure: Structure) -> None:
         self.structure = structure
         shapes = structure.parameters()
         # the parameter vector: every parameter flattened (matrices column-major), then a 1
