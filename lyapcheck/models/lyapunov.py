@@ -253,7 +253,8 @@ def kernel_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
 
 def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], found: dict[str, Any]) -> dict[str, Any]:
     """The certificate of the largest ``mu`` found, starting from ``found`` (``mu = 0``): step down
-    geometrically from :data:`MU_MAX` to the first ``mu`` proved, then bisect geometrically. The
+    geometrically from :data:`MU_MAX` to the first ``mu`` proved (none when :data:`MU_MIN` is not
+    proved either), then bisect geometrically. The
     time limit ends the search, never the proof: the best certificate proved so far is kept (its
     rate is a lower bound of the best, as every rate here is)."""
     lo, hi = Fraction(0), MU_MAX
@@ -265,6 +266,8 @@ def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], fou
                 found, lo = better, candidate
                 break
             hi = candidate
+            if candidate == MU_MAX and attempt_at(MU_MIN) is None:
+                break  # no exponential rate at all (a critical case): one solve, not a dozen steps down
             candidate = candidate / 4
         if lo > 0:
             for _ in range(MU_BISECTION_STEPS):

@@ -39,6 +39,18 @@ from lyapcheck.sos.structure import Structure
 SQRT2 = math.sqrt(2.0)
 
 
+def _unique_with_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(keys, return_inverse=True)`` by a stable sort (``np.unique``'s first call imports
+    ``numpy.ma``, 15-20 ms of a small model's whole run)."""
+    order = np.argsort(keys, kind="stable")
+    ordered = keys[order]
+    first = np.ones(ordered.size, dtype=bool)
+    first[1:] = ordered[1:] != ordered[:-1]
+    inverse = np.empty(keys.size, dtype=np.int64)
+    inverse[order] = np.cumsum(first) - 1
+    return ordered[first], inverse
+
+
 class _Entries:
     """Entries ``(row, column, factor, parameter slot)`` of a matrix linear in the parameters:
     the value is ``factor * p[slot]`` summed over duplicates, with ``p``'s last slot the constant 1."""
@@ -197,7 +209,7 @@ class DirectProgram:
         # -- the sparsity of A once (column-major, rows sorted, duplicates merged) ---------------
         a_rows, a_cols = np.asarray(A.rows, dtype=np.int64), np.asarray(A.cols, dtype=np.int64)
         keys = a_cols * self.m + a_rows
-        unique, self._a_slot = np.unique(keys, return_inverse=True)
+        unique, self._a_slot = _unique_with_inverse(keys)
         self._a_indices = unique % self.m
         self._a_indptr = np.searchsorted(unique // self.m, np.arange(self.n + 1)).astype(np.int64)
         self._a_factors = np.asarray(A.factors)
