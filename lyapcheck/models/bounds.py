@@ -183,7 +183,8 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
     for degree in BOUND_DEGREES:
         full = bound_structure(scaled, y, degree)
         if full is None:
-            tried.append(f"degree {degree}: too large")
+            tried.append(f"degree {degree}: above the size limits (MAX_GRAM_ROWS = {MAX_GRAM_ROWS}, TARGET_LIMIT, "
+                         "BLOCK_COST_LIMIT)")
             continue
         found_here: list[tuple[Fraction, Fraction]] = []
         # the full program first at every rate, then its facial reductions in turn: each found by a
@@ -192,6 +193,7 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
         # infeasible, and its solution says nothing of the face (the margin variable is unused)
         chain: list[tuple[Structure, frozenset[tuple[str, Monomial]]]] = [(full, frozenset())]
         exhausted = False
+        outcomes: dict[str, int] = {}  # why each solve gave no certificate, counted
 
         def try_lam(lam: Fraction) -> dict[str, Any] | None:
             nonlocal exhausted
@@ -211,9 +213,13 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
                         exhausted = True
                         return None
                     chain.append((reduced, drop | vanishing))
-                found, _ = attempt_with_solution(scaled, chain[i][0], y, lam, search)
+                found, solution = attempt_with_solution(scaled, chain[i][0], y, lam, search)
                 if found is not None:
                     return found
+                why = ("the solver proved the program infeasible" if solution.report.outcome == "infeasible" else
+                       "the exact check refused the solver's point" if solution.usable else
+                       f"the solver returned no point ({solution.report.raw_status})")
+                outcomes[why] = outcomes.get(why, 0) + 1
             return None
 
         for lam in (Fraction(x).limit_denominator(1000) for x in LAMBDA_GRID):
@@ -229,7 +235,12 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
                 found = try_lam(lam)
                 if found is not None and best is not None and found["B"] < best["B"]:
                     best = {**found, "degree": degree}
-        tried.append(f"degree {degree}: {'found' if found_here else 'none'}")
+        if found_here:
+            tried.append(f"degree {degree}: found")
+        else:
+            tried.append(f"degree {degree}: none at the rates lam = {', '.join(f'{x:g}' for x in LAMBDA_GRID)} "
+                         f"(scaled time), on the full basis and {len(chain) - 1} facial reduction(s): "
+                         + ", ".join(f"{why} ({count})" for why, count in outcomes.items()))
     return best, tried
 
 
