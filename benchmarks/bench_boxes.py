@@ -31,11 +31,11 @@ def main() -> None:
 
     from lyapcheck.paper.certification import build_system
     from lyapcheck.paper.conditions import ges
-    from sweeps.box_store import BoxStore
-    from sweeps.box_summary import summarize_boxes
-    from sweeps.boxes_run import run_boxes
+    from sweeps.run import run_boxes
     from sweeps.runners import InlineRunner
     from sweeps.spec import load_spec
+    from sweeps.store import BoxStore
+    from sweeps.summary import summarize_boxes
 
     spec = load_spec(args.spec)
     problem = spec.base

@@ -90,14 +90,13 @@ def main() -> None:
     args = parser.parse_args()
 
     from lyapcheck.api import verify
-    from sweeps.box_summary import leaf_fractions
-    from sweeps.model_crosscheck import cross_check
-    from sweeps.model_run import run_model_sweep
-    from sweeps.model_spec import load_model_spec
-    from sweeps.model_store import ModelBoxStore
-    from sweeps.model_summary import summarize_model_store, violation_count
+    from sweeps.crosscheck import cross_check
+    from sweeps.run import run_model_sweep
     from sweeps.runners import make_runner
     from sweeps.schema import BOX_STATUS_CODES
+    from sweeps.spec import load_model_spec
+    from sweeps.store import ModelBoxStore
+    from sweeps.summary import leaf_fractions, summarize_model_store, violation_count
 
     spec = load_model_spec(args.spec)
     if spec.mode != "boxes" or len(spec.axes) != 2:

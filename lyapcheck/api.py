@@ -788,7 +788,7 @@ class SweepResult:
     """A finished (or resumed) sweep: the store's summary and what this run computed."""
 
     summary: Any  # sweeps.summary.Summary, BoxSummary for mode = "boxes", ModelSweepSummary for a model file
-    run: Any  # sweeps.run.SweepReport, sweeps.boxes_run.BoxSweepReport, or sweeps.model_run.ModelSweepReport
+    run: Any  # sweeps.run.SweepReport, BoxSweepReport for mode = "boxes", ModelSweepReport for a model file
 
     @property
     def mode(self) -> str:
@@ -799,14 +799,6 @@ class SweepResult:
 
     @property
     def violations(self) -> int:
-        if self.mode in ("model_points", "model_boxes"):
-            from sweeps.model_summary import violation_count as model_violations
-
-            return model_violations(self.summary)
-        if self.mode == "boxes":
-            from sweeps.box_summary import violation_count as box_violations
-
-            return box_violations(self.summary)
         from sweeps.summary import violation_count
 
         return violation_count(self.summary)
@@ -847,14 +839,11 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
         Callbacks for a progress display: (points finished, total), and "workers are up".
 
     A spec whose ``[sweep]`` names a model file (``model = "FILE.toml"``) sweeps that model's
-    parameters (:mod:`sweeps.model_spec`, ``docs/model-sweeps.md``); the summary is then a
-    :class:`sweeps.model_summary.ModelSweepSummary`.
+    parameters (:mod:`sweeps.spec`, ``docs/model-sweeps.md``); the summary is then a
+    :class:`sweeps.summary.ModelSweepSummary`.
     """
-    from sweeps.export import EXPORT_SUFFIXES, export
-    from sweeps.model_spec import ModelSweepSpec, load_any_spec
-    from sweeps.run import run_sweep
-    from sweeps.store import Store
-    from sweeps.summary import summarize
+    from sweeps.export import EXPORT_SUFFIXES
+    from sweeps.targets import load_any_spec, sweep_any
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or not 0 <= workers <= MAX_LOCAL_WORKERS):
@@ -869,34 +858,9 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
                              f"\"{Path(spec).name}\", mode = \"points\" or \"boxes\", and [[sweep.axes]] with name = \"PARAMETER\", "
                              "start, stop, num (docs/model-sweeps.md)")
     parsed = load_any_spec(spec)
-    if isinstance(parsed, ModelSweepSpec):
-        from sweeps.model_run import run_model_sweep
-        from sweeps.model_summary import open_summary
-        from sweeps.runners import make_runner
-
-        if exports:
-            raise InvalidParameter("export", "absent for a model sweep (its store holds certificates as text: read it "
-                                   "with xarray, or render it with lyapcheck report)", str(exports[0]))
-        model_run = run_model_sweep(parsed, out, runner=make_runner(scheduler=scheduler, workers=workers),
-                                    progress=progress, on_ready=on_ready)
-        return SweepResult(summary=open_summary(out, parsed), run=model_run)
-    if parsed.mode == "boxes":
-        from sweeps.box_store import BoxStore
-        from sweeps.box_summary import summarize_boxes
-        from sweeps.boxes_run import run_boxes
-        from sweeps.runners import make_runner
-
-        if exports:
-            raise InvalidParameter("export", "absent for a box sweep (its store is one table of boxes: read it "
-                                   "with xarray, or render it with lyapcheck report)", str(exports[0]))
-        boxes_run = run_boxes(parsed, out, runner=make_runner(scheduler=scheduler, workers=workers),
-                              progress=progress, on_ready=on_ready)
-        return SweepResult(summary=summarize_boxes(BoxStore.open_or_create(out, parsed)), run=boxes_run)
-    report_ = run_sweep(parsed, out, scheduler=scheduler, workers=workers, progress=progress, on_ready=on_ready)
-    summary = summarize(Store.open_or_create(out, parsed))
-    for target in exports:
-        export(out, target)
-    return SweepResult(summary=summary, run=report_)
+    summary, run = sweep_any(parsed, out, scheduler=scheduler, workers=workers, exports=tuple(exports),
+                             progress=progress, on_ready=on_ready)
+    return SweepResult(summary=summary, run=run)
 
 
 # -- report --------------------------------------------------------------------------------------

@@ -176,7 +176,7 @@ _FIGURE_RTOL: Final[dict[tuple[str, str], float]] = {
 #: (lyapcheck.models.trajectories.RTOL) and V is a polynomial of the state, so its float value along
 #: a trajectory is good to about its degree times that; 1e-5 leaves a decade over a degree-8 V and
 #: stays far below any modelling error a false certificate would show (moved from the report's
-#: reports.model_figures.CHECK_TOL, now shared with the sweeps of model files)
+#: phase portrait, reports.phase_portrait.CHECK_TOL, now shared with the sweeps of model files)
 TRAJECTORY_CHECK_REL_TOL: Final = 1e-5
 
 

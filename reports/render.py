@@ -62,7 +62,7 @@ def _certificate_context(doc: dict[str, Any], **options: Any) -> dict[str, Any]:
 
 
 def _is_model_store(ds: Any) -> bool:
-    from sweeps.model_schema import is_model_dataset
+    from sweeps.schema import is_model_dataset
 
     return bool(is_model_dataset(ds))
 
@@ -137,8 +137,7 @@ def read_store(path: str | Path) -> Any:
     codec error, a JSON error, a missing key) surfaces here, where it is a bad input file.
     """
     from reports.stores.common import open_store
-    from sweeps.model_schema import check_model_dataset, is_model_dataset
-    from sweeps.schema import check_dataset
+    from sweeps.schema import check_dataset, check_model_dataset, is_model_dataset
 
     try:
         dataset = open_store(path)
@@ -147,7 +146,7 @@ def read_store(path: str | Path) -> Any:
     except Exception as exc:  # noqa: BLE001 - zarr and its codecs raise many types for a corrupt store
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputFileError(f"'{path}' is not a readable sweep store (Zarr): {first}") from None
-    if is_model_dataset(dataset):  # a model file's sweep (sweeps.model_schema)
+    if is_model_dataset(dataset):  # a model file's sweep (sweeps.schema)
         check_model_dataset(dataset, str(path))
     else:
         check_dataset(dataset, str(path))

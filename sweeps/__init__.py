@@ -19,10 +19,6 @@ One pipeline for every target (:mod:`sweeps.targets`: a model file, with the cla
 ``export``            NetCDF and CSV
 ====================  =========================================================================
 
-Old paths, kept as re-exports while other packages import them (delete each once nothing does):
-``model_spec``, ``model_schema``, ``model_store``, ``model_summary``, ``model_run``,
-``model_crosscheck``, ``box_store``, ``box_summary``, ``boxes_run``.
-
 Entry points: :func:`sweeps.targets.sweep_any`, :func:`sweeps.run.run_sweep` and ``lyapcheck sweep``
 (:mod:`lyapcheck.cli.sweep`).
 """

@@ -21,7 +21,7 @@ from click.testing import CliRunner, Result
 
 from lyapcheck.cli import app  # type: ignore[attr-defined]  # the module, as tests/test_fuzz.py uses it
 from reports.render import sweep_html
-from sweeps.box_summary import summarize_arrays
+from sweeps.summary import summarize_box_arrays as summarize_arrays
 from sweeps.schema import BOX_DIM, BOX_STATUS_CODES, box_variables, check_dataset
 from tests.test_reports import Page
 

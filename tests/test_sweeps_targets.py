@@ -1,35 +1,19 @@
 """One sweep pipeline for every target (issue 29 item 6): the targets' table, classes derived from the
-registered ones, one loop, and the old module paths as re-exports only."""
+registered ones, one loop."""
 
 from __future__ import annotations
 
 import ast
-import importlib
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
-import pytest
 
 from lyapcheck.models.certify import MODEL_CLASSES
 from sweeps import evaluate, schema, spec, summary, targets
 from tests.conftest import ROOT
 from tests.test_model_sweeps import LINEAR, POINTS, write
 from tests.test_sweeps import spec_text
-
-#: old module path -> the modules that now hold what it exported
-OLD_PATHS = {
-    "sweeps.model_schema": ("sweeps.schema",),
-    "sweeps.model_summary": ("sweeps.summary",),
-    "sweeps.box_summary": ("sweeps.summary",),
-    "sweeps.model_spec": ("sweeps.spec", "sweeps.targets"),
-    "sweeps.model_run": ("sweeps.run", "sweeps.spec"),
-    "sweeps.model_store": ("sweeps.store",),
-    "sweeps.model_crosscheck": ("sweeps.crosscheck",),
-    "sweeps.box_store": ("sweeps.store",),
-    "sweeps.boxes_run": ("sweeps.run", "sweeps.spec", "sweeps.evaluate"),
-}
-
 
 def test_the_targets_table_lists_the_model_file_and_the_paper() -> None:
     assert [t.name for t in targets.TARGETS] == ["model", "paper"]
@@ -80,20 +64,6 @@ def test_a_new_class_gets_its_store_variables_unit_and_summary_from_the_class_li
     found = summary.summarize_model_arrays("model_points", ("p",), {"p": "linear"}, classes, outputs, data,
                                            coords={"p": np.array([1.0])})
     assert found.counts_by_class == {"quadratic": 0, "barrier": 1} and found.share_by_class["barrier"] == 1.0
-
-
-@pytest.mark.parametrize("old", sorted(OLD_PATHS))
-def test_an_old_module_path_only_re_exports(old: str) -> None:
-    """The old paths define nothing: each name is the object of the one pipeline's module."""
-    module = importlib.import_module(old)
-    homes = [importlib.import_module(h) for h in OLD_PATHS[old]]
-    tree = ast.parse(Path(module.__file__ or "").read_text())
-    defined = [n for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef, ast.Assign))
-               and not (isinstance(n, ast.Assign) and [getattr(t, "id", "") for t in n.targets] == ["__all__"])]
-    assert not defined, f"{old} defines {[ast.dump(n)[:60] for n in defined]}"
-    for name in module.__all__:
-        value = getattr(module, name)
-        assert any(value is getattr(h, attr, None) for h in homes for attr in dir(h)), f"{old}.{name}"
 
 
 def test_one_loop_hands_out_every_unit() -> None:

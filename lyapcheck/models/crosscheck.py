@@ -1,8 +1,8 @@
 """Simulated trajectories checked against what a model certificate proves.
 
-The one home of these checks: the report's phase portrait (:mod:`reports.model_figures`),
+The one home of these checks: the report's phase portrait (:mod:`reports.phase_portrait`),
 ``simulate --model --worst-case --certificate`` (:func:`lyapcheck.models.simulate.tightness`) and
-the sweeps of model files (:mod:`sweeps.model_crosscheck`) all call them.
+the sweeps of model files (:mod:`sweeps.crosscheck`) all call them.
 
 ==================  ===================================================  ========================
 certificate         what must hold along a simulated trajectory           check

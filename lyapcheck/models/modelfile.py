@@ -478,7 +478,7 @@ def with_parameters(model: Model, values: Mapping[str, Fraction]) -> Model:
     For computing only: ``overrides`` (what a certificate records to re-read the model) are left as
     they were, so a certificate of the result would not re-read to it. Where a certificate is
     written, read the model with the values as ``--set`` overrides instead (``parse_model(text,
-    source, overrides)``, as :mod:`sweeps.model_spec` does with exact decimals).
+    source, overrides)``, as :mod:`sweeps.spec` does with exact decimals).
     """
     params = {**model.parameters, **values}
     out = replace(model, parameters=params, parameters_given={**model.parameters_given,

@@ -10,9 +10,8 @@ row neither overflows nor slows the others. Every trajectory keeps the integrato
 (:attr:`Trajectory.nodes`, what checks read) and, for drawing, :data:`DENSE` interpolated points
 per step.
 
-Simulations here are pictures and cross-checks, never evidence for a status. (Moved here from
-``reports/model_simulation.py``, which re-exports it, so that the core's cross-checks and the
-report share one simulation.)
+Simulations here are pictures and cross-checks, never evidence for a status. (Moved here from the
+reports, so that the core's cross-checks and the report share one simulation.)
 """
 
 from __future__ import annotations

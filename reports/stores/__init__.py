@@ -12,6 +12,6 @@ module                       store                                  page
 Every page extends ``store.html.j2`` (header, soundness banner, reproducibility block with the
 stored spec and versions: :func:`reports.stores.common.provenance`). :data:`reports.render.STORE_PAGES`
 decides which page a store gets. The paper's two kinds of store and a model file's differ in
-their schema (:mod:`sweeps.schema`, :mod:`sweeps.model_schema`), so their pages read different
+their schema (both in :mod:`sweeps.schema`, one per target), so their pages read different
 variables; a model file's classes report through one store whatever their family.
 """

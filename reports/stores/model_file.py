@@ -1,6 +1,6 @@
 """The sweep of a model file (``[sweep] model = FILE``): the map of certified, refuted and undecided points or boxes.
 
-A model sweep's store (:mod:`sweeps.model_schema`) holds, per grid point or per box of a
+A model sweep's store (:mod:`sweeps.schema`) holds, per grid point or per box of a
 refinement tree, the status (``certified``: a class of the model proved its property, for every
 parameter value of a box; ``refuted``: the equilibrium is proved unstable there, exactly;
 ``not_certified``: nothing decided), each class's status and key figures, the certificate document
@@ -12,7 +12,7 @@ and the simulation cross-check. The page draws the map over the swept parameters
 * boxes over three parameters: no map (a note), the leaves are listed instead;
 
 then the summary table (the same numbers as ``lyapcheck sweep`` prints, from
-:func:`sweeps.model_summary.summarize_dataset`), the classes' figures, the cross-check and its
+:func:`sweeps.summary.summarize_dataset`), the classes' figures, the cross-check and its
 violations, the model file verbatim with its SHA-256, and the spec.
 """
 
@@ -27,9 +27,8 @@ import numpy as np
 from reports import figures
 from reports.stores.common import LEAF_NAMES, BoxAxis, Leaves, box_map, mpl, provenance, window_percent
 from reports.views import fmt_float
-from sweeps.model_schema import BOXES_MODE, box_variables, json_list
-from sweeps.model_summary import LEAF_STATUSES, ModelSweepSummary, stored_window, summarize_dataset, violation_count
-from sweeps.schema import BOX_STATUS_CODES
+from sweeps.schema import BOX_STATUS_CODES, BOXES_MODE, json_list, model_box_variables as box_variables
+from sweeps.summary import LEAF_STATUSES, ModelSweepSummary, stored_window, summarize_dataset, violation_count
 
 #: what each status means on this page
 MEANING: Final = {
@@ -129,7 +128,7 @@ def _violations(summary: ModelSweepSummary) -> tuple[list[tuple[str, str]], int]
 
 def model_store_context(ds: Any) -> dict[str, Any]:
     """Everything ``model_sweep.html.j2`` shows, as plain strings (the template escapes them). ``ds``
-    is a model sweep store, loaded and checked by :func:`sweeps.model_schema.check_model_dataset`."""
+    is a model sweep store, loaded and checked by :func:`sweeps.schema.check_model_dataset`."""
     summary = summarize_dataset(ds)
     boxes = summary.mode == BOXES_MODE
     part = _box_part(ds, summary) if boxes else _point_part(ds, summary)

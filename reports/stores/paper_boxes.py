@@ -1,11 +1,11 @@
 """The report of a box sweep (``mode = "boxes"``): the map of boxes and the certified share of the window.
 
-A box store (:mod:`sweeps.box_store`) has one row per box of an adaptive refinement tree. A
+A box store (:class:`sweeps.store.BoxStore`) has one row per box of an adaptive refinement tree. A
 ``certified`` box carries one exactly checked certificate of global exponential stability that
 holds at every gain set inside it, so the certified share of the window is a proved area, not a
 fraction of sampled points. The page draws the leaves of the tree (rows that are ``done`` and not
 ``split``: a split box is covered by its halves), coloured by status, states each status's share
-of the window as :func:`sweeps.box_summary.summarize_arrays` measures it (the same numbers as
+of the window as :func:`sweeps.summary.summarize_box_arrays` measures it (the same numbers as
 ``lyapcheck sweep`` prints), the range of the certificates' ``k`` and decay rate, and the
 cross-check of certified boxes by simulation.
 
@@ -28,7 +28,7 @@ from reports.stores.common import (
 )
 from reports.stores.paper_grid import PARAMETERS
 from reports.views import fmt_float
-from sweeps.box_summary import BoxSummary, summarize_arrays, violation_count
+from sweeps.summary import BoxSummary, summarize_box_arrays as summarize_arrays, violation_count
 from sweeps.schema import BOX_DIM, BOX_STATUS_CODES, box_variables
 
 #: what each status means, in words (the page's legend)
@@ -77,7 +77,7 @@ def _class_rows(classes: Sequence[str], summary: BoxSummary, data: Mapping[str, 
 
 
 def _spec_window(ds: Any, dims: tuple[str, ...]) -> tuple[dict[str, tuple[float, float]], dict[str, str]] | None:
-    """Window and scales from the stored spec, exactly as :func:`sweeps.box_summary.summarize_boxes` takes them.
+    """Window and scales from the stored spec, exactly as :func:`sweeps.summary.summarize_boxes` takes them.
 
     None when the stored spec does not parse or does not describe these parameters (an edited
     store, or one written by another version): the caller then falls back on the store itself.
