@@ -247,9 +247,9 @@ def test_a_candidate_text_that_is_no_candidate_fails_even_where_nothing_certifie
 
 
 def test_a_report_of_a_figure_beyond_doubles_is_written_not_an_internal_error(tmp_path: Path) -> None:
-    from reports.model_page import model_html
+    from reports.render import certificate_html
 
     doc = certify(scalar("0.5"), classes="quadratic")
     doc["conditions"]["quadratic"]["k"] = 10**400
     assert "quadratic" in failed(doc)
-    assert "Stability certificate" in model_html(doc, simulate=False, recheck=False)
+    assert "Stability certificate" in certificate_html(doc, simulate=False, recheck=False)

@@ -35,7 +35,7 @@ def box_document() -> dict[str, Any]:
 
 
 def test_a_box_certificate_says_its_box_everywhere() -> None:
-    from reports.model_page import model_html
+    from reports.render import certificate_html
 
     doc = box_document()
     q = doc["conditions"]["quadratic"]
@@ -45,7 +45,7 @@ def test_a_box_certificate_says_its_box_everywhere() -> None:
     narrowed = copy.deepcopy(doc)  # a summary that claims a wider box than the certificate's
     narrowed["conditions"]["quadratic"]["summary"] = q["summary"].replace("[0.5, 2]", "[0.1, 5]")
     assert set(failed(narrowed)) == {"quadratic", "verdict"}  # its one class fails, so does the verdict
-    html = model_html(doc, simulate=False, recheck=False)
+    html = certificate_html(doc, simulate=False, recheck=False)
     assert "every claim below holds <strong>for every k in [0.5, 2]" in html
     assert "--box k=0.5..2" in html  # the reproduce command
     assert "the box: every value in this range is covered" in html
