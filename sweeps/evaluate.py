@@ -36,7 +36,7 @@ The paper's model, boxes (:func:`evaluate_boxes`): the box classes of
 random points are simulated against it (:func:`lyapcheck.paper.boxes.cross_check.cross_check`).
 
 A model file, points or boxes (:func:`evaluate_model_points`, :func:`evaluate_model_boxes`): the
-classes of :data:`lyapcheck.models.certify.MODEL_CLASSES` the spec asks for, and the seconds each item
+classes of :data:`lyapcheck.models.classes.CLASSES` the spec asks for, and the seconds each item
 took (which the store does not keep: a wall time would make a resumed store differ from an
 uninterrupted one).
 
@@ -68,6 +68,7 @@ from typing import Any, Callable, Final, Mapping, Sequence
 import numpy as np
 import numpy.typing as npt
 
+from lyapcheck.models import classes as model_classes
 from lyapcheck.results import ConditionResult
 from lyapcheck.paper.params import Problem
 from lyapcheck.paper.boxes.box import ParameterBox
@@ -382,8 +383,9 @@ def _box_bound(spec: SweepSpec, box: ParameterBox, box_id: int, out: dict[str, n
 
 
 # -- a model file, points or boxes ----------------------------------------------------------------
-#: the classes whose certificate proves a stability property (an unstable point refutes them)
-MODEL_STABILITY_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa")
+#: the classes whose certificate proves a stability property (an unstable point refutes them), as
+#: :data:`lyapcheck.models.classes.CLASSES` declares them
+MODEL_STABILITY_CLASSES: Final = model_classes.STABILITY
 
 
 def _model_empty(spec: ModelSweepSpec, n: int) -> dict[str, np.ndarray]:

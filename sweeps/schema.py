@@ -4,8 +4,9 @@ This is the contract between :mod:`sweeps` (which writes a store) and ``reports`
 renders one). One place says what every variable means; nothing else hard-codes a name. A
 target's variables per class are derived from its class list (``status_<class>`` for every class,
 and each class's figures from one per-class table: :data:`MARGIN_SOURCE` for the paper's model,
-:data:`FIGURES` and :data:`OUTPUT_FIGURES` for a model file), so a class added to a target's
-list has its variables without a new module here.
+:data:`FIGURES` and :data:`OUTPUT_FIGURES` for a model file, read from each class's entry in
+:data:`lyapcheck.models.classes.CLASSES`), so a class added to a target's list has its variables
+without a new module here.
 
 The paper's model, points (an xarray Dataset in a Zarr v3 store):
 
@@ -79,8 +80,9 @@ from typing import Any, Final, Sequence
 
 import numpy as np
 
-from lyapcheck.paper.conditions import base as _base
 from lyapcheck.errors import InputFileError
+from lyapcheck.models import classes as model_classes
+from lyapcheck.paper.conditions import base as _base
 
 #: parameters a sweep may vary, mapped to their key in :data:`lyapcheck.paper.params.FIELDS`
 SWEEPABLE: Final[dict[str, str]] = {
@@ -305,18 +307,14 @@ MODEL_MODES: Final = (POINTS_MODE, BOXES_MODE)
 #: a variable-length UTF-8 string (zarr v3's vlen-utf8 codec)
 STRING: Final = np.dtypes.StringDType()
 #: the per-class table of a model file's classes: the key figures of each, as (variable suffix, key of
-#: the class's numbers, description); a class without an entry has its ``status_<class>`` only
+#: the class's numbers, description), from each class's entry in :data:`lyapcheck.models.classes.CLASSES`;
+#: a class without figures has its ``status_<class>`` only
 FIGURES: Final[dict[str, tuple[tuple[str, str, str], ...]]] = {
-    "quadratic": (("decay_rate_V_per_s", "decay_rate_V_per_s", "certified decay rate of V: V' <= -rate V, 1/s"),
-                  ("k", "k", "GES constant: |x(t)| <= k |x0| exp(-rate t)"),
-                  ("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s")),
-    "sos_gas": (("decay_rate_V_per_s", "decay_rate_V_per_s", "certified decay rate of V: V' <= -rate V, 1/s"),),
-    "roa": (("level", "level", "the certified region of attraction is {V <= level}"),
-            ("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI")),
-}
+    c.name: c.figures for c in model_classes.CLASSES if c.figures}
 #: classes with one figure per output of the model: (key of the class's numbers holding ``{output:
 #: value}``, description); stored as ``<class>_<output>``
-OUTPUT_FIGURES: Final[dict[str, tuple[str, str]]] = {"sos_bound": ("bounds", "limsup |{y}| <= this, SI")}
+OUTPUT_FIGURES: Final[dict[str, tuple[str, str]]] = {
+    c.name: c.output_figure for c in model_classes.CLASSES if c.output_figure is not None}
 
 
 def _figures(classes: Sequence[str], outputs: Sequence[str]) -> list[Variable]:

@@ -108,7 +108,7 @@ from typing import Any, Callable, Final, Mapping, Sequence
 import numpy as np
 
 from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
-from lyapcheck.models.certify import MODEL_CLASSES
+from lyapcheck.models import classes as model_classes
 from lyapcheck.models.modelfile import Model
 from lyapcheck.paper.boxes.box import ParameterBox
 from lyapcheck.paper.params import (
@@ -510,15 +510,16 @@ def cached_spec(text: str) -> SweepSpec:
 
 
 # -- a spec that names a model file (target "model"; module docstring) ------------------------------
-#: classes of lyapcheck.models a sweep cannot run: ``candidate`` needs the user's own V (``--candidate``)
-MODEL_USER_CLASSES: Final = ("candidate",)
+#: classes of lyapcheck.models a sweep cannot run: those needing the user's input (``candidate``: the
+#: user's own V, ``--candidate``), as :data:`lyapcheck.models.classes.CLASSES` declares them
+MODEL_USER_CLASSES: Final = model_classes.USER_GIVEN
 #: classes of lyapcheck.models that certify a point only (``not_applicable`` over a box)
-MODEL_POINT_ONLY_CLASSES: Final = ("linearization", "candidate")
-#: classes of a points sweep: every class registered in :data:`lyapcheck.models.certify.MODEL_CLASSES`
-#: (in its order, cheapest first) but the user's own candidate V
-MODEL_POINT_CLASSES: Final = tuple(c for c in MODEL_CLASSES if c not in MODEL_USER_CLASSES)
+MODEL_POINT_ONLY_CLASSES: Final = model_classes.POINT_ONLY
+#: classes of a points sweep: every class of :data:`lyapcheck.models.classes.CLASSES` (in its order,
+#: cheapest first) but those needing the user's input
+MODEL_POINT_CLASSES: Final = tuple(c for c in model_classes.NAMES if c not in MODEL_USER_CLASSES)
 #: classes of a boxes sweep: those with box certificates (lyapcheck.models.boxes)
-MODEL_BOX_CLASSES: Final = tuple(c for c in MODEL_CLASSES if c not in MODEL_POINT_ONLY_CLASSES)
+MODEL_BOX_CLASSES: Final = model_classes.OVER_BOX
 #: a point or a box costs seconds: a grid of more points is a mistake in the spec, not a sweep
 MAX_MODEL_POINTS: Final = 20_000
 MAX_MODEL_BOXES: Final = 20_000

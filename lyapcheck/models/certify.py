@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 import numpy as np
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
+from lyapcheck.models.classes import CLEARED, NAMES
 from lyapcheck.models.field import ScaledField, Scaling, ShiftedField, StateField, active_disturbances, \
     apply_scaling, choose_scaling, clear, disturbances_vanish, shifted_field, state_field
 from lyapcheck.models.modelfile import Model
@@ -47,9 +48,10 @@ if TYPE_CHECKING:  # pragma: no cover
 
 log = logging.getLogger(__name__)
 
-MODEL_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+#: the classes, in the order they run (:data:`lyapcheck.models.classes.CLASSES`, where each is declared)
+MODEL_CLASSES: Final = NAMES
 #: the classes that need the field multiplied through (every denominator of one sign proved)
-CLEARED_CLASSES: Final = ("quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+CLEARED_CLASSES: Final = CLEARED
 #: grid of simulated starts per state for the roa share, by number of states (beyond: random starts)
 ROA_GRID: Final = {1: 401, 2: 101, 3: 21}
 ROA_RANDOM_STARTS: Final = 4000
