@@ -145,6 +145,27 @@ def check_output(name: str, text: str, names: Mapping[str, Named]) -> Dimension:
     return _Walker(text, names).check(f"[outputs] {name}", None, "")
 
 
+def check_inequality(key: str, text: str, names: Mapping[str, Named]) -> None:
+    """A ``[sets]`` inequality (``A <= B``, or a chain): each side agrees with itself, as an output,
+    and the sides of each comparison have one dimension (a side that is the literal 0 fits any)."""
+    from lyapcheck.models.sets import split_inequality
+
+    for left, op, right in split_inequality(text):
+        found = []
+        for side in (left, right):
+            walker = _Walker(side, names)
+            found.append((walker.check(key, None, ""), _is_zero(ast.parse(walker.text, mode="eval").body)))
+        (dl, zl), (dr, zr) = found
+        if zl or zr or dl == dr:
+            continue
+        message = (f"the sides of '{left} {op} {right}' differ in dimension: '{left}' has {dl}, '{right}' has {dr}")
+        if dl == DIMENSIONLESS or dr == DIMENSIONLESS:
+            bare = left if dl == DIMENSIONLESS else right
+            message += (f"; '{bare}' is dimensionless: give a constant with a unit as a parameter "
+                        "(e.g. x0 = \"1 m\")")
+        raise DimensionError(key, message)
+
+
 def check_value(key: str, value: object, expected: Dimension, what: str) -> None:
     """A quantity given with a unit (``[equilibrium]``, ``[domain]``, ``--set``) has the dimension
     ``expected`` (``what`` says whose it is); a plain number is read in SI and passes."""

@@ -9,6 +9,8 @@ The format (docs/model-files.md, the reference; DESIGN.md's "Model files (contra
     [equilibrium]    optional; default every state 0; checked exactly
     [outputs]        optional; default each state
     [domain]         optional: a box of initial states, name = [lo, hi]
+    [sets]           optional: initial, unsafe, goal, each inequalities over the states (a list:
+                     all hold; a list of lists: a union); lyapcheck.models.sets
     [units]          optional: a unit per state and time = "s"; every right-hand side is then
                      dimension-checked term by term (lyapcheck.models.dimensions)
 
@@ -30,6 +32,7 @@ from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_with_divisors
+from lyapcheck.models.sets import SET_KEYS, SetForms, SetText, StateSet, evaluate_set, evaluate_sets, parse_set
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -44,7 +47,8 @@ MAX_DISTURBANCES: Final = 6
 #: the largest model file, in bytes
 MAX_FILE_BYTES: Final = 256 * 1024
 
-SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibrium", "outputs", "domain", "units")
+SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibrium", "outputs", "domain", "sets",
+                    "units")
 MODEL_KEYS: Final = ("name", "states", "source")
 
 
@@ -77,6 +81,14 @@ class Model:
     divisors: tuple[tuple[Poly, ...], ...] = ()
     #: the ``[units]`` table as written (empty when the model declares none: nothing was dimension-checked)
     units: dict[str, str] = field(default_factory=dict)
+    #: ``[sets]`` by key (``initial``, ``unsafe``, ``goal``; only those the file gives): each a union of
+    #: pieces, each piece polynomials ``p >= 0`` in :attr:`state_ring` at :attr:`parameters`
+    #: (:func:`with_parameters` re-evaluates them from :attr:`set_forms`)
+    sets: dict[str, StateSet] = field(default_factory=dict)
+    #: each set's pieces as written: a tuple of strings per piece (lyapcheck.models.sets.to_json)
+    set_text: dict[str, SetText] = field(default_factory=dict)
+    #: each set's ``p`` with the parameters as symbols, in :attr:`ring`
+    set_forms: dict[str, SetForms] = field(default_factory=dict)
 
     @property
     def sha256(self) -> str:
@@ -182,12 +194,16 @@ class _Reader:
         equilibrium = self.equilibrium(states, ring)
         outputs, output_text = self.outputs(states, ring, dists, params)
         domain = self.domain(states)
-        units = self.units(states)
+        set_text, set_forms = self.sets(states, ring, dists)
+        units = self.units(states, set_text)
+        sets = {key: evaluate_set(self.source, key, forms, ring, params, Ring(states + tuple(dists)))
+                for key, forms in set_forms.items()}
         model = Model(source=self.source, text=self.text, name=name, origin=origin, states=states,
                       parameters=params, parameters_given=params_given, disturbances=dists, ring=ring,
                       dynamics=dynamics, equilibrium=equilibrium, outputs=outputs, output_text=output_text,
                       domain=domain, overrides={k: str(v) for k, v in self.overrides.items()},
-                      divisors=tuple(self.divisors), units=units)
+                      divisors=tuple(self.divisors), units=units, sets=sets, set_text=set_text,
+                      set_forms=set_forms)
         check_equilibrium(model)
         return model
 
@@ -366,11 +382,29 @@ class _Reader:
                                         "state)")
         return box
 
-    def units(self, states: tuple[str, ...]) -> dict[str, str]:
+    def sets(self, states: tuple[str, ...], ring: Ring, dists: Mapping[str, Fraction]
+             ) -> tuple[dict[str, SetText], dict[str, SetForms]]:
+        """``[sets]``: each key among :data:`~lyapcheck.models.sets.SET_KEYS`, read by
+        :func:`lyapcheck.models.sets.parse_set` (parameters still symbols)."""
+        if "sets" not in self.data:
+            return {}, {}
+        table = self.table("sets")
+        bad = [k for k in table if k not in SET_KEYS]
+        if bad:
+            raise self.fail(f"[sets] {bad[0]}", f"unknown key (keys: {', '.join(SET_KEYS)})")
+        texts: dict[str, SetText] = {}
+        forms: dict[str, SetForms] = {}
+        for key in SET_KEYS:
+            if key in table:
+                texts[key], forms[key] = parse_set(self.source, key, table[key], ring, states, tuple(dists))
+        return texts, forms
+
+    def units(self, states: tuple[str, ...], set_text: Mapping[str, SetText] | None = None) -> dict[str, str]:
         """``[units]``, when the file declares it: the table read (SI units only), then every
         right-hand side checked term by term against its state per time, every output's sums for
         consistency, and every quantity given with a unit where a dimension is known (a state's
-        ``[equilibrium]`` and ``[domain]`` values, a ``--set``) against it. Runs after the language
+        ``[equilibrium]`` and ``[domain]`` values, a ``--set``) against it, and the two sides of
+        every ``[sets]`` inequality against each other. Runs after the language
         checks, so a text is dimension-checked only once it parses. Returns the table as written."""
         from lyapcheck.models import dimensions as dims
 
@@ -401,6 +435,10 @@ class _Reader:
             for key, pair in self.table("domain").items():
                 for value in pair:
                     dims.check_value(f"[domain] {key}", value, units.dimension(key), _state_unit(key, units))
+            for key, pieces in (set_text or {}).items():
+                for piece in pieces:
+                    for text in piece:
+                        dims.check_inequality(f"[sets] {key}", text, names)
         except dims.DimensionError as exc:
             raise self.fail(exc.key, exc.message) from None
         return {str(key): str(value) for key, value in table.items()}
@@ -484,7 +522,7 @@ def with_parameters(model: Model, values: Mapping[str, Fraction]) -> Model:
     out = replace(model, parameters=params, parameters_given={**model.parameters_given,
                                                               **{k: str(v) for k, v in values.items()}})
     check_equilibrium(out)
-    return out
+    return replace(out, sets=evaluate_sets(out))
 
 
 def degree_of_field(model: Model) -> int:
