@@ -17,7 +17,7 @@ from typing import Any, Literal
 Status = Literal["certified", "refuted", "not_certified", "inconclusive", "holds", "fails", "not_applicable",
                  "counterexample"]
 
-Property = Literal["GES", "GAS", "ISS", "LES", "ROA", "ultimate_bound", "invariant_set"]
+Property = Literal["GES", "GAS", "ISS", "LES", "ROA", "ultimate_bound", "invariant_set", "safety"]
 
 #: which disturbances a claim of a model with ``[disturbances]`` covers (DESIGN.md, "Disturbances in
 #: claims"): ``"zero"``, proved with every disturbance held at 0 (the nominal loop); ``"all"``, it
@@ -33,7 +33,7 @@ PROPERTY: dict[str, Property] = {
     "ultimate_bound": "ultimate_bound", "sos_gas": "GAS", "ges": "GES", "saturated_loop": "invariant_set",
     "sos_bound": "ultimate_bound",
     # the classes of a model file (lyapcheck.models)
-    "linearization": "LES", "quadratic": "GES", "roa": "ROA", "candidate": "ROA",
+    "linearization": "LES", "quadratic": "GES", "roa": "ROA", "candidate": "ROA", "barrier": "safety",
 }
 
 

@@ -544,8 +544,8 @@ def test_every_class_has_one_section_per_model() -> None:
 
 
 def test_a_new_family_of_classes_is_one_section(monkeypatch: pytest.MonkeyPatch) -> None:
-    """What a later family (barrier certificates) needs from the reports: a Section subclass in one
-    module and its entry in the registry. Its view reaches the table and its own section, its set
+    """What a later family (reach-avoid certificates; barrier is the first real one) needs from the
+    reports: a Section subclass in one module and its entry in the registry. Its view reaches the table and its own section, its set
     the phase portrait; nothing else of the page changes."""
     from fractions import Fraction
 
@@ -558,24 +558,24 @@ def test_a_new_family_of_classes_is_one_section(monkeypatch: pytest.MonkeyPatch)
     from reports.sections.model_file import ModelFileSection
     from lyapcheck.models.modelfile import parse_model
 
-    class BarrierSection(ModelFileSection):
-        titles = {"barrier": "Barrier certificate: the unsafe set is never reached"}
+    class ReachAvoidSection(ModelFileSection):
+        titles = {"reach_avoid": "Reach-avoid certificate: the goal is reached, the unsafe set never"}
 
         def portrait(self, name: str, cond: dict[str, Any], n: int, time_scale: Fraction) -> PortraitPart:
             b = ExactPolynomial.from_json(cond["certificate"]["B"], n)
             return PortraitPart(sets=(LevelSet(name, "{B <= 0}", b, Fraction(0), "region", "#cf222e"),))
 
-    barrier = {"status": "certified", "summary": "made up by the test", "property": "invariant_set",
+    made_up = {"status": "certified", "summary": "made up by the test", "property": "invariant_set",
                "certificate": {"B": {"terms": [["1", [2, 0]], ["1", [0, 2]], ["-1", [0, 0]]]}}}
-    doc = _synthetic("fossil-poly2.toml", {"barrier": barrier})
+    doc = _synthetic("fossil-poly2.toml", {"reach_avoid": made_up})
     before = certificate_context(doc, simulate=False, recheck=False)
-    assert before["conditions"][0].title == "barrier"  # the fallback: shown generically, under its key
-    monkeypatch.setitem(BY_CLASS, (MODEL_FILE, "barrier"), BarrierSection())
+    assert before["conditions"][0].title == "reach_avoid"  # the fallback: shown generically, under its key
+    monkeypatch.setitem(BY_CLASS, (MODEL_FILE, "reach_avoid"), ReachAvoidSection())
     context = certificate_context(doc, simulate=False, recheck=False)
     (view,) = context["conditions"]
-    assert view.title == "Barrier certificate: the unsafe set is never reached"
+    assert view.title == "Reach-avoid certificate: the goal is reached, the unsafe set never"
     assert view.property == "invariant_set" and view.anchor == "class-1"
     page = Page(render_html("certificate.html.j2", context))
-    assert "Barrier certificate: the unsafe set is never reached" in page.text
+    assert "Reach-avoid certificate: the goal is reached, the unsafe set never" in page.text
     sets, globals_, notes = level_sets(doc, parse_model(doc["model"]["text"], "m.toml"))
-    assert [(s.name, s.level, s.kind) for s in sets] == [("barrier", 0, "region")] and not globals_ and not notes
+    assert [(s.name, s.level, s.kind) for s in sets] == [("reach_avoid", 0, "region")] and not globals_ and not notes

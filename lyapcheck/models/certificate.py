@@ -396,6 +396,8 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
             if not _v_matches(scaled, StateField(ring=ring, g=scaled.g, D=scaled.D), V, data["V"], v0):
                 return False, f"output {out}: the stated V is not the certificate's"
         return True, "every output's dissipation and output identities hold exactly"
+    if name == "barrier":
+        return _verify_barrier(c, cert, scaled)
     field = state_field(scaled)
     if c.get("disturbances") == "all":
         from lyapcheck.models.certify import robust_field
@@ -459,6 +461,52 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
             return False, f"a {kind} certificate proves a region of attraction (ROA)"
         return True, why
     return False, f"unknown certificate kind {kind!r}"
+
+
+def _verify_barrier(c: dict[str, Any], cert: dict[str, Any], scaled: Any) -> tuple[bool, str]:
+    """A barrier certificate on the robust field (every disturbance that enters a box coordinate),
+    with the sets re-read from the model (a widened initial set or a shrunk unsafe set in the
+    model's text makes an identity fail), B stated in the declared states as its scaled form."""
+    from lyapcheck.models.barrier import scaled_pieces
+    from lyapcheck.models.field import state_field
+    from lyapcheck.models.lyapunov import stated_v
+    from lyapcheck.sos.certificates import check_barrier, exponent
+
+    if cert.get("kind") != "barrier":
+        return False, f"a barrier's certificate kind must be 'barrier', not {cert.get('kind')!r}"
+    if c.get("property") != "safety":
+        return False, "a barrier certificate proves safety"
+    model = scaled.cleared.shifted.model
+    sets = getattr(model, "sets", None) or {}
+    if not sets.get("initial") or not sets.get("unsafe"):
+        return False, "the model has no [sets] initial and unsafe for a barrier"
+    field = state_field(scaled, robust=True)
+    ring, n = field.ring, field.n
+    nv = ring.nvars
+    initial = scaled_pieces(scaled, field, sets["initial"])
+    unsafe = scaled_pieces(scaled, field, sets["unsafe"])
+    terms = cert["B_scaled"]["terms"]
+    B = ring.from_terms({tuple(exponent(e, "B_scaled") for e in m): Fraction(v) for v, m in terms})
+    _check_terms(cert["B"])
+    if stated_v(scaled, field, B) != cert["B"]:
+        return False, "the stated B (declared states) is not the certificate's B unscaled"
+
+    def pieces(key: str, count: int) -> list[tuple[list[Any], Any]]:
+        data = cert[key]
+        if not isinstance(data, list) or len(data) != count:
+            raise ValueError(f"{key}: one entry per piece of the set is needed")
+        return [([_gram(g, nv) for g in item["multipliers"]], _gram(item["remainder"], nv)) for item in data]
+
+    lam = Fraction(cert["lambda_scaled"])
+    box = _multipliers(cert.get("box_multipliers"), nv, n)
+    ok, why = check_barrier(ring, field.g, field.D, B, lam, initial, pieces("initial", len(initial)), unsafe,
+                            pieces("unsafe", len(unsafe)), _gram(cert["gram_decrease"], nv), box)
+    if not ok:
+        return False, why
+    stated = c.get("lambda_per_s")
+    if stated is not None and abs(float(stated) - float(lam / scaled.scaling.time)) > 1e-9 * (1 + abs(float(stated))):
+        return False, "the stated rate lambda_per_s is not the certificate's"
+    return True, why
 
 
 def _verify_ges(scaled: Any, V: Any, mu: Fraction, cert: dict[str, Any], c: dict[str, Any]) -> tuple[bool, str]:

@@ -142,11 +142,17 @@ def parse_candidate(model: Model, text: str) -> Candidate:
     return Candidate(text=text, poly=poly)
 
 
+def _has_safety_sets(model: Model) -> bool:
+    """The model's ``[sets]`` has the two a barrier needs: ``initial`` and ``unsafe``."""
+    sets = getattr(model, "sets", None) or {}
+    return bool(sets.get("initial")) and bool(sets.get("unsafe"))
+
+
 def class_selection(classes: str | Sequence[str] | None, model: Model, candidate: Candidate | None) -> tuple[str, ...]:
     """``None`` (every class that applies), a comma-separated string or names."""
     if classes is None or classes == "all":
         chosen = [c for c in MODEL_CLASSES if (c != "candidate" or candidate is not None)
-                  and (c != "sos_bound" or model.disturbances)]
+                  and (c != "sos_bound" or model.disturbances) and (c != "barrier" or _has_safety_sets(model))]
         return tuple(chosen)
     names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes) if c and c.strip()]
     unknown = [c for c in names if c not in MODEL_CLASSES]
@@ -259,6 +265,10 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         if "candidate" in chosen:
             # the user's V is tried on the nominal loop (its global test has no box multipliers yet)
             run("candidate", lambda budget: _covers(run_candidate(sc, cand, budget), nominal_covers))
+        if "barrier" in chosen and box is None and _has_safety_sets(model):
+            from lyapcheck.models import barrier
+
+            run("barrier", lambda budget: barrier.run(sc, Search(sc.ring, budget)))
         if "sos_bound" in chosen:
             from lyapcheck.models import bounds
 
@@ -272,6 +282,12 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         out.results["linearization"].disturbances = "zero"  # the Jacobian at d = 0
     if "sos_bound" in out.results and model.disturbances:
         out.results["sos_bound"].disturbances = "all"
+    if "barrier" in chosen and "barrier" not in out.results:
+        why = ("not over a box yet (the barrier class certifies a point: --set NAME=VALUE)" if box is not None else
+               "the model's [sets] needs 'initial' and 'unsafe' (docs/model-files.md, [sets])")
+        out.results["barrier"] = ConditionResult("barrier", "not_applicable", why)
+    if "barrier" in out.results and model.disturbances:
+        out.results["barrier"].disturbances = "all"  # B serves every disturbance (the robust field)
     if "candidate" in chosen and box is not None:
         out.results["candidate"] = ConditionResult("candidate", "not_applicable", "not over a box (the candidate "
                                                                                    "class certifies a point)")

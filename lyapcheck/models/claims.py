@@ -25,6 +25,9 @@ SET_NAMES = {"roa": "region of attraction", "candidate": "the user's V"}
 DISTURBANCE_PREFIX = {"zero": "(d = 0) ", "all": "for every disturbance signal within its bounds: "}
 #: said of a nominal claim whose robust form was tried and not found
 ROBUST_NOT_FOUND = "; with the declared disturbances acting, no certificate of this class was found"
+#: what a certified ``barrier`` states (:mod:`lyapcheck.models.barrier`)
+BARRIER_SENTENCE = ("safety: no trajectory that starts in the initial set ever enters the unsafe set (B <= 0 on the "
+                    "initial set, B >= 1 on the unsafe set, B' <= lambda B everywhere; checked exactly)")
 
 
 def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = (),
@@ -43,6 +46,8 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
         return None
     elif name == "sos_bound":
         text = _bounds(condition, outputs)
+    elif name == "barrier":
+        text = BARRIER_SENTENCE
     else:
         text = _stability(name, condition)
     disturbances = condition.get("disturbances")

@@ -124,6 +124,8 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
     ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True),
     ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
                output_figure=OutputFigure("bounds", "limsup |{y}| <= this, SI")),
+    ModelClass("barrier", "safety", "safety", over_box=False, stability=False,
+               figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
 )
 
 

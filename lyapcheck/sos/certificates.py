@@ -17,6 +17,9 @@ Dissipation    ``-grad V . g - lam (V - 1) D - sum tau_k (b_k^2      every ``|d_
 OutputBound    ``V - y^2 + B - 1 = sigma``                           everywhere                 ``y^2 <= V + B - 1``
 Containment    ``c - V - s (r^2 - p) = sigma``                       ``{p <= r^2}``             ``{p <= r^2}`` in ``{V <= c}``
 QuadraticBall  ``V = z^T P z``; norm bounds, no Gram remainder         ``{V <= c}``               ``{V <= c}`` in the ROA
+Barrier        ``-B - sum s_i p_i = r`` (each initial piece),        initial, unsafe, all z     no trajectory from
+               ``B - 1 - sum t_j q_j = r`` (each unsafe piece),                                  initial reaches
+               ``-grad B . g + lam B D - sum r_k (1 - u_k^2) = r``                               unsafe
 =============  ==================================================  =========================  ================
 
 QuadraticBall (:func:`check_quadratic_ball`) is the one kind without an SOS identity: the
@@ -259,6 +262,85 @@ def check_containment(ring: Ring, V: GramPoly, level: Fraction, p: Poly, radius_
     if lhs != sigma.poly(ring):
         return False, "the identity c - V - s (r^2 - p) = sigma does not hold exactly"
     return True, "c - V - s (r^2 - p) = sigma with Q_s, Q_sigma > 0, exactly"
+
+
+SetPiece = Sequence[Poly]
+PieceCertificate = tuple[Sequence[GramPoly], GramPoly]
+
+
+def piece_generators(piece: SetPiece) -> list[Poly]:
+    """The products the S-procedure may use on a piece ``{p_1 >= 0, ..., p_m >= 0}``: each ``p_i``,
+    then each ``p_i p_j`` (``i < j``, in that order), all ``>= 0`` on the piece. The pairs matter: on
+    ``-1/2 <= x <= 1/2`` the product ``(x + 1/2)(1/2 - x)`` bounds a quadratic, which the two
+    linear inequalities with constant multipliers cannot."""
+    out = list(piece)
+    for i in range(len(piece)):
+        for j in range(i + 1, len(piece)):
+            out.append(piece[i] * piece[j])
+    return out
+
+
+def _on_piece(ring: Ring, lhs: Poly, piece: SetPiece, cert: PieceCertificate, what: str) -> tuple[bool, str]:
+    """``lhs - sum_k s_k h_k = r`` over the piece's :func:`piece_generators` ``h_k``, with every ``s_k``
+    and ``r`` positive semidefinite (exact): then ``lhs >= 0`` wherever every ``p_i >= 0`` (the
+    S-procedure on one piece of a set)."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    multipliers, remainder = cert
+    generators = piece_generators(piece)
+    if len(multipliers) != len(generators):
+        return False, f"{what}: one multiplier per inequality of the piece and per pair of them is needed"
+    total = lhs
+    for s, p in zip(multipliers, generators):
+        if not is_positive_semidefinite(s.Q):
+            return False, f"{what}: a multiplier is not positive semidefinite (exact)"
+        total -= s.poly(ring) * p
+    if not is_positive_semidefinite(remainder.Q):
+        return False, f"{what}: the remainder is not positive semidefinite (exact)"
+    if total != remainder.poly(ring):
+        return False, f"{what}: the identity does not hold exactly"
+    return True, f"{what}: holds exactly"
+
+
+def check_barrier(ring: Ring, g: Sequence[Poly], D: Poly, B: Poly, lam: Fraction,
+                  initial: Sequence[SetPiece], initial_certs: Sequence[PieceCertificate],
+                  unsafe: Sequence[SetPiece], unsafe_certs: Sequence[PieceCertificate],
+                  decrease: GramPoly, box: BoxMultipliers = ()) -> tuple[bool, str]:
+    """Barrier: no trajectory of ``z' = g / D`` (``D > 0``) that starts in the initial set ever enters
+    the unsafe set, on its whole interval of existence, for every ``u`` in the box (the ring's
+    variables after the states: disturbances as ``d = b u``, or a box of parameters).
+
+    Each set is a union of pieces, a piece an intersection of ``p >= 0``. The certificate:
+    ``B <= 0`` on every initial piece, ``B >= 1`` on every unsafe piece (each by
+    :func:`_on_piece`), and ``-grad B . g + lam B D - sum_k r_k (1 - u_k^2) = sigma`` with every
+    Gram matrix positive semidefinite, so ``B' = grad B . g / D <= lam B`` everywhere (for every
+    ``u`` in the box). Then ``B(t) exp(-lam t)`` never increases, ``B`` stays ``<= 0`` along a
+    trajectory that starts with ``B <= 0`` (any real ``lam``), and the unsafe set, where ``B >= 1``,
+    is never reached. ``B`` depends on the states only (a disturbance's value may change at any time)."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    n = len(g)
+    if any(any(m[n:]) for m in ring.support(B)):
+        return False, "B may depend on the states only"
+    if len(initial_certs) != len(initial) or len(unsafe_certs) != len(unsafe):
+        return False, "one certificate per piece of the initial and the unsafe set is needed"
+    for k, (piece, cert) in enumerate(zip(initial, initial_certs)):
+        ok, why = _on_piece(ring, -B, piece, cert, f"initial piece {k + 1} (B <= 0)")
+        if not ok:
+            return False, why
+    for k, (piece, cert) in enumerate(zip(unsafe, unsafe_certs)):
+        ok, why = _on_piece(ring, B - ring.constant(1), piece, cert, f"unsafe piece {k + 1} (B >= 1)")
+        if not ok:
+            return False, why
+    if not is_positive_semidefinite(decrease.Q):
+        return False, "the decrease remainder is not positive semidefinite (exact)"
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
+    if -lie_derivative(ring, B, g) + B * D * _q(lam) - boxed != decrease.poly(ring):
+        return False, "the identity -grad B . g + lam B D = sigma does not hold exactly"
+    return True, ("B <= 0 on the initial set, B >= 1 on the unsafe set and B' <= lam B everywhere"
+                  + (" (for every value in the box)" if box else "") + ", exactly")
 
 
 def sphere_bound(a: Monomial) -> Fraction:

@@ -6,6 +6,7 @@ section (module)                        model           classes
 ``stability.StabilitySection``          a model file    linearization, quadratic, sos_gas, roa,
                                                         candidate
 ``output_bound.OutputBoundSection``     a model file    sos_bound (one storage function per output)
+``safety.SafetySection``                a model file    barrier
 ``model_file.ModelFileSection``         a model file    any other class (fallback)
 ``paper.PaperSection``                  the paper's     prop41_ges, prop41_iss, stabcond2,
                                         loop            sector_ges, ultimate_bound, sos_bound, and
@@ -36,10 +37,11 @@ from reports.sections.base import MODEL_FILE, PAPER, Section
 from reports.sections.model_file import ModelFileSection
 from reports.sections.output_bound import OutputBoundSection
 from reports.sections.paper import PaperSection
+from reports.sections.safety import SafetySection
 from reports.sections.stability import StabilitySection
 
 #: every section, in no particular order (a class name is claimed by one section per model)
-SECTIONS: Final[tuple[Section, ...]] = (StabilitySection(), OutputBoundSection(), PaperSection())
+SECTIONS: Final[tuple[Section, ...]] = (StabilitySection(), OutputBoundSection(), SafetySection(), PaperSection())
 #: the section of a class no section names, per model
 FALLBACK: Final[dict[str, Section]] = {MODEL_FILE: ModelFileSection(), PAPER: PaperSection()}
 

@@ -28,6 +28,7 @@ PROPERTY_MEANING: Final = {
     "ultimate_bound": "limsup |y| <= B for each output, from every start, for every disturbance within its bounds",
     "invariant_set": "a set that no trajectory leaves",
     "ISS": "input-to-state stability",
+    "safety": "no trajectory that starts in the initial set ever enters the unsafe set",
 }
 #: how the linearization decided (its certificate's "method")
 METHODS: Final = {

@@ -1,0 +1,306 @@
+"""``barrier``: no trajectory from the initial set ever enters the unsafe set, found by SOS and checked exactly.
+
+The certificate (kind Barrier of :mod:`lyapcheck.sos.certificates`), in the scaled coordinates of
+:mod:`lyapcheck.models.field`, with the disturbances that enter the field as box coordinates
+``d = b u``, ``u in [-1, 1]`` (:func:`~lyapcheck.models.field.state_field`, robust), and each set a
+union of pieces ``{p_1 >= 0, ..., p_m >= 0}`` (:mod:`lyapcheck.models.sets`, mapped to the scaled
+coordinates):
+
+    -B - sum_i s_i h_i = r_I                         each initial piece   (B <= 0 there)
+    B - 1 - sum_j t_j h_j = r_U                      each unsafe piece    (B >= 1 there)
+    -grad B . g + lam B D - sum_k r_k (1 - u_k^2) = r_D                   (B' <= lam B everywhere)
+
+with every ``s``, ``t``, ``r`` a sum of squares, and ``h`` each inequality of the piece and each
+product of two of them (:func:`~lyapcheck.sos.certificates.piece_generators`). ``B`` is a free polynomial of the states (its
+coefficients are the program's free scalars). The margin of 1 between the sets makes every
+condition non-strict, so the exact check needs positive semidefinite Gram matrices only; the search
+still maximizes the smallest Gram eigenvalue, which gives the rounding room.
+
+The search: ``B`` of degree 2, then 4, then 6, each at the rates :data:`LAMBDAS` (scaled time), the
+first certificate that passes the exact check is the answer. The property is ``safety``: for every
+start in the initial set and every disturbance within its bounds (time-varying ones included: ``B``
+does not depend on ``d``), the state never enters the unsafe set.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import Any, Final, Sequence
+
+from lyapcheck.models.field import ScaledField, StateField
+from lyapcheck.models.lyapunov import FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials, vanishing_monomials
+from lyapcheck.models.claims import BARRIER_SENTENCE
+from lyapcheck.results import ConditionResult
+from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
+                                     box_support, multiplier_grams, one, param)
+from lyapcheck.sos import bases
+from lyapcheck.sos.certificates import GramPoly, check_barrier, piece_generators
+from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
+from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Solution, Structure, Term, full_blocks
+
+#: degrees of B tried, in turn
+BARRIER_DEGREES: Final = (2, 4, 6)
+#: rates lam of B' <= lam B tried at each degree (scaled time); any real rate is sound
+LAMBDAS: Final = (Fraction(0), Fraction(1), Fraction(1, 4), Fraction(4), Fraction(-1, 4))
+#: the largest Gram basis the search builds (rows)
+MAX_GRAM_ROWS: Final = 120
+
+Pieces = Sequence[Sequence[Poly]]
+
+
+def _b_basis(field: StateField, degree: int) -> list[Monomial]:
+    """B's monomials: every monomial of the states of degree 0..``degree`` (no box coordinate)."""
+    nv = field.ring.nvars
+    return [tuple(list(m) + [0] * (nv - field.n)) for m in monomials(field.n, 0, degree)]
+
+
+def _products(basis: Sequence[Monomial]) -> set[Monomial]:
+    return {tuple(a + b for a, b in zip(x, y)) for x in basis for y in basis}
+
+
+def _shift(support: Sequence[Monomial], by: Sequence[Monomial]) -> set[Monomial]:
+    return {tuple(a + b for a, b in zip(x, y)) for x in support for y in by}
+
+
+def _multiplier_basis(field: StateField, b_degree: int, p: Poly) -> list[Monomial]:
+    """An S-procedure multiplier's basis: the state monomials up to half of ``deg B - deg p`` (at
+    least the constant), so that ``s p`` stays within B's degree."""
+    nv = field.ring.nvars
+    half = max(0, (b_degree - max(sum(m) for m in field.ring.support(p))) // 2)
+    return [tuple(list(m) + [0] * (nv - field.n)) for m in monomials(field.n, 0, half)]
+
+
+def barrier_structure(field: StateField, initial: Pieces, unsafe: Pieces, degree: int,
+                      drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
+    """The program for ``B`` of this degree, or why there is none (a size limit, named). ``drop``:
+    (remainder, monomial) pairs left out of the remainders' bases (facial reduction)."""
+    ring = field.ring
+    nv = ring.nvars
+    zero = tuple([0] * nv)
+    b_basis = _b_basis(field, degree)
+    scalars = tuple(Scalar(f"b{k}") for k in range(len(b_basis)))
+    grams: list[Gram] = []
+    identities: list[Identity] = []
+
+    def piece_identity(kind: str, k: int, piece: Sequence[Poly], sign: int, constant: int) -> Identity | str:
+        terms = [Term(Coefficients.literal({m: sign}), f"b{i}") for i, m in enumerate(b_basis)]
+        target = set(b_basis)
+        for j, p in enumerate(piece_generators(list(piece))):
+            basis = _multiplier_basis(field, degree, p)
+            name = f"s{kind}{k}_{j}"
+            grams.append(Gram(name, tuple(basis), full_blocks(basis)))
+            terms.append(Term(param(f"p{kind}{k}_{j}", ring.support(p)), name))
+            target |= _shift(ring.support(p), list(_products(basis)))
+        name = f"R{kind}{k}"
+        remainder_basis = [m for m in bases.sos_basis(nv, target | {zero}) if (name, m) not in drop]
+        if len(remainder_basis) > MAX_GRAM_ROWS:
+            return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+        grams.append(Gram(name, tuple(remainder_basis), full_blocks(remainder_basis)))
+        terms.append(Term(one(ring, -1), name))
+        const = Coefficients.literal({zero: constant}) if constant else None
+        return Identity(f"{kind}{k}", tuple(terms), const, name)
+
+    for kind, pieces, sign, constant in (("I", initial, -1, 0), ("U", unsafe, 1, -1)):
+        for k, piece in enumerate(pieces):
+            ident = piece_identity(kind, k, piece, sign, constant)
+            if isinstance(ident, str):
+                return ident
+            identities.append(ident)
+    # the decrease: each coefficient b_m multiplies -grad(z^m) . g + lam z^m D (a parameter per m)
+    terms = []
+    target: set[Monomial] = set()
+    for i, m in enumerate(b_basis):
+        support = _decrease_support(field, m)
+        if not support:
+            continue
+        terms.append(Term(param(f"dB{i}", support), f"b{i}"))
+        target |= set(support)
+    box_grams, box_terms = box_multipliers(nv, field.n, target, with_states=False)
+    target |= box_support(box_grams, nv)
+    if len(target) > TARGET_LIMIT:
+        return f"the size limit TARGET_LIMIT = {TARGET_LIMIT} monomials of the identity was reached"
+    decrease_basis = [m for m in bases.sos_basis(nv, target | {zero}) if ("RD", m) not in drop]
+    if len(decrease_basis) > MAX_GRAM_ROWS:
+        return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+    grams.append(Gram("RD", tuple(decrease_basis), full_blocks(decrease_basis)))
+    grams.extend(box_grams)
+    terms.extend(box_terms)
+    terms.append(Term(one(ring, -1), "RD"))
+    identities.append(Identity("decrease", tuple(terms), None, "RD"))
+    structure = Structure(nvars=nv, grams=tuple(grams), scalars=scalars, identities=tuple(identities),
+                          objective=("max_margin",))
+    if affordable(structure) is None:
+        return "the size limit BLOCK_COST_LIMIT of a program's cost was reached"
+    return structure
+
+
+def _decrease_poly(field: StateField, m: Monomial, lam: Fraction) -> Poly:
+    """``-grad(z^m) . g + lam z^m D``: the decrease identity's coefficient of B's monomial ``m``."""
+    ring = field.ring
+    zm = ring.from_terms({m: 1})
+    total = zm * field.D * to_fmpq(lam)
+    for i, gi in enumerate(field.g):
+        total -= zm.derivative(i) * gi
+    return total
+
+
+def _decrease_support(field: StateField, m: Monomial) -> list[Monomial]:
+    """The generic support of :func:`_decrease_poly` (every rate: ``lam = 1`` stands for all)."""
+    ring = field.ring
+    out: set[Monomial] = set()
+    for i, gi in enumerate(field.g):
+        if m[i] > 0:
+            d = m[:i] + (m[i] - 1,) + m[i + 1:]
+            out |= _shift(ring.support(gi), [d])
+    out |= _shift(ring.support(field.D), [m])
+    return sorted(out)
+
+
+def barrier_values(field: StateField, degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction) -> ParameterValues:
+    """The program's parameters: each set inequality (negated, as the identity subtracts ``s p``) and
+    each of B's monomials' decrease coefficient at rate ``lam``."""
+    ring = field.ring
+    values = ParameterValues()
+    for kind, pieces in (("I", initial), ("U", unsafe)):
+        for k, piece in enumerate(pieces):
+            for j, p in enumerate(piece_generators(list(piece))):
+                values.set_poly(ring, f"p{kind}{k}_{j}", -p, ring.support(p))
+    for i, m in enumerate(_b_basis(field, degree)):
+        support = _decrease_support(field, m)
+        if support:
+            values.set_poly(ring, f"dB{i}", _decrease_poly(field, m, lam), support)
+    return values
+
+
+def attempt(field: StateField, structure: Structure, degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction,
+            search: Search) -> tuple[dict[str, Any] | None, Solution]:
+    """One solve at rate ``lam``; the exact certificate if it passes the exact check."""
+    values = barrier_values(field, degree, initial, unsafe, lam)
+    solution = search.solve(structure, values)
+    if not solution.usable:
+        return None, solution
+    point = search.exact(structure, solution, values)
+    if point is None:
+        return None, solution
+    ring = field.ring
+    B = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(_b_basis(field, degree))})
+    grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+    initial_certs = [([grams[f"sI{k}_{j}"] for j in range(len(piece_generators(list(piece))))], grams[f"RI{k}"])
+                     for k, piece in enumerate(initial)]
+    unsafe_certs = [([grams[f"sU{k}_{j}"] for j in range(len(piece_generators(list(piece))))], grams[f"RU{k}"])
+                    for k, piece in enumerate(unsafe)]
+    box = box_multipliers_of(point.grams, multiplier_grams(structure))
+    ok, _ = check_barrier(ring, field.g, field.D, B, lam, initial, initial_certs, unsafe, unsafe_certs,
+                          grams["RD"], box)
+    if not ok:
+        return None, solution
+    return {"B": B, "lam": lam, "initial": initial_certs, "unsafe": unsafe_certs, "decrease": grams["RD"],
+            "box": box, "margin": solution.scalars.get("t", 0.0)}, solution
+
+
+def search_barrier(field: StateField, initial: Pieces, unsafe: Pieces, search: Search
+                   ) -> tuple[dict[str, Any] | None, list[str]]:
+    """The first certificate over :data:`BARRIER_DEGREES` and :data:`LAMBDAS`, and what was tried."""
+    tried: list[str] = []
+    for degree in BARRIER_DEGREES:
+        full = barrier_structure(field, initial, unsafe, degree)
+        if isinstance(full, str):
+            tried.append(f"degree {degree}: {full}")
+            continue
+        outcomes: dict[str, int] = {}
+        for lam in LAMBDAS:
+            structure: Structure | str = full
+            drop: frozenset[tuple[str, Monomial]] = frozenset()
+            for _ in range(FACIAL_ROUNDS + 1):
+                assert isinstance(structure, Structure)
+                search.budget.check()
+                found, solution = attempt(field, structure, degree, initial, unsafe, lam, search)
+                if found is not None:
+                    found["degree"] = degree
+                    tried.append(f"degree {degree}: found at lam = {lam}")
+                    return found, tried
+                # on the boundary (a remainder that must be singular, e.g. -B' where B's top degree
+                # meets the field's): leave out the vanishing rows and the kernels' supports, again
+                vanishing = frozenset((g.name, m) for g in structure.grams if g.name.startswith("R")
+                                      for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+                reduced = barrier_structure(field, initial, unsafe, degree, drop | vanishing) if vanishing else None
+                if not isinstance(reduced, Structure):
+                    break
+                drop, structure = drop | vanishing, reduced
+            why = ("the solver proved the program infeasible" if solution.report.outcome == "infeasible" else
+                   "the exact check refused the solver's point" if solution.usable else
+                   f"the solver returned no point ({solution.report.raw_status})")
+            outcomes[why] = outcomes.get(why, 0) + 1
+        tried.append(f"degree {degree}: none at lam = {', '.join(str(x) for x in LAMBDAS)} (scaled time): "
+                     + ", ".join(f"{why} ({count})" for why, count in outcomes.items()))
+    return None, tried
+
+
+
+
+def scaled_pieces(scaled: ScaledField, field: StateField, pieces: Pieces) -> list[list[Poly]]:
+    """A set's pieces, polynomials in the declared states (the model's state ring), in the scaled
+    coordinates of ``field``: ``x = x_eq + S z`` substituted exactly (the sets do not depend on the
+    disturbances or a box's parameters)."""
+    from lyapcheck.models.field import linear_images
+
+    model = scaled.cleared.shifted.model
+    full = model.state_ring
+    images = linear_images(full, model.n, scaled.scaling.matrix())
+    images = [im + to_fmpq(e) for im, e in zip(images[:model.n], model.equilibrium)] + images[model.n:]
+    return [[full.restrict(full.compose(p, images), field.ring) for p in piece] for piece in pieces]
+
+
+def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, Any]) -> dict[str, Any]:
+    """The exact certificate: ``B`` in the declared (shifted) states (``terms``, as every model
+    certificate's polynomials), its rate, and every Gram matrix in the scaled coordinates."""
+    from lyapcheck.models.lyapunov import stated_v
+
+    def piece(cert: Any) -> dict[str, Any]:
+        multipliers, remainder = cert
+        return {"multipliers": [s.to_json() for s in multipliers], "remainder": remainder.to_json()}
+
+    out: dict[str, Any] = {"kind": "barrier", "degree": found["degree"], "lambda_scaled": str(found["lam"]),
+                           "B": stated_v(scaled, field, found["B"]),
+                           "B_scaled": {"terms": [[str(c), list(m)] for m, c in sorted(field.ring.terms(found["B"]).items())]},
+                           "initial": [piece(c) for c in found["initial"]],
+                           "unsafe": [piece(c) for c in found["unsafe"]],
+                           "gram_decrease": found["decrease"].to_json()}
+    if found["box"]:
+        out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]
+    return out
+
+
+def run(scaled: ScaledField, search: Search) -> ConditionResult:
+    """The ``barrier`` class on the model's ``[sets]`` (``initial`` and ``unsafe``), for every
+    disturbance within its bounds (the robust field: each disturbance that enters is a box
+    coordinate, so ``B`` serves every disturbance signal)."""
+    from lyapcheck.models.field import state_field
+
+    model = scaled.cleared.shifted.model
+    field = state_field(scaled, robust=True)
+    initial = scaled_pieces(scaled, field, model.sets["initial"])
+    unsafe = scaled_pieces(scaled, field, model.sets["unsafe"])
+    try:
+        found, tried = search_barrier(field, initial, unsafe, search)
+    except BudgetExhausted as exc:
+        return ConditionResult("barrier", "inconclusive", f"{exc}", numbers={"reason": str(exc)},
+                               solver={"solves": search.log}, property="safety")
+    if found is None:
+        return ConditionResult("barrier", "not_certified",
+                               f"no barrier B of degree up to {max(BARRIER_DEGREES)} was found ({'; '.join(tried)}); the "
+                               "system may still be safe", numbers={"tried": tried}, solver={"solves": search.log},
+                               property="safety")
+    T = scaled.scaling.time
+    numbers: dict[str, Any] = {"degree": found["degree"], "lambda_per_s": float(found["lam"] / T),
+                               "relative_margin": found["margin"]}
+    return ConditionResult("barrier", "certified", SUMMARY, numbers=numbers,
+                           certificate=certificate_json(scaled, field, found), solver={"solves": search.log},
+                           property="safety")
+
+
+#: what a certified barrier states (lyapcheck.models.claims, which verify regenerates it from)
+SUMMARY: Final = BARRIER_SENTENCE
+
+__all__ = ["BARRIER_DEGREES", "LAMBDAS", "SUMMARY", "barrier_structure", "search_barrier", "attempt", "run",
+           "scaled_pieces", "certificate_json"]

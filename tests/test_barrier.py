@@ -1,0 +1,130 @@
+"""``barrier`` (issue 32): the exact conditions themselves, the class end to end, and verify's refusals."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner, Result
+
+from lyapcheck.cli import app
+from lyapcheck.sos.certificates import GramPoly, check_barrier
+from lyapcheck.sos.polynomials import Ring
+
+app._register_commands()
+
+
+def run_cli(*args: str) -> Result:
+    return CliRunner().invoke(app.cli, list(args))
+
+
+def _gram(basis: list[tuple[int, ...]], Q: list[list[int]]) -> GramPoly:
+    return GramPoly.of(basis, [[Fraction(x) for x in row] for row in Q])
+
+
+def test_the_barrier_identities_and_signs_by_hand() -> None:
+    """x' = -x, initial {1 - x^2 >= 0}, unsafe {x - 2 >= 0}; B = x^2 - 1:
+    -B - 1 (1 - x^2) = 0; B - 1 - 2 (x - 2) = (x - 1)^2 + 1; -B' + 0 B = 2 x^2."""
+    ring = Ring(("x",))
+    (x,) = ring.gens()
+    g, D = [-x], ring.constant(1)
+    B = x * x - ring.constant(1)
+    initial = [[ring.constant(1) - x * x]]
+    unsafe = [[x - ring.constant(2)]]
+    one = [(0,)]
+    lin = [(0,), (1,)]
+    initial_certs = [([_gram(one, [[1]])], _gram(one, [[0]]))]
+    unsafe_certs = [([_gram(one, [[2]])], _gram(lin, [[2, -1], [-1, 1]]))]
+    decrease = _gram([(1,)], [[2]])
+    ok, why = check_barrier(ring, g, D, B, Fraction(0), initial, initial_certs, unsafe, unsafe_certs, decrease)
+    assert ok, why
+    # each condition is checked: an unsafe set that reaches B <= 0 (x >= 1/2), a growing field, a
+    # negative multiplier
+    half = [[x - ring.constant(Fraction(1, 2))]]
+    assert not check_barrier(ring, g, D, B, Fraction(0), initial, initial_certs, half, unsafe_certs, decrease)[0]
+    assert not check_barrier(ring, [x], D, B, Fraction(0), initial, initial_certs, unsafe, unsafe_certs, decrease)[0]
+    negative = [([_gram(one, [[-1]])], _gram(one, [[0]]))]
+    ok, why = check_barrier(ring, g, D, B, Fraction(0), initial, negative, unsafe, unsafe_certs, decrease)
+    assert not ok and "multiplier is not positive semidefinite" in why
+    # B may not depend on a disturbance coordinate
+    ring2 = Ring(("x", "u"))
+    x2, u = ring2.gens()
+    ok, why = check_barrier(ring2, [-x2], ring2.constant(1), x2 * x2 + u - ring2.constant(1), Fraction(0), [], [],
+                            [], [], _gram([(1, 0)], [[2]]))
+    assert not ok and "states only" in why
+
+
+SAFE = """[model]
+name = "prajna-barrier"
+states = ["x1", "x2"]
+[dynamics]
+x1 = "x2"
+x2 = "-x1 + x1**3/3 - x2"
+[sets]
+initial = ["(x1 - 1.5)**2 + x2**2 <= 0.25"]
+unsafe = ["(x1 + 1)**2 + (x2 + 1)**2 <= 0.16"]
+"""
+
+
+def _forge(doc: dict, old: str, new: str) -> dict:
+    text = doc["model"]["text"].replace(old, new)
+    assert text != doc["model"]["text"]
+    doc["model"]["text"] = text
+    doc["model"]["sha256"] = hashlib.sha256(text.encode()).hexdigest()
+    return doc
+
+
+def test_a_barrier_is_certified_and_verify_refuses_a_widened_initial_or_shrunk_unsafe_set(tmp_path: Path) -> None:
+    model = tmp_path / "safe.toml"
+    model.write_text(SAFE)
+    out = tmp_path / "safe.json"
+    result = run_cli("certify", str(model), "--classes", "barrier", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    doc = json.loads(out.read_text())
+    barrier = doc["conditions"]["barrier"]
+    assert barrier["status"] == "certified" and barrier["property"] == "safety"
+    assert barrier["certificate"]["kind"] == "barrier"
+    assert run_cli("verify", str(out)).exit_code == 0
+    for old, new in (("<= 0.25", "<= 0.81"), ("<= 0.16", "<= 4")):  # initial 0.5 -> 0.9; unsafe 0.4 -> 2
+        forged = tmp_path / "forged.json"
+        forged.write_text(json.dumps(_forge(json.loads(out.read_text()), old, new)))
+        result = run_cli("verify", str(forged))
+        assert result.exit_code == 1 and "FAIL barrier" in result.output, result.output
+
+
+def test_a_reachable_unsafe_set_gets_no_barrier(tmp_path: Path) -> None:
+    # x' = x: every start in [1/2, 1] grows past 2 (at t = ln 4 at the latest)
+    model = tmp_path / "reach.toml"
+    model.write_text('[model]\nname = "growth"\nstates = ["x"]\n[dynamics]\nx = "x"\n'
+                     '[sets]\ninitial = ["0.5 <= x", "x <= 1"]\nunsafe = ["x >= 2"]\n')
+    out = tmp_path / "reach.json"
+    result = run_cli("certify", str(model), "--classes", "barrier", "--out", str(out))
+    doc = json.loads(out.read_text())
+    assert doc["conditions"]["barrier"]["status"] != "certified", result.output
+
+
+def test_barrier_is_not_applicable_without_sets(tmp_path: Path) -> None:
+    model = tmp_path / "plain.toml"
+    model.write_text('[model]\nname = "p"\nstates = ["x"]\n[dynamics]\nx = "-x"\n')
+    out = tmp_path / "plain.json"
+    run_cli("certify", str(model), "--classes", "barrier", "--out", str(out))
+    barrier = json.loads(out.read_text())["conditions"]["barrier"]
+    assert barrier["status"] == "not_applicable" and "[sets]" in barrier["summary"]
+
+
+@pytest.mark.parametrize("bound", ["0.2"])
+def test_a_disturbed_barrier_holds_for_every_disturbance(tmp_path: Path, bound: str) -> None:
+    # x' = -x + d, |d| <= 0.2: from |x| <= 0.5 the state stays within max(0.5, 0.2); unsafe x >= 1
+    model = tmp_path / "tube.toml"
+    model.write_text(f'[model]\nname = "tube"\nstates = ["x"]\n[disturbances]\nd = {bound}\n[dynamics]\nx = "-x + d"\n'
+                     '[sets]\ninitial = ["-0.5 <= x <= 0.5"]\nunsafe = [["x >= 1"], ["x <= -1"]]\n')
+    out = tmp_path / "tube.json"
+    result = run_cli("certify", str(model), "--classes", "barrier", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    barrier = json.loads(out.read_text())["conditions"]["barrier"]
+    assert barrier["status"] == "certified" and barrier["disturbances"] == "all"
+    assert "box_multipliers" in barrier["certificate"]
+    assert run_cli("verify", str(out)).exit_code == 0
