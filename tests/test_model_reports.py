@@ -545,8 +545,8 @@ def test_every_class_has_one_section_per_model() -> None:
 
 def test_a_new_family_of_classes_is_one_section(monkeypatch: pytest.MonkeyPatch) -> None:
     """What a later family (reach-avoid certificates; barrier is the first real one) needs from the
-    reports: a Section subclass in one module and its entry in the registry. Its view reaches the table and its own section, its set
-    the phase portrait; nothing else of the page changes."""
+    reports: a Section subclass in one module and its entry in the registry. Its view reaches the
+    table and its own section, its set the phase portrait; nothing else of the page changes."""
     from fractions import Fraction
 
     from reports.certificate_page import certificate_context
