@@ -496,7 +496,7 @@ def _scenarios(model: Model, horizon: float, starts: int, rng: np.random.Generat
     if 2 ** m <= MAX_VERTICES:
         signs = np.array(list(np.ndindex(*([2] * m))), dtype=np.float64) * 2 - 1
     else:
-        signs = rng.integers(0, 2, (MAX_VERTICES, m)) * 2.0 - 1
+        signs = (rng.integers(0, 2, (MAX_VERTICES, m)) * 2.0 - 1).astype(np.float64)
     constant = [Disturbance("constant", (tuple(float(v) for v in s * bounds),)) for s in signs]
     bang = []
     for _ in range(starts * BANG_BANG_PER_START):
