@@ -87,6 +87,8 @@ def test_a_barrier_is_certified_and_verify_refuses_a_widened_initial_or_shrunk_u
     barrier = doc["conditions"]["barrier"]
     assert barrier["status"] == "certified" and barrier["property"] == "safety"
     assert barrier["certificate"]["kind"] == "barrier"
+    # the simulation beside the proof: no trajectory from the initial set came near the unsafe set
+    assert barrier["closest_approach"] < 0 and "soundness_violation" not in barrier
     assert run_cli("verify", str(out)).exit_code == 0
     for old, new in (("<= 0.25", "<= 0.81"), ("<= 0.16", "<= 4")):  # initial 0.5 -> 0.9; unsafe 0.4 -> 2
         forged = tmp_path / "forged.json"
@@ -102,8 +104,11 @@ def test_a_reachable_unsafe_set_gets_no_barrier(tmp_path: Path) -> None:
                      '[sets]\ninitial = ["0.5 <= x", "x <= 1"]\nunsafe = ["x >= 2"]\n')
     out = tmp_path / "reach.json"
     result = run_cli("certify", str(model), "--classes", "barrier", "--out", str(out))
-    doc = json.loads(out.read_text())
-    assert doc["conditions"]["barrier"]["status"] != "certified", result.output
+    barrier = json.loads(out.read_text())["conditions"]["barrier"]
+    # no barrier, and the simulation beside the search finds a trajectory that enters: a counterexample
+    # with its start (in the initial set) and its time
+    assert barrier["status"] == "counterexample", result.output
+    assert 0.5 <= barrier["refutation"]["start"][0] <= 1 and 0 < barrier["refutation"]["time"] <= 1.39
 
 
 def test_barrier_is_not_applicable_without_sets(tmp_path: Path) -> None:

@@ -41,7 +41,7 @@ from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Solution
 #: degrees of B tried, in turn
 BARRIER_DEGREES: Final = (2, 4, 6)
 #: rates lam of B' <= lam B tried at each degree (scaled time); any real rate is sound
-LAMBDAS: Final = (Fraction(0), Fraction(1), Fraction(1, 4), Fraction(4), Fraction(-1, 4))
+LAMBDAS: Final = (Fraction(-1, 4), Fraction(0), Fraction(1), Fraction(-1), Fraction(1, 4))
 #: the largest Gram basis the search builds (rows)
 MAX_GRAM_ROWS: Final = 120
 
@@ -286,17 +286,51 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
     except BudgetExhausted as exc:
         return ConditionResult("barrier", "inconclusive", f"{exc}", numbers={"reason": str(exc)},
                                solver={"solves": search.log}, property="safety")
+    trial = _falsification(model)
     if found is None:
+        if trial is not None and trial.entry is not None:
+            entry = trial.entry.describe(list(model.states), list(model.disturbances))
+            return ConditionResult("barrier", "counterexample",
+                                   f"a simulated trajectory from the initial set enters the unsafe set: {entry} "
+                                   "(simulation, reproducible from its start and disturbance; no barrier was found: "
+                                   f"{'; '.join(tried)})", numbers={"tried": tried, "falsification": trial.to_dict()},
+                                   refutation={"kind": "trajectory", **trial.entry.to_dict()},
+                                   solver={"solves": search.log}, property="safety")
+        numbers: dict[str, Any] = {"tried": tried}
+        if trial is not None:
+            numbers["falsification"] = trial.to_dict()
         return ConditionResult("barrier", "not_certified",
                                f"no barrier B of degree up to {max(BARRIER_DEGREES)} was found ({'; '.join(tried)}); the "
-                               "system may still be safe", numbers={"tried": tried}, solver={"solves": search.log},
+                               "system may still be safe", numbers=numbers, solver={"solves": search.log},
                                property="safety")
     T = scaled.scaling.time
-    numbers: dict[str, Any] = {"degree": found["degree"], "lambda_per_s": float(found["lam"] / T),
-                               "relative_margin": found["margin"]}
+    numbers = {"degree": found["degree"], "lambda_per_s": float(found["lam"] / T),
+               "relative_margin": found["margin"]}
+    if trial is not None:
+        numbers["falsification"] = trial.to_dict()
+        numbers["closest_approach"] = trial.closest_approach
+        if trial.entered:  # a trajectory into a set proved unreachable: the proof or the simulation is wrong
+            numbers["soundness_violation"] = True
     return ConditionResult("barrier", "certified", SUMMARY, numbers=numbers,
                            certificate=certificate_json(scaled, field, found), solver={"solves": search.log},
                            property="safety")
+
+
+#: starts simulated from the initial set beside every barrier search
+FALSIFICATION_SAMPLES: Final = 100
+
+
+def _falsification(model: Any) -> Any:
+    """Simulation beside the proof (:mod:`lyapcheck.models.falsify`): the closest approach of
+    trajectories from the initial set to the unsafe set, under every disturbance scenario; None
+    when the simulation itself cannot run (a set whose inside no sampling finds)."""
+    from lyapcheck.models.falsify import falsify
+    from lyapcheck.models.sets import margin
+
+    try:
+        return falsify(model, model.sets["initial"], model.sets["unsafe"], margin, samples=FALSIFICATION_SAMPLES)
+    except ValueError:
+        return None
 
 
 #: what a certified barrier states (lyapcheck.models.claims, which verify regenerates it from)

@@ -324,6 +324,11 @@ def _inner_point(piece: _Piece, model: Model, scale: FloatArray, rng: np.random.
 
     for i in order:
         x0 = _evolve(piece, pts[i], float(values[i]), scale, rng)
+        v0 = -objective(x0)
+        if v0 >= 0:  # inside already: Nelder-Mead would only move it deeper (seconds in 8 states)
+            if v0 > best_v:
+                best_x, best_v = x0, v0
+            continue
         step = 0.1 * np.maximum(np.abs(x0), scale * 1e-2)
         simplex = np.vstack([x0] + [x0 + step[k] * np.eye(n)[k] for k in range(n)])
         res = minimize(objective, x0, method="Nelder-Mead",

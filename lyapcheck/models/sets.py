@@ -282,15 +282,31 @@ def _form(source: str, where: str, text: str, a: Rational, b: Rational, ring: Ri
     return form
 
 
+#: each polynomial's exponents and float coefficients, by id (the polynomial kept, so the id is its
+#: own): falsification evaluates the same few polynomials thousands of times
+_ARRAYS: dict[int, tuple[Poly, np.ndarray, np.ndarray]] = {}
+
+
+def _arrays(p: Poly) -> tuple[np.ndarray, np.ndarray]:
+    hit = _ARRAYS.get(id(p))
+    if hit is not None and hit[0] is p:
+        return hit[1], hit[2]
+    monoms = [tuple(int(e) for e in m) for m in p.monoms()]
+    coefficients = np.array([float(Fraction(int(c.p), int(c.q))) for c in p.coeffs()], dtype=float)
+    exponents = np.array(monoms, dtype=np.int64).reshape(len(monoms), -1) if monoms else np.zeros((0, 0), np.int64)
+    if len(_ARRAYS) > 4096:
+        _ARRAYS.clear()
+    _ARRAYS[id(p)] = (p, exponents, coefficients)
+    return exponents, coefficients
+
+
 def _values(p: Poly, x: np.ndarray) -> np.ndarray:
     """``p`` (a polynomial of a state ring: the states first, then the disturbances at exponent 0)
     at the rows of ``x``."""
     n = x.shape[1]
-    monoms = [tuple(int(e) for e in m) for m in p.monoms()]
-    coefficients = np.array([float(Fraction(int(c.p), int(c.q))) for c in p.coeffs()], dtype=float)
-    if not monoms:
+    exponents, coefficients = _arrays(p)
+    if not coefficients.size:
         return np.zeros(x.shape[0])
-    exponents = np.array(monoms, dtype=np.int64).reshape(len(monoms), -1)
     if exponents.shape[1] < n or exponents[:, n:].any():
         raise ValueError(f"a point has {n} coordinates; the set's polynomial {p} needs the states of its ring")
     exponents = exponents[:, :n]
