@@ -133,3 +133,23 @@ def test_a_disturbed_barrier_holds_for_every_disturbance(tmp_path: Path, bound: 
     assert barrier["status"] == "certified" and barrier["disturbances"] == "all"
     assert "box_multipliers" in barrier["certificate"]
     assert run_cli("verify", str(out)).exit_code == 0
+
+
+def test_a_trajectory_into_a_proved_unreachable_set_is_a_soundness_violation(tmp_path: Path,
+                                                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    """Were the simulation beside a certified barrier to enter the unsafe set, the run says so and
+    exits 1 (the proof or the simulation is wrong): stood in here by a made-up falsification."""
+    from lyapcheck.models import barrier
+
+    class Entered:
+        entered, closest_approach, entry = True, 0.01, None
+
+        def to_dict(self) -> dict:
+            return {"closest_approach": 0.01}
+
+    monkeypatch.setattr(barrier, "_falsification", lambda model: Entered())
+    model = tmp_path / "safe.toml"
+    model.write_text(SAFE)
+    result = CliRunner().invoke(app.cli, ["certify", str(model), "--classes", "barrier", "--json"])
+    assert result.exit_code == 1
+    assert '"soundness_violation": true' in result.output and "SOUNDNESS VIOLATION" in result.output

@@ -52,6 +52,14 @@ def _finish(result: Any, out: str | None, report: str | None, as_json: bool, wri
         emit_json(doc)
     else:
         _print_table(doc)
+    # a simulated trajectory that contradicts a certified claim (roa's set, a barrier's unsafe set):
+    # the proof or the simulation is wrong, and a script must not read the run as a success
+    violated = [name for name, c in (doc.get("conditions") or {}).items()
+                if isinstance(c, dict) and c.get("soundness_violation")]
+    if violated:
+        click.echo(f"SOUNDNESS VIOLATION: a simulated trajectory contradicts the certified {', '.join(violated)} "
+                   "(please report it)", err=True)
+        raise SystemExit(EXIT_NEGATIVE)
     raise SystemExit(EXIT_OK if result.verdict in OK_VERDICTS else EXIT_NEGATIVE)
 
 
