@@ -17,7 +17,7 @@ from typing import Any, Literal
 Status = Literal["certified", "refuted", "not_certified", "inconclusive", "holds", "fails", "not_applicable",
                  "counterexample"]
 
-Property = Literal["GES", "GAS", "ISS", "LES", "ROA", "ultimate_bound", "invariant_set", "safety"]
+Property = Literal["GES", "GAS", "ISS", "LES", "ROA", "ultimate_bound", "invariant_set", "safety", "reach_avoid"]
 
 #: which disturbances a claim of a model with ``[disturbances]`` covers (DESIGN.md, "Disturbances in
 #: claims"): ``"zero"``, proved with every disturbance held at 0 (the nominal loop); ``"all"``, it
@@ -34,6 +34,7 @@ PROPERTY: dict[str, Property] = {
     "sos_bound": "ultimate_bound",
     # the classes of a model file (lyapcheck.models)
     "linearization": "LES", "quadratic": "GES", "roa": "ROA", "candidate": "ROA", "barrier": "safety",
+    "reach_avoid": "reach_avoid",
 }
 
 

@@ -137,8 +137,8 @@ def test_the_limits_on_the_page_are_the_codes() -> None:
     hard_stop = tolerances.MODEL_CLASS_TIME_LIMIT_S * certify.HARD_STOP_FACTOR + certify.HARD_STOP_GRACE_S
     assert hard_stop == 95 and tolerances.SIM_MAX_STEPS == 50_000
     assert certify.MODEL_CLASSES == ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound",
-                                     "barrier")
+                                     "barrier", "reach_avoid")
     for text in ("at most 12 (`MAX_STATES`)", "at most 64 (`MAX_PARAMETERS`)", "at most 6 (`MAX_DISTURBANCES`)",
                  "at most 12 (`MAX_EXPONENT`)", "`MODEL_CLASS_TIME_LIMIT_S` = 60 s", "1.5 x 60 + 5 = 95 s",
-                 "`SIM_MAX_STEPS` = 50,000", "`linearization, quadratic, sos_gas, roa, candidate, sos_bound, barrier`"):
+                 "`SIM_MAX_STEPS` = 50,000", "`linearization, quadratic, sos_gas, roa, candidate, sos_bound, barrier, reach_avoid`"):
         assert text in TEXT, text

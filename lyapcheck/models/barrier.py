@@ -70,6 +70,55 @@ def _multiplier_basis(field: StateField, b_degree: int, p: Poly) -> list[Monomia
     return [tuple(list(m) + [0] * (nv - field.n)) for m in monomials(field.n, 0, half)]
 
 
+def set_identities(field: StateField, b_basis: Sequence[Monomial], degree: int, initial: Pieces, unsafe: Pieces,
+                   grams: list[Gram], drop: frozenset[tuple[str, Monomial]] = frozenset()) -> list[Identity] | str:
+    """The identities on the sets, for a free polynomial with coefficients ``b0, b1, ...`` over
+    ``b_basis``: ``-B - sum s h = R`` on each initial piece and ``B - 1 - sum t h = R`` on each
+    unsafe piece (their multipliers and remainders appended to ``grams``), or why not (a size limit)."""
+    ring = field.ring
+    nv = ring.nvars
+    zero = tuple([0] * nv)
+    identities: list[Identity] = []
+    for kind, pieces, sign, constant in (("I", initial, -1, 0), ("U", unsafe, 1, -1)):
+        for k, piece in enumerate(pieces):
+            terms = [Term(Coefficients.literal({m: sign}), f"b{i}") for i, m in enumerate(b_basis)]
+            target = set(b_basis)
+            for j, p in enumerate(piece_generators(list(piece))):
+                basis = _multiplier_basis(field, degree, p)
+                name = f"s{kind}{k}_{j}"
+                grams.append(Gram(name, tuple(basis), full_blocks(basis)))
+                terms.append(Term(param(f"p{kind}{k}_{j}", ring.support(p)), name))
+                target |= _shift(ring.support(p), list(_products(basis)))
+            name = f"R{kind}{k}"
+            remainder_basis = [m for m in bases.sos_basis(nv, target | {zero}) if (name, m) not in drop]
+            if len(remainder_basis) > MAX_GRAM_ROWS:
+                return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+            grams.append(Gram(name, tuple(remainder_basis), full_blocks(remainder_basis)))
+            terms.append(Term(one(ring, -1), name))
+            const = Coefficients.literal({zero: constant}) if constant else None
+            identities.append(Identity(f"{kind}{k}", tuple(terms), const, name))
+    return identities
+
+
+def set_values(field: StateField, values: ParameterValues, initial: Pieces, unsafe: Pieces) -> None:
+    """The parameters of :func:`set_identities`: each generator of each piece, negated."""
+    ring = field.ring
+    for kind, pieces in (("I", initial), ("U", unsafe)):
+        for k, piece in enumerate(pieces):
+            for j, p in enumerate(piece_generators(list(piece))):
+                values.set_poly(ring, f"p{kind}{k}_{j}", -p, ring.support(p))
+
+
+def set_certificates(structure: Structure, grams: dict[str, GramPoly], initial: Pieces, unsafe: Pieces
+                     ) -> tuple[list[Any], list[Any]]:
+    """The exact multipliers and remainders of :func:`set_identities`, per piece."""
+    initial_certs = [([grams[f"sI{k}_{j}"] for j in range(len(piece_generators(list(piece))))], grams[f"RI{k}"])
+                     for k, piece in enumerate(initial)]
+    unsafe_certs = [([grams[f"sU{k}_{j}"] for j in range(len(piece_generators(list(piece))))], grams[f"RU{k}"])
+                    for k, piece in enumerate(unsafe)]
+    return initial_certs, unsafe_certs
+
+
 def barrier_structure(field: StateField, initial: Pieces, unsafe: Pieces, degree: int,
                       drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
     """The program for ``B`` of this degree, or why there is none (a size limit, named). ``drop``:
@@ -80,32 +129,10 @@ def barrier_structure(field: StateField, initial: Pieces, unsafe: Pieces, degree
     b_basis = _b_basis(field, degree)
     scalars = tuple(Scalar(f"b{k}") for k in range(len(b_basis)))
     grams: list[Gram] = []
-    identities: list[Identity] = []
-
-    def piece_identity(kind: str, k: int, piece: Sequence[Poly], sign: int, constant: int) -> Identity | str:
-        terms = [Term(Coefficients.literal({m: sign}), f"b{i}") for i, m in enumerate(b_basis)]
-        target = set(b_basis)
-        for j, p in enumerate(piece_generators(list(piece))):
-            basis = _multiplier_basis(field, degree, p)
-            name = f"s{kind}{k}_{j}"
-            grams.append(Gram(name, tuple(basis), full_blocks(basis)))
-            terms.append(Term(param(f"p{kind}{k}_{j}", ring.support(p)), name))
-            target |= _shift(ring.support(p), list(_products(basis)))
-        name = f"R{kind}{k}"
-        remainder_basis = [m for m in bases.sos_basis(nv, target | {zero}) if (name, m) not in drop]
-        if len(remainder_basis) > MAX_GRAM_ROWS:
-            return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
-        grams.append(Gram(name, tuple(remainder_basis), full_blocks(remainder_basis)))
-        terms.append(Term(one(ring, -1), name))
-        const = Coefficients.literal({zero: constant}) if constant else None
-        return Identity(f"{kind}{k}", tuple(terms), const, name)
-
-    for kind, pieces, sign, constant in (("I", initial, -1, 0), ("U", unsafe, 1, -1)):
-        for k, piece in enumerate(pieces):
-            ident = piece_identity(kind, k, piece, sign, constant)
-            if isinstance(ident, str):
-                return ident
-            identities.append(ident)
+    on_sets = set_identities(field, b_basis, degree, initial, unsafe, grams, drop)
+    if isinstance(on_sets, str):
+        return on_sets
+    identities = list(on_sets)
     # the decrease: each coefficient b_m multiplies -grad(z^m) . g + lam z^m D (a parameter per m)
     terms = []
     target: set[Monomial] = set()
@@ -161,10 +188,7 @@ def barrier_values(field: StateField, degree: int, initial: Pieces, unsafe: Piec
     each of B's monomials' decrease coefficient at rate ``lam``."""
     ring = field.ring
     values = ParameterValues()
-    for kind, pieces in (("I", initial), ("U", unsafe)):
-        for k, piece in enumerate(pieces):
-            for j, p in enumerate(piece_generators(list(piece))):
-                values.set_poly(ring, f"p{kind}{k}_{j}", -p, ring.support(p))
+    set_values(field, values, initial, unsafe)
     for i, m in enumerate(_b_basis(field, degree)):
         support = _decrease_support(field, m)
         if support:
@@ -185,10 +209,7 @@ def attempt(field: StateField, structure: Structure, degree: int, initial: Piece
     ring = field.ring
     B = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(_b_basis(field, degree))})
     grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
-    initial_certs = [([grams[f"sI{k}_{j}"] for j in range(len(piece_generators(list(piece))))], grams[f"RI{k}"])
-                     for k, piece in enumerate(initial)]
-    unsafe_certs = [([grams[f"sU{k}_{j}"] for j in range(len(piece_generators(list(piece))))], grams[f"RU{k}"])
-                    for k, piece in enumerate(unsafe)]
+    initial_certs, unsafe_certs = set_certificates(structure, grams, initial, unsafe)
     box = box_multipliers_of(point.grams, multiplier_grams(structure))
     ok, _ = check_barrier(ring, field.g, field.D, B, lam, initial, initial_certs, unsafe, unsafe_certs,
                           grams["RD"], box)

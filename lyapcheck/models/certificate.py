@@ -398,6 +398,8 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
         return True, "every output's dissipation and output identities hold exactly"
     if name == "barrier":
         return _verify_barrier(c, cert, scaled)
+    if name == "reach_avoid":
+        return _verify_reach_avoid(c, cert, scaled)
     field = state_field(scaled)
     if c.get("disturbances") == "all":
         from lyapcheck.models.certify import robust_field
@@ -506,6 +508,52 @@ def _verify_barrier(c: dict[str, Any], cert: dict[str, Any], scaled: Any) -> tup
     stated = c.get("lambda_per_s")
     if stated is not None and abs(float(stated) - float(lam / scaled.scaling.time)) > 1e-9 * (1 + abs(float(stated))):
         return False, "the stated rate lambda_per_s is not the certificate's"
+    return True, why
+
+
+def _verify_reach_avoid(c: dict[str, Any], cert: dict[str, Any], scaled: Any) -> tuple[bool, str]:
+    """A reach-avoid certificate on the robust field, the sets re-read from the model's text, V
+    stated in the declared states as its scaled form, and the stated time bound the certified one."""
+    from lyapcheck.models.barrier import scaled_pieces
+    from lyapcheck.models.field import state_field
+    from lyapcheck.models.lyapunov import stated_v
+    from lyapcheck.sos.certificates import check_reach_avoid, exponent
+
+    if cert.get("kind") != "reach_avoid":
+        return False, f"a reach_avoid certificate's kind must be 'reach_avoid', not {cert.get('kind')!r}"
+    if c.get("property") != "reach_avoid":
+        return False, "a reach_avoid certificate proves reach_avoid"
+    model = scaled.cleared.shifted.model
+    sets = getattr(model, "sets", None) or {}
+    if not sets.get("initial") or not sets.get("unsafe") or len(sets.get("goal") or ()) != 1:
+        return False, "the model has no [sets] initial, unsafe and a one-piece goal for reach_avoid"
+    field = state_field(scaled, robust=True)
+    ring, n = field.ring, field.n
+    nv = ring.nvars
+    initial = scaled_pieces(scaled, field, sets["initial"])
+    unsafe = scaled_pieces(scaled, field, sets["unsafe"])
+    (goal,) = scaled_pieces(scaled, field, sets["goal"])
+    V = ring.from_terms({tuple(exponent(e, "V_scaled") for e in m): Fraction(v) for v, m in cert["V_scaled"]["terms"]})
+    _check_terms(cert["V"])
+    if stated_v(scaled, field, V) != cert["V"]:
+        return False, "the stated V (declared states) is not the certificate's V unscaled"
+
+    def pieces(key: str, count: int) -> list[tuple[list[Any], Any]]:
+        data = cert[key]
+        if not isinstance(data, list) or len(data) != count:
+            raise ValueError(f"{key}: one entry per piece of the set is needed")
+        return [([_gram(g, nv) for g in item["multipliers"]], _gram(item["remainder"], nv)) for item in data]
+
+    goal_certs = [(_gram(item["multiplier"], nv), _gram(item["remainder"], nv)) for item in cert["goal"]]
+    boxes = [_multipliers(box, nv, n) for box in cert.get("box_multipliers") or [[] for _ in goal]]
+    eps, delta, C = Fraction(cert["eps_scaled"]), Fraction(cert["delta_scaled"]), Fraction(cert["C_scaled"])
+    ok, why = check_reach_avoid(ring, field.g, field.D, V, eps, C, delta, initial, pieces("initial", len(initial)),
+                                unsafe, pieces("unsafe", len(unsafe)), goal, goal_certs, _gram(cert["gram_bounded"], nv),
+                                boxes)
+    if not ok:
+        return False, why
+    if not _at_least(c.get("reach_time_bound_s"), C / eps * scaled.scaling.time):
+        return False, "the stated time bound is below the certified one"
     return True, why
 
 

@@ -142,17 +142,19 @@ def parse_candidate(model: Model, text: str) -> Candidate:
     return Candidate(text=text, poly=poly)
 
 
-def _has_safety_sets(model: Model) -> bool:
-    """The model's ``[sets]`` has the two a barrier needs: ``initial`` and ``unsafe``."""
+def _has_safety_sets(model: Model, goal: bool = False) -> bool:
+    """The model's ``[sets]`` has the two a barrier needs, ``initial`` and ``unsafe`` (and, with
+    ``goal``, the ``goal`` that reach_avoid needs too)."""
     sets = getattr(model, "sets", None) or {}
-    return bool(sets.get("initial")) and bool(sets.get("unsafe"))
+    return bool(sets.get("initial")) and bool(sets.get("unsafe")) and (not goal or bool(sets.get("goal")))
 
 
 def class_selection(classes: str | Sequence[str] | None, model: Model, candidate: Candidate | None) -> tuple[str, ...]:
     """``None`` (every class that applies), a comma-separated string or names."""
     if classes is None or classes == "all":
         chosen = [c for c in MODEL_CLASSES if (c != "candidate" or candidate is not None)
-                  and (c != "sos_bound" or model.disturbances) and (c != "barrier" or _has_safety_sets(model))]
+                  and (c != "sos_bound" or model.disturbances) and (c != "barrier" or _has_safety_sets(model))
+                  and (c != "reach_avoid" or _has_safety_sets(model, goal=True))]
         return tuple(chosen)
     names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes) if c and c.strip()]
     unknown = [c for c in names if c not in MODEL_CLASSES]
@@ -269,6 +271,10 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
             from lyapcheck.models import barrier
 
             run("barrier", lambda budget: barrier.run(sc, Search(sc.ring, budget)))
+        if "reach_avoid" in chosen and box is None and _has_safety_sets(model, goal=True):
+            from lyapcheck.models import reach_avoid
+
+            run("reach_avoid", lambda budget: reach_avoid.run(sc, Search(sc.ring, budget)))
         if "sos_bound" in chosen:
             from lyapcheck.models import bounds
 
@@ -286,8 +292,13 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         why = ("not over a box yet (the barrier class certifies a point: --set NAME=VALUE)" if box is not None else
                "the model's [sets] needs 'initial' and 'unsafe' (docs/model-files.md, [sets])")
         out.results["barrier"] = ConditionResult("barrier", "not_applicable", why)
-    if "barrier" in out.results and model.disturbances:
-        out.results["barrier"].disturbances = "all"  # B serves every disturbance (the robust field)
+    if "reach_avoid" in chosen and "reach_avoid" not in out.results:
+        why = ("not over a box yet (the reach_avoid class certifies a point: --set NAME=VALUE)" if box is not None
+               else "the model's [sets] needs 'initial', 'unsafe' and 'goal' (docs/model-files.md, [sets])")
+        out.results["reach_avoid"] = ConditionResult("reach_avoid", "not_applicable", why)
+    for name in ("barrier", "reach_avoid"):
+        if name in out.results and model.disturbances:
+            out.results[name].disturbances = "all"  # B or V serves every disturbance (the robust field)
     if "candidate" in chosen and box is not None:
         out.results["candidate"] = ConditionResult("candidate", "not_applicable", "not over a box (the candidate "
                                                                                    "class certifies a point)")

@@ -48,6 +48,11 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
         text = _bounds(condition, outputs)
     elif name == "barrier":
         text = BARRIER_SENTENCE
+    elif name == "reach_avoid":
+        text = (f"reach-avoid: every trajectory that starts in the initial set reaches the goal within "
+                f"{_number(condition, 'reach_time_bound_s'):.4g} s without entering the unsafe set before (V <= 0 on "
+                "the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal, V bounded below; checked "
+                "exactly)")
     else:
         text = _stability(name, condition)
     disturbances = condition.get("disturbances")

@@ -343,6 +343,64 @@ def check_barrier(ring: Ring, g: Sequence[Poly], D: Poly, B: Poly, lam: Fraction
                   + (" (for every value in the box)" if box else "") + ", exactly")
 
 
+def check_reach_avoid(ring: Ring, g: Sequence[Poly], D: Poly, V: Poly, eps: Fraction, C: Fraction, delta: Fraction,
+                      initial: Sequence[SetPiece], initial_certs: Sequence[PieceCertificate],
+                      unsafe: Sequence[SetPiece], unsafe_certs: Sequence[PieceCertificate],
+                      goal: SetPiece, goal_certs: Sequence[tuple[GramPoly, GramPoly]], bounded: GramPoly,
+                      box_per_goal: Sequence[BoxMultipliers] = ()) -> tuple[bool, str]:
+    """ReachAvoid: every trajectory of ``z' = g / D`` (``D > 0``) from the initial set reaches the goal
+    ``{q_1 >= 0, ..., q_m >= 0}`` (one piece) within time ``C / eps`` and does not enter the unsafe
+    set before, for every ``u`` in the box.
+
+    * ``V <= 0`` on every initial piece and ``V >= 1`` on every unsafe piece (:func:`_on_piece`);
+    * for each ``i``: ``-grad V . g - eps D + s_i q_i - sum_k r_ik (1 - u_k^2) = sigma_i`` with ``s_i``,
+      ``sigma_i`` (and the ``r``) positive semidefinite: where ``q_i <= 0`` (outside the goal some
+      ``q_i < 0``), ``V' = grad V . g / D <= -eps``;
+    * ``V + C - delta |z|^2 = sigma_B``, ``delta > 0``: ``V >= delta |z|^2 - C``.
+
+    So from a start with ``V <= 0``, while outside the goal ``V`` falls at least at rate ``eps``,
+    stays ``<= 0`` (the unsafe set, where ``V >= 1``, is not reached) and within the compact
+    ``{V <= 0}`` (no escape); it cannot fall below ``-C``, so the goal is reached by ``C / eps``."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    n = len(g)
+    if any(any(m[n:]) for m in ring.support(V)):
+        return False, "V may depend on the states only"
+    if not (eps > 0 and delta > 0 and C >= 0):
+        return False, "eps and delta must be > 0 and C >= 0"
+    if len(initial_certs) != len(initial) or len(unsafe_certs) != len(unsafe) or len(goal_certs) != len(goal):
+        return False, "one certificate per piece of the initial and unsafe sets and per inequality of the goal"
+    for k, (piece, cert) in enumerate(zip(initial, initial_certs)):
+        ok, why = _on_piece(ring, -V, piece, cert, f"initial piece {k + 1} (V <= 0)")
+        if not ok:
+            return False, why
+    for k, (piece, cert) in enumerate(zip(unsafe, unsafe_certs)):
+        ok, why = _on_piece(ring, V - ring.constant(1), piece, cert, f"unsafe piece {k + 1} (V >= 1)")
+        if not ok:
+            return False, why
+    boxes = list(box_per_goal) or [()] * len(goal)
+    if len(boxes) != len(goal):
+        return False, "one set of box multipliers per inequality of the goal"
+    decrease = -lie_derivative(ring, V, g) - D * _q(eps)
+    for i, (q, (s, sigma), box) in enumerate(zip(goal, goal_certs, boxes)):
+        if not is_positive_semidefinite(s.Q) or not is_positive_semidefinite(sigma.Q):
+            return False, f"goal inequality {i + 1}: a Gram matrix is not positive semidefinite (exact)"
+        boxed, box_why = box_terms(ring, box)
+        if box_why is not None:
+            return False, box_why
+        if decrease + s.poly(ring) * q - boxed != sigma.poly(ring):
+            return False, f"goal inequality {i + 1}: the identity -grad V . g - eps D + s q = sigma does not hold exactly"
+    if not is_positive_semidefinite(bounded.Q):
+        return False, "the bound V >= delta |z|^2 - C: its Gram matrix is not positive semidefinite (exact)"
+    radius = ring.zero()
+    for z in ring.gens()[:n]:
+        radius += z * z
+    if V + ring.constant(C) - radius * _q(delta) != bounded.poly(ring):
+        return False, "the identity V + C - delta |z|^2 = sigma does not hold exactly"
+    return True, ("V <= 0 on the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal and "
+                  "V >= delta |z|^2 - C, exactly")
+
+
 def sphere_bound(a: Monomial) -> Fraction:
     """A rational ``k >= max |z^a|`` over the unit sphere ``|z| = 1``: the maximum is
     ``sqrt(prod_j a_j^a_j / |a|^|a|)`` (at ``z_j^2 = a_j / |a|``, by the weighted AM-GM inequality),

@@ -29,6 +29,8 @@ PROPERTY_MEANING: Final = {
     "invariant_set": "a set that no trajectory leaves",
     "ISS": "input-to-state stability",
     "safety": "no trajectory that starts in the initial set ever enters the unsafe set",
+    "reach_avoid": "every trajectory that starts in the initial set reaches the goal, and does not enter the "
+                   "unsafe set before",
 }
 #: how the linearization decided (its certificate's "method")
 METHODS: Final = {

@@ -22,7 +22,8 @@ SAFETY_MEANING: Final = ("no trajectory that starts in the initial set ever ente
 
 
 class SafetySection(ModelFileSection):
-    titles = {"barrier": "Barrier certificate: the unsafe set is never reached"}
+    titles = {"barrier": "Barrier certificate: the unsafe set is never reached",
+              "reach_avoid": "Reach-avoid certificate: the goal is reached, the unsafe set avoided"}
 
     def view(self, name: str, cond: Any, index: int, ctx: ClassContext) -> ClassView:
         view = super().view(name, cond, index, ctx)
@@ -36,11 +37,16 @@ class SafetySection(ModelFileSection):
             view.polynomials.append(polynomial_view("the barrier B, exactly (B <= 0 on the initial set, B >= 1 on "
                                                     "the unsafe set)", cert["B"], lead, ctx.states, ctx.shifts,
                                                     ctx.eqs))
+        for key, what in (("eps_scaled", "eps in V' <= -eps outside the goal (scaled time)"),
+                          ("C_scaled", "C in V >= delta |z|^2 - C (scaled)")):
+            value = as_fraction(cert.get(key))
+            if value is not None:
+                view.exact.append(exact_row(what, value))
         lam = as_fraction(cert.get("lambda_scaled"))
         if lam is not None:
             view.exact.append(exact_row("lambda in B' <= lambda B (scaled time)", lam))
         sets = as_dict(as_dict(ctx.doc.get("model")).get("sets"))
-        for key in ("initial", "unsafe"):
+        for key in ("initial", "unsafe", "goal"):
             if key in sets:
                 view.notes.append(f"{key} set, as the model states it: {sets[key]}")
         view.grams.extend(gram_sizes(cert))

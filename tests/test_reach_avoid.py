@@ -1,0 +1,60 @@
+"""``reach_avoid`` (issue 32 item 3): the goal reached in a bounded time, the unsafe set avoided,
+checked exactly; verify's refusals."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from click.testing import CliRunner, Result
+
+from lyapcheck.cli import app
+
+app._register_commands()
+
+SPIRAL = """[model]
+name = "reach-avoid"
+states = ["x1", "x2"]
+[dynamics]
+x1 = "-x1 + x2"
+x2 = "-x1 - x2"
+[sets]
+initial = ["(x1 - 2)**2 + x2**2 <= 0.25"]
+unsafe = ["(x1 + 1)**2 + (x2 - 2)**2 <= 0.25"]
+goal = ["x1**2 + x2**2 <= 0.1"]
+"""
+
+
+def run_cli(*args: str) -> Result:
+    return CliRunner().invoke(app.cli, list(args))
+
+
+def test_reach_avoid_is_certified_with_a_time_bound_and_verify_refuses_a_shorter_one(tmp_path: Path) -> None:
+    model = tmp_path / "ra.toml"
+    model.write_text(SPIRAL)
+    out = tmp_path / "ra.json"
+    result = run_cli("certify", str(model), "--classes", "reach_avoid", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    doc = json.loads(out.read_text())
+    ra = doc["conditions"]["reach_avoid"]
+    assert ra["status"] == "certified" and ra["property"] == "reach_avoid"
+    # the linear spiral contracts |x| like exp(-t): from |x| <= 2.5 into |x|^2 <= 0.1 by t = ln(2.5 / 0.316)
+    # = 2.07 s; the certified bound C / eps is larger (conservative) and never smaller
+    assert ra["reach_time_bound_s"] >= 2.07 and ra["closest_approach"] < 0
+    assert run_cli("verify", str(out)).exit_code == 0
+    ra["reach_time_bound_s"] = 1.0
+    ra["summary"] = ra["summary"].replace(ra["summary"].split("within ")[1].split(" s")[0], "1")
+    forged = tmp_path / "forged.json"
+    forged.write_text(json.dumps(doc))
+    result = run_cli("verify", str(forged))
+    assert result.exit_code == 1 and "time bound" in result.output
+
+
+def test_a_goal_that_trajectories_leave_is_not_certified(tmp_path: Path) -> None:
+    # x' = x: from x in [1, 2] the state grows; the goal near 0 is never reached
+    model = tmp_path / "away.toml"
+    model.write_text('[model]\nname = "away"\nstates = ["x"]\n[dynamics]\nx = "x"\n'
+                     '[sets]\ninitial = ["1 <= x <= 2"]\nunsafe = ["x <= -5"]\ngoal = ["x**2 <= 0.01"]\n')
+    out = tmp_path / "away.json"
+    run_cli("certify", str(model), "--classes", "reach_avoid", "--out", str(out))
+    assert json.loads(out.read_text())["conditions"]["reach_avoid"]["status"] == "not_certified"
