@@ -153,3 +153,24 @@ def test_a_trajectory_into_a_proved_unreachable_set_is_a_soundness_violation(tmp
     result = CliRunner().invoke(app.cli, ["certify", str(model), "--classes", "barrier", "--json"])
     assert result.exit_code == 1
     assert '"soundness_violation": true' in result.output and "SOUNDNESS VIOLATION" in result.output
+
+
+def test_a_barrier_over_a_box_of_parameters(tmp_path: Path) -> None:
+    """One B for every a in the box: x' = -a x + d, |d| <= 0.5, from |x| <= 0.5 never |x| >= 1 when
+    a >= 0.8 (the state stays below max(0.5, 0.5 / a) <= 0.625); not at a = 0.1 (0.5 / a = 5). A set
+    that names a parameter of the box is not_applicable (sets are read at the model's values)."""
+    text = ('[model]\nname = "tube"\nstates = ["x"]\n[parameters]\na = 1\nw = 1\n[disturbances]\nd = 0.5\n'
+            '[dynamics]\nx = "-a*x + d"\n[sets]\ninitial = ["-0.5 <= x <= 0.5"]\nunsafe = [["x >= w"], ["x <= -1"]]\n')
+    model = tmp_path / "tube.toml"
+    model.write_text(text)
+    out = tmp_path / "box.json"
+    result = run_cli("certify", str(model), "--box", "a=0.8..2", "--classes", "barrier", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    barrier = json.loads(out.read_text())["conditions"]["barrier"]
+    assert barrier["status"] == "certified" and barrier["summary"].startswith("for every a in [0.8, 2]")
+    assert run_cli("verify", str(out)).exit_code == 0
+    run_cli("certify", str(model), "--box", "a=0.1..2", "--classes", "barrier", "--out", str(out))
+    assert json.loads(out.read_text())["conditions"]["barrier"]["status"] != "certified"
+    run_cli("certify", str(model), "--box", "w=0.9..1.1", "--classes", "barrier", "--out", str(out))
+    barrier = json.loads(out.read_text())["conditions"]["barrier"]
+    assert barrier["status"] == "not_applicable" and "parameter of the box" in barrier["summary"]

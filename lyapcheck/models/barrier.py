@@ -269,7 +269,19 @@ def scaled_pieces(scaled: ScaledField, field: StateField, pieces: Pieces) -> lis
     full = model.state_ring
     images = linear_images(full, model.n, scaled.scaling.matrix())
     images = [im + to_fmpq(e) for im, e in zip(images[:model.n], model.equilibrium)] + images[model.n:]
-    return [[full.restrict(full.compose(p, images), field.ring) for p in piece] for piece in pieces]
+    index = {name: k for k, name in enumerate(full.names)}
+    target = field.ring
+
+    def moved(p: Poly) -> Poly:  # the state ring's polynomial in the field's ring (by name)
+        q = full.compose(p, images)
+        terms = {}
+        for m, c in full.terms(q).items():
+            if any(e and full.names[k] not in target.names for k, e in enumerate(m)):
+                raise ValueError("a set depends on a variable of the field's ring only by name: a disturbance")
+            terms[tuple(m[index[name]] if name in index else 0 for name in target.names)] = c
+        return target.from_terms(terms)
+
+    return [[moved(p) for p in piece] for piece in pieces]
 
 
 def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, Any]) -> dict[str, Any]:

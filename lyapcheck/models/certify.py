@@ -149,6 +149,23 @@ def _has_safety_sets(model: Model, goal: bool = False) -> bool:
     return bool(sets.get("initial")) and bool(sets.get("unsafe")) and (not goal or bool(sets.get("goal")))
 
 
+def _sets_use_box(model: Model, box: "ModelBox | None") -> bool:
+    """Some ``[sets]`` inequality names a parameter of ``box`` (the sets are evaluated at the model's
+    values, so a class over the box would prove them at one value only)."""
+    if box is None:
+        return False
+    names = set(box.names)
+    ring = model.ring
+    for forms in (getattr(model, "set_forms", None) or {}).values():
+        for piece in forms:
+            for form in piece:
+                for p in (form.numerator, form.denominator):
+                    for m in ring.support(p):
+                        if any(e and ring.names[k] in names for k, e in enumerate(m)):
+                            return True
+    return False
+
+
 def class_selection(classes: str | Sequence[str] | None, model: Model, candidate: Candidate | None) -> tuple[str, ...]:
     """``None`` (every class that applies), a comma-separated string or names."""
     if classes is None or classes == "all":
@@ -267,7 +284,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         if "candidate" in chosen:
             # the user's V is tried on the nominal loop (its global test has no box multipliers yet)
             run("candidate", lambda budget: _covers(run_candidate(sc, cand, budget), nominal_covers))
-        if "barrier" in chosen and box is None and _has_safety_sets(model):
+        if "barrier" in chosen and _has_safety_sets(model) and not _sets_use_box(model, box):
             from lyapcheck.models import barrier
 
             run("barrier", lambda budget: barrier.run(sc, Search(sc.ring, budget)))
@@ -289,7 +306,8 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
     if "sos_bound" in out.results and model.disturbances:
         out.results["sos_bound"].disturbances = "all"
     if "barrier" in chosen and "barrier" not in out.results:
-        why = ("not over a box yet (the barrier class certifies a point: --set NAME=VALUE)" if box is not None else
+        why = ("over a box the sets may not depend on a parameter of the box (they are read at the model's values)"
+               if _has_safety_sets(model) and _sets_use_box(model, box) else
                "the model's [sets] needs 'initial' and 'unsafe' (docs/model-files.md, [sets])")
         out.results["barrier"] = ConditionResult("barrier", "not_applicable", why)
     if "reach_avoid" in chosen and "reach_avoid" not in out.results:

@@ -124,7 +124,7 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
     ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True),
     ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
                output_figure=OutputFigure("bounds", "limsup |{y}| <= this, SI")),
-    ModelClass("barrier", "safety", "safety", over_box=False, stability=False,
+    ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
     ModelClass("reach_avoid", "safety", "reach_avoid", over_box=False, stability=False,
                figures=(Figure("reach_time_bound_s", "reach_time_bound_s",
