@@ -162,7 +162,8 @@ def barrier_structure(field: StateField, initial: Pieces, unsafe: Pieces, degree
 
 
 def _decrease_poly(field: StateField, m: Monomial, lam: Fraction) -> Poly:
-    """``-grad(z^m) . g + lam z^m D``: the decrease identity's coefficient of B's monomial ``m``."""
+    """``-grad(z^m) . g + lam z^m D``: the decrease identity's coefficient of B's monomial ``m``
+    (``lam = 0``: reach_avoid's ``-grad(z^m) . g``)."""
     ring = field.ring
     zm = ring.from_terms({m: 1})
     total = zm * field.D * to_fmpq(lam)
@@ -171,15 +172,17 @@ def _decrease_poly(field: StateField, m: Monomial, lam: Fraction) -> Poly:
     return total
 
 
-def _decrease_support(field: StateField, m: Monomial) -> list[Monomial]:
-    """The generic support of :func:`_decrease_poly` (every rate: ``lam = 1`` stands for all)."""
+def _decrease_support(field: StateField, m: Monomial, with_rate: bool = True) -> list[Monomial]:
+    """The generic support of :func:`_decrease_poly` (every rate: ``lam = 1`` stands for all;
+    ``with_rate`` False: ``lam = 0``)."""
     ring = field.ring
     out: set[Monomial] = set()
     for i, gi in enumerate(field.g):
         if m[i] > 0:
             d = m[:i] + (m[i] - 1,) + m[i + 1:]
             out |= _shift(ring.support(gi), [d])
-    out |= _shift(ring.support(field.D), [m])
+    if with_rate:
+        out |= _shift(ring.support(field.D), [m])
     return sorted(out)
 
 

@@ -20,10 +20,12 @@ conservative form. The claim is reach-while-avoid; staying in the goal afterward
 
 from __future__ import annotations
 
+from fractions import Fraction
 from typing import Any, Final, Sequence
 
-from lyapcheck.models.barrier import (BudgetExhausted, Pieces, _b_basis, _falsification, _shift, scaled_pieces,
-                                      set_certificates, set_identities, set_values)
+from lyapcheck.models.barrier import (BudgetExhausted, Pieces, _b_basis, _decrease_poly, _decrease_support,
+                                      _falsification, _shift, scaled_pieces, set_certificates, set_identities,
+                                      set_values)
 from lyapcheck.models.field import ScaledField, StateField
 from lyapcheck.models.lyapunov import FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials, vanishing_monomials
 from lyapcheck.models.search import (ParameterValues, Search, box_multipliers, box_multipliers_of, box_support,
@@ -40,26 +42,6 @@ REACH_DEGREES: Final = (2, 4)
 MAX_GRAM_ROWS: Final = 120
 
 
-def _lie_poly(field: StateField, m: Monomial) -> Poly:
-    """``-grad(z^m) . g``: the goal identities' coefficient of V's monomial ``m``."""
-    ring = field.ring
-    zm = ring.from_terms({m: 1})
-    total = ring.zero()
-    for i, gi in enumerate(field.g):
-        total -= zm.derivative(i) * gi
-    return total
-
-
-def _lie_support(field: StateField, m: Monomial) -> list[Monomial]:
-    ring = field.ring
-    out: set[Monomial] = set()
-    for i, gi in enumerate(field.g):
-        if m[i] > 0:
-            d = m[:i] + (m[i] - 1,) + m[i + 1:]
-            out |= _shift(ring.support(gi), [d])
-    return sorted(out)
-
-
 def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly], degree: int,
                     drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
     """The program for ``V`` of this degree, or why there is none (a size limit, named)."""
@@ -73,7 +55,7 @@ def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Se
     if isinstance(on_sets, str):
         return on_sets
     identities = list(on_sets)
-    lie = [(i, _lie_support(field, m)) for i, m in enumerate(v_basis)]
+    lie = [(i, _decrease_support(field, m, with_rate=False)) for i, m in enumerate(v_basis)]
     d_support = ring.support(field.D)
     for k, q in enumerate(goal):
         terms = [Term(param(f"L{i}", support), f"b{i}") for i, support in lie if support]
@@ -122,9 +104,9 @@ def reach_values(field: StateField, degree: int, initial: Pieces, unsafe: Pieces
     values = ParameterValues()
     set_values(field, values, initial, unsafe)
     for i, m in enumerate(_b_basis(field, degree)):
-        support = _lie_support(field, m)
+        support = _decrease_support(field, m, with_rate=False)
         if support:
-            values.set_poly(ring, f"L{i}", _lie_poly(field, m), support)
+            values.set_poly(ring, f"L{i}", _decrease_poly(field, m, Fraction(0)), support)
     values.set_poly(ring, "negD", -field.D, ring.support(field.D))
     for k, q in enumerate(goal):
         values.set_poly(ring, f"q{k}", q, ring.support(q))

@@ -33,7 +33,7 @@ import numpy as np
 
 from lyapcheck import tolerances as tol
 from lyapcheck.sos.sdp import _CSC, DirectSolve, SolveReport, _CLARABEL_TO_CVXPY, _STATUS_MAP, _load_lapack_modules, \
-    _settings
+    _settings, pack_parameters
 from lyapcheck.sos.structure import Structure
 
 SQRT2 = math.sqrt(2.0)
@@ -239,20 +239,7 @@ class DirectProgram:
 
     def parameter_vector(self, values: Mapping[str, Any]) -> np.ndarray:
         """The parameter values in their slots (matrices column-major), then the constant 1."""
-        given = {name for name in values if name in self._slots or np.asarray(values[name]).size}
-        if given != set(self._slots):
-            missing = sorted(set(self._slots) - given)
-            extra = sorted(given - set(self._slots))
-            raise ValueError(f"program {self.structure.key()}: parameters missing {missing}, unknown {extra}")
-        vec = np.zeros(self._param_size)
-        for name, (start, shape) in self._slots.items():
-            v = np.asarray(values[name], dtype=np.float64)
-            if v.shape != shape:
-                raise ValueError(f"The '{name}' parameter of program {self.structure.key()} must have shape {shape}. "
-                                 f"Got {v.shape} instead.")
-            vec[start:start + v.size] = v.ravel(order="F")
-        vec[-1] = 1.0
-        return vec
+        return pack_parameters(self._slots, self._param_size, values, self.structure.key())
 
     def matrices(self, p: np.ndarray) -> tuple[_CSC, np.ndarray]:
         """Clarabel's ``A`` and ``b`` at the parameter vector ``p``."""

@@ -147,6 +147,29 @@ class _CSC:
         return sp.csc_matrix((self.data, self.indices, self.indptr), shape=self.shape)
 
 
+def pack_parameters(slots: Mapping[str, tuple[int, tuple[int, ...]]], size: int, values: Mapping[str, Any],
+                    key: str) -> "np.ndarray":
+    """A program's parameter vector: each value flattened column-major at its slot ``(start, shape)``,
+    then a 1 (``size`` counts it). A parameter of size 0 (a polynomial with no terms, e.g. a state
+    whose derivative is 0) carries no data and may be left out; ValueError naming the program
+    otherwise, for a missing, unknown or misshapen parameter."""
+    import numpy as np
+
+    given = {name for name in values if name in slots or np.asarray(values[name]).size}
+    if given != set(slots):
+        missing = sorted(set(slots) - given)
+        extra = sorted(given - set(slots))
+        raise ValueError(f"program {key}: parameters missing {missing}, unknown {extra}")
+    vec = np.zeros(size)
+    for name, (start, shape) in slots.items():
+        v = np.asarray(values[name], dtype=np.float64)
+        if v.shape != shape:
+            raise ValueError(f"The '{name}' parameter of program {key} must have shape {shape}. Got {v.shape} instead.")
+        vec[start:start + v.size] = v.ravel(order="F")
+    vec[-1] = 1.0
+    return vec
+
+
 class ProgramData:
     """A compiled program's arrays (see :mod:`lyapcheck.paper.conditions.compiled`), with the maps they define."""
 
@@ -181,25 +204,9 @@ class ProgramData:
         return cls(key, arrays)
 
     def parameter_vector(self, values: Mapping[str, Any]) -> "np.ndarray":
-        """cvxpy's parameter vector: each value flattened column-major at its column, then a 1."""
-        import numpy as np
-
-        # a parameter of size 0 (a polynomial with no terms, e.g. a state whose derivative is 0)
-        # carries no data, and cvxpy drops it from the compiled program
-        given = {name for name in values if name in self.params or np.asarray(values[name]).size}
-        if given != set(self.params):
-            missing = sorted(set(self.params) - given)
-            extra = sorted(given - set(self.params))
-            raise ValueError(f"program {self.key}: parameters missing {missing}, unknown {extra}")
-        vec = np.zeros(self.param_size)
-        for name, (col, shape) in self.params.items():
-            v = np.asarray(values[name], dtype=np.float64)
-            if v.shape != shape:
-                raise ValueError(f"The '{name}' parameter of program {self.key} must have shape {shape}. "
-                                 f"Got {v.shape} instead.")
-            vec[col:col + v.size] = v.ravel(order="F")
-        vec[-1] = 1.0
-        return vec
+        """cvxpy's parameter vector: each value flattened column-major at its column, then a 1
+        (cvxpy drops a parameter of size 0 from the compiled program)."""
+        return pack_parameters(self.params, self.param_size, values, self.key)
 
     def matrices(self, param_vec: "np.ndarray") -> tuple[_CSC, "np.ndarray"]:
         """Clarabel's ``A`` and ``b`` (``A x + s = b``) at a parameter vector."""
