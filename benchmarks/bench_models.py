@@ -4,8 +4,10 @@ For each ``examples/models/*.toml`` it runs ``lyapcheck certify --model FILE --j
 processes and prints, per example:
 
 * each class's status (``lin`` linearization, ``quad``, ``gas`` sos_gas, ``roa``, ``bound``
-  sos_bound; ``C`` certified, ``R`` refuted, ``n`` not_certified, ``-`` not_applicable, ``?``
-  inconclusive) and the key figures (roa share of the simulated region of attraction, bounds);
+  sos_bound, ``barr`` barrier; ``C`` certified, ``R`` refuted, ``n`` not_certified, ``-``
+  not_applicable, ``?`` inconclusive, ``X`` counterexample) and the key figures (roa share of the
+  simulated region of attraction, bounds, the barrier's degree, rate and the closest approach of
+  the simulations beside it);
 * ``cold``: the wall time of the first run with an empty ``LYAPCHECK_CACHE_DIR`` (the unit
   conversions' memo; the SOS programs are built in every run, ``lyapcheck/sos/direct.py``);
 * ``wall``: the wall time of a fresh process with that memo warm, imports included (what a user
@@ -19,6 +21,18 @@ case certified in under 1 s wall (imports included, warm cache), the reversed Va
 certified region covering at least 95 % of the simulated one in under 10 s (also measured here on
 LyZNet's own sample count, a 300 x 300 grid), no wrong verdict on the negative cases, and
 ``sos_bound`` within 1.5x of the exact worst case and never below it.
+
+Then the safety examples (``[sets]``, issue 32) with ``--classes barrier`` alone, beside FOSSIL
+2.0's published synthesis times: ``wall`` is ``lyapcheck certify FILE --classes barrier --json`` in
+a fresh process, imports and the falsification beside the proof included (what a user runs);
+``no-sim`` the same with the falsification switched off (``barrier._falsification`` patched to
+return nothing, in the same kind of fresh process), i.e. the search and the exact check alone;
+``sim`` the falsification's own time from the JSON. Issue 32's targets, checked and printed:
+every FOSSIL polynomial barrier benchmark (Barr1, Barr3, HighOrd4/6/8) certified and passing
+``lyapcheck verify`` (the exact re-check), each under 2 s wall with imports (judged on ``wall``;
+the line says when only ``no-sim`` is under 2 s), no certified barrier from which a simulated
+trajectory enters the unsafe set (``closest_approach < 0`` for every certified one), and the
+reachable example (``reachable-spiral``) never certified.
 
 Run:  python benchmarks/bench_models.py [--only NAME ...] [--runs 3]
 """
@@ -43,7 +57,7 @@ sys.path.insert(0, str(ROOT))
 
 SHORT = {"certified": "C", "refuted": "R", "not_certified": "n", "not_applicable": "-", "inconclusive": "?",
          "counterexample": "X"}
-CLASSES = ("linearization", "quadratic", "sos_gas", "roa", "sos_bound")
+CLASSES = ("linearization", "quadratic", "sos_gas", "roa", "sos_bound", "barrier")
 #: what each example must show (issue 23's negative and tricky cases): classes that must never be
 #: certified, and the global verdict expected
 EXPECT: dict[str, dict[str, Any]] = {
@@ -61,7 +75,23 @@ EXPECT: dict[str, dict[str, Any]] = {
     "linear-disturbed-l1": {"certified": ("quadratic", "sos_bound"), "global": True, "exact_bound": 0.5},
     "linear-scalar-disturbed": {"certified": ("quadratic", "sos_bound"), "global": True, "exact_bound": 0.5},
     "paper-error-dynamics": {"certified": ("sos_gas", "sos_bound"), "global": True},
+    "fossil-barr1": {"certified": ("barrier",)},
+    "fossil-barr3": {"certified": ("barrier",)},
+    "fossil-highord4": {"certified": ("barrier",)},
+    "fossil-highord6": {"certified": ("barrier",)},
+    "fossil-highord8": {"certified": ("barrier",)},
+    "disturbed-tube": {"certified": ("barrier", "sos_bound")},
+    "reachable-spiral": {"never": ("barrier",)},
+    "paper-tube": {"certified": ("barrier",)},
 }
+#: the safety examples run with ``--classes barrier`` alone; the FOSSIL ones carry issue 32's targets
+BARRIER_EXAMPLES = ("fossil-barr1", "fossil-barr3", "fossil-highord4", "fossil-highord6", "fossil-highord8",
+                    "disturbed-tube", "reachable-spiral", "paper-tube")
+FOSSIL_BARRIERS = ("fossil-barr1", "fossil-barr3", "fossil-highord4", "fossil-highord6", "fossil-highord8")
+REACHABLE = ("reachable-spiral",)
+#: the falsification switched off: the barrier class's search and exact check alone
+NO_SIM = ("import sys, runpy; import lyapcheck.models.barrier as b; b._falsification = lambda model: None; "
+          "sys.argv = ['lyapcheck', *sys.argv[1:]]; runpy.run_module('lyapcheck', run_name='__main__')")
 
 
 def certify(path: Path, cache: str) -> tuple[float, dict[str, Any]]:
@@ -73,6 +103,86 @@ def certify(path: Path, cache: str) -> tuple[float, dict[str, Any]]:
     if proc.returncode not in (0, 1):
         raise RuntimeError(f"{path.name}: exit {proc.returncode}: {proc.stderr.strip()}")
     return wall, json.loads(proc.stdout)
+
+
+def certify_barrier(path: Path, cache: str, simulate: bool = True) -> tuple[float, dict[str, Any]]:
+    """``certify FILE --classes barrier --json`` in a fresh process; without the falsification
+    when ``simulate`` is false (:data:`NO_SIM`)."""
+    env = {**os.environ, "LYAPCHECK_CACHE_DIR": cache}
+    head = [sys.executable, "-m", "lyapcheck"] if simulate else [sys.executable, "-c", NO_SIM]
+    t0 = time.perf_counter()
+    proc = subprocess.run([*head, "certify", str(path), "--classes", "barrier", "--json"], cwd=ROOT, env=env,
+                          capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if proc.returncode not in (0, 1):
+        raise RuntimeError(f"{path.name}: exit {proc.returncode}: {proc.stderr.strip()}")
+    return wall, json.loads(proc.stdout)
+
+
+def verify_ok(doc: dict[str, Any]) -> bool:
+    """``lyapcheck verify`` on the certificate ``doc`` (exit 0: every claim re-checked exactly)."""
+    with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
+        json.dump(doc, fh)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "lyapcheck", "verify", fh.name], cwd=ROOT, capture_output=True,
+                              text=True)
+        return proc.returncode == 0
+    finally:
+        os.unlink(fh.name)
+
+
+def barrier_section(paths: list[Path], cache: str, runs: int, failures: list[str]) -> None:
+    """The safety examples with ``--classes barrier``, FOSSIL's figures beside, issue 32's targets."""
+    from benchmarks.model_anchors import ANCHORS
+
+    chosen = [p for p in paths if p.stem in BARRIER_EXAMPLES]
+    if not chosen:
+        return
+    print("\nbarrier (issue 32): lyapcheck certify FILE --classes barrier, fresh processes, median of "
+          f"{max(runs, 1)}; wall includes imports and the falsification, no-sim is without the falsification")
+    for path in chosen:
+        certify_barrier(path, cache)  # the unit memo warm, as above
+        walls, docs = [], []
+        for _ in range(max(runs, 1)):
+            w, d = certify_barrier(path, cache)
+            walls.append(w)
+            docs.append(d)
+        no_sim = statistics.median(certify_barrier(path, cache, simulate=False)[0] for _ in range(max(runs, 1)))
+        wall, doc = statistics.median(walls), docs[-1]
+        barrier = doc["conditions"]["barrier"]
+        status = barrier["status"]
+        trial = barrier.get("falsification") or {}
+        sim = trial.get("elapsed_s")
+        verified = verify_ok(doc)
+        closest = trial.get("closest_approach")
+        detail = (f"deg {barrier.get('degree')}, lambda {barrier.get('lambda_per_s'):.4g} 1/s"
+                  if status == "certified" else "")
+        print(f"{path.stem:20s} {status:15s} {detail:26s} closest approach "
+              + (f"{closest:+.4g}" if closest is not None else "-     ")
+              + f" ({trial.get('trajectories', '-')} traj., horizon {trial.get('horizon', 0):.3g} s)"
+              + f"  wall {wall:5.2f} s  no-sim {no_sim:5.2f} s  sim {sim if sim is None else f'{sim:.2f} s'}"
+              + f"  verify {'ok' if verified else 'FAILED'}", flush=True)
+        published = [a for a in ANCHORS.get(path.stem, []) if a["unit"] == "s" and "mean" in a["figure"]]
+        success = [a for a in ANCHORS.get(path.stem, []) if a["unit"] == "%"]
+        for anchor in published:
+            rate = next((a["value"] for a in success if a["tool"] == anchor["tool"]), None)
+            print(f"    {anchor['tool']}: mean {anchor['value']} s" + (f", {rate:g} % of runs successful" if rate is not None
+                                                                      else "")
+                  + f" (x{anchor['value'] / wall:.0f} our wall)")
+        if path.stem in FOSSIL_BARRIERS:
+            if status != "certified":
+                failures.append(f"{path.stem}: barrier {status}, expected certified (FOSSIL benchmark)")
+            if not verified:
+                failures.append(f"{path.stem}: lyapcheck verify failed on the barrier certificate")
+            if wall >= 2.0:
+                why = (f"; {no_sim:.2f} s without the falsification" + (", under 2 s" if no_sim < 2.0 else ""))
+                failures.append(f"{path.stem}: {wall:.2f} s wall with --classes barrier (target: under 2 s, "
+                                f"imports and falsification included){why}")
+        if status == "certified" and not (closest is not None and closest < 0):
+            failures.append(f"{path.stem}: certified barrier with closest approach {closest} (a simulated trajectory "
+                            "reached the unsafe set, or none ran)")
+        if path.stem in REACHABLE and status == "certified":
+            failures.append(f"{path.stem}: barrier certified, which is false (a trajectory enters)")
 
 
 def warm_seconds(path: Path) -> float:
@@ -120,6 +230,12 @@ def figures(doc: dict[str, Any]) -> str:
         out.append("bounds " + ", ".join(f"{k} {v:.4g}" for k, v in c["sos_bound"]["bounds"].items()))
     if c.get("sos_gas", {}).get("status") == "certified":
         out.append(f"gas deg {c['sos_gas'].get('degree')}")
+    barrier = c.get("barrier", {})
+    if barrier.get("status") == "certified":
+        out.append(f"barrier deg {barrier.get('degree')}, lambda {barrier.get('lambda_per_s'):.4g}, "
+                   f"closest approach {barrier.get('closest_approach', float('nan')):.4g}")
+    elif barrier.get("status") == "counterexample":
+        out.append(f"barrier counterexample at t = {barrier['refutation']['time']:.3g} s")
     return "; ".join(out)
 
 
@@ -172,6 +288,10 @@ def main() -> int:
                     print(f"    sos_bound {name}: {value:.6g} against the exact {exact}: ratio {ratio:.4f}")
                     if not 1.0 <= ratio <= 1.5:
                         failures.append(f"{path.stem}: sos_bound {name} ratio {ratio:.4f} outside [1, 1.5]")
+            barrier = doc["conditions"].get("barrier", {})
+            if barrier.get("status") == "certified" and not barrier.get("closest_approach", 0) < 0:
+                failures.append(f"{path.stem}: certified barrier, but a simulated trajectory reached the unsafe set")
+        barrier_section(paths, cache, args.runs, failures)
     for row in rows:
         if row["name"] == "van-der-pol-reversed":
             share = fine_share(row["doc"])
