@@ -533,16 +533,9 @@ _MODEL_TABLES: Final = ("sweep", "simulation")
 
 
 @dataclass(frozen=True)
-class ModelAxis:
-    """A swept parameter of the model: its name and SI values (increasing), and how they were spaced."""
-
-    name: str
-    values: tuple[float, ...]
-    scale: str  # "linear", "log" or "list"
-
-    @property
-    def size(self) -> int:
-        return len(self.values)
+class ModelAxis(Axis):
+    """A swept parameter of the model: its name and SI values (increasing), and how they were spaced
+    (:class:`Axis`, with how a share of it is measured)."""
 
     @property
     def measure(self) -> str:
