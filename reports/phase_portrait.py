@@ -7,23 +7,31 @@ section contributes (:meth:`reports.sections.base.Section.portrait`), which are 
   from the certificate's exact terms (each coefficient converted to the nearest float once, in
   the certificate's scaled coordinates ``x = x_eq + S u``, where the coefficients are of moderate
   size) on a grid, and contoured at ``c`` (contourpy, which matplotlib ships);
+- the invariant sets of the safety classes (kind ``"invariant"``: barrier ``{B <= 0}``,
+  reach_avoid ``{V <= 0}``), their zero level a solid line and the set lightly hatched;
+- the model's ``[sets]`` whenever it has them (whatever classes ran): initial green, unsafe red,
+  goal blue, each filled translucent where ``lyapcheck.models.sets.margin >= 0`` on a grid;
 - the model's ``[domain]`` box, when it has one;
-- trajectories with every disturbance 0 from rings of starts around the equilibrium and from
-  the boundary of the largest certified set, coloured by how they end (converged, escaped,
+- trajectories with every disturbance 0 from rings of starts around the equilibrium, from
+  the boundary of the largest certified set, from just inside each invariant set's boundary and
+  from points spread over the initial set, coloured by how they end (converged, escaped,
   neither);
 - for a model with disturbances and a certified ``sos_bound``, a second panel: each output's
   attracting set ``{V_y <= 1}`` and the band ``|y| <= B`` where the output is a state, with
   trajectories under constant disturbances at their bounds (``d = +b`` and ``d = -b``).
 
 The view is decided beforehand: each set's extent is found along rays from the equilibrium
-(bisection on the first crossing of the level, in ``u``), then joined with the domain.
+(bisection on the first crossing of the level, in ``u``), then joined with the domain and the
+bounding boxes of the model's ``[sets]`` (found on a grid around the rest).
 
 The simulation is :mod:`lyapcheck.models.trajectories` (the core's cross-checks of certificates
 use the same one). The trajectories are also *checked against the certificates* (:class:`CrossCheck`): along
 every simulated trajectory that starts in a certified region of attraction ``V`` must not rise
 and the start must not escape; a global certificate's ``V`` must not rise (and must decay at
 the certified rate) along every trajectory; a storage function must stay below its certified
-envelope ``1 + (V(0) - 1) exp(-lam t)``. A failed check is a soundness alarm on the page.
+envelope ``1 + (V(0) - 1) exp(-lam t)``; along every trajectory that starts in an invariant set
+``{B <= 0}`` B must stay ``<= 0`` (reach_avoid: until the goal is reached), and no trajectory
+from the initial set may enter the unsafe set. A failed check is a soundness alarm on the page.
 """
 
 from __future__ import annotations
@@ -39,6 +47,7 @@ import numpy.typing as npt
 from lyapcheck.models.crosscheck import BISECTIONS, RAY_RADII, check_global, check_region, check_storage, \
     ray_boundary
 from lyapcheck.models.modelfile import Model
+from lyapcheck.models.sets import StateSet, margin
 from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 from reports.figures import Figure, resample_closed, to_svg
 from lyapcheck.models.trajectories import Trajectory, horizon, jacobian_eigenvalues, simulate
@@ -74,6 +83,21 @@ DISTURBED_STARTS: Final = 8
 #: relative tolerance of the cross-checks (lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL: the checks
 #: themselves are lyapcheck.models.crosscheck's, shared with the sweeps of model files)
 CHECK_TOL: Final = TRAJECTORY_CHECK_REL_TOL
+#: the model's [sets] on the portrait: colour and legend words, and the fill's opacity
+SET_STYLE: Final = {"initial": ("#1a7f37", "initial set"), "unsafe": ("#cf222e", "unsafe set"),
+                    "goal": ("#0969da", "goal set")}
+SET_ALPHA: Final = 0.25
+#: the grid on which a set of the model is found before the view is known: the other boxes of the
+#: view (or 2 scales about the equilibrium), widened this many times about their centre
+SET_SEARCH: Final = 3.0
+#: an invariant set: its tint, its hatch and the hatch's opacity
+INVARIANT_TINT: Final = 0.06
+INVARIANT_HATCH: Final = "//"
+INVARIANT_HATCH_ALPHA: Final = 0.35
+#: starts spread over the initial set (farthest-point picks among the grid's points inside it)
+INITIAL_STARTS: Final = 12
+#: starts just inside each invariant set's boundary (along the rays from the equilibrium)
+INVARIANT_STARTS: Final = 8
 OUTCOME_STYLE: Final = {"converged": ("#0969da", "converged to the equilibrium"),
                         "escaped": ("#cf222e", "escaped (ran far out of view)"),
                         "other": ("#9a6700", "neither, by the end")}
@@ -153,6 +177,73 @@ def set_extent(poly_u: FloatPolynomial, level: float) -> Extent | None:
     return Extent(boundary.min(axis=0), boundary.max(axis=0), boundary)
 
 
+# -- the model's sets ------------------------------------------------------------------------------
+def _grid(lo: FloatArray, hi: FloatArray, count: int = GRID) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The axes and the ``(count * count, 2)`` points of a grid over a box."""
+    x = np.linspace(lo[0], hi[0], count)
+    y = np.linspace(lo[1], hi[1], count)
+    X, Y = np.meshgrid(x, y)
+    return x, y, np.column_stack([X.ravel(), Y.ravel()])
+
+
+def set_boxes(model: Model, lo: FloatArray, hi: FloatArray) -> dict[str, tuple[FloatArray, FloatArray] | None]:
+    """The bounding box of each of the model's ``[sets]`` within ``lo..hi`` (grid points with
+    ``margin >= 0``, widened by a grid step), or None where no grid point is inside."""
+    x, y, points = _grid(lo, hi)
+    step = np.array([x[1] - x[0], y[1] - y[0]])
+    out: dict[str, tuple[FloatArray, FloatArray] | None] = {}
+    for key, state_set in model.sets.items():
+        inside = points[margin(state_set, points) >= 0]
+        out[key] = None if not len(inside) else (np.maximum(inside.min(axis=0) - step, lo),
+                                                 np.minimum(inside.max(axis=0) + step, hi))
+    return out
+
+
+def initial_starts(state_set: StateSet, lo: FloatArray, hi: FloatArray, count: int = INITIAL_STARTS) -> FloatArray:
+    """Up to ``count`` starts spread over a set: grid points inside it, picked farthest first
+    (the first is the grid point deepest inside; the next ones reach its edges)."""
+    _, _, points = _grid(lo, hi, 121)
+    m = margin(state_set, points)
+    inside = points[m >= 0]
+    if not len(inside):
+        return np.zeros((0, 2))
+    span = np.maximum(hi - lo, 1e-300)
+    w = (inside - lo) / span
+    picked = [int(np.argmax(m[m >= 0]))]
+    dist = np.hypot(*(w - w[picked[0]]).T)
+    while len(picked) < min(count, len(inside)):
+        k = int(np.argmax(dist))
+        if dist[k] <= 0:
+            break
+        picked.append(k)
+        dist = np.minimum(dist, np.hypot(*(w - w[k]).T))
+    return inside[picked]
+
+
+def _draw_model_sets(ax: Any, model: Model, lo: FloatArray, hi: FloatArray) -> list[str]:
+    """Fill each of the model's ``[sets]`` (every piece: ``margin >= 0`` on a grid); the keys drawn."""
+    from matplotlib.colors import to_rgba
+
+    x, y, points = _grid(lo, hi)
+    drawn = []
+    for key in SET_STYLE:
+        if key not in model.sets:
+            continue
+        M = margin(model.sets[key], points).reshape(len(y), len(x))
+        if not np.any(M >= 0):
+            continue
+        colour, words = SET_STYLE[key]
+        top = max(float(np.max(M)), 0.0) + 1.0
+        ax.contourf(x, y, M, levels=[0.0, top], colors=[to_rgba(colour, SET_ALPHA)], zorder=0.6)
+        if np.any(M < 0):
+            ax.contour(x, y, M, levels=[0.0], colors=[colour], linewidths=0.9, zorder=0.7)
+        pieces = len(model.sets[key])
+        ax.fill([], [], facecolor=to_rgba(colour, SET_ALPHA), edgecolor=colour, lw=0.9,
+                label=f"{words}{f' ({pieces} pieces)' if pieces > 1 else ''}")
+        drawn.append(key)
+    return drawn
+
+
 # -- the figure ------------------------------------------------------------------------------------
 @dataclass
 class _Drawn:
@@ -215,6 +306,32 @@ def _draw_set(ax: Any, drawn: _Drawn, eq: FloatArray, scales: FloatArray, lo: Fl
             ax.plot(pts[:, 0], pts[:, 1], color=colour, lw=1.4, label=text, zorder=1)
         count += 1
     return count
+
+
+def _draw_invariant(ax: Any, drawn: _Drawn, eq: FloatArray, scales: FloatArray, lo: FloatArray,
+                    hi: FloatArray) -> bool:
+    """An invariant set ``{B <= level}``: lightly hatched, its zero level a solid line (a filled
+    contour, so that a set with holes or several parts is drawn as it is); whether it meets the view."""
+    from matplotlib import rc_context
+    from matplotlib.colors import to_rgba
+
+    x, y, points = _grid(lo, hi)
+    Z = drawn.poly_u((points - eq) / scales).reshape(len(y), len(x))
+    level = float(drawn.spec.level)
+    Z = np.where(np.isfinite(Z), Z, np.inf)
+    if not np.any(Z <= level):
+        return False
+    colour = drawn.spec.colour
+    bottom = min(float(np.min(Z)), level) - 1.0
+    # the tint and the hatch apart: matplotlib draws a hatch with its face's opacity
+    ax.contourf(x, y, Z, levels=[bottom, level], colors=[to_rgba(colour, INVARIANT_TINT)], zorder=0.8)
+    with rc_context({"hatch.color": to_rgba(colour, INVARIANT_HATCH_ALPHA), "hatch.linewidth": 0.6}):
+        ax.contourf(x, y, Z, levels=[bottom, level], colors="none", hatches=[INVARIANT_HATCH], zorder=0.8)
+        ax.fill([], [], facecolor=to_rgba(colour, INVARIANT_TINT), edgecolor=colour, lw=1.6, hatch=INVARIANT_HATCH,
+                label=_label(f"{drawn.spec.label}, certified invariant"))
+    if np.any(Z > level):
+        ax.contour(x, y, Z, levels=[level], colors=[colour], linewidths=1.6, zorder=2.5)
+    return True
 
 
 def drawable(paths: Sequence[FloatArray], lo: FloatArray, hi: FloatArray,
@@ -317,6 +434,88 @@ def _storage_check(drawn: _Drawn, runs: Sequence[Trajectory], eq: FloatArray, sc
     return CrossCheck(f"sos_bound ({spec.output}): the storage function stays below its certified envelope", ok, detail)
 
 
+def _until(tr: Trajectory, until: StateSet | None) -> tuple[FloatArray, FloatArray]:
+    """The integrator's points of a trajectory up to where it first enters ``until`` (all without one)."""
+    t, x = tr.nodes
+    if until is None or not len(x):
+        return t, x
+    hit = np.flatnonzero(margin(until, x) >= 0)
+    return (t[:hit[0] + 1], x[:hit[0] + 1]) if hit.size else (t, x)
+
+
+def _at(model: Model, x: FloatArray) -> str:
+    return "(" + ", ".join(f"{s} = {fmt_float(float(v), 4)}" for s, v in zip(model.states, x)) + ")"
+
+
+def _invariant_check(drawn: _Drawn, runs: Sequence[Trajectory], model: Model, eq: FloatArray,
+                     scales: FloatArray) -> CrossCheck | None:
+    """Along every trajectory that starts in ``{B <= level}``, B stays ``<= level`` (up to the goal
+    when the claim ends there); an excess counts beyond :data:`CHECK_TOL` of the largest ``|B|``
+    along the trajectory."""
+    spec, level = drawn.spec, float(drawn.spec.level)
+    until = model.sets.get(spec.until) if spec.until else None
+    b = spec.symbol
+    starts, worst, bad = 0, -math.inf, []
+    for tr in runs:
+        if not drawn.poly_u((tr.x[:1] - eq) / scales)[0] <= level:
+            continue
+        starts += 1
+        t, x = _until(tr, until)
+        v = drawn.poly_u((x - eq) / scales)
+        excess = float(np.max(v) - level) / max(float(np.max(np.abs(v))), abs(level), 1e-300)
+        worst = max(worst, excess)
+        if excess > CHECK_TOL:
+            k = int(np.argmax(v > level))
+            bad.append((x[0], t[k]))
+    if not starts:
+        return None
+    c = fmt_float(level)
+    what = (f"{spec.name}: trajectories from inside {{{b} ≤ {c}}} stay in it"
+            + (" until they reach the goal" if until is not None else ""))
+    above = b if level == 0 else f"{b} - {c}"
+    largest = f"largest {above} reached: {worst:.2g} of the largest |{b}| along its trajectory"
+    if bad:
+        (x0, t0) = bad[0]
+        detail = (f"{starts} simulated starts lie in the set; {b} rose above {c} along {len(bad)} of them"
+                  + (" before the goal" if until is not None else "")
+                  + f" ({largest}), the first from {_at(model, x0)}, leaving at t = {fmt_float(float(t0), 4)} s")
+    else:
+        detail = (f"{starts} simulated starts lie in the set; {b} stayed ≤ {c} along each"
+                  + (" until it reached the goal" if until is not None else "") + f" ({largest})")
+    return CrossCheck(what, not bad, detail)
+
+
+def _avoid_check(spec: LevelSet, runs: Sequence[Trajectory], model: Model) -> CrossCheck | None:
+    """No trajectory from the initial set enters the unsafe set (``margin >= 0``; reach_avoid: before the goal)."""
+    initial, unsafe = model.sets.get("initial"), model.sets.get("unsafe")
+    if initial is None or unsafe is None:
+        return None
+    until = model.sets.get(spec.until) if spec.until else None
+    starts, closest, bad = 0, -math.inf, []
+    for tr in runs:
+        if not margin(initial, tr.x[:1])[0] >= 0:
+            continue
+        starts += 1
+        t, x = _until(tr, until)
+        m = margin(unsafe, x)
+        if m.size:
+            closest = max(closest, float(np.max(m)))
+            if np.max(m) >= 0:
+                bad.append((x[0], t[int(np.argmax(m >= 0))]))
+    if not starts:
+        return None
+    before = " before the goal" if until is not None else ""
+    what = f"{spec.name}: no trajectory from the initial set enters the unsafe set{before}"
+    if bad:
+        (x0, t0) = bad[0]
+        detail = (f"{starts} simulated starts lie in the initial set; {len(bad)} of them entered the unsafe set"
+                  f"{before}, the first from {_at(model, x0)} at t = {fmt_float(float(t0), 4)} s")
+    else:
+        detail = (f"{starts} simulated starts lie in the initial set; none entered the unsafe set{before} "
+                  f"(closest approach: largest unsafe margin {closest:.3g})")
+    return CrossCheck(what, not bad, detail)
+
+
 # -- the portrait ----------------------------------------------------------------------------------
 def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
     """The phase portrait of a 2-state model certificate (see the module docstring)."""
@@ -330,16 +529,33 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
     drawn = [_Drawn(s, s.poly.scaled(exact_scales).evaluator(), None) for s in sets]
     for d in drawn:
         d.extent = set_extent(d.poly_u, float(d.spec.level))
-        if d.extent is None:
+        if d.extent is None and d.spec.kind == "invariant":
+            notes.append(f"The set {d.spec.label} reaches past the view (a ray from the equilibrium does not leave it "
+                         "within the largest radius tried, or the equilibrium is outside it): it is drawn where it "
+                         "meets the view, and no starts are placed on its boundary.")
+        elif d.extent is None:
             notes.append(f"The set {d.spec.label} is not drawn whole: it does not contain the equilibrium or reaches "
                          "beyond the largest radius tried.")
     regions = [d for d in drawn if d.spec.kind == "region"]
     storages = [d for d in drawn if d.spec.kind == "attracting"]
+    invariants = [d for d in drawn if d.spec.kind == "invariant"]
 
-    boxes = [(eq + scales * d.extent.lo, eq + scales * d.extent.hi) for d in regions if d.extent is not None]
+    boxes = [(eq + scales * d.extent.lo, eq + scales * d.extent.hi) for d in regions + invariants
+             if d.extent is not None]
     if model.domain:
         boxes.append((np.array([float(model.domain[s][0]) for s in model.states]),
                       np.array([float(model.domain[s][1]) for s in model.states])))
+    found: dict[str, tuple[FloatArray, FloatArray] | None] = {}
+    if model.sets:  # the model's sets join the view: found on a grid around the rest (or 2 S about eq)
+        around = boxes or [(eq - 2 * scales, eq + 2 * scales)]
+        a_lo = np.minimum(np.min([b[0] for b in around], axis=0), eq)
+        a_hi = np.maximum(np.max([b[1] for b in around], axis=0), eq)
+        centre, half_span = 0.5 * (a_lo + a_hi), 0.5 * SET_SEARCH * (a_hi - a_lo)
+        found = set_boxes(model, centre - half_span, centre + half_span)
+        boxes += [b for b in found.values() if b is not None]
+        for key, box in found.items():
+            if box is None:
+                notes.append(f"The {key} set is not drawn: no point of the grid searched is in it.")
     if not boxes:  # nothing bounds the view: the storage functions' sets give the scale, else S
         boxes = [(eq + scales * d.extent.lo, eq + scales * d.extent.hi) for d in storages if d.extent is not None]
     if not boxes:
@@ -356,6 +572,12 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
     if largest is not None and largest.extent is not None:
         pick = np.linspace(0, RAYS, BOUNDARY_STARTS, endpoint=False).astype(int)
         starts.append(eq + scales * BOUNDARY_INSIDE * largest.extent.boundary[pick])
+    for d in invariants:
+        if d.extent is not None:
+            pick = np.linspace(0, RAYS, INVARIANT_STARTS, endpoint=False).astype(int) + RAYS // (2 * INVARIANT_STARTS)
+            starts.append(eq + scales * BOUNDARY_INSIDE * d.extent.boundary[pick % RAYS])
+    from_initial = initial_starts(model.sets["initial"], lo, hi) if "initial" in model.sets else np.zeros((0, 2))
+    starts.append(from_initial)
     x0 = np.vstack(starts)
     disturbed = bool(storages) and len(model.disturbances) > 0
     lower = _disturbed_view(model, storages, eq, scales, half) if disturbed else None
@@ -375,18 +597,28 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
 
     fig, axes = _new_figure(2 if lower is not None else 1)
     ax = axes[0]
+    shown_sets = _draw_model_sets(ax, model, lo, hi)
+    shown_invariants = [d for d in invariants if _draw_invariant(ax, d, eq, scales, lo, hi)]
     for d in regions:
         _draw_set(ax, d, eq, scales, lo, hi)
     has_domain = _domain_box(ax, model)
     _draw_trajectories(ax, runs, x0, lo, hi, by_outcome=True)
     ax.plot([eq[0]], [eq[1]], "k+", ms=9, mew=1.5, zorder=5, label="equilibrium")
-    _axes(ax, model, lo, hi, "disturbances 0" if model.disturbances else "")
+    _axes(ax, model, lo, hi, "disturbances 0" if model.disturbances else "", below=bool(shown_sets or shown_invariants))
 
     checks = [c for c in (_region_check(d, runs, eq, scales) for d in regions) if c is not None]
     checks += [_global_check(g, runs, t_end, eq, scales) for g in globals_]
+    for d in invariants:
+        checks += [c for c in (_invariant_check(d, runs, model, eq, scales), _avoid_check(d.spec, runs, model))
+                   if c is not None]
     data: dict[str, Any] = {
         "view": (lo.tolist(), hi.tolist()), "t_end_s": t_end, "starts": int(len(x0)),
-        "boundary_starts": int(len(x0) - RING_STARTS * len(RINGS)),
+        "boundary_starts": int(len(x0) - RING_STARTS * len(RINGS) - len(from_initial)),
+        "initial_starts": int(len(from_initial)),
+        "model_sets": {k: None if b is None else (b[0].tolist(), b[1].tolist()) for k, b in found.items()},
+        "model_sets_drawn": shown_sets,
+        "invariant_drawn": [d.spec.name for d in shown_invariants],
+        "legend": [t.get_text() for t in ax.get_legend().get_texts()] if ax.get_legend() else [],
         "outcomes": {k: sum(tr.outcome == k for tr in runs) for k in OUTCOME_STYLE},
         "sets": [{"class": d.spec.name, "level": float(d.spec.level), "kind": d.spec.kind,
                   "extent_declared": None if d.extent is None else
@@ -399,9 +631,12 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
                              "bands": [(model.states[i], b) for i, b, _, _ in lower.bands]}
     checks += [_storage_check(d, list(runs) + list(pushed), eq, scales) for d in storages]
     data["checks"] = [(c.what, c.ok) for c in checks]
-    caption = _caption(model, regions, runs, t_end, has_domain, lower is not None, storages, notes)
+    caption = _caption(model, regions, runs, t_end, has_domain, lower is not None, storages, notes,
+                       shown_sets=shown_sets, invariants=invariants, initial_count=len(from_initial))
     alt = (f"phase portrait of {model.states[0]} and {model.states[1]} with {len(regions)} certified region(s) of "
-           f"attraction and {len(runs)} simulated trajectories")
+           f"attraction, {len(invariants)} certified invariant set(s)"
+           + (f", the model's {', '.join(shown_sets)} set(s)" if shown_sets else "")
+           + f" and {len(runs)} simulated trajectories")
     return PhasePortrait(Figure(to_svg(fig), caption, alt, data), "", checks, notes)
 
 
@@ -422,7 +657,9 @@ def _new_figure(panels: int) -> tuple[Any, list[Any]]:
     return fig, [a for a in axes[:, 0]]
 
 
-def _axes(ax: Any, model: Model, lo: FloatArray, hi: FloatArray, title: str) -> None:
+def _axes(ax: Any, model: Model, lo: FloatArray, hi: FloatArray, title: str, below: bool = False) -> None:
+    """Limits, labels, grid, title and legend (``below``: under the panel, for a legend of the
+    model's sets, which would otherwise cover them)."""
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_xlabel(_label(model.states[0]))
@@ -430,7 +667,10 @@ def _axes(ax: Any, model: Model, lo: FloatArray, hi: FloatArray, title: str) -> 
     ax.grid(alpha=0.3)
     if title:
         ax.set_title(_label(title), fontsize=9)
-    ax.legend(loc="upper right", fontsize=7, framealpha=0.85)
+    if below:
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, fontsize=7, framealpha=0.85)
+    else:
+        ax.legend(loc="upper right", fontsize=7, framealpha=0.85)
 
 
 @dataclass(frozen=True)
@@ -481,21 +721,36 @@ def _draw_disturbed(ax: Any, model: Model, storages: Sequence[_Drawn], lower: _L
 
 
 def _caption(model: Model, regions: Sequence[_Drawn], runs: Sequence[Trajectory], t_end: float,
-             has_domain: bool, disturbed: bool, storages: Sequence[_Drawn], notes: Sequence[str]) -> str:
+             has_domain: bool, disturbed: bool, storages: Sequence[_Drawn], notes: Sequence[str], *,
+             shown_sets: Sequence[str] = (), invariants: Sequence[_Drawn] = (), initial_count: int = 0) -> str:
     counts = {k: sum(tr.outcome == k for tr in runs) for k in OUTCOME_STYLE}
     parts = [f"Phase portrait of the model in its declared coordinates ({model.states[0]}, {model.states[1]})."]
+    if shown_sets:
+        words = {"initial": "initial (green)", "unsafe": "unsafe (red)", "goal": "goal (blue)"}
+        parts.append(f"Shaded: the model's [sets] as it states them, {', '.join(words[k] for k in shown_sets)}.")
+    if invariants:
+        shown = "; ".join(f"{d.spec.name}: {{{d.spec.symbol} ≤ {fmt_float(float(d.spec.level))}}}" for d in invariants)
+        until = any(d.spec.until for d in invariants)
+        parts.append(f"Hatched, bounded by a solid line (its zero level): the certified invariant sets ({shown}), "
+                     "which contain the initial set, exclude the unsafe set and which no trajectory leaves"
+                     + (" (reach_avoid: before it reaches the goal)" if until else "")
+                     + " (checked exactly), evaluated from the certificate's exact polynomial.")
     if regions:
         shown = "; ".join(f"{d.spec.name}: {{V ≤ {fmt_float(float(d.spec.level))}}}" for d in regions)
         parts.append(f"Filled: the certified regions of attraction ({shown}); every start in them converges to the "
                      "equilibrium (checked exactly), V evaluated from the certificate's exact polynomial.")
-    else:
-        parts.append("No region of attraction is certified, so no set is filled.")
-    parts.append(f"Lines: {len(runs)} trajectories with every disturbance 0, over {fmt_float(t_end, 4)} s, from rings "
-                 f"of starts around the equilibrium"
-                 + (f" and {len(runs) - RING_STARTS * len(RINGS)} starts just inside the largest certified set"
-                    if len(runs) > RING_STARTS * len(RINGS) else "")
-                 + f": {counts['converged']} converged (blue), {counts['escaped']} escaped (red), {counts['other']} "
-                   "neither by the end (amber).")
+    elif not invariants:
+        parts.append("No region of attraction is certified, so no certified set is filled.")
+    boundary = len(runs) - RING_STARTS * len(RINGS) - initial_count
+    sources = ["rings of starts around the equilibrium"]
+    if boundary > 0:
+        sources.append(f"{boundary} starts just inside the boundaries of the certified sets")
+    if initial_count:
+        sources.append(f"{initial_count} starts spread over the initial set")
+    joined = sources[0] if len(sources) == 1 else ", ".join(sources[:-1]) + " and " + sources[-1]
+    parts.append(f"Lines: {len(runs)} trajectories with every disturbance 0, over {fmt_float(t_end, 4)} s, from "
+                 f"{joined}: {counts['converged']} converged (blue), {counts['escaped']} escaped (red), "
+                 f"{counts['other']} neither by the end (amber).")
     if has_domain:
         parts.append("Dashed box: the model's [domain].")
     if disturbed:

@@ -544,7 +544,7 @@ def test_every_class_has_one_section_per_model() -> None:
 
 
 def test_a_new_family_of_classes_is_one_section(monkeypatch: pytest.MonkeyPatch) -> None:
-    """What a later family (reach-avoid certificates; barrier is the first real one) needs from the
+    """What a later family (a made-up class here; barrier and reach_avoid are real ones) needs from the
     reports: a Section subclass in one module and its entry in the registry. Its view reaches the
     table and its own section, its set the phase portrait; nothing else of the page changes."""
     from fractions import Fraction
@@ -558,8 +558,8 @@ def test_a_new_family_of_classes_is_one_section(monkeypatch: pytest.MonkeyPatch)
     from reports.sections.model_file import ModelFileSection
     from lyapcheck.models.modelfile import parse_model
 
-    class ReachAvoidSection(ModelFileSection):
-        titles = {"reach_avoid": "Reach-avoid certificate: the goal is reached, the unsafe set never"}
+    class TubeSection(ModelFileSection):
+        titles = {"made_up_tube": "Tube certificate: the unsafe set is never reached"}
 
         def portrait(self, name: str, cond: dict[str, Any], n: int, time_scale: Fraction) -> PortraitPart:
             b = ExactPolynomial.from_json(cond["certificate"]["B"], n)
@@ -567,15 +567,107 @@ def test_a_new_family_of_classes_is_one_section(monkeypatch: pytest.MonkeyPatch)
 
     made_up = {"status": "certified", "summary": "made up by the test", "property": "invariant_set",
                "certificate": {"B": {"terms": [["1", [2, 0]], ["1", [0, 2]], ["-1", [0, 0]]]}}}
-    doc = _synthetic("fossil-poly2.toml", {"reach_avoid": made_up})
+    doc = _synthetic("fossil-poly2.toml", {"made_up_tube": made_up})
     before = certificate_context(doc, simulate=False, recheck=False)
-    assert before["conditions"][0].title == "reach_avoid"  # the fallback: shown generically, under its key
-    monkeypatch.setitem(BY_CLASS, (MODEL_FILE, "reach_avoid"), ReachAvoidSection())
+    assert before["conditions"][0].title == "made_up_tube"  # the fallback: shown generically, under its key
+    monkeypatch.setitem(BY_CLASS, (MODEL_FILE, "made_up_tube"), TubeSection())
     context = certificate_context(doc, simulate=False, recheck=False)
     (view,) = context["conditions"]
-    assert view.title == "Reach-avoid certificate: the goal is reached, the unsafe set never"
+    assert view.title == "Tube certificate: the unsafe set is never reached"
     assert view.property == "invariant_set" and view.anchor == "class-1"
     page = Page(render_html("certificate.html.j2", context))
-    assert "Reach-avoid certificate: the goal is reached, the unsafe set never" in page.text
+    assert "Tube certificate: the unsafe set is never reached" in page.text
     sets, globals_, notes = level_sets(doc, parse_model(doc["model"]["text"], "m.toml"))
-    assert [(s.name, s.level, s.kind) for s in sets] == [("reach_avoid", 0, "region")] and not globals_ and not notes
+    assert [(s.name, s.level, s.kind) for s in sets] == [("made_up_tube", 0, "region")] and not globals_ and not notes
+
+
+# -- the safety classes: the model's [sets] and the invariant set {B <= 0} ------------------------------
+PRAJNA = ('[model]\nname = "prajna"\nstates = ["x1", "x2"]\n[dynamics]\nx1 = "x2"\nx2 = "-x1 + x1**3/3 - x2"\n'
+          '[sets]\ninitial = ["(x1 - 1.5)**2 + x2**2 <= 0.25"]\n'
+          'unsafe = [["(x1 + 1)**2 + (x2 + 1)**2 <= 0.16"], ["0.4 <= x1", "x1 <= 0.6", "0.1 <= x2", "x2 <= 0.5"]]\n')
+
+
+@pytest.fixture(scope="module")
+def prajna(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """Prajna's barrier example (FOSSIL's Barr3 with one initial piece), certified by the command line."""
+    where = tmp_path_factory.mktemp("prajna")
+    (where / "prajna.toml").write_text(PRAJNA)
+    done = run_cli("certify", str(where / "prajna.toml"), "--classes", "barrier", "--out", str(where / "b.json"))
+    assert done.returncode == 0, done.stderr
+    doc: dict[str, Any] = json.loads((where / "b.json").read_text())
+    assert doc["conditions"]["barrier"]["status"] == "certified"
+    return doc
+
+
+def test_a_barrier_page_draws_the_sets_and_its_invariant_set(prajna: dict[str, Any]) -> None:
+    """The portrait fills the initial and the unsafe set (both pieces) and hatches {B <= 0}, with a
+    legend entry each; B stays <= 0 along every start inside it and no start in the initial set
+    enters the unsafe set; the class shows the sets and the falsification as tables."""
+    from reports.certificate_page import certificate_context
+    from reports.html import render_html
+    from reports.phase_portrait import level_sets
+    from lyapcheck.models.modelfile import parse_model
+
+    sets, globals_, notes = level_sets(prajna, parse_model(PRAJNA, "prajna.toml"))
+    assert [(s.name, s.kind, s.level, s.symbol) for s in sets] == [("barrier", "invariant", 0, "B")]
+    assert not globals_ and not notes
+    context = certificate_context(prajna, recheck=False)
+    data = context["portrait"].data
+    assert data["model_sets_drawn"] == ["initial", "unsafe"] and data["invariant_drawn"] == ["barrier"]
+    assert {"initial set", "unsafe set (2 pieces)", "barrier: {B ≤ 0}, certified invariant"} <= set(data["legend"])
+    lo, hi = (np.array(v) for v in data["view"])  # both sets in view: the disc about (-1, -1) and the box
+    assert np.all(lo < [-1.4, -1.4]) and np.all(hi > [2.0, 0.5])
+    assert data["initial_starts"] == 12
+    checks = {c.what: c for c in context["checks"]}
+    assert set(checks) == {"barrier: trajectories from inside {B ≤ 0} stay in it",
+                           "barrier: no trajectory from the initial set enters the unsafe set"}
+    assert all(c.ok for c in checks.values()) and not context["soundness"]
+    found = re.search(r"(\d+) simulated starts lie in the initial set; none entered", " ".join(
+        c.detail for c in checks.values()))
+    assert found is not None and int(found.group(1)) >= 12  # the spread starts, and any ring start in it
+    text = Page(render_html("certificate.html.j2", context)).text
+    assert "The sets, as the model states them set piece inequalities (all hold) initial 1 of 1 (x1 - 1.5)**2" in text
+    assert "2 of 2 0.4 <= x1 and x1 <= 0.6 and 0.1 <= x2 and x2 <= 0.5" in text
+    assert "Falsification beside the search" in text and "starts sampled in the initial set 100" in text
+    assert "Shaded: the model's [sets] as it states them, initial (green), unsafe (red)." in text
+
+
+def test_a_made_up_barrier_whose_zero_level_a_trajectory_leaves_raises_the_alarm() -> None:
+    """{B <= 0} a disc of radius sqrt(0.3) about the initial set's centre holds the initial set, but
+    every trajectory from it leaves for the equilibrium at 0: the invariance check fails (the
+    unsafe set is still never entered, as the true system is safe) and the page raises the alarm."""
+    from reports.certificate_page import certificate_context
+
+    made_up = {"status": "certified", "summary": "made up by the test", "property": "safety", "degree": 2,
+               "certificate": {"kind": "barrier", "B": {"terms": [["1", [2, 0]], ["1", [0, 2]], ["-3", [1, 0]],
+                                                                  ["39/20", [0, 0]]]}}}
+    context = certificate_context(_synthetic(PRAJNA, {"barrier": made_up}), recheck=False)
+    checks = {c.what: c for c in context["checks"]}
+    stay = checks["barrier: trajectories from inside {B ≤ 0} stay in it"]
+    assert not stay.ok and re.search(r"B rose above 0 along \d+ of them", stay.detail) and "leaving at t = " in stay.detail
+    assert checks["barrier: no trajectory from the initial set enters the unsafe set"].ok
+    assert context["soundness"].startswith("SOUNDNESS: a simulation contradicts a certificate")
+    assert context["portrait"].data["invariant_drawn"] == ["barrier"]
+
+
+def test_the_safety_tables_read_the_sets_as_written_and_the_falsification() -> None:
+    """For any number of states: one row per piece of each set the class is about, and the
+    falsification's figures (a reach_avoid also lists its goal)."""
+    from reports.sections.safety import falsification_table, sets_table
+
+    text = {"initial": (("x <= 0", "y >= 1"),), "unsafe": (("x >= 2",), ("z**2 >= 9",)), "goal": (("x**2 <= 1",),)}
+    table = sets_table("reach_avoid", text)
+    assert table is not None and table.rows == [("initial", "1 of 1", "x <= 0  and  y >= 1"),
+                                                ("unsafe", "1 of 2", "x >= 2"), ("", "2 of 2", "z**2 >= 9"),
+                                                ("goal", "1 of 1", "x**2 <= 1")]
+    barrier = sets_table("barrier", text)
+    assert barrier is not None and [r[0] for r in barrier.rows] == ["initial", "unsafe", ""]
+    assert sets_table("barrier", {}) is None
+    trial = falsification_table({"closest_approach": -0.25, "falsification": {
+        "samples": 100, "trajectories": 400, "horizon": 24.0, "disturbance_scenarios": 4, "entered": False}})
+    assert trial is not None
+    rows = dict(trial.rows)
+    assert rows["trajectories simulated"] == "400 (100 starts x 4 disturbance scenarios)"
+    assert rows["horizon"] == "24 s" and rows["a trajectory entered the unsafe set"] == "no"
+    assert rows["closest approach (largest unsafe margin reached)"].startswith("-0.25: no trajectory entered")
+    assert falsification_table({}) is None

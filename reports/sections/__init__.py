@@ -6,7 +6,7 @@ section (module)                        model           classes
 ``stability.StabilitySection``          a model file    linearization, quadratic, sos_gas, roa,
                                                         candidate
 ``output_bound.OutputBoundSection``     a model file    sos_bound (one storage function per output)
-``safety.SafetySection``                a model file    barrier
+``safety.SafetySection``                a model file    barrier, reach_avoid (+ their invariant sets)
 ``model_file.ModelFileSection``         a model file    any other class (fallback)
 ``paper.PaperSection``                  the paper's     prop41_ges, prop41_iss, stabcond2,
                                         loop            sector_ges, ultimate_bound, sos_bound, and
@@ -24,7 +24,8 @@ certified sets to draw. A new family of classes is one module with a subclass of
         titles = {"barrier": "Barrier certificate: the unsafe set is never reached"}
         def portrait(self, name, cond, n, time_scale):
             B = ExactPolynomial.from_json(cond["certificate"]["B"], n)
-            return PortraitPart(sets=(LevelSet(name, "{B <= 0}", B, Fraction(0), "region", "#cf222e"),))
+            return PortraitPart(sets=(LevelSet(name, "{B <= 0}", B, Fraction(0), "invariant", "#6e40c9",
+                                               symbol="B"),))
 
     # here: SECTIONS = (..., BarrierSection())
 """

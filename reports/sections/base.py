@@ -8,8 +8,9 @@ section of the document's model and the class's name, and the section returns a
 typeset polynomials and matrices, exact numbers, notes, comparisons and every stored figure.
 
 A section may also put certified sets on a model's phase portrait (:meth:`Section.portrait`):
-sets ``{V <= level}`` drawn filled (:class:`LevelSet`) and global Lyapunov functions the
-simulated trajectories are checked against (:class:`GlobalV`).
+sets ``{V <= level}`` drawn filled (:class:`LevelSet`: regions of attraction, attracting sets,
+invariant sets of safety certificates) and global Lyapunov functions the simulated trajectories
+are checked against (:class:`GlobalV`).
 
 Everything here reads document data defensively: a malformed value is shown as text or left
 out, never raised.
@@ -76,8 +77,20 @@ class ClassView:
     tightness_note: str = ""
     #: matrices derived from the certificate on the spot (shown under "Derived from the certificate")
     extra: list[Item] = field(default_factory=list)
+    #: tables of the class (the sets it is about, its falsification), shown after the notes
+    tables: list[TableView] = field(default_factory=list)
     items: list[Item] = field(default_factory=list)
     items_title: str = ""
+
+
+@dataclass
+class TableView:
+    """A small table of a class: a title, column heads, rows of text cells, and a note under it."""
+
+    title: str
+    heads: tuple[str, ...]
+    rows: list[tuple[str, ...]]
+    note: str = ""
 
 
 @dataclass(frozen=True)
@@ -86,7 +99,8 @@ class ClassContext:
 
     ``states`` and ``shifts`` (the equilibrium, exact) name and place the polynomials of a model
     file's certificates; ``outputs`` are its outputs; ``box`` the document's box of parameters,
-    if any. ``eqs`` collects the page's equations (typeset together, once).
+    if any; ``set_text`` the model's ``[sets]`` as written (key -> each piece's strings), read
+    from the stored model text. ``eqs`` collects the page's equations (typeset together, once).
     """
 
     doc: dict[str, Any]
@@ -95,16 +109,21 @@ class ClassContext:
     shifts: list[Fraction] = field(default_factory=list)
     outputs: tuple[str, ...] = ()
     box: Any = None
+    set_text: dict[str, tuple[tuple[str, ...], ...]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
 class LevelSet:
     """A certified set ``{V <= level}`` of the document, drawn on the phase portrait.
 
-    ``kind`` is ``"region"`` (roa, candidate: invariant, every start converges) or
+    ``kind`` is ``"region"`` (roa, candidate: invariant, every start converges),
     ``"attracting"`` (sos_bound: every trajectory enters it, for every admissible disturbance;
     ``rate`` is its certified decay rate ``lam`` per second, ``output`` and ``bound`` the output
-    it bounds and the certified ``limsup |y|``).
+    it bounds and the certified ``limsup |y|``) or ``"invariant"`` (barrier ``{B <= 0}``,
+    reach_avoid ``{V <= 0}``: no trajectory that starts in it leaves it, and none from the model's
+    initial set enters its unsafe set; no convergence is claimed). ``until`` names a set of the
+    model (``"goal"``) on reaching which the claim ends (reach_avoid claims nothing after the
+    goal); ``symbol`` is the function's letter in the page's words (``B``, ``V``).
     """
 
     name: str
@@ -116,6 +135,8 @@ class LevelSet:
     rate: float = 0.0
     output: str = ""
     bound: float | None = None
+    until: str = ""
+    symbol: str = "V"
 
 
 @dataclass(frozen=True)
@@ -162,4 +183,4 @@ class Section:
 
 
 __all__ = ["PAPER", "MODEL_FILE", "ClassView", "ClassContext", "PolynomialView", "LevelSet", "GlobalV",
-           "PortraitPart", "Section", "text_of"]
+           "PortraitPart", "Section", "TableView", "text_of"]

@@ -236,7 +236,8 @@ class ModelFileSubject(Subject):
         equilibrium = as_dict(self.doc.get("equilibrium"))
         shifts = [as_fraction(equilibrium.get(s)) or Fraction(0) for s in self.states]
         outputs = tuple(self.parsed.outputs) if self.parsed is not None else ()
-        return ClassContext(self.doc, eqs, self.states, shifts, outputs, self.doc.get("box"))
+        set_text = dict(self.parsed.set_text) if self.parsed is not None else {}
+        return ClassContext(self.doc, eqs, self.states, shifts, outputs, self.doc.get("box"), set_text)
 
     def parts(self, eqs: Equations, *, ledger: bool, simulate: bool) -> dict[str, Any]:
         doc, model, raw = self.doc, self.parsed, self.raw
