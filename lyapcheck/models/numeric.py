@@ -57,6 +57,13 @@ class FieldEvaluator:
     numerators: list[NumericPoly]
     denominators: list[NumericPoly]
 
+    def __post_init__(self) -> None:
+        # every right-hand side at once: the monomials of all numerators (and denominators) evaluated
+        # once per call, then one matrix product (the integrators call this thousands of times; a
+        # loop over terms and states per polynomial was most of a stiff model's simulation)
+        self._num = _stacked(self.numerators)
+        self._den = None if all(_is_one(p) for p in self.denominators) else _stacked(self.denominators)
+
     @classmethod
     def of(cls, model: Model, parameters: Mapping[str, Fraction] | None = None) -> "FieldEvaluator":
         ring = model.state_ring
@@ -71,7 +78,40 @@ class FieldEvaluator:
             xd = np.hstack([x, d])
         else:
             xd = x
-        return np.column_stack([num(xd) / den(xd) for num, den in zip(self.numerators, self.denominators)])
+        out = _evaluate_stacked(self._num, xd)
+        return out if self._den is None else out / _evaluate_stacked(self._den, xd)
+
+
+def _is_one(p: NumericPoly) -> bool:
+    return p.exponents.shape[0] == 1 and not p.exponents.any() and float(p.coefficients[0]) == 1.0
+
+
+def _stacked(polys: list[NumericPoly]) -> tuple[np.ndarray, np.ndarray]:
+    """The union of the polynomials' monomials (rows of exponents) and each polynomial's coefficients
+    over it (a matrix, one row per polynomial)."""
+    index: dict[tuple[int, ...], int] = {}
+    for p in polys:
+        for e in p.exponents:
+            index.setdefault(tuple(int(k) for k in e), len(index))
+    nvars = polys[0].exponents.shape[1] if polys and polys[0].exponents.size else 0
+    exponents = np.array(list(index), dtype=np.int64).reshape(len(index), nvars)
+    coefficients = np.zeros((len(polys), len(index)))
+    for i, p in enumerate(polys):
+        for e, c in zip(p.exponents, p.coefficients):
+            coefficients[i, index[tuple(int(k) for k in e)]] += c
+    return exponents, coefficients
+
+
+def _evaluate_stacked(stacked: tuple[np.ndarray, np.ndarray], x: np.ndarray) -> np.ndarray:
+    exponents, coefficients = stacked
+    if not exponents.size:
+        return np.zeros((x.shape[0], coefficients.shape[0]))
+    monomials = np.ones((x.shape[0], exponents.shape[0]))
+    for k in range(exponents.shape[1]):
+        column = exponents[:, k]
+        if column.any():
+            monomials *= x[:, k:k + 1] ** column[None, :]
+    return monomials @ coefficients.T
 
 
 class ModelSystem:
