@@ -1,4 +1,7 @@
-"""lyapcheck: machine-checked stability answers for the ILOS/ODS microswimmer paper.
+"""lyapcheck: machine-checked stability and safety answers for polynomial and rational closed loops.
+
+Any closed loop given as a model file (``docs/model-files.md``); the worked example is the ILOS/ODS
+microswimmer paper's loop.
 
 The Python API (``docs/api.md``)::
 
