@@ -355,7 +355,7 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
 #: starts simulated from the initial set beside every barrier search; half as many above
 #: FALSIFICATION_FEW_ABOVE states (the 8-state HighOrd8's 100 starts took 1.9 s, three times its proof)
 FALSIFICATION_SAMPLES: Final = 100
-FALSIFICATION_FEW_ABOVE: Final = 4
+FALSIFICATION_FEW_ABOVE: Final = 3
 
 
 def _falsification(model: Any) -> Any:
