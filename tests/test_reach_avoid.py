@@ -58,3 +58,14 @@ def test_a_goal_that_trajectories_leave_is_not_certified(tmp_path: Path) -> None
     out = tmp_path / "away.json"
     run_cli("certify", str(model), "--classes", "reach_avoid", "--out", str(out))
     assert json.loads(out.read_text())["conditions"]["reach_avoid"]["status"] == "not_certified"
+
+
+def test_reach_avoid_over_a_box_of_parameters(tmp_path: Path) -> None:
+    model = tmp_path / "ra.toml"
+    model.write_text(SPIRAL.replace('x2 = "-x1 - x2"', 'x2 = "-k*x1 - x2"') + "[parameters]\nk = 1\n")
+    out = tmp_path / "box.json"
+    result = run_cli("certify", str(model), "--box", "k=0.5..1.5", "--classes", "reach_avoid", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    ra = json.loads(out.read_text())["conditions"]["reach_avoid"]
+    assert ra["status"] == "certified" and ra["summary"].startswith("for every k in [0.5, 1.5]")
+    assert run_cli("verify", str(out)).exit_code == 0

@@ -288,7 +288,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
             from lyapcheck.models import barrier
 
             run("barrier", lambda budget: barrier.run(sc, Search(sc.ring, budget)))
-        if "reach_avoid" in chosen and box is None and _has_safety_sets(model, goal=True):
+        if "reach_avoid" in chosen and _has_safety_sets(model, goal=True) and not _sets_use_box(model, box):
             from lyapcheck.models import reach_avoid
 
             run("reach_avoid", lambda budget: reach_avoid.run(sc, Search(sc.ring, budget)))
@@ -311,8 +311,9 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                "the model's [sets] needs 'initial' and 'unsafe' (docs/model-files.md, [sets])")
         out.results["barrier"] = ConditionResult("barrier", "not_applicable", why)
     if "reach_avoid" in chosen and "reach_avoid" not in out.results:
-        why = ("not over a box yet (the reach_avoid class certifies a point: --set NAME=VALUE)" if box is not None
-               else "the model's [sets] needs 'initial', 'unsafe' and 'goal' (docs/model-files.md, [sets])")
+        why = ("over a box the sets may not depend on a parameter of the box (they are read at the model's values)"
+               if _has_safety_sets(model, goal=True) and _sets_use_box(model, box) else
+               "the model's [sets] needs 'initial', 'unsafe' and 'goal' (docs/model-files.md, [sets])")
         out.results["reach_avoid"] = ConditionResult("reach_avoid", "not_applicable", why)
     for name in ("barrier", "reach_avoid"):
         if name in out.results and model.disturbances:

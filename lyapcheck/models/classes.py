@@ -126,7 +126,7 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                output_figure=OutputFigure("bounds", "limsup |{y}| <= this, SI")),
     ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
-    ModelClass("reach_avoid", "safety", "reach_avoid", over_box=False, stability=False,
+    ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False,
                figures=(Figure("reach_time_bound_s", "reach_time_bound_s",
                                "the goal is reached within this time, s"),)),
 )
