@@ -111,13 +111,15 @@ def test_a_reachable_unsafe_set_gets_no_barrier(tmp_path: Path) -> None:
     assert 0.5 <= barrier["refutation"]["start"][0] <= 1 and 0 < barrier["refutation"]["time"] <= 1.39
 
 
-def test_barrier_is_not_applicable_without_sets(tmp_path: Path) -> None:
+def test_barrier_without_sets_is_bad_input_and_not_run_by_default(tmp_path: Path) -> None:
     model = tmp_path / "plain.toml"
     model.write_text('[model]\nname = "p"\nstates = ["x"]\n[dynamics]\nx = "-x"\n')
+    result = run_cli("certify", str(model), "--classes", "barrier")
+    assert result.exit_code == 2 and "[sets]: the class barrier needs the sets initial and unsafe" in result.output
+    assert len(result.output.strip().splitlines()) == 1
     out = tmp_path / "plain.json"
-    run_cli("certify", str(model), "--classes", "barrier", "--out", str(out))
-    barrier = json.loads(out.read_text())["conditions"]["barrier"]
-    assert barrier["status"] == "not_applicable" and "[sets]" in barrier["summary"]
+    assert run_cli("certify", str(model), "--out", str(out)).exit_code == 0
+    assert "barrier" not in json.loads(out.read_text())["conditions"]
 
 
 @pytest.mark.parametrize("bound", ["0.2"])

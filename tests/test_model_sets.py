@@ -244,7 +244,7 @@ def test_the_page_states_the_codes_limits_and_keys() -> None:
     assert (S.MAX_SET_PIECES, S.MAX_PIECE_INEQUALITIES) == (16, 32)
     for text in ("at most 16, `MAX_SET_PIECES`, of at most 32 inequalities each, `MAX_PIECE_INEQUALITIES`",
                  "| `barrier` | `initial` and `unsafe` |", "| `reach_avoid` | `initial`, `unsafe` and `goal` |",
-                 "unknown key (keys: initial, unsafe, goal)", "outputs, domain, sets, units"):
+                 "unknown key (keys: initial, unsafe, goal, stay_in_goal)", "outputs, domain, sets, units"):
         assert text in page, text
     assert S.SET_KEYS == ("initial", "unsafe", "goal")
     assert S.CLASS_SETS == {"barrier": ("initial", "unsafe"), "reach_avoid": ("initial", "unsafe", "goal")}

@@ -69,3 +69,41 @@ def test_reach_avoid_over_a_box_of_parameters(tmp_path: Path) -> None:
     ra = json.loads(out.read_text())["conditions"]["reach_avoid"]
     assert ra["status"] == "certified" and ra["summary"].startswith("for every k in [0.5, 1.5]")
     assert run_cli("verify", str(out)).exit_code == 0
+
+
+def test_stay_in_goal_is_proved_by_an_invariant_set_inside_the_goal(tmp_path: Path) -> None:
+    """[sets] stay_in_goal = true: the goal is reached through {W <= 0}, a set inside it around the
+    equilibrium that no trajectory leaves; verify checks W, and refuses the certificate without it.
+    A goal away from the equilibrium cannot be stayed in (here: not certified, saying why)."""
+    model = tmp_path / "stay.toml"
+    model.write_text(SPIRAL + "stay_in_goal = true\n")
+    out = tmp_path / "stay.json"
+    result = run_cli("certify", str(model), "--classes", "reach_avoid", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    doc = json.loads(out.read_text())
+    ra = doc["conditions"]["reach_avoid"]
+    assert ra["status"] == "certified" and "stays in the goal afterwards" in ra["summary"]
+    assert "W" in ra["certificate"]["stay"]
+    assert run_cli("verify", str(out)).exit_code == 0
+    del ra["certificate"]["stay"]
+    forged = tmp_path / "forged.json"
+    forged.write_text(json.dumps(doc))
+    assert run_cli("verify", str(forged)).exit_code == 1
+    away = tmp_path / "away.toml"
+    away.write_text(SPIRAL.replace('goal = ["x1**2 + x2**2 <= 0.1"]', 'goal = ["(x1 - 1)**2 + x2**2 <= 0.1"]')
+                    + "stay_in_goal = true\n")
+    run_cli("certify", str(away), "--classes", "reach_avoid", "--out", str(out))
+    ra = json.loads(out.read_text())["conditions"]["reach_avoid"]
+    assert ra["status"] == "not_certified" and "not inside the goal" in ra["summary"]
+
+
+def test_stay_in_goal_is_a_boolean_and_needs_a_goal(tmp_path: Path) -> None:
+    for extra, words in (("stay_in_goal = 1\n", "must be true or false"),):
+        model = tmp_path / "bad.toml"
+        model.write_text(SPIRAL + extra)
+        result = run_cli("certify", str(model), "--classes", "reach_avoid")
+        assert result.exit_code == 2 and words in result.output and "Traceback" not in result.output
+    model = tmp_path / "nogoal.toml"
+    model.write_text(SPIRAL.replace('goal = ["x1**2 + x2**2 <= 0.1"]\n', "stay_in_goal = true\n"))
+    result = run_cli("certify", str(model))
+    assert result.exit_code == 2 and "has no goal" in result.output

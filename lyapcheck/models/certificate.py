@@ -544,6 +544,22 @@ def _verify_reach_avoid(c: dict[str, Any], cert: dict[str, Any], scaled: Any) ->
             raise ValueError(f"{key}: one entry per piece of the set is needed")
         return [([_gram(g, nv) for g in item["multipliers"]], _gram(item["remainder"], nv)) for item in data]
 
+    if "stay" in cert:  # reach {W <= 0}, inside the goal and never left, instead of the goal itself
+        from lyapcheck.sos.certificates import check_goal_invariant
+
+        stay = cert["stay"]
+        W = ring.from_terms({tuple(exponent(e, "W_scaled") for e in m): Fraction(v) for v, m in stay["W_scaled"]["terms"]})
+        _check_terms(stay["W"])
+        if stated_v(scaled, field, W) != stay["W"]:
+            return False, "the stated W (declared states) is not the certificate's W unscaled"
+        ok, why = check_goal_invariant(ring, field.g, field.D, W, Fraction(stay["mu_scaled"]), goal,
+                                       [_gram(g, nv) for g in stay["inside"]], _gram(stay["gram_invariant"], nv),
+                                       _multipliers(stay.get("box_multipliers"), nv, n))
+        if not ok:
+            return False, f"stay_in_goal: {why}"
+        goal = [-W]
+    elif getattr(model, "stay_in_goal", False):
+        return False, "the model asks to stay in the goal, and the certificate does not prove it"
     goal_certs = [(_gram(item["multiplier"], nv), _gram(item["remainder"], nv)) for item in cert["goal"]]
     boxes = [_multipliers(box, nv, n) for box in cert.get("box_multipliers") or [[] for _ in goal]]
     eps, delta, C = Fraction(cert["eps_scaled"]), Fraction(cert["delta_scaled"]), Fraction(cert["C_scaled"])

@@ -179,6 +179,10 @@ def class_selection(classes: str | Sequence[str] | None, model: Model, candidate
         paper = " ('quick' is the paper's selection of its own classes)" if "quick" in unknown else ""
         raise InvalidParameter("classes", "names among " + ", ".join(MODEL_CLASSES) + paper,
                                ",".join(unknown) or classes)
+    from lyapcheck.models.sets import require_sets
+
+    for name in names:  # a safety class asked for by name needs its sets (one line at [sets], exit 2)
+        require_sets(model, name)
     return tuple(c for c in MODEL_CLASSES if c in names)
 
 

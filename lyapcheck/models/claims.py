@@ -53,6 +53,9 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
                 f"{_number(condition, 'reach_time_bound_s'):.4g} s without entering the unsafe set before (V <= 0 on "
                 "the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal, V bounded below; checked "
                 "exactly)")
+        if "stay" in (condition.get("certificate") or {}):
+            text += ("; and it stays in the goal afterwards (it reaches {W <= 0}, a set inside the goal that no "
+                     "trajectory leaves: W' <= mu W; checked exactly)")
     else:
         text = _stability(name, condition)
     disturbances = condition.get("disturbances")

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_with_divisors
-from lyapcheck.models.sets import SET_KEYS, SetForms, SetText, StateSet, evaluate_set, evaluate_sets, parse_set
+from lyapcheck.models.sets import SET_KEYS, STAY_KEY, SetForms, SetText, StateSet, evaluate_set, evaluate_sets, parse_set
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -89,6 +89,8 @@ class Model:
     set_text: dict[str, SetText] = field(default_factory=dict)
     #: each set's ``p`` with the parameters as symbols, in :attr:`ring`
     set_forms: dict[str, SetForms] = field(default_factory=dict)
+    #: ``[sets] stay_in_goal = true``: reach_avoid also proves that the state stays in the goal
+    stay_in_goal: bool = False
 
     @property
     def sha256(self) -> str:
@@ -195,6 +197,7 @@ class _Reader:
         outputs, output_text = self.outputs(states, ring, dists, params)
         domain = self.domain(states)
         set_text, set_forms = self.sets(states, ring, dists)
+        stay_in_goal = self.stay_in_goal(set_forms)
         units = self.units(states, set_text)
         sets = {key: evaluate_set(self.source, key, forms, ring, params, Ring(states + tuple(dists)))
                 for key, forms in set_forms.items()}
@@ -203,7 +206,7 @@ class _Reader:
                       dynamics=dynamics, equilibrium=equilibrium, outputs=outputs, output_text=output_text,
                       domain=domain, overrides={k: str(v) for k, v in self.overrides.items()},
                       divisors=tuple(self.divisors), units=units, sets=sets, set_text=set_text,
-                      set_forms=set_forms)
+                      set_forms=set_forms, stay_in_goal=stay_in_goal)
         check_equilibrium(model)
         return model
 
@@ -389,15 +392,24 @@ class _Reader:
         if "sets" not in self.data:
             return {}, {}
         table = self.table("sets")
-        bad = [k for k in table if k not in SET_KEYS]
+        bad = [k for k in table if k not in SET_KEYS and k != STAY_KEY]
         if bad:
-            raise self.fail(f"[sets] {bad[0]}", f"unknown key (keys: {', '.join(SET_KEYS)})")
+            raise self.fail(f"[sets] {bad[0]}", f"unknown key (keys: {', '.join(SET_KEYS)}, {STAY_KEY})")
         texts: dict[str, SetText] = {}
         forms: dict[str, SetForms] = {}
         for key in SET_KEYS:
             if key in table:
                 texts[key], forms[key] = parse_set(self.source, key, table[key], ring, states, tuple(dists))
         return texts, forms
+
+    def stay_in_goal(self, set_forms: Mapping[str, SetForms]) -> bool:
+        """``[sets] stay_in_goal``: true or false (default false); true needs a ``goal``."""
+        value = self.data.get("sets", {}).get(STAY_KEY, False) if isinstance(self.data.get("sets"), dict) else False
+        if not isinstance(value, bool):
+            raise self.fail(f"[sets] {STAY_KEY}", f"must be true or false, got {value!r}")
+        if value and "goal" not in set_forms:
+            raise self.fail(f"[sets] {STAY_KEY}", "asks to stay in the goal, but [sets] has no goal")
+        return value
 
     def units(self, states: tuple[str, ...], set_text: Mapping[str, SetText] | None = None) -> dict[str, str]:
         """``[units]``, when the file declares it: the table read (SI units only), then every

@@ -33,7 +33,7 @@ from lyapcheck.models.search import (ParameterValues, Search, box_multipliers, b
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_reach_avoid
-from lyapcheck.sos.polynomials import Monomial, Poly, monomials
+from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
 from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Solution, Structure, Term, full_blocks
 
 #: degrees of V tried, in turn
@@ -169,6 +169,100 @@ def search_reach(field: StateField, initial: Pieces, unsafe: Pieces, goal: Seque
     return None, tried
 
 
+#: degrees of W (the invariant set {W <= 0} inside the goal) and its rates mu, for stay_in_goal
+STAY_DEGREES: Final = (2, 4)
+STAY_RATES: Final = (Fraction(-1, 4), Fraction(0), Fraction(1))
+
+
+def stay_structure(field: StateField, goal: Sequence[Poly], degree: int) -> Structure | str:
+    """The program for W: ``W + q_i = R_i`` for each goal inequality (so ``q_i >= -W >= 0`` where
+    ``W <= 0``), ``-grad W . g + mu W D - box = R_W``, and W's constant fixed to ``-w0`` (a
+    parameter: the equilibrium inside ``{W <= 0}``; ``w0`` half the smallest ``q_i(0)``)."""
+    ring = field.ring
+    nv = ring.nvars
+    zero = tuple([0] * nv)
+    w_basis = [m for m in _b_basis(field, degree) if any(m)]  # the constant is -w0, not a decision
+    grams: list[Gram] = []
+    identities: list[Identity] = []
+    for i, q in enumerate(goal):
+        terms = [Term(Coefficients.literal({m: 1}), f"b{k}") for k, m in enumerate(w_basis)]
+        target = set(w_basis) | set(ring.support(q)) | {zero}
+        basis = bases.sos_basis(nv, target)
+        grams.append(Gram(f"RQ{i}", tuple(basis), full_blocks(basis)))
+        terms.append(Term(one(ring, -1), f"RQ{i}"))
+        # the constant: q_i - w0 (-w0 is W's constant, fixed)
+        identities.append(Identity(f"inside{i}", tuple(terms), param(f"q{i}", set(ring.support(q)) | {zero}),
+                                   f"RQ{i}"))
+    terms = [Term(param(f"dW{k}", support), f"b{k}") for k, m in enumerate(w_basis)
+             if (support := _decrease_support(field, m))]
+    target = {mm for t in terms for mm in t.coefficients.support} | set(ring.support(field.D))
+    box_grams, box_terms = box_multipliers(nv, field.n, target, with_states=False, prefix="rW")
+    target |= box_support(box_grams, nv)
+    if len(target) > TARGET_LIMIT:
+        return f"the size limit TARGET_LIMIT = {TARGET_LIMIT} monomials of the identity was reached"
+    basis = bases.sos_basis(nv, target | {zero})
+    if len(basis) > MAX_GRAM_ROWS:
+        return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+    grams.append(Gram("RW", tuple(basis), full_blocks(basis)))
+    grams.extend(box_grams)
+    terms += [*box_terms, Term(one(ring, -1), "RW")]
+    identities.append(Identity("invariant", tuple(terms), param("muD0", ring.support(field.D)), "RW"))
+    scalars = tuple(Scalar(f"b{k}") for k in range(len(w_basis)))
+    structure = Structure(nvars=nv, grams=tuple(grams), scalars=scalars, identities=tuple(identities),
+                          objective=("max_margin",))
+    return structure if affordable(structure) is not None else "the size limit BLOCK_COST_LIMIT was reached"
+
+
+def find_goal_invariant(field: StateField, goal: Sequence[Poly], search: Search
+                        ) -> tuple[dict[str, Any] | None, list[str]]:
+    """A W with ``{W <= 0}`` inside the goal, containing the equilibrium, that no trajectory leaves."""
+    from lyapcheck.sos.certificates import check_goal_invariant
+
+    ring = field.ring
+    zero = tuple([0] * ring.nvars)
+    tried: list[str] = []
+    at_equilibrium = [ring.evaluate(q, [Fraction(0)] * ring.nvars) for q in goal]
+    if min(at_equilibrium) <= 0:
+        return None, ["the equilibrium is not inside the goal (some goal inequality is not > 0 there)"]
+    w0 = min(at_equilibrium) / 2
+    for degree in STAY_DEGREES:
+        structure = stay_structure(field, goal, degree)
+        if isinstance(structure, str):
+            tried.append(f"W of degree {degree}: {structure}")
+            continue
+        w_basis = [m for m in _b_basis(field, degree) if any(m)]
+        for mu in STAY_RATES:
+            search.budget.check()
+            values = ParameterValues()
+            for i, q in enumerate(goal):
+                values.set_poly(ring, f"q{i}", q - ring.constant(w0), set(ring.support(q)) | {zero})
+            for k, m in enumerate(w_basis):
+                support = _decrease_support(field, m)
+                if support:
+                    values.set_poly(ring, f"dW{k}", _decrease_poly(field, m, mu), support)
+            # W's constant -w0 in the invariance identity: -grad(-w0) . g + mu (-w0) D = -mu w0 D
+            values.set_poly(ring, "muD0", field.D * _q(-mu * w0), ring.support(field.D))
+            solution = search.solve(structure, values)
+            point = search.exact(structure, solution, values) if solution.usable else None
+            if point is None:
+                continue
+            W = ring.from_terms({m: point.scalars[f"b{k}"] for k, m in enumerate(w_basis)}) - ring.constant(w0)
+            grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+            box = box_multipliers_of(point.grams, multiplier_grams(structure, "rW"))
+            inside = [grams[f"RQ{i}"] for i in range(len(goal))]
+            ok, _ = check_goal_invariant(ring, field.g, field.D, W, mu, goal, inside, grams["RW"], box)
+            if ok:
+                tried.append(f"W of degree {degree}: found at mu = {mu}")
+                return {"W": W, "mu": mu, "inside": inside, "decrease": grams["RW"], "box": box,
+                        "degree": degree}, tried
+        tried.append(f"W of degree {degree}: none at mu = {', '.join(str(x) for x in STAY_RATES)}")
+    return None, tried
+
+
+def _q(x: Fraction) -> Any:
+    return to_fmpq(x)
+
+
 def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, Any]) -> dict[str, Any]:
     from lyapcheck.models.lyapunov import stated_v
 
@@ -203,8 +297,19 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
     initial = scaled_pieces(scaled, field, model.sets["initial"])
     unsafe = scaled_pieces(scaled, field, model.sets["unsafe"])
     (goal,) = scaled_pieces(scaled, field, model.sets["goal"])
+    invariant: dict[str, Any] | None = None
     try:
-        found, tried = search_reach(field, initial, unsafe, goal, search)
+        target = list(goal)
+        if model.stay_in_goal:  # reach {W <= 0}: inside the goal, and never left
+            invariant, stay_tried = find_goal_invariant(field, goal, search)
+            if invariant is None:
+                return ConditionResult("reach_avoid", "not_certified",
+                                       "stay_in_goal: no set {W <= 0} inside the goal around the equilibrium that no "
+                                       f"trajectory leaves was found ({'; '.join(stay_tried)})",
+                                       numbers={"tried": stay_tried}, solver={"solves": search.log},
+                                       property="reach_avoid")
+            target = [-invariant["W"]]
+        found, tried = search_reach(field, initial, unsafe, target, search)
     except BudgetExhausted as exc:
         return ConditionResult("reach_avoid", "inconclusive", f"{exc}", numbers={"reason": str(exc)},
                                solver={"solves": search.log}, property="reach_avoid")
@@ -222,9 +327,19 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
         numbers["closest_approach"] = trial.closest_approach
         if trial.entered:
             numbers["soundness_violation"] = True
-    return ConditionResult("reach_avoid", "certified", "", numbers=numbers,
-                           certificate=certificate_json(scaled, field, found), solver={"solves": search.log},
-                           property="reach_avoid")
+    certificate = certificate_json(scaled, field, found)
+    if invariant is not None:
+        from lyapcheck.models.lyapunov import stated_v
+
+        certificate["stay"] = {
+            "degree": invariant["degree"], "mu_scaled": str(invariant["mu"]),
+            "W": stated_v(scaled, field, invariant["W"]),
+            "W_scaled": {"terms": [[str(c), list(m)] for m, c in sorted(field.ring.terms(invariant["W"]).items())]},
+            "inside": [g.to_json() for g in invariant["inside"]], "gram_invariant": invariant["decrease"].to_json()}
+        if invariant["box"]:
+            certificate["stay"]["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in invariant["box"]]
+    return ConditionResult("reach_avoid", "certified", "", numbers=numbers, certificate=certificate,
+                           solver={"solves": search.log}, property="reach_avoid")
 
 
 __all__ = ["REACH_DEGREES", "reach_structure", "search_reach", "run", "certificate_json"]

@@ -37,6 +37,9 @@ from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 
 #: the keys of ``[sets]``
 SET_KEYS: Final = ("initial", "unsafe", "goal")
+#: the one key of ``[sets]`` that is not a set: ``stay_in_goal = true`` (reach_avoid then also proves
+#: that the state stays in the goal once there)
+STAY_KEY: Final = "stay_in_goal"
 #: the sets each class of sets needs (a class given a model without one of them is refused)
 CLASS_SETS: Final[dict[str, tuple[str, ...]]] = {"barrier": ("initial", "unsafe"),
                                                  "reach_avoid": ("initial", "unsafe", "goal")}
@@ -345,6 +348,6 @@ def _error(source: str, key: str, message: str) -> ModelFileError:
     return ModelFileError(printable(source), printable(key), printable(message))
 
 
-__all__ = ["SET_KEYS", "CLASS_SETS", "MAX_SET_PIECES", "MAX_PIECE_INEQUALITIES", "SetPiece", "StateSet", "SetText",
+__all__ = ["SET_KEYS", "STAY_KEY", "CLASS_SETS", "MAX_SET_PIECES", "MAX_PIECE_INEQUALITIES", "SetPiece", "StateSet", "SetText",
            "SetForms", "split_inequality", "parse_set", "evaluate_set", "evaluate_sets", "require_sets", "contains",
            "margin", "to_json", "sets_json"]

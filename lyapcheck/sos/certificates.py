@@ -401,6 +401,35 @@ def check_reach_avoid(ring: Ring, g: Sequence[Poly], D: Poly, V: Poly, eps: Frac
                   "V >= delta |z|^2 - C, exactly")
 
 
+def check_goal_invariant(ring: Ring, g: Sequence[Poly], D: Poly, W: Poly, mu: Fraction, goal: SetPiece,
+                         inside: Sequence[GramPoly], decrease: GramPoly, box: BoxMultipliers = ()) -> tuple[bool, str]:
+    """GoalInvariant: ``{W <= 0}`` lies in the goal ``{q_1 >= 0, ..., q_m >= 0}`` and no trajectory
+    leaves it, for every ``u`` in the box: ``W + q_i = sigma_i`` (so ``q_i >= -W >= 0`` where
+    ``W <= 0``) and ``-grad W . g + mu W D - sum_k r_k (1 - u_k^2) = sigma`` (``W' <= mu W``, so
+    ``W(t) exp(-mu t)`` never increases and ``W`` stays ``<= 0``), every Gram matrix positive
+    semidefinite, and ``W(0) < 0`` (the equilibrium inside)."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    n = len(g)
+    if any(any(m[n:]) for m in ring.support(W)):
+        return False, "W may depend on the states only"
+    if not ring.evaluate(W, [Fraction(0)] * ring.nvars) < 0:
+        return False, "W(0) must be < 0 (the equilibrium inside {W <= 0})"
+    if len(inside) != len(goal):
+        return False, "one Gram matrix per inequality of the goal is needed"
+    for i, (q, sigma) in enumerate(zip(goal, inside)):
+        if not is_positive_semidefinite(sigma.Q) or W + q != sigma.poly(ring):
+            return False, f"goal inequality {i + 1}: W + q = sigma does not hold with sigma >= 0 (exact)"
+    if not is_positive_semidefinite(decrease.Q):
+        return False, "the invariance remainder is not positive semidefinite (exact)"
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
+    if -lie_derivative(ring, W, g) + W * D * _q(mu) - boxed != decrease.poly(ring):
+        return False, "the identity -grad W . g + mu W D = sigma does not hold exactly"
+    return True, "{W <= 0} lies in the goal and W' <= mu W, exactly: no trajectory leaves it"
+
+
 def sphere_bound(a: Monomial) -> Fraction:
     """A rational ``k >= max |z^a|`` over the unit sphere ``|z| = 1``: the maximum is
     ``sqrt(prod_j a_j^a_j / |a|^|a|)`` (at ``z_j^2 = a_j / |a|``, by the weighted AM-GM inequality),
