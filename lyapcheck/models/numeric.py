@@ -19,7 +19,7 @@ import numpy as np
 
 from lyapcheck.models.modelfile import Model, field_at
 from lyapcheck.simulation.integrator import Evaluation, integrate
-from lyapcheck.sos.polynomials import Poly, Ring
+from lyapcheck.sos.polynomials import Poly, Ring, monomial_values
 
 
 class NumericPoly:
@@ -106,12 +106,7 @@ def _evaluate_stacked(stacked: tuple[np.ndarray, np.ndarray], x: np.ndarray) -> 
     exponents, coefficients = stacked
     if not exponents.size:
         return np.zeros((x.shape[0], coefficients.shape[0]))
-    monomials = np.ones((x.shape[0], exponents.shape[0]))
-    for k in range(exponents.shape[1]):
-        column = exponents[:, k]
-        if column.any():
-            monomials *= x[:, k:k + 1] ** column[None, :]
-    return monomials @ coefficients.T
+    return monomial_values(x, exponents) @ coefficients.T
 
 
 class ModelSystem:

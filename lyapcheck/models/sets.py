@@ -33,7 +33,7 @@ import numpy as np
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.expressions import (MAX_DEPTH, MAX_EXPRESSION_LENGTH, ExpressionError, Rational,
                                           parse_expression)
-from lyapcheck.sos.polynomials import Poly, Ring, degree_in
+from lyapcheck.sos.polynomials import Poly, Ring, degree_in, monomial_values
 
 #: the keys of ``[sets]``
 SET_KEYS: Final = ("initial", "unsafe", "goal")
@@ -316,7 +316,7 @@ def _values(p: Poly, x: np.ndarray) -> np.ndarray:
     out = np.empty(x.shape[0])
     for start in range(0, x.shape[0], 4096):  # bounded memory: (rows, terms, states) at a time
         rows = x[start:start + 4096]
-        out[start:start + 4096] = np.prod(rows[:, None, :] ** exponents[None, :, :], axis=2) @ coefficients
+        out[start:start + 4096] = monomial_values(rows, exponents) @ coefficients
     return out
 
 

@@ -163,3 +163,22 @@ def monomials(nvars: int, dmin: int, dmax: int) -> list[Monomial]:
         return [(i, *rest) for i in range(d, -1, -1) for rest in of_degree(d - i, n - 1)]
 
     return [m for d in range(max(dmin, 0), dmax + 1) for m in of_degree(d, nvars)]
+
+
+def monomial_values(x: "np.ndarray", exponents: "np.ndarray") -> "np.ndarray":
+    """Every monomial ``x^e`` (rows of ``exponents``, one column per variable of ``x``) at every row
+    of ``x``: ``(rows, monomials)``, floating point. Exponent 1 multiplies, higher ones power, 0 skips:
+    the simulations evaluate the same few monomials tens of thousands of times, and ``np.prod(x **
+    e)`` over all of them was most of a stiff model's falsification."""
+    import numpy as np
+
+    out = np.ones((x.shape[0], exponents.shape[0]))
+    for k in range(exponents.shape[1]):
+        column = exponents[:, k]
+        ones = np.flatnonzero(column == 1)
+        if ones.size:
+            out[:, ones] *= x[:, k:k + 1]
+        higher = np.flatnonzero(column > 1)
+        if higher.size:
+            out[:, higher] *= x[:, k:k + 1] ** column[None, higher]
+    return out
