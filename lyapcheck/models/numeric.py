@@ -19,7 +19,7 @@ import numpy as np
 
 from lyapcheck.models.modelfile import Model, field_at
 from lyapcheck.simulation.integrator import Evaluation, integrate
-from lyapcheck.sos.polynomials import Poly, Ring, monomial_values
+from lyapcheck.sos.polynomials import MonomialPlan, Poly, Ring, monomial_plan, monomial_values
 
 
 class NumericPoly:
@@ -86,7 +86,7 @@ def _is_one(p: NumericPoly) -> bool:
     return p.exponents.shape[0] == 1 and not p.exponents.any() and float(p.coefficients[0]) == 1.0
 
 
-def _stacked(polys: list[NumericPoly]) -> tuple[np.ndarray, np.ndarray]:
+def _stacked(polys: list[NumericPoly]) -> tuple[np.ndarray, np.ndarray, MonomialPlan]:
     """The union of the polynomials' monomials (rows of exponents) and each polynomial's coefficients
     over it (a matrix, one row per polynomial)."""
     index: dict[tuple[int, ...], int] = {}
@@ -99,14 +99,14 @@ def _stacked(polys: list[NumericPoly]) -> tuple[np.ndarray, np.ndarray]:
     for i, p in enumerate(polys):
         for e, c in zip(p.exponents, p.coefficients):
             coefficients[i, index[tuple(int(k) for k in e)]] += c
-    return exponents, coefficients
+    return exponents, coefficients, monomial_plan(exponents)
 
 
-def _evaluate_stacked(stacked: tuple[np.ndarray, np.ndarray], x: np.ndarray) -> np.ndarray:
-    exponents, coefficients = stacked
+def _evaluate_stacked(stacked: tuple[np.ndarray, np.ndarray, MonomialPlan], x: np.ndarray) -> np.ndarray:
+    exponents, coefficients, plan = stacked
     if not exponents.size:
         return np.zeros((x.shape[0], coefficients.shape[0]))
-    return monomial_values(x, exponents) @ coefficients.T
+    return monomial_values(x, plan) @ coefficients.T
 
 
 class ModelSystem:

@@ -33,7 +33,7 @@ import numpy as np
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.expressions import (MAX_DEPTH, MAX_EXPRESSION_LENGTH, ExpressionError, Rational,
                                           parse_expression)
-from lyapcheck.sos.polynomials import Poly, Ring, degree_in, monomial_values
+from lyapcheck.sos.polynomials import MonomialPlan, Poly, Ring, degree_in, monomial_plan, monomial_values
 
 #: the keys of ``[sets]``
 SET_KEYS: Final = ("initial", "unsafe", "goal")
@@ -287,7 +287,17 @@ def _form(source: str, where: str, text: str, a: Rational, b: Rational, ring: Ri
 
 #: each polynomial's exponents and float coefficients, by id (the polynomial kept, so the id is its
 #: own): falsification evaluates the same few polynomials thousands of times
-_ARRAYS: dict[int, tuple[Poly, np.ndarray, np.ndarray]] = {}
+_ARRAYS: dict[int, tuple[Poly, np.ndarray, np.ndarray, dict[int, MonomialPlan]]] = {}
+
+
+def _plan(p: Poly, n: int) -> MonomialPlan:
+    """The :func:`~lyapcheck.sos.polynomials.monomial_plan` of ``p``'s exponents over the first ``n``
+    variables (cached with its arrays)."""
+    exponents, _ = _arrays(p)
+    plans = _ARRAYS[id(p)][3]
+    if n not in plans:
+        plans[n] = monomial_plan(exponents[:, :n])
+    return plans[n]
 
 
 def _arrays(p: Poly) -> tuple[np.ndarray, np.ndarray]:
@@ -299,7 +309,7 @@ def _arrays(p: Poly) -> tuple[np.ndarray, np.ndarray]:
     exponents = np.array(monoms, dtype=np.int64).reshape(len(monoms), -1) if monoms else np.zeros((0, 0), np.int64)
     if len(_ARRAYS) > 4096:
         _ARRAYS.clear()
-    _ARRAYS[id(p)] = (p, exponents, coefficients)
+    _ARRAYS[id(p)] = (p, exponents, coefficients, {})
     return exponents, coefficients
 
 
@@ -312,11 +322,11 @@ def _values(p: Poly, x: np.ndarray) -> np.ndarray:
         return np.zeros(x.shape[0])
     if exponents.shape[1] < n or exponents[:, n:].any():
         raise ValueError(f"a point has {n} coordinates; the set's polynomial {p} needs the states of its ring")
-    exponents = exponents[:, :n]
+    plan = _plan(p, n)
     out = np.empty(x.shape[0])
     for start in range(0, x.shape[0], 4096):  # bounded memory: (rows, terms, states) at a time
         rows = x[start:start + 4096]
-        out[start:start + 4096] = monomial_values(rows, exponents) @ coefficients
+        out[start:start + 4096] = monomial_values(rows, plan) @ coefficients
     return out
 
 

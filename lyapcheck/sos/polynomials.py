@@ -12,9 +12,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
-from typing import Any, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
 import flint
+
+if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np
 
 Monomial = tuple[int, ...]
 Poly = Any  # flint.fmpq_mpoly (FLINT's type stubs are not typed)
@@ -165,20 +168,38 @@ def monomials(nvars: int, dmin: int, dmax: int) -> list[Monomial]:
     return [m for d in range(max(dmin, 0), dmax + 1) for m in of_degree(d, nvars)]
 
 
-def monomial_values(x: "np.ndarray", exponents: "np.ndarray") -> "np.ndarray":
-    """Every monomial ``x^e`` (rows of ``exponents``, one column per variable of ``x``) at every row
-    of ``x``: ``(rows, monomials)``, floating point. Exponent 1 multiplies, higher ones power, 0 skips:
-    the simulations evaluate the same few monomials tens of thousands of times, and ``np.prod(x **
-    e)`` over all of them was most of a stiff model's falsification."""
+MonomialPlan = tuple[int, tuple[tuple[int, "np.ndarray", "np.ndarray", "np.ndarray"], ...]]
+
+
+def monomial_plan(exponents: "np.ndarray") -> MonomialPlan:
+    """What :func:`monomial_values` does per variable, worked out once for an exponent matrix: the
+    monomials in which the variable has exponent 1 (a product), and those with a higher one (a power)."""
     import numpy as np
 
-    out = np.ones((x.shape[0], exponents.shape[0]))
+    steps = []
     for k in range(exponents.shape[1]):
         column = exponents[:, k]
-        ones = np.flatnonzero(column == 1)
+        ones, higher = np.flatnonzero(column == 1), np.flatnonzero(column > 1)
+        if ones.size or higher.size:
+            steps.append((k, ones, higher, column[higher][None, :]))
+    return exponents.shape[0], tuple(steps)
+
+
+def monomial_values(x: "np.ndarray", plan: "MonomialPlan | np.ndarray") -> "np.ndarray":
+    """Every monomial ``x^e`` (rows of an exponent matrix, one column per variable of ``x``, or its
+    :func:`monomial_plan`) at every row of ``x``: ``(rows, monomials)``, floating point. Exponent 1
+    multiplies, higher ones power, 0 skips: the simulations evaluate the same few monomials tens of
+    thousands of times, and ``np.prod(x ** e)`` over all of them was most of a stiff model's
+    falsification."""
+    import numpy as np
+
+    if not isinstance(plan, tuple):
+        plan = monomial_plan(plan)
+    count, steps = plan
+    out = np.ones((x.shape[0], count))
+    for k, ones, higher, powers in steps:
         if ones.size:
             out[:, ones] *= x[:, k:k + 1]
-        higher = np.flatnonzero(column > 1)
         if higher.size:
-            out[:, higher] *= x[:, k:k + 1] ** column[None, higher]
+            out[:, higher] *= x[:, k:k + 1] ** powers
     return out
