@@ -11,8 +11,8 @@ coordinates):
     -grad B . g + lam B D - sum_k r_k (1 - u_k^2) = r_D                   (B' <= lam B everywhere)
 
 with every ``s``, ``t``, ``r`` a sum of squares, and ``h`` each inequality of the piece and each
-product of two of them (:func:`~lyapcheck.sos.certificates.piece_generators`). ``B`` is a free polynomial of the states (its
-coefficients are the program's free scalars). The margin of 1 between the sets makes every
+product of two of them (:func:`~lyapcheck.sos.certificates.piece_generators`). ``B`` is a free
+polynomial of the states (its coefficients are the program's free scalars). The margin of 1 between the sets makes every
 condition non-strict, so the exact check needs positive semidefinite Gram matrices only; the search
 still maximizes the smallest Gram eigenvalue, which gives the rounding room.
 
@@ -27,12 +27,12 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Final, Sequence
 
+from lyapcheck.models.claims import BARRIER_SENTENCE
 from lyapcheck.models.field import ScaledField, StateField
 from lyapcheck.models.lyapunov import FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials, vanishing_monomials
-from lyapcheck.models.claims import BARRIER_SENTENCE
-from lyapcheck.results import ConditionResult
 from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      box_support, multiplier_grams, one, param)
+from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_barrier, piece_generators
 from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
@@ -298,7 +298,8 @@ def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, An
 
     out: dict[str, Any] = {"kind": "barrier", "degree": found["degree"], "lambda_scaled": str(found["lam"]),
                            "B": stated_v(scaled, field, found["B"]),
-                           "B_scaled": {"terms": [[str(c), list(m)] for m, c in sorted(field.ring.terms(found["B"]).items())]},
+                           "B_scaled": {"terms": [[str(c), list(m)]
+                                                  for m, c in sorted(field.ring.terms(found["B"]).items())]},
                            "initial": [piece(c) for c in found["initial"]],
                            "unsafe": [piece(c) for c in found["unsafe"]],
                            "gram_decrease": found["decrease"].to_json()}
@@ -336,8 +337,8 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
         if trial is not None:
             numbers["falsification"] = trial.to_dict()
         return ConditionResult("barrier", "not_certified",
-                               f"no barrier B of degree up to {max(BARRIER_DEGREES)} was found ({'; '.join(tried)}); the "
-                               "system may still be safe", numbers=numbers, solver={"solves": search.log},
+                               f"no barrier B of degree up to {max(BARRIER_DEGREES)} was found "
+                               f"({'; '.join(tried)}); the system may still be safe", numbers=numbers, solver={"solves": search.log},
                                property="safety")
     T = scaled.scaling.time
     numbers = {"degree": found["degree"], "lambda_per_s": float(found["lam"] / T),

@@ -548,7 +548,8 @@ def _verify_reach_avoid(c: dict[str, Any], cert: dict[str, Any], scaled: Any) ->
         from lyapcheck.sos.certificates import check_goal_invariant
 
         stay = cert["stay"]
-        W = ring.from_terms({tuple(exponent(e, "W_scaled") for e in m): Fraction(v) for v, m in stay["W_scaled"]["terms"]})
+        W = ring.from_terms({tuple(exponent(e, "W_scaled") for e in m): Fraction(v)
+                             for v, m in stay["W_scaled"]["terms"]})
         _check_terms(stay["W"])
         if stated_v(scaled, field, W) != stay["W"]:
             return False, "the stated W (declared states) is not the certificate's W unscaled"
@@ -564,8 +565,8 @@ def _verify_reach_avoid(c: dict[str, Any], cert: dict[str, Any], scaled: Any) ->
     boxes = [_multipliers(box, nv, n) for box in cert.get("box_multipliers") or [[] for _ in goal]]
     eps, delta, C = Fraction(cert["eps_scaled"]), Fraction(cert["delta_scaled"]), Fraction(cert["C_scaled"])
     ok, why = check_reach_avoid(ring, field.g, field.D, V, eps, C, delta, initial, pieces("initial", len(initial)),
-                                unsafe, pieces("unsafe", len(unsafe)), goal, goal_certs, _gram(cert["gram_bounded"], nv),
-                                boxes)
+                                unsafe, pieces("unsafe", len(unsafe)), goal, goal_certs,
+                                _gram(cert["gram_bounded"], nv), boxes)
     if not ok:
         return False, why
     if not _at_least(c.get("reach_time_bound_s"), C / eps * scaled.scaling.time):

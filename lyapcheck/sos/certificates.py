@@ -389,7 +389,8 @@ def check_reach_avoid(ring: Ring, g: Sequence[Poly], D: Poly, V: Poly, eps: Frac
         if box_why is not None:
             return False, box_why
         if decrease + s.poly(ring) * q - boxed != sigma.poly(ring):
-            return False, f"goal inequality {i + 1}: the identity -grad V . g - eps D + s q = sigma does not hold exactly"
+            return False, (f"goal inequality {i + 1}: the identity -grad V . g - eps D + s q = sigma does not hold "
+                           "exactly")
     if not is_positive_semidefinite(bounded.Q):
         return False, "the bound V >= delta |z|^2 - C: its Gram matrix is not positive semidefinite (exact)"
     radius = ring.zero()
