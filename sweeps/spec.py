@@ -192,19 +192,10 @@ class BoxSettings:
     seed: int
 
 
-@dataclass(frozen=True)
-class SweepSpec:
-    """A validated sweep spec; ``text`` is the TOML exactly as given (stored in the results)."""
+class _AxesGrid:
+    """The grid a spec's axes span (both targets' specs): its dimensions, shape and point count."""
 
-    text: str
-    axes: tuple[Axis, ...]
-    base: Problem
-    classes: tuple[str, ...]
-    simulation: SimulationSettings
-    refine: Refinement | None
-    chunk_size: int
-    mode: str = "points"
-    boxes: BoxSettings | None = None
+    axes: Sequence[Any]
 
     @property
     def dims(self) -> tuple[str, ...]:
@@ -217,6 +208,21 @@ class SweepSpec:
     @property
     def n_points(self) -> int:
         return int(np.prod(self.shape))
+
+
+@dataclass(frozen=True)
+class SweepSpec(_AxesGrid):
+    """A validated sweep spec; ``text`` is the TOML exactly as given (stored in the results)."""
+
+    text: str
+    axes: tuple[Axis, ...]
+    base: Problem
+    classes: tuple[str, ...]
+    simulation: SimulationSettings
+    refine: Refinement | None
+    chunk_size: int
+    mode: str = "points"
+    boxes: BoxSettings | None = None
 
     @property
     def worker_text(self) -> str:
@@ -553,7 +559,7 @@ class ModelSimulation:
 
 
 @dataclass(frozen=True)
-class ModelSweepSpec:
+class ModelSweepSpec(_AxesGrid):
     """A validated model sweep spec. ``text`` is the spec's TOML as given (stored with the results and
     compared on resume); ``model_text`` the model file's, verbatim; ``model`` the model with
     ``[sweep.set]`` applied (the swept parameters at their file values, replaced point by point)."""
@@ -573,18 +579,6 @@ class ModelSweepSpec:
     @property
     def model_sha256(self) -> str:
         return self.model.sha256
-
-    @property
-    def dims(self) -> tuple[str, ...]:
-        return tuple(a.name for a in self.axes)
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return tuple(a.size for a in self.axes)
-
-    @property
-    def n_points(self) -> int:
-        return int(np.prod(self.shape))
 
     @property
     def outputs(self) -> tuple[str, ...]:

@@ -166,15 +166,14 @@ def _as(values: Any, var: Variable) -> np.ndarray:
     return np.asarray(values, dtype=var.dtype)
 
 
-class GridStore:
-    """A grid of points: every variable over the swept parameters, one coordinate each (module
-    docstring). A target's store says which variables, attributes and coordinate attributes."""
+class _StoreLayout:
+    """What both layouts share: the store's place, its group, its spec and its variables (which a
+    target's store says), and how the group is opened."""
 
     def __init__(self, path: Path, group: Any, spec: Any) -> None:
         self.path = path
         self.group = group
         self.spec = spec
-        self.chunks = chunk_shape(spec.shape, spec.chunk_size)
         self.variables = self.variables_of(spec)
         self.by_name = {v.name: v for v in self.variables}
 
@@ -188,13 +187,22 @@ class GridStore:
         raise NotImplementedError
 
     @classmethod
-    def coord_attributes(cls, axis: Any) -> dict[str, Any]:
-        raise NotImplementedError
-
-    @classmethod
     def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
         """The group, created or checked for resuming (:func:`open_or_build`)."""
         return open_or_build(target, spec, build)
+
+
+class GridStore(_StoreLayout):
+    """A grid of points: every variable over the swept parameters, one coordinate each (module
+    docstring). A target's store says which variables, attributes and coordinate attributes."""
+
+    def __init__(self, path: Path, group: Any, spec: Any) -> None:
+        super().__init__(path, group, spec)
+        self.chunks = chunk_shape(spec.shape, spec.chunk_size)
+
+    @classmethod
+    def coord_attributes(cls, axis: Any) -> dict[str, Any]:
+        raise NotImplementedError
 
     # -- the layout -----------------------------------------------------------------------------
     @classmethod
@@ -275,30 +283,14 @@ class GridStore:
             self.group["done"][region] = block
 
 
-class TreeStore:
+class TreeStore(_StoreLayout):
     """A table of boxes: one row per box of the refinement tree (:func:`sweeps.run.run_box_tree`),
     preallocated to the spec's ``max_boxes`` rows (module docstring)."""
 
     def __init__(self, path: Path, group: Any, spec: Any) -> None:
         assert spec.boxes is not None
-        self.path = path
-        self.group = group
-        self.spec = spec
+        super().__init__(path, group, spec)
         self.capacity = spec.boxes.max_boxes
-        self.variables = self.variables_of(spec)
-        self.by_name = {v.name: v for v in self.variables}
-
-    @classmethod
-    def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
-        raise NotImplementedError
-
-    @classmethod
-    def attrs_of(cls, spec: Any) -> dict[str, Any]:
-        raise NotImplementedError
-
-    @classmethod
-    def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
-        return open_or_build(target, spec, build)
 
     @classmethod
     def open_or_create(cls, path: str | Path, spec: Any) -> Any:

@@ -31,7 +31,7 @@ from lyapcheck.models.claims import BARRIER_SENTENCE
 from lyapcheck.models.field import ScaledField, StateField
 from lyapcheck.models.lyapunov import FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials, vanishing_monomials
 from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
-                                     box_support, multiplier_grams, one, param)
+                                     box_support, exact_grams, multiplier_grams, one, param, why_none)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_barrier, piece_generators
@@ -202,16 +202,12 @@ def barrier_values(field: StateField, degree: int, initial: Pieces, unsafe: Piec
 def attempt(field: StateField, structure: Structure, degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction,
             search: Search) -> tuple[dict[str, Any] | None, Solution]:
     """One solve at rate ``lam``; the exact certificate if it passes the exact check."""
-    values = barrier_values(field, degree, initial, unsafe, lam)
-    solution = search.solve(structure, values)
-    if not solution.usable:
-        return None, solution
-    point = search.exact(structure, solution, values)
+    point, solution = search.solve_exact(structure, barrier_values(field, degree, initial, unsafe, lam))
     if point is None:
         return None, solution
     ring = field.ring
     B = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(_b_basis(field, degree))})
-    grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+    grams = exact_grams(structure, point)
     initial_certs, unsafe_certs = set_certificates(structure, grams, initial, unsafe)
     box = box_multipliers_of(point.grams, multiplier_grams(structure))
     ok, _ = check_barrier(ring, field.g, field.D, B, lam, initial, initial_certs, unsafe, unsafe_certs,
@@ -251,9 +247,7 @@ def search_barrier(field: StateField, initial: Pieces, unsafe: Pieces, search: S
                 if not isinstance(reduced, Structure):
                     break
                 drop, structure = drop | vanishing, reduced
-            why = ("the solver proved the program infeasible" if solution.report.outcome == "infeasible" else
-                   "the exact check refused the solver's point" if solution.usable else
-                   f"the solver returned no point ({solution.report.raw_status})")
+            why = why_none(solution)
             outcomes[why] = outcomes.get(why, 0) + 1
         tried.append(f"degree {degree}: none at lam = {', '.join(str(x) for x in LAMBDAS)} (scaled time): "
                      + ", ".join(f"{why} ({count})" for why, count in outcomes.items()))

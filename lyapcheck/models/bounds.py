@@ -28,10 +28,10 @@ from typing import Any, Final
 from lyapcheck.models.field import ScaledField, unscale_polynomial
 from lyapcheck.models.lyapunov import TARGET_LIMIT, affordable, face_probe, terms_json
 from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
-                                     box_support, multiplier_grams, one, param)
+                                     box_support, exact_grams, multiplier_grams, one, param, why_none)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
-from lyapcheck.sos.certificates import GramPoly, check_dissipation, check_output_bound
+from lyapcheck.sos.certificates import check_dissipation, check_output_bound
 from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
 from lyapcheck.sos.program import Gram, Identity, Scalar, Solution, Structure, Term
 
@@ -149,15 +149,11 @@ def attempt(scaled: ScaledField, structure: Structure, y: Poly, lam: Fraction, s
 def attempt_with_solution(scaled: ScaledField, structure: Structure, y: Poly, lam: Fraction, search: Search
                           ) -> tuple[dict[str, Any] | None, Solution]:
     """One solve at decay rate ``lam``; the exact certificate if it passes (and the solve)."""
-    values = bound_values(scaled, structure, y, lam)
-    solution = search.solve(structure, values)
-    if not solution.usable:
-        return None, solution
-    point = search.exact(structure, solution, values)
+    point, solution = search.solve_exact(structure, bound_values(scaled, structure, y, lam))
     if point is None:
         return None, solution
     ring = scaled.ring
-    grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+    grams = exact_grams(structure, point)
     taus = [grams[f"tau{k}"] for k in range(scaled.m)]
     B, v0 = point.scalars["B"], point.scalars["v0"]
     box_d = box_multipliers_of(point.grams, multiplier_grams(structure, "rD"))
@@ -216,9 +212,7 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
                 found, solution = attempt_with_solution(scaled, chain[i][0], y, lam, search)
                 if found is not None:
                     return found
-                why = ("the solver proved the program infeasible" if solution.report.outcome == "infeasible" else
-                       "the exact check refused the solver's point" if solution.usable else
-                       f"the solver returned no point ({solution.report.raw_status})")
+                why = why_none(solution)
                 outcomes[why] = outcomes.get(why, 0) + 1
             return None
 

@@ -29,10 +29,10 @@ from lyapcheck.models.barrier import (BudgetExhausted, Pieces, _b_basis, _decrea
 from lyapcheck.models.field import ScaledField, StateField
 from lyapcheck.models.lyapunov import FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials, vanishing_monomials
 from lyapcheck.models.search import (ParameterValues, Search, box_multipliers, box_multipliers_of, box_support,
-                                     multiplier_grams, one, param)
+                                     exact_grams, multiplier_grams, one, param, why_none)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
-from lyapcheck.sos.certificates import GramPoly, check_reach_avoid
+from lyapcheck.sos.certificates import check_reach_avoid
 from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
 from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Solution, Structure, Term, full_blocks
 
@@ -115,16 +115,12 @@ def reach_values(field: StateField, degree: int, initial: Pieces, unsafe: Pieces
 
 def attempt(field: StateField, structure: Structure, degree: int, initial: Pieces, unsafe: Pieces,
             goal: Sequence[Poly], search: Search) -> tuple[dict[str, Any] | None, Solution]:
-    values = reach_values(field, degree, initial, unsafe, goal)
-    solution = search.solve(structure, values)
-    if not solution.usable:
-        return None, solution
-    point = search.exact(structure, solution, values)
+    point, solution = search.solve_exact(structure, reach_values(field, degree, initial, unsafe, goal))
     if point is None:
         return None, solution
     ring = field.ring
     V = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(_b_basis(field, degree))})
-    grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+    grams = exact_grams(structure, point)
     initial_certs, unsafe_certs = set_certificates(structure, grams, initial, unsafe)
     goal_certs = [(grams[f"sG{k}"], grams[f"RG{k}"]) for k in range(len(goal))]
     boxes = [box_multipliers_of(point.grams, multiplier_grams(structure, f"rG{k}_")) for k in range(len(goal))]
@@ -156,9 +152,7 @@ def search_reach(field: StateField, initial: Pieces, unsafe: Pieces, goal: Seque
                 found["degree"] = degree
                 tried.append(f"degree {degree}: found")
                 return found, tried
-            why = ("the solver proved the program infeasible" if solution.report.outcome == "infeasible" else
-                   "the exact check refused the solver's point" if solution.usable else
-                   f"the solver returned no point ({solution.report.raw_status})")
+            why = why_none(solution)
             vanishing = frozenset((g.name, m) for g in structure.grams if g.name.startswith("R")
                                   for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
             reduced = reach_structure(field, initial, unsafe, goal, degree, drop | vanishing) if vanishing else None
@@ -242,12 +236,11 @@ def find_goal_invariant(field: StateField, goal: Sequence[Poly], search: Search
                     values.set_poly(ring, f"dW{k}", _decrease_poly(field, m, mu), support)
             # W's constant -w0 in the invariance identity: -grad(-w0) . g + mu (-w0) D = -mu w0 D
             values.set_poly(ring, "muD0", field.D * _q(-mu * w0), ring.support(field.D))
-            solution = search.solve(structure, values)
-            point = search.exact(structure, solution, values) if solution.usable else None
+            point, _ = search.solve_exact(structure, values)
             if point is None:
                 continue
             W = ring.from_terms({m: point.scalars[f"b{k}"] for k, m in enumerate(w_basis)}) - ring.constant(w0)
-            grams = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+            grams = exact_grams(structure, point)
             box = box_multipliers_of(point.grams, multiplier_grams(structure, "rW"))
             inside = [grams[f"RQ{i}"] for i in range(len(goal))]
             ok, _ = check_goal_invariant(ring, field.g, field.D, W, mu, goal, inside, grams["RW"], box)

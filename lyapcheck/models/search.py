@@ -74,6 +74,29 @@ class Search:
             return None
         return exact_point(self.ring, structure, solution, values.exact)
 
+    def solve_exact(self, structure: Structure, values: "ParameterValues") -> tuple[ExactPoint | None, Solution]:
+        """One solve and, when the solver returned a point, its exact rounding (None when there is
+        none): what every class's attempt does before its exact check."""
+        solution = self.solve(structure, values)
+        return self.exact(structure, solution, values), solution
+
+
+def exact_grams(structure: Structure, point: ExactPoint) -> dict[str, Any]:
+    """Every Gram matrix of an exact point, as :class:`~lyapcheck.sos.certificates.GramPoly` by name."""
+    from lyapcheck.sos.certificates import GramPoly
+
+    return {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+
+
+def why_none(solution: Solution) -> str:
+    """Why a solve gave no certificate, in the words of the not-certified reasons: the solver proved
+    the program infeasible, returned no point, or its point failed the exact check."""
+    if solution.report.outcome == "infeasible":
+        return "the solver proved the program infeasible"
+    if solution.usable:
+        return "the exact check refused the solver's point"
+    return f"the solver returned no point ({solution.report.raw_status})"
+
 
 @dataclass
 class ParameterValues:

@@ -302,6 +302,23 @@ def _on_piece(ring: Ring, lhs: Poly, piece: SetPiece, cert: PieceCertificate, wh
     return True, f"{what}: holds exactly"
 
 
+def _on_sets(ring: Ring, F: Poly, name: str, initial: Sequence[SetPiece], initial_certs: Sequence[PieceCertificate],
+             unsafe: Sequence[SetPiece], unsafe_certs: Sequence[PieceCertificate]) -> tuple[bool, str]:
+    """``F <= 0`` on every initial piece and ``F >= 1`` on every unsafe piece (:func:`_on_piece`): the
+    part a barrier ``B`` and a reach-avoid ``V`` share."""
+    if len(initial_certs) != len(initial) or len(unsafe_certs) != len(unsafe):
+        return False, "one certificate per piece of the initial and the unsafe set is needed"
+    for k, (piece, cert) in enumerate(zip(initial, initial_certs)):
+        ok, why = _on_piece(ring, -F, piece, cert, f"initial piece {k + 1} ({name} <= 0)")
+        if not ok:
+            return False, why
+    for k, (piece, cert) in enumerate(zip(unsafe, unsafe_certs)):
+        ok, why = _on_piece(ring, F - ring.constant(1), piece, cert, f"unsafe piece {k + 1} ({name} >= 1)")
+        if not ok:
+            return False, why
+    return True, f"{name} <= 0 on the initial set and {name} >= 1 on the unsafe set"
+
+
 def check_barrier(ring: Ring, g: Sequence[Poly], D: Poly, B: Poly, lam: Fraction,
                   initial: Sequence[SetPiece], initial_certs: Sequence[PieceCertificate],
                   unsafe: Sequence[SetPiece], unsafe_certs: Sequence[PieceCertificate],
@@ -322,16 +339,9 @@ def check_barrier(ring: Ring, g: Sequence[Poly], D: Poly, B: Poly, lam: Fraction
     n = len(g)
     if any(any(m[n:]) for m in ring.support(B)):
         return False, "B may depend on the states only"
-    if len(initial_certs) != len(initial) or len(unsafe_certs) != len(unsafe):
-        return False, "one certificate per piece of the initial and the unsafe set is needed"
-    for k, (piece, cert) in enumerate(zip(initial, initial_certs)):
-        ok, why = _on_piece(ring, -B, piece, cert, f"initial piece {k + 1} (B <= 0)")
-        if not ok:
-            return False, why
-    for k, (piece, cert) in enumerate(zip(unsafe, unsafe_certs)):
-        ok, why = _on_piece(ring, B - ring.constant(1), piece, cert, f"unsafe piece {k + 1} (B >= 1)")
-        if not ok:
-            return False, why
+    ok, why = _on_sets(ring, B, "B", initial, initial_certs, unsafe, unsafe_certs)
+    if not ok:
+        return False, why
     if not is_positive_semidefinite(decrease.Q):
         return False, "the decrease remainder is not positive semidefinite (exact)"
     boxed, box_why = box_terms(ring, box)
@@ -368,16 +378,11 @@ def check_reach_avoid(ring: Ring, g: Sequence[Poly], D: Poly, V: Poly, eps: Frac
         return False, "V may depend on the states only"
     if not (eps > 0 and delta > 0 and C >= 0):
         return False, "eps and delta must be > 0 and C >= 0"
-    if len(initial_certs) != len(initial) or len(unsafe_certs) != len(unsafe) or len(goal_certs) != len(goal):
-        return False, "one certificate per piece of the initial and unsafe sets and per inequality of the goal"
-    for k, (piece, cert) in enumerate(zip(initial, initial_certs)):
-        ok, why = _on_piece(ring, -V, piece, cert, f"initial piece {k + 1} (V <= 0)")
-        if not ok:
-            return False, why
-    for k, (piece, cert) in enumerate(zip(unsafe, unsafe_certs)):
-        ok, why = _on_piece(ring, V - ring.constant(1), piece, cert, f"unsafe piece {k + 1} (V >= 1)")
-        if not ok:
-            return False, why
+    if len(goal_certs) != len(goal):
+        return False, "one certificate per inequality of the goal is needed"
+    ok, why = _on_sets(ring, V, "V", initial, initial_certs, unsafe, unsafe_certs)
+    if not ok:
+        return False, why
     boxes = list(box_per_goal) or [()] * len(goal)
     if len(boxes) != len(goal):
         return False, "one set of box multipliers per inequality of the goal"
