@@ -37,7 +37,7 @@ import warnings
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from fractions import Fraction
-from typing import Final
+from typing import Final, Mapping, Protocol, Sequence
 
 from lyapcheck.sos.polynomials import Poly, Ring, total_degree
 
@@ -63,6 +63,16 @@ _RECAST_HINT: Final = ("the field must be polynomial or rational in the states: 
 
 class ExpressionError(ValueError):
     """An expression outside the language; the message says what and what to write instead."""
+
+
+class FunctionCalls(Protocol):
+    """What the builder hands function calls and ``pi`` to (:class:`lyapcheck.models.recast.Recaster`)."""
+
+    def check_call(self, name: str, arity: int, text: str) -> None: ...
+
+    def apply(self, name: str, args: list["Rational"], text: str) -> "Rational": ...
+
+    def pi(self) -> "Rational": ...
 
 
 @dataclass(frozen=True)
@@ -124,10 +134,17 @@ def parse_expression(text: str, ring: Ring) -> Rational:
     return parse_with_divisors(text, ring)[0]
 
 
-def parse_with_divisors(text: str, ring: Ring) -> tuple[Rational, tuple[Poly, ...]]:
+def parse_with_divisors(text: str, ring: Ring, *, calls: "FunctionCalls | None" = None,
+                        names: Sequence[str] | None = None, constants: Mapping[str, Fraction] | None = None
+                        ) -> tuple[Rational, tuple[Poly, ...]]:
     """The exact rational function of ``text``, over ``ring`` (whose names are the declared ones),
     and every non-constant divisor as written (the numerator of each ``/``'s right operand, before
     any common factor is cancelled: ``-x**2/x`` gives ``-x`` and the divisor ``x``).
+
+    With ``calls`` (:mod:`lyapcheck.models.recast`), a function call of the non-polynomial language
+    and the constant ``pi`` are handed to it, which returns each as a rational function of new
+    variables of ``ring`` (its auxiliaries); ``names`` are then the names the user may write (the
+    ring has more) and ``constants`` the names read as exact numbers (parameters at their values).
 
     Raises
     ------
@@ -160,7 +177,7 @@ def parse_with_divisors(text: str, ring: Ring) -> tuple[Rational, tuple[Poly, ..
         raise ExpressionError(f"not a valid expression ({exc.msg}{_where(exc.offset)})") from None
     except (RecursionError, MemoryError, ValueError):
         raise ExpressionError("not a valid expression (too deeply nested)") from None
-    builder = _Builder(text.strip(), ring)
+    builder = _Builder(text.strip(), ring, calls, names, constants)
     try:
         result = builder.build(tree.body, 0)
     except RecursionError:  # a backstop only: the builder's own depth limit comes first
@@ -175,9 +192,13 @@ def _where(offset: int | None) -> str:
 class _Builder:
     """Walks a parsed tree, accepting only the contract's nodes (see the module docstring)."""
 
-    def __init__(self, source: str, ring: Ring) -> None:
+    def __init__(self, source: str, ring: Ring, calls: "FunctionCalls | None" = None,
+                 names: Sequence[str] | None = None, constants: Mapping[str, Fraction] | None = None) -> None:
         self.source = source
         self.ring = ring
+        self.calls = calls
+        self.names = tuple(ring.names if names is None else names)
+        self.constants = dict(constants or {})
         # node positions are UTF-8 byte offsets; on one line they slice these bytes directly
         # (ast.get_source_segment splits the whole text on every call: a second for 1000 numbers)
         self.source_bytes = source.encode("utf-8")
@@ -191,8 +212,12 @@ class _Builder:
         if isinstance(node, ast.Constant):
             return Rational.polynomial(self.ring, self.ring.constant(self._number(node)))
         if isinstance(node, ast.Name):
-            if node.id not in self.ring.names:
-                declared = ", ".join(self.ring.names) or "none"
+            if node.id in self.constants:
+                return Rational.polynomial(self.ring, self.ring.constant(self.constants[node.id]))
+            if self.calls is not None and node.id == "pi" and node.id not in self.names:
+                return self.calls.pi()
+            if node.id not in self.names:
+                declared = ", ".join(self.names) or "none"
                 raise ExpressionError(f"unknown name '{node.id}' (declared names: {declared}; functions and "
                                       "constants such as pi are not part of the language)")
             return Rational.polynomial(self.ring, self.ring.gen(node.id))
@@ -209,6 +234,12 @@ class _Builder:
             return self._binary(node, depth)
         if isinstance(node, ast.Call):
             name = node.func.id if isinstance(node.func, ast.Name) else self._text(node.func)
+            if self.calls is not None and isinstance(node.func, ast.Name):
+                if node.keywords:
+                    raise ExpressionError(f"'{self._text(node)}': a function takes positional arguments only")
+                self.calls.check_call(name, len(node.args), self._text(node))
+                args = [self.build(a, depth + 1) for a in node.args]
+                return self._checked(self.calls.apply(name, args, self._text(node)), node)
             raise ExpressionError(f"function call '{name}(...)' is not allowed: {_RECAST_HINT}")
         raise ExpressionError(f"'{self._text(node)}' is not part of the language (numbers, declared names, "
                               "+ - * /, ** with a non-negative integer, parentheses)")

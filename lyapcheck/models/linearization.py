@@ -147,7 +147,11 @@ def imaginary_axis_roots(coeffs: Sequence[Fraction]) -> bool:
 
 def run(shifted: ShiftedField) -> ConditionResult:
     """Decide the linearization (see the module docstring)."""
-    J = jacobian(shifted)
+    return decide(jacobian(shifted))
+
+
+def decide(J: Matrix) -> ConditionResult:
+    """Decide whether the exact Jacobian ``J`` is Hurwitz, unstable or critical (the module docstring)."""
     n = len(J)
     cert: dict[str, Any] = {"jacobian": [[str(x) for x in row] for row in J]}
     numbers: dict[str, Any] = {}
@@ -197,7 +201,11 @@ def run(shifted: ShiftedField) -> ConditionResult:
 
 def verify(shifted: ShiftedField, status: str, data: dict[str, Any]) -> tuple[bool, str]:
     """Re-check a ``linearization`` certificate or refutation exactly."""
-    J = jacobian(shifted)
+    return verify_jacobian(jacobian(shifted), status, data)
+
+
+def verify_jacobian(J: Matrix, status: str, data: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a ``linearization`` certificate or refutation of the exact Jacobian ``J``."""
     if data.get("jacobian") != [[str(x) for x in row] for row in J]:
         return False, "the stored Jacobian differs from the model's"
     method = data.get("method")

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_with_divisors
+from lyapcheck.models.recast import FUNCTIONS, RecastModel, recast_dynamics, uses_functions
 from lyapcheck.models.sets import SET_KEYS, STAY_KEY, SetForms, SetText, StateSet, evaluate_set, evaluate_sets, parse_set
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 
@@ -144,12 +145,41 @@ def is_model_file(path: object) -> bool:
 
 
 def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, object] | None = None) -> Model:
-    """Validate a model file's text (see :func:`load_model`)."""
+    """Validate a model file's text (see :func:`load_model`); a loop with functions is refused
+    here, naming the commands that take it (:func:`parse_any_model` reads it)."""
+    model = parse_any_model(text, source, overrides)
+    if isinstance(model, RecastModel):
+        call = next(a.written_as for a in model.system.auxiliaries if a.written_as) \
+            if any(a.written_as for a in model.system.auxiliaries) else "pi"
+        raise _error(source, "[dynamics]", f"uses {call}: a loop with functions is taken by 'certify --model' "
+                                           "and 'verify' (and lyapcheck.api.certify); this command takes polynomial "
+                                           "and rational loops only")
+    return model
+
+
+def parse_any_model(text: str, source: str = "<model>", overrides: Mapping[str, object] | None = None
+                    ) -> "Model | RecastModel":
+    """A model file's text: a :class:`Model` (polynomial or rational loop) or, when its
+    ``[dynamics]`` use functions or pi, a :class:`~lyapcheck.models.recast.RecastModel`."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise _error(source, "file", f"is not valid TOML ({exc})") from None
-    return _Reader(source, text, data, dict(overrides or {})).model()
+    reader = _Reader(source, text, data, dict(overrides or {}))
+    dynamics = data.get("dynamics")
+    if isinstance(dynamics, dict) and uses_functions(list(dynamics.values())):
+        return reader.recast_model()
+    return reader.model()
+
+
+def load_any_model(path: str | Path, overrides: Mapping[str, object] | None = None) -> "Model | RecastModel":
+    """:func:`load_model`, or a loop with functions as a :class:`~lyapcheck.models.recast.RecastModel`."""
+    try:
+        return load_model(path, overrides)
+    except ModelFileError as exc:
+        if "a loop with functions is taken by" not in str(exc):
+            raise
+    return parse_any_model(Path(path).read_bytes().decode("utf-8"), str(path), overrides)
 
 
 class _Reader:
@@ -209,6 +239,51 @@ class _Reader:
                       set_forms=set_forms, stay_in_goal=stay_in_goal)
         check_equilibrium(model)
         return model
+
+    def recast_model(self) -> RecastModel:
+        """A loop with functions (lyapcheck.models.recast): the parameters are read, set to their
+        values and the loop recast; disturbances, outputs, sets and units are not taken yet."""
+        unknown = [k for k in self.data if k not in SECTIONS]
+        if unknown:
+            raise self.fail(f"[{unknown[0]}]", f"unknown section (sections: {', '.join(SECTIONS)})")
+        for section in ("disturbances", "outputs", "sets", "units"):
+            if section in self.data:
+                raise self.fail(f"[{section}]", "is not taken yet for a loop with functions (sin, sqrt, sat, ...): "
+                                                "remove it, or write the loop without functions")
+        head = self.table("model")
+        if "model" not in self.data:
+            raise self.fail("[model]", "missing (it declares the states)")
+        bad = [k for k in head if k not in MODEL_KEYS]
+        if bad:
+            raise self.fail(f"[model] {bad[0]}", f"unknown key (keys: {', '.join(MODEL_KEYS)})")
+        name = head.get("name", Path(self.source).stem)
+        origin = head.get("source", "")
+        for key, value in (("name", name), ("source", origin)):
+            if not isinstance(value, str):
+                raise self.fail(f"[model] {key}", f"must be text, got {value!r}")
+        states = self.states(head)
+        params, params_given = self.quantities("parameters", MAX_PARAMETERS)
+        self.check_unique(states, params, {})
+        params, params_given, _ = self.apply_overrides(params, params_given, {})
+        for reserved in ("pi", *FUNCTIONS):
+            if reserved in states or reserved in params:
+                raise self.fail("[model] states" if reserved in states else f"[parameters] {reserved}",
+                                f"'{reserved}' is a function or constant of the language; choose another name")
+        table = self.table("dynamics")
+        for key in table:
+            if key not in states:
+                raise self.fail(f"[dynamics] {key}", f"an equation without a state: no state named '{key}' "
+                                                     f"(states: {', '.join(states)})")
+        for s in states:
+            if s not in table:
+                raise self.fail("[dynamics]", f"the state '{s}' has no equation")
+        equilibrium = self.equilibrium(states, Ring(states))
+        domain = self.domain(states)
+        system = recast_dynamics(self.source, states, table, params, equilibrium)
+        return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
+                           parameters=params, parameters_given=params_given, equilibrium=equilibrium,
+                           domain=domain, system=system, dynamics_text={s: str(table[s]) for s in states},
+                           overrides={k: str(v) for k, v in self.overrides.items()})
 
     def states(self, head: dict[str, Any]) -> tuple[str, ...]:
         states = head.get("states")

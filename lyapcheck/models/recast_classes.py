@@ -1,0 +1,738 @@
+"""The classes on a recast (non-polynomial) loop: ``linearization``, ``sos_gas``, ``roa``, ``candidate``.
+
+Coordinates: the deviations from the equilibrium of the states and of every non-constant
+auxiliary (:meth:`lyapcheck.models.recast.RecastSystem.shift`); the constant roots stay. A
+Lyapunov function ``V`` is a polynomial in the states and the smooth auxiliaries. Each condition is
+proved on the set ``S`` of the recasting's relations (:mod:`lyapcheck.models.recast_sos`), which
+holds every point ``(z, a(z))`` of the true loop:
+
+- positivity ``V - eps |z|^2 >= 0`` on S (so ``V(z, a(z)) >= eps |z|^2``: positive definite and
+  radially unbounded in the **states**, whatever the auxiliaries do);
+- decrease ``-grad V . N - eps |z|^2 >= 0`` on S, with ``x' = N / D`` and ``D > 0`` proved on S
+  (each distinct factor of the denominators, :func:`prove_denominators`);
+- for a region, the decrease only where ``V <= level`` (a multiplier ``rho`` times ``V - level``).
+
+Then ``sos_gas`` proves global asymptotic stability of the true loop, and ``roa`` that every
+trajectory of the true loop starting where ``V(x, a(x)) <= level`` (a bounded set, by the
+positivity) converges to the equilibrium. A loop that enters only through ``sin`` and ``cos`` of an
+angle has its other equilibria (``k pi``) in every such set's complement: no global claim can be
+proved (none is false-certified: the identities would have to hold at those points too).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any, Final, Sequence
+
+from lyapcheck.models.expressions import Rational
+from lyapcheck.models.recast import RecastModel, RecastSystem, Relation, written_poly
+from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
+                                         order_at_origin, poly_from_json, poly_to_json, solve_on_faces)
+from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search, why_none
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
+
+#: the margin eps of positivity and decrease (times |z|^2), tried in turn
+EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
+#: degrees of V tried by sos_gas
+RECAST_GAS_DEGREES: Final = (2, 4)
+#: halvings of the level's bracket in roa's bisection
+LEVEL_BISECTIONS: Final = 10
+#: levels tried upwards (each the previous times this) before the bisection
+LEVEL_GROWTH: Final = 4
+
+
+# -- the loop in deviations -------------------------------------------------------------------------
+
+@dataclass
+class Loop:
+    """The recast loop in deviations, with its relations (the system's, shifted, then the proved
+    lower bounds ``r - c >= 0`` of square roots) and what proved them."""
+
+    system: RecastSystem
+    relations: list[Relation]
+    #: per square root with a proved lower bound: (c, its proof on the system's relations)
+    root_bounds: dict[str, tuple[Fraction, ConditionCertificate]] = field(default_factory=dict)
+    #: the angle states (:func:`angle_states`), each with its (sine, cosine) names: the loop lives
+    #: on a cylinder and every claim is modulo 2 pi in them
+    angles: dict[str, tuple[str, str]] = field(default_factory=dict)
+
+    @property
+    def ring(self) -> Ring:
+        return self.system.ring
+
+    @property
+    def n(self) -> int:
+        return self.system.n
+
+    def v_variables(self) -> list[int]:
+        """The indices of the variables V may use: the states (not the angles) and the smooth auxiliaries."""
+        names = [n for n in self.system.states + self.system.smooth() if n not in self.angles]
+        return [self.ring.names.index(n) for n in names]
+
+    def unused(self) -> frozenset[int]:
+        """The angles' indices: they appear in no identity (their sine and cosine do)."""
+        return frozenset(self.ring.names.index(a) for a in self.angles)
+
+    def coordinates(self) -> list[int]:
+        """The states V may use: every state but the angles (an angle enters through its sine and cosine)."""
+        return [i for i, s in enumerate(self.system.states) if s not in self.angles]
+
+    def flow(self, name: str) -> Rational:
+        """A state's or smooth auxiliary's flow, shifted."""
+        s = self.system
+        r = s.field[s.states.index(name)] if name in s.states else s.flows[name]
+        return Rational(self.ring, s.shift(r.numerator), s.shift(r.denominator)).normalized()
+
+
+def base_loop(system: RecastSystem) -> Loop:
+    angles = angle_states(system)
+    ring = system.ring
+    relations = [Relation(r.kind, system.shift(r.poly), r.why) for r in system.relations
+                 if not any(degree_in(ring, r.poly, [a]) > 0 for a in angles)]
+    return Loop(system, relations, angles=angles)
+
+
+def angle_states(system: RecastSystem) -> dict[str, tuple[str, str]]:
+    """The states that enter the loop only through the sine and cosine of themselves (a pendulum's
+    angle): nowhere in the field, the flows, or another function's argument. The loop is then
+    periodic in them; its certificates use the sine and cosine instead, and prove what holds on the
+    cylinder (convergence modulo 2 pi)."""
+    ring = system.ring
+    out: dict[str, tuple[str, str]] = {}
+    for theta in system.states:
+        pair = [a for a in system.auxiliaries if a.function in ("sin", "cos") and a.argument is not None
+                and a.argument == ring.gen(theta)]
+        if len(pair) != 2 or not all(a.smooth for a in pair):
+            continue
+        others = [a for a in system.auxiliaries if a.argument is not None and a not in pair]
+        polys = [r.numerator for r in system.field] + [r.denominator for r in system.field] + \
+            [r.numerator for r in system.flows.values()] + [r.denominator for r in system.flows.values()] + \
+            [a.argument for a in others if a.argument is not None]
+        if any(degree_in(ring, p, [theta]) > 0 for p in polys):
+            continue
+        sine = next(a.name for a in pair if a.function == "sin")
+        cosine = next(a.name for a in pair if a.function == "cos")
+        out[theta] = (sine, cosine)
+    return out
+
+
+def with_root_bounds(loop: Loop, bounds: dict[str, tuple[Fraction, ConditionCertificate]]) -> Loop:
+    """The loop with ``r - c >= 0`` for every proved square root bound (in the auxiliaries' order)."""
+    relations = list(loop.relations)
+    for a in loop.system.auxiliaries:
+        if a.name in bounds:
+            c = bounds[a.name][0]
+            relations.append(Relation("ge", loop.system.shift(loop.ring.gen(a.name)) - to_fmpq(c),
+                                      f"{a.name} >= {c} (sqrt of an argument proved >= {c * c})"))
+    return Loop(loop.system, relations, dict(bounds), dict(loop.angles))
+
+
+def common_denominator(loop: Loop, names: Sequence[str]) -> tuple[dict[str, Poly], Poly, list[Poly]]:
+    """``N`` and ``D`` with each flow ``= N / D`` (``D`` the product of the distinct denominators,
+    which are returned too)."""
+    flows = {n: loop.flow(n) for n in names}
+    D = loop.ring.constant(1)
+    for r in flows.values():  # the least common multiple of the denominators
+        if not r.denominator.is_constant():
+            D = D * r.denominator / D.gcd(r.denominator)
+    D = D * (1 / D.leading_coefficient())
+    distinct: list[Poly] = []
+    for factor, _ in D.factor()[1]:  # each irreducible factor once: positive factors make D positive
+        if not factor.is_constant():
+            factor = factor * (1 / factor.leading_coefficient())
+            distinct.append(factor if _at_origin_sign(loop, factor) >= 0 else -factor)
+    N = {}
+    for n, r in flows.items():
+        if r.denominator.is_constant():
+            N[n] = r.numerator * D * (1 / r.denominator.leading_coefficient())
+        else:
+            N[n] = r.numerator * (D / r.denominator)
+    return N, D, distinct
+
+
+# -- single proofs: F >= 0 on S -----------------------------------------------------------------------
+
+def prove_nonnegative(loop: Loop, F: Poly, search: Search, name: str) -> ConditionCertificate | None:
+    """An exact certificate of ``F >= 0`` on the loop's relations, or None."""
+    ring = loop.ring
+    support = ring.support(F) or [tuple([0] * ring.nvars)]
+    vanishing = _at_origin(loop, F) == 0  # then no term of the identity has a constant (nor a root alone)
+
+    def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
+        program = ConditionProgram(ring, loop.relations, drop, loop.unused())
+        return program.condition(name, support, [], max(sum(m) for m in support), vanishing=vanishing) or program
+
+    def accept(program: ConditionProgram, point: Any) -> ConditionCertificate | None:
+        cert = program.certificate(name, point)
+        return cert if check_condition(ring, F, loop.relations, cert)[0] else None
+
+    values = ParameterValues()
+    _set(values, *known_values(ring, name, F, support))
+    return solve_on_faces(search, build, values, accept)[0]
+
+
+def _set(values: ParameterValues, key: str, exact: list[Fraction]) -> None:
+    import numpy as np
+
+    values.exact[key] = exact
+    values.floats[key] = np.array([float(c) for c in exact])
+
+
+def prove_root_bounds(loop: Loop, search: Search) -> tuple[Loop, list[str]]:
+    """Prove each square root's argument ``q >= c^2`` with ``c = r(eq)/2 > 0`` (so ``r >= c``), or
+    ``q >= 0`` when ``r(eq) = 0``. Returns the loop with the bounds, and the roots whose argument
+    could not be proved non-negative (the file is then refused)."""
+    system = loop.system
+    bounds: dict[str, tuple[Fraction, ConditionCertificate]] = {}
+    unproved: list[str] = []
+    for a in system.auxiliaries:
+        if a.function != "sqrt" or a.argument is None:
+            continue
+        q = system.shift(a.argument)
+        assert a.value is not None
+        c = a.value / 2
+        if c > 0:
+            cert = prove_nonnegative(loop, q - to_fmpq(c * c), search, f"root_{a.name}")
+            if cert is not None:
+                bounds[a.name] = (c, cert)
+                continue
+        cert = prove_nonnegative(loop, q, search, f"nonneg_{a.name}")
+        if cert is None:
+            unproved.append(a.written_as or a.definition)
+        else:
+            bounds[a.name] = (Fraction(0), cert)
+    return with_root_bounds(loop, {k: v for k, v in bounds.items() if v[0] > 0}), unproved
+
+
+def root_proofs_json(loop: Loop) -> dict[str, Any]:
+    return {name: {"bound": str(c), "proof": cert.to_json(loop.ring)} for name, (c, cert) in loop.root_bounds.items()}
+
+
+def check_root_proofs(base: Loop, data: Any) -> tuple[Loop | None, str]:
+    """Re-check stored square-root bounds on the base relations; the loop with them, or why not."""
+    if not isinstance(data, dict):
+        return None, "recasting.roots must be a table"
+    bounds = {}
+    for name, item in data.items():
+        aux = next((a for a in base.system.auxiliaries if a.name == name and a.function == "sqrt"), None)
+        if aux is None or aux.argument is None:
+            return None, f"recasting.roots: {name!r} is not a square root of the loop"
+        c = Fraction(str(item["bound"]))
+        if c <= 0:
+            return None, f"recasting.roots.{name}: the bound must be > 0"
+        cert = ConditionCertificate.from_json(base.ring, item["proof"], len(base.relations))
+        F = base.system.shift(aux.argument) - to_fmpq(c * c)
+        ok, why = check_condition(base.ring, F, base.relations, cert)
+        if not ok:
+            return None, f"recasting.roots.{name}: {why}"
+        bounds[name] = (c, cert)
+    return with_root_bounds(base, bounds), "every square root's lower bound is proved exactly"
+
+
+def prove_denominators(loop: Loop, distinct: Sequence[Poly], search: Search
+                       ) -> tuple[list[tuple[Poly, Fraction, ConditionCertificate]], Poly | None]:
+    """For each distinct denominator ``d``: ``d - c >= 0`` on S with ``c = d(0)/4 > 0`` (exact);
+    returns the proofs, and the first denominator that failed (None when all passed)."""
+    ring = loop.ring
+    out = []
+    for k, d in enumerate(distinct):
+        at0 = _at_origin(loop, d)
+        if at0 is None or at0 <= 0:
+            return out, d
+        c = at0 / 4  # well inside d's bound at the equilibrium: an interior point for the solver
+        cert = prove_nonnegative(loop, d - to_fmpq(c), search, f"den{k}")
+        if cert is None:
+            return out, d
+        out.append((d, c, cert))
+    del ring
+    return out, None
+
+
+def _at_origin_sign(loop: Loop, p: Poly) -> int:
+    v = _at_origin(loop, p)
+    return 0 if v is None else (v > 0) - (v < 0)
+
+
+def _at_origin(loop: Loop, p: Poly) -> Fraction | None:
+    """``p`` at the equilibrium (every deviation 0), when that is rational (roots reduced)."""
+    ring = loop.ring
+    zero = {n: Fraction(0) for n in ring.names if n in loop.system.values}
+    value = loop.system.reduce(ring.substitute(p, zero))
+    if not value.is_constant():
+        return None
+    return Fraction(0) if value.is_zero() else Fraction(str(value.leading_coefficient()))
+
+
+# -- Lyapunov conditions ------------------------------------------------------------------------------
+
+def lie(loop: Loop, V: Poly, N: dict[str, Poly]) -> Poly:
+    """``grad V . N``."""
+    ring = loop.ring
+    total = ring.zero()
+    for name, n in N.items():
+        i = ring.names.index(name)
+        if degree_in(ring, V, [name]) > 0:
+            total += V.derivative(i) * n
+    return total
+
+
+def state_square(loop: Loop) -> Poly:
+    """``|z|^2`` over the states; an angle's ``theta^2`` is ``sin^2 + (cos - 1)^2`` (zero exactly at
+    the angle's equilibrium modulo 2 pi)."""
+    ring = loop.ring
+    total = ring.zero()
+    for s in loop.system.states:
+        if s in loop.angles:
+            sine, cosine = loop.angles[s]
+            total += ring.gen(sine) ** 2 + ring.gen(cosine) ** 2  # deviations: c - 1
+        else:
+            total += ring.gen(s) * ring.gen(s)
+    return total
+
+
+def v_names(loop: Loop, V: Poly) -> list[str]:
+    """The variables whose flows ``V'`` needs (V's variables; the states but the angles always, for a
+    stable order)."""
+    ring = loop.ring
+    return [s for s in loop.system.states if s not in loop.angles] + \
+        [n for n in loop.system.smooth() if degree_in(ring, V, [n]) > 0]
+
+
+@dataclass
+class Proved:
+    """A certified V: its certificate's parts (JSON) and figures."""
+
+    certificate: dict[str, Any]
+    numbers: dict[str, Any]
+
+
+def certificate_head(loop: Loop, V: Poly, eps: Fraction, D: Poly, dens: Sequence[tuple[Poly, Fraction,
+                                                                                    ConditionCertificate]]
+                     ) -> dict[str, Any]:
+    system = loop.system
+    ring = loop.ring
+    return {"kind": "recast", "variables": list(ring.names), "auxiliaries": system.definitions(),
+            "shift": {k: str(v) for k, v in system.values.items()},
+            "V": poly_to_json(ring, V), "V_text": v_text(system, V), "epsilon": str(eps),
+            "denominator": poly_to_json(ring, D),
+            "recasting": {"roots": root_proofs_json(loop),
+                          "denominators": [{"poly": poly_to_json(ring, d), "bound": str(c), "proof": cert.to_json(ring)}
+                                           for d, c, cert in dens]}}
+
+
+def v_text(system: RecastSystem, V: Poly) -> str:
+    """V written with the functions: each deviation ``v - value`` spelled out in the model's language."""
+    ring = system.ring
+    text = written_poly(ring, V)
+    names = sorted(ring.names, key=len, reverse=True)
+    table = {}
+    for n in names:
+        aux = next((a for a in system.auxiliaries if a.name == n), None)
+        base = aux.definition if aux is not None else n
+        value = system.values.get(n)
+        table[n] = f"({base} - {value})" if value else base
+    import re
+
+    return re.sub(r"\b(" + "|".join(map(re.escape, names)) + r")\b", lambda m: table[m.group(1)], text)
+
+
+def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGREES) -> ConditionResult:
+    """Search ``V`` (free, in the states and smooth auxiliaries) with positivity and a global decrease."""
+    ring = loop.ring
+    search = Search(ring, budget)
+    tried: list[str] = []
+    all_vars = loop.v_variables()
+    coordinates = loop.coordinates()
+    templates = [(dv, vs) for dv in degrees for vs in ([coordinates] if len(all_vars) == len(coordinates) or
+                                                        loop.angles else [coordinates, all_vars])]
+    templates = [(dv, vs) for dv, vs in templates if vs] if not loop.angles else [(dv, all_vars) for dv in degrees]
+    for dv, v_vars in templates:
+        basis = [m for m in monomials(ring.nvars, 1, dv) if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
+        # the flows of every V variable (V may use any of them)
+        names = [ring.names[i] for i in v_vars]
+        label = f"degree {dv} in {', '.join(names)}"
+        N, D, distinct = common_denominator(loop, names)
+        dens, failed = prove_denominators(loop, distinct, search)
+        if failed is not None:
+            return ConditionResult("sos_gas", "not_applicable", f"the denominator {written_poly(ring, failed)} could "
+                                   "not be proved positive on the recasting's set", property="GAS")
+        l2 = state_square(loop)
+        pos_terms = [(f"v{k}", ring.monomial(m)) for k, m in enumerate(basis)]
+        dec_terms = [(f"v{k}", -lie(loop, ring.monomial(m), N)) for k, m in enumerate(basis)]
+        top_dec = max((sum(mm) for _, p in dec_terms for mm in ring.support(p)), default=2)
+
+        def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
+            program = ConditionProgram(ring, loop.relations, drop, loop.unused())
+            for k in range(len(basis)):
+                program.free(f"v{k}")
+            return program.condition("P", ring.support(l2), pos_terms, dv) or \
+                program.condition("D", ring.support(l2), dec_terms, top_dec) or program
+
+        for eps in EPSILONS:
+            values = ParameterValues()
+            _set(values, *known_values(ring, "P", -l2 * to_fmpq(eps), ring.support(l2)))
+            _set(values, *known_values(ring, "D", -l2 * to_fmpq(eps), ring.support(l2)))
+
+            def accept(program: ConditionProgram, point: Any, eps: Fraction = eps) -> tuple[Poly, Any, Any] | None:
+                V = sum((ring.monomial(m, point.scalars[f"v{k}"]) for k, m in enumerate(basis)), ring.zero())
+                pos, dec = program.certificate("P", point), program.certificate("D", point)
+                ok = check_condition(ring, V - l2 * to_fmpq(eps), loop.relations, pos)[0] and \
+                    check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(eps), loop.relations, dec)[0]
+                return (V, pos, dec) if ok else None
+
+            try:
+                found, why = solve_on_faces(search, build, values, accept)
+            except BudgetExhausted as exc:
+                return ConditionResult("sos_gas", "inconclusive", f"{exc}; tried {'; '.join(tried) or 'nothing'}",
+                                       property="GAS", solver={"solves": search.log})
+            if found is None:
+                tried.append(f"{label}, eps {eps}: {why}")
+                if "size" in why or "rows" in why or "infeasible" in why:
+                    break
+                continue
+            V, pos, dec = found
+            cert = certificate_head(loop, V, eps, D, dens)
+            cert.update({"positivity": pos.to_json(ring), "decrease": dec.to_json(ring)})
+            return ConditionResult("sos_gas", "certified",
+                                   f"V(x, a(x)) >= {eps} |x - x_eq|^2 and V' <= -{eps} |x - x_eq|^2 / D with D > 0 on "
+                                   "the recasting's relations (exact): globally asymptotically stable",
+                                   numbers={"degree": dv}, certificate=cert, property="GAS",
+                                   solver={"solves": search.log})
+    return ConditionResult("sos_gas", "not_certified", "no V found: " + "; ".join(tried), property="GAS",
+                           numbers={"reason": "; ".join(tried)}, solver={"solves": search.log})
+
+
+def region_of_attraction(loop: Loop, budget: Budget, candidates: Sequence[tuple[str, Poly]],
+                         name: str = "roa") -> ConditionResult:
+    """For each fixed ``V`` (shifted), the largest level (bisection) with the decrease on
+    ``{V <= level}``; the best exact one is the answer."""
+    ring = loop.ring
+    search = Search(ring, budget)
+    l2 = state_square(loop)
+    best: tuple[Fraction, dict[str, Any], str] | None = None
+    tried: list[str] = []
+    for label, V in candidates:
+        try:
+            found = _largest_level(loop, V, search, l2)
+        except BudgetExhausted as exc:
+            tried.append(f"{label}: {exc}")
+            break
+        if isinstance(found, str):
+            tried.append(f"{label}: {found}")
+            continue
+        level, cert = found
+        tried.append(f"{label}: level {float(level):.6g}")
+        if best is None or _volume_key(loop, V, level) > _volume_key(loop, *best[1]["_key"]):
+            cert["_key"] = (V, level)
+            best = (level, cert, label)
+    if best is None:
+        return ConditionResult(name, "not_certified", "no region found: " + "; ".join(tried), property="ROA",
+                               numbers={"reason": "; ".join(tried)}, solver={"solves": search.log})
+    level, cert, label = best
+    cert.pop("_key", None)
+    return ConditionResult(name, "certified",
+                           f"every trajectory of the true loop starting where V(x, a(x)) <= {float(level):.6g} "
+                           f"converges to the equilibrium (V from {label}; positivity and decrease on the "
+                           "recasting's relations, exact)", numbers={"level": str(level), "V_from": label,
+                                                                     "tried": tried},
+                           certificate=cert, property="ROA", solver={"solves": search.log})
+
+
+def _volume_key(loop: Loop, V: Poly, level: Fraction) -> float:
+    """A comparable size of ``{V <= level}``: the share of sample states inside (fixed samples)."""
+    import numpy as np
+
+    from lyapcheck.models.recast_numeric import inside_share
+
+    return float(inside_share(loop.system, V, level, np.random.default_rng(0)))
+
+
+def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly) -> tuple[Fraction, dict[str, Any]] | str:
+    ring = loop.ring
+    names = v_names(loop, V)
+    N, D, distinct = common_denominator(loop, names)
+    dens, failed = prove_denominators(loop, distinct, search)
+    if failed is not None:
+        return f"the denominator {written_poly(ring, failed)} could not be proved positive"
+    # positivity of V itself
+    eps_pos = None
+    pos = None
+    for eps in EPSILONS:
+        pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pv")
+        if pos is not None:
+            eps_pos = eps
+            break
+    if pos is None or eps_pos is None:
+        return "V could not be proved positive definite in the states on the recasting's set"
+    dV = lie(loop, V, N)
+    support_known = sorted(set(ring.support(dV)) | set(ring.support(l2)))
+    region_support = sorted(set(ring.support(V)) | {tuple([0] * ring.nvars)})
+    top = max(max(sum(m) for m in support_known), max(sum(m) for r in loop.relations for m in ring.support(r.poly)))
+    eps = EPSILONS[-1]
+    F = -dV - l2 * to_fmpq(eps)
+
+    def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
+        program = ConditionProgram(ring, loop.relations, drop, loop.unused())
+        return program.condition("R", support_known, [], top, region_support=region_support) or program
+
+    def attempt(level: Fraction) -> ConditionCertificate | None:
+        values = ParameterValues()
+        _set(values, *known_values(ring, "R", F, support_known))
+        W = V - to_fmpq(level)
+        terms = ring.terms(W)
+        _set(values, "W_R", [terms.get(tuple(m), Fraction(0)) for m in region_support])
+
+        def accept(program: ConditionProgram, point: Any) -> ConditionCertificate | None:
+            cert = program.certificate("R", point)
+            return cert if check_condition(ring, F, loop.relations, cert, region=W)[0] else None
+
+        return solve_on_faces(search, build, values, accept)[0]
+
+    level = _scale_of(loop, V)
+    best: tuple[Fraction, ConditionCertificate] | None = None
+    lo, hi = Fraction(0), None
+    for _ in range(12):  # grow while it works
+        cert = attempt(level)
+        if cert is None:
+            hi = level
+            break
+        best, lo = (level, cert), level
+        level *= LEVEL_GROWTH
+    if hi is None:
+        hi = level
+    for _ in range(LEVEL_BISECTIONS):
+        mid = _dyadic((lo + hi) / 2)
+        if not lo < mid < hi:
+            break
+        cert = attempt(mid)
+        if cert is None:
+            hi = mid
+        else:
+            best, lo = (mid, cert), mid
+    if best is None:
+        return f"no level found (the smallest tried was {float(hi):.3g})"
+    level, cert = best
+    out = certificate_head(loop, V, eps, D, dens)
+    out.update({"level": str(level), "positivity_epsilon": str(eps_pos), "positivity": pos.to_json(ring),
+                "decrease": cert.to_json(ring)})
+    return level, out
+
+
+def _dyadic(x: Fraction, bits: int = 12) -> Fraction:
+    """``x`` rounded to ``bits`` significant bits (short certificates)."""
+    if x <= 0:
+        return x
+    import math
+
+    e = math.floor(math.log2(x))
+    step = Fraction(2) ** (e - bits)
+    return (x // step) * step
+
+
+def _scale_of(loop: Loop, V: Poly) -> Fraction:
+    """A first level to try: V's value at a small state deviation (a tenth in each state)."""
+    import numpy as np
+
+    from lyapcheck.models.recast_numeric import v_values
+
+    pts = np.eye(loop.n) * 0.1
+    vals = v_values(loop.system, V, pts)
+    return _dyadic(Fraction(max(float(np.min(vals)), 1e-6)))
+
+
+def quadratic_candidate(loop: Loop, J: list[list[Fraction]]) -> Poly | None:
+    """``z^T P z`` with ``J^T P + P J = -I`` (exact), when ``P > 0``."""
+    from lyapcheck.models.linearization import lyapunov_solution
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    P = lyapunov_solution(J)
+    if P is None or not is_positive_definite(P):
+        return None
+    ring = loop.ring
+    z = [ring.gen(s) for s in loop.system.states]
+    square = {}
+    for i, s in enumerate(loop.system.states):
+        if s in loop.angles:  # on the cylinder: theta -> sin theta, theta^2 -> 2 (1 - cos theta)
+            sine, cosine = loop.angles[s]
+            z[i] = ring.gen(sine)
+            square[i] = -2 * ring.gen(cosine)
+    return sum((square[i] * to_fmpq(P[i][i]) if i == j and i in square else z[i] * z[j] * to_fmpq(P[i][j])
+                for i in range(loop.n) for j in range(loop.n)), ring.zero())
+
+
+# -- the linearization ------------------------------------------------------------------------------
+
+def jacobian(loop: Loop) -> list[list[Fraction]] | str:
+    """The exact Jacobian of the true field at the equilibrium (chain rule through the
+    auxiliaries), or why there is none (a non-differentiable function there, or an irrational entry)."""
+    system = loop.system
+    ring = loop.ring
+    n = loop.n
+    # d a_k / d z_j at the origin, in order
+    grads: dict[str, list[Fraction]] = {s: [Fraction(int(i == j)) for j in range(n)] for i, s in enumerate(system.states)}
+    for a in system.auxiliaries:
+        if a.argument is None:
+            grads[a.name] = [Fraction(0)] * n
+            continue
+        u = system.shift(a.argument)
+        du = _total_gradient(loop, u, grads)
+        if isinstance(du, str):
+            return du
+        u0 = Fraction(0) if a.value is None else _argument_value(system, a)
+        if a.function in ("sin", "cos", "exp", "atan", "tanh", "sqrt"):
+            factor = {"sin": Fraction(1), "cos": Fraction(0), "exp": Fraction(1), "atan": Fraction(1),
+                      "tanh": Fraction(1)}.get(a.function)
+            if a.function == "sqrt":
+                if not a.value:
+                    return f"{a.written_as}: sqrt is not differentiable where its argument is 0"
+                factor = 1 / (2 * a.value)
+            assert factor is not None
+            grads[a.name] = [factor * d for d in du]
+        elif a.function == "abs":
+            if u0 == 0:
+                return f"{a.written_as}: abs is not differentiable where its argument is 0 (the equilibrium)"
+            grads[a.name] = [(1 if u0 > 0 else -1) * d for d in du]
+        elif a.function == "sat":
+            assert a.limit is not None
+            if abs(u0) == a.limit:
+                return f"{a.written_as}: sat is not differentiable at its corner (the equilibrium)"
+            grads[a.name] = list(du) if abs(u0) < a.limit else [Fraction(0)] * n
+    J = []
+    for r in system.field:
+        num, den = system.shift(r.numerator), system.shift(r.denominator)
+        d0 = _at_origin(loop, den)
+        if d0 is None or d0 == 0:
+            return "a denominator of the field is irrational or 0 at the equilibrium"
+        row = _total_gradient(loop, num, grads)
+        if isinstance(row, str):
+            return row
+        J.append([x / d0 for x in row])
+    return J
+
+
+def _argument_value(system: RecastSystem, a: Any) -> Fraction:
+    ring = system.ring
+    point = [system.values.get(n, Fraction(0)) for n in ring.names]
+    return ring.evaluate(a.argument, point)
+
+
+def _total_gradient(loop: Loop, p: Poly, grads: dict[str, list[Fraction]]) -> list[Fraction] | str:
+    ring = loop.ring
+    n = loop.n
+    out = [Fraction(0)] * n
+    for i, name in enumerate(ring.names):
+        if degree_in(ring, p, [name]) <= 0:
+            continue
+        if name in grads and not any(grads[name]):
+            continue  # the variable does not move to first order (cos at 0): its partial does not matter
+        partial = _at_origin(loop, p.derivative(i))
+        if partial is None:
+            return "the Jacobian has an irrational entry (sqrt 2 or sqrt 3); its stability is not decided exactly here"
+        if partial == 0:
+            continue
+        if name not in grads:
+            return f"{name}: no derivative"  # pragma: no cover
+        out = [o + partial * g for o, g in zip(out, grads[name])]
+    return out
+
+
+def linearization(loop: Loop) -> ConditionResult:
+    from lyapcheck.models.linearization import decide
+
+    J = jacobian(loop)
+    if isinstance(J, str):
+        return ConditionResult("linearization", "not_applicable", J, property="LES")
+    return decide(J)
+
+
+# -- the model's classes ------------------------------------------------------------------------------
+
+#: the classes a recast loop takes, in order
+RECAST_CLASSES: Final = ("linearization", "sos_gas", "roa", "candidate")
+
+
+def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float
+            ) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
+    """Run the chosen classes; the loop (with its proved square-root bounds) and the seconds each took."""
+    results: dict[str, ConditionResult] = {}
+    seconds: dict[str, float] = {}
+    base = base_loop(model.system)
+    budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+    loop, unproved = prove_root_bounds(base, Search(base.ring, budget))
+    if unproved:
+        raise ValueError(unproved[0])
+    start = time.perf_counter()
+    lin = linearization(loop)
+    if "linearization" in classes:
+        results["linearization"] = lin
+        seconds["linearization"] = time.perf_counter() - start
+    if "sos_gas" in classes:
+        start = time.perf_counter()
+        results["sos_gas"] = sos_gas(loop, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        seconds["sos_gas"] = time.perf_counter() - start
+    if "roa" in classes:
+        start = time.perf_counter()
+        if results.get("sos_gas") is not None and results["sos_gas"].status == "certified":
+            results["roa"] = ConditionResult("roa", "not_applicable", "global asymptotic stability is certified "
+                                             "(sos_gas): the region of attraction is the whole state space",
+                                             property="ROA")
+        else:
+            candidates = []
+            J = jacobian(loop)
+            if not isinstance(J, str):
+                V0 = quadratic_candidate(loop, J)
+                if V0 is not None:
+                    candidates.append(("the linearization (J^T P + P J = -I)", V0))
+            if not candidates:
+                results["roa"] = ConditionResult("roa", "not_certified", "the linearization gives no quadratic V "
+                                                 f"({lin.summary})", property="ROA")
+            else:
+                budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+                from lyapcheck.models.recast_improve import improved_candidates
+
+                candidates += improved_candidates(loop, candidates[0][1], budget)
+                results["roa"] = region_of_attraction(loop, budget, candidates)
+        seconds["roa"] = time.perf_counter() - start
+    if "candidate" in classes and candidate is not None:
+        start = time.perf_counter()
+        results["candidate"] = run_candidate(loop, candidate, Budget(time_limit_s,
+                                                                     "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        seconds["candidate"] = time.perf_counter() - start
+    return results, loop, seconds
+
+
+def run_candidate(loop: Loop, V: Poly, budget: Budget) -> ConditionResult:
+    """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
+    ring = loop.ring
+    search = Search(ring, budget)
+    l2 = state_square(loop)
+    names = v_names(loop, V)
+    N, D, distinct = common_denominator(loop, names)
+    dens, failed = prove_denominators(loop, distinct, search)
+    if failed is not None:
+        return ConditionResult("candidate", "not_applicable", f"the denominator {written_poly(ring, failed)} could not "
+                               "be proved positive on the recasting's set")
+    for eps in EPSILONS:
+        pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pc")
+        if pos is None:
+            continue
+        dec = prove_nonnegative(loop, -lie(loop, V, N) - l2 * to_fmpq(eps), search, "Dc")
+        if dec is not None:
+            cert = certificate_head(loop, V, eps, D, dens)
+            cert.update({"positivity": pos.to_json(ring), "decrease": dec.to_json(ring)})
+            return ConditionResult("candidate", "certified", f"the candidate proves global asymptotic stability: "
+                                   f"V >= {eps} |x - x_eq|^2 and V' <= -{eps} |x - x_eq|^2 / D on the recasting's "
+                                   "relations (exact)", certificate=cert, property="GAS")
+        break
+    else:
+        return ConditionResult("candidate", "not_certified", "the candidate could not be proved positive definite in "
+                               "the states (V >= eps |x - x_eq|^2) on the recasting's relations", property="ROA")
+    region = region_of_attraction(loop, budget, [("the candidate", V)], name="candidate")
+    if region.status != "certified":
+        region.summary = ("the candidate's derivative is not negative definite (no strict global decrease was proved; "
+                          "V' <= 0 alone needs LaSalle's argument, which this class does not make) and no sublevel set "
+                          "was certified: " + region.summary)
+    return region
