@@ -34,6 +34,7 @@ from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.modelfile import Model
+    from lyapcheck.models.recast import RecastModel
     from lyapcheck.paper.params import Problem
     from lyapcheck.results import ConditionResult
 
@@ -310,6 +311,23 @@ def load_model_file(model: "str | Path | Model", settings: Mapping[str, object] 
     return load_model(model, extra)
 
 
+def _recast_model(model: object, settings: Mapping[str, object] | Sequence[str] | None, candidate: str | None
+                  ) -> "RecastModel | None":
+    """The model as a loop with functions (lyapcheck.models.recast), or None when it is polynomial."""
+    from lyapcheck.models.modelfile import load_any_model, parse_any_model
+    from lyapcheck.models.recast import RecastModel
+
+    if isinstance(model, RecastModel):
+        extra = model_settings(settings, model.source)
+        reread = parse_any_model(model.text, model.source, {**model.overrides, **extra}, candidate)
+        return reread if isinstance(reread, RecastModel) else None
+    if not isinstance(model, (str, Path)):
+        return None
+    extra = model_settings(settings, str(model))
+    loaded = load_any_model(model, extra, candidate)
+    return loaded if isinstance(loaded, RecastModel) else None
+
+
 def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
                        candidate: str | None = None, classes: str | Sequence[str] | None = None,
                        time_limit_s: float | None = None, box: Sequence[str] | Mapping[str, Any] | None = None
@@ -319,6 +337,17 @@ def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, ob
     from lyapcheck.models.certificate import build_document
     from lyapcheck.models.certify import certify_model
 
+    recast = _recast_model(model, settings, candidate)
+    if recast is not None:
+        from lyapcheck.models.recast_certify import certify_recast
+
+        if box:
+            raise InvalidParameter("box", "no --box for a loop with functions (certify a point with --set)",
+                                   " ".join(box) if not isinstance(box, Mapping) else str(dict(box)))
+        with _argument_names():
+            verdict, results, document = certify_recast(recast, classes=classes, candidate=candidate,
+                                                        time_limit_s=time_limit_s)
+        return CertifyResult(verdict=verdict, dynamics="model", conditions=results, document=document)
     loaded = _load_with_settings(model, settings)
     with _argument_names():
         parsed = parse_model_box(loaded, box) if box else None

@@ -225,7 +225,11 @@ def what_it_means(doc: Mapping[str, Any], cond: Mapping[str, Any]) -> str:
         parts += [(f"V_{name}", data) for name, data in outputs.items() if isinstance(data, Mapping) and "V_text" in data]
     for label, data in parts:
         try:
-            text += f"\n{label} = {v_text(data['V'], data['variables'], shifts, limit=V_SHORT_TERMS)}"
+            names, at = data["variables"], shifts
+            if data.get("kind") == "recast":  # a loop with functions: each auxiliary by its definition
+                names = [data["auxiliaries"].get(n, n) for n in data["variables"]]
+                at = {data["auxiliaries"].get(n, n): v for n, v in data["shift"].items()}
+            text += f"\n{label} = {v_text(data['V'], names, at, limit=V_SHORT_TERMS)}"
         except (KeyError, TypeError, ValueError, ArithmeticError):
             continue  # a malformed V is verify's to report; the table shows the summary alone
     return text

@@ -91,6 +91,10 @@ def verify_document(doc: dict[str, Any]) -> list[Row]:
         raise InputFileError(f"model certificate has schema_version {doc.get('schema_version')!r}; this lyapcheck "
                              f"reads {SCHEMA_VERSION}")
     try:
+        if isinstance(doc.get("recast"), dict):  # a loop with functions (lyapcheck.models.recast_certify)
+            from lyapcheck.models.recast_certify import verify_recast
+
+            return verify_recast(doc)
         return _verify(doc)
     except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError, RecursionError) as exc:
         text = repr(exc)
@@ -312,7 +316,8 @@ def _with_verdict(doc: dict[str, Any], rows: list[Row]) -> list[Row]:
     proven = {name: c for name, c in conditions.items()
               if isinstance(c, dict) and c.get("status") == "certified" and any(n == name for n, _, _ in rows)
               and all(ok for n, ok, _ in rows if n == name)}
-    prerequisites = all(ok for n, ok, _ in rows if n in ("model", "parameters", "box", "denominators", "scaling"))
+    prerequisites = all(ok for n, ok, _ in rows if n in ("model", "parameters", "box", "denominators", "scaling",
+                                                         "recasting"))
     expected = verdict_of(proven) if prerequisites else "not_certified"
     stated = doc.get("verdict")
     rows.append(("verdict", stated == expected, f"verdict '{stated}' is supported" if stated == expected else

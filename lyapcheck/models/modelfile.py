@@ -157,10 +157,11 @@ def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, obje
     return model
 
 
-def parse_any_model(text: str, source: str = "<model>", overrides: Mapping[str, object] | None = None
-                    ) -> "Model | RecastModel":
+def parse_any_model(text: str, source: str = "<model>", overrides: Mapping[str, object] | None = None,
+                    candidate: str | None = None) -> "Model | RecastModel":
     """A model file's text: a :class:`Model` (polynomial or rational loop) or, when its
-    ``[dynamics]`` use functions or pi, a :class:`~lyapcheck.models.recast.RecastModel`."""
+    ``[dynamics]`` use functions or pi, a :class:`~lyapcheck.models.recast.RecastModel` (with a
+    ``candidate`` V recast along, whose functions may be new ones)."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -168,18 +169,19 @@ def parse_any_model(text: str, source: str = "<model>", overrides: Mapping[str, 
     reader = _Reader(source, text, data, dict(overrides or {}))
     dynamics = data.get("dynamics")
     if isinstance(dynamics, dict) and uses_functions(list(dynamics.values())):
-        return reader.recast_model()
+        return reader.recast_model(candidate)
     return reader.model()
 
 
-def load_any_model(path: str | Path, overrides: Mapping[str, object] | None = None) -> "Model | RecastModel":
+def load_any_model(path: str | Path, overrides: Mapping[str, object] | None = None, candidate: str | None = None
+                   ) -> "Model | RecastModel":
     """:func:`load_model`, or a loop with functions as a :class:`~lyapcheck.models.recast.RecastModel`."""
     try:
         return load_model(path, overrides)
     except ModelFileError as exc:
         if "a loop with functions is taken by" not in str(exc):
             raise
-    return parse_any_model(Path(path).read_bytes().decode("utf-8"), str(path), overrides)
+    return parse_any_model(Path(path).read_bytes().decode("utf-8"), str(path), overrides, candidate)
 
 
 class _Reader:
@@ -240,7 +242,7 @@ class _Reader:
         check_equilibrium(model)
         return model
 
-    def recast_model(self) -> RecastModel:
+    def recast_model(self, candidate: str | None = None) -> RecastModel:
         """A loop with functions (lyapcheck.models.recast): the parameters are read, set to their
         values and the loop recast; disturbances, outputs, sets and units are not taken yet."""
         unknown = [k for k in self.data if k not in SECTIONS]
@@ -279,11 +281,11 @@ class _Reader:
                 raise self.fail("[dynamics]", f"the state '{s}' has no equation")
         equilibrium = self.equilibrium(states, Ring(states))
         domain = self.domain(states)
-        system = recast_dynamics(self.source, states, table, params, equilibrium)
+        system, V = recast_dynamics(self.source, states, table, params, equilibrium, candidate)
         return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
                            parameters=params, parameters_given=params_given, equilibrium=equilibrium,
                            domain=domain, system=system, dynamics_text={s: str(table[s]) for s in states},
-                           overrides={k: str(v) for k, v in self.overrides.items()})
+                           overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V)
 
     def states(self, head: dict[str, Any]) -> tuple[str, ...]:
         states = head.get("states")

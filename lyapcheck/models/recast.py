@@ -513,10 +513,13 @@ def uses_functions(texts: Sequence[object]) -> bool:
 
 
 def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, object],
-                    constants: Mapping[str, Fraction], equilibrium: Sequence[Fraction]) -> RecastSystem:
+                    constants: Mapping[str, Fraction], equilibrium: Sequence[Fraction],
+                    candidate: str | None = None) -> tuple[RecastSystem, Poly | None]:
     """Parse each state's right-hand side with the functions recast (one-line
-    :class:`~lyapcheck.errors.ModelFileError` naming the key on anything refused)."""
-    slots = count_calls([str(t) for t in texts.values()])
+    :class:`~lyapcheck.errors.ModelFileError` naming the key on anything refused); with a
+    ``candidate`` V (``--candidate``, the same language), its functions are recast too and it is
+    returned as a polynomial in the recast ring's deviations (0 at the equilibrium)."""
+    slots = count_calls([str(t) for t in texts.values()] + ([candidate] if candidate is not None else []))
     recaster = Recaster(states, tuple(equilibrium), slots)
     rhs: list[Rational] = []
     for s in states:
@@ -532,15 +535,36 @@ def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, ob
             raise ModelFileError(source, key, "pi may appear only in an argument of sin or cos (as k*pi/12 added to "
                                               "the rest); elsewhere it would be a transcendental coefficient")
         rhs.append(r)
+    extra: list[Rational] = []
+    if candidate is not None:
+        try:
+            v, _ = parse_with_divisors(str(candidate), recaster.ring, calls=recaster, names=states, constants=constants)
+        except ExpressionError as exc:
+            raise ModelFileError(source, "--candidate", str(exc)) from None
+        if not v.is_polynomial():
+            raise ModelFileError(source, "--candidate", "must be polynomial in the states and functions (no division "
+                                                        "by an expression of the states)")
+        extra.append(v)
     try:
         flows = recaster.flows(rhs)
     except ExpressionError as exc:  # pragma: no cover - defensive
         raise ModelFileError(source, "[dynamics]", str(exc)) from None
-    return _finish(source, recaster, rhs, flows, equilibrium)
+    system, moved = _finish(source, recaster, rhs, flows, equilibrium, extra)
+    if not moved:
+        return system, None
+    V = system.shift(moved[0].numerator)
+    if any(degree_in(system.ring, V, [a.name]) > 0 for a in system.auxiliaries if not a.smooth or a.value is None):
+        raise ModelFileError(source, "--candidate", "may use the states and smooth functions of them (sin, cos, exp, "
+                                                    "sqrt, atan, tanh), not abs, min, max, sat or irrational constants")
+    at0 = system.reduce(system.ring.substitute(V, {n: Fraction(0) for n in system.values}))
+    if not at0.is_zero():
+        raise ModelFileError(source, "--candidate", f"must be 0 at the equilibrium, got {written_poly(system.ring, at0)} "
+                                                    "there")
+    return system, V
 
 
 def _finish(source: str, recaster: Recaster, rhs: Sequence[Rational], flows: Mapping[int, Rational],
-            equilibrium: Sequence[Fraction]) -> RecastSystem:
+            equilibrium: Sequence[Fraction], extra: Sequence[Rational] = ()) -> tuple[RecastSystem, list[Rational]]:
     """Name the auxiliaries, move everything to the final ring, and compute the equilibrium values."""
     states = recaster.states
     auxes = recaster.auxiliaries
@@ -610,7 +634,7 @@ def _finish(source: str, recaster: Recaster, rhs: Sequence[Rational], flows: Map
     system = RecastSystem(ring=ring, states=states, auxiliaries=tuple(final), field=field_rhs, flows=flow_map,
                           relations=relations, values=values)
     _check_equilibrium(source, system)
-    return system
+    return system, [move_rational(r) for r in extra]
 
 
 def _value_at(source: str, a: Auxiliary, u: Fraction) -> Fraction:
@@ -672,6 +696,8 @@ class RecastModel:
     #: the right-hand sides as written (for simulating the true field)
     dynamics_text: dict[str, str]
     overrides: dict[str, str] = field(default_factory=dict)
+    #: ``--candidate`` as a polynomial in the recast ring's deviations (its functions recast with the loop's)
+    candidate_v: Poly | None = None
 
     @property
     def sha256(self) -> str:

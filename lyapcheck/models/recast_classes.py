@@ -39,9 +39,11 @@ EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
 #: degrees of V tried by sos_gas
 RECAST_GAS_DEGREES: Final = (2, 4)
 #: halvings of the level's bracket in roa's bisection
-LEVEL_BISECTIONS: Final = 10
+LEVEL_BISECTIONS: Final = 7
 #: levels tried upwards (each the previous times this) before the bisection
 LEVEL_GROWTH: Final = 4
+#: at most this many levels upwards
+LEVEL_GROWTH_STEPS: Final = 10
 
 
 # -- the loop in deviations -------------------------------------------------------------------------
@@ -405,52 +407,87 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
                            numbers={"reason": "; ".join(tried)}, solver={"solves": search.log})
 
 
-def region_of_attraction(loop: Loop, budget: Budget, candidates: Sequence[tuple[str, Poly]],
+@dataclass
+class Region:
+    """A certified sublevel set ``{V <= level}``: its V, its certificate (JSON) and its multiplier rho."""
+
+    label: str
+    V: Poly
+    level: Fraction
+    certificate: dict[str, Any]
+    rho: Poly
+
+
+def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fraction | None = None) -> Region | str:
+    """The largest certified level of a fixed ``V`` (bisection), or why there is none."""
+    found = _largest_level(loop, V, search, state_square(loop), start)
+    if isinstance(found, str):
+        return found
+    level, cert = found
+    rho = cert.pop("_rho")
+    return Region(label, V, level, cert, rho)
+
+
+def level_certificate(loop: Loop, V: Poly, search: Search) -> tuple[Fraction, Poly] | str:
+    """The largest certified level of ``V`` and its region multiplier ``rho`` (the V-s iteration's
+    level step), or why there is none."""
+    found = certify_region(loop, V, search, "")
+    return found if isinstance(found, str) else (found.level, found.rho)
+
+
+def box_share(loop: Loop, region: Region, box: tuple[Any, Any]) -> float:
+    """The share of fixed uniform samples of the box (deviations ``lo..hi``) inside the region."""
+    import numpy as np
+
+    from lyapcheck.models.recast_numeric import v_values
+
+    lo, hi = box
+    Z = lo + (hi - lo) * np.random.default_rng(0).random((4000, loop.n))
+    return float(np.mean(v_values(loop.system, region.V, Z) <= float(region.level)))
+
+
+def best_region(loop: Loop, regions: Sequence[Region], tried: Sequence[str], box: tuple[Any, Any],
+                search: Search, name: str = "roa") -> ConditionResult:
+    """The region covering the largest share of the box, as the class's result."""
+    if not regions:
+        return ConditionResult(name, "not_certified", "no region found: " + "; ".join(tried), property="ROA",
+                               numbers={"reason": "; ".join(tried)}, solver={"solves": search.log})
+    shares = [box_share(loop, r, box) for r in regions]
+    k = max(range(len(regions)), key=lambda i: shares[i])
+    best = regions[k]
+    modulo = (f" (modulo 2 pi in {', '.join(loop.angles)}: the loop is periodic in "
+              f"{'it' if len(loop.angles) == 1 else 'them'})") if loop.angles else ""
+    return ConditionResult(name, "certified",
+                           f"every trajectory of the true loop starting where V(x, a(x)) <= {float(best.level):.6g} "
+                           f"converges to the equilibrium{modulo} (V from {best.label}; positivity and decrease on the "
+                           "recasting's relations, exact)",
+                           numbers={"level": str(best.level), "V_from": best.label, "tried": list(tried),
+                                    "box_share_estimate": shares[k]},
+                           certificate=dict(best.certificate), property="ROA", solver={"solves": search.log})
+
+
+def region_of_attraction(loop: Loop, budget: Budget, candidates: Sequence[tuple[str, Poly]], box: tuple[Any, Any],
                          name: str = "roa") -> ConditionResult:
-    """For each fixed ``V`` (shifted), the largest level (bisection) with the decrease on
-    ``{V <= level}``; the best exact one is the answer."""
-    ring = loop.ring
-    search = Search(ring, budget)
-    l2 = state_square(loop)
-    best: tuple[Fraction, dict[str, Any], str] | None = None
+    """Each fixed ``V``'s largest certified level; the region covering most of the box is the answer."""
+    search = Search(loop.ring, budget)
+    regions: list[Region] = []
     tried: list[str] = []
     for label, V in candidates:
         try:
-            found = _largest_level(loop, V, search, l2)
+            found = certify_region(loop, V, search, label)
         except BudgetExhausted as exc:
             tried.append(f"{label}: {exc}")
             break
         if isinstance(found, str):
             tried.append(f"{label}: {found}")
             continue
-        level, cert = found
-        tried.append(f"{label}: level {float(level):.6g}")
-        if best is None or _volume_key(loop, V, level) > _volume_key(loop, *best[1]["_key"]):
-            cert["_key"] = (V, level)
-            best = (level, cert, label)
-    if best is None:
-        return ConditionResult(name, "not_certified", "no region found: " + "; ".join(tried), property="ROA",
-                               numbers={"reason": "; ".join(tried)}, solver={"solves": search.log})
-    level, cert, label = best
-    cert.pop("_key", None)
-    return ConditionResult(name, "certified",
-                           f"every trajectory of the true loop starting where V(x, a(x)) <= {float(level):.6g} "
-                           f"converges to the equilibrium (V from {label}; positivity and decrease on the "
-                           "recasting's relations, exact)", numbers={"level": str(level), "V_from": label,
-                                                                     "tried": tried},
-                           certificate=cert, property="ROA", solver={"solves": search.log})
+        tried.append(f"{label}: level {float(found.level):.6g}")
+        regions.append(found)
+    return best_region(loop, regions, tried, box, search, name)
 
 
-def _volume_key(loop: Loop, V: Poly, level: Fraction) -> float:
-    """A comparable size of ``{V <= level}``: the share of sample states inside (fixed samples)."""
-    import numpy as np
-
-    from lyapcheck.models.recast_numeric import inside_share
-
-    return float(inside_share(loop.system, V, level, np.random.default_rng(0)))
-
-
-def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly) -> tuple[Fraction, dict[str, Any]] | str:
+def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fraction | None = None
+                   ) -> tuple[Fraction, dict[str, Any]] | str:
     ring = loop.ring
     names = v_names(loop, V)
     N, D, distinct = common_denominator(loop, names)
@@ -491,10 +528,10 @@ def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly) -> tuple[Fract
 
         return solve_on_faces(search, build, values, accept)[0]
 
-    level = _scale_of(loop, V)
+    level = _scale_of(loop, V) if start is None else start
     best: tuple[Fraction, ConditionCertificate] | None = None
     lo, hi = Fraction(0), None
-    for _ in range(12):  # grow while it works
+    for _ in range(LEVEL_GROWTH_STEPS):  # grow while it works
         cert = attempt(level)
         if cert is None:
             hi = level
@@ -518,6 +555,8 @@ def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly) -> tuple[Fract
     out = certificate_head(loop, V, eps, D, dens)
     out.update({"level": str(level), "positivity_epsilon": str(eps_pos), "positivity": pos.to_json(ring),
                 "decrease": cert.to_json(ring)})
+    assert cert.rho is not None
+    out["_rho"] = cert.rho.poly(ring)
     return level, out
 
 
@@ -680,31 +719,56 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
                                              "(sos_gas): the region of attraction is the whole state space",
                                              property="ROA")
         else:
-            candidates = []
-            J = jacobian(loop)
-            if not isinstance(J, str):
-                V0 = quadratic_candidate(loop, J)
-                if V0 is not None:
-                    candidates.append(("the linearization (J^T P + P J = -I)", V0))
-            if not candidates:
-                results["roa"] = ConditionResult("roa", "not_certified", "the linearization gives no quadratic V "
-                                                 f"({lin.summary})", property="ROA")
-            else:
-                budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-                from lyapcheck.models.recast_improve import improved_candidates
-
-                candidates += improved_candidates(loop, candidates[0][1], budget)
-                results["roa"] = region_of_attraction(loop, budget, candidates)
+            results["roa"] = run_roa(loop, lin, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
+                                     comparison_box(model, loop))
         seconds["roa"] = time.perf_counter() - start
     if "candidate" in classes and candidate is not None:
         start = time.perf_counter()
-        results["candidate"] = run_candidate(loop, candidate, Budget(time_limit_s,
-                                                                     "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        results["candidate"] = run_candidate(loop, candidate, Budget(
+            time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"), comparison_box(model, loop))
         seconds["candidate"] = time.perf_counter() - start
     return results, loop, seconds
 
 
-def run_candidate(loop: Loop, V: Poly, budget: Budget) -> ConditionResult:
+def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
+    """The box (deviations ``lo``, ``hi``) in which regions are compared and the V-s iteration
+    samples: the model's ``[domain]``, else ``+-pi`` in an angle and ``+-DEFAULT_HALF_WIDTH`` elsewhere."""
+    import numpy as np
+
+    from lyapcheck.models.recast_numeric import DEFAULT_HALF_WIDTH
+
+    eq = np.array([float(v) for v in model.equilibrium])
+    if model.domain is not None:
+        lo = np.array([float(model.domain[s][0]) for s in model.states]) - eq
+        hi = np.array([float(model.domain[s][1]) for s in model.states]) - eq
+        return lo, hi
+    hw = np.array([np.pi if s in loop.angles else DEFAULT_HALF_WIDTH for s in model.states])
+    return -hw, hw
+
+
+def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
+    """``roa``: the linearization's V and its largest level, then the V-s iteration from it; the
+    region covering most of the box."""
+    search = Search(loop.ring, budget)
+    J = jacobian(loop)
+    V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
+    if V0 is None:
+        return ConditionResult("roa", "not_certified", f"the linearization gives no quadratic V ({lin.summary})",
+                               property="ROA")
+    label = "the linearization (J^T P + P J = -I)"
+    try:
+        first = certify_region(loop, V0, search, label)
+    except BudgetExhausted as exc:
+        return ConditionResult("roa", "inconclusive", f"{label}: {exc}", property="ROA")
+    if isinstance(first, str):
+        return best_region(loop, [], [f"{label}: {first}"], box, search)
+    from lyapcheck.models.recast_improve import improved_regions
+
+    more, tried = improved_regions(loop, first, budget, box)
+    return best_region(loop, [first, *more], [f"{label}: level {float(first.level):.6g}", *tried], box, search)
+
+
+def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
     """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
     ring = loop.ring
     search = Search(ring, budget)
@@ -730,7 +794,7 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget) -> ConditionResult:
     else:
         return ConditionResult("candidate", "not_certified", "the candidate could not be proved positive definite in "
                                "the states (V >= eps |x - x_eq|^2) on the recasting's relations", property="ROA")
-    region = region_of_attraction(loop, budget, [("the candidate", V)], name="candidate")
+    region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
     if region.status != "certified":
         region.summary = ("the candidate's derivative is not negative definite (no strict global decrease was proved; "
                           "V' <= 0 alone needs LaSalle's argument, which this class does not make) and no sublevel set "

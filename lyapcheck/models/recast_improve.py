@@ -1,11 +1,145 @@
-"""Enlarging a recast loop's region of attraction beyond the linearization's quadratic V."""
+"""Enlarging a recast loop's region of attraction beyond the linearization's quadratic ``V``.
+
+The V-s iteration (Jarvis-Wloszek et al., "Some controls applications of sum of squares
+programming", CDC 2003; Topcu, Packard & Seiler, Automatica 2008), alternating two convex steps:
+
+1. **level step** (exact, :func:`lyapcheck.models.recast_classes.level_certificate`): for a fixed
+   ``V``, the largest level ``b`` with ``-V' - eps l - rho (b - V) >= 0`` on the recasting's set, and
+   its multiplier ``rho``;
+2. **V step** (numerical only): with ``rho`` fixed and ``V`` scaled to level 1, a new ``V`` that
+   keeps ``V - eps l >= 0`` and ``-V' - eps l - rho (1 - V) >= 0`` and is as small as it can be on
+   sample states whose simulated trajectories of the true loop converge (a linear objective: their
+   mean ``V``), so that ``{V <= 1}`` grows towards the simulated region of attraction.
+
+The V step's answer is only a candidate: its coefficients are rounded to short rationals and the
+level step certifies it exactly, from scratch, like any other ``V``. Nothing here decides anything.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Final
 
-from lyapcheck.sos.polynomials import Poly
+import numpy as np
+
+from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.recast_classes import Loop, Region
+    from lyapcheck.models.search import Budget
+
+#: V-s iterations at most (each a level step and a V step)
+VS_ITERATIONS: Final = 6
+#: degrees of the improved V, in turn
+VS_DEGREES: Final = (2, 4)
+#: sample states for the V step's objective (those that converge in simulation)
+VS_SAMPLES: Final = 300
+#: bits kept of the V step's coefficients (short certificates; the level step decides)
+VS_ROUND_BITS: Final = 20
+#: the iteration stops when less than this share of the class's time limit is left
+VS_BUDGET_SHARE: Final = 0.35
 
 
-def improved_candidates(loop: Any, V0: Poly, budget: Any) -> list[tuple[str, Poly]]:
-    return []
+def target_samples(loop: "Loop", box: tuple[np.ndarray, np.ndarray], rng: np.random.Generator) -> np.ndarray:
+    """Deviations in the box whose simulated trajectories of the true loop converge (modulo 2 pi in
+    the angles): the region the V step pulls ``{V <= 1}`` towards."""
+    from lyapcheck.models.recast_numeric import converges_modulo
+
+    lo, hi = box
+    Z = lo + (hi - lo) * rng.random((VS_SAMPLES * 3, loop.n))
+    eq = np.array([float(loop.system.values[s]) for s in loop.system.states])
+    ok = converges_modulo(loop.system, Z + eq, tuple(loop.angles), horizon=30.0)
+    return Z[ok][:VS_SAMPLES]
+
+
+def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple[np.ndarray, np.ndarray]
+                     ) -> tuple[list["Region"], list[str]]:
+    """Regions from the V-s iteration started at ``first`` (each certified exactly by the level
+    step), and what was tried."""
+    from lyapcheck.models.recast_classes import certify_region
+    from lyapcheck.models.search import BudgetExhausted, Search
+
+    samples = target_samples(loop, box, np.random.default_rng(1))
+    tried: list[str] = []
+    if len(samples) == 0:
+        return [], ["the V-s iteration: no sample of the box converges in simulation"]
+    out: list["Region"] = []
+    search = Search(loop.ring, budget)
+    for degree in VS_DEGREES:
+        region = first
+        for k in range(VS_ITERATIONS):
+            if budget.left() < budget.seconds * VS_BUDGET_SHARE:
+                tried.append("the V-s iteration: stopped to keep the time limit")
+                return out, tried
+            label = f"the V-s iteration (degree {degree}, step {k + 1})"
+            try:
+                V = v_step(loop, region.V * to_fmpq(1 / region.level), region.rho, degree, samples, search)
+                if V is None:
+                    tried.append(f"{label}: the V step found no V")
+                    break
+                found = certify_region(loop, V, search, label, start=Fraction(1, 2))
+            except BudgetExhausted as exc:
+                tried.append(f"{label}: {exc}")
+                return out, tried
+            if isinstance(found, str):
+                tried.append(f"{label}: {found}")
+                break
+            tried.append(f"{label}: level {float(found.level):.6g}")
+            out.append(found)
+            region = found
+    return out, tried
+
+
+def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.ndarray, search: Any) -> Poly | None:
+    """One V step (see the module docstring): a new V of ``degree`` in the loop's V variables, or None."""
+    from lyapcheck.models.recast_classes import EPSILONS, common_denominator, lie, state_square
+    from lyapcheck.models.recast_numeric import variable_values, poly_values
+    from lyapcheck.models.recast_sos import ConditionProgram, known_values
+    from lyapcheck.models.search import ParameterValues
+    from lyapcheck.models.recast_classes import _set
+
+    ring = loop.ring
+    v_vars = loop.v_variables()
+    basis: list[Monomial] = [m for m in monomials(ring.nvars, 1, degree)
+                             if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
+    names = [ring.names[i] for i in v_vars]
+    N, D, _ = common_denominator(loop, names)
+    eps = EPSILONS[-1]
+    l2 = state_square(loop)
+    # the objective's weights: each basis monomial's mean over the samples (deviations)
+    system = loop.system
+    eq = np.array([float(system.values[s]) for s in system.states])
+    cols = variable_values(system, samples + eq)
+    shifted = {n: v - float(system.values[n]) if n in system.values else v for n, v in cols.items()}
+    weights = [float(np.mean(poly_values(ring, ring.monomial(m), shifted, len(samples)))) for m in basis]
+    program = ConditionProgram(ring, loop.relations, frozenset(), loop.unused(), margin=False)
+    for k in range(len(basis)):
+        program.free(f"v{k}")
+    pos_terms = [(f"v{k}", ring.monomial(m)) for k, m in enumerate(basis)]
+    dec_terms = [(f"v{k}", -lie(loop, ring.monomial(m), N) + rho * ring.monomial(m)) for k, m in enumerate(basis)]
+    top = max((sum(mm) for _, p in dec_terms for mm in ring.support(p)), default=2)
+    known_dec = -l2 * to_fmpq(eps) - rho
+    if program.condition("P", ring.support(l2), pos_terms, degree) or \
+            program.condition("D", ring.support(known_dec), dec_terms, top):
+        return None
+    program.minimize([(f"v{k}", w) for k, w in enumerate(weights)])
+    values = ParameterValues()
+    _set(values, *known_values(ring, "P", -l2 * to_fmpq(eps), ring.support(l2)))
+    _set(values, *known_values(ring, "D", known_dec, ring.support(known_dec)))
+    solution = search.solve(program.structure(), values)
+    if not solution.usable:
+        return None
+    from lyapcheck.sos.rounding import round_scalar
+
+    V = ring.zero()
+    peak = max(abs(solution.scalars[f"v{k}"]) for k in range(len(basis)))
+    for k, m in enumerate(basis):
+        value = solution.scalars[f"v{k}"]
+        c = round_scalar(value, VS_ROUND_BITS) if abs(value) > 1e-9 * peak else 0
+        if c:
+            V += ring.monomial(m, c)
+    del D
+    return V if not V.is_zero() else None
+
+
+__all__ = ["improved_regions", "v_step", "target_samples"]

@@ -90,7 +90,7 @@ def inside_share(system: RecastSystem, V: Poly, level: object, rng: np.random.Ge
     return float(np.mean(v_values(system, V, Z) <= float(level)))  # type: ignore[arg-type]
 
 
-def integrate(system: RecastSystem, X0: np.ndarray, horizon: float, step: float = 0.01) -> np.ndarray:
+def integrate(system: RecastSystem, X0: np.ndarray, horizon: float, step: float = 0.02) -> np.ndarray:
     """Classical Runge-Kutta on the true field, every start at once; the final states."""
     X = np.atleast_2d(np.asarray(X0, dtype=np.float64)).copy()
     steps = int(np.ceil(horizon / step))
@@ -110,3 +110,16 @@ def converges(system: RecastSystem, X0: np.ndarray, horizon: float = 60.0, toler
     with np.errstate(all="ignore"):
         end = integrate(system, X0, horizon)
         return np.all(np.isfinite(end), axis=1) & (np.linalg.norm(end - eq, axis=1) < tolerance)
+
+
+def converges_modulo(system: RecastSystem, X0: np.ndarray, angles: tuple[str, ...] = (), horizon: float = 60.0,
+                     tolerance: float = 2e-2) -> np.ndarray:
+    """Whether each start's simulated trajectory of the true field ends within ``tolerance`` of the
+    equilibrium, each angle taken modulo 2 pi."""
+    eq = np.array([float(system.values[s]) for s in system.states])
+    with np.errstate(all="ignore"):
+        end = integrate(system, X0, horizon) - eq
+    for i, s in enumerate(system.states):
+        if s in angles:
+            end[:, i] = np.angle(np.exp(1j * end[:, i]))
+    return np.all(np.isfinite(end), axis=1) & (np.linalg.norm(end, axis=1) < tolerance)

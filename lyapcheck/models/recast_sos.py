@@ -163,6 +163,9 @@ class ConditionProgram:
     drop: frozenset[tuple[str, Monomial]] = frozenset()
     #: variables no multiplier uses (an angle, which appears in no identity)
     unused: frozenset[int] = frozenset()
+    #: the remainders' Gram matrices at least the margin (maximized); False: only PSD (a program
+    #: with another objective, :meth:`minimize`)
+    margin: bool = True
     grams: list[Gram] = field(default_factory=list)
     scalars: list[Scalar] = field(default_factory=list)
     identities: list[Identity] = field(default_factory=list)
@@ -241,7 +244,7 @@ class ConditionProgram:
                          and not any(m[i] for i in self.unused)]
         if len(remainder) > MAX_RECAST_GRAM_ROWS:
             return f"a Gram matrix of {len(remainder)} rows (the limit is MAX_RECAST_GRAM_ROWS = {MAX_RECAST_GRAM_ROWS})"
-        self.grams.append(Gram(rname, tuple(remainder), full_blocks(remainder), margin=True))
+        self.grams.append(Gram(rname, tuple(remainder), full_blocks(remainder), margin=self.margin))
         terms.append(Term(Coefficients.literal({tuple([0] * nv): -1}), rname))
         self.identities.append(Identity(name, tuple(terms), Coefficients.parameter(f"K_{name}", sorted(known_support)),
                                         rname))
@@ -262,9 +265,24 @@ class ConditionProgram:
                 out += [tuple(e + (1 if i in chosen else 0) for i, e in enumerate(m)) for m in plain]
         return out
 
+    #: the objective: ("max_margin",) or ("min", "objective") after :meth:`minimize`
+    objective: tuple[str, ...] = ("max_margin",)
+
+    def minimize(self, weights: Sequence[tuple[str, float]]) -> None:
+        """Minimize ``sum_k w_k c_k`` over the free scalars (``objective >= sum``, a 1x1 remainder)."""
+        nv = self.ring.nvars
+        zero = tuple([0] * nv)
+        self.scalars.append(Scalar("objective"))
+        terms = [Term(Coefficients.literal({zero: 1}), "objective")]
+        terms += [Term(Coefficients.literal({zero: -Fraction(w)}), name) for name, w in weights if w]
+        self.grams.append(Gram("Sobjective", (zero,), full_blocks([zero]), margin=False))
+        terms.append(Term(Coefficients.literal({zero: -1}), "Sobjective"))
+        self.identities.append(Identity("objective", tuple(terms), None, "Sobjective"))
+        self.objective = ("min", "objective")
+
     def structure(self) -> Structure:
         return Structure(nvars=self.ring.nvars, grams=tuple(self.grams), scalars=tuple(self.scalars),
-                         identities=tuple(self.identities), objective=("max_margin",))
+                         identities=tuple(self.identities), objective=self.objective)
 
     def certificate(self, name: str, point: Any) -> ConditionCertificate:
         """The exact multipliers of identity ``name`` from an exact point of the program."""

@@ -1,0 +1,248 @@
+"""``certify --model`` and ``verify`` for a loop with functions (sin, sqrt, sat, ...).
+
+The certificate document is a model certificate (``kind`` lyapcheck-model-certificate, schema 1;
+:mod:`lyapcheck.models.certificate`) with a ``"recast"`` table: the recasting's variables, each
+auxiliary's definition in the model-file language (``{"s1": "sin(theta)", "c1": "cos(theta)"}``),
+each relation and flow, as lyapcheck derived them. Each certified condition's certificate carries
+``variables`` (the states, then the auxiliaries), ``auxiliaries`` (the same definitions), ``shift``
+(the equilibrium value of each state and auxiliary: ``V`` is a polynomial in ``v - shift[v]``, the
+constant roots ``rt2``, ``rt3`` unshifted), ``V``, ``V_text`` (V written with the functions),
+``epsilon``, the proofs of the recasting (square roots' lower bounds, denominators' positivity) and
+of each identity (:mod:`lyapcheck.models.recast_sos`).
+
+``verify`` re-reads the model text, recasts it again (each flow and relation re-derived from the
+text, so a certificate cannot bring its own), re-checks every stored proof exactly and recomputes
+the verdict. It never calls a solver.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from fractions import Fraction
+from typing import Any, Sequence
+
+from lyapcheck.errors import CertificateError, InvalidParameter, ModelFileError
+from lyapcheck.models.recast import RecastModel
+from lyapcheck.models.recast_classes import (RECAST_CLASSES, Loop, base_loop, check_root_proofs, common_denominator,
+                                             jacobian, lie, state_square, v_names, v_text)
+from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.polynomials import Poly, degree_in, to_fmpq
+
+Row = tuple[str, bool, str]
+
+
+def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None) -> tuple[str, ...]:
+    """The classes asked for among every model class; the default is every recast class (``candidate``
+    with ``--candidate``)."""
+    from lyapcheck.models.classes import NAMES
+
+    if classes is None or classes == "all":
+        names = [c for c in RECAST_CLASSES if c != "candidate" or candidate is not None]
+    else:
+        names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes)]
+        bad = [c for c in names if c not in NAMES]
+        if not names or bad:
+            raise InvalidParameter("classes", "classes among " + ", ".join(NAMES), ",".join(map(str, names)))
+    return tuple(c for c in NAMES if c in names)
+
+
+def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = None, candidate: str | None = None,
+                   time_limit_s: float | None = None) -> tuple[str, dict[str, ConditionResult], dict[str, Any]]:
+    """Run the classes on a recast loop: the verdict, the results and the certificate document."""
+    from lyapcheck import tolerances as tol
+    from lyapcheck.models import recast_classes
+    from lyapcheck.models.certify import verdict_of
+
+    limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
+    chosen = chosen_classes(classes, candidate)
+    if "candidate" in chosen and candidate is None:
+        raise InvalidParameter("candidate", 'a V with --candidate "EXPR" for class candidate', "nothing")
+    V = model.candidate_v if candidate is not None else None
+    try:
+        results, loop, _ = recast_classes.certify(model, chosen, V, limit)
+    except ValueError as exc:
+        raise ModelFileError(model.source, "[dynamics]", f"{exc}: its argument could not be proved non-negative "
+                                                         "(sqrt of something that can be negative)") from None
+    for name in chosen:
+        if name not in results:
+            results[name] = ConditionResult(name, "not_applicable", "not taken yet for a loop with functions (sin, "
+                                            "sqrt, sat, ...): the classes here are " + ", ".join(RECAST_CLASSES))
+    results = {name: results[name] for name in chosen}
+    for name, r in results.items():
+        if r.status == "certified" and name != "linearization":
+            r.summary = claim_sentence(r.certificate, tuple(loop.angles))
+    conditions = {name: r.to_json() for name, r in results.items()}
+    verdict = verdict_of(conditions)
+    return verdict, results, build_document(model, loop, candidate, conditions, verdict)
+
+
+def build_document(model: RecastModel, loop: Loop, candidate: str | None, conditions: dict[str, Any],
+                   verdict: str) -> dict[str, Any]:
+    from lyapcheck.models.certificate import KIND, SCHEMA_VERSION
+    from lyapcheck.numerics import package_versions
+
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "kind": KIND,
+        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text},
+        "overrides": dict(model.overrides),
+        "candidate": candidate,
+        "states": list(model.states),
+        "equilibrium": {s: str(v) for s, v in zip(model.states, model.equilibrium)},
+        "parameters": {k: str(v) for k, v in model.parameters.items()},
+        "disturbances": {},
+        "recast": {**model.system.to_json(), "angles": {a: list(sc) for a, sc in loop.angles.items()}},
+        "conditions": conditions,
+        "verdict": verdict,
+        "versions": package_versions(),
+    }
+
+
+def claim_sentence(cert: dict[str, Any], angles: Sequence[str]) -> str:
+    """What a certified recast condition proves, in one sentence made from its certificate alone
+    (``verify`` re-makes it and compares: a printed sentence never claims more than the proof)."""
+    modulo = (f" modulo 2 pi in {', '.join(angles)} (the loop is periodic in {'it' if len(angles) == 1 else 'them'})"
+              if angles else "")
+    eps = cert["epsilon"]
+    if "level" in cert:
+        level = Fraction(str(cert["level"]))
+        return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "
+                f"{float(level):.6g} (exactly {level}) converges to the equilibrium{modulo} (V positive definite "
+                f"and V' <= -{eps} |dx|^2 / D there, D > 0, proved exactly on the recasting's relations; V_text in "
+                "the certificate)")
+    return (f"globally asymptotically stable{modulo}: V(x, a(x)) >= {cert.get('positivity_epsilon', eps)} |dx|^2 and "
+            f"V' <= -{eps} |dx|^2 / D everywhere, D > 0 (proved exactly on the recasting's relations; V_text in the "
+            "certificate)")
+
+
+def is_recast_document(doc: Any) -> bool:
+    return isinstance(doc, dict) and isinstance(doc.get("recast"), dict)
+
+
+# -- verify ------------------------------------------------------------------------------------------
+
+def verify_recast(doc: dict[str, Any]) -> list[Row]:
+    """Re-check a recast loop's certificate exactly; (check, ok, message) rows."""
+    from lyapcheck.models.certificate import _with_verdict
+    from lyapcheck.models.modelfile import parse_any_model
+
+    rows: list[Row] = []
+    part = doc["model"]
+    text = part["text"]
+    if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
+        return [("model", False, "the model text does not match its SHA-256: the text was changed")]
+    try:
+        model = parse_any_model(text, part.get("file", "<certificate>"), doc.get("overrides") or {},
+                                candidate=doc.get("candidate"))
+    except ModelFileError as exc:
+        return [("model", False, f"the stored model text no longer parses: {exc}")]
+    if not isinstance(model, RecastModel):
+        return [("model", False, "the stored model has no functions: it is not a recast loop")]
+    rows.append(("model", True, "the model text matches its SHA-256, parses and is recast again from it"))
+    same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
+            and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
+    rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
+                 "the stated parameters or equilibrium differ from the model text's"))
+    stated = doc["recast"]
+    derived = model.system.to_json()
+    recast_ok = all(stated.get(k) == derived[k] for k in derived)
+    rows.append(("recasting", recast_ok, "the stated auxiliaries, flows and relations are the ones the model text "
+                                         "gives" if recast_ok else "the stated recasting differs from the one the "
+                                                                   "model text gives"))
+    base = base_loop(model.system)
+    for name, c in doc["conditions"].items():
+        if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted"):
+            continue
+        try:
+            ok, why = _verify_condition(name, c, base)
+        except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
+            ok, why = False, f"malformed certificate: {str(exc)[:200]}"
+        rows.append((name, ok, why if ok else f"{name}: {why}"))
+    return _with_verdict(doc, rows)
+
+
+def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, str]:
+    from lyapcheck.models.linearization import verify_jacobian
+
+    if name == "linearization":
+        J = jacobian(base)
+        if isinstance(J, str):
+            return False, f"the model's Jacobian is not exact here: {J}"
+        data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
+        return verify_jacobian(J, c["status"], data or {})
+    if c["status"] != "certified":
+        return False, f"a {name} condition can be re-checked only when certified"
+    cert = c["certificate"]
+    if cert.get("kind") != "recast":
+        return False, "not a recast certificate"
+    system = base.system
+    if cert.get("variables") != list(system.ring.names) or cert.get("auxiliaries") != system.definitions() or \
+            cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
+        return False, "variables, auxiliaries or shift differ from the recasting of the model text"
+    loop, why = check_root_proofs(base, cert["recasting"]["roots"])
+    if loop is None:
+        return False, why
+    ring = loop.ring
+    V = poly_from_json(ring, cert["V"], "V")
+    allowed = {ring.names[i] for i in loop.v_variables()}
+    if any(degree_in(ring, V, [n]) > 0 for n in ring.names if n not in allowed):
+        return False, "V uses a variable a Lyapunov function may not (an angle, a root, or a non-smooth function)"
+    names = v_names(loop, V)
+    N, D, distinct = common_denominator(loop, names)
+    stored = cert["recasting"]["denominators"]
+    if len(stored) != len(distinct):
+        return False, "one positivity proof per denominator of the field is needed"
+    for d, item in zip(distinct, stored):
+        if poly_from_json(ring, item["poly"], "denominator") != d:
+            return False, "a stored denominator is not the field's"
+        bound = Fraction(str(item["bound"]))
+        if bound <= 0:
+            return False, "a denominator's bound must be > 0"
+        proof = ConditionCertificate.from_json(ring, item["proof"], len(loop.relations))
+        ok, why = check_condition(ring, d - to_fmpq(bound), loop.relations, proof)
+        if not ok:
+            return False, f"denominator {item['poly']}: {why}"
+    l2 = state_square(loop)
+    eps = Fraction(str(cert["epsilon"]))
+    if eps <= 0:
+        return False, "epsilon must be > 0"
+    region = None
+    pos_eps = eps
+    if "level" in cert:
+        level = Fraction(str(cert["level"]))
+        if level <= 0:
+            return False, "the level must be > 0"
+        if c.get("numbers", {}).get("level") not in (None, str(level)):
+            return False, "the stated level is not the certificate's"
+        region = V - to_fmpq(level)
+        pos_eps = Fraction(str(cert["positivity_epsilon"]))
+        if pos_eps <= 0:
+            return False, "positivity_epsilon must be > 0"
+    pos = ConditionCertificate.from_json(ring, cert["positivity"], len(loop.relations))
+    ok, why = check_condition(ring, V - l2 * to_fmpq(pos_eps), loop.relations, pos)
+    if not ok:
+        return False, f"positivity: {why}"
+    dec = ConditionCertificate.from_json(ring, cert["decrease"], len(loop.relations))
+    if (region is None) != (dec.rho is None):
+        return False, "a region's decrease needs its multiplier rho, and only a region's"
+    ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(eps), loop.relations, dec, region=region)
+    if not ok:
+        return False, f"decrease: {why}"
+    if c.get("summary") != claim_sentence(cert, tuple(loop.angles)):
+        return False, "the printed sentence is not the one the certificate supports"
+    if cert.get("V_text") != v_text(system, V):
+        return False, "V_text is not V written with the functions"
+    what = "on {V <= level}" if region is not None else "everywhere"
+    modulo = " (modulo 2 pi in the angles)" if loop.angles else ""
+    return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
+
+
+def verify_or_raise(doc: dict[str, Any]) -> list[Row]:
+    try:
+        return verify_recast(doc)
+    except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError, RecursionError) as exc:
+        raise CertificateError(f"certificate is malformed: {repr(exc)[:200]}") from None
+
+
+__all__ = ["certify_recast", "verify_recast", "verify_or_raise", "is_recast_document", "Poly"]
