@@ -13,14 +13,18 @@ soundness bug (tests/test_recast.py checks each at many points and symbolically)
 function    flow along the trajectories             relations (for every real ``u``)
 ==========  =====================================  ==========================================
 sin, cos    ``s' = c u'``, ``c' = -s u'``           ``s^2 + c^2 = 1``; ``u^2 - s^2 >= 0``;
-            (one pair per argument)                 ``u^2/2 - (1 - c) >= 0``
+            (one pair per argument)                 ``u^2/2 - (1 - c) >= 0``;
+                                                    ``u s - u^2 + u^4/6 >= 0``;
+                                                    ``1 - u^2/2 + u^4/24 - c >= 0``
 exp         ``e' = e u'``                            ``e >= 0``; ``e - 1 - u >= 0``;
                                                     ``1 - e (1 - u) >= 0``
 sqrt(q)     ``r' = q' / (2 r)`` (when ``q >= c^2``   ``r^2 = q``; ``r >= 0``; ``r - c >= 0``
             with ``c > 0`` is proved)               (with the proved ``c``)
 atan        ``a' = u' / (1 + u^2)``                  ``a u >= 0``; ``u^2 - a^2 >= 0``;
-                                                    ``1.571^2 - a^2 >= 0`` (``pi/2 < 1.571``)
-tanh        ``t' = (1 - t^2) u'``                    ``1 - t^2 >= 0``; ``t u >= 0``; ``t (u - t) >= 0``
+                                                    ``1.571^2 - a^2 >= 0`` (``pi/2 < 1.571``);
+                                                    ``u a - u^2 + u^4/3 >= 0``
+tanh        ``t' = (1 - t^2) u'``                    ``1 - t^2 >= 0``; ``t u >= 0``; ``t (u - t) >= 0``;
+                                                    ``u t - u^2 + u^4/3 >= 0``
 abs         none (not differentiable)               ``b^2 = u^2``; ``b >= 0``
 sat(u, L)   none (not differentiable)               ``(u - q)(L^2 - q^2) = 0``; ``L^2 - q^2 >= 0``;
                                                     ``q (u - q) >= 0`` (these three hold for
@@ -209,7 +213,7 @@ class Recaster:
         s = self.ring.gen(self._slot(s_index))
         c = self.ring.gen(self._slot(s_index + 1))
         # sin(u0 + a) = sin u0 cos a + cos u0 sin a;  cos(u0 + a) = cos u0 cos a - sin u0 sin a
-        out = s * cos_k + c * sin_k if name == "sin" else c * cos_k - s * sin_k
+        out = s * cos_k - c * sin_k if name == "sin" else c * cos_k - s * sin_k
         return Rational.polynomial(self.ring, out)
 
     def _root_poly(self, value: Mapping[int, Fraction]) -> Poly:
@@ -287,9 +291,14 @@ class Recaster:
         if function == "sin":
             cos_index = self._new(Auxiliary("", "cos", f"cos({self.written(u)})", u, None, smooth, text))
             c = ring.gen(self._slot(cos_index))
+            u2 = u * u
             self.relations += [Relation("eq", x * x + c * c - 1, "sin^2 + cos^2 = 1"),
-                               Relation("ge", u * u - x * x, "|sin u| <= |u|"),
-                               Relation("ge", u * u * to_fmpq(Fraction(1, 2)) - 1 + c, "1 - cos u <= u^2/2")]
+                               Relation("ge", u2 - x * x, "|sin u| <= |u|"),
+                               Relation("ge", u2 * to_fmpq(Fraction(1, 2)) - 1 + c, "1 - cos u <= u^2/2"),
+                               Relation("ge", u * x - u2 + u2 * u2 * to_fmpq(Fraction(1, 6)),
+                                        "u sin u >= u^2 - u^4/6 (Taylor, alternating)"),
+                               Relation("ge", 1 - u2 * to_fmpq(Fraction(1, 2)) + u2 * u2 * to_fmpq(Fraction(1, 24)) - c,
+                                        "cos u <= 1 - u^2/2 + u^4/24 (Taylor, alternating)")]
             if smooth:
                 self.chain[index] = (Rational.polynomial(ring, c), u)
                 self.chain[cos_index] = (-Rational.polynomial(ring, x), u)
@@ -305,12 +314,16 @@ class Recaster:
                 self.chain[index] = (Rational(ring, ring.constant(1), 2 * x), u)
         elif function == "atan":
             self.relations += [Relation("ge", x * u, "atan(u) u >= 0"), Relation("ge", u * u - x * x, "|atan u| <= |u|"),
-                               Relation("ge", ring.constant(ATAN_RANGE ** 2) - x * x, "|atan u| < pi/2 < 1.571")]
+                               Relation("ge", ring.constant(ATAN_RANGE ** 2) - x * x, "|atan u| < pi/2 < 1.571"),
+                               Relation("ge", u * x - u * u + u * u * u * u * to_fmpq(Fraction(1, 3)),
+                                        "u atan u >= u^2 - u^4/3 (Taylor, alternating)")]
             if smooth:
                 self.chain[index] = (Rational(ring, ring.constant(1), 1 + u * u), u)
         elif function == "tanh":
             self.relations += [Relation("ge", 1 - x * x, "|tanh u| <= 1"), Relation("ge", x * u, "tanh(u) u >= 0"),
-                               Relation("ge", x * (u - x), "tanh(u) (u - tanh u) >= 0")]
+                               Relation("ge", x * (u - x), "tanh(u) (u - tanh u) >= 0"),
+                               Relation("ge", u * x - u * u + u * u * u * u * to_fmpq(Fraction(1, 3)),
+                                        "u tanh u >= u^2 - u^4/3 (Taylor: tanh u >= u - u^3/3 for u >= 0)")]
             if smooth:
                 self.chain[index] = (Rational.polynomial(ring, 1 - x * x), u)
         elif function == "abs":

@@ -687,6 +687,99 @@ def linearization(loop: Loop) -> ConditionResult:
     return decide(J)
 
 
+# -- another equilibrium: no global claim -------------------------------------------------------------
+
+def other_equilibrium(loop: Loop) -> dict[str, str] | None:
+    """An equilibrium of the true loop other than the stated one (modulo 2 pi), found exactly: each
+    angle at ``k pi/12`` (its sine and cosine exact in Q(sqrt 2, sqrt 3)), every other state at its
+    equilibrium value; the point as ``{"theta": "k/12*pi", ...}``, or None. Such a point refutes
+    global asymptotic stability (a trajectory starting there stays there)."""
+    for angle in loop.angles:
+        for k in range(1, 24):
+            point = {angle: f"{Fraction(k, 12)}*pi"}
+            if _is_equilibrium(loop, {angle: k}):
+                return point
+    return None
+
+
+def _is_equilibrium(loop: Loop, angles_at: dict[str, int]) -> bool:
+    """Whether every right-hand side is exactly 0 with the angles at ``k pi/12`` (the rest at the
+    equilibrium); False when a value cannot be written exactly here."""
+    from lyapcheck.models.recast import exact_cos_sin
+
+    system = loop.system
+    ring = loop.ring
+    roots = {int(n[2:]): ring.gen(n) for n in ring.names if n in ("rt2", "rt3")}
+    images: dict[str, Poly] = {n: ring.constant(v) for n, v in system.values.items()}
+    for angle, k in angles_at.items():
+        sine, cosine = loop.angles[angle]
+        for name, value in zip((cosine, sine), exact_cos_sin(k)):
+            p = ring.constant(value.get(1, Fraction(0)))
+            for radicand, coefficient in value.items():
+                if radicand == 1 or not coefficient:
+                    continue
+                if any(r not in roots for r in ((2, 3) if radicand == 6 else (radicand,))):
+                    return False  # an irrational value the loop has no root variable for
+                term = ring.constant(coefficient)
+                for r in ((2, 3) if radicand == 6 else (radicand,)):
+                    term = term * roots[r]
+                p += term
+            images[name] = p
+    for a in system.auxiliaries:  # any other function must take an exactly known value there
+        if a.name in images or a.argument is None:
+            continue
+        u = system.reduce(ring.compose(a.argument, [images.get(n, ring.gen(n)) for n in ring.names]))
+        if not u.is_constant():
+            return False
+        value = Fraction(0) if u.is_zero() else Fraction(str(u.leading_coefficient()))
+        if a.function == "abs":
+            images[a.name] = ring.constant(abs(value))
+        elif a.function == "sat" and a.limit is not None:
+            images[a.name] = ring.constant(max(-a.limit, min(a.limit, value)))
+        elif a.function in ("sin", "atan", "tanh") and value == 0:
+            images[a.name] = ring.constant(0)
+        elif a.function in ("cos", "exp") and value == 0:
+            images[a.name] = ring.constant(1)
+        else:
+            return False
+    full = [images.get(n, ring.gen(n)) for n in ring.names]
+    for r in system.field:
+        if not system.reduce(ring.compose(r.numerator, full)).is_zero():
+            return False
+        if system.reduce(ring.compose(r.denominator, full)).is_zero():
+            return False
+    return True
+
+
+def refute_global(loop: Loop, name: str, prop: str = "GAS") -> ConditionResult | None:
+    """``refuted`` with the other equilibrium as the refutation, when there is one (exact)."""
+    point = other_equilibrium(loop)
+    if point is None:
+        return None
+    where = ", ".join(f"{k} = {v}" for k, v in point.items())
+    return ConditionResult(name, "refuted", f"not globally asymptotically stable: the loop has another equilibrium at "
+                           f"{where} (the other states at their equilibrium; checked exactly, its sine and cosine in "
+                           "Q(sqrt 2, sqrt 3))", property=prop,  # type: ignore[arg-type]
+                           refutation={"kind": "equilibrium", "point": point})
+
+
+def check_refutation(loop: Loop, data: Any) -> tuple[bool, str]:
+    """Re-check a stored other equilibrium exactly."""
+    if not isinstance(data, dict) or data.get("kind") != "equilibrium" or not isinstance(data.get("point"), dict):
+        return False, "a refutation must name another equilibrium"
+    at: dict[str, int] = {}
+    for angle, text in data["point"].items():
+        if angle not in loop.angles or not isinstance(text, str) or not text.endswith("*pi"):
+            return False, f"{angle!r} is not an angle of the loop at k*pi"
+        k = Fraction(text[:-3]) * 12
+        if k.denominator != 1 or k % 24 == 0:
+            return False, f"{angle} must be at a multiple of pi/12 other than 0 (modulo 2 pi)"
+        at[angle] = int(k) % 24
+    if not at or not _is_equilibrium(loop, at):
+        return False, "the stated point is not an equilibrium of the loop"
+    return True, "another equilibrium, exactly: no global asymptotic stability"
+
+
 # -- the model's classes ------------------------------------------------------------------------------
 
 #: the classes a recast loop takes, in order
@@ -710,7 +803,8 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         seconds["linearization"] = time.perf_counter() - start
     if "sos_gas" in classes:
         start = time.perf_counter()
-        results["sos_gas"] = sos_gas(loop, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        results["sos_gas"] = refute_global(loop, "sos_gas") or \
+            sos_gas(loop, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
         seconds["sos_gas"] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()
