@@ -213,7 +213,7 @@ class Recaster:
         s = self.ring.gen(self._slot(s_index))
         c = self.ring.gen(self._slot(s_index + 1))
         # sin(u0 + a) = sin u0 cos a + cos u0 sin a;  cos(u0 + a) = cos u0 cos a - sin u0 sin a
-        out = s * cos_k - c * sin_k if name == "sin" else c * cos_k - s * sin_k
+        out = s * cos_k + c * sin_k if name == "sin" else c * cos_k - s * sin_k
         return Rational.polynomial(self.ring, out)
 
     def _root_poly(self, value: Mapping[int, Fraction]) -> Poly:
