@@ -44,10 +44,15 @@ An argument's value at the equilibrium must make the auxiliary's value rational 
 ``exp(0)``, ``sqrt`` of a rational square), else the file is refused naming the call: a
 transcendental value (``sin(1)``) cannot be written exactly.
 
-Everything here is exact and solver-free except :func:`prove_recasting`, which finds the SOS
-proofs that a ``sqrt``'s argument is non-negative (and its lower bound) and that each denominator
-of the field is positive on the relations' set; those proofs are stored in certificates and
-:func:`check_recasting` re-checks them exactly.
+Everything here is exact and solver-free. The SOS proofs that a ``sqrt``'s argument is
+non-negative (and its lower bound), and that each denominator of the field is positive on the
+relations' set, are found by :func:`lyapcheck.models.recast_classes.prove_root_bounds` and
+:func:`~lyapcheck.models.recast_classes.prove_denominators`, stored in certificates and re-checked
+exactly by ``verify``.
+
+While an expression is built, the auxiliaries and ``pi`` are variables named ``#k#`` and ``#pi#``:
+no name a user can write (a model file's names are identifiers), so no state can be mistaken for
+one, and a definition's text is made by replacing those markers, never a substring of a name.
 """
 
 from __future__ import annotations
@@ -71,6 +76,8 @@ ATAN_RANGE: Final = Fraction(1571, 1000)
 PREFIX: Final = {"sin": "s", "cos": "c", "exp": "e", "sqrt": "r", "atan": "a", "tanh": "t", "abs": "b", "sat": "q"}
 #: the constant square roots the angle-addition formula may need
 ROOTS: Final = (2, 3)
+#: the variable standing for pi while an expression is built (no model-file name can be this)
+PI_MARK: Final = "#pi#"
 
 
 class RecastError(ExpressionError):
@@ -93,6 +100,8 @@ class Auxiliary:
     written_as: str = ""
     #: sat's limit L (> 0)
     limit: Fraction | None = None
+    #: a constant root's radicand (2 or 3: the auxiliary is sqrt of it, not shifted); None otherwise
+    radicand: int | None = None
 
 
 @dataclass(frozen=True)
@@ -121,11 +130,9 @@ class Recaster:
     #: (the flows themselves need the whole field: :meth:`flows`)
     chain: dict[int, tuple[Rational, Poly]] = field(default_factory=dict)
     relations: list[Relation] = field(default_factory=list)
-    #: sqrt auxiliaries whose argument must be proved non-negative: (index, argument, text)
-    roots_to_prove: list[tuple[int, Poly, str]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        names = self.states + tuple(f"_slot{k}" for k in range(self.slots)) + ("_pi",)
+        names = self.states + tuple(self._slot(k) for k in range(self.slots)) + (PI_MARK,)
         self.ring = Ring(names)
 
     # -- the builder's hooks -------------------------------------------------------------------------
@@ -138,7 +145,7 @@ class Recaster:
             raise ExpressionError(f"'{name}' takes {want} argument{'s' if want > 1 else ''}, got {arity} in '{text}'")
 
     def pi(self) -> Rational:
-        return Rational.polynomial(self.ring, self.ring.gen("_pi"))
+        return Rational.polynomial(self.ring, self.ring.gen(PI_MARK))
 
     def apply(self, name: str, args: list[Rational], text: str) -> Rational:
         args = [a.normalized() for a in args]
@@ -167,10 +174,10 @@ class Recaster:
         return Rational.polynomial(self.ring, self.ring.gen(self._slot(index)))
 
     def _slot(self, index: int) -> str:
-        return f"_slot{index}"
+        return f"#{index}#"
 
     def _no_pi(self, u: Rational, name: str, text: str) -> None:
-        if degree_in(self.ring, u.numerator, ["_pi"]) > 0 or degree_in(self.ring, u.denominator, ["_pi"]) > 0:
+        if degree_in(self.ring, u.numerator, [PI_MARK]) > 0 or degree_in(self.ring, u.denominator, [PI_MARK]) > 0:
             raise RecastError(f"'{text}': pi may appear only in an argument of sin or cos, as a multiple of pi/12 "
                               "added to the rest")
 
@@ -181,12 +188,12 @@ class Recaster:
         return u.numerator * (1 / u.denominator.leading_coefficient())
 
     def _trig(self, name: str, u: Rational, text: str) -> Rational:
-        if degree_in(self.ring, u.denominator, ["_pi"]) > 0:
+        if degree_in(self.ring, u.denominator, [PI_MARK]) > 0:
             raise RecastError(f"'{text}': pi may not appear in a divisor")
         num = self._polynomial_argument(u, name, text)
         k = Fraction(0)
-        if degree_in(self.ring, num, ["_pi"]) > 0:
-            pi_index = self.ring.names.index("_pi")
+        if degree_in(self.ring, num, [PI_MARK]) > 0:
+            pi_index = self.ring.names.index(PI_MARK)
             rest_terms, pi_terms = {}, {}
             for m, c in self.ring.terms(num).items():
                 if m[pi_index] == 0:
@@ -232,7 +239,8 @@ class Recaster:
         key = ("root", str(radicand))
         if key in self.made:
             return self.made[key]
-        index = self._new(Auxiliary(f"rt{radicand}", "sqrt", f"sqrt({radicand})", None, None, True))
+        index = self._new(Auxiliary(f"rt{radicand}", "sqrt", f"sqrt({radicand})", None, None, True,
+                                    radicand=radicand))
         self.made[key] = index
         x = self.ring.gen(self._slot(index))
         self.chain[index] = (Rational.polynomial(self.ring, self.ring.zero()), self.ring.zero())
@@ -309,7 +317,6 @@ class Recaster:
                 self.chain[index] = (Rational.polynomial(ring, x), u)
         elif function == "sqrt":
             self.relations += [Relation("eq", x * x - u, "r^2 = q"), Relation("ge", x, "r >= 0")]
-            self.roots_to_prove.append((index, u, text))
             if smooth:  # r' = q'/(2 r): usable where 2 r > 0 is proved (a class proves its denominators)
                 self.chain[index] = (Rational(ring, ring.constant(1), 2 * x), u)
         elif function == "atan":
@@ -372,10 +379,14 @@ class Recaster:
     def written(self, p: Poly) -> str:
         """``p`` in the model-file language over the states, each auxiliary by its definition."""
         text = str(p).replace("^", "**")
-        for i in reversed(range(len(self.auxiliaries))):
-            text = text.replace(self._slot(i), f"({self.auxiliaries[i].definition})" if " " in
-                                self.auxiliaries[i].definition else self.auxiliaries[i].definition)
+        for i in range(len(self.auxiliaries)):
+            text = text.replace(self._slot(i), _parenthesized(self.auxiliaries[i].definition))
         return text
+
+
+def _parenthesized(definition: str) -> str:
+    """A definition as a factor of a longer text (parentheses unless it is one call or name)."""
+    return f"({definition})" if " " in definition else definition
 
 
 def _rational_sqrt(q: Fraction) -> Fraction | None:
@@ -456,6 +467,10 @@ class RecastSystem:
         """The auxiliaries a Lyapunov function may use (those with a flow, not the constant roots)."""
         return tuple(a.name for a in self.auxiliaries if a.smooth and a.value is not None)
 
+    def roots(self) -> dict[str, int]:
+        """The constant roots' names and radicands (``{"rt3": 3}``)."""
+        return {a.name: a.radicand for a in self.auxiliaries if a.radicand is not None}
+
     def shift(self, p: Poly) -> Poly:
         """``p`` in the deviations ``v - value`` (the constant roots stay as they are)."""
         images = [self.ring.gen(n) + to_fmpq(self.values[n]) if n in self.values else self.ring.gen(n) for n in self.names]
@@ -467,8 +482,7 @@ class RecastSystem:
 
     def reduce(self, p: Poly) -> Poly:
         """``p`` with every ``rtk^2`` replaced by ``k`` (its normal form modulo the root relations)."""
-        roots = {i: int(n[2:]) for i, n in enumerate(self.names) if n.startswith("rt") and
-                 any(a.name == n and a.value is None for a in self.auxiliaries)}
+        roots = {self.names.index(a.name): a.radicand for a in self.auxiliaries if a.radicand is not None}
         if not roots:
             return p
         out: dict[tuple[int, ...], Fraction] = {}
@@ -544,7 +558,7 @@ def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, ob
             r, _ = parse_with_divisors(str(text), recaster.ring, calls=recaster, names=states, constants=constants)
         except ExpressionError as exc:
             raise ModelFileError(source, key, str(exc)) from None
-        if degree_in(recaster.ring, r.numerator, ["_pi"]) > 0 or degree_in(recaster.ring, r.denominator, ["_pi"]) > 0:
+        if degree_in(recaster.ring, r.numerator, [PI_MARK]) > 0 or degree_in(recaster.ring, r.denominator, [PI_MARK]) > 0:
             raise ModelFileError(source, key, "pi may appear only in an argument of sin or cos (as k*pi/12 added to "
                                               "the rest); elsewhere it would be a transcendental coefficient")
         rhs.append(r)
@@ -632,15 +646,15 @@ def _finish(source: str, recaster: Recaster, rhs: Sequence[Rational], flows: Map
             value = _value_at(source, a, at)
             values[name] = value
         defined.append(Auxiliary(name, a.function, a.definition, move(a.argument) if a.argument is not None else None,
-                                 value, a.smooth, a.written_as, a.limit))
+                                 value, a.smooth, a.written_as, a.limit, a.radicand))
     # definitions written over the states: replace slot names by the final names' definitions
     final: list[Auxiliary] = []
     for a, name in zip(defined, names):
         definition = a.definition
-        for i in reversed(range(len(names))):
-            definition = definition.replace(f"_slot{i}", f"({defined[i].definition})" if " " in
-                                            defined[i].definition else defined[i].definition)
-        final.append(Auxiliary(a.name, a.function, definition, a.argument, a.value, a.smooth, a.written_as, a.limit))
+        for i in range(len(names)):
+            definition = definition.replace(f"#{i}#", _parenthesized(defined[i].definition))
+        final.append(Auxiliary(a.name, a.function, definition, a.argument, a.value, a.smooth, a.written_as, a.limit,
+                               a.radicand))
     relations = tuple(Relation(r.kind, move(r.poly), r.why) for r in recaster.relations)
     field_rhs = tuple(move_rational(r) for r in rhs)
     flow_map = {names[i]: move_rational(f) for i, f in flows.items()}

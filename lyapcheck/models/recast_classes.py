@@ -74,6 +74,10 @@ class Loop:
         names = [n for n in self.system.states + self.system.smooth() if n not in self.angles]
         return [self.ring.names.index(n) for n in names]
 
+    def roots(self) -> frozenset[int]:
+        """The constant roots' indices (``rt2``, ``rt3``)."""
+        return frozenset(self.ring.names.index(n) for n in self.system.roots())
+
     def unused(self) -> frozenset[int]:
         """The angles' indices: they appear in no identity (their sine and cosine do)."""
         return frozenset(self.ring.names.index(a) for a in self.angles)
@@ -164,7 +168,7 @@ def prove_nonnegative(loop: Loop, F: Poly, search: Search, name: str) -> Conditi
     vanishing = _at_origin(loop, F) == 0  # then no term of the identity has a constant (nor a root alone)
 
     def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
-        program = ConditionProgram(ring, loop.relations, drop, loop.unused())
+        program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots())
         return program.condition(name, support, [], max(sum(m) for m in support), vanishing=vanishing) or program
 
     def accept(program: ConditionProgram, point: Any) -> ConditionCertificate | None:
@@ -367,7 +371,7 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
         top_dec = max((sum(mm) for _, p in dec_terms for mm in ring.support(p)), default=2)
 
         def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
-            program = ConditionProgram(ring, loop.relations, drop, loop.unused())
+            program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots())
             for k in range(len(basis)):
                 program.free(f"v{k}")
             return program.condition("P", ring.support(l2), pos_terms, dv) or \
@@ -512,7 +516,7 @@ def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fractio
     F = -dV - l2 * to_fmpq(eps)
 
     def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
-        program = ConditionProgram(ring, loop.relations, drop, loop.unused())
+        program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots())
         return program.condition("R", support_known, [], top, region_support=region_support) or program
 
     def attempt(level: Fraction) -> ConditionCertificate | None:
@@ -709,7 +713,7 @@ def _is_equilibrium(loop: Loop, angles_at: dict[str, int]) -> bool:
 
     system = loop.system
     ring = loop.ring
-    roots = {int(n[2:]): ring.gen(n) for n in ring.names if n in ("rt2", "rt3")}
+    roots = {k: ring.gen(n) for n, k in system.roots().items()}
     images: dict[str, Poly] = {n: ring.constant(v) for n, v in system.values.items()}
     for angle, k in angles_at.items():
         sine, cosine = loop.angles[angle]

@@ -112,7 +112,7 @@ def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.nda
     cols = variable_values(system, samples + eq)
     shifted = {n: v - float(system.values[n]) if n in system.values else v for n, v in cols.items()}
     weights = [float(np.mean(poly_values(ring, ring.monomial(m), shifted, len(samples)))) for m in basis]
-    program = ConditionProgram(ring, loop.relations, frozenset(), loop.unused(), margin=False)
+    program = ConditionProgram(ring, loop.relations, frozenset(), loop.unused(), margin=False, roots=loop.roots())
     for k in range(len(basis)):
         program.free(f"v{k}")
     pos_terms = [(f"v{k}", ring.monomial(m)) for k, m in enumerate(basis)]

@@ -41,7 +41,7 @@ def variable_values(system: RecastSystem, X: np.ndarray) -> dict[str, np.ndarray
     ring = system.ring
     for a in system.auxiliaries:
         if a.argument is None:  # rt2, rt3
-            cols[a.name] = np.full(rows, float(np.sqrt(float(a.name[2:]))))
+            cols[a.name] = np.full(rows, float(np.sqrt(float(a.radicand or 0))))
             continue
         u = poly_values(ring, a.argument, cols, rows)
         if a.function == "sat":

@@ -61,25 +61,19 @@ def poly_from_json(ring: Ring, data: Any, key: str) -> Poly:
     return ring.from_terms(out)
 
 
-def root_indices(ring: Ring) -> frozenset[int]:
-    """The constant roots' variables (``rt2``, ``rt3``): constants, not deviations, so they count for
-    no degree (a monomial ``rt3 x`` is of degree 1 and does not vanish faster than ``x``)."""
-    return frozenset(i for i, n in enumerate(ring.names) if n in ("rt2", "rt3"))
-
-
 def mdeg(m: Monomial, roots: frozenset[int]) -> int:
     return sum(e for i, e in enumerate(m) if i not in roots)
 
 
-def order_at_origin(ring: Ring, p: Poly) -> int:
-    """The smallest degree of a term of ``p`` in the deviations (a large number for 0)."""
-    roots = root_indices(ring)
+def order_at_origin(ring: Ring, p: Poly, roots: frozenset[int] = frozenset()) -> int:
+    """The smallest degree of a term of ``p`` in the deviations (a large number for 0). ``roots``:
+    the constant roots' variables (``rt2``, ``rt3``), constants rather than deviations, which count
+    for no degree (a monomial ``rt3 x`` does not vanish faster than ``x``)."""
     return min((mdeg(m, roots) for m in ring.support(p)), default=10 ** 6)
 
 
-def degree(ring: Ring, p: Poly) -> int:
+def degree(ring: Ring, p: Poly, roots: frozenset[int] = frozenset()) -> int:
     """The degree of ``p`` in the deviations (the roots not counted)."""
-    roots = root_indices(ring)
     return max((mdeg(m, roots) for m in ring.support(p)), default=0)
 
 
@@ -166,6 +160,8 @@ class ConditionProgram:
     #: the remainders' Gram matrices at least the margin (maximized); False: only PSD (a program
     #: with another objective, :meth:`minimize`)
     margin: bool = True
+    #: the constant roots' variables (:func:`order_at_origin`)
+    roots: frozenset[int] = frozenset()
     grams: list[Gram] = field(default_factory=list)
     scalars: list[Scalar] = field(default_factory=list)
     identities: list[Identity] = field(default_factory=list)
@@ -194,13 +190,13 @@ class ConditionProgram:
                 continue
             terms.append(Term(Coefficients.literal(ring.terms(p)), scalar))
             target |= set(ring.support(p))
-        roots = root_indices(ring)
+        roots = self.roots
         top = max(top_degree, max((mdeg(m, roots) for m in target), default=0))
         top += top % 2
         lambdas: dict[int, list[tuple[str, Monomial]]] = {}
         taus: dict[int, str] = {}
         for i, rel in enumerate(self.relations):
-            d = degree(ring, rel.poly)
+            d = degree(ring, rel.poly, roots)
             if rel.kind == "eq":
                 names = []
                 for k, m in enumerate(self._monomials(0, top - d)):
@@ -215,7 +211,7 @@ class ConditionProgram:
                 half = (top - d) // 2
                 if half < 0:
                     continue
-                lowest = 0 if order_at_origin(ring, rel.poly) >= 2 or not vanishing else 1
+                lowest = 0 if order_at_origin(ring, rel.poly, roots) >= 2 or not vanishing else 1
                 gname = f"T{name}_{i}"
                 basis = [m for m in self._monomials(lowest, half) if (gname, m) not in self.drop]
                 if not basis:
@@ -254,7 +250,7 @@ class ConditionProgram:
     def _monomials(self, low: int, high: int) -> list[Monomial]:
         """The monomials of degree ``low..high`` in the deviations (no unused variable), each also
         times every product of distinct roots (their powers are reduced by ``rt^2 = k``)."""
-        roots = sorted(root_indices(self.ring))
+        roots = sorted(self.roots)
         plain = [m for m in monomials(self.ring.nvars, low, high)
                  if not any(m[i] for i in self.unused) and not any(m[i] for i in roots)]
         out = list(plain)
