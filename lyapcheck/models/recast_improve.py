@@ -29,11 +29,16 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.search import Budget
 
 #: V-s iterations at most (each a level step and a V step)
-VS_ITERATIONS: Final = 6
+VS_ITERATIONS: Final = 4
 #: degrees of the improved V, in turn
 VS_DEGREES: Final = (2, 4)
 #: sample states for the V step's objective (those that converge in simulation)
-VS_SAMPLES: Final = 300
+VS_SAMPLES: Final = 200
+#: the V step's margins of positivity and decrease (times |z|^2), larger than the level step's so
+#: that its V, rounded, still passes there
+VS_MARGIN: Final = Fraction(1, 100)
+#: how long each sample is simulated (the loop's time unit)
+VS_HORIZON_S: Final = 25.0
 #: bits kept of the V step's coefficients (short certificates; the level step decides)
 VS_ROUND_BITS: Final = 20
 #: the iteration stops when less than this share of the class's time limit is left
@@ -48,7 +53,7 @@ def target_samples(loop: "Loop", box: tuple[np.ndarray, np.ndarray], rng: np.ran
     lo, hi = box
     Z = lo + (hi - lo) * rng.random((VS_SAMPLES * 3, loop.n))
     eq = np.array([float(loop.system.values[s]) for s in loop.system.states])
-    ok = converges_modulo(loop.system, Z + eq, tuple(loop.angles), horizon=30.0)
+    ok = converges_modulo(loop.system, Z + eq, tuple(loop.angles), horizon=VS_HORIZON_S, step=0.05)
     return Z[ok][:VS_SAMPLES]
 
 
@@ -74,8 +79,8 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
             label = f"the V-s iteration (degree {degree}, step {k + 1})"
             try:
                 V = v_step(loop, region.V * to_fmpq(1 / region.level), region.rho, degree, samples, search)
-                if V is None:
-                    tried.append(f"{label}: the V step found no V")
+                if isinstance(V, str):
+                    tried.append(f"{label}: {V}")
                     break
                 found = certify_region(loop, V, search, label, start=Fraction(1, 2))
             except BudgetExhausted as exc:
@@ -90,9 +95,9 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
     return out, tried
 
 
-def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.ndarray, search: Any) -> Poly | None:
-    """One V step (see the module docstring): a new V of ``degree`` in the loop's V variables, or None."""
-    from lyapcheck.models.recast_classes import EPSILONS, common_denominator, lie, state_square
+def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.ndarray, search: Any) -> Poly | str:
+    """One V step (see the module docstring): a new V of ``degree`` in the loop's V variables, or why none."""
+    from lyapcheck.models.recast_classes import common_denominator, lie, state_square
     from lyapcheck.models.recast_numeric import variable_values, poly_values
     from lyapcheck.models.recast_sos import ConditionProgram, known_values
     from lyapcheck.models.search import ParameterValues
@@ -104,7 +109,7 @@ def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.nda
                              if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
     names = [ring.names[i] for i in v_vars]
     N, D, _ = common_denominator(loop, names)
-    eps = EPSILONS[-1]
+    eps = VS_MARGIN  # above the level step's EPSILONS: room for rounding and for the exact check
     l2 = state_square(loop)
     # the objective's weights: each basis monomial's mean over the samples (deviations)
     system = loop.system
@@ -119,16 +124,27 @@ def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.nda
     dec_terms = [(f"v{k}", -lie(loop, ring.monomial(m), N) + rho * ring.monomial(m)) for k, m in enumerate(basis)]
     top = max((sum(mm) for _, p in dec_terms for mm in ring.support(p)), default=2)
     known_dec = -l2 * to_fmpq(eps) - rho
-    if program.condition("P", ring.support(l2), pos_terms, degree) or \
-            program.condition("D", ring.support(known_dec), dec_terms, top):
-        return None
+    # the new set contains the old one: 1 - V >= s (1 - V_old) (the iteration never shrinks it)
+    zero = tuple([0] * ring.nvars)
+    contain_terms = [(f"v{k}", -ring.monomial(m)) for k, m in enumerate(basis)]
+    old_support = sorted(set(ring.support(V_scaled)) | {zero})
+    why = program.condition("P", ring.support(l2), pos_terms, degree) or \
+        program.condition("D", ring.support(known_dec), dec_terms, top) or \
+        program.condition("C", [zero], contain_terms, degree, region_support=old_support, vanishing=False)
+    if why is not None:
+        return f"the V step was not built: {why}"
     program.minimize([(f"v{k}", w) for k, w in enumerate(weights)])
     values = ParameterValues()
     _set(values, *known_values(ring, "P", -l2 * to_fmpq(eps), ring.support(l2)))
     _set(values, *known_values(ring, "D", known_dec, ring.support(known_dec)))
+    _set(values, *known_values(ring, "C", ring.constant(1), [zero]))
+    old_terms = ring.terms(V_scaled - 1)
+    _set(values, "W_C", [old_terms.get(m, Fraction(0)) for m in old_support])
     solution = search.solve(program.structure(), values)
     if not solution.usable:
-        return None
+        from lyapcheck.models.search import why_none
+
+        return f"the V step found no V ({why_none(solution)})"
     from lyapcheck.sos.rounding import round_scalar
 
     V = ring.zero()
@@ -139,7 +155,7 @@ def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.nda
         if c:
             V += ring.monomial(m, c)
     del D
-    return V if not V.is_zero() else None
+    return V if not V.is_zero() else "the V step gave V = 0"
 
 
 __all__ = ["improved_regions", "v_step", "target_samples"]

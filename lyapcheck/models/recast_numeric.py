@@ -113,12 +113,12 @@ def converges(system: RecastSystem, X0: np.ndarray, horizon: float = 60.0, toler
 
 
 def converges_modulo(system: RecastSystem, X0: np.ndarray, angles: tuple[str, ...] = (), horizon: float = 60.0,
-                     tolerance: float = 2e-2) -> np.ndarray:
+                     tolerance: float = 2e-2, step: float = 0.02) -> np.ndarray:
     """Whether each start's simulated trajectory of the true field ends within ``tolerance`` of the
     equilibrium, each angle taken modulo 2 pi."""
     eq = np.array([float(system.values[s]) for s in system.states])
     with np.errstate(all="ignore"):
-        end = integrate(system, X0, horizon) - eq
+        end = integrate(system, X0, horizon, step) - eq
     for i, s in enumerate(system.states):
         if s in angles:
             end[:, i] = np.angle(np.exp(1j * end[:, i]))

@@ -225,7 +225,7 @@ class ConditionProgram:
         if region_support is not None:
             half = max((mdeg(m, roots) for m in target), default=2) // 2 - \
                 max((mdeg(m, roots) for m in region_support), default=0) // 2
-            basis = self._monomials(1, max(half, 1))
+            basis = self._monomials(1 if vanishing else 0, max(half, 1))
             rho_name = f"P{name}"
             self.grams.append(Gram(rho_name, tuple(basis), full_blocks(basis), margin=False))
             terms.append(Term(Coefficients.parameter(f"W_{name}", sorted(region_support)), rho_name))
