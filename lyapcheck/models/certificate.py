@@ -35,10 +35,9 @@ from typing import Any, Callable
 
 from lyapcheck.errors import CertificateError, InputFileError
 from lyapcheck.models.certify import ModelCertification
+from lyapcheck.models.documents import KIND, SCHEMA_VERSION, with_verdict as _with_verdict
 from lyapcheck.results import ConditionResult
 
-SCHEMA_VERSION = 1
-KIND = "lyapcheck-model-certificate"
 
 Row = tuple[str, bool, str]
 
@@ -307,22 +306,6 @@ def _multipliers(data: Any, nvars: int, first: int) -> list[tuple[int, Any]]:
     if any(not first <= j < nvars for j, _ in out):
         raise ValueError("a box multiplier must act on a box parameter")
     return out
-
-
-def _with_verdict(doc: dict[str, Any], rows: list[Row]) -> list[Row]:
-    from lyapcheck.models.certify import verdict_of
-
-    conditions = doc["conditions"]
-    proven = {name: c for name, c in conditions.items()
-              if isinstance(c, dict) and c.get("status") == "certified" and any(n == name for n, _, _ in rows)
-              and all(ok for n, ok, _ in rows if n == name)}
-    prerequisites = all(ok for n, ok, _ in rows if n in ("model", "parameters", "box", "denominators", "scaling",
-                                                         "recasting"))
-    expected = verdict_of(proven) if prerequisites else "not_certified"
-    stated = doc.get("verdict")
-    rows.append(("verdict", stated == expected, f"verdict '{stated}' is supported" if stated == expected else
-                 f"verdict: stated '{stated}' but the re-checked conditions support '{expected}'"))
-    return rows
 
 
 def _gram(data: dict[str, Any], nvars: int) -> Any:

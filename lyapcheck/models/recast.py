@@ -111,6 +111,10 @@ class Relation:
     kind: str
     poly: Poly
     why: str
+    #: the auxiliary whose relation it is (its index while building, its name after): a proof that
+    #: a square root's argument is non-negative may use only the relations of earlier auxiliaries,
+    #: never its own (r^2 = q holds for a real r only where q >= 0 already)
+    owner: str = ""
 
 
 @dataclass
@@ -244,8 +248,8 @@ class Recaster:
         self.made[key] = index
         x = self.ring.gen(self._slot(index))
         self.chain[index] = (Rational.polynomial(self.ring, self.ring.zero()), self.ring.zero())
-        self.relations.append(Relation("eq", x * x - radicand, f"rt{radicand}^2 = {radicand}"))
-        self.relations.append(Relation("ge", x, f"rt{radicand} >= 0"))
+        self.relations.append(Relation("eq", x * x - radicand, f"rt{radicand}^2 = {radicand}", str(index)))
+        self.relations.append(Relation("ge", x, f"rt{radicand} >= 0", str(index)))
         return index
 
     def _constant(self, name: str, value: Fraction, text: str) -> Rational:
@@ -291,6 +295,7 @@ class Recaster:
         if key in self.made:
             return self.made[key]
         ring = self.ring
+        first_relation = len(self.relations)
         smooth = function not in ("abs", "sat") and not self._uses_algebraic(u)
         definition = f"{function}({self.written(u)}" + (f", {limit}" if limit is not None else "") + ")"
         index = self._new(Auxiliary("", function, definition, u, None, smooth, text, limit))
@@ -341,6 +346,8 @@ class Recaster:
             self.relations += [Relation("eq", (u - x) * (L2 - x * x), "sat(u) = u unless |sat(u)| = L"),
                                Relation("ge", L2 - x * x, "|sat(u)| <= L"),
                                Relation("ge", x * (u - x), "sat(u) (u - sat(u)) >= 0")]
+        self.relations[first_relation:] = [Relation(r.kind, r.poly, r.why, str(index))
+                                           for r in self.relations[first_relation:]]
         return index
 
     def _uses_algebraic(self, u: Poly) -> bool:
@@ -655,7 +662,7 @@ def _finish(source: str, recaster: Recaster, rhs: Sequence[Rational], flows: Map
             definition = definition.replace(f"#{i}#", _parenthesized(defined[i].definition))
         final.append(Auxiliary(a.name, a.function, definition, a.argument, a.value, a.smooth, a.written_as, a.limit,
                                a.radicand))
-    relations = tuple(Relation(r.kind, move(r.poly), r.why) for r in recaster.relations)
+    relations = tuple(Relation(r.kind, move(r.poly), r.why, names[int(r.owner)]) for r in recaster.relations)
     field_rhs = tuple(move_rational(r) for r in rhs)
     flow_map = {names[i]: move_rational(f) for i, f in flows.items()}
     system = RecastSystem(ring=ring, states=states, auxiliaries=tuple(final), field=field_rhs, flows=flow_map,

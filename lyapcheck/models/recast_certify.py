@@ -23,11 +23,12 @@ from typing import Any, Sequence
 
 from lyapcheck.errors import CertificateError, InvalidParameter, ModelFileError
 from lyapcheck.models.recast import RecastModel
-from lyapcheck.models.recast_classes import (RECAST_CLASSES, Loop, base_loop, check_root_proofs, common_denominator,
-                                             jacobian, lie, state_square, v_names, v_text)
+from lyapcheck.models.recast_classes import (Loop, base_loop, check_root_proofs, common_denominator, jacobian, lie,
+                                             state_square, v_names, v_text)
+from lyapcheck.models.recast_run import RECAST_CLASSES
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.results import ConditionResult
-from lyapcheck.sos.polynomials import Poly, degree_in, to_fmpq
+from lyapcheck.sos.polynomials import degree_in, to_fmpq
 
 Row = tuple[str, bool, str]
 
@@ -51,7 +52,7 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
                    time_limit_s: float | None = None) -> tuple[str, dict[str, ConditionResult], dict[str, Any]]:
     """Run the classes on a recast loop: the verdict, the results and the certificate document."""
     from lyapcheck import tolerances as tol
-    from lyapcheck.models import recast_classes
+    from lyapcheck.models import recast_run
     from lyapcheck.models.certify import verdict_of
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
@@ -60,7 +61,7 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
         raise InvalidParameter("candidate", 'a V with --candidate "EXPR" for class candidate', "nothing")
     V = model.candidate_v if candidate is not None else None
     try:
-        results, loop, _ = recast_classes.certify(model, chosen, V, limit)
+        results, loop, _ = recast_run.certify(model, chosen, V, limit)
     except ValueError as exc:
         raise ModelFileError(model.source, "[dynamics]", f"{exc}: its argument could not be proved non-negative "
                                                          "(sqrt of something that can be negative)") from None
@@ -79,7 +80,7 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
 
 def build_document(model: RecastModel, loop: Loop, candidate: str | None, conditions: dict[str, Any],
                    verdict: str) -> dict[str, Any]:
-    from lyapcheck.models.certificate import KIND, SCHEMA_VERSION
+    from lyapcheck.models.documents import KIND, SCHEMA_VERSION
     from lyapcheck.numerics import package_versions
 
     return {
@@ -124,7 +125,7 @@ def is_recast_document(doc: Any) -> bool:
 
 def verify_recast(doc: dict[str, Any]) -> list[Row]:
     """Re-check a recast loop's certificate exactly; (check, ok, message) rows."""
-    from lyapcheck.models.certificate import _with_verdict
+    from lyapcheck.models.documents import with_verdict as _with_verdict
     from lyapcheck.models.modelfile import parse_any_model
 
     rows: list[Row] = []
@@ -247,4 +248,4 @@ def verify_or_raise(doc: dict[str, Any]) -> list[Row]:
         raise CertificateError(f"certificate is malformed: {repr(exc)[:200]}") from None
 
 
-__all__ = ["certify_recast", "verify_recast", "verify_or_raise", "is_recast_document", "Poly"]
+__all__ = ["certify_recast", "verify_recast", "verify_or_raise", "is_recast_document"]

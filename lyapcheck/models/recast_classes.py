@@ -21,16 +21,15 @@ proved (none is false-certified: the identities would have to hold at those poin
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Final, Sequence
 
 from lyapcheck.models.expressions import Rational
-from lyapcheck.models.recast import RecastModel, RecastSystem, Relation, written_poly
+from lyapcheck.models.recast import RecastSystem, Relation, written_poly
 from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
-                                         order_at_origin, poly_from_json, poly_to_json, solve_on_faces)
-from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search, why_none
+                                         poly_to_json, solve_on_faces)
+from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
 
@@ -96,7 +95,7 @@ class Loop:
 def base_loop(system: RecastSystem) -> Loop:
     angles = angle_states(system)
     ring = system.ring
-    relations = [Relation(r.kind, system.shift(r.poly), r.why) for r in system.relations
+    relations = [Relation(r.kind, system.shift(r.poly), r.why, r.owner) for r in system.relations
                  if not any(degree_in(ring, r.poly, [a]) > 0 for a in angles)]
     return Loop(system, relations, angles=angles)
 
@@ -132,7 +131,7 @@ def with_root_bounds(loop: Loop, bounds: dict[str, tuple[Fraction, ConditionCert
         if a.name in bounds:
             c = bounds[a.name][0]
             relations.append(Relation("ge", loop.system.shift(loop.ring.gen(a.name)) - to_fmpq(c),
-                                      f"{a.name} >= {c} (sqrt of an argument proved >= {c * c})"))
+                                      f"{a.name} >= {c} (sqrt of an argument proved >= {c * c})", "derived"))
     return Loop(loop.system, relations, dict(bounds), dict(loop.angles))
 
 
@@ -187,30 +186,50 @@ def _set(values: ParameterValues, key: str, exact: list[Fraction]) -> None:
     values.floats[key] = np.array([float(c) for c in exact])
 
 
+def base_loop_of(loop: Loop) -> Loop:
+    """The loop with the system's relations only (no derived bound)."""
+    return Loop(loop.system, [r for r in loop.relations if r.owner != "derived"], angles=dict(loop.angles))
+
+
+def _restricted(loop: Loop, owners: set[str], bounds: dict[str, tuple[Fraction, "ConditionCertificate"]]) -> Loop:
+    """The relations of the auxiliaries in ``owners`` only, with the bounds proved for them."""
+    kept = Loop(loop.system, [r for r in loop.relations if r.owner in owners], angles=dict(loop.angles))
+    return with_root_bounds(kept, {k: v for k, v in bounds.items() if k in owners and v[0] > 0})
+
+
+def root_loop(base: Loop, name: str, bounds: dict[str, tuple[Fraction, "ConditionCertificate"]]) -> Loop:
+    """What the proof of square root ``name``'s bound may use: the relations of the auxiliaries
+    made before it, and their proved bounds (its own relation r^2 = q presupposes q >= 0)."""
+    names = [a.name for a in base.system.auxiliaries]
+    return _restricted(base_loop_of(base), set(names[:names.index(name)]), bounds)
+
+
 def prove_root_bounds(loop: Loop, search: Search) -> tuple[Loop, list[str]]:
     """Prove each square root's argument ``q >= c^2`` with ``c = r(eq)/2 > 0`` (so ``r >= c``), or
     ``q >= 0`` when ``r(eq) = 0``. Returns the loop with the bounds, and the roots whose argument
     could not be proved non-negative (the file is then refused)."""
     system = loop.system
+    base = loop
     bounds: dict[str, tuple[Fraction, ConditionCertificate]] = {}
     unproved: list[str] = []
     for a in system.auxiliaries:
         if a.function != "sqrt" or a.argument is None:
             continue
         q = system.shift(a.argument)
+        before = root_loop(base, a.name, bounds)
         assert a.value is not None
         c = a.value / 2
         if c > 0:
-            cert = prove_nonnegative(loop, q - to_fmpq(c * c), search, f"root_{a.name}")
+            cert = prove_nonnegative(before, q - to_fmpq(c * c), search, f"root_{a.name}")
             if cert is not None:
                 bounds[a.name] = (c, cert)
                 continue
-        cert = prove_nonnegative(loop, q, search, f"nonneg_{a.name}")
+        cert = prove_nonnegative(before, q, search, f"nonneg_{a.name}")
         if cert is None:
             unproved.append(a.written_as or a.definition)
         else:
             bounds[a.name] = (Fraction(0), cert)
-    return with_root_bounds(loop, {k: v for k, v in bounds.items() if v[0] > 0}), unproved
+    return with_root_bounds(base, {k: v for k, v in bounds.items() if v[0] > 0}), unproved
 
 
 def root_proofs_json(loop: Loop) -> dict[str, Any]:
@@ -221,7 +240,7 @@ def check_root_proofs(base: Loop, data: Any) -> tuple[Loop | None, str]:
     """Re-check stored square-root bounds on the base relations; the loop with them, or why not."""
     if not isinstance(data, dict):
         return None, "recasting.roots must be a table"
-    bounds = {}
+    bounds: dict[str, tuple[Fraction, ConditionCertificate]] = {}
     for name, item in data.items():
         aux = next((a for a in base.system.auxiliaries if a.name == name and a.function == "sqrt"), None)
         if aux is None or aux.argument is None:
@@ -229,9 +248,10 @@ def check_root_proofs(base: Loop, data: Any) -> tuple[Loop | None, str]:
         c = Fraction(str(item["bound"]))
         if c <= 0:
             return None, f"recasting.roots.{name}: the bound must be > 0"
-        cert = ConditionCertificate.from_json(base.ring, item["proof"], len(base.relations))
+        before = root_loop(base, name, bounds)
+        cert = ConditionCertificate.from_json(base.ring, item["proof"], len(before.relations))
         F = base.system.shift(aux.argument) - to_fmpq(c * c)
-        ok, why = check_condition(base.ring, F, base.relations, cert)
+        ok, why = check_condition(base.ring, F, before.relations, cert)
         if not ok:
             return None, f"recasting.roots.{name}: {why}"
         bounds[name] = (c, cert)
@@ -243,7 +263,7 @@ def prove_denominators(loop: Loop, distinct: Sequence[Poly], search: Search
     """For each distinct denominator ``d``: ``d - c >= 0`` on S with ``c = d(0)/4 > 0`` (exact);
     returns the proofs, and the first denominator that failed (None when all passed)."""
     ring = loop.ring
-    out = []
+    out: list[tuple[Poly, Fraction, ConditionCertificate]] = []
     for k, d in enumerate(distinct):
         at0 = _at_origin(loop, d)
         if at0 is None or at0 <= 0:
@@ -735,22 +755,22 @@ def _is_equilibrium(loop: Loop, angles_at: dict[str, int]) -> bool:
         u = system.reduce(ring.compose(a.argument, [images.get(n, ring.gen(n)) for n in ring.names]))
         if not u.is_constant():
             return False
-        value = Fraction(0) if u.is_zero() else Fraction(str(u.leading_coefficient()))
+        at = Fraction(0) if u.is_zero() else Fraction(str(u.leading_coefficient()))
         if a.function == "abs":
-            images[a.name] = ring.constant(abs(value))
+            images[a.name] = ring.constant(abs(at))
         elif a.function == "sat" and a.limit is not None:
-            images[a.name] = ring.constant(max(-a.limit, min(a.limit, value)))
-        elif a.function in ("sin", "atan", "tanh") and value == 0:
+            images[a.name] = ring.constant(max(-a.limit, min(a.limit, at)))
+        elif a.function in ("sin", "atan", "tanh") and at == 0:
             images[a.name] = ring.constant(0)
-        elif a.function in ("cos", "exp") and value == 0:
+        elif a.function in ("cos", "exp") and at == 0:
             images[a.name] = ring.constant(1)
         else:
             return False
     full = [images.get(n, ring.gen(n)) for n in ring.names]
-    for r in system.field:
-        if not system.reduce(ring.compose(r.numerator, full)).is_zero():
+    for rhs in system.field:
+        if not system.reduce(ring.compose(rhs.numerator, full)).is_zero():
             return False
-        if system.reduce(ring.compose(r.denominator, full)).is_zero():
+        if system.reduce(ring.compose(rhs.denominator, full)).is_zero():
             return False
     return True
 
@@ -782,119 +802,3 @@ def check_refutation(loop: Loop, data: Any) -> tuple[bool, str]:
     if not at or not _is_equilibrium(loop, at):
         return False, "the stated point is not an equilibrium of the loop"
     return True, "another equilibrium, exactly: no global asymptotic stability"
-
-
-# -- the model's classes ------------------------------------------------------------------------------
-
-#: the classes a recast loop takes, in order
-RECAST_CLASSES: Final = ("linearization", "sos_gas", "roa", "candidate")
-
-
-def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float
-            ) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
-    """Run the chosen classes; the loop (with its proved square-root bounds) and the seconds each took."""
-    results: dict[str, ConditionResult] = {}
-    seconds: dict[str, float] = {}
-    base = base_loop(model.system)
-    budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-    loop, unproved = prove_root_bounds(base, Search(base.ring, budget))
-    if unproved:
-        raise ValueError(unproved[0])
-    start = time.perf_counter()
-    lin = linearization(loop)
-    if "linearization" in classes:
-        results["linearization"] = lin
-        seconds["linearization"] = time.perf_counter() - start
-    if "sos_gas" in classes:
-        start = time.perf_counter()
-        results["sos_gas"] = refute_global(loop, "sos_gas") or \
-            sos_gas(loop, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
-        seconds["sos_gas"] = time.perf_counter() - start
-    if "roa" in classes:
-        start = time.perf_counter()
-        if results.get("sos_gas") is not None and results["sos_gas"].status == "certified":
-            results["roa"] = ConditionResult("roa", "not_applicable", "global asymptotic stability is certified "
-                                             "(sos_gas): the region of attraction is the whole state space",
-                                             property="ROA")
-        else:
-            results["roa"] = run_roa(loop, lin, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
-                                     comparison_box(model, loop))
-        seconds["roa"] = time.perf_counter() - start
-    if "candidate" in classes and candidate is not None:
-        start = time.perf_counter()
-        results["candidate"] = run_candidate(loop, candidate, Budget(
-            time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"), comparison_box(model, loop))
-        seconds["candidate"] = time.perf_counter() - start
-    return results, loop, seconds
-
-
-def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
-    """The box (deviations ``lo``, ``hi``) in which regions are compared and the V-s iteration
-    samples: the model's ``[domain]``, else ``+-pi`` in an angle and ``+-DEFAULT_HALF_WIDTH`` elsewhere."""
-    import numpy as np
-
-    from lyapcheck.models.recast_numeric import DEFAULT_HALF_WIDTH
-
-    eq = np.array([float(v) for v in model.equilibrium])
-    if model.domain is not None:
-        lo = np.array([float(model.domain[s][0]) for s in model.states]) - eq
-        hi = np.array([float(model.domain[s][1]) for s in model.states]) - eq
-        return lo, hi
-    hw = np.array([np.pi if s in loop.angles else DEFAULT_HALF_WIDTH for s in model.states])
-    return -hw, hw
-
-
-def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
-    """``roa``: the linearization's V and its largest level, then the V-s iteration from it; the
-    region covering most of the box."""
-    search = Search(loop.ring, budget)
-    J = jacobian(loop)
-    V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
-    if V0 is None:
-        return ConditionResult("roa", "not_certified", f"the linearization gives no quadratic V ({lin.summary})",
-                               property="ROA")
-    label = "the linearization (J^T P + P J = -I)"
-    try:
-        first = certify_region(loop, V0, search, label)
-    except BudgetExhausted as exc:
-        return ConditionResult("roa", "inconclusive", f"{label}: {exc}", property="ROA")
-    if isinstance(first, str):
-        return best_region(loop, [], [f"{label}: {first}"], box, search)
-    from lyapcheck.models.recast_improve import improved_regions
-
-    more, tried = improved_regions(loop, first, budget, box)
-    return best_region(loop, [first, *more], [f"{label}: level {float(first.level):.6g}", *tried], box, search)
-
-
-def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
-    """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
-    ring = loop.ring
-    search = Search(ring, budget)
-    l2 = state_square(loop)
-    names = v_names(loop, V)
-    N, D, distinct = common_denominator(loop, names)
-    dens, failed = prove_denominators(loop, distinct, search)
-    if failed is not None:
-        return ConditionResult("candidate", "not_applicable", f"the denominator {written_poly(ring, failed)} could not "
-                               "be proved positive on the recasting's set")
-    for eps in EPSILONS:
-        pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pc")
-        if pos is None:
-            continue
-        dec = prove_nonnegative(loop, -lie(loop, V, N) - l2 * to_fmpq(eps), search, "Dc")
-        if dec is not None:
-            cert = certificate_head(loop, V, eps, D, dens)
-            cert.update({"positivity": pos.to_json(ring), "decrease": dec.to_json(ring)})
-            return ConditionResult("candidate", "certified", f"the candidate proves global asymptotic stability: "
-                                   f"V >= {eps} |x - x_eq|^2 and V' <= -{eps} |x - x_eq|^2 / D on the recasting's "
-                                   "relations (exact)", certificate=cert, property="GAS")
-        break
-    else:
-        return ConditionResult("candidate", "not_certified", "the candidate could not be proved positive definite in "
-                               "the states (V >= eps |x - x_eq|^2) on the recasting's relations", property="ROA")
-    region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
-    if region.status != "certified":
-        region.summary = ("the candidate's derivative is not negative definite (no strict global decrease was proved; "
-                          "V' <= 0 alone needs LaSalle's argument, which this class does not make) and no sublevel set "
-                          "was certified: " + region.summary)
-    return region

@@ -8,7 +8,7 @@ function evaluated by numpy, not the recast polynomial one.
 
 from __future__ import annotations
 
-from typing import Final
+from typing import Callable, Final
 
 import numpy as np
 
@@ -16,7 +16,7 @@ from lyapcheck.models.recast import RecastSystem
 from lyapcheck.sos.polynomials import Poly, Ring
 
 #: numpy's version of each function of the language
-_NUMPY: Final = {"sin": np.sin, "cos": np.cos, "exp": np.exp, "sqrt": lambda u: np.sqrt(np.maximum(u, 0.0)),
+_NUMPY: Final[dict[str, Callable[[np.ndarray], np.ndarray]]] = {"sin": np.sin, "cos": np.cos, "exp": np.exp, "sqrt": lambda u: np.sqrt(np.maximum(u, 0.0)),
                  "atan": np.arctan, "tanh": np.tanh, "abs": np.abs}
 
 

@@ -1,0 +1,134 @@
+"""The classes of a loop with functions, run in turn: ``linearization``, ``sos_gas``, ``roa``,
+``candidate`` (:mod:`lyapcheck.models.recast_classes` has each condition; this module orders them,
+gives each its time budget, and runs ``roa``'s V-s iteration, :mod:`lyapcheck.models.recast_improve`).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Final, Sequence
+
+from lyapcheck.models.recast import RecastModel
+from lyapcheck.models.recast_classes import (EPSILONS, Loop, base_loop, best_region, certify_region,
+                                             common_denominator, jacobian, lie, linearization,
+                                             prove_denominators, prove_nonnegative, prove_root_bounds,
+                                             quadratic_candidate, refute_global, region_of_attraction, sos_gas,
+                                             certificate_head, state_square, v_names)
+from lyapcheck.models.recast_improve import improved_regions
+from lyapcheck.models.search import Budget, BudgetExhausted, Search
+from lyapcheck.results import ConditionResult
+from lyapcheck.models.recast import written_poly
+from lyapcheck.sos.polynomials import Poly, to_fmpq
+
+# -- the model's classes ------------------------------------------------------------------------------
+
+#: the classes a recast loop takes, in order
+RECAST_CLASSES: Final = ("linearization", "sos_gas", "roa", "candidate")
+
+
+def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float
+            ) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
+    """Run the chosen classes; the loop (with its proved square-root bounds) and the seconds each took."""
+    results: dict[str, ConditionResult] = {}
+    seconds: dict[str, float] = {}
+    base = base_loop(model.system)
+    budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+    loop, unproved = prove_root_bounds(base, Search(base.ring, budget))
+    if unproved:
+        raise ValueError(unproved[0])
+    start = time.perf_counter()
+    lin = linearization(loop)
+    if "linearization" in classes:
+        results["linearization"] = lin
+        seconds["linearization"] = time.perf_counter() - start
+    if "sos_gas" in classes:
+        start = time.perf_counter()
+        results["sos_gas"] = refute_global(loop, "sos_gas") or \
+            sos_gas(loop, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        seconds["sos_gas"] = time.perf_counter() - start
+    if "roa" in classes:
+        start = time.perf_counter()
+        if results.get("sos_gas") is not None and results["sos_gas"].status == "certified":
+            results["roa"] = ConditionResult("roa", "not_applicable", "global asymptotic stability is certified "
+                                             "(sos_gas): the region of attraction is the whole state space",
+                                             property="ROA")
+        else:
+            results["roa"] = run_roa(loop, lin, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
+                                     comparison_box(model, loop))
+        seconds["roa"] = time.perf_counter() - start
+    if "candidate" in classes and candidate is not None:
+        start = time.perf_counter()
+        results["candidate"] = run_candidate(loop, candidate, Budget(
+            time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"), comparison_box(model, loop))
+        seconds["candidate"] = time.perf_counter() - start
+    return results, loop, seconds
+
+
+def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
+    """The box (deviations ``lo``, ``hi``) in which regions are compared and the V-s iteration
+    samples: the model's ``[domain]``, else ``+-pi`` in an angle and ``+-DEFAULT_HALF_WIDTH`` elsewhere."""
+    import numpy as np
+
+    from lyapcheck.models.recast_numeric import DEFAULT_HALF_WIDTH
+
+    eq = np.array([float(v) for v in model.equilibrium])
+    if model.domain is not None:
+        lo = np.array([float(model.domain[s][0]) for s in model.states]) - eq
+        hi = np.array([float(model.domain[s][1]) for s in model.states]) - eq
+        return lo, hi
+    hw = np.array([np.pi if s in loop.angles else DEFAULT_HALF_WIDTH for s in model.states])
+    return -hw, hw
+
+
+def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
+    """``roa``: the linearization's V and its largest level, then the V-s iteration from it; the
+    region covering most of the box."""
+    search = Search(loop.ring, budget)
+    J = jacobian(loop)
+    V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
+    if V0 is None:
+        return ConditionResult("roa", "not_certified", f"the linearization gives no quadratic V ({lin.summary})",
+                               property="ROA")
+    label = "the linearization (J^T P + P J = -I)"
+    try:
+        first = certify_region(loop, V0, search, label)
+    except BudgetExhausted as exc:
+        return ConditionResult("roa", "inconclusive", f"{label}: {exc}", property="ROA")
+    if isinstance(first, str):
+        return best_region(loop, [], [f"{label}: {first}"], box, search)
+    more, tried = improved_regions(loop, first, budget, box)
+    return best_region(loop, [first, *more], [f"{label}: level {float(first.level):.6g}", *tried], box, search)
+
+
+def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
+    """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
+    ring = loop.ring
+    search = Search(ring, budget)
+    l2 = state_square(loop)
+    names = v_names(loop, V)
+    N, D, distinct = common_denominator(loop, names)
+    dens, failed = prove_denominators(loop, distinct, search)
+    if failed is not None:
+        return ConditionResult("candidate", "not_applicable", f"the denominator {written_poly(ring, failed)} could not "
+                               "be proved positive on the recasting's set")
+    for eps in EPSILONS:
+        pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pc")
+        if pos is None:
+            continue
+        dec = prove_nonnegative(loop, -lie(loop, V, N) - l2 * to_fmpq(eps), search, "Dc")
+        if dec is not None:
+            cert = certificate_head(loop, V, eps, D, dens)
+            cert.update({"positivity": pos.to_json(ring), "decrease": dec.to_json(ring)})
+            return ConditionResult("candidate", "certified", f"the candidate proves global asymptotic stability: "
+                                   f"V >= {eps} |x - x_eq|^2 and V' <= -{eps} |x - x_eq|^2 / D on the recasting's "
+                                   "relations (exact)", certificate=cert, property="GAS")
+        break
+    else:
+        return ConditionResult("candidate", "not_certified", "the candidate could not be proved positive definite in "
+                               "the states (V >= eps |x - x_eq|^2) on the recasting's relations", property="ROA")
+    region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
+    if region.status != "certified":
+        region.summary = ("the candidate's derivative is not negative definite (no strict global decrease was proved; "
+                          "V' <= 0 alone needs LaSalle's argument, which this class does not make) and no sublevel set "
+                          "was certified: " + region.summary)
+    return region

@@ -1,0 +1,243 @@
+"""The classes on loops with functions: what is certified is true, what is false is never certified,
+every certificate re-checks exactly, and a changed certificate does not.
+
+Each claim is also checked against the true loop by simulation written here with numpy's own
+functions (not lyapcheck's recast code): a certified region's samples converge, modulo 2 pi in an
+angle.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import subprocess
+import sys
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lyapcheck import api
+from lyapcheck.models import recast_classes as rc
+from lyapcheck.models.modelfile import parse_any_model
+from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
+from lyapcheck.models.search import Budget, Search
+from lyapcheck.sos.certificates import GramPoly
+
+ILOS = """
+[model]
+name = "ILOS course form"
+states = ["y", "yi"]
+[parameters]
+U = 1
+Delta = 2
+kappa = "0.5"
+[dynamics]
+y = "-U*(y + kappa*yi)/sqrt(Delta**2 + (y + kappa*yi)**2)"
+yi = "U*y/sqrt(Delta**2 + (y + kappa*yi)**2)"
+"""
+
+PENDULUM = """
+[model]
+name = "damped pendulum"
+states = ["theta", "omega"]
+[parameters]
+b = 1
+[dynamics]
+theta = "omega"
+omega = "-sin(theta) - b*omega"
+[domain]
+theta = [-3.14159, 3.14159]
+omega = [-4, 4]
+"""
+
+LOSSLESS = """
+[model]
+name = "lossless pendulum"
+states = ["theta", "omega"]
+[dynamics]
+theta = "omega"
+omega = "-sin(theta)"
+"""
+
+SPRING = """
+[model]
+name = "a spring with a sine term"
+states = ["x1", "x2"]
+[dynamics]
+x1 = "x2"
+x2 = "-sin(x1) - x1 - x2"
+"""
+
+UNSTABLE = """
+[model]
+name = "x'' = sin(x) - x'"
+states = ["x", "v"]
+[dynamics]
+x = "v"
+v = "sin(x) - v"
+"""
+
+
+def write(tmp_path: Path, name: str, text: str) -> Path:
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
+def rk4(f, X: np.ndarray, horizon: float, step: float = 0.02) -> np.ndarray:
+    for _ in range(int(horizon / step)):
+        k1 = f(X)
+        k2 = f(X + step / 2 * k1)
+        k3 = f(X + step / 2 * k2)
+        k4 = f(X + step * k3)
+        X = X + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return X
+
+
+def pendulum_field(X: np.ndarray) -> np.ndarray:
+    return np.stack([X[:, 1], -np.sin(X[:, 0]) - X[:, 1]], axis=1)
+
+
+def v_of(cert: dict, X: np.ndarray) -> np.ndarray:
+    """V of a recast certificate at the states X, from its variables, auxiliaries and shift alone
+    (each definition here is sin(theta) or cos(theta), evaluated with numpy)."""
+    funcs = {"sin(theta)": lambda t: np.sin(t), "cos(theta)": lambda t: np.cos(t)}
+    columns = {"theta": X[:, 0], "omega": X[:, 1]}
+    for name, definition in cert["auxiliaries"].items():
+        columns[name] = funcs[definition](X[:, 0])
+    total = np.zeros(len(X))
+    for coefficient, exponents in cert["V"]["terms"]:
+        term = np.full(len(X), float(Fraction(coefficient)))
+        for name, e in zip(cert["variables"], exponents):
+            if e:
+                term = term * (columns[name] - float(Fraction(cert["shift"].get(name, "0")))) ** e
+        total += term
+    return total
+
+
+def test_ilos_course_form_is_globally_asymptotically_stable_exactly(tmp_path: Path) -> None:
+    result = api.certify(model=write(tmp_path, "ilos", ILOS))
+    gas = result.conditions["sos_gas"]
+    assert gas.status == "certified" and gas.property == "GAS"
+    cert = gas.certificate
+    assert cert["variables"] == ["y", "yi", "r1"]
+    assert cert["auxiliaries"] == {"r1": "sqrt(y**2 + y*yi + 1/4*yi**2 + 4)"}
+    assert "r1" in cert["recasting"]["roots"]  # sqrt's argument proved >= c^2 > 0: the denominator is positive
+    assert api.verify(result).valid
+    # a changed coefficient of V, or a relation the text does not give, fails the re-check
+    doc = copy.deepcopy(result.document)
+    term = doc["conditions"]["sos_gas"]["certificate"]["V"]["terms"][0]
+    term[0] = str(Fraction(term[0]) * Fraction(101, 100))
+    assert not api.verify(doc).valid
+    doc = copy.deepcopy(result.document)
+    doc["recast"]["relations"][1]["poly"] = "r1 - 5"
+    checks = api.verify(doc)
+    assert not checks.valid and any(c.check == "recasting" and not c.ok for c in checks.checks)
+
+
+def test_pendulum_region_holds_on_the_true_loop_and_global_stability_is_refuted(tmp_path: Path) -> None:
+    result = api.certify(model=write(tmp_path, "pendulum", PENDULUM))
+    assert result.conditions["linearization"].status == "certified"
+    gas = result.conditions["sos_gas"]
+    assert gas.status == "refuted" and gas.refutation["point"] == {"theta": "1*pi"}
+    roa = result.conditions["roa"]
+    assert roa.status == "certified" and "modulo 2 pi in theta" in roa.summary
+    assert api.verify(result).valid
+    cert = roa.certificate
+    level = float(Fraction(cert["level"]))
+    rng = np.random.default_rng(3)
+    X = np.column_stack([rng.uniform(-np.pi, np.pi, 3000), rng.uniform(-4, 4, 3000)])
+    inside = X[v_of(cert, X) <= level]
+    assert len(inside) > 300
+    end = rk4(pendulum_field, inside, 40.0)
+    wrapped = np.angle(np.exp(1j * end[:, 0]))
+    assert np.all(np.hypot(wrapped, end[:, 1]) < 1e-2)
+    # the set covers more of the box than the energy level set {1 - cos(theta) + omega^2/2 < 2}
+    energy = 1 - np.cos(X[:, 0]) + X[:, 1] ** 2 / 2 < 2
+    assert np.mean(v_of(cert, X) <= level) > np.mean(energy)
+
+
+def test_no_asymptotic_claim_on_a_lossless_or_an_unstable_loop(tmp_path: Path) -> None:
+    for name, text in (("lossless", LOSSLESS), ("unstable", UNSTABLE)):
+        result = api.certify(model=write(tmp_path, name, text))
+        assert result.verdict == "not_certified", name
+        assert all(c.status != "certified" for c in result.conditions.values()), name
+    unstable = api.certify(model=write(tmp_path, "unstable", UNSTABLE), classes="linearization")
+    assert unstable.conditions["linearization"].status == "refuted"
+
+
+def test_the_energy_of_a_damped_pendulum_is_not_a_strict_lyapunov_function(tmp_path: Path) -> None:
+    result = api.certify(model=write(tmp_path, "pendulum", PENDULUM), classes="candidate",
+                         candidate="1 - cos(theta) + omega**2/2")
+    cand = result.conditions["candidate"]
+    assert cand.status == "not_certified" and "LaSalle" in cand.summary
+    assert api.verify(result).valid
+
+
+def test_dropped_relations_only_weaken() -> None:
+    """Without the recasting's inequalities nothing ties sin x1 to x1 near 0 (x1 is no angle here:
+    it enters the field itself too): the linearization's V then proves no region (sound: nothing
+    false appears), with them it does."""
+    model = parse_any_model(SPRING, "spring.toml")
+    loop = rc.base_loop(model.system)
+    assert not loop.angles
+    V0 = rc.quadratic_candidate(loop, rc.jacobian(loop))
+    assert V0 is not None
+    assert not isinstance(rc.certify_region(loop, V0, Search(loop.ring, Budget(30, "test")), "full"), str)
+    weak = rc.Loop(loop.system, [r for r in loop.relations if r.kind == "eq"])
+    assert isinstance(rc.certify_region(weak, V0, Search(loop.ring, Budget(30, "test")), "weak"), str)
+
+
+def test_the_exact_check_refuses_a_free_multiplier_on_an_inequality() -> None:
+    model = parse_any_model(SPRING, "spring.toml")
+    loop = rc.base_loop(model.system)
+    ring = loop.ring
+    k = next(i for i, r in enumerate(loop.relations) if r.kind == "ge")
+    g = loop.relations[k].poly
+    zero = GramPoly((tuple([0] * ring.nvars),), ((Fraction(0),),))
+    # g >= 0 'proved' by a free multiplier 1 on g: the identity holds, the kind is wrong
+    cert = ConditionCertificate({k: ring.constant(1)}, {}, zero)
+    ok, why = check_condition(ring, g, loop.relations, cert)
+    assert not ok and "inequality" in why
+    # -g >= 0 is false; no multiplier of the right kind makes the identity hold with these
+    cert = ConditionCertificate({}, {k: GramPoly((tuple([0] * ring.nvars),), ((Fraction(1),),))}, zero)
+    assert check_condition(ring, g, loop.relations, cert)[0]
+    assert not check_condition(ring, -g, loop.relations, cert)[0]
+
+
+@pytest.mark.parametrize("dynamics, words", [
+    ('x1 = "-sqrt(x1)"', ["sqrt(x1)", "non-negative"]),
+    ('x1 = "-x1 + foo(x1)"', ["unknown function 'foo'"]),
+    ('x1 = "-x1 + sat(x1, 0)"', ["sat", "> 0"]),
+])
+def test_bad_input_is_one_line_with_exit_2(tmp_path: Path, dynamics: str, words: list[str]) -> None:
+    path = write(tmp_path, "bad", f'[model]\nname = "bad"\nstates = ["x1"]\n[dynamics]\n{dynamics}\n')
+    run = subprocess.run([sys.executable, "-m", "lyapcheck", "certify", str(path), "--out", str(tmp_path / "c.json")],
+                         capture_output=True, text=True)
+    assert run.returncode == 2, run.stderr
+    line = run.stderr.strip()
+    assert "\n" not in line and str(path) in line and all(w in line for w in words), line
+    assert not (tmp_path / "c.json").exists()
+
+
+def test_candidate_with_a_function_of_no_flow_is_refused(tmp_path: Path) -> None:
+    path = write(tmp_path, "pendulum", PENDULUM)
+    run = subprocess.run([sys.executable, "-m", "lyapcheck", "certify", str(path), "--classes", "candidate",
+                          "--candidate", "abs(theta) + omega**2"], capture_output=True, text=True)
+    assert run.returncode == 2 and "--candidate" in run.stderr and "\n" not in run.stderr.strip()
+
+
+def test_certificate_file_round_trip_through_the_command_line(tmp_path: Path) -> None:
+    path = write(tmp_path, "ilos", ILOS)
+    out = tmp_path / "ilos.json"
+    run = subprocess.run([sys.executable, "-m", "lyapcheck", "certify", str(path), "--out", str(out)],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(out.read_text())
+    assert doc["recast"]["auxiliaries"] == {"r1": "sqrt(y**2 + y*yi + 1/4*yi**2 + 4)"}
+    V = poly_from_json(parse_any_model(ILOS, "x").system.ring, doc["conditions"]["sos_gas"]["certificate"]["V"], "V")
+    assert not V.is_zero()
+    check = subprocess.run([sys.executable, "-m", "lyapcheck", "verify", str(out)], capture_output=True, text=True)
+    assert check.returncode == 0 and "certificate verified" in check.stdout
