@@ -690,6 +690,21 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     if worst_case and scenarios:
         raise InvalidParameter("scenarios", "left out with worst_case=True (the search tries every family)",
                                ",".join(scenarios))
+    recast = _recast_model(model, settings, None)
+    if recast is not None:  # a loop with functions: the true loop, undisturbed (lyapcheck.models.recast_simulate)
+        from lyapcheck.models.recast_simulate import simulate as simulate_recast
+
+        for name, value in (("worst_case", worst_case), ("scenarios", scenarios), ("frequencies", frequencies),
+                            ("certificate", certificate), ("plot", plot)):
+            if value:
+                raise InvalidParameter(name, "left out for a loop with functions (it has no disturbances; starts, "
+                                             "grid and t_end are taken)", value)
+        recast_starts = model_starts(recast, x0)  # type: ignore[arg-type]
+        if grid is not None:
+            recast_starts += list(sim.grid_over_domain(recast, grid))  # type: ignore[arg-type]
+        horizon_s = sim.parse_horizon(str(t_end)) if t_end is not None else None
+        doc = simulate_recast(recast, np.array(recast_starts) if recast_starts else None, horizon_s)
+        return SimulationReport(diverged=bool(doc["diverged"]), document=doc, series=None)
     loaded = _load_with_settings(model, settings)
     prepared = sim.prepare(loaded)
     starts = model_starts(loaded, x0)
