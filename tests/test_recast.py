@@ -12,6 +12,7 @@ each auxiliary's argument), as each check needs.
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -538,16 +539,18 @@ def test_polynomial_entry_refuses_functions_naming_the_commands(tmp_path: Path) 
     assert "sin(x2)" in message and "certify --model" in message and "verify" in message
     # a polynomial loop is still read by the polynomial entry
     assert not isinstance(parse_model(model_text({"x1": "-x1 + x2", "x2": "-x2"}), "p.toml"), RecastModel)
-    # the command line: a command taking polynomial loops only exits 2 with that one line
+    # the command line: simulate integrates the true loop; a flag it cannot take there exits 2 in one line
     path = tmp_path / "sin.toml"
     path.write_text(text)
-    done = subprocess.run([sys.executable, "-m", "lyapcheck", "simulate", "--model", str(path), "--json"],
-                          capture_output=True, text=True, cwd=ROOT, timeout=120,
+    done = subprocess.run([sys.executable, "-m", "lyapcheck", "simulate", "--model", str(path), "--json",
+                           "--x0", "x1=1,x2=0.5"], capture_output=True, text=True, cwd=ROOT, timeout=120,
                           env={**os.environ, "COLUMNS": "200"})
-    assert done.returncode == 2, done.stderr
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in done.stderr
-    assert str(path) in lines[0] and "certify --model" in lines[0] and "sin(x2)" in lines[0]
+    assert done.returncode == 0, done.stderr
+    doc = json.loads(done.stdout)
+    assert doc["kind"] == "recast" and doc["trajectories"][0]["converged"]
+    done = subprocess.run([sys.executable, "-m", "lyapcheck", "simulate", "--model", str(path), "--worst-case"],
+                          capture_output=True, text=True, cwd=ROOT, timeout=120, env={**os.environ, "COLUMNS": "200"})
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1 and "Traceback" not in done.stderr
 
 
 # -- 6. names ----------------------------------------------------------------------------------------------
