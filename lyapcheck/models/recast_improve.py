@@ -62,6 +62,7 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
     """Regions from the V-s iteration started at ``first`` (each certified exactly by the level
     step), and what was tried."""
     from lyapcheck.models.recast_classes import certify_region
+    from lyapcheck.models.recast_numeric import v_values
     from lyapcheck.models.search import BudgetExhausted, Search
 
     samples = target_samples(loop, box, np.random.default_rng(1))
@@ -78,7 +79,9 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
                 return out, tried
             label = f"the V-s iteration (degree {degree}, step {k + 1})"
             try:
-                V = v_step(loop, region.V * to_fmpq(1 / region.level), region.rho, degree, samples, search)
+                outside = samples[v_values(loop.system, region.V, samples) > float(region.level)]
+                V = v_step(loop, region.V * to_fmpq(1 / region.level), region.rho, degree,
+                           outside if len(outside) else samples, search)
                 if isinstance(V, str):
                     tried.append(f"{label}: {V}")
                     break
