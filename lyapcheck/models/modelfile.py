@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_with_divisors
-from lyapcheck.models.recast import FUNCTIONS, RecastModel, recast_dynamics, uses_functions
+from lyapcheck.models.recast import FUNCTIONS, RecastModel, first_function_use, recast_dynamics, uses_functions
 from lyapcheck.models.sets import SET_KEYS, STAY_KEY, SetForms, SetText, StateSet, evaluate_set, evaluate_sets, parse_set
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 
@@ -250,8 +250,10 @@ class _Reader:
             raise self.fail(f"[{unknown[0]}]", f"unknown section (sections: {', '.join(SECTIONS)})")
         for section in ("disturbances", "outputs", "sets", "units"):
             if section in self.data:
-                raise self.fail(f"[{section}]", "is not taken yet for a loop with functions (sin, sqrt, sat, ...): "
-                                                "remove it, or write the loop without functions")
+                key, what = first_function_use(self.table("dynamics"))
+                raise self.fail(key, f"{what} needs the loop recast (a loop with functions), which takes no "
+                                     f"[{section}] yet: write the field polynomial or rational in the states, or "
+                                     f"remove [{section}]")
         head = self.table("model")
         if "model" not in self.data:
             raise self.fail("[model]", "missing (it declares the states)")

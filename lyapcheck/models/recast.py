@@ -59,6 +59,7 @@ from __future__ import annotations
 
 import ast
 import math
+import warnings
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Final, Mapping, Sequence
@@ -524,26 +525,48 @@ def count_calls(texts: Sequence[str]) -> int:
     """An upper bound of the auxiliaries the texts can make (two per call, two roots)."""
     total = 0
     for text in texts:
-        try:
-            tree = ast.parse(str(text).strip(), mode="eval")
-        except (SyntaxError, ValueError, RecursionError, MemoryError):
-            continue  # the builder says what is wrong
-        total += sum(isinstance(node, ast.Call) for node in ast.walk(tree))
+        tree = _tree(str(text))
+        if tree is not None:  # else the builder says what is wrong
+            total += sum(isinstance(node, ast.Call) for node in ast.walk(tree))
     return 2 * total + len(ROOTS) + 2
+
+
+def _tree(text: object) -> ast.AST | None:
+    """``text``'s tree, or None (the builder says what is wrong with it); Python's warnings about a
+    text outside the language are not printed (the builder refuses it in one line)."""
+    if not isinstance(text, str):
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return ast.parse(text.strip(), mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return None
+
+
+def _function_use(tree: ast.AST | None) -> str | None:
+    """The first call (``'sin(...)'``) or ``'pi'`` in a tree, or None."""
+    for node in ast.walk(tree) if tree is not None else ():
+        if isinstance(node, ast.Call):
+            return f"'{node.func.id if isinstance(node.func, ast.Name) else 'a function'}(...)'"
+        if isinstance(node, ast.Name) and node.id == "pi":
+            return "the constant 'pi'"
+    return None
 
 
 def uses_functions(texts: Sequence[object]) -> bool:
     """Whether any text calls a function or names ``pi`` (a non-polynomial loop)."""
-    for text in texts:
-        if not isinstance(text, str):
-            continue
-        try:
-            tree = ast.parse(text.strip(), mode="eval")
-        except (SyntaxError, ValueError, RecursionError, MemoryError):
-            continue
-        if any(isinstance(node, ast.Call) or (isinstance(node, ast.Name) and node.id == "pi") for node in ast.walk(tree)):
-            return True
-    return False
+    return any(_function_use(_tree(text)) is not None for text in texts)
+
+
+def first_function_use(dynamics: Mapping[str, object]) -> tuple[str, str]:
+    """The key (``[dynamics] x1``) and the call (``'sin(...)'``) of the first right-hand side that
+    uses a function or ``pi``."""
+    for state, text in dynamics.items():
+        use = _function_use(_tree(text))
+        if use is not None:
+            return f"[dynamics] {state}", use
+    return "[dynamics]", "a function"
 
 
 def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, object],
