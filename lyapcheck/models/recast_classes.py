@@ -37,6 +37,8 @@ from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials
 EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
 #: degrees of V tried by sos_gas
 RECAST_GAS_DEGREES: Final = (2, 4)
+#: the most time one sos_gas template (a degree and a set of variables) may take, seconds
+TEMPLATE_LIMIT_S: Final = 10.0
 #: halvings of the level's bracket in roa's bisection
 LEVEL_BISECTIONS: Final = 7
 #: levels tried upwards (each the previous times this) before the bisection
@@ -409,11 +411,18 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
                     check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(eps), loop.relations, dec)[0]
                 return (V, pos, dec) if ok else None
 
-            try:
-                found, why = solve_on_faces(search, build, values, accept)
-            except BudgetExhausted as exc:
-                return ConditionResult("sos_gas", "inconclusive", f"{exc}; tried {'; '.join(tried) or 'nothing'}",
+            if budget.left() <= 0:
+                return ConditionResult("sos_gas", "inconclusive", f"time limit of {budget.seconds:g} s reached "
+                                       f"({budget.limit_name}); tried {'; '.join(tried) or 'nothing'}",
                                        property="GAS", solver={"solves": search.log})
+            # each template gets at most TEMPLATE_LIMIT_S, so that one large program leaves time to the others
+            capped = Search(ring, Budget(min(budget.left(), TEMPLATE_LIMIT_S),
+                                         "lyapcheck.models.recast_classes.TEMPLATE_LIMIT_S"), search.log)
+            try:
+                found, why = solve_on_faces(capped, build, values, accept)
+            except BudgetExhausted as exc:
+                tried.append(f"{label}, eps {eps}: {exc}")
+                break
             if found is None:
                 tried.append(f"{label}, eps {eps}: {why}")
                 if "size" in why or "rows" in why or "infeasible" in why:

@@ -34,13 +34,19 @@ VS_ITERATIONS: Final = 4
 VS_DEGREES: Final = (2, 4)
 #: sample states for the V step's objective (those that converge in simulation)
 VS_SAMPLES: Final = 200
-#: the V step's margins of positivity and decrease (times |z|^2), larger than the level step's so
-#: that its V, rounded, still passes there
-VS_MARGIN: Final = Fraction(1, 100)
+#: the V step's margin of the decrease (times |z|^2): the level step's smallest (a larger one
+#: shrinks the set the V step can find, 63 % -> 40 % of the pendulum's box)
+VS_MARGIN: Final = Fraction(1, 10000)
+#: the V step's margin of positivity: twice the level step's largest, room for the rounding
+VS_POSITIVITY_MARGIN: Final = Fraction(1, 50)
 #: how long each sample is simulated (the loop's time unit)
 VS_HORIZON_S: Final = 25.0
 #: bits kept of the V step's coefficients (short certificates; the level step decides)
 VS_ROUND_BITS: Final = 20
+#: the most time one V step may take, seconds
+VS_STEP_LIMIT_S: Final = 8.0
+#: the most time one level step of the iteration may take, seconds
+VS_LEVEL_LIMIT_S: Final = 15.0
 #: the iteration stops when less than this share of the class's time limit is left
 VS_BUDGET_SHARE: Final = 0.35
 
@@ -63,7 +69,7 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
     step), and what was tried."""
     from lyapcheck.models.recast_classes import certify_region
     from lyapcheck.models.recast_numeric import v_values
-    from lyapcheck.models.search import BudgetExhausted, Search
+    from lyapcheck.models.search import Budget, BudgetExhausted, Search
 
     samples = target_samples(loop, box, np.random.default_rng(1))
     tried: list[str] = []
@@ -80,12 +86,17 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
             label = f"the V-s iteration (degree {degree}, step {k + 1})"
             try:
                 outside = samples[v_values(loop.system, region.V, samples) > float(region.level)]
+                # one V step gets at most VS_STEP_LIMIT_S: a large program leaves time to the level steps
+                capped = Search(loop.ring, Budget(min(budget.left(), VS_STEP_LIMIT_S),
+                                                  "lyapcheck.models.recast_improve.VS_STEP_LIMIT_S"), search.log)
                 V = v_step(loop, region.V * to_fmpq(1 / region.level), region.rho, degree,
-                           outside if len(outside) else samples, search)
+                           outside if len(outside) else samples, capped)
                 if isinstance(V, str):
                     tried.append(f"{label}: {V}")
                     break
-                found = certify_region(loop, V, search, label, start=Fraction(1, 2))
+                level_search = Search(loop.ring, Budget(min(budget.left(), VS_LEVEL_LIMIT_S),
+                                                        "lyapcheck.models.recast_improve.VS_LEVEL_LIMIT_S"), search.log)
+                found = certify_region(loop, V, level_search, label, start=Fraction(1, 2))
             except BudgetExhausted as exc:
                 tried.append(f"{label}: {exc}")
                 return out, tried
@@ -112,7 +123,7 @@ def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.nda
                              if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
     names = [ring.names[i] for i in v_vars]
     N, D, _ = common_denominator(loop, names)
-    eps = VS_MARGIN  # above the level step's EPSILONS: room for rounding and for the exact check
+    eps = VS_MARGIN
     l2 = state_square(loop)
     # the objective's weights: each basis monomial's mean over the samples (deviations)
     system = loop.system
@@ -138,7 +149,8 @@ def v_step(loop: "Loop", V_scaled: Poly, rho: Poly, degree: int, samples: np.nda
         return f"the V step was not built: {why}"
     program.minimize([(f"v{k}", w) for k, w in enumerate(weights)])
     values = ParameterValues()
-    _set(values, *known_values(ring, "P", -l2 * to_fmpq(eps), ring.support(l2)))
+    # positivity with the level step's largest margin, so that the rounded V passes its exact check there
+    _set(values, *known_values(ring, "P", -l2 * to_fmpq(VS_POSITIVITY_MARGIN), ring.support(l2)))
     _set(values, *known_values(ring, "D", known_dec, ring.support(known_dec)))
     _set(values, *known_values(ring, "C", ring.constant(1), [zero]))
     old_terms = ring.terms(V_scaled - 1)

@@ -216,7 +216,7 @@ class ConditionProgram:
                 basis = [m for m in self._monomials(lowest, half) if (gname, m) not in self.drop]
                 if not basis:
                     continue
-                self.grams.append(Gram(gname, tuple(basis), full_blocks(basis), margin=False))
+                self.grams.append(Gram(gname, tuple(basis), full_blocks(basis), margin=self.margin))
                 terms.append(Term(Coefficients.literal(ring.terms(-rel.poly)), gname))
                 taus[i] = gname
                 target |= {tuple(a + b + c for a, b, c in zip(x, y, z)) for x in basis for y in basis
@@ -227,7 +227,7 @@ class ConditionProgram:
                 max((mdeg(m, roots) for m in region_support), default=0) // 2
             basis = self._monomials(1 if vanishing else 0, max(half, 1))
             rho_name = f"P{name}"
-            self.grams.append(Gram(rho_name, tuple(basis), full_blocks(basis), margin=False))
+            self.grams.append(Gram(rho_name, tuple(basis), full_blocks(basis), margin=self.margin))
             terms.append(Term(Coefficients.parameter(f"W_{name}", sorted(region_support)), rho_name))
             target |= {tuple(a + b + c for a, b, c in zip(x, y, z)) for x in basis for y in basis
                        for z in region_support}
