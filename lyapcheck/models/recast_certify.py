@@ -216,7 +216,7 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
         level = Fraction(str(cert["level"]))
         if level <= 0:
             return False, "the level must be > 0"
-        if c.get("numbers", {}).get("level") not in (None, str(level)):
+        if c.get("level") is not None and c.get("level") != float(level):
             return False, "the stated level is not the certificate's"
         region = V - to_fmpq(level)
         pos_eps = Fraction(str(cert["positivity_epsilon"]))

@@ -494,7 +494,7 @@ def best_region(loop: Loop, regions: Sequence[Region], tried: Sequence[str], box
                            f"every trajectory of the true loop starting where V(x, a(x)) <= {float(best.level):.6g} "
                            f"converges to the equilibrium{modulo} (V from {best.label}; positivity and decrease on the "
                            "recasting's relations, exact)",
-                           numbers={"level": str(best.level), "V_from": best.label, "tried": list(tried),
+                           numbers={"level": float(best.level), "V_from": best.label, "tried": list(tried),
                                     "box_share_estimate": shares[k]},
                            certificate=dict(best.certificate), property="ROA", solver={"solves": search.log})
 

@@ -6,6 +6,7 @@ gives each its time budget, and runs ``roa``'s V-s iteration, :mod:`lyapcheck.mo
 from __future__ import annotations
 
 import time
+from fractions import Fraction
 from typing import Any, Final, Sequence
 
 from lyapcheck.models.recast import RecastModel
@@ -97,7 +98,49 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
     if isinstance(first, str):
         return best_region(loop, [], [f"{label}: {first}"], box, search)
     more, tried = improved_regions(loop, first, budget, box)
-    return best_region(loop, [first, *more], [f"{label}: level {float(first.level):.6g}", *tried], box, search)
+    result = best_region(loop, [first, *more], [f"{label}: level {float(first.level):.6g}", *tried], box, search)
+    if result.status == "certified":
+        simulated_check(loop, result, box)
+    return result
+
+
+#: starts per state of the grid over the box on which a certified region is simulated (2 states; the
+#: same count, uniform, for more)
+SIMULATED_GRID: Final = 40
+
+
+def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -> None:
+    """Simulate the true loop from a grid of the box: the share of the simulated region of
+    attraction the certified set covers (``roa_share``, with the box the ``[domain]``), and every
+    start in the set that does not converge (modulo 2 pi in an angle), simulated again far longer;
+    one that still does not is a soundness violation (the proof or the simulation is wrong)."""
+    import numpy as np
+
+    from lyapcheck.models.recast_numeric import converges_modulo, v_values
+    from lyapcheck.models.recast_sos import poly_from_json
+
+    system = loop.system
+    lo, hi = box
+    count = SIMULATED_GRID ** 2
+    if loop.n == 2:
+        axes = [np.linspace(lo[i], hi[i], SIMULATED_GRID) for i in range(2)]
+        Z = np.column_stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")])
+    else:
+        Z = lo + (hi - lo) * np.random.default_rng(0).random((count, loop.n))
+    eq = np.array([float(system.values[s]) for s in system.states])
+    V = poly_from_json(loop.ring, result.certificate["V"], "V")
+    inside = v_values(system, V, Z) <= float(Fraction(result.certificate["level"]))
+    to_zero = converges_modulo(system, Z + eq, (), horizon=30.0, step=0.05)
+    modulo = converges_modulo(system, Z + eq, tuple(loop.angles), horizon=30.0, step=0.05) if loop.angles else to_zero
+    result.numbers["simulated_starts"] = int(len(Z))
+    result.numbers["roa_share"] = float(np.mean(inside[to_zero])) if to_zero.any() else 0.0
+    result.numbers["simulated_roa_share_of_box"] = float(np.mean(to_zero))
+    suspicious = inside & ~modulo
+    if suspicious.any():
+        again = converges_modulo(system, Z[suspicious] + eq, tuple(loop.angles), horizon=300.0, step=0.01)
+        result.numbers["starts_in_set_not_converged"] = int(np.sum(~again))
+        if (~again).any():
+            result.numbers["soundness_violation"] = True
 
 
 def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
