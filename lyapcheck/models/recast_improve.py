@@ -47,6 +47,8 @@ VS_ROUND_BITS: Final = 20
 VS_STEP_LIMIT_S: Final = 8.0
 #: the most time one level step of the iteration may take, seconds
 VS_LEVEL_LIMIT_S: Final = 15.0
+#: a step that adds less than this share of the converging samples ends the iteration at its degree
+VS_MIN_GAIN: Final = 0.01
 #: the iteration stops when less than this share of the class's time limit is left
 VS_BUDGET_SHARE: Final = 0.35
 
@@ -77,8 +79,14 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
         return [], ["the V-s iteration: no sample of the box converges in simulation"]
     out: list["Region"] = []
     search = Search(loop.ring, budget)
+
+    def covered(r: "Region") -> float:
+        """The share of the converging samples inside a region (the iteration's progress)."""
+        return float(np.mean(v_values(loop.system, r.V, samples) <= float(r.level)))
+
+    best, best_share = first, covered(first)
     for degree in VS_DEGREES:
-        region = first
+        region = best
         for k in range(VS_ITERATIONS):
             if budget.left() < budget.seconds * VS_BUDGET_SHARE:
                 tried.append("the V-s iteration: stopped to keep the time limit")
@@ -103,9 +111,13 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
             if isinstance(found, str):
                 tried.append(f"{label}: {found}")
                 break
-            tried.append(f"{label}: level {float(found.level):.6g}")
+            share = covered(found)
+            tried.append(f"{label}: level {float(found.level):.6g}, {100 * share:.1f} % of the converging samples")
             out.append(found)
             region = found
+            if share < best_share + VS_MIN_GAIN:  # no longer growing: the next degree, from the best set
+                break
+            best, best_share = found, share
     return out, tried
 
 
