@@ -241,3 +241,26 @@ def test_certificate_file_round_trip_through_the_command_line(tmp_path: Path) ->
     assert not V.is_zero()
     check = subprocess.run([sys.executable, "-m", "lyapcheck", "verify", str(out)], capture_output=True, text=True)
     assert check.returncode == 0 and "certificate verified" in check.stdout
+
+
+def test_report_refuses_a_loop_with_functions_in_one_line(tmp_path: Path) -> None:
+    path = write(tmp_path, "ilos", ILOS)
+    html = tmp_path / "r.html"
+    run = subprocess.run([sys.executable, "-m", "lyapcheck", "certify", str(path), "--report", str(html), "--out",
+                          str(tmp_path / "c.json")], capture_output=True, text=True)
+    assert run.returncode == 2 and "report" in run.stderr and "\n" not in run.stderr.strip()
+    assert not html.exists() and not (tmp_path / "c.json").exists()
+    out = tmp_path / "c.json"
+    assert subprocess.run([sys.executable, "-m", "lyapcheck", "certify", str(path), "--out", str(out)],
+                          capture_output=True, text=True).returncode == 0
+    run = subprocess.run([sys.executable, "-m", "lyapcheck", "report", str(out), "--html", str(html)],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "loop with functions" in run.stderr and not html.exists()
+
+
+def test_a_certified_region_is_simulated_on_the_true_loop(tmp_path: Path) -> None:
+    result = api.certify(model=write(tmp_path, "pendulum", PENDULUM), classes="roa")
+    roa = result.conditions["roa"]
+    assert roa.status == "certified"
+    assert roa.numbers["simulated_starts"] == 1600 and 0.5 < roa.numbers["roa_share"] <= 1
+    assert not roa.numbers.get("soundness_violation")

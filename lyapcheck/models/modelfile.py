@@ -173,6 +173,17 @@ def parse_any_model(text: str, source: str = "<model>", overrides: Mapping[str, 
     return reader.model()
 
 
+def file_uses_functions(path: str | Path) -> bool:
+    """Whether the model file's ``[dynamics]`` use functions or pi (False when it cannot be read:
+    the loader then says why, in one line)."""
+    try:
+        data = tomllib.loads(Path(path).read_bytes().decode("utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False
+    dynamics = data.get("dynamics")
+    return isinstance(dynamics, dict) and uses_functions(list(dynamics.values()))
+
+
 def load_any_model(path: str | Path, overrides: Mapping[str, object] | None = None, candidate: str | None = None
                    ) -> "Model | RecastModel":
     """:func:`load_model`, or a loop with functions as a :class:`~lyapcheck.models.recast.RecastModel`."""
