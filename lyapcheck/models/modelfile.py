@@ -211,7 +211,8 @@ class _Reader:
             raise self.fail(f"[{name}]", f"must be a table, got {type(value).__name__}")
         return value
 
-    def model(self) -> Model:
+    def head(self) -> tuple[str, str, tuple[str, ...]]:
+        """The sections known, and ``[model]``: its name, source and states."""
         unknown = [k for k in self.data if k not in SECTIONS]
         if unknown:
             raise self.fail(f"[{unknown[0]}]", f"unknown section (sections: {', '.join(SECTIONS)})")
@@ -226,7 +227,10 @@ class _Reader:
         for key, value in (("name", name), ("source", origin)):
             if not isinstance(value, str):
                 raise self.fail(f"[model] {key}", f"must be text, got {value!r}")
-        states = self.states(head)
+        return name, origin, self.states(head)
+
+    def model(self) -> Model:
+        name, origin, states = self.head()
         params, params_given = self.quantities("parameters", MAX_PARAMETERS)
         dists, _ = self.quantities("disturbances", MAX_DISTURBANCES)
         for key, b in dists.items():
@@ -256,27 +260,13 @@ class _Reader:
     def recast_model(self, candidate: str | None = None) -> RecastModel:
         """A loop with functions (lyapcheck.models.recast): the parameters are read, set to their
         values and the loop recast; disturbances, outputs, sets and units are not taken yet."""
-        unknown = [k for k in self.data if k not in SECTIONS]
-        if unknown:
-            raise self.fail(f"[{unknown[0]}]", f"unknown section (sections: {', '.join(SECTIONS)})")
+        name, origin, states = self.head()
         for section in ("disturbances", "outputs", "sets", "units"):
             if section in self.data:
                 key, what = first_function_use(self.table("dynamics"))
                 raise self.fail(key, f"{what} needs the loop recast (a loop with functions), which takes no "
                                      f"[{section}] yet: write the field polynomial or rational in the states, or "
                                      f"remove [{section}]")
-        head = self.table("model")
-        if "model" not in self.data:
-            raise self.fail("[model]", "missing (it declares the states)")
-        bad = [k for k in head if k not in MODEL_KEYS]
-        if bad:
-            raise self.fail(f"[model] {bad[0]}", f"unknown key (keys: {', '.join(MODEL_KEYS)})")
-        name = head.get("name", Path(self.source).stem)
-        origin = head.get("source", "")
-        for key, value in (("name", name), ("source", origin)):
-            if not isinstance(value, str):
-                raise self.fail(f"[model] {key}", f"must be text, got {value!r}")
-        states = self.states(head)
         params, params_given = self.quantities("parameters", MAX_PARAMETERS)
         self.check_unique(states, params, {})
         params, params_given, _ = self.apply_overrides(params, params_given, {})
