@@ -23,8 +23,8 @@ from typing import Any, Sequence
 
 from lyapcheck.errors import CertificateError, InvalidParameter, ModelFileError
 from lyapcheck.models.recast import RecastModel
-from lyapcheck.models.recast_classes import (Loop, base_loop, check_root_proofs, common_denominator, jacobian, lie,
-                                             state_square, v_names, v_text)
+from lyapcheck.models.recast_classes import (Loop, base_loop, check_root_proofs, common_denominator, for_v, jacobian,
+                                             lie, state_square, v_names, v_text)
 from lyapcheck.models.recast_run import RECAST_CLASSES
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.results import ConditionResult
@@ -72,7 +72,7 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     results = {name: results[name] for name in chosen}
     for name, r in results.items():
         if r.status == "certified" and name != "linearization":
-            r.summary = claim_sentence(r.certificate, tuple(loop.angles))
+            r.summary = claim_sentence(r.certificate)
     conditions = {name: r.to_json() for name, r in results.items()}
     verdict = verdict_of(conditions)
     return verdict, results, build_document(model, loop, candidate, conditions, verdict)
@@ -100,9 +100,10 @@ def build_document(model: RecastModel, loop: Loop, candidate: str | None, condit
     }
 
 
-def claim_sentence(cert: dict[str, Any], angles: Sequence[str]) -> str:
+def claim_sentence(cert: dict[str, Any]) -> str:
     """What a certified recast condition proves, in one sentence made from its certificate alone
     (``verify`` re-makes it and compares: a printed sentence never claims more than the proof)."""
+    angles = list(cert["angles"])
     modulo = (f" modulo 2 pi in {', '.join(angles)} (the loop is periodic in {'it' if len(angles) == 1 else 'them'})"
               if angles else "")
     eps = cert["epsilon"]
@@ -183,11 +184,14 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
     if cert.get("variables") != list(system.ring.names) or cert.get("auxiliaries") != system.definitions() or \
             cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
         return False, "variables, auxiliaries or shift differ from the recasting of the model text"
-    loop, why = check_root_proofs(base, cert["recasting"]["roots"])
-    if loop is None:
+    proved, why = check_root_proofs(base, cert["recasting"]["roots"])
+    if proved is None:
         return False, why
-    ring = loop.ring
+    ring = proved.ring
     V = poly_from_json(ring, cert["V"], "V")
+    loop = for_v(proved, V)
+    if cert.get("angles") != list(loop.angles):
+        return False, "the angles taken modulo 2 pi are not the ones this V allows"
     allowed = {ring.names[i] for i in loop.v_variables()}
     if any(degree_in(ring, V, [n]) > 0 for n in ring.names if n not in allowed):
         return False, "V uses a variable a Lyapunov function may not (an angle, a root, or a non-smooth function)"
@@ -232,7 +236,7 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
     ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(eps), loop.relations, dec, region=region)
     if not ok:
         return False, f"decrease: {why}"
-    if c.get("summary") != claim_sentence(cert, tuple(loop.angles)):
+    if c.get("summary") != claim_sentence(cert):
         return False, "the printed sentence is not the one the certificate supports"
     if cert.get("V_text") != v_text(system, V):
         return False, "V_text is not V written with the functions"

@@ -94,12 +94,24 @@ class Loop:
         return Rational(self.ring, s.shift(r.numerator), s.shift(r.denominator)).normalized()
 
 
-def base_loop(system: RecastSystem) -> Loop:
-    angles = angle_states(system)
+def base_loop(system: RecastSystem, cylinder: bool = True) -> Loop:
+    """The loop in deviations with the system's relations; ``cylinder``: its angles
+    (:func:`angle_states`) taken modulo 2 pi (their relations with the angle itself left out)."""
+    angles = angle_states(system) if cylinder else {}
     ring = system.ring
     relations = [Relation(r.kind, system.shift(r.poly), r.why, r.owner) for r in system.relations
                  if not any(degree_in(ring, r.poly, [a]) > 0 for a in angles)]
     return Loop(system, relations, angles=angles)
+
+
+def for_v(loop: Loop, V: Poly) -> Loop:
+    """The loop a given V is proved on: on the cylinder, unless V uses an angle itself (a user's
+    candidate may): then the angle is a state like any other, with every relation that ties it to
+    its sine and cosine, and the claim is not modulo 2 pi."""
+    ring = loop.ring
+    if not any(degree_in(ring, V, [a]) > 0 for a in loop.angles):
+        return loop
+    return with_root_bounds(base_loop(loop.system, cylinder=False), dict(loop.root_bounds))
 
 
 def angle_states(system: RecastSystem) -> dict[str, tuple[str, str]]:
@@ -138,25 +150,31 @@ def with_root_bounds(loop: Loop, bounds: dict[str, tuple[Fraction, ConditionCert
 
 
 def common_denominator(loop: Loop, names: Sequence[str]) -> tuple[dict[str, Poly], Poly, list[Poly]]:
-    """``N`` and ``D`` with each flow ``= N / D`` (``D`` the product of the distinct denominators,
-    which are returned too)."""
+    """``N`` and ``D`` with each flow ``= N / D``: ``D`` the least common multiple of the
+    denominators, as the product of its irreducible factors (each signed to be positive at the
+    equilibrium, so that proving each positive proves ``D`` positive), and those factors."""
     flows = {n: loop.flow(n) for n in names}
-    D = loop.ring.constant(1)
-    for r in flows.values():  # the least common multiple of the denominators
+    lcm = loop.ring.constant(1)
+    for r in flows.values():
         if not r.denominator.is_constant():
-            D = D * r.denominator / D.gcd(r.denominator)
-    D = D * (1 / D.leading_coefficient())
+            lcm = lcm * r.denominator / lcm.gcd(r.denominator)
+    D = loop.ring.constant(1)
     distinct: list[Poly] = []
-    for factor, _ in D.factor()[1]:  # each irreducible factor once: positive factors make D positive
-        if not factor.is_constant():
-            factor = factor * (1 / factor.leading_coefficient())
-            distinct.append(factor if _at_origin_sign(loop, factor) >= 0 else -factor)
+    for factor, power in lcm.factor()[1]:
+        if factor.is_constant():
+            continue
+        factor = factor * (1 / factor.leading_coefficient())
+        if _at_origin_sign(loop, factor) < 0:
+            factor = -factor
+        distinct.append(factor)
+        D = D * factor ** int(power)
     N = {}
     for n, r in flows.items():
         if r.denominator.is_constant():
             N[n] = r.numerator * D * (1 / r.denominator.leading_coefficient())
         else:
-            N[n] = r.numerator * (D / r.denominator)
+            N[n] = r.numerator * (D / r.denominator)  # exact: D is a multiple of every denominator
+        assert N[n] * r.denominator == r.numerator * D, "N / D is not the flow"  # the identity, exactly
     return N, D, distinct
 
 
@@ -297,8 +315,12 @@ def _at_origin(loop: Loop, p: Poly) -> Fraction | None:
 # -- Lyapunov conditions ------------------------------------------------------------------------------
 
 def lie(loop: Loop, V: Poly, N: dict[str, Poly]) -> Poly:
-    """``grad V . N``."""
+    """``grad V . N`` (ValueError when V uses a variable without a flow in ``N``: its term would be
+    missing from V', so nothing may be proved with it)."""
     ring = loop.ring
+    moving = [n for n in ring.names if degree_in(ring, V, [n]) > 0 and n not in N]
+    if moving:
+        raise ValueError(f"V uses {moving[0]}, whose flow is not in the derivative")
     total = ring.zero()
     for name, n in N.items():
         i = ring.names.index(name)
@@ -343,6 +365,7 @@ def certificate_head(loop: Loop, V: Poly, eps: Fraction, D: Poly, dens: Sequence
     system = loop.system
     ring = loop.ring
     return {"kind": "recast", "variables": list(ring.names), "auxiliaries": system.definitions(),
+            "angles": list(loop.angles),
             "shift": {k: str(v) for k, v in system.values.items()},
             "V": poly_to_json(ring, V), "V_text": v_text(system, V), "epsilon": str(eps),
             "denominator": poly_to_json(ring, D),

@@ -14,7 +14,7 @@ from lyapcheck.models.recast_classes import (EPSILONS, Loop, base_loop, best_reg
                                              common_denominator, jacobian, lie, linearization,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
                                              quadratic_candidate, refute_global, region_of_attraction, sos_gas,
-                                             certificate_head, state_square, v_names)
+                                             certificate_head, for_v, state_square, v_names)
 from lyapcheck.models.recast_improve import improved_regions
 from lyapcheck.models.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
@@ -145,6 +145,7 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -
 
 def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
     """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
+    loop = for_v(loop, V)
     ring = loop.ring
     search = Search(ring, budget)
     l2 = state_square(loop)
