@@ -314,18 +314,19 @@ def load_model_file(model: "str | Path | Model", settings: Mapping[str, object] 
 def _recast_model(model: object, settings: Mapping[str, object] | Sequence[str] | None, candidate: str | None
                   ) -> "RecastModel | None":
     """The model as a loop with functions (lyapcheck.models.recast), or None when it is polynomial."""
-    from lyapcheck.models.modelfile import load_any_model, parse_any_model
+    from lyapcheck.models.modelfile import file_uses_functions, load_any_model, parse_any_model
     from lyapcheck.models.recast import RecastModel
 
-    if isinstance(model, RecastModel):
-        extra = model_settings(settings, model.source)
-        reread = parse_any_model(model.text, model.source, {**model.overrides, **extra}, candidate)
-        return reread if isinstance(reread, RecastModel) else None
-    if not isinstance(model, (str, Path)):
-        return None
-    extra = model_settings(settings, str(model))
-    loaded = load_any_model(model, extra, candidate)
-    return loaded if isinstance(loaded, RecastModel) else None
+    with _settings_named():
+        if isinstance(model, RecastModel):
+            extra = model_settings(settings, model.source)
+            reread = parse_any_model(model.text, model.source, {**model.overrides, **extra}, candidate)
+            return reread if isinstance(reread, RecastModel) else None
+        if not isinstance(model, (str, Path)) or not file_uses_functions(model):
+            return None  # a polynomial loop: read once, by the caller
+        extra = model_settings(settings, str(model))
+        loaded = load_any_model(model, extra, candidate)
+        return loaded if isinstance(loaded, RecastModel) else None
 
 
 def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
@@ -747,8 +748,16 @@ def _load_with_settings(model: "str | Path | Model", settings: Mapping[str, obje
                         ) -> "Model":
     """:func:`load_model_file`, its errors about a setting naming the argument ``settings`` (the
     model file's reader names the command line's ``--set``)."""
-    try:
+    with _settings_named():
         return load_model_file(model, settings)
+
+
+@contextlib.contextmanager
+def _settings_named() -> Iterator[None]:
+    """A model file's errors about a setting re-raised naming the argument ``settings`` (the reader
+    names the command line's ``--set``)."""
+    try:
+        yield
     except ModelFileError as exc:
         prefix = f"{exc.source}: {exc.key}: "
         message = str(exc)[len(prefix):] if str(exc).startswith(prefix) else str(exc)
