@@ -314,7 +314,10 @@ def load_model_file(model: "str | Path | Model", settings: Mapping[str, object] 
 def _recast_model(model: object, settings: Mapping[str, object] | Sequence[str] | None, candidate: str | None
                   ) -> "RecastModel | None":
     """The model as a loop with functions (lyapcheck.models.recast), or None when it is polynomial."""
-    from lyapcheck.models.modelfile import file_uses_functions, load_any_model, parse_any_model
+    from lyapcheck.models.modelfile import Model, file_uses_functions, load_any_model, parse_any_model
+
+    if isinstance(model, Model) or (isinstance(model, (str, Path)) and not file_uses_functions(model)):
+        return None  # a polynomial loop: read once, by the caller (and lyapcheck.models.recast not imported)
     from lyapcheck.models.recast import RecastModel
 
     with _settings_named():
@@ -322,8 +325,8 @@ def _recast_model(model: object, settings: Mapping[str, object] | Sequence[str] 
             extra = model_settings(settings, model.source)
             reread = parse_any_model(model.text, model.source, {**model.overrides, **extra}, candidate)
             return reread if isinstance(reread, RecastModel) else None
-        if not isinstance(model, (str, Path)) or not file_uses_functions(model):
-            return None  # a polynomial loop: read once, by the caller
+        if not isinstance(model, (str, Path)):
+            return None
         extra = model_settings(settings, str(model))
         loaded = load_any_model(model, extra, candidate)
         return loaded if isinstance(loaded, RecastModel) else None

@@ -61,6 +61,11 @@ _RECAST_HINT: Final = ("the field must be polynomial or rational in the states: 
                        "c' = -s*x1')")
 
 
+#: the functions of the language and their number of arguments
+FUNCTIONS: Final = {"sin": 1, "cos": 1, "exp": 1, "sqrt": 1, "atan": 1, "tanh": 1, "abs": 1, "min": 2, "max": 2,
+                    "sat": 2}
+
+
 class ExpressionError(ValueError):
     """An expression outside the language; the message says what and what to write instead."""
 
@@ -383,3 +388,43 @@ _OPERATOR_TEXT: Final[dict[type, str]] = {
     ast.FloorDiv: "//", ast.Mod: "%", ast.MatMult: "@", ast.LShift: "<<", ast.RShift: ">>", ast.BitOr: "|",
     ast.BitAnd: "&", ast.BitXor: "^", ast.Invert: "~", ast.Not: "not",
 }
+
+
+# -- which texts use functions (a loop to recast: lyapcheck.models.recast) ------------------------------
+
+def written_tree(text: object) -> ast.AST | None:
+    """``text``'s tree, or None (the builder says what is wrong with it); Python's warnings about a
+    text outside the language are not printed (the builder refuses it in one line)."""
+    if not isinstance(text, str):
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return ast.parse(text.strip(), mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return None
+
+
+def _function_use(tree: ast.AST | None) -> str | None:
+    """The first call (``'sin(...)'``) or ``'pi'`` in a tree, or None."""
+    for node in ast.walk(tree) if tree is not None else ():
+        if isinstance(node, ast.Call):
+            return f"'{node.func.id if isinstance(node.func, ast.Name) else 'a function'}(...)'"
+        if isinstance(node, ast.Name) and node.id == "pi":
+            return "the constant 'pi'"
+    return None
+
+
+def uses_functions(texts: Sequence[object]) -> bool:
+    """Whether any text calls a function or names ``pi`` (a non-polynomial loop)."""
+    return any(_function_use(written_tree(text)) is not None for text in texts)
+
+
+def first_function_use(dynamics: Mapping[str, object]) -> tuple[str, str]:
+    """The key (``[dynamics] x1``) and the call (``'sin(...)'``) of the first right-hand side that
+    uses a function or ``pi``."""
+    for state, text in dynamics.items():
+        use = _function_use(written_tree(text))
+        if use is not None:
+            return f"[dynamics] {state}", use
+    return "[dynamics]", "a function"

@@ -31,13 +31,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
-from lyapcheck.models.expressions import NUMBER_RANGE, ExpressionError, Rational, parse_with_divisors
-from lyapcheck.models.recast import FUNCTIONS, RecastModel, first_function_use, recast_dynamics, uses_functions
+from lyapcheck.models.expressions import (FUNCTIONS, NUMBER_RANGE, ExpressionError, Rational, first_function_use,
+                                          parse_with_divisors, uses_functions)
 from lyapcheck.models.sets import SET_KEYS, STAY_KEY, SetForms, SetText, StateSet, evaluate_set, evaluate_sets, parse_set
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.dimensions import UnitTable
+    from lyapcheck.models.recast import RecastModel
     from lyapcheck.units import SIQuantity
 
 #: the most states a model may have
@@ -148,7 +149,7 @@ def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, obje
     """Validate a model file's text (see :func:`load_model`); a loop with functions is refused
     here, naming the commands that take it (:func:`parse_any_model` reads it)."""
     model = parse_any_model(text, source, overrides)
-    if isinstance(model, RecastModel):
+    if not isinstance(model, Model):  # a loop with functions (lyapcheck.models.recast.RecastModel)
         call = next(a.written_as for a in model.system.auxiliaries if a.written_as) \
             if any(a.written_as for a in model.system.auxiliaries) else "pi"
         raise _error(source, "[dynamics]", f"uses {call}: a loop with functions is taken by 'certify --model', "
@@ -257,9 +258,11 @@ class _Reader:
         check_equilibrium(model)
         return model
 
-    def recast_model(self, candidate: str | None = None) -> RecastModel:
+    def recast_model(self, candidate: str | None = None) -> "RecastModel":
         """A loop with functions (lyapcheck.models.recast): the parameters are read, set to their
         values and the loop recast; disturbances, outputs, sets and units are not taken yet."""
+        from lyapcheck.models.recast import RecastModel, recast_dynamics  # only a loop with functions needs it
+
         name, origin, states = self.head()
         for section in ("disturbances", "outputs", "sets", "units"):
             if section in self.data:

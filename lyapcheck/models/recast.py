@@ -59,18 +59,15 @@ from __future__ import annotations
 
 import ast
 import math
-import warnings
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import ModelFileError
-from lyapcheck.models.expressions import ExpressionError, Rational, parse_with_divisors
+from lyapcheck.models.expressions import (FUNCTIONS, ExpressionError, Rational, first_function_use, parse_with_divisors,
+                                          uses_functions, written_tree)
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in, to_fmpq, to_fraction
 
-#: the functions of the language and their number of arguments
-FUNCTIONS: Final = {"sin": 1, "cos": 1, "exp": 1, "sqrt": 1, "atan": 1, "tanh": 1, "abs": 1, "min": 2, "max": 2,
-                    "sat": 2}
 #: an upper bound of pi/2 = 1.5707963...: |atan u| < pi/2 < 1.571
 ATAN_RANGE: Final = Fraction(1571, 1000)
 #: the letter each function's auxiliaries are named with (s1, c1, e1, ...)
@@ -525,48 +522,10 @@ def count_calls(texts: Sequence[str]) -> int:
     """An upper bound of the auxiliaries the texts can make (two per call, two roots)."""
     total = 0
     for text in texts:
-        tree = _tree(str(text))
+        tree = written_tree(str(text))
         if tree is not None:  # else the builder says what is wrong
             total += sum(isinstance(node, ast.Call) for node in ast.walk(tree))
     return 2 * total + len(ROOTS) + 2
-
-
-def _tree(text: object) -> ast.AST | None:
-    """``text``'s tree, or None (the builder says what is wrong with it); Python's warnings about a
-    text outside the language are not printed (the builder refuses it in one line)."""
-    if not isinstance(text, str):
-        return None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return ast.parse(text.strip(), mode="eval")
-    except (SyntaxError, ValueError, RecursionError, MemoryError):
-        return None
-
-
-def _function_use(tree: ast.AST | None) -> str | None:
-    """The first call (``'sin(...)'``) or ``'pi'`` in a tree, or None."""
-    for node in ast.walk(tree) if tree is not None else ():
-        if isinstance(node, ast.Call):
-            return f"'{node.func.id if isinstance(node.func, ast.Name) else 'a function'}(...)'"
-        if isinstance(node, ast.Name) and node.id == "pi":
-            return "the constant 'pi'"
-    return None
-
-
-def uses_functions(texts: Sequence[object]) -> bool:
-    """Whether any text calls a function or names ``pi`` (a non-polynomial loop)."""
-    return any(_function_use(_tree(text)) is not None for text in texts)
-
-
-def first_function_use(dynamics: Mapping[str, object]) -> tuple[str, str]:
-    """The key (``[dynamics] x1``) and the call (``'sin(...)'``) of the first right-hand side that
-    uses a function or ``pi``."""
-    for state, text in dynamics.items():
-        use = _function_use(_tree(text))
-        if use is not None:
-            return f"[dynamics] {state}", use
-    return "[dynamics]", "a function"
 
 
 def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, object],
