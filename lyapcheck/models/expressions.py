@@ -12,9 +12,15 @@ small language (DESIGN.md, "Model files"):
 - ``**`` with a non-negative integer literal exponent of at most :data:`MAX_EXPONENT`.
 
 Everything else is refused with one line that says what was found and what to write instead: a
-function call (``sqrt``, ``sin``: the field must be polynomial or rational; recast it), ``^``
-(write ``**``), a non-integer, negative or huge exponent, an unknown name, a non-finite number.
-Nothing reaches ``eval``, ``exec``, ``sympify`` or ``parse_expr``.
+function call where none is taken (see below), ``^`` (write ``**``), a non-integer, negative or
+huge exponent, an unknown name, a non-finite number. Nothing reaches ``eval``, ``exec``,
+``sympify`` or ``parse_expr``.
+
+In ``[dynamics]`` (and ``--candidate`` of such a loop) the language also has the functions of
+:data:`FUNCTIONS` and the constant ``pi``: the builder hands each call to a
+:class:`FunctionCalls` (:class:`lyapcheck.models.recast.Recaster`), which returns it as a new
+variable of the ring, an auxiliary with its exact relations. :func:`uses_functions` tells which
+texts need that (a scan of the tree, nothing evaluated).
 
 The result is a :class:`Rational`: numerator and denominator polynomials with exact rational
 coefficients in all the file's names. Sizes are bounded while the tree is built (degree, number
@@ -56,9 +62,8 @@ MAX_DEPTH: Final = 60
 NUMBER_RANGE: Final = "finite as a double (magnitude at most 1.8e308) and, if not 0, at least 2.2e-308"
 
 #: functions users write, and what to do instead (every call is refused; these get a hint)
-_RECAST_HINT: Final = ("the field must be polynomial or rational in the states: recast it (introduce a new state "
-                       "for the function, e.g. for sin(x1): states s = sin(x1), c = cos(x1) with s' = c*x1', "
-                       "c' = -s*x1')")
+_RECAST_HINT: Final = ("here the expression must be polynomial or rational in the states; functions are taken in "
+                       "[dynamics], which lyapcheck then recasts exactly (docs/model-files.md, 'Loops with functions')")
 
 
 #: the functions of the language and their number of arguments
