@@ -484,13 +484,6 @@ def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fract
     return Region(label, V, level, cert, rho)
 
 
-def level_certificate(loop: Loop, V: Poly, search: Search) -> tuple[Fraction, Poly] | str:
-    """The largest certified level of ``V`` and its region multiplier ``rho`` (the V-s iteration's
-    level step), or why there is none."""
-    found = certify_region(loop, V, search, "")
-    return found if isinstance(found, str) else (found.level, found.rho)
-
-
 def box_share(loop: Loop, region: Region, box: tuple[Any, Any]) -> float:
     """The share of fixed uniform samples of the box (deviations ``lo..hi``) inside the region."""
     import numpy as np

@@ -3,7 +3,7 @@
 The V-s iteration (Jarvis-Wloszek et al., "Some controls applications of sum of squares
 programming", CDC 2003; Topcu, Packard & Seiler, Automatica 2008), alternating two convex steps:
 
-1. **level step** (exact, :func:`lyapcheck.models.recast_classes.level_certificate`): for a fixed
+1. **level step** (exact, :func:`lyapcheck.models.recast_classes.certify_region`): for a fixed
    ``V``, the largest level ``b`` with ``-V' - eps l - rho (b - V) >= 0`` on the recasting's set, and
    its multiplier ``rho``;
 2. **V step** (numerical only): with ``rho`` fixed and ``V`` scaled to level 1, a new ``V`` that

@@ -74,20 +74,8 @@ def v_values(system: RecastSystem, V: Poly, Z: np.ndarray) -> np.ndarray:
     return poly_values(system.ring, V, shifted, Z.shape[0])
 
 
-def sample_box(n: int, half_widths: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
-    return (rng.random((count, n)) * 2 - 1) * half_widths
-
-
 #: the box of deviations in which certified sets are compared when the model gives no [domain]
 DEFAULT_HALF_WIDTH: Final = 4.0
-
-
-def inside_share(system: RecastSystem, V: Poly, level: object, rng: np.random.Generator, count: int = 4000,
-                 half_widths: np.ndarray | None = None) -> float:
-    """The share of uniform samples of the box (deviations) with ``V <= level``."""
-    hw = np.full(system.n, DEFAULT_HALF_WIDTH) if half_widths is None else half_widths
-    Z = sample_box(system.n, hw, count, rng)
-    return float(np.mean(v_values(system, V, Z) <= float(level)))  # type: ignore[arg-type]
 
 
 def integrate(system: RecastSystem, X0: np.ndarray, horizon: float, step: float = 0.02) -> np.ndarray:
@@ -102,14 +90,6 @@ def integrate(system: RecastSystem, X0: np.ndarray, horizon: float, step: float 
         X = X + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         X[~np.isfinite(X)] = np.inf
     return X
-
-
-def converges(system: RecastSystem, X0: np.ndarray, horizon: float = 60.0, tolerance: float = 1e-2) -> np.ndarray:
-    """Whether each start's simulated trajectory of the true field ends within ``tolerance`` of the equilibrium."""
-    eq = np.array([float(system.values[s]) for s in system.states])
-    with np.errstate(all="ignore"):
-        end = integrate(system, X0, horizon)
-        return np.all(np.isfinite(end), axis=1) & (np.linalg.norm(end - eq, axis=1) < tolerance)
 
 
 def converges_modulo(system: RecastSystem, X0: np.ndarray, angles: tuple[str, ...] = (), horizon: float = 60.0,
