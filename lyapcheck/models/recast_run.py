@@ -9,7 +9,8 @@ import time
 from fractions import Fraction
 from typing import Any, Final, Sequence
 
-from lyapcheck.models.recast import RecastModel
+from lyapcheck.errors import ModelFileError
+from lyapcheck.models.recast import RecastModel, written_poly
 from lyapcheck.models.recast_classes import (EPSILONS, Loop, base_loop, best_region, certify_region,
                                              common_denominator, jacobian, lie, linearization,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
@@ -18,7 +19,6 @@ from lyapcheck.models.recast_classes import (EPSILONS, Loop, base_loop, best_reg
 from lyapcheck.models.recast_improve import improved_regions
 from lyapcheck.models.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
-from lyapcheck.models.recast import written_poly
 from lyapcheck.sos.polynomials import Poly, to_fmpq
 
 # -- the model's classes ------------------------------------------------------------------------------
@@ -36,7 +36,9 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
     budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
     loop, unproved = prove_root_bounds(base, Search(base.ring, budget))
     if unproved:
-        raise ValueError(unproved[0])
+        raise ModelFileError(model.source, "[dynamics]", f"'{unproved[0]}': its argument could not be proved "
+                             "non-negative (sqrt of something that can be negative, or of something no SOS proof "
+                             "here shows non-negative): write the loop so that the root's argument is >= 0")
     start = time.perf_counter()
     lin = linearization(loop)
     if "linearization" in classes:
