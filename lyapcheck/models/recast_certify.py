@@ -21,7 +21,7 @@ import hashlib
 from fractions import Fraction
 from typing import Any, Sequence
 
-from lyapcheck.errors import CertificateError, InvalidParameter, ModelFileError
+from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.recast import RecastModel
 from lyapcheck.models.recast_classes import (Loop, base_loop, check_root_proofs, common_denominator, for_v, jacobian,
                                              lie, state_square, v_names, v_text)
@@ -112,10 +112,6 @@ def claim_sentence(cert: dict[str, Any]) -> str:
     return (f"globally asymptotically stable{modulo}: V(x, a(x)) >= {cert.get('positivity_epsilon', eps)} |dx|^2 and "
             f"V' <= -{eps} |dx|^2 / D everywhere, D > 0 (proved exactly on the recasting's relations; V_text in the "
             "certificate)")
-
-
-def is_recast_document(doc: Any) -> bool:
-    return isinstance(doc, dict) and isinstance(doc.get("recast"), dict)
 
 
 # -- verify ------------------------------------------------------------------------------------------
@@ -241,11 +237,4 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
     return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
 
 
-def verify_or_raise(doc: dict[str, Any]) -> list[Row]:
-    try:
-        return verify_recast(doc)
-    except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError, RecursionError) as exc:
-        raise CertificateError(f"certificate is malformed: {repr(exc)[:200]}") from None
-
-
-__all__ = ["certify_recast", "verify_recast", "verify_or_raise", "is_recast_document"]
+__all__ = ["certify_recast", "verify_recast", "claim_sentence"]
