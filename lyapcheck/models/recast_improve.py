@@ -61,7 +61,7 @@ def target_samples(loop: "Loop", box: tuple[np.ndarray, np.ndarray], rng: np.ran
     lo, hi = box
     Z = lo + (hi - lo) * rng.random((VS_SAMPLES * 3, loop.n))
     eq = np.array([float(loop.system.values[s]) for s in loop.system.states])
-    ok = converges_modulo(loop.system, Z + eq, tuple(loop.angles), horizon=VS_HORIZON_S, step=0.05)
+    ok = converges_modulo(loop.system, Z + eq, tuple(loop.angles), horizon=VS_HORIZON_S)
     return Z[ok][:VS_SAMPLES]
 
 

@@ -109,6 +109,11 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
 #: starts per state of the grid over the box on which a certified region is simulated (2 states; the
 #: same count, uniform, for more)
 SIMULATED_GRID: Final = 40
+#: how long each is simulated (the loop's time unit); a start in the set that has not converged by
+#: then is simulated ten times longer before it counts against the proof
+SIMULATED_HORIZON: Final = 30.0
+#: converged: ending this close to the equilibrium
+CONVERGED_RADIUS: Final = 2e-2
 
 
 def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -> None:
@@ -118,7 +123,7 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -
     one that still does not is a soundness violation (the proof or the simulation is wrong)."""
     import numpy as np
 
-    from lyapcheck.models.recast_numeric import converges_modulo, v_values
+    from lyapcheck.models.recast_numeric import converges_modulo, distances, simulate_ends, v_values
     from lyapcheck.models.recast_sos import poly_from_json
 
     system = loop.system
@@ -132,14 +137,16 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -
     eq = np.array([float(system.values[s]) for s in system.states])
     V = poly_from_json(loop.ring, result.certificate["V"], "V")
     inside = v_values(system, V, Z) <= float(Fraction(result.certificate["level"]))
-    to_zero = converges_modulo(system, Z + eq, (), horizon=30.0, step=0.05)
-    modulo = converges_modulo(system, Z + eq, tuple(loop.angles), horizon=30.0, step=0.05) if loop.angles else to_zero
+    dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON)
+    to_zero = simulated.ok & (distances(system, dev) < CONVERGED_RADIUS)
+    modulo = simulated.ok & (distances(system, dev, tuple(loop.angles)) < CONVERGED_RADIUS)
     result.numbers["simulated_starts"] = int(len(Z))
     result.numbers["roa_share"] = float(np.mean(inside[to_zero])) if to_zero.any() else 0.0
     result.numbers["simulated_roa_share_of_box"] = float(np.mean(to_zero))
     suspicious = inside & ~modulo
     if suspicious.any():
-        again = converges_modulo(system, Z[suspicious] + eq, tuple(loop.angles), horizon=300.0, step=0.01)
+        again = converges_modulo(system, Z[suspicious] + eq, tuple(loop.angles), horizon=10 * SIMULATED_HORIZON,
+                                 tolerance=CONVERGED_RADIUS)
         result.numbers["starts_in_set_not_converged"] = int(np.sum(~again))
         if (~again).any():
             result.numbers["soundness_violation"] = True

@@ -55,42 +55,30 @@ def default_horizon(model: RecastModel) -> float:
 
 
 def simulate(model: RecastModel, starts: np.ndarray | None = None, t_end: float | None = None) -> dict[str, Any]:
-    """Integrate the true loop from each start (SciPy's RK45, rtol 1e-8); the document."""
-    from scipy.integrate import solve_ivp
-
+    """Integrate the true loop from every start (the project's batched DOPRI5,
+    :func:`lyapcheck.models.recast_numeric.simulate_ends`); the document."""
     from lyapcheck.models.recast_classes import angle_states
-    from lyapcheck.models.recast_numeric import field_values
+    from lyapcheck.models.recast_numeric import distances, simulate_ends
 
     system = model.system
     X0 = default_starts(model) if starts is None or len(starts) == 0 else np.atleast_2d(np.asarray(starts, float))
     horizon = default_horizon(model) if t_end is None else float(t_end)
     eq = np.array([float(v) for v in model.equilibrium])
-    angles = [model.states.index(a) for a in angle_states(system)]
-    limit = ESCAPE_FACTOR * max(1.0, float(np.max(np.abs(X0))))
-
-    def escaped(t: float, x: np.ndarray) -> float:
-        return limit - float(np.max(np.abs(x)))
-
-    escaped.terminal = True  # type: ignore[attr-defined]
+    angles = tuple(angle_states(system))
+    escape = ESCAPE_FACTOR * max(1.0, float(np.max(np.abs(X0 - eq))))
+    dev, result = simulate_ends(system, X0, horizon, escape=escape)
+    distance = distances(system, dev, angles)
     trajectories = []
-    for x0 in X0:
-        with np.errstate(all="ignore"):
-            sol = solve_ivp(lambda t, x: field_values(system, x[None, :])[0], (0.0, horizon), x0, rtol=1e-8,
-                            atol=1e-10, events=escaped)
-        end = sol.y[:, -1]
-        finite = bool(np.all(np.isfinite(end))) and sol.status != 1
-        dev = end - eq
-        for i in angles:
-            dev[i] = float(np.angle(np.exp(1j * dev[i])))
-        distance = float(np.linalg.norm(dev)) if finite else float("inf")
+    for k, x0 in enumerate(X0):
+        diverged = not bool(result.ok[k]) or bool(np.any(np.abs(dev[k]) >= escape))
         trajectories.append({"start": dict(zip(model.states, map(float, x0))),
-                             "final": dict(zip(model.states, map(float, end))),
-                             "t_final_s": float(sol.t[-1]),
-                             "distance_to_equilibrium": distance,
-                             "converged": distance < CONVERGED_TOLERANCE,
-                             "diverged": not finite})
+                             "final": dict(zip(model.states, map(float, dev[k] + eq))),
+                             "t_final_s": float(result.t[k]),
+                             "distance_to_equilibrium": float("inf") if diverged else float(distance[k]),
+                             "converged": not diverged and bool(distance[k] < CONVERGED_TOLERANCE),
+                             "diverged": diverged})
     return {"model": model.name, "kind": "recast",
             "field": "the true loop: each function evaluated by numpy, not the recast polynomial loop",
-            "angles_modulo_2pi": [model.states[i] for i in angles], "t_end_s": horizon,
+            "angles_modulo_2pi": list(angles), "t_end_s": horizon,
             "trajectories": trajectories, "n_converged": sum(t["converged"] for t in trajectories),
             "diverged": any(t["diverged"] for t in trajectories)}
