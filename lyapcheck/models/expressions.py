@@ -170,19 +170,9 @@ def parse_with_divisors(text: str, ring: Ring, *, calls: "FunctionCalls | None" 
         raise ExpressionError("the expression is empty")
     if "\n" in text.strip() or ";" in text:
         raise ExpressionError("an expression is one line, without ';'")
-    depth = 0
-    for ch in text:  # ast.parse itself recurses: refuse absurd nesting before it does
-        depth += ch == "("
-        depth -= ch == ")"
-        if depth > MAX_DEPTH:
-            raise ExpressionError(f"parentheses nested deeper than {MAX_DEPTH} (MAX_DEPTH)")
+    refuse_deep_nesting(text)
     try:
-        # Python's tokenizer warns about some texts outside the language ("1if x1 else 2": invalid
-        # decimal literal) by printing to stderr, a second line beside the one-line error; the
-        # builder refuses every such text anyway, with its own message
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            tree = ast.parse(text.strip(), mode="eval")
+        tree = parse_quietly(text.strip())
     except SyntaxError as exc:
         raise ExpressionError(f"not a valid expression ({exc.msg}{_where(exc.offset)})") from None
     except (RecursionError, MemoryError, ValueError):
@@ -193,6 +183,26 @@ def parse_with_divisors(text: str, ring: Ring, *, calls: "FunctionCalls | None" 
     except RecursionError:  # a backstop only: the builder's own depth limit comes first
         raise ExpressionError(f"the expression is nested too deeply (the limit is {MAX_DEPTH}, MAX_DEPTH)") from None
     return result.normalized(), tuple(builder.divisors)
+
+
+def refuse_deep_nesting(text: str) -> None:
+    """Refuse parentheses nested deeper than :data:`MAX_DEPTH` before :func:`ast.parse` (which
+    recurses) sees them."""
+    depth = 0
+    for ch in text:
+        depth += ch == "("
+        depth -= ch == ")"
+        if depth > MAX_DEPTH:
+            raise ExpressionError(f"parentheses nested deeper than {MAX_DEPTH} (MAX_DEPTH)")
+
+
+def parse_quietly(text: str) -> ast.Expression:
+    """``ast.parse(text, mode="eval")`` without Python's warnings: its tokenizer warns about some texts
+    outside the language ("1if x1 else 2": invalid decimal literal) by printing to stderr, a second
+    line beside the one-line error the builder gives for every such text anyway."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return ast.parse(text, mode="eval")
 
 
 def _where(offset: int | None) -> str:
@@ -398,14 +408,11 @@ _OPERATOR_TEXT: Final[dict[type, str]] = {
 # -- which texts use functions (a loop to recast: lyapcheck.models.recast) ------------------------------
 
 def written_tree(text: object) -> ast.AST | None:
-    """``text``'s tree, or None (the builder says what is wrong with it); Python's warnings about a
-    text outside the language are not printed (the builder refuses it in one line)."""
+    """``text``'s tree, or None (the builder says what is wrong with it)."""
     if not isinstance(text, str):
         return None
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return ast.parse(text.strip(), mode="eval")
+        return parse_quietly(text.strip())
     except (SyntaxError, ValueError, RecursionError, MemoryError):
         return None
 

@@ -24,15 +24,14 @@ disturbance's exponent 0). Every error is one line naming ``[sets] KEY`` (:class
 from __future__ import annotations
 
 import ast
-import warnings
 from fractions import Fraction
 from typing import Final, Mapping, Protocol, Sequence
 
 import numpy as np
 
 from lyapcheck.errors import ModelFileError
-from lyapcheck.models.expressions import (MAX_DEPTH, MAX_EXPRESSION_LENGTH, ExpressionError, Rational,
-                                          parse_expression)
+from lyapcheck.models.expressions import (MAX_EXPRESSION_LENGTH, ExpressionError, Rational, parse_expression,
+                                          parse_quietly, refuse_deep_nesting)
 from lyapcheck.sos.polynomials import MonomialPlan, Poly, Ring, degree_in, monomial_plan, monomial_values
 
 #: the keys of ``[sets]``
@@ -104,16 +103,9 @@ def split_inequality(text: str) -> tuple[tuple[str, str, str], ...]:
                               "(MAX_EXPRESSION_LENGTH)")
     if "\n" in source or "\r" in source or ";" in source:
         raise ExpressionError("an inequality is one line, without ';'")
-    depth = 0
-    for ch in source:  # ast.parse recurses: refuse absurd nesting first, as the expression parser does
-        depth += ch == "("
-        depth -= ch == ")"
-        if depth > MAX_DEPTH:
-            raise ExpressionError(f"parentheses nested deeper than {MAX_DEPTH} (MAX_DEPTH)")
+    refuse_deep_nesting(source)
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            tree = ast.parse(source, mode="eval")
+        tree = parse_quietly(source)
     except SyntaxError as exc:
         where = f" at character {exc.offset}" if exc.offset else ""
         raise ExpressionError(f"not a valid inequality ({exc.msg}{where})") from None
