@@ -289,8 +289,7 @@ class _Reader:
         domain = self.domain(states)
         system, V = recast_dynamics(self.source, states, table, params, equilibrium, candidate)
         return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
-                           parameters=params, parameters_given=params_given, equilibrium=equilibrium,
-                           domain=domain, system=system, dynamics_text={s: str(table[s]) for s in states},
+                           parameters=params, equilibrium=equilibrium, domain=domain, system=system,
                            overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V)
 
     def states(self, head: dict[str, Any]) -> tuple[str, ...]:

@@ -705,12 +705,9 @@ class RecastModel:
     origin: str
     states: tuple[str, ...]
     parameters: dict[str, Fraction]
-    parameters_given: dict[str, str]
     equilibrium: tuple[Fraction, ...]
     domain: dict[str, tuple[Fraction, Fraction]] | None
     system: RecastSystem
-    #: the right-hand sides as written (for simulating the true field)
-    dynamics_text: dict[str, str]
     overrides: dict[str, str] = field(default_factory=dict)
     #: ``--candidate`` as a polynomial in the recast ring's deviations (its functions recast with the loop's)
     candidate_v: Poly | None = None
@@ -724,3 +721,11 @@ class RecastModel:
     @property
     def n(self) -> int:
         return len(self.states)
+
+    @property
+    def dynamics_text(self) -> dict[str, str]:
+        """The right-hand sides as the file writes them (read again from :attr:`text`)."""
+        import tomllib
+
+        table = tomllib.loads(self.text)["dynamics"]
+        return {s: str(table[s]) for s in self.states}
