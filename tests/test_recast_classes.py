@@ -143,9 +143,37 @@ def test_pendulum_region_holds_on_the_true_loop_and_global_stability_is_refuted(
     gas = result.conditions["sos_gas"]
     assert gas.status == "refuted" and gas.refutation["point"] == {"theta": "1*pi"}
     roa = result.conditions["roa"]
-    assert roa.status == "certified" and "modulo 2 pi in theta" in roa.summary
+    # proved by ball arithmetic on the true field: a set in (theta, omega) itself, not modulo 2 pi
+    assert roa.status == "certified" and roa.certificate["kind"] == "interval"
+    assert "converges to the equilibrium itself" in roa.summary and "modulo" not in roa.summary
     assert api.verify(result).valid
     cert = roa.certificate
+    level = float(Fraction(cert["level"]))
+    lo = [float(Fraction(cert["box"][s][0])) for s in ("theta", "omega")]
+    hi = [float(Fraction(cert["box"][s][1])) for s in ("theta", "omega")]
+    rng = np.random.default_rng(3)
+    X = np.column_stack([rng.uniform(-np.pi, np.pi, 3000), rng.uniform(-4, 4, 3000)])
+    member = (v_of(cert, X) <= level) & np.all((X >= lo) & (X <= hi), axis=1)
+    inside = X[member]
+    assert len(inside) > 300
+    end = rk4(pendulum_field, inside, 40.0)
+    assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-2)  # to (0, 0), no wrapping
+    # the set covers more of the box than the energy level set {1 - cos(theta) + omega^2/2 < 2}
+    energy = 1 - np.cos(X[:, 0]) + X[:, 1] ** 2 / 2 < 2
+    assert np.mean(member) > np.mean(energy)
+
+
+def test_pendulum_region_on_the_recasting_relations_is_modulo_2_pi(tmp_path: Path) -> None:
+    """The route taken where ball arithmetic does not apply (more than 3 states): V over (sin, cos - 1,
+    omega), proved exactly on the recasting's relations, and its claim modulo 2 pi."""
+    from lyapcheck.models.recast_run import comparison_box, run_roa
+
+    model = parse_any_model(PENDULUM, "pendulum.toml")
+    loop = rc.base_loop(model.system)
+    roa = run_roa(loop, rc.linearization(loop), Budget(60.0, "test"), comparison_box(model, loop), interval=False)
+    assert roa.status == "certified" and "modulo 2 pi in theta" in roa.summary
+    cert = roa.certificate
+    assert cert["kind"] == "recast"
     level = float(Fraction(cert["level"]))
     rng = np.random.default_rng(3)
     X = np.column_stack([rng.uniform(-np.pi, np.pi, 3000), rng.uniform(-4, 4, 3000)])
@@ -154,9 +182,6 @@ def test_pendulum_region_holds_on_the_true_loop_and_global_stability_is_refuted(
     end = rk4(pendulum_field, inside, 40.0)
     wrapped = np.angle(np.exp(1j * end[:, 0]))
     assert np.all(np.hypot(wrapped, end[:, 1]) < 1e-2)
-    # the set covers more of the box than the energy level set {1 - cos(theta) + omega^2/2 < 2}
-    energy = 1 - np.cos(X[:, 0]) + X[:, 1] ** 2 / 2 < 2
-    assert np.mean(v_of(cert, X) <= level) > np.mean(energy)
 
 
 def test_no_asymptotic_claim_on_a_lossless_or_an_unstable_loop(tmp_path: Path) -> None:

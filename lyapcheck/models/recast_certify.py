@@ -68,7 +68,7 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     results = {name: results[name] for name in chosen}
     for name, r in results.items():
         if r.status == "certified" and name != "linearization":
-            r.summary = claim_sentence(r.certificate)
+            r.summary = sentence_of(r.certificate)
     conditions = {name: r.to_json() for name, r in results.items()}
     verdict = verdict_of(conditions)
     return verdict, results, build_document(model, loop, candidate, conditions, verdict)
@@ -94,6 +94,15 @@ def build_document(model: RecastModel, loop: Loop, candidate: str | None, condit
         "verdict": verdict,
         "versions": package_versions(),
     }
+
+
+def sentence_of(cert: dict[str, Any]) -> str:
+    """The claim sentence of a recast certificate of either kind."""
+    if cert.get("kind") == "interval":
+        from lyapcheck.models.recast_interval import claim_sentence as interval_sentence
+
+        return interval_sentence(cert)
+    return claim_sentence(cert)
 
 
 def claim_sentence(cert: dict[str, Any]) -> str:
@@ -170,6 +179,10 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
 
         return check_refutation(base, c.get("refutation"))
     cert = c["certificate"]
+    if cert.get("kind") == "interval" and name in ("roa", "candidate"):
+        from lyapcheck.models.recast_interval import check_interval
+
+        return check_interval(base, c)
     if cert.get("kind") != "recast":
         return False, "not a recast certificate"
     system = base.system

@@ -83,24 +83,35 @@ def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
     return -hw, hw
 
 
-def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
-    """``roa``: the linearization's V and its largest level, then the V-s iteration from it; the
-    region covering most of the box."""
+def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any], interval: bool = True
+            ) -> ConditionResult:
+    """``roa``: first a V fitted to simulations and proved by ball arithmetic on the true field
+    (:mod:`lyapcheck.models.recast_interval`; loops of 1 to 3 states); where that proves nothing,
+    the linearization's V and its largest level on the recasting's relations, then the V-s
+    iteration from it, and the region covering most of the box (``interval`` False: that route only)."""
+    from lyapcheck.models.recast_interval import interval_roa
+
+    first_route = interval_roa(loop, budget, box) if interval else "ball arithmetic: not tried"
+    if isinstance(first_route, ConditionResult):
+        simulated_check(loop, first_route, box)
+        return first_route
+    skipped = first_route
     search = Search(loop.ring, budget)
     J = jacobian(loop)
     V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
     if V0 is None:
-        return ConditionResult("roa", "not_certified", f"the linearization gives no quadratic V ({lin.summary})",
-                               property="ROA")
+        return ConditionResult("roa", "not_certified", f"{skipped}; the linearization gives no quadratic V "
+                               f"({lin.summary})", property="ROA")
     label = "the linearization (J^T P + P J = -I)"
     try:
         first = certify_region(loop, V0, search, label)
     except BudgetExhausted as exc:
-        return ConditionResult("roa", "inconclusive", f"{label}: {exc}", property="ROA")
+        return ConditionResult("roa", "inconclusive", f"{skipped}; {label}: {exc}", property="ROA")
     if isinstance(first, str):
-        return best_region(loop, [], [f"{label}: {first}"], box, search)
+        return best_region(loop, [], [skipped, f"{label}: {first}"], box, search)
     more, tried = improved_regions(loop, first, budget, box)
-    result = best_region(loop, [first, *more], [f"{label}: level {float(first.level):.6g}", *tried], box, search)
+    result = best_region(loop, [first, *more], [skipped, f"{label}: level {float(first.level):.6g}", *tried], box,
+                         search)
     if result.status == "certified":
         simulated_check(loop, result, box)
     return result
@@ -137,6 +148,10 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -
     eq = np.array([float(system.values[s]) for s in system.states])
     V = poly_from_json(loop.ring, result.certificate["V"], "V")
     inside = v_values(system, V, Z) <= float(Fraction(result.certificate["level"]))
+    if "box" in result.certificate:  # a ball-arithmetic region: the set within its box
+        corners = result.certificate["box"]
+        inside &= np.all((Z >= [float(Fraction(corners[s][0])) for s in system.states])
+                         & (Z <= [float(Fraction(corners[s][1])) for s in system.states]), axis=1)
     dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON)
     to_zero = simulated.ok & (distances(system, dev) < CONVERGED_RADIUS)
     modulo = simulated.ok & (distances(system, dev, tuple(loop.angles)) < CONVERGED_RADIUS)

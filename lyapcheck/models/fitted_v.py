@@ -1,0 +1,194 @@
+"""A candidate V for a region of attraction, fitted to simulations of the true loop by a linear program.
+
+This is the search half of the ball-arithmetic route (:mod:`lyapcheck.models.interval_region` is
+the proof half); nothing here is trusted. The true loop is simulated from a grid over a box twice
+the size of the comparison box (the region of attraction of a damped machine is a long band that
+leaves the box). ``V`` is the linearization's quadratic form ``alpha x^T P0 x`` (``J^T P0 + P0 J =
+-I``, so ``V`` decreases near the equilibrium) plus free terms of degree 3 to ``d``; a linear
+program (HiGHS, through SciPy) asks, at the samples:
+
+* ``V' <= -eps |x|^2`` and ``V >= eps |x|^2`` where the simulated trajectory converges;
+* ``V >= 1 + margin`` where it does not, and on the big box's edge (so that ``{V <= 1}`` closes
+  inside it and leaves out what does not converge);
+
+and minimizes the sum of ``V`` over the converging samples inside the comparison box, which pulls
+as many of them as it can below 1. The level proposed is a little under the smallest ``V`` at a
+sample of a fine grid where ``V' >= 0`` (away from the equilibrium) or on the big box's edge; the
+box proposed is the bounding box of the fine samples under that level, widened. The proof then
+decides.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Final, Sequence
+
+import numpy as np
+
+from lyapcheck.models.interval_region import IntervalClaim, dyadic_ceil, dyadic_floor
+from lyapcheck.models.recast import RecastSystem
+from lyapcheck.sos.polynomials import Poly, Ring
+
+#: the sampled box is the comparison box scaled by this about its centre
+FIT_GROWTH: Final = 2.0
+#: samples per state of the grid over the sampled box, by number of states
+FIT_GRID: Final = {1: 401, 2: 81, 3: 21}
+#: the extra grid near the equilibrium (its half-width is this share of the box's smallest half-width)
+FIT_LOCAL_SHARE: Final = 0.4
+FIT_LOCAL_GRID: Final = {1: 101, 2: 31, 3: 11}
+#: the decrease and positivity margin at the samples (times |x|^2)
+FIT_EPSILON: Final = 0.02
+#: V at a sample that does not converge (or on the edge) is at least 1 + this
+FIT_OUTSIDE_MARGIN: Final = 0.05
+#: the smallest alpha (V's quadratic part is alpha x^T P0 x)
+FIT_MIN_ALPHA: Final = 1e-3
+#: V's degree, by number of states
+FIT_DEGREE: Final = {1: 8, 2: 6, 3: 4}
+#: the fine grid on which the level is proposed (samples per state)
+LEVEL_GRID: Final = {1: 4001, 2: 401, 3: 61}
+#: the level proposed is this share of the smallest V where the fine grid sees V' >= 0
+LEVEL_SHARE: Final = 0.98
+#: the simulation's horizon (the loop's time unit) and the radius that counts as converged
+FIT_HORIZON: Final = 30.0
+FIT_CONVERGED: Final = 2e-2
+#: V's coefficients are rounded to dyadic rationals with this many significant bits
+COEFFICIENT_BITS: Final = 30
+
+
+@dataclass(frozen=True)
+class FittedV:
+    claim: IntervalClaim
+    #: the share of the converging samples of the comparison box below the level (an estimate)
+    sampled_share: float
+
+
+def _grid(lo: np.ndarray, hi: np.ndarray, count: int) -> np.ndarray:
+    axes = [np.linspace(a, b, count) for a, b in zip(lo, hi)]
+    return np.column_stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")])
+
+
+def _monomials(n: int, degree: int) -> list[tuple[int, ...]]:
+    from itertools import product
+
+    return sorted((m for m in product(range(degree + 1), repeat=n) if 3 <= sum(m) <= degree),
+                  key=lambda m: (sum(m), m))
+
+
+def _columns(Z: np.ndarray, F: np.ndarray, P0: np.ndarray, mons: list[tuple[int, ...]]) -> tuple[np.ndarray, np.ndarray]:
+    """The LP's columns at the samples: V's and V''s values for the quadratic form and each monomial."""
+    n = Z.shape[1]
+    top = max((max(m) for m in mons), default=1)
+    powers = [[np.ones(len(Z))] for _ in range(n)]
+    for i in range(n):
+        for _ in range(top):
+            powers[i].append(powers[i][-1] * Z[:, i])
+
+    def monomial(e: Sequence[int]) -> np.ndarray:
+        out = powers[0][e[0]]
+        for i in range(1, n):
+            if e[i]:
+                out = out * powers[i][e[i]]
+        return out
+
+    V = [np.einsum("ij,jk,ik->i", Z, P0, Z)]
+    dV = [2 * np.einsum("ij,jk,ik->i", Z, P0, F)]
+    for m in mons:
+        V.append(monomial(m))
+        d = np.zeros(len(Z))
+        for i in range(n):
+            if m[i]:
+                e = list(m)
+                e[i] -= 1
+                d += m[i] * monomial(e) * F[:, i]
+        dV.append(d)
+    return np.column_stack(V), np.column_stack(dV)
+
+
+def _dyadic(x: float, bits: int = COEFFICIENT_BITS) -> Fraction:
+    if x == 0 or not np.isfinite(x):
+        return Fraction(0)
+    e = int(np.floor(np.log2(abs(x))))
+    scale = 2 ** (bits - 1 - e)
+    return Fraction(round(x * scale)) / scale if scale >= 1 else Fraction(round(x * scale)) / Fraction(scale)
+
+
+def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | str:
+    """A proposed claim (V, level, box) for the ball-arithmetic proof, or why none (one line)."""
+    from scipy.linalg import solve_continuous_lyapunov
+    from scipy.optimize import linprog
+
+    from lyapcheck.models.recast_numeric import distances, field_values, simulate_ends
+
+    n = system.n
+    if n not in FIT_GRID:
+        return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
+    lo, hi = (np.asarray(b, dtype=float) for b in box)
+    eq = np.array([float(system.values[s]) for s in system.states])
+    h = 1e-6
+    J = np.column_stack([(field_values(system, eq + h * e) - field_values(system, eq - h * e))[0] / (2 * h)
+                         for e in np.eye(n)])
+    if not np.all(np.isfinite(J)) or np.max(np.linalg.eigvals(J).real) >= -1e-9:
+        return "the linearization is not Hurwitz (numerically): no quadratic V to start from"
+    P0 = solve_continuous_lyapunov(J.T, -np.eye(n))
+    centre, half = (lo + hi) / 2, (hi - lo) / 2
+    blo, bhi = centre - FIT_GROWTH * half, centre + FIT_GROWTH * half
+    local = FIT_LOCAL_SHARE * float(np.min(half))
+    Z = np.vstack([_grid(blo, bhi, FIT_GRID[n]), _grid(-local * np.ones(n), local * np.ones(n), FIT_LOCAL_GRID[n])])
+    dev, _ = simulate_ends(system, Z + eq, FIT_HORIZON)
+    converges = distances(system, dev) < FIT_CONVERGED
+    edge = np.any(np.isclose(Z, blo) | np.isclose(Z, bhi), axis=1)
+    F = field_values(system, Z + eq)
+    mons = _monomials(n, FIT_DEGREE[n])
+    Vc, dVc = _columns(Z, F, P0, mons)
+    r2 = np.sum(Z ** 2, axis=1)
+    good = converges & ~edge & (r2 > 1e-12) & np.all(np.isfinite(F), axis=1)
+    bad = ~converges | edge
+    A = np.vstack([dVc[good], -Vc[good], -Vc[bad]])
+    b = np.concatenate([-FIT_EPSILON * r2[good], -FIT_EPSILON * r2[good],
+                        -(1 + FIT_OUTSIDE_MARGIN) * np.ones(int(bad.sum()))])
+    inside = good & np.all((Z >= lo) & (Z <= hi), axis=1)
+    if not inside.any():
+        return "no simulated trajectory from the box converges"
+    cost = Vc[inside].sum(axis=0)
+    bounds = [(FIT_MIN_ALPHA, None)] + [(None, None)] * len(mons)
+    lp = linprog(cost / max(1.0, float(np.abs(cost).max())), A_ub=A, b_ub=b, bounds=bounds, method="highs")
+    if lp.status != 0:
+        return f"the fitting linear program found no V ({lp.message.strip()})"
+    w = lp.x
+    # V exactly: dyadic coefficients, the quadratic part alpha P0 rounded as a whole
+    terms: dict[tuple[int, ...], Fraction] = {}
+    for i in range(n):
+        for j in range(i, n):
+            m = [0] * ring.nvars
+            m[i] += 1
+            m[j] += 1
+            terms[tuple(m)] = _dyadic(w[0] * P0[i, j] * (1 if i == j else 2))
+    for c, mon in zip(w[1:], mons):
+        if abs(c) > 1e-12:
+            terms[tuple(list(mon) + [0] * (ring.nvars - n))] = _dyadic(float(c))
+    V: Poly = ring.from_terms({m: c for m, c in terms.items() if c})
+    # the level: under the smallest V where a fine grid sees V' >= 0 (away from 0) or on the edge
+    fine = _grid(blo, bhi, LEVEL_GRID[n])
+    Ff = field_values(system, fine + eq)
+    Vf, dVf = _columns(fine, Ff, P0, mons)
+    vf, dvf = Vf @ w, dVf @ w
+    rf = np.sum(fine ** 2, axis=1)
+    fine_edge = np.any(np.isclose(fine, blo) | np.isclose(fine, bhi), axis=1)
+    worst = (dvf >= 0) & (rf > (0.05 * local) ** 2) | ~np.isfinite(dvf) | fine_edge
+    top = float(np.min(vf[worst])) if worst.any() else 1.0
+    level_f = LEVEL_SHARE * min(top, 1.0)
+    if level_f <= 0:
+        return "the fitted V decreases on no sampled level set"
+    under = vf <= level_f
+    step = (bhi - blo) / (LEVEL_GRID[n] - 1)
+    zlo = np.maximum(fine[under].min(axis=0) - 2 * step, blo)
+    zhi = np.minimum(fine[under].max(axis=0) + 2 * step, bhi)
+    claim = IntervalClaim(V, dyadic_floor(Fraction(level_f)), tuple(dyadic_floor(Fraction(float(x))) for x in zlo),
+                          tuple(dyadic_ceil(Fraction(float(x))) for x in zhi))
+    dev_in = converges & np.all((Z >= lo) & (Z <= hi), axis=1)
+    sampled = float(np.mean((Vc[dev_in] @ w) <= level_f)) if dev_in.any() else 0.0
+    return FittedV(claim, sampled)
+
+
+__all__ = ["FittedV", "fit_v"]

@@ -1,0 +1,286 @@
+"""A region of attraction of a loop with functions, proved on the true field by ball arithmetic.
+
+The claim: every trajectory of the true loop that starts in ``Omega = {x : x - x_eq in B,
+V(x - x_eq) <= level}`` converges to the equilibrium ``x_eq``, for a polynomial ``V`` over the state
+deviations, a rational ``level`` and a box ``B`` (dyadic corners). The proof has three parts, each a
+finite computation that :func:`prove_region` runs and ``verify`` runs again:
+
+1. **The boundary.** ``V > level`` on every face of ``B`` (ball arithmetic, faces bisected until
+   each piece is proved). So ``Omega`` is compact and a trajectory cannot leave it without
+   crossing ``{V > level}``: as long as ``V`` does not increase, ``Omega`` is invariant.
+2. **The decrease.** ``B`` is bisected into cells; every cell on which ``V <= level`` somewhere
+   either has ``g = grad V . f < 0`` on the whole cell, proved in ball arithmetic (the natural
+   enclosure, else the mean-value form ``g(m) + grad g(cell) . (cell - m)``), or lies in the
+   box ``N = [-r, r]^n`` of part 3.
+3. **The equilibrium, exactly.** ``V`` has no constant or linear term (checked on its exact
+   coefficients) and ``f(x_eq) = 0`` (checked exactly when the model is read), so ``g(0) = 0``
+   and ``grad g(0) = 0``; the Hessian of ``g`` over ``N`` (chain rule in ball arithmetic, each
+   function's exact derivatives) is negative definite for every matrix of its enclosure (Cholesky
+   in ball arithmetic). Then ``g(z) = int_0^1 (1 - t) z^T H(t z) z dt < 0`` for every ``z != 0`` in
+   ``N``: no ball around the equilibrium is left unproved, unlike a delta-complete check.
+
+With ``g < 0`` on ``Omega`` except at the equilibrium and ``Omega`` compact and invariant, every
+trajectory from ``Omega`` converges to the equilibrium (``V`` decreases at a rate bounded away from
+0 near any other point of ``Omega``). The claim is in the states themselves, not modulo 2 pi.
+
+Ball arithmetic is python-flint's ``arb``: each result encloses the exact one, outward rounding
+included. The cells and bisections are deterministic (the same inputs give the same cells), so
+``verify`` repeats the proof cell for cell; it stores no cell list.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Final
+
+import flint
+
+from lyapcheck.models.interval_field import BallLoop, LieDerivative, negative_definite
+from lyapcheck.models.recast import RecastSystem
+from lyapcheck.sos.polynomials import Poly, Ring
+
+#: the most cells a proof may examine (decrease and boundary together) before it gives up
+INTERVAL_CELL_LIMIT: Final = 400_000
+#: the finest bisection: a cell is not split below this fraction of the box's width in each state
+#: (with MAGNITUDE_BITS + DYADIC_BITS + 16 + 1 <= 53 every corner and midpoint is an exact double)
+INTERVAL_MIN_WIDTH: Final = Fraction(1, 2 ** 16)
+#: the local box N = [-r, r]^n: the largest r tried is the box's smallest half-width over 2^this,
+#: halved until the Hessian test passes, at most LOCAL_HALVINGS times
+LOCAL_FIRST_SHIFT: Final = 3
+LOCAL_HALVINGS: Final = 24
+#: the dyadic grid corners and levels are rounded to (bits after the binary point)
+DYADIC_BITS: Final = 20
+
+
+def dyadic_floor(x: Fraction, bits: int = DYADIC_BITS) -> Fraction:
+    scale = 2 ** bits
+    return Fraction((x * scale).__floor__(), scale)
+
+
+def dyadic_ceil(x: Fraction, bits: int = DYADIC_BITS) -> Fraction:
+    scale = 2 ** bits
+    return Fraction((x * scale).__ceil__(), scale)
+
+
+#: a box corner's magnitude is below 2^this: with DYADIC_BITS after the point and the finest
+#: bisection, every cell corner and midpoint is then exact in a double (53 bits)
+MAGNITUDE_BITS: Final = 12
+
+
+def is_dyadic(x: Fraction, bits: int = DYADIC_BITS) -> bool:
+    """``x`` has at most ``bits`` bits after the binary point and magnitude below 2^MAGNITUDE_BITS."""
+    return (x * 2 ** bits).denominator == 1 and abs(x) < 2 ** MAGNITUDE_BITS
+
+
+@dataclass(frozen=True)
+class IntervalClaim:
+    """``{x : x - x_eq in [lo, hi], V(x - x_eq) <= level}``, with ``V`` in the ring's state deviations."""
+
+    V: Poly
+    level: Fraction
+    lo: tuple[Fraction, ...]
+    hi: tuple[Fraction, ...]
+
+
+@dataclass(frozen=True)
+class IntervalProof:
+    """What :func:`prove_region` established (``ok``) or why not, and what it took."""
+
+    ok: bool
+    why: str
+    cells: int
+    boundary_cells: int
+    local_radius: Fraction | None
+    seconds: float
+
+
+class _Cells:
+    """Deterministic bisection of a box of floats (dyadic corners: exact as floats and as balls)."""
+
+    def __init__(self, lo: tuple[Fraction, ...], hi: tuple[Fraction, ...]) -> None:
+        self.widths = [float(h - l) for l, h in zip(lo, hi)]
+        self.min_width = [w * float(INTERVAL_MIN_WIDTH) for w in self.widths]
+
+    def balls(self, cell: tuple[tuple[float, float], ...]) -> list[Any]:
+        return [flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell]
+
+    def centers(self, cell: tuple[tuple[float, float], ...]) -> list[Any]:
+        return [flint.arb((a + b) / 2) for a, b in cell]
+
+    def radii(self, cell: tuple[tuple[float, float], ...]) -> list[Any]:
+        return [flint.arb(0, (b - a) / 2) for a, b in cell]  # exact: dyadic
+
+    def split(self, cell: tuple[tuple[float, float], ...], fixed: int | None = None
+              ) -> tuple[tuple[tuple[float, float], ...], ...] | None:
+        """The two halves of ``cell`` across its widest side relative to the box (never ``fixed``), or
+        ``None`` when every side is already at the finest width."""
+        best, k = -1.0, -1
+        for i, (a, b) in enumerate(cell):
+            if i == fixed or (b - a) <= self.min_width[i]:
+                continue
+            rel = (b - a) / self.widths[i]
+            if rel > best:
+                best, k = rel, i
+        if k < 0:
+            return None
+        a, b = cell[k]
+        m = (a + b) / 2
+        left = cell[:k] + ((a, m),) + cell[k + 1:]
+        right = cell[:k] + ((m, b),) + cell[k + 1:]
+        return left, right
+
+
+def _mean_value_negative(lie: LieDerivative, cells: _Cells, cell: tuple[tuple[float, float], ...]) -> bool:
+    """``g < 0`` on the cell by the mean-value form ``g(m) + grad g(cell) . (cell - m)``."""
+    jet = lie.jet(cells.balls(cell), 1)
+    if jet.grad is None:
+        return False
+    total = lie(cells.centers(cell))
+    for gi, ri in zip(jet.grad, cells.radii(cell)):
+        total = total + gi * ri
+    return bool(total < 0)
+
+
+def _second_order_negative(lie: LieDerivative, cells: _Cells, cell: tuple[tuple[float, float], ...]) -> bool:
+    """``g < 0`` on the cell by the second-order form ``g(m) + grad g(m) . t + t^T H(cell) t / 2`` with
+    ``|t_i| <= r_i`` (``H`` enclosed over the cell: Taylor's theorem with the Lagrange remainder)."""
+    hess = lie.jet(cells.balls(cell), 2).hess
+    if hess is None:
+        return False
+    at = lie.jet(cells.centers(cell), 1)
+    if at.grad is None:
+        return False
+    radii = [flint.arb((b - a) / 2) for a, b in cell]  # exact: dyadic
+    zero = flint.arb(0)
+    total = at.value
+    for i, gi in enumerate(at.grad):
+        total = total + gi * zero.union(radii[i]).union(-radii[i])
+        # t_i^2 / 2 in [0, r_i^2 / 2]; t_i t_j for i < j in [-r_i r_j, r_i r_j] (H_ij + H_ji, halved)
+        total = total + hess[i][i] * zero.union(radii[i] * radii[i] / 2)
+        for j in range(i + 1, len(radii)):
+            p = radii[i] * radii[j]
+            total = total + hess[i][j] * p.union(-p)
+    return bool(total < 0)
+
+
+def _v_above(lie: LieDerivative, cells: _Cells, cell: tuple[tuple[float, float], ...], level: Any,
+             mean_value: bool) -> bool:
+    """``V > level`` on the cell (natural enclosure, then the mean-value form if asked)."""
+    if lie.value_of_v(cells.balls(cell)) > level:
+        return True
+    if not mean_value:
+        return False
+    grads = lie.gradient_of_v(cells.balls(cell))
+    total = lie.value_of_v(cells.centers(cell))
+    for gi, ri in zip(grads, cells.radii(cell)):
+        total = total + gi * ri
+    return bool(total > level)
+
+
+def local_radius(lie: LieDerivative, lo: tuple[Fraction, ...], hi: tuple[Fraction, ...]) -> Fraction | None:
+    """The largest ``r`` (a power of 2 below the box's smallest half-width) for which the Hessian of
+    ``g`` on ``[-r, r]^n`` is negative definite, or ``None``."""
+    half = min(min(-l, h) for l, h in zip(lo, hi))
+    if half <= 0:
+        return None
+    r = Fraction(1)
+    while r > half:
+        r /= 2
+    while r * 2 <= half:
+        r *= 2
+    r /= 2 ** LOCAL_FIRST_SHIFT
+    for _ in range(LOCAL_HALVINGS):
+        z = [flint.arb(0, float(r)) for _ in range(lie.n)]
+        jet = lie.jet(z, 2)
+        if jet.hess is not None and negative_definite(jet.hess):
+            return r
+        r /= 2
+    return None
+
+
+def low_order_terms(ring: Ring, V: Poly, n: int) -> bool:
+    """Whether ``V`` has a constant or linear term, or uses a variable beyond the first ``n`` (exact)."""
+    for m in ring.terms(V):
+        if sum(m) < 2 or any(m[n:]):
+            return True
+    return False
+
+
+def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None) -> IntervalProof:
+    """Prove the claim's three parts (module docstring) on the true field; deterministic."""
+    start = time.perf_counter()
+    ring = system.ring
+    n = system.n
+
+    def failed(why: str, cells: int = 0, boundary: int = 0, r: Fraction | None = None) -> IntervalProof:
+        return IntervalProof(False, why, cells, boundary, r, time.perf_counter() - start)
+
+    if len(claim.lo) != n or len(claim.hi) != n:
+        return failed("the box does not have one side per state")
+    if not all(is_dyadic(x) for x in claim.lo + claim.hi) or not all(l < 0 < h for l, h in zip(claim.lo, claim.hi)):
+        return failed(f"the box's corners must be dyadic (at most {DYADIC_BITS} bits after the point) with the "
+                      "equilibrium strictly inside")
+    if claim.level <= 0:
+        return failed("the level must be > 0")
+    if low_order_terms(ring, claim.V, n):
+        return failed("V must be a polynomial in the state deviations without constant or linear terms")
+    lie = LieDerivative(BallLoop(system), ring, claim.V)
+    level = flint.arb(flint.fmpq(claim.level.numerator, claim.level.denominator))
+    cells = _Cells(claim.lo, claim.hi)
+    box = tuple((float(l), float(h)) for l, h in zip(claim.lo, claim.hi))
+    count = 0
+    # 1. the boundary: V > level on each face
+    for i in range(n):
+        for side in (box[i][0], box[i][1]):
+            stack = [box[:i] + ((side, side),) + box[i + 1:]]
+            while stack:
+                cell = stack.pop()
+                count += 1
+                if count > INTERVAL_CELL_LIMIT:
+                    return failed(f"more than {INTERVAL_CELL_LIMIT} cells", boundary=count)
+                if deadline is not None and time.perf_counter() > deadline:
+                    return failed("out of time on the boundary", boundary=count)
+                if _v_above(lie, cells, cell, level, mean_value=True):
+                    continue
+                halves = cells.split(cell, fixed=i)
+                if halves is None:
+                    where = ", ".join(f"{s} - eq in [{a:.6g}, {b:.6g}]" for s, (a, b) in zip(system.states, cell))
+                    return failed(f"V > level is not proved on the box's boundary at {where}", boundary=count)
+                stack.extend(reversed(halves))
+    boundary = count
+    # 3. the local box around the equilibrium
+    r = local_radius(lie, claim.lo, claim.hi)
+    if r is None:
+        return failed("the Hessian of V' is not proved negative definite on any box around the equilibrium",
+                      boundary=boundary)
+    rf = float(r)
+    # 2. the decrease on every cell of B that meets {V <= level}
+    stack = [box]
+    count = 0
+    while stack:
+        cell = stack.pop()
+        count += 1
+        if count > INTERVAL_CELL_LIMIT:
+            return failed(f"more than {INTERVAL_CELL_LIMIT} cells", count, boundary, r)
+        if deadline is not None and count % 256 == 0 and time.perf_counter() > deadline:
+            return failed("out of time", count, boundary, r)
+        if all(-rf <= a and b <= rf for a, b in cell):
+            continue  # inside N: part 3
+        if _v_above(lie, cells, cell, level, mean_value=False):
+            continue
+        if lie(cells.balls(cell)) < 0 or _second_order_negative(lie, cells, cell):
+            continue
+        if _v_above(lie, cells, cell, level, mean_value=True):
+            continue
+        halves = cells.split(cell)
+        if halves is None:
+            where = ", ".join(f"{s} - eq in [{a:.6g}, {b:.6g}]" for s, (a, b) in zip(system.states, cell))
+            return failed(f"V' < 0 is not proved at {where} (at the finest cells)", count, boundary, r)
+        stack.extend(reversed(halves))
+    return IntervalProof(True, "proved", count, boundary, r, time.perf_counter() - start)
+
+
+__all__ = ["IntervalClaim", "IntervalProof", "prove_region", "dyadic_floor", "dyadic_ceil", "is_dyadic",
+           "INTERVAL_CELL_LIMIT"]

@@ -1,0 +1,121 @@
+"""``roa`` on a loop with functions by ball arithmetic on the true field: the search, the
+certificate and its check (issue 31, item 7).
+
+:mod:`lyapcheck.models.fitted_v` proposes ``(V, level, box)`` from simulations; 
+:mod:`lyapcheck.models.interval_region` proves it (boundary, decrease, the equilibrium's
+neighbourhood) with python-flint's ``arb`` balls. No relaxation of the functions is involved: the
+field proved on is the model's own, so a region can follow the true region of attraction much
+more closely than one proved on the recasting's relations. The claim is in the states themselves
+(convergence to the equilibrium, not modulo 2 pi).
+
+The certificate (``kind`` "interval") carries ``variables``, ``auxiliaries`` and ``shift`` like
+every recast certificate, ``V`` (over the state deviations only), ``V_text``, ``level``, ``box``
+(each state's deviation interval) and what the proof took (cells, the local box's half-width).
+``verify`` runs the same deterministic proof again from those alone.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import Any, Final
+
+from lyapcheck.models.interval_region import IntervalClaim, IntervalProof, prove_region
+from lyapcheck.models.recast_classes import Loop, v_text
+from lyapcheck.models.recast_sos import poly_from_json, poly_to_json
+from lyapcheck.models.search import Budget
+from lyapcheck.results import ConditionResult
+
+#: each retry lowers the proposed level by this factor (the proof failing near the level set's edge)
+RETRY_LEVEL_FACTOR: Final = Fraction(9, 10)
+#: proposals tried (the first level, then lowered)
+INTERVAL_ATTEMPTS: Final = 3
+#: what the route proves with, in every sentence and certificate
+METHOD: Final = "ball arithmetic (python-flint arb) on the true field"
+
+
+def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+    """The ball-arithmetic region of attraction, or why there is none (one line)."""
+    import time
+
+    from lyapcheck.models.fitted_v import fit_v
+
+    system = loop.system
+    fitted = fit_v(system, loop.ring, box)
+    if isinstance(fitted, str):
+        return fitted
+    claim = fitted.claim
+    reasons = []
+    for attempt in range(INTERVAL_ATTEMPTS):
+        if budget.left() <= 0:
+            reasons.append("out of time")
+            break
+        proof = prove_region(system, claim, deadline=time.perf_counter() + budget.left())
+        if proof.ok:
+            cert = certificate(loop, claim, proof)
+            return ConditionResult("roa", "certified", claim_sentence(cert), property="ROA", certificate=cert,
+                                   numbers={"level": float(claim.level), "V_from": "a V fitted to simulations of the "
+                                            "true loop (linear program), proved by " + METHOD,
+                                            "cells": proof.cells, "boundary_cells": proof.boundary_cells,
+                                            "proof_seconds": proof.seconds, "sampled_share": fitted.sampled_share,
+                                            "tried": reasons + [f"level {float(claim.level):.6g}: proved"]})
+        reasons.append(f"level {float(claim.level):.6g}: {proof.why}")
+        claim = IntervalClaim(claim.V, claim.level * RETRY_LEVEL_FACTOR, claim.lo, claim.hi)
+    return "ball arithmetic: " + "; ".join(reasons)
+
+
+def certificate(loop: Loop, claim: IntervalClaim, proof: IntervalProof) -> dict[str, Any]:
+    system = loop.system
+    ring = loop.ring
+    return {"kind": "interval", "method": METHOD, "variables": list(ring.names), "auxiliaries": system.definitions(),
+            "angles": [], "shift": {k: str(v) for k, v in system.values.items()},
+            "V": poly_to_json(ring, claim.V), "V_text": v_text(system, claim.V), "level": str(claim.level),
+            "box": {s: [str(a), str(b)] for s, a, b in zip(system.states, claim.lo, claim.hi)},
+            "cells": proof.cells, "boundary_cells": proof.boundary_cells, "local_radius": str(proof.local_radius)}
+
+
+def claim_of(loop: Loop, cert: dict[str, Any]) -> IntervalClaim:
+    """The claim a certificate states (ValueError/KeyError when malformed)."""
+    system = loop.system
+    V = poly_from_json(loop.ring, cert["V"], "V")
+    box = cert["box"]
+    if list(box) != list(system.states):
+        raise ValueError("box: one interval per state, in the states' order")
+    lo = tuple(Fraction(str(box[s][0])) for s in system.states)
+    hi = tuple(Fraction(str(box[s][1])) for s in system.states)
+    return IntervalClaim(V, Fraction(str(cert["level"])), lo, hi)
+
+
+def claim_sentence(cert: dict[str, Any]) -> str:
+    """What the certificate proves, from the certificate alone (``verify`` re-makes and compares)."""
+    level = Fraction(str(cert["level"]))
+    box = ", ".join(f"{s} - eq in [{float(Fraction(a)):.6g}, {float(Fraction(b)):.6g}]" for s, (a, b) in cert["box"].items())
+    return (f"region of attraction: every trajectory of the true loop starting where V(x) <= {float(level):.6g} "
+            f"(exactly {level}) with {box} converges to the equilibrium itself (V > level on that box's boundary, "
+            f"V' < 0 on the set except at the equilibrium; proved by {METHOD}, with an exact Hessian argument at the "
+            "equilibrium; V_text in the certificate)")
+
+
+def check_interval(loop: Loop, c: dict[str, Any]) -> tuple[bool, str]:
+    """``verify`` of an "interval" certificate: the same proof, run again from the certificate."""
+    cert = c["certificate"]
+    system = loop.system
+    if cert.get("variables") != list(loop.ring.names) or cert.get("auxiliaries") != system.definitions() or \
+            cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
+        return False, "variables, auxiliaries or shift differ from the recasting of the model text"
+    if cert.get("angles") != [] or cert.get("method") != METHOD:
+        return False, "an interval certificate is in the states themselves, proved by " + METHOD
+    claim = claim_of(loop, cert)
+    if c.get("level") is not None and c.get("level") != float(claim.level):
+        return False, "the stated level is not the certificate's"
+    proof = prove_region(system, claim)
+    if not proof.ok:
+        return False, f"the ball-arithmetic proof does not go through: {proof.why}"
+    if c.get("summary") != claim_sentence(cert):
+        return False, "the printed sentence is not the one the certificate supports"
+    if cert.get("V_text") != v_text(system, claim.V):
+        return False, "V_text is not V written with the functions"
+    return True, (f"V > level on the box's boundary and V' < 0 on the set ({proof.cells} cells, the equilibrium's "
+                  f"box of half-width {proof.local_radius} by the Hessian), by {METHOD}")
+
+
+__all__ = ["interval_roa", "check_interval", "claim_sentence", "METHOD"]
