@@ -1,0 +1,246 @@
+"""The ball-arithmetic route for loops with functions: the enclosures contain the exact values, a
+false claim is never proved, and a certificate re-checks (and a changed one does not).
+
+Exact values here come from sympy, written in the test from the model's equations (not from
+lyapcheck's own parsing), and trajectories from numpy's RK4.
+"""
+
+from __future__ import annotations
+
+import copy
+from fractions import Fraction
+from pathlib import Path
+
+import flint
+import numpy as np
+import pytest
+import sympy as sp
+
+from lyapcheck import api
+from lyapcheck.models.interval_field import BallLoop, Jet, LieDerivative, apply, negative_definite
+from lyapcheck.models.interval_region import IntervalClaim, prove_region
+from lyapcheck.models.modelfile import parse_any_model
+
+SPRING = """
+[model]
+name = "a spring with a sine term"
+states = ["x1", "x2"]
+[dynamics]
+x1 = "x2"
+x2 = "-sin(x1) - x1 - x2"
+"""
+
+POWER = """
+[model]
+name = "two-machine power system"
+states = ["x1", "x2"]
+[dynamics]
+x1 = "x2"
+x2 = "-0.5*x2 - (sin(x1 + pi/3) - sin(pi/3))"
+[domain]
+x1 = [-2, 3]
+x2 = [-3, 1.5]
+"""
+
+SATURATED = """
+[model]
+name = "double integrator, saturated feedback"
+states = ["x", "v"]
+[dynamics]
+x = "v"
+v = "sat(-x - 2*v, 1)"
+[domain]
+x = [-4, 4]
+v = [-4, 4]
+"""
+
+UNSTABLE = """
+[model]
+name = "x'' = sin(x) - x'"
+states = ["x", "v"]
+[dynamics]
+x = "v"
+v = "sin(x) - v"
+"""
+
+
+def contains(b: flint.arb, x: float, slack: float = 1e-12) -> bool:
+    return bool(b.lower() <= x + slack) and bool(b.upper() >= x - slack)
+
+
+@pytest.mark.parametrize("name, f", [("sin", sp.sin), ("cos", sp.cos), ("exp", sp.exp), ("atan", sp.atan),
+                                     ("tanh", sp.tanh), ("sqrt", sp.sqrt)])
+def test_a_jet_encloses_each_function_and_its_first_two_derivatives(name: str, f) -> None:
+    a, b = sp.symbols("a b")
+    u_expr = 1 + a ** 2 / 2 + a * b - b / 3  # > 0 near the point (sqrt's derivatives exist)
+    g = f(u_expr)
+    point = {a: sp.Rational(3, 10), b: sp.Rational(-1, 5)}
+    za, zb = (Jet.variable(flint.arb(float(point[s])), i, 2, 2) for i, s in enumerate((a, b)))
+    u = 1 + za * za * flint.arb(0.5) + za * zb - zb * (flint.arb(1) / 3)
+    out = apply(name, u)
+    assert isinstance(out, Jet) and out.grad is not None and out.hess is not None
+    assert contains(out.value, float(g.subs(point)))
+    for i, s in enumerate((a, b)):
+        assert contains(out.grad[i], float(sp.diff(g, s).subs(point)))
+        for j, t in enumerate((a, b)):
+            assert contains(out.hess[i][j], float(sp.diff(g, s, t).subs(point)))
+
+
+def test_kinks_drop_the_derivatives_and_a_ball_encloses_every_point() -> None:
+    across = flint.arb(1, 0.5)  # [0.5, 1.5] straddles the limit 1 of sat and nothing of abs
+    jet = Jet.variable(across, 0, 1, 2)
+    assert apply("sat", jet, Fraction(1)).grad is None  # not differentiable on the ball
+    assert apply("abs", jet).grad is not None
+    assert apply("abs", Jet.variable(flint.arb(0, 0.1), 0, 1, 2)).grad is None
+    inside = apply("sat", Jet.variable(flint.arb(0.2, 0.1), 0, 1, 2), Fraction(1))
+    assert inside.grad is not None and contains(inside.grad[0], 1.0)
+    for x in np.linspace(0.5, 1.5, 11):
+        assert contains(apply("sat", across, Fraction(1)), min(x, 1.0))
+    assert apply("sqrt", Jet.variable(flint.arb(0, 0.1), 0, 1, 2)).grad is None
+
+
+def test_negative_definite_decides_every_matrix_of_the_enclosure() -> None:
+    def balls(rows, radius=0.0):
+        return [[flint.arb(v, radius) for v in row] for row in rows]
+
+    assert negative_definite(balls([[-1, 0.5], [0.5, -1]]))
+    assert not negative_definite(balls([[-1, 2], [2, -1]]))
+    assert not negative_definite(balls([[-1, 0.5], [0.5, -1]], radius=0.8))  # contains indefinite matrices
+    assert negative_definite(balls([[-2, 0, 0.1], [0, -1, 0], [0.1, 0, -3]], radius=0.01))
+
+
+def test_the_lie_derivative_jet_matches_sympy_on_the_power_system() -> None:
+    model = parse_any_model(POWER, "power.toml")
+    system = model.system
+    ring = system.ring
+    x1, x2 = ring.gens()[:2]
+    V = x1 ** 2 + x1 * x2 / 3 + x2 ** 2 + x1 ** 3 * x2 / 7
+    lie = LieDerivative(BallLoop(system), ring, V)
+    a, b = sp.symbols("a b")
+    Vs = a ** 2 + a * b / 3 + b ** 2 + a ** 3 * b / 7
+    f = [b, -sp.Rational(1, 2) * b - (sp.sin(a + sp.pi / 3) - sp.sin(sp.pi / 3))]
+    g = sp.diff(Vs, a) * f[0] + sp.diff(Vs, b) * f[1]
+    point = {a: sp.Rational(7, 10), b: sp.Rational(-3, 10)}
+    jet = lie.jet([flint.arb(0.7), flint.arb(-0.3)], 2)
+    assert contains(jet.value, float(g.subs(point)))
+    assert contains(lie([flint.arb(0.7), flint.arb(-0.3)]), float(g.subs(point)))
+    for i, s in enumerate((a, b)):
+        assert contains(jet.grad[i], float(sp.diff(g, s).subs(point)))
+        for j, t in enumerate((a, b)):
+            assert contains(jet.hess[i][j], float(sp.diff(g, s, t).subs(point)))
+
+
+def _quadratic_claim(text: str, level: Fraction, half: Fraction) -> tuple:
+    model = parse_any_model(text, "m.toml")
+    ring = model.system.ring
+    x1, x2 = ring.gens()[:2]
+    V = 3 * x1 ** 2 + x1 * x2 + 2 * x2 ** 2  # on the spring: V' = -2 x1^2 - 3 x1 x2 - 3 x2^2 + O(|x|^4)
+    return model.system, IntervalClaim(V, level, (-half, -half), (half, half))
+
+
+def test_a_true_region_is_proved_and_false_ones_are_not() -> None:
+    system, claim = _quadratic_claim(SPRING, Fraction(2), Fraction(2))
+    proof = prove_region(system, claim)
+    assert proof.ok, proof.why
+    assert proof.local_radius is not None and proof.local_radius > 0
+    # the box cuts the set {V <= 2}: V > level fails on its boundary
+    cut = IntervalClaim(claim.V, claim.level, (Fraction(-1, 2),) * 2, (Fraction(1, 2),) * 2)
+    assert not (p := prove_region(system, cut)).ok and "boundary" in p.why
+    # a V with a linear term, a box without the equilibrium inside, corners that are not dyadic
+    ring = system.ring
+    x1 = ring.gens()[0]
+    assert "linear" in prove_region(system, IntervalClaim(claim.V + x1, claim.level, claim.lo, claim.hi)).why
+    assert not prove_region(system, IntervalClaim(claim.V, claim.level, (Fraction(1, 4), Fraction(-2)),
+                                                  (Fraction(2), Fraction(2)))).ok
+    assert not prove_region(system, IntervalClaim(claim.V, claim.level, (Fraction(-2, 3), Fraction(-2)),
+                                                  (Fraction(2), Fraction(2)))).ok
+
+
+def test_no_region_is_proved_around_a_saddle() -> None:
+    # x'' = sin(x) - x' has a saddle at 0: V' is indefinite there, whatever V and level
+    system, claim = _quadratic_claim(UNSTABLE, Fraction(1, 100), Fraction(1, 4))
+    proof = prove_region(system, claim)
+    assert not proof.ok
+
+
+def test_a_level_set_reaching_the_power_systems_saddle_is_not_proved() -> None:
+    """The saddle (pi/3, 0) is an equilibrium: no set containing it is a region of attraction of 0."""
+    model = parse_any_model(POWER, "power.toml")
+    system = model.system
+    ring = system.ring
+    x1, x2 = ring.gens()[:2]
+    V = x1 ** 2 + x1 * x2 + 2 * x2 ** 2
+    # {V <= 2} within the box contains (pi/3, 0), where V = 1.097
+    claim = IntervalClaim(V, Fraction(2), (Fraction(-2), Fraction(-2)), (Fraction(2), Fraction(2)))
+    proof = prove_region(system, claim)
+    assert not proof.ok and "not proved" in proof.why
+
+
+def _rk4(f, X: np.ndarray, horizon: float, step: float = 0.02) -> np.ndarray:
+    for _ in range(int(horizon / step)):
+        k1 = f(X)
+        k2 = f(X + step / 2 * k1)
+        k3 = f(X + step / 2 * k2)
+        k4 = f(X + step * k3)
+        X = X + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return X
+
+
+def _members(cert: dict, X: np.ndarray, states: tuple[str, str]) -> np.ndarray:
+    """Membership in an interval certificate's set, from the certificate alone (V over the states)."""
+    total = np.zeros(len(X))
+    for coefficient, exponents in cert["V"]["terms"]:
+        term = np.full(len(X), float(Fraction(coefficient)))
+        for name, e in zip(cert["variables"], exponents):
+            if e:
+                assert name in states  # V uses the states only
+                column = X[:, states.index(name)] - float(Fraction(cert["shift"][name]))
+                term = term * column ** e
+        total += term
+    lo = [float(Fraction(cert["box"][s][0])) for s in states]
+    hi = [float(Fraction(cert["box"][s][1])) for s in states]
+    return (total <= float(Fraction(cert["level"]))) & np.all((X >= lo) & (X <= hi), axis=1)
+
+
+@pytest.mark.slow
+def test_the_power_system_region_beats_lyzNets_neural_v_and_holds_on_the_true_loop(tmp_path: Path) -> None:
+    path = tmp_path / "power.toml"
+    path.write_text(POWER)
+    result = api.certify(model=path, classes="roa")
+    roa = result.conditions["roa"]
+    assert roa.status == "certified" and roa.certificate["kind"] == "interval"
+    assert roa.numbers["roa_share"] >= 0.823  # LyZNet's neural V: 82.3 % of the simulated region
+    assert not roa.numbers.get("soundness_violation")
+    assert api.verify(result).valid
+    # outside lyapcheck: the set's grid points converge to the origin itself
+    d = np.pi / 3
+    X = np.column_stack([g.ravel() for g in np.meshgrid(np.linspace(-2, 3, 60), np.linspace(-3, 1.5, 60))])
+    inside = X[_members(roa.certificate, X, ("x1", "x2"))]
+    assert len(inside) > 1000
+    end = _rk4(lambda Y: np.column_stack([Y[:, 1], -0.5 * Y[:, 1] - (np.sin(Y[:, 0] + d) - np.sin(d))]), inside, 60.0)
+    assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-2)
+    # a changed level, box or sentence does not verify
+    for change in ("level", "box", "summary"):
+        doc = copy.deepcopy(result.document)
+        c = doc["conditions"]["roa"]
+        if change == "level":
+            c["certificate"]["level"] = str(Fraction(c["certificate"]["level"]) * 2)
+        elif change == "box":
+            c["certificate"]["box"]["x1"][0] = "-1/2"
+        else:
+            c["summary"] = c["summary"].replace("converges", "stays")
+        assert not api.verify(doc).valid, change
+
+
+def test_a_saturated_loop_gets_a_region_through_its_kinks(tmp_path: Path) -> None:
+    path = tmp_path / "sat.toml"
+    path.write_text(SATURATED)
+    result = api.certify(model=path, classes="roa")
+    roa = result.conditions["roa"]
+    assert roa.status == "certified" and roa.certificate["kind"] == "interval"
+    assert api.verify(result).valid
+    X = np.column_stack([g.ravel() for g in np.meshgrid(np.linspace(-4, 4, 41), np.linspace(-4, 4, 41))])
+    inside = X[_members(roa.certificate, X, ("x", "v"))]
+    assert len(inside) > 200
+    end = _rk4(lambda Y: np.column_stack([Y[:, 1], np.clip(-Y[:, 0] - 2 * Y[:, 1], -1, 1)]), inside, 60.0)
+    assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-2)
