@@ -289,3 +289,45 @@ def test_a_certified_region_is_simulated_on_the_true_loop(tmp_path: Path) -> Non
     assert roa.status == "certified"
     assert roa.numbers["simulated_starts"] == 1600 and 0.5 < roa.numbers["roa_share"] <= 1
     assert not roa.numbers.get("soundness_violation")
+
+
+COUPLED = """
+[model]
+name = "two first-order units coupled through sin and tanh"
+states = ["x1", "x2"]
+[dynamics]
+x1 = "-x1 + sin(x2)/2"
+x2 = "-x2 + tanh(x1)/2"
+"""
+
+
+def test_quadratic_proves_an_exponential_bound_where_the_field_has_no_denominator(tmp_path: Path) -> None:
+    result = api.certify(model=write(tmp_path, "coupled", COUPLED), classes="quadratic")
+    q = result.conditions["quadratic"]
+    assert q.status == "certified" and q.property == "GES"
+    ges = {k: Fraction(v) for k, v in q.certificate["ges"].items()}
+    assert 0 < ges["c1"] <= ges["c2"] and ges["k"] ** 2 >= ges["c2"] / ges["c1"] and ges["rate"] > 0
+    assert q.summary.startswith("globally exponentially stable")
+    assert api.verify(result).valid
+    # the bound holds on the true loop, simulated here with numpy's functions
+    rng = np.random.default_rng(5)
+    X0 = rng.uniform(-5, 5, (200, 2))
+    field = lambda X: np.column_stack([-X[:, 0] + np.sin(X[:, 1]) / 2, -X[:, 1] + np.tanh(X[:, 0]) / 2])
+    for t in (1.0, 3.0):
+        end = rk4(field, X0, t, step=0.01)
+        bound = float(ges["k"]) * np.linalg.norm(X0, axis=1) * np.exp(-float(ges["rate"]) * t)
+        assert np.all(np.linalg.norm(end, axis=1) <= bound)
+    # a smaller k, a larger c1 or a changed rate does not verify
+    for key, factor in (("k", Fraction(1, 2)), ("c1", Fraction(3)), ("rate", Fraction(2))):
+        doc = copy.deepcopy(result.document)
+        stored = doc["conditions"]["quadratic"]["certificate"]["ges"]
+        stored[key] = str(Fraction(stored[key]) * factor)
+        assert not api.verify(doc).valid, key
+
+
+def test_quadratic_with_a_denominator_is_asymptotic_only_and_an_angle_is_not_quadratic(tmp_path: Path) -> None:
+    ilos = api.certify(model=write(tmp_path, "ilos", ILOS), classes="quadratic").conditions["quadratic"]
+    assert ilos.status == "certified" and ilos.property == "GAS" and "ges" not in ilos.certificate
+    model = parse_any_model(PENDULUM, "p.toml")
+    loop = rc.base_loop(model.system)
+    assert rc.quadratic(loop, Budget(10.0, "test")).status == "not_applicable"

@@ -112,6 +112,12 @@ def claim_sentence(cert: dict[str, Any]) -> str:
     modulo = (f" modulo 2 pi in {', '.join(angles)} (the loop is periodic in {'it' if len(angles) == 1 else 'them'})"
               if angles else "")
     eps = cert["epsilon"]
+    if "ges" in cert:
+        ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
+        return (f"globally exponentially stable: |x(t) - x_eq| <= {float(ges['k']):.6g} |x0 - x_eq| "
+                f"exp(-{float(ges['rate']):.6g} t) from every start (exactly k = {ges['k']}, rate = {ges['rate']}: "
+                f"V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} |z|^2, proved exactly on "
+                "the recasting's relations; V_text in the certificate)")
     if "level" in cert:
         level = Fraction(str(cert["level"]))
         return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "
@@ -124,6 +130,39 @@ def claim_sentence(cert: dict[str, Any]) -> str:
 
 
 # -- verify ------------------------------------------------------------------------------------------
+
+def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, str]:
+    """The exponential bound of a quadratic certificate: V quadratic in the states, no denominator,
+    ``P - c1 I`` and ``c2 I - P`` positive definite, ``rate = eps/(2 c2)`` and ``k^2 >= c2/c1`` (all
+    exact)."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    ring = loop.ring
+    n = loop.n
+    if region or loop.angles:
+        return False, "an exponential bound is stated for a global quadratic V in the states only"
+    if poly_from_json(ring, cert["denominator"], "denominator") != ring.constant(1):
+        return False, "an exponential bound needs a field without denominators (D = 1)"
+    V = poly_from_json(ring, cert["V"], "V")
+    P = [[Fraction(0)] * n for _ in range(n)]
+    for m, coefficient in ring.terms(V).items():
+        if sum(m) != 2 or any(m[n:]):
+            return False, "an exponential bound needs V quadratic in the states alone"
+        i = next(k for k in range(n) if m[k])
+        j = next(k for k in range(n - 1, -1, -1) if m[k])
+        P[i][j] = P[j][i] = coefficient if i == j else coefficient / 2
+    ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
+    eps = Fraction(str(cert["epsilon"]))
+    if set(ges) != {"c1", "c2", "rate", "k"} or ges["c1"] <= 0 or ges["c2"] <= 0 or \
+            ges["rate"] != eps / (2 * ges["c2"]) or ges["k"] < 0 or ges["k"] ** 2 < ges["c2"] / ges["c1"]:
+        return False, "the exponential bound's c1, c2, rate and k do not follow from V and epsilon"
+    if not is_positive_definite([[ges["c2"] * int(i == j) - P[i][j] for j in range(n)] for i in range(n)]):
+        return False, "c2 I - P is not positive definite: c2 does not bound V from above"
+    if not is_positive_definite([[P[i][j] - ges["c1"] * int(i == j) for j in range(n)] for i in range(n)]):
+        return False, "P - c1 I is not positive definite: c1 does not bound V from below"
+    return True, "the exponential bound follows"
+
+
 
 def verify_recast(doc: dict[str, Any]) -> list[Row]:
     """Re-check a recast loop's certificate exactly; (check, ok, message) rows."""
@@ -241,6 +280,10 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
     ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(eps), loop.relations, dec, region=region)
     if not ok:
         return False, f"decrease: {why}"
+    if "ges" in cert:
+        ok, why = _verify_ges(loop, cert, region is not None)
+        if not ok:
+            return False, why
     if c.get("summary") != claim_sentence(cert):
         return False, "the printed sentence is not the one the certificate supports"
     if cert.get("V_text") != v_text(system, V):

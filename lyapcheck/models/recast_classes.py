@@ -28,7 +28,7 @@ from typing import Any, Final, Sequence
 from lyapcheck.models.expressions import Rational
 from lyapcheck.models.recast import RecastSystem, Relation, written_poly
 from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
-                                         poly_to_json, solve_on_faces)
+                                         poly_from_json, poly_to_json, solve_on_faces)
 from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
@@ -390,15 +390,17 @@ def v_text(system: RecastSystem, V: Poly) -> str:
     return re.sub(r"\b(" + "|".join(map(re.escape, names)) + r")\b", lambda m: table[m.group(1)], text)
 
 
-def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGREES) -> ConditionResult:
-    """Search ``V`` (free, in the states and smooth auxiliaries) with positivity and a global decrease."""
+def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGREES, name: str = "sos_gas",
+            states_only: bool = False) -> ConditionResult:
+    """Search ``V`` (free, in the states and smooth auxiliaries; ``states_only``: in the states alone)
+    with positivity and a global decrease."""
     ring = loop.ring
     search = Search(ring, budget)
     tried: list[str] = []
     all_vars = loop.v_variables()
     coordinates = loop.coordinates()
     templates = [(dv, vs) for dv in degrees for vs in ([coordinates] if len(all_vars) == len(coordinates) or
-                                                        loop.angles else [coordinates, all_vars])]
+                                                        loop.angles or states_only else [coordinates, all_vars])]
     templates = [(dv, vs) for dv, vs in templates if vs] if not loop.angles else [(dv, all_vars) for dv in degrees]
     for dv, v_vars in templates:
         basis = [m for m in monomials(ring.nvars, 1, dv) if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
@@ -408,7 +410,7 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
         N, D, distinct = common_denominator(loop, names)
         dens, failed = prove_denominators(loop, distinct, search)
         if failed is not None:
-            return ConditionResult("sos_gas", "not_applicable", f"the denominator {written_poly(ring, failed)} could "
+            return ConditionResult(name, "not_applicable", f"the denominator {written_poly(ring, failed)} could "
                                    "not be proved positive on the recasting's set", property="GAS")
         l2 = state_square(loop)
         pos_terms = [(f"v{k}", ring.monomial(m)) for k, m in enumerate(basis)]
@@ -435,7 +437,7 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
                 return (V, pos, dec) if ok else None
 
             if budget.left() <= 0:
-                return ConditionResult("sos_gas", "inconclusive", f"time limit of {budget.seconds:g} s reached "
+                return ConditionResult(name, "inconclusive", f"time limit of {budget.seconds:g} s reached "
                                        f"({budget.limit_name}); tried {'; '.join(tried) or 'nothing'}",
                                        property="GAS", solver={"solves": search.log})
             # each template gets at most TEMPLATE_LIMIT_S, so that one large program leaves time to the others
@@ -454,13 +456,70 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
             V, pos, dec = found
             cert = certificate_head(loop, V, eps, D, dens)
             cert.update({"positivity": pos.to_json(ring), "decrease": dec.to_json(ring)})
-            return ConditionResult("sos_gas", "certified",
+            return ConditionResult(name, "certified",
                                    f"V(x, a(x)) >= {eps} |x - x_eq|^2 and V' <= -{eps} |x - x_eq|^2 / D with D > 0 on "
                                    "the recasting's relations (exact): globally asymptotically stable",
                                    numbers={"degree": dv}, certificate=cert, property="GAS",
                                    solver={"solves": search.log})
-    return ConditionResult("sos_gas", "not_certified", "no V found: " + "; ".join(tried), property="GAS",
+    return ConditionResult(name, "not_certified", "no V found: " + "; ".join(tried), property="GAS",
                            numbers={"reason": "; ".join(tried)}, solver={"solves": search.log})
+
+
+def quadratic(loop: Loop, budget: Budget) -> ConditionResult:
+    """``quadratic``: ``V = z^T P z`` in the state deviations alone, positive definite and decreasing
+    everywhere on the recasting's relations (GAS). Where the field has no denominator (``D = 1``),
+    ``V' <= -eps |z|^2`` and exact ``c1 <= lambda_min(P)``, ``c2 >= lambda_max(P)`` give **GES**:
+    ``|z(t)| <= k |z0| exp(-rate t)`` with ``rate = eps/(2 c2)`` and ``k >= sqrt(c2/c1)``."""
+    if loop.angles:
+        return ConditionResult("quadratic", "not_applicable", f"{', '.join(loop.angles)} enters the loop only through "
+                               "its sine and cosine: a quadratic in it is not periodic (sos_gas uses the sine and "
+                               "cosine)", property="GAS")
+    result = sos_gas(loop, budget, degrees=(2,), name="quadratic", states_only=True)
+    if result.status != "certified":
+        return result
+    ges = ges_of(loop, result.certificate)
+    if ges is not None:
+        result.certificate["ges"] = {k: str(v) for k, v in ges.items()}
+        result.property = "GES"
+        result.numbers.update({"k": float(ges["k"]), "decay_rate_per_s": float(ges["rate"])})
+    return result
+
+
+def ges_of(loop: Loop, cert: dict[str, Any]) -> dict[str, Fraction] | None:
+    """``c1``, ``c2``, ``rate`` and ``k`` of a quadratic certificate without denominators (None
+    otherwise); each exact: ``P - c1 I`` and ``c2 I - P`` positive definite (checked in rationals),
+    ``k^2 >= c2/c1``."""
+    import numpy as np
+
+    from lyapcheck import exact
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    ring = loop.ring
+    n = loop.n
+    D = poly_from_json(ring, cert["denominator"], "denominator")
+    if D != ring.constant(1):
+        return None
+    V = poly_from_json(ring, cert["V"], "V")
+    P = [[Fraction(0)] * n for _ in range(n)]
+    for m, c in ring.terms(V).items():
+        if sum(m) != 2 or any(m[n:]):
+            return None
+        i = next(k for k in range(n) if m[k])
+        j = next(k for k in range(n - 1, -1, -1) if m[k])
+        if i == j:
+            P[i][i] = c
+        else:
+            P[i][j] = P[j][i] = c / 2
+    eps = Fraction(str(cert["epsilon"]))
+    lam = np.linalg.eigvalsh(np.array([[float(x) for x in row] for row in P]))
+    c2 = Fraction(float(lam[-1]) * (1 + 1e-6)).limit_denominator(10 ** 12) + Fraction(1, 10 ** 12)
+    if not is_positive_definite([[c2 * int(i == j) - P[i][j] for j in range(n)] for i in range(n)]):
+        return None
+    # V >= eps |z|^2 is proved; P's own smallest eigenvalue is usually far larger (a tighter k)
+    c1 = Fraction(float(lam[0]) * (1 - 1e-6)).limit_denominator(10 ** 12)
+    if c1 <= eps or not is_positive_definite([[P[i][j] - c1 * int(i == j) for j in range(n)] for i in range(n)]):
+        c1 = eps
+    return {"c1": c1, "c2": c2, "rate": eps / (2 * c2), "k": exact.sqrt_upper(c2 / c1, 12)}
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""The classes of a loop with functions, run in turn: ``linearization``, ``sos_gas``, ``roa``,
+"""The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
 ``candidate`` (:mod:`lyapcheck.models.recast_classes` has each condition; this module orders them,
 gives each its time budget, and runs ``roa``'s V-s iteration, :mod:`lyapcheck.models.recast_improve`).
 """
@@ -14,7 +14,8 @@ from lyapcheck.models.recast import RecastModel, written_poly
 from lyapcheck.models.recast_classes import (EPSILONS, Loop, base_loop, best_region, certify_region,
                                              common_denominator, jacobian, lie, linearization,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
-                                             quadratic_candidate, refute_global, region_of_attraction, sos_gas,
+                                             quadratic, quadratic_candidate, refute_global, region_of_attraction,
+                                             sos_gas,
                                              certificate_head, for_v, state_square, v_names)
 from lyapcheck.models.recast_improve import improved_regions
 from lyapcheck.models.search import Budget, BudgetExhausted, Search
@@ -24,7 +25,7 @@ from lyapcheck.sos.polynomials import Poly, to_fmpq
 # -- the model's classes ------------------------------------------------------------------------------
 
 #: the classes a recast loop takes, in order
-RECAST_CLASSES: Final = ("linearization", "sos_gas", "roa", "candidate")
+RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate")
 
 
 def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float
@@ -44,6 +45,11 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
     if "linearization" in classes:
         results["linearization"] = lin
         seconds["linearization"] = time.perf_counter() - start
+    if "quadratic" in classes:
+        start = time.perf_counter()
+        results["quadratic"] = refute_global(loop, "quadratic") or \
+            quadratic(loop, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        seconds["quadratic"] = time.perf_counter() - start
     if "sos_gas" in classes:
         start = time.perf_counter()
         results["sos_gas"] = refute_global(loop, "sos_gas") or \
@@ -51,9 +57,11 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         seconds["sos_gas"] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()
-        if results.get("sos_gas") is not None and results["sos_gas"].status == "certified":
+        gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
+                    and results[c].status == "certified"), None)
+        if gas is not None:
             results["roa"] = ConditionResult("roa", "not_applicable", "global asymptotic stability is certified "
-                                             "(sos_gas): the region of attraction is the whole state space",
+                                             f"({gas}): the region of attraction is the whole state space",
                                              property="ROA")
         else:
             results["roa"] = run_roa(loop, lin, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
