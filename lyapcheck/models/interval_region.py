@@ -44,8 +44,8 @@ from lyapcheck.sos.polynomials import Poly, Ring
 #: the most cells a proof may examine (decrease and boundary together) before it gives up
 INTERVAL_CELL_LIMIT: Final = 400_000
 #: the finest bisection: a cell is not split below this fraction of the box's width in each state
-#: (with MAGNITUDE_BITS + DYADIC_BITS + 16 + 1 <= 53 every corner and midpoint is an exact double)
-INTERVAL_MIN_WIDTH: Final = Fraction(1, 2 ** 16)
+#: (with MAGNITUDE_BITS + DYADIC_BITS + 13 + 1 <= 53 every corner and midpoint is an exact double)
+INTERVAL_MIN_WIDTH: Final = Fraction(1, 2 ** 13)
 #: the local box N = [-r, r]^n: the largest r tried is the box's smallest half-width over 2^this,
 #: halved until the Hessian test passes, at most LOCAL_HALVINGS times
 LOCAL_FIRST_SHIFT: Final = 3
@@ -94,6 +94,8 @@ class IntervalProof:
     boundary_cells: int
     local_radius: Fraction | None
     seconds: float
+    #: V at a point of the set where V' >= 0 was proved (the claim is then false at this level)
+    counterexample_v: float | None = None
 
 
 class _Cells:
@@ -143,14 +145,15 @@ def _mean_value_negative(lie: LieDerivative, cells: _Cells, cell: tuple[tuple[fl
     return bool(total < 0)
 
 
-def _second_order_negative(lie: LieDerivative, cells: _Cells, cell: tuple[tuple[float, float], ...]) -> bool:
+def _second_order_negative(lie: LieDerivative, cells: _Cells, cell: tuple[tuple[float, float], ...]) -> bool | None:
     """``g < 0`` on the cell by the second-order form ``g(m) + grad g(m) . t + t^T H(cell) t / 2`` with
-    ``|t_i| <= r_i`` (``H`` enclosed over the cell: Taylor's theorem with the Lagrange remainder)."""
-    hess = lie.jet(cells.balls(cell), 2).hess
-    if hess is None:
-        return False
+    ``|t_i| <= r_i`` (``H`` enclosed over the cell: Taylor's theorem with the Lagrange remainder);
+    ``None`` when ``g(m) >= 0`` is proved at the centre ``m`` itself (no bisection can help there)."""
     at = lie.jet(cells.centers(cell), 1)
-    if at.grad is None:
+    if at.value >= 0 and any(a + b != 0 for a, b in cell):  # (at the equilibrium g = 0: no counterexample)
+        return None
+    hess = lie.jet(cells.balls(cell), 2).hess
+    if hess is None or at.grad is None:
         return False
     radii = [flint.arb((b - a) / 2) for a, b in cell]  # exact: dyadic
     zero = flint.arb(0)
@@ -270,8 +273,19 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
             continue  # inside N: part 3
         if _v_above(lie, cells, cell, level, mean_value=False):
             continue
-        if lie(cells.balls(cell)) < 0 or _second_order_negative(lie, cells, cell):
+        if lie(cells.balls(cell)) < 0:
             continue
+        second = _second_order_negative(lie, cells, cell)
+        if second:
+            continue
+        if second is None:
+            centre = cells.centers(cell)
+            v = lie.value_of_v(centre)
+            if v <= level:  # a point of the set where V' >= 0: the claim is false at this level
+                where = ", ".join(f"{s} - eq = {(a + b) / 2:.6g}" for s, (a, b) in zip(system.states, cell))
+                return IntervalProof(False, f"V' >= 0 at {where}, where V = {float(v.mid()):.6g} <= level (proved): "
+                                     "the set is not a region of attraction at this level", count, boundary, r,
+                                     time.perf_counter() - start, float(v.mid()))
         if _v_above(lie, cells, cell, level, mean_value=True):
             continue
         halves = cells.split(cell)

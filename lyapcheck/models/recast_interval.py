@@ -19,7 +19,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Final
 
-from lyapcheck.models.interval_region import IntervalClaim, IntervalProof, prove_region
+from lyapcheck.models.interval_region import IntervalClaim, IntervalProof, dyadic_floor, prove_region
 from lyapcheck.models.recast_classes import Loop, v_text
 from lyapcheck.models.recast_sos import poly_from_json, poly_to_json
 from lyapcheck.models.search import Budget
@@ -29,6 +29,9 @@ from lyapcheck.results import ConditionResult
 RETRY_LEVEL_FACTOR: Final = Fraction(9, 10)
 #: proposals tried (the first level, then lowered)
 INTERVAL_ATTEMPTS: Final = 3
+#: the longest one proof attempt may take (a proof that fails deep in its bisection can take long;
+#: the recasting's route must keep time for itself)
+ATTEMPT_LIMIT_S: Final = 15.0
 #: what the route proves with, in every sentence and certificate
 METHOD: Final = "ball arithmetic (python-flint arb) on the true field"
 
@@ -49,7 +52,7 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any]) -> ConditionR
         if budget.left() <= 0:
             reasons.append("out of time")
             break
-        proof = prove_region(system, claim, deadline=time.perf_counter() + budget.left())
+        proof = prove_region(system, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
         if proof.ok:
             cert = certificate(loop, claim, proof)
             return ConditionResult("roa", "certified", claim_sentence(cert), property="ROA", certificate=cert,
@@ -59,7 +62,12 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any]) -> ConditionR
                                             "proof_seconds": proof.seconds, "sampled_share": fitted.sampled_share,
                                             "tried": reasons + [f"level {float(claim.level):.6g}: proved"]})
         reasons.append(f"level {float(claim.level):.6g}: {proof.why}")
-        claim = IntervalClaim(claim.V, claim.level * RETRY_LEVEL_FACTOR, claim.lo, claim.hi)
+        lower = claim.level * RETRY_LEVEL_FACTOR
+        if proof.counterexample_v is not None:  # below the point where V' >= 0
+            lower = min(lower, dyadic_floor(Fraction(proof.counterexample_v) * RETRY_LEVEL_FACTOR))
+        if lower <= 0:
+            break
+        claim = IntervalClaim(claim.V, lower, claim.lo, claim.hi)
     return "ball arithmetic: " + "; ".join(reasons)
 
 
