@@ -173,7 +173,9 @@ def test_a_level_set_reaching_the_power_systems_saddle_is_not_proved() -> None:
     # {V <= 2} within the box contains (pi/3, 0), where V = 1.097
     claim = IntervalClaim(V, Fraction(2), (Fraction(-2), Fraction(-2)), (Fraction(2), Fraction(2)))
     proof = prove_region(system, claim)
-    assert not proof.ok and "not proved" in proof.why
+    # near the saddle V' > 0 is proved at a point of the set: the claim is false, and said so
+    assert not proof.ok and "V' >= 0 at" in proof.why and proof.counterexample_v is not None
+    assert proof.counterexample_v <= 2
 
 
 def _rk4(f, X: np.ndarray, horizon: float, step: float = 0.02) -> np.ndarray:
