@@ -284,7 +284,7 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
             if v <= level:  # a point of the set where V' >= 0: the claim is false at this level
                 where = ", ".join(f"{s} - eq = {(a + b) / 2:.6g}" for s, (a, b) in zip(system.states, cell))
                 return IntervalProof(False, f"V' >= 0 at {where}, where V = {float(v.mid()):.6g} <= level (proved): "
-                                     "the set is not a region of attraction at this level", count, boundary, r,
+                                     "V does not decrease on the whole set at this level", count, boundary, r,
                                      time.perf_counter() - start, float(v.mid()))
         if _v_above(lie, cells, cell, level, mean_value=True):
             continue
