@@ -246,3 +246,48 @@ def test_a_saturated_loop_gets_a_region_through_its_kinks(tmp_path: Path) -> Non
     assert len(inside) > 200
     end = _rk4(lambda Y: np.column_stack([Y[:, 1], np.clip(-Y[:, 0] - 2 * Y[:, 1], -1, 1)]), inside, 60.0)
     assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-2)
+
+
+PENDULUM = """
+[model]
+name = "damped pendulum"
+states = ["theta", "omega"]
+[dynamics]
+theta = "omega"
+omega = "-sin(theta) - omega"
+[domain]
+theta = [-3.14159, 3.14159]
+omega = [-4, 4]
+"""
+
+
+def test_a_candidate_with_functions_gets_its_sublevel_set_proved_on_the_true_loop(tmp_path: Path) -> None:
+    """The energy plus a cross term is not positive definite everywhere (no global claim), but a
+    sublevel set around the equilibrium is a region of attraction, proved by ball arithmetic."""
+    path = tmp_path / "pendulum.toml"
+    path.write_text(PENDULUM)
+    result = api.certify(model=path, classes="candidate", candidate="1 - cos(theta) + omega**2/2 + theta*omega/4")
+    cand = result.conditions["candidate"]
+    assert cand.status == "certified" and cand.certificate["kind"] == "interval"
+    assert "V(x, a(x)) <=" in cand.summary and cand.certificate["auxiliaries"]  # V uses cos(theta)
+    assert api.verify(result).valid
+    level = float(Fraction(cand.certificate["level"]))
+    box = cand.certificate["box"]
+    X = np.column_stack([g.ravel() for g in np.meshgrid(np.linspace(-3, 3, 41), np.linspace(-3, 3, 41))])
+    V = 1 - np.cos(X[:, 0]) + X[:, 1] ** 2 / 2 + X[:, 0] * X[:, 1] / 4
+    inside = X[(V <= level) & (np.abs(X[:, 0]) <= float(Fraction(box["theta"][1])))
+               & (np.abs(X[:, 1]) <= float(Fraction(box["omega"][1])))]
+    assert len(inside) > 100
+    end = _rk4(lambda Y: np.column_stack([Y[:, 1], -np.sin(Y[:, 0]) - Y[:, 1]]), inside, 40.0)
+    assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-2)
+    doc = copy.deepcopy(result.document)
+    doc["conditions"]["candidate"]["certificate"]["level"] = str(Fraction(cand.certificate["level"]) * 3)
+    assert not api.verify(doc).valid
+
+
+def test_a_candidate_that_is_not_flat_at_the_equilibrium_gets_no_set(tmp_path: Path) -> None:
+    path = tmp_path / "pendulum.toml"
+    path.write_text(PENDULUM)
+    # V = sin(theta) + omega^2 is 0 at the equilibrium but its gradient is not: no Lyapunov function
+    cand = api.certify(model=path, classes="candidate", candidate="sin(theta) + omega**2").conditions["candidate"]
+    assert cand.status != "certified"

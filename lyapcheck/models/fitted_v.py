@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Final, Sequence
+from typing import Any, Callable, Final, Sequence
 
 import numpy as np
 
@@ -171,40 +171,94 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | s
         if abs(c) > 1e-12:
             terms[tuple(list(mon) + [0] * (ring.nvars - n))] = _dyadic(float(c))
     V: Poly = ring.from_terms({m: c for m, c in terms.items() if c})
-    # the level: under the smallest V where a fine grid sees V' >= 0 (away from 0) or on the edge
-    fine = _grid(blo, bhi, LEVEL_GRID[n])
-    Ff = field_values(system, fine + eq)
-    Vf, dVf = _columns(fine, Ff, P0, mons)
-    vf, dvf = Vf @ w, dVf @ w
+    def values(Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        Vz, dVz = _columns(Z, field_values(system, Z + eq), P0, mons)
+        return Vz @ w, dVz @ w
+
+    proposal = _level_and_box(system, V, values, blo, bhi, local, 1.0)
+    if isinstance(proposal, str):
+        return proposal
+    dev_in = converges & np.all((Z >= lo) & (Z <= hi), axis=1)
+    sampled = float(np.mean((Vc[dev_in] @ w) <= float(proposal.level))) if dev_in.any() else 0.0
+    return FittedV(proposal, sampled)
+
+
+def _level_and_box(system: RecastSystem, V: Poly, values: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+                   blo: np.ndarray, bhi: np.ndarray, local: float, cap: float | None) -> IntervalClaim | str:
+    """The level proposed for ``V`` (``values(Z)``: V and V' at deviations, floats): a little under
+    the smallest V where a fine grid of the box ``[blo, bhi]`` sees ``V' >= 0`` (away from the
+    equilibrium) or on the box's edge, lowered again where random points of the set see it; and the
+    box around the set, widened. ``cap``: the level is at most that."""
+    from scipy.ndimage import label
+
+    n = system.n
+    count = LEVEL_GRID[n]
+    fine = _grid(blo, bhi, count)
+    vf, dvf = values(fine)
     rf = np.sum(fine ** 2, axis=1)
     fine_edge = np.any(np.isclose(fine, blo) | np.isclose(fine, bhi), axis=1)
-    worst = (dvf >= 0) & (rf > (0.05 * local) ** 2) | ~np.isfinite(dvf) | fine_edge
-    top = float(np.min(vf[worst])) if worst.any() else 1.0
-    level_f = LEVEL_SHARE * min(top, 1.0)
-    if level_f <= 0:
-        return "the fitted V decreases on no sampled level set"
-    under = vf <= level_f
-    step = (bhi - blo) / (LEVEL_GRID[n] - 1)
+    worst = (dvf >= 0) & (rf > (0.05 * local) ** 2) | ~np.isfinite(dvf) | ~np.isfinite(vf) | fine_edge
+    centre = int(np.argmin(rf))
+
+    def component(c: float) -> np.ndarray:
+        """The grid points of {V <= c} connected to the equilibrium's."""
+        labels, _ = label((np.nan_to_num(vf, nan=np.inf) <= c).reshape((count,) * n))
+        flat = labels.ravel()
+        return flat == flat[centre] if flat[centre] else np.zeros(len(flat), dtype=bool)
+
+    # the largest level whose component holds no point where V' >= 0 (bisection: it grows with c)
+    low, high = 0.0, float(np.nanmax(vf[np.isfinite(vf)])) if cap is None else cap
+    if not component(high)[worst].any():
+        low = high
+    else:
+        for _ in range(40):
+            mid = (low + high) / 2
+            low, high = (mid, high) if not component(mid)[worst].any() else (low, mid)
+    level_f = LEVEL_SHARE * low
+    if not level_f > 0:
+        return "V decreases on no sampled level set"
+    under = component(level_f)
+    step = (bhi - blo) / (count - 1)
     zlo = np.maximum(fine[under].min(axis=0) - 2 * step, blo)
     zhi = np.minimum(fine[under].max(axis=0) + 2 * step, bhi)
     # random points of the set between the grid's: a V' >= 0 there lowers the level before any proof
     rng = np.random.default_rng(0)
     for _ in range(LEVEL_CHECK_ROUNDS):
         R = zlo + (zhi - zlo) * rng.random((LEVEL_CHECK_POINTS, n))
-        Vr, dVr = _columns(R, field_values(system, R + eq), P0, mons)
-        vr, dvr = Vr @ w, dVr @ w
+        vr, dvr = values(R)
         rr = np.sum(R ** 2, axis=1)
         violating = (vr <= level_f) & ((dvr >= -1e-9 * rr) | ~np.isfinite(dvr)) & (rr > (0.05 * local) ** 2)
         if not violating.any():
             break
         level_f = LEVEL_SHARE * float(np.min(vr[violating]))
-        if level_f <= 0:
-            return "the fitted V decreases on no sampled level set"
-    claim = IntervalClaim(V, dyadic_floor(Fraction(level_f)), tuple(dyadic_floor(Fraction(float(x))) for x in zlo),
-                          tuple(dyadic_ceil(Fraction(float(x))) for x in zhi))
-    dev_in = converges & np.all((Z >= lo) & (Z <= hi), axis=1)
-    sampled = float(np.mean((Vc[dev_in] @ w) <= level_f)) if dev_in.any() else 0.0
-    return FittedV(claim, sampled)
+        if not level_f > 0:
+            return "V decreases on no sampled level set"
+    return IntervalClaim(V, dyadic_floor(Fraction(level_f)), tuple(dyadic_floor(Fraction(float(x))) for x in zlo),
+                         tuple(dyadic_ceil(Fraction(float(x))) for x in zhi))
 
 
-__all__ = ["FittedV", "fit_v"]
+def propose_level(system: RecastSystem, V: Poly, box: tuple[Any, Any]) -> IntervalClaim | str:
+    """A claim for a given ``V`` (a user's candidate, over the states and the smooth auxiliaries, in
+    deviations): its level and box from sampling (``V'`` by a central difference along the field)."""
+    from lyapcheck.models.recast_numeric import field_values, v_values
+
+    n = system.n
+    if n not in FIT_GRID:
+        return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
+    lo, hi = (np.asarray(b, dtype=float) for b in box)
+    eq = np.array([float(system.values[s]) for s in system.states])
+    centre, half = (lo + hi) / 2, (hi - lo) / 2
+    blo, bhi = centre - FIT_GROWTH * half, centre + FIT_GROWTH * half
+    local = FIT_LOCAL_SHARE * float(np.min(half))
+
+    def values(Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        F = field_values(system, Z + eq)
+        h = 1e-6 * max(1.0, float(np.max(np.abs(bhi - blo))))
+        with np.errstate(all="ignore"):
+            dv = (v_values(system, V, Z + h * F) - v_values(system, V, Z - h * F)) / (2 * h)
+        return v_values(system, V, Z), dv
+
+    return _level_and_box(system, V, values, blo, bhi, local, None)
+
+
+__all__ = ["FittedV", "fit_v", "propose_level"]

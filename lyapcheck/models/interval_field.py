@@ -332,6 +332,49 @@ class LieDerivative:
         return Jet(value, grad, hess)
 
 
+class RecastLieDerivative:
+    """``g`` for a ``V`` over the states and the smooth auxiliaries (``1 - cos(theta) + omega^2/2``):
+    ``V' = G / D`` with ``G = grad V . N`` from the recasting's flows ``N / D`` (computed exactly by
+    the caller), evaluated on the true variables ``(x, a(x))`` carried as jets of the states, so the
+    chain rule through each function is the jets' own."""
+
+    def __init__(self, loop: BallLoop, ring: Ring, V: Poly, G: Poly, D: Poly) -> None:
+        self.loop = loop
+        self.n = loop.n
+        self.V = CompiledPoly(ring, V)
+        self.G = CompiledPoly(ring, G)
+        self.D = None if D == ring.constant(1) else CompiledPoly(ring, D)
+        values = loop.system.values
+        self.shift = [ball(values[name]) if name in values else None for name in ring.names]
+
+    def _deviations(self, z: Sequence[Number]) -> list[Number]:
+        out = []
+        for v, s in zip(self.loop.variables(z), self.shift):
+            out.append(v if s is None else v - s)
+        return out
+
+    def _ratio(self, dev: list[Number]) -> Number:
+        zero = flint.arb(0)
+        g = self.G(dev, zero)
+        return g if self.D is None else apply("reciprocal", self.D(dev, zero)) * g
+
+    def value_of_v(self, z: Sequence[Ball]) -> Ball:
+        return self.V(self._deviations(z), flint.arb(0))
+
+    def gradient_of_v(self, z: Sequence[Ball]) -> list[Ball]:
+        v = self.V(self._deviations([Jet.variable(zi, i, self.n, 1) for i, zi in enumerate(z)]), flint.arb(0))
+        if not isinstance(v, Jet):
+            return [flint.arb(0)] * self.n
+        return v.grad if v.grad is not None else [flint.arb(0, float("inf"))] * self.n
+
+    def __call__(self, z: Sequence[Ball]) -> Ball:
+        return self._ratio(self._deviations(z))
+
+    def jet(self, z: Sequence[Ball], order: int) -> Jet:
+        g = self._ratio(self._deviations([Jet.variable(zi, i, self.n, order) for i, zi in enumerate(z)]))
+        return g if isinstance(g, Jet) else Jet.constant(g, self.n, order)
+
+
 def negative_definite(H: list[list[Ball]]) -> bool:
     """Every symmetric matrix whose lower triangle lies in the balls of ``H`` is negative definite:
     the Cholesky factorization of ``-H`` in ball arithmetic succeeds with every pivot > 0."""
@@ -353,4 +396,5 @@ def negative_definite(H: list[list[Ball]]) -> bool:
     return True
 
 
-__all__ = ["Jet", "apply", "ball", "BallLoop", "CompiledPoly", "LieDerivative", "negative_definite"]
+__all__ = ["Jet", "apply", "ball", "BallLoop", "CompiledPoly", "LieDerivative", "RecastLieDerivative",
+           "negative_definite"]

@@ -211,8 +211,14 @@ def low_order_terms(ring: Ring, V: Poly, n: int) -> bool:
     return False
 
 
-def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None) -> IntervalProof:
-    """Prove the claim's three parts (module docstring) on the true field; deterministic."""
+def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None,
+                 lie: Any = None, flat: bool | None = None) -> IntervalProof:
+    """Prove the claim's three parts (module docstring) on the true field; deterministic.
+
+    ``V`` over the states alone by default; for a ``V`` that uses auxiliaries, ``lie`` is its
+    :class:`~lyapcheck.models.interval_field.RecastLieDerivative` and ``flat`` whether ``V`` and its
+    gradient in the states vanish at the equilibrium, decided exactly by the caller (part 3 needs it).
+    """
     start = time.perf_counter()
     ring = system.ring
     n = system.n
@@ -227,9 +233,12 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
                       "equilibrium strictly inside")
     if claim.level <= 0:
         return failed("the level must be > 0")
-    if low_order_terms(ring, claim.V, n):
-        return failed("V must be a polynomial in the state deviations without constant or linear terms")
-    lie = LieDerivative(BallLoop(system), ring, claim.V)
+    if lie is None:
+        if low_order_terms(ring, claim.V, n):
+            return failed("V must be a polynomial in the state deviations without constant or linear terms")
+        lie = LieDerivative(BallLoop(system), ring, claim.V)
+    elif not flat:
+        return failed("V and its gradient in the states must vanish at the equilibrium (checked exactly)")
     level = flint.arb(flint.fmpq(claim.level.numerator, claim.level.denominator))
     cells = _Cells(claim.lo, claim.hi)
     box = tuple((float(l), float(h)) for l, h in zip(claim.lo, claim.hi))

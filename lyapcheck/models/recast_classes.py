@@ -716,7 +716,32 @@ def jacobian(loop: Loop) -> list[list[Fraction]] | str:
     """The exact Jacobian of the true field at the equilibrium (chain rule through the
     auxiliaries), or why there is none (a non-differentiable function there, or an irrational entry)."""
     system = loop.system
-    ring = loop.ring
+    grads = variable_gradients(loop)
+    if isinstance(grads, str):
+        return grads
+    J = []
+    for r in system.field:
+        num, den = system.shift(r.numerator), system.shift(r.denominator)
+        d0 = _at_origin(loop, den)
+        if d0 is None or d0 == 0:
+            return "a denominator of the field is irrational or 0 at the equilibrium"
+        row = _total_gradient(loop, num, grads)
+        if isinstance(row, str):
+            return row
+        J.append([x / d0 for x in row])
+    return J
+
+
+def gradient_at_equilibrium(loop: Loop, p: Poly) -> list[Fraction] | str:
+    """The exact gradient in the states, at the equilibrium, of ``p`` (a polynomial in the
+    deviations of the states and auxiliaries), by the chain rule; or why there is none."""
+    grads = variable_gradients(loop)
+    return grads if isinstance(grads, str) else _total_gradient(loop, p, grads)
+
+
+def variable_gradients(loop: Loop) -> dict[str, list[Fraction]] | str:
+    """Each state's and auxiliary's gradient in the states at the equilibrium (exact), or why not."""
+    system = loop.system
     n = loop.n
     # d a_k / d z_j at the origin, in order
     grads: dict[str, list[Fraction]] = {s: [Fraction(int(i == j)) for j in range(n)] for i, s in enumerate(system.states)}
@@ -747,17 +772,7 @@ def jacobian(loop: Loop) -> list[list[Fraction]] | str:
             if abs(u0) == a.limit:
                 return f"{a.written_as}: sat is not differentiable at its corner (the equilibrium)"
             grads[a.name] = list(du) if abs(u0) < a.limit else [Fraction(0)] * n
-    J = []
-    for r in system.field:
-        num, den = system.shift(r.numerator), system.shift(r.denominator)
-        d0 = _at_origin(loop, den)
-        if d0 is None or d0 == 0:
-            return "a denominator of the field is irrational or 0 at the equilibrium"
-        row = _total_gradient(loop, num, grads)
-        if isinstance(row, str):
-            return row
-        J.append([x / d0 for x in row])
-    return J
+    return grads
 
 
 def _argument_value(system: RecastSystem, a: Any) -> Fraction:

@@ -52,7 +52,7 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any]) -> ConditionR
         if budget.left() <= 0:
             reasons.append("out of time")
             break
-        proof = prove_region(system, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
+        proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
         if proof.ok:
             cert = certificate(loop, claim, proof)
             return ConditionResult("roa", "certified", claim_sentence(cert), property="ROA", certificate=cert,
@@ -64,6 +64,74 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any]) -> ConditionR
         reasons.append(f"level {float(claim.level):.6g}: {proof.why}")
         lower = claim.level * RETRY_LEVEL_FACTOR
         if proof.counterexample_v is not None:  # below the point where V' >= 0
+            lower = min(lower, dyadic_floor(Fraction(proof.counterexample_v) * RETRY_LEVEL_FACTOR))
+        if lower <= 0:
+            break
+        claim = IntervalClaim(claim.V, lower, claim.lo, claim.hi)
+    return "ball arithmetic: " + "; ".join(reasons)
+
+
+def uses_auxiliaries(loop: Loop, V: Any) -> bool:
+    return any(any(m[loop.n:]) for m in loop.ring.terms(V))
+
+
+def derivative_of(loop: Loop, V: Any) -> tuple[Any, bool] | str:
+    """For a ``V`` that uses auxiliaries: its ball evaluator (``V' = G/D`` from the recasting's
+    flows) and whether ``V`` and its gradient in the states vanish at the equilibrium (exact);
+    ``(None, True)`` for a ``V`` over the states alone (the prover's own evaluator); or why not."""
+    from lyapcheck.models.interval_field import BallLoop, RecastLieDerivative
+    from lyapcheck.models.recast_classes import (_at_origin, common_denominator, for_v, gradient_at_equilibrium, lie,
+                                                 v_names)
+
+    if not uses_auxiliaries(loop, V):
+        return None, True
+    loop = for_v(loop, V)
+    try:
+        N, D, _ = common_denominator(loop, v_names(loop, V))
+        G = lie(loop, V, N)
+    except ValueError as exc:
+        return str(exc)
+    gradient = gradient_at_equilibrium(loop, V)
+    flat = _at_origin(loop, V) == 0 and not isinstance(gradient, str) and not any(gradient)
+    return RecastLieDerivative(BallLoop(loop.system), loop.ring, V, G, D), flat
+
+
+def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None) -> IntervalProof:
+    """:func:`prove_region` with the evaluator ``claim.V`` needs (one path for the search and ``verify``)."""
+    how = derivative_of(loop, claim.V)
+    if isinstance(how, str):
+        return IntervalProof(False, how, 0, 0, None, 0.0)
+    evaluator, flat = how
+    return prove_region(loop.system, claim, deadline=deadline, lie=evaluator, flat=flat)
+
+
+def interval_candidate(loop: Loop, V: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+    """``candidate``'s region by ball arithmetic: the user's ``V`` (it may use the loop's functions),
+    its largest level where sampling sees ``V' < 0``, proved on the true field."""
+    import time
+
+    from lyapcheck.models.fitted_v import propose_level
+
+    proposal = propose_level(loop.system, V, box)
+    if isinstance(proposal, str):
+        return proposal
+    claim = proposal
+    reasons = []
+    for _ in range(INTERVAL_ATTEMPTS):
+        if budget.left() <= 0:
+            reasons.append("out of time")
+            break
+        proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
+        if proof.ok:
+            cert = certificate(loop, claim, proof)
+            return ConditionResult("candidate", "certified", claim_sentence(cert), property="ROA", certificate=cert,
+                                   numbers={"level": float(claim.level), "V_from": "the candidate, proved by " + METHOD,
+                                            "cells": proof.cells, "boundary_cells": proof.boundary_cells,
+                                            "proof_seconds": proof.seconds,
+                                            "tried": reasons + [f"level {float(claim.level):.6g}: proved"]})
+        reasons.append(f"level {float(claim.level):.6g}: {proof.why}")
+        lower = claim.level * RETRY_LEVEL_FACTOR
+        if proof.counterexample_v is not None:
             lower = min(lower, dyadic_floor(Fraction(proof.counterexample_v) * RETRY_LEVEL_FACTOR))
         if lower <= 0:
             break
@@ -96,8 +164,10 @@ def claim_of(loop: Loop, cert: dict[str, Any]) -> IntervalClaim:
 def claim_sentence(cert: dict[str, Any]) -> str:
     """What the certificate proves, from the certificate alone (``verify`` re-makes and compares)."""
     level = Fraction(str(cert["level"]))
+    n = len(cert["box"])
+    written = "V(x, a(x))" if any(any(e[n:]) for _, e in cert["V"]["terms"]) else "V(x)"
     box = ", ".join(f"{s} - eq in [{float(Fraction(a)):.6g}, {float(Fraction(b)):.6g}]" for s, (a, b) in cert["box"].items())
-    return (f"region of attraction: every trajectory of the true loop starting where V(x) <= {float(level):.6g} "
+    return (f"region of attraction: every trajectory of the true loop starting where {written} <= {float(level):.6g} "
             f"(exactly {level}) with {box} converges to the equilibrium itself (V > level on that box's boundary, "
             f"V' < 0 on the set except at the equilibrium; proved by {METHOD}, with an exact Hessian argument at the "
             "equilibrium; V_text in the certificate)")
@@ -115,7 +185,7 @@ def check_interval(loop: Loop, c: dict[str, Any]) -> tuple[bool, str]:
     claim = claim_of(loop, cert)
     if c.get("level") is not None and c.get("level") != float(claim.level):
         return False, "the stated level is not the certificate's"
-    proof = prove_region(system, claim)
+    proof = prove(loop, claim)
     if not proof.ok:
         return False, f"the ball-arithmetic proof does not go through: {proof.why}"
     if c.get("summary") != claim_sentence(cert):
@@ -126,4 +196,4 @@ def check_interval(loop: Loop, c: dict[str, Any]) -> tuple[bool, str]:
                   f"box of half-width {proof.local_radius} by the Hessian), by {METHOD}")
 
 
-__all__ = ["interval_roa", "check_interval", "claim_sentence", "METHOD"]
+__all__ = ["interval_roa", "interval_candidate", "check_interval", "claim_sentence", "METHOD"]

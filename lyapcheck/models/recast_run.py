@@ -189,6 +189,7 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
     if failed is not None:
         return ConditionResult("candidate", "not_applicable", f"the denominator {written_poly(ring, failed)} could not "
                                "be proved positive on the recasting's set")
+    positive = True
     for eps in EPSILONS:
         pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pc")
         if pos is None:
@@ -202,9 +203,20 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
                                    "relations (exact)", certificate=cert, property="GAS")
         break
     else:
+        positive = False
+    from lyapcheck.models.recast_interval import interval_candidate
+
+    # a sublevel set on the true field (no global positivity needed: the set is compact and V' < 0 on it)
+    interval = interval_candidate(loop, V, budget, box)
+    if isinstance(interval, ConditionResult):
+        simulated_check(loop, interval, box)
+        return interval
+    if not positive:
         return ConditionResult("candidate", "not_certified", "the candidate could not be proved positive definite in "
-                               "the states (V >= eps |x - x_eq|^2) on the recasting's relations", property="ROA")
+                               "the states (V >= eps |x - x_eq|^2) on the recasting's relations, and no sublevel set "
+                               f"was proved on the true field ({interval})", property="ROA")
     region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
+    region.numbers.setdefault("tried_first", interval)
     if region.status != "certified":
         region.summary = ("the candidate's derivative is not negative definite (no strict global decrease was proved; "
                           "V' <= 0 alone needs LaSalle's argument, which this class does not make) and no sublevel set "
