@@ -41,7 +41,9 @@ took (which the store does not keep: a wall time would make a resumed store diff
 uninterrupted one).
 
 * A point: :func:`lyapcheck.models.certify.certify_model` on the model with the point's exact
-  parameters (``Fraction`` of the stored float).
+  parameters (``Fraction`` of the stored float); for a loop with functions,
+  :func:`lyapcheck.models.recast_certify.certify_recast` on the model text read again with them
+  (:meth:`sweeps.spec.ModelSweepSpec.model_at`), cross-checked by :mod:`sweeps.recast_crosscheck`.
 * A box: first the linearization, exactly, at the box's corners (milliseconds): an unstable corner
   proves that no stability class can certify the box (its status is ``refuted``, and the stability
   classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box.
@@ -61,6 +63,7 @@ import json
 import math
 import threading
 import time
+from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
 from typing import Any, Callable, Final, Mapping, Sequence
@@ -76,6 +79,7 @@ from sweeps.schema import (
     BOUND_CLASSES, BOX_STATUS_CODES, DISTURBANCE_SCENARIOS, FIGURES, MARGIN_SOURCE, OUTPUT_FIGURES, STATUS_CODES,
     VARIABLES, point_variables, status_code,
 )
+from sweeps.crosscheck import CrossCheck
 from sweeps.soundness import BOUND_REL_TOL, WORST_CASE_SCREENING_ONLY, violations
 from sweeps.spec import ModelSweepSpec, SweepSpec, cached_model_spec, cached_spec, window_box
 
@@ -400,12 +404,18 @@ def _model_empty(spec: ModelSweepSpec, n: int) -> dict[str, np.ndarray]:
     return out
 
 
+#: keys of a condition that hold solver logs or wall times: left out of a stored document (they would
+#: make the store's bytes depend on the machine's load; ``verify`` does not read them). ``proof_seconds``:
+#: the ball-arithmetic proof of ``roa`` on a loop with functions
+UNSTORED_KEYS: Final = ("solver", "proof_seconds")
+
+
 def certificate_json(document: dict[str, Any]) -> str:
-    """The document as stored: its conditions without solver logs. Keys stay in the document's own
-    order (deterministic: the builder's), never sorted: a box lists the model's parameters in the
-    model's order, which ``verify`` checks."""
+    """The document as stored: its conditions without solver logs and wall times. Keys stay in the
+    document's own order (deterministic: the builder's), never sorted: a box lists the model's
+    parameters in the model's order, which ``verify`` checks."""
     doc = dict(document)
-    doc["conditions"] = {name: {k: v for k, v in cond.items() if k != "solver"}
+    doc["conditions"] = {name: {k: v for k, v in cond.items() if k not in UNSTORED_KEYS}
                          for name, cond in document["conditions"].items()}
     return json.dumps(doc, separators=(",", ":"))
 
@@ -448,8 +458,12 @@ def _cross(spec: ModelSweepSpec, document: dict[str, Any], points: Sequence[dict
            out: dict[str, np.ndarray], j: int) -> None:
     from sweeps.crosscheck import cross_check
 
-    found = cross_check(spec.model, document, points, starts=spec.simulation.starts, seed=seed,
-                        worst_case=spec.simulation.worst_case)
+    _store_cross(cross_check(spec.polynomial, document, points, starts=spec.simulation.starts, seed=seed,
+                             worst_case=spec.simulation.worst_case), out, j)
+
+
+def _store_cross(found: CrossCheck, out: dict[str, np.ndarray], j: int) -> None:
+    """A cross-check's figures into row ``j``."""
     out["cross_check_points"][j] = found.points
     out["cross_check_trajectories"][j] = found.trajectories
     out["cross_check_worst_rise"][j] = found.worst_rise
@@ -465,25 +479,66 @@ def _cross(spec: ModelSweepSpec, document: dict[str, Any], points: Sequence[dict
     out["violation_detail"][j] = "; ".join(found.violations)
 
 
-def evaluate_model_points(worker_text: str, coords: np.ndarray) -> dict[str, np.ndarray]:
-    """Certify and cross-check each grid point (rows of ``coords``, SI, in the spec's axis order)."""
+@dataclass(frozen=True)
+class _Point:
+    """One grid point certified: the model there (a polynomial
+    :class:`~lyapcheck.models.modelfile.Model` or a loop with functions), the classes' results (what
+    :func:`_model_record` reads), the builder of its certificate document, and the note to store
+    instead of the usual one (None: that)."""
+
+    model: Any
+    results: Mapping[str, ConditionResult]
+    document: Callable[[], dict[str, Any]]
+    note: str | None = None
+
+
+def _certify_point(spec: ModelSweepSpec, row: Sequence[float]) -> _Point:
+    """Certify one grid point (``certify_model``, or ``certify_recast`` for a loop with functions)."""
     from lyapcheck.models.certificate import build_document
     from lyapcheck.models.certify import certify_model
+    from lyapcheck.models.modelfile import Model
 
+    model = spec.model_at(row)
+    if isinstance(model, Model):
+        found = certify_model(model, classes=spec.classes)
+        return _Point(model, found.results, lambda: build_document(found))
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.recast_certify import certify_recast
+
+    try:
+        _, results, document = certify_recast(model, classes=spec.classes)
+    except ModelFileError as exc:  # the recasting's own proof (a square root's argument >= 0) failed here
+        why = f"the loop could not be recast at this point: {exc}"
+        return _Point(model, {c: ConditionResult(c, "not_certified", why) for c in spec.classes}, dict, why)
+    return _Point(model, results, lambda: document)
+
+
+def evaluate_model_points(worker_text: str, coords: np.ndarray) -> dict[str, np.ndarray]:
+    """Certify and cross-check each grid point (rows of ``coords``, SI, in the spec's axis order)."""
     spec = cached_model_spec(worker_text)
     coords = np.atleast_2d(np.asarray(coords, dtype=np.float64))
     out = _model_empty(spec, len(coords))
     for j, row in enumerate(coords):
         begin = time.perf_counter()
         with UNIT_LOCK:  # two threads of one Dask worker take turns
-            result = certify_model(spec.model_at(row), classes=spec.classes)
+            point = _certify_point(spec, row)
         middle = time.perf_counter()
-        if _model_record(spec, result, out, j) == "certified":
-            document = build_document(result)
+        status = _model_record(spec, point, out, j)
+        if point.note is not None:
+            out["note"][j] = point.note
+        if status == "certified":
+            document = point.document()
             out["certificate"][j] = certificate_json(document)
             index = int(np.ravel_multi_index(tuple(int(np.searchsorted(a.values, v)) for a, v in zip(spec.axes, row)),
                                              spec.shape))
-            _cross(spec, document, [spec.parameters_at(row)], (spec.simulation.seed, index), out, j)
+            seed = (spec.simulation.seed, index)
+            if spec.has_functions:
+                from sweeps.recast_crosscheck import cross_check_recast
+
+                _store_cross(cross_check_recast(point.model, document, spec.parameters_at(row),
+                                                starts=spec.simulation.starts, seed=seed), out, j)
+            else:
+                _cross(spec, document, [spec.parameters_at(row)], seed, out, j)
         out["seconds_certify"][j] = middle - begin
         out["seconds_cross_check"][j] = time.perf_counter() - middle
         out["done"][j] = True
@@ -500,7 +555,8 @@ def unstable_corners(spec: ModelSweepSpec, box: Any) -> tuple[int, dict[str, str
         return -1, None
     count, first = 0, None
     for corner in box.corners():
-        lin = certify_model(with_parameters(spec.model, corner), classes=("linearization",)).results["linearization"]
+        at = with_parameters(spec.polynomial, corner)
+        lin = certify_model(at, classes=("linearization",)).results["linearization"]
         if lin.status == "refuted":
             count += 1
             if first is None:
@@ -529,7 +585,7 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
         with UNIT_LOCK:
             corners, unstable = unstable_corners(spec, box)
             classes = spec.classes if unstable is None else tuple(c for c in spec.classes if c == "sos_bound")
-            result = certify_model(spec.model, classes=classes, box=box) if classes else None
+            result = certify_model(spec.polynomial, classes=classes, box=box) if classes else None
         middle = time.perf_counter()
         if result is None:  # only stability classes, refuted at a corner
             for c in spec.classes:

@@ -83,6 +83,14 @@ with ``model`` in its ``[sweep]`` table::
     seed = 0                       # of the starts
     worst_case = true              # sos_bound: the worst-case disturbance search at every point
 
+A loop with functions (sin, cos, exp, sqrt, atan, tanh, abs, min, max, sat: what
+:func:`lyapcheck.models.modelfile.parse_any_model` reads as a
+:class:`~lyapcheck.models.recast.RecastModel`) is swept in ``mode = "points"`` only, over the classes
+of :data:`lyapcheck.models.recast_run.RECAST_CLASSES` (but ``candidate``): each grid point is the
+model text read again with the point's values as overrides (:meth:`ModelSweepSpec.model_at`), so
+the loop is recast at them. ``mode = "boxes"`` is refused in one line (box certificates take
+polynomial and rational loops only).
+
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks
 that the file still has the SHA-256 stored with the results. A swept value is validated through
@@ -103,7 +111,7 @@ from dataclasses import dataclass, replace
 from fractions import Fraction
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Callable, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 import numpy as np
 
@@ -117,6 +125,9 @@ from lyapcheck.paper.params import (
 from lyapcheck.simulation.scenarios import RTOL_RANGE
 from lyapcheck.units import Kind
 from sweeps.schema import CLASSES, DEFAULT_CLASSES, DEFAULT_SCENARIOS, SCENARIOS, SWEEPABLE, point_variables
+
+if TYPE_CHECKING:
+    from lyapcheck.models.recast import RecastModel
 
 #: largest grid a spec may ask for (the store is streamed, but one spec should stay a sweep)
 MAX_POINTS: Final = 10_000_000
@@ -562,12 +573,14 @@ class ModelSimulation:
 class ModelSweepSpec(_AxesGrid):
     """A validated model sweep spec. ``text`` is the spec's TOML as given (stored with the results and
     compared on resume); ``model_text`` the model file's, verbatim; ``model`` the model with
-    ``[sweep.set]`` applied (the swept parameters at their file values, replaced point by point)."""
+    ``[sweep.set]`` applied (the swept parameters at their file values, replaced point by point): a
+    polynomial or rational :class:`Model`, or a loop with functions
+    (:class:`~lyapcheck.models.recast.RecastModel`, points only)."""
 
     text: str
     model_file: str
     model_text: str
-    model: Model
+    model: Model | RecastModel
     overrides: tuple[tuple[str, str], ...]
     axes: tuple[ModelAxis, ...]
     classes: tuple[str, ...]
@@ -581,8 +594,23 @@ class ModelSweepSpec(_AxesGrid):
         return self.model.sha256
 
     @property
+    def has_functions(self) -> bool:
+        """Whether the model is a loop with functions (:class:`~lyapcheck.models.recast.RecastModel`)."""
+        return not isinstance(self.model, Model)
+
+    @property
+    def polynomial(self) -> Model:
+        """The model as a polynomial or rational loop, which box sweeps and their cross-checks take
+        (a loop with functions is refused with ``mode = "boxes"`` when the spec is read)."""
+        if not isinstance(self.model, Model):
+            raise TypeError(f"the model {self.model_file} is a loop with functions; boxes take polynomial and "
+                            "rational loops only")
+        return self.model
+
+    @property
     def outputs(self) -> tuple[str, ...]:
-        return tuple(self.model.outputs)
+        """The model's outputs (a loop with functions declares none: it takes no [outputs] yet)."""
+        return tuple(self.model.outputs) if isinstance(self.model, Model) else ()
 
     @property
     def worker_text(self) -> str:
@@ -595,15 +623,20 @@ class ModelSweepSpec(_AxesGrid):
         certificate is about the number in the results, not a decimal neighbour of it."""
         return {name: Fraction(float(v)) for name, v in zip(self.dims, coords)}
 
-    def model_at(self, coords: Sequence[float]) -> Model:
+    def model_at(self, coords: Sequence[float]) -> Model | RecastModel:
         """The model at one grid point. Its ``overrides`` (what a certificate stores, and what
         ``verify`` re-reads the model text with) hold each swept value as the exact decimal of the
-        stored float (:func:`exact_decimal`), so the certificate re-derives the same exact field."""
+        stored float (:func:`exact_decimal`), so the certificate re-derives the same exact field.
+        A loop with functions is read again from the text with those overrides: its recasting (the
+        auxiliaries' values at the equilibrium, the equilibrium's exact check) depends on them."""
         from dataclasses import replace
 
-        from lyapcheck.models.modelfile import with_parameters
+        from lyapcheck.models.modelfile import parse_any_model, with_parameters
 
         exact = self.parameters_at(coords)
+        if not isinstance(self.model, Model):
+            point = {k: exact_decimal(float(v)) for k, v in exact.items()}
+            return parse_any_model(self.model_text, self.model_file, {**dict(self.overrides), **point})
         model = with_parameters(self.model, exact)
         return replace(model, overrides={**model.overrides, **{k: exact_decimal(float(v)) for k, v in exact.items()}})
 
@@ -627,20 +660,21 @@ def _quantity(field: str, raw: object) -> Fraction:
 # -- the parts of a spec ------------------------------------------------------------------------
 def _model(sweep: Mapping[str, Any], source: str, model_text: str | None) -> tuple[str, str]:
     """(the model file as named in the spec, its text): read relative to the spec's directory."""
-    from lyapcheck.models.modelfile import load_model
+    from lyapcheck.models.modelfile import load_any_model
 
     name = sweep.get("model")
     if not isinstance(name, str) or not name.strip():
         raise InvalidParameter("sweep.model", "a model file name, relative to the spec's directory", name)
     if model_text is None:
-        model_text = load_model(Path(source).parent / name).text
+        model_text = load_any_model(Path(source).parent / name).text
     return name, model_text
 
 
-def _overrides(raw: object, declared: Model) -> dict[str, str]:
+def _overrides(raw: object, declared: Model | RecastModel) -> dict[str, str]:
     """``[sweep.set]``: names declared in the model (parameters or disturbance bounds), values checked."""
     table = table_field({} if raw is None else raw, "sweep.set")
-    known = list(declared.parameters) + list(declared.disturbances)
+    disturbances = declared.disturbances if isinstance(declared, Model) else {}  # a loop with functions has none
+    known = list(declared.parameters) + list(disturbances)
     out = {}
     for key, value in table.items():
         field = f"sweep.set.{key}"
@@ -650,13 +684,13 @@ def _overrides(raw: object, declared: Model) -> dict[str, str]:
         if isinstance(value, Mapping) or isinstance(value, list):
             raise InvalidParameter(field, "a number, or a number with a unit such as '0.75 mm'", value)
         exact = _quantity(field, value)
-        if key in declared.disturbances and exact < 0:
+        if key in disturbances and exact < 0:
             raise InvalidParameter(field, "a disturbance bound >= 0", value)
         out[str(key)] = str(value)
     return out
 
 
-def _model_axis(index: int, raw: object, model: Model, fixed: Mapping[str, str]) -> ModelAxis:
+def _model_axis(index: int, raw: object, model: Model | RecastModel, fixed: Mapping[str, str]) -> ModelAxis:
     where = f"sweep.axes[{index}]"
     table = table_field(raw, where)
     known_keys(table, _AXIS_KEYS, where)
@@ -683,14 +717,26 @@ def _readable(axis: ModelAxis, where: str) -> ModelAxis:
     return axis
 
 
-def _model_classes(raw: object, mode: str, model: Model) -> tuple[str, ...]:
-    allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES
+def recast_point_classes() -> tuple[str, ...]:
+    """The classes of a points sweep of a loop with functions: those of
+    :data:`lyapcheck.models.recast_run.RECAST_CLASSES` a sweep can run (not the user's ``candidate``),
+    in :data:`MODEL_POINT_CLASSES`' order."""
+    from lyapcheck.models.recast_run import RECAST_CLASSES
+
+    return tuple(c for c in MODEL_POINT_CLASSES if c in RECAST_CLASSES)
+
+
+def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[str, ...]:
+    polynomial = isinstance(model, Model)
+    allowed = (MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES) if polynomial else recast_point_classes()
+    disturbances = model.disturbances if isinstance(model, Model) else {}
     if raw is None:
-        return tuple(c for c in allowed if c != "sos_bound" or model.disturbances)
+        return tuple(c for c in allowed if c != "sos_bound" or disturbances)
     if not isinstance(raw, list) or not raw or any(c not in allowed for c in raw) or len(set(raw)) != len(raw):
-        raise InvalidParameter("sweep.classes", f"in a {mode} sweep, a list of distinct names from "
+        kind = "" if polynomial else " of a loop with functions"
+        raise InvalidParameter("sweep.classes", f"in a {mode} sweep{kind}, a list of distinct names from "
                                + ", ".join(repr(c) for c in allowed), raw)
-    if "sos_bound" in raw and not model.disturbances:
+    if "sos_bound" in raw and not disturbances:
         raise InvalidParameter("sweep.classes", "classes that apply to the model: sos_bound needs [disturbances] "
                                "in the model file", raw)
     return tuple(c for c in allowed if c in raw)  # canonical order: cheapest first
@@ -769,13 +815,13 @@ def _check_defined(spec: ModelSweepSpec, source: str) -> None:
         return
     window = {axis.name: (Fraction(axis.values[0]), Fraction(axis.values[-1])) for axis in spec.axes}
     try:
-        check_box(spec.model, window_box(spec, window))
+        check_box(spec.polynomial, window_box(spec, window))
         return
     except ModelFileError:
         pass  # the whole window is refused: find the first box of the grid that is, and name it
     for cell in initial_cells(spec):
         try:
-            check_box(spec.model, window_box(spec, cell))
+            check_box(spec.polynomial, window_box(spec, cell))
         except ModelFileError as exc:
             raise ModelFileError(source, f"sweep.axes, the box {_describe(cell)}",
                                  f"the model is not defined on all of it, or its equilibrium moves there ({exc})") from None
@@ -797,7 +843,7 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
         Check that the model is defined at every grid point or on the window's boxes (exact; done
         once, in the main process).
     """
-    from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.modelfile import parse_any_model
 
     try:
         data = tomllib.loads(text)
@@ -810,12 +856,15 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     sweep = table_field(data.get("sweep"), "sweep")
     known_keys(sweep, _MODEL_SWEEP_KEYS, "sweep")
     model_file, model_text = _model(sweep, source, model_text)
-    declared = parse_model(model_text, model_file)
+    declared = parse_any_model(model_text, model_file)
     fixed = _overrides(sweep.get("set"), declared)
-    model = parse_model(model_text, model_file, fixed) if fixed else declared
+    model = parse_any_model(model_text, model_file, fixed) if fixed else declared
     mode = sweep.get("mode", "points")
     if mode not in _MODES:
         raise InvalidParameter("sweep.mode", "one of " + ", ".join(repr(m) for m in _MODES), mode)
+    if mode == "boxes" and not isinstance(model, Model):
+        raise InvalidParameter("sweep.mode", "\"points\" for a loop with functions (sin, sqrt, sat, ...): boxes take "
+                               "polynomial and rational loops only", mode)
     raw_axes = sweep.get("axes")
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",
@@ -835,7 +884,7 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
         points = int(np.prod([a.size for a in axes]))
         if points > MAX_MODEL_POINTS:
             raise InvalidParameter("sweep.axes", f"at most {MAX_MODEL_POINTS} grid points in all", points)
-        reserved = {v.name for v in point_variables(classes, tuple(model.outputs))}
+        reserved = {v.name for v in point_variables(classes, tuple(model.outputs) if isinstance(model, Model) else ())}
         for i, name in enumerate(names):
             if name in reserved:
                 raise InvalidParameter(f"sweep.axes[{i}].name", "a parameter whose name is not one of the results' "
@@ -864,4 +913,5 @@ def cached_model_spec(worker_text: str) -> ModelSweepSpec:
 __all__ = ["Axis", "SimulationSettings", "Refinement", "BoxSettings", "SweepSpec", "parse_spec", "load_spec",
            "cached_spec", "read_spec_text", "axis_values", "ModelAxis", "ModelSimulation", "ModelSweepSpec",
            "parse_model_spec", "load_model_spec", "cached_model_spec", "initial_cells", "window_box", "exact_decimal",
-           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "initial_boxes", "relative_width", "split_cell", "Cell"]
+           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "recast_point_classes", "initial_boxes", "relative_width",
+           "split_cell", "Cell"]

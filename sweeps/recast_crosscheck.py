@@ -1,0 +1,258 @@
+"""The simulation cross-check of a certified grid point of a loop with functions (sin, sqrt, sat, ...).
+
+The loop simulated is the true one: each function evaluated by numpy
+(:func:`lyapcheck.models.recast_numeric.field_values`), never the recast polynomial loop, which holds
+only on its relations' set. Its starts come from ``numpy.random.default_rng([*seed, 0])`` (``seed``:
+the sweep's ``[simulation] seed`` and the point's flat index), so a point's result does not depend
+on the unit it was grouped in. Every certified class of the stored document is checked with the
+checks of :mod:`lyapcheck.models.crosscheck`, as :mod:`sweeps.crosscheck` does for a polynomial loop:
+
+=====================  ==========================================  ==========================================
+certificate            starts                                      must hold
+=====================  ==========================================  ==========================================
+``roa``, {V <= level}  random rays from the equilibrium, between   no escape; V never rises
+                       half-way and just inside the set's
+                       boundary (within the certificate's ``box``
+                       for a ball-arithmetic one, else within the
+                       comparison box of the classes)
+``quadratic``,         uniform over the comparison box (the         no escape; V never rises; ``V(t) <= V(0)
+``sos_gas``            model's ``[domain]``, else +-pi in an angle  exp(-rate t)`` with a certified rate of V;
+                       and +-4 elsewhere)                           a GES certificate's envelope
+``roa`` (its own)      the check :func:`lyapcheck.models.recast_    none of its starts in the set failed to
+                       run.simulated_check` made when certifying    converge (``soundness_violation``)
+=====================  ==========================================  ==========================================
+
+V is the certificate's exact polynomial in its ``variables`` (the states, then the auxiliaries),
+each shifted by the certificate's ``shift``, evaluated in floating point on the true auxiliaries of
+the simulated states. An angle state (one the loop sees only through its sine and cosine) is never
+an escape: on the cylinder the loop may turn several times before it settles. A trajectory is
+converged when it ends within :data:`CONVERGED_FRACTION` of the starts' extent of the equilibrium,
+modulo 2 pi in the angles the certificate's claim is modulo; those that are not are counted
+(``not_converged``), not flagged: a finite simulation cannot refute convergence.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
+
+import numpy as np
+
+from sweeps.crosscheck import CONVERGED_FRACTION, ESCAPE_EXTENTS, REGION_FRACTIONS, CrossCheck
+
+if TYPE_CHECKING:
+    from lyapcheck.models.recast import RecastModel, RecastSystem
+
+#: the classes whose certificates are simulated here (the global ones, then the region)
+GLOBAL_CLASSES: Final = ("quadratic", "sos_gas")
+REGION_CLASS: Final = "roa"
+#: a float function of state deviations (rows ``(k, n)``): ``(k,)`` values
+PointFunction = Callable[[np.ndarray], np.ndarray]
+
+
+class _Nodes:
+    """The integrator's step observer: every row's own points (the start, then each accepted step)."""
+
+    def __init__(self) -> None:
+        self.index: list[np.ndarray] = []
+        self.t: list[np.ndarray] = []
+        self.y: list[np.ndarray] = []
+
+    def start(self, index: np.ndarray, t: np.ndarray, y: np.ndarray, f: np.ndarray) -> None:
+        self._keep(index, t, y)
+
+    def step(self, index: np.ndarray, t0: np.ndarray, t1: np.ndarray, y0: np.ndarray, y1: np.ndarray,
+             f0: np.ndarray, f1: np.ndarray) -> None:
+        self._keep(index, t1, y1)
+
+    def _keep(self, index: np.ndarray, t: np.ndarray, y: np.ndarray) -> None:
+        self.index.append(np.array(index, copy=True))
+        self.t.append(np.broadcast_to(np.asarray(t, dtype=np.float64), (len(index),)).copy())
+        self.y.append(np.array(y, copy=True))
+
+    def rows(self, count: int) -> list[tuple[np.ndarray, np.ndarray]]:
+        index, t, y = np.concatenate(self.index), np.concatenate(self.t), np.concatenate(self.y)
+        order = np.lexsort((t, index))
+        index, t, y = index[order], t[order], y[order]
+        cuts = np.searchsorted(index, np.arange(count + 1))
+        return [(t[a:b], y[a:b]) for a, b in zip(cuts[:-1], cuts[1:])]
+
+
+class _TrueField:
+    """The true field as the batched system's field (no disturbance)."""
+
+    def __init__(self, system: RecastSystem) -> None:
+        self.system = system
+
+    def __call__(self, y: np.ndarray, d: Any = None) -> np.ndarray:
+        from lyapcheck.models.recast_numeric import field_values
+
+        return field_values(self.system, y)
+
+
+def _v_function(system: RecastSystem, cert: Mapping[str, Any]) -> PointFunction:
+    """The certificate's V as a float function of state deviations (rows): its polynomial in its
+    ``variables``, each minus its ``shift``, at the true auxiliaries of ``x_eq + z``."""
+    from lyapcheck.models.recast_numeric import poly_values, variable_values
+    from lyapcheck.models.recast_sos import poly_from_json
+    from lyapcheck.sos.polynomials import Ring
+
+    ring = Ring(tuple(str(v) for v in cert["variables"]))
+    V = poly_from_json(ring, cert["V"], "V")
+    shift = {str(k): float(Fraction(str(v))) for k, v in (cert.get("shift") or {}).items()}
+    eq = np.array([float(system.values[s]) for s in system.states])
+
+    def at(Z: np.ndarray) -> np.ndarray:
+        Z = np.atleast_2d(np.asarray(Z, dtype=np.float64))
+        cols = variable_values(system, Z + eq)
+        return poly_values(ring, V, {n: cols[n] - shift.get(n, 0.0) for n in ring.names}, Z.shape[0])
+
+    return at
+
+
+def _within(V: PointFunction, lo: np.ndarray, hi: np.ndarray) -> PointFunction:
+    """V inside the box ``[lo, hi]`` of deviations, +inf outside (a set ``{V <= level}`` cut by the box)."""
+    def at(Z: np.ndarray) -> np.ndarray:
+        values = np.asarray(V(Z), dtype=np.float64)
+        return np.where(np.all((Z >= lo) & (Z <= hi), axis=1), values, np.inf)
+
+    return at
+
+
+def cross_check_recast(model: RecastModel, doc: Mapping[str, Any], point: Mapping[str, Fraction], *, starts: int,
+                       seed: Sequence[int]) -> CrossCheck:
+    """Simulate the true loop of ``model`` (the point's own) against the certificate document ``doc``.
+
+    Parameters
+    ----------
+    model
+        The loop at the point (:meth:`sweeps.spec.ModelSweepSpec.model_at`).
+    doc
+        Its certificate document (:func:`lyapcheck.models.recast_certify.certify_recast`).
+    point
+        The swept parameters' exact values (named in a violation's detail).
+    starts
+        Starts per certified class.
+    seed
+        The starts come from ``numpy.random.default_rng([*seed, 0])``.
+    """
+    from lyapcheck.models.crosscheck import check_ges_envelope, check_global, check_region, ray_boundary
+    from lyapcheck.models.recast_classes import angle_states, base_loop
+    from lyapcheck.models.recast_run import comparison_box
+    from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
+
+    out = CrossCheck(points=1)
+    where = ", ".join(f"{k} = {float(v):.6g}" for k, v in point.items())
+    system = model.system
+    n = model.n
+    conditions = {name: c for name, c in (doc.get("conditions") or {}).items()
+                  if isinstance(c, dict) and c.get("status") == "certified"}
+    for name, cond in conditions.items():
+        if cond.get("soundness_violation"):
+            out.violations.append(f"{name} at {where}: its own simulation when certified found "
+                                  f"{cond.get('starts_in_set_not_converged', 'some')} starts in the set that did "
+                                  "not converge")
+    checked = [c for c in (*GLOBAL_CLASSES, REGION_CLASS) if c in conditions]
+    if not checked:
+        return out
+    rng = np.random.default_rng([*seed, 0])
+    lo, hi = (np.asarray(b, dtype=np.float64) for b in comparison_box(model, base_loop(system)))
+    blocks: list[np.ndarray] = []
+    owner: list[str] = []
+    functions: dict[str, PointFunction] = {}
+    for cls in checked:
+        cert = conditions[cls].get("certificate") or {}
+        V = _v_function(system, cert)
+        functions[cls] = V
+        if cls in GLOBAL_CLASSES:
+            blocks.append(lo + (hi - lo) * rng.random((starts, n)))
+            owner += [cls] * starts
+            continue
+        level = float(Fraction(str(cert["level"])))
+        box = cert.get("box")  # a ball-arithmetic region: the set within its box
+        b_lo, b_hi = (lo, hi) if box is None else (np.array([float(Fraction(str(box[s][0]))) for s in model.states]),
+                                                   np.array([float(Fraction(str(box[s][1]))) for s in model.states]))
+        directions = rng.standard_normal((starts, n))
+        directions /= np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-300)
+        boundary = ray_boundary(_within(V, b_lo, b_hi), level, directions)
+        if boundary is None:
+            out.violations.append(f"roa at {where}: the certified set {{V <= {level:.6g}}} does not contain the "
+                                  "equilibrium")
+            continue
+        blocks.append(boundary * rng.uniform(*REGION_FRACTIONS, size=(starts, 1)))
+        owner += [cls] * starts
+    if not blocks:
+        return out
+    Z0 = np.vstack(blocks)
+    extent = np.maximum(np.max(np.abs(Z0), axis=0), 1e-6)
+    angles = angle_states(system)  # never an escape: on the cylinder the loop may turn before it settles
+    escape = np.array([np.inf if s in angles else ESCAPE_EXTENTS * e for s, e in zip(model.states, extent)])
+    runs = _simulate(model, Z0, escape, extent)
+    out.trajectories += len(runs)
+    for cls in checked:
+        rows = [i for i, o in enumerate(owner) if o == cls]
+        if not rows:
+            continue
+        cond = conditions[cls]
+        modulo = tuple(str(a) for a in ((cond.get("certificate") or {}).get("angles") or ()))
+        outcomes = [_outcome(system, runs[i][1][-1], escape, float(np.linalg.norm(extent)), modulo) for i in rows]
+        out.not_converged += sum(o == "other" for o in outcomes)
+        V = functions[cls]
+        if cls == REGION_CLASS:
+            found = check_region([V(runs[i][1]) for i in rows], outcomes)
+            out.worse("worst_rise", found.worst_rise)
+            if not found.ok:
+                out.violations.append(f"roa at {where}: of {found.starts} starts in the certified set, {found.escaped} "
+                                      f"escaped; V rose by {found.worst_rise:.3g} of V(0)")
+            continue
+        rate = float(cond.get("decay_rate_V_per_s") or 0.0)
+        glob = check_global([(runs[i][0], V(runs[i][1])) for i in rows], outcomes, rate)
+        out.worse("worst_rise", glob.worst_rise)
+        if rate > 0:
+            out.worse("worst_envelope", glob.worst_envelope)
+        if not glob.ok:
+            out.violations.append(f"{cls} at {where}: of {glob.trajectories} trajectories {glob.escaped} escaped; V "
+                                  f"rose by {glob.worst_rise:.3g} and exceeded V(0) exp(-{rate:.4g} t) by "
+                                  f"{glob.worst_envelope:.3g} of V(0)")
+        if cond.get("property") == "GES" and cond.get("k") is not None and cond.get("decay_rate_per_s") is not None:
+            k, ges_rate = float(cond["k"]), float(cond["decay_rate_per_s"])
+            ratio = check_ges_envelope([(runs[i][0], np.linalg.norm(runs[i][1], axis=1)) for i in rows], k, ges_rate)
+            out.worse("ges_ratio", ratio)
+            if ratio > 1 + TRAJECTORY_CHECK_REL_TOL:
+                out.violations.append(f"{cls} at {where}: |x(t)| reached {ratio:.6g} times the certified GES "
+                                      f"envelope {k:.4g} |x0| exp(-{ges_rate:.4g} t)")
+    return out
+
+
+def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np.ndarray
+              ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Integrate the true loop from the deviations ``Z0`` (rows) with the project's batched DOPRI5 over
+    :func:`lyapcheck.models.recast_simulate.default_horizon`: per row, its own points' times and
+    deviations. A row farther than ``escape`` from the equilibrium in a state stops moving there."""
+    from lyapcheck.models.numeric import ModelSystem
+    from lyapcheck.models.recast_simulate import default_horizon
+    from lyapcheck.models.trajectories import MIN_STEPS, RTOL
+    from lyapcheck.simulation.integrator import integrate
+
+    system = model.system
+    eq = np.array([float(v) for v in model.equilibrium])
+    t_end = default_horizon(model)
+    batch = ModelSystem(_TrueField(system), len(Z0), escape=escape, center=eq)  # type: ignore[arg-type]
+    nodes = _Nodes()
+    with np.errstate(all="ignore"):
+        integrate(batch, 0.0, Z0 + eq, t_end, rtol=RTOL, atol=np.maximum(extent * 1e-7, 1e-300),
+                  max_step=t_end / MIN_STEPS, observer=nodes)
+    return [(t, y - eq) for t, y in nodes.rows(len(Z0))]
+
+
+def _outcome(system: RecastSystem, end: np.ndarray, escape: np.ndarray, extent: float, modulo: tuple[str, ...]) -> str:
+    """How a trajectory ended (its final deviation ``end``): ``escaped``, ``converged`` (within
+    :data:`CONVERGED_FRACTION` of the starts' extent, modulo 2 pi in ``modulo``) or ``other``."""
+    from lyapcheck.models.recast_numeric import distances
+
+    if not np.all(np.isfinite(end)) or np.any(np.abs(end) >= escape * (1 - 1e-9)):
+        return "escaped"
+    return "converged" if distances(system, end[None, :], modulo)[0] <= CONVERGED_FRACTION * extent else "other"
+
+
+__all__ = ["cross_check_recast", "GLOBAL_CLASSES", "REGION_CLASS"]
