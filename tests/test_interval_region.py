@@ -291,3 +291,43 @@ def test_a_candidate_that_is_not_flat_at_the_equilibrium_gets_no_set(tmp_path: P
     # V = sin(theta) + omega^2 is 0 at the equilibrium but its gradient is not: no Lyapunov function
     cand = api.certify(model=path, classes="candidate", candidate="sin(theta) + omega**2").conditions["candidate"]
     assert cand.status != "certified"
+
+
+def test_the_whole_sublevel_set_is_proved_inside_the_box_or_not_claimed() -> None:
+    from lyapcheck.models.interval_region import prove_bounded
+
+    model = parse_any_model(SPRING, "spring.toml")
+    system = model.system
+    x1, x2 = system.ring.gens()[:2]
+    box = (Fraction(-2), Fraction(-2)), (Fraction(2), Fraction(2))
+    ok, why, _, R = prove_bounded(system, IntervalClaim(x1 ** 2 + x2 ** 2 + x1 ** 4 + x2 ** 4 - x1 ** 3 * x2 / 2,
+                                                        Fraction(1), *box))
+    assert ok and R is not None and R >= 2, why
+    # V -> -infinity along x1: its sublevel set is unbounded, never claimed whole
+    assert not prove_bounded(system, IntervalClaim(x1 ** 2 + x2 ** 2 - x1 ** 4, Fraction(1, 10), *box))[0]
+    # a box that cuts the set: V <= level just outside it
+    cut = (Fraction(-1, 2), Fraction(-1, 2)), (Fraction(1, 2), Fraction(1, 2))
+    assert not prove_bounded(system, IntervalClaim(x1 ** 2 + x2 ** 2, Fraction(1), *cut))[0]
+
+
+def test_a_whole_set_claim_holds_far_outside_the_box_and_is_re_checked(tmp_path: Path) -> None:
+    path = tmp_path / "sat.toml"
+    path.write_text(SATURATED)
+    result = api.certify(model=path, classes="roa")
+    roa = result.conditions["roa"]
+    cert = roa.certificate
+    assert roa.status == "certified" and cert["whole"] is True
+    assert "the whole set lies in" in roa.summary
+    # every sampled point with V <= level, however far, lies in the box (the box is only the proof's)
+    X = np.column_stack([g.ravel() for g in np.meshgrid(np.linspace(-60, 60, 301), np.linspace(-60, 60, 301))])
+    total = np.zeros(len(X))
+    for coefficient, exponents in cert["V"]["terms"]:
+        total += float(Fraction(coefficient)) * X[:, 0] ** exponents[0] * X[:, 1] ** exponents[1]
+    under = total <= float(Fraction(cert["level"]))
+    lo = [float(Fraction(cert["box"][s][0])) for s in ("x", "v")]
+    hi = [float(Fraction(cert["box"][s][1])) for s in ("x", "v")]
+    assert under.any() and np.all(np.all((X[under] >= lo) & (X[under] <= hi), axis=1))
+    assert api.verify(result).valid
+    doc = copy.deepcopy(result.document)
+    doc["conditions"]["roa"]["certificate"]["box"]["x"] = ["-1/4", cert["box"]["x"][1]]  # cuts the set
+    assert not api.verify(doc).valid

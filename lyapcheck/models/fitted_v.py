@@ -41,6 +41,10 @@ FIT_LOCAL_GRID: Final = {1: 101, 2: 31, 3: 11}
 FIT_EPSILON: Final = 0.02
 #: V at a sample that does not converge (or on the edge) is at least 1 + this
 FIT_OUTSIDE_MARGIN: Final = 0.05
+#: V's top-degree form at points of the unit cube's faces is at least this over the box's largest
+#: half-width to the degree (so V grows in every direction), at this many points per face side
+FIT_TOP_MARGIN: Final = 1e-2
+FIT_TOP_DIRECTIONS: Final = {1: 1, 2: 33, 3: 9}
 #: the smallest alpha (V's quadratic part is alpha x^T P0 x)
 FIT_MIN_ALPHA: Final = 1e-3
 #: V's degree, by number of states
@@ -69,6 +73,18 @@ class FittedV:
 def _grid(lo: np.ndarray, hi: np.ndarray, count: int) -> np.ndarray:
     axes = [np.linspace(a, b, count) for a, b in zip(lo, hi)]
     return np.column_stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")])
+
+
+def _cube_faces(n: int, count: int) -> np.ndarray:
+    """Points on the faces of the cube ``[-1, 1]^n`` (``count`` per side of each face)."""
+    if n == 1:
+        return np.array([[-1.0], [1.0]])
+    points = []
+    for i in range(n):
+        for side in (-1.0, 1.0):
+            face = _grid(-np.ones(n - 1), np.ones(n - 1), count)
+            points.append(np.insert(face, i, side, axis=1))
+    return np.vstack(points)
 
 
 def _monomials(n: int, degree: int) -> list[tuple[int, ...]]:
@@ -147,9 +163,18 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | s
     r2 = np.sum(Z ** 2, axis=1)
     good = converges & ~edge & (r2 > 1e-12) & np.all(np.isfinite(F), axis=1)
     bad = ~converges | edge
-    A = np.vstack([dVc[good], -Vc[good], -Vc[bad]])
+    # V's top-degree form positive on the faces of the unit cube (so V grows in every direction and a
+    # sublevel set is bounded: the proof then claims the whole of it, not its part in a box)
+    top = FIT_DEGREE[n]
+    U = _cube_faces(n, FIT_TOP_DIRECTIONS[n])
+    Ut = np.zeros((len(U), 1 + len(mons)))
+    for k, mon in enumerate(mons):
+        if sum(mon) == top:
+            Ut[:, 1 + k] = np.prod(U ** np.array(mon), axis=1)
+    A = np.vstack([dVc[good], -Vc[good], -Vc[bad], -Ut])
     b = np.concatenate([-FIT_EPSILON * r2[good], -FIT_EPSILON * r2[good],
-                        -(1 + FIT_OUTSIDE_MARGIN) * np.ones(int(bad.sum()))])
+                        -(1 + FIT_OUTSIDE_MARGIN) * np.ones(int(bad.sum())),
+                        -FIT_TOP_MARGIN / float(np.max(half)) ** top * np.ones(len(U))])
     inside = good & np.all((Z >= lo) & (Z <= hi), axis=1)
     if not inside.any():
         return "no simulated trajectory from the box converges"

@@ -50,6 +50,9 @@ INTERVAL_MIN_WIDTH: Final = Fraction(1, 2 ** 13)
 #: halved until the Hessian test passes, at most LOCAL_HALVINGS times
 LOCAL_FIRST_SHIFT: Final = 3
 LOCAL_HALVINGS: Final = 24
+#: the outer radius (beyond which V > level in every direction) is sought within 2^this times the
+#: box's size before a direction cell is accepted with a farther one
+OUTER_RADIUS_SHIFT: Final = 3
 #: the dyadic grid corners and levels are rounded to (bits after the binary point)
 DYADIC_BITS: Final = 20
 
@@ -305,5 +308,99 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     return IntervalProof(True, "proved", count, boundary, r, time.perf_counter() - start)
 
 
-__all__ = ["IntervalClaim", "IntervalProof", "prove_region", "dyadic_floor", "dyadic_ceil", "is_dyadic",
+def prove_bounded(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None
+                  ) -> tuple[bool, str, int, Fraction | None]:
+    """Part 0, for a ``V`` over the states alone: ``V > level`` everywhere outside the box, so the
+    whole sublevel set ``{V <= level}`` lies in it. On the faces of the unit cube (``u``, ball cells),
+    ``V(t u) = sum_k t^k V_k(u)`` with ``V_k`` the homogeneous parts (even top degree ``d``), and
+    ``V(t u)/t^d - level/t^d >= low(V_d(u)) - sum_{k<d} up(|V_k(u)|) t^(k-d) - level t^-d``, which
+    grows with ``t``: once positive at ``t = R`` it is positive beyond, so ``V > level`` wherever
+    ``|z|_inf >= R`` (R the largest over the cells, a power of 2). Between the box and
+    ``[-R, R]^n`` cells are bisected until ``V > level`` is proved on each. Returns (proved, why,
+    cells, R)."""
+    ring = system.ring
+    n = system.n
+    terms = ring.terms(claim.V)
+    if not terms or any(any(m[n:]) for m in terms) or low_order_terms(ring, claim.V, n):
+        return False, "V must be over the states alone, without constant or linear terms", 0, None
+    d = max(sum(m) for m in terms)
+    if d % 2:
+        return False, "V's degree is odd: V does not grow in every direction", 0, None
+    loop = BallLoop(system)
+    parts = [LieDerivative(loop, ring, ring.from_terms({m: c for m, c in terms.items() if sum(m) == k}))
+             for k in range(2, d + 1)]
+    level = flint.arb(flint.fmpq(claim.level.numerator, claim.level.denominator))
+    smallest = Fraction(1)
+    while smallest < max(max(-l, h) for l, h in zip(claim.lo, claim.hi)):
+        smallest *= 2
+
+    def radius(u: list[Any]) -> Fraction | None:
+        """The smallest power of 2 (from ``smallest``) beyond which V > level along the cell's rays."""
+        values = [part.value_of_v(u) for part in parts]
+        top = values[-1]
+        if not top > 0:
+            return None
+        R = smallest
+        while R < 2 ** MAGNITUDE_BITS:
+            t = flint.arb(flint.fmpq(R.numerator, R.denominator))
+            margin = top - level / t ** d
+            for k, v in zip(range(2, d), values[:-1]):
+                margin = margin - abs(v) / t ** (d - k)
+            if margin > 0:
+                return R
+            R *= 2
+        return None
+
+    unit = _Cells((Fraction(-1),) * n, (Fraction(1),) * n)
+    R = smallest
+    count = 0
+    for i in range(n):
+        for side in (-1.0, 1.0):
+            stack = [tuple((side, side) if k == i else (-1.0, 1.0) for k in range(n))]
+            while stack:
+                cell = stack.pop()
+                count += 1
+                if count > INTERVAL_CELL_LIMIT or (deadline is not None and time.perf_counter() > deadline):
+                    return False, "out of cells or time on the unit cube's faces", count, None
+                r = radius(unit.balls(cell))
+                halves = unit.split(cell, fixed=i)
+                # a far radius from a wide cell is mostly the enclosure's looseness: split it first
+                if r is not None and (r <= smallest * 2 ** OUTER_RADIUS_SHIFT or halves is None):
+                    R = max(R, r)
+                    continue
+                if halves is None:
+                    return False, (f"V is not proved to exceed the level beyond |z|_inf = 2^{MAGNITUDE_BITS} in "
+                                   "every direction"), count, None
+                stack.extend(reversed(halves))
+    lie = LieDerivative(BallLoop(system), ring, claim.V)
+    outer = _Cells(claim.lo, claim.hi)  # cells as fine as the box's own near it
+    inner = [(float(l), float(h)) for l, h in zip(claim.lo, claim.hi)]
+    level_ball = level
+    stack = [tuple((-float(R), float(R)) for _ in range(n))]
+    while stack:
+        cell = stack.pop()
+        count += 1
+        if count > INTERVAL_CELL_LIMIT or (deadline is not None and count % 256 == 0 and time.perf_counter() > deadline):
+            return False, "out of cells or time outside the box", count, R
+        if all(a >= lo_ and b <= hi_ for (a, b), (lo_, hi_) in zip(cell, inner)):
+            continue  # inside the box: the decrease part covers it
+        overlaps = all(a < hi_ and b > lo_ for (a, b), (lo_, hi_) in zip(cell, inner))
+        cut = next(((k, x) for k, ((a, b), (lo_, hi_)) in enumerate(zip(cell, inner)) for x in (lo_, hi_)
+                    if a < x < b), None) if overlaps else None
+        if cut is not None:  # split along the box's face: each piece is then inside or outside it
+            k, x = cut
+            stack.append(cell[:k] + ((cell[k][0], x),) + cell[k + 1:])
+            stack.append(cell[:k] + ((x, cell[k][1]),) + cell[k + 1:])
+            continue
+        if _v_above(lie, outer, cell, level_ball, mean_value=True):
+            continue
+        halves = outer.split(cell)
+        if halves is None:
+            where = ", ".join(f"{s} - eq in [{a:.6g}, {b:.6g}]" for s, (a, b) in zip(system.states, cell))
+            return False, f"V > level is not proved outside the box at {where}", count, R
+        stack.extend(reversed(halves))
+    return True, "proved", count, R
+
+
+__all__ = ["IntervalClaim", "IntervalProof", "prove_region", "prove_bounded", "dyadic_floor", "dyadic_ceil", "is_dyadic",
            "INTERVAL_CELL_LIMIT"]

@@ -19,7 +19,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Final
 
-from lyapcheck.models.interval_region import IntervalClaim, IntervalProof, dyadic_floor, prove_region
+from lyapcheck.models.interval_region import IntervalClaim, IntervalProof, dyadic_floor, prove_bounded, prove_region
 from lyapcheck.models.recast_classes import Loop, v_text
 from lyapcheck.models.recast_sos import poly_from_json, poly_to_json
 from lyapcheck.models.search import Budget
@@ -32,6 +32,9 @@ INTERVAL_ATTEMPTS: Final = 3
 #: the longest one proof attempt may take (a proof that fails deep in its bisection can take long;
 #: the recasting's route must keep time for itself)
 ATTEMPT_LIMIT_S: Final = 15.0
+#: the longest the proof that the whole sublevel set lies in the box may take (without it the claim
+#: is the set within the box, as proved)
+WHOLE_SET_LIMIT_S: Final = 2.0
 #: what the route proves with, in every sentence and certificate
 METHOD: Final = "ball arithmetic (python-flint arb) on the true field"
 
@@ -54,7 +57,7 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any]) -> ConditionR
             break
         proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
         if proof.ok:
-            cert = certificate(loop, claim, proof)
+            cert = certificate(loop, claim, proof, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
             return ConditionResult("roa", "certified", claim_sentence(cert), property="ROA", certificate=cert,
                                    numbers={"level": float(claim.level), "V_from": "a V fitted to simulations of the "
                                             "true loop (linear program), proved by " + METHOD,
@@ -123,7 +126,7 @@ def interval_candidate(loop: Loop, V: Any, budget: Budget, box: tuple[Any, Any])
             break
         proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
         if proof.ok:
-            cert = certificate(loop, claim, proof)
+            cert = certificate(loop, claim, proof, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
             return ConditionResult("candidate", "certified", claim_sentence(cert), property="ROA", certificate=cert,
                                    numbers={"level": float(claim.level), "V_from": "the candidate, proved by " + METHOD,
                                             "cells": proof.cells, "boundary_cells": proof.boundary_cells,
@@ -139,14 +142,26 @@ def interval_candidate(loop: Loop, V: Any, budget: Budget, box: tuple[Any, Any])
     return "ball arithmetic: " + "; ".join(reasons)
 
 
-def certificate(loop: Loop, claim: IntervalClaim, proof: IntervalProof) -> dict[str, Any]:
+def certificate(loop: Loop, claim: IntervalClaim, proof: IntervalProof, deadline: float | None = None
+                ) -> dict[str, Any]:
+    """The certificate of a proved claim; for a ``V`` over the states alone, also the proof that the
+    whole sublevel set lies in the box (``whole``), when it goes through (the claim then needs no box)."""
     system = loop.system
     ring = loop.ring
-    return {"kind": "interval", "method": METHOD, "variables": list(ring.names), "auxiliaries": system.definitions(),
+    cert = {"kind": "interval", "method": METHOD, "variables": list(ring.names), "auxiliaries": system.definitions(),
             "angles": [], "shift": {k: str(v) for k, v in system.values.items()},
             "V": poly_to_json(ring, claim.V), "V_text": v_text(system, claim.V), "level": str(claim.level),
             "box": {s: [str(a), str(b)] for s, a, b in zip(system.states, claim.lo, claim.hi)},
-            "cells": proof.cells, "boundary_cells": proof.boundary_cells, "local_radius": str(proof.local_radius)}
+            "cells": proof.cells, "boundary_cells": proof.boundary_cells, "local_radius": str(proof.local_radius),
+            "whole": False}
+    if not uses_auxiliaries(loop, claim.V):
+        import time
+
+        cap = time.perf_counter() + WHOLE_SET_LIMIT_S
+        whole, _, outer_cells, R = prove_bounded(system, claim, cap if deadline is None else min(deadline, cap))
+        if whole:
+            cert.update({"whole": True, "outer_radius": str(R), "outer_cells": outer_cells})
+    return cert
 
 
 def claim_of(loop: Loop, cert: dict[str, Any]) -> IntervalClaim:
@@ -167,6 +182,12 @@ def claim_sentence(cert: dict[str, Any]) -> str:
     n = len(cert["box"])
     written = "V(x, a(x))" if any(any(e[n:]) for _, e in cert["V"]["terms"]) else "V(x)"
     box = ", ".join(f"{s} - eq in [{float(Fraction(a)):.6g}, {float(Fraction(b)):.6g}]" for s, (a, b) in cert["box"].items())
+    if cert.get("whole"):
+        return (f"region of attraction: every trajectory of the true loop starting where {written} <= "
+                f"{float(level):.6g} (exactly {level}) converges to the equilibrium itself (the whole set lies in "
+                f"{box}: V > level outside it, and V' < 0 on the set except at the equilibrium; proved by {METHOD}, "
+                "with an exact Hessian argument at the equilibrium and an exact growth bound of V far out; V_text "
+                "in the certificate)")
     return (f"region of attraction: every trajectory of the true loop starting where {written} <= {float(level):.6g} "
             f"(exactly {level}) with {box} converges to the equilibrium itself (V > level on that box's boundary, "
             f"V' < 0 on the set except at the equilibrium; proved by {METHOD}, with an exact Hessian argument at the "
@@ -188,12 +209,19 @@ def check_interval(loop: Loop, c: dict[str, Any]) -> tuple[bool, str]:
     proof = prove(loop, claim)
     if not proof.ok:
         return False, f"the ball-arithmetic proof does not go through: {proof.why}"
+    if cert.get("whole") not in (True, False):
+        return False, "whole must be true or false"
+    if cert["whole"]:
+        whole, why, _, _ = prove_bounded(system, claim)
+        if not whole:
+            return False, f"the whole sublevel set is not proved to lie in the box: {why}"
     if c.get("summary") != claim_sentence(cert):
         return False, "the printed sentence is not the one the certificate supports"
     if cert.get("V_text") != v_text(system, claim.V):
         return False, "V_text is not V written with the functions"
-    return True, (f"V > level on the box's boundary and V' < 0 on the set ({proof.cells} cells, the equilibrium's "
-                  f"box of half-width {proof.local_radius} by the Hessian), by {METHOD}")
+    outside = "V > level everywhere outside the box, " if cert["whole"] else "V > level on the box's boundary, "
+    return True, (f"{outside}V' < 0 on the set ({proof.cells} cells, the equilibrium's box of half-width "
+                  f"{proof.local_radius} by the Hessian), by {METHOD}")
 
 
 __all__ = ["interval_roa", "interval_candidate", "check_interval", "claim_sentence", "METHOD"]
