@@ -308,8 +308,8 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     return IntervalProof(True, "proved", count, boundary, r, time.perf_counter() - start)
 
 
-def prove_bounded(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None
-                  ) -> tuple[bool, str, int, Fraction | None]:
+def prove_bounded(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None,
+                  cell_limit: int = INTERVAL_CELL_LIMIT) -> tuple[bool, str, int, Fraction | None]:
     """Part 0, for a ``V`` over the states alone: ``V > level`` everywhere outside the box, so the
     whole sublevel set ``{V <= level}`` lies in it. On the faces of the unit cube (``u``, ball cells),
     ``V(t u) = sum_k t^k V_k(u)`` with ``V_k`` the homogeneous parts (even top degree ``d``), and
@@ -360,7 +360,7 @@ def prove_bounded(system: RecastSystem, claim: IntervalClaim, deadline: float | 
             while stack:
                 cell = stack.pop()
                 count += 1
-                if count > INTERVAL_CELL_LIMIT or (deadline is not None and time.perf_counter() > deadline):
+                if count > cell_limit or (deadline is not None and time.perf_counter() > deadline):
                     return False, "out of cells or time on the unit cube's faces", count, None
                 r = radius(unit.balls(cell))
                 halves = unit.split(cell, fixed=i)
@@ -380,7 +380,7 @@ def prove_bounded(system: RecastSystem, claim: IntervalClaim, deadline: float | 
     while stack:
         cell = stack.pop()
         count += 1
-        if count > INTERVAL_CELL_LIMIT or (deadline is not None and count % 256 == 0 and time.perf_counter() > deadline):
+        if count > cell_limit or (deadline is not None and count % 256 == 0 and time.perf_counter() > deadline):
             return False, "out of cells or time outside the box", count, R
         if all(a >= lo_ and b <= hi_ for (a, b), (lo_, hi_) in zip(cell, inner)):
             continue  # inside the box: the decrease part covers it

@@ -32,9 +32,10 @@ INTERVAL_ATTEMPTS: Final = 3
 #: the longest one proof attempt may take (a proof that fails deep in its bisection can take long;
 #: the recasting's route must keep time for itself)
 ATTEMPT_LIMIT_S: Final = 15.0
-#: the longest the proof that the whole sublevel set lies in the box may take (without it the claim
-#: is the set within the box, as proved)
-WHOLE_SET_LIMIT_S: Final = 2.0
+#: the most cells the proof that the whole sublevel set lies in the box may take (a count, not a
+#: time, so that the same model gives the same claim on any machine; without it the claim is the set
+#: within the box, as proved)
+WHOLE_SET_CELL_LIMIT: Final = 20_000
 #: what the route proves with, in every sentence and certificate
 METHOD: Final = "ball arithmetic (python-flint arb) on the true field"
 
@@ -155,10 +156,7 @@ def certificate(loop: Loop, claim: IntervalClaim, proof: IntervalProof, deadline
             "cells": proof.cells, "boundary_cells": proof.boundary_cells, "local_radius": str(proof.local_radius),
             "whole": False}
     if not uses_auxiliaries(loop, claim.V):
-        import time
-
-        cap = time.perf_counter() + WHOLE_SET_LIMIT_S
-        whole, _, outer_cells, R = prove_bounded(system, claim, cap if deadline is None else min(deadline, cap))
+        whole, _, outer_cells, R = prove_bounded(system, claim, deadline, cell_limit=WHOLE_SET_CELL_LIMIT)
         if whole:
             cert.update({"whole": True, "outer_radius": str(R), "outer_cells": outer_cells})
     return cert
