@@ -33,7 +33,7 @@ from lyapcheck.sos.polynomials import Poly, Ring
 #: the sampled box is the comparison box scaled by this about its centre
 FIT_GROWTH: Final = 2.0
 #: samples per state of the grid over the sampled box, by number of states
-FIT_GRID: Final = {1: 401, 2: 81, 3: 21}
+FIT_GRID: Final = {1: 401, 2: 81, 3: 29}
 #: the extra grid near the equilibrium (its half-width is this share of the box's smallest half-width)
 FIT_LOCAL_SHARE: Final = 0.4
 FIT_LOCAL_GRID: Final = {1: 101, 2: 31, 3: 11}

@@ -31,7 +31,7 @@ RETRY_LEVEL_FACTOR: Final = Fraction(9, 10)
 INTERVAL_ATTEMPTS: Final = 3
 #: the longest one proof attempt may take (a proof that fails deep in its bisection can take long;
 #: the recasting's route must keep time for itself)
-ATTEMPT_LIMIT_S: Final = 15.0
+ATTEMPT_LIMIT_S: Final = 25.0
 #: the most cells the proof that the whole sublevel set lies in the box may take (a count, not a
 #: time, so that the same model gives the same claim on any machine; without it the claim is the set
 #: within the box, as proved)
