@@ -93,6 +93,7 @@ EXPECT: dict[str, dict[str, Any]] = {
     "recast-inverted-pendulum-sat": {"certified": ("linearization", "roa")},
     "recast-tanh-neuron": {"certified": ("linearization", "roa")},
     "recast-power-two-machine": {"certified": ("linearization", "roa"), "refuted": ("sos_gas",)},
+    "recast-pendulum-actuator": {"certified": ("linearization", "roa")},
 }
 #: the safety examples run with ``--classes barrier`` alone; the FOSSIL ones carry issue 32's targets
 BARRIER_EXAMPLES = ("fossil-barr1", "fossil-barr3", "fossil-highord4", "fossil-highord6", "fossil-highord8",

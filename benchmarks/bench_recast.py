@@ -77,6 +77,7 @@ RUNS: list[tuple[str, str, list[str]]] = [
     ("inv-pendulum-sat", "recast-inverted-pendulum-sat", []),
     ("tanh-neuron", "recast-tanh-neuron", []),
     ("power-2machine", "recast-power-two-machine", []),
+    ("pendulum-actuator", "recast-pendulum-actuator", []),
     ("unstable", "recast-unstable-pendulum", []),
 ]
 CLASSES = ("linearization", "quadratic", "sos_gas", "roa", "candidate")

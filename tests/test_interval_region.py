@@ -331,3 +331,27 @@ def test_a_whole_set_claim_holds_far_outside_the_box_and_is_re_checked(tmp_path:
     doc = copy.deepcopy(result.document)
     doc["conditions"]["roa"]["certificate"]["box"]["x"] = ["-1/4", cert["box"]["x"][1]]  # cuts the set
     assert not api.verify(doc).valid
+
+
+@pytest.mark.slow
+def test_three_states_get_a_region_on_the_true_loop(tmp_path: Path) -> None:
+    path = Path(__file__).resolve().parents[1] / "examples" / "models" / "recast-pendulum-actuator.toml"
+    result = api.certify(model=path, classes="roa")
+    roa = result.conditions["roa"]
+    assert roa.status == "certified" and roa.certificate["kind"] == "interval"
+    assert roa.numbers["roa_share"] > 0.5 and not roa.numbers.get("soundness_violation")
+    assert api.verify(result).valid
+    cert = roa.certificate
+    rng = np.random.default_rng(11)
+    X = rng.uniform([-3, -3, -1], [3, 3, 1], (4000, 3))
+    total = np.zeros(len(X))
+    for coefficient, exponents in cert["V"]["terms"]:
+        total += float(Fraction(coefficient)) * np.prod(X ** np.array(exponents[:3]), axis=1)
+    lo = [float(Fraction(cert["box"][s][0])) for s in ("theta", "omega", "u")]
+    hi = [float(Fraction(cert["box"][s][1])) for s in ("theta", "omega", "u")]
+    inside = X[(total <= float(Fraction(cert["level"]))) & np.all((X >= lo) & (X <= hi), axis=1)]
+    assert len(inside) > 200
+    field = lambda Y: np.column_stack([Y[:, 1], -np.sin(Y[:, 0]) - Y[:, 1] / 2 + Y[:, 2],
+                                       -2 * Y[:, 2] + np.clip(-Y[:, 0] - Y[:, 1], -1, 1)])
+    end = _rk4(field, inside, 60.0)
+    assert np.all(np.linalg.norm(end, axis=1) < 1e-2)
