@@ -203,7 +203,23 @@ def portrait(doc: dict[str, Any], model: Model | None, simulate: bool) -> tuple[
     return drawn.figure, drawn.reason, drawn.checks
 
 
-class ModelFileSubject(Subject):
+class ModelCertificateChecks:
+    """What the page of every model certificate shares (a polynomial loop's or a loop with
+    functions'): the fingerprints of its model text and its exact re-check."""
+
+    doc: dict[str, Any]
+
+    def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:
+        return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
+                ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
+                ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
+
+    def checked(self, recheck: bool) -> dict[str, Any]:
+        rows, error = recheck_rows(self.doc) if recheck else ([], "not requested")
+        return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
+
+
+class ModelFileSubject(ModelCertificateChecks, Subject):
     model = MODEL_FILE
     template = "model_file.html.j2"
 
@@ -312,15 +328,6 @@ class ModelFileSubject(Subject):
                    "The full solver log of each class is in the certificate file."),
         }
 
-    def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:
-        return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
-                ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
-                ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
 
-    def checked(self, recheck: bool) -> dict[str, Any]:
-        rows, error = recheck_rows(self.doc) if recheck else ([], "not requested")
-        return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
-
-
-__all__ = ["ModelFileSubject", "EXTRA_STATUS_MEANING", "quantities", "denominators", "scaling", "solvers",
+__all__ = ["ModelFileSubject", "ModelCertificateChecks", "EXTRA_STATUS_MEANING", "quantities", "denominators", "scaling", "solvers",
            "command", "recheck_rows", "portrait"]

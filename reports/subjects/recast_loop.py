@@ -33,7 +33,7 @@ from reports.recast_portrait import recast_portrait
 from reports.sections.base import ClassContext, text_of
 from reports.sections.recast import RECAST_LOOP
 from reports.subjects.base import STATUS_MEANING, Glance, Subject
-from reports.subjects.model_file import EXTRA_STATUS_MEANING, command, quantities, recheck_rows, solvers
+from reports.subjects.model_file import EXTRA_STATUS_MEANING, ModelCertificateChecks, command, quantities, solvers
 from reports.typeset import Equations
 from reports.views import as_dict, as_fraction
 
@@ -85,7 +85,7 @@ def angle_rows(recast: dict[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
-class RecastLoopSubject(Subject):
+class RecastLoopSubject(ModelCertificateChecks, Subject):
     model = RECAST_LOOP
     template = "recast_loop.html.j2"
 
@@ -190,15 +190,6 @@ class RecastLoopSubject(Subject):
             "solvers_note": Markup("A solver's outcome is never a verdict: every status above comes from an exact check. "
                                    "The full solver log of each class is in the certificate file."),
         }
-
-    def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:
-        return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
-                ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
-                ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
-
-    def checked(self, recheck: bool) -> dict[str, Any]:
-        rows, error = recheck_rows(self.doc) if recheck else ([], "not requested")
-        return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
 
 
 __all__ = ["RecastLoopSubject", "is_recast_document", "auxiliary_rows", "relation_rows", "angle_rows"]
