@@ -42,29 +42,33 @@ METHOD: Final = "ball arithmetic (python-flint arb) on the true field"
 
 def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
     """The ball-arithmetic region of attraction, or why there is none (one line)."""
-    import time
-
     from lyapcheck.models.fitted_v import fit_v
 
-    system = loop.system
-    fitted = fit_v(system, loop.ring, box)
+    fitted = fit_v(loop.system, loop.ring, box)
     if isinstance(fitted, str):
         return fitted
-    claim = fitted.claim
-    reasons = []
-    for attempt in range(INTERVAL_ATTEMPTS):
+    return _prove_lowering(loop, fitted.claim, budget, "roa", "a V fitted to simulations of the true loop (linear "
+                           "program), proved by " + METHOD, {"sampled_share": fitted.sampled_share})
+
+
+def _prove_lowering(loop: Loop, claim: IntervalClaim, budget: Budget, name: str, v_from: str,
+                    numbers: dict[str, Any]) -> ConditionResult | str:
+    """Prove the claim; where that fails, lower its level (under a point where ``V' >= 0`` was
+    proved, else by RETRY_LEVEL_FACTOR) and try again, INTERVAL_ATTEMPTS times in all."""
+    import time
+
+    reasons: list[str] = []
+    for _ in range(INTERVAL_ATTEMPTS):
         if budget.left() <= 0:
             reasons.append("out of time")
             break
         proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
         if proof.ok:
             cert = certificate(loop, claim, proof, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
-            return ConditionResult("roa", "certified", claim_sentence(cert), property="ROA", certificate=cert,
-                                   numbers={"level": float(claim.level), "V_from": "a V fitted to simulations of the "
-                                            "true loop (linear program), proved by " + METHOD,
-                                            "cells": proof.cells, "boundary_cells": proof.boundary_cells,
-                                            "proof_seconds": proof.seconds, "sampled_share": fitted.sampled_share,
-                                            "tried": reasons + [f"level {float(claim.level):.6g}: proved"]})
+            return ConditionResult(name, "certified", claim_sentence(cert), property="ROA", certificate=cert,
+                                   numbers={"level": float(claim.level), "V_from": v_from, "cells": proof.cells,
+                                            "boundary_cells": proof.boundary_cells, "proof_seconds": proof.seconds,
+                                            **numbers, "tried": reasons + [f"level {float(claim.level):.6g}: proved"]})
         reasons.append(f"level {float(claim.level):.6g}: {proof.why}")
         lower = claim.level * RETRY_LEVEL_FACTOR
         if proof.counterexample_v is not None:  # below the point where V' >= 0
@@ -112,35 +116,12 @@ def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None) -> In
 def interval_candidate(loop: Loop, V: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
     """``candidate``'s region by ball arithmetic: the user's ``V`` (it may use the loop's functions),
     its largest level where sampling sees ``V' < 0``, proved on the true field."""
-    import time
-
     from lyapcheck.models.fitted_v import propose_level
 
     proposal = propose_level(loop.system, V, box)
     if isinstance(proposal, str):
         return proposal
-    claim = proposal
-    reasons = []
-    for _ in range(INTERVAL_ATTEMPTS):
-        if budget.left() <= 0:
-            reasons.append("out of time")
-            break
-        proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
-        if proof.ok:
-            cert = certificate(loop, claim, proof, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
-            return ConditionResult("candidate", "certified", claim_sentence(cert), property="ROA", certificate=cert,
-                                   numbers={"level": float(claim.level), "V_from": "the candidate, proved by " + METHOD,
-                                            "cells": proof.cells, "boundary_cells": proof.boundary_cells,
-                                            "proof_seconds": proof.seconds,
-                                            "tried": reasons + [f"level {float(claim.level):.6g}: proved"]})
-        reasons.append(f"level {float(claim.level):.6g}: {proof.why}")
-        lower = claim.level * RETRY_LEVEL_FACTOR
-        if proof.counterexample_v is not None:
-            lower = min(lower, dyadic_floor(Fraction(proof.counterexample_v) * RETRY_LEVEL_FACTOR))
-        if lower <= 0:
-            break
-        claim = IntervalClaim(claim.V, lower, claim.lo, claim.hi)
-    return "ball arithmetic: " + "; ".join(reasons)
+    return _prove_lowering(loop, proposal, budget, "candidate", "the candidate, proved by " + METHOD, {})
 
 
 def certificate(loop: Loop, claim: IntervalClaim, proof: IntervalProof, deadline: float | None = None
