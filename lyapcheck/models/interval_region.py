@@ -10,10 +10,13 @@ finite computation that :func:`prove_region` runs and ``verify`` runs again:
    crossing ``{V > level}``: as long as ``V`` does not increase, ``Omega`` is invariant.
 2. **The decrease.** ``B`` is bisected into cells; every cell on which ``V <= level`` somewhere
    either has ``g = grad V . f < 0`` on the whole cell, proved in ball arithmetic (the natural
-   enclosure, else the mean-value form ``g(m) + grad g(cell) . (cell - m)``), or lies in the
-   box ``N = [-r, r]^n`` of part 3.
+   enclosure, else the second-order Taylor form ``g(m) + grad g(m) . t + t^T H(cell) t / 2``), or
+   lies in the box ``N = [-r, r]^n`` of part 3. A cell whose centre has ``g >= 0`` proved and
+   ``V <= level`` ends the proof at once: the claim is false at this level.
 3. **The equilibrium, exactly.** ``V`` has no constant or linear term (checked on its exact
-   coefficients) and ``f(x_eq) = 0`` (checked exactly when the model is read), so ``g(0) = 0``
+   coefficients; for a ``V`` that uses the loop's functions, ``V`` and its gradient in the states
+   vanish at the equilibrium by the exact chain rule) and ``f(x_eq) = 0`` (checked exactly when the
+   model is read), so ``g(0) = 0``
    and ``grad g(0) = 0``; the Hessian of ``g`` over ``N`` (chain rule in ball arithmetic, each
    function's exact derivatives) is negative definite for every matrix of its enclosure (Cholesky
    in ball arithmetic). Then ``g(z) = int_0^1 (1 - t) z^T H(t z) z dt < 0`` for every ``z != 0`` in
@@ -21,7 +24,9 @@ finite computation that :func:`prove_region` runs and ``verify`` runs again:
 
 With ``g < 0`` on ``Omega`` except at the equilibrium and ``Omega`` compact and invariant, every
 trajectory from ``Omega`` converges to the equilibrium (``V`` decreases at a rate bounded away from
-0 near any other point of ``Omega``). The claim is in the states themselves, not modulo 2 pi.
+0 near any other point of ``Omega``; ``V`` need not be positive). The claim is in the states
+themselves, not modulo 2 pi. :func:`prove_bounded` (part 0, optional) proves ``V > level``
+everywhere outside ``B``: then ``Omega`` is the whole sublevel set ``{V <= level}``.
 
 Ball arithmetic is python-flint's ``arb``: each result encloses the exact one, outward rounding
 included. The cells and bisections are deterministic (the same inputs give the same cells), so
@@ -135,17 +140,6 @@ class _Cells:
         left = cell[:k] + ((a, m),) + cell[k + 1:]
         right = cell[:k] + ((m, b),) + cell[k + 1:]
         return left, right
-
-
-def _mean_value_negative(lie: LieDerivative, cells: _Cells, cell: tuple[tuple[float, float], ...]) -> bool:
-    """``g < 0`` on the cell by the mean-value form ``g(m) + grad g(cell) . (cell - m)``."""
-    jet = lie.jet(cells.balls(cell), 1)
-    if jet.grad is None:
-        return False
-    total = lie(cells.centers(cell))
-    for gi, ri in zip(jet.grad, cells.radii(cell)):
-        total = total + gi * ri
-    return bool(total < 0)
 
 
 def _second_order_negative(lie: LieDerivative, cells: _Cells, cell: tuple[tuple[float, float], ...]) -> bool | None:
