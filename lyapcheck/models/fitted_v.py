@@ -10,12 +10,15 @@ program (HiGHS, through SciPy) asks, at the samples:
 * ``V' <= -eps |x|^2`` and ``V >= eps |x|^2`` where the simulated trajectory converges;
 * ``V >= 1 + margin`` where it does not, and on the big box's edge (so that ``{V <= 1}`` closes
   inside it and leaves out what does not converge);
+* ``V``'s top-degree form positive on the unit cube's faces (so that ``V`` grows in every
+  direction and its sublevel sets can be proved bounded);
 
 and minimizes the sum of ``V`` over the converging samples inside the comparison box, which pulls
-as many of them as it can below 1. The level proposed is a little under the smallest ``V`` at a
-sample of a fine grid where ``V' >= 0`` (away from the equilibrium) or on the big box's edge; the
-box proposed is the bounding box of the fine samples under that level, widened. The proof then
-decides.
+as many of them as it can below 1. The level proposed (:func:`_level_and_box`, also for a user's
+candidate, :func:`propose_level`) is a little under the largest at which the component of
+``{V <= level}`` holding the equilibrium has no point of a fine grid where ``V' >= 0`` (away from
+the equilibrium) or on the big box's edge, lowered again where random points of the set see
+``V' >= 0``; the box proposed is that component's bounding box, widened. The proof then decides.
 """
 
 from __future__ import annotations
