@@ -59,6 +59,9 @@ LEVEL_SHARE: Final = 0.98
 #: random points of the proposed set checked in floating point before the proof (rounds, points)
 LEVEL_CHECK_ROUNDS: Final = 4
 LEVEL_CHECK_POINTS: Final = 20000
+#: a simulated start that gets farther than this many times the sampled box's size from the
+#: equilibrium is stopped there, as not converging
+FIT_ESCAPE: Final = 5.0
 #: the simulation's horizon (the loop's time unit) and the radius that counts as converged
 FIT_HORIZON: Final = 30.0
 FIT_CONVERGED: Final = 2e-2
@@ -157,7 +160,9 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | s
     blo, bhi = centre - FIT_GROWTH * half, centre + FIT_GROWTH * half
     local = FIT_LOCAL_SHARE * float(np.min(half))
     Z = np.vstack([_grid(blo, bhi, FIT_GRID[n]), _grid(-local * np.ones(n), local * np.ones(n), FIT_LOCAL_GRID[n])])
-    dev, _ = simulate_ends(system, Z + eq, FIT_HORIZON)
+    # a trajectory far outside the sampled box does not converge (and stopping it keeps a batch
+    # with one finite escape time from crawling)
+    dev, _ = simulate_ends(system, Z + eq, FIT_HORIZON, escape=FIT_ESCAPE * float(np.max(bhi - blo)))
     converges = distances(system, dev) < FIT_CONVERGED
     edge = np.any(np.isclose(Z, blo) | np.isclose(Z, bhi), axis=1)
     F = field_values(system, Z + eq)

@@ -32,37 +32,69 @@ def poly_values(ring: Ring, p: Poly, columns: dict[str, np.ndarray], rows: int) 
     return out
 
 
+class FloatLoop:
+    """The true loop of a recast system in floating point, its polynomials' coefficients converted
+    once (an integrator calls the field thousands of times)."""
+
+    def __init__(self, system: RecastSystem) -> None:
+        self.system = system
+        ring = system.ring
+        self.names = ring.names
+
+        def compiled(p: Poly) -> list[tuple[float, list[tuple[int, int]]]]:
+            return [(c, [(i, k) for i, k in enumerate(m) if k]) for m, c in ring.float_terms(p).items()]
+
+        self.auxiliaries = [(a.function, a.limit, a.radicand, None if a.argument is None else compiled(a.argument))
+                            for a in system.auxiliaries]
+        self.field = [(compiled(r.numerator), compiled(r.denominator)) for r in system.field]
+
+    @staticmethod
+    def _value(terms: list[tuple[float, list[tuple[int, int]]]], cols: list[np.ndarray], rows: int) -> np.ndarray:
+        out = np.zeros(rows)
+        for c, factors in terms:
+            term = np.full(rows, c)
+            for i, k in factors:
+                term = term * cols[i] ** k
+            out += term
+        return out
+
+    def columns(self, X: np.ndarray) -> list[np.ndarray]:
+        """Every variable of the recast ring at the states ``X`` (rows; not deviations), in its order."""
+        rows = X.shape[0]
+        cols = [X[:, i] for i in range(self.system.n)]
+        for function, limit, radicand, argument in self.auxiliaries:
+            if argument is None:  # rt2, rt3
+                cols.append(np.full(rows, float(np.sqrt(float(radicand or 0)))))
+                continue
+            u = self._value(argument, cols, rows)
+            if function == "sat":
+                assert limit is not None
+                cols.append(np.clip(u, -float(limit), float(limit)))
+            else:
+                cols.append(_NUMPY[function](u))
+        return cols
+
+    def __call__(self, X: np.ndarray) -> np.ndarray:
+        """The true field ``x'`` at the states ``X`` (rows)."""
+        X = np.atleast_2d(np.asarray(X, dtype=np.float64))
+        cols = self.columns(X)
+        rows = X.shape[0]
+        out = np.empty_like(X)
+        for i, (num, den) in enumerate(self.field):
+            out[:, i] = self._value(num, cols, rows) / self._value(den, cols, rows)
+        return out
+
+
 def variable_values(system: RecastSystem, X: np.ndarray) -> dict[str, np.ndarray]:
     """Every variable of the recast ring at the states ``X`` (rows; not deviations): the states,
     then each auxiliary from its definition (roots as their constants)."""
     X = np.atleast_2d(np.asarray(X, dtype=np.float64))
-    rows = X.shape[0]
-    cols: dict[str, np.ndarray] = {s: X[:, i] for i, s in enumerate(system.states)}
-    ring = system.ring
-    for a in system.auxiliaries:
-        if a.argument is None:  # rt2, rt3
-            cols[a.name] = np.full(rows, float(np.sqrt(float(a.radicand or 0))))
-            continue
-        u = poly_values(ring, a.argument, cols, rows)
-        if a.function == "sat":
-            assert a.limit is not None
-            L = float(a.limit)
-            cols[a.name] = np.clip(u, -L, L)
-        else:
-            cols[a.name] = _NUMPY[a.function](u)
-    return cols
+    return dict(zip(system.ring.names, FloatLoop(system).columns(X)))
 
 
 def field_values(system: RecastSystem, X: np.ndarray) -> np.ndarray:
     """The true field ``x'`` at the states ``X`` (rows)."""
-    X = np.atleast_2d(np.asarray(X, dtype=np.float64))
-    cols = variable_values(system, X)
-    rows = X.shape[0]
-    ring = system.ring
-    out = np.empty_like(X)
-    for i, r in enumerate(system.field):
-        out[:, i] = poly_values(ring, r.numerator, cols, rows) / poly_values(ring, r.denominator, cols, rows)
-    return out
+    return FloatLoop(system)(X)
 
 
 def v_values(system: RecastSystem, V: Poly, Z: np.ndarray) -> np.ndarray:
@@ -108,10 +140,10 @@ class _TrueField:
     """The true field as the batched system's field: ``(y, d) -> y'`` (no disturbance)."""
 
     def __init__(self, system: RecastSystem) -> None:
-        self.system = system
+        self.loop = FloatLoop(system)
 
     def __call__(self, y: np.ndarray, d: Any = None) -> np.ndarray:
-        return field_values(self.system, y)
+        return self.loop(y)
 
 
 def distances(system: RecastSystem, deviations: np.ndarray, angles: tuple[str, ...] = ()) -> np.ndarray:

@@ -131,6 +131,9 @@ SIMULATED_GRID: Final = 40
 #: how long each is simulated (the loop's time unit); a start in the set that has not converged by
 #: then is simulated ten times longer before it counts against the proof
 SIMULATED_HORIZON: Final = 30.0
+#: a start farther than this many box sizes from the equilibrium is stopped there (it does not
+#: converge in this horizon; its re-simulation, if it started in a certified set, is not stopped)
+SIMULATED_ESCAPE: Final = 10.0
 #: converged: ending this close to the equilibrium
 CONVERGED_RADIUS: Final = 2e-2
 
@@ -160,7 +163,8 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -
         corners = result.certificate["box"]
         inside &= np.all((Z >= [float(Fraction(corners[s][0])) for s in system.states])
                          & (Z <= [float(Fraction(corners[s][1])) for s in system.states]), axis=1)
-    dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON)
+    dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON,
+                                   escape=SIMULATED_ESCAPE * float(np.max(np.asarray(hi) - np.asarray(lo))))
     to_zero = simulated.ok & (distances(system, dev) < CONVERGED_RADIUS)
     modulo = simulated.ok & (distances(system, dev, tuple(loop.angles)) < CONVERGED_RADIUS)
     result.numbers["simulated_starts"] = int(len(Z))
