@@ -355,3 +355,42 @@ def test_three_states_get_a_region_on_the_true_loop(tmp_path: Path) -> None:
                                        -2 * Y[:, 2] + np.clip(-Y[:, 0] - Y[:, 1], -1, 1)])
     end = _rk4(field, inside, 60.0)
     assert np.all(np.linalg.norm(end, axis=1) < 1e-2)
+
+
+@pytest.mark.slow
+def test_random_loops_certified_sets_all_converge_on_the_true_loop(tmp_path: Path) -> None:
+    """A small red team: loops x'' = -a sin(x) - b x' + c tanh(x x') + d x^2/4 - x/2 with random
+    quarter-integer coefficients; every certified set, sampled well beyond its box (the whole
+    sublevel set where that is claimed), is simulated here with numpy and must converge."""
+    rng = np.random.default_rng(7)
+    certified = 0
+    for trial in range(6):
+        a, b, c, d = (Fraction(int(v), 4) for v in rng.integers(-8, 9, 4))
+        b = abs(b) + Fraction(1, 4)
+        path = tmp_path / f"loop{trial}.toml"
+        path.write_text(f'[model]\nname = "random"\nstates = ["x1", "x2"]\n[dynamics]\nx1 = "x2"\n'
+                        f'x2 = "-({a})*sin(x1) - ({b})*x2 + ({c})*tanh(x1*x2) + ({d})*x1**2/4 - x1/2"\n'
+                        '[domain]\nx1 = [-3, 3]\nx2 = [-3, 3]\n')
+        result = api.certify(model=path, classes="roa")
+        roa = result.conditions["roa"]
+        if roa.status != "certified":
+            continue
+        certified += 1
+        cert = roa.certificate
+        assert cert["kind"] == "interval" and api.verify(result).valid
+        X = rng.uniform(-6, 6, (6000, 2))
+        V = np.zeros(len(X))
+        for coefficient, (e1, e2, *_) in cert["V"]["terms"]:
+            V += float(Fraction(coefficient)) * X[:, 0] ** e1 * X[:, 1] ** e2
+        member = V <= float(Fraction(cert["level"]))
+        if not cert["whole"]:
+            lo = [float(Fraction(cert["box"][s][0])) for s in ("x1", "x2")]
+            hi = [float(Fraction(cert["box"][s][1])) for s in ("x1", "x2")]
+            member &= np.all((X >= lo) & (X <= hi), axis=1)
+        inside = X[member]
+        fa, fb, fc, fd = (float(v) for v in (a, b, c, d))
+        field = lambda Y: np.column_stack([Y[:, 1], -fa * np.sin(Y[:, 0]) - fb * Y[:, 1]
+                                           + fc * np.tanh(Y[:, 0] * Y[:, 1]) + fd * Y[:, 0] ** 2 / 4 - Y[:, 0] / 2])
+        end = _rk4(field, inside, 80.0)
+        assert np.all(np.linalg.norm(end, axis=1) < 1e-2), (trial, a, b, c, d)
+    assert certified >= 3
