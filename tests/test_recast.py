@@ -507,7 +507,6 @@ def test_bad_calls_are_refused_in_one_line(rhs: str, key: str, fragments: list[s
 
 
 @pytest.mark.parametrize(("extra", "section"), [
-    ("[disturbances]\nd = 1\n", "[disturbances]"),
     ('[outputs]\ny = "x1"\n', "[outputs]"),
 ])
 def test_sections_not_taken_with_functions_are_refused(extra: str, section: str) -> None:

@@ -332,3 +332,51 @@ def test_quadratic_with_a_denominator_is_asymptotic_only_and_an_angle_is_not_qua
     model = parse_any_model(PENDULUM, "p.toml")
     loop = rc.base_loop(model.system)
     assert rc.quadratic(loop, Budget(10.0, "test")).status == "not_applicable"
+
+
+DISTURBED = """
+[model]
+name = "pendulum with a torque disturbance"
+states = ["theta", "omega"]
+[disturbances]
+w = 0.2
+[dynamics]
+theta = "omega"
+omega = "-sin(theta) - omega + w*cos(theta)"
+[domain]
+theta = [-3.14159, 3.14159]
+omega = [-4, 4]
+"""
+
+
+def test_a_disturbed_loop_with_functions_is_certified_with_its_disturbances_at_0(tmp_path: Path) -> None:
+    result = api.certify(model=write(tmp_path, "disturbed", DISTURBED), classes="linearization,sos_gas,roa")
+    assert result.verdict == "certified_nominal"  # no claim covers the disturbance
+    assert result.document["disturbances"] == {"w": "1/5"}
+    for name, c in result.conditions.items():
+        assert c.disturbances == "zero", name
+        if c.status in ("certified", "refuted"):
+            assert c.summary.startswith("(d = 0) "), name
+    assert result.conditions["roa"].status == "certified"
+    assert api.verify(result).valid
+    # a claim said to cover the disturbance, or a sentence without "(d = 0)", does not verify
+    doc = copy.deepcopy(result.document)
+    doc["conditions"]["roa"]["disturbances"] = "all"
+    assert not api.verify(doc).valid
+    doc = copy.deepcopy(result.document)
+    doc["conditions"]["roa"]["summary"] = doc["conditions"]["roa"]["summary"].removeprefix("(d = 0) ")
+    assert not api.verify(doc).valid
+    # the same file without its disturbance: the plain claims, and the same figures
+    plain = api.certify(model=write(tmp_path, "plain", DISTURBED.replace("[disturbances]\nw = 0.2\n", "")
+                                    .replace(" + w*cos(theta)", "")), classes="roa")
+    assert plain.verdict == "certified" and plain.conditions["roa"].disturbances is None
+    assert plain.conditions["roa"].certificate["V"] == result.conditions["roa"].certificate["V"]
+
+
+@pytest.mark.parametrize(("extra", "fragment"), [("w = -0.2", "must be >= 0"), ("sin = 0.2", "'sin'")])
+def test_bad_disturbances_of_a_loop_with_functions_are_refused_in_one_line(tmp_path: Path, extra: str,
+                                                                          fragment: str) -> None:
+    text = DISTURBED.replace("w = 0.2", extra)
+    path = write(tmp_path, "bad", text)
+    run = subprocess.run([sys.executable, "-m", "lyapcheck", "certify", str(path)], capture_output=True, text=True)
+    assert run.returncode == 2 and fragment in run.stderr and "\n" not in run.stderr.strip()

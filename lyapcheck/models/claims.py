@@ -30,6 +30,12 @@ BARRIER_SENTENCE = ("safety: no trajectory that starts in the initial set ever e
                     "initial set, B >= 1 on the unsafe set, B' <= lambda B everywhere; checked exactly)")
 
 
+def covered(coverage: str | None, text: str) -> str:
+    """A claim's sentence with the disturbances it covers in front (``(d = 0) ...``), as for a
+    loop with functions, which is certified with its disturbances at 0."""
+    return DISTURBANCE_PREFIX.get(coverage, "") + text if coverage is not None else text
+
+
 def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = (),
             box: Mapping[str, Sequence[Any]] | None = None) -> str | None:
     """The sentence of a ``certified`` or ``refuted`` condition (its JSON form), or None for the

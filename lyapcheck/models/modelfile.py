@@ -260,23 +260,29 @@ class _Reader:
 
     def recast_model(self, candidate: str | None = None) -> "RecastModel":
         """A loop with functions (lyapcheck.models.recast): the parameters are read, set to their
-        values and the loop recast; disturbances, outputs, sets and units are not taken yet."""
+        values and the loop recast with every disturbance held at 0 (its claims say ``(d = 0)``);
+        outputs, sets and units are not taken yet."""
         from lyapcheck.models.recast import RecastModel, recast_dynamics  # only a loop with functions needs it
 
         name, origin, states = self.head()
-        for section in ("disturbances", "outputs", "sets", "units"):
+        for section in ("outputs", "sets", "units"):
             if section in self.data:
                 key, what = first_function_use(self.table("dynamics"))
                 raise self.fail(key, f"{what} needs the loop recast (a loop with functions), which takes no "
                                      f"[{section}] yet: write the field polynomial or rational in the states, or "
                                      f"remove [{section}]")
         params, params_given = self.quantities("parameters", MAX_PARAMETERS)
-        self.check_unique(states, params, {})
-        params, params_given, _ = self.apply_overrides(params, params_given, {})
+        dists, _ = self.quantities("disturbances", MAX_DISTURBANCES)
+        for key, b in dists.items():
+            if b < 0:
+                raise self.fail(f"[disturbances] {key}", f"is a bound |d| <= b and must be >= 0, got {float(b)!r}")
+        self.check_unique(states, params, dists)
+        params, params_given, dists = self.apply_overrides(params, params_given, dists)
         for reserved in ("pi", *FUNCTIONS):
-            if reserved in states or reserved in params:
-                raise self.fail("[model] states" if reserved in states else f"[parameters] {reserved}",
-                                f"'{reserved}' is a function or constant of the language; choose another name")
+            where = ("[model] states" if reserved in states else f"[parameters] {reserved}" if reserved in params
+                     else f"[disturbances] {reserved}" if reserved in dists else None)
+            if where is not None:
+                raise self.fail(where, f"'{reserved}' is a function or constant of the language; choose another name")
         table = self.table("dynamics")
         for key in table:
             if key not in states:
@@ -287,10 +293,13 @@ class _Reader:
                 raise self.fail("[dynamics]", f"the state '{s}' has no equation")
         equilibrium = self.equilibrium(states, Ring(states))
         domain = self.domain(states)
-        system, V = recast_dynamics(self.source, states, table, params, equilibrium, candidate)
+        # the nominal loop: every disturbance at 0 (a claim about it says "(d = 0)")
+        system, V = recast_dynamics(self.source, states, table, {**params, **{d: Fraction(0) for d in dists}},
+                                    equilibrium, candidate)
         return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
                            parameters=params, equilibrium=equilibrium, domain=domain, system=system,
-                           overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V)
+                           overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V,
+                           disturbances=dists)
 
     def states(self, head: dict[str, Any]) -> tuple[str, ...]:
         states = head.get("states")

@@ -711,6 +711,9 @@ class RecastModel:
     overrides: dict[str, str] = field(default_factory=dict)
     #: ``--candidate`` as a polynomial in the recast ring's deviations (its functions recast with the loop's)
     candidate_v: Poly | None = None
+    #: the declared disturbances and their bounds ``|d| <= b``; :attr:`system` is the loop with each
+    #: at 0, and every claim about it says ``(d = 0)``
+    disturbances: dict[str, Fraction] = field(default_factory=dict)
 
     @property
     def sha256(self) -> str:

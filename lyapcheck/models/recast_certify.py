@@ -27,7 +27,8 @@ from lyapcheck.models.recast_classes import (Loop, base_loop, check_root_proofs,
                                              lie, state_square, v_names, v_text)
 from lyapcheck.models.recast_run import RECAST_CLASSES
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
-from lyapcheck.results import ConditionResult
+from lyapcheck.models.claims import covered
+from lyapcheck.results import ConditionResult, Disturbances
 from lyapcheck.sos.polynomials import degree_in, to_fmpq
 
 Row = tuple[str, bool, str]
@@ -66,9 +67,15 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
             results[name] = ConditionResult(name, "not_applicable", "not taken yet for a loop with functions (sin, "
                                             "sqrt, sat, ...): the classes here are " + ", ".join(RECAST_CLASSES))
     results = {name: results[name] for name in chosen}
+    # the loop is recast with every disturbance at 0
+    coverage: Disturbances | None = "zero" if model.disturbances else None
     for name, r in results.items():
         if r.status == "certified" and name != "linearization":
             r.summary = sentence_of(r.certificate)
+        if coverage is not None:
+            r.disturbances = coverage
+            if r.status in ("certified", "refuted"):
+                r.summary = covered(coverage, r.summary)
     conditions = {name: r.to_json() for name, r in results.items()}
     verdict = verdict_of(conditions)
     return verdict, results, build_document(model, loop, candidate, conditions, verdict)
@@ -88,7 +95,7 @@ def build_document(model: RecastModel, loop: Loop, candidate: str | None, condit
         "states": list(model.states),
         "equilibrium": {s: str(v) for s, v in zip(model.states, model.equilibrium)},
         "parameters": {k: str(v) for k, v in model.parameters.items()},
-        "disturbances": {},
+        "disturbances": {d: str(b) for d, b in model.disturbances.items()},
         "recast": {**model.system.to_json(), "angles": {a: list(sc) for a, sc in loop.angles.items()}},
         "conditions": conditions,
         "verdict": verdict,
@@ -193,8 +200,16 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
                                          "gives" if recast_ok else "the stated recasting differs from the one the "
                                                                    "model text gives"))
     base = base_loop(model.system)
+    coverage = "zero" if model.disturbances else None
+    declared = {d: str(b) for d, b in model.disturbances.items()}
+    if doc.get("disturbances", {}) != declared:
+        rows.append(("disturbances", False, "the stated disturbances are not the model text's"))
     for name, c in doc["conditions"].items():
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted"):
+            continue
+        if c.get("disturbances") != coverage:
+            rows.append((name, False, f"{name}: a loop with functions is certified with its disturbances at 0; the "
+                                      f"stated coverage {c.get('disturbances')!r} is not that"))
             continue
         try:
             ok, why = _verify_condition(name, c, base)
@@ -284,7 +299,7 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
         ok, why = _verify_ges(loop, cert, region is not None)
         if not ok:
             return False, why
-    if c.get("summary") != claim_sentence(cert):
+    if c.get("summary") != covered(c.get("disturbances"), claim_sentence(cert)):
         return False, "the printed sentence is not the one the certificate supports"
     if cert.get("V_text") != v_text(system, V):
         return False, "V_text is not V written with the functions"
@@ -293,4 +308,4 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
     return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
 
 
-__all__ = ["certify_recast", "verify_recast", "claim_sentence"]
+__all__ = ["certify_recast", "verify_recast", "claim_sentence", "sentence_of"]

@@ -2,9 +2,9 @@
 
 The field integrated is the model's own (each function evaluated by numpy:
 :func:`lyapcheck.models.recast_numeric.field_values`), never the recast polynomial loop, which
-only holds on its relations' set. There are no disturbances (a file with functions has none yet),
-so there is one scenario, the undisturbed loop. The document says, for every start, where it ended,
-how far from the equilibrium (modulo 2 pi in an angle) and whether it converged.
+only holds on its relations' set. Its declared disturbances are held at 0, as in its certificates
+(``(d = 0)``), so there is one scenario, the undisturbed loop. The document says, for every start,
+where it ended, how far from the equilibrium (modulo 2 pi in an angle) and whether it converged.
 """
 
 from __future__ import annotations
@@ -78,7 +78,8 @@ def simulate(model: RecastModel, starts: np.ndarray | None = None, t_end: float 
                              "converged": not diverged and bool(distance[k] < CONVERGED_TOLERANCE),
                              "diverged": diverged})
     return {"model": model.name, "kind": "recast",
-            "field": "the true loop: each function evaluated by numpy, not the recast polynomial loop",
+            "field": "the true loop: each function evaluated by numpy, not the recast polynomial loop"
+                     + (f"; the disturbances {', '.join(model.disturbances)} held at 0" if model.disturbances else ""),
             "angles_modulo_2pi": list(angles), "t_end_s": horizon,
             "trajectories": trajectories, "n_converged": sum(t["converged"] for t in trajectories),
             "diverged": any(t["diverged"] for t in trajectories)}

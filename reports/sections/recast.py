@@ -71,12 +71,14 @@ def figures(cond: dict[str, Any]) -> list[str]:
             for f in key_figures(cond)]
 
 
-def sentence(cert: dict[str, Any]) -> str:
-    """The claim a recast or interval certificate supports, made from the certificate alone."""
+def sentence(cert: dict[str, Any], coverage: Any = None) -> str:
+    """The claim a recast or interval certificate supports, made from the certificate alone (with
+    ``(d = 0)`` in front where the condition says its disturbances were held at 0)."""
+    from lyapcheck.models.claims import covered
     from lyapcheck.models.recast_certify import sentence_of
 
     try:
-        return sentence_of(cert)
+        return covered(coverage if coverage in ("zero", "all") else None, sentence_of(cert))
     except (KeyError, TypeError, ValueError, ArithmeticError, ZeroDivisionError):
         return "(no sentence: the figures of this certificate are malformed)"
 
@@ -169,7 +171,7 @@ class RecastSection(ModelFileSection):
         kind = str(cert["kind"])
         prop = text_of(cond.get("property") or "")
         angles = angles_of(cert)
-        view = ClassView(name, f"class-{index}", self.titles.get(name, name), "certified", sentence(cert),
+        view = ClassView(name, f"class-{index}", self.titles.get(name, name), "certified", sentence(cert, cond.get("disturbances")),
                          property=prop, property_meaning=PROPERTY_MEANING.get(prop, ""), figures=figures(cond),
                          items_title="Every figure of the class, as stored")
         if angles:
