@@ -270,6 +270,46 @@ def _level_and_box(system: RecastSystem, V: Poly, values: Callable[[np.ndarray],
                          tuple(dyadic_ceil(Fraction(float(x))) for x in zhi))
 
 
+def propose_robust_level(system: RecastSystem, robust: RecastSystem, bounds: Sequence[Fraction], V: Poly,
+                         box: tuple[Any, Any]) -> IntervalClaim | str:
+    """A claim for ``V`` (over the states) that should hold for every disturbance value: its level
+    from sampling, with ``V'`` the largest over the disturbances' corners ``d_k = +-b_k`` (the loop
+    ``robust`` has the disturbances as its last states)."""
+    from itertools import product
+
+    from lyapcheck.models.recast_numeric import FloatLoop
+
+    n = system.n
+    if n not in FIT_GRID:
+        return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
+    lo, hi = (np.asarray(b, dtype=float) for b in box)
+    eq = np.array([float(system.values[s]) for s in system.states])
+    centre, half = (lo + hi) / 2, (hi - lo) / 2
+    blo, bhi = centre - FIT_GROWTH * half, centre + FIT_GROWTH * half
+    local = FIT_LOCAL_SHARE * float(np.min(half))
+    field = FloatLoop(robust)
+    corners = [np.array(c, dtype=float) for c in product(*[(-float(b), float(b)) for b in bounds])]
+    mons = [m[:n] for m in system.ring.terms(V)]
+    coefficients = [float(c) for c in system.ring.terms(V).values()]
+
+    def values(Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        v = sum(c * np.prod(Z ** np.array(m), axis=1) for c, m in zip(coefficients, mons))
+        grad = np.zeros_like(Z)
+        for c, m in zip(coefficients, mons):
+            for i in range(n):
+                if m[i]:
+                    e = np.array(m)
+                    e[i] -= 1
+                    grad[:, i] += c * m[i] * np.prod(Z ** e, axis=1)
+        worst = np.full(len(Z), -np.inf)
+        for d in corners:
+            F = field(np.column_stack([Z + eq, np.tile(d, (len(Z), 1))]))[:, :n]
+            worst = np.maximum(worst, np.sum(grad * F, axis=1))
+        return np.asarray(v, dtype=float), worst
+
+    return _level_and_box(system, V, values, blo, bhi, local, 1.0)
+
+
 def propose_level(system: RecastSystem, V: Poly, box: tuple[Any, Any]) -> IntervalClaim | str:
     """A claim for a given ``V`` (a user's candidate, over the states and the smooth auxiliaries, in
     deviations): its level and box from sampling (``V'`` by a central difference along the field)."""
@@ -294,4 +334,4 @@ def propose_level(system: RecastSystem, V: Poly, box: tuple[Any, Any]) -> Interv
     return _level_and_box(system, V, values, blo, bhi, local, None)
 
 
-__all__ = ["FittedV", "fit_v", "propose_level"]
+__all__ = ["FittedV", "fit_v", "propose_level", "propose_robust_level"]

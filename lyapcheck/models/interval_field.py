@@ -189,22 +189,30 @@ class CompiledPoly:
 
 
 class BallLoop:
-    """The true loop of a recast system, evaluated on balls or jets of the state deviations."""
+    """The true loop of a recast system, evaluated on balls or jets of the state deviations.
 
-    def __init__(self, system: RecastSystem) -> None:
+    ``fixed``: balls for the system's last states, which are not states of the loop but its
+    disturbances, recast as states without a flow (:attr:`lyapcheck.models.recast.RecastModel.robust`);
+    every value then holds for every disturbance value in those balls. ``n`` is the loop's own states.
+    """
+
+    def __init__(self, system: RecastSystem, fixed: Sequence[Ball] = ()) -> None:
         self.system = system
         ring = system.ring
-        self.n = system.n
-        self.equilibrium = [ball(system.values[s]) for s in system.states]
+        self.n = system.n - len(fixed)
+        self.fixed = list(fixed)
+        self.equilibrium = [ball(system.values[s]) for s in system.states[:self.n]]
         self.auxiliaries = [(a.function, a.limit, a.radicand, None if a.argument is None else CompiledPoly(ring, a.argument))
                             for a in system.auxiliaries]
-        self.numerators = [CompiledPoly(ring, r.numerator) for r in system.field]
+        own = system.field[:self.n]
+        self.numerators = [CompiledPoly(ring, r.numerator) for r in own]
         self.denominators = [None if (r.denominator.is_constant() and r.denominator == ring.constant(1))
-                             else CompiledPoly(ring, r.denominator) for r in system.field]
+                             else CompiledPoly(ring, r.denominator) for r in own]
 
     def variables(self, z: Sequence[Number]) -> list[Number]:
-        """Every variable of the recasting at the state deviations ``z``: ``x = x_eq + z``, then the auxiliaries."""
-        values: list[Number] = [e + zi for e, zi in zip(self.equilibrium, z)]
+        """Every variable of the recasting at the state deviations ``z``: ``x = x_eq + z``, the
+        disturbances' balls, then the auxiliaries."""
+        values: list[Number] = [e + zi for e, zi in zip(self.equilibrium, z)] + list(self.fixed)
         zero = flint.arb(0)
         for function, limit, radicand, argument in self.auxiliaries:
             if argument is None:  # a constant root

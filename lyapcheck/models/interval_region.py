@@ -218,7 +218,7 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     """
     start = time.perf_counter()
     ring = system.ring
-    n = system.n
+    n = system.n if lie is None else lie.n  # (a robust evaluator's system also has the disturbances)
 
     def failed(why: str, cells: int = 0, boundary: int = 0, r: Fraction | None = None) -> IntervalProof:
         return IntervalProof(False, why, cells, boundary, r, time.perf_counter() - start)

@@ -296,10 +296,17 @@ class _Reader:
         # the nominal loop: every disturbance at 0 (a claim about it says "(d = 0)")
         system, V = recast_dynamics(self.source, states, table, {**params, **{d: Fraction(0) for d in dists}},
                                     equilibrium, candidate)
+        robust = None
+        if dists:  # and the loop with its disturbances as states without a flow, for robust claims
+            try:
+                robust, _ = recast_dynamics(self.source, states + tuple(dists), {**table, **{d: "0" for d in dists}},
+                                            params, tuple(equilibrium) + (Fraction(0),) * len(dists))
+            except ModelFileError:  # (a disturbance where the recasting cannot keep it: nominal claims only)
+                robust = None
         return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
                            parameters=params, equilibrium=equilibrium, domain=domain, system=system,
                            overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V,
-                           disturbances=dists)
+                           disturbances=dists, robust=robust)
 
     def states(self, head: dict[str, Any]) -> tuple[str, ...]:
         states = head.get("states")

@@ -714,6 +714,9 @@ class RecastModel:
     #: the declared disturbances and their bounds ``|d| <= b``; :attr:`system` is the loop with each
     #: at 0, and every claim about it says ``(d = 0)``
     disturbances: dict[str, Fraction] = field(default_factory=dict)
+    #: with disturbances: the loop recast with them as the last states (without a flow), for claims
+    #: that hold for every disturbance value (None: no disturbances, or one the recasting cannot keep)
+    robust: RecastSystem | None = None
 
     @property
     def sha256(self) -> str:

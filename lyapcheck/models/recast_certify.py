@@ -25,7 +25,7 @@ from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.recast import RecastModel
 from lyapcheck.models.recast_classes import (Loop, base_loop, check_root_proofs, common_denominator, for_v, jacobian,
                                              lie, state_square, v_names, v_text)
-from lyapcheck.models.recast_run import RECAST_CLASSES
+from lyapcheck.models.recast_run import RECAST_CLASSES, robust_of
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.claims import covered
 from lyapcheck.results import ConditionResult, Disturbances
@@ -73,9 +73,10 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
         if r.status == "certified" and name != "linearization":
             r.summary = sentence_of(r.certificate)
         if coverage is not None:
-            r.disturbances = coverage
+            if r.disturbances is None:  # ("all": a region proved for every disturbance value)
+                r.disturbances = coverage
             if r.status in ("certified", "refuted"):
-                r.summary = covered(coverage, r.summary)
+                r.summary = covered(r.disturbances, r.summary)
     conditions = {name: r.to_json() for name, r in results.items()}
     verdict = verdict_of(conditions)
     return verdict, results, build_document(model, loop, candidate, conditions, verdict)
@@ -207,19 +208,22 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
     for name, c in doc["conditions"].items():
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted"):
             continue
-        if c.get("disturbances") != coverage:
-            rows.append((name, False, f"{name}: a loop with functions is certified with its disturbances at 0; the "
-                                      f"stated coverage {c.get('disturbances')!r} is not that"))
+        robust_claim = (coverage is not None and c.get("disturbances") == "all"
+                        and isinstance(c.get("certificate"), dict) and c["certificate"].get("kind") == "interval")
+        if c.get("disturbances") != coverage and not robust_claim:
+            rows.append((name, False, f"{name}: a loop with functions is certified with its disturbances at 0 (or, by "
+                                      "ball arithmetic, for every value of them); the stated coverage "
+                                      f"{c.get('disturbances')!r} is neither"))
             continue
         try:
-            ok, why = _verify_condition(name, c, base)
+            ok, why = _verify_condition(name, c, base, robust_of(model))
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
         rows.append((name, ok, why if ok else f"{name}: {why}"))
     return _with_verdict(doc, rows)
 
 
-def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, str]:
+def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = None) -> tuple[bool, str]:
     from lyapcheck.models.linearization import verify_jacobian
 
     if name == "linearization":
@@ -236,7 +240,7 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop) -> tuple[bool, s
     if cert.get("kind") == "interval" and name in ("roa", "candidate"):
         from lyapcheck.models.recast_interval import check_interval
 
-        return check_interval(base, c)
+        return check_interval(base, c, robust)
     if cert.get("kind") != "recast":
         return False, "not a recast certificate"
     system = base.system

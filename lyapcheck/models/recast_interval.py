@@ -16,10 +16,16 @@ every recast certificate, ``V`` (over the state deviations only), ``V_text``, ``
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Final
 
-from lyapcheck.models.interval_region import IntervalClaim, IntervalProof, dyadic_floor, prove_bounded, prove_region
+import flint
+
+from lyapcheck.models.interval_field import BallLoop, Jet, LieDerivative, ball
+from lyapcheck.models.interval_region import (IntervalClaim, IntervalProof, dyadic_floor, low_order_terms,
+                                              prove_bounded, prove_region)
+from lyapcheck.models.recast import RecastSystem
 from lyapcheck.models.recast_classes import Loop, v_text
 from lyapcheck.models.recast_sos import poly_from_json, poly_to_json
 from lyapcheck.models.search import Budget
@@ -40,19 +46,69 @@ WHOLE_SET_CELL_LIMIT: Final = 20_000
 METHOD: Final = "ball arithmetic (python-flint arb) on the true field"
 
 
-def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
-    """The ball-arithmetic region of attraction, or why there is none (one line)."""
+@dataclass(frozen=True)
+class Robust:
+    """A loop's disturbances for a claim that holds for every one of their values: the loop recast
+    with them as its last states (:attr:`lyapcheck.models.recast.RecastModel.robust`) and their
+    bounds ``|d| <= b``."""
+
+    system: RecastSystem
+    bounds: dict[str, Fraction]
+
+    def balls(self) -> list[Any]:
+        return [flint.arb(0).union(ball(b)).union(-ball(b)) for b in self.bounds.values()]
+
+    def vanishes(self) -> bool:
+        """``f(x_eq, d) = 0`` for every ``d`` in the bounds, proved: each component's ball is exactly 0."""
+        loop = BallLoop(self.system, self.balls())
+        return all(not isinstance(v, Jet) and v.is_zero() for v in loop.field([flint.arb(0)] * loop.n))
+
+    def embedded(self, ring: Any, V: Any) -> Any:
+        """``V`` (over the nominal ring's states) in the robust ring (states, disturbances, auxiliaries)."""
+        n = len(self.system.states) - len(self.bounds)
+        size = self.system.ring.nvars
+        return self.system.ring.from_terms({tuple(list(m[:n]) + [0] * (size - n)): c for m, c in ring.terms(V).items()})
+
+    def to_json(self) -> dict[str, list[str]]:
+        return {d: [str(-b), str(b)] for d, b in self.bounds.items()}
+
+
+def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robust | None = None
+                 ) -> ConditionResult | str:
+    """The ball-arithmetic region of attraction, or why there is none (one line). With ``robust``
+    disturbances that vanish at the equilibrium, the set is proved for every disturbance value first
+    (the claim then covers them: ``"all"``), else with them at 0."""
     from lyapcheck.models.fitted_v import fit_v
 
     fitted = fit_v(loop.system, loop.ring, box)
     if isinstance(fitted, str):
         return fitted
-    return _prove_lowering(loop, fitted.claim, budget, "roa", "a V fitted to simulations of the true loop (linear "
-                           "program), proved by " + METHOD, {"sampled_share": fitted.sampled_share})
+    v_from = "a V fitted to simulations of the true loop (linear program), proved by " + METHOD
+    tried = ""
+    if robust is not None and not uses_auxiliaries(loop, fitted.claim.V):
+        from lyapcheck.models.fitted_v import propose_robust_level
+
+        proposal = propose_robust_level(loop.system, robust.system, list(robust.bounds.values()), fitted.claim.V, box) \
+            if robust.vanishes() else None
+        if isinstance(proposal, IntervalClaim):
+            found = _prove_lowering(loop, proposal, budget, "roa", v_from, {"sampled_share": fitted.sampled_share},
+                                    robust)
+            if isinstance(found, ConditionResult):
+                found.disturbances = "all"
+                return found
+            tried = f"for every disturbance value: {found}; "
+        elif isinstance(proposal, str):
+            tried = f"for every disturbance value: {proposal}; "
+        else:
+            tried = "a disturbance moves the equilibrium (f(x_eq, d) is not 0 for every d): with them at 0; "
+    found = _prove_lowering(loop, fitted.claim, budget, "roa", v_from, {"sampled_share": fitted.sampled_share})
+    if isinstance(found, ConditionResult) and tried:
+        found.numbers["robust_attempt"] = tried.rstrip("; ")
+    return found if isinstance(found, ConditionResult) else tried + found
 
 
 def _prove_lowering(loop: Loop, claim: IntervalClaim, budget: Budget, name: str, v_from: str,
-                    numbers: dict[str, Any]) -> ConditionResult | str:
+                    numbers: dict[str, Any], robust: Robust | None = None) -> ConditionResult | str:
     """Prove the claim; where that fails, lower its level (under a point where ``V' >= 0`` was
     proved, else by RETRY_LEVEL_FACTOR) and try again, INTERVAL_ATTEMPTS times in all."""
     import time
@@ -62,9 +118,11 @@ def _prove_lowering(loop: Loop, claim: IntervalClaim, budget: Budget, name: str,
         if budget.left() <= 0:
             reasons.append("out of time")
             break
-        proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
+        proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S), robust=robust)
         if proof.ok:
             cert = certificate(loop, claim, proof, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
+            if robust is not None:
+                cert["disturbances"] = robust.to_json()
             return ConditionResult(name, "certified", claim_sentence(cert), property="ROA", certificate=cert,
                                    numbers={"level": float(claim.level), "V_from": v_from, "cells": proof.cells,
                                             "boundary_cells": proof.boundary_cells, "proof_seconds": proof.seconds,
@@ -87,7 +145,7 @@ def derivative_of(loop: Loop, V: Any) -> tuple[Any, bool] | str:
     """For a ``V`` that uses auxiliaries: its ball evaluator (``V' = G/D`` from the recasting's
     flows) and whether ``V`` and its gradient in the states vanish at the equilibrium (exact);
     ``(None, True)`` for a ``V`` over the states alone (the prover's own evaluator); or why not."""
-    from lyapcheck.models.interval_field import BallLoop, RecastLieDerivative
+    from lyapcheck.models.interval_field import RecastLieDerivative
     from lyapcheck.models.recast_classes import (_at_origin, common_denominator, for_v, gradient_at_equilibrium, lie,
                                                  v_names)
 
@@ -104,8 +162,19 @@ def derivative_of(loop: Loop, V: Any) -> tuple[Any, bool] | str:
     return RecastLieDerivative(BallLoop(loop.system), loop.ring, V, G, D), flat
 
 
-def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None) -> IntervalProof:
-    """:func:`prove_region` with the evaluator ``claim.V`` needs (one path for the search and ``verify``)."""
+def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None, robust: Robust | None = None
+          ) -> IntervalProof:
+    """:func:`prove_region` with the evaluator ``claim.V`` needs (one path for the search and ``verify``);
+    with ``robust``, on the loop with every disturbance value in its bounds (``V`` over the states)."""
+    if robust is not None:
+        if uses_auxiliaries(loop, claim.V) or low_order_terms(loop.ring, claim.V, loop.n):
+            return IntervalProof(False, "a claim for every disturbance value takes a V over the states alone, "
+                                        "without constant or linear terms", 0, 0, None, 0.0)
+        if not robust.vanishes():
+            return IntervalProof(False, "a disturbance moves the equilibrium", 0, 0, None, 0.0)
+        lie = LieDerivative(BallLoop(robust.system, robust.balls()), robust.system.ring,
+                            robust.embedded(loop.ring, claim.V))
+        return prove_region(loop.system, claim, deadline=deadline, lie=lie, flat=True)
     how = derivative_of(loop, claim.V)
     if isinstance(how, str):
         return IntervalProof(False, how, 0, 0, None, 0.0)
@@ -173,8 +242,9 @@ def claim_sentence(cert: dict[str, Any]) -> str:
             "equilibrium; V_text in the certificate)")
 
 
-def check_interval(loop: Loop, c: dict[str, Any]) -> tuple[bool, str]:
-    """``verify`` of an "interval" certificate: the same proof, run again from the certificate."""
+def check_interval(loop: Loop, c: dict[str, Any], robust: Robust | None = None) -> tuple[bool, str]:
+    """``verify`` of an "interval" certificate: the same proof, run again from the certificate
+    (``robust``: the model's disturbances, re-derived from its text, for a claim covering them)."""
     cert = c["certificate"]
     system = loop.system
     if cert.get("variables") != list(loop.ring.names) or cert.get("auxiliaries") != system.definitions() or \
@@ -185,7 +255,13 @@ def check_interval(loop: Loop, c: dict[str, Any]) -> tuple[bool, str]:
     claim = claim_of(loop, cert)
     if c.get("level") is not None and c.get("level") != float(claim.level):
         return False, "the stated level is not the certificate's"
-    proof = prove(loop, claim)
+    if c.get("disturbances") == "all":
+        if robust is None or cert.get("disturbances") != robust.to_json():
+            return False, ("a claim for every disturbance value needs the model's disturbances, with their bounds, "
+                           "in the certificate")
+    elif "disturbances" in cert:
+        return False, "the certificate proves for every disturbance value but the claim does not say so"
+    proof = prove(loop, claim, robust=robust if c.get("disturbances") == "all" else None)
     if not proof.ok:
         return False, f"the ball-arithmetic proof does not go through: {proof.why}"
     if cert.get("whole") not in (True, False):

@@ -65,7 +65,7 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
                                              property="ROA")
         else:
             results["roa"] = run_roa(loop, lin, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
-                                     comparison_box(model, loop))
+                                     comparison_box(model, loop), robust=robust_of(model))
         seconds["roa"] = time.perf_counter() - start
     if "candidate" in classes and candidate is not None:
         start = time.perf_counter()
@@ -73,6 +73,14 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
             time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"), comparison_box(model, loop))
         seconds["candidate"] = time.perf_counter() - start
     return results, loop, seconds
+
+
+def robust_of(model: RecastModel) -> Any:
+    """The model's disturbances for claims covering them (None without any, or where the recasting
+    could not keep them)."""
+    from lyapcheck.models.recast_interval import Robust
+
+    return Robust(model.robust, dict(model.disturbances)) if model.robust is not None else None
 
 
 def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
@@ -91,15 +99,15 @@ def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
     return -hw, hw
 
 
-def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any], interval: bool = True
-            ) -> ConditionResult:
+def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any], interval: bool = True,
+            robust: Any = None) -> ConditionResult:
     """``roa``: first a V fitted to simulations and proved by ball arithmetic on the true field
     (:mod:`lyapcheck.models.recast_interval`; loops of 1 to 3 states); where that proves nothing,
     the linearization's V and its largest level on the recasting's relations, then the V-s
     iteration from it, and the region covering most of the box (``interval`` False: that route only)."""
     from lyapcheck.models.recast_interval import interval_roa
 
-    first_route = interval_roa(loop, budget, box) if interval else "ball arithmetic: not tried"
+    first_route = interval_roa(loop, budget, box, robust) if interval else "ball arithmetic: not tried"
     if isinstance(first_route, ConditionResult):
         simulated_check(loop, first_route, box)
         return first_route
