@@ -121,6 +121,7 @@ def claim_sentence(cert: dict[str, Any]) -> str:
               if angles else "")
     eps = cert["epsilon"]
     if "ges" in cert:
+        eps = cert.get("decrease_epsilon", eps)
         ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
         return (f"globally exponentially stable: |x(t) - x_eq| <= {float(ges['k']):.6g} |x0 - x_eq| "
                 f"exp(-{float(ges['rate']):.6g} t) from every start (exactly k = {ges['k']}, rate = {ges['rate']}: "
@@ -160,7 +161,7 @@ def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, s
         j = next(k for k in range(n - 1, -1, -1) if m[k])
         P[i][j] = P[j][i] = coefficient if i == j else coefficient / 2
     ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
-    eps = Fraction(str(cert["epsilon"]))
+    eps = Fraction(str(cert.get("decrease_epsilon", cert["epsilon"])))
     if set(ges) != {"c1", "c2", "rate", "k"} or ges["c1"] <= 0 or ges["c2"] <= 0 or \
             ges["rate"] != eps / (2 * ges["c2"]) or ges["k"] < 0 or ges["k"] ** 2 < ges["c2"] / ges["c1"]:
         return False, "the exponential bound's c1, c2, rate and k do not follow from V and epsilon"
@@ -296,7 +297,10 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     dec = ConditionCertificate.from_json(ring, cert["decrease"], len(loop.relations))
     if (region is None) != (dec.rho is None):
         return False, "a region's decrease needs its multiplier rho, and only a region's"
-    ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(eps), loop.relations, dec, region=region)
+    decrease = Fraction(str(cert.get("decrease_epsilon", eps)))
+    if decrease < eps:
+        return False, "decrease_epsilon must be at least epsilon"
+    ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(decrease), loop.relations, dec, region=region)
     if not ok:
         return False, f"decrease: {why}"
     if "ges" in cert:
