@@ -318,6 +318,12 @@ def test_quadratic_proves_an_exponential_bound_where_the_field_has_no_denominato
         end = rk4(field, X0, t, step=0.01)
         bound = float(ges["k"]) * np.linalg.norm(X0, axis=1) * np.exp(-float(ges["rate"]) * t)
         assert np.all(np.linalg.norm(end, axis=1) <= bound)
+    # the decrease margin was sharpened beyond the search's, and a larger one than proved does not verify
+    assert Fraction(q.certificate["decrease_epsilon"]) > Fraction(q.certificate["epsilon"])
+    doc = copy.deepcopy(result.document)
+    stored = doc["conditions"]["quadratic"]["certificate"]
+    stored["decrease_epsilon"] = str(Fraction(stored["decrease_epsilon"]) * 4)
+    assert not api.verify(doc).valid
     # a smaller k, a larger c1 or a changed rate does not verify
     for key, factor in (("k", Fraction(1, 2)), ("c1", Fraction(3)), ("rate", Fraction(2))):
         doc = copy.deepcopy(result.document)
