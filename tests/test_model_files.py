@@ -111,13 +111,13 @@ BAD: dict[str, Bad] = {
     "a text Python warns about": Bad(edit('"-x1 + x2"', '"-x1 + (1if x2 else 2)"'), "[dynamics] x1",
                                      ("'1if x2 else 2'", "not part of the language")),
     "unknown name (a constant)": Bad(edit('"-x1 + x2"', '"-z*x1"'), "[dynamics] x1", ("unknown name 'z'",)),
-    # pi and function calls in a loop with disturbances (which a recast loop does not take yet): the
-    # function named, polynomial or rational, recast
-    "constant pi": Bad(edit('"-x1 + x2"', '"-pi*x1"'), "[dynamics] x1", ("'pi'", "polynomial or rational", "recast")),
-    "call sqrt": Bad(edit('"-mu*x2 + d"', '"-sqrt(x2)"'), "[dynamics] x2",
-                     ("'sqrt(...)'", "polynomial or rational", "recast")),
-    "call sin": Bad(edit('"-x1 + x2"', '"-x1 + sin(x2)"'), "[dynamics] x1",
-                    ("'sin(...)'", "polynomial or rational", "recast")),
+    # pi and function calls (a loop with functions, recast; this one also has disturbances): pi
+    # outside sin and cos, a square root of something that can be negative (refused by certify when
+    # its proof fails, by the polynomial-only loader at once), a function of the wrong arity
+    "constant pi": Bad(edit('"-x1 + x2"', '"-pi*x1"'), "[dynamics] x1",
+                       ("pi may appear only in an argument of sin or cos",)),
+    "call sqrt": Bad(edit('"-mu*x2 + d"', '"-sqrt(x2)"'), "[dynamics] x2", ("sqrt(x2)",)),
+    "call sin": Bad(edit('"-x1 + x2"', '"-x1 + sin(x2, x1)"'), "[dynamics] x1", ("'sin' takes 1 argument",)),
     # ^ says **
     "caret": Bad(edit('"-x1 + x2"', '"-x1^3 + x2"'), "[dynamics] x1", ("'^'", "'**'", "x1**3")),
     # exponents

@@ -536,7 +536,7 @@ def test_polynomial_entry_refuses_functions_naming_the_commands(tmp_path: Path) 
     with pytest.raises(ModelFileError) as info:
         parse_model(text, "poly.toml")
     message = str(info.value)
-    assert "\n" not in message and message.startswith("poly.toml: [dynamics]: ")
+    assert "\n" not in message and message.startswith("poly.toml: [dynamics] x1: ")  # the equation that uses it
     assert "sin(x2)" in message and "certify --model" in message and "verify" in message
     # a polynomial loop is still read by the polynomial entry
     assert not isinstance(parse_model(model_text({"x1": "-x1 + x2", "x2": "-x2"}), "p.toml"), RecastModel)

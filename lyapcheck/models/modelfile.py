@@ -152,9 +152,10 @@ def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, obje
     if not isinstance(model, Model):  # a loop with functions (lyapcheck.models.recast.RecastModel)
         call = next(a.written_as for a in model.system.auxiliaries if a.written_as) \
             if any(a.written_as for a in model.system.auxiliaries) else "pi"
-        raise _error(source, "[dynamics]", f"uses {call}: a loop with functions is taken by 'certify --model', "
-                                           "'verify' and 'simulate --model' (and lyapcheck.api's certify, verify "
-                                           "and simulate); this command takes polynomial and rational loops only")
+        raise _error(source, model.key_of(call), f"uses {call}: a loop with functions is taken by 'certify "
+                                                 "--model', 'verify' and 'simulate --model' (and lyapcheck.api's "
+                                                 "certify, verify and simulate); this command takes polynomial and "
+                                                 "rational loops only")
     return model
 
 

@@ -728,6 +728,14 @@ class RecastModel:
     def n(self) -> int:
         return len(self.states)
 
+    def key_of(self, call: str) -> str:
+        """The key of the first right-hand side whose text has ``call`` (``[dynamics] x2``), for messages."""
+        compact = call.replace(" ", "")
+        for state, text in self.dynamics_text.items():
+            if compact in text.replace(" ", ""):
+                return f"[dynamics] {state}"
+        return "[dynamics]"
+
     @property
     def dynamics_text(self) -> dict[str, str]:
         """The right-hand sides as the file writes them (read again from :attr:`text`)."""

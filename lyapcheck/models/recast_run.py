@@ -37,7 +37,7 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
     budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
     loop, unproved = prove_root_bounds(base, Search(base.ring, budget))
     if unproved:
-        raise ModelFileError(model.source, "[dynamics]", f"'{unproved[0]}': its argument could not be proved "
+        raise ModelFileError(model.source, model.key_of(unproved[0]), f"'{unproved[0]}': its argument could not be proved "
                              "non-negative (sqrt of something that can be negative, or of something no SOS proof "
                              "here shows non-negative): write the loop so that the root's argument is >= 0")
     start = time.perf_counter()
