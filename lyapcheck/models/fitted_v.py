@@ -100,7 +100,8 @@ def _monomials(n: int, degree: int) -> list[tuple[int, ...]]:
                   key=lambda m: (sum(m), m))
 
 
-def _columns(Z: np.ndarray, F: np.ndarray, P0: np.ndarray, mons: list[tuple[int, ...]]) -> tuple[np.ndarray, np.ndarray]:
+def _columns(Z: np.ndarray, F: np.ndarray, P0: np.ndarray, mons: list[tuple[int, ...]]
+             ) -> tuple[np.ndarray, np.ndarray]:
     """The LP's columns at the samples: V's and V''s values for the quadratic form and each monomial."""
     n = Z.shape[1]
     top = max((max(m) for m in mons), default=1)

@@ -202,7 +202,8 @@ class BallLoop:
         self.n = system.n - len(fixed)
         self.fixed = list(fixed)
         self.equilibrium = [ball(system.values[s]) for s in system.states[:self.n]]
-        self.auxiliaries = [(a.function, a.limit, a.radicand, None if a.argument is None else CompiledPoly(ring, a.argument))
+        self.auxiliaries = [(a.function, a.limit, a.radicand,
+                             None if a.argument is None else CompiledPoly(ring, a.argument))
                             for a in system.auxiliaries]
         own = system.field[:self.n]
         self.numerators = [CompiledPoly(ring, r.numerator) for r in own]

@@ -396,5 +396,6 @@ def prove_bounded(system: RecastSystem, claim: IntervalClaim, deadline: float | 
     return True, "proved", count, R
 
 
-__all__ = ["IntervalClaim", "IntervalProof", "prove_region", "prove_bounded", "dyadic_floor", "dyadic_ceil", "is_dyadic",
+__all__ = ["IntervalClaim", "IntervalProof", "prove_region", "prove_bounded", "dyadic_floor", "dyadic_ceil",
+           "is_dyadic",
            "INTERVAL_CELL_LIMIT"]

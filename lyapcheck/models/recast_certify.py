@@ -125,8 +125,8 @@ def claim_sentence(cert: dict[str, Any]) -> str:
         ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
         return (f"globally exponentially stable: |x(t) - x_eq| <= {float(ges['k']):.6g} |x0 - x_eq| "
                 f"exp(-{float(ges['rate']):.6g} t) from every start (exactly k = {ges['k']}, rate = {ges['rate']}: "
-                f"V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} |z|^2, proved exactly on "
-                "the recasting's relations; V_text in the certificate)")
+                f"V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} |z|^2, proved "
+                "exactly on the recasting's relations; V_text in the certificate)")
     if "level" in cert:
         level = Fraction(str(cert["level"]))
         return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "

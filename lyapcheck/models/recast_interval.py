@@ -229,7 +229,8 @@ def claim_sentence(cert: dict[str, Any]) -> str:
     level = Fraction(str(cert["level"]))
     n = len(cert["box"])
     written = "V(x, a(x))" if any(any(e[n:]) for _, e in cert["V"]["terms"]) else "V(x)"
-    box = ", ".join(f"{s} - eq in [{float(Fraction(a)):.6g}, {float(Fraction(b)):.6g}]" for s, (a, b) in cert["box"].items())
+    box = ", ".join(f"{s} - eq in [{float(Fraction(a)):.6g}, {float(Fraction(b)):.6g}]"
+                    for s, (a, b) in cert["box"].items())
     if cert.get("whole"):
         return (f"region of attraction: every trajectory of the true loop starting where {written} <= "
                 f"{float(level):.6g} (exactly {level}) converges to the equilibrium itself (the whole set lies in "

@@ -15,8 +15,7 @@ from lyapcheck.models.recast_classes import (EPSILONS, Loop, base_loop, best_reg
                                              common_denominator, jacobian, lie, linearization,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
                                              quadratic, quadratic_candidate, refute_global, region_of_attraction,
-                                             sos_gas,
-                                             certificate_head, for_v, state_square, v_names)
+                                             sos_gas, certificate_head, for_v, state_square, v_names)
 from lyapcheck.models.recast_improve import improved_regions
 from lyapcheck.models.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
@@ -37,9 +36,10 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
     budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
     loop, unproved = prove_root_bounds(base, Search(base.ring, budget))
     if unproved:
-        raise ModelFileError(model.source, model.key_of(unproved[0]), f"'{unproved[0]}': its argument could not be proved "
-                             "non-negative (sqrt of something that can be negative, or of something no SOS proof "
-                             "here shows non-negative): write the loop so that the root's argument is >= 0")
+        raise ModelFileError(model.source, model.key_of(unproved[0]),
+                             f"'{unproved[0]}': its argument could not be proved non-negative (sqrt of something that "
+                             "can be negative, or of something no SOS proof here shows non-negative): write the loop "
+                             "so that the root's argument is >= 0")
     start = time.perf_counter()
     lin = linearization(loop)
     if "linearization" in classes:
