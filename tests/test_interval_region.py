@@ -20,15 +20,8 @@ from lyapcheck import api
 from lyapcheck.models.interval_field import BallLoop, Jet, LieDerivative, apply, negative_definite
 from lyapcheck.models.interval_region import IntervalClaim, prove_region
 from lyapcheck.models.modelfile import parse_any_model
+from tests.recast_loops import PENDULUM, SPRING, UNSTABLE, rk4
 
-SPRING = """
-[model]
-name = "a spring with a sine term"
-states = ["x1", "x2"]
-[dynamics]
-x1 = "x2"
-x2 = "-sin(x1) - x1 - x2"
-"""
 
 POWER = """
 [model]
@@ -52,15 +45,6 @@ v = "sat(-x - 2*v, 1)"
 [domain]
 x = [-4, 4]
 v = [-4, 4]
-"""
-
-UNSTABLE = """
-[model]
-name = "x'' = sin(x) - x'"
-states = ["x", "v"]
-[dynamics]
-x = "v"
-v = "sin(x) - v"
 """
 
 
@@ -178,16 +162,6 @@ def test_a_level_set_reaching_the_power_systems_saddle_is_not_proved() -> None:
     assert proof.counterexample_v <= 2
 
 
-def _rk4(f, X: np.ndarray, horizon: float, step: float = 0.02) -> np.ndarray:
-    for _ in range(int(horizon / step)):
-        k1 = f(X)
-        k2 = f(X + step / 2 * k1)
-        k3 = f(X + step / 2 * k2)
-        k4 = f(X + step * k3)
-        X = X + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return X
-
-
 def _members(cert: dict, X: np.ndarray, states: tuple[str, str]) -> np.ndarray:
     """Membership in an interval certificate's set, from the certificate alone (V over the states)."""
     total = np.zeros(len(X))
@@ -219,7 +193,7 @@ def test_the_power_system_region_beats_lyzNets_neural_v_and_holds_on_the_true_lo
     X = np.column_stack([g.ravel() for g in np.meshgrid(np.linspace(-2, 3, 60), np.linspace(-3, 1.5, 60))])
     inside = X[_members(roa.certificate, X, ("x1", "x2"))]
     assert len(inside) > 1000
-    end = _rk4(lambda Y: np.column_stack([Y[:, 1], -0.5 * Y[:, 1] - (np.sin(Y[:, 0] + d) - np.sin(d))]), inside, 60.0)
+    end = rk4(lambda Y: np.column_stack([Y[:, 1], -0.5 * Y[:, 1] - (np.sin(Y[:, 0] + d) - np.sin(d))]), inside, 60.0)
     assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-2)
     # a changed level, box or sentence does not verify
     for change in ("level", "box", "summary"):
@@ -244,21 +218,8 @@ def test_a_saturated_loop_gets_a_region_through_its_kinks(tmp_path: Path) -> Non
     X = np.column_stack([g.ravel() for g in np.meshgrid(np.linspace(-4, 4, 41), np.linspace(-4, 4, 41))])
     inside = X[_members(roa.certificate, X, ("x", "v"))]
     assert len(inside) > 200
-    end = _rk4(lambda Y: np.column_stack([Y[:, 1], np.clip(-Y[:, 0] - 2 * Y[:, 1], -1, 1)]), inside, 60.0)
+    end = rk4(lambda Y: np.column_stack([Y[:, 1], np.clip(-Y[:, 0] - 2 * Y[:, 1], -1, 1)]), inside, 60.0)
     assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-2)
-
-
-PENDULUM = """
-[model]
-name = "damped pendulum"
-states = ["theta", "omega"]
-[dynamics]
-theta = "omega"
-omega = "-sin(theta) - omega"
-[domain]
-theta = [-3.14159, 3.14159]
-omega = [-4, 4]
-"""
 
 
 def test_a_candidate_with_functions_gets_its_sublevel_set_proved_on_the_true_loop(tmp_path: Path) -> None:
@@ -278,7 +239,7 @@ def test_a_candidate_with_functions_gets_its_sublevel_set_proved_on_the_true_loo
     inside = X[(V <= level) & (np.abs(X[:, 0]) <= float(Fraction(box["theta"][1])))
                & (np.abs(X[:, 1]) <= float(Fraction(box["omega"][1])))]
     assert len(inside) > 100
-    end = _rk4(lambda Y: np.column_stack([Y[:, 1], -np.sin(Y[:, 0]) - Y[:, 1]]), inside, 40.0)
+    end = rk4(lambda Y: np.column_stack([Y[:, 1], -np.sin(Y[:, 0]) - Y[:, 1]]), inside, 40.0)
     assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-2)
     doc = copy.deepcopy(result.document)
     doc["conditions"]["candidate"]["certificate"]["level"] = str(Fraction(cand.certificate["level"]) * 3)
@@ -353,7 +314,7 @@ def test_three_states_get_a_region_on_the_true_loop(tmp_path: Path) -> None:
     assert len(inside) > 200
     field = lambda Y: np.column_stack([Y[:, 1], -np.sin(Y[:, 0]) - Y[:, 1] / 2 + Y[:, 2],
                                        -2 * Y[:, 2] + np.clip(-Y[:, 0] - Y[:, 1], -1, 1)])
-    end = _rk4(field, inside, 60.0)
+    end = rk4(field, inside, 60.0)
     assert np.all(np.linalg.norm(end, axis=1) < 1e-2)
 
 
@@ -391,6 +352,6 @@ def test_random_loops_certified_sets_all_converge_on_the_true_loop(tmp_path: Pat
         fa, fb, fc, fd = (float(v) for v in (a, b, c, d))
         field = lambda Y: np.column_stack([Y[:, 1], -fa * np.sin(Y[:, 0]) - fb * Y[:, 1]
                                            + fc * np.tanh(Y[:, 0] * Y[:, 1]) + fd * Y[:, 0] ** 2 / 4 - Y[:, 0] / 2])
-        end = _rk4(field, inside, 80.0)
+        end = rk4(field, inside, 80.0)
         assert np.all(np.linalg.norm(end, axis=1) < 1e-2), (trial, a, b, c, d)
     assert certified >= 3

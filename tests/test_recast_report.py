@@ -30,6 +30,7 @@ from lyapcheck.models.recast_certify import sentence_of
 from lyapcheck.models.recast_numeric import v_values
 from lyapcheck.models.recast_sos import poly_from_json
 from tests.conftest import ROOT
+from tests.recast_loops import ILOS
 
 PENDULUM = ROOT / "examples" / "models" / "recast-pendulum.toml"
 
@@ -39,19 +40,6 @@ name = "one state with a sine"
 states = ["x"]
 [dynamics]
 x = "-x - sin(x)/2"
-"""
-
-ILOS = """
-[model]
-name = "ILOS course form"
-states = ["y", "yi"]
-[parameters]
-U = 1
-Delta = 2
-kappa = "0.5"
-[dynamics]
-y = "-U*(y + kappa*yi)/sqrt(Delta**2 + (y + kappa*yi)**2)"
-yi = "U*y/sqrt(Delta**2 + (y + kappa*yi)**2)"
 """
 
 

@@ -139,6 +139,42 @@ def _dyadic(x: float, bits: int = COEFFICIENT_BITS) -> Fraction:
     return Fraction(round(x * scale)) / scale if scale >= 1 else Fraction(round(x * scale)) / Fraction(scale)
 
 
+@dataclass(frozen=True)
+class _Sampling:
+    """Where a loop is sampled: its equilibrium, the comparison box (deviations ``lo..hi``), that
+    box grown by FIT_GROWTH (``blo..bhi``) and the half-width of the extra grid at the equilibrium."""
+
+    eq: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    blo: np.ndarray
+    bhi: np.ndarray
+    local: float
+
+
+def _sampling(system: RecastSystem, box: tuple[Any, Any]) -> _Sampling:
+    lo, hi = (np.asarray(b, dtype=float) for b in box)
+    centre, half = (lo + hi) / 2, (hi - lo) / 2
+    return _Sampling(np.array([float(system.values[s]) for s in system.states]), lo, hi,
+                     centre - FIT_GROWTH * half, centre + FIT_GROWTH * half, FIT_LOCAL_SHARE * float(np.min(half)))
+
+
+def _jacobian(system: RecastSystem) -> np.ndarray:
+    """The field's Jacobian at the equilibrium: the exact one of the chain rule
+    (:func:`lyapcheck.models.recast_classes.jacobian`) in floats, or a central difference where that
+    has none (an irrational entry)."""
+    from lyapcheck.models.recast_classes import base_loop, jacobian
+    from lyapcheck.models.recast_numeric import field_values
+
+    exact = jacobian(base_loop(system))
+    if not isinstance(exact, str):
+        return np.array([[float(x) for x in row] for row in exact])
+    eq = np.array([float(system.values[s]) for s in system.states])
+    h = 1e-6
+    return np.column_stack([(field_values(system, eq + h * e) - field_values(system, eq - h * e))[0] / (2 * h)
+                            for e in np.eye(system.n)])
+
+
 def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | str:
     """A proposed claim (V, level, box) for the ball-arithmetic proof, or why none (one line)."""
     from scipy.linalg import solve_continuous_lyapunov
@@ -149,17 +185,13 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | s
     n = system.n
     if n not in FIT_GRID:
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
-    lo, hi = (np.asarray(b, dtype=float) for b in box)
-    eq = np.array([float(system.values[s]) for s in system.states])
-    h = 1e-6
-    J = np.column_stack([(field_values(system, eq + h * e) - field_values(system, eq - h * e))[0] / (2 * h)
-                         for e in np.eye(n)])
+    J = _jacobian(system)
     if not np.all(np.isfinite(J)) or np.max(np.linalg.eigvals(J).real) >= -1e-9:
-        return "the linearization is not Hurwitz (numerically): no quadratic V to start from"
+        return "the linearization is not Hurwitz: no quadratic V to start from"
     P0 = solve_continuous_lyapunov(J.T, -np.eye(n))
-    centre, half = (lo + hi) / 2, (hi - lo) / 2
-    blo, bhi = centre - FIT_GROWTH * half, centre + FIT_GROWTH * half
-    local = FIT_LOCAL_SHARE * float(np.min(half))
+    at = _sampling(system, box)
+    eq, lo, hi, blo, bhi, local = at.eq, at.lo, at.hi, at.blo, at.bhi, at.local
+    half = (hi - lo) / 2
     Z = np.vstack([_grid(blo, bhi, FIT_GRID[n]), _grid(-local * np.ones(n), local * np.ones(n), FIT_LOCAL_GRID[n])])
     # a trajectory far outside the sampled box does not converge (and stopping it keeps a batch
     # with one finite escape time from crawling)
@@ -278,37 +310,27 @@ def propose_robust_level(system: RecastSystem, robust: RecastSystem, bounds: Seq
     ``robust`` has the disturbances as its last states)."""
     from itertools import product
 
-    from lyapcheck.models.recast_numeric import FloatLoop
+    from lyapcheck.models.recast_numeric import FloatLoop, poly_values
 
     n = system.n
     if n not in FIT_GRID:
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
-    lo, hi = (np.asarray(b, dtype=float) for b in box)
-    eq = np.array([float(system.values[s]) for s in system.states])
-    centre, half = (lo + hi) / 2, (hi - lo) / 2
-    blo, bhi = centre - FIT_GROWTH * half, centre + FIT_GROWTH * half
-    local = FIT_LOCAL_SHARE * float(np.min(half))
+    at = _sampling(system, box)
     field = FloatLoop(robust)
     corners = [np.array(c, dtype=float) for c in product(*[(-float(b), float(b)) for b in bounds])]
-    mons = [m[:n] for m in system.ring.terms(V)]
-    coefficients = [float(c) for c in system.ring.terms(V).values()]
+    ring = system.ring
+    gradient = [V.derivative(i) for i in range(n)]
 
     def values(Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        v = sum(c * np.prod(Z ** np.array(m), axis=1) for c, m in zip(coefficients, mons))
-        grad = np.zeros_like(Z)
-        for c, m in zip(coefficients, mons):
-            for i in range(n):
-                if m[i]:
-                    e = np.array(m)
-                    e[i] -= 1
-                    grad[:, i] += c * m[i] * np.prod(Z ** e, axis=1)
+        columns = dict(zip(ring.names, Z.T))  # V is over the states alone
+        grad = np.column_stack([poly_values(ring, g, columns, len(Z)) for g in gradient])
         worst = np.full(len(Z), -np.inf)
         for d in corners:
-            F = field(np.column_stack([Z + eq, np.tile(d, (len(Z), 1))]))[:, :n]
+            F = field(np.column_stack([Z + at.eq, np.tile(d, (len(Z), 1))]))[:, :n]
             worst = np.maximum(worst, np.sum(grad * F, axis=1))
-        return np.asarray(v, dtype=float), worst
+        return poly_values(ring, V, columns, len(Z)), worst
 
-    return _level_and_box(system, V, values, blo, bhi, local, 1.0)
+    return _level_and_box(system, V, values, at.blo, at.bhi, at.local, 1.0)
 
 
 def propose_level(system: RecastSystem, V: Poly, box: tuple[Any, Any]) -> IntervalClaim | str:
@@ -319,20 +341,16 @@ def propose_level(system: RecastSystem, V: Poly, box: tuple[Any, Any]) -> Interv
     n = system.n
     if n not in FIT_GRID:
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
-    lo, hi = (np.asarray(b, dtype=float) for b in box)
-    eq = np.array([float(system.values[s]) for s in system.states])
-    centre, half = (lo + hi) / 2, (hi - lo) / 2
-    blo, bhi = centre - FIT_GROWTH * half, centre + FIT_GROWTH * half
-    local = FIT_LOCAL_SHARE * float(np.min(half))
+    at = _sampling(system, box)
 
     def values(Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        F = field_values(system, Z + eq)
-        h = 1e-6 * max(1.0, float(np.max(np.abs(bhi - blo))))
+        F = field_values(system, Z + at.eq)
+        h = 1e-6 * max(1.0, float(np.max(np.abs(at.bhi - at.blo))))
         with np.errstate(all="ignore"):
             dv = (v_values(system, V, Z + h * F) - v_values(system, V, Z - h * F)) / (2 * h)
         return v_values(system, V, Z), dv
 
-    return _level_and_box(system, V, values, blo, bhi, local, None)
+    return _level_and_box(system, V, values, at.blo, at.bhi, at.local, None)
 
 
 __all__ = ["FittedV", "fit_v", "propose_level", "propose_robust_level"]

@@ -234,10 +234,7 @@ class _Reader:
     def model(self) -> Model:
         name, origin, states = self.head()
         params, params_given = self.quantities("parameters", MAX_PARAMETERS)
-        dists, _ = self.quantities("disturbances", MAX_DISTURBANCES)
-        for key, b in dists.items():
-            if b < 0:
-                raise self.fail(f"[disturbances] {key}", f"is a bound |d| <= b and must be >= 0, got {float(b)!r}")
+        dists = self.disturbance_bounds()
         self.check_unique(states, params, dists)
         params, params_given, dists = self.apply_overrides(params, params_given, dists)
         ring = Ring(states + tuple(dists) + tuple(params))
@@ -273,10 +270,7 @@ class _Reader:
                                      f"[{section}] yet: write the field polynomial or rational in the states, or "
                                      f"remove [{section}]")
         params, params_given = self.quantities("parameters", MAX_PARAMETERS)
-        dists, _ = self.quantities("disturbances", MAX_DISTURBANCES)
-        for key, b in dists.items():
-            if b < 0:
-                raise self.fail(f"[disturbances] {key}", f"is a bound |d| <= b and must be >= 0, got {float(b)!r}")
+        dists = self.disturbance_bounds()
         self.check_unique(states, params, dists)
         params, params_given, dists = self.apply_overrides(params, params_given, dists)
         for reserved in ("pi", *FUNCTIONS):
@@ -347,6 +341,14 @@ class _Reader:
             values[key], given[key] = quantity.value, str(value)
             self.read[section][key] = quantity
         return values, given
+
+    def disturbance_bounds(self) -> dict[str, Fraction]:
+        """``[disturbances]``: each name's bound ``|d| <= b`` (SI), every one ``>= 0``."""
+        dists, _ = self.quantities("disturbances", MAX_DISTURBANCES)
+        for key, b in dists.items():
+            if b < 0:
+                raise self.fail(f"[disturbances] {key}", f"is a bound |d| <= b and must be >= 0, got {float(b)!r}")
+        return dists
 
     def check_unique(self, states: Sequence[str], params: Mapping[str, Fraction], dists: Mapping[str, Fraction]) -> None:
         kinds = {s: "a state" for s in states}

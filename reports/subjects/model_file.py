@@ -203,6 +203,27 @@ def portrait(doc: dict[str, Any], model: Model | None, simulate: bool) -> tuple[
     return drawn.figure, drawn.reason, drawn.checks
 
 
+def page_head(name: str, file: str, origin: str, verdict: str, second: tuple[str, str]) -> dict[str, Any]:
+    """What the page of every model certificate opens with: title, verdict, the glance table, and the
+    table of contents, whose second entry (``second``: anchor, title) is the field or the recasting."""
+    return {
+        "kind": "model-certificate",
+        "title": f"lyapcheck model certificate report: {name}",
+        "name": name,
+        "file": file,
+        "origin": origin,
+        "verdict": verdict,
+        "verdict_meaning": VERDICT_MEANING.get(verdict, "no stability certificate passed an exact check"),
+        "status_meaning": {**STATUS_MEANING, **EXTRA_STATUS_MEANING},
+        "glance": Glance(("class", "status", "property", "what it found", "key figures"), True,
+                         ("certified", "refuted", "not_certified", "inconclusive", "not_applicable")),
+        "toc": [("model", "The model"), second, ("classes", "Classes, one by one"), ("phase", "Phase portrait"),
+                ("recheck", "Exact re-check"), ("reproduce", "Reproducibility")],
+        "classes_anchor": "classes",
+        "classes_heading": "Classes, one by one",
+    }
+
+
 class ModelCertificateChecks:
     """What the page of every model certificate shares (a polynomial loop's or a loop with
     functions'): the fingerprints of its model text and its exact re-check."""
@@ -280,21 +301,9 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
         equilibrium = as_dict(doc.get("equilibrium"))
         name = text_of(model_part.get("name", "model"))
         return {
-            "kind": "model-certificate",
-            "title": f"lyapcheck model certificate report: {name}",
-            "name": name,
-            "file": text_of(model_part.get("file", "")),
-            "origin": model.origin if model is not None else text_of(as_dict(raw.get("model")).get("source", "")),
-            "verdict": verdict,
-            "verdict_meaning": VERDICT_MEANING.get(verdict, "no stability certificate passed an exact check"),
-            "status_meaning": {**STATUS_MEANING, **EXTRA_STATUS_MEANING},
-            "glance": Glance(("class", "status", "property", "what it found", "key figures"), True,
-                             ("certified", "refuted", "not_certified", "inconclusive", "not_applicable")),
-            "toc": [("model", "The model"), ("field", "The field the certificates use"),
-                    ("classes", "Classes, one by one"), ("phase", "Phase portrait"), ("recheck", "Exact re-check"),
-                    ("reproduce", "Reproducibility")],
-            "classes_anchor": "classes",
-            "classes_heading": "Classes, one by one",
+            **page_head(name, text_of(model_part.get("file", "")),
+                        model.origin if model is not None else text_of(as_dict(raw.get("model")).get("source", "")),
+                        verdict, ("field", "The field the certificates use")),
             "states": self.states,
             "equilibrium": [(s, text_of(equilibrium.get(s, "0"))) for s in self.states],
             "parameters": quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), self.overrides,
@@ -329,5 +338,5 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
         }
 
 
-__all__ = ["ModelFileSubject", "ModelCertificateChecks", "EXTRA_STATUS_MEANING", "quantities", "denominators", "scaling", "solvers",
+__all__ = ["ModelFileSubject", "ModelCertificateChecks", "page_head", "EXTRA_STATUS_MEANING", "quantities", "denominators", "scaling", "solvers",
            "command", "recheck_rows", "portrait"]

@@ -26,14 +26,13 @@ from markupsafe import Markup
 
 from lyapcheck.errors import InputFileError, LyapcheckError
 from lyapcheck.models.certificate import KIND, is_model_document
-from lyapcheck.models.certify import VERDICT_MEANING
 from lyapcheck.models.recast import RecastModel
 from reports.figures import Figure
 from reports.recast_portrait import recast_portrait
 from reports.sections.base import ClassContext, text_of
 from reports.sections.recast import RECAST_LOOP
-from reports.subjects.base import STATUS_MEANING, Glance, Subject
-from reports.subjects.model_file import EXTRA_STATUS_MEANING, ModelCertificateChecks, command, quantities, solvers
+from reports.subjects.base import Subject
+from reports.subjects.model_file import ModelCertificateChecks, command, page_head, quantities, solvers
 from reports.typeset import Equations
 from reports.views import as_dict, as_fraction
 
@@ -149,21 +148,10 @@ class RecastLoopSubject(ModelCertificateChecks, Subject):
         name = text_of(part.get("name", "model"))
         variables = recast.get("variables")
         return {
-            "kind": "model-certificate",
-            "title": f"lyapcheck model certificate report: {name}",
-            "name": name,
-            "file": text_of(part.get("file", "")),
-            "origin": self.parsed.origin if self.parsed is not None else text_of(as_dict(raw.get("model")).get("source", "")),
-            "verdict": verdict,
-            "verdict_meaning": VERDICT_MEANING.get(verdict, "no stability certificate passed an exact check"),
-            "status_meaning": {**STATUS_MEANING, **EXTRA_STATUS_MEANING},
-            "glance": Glance(("class", "status", "property", "what it found", "key figures"), True,
-                             ("certified", "refuted", "not_certified", "inconclusive", "not_applicable")),
-            "toc": [("model", "The model"), ("recasting", "The recasting the certificates are proved on"),
-                    ("classes", "Classes, one by one"), ("phase", "Phase portrait"), ("recheck", "Exact re-check"),
-                    ("reproduce", "Reproducibility")],
-            "classes_anchor": "classes",
-            "classes_heading": "Classes, one by one",
+            **page_head(name, text_of(part.get("file", "")),
+                        self.parsed.origin if self.parsed is not None
+                        else text_of(as_dict(raw.get("model")).get("source", "")),
+                        verdict, ("recasting", "The recasting the certificates are proved on")),
             "states": self.states,
             "equilibrium": [(s, text_of(equilibrium.get(s, "0"))) for s in self.states],
             "parameters": quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), self.overrides),
