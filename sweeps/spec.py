@@ -609,8 +609,8 @@ class ModelSweepSpec(_AxesGrid):
 
     @property
     def outputs(self) -> tuple[str, ...]:
-        """The model's outputs (a loop with functions declares none: it takes no [outputs] yet)."""
-        return tuple(self.model.outputs) if isinstance(self.model, Model) else ()
+        """The model's outputs (default each state)."""
+        return tuple(self.model.outputs)
 
     @property
     def worker_text(self) -> str:
@@ -729,7 +729,7 @@ def recast_point_classes() -> tuple[str, ...]:
 def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[str, ...]:
     polynomial = isinstance(model, Model)
     allowed = (MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES) if polynomial else recast_point_classes()
-    disturbances = model.disturbances if isinstance(model, Model) else {}
+    disturbances = model.disturbances
     if raw is None:
         return tuple(c for c in allowed if c != "sos_bound" or disturbances)
     if not isinstance(raw, list) or not raw or any(c not in allowed for c in raw) or len(set(raw)) != len(raw):
@@ -884,7 +884,7 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
         points = int(np.prod([a.size for a in axes]))
         if points > MAX_MODEL_POINTS:
             raise InvalidParameter("sweep.axes", f"at most {MAX_MODEL_POINTS} grid points in all", points)
-        reserved = {v.name for v in point_variables(classes, tuple(model.outputs) if isinstance(model, Model) else ())}
+        reserved = {v.name for v in point_variables(classes, tuple(model.outputs))}
         for i, name in enumerate(names):
             if name in reserved:
                 raise InvalidParameter(f"sweep.axes[{i}].name", "a parameter whose name is not one of the results' "

@@ -507,7 +507,7 @@ def test_bad_calls_are_refused_in_one_line(rhs: str, key: str, fragments: list[s
 
 
 @pytest.mark.parametrize(("extra", "section"), [
-    ('[outputs]\ny = "x1"\n', "[outputs]"),
+    ('[sets]\ninitial = ["x1**2 + x2**2 <= 1"]\nunsafe = ["x1 >= 3"]\n', "[sets]"),
 ])
 def test_sections_not_taken_with_functions_are_refused(extra: str, section: str) -> None:
     text = model_text({"x1": "-x1 + sin(x2)", "x2": "-x2"}, extra=extra)

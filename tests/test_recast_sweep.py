@@ -167,8 +167,10 @@ AXIS = '[[sweep.axes]]\nname = "b"\nvalues = [0.5, 1]\n'
      PENDULUM, "'sweep.mode' parameter must be \"points\" for a loop with functions (sin, sqrt, sat, ...): boxes "
      "take polynomial and rational loops only. Got 'boxes' instead."),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\n' + AXIS, PENDULUM,
+     "'sweep.classes' parameter must be classes that apply to the model: sos_bound needs [disturbances]"),
+    ('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n' + AXIS, PENDULUM,
      "'sweep.classes' parameter must be in a points sweep of a loop with functions, a list of distinct names from "
-     "'linearization', 'quadratic', 'sos_gas', 'roa'"),
+     "'linearization', 'quadratic', 'sos_gas', 'roa', 'sos_bound'"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["candidate"]\n' + AXIS, PENDULUM, "'sweep.classes' parameter must be"),
     ('[sweep]\nmodel = "m.toml"\n[sweep.set]\nq = 1\n' + AXIS, PENDULUM,
      "'sweep.set.q' parameter must be a parameter or disturbance declared in the model (b)"),

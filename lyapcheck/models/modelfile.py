@@ -259,11 +259,12 @@ class _Reader:
     def recast_model(self, candidate: str | None = None) -> "RecastModel":
         """A loop with functions (lyapcheck.models.recast): the parameters are read, set to their
         values and the loop recast with every disturbance held at 0 (its claims say ``(d = 0)``);
-        outputs, sets and units are not taken yet."""
+        its outputs (polynomial in the states, as for a polynomial loop; default each state) are read
+        with the parameters set; sets and units are not taken yet."""
         from lyapcheck.models.recast import RecastModel, recast_dynamics  # only a loop with functions needs it
 
         name, origin, states = self.head()
-        for section in ("outputs", "sets", "units"):
+        for section in ("sets", "units"):
             if section in self.data:
                 key, what = first_function_use(self.table("dynamics"))
                 raise self.fail(key, f"{what} needs the loop recast (a loop with functions), which takes no "
@@ -288,6 +289,7 @@ class _Reader:
                 raise self.fail("[dynamics]", f"the state '{s}' has no equation")
         equilibrium = self.equilibrium(states, Ring(states))
         domain = self.domain(states)
+        outputs = self.recast_outputs(states, params, dists)
         # the nominal loop: every disturbance at 0 (a claim about it says "(d = 0)")
         system, V = recast_dynamics(self.source, states, table, {**params, **{d: Fraction(0) for d in dists}},
                                     equilibrium, candidate)
@@ -301,7 +303,23 @@ class _Reader:
         return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
                            parameters=params, equilibrium=equilibrium, domain=domain, system=system,
                            overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V,
-                           disturbances=dists, robust=robust)
+                           disturbances=dists, robust=robust, outputs=outputs)
+
+    def recast_outputs(self, states: tuple[str, ...], params: Mapping[str, Fraction],
+                       dists: Mapping[str, Fraction]) -> dict[str, Poly]:
+        """A loop with functions' outputs, polynomials over the states' ring with the parameters set
+        (an output with a function is refused by the expression parser, naming it)."""
+        ring = Ring(states + tuple(dists) + tuple(params))
+        rationals, _ = self.outputs(states, ring, dists, params)
+        state_ring = Ring(states)
+        out: dict[str, Poly] = {}
+        for key, expr in rationals.items():
+            num = ring.substitute(expr.numerator, params)
+            den = ring.substitute(expr.denominator, params)
+            if not den.is_constant() or den.is_zero():
+                raise self.fail(f"[outputs] {key}", "an output must be polynomial in the states")
+            out[key] = ring.restrict(num * (1 / den.leading_coefficient()), state_ring)
+        return out
 
     def states(self, head: dict[str, Any]) -> tuple[str, ...]:
         states = head.get("states")

@@ -717,6 +717,8 @@ class RecastModel:
     #: with disturbances: the loop recast with them as the last states (without a flow), for claims
     #: that hold for every disturbance value (None: no disturbances, or one the recasting cannot keep)
     robust: RecastSystem | None = None
+    #: the outputs ``sos_bound`` bounds, polynomials over the states (``Ring(states)``); default each state
+    outputs: dict[str, Poly] = field(default_factory=dict)
 
     @property
     def sha256(self) -> str:

@@ -23,8 +23,9 @@ from typing import Any, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.recast import RecastModel
-from lyapcheck.models.recast_classes import (Loop, base_loop, check_root_proofs, common_denominator, for_v, jacobian,
-                                             lie, state_square, v_names, v_text)
+from lyapcheck.models.recast_bound import KIND, check_bound
+from lyapcheck.models.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
+                                             jacobian, lie, state_square, v_names, v_text)
 from lyapcheck.models.recast_run import RECAST_CLASSES, robust_of
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.claims import covered
@@ -34,13 +35,15 @@ from lyapcheck.sos.polynomials import degree_in, to_fmpq
 Row = tuple[str, bool, str]
 
 
-def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None) -> tuple[str, ...]:
+def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None, disturbed: bool = False
+                   ) -> tuple[str, ...]:
     """The classes asked for among every model class; the default is every recast class (``candidate``
-    with ``--candidate``)."""
+    with ``--candidate``, ``sos_bound`` with disturbances)."""
     from lyapcheck.models.classes import NAMES
 
     if classes is None or classes == "all":
-        names = [c for c in RECAST_CLASSES if c != "candidate" or candidate is not None]
+        names = [c for c in RECAST_CLASSES if (c != "candidate" or candidate is not None)
+                 and (c != "sos_bound" or disturbed)]
     else:
         names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes)]
         bad = [c for c in names if c not in NAMES]
@@ -57,7 +60,7 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     from lyapcheck.models.certify import verdict_of
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
-    chosen = chosen_classes(classes, candidate)
+    chosen = chosen_classes(classes, candidate, bool(model.disturbances))
     if "candidate" in chosen and candidate is None:
         raise InvalidParameter("candidate", 'a V with --candidate "EXPR" for class candidate', "nothing")
     V = model.candidate_v if candidate is not None else None
@@ -70,9 +73,9 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     # the loop is recast with every disturbance at 0
     coverage: Disturbances | None = "zero" if model.disturbances else None
     for name, r in results.items():
-        if r.status == "certified" and name != "linearization":
+        if r.status == "certified" and name not in ("linearization", "sos_bound"):  # (sos_bound's is its own)
             r.summary = sentence_of(r.certificate)
-        if coverage is not None:
+        if coverage is not None and name != "sos_bound":
             if r.disturbances is None:  # ("all": a region proved for every disturbance value)
                 r.disturbances = coverage
             if r.status in ("certified", "refuted"):
@@ -210,14 +213,19 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted"):
             continue
         robust_claim = (coverage is not None and c.get("disturbances") == "all"
-                        and isinstance(c.get("certificate"), dict) and c["certificate"].get("kind") == "interval")
+                        and isinstance(c.get("certificate"), dict)
+                        and (c["certificate"].get("kind") == "interval"
+                             or (name == "sos_bound" and c["certificate"].get("kind") == KIND)))
         if c.get("disturbances") != coverage and not robust_claim:
             rows.append((name, False, f"{name}: a loop with functions is certified with its disturbances at 0 (or, by "
                                       "ball arithmetic, for every value of them); the stated coverage "
                                       f"{c.get('disturbances')!r} is neither"))
             continue
         try:
-            ok, why = _verify_condition(name, c, base, robust_of(model))
+            if name == "sos_bound":
+                ok, why = check_bound(model, c) if c["status"] == "certified" else (False, "sos_bound refutes nothing")
+            else:
+                ok, why = _verify_condition(name, c, base, robust_of(model))
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
         rows.append((name, ok, why if ok else f"{name}: {why}"))
@@ -259,21 +267,9 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     allowed = {ring.names[i] for i in loop.v_variables()}
     if any(degree_in(ring, V, [n]) > 0 for n in ring.names if n not in allowed):
         return False, "V uses a variable a Lyapunov function may not (an angle, a root, or a non-smooth function)"
-    names = v_names(loop, V)
-    N, D, distinct = common_denominator(loop, names)
-    stored = cert["recasting"]["denominators"]
-    if len(stored) != len(distinct):
-        return False, "one positivity proof per denominator of the field is needed"
-    for d, item in zip(distinct, stored):
-        if poly_from_json(ring, item["poly"], "denominator") != d:
-            return False, "a stored denominator is not the field's"
-        bound = Fraction(str(item["bound"]))
-        if bound <= 0:
-            return False, "a denominator's bound must be > 0"
-        proof = ConditionCertificate.from_json(ring, item["proof"], len(loop.relations))
-        ok, why = check_condition(ring, d - to_fmpq(bound), loop.relations, proof)
-        if not ok:
-            return False, f"denominator {item['poly']}: {why}"
+    ok, why, N = check_denominator_proofs(loop, v_names(loop, V), cert["recasting"]["denominators"])
+    if not ok:
+        return False, why
     l2 = state_square(loop)
     eps = Fraction(str(cert["epsilon"]))
     if eps <= 0:

@@ -297,6 +297,27 @@ def prove_denominators(loop: Loop, distinct: Sequence[Poly], search: Search
     return out, None
 
 
+def check_denominator_proofs(loop: Loop, names: Sequence[str], stored: Any) -> tuple[bool, str, dict[str, Poly]]:
+    """Re-check stored denominator proofs (:func:`prove_denominators`) for the flows of ``names``
+    exactly: every distinct factor of the common denominator stored, with ``d - c >= 0``, ``c > 0``,
+    proved on the loop's relations. Returns whether they hold, why not, and the numerators ``N``."""
+    ring = loop.ring
+    N, _, distinct = common_denominator(loop, names)
+    if not isinstance(stored, list) or len(stored) != len(distinct):
+        return False, "one positivity proof per denominator of the field is needed", N
+    for d, item in zip(distinct, stored):
+        if poly_from_json(ring, item["poly"], "denominator") != d:
+            return False, "a stored denominator is not the field's", N
+        bound = Fraction(str(item["bound"]))
+        if bound <= 0:
+            return False, "a denominator's bound must be > 0", N
+        proof = ConditionCertificate.from_json(ring, item["proof"], len(loop.relations))
+        ok, why = check_condition(ring, d - to_fmpq(bound), loop.relations, proof)
+        if not ok:
+            return False, f"denominator {item['poly']}: {why}", N
+    return True, "", N
+
+
 def _at_origin_sign(loop: Loop, p: Poly) -> int:
     v = _at_origin(loop, p)
     return 0 if v is None else (v > 0) - (v < 0)

@@ -1,5 +1,5 @@
 """The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
-``candidate`` (:mod:`lyapcheck.models.recast_classes` has each condition; this module orders them,
+``candidate``, ``sos_bound`` (:mod:`lyapcheck.models.recast_bound`; :mod:`lyapcheck.models.recast_classes` has each condition; this module orders them,
 gives each its time budget, and runs ``roa``'s V-s iteration, :mod:`lyapcheck.models.recast_improve`).
 """
 
@@ -24,7 +24,7 @@ from lyapcheck.sos.polynomials import Poly, to_fmpq
 # -- the model's classes ------------------------------------------------------------------------------
 
 #: the classes a recast loop takes, in order
-RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate")
+RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
 
 
 def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float
@@ -72,6 +72,12 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         results["candidate"] = run_candidate(loop, candidate, Budget(
             time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"), comparison_box(model, loop))
         seconds["candidate"] = time.perf_counter() - start
+    if "sos_bound" in classes:
+        from lyapcheck.models.recast_bound import sos_bound
+
+        start = time.perf_counter()
+        results["sos_bound"] = sos_bound(model, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        seconds["sos_bound"] = time.perf_counter() - start
     return results, loop, seconds
 
 

@@ -162,6 +162,11 @@ class ConditionProgram:
     margin: bool = True
     #: the constant roots' variables (:func:`order_at_origin`)
     roots: frozenset[int] = frozenset()
+    #: variables no basis monomial has squared: square roots ``r``, whose ``r^2 = q`` (an equality
+    #: relation) makes every ``r^2`` of a basis redundant modulo it; kept, the redundancy puts a
+    #: kernel into the remainder that no monomial face removes (``r^2 - q`` has a zero on a whole
+    #: variety), and the margin is then 0
+    square_free: frozenset[int] = frozenset()
     grams: list[Gram] = field(default_factory=list)
     scalars: list[Scalar] = field(default_factory=list)
     identities: list[Identity] = field(default_factory=list)
@@ -237,7 +242,7 @@ class ConditionProgram:
         else:
             remainder = [m for m in bases.sos_basis(nv, target | {tuple([0] * nv)})
                          if (sum(m) >= 1 or not vanishing) and (rname, m) not in self.drop
-                         and not any(m[i] for i in self.unused)]
+                         and not any(m[i] for i in self.unused) and not any(m[i] >= 2 for i in self.square_free)]
         if len(remainder) > MAX_RECAST_GRAM_ROWS:
             return f"a Gram matrix of {len(remainder)} rows (the limit is MAX_RECAST_GRAM_ROWS = {MAX_RECAST_GRAM_ROWS})"
         self.grams.append(Gram(rname, tuple(remainder), full_blocks(remainder), margin=self.margin))
@@ -252,7 +257,8 @@ class ConditionProgram:
         times every product of distinct roots (their powers are reduced by ``rt^2 = k``)."""
         roots = sorted(self.roots)
         plain = [m for m in monomials(self.ring.nvars, low, high)
-                 if not any(m[i] for i in self.unused) and not any(m[i] for i in roots)]
+                 if not any(m[i] for i in self.unused) and not any(m[i] for i in roots)
+                 and not any(m[i] >= 2 for i in self.square_free)]
         out = list(plain)
         for k in range(1, len(roots) + 1):
             from itertools import combinations
