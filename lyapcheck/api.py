@@ -345,12 +345,12 @@ def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, ob
     if recast is not None:
         from lyapcheck.models.recast_certify import certify_recast
 
+        recast_box = None
         if box:
-            raise InvalidParameter("box", "no --box for a loop with functions (certify a point with --set)",
-                                   " ".join(box) if not isinstance(box, Mapping) else str(dict(box)))
+            recast, recast_box = _recast_at_box_centre(recast, settings, candidate, box)
         with _argument_names():
             verdict, results, document = certify_recast(recast, classes=classes, candidate=candidate,
-                                                        time_limit_s=time_limit_s)
+                                                        time_limit_s=time_limit_s, box=recast_box)
         return CertifyResult(verdict=verdict, dynamics="model", conditions=results, document=document)
     loaded = _load_with_settings(model, settings)
     with _argument_names():
@@ -358,6 +358,30 @@ def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, ob
         found = certify_model(loaded, classes=classes, candidate=candidate, time_limit_s=time_limit_s, box=parsed)
     return CertifyResult(verdict=found.verdict, dynamics="model", conditions=found.results,
                          document=build_document(found))
+
+
+def _recast_at_box_centre(recast: "RecastModel", settings: Mapping[str, object] | Sequence[str] | None,
+                          candidate: str | None, box: Sequence[str] | Mapping[str, Any]) -> tuple["RecastModel", Any]:
+    """A loop with functions over a box: the box (one-line errors naming ``box``), and the model read
+    again with each box parameter at the box's centre (an override, so that the certificate's
+    ``overrides`` say where the centre is and ``verify`` reads the same model)."""
+    from lyapcheck.exact import exact_decimal
+    from lyapcheck.models.boxes import parse_box_of
+    from lyapcheck.models.modelfile import parse_any_model
+    from lyapcheck.models.recast import RecastModel
+
+    with _argument_names():
+        parsed = parse_box_of(recast.source, recast.parameters, box)
+    given = model_settings(settings, recast.source)
+    twice = [name for name in parsed.names if name in given]
+    if twice:
+        raise ModelFileError(recast.source, f"--box {twice[0]}", "also given with --set: a box parameter takes its "
+                                                                  "values from the box")
+    centres = {name: exact_decimal(parsed.center(name)) for name in parsed.names}
+    with _settings_named():
+        reread = parse_any_model(recast.text, recast.source, {**recast.overrides, **centres}, candidate)
+    assert isinstance(reread, RecastModel)
+    return reread, parsed
 
 
 def add_tightness(results: "Mapping[str, ConditionResult]", problem: "Problem", *, budget_s: float) -> None:

@@ -277,6 +277,28 @@ def min_eig_exceeds_2x2(m: Matrix, a: Fraction, b: Fraction, q: Fraction) -> boo
     return first > 0 and second > 0
 
 
+def exact_decimal(x: Fraction) -> str:
+    """``x`` written as a decimal with no rounding (``5/4`` -> ``"1.25"``); ValueError when its
+    denominator has a prime factor other than 2 and 5 (no finite decimal exists)."""
+    q, k = x.denominator, 0
+    while q % 10 == 0:
+        q //= 10
+        k += 1
+    while q % 2 == 0:
+        q //= 2
+        k += 1
+    while q % 5 == 0:
+        q //= 5
+        k += 1
+    if q != 1:
+        raise ValueError(f"{x} has no finite decimal expansion")
+    scaled = x * 10 ** k
+    assert scaled.denominator == 1
+    digits = str(abs(scaled.numerator)).rjust(k + 1, "0")
+    text = digits[:len(digits) - k] + ("." + digits[len(digits) - k:] if k else "")
+    return ("-" if x < 0 else "") + text
+
+
 def sqrt_upper(q: Fraction, digits: int = 30) -> Fraction:
     """A rational ``r >= sqrt(q)``, checked exactly (``r*r >= q``)."""
     if q < 0:

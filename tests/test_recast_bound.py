@@ -81,7 +81,7 @@ def test_each_identity_holds_on_the_relations_and_fails_without_the_disturbance_
     assert not isinstance(made, str)
     loop, why = recast_bound.check_root_proofs(made.loop, ilos.conditions["sos_bound"].certificate["recasting"]["roots"])
     assert loop is not None, why
-    bl = recast_bound.BoundLoop(loop, made.bounds, made.v_vars, made.states)
+    bl = made.with_loop(loop)
     ring = bl.ring
     item = ilos.conditions["sos_bound"].certificate["outputs"]["y"]
     ok, why, N = recast_bound.check_denominator_proofs(loop, item["v_variables"], item["denominators"])

@@ -24,12 +24,20 @@ from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.modelfile import Model
 from lyapcheck.models.parameter_box import ModelBox
 
-__all__ = ["ModelBox", "parse_model_box", "check_box"]
+__all__ = ["ModelBox", "parse_model_box", "parse_box_of", "check_box"]
 
 
 def parse_model_box(model: Model, specs: Sequence[str] | Mapping[str, Any]) -> ModelBox:
     """``["mu=0.8..1.2", "d=0.05 mm/s..0.1 mm/s"]`` (or ``{"mu": (0.8, 1.2)}``) for ``model``,
     validated (see the module docstring)."""
+    box = parse_box_of(model.source, model.parameters, specs)
+    check_box(model, box)
+    return box
+
+
+def parse_box_of(source: str, parameters: Mapping[str, Any], specs: Sequence[str] | Mapping[str, Any]) -> ModelBox:
+    """The box's names and ranges, read and checked against the model's ``parameters`` (not yet its
+    loop: :func:`check_box`, or a loop with functions' own check)."""
     from lyapcheck.units import parse_si_quantity
 
     items: list[tuple[str, Any, Any, str]] = []
@@ -49,22 +57,20 @@ def parse_model_box(model: Model, specs: Sequence[str] | Mapping[str, Any]) -> M
         raise InvalidParameter("box", "at least one NAME=LO..HI", "")
     given: dict[str, tuple[Fraction, Fraction]] = {}
     for name, lo_text, hi_text, spec in items:
-        if name not in model.parameters:
-            known = ", ".join(model.parameters) or "none"
-            raise ModelFileError(model.source, f"--box {name}", f"no parameter named '{name}' (parameters: {known})")
+        if name not in parameters:
+            known = ", ".join(parameters) or "none"
+            raise ModelFileError(source, f"--box {name}", f"no parameter named '{name}' (parameters: {known})")
         if name in given:
-            raise ModelFileError(model.source, f"--box {name}", "given twice")
+            raise ModelFileError(source, f"--box {name}", "given twice")
         try:
             lo, hi = parse_si_quantity(name, lo_text), parse_si_quantity(name, hi_text)
         except InvalidParameter as exc:
-            raise ModelFileError(model.source, f"--box {name}", f"must be LO..HI with numbers or unit strings, "
-                                                                f"got {exc.got!r}") from None
+            raise ModelFileError(source, f"--box {name}", f"must be LO..HI with numbers or unit strings, "
+                                                          f"got {exc.got!r}") from None
         if not lo < hi:
-            raise ModelFileError(model.source, f"--box {name}", f"an empty range: lo must be below hi, got '{spec}'")
+            raise ModelFileError(source, f"--box {name}", f"an empty range: lo must be below hi, got '{spec}'")
         given[name] = (lo, hi)
-    box = ModelBox(tuple((name, *given[name]) for name in model.parameters if name in given))
-    check_box(model, box)
-    return box
+    return ModelBox(tuple((name, *given[name]) for name in parameters if name in given))
 
 
 def check_box(model: Model, box: ModelBox) -> None:

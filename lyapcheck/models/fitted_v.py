@@ -303,11 +303,12 @@ def _level_and_box(system: RecastSystem, V: Poly, values: Callable[[np.ndarray],
                          tuple(dyadic_ceil(Fraction(float(x))) for x in zhi))
 
 
-def propose_robust_level(system: RecastSystem, robust: RecastSystem, bounds: Sequence[Fraction], V: Poly,
-                         box: tuple[Any, Any]) -> IntervalClaim | str:
-    """A claim for ``V`` (over the states) that should hold for every disturbance value: its level
-    from sampling, with ``V'`` the largest over the disturbances' corners ``d_k = +-b_k`` (the loop
-    ``robust`` has the disturbances as its last states)."""
+def propose_robust_level(system: RecastSystem, robust: RecastSystem, intervals: Sequence[tuple[Fraction, Fraction]],
+                         V: Poly, box: tuple[Any, Any]) -> IntervalClaim | str:
+    """A claim for ``V`` (over the states) that should hold for every value of some constants: its
+    level from sampling, with ``V'`` the largest over the corners of their ``intervals`` (a
+    disturbance's ``+-b``, a box parameter's ``lo`` and ``hi``; the loop ``robust`` has them as its
+    last states)."""
     from itertools import product
 
     from lyapcheck.models.recast_numeric import FloatLoop, poly_values
@@ -317,7 +318,7 @@ def propose_robust_level(system: RecastSystem, robust: RecastSystem, bounds: Seq
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
     at = _sampling(system, box)
     field = FloatLoop(robust)
-    corners = [np.array(c, dtype=float) for c in product(*[(-float(b), float(b)) for b in bounds])]
+    corners = [np.array(c, dtype=float) for c in product(*[(float(lo), float(hi)) for lo, hi in intervals])]
     ring = system.ring
     gradient = [V.derivative(i) for i in range(n)]
 

@@ -745,3 +745,19 @@ class RecastModel:
 
         table = tomllib.loads(self.text)["dynamics"]
         return {s: str(table[s]) for s in self.states}
+
+
+def recast_with_constants(model: RecastModel, constants: Mapping[str, Fraction]) -> RecastSystem:
+    """The model's loop recast again with some of its parameters and disturbances as variables
+    without a flow, after the states, each at the value given (a box's centre; 0 for a disturbance):
+    the others keep their values (a disturbance not named is 0). Raises
+    :class:`~lyapcheck.errors.ModelFileError` (one line) where the recasting cannot keep one of them
+    a variable (a function of it whose value at the equilibrium is not exact)."""
+    names = tuple(constants)
+    params: dict[str, Fraction] = {k: v for k, v in model.parameters.items() if k not in constants}
+    params.update({d: Fraction(0) for d in model.disturbances if d not in constants})
+    texts: dict[str, object] = {**model.dynamics_text, **{n: "0" for n in names}}
+    system, _ = recast_dynamics(model.source, model.states + names, texts, params,
+                                tuple(model.equilibrium) + tuple(constants[n] for n in names))
+    return system
+

@@ -40,10 +40,11 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Final, Mapping
 
-from lyapcheck.models.recast import RecastModel, Relation, written_poly
+from lyapcheck.models.parameter_box import ModelBox
+from lyapcheck.models.recast import RecastModel, written_poly
 from lyapcheck.models.recast_classes import (Loop, _set, base_loop, check_denominator_proofs, check_root_proofs,
                                              common_denominator, lie, prove_denominators, prove_root_bounds,
-                                             root_proofs_json, v_text)
+                                             root_proofs_json, state_square, v_text)
 from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
                                          poly_from_json, poly_to_json, solve_on_faces)
 from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search, why_none
@@ -69,19 +70,29 @@ KIND: Final = "recast_bound"
 
 @dataclass
 class BoundLoop:
-    """The loop with its disturbances as variables and their bounds as relations, and what ``V`` may use."""
+    """The loop with its disturbances (and a box's parameters) as bounded constants
+    (:attr:`~lyapcheck.models.recast_classes.Loop.fixed`, each with its relation), and what ``V`` may use."""
 
     loop: Loop
     #: the model's disturbances and bounds ``|d| <= b``
-    bounds: dict[str, Fraction]
-    #: the indices of the variables ``V`` may use
-    v_vars: list[int]
-    #: the states ``|dx|^2`` sums over (``loop.angles`` through their sine and cosine)
-    states: tuple[str, ...]
+    disturbances: dict[str, Fraction]
 
     @property
     def ring(self) -> Any:
         return self.loop.ring
+
+    @property
+    def v_vars(self) -> list[int]:
+        """The variables ``V`` may use: no disturbance, box parameter or auxiliary of one (the
+        recasting's flow of such an auxiliary holds for a constant only, and a disturbance varies)."""
+        return self.loop.v_variables()
+
+    @property
+    def states(self) -> tuple[str, ...]:
+        return self.loop.states()
+
+    def with_loop(self, loop: Loop) -> "BoundLoop":
+        return BoundLoop(loop, self.disturbances)
 
     def square_free(self) -> frozenset[int]:
         """The square roots' indices (:attr:`~lyapcheck.models.recast_sos.ConditionProgram.square_free`)."""
@@ -92,16 +103,8 @@ class BoundLoop:
         return [self.ring.names[i] for i in self.v_vars]
 
     def state_square(self) -> Poly:
-        """``|dx|^2`` over the model's states (not the disturbances); an angle's is ``s^2 + (c - 1)^2``."""
-        ring = self.ring
-        total = ring.zero()
-        for s in self.states:
-            if s in self.loop.angles:
-                sine, cosine = self.loop.angles[s]
-                total += ring.gen(sine) ** 2 + ring.gen(cosine) ** 2
-            else:
-                total += ring.gen(s) ** 2
-        return total
+        """``|dx|^2`` over the model's states (not the constants); an angle's is ``s^2 + (c - 1)^2``."""
+        return state_square(self.loop)
 
     def output(self, y: Poly, state_ring: Any) -> Poly:
         """An output (over the states' ring) in this ring's deviations."""
@@ -111,24 +114,21 @@ class BoundLoop:
         return self.loop.system.shift(embedded)
 
 
-def bound_loop(model: RecastModel) -> BoundLoop | str:
-    """The loop ``sos_bound`` works on (before its square roots' bounds), or why there is none."""
-    system = model.robust
+def bound_loop(model: RecastModel, box: ModelBox | None = None) -> BoundLoop | str:
+    """The loop ``sos_bound`` works on (before its square roots' bounds), or why there is none: the
+    disturbances, and the box's parameters, as bounded constants."""
+    from lyapcheck.models.recast import recast_with_constants
+
+    if box is None:
+        system = model.robust
+    else:
+        system = recast_with_constants(model, {**{d: Fraction(0) for d in model.disturbances},
+                                               **{name: box.center(name) for name in box.names}})
     if system is None:
         return ("the recasting could not keep the disturbances as variables (a disturbance inside a function "
                 "whose exact value at the equilibrium is needed)")
-    loop = base_loop(system)
-    ring = system.ring
-    for d, b in model.disturbances.items():
-        g = ring.gen(d)
-        loop.relations.append(Relation("ge", ring.constant(b * b) - g * g, f"|{d}| <= {b}", "disturbance"))
-    # the auxiliaries of a disturbance: the recasting's flow for them holds for a constant d only
-    moved: set[str] = set(model.disturbances)
-    for a in system.auxiliaries:
-        if a.argument is not None and any(degree_in(ring, a.argument, [n]) > 0 for n in moved):
-            moved.add(a.name)
-    v_vars = [i for i in loop.v_variables() if ring.names[i] not in moved]
-    return BoundLoop(loop, dict(model.disturbances), v_vars, model.states)
+    fixed = {**model.disturbances, **({name: box.half(name) for name in box.names} if box is not None else {})}
+    return BoundLoop(base_loop(system, fixed=fixed), dict(model.disturbances))
 
 
 @dataclass(frozen=True)
@@ -295,8 +295,9 @@ def best_bound(bl: BoundLoop, forms: list[Template], y: Poly, search: Search) ->
     return best, tried
 
 
-def sos_bound(model: RecastModel, budget: Budget) -> ConditionResult:
-    """Every output's certified ``limsup`` for every disturbance within its bounds (module docstring)."""
+def sos_bound(model: RecastModel, budget: Budget, box: ModelBox | None = None) -> ConditionResult:
+    """Every output's certified ``limsup`` for every disturbance within its bounds (module docstring);
+    with ``box``, for every parameter value of it as well (each a bounded constant)."""
     from lyapcheck import exact
     from lyapcheck.models.claims import summary
     from lyapcheck.sos.polynomials import Ring
@@ -304,7 +305,7 @@ def sos_bound(model: RecastModel, budget: Budget) -> ConditionResult:
     if not model.disturbances:
         return ConditionResult("sos_bound", "not_applicable", "the model has no [disturbances]: add one (name = "
                                                               "bound) to bound its outputs")
-    made = bound_loop(model)
+    made = bound_loop(model, box)
     if isinstance(made, str):
         return ConditionResult("sos_bound", "not_applicable", made)
     search = Search(made.ring, budget)
@@ -316,7 +317,7 @@ def sos_bound(model: RecastModel, budget: Budget) -> ConditionResult:
         if unproved:
             return ConditionResult("sos_bound", "not_certified", f"the square root '{unproved[0]}' has an argument "
                                    "not proved non-negative with the disturbances acting", solver={"solves": search.log})
-        bl = BoundLoop(loop, made.bounds, made.v_vars, made.states)
+        bl = made.with_loop(loop)
         forms, skipped = templates(bl, search)
         state_ring = Ring(model.states)
         for name, y0 in model.outputs.items():
@@ -342,7 +343,8 @@ def sos_bound(model: RecastModel, budget: Budget) -> ConditionResult:
     system = loop.system
     certificate = {"kind": KIND, "variables": list(ring.names), "auxiliaries": system.definitions(),
                    "angles": list(loop.angles), "shift": {k: str(v) for k, v in system.values.items()},
-                   "disturbances": {d: str(b) for d, b in bl.bounds.items()},
+                   "disturbances": {d: str(b) for d, b in bl.disturbances.items()},
+                   **({"parameter_box": box.to_json()} if box is not None else {}),
                    "positivity_epsilon": str(POSITIVITY_EPSILON),
                    "recasting": {"roots": root_proofs_json(loop)}, "outputs": certs}
     text = summary("sos_bound", {"status": "certified", "bounds": bounds}, list(model.outputs)) or ""
@@ -366,22 +368,27 @@ def output_json(bl: BoundLoop, found: Found, y: Poly, bound: Fraction) -> dict[s
 
 # -- verify -------------------------------------------------------------------------------------------
 
-def check_bound(model: RecastModel, c: Mapping[str, Any]) -> tuple[bool, str]:
-    """Re-check a ``sos_bound`` certificate of a loop with functions exactly (module docstring)."""
+def check_bound(model: RecastModel, c: Mapping[str, Any], box: ModelBox | None = None,
+                summary_of: Any = None) -> tuple[bool, str]:
+    """Re-check a ``sos_bound`` certificate of a loop with functions exactly (module docstring);
+    ``box``: the document's box of parameters; ``summary_of``: the sentence the bounds print (default
+    :func:`lyapcheck.models.claims.summary`'s)."""
     from lyapcheck.models.claims import summary
     from lyapcheck.sos.polynomials import Ring
 
     cert = c["certificate"]
     if cert.get("kind") != KIND:
         return False, "not a bound certificate of a loop with functions"
-    made = bound_loop(model)
+    if cert.get("parameter_box") != (box.to_json() if box is not None else None):
+        return False, "the certificate's parameter box is not the document's"
+    made = bound_loop(model, box)
     if isinstance(made, str):
         return False, made
     system = made.loop.system
     ring = made.ring
     if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != system.definitions() or \
             cert.get("shift") != {k: str(v) for k, v in system.values.items()} or \
-            cert.get("disturbances") != {d: str(b) for d, b in made.bounds.items()} or \
+            cert.get("disturbances") != {d: str(b) for d, b in made.disturbances.items()} or \
             cert.get("angles") != list(made.loop.angles):
         return False, "variables, auxiliaries, shift, disturbances or angles differ from the model text's recasting"
     if Fraction(str(cert["positivity_epsilon"])) != POSITIVITY_EPSILON:
@@ -389,7 +396,7 @@ def check_bound(model: RecastModel, c: Mapping[str, Any]) -> tuple[bool, str]:
     loop, why = check_root_proofs(made.loop, cert["recasting"]["roots"])
     if loop is None:
         return False, why
-    bl = BoundLoop(loop, made.bounds, made.v_vars, made.states)
+    bl = made.with_loop(loop)
     state_ring = Ring(model.states)
     outputs = cert["outputs"]
     if not isinstance(outputs, dict) or not set(outputs) <= set(model.outputs):
@@ -423,7 +430,8 @@ def check_bound(model: RecastModel, c: Mapping[str, Any]) -> tuple[bool, str]:
         bounds[name] = float(bound)
     if c.get("bounds") != bounds:
         return False, "the stated bounds are not the certificate's"
-    if c.get("summary") != summary("sos_bound", {"status": "certified", "bounds": bounds}, list(model.outputs)):
+    expected = summary("sos_bound", {"status": "certified", "bounds": bounds}, list(model.outputs))
+    if c.get("summary") != (summary_of(expected) if summary_of is not None else expected):
         return False, "the printed sentence is not the one the certificate supports"
     return True, ("positivity, dissipation D V' <= -lam (V - 1) and y^2 <= V + B - 1 on the recasting's relations "
                   "with every disturbance within its bounds, exactly")

@@ -22,11 +22,12 @@ from fractions import Fraction
 from typing import Any, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
+from lyapcheck.models.parameter_box import ModelBox
 from lyapcheck.models.recast import RecastModel
 from lyapcheck.models.recast_bound import KIND, check_bound
 from lyapcheck.models.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
                                              jacobian, lie, state_square, v_names, v_text)
-from lyapcheck.models.recast_run import RECAST_CLASSES, robust_of
+from lyapcheck.models.recast_run import RECAST_CLASSES, box_robust, boxed_loop, robust_of
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.claims import covered
 from lyapcheck.results import ConditionResult, Disturbances
@@ -53,8 +54,11 @@ def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None, d
 
 
 def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = None, candidate: str | None = None,
-                   time_limit_s: float | None = None) -> tuple[str, dict[str, ConditionResult], dict[str, Any]]:
-    """Run the classes on a recast loop: the verdict, the results and the certificate document."""
+                   time_limit_s: float | None = None, box: ModelBox | None = None
+                   ) -> tuple[str, dict[str, ConditionResult], dict[str, Any]]:
+    """Run the classes on a recast loop: the verdict, the results and the certificate document.
+    With ``box`` (``model`` read at its centre), every certified claim holds for every value of it and
+    says so first; a refutation is the centre's and says so."""
     from lyapcheck import tolerances as tol
     from lyapcheck.models import recast_run
     from lyapcheck.models.certify import verdict_of
@@ -64,7 +68,9 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     if "candidate" in chosen and candidate is None:
         raise InvalidParameter("candidate", 'a V with --candidate "EXPR" for class candidate', "nothing")
     V = model.candidate_v if candidate is not None else None
-    results, loop, _ = recast_run.certify(model, chosen, V, limit)
+    if box is not None:  # the classes that certify a point are not_applicable over a box, not left out
+        chosen = tuple(c for c in chosen if c != "candidate" or candidate is not None)
+    results, loop, _ = recast_run.certify(model, chosen, V, limit, box)
     for name in chosen:
         if name not in results:
             results[name] = ConditionResult(name, "not_applicable", "not taken yet for a loop with functions (sin, "
@@ -80,13 +86,29 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
                 r.disturbances = coverage
             if r.status in ("certified", "refuted"):
                 r.summary = covered(r.disturbances, r.summary)
+    if box is not None:
+        for name, r in results.items():
+            if r.status in ("certified", "refuted"):
+                r.summary = box_prefix(box, r.status) + r.summary
     conditions = {name: r.to_json() for name, r in results.items()}
     verdict = verdict_of(conditions)
-    return verdict, results, build_document(model, loop, candidate, conditions, verdict)
+    return verdict, results, build_document(model, loop, candidate, conditions, verdict, box)
+
+
+def box_prefix(box: ModelBox, status: str) -> str:
+    """What a claim over a box says first: ``for every b in [0.5, 2]: `` (certified), or where in the
+    box a refutation holds (its centre, one point of the box: the claim for every value is false)."""
+    from lyapcheck.exact import exact_decimal
+    from lyapcheck.models.claims import box_words
+
+    if status == "certified":
+        return f"for every {box_words({n: (lo, hi) for n, lo, hi in box.bounds})}: "
+    centre = ", ".join(f"{n} = {exact_decimal(box.center(n))}" for n in box.names)
+    return f"at the box's centre ({centre}), so not for every value of the box: "
 
 
 def build_document(model: RecastModel, loop: Loop, candidate: str | None, conditions: dict[str, Any],
-                   verdict: str) -> dict[str, Any]:
+                   verdict: str, box: ModelBox | None = None) -> dict[str, Any]:
     from lyapcheck.models.documents import KIND, SCHEMA_VERSION
     from lyapcheck.numerics import package_versions
 
@@ -101,6 +123,7 @@ def build_document(model: RecastModel, loop: Loop, candidate: str | None, condit
         "parameters": {k: str(v) for k, v in model.parameters.items()},
         "disturbances": {d: str(b) for d, b in model.disturbances.items()},
         "recast": {**model.system.to_json(), "angles": {a: list(sc) for a, sc in loop.angles.items()}},
+        **({"box": box.to_json()} if box is not None else {}),
         "conditions": conditions,
         "verdict": verdict,
         "versions": package_versions(),
@@ -150,7 +173,7 @@ def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, s
     from lyapcheck.sos.definiteness import is_positive_definite
 
     ring = loop.ring
-    n = loop.n
+    n = loop.n_states
     if region or loop.angles:
         return False, "an exponential bound is stated for a global quadratic V in the states only"
     if poly_from_json(ring, cert["denominator"], "denominator") != ring.constant(1):
@@ -209,9 +232,23 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
     declared = {d: str(b) for d, b in model.disturbances.items()}
     if doc.get("disturbances", {}) != declared:
         rows.append(("disturbances", False, "the stated disturbances are not the model text's"))
+    box, boxed, why_not = _box_of(doc, model)
+    if why_not:
+        rows.append(("box", False, why_not))
+        return _with_verdict(doc, rows)
+    if box is not None:
+        rows.append(("box", True, "each box parameter is read at the box's centre, and the loop is recast with them "
+                                  "as bounded constants again"))
     for name, c in doc["conditions"].items():
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted"):
             continue
+        if box is not None:  # the claim over the box says so first; the rest is the class's own sentence
+            prefix = box_prefix(box, c["status"])
+            if not str(c.get("summary", "")).startswith(prefix) or name in ("linearization", "candidate"):
+                rows.append((name, False, f"{name}: over a box a claim begins '{prefix}' (and linearization and "
+                                          "candidate certify a point)"))
+                continue
+            c = {**c, "summary": c["summary"][len(prefix):]}
         robust_claim = (coverage is not None and c.get("disturbances") == "all"
                         and isinstance(c.get("certificate"), dict)
                         and (c["certificate"].get("kind") == "interval"
@@ -223,13 +260,42 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
             continue
         try:
             if name == "sos_bound":
-                ok, why = check_bound(model, c) if c["status"] == "certified" else (False, "sos_bound refutes nothing")
+                ok, why = check_bound(model, c, box) if c["status"] == "certified" else \
+                    (False, "sos_bound refutes nothing")
+            elif box is not None and c["status"] == "certified" and name == "roa":
+                ok, why = _verify_condition(name, c, base, box_robust(model, box))
+                if c["certificate"].get("kind") != "interval":
+                    ok, why = False, "over a box, roa is proved by ball arithmetic"
+            elif box is not None and c["status"] == "certified":
+                assert boxed is not None
+                ok, why = _verify_condition(name, c, boxed)
             else:
                 ok, why = _verify_condition(name, c, base, robust_of(model))
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
         rows.append((name, ok, why if ok else f"{name}: {why}"))
     return _with_verdict(doc, rows)
+
+
+def _box_of(doc: dict[str, Any], model: RecastModel) -> tuple[ModelBox | None, Loop | None, str]:
+    """The document's box, and the loop with its parameters as bounded constants; or why not (a box
+    parameter not read at the box's centre, a box the loop cannot take)."""
+    if "box" not in doc:
+        return None, None, ""
+    try:
+        box = ModelBox.from_json(doc["box"])
+    except (TypeError, ValueError, AttributeError, ZeroDivisionError) as exc:
+        return None, None, f"malformed box: {exc}"
+    for name, lo, hi in box.bounds:
+        if name not in model.parameters or not lo < hi:
+            return None, None, f"box: {name!r} is not a parameter of the model with lo < hi"
+        if model.parameters[name] != box.center(name):
+            return None, None, f"box: the model is not read at the box's centre ({name} = {model.parameters[name]})"
+    try:
+        boxed = boxed_loop(model, box)
+    except ModelFileError as exc:
+        return None, None, f"box: {exc}"
+    return box, boxed, ""
 
 
 def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = None) -> tuple[bool, str]:

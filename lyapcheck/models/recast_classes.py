@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Final, Sequence
+from typing import Any, Final, Mapping, Sequence
 
 from lyapcheck.models.expressions import Rational
 from lyapcheck.models.recast import RecastSystem, Relation, written_poly
@@ -61,6 +61,11 @@ class Loop:
     #: the angle states (:func:`angle_states`), each with its (sine, cosine) names: the loop lives
     #: on a cylinder and every claim is modulo 2 pi in them
     angles: dict[str, tuple[str, str]] = field(default_factory=dict)
+    #: the system's last "states" that are bounded constants, not states: a box's parameters and
+    #: disturbances, recast as variables without a flow (:func:`lyapcheck.models.recast.recast_with_constants`),
+    #: each with the half-width of its interval around its value; a Lyapunov function never uses
+    #: them nor an auxiliary of them (its recast flow is that of a constant)
+    fixed: dict[str, Fraction] = field(default_factory=dict)
 
     @property
     def ring(self) -> Ring:
@@ -70,9 +75,29 @@ class Loop:
     def n(self) -> int:
         return self.system.n
 
+    @property
+    def n_states(self) -> int:
+        """The number of true states (the system's first ones; :attr:`fixed` follow them)."""
+        return self.system.n - len(self.fixed)
+
+    def states(self) -> tuple[str, ...]:
+        """The true states (not the bounded constants of :attr:`fixed`)."""
+        return self.system.states[:self.n_states]
+
+    def of_fixed(self) -> set[str]:
+        """The bounded constants and every auxiliary whose argument uses one (directly or through another)."""
+        ring = self.ring
+        moved = set(self.fixed)
+        for a in self.system.auxiliaries:
+            if a.argument is not None and any(degree_in(ring, a.argument, [n]) > 0 for n in moved):
+                moved.add(a.name)
+        return moved
+
     def v_variables(self) -> list[int]:
-        """The indices of the variables V may use: the states (not the angles) and the smooth auxiliaries."""
-        names = [n for n in self.system.states + self.system.smooth() if n not in self.angles]
+        """The indices of the variables V may use: the states (not the angles) and the smooth auxiliaries,
+        none of :meth:`of_fixed`."""
+        moved = self.of_fixed() if self.fixed else set()
+        names = [n for n in self.states() + self.system.smooth() if n not in self.angles and n not in moved]
         return [self.ring.names.index(n) for n in names]
 
     def roots(self) -> frozenset[int]:
@@ -85,7 +110,7 @@ class Loop:
 
     def coordinates(self) -> list[int]:
         """The states V may use: every state but the angles (an angle enters through its sine and cosine)."""
-        return [i for i, s in enumerate(self.system.states) if s not in self.angles]
+        return [i for i, s in enumerate(self.states()) if s not in self.angles]
 
     def flow(self, name: str) -> Rational:
         """A state's or smooth auxiliary's flow, shifted."""
@@ -94,14 +119,27 @@ class Loop:
         return Rational(self.ring, s.shift(r.numerator), s.shift(r.denominator)).normalized()
 
 
-def base_loop(system: RecastSystem, cylinder: bool = True) -> Loop:
+#: the owner of a bounded constant's relation (:attr:`Loop.fixed`); a square root's bound is proved
+#: without it (for every value of the constant)
+CONSTANT: Final = "constant"
+
+
+def base_loop(system: RecastSystem, cylinder: bool = True, fixed: Mapping[str, Fraction] | None = None) -> Loop:
     """The loop in deviations with the system's relations; ``cylinder``: its angles
-    (:func:`angle_states`) taken modulo 2 pi (their relations with the angle itself left out)."""
-    angles = angle_states(system) if cylinder else {}
+    (:func:`angle_states`) taken modulo 2 pi (their relations with the angle itself left out);
+    ``fixed``: the last "states" that are bounded constants (:attr:`Loop.fixed`), each with its
+    relation ``h^2 - dv^2 >= 0`` (``v`` within ``h`` of its value)."""
+    fixed = dict(fixed or {})
+    angles = {a: sc for a, sc in angle_states(system).items() if a not in fixed} if cylinder else {}
     ring = system.ring
     relations = [Relation(r.kind, system.shift(r.poly), r.why, r.owner) for r in system.relations
                  if not any(degree_in(ring, r.poly, [a]) > 0 for a in angles)]
-    return Loop(system, relations, angles=angles)
+    for name, h in fixed.items():
+        centre = system.values[name]
+        g = ring.gen(name)
+        why = f"|{name}| <= {h}" if centre == 0 else f"{name} in [{centre - h}, {centre + h}]"
+        relations.append(Relation("ge", ring.constant(h * h) - g * g, why, CONSTANT))
+    return Loop(system, relations, angles=angles, fixed=fixed)
 
 
 def for_v(loop: Loop, V: Poly) -> Loop:
@@ -111,7 +149,7 @@ def for_v(loop: Loop, V: Poly) -> Loop:
     ring = loop.ring
     if not any(degree_in(ring, V, [a]) > 0 for a in loop.angles):
         return loop
-    return with_root_bounds(base_loop(loop.system, cylinder=False), dict(loop.root_bounds))
+    return with_root_bounds(base_loop(loop.system, cylinder=False, fixed=loop.fixed), dict(loop.root_bounds))
 
 
 def angle_states(system: RecastSystem) -> dict[str, tuple[str, str]]:
@@ -146,7 +184,7 @@ def with_root_bounds(loop: Loop, bounds: dict[str, tuple[Fraction, ConditionCert
             c = bounds[a.name][0]
             relations.append(Relation("ge", loop.system.shift(loop.ring.gen(a.name)) - to_fmpq(c),
                                       f"{a.name} >= {c} (sqrt of an argument proved >= {c * c})", "derived"))
-    return Loop(loop.system, relations, dict(bounds), dict(loop.angles))
+    return Loop(loop.system, relations, dict(bounds), dict(loop.angles), dict(loop.fixed))
 
 
 def common_denominator(loop: Loop, names: Sequence[str]) -> tuple[dict[str, Poly], Poly, list[Poly]]:
@@ -208,12 +246,14 @@ def _set(values: ParameterValues, key: str, exact: list[Fraction]) -> None:
 
 def base_loop_of(loop: Loop) -> Loop:
     """The loop with the system's relations only (no derived bound)."""
-    return Loop(loop.system, [r for r in loop.relations if r.owner != "derived"], angles=dict(loop.angles))
+    return Loop(loop.system, [r for r in loop.relations if r.owner != "derived"], angles=dict(loop.angles),
+                fixed=dict(loop.fixed))
 
 
 def _restricted(loop: Loop, owners: set[str], bounds: dict[str, tuple[Fraction, "ConditionCertificate"]]) -> Loop:
     """The relations of the auxiliaries in ``owners`` only, with the bounds proved for them."""
-    kept = Loop(loop.system, [r for r in loop.relations if r.owner in owners], angles=dict(loop.angles))
+    kept = Loop(loop.system, [r for r in loop.relations if r.owner in owners], angles=dict(loop.angles),
+                fixed=dict(loop.fixed))
     return with_root_bounds(kept, {k: v for k, v in bounds.items() if k in owners and v[0] > 0})
 
 
@@ -355,7 +395,7 @@ def state_square(loop: Loop) -> Poly:
     the angle's equilibrium modulo 2 pi)."""
     ring = loop.ring
     total = ring.zero()
-    for s in loop.system.states:
+    for s in loop.states():
         if s in loop.angles:
             sine, cosine = loop.angles[s]
             total += ring.gen(sine) ** 2 + ring.gen(cosine) ** 2  # deviations: c - 1
@@ -368,7 +408,7 @@ def v_names(loop: Loop, V: Poly) -> list[str]:
     """The variables whose flows ``V'`` needs (V's variables; the states but the angles always, for a
     stable order)."""
     ring = loop.ring
-    return [s for s in loop.system.states if s not in loop.angles] + \
+    return [s for s in loop.states() if s not in loop.angles] + \
         [n for n in loop.system.smooth() if degree_in(ring, V, [n]) > 0]
 
 
@@ -548,7 +588,7 @@ def ges_of(loop: Loop, cert: dict[str, Any]) -> dict[str, Fraction] | None:
     from lyapcheck.sos.definiteness import is_positive_definite
 
     ring = loop.ring
-    n = loop.n
+    n = loop.n_states
     D = poly_from_json(ring, cert["denominator"], "denominator")
     if D != ring.constant(1):
         return None

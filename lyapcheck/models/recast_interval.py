@@ -25,6 +25,7 @@ import flint
 from lyapcheck.models.interval_field import BallLoop, Jet, LieDerivative, ball
 from lyapcheck.models.interval_region import (IntervalClaim, IntervalProof, dyadic_floor, low_order_terms,
                                               prove_bounded, prove_region)
+from lyapcheck.models.parameter_box import ModelBox
 from lyapcheck.models.recast import RecastSystem
 from lyapcheck.models.recast_classes import Loop, v_text
 from lyapcheck.models.recast_sos import poly_from_json, poly_to_json
@@ -54,9 +55,17 @@ class Robust:
 
     system: RecastSystem
     bounds: dict[str, Fraction]
+    #: the box of parameters among the bounds (their values are the box's centres, their bounds its
+    #: half-widths), None without one
+    box: ModelBox | None = None
+
+    def intervals(self) -> list[tuple[Fraction, Fraction]]:
+        """Each constant's interval of values (a disturbance's ``[-b, b]``, a parameter's ``[lo, hi]``)."""
+        return [(self.system.values[name] - h, self.system.values[name] + h) for name, h in self.bounds.items()]
 
     def balls(self) -> list[Any]:
-        return [flint.arb(0).union(ball(b)).union(-ball(b)) for b in self.bounds.values()]
+        """Each constant's values as one ball (its interval, exactly enclosed)."""
+        return [ball(lo).union(ball(hi)) for lo, hi in self.intervals()]
 
     def vanishes(self) -> bool:
         """``f(x_eq, d) = 0`` for every ``d`` in the bounds, proved: each component's ball is exactly 0."""
@@ -70,14 +79,29 @@ class Robust:
         return self.system.ring.from_terms({tuple(list(m[:n]) + [0] * (size - n)): c for m, c in ring.terms(V).items()})
 
     def to_json(self) -> dict[str, list[str]]:
-        return {d: [str(-b), str(b)] for d, b in self.bounds.items()}
+        """The disturbances' bounds (a certificate's ``disturbances``; the box is ``parameter_box``)."""
+        names = self.box.names if self.box is not None else ()
+        return {d: [str(-b), str(b)] for d, b in self.bounds.items() if d not in names}
+
+    def stamp(self, cert: dict[str, Any]) -> None:
+        """Put what the claim covers into its certificate: the disturbances' bounds, the parameter box."""
+        if self.to_json():
+            cert["disturbances"] = self.to_json()
+        if self.box is not None:
+            cert["parameter_box"] = self.box.to_json()
+
+    def matches(self, cert: dict[str, Any]) -> bool:
+        """The certificate states exactly what this covers."""
+        return cert.get("disturbances", {}) == self.to_json() and \
+            cert.get("parameter_box") == (self.box.to_json() if self.box is not None else None)
 
 
 def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robust | None = None
                  ) -> ConditionResult | str:
     """The ball-arithmetic region of attraction, or why there is none (one line). With ``robust``
     disturbances that vanish at the equilibrium, the set is proved for every disturbance value first
-    (the claim then covers them: ``"all"``), else with them at 0."""
+    (the claim then covers them: ``"all"``), else with them at 0. With a parameter box in ``robust``,
+    only the claim for every value of it is tried (``loop`` is the box's centre)."""
     from lyapcheck.models.fitted_v import fit_v
 
     fitted = fit_v(loop.system, loop.ring, box)
@@ -85,22 +109,31 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robus
         return fitted
     v_from = "a V fitted to simulations of the true loop (linear program), proved by " + METHOD
     tried = ""
+    what = ("value of the box and every disturbance value" if robust is not None and robust.box is not None
+            and robust.to_json() else "value of the box" if robust is not None and robust.box is not None
+            else "disturbance value")
     if robust is not None and not uses_auxiliaries(loop, fitted.claim.V):
         from lyapcheck.models.fitted_v import propose_robust_level
 
-        proposal = propose_robust_level(loop.system, robust.system, list(robust.bounds.values()), fitted.claim.V, box) \
+        proposal = propose_robust_level(loop.system, robust.system, robust.intervals(), fitted.claim.V, box) \
             if robust.vanishes() else None
         if isinstance(proposal, IntervalClaim):
             found = _prove_lowering(loop, proposal, budget, "roa", v_from, {"sampled_share": fitted.sampled_share},
                                     robust)
             if isinstance(found, ConditionResult):
-                found.disturbances = "all"
+                if robust.to_json():
+                    found.disturbances = "all"
                 return found
-            tried = f"for every disturbance value: {found}; "
+            tried = f"for every {what}: {found}; "
         elif isinstance(proposal, str):
-            tried = f"for every disturbance value: {proposal}; "
+            tried = f"for every {what}: {proposal}; "
         else:
-            tried = "a disturbance moves the equilibrium (f(x_eq, d) is not 0 for every d): with them at 0; "
+            tried = (f"the equilibrium is not proved to stay put for every {what} (f(x_eq, .) is not exactly 0 in "
+                     "ball arithmetic): with them at 0; ")
+    elif robust is not None:
+        tried = f"for every {what}: the fitted V uses an auxiliary (a claim for every value takes V in the states); "
+    if robust is not None and robust.box is not None:  # a claim at the centre alone says nothing of the box
+        return tried.rstrip("; ").removesuffix(": with them at 0")
     found = _prove_lowering(loop, fitted.claim, budget, "roa", v_from, {"sampled_share": fitted.sampled_share})
     if isinstance(found, ConditionResult) and tried:
         found.numbers["robust_attempt"] = tried.rstrip("; ")
@@ -122,7 +155,7 @@ def _prove_lowering(loop: Loop, claim: IntervalClaim, budget: Budget, name: str,
         if proof.ok:
             cert = certificate(loop, claim, proof, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
             if robust is not None:
-                cert["disturbances"] = robust.to_json()
+                robust.stamp(cert)
             return ConditionResult(name, "certified", claim_sentence(cert), property="ROA", certificate=cert,
                                    numbers={"level": float(claim.level), "V_from": v_from, "cells": proof.cells,
                                             "boundary_cells": proof.boundary_cells, "proof_seconds": proof.seconds,
@@ -256,13 +289,14 @@ def check_interval(loop: Loop, c: dict[str, Any], robust: Robust | None = None) 
     claim = claim_of(loop, cert)
     if c.get("level") is not None and c.get("level") != float(claim.level):
         return False, "the stated level is not the certificate's"
-    if c.get("disturbances") == "all":
-        if robust is None or cert.get("disturbances") != robust.to_json():
-            return False, ("a claim for every disturbance value needs the model's disturbances, with their bounds, "
-                           "in the certificate")
-    elif "disturbances" in cert:
-        return False, "the certificate proves for every disturbance value but the claim does not say so"
-    proof = prove(loop, claim, robust=robust if c.get("disturbances") == "all" else None)
+    boxed = robust is not None and robust.box is not None
+    if c.get("disturbances") == "all" or boxed:
+        if robust is None or not robust.matches(cert) or (c.get("disturbances") == "all") != bool(robust.to_json()):
+            return False, ("a claim for every disturbance value or every value of a box needs the model's disturbances "
+                           "and the box, with their bounds, in the certificate, and only those")
+    elif "disturbances" in cert or "parameter_box" in cert:
+        return False, "the certificate proves for every disturbance or parameter value but the claim does not say so"
+    proof = prove(loop, claim, robust=robust if c.get("disturbances") == "all" or boxed else None)
     if not proof.ok:
         return False, f"the ball-arithmetic proof does not go through: {proof.why}"
     if cert.get("whole") not in (True, False):

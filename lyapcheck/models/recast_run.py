@@ -10,6 +10,7 @@ from fractions import Fraction
 from typing import Any, Final, Sequence
 
 from lyapcheck.errors import ModelFileError
+from lyapcheck.models.parameter_box import ModelBox
 from lyapcheck.models.recast import RecastModel, written_poly
 from lyapcheck.models.recast_classes import (EPSILONS, Loop, base_loop, best_region, certify_region,
                                              common_denominator, jacobian, lie, linearization,
@@ -27,9 +28,12 @@ from lyapcheck.sos.polynomials import Poly, to_fmpq
 RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
 
 
-def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float
-            ) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
-    """Run the chosen classes; the loop (with its proved square-root bounds) and the seconds each took."""
+def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float,
+            box: ModelBox | None = None) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
+    """Run the chosen classes; the loop (with its proved square-root bounds) and the seconds each took.
+    With ``box`` (``model`` read at its centre), :func:`certify_box` runs them over it."""
+    if box is not None:
+        return certify_box(model, classes, time_limit_s, box)
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
     base = base_loop(model.system)
@@ -79,6 +83,116 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         results["sos_bound"] = sos_bound(model, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
         seconds["sos_bound"] = time.perf_counter() - start
     return results, loop, seconds
+
+
+def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float, box: ModelBox
+                ) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
+    """The classes over a box of parameters (``model`` is read at the box's centre).
+
+    ``quadratic`` and ``sos_gas`` are proved on the loop recast with the box's parameters as bounded
+    constants (:func:`boxed_loop`: each a variable without a flow, ``h^2 - dp^2 >= 0``), with a ``V``
+    that uses none of them, so one ``V`` serves every value; a refutation (another equilibrium) is
+    the centre's, which lies in the box. ``roa`` is the ball-arithmetic set proved with each parameter
+    a ball over its interval (the set's ``V'`` negative for every value at once), and ``sos_bound``
+    takes the parameters as it takes the disturbances. ``linearization`` and ``candidate`` certify a
+    point: ``not_applicable`` over a box.
+    """
+    results: dict[str, ConditionResult] = {}
+    seconds: dict[str, float] = {}
+    centre = base_loop(model.system)
+    budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+    loop, unproved = prove_root_bounds(centre, Search(centre.ring, budget))
+    if unproved:
+        raise ModelFileError(model.source, model.key_of(unproved[0]),
+                             f"'{unproved[0]}': its argument could not be proved non-negative (at the box's centre)")
+    boxed = boxed_loop(model, box)
+    for name in ("linearization", "candidate"):
+        if name in classes:
+            results[name] = ConditionResult(name, "not_applicable", f"not over a box (the {name} class certifies a "
+                                            "point: certify the centre with --set)")
+    if {"quadratic", "sos_gas"} & set(classes):
+        proved, _ = prove_root_bounds(boxed, Search(boxed.ring, budget))
+        for name, run_class in (("quadratic", quadratic), ("sos_gas", sos_gas)):
+            if name in classes:
+                start = time.perf_counter()
+                results[name] = refute_global(loop, name) or \
+                    run_class(proved, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+                seconds[name] = time.perf_counter() - start
+    if "roa" in classes:
+        start = time.perf_counter()
+        gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
+                    and results[c].status == "certified"), None)
+        if gas is not None:
+            results["roa"] = ConditionResult("roa", "not_applicable", "global asymptotic stability is certified "
+                                             f"({gas}) for every value of the box: the region of attraction is the "
+                                             "whole state space", property="ROA")
+        else:
+            results["roa"] = box_roa(model, loop, box, Budget(time_limit_s,
+                                                               "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        seconds["roa"] = time.perf_counter() - start
+    if "sos_bound" in classes:
+        from lyapcheck.models.recast_bound import sos_bound
+
+        start = time.perf_counter()
+        results["sos_bound"] = sos_bound(model, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
+                                         box)
+        seconds["sos_bound"] = time.perf_counter() - start
+    return results, loop, seconds
+
+
+def boxed_loop(model: RecastModel, box: ModelBox) -> Loop:
+    """The loop with the box's parameters as bounded constants (after the states), each at the box's
+    centre with its half-width; a one-line :class:`ModelFileError` where the recasting cannot keep
+    one a variable or the equilibrium is not proved to stay put over the box."""
+    from lyapcheck.models.recast import recast_with_constants
+
+    where = f"--box {', '.join(box.names)}"
+    try:
+        system = recast_with_constants(model, {name: box.center(name) for name in box.names})
+    except ModelFileError as exc:
+        raise ModelFileError(model.source, where, f"the loop cannot be recast with the box's parameters as "
+                                                  f"variables ({str(exc).removeprefix(exc.source + ': ')}): certify points with --set") from None
+    if not box_robust(model, box, system).vanishes():
+        raise ModelFileError(model.source, where, "the equilibrium is not proved to stay put over the box (the "
+                                                  "right-hand sides at the equilibrium are not exactly 0 for every "
+                                                  "value of it, in ball arithmetic)")
+    return base_loop(system, fixed={name: box.half(name) for name in box.names})
+
+
+def box_robust(model: RecastModel, box: ModelBox, system: Any = None) -> Any:
+    """The box's parameters (and the model's disturbances) as balls for the ball-arithmetic route."""
+    from lyapcheck.models.recast import recast_with_constants
+    from lyapcheck.models.recast_interval import Robust
+
+    constants = {name: box.center(name) for name in box.names}
+    bounds = {name: box.half(name) for name in box.names}
+    if model.disturbances and system is None:
+        try:
+            system = recast_with_constants(model, {**{d: Fraction(0) for d in model.disturbances}, **constants})
+            bounds = {**dict(model.disturbances), **bounds}
+        except ModelFileError:
+            system = None
+    if system is None:
+        system = recast_with_constants(model, constants)
+        bounds = {name: box.half(name) for name in box.names}
+    return Robust(system, bounds, box)
+
+
+def box_roa(model: RecastModel, loop: Loop, box: ModelBox, budget: Budget) -> ConditionResult:
+    """``roa`` over a box: the ball-arithmetic route with the parameters as balls (no other route
+    proves a set for every value of a box here)."""
+    from lyapcheck.models.recast_interval import interval_roa
+
+    robust = box_robust(model, box)
+    if not robust.vanishes():
+        return ConditionResult("roa", "not_certified", "a disturbance moves the equilibrium: over a box, roa is proved "
+                               "for every disturbance value as well, and cannot be here", property="ROA")
+    found = interval_roa(loop, budget, comparison_box(model, loop), robust)
+    if isinstance(found, str):
+        return ConditionResult("roa", "not_certified", "over a box, roa is proved by ball arithmetic for every "
+                               f"value at once (1 to 3 states): {found}", property="ROA")
+    simulated_check(loop, found, comparison_box(model, loop))
+    return found
 
 
 def robust_of(model: RecastModel) -> Any:

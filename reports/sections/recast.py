@@ -31,7 +31,8 @@ from typing import Any, Final
 
 from reports.polynomials import MAX_PLAIN_CHARS, ExactPolynomial
 from reports.sections.base import ClassContext, ClassView, PolynomialView, text_of
-from reports.sections.model_file import PROPERTY_MEANING, ModelFileSection, exact_row, key_figures, polynomial_view
+from reports.sections.model_file import (PROPERTY_MEANING, ModelFileSection, exact_row, key_figures, polynomial_view,
+                                       shown_summary)
 from reports.sections.stability import SET_COLOURS
 from reports.views import as_dict, as_fraction, fmt_float, value_items
 
@@ -81,6 +82,18 @@ def sentence(cert: dict[str, Any], coverage: Any = None) -> str:
         return covered(coverage if coverage in ("zero", "all") else None, sentence_of(cert))
     except (KeyError, TypeError, ValueError, ArithmeticError, ZeroDivisionError):
         return "(no sentence: the figures of this certificate are malformed)"
+
+
+def box_words_of(box: dict[str, Any], status: str) -> str:
+    """What a claim of a loop with functions over a box of parameters says first
+    (:func:`lyapcheck.models.recast_certify.box_prefix`), or nothing when the box is malformed."""
+    from lyapcheck.models.parameter_box import ModelBox
+    from lyapcheck.models.recast_certify import box_prefix
+
+    try:
+        return box_prefix(ModelBox.from_json(box), status)
+    except (KeyError, TypeError, ValueError, ArithmeticError, ZeroDivisionError):
+        return "(over a malformed box) "
 
 
 def box_of(cert: dict[str, Any]) -> dict[str, tuple[Fraction, Fraction]] | None:
@@ -161,6 +174,9 @@ class RecastSection(ModelFileSection):
         cert = as_dict(cond.get("certificate"))
         if cond.get("status") != "certified" or cert.get("kind") not in KINDS:
             view = super().view(name, cond, index, ctx)  # the linearization, and the classes without a V
+            if cond.get("status") in ("certified", "refuted") and isinstance(ctx.box, dict) and ctx.box:
+                # over a box a loop with functions says where its claim holds (verify's own prefix)
+                view.summary = box_words_of(ctx.box, str(cond["status"])) + shown_summary(name, cond, ctx.outputs)
             view.figures = figures(cond)
             point = as_dict(as_dict(cond.get("refutation")).get("point"))
             if point:
@@ -171,7 +187,10 @@ class RecastSection(ModelFileSection):
         kind = str(cert["kind"])
         prop = text_of(cond.get("property") or "")
         angles = angles_of(cert)
-        view = ClassView(name, f"class-{index}", self.titles.get(name, name), "certified", sentence(cert, cond.get("disturbances")),
+        said = sentence(cert, cond.get("disturbances"))
+        if isinstance(ctx.box, dict) and ctx.box:
+            said = box_words_of(ctx.box, "certified") + said
+        view = ClassView(name, f"class-{index}", self.titles.get(name, name), "certified", said,
                          property=prop, property_meaning=PROPERTY_MEANING.get(prop, ""), figures=figures(cond),
                          items_title="Every figure of the class, as stored")
         if angles:

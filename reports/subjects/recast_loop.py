@@ -122,7 +122,8 @@ class RecastLoopSubject(ModelCertificateChecks, Subject):
     def class_context(self, eqs: Equations) -> ClassContext:
         equilibrium = as_dict(self.doc.get("equilibrium"))
         shifts = [as_fraction(equilibrium.get(s)) or Fraction(0) for s in self.states]
-        return ClassContext(self.doc, eqs, self.states, shifts)
+        outputs = tuple(getattr(self.parsed, "outputs", None) or ())  # sos_bound names those it did not bound
+        return ClassContext(self.doc, eqs, self.states, shifts, outputs, self.doc.get("box"))
 
     def portrait(self, simulate: bool) -> tuple[Figure | None, str]:
         if not simulate:
