@@ -86,13 +86,13 @@ def test_a_changed_box_centre_or_sentence_does_not_verify(ilos_box) -> None:
 
 
 def test_the_pendulum_region_holds_for_every_damping_of_the_box() -> None:
-    result = api.certify(model=EXAMPLES / "recast-pendulum.toml", box=["b=0.8..1.25"], classes="sos_gas,roa")
+    result = api.certify(model=EXAMPLES / "recast-pendulum.toml", box=["b=0.5..2"], classes="sos_gas,roa")
     refuted = result.conditions["sos_gas"]
     assert refuted.status == "refuted"  # the saddle at theta = pi: at the box's centre, said so
-    assert refuted.summary.startswith("at the box's centre (b = 1.025), so not for every value of the box: ")
+    assert refuted.summary.startswith("at the box's centre (b = 1.25), so not for every value of the box: ")
     roa = result.conditions["roa"]
-    assert roa.status == "certified" and roa.summary.startswith("for every b in [0.8, 1.25]: region of attraction")
-    assert roa.certificate["parameter_box"] == {"b": ["4/5", "5/4"]}
+    assert roa.status == "certified" and roa.summary.startswith("for every b in [0.5, 2]: region of attraction")
+    assert roa.certificate["parameter_box"] == {"b": ["1/2", "2"]}
     assert api.verify(result).valid
     # outside lyapcheck: starts in the set (within its box) converge at both ends of the box
     cert = roa.certificate
@@ -103,11 +103,11 @@ def test_the_pendulum_region_holds_for_every_damping_of_the_box() -> None:
     X = lo + (hi - lo) * rng.random((4000, 2))
     X = X[v_of_states(cert, X) <= level][:300]
     assert len(X) > 50
-    for b in (0.8, 1.25):
+    for b in (0.5, 2.0):
         x = X.copy()
-        for _ in range(1500):
+        for _ in range(2500):
             x = rk4(lambda z, b=b: np.column_stack([z[:, 1], -np.sin(z[:, 0]) - b * z[:, 1]]), x, 0.02)
-        assert np.abs(x).max() < 1e-2, b
+        assert np.abs(x).max() < 1e-2, b  # to the equilibrium itself, not a neighbouring well
 
 
 def test_the_bound_under_disturbances_holds_for_every_gain_of_the_box() -> None:

@@ -175,8 +175,76 @@ def _jacobian(system: RecastSystem) -> np.ndarray:
                             for e in np.eye(system.n)])
 
 
-def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | str:
-    """A proposed claim (V, level, box) for the ball-arithmetic proof, or why none (one line)."""
+@dataclass(frozen=True)
+class Corners:
+    """Constants a V must serve at every value of (a box's parameters, disturbances): the loop recast
+    with them as its last states, and the corners of their intervals (absolute values)."""
+
+    system: RecastSystem
+    points: list[np.ndarray]
+
+    @classmethod
+    def of(cls, system: RecastSystem, intervals: Sequence[tuple[Fraction, Fraction]]) -> "Corners":
+        from itertools import product
+
+        return cls(system, [np.array(c, dtype=float) for c in product(*[(float(a), float(b)) for a, b in intervals])])
+
+    def fields(self, Z: np.ndarray, eq: np.ndarray, n: int) -> list[np.ndarray]:
+        """The field at the state deviations ``Z`` at each corner."""
+        from lyapcheck.models.recast_numeric import FloatLoop
+
+        loop = FloatLoop(self.system)
+        return [loop(np.column_stack([Z + eq, np.tile(c, (len(Z), 1))]))[:, :n] for c in self.points]
+
+    def jacobians(self, eq: np.ndarray, n: int) -> list[np.ndarray]:
+        """The field's Jacobian at the equilibrium at each corner (central differences)."""
+        h = 1e-6
+        out = []
+        for k in range(len(self.points)):
+            cols = [(self.fields(h * e[None, :], eq, n)[k] - self.fields(-h * e[None, :], eq, n)[k])[0] / (2 * h)
+                    for e in np.eye(n)]
+            out.append(np.column_stack(cols))
+        return out
+
+    def converge(self, Z: np.ndarray, eq: np.ndarray, n: int, escape: float) -> np.ndarray:
+        """Which starts converge to the equilibrium at every corner (simulated)."""
+        from lyapcheck.models.recast_numeric import simulate_ends
+
+        ok = np.ones(len(Z), dtype=bool)
+        for c in self.points:
+            dev, _ = simulate_ends(self.system, np.column_stack([Z + eq, np.tile(c, (len(Z), 1))]), FIT_HORIZON,
+                                   escape=escape)
+            d = np.linalg.norm(dev[:, :n], axis=1)
+            d[~np.all(np.isfinite(dev[:, :n]), axis=1)] = np.inf
+            ok &= d < FIT_CONVERGED
+        return ok
+
+
+def common_lyapunov(jacobians: Sequence[np.ndarray]) -> np.ndarray | None:
+    """A ``P`` with ``J^T P + P J <= -I`` for every Jacobian (a small SDP; None where there is none):
+    the quadratic part of a V common to a box, whose Jacobian is affine in the parameters there."""
+    import cvxpy as cp
+
+    n = jacobians[0].shape[0]
+    P = cp.Variable((n, n), symmetric=True)
+    cons = [P >> 1e-6 * np.eye(n)] + [J.T @ P + P @ J << -np.eye(n) for J in jacobians]
+    problem = cp.Problem(cp.Minimize(cp.trace(P)), cons)
+    try:
+        problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError:
+        return None
+    if problem.status != "optimal" or P.value is None:
+        return None
+    value = (P.value + P.value.T) / 2
+    if any(np.max(np.linalg.eigvalsh(J.T @ value + value @ J)) >= -0.5 for J in jacobians):
+        return None  # (the solver's point, checked: the proof decides in any case)
+    return value
+
+
+def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corners | None = None) -> FittedV | str:
+    """A proposed claim (V, level, box) for the ball-arithmetic proof, or why none (one line). With
+    ``corners``, V is asked to serve every corner of the constants (its quadratic part a common
+    Lyapunov function of their linearizations, its decrease at the samples at each corner)."""
     from scipy.linalg import solve_continuous_lyapunov
     from scipy.optimize import linprog
 
@@ -188,19 +256,29 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | s
     J = _jacobian(system)
     if not np.all(np.isfinite(J)) or np.max(np.linalg.eigvals(J).real) >= -1e-9:
         return "the linearization is not Hurwitz: no quadratic V to start from"
-    P0 = solve_continuous_lyapunov(J.T, -np.eye(n))
     at = _sampling(system, box)
     eq, lo, hi, blo, bhi, local = at.eq, at.lo, at.hi, at.blo, at.bhi, at.local
+    if corners is None:
+        P0 = solve_continuous_lyapunov(J.T, -np.eye(n))
+    else:
+        common = common_lyapunov([J, *corners.jacobians(eq, n)])
+        if common is None:
+            return "no quadratic V is common to the linearizations at the corners (a box too wide for one V)"
+        P0 = common
     half = (hi - lo) / 2
     Z = np.vstack([_grid(blo, bhi, FIT_GRID[n]), _grid(-local * np.ones(n), local * np.ones(n), FIT_LOCAL_GRID[n])])
     # a trajectory far outside the sampled box does not converge (and stopping it keeps a batch
     # with one finite escape time from crawling)
-    dev, _ = simulate_ends(system, Z + eq, FIT_HORIZON, escape=FIT_ESCAPE * float(np.max(bhi - blo)))
+    escape = FIT_ESCAPE * float(np.max(bhi - blo))
+    dev, _ = simulate_ends(system, Z + eq, FIT_HORIZON, escape=escape)
     converges = distances(system, dev) < FIT_CONVERGED
+    if corners is not None:
+        converges &= corners.converge(Z, eq, n, escape)
     edge = np.any(np.isclose(Z, blo) | np.isclose(Z, bhi), axis=1)
     F = field_values(system, Z + eq)
     mons = _monomials(n, FIT_DEGREE[n])
     Vc, dVc = _columns(Z, F, P0, mons)
+    corner_dV = [] if corners is None else [_columns(Z, Fc, P0, mons)[1] for Fc in corners.fields(Z, eq, n)]
     r2 = np.sum(Z ** 2, axis=1)
     good = converges & ~edge & (r2 > 1e-12) & np.all(np.isfinite(F), axis=1)
     bad = ~converges | edge
@@ -212,8 +290,8 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any]) -> FittedV | s
     for k, mon in enumerate(mons):
         if sum(mon) == top:
             Ut[:, 1 + k] = np.prod(U ** np.array(mon), axis=1)
-    A = np.vstack([dVc[good], -Vc[good], -Vc[bad], -Ut])
-    b = np.concatenate([-FIT_EPSILON * r2[good], -FIT_EPSILON * r2[good],
+    A = np.vstack([dVc[good], *[d[good] for d in corner_dV], -Vc[good], -Vc[bad], -Ut])
+    b = np.concatenate([-FIT_EPSILON * r2[good], *[-FIT_EPSILON * r2[good] for _ in corner_dV], -FIT_EPSILON * r2[good],
                         -(1 + FIT_OUTSIDE_MARGIN) * np.ones(int(bad.sum())),
                         -FIT_TOP_MARGIN / float(np.max(half)) ** top * np.ones(len(U))])
     inside = good & np.all((Z >= lo) & (Z <= hi), axis=1)
@@ -354,4 +432,4 @@ def propose_level(system: RecastSystem, V: Poly, box: tuple[Any, Any]) -> Interv
     return _level_and_box(system, V, values, at.blo, at.bhi, at.local, None)
 
 
-__all__ = ["FittedV", "fit_v", "propose_level", "propose_robust_level"]
+__all__ = ["FittedV", "Corners", "common_lyapunov", "fit_v", "propose_level", "propose_robust_level"]

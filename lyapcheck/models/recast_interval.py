@@ -102,9 +102,11 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robus
     disturbances that vanish at the equilibrium, the set is proved for every disturbance value first
     (the claim then covers them: ``"all"``), else with them at 0. With a parameter box in ``robust``,
     only the claim for every value of it is tried (``loop`` is the box's centre)."""
-    from lyapcheck.models.fitted_v import fit_v
+    from lyapcheck.models.fitted_v import Corners, fit_v
 
-    fitted = fit_v(loop.system, loop.ring, box)
+    # over a box of parameters V must serve every value: fitted at the box's corners as well
+    corners = Corners.of(robust.system, robust.intervals()) if robust is not None and robust.box is not None else None
+    fitted = fit_v(loop.system, loop.ring, box, corners)
     if isinstance(fitted, str):
         return fitted
     v_from = "a V fitted to simulations of the true loop (linear program), proved by " + METHOD
