@@ -34,6 +34,11 @@ Last, the targets of the examples, with the figures measured in this run:
 * lossless and unstable loops: no asymptotic claim (``sos_gas``, ``roa``, ``candidate`` not
   certified).
 
+A certified ``sos_bound`` (the disturbed examples) is simulated too: starts in the box twice the
+``[domain]``'s, each disturbance a bang-bang signal against the output's sign or a square wave at its
+bound, and the largest ``|y|`` after 150 s must stay within the certified bound. A run with ``--box``
+is simulated at every corner of its box (the claim holds for every value).
+
 A missed target prints "target missed"; the script exits 1 only on a SOUNDNESS VIOLATION (or an
 example that does not run at all).
 
@@ -79,9 +84,14 @@ RUNS: list[tuple[str, str, list[str]]] = [
     ("power-2machine", "recast-power-two-machine", []),
     ("pendulum-actuator", "recast-pendulum-actuator", []),
     ("unstable", "recast-unstable-pendulum", []),
+    ("ilos-disturbed", "recast-ilos-course-disturbed", []),
+    ("pendulum-torque", "recast-pendulum-torque", []),
+    ("ilos-box", "recast-ilos-course", ["--box", "kappa=0.4..0.6"]),
+    ("pendulum-box", "recast-pendulum", ["--box", "b=0.5..2", "--classes", "sos_gas,roa"]),
 ]
-CLASSES = ("linearization", "quadratic", "sos_gas", "roa", "candidate")
-HEAD = {"linearization": "lin", "quadratic": "quad", "sos_gas": "gas", "roa": "roa", "candidate": "cand"}
+CLASSES = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+HEAD = {"linearization": "lin", "quadratic": "quad", "sos_gas": "gas", "roa": "roa", "candidate": "cand",
+        "sos_bound": "bnd"}
 SHORT = {"certified": "C", "refuted": "R", "not_certified": "n", "not_applicable": "-", "inconclusive": "?"}
 ASYMPTOTIC = ("quadratic", "sos_gas", "roa", "candidate")
 #: LyZNet's published figures for the two-machine power system (the target is the neural V's)
@@ -180,27 +190,47 @@ class Model:
         self.domain = (np.array([[float(dom[s][0]), float(dom[s][1])] for s in self.states]) if dom
                        else np.stack([self.eq - 3, self.eq + 3], axis=1))
         self.has_domain = dom is not None
+        #: the disturbances' bounds; a simulation holds them at 0 unless it is given a signal
+        self.dists = {k: float(v) for k, v in data.get("disturbances", {}).items()}
+        outputs = data.get("outputs") or {s: s for s in self.states}
+        self.outputs = {k: Expr(str(v)) for k, v in outputs.items()}
 
-    def names(self, X: np.ndarray) -> dict[str, Any]:
+    def at(self, **params: float) -> "Model":
+        """The same model with some parameters set (a box's corner)."""
+        other = Model.__new__(Model)
+        other.__dict__.update(self.__dict__)
+        other.params = {**self.params, **params}
+        return other
+
+    def names(self, X: np.ndarray, d: dict[str, Any] | None = None) -> dict[str, Any]:
         out: dict[str, Any] = dict(self.params)
+        out.update({k: 0.0 for k in self.dists})
+        out.update(d or {})
         out.update({s: X[:, i] for i, s in enumerate(self.states)})
         return out
 
-    def field(self, X: np.ndarray) -> np.ndarray:
-        names = self.names(X)
+    def field(self, X: np.ndarray, d: dict[str, Any] | None = None) -> np.ndarray:
+        names = self.names(X, d)
         return np.stack([np.broadcast_to(np.asarray(e(names), dtype=float), (len(X),)) for e in self.rhs], axis=1)
 
-    def simulate(self, X0: np.ndarray, t_end: float = T_END, dt: float = DT) -> np.ndarray:
-        """RK4 on the true field; a state that blows up is frozen at nan (it does not converge)."""
+    def simulate(self, X0: np.ndarray, t_end: float = T_END, dt: float = DT,
+                 signal: Callable[[np.ndarray, float], dict[str, Any]] | None = None,
+                 tail: Callable[[np.ndarray], None] | None = None, tail_from: float = 0.0) -> np.ndarray:
+        """RK4 on the true field; a state that blows up is frozen at nan (it does not converge).
+        ``signal(X, t)``: the disturbances' values (held over each step); ``tail(X)`` is called at
+        every step from ``tail_from`` on."""
         X = np.array(X0, dtype=float)
         with np.errstate(all="ignore"):
-            for _ in range(int(round(t_end / dt))):
-                k1 = self.field(X)
-                k2 = self.field(X + dt / 2 * k1)
-                k3 = self.field(X + dt / 2 * k2)
-                k4 = self.field(X + dt * k3)
+            for k in range(int(round(t_end / dt))):
+                d = signal(X, k * dt) if signal is not None else None
+                k1 = self.field(X, d)
+                k2 = self.field(X + dt / 2 * k1, d)
+                k3 = self.field(X + dt / 2 * k2, d)
+                k4 = self.field(X + dt * k3, d)
                 X = X + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
                 X[~np.isfinite(X).all(axis=1) | (np.abs(X) > 1e6).any(axis=1)] = np.nan
+                if tail is not None and k * dt >= tail_from:
+                    tail(X)
         return X
 
     def converged(self, X: np.ndarray, angles: tuple[str, ...] = ()) -> np.ndarray:
@@ -249,6 +279,8 @@ class Lyapunov:
                 col = self.aux[v](names)
             elif v in ("rt2", "rt3"):
                 col = math.sqrt(int(v[2:]))
+            elif v in self.model.params or v in self.model.dists:  # a box's parameter (a constant of the loop)
+                col = names[v]
             else:
                 raise ValueError(f"V's variable {v!r} is neither a state nor an auxiliary")
             col = np.broadcast_to(np.asarray(col, dtype=float), (len(X),))
@@ -363,6 +395,58 @@ def soundness(label: str, model: Model, doc: dict[str, Any], n: int, rng: np.ran
     return bad, lines
 
 
+def box_corners(extra: list[str]) -> list[dict[str, float]]:
+    """The corners of a run's ``--box`` arguments (one empty corner without a box)."""
+    from itertools import product
+
+    ranges = []
+    for flag, value in zip(extra, extra[1:]):
+        if flag == "--box":
+            name, _, interval = value.partition("=")
+            lo, _, hi = interval.partition("..")
+            ranges.append([(name, float(lo)), (name, float(hi))])
+    return [dict(c) for c in product(*ranges)] if ranges else [{}]
+
+
+#: the disturbance signals an ultimate bound is simulated under: bang-bang against an output's sign
+#: and square waves of several periods (each value at a bound)
+BOUND_PERIODS = (0.5, 2.0, 6.0, 20.0)
+BOUND_T_END, BOUND_TAIL = 300.0, 150.0
+
+
+def bound_check(label: str, model: Model, doc: dict[str, Any], n: int, rng: np.random.Generator
+                ) -> tuple[int, list[str]]:
+    """A certified ``sos_bound``: starts in the box twice the [domain]'s, each disturbance a bang-bang or
+    square-wave signal at its bound; the largest ``|y|`` after BOUND_TAIL s must stay within the bound."""
+    cond = doc["conditions"].get("sos_bound")
+    if not cond or cond.get("status") != "certified":
+        return 0, []
+    lines, bad = [], 0
+    X0 = sample(model, n // 10, rng)
+    for name, bound in cond["bounds"].items():
+        y = model.outputs[name]
+        worst = 0.0
+
+        def track(X: np.ndarray) -> None:
+            nonlocal worst
+            values = np.abs(np.broadcast_to(np.asarray(y(model.names(X)), dtype=float), (len(X),)))
+            worst = max(worst, float(np.nanmax(values)))
+
+        policies: list[Callable[[np.ndarray, float], dict[str, Any]]] = [
+            lambda X, t: {d: b * np.sign(np.broadcast_to(np.asarray(y(model.names(X)), dtype=float), (len(X),))
+                                         + 1e-12) for d, b in model.dists.items()}]
+        policies += [lambda X, t, T=T: {d: b * np.sign(np.sin(2 * math.pi * t / T) + 1e-12)
+                                        for d, b in model.dists.items()} for T in BOUND_PERIODS]
+        for policy in policies:
+            model.simulate(X0, BOUND_T_END, 0.02, signal=policy, tail=track, tail_from=BOUND_TAIL)
+        ok = worst <= bound
+        bad += 0 if ok else 1
+        lines.append(f"  {label} sos_bound: limsup |{name}| <= {bound:.4g} certified; simulated tail sup {worst:.4g} "
+                     f"({len(X0)} starts, {len(policies)} disturbance signals, {BOUND_T_END:g} s)"
+                     + ("" if ok else "  SOUNDNESS VIOLATION"))
+    return bad, lines
+
+
 def status(doc: dict[str, Any] | None, name: str) -> str:
     if not doc:
         return "!"
@@ -406,14 +490,18 @@ def main() -> int:
           f"{args.samples} starts in the [domain] box and {args.samples} in the box twice as wide:")
     rng = np.random.default_rng(20240531)
     violations = 0
-    for label, stem, _ in runs:
+    for label, stem, extra in runs:
         doc = results[label].get("doc")
         if doc is None:
             continue
-        bad, lines = soundness(label, Model(MODELS / f"{stem}.toml"), doc, args.samples, rng)
-        violations += bad
-        for line in lines:
-            print(line)
+        for corner in box_corners(extra):  # a claim over a box holds at its corners
+            model = Model(MODELS / f"{stem}.toml").at(**corner)
+            tag = label + ("" if not corner else " at " + ", ".join(f"{k} = {v:g}" for k, v in corner.items()))
+            bad, lines = soundness(tag, model, doc, args.samples, rng)
+            more, bound_lines = bound_check(tag, model, doc, args.samples, rng)
+            violations += bad + more
+            for line in lines + bound_lines:
+                print(line)
     print()
 
     print("Targets (figures measured in this run):")
