@@ -79,7 +79,8 @@ def test_each_identity_holds_on_the_relations_and_fails_without_the_disturbance_
     model = load_any_model(ILOS)
     made = recast_bound.bound_loop(model)
     assert not isinstance(made, str)
-    loop, why = recast_bound.check_root_proofs(made.loop, ilos.conditions["sos_bound"].certificate["recasting"]["roots"])
+    roots = ilos.conditions["sos_bound"].certificate["recasting"]["roots"]
+    loop, why = recast_bound.check_root_proofs(made.loop, roots)
     assert loop is not None, why
     bl = made.with_loop(loop)
     ring = bl.ring

@@ -76,8 +76,8 @@ def register(group: click.Group) -> None:
                   "paper, 'quick' = the quadratic and arithmetic classes, about 20x faster).")
     @click.option("--box", "boxes", multiple=True, help='Certify a whole box of a model\'s parameters (a loop with '
                   'functions too), e.g. --box "mu=0.8..1.2" (repeatable), or of the paper\'s gains, e.g. --box '
-                  '"alpha_d=540..660" --box "k_d=0.1..0.2" (classes prop41_ges, prop41_iss, sector_ges and ges by default; --classes all '
-                  'adds ultimate_bound, sos_gas, saturated_loop and sos_bound).')
+                  '"alpha_d=540..660" --box "k_d=0.1..0.2" (classes prop41_ges, prop41_iss, sector_ges and ges by '
+                  'default; --classes all adds ultimate_bound, sos_gas, saturated_loop and sos_bound).')
     @click.option("--json", "as_json", is_flag=True, help="Print the certificate document as JSON.")
     @click.option("--out", type=click.Path(dir_okay=False), help="Write the certificate JSON here.")
     @click.option("--report", type=click.Path(dir_okay=False), help="Write an HTML or PDF report (by extension).")

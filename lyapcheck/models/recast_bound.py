@@ -76,6 +76,9 @@ class BoundLoop:
     loop: Loop
     #: the model's disturbances and bounds ``|d| <= b``
     disturbances: dict[str, Fraction]
+    #: a box's parameters among the loop's constants: constant in time, so ``V`` may depend on them
+    #: (the recasting's flows hold for a constant), unlike a disturbance
+    box_names: tuple[str, ...] = ()
 
     @property
     def ring(self) -> Any:
@@ -91,13 +94,21 @@ class BoundLoop:
     def states(self) -> tuple[str, ...]:
         return self.loop.states()
 
+    @property
+    def parameters(self) -> tuple[int, ...]:
+        """The indices of the box's parameters."""
+        return tuple(self.ring.names.index(n) for n in self.box_names)
+
     def with_loop(self, loop: Loop) -> "BoundLoop":
-        return BoundLoop(loop, self.disturbances)
+        return BoundLoop(loop, self.disturbances, self.box_names)
 
     def square_free(self) -> frozenset[int]:
-        """The square roots' indices (:attr:`~lyapcheck.models.recast_sos.ConditionProgram.square_free`)."""
-        return frozenset(self.ring.names.index(a.name) for a in self.loop.system.auxiliaries
-                         if a.function == "sqrt" and a.smooth and a.radicand is None)
+        """The square roots' indices (:attr:`~lyapcheck.models.recast_sos.ConditionProgram.square_free`),
+        and each angle's cosine (``c^2 = 1 - s^2`` makes its squares as redundant)."""
+        roots = {a.name for a in self.loop.system.auxiliaries if a.function == "sqrt" and a.smooth
+                 and a.radicand is None}
+        cosines = {cosine for _, cosine in self.loop.angles.values()}
+        return frozenset(self.ring.names.index(n) for n in roots | cosines)
 
     def names(self) -> list[str]:
         return [self.ring.names[i] for i in self.v_vars]
@@ -128,7 +139,7 @@ def bound_loop(model: RecastModel, box: ModelBox | None = None) -> BoundLoop | s
         return ("the recasting could not keep the disturbances as variables (a disturbance inside a function "
                 "whose exact value at the equilibrium is needed)")
     fixed = {**model.disturbances, **({name: box.half(name) for name in box.names} if box is not None else {})}
-    return BoundLoop(base_loop(system, fixed=fixed), dict(model.disturbances))
+    return BoundLoop(base_loop(system, fixed=fixed), dict(model.disturbances), box.names if box is not None else ())
 
 
 @dataclass(frozen=True)
@@ -140,12 +151,21 @@ class Template:
     variables: tuple[int, ...]
     N: dict[str, Poly]
     denominators: tuple[tuple[Poly, Fraction, ConditionCertificate], ...]
+    #: a box's parameters V is affine in (each monomial of ``degree`` in the variables times 1 or one
+    #: of them): one V per value of the box, ``V(x, p)``
+    parameters: tuple[int, ...] = ()
 
     def basis(self, ring: Any) -> list[Monomial]:
         # from degree 0: a constant in V lets {V <= 1} be any sublevel set of V's other terms, so that
         # B < 1 (a bound below 1) is possible at all
-        return [m for m in monomials(ring.nvars, 0, self.degree)
-                if all(m[i] == 0 for i in range(ring.nvars) if i not in self.variables)]
+        plain = [m for m in monomials(ring.nvars, 0, self.degree)
+                 if all(m[i] == 0 for i in range(ring.nvars) if i not in self.variables)]
+        return plain + [tuple(e + int(i == p) for i, e in enumerate(m)) for p in self.parameters for m in plain]
+
+    def label(self, ring: Any) -> str:
+        names = ", ".join(ring.names[i] for i in self.variables)
+        affine = f", affine in {', '.join(ring.names[i] for i in self.parameters)}" if self.parameters else ""
+        return f"degree {self.degree} in {names}{affine}"
 
 
 def templates(bl: BoundLoop, search: Search) -> tuple[list[Template], list[str]]:
@@ -174,6 +194,11 @@ def templates(bl: BoundLoop, search: Search) -> tuple[list[Template], list[str]]
             made = proved[variables]
             if made is not None:
                 out.append(Template(degree, variables, made[0], made[1]))
+        for variables in choices:  # then V(x, p), one per value of a box (its parameters' flow is 0: no new
+            made = proved[variables]  # denominator)
+            if made is not None and bl.parameters:
+                N, _, _ = common_denominator(bl.loop, [ring.names[i] for i in variables + bl.parameters])
+                out.append(Template(degree, variables, N, made[1], bl.parameters))
     return out, skipped
 
 
@@ -288,7 +313,7 @@ def best_bound(bl: BoundLoop, forms: list[Template], y: Poly, search: Search) ->
                     break
             elif best is None or found.B < best.B:
                 best = found
-        label = f"degree {t.degree} in {', '.join(ring.names[i] for i in t.variables)}"
+        label = t.label(ring)
         tried.append(f"{label}: " + ("found" if not outcomes else "none at some rates of lam = "
                                      f"{', '.join(str(x) for x in LAMBDA_GRID)} 1/s (" +
                                      ", ".join(f"{why} ({count})" for why, count in outcomes.items()) + ")"))
@@ -316,7 +341,8 @@ def sos_bound(model: RecastModel, budget: Budget, box: ModelBox | None = None) -
         loop, unproved = prove_root_bounds(made.loop, search)
         if unproved:
             return ConditionResult("sos_bound", "not_certified", f"the square root '{unproved[0]}' has an argument "
-                                   "not proved non-negative with the disturbances acting", solver={"solves": search.log})
+                                   "not proved non-negative with the disturbances acting",
+                                   solver={"solves": search.log})
         bl = made.with_loop(loop)
         forms, skipped = templates(bl, search)
         state_ring = Ring(model.states)
@@ -357,7 +383,7 @@ def sos_bound(model: RecastModel, budget: Budget, box: ModelBox | None = None) -
 def output_json(bl: BoundLoop, found: Found, y: Poly, bound: Fraction) -> dict[str, Any]:
     ring = bl.ring
     t = found.template
-    return {"y": poly_to_json(ring, y), "v_variables": [ring.names[i] for i in t.variables],
+    return {"y": poly_to_json(ring, y), "v_variables": [ring.names[i] for i in t.variables + t.parameters],
             "denominators": [{"poly": poly_to_json(ring, d), "bound": str(c), "proof": cert.to_json(ring)}
                              for d, c, cert in t.denominators],
             "V": poly_to_json(ring, found.V), "V_text": v_text(bl.loop.system, found.V),
@@ -402,14 +428,15 @@ def check_bound(model: RecastModel, c: Mapping[str, Any], box: ModelBox | None =
     if not isinstance(outputs, dict) or not set(outputs) <= set(model.outputs):
         return False, "a bound is stated for an output the model does not have"
     bounds: dict[str, float] = {}
-    allowed = set(bl.names())
+    allowed = set(bl.names()) | set(bl.box_names)  # a box's parameter is constant: V may depend on it
     for name, item in outputs.items():
         y = bl.output(model.outputs[name], state_ring)
         if poly_from_json(ring, item["y"], "y") != y:
             return False, f"{name}: the stated output is not the model's"
         names = item["v_variables"]
         if not isinstance(names, list) or not set(names) <= allowed or len(set(names)) != len(names):
-            return False, f"{name}: V's variables must be ones it may use (no disturbance, auxiliary of one, angle)"
+            return False, (f"{name}: V's variables must be ones it may use (no disturbance, auxiliary of a "
+                           "disturbance or box parameter, angle)")
         V = poly_from_json(ring, item["V"], "V")
         if any(degree_in(ring, V, [n]) > 0 for n in ring.names if n not in names):
             return False, f"{name}: V uses a variable not among its v_variables"

@@ -263,7 +263,9 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
                 ok, why = check_bound(model, c, box) if c["status"] == "certified" else \
                     (False, "sos_bound refutes nothing")
             elif box is not None and c["status"] == "certified" and name == "roa":
-                ok, why = _verify_condition(name, c, base, box_robust(model, box))
+                # the set covers the disturbances too where its certificate says so (else d = 0)
+                disturbed = "disturbances" in (c.get("certificate") or {})
+                ok, why = _verify_condition(name, c, base, box_robust(model, box, disturbed=disturbed))
                 if c["certificate"].get("kind") != "interval":
                     ok, why = False, "over a box, roa is proved by ball arithmetic"
             elif box is not None and c["status"] == "certified":

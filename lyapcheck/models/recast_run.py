@@ -1,6 +1,8 @@
 """The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
-``candidate``, ``sos_bound`` (:mod:`lyapcheck.models.recast_bound`; :mod:`lyapcheck.models.recast_classes` has each condition; this module orders them,
-gives each its time budget, and runs ``roa``'s V-s iteration, :mod:`lyapcheck.models.recast_improve`).
+``candidate``, ``sos_bound`` (:mod:`lyapcheck.models.recast_classes` has each condition,
+:mod:`lyapcheck.models.recast_bound` the last; this module orders them, gives each its time budget,
+runs ``roa``'s V-s iteration, :mod:`lyapcheck.models.recast_improve`, and the classes over a box of
+parameters, :func:`certify_box`).
 """
 
 from __future__ import annotations
@@ -150,8 +152,9 @@ def boxed_loop(model: RecastModel, box: ModelBox) -> Loop:
     try:
         system = recast_with_constants(model, {name: box.center(name) for name in box.names})
     except ModelFileError as exc:
+        why = str(exc).removeprefix(exc.source + ": ")
         raise ModelFileError(model.source, where, f"the loop cannot be recast with the box's parameters as "
-                                                  f"variables ({str(exc).removeprefix(exc.source + ': ')}): certify points with --set") from None
+                                                  f"variables ({why}): certify points with --set") from None
     if not box_robust(model, box, system).vanishes():
         raise ModelFileError(model.source, where, "the equilibrium is not proved to stay put over the box (the "
                                                   "right-hand sides at the equilibrium are not exactly 0 for every "
@@ -159,14 +162,15 @@ def boxed_loop(model: RecastModel, box: ModelBox) -> Loop:
     return base_loop(system, fixed={name: box.half(name) for name in box.names})
 
 
-def box_robust(model: RecastModel, box: ModelBox, system: Any = None) -> Any:
-    """The box's parameters (and the model's disturbances) as balls for the ball-arithmetic route."""
+def box_robust(model: RecastModel, box: ModelBox, system: Any = None, disturbed: bool = True) -> Any:
+    """The box's parameters (and, ``disturbed``, the model's disturbances where the recasting keeps
+    them) as balls for the ball-arithmetic route; without them the disturbances are at 0."""
     from lyapcheck.models.recast import recast_with_constants
     from lyapcheck.models.recast_interval import Robust
 
     constants = {name: box.center(name) for name in box.names}
     bounds = {name: box.half(name) for name in box.names}
-    if model.disturbances and system is None:
+    if model.disturbances and system is None and disturbed:
         try:
             system = recast_with_constants(model, {**{d: Fraction(0) for d in model.disturbances}, **constants})
             bounds = {**dict(model.disturbances), **bounds}
@@ -184,9 +188,8 @@ def box_roa(model: RecastModel, loop: Loop, box: ModelBox, budget: Budget) -> Co
     from lyapcheck.models.recast_interval import interval_roa
 
     robust = box_robust(model, box)
-    if not robust.vanishes():
-        return ConditionResult("roa", "not_certified", "a disturbance moves the equilibrium: over a box, roa is proved "
-                               "for every disturbance value as well, and cannot be here", property="ROA")
+    if not robust.vanishes():  # a disturbance moves the equilibrium: the set for every value of the box, d = 0
+        robust = box_robust(model, box, disturbed=False)
     found = interval_roa(loop, budget, comparison_box(model, loop), robust)
     if isinstance(found, str):
         return ConditionResult("roa", "not_certified", "over a box, roa is proved by ball arithmetic for every "
