@@ -38,14 +38,7 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         return certify_box(model, classes, time_limit_s, box)
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
-    base = base_loop(model.system)
-    budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-    loop, unproved = prove_root_bounds(base, Search(base.ring, budget))
-    if unproved:
-        raise ModelFileError(model.source, model.key_of(unproved[0]),
-                             f"'{unproved[0]}': its argument could not be proved non-negative (sqrt of something that "
-                             "can be negative, or of something no SOS proof here shows non-negative): write the loop "
-                             "so that the root's argument is >= 0")
+    loop = proved_loop(model, time_limit_s)
     start = time.perf_counter()
     lin = linearization(loop)
     if "linearization" in classes:
@@ -63,15 +56,9 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         seconds["sos_gas"] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()
-        gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
-                    and results[c].status == "certified"), None)
-        if gas is not None:
-            results["roa"] = ConditionResult("roa", "not_applicable", "global asymptotic stability is certified "
-                                             f"({gas}): the region of attraction is the whole state space",
-                                             property="ROA")
-        else:
-            results["roa"] = run_roa(loop, lin, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
-                                     comparison_box(model, loop), robust=robust_of(model))
+        results["roa"] = roa_after_gas(results, "") or \
+            run_roa(loop, lin, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
+                    comparison_box(model, loop), robust=robust_of(model))
         seconds["roa"] = time.perf_counter() - start
     if "candidate" in classes and candidate is not None:
         start = time.perf_counter()
@@ -101,12 +88,8 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
     """
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
-    centre = base_loop(model.system)
     budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-    loop, unproved = prove_root_bounds(centre, Search(centre.ring, budget))
-    if unproved:
-        raise ModelFileError(model.source, model.key_of(unproved[0]),
-                             f"'{unproved[0]}': its argument could not be proved non-negative (at the box's centre)")
+    loop = proved_loop(model, time_limit_s)  # the box's centre
     boxed = boxed_loop(model, box)
     for name in ("linearization", "candidate"):
         if name in classes:
@@ -122,15 +105,8 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
                 seconds[name] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()
-        gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
-                    and results[c].status == "certified"), None)
-        if gas is not None:
-            results["roa"] = ConditionResult("roa", "not_applicable", "global asymptotic stability is certified "
-                                             f"({gas}) for every value of the box: the region of attraction is the "
-                                             "whole state space", property="ROA")
-        else:
-            results["roa"] = box_roa(model, loop, box, Budget(time_limit_s,
-                                                               "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        results["roa"] = roa_after_gas(results, " for every value of the box") or \
+            box_roa(model, loop, box, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
         seconds["roa"] = time.perf_counter() - start
     if "sos_bound" in classes:
         from lyapcheck.models.recast_bound import sos_bound
@@ -140,6 +116,31 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
                                          box)
         seconds["sos_bound"] = time.perf_counter() - start
     return results, loop, seconds
+
+
+def roa_after_gas(results: dict[str, ConditionResult], where: str) -> ConditionResult | None:
+    """``roa`` is ``not_applicable`` once ``quadratic`` or ``sos_gas`` certified GAS (``where``: said
+    of the claim, as " for every value of the box"); None otherwise."""
+    gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
+                and results[c].status == "certified"), None)
+    if gas is None:
+        return None
+    return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified ({gas}){where}: the "
+                           "region of attraction is the whole state space", property="ROA")
+
+
+def proved_loop(model: RecastModel, time_limit_s: float) -> Loop:
+    """The loop in deviations with its square roots' lower bounds proved; a one-line
+    :class:`ModelFileError` naming the equation of a root whose argument is not proved >= 0."""
+    base = base_loop(model.system)
+    loop, unproved = prove_root_bounds(base, Search(base.ring, Budget(
+        time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")))
+    if unproved:
+        raise ModelFileError(model.source, model.key_of(unproved[0]),
+                             f"'{unproved[0]}': its argument could not be proved non-negative (sqrt of something that "
+                             "can be negative, or of something no SOS proof here shows non-negative): write the loop "
+                             "so that the root's argument is >= 0")
+    return loop
 
 
 def boxed_loop(model: RecastModel, box: ModelBox) -> Loop:
