@@ -94,6 +94,8 @@ EXPECT: dict[str, dict[str, Any]] = {
     "recast-tanh-neuron": {"certified": ("linearization", "roa")},
     "recast-power-two-machine": {"certified": ("linearization", "roa"), "refuted": ("sos_gas",)},
     "recast-pendulum-actuator": {"certified": ("linearization", "roa")},
+    "recast-ilos-course-disturbed": {"certified": ("linearization", "sos_gas", "sos_bound")},
+    "recast-pendulum-torque": {"certified": ("linearization", "roa", "sos_bound"), "refuted": ("sos_gas",)},
 }
 #: the safety examples run with ``--classes barrier`` alone; the FOSSIL ones carry issue 32's targets
 BARRIER_EXAMPLES = ("fossil-barr1", "fossil-barr3", "fossil-highord4", "fossil-highord6", "fossil-highord8",
