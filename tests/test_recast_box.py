@@ -151,3 +151,17 @@ def test_a_box_centre_is_written_as_an_exact_decimal(value: Fraction, text: str)
     assert exact_decimal(value) == text and Fraction(text) == value
     with pytest.raises(ValueError):
         exact_decimal(Fraction(1, 3))
+
+
+def test_a_box_parameter_inside_a_square_root_bounds_it_with_the_box() -> None:
+    """sqrt(Delta^2 + e^2) >= 1 holds for Delta in [1.5, 2.5], not for every Delta: its proof uses the
+    box's relation and says so (``constants``); without it the stored proof does not check."""
+    result = api.certify(model=EXAMPLES / "recast-ilos-course.toml", box=["Delta=1.5..2.5"], classes="sos_gas")
+    gas = result.conditions["sos_gas"]
+    assert gas.status == "certified" and gas.summary.startswith("for every Delta in [1.5, 2.5]: ")
+    roots = gas.certificate["recasting"]["roots"]
+    assert roots["r1"]["constants"] is True and Fraction(roots["r1"]["bound"]) > 0
+    assert api.verify(result).valid
+    doc = copy.deepcopy(result.document)
+    del doc["conditions"]["sos_gas"]["certificate"]["recasting"]["roots"]["r1"]["constants"]
+    assert not api.verify(doc).valid

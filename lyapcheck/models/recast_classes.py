@@ -66,6 +66,9 @@ class Loop:
     #: each with the half-width of its interval around its value; a Lyapunov function never uses
     #: them nor an auxiliary of them (its recast flow is that of a constant)
     fixed: dict[str, Fraction] = field(default_factory=dict)
+    #: the square roots whose bound's proof also used the bounded constants' relations (a root of
+    #: a box's parameter, ``sqrt(Delta^2 + e^2) >= Delta_lo``); the others' proofs hold for any value
+    root_constants: frozenset[str] = frozenset()
 
     @property
     def ring(self) -> Ring:
@@ -149,7 +152,8 @@ def for_v(loop: Loop, V: Poly) -> Loop:
     ring = loop.ring
     if not any(degree_in(ring, V, [a]) > 0 for a in loop.angles):
         return loop
-    return with_root_bounds(base_loop(loop.system, cylinder=False, fixed=loop.fixed), dict(loop.root_bounds))
+    return with_root_bounds(base_loop(loop.system, cylinder=False, fixed=loop.fixed), dict(loop.root_bounds),
+                            loop.root_constants)
 
 
 def angle_states(system: RecastSystem) -> dict[str, tuple[str, str]]:
@@ -176,15 +180,18 @@ def angle_states(system: RecastSystem) -> dict[str, tuple[str, str]]:
     return out
 
 
-def with_root_bounds(loop: Loop, bounds: dict[str, tuple[Fraction, ConditionCertificate]]) -> Loop:
-    """The loop with ``r - c >= 0`` for every proved square root bound (in the auxiliaries' order)."""
+def with_root_bounds(loop: Loop, bounds: dict[str, tuple[Fraction, ConditionCertificate]],
+                     constants: frozenset[str] = frozenset()) -> Loop:
+    """The loop with ``r - c >= 0`` for every proved square root bound (in the auxiliaries' order);
+    ``constants``: the roots whose proofs used the bounded constants' relations."""
     relations = list(loop.relations)
     for a in loop.system.auxiliaries:
         if a.name in bounds:
             c = bounds[a.name][0]
             relations.append(Relation("ge", loop.system.shift(loop.ring.gen(a.name)) - to_fmpq(c),
                                       f"{a.name} >= {c} (sqrt of an argument proved >= {c * c})", "derived"))
-    return Loop(loop.system, relations, dict(bounds), dict(loop.angles), dict(loop.fixed))
+    return Loop(loop.system, relations, dict(bounds), dict(loop.angles), dict(loop.fixed),
+                frozenset(n for n in constants if n in bounds))
 
 
 def common_denominator(loop: Loop, names: Sequence[str]) -> tuple[dict[str, Poly], Poly, list[Poly]]:
@@ -251,17 +258,20 @@ def base_loop_of(loop: Loop) -> Loop:
 
 
 def _restricted(loop: Loop, owners: set[str], bounds: dict[str, tuple[Fraction, "ConditionCertificate"]]) -> Loop:
-    """The relations of the auxiliaries in ``owners`` only, with the bounds proved for them."""
+    """The relations of the auxiliaries (or :data:`CONSTANT`) in ``owners`` only, with the bounds proved
+    for them."""
     kept = Loop(loop.system, [r for r in loop.relations if r.owner in owners], angles=dict(loop.angles),
                 fixed=dict(loop.fixed))
     return with_root_bounds(kept, {k: v for k, v in bounds.items() if k in owners and v[0] > 0})
 
 
-def root_loop(base: Loop, name: str, bounds: dict[str, tuple[Fraction, "ConditionCertificate"]]) -> Loop:
+def root_loop(base: Loop, name: str, bounds: dict[str, tuple[Fraction, "ConditionCertificate"]],
+              constants: bool = False) -> Loop:
     """What the proof of square root ``name``'s bound may use: the relations of the auxiliaries
-    made before it, and their proved bounds (its own relation r^2 = q presupposes q >= 0)."""
-    names = [a.name for a in base.system.auxiliaries]
-    return _restricted(base_loop_of(base), set(names[:names.index(name)]), bounds)
+    made before it, and their proved bounds (its own relation r^2 = q presupposes q >= 0); with
+    ``constants``, the bounded constants' relations too (a box's parameter inside the root)."""
+    names = set(a.name for a in base.system.auxiliaries[:[a.name for a in base.system.auxiliaries].index(name)])
+    return _restricted(base_loop_of(base), names | ({CONSTANT} if constants else set()), bounds)
 
 
 def prove_root_bounds(loop: Loop, search: Search) -> tuple[Loop, list[str]]:
@@ -271,29 +281,35 @@ def prove_root_bounds(loop: Loop, search: Search) -> tuple[Loop, list[str]]:
     system = loop.system
     base = loop
     bounds: dict[str, tuple[Fraction, ConditionCertificate]] = {}
+    constants: set[str] = set()
     unproved: list[str] = []
+    # first without the bounded constants' relations (a proof for any value of them; their multipliers
+    # only add a face to the program), then with them where the loop has any
+    with_constants = (False, True) if loop.fixed else (False,)
     for a in system.auxiliaries:
         if a.function != "sqrt" or a.argument is None:
             continue
         q = system.shift(a.argument)
-        before = root_loop(base, a.name, bounds)
         assert a.value is not None
         c = a.value / 2
-        if c > 0:
-            cert = prove_nonnegative(before, q - to_fmpq(c * c), search, f"root_{a.name}")
-            if cert is not None:
-                bounds[a.name] = (c, cert)
-                continue
-        cert = prove_nonnegative(before, q, search, f"nonneg_{a.name}")
-        if cert is None:
+        targets = ([(c, q - to_fmpq(c * c), f"root_{a.name}")] if c > 0 else []) + \
+            [(Fraction(0), q, f"nonneg_{a.name}")]
+        found = next(((bound, uses, cert) for bound, F, label in targets for uses in with_constants
+                      for cert in [prove_nonnegative(root_loop(base, a.name, bounds, uses), F, search, label)]
+                      if cert is not None), None)
+        if found is None:
             unproved.append(a.written_as or a.definition)
-        else:
-            bounds[a.name] = (Fraction(0), cert)
-    return with_root_bounds(base, {k: v for k, v in bounds.items() if v[0] > 0}), unproved
+            continue
+        bounds[a.name] = (found[0], found[2])
+        if found[1]:
+            constants.add(a.name)
+    return with_root_bounds(base, {k: v for k, v in bounds.items() if v[0] > 0}, frozenset(constants)), unproved
 
 
 def root_proofs_json(loop: Loop) -> dict[str, Any]:
-    return {name: {"bound": str(c), "proof": cert.to_json(loop.ring)} for name, (c, cert) in loop.root_bounds.items()}
+    return {name: {"bound": str(c), "proof": cert.to_json(loop.ring), **({"constants": True} if name in
+                                                                         loop.root_constants else {})}
+            for name, (c, cert) in loop.root_bounds.items()}
 
 
 def check_root_proofs(base: Loop, data: Any) -> tuple[Loop | None, str]:
@@ -301,6 +317,7 @@ def check_root_proofs(base: Loop, data: Any) -> tuple[Loop | None, str]:
     if not isinstance(data, dict):
         return None, "recasting.roots must be a table"
     bounds: dict[str, tuple[Fraction, ConditionCertificate]] = {}
+    constants: set[str] = set()
     for name, item in data.items():
         aux = next((a for a in base.system.auxiliaries if a.name == name and a.function == "sqrt"), None)
         if aux is None or aux.argument is None:
@@ -308,14 +325,18 @@ def check_root_proofs(base: Loop, data: Any) -> tuple[Loop | None, str]:
         c = Fraction(str(item["bound"]))
         if c <= 0:
             return None, f"recasting.roots.{name}: the bound must be > 0"
-        before = root_loop(base, name, bounds)
+        if item.get("constants", False) not in (True, False):
+            return None, f"recasting.roots.{name}: constants must be true or false"
+        before = root_loop(base, name, bounds, bool(item.get("constants", False)))
+        if item.get("constants"):
+            constants.add(name)
         cert = ConditionCertificate.from_json(base.ring, item["proof"], len(before.relations))
         F = base.system.shift(aux.argument) - to_fmpq(c * c)
         ok, why = check_condition(base.ring, F, before.relations, cert)
         if not ok:
             return None, f"recasting.roots.{name}: {why}"
         bounds[name] = (c, cert)
-    return with_root_bounds(base, bounds), "every square root's lower bound is proved exactly"
+    return with_root_bounds(base, bounds, frozenset(constants)), "every square root's lower bound is proved exactly"
 
 
 def prove_denominators(loop: Loop, distinct: Sequence[Poly], search: Search
