@@ -165,3 +165,13 @@ def test_a_box_parameter_inside_a_square_root_bounds_it_with_the_box() -> None:
     doc = copy.deepcopy(result.document)
     del doc["conditions"]["sos_gas"]["certificate"]["recasting"]["roots"]["r1"]["constants"]
     assert not api.verify(doc).valid
+
+
+def test_a_gain_multiplying_the_whole_field_is_covered_with_the_square_root_square_free() -> None:
+    """ILOS over its speed U in [0.5, 2]: V' is U times the nominal one, so one V serves every U > 0
+    (the S-procedure with the box's multiplier is feasible exactly when U's lower end is > 0). With
+    r^2 = q the bases' r^2 put a kernel into the remainder on the variety r^2 = q: square-free bases."""
+    result = api.certify(model=EXAMPLES / "recast-ilos-course.toml", box=["U=0.5..2"], classes="quadratic")
+    quad = result.conditions["quadratic"]
+    assert quad.status == "certified" and quad.summary.startswith("for every U in [0.5, 2]: globally asymptotically")
+    assert api.verify(result).valid

@@ -102,14 +102,6 @@ class BoundLoop:
     def with_loop(self, loop: Loop) -> "BoundLoop":
         return BoundLoop(loop, self.disturbances, self.box_names)
 
-    def square_free(self) -> frozenset[int]:
-        """The square roots' indices (:attr:`~lyapcheck.models.recast_sos.ConditionProgram.square_free`),
-        and each angle's cosine (``c^2 = 1 - s^2`` makes its squares as redundant)."""
-        roots = {a.name for a in self.loop.system.auxiliaries if a.function == "sqrt" and a.smooth
-                 and a.radicand is None}
-        cosines = {cosine for _, cosine in self.loop.angles.values()}
-        return frozenset(self.ring.names.index(n) for n in roots | cosines)
-
     def names(self) -> list[str]:
         return [self.ring.names[i] for i in self.v_vars]
 
@@ -210,7 +202,7 @@ def _program(bl: BoundLoop, t: Template, y: Poly, lam: Fraction, B: Fraction | N
     zero = tuple([0] * ring.nvars)
     basis = t.basis(ring)
     program = ConditionProgram(ring, loop.relations, drop, loop.unused(), margin=B is not None, roots=loop.roots(),
-                               square_free=bl.square_free())
+                               square_free=loop.square_free())
     for k in range(len(basis)):
         program.free(f"v{k}")
     pos_terms = [(f"v{k}", ring.monomial(m)) for k, m in enumerate(basis)]

@@ -111,6 +111,14 @@ class Loop:
         """The angles' indices: they appear in no identity (their sine and cosine do)."""
         return frozenset(self.ring.names.index(a) for a in self.angles)
 
+    def square_free(self) -> frozenset[int]:
+        """The variables whose squares a relation reduces
+        (:attr:`~lyapcheck.models.recast_sos.ConditionProgram.square_free`): each square root
+        (``r^2 = q``) and each angle's cosine (``c^2 = 1 - s^2``)."""
+        roots = {a.name for a in self.system.auxiliaries if a.function == "sqrt" and a.smooth and a.radicand is None}
+        cosines = {cosine for _, cosine in self.angles.values()}
+        return frozenset(self.ring.names.index(n) for n in roots | cosines)
+
     def coordinates(self) -> list[int]:
         """The states V may use: every state but the angles (an angle enters through its sine and cosine)."""
         return [i for i, s in enumerate(self.states()) if s not in self.angles]
@@ -500,7 +508,8 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
         top_dec = max((sum(mm) for _, p in dec_terms for mm in ring.support(p)), default=2)
 
         def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
-            program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots())
+            program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
+                                       square_free=loop.square_free())
             for k in range(len(basis)):
                 program.free(f"v{k}")
             return program.condition("P", ring.support(l2), pos_terms, dv) or \
