@@ -175,3 +175,40 @@ def test_a_gain_multiplying_the_whole_field_is_covered_with_the_square_root_squa
     quad = result.conditions["quadratic"]
     assert quad.status == "certified" and quad.summary.startswith("for every U in [0.5, 2]: globally asymptotically")
     assert api.verify(result).valid
+
+
+def test_a_wide_box_is_proved_on_its_halves_and_verify_splits_it_the_same_way() -> None:
+    """b in [0.3, 3]: the local Hessian argument fails over the whole interval (the enclosure treats
+    b's entries apart) and goes through on its halves; the claim is still one set for every b."""
+    from lyapcheck.models.modelfile import load_any_model
+    from lyapcheck.models.recast_classes import base_loop
+    from lyapcheck.models.recast_interval import claim_of, prove
+    from lyapcheck.models.recast_run import box_robust
+    from lyapcheck.models.parameter_box import ModelBox
+
+    result = api.certify(model=EXAMPLES / "recast-pendulum.toml", box=["b=0.3..3"], classes="roa")
+    roa = result.conditions["roa"]
+    assert roa.status == "certified" and roa.summary.startswith("for every b in [0.3, 3]: ")
+    assert api.verify(result).valid
+    model = load_any_model(EXAMPLES / "recast-pendulum.toml", {"b": "1.65"})
+    box = ModelBox.from_json(result.document["box"])
+    loop = base_loop(model.system)
+    claim = claim_of(loop, roa.certificate)
+    robust = box_robust(model, box)
+    assert prove(loop, claim, robust=robust).ok
+    # the same claim, without the halving: not proved over the whole interval at once
+    from lyapcheck.models import recast_interval
+    whole = recast_interval._prove_parts(loop, claim, None, robust, 0)
+    assert not whole.ok
+    # outside lyapcheck: starts in the set converge at both ends of the box
+    cert = roa.certificate
+    level = float(Fraction(cert["level"]))
+    rng = np.random.default_rng(2)
+    X = rng.uniform(-4, 4, (6000, 2))
+    X = X[v_of_states(cert, X) <= level][:200]
+    assert len(X) > 50
+    for b in (0.3, 3.0):
+        x = X.copy()
+        for _ in range(4000):
+            x = rk4(lambda z, b=b: np.column_stack([z[:, 1], -np.sin(z[:, 0]) - b * z[:, 1]]), x, 0.02)
+        assert np.abs(x).max() < 1e-2, b

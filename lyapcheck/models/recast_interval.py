@@ -16,7 +16,7 @@ every recast certificate, ``V`` (over the state deviations only), ``V_text``, ``
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import Any, Final
 
@@ -43,6 +43,10 @@ ATTEMPT_LIMIT_S: Final = 25.0
 #: time, so that the same model gives the same claim on any machine; without it the claim is the set
 #: within the box, as proved)
 WHOLE_SET_CELL_LIMIT: Final = 20_000
+#: over a box of parameters, a proof that fails (not at a proved counterexample) is tried again on the
+#: box's halves, down to this depth (at most 2^depth parts): the enclosures of a narrower part are
+#: tighter (a parameter enters several entries of V''s Hessian, which the enclosure treats apart)
+PARAMETER_SPLITS: Final = 3
 #: what the route proves with, in every sentence and certificate
 METHOD: Final = "ball arithmetic (python-flint arb) on the true field"
 
@@ -58,10 +62,25 @@ class Robust:
     #: the box of parameters among the bounds (their values are the box's centres, their bounds its
     #: half-widths), None without one
     box: ModelBox | None = None
+    #: a part of the box a proof covers (name -> interval), where it was split (:meth:`halves`)
+    part: dict[str, tuple[Fraction, Fraction]] | None = None
 
     def intervals(self) -> list[tuple[Fraction, Fraction]]:
-        """Each constant's interval of values (a disturbance's ``[-b, b]``, a parameter's ``[lo, hi]``)."""
-        return [(self.system.values[name] - h, self.system.values[name] + h) for name, h in self.bounds.items()]
+        """Each constant's interval of values (a disturbance's ``[-b, b]``, a parameter's ``[lo, hi]``,
+        or its part's)."""
+        part = self.part or {}
+        return [part.get(name, (self.system.values[name] - h, self.system.values[name] + h))
+                for name, h in self.bounds.items()]
+
+    def halves(self) -> tuple["Robust", "Robust"]:
+        """The part of the box split in two at the middle of its widest parameter interval (exact)."""
+        assert self.box is not None
+        ranges = dict(zip(self.bounds, self.intervals()))
+        name = max(self.box.names, key=lambda n: ranges[n][1] - ranges[n][0])
+        lo, hi = ranges[name]
+        mid = (lo + hi) / 2
+        return (replace(self, part={**(self.part or {}), name: (lo, mid)}),
+                replace(self, part={**(self.part or {}), name: (mid, hi)}))
 
     def balls(self) -> list[Any]:
         """Each constant's values as one ball (its interval, exactly enclosed)."""
@@ -207,14 +226,30 @@ def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None, robus
                                         "without constant or linear terms", 0, 0, None, 0.0)
         if not robust.vanishes():
             return IntervalProof(False, "a disturbance moves the equilibrium", 0, 0, None, 0.0)
-        lie = LieDerivative(BallLoop(robust.system, robust.balls()), robust.system.ring,
-                            robust.embedded(loop.ring, claim.V))
-        return prove_region(loop.system, claim, deadline=deadline, lie=lie, flat=True)
+        return _prove_parts(loop, claim, deadline, robust, PARAMETER_SPLITS if robust.box is not None else 0)
     how = derivative_of(loop, claim.V)
     if isinstance(how, str):
         return IntervalProof(False, how, 0, 0, None, 0.0)
     evaluator, flat = how
     return prove_region(loop.system, claim, deadline=deadline, lie=evaluator, flat=flat)
+
+
+def _prove_parts(loop: Loop, claim: IntervalClaim, deadline: float | None, robust: Robust, depth: int
+                 ) -> IntervalProof:
+    """The proof for every value of ``robust``'s constants; over a box, where it fails without a
+    proved counterexample, on each half of the box (deterministic, so ``verify`` splits the same way)."""
+    lie = LieDerivative(BallLoop(robust.system, robust.balls()), robust.system.ring,
+                        robust.embedded(loop.ring, claim.V))
+    proof = prove_region(loop.system, claim, deadline=deadline, lie=lie, flat=True)
+    if proof.ok or depth == 0 or robust.box is None or proof.counterexample_v is not None:
+        return proof
+    parts = [_prove_parts(loop, claim, deadline, half, depth - 1) for half in robust.halves()]
+    failed = next((p for p in parts if not p.ok), None)
+    if failed is not None:
+        return failed
+    radii = [p.local_radius for p in parts if p.local_radius is not None]
+    return IntervalProof(True, "", sum(p.cells for p in parts), sum(p.boundary_cells for p in parts),
+                         min(radii) if radii else None, sum(p.seconds for p in parts))
 
 
 def interval_candidate(loop: Loop, V: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
