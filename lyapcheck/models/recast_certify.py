@@ -68,8 +68,6 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     if "candidate" in chosen and candidate is None:
         raise InvalidParameter("candidate", 'a V with --candidate "EXPR" for class candidate', "nothing")
     V = model.candidate_v if candidate is not None else None
-    if box is not None:  # the classes that certify a point are not_applicable over a box, not left out
-        chosen = tuple(c for c in chosen if c != "candidate" or candidate is not None)
     results, loop, _ = recast_run.certify(model, chosen, V, limit, box)
     for name in chosen:
         if name not in results:
