@@ -673,7 +673,7 @@ def _model(sweep: Mapping[str, Any], source: str, model_text: str | None) -> tup
 def _overrides(raw: object, declared: Model | RecastModel) -> dict[str, str]:
     """``[sweep.set]``: names declared in the model (parameters or disturbance bounds), values checked."""
     table = table_field({} if raw is None else raw, "sweep.set")
-    disturbances = declared.disturbances if isinstance(declared, Model) else {}  # a loop with functions has none
+    disturbances = declared.disturbances
     known = list(declared.parameters) + list(disturbances)
     out = {}
     for key, value in table.items():

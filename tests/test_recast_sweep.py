@@ -128,6 +128,25 @@ def test_a_gas_loop_is_cross_checked_by_simulating_its_true_field(tmp_path: Path
     assert result.summary.to_json()["cross_check"]["trajectories"] == 18
 
 
+
+def test_a_disturbed_loop_with_functions_sweeps_its_bound_with_the_disturbance_from_the_spec(tmp_path: Path) -> None:
+    """sos_bound per point, the disturbance's bound set by [sweep.set]: a smaller bound proves a smaller limsup."""
+    from lyapcheck.api import verify
+
+    model = (ROOT / "examples" / "models" / "recast-ilos-course-disturbed.toml").read_text()
+    spec = ('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\n[sweep.set]\nd = {d}\n'
+            '[[sweep.axes]]\nname = "kappa"\nvalues = [0.5]\n')
+    bounds = {}
+    for d in ("0.02", "0.05"):
+        run(write(tmp_path / d, spec.format(d=d), model), tmp_path / d / "out.zarr")
+        data = arrays(tmp_path / d / "out.zarr")
+        assert list(data["status_sos_bound"]) == [1]
+        doc = json.loads(str(data["certificate"][0]))
+        assert doc["disturbances"] == {"d": str(Fraction(d))} and verify(doc).valid
+        bounds[d] = float(data["sos_bound_y"][0])
+    assert bounds["0.02"] < bounds["0.05"]
+
+
 # -- resume ----------------------------------------------------------------------------------------------
 class Interrupt(Exception):
     """Raised from the progress callback: the sweep stops between units, as after a kill."""
