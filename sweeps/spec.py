@@ -88,8 +88,9 @@ A loop with functions (sin, cos, exp, sqrt, atan, tanh, abs, min, max, sat: what
 :class:`~lyapcheck.models.recast.RecastModel`) is swept in ``mode = "points"`` only, over the classes
 of :data:`lyapcheck.models.recast_run.RECAST_CLASSES` (but ``candidate``): each grid point is the
 model text read again with the point's values as overrides (:meth:`ModelSweepSpec.model_at`), so
-the loop is recast at them. ``mode = "boxes"`` is refused in one line (box certificates take
-polynomial and rational loops only).
+the loop is recast at them. ``mode = "boxes"`` is refused in one line (a box sweep's splitting,
+corner checks and cross-checks take polynomial and rational loops only; one box of a loop with
+functions is ``lyapcheck certify FILE --box``).
 
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks
@@ -603,8 +604,8 @@ class ModelSweepSpec(_AxesGrid):
         """The model as a polynomial or rational loop, which box sweeps and their cross-checks take
         (a loop with functions is refused with ``mode = "boxes"`` when the spec is read)."""
         if not isinstance(self.model, Model):
-            raise TypeError(f"the model {self.model_file} is a loop with functions; boxes take polynomial and "
-                            "rational loops only")
+            raise TypeError(f"the model {self.model_file} is a loop with functions; box sweeps take polynomial "
+                            "and rational loops only")
         return self.model
 
     @property
@@ -863,8 +864,9 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     if mode not in _MODES:
         raise InvalidParameter("sweep.mode", "one of " + ", ".join(repr(m) for m in _MODES), mode)
     if mode == "boxes" and not isinstance(model, Model):
-        raise InvalidParameter("sweep.mode", "\"points\" for a loop with functions (sin, sqrt, sat, ...): boxes take "
-                               "polynomial and rational loops only", mode)
+        raise InvalidParameter("sweep.mode", "\"points\" for a loop with functions (sin, sqrt, sat, ...): a box sweep "
+                               "takes polynomial and rational loops only (one box of such a loop: lyapcheck certify "
+                               "FILE --box NAME=LO..HI)", mode)
     raw_axes = sweep.get("axes")
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",

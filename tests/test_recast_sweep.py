@@ -183,8 +183,9 @@ AXIS = '[[sweep.axes]]\nname = "b"\nvalues = [0.5, 1]\n'
     ('[sweep]\nmodel = "m.toml"\n[[sweep.axes]]\nname = "g"\nvalues = [1, 2]\n', PENDULUM,
      "'sweep.axes[0].name' parameter must be a parameter declared in the model (b). Got 'g' instead."),
     ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\n[[sweep.axes]]\nname = "b"\nstart = 0.5\nstop = 2\nnum = 3\n',
-     PENDULUM, "'sweep.mode' parameter must be \"points\" for a loop with functions (sin, sqrt, sat, ...): boxes "
-     "take polynomial and rational loops only. Got 'boxes' instead."),
+     PENDULUM, "'sweep.mode' parameter must be \"points\" for a loop with functions (sin, sqrt, sat, ...): a box "
+     "sweep takes polynomial and rational loops only (one box of such a loop: lyapcheck certify FILE --box "
+     "NAME=LO..HI). Got 'boxes' instead."),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\n' + AXIS, PENDULUM,
      "'sweep.classes' parameter must be classes that apply to the model: sos_bound needs [disturbances]"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n' + AXIS, PENDULUM,
