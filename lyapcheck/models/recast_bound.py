@@ -25,9 +25,13 @@ with its ``1/sqrt(Delta^2 + e^2)``, carry a quadratic ``V``.
 
 ``V`` uses the states (not an angle: there its sine and cosine) and the smooth auxiliaries that do not
 depend on a disturbance: the recasting gives an auxiliary of ``d`` the flow of a constant ``d``, which
-a disturbance *signal* does not have.
+a disturbance *signal* does not have. Over a box of parameters (each a bounded constant like a
+disturbance, :func:`bound_loop`), ``V`` is common to the box first, then affine in its parameters:
+a parameter is constant in time, so ``V(x, p)`` serves each value, and the argument above holds for
+each value apart.
 
-The search, per output: ``V`` of degree 2, then 4, at each decay rate of :data:`LAMBDA_GRID`; first
+The search, per output: ``V`` of degree 2, then 4 (in the states, then with the auxiliaries, then
+affine in a box's parameters), at each decay rate of :data:`LAMBDA_GRID`; first
 ``B`` minimized (the remainders only positive semidefinite), then the program solved again with ``B``
 raised by :data:`B_SLACK` and the Gram margins maximized, so that the rounded point passes the exact
 check. The smallest certified ``B`` is the output's; the printed bound is ``sqrt(B)`` rounded up

@@ -131,7 +131,7 @@ class Loop:
 
 
 #: the owner of a bounded constant's relation (:attr:`Loop.fixed`); a square root's bound is proved
-#: without it (for every value of the constant)
+#: without it first, then with it (:func:`prove_root_bounds`, :attr:`Loop.root_constants`)
 CONSTANT: Final = "constant"
 
 
