@@ -20,6 +20,9 @@ certificate            starts                                      must hold
                        and +-4 elsewhere)                           a GES certificate's envelope
 ``roa`` (its own)      the check :func:`lyapcheck.models.recast_    none of its starts in the set failed to
                        run.simulated_check` made when certifying    converge (``soundness_violation``)
+``sos_bound``          uniform over the comparison box; each        the largest ``|y|`` after 60 s (stored as
+                       disturbance bang-bang against ``y``'s sign   ``sim_worst_<y>``) within the certified
+                       or a square wave at its bound, RK4, 120 s    bound
 =====================  ==========================================  ==========================================
 
 V is the certificate's exact polynomial in its ``variables`` (the states, then the auxiliaries),
@@ -152,6 +155,8 @@ def cross_check_recast(model: RecastModel, doc: Mapping[str, Any], point: Mappin
             out.violations.append(f"{name} at {where}: its own simulation when certified found "
                                   f"{cond.get('starts_in_set_not_converged', 'some')} starts in the set that did "
                                   "not converge")
+    if "sos_bound" in conditions and model.robust is not None:
+        _check_bound(model, conditions["sos_bound"], starts, seed, where, out)
     checked = [c for c in (*GLOBAL_CLASSES, REGION_CLASS) if c in conditions]
     if not checked:
         return out
@@ -222,6 +227,88 @@ def cross_check_recast(model: RecastModel, doc: Mapping[str, Any], point: Mappin
                 out.violations.append(f"{cls} at {where}: |x(t)| reached {ratio:.6g} times the certified GES "
                                       f"envelope {k:.4g} |x0| exp(-{ges_rate:.4g} t)")
     return out
+
+
+#: the disturbance signals a certified ``sos_bound`` is simulated under: bang-bang against the sign
+#: of the output, then square waves of these periods (s), each at the disturbance's bound
+BOUND_SIGNAL_PERIODS: Final = (0.5, 2.0, 8.0)
+#: the simulation (RK4): its horizon, step, and the time from which the tail sup is taken (s)
+BOUND_HORIZON_S: Final = 120.0
+BOUND_STEP_S: Final = 0.02
+BOUND_TAIL_FROM_S: Final = 60.0
+
+
+def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed: Sequence[int], where: str,
+                 out: CrossCheck) -> None:
+    """A certified ``sos_bound``: the true loop (``model.robust``, its disturbances as the last
+    columns) from random starts of the comparison box, each disturbance a bang-bang or square-wave
+    signal at its bound; the largest ``|y|`` after BOUND_TAIL_FROM_S is ``sim_worst`` and may not
+    exceed the certified bound (beyond TRAJECTORY_CHECK_REL_TOL)."""
+    from lyapcheck.models.recast_classes import base_loop
+    from lyapcheck.models.recast_numeric import FloatLoop
+    from lyapcheck.models.recast_run import comparison_box
+    from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
+
+    robust = model.robust
+    assert robust is not None
+    bounds = np.array([float(b) for b in model.disturbances.values()])
+    eq = np.array([float(v) for v in model.equilibrium])
+    lo, hi = comparison_box(model, base_loop(model.system))
+    rng = np.random.default_rng([*seed, 1])
+    Z0 = lo + (hi - lo) * rng.random((max(starts, 1), model.n))
+    field = FloatLoop(robust)
+    for name, bound in (cond.get("bounds") or {}).items():
+        y = model.outputs.get(name)
+        if y is None:
+            continue
+        out_terms = [(float(c), m) for m, c in _state_terms(model, y)]
+
+        def output(X: np.ndarray) -> np.ndarray:
+            total = np.zeros(len(X))
+            for c, m in out_terms:
+                term = np.full(len(X), c)
+                for k, e in enumerate(m):
+                    if e:
+                        term = term * X[:, k] ** e
+                total += term
+            return total
+
+        policies = 1 + len(BOUND_SIGNAL_PERIODS)
+        X = np.tile(Z0 + eq, (policies, 1))
+        period = np.repeat([0.0, *BOUND_SIGNAL_PERIODS], len(Z0))
+        worst = 0.0
+        steps = int(round(BOUND_HORIZON_S / BOUND_STEP_S))
+        with np.errstate(all="ignore"):
+            for k in range(steps):
+                t = k * BOUND_STEP_S
+                wave = np.sign(np.sin(2 * np.pi * t / np.where(period > 0, period, 1.0)) + 1e-12)
+                sign = np.where(period > 0, wave, np.sign(output(X) + 1e-12))
+                D = sign[:, None] * bounds[None, :]
+
+                def f(Y: np.ndarray) -> np.ndarray:
+                    return field(np.column_stack([Y, D]))[:, :model.n]
+
+                k1 = f(X)
+                k2 = f(X + BOUND_STEP_S / 2 * k1)
+                k3 = f(X + BOUND_STEP_S / 2 * k2)
+                k4 = f(X + BOUND_STEP_S * k3)
+                X = X + BOUND_STEP_S / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                if t >= BOUND_TAIL_FROM_S:
+                    values = np.abs(output(X))
+                    worst = max(worst, float(np.max(np.where(np.isfinite(values), values, np.inf))))
+        out.trajectories += len(X)
+        out.sim_worst[name] = max(out.sim_worst.get(name, 0.0), worst)
+        if worst > float(bound) * (1 + TRAJECTORY_CHECK_REL_TOL):
+            out.violations.append(f"sos_bound at {where}: under a disturbance at its bounds |{name}| reached "
+                                  f"{worst:.6g} after {BOUND_TAIL_FROM_S:g} s, above the certified limsup "
+                                  f"{float(bound):.6g}")
+
+
+def _state_terms(model: RecastModel, y: Any) -> list[tuple[tuple[int, ...], Any]]:
+    """An output's terms over the states (its exponents in the states' order)."""
+    from lyapcheck.sos.polynomials import Ring
+
+    return list(Ring(model.states).terms(y).items())
 
 
 def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np.ndarray

@@ -144,7 +144,25 @@ def test_a_disturbed_loop_with_functions_sweeps_its_bound_with_the_disturbance_f
         doc = json.loads(str(data["certificate"][0]))
         assert doc["disturbances"] == {"d": str(Fraction(d))} and verify(doc).valid
         bounds[d] = float(data["sos_bound_y"][0])
+        # simulated under disturbances at their bound: inside the certified bound, and the constant
+        # d holds yi at d Delta / (kappa sqrt(U^2 - d^2)), which the bang-bang search reaches
+        assert 0 < data["sim_worst_y"][0] <= data["sos_bound_y"][0] and not data["soundness_violation"][0]
+        assert data["sim_worst_yi"][0] >= 0.99 * float(d) * 2 / (0.5 * (1 - float(d) ** 2) ** 0.5)
     assert bounds["0.02"] < bounds["0.05"]
+
+
+def test_a_bound_below_what_the_loop_reaches_raises_the_alarm() -> None:
+    """A certified sos_bound halved: the disturbed ILOS reaches more than it under a disturbance at its
+    bound (yi settles at d Delta / (kappa sqrt(U^2 - d^2)) for a constant d), and the sweep says so."""
+    from lyapcheck.models.modelfile import parse_any_model
+    from sweeps.recast_crosscheck import cross_check_recast
+
+    text = (ROOT / "examples" / "models" / "recast-ilos-course-disturbed.toml").read_text()
+    model = parse_any_model(text, "m.toml", {"kappa": "0.5"})
+    claim = {"conditions": {"sos_bound": {"status": "certified", "bounds": {"yi": 0.1}}}}
+    found = cross_check_recast(model, claim, {"kappa": Fraction(1, 2)}, starts=4, seed=(0, 2))
+    assert found.violation and found.violations[0].startswith("sos_bound at kappa = 0.5: ")
+    assert found.sim_worst["yi"] > 0.2
 
 
 # -- resume ----------------------------------------------------------------------------------------------
