@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import ROOT
+from tests.test_model_sweeps import arrays, cli, run  # the model sweeps' own helpers (run, read, CLI)
 
 PENDULUM = (ROOT / "examples" / "models" / "recast-pendulum.toml").read_text()
 ILOS = (ROOT / "examples" / "models" / "recast-ilos-course.toml").read_text()
@@ -53,28 +54,6 @@ def write(directory: Path, spec: str, model: str = PENDULUM) -> Path:
     path = directory / "spec.toml"
     path.write_text(spec)
     return path
-
-
-def run(spec: Path, out: Path, **kw: Any) -> Any:
-    from lyapcheck.api import sweep
-
-    return sweep(spec, out, workers=0, **kw)
-
-
-def arrays(path: Path) -> dict[str, np.ndarray]:
-    import zarr
-
-    group = zarr.open_group(str(path), mode="r")
-    return {name: np.asarray(group[name][...]) for name in group.array_keys()}
-
-
-def cli(*args: str) -> Any:
-    from click.testing import CliRunner
-
-    from lyapcheck.cli import app
-
-    app._register_commands()
-    return CliRunner().invoke(app.cli, list(args), standalone_mode=False)
 
 
 @pytest.fixture(scope="module")

@@ -167,6 +167,7 @@ class RecastSection(ModelFileSection):
         "sos_gas": "Global Lyapunov function on the recasting (sum of squares)",
         "roa": "Region of attraction of the true loop",
         "candidate": "Your candidate V",
+        "sos_bound": "Ultimate bound on each output under bounded disturbances (on the recasting)",
     }
 
     def view(self, name: str, cond: Any, index: int, ctx: ClassContext) -> ClassView:

@@ -326,17 +326,25 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
             "figure_reason": figure_reason,
             "checks": checks,
             "soundness": alarm,
-            "command": command(doc),
-            "verbatim_title": "The model file, verbatim (as stored in the certificate)",
-            "verbatim": self.text,
-            "solvers": solvers(as_dict(doc.get("conditions"))),
-            "solvers_title": "Solver outcomes",
-            "solvers_exact": False,
-            # Markup: the page's own words (not input), printed as written
-            "solvers_note": Markup("A solver's outcome is never a verdict: every status above comes from an exact check. "
-                   "The full solver log of each class is in the certificate file."),
+            **page_tail(doc, self.text),
         }
 
 
-__all__ = ["ModelFileSubject", "ModelCertificateChecks", "page_head", "EXTRA_STATUS_MEANING", "quantities", "denominators", "scaling", "solvers",
-           "command", "recheck_rows", "portrait"]
+def page_tail(doc: dict[str, Any], text: str) -> dict[str, Any]:
+    """The end of a model page, the same for both kinds of model: the command that re-makes it, the
+    model file verbatim, and the solvers' outcomes (never a verdict)."""
+    return {
+        "command": command(doc),
+        "verbatim_title": "The model file, verbatim (as stored in the certificate)",
+        "verbatim": text,
+        "solvers": solvers(as_dict(doc.get("conditions"))),
+        "solvers_title": "Solver outcomes",
+        "solvers_exact": False,
+        # Markup: the page's own words (not input), printed as written
+        "solvers_note": Markup("A solver's outcome is never a verdict: every status above comes from an exact check. "
+                               "The full solver log of each class is in the certificate file."),
+    }
+
+
+__all__ = ["ModelFileSubject", "page_tail", "ModelCertificateChecks", "page_head", "EXTRA_STATUS_MEANING", "quantities",
+           "denominators", "scaling", "solvers", "command", "recheck_rows", "portrait"]

@@ -22,8 +22,6 @@ import tomllib
 from fractions import Fraction
 from typing import Any
 
-from markupsafe import Markup
-
 from lyapcheck.errors import InputFileError, LyapcheckError
 from lyapcheck.models.certificate import KIND, is_model_document
 from lyapcheck.models.recast import RecastModel
@@ -32,7 +30,7 @@ from reports.recast_portrait import recast_portrait
 from reports.sections.base import ClassContext, text_of
 from reports.sections.recast import RECAST_LOOP
 from reports.subjects.base import Subject
-from reports.subjects.model_file import ModelCertificateChecks, command, page_head, quantities, solvers
+from reports.subjects.model_file import ModelCertificateChecks, page_head, page_tail, quantities
 from reports.typeset import Equations
 from reports.views import as_dict, as_fraction
 
@@ -169,15 +167,7 @@ class RecastLoopSubject(ModelCertificateChecks, Subject):
             "angles": angle_rows(recast),
             "portrait": figure,
             "figure_reason": figure_reason,
-            "command": command(doc),
-            "verbatim_title": "The model file, verbatim (as stored in the certificate)",
-            "verbatim": self.text,
-            "solvers": solvers(as_dict(doc.get("conditions"))),
-            "solvers_title": "Solver outcomes",
-            "solvers_exact": False,
-            # Markup: the page's own words (not input), printed as written
-            "solvers_note": Markup("A solver's outcome is never a verdict: every status above comes from an exact check. "
-                                   "The full solver log of each class is in the certificate file."),
+            **page_tail(doc, self.text),
         }
 
 
