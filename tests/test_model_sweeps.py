@@ -150,13 +150,17 @@ AXIS = '[[sweep.axes]]\nname = "a"\nstart = 0.5\nstop = 2\nnum = 3\n'
      LINEAR.replace('"-a*x"', '"-x/a"'), "the box a in [-1, 0]: the model is not defined on all of it"),
 ])
 def test_a_bad_spec_is_one_line_exit_2_and_writes_nothing(tmp_path: Path, spec: str, model: str, needle: str) -> None:
-    path = write(tmp_path, spec, model)
-    out = tmp_path / "out.zarr"
+    assert_refused(write(tmp_path, spec, model), needle)
+
+
+def assert_refused(path: Path, needle: str) -> None:
+    """``lyapcheck sweep PATH`` exits 2 with one line holding ``needle``, and writes no store."""
+    out = path.parent / "out.zarr"
     result = cli("sweep", str(path), "--out", str(out), "--workers", "0", "--quiet")
     lines = result.stderr.strip().splitlines()
     assert result.exit_code == 2, result.output
     assert len(lines) == 1 and needle in lines[0], lines
-    assert not out.exists() and not any(p.name.startswith(".out.zarr") for p in tmp_path.iterdir())
+    assert not out.exists() and not any(p.name.startswith(".out.zarr") for p in path.parent.iterdir())
 
 
 # -- points and boxes on a model with a known answer --------------------------------------------------

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import ROOT
-from tests.test_model_sweeps import arrays, cli, run  # the model sweeps' own helpers (run, read, CLI)
+from tests.test_model_sweeps import arrays, assert_refused, cli, run  # the model sweeps' own helpers
 
 PENDULUM = (ROOT / "examples" / "models" / "recast-pendulum.toml").read_text()
 ILOS = (ROOT / "examples" / "models" / "recast-ilos-course.toml").read_text()
@@ -196,13 +196,7 @@ AXIS = '[[sweep.axes]]\nname = "b"\nvalues = [0.5, 1]\n'
      "sweep.axes at the grid point Delta = 0: the model is not defined there"),
 ])
 def test_a_bad_spec_is_one_line_exit_2_and_writes_nothing(tmp_path: Path, spec: str, model: str, needle: str) -> None:
-    path = write(tmp_path, spec, model)
-    out = tmp_path / "out.zarr"
-    result = cli("sweep", str(path), "--out", str(out), "--workers", "0", "--quiet")
-    lines = result.stderr.strip().splitlines()
-    assert result.exit_code == 2, result.output
-    assert len(lines) == 1 and needle in lines[0], lines
-    assert not out.exists() and not any(p.name.startswith(".out.zarr") for p in tmp_path.iterdir())
+    assert_refused(write(tmp_path, spec, model), needle)
 
 
 def test_the_classes_of_a_loop_with_functions_are_the_recast_ones_a_sweep_can_run() -> None:
