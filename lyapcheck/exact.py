@@ -100,6 +100,49 @@ def det(m: Matrix) -> Fraction:
     return result
 
 
+def solve(m: Matrix, b: Sequence[Fraction]) -> list[Fraction]:
+    """``x`` with ``m x = b`` for a square, invertible ``m`` (fraction-exact Gaussian elimination);
+    ValueError when ``m`` is singular."""
+    n = len(m)
+    work = [list(row) + [b[i]] for i, row in enumerate(m)]
+    for col in range(n):
+        pivot = next((r for r in range(col, n) if work[r][col] != 0), None)
+        if pivot is None:
+            raise ValueError("the matrix is singular")
+        work[col], work[pivot] = work[pivot], work[col]
+        head = work[col]
+        for r in range(col + 1, n):
+            factor = work[r][col] / head[col]
+            if factor:
+                row = work[r]
+                for c in range(col, n + 1):
+                    row[c] -= factor * head[c]
+    x = [Fraction(0)] * n
+    for i in range(n - 1, -1, -1):
+        row = work[i]
+        x[i] = (row[n] - sum((row[j] * x[j] for j in range(i + 1, n)), Fraction(0))) / row[i]
+    return x
+
+
+def least_squares(rows: Sequence[Sequence[Fraction | int]], rhs: Sequence[Fraction | int]) -> list[Fraction]:
+    """The exact minimizer of ``|A x - b|^2`` (``A``'s rows ``rows``, full column rank), from the
+    normal equations ``A^T A x = A^T b`` solved exactly. Why not a floating-point solver: the
+    answer is the same on every platform (a floating-point one differs in its last bits between
+    BLAS kernels), and rounding it to integers, as the scalings do, then never depends on them.
+    ValueError when ``A`` does not have full column rank."""
+    cols = len(rows[0]) if rows else 0
+    normal = [[Fraction(0)] * cols for _ in range(cols)]
+    right = [Fraction(0)] * cols
+    for row, value in zip(rows, rhs):
+        nonzero = [(j, Fraction(a)) for j, a in enumerate(row) if a]
+        for j, a in nonzero:
+            right[j] += a * value
+            line = normal[j]
+            for k, c in nonzero:
+                line[k] += a * c
+    return solve(tuple(tuple(r) for r in normal), right)
+
+
 def leading_minors(m: Matrix) -> list[Fraction]:
     return [det(tuple(row[:k] for row in m[:k])) for k in range(1, len(m) + 1)]
 

@@ -281,7 +281,7 @@ def clear(shifted: ShiftedField, signs: Sequence[int]) -> ClearedField:
 
 # -- scaling ----------------------------------------------------------------------------------------
 
-def _pow2(x: float) -> Fraction:
+def _pow2(x: float | Fraction) -> Fraction:
     return Fraction(2) ** int(round(x))
 
 
@@ -330,8 +330,10 @@ def adapted_transform(cleared: ClearedField) -> tuple[tuple[Fraction, ...], ...]
 
 def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, Fraction]] | None = None) -> Scaling:
     """An adapted linear transform (:func:`adapted_transform`), then powers of two that bring the
-    field's coefficients near 1 (see the module docstring)."""
-    import numpy as np
+    field's coefficients near 1 (see the module docstring): the least-squares fit of their logarithms,
+    solved exactly (:func:`lyapcheck.exact.least_squares`), so that the same field gets the same
+    scaling on every platform."""
+    from lyapcheck import exact
 
     model = cleared.shifted.model
     n, m = model.n, len(model.disturbances)
@@ -356,11 +358,13 @@ def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, F
             if half > 0:
                 fixed_states[i] = math.log2(half)
     # unknowns: u_0..u_{n-1} (states), tau (time), delta (denominator)
-    rows, rhs = [], []
+    rows: list[list[Fraction]] = []
+    rhs: list[Fraction] = []
+    strong, gentle = Fraction(1000), Fraction(1, 1000)
 
-    def add(row: list[float], value: float, weight: float = 1.0) -> None:
-        rows.append([weight * r for r in row])
-        rhs.append(weight * value)
+    def add(row: list[float], value: float, weight: Fraction = Fraction(1)) -> None:
+        rows.append([weight * Fraction(r) for r in row])
+        rhs.append(weight * Fraction(value))
 
     for i, gi in enumerate(g_w):
         for mono, c in ring.float_terms(gi).items():
@@ -382,21 +386,21 @@ def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, F
         row = [0.0] * (n + 2)
         row[k] = 1.0
         if fixed is not None:
-            add(row, fixed, weight=1e3)
+            add(row, fixed, weight=strong)
         else:
-            add(row, 0.0, weight=1e-3)  # a gentle pull to 1 where the field does not decide
+            add(row, 0.0, weight=gentle)  # a gentle pull to 1 where the field does not decide
     row = [0.0] * (n + 2)
     row[n] = 1.0
-    add(row, 0.0, weight=1e-3)
-    A, b = np.array(rows), np.array(rhs)
-    x, *_ = np.linalg.lstsq(A, b, rcond=None)
+    add(row, 0.0, weight=gentle)
+    x = exact.least_squares(rows, rhs)
     states = tuple(_pow2(v) for v in x[:n])
     time = _pow2(x[n])
     denominator = _pow2(x[n + 1]) if not D_w.is_constant() else Fraction(1)
     disturbances = tuple(_pow2(v) if bounds[k] > 0 else Fraction(1) for k, v in enumerate(dist_log))
     outputs = []
     for y in outputs_w:
-        logs = [math.log2(abs(c)) + sum(mono[k] * x[k] for k in range(n)) for mono, c in ring.float_terms(y).items()]
+        logs = [math.log2(abs(c)) + sum(mono[k] * float(x[k]) for k in range(n))
+                for mono, c in ring.float_terms(y).items()]
         outputs.append(_pow2(max(logs)) if logs else Fraction(1))
     return Scaling(states=states, disturbances=disturbances, time=time, denominator=denominator,
                    outputs=tuple(outputs), transform=transform)
