@@ -18,7 +18,6 @@ all, picks its kernel by the same rules). Nothing compares it.
 
 from __future__ import annotations
 
-import ctypes
 import importlib
 import os
 import sys
@@ -49,6 +48,8 @@ def _openblas_kernels() -> list[str]:
     and its bytes must not depend on that). Empty where the names or the flag do not exist (another
     BLAS, macOS' Accelerate).
     """
+    import ctypes
+
     noload = getattr(os, "RTLD_NOLOAD", None)
     location = getattr(sys.modules.get("numpy"), "__file__", None)
     if noload is None or location is None:  # pragma: no cover - not on Linux or macOS

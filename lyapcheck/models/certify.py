@@ -31,8 +31,6 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
-import numpy as np
-
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.classes import CLEARED, NAMES
 from lyapcheck.models.field import ScaledField, Scaling, ShiftedField, StateField, active_disturbances, \
@@ -44,6 +42,9 @@ from lyapcheck.sos.polynomials import Poly
 from lyapcheck.timing import ClassTimeLimit, time_limit
 
 if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np  # imported where a class computes with floats: reading a model, or re-checking a
+    # stored certificate (lyapcheck.models.store), needs none of it
+
     from lyapcheck.models.parameter_box import ModelBox
 
 log = logging.getLogger(__name__)
@@ -418,11 +419,20 @@ def _text(shifted: ShiftedField, p: Poly) -> str:
     return str(p).replace("^", "**")
 
 
+def _numerical_errors() -> tuple[type[BaseException], ...]:
+    """The errors of numerical trouble (evaluated when one propagates: numpy's only where loaded)."""
+    import sys
+
+    from lyapcheck.errors import SolverError
+
+    numpy = sys.modules.get("numpy")
+    linalg = (numpy.linalg.LinAlgError,) if numpy is not None else ()
+    return (SolverError, ArithmeticError, OverflowError, *linalg)
+
+
 def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) -> ConditionResult:
     """Numerical trouble or the time limit becomes ``inconclusive`` with its reason; bad input and
     bugs propagate (the command line reports them)."""
-    from lyapcheck.errors import SolverError
-
     try:
         # a hard stop a little beyond the cooperative budget (a solve or check that overruns it)
         with time_limit(limit * HARD_STOP_FACTOR + HARD_STOP_GRACE_S):
@@ -431,7 +441,7 @@ def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) ->
         reason = str(exc)
     except ClassTimeLimit as exc:
         reason = f"{exc} (lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S, hard stop)"
-    except (SolverError, ArithmeticError, np.linalg.LinAlgError, OverflowError) as exc:
+    except _numerical_errors() as exc:
         reason = f"{type(exc).__name__}: {exc}"
     log.info("%s inconclusive: %s", name, reason)
     return ConditionResult(name, "inconclusive", f"could not be decided: {reason}", numbers={"reason": reason})
@@ -442,6 +452,8 @@ def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) ->
 def simulated_region(scaled: ScaledField, samples_declared: np.ndarray) -> np.ndarray:
     """Which declared starts converge to the equilibrium (disturbances 0); over a box, at every
     parameter point of :func:`parameter_points` (its centre and corners)."""
+    import numpy as np
+
     from lyapcheck.models.numeric import converges, typical_time
 
     model = scaled.cleared.shifted.model
@@ -465,6 +477,8 @@ def parameter_points(scaled: ScaledField) -> list[dict[str, Fraction]]:
 
 
 def _half_widths(model: Model) -> np.ndarray:
+    import numpy as np
+
     if model.domain:
         return np.array([max(abs(float(model.domain[s][0] - e)), abs(float(model.domain[s][1] - e)))
                          for s, e in zip(model.states, model.equilibrium)])
@@ -472,6 +486,8 @@ def _half_widths(model: Model) -> np.ndarray:
 
 
 def roa_starts(model: Model, seed: int = 0) -> np.ndarray:
+    import numpy as np
+
     from lyapcheck.models.numeric import grid_starts
 
     assert model.domain is not None
@@ -486,6 +502,8 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
     """The ``roa`` class on ``field_`` (default: the nominal :func:`state_field`; the robust one
     proves a set common to every disturbance value). ``memo`` keeps the simulated starts between
     the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0)."""
+    import numpy as np
+
     from lyapcheck.models import regions
 
     model = scaled.cleared.shifted.model
@@ -536,6 +554,8 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
 
 
 def simulated_region_long(scaled: ScaledField, starts: np.ndarray) -> np.ndarray:
+    import numpy as np
+
     from lyapcheck.models.numeric import converges, typical_time
 
     model = scaled.cleared.shifted.model
@@ -548,6 +568,8 @@ def simulated_region_long(scaled: ScaledField, starts: np.ndarray) -> np.ndarray
 
 
 def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -> ConditionResult:
+    import numpy as np
+
     from lyapcheck.models import regions
     from lyapcheck.models.lyapunov import best_decay_rate, stated_v
     from lyapcheck.sos.polynomials import to_fmpq

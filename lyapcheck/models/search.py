@@ -13,14 +13,16 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
-import numpy as np
-
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring
-from lyapcheck.sos.program import Coefficients, SOSProgram, Solution, Structure
+from lyapcheck.sos.structure import Coefficients, Structure
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.sos.program import Gram, Term
-from lyapcheck.sos.rounding import ExactPoint, exact_point
+    # numpy, the solver and the rounding are imported by the first solve: a run whose certificates
+    # all come from the store (lyapcheck.models.store) re-checks them exactly without any of them
+    import numpy as np
+
+    from lyapcheck.sos.program import Gram, Solution, Term
+    from lyapcheck.sos.rounding import ExactPoint
 
 
 #: a solve whose margin (smallest Gram eigenvalue, scaled coordinates) is above minus this is handed
@@ -58,6 +60,8 @@ class Search:
     log: list[dict[str, Any]] = field(default_factory=list)
 
     def solve(self, structure: Structure, values: "ParameterValues") -> Solution:
+        from lyapcheck.sos.program import SOSProgram
+
         self.budget.check()
         program = SOSProgram.of(structure)
         self.budget.check()
@@ -70,6 +74,8 @@ class Search:
         return solution
 
     def exact(self, structure: Structure, solution: Solution, values: "ParameterValues") -> ExactPoint | None:
+        from lyapcheck.sos.rounding import exact_point
+
         if not solution.usable:
             return None
         return exact_point(self.ring, structure, solution, values.exact)
@@ -108,6 +114,8 @@ class ParameterValues:
     def set_poly(self, ring: Ring, name: str, p: Poly, support: Iterable[Monomial]) -> None:
         """Parameter ``name`` = ``p``'s coefficients over ``support`` in :func:`canonical` order (the
         order :func:`param` declares)."""
+        import numpy as np
+
         support = canonical(support)
         terms = ring.terms(p)
         unknown = [m for m in terms if m not in set(support)]
@@ -118,9 +126,13 @@ class ParameterValues:
         self.floats[name] = np.array([float(c) for c in exact])
 
     def set_matrix(self, name: str, M: np.ndarray) -> None:
+        import numpy as np
+
         self.floats[name] = np.asarray(M, dtype=np.float64)
 
     def set_scalar(self, name: str, value: float) -> None:
+        import numpy as np
+
         self.floats[name] = np.asarray(float(value), dtype=np.float64)
 
 

@@ -25,14 +25,15 @@ from __future__ import annotations
 
 import ast
 from fractions import Fraction
-from typing import Final, Mapping, Protocol, Sequence
-
-import numpy as np
+from typing import TYPE_CHECKING, Final, Mapping, Protocol, Sequence
 
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.expressions import (MAX_EXPRESSION_LENGTH, ExpressionError, Rational, parse_expression,
                                           parse_quietly, refuse_deep_nesting)
 from lyapcheck.sos.polynomials import MonomialPlan, Poly, Ring, degree_in, monomial_plan, monomial_values
+
+if TYPE_CHECKING:  # pragma: no cover - numpy is imported where a set is evaluated, not to read a model
+    import numpy as np
 
 #: the keys of ``[sets]``
 SET_KEYS: Final = ("initial", "unsafe", "goal")
@@ -198,6 +199,8 @@ def require_sets(model: ModelSets, name: str) -> None:
 def contains(state_set: StateSet, point: Sequence[float]) -> bool:
     """Whether ``point`` (one value per state, in the declared order, SI) is in the set, in floating
     point: for falsification and simulation, never a proof."""
+    import numpy as np
+
     return bool(margin(state_set, np.asarray(point, dtype=float).reshape(1, -1))[0] >= 0)
 
 
@@ -205,6 +208,8 @@ def margin(state_set: StateSet, points: np.ndarray) -> np.ndarray:
     """For each row of ``points`` (``(m, n)``, or one point ``(n,)``), the largest over the pieces
     of the smallest ``p(x)`` over the piece's inequalities: ``>= 0`` exactly in the set (floating
     point); how far inside, or outside, in the units of the polynomials. An empty set: ``-inf``."""
+    import numpy as np
+
     x = np.atleast_2d(np.asarray(points, dtype=float))
     out = np.full(x.shape[0], -np.inf)
     for piece in state_set:
@@ -293,6 +298,8 @@ def _plan(p: Poly, n: int) -> MonomialPlan:
 
 
 def _arrays(p: Poly) -> tuple[np.ndarray, np.ndarray]:
+    import numpy as np
+
     hit = _ARRAYS.get(id(p))
     if hit is not None and hit[0] is p:
         return hit[1], hit[2]
@@ -308,6 +315,8 @@ def _arrays(p: Poly) -> tuple[np.ndarray, np.ndarray]:
 def _values(p: Poly, x: np.ndarray) -> np.ndarray:
     """``p`` (a polynomial of a state ring: the states first, then the disturbances at exponent 0)
     at the rows of ``x``."""
+    import numpy as np
+
     n = x.shape[1]
     exponents, coefficients = _arrays(p)
     if not coefficients.size:

@@ -25,17 +25,20 @@ parity reduction (the ILOS field is odd: ``S = -I``).
 from __future__ import annotations
 
 import itertools
-from typing import Iterable, Sequence
-
-import numpy as np
+from typing import TYPE_CHECKING, Iterable, Sequence
 
 from lyapcheck.sos.polynomials import Monomial, monomials
+
+if TYPE_CHECKING:  # pragma: no cover - numpy is imported where a basis is built, not by the exact checks
+    import numpy as np
 
 #: sign-vector directions with at most this many non-zero entries are used by the hyperplane test
 DIRECTION_SUPPORT = 3
 
 
 def _directions(nvars: int) -> np.ndarray:
+    import numpy as np
+
     out = []
     for k in range(1, min(DIRECTION_SUPPORT, nvars) + 1):
         for idx in itertools.combinations(range(nvars), k):
@@ -51,6 +54,8 @@ def _directions(nvars: int) -> np.ndarray:
 
 def inside_half_polytope(candidates: Sequence[Monomial], support: Iterable[Monomial]) -> list[bool]:
     """Whether no tested hyperplane separates ``2a`` from ``support``'s hull, per candidate ``a``."""
+    import numpy as np
+
     pts = np.array(sorted(set(support)), dtype=np.int64)
     if pts.size == 0 or not candidates:
         return [False] * len(candidates)
@@ -74,6 +79,8 @@ def newton_reduce(candidates: Sequence[Monomial], support: Iterable[Monomial]) -
 def diagonally_consistent(basis: Sequence[Monomial], support: Iterable[Monomial]) -> list[Monomial]:
     """Drop ``a`` while ``2a`` is neither in ``support`` nor a sum ``b + c`` of two different basis
     monomials (then ``Q_aa`` is forced to 0 and ``a`` cannot be used)."""
+    import numpy as np
+
     kept = list(basis)
     if not kept:
         return kept
