@@ -6,6 +6,17 @@ import os
 import tempfile
 from pathlib import Path
 
+#: where lyapcheck keeps what it remembers across runs (unit factors, found certificates), when
+#: set; else ``$XDG_CACHE_HOME/lyapcheck`` or ``~/.cache/lyapcheck``
+CACHE_DIR_ENV = "LYAPCHECK_CACHE_DIR"
+
+
+def cache_dir() -> Path:
+    """The directory of lyapcheck's caches (:data:`CACHE_DIR_ENV`; not created here)."""
+    root = os.environ.get(CACHE_DIR_ENV) or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lyapcheck")
+    return Path(root)
+
 
 def atomic_write(path: str | Path, data: str | bytes) -> Path:
     """Write `data` to a temporary file beside `path`, then rename it into place.

@@ -129,17 +129,16 @@ def _factor_memo_path() -> Path | None:
     """The memo of unit factors: one file per version of pint and of this module, so that a
     change of either recomputes every factor. None when the version cannot be read."""
     import hashlib
-    import os
     from importlib import metadata
+
+    from lyapcheck.fileio import cache_dir
 
     try:
         version = metadata.version("pint")
         source = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
     except (OSError, metadata.PackageNotFoundError):  # pragma: no cover - a broken install
         return None
-    root = os.environ.get("LYAPCHECK_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lyapcheck")
-    return Path(root) / f"unit-factors-{source}-pint-{version}.json"
+    return cache_dir() / f"unit-factors-{source}-pint-{version}.json"
 
 
 @lru_cache(maxsize=1)

@@ -15,6 +15,9 @@ from lyapcheck.simulation.integrator import Evaluation
 # the suite's unit-factor memo (lyapcheck.units) lives in a fresh directory, not the user's cache:
 # the fuzz tests parse hundreds of odd unit strings (subprocesses inherit this)
 os.environ.setdefault("LYAPCHECK_CACHE_DIR", tempfile.mkdtemp(prefix="lyapcheck-test-cache-"))
+# every test searches (a certificate stored by an earlier test would skip the solves some tests
+# look at); tests/test_certificate_store.py turns the store on where it tests it
+os.environ["LYAPCHECK_CERTIFICATE_STORE"] = "off"
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER_TOML = ROOT / "examples" / "paper.toml"

@@ -95,10 +95,13 @@ def register(group: click.Group) -> None:
     @click.option("--worst-case", is_flag=True, help="The paper's loop: also search the worst disturbance in "
                   "simulation and report tightness_ratio = certified / simulated beside each certified bound "
                   "(10-20 s).")
+    @click.option("--no-store", "no_store", is_flag=True, help="A model file: search every class again, neither "
+                  "reading nor writing the certificates kept from earlier runs (a stored certificate is re-checked "
+                  "exactly before it is used; LYAPCHECK_CERTIFICATE_STORE=off does the same for every run).")
     @one_line_errors
     def certify(files: tuple[str, ...], dynamics: str, as_json: bool, out: str | None, report: str | None,
                 linear_views: bool, classes: str | None, worst_case: bool, boxes: tuple[str, ...],
-                model_file: str | None, settings: tuple[str, ...], candidate: str | None,
+                model_file: str | None, settings: tuple[str, ...], candidate: str | None, no_store: bool,
                 **flags: str | None) -> None:
         """Certify any closed loop from a model file (FILE or --model FILE), or a gain set of the
         paper's ILOS/ODS loop (its worked example: a gain file, flags, or both): every condition
@@ -121,6 +124,12 @@ def register(group: click.Group) -> None:
         from lyapcheck.errors import InvalidParameter
 
         sdp.LEAN_LAPACK_IMPORT = True  # this process is the command's own (see sdp._load_lapack_modules)
+        if no_store:  # the process is the command's own: the switch holds for this run alone
+            import os
+
+            from lyapcheck.models.store import STORE_ENV
+
+            os.environ[STORE_ENV] = "off"
 
         if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
             raise InvalidParameter("report", "a file name ending in .html or .pdf", report)

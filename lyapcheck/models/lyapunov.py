@@ -18,14 +18,19 @@ eigenvalue ``t`` of ``Q_V`` and ``Q_W`` with ``trace Q_V = 1``; ``z_W`` is reduc
 polytope; where the field has sign symmetries the Gram matrices are block diagonal
 (:mod:`lyapcheck.sos.bases`). First ``mu = 0`` (GAS), then the largest ``mu`` found by a geometric
 search, each candidate decided by the exact check.
+
+The certificate found is kept in the certificate store (:mod:`lyapcheck.models.store`) under the
+exact field and the degrees searched; a later run of the same problem checks it exactly again
+(:func:`recall_certificate`) and, when it passes, uses it without a solve.
 """
 
 from __future__ import annotations
 
 import math
 from fractions import Fraction
-from typing import Any, Callable, Final, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
+from lyapcheck.models import store
 from lyapcheck.models.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
 from lyapcheck.models.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      multiplier_grams, multiplier_variable, one, param)
@@ -33,7 +38,10 @@ from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_lyapunov
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials
-from lyapcheck.sos.program import Gram, Identity, Solution, Structure, Term
+from lyapcheck.sos.structure import Gram, Identity, Structure, Term
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.sos.program import Solution
 
 #: degrees of V that ``sos_gas`` tries, in turn (``quadratic`` is degree 2 alone)
 SOS_GAS_DEGREES: Final = (2, 4, 6, 8)
@@ -404,6 +412,13 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
     on a disturbance)."""
     if field is None:
         field = state_field(scaled)
+    key = (store.problem_key("lyapunov", stored_problem(field, name, degrees, param_degrees))
+           if store.enabled() else None)
+    if key is not None:
+        recalled = recall_certificate(field, key, degrees)
+        if recalled is not None:
+            return _certified(scaled, field, name, recalled[0], {"solves": [], "stored": {
+                "key": key, "solves_when_found": recalled[1], "check": "exact, in this run"}})
     tried: list[str] = []
     try:
         for degree in degrees:
@@ -412,7 +427,9 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                 found, why = search_degree(field, degree, search, param_degree)
                 tried.append(why)
                 if found is not None:
-                    return _certified(scaled, field, name, found, search)
+                    if key is not None:
+                        store.keep(key, {"found": found_json(found), "solves": len(search.log)})
+                    return _certified(scaled, field, name, found, {"solves": search.log})
     except BudgetExhausted as exc:
         return ConditionResult(name, "inconclusive", f"{exc}; tried: {'; '.join(tried) or 'nothing finished'}",
                                numbers={"reason": str(exc), "tried": tried}, solver={"solves": search.log})
@@ -423,7 +440,50 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                            property="GAS" if name != "quadratic" else None)
 
 
-def _certified(scaled: ScaledField, field: StateField, name: str, found: dict[str, Any], search: Search
+def stored_problem(field: StateField, name: str, degrees: Sequence[int], param_degrees: Sequence[int]
+                   ) -> dict[str, Any]:
+    """What decides the search of :func:`run`, for the certificate store's key: the class, its
+    degrees and the exact field (ring, ``g``, ``D``, how many disturbances)."""
+    return {"class": name, "degrees": list(degrees), "param_degrees": list(param_degrees),
+            "ring": list(field.ring.names), "disturbances": field.disturbances,
+            "g": [store.polynomial_json(field.ring, gi) for gi in field.g],
+            "D": store.polynomial_json(field.ring, field.D)}
+
+
+def found_json(found: dict[str, Any]) -> dict[str, Any]:
+    """A found certificate (:func:`attempt`'s, with its degrees) as the store keeps it."""
+    return {"degree": found["degree"], "param_degree": found.get("param_degree", 0), "mu": str(found["mu"]),
+            "margin": found["margin"], "V": found["V"].to_json(), "W": found["W"].to_json(),
+            "box": [[j, r.to_json()] for j, r in found["box"]]}
+
+
+def recall_certificate(field: StateField, key: str, degrees: Sequence[int]) -> tuple[dict[str, Any], int] | None:
+    """The stored certificate of ``key`` and the solves its search took, when it passes the exact
+    check on ``field`` (the one this run derived) now, with a ``V`` of one of ``degrees``; None
+    otherwise (no entry, a malformed one, or one that fails: the search runs as if there were none)."""
+    entry = store.recall(key)
+    if entry is None:
+        return None
+    try:
+        data = entry["found"]
+        nv = field.ring.nvars
+        V = GramPoly.from_json(data["V"], nv)
+        W = GramPoly.from_json(data["W"], nv)
+        box = [(int(j), GramPoly.from_json(r, nv)) for j, r in data["box"]]
+        mu = Fraction(data["mu"])
+        found = {"V": V, "W": W, "mu": mu, "margin": float(data["margin"]), "box": box,
+                 "degree": int(data["degree"]), "param_degree": int(data["param_degree"])}
+        solves = int(entry["solves"])
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return None
+    # the degree the claim states is V's own (the search's basis reaches it with a positive diagonal)
+    if found["degree"] not in degrees or not V.basis or found["degree"] != 2 * max(sum(m[:field.n]) for m in V.basis):
+        return None
+    ok, _ = check_lyapunov(field.ring, field.g, field.D, V, W, mu, box)
+    return (found, solves) if ok else None
+
+
+def _certified(scaled: ScaledField, field: StateField, name: str, found: dict[str, Any], solver: dict[str, Any]
                ) -> ConditionResult:
     mu = found["mu"]
     T = scaled.scaling.time
@@ -443,9 +503,9 @@ def _certified(scaled: ScaledField, field: StateField, name: str, found: dict[st
             return ConditionResult(name, "certified",
                                    f"GES: |x(t)| <= {float(k_bound):.4g} |x0| exp(-{rate_v / 2:.4g} t) from every start "
                                    "(a quadratic V with V' <= -mu V, checked exactly)", numbers=numbers,
-                                   certificate=cert, solver={"solves": search.log}, property="GES")
+                                   certificate=cert, solver=solver, property="GES")
     tail = f", and V' <= -{rate_v:.4g} V (V decays exponentially from every start)" if mu > 0 else ""
     what = "a quadratic V" if found["degree"] == 2 else f"a polynomial V of degree {found['degree']}"
     return ConditionResult(name, "certified", f"GAS: {what} with V' < 0 away from the equilibrium{tail} "
                                               "(checked exactly)",
-                           numbers=numbers, certificate=cert, solver={"solves": search.log}, property="GAS")
+                           numbers=numbers, certificate=cert, solver=solver, property="GAS")

@@ -14,13 +14,13 @@ import math
 from fractions import Fraction
 from typing import Any, Sequence
 
+from lyapcheck.models import store
 from lyapcheck.models.search import (Budget, ParameterValues, Search, box_multipliers, box_multipliers_from_json,
                                      box_multipliers_of, multiplier_grams, multiplier_variable, one, param)
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_positivity
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
-from lyapcheck.sos.program import Gram, Identity, Scalar, Structure, Term
-from lyapcheck.sos.rounding import project, round_scalar, rounded_point
+from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term
 
 
 def _variable_scales(ring: Ring, p: Poly) -> list[Fraction]:
@@ -73,6 +73,33 @@ def prove_positive(ring: Ring, p: Poly, budget: Budget, free: int | None = None)
         c = ring.evaluate(p, [Fraction(0)] * ring.nvars)
         return {"kind": "constant", "value": str(c)} if c > 0 else None
     free = ring.nvars if free is None else free
+    problem = {"ring": list(ring.names), "p": store.polynomial_json(ring, p), "free": free} if store.enabled() else None
+    key = store.problem_key("positivity", problem) if problem is not None else None
+    stored = recall_certificate(ring, p, free, key) if key is not None else None
+    if stored is not None:
+        return stored
+    found = _search_positive(ring, p, budget, free)
+    if found is not None and key is not None:
+        store.keep(key, {"certificate": found})
+    return found
+
+
+def recall_certificate(ring: Ring, p: Poly, free: int, key: str) -> dict[str, Any] | None:
+    """The certificate stored under ``key`` (:mod:`lyapcheck.models.store`) when it passes
+    :func:`check_certificate` on ``p`` now; None otherwise."""
+    entry = store.recall(key)
+    cert = entry.get("certificate") if entry is not None else None
+    if not isinstance(cert, dict) or cert.get("kind") != "sos":
+        return None
+    try:
+        ok, _ = check_certificate(ring, p, cert, free)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return None
+    return cert if ok else None
+
+
+def _search_positive(ring: Ring, p: Poly, budget: Budget, free: int) -> dict[str, Any] | None:
+    """:func:`prove_positive`'s search (one solve, its rounding and the exact check)."""
     scales = [s if k < free else Fraction(1) for k, s in enumerate(_variable_scales(ring, p))]
     gens = ring.gens()
     scaled = ring.compose(p, [g * to_fmpq(s) for g, s in zip(gens, scales)])
@@ -89,6 +116,8 @@ def prove_positive(ring: Ring, p: Poly, budget: Budget, free: int | None = None)
     c_max = solution.scalars.get("c", 0.0)
     if not solution.usable or not c_max > 0:
         return None
+    from lyapcheck.sos.rounding import project, round_scalar, rounded_point
+
     # the largest c makes sigma's constant entry 0; half of it leaves room for the rounding
     rounded = rounded_point(solution)
     rounded.scalars["c"] = round_scalar(c_max / 2)

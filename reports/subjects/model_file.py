@@ -124,7 +124,13 @@ def solvers(conditions: dict[str, Any]) -> list[tuple[str, str]]:
     """Per class: how many solves, their outcomes and the solver time (the full log is in the file)."""
     out = []
     for name, cond in conditions.items():
-        solves = as_dict(as_dict(cond).get("solver")).get("solves")
+        solver = as_dict(as_dict(cond).get("solver"))
+        solves = solver.get("solves")
+        stored = as_dict(solver.get("stored"))
+        if stored:  # lyapcheck.models.store: no solve in this run
+            out.append((str(name), f"no solve: the certificate its search found in an earlier run "
+                                   f"({text_of(stored.get('solves_when_found', '?'))} solves), re-checked exactly"))
+            continue
         if not isinstance(solves, list) or not solves:
             continue
         outcomes: dict[str, int] = {}

@@ -1,0 +1,103 @@
+"""The certificate store: what a search found, kept for the next run of the same problem.
+
+A class's search (SOS programs, the solver, the rounding) is the costly part of a run; what it
+finds, a certificate in rationals, is small. The store keeps that certificate under a digest of
+the exact problem (the polynomial field the class works on, and what the class searches: its
+degrees) and of the code that searches (:data:`SEARCH_SOURCES`). A later run of the same problem
+reads it and checks it **exactly again** against the field it derived itself in that run, with the
+same exact check a fresh solution gets. So the store is a hint, never a verdict: nothing is
+certified from it without the exact check, and a stale, foreign or damaged entry costs only the
+search the run would have made anyway (an entry that fails to parse or to check is ignored, and
+the search's new certificate replaces it).
+
+Why: a researcher re-runs the same model many times (a report, a notebook, CI); from the second
+run on, ``certify`` costs the exact check instead of the search. The run's document says where a
+certificate came from (``solver.stored``), and ``--no-store`` (or ``LYAPCHECK_CERTIFICATE_STORE=off``)
+makes every run search again.
+
+The entries live in ``<cache>/certificates/`` (:func:`lyapcheck.fileio.cache_dir`), one JSON file
+per problem, written atomically; a read-only or full cache is left as it is.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from functools import lru_cache
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Final, Mapping
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.sos.polynomials import Poly, Ring
+
+#: ``off`` keeps the store out of every run (neither read nor written); any other value, or none, uses it
+STORE_ENV: Final = "LYAPCHECK_CERTIFICATE_STORE"
+#: the store's folder inside the cache directory
+STORE_FOLDER: Final = "certificates"
+#: the sources (relative to the package) whose change changes what a search finds: every entry
+#: written by other code is ignored (its exact re-check would still be sound; this keeps a run's
+#: certificate the one its own search would find)
+SEARCH_SOURCES: Final = ("sos", "models/lyapunov.py", "models/field.py", "models/search.py", "models/store.py",
+                         "tolerances.py")
+#: an entry larger than this is not written (a certificate of a large program; the search is then
+#: repeated in each run rather than filling the cache)
+MAX_ENTRY_BYTES: Final = 4_000_000
+
+
+def enabled() -> bool:
+    """Whether runs read and write the store (:data:`STORE_ENV`)."""
+    return os.environ.get(STORE_ENV, "").strip().lower() != "off"
+
+
+@lru_cache(maxsize=1)
+def code_digest() -> str:
+    """A digest of :data:`SEARCH_SOURCES` (about 0.5 ms: a dozen small files)."""
+    package = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for entry in SEARCH_SOURCES:
+        path = package / entry
+        for source in sorted(path.glob("*.py")) if path.is_dir() else [path]:
+            digest.update(source.relative_to(package).as_posix().encode())
+            digest.update(source.read_bytes())
+    return digest.hexdigest()
+
+
+def problem_key(kind: str, problem: Mapping[str, Any]) -> str:
+    """The key of one problem: a digest of its kind, its JSON form and :func:`code_digest`."""
+    text = json.dumps({"kind": kind, "code": code_digest(), "problem": problem}, sort_keys=True,
+                      separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def polynomial_json(ring: Ring, p: Poly) -> list[list[Any]]:
+    """``p`` exactly, in a canonical form for a key: ``[[exponents, "coefficient"], ...]``, sorted."""
+    return sorted([list(m), str(c)] for m, c in ring.terms(p).items())
+
+
+def _path(key: str) -> Path:
+    from lyapcheck.fileio import cache_dir
+
+    return cache_dir() / STORE_FOLDER / f"{key}.json"
+
+
+def recall(key: str) -> dict[str, Any] | None:
+    """The entry stored under ``key``, or None (none, unreadable, or not a JSON table)."""
+    try:
+        data = json.loads(_path(key).read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) and data.get("key") == key else None
+
+
+def keep(key: str, entry: Mapping[str, Any]) -> None:
+    """Store ``entry`` under ``key`` (atomically; an unwritable cache or a large entry is skipped)."""
+    from lyapcheck.fileio import atomic_write
+
+    text = json.dumps({"key": key, **entry}, separators=(",", ":"))
+    if len(text) > MAX_ENTRY_BYTES:
+        return
+    try:
+        atomic_write(_path(key), text)
+    except OSError:
+        pass  # a read-only or full cache: the next run searches again
