@@ -494,13 +494,15 @@ class _Point:
 
 def _certify_point(spec: ModelSweepSpec, row: Sequence[float]) -> _Point:
     """Certify one grid point (``certify_model``, or ``certify_recast`` for a loop with functions)."""
+    from lyapcheck.models import store
     from lyapcheck.models.certificate import build_document
     from lyapcheck.models.certify import certify_model
     from lyapcheck.models.modelfile import Model
 
     model = spec.model_at(row)
     if isinstance(model, Model):
-        found = certify_model(model, classes=spec.classes)
+        with store.disabled():  # a point of its own (lyapcheck.models.store.disabled)
+            found = certify_model(model, classes=spec.classes)
         return _Point(model, found.results, lambda: build_document(found))
     from lyapcheck.errors import ModelFileError
     from lyapcheck.models.recast_certify import certify_recast
@@ -572,6 +574,7 @@ def box_seed(seed: int, box_id: int) -> int:
 
 def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, list[str]]]]) -> dict[str, np.ndarray]:
     """Certify and cross-check each ``(id, {name: [lo, hi]})`` box (exact edges as ``"p/q"`` text)."""
+    from lyapcheck.models import store
     from lyapcheck.models.certificate import build_document
     from lyapcheck.models.certify import certify_model
 
@@ -585,7 +588,8 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
         with UNIT_LOCK:
             corners, unstable = unstable_corners(spec, box)
             classes = spec.classes if unstable is None else tuple(c for c in spec.classes if c == "sos_bound")
-            result = certify_model(spec.polynomial, classes=classes, box=box) if classes else None
+            with store.disabled():
+                result = certify_model(spec.polynomial, classes=classes, box=box) if classes else None
         middle = time.perf_counter()
         if result is None:  # only stability classes, refuted at a corner
             for c in spec.classes:

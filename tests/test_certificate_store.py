@@ -162,3 +162,12 @@ def test_exact_least_squares_matches_the_floating_point_one() -> None:
         assert np.allclose([float(x) for x in exact], floating, rtol=1e-10, atol=1e-12)
     with pytest.raises(ValueError, match="singular"):
         least_squares([[1, 2], [2, 4]], [1, 2])
+
+
+def test_inside_disabled_nothing_is_read_or_written(cache: Path) -> None:
+    """What a sweep's points run under (sweeps.evaluate): each point is a problem of its own."""
+    with store.disabled():
+        assert not store.enabled()
+        _, cond = sos_gas(QUARTIC)
+    assert cond["status"] == "certified" and entries(cache) == []
+    assert store.enabled()

@@ -21,12 +21,14 @@ per problem, written atomically; a read-only or full cache is left as it is.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import hashlib
 import json
 import os
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final, Mapping
+from typing import TYPE_CHECKING, Any, Final, Iterator, Mapping
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.sos.polynomials import Poly, Ring
@@ -45,9 +47,25 @@ SEARCH_SOURCES: Final = ("sos", "models/lyapunov.py", "models/field.py", "models
 MAX_ENTRY_BYTES: Final = 4_000_000
 
 
+#: set inside :func:`disabled` (per thread and task: a context variable)
+_DISABLED: contextvars.ContextVar[bool] = contextvars.ContextVar("lyapcheck_store_disabled", default=False)
+
+
 def enabled() -> bool:
-    """Whether runs read and write the store (:data:`STORE_ENV`)."""
-    return os.environ.get(STORE_ENV, "").strip().lower() != "off"
+    """Whether this run reads and writes the store (:data:`STORE_ENV`, :func:`disabled`)."""
+    return not _DISABLED.get() and os.environ.get(STORE_ENV, "").strip().lower() != "off"
+
+
+@contextlib.contextmanager
+def disabled() -> Iterator[None]:
+    """The store off inside the block: a sweep's points are each a problem of their own, which no
+    later run repeats (an interrupted sweep resumes from its own results), so storing them would only
+    fill the cache."""
+    token = _DISABLED.set(True)
+    try:
+        yield
+    finally:
+        _DISABLED.reset(token)
 
 
 @lru_cache(maxsize=1)
