@@ -476,8 +476,11 @@ def recall_certificate(field: StateField, key: str, degrees: Sequence[int]) -> t
         solves = int(entry["solves"])
     except (KeyError, TypeError, ValueError, ZeroDivisionError):
         return None
-    # the degree the claim states is V's own (the search's basis reaches it with a positive diagonal)
-    if found["degree"] not in degrees or not V.basis or found["degree"] != 2 * max(sum(m[:field.n]) for m in V.basis):
+    # the degree the claim states is V's own (the search's basis reaches it with a positive diagonal),
+    # and V, as the search's, never depends on a disturbance (the claim states it without them)
+    n, d = field.n, field.disturbances
+    if found["degree"] not in degrees or not V.basis or found["degree"] != 2 * max(sum(m[:n]) for m in V.basis) \
+            or any(any(m[n:n + d]) for m in V.basis):
         return None
     ok, _ = check_lyapunov(field.ring, field.g, field.D, V, W, mu, box)
     return (found, solves) if ok else None

@@ -40,8 +40,8 @@ STORE_FOLDER: Final = "certificates"
 #: the sources (relative to the package) whose change changes what a search finds: every entry
 #: written by other code is ignored (its exact re-check would still be sound; this keeps a run's
 #: certificate the one its own search would find)
-SEARCH_SOURCES: Final = ("sos", "models/lyapunov.py", "models/field.py", "models/search.py", "models/store.py",
-                         "tolerances.py")
+SEARCH_SOURCES: Final = ("sos", "models/lyapunov.py", "models/positivity.py", "models/field.py", "models/search.py",
+                         "models/store.py", "tolerances.py")
 #: an entry larger than this is not written (a certificate of a large program; the search is then
 #: repeated in each run rather than filling the cache)
 MAX_ENTRY_BYTES: Final = 4_000_000
