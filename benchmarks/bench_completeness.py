@@ -7,8 +7,8 @@ limit cycle, a finite escape, a centre, a critical unstable point, a lossless mo
 ``benchmarks/completeness/index.toml``.
 
 Each system runs as ``lyapcheck certify FILE --json --classes quadratic,sos_gas`` in a fresh
-process (``python -m lyapcheck``, imports included, the user's program cache as it is; a fair
-picture of what a user waits for, not of the engine alone). A positive is ``found`` when either
+process (``python -m lyapcheck``, imports included, the certificate store off so that every run
+searches; a fair picture of what a user waits for at a model's first run, not of the engine alone). A positive is ``found`` when either
 class is certified (the column ``class`` says which: ``quad``, ``gas`` or ``quad+gas``), ``missed``
 otherwise (``timeout`` when the process overran ``--timeout``). A negative must get neither class:
 a ``certified`` there is printed as ``SOUNDNESS VIOLATION`` and the script exits 1, whatever else
@@ -85,8 +85,9 @@ def run_system(kind: str, stem: str, entry: dict[str, Any], timeout: float,
     cmd = [sys.executable, "-m", "lyapcheck", "certify", str(path), "--json", "--classes", ",".join(GLOBAL_CLASSES)]
     t0 = time.perf_counter()
     try:
+        # the certificate store off: every run searches (a stored certificate would skip the search measured)
         proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout,
-                              env={**os.environ, **(env or {})})
+                              env={**os.environ, "LYAPCHECK_CERTIFICATE_STORE": "off", **(env or {})})
     except subprocess.TimeoutExpired:
         statuses = {c: "timeout" for c in GLOBAL_CLASSES}
     else:
