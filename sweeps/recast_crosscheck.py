@@ -245,9 +245,12 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
     signal at its bound; the largest ``|y|`` after BOUND_TAIL_FROM_S is ``sim_worst`` and may not
     exceed the certified bound (beyond TRAJECTORY_CHECK_REL_TOL)."""
     from lyapcheck.models.recast_classes import base_loop
-    from lyapcheck.models.recast_numeric import FloatLoop
+    from lyapcheck.models.recast_numeric import FloatLoop, poly_values
     from lyapcheck.models.recast_run import comparison_box
+    from lyapcheck.sos.polynomials import Ring
     from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
+
+    state_ring = Ring(model.states)
 
     robust = model.robust
     assert robust is not None
@@ -261,17 +264,8 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
         y = model.outputs.get(name)
         if y is None:
             continue
-        out_terms = [(float(c), m) for m, c in _state_terms(model, y)]
-
         def output(X: np.ndarray) -> np.ndarray:
-            total = np.zeros(len(X))
-            for c, m in out_terms:
-                term = np.full(len(X), c)
-                for k, e in enumerate(m):
-                    if e:
-                        term = term * X[:, k] ** e
-                total += term
-            return total
+            return poly_values(state_ring, y, {s: X[:, k] for k, s in enumerate(model.states)}, len(X))
 
         policies = 1 + len(BOUND_SIGNAL_PERIODS)
         X = np.tile(Z0 + eq, (policies, 1))
@@ -302,13 +296,6 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
             out.violations.append(f"sos_bound at {where}: under a disturbance at its bounds |{name}| reached "
                                   f"{worst:.6g} after {BOUND_TAIL_FROM_S:g} s, above the certified limsup "
                                   f"{float(bound):.6g}")
-
-
-def _state_terms(model: RecastModel, y: Any) -> list[tuple[tuple[int, ...], Any]]:
-    """An output's terms over the states (its exponents in the states' order)."""
-    from lyapcheck.sos.polynomials import Ring
-
-    return list(Ring(model.states).terms(y).items())
 
 
 def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np.ndarray

@@ -46,6 +46,8 @@ class _ExactPrinter(PythonCodePrinter):
 
 
 def _code(expr: sp.Expr, names: dict[sp.Symbol, str]) -> str:
+    if isinstance(expr, str):  # the derivations' own expressions only: text would be evaluated by sympify
+        raise TypeError("codegen prints sympy expressions, not text")
     return _ExactPrinter({"fully_qualified_modules": False}).doprint(sp.sympify(expr).xreplace(
         {sym: sp.Symbol(name) for sym, name in names.items()}))
 

@@ -98,6 +98,8 @@ class LedgerEntry:
 
 
 def _as_matrix(obj: object) -> sp.Matrix:
+    if isinstance(obj, str):  # a claim is built in code; text would be evaluated by sympify
+        raise TypeError("a claim's expression must be a sympy object, not text")
     if isinstance(obj, sp.MatrixBase):
         return sp.Matrix(obj)
     if isinstance(obj, sp.Equality):

@@ -199,12 +199,11 @@ class Corners:
     def jacobians(self, eq: np.ndarray, n: int) -> list[np.ndarray]:
         """The field's Jacobian at the equilibrium at each corner (central differences)."""
         h = 1e-6
-        out = []
-        for k in range(len(self.points)):
-            cols = [(self.fields(h * e[None, :], eq, n)[k] - self.fields(-h * e[None, :], eq, n)[k])[0] / (2 * h)
-                    for e in np.eye(n)]
-            out.append(np.column_stack(cols))
-        return out
+        steps = np.eye(n)
+        plus = [self.fields(h * e[None, :], eq, n) for e in steps]  # per step, the field at every corner
+        minus = [self.fields(-h * e[None, :], eq, n) for e in steps]
+        return [np.column_stack([(plus[i][k] - minus[i][k])[0] / (2 * h) for i in range(n)])
+                for k in range(len(self.points))]
 
     def converge(self, Z: np.ndarray, eq: np.ndarray, n: int, escape: float) -> np.ndarray:
         """Which starts converge to the equilibrium at every corner (simulated)."""

@@ -278,8 +278,9 @@ def root_loop(base: Loop, name: str, bounds: dict[str, tuple[Fraction, "Conditio
     """What the proof of square root ``name``'s bound may use: the relations of the auxiliaries
     made before it, and their proved bounds (its own relation r^2 = q presupposes q >= 0); with
     ``constants``, the bounded constants' relations too (a box's parameter inside the root)."""
-    names = set(a.name for a in base.system.auxiliaries[:[a.name for a in base.system.auxiliaries].index(name)])
-    return _restricted(base_loop_of(base), names | ({CONSTANT} if constants else set()), bounds)
+    names = [a.name for a in base.system.auxiliaries]
+    before = set(names[:names.index(name)])
+    return _restricted(base_loop_of(base), before | ({CONSTANT} if constants else set()), bounds)
 
 
 def prove_root_bounds(loop: Loop, search: Search) -> tuple[Loop, list[str]]:
@@ -302,16 +303,29 @@ def prove_root_bounds(loop: Loop, search: Search) -> tuple[Loop, list[str]]:
         c = a.value / 2
         targets = ([(c, q - to_fmpq(c * c), f"root_{a.name}")] if c > 0 else []) + \
             [(Fraction(0), q, f"nonneg_{a.name}")]
-        found = next(((bound, uses, cert) for bound, F, label in targets for uses in with_constants
-                      for cert in [prove_nonnegative(root_loop(base, a.name, bounds, uses), F, search, label)]
-                      if cert is not None), None)
+        found = _first_root_proof(base, a.name, bounds, targets, with_constants, search)
         if found is None:
             unproved.append(a.written_as or a.definition)
             continue
-        bounds[a.name] = (found[0], found[2])
-        if found[1]:
+        bound, uses, cert = found
+        bounds[a.name] = (bound, cert)
+        if uses:
             constants.add(a.name)
     return with_root_bounds(base, {k: v for k, v in bounds.items() if v[0] > 0}, frozenset(constants)), unproved
+
+
+def _first_root_proof(base: Loop, name: str, bounds: dict[str, tuple[Fraction, ConditionCertificate]],
+                      targets: Sequence[tuple[Fraction, Poly, str]], with_constants: Sequence[bool], search: Search
+                      ) -> tuple[Fraction, bool, ConditionCertificate] | None:
+    """The first of ``targets`` (bound, polynomial to prove >= 0, label) proved for root ``name``,
+    without the bounded constants' relations first, then with them: its bound, whether it used them,
+    and the proof; None when none is proved."""
+    for bound, F, label in targets:
+        for uses in with_constants:
+            cert = prove_nonnegative(root_loop(base, name, bounds, uses), F, search, label)
+            if cert is not None:
+                return bound, uses, cert
+    return None
 
 
 def root_proofs_json(loop: Loop) -> dict[str, Any]:

@@ -26,6 +26,11 @@ from lyapcheck.sos.polynomials import Poly, to_fmpq
 
 # -- the model's classes ------------------------------------------------------------------------------
 
+def class_budget(seconds: float) -> Budget:
+    """One class's time budget, named after the limit it comes from (the message says which)."""
+    return Budget(seconds, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+
+
 #: the classes a recast loop takes, in order
 RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
 
@@ -47,29 +52,27 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
     if "quadratic" in classes:
         start = time.perf_counter()
         results["quadratic"] = refute_global(loop, "quadratic") or \
-            quadratic(loop, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+            quadratic(loop, class_budget(time_limit_s))
         seconds["quadratic"] = time.perf_counter() - start
     if "sos_gas" in classes:
         start = time.perf_counter()
         results["sos_gas"] = refute_global(loop, "sos_gas") or \
-            sos_gas(loop, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+            sos_gas(loop, class_budget(time_limit_s))
         seconds["sos_gas"] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()
         results["roa"] = roa_after_gas(results, "") or \
-            run_roa(loop, lin, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
-                    comparison_box(model, loop), robust=robust_of(model))
+            run_roa(loop, lin, class_budget(time_limit_s), comparison_box(model, loop), robust=robust_of(model))
         seconds["roa"] = time.perf_counter() - start
     if "candidate" in classes and candidate is not None:
         start = time.perf_counter()
-        results["candidate"] = run_candidate(loop, candidate, Budget(
-            time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"), comparison_box(model, loop))
+        results["candidate"] = run_candidate(loop, candidate, class_budget(time_limit_s), comparison_box(model, loop))
         seconds["candidate"] = time.perf_counter() - start
     if "sos_bound" in classes:
         from lyapcheck.models.recast_bound import sos_bound
 
         start = time.perf_counter()
-        results["sos_bound"] = sos_bound(model, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        results["sos_bound"] = sos_bound(model, class_budget(time_limit_s))
         seconds["sos_bound"] = time.perf_counter() - start
     return results, loop, seconds
 
@@ -88,7 +91,7 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
     """
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
-    budget = Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+    budget = class_budget(time_limit_s)
     loop = proved_loop(model, time_limit_s)  # the box's centre
     boxed = boxed_loop(model, box)
     for name in ("linearization", "candidate"):
@@ -101,19 +104,18 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
             if name in classes:
                 start = time.perf_counter()
                 results[name] = refute_global(loop, name) or \
-                    run_class(proved, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+                    run_class(proved, class_budget(time_limit_s))
                 seconds[name] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()
         results["roa"] = roa_after_gas(results, " for every value of the box") or \
-            box_roa(model, loop, box, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+            box_roa(model, loop, box, class_budget(time_limit_s))
         seconds["roa"] = time.perf_counter() - start
     if "sos_bound" in classes:
         from lyapcheck.models.recast_bound import sos_bound
 
         start = time.perf_counter()
-        results["sos_bound"] = sos_bound(model, Budget(time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"),
-                                         box)
+        results["sos_bound"] = sos_bound(model, class_budget(time_limit_s), box)
         seconds["sos_bound"] = time.perf_counter() - start
     return results, loop, seconds
 
@@ -133,8 +135,7 @@ def proved_loop(model: RecastModel, time_limit_s: float) -> Loop:
     """The loop in deviations with its square roots' lower bounds proved; a one-line
     :class:`ModelFileError` naming the equation of a root whose argument is not proved >= 0."""
     base = base_loop(model.system)
-    loop, unproved = prove_root_bounds(base, Search(base.ring, Budget(
-        time_limit_s, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")))
+    loop, unproved = prove_root_bounds(base, Search(base.ring, class_budget(time_limit_s)))
     if unproved:
         raise ModelFileError(model.source, model.key_of(unproved[0]),
                              f"'{unproved[0]}': its argument could not be proved non-negative (sqrt of something that "
