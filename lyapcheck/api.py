@@ -6,7 +6,7 @@ For the notebook user who will not shell out::
 
     result = certify({"alpha_d": "0.0558", "sigma0": 0.01, "k_d": "0.15 1/s",
                       "delta_los": "0.75 mm", "e11": "9.3e-5 m"}, classes="quick")
-    result.verdict                       # "certified" or "not_certified"
+    result.verdict                       # "certified", "not_certified", "unsafe", ... (lyapcheck.answers)
     result.conditions["sector_ges"].status
     verify(result.to_json()).valid       # exact re-check, no solver
 
@@ -119,8 +119,14 @@ class CertifyResult:
     Attributes
     ----------
     verdict
-        ``certified`` when some stability certificate passed its exact check (a model with
-        disturbances: ``certified_nominal`` when only claims with them held at 0 passed).
+        One word (:data:`lyapcheck.answers.VERDICTS`): ``certified`` when a claim passed its exact
+        check and no question is answered negatively (a model with disturbances:
+        ``certified_nominal`` when only claims with them held at 0 passed; ``certified_local`` when
+        only the linearization is proved), ``unsafe`` / ``unstable`` for a negative answer, else
+        ``not_certified``.
+    answers
+        Question -> its answer (:func:`lyapcheck.answers.answers_of`): ``stability``, ``safety``,
+        ``reach_avoid``, ``bounds``, each ``{"answer", "by", "text", ...}``, for the questions asked.
     dynamics
         ``derived`` or ``printed`` (the paper's loop); ``model`` for a model file.
     conditions
@@ -146,6 +152,19 @@ class CertifyResult:
                                  disturbances=described.get(name, {}).get("disturbances", cond.disturbances))
                    for name, cond in self.conditions.items()}
         object.__setattr__(self, "conditions", aligned)
+
+    @property
+    def answers(self) -> dict[str, dict[str, Any]]:
+        """The document's ``answers`` (see the class docstring)."""
+        import copy
+
+        return copy.deepcopy(self.document.get("answers") or {})
+
+    def unmet(self, require: str | Sequence[str]) -> list[str]:
+        """The names of ``require`` (``"GAS,safety"``, as ``--require``) that no certified condition meets."""
+        from lyapcheck.answers import parse_requirements, unmet_requirements
+
+        return unmet_requirements(self.document.get("conditions") or {}, parse_requirements(require))
 
     def V(self, condition: str, output: str | None = None) -> Any:
         """The certified ``V`` of a model's ``condition`` exactly, as a sympy expression in the
@@ -201,7 +220,8 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
             box: Sequence[str] | Mapping[str, Any] | None = None,
             dynamics: str = "derived", classes: str | Sequence[str] | None = None,
             linear_views: bool = False, overrides: Mapping[str, object] | None = None,
-            worst_case: bool = False, worst_case_budget_s: float = 20.0) -> CertifyResult:
+            worst_case: bool = False, worst_case_budget_s: float = 20.0, degree: int | None = None,
+            time_limit_s: float | None = None) -> CertifyResult:
     """Certify a gain set of the paper's loop, or any closed loop from a model file; every class
     is checked exactly.
 
@@ -233,6 +253,12 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
         Add python-control views (poles, the Lyapunov P for Gamma = I) under ``linear_views``.
     overrides
         Values laid over ``params`` (as the command-line flags are laid over the TOML file).
+    degree
+        With ``model``: the largest polynomial degree each class searches (``--degree``; None: each
+        class's own ladder, :mod:`lyapcheck.degrees`).
+    time_limit_s
+        With ``model``: each class's time limit in seconds (``--time-limit``; None: 60 s,
+        :data:`lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S`).
     worst_case
         Also search the worst disturbance ``|d| <= d*`` in simulation (about 10-20 s) and report,
         beside each certified ultimate bound, the worst simulated tail ``sup |eps|`` and
@@ -246,7 +272,11 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
         if params is not None or overrides:
             raise InvalidParameter("model", "given without the paper's parameters (a model file carries its own)",
                                    str(params if params is not None else overrides))
-        return certify_model_file(model, settings=settings, candidate=candidate, classes=classes, box=box)
+        return certify_model_file(model, settings=settings, candidate=candidate, classes=classes, box=box,
+                                  degree=degree, time_limit_s=time_limit_s)
+    if degree is not None or time_limit_s is not None:
+        raise InvalidParameter("degree" if degree is not None else "time_limit_s", "used with a model file "
+                               "(model=...)", degree if degree is not None else time_limit_s)
     if settings or candidate is not None:
         raise InvalidParameter("set" if settings else "candidate", "used with a model file (model=...)",
                                settings if settings else candidate)
@@ -334,9 +364,21 @@ def _recast_model(model: object, settings: Mapping[str, object] | Sequence[str] 
 
 def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
                        candidate: str | None = None, classes: str | Sequence[str] | None = None,
-                       time_limit_s: float | None = None, box: Sequence[str] | Mapping[str, Any] | None = None
-                       ) -> CertifyResult:
+                       time_limit_s: float | None = None, box: Sequence[str] | Mapping[str, Any] | None = None,
+                       degree: int | None = None) -> CertifyResult:
     """:func:`certify` for a model file (``certify(model=...)`` calls this)."""
+    from lyapcheck.degrees import check_degree, degree_ceiling
+
+    if time_limit_s is not None and not (isinstance(time_limit_s, (int, float)) and 0 < time_limit_s < float("inf")):
+        raise InvalidParameter("time_limit_s", "a number of seconds > 0", time_limit_s)
+    with degree_ceiling(check_degree(degree)):
+        return _certify_model_file(model, settings=settings, candidate=candidate, classes=classes,
+                                   time_limit_s=time_limit_s, box=box)
+
+
+def _certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None,
+                        candidate: str | None, classes: str | Sequence[str] | None, time_limit_s: float | None,
+                        box: Sequence[str] | Mapping[str, Any] | None) -> CertifyResult:
     from lyapcheck.models.boxes import parse_model_box
     from lyapcheck.models.certificate import build_document
     from lyapcheck.models.certify import certify_model

@@ -72,7 +72,8 @@ def certify_repr(doc: Mapping[str, Any]) -> str:
     """``CertifyResult``: the verdict, then one line per class (status, property, disturbances)."""
     conditions: Mapping[str, Mapping[str, Any]] = doc["conditions"]
     width = max([len(n) for n in conditions] + [9])
-    lines = [f"CertifyResult: {doc['verdict']} ({certify_subject(doc)})"]
+    answers = ", ".join(f"{q} {a.get('answer')}" for q, a in (doc.get("answers") or {}).items() if isinstance(a, Mapping))
+    lines = [f"CertifyResult: {doc['verdict']} ({certify_subject(doc)})" + (f": {answers}" if answers else "")]
     lines += [f"  {name:<{width}}  {str(c['status']):<14}  {_claim(c)}".rstrip() for name, c in conditions.items()]
     return _bounded(lines)
 
@@ -89,6 +90,10 @@ def _table(caption: str, header: Sequence[str], rows: Sequence[Sequence[Any]]) -
 def certify_html(doc: Mapping[str, Any]) -> str:
     """``CertifyResult._repr_html_``: the verdict and one row per class, with its summary (escaped)."""
     caption = f"<strong>{html.escape(str(doc['verdict']))}</strong>: {html.escape(certify_subject(doc))}"
+    answers = [f"{html.escape(q)}: <strong>{html.escape(str(a.get('answer')))}</strong> ({html.escape(str(a.get('text')))})"
+               for q, a in (doc.get("answers") or {}).items() if isinstance(a, Mapping)]
+    if answers:
+        caption += "<br>" + "<br>".join(answers)
     rows = [[name, c["status"], _claim(c), c.get("summary", "")] for name, c in doc["conditions"].items()]
     return _table(caption, ["condition", "status", "property", "what it means"], rows)
 

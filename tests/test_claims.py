@@ -143,15 +143,17 @@ def test_a_summary_edited_alone_fails_verify(bounded: dict[str, Any]) -> None:
     c = forged["conditions"]["sos_bound"]
     assert "limsup |x| <= 0.5" in c["summary"]
     c["summary"] = c["summary"].replace("limsup |x| <= 0.5", "limsup |x| <= 0.1")
-    # the verdict falls with it: sos_bound was the one claim that covered the disturbance
-    assert set(failed(forged)) == {"sos_bound", "verdict"}
+    # the verdict falls with it (sos_bound was the one claim that covered the disturbance), and the
+    # answer to the bounds question
+    assert set(failed(forged)) == {"sos_bound", "verdict", "answers"}
     lowered = copy.deepcopy(bounded)  # a figure lowered alone is caught by the exact check
     lowered["conditions"]["sos_bound"]["bounds"]["x"] = 0.1
     assert "sos_bound" in failed(lowered)
     other = copy.deepcopy(bounded)  # and a GES sentence with an edited rate
     q = other["conditions"]["quadratic"]
     q["summary"] = q["summary"].replace("exp(-", "exp(-9")
-    assert failed(other) == ["quadratic"]
+    # (the stability answer rested on quadratic's GES, so it falls with it)
+    assert failed(other) == ["quadratic", "answers"]
 
 
 @pytest.mark.parametrize("value", [1.4, 2.4, -1, 1.0, "1", True])

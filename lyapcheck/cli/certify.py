@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import click
 
 from lyapcheck.cli.common import EXIT_NEGATIVE, EXIT_OK, emit_json, one_line_errors
+from lyapcheck.errors import InvalidParameter
 
 #: command-line flag -> parameter key (lyapcheck.paper.params.FIELDS)
 FLAG_KEYS = {
@@ -15,43 +16,42 @@ FLAG_KEYS = {
     "e11": "swimmer.e11", "omega_so": "actuation.omega_so", "d_max": "disturbance.d_max",
 }
 
-#: verdicts that exit 0: a certificate passed its exact check (``certified_nominal``: a model's
-#: claims hold with its disturbances held at 0 only, which the verdict says)
-OK_VERDICTS = ("certified", "certified_nominal")
-
-
-def _print_table(doc: dict[str, Any]) -> None:
+def _print_table(doc: dict[str, Any], verbose: bool = False, unmet: Sequence[str] = ()) -> None:
     """The conditions as a table that fits the terminal (no cell cut inside a word or a number:
-    :mod:`lyapcheck.cli.tables`), then the verdict and what it means."""
+    :mod:`lyapcheck.cli.tables`), then the answer to each question, the verdict and what it means."""
     from rich.console import Console
-    from rich.text import Text
 
-    from lyapcheck.cli.tables import print_conditions, say
+    from lyapcheck.cli.tables import print_answers, print_conditions
 
     console = Console()
-    print_conditions(console, doc)
-    style = "bold green" if doc["verdict"] == "certified" else "bold yellow"
-    if doc["verdict"] == "certified_nominal":
-        from lyapcheck.models.certify import VERDICT_MEANING
-
-        meaning = VERDICT_MEANING["certified_nominal"]
-    else:
-        meaning = "certified = an exact check of a stability certificate passed"
-    say(console, Text.assemble("verdict: ", (str(doc["verdict"]), style), f"  ({meaning})"))
+    print_conditions(console, doc, verbose=verbose)
+    print_answers(console, doc, unmet)
 
 
-def _finish(result: Any, out: str | None, report: str | None, as_json: bool, write_report: Any) -> None:
-    """Write what was asked, print the table or the JSON, exit 0 (certified) or 1."""
+def exit_code(doc: dict[str, Any], unmet: Sequence[str] = ()) -> int:
+    """0 when no asked question is answered negatively, some claim passed its exact check and every
+    ``--require`` is met; else 1 (README, "Exit codes")."""
+    from lyapcheck.answers import OK_VERDICTS
+
+    return EXIT_OK if doc.get("verdict") in OK_VERDICTS and not unmet else EXIT_NEGATIVE
+
+
+def _finish(result: Any, out: str | None, report: str | None, as_json: bool, write_report: Any,
+            required: Sequence[str] = (), verbose: bool = False) -> None:
+    """Write what was asked, print the table or the JSON, exit 0 or 1 (:func:`exit_code`)."""
+    from lyapcheck.answers import unmet_requirements
+
     if out:
         result.write(out)
     if report:
         as_pdf = Path(report).suffix.lower() == ".pdf"
         write_report(result, html=None if as_pdf else report, pdf=report if as_pdf else None)
     doc = result.to_json()
+    unmet = unmet_requirements(doc.get("conditions") or {}, required)
     if as_json:
         emit_json(doc)
     else:
-        _print_table(doc)
+        _print_table(doc, verbose, unmet)
     # a simulated trajectory that contradicts a certified claim (roa's set, a barrier's unsafe set):
     # the proof or the simulation is wrong, and a script must not read the run as a success
     violated = [name for name, c in (doc.get("conditions") or {}).items()
@@ -60,7 +60,24 @@ def _finish(result: Any, out: str | None, report: str | None, as_json: bool, wri
         click.echo(f"SOUNDNESS VIOLATION: a simulated trajectory contradicts the certified {', '.join(violated)} "
                    "(please report it)", err=True)
         raise SystemExit(EXIT_NEGATIVE)
-    raise SystemExit(EXIT_OK if result.verdict in OK_VERDICTS else EXIT_NEGATIVE)
+    raise SystemExit(exit_code(doc, unmet))
+
+
+#: the longest ``--time-limit`` accepted, in seconds (a day: a class that needs more is not one to wait for)
+MAX_TIME_LIMIT_S = 86_400.0
+
+
+def _time_limit(text: str | None) -> float | None:
+    """``--time-limit SECONDS`` (None: the default); a one-line error naming ``time-limit``."""
+    if text is None:
+        return None
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = float("nan")
+    if not 0 < seconds <= MAX_TIME_LIMIT_S:  # (nan fails too)
+        raise InvalidParameter("time-limit", f"a number of seconds in (0, {MAX_TIME_LIMIT_S:g}]", text)
+    return seconds
 
 
 def register(group: click.Group) -> None:
@@ -98,14 +115,30 @@ def register(group: click.Group) -> None:
     @click.option("--no-store", "no_store", is_flag=True, help="A model file: search every class again, neither "
                   "reading nor writing the certificates kept from earlier runs (a stored certificate is re-checked "
                   "exactly before it is used; LYAPCHECK_CERTIFICATE_STORE=off does the same for every run).")
+    @click.option("--require", "require", metavar="PROPS",
+                  help="Exit 1 unless each of these is proved, e.g. --require GAS,safety (names: GES, GAS, ROA, "
+                       "LES, ISS, ultimate_bound or bounds, safety, reach_avoid; GES meets GAS, GAS meets ROA).")
+    @click.option("--degree", "degree", metavar="N", help="A model file: the largest polynomial degree each class "
+                  "searches (default: each class's own ladder, e.g. sos_gas 2, 4, 6, 8; higher can prove more and "
+                  "costs more).")
+    @click.option("--time-limit", "time_limit", metavar="SECONDS", help="A model file: each class's time limit in "
+                  "seconds (default 60); past it the class is inconclusive and says so.")
+    @click.option("--verbose", is_flag=True, help="Show each condition's technical detail (solver statuses, size "
+                  "limits) under its summary.")
     @one_line_errors
     def certify(files: tuple[str, ...], dynamics: str, as_json: bool, out: str | None, report: str | None,
                 linear_views: bool, classes: str | None, worst_case: bool, boxes: tuple[str, ...],
                 model_file: str | None, settings: tuple[str, ...], candidate: str | None, no_store: bool,
+                require: str | None, degree: str | None, time_limit: str | None, verbose: bool,
                 **flags: str | None) -> None:
         """Certify any closed loop from a model file (FILE or --model FILE), or a gain set of the
         paper's ILOS/ODS loop (its worked example: a gain file, flags, or both): every condition
         class, each checked exactly.
+
+        The headline answers each question the model asks: stability (global, region, local,
+        unstable, undecided), safety (safe, unsafe with a counterexample, undecided), reach-avoid
+        and bounds. Exit 1 when one is answered negatively (unsafe, unstable), when nothing is
+        proved, or when --require names a property not proved; else 0.
 
         Disturbances of a model file: every claim says which disturbances it covers, "all" (for
         every disturbance signal within its bounds: sos_bound, and a stability class whose V
@@ -114,14 +147,13 @@ def register(group: click.Group) -> None:
         verdict is certified (exit 0) only through a claim that covers the disturbances;
         certified_nominal (exit 0) when only "(d = 0)" claims passed; else not_certified (exit 1).
 
-        Time: each class of a model file stops searching at MODEL_CLASS_TIME_LIMIT_S (60 s) and is then
+        Time: each class of a model file stops searching at --time-limit (60 s) and is then
         inconclusive, the others still run; work that overruns it is stopped at 1.5 x 60 + 5 = 95 s.
         One certify --model therefore takes at most about 11 minutes (six classes and the
         denominators' proof, 95 s each, before any --report), and seconds on the shipped examples."""
         from lyapcheck.api import certify as certify_gains
         from lyapcheck.api import report as write_report
         from lyapcheck.sos import sdp
-        from lyapcheck.errors import InvalidParameter
 
         sdp.LEAN_LAPACK_IMPORT = True  # this process is the command's own (see sdp._load_lapack_modules)
         if no_store:  # the process is the command's own: the switch holds for this run alone
@@ -133,6 +165,12 @@ def register(group: click.Group) -> None:
 
         if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
             raise InvalidParameter("report", "a file name ending in .html or .pdf", report)
+        from lyapcheck.answers import parse_requirements
+        from lyapcheck.degrees import check_degree
+
+        required = parse_requirements(require)
+        max_degree = check_degree(degree)
+        seconds = _time_limit(time_limit)
         overrides = {FLAG_KEYS[k]: v for k, v in flags.items() if v is not None}
         from lyapcheck.cli.inputs import check_model_flags, flag_names, split_model_argument
 
@@ -145,13 +183,16 @@ def register(group: click.Group) -> None:
             check_model_flags(model_file, stray, settings, paper_flags)
             with flag_names():
                 result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes,
-                                       box=list(boxes) or None)
-            _finish(result, out, report, as_json, write_report)
+                                       box=list(boxes) or None, degree=max_degree, time_limit_s=seconds)
+            _finish(result, out, report, as_json, write_report, required, verbose)
         if stray is not None:
             raise InvalidParameter("FILE", "one gain file or model file", " ".join(files))
         if settings or candidate is not None:
             raise InvalidParameter("set" if settings else "candidate", "used with a model file",
                                    settings[0] if settings else candidate)
+        if degree is not None or time_limit is not None:  # the paper's classes have their own degrees and costs
+            raise InvalidParameter("degree" if degree is not None else "time-limit", "used with a model file",
+                                   degree if degree is not None else time_limit)
         if boxes:
             from lyapcheck.api import certify_box
 
@@ -161,14 +202,18 @@ def register(group: click.Group) -> None:
             result = certify_box(gains, boxes, dynamics=dynamics, overrides=overrides, classes=classes)
             if out:
                 result.write(out)
+            doc = result.to_json()
+            from lyapcheck.answers import unmet_requirements
+
+            unmet = unmet_requirements(doc.get("conditions") or {}, required)
             if as_json:
-                emit_json(result.to_json())
+                emit_json(doc)
             else:
-                _print_table(result.to_json())
-            raise SystemExit(EXIT_OK if result.verdict in OK_VERDICTS else EXIT_NEGATIVE)
+                _print_table(doc, verbose, unmet)
+            raise SystemExit(exit_code(doc, unmet))
         result = certify_gains(gains, dynamics=dynamics, classes=classes, linear_views=linear_views,
                                overrides=overrides, worst_case=worst_case)
-        _finish(result, out, report, as_json, write_report)
+        _finish(result, out, report, as_json, write_report, required, verbose)
 
     @group.command()
     @click.argument("certificate", type=click.Path(dir_okay=False))

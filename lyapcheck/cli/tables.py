@@ -235,9 +235,15 @@ def what_it_means(doc: Mapping[str, Any], cond: Mapping[str, Any]) -> str:
     return text
 
 
-def print_conditions(console: "Console", doc: Mapping[str, Any]) -> None:
+#: the keys of a condition whose text is for the curious (solver statuses, limits, counts): shown
+#: with ``--verbose`` only
+DETAIL_KEYS = ("detail", "reason")
+
+
+def print_conditions(console: "Console", doc: Mapping[str, Any], verbose: bool = False) -> None:
     """The conditions of a certificate document (``certify --json``): one row per class with its
-    status, property and summary; at narrow widths the status and property go under the name."""
+    status, property and summary; at narrow widths the status and property go under the name. With
+    ``verbose``, each condition's technical detail (:data:`DETAIL_KEYS`) follows its summary."""
     from rich.text import Text
 
     title = (f"lyapcheck certify - model: {doc['model']['name']}" if "model" in doc
@@ -246,7 +252,8 @@ def print_conditions(console: "Console", doc: Mapping[str, Any]) -> None:
         from lyapcheck.models.claims import box_words
 
         title += f", for every {box_words(doc['box'])}"
-    conditions = {name: {**c, "summary": what_it_means(doc, c)} for name, c in doc["conditions"].items()}
+    conditions = {name: {**c, "summary": what_it_means(doc, c) + (_details(c) if verbose else "")}
+                  for name, c in doc["conditions"].items()}
 
     def status(cond: Mapping[str, Any]) -> Text:
         return Text(str(cond["status"]), style=STATUS_STYLE.get(str(cond["status"]), ""))
@@ -270,6 +277,44 @@ def print_conditions(console: "Console", doc: Mapping[str, Any]) -> None:
         print_table(console, Text(title), narrow_cols, narrow, show_lines=True)
     else:
         print_records(console, Text(title), wide_cols, wide, keys=3)
+
+
+def _details(cond: Mapping[str, Any]) -> str:
+    out = ""
+    for key in DETAIL_KEYS:
+        value = cond.get(key)
+        if isinstance(value, str) and value and value not in str(cond.get("summary", "")):
+            out += f"\n[{key}] {value}"
+        elif isinstance(value, list):
+            out += "".join(f"\n[{key}] {v}" for v in value)
+    return out
+
+
+#: colour of each answer (lyapcheck.answers): a negative one is red, an undecided one yellow
+ANSWER_STYLE: Mapping[str, str] = {
+    "global": "bold green", "region": "green", "local": "yellow", "safe": "bold green", "proved": "bold green",
+    "bounded": "green", "undecided": "yellow", "unstable": "bold red", "unsafe": "bold red", "fails": "bold red",
+}
+
+
+def print_answers(console: "Console", doc: Mapping[str, Any], unmet: Sequence[str] = ()) -> None:
+    """The headline: one line per question asked (``answers``), then the verdict and what it means,
+    then the ``--require`` names not met."""
+    from rich.text import Text
+
+    from lyapcheck.answers import VERDICT_MEANING
+
+    answers = doc.get("answers") if isinstance(doc.get("answers"), Mapping) else {}
+    for question, a in answers.items():
+        if isinstance(a, Mapping):
+            say(console, Text.assemble((f"{question.replace('_', '-')}: ", "bold"),
+                                       (str(a.get("answer", "")), ANSWER_STYLE.get(str(a.get("answer")), "")),
+                                       f" - {a.get('text', '')}"))
+    verdict = str(doc.get("verdict"))
+    style = {"certified": "bold green", "unsafe": "bold red", "unstable": "bold red"}.get(verdict, "bold yellow")
+    say(console, Text.assemble("verdict: ", (verdict, style), f"  ({VERDICT_MEANING.get(verdict, '')})"))
+    if unmet:
+        say(console, Text.assemble(("required but not proved: ", "bold red"), ", ".join(unmet)))
 
 
 # -- simulate ----------------------------------------------------------------------------------------

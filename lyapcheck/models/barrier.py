@@ -27,6 +27,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Final, Sequence
 
+from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.claims import BARRIER_SENTENCE
 from lyapcheck.models.field import ScaledField, StateField
 from lyapcheck.models.lyapunov import FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials, vanishing_monomials
@@ -222,7 +223,7 @@ def search_barrier(field: StateField, initial: Pieces, unsafe: Pieces, search: S
                    ) -> tuple[dict[str, Any] | None, list[str]]:
     """The first certificate over :data:`BARRIER_DEGREES` and :data:`LAMBDAS`, and what was tried."""
     tried: list[str] = []
-    for degree in BARRIER_DEGREES:
+    for degree in searched_degrees(BARRIER_DEGREES):
         full = barrier_structure(field, initial, unsafe, degree)
         if isinstance(full, str):
             tried.append(f"degree {degree}: {full}")

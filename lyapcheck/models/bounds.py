@@ -25,6 +25,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Final
 
+from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.field import ScaledField, unscale_polynomial
 from lyapcheck.models.lyapunov import TARGET_LIMIT, affordable, face_probe, terms_json
 from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
@@ -176,7 +177,7 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
 
     best: dict[str, Any] | None = None
     tried: list[str] = []
-    for degree in BOUND_DEGREES:
+    for degree in searched_degrees(BOUND_DEGREES):
         full = bound_structure(scaled, y, degree)
         if full is None:
             tried.append(f"degree {degree}: above the size limits (MAX_GRAM_ROWS = {MAX_GRAM_ROWS}, TARGET_LIMIT, "

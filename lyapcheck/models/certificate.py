@@ -13,7 +13,8 @@ Schema (version 1)::
       "conditions": {"linearization": {..}, "roa": {"status": .., "level": .., "disturbances": "all",
                      "certificate": {"V": {"terms": [["3/2", [2, 0]], ..]}, "variables": ["x1", "x2"],
                                      "V_text": "1.5*x1**2 - ...", "level": "p/q", ..}}, ..},
-      "verdict": "certified" | "certified_nominal" | "not_certified",
+      "verdict": "certified" | "certified_nominal" | "certified_local" | "not_certified" | "unsafe" | "unstable",
+      "answers": {"stability": {"answer": .., "by": .., "text": ..}, ..},   # lyapcheck.answers
       "versions": {..}
     }
 
@@ -43,6 +44,7 @@ Row = tuple[str, bool, str]
 
 
 def build_document(result: ModelCertification) -> dict[str, Any]:
+    from lyapcheck.answers import answers_of
     from lyapcheck.numerics import package_versions
 
     model = result.model
@@ -59,7 +61,8 @@ def build_document(result: ModelCertification) -> dict[str, Any]:
         "field": {"denominators": result.denominators,
                   "scaling": result.scaling.to_json() if result.scaling is not None else None},
         **({"box": result.box.to_json()} if result.box is not None else {}),
-        "conditions": {name: r.to_json() for name, r in result.results.items()},
+        "conditions": (conditions := {name: r.to_json() for name, r in result.results.items()}),
+        "answers": answers_of(conditions),
         "verdict": result.verdict,
         "versions": package_versions(),
     }

@@ -31,6 +31,8 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
+from lyapcheck import answers as _answers
+from lyapcheck.degrees import searched_degrees
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.classes import CLEARED, NAMES
 from lyapcheck.models.field import ScaledField, Scaling, ShiftedField, StateField, active_disturbances, \
@@ -93,25 +95,9 @@ class ModelCertification:
         return verdict_of({name: r.to_json() for name, r in self.results.items()})
 
 
-#: the verdicts of a model's certification: ``certified`` when a certified claim covers the declared
-#: disturbances (``"all"``, or the model has none), ``certified_nominal`` when every certified claim
-#: holds with the disturbances held at 0 only, else ``not_certified``; the first two exit 0
-VERDICTS: Final = ("certified", "certified_nominal", "not_certified")
-#: what each verdict means, printed beside it
-VERDICT_MEANING: Final = {
-    "certified": "an exact check of a stability certificate passed",
-    "certified_nominal": "exact checks passed only with every disturbance held at 0; no certified claim covers the "
-                         "declared disturbances",
-    "not_certified": "no stability certificate passed an exact check",
-}
-
-
-def verdict_of(conditions: Mapping[str, Any]) -> str:
-    """The verdict of conditions in their JSON form (one rule for ``certify`` and ``verify``)."""
-    certified = [c for c in conditions.values() if isinstance(c, dict) and c.get("status") == "certified"]
-    if any(c.get("disturbances") in (None, "all") for c in certified):
-        return "certified"
-    return "certified_nominal" if certified else "not_certified"
+#: the verdict (one rule for every loop and the paper's; :mod:`lyapcheck.answers`)
+VERDICTS, OK_VERDICTS, VERDICT_MEANING, verdict_of = _answers.VERDICTS, _answers.OK_VERDICTS, \
+    _answers.VERDICT_MEANING, _answers.verdict_of
 
 
 def parse_candidate(model: Model, text: str) -> Candidate:
@@ -261,7 +247,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                                                                                    field=f)))
         if "sos_gas" in chosen:
             run("sos_gas", stability(lambda f, search: lyapunov.run(
-                sc, "sos_gas", lyapunov.SOS_GAS_DEGREES, search, param_degrees=BOX_PARAM_DEGREES, field=f)))
+                sc, "sos_gas", searched_degrees(lyapunov.SOS_GAS_DEGREES), search, param_degrees=BOX_PARAM_DEGREES, field=f)))
         if "roa" in chosen:
             lin = out.results.get("linearization")
             gas = {r.disturbances: name for name, r in out.results.items()

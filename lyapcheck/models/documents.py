@@ -16,17 +16,17 @@ Row = tuple[str, bool, str]
 
 
 def with_verdict(doc: dict[str, Any], rows: list[Row]) -> list[Row]:
-    """The verdict row: the stated verdict against the one the re-checked conditions support."""
-    from lyapcheck.models.certify import verdict_of
+    """The verdict row and the answers row: the stated verdict and answers against the ones the
+    re-checked conditions support (:func:`checked_conditions`)."""
+    from lyapcheck.answers import answers_row, checked_conditions
+    from lyapcheck.answers import verdict_of
 
-    conditions = doc["conditions"]
-    proven = {name: c for name, c in conditions.items()
-              if isinstance(c, dict) and c.get("status") == "certified" and any(n == name for n, _, _ in rows)
-              and all(ok for n, ok, _ in rows if n == name)}
     prerequisites = all(ok for n, ok, _ in rows if n in ("model", "parameters", "box", "denominators", "scaling",
-                                                         "recasting"))
-    expected = verdict_of(proven) if prerequisites else "not_certified"
+                                                         "recasting", "states"))
+    checked = checked_conditions(doc["conditions"], rows, prerequisites)
+    expected = verdict_of(checked)
     stated = doc.get("verdict")
     rows.append(("verdict", stated == expected, f"verdict '{stated}' is supported" if stated == expected else
                  f"verdict: stated '{stated}' but the re-checked conditions support '{expected}'"))
+    rows.append(answers_row(doc, checked))
     return rows

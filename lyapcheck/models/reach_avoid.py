@@ -23,6 +23,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Final, Sequence
 
+from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.barrier import (BudgetExhausted, Pieces, _b_basis, _decrease_poly, _decrease_support,
                                       _falsification, _shift, scaled_pieces, set_certificates, set_identities,
                                       set_values)
@@ -137,7 +138,7 @@ def attempt(field: StateField, structure: Structure, degree: int, initial: Piece
 def search_reach(field: StateField, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly], search: Search
                  ) -> tuple[dict[str, Any] | None, list[str]]:
     tried: list[str] = []
-    for degree in REACH_DEGREES:
+    for degree in searched_degrees(REACH_DEGREES):
         structure: Structure | str = reach_structure(field, initial, unsafe, goal, degree)
         if isinstance(structure, str):
             tried.append(f"degree {degree}: {structure}")
@@ -219,7 +220,7 @@ def find_goal_invariant(field: StateField, goal: Sequence[Poly], search: Search
     if min(at_equilibrium) <= 0:
         return None, ["the equilibrium is not inside the goal (some goal inequality is not > 0 there)"]
     w0 = min(at_equilibrium) / 2
-    for degree in STAY_DEGREES:
+    for degree in searched_degrees(STAY_DEGREES):
         structure = stay_structure(field, goal, degree)
         if isinstance(structure, str):
             tried.append(f"W of degree {degree}: {structure}")

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Final, Mapping
 
+from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.parameter_box import ModelBox
 from lyapcheck.models.recast import RecastModel, written_poly
 from lyapcheck.models.recast_classes import (Loop, _set, base_loop, check_denominator_proofs, check_root_proofs,
@@ -185,7 +186,7 @@ def templates(bl: BoundLoop, search: Search) -> tuple[list[Template], list[str]]
             proved[variables] = None
         else:
             proved[variables] = (N, tuple(dens))
-    for degree in BOUND_DEGREES:
+    for degree in searched_degrees(BOUND_DEGREES):
         for variables in choices:
             made = proved[variables]
             if made is not None:

@@ -107,6 +107,7 @@ def box_prefix(box: ModelBox, status: str) -> str:
 
 def build_document(model: RecastModel, loop: Loop, candidate: str | None, conditions: dict[str, Any],
                    verdict: str, box: ModelBox | None = None) -> dict[str, Any]:
+    from lyapcheck.answers import answers_of
     from lyapcheck.models.documents import KIND, SCHEMA_VERSION
     from lyapcheck.numerics import package_versions
 
@@ -123,6 +124,7 @@ def build_document(model: RecastModel, loop: Loop, candidate: str | None, condit
         "recast": {**model.system.to_json(), "angles": {a: list(sc) for a, sc in loop.angles.items()}},
         **({"box": box.to_json()} if box is not None else {}),
         "conditions": conditions,
+        "answers": answers_of(conditions),
         "verdict": verdict,
         "versions": package_versions(),
     }

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 
+from lyapcheck.degrees import searched_degrees
 from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -85,7 +86,7 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
         return float(np.mean(v_values(loop.system, r.V, samples) <= float(r.level)))
 
     best, best_share = first, covered(first)
-    for degree in VS_DEGREES:
+    for degree in searched_degrees(VS_DEGREES):
         region = best
         for k in range(VS_ITERATIONS):
             if budget.left() < budget.seconds * VS_BUDGET_SHARE:

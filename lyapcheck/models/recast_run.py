@@ -11,10 +11,11 @@ import time
 from fractions import Fraction
 from typing import Any, Final, Sequence
 
+from lyapcheck.degrees import searched_degrees
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.parameter_box import ModelBox
 from lyapcheck.models.recast import RecastModel, written_poly
-from lyapcheck.models.recast_classes import (EPSILONS, Loop, base_loop, best_region, certify_region,
+from lyapcheck.models.recast_classes import (EPSILONS, RECAST_GAS_DEGREES, Loop, base_loop, best_region, certify_region,
                                              common_denominator, jacobian, lie, linearization,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
                                              quadratic, quadratic_candidate, refute_global, region_of_attraction,
@@ -57,7 +58,7 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
     if "sos_gas" in classes:
         start = time.perf_counter()
         results["sos_gas"] = refute_global(loop, "sos_gas") or \
-            sos_gas(loop, class_budget(time_limit_s))
+            sos_gas(loop, class_budget(time_limit_s), degrees=searched_degrees(RECAST_GAS_DEGREES))
         seconds["sos_gas"] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()

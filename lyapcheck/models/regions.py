@@ -36,6 +36,7 @@ from typing import Any, Final, Sequence
 
 import numpy as np
 
+from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.field import ScaledField, Scaling, StateField, linear_images
 from lyapcheck.models.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
     symmetry, vanishing_monomials
@@ -522,7 +523,7 @@ def enlarge(field: StateField, search: Search, samples: np.ndarray, converged: n
     degree, the best set certified exactly (module docstring). Over a box (its programs are larger
     and one box must cost a few points' time) :data:`BOX_ROA_DEGREES` and :data:`BOX_ROA_ROUNDS`."""
     if degrees is None:
-        degrees = BOX_ROA_DEGREES if field.p else ROA_DEGREES
+        degrees = searched_degrees(BOX_ROA_DEGREES if field.p else ROA_DEGREES)
     if rounds is None:
         rounds = BOX_ROA_ROUNDS if field.p else ROA_ROUNDS
     generators = symmetry(field)

@@ -25,8 +25,8 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from lyapcheck.answers import answers_row, checked_conditions
 from lyapcheck.errors import CertificateError, InputFileError
-
 from lyapcheck.numerics import package_versions  # noqa: F401 (re-exported)
 
 SCHEMA_VERSION = 1
@@ -57,6 +57,7 @@ def document_inputs(problem: Any) -> dict[str, Any]:
 
 
 def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict: str) -> dict[str, Any]:
+    from lyapcheck.answers import answers_of
     from lyapcheck.paper.certification import build_system
 
     system = build_system(problem, dynamics)
@@ -66,7 +67,8 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
         "inputs": document_inputs(problem),
         "dynamics": dynamics,
         "system": system_to_json(system),
-        "conditions": {name: res.to_json() for name, res in results.items()},
+        "conditions": (conditions := {name: res.to_json() for name, res in results.items()}),
+        "answers": answers_of(conditions),
         "verdict": verdict,
         "versions": package_versions(),
     }
@@ -74,6 +76,7 @@ def build_document(problem: Any, dynamics: str, results: dict[str, Any], verdict
 
 def build_box_document(problem: Any, box: Any, dynamics: str, results: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """A certificate for every gain set in ``box`` (:mod:`lyapcheck.paper.boxes`), one entry per class."""
+    from lyapcheck.answers import answers_of
     from lyapcheck.paper.boxes.saturated import real_loop_bound
     from lyapcheck.paper.boxes.classes import BOX_STABILITY_CLASSES
 
@@ -86,6 +89,7 @@ def build_box_document(problem: Any, box: Any, dynamics: str, results: dict[str,
         "box": box.to_json(),
         "dynamics": dynamics,
         "conditions": results,
+        "answers": answers_of(results),
         "verdict": "certified" if certified else "not_certified",
         "versions": package_versions(),
     }
@@ -141,6 +145,7 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         rows.append(("verdict", doc.get("verdict") == expected,
                      f"verdict '{doc.get('verdict')}' is supported" if doc.get("verdict") == expected
                      else f"verdict: stated '{doc.get('verdict')}' but the re-checked box supports '{expected}'"))
+        rows.append(answers_row(doc, checked_conditions(conditions, rows)))
         return rows
     except (KeyError, ValueError, ArithmeticError, TypeError, AttributeError, IndexError) as exc:
         raise CertificateError(f"certificate is malformed: {exc!r}") from None
@@ -519,4 +524,5 @@ def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     expected = "certified" if proven else "not_certified"
     ok_row("verdict", stated == expected, f"verdict '{stated}' is supported",
            f"verdict: stated '{stated}' but the re-checked conditions support '{expected}'")
+    rows.append(answers_row(doc, checked_conditions(conditions, rows)))
     return rows
