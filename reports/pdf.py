@@ -33,7 +33,12 @@ _SKIP: Final = {"head", "style", "script", "title"}
 COLOURS: Final = {
     "certified": "#1a7f37", "holds": "#1a7f37", "refuted": "#cf222e", "fails": "#cf222e",
     "discrepancy": "#cf222e", "not_certified": "#9a6700", "unverifiable": "#9a6700", "inconclusive": "#8250df",
+    "counterexample": "#cf222e",
+    # the tones of a page's head (reports.subjects.base.verdict_tone, answer_lines)
+    "tone-ok": "#1a7f37", "tone-bad": "#cf222e", "tone-warn": "#9a6700", "tone-plain": "#6e7781",
 }
+#: the verdict box's fill per tone (report.css, .verdict.tone-*)
+VERDICT_FILLS: Final = {"tone-ok": "#dafbe1", "tone-warn": "#fff8c5", "tone-bad": "#ffebe9"}
 _NEUTRAL: Final = "#6e7781"
 #: unbroken runs longer than this (exact rationals, hashes) get a break opportunity (a
 #: zero-width space) every _BREAK_EVERY characters; shorter words stay intact for search
@@ -239,7 +244,9 @@ class _Translator:
         if "page-break" in cls:
             body = "#pagebreak(weak: true)\n" + body
         if "verdict" in cls:
-            fill = {"certified": "#dafbe1", "not_certified": "#fff8c5"}.get(status or "", "#f6f8fa")
+            # the box's colour is its tone, never the verdict's word (an unknown tone is neutral)
+            tone = next((c for c in sorted(cls) if c in VERDICT_FILLS), "")
+            colour, fill = COLOURS.get(tone, _NEUTRAL), VERDICT_FILLS.get(tone, "#f6f8fa")
             return f'#block(width: 100%, inset: 8pt, radius: 5pt, stroke: 2pt + rgb("{colour}"), fill: rgb("{fill}"))[{body}]'
         if "alarm" in cls:
             return f'#block(width: 100%, inset: 7pt, radius: 4pt, stroke: 2pt + rgb("#cf222e"), fill: rgb("#ffebe9"))[#strong[{body}]]'

@@ -16,6 +16,12 @@ section contributes (:meth:`reports.sections.base.Section.portrait`), which are 
   the boundary of the largest certified set, from just inside each invariant set's boundary and
   from points spread over the initial set, coloured by how they end (converged, escaped,
   neither);
+- each ``counterexample`` of a safety class (its ``refutation``: a start in the initial set and a
+  disturbance, :mod:`lyapcheck.models.falsify`), simulated again from its stored start with the
+  same simulator, drawn wide in dark red from its start (a circle) to where it enters the unsafe
+  set (a cross) and named in the legend with the time it enters; a model of other than 2 states,
+  which has no portrait, gets its counterexamples against time instead (the unsafe set's margin
+  and every state);
 - for a model with disturbances and a certified ``sos_bound``, a second panel: each output's
   attracting set ``{V_y <= 1}`` and the band ``|y| <= B`` where the output is a state, with
   trajectories under constant disturbances at their bounds (``d = +b`` and ``d = -b``).
@@ -98,6 +104,12 @@ INVARIANT_HATCH_ALPHA: Final = 0.35
 INITIAL_STARTS: Final = 12
 #: starts just inside each invariant set's boundary (along the rays from the equilibrium)
 INVARIANT_STARTS: Final = 8
+#: a class's counterexample (a trajectory from the initial set into the unsafe set, status
+#: ``counterexample``): drawn in this red, this wide, simulated again from its stored start for its
+#: stored entry time and this share more (so that an entry found a little later is still seen)
+COUNTEREXAMPLE_COLOUR: Final = "#a40e26"
+COUNTEREXAMPLE_WIDTH: Final = 2.2
+COUNTEREXAMPLE_PAST: Final = 0.25
 OUTCOME_STYLE: Final = {"converged": ("#0969da", "converged to the equilibrium"),
                         "escaped": ("#cf222e", "escaped (ran far out of view)"),
                         "other": ("#9a6700", "neither, by the end")}
@@ -175,6 +187,162 @@ def set_extent(poly_u: FloatPolynomial, level: float) -> Extent | None:
     if boundary is None:
         return None
     return Extent(boundary.min(axis=0), boundary.max(axis=0), boundary)
+
+
+# -- counterexamples -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Counterexample:
+    """A class's counterexample simulated again from its stored start under its stored disturbance
+    (:mod:`lyapcheck.models.falsify`'s witness: ``refutation`` of a ``counterexample`` condition).
+
+    ``t``, ``x``: the re-simulated trajectory, up to where it enters the unsafe set (the entry
+    found on the dense output, linearly between the last point outside and the first inside)
+    or, when it does not enter, to its end; ``entry_time`` is None then.
+    """
+
+    name: str
+    start: FloatArray
+    disturbance: str
+    stored_time: float
+    t: FloatArray
+    x: FloatArray
+    entry_time: float | None
+    closest_margin: float
+
+    @property
+    def label(self) -> str:
+        if self.entry_time is not None:
+            return f"counterexample ({self.name}): enters the unsafe set at t = {fmt_float(self.entry_time, 4)} s"
+        return (f"counterexample ({self.name}), simulated again: does not enter the unsafe set by "
+                f"t = {fmt_float(float(self.t[-1]), 4)} s")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"class": self.name, "start": self.start.tolist(), "disturbance": self.disturbance,
+                "stored_time_s": self.stored_time, "entered": self.entry_time is not None,
+                "entry_time_s": self.entry_time, "entry_point": self.x[-1].tolist() if self.entry_time is not None
+                else None, "closest_margin": self.closest_margin}
+
+
+def _segments(refutation: dict[str, Any], m: int, t_end: float) -> list[tuple[float, float, FloatArray]] | None:
+    """The stored disturbance as constant pieces ``(t0, t1, d)`` over ``[0, t_end]`` (``none``,
+    ``constant`` or ``bang-bang``: :class:`lyapcheck.models.falsify.Disturbance`); None when it
+    cannot be read for ``m`` disturbances."""
+    dist = as_dict(refutation.get("disturbance"))
+    kind = dist.get("kind")
+    if kind == "none" or (kind is None and m == 0):
+        return [(0.0, t_end, np.zeros(m))]
+    values = dist.get("values")
+    if not isinstance(values, list) or not values:
+        return None
+    try:
+        rows = [np.array([float(v) for v in row], dtype=np.float64) for row in values]
+    except (TypeError, ValueError):
+        return None
+    if any(r.shape != (m,) or not np.all(np.isfinite(r)) for r in rows):
+        return None
+    if kind == "constant":
+        return [(0.0, t_end, rows[0])]
+    times = dist.get("switch_times") or []
+    if kind != "bang-bang" or not isinstance(times, list):
+        return None
+    edges = [0.0] + [float(t) for t in times if isinstance(t, (int, float)) and 0 < float(t) < t_end] + [t_end]
+    if len(edges) - 1 > len(rows) or any(b <= a for a, b in zip(edges, edges[1:])):
+        return None
+    return [(a, b, rows[j]) for j, (a, b) in enumerate(zip(edges, edges[1:]))]
+
+
+def counterexample_trajectories(doc: dict[str, Any], model: Model, half: FloatArray
+                                ) -> tuple[list[Counterexample], list[str]]:
+    """Each ``counterexample`` condition's trajectory, simulated again with the portrait's own
+    simulator (:func:`lyapcheck.models.trajectories.simulate`, piece by piece for a switching
+    disturbance) from its stored start; notes for those that cannot be read. ``half``: the view's
+    half-widths (the escape box and tolerances of the simulation)."""
+    from lyapcheck.models.falsify import Disturbance
+
+    out: list[Counterexample] = []
+    notes: list[str] = []
+    unsafe = model.sets.get("unsafe")
+    m = len(model.disturbances)
+    for name, cond in as_dict(doc.get("conditions")).items():
+        cond = as_dict(cond)
+        if cond.get("status") != "counterexample":
+            continue
+        ref = as_dict(cond.get("refutation"))
+        start = ref.get("start")
+        stored = as_number(ref.get("time"))
+        ok = (ref.get("kind") == "trajectory" and isinstance(start, list) and len(start) == model.n
+              and all(as_number(v) is not None and math.isfinite(float(v)) for v in start)
+              and stored is not None and math.isfinite(stored) and stored >= 0 and unsafe is not None)
+        t_end = (stored or 0.0) * (1 + COUNTEREXAMPLE_PAST)
+        pieces = _segments(ref, m, t_end) if ok and t_end > 0 else ([(0.0, 0.0, np.zeros(m))] if ok else None)
+        if not ok or pieces is None or unsafe is None or not isinstance(start, list):
+            notes.append(f"The counterexample of {name} is not drawn: its stored start, time or disturbance cannot "
+                         "be read.")
+            continue
+        x0 = np.array([float(v) for v in start], dtype=np.float64)
+        ts, xs = [np.zeros(1)], [x0[None, :]]
+        for a, b, d in pieces:
+            if b <= a:
+                continue
+            (run,) = simulate(model, xs[-1][-1][None, :], t_end=b - a, half_widths=half,
+                              disturbances=d[None, :] if m else None)
+            ts.append(a + run.t[1:])
+            xs.append(run.x[1:])
+            if run.outcome == "escaped":
+                break
+        t, x = np.concatenate(ts), np.vstack(xs)
+        finite = np.all(np.isfinite(x), axis=1)
+        t, x = t[finite], x[finite]
+        values = margin(unsafe, x)
+        inside = np.flatnonzero(values >= 0)
+        entry: float | None = None
+        if inside.size:
+            k = int(inside[0])
+            if k > 0:  # linearly between the last point outside and the first inside (margin 0)
+                s = float(values[k - 1] / (values[k - 1] - values[k]))
+                t = np.append(t[:k], t[k - 1] + s * (t[k] - t[k - 1]))
+                x = np.vstack([x[:k], x[k - 1] + s * (x[k] - x[k - 1])])
+            else:
+                t, x = t[:1], x[:1]
+            entry = float(t[-1])
+        words = Disturbance(str(as_dict(ref.get("disturbance")).get("kind", "none")),
+                            tuple(tuple(float(v) for v in p[2]) for p in pieces),
+                            tuple(p[0] for p in pieces[1:])).describe(list(model.disturbances))
+        out.append(Counterexample(str(name), x0, words, float(stored or 0.0), t, x, entry,
+                                  float(np.max(values)) if values.size else -math.inf))
+    return out, notes
+
+
+def _draw_counterexamples(ax: Any, shown: Sequence[Counterexample], lo: FloatArray, hi: FloatArray) -> None:
+    """Each counterexample: a wide red line from its start (a circle) to where it enters the
+    unsafe set (a cross), named in the legend with the time it enters."""
+    for ce, line in zip(shown, drawable([ce.x for ce in shown], lo, hi)):
+        ax.plot(line[:, 0], line[:, 1], color=COUNTEREXAMPLE_COLOUR, lw=COUNTEREXAMPLE_WIDTH, zorder=6,
+                label=_label(ce.label))
+        ax.plot([ce.start[0]], [ce.start[1]], "o", ms=6, color=COUNTEREXAMPLE_COLOUR, mec="white", mew=0.8, zorder=7)
+        if ce.entry_time is not None:
+            ax.plot([ce.x[-1][0]], [ce.x[-1][1]], "X", ms=9, color=COUNTEREXAMPLE_COLOUR, mec="white", mew=0.8,
+                    zorder=7)
+
+
+def _counterexample_words(model: Model, shown: Sequence[Counterexample], portrait: bool = True) -> str:
+    """The caption's sentences on the counterexamples (``portrait``: drawn in the phase portrait,
+    with a circle at the start; else against time)."""
+    parts = []
+    for ce in shown:
+        head = ((("Wide dark red: the" if portrait else "The") + f" counterexample of {ce.name}, simulated again from "
+                 f"its stored start {_at(model, ce.start)} with {ce.disturbance}"))
+        marks = ["circle: its start"] if portrait else []
+        if ce.entry_time is not None:
+            marks += [f"cross: where it enters the unsafe set, at t = {fmt_float(ce.entry_time, 4)} s",
+                      f"the class found t = {fmt_float(ce.stored_time, 4)} s"]
+            parts.append(f"{head} ({'; '.join(marks)}).")
+        else:
+            parts.append(f"{head}{f' ({marks[0]})' if marks else ''}: simulated again it does not enter the unsafe "
+                         f"set by t = {fmt_float(float(ce.t[-1]), 4)} s (largest unsafe margin "
+                         f"{ce.closest_margin:.3g}), while the class found an entry at t = "
+                         f"{fmt_float(ce.stored_time, 4)} s.")
+    return " ".join(parts)
 
 
 # -- the model's sets ------------------------------------------------------------------------------
@@ -520,8 +688,9 @@ def _avoid_check(spec: LevelSet, runs: Sequence[Trajectory], model: Model) -> Cr
 def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
     """The phase portrait of a 2-state model certificate (see the module docstring)."""
     if model.n != 2:
-        return PhasePortrait(None, f"the model has {model.n} state{'s' if model.n != 1 else ''}: a phase portrait is "
-                                   "drawn for 2 states only, so this report shows tables")
+        reason = (f"the model has {model.n} state{'s' if model.n != 1 else ''}: a phase portrait is drawn for 2 "
+                  "states only, so this report shows tables")
+        return _counterexample_timeline(doc, model, reason)
     sets, globals_, notes = level_sets(doc, model)
     exact_scales, _ = certificate_scaling(doc, model)
     scales = np.array([float(s) for s in exact_scales])
@@ -560,6 +729,12 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
         boxes = [(eq + scales * d.extent.lo, eq + scales * d.extent.hi) for d in storages if d.extent is not None]
     if not boxes:
         boxes.append((eq - 2 * scales, eq + 2 * scales))
+    # the counterexamples join the view: simulated at the scale of the view without them
+    first_lo, first_hi = _view(boxes, eq)
+    shown_ce, ce_notes = counterexample_trajectories(doc, model, np.maximum(np.maximum(eq - first_lo, first_hi - eq),
+                                                                            1e-300))
+    notes += ce_notes
+    boxes += [(ce.x.min(axis=0), ce.x.max(axis=0)) for ce in shown_ce]
     base_lo = np.minimum(np.min([b[0] for b in boxes], axis=0), eq)
     base_hi = np.maximum(np.max([b[1] for b in boxes], axis=0), eq)
     lo, hi = _view(boxes, eq)
@@ -603,6 +778,7 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
         _draw_set(ax, d, eq, scales, lo, hi)
     has_domain = _domain_box(ax, model)
     _draw_trajectories(ax, runs, x0, lo, hi, by_outcome=True)
+    _draw_counterexamples(ax, shown_ce, lo, hi)
     ax.plot([eq[0]], [eq[1]], "k+", ms=9, mew=1.5, zorder=5, label="equilibrium")
     _axes(ax, model, lo, hi, "disturbances 0" if model.disturbances else "", below=bool(shown_sets or shown_invariants))
 
@@ -620,6 +796,7 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
         "invariant_drawn": [d.spec.name for d in shown_invariants],
         "legend": [t.get_text() for t in ax.get_legend().get_texts()] if ax.get_legend() else [],
         "outcomes": {k: sum(tr.outcome == k for tr in runs) for k in OUTCOME_STYLE},
+        "counterexamples": [ce.to_dict() for ce in shown_ce],
         "sets": [{"class": d.spec.name, "level": float(d.spec.level), "kind": d.spec.kind,
                   "extent_declared": None if d.extent is None else
                   ((eq + scales * d.extent.lo).tolist(), (eq + scales * d.extent.hi).tolist())} for d in drawn],
@@ -632,12 +809,61 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
     checks += [_storage_check(d, list(runs) + list(pushed), eq, scales) for d in storages]
     data["checks"] = [(c.what, c.ok) for c in checks]
     caption = _caption(model, regions, runs, t_end, has_domain, lower is not None, storages, notes,
-                       shown_sets=shown_sets, invariants=invariants, initial_count=len(from_initial))
+                       shown_sets=shown_sets, invariants=invariants, initial_count=len(from_initial),
+                       counterexamples=shown_ce)
     alt = (f"phase portrait of {model.states[0]} and {model.states[1]} with {len(regions)} certified region(s) of "
            f"attraction, {len(invariants)} certified invariant set(s)"
            + (f", the model's {', '.join(shown_sets)} set(s)" if shown_sets else "")
-           + f" and {len(runs)} simulated trajectories")
+           + f" and {len(runs)} simulated trajectories"
+           + "".join(f", and the {ce.label}" for ce in shown_ce))
     return PhasePortrait(Figure(to_svg(fig), caption, alt, data), "", checks, notes)
+
+
+def _counterexample_timeline(doc: dict[str, Any], model: Model, reason: str) -> PhasePortrait:
+    """For a model of other than 2 states, which has no phase portrait: its counterexamples
+    against time (the unsafe set's margin, which crosses 0 where the trajectory enters, and each
+    state), or no figure (``reason``) when it has none."""
+    if not any(as_dict(c).get("status") == "counterexample" for c in as_dict(doc.get("conditions")).values()):
+        return PhasePortrait(None, reason)
+    exact_scales, _ = certificate_scaling(doc, model)
+    half = np.array([float(s) for s in exact_scales])
+    if model.domain and all(s in model.domain for s in model.states):
+        half = np.maximum(np.array([float(model.domain[s][1] - model.domain[s][0]) / 2 for s in model.states]), half)
+    shown, notes = counterexample_trajectories(doc, model, half)
+    if not shown:
+        return PhasePortrait(None, reason, notes=notes)
+    from matplotlib.figure import Figure as MplFigure
+
+    from reports.figures import WIDTH_IN
+
+    fig = MplFigure(figsize=(WIDTH_IN, 5.2), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    unsafe = model.sets["unsafe"]
+    for ce in shown:
+        top.plot(ce.t, margin(unsafe, ce.x), color=COUNTEREXAMPLE_COLOUR, lw=COUNTEREXAMPLE_WIDTH,
+                 label=_label(ce.label))
+        if ce.entry_time is not None:
+            top.plot([ce.entry_time], [0.0], "X", ms=9, color=COUNTEREXAMPLE_COLOUR, mec="white", mew=0.8, zorder=7)
+        for i, state in enumerate(model.states):
+            bottom.plot(ce.t, ce.x[:, i], lw=1.2, label=_label(f"{state} ({ce.name})" if len(shown) > 1 else state))
+    top.axhline(0.0, color="k", lw=0.8, ls="--")
+    top.set_ylabel("unsafe margin (≥ 0: inside)")
+    top.grid(alpha=0.3)
+    top.legend(loc="lower right", fontsize=7, framealpha=0.85)
+    bottom.set_xlabel("t (s)")
+    bottom.set_ylabel("state")
+    bottom.grid(alpha=0.3)
+    bottom.legend(loc="best", fontsize=7, framealpha=0.85, ncol=min(4, model.n * len(shown)))
+    caption = (f"The model has {model.n} state{'s' if model.n != 1 else ''}: a phase portrait is drawn for 2 states "
+               "only, so the counterexamples are drawn against time: above, the unsafe set's "
+               "margin along each (the max over its pieces of the min of their polynomials, ≥ 0 inside the unsafe "
+               "set), below, every state. " + _counterexample_words(model, shown, portrait=False)
+               + (" " + " ".join(notes) if notes else ""))
+    alt = ("the counterexample trajectories against time: "
+           + "; ".join(ce.label for ce in shown))
+    data = {"counterexamples": [ce.to_dict() for ce in shown],
+            "legend": [t.get_text() for t in top.get_legend().get_texts()]}
+    return PhasePortrait(Figure(to_svg(fig), caption, alt, data), "", [], notes)
 
 
 def _evaluator(model: Model) -> Any:
@@ -693,7 +919,7 @@ def _disturbed_view(model: Model, storages: Sequence[_Drawn], eq: FloatArray, sc
         if i is not None and d.spec.bound is not None:
             bands.append((i, d.spec.bound, d.spec.colour, d.spec.output))
             box_lo, box_hi = eq.copy(), eq.copy()
-            box_lo[i], box_hi[i] = -d.spec.bound, d.spec.bound
+            box_lo[i], box_hi[i] = eq[i] - d.spec.bound, eq[i] + d.spec.bound  # the bound is on |y - y_eq|
             boxes.append((box_lo, box_hi))
     if not boxes:
         boxes.append((eq - half, eq + half))
@@ -710,8 +936,10 @@ def _draw_disturbed(ax: Any, model: Model, storages: Sequence[_Drawn], lower: _L
         _draw_set(ax, d, eq, scales, lower.lo, lower.hi)
     for i, b, colour, output in lower.bands:
         line = ax.axvline if i == 0 else ax.axhline
-        line(b, color=colour, ls="--", lw=1.1, label=_label(f"|{output}| = {fmt_float(b, 4)} (certified limsup)"))
-        line(-b, color=colour, ls="--", lw=1.1)
+        shown = f"{output} - {fmt_float(eq[i], 6)}" if eq[i] else output
+        line(eq[i] + b, color=colour, ls="--", lw=1.1,
+             label=_label(f"|{shown}| = {fmt_float(b, 4)} (certified limsup)"))
+        line(eq[i] - b, color=colour, ls="--", lw=1.1)
     k = len(lower.starts)
     _draw_trajectories(ax, pushed[:k], lower.starts, lower.lo, lower.hi, by_outcome=False, colour="#0969da",
                        label="constant d = +b")
@@ -722,7 +950,8 @@ def _draw_disturbed(ax: Any, model: Model, storages: Sequence[_Drawn], lower: _L
 
 def _caption(model: Model, regions: Sequence[_Drawn], runs: Sequence[Trajectory], t_end: float,
              has_domain: bool, disturbed: bool, storages: Sequence[_Drawn], notes: Sequence[str], *,
-             shown_sets: Sequence[str] = (), invariants: Sequence[_Drawn] = (), initial_count: int = 0) -> str:
+             shown_sets: Sequence[str] = (), invariants: Sequence[_Drawn] = (), initial_count: int = 0,
+             counterexamples: Sequence[Counterexample] = ()) -> str:
     counts = {k: sum(tr.outcome == k for tr in runs) for k in OUTCOME_STYLE}
     parts = [f"Phase portrait of the model in its declared coordinates ({model.states[0]}, {model.states[1]})."]
     if shown_sets:
@@ -751,6 +980,8 @@ def _caption(model: Model, regions: Sequence[_Drawn], runs: Sequence[Trajectory]
     parts.append(f"Lines: {len(runs)} trajectories with every disturbance 0, over {fmt_float(t_end, 4)} s, from "
                  f"{joined}: {counts['converged']} converged (blue), {counts['escaped']} escaped (red), "
                  f"{counts['other']} neither by the end (amber).")
+    if counterexamples:
+        parts.append(_counterexample_words(model, counterexamples))
     if has_domain:
         parts.append("Dashed box: the model's [domain].")
     if disturbed:

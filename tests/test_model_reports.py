@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from lyapcheck.models.claims import rounded
 from tests.conftest import ROOT
 
 MODELS = ROOT / "examples" / "models"
@@ -184,7 +185,7 @@ def test_vdp_page_shows_every_class_the_exact_v_and_the_phase_portrait(vdp: Any,
         assert cond["status"] in badges
     # the level: its digits in the table of classes, and exactly
     roa = doc["conditions"]["roa"]
-    assert f"level c = {roa['level']:.6g}" in text
+    assert f"level c = {rounded(roa['level'], 6, 'down')}" in text
     assert roa["certificate"]["level"] in text
     # V exactly: every term of the certificate's V is in the plain text, coefficient for coefficient
     for coefficient, _ in roa["certificate"]["V"]["terms"]:
@@ -197,7 +198,7 @@ def test_vdp_page_shows_every_class_the_exact_v_and_the_phase_portrait(vdp: Any,
     assert doc["model"]["sha256"] in text and "x1 - mu*(1 - x1**2)*x2" in text and "[-2.5, 2.5]" in text
     assert "LyZNet" in text and "the stored text matches it" in text
     # the exact re-check ran and holds; the simulation cross-check holds
-    assert "Re-checked exactly while this report was made: every claim holds" in text
+    assert "Re-checked exactly while this report was made: every certified claim re-checks" in text
     assert "THE EXACT RE-CHECK FAILS" not in text and "SOUNDNESS" not in text
     # one figure, an SVG with the set and the trajectories
     figs = figures_of(page)
@@ -240,7 +241,7 @@ def test_vdp_pdf_opens_and_carries_the_page(vdp: Any, vdp_html: str) -> None:
     # carries this run's level
     roa = vdp.document["conditions"]["roa"]
     assert roa["level"] == pytest.approx(0.999692, rel=FIGURE_MODEL_ROA_LEVEL_RTOL)
-    assert f"level c = {roa['level']:.6g}" in text and "certified" in text and "not certified" in text
+    assert f"level c = {rounded(roa['level'], 6, 'down')}" in text and "certified" in text and "not certified" in text
     assert roa["certificate"]["level"] in text or f"{roa['level']:.6g}" in text
     assert "Phase portrait" in text and "Exact re-check" in text
     # the figure is drawn: the filled set's light green is on the page of the portrait
@@ -274,7 +275,7 @@ def test_sos_bound_page_shows_bounds_storage_functions_and_the_disturbed_panel(l
     text = page.text
     bounds = doc["conditions"]["sos_bound"]["bounds"]
     for output, bound in bounds.items():
-        assert f"limsup |{output}| <= {bound:.6g}" in text
+        assert f"limsup |{output}| <= {rounded(bound, 6, 'up')}" in text
         assert f"storage function for the output {output}, exactly" in text
         for coefficient, _ in doc["conditions"]["sos_bound"]["certificate"]["outputs"][output]["V"]["terms"]:
             assert coefficient.lstrip("-") in text
@@ -304,7 +305,7 @@ def test_report_command_renders_a_model_certificate_to_html_and_pdf(l1: Any, tmp
     assert len(figures_of(page)) == 1
     text = pdf_text(pdf.read_bytes())
     bound = l1.document["conditions"]["sos_bound"]["bounds"]["y"]
-    assert f"limsup |y| <= {bound:.6g}" in text and "sos_bound" in text and "Ultimate bound on each output" in text
+    assert f"limsup |y| <= {rounded(bound, 6, 'up')}" in text and "sos_bound" in text and "Ultimate bound on each output" in text
 
 
 # ------------------------------------------------------------------------------------------------

@@ -102,7 +102,7 @@ def test_certify_report_writes_the_page_with_the_recasting_and_each_claim(pendul
     for name, cond in doc["conditions"].items():
         assert 'href="#class-' in page and f"<code>{name}</code>" in page
         assert f'class="badge {cond["status"]}"' in page
-    assert "Re-checked exactly while this report was made: every claim holds" in page
+    assert "Re-checked exactly while this report was made: every certified claim re-checks" in page
     assert 'class="alarm"' not in page
     # the portrait: the true field's streamlines and the certified set, as SVG groups
     svg = phase_svg(page)

@@ -14,6 +14,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Final
 
+from lyapcheck.models.claims import RATE_UNIT, deviation, rounded, with_unit
 from reports.polynomials import MAX_PLAIN_CHARS, ExactPolynomial
 from reports.sections.base import MODEL_FILE, ClassContext, ClassView, PolynomialView, Section, text_of
 from reports.typeset import Equations, parse_matrix
@@ -22,10 +23,11 @@ from reports.views import as_dict, as_fraction, as_number, fmt_float, matrix_ite
 #: one sentence per property a class can prove (DESIGN.md)
 PROPERTY_MEANING: Final = {
     "LES": "local exponential stability of the equilibrium",
-    "GES": "global exponential stability: |x(t)| <= k |x0| exp(-rate t) from every start",
+    "GES": "global exponential stability: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t) from every start",
     "GAS": "global asymptotic stability: every start converges to the equilibrium",
     "ROA": "every start in the stated set converges to the equilibrium",
-    "ultimate_bound": "limsup |y| <= B for each output, from every start, for every disturbance within its bounds",
+    "ultimate_bound": "limsup |y - y_eq| <= B for each output (y_eq: its value at the equilibrium), from every start, "
+                      "for every disturbance within its bounds",
     "invariant_set": "a set that no trajectory leaves",
     "ISS": "input-to-state stability",
     "safety": "no trajectory that starts in the initial set ever enters the unsafe set",
@@ -51,10 +53,11 @@ def key_figures(cond: dict[str, Any]) -> list[str]:
     out = []
     level = as_number(cond.get("level"))
     if level is not None:
-        out.append(f"level c = {fmt_float(level)}")
+        out.append(f"level c = {rounded(level, 6, 'down')}")
     radius = as_number(cond.get("ball_radius"))
     if radius is not None:
-        out.append(f"holds the ball |x - x_eq| <= {fmt_float(radius, 4)}")
+        unit = cond.get("ball_radius_unit")
+        out.append(f"holds the ball |x - x_eq| <= {with_unit(radius, unit if isinstance(unit, str) else None, direction='down')}")
     share = as_number(cond.get("roa_share"))
     if share is not None:
         out.append(f"covers {percent(share)} of the simulated region of attraction in the domain")
@@ -63,14 +66,18 @@ def key_figures(cond: dict[str, Any]) -> list[str]:
         out.append(f"simulated region of attraction: {percent(domain_share)} of the domain")
     k, rate = as_number(cond.get("k")), as_number(cond.get("decay_rate_per_s"))
     if k is not None and rate is not None:
-        out.append(f"|x(t)| <= {fmt_float(k, 4)} |x0| exp(-{fmt_float(rate, 4)} t)")
+        out.append(f"|x(t) - x_eq| <= {rounded(k, 4, 'up')} |x0 - x_eq| exp(-r t), r = "
+                   f"{with_unit(rate, RATE_UNIT, direction='down')}")
     rate_v = as_number(cond.get("decay_rate_V_per_s"))
     if rate_v is not None and rate_v > 0:
-        out.append(f"V' <= -{fmt_float(rate_v, 4)} V")
+        out.append(f"V' <= -r V, r = {with_unit(rate_v, RATE_UNIT, direction='down')}")
+    references, units = as_dict(cond.get("bounds_reference")), as_dict(cond.get("bounds_unit"))
     for output, bound in as_dict(cond.get("bounds")).items():
         b = as_number(bound)
-        if b is not None:
-            out.append(f"limsup |{output}| <= {fmt_float(b)}")
+        if b is not None:  # a bound on the deviation from the output's value at the equilibrium
+            unit = units.get(output) if isinstance(units.get(output), str) else None
+            out.append(f"limsup |{deviation(output, as_number(references.get(output)), unit)}| <= "
+                       f"{with_unit(b, unit, 6, 'up')}")
     degree = cond.get("degree")
     if isinstance(degree, int) and not isinstance(degree, bool) and cond.get("status") == "certified":
         out.append(f"V of degree {degree}")

@@ -1,6 +1,6 @@
 """``sos_bound`` of a model file: an ultimate bound on each output under bounded disturbances.
 
-Its certificate holds one storage function ``V_y`` per output, with ``limsup |y| <= B``. The
+Its certificate holds one storage function ``V_y`` per output, with ``limsup |y - y_eq| <= B``. The
 page shows each ``V_y`` exactly, the certified bound, ``lambda`` and ``B`` of its identities and
 the Gram sizes; on a 2-state model's phase portrait each ``{V_y <= 1}`` is an attracting set
 (every trajectory enters it, for every admissible disturbance), checked against the envelope
@@ -36,8 +36,15 @@ class OutputBoundSection(ModelFileSection):
             view.polynomials.append(polynomial_view(f"storage function for the output {output}, exactly",
                                                     data.get("V"), lead, states, shifts, ctx.eqs))
             bound = as_fraction(data.get("bound"))
-            if bound is not None:
-                view.exact.append(exact_row(f"certified limsup |{output}|", bound))
+            if bound is not None:  # a bound on the deviation from the output's value at the equilibrium
+                from lyapcheck.models.claims import deviation
+
+                sos_bound = as_dict(as_dict(ctx.doc.get("conditions")).get("sos_bound"))
+                y_eq = as_number(as_dict(sos_bound.get("bounds_reference")).get(output))
+                unit = as_dict(sos_bound.get("bounds_unit")).get(output)
+                unit = unit if isinstance(unit, str) else None
+                view.exact.append(exact_row(f"certified limsup |{deviation(str(output), y_eq, unit)}|"
+                                            + (f", in {unit}" if unit else ""), bound))
             for key, what in (("lam_scaled", f"lambda of {output} in V' <= -lambda (V - 1) (scaled time)"),
                               ("B_scaled", f"B of {output} in y^2 <= V + B - 1 (scaled)")):
                 value = as_fraction(data.get(key))

@@ -108,6 +108,17 @@ def falsification_table(cond: dict[str, Any]) -> TableView | None:
                      "their box held, and switched at random); the claim itself rests on the exact check above.")
 
 
+#: a class's title when it found a counterexample (its usual title says what it would have proved)
+COUNTEREXAMPLE_TITLES: Final = {
+    "barrier": "Barrier certificate: none, and the unsafe set IS reached (counterexample)",
+    "reach_avoid": "Reach-avoid certificate: none, and a trajectory defeats it (counterexample)",
+}
+#: the note under a counterexample: where the page shows it
+COUNTEREXAMPLE_NOTE: Final = ("The counterexample (a simulated trajectory, reproducible from its start and "
+                              "disturbance) is drawn in the phase portrait, or against time for a model of other than "
+                              "2 states: simulated again from its stored start, up to where it enters the unsafe set.")
+
+
 class SafetySection(ModelFileSection):
     titles = {"barrier": "Barrier certificate: the unsafe set is never reached",
               "reach_avoid": "Reach-avoid certificate: the goal is reached, the unsafe set avoided"}
@@ -117,6 +128,9 @@ class SafetySection(ModelFileSection):
         if not view.property_meaning:
             view.property_meaning = PROPERTY_MEANING.get(view.property, SAFETY_MEANING)
         cond = as_dict(cond)
+        if cond.get("status") == "counterexample":
+            view.title = COUNTEREXAMPLE_TITLES.get(name, view.title)
+            view.notes.insert(0, COUNTEREXAMPLE_NOTE)
         table = sets_table(name, ctx.set_text)
         if table is not None:
             view.tables.append(table)
@@ -154,4 +168,5 @@ class SafetySection(ModelFileSection):
                                            colour, until=until, symbol=symbol),))
 
 
-__all__ = ["SafetySection", "SAFETY_MEANING", "CLASS_SETS", "INVARIANT", "sets_table", "falsification_table"]
+__all__ = ["SafetySection", "SAFETY_MEANING", "COUNTEREXAMPLE_TITLES", "COUNTEREXAMPLE_NOTE", "CLASS_SETS", "INVARIANT",
+           "sets_table", "falsification_table"]

@@ -27,12 +27,11 @@ from markupsafe import Markup
 
 from lyapcheck.errors import InputFileError, LyapcheckError
 from lyapcheck.models.certificate import KIND, is_model_document
-from lyapcheck.models.certify import VERDICT_MEANING
 from lyapcheck.models.modelfile import Model
 from reports.figures import Figure
 from reports.phase_portrait import CrossCheck, phase_portrait
 from reports.sections.base import MODEL_FILE, ClassContext, text_of
-from reports.subjects.base import STATUS_MEANING, Glance, Quantity, Subject
+from reports.subjects.base import STATUS_MEANING, Glance, Quantity, Subject, verdict_head
 from reports.typeset import Equations
 from reports.views import as_dict, as_fraction, as_number, fmt_float
 
@@ -128,8 +127,8 @@ def solvers(conditions: dict[str, Any]) -> list[tuple[str, str]]:
         solves = solver.get("solves")
         stored = as_dict(solver.get("stored"))
         if stored:  # lyapcheck.models.store: no solve in this run
-            out.append((str(name), f"no solve: the certificate its search found in an earlier run "
-                                   f"({text_of(stored.get('solves_when_found', '?'))} solves), re-checked exactly"))
+            # (an entry's own record of its search is not re-provable: not shown)
+            out.append((str(name), "no solve: the certificate its search found in an earlier run, re-checked exactly"))
             continue
         if not isinstance(solves, list) or not solves:
             continue
@@ -209,20 +208,21 @@ def portrait(doc: dict[str, Any], model: Model | None, simulate: bool) -> tuple[
     return drawn.figure, drawn.reason, drawn.checks
 
 
-def page_head(name: str, file: str, origin: str, verdict: str, second: tuple[str, str]) -> dict[str, Any]:
-    """What the page of every model certificate opens with: title, verdict, the glance table, and the
-    table of contents, whose second entry (``second``: anchor, title) is the field or the recasting."""
+def page_head(name: str, file: str, origin: str, doc: dict[str, Any], second: tuple[str, str]) -> dict[str, Any]:
+    """What the page of every model certificate opens with: title, the verdict with the answer to
+    each question (:func:`reports.subjects.base.verdict_head`), the glance table, and the table of
+    contents, whose second entry (``second``: anchor, title) is the field or the recasting."""
     return {
         "kind": "model-certificate",
         "title": f"lyapcheck model certificate report: {name}",
         "name": name,
         "file": file,
         "origin": origin,
-        "verdict": verdict,
-        "verdict_meaning": VERDICT_MEANING.get(verdict, "no stability certificate passed an exact check"),
+        **verdict_head(doc),
         "status_meaning": {**STATUS_MEANING, **EXTRA_STATUS_MEANING},
         "glance": Glance(("class", "status", "property", "what it found", "key figures"), True,
-                         ("certified", "refuted", "not_certified", "inconclusive", "not_applicable")),
+                         ("certified", "refuted", "counterexample", "not_certified", "inconclusive",
+                          "not_applicable")),
         "toc": [("model", "The model"), second, ("classes", "Classes, one by one"), ("phase", "Phase portrait"),
                 ("recheck", "Exact re-check"), ("reproduce", "Reproducibility")],
         "classes_anchor": "classes",
@@ -298,7 +298,6 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
         disturbances = [str(d) for d in as_dict(doc.get("disturbances"))]
         outputs_text = dict(model.output_text) if model is not None else {
             str(k): text_of(v) for k, v in as_dict(raw.get("outputs")).items()}
-        verdict = text_of(doc.get("verdict", "unknown"))
         failed_checks = [c for c in checks if not c.ok]
         alarm = ""
         if failed_checks:
@@ -309,7 +308,7 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
         return {
             **page_head(name, text_of(model_part.get("file", "")),
                         model.origin if model is not None else text_of(as_dict(raw.get("model")).get("source", "")),
-                        verdict, ("field", "The field the certificates use")),
+                        doc, ("field", "The field the certificates use")),
             "states": self.states,
             "equilibrium": [(s, text_of(equilibrium.get(s, "0"))) for s in self.states],
             "parameters": quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), self.overrides,

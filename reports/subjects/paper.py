@@ -25,7 +25,7 @@ from lyapcheck.errors import LyapcheckError
 from reports import figures, paper_figures
 from reports.sections.base import PAPER
 from reports.sections.paper import BOUND_CLASSES, describe_disturbance, number, text
-from reports.subjects.base import Glance, Quantity, Subject, canonical_json
+from reports.subjects.base import Glance, Quantity, Subject, canonical_json, verdict_head
 from reports.typeset import Equation, Equations, parse_fraction, parse_matrix
 from reports.views import Item, as_dict, dict_items, fmt_float, matrix_item
 
@@ -240,13 +240,10 @@ class PaperSubject(Subject):
         counts: dict[str, int] = {}
         for card in cards:
             counts[card.status] = counts.get(card.status, 0) + 1
-        verdict = text(doc.get("verdict", "unknown"))
         return {
             "kind": "certificate",
             "title": "lyapcheck certificate report",
-            "verdict": verdict,
-            "verdict_meaning": ("an exact check of a stability certificate passed" if verdict == "certified"
-                                else "no stability certificate passed an exact check"),
+            **verdict_head(doc),
             "dynamics": text(doc.get("dynamics", "unknown")),
             "glance": Glance(("condition", "status", "what it means"), False,
                              ("certified", "refuted", "not_certified", "inconclusive")),

@@ -142,7 +142,6 @@ class RecastLoopSubject(ModelCertificateChecks, Subject):
         figure, figure_reason = self.portrait(simulate)
         digest = hashlib.sha256(self.text.encode()).hexdigest()
         stated = text_of(part.get("sha256", ""))
-        verdict = text_of(doc.get("verdict", "unknown"))
         equilibrium = as_dict(doc.get("equilibrium"))
         name = text_of(part.get("name", "model"))
         variables = recast.get("variables")
@@ -150,7 +149,7 @@ class RecastLoopSubject(ModelCertificateChecks, Subject):
             **page_head(name, text_of(part.get("file", "")),
                         self.parsed.origin if self.parsed is not None
                         else text_of(as_dict(raw.get("model")).get("source", "")),
-                        verdict, ("recasting", "The recasting the certificates are proved on")),
+                        doc, ("recasting", "The recasting the certificates are proved on")),
             "states": self.states,
             "equilibrium": [(s, text_of(equilibrium.get(s, "0"))) for s in self.states],
             "parameters": quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), self.overrides),
