@@ -716,7 +716,8 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
                         worst_case: bool = False, budget_s: float = 20.0, certificate: str | Path | None = None,
                         plot: str | Path | None = None, series: bool = True) -> SimulationReport:
     """``lyapcheck simulate --model``: the model's closed loop from its starts under its disturbance
-    scenarios, batched (:mod:`lyapcheck.models.simulate`; docs/simulation.md has the JSON keys).
+    scenarios, batched (:mod:`lyapcheck.models.simulate`; docs/simulation.md has the JSON keys). A
+    loop with functions is the same, on its true loop (:mod:`lyapcheck.models.recast_simulate`).
 
     Errors name these arguments (``x0``, ``t_end``, ``settings``, ...): an
     :class:`~lyapcheck.errors.InvalidParameter`, or a :class:`~lyapcheck.errors.ModelFileError` for
@@ -760,24 +761,16 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     if worst_case and scenarios:
         raise InvalidParameter("scenarios", "left out with worst_case=True (the search tries every family)",
                                ",".join(scenarios))
+    # a loop with functions is simulated on its true loop by the same machinery (lyapcheck.models.recast_simulate)
     recast = _recast_model(model, settings, None)
-    if recast is not None:  # a loop with functions: the true loop, undisturbed (lyapcheck.models.recast_simulate)
-        from lyapcheck.models.recast_simulate import simulate as simulate_recast
+    loaded = recast if recast is not None else _load_with_settings(model, settings)
+    if recast is not None:
+        from lyapcheck.models.recast_simulate import prepare_true_loop
 
-        for name, value in (("worst_case", worst_case), ("scenarios", scenarios), ("frequencies", frequencies),
-                            ("certificate", certificate), ("plot", plot)):
-            if value:
-                raise InvalidParameter(name, "left out for a loop with functions (it has no disturbances; starts, "
-                                             "grid and t_end are taken)", value)
-        recast_starts = model_starts(recast, x0)  # type: ignore[arg-type]
-        if grid is not None:
-            recast_starts += list(sim.grid_over_domain(recast, grid))  # type: ignore[arg-type]
-        horizon_s = sim.parse_horizon(str(t_end)) if t_end is not None else None
-        doc = simulate_recast(recast, np.array(recast_starts) if recast_starts else None, horizon_s)
-        return SimulationReport(diverged=bool(doc["diverged"]), document=doc, series=None)
-    loaded = _load_with_settings(model, settings)
-    prepared = sim.prepare(loaded)
-    starts = model_starts(loaded, x0)
+        prepared = prepare_true_loop(recast)
+    else:
+        prepared = sim.prepare(loaded)
+    starts = model_starts(loaded, x0)  # type: ignore[arg-type]  # (a RecastModel has the states it reads)
     if grid is not None:
         starts += list(sim.grid_over_domain(loaded, grid))
     start_arr = np.array(starts) if starts else None

@@ -120,43 +120,73 @@ def verify_html(doc: Mapping[str, Any]) -> str:
 
 
 # -- simulate ------------------------------------------------------------------------------------
+# Every key is read with a default: a document of any shape (a model's scenarios or worst case, the
+# paper's loop, an older or hand-made one) gives its lines, never an exception.
 
-def _per_output(values: Mapping[str, Any]) -> list[str]:
-    items = [f"{name} {_figure(v)}" for name, v in values.items()]
+def _per_output(values: Any) -> list[str]:
+    items = [f"{name} {_figure(v)}" for name, v in (values.items() if isinstance(values, Mapping) else ())]
+    if not items:
+        return []
     lines = ["  tail sup |y|: " + ", ".join(items[:MAX_LISTED])]
     if len(items) > MAX_LISTED:
         lines[0] += f", ... ({len(items) - MAX_LISTED} more outputs)"
     return lines
 
 
+def _model_name(doc: Mapping[str, Any]) -> str:
+    """The model's name: ``model`` is ``{"name": ...}`` (any model file), or a bare name."""
+    model = doc.get("model")
+    return _short(str(model.get("name", "?") if isinstance(model, Mapping) else model))
+
+
+def _mapping(value: Any) -> Mapping[str, Any]:
+    return value if isinstance(value, Mapping) else {}
+
+
+def _window(doc: Mapping[str, Any]) -> str:
+    window = doc.get("tail_window_s")
+    if isinstance(window, (list, tuple)) and len(window) == 2:
+        return f", tail window {_figure(window[0])}-{_figure(window[1])} s"
+    return ""
+
+
 def simulation_lines(doc: Mapping[str, Any]) -> list[str]:
     """What a simulation found, in a few lines (a model's scenarios or worst case, or the paper's loop)."""
     if "model" in doc:
-        name = _short(doc["model"]["name"])
+        name = _model_name(doc)
         if doc.get("mode") == "worst_case":
-            lines = [f"worst case of model '{name}' ({doc['candidates_tried']} candidates; a search, not a proof)"]
-            tight = doc.get("tightness") or {}
-            for y, found in list(doc["worst"].items())[:MAX_LISTED]:
-                extra = (f", tightness_ratio {_figure(tight[y]['tightness_ratio'])}" if y in tight else "")
-                lines.append(f"  {y}: worst tail sup {_figure(found['sup_abs_output_tail'])} "
-                             f"({found['disturbance']['kind']}){extra}")
-            if len(doc["worst"]) > MAX_LISTED:
-                lines.append(f"  ... ({len(doc['worst']) - MAX_LISTED} more outputs)")
+            lines = [f"worst case of model '{name}' ({doc.get('candidates_tried', '?')} candidates; a search, not a "
+                     "proof)"]
+            tight = _mapping(doc.get("tightness"))
+            worst = _mapping(doc.get("worst"))
+            for y, found in list(worst.items())[:MAX_LISTED]:
+                found = _mapping(found)
+                ratio = _mapping(tight.get(y)).get("tightness_ratio")
+                extra = f", tightness_ratio {_figure(ratio)}" if y in tight else ""
+                lines.append(f"  {y}: worst tail sup {_figure(found.get('sup_abs_output_tail'))} "
+                             f"({_mapping(found.get('disturbance')).get('kind', '?')}){extra}")
+            if len(worst) > MAX_LISTED:
+                lines.append(f"  ... ({len(worst) - MAX_LISTED} more outputs)")
             return lines
-        w0, w1 = doc["tail_window_s"]
-        lines = [f"model '{name}': {doc['n_trajectories']} trajectories ({doc['n_converged']} converged, "
-                 f"{doc['n_diverged']} diverged), scenarios {', '.join(doc['scenarios'])}, tail window "
-                 f"{_figure(w0)}-{_figure(w1)} s"]
-        return lines + _per_output(doc["sup_abs_output_tail"])
+        trajectories = doc.get("trajectories")
+        count = doc.get("n_trajectories", len(trajectories) if isinstance(trajectories, list) else "?")
+        counts = f"{count} trajectories ({doc.get('n_converged', '?')} converged"
+        counts += f", {doc['n_diverged']} diverged)" if "n_diverged" in doc else ")"
+        scenarios = doc.get("scenarios")
+        which = f", scenarios {', '.join(map(str, scenarios))}" if isinstance(scenarios, (Mapping, list)) else ""
+        angles = doc.get("angles_modulo_2pi")
+        modulo = (f", converged modulo 2 pi in {', '.join(map(str, angles))}" if isinstance(angles, list) and angles
+                  else "")
+        lines = [f"model '{name}': {counts}{which}{_window(doc)}{modulo}"]
+        return lines + _per_output(doc.get("sup_abs_output_tail"))
     if doc.get("mode") == "worst_case":
-        return [f"worst case of {doc['scenario']}: tail sup |eps| {_figure(doc['sup_abs_eps_tail_m'])} m "
-                f"({doc['candidates_tried']} candidates; a search, not a proof)"]
-    w0, w1 = doc["tail_window_s"]
-    return [f"{doc['scenario']} ({doc['controller']}, ODS {doc['ods_form']}): "
-            f"{'diverged' if doc['diverged'] else 'did not diverge'}",
-            f"  mean |eps| {_figure(doc['mean_abs_eps_tail_m'])} m, sup |eps| {_figure(doc['sup_abs_eps_tail_m'])} m "
-            f"over {_figure(w0)}-{_figure(w1)} s; steady rotation {_figure(doc['steady_rotation_hz'])} Hz, "
-            f"max {_figure(doc['max_rotation_hz'])} Hz"]
+        return [f"worst case of {doc.get('scenario', '?')}: tail sup |eps| {_figure(doc.get('sup_abs_eps_tail_m'))} m "
+                f"({doc.get('candidates_tried', '?')} candidates; a search, not a proof)"]
+    return [f"{doc.get('scenario', '?')} ({doc.get('controller', '?')}, ODS {doc.get('ods_form', '?')}): "
+            f"{'diverged' if doc.get('diverged') else 'did not diverge'}",
+            f"  mean |eps| {_figure(doc.get('mean_abs_eps_tail_m'))} m, sup |eps| "
+            f"{_figure(doc.get('sup_abs_eps_tail_m'))} m{_window(doc).replace(', tail window', ' over')}; steady "
+            f"rotation {_figure(doc.get('steady_rotation_hz'))} Hz, max {_figure(doc.get('max_rotation_hz'))} Hz"]
 
 
 def series_line(series: Any) -> str:
@@ -171,8 +201,8 @@ def series_line(series: Any) -> str:
 
 
 def simulation_repr(doc: Mapping[str, Any], series: Any) -> str:
-    return _bounded(["SimulationReport: " + simulation_lines(doc)[0], *simulation_lines(doc)[1:],
-                     series_line(series)])
+    lines = simulation_lines(doc)
+    return _bounded(["SimulationReport: " + lines[0], *lines[1:], series_line(series)])
 
 
 def simulation_html(doc: Mapping[str, Any]) -> str:
@@ -180,14 +210,17 @@ def simulation_html(doc: Mapping[str, Any]) -> str:
     lines = simulation_lines(doc)
     caption = html.escape(lines[0])
     if "model" in doc and doc.get("mode") != "worst_case":
-        names = list(doc["scenarios"])
-        rows = [[y] + [_figure(doc["scenarios"][s]["sup_abs_output_tail"][y]) for s in names]
-                + [_figure(v)] for y, v in doc["sup_abs_output_tail"].items()]
+        scenarios = _mapping(doc.get("scenarios"))
+        names = list(scenarios)
+        rows = [[y] + [_figure(_mapping(_mapping(scenarios[s]).get("sup_abs_output_tail")).get(y)) for s in names]
+                + [_figure(v)] for y, v in _mapping(doc.get("sup_abs_output_tail")).items()]
         return _table(caption, ["tail sup of |output|", *names, "all"], rows)
     if "model" in doc:  # a model's worst case: one row per output
-        tight = doc.get("tightness") or {}
-        rows = [[y, _figure(found["sup_abs_output_tail"]), found["disturbance"]["kind"],
-                 _figure(tight[y]["tightness_ratio"]) if y in tight else "-"] for y, found in doc["worst"].items()]
+        tight = _mapping(doc.get("tightness"))
+        rows = [[y, _figure(_mapping(found).get("sup_abs_output_tail")),
+                 _mapping(_mapping(found).get("disturbance")).get("kind", "?"),
+                 _figure(_mapping(tight[y]).get("tightness_ratio")) if y in tight else "-"]
+                for y, found in _mapping(doc.get("worst")).items()]
         return _table(caption, ["output", "worst tail sup", "disturbance", "tightness_ratio"], rows)
     keys = ["mean_abs_eps_tail_m", "sup_abs_eps_tail_m", "final_eps_m", "steady_rotation_hz", "max_rotation_hz",
             "convergence_time_s", "constant_sup_abs_eps_tail_m"]

@@ -57,27 +57,18 @@ def _print_model_table(doc: dict[str, Any]) -> None:
 
     console = Console()
     print_model_simulation(console, doc)
+    if doc.get("field"):  # a loop with functions: what was integrated
+        say(console, f"field: {doc['field']}")
+    angles = doc.get("angles_modulo_2pi") or []
+    modulo = f" (modulo 2 pi in {', '.join(angles)})" if angles else ""
     say(console, f"starts: {len(doc['starts'])} ({doc['starts_from']}); converged = final state within "
-                 "1e-3 state scales of the equilibrium")
+                 f"1e-3 state scales of the equilibrium{modulo}")
     failed = [t for t in doc["trajectories"] if t["diverged"]]
     if failed:
         first = failed[0]
         start = ", ".join(f"{k}={figure(v)}" for k, v in doc["starts"][first["start"]].items())
         say(console, Text.assemble((f"{len(failed)} trajectories diverged", "bold red"),
                                    f", e.g. from ({start}) under {first['scenario']}: {first['failure'] or ''}"))
-
-
-def _print_recast(doc: dict[str, Any]) -> None:
-    """A loop with functions: one line per start (where it ended, how far from the equilibrium)."""
-    modulo = f" (modulo 2 pi in {', '.join(doc['angles_modulo_2pi'])})" if doc["angles_modulo_2pi"] else ""
-    click.echo(f"{doc['model']}: {doc['field']}; {len(doc['trajectories'])} starts, t_end {doc['t_end_s']:.6g} s")
-    for t in doc["trajectories"]:
-        start = ", ".join(f"{k}={v:.4g}" for k, v in t["start"].items())
-        end = "diverged" if t["diverged"] else \
-            f"distance to the equilibrium{modulo} {t['distance_to_equilibrium']:.3g}" + \
-            (" (converged)" if t["converged"] else "")
-        click.echo(f"  from {start}: {end}")
-    click.echo(f"{doc['n_converged']} of {len(doc['trajectories'])} converged")
 
 
 def _model_disturbance_text(d: dict[str, Any]) -> str:
@@ -161,8 +152,6 @@ def _run_model(model_file: str, settings: tuple[str, ...], x0: tuple[str, ...], 
     doc = result.to_json()
     if as_json:
         emit_json(doc)
-    elif doc.get("kind") == "recast":
-        _print_recast(doc)
     elif worst_case:
         _print_model_worst_case(doc)
     else:

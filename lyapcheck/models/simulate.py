@@ -36,6 +36,14 @@ stopped, or the integrator failed: overflow, a step too small, the step budget).
 is, per state, the largest of: the starts' distance from the equilibrium, the domain's
 half-width, the steady response of the linearisation to the bounds, ``|x_eq|``; 1 if all vanish.
 
+The field is evaluated behind one small interface, :class:`LoopField` (``x' = f(x, d)`` row by
+row): a polynomial (rational) loop's is :class:`_Field`, from its exact polynomials; a loop with
+functions' (sin, sqrt, sat, ...) is the true loop, each function evaluated by numpy
+(:mod:`lyapcheck.models.recast_simulate`), never its recast polynomial loop. Everything else
+(scenarios, starts, tail sups, the series, the plots, the worst-case search) is the same for both;
+an angle that enters the loop only through its sine and cosine is measured modulo 2 pi (its
+deviation from the equilibrium wrapped into ``(-pi, pi]``, and it never leaves the escape box).
+
 :func:`search_worst_case` searches the disturbance ``|d_k| <= b_k`` that maximises each output's
 tail sup: constant, feedback, square waves over the frequency range, then a local pattern search
 (constant amplitudes inside the box; square-wave frequency and phase), within a time budget.
@@ -45,6 +53,7 @@ evidence, never proofs: a certified bound below a simulated figure is a soundnes
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import logging
 import math
@@ -52,7 +61,7 @@ import time
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Final, Mapping, Protocol, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -64,6 +73,9 @@ from lyapcheck.simulation.integrator import (
 )
 from lyapcheck.sos.polynomials import Poly, Ring
 from lyapcheck.tolerances import SIM_MAX_STEPS, SIM_REL_TOL
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.recast import RecastModel
 
 logger = logging.getLogger(__name__)
 
@@ -214,6 +226,24 @@ class CompiledPolys:
         return monos @ self.coefficients
 
 
+class LoopField(Protocol):
+    """The field a simulation integrates: ``x'`` at ``(batch, n)`` states under ``(batch, m)``
+    disturbances (None: every disturbance 0). Two implementations: :class:`_Field` (a polynomial
+    loop) and :class:`lyapcheck.models.recast_simulate.TrueField` (a loop with functions)."""
+
+    def __call__(self, x: FloatArray, d: FloatArray | None) -> FloatArray: ...
+
+
+class OutputGain(Protocol):
+    """Per output, ``G_k = dy'/dd_k`` at ``d = 0`` (the bang-bang law's direction)."""
+
+    def depends(self, k: int) -> bool:
+        """Whether ``y'`` depends on ``d_k`` (otherwise the law takes the linearisation's Markov sign)."""
+        ...
+
+    def gain(self, k: int, x: FloatArray) -> FloatArray: ...
+
+
 @dataclass(frozen=True)
 class _Field:
     """``x' = N(x, d) / D(x)`` row by row, every numerator and denominator in one evaluation."""
@@ -236,6 +266,9 @@ class _OutputFeedback:
     polys: CompiledPolys | None
     terms: tuple[tuple[int, ...] | None, ...]  # per k: the indices of its terms
 
+    def depends(self, k: int) -> bool:
+        return self.terms[k] is not None
+
     def gain(self, k: int, x: FloatArray) -> FloatArray:
         idx = self.terms[k]
         assert idx is not None and self.polys is not None
@@ -248,16 +281,27 @@ class _OutputFeedback:
 
 @dataclass(frozen=True)
 class Prepared:
-    """A model ready to simulate: its field, outputs and linearisation in floating point."""
+    """A model ready to simulate: its field, outputs and linearisation in floating point (a
+    polynomial loop: :func:`prepare`; a loop with functions:
+    :func:`lyapcheck.models.recast_simulate.prepare_true_loop`)."""
 
-    model: Model
-    field: _Field
+    model: "Model | RecastModel"
+    field: LoopField
     output_polys: CompiledPolys
     output_names: tuple[str, ...]
-    feedback: dict[str, _OutputFeedback]
+    feedback: Mapping[str, OutputGain]
     linearization: Linearization
     equilibrium: FloatArray
     bounds: FloatArray
+    #: each output's text as the file writes it (the document's ``outputs``)
+    output_text: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    #: the states measured modulo 2 pi (their indices): an angle the loop sees only through its sine
+    #: and cosine; convergence, escape and plots take its deviation in (-pi, pi]
+    angles: tuple[int, ...] = ()
+    #: why this loop cannot take a disturbance (then only the scenario ``none`` runs); None: it can
+    undisturbed_only: str | None = None
+    #: the keys this loop adds to the document (a loop with functions: ``kind``, ``field``, ...)
+    document_keys: Mapping[str, Any] = dataclasses.field(default_factory=dict)
 
     def output_values(self, x: FloatArray) -> FloatArray:
         """``(batch, outputs)`` values of every output at ``(batch, n)`` states."""
@@ -265,6 +309,24 @@ class Prepared:
 
     def output(self, name: str, x: FloatArray) -> FloatArray:
         return self.output_polys(x)[:, self.output_names.index(name)]
+
+    def deviation(self, x: FloatArray) -> FloatArray:
+        """``x - x_eq`` row by row, each angle's wrapped into ``(-pi, pi]``."""
+        dev = np.asarray(x, dtype=np.float64) - self.equilibrium
+        if self.angles:
+            dev = dev.copy()
+            a = list(self.angles)
+            dev[..., a] = np.angle(np.exp(1j * dev[..., a]))
+        return dev
+
+    def box(self, factor: float, scale: FloatArray) -> FloatArray:
+        """Half-widths ``factor * scale`` around the equilibrium, infinite along an angle (a
+        pendulum that turns over has not left anything)."""
+        out = factor * np.asarray(scale, dtype=np.float64)
+        if self.angles:
+            out = out.copy()
+            out[list(self.angles)] = np.inf
+        return out
 
 
 def _output_poly(model: Model, name: str) -> Poly:
@@ -276,8 +338,13 @@ def _output_poly(model: Model, name: str) -> Poly:
     return num * (1 / den.leading_coefficient())
 
 
-def prepare(model: Model) -> Prepared:
-    """The model's field, outputs, feedback gains and linearisation, once per model."""
+def prepare(model: "Model | RecastModel") -> Prepared:
+    """The model's field, outputs, feedback gains and linearisation, once per model. A loop with
+    functions is prepared by :func:`lyapcheck.models.recast_simulate.prepare_true_loop` (which builds
+    on this module, so it is its caller that chooses: :func:`lyapcheck.api.simulate`), and its
+    ``Prepared`` passed to :func:`run_model` or :func:`search_worst_case`."""
+    if not isinstance(model, Model):
+        raise TypeError("a loop with functions is prepared by lyapcheck.models.recast_simulate.prepare_true_loop")
     full = model.state_ring
     states = Ring(model.states)
     rhs = field_at(model)
@@ -298,17 +365,14 @@ def prepare(model: Model) -> Prepared:
     A = [[value(r.numerator.derivative(s)) / dens[i] for s in model.states] for i, r in enumerate(rhs)]
     B = [[value(r.numerator.derivative(d)) / dens[i] for d in model.disturbances] for i, r in enumerate(rhs)]
     feedback: dict[str, _OutputFeedback] = {}
-    C: dict[str, FloatArray] = {}
-    markov: dict[str, tuple[float, ...]] = {}
+    C: dict[str, list[Fraction]] = {}
     output_polys: list[Poly] = []
     for name in model.outputs:
         y = _output_poly(model, name)
         output_polys.append(on_states(y))
-        c = [value(y.derivative(s)) for s in model.states]
-        C[name] = np.array([float(v) for v in c])
+        C[name] = [value(y.derivative(s)) for s in model.states]
         columns: list[Poly] = []
         per_k: list[tuple[int, ...] | None] = []
-        signs: list[float] = []
         for k, d in enumerate(model.disturbances):
             pieces = []
             for s, r in zip(model.states, rhs):
@@ -321,18 +385,28 @@ def prepare(model: Model) -> Prepared:
                 first = len(columns) // 3
                 per_k.append(tuple(range(first, first + len(pieces))))
                 columns += [q for piece in pieces for q in piece]
-            signs.append(_markov_sign(A, [row[k] for row in B], c, n))
         feedback[name] = _OutputFeedback(CompiledPolys(states, columns) if columns else None, tuple(per_k))
-        markov[name] = tuple(signs)
-    A_float = np.array([[float(v) for v in row] for row in A]).reshape(n, n)
-    B_float = np.array([[float(v) for v in row] for row in B]).reshape(n, m)
-    eig = np.linalg.eigvals(A_float) if n else np.zeros(0, dtype=complex)
-    lin = Linearization(A=A_float, B=B_float, C=C, eigenvalues=eig, markov_sign=markov)
+    lin = linearization(A, B, C)
     field_ = _Field(CompiledPolys(full, [r.numerator for r in rhs] + [r.denominator for r in rhs]), n, m)
     return Prepared(model=model, field=field_, output_polys=CompiledPolys(states, output_polys),
                     output_names=tuple(model.outputs), feedback=feedback, linearization=lin,
                     equilibrium=np.array([float(v) for v in model.equilibrium]),
-                    bounds=np.array([float(b) for b in model.disturbances.values()]))
+                    bounds=np.array([float(b) for b in model.disturbances.values()]),
+                    output_text=dict(model.output_text))
+
+
+def linearization(A: Sequence[Sequence[Fraction | float]], B: Sequence[Sequence[Fraction | float]],
+                  C: Mapping[str, Sequence[Fraction | float]]) -> Linearization:
+    """The :class:`Linearization` of ``x' = A x + B d``, ``y = C x`` (exact entries where the loop
+    gives them, so that the Markov signs are exact; floats otherwise)."""
+    n = len(A)
+    m = len(B[0]) if n and len(B) else 0
+    markov = {name: tuple(_markov_sign(A, [row[k] for row in B], c, n) for k in range(m)) for name, c in C.items()}
+    A_float = np.array([[float(v) for v in row] for row in A]).reshape(n, n)
+    B_float = np.array([[float(v) for v in row] for row in B]).reshape(n, m)
+    eig = np.linalg.eigvals(A_float) if n else np.zeros(0, dtype=complex)
+    return Linearization(A=A_float, B=B_float, C={name: np.array([float(v) for v in c]) for name, c in C.items()},
+                         eigenvalues=eig, markov_sign=markov)
 
 
 def _sums_to_zero(pieces: Sequence[tuple[Poly, Poly, Poly]]) -> bool:
@@ -349,8 +423,9 @@ def _sums_to_zero(pieces: Sequence[tuple[Poly, Poly, Poly]]) -> bool:
     return bool(total is not None and total.is_zero())
 
 
-def _markov_sign(A: Sequence[Sequence[Fraction]], b: Sequence[Fraction], c: Sequence[Fraction], n: int) -> float:
-    """Sign of the first non-zero ``c A^j b`` for j = 1..n-1 (exact), else +1."""
+def _markov_sign(A: Sequence[Sequence[Fraction | float]], b: Sequence[Fraction | float],
+                 c: Sequence[Fraction | float], n: int) -> float:
+    """Sign of the first non-zero ``c A^j b`` for j = 1..n-1 (exact for exact entries), else +1."""
     v = list(b)
     for _ in range(1, max(n, 1)):
         v = [sum((A[i][j] * v[j] for j in range(n)), Fraction(0)) for i in range(n)]
@@ -413,7 +488,7 @@ class ModelDisturbance:
     output: str = ""
     direction: int = 1
 
-    def describe(self, model: Model) -> dict[str, Any]:
+    def describe(self, model: "Model | RecastModel") -> dict[str, Any]:
         """JSON description (SI; ``kind`` is the scenario name)."""
         names = list(model.disturbances)
         if self.kind == "none":
@@ -551,7 +626,7 @@ class _ScenarioSystem:
             push = np.clip((p.output(name, xs) + offset) / layer, -1.0, 1.0)
             fbk = p.feedback[name]
             for k, b in enumerate(p.bounds):
-                if fbk.terms[k] is None:
+                if not fbk.depends(k):
                     d[sel, k] = b * p.linearization.markov_sign[name][k] * push
                 else:
                     d[sel, k] = b * push * np.clip(fbk.gain(k, xs) / self.gain_scale[o, k], -1.0, 1.0)
@@ -706,7 +781,7 @@ def _run(prepared: Prepared, starts: FloatArray, disturbances: Sequence[ModelDis
                  switch_times=np.tile(table, (S, 1)), feedback_output=np.tile(fb_out, S),
                  feedback_direction=np.tile(fb_dir, S), output_layer=np.tile(layer, S))
     t_tail = (1 - TAIL_FRACTION) * t_end
-    escape = ESCAPE_FACTOR * scale
+    escape = prepared.box(ESCAPE_FACTOR, scale)
     system = _ScenarioSystem(prepared, rows, np.tile(init, S), t_tail, escape, gain_scale)
     y0 = np.repeat(starts, J, axis=0)
     observer = _TailObserver(prepared, R, t_tail, None if record is None else np.asarray(record, dtype=np.intp))
@@ -717,7 +792,7 @@ def _run(prepared: Prepared, starts: FloatArray, disturbances: Sequence[ModelDis
                        observer=observer if series is None else Fanout(observer, series),
                        max_iterations=SIM_MAX_STEPS)
     final = result.y
-    offset = np.abs(final - prepared.equilibrium)
+    offset = np.abs(prepared.deviation(final))
     escaped = np.any(offset > escape, axis=1) | ~np.all(np.isfinite(final), axis=1)
     diverged = escaped | (result.status != STATUS_OK)
     converged = ~diverged & np.all(offset <= CONVERGENCE_RADIUS * scale, axis=1)
@@ -737,7 +812,7 @@ def _gain_scales(prepared: Prepared, starts: FloatArray, scale: FloatArray) -> F
     probes = np.vstack([starts, eq[None, :], eq + scale, eq - scale])
     for o, y in enumerate(names):
         for k in range(m):
-            if prepared.feedback[y].terms[k] is None:
+            if not prepared.feedback[y].depends(k):
                 continue
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 g = np.abs(prepared.feedback[y].gain(k, probes))
@@ -748,7 +823,7 @@ def _gain_scales(prepared: Prepared, starts: FloatArray, scale: FloatArray) -> F
 
 # -- inputs -------------------------------------------------------------------------------------
 
-def parse_start(model: Model, text: str) -> FloatArray:
+def parse_start(model: "Model | RecastModel", text: str) -> FloatArray:
     """One ``--x0`` start, ``"x1=1,x2=0"`` or ``"x1=1 x2=0"``: values are numbers or unit strings
     (SI inside; ``"x1=1 mm x2=0"`` splits before each ``NAME=``); missing states take the
     equilibrium's value."""
@@ -779,7 +854,7 @@ def parse_start(model: Model, text: str) -> FloatArray:
     return np.array([float(values[s]) for s in model.states])
 
 
-def grid_over_domain(model: Model, per_state: int) -> FloatArray:
+def grid_over_domain(model: "Model | RecastModel", per_state: int) -> FloatArray:
     """``per_state`` evenly spaced points per state over the model's ``[domain]`` (every combination)."""
     if model.domain is None:
         raise InvalidParameter("grid", "used with a model that has a [domain] (this one has none: give the starts "
@@ -880,21 +955,24 @@ def _frequency_grid(prepared: Prepared, t_end: float, frequencies: tuple[float, 
     return grid
 
 
-def _check_scenarios(model: Model, scenarios: Sequence[str] | None) -> tuple[str, ...]:
+def _check_scenarios(prepared: Prepared, scenarios: Sequence[str] | None) -> tuple[str, ...]:
+    model = prepared.model
     if scenarios is None or not len(scenarios):
-        return SCENARIOS if model.disturbances else ("none",)
+        return SCENARIOS if model.disturbances and prepared.undisturbed_only is None else ("none",)
     chosen = []
     for s in scenarios:
         if s not in SCENARIOS:
             raise InvalidParameter("scenarios", "one of " + ", ".join(SCENARIOS), s)
         if s != "none" and not model.disturbances:
             raise InvalidParameter("scenarios", "'none' for a model without [disturbances] (add one, name = bound)", s)
+        if s != "none" and prepared.undisturbed_only is not None:
+            raise InvalidParameter("scenarios", f"'none' for this loop ({prepared.undisturbed_only})", s)
         if s not in chosen:
             chosen.append(s)
     return tuple(c for c in SCENARIOS if c in chosen)
 
 
-def _check_starts(model: Model, starts: Any) -> FloatArray:
+def _check_starts(model: "Model | RecastModel", starts: Any) -> FloatArray:
     arr = np.atleast_2d(np.asarray(starts, dtype=np.float64))
     if arr.ndim != 2 or arr.shape[1] != model.n or arr.shape[0] == 0:
         raise InvalidParameter("starts", f"an array of shape (k, {model.n}) (one row per start)", arr.shape)
@@ -905,11 +983,11 @@ def _check_starts(model: Model, starts: Any) -> FloatArray:
     return arr
 
 
-def _point(model: Model, x: FloatArray) -> dict[str, float]:
+def _point(model: "Model | RecastModel", x: FloatArray) -> dict[str, float]:
     return {s: float(v) for s, v in zip(model.states, x)}
 
 
-def _model_header(model: Model) -> dict[str, Any]:
+def _model_header(model: "Model | RecastModel") -> dict[str, Any]:
     return {"name": model.name, "file": model.source, "sha256": model.sha256, "overrides": dict(model.overrides)}
 
 
@@ -928,7 +1006,7 @@ class ModelRun:
     series: Any | None = None
 
 
-def simulate_model(model: Model, *, starts: Any | None = None, scenarios: Sequence[str] | None = None,
+def simulate_model(model: "Model | RecastModel", *, starts: Any | None = None, scenarios: Sequence[str] | None = None,
                    t_end: float | None = None, frequencies: tuple[float, float] | None = None,
                    rtol: float = DEFAULT_RTOL, plot: str | Path | None = None,
                    prepared: Prepared | None = None) -> dict[str, Any]:
@@ -937,7 +1015,7 @@ def simulate_model(model: Model, *, starts: Any | None = None, scenarios: Sequen
                      plot=plot, prepared=prepared).document
 
 
-def run_model(model: Model, *, starts: Any | None = None, scenarios: Sequence[str] | None = None,
+def run_model(model: "Model | RecastModel", *, starts: Any | None = None, scenarios: Sequence[str] | None = None,
               t_end: float | None = None, frequencies: tuple[float, float] | None = None,
               rtol: float = DEFAULT_RTOL, plot: str | Path | None = None,
               prepared: Prepared | None = None, series: bool = False) -> ModelRun:
@@ -946,7 +1024,8 @@ def run_model(model: Model, *, starts: Any | None = None, scenarios: Sequence[st
     Parameters
     ----------
     model
-        A loaded model (:func:`lyapcheck.models.modelfile.load_model`).
+        A loaded model (:func:`lyapcheck.models.modelfile.load_model`), or a loop with functions
+        (:func:`lyapcheck.models.modelfile.load_any_model`: its true loop is integrated).
     starts
         ``(k, n)`` initial states in the declared coordinates, SI (:func:`parse_start`,
         :func:`grid_over_domain`); default :func:`default_starts`.
@@ -975,7 +1054,7 @@ def run_model(model: Model, *, starts: Any | None = None, scenarios: Sequence[st
     """
     begin = time.perf_counter()
     p = prepared if prepared is not None else prepare(model)
-    chosen = _check_scenarios(model, scenarios)
+    chosen = _check_scenarios(p, scenarios)
     if starts is None:
         start_arr, how = default_starts(p)
     else:
@@ -1022,10 +1101,11 @@ def run_model(model: Model, *, starts: Any | None = None, scenarios: Sequence[st
     doc: dict[str, Any] = {
         "mode": "scenarios",
         "model": _model_header(model),
+        **p.document_keys,
         "states": list(model.states),
         "equilibrium": _point(model, p.equilibrium),
         "disturbance_bounds": {k: float(b) for k, b in model.disturbances.items()},
-        "outputs": dict(model.output_text),
+        "outputs": dict(p.output_text),
         "starts": [_point(model, x) for x in start_arr],
         "starts_from": how,
         "t_end_s": horizon,
@@ -1057,7 +1137,8 @@ def run_model(model: Model, *, starts: Any | None = None, scenarios: Sequence[st
                                 starts_per_row=np.arange(rows_total) // J,
                                 scenarios_per_row=[dists[r % J].kind for r in range(rows_total)],
                                 converged=batch.converged, diverged=batch.diverged,
-                                escape=(p.equilibrium, ESCAPE_FACTOR * scale), attrs={"model": model.name, "file": str(model.source), "t_end_s": horizon,
+                                escape=(p.equilibrium, p.box(ESCAPE_FACTOR, scale)),
+                                attrs={"model": model.name, "file": str(model.source), "t_end_s": horizon,
                                        "tail_window_start_s": batch.t_tail, "integrator": INTEGRATOR_NAME,
                                        "rtol": rtol})
     return ModelRun(document=doc, series=dataset)
@@ -1104,7 +1185,7 @@ def _initial_steps(d: ModelDisturbance, m: int) -> list[float]:
     return []
 
 
-def search_worst_case(model: Model, *, starts: Any | None = None, t_end: float | None = None,
+def search_worst_case(model: "Model | RecastModel", *, starts: Any | None = None, t_end: float | None = None,
                       frequencies: tuple[float, float] | None = None, budget_s: float = 20.0,
                       certified_bounds: Mapping[str, float] | None = None, plot: str | Path | None = None,
                       prepared: Prepared | None = None) -> dict[str, Any]:
@@ -1151,6 +1232,8 @@ def search_worst_case(model: Model, *, starts: Any | None = None, t_end: float |
         raise InvalidParameter("worst_case", "used with a model that has [disturbances] (name = bound)",
                                model.source)
     p = prepared if prepared is not None else prepare(model)
+    if p.undisturbed_only is not None:
+        raise InvalidParameter("worst_case", f"left out for this loop ({p.undisturbed_only})", model.source)
     start_arr = p.equilibrium[None, :] if starts is None else _check_starts(model, starts)
     horizon = check_horizon(p, t_end)
     grid = _frequency_grid(p, horizon, frequencies)
@@ -1255,10 +1338,11 @@ def search_worst_case(model: Model, *, starts: Any | None = None, t_end: float |
     doc: dict[str, Any] = {
         "mode": "worst_case",
         "model": _model_header(model),
+        **p.document_keys,
         "states": list(model.states),
         "equilibrium": _point(model, p.equilibrium),
         "disturbance_bounds": {k: float(b) for k, b in model.disturbances.items()},
-        "outputs": dict(model.output_text),
+        "outputs": dict(p.output_text),
         "starts": [_point(model, x) for x in start_arr],
         "sup_abs_output_tail": sups,
         "worst": worst,
@@ -1291,7 +1375,7 @@ def search_worst_case(model: Model, *, starts: Any | None = None, t_end: float |
     return doc
 
 
-def _divergences(model: Model, batch: _Batch) -> list[dict[str, Any]]:
+def _divergences(model: "Model | RecastModel", batch: _Batch) -> list[dict[str, Any]]:
     """The first MAX_EXAMPLES diverged rows of a batch: disturbance, start and why."""
     J = len(batch.disturbances)
     return [{"disturbance": batch.disturbances[r % J].describe(model), "start": _point(model, batch.starts[r // J]),
@@ -1324,9 +1408,10 @@ def tightness(certified_bounds: Mapping[str, float], worst: Mapping[str, float])
     return out
 
 
-def certified_bounds_of(model: Model, path: str | Path) -> dict[str, float]:
+def certified_bounds_of(model: "Model | RecastModel", path: str | Path) -> dict[str, float]:
     """The certified ``sos_bound`` figures of a model certificate file for this model (the same
-    text and parameters), after re-checking the certificate exactly (no solver)."""
+    text and parameters), after re-checking the certificate exactly (no solver), as bounds on
+    ``|y|`` (what a simulation measures): ``bound + |y_eq|`` for a bound on ``|y - y_eq|``."""
     from lyapcheck.models.certificate import is_model_document, read_json, verify_document
 
     try:
@@ -1350,11 +1435,15 @@ def certified_bounds_of(model: Model, path: str | Path) -> dict[str, float]:
         raise InvalidParameter("certificate", "a certificate whose class sos_bound is certified", str(path))
     rows = verify_document(doc)
     failed = [why for name, ok, why in rows if not ok and name in ("model", "parameters", "denominators", "scaling",
-                                                                    "sos_bound")]
+                                                                    "recasting", "disturbances", "sos_bound")]
     if failed:
         raise InvalidParameter("certificate", "a certificate that passes its exact re-check (lyapcheck verify)",
                                f"{path}: {failed[0]}")
-    return {str(k): float(v) for k, v in bound["bounds"].items()}
+    # a bound is on |y - y_eq| (bounds_reference); the simulation measures |y|: compare with the bound
+    # on |y| it implies, |y| <= bound + |y_eq| (else a loop resting at y_eq != 0 would raise a false alarm)
+    given = bound.get("bounds_reference")
+    reference: dict[str, Any] = given if isinstance(given, dict) else {}
+    return {str(k): float(v) + abs(float(reference.get(k, 0.0))) for k, v in bound["bounds"].items()}
 
 
 # -- plots --------------------------------------------------------------------------------------
@@ -1384,7 +1473,7 @@ def plot_batch(prepared: Prepared, batch: _Batch, rows: Sequence[int], labels: S
             seen.add(lab)
         ax.axvspan(batch.t_tail, batch.t_end, color="0.85", alpha=0.5, lw=0)
         ax.set_xlabel("t (s)")
-        text = prepared.model.output_text.get(y, y)
+        text = prepared.output_text.get(y, y)
         ax.set_ylabel(y if text == y else f"{y} = {text}")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=7)
@@ -1413,9 +1502,9 @@ def plot_batch(prepared: Prepared, batch: _Batch, rows: Sequence[int], labels: S
 def _clipped(prepared: Prepared, batch: _Batch, row: int, samples: int = PLOT_SAMPLES) -> tuple[FloatArray, FloatArray]:
     """A recorded row resampled, NaN where it is farther than PLOT_CLIP state scales from the
     equilibrium (a diverging row would flatten every other curve)."""
-    box = PLOT_CLIP * batch.scale
+    box = prepared.box(PLOT_CLIP, batch.scale)
     t, xs = batch.observer.trajectory(row, samples, prepared.equilibrium, box)
-    far = np.any(np.abs(xs - prepared.equilibrium) > PLOT_CLIP * batch.scale, axis=1)
+    far = np.any(np.abs(xs - prepared.equilibrium) > box, axis=1)
     xs = xs.copy()
     xs[far] = np.nan
     return t, xs
