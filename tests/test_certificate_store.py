@@ -13,8 +13,10 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import subprocess
 import sys
+import threading
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -61,12 +63,13 @@ def test_a_stored_certificate_is_rechecked_and_used(cache: Path) -> None:
     assert len(entries(cache)) == 1
     doc, second = sos_gas(QUARTIC)
     assert second["solver"]["solves"] == []
-    assert second["solver"]["stored"]["solves_when_found"] == len(first["solver"]["solves"])
+    assert second["solver"]["stored"] == {"key": entries(cache)[0].stem, "check": "exact, in this run"}
     for key in ("status", "summary", "degree", "decay_rate_V_per_s", "certificate"):
         assert second[key] == first[key], key
+    assert first["relative_margin"] > 0 and second["relative_margin"] is None  # a solver's figure: no solve ran
     assert api.verify(doc).valid
     [(name, said)] = solvers({"sos_gas": second})  # the report's solver outcomes say it
-    assert name == "sos_gas" and said.startswith("no solve") and f"({len(first['solver']['solves'])} solves)" in said
+    assert name == "sos_gas" and said.startswith("no solve") and "re-checked exactly" in said
 
 
 def _altered(path: Path, change: Any) -> None:
@@ -171,3 +174,102 @@ def test_inside_disabled_nothing_is_read_or_written(cache: Path) -> None:
         _, cond = sos_gas(QUARTIC)
     assert cond["status"] == "certified" and entries(cache) == []
     assert store.enabled()
+
+
+class _Writer:
+    """A writer waiting on a FIFO: it releases any reader that opens the FIFO (so a test that
+    would otherwise stall ends), and records that one did."""
+
+    def __init__(self, fifo: Path) -> None:
+        self.fifo, self.opened = fifo, threading.Event()
+        self.thread = threading.Thread(target=self._write, daemon=True)
+        self.thread.start()
+
+    def _write(self) -> None:
+        try:
+            with open(self.fifo, "w") as pipe:  # blocks until a reader opens the FIFO
+                self.opened.set()
+                pipe.write("{not json")
+        except BrokenPipeError:  # the reader was release()'s, which closes at once: nothing to write to
+            pass
+
+    def release(self) -> bool:
+        """Whether a reader opened the FIFO; then ends the writer (by opening it as the reader)."""
+        was = self.opened.is_set()
+        if not was and self.fifo.exists() and stat.S_ISFIFO(self.fifo.stat().st_mode):
+            os.close(os.open(self.fifo, os.O_RDONLY | os.O_NONBLOCK))
+        self.thread.join(timeout=30)
+        return was
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="FIFOs are POSIX")
+def test_a_fifo_at_an_entrys_path_is_not_read(cache: Path) -> None:
+    """A pipe where an entry should be is ignored without opening it: no stall (a reader would
+    wait for a writer), and the class's result is the one a run without the store gets."""
+    with store.disabled():
+        _, alone = sos_gas(QUARTIC)
+    sos_gas(QUARTIC)
+    [path] = entries(cache)
+    path.unlink()
+    os.mkfifo(path)
+    writer = _Writer(path)
+    try:
+        _, again = sos_gas(QUARTIC)
+    finally:
+        opened = writer.release()
+    assert not opened, "the store opened a FIFO"
+    assert "stored" not in again["solver"] and again["solver"]["solves"]  # searched, as without the store
+    for key in ("status", "summary", "degree", "certificate"):
+        assert again[key] == alone[key], key
+    assert path.is_file() and store.recall(path.stem) is not None  # the search's entry replaced the pipe
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="FIFOs are POSIX")
+def test_only_a_regular_file_of_bounded_size_is_an_entry(cache: Path) -> None:
+    cache.mkdir(parents=True)
+    key = "0" * 32
+    path = cache / f"{key}.json"
+    good = json.dumps({"key": key, "found": {}})
+    target = cache / "target.json"
+    target.write_text(good)
+    path.symlink_to(target)  # a symlink to a regular file is read
+    assert store.recall(key) == {"key": key, "found": {}}
+    path.unlink()
+    fifo = cache / "pipe"
+    os.mkfifo(fifo)
+    writer = _Writer(fifo)
+    path.symlink_to(fifo)  # a symlink to a FIFO is not opened
+    try:
+        assert store.recall(key) is None
+    finally:
+        assert not writer.release(), "the store opened a FIFO"
+    path.unlink()
+    path.symlink_to(cache)  # nor a directory
+    assert store.recall(key) is None
+    path.unlink()
+    padded = good[:-1] + " " * store.MAX_ENTRY_BYTES + "}"  # valid JSON, larger than the cap
+    path.write_text(padded)
+    assert store.recall(key) is None
+    path.write_text(good)
+    assert store.recall(key) == {"key": key, "found": {}}
+
+
+def test_an_entrys_own_margin_and_solve_count_are_not_shown(cache: Path) -> None:
+    """The entry's ``margin`` and ``solves`` are not re-proved by the exact check: an edited one
+    reaches neither the document nor the terminal, and the certificate is still used."""
+    _, first = sos_gas(QUARTIC)
+    [path] = entries(cache)
+    entry = json.loads(path.read_text())
+    entry["found"]["margin"] = 987654.25
+    entry["solves"] = 424242
+    path.write_text(json.dumps(entry))
+    doc, second = sos_gas(QUARTIC)
+    assert "stored" in second["solver"] and second["certificate"] == first["certificate"]
+    text = json.dumps(doc)
+    assert "987654" not in text and "424242" not in text
+    assert second["relative_margin"] is None
+    done = CliRunner().invoke(app.cli, ["certify", str(QUARTIC), "--classes", "sos_gas"])
+    assert done.exit_code == 0, done.output
+    assert "987654" not in done.output and "424242" not in done.output and "9.877e+05" not in done.output
+    [(_, said)] = solvers({"sos_gas": second})
+    assert "424242" not in said

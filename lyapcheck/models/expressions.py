@@ -237,9 +237,7 @@ class _Builder:
             if self.calls is not None and node.id == "pi" and node.id not in self.names:
                 return self.calls.pi()
             if node.id not in self.names:
-                declared = ", ".join(self.names) or "none"
-                raise ExpressionError(f"unknown name '{node.id}' (declared names: {declared}; functions and "
-                                      "constants such as pi are not part of the language)")
+                raise ExpressionError(self._unknown_name(node.id))
             return Rational.polynomial(self.ring, self.ring.gen(node.id))
         if isinstance(node, ast.UnaryOp):
             if isinstance(node.op, ast.USub):
@@ -252,6 +250,8 @@ class _Builder:
             if isinstance(node.op, _CHAIN_OPERATORS):
                 return self._chain(node, depth)
             return self._binary(node, depth)
+        if isinstance(node, ast.Attribute) or isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+            raise ExpressionError(self._attribute(node))
         if isinstance(node, ast.Call):
             name = node.func.id if isinstance(node.func, ast.Name) else self._text(node.func)
             if self.calls is not None and isinstance(node.func, ast.Name):
@@ -263,6 +263,41 @@ class _Builder:
             raise ExpressionError(f"function call '{name}(...)' is not allowed: {_RECAST_HINT}")
         raise ExpressionError(f"'{self._text(node)}' is not part of the language (numbers, declared names, "
                               "+ - * /, ** with a non-negative integer, parentheses)")
+
+    def _unknown_name(self, name: str) -> str:
+        """The message for a name that is not declared: what it is, and what to write instead.
+
+        Without a :class:`FunctionCalls` the text is in a section that takes no functions (or a
+        polynomial ``[dynamics]``, where ``pi`` never reaches here: it makes the loop one with
+        functions), so ``pi`` is refused as a constant that only [dynamics] takes."""
+        declared = ", ".join(self.names) or "none"
+        if name == "t":
+            return (f"unknown name 't' (declared names: {declared}): time is not a name of the model; the loop must "
+                    "be autonomous (for a time dependence, make time a state t with [dynamics] t = \"1\")")
+        if name == "pi" and self.calls is None:
+            return ("the constant 'pi' is not allowed here: the expression must be polynomial or rational in the "
+                    "states (pi is taken in [dynamics], in an argument of sin or cos)")
+        return f"unknown name '{name}' (declared names: {declared}; a constant is declared in [parameters])"
+
+    def _attribute(self, node: ast.Attribute | ast.Call) -> str:
+        """The message for ``math.sin(x)``, ``np.pi``, ``x.real``: attribute access is not part of
+        the language; a known function or ``pi`` is written without its module."""
+        attribute = node if isinstance(node, ast.Attribute) else node.func
+        assert isinstance(attribute, ast.Attribute)  # the caller's test; narrows the type
+        prefix = self._text(attribute.value)
+        said = f"'{self._text(node)}': attribute access ('{prefix}.') is not part of the language"
+        if isinstance(node, ast.Call):
+            said = "function call " + said
+            if self.calls is None:  # a call reaches here only outside [dynamics] (calls make a loop recast)
+                return f"{said}, and {_RECAST_HINT}"
+        if attribute.attr in FUNCTIONS or attribute.attr == "pi":
+            whole, value = self._segment(node), self._segment(attribute.value)
+            bare = whole[len(value):].lstrip().lstrip(".").lstrip() if whole and value and \
+                whole.startswith(value) else attribute.attr + ("(...)" if isinstance(node, ast.Call) else "")
+            return f"{said}: write '{_short(' '.join(bare.split()))}'"
+        if isinstance(node, ast.Call):
+            return f"{said} (functions: {', '.join(FUNCTIONS)}; and the constant pi)"
+        return said
 
     def _text(self, node: ast.AST) -> str:
         """What the user wrote for ``node``, on one line and shortened: read from the source by

@@ -2,7 +2,8 @@
 
 The format (docs/model-files.md, the reference; DESIGN.md's "Model files (contract)")::
 
-    [model]          name, states (the order of the state vector), source (optional)
+    [model]          name, states (the order of the state vector), source (optional), time
+                     (optional: "continuous", the only kind yet)
     [parameters]     name = number or "number unit" (SI inside)
     [disturbances]   name = bound b, meaning |d(t)| <= b
     [dynamics]       one entry per state: its time derivative, an expression
@@ -51,7 +52,10 @@ MAX_FILE_BYTES: Final = 256 * 1024
 
 SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibrium", "outputs", "domain", "sets",
                     "units")
-MODEL_KEYS: Final = ("name", "states", "source")
+MODEL_KEYS: Final = ("name", "states", "source", "time")
+#: the values of ``[model] time``: a file says which time its [dynamics] are in, and a value lyapcheck
+#: does not take is refused, so that a file never means another system than its author wrote
+TIME_KINDS: Final = ("continuous",)
 
 
 @dataclass(frozen=True)
@@ -229,7 +233,20 @@ class _Reader:
         for key, value in (("name", name), ("source", origin)):
             if not isinstance(value, str):
                 raise self.fail(f"[model] {key}", f"must be text, got {value!r}")
+        self.check_time(head.get("time", TIME_KINDS[0]))
         return name, origin, self.states(head)
+
+    def check_time(self, value: object) -> None:
+        """``[model] time`` is one of :data:`TIME_KINDS`; a discrete-time map is refused by name (read
+        as [dynamics], its right-hand sides would be taken as time derivatives: another system)."""
+        if value in TIME_KINDS:
+            return
+        kinds = ", ".join(f'"{k}"' for k in TIME_KINDS)
+        if isinstance(value, str) and "discrete" in value.lower():
+            raise self.fail("[model] time", f"discrete-time maps are not supported yet ([dynamics] gives time "
+                                            f"derivatives x' = f(x), not x[k+1] = f(x[k])); supported: {kinds}; "
+                                            f"got {value!r}")
+        raise self.fail("[model] time", f"must be one of {kinds}, got {value!r}")
 
     def model(self) -> Model:
         name, origin, states = self.head()

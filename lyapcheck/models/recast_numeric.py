@@ -71,7 +71,10 @@ class FloatLoop:
                 assert limit is not None
                 cols.append(np.clip(u, -float(limit), float(limit)))
             else:
-                cols.append(_NUMPY[function](u))
+                # exp of a far sample overflows to inf: every caller treats a non-finite value as
+                # an escape (the integrator, the fitted V's samples), so numpy need not warn
+                with np.errstate(over="ignore", invalid="ignore"):
+                    cols.append(_NUMPY[function](u))
         return cols
 
     def __call__(self, X: np.ndarray) -> np.ndarray:

@@ -26,6 +26,7 @@ import contextvars
 import hashlib
 import json
 import os
+import stat
 from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final, Iterator, Mapping
@@ -43,7 +44,7 @@ STORE_FOLDER: Final = "certificates"
 SEARCH_SOURCES: Final = ("sos", "models/lyapunov.py", "models/positivity.py", "models/field.py", "models/search.py",
                          "models/store.py", "tolerances.py")
 #: an entry larger than this is not written (a certificate of a large program; the search is then
-#: repeated in each run rather than filling the cache)
+#: repeated in each run rather than filling the cache), nor read (whatever put it there)
 MAX_ENTRY_BYTES: Final = 4_000_000
 
 
@@ -100,12 +101,51 @@ def _path(key: str) -> Path:
 
 
 def recall(key: str) -> dict[str, Any] | None:
-    """The entry stored under ``key``, or None (none, unreadable, or not a JSON table)."""
+    """The entry stored under ``key``, or None (none, unreadable, not a regular file, larger than
+    :data:`MAX_ENTRY_BYTES`, or not a JSON table)."""
+    text = _read_entry(_path(key))
+    if text is None:
+        return None
     try:
-        data = json.loads(_path(key).read_text())
-    except (OSError, ValueError):
+        data = json.loads(text)
+    except ValueError:
         return None
     return data if isinstance(data, dict) and data.get("key") == key else None
+
+
+def _read_entry(path: Path) -> str | None:
+    """The text of the regular file at ``path`` (a symlink to one counts), or None.
+
+    Whatever sits at an entry's path is read only if it is a regular file of at most
+    :data:`MAX_ENTRY_BYTES`: a FIFO would block the run until a writer came (a class stalled, then
+    out of time, so a planted pipe changed a verdict), a device could be endless. The type is
+    checked before opening (a device is never opened) and again on the open descriptor (the path
+    may have changed in between); the open does not block (``O_NONBLOCK``), and at most the cap
+    plus one byte is read, whatever the size said."""
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return None
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    except (OSError, ValueError):
+        return None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_ENTRY_BYTES:
+            return None
+        chunks: list[bytes] = []
+        left = MAX_ENTRY_BYTES + 1
+        while left > 0:
+            chunk = os.read(fd, min(left, 1 << 20))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            left -= len(chunk)
+        data = b"".join(chunks)
+        return data.decode("utf-8") if len(data) <= MAX_ENTRY_BYTES else None
+    except (OSError, UnicodeDecodeError):
+        return None
+    finally:
+        os.close(fd)
 
 
 def keep(key: str, entry: Mapping[str, Any]) -> None:

@@ -34,13 +34,24 @@ if TYPE_CHECKING:  # pragma: no cover - numpy is imported where a basis is built
 
 #: sign-vector directions with at most this many non-zero entries are used by the hyperplane test
 DIRECTION_SUPPORT = 3
+#: the most entries (directions times points, candidates and variables) the hyperplane test builds: in
+#: many variables (a loop with a hundred auxiliaries has a million directions of support 3) the
+#: support is lowered until they fit. Fewer directions drop fewer monomials: a larger basis, as sound
+MAX_DIRECTION_ENTRIES = 10**8
 
 
-def _directions(nvars: int) -> np.ndarray:
+def direction_count(nvars: int, support: int) -> int:
+    """How many sign vectors with ``1..support`` non-zero entries, the first of them +1, there are."""
+    from math import comb
+
+    return sum(comb(nvars, k) * 2 ** (k - 1) for k in range(1, min(support, nvars) + 1))
+
+
+def _directions(nvars: int, support: int = DIRECTION_SUPPORT) -> np.ndarray:
     import numpy as np
 
     out = []
-    for k in range(1, min(DIRECTION_SUPPORT, nvars) + 1):
+    for k in range(1, min(support, nvars) + 1):
         for idx in itertools.combinations(range(nvars), k):
             for signs in itertools.product((1, -1), repeat=k):
                 if signs[0] != 1:
@@ -60,7 +71,11 @@ def inside_half_polytope(candidates: Sequence[Monomial], support: Iterable[Monom
     if pts.size == 0 or not candidates:
         return [False] * len(candidates)
     nvars = pts.shape[1]
-    dirs = _directions(nvars)
+    nonzero = DIRECTION_SUPPORT
+    rows = len(pts) + len(candidates) + nvars
+    while nonzero > 1 and direction_count(nvars, nonzero) * rows > MAX_DIRECTION_ENTRIES:
+        nonzero -= 1
+    dirs = _directions(nvars, nonzero)
     proj = pts @ dirs.T  # (points, directions)
     hi, lo = proj.max(axis=0), proj.min(axis=0)
     cand = np.array(candidates, dtype=np.int64).reshape(-1, nvars)
@@ -87,10 +102,14 @@ def diagonally_consistent(basis: Sequence[Monomial], support: Iterable[Monomial]
     nvars = len(kept[0])
     supp = [tuple(m) for m in support]
     top = 2 * max(max(max(m) for m in kept), max((max(m) for m in supp), default=0)) + 1
-    radix = np.array([top ** k for k in range(nvars)], dtype=np.int64)
+    # A monomial's code is its exponents in base ``top`` (a sum of two never carries). With many
+    # variables (a loop with 120 auxiliaries) ``top ** nvars`` exceeds int64: the codes are then
+    # Python integers (numpy's object arrays), exact at any size.
+    dtype: type = np.int64 if top ** nvars <= np.iinfo(np.int64).max else object
+    radix: np.ndarray = np.array([top ** k for k in range(nvars)], dtype=dtype)
 
     def code(ms: Sequence[Monomial]) -> np.ndarray:
-        return np.array(ms, dtype=np.int64).reshape(-1, nvars) @ radix
+        return np.array(ms, dtype=dtype).reshape(-1, nvars) @ radix
 
     supp_codes = set(code(supp).tolist()) if supp else set()
     while True:
