@@ -264,8 +264,10 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
         y = model.outputs.get(name)
         if y is None:
             continue
+        y_eq = float((cond.get("bounds_reference") or {}).get(name) or 0.0)  # the bound is on |y - y_eq|
+
         def output(X: np.ndarray) -> np.ndarray:
-            return poly_values(state_ring, y, {s: X[:, k] for k, s in enumerate(model.states)}, len(X))
+            return poly_values(state_ring, y, {s: X[:, k] for k, s in enumerate(model.states)}, len(X)) - y_eq
 
         policies = 1 + len(BOUND_SIGNAL_PERIODS)
         X = np.tile(Z0 + eq, (policies, 1))
@@ -293,7 +295,8 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
         out.trajectories += len(X)
         out.sim_worst[name] = max(out.sim_worst.get(name, 0.0), worst)
         if worst > float(bound) * (1 + TRAJECTORY_CHECK_REL_TOL):
-            out.violations.append(f"sos_bound at {where}: under a disturbance at its bounds |{name}| reached "
+            out.violations.append(f"sos_bound at {where}: under a disturbance at its bounds "
+                                  f"|{name}{f' - {y_eq:.6g}' if y_eq else ''}| reached "
                                   f"{worst:.6g} after {BOUND_TAIL_FROM_S:g} s, above the certified limsup "
                                   f"{float(bound):.6g}")
 

@@ -164,11 +164,12 @@ def test_require_is_met_by_a_stronger_property_and_not_by_a_weaker(tmp_path: Pat
     assert run.exit_code == 1 and json.loads(run.output)["verdict"] == "certified"
 
 
-def test_degree_caps_the_search(tmp_path: Path) -> None:
+def test_degree_caps_the_search_and_the_reason_names_the_next_degree(tmp_path: Path) -> None:
     path = tmp_path / "osc.toml"
     path.write_text(OSCILLATOR)
     capped = certify(model=path, classes="sos_gas", degree=2).conditions["sos_gas"]
     assert capped.status == "not_certified"
+    assert "--degree 4" in capped.summary
     found = certify(model=path, classes="sos_gas").conditions["sos_gas"]
     assert found.status == "certified" and found.numbers["degree"] == 4
 

@@ -10,6 +10,7 @@ import pytest
 import sympy as sp
 
 from lyapcheck import exact, verify
+from lyapcheck.answers import answers_of
 from lyapcheck.api import certify_box
 from lyapcheck.paper.boxes.prop41 import box_vertices, certify_prop41_box, verify_prop41_box
 from lyapcheck.paper.boxes.box import corner_problems, parse_box, problem_at_point
@@ -92,6 +93,7 @@ def test_a_box_around_the_papers_gains_is_refuted_at_a_corner_and_verify_recheck
                                         "refutation": {"point": {k: str(v) for k, v in corner.items()},
                                                        "sup_bound": "1", "g": "2"}}
     slow["verdict"] = "not_certified"  # consistent with the forged status: only the refutation is wrong
+    slow["answers"] = answers_of(slow["conditions"])  # and so are the answers
     rows = verify(slow).checks
     assert [c.ok for c in rows if c.check == "prop41_ges"] == [False]
     assert all(c.ok for c in rows if c.check != "prop41_ges")

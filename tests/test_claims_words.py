@@ -44,7 +44,7 @@ def test_a_box_certificate_says_its_box_everywhere() -> None:
     assert failed(doc) == []
     narrowed = copy.deepcopy(doc)  # a summary that claims a wider box than the certificate's
     narrowed["conditions"]["quadratic"]["summary"] = q["summary"].replace("[0.5, 2]", "[0.1, 5]")
-    assert set(failed(narrowed)) == {"quadratic", "verdict"}  # its one class fails, so does the verdict
+    assert set(failed(narrowed)) == {"quadratic", "verdict", "answers"}  # its one class fails, so do the verdict and answers
     html = certificate_html(doc, simulate=False, recheck=False)
     assert "every claim below holds <strong>for every k in [0.5, 2]" in html
     assert "--box k=0.5..2" in html  # the reproduce command
@@ -72,7 +72,7 @@ def test_v_text_is_the_certified_v_and_a_forged_one_fails_verify() -> None:
     assert failed(doc) == []
     forged = copy.deepcopy(doc)
     forged["conditions"]["quadratic"]["certificate"]["V_text"] = "x1**2 + x2**2"
-    assert set(failed(forged)) == {"quadratic", "verdict"}
+    assert set(failed(forged)) == {"quadratic", "verdict", "answers"}
 
 
 def test_v_text_short_form_and_signs() -> None:
@@ -86,14 +86,16 @@ def test_a_not_certified_reason_says_what_stopped_the_search() -> None:
     duffing = '[model]\nname = "d"\nstates = ["x1", "x2"]\n[dynamics]\nx1 = "x2"\nx2 = "-x1 - x2 - x1**3"\n'
     found = certify_model(parse_model(duffing, "<test>"), classes="quadratic").results["quadratic"]
     assert found.status == "not_certified"
-    assert "degree 2: the solver proved the program infeasible (best margin" in found.summary
+    # the summary says what was tried and what to try; the search's own words are its detail (JSON)
+    assert found.summary.startswith("no quadratic Lyapunov function was found; try ")
+    assert "degree 2: the solver proved the program infeasible (best margin" in " ".join(found.numbers["detail"])
     critical = '[model]\nname = "c"\nstates = ["x1", "x2"]\n[dynamics]\nx1 = "-x1**3 + x2"\nx2 = "-x2"\n'
     found = certify_model(parse_model(critical, "<test>"), classes="quadratic").results["quadratic"]
     # -V' of a quadratic V has x1**4 but no x1**2 term: no strict quadratic certificate can exist. The
     # facial reduction finds that x1's row of V must vanish, and says so (sos_gas finds a quartic V)
     assert found.status == "not_certified"
     assert ("degree 2: no strict certificate of this form exists (V's basis, reduced to the face the solver "
-            "found, keeps no pure power of some state)") in found.summary
+            "found, keeps no pure power of some state)") in " ".join(found.numbers["detail"])
 
 
 def test_the_table_shows_each_certified_v_and_the_box(tmp_path: Any) -> None:

@@ -7,7 +7,6 @@ few sets the tests make up are parsed by the same code (:func:`lyapcheck.models.
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -52,15 +51,12 @@ def test_reachable_example_gives_a_counterexample_with_start_and_time() -> None:
 
 def test_safe_example_reports_a_negative_closest_approach() -> None:
     model, initial, unsafe = load_with_sets(MODELS / "fossil-barr3.toml")
-    t0 = time.perf_counter()
     out = falsify(model, initial, unsafe, margin, samples=200)
-    elapsed = time.perf_counter() - t0
     assert not out.entered and not out.soundness_violation()
     assert out.entries == 0 and out.closest_approach < 0
     assert out.samples == 200 and out.trajectories == 200
     # every piece of the union was sampled: its box holds the piece
-    assert len(out.boxes) == 3
-    assert elapsed < 2.0
+    assert len(out.boxes) == 3  # (its time is benchmarks/bench_quick_paths.py's: no test asserts a wall time)
 
 
 def test_disturbed_tube_is_safe_and_disturbances_push_a_marginal_case_in() -> None:

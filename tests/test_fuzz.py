@@ -14,8 +14,8 @@ run must keep the command-line contract (DESIGN.md):
   no temporary file is left beside it.
 
 Second part: each gain of ``examples/paper.toml`` at 1e-6 and 1e6 times the paper's value,
-with every class: each verdict passes its exact re-check (``verify`` exits 0), within a
-bounded time.
+with every class: each verdict passes its exact re-check (``verify`` exits 0); each class's
+time is bounded by its own limit (no test asserts a wall time).
 
 Hypothesis runs derandomized (a fixed seed: the same cases every run) with bounded example
 counts; the whole file takes about two minutes on two cores. ``LYAPCHECK_FUZZ_SCALE=N`` draws
@@ -29,7 +29,6 @@ import math
 import os
 import re
 import shlex
-import time
 import traceback
 from collections import Counter
 from collections.abc import Iterator, Sequence
@@ -835,9 +834,6 @@ EXTREME_GAINS = {
     ("delta_los", "1e-6"): ("--delta-los", "7.5e-10 m"), ("delta_los", "1e6"): ("--delta-los", "750 m"),
     ("e11", "1e-6"): ("--e11", "9.3e-11 m"), ("e11", "1e6"): ("--e11", "93 m"),
 }
-#: seconds one all-classes run may take at an extreme gain set (about 4 s measured; the class
-#: time limit, lyapcheck.tolerances.CLASS_TIME_LIMIT_S, is the hard bound per class)
-EXTREME_RUN_BUDGET_S = 60.0
 
 
 @pytest.mark.slow
@@ -845,13 +841,10 @@ EXTREME_RUN_BUDGET_S = 60.0
 def test_extreme_gain_sets_pass_their_exact_recheck(gain: str, scale: str) -> None:
     flag, value = EXTREME_GAINS[gain, scale]
     with scratch() as directory:
-        start = time.monotonic()
         result = _certify_and_check(directory, [str(PAPER_TOML), flag, value, "--json"])
-        seconds = time.monotonic() - start
         assert result.exit_code in (0, 1), result.stderr
         doc = json.loads(result.stdout)
         statuses = {name: c["status"] for name, c in doc["conditions"].items()}
         assert statuses["stabcond2"] in ("holds", "fails")
         checked = run_checked(["verify", str(directory / "cert.json"), "--json"])
         assert checked.exit_code == 0, f"{gain} x {scale}: {statuses}\n{checked.stdout}"
-        assert seconds < EXTREME_RUN_BUDGET_S, f"{gain} x {scale}: {seconds:.1f} s"

@@ -214,7 +214,7 @@ def test_an_unstable_equilibrium_is_refuted_with_an_exact_argument(tmp_path: Pat
     import json
 
     doc = json.loads(out.read_text())
-    assert doc["verdict"] == "not_certified"
+    assert doc["verdict"] == "unstable" and doc["answers"]["stability"]["answer"] == "unstable"
     assert doc["conditions"]["linearization"]["status"] == "refuted"
     assert doc["conditions"]["linearization"]["refutation"]["method"] == "lyapunov_inertia"
     assert all(c["status"] != "certified" for c in doc["conditions"].values())
@@ -345,9 +345,11 @@ def test_every_class_is_bounded_in_time_and_the_others_still_run() -> None:
     assert result.results["linearization"].status == "certified"  # exact, no search
     for name in ("quadratic", "sos_gas", "roa"):
         r = result.results[name]
-        assert r.status == "inconclusive" and "MODEL_CLASS_TIME_LIMIT_S" in r.summary
+        assert r.status == "inconclusive" and "MODEL_CLASS_TIME_LIMIT_S" in " ".join(r.numbers["detail"])
+        assert "time limit" in r.summary and "--time-limit" in r.summary
     result = certify_model(vdp, classes=("roa", "linearization"), time_limit_s=0.2)
     roa = result.results["roa"]
-    assert roa.status == "inconclusive" and "MODEL_CLASS_TIME_LIMIT_S" in roa.summary
+    assert roa.status == "inconclusive" and "MODEL_CLASS_TIME_LIMIT_S" in " ".join(roa.numbers["detail"])
+    assert "--time-limit" in roa.summary
     assert result.seconds["roa"] < 0.2 + 5  # the limit plus one solve and its exact check, at most
     assert result.results["linearization"].status == "certified"

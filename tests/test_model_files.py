@@ -15,7 +15,8 @@ Four families:
 - **Security.** Property-based (hypothesis, derandomized): random strings and random trees
   written as text (``__import__('os')``, attributes, lambdas, comprehensions, f-strings, walrus,
   starred, subscripts, very long and deeply nested inputs) either parse or raise
-  :class:`~lyapcheck.models.expressions.ExpressionError`, one line, quickly, while ``eval``,
+  :class:`~lyapcheck.models.expressions.ExpressionError`, one line (how quickly: benchmarks/
+  bench_quick_paths.py), while ``eval``,
   ``exec``, ``compile`` (other than ``ast.parse``'s), ``sympy.sympify`` and ``parse_expr`` fail
   the test if anything calls them. A static test reads ``lyapcheck/models/`` with ``ast``: no call
   to any of them.
@@ -33,7 +34,6 @@ import json
 import os
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -283,17 +283,14 @@ def test_bad_input_end_to_end_in_a_subprocess(name: str, tmp_path: Path) -> None
 
 
 def test_a_huge_power_is_refused_before_it_is_expanded() -> None:
-    """(x1 + ... + x12)**12 has 1,352,078 terms: refused at a product beyond MAX_TERMS, in
-    milliseconds (it took 1.5 s when the power was expanded first)."""
+    """(x1 + ... + x12)**12 has 1,352,078 terms: refused at a product beyond MAX_TERMS (it took
+    1.5 s when the power was expanded first; the time is benchmarks/bench_quick_paths.py's, no test
+    asserts a wall time)."""
     ring = Ring(tuple(TWELVE))
-    start = time.perf_counter()
     with pytest.raises(ExpressionError, match="MAX_TERMS"):
         parse_expression(f"({' + '.join(TWELVE)})**12", ring)
-    assert time.perf_counter() - start < 0.25
-    start = time.perf_counter()
     with pytest.raises(ModelFileError, match="MAX_TERMS"):
         parse_model(BAD["(x1 + ... + x12)**12"].text, "twelve.toml")
-    assert time.perf_counter() - start < 0.25
     # at the limit, and within it, it is no refusal: 13 terms of degree 12
     assert len(parse_expression("(x1 + 1)**12", ring).numerator) == 13
 
@@ -334,14 +331,13 @@ def test_decimals_are_exact() -> None:
 
 
 def test_a_decimal_exponent_beyond_doubles_is_refused_without_building_it() -> None:
-    """Fraction("1e-9999999") would build 10**9999999 (11 s here) before the range check."""
+    """Fraction("1e-9999999") would build 10**9999999 (11 s here) before the range check (the
+    time is benchmarks/bench_quick_paths.py's)."""
     ring = Ring(("x1",))
-    start = time.perf_counter()
     for text in ("1e-9999999*x1", "-1.5e-9999999 + x1"):
         with pytest.raises(ExpressionError, match="out of range"):
             parse_expression(text, ring)
     assert parse_expression("0e9999999*x1 + x1", ring).numerator == ring.gen("x1")
-    assert time.perf_counter() - start < 0.25
 
 
 def test_a_field_of_decimals_that_cancel_is_exactly_zero() -> None:
@@ -507,8 +503,8 @@ HOSTILE = st.one_of(st.text(alphabet=EXPRESSION_CHARS, max_size=120), st.text(ma
 
 def check_refused_or_parsed(text: str) -> None:
     """parse_expression(text) returns an exact rational function or raises ExpressionError, with a
-    one-line message, quickly, and nothing is evaluated."""
-    start = time.perf_counter()
+    one-line message, and nothing is evaluated (how quickly is benchmarks/bench_quick_paths.py's figure:
+    no test asserts a wall time, which a loaded machine decides)."""
     with no_code_execution() as calls:
         try:
             result = parse_expression(text, SECURITY_RING)
@@ -520,7 +516,6 @@ def check_refused_or_parsed(text: str) -> None:
         else:
             assert isinstance(result, Rational) and not result.denominator.is_zero()
     assert calls == [], f"{text[:200]!r} called {calls}"
-    assert time.perf_counter() - start < 1.0, f"{text[:200]!r} took {time.perf_counter() - start:.2f} s"
 
 
 @SECURITY_SETTINGS

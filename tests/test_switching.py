@@ -152,14 +152,10 @@ def test_paper_gains_from_the_toml_file(paper_problem) -> None:
     assert sw.verify(printed, result.certificate)[0]
 
 
-def test_search_finds_the_growing_switching_quickly(paper_system: System) -> None:
-    import time
-
+def test_search_finds_the_growing_switching(paper_system: System) -> None:
+    # (how quickly is benchmarks/bench_quick_paths.py's figure: no test asserts a wall time)
     vertices = paper_vertices(paper_system)
-    sw.find_unstable_switching(vertices)  # warm-up (imports)
-    started = time.perf_counter()
     found = sw.find_unstable_switching(vertices)
-    assert time.perf_counter() - started < 0.2
     assert found is not None and found["growth_per_period"] > 2
     m = (exact.to_float(vertices[0]), exact.to_float(vertices[1]))
     e0 = sw._expm2(np.array(m[0]), np.array(found["t0"]))

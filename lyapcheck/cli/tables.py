@@ -304,7 +304,8 @@ def print_answers(console: "Console", doc: Mapping[str, Any], unmet: Sequence[st
 
     from lyapcheck.answers import VERDICT_MEANING
 
-    answers = doc.get("answers") if isinstance(doc.get("answers"), Mapping) else {}
+    stated = doc.get("answers")
+    answers: Mapping[str, Any] = stated if isinstance(stated, Mapping) else {}
     for question, a in answers.items():
         if isinstance(a, Mapping):
             say(console, Text.assemble((f"{question.replace('_', '-')}: ", "bold"),

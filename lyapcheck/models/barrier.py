@@ -28,9 +28,12 @@ from fractions import Fraction
 from typing import Any, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
+from lyapcheck.models import reasons
 from lyapcheck.models.claims import BARRIER_SENTENCE
 from lyapcheck.models.field import ScaledField, StateField
-from lyapcheck.models.lyapunov import FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials, vanishing_monomials
+from lyapcheck.models.lyapunov import (BLOCK_COST_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials,
+                                        vanishing_monomials)
+from lyapcheck.models.reasons import size_limit
 from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      box_support, exact_grams, multiplier_grams, one, param, why_none)
 from lyapcheck.results import ConditionResult
@@ -93,7 +96,8 @@ def set_identities(field: StateField, b_basis: Sequence[Monomial], degree: int, 
             name = f"R{kind}{k}"
             remainder_basis = [m for m in bases.sos_basis(nv, target | {zero}) if (name, m) not in drop]
             if len(remainder_basis) > MAX_GRAM_ROWS:
-                return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+                return size_limit(len(remainder_basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS,
+                                  "MAX_GRAM_ROWS")
             grams.append(Gram(name, tuple(remainder_basis), full_blocks(remainder_basis)))
             terms.append(Term(one(ring, -1), name))
             const = Coefficients.literal({zero: constant}) if constant else None
@@ -146,10 +150,10 @@ def barrier_structure(field: StateField, initial: Pieces, unsafe: Pieces, degree
     box_grams, box_terms = box_multipliers(nv, field.n, target, with_states=False)
     target |= box_support(box_grams, nv)
     if len(target) > TARGET_LIMIT:
-        return f"the size limit TARGET_LIMIT = {TARGET_LIMIT} monomials of the identity was reached"
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
     decrease_basis = [m for m in bases.sos_basis(nv, target | {zero}) if ("RD", m) not in drop]
     if len(decrease_basis) > MAX_GRAM_ROWS:
-        return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+        return size_limit(len(decrease_basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
     grams.append(Gram("RD", tuple(decrease_basis), full_blocks(decrease_basis)))
     grams.extend(box_grams)
     terms.extend(box_terms)
@@ -158,7 +162,8 @@ def barrier_structure(field: StateField, initial: Pieces, unsafe: Pieces, degree
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=scalars, identities=tuple(identities),
                           objective=("max_margin",))
     if affordable(structure) is None:
-        return "the size limit BLOCK_COST_LIMIT of a program's cost was reached"
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
     return structure
 
 
@@ -316,24 +321,25 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
     try:
         found, tried = search_barrier(field, initial, unsafe, search)
     except BudgetExhausted as exc:
-        return ConditionResult("barrier", "inconclusive", f"{exc}", numbers={"reason": str(exc)},
+        late = reasons.out_of_time("a barrier", search.budget.seconds, str(exc))
+        return ConditionResult("barrier", "inconclusive", late.summary, numbers=late.numbers({"reason": str(exc)}),
                                solver={"solves": search.log}, property="safety")
     trial = _falsification(model)
     if found is None:
         if trial is not None and trial.entry is not None:
-            entry = trial.entry.describe(list(model.states), list(model.disturbances))
+            entry = trial.entry.describe(list(model.states), list(model.disturbances), model.units)
             return ConditionResult("barrier", "counterexample",
                                    f"a simulated trajectory from the initial set enters the unsafe set: {entry} "
-                                   "(simulation, reproducible from its start and disturbance; no barrier was found: "
-                                   f"{'; '.join(tried)})", numbers={"tried": tried, "falsification": trial.to_dict()},
+                                   "(simulation, reproducible from its start and disturbance)",
+                                   numbers={"tried": tried, "falsification": trial.to_dict(),
+                                            "detail": [f"no barrier was found: {line}" for line in tried]},
                                    refutation={"kind": "trajectory", **trial.entry.to_dict()},
                                    solver={"solves": search.log}, property="safety")
-        numbers: dict[str, Any] = {"tried": tried}
+        none = reasons.not_found("barrier", BARRIER_DEGREES, tried, ("degree", "sets", "time"))
+        numbers: dict[str, Any] = none.numbers({"tried": tried})
         if trial is not None:
             numbers["falsification"] = trial.to_dict()
-        return ConditionResult("barrier", "not_certified",
-                               f"no barrier B of degree up to {max(BARRIER_DEGREES)} was found "
-                               f"({'; '.join(tried)}); the system may still be safe", numbers=numbers, solver={"solves": search.log},
+        return ConditionResult("barrier", "not_certified", none.summary, numbers=numbers, solver={"solves": search.log},
                                property="safety")
     T = scaled.scaling.time
     numbers = {"degree": found["degree"], "lambda_per_s": float(found["lam"] / T),

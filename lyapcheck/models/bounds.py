@@ -14,6 +14,11 @@ for all time (``V`` bounds ``|z|``) and ``limsup V <= 1`` from every start. With
 identity ``y^2 <= V + B - 1``, hence ``limsup |y| <= sqrt(B)`` for every disturbance within its
 bounds and every initial state.
 
+The ``y`` bounded is the output's deviation from its value at the equilibrium (the disturbances at 0),
+``y - y_eq`` (:func:`output_deviation`): the shifted field's output keeps ``y_eq`` as its constant
+term, and a bound on ``|h|`` for a gap whose equilibrium is 30 m would say nothing. The claim states
+``bounds_reference`` (each ``y_eq``, SI) and, with ``[units]``, ``bounds_unit`` (:func:`bound_figures`).
+
 The search, per output: minimize ``B`` for each decay rate of :data:`LAMBDA_GRID` (scaled time),
 ``V`` of degree 2, then 4 where the field allows; every candidate is decided by the exact check,
 and the smallest certified ``B`` is the bound. The bound in declared units is
@@ -23,11 +28,13 @@ and the smallest certified ``B`` is the bound. The bound in declared units is
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
+from lyapcheck.models import reasons
 from lyapcheck.models.field import ScaledField, unscale_polynomial
 from lyapcheck.models.lyapunov import TARGET_LIMIT, affordable, face_probe, terms_json
+from lyapcheck.models.reasons import size_limit
 from lyapcheck.models.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      box_support, exact_grams, multiplier_grams, one, param, why_none)
 from lyapcheck.results import ConditionResult
@@ -35,6 +42,9 @@ from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import check_dissipation, check_output_bound
 from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
 from lyapcheck.sos.program import Gram, Identity, Scalar, Solution, Structure, Term
+
+if TYPE_CHECKING:
+    from lyapcheck.models.modelfile import Model
 
 #: decay rates ``lam`` of the dissipation inequality tried, in scaled time
 LAMBDA_GRID: Final = (0.05, 0.2, 0.6, 1.5, 4.0)
@@ -180,8 +190,8 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
     for degree in searched_degrees(BOUND_DEGREES):
         full = bound_structure(scaled, y, degree)
         if full is None:
-            tried.append(f"degree {degree}: above the size limits (MAX_GRAM_ROWS = {MAX_GRAM_ROWS}, TARGET_LIMIT, "
-                         "BLOCK_COST_LIMIT)")
+            tried.append(f"degree {degree}: " + size_limit(None, "a program above the size limits", None,
+                                                           "MAX_GRAM_ROWS, TARGET_LIMIT, BLOCK_COST_LIMIT"))
             continue
         found_here: list[tuple[Fraction, Fraction]] = []
         # the full program first at every rate, then its facial reductions in turn: each found by a
@@ -239,6 +249,66 @@ def best_bound(scaled: ScaledField, y: Poly, search: Search) -> tuple[dict[str, 
     return best, tried
 
 
+def output_deviation(scaled: ScaledField, name: str) -> tuple[Poly, Fraction | None]:
+    """The output ``name`` whose ``limsup |.|`` the class proves, in scaled coordinates, and its
+    reference point in declared units: ``y~ - y~(0)`` and ``y_eq = s_y y~(0)``, the output at the
+    equilibrium with the disturbances at 0 (the shifted coordinates put the equilibrium at 0). Where
+    that value depends on a box's parameters (it is not one number), the output itself and None."""
+    ring = scaled.ring
+    y = scaled.outputs[name]
+    s_y = scaled.scaling.outputs[list(scaled.outputs).index(name)]
+    moving = scaled.n + scaled.m  # the states and the disturbances; a box's parameters come after
+    zero = tuple([0] * ring.nvars)
+    fixed = {m: c for m, c in ring.terms(y).items() if not any(m[:moving])}
+    if any(m != zero for m in fixed):
+        return y, None
+    y_eq = fixed.get(zero, Fraction(0))
+    return y - ring.constant(y_eq), y_eq * s_y
+
+
+def output_units(model: "Model") -> dict[str, str]:
+    """Each output's unit (an SI unit text, ``''`` when dimensionless) where the model declares
+    ``[units]``, else ``{}``: a state's as declared, an expression's its dimension's SI unit, found by
+    the dimension check of :mod:`lyapcheck.models.dimensions` (which the model passed on loading)
+    from the states' units and the parameters' values as the file gives them (a ``--set`` has the
+    file's dimension, checked on loading)."""
+    import tomllib
+
+    from lyapcheck.models import dimensions as dims
+    from lyapcheck.units import parse_si_with_dimension
+
+    if not model.units:
+        return {}
+    table = dims.read_units(model.units, model.states)
+    names = {s: dims.Named("state", table.dimension(s), table.states[s][0], bool(table.states[s][0]))
+             for s in model.states}
+    for key, value in tomllib.loads(model.text).get("parameters", {}).items():
+        quantity = parse_si_with_dimension(key, value)
+        names[key] = dims.Named("parameter", quantity.dimension, str(value), bool(quantity.unit))
+    out: dict[str, str] = {}
+    for name, text in model.output_text.items():
+        written = text.strip()
+        out[name] = table.states[written][0] if written in table.states else \
+            dims.check_output(name, written, names).si_unit()
+    return out
+
+
+def bound_figures(scaled: ScaledField, names: Sequence[str]) -> dict[str, Any]:
+    """What a claim on the outputs ``names`` states beside its bounds: ``bounds_reference`` (each
+    output's value at the equilibrium, SI; None where it depends on a box's parameters, and the
+    bound is then on the output itself) and, with ``[units]``, ``bounds_unit``. ``verify`` re-makes
+    them from the model and compares."""
+    references = {}
+    for name in names:
+        _, y_eq = output_deviation(scaled, name)
+        references[name] = float(y_eq) if y_eq is not None else None
+    out: dict[str, Any] = {"bounds_reference": references}
+    units = output_units(scaled.cleared.shifted.model)
+    if units:
+        out["bounds_unit"] = {name: units[name] for name in names}
+    return out
+
+
 def run(scaled: ScaledField, search: Search) -> ConditionResult:
     """Every output's certified ``limsup`` (declared units), one certificate each."""
     from lyapcheck import exact
@@ -249,11 +319,14 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
     bounds: dict[str, float] = {}
     certs: dict[str, Any] = {}
     missing: list[str] = []
+    detail: list[str] = []  # what each output's search met (numbers["detail"])
     try:
-        for (name, y), s_y in zip(scaled.outputs.items(), scaled.scaling.outputs):
+        for name, s_y in zip(scaled.outputs, scaled.scaling.outputs):
+            y, _ = output_deviation(scaled, name)
             found, tried = best_bound(scaled, y, search)
             if found is None:
                 missing.append(f"{name} ({'; '.join(tried)})")
+                detail.extend(f"{name}: {line}" for line in tried)
                 continue
             bound = exact.sqrt_upper(found["B"], 12) * s_y
             bounds[name] = float(bound)
@@ -268,14 +341,19 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
                 certs[name]["box_multipliers_D"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box_D"]]
                 certs[name]["box_multipliers_E"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box_E"]]
     except BudgetExhausted as exc:
-        return ConditionResult("sos_bound", "inconclusive", f"{exc}; bounds found so far: {bounds}",
-                               numbers={"reason": str(exc), "bounds": bounds}, solver={"solves": search.log})
+        late = reasons.out_of_time("a bound on every output", search.budget.seconds,
+                                   [str(exc), f"bounds found so far: {bounds}", *detail])
+        return ConditionResult("sos_bound", "inconclusive", late.summary,
+                               numbers=late.numbers({"reason": str(exc), "bounds": bounds}),
+                               solver={"solves": search.log})
     if not bounds:
-        return ConditionResult("sos_bound", "not_certified", "no dissipation certificate was found for any output: "
-                                                             + "; ".join(missing), solver={"solves": search.log})
-    text = ", ".join(f"limsup |{k}| <= {v:.4g}" for k, v in bounds.items())
-    summary = f"for every disturbance within its bounds and every start: {text} (checked exactly)"
-    if missing:
-        summary += f"; no bound for {', '.join(missing)}"
-    return ConditionResult("sos_bound", "certified", summary, numbers={"bounds": bounds},
+        none = reasons.not_found("storage function that bounds an output", BOUND_DEGREES, detail,
+                                 ("degree", "disturbances", "time"))
+        return ConditionResult("sos_bound", "not_certified", none.summary, numbers=none.numbers(),
+                               solver={"solves": search.log})
+    from lyapcheck.models.claims import summary
+
+    numbers = {"bounds": bounds, **bound_figures(scaled, list(bounds))}
+    text = summary("sos_bound", {"status": "certified", **numbers}, list(scaled.outputs)) or ""
+    return ConditionResult("sos_bound", "certified", text, numbers=numbers,
                            certificate={"outputs": certs}, solver={"solves": search.log})

@@ -107,6 +107,7 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
     from lyapcheck.errors import ModelFileError
     from lyapcheck.models.field import Scaling, apply_scaling, clear, shifted_field
     from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.stated import check_declared
 
     rows: list[Row] = []
     model_part = doc["model"]
@@ -123,6 +124,7 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
     rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
                  "the stated parameters or equilibrium differ from the model text's"))
+    rows.append(check_declared(doc, model))
     box = None
     if "box" in doc:
         from lyapcheck.models.boxes import ModelBox, check_box
@@ -187,6 +189,7 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
     _check_disturbance_keys(model, conditions, rows)
     _check_candidate(doc, model, conditions, rows)
     _check_summaries(model, conditions, rows, doc.get("box"))
+    _check_stated_claims(model, conditions, rows)
     return _with_verdict(doc, rows)
 
 
@@ -278,10 +281,56 @@ def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any]
                  "candidate: the candidate text is not the V of the certified candidate condition"))
 
 
+#: the figures the exact check of each certificate kind (:func:`_verify_class`) compares with the
+#: certificate itself, each in the direction that keeps the claim true (a stated rate or level at
+#: most the certified one, a bound or a time at least it); a GES claim adds ``k`` and its rate
+_CHECKED_FIGURES: dict[str, tuple[str, ...]] = {
+    "lyapunov": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius"),
+    "quadratic_ball": ("level", "ball_radius"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
+    "sos_bound": ("bounds", "bounds_reference"),
+}
+#: what a certificate of each kind proves (a Lyapunov certificate: GAS, or GES where
+#: :func:`_verify_ges` passed)
+_KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "sublevel": "ROA", "quadratic_ball": "ROA", "barrier": "safety",
+                                  "reach_avoid": "reach_avoid", "sos_bound": "ultimate_bound"}
+
+
+def _check_stated_claims(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
+    """Each decided condition's property and figures against what its certificate proves, by the
+    rule every loop shares (:func:`lyapcheck.models.stated.check_stated`): a figure is one its
+    class's exact check compared, one re-derived here (the degree of the stated polynomial), or a
+    declared estimate; anything else (a ``k`` beside a region, a decay rate beside the
+    linearization) is refused."""
+    from lyapcheck.models.stated import Stated, check_stated
+
+    for name, c in conditions.items():
+        if not isinstance(c, dict) or not (c.get("status") == "certified" or
+                                           (name == "linearization" and c.get("status") == "refuted")):
+            continue
+        try:
+            if name == "linearization":
+                proved = Stated("LES")
+            else:
+                cert = c["certificate"]
+                kind = "sos_bound" if name == "sos_bound" else cert.get("kind")
+                if kind not in _KIND_PROPERTY:
+                    continue  # an unknown kind already fails its class's check
+                prop = "GES" if kind == "lyapunov" and c.get("property") == "GES" else _KIND_PROPERTY[kind]
+                checked = _CHECKED_FIGURES[kind] + (("k", "decay_rate_per_s") if prop == "GES" else ())
+                stated = cert.get("B" if kind == "barrier" else "V")
+                figures = {} if stated is None else {"degree": max(sum(e[:model.n]) for _, e in stated["terms"])}
+                proved = Stated(prop, figures, frozenset(checked))
+            ok, why = check_stated(c, proved)
+        except (KeyError, ValueError, TypeError, ArithmeticError) as exc:
+            ok, why = False, f"the stated figures are malformed: {_describe(exc)}"
+        if not ok:
+            rows.append((name, False, f"{name}: {why}"))
+
+
 def _check_summaries(model: Any, conditions: dict[str, Any], rows: list[Row], box: Any) -> None:
     """Each decided condition's summary is the one its checked figures (and the checked box) give
-    (:mod:`lyapcheck.models.claims`)."""
-    from lyapcheck.models.claims import summary
+    (:mod:`lyapcheck.models.claims`), and its figures' units are the model's."""
+    from lyapcheck.models.claims import state_unit_figures, summary
 
     for name, c in conditions.items():
         if not isinstance(c, dict):
@@ -294,6 +343,9 @@ def _check_summaries(model: Any, conditions: dict[str, Any], rows: list[Row], bo
         if expected is not None and c.get("summary") != expected:
             rows.append((name, False, f"{name}: the summary is not what the checked figures say; they say: "
                                       f"{expected!r}"))
+        elif expected is not None and ({k: c[k] for k in ("ball_radius_unit",) if k in c}
+                                       != state_unit_figures(model.units, model.states, c)):
+            rows.append((name, False, f"{name}: ball_radius_unit is not the states' unit"))
 
 
 def _box_start(model: Any, box: Any) -> int | None:
@@ -355,13 +407,15 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
 
     cert = c["certificate"]
     if name == "sos_bound":
+        from lyapcheck.models.bounds import bound_figures, output_deviation
+
         ring = scaled.ring
         nv = ring.nvars
         names = list(scaled.outputs)
         for out, data in cert["outputs"].items():
             if out not in scaled.outputs:
                 return False, f"no output named {out}"
-            y = scaled.outputs[out]
+            y, _ = output_deviation(scaled, out)  # y - y_eq, as the sentence says (lyapcheck.models.bounds)
             s_y = scaled.scaling.outputs[names.index(out)]
             V = _gram(data["gram_V"], nv)
             taus = [_gram(t, nv) for t in data["gram_tau"]]
@@ -386,6 +440,11 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
                 return False, f"output {out}: the stated figure is below the certified bound"
             if not _v_matches(scaled, StateField(ring=ring, g=scaled.g, D=scaled.D), V, data["V"], v0):
                 return False, f"output {out}: the stated V is not the certificate's"
+        figures = bound_figures(scaled, list(cert["outputs"]))
+        if set(c.get("bounds", {})) != set(cert["outputs"]):
+            return False, "a bound is stated for an output the certificate does not bound"
+        if any(c.get(key) != figures.get(key) for key in ("bounds_reference", "bounds_unit")):
+            return False, "the bounds' reference points (bounds_reference) or units (bounds_unit) are not the model's"
         return True, "every output's dissipation and output identities hold exactly"
     if name == "barrier":
         return _verify_barrier(c, cert, scaled)

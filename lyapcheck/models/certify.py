@@ -12,8 +12,8 @@ sos_gas         GAS          a polynomial ``V`` decreasing everywhere (and the d
 roa             ROA          ``{V <= c}`` lies in the region of attraction
 candidate       ROA or GAS   the same for the user's ``V`` (``--candidate``); GAS when it holds
                              everywhere
-sos_bound       ult. bound   ``limsup |y| <= B`` for each output, every start, every disturbance
-                             within its bounds
+sos_bound       ult. bound   ``limsup |y - y_eq| <= B`` for each output (``y_eq``: its value at the
+                             equilibrium), every start, every disturbance within its bounds
 ==============  ===========  =============================================================
 
 Every class but ``linearization`` needs the field multiplied through by its denominators, which
@@ -47,6 +47,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import numpy as np  # imported where a class computes with floats: reading a model, or re-checking a
     # stored certificate (lyapcheck.models.store), needs none of it
 
+    from lyapcheck.models.numeric import SetCrossCheck
     from lyapcheck.models.parameter_box import ModelBox
 
 log = logging.getLogger(__name__)
@@ -319,13 +320,14 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
     for r in out.results.values():  # every condition of a disturbed model says which it covers
         if model.disturbances and r.disturbances is None:
             r.disturbances = "all" if r.name == "sos_bound" else "zero"  # e.g. not_applicable ones
-    from lyapcheck.models.claims import summary
+    from lyapcheck.models.claims import state_unit_figures, summary
 
     for name, r in out.results.items():
         if r.status == "certified":
             for data, variables in stated_polynomials(model, box, name, r.certificate):
                 data["variables"] = variables
                 data["V_text"] = readable_v(model, data["V"], variables)
+            r.numbers.update(state_unit_figures(model.units, model.states, r.numbers))
         text = summary(name, r.to_json(), tuple(model.outputs), box.to_json() if box is not None else None)
         if text is not None:
             r.summary = text
@@ -419,18 +421,24 @@ def _numerical_errors() -> tuple[type[BaseException], ...]:
 def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) -> ConditionResult:
     """Numerical trouble or the time limit becomes ``inconclusive`` with its reason; bad input and
     bugs propagate (the command line reports them)."""
+    from lyapcheck.models import reasons
+
     try:
         # a hard stop a little beyond the cooperative budget (a solve or check that overruns it)
         with time_limit(limit * HARD_STOP_FACTOR + HARD_STOP_GRACE_S):
             return compute()
     except BudgetExhausted as exc:
         reason = str(exc)
+        why = reasons.out_of_time(reasons.searched_for(name), limit, reason)
     except ClassTimeLimit as exc:
         reason = f"{exc} (lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S, hard stop)"
+        why = reasons.out_of_time(reasons.searched_for(name), limit, reason,
+                                  hard_stop=limit * HARD_STOP_FACTOR + HARD_STOP_GRACE_S)
     except _numerical_errors() as exc:
         reason = f"{type(exc).__name__}: {exc}"
+        why = reasons.numerical_trouble(reasons.searched_for(name), reason)
     log.info("%s inconclusive: %s", name, reason)
-    return ConditionResult(name, "inconclusive", f"could not be decided: {reason}", numbers={"reason": reason})
+    return ConditionResult(name, "inconclusive", why.summary, numbers=why.numbers({"reason": reason}))
 
 
 # -- roa and candidate -------------------------------------------------------------------------------
@@ -490,7 +498,7 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
     the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0)."""
     import numpy as np
 
-    from lyapcheck.models import regions
+    from lyapcheck.models import reasons, regions
 
     model = scaled.cleared.shifted.model
     if field_ is None:
@@ -499,11 +507,12 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
     A = np.array([[float(x) for x in row] for row in scaled.scaling.matrix()])
     eq = np.array([float(v) for v in model.equilibrium])
     if regions.lyapunov_quadratic(field_) is None:
-        return ConditionResult("roa", "not_certified", "the Jacobian at the equilibrium is not Hurwitz"
-                                                       + (" at the box's centre" if field_.p > field_.disturbances
-                                                          else " with the disturbances at 0" if field_.p else "")
-                                                       + ", so no quadratic Lyapunov function starts the search "
-                                                       "(see linearization)", property="ROA")
+        why = reasons.reason("the Jacobian at the equilibrium is not Hurwitz"
+                             + (" at the box's centre" if field_.p > field_.disturbances
+                                else " with the disturbances at 0" if field_.p else "")
+                             + ", so no quadratic Lyapunov function starts the search (see linearization)",
+                             ("candidate",))
+        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
     memo = {} if memo is None else memo
     if "starts" not in memo:
         if model.domain:
@@ -516,47 +525,67 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
     samples = scaled.scaling.to_scaled(starts - eq)
     outcome = regions.enlarge(field_, search, samples, converged)
     if outcome.certificate is None:
-        return ConditionResult("roa", "not_certified", "no sublevel set passed the exact check", property="ROA",
-                               solver={"solves": search.log}, numbers={"history": outcome.history})
+        why = reasons.reason("no region of attraction was proved: no level set of the linearization's quadratic V "
+                             "could be proved to shrink", ("domain", "candidate", "time"),
+                             "no sublevel set passed the exact check")
+        return ConditionResult("roa", "not_certified", why.summary, property="ROA",
+                               solver={"solves": search.log}, numbers=why.numbers({"history": outcome.history}))
     cert = outcome.certificate
     inside = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))(regions.on_states(field_, samples)) \
         <= float(cert.level)
     numbers: dict[str, Any] = {"degree": 2 * max(sum(m) for m in cert.V.basis), "simulated_starts": int(len(starts))}
     if model.domain:
-        numbers["roa_share"] = float(np.mean(inside[converged])) if converged.any() else 0.0
+        if converged.any():  # (no simulated start converged in the horizon: no share to state, not a share of 0)
+            numbers["roa_share"] = float(np.mean(inside[converged]))
         numbers["simulated_roa_share_of_domain"] = float(np.mean(converged))
     suspicious = inside & ~converged
-    if suspicious.any():  # a start in a proved set that did not converge: simulate it far longer
+    if suspicious.any():  # a start in a proved set that did not converge: simulate it far longer, V watched
+        V = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))
+
+        def value(X: np.ndarray) -> np.ndarray:
+            return V(regions.on_states(field_, scaled.scaling.to_scaled(np.atleast_2d(X) - eq)))
+
         try:
-            again = simulated_region_long(scaled, starts[suspicious])
+            again = simulated_region_long(scaled, starts[suspicious], value, float(cert.level))
         except ClassTimeLimit:  # the hard stop may end this check, never the proof before it
             numbers["long_simulation"] = "stopped by the class's hard time limit"
         else:
-            numbers["starts_in_set_not_converged"] = int(np.sum(~again))
-            if (~again).any():
-                numbers["soundness_violation"] = True
+            numbers.update(again.numbers())
     numbers["rounds"] = outcome.history
     return regions.level_result("roa", scaled, field_, cert, search, numbers, "region of attraction")
 
 
-def simulated_region_long(scaled: ScaledField, starts: np.ndarray) -> np.ndarray:
+def simulated_region_long(scaled: ScaledField, starts: np.ndarray, value: Callable[[np.ndarray], np.ndarray],
+                          level: float) -> SetCrossCheck:
+    """Starts (declared states, rows) in the certified set ``{value <= level}`` that did not converge
+    in the first simulation, simulated twenty times longer at every parameter point with V watched
+    (:func:`lyapcheck.models.numeric.check_certified_set`): a violation only where one leaves the
+    set (the certificate gives no decrease rate to bound the time to converge); the others, still
+    converging, are not checked."""
     import numpy as np
 
-    from lyapcheck.models.numeric import converges, typical_time
+    from lyapcheck.models.numeric import FieldEvaluator, ModelSystem, SetCrossCheck, check_certified_set, typical_time
+    from lyapcheck.models.trajectories import RTOL
 
     model = scaled.cleared.shifted.model
     half = _half_widths(model)
+    eq = np.array([float(v) for v in model.equilibrium])
+    left = np.zeros(len(starts), dtype=bool)
     converged = np.ones(len(starts), dtype=bool)
     for params in parameter_points(scaled):
-        converged &= converges(model, starts, t_end=20 * ROA_HORIZON * typical_time(model, params), radius=half * 1e-3,
-                               escape=half * 1e3, max_iterations=200_000, parameters=params).converged
-    return converged
+        system = ModelSystem(FieldEvaluator.of(model, params), len(starts), escape=half * 1e3, center=eq)
+        found = check_certified_set(system, starts, 20 * ROA_HORIZON * typical_time(model, params), value=value,
+                                    level=level, converged=lambda X: np.all(np.abs(X - eq) <= half * 1e-3, axis=1),
+                                    rtol=RTOL, atol=half * 1e-6, max_iterations=200_000)
+        left |= found.left
+        converged &= found.converged
+    return SetCrossCheck(left=left, overdue=np.zeros(len(starts), dtype=bool), converged=converged & ~left)
 
 
 def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -> ConditionResult:
     import numpy as np
 
-    from lyapcheck.models import regions
+    from lyapcheck.models import reasons, regions
     from lyapcheck.models.lyapunov import best_decay_rate, stated_v
     from lyapcheck.sos.polynomials import to_fmpq
 
@@ -574,9 +603,10 @@ def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -
     v_scaled = full.restrict(full.compose(cand.poly, images), ring)
     V = regions.gram_of(field_, v_scaled, search)
     if V is None:
-        return ConditionResult("candidate", "not_certified", "V could not be shown positive definite and radially "
-                                                             "unbounded (no positive definite Gram matrix over its "
-                                                             "reduced basis with a pure power of every state)",
+        why = reasons.reason("the candidate V could not be proved positive definite and radially unbounded",
+                             ("other_candidate",), "no positive definite Gram matrix over its reduced basis with a "
+                             "pure power of every state")
+        return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
                                solver={"solves": search.log}, property="ROA")
     sigma = regions.global_decrease(field_, V, Fraction(0), search)
     if sigma is not None:
@@ -605,16 +635,20 @@ def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -
         guess = float(np.max(regions.NumericPoly(ring, V.poly(ring))(regions.on_states(field_, ball))))
         cert = regions.largest_level(field_, V, search, guess, regions.symmetry(field_), grow=True)
         if cert is None:
-            return ConditionResult("candidate", "not_certified", "V' < 0 everywhere could not be proved, no point with "
-                                                                 "V' >= 0 was sampled, and no level from "
-                                                                 f"{guess:.6g} upwards passed the level program",
+            why = reasons.reason("V' < 0 could not be proved everywhere, nor on any level set {V <= c} (no point with "
+                                 "V' >= 0 was sampled)", ("other_candidate", "domain", "time"),
+                                 f"no level from {guess:.6g} upwards passed the level program")
+            return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
                                    solver={"solves": search.log}, property="ROA")
         return regions.level_result("candidate", scaled, field_, cert, search, {"level_search": "upwards, by SOS"},
                                     "the user's V")
     cert = regions.largest_level(field_, V, search, top, regions.symmetry(field_))
     if cert is None:
-        return ConditionResult("candidate", "not_certified", f"no level of V passed the exact check (sampled supremum "
-                                                             f"{top:.6g})", numbers={"level_supremum_estimate": top},
+        why = reasons.reason("V' < 0 could not be proved everywhere, nor on any level set {V <= c} below the "
+                             f"sampled points where V' >= 0 (V = {top:.6g})", ("other_candidate", "time"),
+                             f"no level of V passed the exact check (sampled supremum {top:.6g})")
+        return ConditionResult("candidate", "not_certified", why.summary,
+                               numbers=why.numbers({"level_supremum_estimate": top}),
                                solver={"solves": search.log}, property="ROA")
     return regions.level_result("candidate", scaled, field_, cert, search,
                                 {"level_supremum_estimate": top, "level_ratio_to_estimate": float(cert.level) / top},

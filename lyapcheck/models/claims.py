@@ -12,6 +12,13 @@ The disturbances (DESIGN.md, "Disturbances in claims"): a claim proved with ever
 held at 0 says ``(d = 0)``; a stability claim proved for every disturbance signal within its bounds
 says so. ``not_certified``, ``inconclusive`` and ``not_applicable`` conditions claim nothing; their
 text is a reason, not a summary of figures, and is left as the class wrote it.
+
+Every figure is printed with its unit (:func:`with_unit`) and its reference point: times in s and
+rates in 1/s (a model file is SI inside, and its time is in seconds with or without ``[units]``); a
+bound in its output's unit (``bounds_unit``, with ``[units]``) and on the output's deviation from its
+value at the equilibrium (``limsup |h - 30 m| <= 2.9 m``, ``bounds_reference``); a ball's radius in
+the states' unit when they share one (``ball_radius_unit``); a level of ``V`` bare (``V`` has no
+declared unit). A state's distance is always to the equilibrium: ``|x(t) - x_eq|``.
 """
 
 from __future__ import annotations
@@ -28,6 +35,63 @@ ROBUST_NOT_FOUND = "; with the declared disturbances acting, no certificate of t
 #: what a certified ``barrier`` states (:mod:`lyapcheck.models.barrier`)
 BARRIER_SENTENCE = ("safety: no trajectory that starts in the initial set ever enters the unsafe set (B <= 0 on the "
                     "initial set, B >= 1 on the unsafe set, B' <= lambda B everywhere; checked exactly)")
+#: the unit of every time a sentence prints, and of every rate (its inverse): a model file is SI
+#: inside and its ``[units]`` accept only ``time = "s"`` (lyapcheck.models.dimensions)
+TIME_UNIT = "s"
+RATE_UNIT = "1/s"
+#: significant digits of a figure in a sentence (the JSON keeps the full figure)
+FIGURE_DIGITS = 4
+
+
+def rounded(value: float | Fraction, digits: int = FIGURE_DIGITS, direction: str = "nearest") -> str:
+    """``value`` to ``digits`` significant digits, rounded towards the weaker claim: ``"up"`` for an
+    upper bound (a limsup, a GES constant k, a time bound: 2.00015 prints 2.001, never 2),
+    ``"down"`` for a lower bound (a decay rate, a level, a ball's radius), ``"nearest"`` for a
+    figure that bounds nothing. A printed sentence never claims more than its certificate proves."""
+    if direction == "nearest" or value == 0:
+        return f"{float(value):.{digits}g}"
+    import math
+    from decimal import Decimal
+
+    exact = Fraction(value)  # (a float converts exactly)
+    exponent = math.floor(math.log10(abs(float(exact)))) - digits + 1
+    quantum = Fraction(10) ** exponent
+    steps = exact / quantum
+    whole = math.ceil(steps) if direction == "up" else math.floor(steps)
+    if direction not in ("up", "down"):
+        raise ValueError(f"direction must be 'up', 'down' or 'nearest', got {direction!r}")
+    text = f"{Decimal(whole).scaleb(exponent):.{digits + 1}g}"  # exact: at most digits + 1 significant digits
+    return f"{float(text):.{digits + 1}g}"
+
+
+def with_unit(value: float | Fraction, unit: str | None, digits: int = FIGURE_DIGITS, direction: str = "nearest"
+              ) -> str:
+    """A figure as a sentence prints it: ``2.294 m``; bare when it has no unit (``unit`` None or
+    ``''``, dimensionless), rounded towards the weaker claim (:func:`rounded`). The one place a
+    sentence formats a physical figure."""
+    text = rounded(value, digits, direction)
+    return f"{text} {unit}" if unit else text
+
+
+def state_unit_figures(units: Mapping[str, str], states: Sequence[str], condition: Mapping[str, Any]
+                       ) -> dict[str, Any]:
+    """The unit of a condition's figure in the states (its ``ball_radius``), from the model's
+    ``[units]`` as written (``units``; ``{}`` without the table): ``ball_radius_unit`` is the unit
+    the states share (``''`` when all are dimensionless), or None when they differ (the radius is
+    then a norm of SI values of different units). Nothing without ``[units]`` or a radius."""
+    if not units or "ball_radius" not in condition:
+        return {}
+    found = {"" if units.get(s, "").strip() in ("", "1") else units[s].strip() for s in states}
+    return {"ball_radius_unit": found.pop() if len(found) == 1 else None}
+
+
+def deviation(name: str, reference: float | None, unit: str | None) -> str:
+    """``h - 30 m``: a quantity's deviation from its value at the equilibrium, or ``h`` where that
+    value is 0 (or not one number: ``reference`` None)."""
+    if not reference:
+        return name
+    sign = "-" if reference > 0 else "+"
+    return f"{name} {sign} {with_unit(abs(reference), unit, digits=6)}"
 
 
 def covered(coverage: str | None, text: str) -> str:
@@ -56,9 +120,9 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
         text = BARRIER_SENTENCE
     elif name == "reach_avoid":
         text = (f"reach-avoid: every trajectory that starts in the initial set reaches the goal within "
-                f"{_number(condition, 'reach_time_bound_s'):.4g} s without entering the unsafe set before (V <= 0 on "
-                "the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal, V bounded below; checked "
-                "exactly)")
+                f"{with_unit(_number(condition, 'reach_time_bound_s'), TIME_UNIT, direction='up')} without entering the unsafe set "
+                "before (V <= 0 on the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal, V bounded "
+                "below; checked exactly)")
         if "stay" in (condition.get("certificate") or {}):
             text += ("; and it stays in the goal afterwards (it reaches {W <= 0}, a set inside the goal that no "
                      "trajectory leaves: W' <= mu W; checked exactly)")
@@ -112,36 +176,73 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
     if kind in ("sublevel", "quadratic_ball"):
         what = SET_NAMES.get(name, name)
         level = _number(condition, "level")
-        ball = (f"; it holds the ball |x - x_eq| <= {_number(condition, 'ball_radius'):.4g}"
-                if "ball_radius" in condition else "")
-        return f"{what}: every start in {{V <= {level:.6g}}} converges to the equilibrium (checked exactly){ball}"
+        ball = f"; {ball_words(condition)}" if "ball_radius" in condition else ""
+        return (f"{what}: every start in {{V <= {rounded(level, 6, 'down')}}} converges to the equilibrium (checked "
+                f"exactly){ball}")
     if kind != "lyapunov":
         raise ValueError(f"unknown certificate kind {kind!r}")
     if condition.get("property") == "GES":
-        return (f"GES: |x(t)| <= {_number(condition, 'k'):.4g} |x0| exp(-{_number(condition, 'decay_rate_per_s'):.4g} "
-                "t) from every start (a quadratic V with V' <= -mu V, checked exactly)")
+        return (f"GES: |x(t) - x_eq| <= {rounded(_number(condition, 'k'), FIGURE_DIGITS, 'up')} |x0 - x_eq| exp(-r t) "
+                f"with r = {with_unit(_number(condition, 'decay_rate_per_s'), RATE_UNIT, direction='down')}, from every start (a quadratic V "
+                "with V' <= -mu V, checked exactly)")
     rate = _number(condition, "decay_rate_V_per_s")
     if name == "candidate":
-        tail = f", V' <= -{rate:.4g} V" if rate > 0 else ""
+        tail = f", V' <= -r V with r = {with_unit(rate, RATE_UNIT, direction='down')}" if rate > 0 else ""
         return f"GAS: V' < 0 away from the equilibrium everywhere{tail} (checked exactly)"
     degree = condition["degree"]
     if isinstance(degree, bool) or not isinstance(degree, int):
         raise TypeError(f"figure 'degree' must be an integer, got {degree!r}")
-    tail = f", and V' <= -{rate:.4g} V (V decays exponentially from every start)" if rate > 0 else ""
+    tail = (f", and V' <= -r V with r = {with_unit(rate, RATE_UNIT, direction='down')} (V decays exponentially from every start)"
+            if rate > 0 else "")
     what = "a quadratic V" if degree == 2 else f"a polynomial V of degree {degree}"
     return f"GAS: {what} with V' < 0 away from the equilibrium{tail} (checked exactly)"
+
+
+def ball_words(condition: Mapping[str, Any]) -> str:
+    """``it holds the ball |x - x_eq| <= 0.5 m``: a certified set's largest ball, with the states'
+    unit where they share one (``ball_radius_unit``); where they do not (``null``), the radius is a
+    Euclidean norm of the states' SI values, and the sentence says so."""
+    radius = _number(condition, "ball_radius")
+    unit = condition.get("ball_radius_unit")
+    if unit is not None and not isinstance(unit, str):
+        raise TypeError(f"figure 'ball_radius_unit' must be a unit or null, got {unit!r}")
+    mixed = "ball_radius_unit" in condition and unit is None
+    return (f"it holds the ball |x - x_eq| <= {with_unit(radius, unit, direction='down')}"
+            + (" (the Euclidean norm of the states' SI values: they have different units)" if mixed else ""))
 
 
 def _bounds(condition: Mapping[str, Any], outputs: Sequence[str]) -> str:
     bounds = condition["bounds"]
     if not isinstance(bounds, dict):
         raise TypeError("figure 'bounds' must be a table of outputs")
-    text = ", ".join(f"limsup |{k}| <= {_number(bounds, k):.4g}" for k in bounds)
-    out = f"for every disturbance within its bounds and every start: {text} (checked exactly)"
+    references = _table(condition, "bounds_reference", bounds)
+    units = _table(condition, "bounds_unit", bounds)
+    parts = []
+    for k in bounds:
+        # absent: a document without reference points (the output's value at the equilibrium is 0);
+        # None: that value depends on a box's parameters, and the proof bounds the output itself
+        reference = 0.0 if k not in references else None if references[k] is None else _number(references, k)
+        unit = units.get(k)
+        if unit is not None and not isinstance(unit, str):
+            raise TypeError(f"figure 'bounds_unit' of {k} must be a unit, got {unit!r}")
+        text = f"limsup |{deviation(k, reference, unit)}| <= {with_unit(_number(bounds, k), unit, direction='up')}"
+        if reference is None:
+            text += f" (of {k} itself: its value at the equilibrium depends on the box's parameters)"
+        parts.append(text)
+    out = f"for every disturbance within its bounds and every start: {', '.join(parts)} (checked exactly)"
     missing = [k for k in outputs if k not in bounds]
     if missing:
         out += f"; no bound for {', '.join(missing)}"
     return out
+
+
+def _table(condition: Mapping[str, Any], key: str, bounds: Mapping[str, Any]) -> Mapping[str, Any]:
+    """A per-output figure table (``bounds_reference``, ``bounds_unit``): absent, or a table over
+    the bounded outputs exactly."""
+    table = condition.get(key, {})
+    if not isinstance(table, dict) or (key in condition and set(table) != set(bounds)):
+        raise TypeError(f"figure '{key}' must be a table over the bounded outputs")
+    return table
 
 
 # -- V as a reader sees it ------------------------------------------------------------------------
@@ -204,4 +305,5 @@ def v_expression(terms: Mapping[str, Any], variables: Sequence[str], shifts: Map
     return total
 
 
-__all__ = ["summary", "box_words", "v_text", "v_expression", "SET_NAMES", "DISTURBANCE_PREFIX"]
+__all__ = ["summary", "box_words", "ball_words", "with_unit", "deviation", "state_unit_figures", "v_text",
+           "v_expression", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT", "RATE_UNIT"]

@@ -115,7 +115,7 @@ _V_RATE: Final = Figure("decay_rate_V_per_s", "decay_rate_V_per_s", "certified d
 CLASSES: Final[tuple[ModelClass, ...]] = (
     ModelClass("linearization", "stability", "LES", over_box=False, stability=True, cleared=False),
     ModelClass("quadratic", "stability", "GES", over_box=True, stability=True,
-               figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t)| <= k |x0| exp(-rate t)"),
+               figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"),
                         Figure("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s"))),
     ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,)),
     ModelClass("roa", "stability", "ROA", over_box=True, stability=True,
@@ -123,7 +123,7 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                         Figure("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI"))),
     ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True),
     ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
-               output_figure=OutputFigure("bounds", "limsup |{y}| <= this, SI")),
+               output_figure=OutputFigure("bounds", "limsup |{y} - {y}_eq| <= this, SI ({y}_eq: bounds_reference)")),
     ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
     ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False,

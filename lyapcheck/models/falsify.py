@@ -71,7 +71,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Final, Sequence
+from typing import Any, Callable, Final, Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -179,9 +179,17 @@ class Witness:
     #: the trajectory stayed in the [domain] box until ``time`` (None: the model declares none)
     inside_domain: bool | None
 
-    def describe(self, states: Sequence[str], disturbances: Sequence[str]) -> str:
-        start = ", ".join(f"{s} = {v:.6g}" for s, v in zip(states, self.start))
-        point = ", ".join(f"{s} = {v:.6g}" for s, v in zip(states, self.point))
+    def describe(self, states: Sequence[str], disturbances: Sequence[str], units: Mapping[str, str] | None = None
+                 ) -> str:
+        """The witness in words; with the model's ``[units]``, each state's value with its unit."""
+        from lyapcheck.models.claims import with_unit
+
+        def unit(s: str) -> str | None:
+            u = (units or {}).get(s, "").strip()
+            return None if u in ("", "1") else u
+
+        start = ", ".join(f"{s} = {with_unit(v, unit(s), 6)}" for s, v in zip(states, self.start))
+        point = ", ".join(f"{s} = {with_unit(v, unit(s), 6)}" for s, v in zip(states, self.point))
         return (f"from {start} with {self.disturbance.describe(disturbances)}: at t = {self.time:.6g} s "
                 f"at {point} (unsafe margin {self.margin:.6g})")
 

@@ -398,9 +398,9 @@ def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, F
     denominator = _pow2(x[n + 1]) if not D_w.is_constant() else Fraction(1)
     disturbances = tuple(_pow2(v) if bounds[k] > 0 else Fraction(1) for k, v in enumerate(dist_log))
     outputs = []
-    for y in outputs_w:
+    for y in outputs_w:  # sized by its deviation: sos_bound bounds |y - y_eq| (lyapcheck.models.bounds)
         logs = [math.log2(abs(c)) + sum(mono[k] * float(x[k]) for k in range(n))
-                for mono, c in ring.float_terms(y).items()]
+                for mono, c in ring.float_terms(y).items() if any(mono)]
         outputs.append(_pow2(max(logs)) if logs else Fraction(1))
     return Scaling(states=states, disturbances=disturbances, time=time, denominator=denominator,
                    outputs=tuple(outputs), transform=transform)

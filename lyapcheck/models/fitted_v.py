@@ -106,9 +106,10 @@ def _columns(Z: np.ndarray, F: np.ndarray, P0: np.ndarray, mons: list[tuple[int,
     n = Z.shape[1]
     top = max((max(m) for m in mons), default=1)
     powers = [[np.ones(len(Z))] for _ in range(n)]
-    for i in range(n):
-        for _ in range(top):
-            powers[i].append(powers[i][-1] * Z[:, i])
+    with np.errstate(over="ignore"):  # a far sample's powers: inf (see below)
+        for i in range(n):
+            for _ in range(top):
+                powers[i].append(powers[i][-1] * Z[:, i])
 
     def monomial(e: Sequence[int]) -> np.ndarray:
         out = powers[0][e[0]]
@@ -117,17 +118,20 @@ def _columns(Z: np.ndarray, F: np.ndarray, P0: np.ndarray, mons: list[tuple[int,
                 out = out * powers[i][e[i]]
         return out
 
-    V = [np.einsum("ij,jk,ik->i", Z, P0, Z)]
-    dV = [2 * np.einsum("ij,jk,ik->i", Z, P0, F)]
-    for m in mons:
-        V.append(monomial(m))
-        d = np.zeros(len(Z))
-        for i in range(n):
-            if m[i]:
-                e = list(m)
-                e[i] -= 1
-                d += m[i] * monomial(e) * F[:, i]
-        dV.append(d)
+    # a far sample (or one where the field overflowed) gives inf or nan here: the callers keep only
+    # finite rows (``good``; _level_and_box counts a non-finite V' as a violation)
+    with np.errstate(over="ignore", invalid="ignore"):
+        V = [np.einsum("ij,jk,ik->i", Z, P0, Z)]
+        dV = [2 * np.einsum("ij,jk,ik->i", Z, P0, F)]
+        for m in mons:
+            V.append(monomial(m))
+            d = np.zeros(len(Z))
+            for i in range(n):
+                if m[i]:
+                    e = list(m)
+                    e[i] -= 1
+                    d += m[i] * monomial(e) * F[:, i]
+            dV.append(d)
     return np.column_stack(V), np.column_stack(dV)
 
 

@@ -46,8 +46,12 @@ from lyapcheck.models.interval_field import BallLoop, LieDerivative, negative_de
 from lyapcheck.models.recast import RecastSystem
 from lyapcheck.sos.polynomials import Poly, Ring
 
-#: the most cells a proof may examine (decrease and boundary together) before it gives up
+#: the most cells a proof may examine in each part (the boundary, the decrease) before it gives up
+#: (``verify``'s bound; a search's attempt has its own, smaller one: INTERVAL_ATTEMPT_CELLS)
 INTERVAL_CELL_LIMIT: Final = 400_000
+#: why a proof stopped at its deadline: the class's wall-clock limit, a safety net only (the work
+#: budgets above decide every outcome a test or a documented figure depends on)
+SAFETY_NET: Final = "stopped by the class's time limit (a safety net; lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S)"
 #: the finest bisection: a cell is not split below this fraction of the box's width in each state
 #: (with MAGNITUDE_BITS + DYADIC_BITS + 13 + 1 <= 53 every corner and midpoint is an exact double)
 INTERVAL_MIN_WIDTH: Final = Fraction(1, 2 ** 13)
@@ -209,12 +213,17 @@ def low_order_terms(ring: Ring, V: Poly, n: int) -> bool:
 
 
 def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None,
-                 lie: Any = None, flat: bool | None = None) -> IntervalProof:
+                 lie: Any = None, flat: bool | None = None, cell_budget: int | None = None) -> IntervalProof:
     """Prove the claim's three parts (module docstring) on the true field; deterministic.
 
     ``V`` over the states alone by default; for a ``V`` that uses auxiliaries, ``lie`` is its
     :class:`~lyapcheck.models.interval_field.RecastLieDerivative` and ``flat`` whether ``V`` and its
     gradient in the states vanish at the equilibrium, decided exactly by the caller (part 3 needs it).
+    ``cell_budget`` bounds the cells of the boundary and the decrease together (a search's work budget,
+    :data:`~lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS`: the outcome is the same on any machine and
+    under any load); each part is also bounded by INTERVAL_CELL_LIMIT. ``deadline`` (a
+    ``time.perf_counter()`` value) is only a safety net: the class's time limit, named as such when
+    it stops the proof.
     """
     start = time.perf_counter()
     ring = system.ring
@@ -240,6 +249,13 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     cells = _Cells(claim.lo, claim.hi)
     box = tuple((float(l), float(h)) for l, h in zip(claim.lo, claim.hi))
     count = 0
+
+    def out_of_cells(part: int, total: int) -> str | None:
+        """Why the proof stops at this many cells of the part and of both parts, or None."""
+        if cell_budget is not None and total > cell_budget:
+            return f"more than the attempt's {cell_budget} cells (lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS)"
+        return f"more than {INTERVAL_CELL_LIMIT} cells" if part > INTERVAL_CELL_LIMIT else None
+
     # 1. the boundary: V > level on each face
     for i in range(n):
         for side in (box[i][0], box[i][1]):
@@ -247,10 +263,10 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
             while stack:
                 cell = stack.pop()
                 count += 1
-                if count > INTERVAL_CELL_LIMIT:
-                    return failed(f"more than {INTERVAL_CELL_LIMIT} cells", boundary=count)
+                if (why := out_of_cells(count, count)) is not None:
+                    return failed(why, boundary=count)
                 if deadline is not None and time.perf_counter() > deadline:
-                    return failed("out of time on the boundary", boundary=count)
+                    return failed(SAFETY_NET + " on the boundary", boundary=count)
                 if _v_above(lie, cells, cell, level, mean_value=True):
                     continue
                 halves = cells.split(cell, fixed=i)
@@ -271,10 +287,10 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     while stack:
         cell = stack.pop()
         count += 1
-        if count > INTERVAL_CELL_LIMIT:
-            return failed(f"more than {INTERVAL_CELL_LIMIT} cells", count, boundary, r)
+        if (why := out_of_cells(count, boundary + count)) is not None:
+            return failed(why, count, boundary, r)
         if deadline is not None and count % 256 == 0 and time.perf_counter() > deadline:
-            return failed("out of time", count, boundary, r)
+            return failed(SAFETY_NET, count, boundary, r)
         if all(-rf <= a and b <= rf for a, b in cell):
             continue  # inside N: part 3
         if _v_above(lie, cells, cell, level, mean_value=False):

@@ -189,14 +189,16 @@ def decide(J: Matrix) -> ConditionResult:
         return ConditionResult("linearization", "refuted",
                                f"the Jacobian has an eigenvalue with positive real part (rigorous enclosure {root}): "
                                "the equilibrium is unstable", numbers=numbers, refutation=cert)
+    from lyapcheck.models import reasons
+
     if imaginary_axis_roots(coeffs):
-        return ConditionResult("linearization", "not_certified",
-                               "critical case: the Jacobian has eigenvalues on the imaginary axis (exact) and none "
-                               "with positive real part; the linearization decides nothing (try the other classes)",
-                               numbers={**numbers, "reason": "critical"}, certificate=cert)
-    return ConditionResult("linearization", "inconclusive",
-                           f"the {n}x{n} Jacobian could not be decided (no root enclosure was conclusive)",
-                           numbers=numbers)
+        why = reasons.reason("critical case: the Jacobian has eigenvalues on the imaginary axis (exact) and none with "
+                             "positive real part, so the linearization decides nothing", ("search", "candidate"))
+        return ConditionResult("linearization", "not_certified", why.summary,
+                               numbers=why.numbers({**numbers, "reason": "critical"}), certificate=cert)
+    why = reasons.reason(f"the eigenvalues of the {n}x{n} Jacobian could not be located exactly",
+                         ("search", "candidate"), "no root enclosure was conclusive")
+    return ConditionResult("linearization", "inconclusive", why.summary, numbers=why.numbers(numbers))
 
 
 def verify(shifted: ShiftedField, status: str, data: dict[str, Any]) -> tuple[bool, str]:

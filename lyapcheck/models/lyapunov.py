@@ -30,8 +30,9 @@ import math
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
-from lyapcheck.models import store
+from lyapcheck.models import reasons, store
 from lyapcheck.models.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
+from lyapcheck.models.reasons import size_limit
 from lyapcheck.models.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      multiplier_grams, multiplier_variable, one, param)
 from lyapcheck.results import ConditionResult
@@ -116,7 +117,8 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     ring = field.ring
     nv = ring.nvars
     if bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree) > CANDIDATE_LIMIT:
-        return f"the size limit CANDIDATE_LIMIT = {CANDIDATE_LIMIT} candidate monomials was reached"
+        return size_limit(bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree),
+                          "candidate monomials", CANDIDATE_LIMIT, "CANDIDATE_LIMIT")
     z_v = [m for m in monomials(nv, 1, degree // 2 + param_degree)
            if 1 <= sum(m[:n]) <= degree // 2 and sum(m[n:]) <= param_degree and m not in drop_v]
     if not bases.has_pure_powers(z_v, range(n)):
@@ -134,10 +136,11 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
         sq = {tuple(2 * int(k == multiplier_variable(g.name)) for k in range(nv)), tuple([0] * nv)}
         target |= {tuple(a + b for a, b in zip(m, s)) for m in _products(g.basis, g.blocks) for s in sq}
     if len(target) > TARGET_LIMIT:
-        return f"the size limit TARGET_LIMIT = {TARGET_LIMIT} monomials of the identity was reached"
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
     z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
     if len(z_w) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
-        return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+        return size_limit(max(len(z_w), len(z_v)), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS,
+                          "MAX_GRAM_ROWS")
     if not z_w or not bases.has_pure_powers(z_w, range(n)):
         return ("no strict certificate of this form exists (the Newton polytope of -V' leaves no pure power of "
                 "every state in its basis)")
@@ -154,7 +157,8 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
         identities=(Identity("lyapunov", tuple(terms), None, "W"),),
         objective=("max_margin",), trace_one=("V",))
     if affordable(structure) is None:
-        return f"the size limit BLOCK_COST_LIMIT = {BLOCK_COST_LIMIT:.1e} of a program's cost was reached"
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
     return structure
 
 
@@ -417,8 +421,8 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
     if key is not None:
         recalled = recall_certificate(field, key, degrees)
         if recalled is not None:
-            return _certified(scaled, field, name, recalled[0], {"solves": [], "stored": {
-                "key": key, "solves_when_found": recalled[1], "check": "exact, in this run"}})
+            return _certified(scaled, field, name, recalled, {"solves": [], "stored": {
+                "key": key, "check": "exact, in this run"}})
     tried: list[str] = []
     try:
         for degree in degrees:
@@ -431,13 +435,14 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                         store.keep(key, {"found": found_json(found), "solves": len(search.log)})
                     return _certified(scaled, field, name, found, {"solves": search.log})
     except BudgetExhausted as exc:
-        return ConditionResult(name, "inconclusive", f"{exc}; tried: {'; '.join(tried) or 'nothing finished'}",
-                               numbers={"reason": str(exc), "tried": tried}, solver={"solves": search.log})
-    what = "quadratic V" if name == "quadratic" else f"polynomial V of degree up to {max(degrees)}"
-    return ConditionResult(name, "not_certified",
-                           f"no {what} with V' < 0 everywhere was found ({'; '.join(tried)}); a V of another form "
-                           "may still exist", numbers={"tried": tried}, solver={"solves": search.log},
-                           property="GAS" if name != "quadratic" else None)
+        late = reasons.out_of_time("a Lyapunov function", search.budget.seconds, [str(exc), *tried])
+        return ConditionResult(name, "inconclusive", late.summary,
+                               numbers=late.numbers({"reason": str(exc), "tried": tried}),
+                               solver={"solves": search.log})
+    steps = ("sos_gas", "candidate") if name == "quadratic" else ("degree", "candidate")
+    none = reasons.not_found("Lyapunov function", degrees, tried, steps)
+    return ConditionResult(name, "not_certified", none.summary, numbers=none.numbers({"tried": tried}),
+                           solver={"solves": search.log}, property="GAS" if name != "quadratic" else None)
 
 
 def stored_problem(field: StateField, name: str, degrees: Sequence[int], param_degrees: Sequence[int]
@@ -457,8 +462,8 @@ def found_json(found: dict[str, Any]) -> dict[str, Any]:
             "box": [[j, r.to_json()] for j, r in found["box"]]}
 
 
-def recall_certificate(field: StateField, key: str, degrees: Sequence[int]) -> tuple[dict[str, Any], int] | None:
-    """The stored certificate of ``key`` and the solves its search took, when it passes the exact
+def recall_certificate(field: StateField, key: str, degrees: Sequence[int]) -> dict[str, Any] | None:
+    """The stored certificate of ``key``, when it passes the exact
     check on ``field`` (the one this run derived) now, with a ``V`` of one of ``degrees``; None
     otherwise (no entry, a malformed one, or one that fails: the search runs as if there were none)."""
     entry = store.recall(key)
@@ -471,9 +476,10 @@ def recall_certificate(field: StateField, key: str, degrees: Sequence[int]) -> t
         W = GramPoly.from_json(data["W"], nv)
         box = [(int(j), GramPoly.from_json(r, nv)) for j, r in data["box"]]
         mu = Fraction(data["mu"])
-        found = {"V": V, "W": W, "mu": mu, "margin": float(data["margin"]), "box": box,
+        # the entry's margin (a solver's figure) and solve count are not re-provable: not read, so
+        # that nothing unchecked reaches the output (no solve ran: relative_margin is None)
+        found = {"V": V, "W": W, "mu": mu, "margin": None, "box": box,
                  "degree": int(data["degree"]), "param_degree": int(data["param_degree"])}
-        solves = int(entry["solves"])
     except (KeyError, TypeError, ValueError, ZeroDivisionError):
         return None
     # the degree the claim states is V's own (the search's basis reaches it with a positive diagonal),
@@ -483,7 +489,7 @@ def recall_certificate(field: StateField, key: str, degrees: Sequence[int]) -> t
             or any(any(m[n:n + d]) for m in V.basis):
         return None
     ok, _ = check_lyapunov(field.ring, field.g, field.D, V, W, mu, box)
-    return (found, solves) if ok else None
+    return found if ok else None
 
 
 def _certified(scaled: ScaledField, field: StateField, name: str, found: dict[str, Any], solver: dict[str, Any]

@@ -20,6 +20,7 @@ import numpy as np
 from lyapcheck.models.modelfile import Model, field_at
 from lyapcheck.simulation.integrator import Evaluation, integrate
 from lyapcheck.sos.polynomials import MonomialPlan, Poly, Ring, monomial_plan, monomial_values
+from lyapcheck.tolerances import SIM_MAX_STEPS
 
 
 class NumericPoly:
@@ -167,6 +168,128 @@ def converges(model: Model, starts: np.ndarray, *, t_end: float, radius: np.ndar
     final = result.y
     converged = np.all(np.abs(final - eq) <= radius, axis=1) & result.ok
     return Convergence(converged=converged, final=final, status=result.status)
+
+
+class RunningMaxima:
+    """An integrator step observer (:class:`lyapcheck.simulation.integrator.StepObserver`): per
+    trajectory, the largest value of each column of ``function(y)`` (``(rows, columns)``) over its
+    start and every accepted step's end (the integrator's own points, as the trajectory checks of
+    :mod:`lyapcheck.models.crosscheck` read them). NaN counts as +inf."""
+
+    def __init__(self, function: Callable[[np.ndarray], np.ndarray], rows: int, columns: int) -> None:
+        self.function = function
+        self.maxima = np.full((rows, columns), -np.inf)
+
+    def _see(self, index: np.ndarray, y: np.ndarray) -> None:
+        with np.errstate(all="ignore"):
+            values = np.asarray(self.function(y), dtype=np.float64).reshape(len(index), -1)
+        values = np.where(np.isnan(values), np.inf, values)
+        self.maxima[index] = np.maximum(self.maxima[index], values)
+
+    def start(self, index: np.ndarray, t: np.ndarray, y: np.ndarray, f: np.ndarray) -> None:
+        self._see(index, y)
+
+    def step(self, index: np.ndarray, t0: np.ndarray, t1: np.ndarray, y0: np.ndarray, y1: np.ndarray,
+             f0: np.ndarray, f1: np.ndarray) -> None:
+        self._see(index, y1)
+
+
+@dataclass(frozen=True)
+class CertifiedDecrease:
+    """What a region certificate proves of ``V'`` on its set: ``V' <= -epsilon q / D`` with ``q`` a
+    squared distance to the equilibrium and ``D > 0`` (the recast classes' decrease, with ``q`` their
+    :func:`~lyapcheck.models.recast_classes.state_square`). Both are float functions of the states
+    (rows, not deviations). With ``V >= 0``, a trajectory that stays in the set and outside
+    ``{q < r^2}`` for a time ``T`` has ``0 <= V(T) <= V(0) - T epsilon r^2 / max D``: by
+    ``T = V(0) max D / (epsilon r^2)`` it must have entered the ball."""
+
+    epsilon: float
+    q: Callable[[np.ndarray], np.ndarray]
+    D: Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class SetCrossCheck:
+    """Starts in a certified set ``{V <= level}`` that had not converged in the first simulation,
+    simulated again with V watched along each trajectory (:func:`check_certified_set`). Per start:
+
+    ``left``
+        V rose above the level (beyond :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL`, relative): the set is
+        invariant under its certificate, so this contradicts the proof (or the simulation).
+    ``overdue``
+        integrated past the time by which the certificate's own decrease forces entry into the
+        small ball (:class:`CertifiedDecrease`), and never entered it: a contradiction too.
+    ``converged``
+        ended at the equilibrium.
+
+    The others are still converging slowly, or their integration stopped early: not checked
+    (a finite simulation cannot refute convergence without a certified rate)."""
+
+    left: np.ndarray
+    overdue: np.ndarray
+    converged: np.ndarray
+
+    @property
+    def violated(self) -> np.ndarray:
+        return self.left | self.overdue
+
+    @property
+    def not_checked(self) -> np.ndarray:
+        return ~(self.violated | self.converged)
+
+    def numbers(self) -> dict[str, Any]:
+        """The figures a region result carries: the starts checked again (those of the set not
+        converged in the first simulation), those that left the set, those past the certified time,
+        those not checked, and ``soundness_violation`` only when the check is conclusive."""
+        out: dict[str, Any] = {"starts_in_set_not_converged": int(self.converged.size),
+                               "starts_left_set": int(np.sum(self.left)),
+                               "starts_not_checked_slow_convergence": int(np.sum(self.not_checked))}
+        if self.overdue.any():
+            out["starts_past_certified_convergence_time"] = int(np.sum(self.overdue))
+        if self.violated.any():
+            out["soundness_violation"] = True
+        return out
+
+
+def check_certified_set(system: ModelSystem, starts: np.ndarray, t_end: float, *,
+                        value: Callable[[np.ndarray], np.ndarray], level: float,
+                        converged: Callable[[np.ndarray], np.ndarray], rtol: float,
+                        atol: np.ndarray | float, max_iterations: int = SIM_MAX_STEPS,
+                        decrease: CertifiedDecrease | None = None) -> SetCrossCheck:
+    """Simulate ``starts`` (states, rows; each in ``{value <= level}``) on ``system`` until ``t_end``,
+    with ``value`` (the certificate's V, of the states; +inf outside a set cut by a box) watched
+    along every trajectory; ``converged(final_states)`` says which ended at the equilibrium. A
+    start is a violation only when the check is conclusive (:class:`SetCrossCheck`)."""
+    from lyapcheck.tolerances import CONVERGED_BALL_RADIUS, TRAJECTORY_CHECK_REL_TOL
+
+    starts = np.atleast_2d(np.asarray(starts, dtype=np.float64))
+    with np.errstate(all="ignore"):
+        v0 = np.asarray(value(starts), dtype=np.float64)
+
+    def watched(y: np.ndarray) -> np.ndarray:
+        columns = [value(y)]
+        if decrease is not None:
+            columns += [-decrease.q(y), decrease.D(y)]
+        return np.column_stack(columns)
+
+    watch = RunningMaxima(watched, len(starts), 1 if decrease is None else 3)
+    with np.errstate(all="ignore"):
+        result = integrate(system, 0.0, starts, t_end, rtol=rtol, atol=atol, max_iterations=max_iterations,
+                           observer=watch)
+    top = watch.maxima[:, 0]
+    left = ~(top <= level + TRAJECTORY_CHECK_REL_TOL * max(abs(level), 1e-300))
+    done = result.ok & np.isfinite(result.y).all(axis=1)
+    ended = done & np.asarray(converged(result.y), dtype=bool)
+    overdue = np.zeros(len(starts), dtype=bool)
+    if decrease is not None and decrease.epsilon > 0:
+        r2 = CONVERGED_BALL_RADIUS ** 2
+        q_min, d_max = -watch.maxima[:, 1], watch.maxima[:, 2]
+        # never within twice the ball's radius at the integrator's points (a dip between two of
+        # them stays outside the ball itself), for longer than the certified decrease allows
+        outside = q_min >= 4 * r2
+        forced = t_end * decrease.epsilon * r2 / np.where(d_max > 0, d_max, np.inf) >= v0
+        overdue = done & ~left & ~ended & outside & forced
+    return SetCrossCheck(left=left, overdue=overdue, converged=ended & ~left)
 
 
 def grid_starts(domain: Mapping[str, tuple[Fraction, Fraction]], states: Sequence[str], per_axis: int,

@@ -28,7 +28,10 @@ from lyapcheck.models.barrier import (BudgetExhausted, Pieces, _b_basis, _decrea
                                       _falsification, _shift, scaled_pieces, set_certificates, set_identities,
                                       set_values)
 from lyapcheck.models.field import ScaledField, StateField
-from lyapcheck.models.lyapunov import FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials, vanishing_monomials
+from lyapcheck.models import reasons
+from lyapcheck.models.lyapunov import (BLOCK_COST_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials,
+                                        vanishing_monomials)
+from lyapcheck.models.reasons import size_limit
 from lyapcheck.models.search import (ParameterValues, Search, box_multipliers, box_multipliers_of, box_support,
                                      exact_grams, multiplier_grams, one, param, why_none)
 from lyapcheck.results import ConditionResult
@@ -41,6 +44,8 @@ from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Solution
 REACH_DEGREES: Final = (2, 4)
 #: the largest Gram basis the search builds (rows)
 MAX_GRAM_ROWS: Final = 120
+#: why stay_in_goal cannot hold: the set it needs contains the equilibrium
+NOT_IN_GOAL: Final = "the equilibrium is not inside the goal (some goal inequality is not > 0 there)"
 
 
 def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly], degree: int,
@@ -71,11 +76,11 @@ def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Se
         box_grams, box_terms = box_multipliers(nv, n, target, with_states=False, prefix=f"rG{k}_")
         target |= box_support(box_grams, nv)
         if len(target) > TARGET_LIMIT:
-            return f"the size limit TARGET_LIMIT = {TARGET_LIMIT} monomials of the identity was reached"
+            return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
         name = f"RG{k}"
         basis = [m for m in bases.sos_basis(nv, target | {zero}) if (name, m) not in drop]
         if len(basis) > MAX_GRAM_ROWS:
-            return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+            return size_limit(len(basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
         grams.append(Gram(name, tuple(basis), full_blocks(basis)))
         grams.extend(box_grams)
         terms.extend(box_terms)
@@ -95,7 +100,8 @@ def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Se
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=scalars, identities=tuple(identities),
                           objective=("max_margin",))
     if affordable(structure) is None:
-        return "the size limit BLOCK_COST_LIMIT of a program's cost was reached"
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
     return structure
 
 
@@ -194,10 +200,10 @@ def stay_structure(field: StateField, goal: Sequence[Poly], degree: int) -> Stru
     box_grams, box_terms = box_multipliers(nv, field.n, target, with_states=False, prefix="rW")
     target |= box_support(box_grams, nv)
     if len(target) > TARGET_LIMIT:
-        return f"the size limit TARGET_LIMIT = {TARGET_LIMIT} monomials of the identity was reached"
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
     basis = bases.sos_basis(nv, target | {zero})
     if len(basis) > MAX_GRAM_ROWS:
-        return f"the size limit MAX_GRAM_ROWS = {MAX_GRAM_ROWS} rows of a Gram matrix was reached"
+        return size_limit(len(basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
     grams.append(Gram("RW", tuple(basis), full_blocks(basis)))
     grams.extend(box_grams)
     terms += [*box_terms, Term(one(ring, -1), "RW")]
@@ -205,7 +211,9 @@ def stay_structure(field: StateField, goal: Sequence[Poly], degree: int) -> Stru
     scalars = tuple(Scalar(f"b{k}") for k in range(len(w_basis)))
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=scalars, identities=tuple(identities),
                           objective=("max_margin",))
-    return structure if affordable(structure) is not None else "the size limit BLOCK_COST_LIMIT was reached"
+    return structure if affordable(structure) is not None else \
+        size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                   "BLOCK_COST_LIMIT")
 
 
 def find_goal_invariant(field: StateField, goal: Sequence[Poly], search: Search
@@ -218,7 +226,7 @@ def find_goal_invariant(field: StateField, goal: Sequence[Poly], search: Search
     tried: list[str] = []
     at_equilibrium = [ring.evaluate(q, [Fraction(0)] * ring.nvars) for q in goal]
     if min(at_equilibrium) <= 0:
-        return None, ["the equilibrium is not inside the goal (some goal inequality is not > 0 there)"]
+        return None, [NOT_IN_GOAL]
     w0 = min(at_equilibrium) / 2
     for degree in searched_degrees(STAY_DEGREES):
         structure = stay_structure(field, goal, degree)
@@ -297,20 +305,24 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
         if model.stay_in_goal:  # reach {W <= 0}: inside the goal, and never left
             invariant, stay_tried = find_goal_invariant(field, goal, search)
             if invariant is None:
-                return ConditionResult("reach_avoid", "not_certified",
-                                       "stay_in_goal: no set {W <= 0} inside the goal around the equilibrium that no "
-                                       f"trajectory leaves was found ({'; '.join(stay_tried)})",
-                                       numbers={"tried": stay_tried}, solver={"solves": search.log},
+                none = (reasons.reason("stay_in_goal: the equilibrium is not inside the goal, so no set around it "
+                                       "inside the goal can hold the trajectories", ("goal",), stay_tried)
+                        if stay_tried == [NOT_IN_GOAL] else
+                        reasons.not_found("set inside the goal around the equilibrium that no trajectory leaves "
+                                          "(stay_in_goal)", STAY_DEGREES, stay_tried, ("degree", "time")))
+                return ConditionResult("reach_avoid", "not_certified", none.summary,
+                                       numbers=none.numbers({"tried": stay_tried}), solver={"solves": search.log},
                                        property="reach_avoid")
             target = [-invariant["W"]]
         found, tried = search_reach(field, initial, unsafe, target, search)
     except BudgetExhausted as exc:
-        return ConditionResult("reach_avoid", "inconclusive", f"{exc}", numbers={"reason": str(exc)},
+        late = reasons.out_of_time("a reach-avoid function", search.budget.seconds, str(exc))
+        return ConditionResult("reach_avoid", "inconclusive", late.summary, numbers=late.numbers({"reason": str(exc)}),
                                solver={"solves": search.log}, property="reach_avoid")
     if found is None:
-        return ConditionResult("reach_avoid", "not_certified",
-                               f"no reach-avoid V of degree up to {max(REACH_DEGREES)} was found ({'; '.join(tried)})",
-                               numbers={"tried": tried}, solver={"solves": search.log}, property="reach_avoid")
+        none = reasons.not_found("reach-avoid function", REACH_DEGREES, tried, ("degree", "sets", "time"))
+        return ConditionResult("reach_avoid", "not_certified", none.summary, numbers=none.numbers({"tried": tried}),
+                               solver={"solves": search.log}, property="reach_avoid")
     T = scaled.scaling.time
     bound = found["C"] / found["eps"] * T
     numbers: dict[str, Any] = {"degree": found["degree"], "reach_time_bound_s": float(bound),

@@ -12,7 +12,9 @@ the certificate of one output ``y`` is three identities of the form
     V - y^2 + B - 1 >= 0                      (the output under V),
 
 all on the set the recasting's relations and the disturbance bounds describe, which every state of
-the true loop under every admissible disturbance lies in.
+the true loop under every admissible disturbance lies in. ``y`` is the output's deviation from its
+value at the equilibrium, ``y - y_eq`` (:meth:`BoundLoop.output`): the claim is ``limsup |y - y_eq|
+<= sqrt(B)``, and states ``y_eq`` as ``bounds_reference`` (:func:`bound_claim`).
 
 Why ``limsup |y| <= sqrt(B)`` follows, from every start: where ``V > 1``, ``V' <= -lam (V - 1) / D
 < 0``, so ``V(t) <= max(V(x0), 1)`` and the trajectory stays in ``{V <= max(V(x0), 1)}``, which is
@@ -45,6 +47,7 @@ from fractions import Fraction
 from typing import Any, Final, Mapping
 
 from lyapcheck.degrees import searched_degrees
+from lyapcheck.models import reasons
 from lyapcheck.models.parameter_box import ModelBox
 from lyapcheck.models.recast import RecastModel, written_poly
 from lyapcheck.models.recast_classes import (Loop, _set, base_loop, check_denominator_proofs, check_root_proofs,
@@ -60,6 +63,8 @@ from lyapcheck.sos.polynomials import Monomial, Poly, degree_in, monomials, to_f
 LAMBDA_GRID: Final = (Fraction(1, 20), Fraction(1, 5), Fraction(3, 5), Fraction(3, 2), Fraction(4))
 #: degrees of V tried, in turn
 BOUND_DEGREES: Final = (2, 4)
+#: why an output that uses an angle gets no bound
+ANGLE_OUTPUT: Final = "it uses an angle, which the loop takes modulo 2 pi: no bound is sought"
 #: ``V >= eps |dx|^2``: the positivity margin (radial unboundedness in the states)
 POSITIVITY_EPSILON: Final = Fraction(1, 10**4)
 #: the minimized ``B`` is raised by this factor (and :data:`B_FLOOR`) before the margin-maximizing
@@ -115,11 +120,14 @@ class BoundLoop:
         return state_square(self.loop)
 
     def output(self, y: Poly, state_ring: Any) -> Poly:
-        """An output (over the states' ring) in this ring's deviations."""
+        """An output (over the states' ring) as the class bounds it: its deviation from its value at
+        the equilibrium, ``y - y_eq`` (:func:`output_reference`), in this ring's deviations (where
+        ``y_eq`` is the constant term)."""
         ring = self.ring
         n = len(state_ring.names)
         embedded = ring.from_terms({tuple(list(m) + [0] * (ring.nvars - n)): c for m, c in state_ring.terms(y).items()})
-        return self.loop.system.shift(embedded)
+        shifted = self.loop.system.shift(embedded)
+        return shifted - ring.constant(ring.terms(shifted).get(tuple([0] * ring.nvars), Fraction(0)))
 
 
 def bound_loop(model: RecastModel, box: ModelBox | None = None) -> BoundLoop | str:
@@ -137,6 +145,31 @@ def bound_loop(model: RecastModel, box: ModelBox | None = None) -> BoundLoop | s
                 "whose exact value at the equilibrium is needed)")
     fixed = {**model.disturbances, **({name: box.half(name) for name in box.names} if box is not None else {})}
     return BoundLoop(base_loop(system, fixed=fixed), dict(model.disturbances), box.names if box is not None else ())
+
+
+def output_reference(model: RecastModel, name: str) -> Fraction:
+    """The output's value at the equilibrium (SI), the point its bound is relative to: the outputs
+    are polynomials in the states alone, so the disturbances do not enter it."""
+    from lyapcheck.sos.polynomials import Ring
+
+    return Ring(model.states).evaluate(model.outputs[name], list(model.equilibrium))
+
+
+def bound_claim(model: RecastModel, bounds: Mapping[str, float | Fraction]) -> dict[str, Any]:
+    """The claim of certified ``bounds`` as its condition states it: the bounds and their reference
+    points (``bounds_reference``, each output at the equilibrium; a loop with functions takes no
+    ``[units]``). Certify writes it and its sentence (:func:`bound_sentence`); ``verify`` re-makes both
+    from the model and compares."""
+    return {"status": "certified", "bounds": dict(bounds),
+            "bounds_reference": {name: float(output_reference(model, name)) for name in bounds}}
+
+
+def bound_sentence(model: RecastModel, bounds: Mapping[str, float | Fraction]) -> str:
+    """The sentence of certified ``bounds`` (:func:`lyapcheck.models.claims.summary` of
+    :func:`bound_claim`): ``limsup |y - 1.5| <= 0.2``."""
+    from lyapcheck.models.claims import summary
+
+    return summary("sos_bound", bound_claim(model, bounds), list(model.outputs)) or ""
 
 
 @dataclass(frozen=True)
@@ -321,7 +354,6 @@ def sos_bound(model: RecastModel, budget: Budget, box: ModelBox | None = None) -
     """Every output's certified ``limsup`` for every disturbance within its bounds (module docstring);
     with ``box``, for every parameter value of it as well (each a bounded constant)."""
     from lyapcheck import exact
-    from lyapcheck.models.claims import summary
     from lyapcheck.sos.polynomials import Ring
 
     if not model.disturbances:
@@ -334,34 +366,42 @@ def sos_bound(model: RecastModel, budget: Budget, box: ModelBox | None = None) -
     bounds: dict[str, float] = {}
     certs: dict[str, Any] = {}
     missing: list[str] = []
+    detail: list[str] = []  # what each output's search met, a line each (numbers["detail"])
     try:
         loop, unproved = prove_root_bounds(made.loop, search)
         if unproved:
-            return ConditionResult("sos_bound", "not_certified", f"the square root '{unproved[0]}' has an argument "
-                                   "not proved non-negative with the disturbances acting",
+            why = reasons.reason(f"the square root '{unproved[0]}' has an argument not proved non-negative with the "
+                                 "disturbances acting", ("disturbances",))
+            return ConditionResult("sos_bound", "not_certified", why.summary, numbers=why.numbers(),
                                    solver={"solves": search.log})
         bl = made.with_loop(loop)
         forms, skipped = templates(bl, search)
         state_ring = Ring(model.states)
         for name, y0 in model.outputs.items():
             if any(degree_in(state_ring, y0, [a]) > 0 for a in loop.angles):
-                missing.append(f"{name} (it uses an angle, which the loop takes modulo 2 pi: no bound is sought)")
+                missing.append(f"{name} ({ANGLE_OUTPUT})")
                 continue
             y = bl.output(y0, state_ring)
             found, tried = best_bound(bl, forms, y, search)
             if found is None:
                 missing.append(f"{name} ({'; '.join(skipped + tried) or 'no form of V could be built'})")
+                detail.extend(f"{name}: {line}" for line in skipped + tried)
                 continue
             bound = exact.sqrt_upper(found.B, BOUND_DIGITS)
             bounds[name] = float(bound)
             certs[name] = output_json(bl, found, y, bound)
     except BudgetExhausted as exc:
-        return ConditionResult("sos_bound", "inconclusive", f"{exc}; bounds found so far: {bounds}",
-                               numbers={"reason": str(exc)}, solver={"solves": search.log})
-    if not bounds:
-        return ConditionResult("sos_bound", "not_certified", "no dissipation certificate was found for any output: "
-                               + "; ".join(missing), numbers={"reason": "; ".join(missing)},
+        late = reasons.out_of_time("a bound on every output", budget.seconds,
+                                   [str(exc), f"bounds found so far: {bounds}", *missing])
+        return ConditionResult("sos_bound", "inconclusive", late.summary, numbers=late.numbers({"reason": str(exc)}),
                                solver={"solves": search.log})
+    if not bounds:
+        none = (reasons.reason("no bound was sought: every output uses an angle, which the loop takes modulo 2 pi",
+                               ("outputs",), missing) if all(ANGLE_OUTPUT in m for m in missing) else
+                reasons.not_found("storage function that bounds an output", BOUND_DEGREES, detail or missing,
+                                  ("degree", "disturbances", "time")))
+        return ConditionResult("sos_bound", "not_certified", none.summary,
+                               numbers=none.numbers({"reason": "; ".join(missing)}), solver={"solves": search.log})
     ring = bl.ring
     system = loop.system
     certificate = {"kind": KIND, "variables": list(ring.names), "auxiliaries": system.definitions(),
@@ -370,8 +410,9 @@ def sos_bound(model: RecastModel, budget: Budget, box: ModelBox | None = None) -
                    **({"parameter_box": box.to_json()} if box is not None else {}),
                    "positivity_epsilon": str(POSITIVITY_EPSILON),
                    "recasting": {"roots": root_proofs_json(loop)}, "outputs": certs}
-    text = summary("sos_bound", {"status": "certified", "bounds": bounds}, list(model.outputs)) or ""
-    result = ConditionResult("sos_bound", "certified", text, numbers={"bounds": bounds}, certificate=certificate,
+    claim = bound_claim(model, bounds)
+    result = ConditionResult("sos_bound", "certified", bound_sentence(model, bounds),
+                             numbers={k: v for k, v in claim.items() if k != "status"}, certificate=certificate,
                              solver={"solves": search.log})
     result.disturbances = "all"
     return result
@@ -396,7 +437,6 @@ def check_bound(model: RecastModel, c: Mapping[str, Any], box: ModelBox | None =
     """Re-check a ``sos_bound`` certificate of a loop with functions exactly (module docstring);
     ``box``: the document's box of parameters; ``summary_of``: the sentence the bounds print (default
     :func:`lyapcheck.models.claims.summary`'s)."""
-    from lyapcheck.models.claims import summary
     from lyapcheck.sos.polynomials import Ring
 
     cert = c["certificate"]
@@ -452,13 +492,15 @@ def check_bound(model: RecastModel, c: Mapping[str, Any], box: ModelBox | None =
             if not ok:
                 return False, f"{name}, {key}: {why}"
         bounds[name] = float(bound)
-    if c.get("bounds") != bounds:
-        return False, "the stated bounds are not the certificate's"
-    expected = summary("sos_bound", {"status": "certified", "bounds": bounds}, list(model.outputs))
+    claim = bound_claim(model, bounds)
+    if any(c.get(k) != v for k, v in claim.items() if k != "status") or "bounds_unit" in c:
+        return False, "the stated bounds or their reference points (bounds_reference) are not the certificate's"
+    expected = bound_sentence(model, bounds)
     if c.get("summary") != (summary_of(expected) if summary_of is not None else expected):
         return False, "the printed sentence is not the one the certificate supports"
     return True, ("positivity, dissipation D V' <= -lam (V - 1) and y^2 <= V + B - 1 on the recasting's relations "
                   "with every disturbance within its bounds, exactly")
 
 
-__all__ = ["sos_bound", "check_bound", "bound_loop", "BoundLoop", "LAMBDA_GRID", "BOUND_DEGREES", "KIND"]
+__all__ = ["sos_bound", "check_bound", "bound_loop", "bound_claim", "bound_sentence", "output_reference", "BoundLoop",
+           "LAMBDA_GRID", "BOUND_DEGREES", "KIND"]

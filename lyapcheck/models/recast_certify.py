@@ -30,6 +30,7 @@ from lyapcheck.models.recast_classes import (Loop, base_loop, check_denominator_
 from lyapcheck.models.recast_run import RECAST_CLASSES, box_robust, boxed_loop, robust_of
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.claims import covered
+from lyapcheck.models.stated import Stated, check_declared, check_stated
 from lyapcheck.results import ConditionResult, Disturbances
 from lyapcheck.sos.polynomials import degree_in, to_fmpq
 
@@ -141,7 +142,10 @@ def sentence_of(cert: dict[str, Any]) -> str:
 
 def claim_sentence(cert: dict[str, Any]) -> str:
     """What a certified recast condition proves, in one sentence made from its certificate alone
-    (``verify`` re-makes it and compares: a printed sentence never claims more than the proof)."""
+    (``verify`` re-makes it and compares: a printed sentence never claims more than the proof). A
+    distance is to the equilibrium, a rate in 1/s (:func:`lyapcheck.models.claims.with_unit`)."""
+    from lyapcheck.models.claims import RATE_UNIT, rounded, with_unit
+
     angles = list(cert["angles"])
     modulo = (f" modulo 2 pi in {', '.join(angles)} (the loop is periodic in {'it' if len(angles) == 1 else 'them'})"
               if angles else "")
@@ -149,14 +153,14 @@ def claim_sentence(cert: dict[str, Any]) -> str:
     if "ges" in cert:
         eps = cert.get("decrease_epsilon", eps)
         ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
-        return (f"globally exponentially stable: |x(t) - x_eq| <= {float(ges['k']):.6g} |x0 - x_eq| "
-                f"exp(-{float(ges['rate']):.6g} t) from every start (exactly k = {ges['k']}, rate = {ges['rate']}: "
-                f"V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} |z|^2, proved "
-                "exactly on the recasting's relations; V_text in the certificate)")
+        return (f"globally exponentially stable: |x(t) - x_eq| <= {rounded(ges['k'], 6, 'up')} |x0 - x_eq| exp(-r t) "
+                f"with r = {with_unit(ges['rate'], RATE_UNIT, 6, 'down')}, from every start (exactly k = {ges['k']}, "
+                f"r = {ges['rate']}: V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} "
+                "|z|^2, proved exactly on the recasting's relations; V_text in the certificate)")
     if "level" in cert:
         level = Fraction(str(cert["level"]))
         return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "
-                f"{float(level):.6g} (exactly {level}) converges to the equilibrium{modulo} (V positive definite "
+                f"{rounded(level, 6, 'down')} (exactly {level}) converges to the equilibrium{modulo} (V positive definite "
                 f"and V' <= -{eps} |dx|^2 / D there, D > 0, proved exactly on the recasting's relations; V_text in "
                 "the certificate)")
     return (f"globally asymptotically stable{modulo}: V(x, a(x)) >= {cert.get('positivity_epsilon', eps)} |dx|^2 and "
@@ -221,6 +225,7 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
             and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
     rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
                  "the stated parameters or equilibrium differ from the model text's"))
+    rows.append(check_declared(doc, model))
     stated = doc["recast"]
     derived = model.system.to_json()
     recast_ok = all(stated.get(k) == derived[k] for k in derived)
@@ -259,6 +264,11 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
                                       f"{c.get('disturbances')!r} is neither"))
             continue
         try:
+            # what the condition states beside its proof, from the certificate (cheap: before the proof is re-run)
+            ok, claims = check_stated(c, proved_claims(name, c, model))
+            if not ok:
+                rows.append((name, False, f"{name}: {claims}"))
+                continue
             if name == "sos_bound":
                 ok, why = check_bound(model, c, box) if c["status"] == "certified" else \
                     (False, "sos_bound refutes nothing")
@@ -275,8 +285,61 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
                 ok, why = _verify_condition(name, c, base, robust_of(model))
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
-        rows.append((name, ok, why if ok else f"{name}: {why}"))
+        rows.append((name, ok, f"{why}; {claims}" if ok else f"{name}: {why}"))
+    rows.extend(_check_candidate(doc, model))
     return _with_verdict(doc, rows)
+
+
+def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
+    """The property and the figures a decided condition's certificate proves, read from the
+    certificate (which its class's check then re-checks) and the model: a figure beside the status
+    is compared with these, and any other is refused unless it is a declared estimate
+    (:func:`lyapcheck.models.stated.check_stated`)."""
+    if name == "linearization":
+        return Stated("LES")
+    if c["status"] == "refuted":  # another equilibrium, exactly: no global asymptotic stability
+        return Stated("GAS")
+    cert = c["certificate"]
+    if not isinstance(cert, dict):
+        raise ValueError("certificate: must be a table")
+    kind = cert.get("kind")
+    if kind == KIND:
+        from lyapcheck.models.recast_bound import bound_claim
+
+        claim = bound_claim(model, {out: Fraction(str(item["bound"])) for out, item in cert["outputs"].items()})
+        return Stated("ultimate_bound", {k: v for k, v in claim.items() if k != "status"})
+    if kind == "interval":
+        return Stated("ROA", {"level": Fraction(str(cert["level"]))})
+    degree = max(sum(e) for _, e in cert["V"]["terms"])
+    if isinstance(degree, bool) or not isinstance(degree, int):
+        raise ValueError("V: exponents must be integers")
+    if "level" in cert:
+        return Stated("ROA", {"degree": degree, "level": Fraction(str(cert["level"]))})
+    if "ges" in cert:
+        ges = cert["ges"]
+        return Stated("GES", {"degree": degree, "k": Fraction(str(ges["k"])),
+                              "decay_rate_per_s": Fraction(str(ges["rate"]))})
+    return Stated("GAS", {"degree": degree})
+
+
+def _check_candidate(doc: dict[str, Any], model: RecastModel) -> list[Row]:
+    """The top-level ``candidate`` text is the user's V: recast with the model's functions (the text
+    parsed with it, else verify stopped at the model row), it must be the ``V`` of a certified
+    ``candidate`` condition, and a certified one needs it."""
+    c = doc["conditions"].get("candidate")
+    certified = isinstance(c, dict) and c.get("status") == "certified"
+    text = doc.get("candidate")
+    if not certified:
+        return [] if text is None or isinstance(text, str) else \
+            [("candidate", False, "candidate: the candidate text must be text")]
+    if not isinstance(text, str) or model.candidate_v is None:
+        return [("candidate", False, "candidate: a certified candidate condition needs the candidate text")]
+    try:
+        same = poly_from_json(model.system.ring, c["certificate"]["V"], "V") == model.candidate_v
+    except (KeyError, ValueError, TypeError, ArithmeticError) as exc:
+        return [("candidate", False, f"candidate: the certified V is malformed: {str(exc)[:200]}")]
+    return [("candidate", same, "the candidate text is the certified V" if same else
+             "candidate: the candidate text is not the V of the certified candidate condition")]
 
 
 def _box_of(doc: dict[str, Any], model: RecastModel) -> tuple[ModelBox | None, Loop | None, str]:
@@ -304,15 +367,23 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     from lyapcheck.models.linearization import verify_jacobian
 
     if name == "linearization":
+        from lyapcheck.models.claims import summary
+
         J = jacobian(base)
         if isinstance(J, str):
             return False, f"the model's Jacobian is not exact here: {J}"
         data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
-        return verify_jacobian(J, c["status"], data or {})
+        ok, why = verify_jacobian(J, c["status"], data or {})
+        if ok and c.get("summary") != summary(name, c):
+            return False, "the printed sentence is not the one the certificate supports"
+        return ok, why
     if c["status"] == "refuted":
-        from lyapcheck.models.recast_classes import check_refutation
+        from lyapcheck.models.recast_classes import check_refutation, refutation_sentence
 
-        return check_refutation(base, c.get("refutation"))
+        ok, why = check_refutation(base, c.get("refutation"))
+        if ok and c.get("summary") != covered(c.get("disturbances"), refutation_sentence(c["refutation"]["point"])):
+            return False, "the printed sentence is not the one the refutation supports"
+        return ok, why
     cert = c["certificate"]
     if cert.get("kind") == "interval" and name in ("roa", "candidate"):
         from lyapcheck.models.recast_interval import check_interval
@@ -380,4 +451,4 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
 
 
-__all__ = ["certify_recast", "verify_recast", "claim_sentence", "sentence_of"]
+__all__ = ["certify_recast", "verify_recast", "claim_sentence", "sentence_of", "proved_claims"]

@@ -36,9 +36,6 @@ from lyapcheck.results import ConditionResult
 RETRY_LEVEL_FACTOR: Final = Fraction(9, 10)
 #: proposals tried (the first level, then lowered)
 INTERVAL_ATTEMPTS: Final = 3
-#: the longest one proof attempt may take (a proof that fails deep in its bisection can take long;
-#: the recasting's route must keep time for itself)
-ATTEMPT_LIMIT_S: Final = 25.0
 #: the most cells the proof that the whole sublevel set lies in the box may take (a count, not a
 #: time, so that the same model gives the same claim on any machine; without it the claim is the set
 #: within the box, as proved)
@@ -164,17 +161,24 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robus
 def _prove_lowering(loop: Loop, claim: IntervalClaim, budget: Budget, name: str, v_from: str,
                     numbers: dict[str, Any], robust: Robust | None = None) -> ConditionResult | str:
     """Prove the claim; where that fails, lower its level (under a point where ``V' >= 0`` was
-    proved, else by RETRY_LEVEL_FACTOR) and try again, INTERVAL_ATTEMPTS times in all."""
+    proved, else by RETRY_LEVEL_FACTOR) and try again, INTERVAL_ATTEMPTS times in all. Each attempt
+    has a work budget, :data:`~lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS` cells, so that what is
+    proved is the same on any machine and under any load; the class's time limit (``budget``)
+    only stops a proof as a safety net, and the reason then says so."""
     import time
+
+    from lyapcheck.models.interval_region import SAFETY_NET
+    from lyapcheck.tolerances import INTERVAL_ATTEMPT_CELLS
 
     reasons: list[str] = []
     for _ in range(INTERVAL_ATTEMPTS):
         if budget.left() <= 0:
-            reasons.append("out of time")
+            reasons.append(SAFETY_NET)
             break
-        proof = prove(loop, claim, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S), robust=robust)
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), robust=robust,
+                      cells=INTERVAL_ATTEMPT_CELLS)
         if proof.ok:
-            cert = certificate(loop, claim, proof, deadline=time.perf_counter() + min(budget.left(), ATTEMPT_LIMIT_S))
+            cert = certificate(loop, claim, proof)
             if robust is not None:
                 robust.stamp(cert)
             return ConditionResult(name, "certified", claim_sentence(cert), property="ROA", certificate=cert,
@@ -216,34 +220,47 @@ def derivative_of(loop: Loop, V: Any) -> tuple[Any, bool] | str:
     return RecastLieDerivative(BallLoop(loop.system), loop.ring, V, G, D), flat
 
 
-def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None, robust: Robust | None = None
-          ) -> IntervalProof:
+def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None, robust: Robust | None = None,
+          cells: int | None = None) -> IntervalProof:
     """:func:`prove_region` with the evaluator ``claim.V`` needs (one path for the search and ``verify``);
-    with ``robust``, on the loop with every disturbance value in its bounds (``V`` over the states)."""
+    with ``robust``, on the loop with every disturbance value in its bounds (``V`` over the states).
+    ``cells``: the work budget of the whole attempt (every part of a box together); None: each part
+    within INTERVAL_CELL_LIMIT (``verify``)."""
     if robust is not None:
         if uses_auxiliaries(loop, claim.V) or low_order_terms(loop.ring, claim.V, loop.n):
             return IntervalProof(False, "a claim for every disturbance value takes a V over the states alone, "
                                         "without constant or linear terms", 0, 0, None, 0.0)
         if not robust.vanishes():
             return IntervalProof(False, "a disturbance moves the equilibrium", 0, 0, None, 0.0)
-        return _prove_parts(loop, claim, deadline, robust, PARAMETER_SPLITS if robust.box is not None else 0)
+        return _prove_parts(loop, claim, deadline, robust, PARAMETER_SPLITS if robust.box is not None else 0,
+                            None if cells is None else [cells])
     how = derivative_of(loop, claim.V)
     if isinstance(how, str):
         return IntervalProof(False, how, 0, 0, None, 0.0)
     evaluator, flat = how
-    return prove_region(loop.system, claim, deadline=deadline, lie=evaluator, flat=flat)
+    return prove_region(loop.system, claim, deadline=deadline, lie=evaluator, flat=flat, cell_budget=cells)
 
 
-def _prove_parts(loop: Loop, claim: IntervalClaim, deadline: float | None, robust: Robust, depth: int
-                 ) -> IntervalProof:
+def _prove_parts(loop: Loop, claim: IntervalClaim, deadline: float | None, robust: Robust, depth: int,
+                 cells: list[int] | None = None) -> IntervalProof:
     """The proof for every value of ``robust``'s constants; over a box, where it fails without a
-    proved counterexample, on each half of the box (deterministic, so ``verify`` splits the same way)."""
+    proved counterexample, on each half of the box (deterministic, so ``verify`` splits the same way).
+    ``cells``: the cells left to the whole attempt (one counter shared by every part), or None."""
     lie = LieDerivative(BallLoop(robust.system, robust.balls()), robust.system.ring,
                         robust.embedded(loop.ring, claim.V))
-    proof = prove_region(loop.system, claim, deadline=deadline, lie=lie, flat=True)
+    proof = prove_region(loop.system, claim, deadline=deadline, lie=lie, flat=True,
+                         cell_budget=None if cells is None else max(cells[0], 0))
+    if cells is not None:
+        cells[0] -= proof.cells + proof.boundary_cells
     if proof.ok or depth == 0 or robust.box is None or proof.counterexample_v is not None:
         return proof
-    parts = [_prove_parts(loop, claim, deadline, half, depth - 1) for half in robust.halves()]
+    if cells is not None and cells[0] <= 0:
+        return proof  # the attempt's work budget is spent: its reason says so
+    parts: list[IntervalProof] = []
+    for half in robust.halves():  # in order, stopping at the first failure (the budget is shared)
+        parts.append(_prove_parts(loop, claim, deadline, half, depth - 1, cells))
+        if not parts[-1].ok:
+            break
     failed = next((p for p in parts if not p.ok), None)
     if failed is not None:
         return failed
@@ -296,18 +313,24 @@ def claim_of(loop: Loop, cert: dict[str, Any]) -> IntervalClaim:
 
 def claim_sentence(cert: dict[str, Any]) -> str:
     """What the certificate proves, from the certificate alone (``verify`` re-makes and compares)."""
+    from lyapcheck.models.claims import rounded
+
     level = Fraction(str(cert["level"]))
     n = len(cert["box"])
     written = "V(x, a(x))" if any(any(e[n:]) for _, e in cert["V"]["terms"]) else "V(x)"
-    box = ", ".join(f"{s} - eq in [{float(Fraction(a)):.6g}, {float(Fraction(b)):.6g}]"
+    # the box rounded towards the weaker claim: outwards where the set is said to lie in it, inwards
+    # where the proved set is the part of {V <= level} in it
+    out, inward = ("down", "up") if cert.get("whole") else ("up", "down")
+    box = ", ".join(f"{s} - eq in [{rounded(Fraction(a), 6, out)}, {rounded(Fraction(b), 6, inward)}]"
                     for s, (a, b) in cert["box"].items())
+    level_text = rounded(level, 6, "down")
     if cert.get("whole"):
         return (f"region of attraction: every trajectory of the true loop starting where {written} <= "
-                f"{float(level):.6g} (exactly {level}) converges to the equilibrium itself (the whole set lies in "
+                f"{level_text} (exactly {level}) converges to the equilibrium itself (the whole set lies in "
                 f"{box}: V > level outside it, and V' < 0 on the set except at the equilibrium; proved by {METHOD}, "
                 "with an exact Hessian argument at the equilibrium and an exact growth bound of V far out; V_text "
                 "in the certificate)")
-    return (f"region of attraction: every trajectory of the true loop starting where {written} <= {float(level):.6g} "
+    return (f"region of attraction: every trajectory of the true loop starting where {written} <= {level_text} "
             f"(exactly {level}) with {box} converges to the equilibrium itself (V > level on that box's boundary, "
             f"V' < 0 on the set except at the equilibrium; proved by {METHOD}, with an exact Hessian argument at the "
             "equilibrium; V_text in the certificate)")

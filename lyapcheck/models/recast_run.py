@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 from fractions import Fraction
-from typing import Any, Final, Sequence
+from typing import TYPE_CHECKING, Any, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.errors import ModelFileError
@@ -24,6 +24,10 @@ from lyapcheck.models.recast_improve import improved_regions
 from lyapcheck.models.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, to_fmpq
+from lyapcheck.tolerances import CONVERGED_BALL_RADIUS
+
+if TYPE_CHECKING:
+    from lyapcheck.models.numeric import SetCrossCheck
 
 # -- the model's classes ------------------------------------------------------------------------------
 
@@ -195,8 +199,11 @@ def box_roa(model: RecastModel, loop: Loop, box: ModelBox, budget: Budget) -> Co
         robust = box_robust(model, box, disturbed=False)
     found = interval_roa(loop, budget, comparison_box(model, loop), robust)
     if isinstance(found, str):
-        return ConditionResult("roa", "not_certified", "over a box, roa is proved by ball arithmetic for every "
-                               f"value at once (1 to 3 states): {found}", property="ROA")
+        from lyapcheck.models import reasons
+
+        why = reasons.reason("no region of attraction was proved for every value of the box (over a box only ball "
+                             "arithmetic proves one, on loops of 1 to 3 states)", ("box", "domain", "time"), found)
+        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
     simulated_check(loop, found, comparison_box(model, loop))
     return found
 
@@ -241,14 +248,20 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
     search = Search(loop.ring, budget)
     J = jacobian(loop)
     V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
+    from lyapcheck.models import reasons
+
     if V0 is None:
-        return ConditionResult("roa", "not_certified", f"{skipped}; the linearization gives no quadratic V "
-                               f"({lin.summary})", property="ROA")
+        why = reasons.reason("no region of attraction was proved: the linearization gives no quadratic V to start "
+                             "the search from (see linearization)", ("candidate",),
+                             [skipped, f"the linearization gives no quadratic V ({lin.summary})"])
+        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
     label = "the linearization (J^T P + P J = -I)"
     try:
         first = certify_region(loop, V0, search, label)
     except BudgetExhausted as exc:
-        return ConditionResult("roa", "inconclusive", f"{skipped}; {label}: {exc}", property="ROA")
+        late = reasons.out_of_time("a region of attraction", budget.seconds, [skipped, f"{label}: {exc}"],
+                                   ("time", "domain"))
+        return ConditionResult("roa", "inconclusive", late.summary, numbers=late.numbers(), property="ROA")
     if isinstance(first, str):
         return best_region(loop, [], [skipped, f"{label}: {first}"], box, search)
     more, tried = improved_regions(loop, first, budget, box)
@@ -263,24 +276,23 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
 #: same count, uniform, for more)
 SIMULATED_GRID: Final = 40
 #: how long each is simulated (the loop's time unit); a start in the set that has not converged by
-#: then is simulated ten times longer before it counts against the proof
+#: then is simulated ten times longer with V watched along it (:func:`set_cross_check`)
 SIMULATED_HORIZON: Final = 30.0
 #: a start farther than this many box sizes from the equilibrium is stopped there (it does not
 #: converge in this horizon; its re-simulation, if it started in a certified set, is not stopped)
 SIMULATED_ESCAPE: Final = 10.0
 #: converged: ending this close to the equilibrium
-CONVERGED_RADIUS: Final = 2e-2
+CONVERGED_RADIUS: Final = CONVERGED_BALL_RADIUS
 
 
 def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -> None:
     """Simulate the true loop from a grid of the box: the share of the simulated region of
     attraction the certified set covers (``roa_share``, with the box the ``[domain]``), and every
-    start in the set that does not converge (modulo 2 pi in an angle), simulated again far longer;
-    one that still does not is a soundness violation (the proof or the simulation is wrong)."""
+    start in the set that does not converge (modulo 2 pi in an angle) checked again
+    (:func:`set_cross_check`): a soundness violation only when that check is conclusive."""
     import numpy as np
 
-    from lyapcheck.models.recast_numeric import converges_modulo, distances, simulate_ends, v_values
-    from lyapcheck.models.recast_sos import poly_from_json
+    from lyapcheck.models.recast_numeric import distances, simulate_ends
 
     system = loop.system
     lo, hi = box
@@ -291,28 +303,93 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -
     else:
         Z = lo + (hi - lo) * np.random.default_rng(0).random((count, loop.n))
     eq = np.array([float(system.values[s]) for s in system.states])
-    V = poly_from_json(loop.ring, result.certificate["V"], "V")
-    inside = v_values(system, V, Z) <= float(Fraction(result.certificate["level"]))
-    if "box" in result.certificate:  # a ball-arithmetic region: the set within its box
-        corners = result.certificate["box"]
-        inside &= np.all((Z >= [float(Fraction(corners[s][0])) for s in system.states])
-                         & (Z <= [float(Fraction(corners[s][1])) for s in system.states]), axis=1)
+    value, = certified_value(loop, result)
+    inside = value(Z + eq) <= float(Fraction(result.certificate["level"]))
     dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON,
                                    escape=SIMULATED_ESCAPE * float(np.max(np.asarray(hi) - np.asarray(lo))))
     to_zero = simulated.ok & (distances(system, dev) < CONVERGED_RADIUS)
     modulo = simulated.ok & (distances(system, dev, tuple(loop.angles)) < CONVERGED_RADIUS)
     result.numbers["simulated_starts"] = int(len(Z))
-    result.numbers["roa_share"] = float(np.mean(inside[to_zero])) if to_zero.any() else 0.0
+    if to_zero.any():  # (no simulated start converged in the horizon: no share to state, not a share of 0)
+        result.numbers["roa_share"] = float(np.mean(inside[to_zero]))
     result.numbers["simulated_roa_share_of_box"] = float(np.mean(to_zero))
     # a region proved by ball arithmetic claims convergence to the equilibrium itself, not modulo 2 pi
     angles = () if result.certificate.get("kind") == "interval" else tuple(loop.angles)
     suspicious = inside & ~(to_zero if not angles else modulo)
     if suspicious.any():
-        again = converges_modulo(system, Z[suspicious] + eq, angles, horizon=10 * SIMULATED_HORIZON,
-                                 tolerance=CONVERGED_RADIUS)
-        result.numbers["starts_in_set_not_converged"] = int(np.sum(~again))
-        if (~again).any():
-            result.numbers["soundness_violation"] = True
+        result.numbers.update(set_cross_check(loop, result, Z[suspicious] + eq, angles).numbers())
+
+
+def certified_value(loop: Loop, result: ConditionResult, *others: Poly) -> list[Any]:
+    """The certified set's V as a float function of the states (rows, not deviations): ``V(z, a(x) -
+    a(x_eq))``, and +inf outside the box of a ball-arithmetic region (its set is ``{V <= level}``
+    within that box); then each of ``others`` (polynomials of the loop's ring, in deviations) as
+    such a function. The loop is compiled once and the variables at the last states are shared
+    (a cross-check reads V, q and D at every step of its trajectories)."""
+    import numpy as np
+
+    from lyapcheck.models.numeric import NumericPoly
+    from lyapcheck.models.recast_numeric import FloatLoop
+    from lyapcheck.models.recast_sos import poly_from_json
+
+    system = loop.system
+    eq = np.array([float(system.values[s]) for s in system.states])
+    field = FloatLoop(system)
+    shift = np.array([float(system.values[n]) if n in system.values else 0.0 for n in system.ring.names])
+    last: list[Any] = [None, None]  # the last states given and the loop's variables there
+
+    def variables(X: Any) -> Any:
+        if X is not last[0]:
+            last[:] = [X, np.column_stack(field.columns(np.atleast_2d(np.asarray(X, dtype=np.float64)))) - shift]
+        return last[1]
+
+    def function(p: Poly) -> Any:
+        poly = NumericPoly(system.ring, p)
+        return lambda X: poly(variables(X))
+
+    V = function(poly_from_json(loop.ring, result.certificate["V"], "V"))
+    corners = result.certificate.get("box")
+    lo = None if corners is None else np.array([float(Fraction(corners[s][0])) for s in system.states])
+    hi = None if corners is None else np.array([float(Fraction(corners[s][1])) for s in system.states])
+
+    def value(X: Any) -> Any:
+        out = V(X)
+        if lo is not None:
+            Z = np.atleast_2d(np.asarray(X, dtype=np.float64)) - eq
+            out = np.where(np.all((Z >= lo) & (Z <= hi), axis=1), out, np.inf)
+        return out
+
+    return [value, *(function(p) for p in others)]
+
+
+def set_cross_check(loop: Loop, result: ConditionResult, starts: Any, angles: tuple[str, ...]
+                    ) -> SetCrossCheck:
+    """Starts (states, rows) in the certified set that did not converge in the first simulation,
+    simulated ten times longer with V watched (:func:`lyapcheck.models.numeric.check_certified_set`):
+    a violation when one leaves the set, or, with the certificate's decrease ``V' <= -epsilon |z|^2 /
+    D``, stays outside a small ball longer than that decrease allows; the others still converging
+    are counted as not checked. Returns the :class:`lyapcheck.models.numeric.SetCrossCheck`."""
+    import numpy as np
+
+    from lyapcheck.models.numeric import CertifiedDecrease, ModelSystem, check_certified_set
+    from lyapcheck.models.recast_numeric import ATOL, RTOL, FloatLoop, distances
+    from lyapcheck.models.recast_sos import poly_from_json
+
+    system = loop.system
+    eq = np.array([float(system.values[s]) for s in system.states])
+    cert = result.certificate
+    decrease = None
+    if "epsilon" in cert and "denominator" in cert:
+        value, q, D = certified_value(loop, result, state_square(loop),
+                                      poly_from_json(loop.ring, cert["denominator"], "denominator"))
+        decrease = CertifiedDecrease(epsilon=float(Fraction(str(cert["epsilon"]))), q=q, D=D)
+    else:
+        value, = certified_value(loop, result)
+    field = FloatLoop(system)
+    batch = ModelSystem(lambda y, d=None: field(y), len(starts))  # type: ignore[arg-type]
+    return check_certified_set(batch, starts, 10 * SIMULATED_HORIZON, value=value, level=float(Fraction(cert["level"])),
+                               converged=lambda X: distances(system, X - eq, angles) < CONVERGED_RADIUS,
+                               rtol=RTOL, atol=ATOL, decrease=decrease)
 
 
 def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
@@ -349,14 +426,20 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
     if isinstance(interval, ConditionResult):
         simulated_check(loop, interval, box)
         return interval
+    from lyapcheck.models import reasons
+
     if not positive:
-        return ConditionResult("candidate", "not_certified", "the candidate could not be proved positive definite in "
-                               "the states (V >= eps |x - x_eq|^2) on the recasting's relations, and no sublevel set "
-                               f"was proved on the true field ({interval})", property="ROA")
+        why = reasons.reason("the candidate V could not be proved positive definite (V >= eps |x - x_eq|^2), and no "
+                             "level set of it was proved a region of attraction on the true loop",
+                             ("other_candidate", "domain"), interval)
+        return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
     region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
     region.numbers.setdefault("tried_first", interval)
     if region.status != "certified":
-        region.summary = ("the candidate's derivative is not negative definite (no strict global decrease was proved; "
-                          "V' <= 0 alone needs LaSalle's argument, which this class does not make) and no sublevel set "
-                          "was certified: " + region.summary)
+        why = reasons.reason("the candidate's derivative could not be proved negative definite (V' <= 0 alone needs "
+                             "LaSalle's argument, which this class does not make), and no level set of it was proved "
+                             "a region of attraction", ("other_candidate", "domain", "time"),
+                             [interval, *region.numbers.get("detail", [])])
+        region.summary = why.summary
+        region.numbers["detail"] = why.detail
     return region

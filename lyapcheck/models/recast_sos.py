@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Callable, Mapping, Sequence, TypeVar
 
+from lyapcheck.models.reasons import size_limit
 from lyapcheck.models.recast import Relation
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly
@@ -244,7 +245,8 @@ class ConditionProgram:
                          if (sum(m) >= 1 or not vanishing) and (rname, m) not in self.drop
                          and not any(m[i] for i in self.unused) and not any(m[i] >= 2 for i in self.square_free)]
         if len(remainder) > MAX_RECAST_GRAM_ROWS:
-            return f"a Gram matrix of {len(remainder)} rows (the limit is MAX_RECAST_GRAM_ROWS = {MAX_RECAST_GRAM_ROWS})"
+            return size_limit(len(remainder), "rows of one sum-of-squares matrix", MAX_RECAST_GRAM_ROWS,
+                              "MAX_RECAST_GRAM_ROWS")  # "rows": the searches stop a template's rates on it
         self.grams.append(Gram(rname, tuple(remainder), full_blocks(remainder), margin=self.margin))
         terms.append(Term(Coefficients.literal({tuple([0] * nv): -1}), rname))
         self.identities.append(Identity(name, tuple(terms), Coefficients.parameter(f"K_{name}", sorted(known_support)),
