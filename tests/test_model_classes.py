@@ -351,5 +351,5 @@ def test_every_class_is_bounded_in_time_and_the_others_still_run() -> None:
     roa = result.results["roa"]
     assert roa.status == "inconclusive" and "MODEL_CLASS_TIME_LIMIT_S" in " ".join(roa.numbers["detail"])
     assert "--time-limit" in roa.summary
-    assert result.seconds["roa"] < 0.2 + 5  # the limit plus one solve and its exact check, at most
+    # (how soon after the limit a class stops is tests/test_time_limits.py's, in CPU time: no wall time here)
     assert result.results["linearization"].status == "certified"

@@ -16,6 +16,12 @@ falls inside one long solve (tests/data/time-limit-cubic-6.toml: sos_gas's degre
 idle, 3.3 s with the other core busy), inside the roa class's simulation (the hard stop,
 tests/data/time-limit-fast-cycle.toml, 48 s of simulation unbounded), and inside the decay-rate
 search that follows a proof (tests/data/time-limit-quartic-pairs.toml).
+
+The limit is a safety net (issue 40, item 9): these tests check how it stops a class (Clarabel's
+own limit cutting the solve under way, the hard stop's alarm, the reason naming the limit), never
+how many seconds a stop took, which a loaded machine can stretch; ``seconds >= limit`` (a class is
+not stopped before its limit) is the only figure asserted. How soon after its limit a class stops
+is measured in benchmarks/bench_quick_paths.py.
 """
 
 from __future__ import annotations
@@ -70,7 +76,7 @@ def slow_solve() -> SlowSolve:
     full = certify_model(model, classes=("sos_gas",))
     gas = full.results["sos_gas"]
     assert gas.status == "not_certified", gas.summary
-    assert "degree 4: the solver proved the program infeasible" in gas.summary
+    assert "degree 4: the solver proved the program infeasible" in " ".join(gas.numbers["detail"])
     solves = gas.solver["solves"]
     assert len(solves) == 2  # degree 2, degree 4 (6 and 8 are above the size limits, unsolved)
     last = solves[-1]
@@ -81,21 +87,25 @@ def slow_solve() -> SlowSolve:
 def assert_cut_in_the_solve(result: dict[str, Any], slow: SlowSolve) -> None:
     """sos_gas (its JSON form): inconclusive, naming the limit, its degree-4 solve cut short."""
     assert result["status"] == "inconclusive", result["summary"]
-    assert LIMIT_NAME in result["summary"] and f"time limit of {slow.limit:g} s reached" in result["summary"]
+    detail = " ".join(result["detail"])  # the summary says it in words; the limit's name is in the detail
+    assert LIMIT_NAME in detail and f"time limit of {slow.limit:g} s reached" in detail
+    assert f"the time limit of {slow.limit:g} s was reached" in result["summary"]
     cut = result["solver"]["solves"][-1]
     assert cut["program"] == slow.program
     # the degree-4 solve was stopped by the budget's time limit (Clarabel's), not run to its end;
     # user_limit, or AlmostSolved (optimal_inaccurate) when the point then met the looser tolerances
     assert cut["iterations"] < slow.iterations, (cut, slow)
     assert cut["status"] in ("user_limit", "optimal_inaccurate"), cut
+    # ... and not by the hard stop's alarm: the cooperative budget ended the class
+    assert "hard stop" not in detail and "ran past its time limit" not in result["summary"]
 
 
-def assert_within_one_solve(seconds: float, slow: SlowSolve) -> None:
-    """The class ran up to its limit and stopped within the limit plus one solve: the overshoot is
-    Clarabel's set-up (before its clock starts) and the iteration under way at the limit, 0.1-0.3 s
-    here; it neither waited for the solve's end nor for the hard stop."""
-    assert slow.limit <= seconds < slow.limit + slow.solve_s, (seconds, slow)
-    assert seconds < hard_stop(slow.limit)
+def assert_stopped_by_the_budget(seconds: float, slow: SlowSolve) -> None:
+    """The class ran up to its limit (never stopped before it) and was stopped by its budget, inside
+    the solve under way (:func:`assert_cut_in_the_solve`): it waited neither for the solve's end nor
+    for the hard stop. How long after the limit it stopped depends on the machine's load and is
+    measured in benchmarks/bench_quick_paths.py, not asserted."""
+    assert seconds >= slow.limit, (seconds, slow)
 
 
 @pytest.mark.slow
@@ -104,19 +114,18 @@ def test_a_limit_reached_inside_a_solve_stops_the_class_and_the_others_still_run
     (the budget hands it the time left), sos_gas is inconclusive naming the limit, within the limit
     plus one solve; linearization and quadratic before it, and candidate after it, still decide."""
     limit = slow_solve.limit
-    start = time.perf_counter()
     found = certify_model(slow_solve.model, classes=("linearization", "quadratic", "sos_gas", "candidate"),
                           candidate="x1**2", time_limit_s=limit)
-    wall = time.perf_counter() - start
     results = found.results
     assert_cut_in_the_solve(results["sos_gas"].to_json(), slow_solve)
-    assert_within_one_solve(found.seconds["sos_gas"], slow_solve)
+    assert_stopped_by_the_budget(found.seconds["sos_gas"], slow_solve)
     assert results["linearization"].status == "certified"  # exact, no search
     assert results["quadratic"].status == "not_certified"  # one solve of milliseconds, inside the limit
     # after the stopped class, a fresh budget: the user's V = x1**2 is not positive definite
     assert results["candidate"].status == "not_certified"
     assert "positive definite" in results["candidate"].summary
-    assert wall < sum(hard_stop(limit) for _ in results)
+    # no class needed the hard stop: every one ended on its own or by its budget
+    assert not any("hard stop" in " ".join(r.numbers.get("detail", [])) for r in results.values())
 
 
 @pytest.mark.slow
@@ -133,15 +142,15 @@ def test_the_limit_through_the_command_line(slow_solve: SlowSolve, monkeypatch: 
     done = CliRunner().invoke(app.cli, ["certify", "--model", str(SLOW_SOLVE), "--classes",
                                         "linearization,quadratic,sos_gas", "--json"], catch_exceptions=False)
     seconds = time.perf_counter() - start
-    assert done.exit_code == 0, done.output  # linearization certified: the verdict is certified
+    assert done.exit_code == 0, done.output  # linearization certified: the verdict is certified_local
     doc = json.loads(done.stdout)
-    assert doc["verdict"] == "certified"
+    assert doc["verdict"] == "certified_local"
     assert doc["conditions"]["linearization"]["status"] == "certified"
     assert doc["conditions"]["quadratic"]["status"] == "not_certified"
     assert_cut_in_the_solve(doc["conditions"]["sos_gas"], slow_solve)
-    # the command's whole run: sos_gas's, plus milliseconds of linearization, quadratic and the
-    # document (the JSON has no per-class seconds)
-    assert slow_solve.limit <= seconds < slow_solve.limit + slow_solve.solve_s + 1.0, (seconds, slow_solve)
+    # the command's whole run holds sos_gas's, which lasted its limit (the JSON has no per-class
+    # seconds); that its solve was cut by the budget, not waited for, assert_cut_in_the_solve showed
+    assert seconds >= slow_solve.limit, (seconds, slow_solve)
 
 
 @pytest.mark.slow
@@ -152,14 +161,22 @@ def test_the_hard_stop_ends_the_roa_simulation() -> None:
     model = load_model(FAST_CYCLE)
     limit = 0.1
     before = signal.getsignal(signal.SIGALRM)
+    cpu = time.process_time()
     found = certify_model(model, classes=("linearization", "roa"), time_limit_s=limit)
+    cpu = time.process_time() - cpu
     assert found.results["linearization"].status == "certified"
     roa = found.results["roa"]
     assert roa.status == "inconclusive", roa.summary
-    assert LIMIT_NAME in roa.summary and "hard stop" in roa.summary
-    assert f"time limit of {hard_stop(limit):g} s reached" in roa.summary
-    # stopped at the hard stop, give or take the numpy call under way when the alarm came
-    assert hard_stop(limit) <= found.seconds["roa"] < hard_stop(limit) + 1.0, found.seconds
+    detail = " ".join(roa.numbers["detail"])
+    assert LIMIT_NAME in detail and "hard stop" in detail
+    assert f"time limit of {hard_stop(limit):g} s reached" in detail
+    assert f"stopped at {hard_stop(limit):g} s" in roa.summary and "--time-limit" in roa.summary
+    # not before the hard stop; and the alarm interrupted the simulation: this process's own CPU
+    # time (which a busy machine does not stretch: it counts only the work done) stayed far below
+    # the simulation's tens of seconds. How soon after the alarm the class ended is a wall time,
+    # measured in benchmarks/bench_quick_paths.py
+    assert found.seconds["roa"] >= hard_stop(limit), found.seconds
+    assert cpu < 3 * hard_stop(limit), cpu
     assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
     assert signal.getsignal(signal.SIGALRM) is before
 

@@ -25,11 +25,13 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Final, Mapping, Sequence
 
+from lyapcheck import tolerances
+from lyapcheck.models import reasons
 from lyapcheck.models.expressions import Rational
 from lyapcheck.models.recast import RecastSystem, Relation, written_poly
 from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
                                          poly_from_json, poly_to_json, solve_on_faces)
-from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search
+from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
 
@@ -37,8 +39,6 @@ from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials
 EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
 #: degrees of V tried by sos_gas
 RECAST_GAS_DEGREES: Final = (2, 4)
-#: the most time one sos_gas template (a degree and a set of variables) may take, seconds
-TEMPLATE_LIMIT_S: Final = 10.0
 #: halvings of the level's bracket in roa's bisection
 LEVEL_BISECTIONS: Final = 7
 #: levels tried upwards (each the previous times this) before the bisection
@@ -506,8 +506,12 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
     templates = [(dv, vs) for dv in degrees for vs in ([coordinates] if len(all_vars) == len(coordinates) or
                                                         loop.angles or states_only else [coordinates, all_vars])]
     templates = [(dv, vs) for dv, vs in templates if vs] if not loop.angles else [(dv, all_vars) for dv in degrees]
+    spent: list[str] = []  # the templates whose budget of solves ended their search
     for dv, v_vars in templates:
         basis = [m for m in monomials(ring.nvars, 1, dv) if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
+        # each template (its margins and faces together) gets a budget of solves, so that one large
+        # program leaves the others their turn, the same way on any machine (a count, not seconds)
+        capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
         # the flows of every V variable (V may use any of them)
         names = [ring.names[i] for i in v_vars]
         label = f"degree {dv} in {', '.join(names)}"
@@ -527,7 +531,7 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
             for k in range(len(basis)):
                 program.free(f"v{k}")
             return program.condition("P", ring.support(l2), pos_terms, dv) or \
-                program.condition("D", ring.support(l2), dec_terms, top_dec) or program
+                program.condition("D", ring.support(l2), dec_terms, top_dec) or _template_size(program)
 
         for eps in EPSILONS:
             values = ParameterValues()
@@ -542,14 +546,15 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
                 return (V, pos, dec) if ok else None
 
             if budget.left() <= 0:
-                return ConditionResult(name, "inconclusive", f"time limit of {budget.seconds:g} s reached "
-                                       f"({budget.limit_name}); tried {'; '.join(tried) or 'nothing'}",
+                late = reasons.out_of_time("a Lyapunov function", budget.seconds, [budget.reached(), *tried])
+                return ConditionResult(name, "inconclusive", late.summary, numbers=late.numbers(),
                                        property="GAS", solver={"solves": search.log})
-            # each template gets at most TEMPLATE_LIMIT_S, so that one large program leaves time to the others
-            capped = Search(ring, Budget(min(budget.left(), TEMPLATE_LIMIT_S),
-                                         "lyapcheck.models.recast_classes.TEMPLATE_LIMIT_S"), search.log)
             try:
                 found, why = solve_on_faces(capped, build, values, accept)
+            except SolvesSpent as exc:
+                tried.append(f"{label}, eps {eps}: {exc}")
+                spent.append(exc.limit.words())
+                break
             except BudgetExhausted as exc:
                 tried.append(f"{label}, eps {eps}: {exc}")
                 break
@@ -566,8 +571,23 @@ def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGR
                                    "the recasting's relations (exact): globally asymptotically stable",
                                    numbers={"degree": dv}, certificate=cert, property="GAS",
                                    solver={"solves": search.log})
-    return ConditionResult(name, "not_certified", "no V found: " + "; ".join(tried), property="GAS",
-                           numbers={"reason": "; ".join(tried)}, solver={"solves": search.log})
+    none = reasons.not_found("Lyapunov function", degrees, tried,
+                             ("sos_gas", "candidate") if name == "quadratic" else ("degree", "candidate"))
+    if spent:
+        none = reasons.with_budget(none, spent[0])
+    return ConditionResult(name, "not_certified", none.summary, property="GAS",
+                           numbers=none.numbers({"reason": "; ".join(tried)}), solver={"solves": search.log})
+
+
+def _template_size(program: ConditionProgram) -> ConditionProgram | str:
+    """``program``, or why a template's program is too large for sos_gas (its largest matrix
+    above :data:`~lyapcheck.tolerances.TEMPLATE_GRAM_ROWS` rows): a count that decides, where a
+    wall-clock limit per template once did, whether the template is solved."""
+    rows = max((len(g.basis) for g in program.grams), default=0)
+    if rows > tolerances.TEMPLATE_GRAM_ROWS:
+        return reasons.size_limit(rows, "rows of one sum-of-squares matrix", tolerances.TEMPLATE_GRAM_ROWS,
+                                  "TEMPLATE_GRAM_ROWS")
+    return program
 
 
 def quadratic(loop: Loop, budget: Budget) -> ConditionResult:
@@ -696,8 +716,12 @@ def best_region(loop: Loop, regions: Sequence[Region], tried: Sequence[str], box
                 search: Search, name: str = "roa") -> ConditionResult:
     """The region covering the largest share of the box, as the class's result."""
     if not regions:
-        return ConditionResult(name, "not_certified", "no region found: " + "; ".join(tried), property="ROA",
-                               numbers={"reason": "; ".join(tried)}, solver={"solves": search.log})
+        which = "the candidate V" if name == "candidate" else "the V functions tried"
+        none = reasons.reason(f"no region of attraction was proved: no level set of {which} could be proved to shrink",
+                              ("domain", "candidate", "time") if name != "candidate"
+                              else ("other_candidate", "domain", "time"), tried)
+        return ConditionResult(name, "not_certified", none.summary, property="ROA",
+                               numbers=none.numbers({"reason": "; ".join(tried)}), solver={"solves": search.log})
     shares = [box_share(loop, r, box) for r in regions]
     k = max(range(len(regions)), key=lambda i: shares[i])
     best = regions[k]
@@ -1017,11 +1041,15 @@ def refute_global(loop: Loop, name: str, prop: str = "GAS") -> ConditionResult |
     point = other_equilibrium(loop)
     if point is None:
         return None
-    where = ", ".join(f"{k} = {v}" for k, v in point.items())
-    return ConditionResult(name, "refuted", f"not globally asymptotically stable: the loop has another equilibrium at "
-                           f"{where} (the other states at their equilibrium; checked exactly, its sine and cosine in "
-                           "Q(sqrt 2, sqrt 3))", property=prop,  # type: ignore[arg-type]
+    return ConditionResult(name, "refuted", refutation_sentence(point), property=prop,  # type: ignore[arg-type]
                            refutation={"kind": "equilibrium", "point": point})
+
+
+def refutation_sentence(point: dict[str, str]) -> str:
+    """What another equilibrium refutes, from the point alone (``verify`` re-makes it and compares)."""
+    where = ", ".join(f"{k} = {v}" for k, v in point.items())
+    return (f"not globally asymptotically stable: the loop has another equilibrium at {where} (the other states at "
+            "their equilibrium; checked exactly, its sine and cosine in Q(sqrt 2, sqrt 3))")
 
 
 def check_refutation(loop: Loop, data: Any) -> tuple[bool, str]:

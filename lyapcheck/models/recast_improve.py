@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 
+from lyapcheck import tolerances
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
 
@@ -44,14 +45,11 @@ VS_POSITIVITY_MARGIN: Final = Fraction(1, 50)
 VS_HORIZON_S: Final = 25.0
 #: bits kept of the V step's coefficients (short certificates; the level step decides)
 VS_ROUND_BITS: Final = 20
-#: the most time one V step may take, seconds
-VS_STEP_LIMIT_S: Final = 8.0
-#: the most time one level step of the iteration may take, seconds
-VS_LEVEL_LIMIT_S: Final = 15.0
 #: a step that adds less than this share of the converging samples ends the iteration at its degree
 VS_MIN_GAIN: Final = 0.01
-#: the iteration stops when less than this share of the class's time limit is left
-VS_BUDGET_SHARE: Final = 0.35
+# The iteration's work is counted, not timed (the same regions on any machine): a V step is one
+# solve (its length bounded by SOLVER_MAX_ITER), a level step at most
+# lyapcheck.tolerances.VS_LEVEL_SOLVES solves, the whole iteration at most VS_SOLVES.
 
 
 def target_samples(loop: "Loop", box: tuple[np.ndarray, np.ndarray], rng: np.random.Generator) -> np.ndarray:
@@ -72,14 +70,17 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
     step), and what was tried."""
     from lyapcheck.models.recast_classes import certify_region
     from lyapcheck.models.recast_numeric import v_values
-    from lyapcheck.models.search import Budget, BudgetExhausted, Search
+    from lyapcheck.models.search import BudgetExhausted, Search
 
     samples = target_samples(loop, box, np.random.default_rng(1))
     tried: list[str] = []
     if len(samples) == 0:
         return [], ["the V-s iteration: no sample of the box converges in simulation"]
     out: list["Region"] = []
-    search = Search(loop.ring, budget)
+    # the whole iteration's budget of solves: what is left of the class's work goes to the exact
+    # checks of the regions found, whatever the machine's speed
+    search = Search(loop.ring, budget).within(tolerances.VS_SOLVES, "for the V-s iteration",
+                                              "lyapcheck.tolerances.VS_SOLVES")
 
     def covered(r: "Region") -> float:
         """The share of the converging samples inside a region (the iteration's progress)."""
@@ -89,24 +90,19 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
     for degree in searched_degrees(VS_DEGREES):
         region = best
         for k in range(VS_ITERATIONS):
-            if budget.left() < budget.seconds * VS_BUDGET_SHARE:
-                tried.append("the V-s iteration: stopped to keep the time limit")
-                return out, tried
             label = f"the V-s iteration (degree {degree}, step {k + 1})"
             try:
                 outside = samples[v_values(loop.system, region.V, samples) > float(region.level)]
-                # one V step gets at most VS_STEP_LIMIT_S: a large program leaves time to the level steps
-                capped = Search(loop.ring, Budget(min(budget.left(), VS_STEP_LIMIT_S),
-                                                  "lyapcheck.models.recast_improve.VS_STEP_LIMIT_S"), search.log)
                 V = v_step(loop, region.V * to_fmpq(1 / region.level), region.rho, degree,
-                           outside if len(outside) else samples, capped)
+                           outside if len(outside) else samples, search)
                 if isinstance(V, str):
                     tried.append(f"{label}: {V}")
                     break
-                level_search = Search(loop.ring, Budget(min(budget.left(), VS_LEVEL_LIMIT_S),
-                                                        "lyapcheck.models.recast_improve.VS_LEVEL_LIMIT_S"), search.log)
+                # each level step gets a budget of solves (a count: the same steps on any machine)
+                level_search = search.within(tolerances.VS_LEVEL_SOLVES, "per level step",
+                                             "lyapcheck.tolerances.VS_LEVEL_SOLVES")
                 found = certify_region(loop, V, level_search, label, start=Fraction(1, 2))
-            except BudgetExhausted as exc:
+            except BudgetExhausted as exc:  # a budget of solves spent, or the class's time limit (the safety net)
                 tried.append(f"{label}: {exc}")
                 return out, tried
             if isinstance(found, str):

@@ -36,13 +36,14 @@ from typing import Any, Final, Sequence
 
 import numpy as np
 
+from lyapcheck import tolerances
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.field import ScaledField, Scaling, StateField, linear_images
 from lyapcheck.models.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
     symmetry, vanishing_monomials
 from lyapcheck.models.numeric import NumericPoly
-from lyapcheck.models.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
-                                     box_support, multiplier_grams, one, param)
+from lyapcheck.models.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, SolvesSpent,
+                                     box_multipliers, box_multipliers_of, box_support, multiplier_grams, one, param)
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_containment, check_lyapunov, check_sublevel, lie_derivative
@@ -69,9 +70,8 @@ ROA_STALE_ROUNDS: Final = 3
 #: over mu in [0.8, 1.2] the full search reached 88 % of the box's common region in 55 s)
 BOX_ROA_DEGREES: Final = (4,)
 BOX_ROA_ROUNDS: Final = 8
-#: the enlarging rounds stop when less than this share of the class's time is left, which is kept
-#: for the exact check of the best set and its ball
-ROA_RESERVE: Final = 0.35
+# the enlarging rounds spend at most lyapcheck.tolerances.ROA_ENLARGE_SOLVES solves (a count, the
+# same rounds on any machine); the rest of the class's work is the exact check of the best set and its ball
 #: the V step keeps Q_V >= ROA_FLOOR I (V positive definite with room for the exact check)
 ROA_FLOOR: Final = 1e-6
 #: extra half-degree of the multiplier s beyond the least that balances the degrees: on the
@@ -555,20 +555,19 @@ def enlarge(field: StateField, search: Search, samples: np.ndarray, converged: n
     V = _scaled(best.V, 1 / best.level)
     s = best.s
     candidate: tuple[GramPoly, float] | None = None
+    rounds_search = search.within(tolerances.ROA_ENLARGE_SOLVES, "for the enlarging rounds",
+                                  "lyapcheck.tolerances.ROA_ENLARGE_SOLVES")
     try:
         for degree in degrees:
             if degree <= 2 or s is None:
                 continue
             stale = 0
             for _ in range(rounds):
-                if search.budget.left() < ROA_RESERVE * search.budget.seconds:
-                    outcome.history.append({"stopped": "time reserved for the exact check"})
-                    break
-                new_V = vstep(field, degree, LevelCertificate(V, Fraction(1), s, s, 0.0), target, search,
+                new_V = vstep(field, degree, LevelCertificate(V, Fraction(1), s, s, 0.0), target, rounds_search,
                               generators)
                 if new_V is None:
                     break
-                new_s = multiplier_at(field, new_V, Fraction(1), search, generators)
+                new_s = multiplier_at(field, new_V, Fraction(1), rounds_search, generators)
                 if new_s is None:
                     break
                 V, s = new_V, new_s
@@ -580,8 +579,10 @@ def enlarge(field: StateField, search: Search, samples: np.ndarray, converged: n
                     stale += 1
                     if stale >= ROA_STALE_ROUNDS:
                         break
+    except SolvesSpent as exc:
+        outcome.history.append({"stopped": str(exc)})
     except BudgetExhausted:
-        outcome.history.append({"stopped": "time limit"})
+        outcome.history.append({"stopped": "time limit (the safety net)"})
     if candidate is not None and candidate[1] > (outcome.share or 0.0):
         try:
             V, _ = candidate
@@ -643,8 +644,8 @@ def ball_radius(scaled: ScaledField, field: StateField, cert: LevelCertificate |
         inside = v_num(on_states(field, to_scaled(mid[:, None] * directions))) <= level
         lo, hi = np.where(inside, mid, lo), np.where(inside, hi, mid)
     estimate = float(np.min(lo))
-    if not estimate > 0 or search.budget.left() < 0.1 * search.budget.seconds:
-        return (estimate if estimate > 0 else None), None
+    if not estimate > 0:  # (at most three containment solves follow: a spent budget ends them, below)
+        return None, None
     p = radius_polynomial(ring, scaled.scaling)
     for factor in (Fraction(99, 100), Fraction(9, 10), Fraction(1, 2)):
         r = Fraction(estimate).limit_denominator(10**9) * factor
@@ -734,9 +735,12 @@ def level_result(name: str, scaled: ScaledField, field: StateField, cert: LevelC
         numbers["ball_radius"] = float(Fraction(ball["radius"]))
     if estimate is not None:
         numbers["ball_radius_estimate"] = estimate
-    ball_text = f"; it holds the ball |x - x_eq| <= {numbers['ball_radius']:.4g}" if "ball_radius" in numbers else ""
-    return ConditionResult(name, "certified", f"{what}: every start in {{V <= {float(cert.level):.6g}}} converges to "
-                                              f"the equilibrium (checked exactly){ball_text}",
+    from lyapcheck.models.claims import rounded
+
+    ball_text = (f"; it holds the ball |x - x_eq| <= {rounded(numbers['ball_radius'], 4, 'down')}"
+                 if "ball_radius" in numbers else "")
+    return ConditionResult(name, "certified", f"{what}: every start in {{V <= {rounded(cert.level, 6, 'down')}}} "
+                                              f"converges to the equilibrium (checked exactly){ball_text}",
                            numbers=numbers, certificate=certificate, solver={"solves": search.log}, property="ROA")
 
 

@@ -1,8 +1,12 @@
 """What every generic class's search shares: its time budget, its solver log, and the way from a
 polynomial's coefficients to a program's parameters and back to an exact point.
 
-A class's search is bounded by a wall-time budget (:class:`Budget`): every solve gets at most
-the time left (Clarabel's own time limit), and a search that runs out raises
+A class's work is bounded by counts that are the same on any machine and under any load: each
+solve by the solver's iterations (:data:`~lyapcheck.tolerances.SOLVER_MAX_ITER`), and a step of a
+search by its budget of solves (:class:`SolveLimit`, :meth:`Search.within`; a step that spends it
+raises :class:`SolvesSpent`, and its class says so in its reason). The wall-time budget
+(:class:`Budget`) is only a safety net: every solve gets at most the class's time left (Clarabel's
+own time limit, far above a normal solve), and a search that runs out raises
 :class:`BudgetExhausted`, which the class reports as ``inconclusive`` naming the limit.
 """
 
@@ -32,39 +36,95 @@ EXACT_TRY_MARGIN = 1e-9
 
 
 class BudgetExhausted(Exception):
-    """A class's search reached its time limit."""
+    """A class's search reached its time limit (the safety net), or one of its steps spent its
+    budget of solves (:class:`SolvesSpent`)."""
+
+
+@dataclass
+class SolveLimit:
+    """A budget of solves for one step of a search (a template, the V-s iteration, the enlarging
+    rounds): ``solves`` at most, ``per`` the step in a reason's words (``per template``), and
+    ``limit_name`` the constant that sets it. A count, so that a loaded machine does the same
+    work and gets the same outcome as an idle one."""
+
+    solves: int
+    per: str
+    limit_name: str
+    used: int = 0
+
+    def words(self) -> str:
+        """``the search's budget of 12 solves per template was spent`` (a reason's words)."""
+        return f"the search's budget of {self.solves} solve{'s' if self.solves != 1 else ''} {self.per} was spent"
+
+
+class SolvesSpent(BudgetExhausted):
+    """A step of a search spent its budget of solves (:class:`SolveLimit`); its message is the
+    limit's words and the constant's name."""
+
+    def __init__(self, limit: SolveLimit) -> None:
+        self.limit = limit
+        super().__init__(f"{limit.words()} ({limit.limit_name})")
+
+
+def _now() -> float:
+    """The clock of :class:`Budget` (one name, so that a test can show that no outcome depends on it)."""
+    return time.perf_counter()
 
 
 @dataclass
 class Budget:
-    """A wall-time limit for one class (``limit_name`` names the constant, for the message)."""
+    """A wall-time limit for one class (``limit_name`` names the constant, for the message).
+
+    A safety net, not a decider: every step whose outcome a test or a documented figure depends
+    on bounds its work by counts (cells, iterations, solves: the ball-arithmetic route's
+    :data:`~lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS`, the solves of :class:`SolveLimit`), so
+    that a loaded machine gets the same outcome; reaching this limit makes the class inconclusive
+    with a reason that names it as the safety net."""
 
     seconds: float
     limit_name: str
-    start: float = field(default_factory=time.perf_counter)
+    start: float = field(default_factory=lambda: _now())
 
     def left(self) -> float:
-        return self.seconds - (time.perf_counter() - self.start)
+        return self.seconds - (_now() - self.start)
+
+    def reached(self) -> str:
+        """The detail line of this limit reached (it names the limit as the safety net it is)."""
+        return f"time limit of {self.seconds:g} s reached (a safety net: {self.limit_name})"
 
     def check(self) -> None:
         if self.left() <= 0:
-            raise BudgetExhausted(f"time limit of {self.seconds:g} s reached ({self.limit_name})")
+            raise BudgetExhausted(self.reached())
 
 
 @dataclass
 class Search:
-    """One class's search: the ring of its polynomials, its budget and its log of solves."""
+    """One class's search: the ring of its polynomials, its budget, its log of solves and the
+    budgets of solves of the steps it is in (:meth:`within`)."""
 
     ring: Ring
     budget: Budget
     log: list[dict[str, Any]] = field(default_factory=list)
+    limits: tuple[SolveLimit, ...] = ()
+
+    def within(self, solves: int, per: str, limit_name: str) -> "Search":
+        """This search (same ring, budget and log) inside a step with a budget of ``solves`` solves
+        (:class:`SolveLimit`): a solve past it raises :class:`SolvesSpent`."""
+        return Search(self.ring, self.budget, self.log, (*self.limits, SolveLimit(solves, per, limit_name)))
 
     def solve(self, structure: Structure, values: "ParameterValues") -> Solution:
         from lyapcheck.sos.program import SOSProgram
 
+        for limit in self.limits:
+            if limit.used >= limit.solves:
+                raise SolvesSpent(limit)
         self.budget.check()
         program = SOSProgram.of(structure)
         self.budget.check()
+        for limit in self.limits:
+            limit.used += 1
+        # the class's time left is the solver's limit: a safety net far above a normal solve, whose
+        # length SOLVER_MAX_ITER bounds (a count of iterations)
         solution = program.solve(values.floats, time_limit=max(self.budget.left(), 0.05))
         entry = solution.report.to_json()
         entry["program"] = structure.key()
