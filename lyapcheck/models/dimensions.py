@@ -13,32 +13,48 @@ only ``s``) has every right-hand side checked, term by term as written
 - ``*`` and ``/`` multiply and divide dimensions, ``** k`` raises to the ``k``-th power, a unary sign
   changes nothing;
 - a literal number is dimensionless (``-x + 1`` with ``x`` in m is a mismatch), except the literal 0,
-  which fits any dimension.
+  which fits any dimension;
+- in a loop with functions (lyapcheck.models.recast): ``sin cos exp tanh atan`` take a dimensionless
+  argument and give a dimensionless result; ``sqrt(q)`` has half the dimension of ``q`` (a dimension
+  with an odd power has no square root and is refused); ``abs(u)`` has the dimension of ``u``;
+  ``min(a, b)``, ``max(a, b)`` and ``sat(u, limit)`` need their two arguments of one dimension and
+  have it; ``pi`` is dimensionless.
 
 Outputs are checked for consistency only (the terms of each sum agree): nothing declares an
 output's unit, and its bound is in the unit its expression has.
 
 The walker reads the expression with :func:`ast.parse` (a tree, nothing evaluated), after
 :mod:`lyapcheck.models.expressions` has accepted the text, and visits only that language's nodes
-(``BinOp`` with ``+ - * / **``, ``UnaryOp``, ``Constant``, ``Name``). Values are untouched: a model
-file is SI inside with or without ``[units]``, which is why ``[units]`` takes SI units only.
+(``BinOp`` with ``+ - * / **``, ``UnaryOp``, ``Constant``, ``Name``, and ``Call`` of the functions of
+:data:`~lyapcheck.models.expressions.FUNCTIONS`). Anything else, or a name the model does not
+declare, raises :class:`OutsideLanguage`: a loop with functions is dimension-checked before it is
+recast, and its parser (which runs in the recasting) then says what is wrong in its own words.
+Values are untouched: a model file is SI inside with or without ``[units]``, which is why
+``[units]`` takes SI units only.
 """
 
 from __future__ import annotations
 
 import ast
-import warnings
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Final, Literal, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter
+from lyapcheck.models.expressions import (FUNCTIONS, MAX_EXPRESSION_LENGTH, ExpressionError, parse_quietly,
+                                          refuse_deep_nesting)
 from lyapcheck.units import DIMENSIONLESS, Dimension, model_unit, parse_si_with_dimension
 
 #: the table's key for the time unit
 TIME_KEY: Final = "time"
 #: the dimension of time, the only one the ``time`` key accepts
 TIME: Final = Dimension.of({"[time]": 1})
+#: the functions whose argument must be dimensionless, and whose value is
+_DIMENSIONLESS_FUNCTIONS: Final = ("sin", "cos", "exp", "tanh", "atan")
+#: the functions whose two arguments must have one dimension, which is the value's
+_AGREEING_FUNCTIONS: Final = ("min", "max", "sat")
+#: the constant of the language (dimensionless), a name no model may declare in a loop with functions
+_PI: Final = "pi"
 #: the deepest tree the walker visits (the expression parser's MAX_DEPTH is 60, and a parenthesis
 #: costs the walker at most two levels)
 _MAX_WALK_DEPTH: Final = 200
@@ -52,6 +68,11 @@ class DimensionError(ValueError):
         self.key = key
         self.message = message
         super().__init__(f"{key}: {message}")
+
+
+class OutsideLanguage(DimensionError):
+    """A text outside the expression language (a node, a function or a name the model does not
+    have): its parser says what is wrong, in one line; the dimension check stands aside for it."""
 
 
 @dataclass(frozen=True)
@@ -137,7 +158,7 @@ def check_dynamics(state: str, text: str, units: UnitTable, names: Mapping[str, 
     expected = dimension / TIME
     why = f"the dimension of {state}' ({state} in {unit}, per {units.time})" if unit else \
         f"the dimension of {state}' ({state} dimensionless, per {units.time})"
-    _Walker(text, names).check(f"[dynamics] {state}", expected, why)
+    _Walker(text, names, closed=True).check(f"[dynamics] {state}", expected, why)
 
 
 def check_output(name: str, text: str, names: Mapping[str, Named]) -> Dimension:
@@ -154,7 +175,7 @@ def check_inequality(key: str, text: str, names: Mapping[str, Named]) -> None:
         found = []
         for side in (left, right):
             walker = _Walker(side, names)
-            found.append((walker.check(key, None, ""), _is_zero(ast.parse(walker.text, mode="eval").body)))
+            found.append((walker.check(key, None, ""), _is_zero(parse_quietly(walker.text).body)))
         (dl, zl), (dr, zr) = found
         if zl or zr or dl == dr:
             continue
@@ -178,35 +199,48 @@ def check_value(key: str, value: object, expected: Dimension, what: str) -> None
 
 
 class _Mismatch(Exception):
-    def __init__(self, term: ast.AST, found: Dimension, expected: Dimension, why: str) -> None:
+    """A term whose dimension is not the one expected; ``said``, when given, is the message's
+    opening instead of "the term ... has dimension ..., expected ..." (a function's argument)."""
+
+    def __init__(self, term: ast.AST, found: Dimension, expected: Dimension, why: str, said: str = "") -> None:
         super().__init__()
-        self.term, self.found, self.expected, self.why = term, found, expected, why
+        self.term, self.found, self.expected, self.why, self.said = term, found, expected, why, said
 
 
 class _Walker:
     """The dimension of an expression's tree, top down where the expected dimension is known."""
 
-    def __init__(self, text: str, names: Mapping[str, Named]) -> None:
+    def __init__(self, text: str, names: Mapping[str, Named], closed: bool = False) -> None:
         self.text = str(text).strip()
         self.source = self.text.encode("utf-8")
         self.names = names
+        #: every name must be one of ``names`` (a right-hand side: else :class:`OutsideLanguage`);
+        #: elsewhere a name not given (an output's disturbance times 0) is dimensionless
+        self.closed = closed
 
     def check(self, key: str, expected: Dimension | None, why: str) -> Dimension:
+        # on a polynomial loop the expression parser accepted the text first; a loop with functions
+        # is checked before its recasting parses it, so what the parser refuses stands aside here
+        # (OutsideLanguage), checked by the same limits before ast.parse recurses through it
+        if len(self.text) > MAX_EXPRESSION_LENGTH:
+            raise OutsideLanguage(key, "the expression is too long")
         try:
-            with warnings.catch_warnings():  # as the expression parser does: its one-line error came first
-                warnings.simplefilter("ignore")
-                tree = ast.parse(self.text, mode="eval")
-        except SyntaxError:  # pragma: no cover - the expression parser accepted the text first
-            raise DimensionError(key, "not a valid expression") from None
+            refuse_deep_nesting(self.text)
+            tree = parse_quietly(self.text)
+        except (ExpressionError, SyntaxError, ValueError, RecursionError, MemoryError):
+            raise OutsideLanguage(key, "not a valid expression") from None
         try:
             return self.walk(tree.body, expected, why, 0)
         except _Mismatch as exc:
             raise DimensionError(key, self.message(exc)) from None
+        except OutsideLanguage as exc:
+            raise OutsideLanguage(key, exc.message) from None
 
     def message(self, exc: _Mismatch) -> str:
         term = self.segment(exc.term)
-        text = f"the term '{term}' has dimension {exc.found}, expected {exc.expected}, {exc.why}"
-        used = list(dict.fromkeys(n.id for n in ast.walk(exc.term) if isinstance(n, ast.Name)))
+        text = exc.said or f"the term '{term}' has dimension {exc.found}, expected {exc.expected}, {exc.why}"
+        callees = _callees(exc.term)
+        used = list(dict.fromkeys(n.id for n in ast.walk(exc.term) if isinstance(n, ast.Name) and n not in callees))
         described = [self.names[n].describe(n) for n in used if n in self.names]
         if described:
             text += "; " + ", ".join(described)
@@ -220,11 +254,11 @@ class _Walker:
         return text if len(text) <= 60 else text[:60] + "..."
 
     def walk(self, node: ast.AST, expected: Dimension | None, why: str, depth: int) -> Dimension:
-        if depth > _MAX_WALK_DEPTH:  # pragma: no cover - the parser's MAX_DEPTH comes first
-            raise DimensionError("expression", "nested too deeply")
+        if depth > _MAX_WALK_DEPTH:  # the parser's MAX_DEPTH refuses it (first, on a polynomial loop)
+            raise OutsideLanguage("expression", "nested too deeply")
         if _is_zero(node):
             return expected if expected is not None else DIMENSIONLESS
-        if isinstance(node, ast.UnaryOp):
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
             return self.walk(node.operand, expected, why, depth + 1)
         if isinstance(node, ast.BinOp):
             if isinstance(node.op, (ast.Add, ast.Sub)):
@@ -235,11 +269,15 @@ class _Walker:
                 return self.power(node, expected, why, depth)
         if isinstance(node, ast.Name):
             named = self.names.get(node.id)
+            if named is None and self.closed and node.id != _PI:  # pi: the language's constant, a number
+                raise OutsideLanguage("expression", f"unknown name '{node.id}'")
             return self.compare(node, named.dimension if named else DIMENSIONLESS, expected, why)
-        if isinstance(node, ast.Constant):
+        if isinstance(node, ast.Constant) and _is_number(node):
             return self.compare(node, DIMENSIONLESS, expected, why)
-        # pragma: no cover - the expression parser refuses every other node first
-        raise DimensionError("expression", f"'{self.segment(node)}' is not part of the language")
+        if isinstance(node, ast.Call):
+            return self.call(node, expected, why, depth)
+        # the expression parser refuses every other node (first, on a polynomial loop)
+        raise OutsideLanguage("expression", f"'{self.segment(node)}' is not part of the language")
 
     def compare(self, node: ast.AST, found: Dimension, expected: Dimension | None, why: str) -> Dimension:
         if expected is not None and found != expected:
@@ -254,20 +292,90 @@ class _Walker:
             left = left.left
         terms.append(left)
         terms.reverse()
+        return self.agree(node, terms, expected, why, depth, "the first term")
+
+    def agree(self, node: ast.AST, parts: Sequence[ast.AST], expected: Dimension | None, why: str, depth: int,
+              first_is: str) -> Dimension:
+        """``parts`` of ``node`` that have one dimension, ``node``'s (a sum's terms, the arguments of
+        ``min``, ``max``, ``sat``): each compared with ``expected`` where it is known, else with the
+        first part that is not the literal 0 (``first_is`` says what that part is, for messages)."""
         if expected is not None:
-            for term in terms:
-                self.walk(term, expected, why, depth + 1)
+            for part in parts:
+                self.walk(part, expected, why, depth + 1)
             return expected
         reference: Dimension | None = None
         first = ""
-        for term in terms:
-            if _is_zero(term):
+        for part in parts:
+            if _is_zero(part):
                 continue
             if reference is None:
-                reference, first = self.walk(term, None, why, depth + 1), self.segment(term)
+                reference, first = self.walk(part, None, why, depth + 1), self.segment(part)
                 continue
-            self.walk(term, reference, f"that of '{first}', the first term of '{self.segment(node)}'", depth + 1)
+            self.walk(part, reference, f"that of '{first}', {first_is} of '{self.segment(node)}'", depth + 1)
         return reference if reference is not None else DIMENSIONLESS
+
+    def call(self, node: ast.Call, expected: Dimension | None, why: str, depth: int) -> Dimension:
+        """A function of the language (the module docstring's rules); anything else is
+        :class:`OutsideLanguage` (its parser says why)."""
+        name = node.func.id if isinstance(node.func, ast.Name) else ""
+        if name not in FUNCTIONS or node.keywords or len(node.args) != FUNCTIONS[name]:
+            raise OutsideLanguage("expression", f"'{self.segment(node)}' is not a function of the language")
+        args = node.args
+        if name in _DIMENSIONLESS_FUNCTIONS:
+            found = self.fitting(args[0], DIMENSIONLESS, f"for the argument of '{self.segment(node)}' to be "
+                                                         "dimensionless", depth)
+            if found != DIMENSIONLESS:
+                raise _Mismatch(args[0], found, DIMENSIONLESS, why, f"the argument of {self.segment(node)} must be "
+                                                                    f"dimensionless, it has {found}")
+            return self.compare(node, DIMENSIONLESS, expected, why)
+        if name == "sqrt":
+            # where the root's dimension is known, its argument's (the square) is, and a sum there is
+            # compared term by term with it
+            if expected is not None:
+                square = self.fitting(args[0], expected ** 2, f"for '{self.segment(node)}' to have {expected}", depth)
+            else:
+                square = self.walk(args[0], None, why, depth + 1)
+            odd = [(base, power) for base, power in square.exponents if power % 2]
+            if odd:
+                base, power = odd[0]
+                raise _Mismatch(args[0], square, square, why, f"the argument of {self.segment(node)} has dimension "
+                                                              f"{square}, which has no square root: the power of "
+                                                              f"{base} is odd ({power}); sqrt takes a dimensionless "
+                                                              "argument or one whose powers are even (an area)")
+            return self.compare(node, square ** Fraction(1, 2), expected, why)
+        if name == "abs":
+            return self.walk(args[0], expected, why, depth + 1)
+        if name not in _AGREEING_FUNCTIONS:  # pragma: no cover - a function without a rule here
+            raise OutsideLanguage("expression", f"'{self.segment(node)}' has no dimension rule")
+        # min, max, sat: two arguments of one dimension, the value's; where that is known from outside
+        # and the arguments agree with each other but not with it, the whole call is the term named
+        try:
+            return self.agree(node, args, expected, why, depth, "the first argument")
+        except _Mismatch as outer:
+            if expected is None:
+                raise
+            try:
+                found = self.agree(node, args, None, why, depth, "the first argument")
+            except _Mismatch:
+                raise outer from None
+            raise _Mismatch(node, found, expected, why) from None
+
+    def fitting(self, node: ast.AST, target: Dimension, why: str, depth: int) -> Dimension:
+        """The dimension of ``node``, a function's argument that should have ``target``: where it
+        agrees with itself but has another dimension, that dimension (the caller names the whole
+        argument); where it does not agree with itself either, the first term that does not fit
+        ``target`` is named (:class:`_Mismatch`)."""
+        try:
+            self.walk(node, target, why, depth + 1)
+            return target
+        except _Mismatch as outer:
+            try:
+                found = self.walk(node, None, why, depth + 1)
+            except _Mismatch:
+                raise outer from None
+            if found == target:  # pragma: no cover - agreeing with itself and with target, it fitted
+                raise outer from None
+            return found
 
     def product(self, node: ast.BinOp, expected: Dimension | None, why: str, depth: int) -> Dimension:
         factors: list[tuple[ast.AST, int]] = []
@@ -310,8 +418,8 @@ class _Walker:
 
     def power(self, node: ast.BinOp, expected: Dimension | None, why: str, depth: int) -> Dimension:
         exponent = node.right.value if isinstance(node.right, ast.Constant) else None
-        if not isinstance(exponent, int) or isinstance(exponent, bool):  # pragma: no cover - the parser's rule
-            raise DimensionError("expression", f"the exponent of '{self.segment(node)}' is not an integer")
+        if not isinstance(exponent, int) or isinstance(exponent, bool):  # the parser's rule
+            raise OutsideLanguage("expression", f"the exponent of '{self.segment(node)}' is not an integer")
         if expected is not None and exponent > 0 and _holds_sum(node.left):
             self.within(node, node.left, expected ** Fraction(1, exponent), DIMENSIONLESS, exponent, expected, why,
                         depth)
@@ -328,6 +436,15 @@ def _is_zero(node: ast.AST) -> bool:
             and not isinstance(node.value, bool) and node.value == 0)
 
 
+def _is_number(node: ast.Constant) -> bool:
+    return isinstance(node.value, (int, float)) and not isinstance(node.value, bool)
+
+
+def _callees(node: ast.AST) -> list[ast.AST]:
+    """The names of the functions called in ``node`` (``sin`` in ``sin(x)``): not names of the model."""
+    return [n.func for n in ast.walk(node) if isinstance(n, ast.Call)]
+
+
 def _holds_sum(node: ast.AST) -> bool:
     """Whether ``node`` is a sum, under signs and powers (``-(a + b)``, ``(a + b)**2``)."""
     while True:
@@ -339,5 +456,5 @@ def _holds_sum(node: ast.AST) -> bool:
             return isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub))
 
 
-__all__ = ["DimensionError", "Named", "UnitTable", "read_units", "check_dynamics", "check_output", "check_value",
+__all__ = ["DimensionError", "OutsideLanguage", "Named", "UnitTable", "read_units", "check_dynamics", "check_output", "check_value",
            "TIME_KEY"]

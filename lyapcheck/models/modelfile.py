@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
-from lyapcheck.models.expressions import (FUNCTIONS, NUMBER_RANGE, ExpressionError, Rational, first_function_use,
+from lyapcheck.models.expressions import (FUNCTIONS, NUMBER_RANGE, ExpressionError, Rational,
                                           parse_with_divisors, uses_functions)
 from lyapcheck.models.sets import SET_KEYS, STAY_KEY, SetForms, SetText, StateSet, evaluate_set, evaluate_sets, parse_set
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in
@@ -110,6 +110,12 @@ class Model:
     @property
     def n(self) -> int:
         return len(self.states)
+
+    def to_toml(self) -> str:
+        """The model file's text as read: a file with it gives this model (``overrides``, settings laid
+        over it, are not in it). A model built in Python (:func:`lyapcheck.models.build.from_sympy`) is read
+        from this text."""
+        return self.text
 
 
 def load_model(path: str | Path, overrides: Mapping[str, object] | None = None) -> Model:
@@ -277,16 +283,12 @@ class _Reader:
         """A loop with functions (lyapcheck.models.recast): the parameters are read, set to their
         values and the loop recast with every disturbance held at 0 (its claims say ``(d = 0)``);
         its outputs (polynomial in the states, as for a polynomial loop; default each state) are read
-        with the parameters set; sets and units are not taken yet."""
+        with the parameters set; ``[units]`` is checked on the texts as written, before the recasting
+        (:meth:`units`)."""
+        from lyapcheck.models.dimensions import OutsideLanguage
         from lyapcheck.models.recast import RecastModel, recast_dynamics  # only a loop with functions needs it
 
         name, origin, states = self.head()
-        for section in ("sets", "units"):
-            if section in self.data:
-                key, what = first_function_use(self.table("dynamics"))
-                raise self.fail(key, f"{what} needs the loop recast (a loop with functions), which takes no "
-                                     f"[{section}] yet: write the field polynomial or rational in the states, or "
-                                     f"remove [{section}]")
         params, params_given = self.quantities("parameters", MAX_PARAMETERS)
         dists = self.disturbance_bounds()
         self.check_unique(states, params, dists)
@@ -307,9 +309,18 @@ class _Reader:
         equilibrium = self.equilibrium(states, Ring(states))
         domain = self.domain(states)
         outputs = self.recast_outputs(states, params, dists)
+        set_text, recast_sets = self.recast_sets(states, params, dists)
+        # [units]: the texts as written, term by term, before the recasting (which moves a field to
+        # auxiliaries whose dimensions no longer show); None where a text stood aside for the parser
+        try:
+            units: dict[str, str] | None = self.units(states, set_text, defer_outside=True)
+        except OutsideLanguage:
+            units = None
         # the nominal loop: every disturbance at 0 (a claim about it says "(d = 0)")
         system, V = recast_dynamics(self.source, states, table, {**params, **{d: Fraction(0) for d in dists}},
                                     equilibrium, candidate)
+        if units is None:  # the recasting's parser took every text after all: each is checked now
+            units = self.units(states, set_text)
         robust = None
         if dists:  # and the loop with its disturbances as states without a flow, for robust claims
             try:
@@ -320,7 +331,25 @@ class _Reader:
         return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
                            parameters=params, equilibrium=equilibrium, domain=domain, system=system,
                            overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V,
-                           disturbances=dists, robust=robust, outputs=outputs)
+                           disturbances=dists, robust=robust, outputs=outputs, sets=recast_sets,
+                           set_text=set_text, units=units)
+
+    def recast_sets(self, states: tuple[str, ...], params: Mapping[str, Fraction], dists: Mapping[str, Fraction]
+                    ) -> tuple[dict[str, SetText], dict[str, StateSet]]:
+        """A loop with functions' ``[sets]`` (``initial``, ``unsafe``: the barrier class), read as a
+        polynomial loop's (an inequality with a function is refused by the expression parser, naming
+        it), with the parameters set; ``goal`` is refused in one line (no reach_avoid here yet)."""
+        if "sets" in self.data and isinstance(self.data["sets"], dict):
+            extra = [k for k in ("goal", STAY_KEY) if k in self.data["sets"]]
+            if extra:
+                raise self.fail(f"[sets] {extra[0]}", "a loop with functions (sin, sqrt, sat, ...) takes the sets "
+                                                      "initial and unsafe (class barrier); reach_avoid and its goal "
+                                                      "are not taken yet: remove it, or write the field polynomial")
+        ring = Ring(states + tuple(dists) + tuple(params))
+        set_text, set_forms = self.sets(states, ring, dists)
+        sets = {key: evaluate_set(self.source, key, forms, ring, params, Ring(states + tuple(dists)))
+                for key, forms in set_forms.items()}
+        return set_text, sets
 
     def recast_outputs(self, states: tuple[str, ...], params: Mapping[str, Fraction],
                        dists: Mapping[str, Fraction]) -> dict[str, Poly]:
@@ -547,13 +576,18 @@ class _Reader:
             raise self.fail(f"[sets] {STAY_KEY}", "asks to stay in the goal, but [sets] has no goal")
         return value
 
-    def units(self, states: tuple[str, ...], set_text: Mapping[str, SetText] | None = None) -> dict[str, str]:
+    def units(self, states: tuple[str, ...], set_text: Mapping[str, SetText] | None = None,
+              defer_outside: bool = False) -> dict[str, str]:
         """``[units]``, when the file declares it: the table read (SI units only), then every
         right-hand side checked term by term against its state per time, every output's sums for
         consistency, and every quantity given with a unit where a dimension is known (a state's
         ``[equilibrium]`` and ``[domain]`` values, a ``--set``) against it, and the two sides of
         every ``[sets]`` inequality against each other. Runs after the language
-        checks, so a text is dimension-checked only once it parses. Returns the table as written."""
+        checks, so a text is dimension-checked only once it parses; a loop with functions is checked
+        before its recasting parses it, and with ``defer_outside`` a text outside the language (which
+        the parser then refuses in its own words) raises
+        :class:`~lyapcheck.models.dimensions.OutsideLanguage` instead of a one-line error. Returns
+        the table as written."""
         from lyapcheck.models import dimensions as dims
 
         if "units" not in self.data:
@@ -588,6 +622,8 @@ class _Reader:
                     for text in piece:
                         dims.check_inequality(f"[sets] {key}", text, names)
         except dims.DimensionError as exc:
+            if defer_outside and isinstance(exc, dims.OutsideLanguage):
+                raise
             raise self.fail(exc.key, exc.message) from None
         return {str(key): str(value) for key, value in table.items()}
 

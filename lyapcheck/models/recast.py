@@ -719,6 +719,18 @@ class RecastModel:
     robust: RecastSystem | None = None
     #: the outputs ``sos_bound`` bounds, polynomials over the states (``Ring(states)``); default each state
     outputs: dict[str, Poly] = field(default_factory=dict)
+    #: ``[sets]`` ``initial`` and ``unsafe`` (lyapcheck.models.sets: polynomials of :attr:`state_ring`,
+    #: parameters set) and their strings as written, for the barrier class
+    sets: dict[str, Any] = field(default_factory=dict)
+    set_text: dict[str, Any] = field(default_factory=dict)
+    #: the ``[units]`` table as written (empty when the model declares none): the right-hand sides
+    #: were dimension-checked as written, before the recasting (lyapcheck.models.dimensions)
+    units: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def state_ring(self) -> Ring:
+        """The states and the disturbances (the ring of :attr:`sets`, as a polynomial model's)."""
+        return Ring(self.states + tuple(self.disturbances))
 
     @property
     def sha256(self) -> str:
@@ -729,6 +741,10 @@ class RecastModel:
     @property
     def n(self) -> int:
         return len(self.states)
+
+    def to_toml(self) -> str:
+        """The model file's text as read: a file with it gives this model (``overrides`` aside)."""
+        return self.text
 
     def key_of(self, call: str) -> str:
         """The key of the first right-hand side whose text has ``call`` (``[dynamics] x2``), for messages."""
