@@ -730,6 +730,8 @@ def recast_point_classes() -> tuple[str, ...]:
 def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[str, ...]:
     polynomial = isinstance(model, Model)
     allowed = (MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES) if polynomial else recast_point_classes()
+    if not polynomial and not ("initial" in model.sets and "unsafe" in model.sets):
+        allowed = tuple(c for c in allowed if c != "barrier")  # (a loop with functions: barrier with its sets only)
     disturbances = model.disturbances
     if raw is None:
         return tuple(c for c in allowed if c != "sos_bound" or disturbances)

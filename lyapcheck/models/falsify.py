@@ -644,9 +644,10 @@ class _Watch:
 
 # -- the horizon --------------------------------------------------------------------------------
 
-def default_horizon(model: Model, scale: FloatArray | None = None) -> float:
-    """How long :func:`falsify` simulates by default (module doc, Simulation)."""
-    evaluate = FieldEvaluator.of(model)
+def default_horizon(model: Model, scale: FloatArray | None = None, evaluate: Any = None) -> float:
+    """How long :func:`falsify` simulates by default (module doc, Simulation); ``evaluate``: the
+    field (default the polynomial model's)."""
+    evaluate = FieldEvaluator.of(model) if evaluate is None else evaluate
     eq = np.array([float(v) for v in model.equilibrium])
     scale = np.ones(model.n) if scale is None else scale
     eig = jacobian_eigenvalues(evaluate, eq, scale)
@@ -663,7 +664,7 @@ def default_horizon(model: Model, scale: FloatArray | None = None) -> float:
 
 def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: MarginFunction, *,
             samples: int = SAMPLES, horizon: float | None = None, seed: int = 0,
-            disturbed: bool = True) -> Falsification:
+            disturbed: bool = True, evaluate: Any = None) -> Falsification:
     """Simulate from ``samples`` starts in ``initial`` and report the closest approach to ``unsafe``.
 
     Parameters
@@ -686,6 +687,11 @@ def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: Margin
         the arguments.
     disturbed
         With False, the disturbances are held at 0 (for a claim made with ``d = 0`` only).
+    evaluate
+        The field ``evaluate(x, d)`` (rows), default the polynomial model's
+        (:class:`~lyapcheck.models.numeric.FieldEvaluator`); a loop with functions gives its true
+        field (:mod:`lyapcheck.models.recast_barrier`), ``model`` then any object with the
+        attributes read here (``n``, ``states``, ``equilibrium``, ``domain``, ``disturbances``).
 
     Returns
     -------
@@ -712,7 +718,7 @@ def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: Margin
     scale = np.where(half > 0, half, np.maximum(np.abs(eq), 1.0))
     center = (lo + hi) / 2
     if horizon is None:
-        horizon = default_horizon(model, scale)
+        horizon = default_horizon(model, scale, evaluate)
 
     constant, bang = _scenarios(model, horizon, starts.shape[0], rng, disturbed)
     per_start = len(constant) + BANG_BANG_PER_START * (1 if bang else 0)
@@ -724,7 +730,7 @@ def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: Margin
     rows = len(dists)
     y0 = starts[row_start]
 
-    evaluate = FieldEvaluator.of(model)
+    evaluate = FieldEvaluator.of(model) if evaluate is None else evaluate
     escape = ESCAPE_FACTOR * scale
     system: ModelSystem
     if dists[0].kind == "none":

@@ -29,7 +29,8 @@ from lyapcheck.models.recast_classes import (Loop, base_loop, check_denominator_
                                              jacobian, lie, state_square, v_names, v_text)
 from lyapcheck.models.recast_run import RECAST_CLASSES, box_robust, boxed_loop, robust_of
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
-from lyapcheck.models.claims import covered
+from lyapcheck.models.claims import BARRIER_SENTENCE, covered
+from lyapcheck.models.recast_barrier import KIND as RECAST_BARRIER
 from lyapcheck.models.stated import Stated, check_declared, check_stated
 from lyapcheck.results import ConditionResult, Disturbances
 from lyapcheck.sos.polynomials import degree_in, to_fmpq
@@ -37,20 +38,25 @@ from lyapcheck.sos.polynomials import degree_in, to_fmpq
 Row = tuple[str, bool, str]
 
 
-def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None, disturbed: bool = False
-                   ) -> tuple[str, ...]:
+def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None, disturbed: bool = False,
+                   model: RecastModel | None = None) -> tuple[str, ...]:
     """The classes asked for among every model class; the default is every recast class (``candidate``
-    with ``--candidate``, ``sos_bound`` with disturbances)."""
+    with ``--candidate``, ``sos_bound`` with disturbances, ``barrier`` with ``[sets]`` initial and
+    unsafe). A safety class named needs its sets (``model``: one line at ``[sets]`` otherwise)."""
     from lyapcheck.models.classes import NAMES
+    from lyapcheck.models.sets import require_sets
 
+    sets = model.sets if model is not None else {}
     if classes is None or classes == "all":
         names = [c for c in RECAST_CLASSES if (c != "candidate" or candidate is not None)
-                 and (c != "sos_bound" or disturbed)]
+                 and (c != "sos_bound" or disturbed) and (c != "barrier" or ("initial" in sets and "unsafe" in sets))]
     else:
         names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes)]
         bad = [c for c in names if c not in NAMES]
         if not names or bad:
             raise InvalidParameter("classes", "classes among " + ", ".join(NAMES), ",".join(map(str, names)))
+        if model is not None and "barrier" in names:
+            require_sets(model, "barrier")  # type: ignore[arg-type]  # (it reads only source and sets)
     return tuple(c for c in NAMES if c in names)
 
 
@@ -65,7 +71,7 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     from lyapcheck.models.certify import verdict_of
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
-    chosen = chosen_classes(classes, candidate, bool(model.disturbances))
+    chosen = chosen_classes(classes, candidate, bool(model.disturbances), model)
     if "candidate" in chosen and candidate is None:
         raise InvalidParameter("candidate", 'a V with --candidate "EXPR" for class candidate', "nothing")
     V = model.candidate_v if candidate is not None else None
@@ -132,7 +138,9 @@ def build_document(model: RecastModel, loop: Loop, candidate: str | None, condit
 
 
 def sentence_of(cert: dict[str, Any]) -> str:
-    """The claim sentence of a recast certificate of either kind."""
+    """The claim sentence of a recast certificate of any kind (a barrier's is the polynomial loops' one)."""
+    if cert.get("kind") == RECAST_BARRIER:
+        return BARRIER_SENTENCE
     if cert.get("kind") == "interval":
         from lyapcheck.models.recast_interval import claim_sentence as interval_sentence
 
@@ -282,7 +290,7 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
                 assert boxed is not None
                 ok, why = _verify_condition(name, c, boxed)
             else:
-                ok, why = _verify_condition(name, c, base, robust_of(model))
+                ok, why = _verify_condition(name, c, base, robust_of(model), model)
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
         rows.append((name, ok, f"{why}; {claims}" if ok else f"{name}: {why}"))
@@ -310,6 +318,14 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
         return Stated("ultimate_bound", {k: v for k, v in claim.items() if k != "status"})
     if kind == "interval":
         return Stated("ROA", {"level": Fraction(str(cert["level"]))})
+    if kind == RECAST_BARRIER:
+        if name != "barrier":
+            raise ValueError(f"a barrier certificate under the class {name}")
+        B = cert["B"]["terms"]
+        degree = max((sum(e) for _, e in B), default=0)
+        if isinstance(degree, bool) or not isinstance(degree, int):
+            raise ValueError("B: exponents must be integers")
+        return Stated("safety", {"degree": degree, "lambda_per_s": Fraction(str(cert["lambda_per_s"]))})
     degree = max(sum(e) for _, e in cert["V"]["terms"])
     if isinstance(degree, bool) or not isinstance(degree, int):
         raise ValueError("V: exponents must be integers")
@@ -363,7 +379,9 @@ def _box_of(doc: dict[str, Any], model: RecastModel) -> tuple[ModelBox | None, L
     return box, boxed, ""
 
 
-def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = None) -> tuple[bool, str]:
+def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = None,
+                      model: RecastModel | None = None) -> tuple[bool, str]:
+    """Re-check one decided condition exactly (``model``: the model text's, for a barrier's sets)."""
     from lyapcheck.models.linearization import verify_jacobian
 
     if name == "linearization":
@@ -385,6 +403,10 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
             return False, "the printed sentence is not the one the refutation supports"
         return ok, why
     cert = c["certificate"]
+    if name == "barrier" or cert.get("kind") == RECAST_BARRIER:
+        if model is None:
+            return False, "a barrier is certified on the model's own parameters, not over a box"
+        return _verify_barrier(c, base, model)
     if cert.get("kind") == "interval" and name in ("roa", "candidate"):
         from lyapcheck.models.recast_interval import check_interval
 
@@ -449,6 +471,27 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     what = "on {V <= level}" if region is not None else "everywhere"
     modulo = " (modulo 2 pi in the angles)" if loop.angles else ""
     return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
+
+
+def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
+    """A recast barrier (:func:`lyapcheck.models.recast_barrier.check`), its recasting's square-root
+    proofs and its sentence (the polynomial loops' :data:`~lyapcheck.models.claims.BARRIER_SENTENCE`)."""
+    from lyapcheck.models.recast_barrier import check
+
+    cert = c["certificate"]
+    if c.get("status") != "certified" or cert.get("kind") != RECAST_BARRIER:
+        return False, f"a barrier's certificate kind must be {RECAST_BARRIER!r}, not {cert.get('kind')!r}"
+    system = base.system
+    if cert.get("variables") != list(system.ring.names) or cert.get("auxiliaries") != system.definitions() or \
+            cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
+        return False, "variables, auxiliaries or shift differ from the recasting of the model text"
+    proved, why = check_root_proofs(base, cert["recasting"]["roots"])
+    if proved is None:
+        return False, why
+    ok, why = check(model, proved, c)
+    if ok and c.get("summary") != covered(c.get("disturbances"), BARRIER_SENTENCE):
+        return False, "the printed sentence is not the one the certificate supports"
+    return ok, why
 
 
 __all__ = ["certify_recast", "verify_recast", "claim_sentence", "sentence_of", "proved_claims"]

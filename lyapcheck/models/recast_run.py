@@ -1,8 +1,8 @@
 """The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
-``candidate``, ``sos_bound`` (:mod:`lyapcheck.models.recast_classes` has each condition,
-:mod:`lyapcheck.models.recast_bound` the last; this module orders them, gives each its time budget,
-runs ``roa``'s V-s iteration, :mod:`lyapcheck.models.recast_improve`, and the classes over a box of
-parameters, :func:`certify_box`).
+``candidate``, ``sos_bound``, ``barrier`` (:mod:`lyapcheck.models.recast_classes` has each condition,
+:mod:`lyapcheck.models.recast_bound` and :mod:`lyapcheck.models.recast_barrier` the last two; this
+module orders them, gives each its time budget, runs ``roa``'s V-s iteration,
+:mod:`lyapcheck.models.recast_improve`, and the classes over a box of parameters, :func:`certify_box`).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ def class_budget(seconds: float) -> Budget:
 
 
 #: the classes a recast loop takes, in order
-RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier")
 
 
 def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float,
@@ -79,6 +79,12 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         start = time.perf_counter()
         results["sos_bound"] = sos_bound(model, class_budget(time_limit_s))
         seconds["sos_bound"] = time.perf_counter() - start
+    if "barrier" in classes:
+        from lyapcheck.models.recast_barrier import run as run_barrier
+
+        start = time.perf_counter()
+        results["barrier"] = run_barrier(model, loop, class_budget(time_limit_s))
+        seconds["barrier"] = time.perf_counter() - start
     return results, loop, seconds
 
 
