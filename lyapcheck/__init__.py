@@ -6,6 +6,7 @@ microswimmer paper's loop.
 The Python API (``docs/api.md``)::
 
     from lyapcheck import certify, certify_box, verify, simulate, sweep, report
+    from lyapcheck import Model, close_loop    # a model built in Python (sympy, python-control)
 
 Each function does what the command of the same name does and returns a typed result with
 ``to_json()``; heavy libraries load only when a function runs.
@@ -16,5 +17,20 @@ from lyapcheck.api import (
     verify,
 )
 
+from typing import Any
+
 __all__ = ["certify", "certify_box", "verify", "simulate", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
-           "SimulationReport", "SweepResult"]
+           "SimulationReport", "SweepResult", "Model", "close_loop"]
+
+
+def __getattr__(name: str) -> Any:
+    """``Model`` and ``close_loop``, imported on first use (the command line's start stays light)."""
+    if name == "Model":
+        from lyapcheck.models.build import Model
+
+        return Model
+    if name == "close_loop":
+        from lyapcheck.models.build import close_loop
+
+        return close_loop
+    raise AttributeError(f"module 'lyapcheck' has no attribute {name!r}")
