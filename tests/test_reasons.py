@@ -21,6 +21,7 @@ import pytest
 from lyapcheck import api
 from lyapcheck.models import reasons
 from lyapcheck.models.reasons import NEXT
+from tests.acc_models import UNSAFE_ACC
 from tests.conftest import ROOT
 
 MODELS = ROOT / "examples" / "models"
@@ -33,42 +34,7 @@ SOLVER_WORDS = re.compile(r"HiGHS|Status \d|status \w|Clarabel|solver|BLOCK_COST
 OPTIONS = re.compile(r"--degree|--candidate|--time-limit|--classes|--box|\[domain\]|\[disturbances\]|"
                      r"\[outputs\]|initial set|goal set|fewer states")
 
-ACC = """
-[model]
-name = "adaptive cruise control, unsafe"
-states = ["h", "v"]
-
-[units]
-h = "m"
-v = "m/s"
-
-[parameters]
-vL = "20 m/s"
-kp = "0.2 1/s^2"
-kd = "0.5 1/s"
-h0 = "30 m"
-h_lo = "10 m"
-h_hi = "12 m"
-v_lo = "30 m/s"
-v_hi = "32 m/s"
-hmin = "5 m"
-
-[dynamics]
-h = "vL - v"
-v = "kp*(h - h0) + kd*(vL - v)"
-
-[equilibrium]
-h = "30 m"
-v = "20 m/s"
-
-[domain]
-h = ["0 m", "60 m"]
-v = ["0 m/s", "40 m/s"]
-
-[sets]
-initial = ["h_lo <= h", "h <= h_hi", "v_lo <= v", "v <= v_hi"]
-unsafe = ["h <= hmin"]
-"""
+ACC = UNSAFE_ACC  # (tests/acc_models.py)
 
 
 def conditions(model: Path | str, **options: Any) -> dict[str, dict[str, Any]]:

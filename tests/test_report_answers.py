@@ -16,47 +16,13 @@ from typing import Any
 import numpy as np
 import pytest
 
+from tests.acc_models import UNSAFE_ACC
 from tests.conftest import ROOT
 from tests.test_model_reports import Page, figures_of, pdf_text
 
 #: an adaptive cruise control that IS unsafe: from the initial set (a gap of 10 to 12 m, closing at
 #: 10 to 12 m/s) the gap falls below 5 m within a second
-ACC = """\
-[model]
-name = "adaptive cruise control, unsafe"
-states = ["h", "v"]
-
-[units]
-h = "m"
-v = "m/s"
-
-[parameters]
-vL = "20 m/s"
-kp = "0.2 1/s^2"
-kd = "0.5 1/s"
-h0 = "30 m"
-h_lo = "10 m"
-h_hi = "12 m"
-v_lo = "30 m/s"
-v_hi = "32 m/s"
-hmin = "5 m"
-
-[dynamics]
-h = "vL - v"
-v = "kp*(h - h0) + kd*(vL - v)"
-
-[equilibrium]
-h = "30 m"
-v = "20 m/s"
-
-[domain]
-h = ["0 m", "60 m"]
-v = ["0 m/s", "40 m/s"]
-
-[sets]
-initial = ["h_lo <= h", "h <= h_hi", "v_lo <= v", "v <= v_hi"]
-unsafe = ["h <= hmin"]
-"""
+ACC = UNSAFE_ACC  # (tests/acc_models.py)
 
 
 @pytest.fixture(scope="module")
