@@ -414,10 +414,7 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     if cert.get("kind") != "recast":
         return False, "not a recast certificate"
     system = base.system
-    if cert.get("variables") != list(system.ring.names) or cert.get("auxiliaries") != system.definitions() or \
-            cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
-        return False, "variables, auxiliaries or shift differ from the recasting of the model text"
-    proved, why = check_root_proofs(base, cert["recasting"]["roots"])
+    proved, why = _proved_recasting(cert, base)
     if proved is None:
         return False, why
     ring = proved.ring
@@ -473,6 +470,16 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
 
 
+def _proved_recasting(cert: dict[str, Any], base: Loop) -> tuple[Loop | None, str]:
+    """The loop a recast certificate's V (or B) lives on: its variables, auxiliaries and shift must be
+    the recasting of the model text, and its square roots' lower bounds are re-proved; or why not."""
+    system = base.system
+    if cert.get("variables") != list(system.ring.names) or cert.get("auxiliaries") != system.definitions() or \
+            cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
+        return None, "variables, auxiliaries or shift differ from the recasting of the model text"
+    return check_root_proofs(base, cert["recasting"]["roots"])
+
+
 def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
     """A recast barrier (:func:`lyapcheck.models.recast_barrier.check`), its recasting's square-root
     proofs and its sentence (the polynomial loops' :data:`~lyapcheck.models.claims.BARRIER_SENTENCE`)."""
@@ -481,11 +488,7 @@ def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[
     cert = c["certificate"]
     if c.get("status") != "certified" or cert.get("kind") != RECAST_BARRIER:
         return False, f"a barrier's certificate kind must be {RECAST_BARRIER!r}, not {cert.get('kind')!r}"
-    system = base.system
-    if cert.get("variables") != list(system.ring.names) or cert.get("auxiliaries") != system.definitions() or \
-            cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
-        return False, "variables, auxiliaries or shift differ from the recasting of the model text"
-    proved, why = check_root_proofs(base, cert["recasting"]["roots"])
+    proved, why = _proved_recasting(cert, base)
     if proved is None:
         return False, why
     ok, why = check(model, proved, c)
