@@ -47,6 +47,9 @@ uninterrupted one).
 * A box: first the linearization, exactly, at the box's corners (milliseconds): an unstable corner
   proves that no stability class can certify the box (its status is ``refuted``, and the stability
   classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box.
+  A box of a loop with functions: ``certify_recast`` over the box on the model read at its centre
+  (what ``lyapcheck certify FILE --box`` runs), no corner check, cross-checked at random parameter
+  points by :func:`sweeps.recast_crosscheck.cross_check_recast_box`.
 
 A point or box is ``certified`` when any class certified; ``refuted`` when the equilibrium is proved
 unstable there (the linearization, exactly) and nothing certified; else ``not_certified``. Every
@@ -584,6 +587,10 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
     out["unstable_corners"] = np.full(len(boxes), -1, dtype=np.int8)
     for j, (box_id, edges) in enumerate(boxes):
         begin = time.perf_counter()
+        if spec.has_functions:
+            _recast_box(spec, box_id, {name: (Fraction(lo), Fraction(hi)) for name, (lo, hi) in edges.items()}, out, j)
+            out["done"][j] = True
+            continue
         box = window_box(spec, {name: (Fraction(lo), Fraction(hi)) for name, (lo, hi) in edges.items()})
         with UNIT_LOCK:
             corners, unstable = unstable_corners(spec, box)
@@ -607,6 +614,52 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
         out["seconds_cross_check"][j] = time.perf_counter() - middle
         out["done"][j] = True
     return out
+
+
+def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Fraction, Fraction]],
+                out: dict[str, np.ndarray], j: int) -> None:
+    """One box of a loop with functions, as ``lyapcheck certify FILE --box`` certifies it: the model
+    read at the box's centre (:meth:`sweeps.spec.ModelSweepSpec.recast_box`), then ``certify_recast``
+    over the box; a certified box is simulated at its random parameter points
+    (:func:`sweeps.recast_crosscheck.cross_check_recast_box`), and the points where its certificates
+    do not apply are named in the note. No corner is checked (``unstable_corners`` stays -1)."""
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.recast_certify import certify_recast
+    from sweeps.recast_crosscheck import cross_check_recast_box
+
+    assert spec.boxes is not None
+    begin = time.perf_counter()
+    note = None
+    try:
+        with UNIT_LOCK:
+            model, box = spec.recast_box(cell)
+            _, results, document = certify_recast(model, classes=spec.classes, box=box)
+    except ModelFileError as exc:  # the recasting over this box (a square root's argument, the equilibrium) failed
+        note = f"the loop could not be recast over this box: {exc}"
+        model, results, document = None, {c: ConditionResult(c, "not_certified", note) for c in spec.classes}, {}
+    middle = time.perf_counter()
+    status = _model_record(spec, _Point(model, results, lambda: document), out, j)
+    if note is not None:
+        out["note"][j] = note
+    if status == "certified":
+        out["certificate"][j] = certificate_json(document)
+        points = box.points(spec.boxes.cross_check_points, box_seed(spec.boxes.seed, box_id))
+        loops, skipped = [], []
+        for point in points:
+            try:
+                loops.append((spec.recast_at(point), point))
+            except ModelFileError as exc:
+                where = ", ".join(f"{name} = {float(v):.6g}" for name, v in point.items())
+                skipped.append(f"at {where}: the loop could not be read there ({exc})")
+        found, mismatched = cross_check_recast_box(loops, document, starts=spec.simulation.starts,
+                                                   seed=(spec.simulation.seed, box_id))
+        skipped += mismatched
+        _store_cross(found, out, j)
+        if skipped:
+            out["note"][j] = f"{out['note'][j]}; cross-check not applicable at {len(skipped)} of {len(points)} " \
+                             "random points of the box (not simulated): " + "; ".join(skipped)
+    out["seconds_certify"][j] = middle - begin
+    out["seconds_cross_check"][j] = time.perf_counter() - middle
 
 
 __all__ = ["evaluate", "evaluate_unit", "certify_point", "simulate_points", "empty_result", "Evaluator", "evaluate_boxes",

@@ -1,4 +1,8 @@
-"""The simulation cross-check of a certified grid point of a loop with functions (sin, sqrt, sat, ...).
+"""The simulation cross-check of a certified grid point or box of a loop with functions (sin, sqrt, sat, ...).
+
+A box (:func:`cross_check_recast_box`) is checked at random parameter points of it, each on the loop
+read at that point; a point where the box's certificates are not functions of that loop's
+variables (:func:`box_mismatch`) is not simulated, and the reason is returned to be stored.
 
 The loop simulated is the true one: each function evaluated by numpy
 (:func:`lyapcheck.models.recast_numeric.field_values`), never the recast polynomial loop, which holds
@@ -229,6 +233,61 @@ def cross_check_recast(model: RecastModel, doc: Mapping[str, Any], point: Mappin
     return out
 
 
+def box_mismatch(model: RecastModel, doc: Mapping[str, Any]) -> str | None:
+    """Why the certificates of a box's document cannot be simulated on the loop ``model`` of one
+    point of the box (None: they can). The check evaluates each ``V`` on the point's own auxiliaries,
+    shifted by the certificate's ``shift`` (the box centre's values at the equilibrium); that is the
+    certificate's function only when every auxiliary it names is defined alike at the point and
+    has the same value at the equilibrium (an auxiliary with a box parameter in it, such as
+    ``sin(b*x)``, is not)."""
+    definitions = model.system.definitions()
+    values = {k: Fraction(v) for k, v in model.system.values.items()}
+    for name, cond in (doc.get("conditions") or {}).items():
+        if not isinstance(cond, dict) or cond.get("status") != "certified" or \
+                name not in (*GLOBAL_CLASSES, REGION_CLASS):
+            continue
+        cert = cond.get("certificate") or {}
+        missing = [str(v) for v in cert.get("variables") or () if str(v) not in model.system.ring.names]
+        if missing:  # a box parameter kept as a bounded variable of the recasting
+            return (f"the {name} certificate's V is a function of {', '.join(missing)}, not a variable of the "
+                    "point's loop")
+        for aux, text in (cert.get("auxiliaries") or {}).items():
+            if definitions.get(aux) != text:
+                return f"the auxiliary {aux} = {text} of the {name} certificate is not one of the point's recasting"
+        for var, shift in (cert.get("shift") or {}).items():
+            if var in values and values[var] != Fraction(str(shift)):
+                return (f"the {name} certificate's {var} is shifted by {shift} (the box centre's value at the "
+                        "equilibrium), not by the point's own value")
+    return None
+
+
+def cross_check_recast_box(points: Sequence[tuple[RecastModel, Mapping[str, Fraction]]], doc: Mapping[str, Any], *,
+                           starts: int, seed: Sequence[int]) -> tuple[CrossCheck, list[str]]:
+    """A certified box of a loop with functions: :func:`cross_check_recast` at each of its random
+    parameter points (``(the loop there, the point)``; the ``k``-th point's starts from
+    ``[*seed, k]``), the figures merged (the worst of each, counts summed). Returns the merged check
+    and, for every point where :func:`box_mismatch` says the certificates do not apply, why (those
+    points are not simulated and not counted)."""
+    out = CrossCheck()
+    skipped: list[str] = []
+    for k, (model, point) in enumerate(points):
+        why = box_mismatch(model, doc)
+        if why is not None:
+            where = ", ".join(f"{name} = {float(v):.6g}" for name, v in point.items())
+            skipped.append(f"at {where}: {why}")
+            continue
+        found = cross_check_recast(model, doc, point, starts=starts, seed=(*seed, k))
+        out.points += found.points
+        out.trajectories += found.trajectories
+        out.not_converged += found.not_converged
+        for attr in ("worst_rise", "worst_envelope", "ges_ratio"):
+            out.worse(attr, getattr(found, attr))
+        for y, sup in found.sim_worst.items():
+            out.sim_worst[y] = max(out.sim_worst.get(y, 0.0), sup)
+        out.violations += found.violations
+    return out, skipped
+
+
 #: the disturbance signals a certified ``sos_bound`` is simulated under: bang-bang against the sign
 #: of the output, then square waves of these periods (s), each at the disturbance's bound
 BOUND_SIGNAL_PERIODS: Final = (0.5, 2.0, 8.0)
@@ -332,4 +391,4 @@ def _outcome(system: RecastSystem, end: np.ndarray, escape: np.ndarray, extent: 
     return "converged" if distances(system, end[None, :], modulo)[0] <= CONVERGED_FRACTION * extent else "other"
 
 
-__all__ = ["cross_check_recast", "GLOBAL_CLASSES", "REGION_CLASS"]
+__all__ = ["cross_check_recast", "cross_check_recast_box", "box_mismatch", "GLOBAL_CLASSES", "REGION_CLASS"]

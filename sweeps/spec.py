@@ -85,12 +85,14 @@ with ``model`` in its ``[sweep]`` table::
 
 A loop with functions (sin, cos, exp, sqrt, atan, tanh, abs, min, max, sat: what
 :func:`lyapcheck.models.modelfile.parse_any_model` reads as a
-:class:`~lyapcheck.models.recast.RecastModel`) is swept in ``mode = "points"`` only, over the classes
+:class:`~lyapcheck.models.recast.RecastModel`) is swept point by point over the classes
 of :data:`lyapcheck.models.recast_run.RECAST_CLASSES` (but ``candidate``): each grid point is the
 model text read again with the point's values as overrides (:meth:`ModelSweepSpec.model_at`), so
-the loop is recast at them. ``mode = "boxes"`` is refused in one line (a box sweep's splitting,
-corner checks and cross-checks take polynomial and rational loops only; one box of a loop with
-functions is ``lyapcheck certify FILE --box``).
+the loop is recast at them. Its boxes (``mode = "boxes"``, classes :func:`recast_box_classes`) are
+each what ``lyapcheck certify FILE --box`` certifies: the model read again at the box's centre
+(:meth:`ModelSweepSpec.recast_box`), then
+:func:`lyapcheck.models.recast_certify.certify_recast` over the box. No corner is checked for
+instability there (``unstable_corners`` -1): an undecided box is split.
 
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks
@@ -576,7 +578,7 @@ class ModelSweepSpec(_AxesGrid):
     compared on resume); ``model_text`` the model file's, verbatim; ``model`` the model with
     ``[sweep.set]`` applied (the swept parameters at their file values, replaced point by point): a
     polynomial or rational :class:`Model`, or a loop with functions
-    (:class:`~lyapcheck.models.recast.RecastModel`, points only)."""
+    (:class:`~lyapcheck.models.recast.RecastModel`)."""
 
     text: str
     model_file: str
@@ -601,12 +603,31 @@ class ModelSweepSpec(_AxesGrid):
 
     @property
     def polynomial(self) -> Model:
-        """The model as a polynomial or rational loop, which box sweeps and their cross-checks take
-        (a loop with functions is refused with ``mode = "boxes"`` when the spec is read)."""
+        """The model as a polynomial or rational loop, which a box's corner checks and
+        :mod:`sweeps.crosscheck` take (a loop with functions goes through :meth:`recast_box`)."""
         if not isinstance(self.model, Model):
-            raise TypeError(f"the model {self.model_file} is a loop with functions; box sweeps take polynomial "
-                            "and rational loops only")
+            raise TypeError(f"the model {self.model_file} is a loop with functions, not a polynomial or rational loop")
         return self.model
+
+    def recast_at(self, values: Mapping[str, Fraction]) -> RecastModel:
+        """A loop with functions read again from the text with the swept parameters at the exact
+        ``values`` (dyadic: box edges and their midpoints), each written as its exact decimal in
+        the model's ``overrides``, as ``lyapcheck certify --set`` would."""
+        from lyapcheck.exact import exact_decimal as decimal_of
+        from lyapcheck.models.modelfile import parse_any_model
+        from lyapcheck.models.recast import RecastModel
+
+        point = {k: decimal_of(Fraction(v)) for k, v in values.items()}
+        model = parse_any_model(self.model_text, self.model_file, {**dict(self.overrides), **point})
+        assert isinstance(model, RecastModel)
+        return model
+
+    def recast_box(self, cell: Mapping[str, tuple[Fraction, Fraction]]) -> tuple[RecastModel, Any]:
+        """A box of a loop with functions as ``lyapcheck certify FILE --box`` takes it: the model read
+        at the box's centre (:meth:`recast_at`: the certificate's overrides say where the centre
+        is, so ``verify`` reads the same model) and the box (:func:`window_box`)."""
+        box = window_box(self, cell)
+        return self.recast_at({name: box.center(name) for name in box.names}), box
 
     @property
     def outputs(self) -> tuple[str, ...]:
@@ -727,9 +748,22 @@ def recast_point_classes() -> tuple[str, ...]:
     return tuple(c for c in MODEL_POINT_CLASSES if c in RECAST_CLASSES)
 
 
+#: the classes :func:`lyapcheck.models.recast_run.certify_box` proves over a box (the others are
+#: ``not_applicable`` or not taken there)
+_RECAST_OVER_BOX: Final = ("quadratic", "sos_gas", "roa", "sos_bound")
+
+
+def recast_box_classes() -> tuple[str, ...]:
+    """The classes of a box sweep of a loop with functions, in :data:`MODEL_BOX_CLASSES`' order."""
+    return tuple(c for c in MODEL_BOX_CLASSES if c in _RECAST_OVER_BOX)
+
+
 def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[str, ...]:
     polynomial = isinstance(model, Model)
-    allowed = (MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES) if polynomial else recast_point_classes()
+    if polynomial:
+        allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES
+    else:
+        allowed = recast_point_classes() if mode == "points" else recast_box_classes()
     if not polynomial and not ("initial" in model.sets and "unsafe" in model.sets):
         allowed = tuple(c for c in allowed if c != "barrier")  # (a loop with functions: barrier with its sets only)
     disturbances = model.disturbances
@@ -816,6 +850,16 @@ def _check_defined(spec: ModelSweepSpec, source: str) -> None:
                 raise ModelFileError(source, f"sweep.axes at the grid point {where}",
                                      f"the model is not defined there ({exc})") from None
         return
+    if spec.has_functions:
+        from lyapcheck.models.recast_run import boxed_loop
+
+        for cell in initial_cells(spec):  # the recasting with the box's parameters as bounded constants
+            try:
+                boxed_loop(*spec.recast_box(cell))
+            except ModelFileError as exc:
+                raise ModelFileError(source, f"sweep.axes, the box {_describe(cell)}",
+                                     f"the loop cannot be recast over all of it ({exc})") from None
+        return
     window = {axis.name: (Fraction(axis.values[0]), Fraction(axis.values[-1])) for axis in spec.axes}
     try:
         check_box(spec.polynomial, window_box(spec, window))
@@ -865,10 +909,6 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     mode = sweep.get("mode", "points")
     if mode not in _MODES:
         raise InvalidParameter("sweep.mode", "one of " + ", ".join(repr(m) for m in _MODES), mode)
-    if mode == "boxes" and not isinstance(model, Model):
-        raise InvalidParameter("sweep.mode", "\"points\" for a loop with functions (sin, sqrt, sat, ...): a box sweep "
-                               "takes polynomial and rational loops only (one box of such a loop: lyapcheck certify "
-                               "FILE --box NAME=LO..HI)", mode)
     raw_axes = sweep.get("axes")
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",
@@ -917,5 +957,5 @@ def cached_model_spec(worker_text: str) -> ModelSweepSpec:
 __all__ = ["Axis", "SimulationSettings", "Refinement", "BoxSettings", "SweepSpec", "parse_spec", "load_spec",
            "cached_spec", "read_spec_text", "axis_values", "ModelAxis", "ModelSimulation", "ModelSweepSpec",
            "parse_model_spec", "load_model_spec", "cached_model_spec", "initial_cells", "window_box", "exact_decimal",
-           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "recast_point_classes", "initial_boxes", "relative_width",
-           "split_cell", "Cell"]
+           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "recast_point_classes", "recast_box_classes", "initial_boxes",
+           "relative_width", "split_cell", "Cell"]

@@ -9,9 +9,10 @@ of their pieces are its own:
 target  its specs                               its classes                                      layouts
 ======  ======================================  ===============================================  ==============
 model   ``[sweep] model = "FILE.toml"``         :data:`lyapcheck.models.classes.CLASSES`         points, boxes
-        (any polynomial or rational model;      (but ``candidate``; boxes: those with box        (functions:
-        a loop with functions: points only)     certificates; functions: those of                points)
-                                                :func:`sweeps.spec.recast_point_classes`)
+        (any polynomial or rational model,      (but ``candidate``; boxes: those with box
+        or a loop with functions)               certificates; functions: those of
+                                                :func:`sweeps.spec.recast_point_classes`, boxes:
+                                                :func:`sweeps.spec.recast_box_classes`)
 paper   the paper's sections (gains, swimmer,   the paper's condition classes                    points (and its
         ...) with ``[[sweep.axes]]``            (:data:`sweeps.schema.CLASSES`; boxes:           quadtree), boxes
                                                 :data:`sweeps.spec.BOX_CLASSES`)

@@ -180,10 +180,12 @@ AXIS = '[[sweep.axes]]\nname = "b"\nvalues = [0.5, 1]\n'
 @pytest.mark.parametrize("spec, model, needle", [
     ('[sweep]\nmodel = "m.toml"\n[[sweep.axes]]\nname = "g"\nvalues = [1, 2]\n', PENDULUM,
      "'sweep.axes[0].name' parameter must be a parameter declared in the model (b). Got 'g' instead."),
-    ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\n[[sweep.axes]]\nname = "b"\nstart = 0.5\nstop = 2\nnum = 3\n',
-     PENDULUM, "'sweep.mode' parameter must be \"points\" for a loop with functions (sin, sqrt, sat, ...): a box "
-     "sweep takes polynomial and rational loops only (one box of such a loop: lyapcheck certify FILE --box "
-     "NAME=LO..HI). Got 'boxes' instead."),
+    ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["linearization"]\n[[sweep.axes]]\nname = "b"\n'
+     'start = 0.5\nstop = 2\nnum = 3\n', PENDULUM,
+     "'sweep.classes' parameter must be in a boxes sweep of a loop with functions, a list of distinct names from "
+     "'quadratic', 'sos_gas', 'roa', 'sos_bound'. Got ['linearization'] instead."),
+    ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["sos_gas"]\n[[sweep.axes]]\nname = "Delta"\n'
+     'values = [-1, 0, 1]\n', ILOS, "sweep.axes, the box Delta in [-1, 0]: the loop cannot be recast over all of it"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\n' + AXIS, PENDULUM,
      "'sweep.classes' parameter must be classes that apply to the model: sos_bound needs [disturbances]"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n' + AXIS, PENDULUM,

@@ -1,0 +1,169 @@
+"""Box sweeps of a loop with functions (``mode = "boxes"`` with a ``[sweep] model`` whose ``[dynamics]``
+use sin, sqrt, ...): each box certified as ``lyapcheck certify FILE --box`` certifies it, stored like
+a polynomial model's box, its certificate re-checked by ``verify``, cross-checked at random parameter
+points of the box on the true loop.
+
+The loop is the damped pendulum (``recast-pendulum.toml``) over its damping b in [0.5, 2], two boxes.
+Over a box only ``roa`` certifies it (the ball-arithmetic region; no global V exists because of the
+saddle at theta = pi), a few seconds a box.
+"""
+
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from tests.conftest import ROOT
+from tests.test_model_sweeps import arrays, run  # the model sweeps' own helpers
+
+PENDULUM = (ROOT / "examples" / "models" / "recast-pendulum.toml").read_text()
+BOXES = """[sweep]
+model = "m.toml"
+mode = "boxes"
+classes = ["roa"]
+chunk_size = 1
+[[sweep.axes]]
+name = "b"
+start = 0.5
+stop = 2
+num = 3
+[sweep.boxes]
+max_boxes = 2
+cross_check_points = 1
+[simulation]
+starts = 4
+"""
+
+
+def write(directory: Path, spec: str, model: str = PENDULUM) -> Path:
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / "m.toml").write_text(model)
+    path = directory / "spec.toml"
+    path.write_text(spec)
+    return path
+
+
+@pytest.fixture(scope="module")
+def box_store(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, np.ndarray]]:
+    directory = tmp_path_factory.mktemp("recast-boxes")
+    out = directory / "out.zarr"
+    run(write(directory, BOXES), out)
+    return out, arrays(out)
+
+
+def test_both_boxes_of_the_pendulum_are_certified_by_roa_for_every_damping_of_the_box(
+        box_store: tuple[Path, dict[str, np.ndarray]]) -> None:
+    from sweeps.schema import BOX_STATUS_CODES, STATUS_CODES
+
+    _, data = box_store
+    assert len(data["status"]) == 2
+    assert list(data["status"]) == [BOX_STATUS_CODES["certified"]] * 2, list(data["note"])
+    assert list(data["status_roa"]) == [STATUS_CODES["certified"]] * 2
+    assert list(data["lo_b"]) == [0.5, 1.25] and list(data["hi_b"]) == [1.25, 2.0]
+    assert list(data["level"]) == [0, 0] and list(data["parent"]) == [-1, -1]
+    for note, lo, hi in zip(data["note"], data["lo_b"], data["hi_b"]):
+        assert str(note).startswith("certified by roa"), note
+    assert list(data["unstable_corners"]) == [-1, -1]  # not checked on a loop with functions
+
+
+def test_each_box_certificate_is_the_box_claim_and_passes_verify(box_store: tuple[Path, dict[str, np.ndarray]]) -> None:
+    from lyapcheck.api import verify
+
+    _, data = box_store
+    for text, lo, hi in zip(data["certificate"], data["lo_b"], data["hi_b"]):
+        doc = json.loads(str(text))
+        assert doc["box"] == {"b": [str(Fraction(lo)), str(Fraction(hi))]}
+        # the model read at the box's centre, as `certify --box` reads it
+        assert Fraction(doc["overrides"]["b"]) == (Fraction(lo) + Fraction(hi)) / 2
+        roa = doc["conditions"]["roa"]
+        assert roa["status"] == "certified" and roa["summary"].startswith("for every b in")
+        assert roa["certificate"]["parameter_box"] == doc["box"]
+        checked = verify(doc)
+        assert checked.valid, [c for c in checked.checks if not c.ok]
+        tampered = json.loads(str(text))
+        tampered["box"]["b"][1] = "3"  # a wider box than the one proved
+        assert not verify(tampered).valid
+
+
+def test_certified_boxes_are_simulated_at_random_parameter_points_on_the_true_loop(
+        box_store: tuple[Path, dict[str, np.ndarray]]) -> None:
+    _, data = box_store
+    assert list(data["cross_check_points"]) == [1, 1]
+    assert all(data["cross_check_trajectories"] >= 4)
+    assert not data["soundness_violation"].any(), list(data["violation_detail"])
+    assert all(np.isfinite(data["cross_check_worst_rise"]))
+
+
+def test_a_box_whose_certificate_does_not_apply_at_a_point_says_so() -> None:
+    """A certificate whose auxiliaries or shifts are not the point's own (an auxiliary with the box's
+    parameter in it, such as ``sin(b*theta)``): the cross-check names the point and the reason and
+    simulates nothing there."""
+    from lyapcheck.models.modelfile import parse_any_model
+    from sweeps.recast_crosscheck import box_mismatch, cross_check_recast_box
+
+    model = parse_any_model(PENDULUM, "m.toml", {"b": "1"})
+    cert = {"variables": ["theta", "omega", "s1", "c1"], "auxiliaries": model.system.definitions(),
+            "shift": {"theta": "0", "omega": "0", "s1": "0", "c1": "1"}}
+    doc: dict[str, Any] = {"conditions": {"roa": {"status": "certified", "certificate": cert}}}
+    assert box_mismatch(model, doc) is None
+    doc["conditions"]["roa"]["certificate"] = {**cert, "shift": {**cert["shift"], "c1": "1/2"}}
+    found, skipped = cross_check_recast_box([(model, {"b": Fraction(1)})], doc, starts=2, seed=(0, 0))
+    assert found.points == 0 and found.trajectories == 0
+    assert len(skipped) == 1 and skipped[0].startswith("at b = 1: the roa certificate's c1 is shifted by 1/2")
+    doc["conditions"]["roa"]["certificate"] = {**cert, "auxiliaries": {"s1": "sin(2*theta)"}}
+    assert "the auxiliary s1 = sin(2*theta) of the roa certificate" in str(box_mismatch(model, doc))
+
+
+def test_a_box_sweep_of_a_loop_with_functions_is_no_longer_refused_and_takes_the_box_classes(tmp_path: Path) -> None:
+    from lyapcheck.errors import InvalidParameter
+    from sweeps.spec import MODEL_BOX_CLASSES, load_model_spec, recast_box_classes
+
+    spec = load_model_spec(write(tmp_path, BOXES.replace('classes = ["roa"]\n', "")))
+    assert spec.mode == "boxes" and spec.has_functions
+    assert spec.classes == ("quadratic", "sos_gas", "roa")  # no [disturbances]: no sos_bound
+    assert recast_box_classes() == ("quadratic", "sos_gas", "roa", "sos_bound")
+    assert set(recast_box_classes()) < set(MODEL_BOX_CLASSES)
+    with pytest.raises(InvalidParameter, match="in a boxes sweep of a loop with functions"):
+        load_model_spec(write(tmp_path, BOXES.replace('["roa"]', '["linearization"]')))
+
+
+def test_a_box_whose_parameter_stays_a_variable_of_the_certificate_is_stored_with_why_it_is_not_simulated(
+        tmp_path: Path) -> None:
+    """The ILOS loop over its lookahead Delta: ``sos_gas`` certifies the box with a V in which Delta is
+    a bounded variable (the loop recast with Delta as a constant of the box), which no loop read at
+    one point has: the box is certified, no point is simulated, and the note says why."""
+    from sweeps.schema import BOX_STATUS_CODES
+
+    ilos = (ROOT / "examples" / "models" / "recast-ilos-course.toml").read_text()
+    spec = ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["sos_gas"]\n[[sweep.axes]]\nname = "Delta"\n'
+            'start = 1\nstop = 2\nnum = 2\n[sweep.boxes]\ncross_check_points = 2\n')
+    out = tmp_path / "out.zarr"
+    run(write(tmp_path, spec, ilos), out)
+    data = arrays(out)
+    assert int(data["done"].sum()) == 1  # one box, certified: nothing to split
+    assert data["status"][0] == BOX_STATUS_CODES["certified"] and data["cross_check_points"][0] == 0
+    note = str(data["note"][0])
+    assert "cross-check not applicable at 2 of 2 random points of the box (not simulated)" in note, note
+    assert "the sos_gas certificate's V is a function of Delta, not a variable of the point's loop" in note
+
+
+def test_an_undecided_box_is_split_in_halves_as_a_polynomial_models_box(tmp_path: Path) -> None:
+    """``sos_gas`` can never certify the pendulum (the saddle at theta = pi): the box is split into its
+    halves while the budget lasts, each half decided alike."""
+    from sweeps.schema import BOX_STATUS_CODES
+
+    spec = BOXES.replace('["roa"]', '["sos_gas"]').replace("num = 3", "num = 2").replace("max_boxes = 2",
+                                                                                          "max_boxes = 3")
+    out = tmp_path / "out.zarr"
+    run(write(tmp_path, spec), out)
+    data = arrays(out)
+    assert int(data["done"].sum()) == 3
+    assert list(data["status"]) == [BOX_STATUS_CODES["split"]] + [BOX_STATUS_CODES["not_certified"]] * 2
+    assert list(data["parent"]) == [-1, 0, 0] and list(data["level"]) == [0, 1, 1]
+    assert list(data["lo_b"]) == [0.5, 0.5, 1.25] and list(data["hi_b"]) == [2.0, 1.25, 2.0]
+    assert all(str(c) == "" for c in data["certificate"])
