@@ -67,3 +67,24 @@ def rk4(f, X: np.ndarray, horizon: float, step: float = 0.02) -> np.ndarray:
 
 def pendulum_field(X: np.ndarray) -> np.ndarray:
     return np.stack([X[:, 1], -np.sin(X[:, 0]) - X[:, 1]], axis=1)
+
+
+#: a pendulum without friction: its energy is conserved, so no trajectory converges
+LOSSLESS = """
+[model]
+name = "lossless pendulum"
+states = ["theta", "omega"]
+[dynamics]
+theta = "omega"
+omega = "-sin(theta)"
+"""
+
+#: two first-order units coupled through sin and tanh: no denominator, and a quadratic V (GES)
+COUPLED = """
+[model]
+name = "two first-order units coupled through sin and tanh"
+states = ["x1", "x2"]
+[dynamics]
+x1 = "-x1 + sin(x2)/2"
+x2 = "-x2 + tanh(x1)/2"
+"""

@@ -25,20 +25,14 @@ from lyapcheck.models.modelfile import parse_any_model
 from lyapcheck.models.recast_run import comparison_box, simulated_check
 from lyapcheck.models.recast_sos import poly_to_json
 from lyapcheck.results import ConditionResult
+from tests.recast_loops import LOSSLESS as LOSSLESS_LOOP
 
 app._register_commands()
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "models"
 
-#: a pendulum without friction: its energy is conserved, so no trajectory converges
-LOSSLESS = """
-[model]
-name = "lossless pendulum"
-states = ["theta", "omega"]
-[dynamics]
-theta = "omega"
-omega = "-sin(theta)"
-[domain]
+#: the lossless pendulum (tests/recast_loops.py) over a domain
+LOSSLESS = LOSSLESS_LOOP + """[domain]
 theta = [-3, 3]
 omega = [-3, 3]
 """

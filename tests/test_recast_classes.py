@@ -24,17 +24,8 @@ from lyapcheck.models.modelfile import parse_any_model
 from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.search import Budget, Search
 from lyapcheck.sos.certificates import GramPoly
-from tests.recast_loops import ILOS, PENDULUM, SPRING, UNSTABLE, pendulum_field, rk4
+from tests.recast_loops import COUPLED, ILOS, LOSSLESS, PENDULUM, SPRING, UNSTABLE, pendulum_field, rk4
 
-
-LOSSLESS = """
-[model]
-name = "lossless pendulum"
-states = ["theta", "omega"]
-[dynamics]
-theta = "omega"
-omega = "-sin(theta)"
-"""
 
 
 def write(tmp_path: Path, name: str, text: str) -> Path:
@@ -235,15 +226,6 @@ def test_a_certified_region_is_simulated_on_the_true_loop(tmp_path: Path) -> Non
     assert roa.numbers["simulated_starts"] == 1600 and 0.5 < roa.numbers["roa_share"] <= 1
     assert not roa.numbers.get("soundness_violation")
 
-
-COUPLED = """
-[model]
-name = "two first-order units coupled through sin and tanh"
-states = ["x1", "x2"]
-[dynamics]
-x1 = "-x1 + sin(x2)/2"
-x2 = "-x2 + tanh(x1)/2"
-"""
 
 
 def test_quadratic_proves_an_exponential_bound_where_the_field_has_no_denominator(tmp_path: Path) -> None:

@@ -16,19 +16,12 @@ from typing import Any, Callable
 import pytest
 
 from lyapcheck import api
+from tests.recast_loops import COUPLED
 
 MODELS = Path(__file__).resolve().parent.parent / "examples" / "models"
 
 #: GES needs a field without denominators; no shipped loop with functions has both that and a
-#: quadratic V (tests/test_recast_classes.py proves this loop's bound on simulations)
-COUPLED = """
-[model]
-name = "two first-order units coupled through sin and tanh"
-states = ["x1", "x2"]
-[dynamics]
-x1 = "-x1 + sin(x2)/2"
-x2 = "-x2 + tanh(x1)/2"
-"""
+#: quadratic V: COUPLED (tests/recast_loops.py; tests/test_recast_classes.py proves its bound on simulations)
 #: a candidate whose sublevel set ball arithmetic proves on the true pendulum (examples/models/README.md)
 PENDULUM_V = "1 - cos(theta) + omega**2/2 + theta*omega/4"
 
