@@ -23,6 +23,7 @@ import math
 import re
 from fractions import Fraction
 from pathlib import Path
+from typing import Any
 
 import pytest
 from click.testing import CliRunner, Result
@@ -52,10 +53,11 @@ def oscillator(k: object = '"2 1/s^2"', c: object = '"0.5 1/s"', v: str = "-k*x 
             f'[dynamics]\nx = "v"\nv = "{v}"\n{extra}')
 
 
-def refused(text: str, key: str, *says: str, source: str = "model.toml") -> str:
-    """The library refuses ``text`` at ``key`` in one line that says every one of ``says``."""
+def refused(text: str, key: str, *says: str, source: str = "model.toml", parse: Any = None) -> str:
+    """The library refuses ``text`` at ``key`` in one line that says every one of ``says`` (read by
+    ``parse``, default :func:`parse_model`; a loop with functions: ``parse_any_model``)."""
     with pytest.raises(ModelFileError) as raised:
-        parse_model(text, source)
+        (parse or parse_model)(text, source)
     message = str(raised.value)
     assert raised.value.key == key, message
     assert "\n" not in message and message.startswith(f"{source}: {key}: "), message

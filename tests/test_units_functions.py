@@ -22,18 +22,15 @@ from fractions import Fraction
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner, Result
 
-from lyapcheck.cli import app
-from lyapcheck.errors import ModelFileError
 from lyapcheck.models.dimensions import Named, check_output
 from lyapcheck.models.modelfile import parse_any_model
 from lyapcheck.models.recast import RecastModel
 from lyapcheck.units import Dimension
 from tests.conftest import ROOT
+from tests.test_model_units import refused as refused_by
+from tests.test_model_units import run
 
-app._register_commands()
-RUNNER = CliRunner()
 PAGE = ROOT / "docs" / "model-files.md"
 
 LENGTH = Dimension.of({"[length]": 1})
@@ -50,18 +47,7 @@ def pendulum(omega: str = PENDULUM_RHS, units_table: str | None = 'theta = "rad"
 
 def refused(text: str, key: str, *says: str, source: str = "model.toml") -> str:
     """The library refuses ``text`` at ``key`` in one line that says every one of ``says``."""
-    with pytest.raises(ModelFileError) as raised:
-        parse_any_model(text, source)
-    message = str(raised.value)
-    assert raised.value.key == key, message
-    assert "\n" not in message and message.startswith(f"{source}: {key}: "), message
-    for needle in says:
-        assert needle in message, f"{needle!r} not in {message!r}"
-    return message
-
-
-def run(args: list[str]) -> Result:
-    return RUNNER.invoke(app.cli, args, catch_exceptions=True)
+    return refused_by(text, key, *says, source=source, parse=parse_any_model)
 
 
 def write(tmp_path: Path, name: str, text: str) -> Path:
