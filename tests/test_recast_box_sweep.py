@@ -20,6 +20,7 @@ import pytest
 
 from tests.conftest import ROOT
 from tests.test_model_sweeps import arrays, run  # the model sweeps' own helpers
+from tests.test_recast_sweep import write  # a spec beside its model file
 
 PENDULUM = (ROOT / "examples" / "models" / "recast-pendulum.toml").read_text()
 BOXES = """[sweep]
@@ -39,13 +40,6 @@ cross_check_points = 1
 starts = 4
 """
 
-
-def write(directory: Path, spec: str, model: str = PENDULUM) -> Path:
-    directory.mkdir(parents=True, exist_ok=True)
-    (directory / "m.toml").write_text(model)
-    path = directory / "spec.toml"
-    path.write_text(spec)
-    return path
 
 
 @pytest.fixture(scope="module")
