@@ -47,7 +47,7 @@ def verdict(ok: bool) -> str:
 
 def point_seconds(spec: Any, rng: np.random.Generator, count: int) -> list[float]:
     """Wall time of certify_model at ``count`` random points of the window (each axis in its scale)."""
-    from lyapcheck.models.certify import certify_model
+    from lyapcheck.models.surfaces.certify import certify_model
 
     out = []
     for _ in range(count):

@@ -105,7 +105,7 @@ BARRIER_EXAMPLES = ("fossil-barr1", "fossil-barr3", "fossil-highord4", "fossil-h
 FOSSIL_BARRIERS = ("fossil-barr1", "fossil-barr3", "fossil-highord4", "fossil-highord6", "fossil-highord8")
 REACHABLE = ("reachable-spiral",)
 #: the falsification switched off: the barrier class's search and exact check alone
-NO_SIM = ("import sys, runpy; import lyapcheck.models.barrier as b; b._falsification = lambda model: None; "
+NO_SIM = ("import sys, runpy; import lyapcheck.models.classes.barrier as b; b._falsification = lambda model: None; "
           "sys.argv = ['lyapcheck', *sys.argv[1:]]; runpy.run_module('lyapcheck', run_name='__main__')")
 
 
@@ -214,8 +214,8 @@ def fine_share(doc: dict[str, Any], per_axis: int = 300) -> float | None:
     sample count of LyZNet's own figure), for a 2-state model with a domain."""
     import numpy as np
 
-    from lyapcheck.models.modelfile import parse_model
-    from lyapcheck.models.numeric import converges, grid_starts
+    from lyapcheck.models.language.modelfile import parse_model
+    from lyapcheck.models.engines.numeric import converges, grid_starts
 
     roa = doc["conditions"].get("roa", {})
     model = parse_model(doc["model"]["text"], doc["model"]["file"])

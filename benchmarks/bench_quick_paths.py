@@ -46,7 +46,7 @@ def timed(work: Callable[[], object], runs: int) -> float:
 
 
 def refused(text: str) -> Callable[[], object]:
-    from lyapcheck.models.expressions import ExpressionError, parse_expression
+    from lyapcheck.models.language.expressions import ExpressionError, parse_expression
     from lyapcheck.sos.polynomials import Ring
 
     ring = Ring(tuple(f"x{i}" for i in range(1, 13)))
@@ -61,9 +61,9 @@ def refused(text: str) -> Callable[[], object]:
 
 
 def falsify_barr3() -> object:
-    from lyapcheck.models.falsify import falsify
-    from lyapcheck.models.modelfile import load_model
-    from lyapcheck.models.sets import margin
+    from lyapcheck.models.classes.falsify import falsify
+    from lyapcheck.models.language.modelfile import load_model
+    from lyapcheck.models.language.sets import margin
 
     model = load_model(ROOT / "examples" / "models" / "fossil-barr3.toml")
     return falsify(model, model.sets["initial"], model.sets["unsafe"], margin, samples=200)
@@ -85,8 +85,8 @@ def time_limit_overshoots() -> list[tuple[str, float, float]]:
     """How long after its limit a class stopped, seconds, beside the bound the tests asserted:
     the limit a third of the way into sos_gas's degree-4 solve (``time-limit-cubic-6.toml``), and
     the hard stop (limit * 1.5 + 5 s) inside roa's simulation (``time-limit-fast-cycle.toml``)."""
-    from lyapcheck.models.certify import certify_model
-    from lyapcheck.models.modelfile import load_model
+    from lyapcheck.models.surfaces.certify import certify_model
+    from lyapcheck.models.language.modelfile import load_model
 
     data = ROOT / "tests" / "data"
     model = load_model(data / "time-limit-cubic-6.toml")

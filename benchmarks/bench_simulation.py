@@ -6,7 +6,7 @@ Workload: ``n`` parameter sets around the paper's (alpha_d, sigma0, k_d, Delta_L
 cross-track error drawn at random, ILOS and conventional LOS alternating), the saturated ODS
 loop with the paper's constant sinking disturbance, 100 s each with the tail integrals.
 
-* batched: :func:`lyapcheck.simulation.runner.simulate`, all ``n`` in one call (Dormand-Prince
+* batched: :func:`lyapcheck.paper.simulation.runner.simulate`, all ``n`` in one call (Dormand-Prince
   5(4), a step per trajectory, measurements accumulated on the fly);
 * loop: ``scipy.integrate.solve_ivp(method="RK45")`` (the same Dormand-Prince pair) with the
   same ``rtol`` and per-component ``atol``, one trajectory at a time, on the same right-hand
@@ -25,10 +25,10 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from lyapcheck.simulation.disturbances import Constant
-from lyapcheck.simulation.model import ClosedLoop, LoopParams
-from lyapcheck.simulation.runner import simulate
-from lyapcheck.simulation.scenarios import paper_problem
+from lyapcheck.paper.simulation.disturbances import Constant
+from lyapcheck.paper.simulation.model import ClosedLoop, LoopParams
+from lyapcheck.paper.simulation.runner import simulate
+from lyapcheck.paper.simulation.scenarios import paper_problem
 
 HORIZON, TAIL = 100.0, 10.0
 

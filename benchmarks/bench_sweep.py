@@ -140,10 +140,10 @@ def bench_simulation(trajectories: int, ivp: int) -> None:
     from scipy.integrate import solve_ivp
 
     from lyapcheck.paper.params import problem_from_sources
-    from lyapcheck.simulation.disturbances import Constant
-    from lyapcheck.simulation.integrator import DEFAULT_RTOL
-    from lyapcheck.simulation.model import ClosedLoop, LoopParams
-    from lyapcheck.simulation.runner import simulate
+    from lyapcheck.paper.simulation.disturbances import Constant
+    from lyapcheck.integrator import DEFAULT_RTOL
+    from lyapcheck.paper.simulation.model import ClosedLoop, LoopParams
+    from lyapcheck.paper.simulation.runner import simulate
 
     problem = problem_from_sources(ROOT / "examples" / "paper.toml", {})
     rng = np.random.default_rng(3)

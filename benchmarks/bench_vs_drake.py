@@ -9,7 +9,7 @@ model reading, build, solve):
   ``-V' - eps|x|^2`` SOS, degree 2 then 4), lyapcheck not imported; its answer is floating point;
 * ``cold``: ``lyapcheck certify FILE --classes sos_gas --json`` with an empty
   ``LYAPCHECK_CACHE_DIR`` (a new user's first run: the whole search, solves, rounding and exact
-  check; it leaves the certificate in the store, :mod:`lyapcheck.models.store`);
+  check; it leaves the certificate in the store, :mod:`lyapcheck.models.engines.store`);
 * ``warm``: the same command again on that directory (what a user sees from the second run of a
   model on): the stored certificate checked exactly again against the field this run derives, no
   solve. Its ``certified`` is an exact check in rationals, as the cold run's.

@@ -2,7 +2,7 @@
 
     python benchmarks/bench_worst_case.py [--preset paper-ilos] [--budget 20] [--seed 0] [--no-storage]
 
-Workload: :func:`lyapcheck.simulation.worst_case.search_worst_case` on the preset (the paper's
+Workload: :func:`lyapcheck.paper.simulation.worst_case.search_worst_case` on the preset (the paper's
 gains, 100 s, tail 10 s, from ``p(0) = (0, -40 mm)`` and from the origin), with the ``sos_bound``
 storage certificate for the ``storage_gradient`` family (its SDP search is timed separately and
 is not part of the search's time). Prints the best tail sup of ``|eps|`` per family, the
@@ -18,8 +18,8 @@ import json
 import time
 from fractions import Fraction
 
-from lyapcheck.simulation.scenarios import PRESETS, preset
-from lyapcheck.simulation.worst_case import FAMILIES, search_worst_case, storage_certificate
+from lyapcheck.paper.simulation.scenarios import PRESETS, preset
+from lyapcheck.paper.simulation.worst_case import FAMILIES, search_worst_case, storage_certificate
 
 
 def main() -> None:

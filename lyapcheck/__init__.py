@@ -26,11 +26,11 @@ __all__ = ["certify", "certify_box", "verify", "simulate", "sweep", "report", "C
 def __getattr__(name: str) -> Any:
     """``Model`` and ``close_loop``, imported on first use (the command line's start stays light)."""
     if name == "Model":
-        from lyapcheck.models.build import Model
+        from lyapcheck.models.language.build import Model
 
         return Model
     if name == "close_loop":
-        from lyapcheck.models.build import close_loop
+        from lyapcheck.models.language.build import close_loop
 
         return close_loop
     raise AttributeError(f"module 'lyapcheck' has no attribute {name!r}")

@@ -128,7 +128,7 @@ def _region_size(condition: Mapping[str, Any]) -> str:
         parts.append(f"{100 * share:.3g} % of the simulated region of attraction in the domain")
     ball = condition.get("ball_radius")
     if isinstance(ball, (int, float)) and not isinstance(ball, bool):
-        from lyapcheck.models.claims import ball_words  # the claim's own words, with the states' unit
+        from lyapcheck.models.classes.claims import ball_words  # the claim's own words, with the states' unit
 
         parts.append(ball_words(condition))
     return ", ".join(parts)

@@ -33,8 +33,8 @@ from typing import TYPE_CHECKING, Any
 from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.models.modelfile import Model
-    from lyapcheck.models.recast import RecastModel
+    from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.language.recast import RecastModel
     from lyapcheck.paper.params import Problem
     from lyapcheck.results import ConditionResult
 
@@ -171,7 +171,7 @@ class CertifyResult:
         declared states (``x - x_eq`` where the equilibrium is not 0; a box's parameters by name);
         ``sos_bound`` has one per ``output``. A one-line :class:`InvalidParameter` where there is
         none (the condition is not certified, or states no V)."""
-        from lyapcheck.models.claims import v_expression
+        from lyapcheck.models.classes.claims import v_expression
 
         cond = self.document.get("conditions", {}).get(condition)
         if not isinstance(cond, dict) or cond.get("status") != "certified":
@@ -233,7 +233,7 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
         paper's classes that need them are ``not_applicable`` and the others still run.
     model
         Instead of ``params``: a model file (docs/model-files.md), as a path or a loaded
-        :class:`lyapcheck.models.modelfile.Model`. Its classes are ``linearization``,
+        :class:`lyapcheck.models.language.modelfile.Model`. Its classes are ``linearization``,
         ``quadratic``, ``sos_gas``, ``roa``, ``candidate`` and ``sos_bound``.
     settings
         With ``model``: parameter (or disturbance-bound) values laid over the file's, as a mapping
@@ -264,7 +264,7 @@ def certify(params: Any = None, *, model: "str | Path | Model | None" = None,
         beside each certified ultimate bound, the worst simulated tail ``sup |eps|`` and
         ``tightness_ratio`` = certified / simulated (>= 1 unless the bound is unsound).
     """
-    from lyapcheck.models.modelfile import is_model_file
+    from lyapcheck.models.language.modelfile import is_model_file
 
     if model is None and is_model_file(params):  # a model file given where the paper's gain file would be
         model, params = params, None
@@ -328,7 +328,7 @@ def model_settings(settings: Mapping[str, object] | Sequence[str] | None, source
 def load_model_file(model: "str | Path | Model", settings: Mapping[str, object] | Sequence[str] | None = None
                     ) -> "Model":
     """A validated model (a path is read; a loaded model gets ``settings`` laid over its parameters)."""
-    from lyapcheck.models.modelfile import Model, load_model, parse_model
+    from lyapcheck.models.language.modelfile import Model, load_model, parse_model
 
     source = model.source if isinstance(model, Model) else str(model) if isinstance(model, (str, Path)) else None
     extra = model_settings(settings, source)
@@ -343,12 +343,12 @@ def load_model_file(model: "str | Path | Model", settings: Mapping[str, object] 
 
 def _recast_model(model: object, settings: Mapping[str, object] | Sequence[str] | None, candidate: str | None
                   ) -> "RecastModel | None":
-    """The model as a loop with functions (lyapcheck.models.recast), or None when it is polynomial."""
-    from lyapcheck.models.modelfile import Model, file_uses_functions, load_any_model, parse_any_model
+    """The model as a loop with functions (lyapcheck.models.language.recast), or None when it is polynomial."""
+    from lyapcheck.models.language.modelfile import Model, file_uses_functions, load_any_model, parse_any_model
 
     if isinstance(model, Model) or (isinstance(model, (str, Path)) and not file_uses_functions(model)):
-        return None  # a polynomial loop: read once, by the caller (and lyapcheck.models.recast not imported)
-    from lyapcheck.models.recast import RecastModel
+        return None  # a polynomial loop: read once, by the caller (and lyapcheck.models.language.recast not imported)
+    from lyapcheck.models.language.recast import RecastModel
 
     with _settings_named():
         if isinstance(model, RecastModel):
@@ -379,13 +379,13 @@ def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, ob
 def _certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None,
                         candidate: str | None, classes: str | Sequence[str] | None, time_limit_s: float | None,
                         box: Sequence[str] | Mapping[str, Any] | None) -> CertifyResult:
-    from lyapcheck.models.boxes import parse_model_box
-    from lyapcheck.models.certificate import build_document
-    from lyapcheck.models.certify import certify_model
+    from lyapcheck.models.loop.boxes import parse_model_box
+    from lyapcheck.models.surfaces.certificate import build_document
+    from lyapcheck.models.surfaces.certify import certify_model
 
     recast = _recast_model(model, settings, candidate)
     if recast is not None:
-        from lyapcheck.models.recast_certify import certify_recast
+        from lyapcheck.models.surfaces.recast_certify import certify_recast
 
         recast_box = None
         if box:
@@ -408,9 +408,9 @@ def _recast_at_box_centre(recast: "RecastModel", settings: Mapping[str, object] 
     again with each box parameter at the box's centre (an override, so that the certificate's
     ``overrides`` say where the centre is and ``verify`` reads the same model)."""
     from lyapcheck.exact import exact_decimal
-    from lyapcheck.models.boxes import parse_box_of
-    from lyapcheck.models.modelfile import parse_any_model
-    from lyapcheck.models.recast import RecastModel
+    from lyapcheck.models.loop.boxes import parse_box_of
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.language.recast import RecastModel
 
     with _argument_names():
         parsed = parse_box_of(recast.source, recast.parameters, box)
@@ -432,7 +432,7 @@ def add_tightness(results: "Mapping[str, ConditionResult]", problem: "Problem", 
     The search runs on the real loop (saturated ODS command, the paper-ilos settings) with
     ``|d_mu| <= d*``; a ratio below 1 would be a soundness violation and is said so.
     """
-    from lyapcheck.simulation.worst_case import search_worst_case
+    from lyapcheck.paper.simulation.worst_case import search_worst_case
 
     bounds = [r for name, r in results.items() if name in ("ultimate_bound", "sos_bound") and r.status == "certified"]
     if not bounds or problem.d_max is None:
@@ -557,7 +557,7 @@ def verify(certificate: str | Path | Mapping[str, Any] | CertifyResult) -> Verif
     """Re-check a certificate exactly, without a solver (file path, document or result): the
     paper's certificates and model-file certificates alike."""
     from lyapcheck.paper.certificate import check_document, verify_document
-    from lyapcheck.models import certificate as model_certificate
+    from lyapcheck.models.surfaces import certificate as model_certificate
 
     if isinstance(certificate, CertifyResult):
         doc = certificate.document
@@ -591,7 +591,7 @@ class SimulationReport:
     series
         The simulated time series as an :class:`xarray.Dataset` with ``time`` (s) as a coordinate:
         for a model, ``x`` (trajectory, time, state) and ``y`` (trajectory, time, output), the
-        trajectories numbered as ``document["trajectories"]`` (:mod:`lyapcheck.models.series`); for
+        trajectories numbered as ``document["trajectories"]`` (:mod:`lyapcheck.models.engines.series`); for
         the paper's loop, ``p_x``, ``p_z``, ``s``, ``eps``, ``u_x``, ``u_z``, ``v_x``, ``v_z``, ``d_x``,
         ``d_z`` over time. None for a worst-case search, or with ``series=False``.
     """
@@ -650,7 +650,7 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
         Keep the time series (:attr:`SimulationReport.series`, an :class:`xarray.Dataset`); False
         skips the sampling. A worst-case search keeps none.
     """
-    from lyapcheck.models.modelfile import is_model_file
+    from lyapcheck.models.language.modelfile import is_model_file
 
     if model is None and is_model_file(scenario):  # a model file given where a scenario would be
         model, scenario = scenario, None
@@ -667,7 +667,7 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
     if given:
         raise InvalidParameter(given[0], "used with a model file (model=...; the paper's loop takes a scenario or a "
                                "preset)", model_only[given[0]])
-    from lyapcheck.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
+    from lyapcheck.paper.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
 
     if plot is not None and Path(plot).suffix.lower() != ".png":
         raise InvalidParameter("plot", "a file name ending in .png", str(plot))
@@ -676,7 +676,7 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
     if worst_case:
         if plot is not None:
             raise InvalidParameter("plot", "left out with worst_case=True", str(plot))
-        from lyapcheck.simulation.worst_case import search_worst_case
+        from lyapcheck.paper.simulation.worst_case import search_worst_case
 
         chosen, _, _ = scenario_batch(None if scenario is None else str(scenario), preset)
         found = search_worst_case(chosen, budget_s=float(budget_s))
@@ -687,7 +687,7 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
     result = run_scenarios(batch, record=plot is not None or series)
     doc = simulation_document(chosen, result, index)
     if plot is not None:
-        from lyapcheck.simulation.plots import section5_figure
+        from lyapcheck.paper.simulation.plots import section5_figure
 
         section5_figure(batch, result, str(plot))
         doc["plot"] = str(plot)
@@ -716,8 +716,8 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
                         worst_case: bool = False, budget_s: float = 20.0, certificate: str | Path | None = None,
                         plot: str | Path | None = None, series: bool = True) -> SimulationReport:
     """``lyapcheck simulate --model``: the model's closed loop from its starts under its disturbance
-    scenarios, batched (:mod:`lyapcheck.models.simulate`; docs/simulation.md has the JSON keys). A
-    loop with functions is the same, on its true loop (:mod:`lyapcheck.models.recast_simulate`).
+    scenarios, batched (:mod:`lyapcheck.models.surfaces.simulate`; docs/simulation.md has the JSON keys). A
+    loop with functions is the same, on its true loop (:mod:`lyapcheck.models.surfaces.recast_simulate`).
 
     Errors name these arguments (``x0``, ``t_end``, ``settings``, ...): an
     :class:`~lyapcheck.errors.InvalidParameter`, or a :class:`~lyapcheck.errors.ModelFileError` for
@@ -746,12 +746,12 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     plot
         Also write the figures to this PNG.
     series
-        Keep the time series (:attr:`SimulationReport.series`: :mod:`lyapcheck.models.series`);
+        Keep the time series (:attr:`SimulationReport.series`: :mod:`lyapcheck.models.engines.series`);
         a worst-case search keeps none.
     """
     import numpy as np
 
-    from lyapcheck.models import simulate as sim
+    from lyapcheck.models.surfaces import simulate as sim
 
     if plot is not None and Path(plot).suffix.lower() != ".png":
         raise InvalidParameter("plot", "a file name ending in .png", str(plot))
@@ -761,11 +761,11 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     if worst_case and scenarios:
         raise InvalidParameter("scenarios", "left out with worst_case=True (the search tries every family)",
                                ",".join(scenarios))
-    # a loop with functions is simulated on its true loop by the same machinery (lyapcheck.models.recast_simulate)
+    # a loop with functions is simulated on its true loop by the same machinery (lyapcheck.models.surfaces.recast_simulate)
     recast = _recast_model(model, settings, None)
     loaded = recast if recast is not None else _load_with_settings(model, settings)
     if recast is not None:
-        from lyapcheck.models.recast_simulate import prepare_true_loop
+        from lyapcheck.models.surfaces.recast_simulate import prepare_true_loop
 
         prepared = prepare_true_loop(recast)
     else:
@@ -869,7 +869,7 @@ def _one_start(model: "Model", item: Any) -> Any:
 
     import numpy as np
 
-    from lyapcheck.models.simulate import parse_start
+    from lyapcheck.models.surfaces.simulate import parse_start
     from lyapcheck.units import parse_si_quantity
 
     if isinstance(item, str):
@@ -966,7 +966,7 @@ def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, wo
     for target in exports:
         if Path(target).suffix.lower() not in EXPORT_SUFFIXES:
             raise InvalidParameter("export", "a file name ending in .nc or .csv", str(target))
-    from lyapcheck.models.modelfile import is_model_file
+    from lyapcheck.models.language.modelfile import is_model_file
 
     if is_model_file(spec):  # a model file is what a sweep spec names, not a spec
         raise InputFileError(f"{spec} is a model file; a sweep reads a spec that names it: [sweep] model = "
@@ -999,7 +999,7 @@ def report(source: str | Path | CertifyResult, *, html: str | Path | None = None
         return [certificate_report(source.document, t) for t in targets]
     if not isinstance(source, (str, Path)):
         raise InputFileError(f"cannot report on a {type(source).__name__}: give a path or a CertifyResult")
-    from lyapcheck.models.modelfile import is_model_file
+    from lyapcheck.models.language.modelfile import is_model_file
 
     if is_model_file(source):  # a model file: certify it with every class, then report on that
         target_html = html if html is not None or pdf is not None else Path(Path(source).stem + ".html")

@@ -170,10 +170,10 @@ _FIGURE_RTOL: Final[dict[tuple[str, str], float]] = {
 }
 
 
-# -- simulation cross-checks of model certificates (lyapcheck.models.crosscheck) -------------------
+# -- simulation cross-checks of model certificates (lyapcheck.models.engines.crosscheck) -------------------
 #: a simulated trajectory breaks a model certificate's claim (V rises along it, V or |x| leaves its
 #: certified envelope) only beyond this relative slack: the trajectories are integrated at rtol 1e-7
-#: (lyapcheck.models.trajectories.RTOL) and V is a polynomial of the state, so its float value along
+#: (lyapcheck.models.engines.trajectories.RTOL) and V is a polynomial of the state, so its float value along
 #: a trajectory is good to about its degree times that; 1e-5 leaves a decade over a degree-8 V and
 #: stays far below any modelling error a false certificate would show (moved from the report's
 #: phase portrait, reports.phase_portrait.CHECK_TOL, now shared with the sweeps of model files)
@@ -183,7 +183,7 @@ TRAJECTORY_CHECK_REL_TOL: Final = 1e-5
 # -- figures of model certificates across floating-point platforms (issue 28) ----------------------
 #: the level c of a model's certified region of attraction ``{V <= c}`` (``roa``, after its V steps):
 #: each V step builds V with the level-1 condition feasible, and the last level step bisects on the
-#: solver's feasibility up to a relative width of 1e-3 (lyapcheck.models.regions.LEVEL_REL_TOL), so
+#: solver's feasibility up to a relative width of 1e-3 (lyapcheck.models.classes.regions.LEVEL_REL_TOL), so
 #: c is within that width of the largest level the solver finds feasible, 1 or just above; which
 #: side of a bisection step a solve falls on follows the platform's last bits, and so does V itself.
 #: Measured at the reversed Van der Pol (mu = 1) on five x86-64 platforms (numpy's AVX-512, AVX2 or
@@ -193,17 +193,17 @@ FIGURE_MODEL_ROA_LEVEL_RTOL: Final = 1e-3
 
 
 # -- the cross-check of a certified region against its own simulation (issue 40) -----------------
-#: the small ball of the conclusive cross-check (lyapcheck.models.numeric.check_certified_set): a
+#: the small ball of the conclusive cross-check (lyapcheck.models.engines.numeric.check_certified_set): a
 #: start of a certified set whose trajectory stays in the set, outside this ball (radius in the
 #: certificate's squared distance q, the recast classes' state_square), for longer than the
 #: certificate's own decrease V' <= -epsilon q / D allows, contradicts the proof; the same radius
-#: as the recast cross-check's convergence (lyapcheck.models.recast_run.CONVERGED_RADIUS)
+#: as the recast cross-check's convergence (lyapcheck.models.surfaces.recast_run.CONVERGED_RADIUS)
 CONVERGED_BALL_RADIUS: Final = 2e-2
 
 
 # -- work budgets that decide outcomes (issue 40: the same outcome under load) ----------------------
 #: the cells one proof attempt of a ball-arithmetic region may examine (boundary and decrease
-#: together, every part of a parameter box together; lyapcheck.models.recast_interval) before it
+#: together, every part of a parameter box together; lyapcheck.models.classes.recast_interval) before it
 #: gives up at that level: a count, so that a model gets the same region on any machine and under
 #: any load (it replaced a 25 s wall-clock limit per attempt, which a loaded 2-core machine hit on
 #: the three-state recast-pendulum-actuator). Calibrated on the shipped examples: the largest proof
@@ -211,7 +211,7 @@ CONVERGED_BALL_RADIUS: Final = 2e-2
 #: core of the 2-core CI machine); the two-state examples take at most a few thousand
 INTERVAL_ATTEMPT_CELLS: Final = 100_000
 #: the solves one template of the recast sos_gas / quadratic search (a degree and a set of V
-#: variables: its margins eps and its face reductions together; lyapcheck.models.recast_classes)
+#: variables: its margins eps and its face reductions together; lyapcheck.models.classes.recast_classes)
 #: may spend before the next template has its turn. It replaced a 10 s wall-clock limit per
 #: template and margin. Calibrated on the shipped examples and tests: a certified template takes at
 #: most 3 solves (recast-ilos-course over the box U in [0.5, 2]: two face reductions), most take
@@ -219,14 +219,14 @@ INTERVAL_ATTEMPT_CELLS: Final = 100_000
 #: (FACE_ROUNDS + 1 = 4) instead of up to 8
 TEMPLATE_SOLVES: Final = 4
 #: the most rows of one sum-of-squares matrix of a recast sos_gas template's program (the search
-#: skips a larger template as too large; lyapcheck.models.recast_sos.MAX_RECAST_GRAM_ROWS, 60, is
+#: skips a larger template as too large; lyapcheck.models.engines.recast_sos.MAX_RECAST_GRAM_ROWS, 60, is
 #: every recast program's own limit). A count of the work of one solve (an interior-point
 #: iteration costs about the cube of the rows), which replaced the 10 s wall-clock limit per
 #: template that cut these solves short. Calibrated on the shipped examples: their templates'
 #: programs have at most 27 rows (solved in under a second) or 50-55 rows (10-30 s a solve,
 #: none certified: recast-inverted-pendulum-sat, recast-los-heading at degree 4)
 TEMPLATE_GRAM_ROWS: Final = 40
-#: the solves one level step of the recast V-s iteration (lyapcheck.models.recast_improve: a
+#: the solves one level step of the recast V-s iteration (lyapcheck.models.classes.recast_improve: a
 #: level's growth and bisection, each level its face reductions) may spend; it replaced a 15 s
 #: wall-clock limit. Calibrated on the tests' pendulum (the route without ball arithmetic): its
 #: level steps take 12 to 15 solves
@@ -236,7 +236,7 @@ VS_LEVEL_SOLVES: Final = 40
 #: class's time is left". Calibrated on the same pendulum: 88 solves in all (4-8 s of one core)
 VS_SOLVES: Final = 150
 #: the solves of the enlarging rounds of the polynomial roa class (its V steps and their level-1
-#: multipliers; lyapcheck.models.regions.enlarge; the exact check of the best set and its ball
+#: multipliers; lyapcheck.models.classes.regions.enlarge; the exact check of the best set and its ball
 #: come after, not counted); it replaced "stop when less than 35 % of the class's time is left".
 #: Calibrated on the shipped examples and tests: van-der-pol-reversed's rounds take 114 solves,
 #: van-der-pol-reversed-mu3's 62, the tests' models at most 114 (the ladder's own end, 30 rounds

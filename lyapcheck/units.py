@@ -20,7 +20,7 @@ and refuses a bare ``1/s`` for a rotation because it is ambiguous.
 Model files say nothing of which quantity is a rotation, and their values must be exact: there
 :func:`parse_si_quantity` converts any unit to SI base units exactly (pint's decimal definitions
 read as fractions: ``1/min`` is 1/60), gives its :class:`Dimension` for the ``[units]`` check
-(:mod:`lyapcheck.models.dimensions`), and refuses ``Hz``, units defined through pi and the symbol
+(:mod:`lyapcheck.models.language.dimensions`), and refuses ``Hz``, units defined through pi and the symbol
 ``l`` with a message saying what to write (:func:`model_unit`; docs/model-files-units.md).
 """
 

@@ -56,7 +56,7 @@ def certificate_context(doc: dict[str, Any], *, ledger: bool = True, simulate: b
     ----------
     doc
         A certificate document: the paper's (``lyapcheck.paper.certificate`` schema) or a model
-        file's (``lyapcheck.models.certificate``); unknown keys and condition classes are shown
+        file's (``lyapcheck.models.surfaces.certificate``); unknown keys and condition classes are shown
         generically.
     ledger, simulate
         Include the claims ledger (the paper's) and the simulation figures (on for real reports).
@@ -94,7 +94,7 @@ def read_certificate(path: str | Path) -> dict[str, Any]:
     InputFileError
         One line: missing, not JSON, not a certificate, or a schema this version does not read.
     """
-    from lyapcheck.models.certificate import SCHEMA_VERSION, is_model_document, read_json
+    from lyapcheck.models.surfaces.certificate import SCHEMA_VERSION, is_model_document, read_json
     from lyapcheck.paper.certificate import read_document
 
     try:

@@ -11,7 +11,7 @@ pushing to the right of it (for ``theta_r = 0``: the paper's sinking velocity ``
 
 The worst case. A certificate made with ``lyapcheck certify --worst-case`` carries, beside each
 certified ultimate bound, the worst disturbance the search of
-:mod:`lyapcheck.simulation.worst_case` found (its JSON description) and its tail
+:mod:`lyapcheck.paper.simulation.worst_case` found (its JSON description) and its tail
 ``sup |eps|``. It is re-simulated here, from both of the search's initial states (the origin
 and the paper's start; the document does not say which one won), in the same batched call as
 the three trajectories above when the settings agree (they do: the search uses the
@@ -114,11 +114,11 @@ def simulate_certificate(doc: dict[str, Any]) -> LoopRun:
         When the inputs do not describe a problem the simulator accepts (the report shows why).
     """
     from lyapcheck.paper.params import build_problem
-    from lyapcheck.simulation.integrator import INTEGRATOR_NAME, STATUS_OK
-    from lyapcheck.simulation.disturbances import Constant, Disturbance, from_description, stack_rows
-    from lyapcheck.simulation.model import LoopParams
-    from lyapcheck.simulation.runner import simulate
-    from lyapcheck.simulation.scenarios import Scenario
+    from lyapcheck.integrator import INTEGRATOR_NAME, STATUS_OK
+    from lyapcheck.paper.simulation.disturbances import Constant, Disturbance, from_description, stack_rows
+    from lyapcheck.paper.simulation.model import LoopParams
+    from lyapcheck.paper.simulation.runner import simulate
+    from lyapcheck.paper.simulation.scenarios import Scenario
 
     inputs = doc.get("inputs")
     given = inputs.get("given") if isinstance(inputs, dict) else None

@@ -10,14 +10,14 @@ section contributes (:meth:`reports.sections.base.Section.portrait`), which are 
 - the invariant sets of the safety classes (kind ``"invariant"``: barrier ``{B <= 0}``,
   reach_avoid ``{V <= 0}``), their zero level a solid line and the set lightly hatched;
 - the model's ``[sets]`` whenever it has them (whatever classes ran): initial green, unsafe red,
-  goal blue, each filled translucent where ``lyapcheck.models.sets.margin >= 0`` on a grid;
+  goal blue, each filled translucent where ``lyapcheck.models.language.sets.margin >= 0`` on a grid;
 - the model's ``[domain]`` box, when it has one;
 - trajectories with every disturbance 0 from rings of starts around the equilibrium, from
   the boundary of the largest certified set, from just inside each invariant set's boundary and
   from points spread over the initial set, coloured by how they end (converged, escaped,
   neither);
 - each ``counterexample`` of a safety class (its ``refutation``: a start in the initial set and a
-  disturbance, :mod:`lyapcheck.models.falsify`), simulated again from its stored start with the
+  disturbance, :mod:`lyapcheck.models.classes.falsify`), simulated again from its stored start with the
   same simulator, drawn wide in dark red from its start (a circle) to where it enters the unsafe
   set (a cross) and named in the legend with the time it enters; a model of other than 2 states,
   which has no portrait, gets its counterexamples against time instead (the unsafe set's margin
@@ -30,7 +30,7 @@ The view is decided beforehand: each set's extent is found along rays from the e
 (bisection on the first crossing of the level, in ``u``), then joined with the domain and the
 bounding boxes of the model's ``[sets]`` (found on a grid around the rest).
 
-The simulation is :mod:`lyapcheck.models.trajectories` (the core's cross-checks of certificates
+The simulation is :mod:`lyapcheck.models.engines.trajectories` (the core's cross-checks of certificates
 use the same one). The trajectories are also *checked against the certificates* (:class:`CrossCheck`): along
 every simulated trajectory that starts in a certified region of attraction ``V`` must not rise
 and the start must not escape; a global certificate's ``V`` must not rise (and must decay at
@@ -50,13 +50,13 @@ from typing import Any, Final, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from lyapcheck.models.crosscheck import BISECTIONS, RAY_RADII, check_global, check_region, check_storage, \
+from lyapcheck.models.engines.crosscheck import BISECTIONS, RAY_RADII, check_global, check_region, check_storage, \
     ray_boundary
-from lyapcheck.models.modelfile import Model
-from lyapcheck.models.sets import StateSet, margin
+from lyapcheck.models.language.modelfile import Model
+from lyapcheck.models.language.sets import StateSet, margin
 from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 from reports.figures import Figure, resample_closed, to_svg
-from lyapcheck.models.trajectories import Trajectory, horizon, jacobian_eigenvalues, simulate
+from lyapcheck.models.engines.trajectories import Trajectory, horizon, jacobian_eigenvalues, simulate
 from reports.polynomials import FloatPolynomial
 from reports.sections import MODEL_FILE, section_for
 from reports.sections.base import GlobalV, LevelSet
@@ -65,7 +65,7 @@ from reports.views import as_dict, as_fraction, as_number, fmt_float
 FloatArray = npt.NDArray[np.float64]
 
 #: rays from the equilibrium along which each set's extent is found (the radii tried, in the
-#: scaled coordinates u, and the bisection steps are lyapcheck.models.crosscheck's RAY_RADII and
+#: scaled coordinates u, and the bisection steps are lyapcheck.models.engines.crosscheck's RAY_RADII and
 #: BISECTIONS)
 RAYS: Final = 360
 #: grid points per axis on which V is evaluated and contoured
@@ -87,7 +87,7 @@ PANEL_POINTS: Final = 12_000
 #: starts per sign of the constant disturbance in the disturbed panel
 DISTURBED_STARTS: Final = 8
 #: relative tolerance of the cross-checks (lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL: the checks
-#: themselves are lyapcheck.models.crosscheck's, shared with the sweeps of model files)
+#: themselves are lyapcheck.models.engines.crosscheck's, shared with the sweeps of model files)
 CHECK_TOL: Final = TRAJECTORY_CHECK_REL_TOL
 #: the model's [sets] on the portrait: colour and legend words, and the fill's opacity
 SET_STYLE: Final = {"initial": ("#1a7f37", "initial set"), "unsafe": ("#cf222e", "unsafe set"),
@@ -193,7 +193,7 @@ def set_extent(poly_u: FloatPolynomial, level: float) -> Extent | None:
 @dataclass(frozen=True)
 class Counterexample:
     """A class's counterexample simulated again from its stored start under its stored disturbance
-    (:mod:`lyapcheck.models.falsify`'s witness: ``refutation`` of a ``counterexample`` condition).
+    (:mod:`lyapcheck.models.classes.falsify`'s witness: ``refutation`` of a ``counterexample`` condition).
 
     ``t``, ``x``: the re-simulated trajectory, up to where it enters the unsafe set (the entry
     found on the dense output, linearly between the last point outside and the first inside)
@@ -225,7 +225,7 @@ class Counterexample:
 
 def _segments(refutation: dict[str, Any], m: int, t_end: float) -> list[tuple[float, float, FloatArray]] | None:
     """The stored disturbance as constant pieces ``(t0, t1, d)`` over ``[0, t_end]`` (``none``,
-    ``constant`` or ``bang-bang``: :class:`lyapcheck.models.falsify.Disturbance`); None when it
+    ``constant`` or ``bang-bang``: :class:`lyapcheck.models.classes.falsify.Disturbance`); None when it
     cannot be read for ``m`` disturbances."""
     dist = as_dict(refutation.get("disturbance"))
     kind = dist.get("kind")
@@ -254,10 +254,10 @@ def _segments(refutation: dict[str, Any], m: int, t_end: float) -> list[tuple[fl
 def counterexample_trajectories(doc: dict[str, Any], model: Model, half: FloatArray
                                 ) -> tuple[list[Counterexample], list[str]]:
     """Each ``counterexample`` condition's trajectory, simulated again with the portrait's own
-    simulator (:func:`lyapcheck.models.trajectories.simulate`, piece by piece for a switching
+    simulator (:func:`lyapcheck.models.engines.trajectories.simulate`, piece by piece for a switching
     disturbance) from its stored start; notes for those that cannot be read. ``half``: the view's
     half-widths (the escape box and tolerances of the simulation)."""
-    from lyapcheck.models.falsify import Disturbance
+    from lyapcheck.models.classes.falsify import Disturbance
 
     out: list[Counterexample] = []
     notes: list[str] = []
@@ -566,7 +566,7 @@ def _state_output(model: Model, output: str) -> int | None:
     return model.states.index(text) if text in model.states else None
 
 
-# -- the cross-checks (lyapcheck.models.crosscheck: one home for them) ----------------------------
+# -- the cross-checks (lyapcheck.models.engines.crosscheck: one home for them) ----------------------------
 def _region_check(drawn: _Drawn, runs: Sequence[Trajectory], eq: FloatArray, scales: FloatArray) -> CrossCheck | None:
     level = float(drawn.spec.level)
     inside = [tr for tr in runs if drawn.poly_u((tr.x[:1] - eq) / scales)[0] <= level]
@@ -867,7 +867,7 @@ def _counterexample_timeline(doc: dict[str, Any], model: Model, reason: str) -> 
 
 
 def _evaluator(model: Model) -> Any:
-    from lyapcheck.models.numeric import FieldEvaluator
+    from lyapcheck.models.engines.numeric import FieldEvaluator
 
     return FieldEvaluator.of(model)
 

@@ -3,23 +3,23 @@
 What is drawn:
 
 - the **true field** (the model's own functions, evaluated by numpy through
-  :func:`lyapcheck.models.recast_numeric.field_values`, not the recasting's polynomial field) as
+  :func:`lyapcheck.models.engines.recast_numeric.field_values`, not the recasting's polynomial field) as
   grey streamlines;
 - each **certified set** its class's section names (:meth:`reports.sections.recast.RecastSection.portrait_set`),
   filled, with its boundary a solid line. A set is drawn through its *gauge*, ``<= 1`` exactly on
   the set: ``V / level`` for a recast certificate (V evaluated with every auxiliary at its
-  definition, :func:`lyapcheck.models.recast_numeric.v_values`), and for an interval certificate
+  definition, :func:`lyapcheck.models.engines.recast_numeric.v_values`), and for an interval certificate
   the larger of ``V / level`` and the box's own gauge (``max |z_i - centre_i| / half-width_i``),
   so the drawn set is the certificate's ``{x - x_eq in box, V <= level}``; the box is drawn dashed;
 - the equilibrium, and where the loop has angles its copies ``2 k pi`` apart that fall in the view.
 
 The view is the model's ``[domain]`` (else ``+-pi`` in an angle and
-:data:`lyapcheck.models.recast_numeric.DEFAULT_HALF_WIDTH` elsewhere, the box the ``roa`` class
+:data:`lyapcheck.models.engines.recast_numeric.DEFAULT_HALF_WIDTH` elsewhere, the box the ``roa`` class
 compares its sets in) joined with every certificate's box and with each recast set's extent in the
 states that are not angles (searched up to :data:`REACH` times that box), padded. Nothing is simulated here:
 the ``roa`` class simulated its set on the true loop when it was certified, and its figures are
 on the page. The model text is parsed by the project's parser only (the caller's
-:func:`lyapcheck.models.modelfile.parse_any_model`); nothing from the document is evaluated.
+:func:`lyapcheck.models.language.modelfile.parse_any_model`); nothing from the document is evaluated.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
-from lyapcheck.models.recast import RecastModel
+from lyapcheck.models.language.recast import RecastModel
 from reports.figures import Figure, WIDTH_IN, to_svg
 from reports.sections import section_for
 from reports.sections.recast import RECAST_LOOP, RecastSection, RecastSet
@@ -93,7 +93,7 @@ def certified_sets(doc: dict[str, Any]) -> tuple[list[RecastSet], list[str], lis
 
 def base_view(model: RecastModel, angles: set[str]) -> tuple[FloatArray, FloatArray]:
     """The model's [domain], else the box the roa class compares its sets in (absolute states)."""
-    from lyapcheck.models.recast_numeric import DEFAULT_HALF_WIDTH
+    from lyapcheck.models.engines.recast_numeric import DEFAULT_HALF_WIDTH
 
     eq = np.array([float(v) for v in model.equilibrium])
     if model.domain is not None:
@@ -105,8 +105,8 @@ def base_view(model: RecastModel, angles: set[str]) -> tuple[FloatArray, FloatAr
 
 def gauge(model: RecastModel, spec: RecastSet, X: FloatArray) -> FloatArray:
     """``<= 1`` exactly on the set, at the states ``X`` (rows); :data:`FAR` where V is not finite."""
-    from lyapcheck.models.recast_numeric import v_values
-    from lyapcheck.models.recast_sos import poly_from_json
+    from lyapcheck.models.engines.recast_numeric import v_values
+    from lyapcheck.models.engines.recast_sos import poly_from_json
 
     system = model.system
     V = poly_from_json(system.ring, spec.V, "V")
@@ -159,7 +159,7 @@ def recast_portrait(doc: dict[str, Any], model: RecastModel) -> RecastPortrait:
     from matplotlib.figure import Figure as MplFigure
     from matplotlib.patches import Rectangle
 
-    from lyapcheck.models.recast_numeric import field_values
+    from lyapcheck.models.engines.recast_numeric import field_values
 
     n = len(model.states)
     if n != 2:

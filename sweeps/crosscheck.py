@@ -2,8 +2,8 @@
 
 At each parameter point (the point itself, or random points of a box drawn from ``(seed, box
 id)`` so that a box's result does not depend on the unit it was grouped in), the model is
-simulated with the project's integrator (:mod:`lyapcheck.models.trajectories`) and every certified
-class of the stored certificate is checked with :mod:`lyapcheck.models.crosscheck`:
+simulated with the project's integrator (:mod:`lyapcheck.models.engines.trajectories`) and every certified
+class of the stored certificate is checked with :mod:`lyapcheck.models.engines.crosscheck`:
 
 * ``roa``: starts drawn inside ``{V <= level}`` (random directions, between half the way and
   just inside the set's boundary, found by bisection along each ray) must not escape and V must
@@ -12,12 +12,12 @@ class of the stored certificate is checked with :mod:`lyapcheck.models.crosschec
   of twice the certificate's state scales around the equilibrium) must not escape, V must not rise
   and must stay below ``V(0) exp(-rate t)`` (the certified rate of V); a GES certificate's
   ``|x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)`` too;
-* ``sos_bound``: the worst-case disturbance search (:func:`lyapcheck.models.simulate.search_worst_case`,
+* ``sos_bound``: the worst-case disturbance search (:func:`lyapcheck.models.surfaces.simulate.search_worst_case`,
   its deterministic screening round) must not find a tail sup of an output above its certified
   bound beyond :data:`sweeps.soundness.BOUND_REL_TOL`, nor a diverging disturbance.
 
 A V over a box may depend on the parameters: it is evaluated at each point's own values. The
-horizon is :func:`lyapcheck.models.trajectories.horizon` of the point's linearization. Trajectories
+horizon is :func:`lyapcheck.models.engines.trajectories.horizon` of the point's linearization. Trajectories
 not at the equilibrium by then are counted (``not_converged``): a finite simulation cannot refute
 convergence, so this is a figure; a certified decay rate (V's, or a GES envelope) is what makes
 slow convergence a violation. Any breach is a soundness violation, with a one-line detail.
@@ -32,7 +32,7 @@ from typing import Any, Final, Mapping, Sequence
 
 import numpy as np
 
-from lyapcheck.models.modelfile import Model
+from lyapcheck.models.language.modelfile import Model
 from sweeps.soundness import BOUND_REL_TOL, WORST_CASE_SCREENING_ONLY
 
 #: trajectories leave the cross-check's box only this many start extents from the equilibrium (a
@@ -74,7 +74,7 @@ class _Set:
     """A certified function of the document at one parameter point."""
 
     cls: str
-    V: Any  # a float function of the scaled states (lyapcheck.models.crosscheck.certificate_function)
+    V: Any  # a float function of the scaled states (lyapcheck.models.engines.crosscheck.certificate_function)
     level: float = math.nan  # roa
     rate: float = 0.0  # certified decay rate of V, 1/s
     k: float = math.nan  # GES envelope
@@ -86,7 +86,7 @@ def _point_text(point: Mapping[str, Fraction]) -> str:
 
 
 def _sets(doc: Mapping[str, Any], model: Model, point: Mapping[str, Fraction], scales: Sequence[Fraction]) -> list[_Set]:
-    from lyapcheck.models.crosscheck import certificate_function
+    from lyapcheck.models.engines.crosscheck import certificate_function
 
     box = list((doc.get("box") or {}).keys())
     names = list(model.states) + box
@@ -116,7 +116,7 @@ def cross_check(model: Model, doc: Mapping[str, Any], points: Sequence[Mapping[s
     model
         The sweep's model (its other parameters as the spec sets them).
     doc
-        The certificate document of the point or box (:func:`lyapcheck.models.certificate.build_document`).
+        The certificate document of the point or box (:func:`lyapcheck.models.surfaces.certificate.build_document`).
     points
         Exact values of the swept parameters, one mapping per point to simulate.
     starts
@@ -126,7 +126,7 @@ def cross_check(model: Model, doc: Mapping[str, Any], points: Sequence[Mapping[s
     worst_case
         Run the worst-case disturbance search against ``sos_bound``'s bounds.
     """
-    from lyapcheck.models.modelfile import with_parameters
+    from lyapcheck.models.language.modelfile import with_parameters
 
     out = CrossCheck()
     scaling = (doc.get("field") or {}).get("scaling") or {}
@@ -147,7 +147,7 @@ def cross_check(model: Model, doc: Mapping[str, Any], points: Sequence[Mapping[s
 
 def _region_starts(V: Any, level: float, n: int, rng: np.random.Generator, count: int) -> np.ndarray | None:
     """``count`` starts (scaled states) inside ``{V <= level}``, or None when its boundary is not found."""
-    from lyapcheck.models.crosscheck import ray_boundary
+    from lyapcheck.models.engines.crosscheck import ray_boundary
 
     directions = rng.standard_normal((count, n))
     directions /= np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-300)
@@ -168,9 +168,9 @@ def _global_starts(model: Model, eq: np.ndarray, s: np.ndarray, rng: np.random.G
 
 def _trajectories(model: Model, sets: Sequence[_Set], scales: Sequence[Fraction], rng: np.random.Generator,
                   starts: int, point: Mapping[str, Fraction], out: CrossCheck) -> None:
-    from lyapcheck.models.crosscheck import check_ges_envelope, check_global, check_region
-    from lyapcheck.models.numeric import FieldEvaluator
-    from lyapcheck.models.trajectories import horizon, jacobian_eigenvalues, simulate
+    from lyapcheck.models.engines.crosscheck import check_ges_envelope, check_global, check_region
+    from lyapcheck.models.engines.numeric import FieldEvaluator
+    from lyapcheck.models.engines.trajectories import horizon, jacobian_eigenvalues, simulate
 
     n = model.n
     eq = np.array([float(v) for v in model.equilibrium])
@@ -235,8 +235,8 @@ def _bounds(model: Model, bounds: Mapping[str, Any], point: Mapping[str, Fractio
     """The worst case found against each bound. A bound is on ``|y - y_eq|`` (``references``: each
     ``y_eq``), the search's figure on ``|y|``: by the triangle inequality ``|y| <= |y_eq| + bound``
     is what the bound implies, so only beyond that is a violation shown (never a false alarm)."""
-    from lyapcheck.models.crosscheck import bound_exceeded
-    from lyapcheck.models.simulate import search_worst_case
+    from lyapcheck.models.engines.crosscheck import bound_exceeded
+    from lyapcheck.models.surfaces.simulate import search_worst_case
 
     found = search_worst_case(model, budget_s=WORST_CASE_SCREENING_ONLY)
     where = _point_text(point)

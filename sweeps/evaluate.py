@@ -8,7 +8,7 @@ One unit at a time per process (:data:`UNIT_LOCK`).
 The paper's model, points (:func:`evaluate_unit`). The certificate programs are the compiled
 programs of :mod:`lyapcheck.paper.conditions.compiled` (read once per process, then solved by Clarabel
 with new parameter values, no cvxpy); ``sector_ges`` goes through :mod:`sweeps.fast_sector`. The
-simulation is one batched call of :func:`lyapcheck.simulation.runner.simulate` per scenario for
+simulation is one batched call of :func:`lyapcheck.paper.simulation.runner.simulate` per scenario for
 the whole unit; its rows are independent of the batch they sit in, so a point's result does
 not depend on how points were grouped (which is what makes a resumed sweep identical to an
 uninterrupted one).
@@ -20,7 +20,7 @@ Scenarios (all with ``|d_perp| <= d*`` except ``nominal``, which has no disturba
                  ``max(|eps(0)|, Delta_LOS)``);
 ``constant``     ``d* `` across the path, pointing like gravity for a horizontal path;
 ``weight``       the swimmer's weight mapped through ``D`` with the swimmer's axis along ``u``
-                 (eq:tmp3, :class:`~lyapcheck.simulation.disturbances.Weight`), scaled so that its
+                 (eq:tmp3, :class:`~lyapcheck.paper.simulation.disturbances.Weight`), scaled so that its
                  a-priori bound ``|d| <= W max(1/a1, 1/a2)`` equals ``d*``: the direction
                  dependence is the weight's, the size is the certificate's hypothesis;
 ``adversarial``  pushes ``V = x^T P x`` up as hard as ``|d_perp| <= d*`` allows, with ``P`` the last
@@ -36,13 +36,13 @@ The paper's model, boxes (:func:`evaluate_boxes`): the box classes of
 random points are simulated against it (:func:`lyapcheck.paper.boxes.cross_check.cross_check`).
 
 A model file, points or boxes (:func:`evaluate_model_points`, :func:`evaluate_model_boxes`): the
-classes of :data:`lyapcheck.models.classes.CLASSES` the spec asks for, and the seconds each item
+classes of :data:`lyapcheck.models.classes.registry.CLASSES` the spec asks for, and the seconds each item
 took (which the store does not keep: a wall time would make a resumed store differ from an
 uninterrupted one).
 
-* A point: :func:`lyapcheck.models.certify.certify_model` on the model with the point's exact
+* A point: :func:`lyapcheck.models.surfaces.certify.certify_model` on the model with the point's exact
   parameters (``Fraction`` of the stored float); for a loop with functions,
-  :func:`lyapcheck.models.recast_certify.certify_recast` on the model text read again with them
+  :func:`lyapcheck.models.surfaces.recast_certify.certify_recast` on the model text read again with them
   (:meth:`sweeps.spec.ModelSweepSpec.model_at`), cross-checked by :mod:`sweeps.recast_crosscheck`.
 * A box: first the linearization, exactly, at the box's corners (milliseconds): an unstable corner
   proves that no stability class can certify the box (its status is ``refuted``, and the stability
@@ -74,7 +74,7 @@ from typing import Any, Callable, Final, Mapping, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from lyapcheck.models import classes as model_classes
+from lyapcheck.models.classes import registry as model_classes
 from lyapcheck.results import ConditionResult
 from lyapcheck.paper.params import Problem
 from lyapcheck.paper.boxes.box import ParameterBox
@@ -161,7 +161,7 @@ def _weight_constants(spec_text: str) -> tuple[float, float]:
     Only their ratio matters once the weight is scaled to ``d*``; without ``[swimmer] xi_par``
     the scale ``xi_par = 1 N s/m^2`` is used (the ratio comes from ``e11`` and the geometry).
     """
-    from lyapcheck.simulation.scenarios import weight_disturbance
+    from lyapcheck.paper.simulation.scenarios import weight_disturbance
 
     problem = cached_spec(spec_text).base
     xi_par = None if problem.swimmer.xi_par is not None else 1.0
@@ -176,11 +176,11 @@ def simulate_points(spec: SweepSpec, coords: FloatArray, adversary: list[FloatAr
     ``storage``: per point, the ``sos_bound`` certificate (for the worst-case search's
     storage-gradient family), or None.
     """
-    from lyapcheck.simulation.disturbances import (ADVERSARIAL_LAYER_FRACTION, Adversarial, Constant, NoDisturbance,
+    from lyapcheck.paper.simulation.disturbances import (ADVERSARIAL_LAYER_FRACTION, Adversarial, Constant, NoDisturbance,
                                                    Stacked, Weight)
-    from lyapcheck.simulation.integrator import STATUS_OK
-    from lyapcheck.simulation.model import LoopParams
-    from lyapcheck.simulation.runner import simulate
+    from lyapcheck.integrator import STATUS_OK
+    from lyapcheck.paper.simulation.model import LoopParams
+    from lyapcheck.paper.simulation.runner import simulate
 
     n = coords.shape[0]
     sim = spec.simulation
@@ -237,8 +237,8 @@ def _worst_case(spec: SweepSpec, coords: FloatArray, storage: list[dict[str, Any
     """The worst-case disturbance search at every point, started on the path like the other
     disturbance scenarios (inside every invariant set of the certificates)."""
     from lyapcheck.errors import InvalidParameter
-    from lyapcheck.simulation.scenarios import Scenario
-    from lyapcheck.simulation.worst_case import search_worst_case
+    from lyapcheck.paper.simulation.scenarios import Scenario
+    from lyapcheck.paper.simulation.worst_case import search_worst_case
 
     sim = spec.simulation
     sups, failed = np.full(len(coords), np.nan), np.zeros(len(coords), dtype=bool)
@@ -368,7 +368,7 @@ def _box_bound(spec: SweepSpec, box: ParameterBox, box_id: int, out: dict[str, n
     """
     from lyapcheck.paper.boxes.classes import certify_box
     from lyapcheck.paper.boxes.box import sample_points
-    from lyapcheck.simulation.worst_case import search_worst_case
+    from lyapcheck.paper.simulation.worst_case import search_worst_case
 
     assert spec.boxes is not None
     with UNIT_LOCK:
@@ -391,7 +391,7 @@ def _box_bound(spec: SweepSpec, box: ParameterBox, box_id: int, out: dict[str, n
 
 # -- a model file, points or boxes ----------------------------------------------------------------
 #: the classes whose certificate proves a stability property (an unstable point refutes them), as
-#: :data:`lyapcheck.models.classes.CLASSES` declares them
+#: :data:`lyapcheck.models.classes.registry.CLASSES` declares them
 MODEL_STABILITY_CLASSES: Final = model_classes.STABILITY
 
 
@@ -485,7 +485,7 @@ def _store_cross(found: CrossCheck, out: dict[str, np.ndarray], j: int) -> None:
 @dataclass(frozen=True)
 class _Point:
     """One grid point certified: the model there (a polynomial
-    :class:`~lyapcheck.models.modelfile.Model` or a loop with functions), the classes' results (what
+    :class:`~lyapcheck.models.language.modelfile.Model` or a loop with functions), the classes' results (what
     :func:`_model_record` reads), the builder of its certificate document, and the note to store
     instead of the usual one (None: that)."""
 
@@ -497,18 +497,18 @@ class _Point:
 
 def _certify_point(spec: ModelSweepSpec, row: Sequence[float]) -> _Point:
     """Certify one grid point (``certify_model``, or ``certify_recast`` for a loop with functions)."""
-    from lyapcheck.models import store
-    from lyapcheck.models.certificate import build_document
-    from lyapcheck.models.certify import certify_model
-    from lyapcheck.models.modelfile import Model
+    from lyapcheck.models.engines import store
+    from lyapcheck.models.surfaces.certificate import build_document
+    from lyapcheck.models.surfaces.certify import certify_model
+    from lyapcheck.models.language.modelfile import Model
 
     model = spec.model_at(row)
     if isinstance(model, Model):
-        with store.disabled():  # a point of its own (lyapcheck.models.store.disabled)
+        with store.disabled():  # a point of its own (lyapcheck.models.engines.store.disabled)
             found = certify_model(model, classes=spec.classes)
         return _Point(model, found.results, lambda: build_document(found))
     from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.recast_certify import certify_recast
+    from lyapcheck.models.surfaces.recast_certify import certify_recast
 
     try:
         _, results, document = certify_recast(model, classes=spec.classes)
@@ -553,8 +553,8 @@ def evaluate_model_points(worker_text: str, coords: np.ndarray) -> dict[str, np.
 def unstable_corners(spec: ModelSweepSpec, box: Any) -> tuple[int, dict[str, str] | None]:
     """How many corners of ``box`` have an unstable equilibrium (the linearization refuted, exactly),
     and the first as ``{"note": ...}`` (None when none); ``(-1, None)`` when no stability class is asked."""
-    from lyapcheck.models.certify import certify_model
-    from lyapcheck.models.modelfile import with_parameters
+    from lyapcheck.models.surfaces.certify import certify_model
+    from lyapcheck.models.language.modelfile import with_parameters
 
     if not any(c in MODEL_STABILITY_CLASSES for c in spec.classes):
         return -1, None
@@ -577,9 +577,9 @@ def box_seed(seed: int, box_id: int) -> int:
 
 def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, list[str]]]]) -> dict[str, np.ndarray]:
     """Certify and cross-check each ``(id, {name: [lo, hi]})`` box (exact edges as ``"p/q"`` text)."""
-    from lyapcheck.models import store
-    from lyapcheck.models.certificate import build_document
-    from lyapcheck.models.certify import certify_model
+    from lyapcheck.models.engines import store
+    from lyapcheck.models.surfaces.certificate import build_document
+    from lyapcheck.models.surfaces.certify import certify_model
 
     spec = cached_model_spec(worker_text)
     assert spec.boxes is not None
@@ -624,7 +624,7 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     (:func:`sweeps.recast_crosscheck.cross_check_recast_box`), and the points where its certificates
     do not apply are named in the note. No corner is checked (``unstable_corners`` stays -1)."""
     from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.recast_certify import certify_recast
+    from lyapcheck.models.surfaces.recast_certify import certify_recast
     from sweeps.recast_crosscheck import cross_check_recast_box
 
     assert spec.boxes is not None

@@ -5,11 +5,11 @@ read at that point; a point where the box's certificates are not functions of th
 variables (:func:`box_mismatch`) is not simulated, and the reason is returned to be stored.
 
 The loop simulated is the true one: each function evaluated by numpy
-(:func:`lyapcheck.models.recast_numeric.field_values`), never the recast polynomial loop, which holds
+(:func:`lyapcheck.models.engines.recast_numeric.field_values`), never the recast polynomial loop, which holds
 only on its relations' set. Its starts come from ``numpy.random.default_rng([*seed, 0])`` (``seed``:
 the sweep's ``[simulation] seed`` and the point's flat index), so a point's result does not depend
 on the unit it was grouped in. Every certified class of the stored document is checked with the
-checks of :mod:`lyapcheck.models.crosscheck`, as :mod:`sweeps.crosscheck` does for a polynomial loop:
+checks of :mod:`lyapcheck.models.engines.crosscheck`, as :mod:`sweeps.crosscheck` does for a polynomial loop:
 
 =====================  ==========================================  ==========================================
 certificate            starts                                      must hold
@@ -22,8 +22,8 @@ certificate            starts                                      must hold
 ``quadratic``,         uniform over the comparison box (the         no escape; V never rises; ``V(t) <= V(0)
 ``sos_gas``            model's ``[domain]``, else +-pi in an angle  exp(-rate t)`` with a certified rate of V;
                        and +-4 elsewhere)                           a GES certificate's envelope
-``roa`` (its own)      the check :func:`lyapcheck.models.recast_    none of its starts in the set failed to
-                       run.simulated_check` made when certifying    converge (``soundness_violation``)
+``roa`` (its own)      the check ``recast_run.simulated_check``     none of its starts in the set failed to
+                       made when certifying                         converge (``soundness_violation``)
 ``sos_bound``          uniform over the comparison box; each        the largest ``|y|`` after 60 s (stored as
                        disturbance bang-bang against ``y``'s sign   ``sim_worst_<y>``) within the certified
                        or a square wave at its bound, RK4, 120 s    bound
@@ -48,7 +48,7 @@ import numpy as np
 from sweeps.crosscheck import CONVERGED_FRACTION, ESCAPE_EXTENTS, REGION_FRACTIONS, CrossCheck
 
 if TYPE_CHECKING:
-    from lyapcheck.models.recast import RecastModel, RecastSystem
+    from lyapcheck.models.language.recast import RecastModel, RecastSystem
 
 #: the classes whose certificates are simulated here (the global ones, then the region)
 GLOBAL_CLASSES: Final = ("quadratic", "sos_gas")
@@ -92,7 +92,7 @@ class _TrueField:
         self.system = system
 
     def __call__(self, y: np.ndarray, d: Any = None) -> np.ndarray:
-        from lyapcheck.models.recast_numeric import field_values
+        from lyapcheck.models.engines.recast_numeric import field_values
 
         return field_values(self.system, y)
 
@@ -100,8 +100,8 @@ class _TrueField:
 def _v_function(system: RecastSystem, cert: Mapping[str, Any]) -> PointFunction:
     """The certificate's V as a float function of state deviations (rows): its polynomial in its
     ``variables``, each minus its ``shift``, at the true auxiliaries of ``x_eq + z``."""
-    from lyapcheck.models.recast_numeric import poly_values, variable_values
-    from lyapcheck.models.recast_sos import poly_from_json
+    from lyapcheck.models.engines.recast_numeric import poly_values, variable_values
+    from lyapcheck.models.engines.recast_sos import poly_from_json
     from lyapcheck.sos.polynomials import Ring
 
     ring = Ring(tuple(str(v) for v in cert["variables"]))
@@ -135,7 +135,7 @@ def cross_check_recast(model: RecastModel, doc: Mapping[str, Any], point: Mappin
     model
         The loop at the point (:meth:`sweeps.spec.ModelSweepSpec.model_at`).
     doc
-        Its certificate document (:func:`lyapcheck.models.recast_certify.certify_recast`).
+        Its certificate document (:func:`lyapcheck.models.surfaces.recast_certify.certify_recast`).
     point
         The swept parameters' exact values (named in a violation's detail).
     starts
@@ -143,9 +143,9 @@ def cross_check_recast(model: RecastModel, doc: Mapping[str, Any], point: Mappin
     seed
         The starts come from ``numpy.random.default_rng([*seed, 0])``.
     """
-    from lyapcheck.models.crosscheck import check_ges_envelope, check_global, check_region, ray_boundary
-    from lyapcheck.models.recast_classes import angle_states, base_loop
-    from lyapcheck.models.recast_run import comparison_box
+    from lyapcheck.models.engines.crosscheck import check_ges_envelope, check_global, check_region, ray_boundary
+    from lyapcheck.models.classes.recast_classes import angle_states, base_loop
+    from lyapcheck.models.surfaces.recast_run import comparison_box
     from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 
     out = CrossCheck(points=1)
@@ -303,9 +303,9 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
     columns) from random starts of the comparison box, each disturbance a bang-bang or square-wave
     signal at its bound; the largest ``|y|`` after BOUND_TAIL_FROM_S is ``sim_worst`` and may not
     exceed the certified bound (beyond TRAJECTORY_CHECK_REL_TOL)."""
-    from lyapcheck.models.recast_classes import base_loop
-    from lyapcheck.models.recast_numeric import FloatLoop, poly_values
-    from lyapcheck.models.recast_run import comparison_box
+    from lyapcheck.models.classes.recast_classes import base_loop
+    from lyapcheck.models.engines.recast_numeric import FloatLoop, poly_values
+    from lyapcheck.models.surfaces.recast_run import comparison_box
     from lyapcheck.sos.polynomials import Ring
     from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 
@@ -363,12 +363,12 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
 def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np.ndarray
               ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Integrate the true loop from the deviations ``Z0`` (rows) with the project's batched DOPRI5 over
-    :func:`lyapcheck.models.recast_simulate.default_horizon`: per row, its own points' times and
+    :func:`lyapcheck.models.surfaces.recast_simulate.default_horizon`: per row, its own points' times and
     deviations. A row farther than ``escape`` from the equilibrium in a state stops moving there."""
-    from lyapcheck.models.numeric import ModelSystem
-    from lyapcheck.models.recast_simulate import default_horizon
-    from lyapcheck.models.trajectories import MIN_STEPS, RTOL
-    from lyapcheck.simulation.integrator import integrate
+    from lyapcheck.models.engines.numeric import ModelSystem
+    from lyapcheck.models.surfaces.recast_simulate import default_horizon
+    from lyapcheck.models.engines.trajectories import MIN_STEPS, RTOL
+    from lyapcheck.integrator import integrate
 
     system = model.system
     eq = np.array([float(v) for v in model.equilibrium])
@@ -384,7 +384,7 @@ def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np
 def _outcome(system: RecastSystem, end: np.ndarray, escape: np.ndarray, extent: float, modulo: tuple[str, ...]) -> str:
     """How a trajectory ended (its final deviation ``end``): ``escaped``, ``converged`` (within
     :data:`CONVERGED_FRACTION` of the starts' extent, modulo 2 pi in ``modulo``) or ``other``."""
-    from lyapcheck.models.recast_numeric import distances
+    from lyapcheck.models.engines.recast_numeric import distances
 
     if not np.all(np.isfinite(end)) or np.any(np.abs(end) >= escape * (1 - 1e-9)):
         return "escaped"

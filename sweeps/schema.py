@@ -5,7 +5,7 @@ renders one). One place says what every variable means; nothing else hard-codes 
 target's variables per class are derived from its class list (``status_<class>`` for every class,
 and each class's figures from one per-class table: :data:`MARGIN_SOURCE` for the paper's model,
 :data:`FIGURES` and :data:`OUTPUT_FIGURES` for a model file, read from each class's entry in
-:data:`lyapcheck.models.classes.CLASSES`), so a class added to a target's list has its variables
+:data:`lyapcheck.models.classes.registry.CLASSES`), so a class added to a target's list has its variables
 without a new module here.
 
 The paper's model, points (an xarray Dataset in a Zarr v3 store):
@@ -81,7 +81,7 @@ from typing import Any, Final, Sequence
 import numpy as np
 
 from lyapcheck.errors import InputFileError
-from lyapcheck.models import classes as model_classes
+from lyapcheck.models.classes import registry as model_classes
 from lyapcheck.paper.conditions import base as _base
 
 #: parameters a sweep may vary, mapped to their key in :data:`lyapcheck.paper.params.FIELDS`
@@ -307,7 +307,7 @@ MODEL_MODES: Final = (POINTS_MODE, BOXES_MODE)
 #: a variable-length UTF-8 string (zarr v3's vlen-utf8 codec)
 STRING: Final = np.dtypes.StringDType()
 #: the per-class table of a model file's classes: the key figures of each, as (variable suffix, key of
-#: the class's numbers, description), from each class's entry in :data:`lyapcheck.models.classes.CLASSES`;
+#: the class's numbers, description), from each class's entry in :data:`lyapcheck.models.classes.registry.CLASSES`;
 #: a class without figures has its ``status_<class>`` only
 FIGURES: Final[dict[str, tuple[tuple[str, str, str], ...]]] = {
     c.name: c.figures for c in model_classes.CLASSES if c.figures}

@@ -84,22 +84,22 @@ with ``model`` in its ``[sweep]`` table::
     worst_case = true              # sos_bound: the worst-case disturbance search at every point
 
 A loop with functions (sin, cos, exp, sqrt, atan, tanh, abs, min, max, sat: what
-:func:`lyapcheck.models.modelfile.parse_any_model` reads as a
-:class:`~lyapcheck.models.recast.RecastModel`) is swept point by point over the classes
-of :data:`lyapcheck.models.recast_run.RECAST_CLASSES` (but ``candidate``): each grid point is the
+:func:`lyapcheck.models.language.modelfile.parse_any_model` reads as a
+:class:`~lyapcheck.models.language.recast.RecastModel`) is swept point by point over the classes
+of :data:`lyapcheck.models.surfaces.recast_run.RECAST_CLASSES` (but ``candidate``): each grid point is the
 model text read again with the point's values as overrides (:meth:`ModelSweepSpec.model_at`), so
 the loop is recast at them. Its boxes (``mode = "boxes"``, classes :func:`recast_box_classes`) are
 each what ``lyapcheck certify FILE --box`` certifies: the model read again at the box's centre
 (:meth:`ModelSweepSpec.recast_box`), then
-:func:`lyapcheck.models.recast_certify.certify_recast` over the box. No corner is checked for
+:func:`lyapcheck.models.surfaces.recast_certify.certify_recast` over the box. No corner is checked for
 instability there (``unstable_corners`` -1): an undecided box is split.
 
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks
 that the file still has the SHA-256 stored with the results. A swept value is validated through
 the model file's own path (:func:`lyapcheck.units.parse_si_quantity`, then the exact equilibrium
-check of :func:`lyapcheck.models.modelfile.with_parameters` at every grid point; over boxes
-:func:`lyapcheck.models.boxes.check_box`, the model defined on the whole window). Every bad input
+check of :func:`lyapcheck.models.language.modelfile.with_parameters` at every grid point; over boxes
+:func:`lyapcheck.models.loop.boxes.check_box`, the model defined on the whole window). Every bad input
 is one line (:class:`~lyapcheck.errors.InvalidParameter` or
 :class:`~lyapcheck.errors.ModelFileError`) naming the field, what is accepted and what was given.
 """
@@ -119,18 +119,18 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 import numpy as np
 
 from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
-from lyapcheck.models import classes as model_classes
-from lyapcheck.models.modelfile import Model
+from lyapcheck.models.classes import registry as model_classes
+from lyapcheck.models.language.modelfile import Model
 from lyapcheck.paper.boxes.box import ParameterBox
 from lyapcheck.paper.params import (
     FIELD_BY_KEY, POSITIVE, FieldSpec, Interval, Problem, build_problem, flatten_tables, validate_field,
 )
-from lyapcheck.simulation.scenarios import RTOL_RANGE
+from lyapcheck.paper.simulation.scenarios import RTOL_RANGE
 from lyapcheck.units import Kind
 from sweeps.schema import CLASSES, DEFAULT_CLASSES, DEFAULT_SCENARIOS, SCENARIOS, SWEEPABLE, point_variables
 
 if TYPE_CHECKING:
-    from lyapcheck.models.recast import RecastModel
+    from lyapcheck.models.language.recast import RecastModel
 
 #: largest grid a spec may ask for (the store is streamed, but one spec should stay a sweep)
 MAX_POINTS: Final = 10_000_000
@@ -531,14 +531,14 @@ def cached_spec(text: str) -> SweepSpec:
 
 # -- a spec that names a model file (target "model"; module docstring) ------------------------------
 #: classes of lyapcheck.models a sweep cannot run: those needing the user's input (``candidate``: the
-#: user's own V, ``--candidate``), as :data:`lyapcheck.models.classes.CLASSES` declares them
+#: user's own V, ``--candidate``), as :data:`lyapcheck.models.classes.registry.CLASSES` declares them
 MODEL_USER_CLASSES: Final = model_classes.USER_GIVEN
 #: classes of lyapcheck.models that certify a point only (``not_applicable`` over a box)
 MODEL_POINT_ONLY_CLASSES: Final = model_classes.POINT_ONLY
-#: classes of a points sweep: every class of :data:`lyapcheck.models.classes.CLASSES` (in its order,
+#: classes of a points sweep: every class of :data:`lyapcheck.models.classes.registry.CLASSES` (in its order,
 #: cheapest first) but those needing the user's input
 MODEL_POINT_CLASSES: Final = tuple(c for c in model_classes.NAMES if c not in MODEL_USER_CLASSES)
-#: classes of a boxes sweep: those with box certificates (lyapcheck.models.boxes)
+#: classes of a boxes sweep: those with box certificates (lyapcheck.models.loop.boxes)
 MODEL_BOX_CLASSES: Final = model_classes.OVER_BOX
 #: a point or a box costs seconds: a grid of more points is a mistake in the spec, not a sweep
 MAX_MODEL_POINTS: Final = 20_000
@@ -578,7 +578,7 @@ class ModelSweepSpec(_AxesGrid):
     compared on resume); ``model_text`` the model file's, verbatim; ``model`` the model with
     ``[sweep.set]`` applied (the swept parameters at their file values, replaced point by point): a
     polynomial or rational :class:`Model`, or a loop with functions
-    (:class:`~lyapcheck.models.recast.RecastModel`)."""
+    (:class:`~lyapcheck.models.language.recast.RecastModel`)."""
 
     text: str
     model_file: str
@@ -598,7 +598,7 @@ class ModelSweepSpec(_AxesGrid):
 
     @property
     def has_functions(self) -> bool:
-        """Whether the model is a loop with functions (:class:`~lyapcheck.models.recast.RecastModel`)."""
+        """Whether the model is a loop with functions (:class:`~lyapcheck.models.language.recast.RecastModel`)."""
         return not isinstance(self.model, Model)
 
     @property
@@ -614,8 +614,8 @@ class ModelSweepSpec(_AxesGrid):
         ``values`` (dyadic: box edges and their midpoints), each written as its exact decimal in
         the model's ``overrides``, as ``lyapcheck certify --set`` would."""
         from lyapcheck.exact import exact_decimal as decimal_of
-        from lyapcheck.models.modelfile import parse_any_model
-        from lyapcheck.models.recast import RecastModel
+        from lyapcheck.models.language.modelfile import parse_any_model
+        from lyapcheck.models.language.recast import RecastModel
 
         point = {k: decimal_of(Fraction(v)) for k, v in values.items()}
         model = parse_any_model(self.model_text, self.model_file, {**dict(self.overrides), **point})
@@ -653,7 +653,7 @@ class ModelSweepSpec(_AxesGrid):
         auxiliaries' values at the equilibrium, the equilibrium's exact check) depends on them."""
         from dataclasses import replace
 
-        from lyapcheck.models.modelfile import parse_any_model, with_parameters
+        from lyapcheck.models.language.modelfile import parse_any_model, with_parameters
 
         exact = self.parameters_at(coords)
         if not isinstance(self.model, Model):
@@ -682,7 +682,7 @@ def _quantity(field: str, raw: object) -> Fraction:
 # -- the parts of a spec ------------------------------------------------------------------------
 def _model(sweep: Mapping[str, Any], source: str, model_text: str | None) -> tuple[str, str]:
     """(the model file as named in the spec, its text): read relative to the spec's directory."""
-    from lyapcheck.models.modelfile import load_any_model
+    from lyapcheck.models.language.modelfile import load_any_model
 
     name = sweep.get("model")
     if not isinstance(name, str) or not name.strip():
@@ -741,14 +741,14 @@ def _readable(axis: ModelAxis, where: str) -> ModelAxis:
 
 def recast_point_classes() -> tuple[str, ...]:
     """The classes of a points sweep of a loop with functions: those of
-    :data:`lyapcheck.models.recast_run.RECAST_CLASSES` a sweep can run (not the user's ``candidate``),
+    :data:`lyapcheck.models.surfaces.recast_run.RECAST_CLASSES` a sweep can run (not the user's ``candidate``),
     in :data:`MODEL_POINT_CLASSES`' order."""
-    from lyapcheck.models.recast_run import RECAST_CLASSES
+    from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES
 
     return tuple(c for c in MODEL_POINT_CLASSES if c in RECAST_CLASSES)
 
 
-#: the classes :func:`lyapcheck.models.recast_run.certify_box` proves over a box (the others are
+#: the classes :func:`lyapcheck.models.surfaces.recast_run.certify_box` proves over a box (the others are
 #: ``not_applicable`` or not taken there)
 _RECAST_OVER_BOX: Final = ("quadratic", "sos_gas", "roa", "sos_bound")
 
@@ -795,9 +795,9 @@ Cell = dict[str, tuple[Fraction, Fraction]]
 
 
 def window_box(spec: ModelSweepSpec, bounds: Mapping[str, tuple[Fraction, Fraction]]) -> Any:
-    """A :class:`~lyapcheck.models.boxes.ModelBox` of the swept parameters (in the model's order, as a
+    """A :class:`~lyapcheck.models.loop.boxes.ModelBox` of the swept parameters (in the model's order, as a
     certificate states its box), from exact ``{name: (lo, hi)}``."""
-    from lyapcheck.models.boxes import ModelBox
+    from lyapcheck.models.loop.boxes import ModelBox
 
     return ModelBox(tuple((name, *bounds[name]) for name in spec.model.parameters if name in bounds))
 
@@ -838,7 +838,7 @@ def _describe(bounds: Mapping[str, tuple[Fraction, Fraction]]) -> str:
 
 def _check_defined(spec: ModelSweepSpec, source: str) -> None:
     """The model is defined at every grid point (points) or on every box of the window (boxes)."""
-    from lyapcheck.models.boxes import check_box
+    from lyapcheck.models.loop.boxes import check_box
 
     if spec.mode == "points":
         for index in np.ndindex(*spec.shape):
@@ -851,7 +851,7 @@ def _check_defined(spec: ModelSweepSpec, source: str) -> None:
                                      f"the model is not defined there ({exc})") from None
         return
     if spec.has_functions:
-        from lyapcheck.models.recast_run import boxed_loop
+        from lyapcheck.models.surfaces.recast_run import boxed_loop
 
         for cell in initial_cells(spec):  # the recasting with the box's parameters as bounded constants
             try:
@@ -890,7 +890,7 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
         Check that the model is defined at every grid point or on the window's boxes (exact; done
         once, in the main process).
     """
-    from lyapcheck.models.modelfile import parse_any_model
+    from lyapcheck.models.language.modelfile import parse_any_model
 
     try:
         data = tomllib.loads(text)

@@ -72,7 +72,7 @@ def versions() -> dict[str, str]:
 
 def paper_point() -> dict[str, float]:
     """The paper's gain set (and d*) in SI, keyed like the sweep dimensions."""
-    from lyapcheck.simulation.scenarios import paper_problem
+    from lyapcheck.paper.simulation.scenarios import paper_problem
 
     p = paper_problem()
     g = p.gains

@@ -8,7 +8,7 @@ of their pieces are its own:
 ======  ======================================  ===============================================  ==============
 target  its specs                               its classes                                      layouts
 ======  ======================================  ===============================================  ==============
-model   ``[sweep] model = "FILE.toml"``         :data:`lyapcheck.models.classes.CLASSES`         points, boxes
+model   ``[sweep] model = "FILE.toml"``         :data:`lyapcheck.models.classes.registry.CLASSES`         points, boxes
         (any polynomial or rational model,      (but ``candidate``; boxes: those with box
         or a loop with functions)               certificates; functions: those of
                                                 :func:`sweeps.spec.recast_point_classes`, boxes:
@@ -19,7 +19,7 @@ paper   the paper's sections (gains, swimmer,   the paper's condition classes   
 ======  ======================================  ===============================================  ==============
 
 The paper's loop is one model among these: its classes are classes of the paper's model, run by the
-same loop into the same kinds of store. A class declared in :data:`lyapcheck.models.classes.CLASSES`
+same loop into the same kinds of store. A class declared in :data:`lyapcheck.models.classes.registry.CLASSES`
 reaches sweeps through the model target's class list: its ``status_<class>`` variable, its unit and
 its summary are derived from the list, its key figures from its entry (:data:`sweeps.schema.FIGURES`),
 so a new family of classes needs no change here. A new input kind is one more row: a

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from lyapcheck.paper.params import Problem, problem_from_sources
-from lyapcheck.simulation.integrator import Evaluation
+from lyapcheck.integrator import Evaluation
 
 # the suite's unit-factor memo (lyapcheck.units) lives in a fresh directory, not the user's cache:
 # the fuzz tests parse hundreds of odd unit strings (subprocesses inherit this)

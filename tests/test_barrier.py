@@ -141,7 +141,7 @@ def test_a_trajectory_into_a_proved_unreachable_set_is_a_soundness_violation(tmp
                                                                             monkeypatch: pytest.MonkeyPatch) -> None:
     """Were the simulation beside a certified barrier to enter the unsafe set, the run says so and
     exits 1 (the proof or the simulation is wrong): stood in here by a made-up falsification."""
-    from lyapcheck.models import barrier
+    from lyapcheck.models.classes import barrier
 
     class Entered:
         entered, closest_approach, entry = True, 0.01, None

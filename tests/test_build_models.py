@@ -1,4 +1,4 @@
-"""Models built in Python (lyapcheck.models.build): sympy expressions and python-control loops, read
+"""Models built in Python (lyapcheck.models.language.build): sympy expressions and python-control loops, read
 as the model file ``to_toml`` returns, exactly."""
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ import sympy as sp
 
 from lyapcheck import Model, certify, close_loop, verify
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.models.modelfile import Model as FileModel
-from lyapcheck.models.modelfile import load_model, parse_any_model
-from lyapcheck.models.recast import RecastModel
+from lyapcheck.models.language.modelfile import Model as FileModel
+from lyapcheck.models.language.modelfile import load_model, parse_any_model
+from lyapcheck.models.language.recast import RecastModel
 from tests.conftest import ROOT
 
 EXAMPLES = ROOT / "examples" / "models"
@@ -179,8 +179,8 @@ def test_a_sympy_plant_closed_with_a_law_is_the_substituted_loop() -> None:
 def test_the_printed_text_is_the_expression(expr: sp.Expr) -> None:
     # the printer's text, read by the model language, is the sympy expression exactly (at points
     # where it is defined): parentheses, signs, coefficients and denominators are kept
-    from lyapcheck.models.build import expression_text
-    from lyapcheck.models.expressions import parse_expression
+    from lyapcheck.models.language.build import expression_text
+    from lyapcheck.models.language.expressions import parse_expression
     from lyapcheck.sos.polynomials import Ring
 
     ring = Ring(("x1", "x2"))

@@ -1,4 +1,4 @@
-"""The certificate store (lyapcheck.models.store): a certificate found by a search is kept, and a
+"""The certificate store (lyapcheck.models.engines.store): a certificate found by a search is kept, and a
 later run of the same problem uses it only after the same exact check a fresh one gets.
 
 What is asserted: the second run solves nothing and says where its certificate came from, with
@@ -28,7 +28,7 @@ from click.testing import CliRunner
 from lyapcheck import api
 from lyapcheck.cli import app
 from lyapcheck.exact import least_squares
-from lyapcheck.models import store
+from lyapcheck.models.engines import store
 from reports.subjects.model_file import solvers
 from tests.conftest import ROOT
 

@@ -25,9 +25,9 @@ from click.testing import CliRunner
 
 from lyapcheck.cli import app
 from lyapcheck.errors import ModelFileError
-from lyapcheck.models.certificate import build_document, verify_document
-from lyapcheck.models.certify import certify_model, verdict_of
-from lyapcheck.models.modelfile import parse_model
+from lyapcheck.models.surfaces.certificate import build_document, verify_document
+from lyapcheck.models.surfaces.certify import certify_model, verdict_of
+from lyapcheck.models.language.modelfile import parse_model
 
 app._register_commands()
 RUNNER = CliRunner()

@@ -13,10 +13,10 @@ from typing import Any
 
 import sympy as sp
 
-from lyapcheck.models.certificate import build_document, verify_document
-from lyapcheck.models.certify import certify_model
-from lyapcheck.models.claims import box_words, v_expression, v_text
-from lyapcheck.models.modelfile import load_model, parse_model
+from lyapcheck.models.surfaces.certificate import build_document, verify_document
+from lyapcheck.models.surfaces.certify import certify_model
+from lyapcheck.models.classes.claims import box_words, v_expression, v_text
+from lyapcheck.models.language.modelfile import load_model, parse_model
 from tests.conftest import ROOT
 
 OSCILLATOR = ROOT / "examples" / "models" / "damped-oscillator.toml"
@@ -27,7 +27,7 @@ def failed(doc: dict[str, Any]) -> list[str]:
 
 
 def box_document() -> dict[str, Any]:
-    from lyapcheck.models.boxes import parse_model_box
+    from lyapcheck.models.loop.boxes import parse_model_box
 
     model = load_model(OSCILLATOR)
     box = parse_model_box(model, ["k=0.5..2"])

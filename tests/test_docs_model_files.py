@@ -19,8 +19,8 @@ import pytest
 from click.testing import CliRunner
 
 from lyapcheck.cli import app
-from lyapcheck.models.certify import VERDICTS
-from lyapcheck.models.modelfile import parse_model
+from lyapcheck.models.surfaces.certify import VERDICTS
+from lyapcheck.models.language.modelfile import parse_model
 from tests.conftest import ROOT
 
 app._register_commands()
@@ -126,7 +126,9 @@ def test_the_cheap_commands_exit_as_the_page_says(tmp_path: Path, monkeypatch: p
 
 def test_the_limits_on_the_page_are_the_codes() -> None:
     from lyapcheck import tolerances
-    from lyapcheck.models import certify, expressions, lyapunov, modelfile
+    from lyapcheck.models.surfaces import certify
+    from lyapcheck.models.language import expressions, modelfile
+    from lyapcheck.models.classes import lyapunov
 
     assert (modelfile.MAX_STATES, modelfile.MAX_PARAMETERS, modelfile.MAX_DISTURBANCES) == (12, 64, 6)
     assert modelfile.MAX_FILE_BYTES == 256 * 1024

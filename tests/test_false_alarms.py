@@ -20,10 +20,10 @@ import pytest
 from click.testing import CliRunner
 
 from lyapcheck.cli import app
-from lyapcheck.models import recast_classes as rc
-from lyapcheck.models.modelfile import parse_any_model
-from lyapcheck.models.recast_run import comparison_box, simulated_check
-from lyapcheck.models.recast_sos import poly_to_json
+from lyapcheck.models.classes import recast_classes as rc
+from lyapcheck.models.language.modelfile import parse_any_model
+from lyapcheck.models.surfaces.recast_run import comparison_box, simulated_check
+from lyapcheck.models.engines.recast_sos import poly_to_json
 from lyapcheck.results import ConditionResult
 from tests.recast_loops import LOSSLESS as LOSSLESS_LOOP
 
@@ -99,7 +99,7 @@ def test_a_decrease_the_loop_does_not_have_raises_the_alarm() -> None:
 def test_a_tripled_level_raises_the_alarm_on_a_polynomial_loop(monkeypatch: pytest.MonkeyPatch) -> None:
     # the reversed Van der Pol's region is bounded by an unstable limit cycle: the certified level
     # tripled takes in starts beyond it, whose trajectories leave the set
-    from lyapcheck.models import regions
+    from lyapcheck.models.classes import regions
 
     enlarge = regions.enlarge
 

@@ -1,8 +1,8 @@
-"""lyapcheck.models.falsify: simulations from an initial set watching an unsafe set (issue 32).
+"""lyapcheck.models.classes.falsify: simulations from an initial set watching an unsafe set (issue 32).
 
 The example files' ``[sets]`` are read by the model parser (:func:`load_model`, ``model.sets``) and
-their margins computed by :func:`lyapcheck.models.sets.margin`, as the ``barrier`` class does; the
-few sets the tests make up are parsed by the same code (:func:`lyapcheck.models.sets.parse_set`).
+their margins computed by :func:`lyapcheck.models.language.sets.margin`, as the ``barrier`` class does; the
+few sets the tests make up are parsed by the same code (:func:`lyapcheck.models.language.sets.parse_set`).
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lyapcheck.models.falsify import StateSet, falsify, sample_set
-from lyapcheck.models.modelfile import Model, load_model
-from lyapcheck.models.sets import evaluate_set, margin, parse_set
+from lyapcheck.models.classes.falsify import StateSet, falsify, sample_set
+from lyapcheck.models.language.modelfile import Model, load_model
+from lyapcheck.models.language.sets import evaluate_set, margin, parse_set
 
 MODELS = Path(__file__).resolve().parents[1] / "examples" / "models"
 

@@ -18,7 +18,7 @@ import pytest
 from click.testing import CliRunner
 
 from lyapcheck.cli import app
-from lyapcheck.models.modelfile import TIME_KINDS
+from lyapcheck.models.language.modelfile import TIME_KINDS
 
 app._register_commands()
 

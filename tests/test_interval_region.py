@@ -20,9 +20,9 @@ import pytest
 import sympy as sp
 
 from lyapcheck import api
-from lyapcheck.models.interval_field import BallLoop, Jet, LieDerivative, apply, negative_definite
-from lyapcheck.models.interval_region import IntervalClaim, prove_region
-from lyapcheck.models.modelfile import parse_any_model
+from lyapcheck.models.engines.interval_field import BallLoop, Jet, LieDerivative, apply, negative_definite
+from lyapcheck.models.engines.interval_region import IntervalClaim, prove_region
+from lyapcheck.models.language.modelfile import parse_any_model
 from tests.recast_loops import PENDULUM, SPRING, UNSTABLE, rk4
 
 
@@ -258,7 +258,7 @@ def test_a_candidate_that_is_not_flat_at_the_equilibrium_gets_no_set(tmp_path: P
 
 
 def test_the_whole_sublevel_set_is_proved_inside_the_box_or_not_claimed() -> None:
-    from lyapcheck.models.interval_region import prove_bounded
+    from lyapcheck.models.engines.interval_region import prove_bounded
 
     model = parse_any_model(SPRING, "spring.toml")
     system = model.system
@@ -381,12 +381,12 @@ def test_random_loops_certified_sets_all_converge_on_the_true_loop(tmp_path: Pat
 
 
 def interval_route(text: str) -> tuple[object, str]:
-    """The ball-arithmetic route alone (:func:`lyapcheck.models.recast_interval.interval_roa`) on a
+    """The ball-arithmetic route alone (:func:`lyapcheck.models.classes.recast_interval.interval_roa`) on a
     model's text, with a safety net far away: its certificate (None when it proved nothing) and why."""
-    from lyapcheck.models import recast_classes as rc
-    from lyapcheck.models.recast_interval import interval_roa
-    from lyapcheck.models.recast_run import comparison_box
-    from lyapcheck.models.search import Budget
+    from lyapcheck.models.classes import recast_classes as rc
+    from lyapcheck.models.classes.recast_interval import interval_roa
+    from lyapcheck.models.surfaces.recast_run import comparison_box
+    from lyapcheck.models.engines.search import Budget
 
     model = parse_any_model(text, "model.toml")
     loop = rc.base_loop(model.system)

@@ -163,3 +163,54 @@ def test_the_import_graph_has_no_cycle() -> None:
 def test_the_cycle_finder_finds_a_cycle() -> None:
     assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert cycles({"a": {"b"}, "b": set()}) == []
+
+
+# ---- inside the core: the model packages' arrows, as each package's docstring declares them ----
+
+MODEL_PACKAGES = ("language", "engines", "loop", "classes", "surfaces")
+
+
+def declared_imports(package: str) -> tuple[str, ...]:
+    """The prefixes a package's ``__init__`` docstring lists after ``May import:``."""
+    doc = ast.get_docstring(ast.parse((ROOT / package.replace(".", "/") / "__init__.py").read_text())) or ""
+    _, found, rest = doc.partition("May import:")
+    assert found, f"{package}'s docstring does not say what it may import ('May import: ...')"
+    return tuple(name.strip() for name in rest.replace("\n", " ").split(",") if name.strip())
+
+
+def allowed(name: str, own: str, prefixes: tuple[str, ...]) -> bool:
+    return any(name == p or name.startswith(p + ".") for p in (own, *prefixes))
+
+
+@pytest.mark.parametrize("package", MODEL_PACKAGES)
+def test_each_model_package_imports_only_what_its_docstring_declares(package: str) -> None:
+    own = f"lyapcheck.models.{package}"
+    prefixes = declared_imports(own)
+    # the declared order is the layering: a package never declares one above it
+    above = {f"lyapcheck.models.{p}" for p in MODEL_PACKAGES[MODEL_PACKAGES.index(package):]}
+    assert not above & set(prefixes), f"{own} declares a package at or above its own: {above & set(prefixes)}"
+    breaches = [f"{path.relative_to(ROOT)} line {line}: {name}"
+                for path in sorted((ROOT / own.replace(".", "/")).rglob("*.py"))
+                for line, name in project_imports(path)
+                if name.startswith("lyapcheck") and not allowed(name, own, prefixes)]
+    assert not breaches, f"{own} may import only {prefixes}: {breaches}"
+
+
+def test_no_generic_module_imports_the_paper() -> None:
+    """The generic core (model files, the SOS engine, the integrator, ...) never depends on the paper's
+    loop; only the paper's own package, the API and the command line may."""
+    breaches = []
+    for path in sources():
+        me = module_name(path)
+        if not me.startswith("lyapcheck") or me.startswith("lyapcheck.paper") or layer_of(me) > layer_of("lyapcheck.exact"):
+            continue
+        breaches += [f"{me} line {line}: {name}" for line, name in project_imports(path)
+                     if name.startswith("lyapcheck.paper")]
+    assert not breaches, breaches
+
+
+def test_the_declared_arrows_are_checked_not_assumed() -> None:
+    """The checker is not vacuous: an import the docstring does not list is a breach."""
+    prefixes = declared_imports("lyapcheck.models.language")
+    assert not allowed("lyapcheck.models.classes.barrier", "lyapcheck.models.language", prefixes)
+    assert allowed("lyapcheck.sos.polynomials", "lyapcheck.models.language", prefixes)

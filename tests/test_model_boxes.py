@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from lyapcheck.errors import ModelFileError
-from lyapcheck.models.boxes import parse_model_box
-from lyapcheck.models.certificate import build_document, verify_document
-from lyapcheck.models.certify import certify_model
-from lyapcheck.models.modelfile import load_model, parse_model
+from lyapcheck.models.loop.boxes import parse_model_box
+from lyapcheck.models.surfaces.certificate import build_document, verify_document
+from lyapcheck.models.surfaces.certify import certify_model
+from lyapcheck.models.language.modelfile import load_model, parse_model
 from tests.conftest import ROOT
 
 MODELS = ROOT / "examples" / "models"
@@ -133,7 +133,7 @@ def test_a_region_of_attraction_over_a_box_holds_at_random_parameter_values() ->
     doc = build_document(result)
     assert all(ok for _, ok, _ in verify_document(doc))
     # starts inside the certified set converge at random values of mu in the box
-    from lyapcheck.models.numeric import converges
+    from lyapcheck.models.engines.numeric import converges
 
     level = float(Fraction(roa.certificate["level"]))
     terms = [(float(Fraction(c)), e) for c, e in roa.certificate["V"]["terms"]]

@@ -1,10 +1,11 @@
-"""The classes of a model file are declared once (lyapcheck.models.classes, issue 29 item 6): what
+"""The classes of a model file are declared once (lyapcheck.models.classes.registry, issue 29 item 6): what
 certify, sweeps and the results' default properties say of them is read from there, and each class
 has its report section in the module its family names."""
 
 from __future__ import annotations
 
-from lyapcheck.models import certify, classes
+from lyapcheck.models.surfaces import certify
+from lyapcheck.models.classes import registry as classes
 from lyapcheck.results import PROPERTY
 from reports.sections import FALLBACK, MODEL_FILE, section_for
 from sweeps import evaluate, schema, spec

@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from lyapcheck.models.certificate import build_document, verify_document
-from lyapcheck.models.certify import certify_model
-from lyapcheck.models.modelfile import load_model, parse_model
+from lyapcheck.models.surfaces.certificate import build_document, verify_document
+from lyapcheck.models.surfaces.certify import certify_model
+from lyapcheck.models.language.modelfile import load_model, parse_model
 from tests.conftest import ROOT
 
 MODELS = ROOT / "examples" / "models"

@@ -15,7 +15,7 @@ Four families:
 - **Security.** Property-based (hypothesis, derandomized): random strings and random trees
   written as text (``__import__('os')``, attributes, lambdas, comprehensions, f-strings, walrus,
   starred, subscripts, very long and deeply nested inputs) either parse or raise
-  :class:`~lyapcheck.models.expressions.ExpressionError`, one line (how quickly: benchmarks/
+  :class:`~lyapcheck.models.language.expressions.ExpressionError`, one line (how quickly: benchmarks/
   bench_quick_paths.py), while ``eval``,
   ``exec``, ``compile`` (other than ``ast.parse``'s), ``sympy.sympify`` and ``parse_expr`` fail
   the test if anything calls them. A static test reads ``lyapcheck/models/`` with ``ast``: no call
@@ -48,9 +48,9 @@ from hypothesis import strategies as st
 from lyapcheck.api import load_model_file
 from lyapcheck.cli import app
 from lyapcheck.errors import InvalidParameter, ModelFileError
-from lyapcheck.models.certify import parse_candidate
-from lyapcheck.models.expressions import MAX_TOTAL_DEGREE, ExpressionError, Rational, parse_expression
-from lyapcheck.models.modelfile import MAX_STATES, load_model, parse_model
+from lyapcheck.models.surfaces.certify import parse_candidate
+from lyapcheck.models.language.expressions import MAX_TOTAL_DEGREE, ExpressionError, Rational, parse_expression
+from lyapcheck.models.language.modelfile import MAX_STATES, load_model, parse_model
 from lyapcheck.sos.polynomials import Ring
 from lyapcheck.units import parse_si_quantity
 from tests.conftest import ROOT
@@ -582,8 +582,8 @@ def test_there_are_examples() -> None:
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_every_example_loads_with_its_text_and_hash(path: Path) -> None:
-    from lyapcheck.models.modelfile import load_any_model, parse_any_model
-    from lyapcheck.models.recast import RecastModel
+    from lyapcheck.models.language.modelfile import load_any_model, parse_any_model
+    from lyapcheck.models.language.recast import RecastModel
 
     raw = path.read_bytes()
     model = load_any_model(path)

@@ -16,7 +16,7 @@ import pytest
 from click.testing import CliRunner
 
 from lyapcheck.cli import app
-from lyapcheck.models.modelfile import is_model_file
+from lyapcheck.models.language.modelfile import is_model_file
 from tests.conftest import PAPER_TOML, ROOT
 
 app._register_commands()

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from lyapcheck.models.claims import rounded
+from lyapcheck.models.classes.claims import rounded
 from tests.conftest import ROOT
 
 MODELS = ROOT / "examples" / "models"
@@ -355,8 +355,8 @@ def _synthetic(model_file: str, conditions: dict[str, Any], **extra: Any) -> dic
     """A model document around a shipped model text, with conditions made up by the test."""
     import hashlib
 
-    from lyapcheck.models.certificate import KIND, SCHEMA_VERSION
-    from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.surfaces.certificate import KIND, SCHEMA_VERSION
+    from lyapcheck.models.language.modelfile import parse_model
 
     text = (MODELS / model_file).read_text() if not model_file.startswith("[") else model_file
     model = parse_model(text, model_file[:40])
@@ -398,7 +398,7 @@ def test_input_text_reaches_the_page_as_text(tmp_path: Path) -> None:
 def test_the_portrait_of_a_true_certificate_matches_the_exact_set() -> None:
     """x**2 + y**2 <= 1 for FOSSIL's Poly2 (V' = -2x^4 - 2y^2): the drawn set is the unit disc and
     every simulated trajectory that starts in it stays there; the domain box [-5, 5]^2 is in view."""
-    from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.language.modelfile import parse_model
     from reports.phase_portrait import phase_portrait
 
     doc = _synthetic("fossil-poly2.toml", {"roa": _disc("1")})
@@ -428,7 +428,7 @@ def test_a_false_region_of_attraction_raises_the_soundness_alarm() -> None:
 
 def test_a_shifted_equilibrium_is_drawn_where_it_is() -> None:
     """V is stored in x - x_eq: the set {(x1 - 1)^2 + x2^2 <= 1/4} is drawn around (1, 0)."""
-    from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.language.modelfile import parse_model
     from reports.phase_portrait import phase_portrait
     from reports.certificate_page import certificate_context
 
@@ -451,7 +451,7 @@ def test_a_shifted_equilibrium_is_drawn_where_it_is() -> None:
 def test_plain_text_parses_back_to_the_same_polynomial() -> None:
     """The text the page prints is the model-file language: the project's parser reads it back to
     exactly the stored terms (shifted by the equilibrium where it is not 0)."""
-    from lyapcheck.models.expressions import parse_expression
+    from lyapcheck.models.language.expressions import parse_expression
     from lyapcheck.sos.polynomials import Ring
     from reports.polynomials import ExactPolynomial
 
@@ -557,7 +557,7 @@ def test_a_new_family_of_classes_is_one_section(monkeypatch: pytest.MonkeyPatch)
     from reports.sections import BY_CLASS, MODEL_FILE
     from reports.sections.base import LevelSet, PortraitPart
     from reports.sections.model_file import ModelFileSection
-    from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.language.modelfile import parse_model
 
     class TubeSection(ModelFileSection):
         titles = {"made_up_tube": "Tube certificate: the unsafe set is never reached"}
@@ -607,7 +607,7 @@ def test_a_barrier_page_draws_the_sets_and_its_invariant_set(prajna: dict[str, A
     from reports.certificate_page import certificate_context
     from reports.html import render_html
     from reports.phase_portrait import level_sets
-    from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.language.modelfile import parse_model
 
     sets, globals_, notes = level_sets(prajna, parse_model(PRAJNA, "prajna.toml"))
     assert [(s.name, s.kind, s.level, s.symbol) for s in sets] == [("barrier", "invariant", 0, "B")]

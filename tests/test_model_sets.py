@@ -19,8 +19,8 @@ from click.testing import CliRunner
 
 from lyapcheck.cli import app
 from lyapcheck.errors import ModelFileError
-from lyapcheck.models import sets as S
-from lyapcheck.models.modelfile import parse_model, with_parameters
+from lyapcheck.models.language import sets as S
+from lyapcheck.models.language.modelfile import parse_model, with_parameters
 
 app._register_commands()
 RUNNER = CliRunner()
@@ -53,7 +53,7 @@ def with_sets(body: str) -> str:
 
 def poly(model_text: str, text: str):  # type: ignore[no-untyped-def]
     """``text`` as a polynomial of the model's state ring."""
-    from lyapcheck.models.expressions import parse_expression
+    from lyapcheck.models.language.expressions import parse_expression
 
     model = parse_model(model_text, "m.toml")
     e = parse_expression(text, model.state_ring)

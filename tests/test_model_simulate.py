@@ -19,8 +19,8 @@ from click.testing import CliRunner, Result
 
 from lyapcheck.cli import app  # type: ignore[attr-defined]  # the module, as tests/test_fuzz.py uses it
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.models import simulate as sim
-from lyapcheck.models.modelfile import load_model, parse_model
+from lyapcheck.models.surfaces import simulate as sim
+from lyapcheck.models.language.modelfile import load_model, parse_model
 from lyapcheck.tolerances import SIM_REL_TOL
 from tests.conftest import ROOT
 

@@ -297,7 +297,7 @@ def doc_with(conditions: dict[str, Any], scale: str = "1") -> dict[str, Any]:
 
 
 def check(model_text: str, doc: dict[str, Any], a: str = "1") -> Any:
-    from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.language.modelfile import parse_model
     from sweeps.crosscheck import cross_check
 
     model = parse_model(model_text, "m.toml")
@@ -338,7 +338,7 @@ def test_a_decay_rate_too_fast_raises_the_alarm() -> None:
 def test_a_false_certificate_in_a_sweep_is_shouted_and_exits_1(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The classes certify honestly; here a wrapper halves every certified bound before the document
     is built, so the sweep's own cross-check must find the worst case above it."""
-    import lyapcheck.models.certify as certify
+    import lyapcheck.models.surfaces.certify as certify
 
     honest = certify.certify_model
 

@@ -31,8 +31,8 @@ from click.testing import CliRunner, Result
 from lyapcheck import units
 from lyapcheck.cli import app
 from lyapcheck.errors import InvalidParameter, ModelFileError
-from lyapcheck.models.dimensions import DimensionError, Named, check_output
-from lyapcheck.models.modelfile import load_model, parse_model
+from lyapcheck.models.language.dimensions import DimensionError, Named, check_output
+from lyapcheck.models.language.modelfile import load_model, parse_model
 from lyapcheck.units import DIMENSIONLESS, Dimension, Kind, parse_quantity, parse_si_quantity, parse_si_with_dimension
 from tests.conftest import ROOT
 

@@ -23,9 +23,9 @@ import pytest
 from click.testing import CliRunner
 
 from lyapcheck.cli import app
-from lyapcheck.models.modelfile import load_any_model
-from lyapcheck.models.recast import RecastModel
-from lyapcheck.models.recast_numeric import field_values
+from lyapcheck.models.language.modelfile import load_any_model
+from lyapcheck.models.language.recast import RecastModel
+from lyapcheck.models.engines.recast_numeric import field_values
 from lyapcheck.sos import bases
 from lyapcheck.sos.polynomials import Monomial
 

@@ -19,8 +19,8 @@ from typing import Any
 import pytest
 
 from lyapcheck import api
-from lyapcheck.models import reasons
-from lyapcheck.models.reasons import NEXT
+from lyapcheck.models.engines import reasons
+from lyapcheck.models.engines.reasons import NEXT
 from tests.acc_models import UNSAFE_ACC
 from tests.conftest import ROOT
 

@@ -1,4 +1,4 @@
-"""Soundness of the recasting of non-polynomial loops (lyapcheck.models.recast).
+"""Soundness of the recasting of non-polynomial loops (lyapcheck.models.language.recast).
 
 Every relation the recasting states must hold at every point with the true function values, every
 flow must be the true time derivative of its auxiliary, the recast field must be the true field,
@@ -6,7 +6,7 @@ the constants of the angle-addition formula must be exact, sat's relations must 
 every refused file must be refused in one line naming the file, the key and the call.
 
 The true values come from numpy applied to the text the test wrote (an evaluator independent of
-the recasting), or from :func:`lyapcheck.models.recast_numeric.variable_values` (numpy applied to
+the recasting), or from :func:`lyapcheck.models.engines.recast_numeric.variable_values` (numpy applied to
 each auxiliary's argument), as each check needs.
 """
 
@@ -25,9 +25,9 @@ import numpy as np
 import pytest
 
 from lyapcheck.errors import ModelFileError
-from lyapcheck.models.modelfile import parse_any_model, parse_model
-from lyapcheck.models.recast import RecastModel, RecastSystem, exact_cos_sin
-from lyapcheck.models.recast_numeric import poly_values, variable_values
+from lyapcheck.models.language.modelfile import parse_any_model, parse_model
+from lyapcheck.models.language.recast import RecastModel, RecastSystem, exact_cos_sin
+from lyapcheck.models.engines.recast_numeric import poly_values, variable_values
 from lyapcheck.sos.polynomials import Poly, Ring
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,7 +54,7 @@ def recast(dynamics: dict[str, str], **kw: Any) -> RecastModel:
     return m
 
 
-#: the language's functions in numpy, written independently of lyapcheck.models.recast_numeric
+#: the language's functions in numpy, written independently of lyapcheck.models.engines.recast_numeric
 _TRUE: dict[str, Any] = {"sin": np.sin, "cos": np.cos, "exp": np.exp, "sqrt": np.sqrt, "atan": np.arctan,
                          "tanh": np.tanh, "abs": np.abs, "min": np.minimum, "max": np.maximum,
                          "sat": lambda u, L: np.clip(u, -L, L), "pi": np.pi}

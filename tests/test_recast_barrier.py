@@ -1,4 +1,4 @@
-"""The barrier class on loops with functions (lyapcheck.models.recast_barrier): ``[sets]`` taken, the
+"""The barrier class on loops with functions (lyapcheck.models.classes.recast_barrier): ``[sets]`` taken, the
 true loop simulated for a counterexample, a barrier over the recasting's relations proved and re-checked."""
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from typing import Any
 from click.testing import CliRunner, Result
 
 from lyapcheck.cli import app
-from lyapcheck.models.modelfile import parse_any_model
-from lyapcheck.models.recast import RecastModel
-from lyapcheck.models.recast_certify import verify_recast
+from lyapcheck.models.language.modelfile import parse_any_model
+from lyapcheck.models.language.recast import RecastModel
+from lyapcheck.models.surfaces.recast_certify import verify_recast
 
 app._register_commands()
 
@@ -108,8 +108,8 @@ def test_a_safe_acc_with_a_function_gets_a_barrier_that_verify_re_checks(tmp_pat
     assert cert["kind"] == "recast_barrier" and barrier["lambda_per_s"] == float(Fraction(cert["lambda_per_s"]))
     recast = parse_any_model(model.read_text(), str(model), {})
     assert isinstance(recast, RecastModel)
-    from lyapcheck.models.recast_classes import v_text
-    from lyapcheck.models.recast_sos import poly_from_json, poly_to_json
+    from lyapcheck.models.classes.recast_classes import v_text
+    from lyapcheck.models.engines.recast_sos import poly_from_json, poly_to_json
 
     ring = recast.system.ring
 

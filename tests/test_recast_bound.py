@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from lyapcheck import api
-from lyapcheck.models import recast_bound
-from lyapcheck.models.modelfile import load_any_model
-from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
+from lyapcheck.models.classes import recast_bound
+from lyapcheck.models.language.modelfile import load_any_model
+from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.sos.polynomials import Ring
 from tests.recast_loops import rk4
 

@@ -185,11 +185,11 @@ def test_a_gain_multiplying_the_whole_field_is_covered_with_the_square_root_squa
 def test_a_wide_box_is_proved_on_its_halves_and_verify_splits_it_the_same_way() -> None:
     """b in [0.3, 3]: the local Hessian argument fails over the whole interval (the enclosure treats
     b's entries apart) and goes through on its halves; the claim is still one set for every b."""
-    from lyapcheck.models.modelfile import load_any_model
-    from lyapcheck.models.recast_classes import base_loop
-    from lyapcheck.models.recast_interval import claim_of, prove
-    from lyapcheck.models.recast_run import box_robust
-    from lyapcheck.models.parameter_box import ModelBox
+    from lyapcheck.models.language.modelfile import load_any_model
+    from lyapcheck.models.classes.recast_classes import base_loop
+    from lyapcheck.models.classes.recast_interval import claim_of, prove
+    from lyapcheck.models.surfaces.recast_run import box_robust
+    from lyapcheck.models.language.parameter_box import ModelBox
 
     result = api.certify(model=EXAMPLES / "recast-pendulum.toml", box=["b=0.3..3"], classes="roa")
     roa = result.conditions["roa"]
@@ -202,7 +202,7 @@ def test_a_wide_box_is_proved_on_its_halves_and_verify_splits_it_the_same_way() 
     robust = box_robust(model, box)
     assert prove(loop, claim, robust=robust).ok
     # the same claim, without the halving: not proved over the whole interval at once
-    from lyapcheck.models import recast_interval
+    from lyapcheck.models.classes import recast_interval
     whole = recast_interval._prove_parts(loop, claim, None, robust, 0)
     assert not whole.ok
     # outside lyapcheck: starts in the set converge at both ends of the box

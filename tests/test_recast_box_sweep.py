@@ -97,7 +97,7 @@ def test_a_box_whose_certificate_does_not_apply_at_a_point_says_so() -> None:
     """A certificate whose auxiliaries or shifts are not the point's own (an auxiliary with the box's
     parameter in it, such as ``sin(b*theta)``): the cross-check names the point and the reason and
     simulates nothing there."""
-    from lyapcheck.models.modelfile import parse_any_model
+    from lyapcheck.models.language.modelfile import parse_any_model
     from sweeps.recast_crosscheck import box_mismatch, cross_check_recast_box
 
     model = parse_any_model(PENDULUM, "m.toml", {"b": "1"})

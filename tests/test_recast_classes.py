@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 from lyapcheck import api
-from lyapcheck.models import recast_classes as rc
-from lyapcheck.models.modelfile import parse_any_model
-from lyapcheck.models.recast_sos import ConditionCertificate, check_condition, poly_from_json
-from lyapcheck.models.search import Budget, Search
+from lyapcheck.models.classes import recast_classes as rc
+from lyapcheck.models.language.modelfile import parse_any_model
+from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
+from lyapcheck.models.engines.search import Budget, Search
 from lyapcheck.sos.certificates import GramPoly
 from tests.recast_loops import COUPLED, ILOS, LOSSLESS, PENDULUM, SPRING, UNSTABLE, pendulum_field, rk4
 
@@ -100,7 +100,7 @@ def test_pendulum_region_holds_on_the_true_loop_and_global_stability_is_refuted(
 def test_pendulum_region_on_the_recasting_relations_is_modulo_2_pi(tmp_path: Path) -> None:
     """The route taken where ball arithmetic does not apply (more than 3 states): V over (sin, cos - 1,
     omega), proved exactly on the recasting's relations, and its claim modulo 2 pi."""
-    from lyapcheck.models.recast_run import comparison_box, run_roa
+    from lyapcheck.models.surfaces.recast_run import comparison_box, run_roa
 
     model = parse_any_model(PENDULUM, "pendulum.toml")
     loop = rc.base_loop(model.system)

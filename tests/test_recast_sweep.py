@@ -134,7 +134,7 @@ def test_a_disturbed_loop_with_functions_sweeps_its_bound_with_the_disturbance_f
 def test_a_bound_below_what_the_loop_reaches_raises_the_alarm() -> None:
     """A certified sos_bound halved: the disturbed ILOS reaches more than it under a disturbance at its
     bound (yi settles at d Delta / (kappa sqrt(U^2 - d^2)) for a constant d), and the sweep says so."""
-    from lyapcheck.models.modelfile import parse_any_model
+    from lyapcheck.models.language.modelfile import parse_any_model
     from sweeps.recast_crosscheck import cross_check_recast
 
     text = (ROOT / "examples" / "models" / "recast-ilos-course-disturbed.toml").read_text()
@@ -203,7 +203,7 @@ def test_a_bad_spec_is_one_line_exit_2_and_writes_nothing(tmp_path: Path, spec: 
 
 
 def test_the_classes_of_a_loop_with_functions_are_the_recast_ones_a_sweep_can_run() -> None:
-    from lyapcheck.models.recast_run import RECAST_CLASSES
+    from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES
     from sweeps.spec import MODEL_POINT_CLASSES, recast_point_classes
 
     assert set(recast_point_classes()) == set(RECAST_CLASSES) - {"candidate"}
@@ -235,7 +235,7 @@ def test_a_point_whose_recasting_fails_is_stored_not_certified_with_the_reason(t
 def test_a_false_certificate_of_the_pendulum_raises_the_alarm() -> None:
     """``V = theta**2 + omega**2`` claimed GAS: starts at high speed turn over the saddle and V rises.
     The energy ``1 - cos(theta) + omega**2/2`` (``V' = -b omega**2 <= 0``) never rises: no alarm."""
-    from lyapcheck.models.modelfile import parse_any_model
+    from lyapcheck.models.language.modelfile import parse_any_model
     from sweeps.recast_crosscheck import cross_check_recast
 
     model = parse_any_model(PENDULUM, "m.toml", {"b": "0.5"})
@@ -261,7 +261,7 @@ def test_a_false_certificate_of_the_pendulum_raises_the_alarm() -> None:
 def test_a_sweep_shouts_a_violation_its_certifier_reported(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A certificate whose own simulation when certified found a start that did not converge (here
     put there by a wrapper) is a soundness violation of the sweep: exit 1, shouted."""
-    import lyapcheck.models.recast_certify as recast_certify
+    import lyapcheck.models.surfaces.recast_certify as recast_certify
 
     honest = recast_certify.certify_recast
 

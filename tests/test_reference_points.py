@@ -19,12 +19,12 @@ from typing import Any
 
 import pytest
 
-from lyapcheck.models.claims import rounded
+from lyapcheck.models.classes.claims import rounded
 from lyapcheck import api
-from lyapcheck.models.certificate import build_document, verify_document
-from lyapcheck.models.certify import certify_model
-from lyapcheck.models.claims import summary
-from lyapcheck.models.modelfile import parse_model
+from lyapcheck.models.surfaces.certificate import build_document, verify_document
+from lyapcheck.models.surfaces.certify import certify_model
+from lyapcheck.models.classes.claims import summary
+from lyapcheck.models.language.modelfile import parse_model
 
 ACC = """
 [model]

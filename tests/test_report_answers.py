@@ -144,8 +144,8 @@ def test_the_counterexample_badge_is_red_and_explained(acc_html: str) -> None:
 @pytest.mark.slow
 def test_the_portrait_draws_the_counterexample_into_the_unsafe_set(acc: dict[str, Any], acc_context: dict[str, Any],
                                                                    acc_html: str) -> None:
-    from lyapcheck.models.modelfile import parse_model
-    from lyapcheck.models.sets import margin
+    from lyapcheck.models.language.modelfile import parse_model
+    from lyapcheck.models.language.sets import margin
 
     page = Page(acc_html)
     (fig,) = [a for t, a in page.tags if t == "figure" and a.get("id") == "fig-phase"]

@@ -12,7 +12,7 @@ import pytest
 
 from lyapcheck.paper.certification import build_system
 from lyapcheck.paper.conditions.saturated import OMEGA_ROUNDING, global_reach, verify_reach
-from lyapcheck.simulation.scenarios import paper_problem
+from lyapcheck.paper.simulation.scenarios import paper_problem
 from symbolic._generated import unsaturated_strip_sq
 
 
@@ -62,9 +62,9 @@ def test_reach_fails_when_the_disturbance_outswims_the_swimmer() -> None:
 def test_simulated_real_loop_enters_the_reach_set_and_stays() -> None:
     """From far starts with a large wound-up integrator and d = d* across the path, the
     simulator's saturated loop enters {|y| <= Y_q, |s| <= 1.05 S*} and never leaves it."""
-    from lyapcheck.simulation.disturbances import Constant
-    from lyapcheck.simulation.model import LoopParams
-    from lyapcheck.simulation.runner import simulate
+    from lyapcheck.paper.simulation.disturbances import Constant
+    from lyapcheck.paper.simulation.model import LoopParams
+    from lyapcheck.paper.simulation.runner import simulate
 
     problem = paper_problem()
     _, reach = _reach(problem)

@@ -1,5 +1,5 @@
 """``simulate`` of a loop with functions (sin, sqrt, sat, ...): its true loop through the same pipeline
-as a polynomial loop (:mod:`lyapcheck.models.simulate`, :mod:`lyapcheck.models.recast_simulate`).
+as a polynomial loop (:mod:`lyapcheck.models.surfaces.simulate`, :mod:`lyapcheck.models.surfaces.recast_simulate`).
 
 Figures are checked against closed forms and against a polynomial twin: the linear cascade of
 ``examples/models/linear-disturbed-l1.toml`` written with ``sat(., 100)`` around terms that never

@@ -15,14 +15,14 @@ import pytest
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.paper.params import Problem, problem_from_sources
 from lyapcheck.api import simulate as api_simulate
-from lyapcheck.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
-from lyapcheck.simulation.disturbances import Adversarial, Constant, NoDisturbance, PiecewiseConstant, Sinusoid
-from lyapcheck.simulation.model import ClosedLoop, LoopParams
-from lyapcheck.simulation.runner import SimulationResult, simulate
-from lyapcheck.simulation.scenarios import (
+from lyapcheck.paper.simulation.scenario_run import run_scenarios, scenario_batch, simulation_document
+from lyapcheck.paper.simulation.disturbances import Adversarial, Constant, NoDisturbance, PiecewiseConstant, Sinusoid
+from lyapcheck.paper.simulation.model import ClosedLoop, LoopParams
+from lyapcheck.paper.simulation.runner import SimulationResult, simulate
+from lyapcheck.paper.simulation.scenarios import (
     PAPER_VALUES, PRESETS, load_scenario, paper_disturbance, parse_simulation, preset, weight_disturbance,
 )
-from lyapcheck.simulation.scenarios import paper_problem as presets_problem
+from lyapcheck.paper.simulation.scenarios import paper_problem as presets_problem
 from tests.conftest import PAPER_TOML, ROOT
 
 EXAMPLES = ROOT / "examples"
@@ -263,7 +263,7 @@ def test_weight_disturbance_uses_rft_and_e11(paper_problem: Problem) -> None:
 
 @pytest.mark.slow
 def test_weight_model_also_reproduces_section5() -> None:
-    from lyapcheck.simulation.inference import relative_deviation, reproduce
+    from lyapcheck.paper.simulation.inference import relative_deviation, reproduce
 
     dev = relative_deviation(reproduce("weight", [58.0]))[0]
     assert np.all(np.abs(dev) < REPRODUCTION_RTOL), dev
@@ -272,7 +272,7 @@ def test_weight_model_also_reproduces_section5() -> None:
 @pytest.mark.slow
 def test_inferred_disturbance_is_the_fit_optimum() -> None:
     """The presets' 0.088 mm/s is the least-squares optimum (to the paper's two digits)."""
-    from lyapcheck.simulation.inference import fit_paper_disturbance
+    from lyapcheck.paper.simulation.inference import fit_paper_disturbance
 
     fit = fit_paper_disturbance("constant", points=9, refinements=2)
     assert fit.best == pytest.approx(0.088e-3, rel=0.03)

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from lyapcheck.errors import InvalidParameter
-from lyapcheck.simulation.integrator import (
+from lyapcheck.integrator import (
     STATUS_MAX_ITERATIONS, STATUS_OK, IntegrationResult, integrate,
 )
-from lyapcheck.simulation.runner import STEPS_PER_TAIL
+from lyapcheck.paper.simulation.runner import STEPS_PER_TAIL
 from lyapcheck.tolerances import SIM_MAX_STEPS
 from tests.conftest import DecaySystem
 
@@ -91,8 +91,8 @@ def test_a_failure_message_names_each_status() -> None:
     ("los_speed", '"1e300 m/s"', "step size below 16 ulps of t"),
 ])
 def test_extreme_loops_fail_quickly_with_a_reason(tmp_path: Path, key: str, value: str, why: str) -> None:
-    from lyapcheck.simulation.scenario_run import run_scenarios, simulation_document
-    from lyapcheck.simulation.scenarios import load_scenario
+    from lyapcheck.paper.simulation.scenario_run import run_scenarios, simulation_document
+    from lyapcheck.paper.simulation.scenarios import load_scenario
 
     scenario = load_scenario(_scenario(tmp_path, key, value))
     results = run_scenarios([scenario])
@@ -105,8 +105,8 @@ def test_extreme_loops_fail_quickly_with_a_reason(tmp_path: Path, key: str, valu
 
 @FP_WARNINGS
 def test_a_huge_disturbance_runs_and_diverges(tmp_path: Path) -> None:
-    from lyapcheck.simulation.scenario_run import run_scenarios, simulation_document
-    from lyapcheck.simulation.scenarios import load_scenario
+    from lyapcheck.paper.simulation.scenario_run import run_scenarios, simulation_document
+    from lyapcheck.paper.simulation.scenarios import load_scenario
 
     scenario = load_scenario(_scenario(tmp_path, "velocity", '["1e300 m/s", "-1e300 m/s"]'))
     doc = simulation_document(scenario, run_scenarios([scenario]))
@@ -115,8 +115,8 @@ def test_a_huge_disturbance_runs_and_diverges(tmp_path: Path) -> None:
 
 
 def test_paper_scenario_has_no_failure(tmp_path: Path) -> None:
-    from lyapcheck.simulation.scenario_run import run_scenarios, simulation_document
-    from lyapcheck.simulation.scenarios import load_scenario
+    from lyapcheck.paper.simulation.scenario_run import run_scenarios, simulation_document
+    from lyapcheck.paper.simulation.scenarios import load_scenario
 
     scenario = load_scenario(_scenario(tmp_path, "rtol", "1e-8"))
     doc = simulation_document(scenario, run_scenarios([scenario]))
@@ -125,7 +125,7 @@ def test_paper_scenario_has_no_failure(tmp_path: Path) -> None:
 
 
 def test_a_tail_too_short_for_the_step_budget_is_refused(tmp_path: Path) -> None:
-    from lyapcheck.simulation.scenarios import load_scenario
+    from lyapcheck.paper.simulation.scenarios import load_scenario
 
     shortest = 1.0 * STEPS_PER_TAIL / SIM_MAX_STEPS  # the scenario's horizon is 1 s
     with pytest.raises(InvalidParameter, match=rf"'tail' parameter must be at least horizon \* {STEPS_PER_TAIL} / "
@@ -155,7 +155,7 @@ def test_linear_views_beyond_the_double_range_are_not_computed_but_exact_hurwitz
 @pytest.mark.parametrize(("key", "value"), [("k_d", "1e300"), ("e11", '"1e300 m"')])
 def test_worst_case_search_at_extreme_scales_is_no_internal_error(tmp_path: Path, key: str, value: str) -> None:
     """The loop's resonances at these scales would need square waves with ~1e300 switches: those
-    candidates are skipped with the reason (lyapcheck.simulation.worst_case.MAX_SWITCHES)."""
+    candidates are skipped with the reason (lyapcheck.paper.simulation.worst_case.MAX_SWITCHES)."""
     from click.testing import CliRunner
 
     from lyapcheck.cli import app

@@ -13,9 +13,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from lyapcheck.paper.params import Problem
-from lyapcheck.simulation.disturbances import Constant, PiecewiseConstant
-from lyapcheck.simulation.integrator import DEFAULT_RTOL, STATUS_OK, Evaluation, integrate
-from lyapcheck.simulation.model import N_STATE, ClosedLoop, ErrorDynamics, LoopParams
+from lyapcheck.paper.simulation.disturbances import Constant, PiecewiseConstant
+from lyapcheck.integrator import DEFAULT_RTOL, STATUS_OK, Evaluation, integrate
+from lyapcheck.paper.simulation.model import N_STATE, ClosedLoop, ErrorDynamics, LoopParams
 from lyapcheck.tolerances import SIM_REL_TOL
 from tests.conftest import DecaySystem
 

@@ -108,9 +108,9 @@ def test_sign_symmetry_of_an_odd_field_is_the_parity() -> None:
 def test_exact_rounding_makes_the_identity_hold_exactly() -> None:
     """A Lyapunov program for a cubic field: the rounded, corrected and projected point satisfies
     the identity exactly (the classes' exact check says so too)."""
-    from lyapcheck.models import lyapunov
-    from lyapcheck.models.field import StateField
-    from lyapcheck.models.search import Budget, Search
+    from lyapcheck.models.classes import lyapunov
+    from lyapcheck.models.loop.field import StateField
+    from lyapcheck.models.engines.search import Budget, Search
     from lyapcheck.sos.certificates import GramPoly, lie_derivative
     from lyapcheck.sos.polynomials import Ring, gram_form
 
@@ -132,8 +132,8 @@ def test_exact_rounding_makes_the_identity_hold_exactly() -> None:
 def test_a_model_is_certified_without_importing_cvxpy() -> None:
     """The generic classes build Clarabel's data from the structure (lyapcheck.sos.direct): no
     cvxpy import (about a second) and no compile step, in the first run as in every other."""
-    code = ("import sys, json; from lyapcheck.models.modelfile import parse_model; "
-            "from lyapcheck.models.certify import certify_model; "
+    code = ("import sys, json; from lyapcheck.models.language.modelfile import parse_model; "
+            "from lyapcheck.models.surfaces.certify import certify_model; "
             "r = certify_model(parse_model('[model]\\nstates=[\"x\",\"y\"]\\n[dynamics]\\nx=\"-x+y\"\\ny=\"-x-y\"\\n'), "
             "classes='quadratic'); print(json.dumps([r.results['quadratic'].status, 'cvxpy' in sys.modules]))")
     run = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
@@ -149,10 +149,10 @@ def test_the_direct_conic_data_and_cvxpy_reach_the_same_optimum(system: str) -> 
     and on a sos_bound program with scalars, a minimized objective and floors (parameter margins)."""
     import numpy as np
 
-    from lyapcheck.models import bounds, lyapunov
-    from lyapcheck.models.certify import shifted_field
-    from lyapcheck.models.field import apply_scaling, choose_scaling, clear, state_field
-    from lyapcheck.models.modelfile import parse_model
+    from lyapcheck.models.classes import bounds, lyapunov
+    from lyapcheck.models.surfaces.certify import shifted_field
+    from lyapcheck.models.loop.field import apply_scaling, choose_scaling, clear, state_field
+    from lyapcheck.models.language.modelfile import parse_model
     from lyapcheck.sos.direct import DirectProgram
     from lyapcheck.sos.program import build_cvxpy
     from lyapcheck.sos.sdp import solve as solve_cvxpy

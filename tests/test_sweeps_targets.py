@@ -9,7 +9,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from lyapcheck.models.certify import MODEL_CLASSES
+from lyapcheck.models.surfaces.certify import MODEL_CLASSES
 from sweeps import evaluate, schema, spec, summary, targets
 from tests.conftest import ROOT
 from tests.test_model_sweeps import LINEAR, POINTS, write

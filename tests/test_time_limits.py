@@ -1,12 +1,12 @@
 """A model class's time limit, reached in real runs (issue 28, part 4: "Time limits are real").
 
 ``certify --model`` gives every class :data:`~lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S`
-(``time_limit_s`` of :func:`~lyapcheck.models.certify.certify_model`) in two layers:
+(``time_limit_s`` of :func:`~lyapcheck.models.surfaces.certify.certify_model`) in two layers:
 
-* the cooperative :class:`~lyapcheck.models.search.Budget`: every solve gets at most the time left
+* the cooperative :class:`~lyapcheck.models.engines.search.Budget`: every solve gets at most the time left
   (Clarabel's own time limit, status ``user_limit``), and the next solve past the limit raises
-  :class:`~lyapcheck.models.search.BudgetExhausted`; the class is ``inconclusive`` naming the limit;
-* the hard stop of :func:`lyapcheck.models.certify._guarded`, a SIGALRM at ``limit * 1.5 + 5`` s
+  :class:`~lyapcheck.models.engines.search.BudgetExhausted`; the class is ``inconclusive`` naming the limit;
+* the hard stop of :func:`lyapcheck.models.surfaces.certify._guarded`, a SIGALRM at ``limit * 1.5 + 5`` s
   (:func:`lyapcheck.paper.certification.time_limit`), for work between solves that never consults the
   budget (compiling a program, an exact check, the roa class's simulations).
 
@@ -36,8 +36,8 @@ import pytest
 from click.testing import CliRunner
 
 from lyapcheck import tolerances
-from lyapcheck.models.certify import certify_model
-from lyapcheck.models.modelfile import Model, load_model
+from lyapcheck.models.surfaces.certify import certify_model
+from lyapcheck.models.language.modelfile import Model, load_model
 from tests.conftest import ROOT
 
 DATA = ROOT / "tests" / "data"
@@ -48,7 +48,7 @@ LIMIT_NAME = "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"
 
 
 def hard_stop(limit: float) -> float:
-    """The hard stop of :func:`lyapcheck.models.certify._guarded` for a class limit of ``limit``."""
+    """The hard stop of :func:`lyapcheck.models.surfaces.certify._guarded` for a class limit of ``limit``."""
     return limit * 1.5 + 5
 
 
@@ -187,7 +187,7 @@ def test_a_proof_found_before_the_limit_is_kept(monkeypatch: pytest.MonkeyPatch)
     far), not report the class inconclusive. The limit is made to fall there deterministically: the
     budget is exhausted at the first solve after the degree-4 proof (a wall-time limit would depend
     on this machine's speed)."""
-    from lyapcheck.models import search as search_module
+    from lyapcheck.models.engines import search as search_module
 
     model = load_model(QUARTIC_PAIRS)
     full = certify_model(model, classes=("sos_gas",))

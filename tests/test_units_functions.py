@@ -23,9 +23,9 @@ from pathlib import Path
 
 import pytest
 
-from lyapcheck.models.dimensions import Named, check_output
-from lyapcheck.models.modelfile import parse_any_model
-from lyapcheck.models.recast import RecastModel
+from lyapcheck.models.language.dimensions import Named, check_output
+from lyapcheck.models.language.modelfile import parse_any_model
+from lyapcheck.models.language.recast import RecastModel
 from lyapcheck.units import Dimension
 from tests.conftest import ROOT
 from tests.test_model_units import refused as refused_by

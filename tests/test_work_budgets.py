@@ -1,12 +1,12 @@
 """Work budgets decide outcomes, the clock only guards (issue 40, item 9: "Same outcome under load").
 
-A search's steps are bounded by counts of solves (:class:`~lyapcheck.models.search.SolveLimit`):
+A search's steps are bounded by counts of solves (:class:`~lyapcheck.models.engines.search.SolveLimit`):
 the recast sos_gas search per template (``TEMPLATE_SOLVES``), the recast V-s iteration
 (``VS_SOLVES``, ``VS_LEVEL_SOLVES``) and the polynomial roa class's enlarging rounds
 (``ROA_ENLARGE_SOLVES``), all in :mod:`lyapcheck.tolerances`. These tests make each budget tiny
 (monkeypatch) so that it decides, and run the same search twice: once on the real clock, once on
 a clock that makes the machine look thousands of times slower (every reading of the class's
-:class:`~lyapcheck.models.search.Budget` is 30 s later than the one before). The outcome, its
+:class:`~lyapcheck.models.engines.search.Budget` is 30 s later than the one before). The outcome, its
 reason and the solves made must be the same; under the wall-clock step limits these budgets
 replaced, the slow clock cut every step short. The class's time limit itself stays a safety net,
 named as one.
@@ -20,11 +20,11 @@ from typing import Any, Callable
 import pytest
 
 from lyapcheck import tolerances
-from lyapcheck.models import recast_classes as rc
-from lyapcheck.models import search as search_module
-from lyapcheck.models.certify import certify_model
-from lyapcheck.models.modelfile import load_model, parse_any_model
-from lyapcheck.models.search import Budget
+from lyapcheck.models.classes import recast_classes as rc
+from lyapcheck.models.engines import search as search_module
+from lyapcheck.models.surfaces.certify import certify_model
+from lyapcheck.models.language.modelfile import load_model, parse_any_model
+from lyapcheck.models.engines.search import Budget
 from lyapcheck.results import ConditionResult
 from tests.conftest import ROOT
 from tests.recast_loops import PENDULUM
@@ -101,7 +101,7 @@ def test_the_class_time_limit_is_a_safety_net_named_as_one() -> None:
 
 
 def pendulum_region(budget_s: float = SAFETY_NET_S) -> ConditionResult:
-    from lyapcheck.models.recast_run import comparison_box, run_roa
+    from lyapcheck.models.surfaces.recast_run import comparison_box, run_roa
 
     model = parse_any_model(PENDULUM, "pendulum.toml")
     loop = rc.base_loop(model.system)

@@ -19,13 +19,13 @@ import pytest
 
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.paper.params import Problem
-from lyapcheck.simulation.disturbances import (
+from lyapcheck.paper.simulation.disturbances import (
     Adversarial, BangBang, Constant, Feedback, Sinusoid, SquareWave, Stacked, from_description, stack_rows,
 )
-from lyapcheck.simulation.model import LoopParams
-from lyapcheck.simulation.runner import simulate
-from lyapcheck.simulation.scenarios import Scenario, paper_problem, preset
-from lyapcheck.simulation.worst_case import (
+from lyapcheck.paper.simulation.model import LoopParams
+from lyapcheck.paper.simulation.runner import simulate
+from lyapcheck.paper.simulation.scenarios import Scenario, paper_problem, preset
+from lyapcheck.paper.simulation.worst_case import (
     FAMILIES, WorstCaseResult, search_worst_case, simulate_disturbance, storage_switching,
 )
 from lyapcheck.tolerances import SIM_REL_TOL

@@ -159,7 +159,7 @@ def register(group: click.Group) -> None:
         if no_store:  # the process is the command's own: the switch holds for this run alone
             import os
 
-            from lyapcheck.models.store import STORE_ENV
+            from lyapcheck.models.engines.store import STORE_ENV
 
             os.environ[STORE_ENV] = "off"
 

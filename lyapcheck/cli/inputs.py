@@ -1,6 +1,6 @@
 """What the command line reads as a model file, and what it says when the paper's flags meet one.
 
-A model file is recognised by its content (:func:`lyapcheck.models.modelfile.is_model_file`), so
+A model file is recognised by its content (:func:`lyapcheck.models.language.modelfile.is_model_file`), so
 ``lyapcheck certify FILE`` and ``lyapcheck simulate FILE`` take one where the paper's gain or
 scenario file would stand; ``--model FILE`` keeps working. On a model's path every message speaks
 of the model: ``--set mu 1`` says ``use --set mu=1``, and a flag of the paper's loop names itself
@@ -26,7 +26,7 @@ GAIN_FLAG_HINT = "a model file carries its own parameters: use --set NAME=VALUE"
 
 def split_model_argument(positional: str | None, model_file: str | None) -> tuple[str | None, str | None]:
     """``(model_file, positional)``: a positional file that is a model file becomes the model."""
-    from lyapcheck.models.modelfile import is_model_file
+    from lyapcheck.models.language.modelfile import is_model_file
 
     if positional is not None and is_model_file(positional):
         if model_file is not None:

@@ -1,5 +1,5 @@
 """``lyapcheck simulate``: run a preset or a scenario TOML through :func:`lyapcheck.api.simulate`,
-or any closed loop of a model file (``--model FILE``) through :mod:`lyapcheck.models.simulate`.
+or any closed loop of a model file (``--model FILE``) through :mod:`lyapcheck.models.surfaces.simulate`.
 
 Exit codes (DESIGN.md): 0 the simulation ran and the loop did not diverge; 1 it ran but the
 loop diverged (the tail of ``|eps|`` went beyond the initial error, or the integrator failed,
@@ -72,7 +72,7 @@ def _print_model_table(doc: dict[str, Any]) -> None:
 
 
 def _model_disturbance_text(d: dict[str, Any]) -> str:
-    """One line for a model disturbance's JSON description (lyapcheck.models.simulate)."""
+    """One line for a model disturbance's JSON description (lyapcheck.models.surfaces.simulate)."""
     def values(v: dict[str, float]) -> str:
         return ", ".join(f"{k} = {x:.6g}" for k, x in v.items())
 

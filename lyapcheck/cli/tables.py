@@ -212,7 +212,7 @@ def what_it_means(doc: Mapping[str, Any], cond: Mapping[str, Any]) -> str:
     """A condition's summary and, for a certified V, its short form (the first terms to six
     significant digits; the exact V is in the JSON): ``V = ...``, one line per output for
     ``sos_bound``."""
-    from lyapcheck.models.claims import V_SHORT_TERMS, v_text
+    from lyapcheck.models.classes.claims import V_SHORT_TERMS, v_text
 
     text = str(cond["summary"])
     cert = cond.get("certificate")
@@ -249,7 +249,7 @@ def print_conditions(console: "Console", doc: Mapping[str, Any], verbose: bool =
     title = (f"lyapcheck certify - model: {doc['model']['name']}" if "model" in doc
              else f"lyapcheck certify - dynamics: {doc['dynamics']}")
     if "model" in doc and isinstance(doc.get("box"), dict) and doc["box"]:
-        from lyapcheck.models.claims import box_words
+        from lyapcheck.models.classes.claims import box_words
 
         title += f", for every {box_words(doc['box'])}"
     conditions = {name: {**c, "summary": what_it_means(doc, c) + (_details(c) if verbose else "")}

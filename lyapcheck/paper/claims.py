@@ -2,7 +2,7 @@
 
 A certificate's ``summary`` is what a reader believes, so it must never say more than the exact
 data beside it, which ``verify`` re-checks. This module is the one place that writes those
-sentences (the model files' twin is :mod:`lyapcheck.models.claims`): every class of
+sentences (the model files' twin is :mod:`lyapcheck.models.classes.claims`): every class of
 :mod:`lyapcheck.paper.conditions` and :mod:`lyapcheck.paper.boxes` sets the summary of a decided
 result with :func:`summary` (through :func:`decided` or :func:`decided_box`);
 :func:`lyapcheck.paper.certificate.verify_document` and ``verify_box_document`` regenerate it from the

@@ -14,7 +14,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Final
 
-from lyapcheck.models.claims import RATE_UNIT, deviation, rounded, with_unit
+from lyapcheck.models.classes.claims import RATE_UNIT, deviation, rounded, with_unit
 from reports.polynomials import MAX_PLAIN_CHARS, ExactPolynomial
 from reports.sections.base import MODEL_FILE, ClassContext, ClassView, PolynomialView, Section, text_of
 from reports.typeset import Equations, parse_matrix
@@ -125,9 +125,9 @@ def gram_sizes(cert: dict[str, Any], prefix: str = "") -> list[str]:
 
 def shown_summary(name: str, cond: dict[str, Any], outputs: tuple[str, ...], box: Any = None) -> str:
     """The sentence a reader sees: for a decided class, the one its figures give
-    (:func:`lyapcheck.models.claims.summary`, as ``verify`` regenerates it), never the file's own
+    (:func:`lyapcheck.models.classes.claims.summary`, as ``verify`` regenerates it), never the file's own
     text; for the others, the file's reason."""
-    from lyapcheck.models.claims import summary
+    from lyapcheck.models.classes.claims import summary
 
     try:
         text = summary(name, cond, outputs, box if isinstance(box, dict) else None)

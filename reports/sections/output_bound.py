@@ -37,7 +37,7 @@ class OutputBoundSection(ModelFileSection):
                                                     data.get("V"), lead, states, shifts, ctx.eqs))
             bound = as_fraction(data.get("bound"))
             if bound is not None:  # a bound on the deviation from the output's value at the equilibrium
-                from lyapcheck.models.claims import deviation
+                from lyapcheck.models.classes.claims import deviation
 
                 sos_bound = as_dict(as_dict(ctx.doc.get("conditions")).get("sos_bound"))
                 y_eq = as_number(as_dict(sos_bound.get("bounds_reference")).get(output))

@@ -39,7 +39,7 @@ def number(value: object) -> float | None:
 
 
 def describe_disturbance(desc: dict[str, Any]) -> str:
-    """A short reading of a stored disturbance description (lyapcheck.simulation.disturbances)."""
+    """A short reading of a stored disturbance description (lyapcheck.paper.simulation.disturbances)."""
     kind = text(desc.get("kind", "unknown"))
     hz = number(desc.get("frequency_hz"))
     words = {"square_wave": "square wave of amplitude d* across the path",

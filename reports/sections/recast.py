@@ -1,6 +1,6 @@
 """The classes of a loop with functions (a model file whose ``[dynamics]`` use sin, sqrt, sat, ...).
 
-Such a loop is certified on its *recasting* (:mod:`lyapcheck.models.recast`): each function is
+Such a loop is certified on its *recasting* (:mod:`lyapcheck.models.language.recast`): each function is
 an auxiliary variable with its definition, its flow and the relations it satisfies. A certified
 condition's certificate is of one of two kinds, each with its own set:
 
@@ -16,7 +16,7 @@ kind              V is a polynomial in                   the certified set (``ro
 
 :class:`RecastSection` shows the linearization and every uncertified class as any model file's
 (:class:`~reports.sections.model_file.ModelFileSection`), and a recast or interval certificate
-from its own keys: the sentence it supports (:func:`lyapcheck.models.recast_certify.sentence_of`,
+from its own keys: the sentence it supports (:func:`lyapcheck.models.surfaces.recast_certify.sentence_of`,
 as ``verify`` re-makes it, never the file's text), ``V`` typeset in the recasting's variables and
 ``V_text`` (V written with the functions), the level, the box, the exact proof's sizes. For the
 phase portrait of a 2-state loop it names each certified set (:meth:`RecastSection.portrait_set`,
@@ -38,7 +38,7 @@ from reports.views import as_dict, as_fraction, fmt_float, value_items
 
 #: the model of these sections' documents (a model certificate with a ``"recast"`` table)
 RECAST_LOOP: Final = "recast-loop"
-#: the certificate kinds this section reads (lyapcheck.models.recast_certify, recast_interval)
+#: the certificate kinds this section reads (lyapcheck.models.surfaces.recast_certify, recast_interval)
 KINDS: Final = ("recast", "interval")
 #: keys of a condition shown elsewhere on the page (the solver's outcomes under Reproducibility)
 SHOWN_ELSEWHERE: Final = ("status", "summary", "property", "certificate", "refutation", "solver")
@@ -75,8 +75,8 @@ def figures(cond: dict[str, Any]) -> list[str]:
 def sentence(cert: dict[str, Any], coverage: Any = None) -> str:
     """The claim a recast or interval certificate supports, made from the certificate alone (with
     ``(d = 0)`` in front where the condition says its disturbances were held at 0)."""
-    from lyapcheck.models.claims import covered
-    from lyapcheck.models.recast_certify import sentence_of
+    from lyapcheck.models.classes.claims import covered
+    from lyapcheck.models.surfaces.recast_certify import sentence_of
 
     try:
         return covered(coverage if coverage in ("zero", "all") else None, sentence_of(cert))
@@ -86,9 +86,9 @@ def sentence(cert: dict[str, Any], coverage: Any = None) -> str:
 
 def box_words_of(box: dict[str, Any], status: str) -> str:
     """What a claim of a loop with functions over a box of parameters says first
-    (:func:`lyapcheck.models.recast_certify.box_prefix`), or nothing when the box is malformed."""
-    from lyapcheck.models.parameter_box import ModelBox
-    from lyapcheck.models.recast_certify import box_prefix
+    (:func:`lyapcheck.models.surfaces.recast_certify.box_prefix`), or nothing when the box is malformed."""
+    from lyapcheck.models.language.parameter_box import ModelBox
+    from lyapcheck.models.surfaces.recast_certify import box_prefix
 
     try:
         return box_prefix(ModelBox.from_json(box), status)

@@ -29,7 +29,7 @@ from reports.views import as_dict, as_fraction, as_number, fmt_float
 #: the safety property, in the words of the page's property column
 SAFETY_MEANING: Final = ("no trajectory that starts in the initial set ever enters the unsafe set, for every "
                          "disturbance within its bounds")
-#: the sets each class is about (lyapcheck.models.sets.CLASS_SETS), in the page's order
+#: the sets each class is about (lyapcheck.models.language.sets.CLASS_SETS), in the page's order
 CLASS_SETS: Final = {"barrier": ("initial", "unsafe"), "reach_avoid": ("initial", "unsafe", "goal")}
 #: each class's invariant set on the phase portrait: (function, certificate key, colour, until)
 INVARIANT: Final = {"barrier": ("B", "B", "#6e40c9", ""), "reach_avoid": ("V", "V", "#6e40c9", "goal")}
@@ -59,7 +59,7 @@ def sets_table(name: str, set_text: dict[str, tuple[tuple[str, ...], ...]]) -> T
 
 
 def falsification_table(cond: dict[str, Any]) -> TableView | None:
-    """The falsification beside the search (lyapcheck.models.falsify): what was simulated and how
+    """The falsification beside the search (lyapcheck.models.classes.falsify): what was simulated and how
     near the unsafe set it came."""
     trial = as_dict(cond.get("falsification"))
     closest = as_number(cond.get("closest_approach"))

@@ -5,11 +5,11 @@ SI, a box's ranges, disturbances, equilibrium, outputs, domain, the dynamics as 
 SHA-256 of the text); the field the certificates use (each denominator's positivity certificate,
 the scaling); for 2 states the phase portrait with the certified sets and simulated trajectories
 and the simulation cross-checks of the certificates (:mod:`reports.phase_portrait`); the
-certificate **re-checked exactly** on the spot (:func:`lyapcheck.models.certificate.verify_document`,
+certificate **re-checked exactly** on the spot (:func:`lyapcheck.models.surfaces.certificate.verify_document`,
 no solver, well under a second; a failure is an alarm at the top); the command line and the
 model file verbatim.
 
-The model text is re-read only by the model-file parser (:func:`lyapcheck.models.modelfile.parse_model`,
+The model text is re-read only by the model-file parser (:func:`lyapcheck.models.language.modelfile.parse_model`,
 a whitelist over Python's ``ast``) and by :mod:`tomllib`; nothing from it is evaluated.
 """
 
@@ -26,8 +26,8 @@ from typing import Any, Final
 from markupsafe import Markup
 
 from lyapcheck.errors import InputFileError, LyapcheckError
-from lyapcheck.models.certificate import KIND, is_model_document
-from lyapcheck.models.modelfile import Model
+from lyapcheck.models.surfaces.certificate import KIND, is_model_document
+from lyapcheck.models.language.modelfile import Model
 from reports.figures import Figure
 from reports.phase_portrait import CrossCheck, phase_portrait
 from reports.sections.base import MODEL_FILE, ClassContext, text_of
@@ -126,7 +126,7 @@ def solvers(conditions: dict[str, Any]) -> list[tuple[str, str]]:
         solver = as_dict(as_dict(cond).get("solver"))
         solves = solver.get("solves")
         stored = as_dict(solver.get("stored"))
-        if stored:  # lyapcheck.models.store: no solve in this run
+        if stored:  # lyapcheck.models.engines.store: no solve in this run
             # (an entry's own record of its search is not re-provable: not shown)
             out.append((str(name), "no solve: the certificate its search found in an earlier run, re-checked exactly"))
             continue
@@ -187,7 +187,7 @@ def command(doc: dict[str, Any]) -> str:
 
 def recheck_rows(doc: dict[str, Any]) -> tuple[list[tuple[str, bool, str]], str]:
     """Re-check every claim exactly (no solver); (rows, error if it could not run)."""
-    from lyapcheck.models.certificate import verify_document
+    from lyapcheck.models.surfaces.certificate import verify_document
 
     try:
         return verify_document(doc), ""
@@ -251,7 +251,7 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
     template = "model_file.html.j2"
 
     def __init__(self, doc: dict[str, Any]) -> None:
-        from lyapcheck.models.modelfile import parse_model
+        from lyapcheck.models.language.modelfile import parse_model
 
         if not is_model_document(doc):
             raise InputFileError(f"not a model certificate (missing kind '{KIND}')")
@@ -286,7 +286,7 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
         doc, model, raw = self.doc, self.parsed, self.raw
         model_part = as_dict(doc.get("model"))
         try:
-            from lyapcheck.models.claims import box_words
+            from lyapcheck.models.classes.claims import box_words
 
             box_text = box_words(as_dict(doc.get("box"))) if as_dict(doc.get("box")) else ""
         except (TypeError, ValueError, ArithmeticError):

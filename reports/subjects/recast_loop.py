@@ -1,16 +1,16 @@
 """A loop with functions (a model file whose ``[dynamics]`` use sin, sqrt, sat, ...) as a certificate page's subject.
 
 Its document is a model certificate (``kind`` lyapcheck-model-certificate) with a ``"recast"``
-table (:mod:`lyapcheck.models.recast_certify`). The page shows: the model as stored (name,
+table (:mod:`lyapcheck.models.surfaces.recast_certify`). The page shows: the model as stored (name,
 source, states, equilibrium, parameters as given and exact, domain, the dynamics as written, the
 SHA-256 of the text); the **recasting** the certificates are proved on (each auxiliary with its
 definition, its value at the equilibrium and its flow; the relations between them; the states
 taken modulo 2 pi); each class by :class:`reports.sections.recast.RecastSection`; for 2 states
 the phase portrait in the loop's own states (:mod:`reports.recast_portrait`); the certificate
-**re-checked exactly** on the spot (:func:`lyapcheck.models.certificate.verify_document`, which
+**re-checked exactly** on the spot (:func:`lyapcheck.models.surfaces.certificate.verify_document`, which
 recasts the model text again; no solver); the command line and the model file verbatim.
 
-The model text is read only by the project's parser (:func:`lyapcheck.models.modelfile.parse_any_model`)
+The model text is read only by the project's parser (:func:`lyapcheck.models.language.modelfile.parse_any_model`)
 and by :mod:`tomllib`; nothing from it is evaluated.
 """
 
@@ -23,8 +23,8 @@ from fractions import Fraction
 from typing import Any
 
 from lyapcheck.errors import InputFileError, LyapcheckError
-from lyapcheck.models.certificate import KIND, is_model_document
-from lyapcheck.models.recast import RecastModel
+from lyapcheck.models.surfaces.certificate import KIND, is_model_document
+from lyapcheck.models.language.recast import RecastModel
 from reports.figures import Figure
 from reports.recast_portrait import recast_portrait
 from reports.sections.base import ClassContext, text_of
@@ -87,7 +87,7 @@ class RecastLoopSubject(ModelCertificateChecks, Subject):
     template = "recast_loop.html.j2"
 
     def __init__(self, doc: dict[str, Any]) -> None:
-        from lyapcheck.models.modelfile import parse_any_model
+        from lyapcheck.models.language.modelfile import parse_any_model
 
         if not is_model_document(doc) or not is_recast_document(doc):
             raise InputFileError(f"not a certificate of a loop with functions (kind '{KIND}' with a 'recast' table)")

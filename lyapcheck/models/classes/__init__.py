@@ -1,0 +1,19 @@
+"""The condition classes of a model file: each one's search, its exact check and its sentence.
+
+- :mod:`~lyapcheck.models.classes.registry`: the one list of classes, what each proves and what a
+  sweep stores;
+- polynomial and rational loops: :mod:`~lyapcheck.models.classes.linearization`,
+  :mod:`~lyapcheck.models.classes.lyapunov` (quadratic, sos_gas, candidate),
+  :mod:`~lyapcheck.models.classes.regions` (roa), :mod:`~lyapcheck.models.classes.bounds`
+  (sos_bound), :mod:`~lyapcheck.models.classes.barrier`, :mod:`~lyapcheck.models.classes.reach_avoid`;
+- loops with functions: :mod:`~lyapcheck.models.classes.recast_classes`,
+  :mod:`~lyapcheck.models.classes.recast_bound`, :mod:`~lyapcheck.models.classes.recast_barrier`,
+  :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
+  (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_improve`;
+- :mod:`~lyapcheck.models.classes.falsify` (counterexamples to safety) and
+  :mod:`~lyapcheck.models.classes.claims` (the sentence of each decided class).
+
+May import: lyapcheck.models.language, lyapcheck.models.engines, lyapcheck.models.loop, lyapcheck.sos,
+lyapcheck.integrator, lyapcheck.results, lyapcheck.degrees, lyapcheck.exact, lyapcheck.tolerances,
+lyapcheck.units, lyapcheck.errors
+"""

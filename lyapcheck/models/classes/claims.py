@@ -1,0 +1,309 @@
+"""The sentence each decided class of a model file prints, made from its checked figures alone.
+
+A certificate's ``summary`` is what a reader believes, so it must never say more than the figures
+beside it, which ``verify`` re-checks against the exact certificate. This module is the one place
+that writes those sentences: :func:`lyapcheck.models.surfaces.certify.certify_model` sets each ``certified``
+or ``refuted`` condition's summary with :func:`summary`, and
+:func:`lyapcheck.models.surfaces.certificate.verify_document` regenerates it from the figures it has just
+re-checked and fails where the file's text differs (an edited summary, ``limsup |y| <= 0.1`` where
+0.52 was proved, is caught there). Reports print the regenerated text.
+
+The disturbances (DESIGN.md, "Disturbances in claims"): a claim proved with every disturbance
+held at 0 says ``(d = 0)``; a stability claim proved for every disturbance signal within its bounds
+says so. ``not_certified``, ``inconclusive`` and ``not_applicable`` conditions claim nothing; their
+text is a reason, not a summary of figures, and is left as the class wrote it.
+
+Every figure is printed with its unit (:func:`with_unit`) and its reference point: times in s and
+rates in 1/s (a model file is SI inside, and its time is in seconds with or without ``[units]``); a
+bound in its output's unit (``bounds_unit``, with ``[units]``) and on the output's deviation from its
+value at the equilibrium (``limsup |h - 30 m| <= 2.9 m``, ``bounds_reference``); a ball's radius in
+the states' unit when they share one (``ball_radius_unit``); a level of ``V`` bare (``V`` has no
+declared unit). A state's distance is always to the equilibrium: ``|x(t) - x_eq|``.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import Any, Mapping, Sequence
+
+#: what a ``certified`` sublevel set of each class is called in its sentence
+SET_NAMES = {"roa": "region of attraction", "candidate": "the user's V"}
+#: the prefix of a claim by the disturbances it covers (a stability class of a disturbed model)
+DISTURBANCE_PREFIX = {"zero": "(d = 0) ", "all": "for every disturbance signal within its bounds: "}
+#: said of a nominal claim whose robust form was tried and not found
+ROBUST_NOT_FOUND = "; with the declared disturbances acting, no certificate of this class was found"
+#: what a certified ``barrier`` states (:mod:`lyapcheck.models.classes.barrier`)
+BARRIER_SENTENCE = ("safety: no trajectory that starts in the initial set ever enters the unsafe set (B <= 0 on the "
+                    "initial set, B >= 1 on the unsafe set, B' <= lambda B everywhere; checked exactly)")
+#: the unit of every time a sentence prints, and of every rate (its inverse): a model file is SI
+#: inside and its ``[units]`` accept only ``time = "s"`` (lyapcheck.models.language.dimensions)
+TIME_UNIT = "s"
+RATE_UNIT = "1/s"
+#: significant digits of a figure in a sentence (the JSON keeps the full figure)
+FIGURE_DIGITS = 4
+
+
+def rounded(value: float | Fraction, digits: int = FIGURE_DIGITS, direction: str = "nearest") -> str:
+    """``value`` to ``digits`` significant digits, rounded towards the weaker claim: ``"up"`` for an
+    upper bound (a limsup, a GES constant k, a time bound: 2.00015 prints 2.001, never 2),
+    ``"down"`` for a lower bound (a decay rate, a level, a ball's radius), ``"nearest"`` for a
+    figure that bounds nothing. A printed sentence never claims more than its certificate proves."""
+    if direction == "nearest" or value == 0:
+        return f"{float(value):.{digits}g}"
+    import math
+    from decimal import Decimal
+
+    exact = Fraction(value)  # (a float converts exactly)
+    exponent = math.floor(math.log10(abs(float(exact)))) - digits + 1
+    quantum = Fraction(10) ** exponent
+    steps = exact / quantum
+    whole = math.ceil(steps) if direction == "up" else math.floor(steps)
+    if direction not in ("up", "down"):
+        raise ValueError(f"direction must be 'up', 'down' or 'nearest', got {direction!r}")
+    text = f"{Decimal(whole).scaleb(exponent):.{digits + 1}g}"  # exact: at most digits + 1 significant digits
+    return f"{float(text):.{digits + 1}g}"
+
+
+def with_unit(value: float | Fraction, unit: str | None, digits: int = FIGURE_DIGITS, direction: str = "nearest"
+              ) -> str:
+    """A figure as a sentence prints it: ``2.294 m``; bare when it has no unit (``unit`` None or
+    ``''``, dimensionless), rounded towards the weaker claim (:func:`rounded`). The one place a
+    sentence formats a physical figure."""
+    text = rounded(value, digits, direction)
+    return f"{text} {unit}" if unit else text
+
+
+def state_unit_figures(units: Mapping[str, str], states: Sequence[str], condition: Mapping[str, Any]
+                       ) -> dict[str, Any]:
+    """The unit of a condition's figure in the states (its ``ball_radius``), from the model's
+    ``[units]`` as written (``units``; ``{}`` without the table): ``ball_radius_unit`` is the unit
+    the states share (``''`` when all are dimensionless), or None when they differ (the radius is
+    then a norm of SI values of different units). Nothing without ``[units]`` or a radius."""
+    if not units or "ball_radius" not in condition:
+        return {}
+    found = {"" if units.get(s, "").strip() in ("", "1") else units[s].strip() for s in states}
+    return {"ball_radius_unit": found.pop() if len(found) == 1 else None}
+
+
+def deviation(name: str, reference: float | None, unit: str | None) -> str:
+    """``h - 30 m``: a quantity's deviation from its value at the equilibrium, or ``h`` where that
+    value is 0 (or not one number: ``reference`` None)."""
+    if not reference:
+        return name
+    sign = "-" if reference > 0 else "+"
+    return f"{name} {sign} {with_unit(abs(reference), unit, digits=6)}"
+
+
+def covered(coverage: str | None, text: str) -> str:
+    """A claim's sentence with the disturbances it covers in front (``(d = 0) ...``), as for a
+    loop with functions, which is certified with its disturbances at 0."""
+    return DISTURBANCE_PREFIX.get(coverage, "") + text if coverage is not None else text
+
+
+def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = (),
+            box: Mapping[str, Sequence[Any]] | None = None) -> str | None:
+    """The sentence of a ``certified`` or ``refuted`` condition (its JSON form), or None for the
+    other statuses. ``outputs``: the model's output names (``sos_bound`` names those it did not
+    bound); ``box``: the document's box of parameters (``{"mu": ["4/5", "6/5"]}``), which a claim
+    over it names first. Raises KeyError, TypeError or ValueError on figures of the wrong form
+    (verify reports them as a failed check)."""
+    status = condition.get("status")
+    if status not in ("certified", "refuted"):
+        return None
+    if name == "linearization":
+        text = _linearization(status, condition)
+    elif status != "certified":
+        return None
+    elif name == "sos_bound":
+        text = _bounds(condition, outputs)
+    elif name == "barrier":
+        text = BARRIER_SENTENCE
+    elif name == "reach_avoid":
+        text = (f"reach-avoid: every trajectory that starts in the initial set reaches the goal within "
+                f"{with_unit(_number(condition, 'reach_time_bound_s'), TIME_UNIT, direction='up')} without entering the unsafe set "
+                "before (V <= 0 on the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal, V bounded "
+                "below; checked exactly)")
+        if "stay" in (condition.get("certificate") or {}):
+            text += ("; and it stays in the goal afterwards (it reaches {W <= 0}, a set inside the goal that no "
+                     "trajectory leaves: W' <= mu W; checked exactly)")
+    else:
+        text = _stability(name, condition)
+    disturbances = condition.get("disturbances")
+    if name != "sos_bound" and disturbances is not None:
+        text = DISTURBANCE_PREFIX[disturbances] + text
+    if "robust_attempt" in condition:
+        text += ROBUST_NOT_FOUND
+    if box:
+        text = f"for every {box_words(box)}: {text}"
+    return text
+
+
+def box_words(box: Mapping[str, Sequence[Any]]) -> str:
+    """``mu in [0.8, 1.2] and k in [1, 2]``: a box of parameters (exact bounds as in a certificate's
+    ``box``) as a reader reads it (:meth:`~lyapcheck.models.language.parameter_box.ModelBox.describe`)."""
+    from lyapcheck.models.language.parameter_box import ModelBox
+
+    return ModelBox.from_json({name: [str(lo), str(hi)] for name, (lo, hi) in box.items()}).describe(" and ")
+
+
+def _number(condition: Mapping[str, Any], key: str) -> float:
+    value = condition[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"figure '{key}' must be a number, got {value!r}")
+    return float(value)
+
+
+def _linearization(status: str, condition: Mapping[str, Any]) -> str:
+    data = condition.get("certificate" if status == "certified" else "refutation") or {}
+    method = data.get("method")
+    if status == "certified" and method == "lyapunov_equation":
+        return ("the Jacobian at the equilibrium is Hurwitz (J^T P + P J = -I with P > 0, exact): locally "
+                "exponentially stable")
+    if status == "certified" and method == "routh_hurwitz":
+        return "the Jacobian is Hurwitz (every Hurwitz determinant > 0, exact): locally exponentially stable"
+    if status == "refuted" and method == "lyapunov_inertia":
+        return ("the Jacobian has an eigenvalue with positive real part (J^T P + P J = -I with P not positive "
+                "definite, exact; inertia theorem): the equilibrium is unstable")
+    if status == "refuted" and method == "root_isolation":
+        return (f"the Jacobian has an eigenvalue with positive real part (rigorous enclosure {data['root']}): the "
+                "equilibrium is unstable")
+    raise ValueError(f"unknown linearization method {method!r} for status {status!r}")
+
+
+def _stability(name: str, condition: Mapping[str, Any]) -> str:
+    cert = condition.get("certificate") or {}
+    kind = cert.get("kind")
+    if kind in ("sublevel", "quadratic_ball"):
+        what = SET_NAMES.get(name, name)
+        level = _number(condition, "level")
+        ball = f"; {ball_words(condition)}" if "ball_radius" in condition else ""
+        return (f"{what}: every start in {{V <= {rounded(level, 6, 'down')}}} converges to the equilibrium (checked "
+                f"exactly){ball}")
+    if kind != "lyapunov":
+        raise ValueError(f"unknown certificate kind {kind!r}")
+    if condition.get("property") == "GES":
+        return (f"GES: |x(t) - x_eq| <= {rounded(_number(condition, 'k'), FIGURE_DIGITS, 'up')} |x0 - x_eq| exp(-r t) "
+                f"with r = {with_unit(_number(condition, 'decay_rate_per_s'), RATE_UNIT, direction='down')}, from every start (a quadratic V "
+                "with V' <= -mu V, checked exactly)")
+    rate = _number(condition, "decay_rate_V_per_s")
+    if name == "candidate":
+        tail = f", V' <= -r V with r = {with_unit(rate, RATE_UNIT, direction='down')}" if rate > 0 else ""
+        return f"GAS: V' < 0 away from the equilibrium everywhere{tail} (checked exactly)"
+    degree = condition["degree"]
+    if isinstance(degree, bool) or not isinstance(degree, int):
+        raise TypeError(f"figure 'degree' must be an integer, got {degree!r}")
+    tail = (f", and V' <= -r V with r = {with_unit(rate, RATE_UNIT, direction='down')} (V decays exponentially from every start)"
+            if rate > 0 else "")
+    what = "a quadratic V" if degree == 2 else f"a polynomial V of degree {degree}"
+    return f"GAS: {what} with V' < 0 away from the equilibrium{tail} (checked exactly)"
+
+
+def ball_words(condition: Mapping[str, Any]) -> str:
+    """``it holds the ball |x - x_eq| <= 0.5 m``: a certified set's largest ball, with the states'
+    unit where they share one (``ball_radius_unit``); where they do not (``null``), the radius is a
+    Euclidean norm of the states' SI values, and the sentence says so."""
+    radius = _number(condition, "ball_radius")
+    unit = condition.get("ball_radius_unit")
+    if unit is not None and not isinstance(unit, str):
+        raise TypeError(f"figure 'ball_radius_unit' must be a unit or null, got {unit!r}")
+    mixed = "ball_radius_unit" in condition and unit is None
+    return (f"it holds the ball |x - x_eq| <= {with_unit(radius, unit, direction='down')}"
+            + (" (the Euclidean norm of the states' SI values: they have different units)" if mixed else ""))
+
+
+def _bounds(condition: Mapping[str, Any], outputs: Sequence[str]) -> str:
+    bounds = condition["bounds"]
+    if not isinstance(bounds, dict):
+        raise TypeError("figure 'bounds' must be a table of outputs")
+    references = _table(condition, "bounds_reference", bounds)
+    units = _table(condition, "bounds_unit", bounds)
+    parts = []
+    for k in bounds:
+        # absent: a document without reference points (the output's value at the equilibrium is 0);
+        # None: that value depends on a box's parameters, and the proof bounds the output itself
+        reference = 0.0 if k not in references else None if references[k] is None else _number(references, k)
+        unit = units.get(k)
+        if unit is not None and not isinstance(unit, str):
+            raise TypeError(f"figure 'bounds_unit' of {k} must be a unit, got {unit!r}")
+        text = f"limsup |{deviation(k, reference, unit)}| <= {with_unit(_number(bounds, k), unit, direction='up')}"
+        if reference is None:
+            text += f" (of {k} itself: its value at the equilibrium depends on the box's parameters)"
+        parts.append(text)
+    out = f"for every disturbance within its bounds and every start: {', '.join(parts)} (checked exactly)"
+    missing = [k for k in outputs if k not in bounds]
+    if missing:
+        out += f"; no bound for {', '.join(missing)}"
+    return out
+
+
+def _table(condition: Mapping[str, Any], key: str, bounds: Mapping[str, Any]) -> Mapping[str, Any]:
+    """A per-output figure table (``bounds_reference``, ``bounds_unit``): absent, or a table over
+    the bounded outputs exactly."""
+    table = condition.get(key, {})
+    if not isinstance(table, dict) or (key in condition and set(table) != set(bounds)):
+        raise TypeError(f"figure '{key}' must be a table over the bounded outputs")
+    return table
+
+
+# -- V as a reader sees it ------------------------------------------------------------------------
+
+#: significant digits of a coefficient in ``V_text`` and in the table's short form of V
+V_DIGITS = 6
+#: the table's short form of V shows this many terms, then how many more there are
+V_SHORT_TERMS = 6
+
+
+def v_text(terms: Mapping[str, Any], variables: Sequence[str], shifts: Mapping[str, Any] | None = None,
+           limit: int | None = None) -> str:
+    """``V`` (the contract's exact ``{"terms": [[coefficient, [exponents]], ...]}``, in ``z = x -
+    x_eq``) as a readable polynomial in the declared names: coefficients to :data:`V_DIGITS`
+    significant digits, each state with a non-zero equilibrium value written ``(x1 - 1.5)``; with
+    ``limit``, only the first terms (by degree) and how many more. The exact V is ``terms``."""
+
+    shifts = shifts or {}
+    rows = []
+    for coefficient, exponents in terms["terms"]:
+        if len(exponents) != len(variables):
+            raise ValueError(f"V: a term has {len(exponents)} exponents for {len(variables)} variables")
+        rows.append((Fraction(coefficient), exponents))
+    parts = []
+    for k, (c, exponents) in enumerate(rows):
+        if limit is not None and k == limit and len(rows) > limit + 1:  # one term more is shown, not counted
+            parts.append(f"+ ... ({len(rows) - limit} more terms)")
+            break
+        factors = []
+        for name, e in zip(variables, exponents):
+            if e == 0:
+                continue
+            shift = Fraction(str(shifts.get(name, 0)))
+            base = name if shift == 0 else f"({name} {'-' if shift > 0 else '+'} {float(abs(shift)):.{V_DIGITS}g})"
+            factors.append(base if e == 1 else f"{base}**{e}")
+        magnitude = f"{float(abs(c)):.{V_DIGITS}g}"
+        body = "*".join(factors) if magnitude == "1" and factors else "*".join([magnitude] + factors)
+        sign = "-" if c < 0 else "+"
+        parts.append(body if not parts and sign == "+" else f"{sign} {body}" if parts else f"-{body}")
+    return " ".join(parts) if parts else "0"
+
+
+def v_expression(terms: Mapping[str, Any], variables: Sequence[str], shifts: Mapping[str, Any] | None = None) -> Any:
+    """``V`` exactly, as a sympy expression in the declared names (``x - x_eq`` where the
+    equilibrium is not 0); the numbers are the certificate's rationals."""
+    import sympy as sp
+
+    shifts = shifts or {}
+    def rational(value: Any) -> Any:  # through Fraction's own reader: no text reaches sympy's parser
+        exact = Fraction(str(value))
+        return sp.Rational(exact.numerator, exact.denominator)
+
+    symbols = [sp.Symbol(name) - rational(shifts.get(name, 0)) for name in variables]
+    total = sp.Integer(0)
+    for coefficient, exponents in terms["terms"]:
+        term = rational(coefficient)
+        for base, e in zip(symbols, exponents):
+            term *= base ** int(e)
+        total += term
+    return total
+
+
+__all__ = ["summary", "box_words", "ball_words", "with_unit", "deviation", "state_unit_figures", "v_text",
+           "v_expression", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT", "RATE_UNIT"]

@@ -1,0 +1,232 @@
+"""``linearization``: the Jacobian at the equilibrium, decided exactly (property LES).
+
+``J = d(N_i / D_i)/dz_j`` at ``z = 0`` with the disturbances 0; since ``N_i(0) = 0`` it is
+``(dN_i/dz_j)(0) / D_i(0)``, exact rationals. Then, in this order:
+
+1. **Lyapunov equation** ``J^T P + P J = -I``, solved exactly (FLINT). When it has a unique
+   solution: ``P > 0`` (exact) proves ``J`` Hurwitz, so the equilibrium is locally exponentially
+   stable (``certified``). If ``P`` is not positive definite, the inertia theorem
+   (Ostrowski-Schneider: ``J^T H + H J > 0`` with ``H = -P`` gives ``In(J) = In(H)``) says ``J``
+   has as many eigenvalues with positive real part as ``P`` has negative ones, at least one: the
+   equilibrium is unstable (``refuted``, Lyapunov's indirect method).
+2. When the equation is singular (``lambda_i + lambda_j = 0`` for some eigenvalues: a zero or
+   imaginary eigenvalue, or a pair ``+-lambda``), the characteristic polynomial ``p`` decides:
+   Routh-Hurwitz (all Hurwitz determinants > 0, exact) certifies; an isolating root enclosure
+   (FLINT/Arb, rigorous interval arithmetic) whose real part is > 0 refutes; otherwise the roots on
+   the imaginary axis are found exactly (``gcd(Re p(i w), Im p(i w))`` has a real root) and the
+   case is critical: ``not_certified``, the linearization decides nothing.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import Any, Sequence
+
+from lyapcheck.models.loop.field import ShiftedField
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.definiteness import is_positive_definite
+from lyapcheck.sos.polynomials import to_fraction
+
+Matrix = list[list[Fraction]]
+
+
+def jacobian(shifted: ShiftedField) -> Matrix:
+    """``J`` at the equilibrium (disturbances 0), exactly."""
+    ring = shifted.ring
+    n = shifted.n
+    origin = [Fraction(0)] * ring.nvars
+    J = []
+    for num, den in zip(shifted.numerators, shifted.denominators):
+        d0 = ring.evaluate(den, origin)
+        J.append([ring.evaluate(num.derivative(j), origin) / d0 for j in range(n)])
+    return J
+
+
+def _fmpq_mat(rows: Sequence[Sequence[Fraction]]) -> Any:
+    import flint
+
+    return flint.fmpq_mat([[flint.fmpq(x.numerator, x.denominator) for x in row] for row in rows])
+
+
+def lyapunov_solution(J: Matrix) -> Matrix | None:
+    """The exact ``P = P^T`` with ``J^T P + P J = -I``, or None when that is singular."""
+    import flint
+
+    n = len(J)
+    pairs = [(i, j) for i in range(n) for j in range(i, n)]
+    index: dict[tuple[int, ...], int] = {p: k for k, p in enumerate(pairs)}
+    rows, rhs = [], []
+    for a in range(n):
+        for b in range(a, n):
+            # (J^T P + P J)_{ab} = sum_k J_ka P_kb + P_ak J_kb
+            row = [Fraction(0)] * len(pairs)
+            for k in range(n):
+                row[index[tuple(sorted((k, b)))]] += J[k][a]
+                row[index[tuple(sorted((a, k)))]] += J[k][b]
+            rows.append(row)
+            rhs.append([Fraction(-1 if a == b else 0)])
+    A = _fmpq_mat(rows)
+    try:
+        x = A.solve(_fmpq_mat(rhs))
+    except (ZeroDivisionError, ValueError):
+        return None
+    P = [[Fraction(0)] * n for _ in range(n)]
+    for (i, j), k in index.items():
+        P[i][j] = P[j][i] = to_fraction(x[k, 0])
+    del flint
+    return P
+
+
+def lyapunov_residual_ok(J: Matrix, P: Matrix) -> bool:
+    n = len(J)
+    for a in range(n):
+        for b in range(n):
+            value = sum((J[k][a] * P[k][b] + P[a][k] * J[k][b] for k in range(n)), Fraction(0))
+            if value != (-1 if a == b else 0):
+                return False
+    return True
+
+
+def characteristic_polynomial(J: Matrix) -> list[Fraction]:
+    """Coefficients of ``det(s I - J)``, lowest degree first (exact)."""
+    return [to_fraction(c) for c in _fmpq_mat(J).charpoly().coeffs()]
+
+
+def hurwitz_determinants(coeffs: Sequence[Fraction]) -> list[Fraction]:
+    """The Hurwitz determinants of the monic ``p(s) = sum c_k s^k`` (all > 0 iff Hurwitz)."""
+    from lyapcheck import exact
+
+    n = len(coeffs) - 1
+    a = [coeffs[n - k] for k in range(n + 1)]  # a_0 s^n + a_1 s^(n-1) + ... + a_n, a_0 = 1
+
+    def entry(i: int, j: int) -> Fraction:
+        k = 2 * (j + 1) - (i + 1)
+        return a[k] if 0 <= k <= n else Fraction(0)
+
+    H = [[entry(i, j) for j in range(n)] for i in range(n)]
+    return [exact.det(tuple(tuple(row[:k]) for row in H[:k])) for k in range(1, n + 1)]
+
+
+def right_half_plane_root(coeffs: Sequence[Fraction]) -> str | None:
+    """A root enclosure with real part certainly > 0 (FLINT/Arb, rigorous), as text, or None."""
+    import flint
+
+    poly = flint.fmpq_poly([flint.fmpq(c.numerator, c.denominator) for c in coeffs])
+    roots: Any = poly.complex_roots()  # (acb, multiplicity) pairs at run time, whatever the stubs say
+    for root, multiplicity in roots:
+        if root.real > 0:
+            return f"{root} (multiplicity {multiplicity})"
+    return None
+
+
+def imaginary_axis_roots(coeffs: Sequence[Fraction]) -> bool:
+    """Exactly: ``p`` has a root on the imaginary axis (``gcd(Re p(i w), Im p(i w))`` has a real root)."""
+    import flint
+
+    re, im = [Fraction(0)] * len(coeffs), [Fraction(0)] * len(coeffs)
+    for k, c in enumerate(coeffs):  # (i w)^k = i^k w^k
+        unit = k % 4
+        if unit == 0:
+            re[k] += c
+        elif unit == 1:
+            im[k] += c
+        elif unit == 2:
+            re[k] -= c
+        else:
+            im[k] -= c
+    R = flint.fmpq_poly([flint.fmpq(c.numerator, c.denominator) for c in re])
+    I_ = flint.fmpq_poly([flint.fmpq(c.numerator, c.denominator) for c in im])
+    G = R.gcd(I_) if not I_.is_zero() else R
+    if G.degree() < 1:
+        return False
+    # Arb isolates the roots of an integer polynomial and gives the real ones an exactly zero
+    # imaginary part (arb_fmpz_poly_complex_roots)
+    roots: Any = G.numer().complex_roots()
+    return any(root.imag.is_zero() for root, _ in roots)
+
+
+def run(shifted: ShiftedField) -> ConditionResult:
+    """Decide the linearization (see the module docstring)."""
+    return decide(jacobian(shifted))
+
+
+def decide(J: Matrix) -> ConditionResult:
+    """Decide whether the exact Jacobian ``J`` is Hurwitz, unstable or critical (the module docstring)."""
+    n = len(J)
+    cert: dict[str, Any] = {"jacobian": [[str(x) for x in row] for row in J]}
+    numbers: dict[str, Any] = {}
+    try:
+        import numpy as np
+
+        eig = np.linalg.eigvals(np.array([[float(x) for x in row] for row in J]))
+        numbers["max_real_part_estimate"] = float(np.max(eig.real))
+    except (ValueError, OverflowError, ArithmeticError):
+        pass
+    P = lyapunov_solution(J)
+    if P is not None:
+        cert["P"] = [[str(x) for x in row] for row in P]
+        if is_positive_definite(P):
+            cert["method"] = "lyapunov_equation"
+            return ConditionResult("linearization", "certified",
+                                   "the Jacobian at the equilibrium is Hurwitz (J^T P + P J = -I with P > 0, exact): "
+                                   "locally exponentially stable", numbers=numbers, certificate=cert)
+        cert["method"] = "lyapunov_inertia"
+        return ConditionResult("linearization", "refuted",
+                               "the Jacobian has an eigenvalue with positive real part (J^T P + P J = -I with P not "
+                               "positive definite, exact; inertia theorem): the equilibrium is unstable",
+                               numbers=numbers, refutation=cert)
+    coeffs = characteristic_polynomial(J)
+    cert["characteristic_polynomial"] = [str(c) for c in coeffs]
+    if all(h > 0 for h in hurwitz_determinants(coeffs)):
+        cert["method"] = "routh_hurwitz"
+        return ConditionResult("linearization", "certified",
+                               "the Jacobian is Hurwitz (every Hurwitz determinant > 0, exact): locally exponentially "
+                               "stable", numbers=numbers, certificate=cert)
+    root = right_half_plane_root(coeffs)
+    if root is not None:
+        cert["method"] = "root_isolation"
+        cert["root"] = root
+        return ConditionResult("linearization", "refuted",
+                               f"the Jacobian has an eigenvalue with positive real part (rigorous enclosure {root}): "
+                               "the equilibrium is unstable", numbers=numbers, refutation=cert)
+    from lyapcheck.models.engines import reasons
+
+    if imaginary_axis_roots(coeffs):
+        why = reasons.reason("critical case: the Jacobian has eigenvalues on the imaginary axis (exact) and none with "
+                             "positive real part, so the linearization decides nothing", ("search", "candidate"))
+        return ConditionResult("linearization", "not_certified", why.summary,
+                               numbers=why.numbers({**numbers, "reason": "critical"}), certificate=cert)
+    why = reasons.reason(f"the eigenvalues of the {n}x{n} Jacobian could not be located exactly",
+                         ("search", "candidate"), "no root enclosure was conclusive")
+    return ConditionResult("linearization", "inconclusive", why.summary, numbers=why.numbers(numbers))
+
+
+def verify(shifted: ShiftedField, status: str, data: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a ``linearization`` certificate or refutation exactly."""
+    return verify_jacobian(jacobian(shifted), status, data)
+
+
+def verify_jacobian(J: Matrix, status: str, data: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a ``linearization`` certificate or refutation of the exact Jacobian ``J``."""
+    if data.get("jacobian") != [[str(x) for x in row] for row in J]:
+        return False, "the stored Jacobian differs from the model's"
+    method = data.get("method")
+    if method in ("lyapunov_equation", "lyapunov_inertia"):
+        P = [[Fraction(x) for x in row] for row in data["P"]]
+        if len(P) != len(J) or not lyapunov_residual_ok(J, P):
+            return False, "J^T P + P J = -I does not hold exactly"
+        if status == "certified":
+            return (True, "J^T P + P J = -I with P > 0, exactly") if is_positive_definite(P) else \
+                (False, "P is not positive definite")
+        if status == "refuted":
+            # P is nonsingular by the inertia theorem; that P is not positive definite is the claim
+            return (True, "J^T P + P J = -I with P not positive definite, exactly") if not is_positive_definite(P) \
+                else (False, "P is positive definite: J is Hurwitz, not unstable")
+    coeffs = characteristic_polynomial(J)
+    if method == "routh_hurwitz" and status == "certified":
+        return (True, "every Hurwitz determinant > 0, exactly") if all(h > 0 for h in hurwitz_determinants(coeffs)) \
+            else (False, "a Hurwitz determinant is not > 0")
+    if method == "root_isolation" and status == "refuted":
+        return (True, "a rigorous root enclosure with real part > 0") if right_half_plane_root(coeffs) else \
+            (False, "no root enclosure with real part > 0")
+    return False, f"unknown method {method!r} for status {status!r}"

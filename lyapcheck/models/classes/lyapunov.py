@@ -1,0 +1,520 @@
+"""``quadratic`` and ``sos_gas``: a global polynomial Lyapunov function, found by SOS and checked exactly.
+
+The certificate (kind Lyapunov of :mod:`lyapcheck.sos.certificates`), in the scaled coordinates of
+:mod:`lyapcheck.models.loop.field`: ``V = z_V^T Q_V z_V`` over the monomials of degree 1 to ``k``,
+``Q_V > 0``, and
+
+    -grad V . g - mu V D = z_W^T Q_W z_W,   Q_W > 0,   mu >= 0,
+
+with a pure power of every state in ``z_W``. Then ``V >= lambda |z|^2`` (positive definite and
+radially unbounded) and ``V' = grad V . g / D = -mu V - sigma / D < 0`` away from 0: the equilibrium
+is globally asymptotically stable, and ``V`` decays at least like ``exp(-mu t)``. For a quadratic
+``V = z^T P z`` with ``mu > 0`` this is GES: ``|x(t)| <= sqrt(c2/c1) |x0| exp(-mu t / 2)`` with
+``c1 I <= P <= c2 I`` (exact rational bounds). For a ``V`` of higher degree the decay of ``V`` is not
+a bound linear in ``|x0|``, so only GAS (and the decay rate of ``V``) is claimed.
+
+The search (a cvxpy program per structure, :mod:`lyapcheck.sos.program`): maximize the smallest
+eigenvalue ``t`` of ``Q_V`` and ``Q_W`` with ``trace Q_V = 1``; ``z_W`` is reduced by the Newton
+polytope; where the field has sign symmetries the Gram matrices are block diagonal
+(:mod:`lyapcheck.sos.bases`). First ``mu = 0`` (GAS), then the largest ``mu`` found by a geometric
+search, each candidate decided by the exact check.
+
+The certificate found is kept in the certificate store (:mod:`lyapcheck.models.engines.store`) under the
+exact field and the degrees searched; a later run of the same problem checks it exactly again
+(:func:`recall_certificate`) and, when it passes, uses it without a solve.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
+
+from lyapcheck.models.engines import reasons, store
+from lyapcheck.models.loop.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
+from lyapcheck.models.engines.reasons import size_limit
+from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
+                                     multiplier_grams, multiplier_variable, one, param)
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos import bases
+from lyapcheck.sos.certificates import GramPoly, check_lyapunov
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials
+from lyapcheck.sos.structure import Gram, Identity, Structure, Term
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.sos.program import Solution
+
+#: degrees of V that ``sos_gas`` tries, in turn (``quadratic`` is degree 2 alone)
+SOS_GAS_DEGREES: Final = (2, 4, 6, 8)
+#: the largest Gram basis a search builds (rows); a degree that needs more is skipped, named. A
+#: solve with Gram matrices of 65 and 150 rows (degree 4 in 10 states) takes 5-7 s here
+MAX_GRAM_ROWS: Final = 120
+#: decay-rate search in scaled time: geometric steps down from MU_MAX to the first mu proved, then
+#: MU_BISECTION_STEPS geometric bisections (the rate is a figure: a few per cent resolve it)
+MU_MAX: Final = Fraction(4)
+MU_MIN: Final = Fraction(1, 10**6)
+MU_BISECTION_STEPS: Final = 4
+#: facial reduction: a remainder's basis monomial whose diagonal is below this fraction of the
+#: largest is dropped and the search repeated, at most FACIAL_ROUNDS times
+FACIAL_TOL: Final = 1e-7
+#: a remainder whose unreduced candidate basis (the monomials up to half the target's degree)
+#: has more than this many monomials is not attempted: building its Newton-reduced basis alone
+#: takes seconds, and its program could not be solved within the class's time
+CANDIDATE_LIMIT: Final = 500
+#: the most monomials an identity may have (one equality each): degree 4 in 10 states has about
+#: 3000, and a solve took 6-20 s here
+TARGET_LIMIT: Final = 1500
+#: the largest program a search solves (:meth:`~lyapcheck.sos.program.Structure.cost`): degree 4
+#: in 10 states, with two Gram matrices in PSD blocks of 47 and 18 rows (cost 2.9e9), took 12-21 s
+#: a solve here; one such Gram matrix (the 10-state level step, 1.4e9) about 2 s
+BLOCK_COST_LIMIT: Final = 2_000_000_000
+FACIAL_ROUNDS: Final = 3
+#: ... and only when the solve's margin is not clearly negative (an infeasible program has no face)
+FACIAL_MARGIN: Final = 1e-6
+#: rounds of facial reduction in the Lyapunov search (quadratic, sos_gas), where the programs
+#: shrink with every round: on a 6-state system (Papachristodoulou & Prajna) the face of the
+#: quartic V took 6 rounds
+LYAPUNOV_FACIAL_ROUNDS: Final = 8
+
+
+def symmetry(field: StateField) -> list[tuple[int, ...]]:
+    """The sign changes of the states (and box parameters) that map the field to itself (``g_i``
+    like ``z_i``, ``D`` invariant; a box's ``1 - u_j^2`` is invariant anyway)."""
+    return bases.sign_symmetries(field.ring.nvars, [(field.ring.support(gi), i) for i, gi in enumerate(field.g)]
+                                 + [(field.ring.support(field.D), None)])
+
+
+def field_degree(field: StateField) -> int:
+    """The largest total degree of ``g`` and ``D``."""
+    return max([sum(m) for gi in field.g for m in field.ring.support(gi)]
+               + [sum(m) for m in field.ring.support(field.D)] + [1])
+
+
+def _products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) -> set[Monomial]:
+    return {tuple(a + b for a, b in zip(basis[i], basis[j])) for idx in blocks for i in idx for j in idx}
+
+
+def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequence[int]],
+                       drop: frozenset[Monomial] = frozenset(), param_degree: int = 0,
+                       drop_v: frozenset[Monomial] = frozenset()) -> Structure | None:
+    """The program for a ``V`` of this degree, or None (:func:`lyapunov_program` says why)."""
+    found = lyapunov_program(field, degree, generators, drop, param_degree, drop_v)
+    return found if isinstance(found, Structure) else None
+
+
+def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequence[int]],
+                     drop: frozenset[Monomial] = frozenset(), param_degree: int = 0,
+                     drop_v: frozenset[Monomial] = frozenset()) -> Structure | str:
+    """The program for a ``V`` of this degree, or why there is none: a size limit (named), or no
+    strict certificate can exist in this form (the remainder's reduced basis lacks a pure power of
+    some state: the Newton polytope of ``-V'`` leaves no room for one). ``drop``: monomials the
+    remainder's basis leaves out, ``drop_v`` those ``V``'s basis leaves out (facial reduction,
+    :func:`vanishing_monomials`: a ``V`` whose Gram matrix must be singular over the full basis,
+    e.g. one without ``x1^4`` where an ``x1^4`` would leave odd terms in ``-V'``). Over a box of
+    parameters (the ring's variables after the states) ``V``'s basis monomials may carry the
+    parameters up to ``param_degree`` and the box's multipliers join the identity."""
+    n = field.n
+    ring = field.ring
+    nv = ring.nvars
+    if bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree) > CANDIDATE_LIMIT:
+        return size_limit(bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree),
+                          "candidate monomials", CANDIDATE_LIMIT, "CANDIDATE_LIMIT")
+    z_v = [m for m in monomials(nv, 1, degree // 2 + param_degree)
+           if 1 <= sum(m[:n]) <= degree // 2 and sum(m[n:]) <= param_degree and m not in drop_v]
+    if not bases.has_pure_powers(z_v, range(n)):
+        return ("no strict certificate of this form exists (V's basis, reduced to the face the solver found, "
+                "keeps no pure power of some state)")
+    v_blocks = bases.character_blocks(z_v, generators)
+    products = _products(z_v, v_blocks)
+    target: set[Monomial] = set()
+    for i, gi in enumerate(field.g):
+        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
+    target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+    box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators)
+    for g in box_grams:
+        sq = {tuple(2 * int(k == multiplier_variable(g.name)) for k in range(nv)), tuple([0] * nv)}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in _products(g.basis, g.blocks) for s in sq}
+    if len(target) > TARGET_LIMIT:
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
+    z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
+    if len(z_w) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
+        return size_limit(max(len(z_w), len(z_v)), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS,
+                          "MAX_GRAM_ROWS")
+    if not z_w or not bases.has_pure_powers(z_w, range(n)):
+        return ("no strict certificate of this form exists (the Newton polytope of -V' leaves no pure power of "
+                "every state in its basis)")
+    w_blocks = bases.character_blocks(z_w, generators)
+    terms = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in enumerate(field.g)]
+    terms.append(Term(param("muD", ring.support(field.D)), "V"))
+    terms.extend(box_terms)
+    terms.append(Term(one(ring, -1), "W"))
+    structure = Structure(
+        nvars=nv,
+        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))),
+               *box_grams),
+        scalars=(),
+        identities=(Identity("lyapunov", tuple(terms), None, "W"),),
+        objective=("max_margin",), trace_one=("V",))
+    if affordable(structure) is None:
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
+    return structure
+
+
+def affordable(structure: Structure) -> Structure | None:
+    """``structure`` unless its blocks cost more than :data:`BLOCK_COST_LIMIT`."""
+    return structure if structure.cost() <= BLOCK_COST_LIMIT else None
+
+
+def lyapunov_values(field: StateField, structure: Structure, mu: Fraction) -> ParameterValues:
+    values = ParameterValues()
+    ring = field.ring
+    for i, gi in enumerate(field.g):
+        values.set_poly(ring, f"g{i}", -gi, ring.support(gi))
+    values.set_poly(ring, "muD", field.D * _fmpq(-mu), ring.support(field.D))
+    return values
+
+
+def _fmpq(x: Fraction) -> Any:
+    import flint
+
+    return flint.fmpq(x.numerator, x.denominator)
+
+
+def attempt(field: StateField, structure: Structure, mu: Fraction, search: Search) -> dict[str, Any] | None:
+    """One solve at decay rate ``mu``; the exact certificate if it passes the exact check."""
+    return attempt_with_solution(field, structure, mu, search)[0]
+
+
+def attempt_with_solution(field: StateField, structure: Structure, mu: Fraction, search: Search
+                          ) -> tuple[dict[str, Any] | None, Solution]:
+    values = lyapunov_values(field, structure, mu)
+    solution = search.solve(structure, values)
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
+        return None, solution
+    point = search.exact(structure, solution, values)
+    if point is None:
+        return None, solution
+    V = GramPoly.of(structure.gram("V").basis, point.grams["V"])
+    W = GramPoly.of(structure.gram("W").basis, point.grams["W"])
+    box = box_multipliers_of(point.grams, multiplier_grams(structure))
+    ok, _ = check_lyapunov(field.ring, field.g, field.D, V, W, mu, box)
+    if not ok:
+        return None, solution
+    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"], "box": box}, solution
+
+
+def vanishing_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
+    """Facial reduction: the basis monomials whose diagonal entry the solver drove to (nearly) 0.
+
+    A positive semidefinite Gram matrix with a zero diagonal entry has a zero row, so its monomial
+    contributes nothing and keeps the matrix from being positive definite, which the exact check
+    needs; the search is repeated without it (the generic Newton polytope cannot see cancellations
+    that the identity forces, e.g. a coefficient that must vanish with another)."""
+    import numpy as np
+
+    Q = solution.grams.get(gram.name)
+    if Q is None or not solution.usable or solution.scalars.get("t", 0.0) < -FACIAL_MARGIN:
+        return frozenset()  # infeasible (a clearly negative margin): no face to reduce to
+    diag = np.abs(np.diag(Q))
+    peak = float(diag.max()) if diag.size else 0.0
+    if peak <= 0:
+        return frozenset()
+    return frozenset(m for m, d in zip(gram.basis, diag) if d <= FACIAL_TOL * peak)
+
+
+def face_probe(structure: Structure, normalized: str) -> Structure:
+    """``structure`` with every Gram matrix's floor replaced by the program's margin and the margin
+    maximized (``normalized``'s trace 1): its solution lies in the relative interior of the face of
+    the feasible set, where the diagonal entries that must vanish are (nearly) 0, so that
+    :func:`vanishing_monomials` can name them; a program with floors that is infeasible only
+    because some Gram matrix must be singular is infeasible, and shows no face."""
+    from dataclasses import replace
+
+    return replace(structure, grams=tuple(replace(g, margin=True) for g in structure.grams),
+                   objective=("max_margin",), trace_one=(normalized,))
+
+
+#: the kernel of a Gram matrix at the solver's point: eigenvalues below this share of the largest
+KERNEL_TOL: Final = 1e-7
+#: ... and a kernel vector's support: its entries above this share of its largest
+KERNEL_SUPPORT_TOL: Final = 1e-3
+
+
+def kernel_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
+    """The basis monomials in the support of the numerical kernel of ``gram``'s matrix, when the
+    solve ends on the boundary (margin about 0) with no vanishing diagonal entry: a face that is
+    not a coordinate one (e.g. ``-V'`` whose quadratic part must be a multiple of ``(x1 + x2)^2``).
+    Leaving the whole support out asks for a smaller, coordinate face inside it (there, the
+    quadratic part 0), which a certificate may well have; if none does, the next solve says so."""
+    import numpy as np
+
+    Q = solution.grams.get(gram.name)
+    if Q is None or not solution.usable or abs(solution.scalars.get("t", 1.0)) > FACIAL_MARGIN:
+        return frozenset()
+    w, U = np.linalg.eigh(Q)
+    if not w.size or w[-1] <= 0:
+        return frozenset()
+    out: set[Monomial] = set()
+    for k in np.flatnonzero(w <= KERNEL_TOL * w[-1]):
+        v = np.abs(U[:, k])
+        out |= {m for m, x in zip(gram.basis, v) if x > KERNEL_SUPPORT_TOL * v.max()}
+    return frozenset(out)
+
+
+def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], found: dict[str, Any]) -> dict[str, Any]:
+    """The certificate of the largest ``mu`` found, starting from ``found`` (``mu = 0``): step down
+    geometrically from :data:`MU_MAX` to the first ``mu`` proved (none when :data:`MU_MIN` is not
+    proved either), then bisect geometrically. The
+    time limit ends the search, never the proof: the best certificate proved so far is kept (its
+    rate is a lower bound of the best, as every rate here is)."""
+    lo, hi = Fraction(0), MU_MAX
+    candidate = MU_MAX
+    try:
+        while candidate >= MU_MIN:
+            better = attempt_at(candidate)
+            if better is not None:
+                found, lo = better, candidate
+                break
+            hi = candidate
+            if candidate == MU_MAX and attempt_at(MU_MIN) is None:
+                break  # no exponential rate at all (a critical case): one solve, not a dozen steps down
+            candidate = candidate / 4
+        if lo > 0:
+            for _ in range(MU_BISECTION_STEPS):
+                mid = Fraction(math.sqrt(float(lo) * float(hi))).limit_denominator(10**6)
+                if not lo < mid < hi:
+                    break
+                better = attempt_at(mid)
+                if better is not None:
+                    found, lo = better, mid
+                else:
+                    hi = mid
+    except BudgetExhausted:
+        pass  # the time limit: keep the best certificate proved so far
+    return found
+
+
+#: a solve's margin (the smallest Gram eigenvalue it maximized) below minus this says the strict
+#: program is infeasible: no certificate of this form; between it and 0 the program sits on the
+#: boundary of feasibility, where only a certificate with a singular Gram matrix might exist
+INFEASIBLE_MARGIN: Final = FACIAL_MARGIN
+
+
+def failure(solution: Solution, exact_tried: bool) -> str:
+    """Why one solve gave no certificate, in the words of the not-certified reasons: the solver
+    failed, the program is infeasible (margin clearly negative), it sits on the boundary of
+    feasibility, or its solution failed the exact check."""
+    margin = solution.scalars.get("t")
+    if not solution.usable or margin is None:
+        return f"the solver returned no usable point (status {solution.report.raw_status})"
+    if margin < -INFEASIBLE_MARGIN:
+        return f"the solver proved the program infeasible (best margin {margin:.2g} < 0)"
+    if exact_tried:
+        return f"the solver's solution failed the exact check (margin {margin:.2g})"
+    return (f"the program is on the boundary of feasibility (best margin {margin:.2g}): no strictly positive "
+            "certificate of this form was found")
+
+
+def search_degree(field: StateField, degree: int, search: Search, param_degree: int = 0
+                  ) -> tuple[dict[str, Any] | None, str]:
+    """A certificate with ``V`` of this degree (and its best decay rate), or None and why not: the
+    size limit that was reached, no strict certificate of the form, the solver's verdict on the
+    program, or the exact check that refused its solution."""
+    generators = symmetry(field)
+    drop: frozenset[Monomial] = frozenset()
+    drop_v: frozenset[Monomial] = frozenset()
+    label = f"degree {degree}" + (f" ({param_degree} in the parameters)" if field.p > field.disturbances else "")
+    why = "none found"
+    for _ in range(LYAPUNOV_FACIAL_ROUNDS + 1):
+        structure = lyapunov_program(field, degree, generators, drop, param_degree, drop_v)
+        if isinstance(structure, str):
+            return None, f"{label}: {structure}" + (f" (after facial reduction, where {why})" if drop or drop_v else "")
+        found, solution = attempt_with_solution(field, structure, Fraction(0), search)
+        if found is not None:
+            break
+        why = failure(solution, exact_tried=solution.usable
+                      and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+        vanishing = vanishing_monomials(structure.gram("W"), solution)
+        vanishing_v = vanishing_monomials(structure.gram("V"), solution)
+        if not vanishing and not vanishing_v:  # no zero diagonal: try the kernels' supports
+            vanishing = kernel_monomials(structure.gram("W"), solution)
+            vanishing_v = kernel_monomials(structure.gram("V"), solution)
+        if not vanishing and not vanishing_v:
+            return None, f"{label}: {why}"
+        drop = drop | vanishing
+        drop_v = drop_v | vanishing_v
+    else:
+        return None, f"{label}: {why} (after {LYAPUNOV_FACIAL_ROUNDS} rounds of facial reduction)"
+    found = best_decay_rate(lambda mu: attempt(field, structure, mu, search), found)
+    found["degree"] = degree
+    found["param_degree"] = param_degree
+    return found, f"{label}: found"
+
+
+def stated_v(scaled: ScaledField, field: StateField, v_scaled: Poly) -> dict[str, Any]:
+    """The contract's ``V``: the scaled ``V`` in the declared (shifted) states and a box's
+    parameters (never a disturbance: :attr:`StateField.claim_ring`)."""
+    v_orig = unscale_polynomial(field.ring, v_scaled, scaled.scaling, field.n, scaled.cleared.shifted.box)
+    return terms_json(field.claim_ring, field.ring.restrict(v_orig, field.claim_ring))
+
+
+def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, Any]) -> dict[str, Any]:
+    """The exact certificate: V in the declared (shifted) states, and the Gram matrices in the
+    scaled ones (the scaling is at the document's top) over ``field``'s ring."""
+    v_scaled = found["V"].poly(field.ring)
+    out = {"kind": "lyapunov", "degree": found["degree"], "mu_scaled": str(found["mu"]),
+           "V": stated_v(scaled, field, v_scaled), "gram_V": found["V"].to_json(),
+           "gram_sigma": found["W"].to_json()}
+    if found.get("box"):
+        out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]
+        out["param_degree"] = found.get("param_degree", 0)
+    return out
+
+
+def terms_json(ring: Ring, p: Poly) -> dict[str, Any]:
+    """The contract's exact polynomial: ``{"terms": [["3/2", [2, 0]], ...]}``."""
+    return {"terms": [[str(c), list(m)] for m, c in sorted(ring.terms(p).items(), key=lambda t: (sum(t[0]), t[0]),
+                                                          reverse=False)]}
+
+
+def ges_bounds(scaled: ScaledField, found: dict[str, Any]) -> tuple[Fraction, Fraction] | None:
+    """Exact ``c1 <= lambda_min(P) <= lambda_max(P) <= c2`` of the quadratic ``V = x^T P x`` in the
+    declared (shifted) states, or None (only for degree 2)."""
+    import numpy as np
+
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    n = scaled.n
+    basis = found["V"].basis
+    if found["degree"] != 2 or any(any(m[n:]) for m in basis):
+        return None  # GES is claimed for a quadratic V common to the box only
+    nv = len(basis[0])
+    Qv = found["V"].Q
+    order = [basis.index(tuple(int(k == i) for k in range(nv))) for i in range(n)]
+    P = declared_quadratic(scaled.scaling, [[Qv[order[i]][order[j]] for j in range(n)] for i in range(n)])
+    lam = np.linalg.eigvalsh(np.array([[float(x) for x in row] for row in P]))
+    c1 = Fraction(float(lam[0]) * (1 - 1e-6)).limit_denominator(10**12) if lam[0] > 0 else Fraction(0)
+    c2 = Fraction(float(lam[-1]) * (1 + 1e-6))
+    if c1 <= 0:
+        return None
+    eye = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    if not is_positive_definite([[P[i][j] - c1 * eye[i][j] for j in range(n)] for i in range(n)]):
+        return None
+    if not is_positive_definite([[c2 * eye[i][j] - P[i][j] for j in range(n)] for i in range(n)]):
+        return None
+    return c1, c2
+
+
+def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
+        param_degrees: Sequence[int] = (0,), field: StateField | None = None) -> ConditionResult:
+    """``quadratic`` (degrees ``(2,)``) or ``sos_gas`` (rising degrees) on ``field`` (default: the
+    nominal :func:`state_field`; the robust one makes every disturbance a box coordinate); over a
+    box, ``V`` may depend on the parameters up to each of ``param_degrees`` in turn (not with
+    disturbances in the ring: the basis' parameter degree counts them too, and V must not depend
+    on a disturbance)."""
+    if field is None:
+        field = state_field(scaled)
+    key = (store.problem_key("lyapunov", stored_problem(field, name, degrees, param_degrees))
+           if store.enabled() else None)
+    if key is not None:
+        recalled = recall_certificate(field, key, degrees)
+        if recalled is not None:
+            return _certified(scaled, field, name, recalled, {"solves": [], "stored": {
+                "key": key, "check": "exact, in this run"}})
+    tried: list[str] = []
+    try:
+        for degree in degrees:
+            for param_degree in (param_degrees if field.p and not field.disturbances else (0,)):
+                search.budget.check()  # also before a degree whose program is skipped unsolved
+                found, why = search_degree(field, degree, search, param_degree)
+                tried.append(why)
+                if found is not None:
+                    if key is not None:
+                        store.keep(key, {"found": found_json(found), "solves": len(search.log)})
+                    return _certified(scaled, field, name, found, {"solves": search.log})
+    except BudgetExhausted as exc:
+        late = reasons.out_of_time("a Lyapunov function", search.budget.seconds, [str(exc), *tried])
+        return ConditionResult(name, "inconclusive", late.summary,
+                               numbers=late.numbers({"reason": str(exc), "tried": tried}),
+                               solver={"solves": search.log})
+    steps = ("sos_gas", "candidate") if name == "quadratic" else ("degree", "candidate")
+    none = reasons.not_found("Lyapunov function", degrees, tried, steps)
+    return ConditionResult(name, "not_certified", none.summary, numbers=none.numbers({"tried": tried}),
+                           solver={"solves": search.log}, property="GAS" if name != "quadratic" else None)
+
+
+def stored_problem(field: StateField, name: str, degrees: Sequence[int], param_degrees: Sequence[int]
+                   ) -> dict[str, Any]:
+    """What decides the search of :func:`run`, for the certificate store's key: the class, its
+    degrees and the exact field (ring, ``g``, ``D``, how many disturbances)."""
+    return {"class": name, "degrees": list(degrees), "param_degrees": list(param_degrees),
+            "ring": list(field.ring.names), "disturbances": field.disturbances,
+            "g": [store.polynomial_json(field.ring, gi) for gi in field.g],
+            "D": store.polynomial_json(field.ring, field.D)}
+
+
+def found_json(found: dict[str, Any]) -> dict[str, Any]:
+    """A found certificate (:func:`attempt`'s, with its degrees) as the store keeps it."""
+    return {"degree": found["degree"], "param_degree": found.get("param_degree", 0), "mu": str(found["mu"]),
+            "margin": found["margin"], "V": found["V"].to_json(), "W": found["W"].to_json(),
+            "box": [[j, r.to_json()] for j, r in found["box"]]}
+
+
+def recall_certificate(field: StateField, key: str, degrees: Sequence[int]) -> dict[str, Any] | None:
+    """The stored certificate of ``key``, when it passes the exact
+    check on ``field`` (the one this run derived) now, with a ``V`` of one of ``degrees``; None
+    otherwise (no entry, a malformed one, or one that fails: the search runs as if there were none)."""
+    entry = store.recall(key)
+    if entry is None:
+        return None
+    try:
+        data = entry["found"]
+        nv = field.ring.nvars
+        V = GramPoly.from_json(data["V"], nv)
+        W = GramPoly.from_json(data["W"], nv)
+        box = [(int(j), GramPoly.from_json(r, nv)) for j, r in data["box"]]
+        mu = Fraction(data["mu"])
+        # the entry's margin (a solver's figure) and solve count are not re-provable: not read, so
+        # that nothing unchecked reaches the output (no solve ran: relative_margin is None)
+        found = {"V": V, "W": W, "mu": mu, "margin": None, "box": box,
+                 "degree": int(data["degree"]), "param_degree": int(data["param_degree"])}
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return None
+    # the degree the claim states is V's own (the search's basis reaches it with a positive diagonal),
+    # and V, as the search's, never depends on a disturbance (the claim states it without them)
+    n, d = field.n, field.disturbances
+    if found["degree"] not in degrees or not V.basis or found["degree"] != 2 * max(sum(m[:n]) for m in V.basis) \
+            or any(any(m[n:n + d]) for m in V.basis):
+        return None
+    ok, _ = check_lyapunov(field.ring, field.g, field.D, V, W, mu, box)
+    return found if ok else None
+
+
+def _certified(scaled: ScaledField, field: StateField, name: str, found: dict[str, Any], solver: dict[str, Any]
+               ) -> ConditionResult:
+    mu = found["mu"]
+    T = scaled.scaling.time
+    rate_v = float(mu / T)
+    cert = certificate_json(scaled, field, found)
+    numbers: dict[str, Any] = {"degree": found["degree"], "decay_rate_V_per_s": rate_v,
+                               "relative_margin": found["margin"]}
+    if name == "quadratic" and mu > 0:
+        bounds = ges_bounds(scaled, found)
+        if bounds is not None:
+            from lyapcheck import exact
+
+            c1, c2 = bounds
+            k_bound = exact.sqrt_upper(c2 / c1, 12)
+            cert.update({"c1": str(c1), "c2": str(c2), "k": str(k_bound)})
+            numbers.update({"k": float(k_bound), "decay_rate_per_s": rate_v / 2})
+            return ConditionResult(name, "certified",
+                                   f"GES: |x(t)| <= {float(k_bound):.4g} |x0| exp(-{rate_v / 2:.4g} t) from every start "
+                                   "(a quadratic V with V' <= -mu V, checked exactly)", numbers=numbers,
+                                   certificate=cert, solver=solver, property="GES")
+    tail = f", and V' <= -{rate_v:.4g} V (V decays exponentially from every start)" if mu > 0 else ""
+    what = "a quadratic V" if found["degree"] == 2 else f"a polynomial V of degree {found['degree']}"
+    return ConditionResult(name, "certified", f"GAS: {what} with V' < 0 away from the equilibrium{tail} "
+                                              "(checked exactly)",
+                           numbers=numbers, certificate=cert, solver=solver, property="GAS")

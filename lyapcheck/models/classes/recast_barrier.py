@@ -1,0 +1,336 @@
+"""``barrier`` on a loop with functions: no trajectory of the true loop from the initial set enters the unsafe set.
+
+The polynomial barrier (:mod:`lyapcheck.models.classes.barrier`) on the recasting (:mod:`lyapcheck.models.language.recast`):
+``B`` is a polynomial in the deviations of the states and of the smooth auxiliaries (as a recast
+Lyapunov function, :meth:`~lyapcheck.models.classes.recast_classes.Loop.v_variables`), and each condition
+is proved on the set of the recasting's relations (:mod:`lyapcheck.models.engines.recast_sos`), with a
+set's inequalities (polynomials in the states, shifted to deviations) and their pairwise products
+(:func:`~lyapcheck.sos.certificates.piece_generators`) as further relations ``p >= 0``:
+
+    -B >= 0           on the relations and each initial piece        (B <= 0 on the initial set)
+    B - 1 >= 0        on the relations and each unsafe piece         (B >= 1 on the unsafe set)
+    lam B D - grad B . N >= 0   on the relations                     (B' <= lam B everywhere)
+
+with ``x' = N / D`` and ``D > 0`` proved on the relations (as the recast sos_gas does). Every point
+``(x, a(x))`` of the true loop lies in the relations' set, so along a trajectory ``b(t) =
+B(x(t), a(x(t)))`` has ``b' <= lam b``: from ``b(0) <= 0``, ``b(t) <= 0 < 1`` for ever, and the unsafe
+set (``B >= 1`` there) is never entered. The angles are ordinary states here (a set may bound an
+angle itself: no claim modulo 2 pi). The loop is the nominal one (every disturbance at 0: its claim
+says ``(d = 0)``).
+
+Beside the proof, the true loop (each function evaluated by numpy,
+:class:`~lyapcheck.models.engines.recast_numeric.FloatLoop`) is simulated from the initial set
+(:func:`lyapcheck.models.classes.falsify.falsify`): a trajectory that enters the unsafe set is a
+``counterexample`` (no proof is then searched: none can exist), and one beside a certificate a
+soundness alarm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Final, Sequence
+
+from lyapcheck.degrees import searched_degrees
+from lyapcheck.models.engines import reasons
+from lyapcheck.models.classes.barrier import FALSIFICATION_FEW_ABOVE, FALSIFICATION_SAMPLES, LAMBDAS
+from lyapcheck.models.classes.claims import BARRIER_SENTENCE
+from lyapcheck.models.language.recast import RecastModel, Relation, written_poly
+from lyapcheck.models.classes.recast_classes import (Loop, _set, base_loop, common_denominator, lie, prove_denominators,
+                                             root_proofs_json, v_names, v_text, with_root_bounds)
+from lyapcheck.models.engines.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
+                                         poly_from_json, poly_to_json, solve_on_faces)
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.certificates import piece_generators
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
+
+#: the certificate's kind (``verify`` dispatches on it)
+KIND: Final = "recast_barrier"
+#: degrees of B tried, in turn
+RECAST_BARRIER_DEGREES: Final = (2, 4)
+#: the owner of a set's relation (:attr:`lyapcheck.models.language.recast.Relation.owner`)
+SET_OWNER: Final = "set"
+
+
+def flat_loop(loop: Loop) -> Loop:
+    """The loop with its angles as ordinary states (their relations with their sine and cosine kept)
+    and its proved square-root bounds: a set may bound an angle, so no claim is modulo 2 pi."""
+    if not loop.angles:
+        return loop
+    return with_root_bounds(base_loop(loop.system, cylinder=False, fixed=loop.fixed), dict(loop.root_bounds),
+                            loop.root_constants)
+
+
+def piece_relations(loop: Loop, state_ring: Ring, pieces: Sequence[Sequence[Poly]], what: str
+                    ) -> list[list[Relation]]:
+    """Each piece's generators (its inequalities and their pairwise products), polynomials of the
+    model's state ring, as relations ``p >= 0`` of the loop's ring in the deviations."""
+    ring = loop.ring
+    system = loop.system
+    n = len(system.states)
+    out = []
+    for k, piece in enumerate(pieces):
+        relations = []
+        for j, p in enumerate(piece_generators(list(piece))):
+            terms = {}
+            for m, c in state_ring.terms(p).items():
+                if any(m[n:]):
+                    raise ValueError("a set's inequality uses a variable that is not a state")
+                terms[tuple(m[:n]) + (0,) * (ring.nvars - n)] = c
+            relations.append(Relation("ge", system.shift(ring.from_terms(terms)), f"{what} piece {k}, generator {j}",
+                                      SET_OWNER))
+        out.append(relations)
+    return out
+
+
+@dataclass
+class Found:
+    """A barrier that passed the exact check: ``B`` (deviations), its rate, degree and proofs."""
+
+    B: Poly
+    lam: Fraction
+    degree: int
+    initial: list[ConditionCertificate]
+    unsafe: list[ConditionCertificate]
+    decrease: ConditionCertificate
+
+
+def conditions(loop: Loop, B: Poly, lam: Fraction, N: dict[str, Poly], D: Poly, initial: list[list[Relation]],
+               unsafe: list[list[Relation]]) -> list[tuple[str, Poly, list[Relation]]]:
+    """Each identity's name, its ``F >= 0`` and the relations it is proved on (module docstring)."""
+    ring = loop.ring
+    out = [(f"I{k}", -B, loop.relations + rels) for k, rels in enumerate(initial)]
+    out += [(f"U{k}", B - ring.constant(1), loop.relations + rels) for k, rels in enumerate(unsafe)]
+    out.append(("D", B * D * to_fmpq(lam) - lie(loop, B, N), list(loop.relations)))
+    return out
+
+
+def search_barrier(loop: Loop, initial: list[list[Relation]], unsafe: list[list[Relation]], budget: Budget
+                   ) -> tuple[tuple[Found, Poly, list[Any]] | None, list[str], Any]:
+    """The first barrier over :data:`RECAST_BARRIER_DEGREES` (B in the states first, then with the
+    smooth auxiliaries) and the rates :data:`~lyapcheck.models.classes.barrier.LAMBDAS` (per second) that
+    passes the exact check; with its denominator ``D`` and the proofs of ``D > 0``; what was tried."""
+    from lyapcheck import tolerances
+
+    ring = loop.ring
+    search = Search(ring, budget)
+    tried: list[str] = []
+    all_vars = loop.v_variables()
+    coordinates = loop.coordinates()
+    sets_of = [coordinates] if len(all_vars) == len(coordinates) else [coordinates, all_vars]
+    zero = tuple([0] * ring.nvars)
+    for dv in searched_degrees(RECAST_BARRIER_DEGREES):
+        for v_vars in sets_of:
+            basis = [m for m in monomials(ring.nvars, 0, dv) if all(m[i] == 0 for i in range(ring.nvars)
+                                                                   if i not in v_vars)]
+            names = [ring.names[i] for i in v_vars]
+            label = f"degree {dv} in {', '.join(names)}"
+            N, D, distinct = common_denominator(loop, names)
+            dens, failed = prove_denominators(loop, distinct, search)
+            if failed is not None:
+                tried.append(f"{label}: the denominator {written_poly(ring, failed)} was not proved positive")
+                continue
+            for lam in LAMBDAS:
+                # each rate (its faces together) gets a budget of solves: a count, the same on any machine
+                capped = search.within(tolerances.TEMPLATE_SOLVES, "per template",
+                                       "lyapcheck.tolerances.TEMPLATE_SOLVES")
+                monos = [ring.monomial(m) for m in basis]
+                shapes = conditions(loop, ring.zero(), lam, N, D, initial, unsafe)  # names and relations
+
+                def terms_of(name: str, lam: Fraction = lam) -> list[tuple[str, Poly]]:
+                    if name.startswith("I"):
+                        return [(f"b{k}", -p) for k, p in enumerate(monos)]
+                    if name.startswith("U"):
+                        return [(f"b{k}", p) for k, p in enumerate(monos)]
+                    return [(f"b{k}", p * D * to_fmpq(lam) - lie(loop, p, N)) for k, p in enumerate(monos)]
+
+                def build(drop: frozenset[tuple[str, Monomial]], lam: Fraction = lam) -> ConditionProgram | str:
+                    program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
+                                               square_free=loop.square_free())
+                    for k in range(len(basis)):
+                        program.free(f"b{k}")
+                    for name, _, relations in shapes:
+                        program.relations = relations  # each identity's own: a set's inequalities only where they hold
+                        free = terms_of(name)
+                        top = max((sum(m) for _, p in free for m in ring.support(p)), default=dv)
+                        why = program.condition(name, [zero], free, top, vanishing=False)
+                        if why is not None:
+                            return why
+                    return program
+
+                values = ParameterValues()
+                for name, _, _ in shapes:
+                    known = ring.constant(-1) if name.startswith("U") else ring.zero()
+                    _set(values, *known_values(ring, name, known, [zero]))
+
+                def accept(program: ConditionProgram, point: Any, lam: Fraction = lam) -> Found | None:
+                    B = sum((ring.monomial(m, point.scalars[f"b{k}"]) for k, m in enumerate(basis)), ring.zero())
+                    certs = {}
+                    for name, F, relations in conditions(loop, B, lam, N, D, initial, unsafe):
+                        cert = program.certificate(name, point)
+                        if not check_condition(ring, F, relations, cert)[0]:
+                            return None
+                        certs[name] = cert
+                    return Found(B, lam, dv, [certs[f"I{k}"] for k in range(len(initial))],
+                                 [certs[f"U{k}"] for k in range(len(unsafe))], certs["D"])
+
+                try:
+                    found, why = solve_on_faces(capped, build, values, accept)
+                except SolvesSpent as exc:
+                    tried.append(f"{label}, lambda = {lam} per second: {exc}")
+                    continue
+                if found is not None:
+                    tried.append(f"{label}: found at lambda = {lam} per second")
+                    return (found, D, dens), tried, search
+                tried.append(f"{label}, lambda = {lam} per second: {why}")
+                if "size" in why or "rows" in why:
+                    break
+    return None, tried, search
+
+
+def certificate_json(loop: Loop, found: Found, D: Poly, dens: list[Any]) -> dict[str, Any]:
+    """The exact certificate: B in the deviations (``shift``), written with the functions too, its
+    rate and degree, and every proof (the recasting's, each set piece's, the decrease's)."""
+    system = loop.system
+    ring = loop.ring
+    return {"kind": KIND, "variables": list(ring.names), "auxiliaries": system.definitions(),
+            "shift": {k: str(v) for k, v in system.values.items()},
+            "B": poly_to_json(ring, found.B), "B_text": v_text(system, found.B), "degree": b_degree(ring, found.B),
+            "lambda_per_s": str(found.lam), "denominator": poly_to_json(ring, D),
+            "recasting": {"roots": root_proofs_json(loop),
+                          "denominators": [{"poly": poly_to_json(ring, d), "bound": str(c), "proof": cert.to_json(ring)}
+                                           for d, c, cert in dens]},
+            "initial": [c.to_json(ring) for c in found.initial], "unsafe": [c.to_json(ring) for c in found.unsafe],
+            "decrease": found.decrease.to_json(ring)}
+
+
+def b_degree(ring: Ring, B: Poly) -> int:
+    """B's total degree (the ``degree`` figure)."""
+    return max((sum(m) for m in ring.support(B)), default=0)
+
+
+# -- falsification on the true loop -------------------------------------------------------------------
+
+class _TrueField:
+    """The true loop's field as :func:`lyapcheck.models.classes.falsify.falsify` calls it: ``(x, d)`` rows,
+    the disturbances at 0 (the nominal loop)."""
+
+    def __init__(self, model: RecastModel) -> None:
+        from lyapcheck.models.engines.recast_numeric import FloatLoop
+
+        self.loop = FloatLoop(model.system)
+
+    def __call__(self, x: Any, d: Any = None) -> Any:
+        import numpy as np
+
+        with np.errstate(all="ignore"):  # a far start overflows: the integrator treats it as an escape
+            return self.loop(x)
+
+
+def falsification(model: RecastModel) -> Any:
+    """The closest approach of trajectories of the true loop from the initial set to the unsafe set
+    (disturbances at 0); None when the simulation cannot run (no inside point of a set found)."""
+    from lyapcheck.models.classes.falsify import falsify
+    from lyapcheck.models.language.sets import margin
+
+    samples = FALSIFICATION_SAMPLES if model.n <= FALSIFICATION_FEW_ABOVE else FALSIFICATION_SAMPLES // 2
+    try:
+        return falsify(model, model.sets["initial"], model.sets["unsafe"], margin,  # type: ignore[arg-type]
+                       samples=samples, disturbed=False, evaluate=_TrueField(model))
+    except ValueError:
+        return None
+
+
+# -- the class ----------------------------------------------------------------------------------------
+
+def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
+    """The ``barrier`` class on a loop with functions (module docstring)."""
+    trial = falsification(model)
+    if trial is not None and trial.entry is not None:
+        entry = trial.entry.describe(list(model.states), [], getattr(model, "units", None) or None)
+        return ConditionResult("barrier", "counterexample",
+                               f"a simulated trajectory of the true loop from the initial set enters the unsafe set: "
+                               f"{entry} (simulation, reproducible from its start)",
+                               numbers={"falsification": trial.to_dict()},
+                               refutation={"kind": "trajectory", **trial.entry.to_dict()}, property="safety")
+    flat = flat_loop(loop)
+    initial = piece_relations(flat, model.state_ring, model.sets["initial"], "initial")
+    unsafe = piece_relations(flat, model.state_ring, model.sets["unsafe"], "unsafe")
+    try:
+        result, tried, search = search_barrier(flat, initial, unsafe, budget)
+    except BudgetExhausted as exc:
+        late = reasons.out_of_time("a barrier", budget.seconds, str(exc))
+        numbers = late.numbers({"reason": str(exc)})
+        if trial is not None:
+            numbers["falsification"] = trial.to_dict()
+        return ConditionResult("barrier", "inconclusive", late.summary, numbers=numbers, property="safety")
+    if result is None:
+        rough = sorted({a.function for a in flat.system.auxiliaries if not a.smooth and a.function})
+        if rough:  # why a low degree often cannot: B may not use them, yet B' <= lambda B must hold everywhere
+            tried.append(f"B may not use {', '.join(rough)} (not smooth): B' <= lambda B must then hold on the whole "
+                         "state space through their relations alone")
+        none = reasons.not_found("barrier", searched_degrees(RECAST_BARRIER_DEGREES), tried,
+                                 ("degree", "sets", "time"))
+        numbers = none.numbers({"tried": tried})
+        if trial is not None:
+            numbers["falsification"] = trial.to_dict()
+        return ConditionResult("barrier", "not_certified", none.summary, numbers=numbers,
+                               solver={"solves": search.log}, property="safety")
+    found, D, dens = result
+    numbers = {"degree": b_degree(flat.ring, found.B), "lambda_per_s": float(found.lam)}
+    if trial is not None:
+        numbers["falsification"] = trial.to_dict()
+        numbers["closest_approach"] = trial.closest_approach
+    return ConditionResult("barrier", "certified", BARRIER_SENTENCE, numbers=numbers,
+                           certificate=certificate_json(flat, found, D, dens), solver={"solves": search.log},
+                           property="safety")
+
+
+# -- verify -------------------------------------------------------------------------------------------
+
+def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a recast barrier exactly from the certificate and the model text: ``proved`` is the
+    loop with the certificate's square-root bounds already re-checked; the sets are the model's."""
+    from lyapcheck.models.classes.recast_classes import check_denominator_proofs
+
+    cert = c["certificate"]
+    if c.get("property") != "safety":
+        return False, "a barrier certificate proves safety"
+    if "initial" not in model.sets or "unsafe" not in model.sets:
+        return False, "the model has no [sets] initial and unsafe for a barrier"
+    loop = flat_loop(proved)
+    ring = loop.ring
+    B = poly_from_json(ring, cert["B"], "B")
+    allowed = {ring.names[i] for i in loop.v_variables()}
+    if any(degree_in(ring, B, [n]) > 0 for n in ring.names if n not in allowed):
+        return False, "B uses a variable a barrier may not (a root, or a non-smooth function)"
+    if cert.get("B_text") != v_text(loop.system, B):
+        return False, "B_text is not B written with the functions"
+    if cert.get("degree") != b_degree(ring, B):
+        return False, "the stated degree is not B's"
+    lam = Fraction(str(cert["lambda_per_s"]))
+    ok, why, N = check_denominator_proofs(loop, v_names(loop, B), cert["recasting"]["denominators"])
+    if not ok:
+        return False, why
+    _, D, _ = common_denominator(loop, v_names(loop, B))
+    if poly_from_json(ring, cert["denominator"], "denominator") != D:
+        return False, "the stated denominator is not the field's"
+    initial = piece_relations(loop, model.state_ring, model.sets["initial"], "initial")
+    unsafe = piece_relations(loop, model.state_ring, model.sets["unsafe"], "unsafe")
+    stored = list(cert["initial"]) + list(cert["unsafe"]) + [cert["decrease"]]
+    if len(cert["initial"]) != len(initial) or len(cert["unsafe"]) != len(unsafe):
+        return False, "one proof per piece of the initial and of the unsafe set is needed"
+    for (name, F, relations), data in zip(conditions(loop, B, lam, N, D, initial, unsafe), stored):
+        proof = ConditionCertificate.from_json(ring, data, len(relations))
+        if proof.rho is not None:
+            return False, f"{name}: a barrier's identity takes no region multiplier"
+        ok, why = check_condition(ring, F, relations, proof)
+        if not ok:
+            what = {"I": "B <= 0 on the initial set", "U": "B >= 1 on the unsafe set"}.get(name[0], "B' <= lambda B")
+            return False, f"{what}: {why}"
+    return True, ("B <= 0 on the initial set, B >= 1 on the unsafe set and B' <= lambda B on the recasting's "
+                  "relations, exactly")
+
+
+__all__ = ["KIND", "RECAST_BARRIER_DEGREES", "run", "check", "certificate_json", "falsification"]

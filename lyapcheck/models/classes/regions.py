@@ -1,0 +1,804 @@
+"""``roa`` and ``candidate``: sublevel sets ``{V <= c}`` proved inside the region of attraction.
+
+Certificate (kind Sublevel of :mod:`lyapcheck.sos.certificates`), in scaled coordinates:
+
+    -grad V . g - s (c - V) = sigma,   Q_V > 0,  Q_s > 0,  Q_sigma > 0,  c > 0,
+
+with ``V``'s basis holding every state, ``s`` without a constant term and a pure power of every
+state in ``sigma``'s basis. On ``{V <= c}`` minus the equilibrium, ``-grad V . g >= sigma > 0``,
+so ``V' < 0`` there (``D > 0``); the set is compact (``V >= lambda |z|^2``) and forward invariant,
+and LaSalle's principle sends every trajectory that starts in it to the equilibrium.
+
+The level (:func:`largest_level`): for a fixed ``V`` the condition is linear in ``(s, sigma)``
+for each ``c``; ``c`` is bisected on the solver's feasibility up to :data:`LEVEL_REL_TOL`, and
+the largest feasible ``c`` whose solution passes the exact check is the certified level (lower
+ones are tried if it fails). A certified level never exceeds the true supremum (that is what the
+exact check proves); the bisection's top is an estimate of that supremum from samples of
+``V' >= 0``, so it is also reported.
+
+``roa`` enlarges ``V`` iteratively from the linearization's quadratic Lyapunov function. Each
+round: the level step above gives ``c`` and the multiplier ``s``; then ``V`` is rescaled to level
+1 and, with ``s`` fixed, the condition is linear in ``V``: the V step minimizes the sum of ``V``
+over sample points of the simulated region of attraction (or of a box around the current set)
+that the set does not contain yet, with ``Q_V >= floor I``. The rounds stop when the covered share
+stops growing or the class's time runs out; the best certified set is the answer.
+
+``candidate`` is the user's own ``V``: first the global test (``-grad V . g = sigma``, GAS), then
+its largest certified level.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field as dc_field
+from fractions import Fraction
+from typing import Any, Final, Sequence
+
+import numpy as np
+
+from lyapcheck import tolerances
+from lyapcheck.degrees import searched_degrees
+from lyapcheck.models.loop.field import ScaledField, Scaling, StateField, linear_images
+from lyapcheck.models.classes.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
+    symmetry, vanishing_monomials
+from lyapcheck.models.engines.numeric import NumericPoly
+from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, SolvesSpent,
+                                     box_multipliers, box_multipliers_of, box_support, multiplier_grams, one, param)
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos import bases
+from lyapcheck.sos.certificates import GramPoly, check_containment, check_lyapunov, check_sublevel, lie_derivative
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
+from lyapcheck.sos.program import Gram, Identity, Scalar, Solution, Structure, Term
+
+#: relative width at which the level bisection stops (the certified level is within this of the
+#: largest level the solver finds feasible)
+LEVEL_REL_TOL: Final = 1e-3
+#: a level counts as feasible in the bisection when the solve's margin (smallest eigenvalue of the
+#: Gram matrices, scaled coordinates) exceeds this: at the supremum itself the margin is 0 and the
+#: solver returns noise of either sign (1e-13 seen), which the exact check then refuses
+LEVEL_MARGIN_MIN: Final = 1e-8
+#: at most this many bisection solves per level
+LEVEL_MAX_SOLVES: Final = 24
+#: degrees of V that ``roa`` enlarges to after the quadratic start, in turn (rounds each)
+ROA_DEGREES: Final = (4, 6, 8)
+#: rounds of the V step per degree (stopped early when the covered share does not grow for
+#: ROA_STALE_ROUNDS rounds)
+ROA_ROUNDS: Final = 30
+ROA_STALE_ROUNDS: Final = 3
+#: over a box of parameters: V of degree 4 only, and this many rounds (a box's programs carry the
+#: parameters and its multipliers: a solve costs 5-10 times a point's; on the reversed Van der Pol
+#: over mu in [0.8, 1.2] the full search reached 88 % of the box's common region in 55 s)
+BOX_ROA_DEGREES: Final = (4,)
+BOX_ROA_ROUNDS: Final = 8
+# the enlarging rounds spend at most lyapcheck.tolerances.ROA_ENLARGE_SOLVES solves (a count, the
+# same rounds on any machine); the rest of the class's work is the exact check of the best set and its ball
+#: the V step keeps Q_V >= ROA_FLOOR I (V positive definite with room for the exact check)
+ROA_FLOOR: Final = 1e-6
+#: extra half-degree of the multiplier s beyond the least that balances the degrees: on the
+#: reversed Van der Pol oscillator the least one stalled the enlargement at 70 % of the simulated
+#: region of attraction, one more reached 99.8 % (301 x 301 grid)
+MULTIPLIER_EXTRA: Final = 1
+#: the V step weighs the samples outside the current set nearest to it (this share of them, by V)
+VSTEP_NEAREST: Final = 0.25
+#: ... each sample's monomial vector normalized (far samples do not outweigh near ones); on the
+#: reversed Van der Pol (101 x 101 grid) the two together took the covered share from 96.6 % in
+#: 10.4 s (every outside sample, unnormalized) to 99.5 % in 4.8 s
+VSTEP_NORMALIZE: Final = True
+#: over a box, the multiplier s may carry the parameters up to this degree
+MULTIPLIER_PARAM_DEGREE: Final = 1
+#: the largest Gram basis the region searches build (rows)
+MAX_GRAM_ROWS: Final = 120
+#: sample points drawn to estimate the supremum of the level (per state: a grid of this many)
+SUPREMUM_SAMPLES: Final = 4000
+
+
+@dataclass
+class LevelCertificate:
+    V: GramPoly
+    level: Fraction
+    s: GramPoly
+    sigma: GramPoly
+    margin: float
+    box: list[tuple[int, GramPoly]] = dc_field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"kind": "sublevel", "level_scaled": str(self.level), "gram_V": self.V.to_json(),
+                               "gram_s": self.s.to_json(), "gram_sigma": self.sigma.to_json()}
+        if self.box:
+            out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in self.box]
+        return out
+
+
+@dataclass
+class BallCertificate:
+    """A level of the linearization's quadratic ``V`` proved by norm bounds (kind QuadraticBall of
+    :mod:`lyapcheck.sos.certificates`): the start of ``roa`` where the SOS level step does not fit
+    (many states) or finds nothing. It has no multiplier, so it does not seed the V step."""
+
+    V: GramPoly
+    level: Fraction
+    radius: Fraction
+    lam: Fraction
+    p_bar: Fraction
+    m: Fraction
+    margin: float = 0.0
+    box: list[tuple[int, GramPoly]] = dc_field(default_factory=list)
+    s: GramPoly | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"kind": "quadratic_ball", "level_scaled": str(self.level), "gram_V": self.V.to_json(),
+                "radius_scaled": str(self.radius), "lambda": str(self.lam), "p_bar": str(self.p_bar), "m": str(self.m)}
+
+
+#: the quadratic ball's radius is this share of the largest one the numerical bound allows
+BALL_RADIUS_SHARE: Final = Fraction(99, 100)
+
+
+def quadratic_ball(field: StateField, V: GramPoly) -> BallCertificate | None:
+    """The largest level of the quadratic ``V`` that :func:`~lyapcheck.sos.certificates.check_quadratic_ball`
+    proves (a point of parameters only: over a box the linear part depends on the parameters)."""
+    from lyapcheck.sos.certificates import check_quadratic_ball, sphere_bound
+
+    ring = field.ring
+    n = field.n
+    if ring.nvars != n or any(sum(m) != 1 for m in V.basis):
+        return None
+    idx = [V.basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
+    P = np.array([[float(V.Q[idx[i]][idx[j]]) for j in range(n)] for i in range(n)])
+    L = np.zeros((n, n))
+    coefficients: list[list[tuple[int, float]]] = []
+    for i, gi in enumerate(field.g):
+        row = []
+        for mono, c in ring.terms(gi).items():
+            if sum(mono) == 1:
+                L[i, mono.index(1)] = float(c)
+            elif sum(mono) >= 2:
+                row.append((sum(mono), abs(float(c)) * float(sphere_bound(mono))))
+        coefficients.append(row)
+    M = -(P @ L + L.T @ P)
+    eig_p = np.linalg.eigvalsh(P)
+    eig_m = np.linalg.eigvalsh(M)
+    if eig_p[0] <= 0 or eig_m[0] <= 0:
+        return None
+
+    def below(x: float) -> Fraction:
+        return Fraction(x * (1 - 1e-6)).limit_denominator(10**9)
+
+    lam, m = below(float(eig_p[0])), below(float(eig_m[0]))
+    p_bar = Fraction(float(eig_p[-1]) * (1 + 1e-6)).limit_denominator(10**9) + Fraction(1, 10**9)
+
+    def room(r: float) -> float:  # m r - 2 p_bar |b(r)|: positive while the decrease is proved
+        b = [sum(c * r ** d for d, c in row) for row in coefficients]
+        return float(m) * r - 2 * float(p_bar) * math.sqrt(sum(x * x for x in b))
+
+    if not any(coefficients):  # a linear field: any radius; the level is a figure, pick a large one
+        r_top = 1e6
+    else:
+        lo, hi = 0.0, 1.0
+        while room(hi) > 0 and hi < 1e12:
+            lo, hi = hi, hi * 2
+        for _ in range(60):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if room(mid) > 0 else (lo, mid)
+        r_top = lo
+    if not r_top > 0:
+        return None
+    for share in (BALL_RADIUS_SHARE, Fraction(9, 10), Fraction(1, 2)):
+        radius = Fraction(r_top).limit_denominator(10**9) * share
+        level = lam * radius * radius
+        ok, _ = check_quadratic_ball(ring, field.g, V, level, radius, lam, p_bar, m)
+        if ok:
+            return BallCertificate(V, level, radius, lam, p_bar, m)
+    return None
+
+
+def multiplier_half_degree(field: StateField, v_degree: int, extra: int = MULTIPLIER_EXTRA) -> int:
+    """``s`` of degree ``2k``: ``deg(s V) >= deg(grad V . g)`` at least, and ``k >= 1``, plus ``extra``."""
+    dg = max((sum(m) for gi in field.g for m in field.ring.support(gi)), default=1)
+    return max(1, math.ceil((dg - 1) / 2)) + extra
+
+
+def level_structure(field: StateField, V: GramPoly, generators: Sequence[Sequence[int]],
+                    drop: frozenset[Monomial] = frozenset()) -> Structure | None:
+    """The level step's program; the multiplier one degree richer than needed where that fits in
+    :data:`MAX_GRAM_ROWS` (many states), else the least."""
+    for extra in sorted({MULTIPLIER_EXTRA, 0}, reverse=True):
+        structure = _level_structure(field, V, generators, drop, extra)
+        if structure is not None:
+            return structure
+    return None
+
+
+def _level_structure(field: StateField, V: GramPoly, generators: Sequence[Sequence[int]],
+                     drop: frozenset[Monomial], extra: int) -> Structure | None:
+    ring = field.ring
+    n = field.n
+    nv = ring.nvars
+    v_poly = V.poly(ring)
+    v_degree = max(sum(m) for m in V.basis) * 2
+    ks = multiplier_half_degree(field, v_degree, extra)
+    pd = MULTIPLIER_PARAM_DEGREE if field.p else 0
+    if bases.candidate_count(nv, max(v_degree - 1 + field_degree(field), v_degree + 2 * ks) + 2 * pd) > CANDIDATE_LIMIT:
+        return None
+    z_s = [m for m in monomials(nv, 1, ks + pd) if 1 <= sum(m[:n]) <= ks and sum(m[n:]) <= pd]
+    s_blocks = bases.character_blocks(z_s, generators)
+    lv = lie_derivative(ring, v_poly, field.g)
+    v_support = set(ring.support(v_poly)) | {tuple([0] * nv)}
+    s_products = {tuple(a + b for a, b in zip(z_s[i], z_s[j])) for idx in s_blocks for i in idx for j in idx}
+    target = set(ring.support(lv)) | {tuple(a + b for a, b in zip(m, v)) for m in s_products for v in v_support}
+    box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators)
+    target |= box_support(box_grams, nv)
+    if len(target) > TARGET_LIMIT:
+        return None
+    z_sigma = [m for m in bases.sos_basis(nv, target) if m not in drop]
+    if not z_sigma or not bases.has_pure_powers(z_sigma, range(n)) or max(len(z_sigma), len(z_s)) > MAX_GRAM_ROWS:
+        return None
+    sigma_blocks = bases.character_blocks(z_sigma, generators)
+    terms = (Term(param("Vc", v_support), "s"), *box_terms, Term(one(ring, -1), "sigma"))
+    return affordable(Structure(nvars=nv, grams=(Gram("s", tuple(z_s), tuple(map(tuple, s_blocks))),
+                                                 Gram("sigma", tuple(z_sigma), tuple(map(tuple, sigma_blocks))),
+                                                 *box_grams),
+                                scalars=(), identities=(Identity("sublevel", terms,
+                                                                 param("LV", ring.support(lv) or [tuple([0] * nv)]),
+                                                                 "sigma"),),
+                                objective=("max_margin",)))
+
+
+def level_values(field: StateField, structure: Structure, V: GramPoly, c: Fraction) -> ParameterValues:
+    ring = field.ring
+    v_poly = V.poly(ring)
+    values = ParameterValues()
+    ident = structure.identities[0]
+    values.set_poly(ring, "LV", -lie_derivative(ring, v_poly, field.g), ident.constant.support)  # type: ignore[union-attr]
+    values.set_poly(ring, "Vc", v_poly - ring.constant(c), ident.terms[0].coefficients.support)
+    return values
+
+
+def level_attempt(field: StateField, structure: Structure, V: GramPoly, c: Fraction, search: Search,
+                  exact: bool) -> tuple[LevelCertificate | None, Solution]:
+    values = level_values(field, structure, V, c)
+    solution = search.solve(structure, values)
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN or not exact:
+        return None, solution
+    point = search.exact(structure, solution, values)
+    if point is None:
+        return None, solution
+    s = GramPoly.of(structure.gram("s").basis, point.grams["s"])
+    sigma = GramPoly.of(structure.gram("sigma").basis, point.grams["sigma"])
+    box = box_multipliers_of(point.grams, multiplier_grams(structure))
+    ok, _ = check_sublevel(field.ring, field.g, V, c, s, sigma, box)
+    return (LevelCertificate(V, c, s, sigma, solution.scalars["t"], box) if ok else None), solution
+
+
+def supremum_estimate(field: StateField, V: GramPoly, radius: float) -> float | None:
+    """``min V`` over sampled points with ``V' >= 0`` (a numerical upper bound of the true supremum
+    of the certifiable level), sampling the ball of ``radius`` (scaled coordinates); None if no
+    sample has ``V' >= 0``."""
+    ring = field.ring
+    v_poly = V.poly(ring)
+    v_num = NumericPoly(ring, v_poly)
+    dv_num = NumericPoly(ring, lie_derivative(ring, v_poly, field.g))
+    rng = np.random.default_rng(20261125)
+    n = field.n
+    directions = rng.normal(size=(SUPREMUM_SAMPLES, n))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    radii = np.linspace(radius / 400, radius, 400)
+    best = math.inf
+    for u in box_samples(field.p):  # the parameters of a box at its corners and centre
+        for chunk in np.array_split(directions, 8):
+            pts = (chunk[:, None, :] * radii[None, :, None]).reshape(-1, n)
+            full = np.hstack([pts, np.tile(u, (pts.shape[0], 1))]) if field.p else pts
+            dv = dv_num(full)
+            v = v_num(full)
+            bad = dv >= 0
+            if np.any(bad):
+                best = min(best, float(np.min(v[bad])))
+    return best if math.isfinite(best) else None
+
+
+def box_samples(p: int) -> list[np.ndarray]:
+    """The normalized parameters of a box at which numerical estimates are made: the centre and
+    the corners (only the centre, an empty vector, without a box)."""
+    import itertools
+
+    if p == 0:
+        return [np.zeros(0)]
+    return [np.zeros(p)] + [np.array(c, dtype=float) for c in itertools.product((-1.0, 1.0), repeat=p)]
+
+
+def on_states(field: StateField, points: np.ndarray) -> np.ndarray:
+    """State points padded with the box's parameters at their centre (V of a box class is common)."""
+    return np.hstack([points, np.zeros((points.shape[0], field.p))]) if field.p else points
+
+
+#: the upward search of a level without a sampled top (:func:`largest_level` with ``grow``): the
+#: level is multiplied by this while the solver finds it feasible, at most LEVEL_GROW_STEPS times
+LEVEL_GROWTH: Final = 8.0
+LEVEL_GROW_STEPS: Final = 16
+
+
+def largest_level(field: StateField, V: GramPoly, search: Search, c_top: float,
+                  generators: Sequence[Sequence[int]], grow: bool = False) -> LevelCertificate | None:
+    """The largest certified level below ``c_top`` (bisection on feasibility, then exact checks).
+
+    With ``grow``, ``c_top`` is only a first guess (no sample had ``V' >= 0``): while the level
+    program is feasible there the level is multiplied by :data:`LEVEL_GROWTH`, and the bisection
+    runs between the last feasible and the first infeasible level. Each feasible level is an SOS
+    lower bound of ``min {V : V' >= 0, x != 0}``, so the set needs no sample of the boundary."""
+    drop: frozenset[Monomial] = frozenset()
+    structure = level_structure(field, V, generators)
+    if structure is None:
+        return None
+    feasible: list[Fraction] = []
+    lo, hi = 0.0, c_top
+    c = Fraction(c_top).limit_denominator(10**9)
+    solves = 0
+    if grow:
+        for _ in range(LEVEL_GROW_STEPS):
+            search.budget.check()
+            _, solution = level_attempt(field, structure, V, c, search, exact=False)
+            solves += 1
+            if not (solution.usable and solution.scalars.get("t", 0.0) > LEVEL_MARGIN_MIN):
+                break
+            feasible.append(c)
+            c = Fraction(float(c) * LEVEL_GROWTH).limit_denominator(10**9)
+        lo, hi = (float(feasible[-1]) if feasible else 0.0), float(c)
+        if feasible and lo < hi:
+            c = Fraction(math.sqrt(lo * hi)).limit_denominator(10**9)
+        solves = 0
+    # the top itself first (often feasible when the estimate is of a V' < 0 set with no boundary)
+    while solves < LEVEL_MAX_SOLVES and (hi - lo) > LEVEL_REL_TOL * hi:
+        search.budget.check()
+        cert, solution = level_attempt(field, structure, V, c, search, exact=False)
+        solves += 1
+        ok = solution.usable and solution.scalars.get("t", 0.0) > LEVEL_MARGIN_MIN
+        if not ok and not feasible and solves <= FACIAL_ROUNDS:
+            vanishing = vanishing_monomials(structure.gram("sigma"), solution)
+            if vanishing:
+                reduced = level_structure(field, V, generators, drop | vanishing)
+                if reduced is not None:
+                    drop, structure = drop | vanishing, reduced
+                    continue
+        if ok:
+            feasible.append(c)
+            lo = float(c)
+        else:
+            hi = float(c)
+        c = Fraction(math.sqrt(lo * hi) if lo > 0 else hi / 4).limit_denominator(10**9)
+        if lo == 0 and hi < c_top * 1e-6:
+            break
+    for c in sorted(feasible, reverse=True)[:4]:
+        cert, _ = level_attempt(field, structure, V, c, search, exact=True)
+        if cert is not None:
+            return cert
+    return None
+
+
+def lyapunov_quadratic(field: StateField) -> GramPoly | None:
+    """``V = z^T P z`` with ``J^T P + P J = -I`` (``J`` the scaled field's Jacobian at 0), exact."""
+    from lyapcheck.models.classes.linearization import lyapunov_solution
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    ring = field.ring
+    n = field.n
+    nv = ring.nvars
+    origin = [Fraction(0)] * nv  # the states at the equilibrium, a box's parameters at its centre
+    d0 = ring.evaluate(field.D, origin)
+    J = [[ring.evaluate(gi.derivative(j), origin) / d0 for j in range(n)] for gi in field.g]
+    P = lyapunov_solution(J)
+    if P is None or not is_positive_definite(P):
+        return None
+    scale = max(abs(x) for row in P for x in row)
+    P = [[x / scale for x in row] for row in P]
+    basis = [m for m in monomials(nv, 1, 1) if any(m[:n])]
+    order = [basis.index(tuple(int(k == i) for k in range(nv))) for i in range(n)]
+    Q = [[P[order.index(a)][order.index(b)] for b in range(n)] for a in range(n)]
+    return GramPoly.of(basis, Q)
+
+
+def robust_quadratic(field: StateField, search: Search) -> GramPoly | None:
+    """The quadratic start of ``roa``: :func:`lyapunov_quadratic` at a point; over a box, a quadratic
+    ``V`` whose decrease along the linearized field is proved for every parameter of the box (the
+    Lyapunov class of degree 2 on the field's part of degree 1 in the states). The centre's Lyapunov
+    function need not decrease at the box's corners."""
+    if field.p == 0:
+        return lyapunov_quadratic(field)
+    from lyapcheck.models.classes.lyapunov import search_degree
+
+    ring = field.ring
+    n = field.n
+
+    def part(p: Poly, degree: int) -> Poly:
+        return ring.from_terms({m: c for m, c in ring.terms(p).items() if sum(m[:n]) == degree})
+
+    linear = StateField(ring, tuple(part(gi, 1) for gi in field.g), part(field.D, 0))
+    found, _ = search_degree(linear, 2, search)
+    return None if found is None else found["V"]
+
+
+# -- roa: enlarging V --------------------------------------------------------------------------------
+
+def vstep_structure(field: StateField, v_degree: int, s: GramPoly, generators: Sequence[Sequence[int]]
+                    ) -> Structure | None:
+    """With ``s`` fixed: ``-grad V . g - s (1 - V) = sigma``, ``Q_V >= floor I``, minimize ``<Q_V, M>``
+    (over a box, ``V`` common to it and the box's multipliers in the identity)."""
+    ring = field.ring
+    n = field.n
+    nv = ring.nvars
+    s_degree = 2 * max((sum(m) for m in s.basis), default=0)
+    if bases.candidate_count(nv, max(v_degree - 1 + field_degree(field), v_degree + s_degree)) > CANDIDATE_LIMIT:
+        return None
+    z_v = [m for m in monomials(nv, 1, v_degree // 2) if not any(m[n:])]
+    v_blocks = bases.character_blocks(z_v, generators)
+    s_poly = s.poly(ring)
+    s_support = ring.support(s_poly) or [tuple([0] * nv)]
+    products = {tuple(a + b for a, b in zip(z_v[i], z_v[j])) for idx in v_blocks for i in idx for j in idx}
+    target: set[Monomial] = set(s_support)
+    for i, gi in enumerate(field.g):
+        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
+        target |= {tuple(a + b for a, b in zip(m, q)) for m in derived for q in ring.support(gi)}
+    target |= {tuple(a + b for a, b in zip(m, q)) for m in products for q in s_support}
+    box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators,
+                                           margin="floor")  # its objective is J, not the margin
+    target |= box_support(box_grams, nv)
+    if len(target) > TARGET_LIMIT:
+        return None
+    z_sigma = bases.sos_basis(nv, target)
+    if not z_sigma or len(z_sigma) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
+        return None
+    sigma_blocks = bases.character_blocks(z_sigma, generators)
+    terms = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in enumerate(field.g)]
+    terms += [Term(param("s1", s_support), "V"), *box_terms, Term(one(ring, -1), "sigma")]
+    return affordable(Structure(nvars=nv,
+                     grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks)), margin="floor"),
+                            Gram("sigma", tuple(z_sigma), tuple(map(tuple, sigma_blocks)), margin=False), *box_grams),
+                     scalars=(Scalar("J"),),
+                     identities=(Identity("sublevel_1", tuple(terms), param("negs1", s_support), "sigma"),),
+                     objective=("min", "J"), inner=(("J", "V", "M"),)))
+
+
+def _monomial_vectors(basis: Sequence[Monomial], points: np.ndarray) -> np.ndarray:
+    out = np.ones((points.shape[0], len(basis)))
+    for k, m in enumerate(basis):
+        for i, e in enumerate(m):
+            if e:
+                out[:, k] *= points[:, i] ** e
+    return out
+
+
+def vstep(field: StateField, v_degree: int, current: LevelCertificate, samples: np.ndarray, search: Search,
+          generators: Sequence[Sequence[int]]) -> GramPoly | None:
+    """One V step (see the module docstring); the new ``V`` (floats, level 1) or None."""
+    ring = field.ring
+    structure = vstep_structure(field, v_degree, current.s, generators)
+    if structure is None:
+        return None
+    s_poly = current.s.poly(ring)
+    values = ParameterValues()
+    for i, gi in enumerate(field.g):
+        values.set_poly(ring, f"g{i}", -gi, ring.support(gi))
+    s_support = structure.identities[0].constant.support  # type: ignore[union-attr]
+    values.set_poly(ring, "s1", s_poly, s_support)
+    values.set_poly(ring, "negs1", -s_poly, s_support)
+    z_v = structure.gram("V").basis
+    samples = on_states(field, samples)
+    # the samples the current set does not hold yet weigh; the others (already in) a little
+    v_now = NumericPoly(ring, current.V.poly(ring))(samples) / float(current.level)
+    outside = samples[v_now > 1]
+    weighted = outside if outside.shape[0] else samples
+    if VSTEP_NEAREST < 1.0 and outside.shape[0]:
+        order = np.argsort(v_now[v_now > 1])
+        weighted = outside[order[:max(1, int(np.ceil(VSTEP_NEAREST * outside.shape[0])))]]
+    Z = _monomial_vectors(z_v, weighted)
+    if VSTEP_NORMALIZE:
+        norms = np.linalg.norm(Z, axis=1, keepdims=True)
+        Z = Z[norms[:, 0] > 0] / norms[norms[:, 0] > 0]
+    M = Z.T @ Z / max(weighted.shape[0], 1)
+    values.set_matrix("M", (M + M.T) / 2)
+    values.set_scalar("floor", ROA_FLOOR)
+    solution = search.solve(structure, values)
+    if not solution.usable:
+        return None
+    from lyapcheck.sos.rounding import round_matrix
+
+    return GramPoly.of(z_v, round_matrix(solution.grams["V"]))
+
+
+@dataclass
+class RegionOutcome:
+    certificate: LevelCertificate | BallCertificate | None
+    share: float | None = None
+    supremum: float | None = None
+    history: list[dict[str, Any]] = dc_field(default_factory=list)
+
+
+def covered(field: StateField, cert: LevelCertificate, samples: np.ndarray) -> np.ndarray:
+    v = NumericPoly(field.ring, cert.V.poly(field.ring))(on_states(field, samples))
+    return v <= float(cert.level)
+
+
+def enlarge(field: StateField, search: Search, samples: np.ndarray, converged: np.ndarray | None,
+            degrees: Sequence[int] | None = None, rounds: int | None = None) -> RegionOutcome:
+    """The ``roa`` search: quadratic start, then rounds of (level-1 step for ``s``, V step) at each
+    degree, the best set certified exactly (module docstring). Over a box (its programs are larger
+    and one box must cost a few points' time) :data:`BOX_ROA_DEGREES` and :data:`BOX_ROA_ROUNDS`."""
+    if degrees is None:
+        degrees = searched_degrees(BOX_ROA_DEGREES if field.p else ROA_DEGREES)
+    if rounds is None:
+        rounds = BOX_ROA_ROUNDS if field.p else ROA_ROUNDS
+    generators = symmetry(field)
+    V0 = robust_quadratic(field, search)
+    if V0 is None:
+        return RegionOutcome(None)
+    radius = float(np.max(np.linalg.norm(samples, axis=1))) if samples.size else 1.0
+    top = supremum_estimate(field, V0, 4 * radius)
+    if top is None:
+        top = float(np.max(NumericPoly(field.ring, V0.poly(field.ring))(on_states(field, samples)))) * 4 \
+            if samples.size else 10.0
+    best: LevelCertificate | BallCertificate | None = largest_level(field, V0, search, top, generators)
+    if best is None:
+        # no SOS level (its program is too large at many states, or the solves found none): the
+        # linearization's V with a level proved by norm bounds; it carries no multiplier for the V step
+        best = quadratic_ball(field, V0) if field.p == 0 else None
+        if best is None:
+            return RegionOutcome(None)
+    target = samples[converged] if converged is not None else samples
+    if not target.shape[0]:
+        target = samples
+
+    def share_of(V: GramPoly, level: Fraction) -> float:
+        v = NumericPoly(field.ring, V.poly(field.ring))(on_states(field, target))
+        return float(np.mean(v <= float(level)))
+
+    outcome = RegionOutcome(best, share_of(best.V, best.level))
+    outcome.history.append({"degree": 2, "level": float(best.level), "share": outcome.share})
+    V = _scaled(best.V, 1 / best.level)
+    s = best.s
+    candidate: tuple[GramPoly, float] | None = None
+    rounds_search = search.within(tolerances.ROA_ENLARGE_SOLVES, "for the enlarging rounds",
+                                  "lyapcheck.tolerances.ROA_ENLARGE_SOLVES")
+    try:
+        for degree in degrees:
+            if degree <= 2 or s is None:
+                continue
+            stale = 0
+            for _ in range(rounds):
+                new_V = vstep(field, degree, LevelCertificate(V, Fraction(1), s, s, 0.0), target, rounds_search,
+                              generators)
+                if new_V is None:
+                    break
+                new_s = multiplier_at(field, new_V, Fraction(1), rounds_search, generators)
+                if new_s is None:
+                    break
+                V, s = new_V, new_s
+                share = share_of(V, Fraction(1))
+                outcome.history.append({"degree": degree, "level": 1.0, "share": share})
+                if candidate is None or share > candidate[1] + 1e-4:
+                    candidate, stale = (V, share), 0
+                else:
+                    stale += 1
+                    if stale >= ROA_STALE_ROUNDS:
+                        break
+    except SolvesSpent as exc:
+        outcome.history.append({"stopped": str(exc)})
+    except BudgetExhausted:
+        outcome.history.append({"stopped": "time limit (the safety net)"})
+    if candidate is not None and candidate[1] > (outcome.share or 0.0):
+        try:
+            V, _ = candidate
+            top = supremum_estimate(field, V, 4 * radius) or 2.0
+            cert = largest_level(field, V, search, max(top, 1.0), generators)
+            if cert is not None:
+                share = share_of(cert.V, cert.level)
+                outcome.history.append({"certified_share": share, "level": float(cert.level)})
+                if share > (outcome.share or 0.0):
+                    outcome.certificate, outcome.share = cert, share
+        except BudgetExhausted:
+            outcome.history.append({"stopped": "time limit before the final exact check"})
+    return outcome
+
+
+def _scaled(V: GramPoly, factor: Fraction) -> GramPoly:
+    return GramPoly(V.basis, tuple(tuple(x * factor for x in row) for row in V.Q))
+
+
+def multiplier_at(field: StateField, V: GramPoly, c: Fraction, search: Search,
+                  generators: Sequence[Sequence[int]]) -> GramPoly | None:
+    """The level step at one level (no exact check): the multiplier ``s`` the solver centres."""
+    from lyapcheck.sos.rounding import round_matrix
+
+    structure = level_structure(field, V, generators)
+    if structure is None:
+        return None
+    _, solution = level_attempt(field, structure, V, c, search, exact=False)
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
+        return None
+    return GramPoly.of(structure.gram("s").basis, round_matrix(solution.grams["s"]))
+
+
+# -- the largest ball inside a certified set --------------------------------------------------------
+
+def ball_radius(scaled: ScaledField, field: StateField, cert: LevelCertificate | BallCertificate, search: Search
+                ) -> tuple[float | None, dict[str, Any] | None]:
+    """The radius (declared states, SI, Euclidean) of the largest ball around the equilibrium in
+    ``{V <= c}``: a numerical estimate along rays, and a certified lower bound (Containment, exact)
+    just below it, or None (``V`` over ``field``'s ring)."""
+    ring = field.ring
+    n = field.n
+    v_num = NumericPoly(ring, cert.V.poly(ring))
+    to_scaled = scaled.scaling.to_scaled
+    level = float(cert.level)
+    rng = np.random.default_rng(7)
+    directions = rng.normal(size=(2000, n))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    # along each ray in declared coordinates x = r d, scaled z = r d / s: the first r with V = c
+    lo = np.zeros(len(directions))
+    hi = np.full(len(directions), 1.0)
+    for _ in range(60):  # grow hi until outside
+        out = v_num(on_states(field, to_scaled(hi[:, None] * directions))) > level
+        if np.all(out):
+            break
+        hi = np.where(out, hi, hi * 2)
+    for _ in range(50):
+        mid = (lo + hi) / 2
+        inside = v_num(on_states(field, to_scaled(mid[:, None] * directions))) <= level
+        lo, hi = np.where(inside, mid, lo), np.where(inside, hi, mid)
+    estimate = float(np.min(lo))
+    if not estimate > 0:  # (at most three containment solves follow: a spent budget ends them, below)
+        return None, None
+    p = radius_polynomial(ring, scaled.scaling)
+    for factor in (Fraction(99, 100), Fraction(9, 10), Fraction(1, 2)):
+        r = Fraction(estimate).limit_denominator(10**9) * factor
+        try:
+            found = _containment(field, cert, p, r * r, search)
+        except BudgetExhausted:
+            return estimate, None
+        if found is not None:
+            return estimate, {"radius": str(r), **found}
+    return estimate, None
+
+
+def _containment(field: StateField, cert: LevelCertificate | BallCertificate, p: Poly, r2: Fraction, search: Search
+                 ) -> dict[str, Any] | None:
+    """Containment in the ring of the states alone (``V`` and the ball do not depend on a box's
+    parameters)."""
+    n = field.n
+    ring = Ring(field.ring.names[:n])
+    search = Search(ring, search.budget, search.log)  # this program lives in the states' ring
+    V = states_only(cert.V, n)
+    v_poly = V.poly(ring)
+    p = field.ring.restrict(p, ring)
+    kv = max(sum(m) for m in cert.V.basis)
+    z_s = monomials(n, 0, max(kv - 1, 0))
+    p_support = set(ring.support(p)) | {tuple([0] * n)}
+    s_products = {tuple(a + b for a, b in zip(x, y)) for x in z_s for y in z_s}
+    target = set(ring.support(v_poly)) | {tuple([0] * n)} | {tuple(a + b for a, b in zip(m, q))
+                                                             for m in s_products for q in p_support}
+    z_sigma = bases.sos_basis(n, target)
+    if not z_sigma or len(z_sigma) > MAX_GRAM_ROWS:
+        return None
+    # c - V - s (r^2 - p) - sigma = 0
+    structure = Structure(nvars=n, grams=(Gram("s", tuple(z_s), bases_full(z_s)),
+                                          Gram("sigma", tuple(z_sigma), bases_full(z_sigma))), scalars=(),
+                          identities=(Identity("containment", (Term(param("pr", p_support), "s"),
+                                                               Term(one(ring, -1), "sigma")),
+                                               param("cV", set(ring.support(v_poly)) | {tuple([0] * n)}),
+                                               "sigma"),),
+                          objective=("max_margin",))
+    values = ParameterValues()
+    values.set_poly(ring, "pr", p - ring.constant(r2), structure.identities[0].terms[0].coefficients.support)
+    values.set_poly(ring, "cV", ring.constant(cert.level) - v_poly, structure.identities[0].constant.support)  # type: ignore[union-attr]
+    solution = search.solve(structure, values)
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
+        return None
+    point = search.exact(structure, solution, values)
+    if point is None:
+        return None
+    s = GramPoly.of(z_s, point.grams["s"])
+    sigma = GramPoly.of(z_sigma, point.grams["sigma"])
+    ok, _ = check_containment(ring, V, cert.level, p, r2, s, sigma)
+    return {"gram_s": s.to_json(), "gram_sigma": sigma.to_json()} if ok else None
+
+
+def states_only(V: GramPoly, n: int) -> GramPoly:
+    """A Gram polynomial whose basis carries no box parameter, in the ring of the states alone."""
+    if any(any(m[n:]) for m in V.basis):
+        raise ValueError("V depends on the box's parameters")
+    return GramPoly(tuple(m[:n] for m in V.basis), V.Q)
+
+
+def bases_full(basis: Sequence[Monomial]) -> tuple[tuple[int, ...], ...]:
+    return (tuple(range(len(basis))),)
+
+
+def radius_polynomial(ring: Ring, scaling: Scaling) -> Poly:
+    """``|x - x_eq|^2`` (declared states) in the scaled coordinates: ``|A w~|^2``."""
+    n = len(scaling.states)
+    p = ring.zero()
+    for component in linear_images(ring, n, scaling.matrix())[:n]:
+        p += component * component
+    return p
+
+
+# -- the classes -------------------------------------------------------------------------------------
+
+def level_result(name: str, scaled: ScaledField, field: StateField, cert: LevelCertificate | BallCertificate, search: Search,
+                 numbers: dict[str, Any], what: str) -> ConditionResult:
+    """A certified ``roa`` / ``candidate``: the set, its level, V in declared states, the ball."""
+    from lyapcheck.models.classes.lyapunov import stated_v
+
+    certificate = {**cert.to_json(), "V": stated_v(scaled, field, cert.V.poly(field.ring)), "level": str(cert.level)}
+    estimate, ball = ball_radius(scaled, field, cert, search)
+    numbers = {"level": float(cert.level), **numbers}
+    if ball is not None:
+        certificate["ball"] = ball
+        numbers["ball_radius"] = float(Fraction(ball["radius"]))
+    if estimate is not None:
+        numbers["ball_radius_estimate"] = estimate
+    from lyapcheck.models.classes.claims import rounded
+
+    ball_text = (f"; it holds the ball |x - x_eq| <= {rounded(numbers['ball_radius'], 4, 'down')}"
+                 if "ball_radius" in numbers else "")
+    return ConditionResult(name, "certified", f"{what}: every start in {{V <= {rounded(cert.level, 6, 'down')}}} "
+                                              f"converges to the equilibrium (checked exactly){ball_text}",
+                           numbers=numbers, certificate=certificate, solver={"solves": search.log}, property="ROA")
+
+
+def global_decrease(field: StateField, V: GramPoly, mu: Fraction, search: Search) -> GramPoly | None:
+    """For a fixed ``V``: ``sigma`` with ``-grad V . g - mu V D = sigma`` exactly (kind Lyapunov), or None."""
+    ring = field.ring
+    v_poly = V.poly(ring)
+    target_poly = -lie_derivative(ring, v_poly, field.g) - v_poly * field.D * to_fmpq(mu)
+    support = set(ring.support(target_poly))
+    if not support:
+        return None
+    n = field.n
+    generators = symmetry(field)
+    drop: frozenset[Monomial] = frozenset()
+    for _ in range(FACIAL_ROUNDS + 1):
+        z_sigma = [m for m in bases.sos_basis(n, support) if m not in drop]
+        if not z_sigma or not bases.has_pure_powers(z_sigma, range(n)) or len(z_sigma) > MAX_GRAM_ROWS:
+            return None
+        structure = Structure(nvars=n, grams=(Gram("sigma", tuple(z_sigma),
+                                                   tuple(map(tuple, bases.character_blocks(z_sigma, generators)))),),
+                              scalars=(), identities=(Identity("decrease", (Term(one(ring, -1), "sigma"),),
+                                                               param("LV", support), "sigma"),),
+                              objective=("max_margin",))
+        values = ParameterValues()
+        values.set_poly(ring, "LV", target_poly, structure.identities[0].constant.support)  # type: ignore[union-attr]
+        solution = search.solve(structure, values)
+        if solution.usable and solution.scalars.get("t", 0.0) > 0:
+            point = search.exact(structure, solution, values)
+            if point is not None:
+                sigma = GramPoly.of(z_sigma, point.grams["sigma"])
+                if check_lyapunov(ring, field.g, field.D, V, sigma, mu)[0]:
+                    return sigma
+        vanishing = vanishing_monomials(structure.gram("sigma"), solution)
+        if not vanishing:
+            return None
+        drop = drop | vanishing
+    return None
+
+
+def gram_of(field: StateField, p: Poly, search: Search) -> GramPoly | None:
+    """``p = z^T Q z`` with ``Q > 0`` over the reduced basis of ``p`` (exactly), or None: how a
+    user's candidate ``V`` is shown positive definite and radially unbounded."""
+    ring = field.ring
+    n = field.n
+    support = set(ring.support(p))
+    basis = bases.sos_basis(n, support)
+    if not basis or not bases.has_pure_powers(basis, range(n)) or any(sum(m) == 0 for m in basis):
+        return None
+    structure = Structure(nvars=n, grams=(Gram("V", tuple(basis), bases_full(basis)),), scalars=(),
+                          identities=(Identity("gram", (Term(one(ring, -1), "V"),), param("P", support), "V"),),
+                          objective=("max_margin",))
+    values = ParameterValues()
+    values.set_poly(ring, "P", p, structure.identities[0].constant.support)  # type: ignore[union-attr]
+    solution = search.solve(structure, values)
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
+        return None
+    point = search.exact(structure, solution, values)
+    if point is None:
+        return None
+    V = GramPoly.of(basis, point.grams["V"])
+    return V if V.poly(ring) == p and V.positive_definite() else None

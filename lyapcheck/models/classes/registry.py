@@ -1,0 +1,166 @@
+"""The classes of a model file, each declared once: what it proves, where it runs, what a sweep stores.
+
+:data:`CLASSES` is the one list of the condition classes of ``certify --model`` (DESIGN.md, "Model
+files"), in the order they run (cheapest first) and are listed in a certificate. These names are
+derived from it:
+
+================================================  =================================================
+name                                              derived from
+================================================  =================================================
+:data:`lyapcheck.models.surfaces.certify.MODEL_CLASSES`    :data:`NAMES`: the selection and its order
+:data:`lyapcheck.models.surfaces.certify.CLEARED_CLASSES`  :data:`CLEARED`: the field multiplied through
+:data:`sweeps.spec.MODEL_USER_CLASSES`            :data:`USER_GIVEN`: a sweep cannot run them
+:data:`sweeps.spec.MODEL_POINT_ONLY_CLASSES`      :data:`POINT_ONLY`: ``not_applicable`` over a box
+:data:`sweeps.spec.MODEL_POINT_CLASSES`           every class but :data:`USER_GIVEN`
+:data:`sweeps.spec.MODEL_BOX_CLASSES`             :data:`OVER_BOX`: those with box certificates
+:data:`sweeps.evaluate.MODEL_STABILITY_CLASSES`   :data:`STABILITY`: an unstable point refutes them
+:data:`sweeps.schema.FIGURES`                     each class's ``figures``, stored per point or box
+:data:`sweeps.schema.OUTPUT_FIGURES`              each class's ``output_figure``
+================================================  =================================================
+
+so the sweeps of model files (store variables, units of work, summaries, the report of a store) take a
+new class from its entry alone.
+
+**A new family of classes** (a later issue adds ``barrier`` and ``reach_avoid``) is:
+
+1. one :class:`ModelClass` entry per class in :data:`CLASSES` (here; its place is its place in the
+   order of ``certify --model``);
+2. its implementation module, ``lyapcheck/models/<family>.py``: the search, returning a
+   :class:`~lyapcheck.results.ConditionResult`, and the exact check of its certificate;
+3. one module in ``reports/sections/``, the one the entries' ``family`` names (a
+   :class:`reports.sections.base.Section` naming the classes in its ``titles``), and that section in
+   :data:`reports.sections.SECTIONS` (``reports/README.md``).
+
+What else must change today, because those places name each class rather than read this list:
+
+4. :func:`lyapcheck.models.surfaces.certify.certify_model`: one ``if "<name>" in chosen: run("<name>", ...)``
+   calling the implementation (in the branch with the cleared field ``sc`` when ``cleared``); without
+   it the class is selectable but never runs, and is missing from the certificate;
+5. ``lyapcheck/models/surfaces/certificate.py``, ``_verify_class``: a branch calling the implementation's exact
+   check (an unknown certificate kind fails verification); and, when the class proves its claim with
+   the disturbances at 0 only, the tuple in ``_check_disturbance_keys``;
+6. :func:`lyapcheck.models.classes.claims.summary`: the sentence a ``certified`` condition states (verify
+   compares it with the document's summary);
+7. :data:`lyapcheck.results.PROPERTY`: the class's default property, equal to ``proves``
+   (``tests/test_model_class_registry.py`` checks it); a new property (``safety``, ``reach_avoid``) is
+   also one more value of :data:`lyapcheck.results.Property`.
+
+Nothing in ``sweeps/`` changes. :mod:`sweeps.crosscheck` cross-checks by simulation the Lyapunov-type
+certificates (``quadratic``, ``sos_gas``, ``roa``) and ``sos_bound``; a new family is stored and
+summarised, and simulated against its claim only once the cross-check learns that claim.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Final, NamedTuple
+
+from lyapcheck.results import Property
+
+
+class Figure(NamedTuple):
+    """One key figure of a certified class, stored by sweeps as the float ``<class>_<suffix>``."""
+
+    #: the store variable's suffix
+    suffix: str
+    #: the key of the class's ``numbers`` holding the figure
+    key: str
+    #: what the figure is (the store variable's description)
+    text: str
+
+
+class OutputFigure(NamedTuple):
+    """A figure per output of the model, stored by sweeps as ``<class>_<output>``."""
+
+    #: the key of the class's ``numbers`` holding ``{output: value}``
+    key: str
+    #: what the figure is, with ``{y}`` for the output's name
+    text: str
+
+
+@dataclass(frozen=True)
+class ModelClass:
+    """One condition class of a model file."""
+
+    #: its name in ``--classes``, in a certificate's ``conditions``, in a store's ``status_<name>``
+    name: str
+    #: its family: the module of ``reports/sections/`` that shows it (``stability``, ``output_bound``)
+    family: str
+    #: what a ``certified`` proves by default (a result may state another: ``quadratic`` GES or GAS)
+    proves: Property
+    #: it certifies every parameter value of a ``--box`` (:mod:`lyapcheck.models.loop.boxes`); else it
+    #: certifies a point only and is ``not_applicable`` over a box
+    over_box: bool
+    #: it proves a stability property of the equilibrium: an unstable equilibrium (the linearization
+    #: refuted, exactly) refutes it
+    stability: bool
+    #: it needs the field multiplied through by its denominators (each proved of one sign)
+    cleared: bool = True
+    #: it needs the user's input (``--candidate``): a sweep cannot run it
+    user_given: bool = False
+    #: its key figures, stored by sweeps per point or box
+    figures: tuple[Figure, ...] = ()
+    #: its figure per output of the model, if any
+    output_figure: OutputFigure | None = None
+
+    @property
+    def point_only(self) -> bool:
+        """It certifies a point only (``not_applicable`` over a ``--box``)."""
+        return not self.over_box
+
+
+_V_RATE: Final = Figure("decay_rate_V_per_s", "decay_rate_V_per_s", "certified decay rate of V: V' <= -rate V, 1/s")
+
+#: every class of a model file, in the order ``certify --model`` runs them (cheapest first)
+CLASSES: Final[tuple[ModelClass, ...]] = (
+    ModelClass("linearization", "stability", "LES", over_box=False, stability=True, cleared=False),
+    ModelClass("quadratic", "stability", "GES", over_box=True, stability=True,
+               figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"),
+                        Figure("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s"))),
+    ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,)),
+    ModelClass("roa", "stability", "ROA", over_box=True, stability=True,
+               figures=(Figure("level", "level", "the certified region of attraction is {V <= level}"),
+                        Figure("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI"))),
+    ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True),
+    ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
+               output_figure=OutputFigure("bounds", "limsup |{y} - {y}_eq| <= this, SI ({y}_eq: bounds_reference)")),
+    ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
+               figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
+    ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False,
+               figures=(Figure("reach_time_bound_s", "reach_time_bound_s",
+                               "the goal is reached within this time, s"),)),
+)
+
+
+def _names(**want: bool) -> tuple[str, ...]:
+    return tuple(c.name for c in CLASSES if all(getattr(c, k) == v for k, v in want.items()))
+
+
+#: the classes' names, in order
+NAMES: Final = _names()
+#: the classes that need the field multiplied through (every denominator of one sign proved)
+CLEARED: Final = _names(cleared=True)
+#: the classes with a box version (they certify every parameter value of a ``--box``)
+OVER_BOX: Final = _names(over_box=True)
+#: the classes that certify a point only (``not_applicable`` over a box)
+POINT_ONLY: Final = _names(point_only=True)
+#: the classes whose certificate proves a stability property (an unstable point refutes them)
+STABILITY: Final = _names(stability=True)
+#: the classes that need the user's input (``--candidate``)
+USER_GIVEN: Final = _names(user_given=True)
+#: class name -> its entry
+BY_NAME: Final[dict[str, ModelClass]] = {c.name: c for c in CLASSES}
+
+
+def _check() -> None:
+    if len(BY_NAME) != len(CLASSES):
+        raise RuntimeError("two model classes share a name")
+    for c in CLASSES:
+        if c.user_given and c.over_box:
+            raise RuntimeError(f"{c.name}: a class needing the user's input certifies a point only")
+
+
+_check()
+
+__all__ = ["Figure", "OutputFigure", "ModelClass", "CLASSES", "NAMES", "CLEARED", "OVER_BOX", "POINT_ONLY",
+           "STABILITY", "USER_GIVEN", "BY_NAME"]

@@ -1,0 +1,500 @@
+"""``certify --model`` and ``verify`` for a loop with functions (sin, sqrt, sat, ...).
+
+The certificate document is a model certificate (``kind`` lyapcheck-model-certificate, schema 1;
+:mod:`lyapcheck.models.surfaces.certificate`) with a ``"recast"`` table: the recasting's variables, each
+auxiliary's definition in the model-file language (``{"s1": "sin(theta)", "c1": "cos(theta)"}``),
+each relation and flow, as lyapcheck derived them. Each certified condition's certificate carries
+``variables`` (the states, then the auxiliaries), ``auxiliaries`` (the same definitions), ``shift``
+(the equilibrium value of each state and auxiliary: ``V`` is a polynomial in ``v - shift[v]``, the
+constant roots ``rt2``, ``rt3`` unshifted), ``V``, ``V_text`` (V written with the functions),
+``epsilon``, the proofs of the recasting (square roots' lower bounds, denominators' positivity) and
+of each identity (:mod:`lyapcheck.models.engines.recast_sos`).
+
+``verify`` re-reads the model text, recasts it again (each flow and relation re-derived from the
+text, so a certificate cannot bring its own), re-checks every stored proof exactly and recomputes
+the verdict. It never calls a solver.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from fractions import Fraction
+from typing import Any, Sequence
+
+from lyapcheck.errors import InvalidParameter, ModelFileError
+from lyapcheck.models.language.parameter_box import ModelBox
+from lyapcheck.models.language.recast import RecastModel
+from lyapcheck.models.classes.recast_bound import KIND, check_bound
+from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
+                                             jacobian, lie, state_square, v_names, v_text)
+from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES, box_robust, boxed_loop, robust_of
+from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
+from lyapcheck.models.classes.claims import BARRIER_SENTENCE, covered
+from lyapcheck.models.classes.recast_barrier import KIND as RECAST_BARRIER
+from lyapcheck.models.surfaces.stated import Stated, check_declared, check_stated
+from lyapcheck.results import ConditionResult, Disturbances
+from lyapcheck.sos.polynomials import degree_in, to_fmpq
+
+Row = tuple[str, bool, str]
+
+
+def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None, disturbed: bool = False,
+                   model: RecastModel | None = None) -> tuple[str, ...]:
+    """The classes asked for among every model class; the default is every recast class (``candidate``
+    with ``--candidate``, ``sos_bound`` with disturbances, ``barrier`` with ``[sets]`` initial and
+    unsafe). A safety class named needs its sets (``model``: one line at ``[sets]`` otherwise)."""
+    from lyapcheck.models.classes.registry import NAMES
+    from lyapcheck.models.language.sets import require_sets
+
+    sets = model.sets if model is not None else {}
+    if classes is None or classes == "all":
+        names = [c for c in RECAST_CLASSES if (c != "candidate" or candidate is not None)
+                 and (c != "sos_bound" or disturbed) and (c != "barrier" or ("initial" in sets and "unsafe" in sets))]
+    else:
+        names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes)]
+        bad = [c for c in names if c not in NAMES]
+        if not names or bad:
+            raise InvalidParameter("classes", "classes among " + ", ".join(NAMES), ",".join(map(str, names)))
+        if model is not None and "barrier" in names:
+            require_sets(model, "barrier")  # type: ignore[arg-type]  # (it reads only source and sets)
+    return tuple(c for c in NAMES if c in names)
+
+
+def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = None, candidate: str | None = None,
+                   time_limit_s: float | None = None, box: ModelBox | None = None
+                   ) -> tuple[str, dict[str, ConditionResult], dict[str, Any]]:
+    """Run the classes on a recast loop: the verdict, the results and the certificate document.
+    With ``box`` (``model`` read at its centre), every certified claim holds for every value of it and
+    says so first; a refutation is the centre's and says so."""
+    from lyapcheck import tolerances as tol
+    from lyapcheck.models.surfaces import recast_run
+    from lyapcheck.models.surfaces.certify import verdict_of
+
+    limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
+    chosen = chosen_classes(classes, candidate, bool(model.disturbances), model)
+    if "candidate" in chosen and candidate is None:
+        raise InvalidParameter("candidate", 'a V with --candidate "EXPR" for class candidate', "nothing")
+    V = model.candidate_v if candidate is not None else None
+    results, loop, _ = recast_run.certify(model, chosen, V, limit, box)
+    for name in chosen:
+        if name not in results:
+            results[name] = ConditionResult(name, "not_applicable", "not taken yet for a loop with functions (sin, "
+                                            "sqrt, sat, ...): the classes here are " + ", ".join(RECAST_CLASSES))
+    results = {name: results[name] for name in chosen}
+    # the loop is recast with every disturbance at 0
+    coverage: Disturbances | None = "zero" if model.disturbances else None
+    for name, r in results.items():
+        if r.status == "certified" and name not in ("linearization", "sos_bound"):  # (sos_bound's is its own)
+            r.summary = sentence_of(r.certificate)
+        if coverage is not None and name != "sos_bound":
+            if r.disturbances is None:  # ("all": a region proved for every disturbance value)
+                r.disturbances = coverage
+            if r.status in ("certified", "refuted"):
+                r.summary = covered(r.disturbances, r.summary)
+    if box is not None:
+        for name, r in results.items():
+            if r.status in ("certified", "refuted"):
+                r.summary = box_prefix(box, r.status) + r.summary
+    conditions = {name: r.to_json() for name, r in results.items()}
+    verdict = verdict_of(conditions)
+    return verdict, results, build_document(model, loop, candidate, conditions, verdict, box)
+
+
+def box_prefix(box: ModelBox, status: str) -> str:
+    """What a claim over a box says first: ``for every b in [0.5, 2]: `` (certified), or where in the
+    box a refutation holds (its centre, one point of the box: the claim for every value is false)."""
+    from lyapcheck.exact import exact_decimal
+    from lyapcheck.models.classes.claims import box_words
+
+    if status == "certified":
+        return f"for every {box_words({n: (lo, hi) for n, lo, hi in box.bounds})}: "
+    centre = ", ".join(f"{n} = {exact_decimal(box.center(n))}" for n in box.names)
+    return f"at the box's centre ({centre}), so not for every value of the box: "
+
+
+def build_document(model: RecastModel, loop: Loop, candidate: str | None, conditions: dict[str, Any],
+                   verdict: str, box: ModelBox | None = None) -> dict[str, Any]:
+    from lyapcheck.answers import answers_of
+    from lyapcheck.models.surfaces.documents import KIND, SCHEMA_VERSION
+    from lyapcheck.numerics import package_versions
+
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "kind": KIND,
+        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text},
+        "overrides": dict(model.overrides),
+        "candidate": candidate,
+        "states": list(model.states),
+        "equilibrium": {s: str(v) for s, v in zip(model.states, model.equilibrium)},
+        "parameters": {k: str(v) for k, v in model.parameters.items()},
+        "disturbances": {d: str(b) for d, b in model.disturbances.items()},
+        "recast": {**model.system.to_json(), "angles": {a: list(sc) for a, sc in loop.angles.items()}},
+        **({"box": box.to_json()} if box is not None else {}),
+        "conditions": conditions,
+        "answers": answers_of(conditions),
+        "verdict": verdict,
+        "versions": package_versions(),
+    }
+
+
+def sentence_of(cert: dict[str, Any]) -> str:
+    """The claim sentence of a recast certificate of any kind (a barrier's is the polynomial loops' one)."""
+    if cert.get("kind") == RECAST_BARRIER:
+        return BARRIER_SENTENCE
+    if cert.get("kind") == "interval":
+        from lyapcheck.models.classes.recast_interval import claim_sentence as interval_sentence
+
+        return interval_sentence(cert)
+    return claim_sentence(cert)
+
+
+def claim_sentence(cert: dict[str, Any]) -> str:
+    """What a certified recast condition proves, in one sentence made from its certificate alone
+    (``verify`` re-makes it and compares: a printed sentence never claims more than the proof). A
+    distance is to the equilibrium, a rate in 1/s (:func:`lyapcheck.models.classes.claims.with_unit`)."""
+    from lyapcheck.models.classes.claims import RATE_UNIT, rounded, with_unit
+
+    angles = list(cert["angles"])
+    modulo = (f" modulo 2 pi in {', '.join(angles)} (the loop is periodic in {'it' if len(angles) == 1 else 'them'})"
+              if angles else "")
+    eps = cert["epsilon"]
+    if "ges" in cert:
+        eps = cert.get("decrease_epsilon", eps)
+        ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
+        return (f"globally exponentially stable: |x(t) - x_eq| <= {rounded(ges['k'], 6, 'up')} |x0 - x_eq| exp(-r t) "
+                f"with r = {with_unit(ges['rate'], RATE_UNIT, 6, 'down')}, from every start (exactly k = {ges['k']}, "
+                f"r = {ges['rate']}: V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} "
+                "|z|^2, proved exactly on the recasting's relations; V_text in the certificate)")
+    if "level" in cert:
+        level = Fraction(str(cert["level"]))
+        return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "
+                f"{rounded(level, 6, 'down')} (exactly {level}) converges to the equilibrium{modulo} (V positive definite "
+                f"and V' <= -{eps} |dx|^2 / D there, D > 0, proved exactly on the recasting's relations; V_text in "
+                "the certificate)")
+    return (f"globally asymptotically stable{modulo}: V(x, a(x)) >= {cert.get('positivity_epsilon', eps)} |dx|^2 and "
+            f"V' <= -{eps} |dx|^2 / D everywhere, D > 0 (proved exactly on the recasting's relations; V_text in the "
+            "certificate)")
+
+
+# -- verify ------------------------------------------------------------------------------------------
+
+def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, str]:
+    """The exponential bound of a quadratic certificate: V quadratic in the states, no denominator,
+    ``P - c1 I`` and ``c2 I - P`` positive definite, ``rate = eps/(2 c2)`` and ``k^2 >= c2/c1`` (all
+    exact)."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    ring = loop.ring
+    n = loop.n_states
+    if region or loop.angles:
+        return False, "an exponential bound is stated for a global quadratic V in the states only"
+    if poly_from_json(ring, cert["denominator"], "denominator") != ring.constant(1):
+        return False, "an exponential bound needs a field without denominators (D = 1)"
+    V = poly_from_json(ring, cert["V"], "V")
+    P = [[Fraction(0)] * n for _ in range(n)]
+    for m, coefficient in ring.terms(V).items():
+        if sum(m) != 2 or any(m[n:]):
+            return False, "an exponential bound needs V quadratic in the states alone"
+        i = next(k for k in range(n) if m[k])
+        j = next(k for k in range(n - 1, -1, -1) if m[k])
+        P[i][j] = P[j][i] = coefficient if i == j else coefficient / 2
+    ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
+    eps = Fraction(str(cert.get("decrease_epsilon", cert["epsilon"])))
+    if set(ges) != {"c1", "c2", "rate", "k"} or ges["c1"] <= 0 or ges["c2"] <= 0 or \
+            ges["rate"] != eps / (2 * ges["c2"]) or ges["k"] < 0 or ges["k"] ** 2 < ges["c2"] / ges["c1"]:
+        return False, "the exponential bound's c1, c2, rate and k do not follow from V and epsilon"
+    if not is_positive_definite([[ges["c2"] * int(i == j) - P[i][j] for j in range(n)] for i in range(n)]):
+        return False, "c2 I - P is not positive definite: c2 does not bound V from above"
+    if not is_positive_definite([[P[i][j] - ges["c1"] * int(i == j) for j in range(n)] for i in range(n)]):
+        return False, "P - c1 I is not positive definite: c1 does not bound V from below"
+    return True, "the exponential bound follows"
+
+
+
+def verify_recast(doc: dict[str, Any]) -> list[Row]:
+    """Re-check a recast loop's certificate exactly; (check, ok, message) rows."""
+    from lyapcheck.models.surfaces.documents import with_verdict as _with_verdict
+    from lyapcheck.models.language.modelfile import parse_any_model
+
+    rows: list[Row] = []
+    part = doc["model"]
+    text = part["text"]
+    if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
+        return [("model", False, "the model text does not match its SHA-256: the text was changed")]
+    try:
+        model = parse_any_model(text, part.get("file", "<certificate>"), doc.get("overrides") or {},
+                                candidate=doc.get("candidate"))
+    except ModelFileError as exc:
+        return [("model", False, f"the stored model text no longer parses: {exc}")]
+    if not isinstance(model, RecastModel):
+        return [("model", False, "the stored model has no functions: it is not a recast loop")]
+    rows.append(("model", True, "the model text matches its SHA-256, parses and is recast again from it"))
+    same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
+            and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
+    rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
+                 "the stated parameters or equilibrium differ from the model text's"))
+    rows.append(check_declared(doc, model))
+    stated = doc["recast"]
+    derived = model.system.to_json()
+    recast_ok = all(stated.get(k) == derived[k] for k in derived)
+    rows.append(("recasting", recast_ok, "the stated auxiliaries, flows and relations are the ones the model text "
+                                         "gives" if recast_ok else "the stated recasting differs from the one the "
+                                                                   "model text gives"))
+    base = base_loop(model.system)
+    coverage = "zero" if model.disturbances else None
+    declared = {d: str(b) for d, b in model.disturbances.items()}
+    if doc.get("disturbances", {}) != declared:
+        rows.append(("disturbances", False, "the stated disturbances are not the model text's"))
+    box, boxed, why_not = _box_of(doc, model)
+    if why_not:
+        rows.append(("box", False, why_not))
+        return _with_verdict(doc, rows)
+    if box is not None:
+        rows.append(("box", True, "each box parameter is read at the box's centre, and the loop is recast with them "
+                                  "as bounded constants again"))
+    for name, c in doc["conditions"].items():
+        if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted"):
+            continue
+        if box is not None:  # the claim over the box says so first; the rest is the class's own sentence
+            prefix = box_prefix(box, c["status"])
+            if not str(c.get("summary", "")).startswith(prefix) or name in ("linearization", "candidate"):
+                rows.append((name, False, f"{name}: over a box a claim begins '{prefix}' (and linearization and "
+                                          "candidate certify a point)"))
+                continue
+            c = {**c, "summary": c["summary"][len(prefix):]}
+        robust_claim = (coverage is not None and c.get("disturbances") == "all"
+                        and isinstance(c.get("certificate"), dict)
+                        and (c["certificate"].get("kind") == "interval"
+                             or (name == "sos_bound" and c["certificate"].get("kind") == KIND)))
+        if c.get("disturbances") != coverage and not robust_claim:
+            rows.append((name, False, f"{name}: a loop with functions is certified with its disturbances at 0 (or, by "
+                                      "ball arithmetic, for every value of them); the stated coverage "
+                                      f"{c.get('disturbances')!r} is neither"))
+            continue
+        try:
+            # what the condition states beside its proof, from the certificate (cheap: before the proof is re-run)
+            ok, claims = check_stated(c, proved_claims(name, c, model))
+            if not ok:
+                rows.append((name, False, f"{name}: {claims}"))
+                continue
+            if name == "sos_bound":
+                ok, why = check_bound(model, c, box) if c["status"] == "certified" else \
+                    (False, "sos_bound refutes nothing")
+            elif box is not None and c["status"] == "certified" and name == "roa":
+                # the set covers the disturbances too where its certificate says so (else d = 0)
+                disturbed = "disturbances" in (c.get("certificate") or {})
+                ok, why = _verify_condition(name, c, base, box_robust(model, box, disturbed=disturbed))
+                if c["certificate"].get("kind") != "interval":
+                    ok, why = False, "over a box, roa is proved by ball arithmetic"
+            elif box is not None and c["status"] == "certified":
+                assert boxed is not None
+                ok, why = _verify_condition(name, c, boxed)
+            else:
+                ok, why = _verify_condition(name, c, base, robust_of(model), model)
+        except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
+            ok, why = False, f"malformed certificate: {str(exc)[:200]}"
+        rows.append((name, ok, f"{why}; {claims}" if ok else f"{name}: {why}"))
+    rows.extend(_check_candidate(doc, model))
+    return _with_verdict(doc, rows)
+
+
+def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
+    """The property and the figures a decided condition's certificate proves, read from the
+    certificate (which its class's check then re-checks) and the model: a figure beside the status
+    is compared with these, and any other is refused unless it is a declared estimate
+    (:func:`lyapcheck.models.surfaces.stated.check_stated`)."""
+    if name == "linearization":
+        return Stated("LES")
+    if c["status"] == "refuted":  # another equilibrium, exactly: no global asymptotic stability
+        return Stated("GAS")
+    cert = c["certificate"]
+    if not isinstance(cert, dict):
+        raise ValueError("certificate: must be a table")
+    kind = cert.get("kind")
+    if kind == KIND:
+        from lyapcheck.models.classes.recast_bound import bound_claim
+
+        claim = bound_claim(model, {out: Fraction(str(item["bound"])) for out, item in cert["outputs"].items()})
+        return Stated("ultimate_bound", {k: v for k, v in claim.items() if k != "status"})
+    if kind == "interval":
+        return Stated("ROA", {"level": Fraction(str(cert["level"]))})
+    if kind == RECAST_BARRIER:
+        if name != "barrier":
+            raise ValueError(f"a barrier certificate under the class {name}")
+        B = cert["B"]["terms"]
+        degree = max((sum(e) for _, e in B), default=0)
+        if isinstance(degree, bool) or not isinstance(degree, int):
+            raise ValueError("B: exponents must be integers")
+        return Stated("safety", {"degree": degree, "lambda_per_s": Fraction(str(cert["lambda_per_s"]))})
+    degree = max(sum(e) for _, e in cert["V"]["terms"])
+    if isinstance(degree, bool) or not isinstance(degree, int):
+        raise ValueError("V: exponents must be integers")
+    if "level" in cert:
+        return Stated("ROA", {"degree": degree, "level": Fraction(str(cert["level"]))})
+    if "ges" in cert:
+        ges = cert["ges"]
+        return Stated("GES", {"degree": degree, "k": Fraction(str(ges["k"])),
+                              "decay_rate_per_s": Fraction(str(ges["rate"]))})
+    return Stated("GAS", {"degree": degree})
+
+
+def _check_candidate(doc: dict[str, Any], model: RecastModel) -> list[Row]:
+    """The top-level ``candidate`` text is the user's V: recast with the model's functions (the text
+    parsed with it, else verify stopped at the model row), it must be the ``V`` of a certified
+    ``candidate`` condition, and a certified one needs it."""
+    c = doc["conditions"].get("candidate")
+    certified = isinstance(c, dict) and c.get("status") == "certified"
+    text = doc.get("candidate")
+    if not certified:
+        return [] if text is None or isinstance(text, str) else \
+            [("candidate", False, "candidate: the candidate text must be text")]
+    if not isinstance(text, str) or model.candidate_v is None:
+        return [("candidate", False, "candidate: a certified candidate condition needs the candidate text")]
+    try:
+        same = poly_from_json(model.system.ring, c["certificate"]["V"], "V") == model.candidate_v
+    except (KeyError, ValueError, TypeError, ArithmeticError) as exc:
+        return [("candidate", False, f"candidate: the certified V is malformed: {str(exc)[:200]}")]
+    return [("candidate", same, "the candidate text is the certified V" if same else
+             "candidate: the candidate text is not the V of the certified candidate condition")]
+
+
+def _box_of(doc: dict[str, Any], model: RecastModel) -> tuple[ModelBox | None, Loop | None, str]:
+    """The document's box, and the loop with its parameters as bounded constants; or why not (a box
+    parameter not read at the box's centre, a box the loop cannot take)."""
+    if "box" not in doc:
+        return None, None, ""
+    try:
+        box = ModelBox.from_json(doc["box"])
+    except (TypeError, ValueError, AttributeError, ZeroDivisionError) as exc:
+        return None, None, f"malformed box: {exc}"
+    for name, lo, hi in box.bounds:
+        if name not in model.parameters or not lo < hi:
+            return None, None, f"box: {name!r} is not a parameter of the model with lo < hi"
+        if model.parameters[name] != box.center(name):
+            return None, None, f"box: the model is not read at the box's centre ({name} = {model.parameters[name]})"
+    try:
+        boxed = boxed_loop(model, box)
+    except ModelFileError as exc:
+        return None, None, f"box: {exc}"
+    return box, boxed, ""
+
+
+def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = None,
+                      model: RecastModel | None = None) -> tuple[bool, str]:
+    """Re-check one decided condition exactly (``model``: the model text's, for a barrier's sets)."""
+    from lyapcheck.models.classes.linearization import verify_jacobian
+
+    if name == "linearization":
+        from lyapcheck.models.classes.claims import summary
+
+        J = jacobian(base)
+        if isinstance(J, str):
+            return False, f"the model's Jacobian is not exact here: {J}"
+        data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
+        ok, why = verify_jacobian(J, c["status"], data or {})
+        if ok and c.get("summary") != summary(name, c):
+            return False, "the printed sentence is not the one the certificate supports"
+        return ok, why
+    if c["status"] == "refuted":
+        from lyapcheck.models.classes.recast_classes import check_refutation, refutation_sentence
+
+        ok, why = check_refutation(base, c.get("refutation"))
+        if ok and c.get("summary") != covered(c.get("disturbances"), refutation_sentence(c["refutation"]["point"])):
+            return False, "the printed sentence is not the one the refutation supports"
+        return ok, why
+    cert = c["certificate"]
+    if name == "barrier" or cert.get("kind") == RECAST_BARRIER:
+        if model is None:
+            return False, "a barrier is certified on the model's own parameters, not over a box"
+        return _verify_barrier(c, base, model)
+    if cert.get("kind") == "interval" and name in ("roa", "candidate"):
+        from lyapcheck.models.classes.recast_interval import check_interval
+
+        return check_interval(base, c, robust)
+    if cert.get("kind") != "recast":
+        return False, "not a recast certificate"
+    system = base.system
+    proved, why = _proved_recasting(cert, base)
+    if proved is None:
+        return False, why
+    ring = proved.ring
+    V = poly_from_json(ring, cert["V"], "V")
+    loop = for_v(proved, V)
+    if cert.get("angles") != list(loop.angles):
+        return False, "the angles taken modulo 2 pi are not the ones this V allows"
+    allowed = {ring.names[i] for i in loop.v_variables()}
+    if any(degree_in(ring, V, [n]) > 0 for n in ring.names if n not in allowed):
+        return False, "V uses a variable a Lyapunov function may not (an angle, a root, or a non-smooth function)"
+    ok, why, N = check_denominator_proofs(loop, v_names(loop, V), cert["recasting"]["denominators"])
+    if not ok:
+        return False, why
+    l2 = state_square(loop)
+    eps = Fraction(str(cert["epsilon"]))
+    if eps <= 0:
+        return False, "epsilon must be > 0"
+    region = None
+    pos_eps = eps
+    if "level" in cert:
+        level = Fraction(str(cert["level"]))
+        if level <= 0:
+            return False, "the level must be > 0"
+        if c.get("level") is not None and c.get("level") != float(level):
+            return False, "the stated level is not the certificate's"
+        region = V - to_fmpq(level)
+        pos_eps = Fraction(str(cert["positivity_epsilon"]))
+        if pos_eps <= 0:
+            return False, "positivity_epsilon must be > 0"
+    pos = ConditionCertificate.from_json(ring, cert["positivity"], len(loop.relations))
+    ok, why = check_condition(ring, V - l2 * to_fmpq(pos_eps), loop.relations, pos)
+    if not ok:
+        return False, f"positivity: {why}"
+    dec = ConditionCertificate.from_json(ring, cert["decrease"], len(loop.relations))
+    if (region is None) != (dec.rho is None):
+        return False, "a region's decrease needs its multiplier rho, and only a region's"
+    decrease = Fraction(str(cert.get("decrease_epsilon", eps)))
+    if decrease < eps:
+        return False, "decrease_epsilon must be at least epsilon"
+    ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(decrease), loop.relations, dec, region=region)
+    if not ok:
+        return False, f"decrease: {why}"
+    if "ges" in cert:
+        ok, why = _verify_ges(loop, cert, region is not None)
+        if not ok:
+            return False, why
+    if c.get("summary") != covered(c.get("disturbances"), claim_sentence(cert)):
+        return False, "the printed sentence is not the one the certificate supports"
+    if cert.get("V_text") != v_text(system, V):
+        return False, "V_text is not V written with the functions"
+    what = "on {V <= level}" if region is not None else "everywhere"
+    modulo = " (modulo 2 pi in the angles)" if loop.angles else ""
+    return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
+
+
+def _proved_recasting(cert: dict[str, Any], base: Loop) -> tuple[Loop | None, str]:
+    """The loop a recast certificate's V (or B) lives on: its variables, auxiliaries and shift must be
+    the recasting of the model text, and its square roots' lower bounds are re-proved; or why not."""
+    system = base.system
+    if cert.get("variables") != list(system.ring.names) or cert.get("auxiliaries") != system.definitions() or \
+            cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
+        return None, "variables, auxiliaries or shift differ from the recasting of the model text"
+    return check_root_proofs(base, cert["recasting"]["roots"])
+
+
+def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
+    """A recast barrier (:func:`lyapcheck.models.classes.recast_barrier.check`), its recasting's square-root
+    proofs and its sentence (the polynomial loops' :data:`~lyapcheck.models.classes.claims.BARRIER_SENTENCE`)."""
+    from lyapcheck.models.classes.recast_barrier import check
+
+    cert = c["certificate"]
+    if c.get("status") != "certified" or cert.get("kind") != RECAST_BARRIER:
+        return False, f"a barrier's certificate kind must be {RECAST_BARRIER!r}, not {cert.get('kind')!r}"
+    proved, why = _proved_recasting(cert, base)
+    if proved is None:
+        return False, why
+    ok, why = check(model, proved, c)
+    if ok and c.get("summary") != covered(c.get("disturbances"), BARRIER_SENTENCE):
+        return False, "the printed sentence is not the one the certificate supports"
+    return ok, why
+
+
+__all__ = ["certify_recast", "verify_recast", "claim_sentence", "sentence_of", "proved_claims"]

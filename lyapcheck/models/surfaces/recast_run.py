@@ -1,0 +1,451 @@
+"""The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
+``candidate``, ``sos_bound``, ``barrier`` (:mod:`lyapcheck.models.classes.recast_classes` has each condition,
+:mod:`lyapcheck.models.classes.recast_bound` and :mod:`lyapcheck.models.classes.recast_barrier` the last two; this
+module orders them, gives each its time budget, runs ``roa``'s V-s iteration,
+:mod:`lyapcheck.models.classes.recast_improve`, and the classes over a box of parameters, :func:`certify_box`).
+"""
+
+from __future__ import annotations
+
+import time
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Final, Sequence
+
+from lyapcheck.degrees import searched_degrees
+from lyapcheck.errors import ModelFileError
+from lyapcheck.models.language.parameter_box import ModelBox
+from lyapcheck.models.language.recast import RecastModel, written_poly
+from lyapcheck.models.classes.recast_classes import (EPSILONS, RECAST_GAS_DEGREES, Loop, base_loop, best_region, certify_region,
+                                             common_denominator, jacobian, lie, linearization,
+                                             prove_denominators, prove_nonnegative, prove_root_bounds,
+                                             quadratic, quadratic_candidate, refute_global, region_of_attraction,
+                                             sos_gas, certificate_head, for_v, state_square, v_names)
+from lyapcheck.models.classes.recast_improve import improved_regions
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.polynomials import Poly, to_fmpq
+from lyapcheck.tolerances import CONVERGED_BALL_RADIUS
+
+if TYPE_CHECKING:
+    from lyapcheck.models.engines.numeric import SetCrossCheck
+
+# -- the model's classes ------------------------------------------------------------------------------
+
+def class_budget(seconds: float) -> Budget:
+    """One class's time budget, named after the limit it comes from (the message says which)."""
+    return Budget(seconds, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+
+
+#: the classes a recast loop takes, in order
+RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier")
+
+
+def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float,
+            box: ModelBox | None = None) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
+    """Run the chosen classes; the loop (with its proved square-root bounds) and the seconds each took.
+    With ``box`` (``model`` read at its centre), :func:`certify_box` runs them over it."""
+    if box is not None:
+        return certify_box(model, classes, time_limit_s, box)
+    results: dict[str, ConditionResult] = {}
+    seconds: dict[str, float] = {}
+    loop = proved_loop(model, time_limit_s)
+    start = time.perf_counter()
+    lin = linearization(loop)
+    if "linearization" in classes:
+        results["linearization"] = lin
+        seconds["linearization"] = time.perf_counter() - start
+    if "quadratic" in classes:
+        start = time.perf_counter()
+        results["quadratic"] = refute_global(loop, "quadratic") or \
+            quadratic(loop, class_budget(time_limit_s))
+        seconds["quadratic"] = time.perf_counter() - start
+    if "sos_gas" in classes:
+        start = time.perf_counter()
+        results["sos_gas"] = refute_global(loop, "sos_gas") or \
+            sos_gas(loop, class_budget(time_limit_s), degrees=searched_degrees(RECAST_GAS_DEGREES))
+        seconds["sos_gas"] = time.perf_counter() - start
+    if "roa" in classes:
+        start = time.perf_counter()
+        results["roa"] = roa_after_gas(results, "") or \
+            run_roa(loop, lin, class_budget(time_limit_s), comparison_box(model, loop), robust=robust_of(model))
+        seconds["roa"] = time.perf_counter() - start
+    if "candidate" in classes and candidate is not None:
+        start = time.perf_counter()
+        results["candidate"] = run_candidate(loop, candidate, class_budget(time_limit_s), comparison_box(model, loop))
+        seconds["candidate"] = time.perf_counter() - start
+    if "sos_bound" in classes:
+        from lyapcheck.models.classes.recast_bound import sos_bound
+
+        start = time.perf_counter()
+        results["sos_bound"] = sos_bound(model, class_budget(time_limit_s))
+        seconds["sos_bound"] = time.perf_counter() - start
+    if "barrier" in classes:
+        from lyapcheck.models.classes.recast_barrier import run as run_barrier
+
+        start = time.perf_counter()
+        results["barrier"] = run_barrier(model, loop, class_budget(time_limit_s))
+        seconds["barrier"] = time.perf_counter() - start
+    return results, loop, seconds
+
+
+def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float, box: ModelBox
+                ) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
+    """The classes over a box of parameters (``model`` is read at the box's centre).
+
+    ``quadratic`` and ``sos_gas`` are proved on the loop recast with the box's parameters as bounded
+    constants (:func:`boxed_loop`: each a variable without a flow, ``h^2 - dp^2 >= 0``), with a ``V``
+    that uses none of them, so one ``V`` serves every value; a refutation (another equilibrium) is
+    the centre's, which lies in the box. ``roa`` is the ball-arithmetic set proved with each parameter
+    a ball over its interval (the set's ``V'`` negative for every value at once), and ``sos_bound``
+    takes the parameters as it takes the disturbances. ``linearization`` and ``candidate`` certify a
+    point: ``not_applicable`` over a box.
+    """
+    results: dict[str, ConditionResult] = {}
+    seconds: dict[str, float] = {}
+    budget = class_budget(time_limit_s)
+    loop = proved_loop(model, time_limit_s)  # the box's centre
+    boxed = boxed_loop(model, box)
+    for name in ("linearization", "candidate"):
+        if name in classes:
+            results[name] = ConditionResult(name, "not_applicable", f"not over a box (the {name} class certifies a "
+                                            "point: certify the centre with --set)")
+    if {"quadratic", "sos_gas"} & set(classes):
+        proved, _ = prove_root_bounds(boxed, Search(boxed.ring, budget))
+        for name, run_class in (("quadratic", quadratic), ("sos_gas", sos_gas)):
+            if name in classes:
+                start = time.perf_counter()
+                results[name] = refute_global(loop, name) or \
+                    run_class(proved, class_budget(time_limit_s))
+                seconds[name] = time.perf_counter() - start
+    if "roa" in classes:
+        start = time.perf_counter()
+        results["roa"] = roa_after_gas(results, " for every value of the box") or \
+            box_roa(model, loop, box, class_budget(time_limit_s))
+        seconds["roa"] = time.perf_counter() - start
+    if "sos_bound" in classes:
+        from lyapcheck.models.classes.recast_bound import sos_bound
+
+        start = time.perf_counter()
+        results["sos_bound"] = sos_bound(model, class_budget(time_limit_s), box)
+        seconds["sos_bound"] = time.perf_counter() - start
+    return results, loop, seconds
+
+
+def roa_after_gas(results: dict[str, ConditionResult], where: str) -> ConditionResult | None:
+    """``roa`` is ``not_applicable`` once ``quadratic`` or ``sos_gas`` certified GAS (``where``: said
+    of the claim, as " for every value of the box"); None otherwise."""
+    gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
+                and results[c].status == "certified"), None)
+    if gas is None:
+        return None
+    return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified ({gas}){where}: the "
+                           "region of attraction is the whole state space", property="ROA")
+
+
+def proved_loop(model: RecastModel, time_limit_s: float) -> Loop:
+    """The loop in deviations with its square roots' lower bounds proved; a one-line
+    :class:`ModelFileError` naming the equation of a root whose argument is not proved >= 0."""
+    base = base_loop(model.system)
+    loop, unproved = prove_root_bounds(base, Search(base.ring, class_budget(time_limit_s)))
+    if unproved:
+        raise ModelFileError(model.source, model.key_of(unproved[0]),
+                             f"'{unproved[0]}': its argument could not be proved non-negative (sqrt of something that "
+                             "can be negative, or of something no SOS proof here shows non-negative): write the loop "
+                             "so that the root's argument is >= 0")
+    return loop
+
+
+def boxed_loop(model: RecastModel, box: ModelBox) -> Loop:
+    """The loop with the box's parameters as bounded constants (after the states), each at the box's
+    centre with its half-width; a one-line :class:`ModelFileError` where the recasting cannot keep
+    one a variable or the equilibrium is not proved to stay put over the box."""
+    from lyapcheck.models.language.recast import recast_with_constants
+
+    where = f"--box {', '.join(box.names)}"
+    try:
+        system = recast_with_constants(model, {name: box.center(name) for name in box.names})
+    except ModelFileError as exc:
+        why = str(exc).removeprefix(exc.source + ": ")
+        raise ModelFileError(model.source, where, f"the loop cannot be recast with the box's parameters as "
+                                                  f"variables ({why}): certify points with --set") from None
+    if not box_robust(model, box, system).vanishes():
+        raise ModelFileError(model.source, where, "the equilibrium is not proved to stay put over the box (the "
+                                                  "right-hand sides at the equilibrium are not exactly 0 for every "
+                                                  "value of it, in ball arithmetic)")
+    return base_loop(system, fixed={name: box.half(name) for name in box.names})
+
+
+def box_robust(model: RecastModel, box: ModelBox, system: Any = None, disturbed: bool = True) -> Any:
+    """The box's parameters (and, ``disturbed``, the model's disturbances where the recasting keeps
+    them) as balls for the ball-arithmetic route; without them the disturbances are at 0."""
+    from lyapcheck.models.language.recast import recast_with_constants
+    from lyapcheck.models.classes.recast_interval import Robust
+
+    constants = {name: box.center(name) for name in box.names}
+    bounds = {name: box.half(name) for name in box.names}
+    if model.disturbances and system is None and disturbed:
+        try:
+            system = recast_with_constants(model, {**{d: Fraction(0) for d in model.disturbances}, **constants})
+            bounds = {**dict(model.disturbances), **bounds}
+        except ModelFileError:
+            system = None
+    if system is None:
+        system = recast_with_constants(model, constants)
+        bounds = {name: box.half(name) for name in box.names}
+    return Robust(system, bounds, box)
+
+
+def box_roa(model: RecastModel, loop: Loop, box: ModelBox, budget: Budget) -> ConditionResult:
+    """``roa`` over a box: the ball-arithmetic route with the parameters as balls (no other route
+    proves a set for every value of a box here)."""
+    from lyapcheck.models.classes.recast_interval import interval_roa
+
+    robust = box_robust(model, box)
+    if not robust.vanishes():  # a disturbance moves the equilibrium: the set for every value of the box, d = 0
+        robust = box_robust(model, box, disturbed=False)
+    found = interval_roa(loop, budget, comparison_box(model, loop), robust)
+    if isinstance(found, str):
+        from lyapcheck.models.engines import reasons
+
+        why = reasons.reason("no region of attraction was proved for every value of the box (over a box only ball "
+                             "arithmetic proves one, on loops of 1 to 3 states)", ("box", "domain", "time"), found)
+        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
+    simulated_check(loop, found, comparison_box(model, loop))
+    return found
+
+
+def robust_of(model: RecastModel) -> Any:
+    """The model's disturbances for claims covering them (None without any, or where the recasting
+    could not keep them)."""
+    from lyapcheck.models.classes.recast_interval import Robust
+
+    return Robust(model.robust, dict(model.disturbances)) if model.robust is not None else None
+
+
+def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
+    """The box (deviations ``lo``, ``hi``) in which regions are compared and the V-s iteration
+    samples: the model's ``[domain]``, else ``+-pi`` in an angle and ``+-DEFAULT_HALF_WIDTH`` elsewhere."""
+    import numpy as np
+
+    from lyapcheck.models.engines.recast_numeric import DEFAULT_HALF_WIDTH
+
+    eq = np.array([float(v) for v in model.equilibrium])
+    if model.domain is not None:
+        lo = np.array([float(model.domain[s][0]) for s in model.states]) - eq
+        hi = np.array([float(model.domain[s][1]) for s in model.states]) - eq
+        return lo, hi
+    hw = np.array([np.pi if s in loop.angles else DEFAULT_HALF_WIDTH for s in model.states])
+    return -hw, hw
+
+
+def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any], interval: bool = True,
+            robust: Any = None) -> ConditionResult:
+    """``roa``: first a V fitted to simulations and proved by ball arithmetic on the true field
+    (:mod:`lyapcheck.models.classes.recast_interval`; loops of 1 to 3 states); where that proves nothing,
+    the linearization's V and its largest level on the recasting's relations, then the V-s
+    iteration from it, and the region covering most of the box (``interval`` False: that route only)."""
+    from lyapcheck.models.classes.recast_interval import interval_roa
+
+    first_route = interval_roa(loop, budget, box, robust) if interval else "ball arithmetic: not tried"
+    if isinstance(first_route, ConditionResult):
+        simulated_check(loop, first_route, box)
+        return first_route
+    skipped = first_route
+    search = Search(loop.ring, budget)
+    J = jacobian(loop)
+    V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
+    from lyapcheck.models.engines import reasons
+
+    if V0 is None:
+        why = reasons.reason("no region of attraction was proved: the linearization gives no quadratic V to start "
+                             "the search from (see linearization)", ("candidate",),
+                             [skipped, f"the linearization gives no quadratic V ({lin.summary})"])
+        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
+    label = "the linearization (J^T P + P J = -I)"
+    try:
+        first = certify_region(loop, V0, search, label)
+    except BudgetExhausted as exc:
+        late = reasons.out_of_time("a region of attraction", budget.seconds, [skipped, f"{label}: {exc}"],
+                                   ("time", "domain"))
+        return ConditionResult("roa", "inconclusive", late.summary, numbers=late.numbers(), property="ROA")
+    if isinstance(first, str):
+        return best_region(loop, [], [skipped, f"{label}: {first}"], box, search)
+    more, tried = improved_regions(loop, first, budget, box)
+    result = best_region(loop, [first, *more], [skipped, f"{label}: level {float(first.level):.6g}", *tried], box,
+                         search)
+    if result.status == "certified":
+        simulated_check(loop, result, box)
+    return result
+
+
+#: starts per state of the grid over the box on which a certified region is simulated (2 states; the
+#: same count, uniform, for more)
+SIMULATED_GRID: Final = 40
+#: how long each is simulated (the loop's time unit); a start in the set that has not converged by
+#: then is simulated ten times longer with V watched along it (:func:`set_cross_check`)
+SIMULATED_HORIZON: Final = 30.0
+#: a start farther than this many box sizes from the equilibrium is stopped there (it does not
+#: converge in this horizon; its re-simulation, if it started in a certified set, is not stopped)
+SIMULATED_ESCAPE: Final = 10.0
+#: converged: ending this close to the equilibrium
+CONVERGED_RADIUS: Final = CONVERGED_BALL_RADIUS
+
+
+def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -> None:
+    """Simulate the true loop from a grid of the box: the share of the simulated region of
+    attraction the certified set covers (``roa_share``, with the box the ``[domain]``), and every
+    start in the set that does not converge (modulo 2 pi in an angle) checked again
+    (:func:`set_cross_check`): a soundness violation only when that check is conclusive."""
+    import numpy as np
+
+    from lyapcheck.models.engines.recast_numeric import distances, simulate_ends
+
+    system = loop.system
+    lo, hi = box
+    count = SIMULATED_GRID ** 2
+    if loop.n == 2:
+        axes = [np.linspace(lo[i], hi[i], SIMULATED_GRID) for i in range(2)]
+        Z = np.column_stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")])
+    else:
+        Z = lo + (hi - lo) * np.random.default_rng(0).random((count, loop.n))
+    eq = np.array([float(system.values[s]) for s in system.states])
+    value, = certified_value(loop, result)
+    inside = value(Z + eq) <= float(Fraction(result.certificate["level"]))
+    dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON,
+                                   escape=SIMULATED_ESCAPE * float(np.max(np.asarray(hi) - np.asarray(lo))))
+    to_zero = simulated.ok & (distances(system, dev) < CONVERGED_RADIUS)
+    modulo = simulated.ok & (distances(system, dev, tuple(loop.angles)) < CONVERGED_RADIUS)
+    result.numbers["simulated_starts"] = int(len(Z))
+    if to_zero.any():  # (no simulated start converged in the horizon: no share to state, not a share of 0)
+        result.numbers["roa_share"] = float(np.mean(inside[to_zero]))
+    result.numbers["simulated_roa_share_of_box"] = float(np.mean(to_zero))
+    # a region proved by ball arithmetic claims convergence to the equilibrium itself, not modulo 2 pi
+    angles = () if result.certificate.get("kind") == "interval" else tuple(loop.angles)
+    suspicious = inside & ~(to_zero if not angles else modulo)
+    if suspicious.any():
+        result.numbers.update(set_cross_check(loop, result, Z[suspicious] + eq, angles).numbers())
+
+
+def certified_value(loop: Loop, result: ConditionResult, *others: Poly) -> list[Any]:
+    """The certified set's V as a float function of the states (rows, not deviations): ``V(z, a(x) -
+    a(x_eq))``, and +inf outside the box of a ball-arithmetic region (its set is ``{V <= level}``
+    within that box); then each of ``others`` (polynomials of the loop's ring, in deviations) as
+    such a function. The loop is compiled once and the variables at the last states are shared
+    (a cross-check reads V, q and D at every step of its trajectories)."""
+    import numpy as np
+
+    from lyapcheck.models.engines.numeric import NumericPoly
+    from lyapcheck.models.engines.recast_numeric import FloatLoop
+    from lyapcheck.models.engines.recast_sos import poly_from_json
+
+    system = loop.system
+    eq = np.array([float(system.values[s]) for s in system.states])
+    field = FloatLoop(system)
+    shift = np.array([float(system.values[n]) if n in system.values else 0.0 for n in system.ring.names])
+    last: list[Any] = [None, None]  # the last states given and the loop's variables there
+
+    def variables(X: Any) -> Any:
+        if X is not last[0]:
+            last[:] = [X, np.column_stack(field.columns(np.atleast_2d(np.asarray(X, dtype=np.float64)))) - shift]
+        return last[1]
+
+    def function(p: Poly) -> Any:
+        poly = NumericPoly(system.ring, p)
+        return lambda X: poly(variables(X))
+
+    V = function(poly_from_json(loop.ring, result.certificate["V"], "V"))
+    corners = result.certificate.get("box")
+    lo = None if corners is None else np.array([float(Fraction(corners[s][0])) for s in system.states])
+    hi = None if corners is None else np.array([float(Fraction(corners[s][1])) for s in system.states])
+
+    def value(X: Any) -> Any:
+        out = V(X)
+        if lo is not None:
+            Z = np.atleast_2d(np.asarray(X, dtype=np.float64)) - eq
+            out = np.where(np.all((Z >= lo) & (Z <= hi), axis=1), out, np.inf)
+        return out
+
+    return [value, *(function(p) for p in others)]
+
+
+def set_cross_check(loop: Loop, result: ConditionResult, starts: Any, angles: tuple[str, ...]
+                    ) -> SetCrossCheck:
+    """Starts (states, rows) in the certified set that did not converge in the first simulation,
+    simulated ten times longer with V watched (:func:`lyapcheck.models.engines.numeric.check_certified_set`):
+    a violation when one leaves the set, or, with the certificate's decrease ``V' <= -epsilon |z|^2 /
+    D``, stays outside a small ball longer than that decrease allows; the others still converging
+    are counted as not checked. Returns the :class:`lyapcheck.models.engines.numeric.SetCrossCheck`."""
+    import numpy as np
+
+    from lyapcheck.models.engines.numeric import CertifiedDecrease, ModelSystem, check_certified_set
+    from lyapcheck.models.engines.recast_numeric import ATOL, RTOL, FloatLoop, distances
+    from lyapcheck.models.engines.recast_sos import poly_from_json
+
+    system = loop.system
+    eq = np.array([float(system.values[s]) for s in system.states])
+    cert = result.certificate
+    decrease = None
+    if "epsilon" in cert and "denominator" in cert:
+        value, q, D = certified_value(loop, result, state_square(loop),
+                                      poly_from_json(loop.ring, cert["denominator"], "denominator"))
+        decrease = CertifiedDecrease(epsilon=float(Fraction(str(cert["epsilon"]))), q=q, D=D)
+    else:
+        value, = certified_value(loop, result)
+    field = FloatLoop(system)
+    batch = ModelSystem(lambda y, d=None: field(y), len(starts))  # type: ignore[arg-type]
+    return check_certified_set(batch, starts, 10 * SIMULATED_HORIZON, value=value, level=float(Fraction(cert["level"])),
+                               converged=lambda X: distances(system, X - eq, angles) < CONVERGED_RADIUS,
+                               rtol=RTOL, atol=ATOL, decrease=decrease)
+
+
+def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
+    """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
+    loop = for_v(loop, V)
+    ring = loop.ring
+    search = Search(ring, budget)
+    l2 = state_square(loop)
+    names = v_names(loop, V)
+    N, D, distinct = common_denominator(loop, names)
+    dens, failed = prove_denominators(loop, distinct, search)
+    if failed is not None:
+        return ConditionResult("candidate", "not_applicable", f"the denominator {written_poly(ring, failed)} could not "
+                               "be proved positive on the recasting's set")
+    positive = True
+    for eps in EPSILONS:
+        pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pc")
+        if pos is None:
+            continue
+        dec = prove_nonnegative(loop, -lie(loop, V, N) - l2 * to_fmpq(eps), search, "Dc")
+        if dec is not None:
+            cert = certificate_head(loop, V, eps, D, dens)
+            cert.update({"positivity": pos.to_json(ring), "decrease": dec.to_json(ring)})
+            return ConditionResult("candidate", "certified", f"the candidate proves global asymptotic stability: "
+                                   f"V >= {eps} |x - x_eq|^2 and V' <= -{eps} |x - x_eq|^2 / D on the recasting's "
+                                   "relations (exact)", certificate=cert, property="GAS")
+        break
+    else:
+        positive = False
+    from lyapcheck.models.classes.recast_interval import interval_candidate
+
+    # a sublevel set on the true field (no global positivity needed: the set is compact and V' < 0 on it)
+    interval = interval_candidate(loop, V, budget, box)
+    if isinstance(interval, ConditionResult):
+        simulated_check(loop, interval, box)
+        return interval
+    from lyapcheck.models.engines import reasons
+
+    if not positive:
+        why = reasons.reason("the candidate V could not be proved positive definite (V >= eps |x - x_eq|^2), and no "
+                             "level set of it was proved a region of attraction on the true loop",
+                             ("other_candidate", "domain"), interval)
+        return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
+    region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
+    region.numbers.setdefault("tried_first", interval)
+    if region.status != "certified":
+        why = reasons.reason("the candidate's derivative could not be proved negative definite (V' <= 0 alone needs "
+                             "LaSalle's argument, which this class does not make), and no level set of it was proved "
+                             "a region of attraction", ("other_candidate", "domain", "time"),
+                             [interval, *region.numbers.get("detail", [])])
+        region.summary = why.summary
+        region.numbers["detail"] = why.detail
+    return region
