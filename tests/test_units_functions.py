@@ -93,9 +93,62 @@ def test_the_pendulums_region_of_attraction_certifies_and_verifies_with_units(tm
     done = run(["certify", "--model", str(path), "--classes", "roa", "--out", str(out)])
     assert done.exit_code == 0, (done.exit_code, done.stderr)
     certificate = json.loads(out.read_text(encoding="utf-8"))
-    assert certificate["conditions"]["roa"]["status"] == "certified"
+    roa = certificate["conditions"]["roa"]
+    assert roa["status"] == "certified"
     checked = run(["verify", str(out)])
     assert checked.exit_code == 0, (checked.exit_code, checked.stdout[-500:], checked.stderr)
+    # the proved box is printed in the states' units, and verify holds the units to the model's
+    assert roa["certificate"]["kind"] == "interval" and roa["certificate"]["units"] == {"theta": "rad", "omega": "1/s"}
+    assert re.search(r"theta - eq in \[-[0-9.]+, [0-9.]+\] rad, omega - eq in \[-[0-9.]+, [0-9.]+\] 1/s", roa["summary"])
+    roa["certificate"]["units"]["theta"] = "deg"
+    out.write_text(json.dumps(certificate), encoding="utf-8")
+    tampered = run(["verify", str(out)])
+    assert tampered.exit_code == 1 and "the units its box is printed in" in tampered.stdout, tampered.stdout[-500:]
+
+
+ILOS_WITH_UNITS = """[model]
+name = "ILOS cross-track error with units"
+states = ["y", "yi"]
+
+[units]
+y = "m"
+yi = "m"
+time = "s"
+
+[parameters]
+U = "1 m/s"
+Delta = "2 m"
+kappa = 0.5
+
+[disturbances]
+d = "0.05 m/s"
+
+[dynamics]
+y = "-U*(y + kappa*yi)/sqrt(Delta**2 + (y + kappa*yi)**2) + d"
+yi = "U*y/sqrt(Delta**2 + (y + kappa*yi)**2)"
+"""
+
+
+def test_a_bound_of_a_loop_with_functions_carries_its_unit(tmp_path: Path) -> None:
+    """sos_bound on a loop with functions prints each bound in its output's unit (``bounds_unit``, as a
+    polynomial loop's), and verify re-makes the units from the model text."""
+    path = write(tmp_path, "ilos.toml", ILOS_WITH_UNITS)
+    out = tmp_path / "bound.json"
+    done = run(["certify", "--model", str(path), "--classes", "sos_bound", "--out", str(out)])
+    assert done.exit_code == 0, (done.exit_code, done.stderr)
+    certificate = json.loads(out.read_text(encoding="utf-8"))
+    bound = certificate["conditions"]["sos_bound"]
+    assert bound["status"] == "certified" and bound["bounds_unit"] == {"y": "m", "yi": "m"}
+    assert re.search(r"limsup \|y\| <= [0-9.]+ m, limsup \|yi\| <= [0-9.]+ m", bound["summary"]), bound["summary"]
+    assert run(["verify", str(out)]).exit_code == 0
+    for edit in ({"y": "mm", "yi": "m"}, None):
+        if edit is None:
+            del bound["bounds_unit"]
+        else:
+            bound["bounds_unit"] = edit
+        out.write_text(json.dumps(certificate), encoding="utf-8")
+        tampered = run(["verify", str(out)])
+        assert tampered.exit_code == 1 and "bounds_unit" in tampered.stdout, tampered.stdout[-500:]
 
 
 # -- the rules ------------------------------------------------------------------------------------------------

@@ -45,6 +45,7 @@ from lyapcheck.sos.program import Gram, Identity, Scalar, Solution, Structure, T
 
 if TYPE_CHECKING:
     from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.language.recast import RecastModel
 
 #: decay rates ``lam`` of the dissipation inequality tried, in scaled time
 LAMBDA_GRID: Final = (0.05, 0.2, 0.6, 1.5, 4.0)
@@ -266,7 +267,7 @@ def output_deviation(scaled: ScaledField, name: str) -> tuple[Poly, Fraction | N
     return y - ring.constant(y_eq), y_eq * s_y
 
 
-def output_units(model: "Model") -> dict[str, str]:
+def output_units(model: "Model | RecastModel") -> dict[str, str]:
     """Each output's unit (an SI unit text, ``''`` when dimensionless) where the model declares
     ``[units]``, else ``{}``: a state's as declared, an expression's its dimension's SI unit, found by
     the dimension check of :mod:`lyapcheck.models.language.dimensions` (which the model passed on loading)

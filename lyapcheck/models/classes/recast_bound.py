@@ -157,11 +157,18 @@ def output_reference(model: RecastModel, name: str) -> Fraction:
 
 def bound_claim(model: RecastModel, bounds: Mapping[str, float | Fraction]) -> dict[str, Any]:
     """The claim of certified ``bounds`` as its condition states it: the bounds and their reference
-    points (``bounds_reference``, each output at the equilibrium; a loop with functions takes no
-    ``[units]``). Certify writes it and its sentence (:func:`bound_sentence`); ``verify`` re-makes both
-    from the model and compares."""
-    return {"status": "certified", "bounds": dict(bounds),
-            "bounds_reference": {name: float(output_reference(model, name)) for name in bounds}}
+    points (``bounds_reference``, each output at the equilibrium) and, with ``[units]``, each output's
+    unit (``bounds_unit``, as a polynomial loop's: :func:`lyapcheck.models.classes.bounds.output_units`).
+    Certify writes it and its sentence (:func:`bound_sentence`); ``verify`` re-makes both from the
+    model and compares."""
+    from lyapcheck.models.classes.bounds import output_units
+
+    claim: dict[str, Any] = {"status": "certified", "bounds": dict(bounds),
+                             "bounds_reference": {name: float(output_reference(model, name)) for name in bounds}}
+    units = output_units(model)
+    if units:
+        claim["bounds_unit"] = {name: units[name] for name in bounds}
+    return claim
 
 
 def bound_sentence(model: RecastModel, bounds: Mapping[str, float | Fraction]) -> str:
@@ -493,8 +500,9 @@ def check_bound(model: RecastModel, c: Mapping[str, Any], box: ModelBox | None =
                 return False, f"{name}, {key}: {why}"
         bounds[name] = float(bound)
     claim = bound_claim(model, bounds)
-    if any(c.get(k) != v for k, v in claim.items() if k != "status") or "bounds_unit" in c:
-        return False, "the stated bounds or their reference points (bounds_reference) are not the certificate's"
+    if any(c.get(k) != v for k, v in claim.items() if k != "status") or ("bounds_unit" in c) != ("bounds_unit" in claim):
+        return False, ("the stated bounds, their reference points (bounds_reference) or their units (bounds_unit) are "
+                       "not the certificate's")
     expected = bound_sentence(model, bounds)
     if c.get("summary") != (summary_of(expected) if summary_of is not None else expected):
         return False, "the printed sentence is not the one the certificate supports"

@@ -26,7 +26,7 @@ from lyapcheck.models.engines.interval_field import BallLoop, Jet, LieDerivative
 from lyapcheck.models.engines.interval_region import (IntervalClaim, IntervalProof, dyadic_floor, low_order_terms,
                                               prove_bounded, prove_region)
 from lyapcheck.models.language.parameter_box import ModelBox
-from lyapcheck.models.language.recast import RecastSystem
+from lyapcheck.models.language.recast import RecastModel, RecastSystem
 from lyapcheck.models.classes.recast_classes import Loop, v_text
 from lyapcheck.models.engines.recast_sos import poly_from_json, poly_to_json
 from lyapcheck.models.engines.search import Budget
@@ -321,8 +321,9 @@ def claim_sentence(cert: dict[str, Any]) -> str:
     # the box rounded towards the weaker claim: outwards where the set is said to lie in it, inwards
     # where the proved set is the part of {V <= level} in it
     out, inward = ("down", "up") if cert.get("whole") else ("up", "down")
+    units = cert.get("units") or {}
     box = ", ".join(f"{s} - eq in [{rounded(Fraction(a), 6, out)}, {rounded(Fraction(b), 6, inward)}]"
-                    for s, (a, b) in cert["box"].items())
+                    + (f" {units[s]}" if units.get(s) else "") for s, (a, b) in cert["box"].items())
     level_text = rounded(level, 6, "down")
     if cert.get("whole"):
         return (f"region of attraction: every trajectory of the true loop starting where {written} <= "
@@ -334,6 +335,17 @@ def claim_sentence(cert: dict[str, Any]) -> str:
             f"(exactly {level}) with {box} converges to the equilibrium itself (V > level on that box's boundary, "
             f"V' < 0 on the set except at the equilibrium; proved by {METHOD}, with an exact Hessian argument at the "
             "equilibrium; V_text in the certificate)")
+
+
+def box_units(model: RecastModel) -> dict[str, str] | None:
+    """Each state's unit as ``[units]`` declares it (``''`` dimensionless), which a certificate's box
+    is printed in (its ``units``); None without ``[units]``. ``verify`` re-makes it from the model."""
+    from lyapcheck.models.language.dimensions import read_units
+
+    if not model.units:
+        return None
+    table = read_units(model.units, model.states)
+    return {s: "" if table.states[s][0].strip() in ("", "1") else table.states[s][0].strip() for s in model.states}
 
 
 def check_interval(loop: Loop, c: dict[str, Any], robust: Robust | None = None) -> tuple[bool, str]:
@@ -376,4 +388,4 @@ def check_interval(loop: Loop, c: dict[str, Any], robust: Robust | None = None) 
                   f"{proof.local_radius} by the Hessian), by {METHOD}")
 
 
-__all__ = ["interval_roa", "interval_candidate", "check_interval", "claim_sentence", "METHOD"]
+__all__ = ["interval_roa", "interval_candidate", "check_interval", "claim_sentence", "box_units", "METHOD"]

@@ -25,7 +25,7 @@ new class from its entry alone.
 
 1. one :class:`ModelClass` entry per class in :data:`CLASSES` (here; its place is its place in the
    order of ``certify --model``);
-2. its implementation module, ``lyapcheck/models/<family>.py``: the search, returning a
+2. its implementation module, ``lyapcheck/models/classes/<family>.py``: the search, returning a
    :class:`~lyapcheck.results.ConditionResult`, and the exact check of its certificate;
 3. one module in ``reports/sections/``, the one the entries' ``family`` names (a
    :class:`reports.sections.base.Section` naming the classes in its ``titles``), and that section in

@@ -308,7 +308,7 @@ class _Reader:
                 raise self.fail("[dynamics]", f"the state '{s}' has no equation")
         equilibrium = self.equilibrium(states, Ring(states))
         domain = self.domain(states)
-        outputs = self.recast_outputs(states, params, dists)
+        outputs, output_text = self.recast_outputs(states, params, dists)
         set_text, recast_sets = self.recast_sets(states, params, dists)
         # [units]: the texts as written, term by term, before the recasting (which moves a field to
         # auxiliaries whose dimensions no longer show); None where a text stood aside for the parser
@@ -331,8 +331,8 @@ class _Reader:
         return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
                            parameters=params, equilibrium=equilibrium, domain=domain, system=system,
                            overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V,
-                           disturbances=dists, robust=robust, outputs=outputs, sets=recast_sets,
-                           set_text=set_text, units=units)
+                           disturbances=dists, robust=robust, outputs=outputs, output_text=output_text,
+                           sets=recast_sets, set_text=set_text, units=units)
 
     def recast_sets(self, states: tuple[str, ...], params: Mapping[str, Fraction], dists: Mapping[str, Fraction]
                     ) -> tuple[dict[str, SetText], dict[str, StateSet]]:
@@ -352,11 +352,11 @@ class _Reader:
         return set_text, sets
 
     def recast_outputs(self, states: tuple[str, ...], params: Mapping[str, Fraction],
-                       dists: Mapping[str, Fraction]) -> dict[str, Poly]:
+                       dists: Mapping[str, Fraction]) -> tuple[dict[str, Poly], dict[str, str]]:
         """A loop with functions' outputs, polynomials over the states' ring with the parameters set
-        (an output with a function is refused by the expression parser, naming it)."""
+        (an output with a function is refused by the expression parser, naming it), and their texts."""
         ring = Ring(states + tuple(dists) + tuple(params))
-        rationals, _ = self.outputs(states, ring, dists, params)
+        rationals, texts = self.outputs(states, ring, dists, params)
         state_ring = Ring(states)
         out: dict[str, Poly] = {}
         for key, expr in rationals.items():
@@ -365,7 +365,7 @@ class _Reader:
             if not den.is_constant() or den.is_zero():
                 raise self.fail(f"[outputs] {key}", "an output must be polynomial in the states")
             out[key] = ring.restrict(num * (1 / den.leading_coefficient()), state_ring)
-        return out
+        return out, texts
 
     def states(self, head: dict[str, Any]) -> tuple[str, ...]:
         states = head.get("states")

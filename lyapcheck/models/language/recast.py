@@ -719,6 +719,8 @@ class RecastModel:
     robust: RecastSystem | None = None
     #: the outputs ``sos_bound`` bounds, polynomials over the states (``Ring(states)``); default each state
     outputs: dict[str, Poly] = field(default_factory=dict)
+    #: the outputs' texts as written (``[outputs]``; default each state's name)
+    output_text: dict[str, str] = field(default_factory=dict)
     #: ``[sets]`` ``initial`` and ``unsafe`` (lyapcheck.models.language.sets: polynomials of :attr:`state_ring`,
     #: parameters set) and their strings as written, for the barrier class
     sets: dict[str, Any] = field(default_factory=dict)

@@ -25,6 +25,7 @@ from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel
 from lyapcheck.models.classes.recast_bound import KIND, check_bound
+from lyapcheck.models.classes.recast_interval import box_units
 from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
                                              jacobian, lie, state_square, v_names, v_text)
 from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES, box_robust, boxed_loop, robust_of
@@ -83,8 +84,11 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     results = {name: results[name] for name in chosen}
     # the loop is recast with every disturbance at 0
     coverage: Disturbances | None = "zero" if model.disturbances else None
+    units = box_units(model)
     for name, r in results.items():
         if r.status == "certified" and name not in ("linearization", "sos_bound"):  # (sos_bound's is its own)
+            if units is not None and r.certificate.get("kind") == "interval":
+                r.certificate["units"] = units  # (the box it prints, in the states' units)
             r.summary = sentence_of(r.certificate)
         if coverage is not None and name != "sos_bound":
             if r.disturbances is None:  # ("all": a region proved for every disturbance value)
@@ -277,7 +281,10 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
             if not ok:
                 rows.append((name, False, f"{name}: {claims}"))
                 continue
-            if name == "sos_bound":
+            interval = c["status"] == "certified" and (c.get("certificate") or {}).get("kind") == "interval"
+            if interval and c["certificate"].get("units") != box_units(model):
+                ok, why = False, "the units its box is printed in are not the states' units of the model text"
+            elif name == "sos_bound":
                 ok, why = check_bound(model, c, box) if c["status"] == "certified" else \
                     (False, "sos_bound refutes nothing")
             elif box is not None and c["status"] == "certified" and name == "roa":
