@@ -66,22 +66,21 @@ def piece_relations(loop: Loop, state_ring: Ring, pieces: Sequence[Sequence[Poly
                     ) -> list[list[Relation]]:
     """Each piece's generators (its inequalities and their pairwise products), polynomials of the
     model's state ring, as relations ``p >= 0`` of the loop's ring in the deviations."""
+    return [[state_relation(loop, state_ring, p, f"{what} piece {k}, generator {j}")
+             for j, p in enumerate(piece_generators(list(piece)))] for k, piece in enumerate(pieces)]
+
+
+def state_relation(loop: Loop, state_ring: Ring, p: Poly, why: str) -> Relation:
+    """``p >= 0`` for ``p`` a polynomial of the model's state ring, as a relation of the loop's ring in
+    the deviations."""
     ring = loop.ring
-    system = loop.system
-    n = len(system.states)
-    out = []
-    for k, piece in enumerate(pieces):
-        relations = []
-        for j, p in enumerate(piece_generators(list(piece))):
-            terms = {}
-            for m, c in state_ring.terms(p).items():
-                if any(m[n:]):
-                    raise ValueError("a set's inequality uses a variable that is not a state")
-                terms[tuple(m[:n]) + (0,) * (ring.nvars - n)] = c
-            relations.append(Relation("ge", system.shift(ring.from_terms(terms)), f"{what} piece {k}, generator {j}",
-                                      SET_OWNER))
-        out.append(relations)
-    return out
+    n = len(loop.system.states)
+    terms = {}
+    for m, c in state_ring.terms(p).items():
+        if any(m[n:]):
+            raise ValueError("a set's inequality uses a variable that is not a state")
+        terms[tuple(m[:n]) + (0,) * (ring.nvars - n)] = c
+    return Relation("ge", loop.system.shift(ring.from_terms(terms)), why, SET_OWNER)
 
 
 @dataclass
@@ -214,32 +213,53 @@ def b_degree(ring: Ring, B: Poly) -> int:
 
 class _TrueField:
     """The true loop's field as :func:`lyapcheck.models.falsify.falsify` calls it: ``(x, d)`` rows,
-    the disturbances at 0 (the nominal loop)."""
+    the disturbances at 0 (the nominal loop). With ``stop`` (a set), a state inside it stays there
+    (field 0): a trajectory is watched only until it reaches that set (reach-avoid's goal)."""
 
-    def __init__(self, model: RecastModel) -> None:
+    def __init__(self, model: RecastModel, stop: Any = None) -> None:
         from lyapcheck.models.recast_numeric import FloatLoop
 
         self.loop = FloatLoop(model.system)
+        self.stop = stop
 
     def __call__(self, x: Any, d: Any = None) -> Any:
         import numpy as np
 
         with np.errstate(all="ignore"):  # a far start overflows: the integrator treats it as an escape
-            return self.loop(x)
+            f = self.loop(x)
+            if self.stop is not None:
+                from lyapcheck.models.sets import margin
+
+                f = np.where((margin(self.stop, x) >= 0)[:, None], 0.0, f)
+            return f
 
 
-def falsification(model: RecastModel) -> Any:
+def falsification(model: RecastModel, stop: Any = None) -> Any:
     """The closest approach of trajectories of the true loop from the initial set to the unsafe set
-    (disturbances at 0); None when the simulation cannot run (no inside point of a set found)."""
-    from lyapcheck.models.falsify import falsify
+    (disturbances at 0), each watched until it reaches ``stop`` when given (before it, the true loop's
+    trajectory exactly); None when the simulation cannot run (no inside point of a set found)."""
+    from lyapcheck.models.falsify import default_horizon, falsify
     from lyapcheck.models.sets import margin
 
     samples = FALSIFICATION_SAMPLES if model.n <= FALSIFICATION_FEW_ABOVE else FALSIFICATION_SAMPLES // 2
+    # the horizon is the true loop's (stopped at a goal around the equilibrium, its Jacobian there is 0)
+    horizon = None if stop is None else default_horizon(model, evaluate=_TrueField(model))  # type: ignore[arg-type]
     try:
         return falsify(model, model.sets["initial"], model.sets["unsafe"], margin,  # type: ignore[arg-type]
-                       samples=samples, disturbed=False, evaluate=_TrueField(model))
+                       samples=samples, disturbed=False, evaluate=_TrueField(model, stop), horizon=horizon)
     except ValueError:
         return None
+
+
+def not_smooth_note(loop: Loop, function: str, condition: str) -> str | None:
+    """Why a low degree often cannot: the ``function`` (B, V) may not use the loop's non-smooth
+    functions (sat, abs, ...), yet ``condition`` must hold on the whole state space through their
+    relations alone; None when the loop has none."""
+    rough = sorted({a.function for a in loop.system.auxiliaries if not a.smooth and a.function})
+    if not rough:
+        return None
+    return (f"{function} may not use {', '.join(rough)} (not smooth): {condition} must then hold on the whole "
+            "state space through their relations alone")
 
 
 # -- the class ----------------------------------------------------------------------------------------
@@ -266,10 +286,9 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
             numbers["falsification"] = trial.to_dict()
         return ConditionResult("barrier", "inconclusive", late.summary, numbers=numbers, property="safety")
     if result is None:
-        rough = sorted({a.function for a in flat.system.auxiliaries if not a.smooth and a.function})
-        if rough:  # why a low degree often cannot: B may not use them, yet B' <= lambda B must hold everywhere
-            tried.append(f"B may not use {', '.join(rough)} (not smooth): B' <= lambda B must then hold on the whole "
-                         "state space through their relations alone")
+        rough = not_smooth_note(flat, "B", "B' <= lambda B")
+        if rough:
+            tried.append(rough)
         none = reasons.not_found("barrier", searched_degrees(RECAST_BARRIER_DEGREES), tried,
                                  ("degree", "sets", "time"))
         numbers = none.numbers({"tried": tried})
@@ -333,4 +352,5 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
                   "relations, exactly")
 
 
-__all__ = ["KIND", "RECAST_BARRIER_DEGREES", "run", "check", "certificate_json", "falsification"]
+__all__ = ["KIND", "RECAST_BARRIER_DEGREES", "run", "check", "certificate_json", "falsification", "flat_loop",
+           "piece_relations", "state_relation", "not_smooth_note"]

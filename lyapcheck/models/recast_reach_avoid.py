@@ -1,0 +1,293 @@
+"""``reach_avoid`` on a loop with functions: every trajectory of the true loop from the initial set reaches
+the goal in a bounded time without entering the unsafe set before.
+
+The polynomial reach-avoid's conditions (:func:`lyapcheck.models.reach_avoid.conditions`, stated
+once for both routes) on the recasting (:mod:`lyapcheck.models.recast`), as the recast barrier
+(:mod:`lyapcheck.models.recast_barrier`) takes the barrier's: ``V`` is a polynomial in the deviations
+of the states and of the smooth auxiliaries, ``x' = N / D`` with ``D > 0`` proved on the relations,
+and each condition is proved on the recasting's relations with a set's inequalities (and their
+pairwise products) as further relations ``p >= 0`` (:mod:`lyapcheck.models.recast_sos`):
+
+    -V >= 0                      on the relations and each initial piece      (V <= 0 on the initial set)
+    V - 1 >= 0                   on the relations and each unsafe piece       (V >= 1 on the unsafe set)
+    -grad V . N - eps D >= 0     on the relations and -q_i >= 0, each goal inequality q_i
+                                                                              (V' <= -eps outside the goal)
+    V + C - delta |x|^2 >= 0     on the relations                             (V bounded below)
+
+with ``eps, delta > 0`` and ``C >= 0``. Every point ``(x, a(x))`` of the true loop lies in the
+relations' set, so along a trajectory ``v(t) = V(x(t), a(x(t)))`` falls at rate ``eps`` while the goal
+is not reached: from ``v(0) <= 0`` it stays ``<= 0 < 1`` (the unsafe set is not entered), in the compact
+``{|x|^2 <= C / delta}``, and above ``-C``, so the goal is reached by ``C / eps`` seconds. The angles are
+ordinary states (no claim modulo 2 pi), the loop the nominal one (every disturbance at 0), and the
+decrease is demanded outside the goal everywhere (a loop with another equilibrium outside the goal has
+none: a sufficient, conservative form, as on polynomial loops).
+
+Before the proof, the true loop (each function evaluated by numpy) is simulated from the initial set,
+each trajectory until it reaches the goal (:func:`lyapcheck.models.recast_barrier.falsification`): one
+that enters the unsafe set first is a ``counterexample`` (no proof is then searched: none can exist).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Final, Sequence
+
+from lyapcheck.degrees import searched_degrees
+from lyapcheck.models.reach_avoid import (REACH_DEGREES, SCALARS, Condition, certified_numbers, conditions,
+                                          goal_of_one_piece, linear_conditions, not_found, out_of_time, time_bound)
+from lyapcheck.models.recast import RecastModel, Relation, written_poly
+from lyapcheck.models.recast_barrier import (b_degree, falsification, flat_loop, not_smooth_note, piece_relations,
+                                             state_relation)
+from lyapcheck.models.recast_classes import (Loop, _set, common_denominator, lie, prove_denominators, root_proofs_json,
+                                             state_square, v_names, v_text)
+from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
+                                         poly_from_json, poly_to_json, solve_on_faces)
+from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.polynomials import Poly, Ring, degree_in, monomials
+
+#: the certificate's kind (``verify`` dispatches on it)
+KIND: Final = "recast_reach_avoid"
+#: the search's lower bounds on eps (1/s) and delta, and on C: the check needs eps, delta > 0 and C >= 0;
+#: a small floor leaves the program free (a smaller eps only lengthens the time bound C / eps)
+FLOORS: Final = {"eps": Fraction(1, 1000), "C": Fraction(0), "delta": Fraction(1, 1000)}
+
+Pieces = list[list[Relation]]
+
+
+@dataclass
+class Found:
+    """A reach-avoid function that passed the exact check: ``V`` (deviations), its scalars, degree and
+    each condition's proof by name."""
+
+    V: Poly
+    eps: Fraction
+    C: Fraction
+    delta: Fraction
+    proofs: dict[str, ConditionCertificate]
+
+
+def goal_relations(loop: Loop, state_ring: Ring, goal: Sequence[Poly]) -> list[Relation]:
+    """Each goal inequality ``q_i >= 0`` failing, ``-q_i >= 0``, as a relation of the loop's ring."""
+    return [state_relation(loop, state_ring, -q, f"goal inequality {i + 1} fails") for i, q in enumerate(goal)]
+
+
+def where(loop: Loop, condition: Condition, initial: Pieces, unsafe: Pieces, outside: list[Relation]
+          ) -> list[Relation]:
+    """The relations a condition is proved on: the recasting's, and the set it holds on."""
+    extra = {"initial": initial, "unsafe": unsafe, "outside_goal": [[r] for r in outside]}.get(condition.on)
+    return list(loop.relations) + (list(extra[condition.index]) if extra is not None else [])
+
+
+def formulation(loop: Loop, V: Poly, N: dict[str, Poly], D: Poly, eps: Fraction, C: Fraction, delta: Fraction,
+                initial: Pieces, unsafe: Pieces, outside: list[Relation]) -> list[Condition]:
+    """The reach-avoid conditions (:func:`lyapcheck.models.reach_avoid.conditions`) on this loop."""
+    return conditions(loop.ring, V, lambda p: lie(loop, p, N), D, eps, C, delta, state_square(loop), len(initial),
+                      len(unsafe), len(outside))
+
+
+def search_reach(loop: Loop, initial: Pieces, unsafe: Pieces, outside: list[Relation], search: Search
+                 ) -> tuple[tuple[Found, int, Poly, list[Any]] | None, list[str]]:
+    """The first reach-avoid function over :data:`~lyapcheck.models.reach_avoid.REACH_DEGREES` (V in the
+    states first, then with the smooth auxiliaries) that passes the exact check; with its degree, its
+    denominator ``D`` and the proofs of ``D > 0``; and what was tried."""
+    from lyapcheck import tolerances
+
+    ring = loop.ring
+    tried: list[str] = []
+    all_vars = loop.v_variables()
+    coordinates = loop.coordinates()
+    sets_of = [coordinates] if len(all_vars) == len(coordinates) else [coordinates, all_vars]
+    zero = tuple([0] * ring.nvars)
+    one = ring.constant(1)
+    square = state_square(loop)
+    for dv in searched_degrees(REACH_DEGREES):
+        for v_vars in sets_of:
+            basis = [m for m in monomials(ring.nvars, 0, dv) if all(m[i] == 0 for i in range(ring.nvars)
+                                                                   if i not in v_vars)]
+            names = [ring.names[i] for i in v_vars]
+            label = f"degree {dv} in {', '.join(names)}"
+            N, D, distinct = common_denominator(loop, names)
+            dens, failed = prove_denominators(loop, distinct, search)
+            if failed is not None:
+                tried.append(f"{label}: the denominator {written_poly(ring, failed)} was not proved positive")
+                continue
+            capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
+            monos = [ring.monomial(m) for m in basis]
+            linear = linear_conditions(ring, monos, lambda p: lie(loop, p, N), D, square, len(initial), len(unsafe),
+                                       len(outside))
+
+            def build(drop: frozenset[Any], linear: Any = linear) -> ConditionProgram | str:
+                program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
+                                           square_free=loop.square_free())
+                for k in range(len(basis)):
+                    program.free(f"b{k}")
+                for name in SCALARS:
+                    program.free(name)
+                for condition, free in linear:
+                    program.relations = where(loop, condition, initial, unsafe, outside)
+                    top = max((sum(m) for _, p in free for m in ring.support(p)), default=dv)
+                    why = program.condition(condition.name, sorted(set(ring.support(condition.F)) | {zero}), free,
+                                            top, vanishing=False)
+                    if why is not None:
+                        return why
+                program.relations = []
+                for name in SCALARS:  # each scalar at least its floor: a 1x1 remainder
+                    program.condition(f"floor_{name}", [zero], [(name, one)], 0, vanishing=False)
+                return program
+
+            values = ParameterValues()
+            for condition, _ in linear:
+                _set(values, *known_values(ring, condition.name, condition.F,
+                                           sorted(set(ring.support(condition.F)) | {zero})))
+            for name in SCALARS:
+                _set(values, *known_values(ring, f"floor_{name}", ring.constant(-FLOORS[name]), [zero]))
+
+            def accept(program: ConditionProgram, point: Any, N: dict[str, Poly] = N, D: Poly = D) -> Found | None:
+                V = sum((ring.monomial(m, point.scalars[f"b{k}"]) for k, m in enumerate(basis)), ring.zero())
+                eps, C, delta = (Fraction(point.scalars[name]) for name in SCALARS)
+                if not (eps > 0 and delta > 0 and C >= 0):
+                    return None
+                proofs = {}
+                for condition in formulation(loop, V, N, D, eps, C, delta, initial, unsafe, outside):
+                    proof = program.certificate(condition.name, point)
+                    if not check_condition(ring, condition.F, where(loop, condition, initial, unsafe, outside),
+                                           proof)[0]:
+                        return None
+                    proofs[condition.name] = proof
+                return Found(V, eps, C, delta, proofs)
+
+            try:
+                found, why = solve_on_faces(capped, build, values, accept)
+            except SolvesSpent as exc:
+                tried.append(f"{label}: {exc}")
+                continue
+            if found is not None:
+                tried.append(f"{label}: found")
+                return (found, dv, D, dens), tried
+            tried.append(f"{label}: {why}")
+    return None, tried
+
+
+def certificate_json(loop: Loop, found: Found, D: Poly, dens: list[Any]) -> dict[str, Any]:
+    """The exact certificate: V in the deviations (``shift``), written with the functions too, its
+    scalars (``eps`` per second), its degree, and every proof (the recasting's, each condition's)."""
+    system = loop.system
+    ring = loop.ring
+    return {"kind": KIND, "variables": list(ring.names), "auxiliaries": system.definitions(),
+            "shift": {k: str(v) for k, v in system.values.items()},
+            "V": poly_to_json(ring, found.V), "V_text": v_text(system, found.V), "degree": b_degree(ring, found.V),
+            "eps_per_s": str(found.eps), "C": str(found.C), "delta": str(found.delta),
+            "denominator": poly_to_json(ring, D),
+            "recasting": {"roots": root_proofs_json(loop),
+                          "denominators": [{"poly": poly_to_json(ring, d), "bound": str(c), "proof": cert.to_json(ring)}
+                                           for d, c, cert in dens]},
+            "proofs": {name: proof.to_json(ring) for name, proof in found.proofs.items()}}
+
+
+def reach_time(cert: dict[str, Any]) -> Fraction:
+    """The certified time bound ``C / eps`` (s) of a certificate of this kind."""
+    return time_bound(Fraction(str(cert["C"])), Fraction(str(cert["eps_per_s"])))
+
+
+def sentence(cert: dict[str, Any]) -> str:
+    """The claim of a certificate of this kind: the polynomial loops' reach-avoid sentence."""
+    from lyapcheck.models.claims import summary
+
+    text = summary("reach_avoid", {"status": "certified", "reach_time_bound_s": float(reach_time(cert))})
+    assert text is not None  # (a certified reach_avoid always has its sentence)
+    return text
+
+
+# -- the class ----------------------------------------------------------------------------------------
+
+def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
+    """The ``reach_avoid`` class on a loop with functions (module docstring)."""
+    refused = goal_of_one_piece(model.sets["goal"])
+    if refused is not None:
+        return refused
+    trial = falsification(model, stop=model.sets["goal"])
+    if trial is not None and trial.entry is not None:
+        entry = trial.entry.describe(list(model.states), [], getattr(model, "units", None) or None)
+        return ConditionResult("reach_avoid", "counterexample",
+                               f"a simulated trajectory of the true loop from the initial set enters the unsafe set "
+                               f"before it reaches the goal: {entry} (simulation, reproducible from its start)",
+                               numbers={"falsification": trial.to_dict()},
+                               refutation={"kind": "trajectory", **trial.entry.to_dict()}, property="reach_avoid")
+    flat = flat_loop(loop)
+    initial = piece_relations(flat, model.state_ring, model.sets["initial"], "initial")
+    unsafe = piece_relations(flat, model.state_ring, model.sets["unsafe"], "unsafe")
+    outside = goal_relations(flat, model.state_ring, model.sets["goal"][0])
+    simulated = {} if trial is None else {"falsification": trial.to_dict()}
+    search = Search(flat.ring, budget)
+    try:
+        result, tried = search_reach(flat, initial, unsafe, outside, search)
+    except BudgetExhausted as exc:
+        return out_of_time(budget.seconds, exc, search.log, simulated)
+    if result is None:
+        rough = not_smooth_note(flat, "V", "V' <= -eps outside the goal")
+        if rough:
+            tried.append(rough)
+        return not_found(tried, search.log, searched_degrees(REACH_DEGREES), simulated)
+    found, degree, D, dens = result
+    certificate = certificate_json(flat, found, D, dens)
+    return ConditionResult("reach_avoid", "certified", sentence(certificate),
+                           numbers=certified_numbers(degree, reach_time(certificate), trial),
+                           certificate=certificate, solver={"solves": search.log}, property="reach_avoid")
+
+
+# -- verify -------------------------------------------------------------------------------------------
+
+def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a recast reach-avoid certificate exactly from the certificate and the model text:
+    ``proved`` is the loop with the certificate's square-root bounds already re-checked; the sets
+    are the model's."""
+    from lyapcheck.models.recast_classes import check_denominator_proofs
+
+    cert = c["certificate"]
+    if c.get("property") != "reach_avoid":
+        return False, "a reach_avoid certificate proves reach_avoid"
+    sets = model.sets
+    if not sets.get("initial") or not sets.get("unsafe") or len(sets.get("goal") or ()) != 1:
+        return False, "the model has no [sets] initial, unsafe and a one-piece goal for reach_avoid"
+    loop = flat_loop(proved)
+    ring = loop.ring
+    V = poly_from_json(ring, cert["V"], "V")
+    allowed = {ring.names[i] for i in loop.v_variables()}
+    if any(degree_in(ring, V, [n]) > 0 for n in ring.names if n not in allowed):
+        return False, "V uses a variable a reach-avoid function may not (a root, or a non-smooth function)"
+    if cert.get("V_text") != v_text(loop.system, V):
+        return False, "V_text is not V written with the functions"
+    if cert.get("degree") != b_degree(ring, V):
+        return False, "the stated degree is not V's"
+    eps, C, delta = (Fraction(str(cert[key])) for key in ("eps_per_s", "C", "delta"))
+    if not (eps > 0 and delta > 0 and C >= 0):
+        return False, "eps and delta must be > 0 and C >= 0"
+    ok, why, N = check_denominator_proofs(loop, v_names(loop, V), cert["recasting"]["denominators"])
+    if not ok:
+        return False, why
+    _, D, _ = common_denominator(loop, v_names(loop, V))
+    if poly_from_json(ring, cert["denominator"], "denominator") != D:
+        return False, "the stated denominator is not the field's"
+    initial = piece_relations(loop, model.state_ring, sets["initial"], "initial")
+    unsafe = piece_relations(loop, model.state_ring, sets["unsafe"], "unsafe")
+    outside = goal_relations(loop, model.state_ring, sets["goal"][0])
+    stated = cert["proofs"]
+    formulated = formulation(loop, V, N, D, eps, C, delta, initial, unsafe, outside)
+    if not isinstance(stated, dict) or set(stated) != {condition.name for condition in formulated}:
+        return False, ("one proof per piece of the initial and of the unsafe set, per goal inequality and for the "
+                       "lower bound is needed")
+    for condition in formulated:
+        relations = where(loop, condition, initial, unsafe, outside)
+        proof = ConditionCertificate.from_json(ring, stated[condition.name], len(relations))
+        if proof.rho is not None:
+            return False, f"{condition.name}: a reach-avoid identity takes no region multiplier"
+        ok, why = check_condition(ring, condition.F, relations, proof)
+        if not ok:
+            return False, f"{condition.what}: {why}"
+    return True, ("V <= 0 on the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal and V >= "
+                  "delta |x|^2 - C on the recasting's relations, exactly")
+
+
+__all__ = ["KIND", "FLOORS", "run", "check", "certificate_json", "reach_time", "sentence", "goal_relations"]
