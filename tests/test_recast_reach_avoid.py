@@ -4,7 +4,6 @@ the true loop into the unsafe set before the goal as a counterexample, a saturat
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
 from fractions import Fraction
@@ -19,6 +18,7 @@ from lyapcheck.models.modelfile import parse_any_model
 from lyapcheck.models.recast import RecastModel
 from lyapcheck.models.recast_certify import verify_recast
 from tests.recast_loops import SPRING, rk4
+from tests.test_recast_barrier import _failed, _forged
 
 app._register_commands()
 
@@ -41,16 +41,6 @@ def write(tmp_path: Path, name: str, unsafe: str = FAR, goal: str = GOAL) -> Pat
 
 def spring_field(X: np.ndarray) -> np.ndarray:
     return np.stack([X[:, 1], -np.sin(X[:, 0]) - X[:, 0] - X[:, 1]], axis=1)
-
-
-def _failed(rows: list[tuple[str, bool, str]]) -> list[str]:
-    return [why for _, ok, why in rows if not ok]
-
-
-def _forged(doc: dict[str, Any], change: Any) -> list[tuple[str, bool, str]]:
-    forged = copy.deepcopy(doc)
-    change(forged)
-    return verify_recast(forged)
 
 
 def test_a_spring_with_a_sine_gets_a_reach_avoid_function_that_verify_re_checks(tmp_path: Path) -> None:

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import hashlib
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.parameter_box import ModelBox
@@ -509,13 +509,7 @@ def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[
     cert = c["certificate"]
     if c.get("status") != "certified" or cert.get("kind") != RECAST_BARRIER:
         return False, f"a barrier's certificate kind must be {RECAST_BARRIER!r}, not {cert.get('kind')!r}"
-    proved, why = _proved_recasting(cert, base)
-    if proved is None:
-        return False, why
-    ok, why = check(model, proved, c)
-    if ok and c.get("summary") != covered(c.get("disturbances"), BARRIER_SENTENCE):
-        return False, "the printed sentence is not the one the certificate supports"
-    return ok, why
+    return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), BARRIER_SENTENCE)
 
 
 def _verify_reach_avoid(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
@@ -526,11 +520,18 @@ def _verify_reach_avoid(c: dict[str, Any], base: Loop, model: RecastModel) -> tu
     cert = c["certificate"]
     if c.get("status") != "certified" or cert.get("kind") != RECAST_REACH_AVOID:
         return False, f"a reach_avoid certificate's kind must be {RECAST_REACH_AVOID!r}, not {cert.get('kind')!r}"
-    proved, why = _proved_recasting(cert, base)
+    return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), sentence(cert))
+
+
+def _checked_on_recasting(c: dict[str, Any], base: Loop, check: Callable[[Loop], tuple[bool, str]],
+                          sentence: str) -> tuple[bool, str]:
+    """A certificate of a safety class: its recasting's square-root proofs, its class's ``check`` on the
+    loop they prove, and its printed sentence."""
+    proved, why = _proved_recasting(c["certificate"], base)
     if proved is None:
         return False, why
-    ok, why = check(model, proved, c)
-    if ok and c.get("summary") != covered(c.get("disturbances"), sentence(cert)):
+    ok, why = check(proved)
+    if ok and c.get("summary") != covered(c.get("disturbances"), sentence):
         return False, "the printed sentence is not the one the certificate supports"
     return ok, why
 

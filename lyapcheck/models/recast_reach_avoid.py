@@ -36,16 +36,15 @@ from typing import Any, Final, Sequence
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.reach_avoid import (REACH_DEGREES, SCALARS, Condition, certified_numbers, conditions,
                                           goal_of_one_piece, linear_conditions, not_found, out_of_time, time_bound)
-from lyapcheck.models.recast import RecastModel, Relation, written_poly
-from lyapcheck.models.recast_barrier import (b_degree, falsification, flat_loop, not_smooth_note, piece_relations,
-                                             state_relation)
-from lyapcheck.models.recast_classes import (Loop, _set, common_denominator, lie, prove_denominators, root_proofs_json,
-                                             state_square, v_names, v_text)
+from lyapcheck.models.recast import RecastModel, Relation
+from lyapcheck.models.recast_barrier import (check_polynomial, counterexample, falsification, flat_loop, not_smooth_note,
+                                             piece_relations, polynomial_json, recasting_json, state_relation, templates)
+from lyapcheck.models.recast_classes import Loop, _set, lie, state_square
 from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
-                                         poly_from_json, poly_to_json, solve_on_faces)
+                                         solve_on_faces)
 from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
 from lyapcheck.results import ConditionResult
-from lyapcheck.sos.polynomials import Poly, Ring, degree_in, monomials
+from lyapcheck.sos.polynomials import Poly, Ring
 
 #: the certificate's kind (``verify`` dispatches on it)
 KIND: Final = "recast_reach_avoid"
@@ -96,93 +95,75 @@ def search_reach(loop: Loop, initial: Pieces, unsafe: Pieces, outside: list[Rela
 
     ring = loop.ring
     tried: list[str] = []
-    all_vars = loop.v_variables()
-    coordinates = loop.coordinates()
-    sets_of = [coordinates] if len(all_vars) == len(coordinates) else [coordinates, all_vars]
     zero = tuple([0] * ring.nvars)
     one = ring.constant(1)
     square = state_square(loop)
-    for dv in searched_degrees(REACH_DEGREES):
-        for v_vars in sets_of:
-            basis = [m for m in monomials(ring.nvars, 0, dv) if all(m[i] == 0 for i in range(ring.nvars)
-                                                                   if i not in v_vars)]
-            names = [ring.names[i] for i in v_vars]
-            label = f"degree {dv} in {', '.join(names)}"
-            N, D, distinct = common_denominator(loop, names)
-            dens, failed = prove_denominators(loop, distinct, search)
-            if failed is not None:
-                tried.append(f"{label}: the denominator {written_poly(ring, failed)} was not proved positive")
-                continue
-            capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
-            monos = [ring.monomial(m) for m in basis]
-            linear = linear_conditions(ring, monos, lambda p: lie(loop, p, N), D, square, len(initial), len(unsafe),
-                                       len(outside))
+    for template in templates(loop, REACH_DEGREES, search, tried):
+        dv, basis, label, N, D, dens = (template.degree, template.basis, template.label, template.N, template.D,
+                                        template.dens)
+        capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
+        monos = [ring.monomial(m) for m in basis]
+        linear = linear_conditions(ring, monos, lambda p: lie(loop, p, N), D, square, len(initial), len(unsafe),
+                                   len(outside))
 
-            def build(drop: frozenset[Any], linear: Any = linear) -> ConditionProgram | str:
-                program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
-                                           square_free=loop.square_free())
-                for k in range(len(basis)):
-                    program.free(f"b{k}")
-                for name in SCALARS:
-                    program.free(name)
-                for condition, free in linear:
-                    program.relations = where(loop, condition, initial, unsafe, outside)
-                    top = max((sum(m) for _, p in free for m in ring.support(p)), default=dv)
-                    why = program.condition(condition.name, sorted(set(ring.support(condition.F)) | {zero}), free,
-                                            top, vanishing=False)
-                    if why is not None:
-                        return why
-                program.relations = []
-                for name in SCALARS:  # each scalar at least its floor: a 1x1 remainder
-                    program.condition(f"floor_{name}", [zero], [(name, one)], 0, vanishing=False)
-                return program
-
-            values = ParameterValues()
-            for condition, _ in linear:
-                _set(values, *known_values(ring, condition.name, condition.F,
-                                           sorted(set(ring.support(condition.F)) | {zero})))
+        def build(drop: frozenset[Any], linear: Any = linear) -> ConditionProgram | str:
+            program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
+                                       square_free=loop.square_free())
+            for k in range(len(basis)):
+                program.free(f"b{k}")
             for name in SCALARS:
-                _set(values, *known_values(ring, f"floor_{name}", ring.constant(-FLOORS[name]), [zero]))
+                program.free(name)
+            for condition, free in linear:
+                program.relations = where(loop, condition, initial, unsafe, outside)
+                top = max((sum(m) for _, p in free for m in ring.support(p)), default=dv)
+                why = program.condition(condition.name, sorted(set(ring.support(condition.F)) | {zero}), free,
+                                        top, vanishing=False)
+                if why is not None:
+                    return why
+            program.relations = []
+            for name in SCALARS:  # each scalar at least its floor: a 1x1 remainder
+                program.condition(f"floor_{name}", [zero], [(name, one)], 0, vanishing=False)
+            return program
 
-            def accept(program: ConditionProgram, point: Any, N: dict[str, Poly] = N, D: Poly = D) -> Found | None:
-                V = sum((ring.monomial(m, point.scalars[f"b{k}"]) for k, m in enumerate(basis)), ring.zero())
-                eps, C, delta = (Fraction(point.scalars[name]) for name in SCALARS)
-                if not (eps > 0 and delta > 0 and C >= 0):
+        values = ParameterValues()
+        for condition, _ in linear:
+            _set(values, *known_values(ring, condition.name, condition.F,
+                                       sorted(set(ring.support(condition.F)) | {zero})))
+        for name in SCALARS:
+            _set(values, *known_values(ring, f"floor_{name}", ring.constant(-FLOORS[name]), [zero]))
+
+        def accept(program: ConditionProgram, point: Any, N: dict[str, Poly] = N, D: Poly = D) -> Found | None:
+            V = sum((ring.monomial(m, point.scalars[f"b{k}"]) for k, m in enumerate(basis)), ring.zero())
+            eps, C, delta = (Fraction(point.scalars[name]) for name in SCALARS)
+            if not (eps > 0 and delta > 0 and C >= 0):
+                return None
+            proofs = {}
+            for condition in formulation(loop, V, N, D, eps, C, delta, initial, unsafe, outside):
+                proof = program.certificate(condition.name, point)
+                if not check_condition(ring, condition.F, where(loop, condition, initial, unsafe, outside),
+                                       proof)[0]:
                     return None
-                proofs = {}
-                for condition in formulation(loop, V, N, D, eps, C, delta, initial, unsafe, outside):
-                    proof = program.certificate(condition.name, point)
-                    if not check_condition(ring, condition.F, where(loop, condition, initial, unsafe, outside),
-                                           proof)[0]:
-                        return None
-                    proofs[condition.name] = proof
-                return Found(V, eps, C, delta, proofs)
+                proofs[condition.name] = proof
+            return Found(V, eps, C, delta, proofs)
 
-            try:
-                found, why = solve_on_faces(capped, build, values, accept)
-            except SolvesSpent as exc:
-                tried.append(f"{label}: {exc}")
-                continue
-            if found is not None:
-                tried.append(f"{label}: found")
-                return (found, dv, D, dens), tried
-            tried.append(f"{label}: {why}")
+        try:
+            found, why = solve_on_faces(capped, build, values, accept)
+        except SolvesSpent as exc:
+            tried.append(f"{label}: {exc}")
+            continue
+        if found is not None:
+            tried.append(f"{label}: found")
+            return (found, dv, D, dens), tried
+        tried.append(f"{label}: {why}")
     return None, tried
 
 
 def certificate_json(loop: Loop, found: Found, D: Poly, dens: list[Any]) -> dict[str, Any]:
     """The exact certificate: V in the deviations (``shift``), written with the functions too, its
     scalars (``eps`` per second), its degree, and every proof (the recasting's, each condition's)."""
-    system = loop.system
     ring = loop.ring
-    return {"kind": KIND, "variables": list(ring.names), "auxiliaries": system.definitions(),
-            "shift": {k: str(v) for k, v in system.values.items()},
-            "V": poly_to_json(ring, found.V), "V_text": v_text(system, found.V), "degree": b_degree(ring, found.V),
-            "eps_per_s": str(found.eps), "C": str(found.C), "delta": str(found.delta),
-            "denominator": poly_to_json(ring, D),
-            "recasting": {"roots": root_proofs_json(loop),
-                          "denominators": [{"poly": poly_to_json(ring, d), "bound": str(c), "proof": cert.to_json(ring)}
-                                           for d, c, cert in dens]},
+    return {**polynomial_json(loop, KIND, "V", found.V), "eps_per_s": str(found.eps), "C": str(found.C),
+            "delta": str(found.delta), **recasting_json(loop, D, dens),
             "proofs": {name: proof.to_json(ring) for name, proof in found.proofs.items()}}
 
 
@@ -208,13 +189,8 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
     if refused is not None:
         return refused
     trial = falsification(model, stop=model.sets["goal"])
-    if trial is not None and trial.entry is not None:
-        entry = trial.entry.describe(list(model.states), [], getattr(model, "units", None) or None)
-        return ConditionResult("reach_avoid", "counterexample",
-                               f"a simulated trajectory of the true loop from the initial set enters the unsafe set "
-                               f"before it reaches the goal: {entry} (simulation, reproducible from its start)",
-                               numbers={"falsification": trial.to_dict()},
-                               refutation={"kind": "trajectory", **trial.entry.to_dict()}, property="reach_avoid")
+    if trial is not None and trial.entry is not None:  # entered before the goal: no V can exist
+        return counterexample(model, trial, "reach_avoid", "reach_avoid", " before it reaches the goal")
     flat = flat_loop(loop)
     initial = piece_relations(flat, model.state_ring, model.sets["initial"], "initial")
     unsafe = piece_relations(flat, model.state_ring, model.sets["unsafe"], "unsafe")
@@ -243,8 +219,6 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
     """Re-check a recast reach-avoid certificate exactly from the certificate and the model text:
     ``proved`` is the loop with the certificate's square-root bounds already re-checked; the sets
     are the model's."""
-    from lyapcheck.models.recast_classes import check_denominator_proofs
-
     cert = c["certificate"]
     if c.get("property") != "reach_avoid":
         return False, "a reach_avoid certificate proves reach_avoid"
@@ -253,23 +227,13 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
         return False, "the model has no [sets] initial, unsafe and a one-piece goal for reach_avoid"
     loop = flat_loop(proved)
     ring = loop.ring
-    V = poly_from_json(ring, cert["V"], "V")
-    allowed = {ring.names[i] for i in loop.v_variables()}
-    if any(degree_in(ring, V, [n]) > 0 for n in ring.names if n not in allowed):
-        return False, "V uses a variable a reach-avoid function may not (a root, or a non-smooth function)"
-    if cert.get("V_text") != v_text(loop.system, V):
-        return False, "V_text is not V written with the functions"
-    if cert.get("degree") != b_degree(ring, V):
-        return False, "the stated degree is not V's"
     eps, C, delta = (Fraction(str(cert[key])) for key in ("eps_per_s", "C", "delta"))
     if not (eps > 0 and delta > 0 and C >= 0):
         return False, "eps and delta must be > 0 and C >= 0"
-    ok, why, N = check_denominator_proofs(loop, v_names(loop, V), cert["recasting"]["denominators"])
-    if not ok:
-        return False, why
-    _, D, _ = common_denominator(loop, v_names(loop, V))
-    if poly_from_json(ring, cert["denominator"], "denominator") != D:
-        return False, "the stated denominator is not the field's"
+    head = check_polynomial(loop, cert, "V", "a reach-avoid function")
+    if isinstance(head, str):
+        return False, head
+    V, N, D = head
     initial = piece_relations(loop, model.state_ring, sets["initial"], "initial")
     unsafe = piece_relations(loop, model.state_ring, sets["unsafe"], "unsafe")
     outside = goal_relations(loop, model.state_ring, sets["goal"][0])
