@@ -29,9 +29,10 @@ that enters the unsafe set first is a ``counterexample`` (no proof is then searc
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Final, Sequence
+from typing import Any, Callable, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.reach_avoid import (REACH_DEGREES, SCALARS, Condition, certified_numbers, conditions,
@@ -44,13 +45,16 @@ from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram,
                                          solve_on_faces)
 from lyapcheck.models.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
 from lyapcheck.results import ConditionResult
-from lyapcheck.sos.polynomials import Poly, Ring
+from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
 
 #: the certificate's kind (``verify`` dispatches on it)
 KIND: Final = "recast_reach_avoid"
 #: the search's lower bounds on eps (1/s) and delta, and on C: the check needs eps, delta > 0 and C >= 0;
 #: a small floor leaves the program free (a smaller eps only lengthens the time bound C / eps)
 FLOORS: Final = {"eps": Fraction(1, 1000), "C": Fraction(0), "delta": Fraction(1, 1000)}
+#: the time bound's tightening (:func:`tightened`): rounds after the first certificate, and the first step
+TIGHTEN_ROUNDS: Final = 4
+TIGHTEN_FACTOR: Final = Fraction(16)
 
 Pieces = list[list[Relation]]
 
@@ -106,7 +110,8 @@ def search_reach(loop: Loop, initial: Pieces, unsafe: Pieces, outside: list[Rela
         linear = linear_conditions(ring, monos, lambda p: lie(loop, p, N), D, square, len(initial), len(unsafe),
                                    len(outside))
 
-        def build(drop: frozenset[Any], linear: Any = linear) -> ConditionProgram | str:
+        def build(drop: frozenset[Any], linear: Any = linear, within: Fraction | None = None
+                  ) -> ConditionProgram | str:
             program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
                                        square_free=loop.square_free())
             for k in range(len(basis)):
@@ -123,6 +128,9 @@ def search_reach(loop: Loop, initial: Pieces, unsafe: Pieces, outside: list[Rela
             program.relations = []
             for name in SCALARS:  # each scalar at least its floor: a 1x1 remainder
                 program.condition(f"floor_{name}", [zero], [(name, one)], 0, vanishing=False)
+            if within is not None:  # C <= within eps: the time bound C / eps at most ``within``
+                program.condition("within", [zero], [("eps", one * to_fmpq(within)), ("C", -one)], 0,
+                                  vanishing=False)
             return program
 
         values = ParameterValues()
@@ -153,9 +161,46 @@ def search_reach(loop: Loop, initial: Pieces, unsafe: Pieces, outside: list[Rela
             continue
         if found is not None:
             tried.append(f"{label}: found")
+            found = tightened(found, search, build, values, accept)
             return (found, dv, D, dens), tried
         tried.append(f"{label}: {why}")
     return None, tried
+
+
+def tightened(found: Found, search: Search, build: Callable[..., ConditionProgram | str], values: ParameterValues,
+              accept: Callable[[ConditionProgram, Any], Found | None]) -> Found:
+    """The same template solved again with ``C <= T eps`` for shorter bounds ``T`` (the search maximizes
+    the Gram margin, not the time: its first bound is loose): :data:`TIGHTEN_ROUNDS` rounds, each ``T``
+    the best bound over :data:`TIGHTEN_FACTOR`, or (after a ``T`` not reached) the geometric mean of the
+    two; the last certificate that passed its exact check is kept."""
+    from lyapcheck import tolerances
+
+    tight = ParameterValues(dict(values.floats), dict(values.exact))  # and the parameter of C <= T eps
+    _set(tight, *known_values(search.ring, "within", search.ring.zero(), [tuple([0] * search.ring.nvars)]))
+    best, lo = found, None
+    for _ in range(TIGHTEN_ROUNDS):
+        hi = found_bound(best)
+        within = hi / TIGHTEN_FACTOR if lo is None else _dyadic_mean(lo, hi)
+        capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
+        try:
+            better, _ = solve_on_faces(capped, lambda drop: build(drop, within=within), tight, accept)
+        except SolvesSpent:
+            better = None
+        if better is not None and found_bound(better) < hi:
+            best = better
+        else:  # not reached: the next try lies between it and the best bound
+            lo = within
+    return best
+
+
+def found_bound(found: Found) -> Fraction:
+    """A found certificate's time bound ``C / eps`` (s)."""
+    return time_bound(found.C, found.eps)
+
+
+def _dyadic_mean(a: Fraction, b: Fraction) -> Fraction:
+    """About the geometric mean of ``a`` and ``b`` (a short rational: it enters the program)."""
+    return Fraction(math.sqrt(float(a) * float(b))).limit_denominator(1 << 20)
 
 
 def certificate_json(loop: Loop, found: Found, D: Poly, dens: list[Any]) -> dict[str, Any]:
