@@ -147,13 +147,16 @@ def test_a_saturated_loop_says_why_a_reach_avoid_function_is_hard_to_find(tmp_pa
     model.write_text(model.read_text() + 'goal = ["(h - 30)**2 + (v - 20)**2 <= 0.25"]\n')
     out = tmp_path / "acc.json"
     result = run_cli("certify", str(model), "--classes", "reach_avoid", "--out", str(out))
-    ra = json.loads(out.read_text())["conditions"]["reach_avoid"]
+    doc = json.loads(out.read_text())
+    ra = doc["conditions"]["reach_avoid"]
     assert ra["status"] in ("not_certified", "certified"), ra
+    assert ra["falsification"]["entry"] is None  # no simulated trajectory defeats it
     if ra["status"] == "certified":  # (a search that one day proves it: verify must agree)
         assert result.exit_code == 0 and run_cli("verify", str(out)).exit_code == 0
     else:
         assert result.exit_code == 1 and "reach-avoid function was found" in ra["summary"], ra["summary"]
         assert any("V may not use sat" in line for line in ra["detail"]), ra["detail"]
+        assert doc["answers"]["reach_avoid"]["answer"] == "undecided" and "reach-avoid: undecided" in result.output
 
 
 def test_reach_avoid_needs_its_goal_on_a_loop_with_functions(tmp_path: Path) -> None:

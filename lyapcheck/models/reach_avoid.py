@@ -17,11 +17,13 @@ below ``-C``, so the goal is reached by the time ``C / eps``. The decrease is de
 goal everywhere, not only on ``{V <= 0}`` (that would make the program bilinear): a sufficient,
 conservative form. The claim is reach-while-avoid; staying in the goal afterwards is not claimed.
 
-Every route states these conditions through :func:`conditions` (``F >= 0`` where a set holds) and
-builds its result through :func:`not_found`, :func:`out_of_time` and :func:`certified_numbers`: the
-polynomial route here (its identities' Gram form is checked by
-:func:`~lyapcheck.sos.certificates.check_reach_avoid`), and a loop with functions in
-:mod:`lyapcheck.models.recast_reach_avoid` (each condition proved on the recasting's relations).
+:func:`conditions` states these conditions once as polynomials (``F >= 0`` where a set holds): a
+loop with functions (:mod:`lyapcheck.models.recast_reach_avoid`) builds its program from them
+(:func:`linear_conditions`) and proves each on its recasting's relations; the polynomial route here
+writes the same conditions as the Gram identities above, which
+:func:`~lyapcheck.sos.certificates.check_reach_avoid` checks (an engine below this package). Both routes
+share the degrees :data:`REACH_DEGREES`, the goal's form (:func:`goal_of_one_piece`), the time bound
+(:func:`time_bound`) and their results (:func:`not_found`, :func:`out_of_time`, :func:`certified_numbers`).
 """
 
 from __future__ import annotations

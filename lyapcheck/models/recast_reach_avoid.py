@@ -91,10 +91,10 @@ def formulation(loop: Loop, V: Poly, N: dict[str, Poly], D: Poly, eps: Fraction,
 
 
 def search_reach(loop: Loop, initial: Pieces, unsafe: Pieces, outside: list[Relation], search: Search
-                 ) -> tuple[tuple[Found, int, Poly, list[Any]] | None, list[str]]:
+                 ) -> tuple[tuple[Found, Poly, list[Any]] | None, list[str]]:
     """The first reach-avoid function over :data:`~lyapcheck.models.reach_avoid.REACH_DEGREES` (V in the
-    states first, then with the smooth auxiliaries) that passes the exact check; with its degree, its
-    denominator ``D`` and the proofs of ``D > 0``; and what was tried."""
+    states first, then with the smooth auxiliaries) that passes the exact check, its time bound then
+    tightened (:func:`tightened`); with its denominator ``D`` and the proofs of ``D > 0``; and what was tried."""
     from lyapcheck import tolerances
 
     ring = loop.ring
@@ -162,7 +162,7 @@ def search_reach(loop: Loop, initial: Pieces, unsafe: Pieces, outside: list[Rela
         if found is not None:
             tried.append(f"{label}: found")
             found = tightened(found, search, build, values, accept)
-            return (found, dv, D, dens), tried
+            return (found, D, dens), tried
         tried.append(f"{label}: {why}")
     return None, tried
 
@@ -251,10 +251,10 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
         if rough:
             tried.append(rough)
         return not_found(tried, search.log, searched_degrees(REACH_DEGREES), simulated)
-    found, degree, D, dens = result
+    found, D, dens = result
     certificate = certificate_json(flat, found, D, dens)
-    return ConditionResult("reach_avoid", "certified", sentence(certificate),
-                           numbers=certified_numbers(degree, reach_time(certificate), trial),
+    return ConditionResult("reach_avoid", "certified", sentence(certificate),  # (V's degree, not its template's)
+                           numbers=certified_numbers(certificate["degree"], reach_time(certificate), trial),
                            certificate=certificate, solver={"solves": search.log}, property="reach_avoid")
 
 
