@@ -17,7 +17,7 @@ from lyapcheck.cli import app
 from lyapcheck.models.modelfile import parse_any_model
 from lyapcheck.models.recast import RecastModel
 from lyapcheck.models.recast_certify import verify_recast
-from tests.recast_loops import SPRING, rk4
+from tests.recast_loops import PENDULUM, SPRING, rk4
 from tests.test_recast_barrier import _failed, _forged
 
 app._register_commands()
@@ -169,3 +169,27 @@ def test_reach_avoid_needs_its_goal_on_a_loop_with_functions(tmp_path: Path) -> 
     out = tmp_path / "nogoal.json"
     run_cli("certify", str(model), "--classes", "barrier", "--out", str(out))
     assert "reach_avoid" not in json.loads(out.read_text())["conditions"]
+
+
+def test_a_pendulum_whose_angle_makes_another_equilibrium_outside_the_goal_says_none_can_exist(tmp_path: Path) -> None:
+    # theta enters through sin only: (2 pi, 0) is an equilibrium too, outside the goal, where V' = 0, so
+    # no V with V' <= -eps outside the goal exists (the reach-avoid property itself may hold: undecided)
+    model = tmp_path / "pendulum.toml"
+    model.write_text(PENDULUM + '[sets]\ninitial = ["(theta - 1)**2 + omega**2 <= 0.04"]\nunsafe = ["theta <= -3"]\n'
+                                'goal = ["theta**2 + omega**2 <= 0.1"]\n')
+    out = tmp_path / "pendulum.json"
+    result = run_cli("certify", str(model), "--classes", "reach_avoid", "--out", str(out))
+    assert result.exit_code == 1, result.output
+    doc = json.loads(out.read_text())
+    ra = doc["conditions"]["reach_avoid"]
+    assert ra["status"] == "not_certified" and "can exist" in ra["summary"] and "theta_eq + 2 pi" in ra["summary"]
+    assert ra["falsification"]["entry"] is None and doc["answers"]["reach_avoid"]["answer"] == "undecided"
+    # a wider goal that holds theta_eq + 2 pi and - 2 pi still misses theta_eq + 4 pi
+    wide = tmp_path / "wide.toml"
+    wide.write_text(model.read_text().replace("theta**2 + omega**2 <= 0.1", "theta**2 + omega**2 <= 50"))
+    run_cli("certify", str(wide), "--classes", "reach_avoid", "--out", str(out))
+    assert "theta_eq + 4 pi" in json.loads(out.read_text())["conditions"]["reach_avoid"]["summary"]
+    # a goal that holds every such equilibrium (every theta) is searched, and the note is not given
+    wide.write_text(model.read_text().replace("theta**2 + omega**2 <= 0.1", "omega**2 <= 0.1"))
+    run_cli("certify", str(wide), "--classes", "reach_avoid", "--out", str(out))
+    assert "can exist" not in json.loads(out.read_text())["conditions"]["reach_avoid"]["summary"]

@@ -124,9 +124,11 @@ def time_bound(C: Fraction, eps: Fraction, time_unit: Fraction = Fraction(1)) ->
 
 
 def not_found(tried: list[str], log: Any, degrees: Sequence[int] = REACH_DEGREES,
-              numbers: dict[str, Any] | None = None) -> ConditionResult:
-    """``not_certified``: no certificate passed the exact check (what was tried, and why)."""
-    none = reasons.not_found("reach-avoid function", degrees, tried, ("degree", "sets", "time"))
+              numbers: dict[str, Any] | None = None, cause: str | None = None) -> ConditionResult:
+    """``not_certified``: no certificate passed the exact check (what was tried, and why; ``cause``:
+    why none can exist, said instead of what to try next)."""
+    none = reasons.reason(cause, (), tried) if cause else \
+        reasons.not_found("reach-avoid function", degrees, tried, ("degree", "sets", "time"))
     return ConditionResult("reach_avoid", "not_certified", none.summary,
                            numbers={**none.numbers({"tried": tried}), **(numbers or {})}, solver={"solves": log},
                            property="reach_avoid")

@@ -55,6 +55,11 @@ FLOORS: Final = {"eps": Fraction(1, 1000), "C": Fraction(0), "delta": Fraction(1
 #: the time bound's tightening (:func:`tightened`): rounds after the first certificate, and the first step
 TIGHTEN_ROUNDS: Final = 4
 TIGHTEN_FACTOR: Final = Fraction(16)
+#: a point is said to lie outside the goal (in a reason's words, read in floating point) when the goal's
+#: margin there is below minus this
+OUTSIDE_GOAL_MARGIN: Final = 1e-9
+#: the turns of an angle tried for another equilibrium outside the goal (1, -1, 2, -2, ...)
+PERIODS: Final = 8
 
 Pieces = list[list[Relation]]
 
@@ -236,11 +241,15 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
     trial = falsification(model, stop=model.sets["goal"])
     if trial is not None and trial.entry is not None:  # entered before the goal: no V can exist
         return counterexample(model, trial, "reach_avoid", "reach_avoid", " before it reaches the goal")
+    simulated = {} if trial is None else {"falsification": trial.to_dict()}
+    periodic = periodic_notes(model, loop)
+    if periodic:  # an equilibrium outside the goal: no V of this form exists, and none is searched
+        return not_found(periodic, [], searched_degrees(REACH_DEGREES), simulated,
+                         f"no reach-avoid function of this form can exist: {periodic[0]}")
     flat = flat_loop(loop)
     initial = piece_relations(flat, model.state_ring, model.sets["initial"], "initial")
     unsafe = piece_relations(flat, model.state_ring, model.sets["unsafe"], "unsafe")
     outside = goal_relations(flat, model.state_ring, model.sets["goal"][0])
-    simulated = {} if trial is None else {"falsification": trial.to_dict()}
     search = Search(flat.ring, budget)
     try:
         result, tried = search_reach(flat, initial, unsafe, outside, search)
@@ -256,6 +265,28 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
     return ConditionResult("reach_avoid", "certified", sentence(certificate),  # (V's degree, not its template's)
                            numbers=certified_numbers(certificate["degree"], reach_time(certificate), trial),
                            certificate=certificate, solver={"solves": search.log}, property="reach_avoid")
+
+
+def periodic_notes(model: RecastModel, loop: Loop) -> list[str]:
+    """Why no V of this form can exist: an angle (a state that enters only through its sine and cosine)
+    makes the equilibrium shifted by 2 pi in it an equilibrium too, where ``V' = 0``; outside the goal
+    (read in floating point: these are words, not a status) ``V' <= -eps`` fails there."""
+    import numpy as np
+
+    from lyapcheck.models.sets import margin
+
+    out = []
+    for angle in loop.angles:
+        for turns in (k * sign for k in range(1, PERIODS + 1) for sign in (1, -1)):
+            point = np.array([float(v) for v in model.equilibrium])
+            point[list(model.states).index(angle)] += 2 * math.pi * turns
+            if margin(model.sets["goal"], point)[0] < -OUTSIDE_GOAL_MARGIN:
+                out.append(f"{angle} enters only through its sine and cosine, so {angle} = {angle}_eq "
+                           f"{'+' if turns > 0 else '-'} {2 * abs(turns)} pi (the other states at their equilibrium) "
+                           "is an equilibrium too, outside the goal, where V' = 0: V' <= -eps is demanded outside the "
+                           "goal on the whole state space")
+                break
+    return out
 
 
 # -- verify -------------------------------------------------------------------------------------------
