@@ -215,7 +215,8 @@ def certificate_json(loop: Loop, found: Found, D: Poly, dens: list[Any]) -> dict
     """The exact certificate: B in the deviations (``shift``), written with the functions too, its
     rate and degree, and every proof (the recasting's, each set piece's, the decrease's)."""
     ring = loop.ring
-    return {**polynomial_json(loop, KIND, "B", found.B), "lambda_per_s": str(found.lam), **recasting_json(loop, D, dens),
+    return {**polynomial_json(loop, KIND, "B", found.B), "lambda_per_s": str(found.lam),
+            **recasting_json(loop, D, dens),
             "initial": [c.to_json(ring) for c in found.initial], "unsafe": [c.to_json(ring) for c in found.unsafe],
             "decrease": found.decrease.to_json(ring)}
 

@@ -38,8 +38,9 @@ from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.reach_avoid import (REACH_DEGREES, SCALARS, Condition, certified_numbers, conditions,
                                           goal_of_one_piece, linear_conditions, not_found, out_of_time, time_bound)
 from lyapcheck.models.recast import RecastModel, Relation
-from lyapcheck.models.recast_barrier import (check_polynomial, counterexample, falsification, flat_loop, not_smooth_note,
-                                             piece_relations, polynomial_json, recasting_json, state_relation, templates)
+from lyapcheck.models.recast_barrier import (check_polynomial, counterexample, falsification, flat_loop,
+                                             not_smooth_note, piece_relations, polynomial_json, recasting_json,
+                                             state_relation, templates)
 from lyapcheck.models.recast_classes import Loop, _set, lie, state_square
 from lyapcheck.models.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
                                          solve_on_faces)
