@@ -766,6 +766,8 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         allowed = recast_point_classes() if mode == "points" else recast_box_classes()
     if not polynomial and not ("initial" in model.sets and "unsafe" in model.sets):
         allowed = tuple(c for c in allowed if c != "barrier")  # (a loop with functions: barrier with its sets only)
+    if not polynomial and not ("initial" in model.sets and "unsafe" in model.sets and "goal" in model.sets):
+        allowed = tuple(c for c in allowed if c != "reach_avoid")  # (and reach_avoid with its goal too)
     disturbances = model.disturbances
     if raw is None:
         return tuple(c for c in allowed if c != "sos_bound" or disturbances)

@@ -507,17 +507,21 @@ def test_bad_calls_are_refused_in_one_line(rhs: str, key: str, fragments: list[s
 
 
 @pytest.mark.parametrize(("extra", "section"), [
-    ('[sets]\ninitial = ["x1**2 + x2**2 <= 1"]\nunsafe = ["x1 >= 3"]\ngoal = ["x1**2 <= 1"]\n', "[sets] goal"),
+    ('[sets]\ninitial = ["x1**2 + x2**2 <= 1"]\nunsafe = ["x1 >= 3"]\ngoal = ["x1**2 <= 1"]\nstay_in_goal = true\n',
+     "[sets] stay_in_goal"),
 ])
 def test_sections_not_taken_with_functions_are_refused(extra: str, section: str) -> None:
     text = model_text({"x1": "-x1 + sin(x2)", "x2": "-x2"}, extra=extra)
     with pytest.raises(ModelFileError) as info:
         parse_any_model(text, "dist.toml")
     message = str(info.value)
-    # the key is what a loop with functions cannot take yet (its initial and unsafe sets it takes:
-    # tests/test_recast_barrier.py), and the message says so in one line
+    # the key is what a loop with functions cannot take yet (its initial, unsafe and goal sets it takes:
+    # tests/test_recast_barrier.py, tests/test_recast_reach_avoid.py), and the message says so in one line
     assert "\n" not in message and message.startswith(f"dist.toml: {section}: "), message
     assert "not taken yet" in message
+    # without stay_in_goal, the goal is taken (class reach_avoid)
+    taken = parse_any_model(text.replace("stay_in_goal = true\n", ""), "dist.toml")
+    assert isinstance(taken, RecastModel) and set(taken.sets) == {"initial", "unsafe", "goal"}
     # the same sections are still taken by a polynomial loop
     assert not isinstance(parse_any_model(model_text({"x1": "-x1 + x2", "x2": "-x2"}, extra=extra), "p.toml"),
                           RecastModel)

@@ -162,8 +162,12 @@ def test_sets_on_a_loop_with_functions_are_read_or_refused_in_one_line(tmp_path:
     goal = tmp_path / "goal.toml"
     goal.write_text(write(tmp_path, "base").read_text().replace('unsafe = ["h <= 5"]',
                                                                  'unsafe = ["h <= 5"]\ngoal = ["h >= 29"]'))
-    result = run_cli("certify", str(goal), "--classes", "barrier")
-    assert result.exit_code == 2 and "[sets] goal" in result.output, result.output
+    # a goal is read (class reach_avoid: tests/test_recast_reach_avoid.py); staying in it is refused in one line
+    assert set(parse_any_model(goal.read_text(), "goal.toml", {}).sets) == {"initial", "unsafe", "goal"}
+    stay = tmp_path / "stay.toml"
+    stay.write_text(goal.read_text() + "stay_in_goal = true\n")
+    result = run_cli("certify", str(stay), "--classes", "barrier")
+    assert result.exit_code == 2 and "[sets] stay_in_goal" in result.output, result.output
     assert len(result.output.strip().splitlines()) == 1
     no_sets = tmp_path / "nosets.toml"
     no_sets.write_text(write(tmp_path, "base").read_text().split("[sets]")[0])

@@ -16,12 +16,21 @@ meets the unsafe set, where ``V >= 1``) and stays in the compact ``{V <= 0}``; `
 below ``-C``, so the goal is reached by the time ``C / eps``. The decrease is demanded outside the
 goal everywhere, not only on ``{V <= 0}`` (that would make the program bilinear): a sufficient,
 conservative form. The claim is reach-while-avoid; staying in the goal afterwards is not claimed.
+
+:func:`conditions` states these conditions once as polynomials (``F >= 0`` where a set holds): a
+loop with functions (:mod:`lyapcheck.models.classes.recast_reach_avoid`) builds its program from them
+(:func:`linear_conditions`) and proves each on its recasting's relations; the polynomial route here
+writes the same conditions as the Gram identities above, which
+:func:`~lyapcheck.sos.certificates.check_reach_avoid` checks (an engine below this package). Both routes
+share the degrees :data:`REACH_DEGREES`, the goal's form (:func:`goal_of_one_piece`), the time bound
+(:func:`time_bound`) and their results (:func:`not_found`, :func:`out_of_time`, :func:`certified_numbers`).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Final, Sequence
+from typing import Any, Callable, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.classes.barrier import (BudgetExhausted, Pieces, _b_basis, _decrease_poly, _decrease_support,
@@ -37,7 +46,7 @@ from lyapcheck.models.engines.search import (ParameterValues, Search, box_multip
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import check_reach_avoid
-from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Solution, Structure, Term, full_blocks
 
 #: degrees of V tried, in turn
@@ -46,6 +55,106 @@ REACH_DEGREES: Final = (2, 4)
 MAX_GRAM_ROWS: Final = 120
 #: why stay_in_goal cannot hold: the set it needs contains the equilibrium
 NOT_IN_GOAL: Final = "the equilibrium is not inside the goal (some goal inequality is not > 0 there)"
+#: the program's unknowns besides V's coefficients ``b0, b1, ...`` (the time bound is ``C / eps``)
+SCALARS: Final = ("eps", "C", "delta")
+
+
+# -- the formulation, once for every route ----------------------------------------------------------
+
+@dataclass(frozen=True)
+class Condition:
+    """One condition of the certificate (module docstring): ``F >= 0`` wherever ``on`` holds:
+    ``initial`` or ``unsafe`` (piece ``index`` of the set), ``outside_goal`` (where goal inequality
+    ``index`` is ``<= 0``) or ``everywhere``; ``what`` says it in words."""
+
+    name: str
+    F: Poly
+    on: str
+    index: int
+    what: str
+
+
+def conditions(ring: Ring, V: Poly, lie: Callable[[Poly], Poly], D: Poly, eps: Fraction, C: Fraction,
+               delta: Fraction, square: Poly, initial: int, unsafe: int, goal: int) -> list[Condition]:
+    """The conditions of a reach-avoid certificate with ``V``, ``x' = N / D`` (``lie(V)``: ``grad V . N``,
+    ``D > 0``), ``square`` the states' ``|z|^2``, and the number of initial and unsafe pieces and of
+    goal inequalities: ``-V`` on each initial piece, ``V - 1`` on each unsafe piece, ``-lie(V) - eps D``
+    outside each goal inequality, ``V + C - delta |z|^2`` everywhere."""
+    one = ring.constant(1)
+    out = [Condition(f"I{k}", -V, "initial", k, "V <= 0 on the initial set") for k in range(initial)]
+    out += [Condition(f"U{k}", V - one, "unsafe", k, "V >= 1 on the unsafe set") for k in range(unsafe)]
+    decrease = -lie(V) - D * to_fmpq(eps)
+    out += [Condition(f"goal{i}", decrease, "outside_goal", i, f"V' <= -eps where goal inequality {i + 1} fails")
+            for i in range(goal)]
+    out.append(Condition("bounded", V + one * to_fmpq(C) - square * to_fmpq(delta), "everywhere", 0,
+                         "V >= delta |z|^2 - C"))
+    return out
+
+
+def linear_conditions(ring: Ring, basis: Sequence[Poly], lie: Callable[[Poly], Poly], D: Poly, square: Poly,
+                      initial: int, unsafe: int, goal: int) -> list[tuple[Condition, list[tuple[str, Poly]]]]:
+    """:func:`conditions` with V, eps, C and delta unknown (``V = sum_k b_k basis[k]``): each condition
+    at zero unknowns (its known part, ``F``) and its coefficient of each unknown (``b0, b1, ...``, then
+    :data:`SCALARS`); the conditions are affine in the unknowns, so this is exact."""
+    counts = (initial, unsafe, goal)
+    zero = Fraction(0)
+    known = conditions(ring, ring.zero(), lie, D, zero, zero, zero, square, *counts)
+    units: list[tuple[str, list[Condition]]] = [
+        (f"b{k}", conditions(ring, p, lie, D, zero, zero, zero, square, *counts)) for k, p in enumerate(basis)]
+    for name in SCALARS:
+        at = {s: Fraction(int(s == name)) for s in SCALARS}
+        units.append((name, conditions(ring, ring.zero(), lie, D, at["eps"], at["C"], at["delta"], square, *counts)))
+    return [(c, [(name, unit[i].F - c.F) for name, unit in units if not (unit[i].F - c.F).is_zero()])
+            for i, c in enumerate(known)]
+
+
+def goal_of_one_piece(goal: Sequence[Any]) -> ConditionResult | None:
+    """``not_applicable`` when the goal is a union of several pieces (the decrease is demanded where
+    one piece's inequality fails); None for one piece."""
+    if len(goal) == 1:
+        return None
+    return ConditionResult("reach_avoid", "not_applicable",
+                           f"the goal must be one piece (an intersection of inequalities); it has {len(goal)}",
+                           property="reach_avoid")
+
+
+def time_bound(C: Fraction, eps: Fraction, time_unit: Fraction = Fraction(1)) -> Fraction:
+    """The time by which the goal is reached: ``C / eps`` (in the route's time, times its unit in seconds)."""
+    return C / eps * time_unit
+
+
+def not_found(tried: list[str], log: Any, degrees: Sequence[int] = REACH_DEGREES,
+              numbers: dict[str, Any] | None = None, cause: str | None = None) -> ConditionResult:
+    """``not_certified``: no certificate passed the exact check (what was tried, and why; ``cause``:
+    why none can exist, said instead of what to try next)."""
+    none = reasons.reason(cause, (), tried) if cause else \
+        reasons.not_found("reach-avoid function", degrees, tried, ("degree", "sets", "time"))
+    return ConditionResult("reach_avoid", "not_certified", none.summary,
+                           numbers={**none.numbers({"tried": tried}), **(numbers or {})}, solver={"solves": log},
+                           property="reach_avoid")
+
+
+def out_of_time(seconds: float, exc: Exception, log: Any, numbers: dict[str, Any] | None = None) -> ConditionResult:
+    """``inconclusive``: the search ran out of its budget."""
+    late = reasons.out_of_time("a reach-avoid function", seconds, str(exc))
+    return ConditionResult("reach_avoid", "inconclusive", late.summary,
+                           numbers={**late.numbers({"reason": str(exc)}), **(numbers or {})}, solver={"solves": log},
+                           property="reach_avoid")
+
+
+def certified_numbers(degree: int, bound_s: Fraction, trial: Any, margin: float | None = None) -> dict[str, Any]:
+    """A certified reach-avoid's figures: V's degree, the time bound (s), the search's margin, and the
+    simulation beside the proof (the avoid half: a simulated trajectory into the unsafe set beside a
+    certificate is a soundness alarm)."""
+    numbers: dict[str, Any] = {"degree": degree, "reach_time_bound_s": float(bound_s)}
+    if margin is not None:
+        numbers["relative_margin"] = margin
+    if trial is not None:
+        numbers["falsification"] = trial.to_dict()
+        numbers["closest_approach"] = trial.closest_approach
+        if trial.entered:
+            numbers["soundness_violation"] = True
+    return numbers
 
 
 def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly], degree: int,
@@ -291,10 +400,9 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
     from lyapcheck.models.loop.field import state_field
 
     model = scaled.cleared.shifted.model
-    if len(model.sets["goal"]) != 1:
-        return ConditionResult("reach_avoid", "not_applicable",
-                               f"the goal must be one piece (an intersection of inequalities); it has "
-                               f"{len(model.sets['goal'])}", property="reach_avoid")
+    refused = goal_of_one_piece(model.sets["goal"])
+    if refused is not None:
+        return refused
     field = state_field(scaled, robust=True)
     initial = scaled_pieces(scaled, field, model.sets["initial"])
     unsafe = scaled_pieces(scaled, field, model.sets["unsafe"])
@@ -316,23 +424,12 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
             target = [-invariant["W"]]
         found, tried = search_reach(field, initial, unsafe, target, search)
     except BudgetExhausted as exc:
-        late = reasons.out_of_time("a reach-avoid function", search.budget.seconds, str(exc))
-        return ConditionResult("reach_avoid", "inconclusive", late.summary, numbers=late.numbers({"reason": str(exc)}),
-                               solver={"solves": search.log}, property="reach_avoid")
+        return out_of_time(search.budget.seconds, exc, search.log)
     if found is None:
-        none = reasons.not_found("reach-avoid function", REACH_DEGREES, tried, ("degree", "sets", "time"))
-        return ConditionResult("reach_avoid", "not_certified", none.summary, numbers=none.numbers({"tried": tried}),
-                               solver={"solves": search.log}, property="reach_avoid")
-    T = scaled.scaling.time
-    bound = found["C"] / found["eps"] * T
-    numbers: dict[str, Any] = {"degree": found["degree"], "reach_time_bound_s": float(bound),
-                               "relative_margin": found["margin"]}
+        return not_found(tried, search.log)
+    bound = time_bound(found["C"], found["eps"], scaled.scaling.time)
     trial = _falsification(model)  # the avoid half: no simulated trajectory may enter the unsafe set
-    if trial is not None:
-        numbers["falsification"] = trial.to_dict()
-        numbers["closest_approach"] = trial.closest_approach
-        if trial.entered:
-            numbers["soundness_violation"] = True
+    numbers = certified_numbers(found["degree"], bound, trial, found["margin"])
     certificate = certificate_json(scaled, field, found)
     if invariant is not None:
         from lyapcheck.models.classes.lyapunov import stated_v
@@ -348,4 +445,6 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
                            solver={"solves": search.log}, property="reach_avoid")
 
 
-__all__ = ["REACH_DEGREES", "reach_structure", "search_reach", "run", "certificate_json"]
+__all__ = ["REACH_DEGREES", "SCALARS", "Condition", "conditions", "linear_conditions", "goal_of_one_piece",
+           "time_bound", "not_found",
+           "out_of_time", "certified_numbers", "reach_structure", "search_reach", "run", "certificate_json"]

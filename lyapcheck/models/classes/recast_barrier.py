@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Final, Sequence
+from typing import Any, Final, Iterator, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.engines import reasons
@@ -41,7 +41,7 @@ from lyapcheck.models.classes.recast_classes import (Loop, _set, base_loop, comm
 from lyapcheck.models.engines.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
                                          poly_from_json, poly_to_json, solve_on_faces)
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
-from lyapcheck.results import ConditionResult
+from lyapcheck.results import ConditionResult, Property
 from lyapcheck.sos.certificates import piece_generators
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
 
@@ -66,22 +66,21 @@ def piece_relations(loop: Loop, state_ring: Ring, pieces: Sequence[Sequence[Poly
                     ) -> list[list[Relation]]:
     """Each piece's generators (its inequalities and their pairwise products), polynomials of the
     model's state ring, as relations ``p >= 0`` of the loop's ring in the deviations."""
+    return [[state_relation(loop, state_ring, p, f"{what} piece {k}, generator {j}")
+             for j, p in enumerate(piece_generators(list(piece)))] for k, piece in enumerate(pieces)]
+
+
+def state_relation(loop: Loop, state_ring: Ring, p: Poly, why: str) -> Relation:
+    """``p >= 0`` for ``p`` a polynomial of the model's state ring, as a relation of the loop's ring in
+    the deviations."""
     ring = loop.ring
-    system = loop.system
-    n = len(system.states)
-    out = []
-    for k, piece in enumerate(pieces):
-        relations = []
-        for j, p in enumerate(piece_generators(list(piece))):
-            terms = {}
-            for m, c in state_ring.terms(p).items():
-                if any(m[n:]):
-                    raise ValueError("a set's inequality uses a variable that is not a state")
-                terms[tuple(m[:n]) + (0,) * (ring.nvars - n)] = c
-            relations.append(Relation("ge", system.shift(ring.from_terms(terms)), f"{what} piece {k}, generator {j}",
-                                      SET_OWNER))
-        out.append(relations)
-    return out
+    n = len(loop.system.states)
+    terms = {}
+    for m, c in state_ring.terms(p).items():
+        if any(m[n:]):
+            raise ValueError("a set's inequality uses a variable that is not a state")
+        terms[tuple(m[:n]) + (0,) * (ring.nvars - n)] = c
+    return Relation("ge", loop.system.shift(ring.from_terms(terms)), why, SET_OWNER)
 
 
 @dataclass
@@ -106,21 +105,27 @@ def conditions(loop: Loop, B: Poly, lam: Fraction, N: dict[str, Poly], D: Poly, 
     return out
 
 
-def search_barrier(loop: Loop, initial: list[list[Relation]], unsafe: list[list[Relation]], budget: Budget
-                   ) -> tuple[tuple[Found, Poly, list[Any]] | None, list[str], Any]:
-    """The first barrier over :data:`RECAST_BARRIER_DEGREES` (B in the states first, then with the
-    smooth auxiliaries) and the rates :data:`~lyapcheck.models.classes.barrier.LAMBDAS` (per second) that
-    passes the exact check; with its denominator ``D`` and the proofs of ``D > 0``; what was tried."""
-    from lyapcheck import tolerances
+@dataclass
+class Template:
+    """A polynomial's template (a barrier's B, a reach-avoid's V): its degree, its monomials, its
+    label in what was tried, and the flows ``N / D`` of its variables with the proofs of ``D > 0``."""
 
+    degree: int
+    basis: list[Monomial]
+    label: str
+    N: dict[str, Poly]
+    D: Poly
+    dens: list[Any]
+
+
+def templates(loop: Loop, degrees: Sequence[int], search: Search, tried: list[str]) -> Iterator[Template]:
+    """The templates of each degree, in the states first, then with the smooth auxiliaries, whose
+    denominator is proved positive (a template whose denominator is not is said in ``tried``)."""
     ring = loop.ring
-    search = Search(ring, budget)
-    tried: list[str] = []
     all_vars = loop.v_variables()
     coordinates = loop.coordinates()
     sets_of = [coordinates] if len(all_vars) == len(coordinates) else [coordinates, all_vars]
-    zero = tuple([0] * ring.nvars)
-    for dv in searched_degrees(RECAST_BARRIER_DEGREES):
+    for dv in searched_degrees(degrees):
         for v_vars in sets_of:
             basis = [m for m in monomials(ring.nvars, 0, dv) if all(m[i] == 0 for i in range(ring.nvars)
                                                                    if i not in v_vars)]
@@ -131,78 +136,108 @@ def search_barrier(loop: Loop, initial: list[list[Relation]], unsafe: list[list[
             if failed is not None:
                 tried.append(f"{label}: the denominator {written_poly(ring, failed)} was not proved positive")
                 continue
-            for lam in LAMBDAS:
-                # each rate (its faces together) gets a budget of solves: a count, the same on any machine
-                capped = search.within(tolerances.TEMPLATE_SOLVES, "per template",
-                                       "lyapcheck.tolerances.TEMPLATE_SOLVES")
-                monos = [ring.monomial(m) for m in basis]
-                shapes = conditions(loop, ring.zero(), lam, N, D, initial, unsafe)  # names and relations
+            yield Template(dv, basis, label, N, D, dens)
 
-                def terms_of(name: str, lam: Fraction = lam) -> list[tuple[str, Poly]]:
-                    if name.startswith("I"):
-                        return [(f"b{k}", -p) for k, p in enumerate(monos)]
-                    if name.startswith("U"):
-                        return [(f"b{k}", p) for k, p in enumerate(monos)]
-                    return [(f"b{k}", p * D * to_fmpq(lam) - lie(loop, p, N)) for k, p in enumerate(monos)]
 
-                def build(drop: frozenset[tuple[str, Monomial]], lam: Fraction = lam) -> ConditionProgram | str:
-                    program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
-                                               square_free=loop.square_free())
-                    for k in range(len(basis)):
-                        program.free(f"b{k}")
-                    for name, _, relations in shapes:
-                        program.relations = relations  # each identity's own: a set's inequalities only where they hold
-                        free = terms_of(name)
-                        top = max((sum(m) for _, p in free for m in ring.support(p)), default=dv)
-                        why = program.condition(name, [zero], free, top, vanishing=False)
-                        if why is not None:
-                            return why
-                    return program
+def search_barrier(loop: Loop, initial: list[list[Relation]], unsafe: list[list[Relation]], budget: Budget
+                   ) -> tuple[tuple[Found, Poly, list[Any]] | None, list[str], Any]:
+    """The first barrier over :data:`RECAST_BARRIER_DEGREES` (B in the states first, then with the
+    smooth auxiliaries) and the rates :data:`~lyapcheck.models.classes.barrier.LAMBDAS` (per second) that
+    passes the exact check; with its denominator ``D`` and the proofs of ``D > 0``; what was tried."""
+    from lyapcheck import tolerances
 
-                values = ParameterValues()
-                for name, _, _ in shapes:
-                    known = ring.constant(-1) if name.startswith("U") else ring.zero()
-                    _set(values, *known_values(ring, name, known, [zero]))
+    ring = loop.ring
+    search = Search(ring, budget)
+    tried: list[str] = []
+    zero = tuple([0] * ring.nvars)
+    for template in templates(loop, RECAST_BARRIER_DEGREES, search, tried):
+        dv, basis, label, N, D, dens = (template.degree, template.basis, template.label, template.N, template.D,
+                                        template.dens)
+        for lam in LAMBDAS:
+            # each rate (its faces together) gets a budget of solves: a count, the same on any machine
+            capped = search.within(tolerances.TEMPLATE_SOLVES, "per template",
+                                   "lyapcheck.tolerances.TEMPLATE_SOLVES")
+            monos = [ring.monomial(m) for m in basis]
+            shapes = conditions(loop, ring.zero(), lam, N, D, initial, unsafe)  # names and relations
 
-                def accept(program: ConditionProgram, point: Any, lam: Fraction = lam) -> Found | None:
-                    B = sum((ring.monomial(m, point.scalars[f"b{k}"]) for k, m in enumerate(basis)), ring.zero())
-                    certs = {}
-                    for name, F, relations in conditions(loop, B, lam, N, D, initial, unsafe):
-                        cert = program.certificate(name, point)
-                        if not check_condition(ring, F, relations, cert)[0]:
-                            return None
-                        certs[name] = cert
-                    return Found(B, lam, dv, [certs[f"I{k}"] for k in range(len(initial))],
-                                 [certs[f"U{k}"] for k in range(len(unsafe))], certs["D"])
+            def terms_of(name: str, lam: Fraction = lam) -> list[tuple[str, Poly]]:
+                if name.startswith("I"):
+                    return [(f"b{k}", -p) for k, p in enumerate(monos)]
+                if name.startswith("U"):
+                    return [(f"b{k}", p) for k, p in enumerate(monos)]
+                return [(f"b{k}", p * D * to_fmpq(lam) - lie(loop, p, N)) for k, p in enumerate(monos)]
 
-                try:
-                    found, why = solve_on_faces(capped, build, values, accept)
-                except SolvesSpent as exc:
-                    tried.append(f"{label}, lambda = {lam} per second: {exc}")
-                    continue
-                if found is not None:
-                    tried.append(f"{label}: found at lambda = {lam} per second")
-                    return (found, D, dens), tried, search
-                tried.append(f"{label}, lambda = {lam} per second: {why}")
-                if "size" in why or "rows" in why:
-                    break
+            def build(drop: frozenset[tuple[str, Monomial]], lam: Fraction = lam) -> ConditionProgram | str:
+                program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
+                                           square_free=loop.square_free())
+                for k in range(len(basis)):
+                    program.free(f"b{k}")
+                for name, _, relations in shapes:
+                    program.relations = relations  # each identity's own: a set's inequalities only where they hold
+                    free = terms_of(name)
+                    top = max((sum(m) for _, p in free for m in ring.support(p)), default=dv)
+                    why = program.condition(name, [zero], free, top, vanishing=False)
+                    if why is not None:
+                        return why
+                return program
+
+            values = ParameterValues()
+            for name, _, _ in shapes:
+                known = ring.constant(-1) if name.startswith("U") else ring.zero()
+                _set(values, *known_values(ring, name, known, [zero]))
+
+            def accept(program: ConditionProgram, point: Any, lam: Fraction = lam) -> Found | None:
+                B = sum((ring.monomial(m, point.scalars[f"b{k}"]) for k, m in enumerate(basis)), ring.zero())
+                certs = {}
+                for name, F, relations in conditions(loop, B, lam, N, D, initial, unsafe):
+                    cert = program.certificate(name, point)
+                    if not check_condition(ring, F, relations, cert)[0]:
+                        return None
+                    certs[name] = cert
+                return Found(B, lam, dv, [certs[f"I{k}"] for k in range(len(initial))],
+                             [certs[f"U{k}"] for k in range(len(unsafe))], certs["D"])
+
+            try:
+                found, why = solve_on_faces(capped, build, values, accept)
+            except SolvesSpent as exc:
+                tried.append(f"{label}, lambda = {lam} per second: {exc}")
+                continue
+            if found is not None:
+                tried.append(f"{label}: found at lambda = {lam} per second")
+                return (found, D, dens), tried, search
+            tried.append(f"{label}, lambda = {lam} per second: {why}")
+            if "size" in why or "rows" in why:
+                break
     return None, tried, search
 
 
 def certificate_json(loop: Loop, found: Found, D: Poly, dens: list[Any]) -> dict[str, Any]:
     """The exact certificate: B in the deviations (``shift``), written with the functions too, its
     rate and degree, and every proof (the recasting's, each set piece's, the decrease's)."""
-    system = loop.system
     ring = loop.ring
-    return {"kind": KIND, "variables": list(ring.names), "auxiliaries": system.definitions(),
-            "shift": {k: str(v) for k, v in system.values.items()},
-            "B": poly_to_json(ring, found.B), "B_text": v_text(system, found.B), "degree": b_degree(ring, found.B),
-            "lambda_per_s": str(found.lam), "denominator": poly_to_json(ring, D),
-            "recasting": {"roots": root_proofs_json(loop),
-                          "denominators": [{"poly": poly_to_json(ring, d), "bound": str(c), "proof": cert.to_json(ring)}
-                                           for d, c, cert in dens]},
+    return {**polynomial_json(loop, KIND, "B", found.B), "lambda_per_s": str(found.lam),
+            **recasting_json(loop, D, dens),
             "initial": [c.to_json(ring) for c in found.initial], "unsafe": [c.to_json(ring) for c in found.unsafe],
             "decrease": found.decrease.to_json(ring)}
+
+
+def polynomial_json(loop: Loop, kind: str, letter: str, P: Poly) -> dict[str, Any]:
+    """A certificate's head: its kind, the recasting's variables, auxiliaries and shift, and its
+    polynomial (``B``, ``V``) in the deviations, written with the functions too, with its degree."""
+    system = loop.system
+    ring = loop.ring
+    return {"kind": kind, "variables": list(ring.names), "auxiliaries": system.definitions(),
+            "shift": {k: str(v) for k, v in system.values.items()},
+            letter: poly_to_json(ring, P), f"{letter}_text": v_text(system, P), "degree": b_degree(ring, P)}
+
+
+def recasting_json(loop: Loop, D: Poly, dens: list[Any]) -> dict[str, Any]:
+    """The field's denominator and the recasting's proofs (square roots' bounds, ``D > 0``)."""
+    ring = loop.ring
+    return {"denominator": poly_to_json(ring, D),
+            "recasting": {"roots": root_proofs_json(loop),
+                          "denominators": [{"poly": poly_to_json(ring, d), "bound": str(c), "proof": cert.to_json(ring)}
+                                           for d, c, cert in dens]}}
 
 
 def b_degree(ring: Ring, B: Poly) -> int:
@@ -214,32 +249,64 @@ def b_degree(ring: Ring, B: Poly) -> int:
 
 class _TrueField:
     """The true loop's field as :func:`lyapcheck.models.classes.falsify.falsify` calls it: ``(x, d)`` rows,
-    the disturbances at 0 (the nominal loop)."""
+    the disturbances at 0 (the nominal loop). With ``stop`` (a set), a state inside it stays there
+    (field 0): a trajectory is watched only until it reaches that set (reach-avoid's goal)."""
 
-    def __init__(self, model: RecastModel) -> None:
+    def __init__(self, model: RecastModel, stop: Any = None) -> None:
         from lyapcheck.models.engines.recast_numeric import FloatLoop
 
         self.loop = FloatLoop(model.system)
+        self.stop = stop
 
     def __call__(self, x: Any, d: Any = None) -> Any:
         import numpy as np
 
         with np.errstate(all="ignore"):  # a far start overflows: the integrator treats it as an escape
-            return self.loop(x)
+            f = self.loop(x)
+            if self.stop is not None:
+                from lyapcheck.models.language.sets import margin
+
+                f = np.where((margin(self.stop, x) >= 0)[:, None], 0.0, f)
+            return f
 
 
-def falsification(model: RecastModel) -> Any:
+def falsification(model: RecastModel, stop: Any = None) -> Any:
     """The closest approach of trajectories of the true loop from the initial set to the unsafe set
-    (disturbances at 0); None when the simulation cannot run (no inside point of a set found)."""
-    from lyapcheck.models.classes.falsify import falsify
+    (disturbances at 0), each watched until it reaches ``stop`` when given (before it, the true loop's
+    trajectory exactly); None when the simulation cannot run (no inside point of a set found)."""
+    from lyapcheck.models.classes.falsify import default_horizon, falsify
     from lyapcheck.models.language.sets import margin
 
     samples = FALSIFICATION_SAMPLES if model.n <= FALSIFICATION_FEW_ABOVE else FALSIFICATION_SAMPLES // 2
+    # the horizon is the true loop's (stopped at a goal around the equilibrium, its Jacobian there is 0)
+    horizon = None if stop is None else default_horizon(model, evaluate=_TrueField(model))  # type: ignore[arg-type]
     try:
         return falsify(model, model.sets["initial"], model.sets["unsafe"], margin,  # type: ignore[arg-type]
-                       samples=samples, disturbed=False, evaluate=_TrueField(model))
+                       samples=samples, disturbed=False, evaluate=_TrueField(model, stop), horizon=horizon)
     except ValueError:
         return None
+
+
+def counterexample(model: RecastModel, trial: Any, name: str, prop: Property, when: str = "") -> ConditionResult:
+    """``counterexample``: a simulated trajectory of the true loop from the initial set enters the
+    unsafe set (``when``: words on when, as " before it reaches the goal"), reproducible from its start."""
+    entry = trial.entry.describe(list(model.states), [], getattr(model, "units", None) or None)
+    return ConditionResult(name, "counterexample",
+                           f"a simulated trajectory of the true loop from the initial set enters the unsafe set{when}: "
+                           f"{entry} (simulation, reproducible from its start)",
+                           numbers={"falsification": trial.to_dict()},
+                           refutation={"kind": "trajectory", **trial.entry.to_dict()}, property=prop)
+
+
+def not_smooth_note(loop: Loop, function: str, condition: str) -> str | None:
+    """Why a low degree often cannot: the ``function`` (B, V) may not use the loop's non-smooth
+    functions (sat, abs, ...), yet ``condition`` must hold on the whole state space through their
+    relations alone; None when the loop has none."""
+    rough = sorted({a.function for a in loop.system.auxiliaries if not a.smooth and a.function})
+    if not rough:
+        return None
+    return (f"{function} may not use {', '.join(rough)} (not smooth): {condition} must then hold on the whole "
+            "state space through their relations alone")
 
 
 # -- the class ----------------------------------------------------------------------------------------
@@ -248,12 +315,7 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
     """The ``barrier`` class on a loop with functions (module docstring)."""
     trial = falsification(model)
     if trial is not None and trial.entry is not None:
-        entry = trial.entry.describe(list(model.states), [], getattr(model, "units", None) or None)
-        return ConditionResult("barrier", "counterexample",
-                               f"a simulated trajectory of the true loop from the initial set enters the unsafe set: "
-                               f"{entry} (simulation, reproducible from its start)",
-                               numbers={"falsification": trial.to_dict()},
-                               refutation={"kind": "trajectory", **trial.entry.to_dict()}, property="safety")
+        return counterexample(model, trial, "barrier", "safety")
     flat = flat_loop(loop)
     initial = piece_relations(flat, model.state_ring, model.sets["initial"], "initial")
     unsafe = piece_relations(flat, model.state_ring, model.sets["unsafe"], "unsafe")
@@ -266,10 +328,9 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
             numbers["falsification"] = trial.to_dict()
         return ConditionResult("barrier", "inconclusive", late.summary, numbers=numbers, property="safety")
     if result is None:
-        rough = sorted({a.function for a in flat.system.auxiliaries if not a.smooth and a.function})
-        if rough:  # why a low degree often cannot: B may not use them, yet B' <= lambda B must hold everywhere
-            tried.append(f"B may not use {', '.join(rough)} (not smooth): B' <= lambda B must then hold on the whole "
-                         "state space through their relations alone")
+        rough = not_smooth_note(flat, "B", "B' <= lambda B")
+        if rough:
+            tried.append(rough)
         none = reasons.not_found("barrier", searched_degrees(RECAST_BARRIER_DEGREES), tried,
                                  ("degree", "sets", "time"))
         numbers = none.numbers({"tried": tried})
@@ -289,11 +350,34 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
 
 # -- verify -------------------------------------------------------------------------------------------
 
+def check_polynomial(loop: Loop, cert: dict[str, Any], letter: str, what: str
+                     ) -> tuple[Poly, dict[str, Poly], Poly] | str:
+    """A certificate's polynomial (``B``, ``V``; :func:`polynomial_json`) and the field it is proved
+    on: its variables allowed, its text and degree as stated, the denominators' proofs re-checked;
+    the polynomial, the flows ``N`` and the denominator ``D``, or why not (``what``: its class's words)."""
+    from lyapcheck.models.classes.recast_classes import check_denominator_proofs
+
+    ring = loop.ring
+    P = poly_from_json(ring, cert[letter], letter)
+    allowed = {ring.names[i] for i in loop.v_variables()}
+    if any(degree_in(ring, P, [n]) > 0 for n in ring.names if n not in allowed):
+        return f"{letter} uses a variable {what} may not (a root, or a non-smooth function)"
+    if cert.get(f"{letter}_text") != v_text(loop.system, P):
+        return f"{letter}_text is not {letter} written with the functions"
+    if cert.get("degree") != b_degree(ring, P):
+        return f"the stated degree is not {letter}'s"
+    ok, why, N = check_denominator_proofs(loop, v_names(loop, P), cert["recasting"]["denominators"])
+    if not ok:
+        return why
+    _, D, _ = common_denominator(loop, v_names(loop, P))
+    if poly_from_json(ring, cert["denominator"], "denominator") != D:
+        return "the stated denominator is not the field's"
+    return P, N, D
+
+
 def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, str]:
     """Re-check a recast barrier exactly from the certificate and the model text: ``proved`` is the
     loop with the certificate's square-root bounds already re-checked; the sets are the model's."""
-    from lyapcheck.models.classes.recast_classes import check_denominator_proofs
-
     cert = c["certificate"]
     if c.get("property") != "safety":
         return False, "a barrier certificate proves safety"
@@ -301,21 +385,11 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
         return False, "the model has no [sets] initial and unsafe for a barrier"
     loop = flat_loop(proved)
     ring = loop.ring
-    B = poly_from_json(ring, cert["B"], "B")
-    allowed = {ring.names[i] for i in loop.v_variables()}
-    if any(degree_in(ring, B, [n]) > 0 for n in ring.names if n not in allowed):
-        return False, "B uses a variable a barrier may not (a root, or a non-smooth function)"
-    if cert.get("B_text") != v_text(loop.system, B):
-        return False, "B_text is not B written with the functions"
-    if cert.get("degree") != b_degree(ring, B):
-        return False, "the stated degree is not B's"
+    head = check_polynomial(loop, cert, "B", "a barrier")
+    if isinstance(head, str):
+        return False, head
+    B, N, D = head
     lam = Fraction(str(cert["lambda_per_s"]))
-    ok, why, N = check_denominator_proofs(loop, v_names(loop, B), cert["recasting"]["denominators"])
-    if not ok:
-        return False, why
-    _, D, _ = common_denominator(loop, v_names(loop, B))
-    if poly_from_json(ring, cert["denominator"], "denominator") != D:
-        return False, "the stated denominator is not the field's"
     initial = piece_relations(loop, model.state_ring, model.sets["initial"], "initial")
     unsafe = piece_relations(loop, model.state_ring, model.sets["unsafe"], "unsafe")
     stored = list(cert["initial"]) + list(cert["unsafe"]) + [cert["decrease"]]
@@ -333,4 +407,6 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
                   "relations, exactly")
 
 
-__all__ = ["KIND", "RECAST_BARRIER_DEGREES", "run", "check", "certificate_json", "falsification"]
+__all__ = ["KIND", "RECAST_BARRIER_DEGREES", "run", "check", "certificate_json", "falsification", "flat_loop",
+           "piece_relations", "state_relation", "not_smooth_note", "Template", "templates", "polynomial_json",
+           "recasting_json", "check_polynomial", "counterexample"]

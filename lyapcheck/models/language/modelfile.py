@@ -336,15 +336,15 @@ class _Reader:
 
     def recast_sets(self, states: tuple[str, ...], params: Mapping[str, Fraction], dists: Mapping[str, Fraction]
                     ) -> tuple[dict[str, SetText], dict[str, StateSet]]:
-        """A loop with functions' ``[sets]`` (``initial``, ``unsafe``: the barrier class), read as a
-        polynomial loop's (an inequality with a function is refused by the expression parser, naming
-        it), with the parameters set; ``goal`` is refused in one line (no reach_avoid here yet)."""
+        """A loop with functions' ``[sets]`` (``initial``, ``unsafe``, ``goal``: the barrier and reach_avoid
+        classes), read as a polynomial loop's (an inequality with a function is refused by the expression
+        parser, naming it), with the parameters set; ``stay_in_goal`` is refused in one line (not taken here yet)."""
         if "sets" in self.data and isinstance(self.data["sets"], dict):
-            extra = [k for k in ("goal", STAY_KEY) if k in self.data["sets"]]
-            if extra:
-                raise self.fail(f"[sets] {extra[0]}", "a loop with functions (sin, sqrt, sat, ...) takes the sets "
-                                                      "initial and unsafe (class barrier); reach_avoid and its goal "
-                                                      "are not taken yet: remove it, or write the field polynomial")
+            if STAY_KEY in self.data["sets"]:
+                raise self.fail(f"[sets] {STAY_KEY}", "a loop with functions (sin, sqrt, sat, ...) takes the sets "
+                                                      "initial, unsafe and goal (classes barrier and reach_avoid); "
+                                                      "staying in the goal is not taken yet: remove it, or write the "
+                                                      "field polynomial")
         ring = Ring(states + tuple(dists) + tuple(params))
         set_text, set_forms = self.sets(states, ring, dists)
         sets = {key: evaluate_set(self.source, key, forms, ring, params, Ring(states + tuple(dists)))

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import hashlib
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
@@ -32,6 +32,7 @@ from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES, box_robust, box
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.classes.claims import BARRIER_SENTENCE, covered
 from lyapcheck.models.classes.recast_barrier import KIND as RECAST_BARRIER
+from lyapcheck.models.classes.recast_reach_avoid import KIND as RECAST_REACH_AVOID
 from lyapcheck.models.surfaces.stated import Stated, check_declared, check_stated
 from lyapcheck.results import ConditionResult, Disturbances
 from lyapcheck.sos.polynomials import degree_in, to_fmpq
@@ -43,21 +44,24 @@ def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None, d
                    model: RecastModel | None = None) -> tuple[str, ...]:
     """The classes asked for among every model class; the default is every recast class (``candidate``
     with ``--candidate``, ``sos_bound`` with disturbances, ``barrier`` with ``[sets]`` initial and
-    unsafe). A safety class named needs its sets (``model``: one line at ``[sets]`` otherwise)."""
+    unsafe, ``reach_avoid`` with a goal too). A safety class named needs its sets (``model``: one line
+    at ``[sets]`` otherwise)."""
     from lyapcheck.models.classes.registry import NAMES
     from lyapcheck.models.language.sets import require_sets
 
     sets = model.sets if model is not None else {}
     if classes is None or classes == "all":
         names = [c for c in RECAST_CLASSES if (c != "candidate" or candidate is not None)
-                 and (c != "sos_bound" or disturbed) and (c != "barrier" or ("initial" in sets and "unsafe" in sets))]
+                 and (c != "sos_bound" or disturbed) and (c != "barrier" or ("initial" in sets and "unsafe" in sets))
+                 and (c != "reach_avoid" or ("initial" in sets and "unsafe" in sets and "goal" in sets))]
     else:
         names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes)]
         bad = [c for c in names if c not in NAMES]
         if not names or bad:
             raise InvalidParameter("classes", "classes among " + ", ".join(NAMES), ",".join(map(str, names)))
-        if model is not None and "barrier" in names:
-            require_sets(model, "barrier")  # type: ignore[arg-type]  # (it reads only source and sets)
+        for name in ("barrier", "reach_avoid"):
+            if model is not None and name in names:
+                require_sets(model, name)  # type: ignore[arg-type]  # (it reads only source and sets)
     return tuple(c for c in NAMES if c in names)
 
 
@@ -145,6 +149,10 @@ def sentence_of(cert: dict[str, Any]) -> str:
     """The claim sentence of a recast certificate of any kind (a barrier's is the polynomial loops' one)."""
     if cert.get("kind") == RECAST_BARRIER:
         return BARRIER_SENTENCE
+    if cert.get("kind") == RECAST_REACH_AVOID:
+        from lyapcheck.models.classes.recast_reach_avoid import sentence
+
+        return sentence(cert)
     if cert.get("kind") == "interval":
         from lyapcheck.models.classes.recast_interval import claim_sentence as interval_sentence
 
@@ -333,6 +341,15 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
         if isinstance(degree, bool) or not isinstance(degree, int):
             raise ValueError("B: exponents must be integers")
         return Stated("safety", {"degree": degree, "lambda_per_s": Fraction(str(cert["lambda_per_s"]))})
+    if kind == RECAST_REACH_AVOID:
+        from lyapcheck.models.classes.recast_reach_avoid import reach_time
+
+        if name != "reach_avoid":
+            raise ValueError(f"a reach-avoid certificate under the class {name}")
+        degree = max((sum(e) for _, e in cert["V"]["terms"]), default=0)
+        if isinstance(degree, bool) or not isinstance(degree, int):
+            raise ValueError("V: exponents must be integers")
+        return Stated("reach_avoid", {"degree": degree, "reach_time_bound_s": reach_time(cert)})
     degree = max(sum(e) for _, e in cert["V"]["terms"])
     if isinstance(degree, bool) or not isinstance(degree, int):
         raise ValueError("V: exponents must be integers")
@@ -414,6 +431,10 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
         if model is None:
             return False, "a barrier is certified on the model's own parameters, not over a box"
         return _verify_barrier(c, base, model)
+    if name == "reach_avoid" or cert.get("kind") == RECAST_REACH_AVOID:
+        if model is None:
+            return False, "a reach-avoid function is certified on the model's own parameters, not over a box"
+        return _verify_reach_avoid(c, base, model)
     if cert.get("kind") == "interval" and name in ("roa", "candidate"):
         from lyapcheck.models.classes.recast_interval import check_interval
 
@@ -495,11 +516,29 @@ def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[
     cert = c["certificate"]
     if c.get("status") != "certified" or cert.get("kind") != RECAST_BARRIER:
         return False, f"a barrier's certificate kind must be {RECAST_BARRIER!r}, not {cert.get('kind')!r}"
-    proved, why = _proved_recasting(cert, base)
+    return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), BARRIER_SENTENCE)
+
+
+def _verify_reach_avoid(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
+    """A recast reach-avoid certificate (:func:`lyapcheck.models.classes.recast_reach_avoid.check`), its
+    recasting's square-root proofs and its sentence (the polynomial loops' reach-avoid one)."""
+    from lyapcheck.models.classes.recast_reach_avoid import check, sentence
+
+    cert = c["certificate"]
+    if c.get("status") != "certified" or cert.get("kind") != RECAST_REACH_AVOID:
+        return False, f"a reach_avoid certificate's kind must be {RECAST_REACH_AVOID!r}, not {cert.get('kind')!r}"
+    return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), sentence(cert))
+
+
+def _checked_on_recasting(c: dict[str, Any], base: Loop, check: Callable[[Loop], tuple[bool, str]],
+                          sentence: str) -> tuple[bool, str]:
+    """A certificate of a safety class: its recasting's square-root proofs, its class's ``check`` on the
+    loop they prove, and its printed sentence."""
+    proved, why = _proved_recasting(c["certificate"], base)
     if proved is None:
         return False, why
-    ok, why = check(model, proved, c)
-    if ok and c.get("summary") != covered(c.get("disturbances"), BARRIER_SENTENCE):
+    ok, why = check(proved)
+    if ok and c.get("summary") != covered(c.get("disturbances"), sentence):
         return False, "the printed sentence is not the one the certificate supports"
     return ok, why
 

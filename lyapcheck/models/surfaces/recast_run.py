@@ -1,6 +1,7 @@
 """The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
-``candidate``, ``sos_bound``, ``barrier`` (:mod:`lyapcheck.models.classes.recast_classes` has each condition,
-:mod:`lyapcheck.models.classes.recast_bound` and :mod:`lyapcheck.models.classes.recast_barrier` the last two; this
+``candidate``, ``sos_bound``, ``barrier``, ``reach_avoid`` (:mod:`lyapcheck.models.classes.recast_classes` has each
+condition, :mod:`lyapcheck.models.classes.recast_bound`, :mod:`lyapcheck.models.classes.recast_barrier` and
+:mod:`lyapcheck.models.classes.recast_reach_avoid` the last three; this
 module orders them, gives each its time budget, runs ``roa``'s V-s iteration,
 :mod:`lyapcheck.models.classes.recast_improve`, and the classes over a box of parameters, :func:`certify_box`).
 """
@@ -37,7 +38,8 @@ def class_budget(seconds: float) -> Budget:
 
 
 #: the classes a recast loop takes, in order
-RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier")
+RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier",
+                         "reach_avoid")
 
 
 def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float,
@@ -85,6 +87,12 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         start = time.perf_counter()
         results["barrier"] = run_barrier(model, loop, class_budget(time_limit_s))
         seconds["barrier"] = time.perf_counter() - start
+    if "reach_avoid" in classes:
+        from lyapcheck.models.classes.recast_reach_avoid import run as run_reach_avoid
+
+        start = time.perf_counter()
+        results["reach_avoid"] = run_reach_avoid(model, loop, class_budget(time_limit_s))
+        seconds["reach_avoid"] = time.perf_counter() - start
     return results, loop, seconds
 
 
