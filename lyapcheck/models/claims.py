@@ -179,6 +179,10 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
         ball = f"; {ball_words(condition)}" if "ball_radius" in condition else ""
         return (f"{what}: every start in {{V <= {rounded(level, 6, 'down')}}} converges to the equilibrium (checked "
                 f"exactly){ball}")
+    if kind == "interval" and name == "roa":  # the ball-arithmetic engine's region (lyapcheck.models.ball_roa)
+        from lyapcheck.models.recast_interval import claim_sentence
+
+        return claim_sentence(cert)
     if kind != "lyapunov":
         raise ValueError(f"unknown certificate kind {kind!r}")
     if condition.get("property") == "GES":
