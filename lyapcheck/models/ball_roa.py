@@ -123,8 +123,9 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
     ``certified`` (the condition says ``engine``, and ``tried`` starts with the SOS route's reason),
     or ``sos`` again with its reason saying that ball arithmetic proved none either (a
     ``not_applicable`` becomes ``not_certified``: the class was tried)."""
+    from lyapcheck.models.claims import covered
     from lyapcheck.models.interval_region import prove_bounded
-    from lyapcheck.models.recast_interval import METHOD, claim_of, interval_roa
+    from lyapcheck.models.recast_interval import METHOD, claim_of, claim_sentence, interval_roa
     from lyapcheck.models.recast_run import comparison_box, proved_loop, robust_of, simulated_check
 
     recast = as_recast(model)
@@ -155,6 +156,8 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
     simulated_check(loop, found, box)
     if found.disturbances is None and model.disturbances:
         found.disturbances = "zero"  # proved on the loop with its disturbances at 0
+    # the recast route's sentence, from the certificate as it now stands (whole), with the coverage
+    found.summary = covered(found.disturbances, claim_sentence(found.certificate))
     V = found.certificate["V"]["terms"]
     found.numbers.update({"engine": ENGINE, "degree": max(sum(e[:model.n]) for _, e in V),
                           "tried": [f"sums of squares: {sos.summary}", *found.numbers.get("tried", [])]})
@@ -171,12 +174,12 @@ def is_ball_region(name: str, c: Any) -> bool:
 def verify_ball_roa(name: str, c: dict[str, Any], model: "Model", box: Any) -> tuple[bool, str]:
     """``verify`` of a ball-arithmetic ``roa`` of a polynomial or rational loop: the model text's loop
     recast again (no auxiliary), and the same deterministic proof run again from the certificate
-    alone (:func:`lyapcheck.models.recast_interval.check_interval`), the whole set included. It
-    needs no proof of the field's denominators: ball arithmetic evaluates the true field, and a
-    cell where a denominator may vanish is not proved. The document's ``V_text`` and sentence
-    follow the polynomial documents' rules, which :mod:`lyapcheck.models.certificate` checks beside
-    this; they are put in the recast form here for the proof's own comparison."""
-    from lyapcheck.models.claims import ROBUST_NOT_FOUND
+    alone (:func:`lyapcheck.models.recast_interval.check_interval`, which also re-makes the
+    sentence), the whole set included. It needs no proof of the field's denominators: ball
+    arithmetic evaluates the true field, and a cell where a denominator may vanish is not proved.
+    The document's ``V_text`` follows the polynomial documents' rule, which
+    :mod:`lyapcheck.models.certificate` checks beside this; it is put in the recast form here for
+    the proof's own comparison."""
     from lyapcheck.models.recast_classes import v_text
     from lyapcheck.models.recast_interval import check_interval
     from lyapcheck.models.recast_run import proved_loop, robust_of
@@ -192,12 +195,8 @@ def verify_ball_roa(name: str, c: dict[str, Any], model: "Model", box: Any) -> t
         return False, "a region of attraction of a polynomial loop is a whole sublevel set {V <= level} (whole: true)"
     recast = as_recast(model)
     loop = proved_loop(recast, MODEL_CLASS_TIME_LIMIT_S)
-    summary = str(c.get("summary", ""))
-    if "robust_attempt" in c:  # the polynomial sentence says that the claim for every disturbance was not found
-        summary = summary.removesuffix(ROBUST_NOT_FOUND)
     V = poly_from_json(loop.ring, cert["V"], "V")
-    return check_interval(loop, {**c, "summary": summary, "certificate": {**cert, "V_text": v_text(loop.system, V)}},
-                          robust_of(recast))
+    return check_interval(loop, {**c, "certificate": {**cert, "V_text": v_text(loop.system, V)}}, robust_of(recast))
 
 
 __all__ = ["ENGINE", "BALL_STATES", "as_recast", "recording", "sos_ended", "takes", "after_sos", "is_ball_region", "verify_ball_roa"]
