@@ -181,3 +181,18 @@ def test_where_neither_engine_proves_a_region_the_reason_names_both(monkeypatch:
                                   "denominator x1 - 2"), roa.summary
     assert "nor was one proved by ball arithmetic (python-flint arb) on the true field" in roa.summary
     assert roa.numbers["detail"][-1] == "ball arithmetic: no V fitted"
+
+
+@pytest.mark.slow
+def test_a_region_for_every_disturbance_value_is_proved_and_re_checked_with_the_disturbances() -> None:
+    """The same loop with ``d*x1`` added, ``|d| <= 1/100`` (0 at the equilibrium): the set is proved for
+    every value of ``d`` at once (``disturbances`` "all", its bounds in the certificate), and verify
+    re-runs that proof on the loop with ``d`` as a ball; a certificate claiming wider bounds is refused."""
+    text = POLE.replace('x1**2/(2 - x1)"', 'x1**2/(2 - x1) + d*x1"\n\n[disturbances]\nd = 0.01')
+    doc = api.certify(model=parse_model(text, "<pole, disturbed>"), classes="roa").to_json()
+    roa = doc["conditions"]["roa"]
+    assert roa["status"] == "certified" and roa["engine"] == ball_roa.ENGINE and roa["disturbances"] == "all"
+    assert roa["certificate"]["disturbances"] == {"d": ["-1/100", "1/100"]}
+    assert api.verify(doc).valid
+    wider = edited(doc, lambda d: d["conditions"]["roa"]["certificate"].update(disturbances={"d": ["-1/10", "1/10"]}))
+    assert "disturbances" in refused(wider).get("roa", "")

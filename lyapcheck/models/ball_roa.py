@@ -109,11 +109,15 @@ def takes(model: "Model", box: "ModelBox | None") -> bool:
     """Whether the ball route takes the loop: 1 to 3 states, no box of parameters, and a Hurwitz
     Jacobian at the equilibrium, exactly (the recast route's quadratic start: the ball route, like
     the SOS route, starts from the linearization's quadratic V)."""
+    from lyapcheck.errors import ModelFileError
     from lyapcheck.models.recast_classes import base_loop, jacobian, quadratic_candidate
 
     if box is not None or model.n not in BALL_STATES:
         return False
-    loop = base_loop(as_recast(model).system)
+    try:
+        loop = base_loop(as_recast(model).system)
+    except ModelFileError:  # (a text the recasting's parser reads otherwise: not for this route)
+        return False
     J = jacobian(loop)
     return not isinstance(J, str) and quadratic_candidate(loop, J) is not None
 
