@@ -10,22 +10,29 @@ simulations, proved on the true field with python-flint's ``arb`` balls, within 
 exact re-check (:func:`lyapcheck.models.recast_interval.check_interval`). The sum-of-squares route
 and the ball-arithmetic route are two engines of one class:
 
-=================  ===========================  ==================================================
-engine             when                         what a ``certified`` proves
-=================  ===========================  ==================================================
-``sos``            always first                 ``{V <= level}`` (SOS multipliers, exact check)
-``ball_arithmetic``  1 to 3 states, no box, a    ``{V <= level}``, the whole sublevel set
-                   Hurwitz Jacobian, when the   (``whole``: ``V > level`` outside the proof's box,
-                   SOS route did not certify    ``V' < 0`` on the set but at the equilibrium)
-=================  ===========================  ==================================================
+===================  ================================  ==============================================
+engine               when                              what a ``certified`` proves
+===================  ================================  ==============================================
+``sos``              always first, on the field        ``{V <= level}`` (SOS multipliers, exact check)
+                     multiplied through its
+                     denominators
+``ball_arithmetic``  1 to 3 states, no box, a Hurwitz  ``{V <= level}``, the whole sublevel set
+                     Jacobian, where the SOS route     (``whole``: ``V > level`` outside the proof's
+                     did not certify                   box, ``V' < 0`` on the set but at the
+                                                       equilibrium), on the true field
+===================  ================================  ==============================================
 
 The ball route is a fallback: where the SOS route certifies, its figures stand as before. It is
 not tried where the SOS route stopped at the class's time limit (the time is spent), only where
-it ended ``not_certified`` or ``inconclusive`` on a work budget or numerical trouble. A region it
+it ended ``not_certified``, ``inconclusive`` on a work budget or numerical trouble, or
+``not_applicable`` because a denominator of the field is not proved of one sign (the field cannot
+be multiplied through; ball arithmetic evaluates the true field, and a cell where a denominator may
+vanish is simply not proved). It has a time budget of its own, the class's limit again. A region it
 proves is taken only when the whole sublevel set is proved to lie in its box, so that the claim is
 ``{V <= level}`` as every polynomial ``roa`` states it (reports draw that set, sweeps simulate
 from it). The condition says which engine proved it: ``engine`` = ``"ball_arithmetic"`` (the SOS
-route's conditions carry no ``engine`` key, so that their documents stay as they were).
+route's conditions carry no ``engine`` key, so that their documents stay as they were); its
+sentence is the recast route's (:func:`lyapcheck.models.recast_interval.claim_sentence`).
 """
 
 from __future__ import annotations
