@@ -83,8 +83,11 @@ class FloatLoop:
         cols = self.columns(X)
         rows = X.shape[0]
         out = np.empty_like(X)
-        for i, (num, den) in enumerate(self.field):
-            out[:, i] = self._value(num, cols, rows) / self._value(den, cols, rows)
+        # a rational field at a pole (a denominator 0 at a sample) is inf or nan there: every caller
+        # treats a non-finite value as an escape, as for an overflow above, so numpy need not warn
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for i, (num, den) in enumerate(self.field):
+                out[:, i] = self._value(num, cols, rows) / self._value(den, cols, rows)
         return out
 
 

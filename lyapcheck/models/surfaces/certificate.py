@@ -152,8 +152,17 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
         data = lin.get("certificate") if lin["status"] == "certified" else lin.get("refutation")
         row("linearization", lambda: linearization.verify(shifted, lin["status"], data or {}))
 
+    from lyapcheck.models.ball_roa import is_ball_region, verify_ball_roa
+
+    for name, c in conditions.items():  # a ball-arithmetic region: on the true field, not the cleared one
+        if is_ball_region(name, c):
+            try:
+                ok, why = verify_ball_roa(name, c, model, box)
+            except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
+                ok, why = False, f"malformed certificate: {_describe(exc)}"
+            rows.append((name, ok, why if ok else f"{name}: {why}"))
     needs_field = [n for n, c in conditions.items() if n != "linearization" and isinstance(c, dict)
-                   and c.get("status") == "certified"]
+                   and c.get("status") == "certified" and not is_ball_region(n, c)]
     if needs_field:
         from lyapcheck.models.loop.positivity import check_certificate
 
@@ -287,12 +296,12 @@ def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any]
 _CHECKED_FIGURES: dict[str, tuple[str, ...]] = {
     "lyapunov": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius"),
     "quadratic_ball": ("level", "ball_radius"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
-    "sos_bound": ("bounds", "bounds_reference"),
+    "sos_bound": ("bounds", "bounds_reference"), "interval": ("level",),
 }
 #: what a certificate of each kind proves (a Lyapunov certificate: GAS, or GES where
 #: :func:`_verify_ges` passed)
 _KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "sublevel": "ROA", "quadratic_ball": "ROA", "barrier": "safety",
-                                  "reach_avoid": "reach_avoid", "sos_bound": "ultimate_bound"}
+                                  "reach_avoid": "reach_avoid", "sos_bound": "ultimate_bound", "interval": "ROA"}
 
 
 def _check_stated_claims(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:

@@ -207,6 +207,9 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         run("linearization", lambda budget: linearization.run(shifted))
     needing = [c for c in chosen if c in CLEARED_CLASSES]
     scaled: ScaledField | None = None
+    from lyapcheck.models import ball_roa
+
+    roa_stopped: list[BaseException] = []  # what ended roa's SOS route, where it raised
     if needing:
         from lyapcheck.models.loop.positivity import prove_denominators
 
@@ -272,7 +275,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                                                disturbances="zero")
                     return _covers(run_roa(sc, budget, lin, nominal, memo), nominal_covers)
 
-                run("roa", roa)
+                run("roa", ball_roa.recording(roa, roa_stopped))
         if "candidate" in chosen:
             # the user's V is tried on the nominal loop (its global test has no box multipliers yet)
             run("candidate", lambda budget: _covers(run_candidate(sc, cand, budget), nominal_covers))
@@ -293,6 +296,8 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                                                            "bound its outputs")
             else:
                 run("sos_bound", lambda budget: bounds.run(sc, Search(sc.ring, budget)))
+    if "roa" in out.results:  # the ball-arithmetic engine, where the SOS route did not certify
+        _ball_after_sos(out, model, box, roa_stopped, scaled is not None, run)
     if "linearization" in out.results and model.disturbances:
         out.results["linearization"].disturbances = "zero"  # the Jacobian at d = 0
     if "sos_bound" in out.results and model.disturbances:
@@ -332,6 +337,23 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         if text is not None:
             r.summary = text
     return out
+
+
+def _ball_after_sos(out: ModelCertification, model: Model, box: "ModelBox | None", stopped: list[BaseException],
+                    cleared: bool, run: Callable[[str, Callable[[Budget], ConditionResult]], None]) -> None:
+    """``roa`` by ball arithmetic on the true field (:mod:`lyapcheck.models.ball_roa`) where its SOS
+    route did not certify and did not stop at the time limit, on a loop the ball route takes; with
+    a budget of its own (the class's seconds add up). Not where ``roa`` is ``not_applicable`` after
+    GAS (``cleared``: the field was multiplied through, so that is the reason)."""
+    from lyapcheck.models import ball_roa
+
+    sos = out.results["roa"]
+    if (sos.status == "not_applicable" and cleared) or not ball_roa.sos_ended(sos, stopped) \
+            or not ball_roa.takes(model, box):
+        return
+    seconds = out.seconds.get("roa", 0.0)
+    run("roa", lambda budget: ball_roa.after_sos(model, sos, budget))
+    out.seconds["roa"] += seconds
 
 
 def stated_polynomials(model: Model, box: "ModelBox | None", name: str, certificate: dict[str, Any]
