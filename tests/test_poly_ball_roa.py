@@ -1,7 +1,7 @@
 """``roa`` of a polynomial or rational loop by ball arithmetic where the SOS route does not certify
 (issue 41: the SOS route and the ball-arithmetic route are two engines of one class).
 
-The ball route (:mod:`lyapcheck.models.ball_roa`) is the recast route's, on the loop read as a loop
+The ball route (:mod:`lyapcheck.models.surfaces.ball_roa`) is the recast route's, on the loop read as a loop
 with no auxiliaries. It is a fallback: where the SOS route certifies, its certificate and figures
 stand. A rational loop whose denominator changes sign away from the equilibrium gets no SOS class
 at all (the field cannot be multiplied through); ball arithmetic evaluates the true field and proves
@@ -21,9 +21,9 @@ from click.testing import CliRunner
 
 from lyapcheck import api
 from lyapcheck.cli import app
-from lyapcheck.models import ball_roa
-from lyapcheck.models.certify import certify_model
-from lyapcheck.models.modelfile import load_model, parse_model
+from lyapcheck.models.surfaces import ball_roa
+from lyapcheck.models.surfaces.certify import certify_model
+from lyapcheck.models.language.modelfile import load_model, parse_model
 
 app._register_commands()  # (the commands are registered lazily, for an instant --help)
 
@@ -60,7 +60,7 @@ def pole(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Doc, Any]:
 
 
 def test_a_rational_loop_no_sos_class_takes_gets_its_region_by_ball_arithmetic(pole: tuple[Path, Doc, Any]) -> None:
-    from lyapcheck.models.recast_interval import claim_sentence
+    from lyapcheck.models.classes.recast_interval import claim_sentence
 
     path, doc, done = pole
     assert done.exit_code == 0, done.output
@@ -104,7 +104,7 @@ def refused(doc: Doc) -> dict[str, str]:
 def test_a_tampered_ball_region_is_refused(pole: tuple[Path, Doc, Any]) -> None:
     """Each edit is refused by the check that names it; an edit of the claim itself, with its
     sentence made again to match, by the proof run again."""
-    from lyapcheck.models.recast_interval import claim_sentence
+    from lyapcheck.models.classes.recast_interval import claim_sentence
 
     _, doc, _ = pole
 
@@ -172,7 +172,7 @@ def test_where_neither_engine_proves_a_region_the_reason_names_both(monkeypatch:
     """The ball route's engine finding nothing (its reason stands in for it here): ``not_certified``,
     the sentence saying that neither sums of squares nor ball arithmetic proved one, the ball
     route's reason in the detail."""
-    from lyapcheck.models import recast_interval
+    from lyapcheck.models.classes import recast_interval
 
     monkeypatch.setattr(recast_interval, "interval_roa", lambda *args, **kwargs: "ball arithmetic: no V fitted")
     roa = certify_model(parse_model(POLE, "<pole>"), classes="roa").results["roa"]

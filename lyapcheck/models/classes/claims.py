@@ -103,7 +103,7 @@ def covered(coverage: str | None, text: str) -> str:
 def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = (),
             box: Mapping[str, Sequence[Any]] | None = None) -> str | None:
     """The sentence of a ``certified`` or ``refuted`` condition (its JSON form), or None for the
-    other statuses and for a ball-arithmetic region (:mod:`lyapcheck.models.ball_roa` writes and
+    other statuses and for a ball-arithmetic region (:mod:`lyapcheck.models.surfaces.ball_roa` writes and
     checks its sentence). ``outputs``: the model's output names (``sos_bound`` names those it did not
     bound); ``box``: the document's box of parameters (``{"mu": ["4/5", "6/5"]}``), which a claim
     over it names first. Raises KeyError, TypeError or ValueError on figures of the wrong form

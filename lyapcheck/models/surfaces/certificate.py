@@ -152,7 +152,7 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
         data = lin.get("certificate") if lin["status"] == "certified" else lin.get("refutation")
         row("linearization", lambda: linearization.verify(shifted, lin["status"], data or {}))
 
-    from lyapcheck.models.ball_roa import is_ball_region, verify_ball_roa
+    from lyapcheck.models.surfaces.ball_roa import is_ball_region, verify_ball_roa
 
     for name, c in conditions.items():  # a ball-arithmetic region: on the true field, not the cleared one
         if is_ball_region(name, c):

@@ -207,7 +207,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         run("linearization", lambda budget: linearization.run(shifted))
     needing = [c for c in chosen if c in CLEARED_CLASSES]
     scaled: ScaledField | None = None
-    from lyapcheck.models import ball_roa
+    from lyapcheck.models.surfaces import ball_roa
 
     roa_stopped: list[BaseException] = []  # what ended roa's SOS route, where it raised
     if needing:
@@ -341,11 +341,11 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
 
 def _ball_after_sos(out: ModelCertification, model: Model, box: "ModelBox | None", stopped: list[BaseException],
                     cleared: bool, run: Callable[[str, Callable[[Budget], ConditionResult]], None]) -> None:
-    """``roa`` by ball arithmetic on the true field (:mod:`lyapcheck.models.ball_roa`) where its SOS
+    """``roa`` by ball arithmetic on the true field (:mod:`lyapcheck.models.surfaces.ball_roa`) where its SOS
     route did not certify and did not stop at the time limit, on a loop the ball route takes; with
     a budget of its own (the class's seconds add up). Not where ``roa`` is ``not_applicable`` after
     GAS (``cleared``: the field was multiplied through, so that is the reason)."""
-    from lyapcheck.models import ball_roa
+    from lyapcheck.models.surfaces import ball_roa
 
     sos = out.results["roa"]
     if (sos.status == "not_applicable" and cleared) or not ball_roa.sos_ended(sos, stopped) \

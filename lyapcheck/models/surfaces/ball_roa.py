@@ -2,12 +2,12 @@
 loop read as a loop with no auxiliaries (issue 41).
 
 A polynomial or rational model file's ``[dynamics]``, read by the recasting's own parser
-(:func:`lyapcheck.models.recast.recast_dynamics`), is a recast loop whose ring holds the states
+(:func:`lyapcheck.models.language.recast.recast_dynamics`), is a recast loop whose ring holds the states
 alone: no function, so no auxiliary and no relation. The ball-arithmetic region of attraction of
-loops with functions (:func:`lyapcheck.models.recast_interval.interval_roa`: a ``V`` fitted to
+loops with functions (:func:`lyapcheck.models.classes.recast_interval.interval_roa`: a ``V`` fitted to
 simulations, proved on the true field with python-flint's ``arb`` balls, within the work budget
 :data:`~lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS`) then runs on it unchanged, and so does its
-exact re-check (:func:`lyapcheck.models.recast_interval.check_interval`). The sum-of-squares route
+exact re-check (:func:`lyapcheck.models.classes.recast_interval.check_interval`). The sum-of-squares route
 and the ball-arithmetic route are two engines of one class:
 
 ===================  ================================  ==============================================
@@ -32,7 +32,7 @@ proves is taken only when the whole sublevel set is proved to lie in its box, so
 ``{V <= level}`` as every polynomial ``roa`` states it (reports draw that set, sweeps simulate
 from it). The condition says which engine proved it: ``engine`` = ``"ball_arithmetic"`` (the SOS
 route's conditions carry no ``engine`` key, so that their documents stay as they were); its
-sentence is the recast route's (:func:`lyapcheck.models.recast_interval.claim_sentence`).
+sentence is the recast route's (:func:`lyapcheck.models.classes.recast_interval.claim_sentence`).
 """
 
 from __future__ import annotations
@@ -41,19 +41,19 @@ import tomllib
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final
 
-from lyapcheck.models.search import Budget, BudgetExhausted, SolvesSpent
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, SolvesSpent
 from lyapcheck.results import ConditionResult
 from lyapcheck.timing import ClassTimeLimit
 from lyapcheck.tolerances import INTERVAL_ATTEMPT_CELLS
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.models.modelfile import Model
-    from lyapcheck.models.parameter_box import ModelBox
-    from lyapcheck.models.recast import RecastModel
+    from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.language.parameter_box import ModelBox
+    from lyapcheck.models.language.recast import RecastModel
 
 #: the condition's ``engine`` where the ball-arithmetic route proved the region
 ENGINE: Final = "ball_arithmetic"
-#: the numbers of states the ball route takes (its sampling grids: lyapcheck.models.fitted_v.FIT_GRID)
+#: the numbers of states the ball route takes (its sampling grids: lyapcheck.models.classes.fitted_v.FIT_GRID)
 BALL_STATES: Final = (1, 2, 3)
 #: the cells the proof that the whole sublevel set lies in the box may take, where the certificate's
 #: own try (WHOLE_SET_CELL_LIMIT) did not go through: a polynomial loop's region is that whole set.
@@ -65,10 +65,10 @@ def as_recast(model: "Model") -> "RecastModel":
     """The polynomial or rational loop as a loop with functions that has none: its ``[dynamics]``
     texts recast at the model's parameter values (``model.parameters``, which a sweep may have
     replaced), every disturbance at 0; and, with disturbances, the loop with them as its last
-    states without a flow (:attr:`~lyapcheck.models.recast.RecastModel.robust`), as
-    :mod:`lyapcheck.models.modelfile` reads a loop with functions."""
+    states without a flow (:attr:`~lyapcheck.models.language.recast.RecastModel.robust`), as
+    :mod:`lyapcheck.models.language.modelfile` reads a loop with functions."""
     from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.recast import RecastModel, recast_dynamics
+    from lyapcheck.models.language.recast import RecastModel, recast_dynamics
 
     table = tomllib.loads(model.text)["dynamics"]
     texts = {s: table[s] for s in model.states}
@@ -105,7 +105,7 @@ def sos_ended(sos: ConditionResult, stopped: list[BaseException]) -> bool:
     """Whether the SOS route's ``sos`` leaves the ball route a try: it did not certify and did not
     stop at the class's time limit (a work budget of solves or numerical trouble may end it: the
     ball route has budgets of its own); ``not_applicable`` only where the field's denominators are
-    not proved of one sign (:func:`lyapcheck.models.certify.certify_model` calls it then: ball
+    not proved of one sign (:func:`lyapcheck.models.surfaces.certify.certify_model` calls it then: ball
     arithmetic evaluates the true field and needs no such proof), not after GAS."""
     timed_out = any(isinstance(e, ClassTimeLimit) or (isinstance(e, BudgetExhausted) and not isinstance(e, SolvesSpent))
                     for e in stopped)
@@ -117,7 +117,7 @@ def takes(model: "Model", box: "ModelBox | None") -> bool:
     Jacobian at the equilibrium, exactly (the recast route's quadratic start: the ball route, like
     the SOS route, starts from the linearization's quadratic V)."""
     from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.recast_classes import base_loop, jacobian, quadratic_candidate
+    from lyapcheck.models.classes.recast_classes import base_loop, jacobian, quadratic_candidate
 
     if box is not None or model.n not in BALL_STATES:
         return False
@@ -134,10 +134,10 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
     ``certified`` (the condition says ``engine``, and ``tried`` starts with the SOS route's reason),
     or ``sos`` again with its reason saying that ball arithmetic proved none either (a
     ``not_applicable`` becomes ``not_certified``: the class was tried)."""
-    from lyapcheck.models.claims import covered
-    from lyapcheck.models.interval_region import prove_bounded
-    from lyapcheck.models.recast_interval import METHOD, claim_of, claim_sentence, interval_roa
-    from lyapcheck.models.recast_run import comparison_box, proved_loop, robust_of, simulated_check
+    from lyapcheck.models.classes.claims import covered
+    from lyapcheck.models.engines.interval_region import prove_bounded
+    from lyapcheck.models.classes.recast_interval import METHOD, claim_of, claim_sentence, interval_roa
+    from lyapcheck.models.surfaces.recast_run import comparison_box, proved_loop, robust_of, simulated_check
 
     recast = as_recast(model)
     loop = proved_loop(recast, budget.seconds)  # (no square root to prove: the loop has no auxiliary)
@@ -185,16 +185,16 @@ def is_ball_region(name: str, c: Any) -> bool:
 def verify_ball_roa(name: str, c: dict[str, Any], model: "Model", box: Any) -> tuple[bool, str]:
     """``verify`` of a ball-arithmetic ``roa`` of a polynomial or rational loop: the model text's loop
     recast again (no auxiliary), and the same deterministic proof run again from the certificate
-    alone (:func:`lyapcheck.models.recast_interval.check_interval`, which also re-makes the
+    alone (:func:`lyapcheck.models.classes.recast_interval.check_interval`, which also re-makes the
     sentence), the whole set included. It needs no proof of the field's denominators: ball
     arithmetic evaluates the true field, and a cell where a denominator may vanish is not proved.
     The document's ``V_text`` follows the polynomial documents' rule, which
-    :mod:`lyapcheck.models.certificate` checks beside this; it is put in the recast form here for
+    :mod:`lyapcheck.models.surfaces.certificate` checks beside this; it is put in the recast form here for
     the proof's own comparison."""
-    from lyapcheck.models.recast_classes import v_text
-    from lyapcheck.models.recast_interval import check_interval
-    from lyapcheck.models.recast_run import proved_loop, robust_of
-    from lyapcheck.models.recast_sos import poly_from_json
+    from lyapcheck.models.classes.recast_classes import v_text
+    from lyapcheck.models.classes.recast_interval import check_interval
+    from lyapcheck.models.surfaces.recast_run import proved_loop, robust_of
+    from lyapcheck.models.engines.recast_sos import poly_from_json
     from lyapcheck.tolerances import MODEL_CLASS_TIME_LIMIT_S
 
     cert = c["certificate"]
