@@ -276,7 +276,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
                     return _covers(run_roa(sc, budget, lin, nominal, memo), nominal_covers)
 
                 run("roa", ball_roa.recording(roa, roa_stopped))
-        if "candidate" in chosen:
+        if "candidate" in chosen and cand is not None:  # without --candidate: not_applicable, below
             # the user's V is tried on the nominal loop (its global test has no box multipliers yet)
             run("candidate", lambda budget: _covers(run_candidate(sc, cand, budget), nominal_covers))
         if "barrier" in chosen and _has_safety_sets(model) and not _sets_use_box(model, box):
