@@ -77,7 +77,6 @@ x1 = "-a*x1 + x2"
 x2 = "-x1 - a*x2 - x2/(1 + x1**2)"
 """ + _SETS + _GOAL
 
-#: no goal: a loop with functions refuses [sets] goal today (FUNCTIONS_GOAL is the file reach_avoid gets)
 FUNCTIONS = """[model]
 name = "two units coupled through a sine and a saturation"
 states = ["x1", "x2"]
@@ -86,8 +85,7 @@ a = 1
 [dynamics]
 x1 = "-a*x1 + sin(x2)/2"
 x2 = "-x2 + sat(x1, 1)/2"
-""" + _SETS
-FUNCTIONS_GOAL = FUNCTIONS + _GOAL
+""" + _SETS + _GOAL
 
 #: the invariant discs of V = x1**2 + x2**2 (examples/models/disturbed-tube.toml): |z|' <= -a |z| + |d|
 DISTURBANCES = """[model]
@@ -198,14 +196,10 @@ REFUSALS: tuple[Refusal, ...] = (
             "the box, a search of box multipliers for a fixed V that is not built (a gap, not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("functions",), ("reach_avoid",), CLASS_SURFACES), ("[sets] goal", "of a loop with functions"),
-            "On a loop with functions the reach-avoid V would have to decrease outside the goal on the recast "
-            "loop's relations, which is not built yet (a gap, not a theorem): `[sets] goal` is refused in one "
-            "line."),
-    Refusal(cells(("functions",), ("barrier",), _OVER_A_BOX), ("not taken yet for a loop with functions",
-                                                               "boxes sweep of a loop with functions"),
-            "A barrier over a box of a loop with functions (one B for every parameter value, on the recasting "
-            "with the box's bounded constants) is not built yet (a gap, not a theorem)."),
+    Refusal(cells(("functions",), ("barrier", "reach_avoid"), _OVER_A_BOX),
+            ("not taken yet for a loop with functions", "boxes sweep of a loop with functions"),
+            "A barrier or a reach-avoid V over a box of a loop with functions (one certificate for every parameter "
+            "value, on the recasting with the box's bounded constants) is not built yet (a gap, not a theorem)."),
 )
 
 
@@ -257,13 +251,11 @@ class Matrix:
     seconds: dict[str, float] = field(default_factory=dict)
 
 
-def model_file(directory: Path, kind: str, cls: str | None = None) -> Path:
-    """The kind's model file in ``directory`` (``reach_avoid`` of a loop with functions gets the goal)."""
-    text = FUNCTIONS_GOAL if kind == "functions" and cls == "reach_avoid" else MODELS[kind]
-    name = f"{kind}-goal.toml" if text is FUNCTIONS_GOAL else f"{kind}.toml"
-    path = directory / name
+def model_file(directory: Path, kind: str) -> Path:
+    """The kind's model file in ``directory``."""
+    path = directory / f"{kind}.toml"
     if not path.exists():
-        path.write_text(text)
+        path.write_text(MODELS[kind])
     return path
 
 
@@ -273,7 +265,7 @@ def certify_cells(directory: Path, kind: str, *, box: bool) -> dict[str, tuple[O
     refused in one line, each of its classes is run alone, so that each refusal is the class's own."""
     groups: dict[Path, list[str]] = {}
     for cls in CLASSES:
-        groups.setdefault(model_file(directory, kind, cls), []).append(cls)
+        groups.setdefault(model_file(directory, kind), []).append(cls)
     found: dict[str, tuple[Outcome, Path]] = {}
     for path, classes in groups.items():
         found.update(_certify_run(path, classes, box=box))
@@ -346,7 +338,7 @@ def api_cells(directory: Path, kind: str, cls: str) -> tuple[Outcome, Outcome]:
     if kind == "box":
         kw["box"] = [BOX]
     try:
-        result = lyapcheck.certify(model=model_file(directory, kind, cls), **kw)
+        result = lyapcheck.certify(model=model_file(directory, kind), **kw)
     except LyapcheckError as exc:
         refused = Outcome(False, _one_line(str(exc), f"lyapcheck.certify({kind}, {cls})"))
         return refused, _inherit(refused, "API result")
