@@ -210,6 +210,14 @@ CONVERGED_BALL_RADIUS: Final = 2e-2
 #: that passes, recast-pendulum-actuator's at level 0.98, takes 65,193 cells (about 26 s of one
 #: core of the 2-core CI machine); the two-state examples take at most a few thousand
 INTERVAL_ATTEMPT_CELLS: Final = 100_000
+#: the integrator steps one trajectory of the ball-arithmetic route's fit of V (and of its simulated check) may take when the
+#: route runs after the SOS route on a polynomial or rational loop (lyapcheck.models.surfaces.ball_roa):
+#: a rational loop's trajectory that runs into a pole crawls towards it step by step (1-state
+#: x' = -x + x**2/(3 - x): 14,000 steps, 50 s, for a fit that nothing trusts). The fit only proposes a
+#: V, so a row stopped by this budget just does not count as converging; smooth two- and three-state
+#: loops need a few hundred steps over the fit's 30 s horizon. Loops with functions keep
+#: SIM_MAX_STEPS (their shipped figures were fitted with it)
+BALL_FALLBACK_FIT_STEPS: Final = 2_000
 #: the solves one template of the recast sos_gas / quadratic search (a degree and a set of V
 #: variables: its margins eps and its face reductions together; lyapcheck.models.classes.recast_classes)
 #: may spend before the next template has its turn. It replaced a 10 s wall-clock limit per

@@ -196,3 +196,30 @@ def test_a_region_for_every_disturbance_value_is_proved_and_re_checked_with_the_
     assert api.verify(doc).valid
     wider = edited(doc, lambda d: d["conditions"]["roa"]["certificate"].update(disturbances={"d": ["-1/10", "1/10"]}))
     assert "disturbances" in refused(wider).get("roa", "")
+
+
+INTO_THE_POLE = """[model]
+name = "one state whose trajectories beyond 1.5 run into a pole at x = 3"
+states = ["x"]
+
+[dynamics]
+x = "-x + x**2/(3 - x)"
+"""
+
+
+@pytest.mark.slow
+def test_trajectories_that_run_into_a_pole_do_not_eat_the_class(tmp_path: Path) -> None:
+    """x' = -x + x**2/(3 - x): equilibria 0 and 1.5, and from (1.5, 3) a finite escape into the pole,
+    which the integrator approaches step by step. The fallback's simulations stop each trajectory at
+    BALL_FALLBACK_FIT_STEPS (a count), so the class proves its region instead of reaching the time
+    limit (before: inconclusive after 95 s); the region stays left of the second equilibrium 1.5."""
+    model, out = tmp_path / "pole1.toml", tmp_path / "pole1.cert.json"
+    model.write_text(INTO_THE_POLE)
+    done = CliRunner().invoke(app.cli, ["certify", str(model), "--classes", "roa", "--no-store", "--out", str(out)],
+                              catch_exceptions=False)
+    assert done.exit_code == 0, done.output
+    roa = json.loads(out.read_text())["conditions"]["roa"]
+    assert roa["status"] == "certified" and roa["engine"] == ball_roa.ENGINE
+    lo, hi = (Fraction(b) for b in roa["certificate"]["box"]["x"])
+    assert lo < 0 < hi < Fraction(3, 2)
+    assert CliRunner().invoke(app.cli, ["verify", str(out)]).exit_code == 0

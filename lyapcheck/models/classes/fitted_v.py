@@ -244,10 +244,12 @@ def common_lyapunov(jacobians: Sequence[np.ndarray]) -> np.ndarray | None:
     return value
 
 
-def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corners | None = None) -> FittedV | str:
+def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corners | None = None,
+          max_steps: int | None = None) -> FittedV | str:
     """A proposed claim (V, level, box) for the ball-arithmetic proof, or why none (one line). With
     ``corners``, V is asked to serve every corner of the constants (its quadratic part a common
-    Lyapunov function of their linearizations, its decrease at the samples at each corner)."""
+    Lyapunov function of their linearizations, its decrease at the samples at each corner);
+    ``max_steps``: each simulated row's step budget (a row stopped by it does not converge)."""
     from scipy.linalg import solve_continuous_lyapunov
     from scipy.optimize import linprog
 
@@ -273,7 +275,7 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corne
     # a trajectory far outside the sampled box does not converge (and stopping it keeps a batch
     # with one finite escape time from crawling)
     escape = FIT_ESCAPE * float(np.max(bhi - blo))
-    dev, _ = simulate_ends(system, Z + eq, FIT_HORIZON, escape=escape)
+    dev, _ = simulate_ends(system, Z + eq, FIT_HORIZON, escape=escape, max_steps=max_steps)
     converges = distances(system, dev) < FIT_CONVERGED
     if corners is not None:
         converges &= corners.converge(Z, eq, n, escape)
@@ -319,8 +321,9 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corne
             terms[tuple(list(mon) + [0] * (ring.nvars - n))] = _dyadic(float(c))
     V: Poly = ring.from_terms({m: c for m, c in terms.items() if c})
     def values(Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        Vz, dVz = _columns(Z, field_values(system, Z + eq), P0, mons)
-        return Vz @ w, dVz @ w
+        with np.errstate(all="ignore"):  # (a rational field at a pole: inf or nan, which fails the decrease)
+            Vz, dVz = _columns(Z, field_values(system, Z + eq), P0, mons)
+            return Vz @ w, dVz @ w
 
     proposal = _level_and_box(system, V, values, blo, bhi, local, 1.0)
     if isinstance(proposal, str):

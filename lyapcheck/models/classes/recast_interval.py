@@ -112,17 +112,18 @@ class Robust:
             cert.get("parameter_box") == (self.box.to_json() if self.box is not None else None)
 
 
-def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robust | None = None
-                 ) -> ConditionResult | str:
+def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robust | None = None,
+                 fit_steps: int | None = None) -> ConditionResult | str:
     """The ball-arithmetic region of attraction, or why there is none (one line). With ``robust``
     disturbances that vanish at the equilibrium, the set is proved for every disturbance value first
     (the claim then covers them: ``"all"``), else with them at 0. With a parameter box in ``robust``,
-    only the claim for every value of it is tried (``loop`` is the box's centre)."""
+    only the claim for every value of it is tried (``loop`` is the box's centre). ``fit_steps``: the
+    step budget of each trajectory simulated to fit V (:func:`~lyapcheck.models.classes.fitted_v.fit_v`)."""
     from lyapcheck.models.classes.fitted_v import Corners, fit_v
 
     # over a box of parameters V must serve every value: fitted at the box's corners as well
     corners = Corners.of(robust.system, robust.intervals()) if robust is not None and robust.box is not None else None
-    fitted = fit_v(loop.system, loop.ring, box, corners)
+    fitted = fit_v(loop.system, loop.ring, box, corners, max_steps=fit_steps)
     if isinstance(fitted, str):
         return fitted
     v_from = "a V fitted to simulations of the true loop (linear program), proved by " + METHOD

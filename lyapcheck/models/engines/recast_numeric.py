@@ -14,6 +14,7 @@ import numpy as np
 
 from lyapcheck.models.language.recast import RecastSystem
 from lyapcheck.sos.polynomials import Poly, Ring
+from lyapcheck.tolerances import SIM_MAX_STEPS
 
 #: numpy's version of each function of the language
 _NUMPY: Final[dict[str, Callable[[np.ndarray], np.ndarray]]] = {"sin": np.sin, "cos": np.cos, "exp": np.exp, "sqrt": lambda u: np.sqrt(np.maximum(u, 0.0)),
@@ -123,12 +124,13 @@ RTOL: Final = 1e-7
 ATOL: Final = 1e-9
 
 
-def simulate_ends(system: RecastSystem, X0: np.ndarray, horizon: float, escape: float | None = None
-                  ) -> tuple[np.ndarray, Any]:
+def simulate_ends(system: RecastSystem, X0: np.ndarray, horizon: float, escape: float | None = None,
+                  max_steps: int | None = None) -> tuple[np.ndarray, Any]:
     """Integrate the true field from every start at once with the project's batched DOPRI5
     (:func:`lyapcheck.integrator.integrate`, through the model files' batched system
     :class:`lyapcheck.models.engines.numeric.ModelSystem`); a row farther than ``escape`` from the
-    equilibrium in a state stops moving there. The final deviations from the equilibrium, and the
+    equilibrium in a state stops moving there; ``max_steps``: each row's step budget (default
+    :data:`~lyapcheck.tolerances.SIM_MAX_STEPS`). The final deviations from the equilibrium, and the
     integrator's result (per row: ``t``, ``status``, ``failure``)."""
     from lyapcheck.models.engines.numeric import ModelSystem
     from lyapcheck.integrator import integrate
@@ -138,7 +140,8 @@ def simulate_ends(system: RecastSystem, X0: np.ndarray, horizon: float, escape: 
     batch = ModelSystem(_TrueField(system), len(X0),  # type: ignore[arg-type]
                         escape=None if escape is None else np.full(system.n, escape), center=eq)
     with np.errstate(all="ignore"):
-        result = integrate(batch, 0.0, X0, horizon, rtol=RTOL, atol=ATOL)
+        result = integrate(batch, 0.0, X0, horizon, rtol=RTOL, atol=ATOL,
+                           max_iterations=SIM_MAX_STEPS if max_steps is None else max_steps)
     return result.y - eq, result
 
 

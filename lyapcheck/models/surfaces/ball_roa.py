@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, Any, Callable, Final
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, SolvesSpent
 from lyapcheck.results import ConditionResult
 from lyapcheck.timing import ClassTimeLimit
-from lyapcheck.tolerances import INTERVAL_ATTEMPT_CELLS
+from lyapcheck.tolerances import BALL_FALLBACK_FIT_STEPS, INTERVAL_ATTEMPT_CELLS
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.modelfile import Model
@@ -142,7 +142,7 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
     recast = as_recast(model)
     loop = proved_loop(recast, budget.seconds)  # (no square root to prove: the loop has no auxiliary)
     box = comparison_box(recast, loop)
-    found = interval_roa(loop, budget, box, robust_of(recast))
+    found = interval_roa(loop, budget, box, robust_of(recast), fit_steps=BALL_FALLBACK_FIT_STEPS)
     if isinstance(found, ConditionResult) and not found.certificate.get("whole"):
         import time
 
@@ -164,7 +164,7 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
         sos.summary = f"{head}; nor was one proved by {METHOD}{sep}{advice}"
         sos.numbers["detail"] = [*sos.numbers.get("detail", []), found]
         return sos
-    simulated_check(loop, found, box)
+    simulated_check(loop, found, box, max_steps=BALL_FALLBACK_FIT_STEPS)
     if found.disturbances is None and model.disturbances:
         found.disturbances = "zero"  # proved on the loop with its disturbances at 0
     # the recast route's sentence, from the certificate as it now stands (whole), with the coverage

@@ -299,11 +299,13 @@ SIMULATED_ESCAPE: Final = 10.0
 CONVERGED_RADIUS: Final = CONVERGED_BALL_RADIUS
 
 
-def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -> None:
+def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any], max_steps: int | None = None) -> None:
     """Simulate the true loop from a grid of the box: the share of the simulated region of
     attraction the certified set covers (``roa_share``, with the box the ``[domain]``), and every
     start in the set that does not converge (modulo 2 pi in an angle) checked again
-    (:func:`set_cross_check`): a soundness violation only when that check is conclusive."""
+    (:func:`set_cross_check`): a soundness violation only when that check is conclusive.
+    ``max_steps``: each row's step budget (a row it stops counts as not converged: a start in the
+    set is then checked again)."""
     import numpy as np
 
     from lyapcheck.models.engines.recast_numeric import distances, simulate_ends
@@ -320,7 +322,8 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any]) -
     value, = certified_value(loop, result)
     inside = value(Z + eq) <= float(Fraction(result.certificate["level"]))
     dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON,
-                                   escape=SIMULATED_ESCAPE * float(np.max(np.asarray(hi) - np.asarray(lo))))
+                                   escape=SIMULATED_ESCAPE * float(np.max(np.asarray(hi) - np.asarray(lo))),
+                                   max_steps=max_steps)
     to_zero = simulated.ok & (distances(system, dev) < CONVERGED_RADIUS)
     modulo = simulated.ok & (distances(system, dev, tuple(loop.angles)) < CONVERGED_RADIUS)
     result.numbers["simulated_starts"] = int(len(Z))
