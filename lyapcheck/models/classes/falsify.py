@@ -64,6 +64,15 @@ fastest (a stiff loop's explicit steps are bounded by its fastest mode), otherwi
 :data:`~lyapcheck.models.engines.trajectories.FAST_TIME_CONSTANTS_CRITICAL` of the fastest (the
 horizon rule of :mod:`lyapcheck.models.engines.trajectories`, with a cap ten times as long: a safety
 question needs the slow drift too).
+
+Stopping at a goal
+------------------
+With ``stop`` (a set, reach-avoid's goal), a trajectory is watched only until it reaches that set: the
+field is held at 0 inside it (:class:`_Stopped`), so the trajectory stays where it reached the set and
+nothing after that counts (an entry into the unsafe set after the goal is no violation of reach-while-avoid).
+Before it, the trajectory is the model's exactly. The default horizon is the unstopped field's (a goal
+around the equilibrium would make the stopped field's Jacobian there 0). :func:`replay` re-simulates one
+witness the same way, from its start and disturbance alone (``verify`` re-checks a counterexample with it).
 """
 
 from __future__ import annotations
@@ -137,6 +146,11 @@ MIN_STEPS: Final = 200
 SAMPLE_THETAS: Final = (0.25, 0.5, 0.75, 1.0)
 #: a row farther than this many box half-widths from the box's centre stops (runs away)
 ESCAPE_FACTOR: Final = 1e3
+#: replay of one witness: simulated this fraction beyond its stated time, and its entry time and point
+#: agreeing with the stated ones within this fraction of (1 + the largest magnitude) (the same integrator
+#: and tolerances, but one row with its own steps: the two agree to about RTOL, far inside this)
+REPLAY_TIME_MARGIN: Final = 0.01
+REPLAY_TOLERANCE: Final = 1e-4
 
 
 # -- the result ---------------------------------------------------------------------------------
@@ -662,9 +676,24 @@ def default_horizon(model: Model, scale: FloatArray | None = None, evaluate: Any
 
 # -- the search ---------------------------------------------------------------------------------
 
+class _Stopped:
+    """``evaluate`` held at 0 inside ``stop`` (module doc, Stopping at a goal)."""
+
+    def __init__(self, evaluate: Any, stop: StateSet, margin_fn: MarginFunction) -> None:
+        self.evaluate = evaluate
+        self.stop = stop
+        self.margin_fn = margin_fn
+
+    def __call__(self, x: FloatArray, d: FloatArray | None = None) -> FloatArray:
+        f = np.asarray(self.evaluate(x, d), dtype=np.float64)
+        with np.errstate(all="ignore"):
+            reached = np.asarray(self.margin_fn(self.stop, np.atleast_2d(x)), dtype=np.float64) >= 0
+        return np.where(reached[:, None], 0.0, f)
+
+
 def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: MarginFunction, *,
             samples: int = SAMPLES, horizon: float | None = None, seed: int = 0,
-            disturbed: bool = True, evaluate: Any = None) -> Falsification:
+            disturbed: bool = True, evaluate: Any = None, stop: StateSet | None = None) -> Falsification:
     """Simulate from ``samples`` starts in ``initial`` and report the closest approach to ``unsafe``.
 
     Parameters
@@ -692,6 +721,9 @@ def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: Margin
         (:class:`~lyapcheck.models.engines.numeric.FieldEvaluator`); a loop with functions gives its true
         field (:mod:`lyapcheck.models.classes.recast_barrier`), ``model`` then any object with the
         attributes read here (``n``, ``states``, ``equilibrium``, ``domain``, ``disturbances``).
+    stop
+        A set (reach-avoid's goal): each trajectory is watched only until it reaches it (module doc,
+        Stopping at a goal); None (the default) watches the whole horizon.
 
     Returns
     -------
@@ -731,6 +763,8 @@ def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: Margin
     y0 = starts[row_start]
 
     evaluate = FieldEvaluator.of(model) if evaluate is None else evaluate
+    if stop is not None:  # after the horizon: it is the unstopped field's
+        evaluate = _Stopped(evaluate, stop, margin_fn)
     escape = ESCAPE_FACTOR * scale
     system: ModelSystem
     if dists[0].kind == "none":
@@ -765,3 +799,64 @@ def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: Margin
         disturbance_scenarios=per_start, seed=seed, elapsed_s=time.perf_counter() - t_start,
         states=tuple(model.states), disturbances=tuple(model.disturbances),
         boxes=tuple((tuple(float(v) for v in b[0]), tuple(float(v) for v in b[1])) for b in boxes))
+
+
+# -- replaying one witness ------------------------------------------------------------------------
+
+def disturbance_of(data: Mapping[str, Any], model: Any) -> Disturbance:
+    """A witness's disturbance (:meth:`Disturbance.to_dict`) read back, or ValueError when it is not
+    one :func:`falsify` could have drawn: ``none``, or ``constant`` / ``bang-bang`` values of one
+    entry per disturbance, each ``|d_k| <= b_k``, the switching times finite and increasing."""
+    bounds = [float(b) for b in model.disturbances.values()]
+    kind = data.get("kind")
+    values = tuple(tuple(float(v) for v in row) for row in data.get("values", ()))
+    times = tuple(float(t) for t in data.get("switch_times", ()))
+    if kind == "none":
+        if values or times:
+            raise ValueError("a disturbance of kind 'none' has no values and no switching times")
+        return Disturbance("none")
+    if kind not in ("constant", "bang-bang") or not bounds:
+        raise ValueError(f"the disturbance's kind must be 'none'{'' if not bounds else ', constant or bang-bang'}, "
+                         f"not {kind!r}")
+    rows = 1 if kind == "constant" else len(times) + 1
+    if len(values) != rows or (kind == "constant" and times):
+        raise ValueError(f"a {kind} disturbance has {rows} row(s) of values, one per segment; it has {len(values)}")
+    if any(len(row) != len(bounds) or not all(math.isfinite(v) and abs(v) <= b for v, b in zip(row, bounds))
+           for row in values):
+        raise ValueError("every disturbance value must be within its declared bound |d_k| <= b_k")
+    if not all(math.isfinite(t) and t > 0 for t in times) or any(b <= a for a, b in zip(times, times[1:])):
+        raise ValueError("the switching times must be finite, positive and increasing")
+    return Disturbance(kind, values, times)
+
+
+def replay(model: Any, start: Sequence[float], disturbance: Disturbance, until: float, unsafe: StateSet,
+           margin_fn: MarginFunction, *, stop: StateSet | None = None, evaluate: Any = None) -> Witness | None:
+    """Re-simulate one trajectory as :func:`falsify` does (same integrator and tolerances, ``stop``
+    as there) from ``start`` under ``disturbance`` until ``until`` s: its first entry into ``unsafe``
+    (start, disturbance, time and point), or None when it does not enter by then."""
+    y0 = np.array([[float(v) for v in start]], dtype=np.float64)
+    if y0.shape != (1, model.n) or not np.all(np.isfinite(y0)):
+        raise ValueError(f"The 'start' parameter must be {model.n} finite numbers. Got {list(start)!r} instead.")
+    if not (math.isfinite(until) and until >= 0):
+        raise ValueError(f"The 'until' parameter must be a time >= 0 s. Got {until!r} instead.")
+    evaluate = FieldEvaluator.of(model) if evaluate is None else evaluate
+    if stop is not None:
+        evaluate = _Stopped(evaluate, stop, margin_fn)
+    domain = _domain_box(model)
+    watch = _Watch(1, model.n, lambda x: margin_fn(unsafe, x), domain)
+    if until == 0:  # the start itself: no step to take
+        watch.start(np.arange(1), np.zeros(1), y0, evaluate(y0))
+    else:
+        system: ModelSystem
+        if disturbance.kind == "none":
+            system = ModelSystem(evaluate, 1)
+        else:
+            times, levels = _tables([disturbance], len(model.disturbances))
+            system = _Switched(evaluate, 1, times, levels)
+        integrate(system, 0.0, y0, until, rtol=RTOL, atol=ATOL_PER_SCALE * np.maximum(np.abs(y0[0]), 1.0),
+                  max_step=until / MIN_STEPS, observer=watch)
+    if np.isnan(watch.entry_t[0]):
+        return None
+    t = float(watch.entry_t[0])
+    return Witness(tuple(float(v) for v in y0[0]), disturbance, t, tuple(float(v) for v in watch.entry_x[0]),
+                   float(watch.entry_m[0]), None if domain is None else bool(watch.left_t[0] > t))

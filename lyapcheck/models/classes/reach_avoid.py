@@ -34,7 +34,7 @@ from typing import Any, Callable, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.classes.barrier import (BudgetExhausted, Pieces, _b_basis, _decrease_poly, _decrease_support,
-                                      _falsification, _shift, scaled_pieces, set_certificates, set_identities,
+                                      _shift, scaled_pieces, set_certificates, set_identities,
                                       set_values)
 from lyapcheck.models.loop.field import ScaledField, StateField
 from lyapcheck.models.engines import reasons
@@ -394,15 +394,50 @@ def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, An
     return out
 
 
+def falsification(model: Any) -> Any:
+    """Trajectories from the initial set under every disturbance scenario, as beside a barrier
+    (:func:`lyapcheck.models.classes.barrier._falsification`'s starts), each watched until it reaches the
+    goal (:func:`lyapcheck.models.classes.falsify.falsify`'s ``stop``): an entry into the unsafe set after
+    the goal does not count (the claim is reach-while-avoid). None when the simulation cannot run."""
+    from lyapcheck.models.classes.barrier import FALSIFICATION_FEW_ABOVE, FALSIFICATION_SAMPLES
+    from lyapcheck.models.classes.falsify import falsify
+    from lyapcheck.models.language.sets import margin
+
+    samples = FALSIFICATION_SAMPLES if model.n <= FALSIFICATION_FEW_ABOVE else FALSIFICATION_SAMPLES // 2
+    try:
+        return falsify(model, model.sets["initial"], model.sets["unsafe"], margin, samples=samples,
+                       stop=model.sets["goal"])
+    except ValueError:
+        return None
+
+
+def counterexample(model: Any, trial: Any) -> ConditionResult:
+    """``counterexample``: a simulated trajectory from the initial set enters the unsafe set before it
+    reaches the goal (``verify`` re-simulates it from its start and disturbance)."""
+    entry = trial.entry.describe(list(model.states), list(model.disturbances), model.units)
+    return ConditionResult("reach_avoid", "counterexample",
+                           f"a simulated trajectory from the initial set enters the unsafe set before it reaches "
+                           f"the goal: {entry} (simulation, reproducible from its start and disturbance)",
+                           numbers={"falsification": trial.to_dict()},
+                           refutation={"kind": "trajectory", **trial.entry.to_dict()}, property="reach_avoid")
+
+
 def run(scaled: ScaledField, search: Search) -> ConditionResult:
     """The ``reach_avoid`` class on the model's ``[sets]`` (``initial``, ``unsafe``, ``goal``; the
-    goal one piece), for every disturbance within its bounds."""
+    goal one piece), for every disturbance within its bounds. Trajectories from the initial set are
+    simulated first (:func:`falsification`): one into the unsafe set before the goal is a
+    ``counterexample`` (no certificate is then searched: none can exist); beside a certificate, the same
+    simulation is the soundness alarm."""
     from lyapcheck.models.loop.field import state_field
 
     model = scaled.cleared.shifted.model
     refused = goal_of_one_piece(model.sets["goal"])
     if refused is not None:
         return refused
+    trial = falsification(model)
+    if trial is not None and trial.entry is not None:  # entered before the goal: no V can exist
+        return counterexample(model, trial)
+    simulated = {} if trial is None else {"falsification": trial.to_dict()}
     field = state_field(scaled, robust=True)
     initial = scaled_pieces(scaled, field, model.sets["initial"])
     unsafe = scaled_pieces(scaled, field, model.sets["unsafe"])
@@ -419,16 +454,16 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
                         reasons.not_found("set inside the goal around the equilibrium that no trajectory leaves "
                                           "(stay_in_goal)", STAY_DEGREES, stay_tried, ("degree", "time")))
                 return ConditionResult("reach_avoid", "not_certified", none.summary,
-                                       numbers=none.numbers({"tried": stay_tried}), solver={"solves": search.log},
-                                       property="reach_avoid")
+                                       numbers={**none.numbers({"tried": stay_tried}), **simulated},
+                                       solver={"solves": search.log}, property="reach_avoid")
             target = [-invariant["W"]]
         found, tried = search_reach(field, initial, unsafe, target, search)
     except BudgetExhausted as exc:
-        return out_of_time(search.budget.seconds, exc, search.log)
+        return out_of_time(search.budget.seconds, exc, search.log, simulated)
     if found is None:
-        return not_found(tried, search.log)
+        return not_found(tried, search.log, numbers=simulated)
     bound = time_bound(found["C"], found["eps"], scaled.scaling.time)
-    trial = _falsification(model)  # the avoid half: no simulated trajectory may enter the unsafe set
+    # the avoid half beside the proof: no simulated trajectory may enter the unsafe set before the goal
     numbers = certified_numbers(found["degree"], bound, trial, found["margin"])
     certificate = certificate_json(scaled, field, found)
     if invariant is not None:
@@ -447,4 +482,5 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
 
 __all__ = ["REACH_DEGREES", "SCALARS", "Condition", "conditions", "linear_conditions", "goal_of_one_piece",
            "time_bound", "not_found",
-           "out_of_time", "certified_numbers", "reach_structure", "search_reach", "run", "certificate_json"]
+           "out_of_time", "certified_numbers", "reach_structure", "search_reach", "run", "certificate_json",
+           "falsification", "counterexample"]

@@ -194,12 +194,69 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
                 ok, why = False, f"malformed certificate: {_describe(exc)}"
             rows.append((name, ok, why if ok else f"{name}: {why}"))
+    _check_counterexamples(model, conditions, rows)
     _check_stated_v(model, box, conditions, rows)
     _check_disturbance_keys(model, conditions, rows)
     _check_candidate(doc, model, conditions, rows)
     _check_summaries(model, conditions, rows, doc.get("box"))
     _check_stated_claims(model, conditions, rows)
     return _with_verdict(doc, rows)
+
+
+def _check_counterexamples(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
+    """A reach_avoid ``counterexample`` re-simulated from its start and disturbance alone
+    (:func:`_verify_reach_avoid_counterexample`); a row per counterexample, failed when it does not reproduce."""
+    c = conditions.get("reach_avoid")
+    if not isinstance(c, dict) or c.get("status") != "counterexample":
+        return
+    try:
+        ok, why = _verify_reach_avoid_counterexample(c, model)
+    except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
+        ok, why = False, f"malformed counterexample: {_describe(exc)}"
+    rows.append(("reach_avoid", ok, why if ok else f"reach_avoid: {why}"))
+
+
+def _verify_reach_avoid_counterexample(c: dict[str, Any], model: Any) -> tuple[bool, str]:
+    """A reach_avoid counterexample's trajectory, re-simulated as certify simulated it
+    (:func:`lyapcheck.models.classes.falsify.replay`, stopped at the goal): its start in the initial set,
+    its disturbance admissible, and its first entry into the unsafe set, before the goal, at the stated
+    time and point (within :data:`~lyapcheck.models.classes.falsify.REPLAY_TOLERANCE`). Evidence, not a
+    proof: it shows that the stated trajectory is what the model's simulation gives."""
+    import numpy as np
+
+    from lyapcheck.models.classes.falsify import REPLAY_TIME_MARGIN, REPLAY_TOLERANCE, disturbance_of, replay
+    from lyapcheck.models.language.sets import margin
+
+    if c.get("property") != "reach_avoid":
+        return False, "a reach_avoid counterexample is evidence against reach_avoid"
+    ref = c.get("refutation") or {}
+    if ref.get("kind") != "trajectory":
+        return False, "a counterexample's refutation must be a trajectory"
+    sets = model.sets
+    if not (sets.get("initial") and sets.get("unsafe") and sets.get("goal")):
+        return False, "the model has no [sets] initial, unsafe and goal for reach_avoid"
+    start = [float(v) for v in ref["start"]]
+    if len(start) != model.n or not all(np.isfinite(start)):
+        return False, f"the start must be {model.n} finite numbers (one per state)"
+    if not margin(sets["initial"], np.array([start]))[0] >= 0:
+        return False, f"the start {start} is not in the initial set"
+    disturbance = disturbance_of(ref["disturbance"], model)
+    t = float(ref["time"])
+    if not (np.isfinite(t) and t >= 0):
+        return False, f"the time of entry must be a number of seconds >= 0, not {ref['time']!r}"
+    entry = replay(model, start, disturbance, t * (1 + REPLAY_TIME_MARGIN), sets["unsafe"], margin,
+                   stop=sets["goal"])
+    if entry is None:
+        return False, (f"re-simulated from its start and disturbance, the trajectory does not enter the unsafe set "
+                       f"before it reaches the goal by t = {t:.6g} s")
+    point = [float(v) for v in ref["point"]]
+    size = 1 + max(abs(v) for v in (*point, *entry.point))
+    if len(point) != model.n or abs(entry.time - t) > REPLAY_TOLERANCE * (1 + t) or \
+            max(abs(a - b) for a, b in zip(point, entry.point)) > REPLAY_TOLERANCE * size:
+        return False, (f"re-simulated from its start and disturbance, the trajectory enters the unsafe set at "
+                       f"t = {entry.time:.6g} s at {list(entry.point)}, not at the stated t = {t:.6g} s at {point}")
+    return True, (f"the counterexample re-simulated from its start and disturbance enters the unsafe set before "
+                  f"the goal at t = {entry.time:.6g} s")
 
 
 def _describe(exc: BaseException) -> str:
