@@ -18,6 +18,9 @@ builder                sentence
 :func:`out_of_time`    the time limit of 60 s was reached while searching for <thing>; try more time ...
 :func:`reason`         any other "what was tried" with its "what to try next"
 =====================  ==============================================================================
+
+The few ``not_applicable`` sentences that both kinds of loop print (:data:`NOT_OVER_A_BOX`,
+:data:`NEEDS_CANDIDATE`) are worded here too, once.
 """
 
 from __future__ import annotations
@@ -59,6 +62,16 @@ SIZE_LIMIT: Final = re.compile(r"too large: (?P<words>[^;()]+?) \((?P<constant>[
 DEGREE: Final = re.compile(r"\bdegree (\d+)\b")
 #: the degree words of the common degrees (others: "of degree 6")
 DEGREE_WORDS: Final[Mapping[int, str]] = {2: "quadratic", 4: "quartic"}
+
+#: why a class that certifies a point is ``not_applicable`` over a ``--box``: one sentence per class, the
+#: same on a polynomial loop and on a loop with functions
+NOT_OVER_A_BOX: Final[Mapping[str, str]] = {
+    "linearization": "over a box the Jacobian depends on the parameters: certify a point (--set NAME=VALUE) for "
+                     "the linearization",
+    "candidate": "not over a box (the candidate class certifies a point: certify one with --set NAME=VALUE)",
+}
+#: why ``candidate`` asked for without ``--candidate`` is ``not_applicable`` (on every kind of loop)
+NEEDS_CANDIDATE: Final = 'needs --candidate "EXPR" (the user\'s V); not run'
 
 
 class Reason(NamedTuple):
@@ -197,5 +210,6 @@ def numerical_trouble(thing: str, detail: str | Iterable[str]) -> Reason:
                   detail)
 
 
-__all__ = ["NEXT", "SEARCHED_FOR", "Reason", "searched_for", "size_limit", "size_limits", "reason", "not_found",
-           "out_of_time", "with_budget", "numerical_trouble", "advice", "degree_words"]
+__all__ = ["NEXT", "SEARCHED_FOR", "NOT_OVER_A_BOX", "NEEDS_CANDIDATE", "Reason", "searched_for", "size_limit",
+           "size_limits", "reason", "not_found", "out_of_time", "with_budget", "numerical_trouble", "advice",
+           "degree_words"]

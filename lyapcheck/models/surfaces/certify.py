@@ -38,6 +38,7 @@ from lyapcheck.models.classes.registry import CLEARED, NAMES
 from lyapcheck.models.loop.field import ScaledField, Scaling, ShiftedField, StateField, active_disturbances, \
     apply_scaling, choose_scaling, clear, disturbances_vanish, shifted_field, state_field
 from lyapcheck.models.language.modelfile import Model
+from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult, Disturbances
 from lyapcheck.sos.polynomials import Poly
@@ -154,6 +155,13 @@ def _sets_use_box(model: Model, box: "ModelBox | None") -> bool:
     return False
 
 
+def refuse_candidate_over_box(source: str, candidate: str | None, box: object | None) -> None:
+    """``--candidate`` with ``--box`` is bad input on every kind of loop (exit 2 naming ``--candidate``): the
+    candidate class certifies a point (docs/model-files.md, "Boxes of parameters")."""
+    if box is not None and candidate is not None:
+        raise ModelFileError(source, "--candidate", "not over a --box (the candidate class certifies a point)")
+
+
 def class_selection(classes: str | Sequence[str] | None, model: Model, candidate: Candidate | None) -> tuple[str, ...]:
     """``None`` (every class that applies), a comma-separated string or names."""
     if classes is None or classes == "all":
@@ -184,8 +192,7 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
-    if box is not None and candidate is not None:
-        raise ModelFileError(model.source, "--candidate", "not over a --box (the candidate class certifies a point)")
+    refuse_candidate_over_box(model.source, candidate, box)
     cand = parse_candidate(model, candidate) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
     out = ModelCertification(model=model, candidate=cand, results={}, box=box)
@@ -198,9 +205,8 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         out.seconds[name] = time.perf_counter() - start
 
     if "linearization" in chosen and box is not None:
-        out.results["linearization"] = ConditionResult(
-            "linearization", "not_applicable", "over a box the Jacobian depends on the parameters: certify a point "
-            "(--set NAME=VALUE) for the linearization")
+        out.results["linearization"] = ConditionResult("linearization", "not_applicable",
+                                                       reasons.NOT_OVER_A_BOX["linearization"])
     elif "linearization" in chosen:
         from lyapcheck.models.classes import linearization
 
@@ -316,11 +322,9 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         if name in out.results and model.disturbances:
             out.results[name].disturbances = "all"  # B or V serves every disturbance (the robust field)
     if "candidate" in chosen and box is not None:
-        out.results["candidate"] = ConditionResult("candidate", "not_applicable", "not over a box (the candidate "
-                                                                                   "class certifies a point)")
+        out.results["candidate"] = ConditionResult("candidate", "not_applicable", reasons.NOT_OVER_A_BOX["candidate"])
     elif "candidate" in chosen and cand is None:
-        out.results["candidate"] = ConditionResult("candidate", "not_applicable", "needs --candidate \"EXPR\" (the "
-                                                                                   "user's V); not run")
+        out.results["candidate"] = ConditionResult("candidate", "not_applicable", reasons.NEEDS_CANDIDATE)
     out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
     for r in out.results.values():  # every condition of a disturbed model says which it covers
         if model.disturbances and r.disturbances is None:
@@ -679,4 +683,5 @@ def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -
                                 "the user's V")
 
 
-__all__ = ["MODEL_CLASSES", "ModelCertification", "certify_model", "parse_candidate", "class_selection"]
+__all__ = ["MODEL_CLASSES", "ModelCertification", "certify_model", "parse_candidate", "class_selection",
+           "refuse_candidate_over_box"]

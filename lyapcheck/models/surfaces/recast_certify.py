@@ -73,18 +73,21 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     says so first; a refutation is the centre's and says so."""
     from lyapcheck import tolerances as tol
     from lyapcheck.models.surfaces import recast_run
-    from lyapcheck.models.surfaces.certify import verdict_of
+    from lyapcheck.models.engines import reasons
+    from lyapcheck.models.surfaces.certify import refuse_candidate_over_box, verdict_of
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
+    refuse_candidate_over_box(model.source, candidate, box)  # (as on a polynomial loop: exit 2)
     chosen = chosen_classes(classes, candidate, bool(model.disturbances), model)
-    if "candidate" in chosen and candidate is None:
-        raise InvalidParameter("candidate", 'a V with --candidate "EXPR" for class candidate', "nothing")
     V = model.candidate_v if candidate is not None else None
     results, loop, _ = recast_run.certify(model, chosen, V, limit, box)
+    if "candidate" in chosen and "candidate" not in results:  # asked for without --candidate
+        results["candidate"] = ConditionResult("candidate", "not_applicable", reasons.NEEDS_CANDIDATE)
     for name in chosen:
-        if name not in results:
+        if name not in results:  # (the sentence never lists the class it refuses)
+            where = " over a box: certify a point (--set NAME=VALUE)" if box is not None else ""
             results[name] = ConditionResult(name, "not_applicable", "not taken yet for a loop with functions (sin, "
-                                            "sqrt, sat, ...): the classes here are " + ", ".join(RECAST_CLASSES))
+                                            "sqrt, sat, ...)" + where)
     results = {name: results[name] for name in chosen}
     # the loop is recast with every disturbance at 0
     coverage: Disturbances | None = "zero" if model.disturbances else None

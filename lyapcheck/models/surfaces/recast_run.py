@@ -115,8 +115,9 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
     boxed = boxed_loop(model, box)
     for name in ("linearization", "candidate"):
         if name in classes:
-            results[name] = ConditionResult(name, "not_applicable", f"not over a box (the {name} class certifies a "
-                                            "point: certify the centre with --set)")
+            from lyapcheck.models.engines import reasons
+
+            results[name] = ConditionResult(name, "not_applicable", reasons.NOT_OVER_A_BOX[name])
     if {"quadratic", "sos_gas"} & set(classes):
         proved, _ = prove_root_bounds(boxed, Search(boxed.ring, budget))
         for name, run_class in (("quadratic", quadratic), ("sos_gas", sos_gas)):
