@@ -764,10 +764,12 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES
     else:
         allowed = recast_point_classes() if mode == "points" else recast_box_classes()
-    if not polynomial and not ("initial" in model.sets and "unsafe" in model.sets):
-        allowed = tuple(c for c in allowed if c != "barrier")  # (a loop with functions: barrier with its sets only)
-    if not polynomial and not ("initial" in model.sets and "unsafe" in model.sets and "goal" in model.sets):
-        allowed = tuple(c for c in allowed if c != "reach_avoid")  # (and reach_avoid with its goal too)
+    # (any loop: barrier with its sets only, reach_avoid with its goal too; a class the model cannot ask is
+    # not picked by default, and naming it is refused here rather than at the first point)
+    if not ("initial" in model.sets and "unsafe" in model.sets):
+        allowed = tuple(c for c in allowed if c != "barrier")
+    if not ("initial" in model.sets and "unsafe" in model.sets and "goal" in model.sets):
+        allowed = tuple(c for c in allowed if c != "reach_avoid")
     disturbances = model.disturbances
     if raw is None:
         return tuple(c for c in allowed if c != "sos_bound" or disturbances)

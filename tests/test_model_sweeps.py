@@ -135,6 +135,9 @@ AXIS = '[[sweep.axes]]\nname = "a"\nstart = 0.5\nstop = 2\nnum = 3\n'
      "'sweep.axes[0].start' parameter must be positive on a log axis"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["candidate"]\n' + AXIS, LINEAR, "'sweep.classes' parameter must be"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\n' + AXIS, LINEAR, "sos_bound needs [disturbances]"),
+    # a model without [sets] cannot ask the safety questions: refused by the spec, not at the first point
+    ('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n' + AXIS, LINEAR, "'sweep.classes' parameter must be"),
+    ('[sweep]\nmodel = "m.toml"\nclasses = ["reach_avoid"]\n' + AXIS, LINEAR, "'sweep.classes' parameter must be"),
     ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["linearization"]\n' + AXIS, LINEAR,
      "in a boxes sweep, a list of distinct names from 'quadratic'"),
     ('[sweep]\nmodel = "m.toml"\n[sweep.set]\nq = 1\n' + AXIS, LINEAR, "'sweep.set.q' parameter must be a parameter "
@@ -151,6 +154,15 @@ AXIS = '[[sweep.axes]]\nname = "a"\nstart = 0.5\nstop = 2\nnum = 3\n'
 ])
 def test_a_bad_spec_is_one_line_exit_2_and_writes_nothing(tmp_path: Path, spec: str, model: str, needle: str) -> None:
     assert_refused(write(tmp_path, spec, model), needle)
+
+
+def test_a_spec_without_classes_asks_only_what_the_model_can_answer(tmp_path: Path) -> None:
+    """Without ``classes`` a sweep runs every class the model can ask: no barrier or reach_avoid without
+    ``[sets]`` (they used to be picked, and the first point refused them: the sweep exited 2)."""
+    from sweeps.spec import load_model_spec
+
+    spec = load_model_spec(write(tmp_path, '[sweep]\nmodel = "m.toml"\n' + AXIS, LINEAR))
+    assert "quadratic" in spec.classes and not {"barrier", "reach_avoid"} & set(spec.classes)
 
 
 def assert_refused(path: Path, needle: str) -> None:
