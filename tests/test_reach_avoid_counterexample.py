@@ -131,3 +131,21 @@ def test_entering_the_unsafe_set_after_the_goal_raises_no_alarm(tmp_path: Path) 
         assert result.exit_code == 0, result.output
         assert "SOUNDNESS" not in result.output
         assert run_cli("verify", str(out)).exit_code == 0
+
+
+def test_a_barrier_counterexample_is_re_simulated_by_verify_too(tmp_path: Path) -> None:
+    """The barrier's counterexample has the same form and the same check: verify re-simulates it (it used
+    to accept one as stated), and a moved start is rejected."""
+    text = SPIRAL.format(d="").replace('goal = ["x1**2 + x2**2 <= 0.1"]\n', "")
+    model, out = tmp_path / "spiral-barrier.toml", tmp_path / "spiral-barrier.json"
+    model.write_text(text)
+    result = run_cli("certify", str(model), "--classes", "barrier", "--out", str(out))
+    doc = json.loads(out.read_text())
+    assert result.exit_code == 1 and doc["conditions"]["barrier"]["status"] == "counterexample", result.output
+    checked = run_cli("verify", str(out))
+    assert checked.exit_code == 0 and "the counterexample re-simulated" in checked.output, checked.output
+    forged = copy.deepcopy(doc)
+    forged["conditions"]["barrier"]["refutation"]["start"][0] += 0.01
+    out.write_text(json.dumps(forged))
+    moved = run_cli("verify", str(out))
+    assert moved.exit_code == 1 and "barrier: re-simulated from its start" in moved.output, moved.output

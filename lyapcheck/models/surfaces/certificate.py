@@ -32,7 +32,7 @@ import hashlib
 import json
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Final
 
 from lyapcheck.errors import CertificateError, InputFileError
 from lyapcheck.models.surfaces.certify import ModelCertification
@@ -204,37 +204,45 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
 
 
 def _check_counterexamples(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
-    """A reach_avoid ``counterexample`` re-simulated from its start and disturbance alone
-    (:func:`_verify_reach_avoid_counterexample`); a row per counterexample, failed when it does not reproduce."""
-    c = conditions.get("reach_avoid")
-    if not isinstance(c, dict) or c.get("status") != "counterexample":
-        return
-    try:
-        ok, why = _verify_reach_avoid_counterexample(c, model)
-    except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
-        ok, why = False, f"malformed counterexample: {_describe(exc)}"
-    rows.append(("reach_avoid", ok, why if ok else f"reach_avoid: {why}"))
+    """A ``counterexample`` of barrier or reach_avoid re-simulated from its start and disturbance alone
+    (:func:`_verify_counterexample`); a row per counterexample, failed when it does not reproduce."""
+    for name in ("barrier", "reach_avoid"):
+        c = conditions.get(name)
+        if not isinstance(c, dict) or c.get("status") != "counterexample":
+            continue
+        try:
+            ok, why = _verify_counterexample(name, c, model)
+        except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
+            ok, why = False, f"malformed counterexample: {_describe(exc)}"
+        rows.append((name, ok, why if ok else f"{name}: {why}"))
 
 
-def _verify_reach_avoid_counterexample(c: dict[str, Any], model: Any) -> tuple[bool, str]:
-    """A reach_avoid counterexample's trajectory, re-simulated as certify simulated it
-    (:func:`lyapcheck.models.classes.falsify.replay`, stopped at the goal): its start in the initial set,
-    its disturbance admissible, and its first entry into the unsafe set, before the goal, at the stated
-    time and point (within :data:`~lyapcheck.models.classes.falsify.REPLAY_TOLERANCE`). Evidence, not a
-    proof: it shows that the stated trajectory is what the model's simulation gives."""
+#: per class with counterexamples: the property it is evidence against, and whether its trajectories
+#: stop at the goal (reach_avoid: an entry after the goal is not one)
+_COUNTEREXAMPLE_OF: Final = {"barrier": ("safety", False), "reach_avoid": ("reach_avoid", True)}
+
+
+def _verify_counterexample(name: str, c: dict[str, Any], model: Any) -> tuple[bool, str]:
+    """A counterexample's trajectory, re-simulated as certify simulated it
+    (:func:`lyapcheck.models.classes.falsify.replay`; for reach_avoid stopped at the goal): its start in
+    the initial set, its disturbance admissible, and its first entry into the unsafe set (before the
+    goal) at the stated time and point (within :data:`~lyapcheck.models.classes.falsify.REPLAY_TOLERANCE`).
+    Evidence, not a proof: it shows that the stated trajectory is what the model's simulation gives."""
     import numpy as np
 
     from lyapcheck.models.classes.falsify import REPLAY_TIME_MARGIN, REPLAY_TOLERANCE, disturbance_of, replay
     from lyapcheck.models.language.sets import margin
 
-    if c.get("property") != "reach_avoid":
-        return False, "a reach_avoid counterexample is evidence against reach_avoid"
+    prop, to_goal = _COUNTEREXAMPLE_OF[name]
+    if c.get("property") != prop:
+        return False, f"a {name} counterexample is evidence against {prop}"
     ref = c.get("refutation") or {}
     if ref.get("kind") != "trajectory":
         return False, "a counterexample's refutation must be a trajectory"
     sets = model.sets
-    if not (sets.get("initial") and sets.get("unsafe") and sets.get("goal")):
-        return False, "the model has no [sets] initial, unsafe and goal for reach_avoid"
+    needed = ("initial", "unsafe", "goal") if to_goal else ("initial", "unsafe")
+    if not all(sets.get(key) for key in needed):
+        return False, f"the model has no [sets] {', '.join(needed)} for {name}"
     start = [float(v) for v in ref["start"]]
     if len(start) != model.n or not all(np.isfinite(start)):
         return False, f"the start must be {model.n} finite numbers (one per state)"
@@ -245,18 +253,19 @@ def _verify_reach_avoid_counterexample(c: dict[str, Any], model: Any) -> tuple[b
     if not (np.isfinite(t) and t >= 0):
         return False, f"the time of entry must be a number of seconds >= 0, not {ref['time']!r}"
     entry = replay(model, start, disturbance, t * (1 + REPLAY_TIME_MARGIN), sets["unsafe"], margin,
-                   stop=sets["goal"])
+                   stop=sets["goal"] if to_goal else None)
+    before = " before it reaches the goal" if to_goal else ""
     if entry is None:
-        return False, (f"re-simulated from its start and disturbance, the trajectory does not enter the unsafe set "
-                       f"before it reaches the goal by t = {t:.6g} s")
+        return False, (f"re-simulated from its start and disturbance, the trajectory does not enter the unsafe set"
+                       f"{before} by t = {t:.6g} s")
     point = [float(v) for v in ref["point"]]
     size = 1 + max(abs(v) for v in (*point, *entry.point))
     if len(point) != model.n or abs(entry.time - t) > REPLAY_TOLERANCE * (1 + t) or \
             max(abs(a - b) for a, b in zip(point, entry.point)) > REPLAY_TOLERANCE * size:
         return False, (f"re-simulated from its start and disturbance, the trajectory enters the unsafe set at "
                        f"t = {entry.time:.6g} s at {list(entry.point)}, not at the stated t = {t:.6g} s at {point}")
-    return True, (f"the counterexample re-simulated from its start and disturbance enters the unsafe set before "
-                  f"the goal at t = {entry.time:.6g} s")
+    return True, (f"the counterexample re-simulated from its start and disturbance enters the unsafe set{before} "
+                  f"at t = {entry.time:.6g} s")
 
 
 def _describe(exc: BaseException) -> str:
