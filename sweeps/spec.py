@@ -749,8 +749,8 @@ def recast_point_classes() -> tuple[str, ...]:
 
 
 #: the classes :func:`lyapcheck.models.surfaces.recast_run.certify_box` proves over a box (the others are
-#: ``not_applicable`` or not taken there)
-_RECAST_OVER_BOX: Final = ("quadratic", "sos_gas", "roa", "sos_bound")
+#: ``not_applicable`` there); ``barrier`` and ``reach_avoid`` with the model's sets (:func:`_model_classes`)
+_RECAST_OVER_BOX: Final = ("quadratic", "sos_gas", "roa", "sos_bound", "barrier", "reach_avoid")
 
 
 def recast_box_classes() -> tuple[str, ...]:

@@ -196,10 +196,6 @@ REFUSALS: tuple[Refusal, ...] = (
             "the box, a search of box multipliers for a fixed V that is not built (a gap, not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("functions",), ("barrier", "reach_avoid"), _OVER_A_BOX),
-            ("not taken yet for a loop with functions", "boxes sweep of a loop with functions"),
-            "A barrier or a reach-avoid V over a box of a loop with functions (one certificate for every parameter "
-            "value, on the recasting with the box's bounded constants) is not built yet (a gap, not a theorem)."),
 )
 
 

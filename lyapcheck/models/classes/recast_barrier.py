@@ -35,6 +35,7 @@ from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.classes.barrier import FALSIFICATION_FEW_ABOVE, FALSIFICATION_SAMPLES, LAMBDAS
 from lyapcheck.models.classes.claims import BARRIER_SENTENCE
+from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel, Relation, written_poly
 from lyapcheck.models.classes.recast_classes import (Loop, _set, base_loop, common_denominator, lie, prove_denominators,
                                              root_proofs_json, v_names, v_text, with_root_bounds)
@@ -74,7 +75,7 @@ def state_relation(loop: Loop, state_ring: Ring, p: Poly, why: str) -> Relation:
     """``p >= 0`` for ``p`` a polynomial of the model's state ring, as a relation of the loop's ring in
     the deviations."""
     ring = loop.ring
-    n = len(loop.system.states)
+    n = loop.n_states  # (a box's parameters, bounded constants of the loop, follow the states: no set names one)
     terms = {}
     for m, c in state_ring.terms(p).items():
         if any(m[n:]):
@@ -311,11 +312,15 @@ def not_smooth_note(loop: Loop, function: str, condition: str) -> str | None:
 
 # -- the class ----------------------------------------------------------------------------------------
 
-def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
-    """The ``barrier`` class on a loop with functions (module docstring)."""
-    trial = falsification(model)
+def run(model: RecastModel, loop: Loop, budget: Budget, box: ModelBox | None = None) -> ConditionResult:
+    """The ``barrier`` class on a loop with functions (module docstring). With ``box``, ``loop`` is the
+    loop with the box's parameters as bounded constants (:func:`lyapcheck.models.surfaces.recast_run.boxed_loop`,
+    ``model`` read at the box's centre): one B for every value of the box (:func:`over_box`)."""
+    if box is not None and sets_use_box(model, box):
+        return ConditionResult("barrier", "not_applicable", SETS_USE_BOX)
+    trial, at = box_falsification(model, box) if box is not None else (falsification(model), None)
     if trial is not None and trial.entry is not None:
-        return counterexample(model, trial, "barrier", "safety")
+        return at_point(counterexample(model, trial, "barrier", "safety"), at)
     flat = flat_loop(loop)
     initial = piece_relations(flat, model.state_ring, model.sets["initial"], "initial")
     unsafe = piece_relations(flat, model.state_ring, model.sets["unsafe"], "unsafe")
@@ -346,6 +351,90 @@ def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
     return ConditionResult("barrier", "certified", BARRIER_SENTENCE, numbers=numbers,
                            certificate=certificate_json(flat, found, D, dens), solver={"solves": search.log},
                            property="safety")
+
+
+# -- over a box of parameters -------------------------------------------------------------------------
+#
+# Over a box the search runs on the loop recast with the box's parameters as bounded constants (each a
+# variable without a flow, ``h^2 - dp^2 >= 0`` among the relations): every point ``(x, a(x), p)`` of the
+# true loop at a parameter value ``p`` of the box lies in the relations' set, and ``p`` stays put along a
+# trajectory, so each identity proved there holds at every value of the box, and one B (or V, which
+# uses none of the parameters) serves them all. The sets are read at the model's values: a set that
+# names a box parameter is refused.
+
+#: why a safety class over a box refuses sets that name a box parameter (the polynomial loops' words,
+#: :func:`lyapcheck.models.surfaces.certify.certify_model`)
+SETS_USE_BOX: Final = ("over a box the sets may not depend on a parameter of the box (they are read at the model's "
+                       "values)")
+#: the most corners of a box simulated after its centre (a box of up to 3 parameters has them all)
+BOX_CORNERS: Final = 8
+
+
+def sets_use_box(model: RecastModel, box: ModelBox) -> bool:
+    """Some ``[sets]`` inequality names a parameter of ``box`` (the sets are read again from their
+    text with the parameters as symbols: :attr:`RecastModel.sets` has them at the model's values)."""
+    from types import SimpleNamespace
+
+    from lyapcheck.models.language.sets import parse_set
+    from lyapcheck.models.surfaces.certify import _sets_use_box
+
+    ring = Ring(tuple(model.states) + tuple(model.disturbances) + tuple(model.parameters))
+    forms = {key: parse_set(model.source, key, [list(piece) for piece in text], ring, model.states,
+                            tuple(model.disturbances))[1] for key, text in model.set_text.items()}
+    return _sets_use_box(SimpleNamespace(ring=ring, set_forms=forms), box)  # type: ignore[arg-type]
+
+
+#: a point of a box where the true loop is simulated: the loop there, what a claim about it says first,
+#: and the box's parameters there (exact decimals)
+BoxPoint = tuple[RecastModel, str, dict[str, str]]
+
+
+def box_points(model: RecastModel, box: ModelBox) -> Iterator[BoxPoint]:
+    """The true loop at points of the box (:data:`BoxPoint`): its centre (``model``), then up to
+    :data:`BOX_CORNERS` corners, each read again from the model text with the box's parameters there
+    (a corner that has no finite decimal, or where the model cannot be read, is left out: these
+    points only look for a counterexample)."""
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.exact import exact_decimal
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.surfaces.recast_certify import box_prefix
+
+    yield model, box_prefix(box, "counterexample"), {name: exact_decimal(box.center(name)) for name in box.names}
+    for corner in box.corners()[:BOX_CORNERS]:
+        try:
+            values = {name: exact_decimal(v) for name, v in corner.items()}
+            there = parse_any_model(model.text, model.source, {**model.overrides, **values})
+        except (ValueError, ModelFileError):
+            continue
+        if isinstance(there, RecastModel):
+            where = ", ".join(f"{name} = {text}" for name, text in values.items())
+            yield there, f"at a corner of the box ({where}), so not for every value of the box: ", values
+
+
+def box_falsification(model: RecastModel, box: ModelBox, goal: bool = False) -> tuple[Any, BoxPoint | None]:
+    """:func:`falsification` at the points of :func:`box_points` (``goal``: each trajectory watched until
+    it reaches the goal), until one enters the unsafe set: that trial and its point; else the
+    centre's trial (None when it cannot run) and None."""
+    first = None
+    for k, point in enumerate(box_points(model, box)):
+        there = point[0]
+        trial = falsification(there, stop=there.sets["goal"] if goal else None)
+        if trial is not None and trial.entry is not None:
+            return trial, point
+        if k == 0:
+            first = trial
+    return first, None
+
+
+def at_point(result: ConditionResult, point: BoxPoint | None) -> ConditionResult:
+    """A counterexample found at a point of a box says which point first, and its refutation gives the
+    box's parameters there (``parameters``: it is reproduced at them); ``point`` None: not over a box."""
+    if point is not None:
+        _, words, values = point
+        result.summary = words + result.summary
+        if result.refutation is not None:
+            result.refutation["parameters"] = dict(values)
+    return result
 
 
 # -- verify -------------------------------------------------------------------------------------------
@@ -409,4 +498,5 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
 
 __all__ = ["KIND", "RECAST_BARRIER_DEGREES", "run", "check", "certificate_json", "falsification", "flat_loop",
            "piece_relations", "state_relation", "not_smooth_note", "Template", "templates", "polynomial_json",
-           "recasting_json", "check_polynomial", "counterexample"]
+           "recasting_json", "check_polynomial", "counterexample", "SETS_USE_BOX", "BOX_CORNERS", "sets_use_box",
+           "box_points", "box_falsification", "at_point", "BoxPoint"]

@@ -38,9 +38,11 @@ from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.classes.reach_avoid import (REACH_DEGREES, SCALARS, Condition, certified_numbers, conditions,
                                           goal_of_one_piece, linear_conditions, not_found, out_of_time, time_bound)
 from lyapcheck.models.language.recast import RecastModel, Relation
-from lyapcheck.models.classes.recast_barrier import (check_polynomial, counterexample, falsification, flat_loop,
-                                             not_smooth_note, piece_relations, polynomial_json, recasting_json,
+from lyapcheck.models.classes.recast_barrier import (SETS_USE_BOX, at_point, box_falsification, check_polynomial,
+                                             counterexample, falsification, flat_loop, not_smooth_note,
+                                             piece_relations, polynomial_json, recasting_json, sets_use_box,
                                              state_relation, templates)
+from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.classes.recast_classes import Loop, _set, lie, state_square
 from lyapcheck.models.engines.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
                                          solve_on_faces)
@@ -234,14 +236,20 @@ def sentence(cert: dict[str, Any]) -> str:
 
 # -- the class ----------------------------------------------------------------------------------------
 
-def run(model: RecastModel, loop: Loop, budget: Budget) -> ConditionResult:
-    """The ``reach_avoid`` class on a loop with functions (module docstring)."""
+def run(model: RecastModel, loop: Loop, budget: Budget, box: ModelBox | None = None) -> ConditionResult:
+    """The ``reach_avoid`` class on a loop with functions (module docstring). With ``box``, ``loop`` is
+    the loop with the box's parameters as bounded constants (``model`` read at the box's centre): one
+    V for every value of the box, as the recast barrier's
+    (:func:`lyapcheck.models.classes.recast_barrier.run`)."""
     refused = goal_of_one_piece(model.sets["goal"])
     if refused is not None:
         return refused
-    trial = falsification(model, stop=model.sets["goal"])
+    if box is not None and sets_use_box(model, box):
+        return ConditionResult("reach_avoid", "not_applicable", SETS_USE_BOX)
+    trial, at = box_falsification(model, box, goal=True) if box is not None else \
+        (falsification(model, stop=model.sets["goal"]), None)
     if trial is not None and trial.entry is not None:  # entered before the goal: no V can exist
-        return counterexample(model, trial, "reach_avoid", "reach_avoid", " before it reaches the goal")
+        return at_point(counterexample(model, trial, "reach_avoid", "reach_avoid", " before it reaches the goal"), at)
     simulated = {} if trial is None else {"falsification": trial.to_dict()}
     periodic = periodic_notes(model, loop)
     if periodic:  # an equilibrium outside the goal: no V of this form exists, and none is searched

@@ -304,6 +304,9 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
                 ok, why = _verify_condition(name, c, base, box_robust(model, box, disturbed=disturbed))
                 if c["certificate"].get("kind") != "interval":
                     ok, why = False, "over a box, roa is proved by ball arithmetic"
+            elif box is not None and c["status"] == "certified" and name in ("barrier", "reach_avoid"):
+                assert boxed is not None
+                ok, why = _verify_box_safety(name, c, boxed, model, box)
             elif box is not None and c["status"] == "certified":
                 assert boxed is not None
                 ok, why = _verify_condition(name, c, boxed)
@@ -499,6 +502,20 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     what = "on {V <= level}" if region is not None else "everywhere"
     modulo = " (modulo 2 pi in the angles)" if loop.angles else ""
     return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
+
+
+def _verify_box_safety(name: str, c: dict[str, Any], boxed: Loop, model: RecastModel, box: ModelBox
+                       ) -> tuple[bool, str]:
+    """A barrier or a reach-avoid function over a box: its proofs re-checked on the loop recast again
+    with the box's parameters as bounded constants (``boxed``), so one B or V serves every value of it,
+    with the sets the model text gives (none of which may name a box parameter)."""
+    from lyapcheck.models.classes.recast_barrier import SETS_USE_BOX, sets_use_box
+
+    if sets_use_box(model, box):
+        return False, SETS_USE_BOX
+    ok, why = _verify_condition(name, c, boxed, None, model)
+    return ok, (f"{why}, for every value of the box (its parameters bounded constants of the recasting)" if ok
+                else why)
 
 
 def _proved_recasting(cert: dict[str, Any], base: Loop) -> tuple[Loop | None, str]:

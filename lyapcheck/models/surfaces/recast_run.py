@@ -105,7 +105,10 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
     that uses none of them, so one ``V`` serves every value; a refutation (another equilibrium) is
     the centre's, which lies in the box. ``roa`` is the ball-arithmetic set proved with each parameter
     a ball over its interval (the set's ``V'`` negative for every value at once), and ``sos_bound``
-    takes the parameters as it takes the disturbances. ``linearization`` and ``candidate`` certify a
+    takes the parameters as it takes the disturbances. ``barrier`` and ``reach_avoid`` are proved on the
+    same boxed loop (one B or V for every value; :func:`lyapcheck.models.classes.recast_barrier.run`), their
+    sets read at the model's values; a trajectory of the true loop at the centre or a corner that enters
+    the unsafe set is a counterexample at that point. ``linearization`` and ``candidate`` certify a
     point: ``not_applicable`` over a box.
     """
     results: dict[str, ConditionResult] = {}
@@ -118,7 +121,7 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
             from lyapcheck.models.engines import reasons
 
             results[name] = ConditionResult(name, "not_applicable", reasons.NOT_OVER_A_BOX[name])
-    if {"quadratic", "sos_gas"} & set(classes):
+    if {"quadratic", "sos_gas", "barrier", "reach_avoid"} & set(classes):
         proved, _ = prove_root_bounds(boxed, Search(boxed.ring, budget))
         for name, run_class in (("quadratic", quadratic), ("sos_gas", sos_gas)):
             if name in classes:
@@ -137,6 +140,18 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
         start = time.perf_counter()
         results["sos_bound"] = sos_bound(model, class_budget(time_limit_s), box)
         seconds["sos_bound"] = time.perf_counter() - start
+    if "barrier" in classes:
+        from lyapcheck.models.classes.recast_barrier import run as run_barrier
+
+        start = time.perf_counter()
+        results["barrier"] = run_barrier(model, proved, class_budget(time_limit_s), box)
+        seconds["barrier"] = time.perf_counter() - start
+    if "reach_avoid" in classes:
+        from lyapcheck.models.classes.recast_reach_avoid import run as run_reach_avoid
+
+        start = time.perf_counter()
+        results["reach_avoid"] = run_reach_avoid(model, proved, class_budget(time_limit_s), box)
+        seconds["reach_avoid"] = time.perf_counter() - start
     return results, loop, seconds
 
 
