@@ -86,9 +86,9 @@ def sentence(cert: dict[str, Any], coverage: Any = None) -> str:
 
 def box_words_of(box: dict[str, Any], status: str) -> str:
     """What a claim of a loop with functions over a box of parameters says first
-    (:func:`lyapcheck.models.surfaces.recast_certify.box_prefix`), or nothing when the box is malformed."""
+    (:func:`lyapcheck.models.classes.claims.box_prefix`), or nothing when the box is malformed."""
     from lyapcheck.models.language.parameter_box import ModelBox
-    from lyapcheck.models.surfaces.recast_certify import box_prefix
+    from lyapcheck.models.classes.claims import box_prefix
 
     try:
         return box_prefix(ModelBox.from_json(box), status)

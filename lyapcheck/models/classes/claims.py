@@ -24,7 +24,10 @@ declared unit). A state's distance is always to the equilibrium: ``|x(t) - x_eq|
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
+
+if TYPE_CHECKING:
+    from lyapcheck.models.language.parameter_box import ModelBox
 
 #: what a ``certified`` sublevel set of each class is called in its sentence
 SET_NAMES = {"roa": "region of attraction", "candidate": "the user's V"}
@@ -308,5 +311,16 @@ def v_expression(terms: Mapping[str, Any], variables: Sequence[str], shifts: Map
     return total
 
 
-__all__ = ["summary", "box_words", "ball_words", "with_unit", "deviation", "state_unit_figures", "v_text",
+def box_prefix(box: ModelBox, status: str) -> str:
+    """What a claim over a box says first: ``for every b in [0.5, 2]: `` (certified), or where in the
+    box a refutation holds (its centre, one point of the box: the claim for every value is false)."""
+    from lyapcheck.exact import exact_decimal
+
+    if status == "certified":
+        return f"for every {box_words({n: (lo, hi) for n, lo, hi in box.bounds})}: "
+    centre = ", ".join(f"{n} = {exact_decimal(box.center(n))}" for n in box.names)
+    return f"at the box's centre ({centre}), so not for every value of the box: "
+
+
+__all__ = ["summary", "box_words", "box_prefix", "ball_words", "with_unit", "deviation", "state_unit_figures", "v_text",
            "v_expression", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT", "RATE_UNIT"]

@@ -373,15 +373,12 @@ BOX_CORNERS: Final = 8
 def sets_use_box(model: RecastModel, box: ModelBox) -> bool:
     """Some ``[sets]`` inequality names a parameter of ``box`` (the sets are read again from their
     text with the parameters as symbols: :attr:`RecastModel.sets` has them at the model's values)."""
-    from types import SimpleNamespace
-
-    from lyapcheck.models.language.sets import parse_set
-    from lyapcheck.models.surfaces.certify import _sets_use_box
+    from lyapcheck.models.language.sets import forms_name, parse_set
 
     ring = Ring(tuple(model.states) + tuple(model.disturbances) + tuple(model.parameters))
     forms = {key: parse_set(model.source, key, [list(piece) for piece in text], ring, model.states,
                             tuple(model.disturbances))[1] for key, text in model.set_text.items()}
-    return _sets_use_box(SimpleNamespace(ring=ring, set_forms=forms), box)  # type: ignore[arg-type]
+    return forms_name(ring, forms, set(box.names))
 
 
 #: a point of a box where the true loop is simulated: the loop there, what a claim about it says first,
@@ -397,7 +394,7 @@ def box_points(model: RecastModel, box: ModelBox) -> Iterator[BoxPoint]:
     from lyapcheck.errors import ModelFileError
     from lyapcheck.exact import exact_decimal
     from lyapcheck.models.language.modelfile import parse_any_model
-    from lyapcheck.models.surfaces.recast_certify import box_prefix
+    from lyapcheck.models.classes.claims import box_prefix
 
     yield model, box_prefix(box, "counterexample"), {name: exact_decimal(box.center(name)) for name in box.names}
     for corner in box.corners()[:BOX_CORNERS]:

@@ -359,6 +359,21 @@ def _error(source: str, key: str, message: str) -> ModelFileError:
     return ModelFileError(printable(source), printable(key), printable(message))
 
 
-__all__ = ["SET_KEYS", "STAY_KEY", "CLASS_SETS", "MAX_SET_PIECES", "MAX_PIECE_INEQUALITIES", "SetPiece", "StateSet", "SetText",
+def forms_name(ring: Ring, set_forms: Mapping[str, SetForms], names: set[str]) -> bool:
+    """Some inequality of ``set_forms`` (``[sets]`` as parsed: key -> pieces -> forms over ``ring``)
+    names one of ``names`` (a box's parameters: the sets are read at the model's values, so a class
+    over the box would prove them at one value only)."""
+    for forms in set_forms.values():
+        for piece in forms:
+            for form in piece:
+                for p in (form.numerator, form.denominator):
+                    for m in ring.support(p):
+                        if any(e and ring.names[k] in names for k, e in enumerate(m)):
+                            return True
+    return False
+
+
+__all__ = ["forms_name", "SET_KEYS", "STAY_KEY", "CLASS_SETS", "MAX_SET_PIECES", "MAX_PIECE_INEQUALITIES", "SetPiece", "StateSet", "SetText",
            "SetForms", "split_inequality", "parse_set", "evaluate_set", "evaluate_sets", "require_sets", "contains",
            "margin", "to_json", "sets_json"]
+

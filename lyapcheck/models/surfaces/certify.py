@@ -141,18 +141,9 @@ def _has_safety_sets(model: Model, goal: bool = False) -> bool:
 def _sets_use_box(model: Model, box: "ModelBox | None") -> bool:
     """Some ``[sets]`` inequality names a parameter of ``box`` (the sets are evaluated at the model's
     values, so a class over the box would prove them at one value only)."""
-    if box is None:
-        return False
-    names = set(box.names)
-    ring = model.ring
-    for forms in (getattr(model, "set_forms", None) or {}).values():
-        for piece in forms:
-            for form in piece:
-                for p in (form.numerator, form.denominator):
-                    for m in ring.support(p):
-                        if any(e and ring.names[k] in names for k, e in enumerate(m)):
-                            return True
-    return False
+    from lyapcheck.models.language.sets import forms_name
+
+    return box is not None and forms_name(model.ring, getattr(model, "set_forms", None) or {}, set(box.names))
 
 
 def refuse_candidate_over_box(source: str, candidate: str | None, box: object | None) -> None:

@@ -30,7 +30,7 @@ from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_deno
                                              jacobian, lie, state_square, v_names, v_text)
 from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES, box_robust, boxed_loop, robust_of
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
-from lyapcheck.models.classes.claims import BARRIER_SENTENCE, covered
+from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered
 from lyapcheck.models.classes.recast_barrier import KIND as RECAST_BARRIER
 from lyapcheck.models.classes.recast_reach_avoid import KIND as RECAST_REACH_AVOID
 from lyapcheck.models.surfaces.stated import Stated, check_declared, check_stated
@@ -109,18 +109,6 @@ def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = 
     conditions = {name: r.to_json() for name, r in results.items()}
     verdict = verdict_of(conditions)
     return verdict, results, build_document(model, loop, candidate, conditions, verdict, box)
-
-
-def box_prefix(box: ModelBox, status: str) -> str:
-    """What a claim over a box says first: ``for every b in [0.5, 2]: `` (certified), or where in the
-    box a refutation holds (its centre, one point of the box: the claim for every value is false)."""
-    from lyapcheck.exact import exact_decimal
-    from lyapcheck.models.classes.claims import box_words
-
-    if status == "certified":
-        return f"for every {box_words({n: (lo, hi) for n, lo, hi in box.bounds})}: "
-    centre = ", ".join(f"{n} = {exact_decimal(box.center(n))}" for n in box.names)
-    return f"at the box's centre ({centre}), so not for every value of the box: "
 
 
 def build_document(model: RecastModel, loop: Loop, candidate: str | None, conditions: dict[str, Any],
