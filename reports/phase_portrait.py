@@ -53,6 +53,7 @@ import numpy.typing as npt
 from lyapcheck.models.engines.crosscheck import BISECTIONS, RAY_RADII, check_global, check_region, check_storage, \
     ray_boundary
 from lyapcheck.models.language.modelfile import Model
+from lyapcheck.models.language.recast import RecastModel
 from lyapcheck.models.language.sets import StateSet, margin
 from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 from reports.figures import Figure, resample_closed, to_svg
@@ -251,7 +252,7 @@ def _segments(refutation: dict[str, Any], m: int, t_end: float) -> list[tuple[fl
     return [(a, b, rows[j]) for j, (a, b) in enumerate(zip(edges, edges[1:]))]
 
 
-def counterexample_trajectories(doc: dict[str, Any], model: Model, half: FloatArray
+def counterexample_trajectories(doc: dict[str, Any], model: Model | RecastModel, half: FloatArray
                                 ) -> tuple[list[Counterexample], list[str]]:
     """Each ``counterexample`` condition's trajectory, simulated again with the portrait's own
     simulator (:func:`lyapcheck.models.engines.trajectories.simulate`, piece by piece for a switching
@@ -313,7 +314,7 @@ def counterexample_trajectories(doc: dict[str, Any], model: Model, half: FloatAr
     return out, notes
 
 
-def _draw_counterexamples(ax: Any, shown: Sequence[Counterexample], lo: FloatArray, hi: FloatArray) -> None:
+def draw_counterexamples(ax: Any, shown: Sequence[Counterexample], lo: FloatArray, hi: FloatArray) -> None:
     """Each counterexample: a wide red line from its start (a circle) to where it enters the
     unsafe set (a cross), named in the legend with the time it enters."""
     for ce, line in zip(shown, drawable([ce.x for ce in shown], lo, hi)):
@@ -325,7 +326,7 @@ def _draw_counterexamples(ax: Any, shown: Sequence[Counterexample], lo: FloatArr
                     zorder=7)
 
 
-def _counterexample_words(model: Model, shown: Sequence[Counterexample], portrait: bool = True) -> str:
+def counterexample_words(model: Model | RecastModel, shown: Sequence[Counterexample], portrait: bool = True) -> str:
     """The caption's sentences on the counterexamples (``portrait``: drawn in the phase portrait,
     with a circle at the start; else against time)."""
     parts = []
@@ -345,6 +346,12 @@ def _counterexample_words(model: Model, shown: Sequence[Counterexample], portrai
     return " ".join(parts)
 
 
+def model_sets_sentence(shown: Sequence[str]) -> str:
+    """The caption's sentence on the model's ``[sets]`` drawn (their keys, in :data:`SET_STYLE`'s order)."""
+    words = {"initial": "initial (green)", "unsafe": "unsafe (red)", "goal": "goal (blue)"}
+    return f"Shaded: the model's [sets] as it states them, {', '.join(words[k] for k in shown)}."
+
+
 # -- the model's sets ------------------------------------------------------------------------------
 def _grid(lo: FloatArray, hi: FloatArray, count: int = GRID) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The axes and the ``(count * count, 2)`` points of a grid over a box."""
@@ -354,7 +361,7 @@ def _grid(lo: FloatArray, hi: FloatArray, count: int = GRID) -> tuple[FloatArray
     return x, y, np.column_stack([X.ravel(), Y.ravel()])
 
 
-def set_boxes(model: Model, lo: FloatArray, hi: FloatArray) -> dict[str, tuple[FloatArray, FloatArray] | None]:
+def set_boxes(model: Model | RecastModel, lo: FloatArray, hi: FloatArray) -> dict[str, tuple[FloatArray, FloatArray] | None]:
     """The bounding box of each of the model's ``[sets]`` within ``lo..hi`` (grid points with
     ``margin >= 0``, widened by a grid step), or None where no grid point is inside."""
     x, y, points = _grid(lo, hi)
@@ -388,7 +395,7 @@ def initial_starts(state_set: StateSet, lo: FloatArray, hi: FloatArray, count: i
     return inside[picked]
 
 
-def _draw_model_sets(ax: Any, model: Model, lo: FloatArray, hi: FloatArray) -> list[str]:
+def draw_model_sets(ax: Any, model: Model | RecastModel, lo: FloatArray, hi: FloatArray) -> list[str]:
     """Fill each of the model's ``[sets]`` (every piece: ``margin >= 0`` on a grid); the keys drawn."""
     from matplotlib.colors import to_rgba
 
@@ -611,7 +618,7 @@ def _until(tr: Trajectory, until: StateSet | None) -> tuple[FloatArray, FloatArr
     return (t[:hit[0] + 1], x[:hit[0] + 1]) if hit.size else (t, x)
 
 
-def _at(model: Model, x: FloatArray) -> str:
+def _at(model: Model | RecastModel, x: FloatArray) -> str:
     return "(" + ", ".join(f"{s} = {fmt_float(float(v), 4)}" for s, v in zip(model.states, x)) + ")"
 
 
@@ -772,13 +779,13 @@ def phase_portrait(doc: dict[str, Any], model: Model) -> PhasePortrait:
 
     fig, axes = _new_figure(2 if lower is not None else 1)
     ax = axes[0]
-    shown_sets = _draw_model_sets(ax, model, lo, hi)
+    shown_sets = draw_model_sets(ax, model, lo, hi)
     shown_invariants = [d for d in invariants if _draw_invariant(ax, d, eq, scales, lo, hi)]
     for d in regions:
         _draw_set(ax, d, eq, scales, lo, hi)
     has_domain = _domain_box(ax, model)
     _draw_trajectories(ax, runs, x0, lo, hi, by_outcome=True)
-    _draw_counterexamples(ax, shown_ce, lo, hi)
+    draw_counterexamples(ax, shown_ce, lo, hi)
     ax.plot([eq[0]], [eq[1]], "k+", ms=9, mew=1.5, zorder=5, label="equilibrium")
     _axes(ax, model, lo, hi, "disturbances 0" if model.disturbances else "", below=bool(shown_sets or shown_invariants))
 
@@ -857,7 +864,7 @@ def _counterexample_timeline(doc: dict[str, Any], model: Model, reason: str) -> 
     caption = (f"The model has {model.n} state{'s' if model.n != 1 else ''}: a phase portrait is drawn for 2 states "
                "only, so the counterexamples are drawn against time: above, the unsafe set's "
                "margin along each (the max over its pieces of the min of their polynomials, ≥ 0 inside the unsafe "
-               "set), below, every state. " + _counterexample_words(model, shown, portrait=False)
+               "set), below, every state. " + counterexample_words(model, shown, portrait=False)
                + (" " + " ".join(notes) if notes else ""))
     alt = ("the counterexample trajectories against time: "
            + "; ".join(ce.label for ce in shown))
@@ -955,8 +962,7 @@ def _caption(model: Model, regions: Sequence[_Drawn], runs: Sequence[Trajectory]
     counts = {k: sum(tr.outcome == k for tr in runs) for k in OUTCOME_STYLE}
     parts = [f"Phase portrait of the model in its declared coordinates ({model.states[0]}, {model.states[1]})."]
     if shown_sets:
-        words = {"initial": "initial (green)", "unsafe": "unsafe (red)", "goal": "goal (blue)"}
-        parts.append(f"Shaded: the model's [sets] as it states them, {', '.join(words[k] for k in shown_sets)}.")
+        parts.append(model_sets_sentence(shown_sets))
     if invariants:
         shown = "; ".join(f"{d.spec.name}: {{{d.spec.symbol} ≤ {fmt_float(float(d.spec.level))}}}" for d in invariants)
         until = any(d.spec.until for d in invariants)
@@ -981,7 +987,7 @@ def _caption(model: Model, regions: Sequence[_Drawn], runs: Sequence[Trajectory]
                  f"{joined}: {counts['converged']} converged (blue), {counts['escaped']} escaped (red), "
                  f"{counts['other']} neither by the end (amber).")
     if counterexamples:
-        parts.append(_counterexample_words(model, counterexamples))
+        parts.append(counterexample_words(model, counterexamples))
     if has_domain:
         parts.append("Dashed box: the model's [domain].")
     if disturbed:

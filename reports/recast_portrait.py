@@ -26,13 +26,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Any, Final, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
 from lyapcheck.models.language.recast import RecastModel
 from reports.figures import Figure, WIDTH_IN, to_svg
+from reports.phase_portrait import (SET_SEARCH, Counterexample, counterexample_trajectories, counterexample_words,
+                                    draw_counterexamples, draw_model_sets, model_sets_sentence, set_boxes)
 from reports.sections import section_for
 from reports.sections.recast import RECAST_LOOP, RecastSection, RecastSet
 from reports.views import as_dict
@@ -176,6 +178,17 @@ def recast_portrait(doc: dict[str, Any], model: RecastModel) -> RecastPortrait:
     for spec in sets:
         if spec.box is None:
             lo, hi = reach(model, spec, lo, hi, angles, notes)
+    # the model's [sets] and the counterexamples join the view, as in a polynomial loop's portrait
+    centre, half_span = 0.5 * (lo + hi), 0.5 * SET_SEARCH * (hi - lo)
+    for key, found in set_boxes(model, centre - half_span, centre + half_span).items():
+        if found is None:
+            notes.append(f"The {key} set is not drawn: no point of the grid searched is in it.")
+        else:
+            lo, hi = np.minimum(lo, found[0]), np.maximum(hi, found[1])
+    counterexamples, ce_notes = counterexample_trajectories(doc, model, np.maximum((hi - lo) / 2, 1e-300))
+    notes += ce_notes
+    for ce in counterexamples:
+        lo, hi = np.minimum(lo, ce.x.min(axis=0)), np.maximum(hi, ce.x.max(axis=0))
     span = hi - lo
     lo, hi = lo - PAD * span, hi + PAD * span
 
@@ -222,6 +235,10 @@ def recast_portrait(doc: dict[str, Any], model: RecastModel) -> RecastPortrait:
             ax.add_patch(Rectangle((blo[0], blo[1]), bhi[0] - blo[0], bhi[1] - blo[1], fill=False, ls="--", lw=1.0,
                                    edgecolor=spec.colour, zorder=3, label=_label(f"{spec.name}'s box")))
 
+    shown_sets = draw_model_sets(ax, model, lo, hi)
+    draw_counterexamples(ax, counterexamples, lo, hi)
+    data["model_sets_drawn"] = shown_sets
+    data["counterexamples"] = [ce.to_dict() for ce in counterexamples]
     ax.plot([eq[0]], [eq[1]], "ko", ms=5, zorder=5, label="the equilibrium")
     copies = []
     for i, s in enumerate(model.states):
@@ -247,13 +264,14 @@ def recast_portrait(doc: dict[str, Any], model: RecastModel) -> RecastPortrait:
     legend = ax.get_legend()
     data["legend"] = [t.get_text() for t in legend.get_texts()] if legend is not None else []
     drawn = [s for s in sets if s.name in data["sets"] and data["sets"][s.name]["grid_points_inside"]]
-    caption = _caption(model, drawn, global_, notes)
+    caption = _caption(model, drawn, global_, notes, shown_sets, counterexamples)
     alt = (f"phase portrait of the loop with functions in {model.states[0]} and {model.states[1]}: the true field's "
            f"streamlines, {len(drawn)} certified set(s) and the equilibrium")
     return RecastPortrait(Figure(to_svg(fig), caption, alt, data), "", notes)
 
 
-def _caption(model: RecastModel, drawn: list[RecastSet], global_: list[str], notes: list[str]) -> str:
+def _caption(model: RecastModel, drawn: list[RecastSet], global_: list[str], notes: list[str],
+             shown_sets: Sequence[str] = (), counterexamples: Sequence[Counterexample] = ()) -> str:
     s0, s1 = model.states
     parts = [f"Phase portrait of the true loop in its own states ({s0}, {s1}). Grey: streamlines of the field as the "
              "model writes it, with its functions (not the recasting's polynomial field). Black dot: the equilibrium."]
@@ -277,8 +295,13 @@ def _caption(model: RecastModel, drawn: list[RecastSet], global_: list[str], not
         parts.append("No certified set to fill: no class certified a region.")
     if global_:
         parts.append(f"Certified globally, so no set to draw: {'; '.join(global_)}.")
+    if shown_sets:
+        parts.append(model_sets_sentence(shown_sets))
+    if counterexamples:
+        parts.append(counterexample_words(model, counterexamples))
     parts.append("The view holds the model's [domain] (without one: ±π in an angle, ±4 elsewhere about the "
-                 "equilibrium), every certificate's box and the recast sets' extent.")
+                 "equilibrium), every certificate's box, the recast sets' extent, the model's [sets] and the "
+                 "counterexamples.")
     return " ".join(parts + notes)
 
 

@@ -215,3 +215,46 @@ def test_a_global_certificate_and_a_one_state_loop(tmp_path: Path) -> None:
     page = (tmp_path / "one.html").read_text("utf-8")
     assert "No phase portrait: the loop has 1 state: a phase portrait is drawn for 2 states only" in page
     assert "<code>sin(x)</code>" in page
+
+
+UNSAFE_PENDULUM = """[model]
+name = "damped pendulum launched towards an unsafe band"
+states = ["theta", "omega"]
+
+[parameters]
+b = 0.5
+
+[dynamics]
+theta = "omega"
+omega = "-sin(theta) - b*omega"
+
+[domain]
+theta = [-3, 3]
+omega = [-3, 3]
+
+[sets]
+initial = ["(theta - 1)**2 + (omega + 2.5)**2 <= 0.04"]
+unsafe = ["theta <= -0.6"]
+"""
+
+
+def test_the_portrait_of_a_loop_with_functions_draws_its_sets_and_its_counterexample(tmp_path: Path) -> None:
+    """As a polynomial loop's portrait does: the [sets] shaded, and the barrier's counterexample simulated
+    again on the true loop (with sin) from its stored start, entering the unsafe set where the class said."""
+    from reports.recast_portrait import recast_portrait
+
+    model_file, cert = tmp_path / "unsafe.toml", tmp_path / "unsafe.json"
+    model_file.write_text(UNSAFE_PENDULUM)
+    run = lyapcheck("certify", str(model_file), "--classes", "barrier", "--out", str(cert))
+    assert run.returncode == 1, run.stderr
+    doc = json.loads(cert.read_text())
+    assert doc["conditions"]["barrier"]["status"] == "counterexample"
+    figure = recast_portrait(doc, model_of(doc)).figure
+    assert figure is not None
+    assert figure.data["model_sets_drawn"] == ["initial", "unsafe"]
+    (drawn,) = figure.data["counterexamples"]
+    stored = doc["conditions"]["barrier"]["refutation"]
+    assert drawn["class"] == "barrier" and drawn["entered"] and drawn["start"] == stored["start"]
+    assert drawn["entry_time_s"] == pytest.approx(stored["time"], rel=1e-4)
+    assert drawn["entry_point"][0] == pytest.approx(-0.6, abs=1e-6)
+    assert "Shaded: the model's [sets]" in figure.caption and "counterexample of barrier" in figure.caption

@@ -12,7 +12,7 @@ from typing import Any, Callable, Final
 
 import numpy as np
 
-from lyapcheck.models.language.recast import RecastSystem
+from lyapcheck.models.language.recast import RecastModel, RecastSystem
 from lyapcheck.sos.polynomials import Poly, Ring
 from lyapcheck.tolerances import SIM_MAX_STEPS
 
@@ -137,7 +137,7 @@ def simulate_ends(system: RecastSystem, X0: np.ndarray, horizon: float, escape: 
 
     X0 = np.atleast_2d(np.asarray(X0, dtype=np.float64))
     eq = np.array([float(system.values[s]) for s in system.states])
-    batch = ModelSystem(_TrueField(system), len(X0),  # type: ignore[arg-type]
+    batch = ModelSystem(TrueField(system), len(X0),  # type: ignore[arg-type]
                         escape=None if escape is None else np.full(system.n, escape), center=eq)
     with np.errstate(all="ignore"):
         result = integrate(batch, 0.0, X0, horizon, rtol=RTOL, atol=ATOL,
@@ -145,14 +145,28 @@ def simulate_ends(system: RecastSystem, X0: np.ndarray, horizon: float, escape: 
     return result.y - eq, result
 
 
-class _TrueField:
-    """The true field as the batched system's field: ``(y, d) -> y'`` (no disturbance)."""
+class TrueField:
+    """The true field of a loop with functions, ``(x, d) -> x'`` row by row, each function evaluated by
+    numpy (:class:`FloatLoop`), never the recast polynomial loop: the batched system's field of every
+    simulation of such a loop (and :class:`lyapcheck.models.surfaces.simulate.LoopField`). From a
+    :class:`~lyapcheck.models.language.recast.RecastModel` the disturbances ``d`` (rows, None: all 0)
+    enter through the loop recast with them as variables; from a bare
+    :class:`~lyapcheck.models.language.recast.RecastSystem` there are none."""
 
-    def __init__(self, system: RecastSystem) -> None:
-        self.loop = FloatLoop(system)
+    def __init__(self, loop: RecastModel | RecastSystem) -> None:
+        if isinstance(loop, RecastSystem):
+            self.n, self.nominal, self.disturbed = loop.n, FloatLoop(loop), None
+            return
+        self.n = loop.n
+        self.nominal = FloatLoop(loop.system)
+        # the loop with the disturbances as variables (the last "states", without a flow)
+        self.disturbed = FloatLoop(loop.robust) if loop.disturbances and loop.robust is not None else None
 
-    def __call__(self, y: np.ndarray, d: Any = None) -> np.ndarray:
-        return self.loop(y)
+    def __call__(self, x: np.ndarray, d: np.ndarray | None = None) -> np.ndarray:
+        x = np.atleast_2d(np.asarray(x, dtype=np.float64))
+        if d is None or self.disturbed is None or not d.size:
+            return self.nominal(x)
+        return self.disturbed(np.concatenate([x, np.asarray(d, dtype=np.float64)], axis=1))[:, :self.n]
 
 
 def distances(system: RecastSystem, deviations: np.ndarray, angles: tuple[str, ...] = ()) -> np.ndarray:

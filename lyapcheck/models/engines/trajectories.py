@@ -23,6 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from lyapcheck.models.language.modelfile import Model
+from lyapcheck.models.language.recast import RecastModel
 from lyapcheck.models.engines.numeric import FieldEvaluator, ModelSystem
 from lyapcheck.integrator import integrate
 
@@ -146,7 +147,7 @@ def _per_row(values: FloatArray) -> Callable[[FloatArray, FloatArray, IntArray],
     return push
 
 
-def simulate(model: Model, starts: FloatArray, *, t_end: float, half_widths: FloatArray,
+def simulate(model: Model | RecastModel, starts: FloatArray, *, t_end: float, half_widths: FloatArray,
              disturbances: FloatArray | None = None, escape_factor: float = ESCAPE_FACTOR,
              converged_fraction: float = CONVERGED_FRACTION) -> list[Trajectory]:
     """Simulate every start (rows of ``starts``, declared coordinates) until ``t_end``, in one batch.
@@ -154,7 +155,8 @@ def simulate(model: Model, starts: FloatArray, *, t_end: float, half_widths: Flo
     Parameters
     ----------
     model
-        The parsed model (parameters at the certificate's values).
+        The parsed model (parameters at the certificate's values); a loop with functions is simulated
+        on its true field (:class:`lyapcheck.models.engines.recast_numeric.TrueField`).
     starts
         ``(k, n)`` initial states.
     t_end
@@ -168,7 +170,10 @@ def simulate(model: Model, starts: FloatArray, *, t_end: float, half_widths: Flo
         The escape box and the convergence radius in half-widths (defaults :data:`ESCAPE_FACTOR`,
         :data:`CONVERGED_FRACTION`: the phase portrait's view).
     """
-    evaluate = FieldEvaluator.of(model)
+    from lyapcheck.models.engines.recast_numeric import TrueField
+
+    # (either is the batched system's field, (x, d) -> x')
+    evaluate: Any = TrueField(model) if isinstance(model, RecastModel) else FieldEvaluator.of(model)
     eq = np.array([float(v) for v in model.equilibrium])
     starts = np.atleast_2d(np.asarray(starts, dtype=np.float64))
     rows = starts.shape[0]

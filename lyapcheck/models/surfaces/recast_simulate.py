@@ -4,7 +4,7 @@ A loop with functions (sin, sqrt, sat, ...) is simulated by :mod:`lyapcheck.mode
 same scenarios, starts, tail sups, series, plots and worst-case search as a polynomial loop; this
 module gives it what that machinery needs (:func:`prepare_true_loop`):
 
-- the field (:class:`TrueField`): the model's own, each function evaluated by numpy
+- the field (:class:`lyapcheck.models.engines.recast_numeric.TrueField`): the model's own, each function evaluated by numpy
   (:class:`lyapcheck.models.engines.recast_numeric.FloatLoop`), never the recast polynomial loop, which only
   holds on its relations' set; under a disturbance, the loop recast with its disturbances as
   variables (:attr:`~lyapcheck.models.language.recast.RecastModel.robust`). Where the recasting could not keep
@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any, Final, Sequence
 import numpy as np
 
 from lyapcheck.models.language.recast import RecastModel, RecastSystem
-from lyapcheck.models.engines.recast_numeric import FloatLoop
+from lyapcheck.models.engines.recast_numeric import TrueField
 from lyapcheck.sos.polynomials import Ring, degree_in
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -62,23 +62,6 @@ def default_horizon(model: RecastModel) -> float:
     real = np.linalg.eigvals(np.array([[float(x) for x in row] for row in J])).real
     slowest = np.max(real)
     return float(HORIZON_TIME_CONSTANTS / -slowest) if slowest < 0 else FALLBACK_HORIZON_S
-
-
-class TrueField:
-    """The true field of a loop with functions, ``(x, d) -> x'`` row by row (the simulation's
-    :class:`lyapcheck.models.surfaces.simulate.LoopField`)."""
-
-    def __init__(self, model: RecastModel) -> None:
-        self.n = model.n
-        self.nominal = FloatLoop(model.system)
-        # the loop with the disturbances as variables (the last "states", without a flow)
-        self.disturbed = FloatLoop(model.robust) if model.disturbances and model.robust is not None else None
-
-    def __call__(self, x: FloatArray, d: FloatArray | None) -> FloatArray:
-        x = np.atleast_2d(np.asarray(x, dtype=np.float64))
-        if d is None or self.disturbed is None or not d.size:
-            return self.nominal(x)
-        return self.disturbed(np.concatenate([x, np.asarray(d, dtype=np.float64)], axis=1))[:, :self.n]
 
 
 @dataclass(frozen=True)
@@ -203,4 +186,4 @@ def prepare_true_loop(model: RecastModel) -> "Prepared":
                     document_keys={"kind": "recast", "field": text, "angles_modulo_2pi": list(angles)})
 
 
-__all__ = ["TrueField", "TrueOutputGain", "prepare_true_loop", "output_text", "default_horizon"]
+__all__ = ["TrueOutputGain", "prepare_true_loop", "output_text", "default_horizon"]

@@ -229,7 +229,7 @@ class CompiledPolys:
 class LoopField(Protocol):
     """The field a simulation integrates: ``x'`` at ``(batch, n)`` states under ``(batch, m)``
     disturbances (None: every disturbance 0). Two implementations: :class:`_Field` (a polynomial
-    loop) and :class:`lyapcheck.models.surfaces.recast_simulate.TrueField` (a loop with functions)."""
+    loop) and :class:`lyapcheck.models.engines.recast_numeric.TrueField` (a loop with functions)."""
 
     def __call__(self, x: FloatArray, d: FloatArray | None) -> FloatArray: ...
 
