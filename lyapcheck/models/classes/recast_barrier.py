@@ -271,6 +271,13 @@ class _TrueField:
             return f
 
 
+def true_field(model: RecastModel) -> Any:
+    """The true loop's field as :func:`falsification` simulates it (each function evaluated by numpy, the
+    disturbances at 0), unstopped: ``verify`` replays a counterexample with it
+    (:func:`lyapcheck.models.classes.falsify.replay`, which stops a trajectory at the goal itself)."""
+    return _TrueField(model)
+
+
 def falsification(model: RecastModel, stop: Any = None) -> Any:
     """The closest approach of trajectories of the true loop from the initial set to the unsafe set
     (disturbances at 0), each watched until it reaches ``stop`` when given (before it, the true loop's
@@ -496,4 +503,4 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
 __all__ = ["KIND", "RECAST_BARRIER_DEGREES", "run", "check", "certificate_json", "falsification", "flat_loop",
            "piece_relations", "state_relation", "not_smooth_note", "Template", "templates", "polynomial_json",
            "recasting_json", "check_polynomial", "counterexample", "SETS_USE_BOX", "BOX_CORNERS", "sets_use_box",
-           "box_points", "box_falsification", "at_point", "BoxPoint"]
+           "box_points", "box_falsification", "at_point", "BoxPoint", "true_field"]

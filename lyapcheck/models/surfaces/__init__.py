@@ -3,7 +3,8 @@
 - :mod:`~lyapcheck.models.surfaces.certify` and :mod:`~lyapcheck.models.surfaces.recast_run` /
   :mod:`~lyapcheck.models.surfaces.recast_certify`: run the classes a model asks for;
 - :mod:`~lyapcheck.models.surfaces.certificate`, :mod:`~lyapcheck.models.surfaces.documents`,
-  :mod:`~lyapcheck.models.surfaces.stated`: certificate documents and ``verify``;
+  :mod:`~lyapcheck.models.surfaces.stated`, :mod:`~lyapcheck.models.surfaces.counterexamples`: certificate
+  documents and ``verify``;
 - :mod:`~lyapcheck.models.surfaces.simulate`, :mod:`~lyapcheck.models.surfaces.recast_simulate`:
   ``simulate --model``.
 

@@ -32,10 +32,11 @@ import hashlib
 import json
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Callable, Final
+from typing import Any, Callable
 
 from lyapcheck.errors import CertificateError, InputFileError
 from lyapcheck.models.surfaces.certify import ModelCertification
+from lyapcheck.models.surfaces.counterexamples import check_counterexamples, describe_exception as _describe
 from lyapcheck.models.surfaces.documents import KIND, SCHEMA_VERSION, with_verdict as _with_verdict
 from lyapcheck.results import ConditionResult
 
@@ -194,82 +195,13 @@ def _verify(doc: dict[str, Any]) -> list[Row]:
             except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
                 ok, why = False, f"malformed certificate: {_describe(exc)}"
             rows.append((name, ok, why if ok else f"{name}: {why}"))
-    _check_counterexamples(model, conditions, rows)
+    check_counterexamples(model, conditions, rows)
     _check_stated_v(model, box, conditions, rows)
     _check_disturbance_keys(model, conditions, rows)
     _check_candidate(doc, model, conditions, rows)
     _check_summaries(model, conditions, rows, doc.get("box"))
     _check_stated_claims(model, conditions, rows)
     return _with_verdict(doc, rows)
-
-
-def _check_counterexamples(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
-    """A ``counterexample`` of barrier or reach_avoid re-simulated from its start and disturbance alone
-    (:func:`_verify_counterexample`); a row per counterexample, failed when it does not reproduce."""
-    for name in ("barrier", "reach_avoid"):
-        c = conditions.get(name)
-        if not isinstance(c, dict) or c.get("status") != "counterexample":
-            continue
-        try:
-            ok, why = _verify_counterexample(name, c, model)
-        except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
-            ok, why = False, f"malformed counterexample: {_describe(exc)}"
-        rows.append((name, ok, why if ok else f"{name}: {why}"))
-
-
-#: per class with counterexamples: the property it is evidence against, and whether its trajectories
-#: stop at the goal (reach_avoid: an entry after the goal is not one)
-_COUNTEREXAMPLE_OF: Final = {"barrier": ("safety", False), "reach_avoid": ("reach_avoid", True)}
-
-
-def _verify_counterexample(name: str, c: dict[str, Any], model: Any) -> tuple[bool, str]:
-    """A counterexample's trajectory, re-simulated as certify simulated it
-    (:func:`lyapcheck.models.classes.falsify.replay`; for reach_avoid stopped at the goal): its start in
-    the initial set, its disturbance admissible, and its first entry into the unsafe set (before the
-    goal) at the stated time and point (within :data:`~lyapcheck.models.classes.falsify.REPLAY_TOLERANCE`).
-    Evidence, not a proof: it shows that the stated trajectory is what the model's simulation gives."""
-    import numpy as np
-
-    from lyapcheck.models.classes.falsify import REPLAY_TIME_MARGIN, REPLAY_TOLERANCE, disturbance_of, replay
-    from lyapcheck.models.language.sets import margin
-
-    prop, to_goal = _COUNTEREXAMPLE_OF[name]
-    if c.get("property") != prop:
-        return False, f"a {name} counterexample is evidence against {prop}"
-    ref = c.get("refutation") or {}
-    if ref.get("kind") != "trajectory":
-        return False, "a counterexample's refutation must be a trajectory"
-    sets = model.sets
-    needed = ("initial", "unsafe", "goal") if to_goal else ("initial", "unsafe")
-    if not all(sets.get(key) for key in needed):
-        return False, f"the model has no [sets] {', '.join(needed)} for {name}"
-    start = [float(v) for v in ref["start"]]
-    if len(start) != model.n or not all(np.isfinite(start)):
-        return False, f"the start must be {model.n} finite numbers (one per state)"
-    if not margin(sets["initial"], np.array([start]))[0] >= 0:
-        return False, f"the start {start} is not in the initial set"
-    disturbance = disturbance_of(ref["disturbance"], model)
-    t = float(ref["time"])
-    if not (np.isfinite(t) and t >= 0):
-        return False, f"the time of entry must be a number of seconds >= 0, not {ref['time']!r}"
-    entry = replay(model, start, disturbance, t * (1 + REPLAY_TIME_MARGIN), sets["unsafe"], margin,
-                   stop=sets["goal"] if to_goal else None)
-    before = " before it reaches the goal" if to_goal else ""
-    if entry is None:
-        return False, (f"re-simulated from its start and disturbance, the trajectory does not enter the unsafe set"
-                       f"{before} by t = {t:.6g} s")
-    point = [float(v) for v in ref["point"]]
-    size = 1 + max(abs(v) for v in (*point, *entry.point))
-    if len(point) != model.n or abs(entry.time - t) > REPLAY_TOLERANCE * (1 + t) or \
-            max(abs(a - b) for a, b in zip(point, entry.point)) > REPLAY_TOLERANCE * size:
-        return False, (f"re-simulated from its start and disturbance, the trajectory enters the unsafe set at "
-                       f"t = {entry.time:.6g} s at {list(entry.point)}, not at the stated t = {t:.6g} s at {point}")
-    return True, (f"the counterexample re-simulated from its start and disturbance enters the unsafe set{before} "
-                  f"at t = {entry.time:.6g} s")
-
-
-def _describe(exc: BaseException) -> str:
-    return f"missing key {exc}" if isinstance(exc, KeyError) else str(exc)[:200]
 
 
 def _check_stated_v(model: Any, box: Any, conditions: dict[str, Any], rows: list[Row]) -> None:

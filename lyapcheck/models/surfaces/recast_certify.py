@@ -303,6 +303,7 @@ def verify_recast(doc: dict[str, Any]) -> list[Row]:
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
         rows.append((name, ok, f"{why}; {claims}" if ok else f"{name}: {why}"))
+    _check_true_counterexamples(doc, model, box, rows)
     rows.extend(_check_candidate(doc, model))
     return _with_verdict(doc, rows)
 
@@ -354,6 +355,65 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
         return Stated("GES", {"degree": degree, "k": Fraction(str(ges["k"])),
                               "decay_rate_per_s": Fraction(str(ges["rate"]))})
     return Stated("GAS", {"degree": degree})
+
+
+def _check_true_counterexamples(doc: dict[str, Any], model: RecastModel, box: ModelBox | None, rows: list[Row]
+                                ) -> None:
+    """A ``counterexample`` of barrier or reach_avoid re-simulated on the true loop, as certify's falsification
+    simulated it (:func:`lyapcheck.models.classes.recast_barrier.falsification`): the polynomial loops' checks
+    (:func:`lyapcheck.models.surfaces.counterexamples.check_counterexamples`) with the true loop's field, its
+    disturbances at 0, and over a box at the point of the box where it was found."""
+    from lyapcheck.models.classes.recast_barrier import true_field
+    from lyapcheck.models.surfaces.counterexamples import check_counterexamples, verify_counterexample
+
+    def check(name: str, c: dict[str, Any], model: RecastModel) -> tuple[bool, str]:
+        ref = c.get("refutation") or {}
+        there, where = _counterexample_loop(ref, model, box)
+        if there is None:
+            return False, where
+        disturbance = ref.get("disturbance")
+        kind = disturbance.get("kind") if isinstance(disturbance, dict) else disturbance
+        if there.disturbances and kind != "none":
+            # the claims are the nominal loop's (d = 0), the one certify simulated; without disturbances the
+            # shared check says a disturbance is none
+            return False, (f"a loop with functions is simulated with its disturbances at 0 (d = 0): the "
+                           f"counterexample's disturbance must be of kind 'none', not {kind!r}")
+        ok, why = verify_counterexample(name, c, there, evaluate=true_field(there))
+        return ok, f"{why} (the true loop at {where})" if where else why
+
+    check_counterexamples(model, doc["conditions"], rows, check)
+
+
+def _counterexample_loop(ref: dict[str, Any], model: RecastModel, box: ModelBox | None
+                         ) -> tuple[RecastModel | None, str]:
+    """The model a counterexample is re-simulated on, and the words for the point of the box (empty when
+    there is no box): over a box, the model text read again at the refutation's ``parameters`` (the point
+    of the box where it was found, :func:`lyapcheck.models.classes.recast_barrier.at_point`), which must lie
+    in the box; else the model itself. (None, why) when it cannot be."""
+    from lyapcheck.exact import exact_decimal
+    from lyapcheck.models.language.modelfile import parse_any_model
+
+    stated = ref.get("parameters")
+    if box is None:
+        if stated is not None:
+            return None, "a counterexample's parameters name a point of a box, and the document has no box"
+        return model, ""
+    if not isinstance(stated, dict) or set(stated) != set(box.names):
+        return None, (f"over a box a counterexample names the point of the box where it was found: parameters "
+                      f"{', '.join(box.names)}")
+    values = {}
+    for name, lo, hi in box.bounds:
+        value = Fraction(str(stated[name]))
+        if not lo <= value <= hi:
+            return None, f"the parameter {name} = {stated[name]} is not a point of the box [{lo}, {hi}]"
+        values[name] = exact_decimal(value)
+    try:
+        there = parse_any_model(model.text, model.source, {**model.overrides, **values})
+    except ModelFileError as exc:
+        return None, f"the model cannot be read at the point {values} of the box: {exc}"
+    if not isinstance(there, RecastModel):
+        return None, f"the model read at the point {values} of the box is not a loop with functions"
+    return there, ", ".join(f"{name} = {text}" for name, text in values.items())
 
 
 def _check_candidate(doc: dict[str, Any], model: RecastModel) -> list[Row]:
