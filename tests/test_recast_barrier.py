@@ -73,7 +73,7 @@ def test_an_unsafe_saturated_acc_gets_a_counterexample_on_the_true_loop(tmp_path
     h0, v0 = barrier["refutation"]["start"]
     assert 28 <= h0 <= 32 and 38 <= v0 <= 40  # a start in the initial set
     assert barrier["refutation"]["point"][0] <= 5 + 1e-6 and barrier["refutation"]["time"] > 0  # the gap closed
-    # the sentence names the true loop's simulation, and verify accepts a counterexample as stated
+    # the sentence names the true loop's simulation, and verify re-simulates the counterexample on it
     assert "true loop" in barrier["summary"]
     assert all(ok for _, ok, _ in verify_recast(doc)), verify_recast(doc)
 
