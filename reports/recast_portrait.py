@@ -11,14 +11,16 @@ What is drawn:
   definition, :func:`lyapcheck.models.engines.recast_numeric.v_values`), and for an interval certificate
   the larger of ``V / level`` and the box's own gauge (``max |z_i - centre_i| / half-width_i``),
   so the drawn set is the certificate's ``{x - x_eq in box, V <= level}``; the box is drawn dashed;
-- the equilibrium, and where the loop has angles its copies ``2 k pi`` apart that fall in the view.
+- the equilibrium, and where the loop has angles its copies ``2 k pi`` apart that fall in the view;
+- the model's ``[sets]`` shaded and each ``counterexample`` simulated again on the true loop from its
+  stored start, drawn by the polynomial portrait's own functions (:mod:`reports.phase_portrait`).
 
 The view is the model's ``[domain]`` (else ``+-pi`` in an angle and
 :data:`lyapcheck.models.engines.recast_numeric.DEFAULT_HALF_WIDTH` elsewhere, the box the ``roa`` class
 compares its sets in) joined with every certificate's box and with each recast set's extent in the
-states that are not angles (searched up to :data:`REACH` times that box), padded. Nothing is simulated here:
-the ``roa`` class simulated its set on the true loop when it was certified, and its figures are
-on the page. The model text is parsed by the project's parser only (the caller's
+states that are not angles (searched up to :data:`REACH` times that box), the model's sets and the
+counterexamples, padded. Only the counterexamples are simulated here: the ``roa`` class simulated its
+set on the true loop when it was certified, and its figures are on the page. The model text is parsed by the project's parser only (the caller's
 :func:`lyapcheck.models.language.modelfile.parse_any_model`); nothing from the document is evaluated.
 """
 
