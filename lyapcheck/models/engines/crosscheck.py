@@ -15,12 +15,25 @@ certificate         what must hold along a simulated trajectory           check
 ``sos_bound``       the storage function stays below its envelope          :func:`check_storage`
                     ``1 + (V(0) - 1) exp(-lam t)``; the tail sup of each
                     output stays below its certified bound                  :func:`bound_exceeded`
+``barrier``         a start in the initial set never enters the unsafe     :func:`check_safety`
+                    set
+``reach_avoid``     a start in the initial set is in the goal by the       :func:`check_reach_avoid`
+                    certified time bound, and does not enter the unsafe
+                    set before it reaches the goal
 ==================  ===================================================  ========================
 
 A rise, an excess or a ratio counts only beyond
 :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL` (relative), which absorbs the integrator's
 error, never a modelling slack. Every check reads the integrator's own points
 (:attr:`lyapcheck.models.engines.trajectories.Trajectory.nodes`).
+
+The two set checks read a set's margin along a trajectory (``lyapcheck.models.language.sets.margin``:
+``>= 0`` inside, in the units of the set's polynomials) and judge it relative to that trajectory's own
+scale of it, its largest ``|margin|`` (:func:`relative_margin`), so that a check does not depend on the
+states' units: the unsafe set is entered only where the relative margin exceeds the tolerance, the goal
+is reached where it is above minus the tolerance. A time is read as the last point before the goal was
+reached (a lower bound of the time it was reached, up to a graze between two points), and the time
+bound is exceeded only beyond the tolerance, relative to the bound.
 
 Two helpers feed them: :func:`certificate_function` turns a certificate's exact ``V`` (in the
 declared states shifted to the equilibrium; over a box also in the box's parameters) into a float
@@ -141,6 +154,108 @@ def bound_exceeded(bound: float, simulated: float, rel_tol: float) -> bool:
     return bool(simulated > bound * (1 + rel_tol))
 
 
+def relative_margin(values: FloatArray) -> FloatArray:
+    """A set's margin along one trajectory divided by its largest magnitude along it (0 where it is
+    0 throughout): ``> 0`` inside, comparable across trajectories and units."""
+    values = np.asarray(values, dtype=np.float64)
+    with np.errstate(all="ignore"):
+        scale = float(np.max(np.abs(values[np.isfinite(values)]), initial=0.0))
+    return values / scale if scale > 0 else np.zeros_like(values)
+
+
+@dataclass(frozen=True)
+class SafetyCheck:
+    """Trajectories from the initial set under a barrier certificate (the unsafe set is never entered):
+    how many, how many entered the unsafe set, which first (index, None: none) and the largest
+    relative unsafe margin reached (:func:`relative_margin`; ``< 0``: none came inside; NaN: none)."""
+
+    trajectories: int
+    entered: int
+    first: int | None
+    worst_margin: float
+
+    @property
+    def ok(self) -> bool:
+        return self.entered == 0
+
+
+def check_safety(unsafe_margins: Sequence[FloatArray]) -> SafetyCheck:
+    """``unsafe_margins[i]``: the unsafe set's margin at the points of trajectory ``i`` (which started
+    in the initial set); it entered where the relative margin exceeds
+    :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL`."""
+    entered, first, worst = 0, None, math.nan
+    for i, values in enumerate(unsafe_margins):
+        rel = relative_margin(values)
+        if not rel.size:
+            continue
+        top = float(np.nanmax(rel)) if np.any(np.isfinite(rel)) else math.nan
+        if math.isfinite(top):
+            worst = top if math.isnan(worst) else max(worst, top)
+        if top > TRAJECTORY_CHECK_REL_TOL:
+            entered += 1
+            first = i if first is None else first
+    return SafetyCheck(len(unsafe_margins), entered, first, worst)
+
+
+@dataclass(frozen=True)
+class ReachAvoidCheck:
+    """Trajectories from the initial set under a reach-avoid certificate: how many entered the unsafe set
+    before the goal (``entered``, the first of them ``first_entered``), how many were not in the goal by
+    the time bound (``late``, the first ``first_late``), the largest relative unsafe margin before the
+    goal (as :class:`SafetyCheck`) and the largest time before the goal over the bound (``reach_ratio``,
+    a trajectory that never reached it counting its whole simulated time; NaN: none)."""
+
+    trajectories: int
+    entered: int
+    late: int
+    first_entered: int | None
+    first_late: int | None
+    worst_margin: float
+    reach_ratio: float
+
+    @property
+    def ok(self) -> bool:
+        return self.entered == 0 and self.late == 0
+
+
+def check_reach_avoid(series: Sequence[tuple[FloatArray, FloatArray, FloatArray]], bound_s: float) -> ReachAvoidCheck:
+    """``series[i] = (t, unsafe margin, goal margin)`` at the points of trajectory ``i`` (which started
+    in the initial set), simulated beyond ``bound_s (1 + TRAJECTORY_CHECK_REL_TOL)``
+    (:func:`reach_horizon`). The goal is reached at the first point whose relative goal margin is at
+    least ``-TRAJECTORY_CHECK_REL_TOL``; the time before it is the point before that one (a lower
+    bound of the time it was reached). Late: that time beyond ``bound_s (1 + TRAJECTORY_CHECK_REL_TOL)``;
+    entered: a relative unsafe margin above ``TRAJECTORY_CHECK_REL_TOL`` at a point before the goal."""
+    entered = late = 0
+    first_entered: int | None = None
+    first_late: int | None = None
+    worst, ratio = math.nan, math.nan
+    for i, (t, unsafe, goal) in enumerate(series):
+        t = np.asarray(t, dtype=np.float64)
+        if not t.size:
+            continue
+        reached = np.flatnonzero(relative_margin(goal) >= -TRAJECTORY_CHECK_REL_TOL)
+        k = int(reached[0]) if reached.size else t.size  # the first point in the goal (t.size: none)
+        before = 0.0 if k == 0 else float(t[k - 1])
+        ratio = before / bound_s if math.isnan(ratio) else max(ratio, before / bound_s)
+        if before > bound_s * (1 + TRAJECTORY_CHECK_REL_TOL):
+            late += 1
+            first_late = i if first_late is None else first_late
+        rel = relative_margin(np.asarray(unsafe, dtype=np.float64)[:k])  # its scale before the goal too
+        top = float(np.nanmax(rel)) if np.any(np.isfinite(rel)) else math.nan
+        if math.isfinite(top):
+            worst = top if math.isnan(worst) else max(worst, top)
+        if top > TRAJECTORY_CHECK_REL_TOL:
+            entered += 1
+            first_entered = i if first_entered is None else first_entered
+    return ReachAvoidCheck(len(series), entered, late, first_entered, first_late, worst, ratio)
+
+
+def reach_horizon(bound_s: float) -> float:
+    """How long a reach-avoid cross-check simulates: past the certified time bound by twice the
+    tolerance, so that a trajectory not in the goal by then is conclusively late."""
+    return bound_s * (1 + 2 * TRAJECTORY_CHECK_REL_TOL)
+
+
 def certificate_function(terms: Mapping[str, Any], names: Sequence[str], n: int, values: Mapping[str, Fraction],
                          scales: Sequence[Fraction]) -> PointFunction:
     """A certificate's exact polynomial as a float function of the scaled states ``u``.
@@ -216,4 +331,5 @@ def ray_boundary(function: PointFunction, level: float, directions: FloatArray,
 
 
 __all__ = ["rise", "RegionCheck", "check_region", "GlobalCheck", "check_global", "check_storage",
-           "check_ges_envelope", "bound_exceeded", "certificate_function", "ray_boundary", "RAY_RADII", "BISECTIONS"]
+           "check_ges_envelope", "relative_margin", "SafetyCheck", "check_safety", "ReachAvoidCheck",
+           "check_reach_avoid", "reach_horizon", "bound_exceeded", "certificate_function", "ray_boundary", "RAY_RADII", "BISECTIONS"]
