@@ -16,10 +16,11 @@ class of the stored certificate is checked with :mod:`lyapcheck.models.engines.c
   drawn from the model's ``[sets] initial`` (:func:`lyapcheck.models.classes.falsify.sample_set`, a quarter on
   its boundary), each simulated with every disturbance at 0 and, for a claim over every disturbance
   (``"disturbances": "all"``), at each vertex of the disturbance box held constant (at most
-  :data:`MAX_VERTICES`). A barrier's trajectories, over the falsification's horizon
-  (:func:`lyapcheck.models.classes.falsify.default_horizon`), must not enter ``unsafe``; a reach-avoid's,
-  simulated just past the certified ``reach_time_bound_s``, must be in ``goal`` by then and not enter
-  ``unsafe`` before it (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
+  :data:`MAX_VERTICES`), over the falsification's horizon
+  (:func:`lyapcheck.models.classes.falsify.default_horizon`; both classes read the same trajectories). A
+  barrier's must not enter ``unsafe``; a reach-avoid's must be in ``goal`` by the certified
+  ``reach_time_bound_s`` and not enter ``unsafe`` before it, and when one is not in the goal by the
+  horizon and the bound is beyond it, all are simulated again to just past the bound (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
   :func:`~lyapcheck.models.engines.crosscheck.check_reach_avoid`). Figures: ``unsafe_margin`` (the largest
   relative unsafe margin reached, ``< 0`` none entered) and ``reach_ratio`` (the latest time before the
   goal over the bound);
@@ -294,55 +295,77 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
     from lyapcheck.models.language.sets import margin
 
     sets = getattr(model, "sets", None) or {}
-    for cls in SAFETY_CLASSES:
-        cond = (doc.get("conditions") or {}).get(cls)
-        if not isinstance(cond, dict) or cond.get("status") != "certified" or not sets.get("initial") \
-                or not sets.get("unsafe") or (cls == "reach_avoid" and not sets.get("goal")):
-            continue
-        try:
-            x0, _ = sample_set(model, sets["initial"], margin, starts, rng)
-        except ValueError:  # no point of the initial set found: nothing to simulate
-            continue
-        vertices = _vertices(model, cond)
-        X0 = np.tile(x0, (len(vertices), 1))
-        D = np.repeat(np.array(vertices), len(x0), axis=0) if vertices[0].size else None
-        bound = float(cond.get("reach_time_bound_s") or math.nan) if cls == "reach_avoid" else math.nan
-        if cls == "reach_avoid" and not (math.isfinite(bound) and bound > 0):
-            out.violations.append(f"reach_avoid at {where}: the certified time bound {bound!r} s is not a positive "
-                                  "number")
-            continue
-        runs = run(X0, None if cls == "barrier" else reach_horizon(bound), D)
-        out.trajectories += len(runs)
+    conditions = doc.get("conditions") or {}
+    certified = [cls for cls in SAFETY_CLASSES if isinstance(conditions.get(cls), dict)
+                 and conditions[cls].get("status") == "certified" and sets.get("initial") and sets.get("unsafe")
+                 and (cls == "barrier" or sets.get("goal"))]
+    if not certified:
+        return
+    bound = float(conditions["reach_avoid"].get("reach_time_bound_s") or math.nan) \
+        if "reach_avoid" in certified else math.nan
+    if "reach_avoid" in certified and not (math.isfinite(bound) and bound > 0):
+        out.violations.append(f"reach_avoid at {where}: the certified time bound {bound!r} s is not a positive number")
+        certified.remove("reach_avoid")
+    try:
+        x0, _ = sample_set(model, sets["initial"], margin, starts, rng)
+    except ValueError:  # no point of the initial set found: nothing to simulate
+        return
+    # one set of trajectories for both claims, under every disturbance either claims
+    vertices = _vertices(model, {"disturbances": "all" if any(conditions[c].get("disturbances") == "all"
+                                                               for c in certified) else "zero"})
+    X0 = np.tile(x0, (len(vertices), 1))
+    D = np.repeat(np.array(vertices), len(x0), axis=0) if vertices[0].size else None
+    runs = run(X0, None, D)  # the falsification's horizon
+    out.trajectories += len(runs)
 
-        def start(i: int) -> str:
-            text = ", ".join(f"{x} = {v:.6g}" for x, v in zip(model.states, X0[i]))
-            if D is not None:
-                text += " with " + ", ".join(f"{d} = {v:+.6g}" for d, v in zip(model.disturbances, D[i]))
-            return text
+    def start(i: int) -> str:
+        text = ", ".join(f"{x} = {v:.6g}" for x, v in zip(model.states, X0[i]))
+        if D is not None:
+            text += " with " + ", ".join(f"{d} = {v:+.6g}" for d, v in zip(model.disturbances, D[i]))
+        return text
 
-        if cls == "barrier":
-            safe = check_safety([margin(sets["unsafe"], x) for _, x in runs])
-            out.worse("unsafe_margin", safe.worst_margin)
-            if not safe.ok:
-                assert safe.first is not None
-                out.violations.append(f"barrier at {where}: of {safe.trajectories} trajectories from the initial set "
-                                      f"{safe.entered} entered the unsafe set (relative margin {safe.worst_margin:.3g}), "
-                                      f"the first from {start(safe.first)}")
-            continue
-        found = check_reach_avoid([(t, margin(sets["unsafe"], x), margin(sets["goal"], x)) for t, x in runs], bound)
-        out.worse("unsafe_margin", found.worst_margin)
-        out.worse("reach_ratio", found.reach_ratio)
-        if found.entered:
-            assert found.first_entered is not None
-            out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "
-                                  f"{found.entered} entered the unsafe set before the goal (relative margin "
-                                  f"{found.worst_margin:.3g}), the first from {start(found.first_entered)}")
-        if found.late:
-            assert found.first_late is not None
-            out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "
-                                  f"{found.late} were not in the goal by the certified time bound {bound:.6g} s "
-                                  f"(one still out at {found.reach_ratio:.6g} times it), the first from "
-                                  f"{start(found.first_late)}")
+    def rows(cls: str) -> list[int]:  # a nominal claim's trajectories: those with every disturbance 0
+        if D is None or conditions[cls].get("disturbances") == "all":
+            return list(range(len(runs)))
+        return list(range(len(x0)))
+
+    if "barrier" in certified:
+        mine = rows("barrier")
+        safe = check_safety([margin(sets["unsafe"], runs[i][1]) for i in mine])
+        out.worse("unsafe_margin", safe.worst_margin)
+        if not safe.ok:
+            assert safe.first is not None
+            out.violations.append(f"barrier at {where}: of {safe.trajectories} trajectories from the initial set "
+                                  f"{safe.entered} entered the unsafe set (relative margin {safe.worst_margin:.3g}), "
+                                  f"the first from {start(mine[safe.first])}")
+    if "reach_avoid" not in certified:
+        return
+    mine = rows("reach_avoid")
+
+    def reach(found_runs: list[tuple[np.ndarray, np.ndarray]]) -> Any:
+        return check_reach_avoid([(found_runs[i][0], margin(sets["unsafe"], found_runs[i][1]),
+                                   margin(sets["goal"], found_runs[i][1])) for i in mine], bound)
+
+    found = reach(runs)
+    end = reach_horizon(bound)
+    if found.unreached and min(float(runs[i][0][-1]) for i in mine) < end:
+        # some trajectory was not in the goal by the falsification's horizon, before the bound: on to the bound
+        runs = run(X0, end, D)
+        out.trajectories += len(mine)
+        found = reach(runs)
+    out.worse("unsafe_margin", found.worst_margin)
+    out.worse("reach_ratio", found.reach_ratio)
+    if found.entered:
+        assert found.first_entered is not None
+        out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "
+                              f"{found.entered} entered the unsafe set before the goal (relative margin "
+                              f"{found.worst_margin:.3g}), the first from {start(mine[found.first_entered])}")
+    if found.late:
+        assert found.first_late is not None
+        out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "
+                              f"{found.late} were not in the goal by the certified time bound {bound:.6g} s "
+                              f"(one still out at {found.reach_ratio:.6g} times it), the first from "
+                              f"{start(mine[found.first_late])}")
 
 
 def _bounds(model: Model, bounds: Mapping[str, Any], point: Mapping[str, Fraction], out: CrossCheck,

@@ -89,15 +89,17 @@ class _Nodes:
 
 
 class _TrueField:
-    """The true field as the batched system's field (no disturbance)."""
+    """The true field as the batched system's field (no disturbance); its coefficients converted once
+    (:class:`~lyapcheck.models.engines.recast_numeric.FloatLoop`), not at every call of the integrator."""
 
     def __init__(self, system: RecastSystem) -> None:
+        from lyapcheck.models.engines.recast_numeric import FloatLoop
+
         self.system = system
+        self.loop = FloatLoop(system)
 
     def __call__(self, y: np.ndarray, d: Any = None) -> np.ndarray:
-        from lyapcheck.models.engines.recast_numeric import field_values
-
-        return field_values(self.system, y)
+        return self.loop(y)
 
 
 def _v_function(system: RecastSystem, cert: Mapping[str, Any]) -> PointFunction:

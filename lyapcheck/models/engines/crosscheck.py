@@ -203,11 +203,13 @@ class ReachAvoidCheck:
     before the goal (``entered``, the first of them ``first_entered``), how many were not in the goal by
     the time bound (``late``, the first ``first_late``), the largest relative unsafe margin before the
     goal (as :class:`SafetyCheck`) and the largest time before the goal over the bound (``reach_ratio``,
-    a trajectory that never reached it counting its whole simulated time; NaN: none)."""
+    a trajectory that never reached it counting its whole simulated time; NaN: none); ``unreached``:
+    the trajectories not in the goal at any of their points (late, or simulated too briefly to tell)."""
 
     trajectories: int
     entered: int
     late: int
+    unreached: int
     first_entered: int | None
     first_late: int | None
     worst_margin: float
@@ -225,7 +227,7 @@ def check_reach_avoid(series: Sequence[tuple[FloatArray, FloatArray, FloatArray]
     least ``-TRAJECTORY_CHECK_REL_TOL``; the time before it is the point before that one (a lower
     bound of the time it was reached). Late: that time beyond ``bound_s (1 + TRAJECTORY_CHECK_REL_TOL)``;
     entered: a relative unsafe margin above ``TRAJECTORY_CHECK_REL_TOL`` at a point before the goal."""
-    entered = late = 0
+    entered = late = unreached = 0
     first_entered: int | None = None
     first_late: int | None = None
     worst, ratio = math.nan, math.nan
@@ -235,6 +237,7 @@ def check_reach_avoid(series: Sequence[tuple[FloatArray, FloatArray, FloatArray]
             continue
         reached = np.flatnonzero(relative_margin(goal) >= -TRAJECTORY_CHECK_REL_TOL)
         k = int(reached[0]) if reached.size else t.size  # the first point in the goal (t.size: none)
+        unreached += not reached.size
         before = 0.0 if k == 0 else float(t[k - 1])
         ratio = before / bound_s if math.isnan(ratio) else max(ratio, before / bound_s)
         if before > bound_s * (1 + TRAJECTORY_CHECK_REL_TOL):
@@ -247,7 +250,7 @@ def check_reach_avoid(series: Sequence[tuple[FloatArray, FloatArray, FloatArray]
         if top > TRAJECTORY_CHECK_REL_TOL:
             entered += 1
             first_entered = i if first_entered is None else first_entered
-    return ReachAvoidCheck(len(series), entered, late, first_entered, first_late, worst, ratio)
+    return ReachAvoidCheck(len(series), entered, late, unreached, first_entered, first_late, worst, ratio)
 
 
 def reach_horizon(bound_s: float) -> float:
