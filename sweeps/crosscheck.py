@@ -20,7 +20,8 @@ class of the stored certificate is checked with :mod:`lyapcheck.models.engines.c
   (:func:`lyapcheck.models.classes.falsify.default_horizon`; both classes read the same trajectories). A
   barrier's must not enter ``unsafe``; a reach-avoid's must be in ``goal`` by the certified
   ``reach_time_bound_s`` and not enter ``unsafe`` before it, and when one is not in the goal by the
-  horizon and the bound is beyond it, all are simulated again to just past the bound (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
+  horizon and the bound is beyond it, all are simulated again to just past the bound
+  (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
   :func:`~lyapcheck.models.engines.crosscheck.check_reach_avoid`). Figures: ``unsafe_margin`` (the largest
   relative unsafe margin reached, ``< 0`` none entered) and ``reach_ratio`` (the latest time before the
   goal over the bound);
@@ -261,7 +262,8 @@ def _polynomial_runs(model: Model) -> Runs:
 
     eq = np.array([float(v) for v in model.equilibrium])
 
-    def run(x0: np.ndarray, t_end: float | None, disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
+    def run(x0: np.ndarray, t_end: float | None,
+            disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
         half = np.maximum(np.max(np.abs(x0 - eq), axis=0), np.maximum(np.abs(eq), 1.0) * 1e-6)
         horizon = default_horizon(model, half) if t_end is None else t_end
         with np.errstate(all="ignore"):

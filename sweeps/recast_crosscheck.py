@@ -389,11 +389,13 @@ def _recast_runs(model: RecastModel) -> Runs:
     eq = np.array([float(v) for v in model.equilibrium])
     angles = angle_states(model.system)
 
-    def run(x0: np.ndarray, t_end: float | None, disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
+    def run(x0: np.ndarray, t_end: float | None,
+            disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
         Z0 = x0 - eq
         extent = np.maximum(np.max(np.abs(Z0), axis=0), np.maximum(np.abs(eq), 1.0) * 1e-6)
         escape = np.array([np.inf if s in angles else ESCAPE_FACTOR * e for s, e in zip(model.states, extent)])
-        horizon = default_horizon(model, extent, _TrueField(model.system)) if t_end is None else t_end  # type: ignore[arg-type]
+        true_field = _TrueField(model.system)
+        horizon = default_horizon(model, extent, true_field) if t_end is None else t_end  # type: ignore[arg-type]
         if model.robust is None:  # no disturbance kept by the recasting: the nominal loop only
             disturbances = None
         runs = _simulate(model, Z0, escape, extent, t_end=horizon, disturbances=disturbances)

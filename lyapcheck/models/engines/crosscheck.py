@@ -335,4 +335,5 @@ def ray_boundary(function: PointFunction, level: float, directions: FloatArray,
 
 __all__ = ["rise", "RegionCheck", "check_region", "GlobalCheck", "check_global", "check_storage",
            "check_ges_envelope", "relative_margin", "SafetyCheck", "check_safety", "ReachAvoidCheck",
-           "check_reach_avoid", "reach_horizon", "bound_exceeded", "certificate_function", "ray_boundary", "RAY_RADII", "BISECTIONS"]
+           "check_reach_avoid", "reach_horizon", "bound_exceeded", "certificate_function", "ray_boundary", "RAY_RADII",
+           "BISECTIONS"]
