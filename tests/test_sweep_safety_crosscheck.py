@@ -17,6 +17,7 @@ the stored document, as ``tests/test_model_sweeps.py`` does for a region of attr
 from __future__ import annotations
 
 import json
+import math
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -148,6 +149,30 @@ def test_a_safety_certificate_the_truth_contradicts_raises_the_alarm(loop: str, 
     assert [v.split(" at ")[0] for v in late.violations] == ["reach_avoid"], late.violations
     assert "were not in the goal by the certified time bound" in late.violations[0]
     assert late.reach_ratio > 1 + TRAJECTORY_CHECK_REL_TOL
+
+
+def test_a_box_s_safety_claims_are_simulated_at_a_point_where_its_v_is_not_the_point_s(
+        with_functions: tuple[dict[str, np.ndarray], Any]) -> None:
+    """A box certificate whose ``quadratic`` V is a function of the box's parameter is not simulated at a
+    point of the box (``box_mismatch``); its barrier and reach_avoid, claims about the model's sets and
+    its true loop, are, and a contradicted one raises the alarm there."""
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from sweeps.recast_crosscheck import cross_check_recast_box
+
+    data, _ = with_functions
+    doc = doctored(data)
+    doc["conditions"]["quadratic"] = {"status": "certified", "certificate": {"variables": ["x1", "x2", "k"]}}
+
+    def check(unsafe: str) -> tuple[Any, list[str]]:
+        model = parse_any_model(WITH_FUNCTIONS.replace("UNSAFE", unsafe), "m.toml")
+        return cross_check_recast_box([(model, {"k": Fraction(1)})], doc, starts=STARTS, seed=(0,))
+
+    (clean, skipped), (moved, _) = check(FAR), check(CROSSED["with_functions"])
+    assert len(skipped) == 1 and "V is a function of k" in skipped[0], skipped
+    assert skipped[0].endswith("(barrier and reach_avoid simulated there all the same)"), skipped
+    assert clean.points == 1 and clean.trajectories == STARTS and not clean.violation, clean.violations
+    assert math.isnan(clean.worst_rise)  # the quadratic certificate was not simulated
+    assert sorted(v.split(" at ")[0] for v in moved.violations) == ["barrier", "reach_avoid"], moved.violations
 
 
 def test_a_claim_over_every_disturbance_is_simulated_at_the_vertices_of_the_disturbance_box() -> None:
