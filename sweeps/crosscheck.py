@@ -353,7 +353,7 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
     if found.unreached and min(float(runs[i][0][-1]) for i in mine) < end:
         # some trajectory was not in the goal by the falsification's horizon, before the bound: on to the bound
         runs = run(X0, end, D)
-        out.trajectories += len(mine)
+        out.trajectories += len(runs)
         found = reach(runs)
     out.worse("unsafe_margin", found.worst_margin)
     out.worse("reach_ratio", found.reach_ratio)
