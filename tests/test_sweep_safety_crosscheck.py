@@ -71,7 +71,8 @@ def sweep_one(directory: Path, model: str, parameter: str) -> tuple[dict[str, np
                     f'name = "{parameter}"\nvalues = [1]\n[simulation]\nstarts = {STARTS}\n')
     summary = sweep(spec, directory / "out.zarr", workers=0)
     group = zarr.open_group(str(directory / "out.zarr"), mode="r")
-    return {name: np.asarray(group[name][...]).ravel() for name in group.array_keys()}, summary
+    return {name: np.asarray(group[name][...]).ravel()  # type: ignore[index]
+            for name in group.array_keys()}, summary
 
 
 @pytest.fixture(scope="module")
@@ -122,12 +123,20 @@ def check_polynomial(unsafe: str, doc: dict[str, Any]) -> Any:
     return cross_check(model, doc, [{"a": Fraction(1)}], starts=STARTS, seed=(0,), worst_case=False)
 
 
-def check_with_functions(unsafe: str, doc: dict[str, Any]) -> Any:
+def recast(unsafe: str) -> Any:
+    """The loop with functions, its unsafe set ``unsafe``, read as a loop with functions."""
     from lyapcheck.models.language.modelfile import parse_any_model
-    from sweeps.recast_crosscheck import cross_check_recast
+    from lyapcheck.models.language.recast import RecastModel
 
     model = parse_any_model(WITH_FUNCTIONS.replace("UNSAFE", unsafe), "m.toml")
-    return cross_check_recast(model, doc, {"k": Fraction(1)}, starts=STARTS, seed=(0,))
+    assert isinstance(model, RecastModel)
+    return model
+
+
+def check_with_functions(unsafe: str, doc: dict[str, Any]) -> Any:
+    from sweeps.recast_crosscheck import cross_check_recast
+
+    return cross_check_recast(recast(unsafe), doc, {"k": Fraction(1)}, starts=STARTS, seed=(0,))
 
 
 @pytest.mark.parametrize("loop, check", [("polynomial", check_polynomial), ("with_functions", check_with_functions)])
@@ -156,7 +165,6 @@ def test_a_box_s_safety_claims_are_simulated_at_a_point_where_its_v_is_not_the_p
     """A box certificate whose ``quadratic`` V is a function of the box's parameter is not simulated at a
     point of the box (``box_mismatch``); its barrier and reach_avoid, claims about the model's sets and
     its true loop, are, and a contradicted one raises the alarm there."""
-    from lyapcheck.models.language.modelfile import parse_any_model
     from sweeps.recast_crosscheck import cross_check_recast_box
 
     data, _ = with_functions
@@ -164,8 +172,7 @@ def test_a_box_s_safety_claims_are_simulated_at_a_point_where_its_v_is_not_the_p
     doc["conditions"]["quadratic"] = {"status": "certified", "certificate": {"variables": ["x1", "x2", "k"]}}
 
     def check(unsafe: str) -> tuple[Any, list[str]]:
-        model = parse_any_model(WITH_FUNCTIONS.replace("UNSAFE", unsafe), "m.toml")
-        return cross_check_recast_box([(model, {"k": Fraction(1)})], doc, starts=STARTS, seed=(0,))
+        return cross_check_recast_box([(recast(unsafe), {"k": Fraction(1)})], doc, starts=STARTS, seed=(0,))
 
     (clean, skipped), (moved, _) = check(FAR), check(CROSSED["with_functions"])
     assert len(skipped) == 1 and "V is a function of k" in skipped[0], skipped
