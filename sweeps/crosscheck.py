@@ -23,7 +23,8 @@ class of the stored certificate is checked with :mod:`lyapcheck.models.engines.c
   horizon and the bound is beyond it, all are simulated again to just past the bound
   (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
   :func:`~lyapcheck.models.engines.crosscheck.check_reach_avoid`). Figures: ``unsafe_margin`` (the largest
-  relative unsafe margin reached, ``< 0`` none entered) and ``reach_ratio`` (the latest time before the
+  unsafe margin reached, each inequality relative to the size of its terms:
+  :func:`~lyapcheck.models.engines.crosscheck.scaled_margin`; ``< 0`` none entered) and ``reach_ratio`` (the latest time before the
   goal over the bound);
 * ``sos_bound``: the worst-case disturbance search (:func:`lyapcheck.models.surfaces.simulate.search_worst_case`,
   its deterministic screening round) must not find a tail sup of an output above its certified
@@ -293,7 +294,7 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
     functions at the point (its ``sets`` evaluated there; ``n``, ``equilibrium``, ``domain``,
     ``disturbances``); ``where`` names the point in a violation's detail."""
     from lyapcheck.models.classes.falsify import sample_set
-    from lyapcheck.models.engines.crosscheck import check_reach_avoid, check_safety, reach_horizon
+    from lyapcheck.models.engines.crosscheck import check_reach_avoid, check_safety, reach_horizon, scaled_margin
     from lyapcheck.models.language.sets import margin
 
     sets = getattr(model, "sets", None) or {}
@@ -318,6 +319,12 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
     X0 = np.tile(x0, (len(vertices), 1))
     D = np.repeat(np.array(vertices), len(x0), axis=0) if vertices[0].size else None
     runs = run(X0, None, D)  # the falsification's horizon
+    eq = np.array([float(v) for v in model.equilibrium])
+    extent = np.max(np.abs(X0 - eq), axis=0)  # the problem's scale per state, for the margins' sizes
+    extent = np.where(extent > 0, extent, np.maximum(np.abs(eq), 1.0))
+
+    def at(key: str, x: np.ndarray) -> np.ndarray:
+        return scaled_margin(sets[key], x, extent)
     out.trajectories += len(runs)
 
     def start(i: int) -> str:
@@ -333,20 +340,20 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
 
     if "barrier" in certified:
         mine = rows("barrier")
-        safe = check_safety([margin(sets["unsafe"], runs[i][1]) for i in mine])
+        safe = check_safety([at("unsafe", runs[i][1]) for i in mine])
         out.worse("unsafe_margin", safe.worst_margin)
         if not safe.ok:
             assert safe.first is not None
             out.violations.append(f"barrier at {where}: of {safe.trajectories} trajectories from the initial set "
-                                  f"{safe.entered} entered the unsafe set (relative margin {safe.worst_margin:.3g}), "
+                                  f"{safe.entered} entered the unsafe set (margin {safe.worst_margin:.3g} of its terms' size), "
                                   f"the first from {start(mine[safe.first])}")
     if "reach_avoid" not in certified:
         return
     mine = rows("reach_avoid")
 
     def reach(found_runs: list[tuple[np.ndarray, np.ndarray]]) -> Any:
-        return check_reach_avoid([(found_runs[i][0], margin(sets["unsafe"], found_runs[i][1]),
-                                   margin(sets["goal"], found_runs[i][1])) for i in mine], bound)
+        return check_reach_avoid([(found_runs[i][0], at("unsafe", found_runs[i][1]), at("goal", found_runs[i][1]))
+                                  for i in mine], bound)
 
     found = reach(runs)
     end = reach_horizon(bound)
@@ -360,8 +367,9 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
     if found.entered:
         assert found.first_entered is not None
         out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "
-                              f"{found.entered} entered the unsafe set before the goal (relative margin "
-                              f"{found.worst_margin:.3g}), the first from {start(mine[found.first_entered])}")
+                              f"{found.entered} entered the unsafe set before the goal (margin "
+                              f"{found.worst_margin:.3g} of its terms' size), the first from "
+                              f"{start(mine[found.first_entered])}")
     if found.late:
         assert found.first_late is not None
         out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "

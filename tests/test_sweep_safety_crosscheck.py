@@ -227,15 +227,29 @@ def test_a_goal_not_reached_by_the_horizon_is_simulated_on_to_the_certified_boun
 
 
 # -- the shared checks, on hand-made margins -------------------------------------------------------------
-def test_an_entry_counts_only_beyond_the_tolerance_of_the_trajectory_s_own_margin_scale() -> None:
-    from lyapcheck.models.engines.crosscheck import check_safety
+def test_an_entry_counts_only_beyond_the_tolerance_of_the_size_of_the_set_s_terms() -> None:
+    from lyapcheck.models.engines.crosscheck import check_safety, scaled_margin
+    from lyapcheck.models.language.modelfile import parse_model
 
     tol = TRAJECTORY_CHECK_REL_TOL
-    graze = np.array([-2.0, -1.0, 2.0 * 0.5 * tol])  # inside by half the tolerance of its scale 2
-    enter = np.array([-2.0, -1.0, 2.0 * 2 * tol])
-    assert check_safety([graze]).ok and check_safety([graze]).worst_margin == pytest.approx(0.5 * tol)
-    found = check_safety([graze, enter, enter * 1e-6])  # the same entry in other units: the same verdict
+
+    def unsafe(bound: str) -> Any:  # {x >= bound} of a one-state loop
+        return parse_model(f'[model]\nstates = ["x"]\n[dynamics]\nx = "-x"\n[sets]\ninitial = ["x <= 0"]\n'
+                           f'unsafe = ["x >= {bound}"]\n', "m.toml").sets["unsafe"]
+
+    # x - 2 >= 0 at x: (x - 2) / (|x| + s + 2) with the extent s = 1, about 5 near x = 2
+    x = np.array([[2 + 0.5 * tol * 5], [2 + 2 * tol * 5], [1.0], [1e6]])
+    margins = scaled_margin(unsafe("2"), x, np.array([1.0]))
+    assert margins == pytest.approx([0.5 * tol, 2 * tol, -1 / 4, (1e6 - 2) / (1e6 + 3)], rel=1e-4)
+    # the same points and set in other units (mm): the same figures
+    assert scaled_margin(unsafe("0.002"), x * 1e-3, np.array([1e-3])) == pytest.approx(margins, rel=1e-9)
+    graze, enter = margins[[2, 0]], margins[[2, 1]]  # from x = 1 to just inside by half and twice the tolerance
+    assert check_safety([graze]).ok and check_safety([graze]).worst_margin == margins[0]
+    found = check_safety([graze, enter, enter])
     assert (found.entered, found.first) == (2, 1) and not found.ok
+    # a union of pieces: the largest of its pieces
+    union = unsafe("2") + unsafe("-1")
+    assert scaled_margin(union, np.array([[0.0]]), np.array([1.0]))[0] == pytest.approx(1 / 2)
 
 
 def test_reach_avoid_reads_the_time_before_the_goal_and_the_unsafe_set_before_it_only() -> None:

@@ -27,11 +27,10 @@ A rise, an excess or a ratio counts only beyond
 error, never a modelling slack. Every check reads the integrator's own points
 (:attr:`lyapcheck.models.engines.trajectories.Trajectory.nodes`).
 
-The two set checks read a set's margin along a trajectory (``lyapcheck.models.language.sets.margin``:
-``>= 0`` inside, in the units of the set's polynomials) and judge it relative to that trajectory's own
-scale of it, its largest ``|margin|`` (:func:`relative_margin`), so that a check does not depend on the
-states' units: the unsafe set is entered only where the relative margin exceeds the tolerance, the goal
-is reached where it is above minus the tolerance. A time is read as the last point before the goal was
+The two set checks read a set's margin along a trajectory, each inequality relative to the size of its
+terms there (:func:`scaled_margin`: ``>= 0`` inside, in ``[-1, 1]``, independent of the states' units):
+the unsafe set is entered only where it exceeds the tolerance, the goal is reached where it is above
+minus the tolerance. A time is read as the last point before the goal was
 reached (a lower bound of the time it was reached, up to a graze between two points), and the time
 bound is exceeded only beyond the tolerance, relative to the bound.
 
@@ -154,20 +153,45 @@ def bound_exceeded(bound: float, simulated: float, rel_tol: float) -> bool:
     return bool(simulated > bound * (1 + rel_tol))
 
 
-def relative_margin(values: FloatArray) -> FloatArray:
-    """A set's margin along one trajectory divided by its largest magnitude along it (0 where it is
-    0 throughout): ``> 0`` inside, comparable across trajectories and units."""
-    values = np.asarray(values, dtype=np.float64)
+def scaled_margin(state_set: Sequence[Sequence[Any]], points: FloatArray, scale: FloatArray) -> FloatArray:
+    """A set's margin at each row of ``points`` (``(k, n)``, the declared states), each inequality
+    ``p >= 0`` divided by the size of its terms there: ``p(x) / sum_m |c_m| prod_i (|x_i| + scale_i)**m_i``,
+    in ``[-1, 1]``; a piece's the smallest of its inequalities', the set's the largest of its pieces'
+    (``>= 0`` exactly where :func:`lyapcheck.models.language.sets.margin` is). The denominator bounds
+    what rounding and the integrator's error (relative to the states, or to ``scale``: the problem's
+    extent per state) can do to ``p(x)``, so that a figure above a small tolerance is conclusive, and
+    the figure does not depend on the states' units nor shrink along a trajectory that runs far away.
+    ``state_set``: pieces of polynomials of a state ring (the states first, any others at exponent 0)."""
+    x = np.atleast_2d(np.asarray(points, dtype=np.float64))
+    ax = np.abs(x) + np.asarray(scale, dtype=np.float64)[None, :]
+    n = x.shape[1]
+    out = np.full(x.shape[0], -np.inf)
     with np.errstate(all="ignore"):
-        scale = float(np.max(np.abs(values[np.isfinite(values)]), initial=0.0))
-    return values / scale if scale > 0 else np.zeros_like(values)
+        for piece in state_set:
+            inner = np.full(x.shape[0], np.inf)
+            for p in piece:
+                exponents = np.array([tuple(int(e) for e in m) for m in p.monoms()], dtype=np.int64)
+                coefficients = np.array([float(Fraction(int(c.p), int(c.q))) for c in p.coeffs()])
+                if not coefficients.size:
+                    inner = np.minimum(inner, 0.0)
+                    continue
+                exponents = exponents.reshape(len(coefficients), -1)
+                if exponents.shape[1] < n or exponents[:, n:].any():
+                    raise ValueError(f"a point has {n} coordinates; the set's polynomial {p} needs the states of "
+                                     "its ring")
+                e = exponents[:, :n]
+                value = np.prod(x[:, None, :] ** e[None, :, :], axis=2) @ coefficients
+                size = np.prod(ax[:, None, :] ** e[None, :, :], axis=2) @ np.abs(coefficients)
+                inner = np.minimum(inner, np.where(size > 0, value / size, 0.0))
+            out = np.maximum(out, inner)
+    return np.asarray(np.where(np.isnan(out), -np.inf, out), dtype=np.float64)
 
 
 @dataclass(frozen=True)
 class SafetyCheck:
     """Trajectories from the initial set under a barrier certificate (the unsafe set is never entered):
     how many, how many entered the unsafe set, which first (index, None: none) and the largest
-    relative unsafe margin reached (:func:`relative_margin`; ``< 0``: none came inside; NaN: none)."""
+    unsafe margin reached (:func:`scaled_margin`; ``< 0``: none came inside; NaN: none)."""
 
     trajectories: int
     entered: int
@@ -180,12 +204,12 @@ class SafetyCheck:
 
 
 def check_safety(unsafe_margins: Sequence[FloatArray]) -> SafetyCheck:
-    """``unsafe_margins[i]``: the unsafe set's margin at the points of trajectory ``i`` (which started
-    in the initial set); it entered where the relative margin exceeds
+    """``unsafe_margins[i]``: the unsafe set's margin (:func:`scaled_margin`) at the points of trajectory
+    ``i`` (which started in the initial set); it entered where that exceeds
     :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL`."""
     entered, first, worst = 0, None, math.nan
     for i, values in enumerate(unsafe_margins):
-        rel = relative_margin(values)
+        rel = np.asarray(values, dtype=np.float64)
         if not rel.size:
             continue
         top = float(np.nanmax(rel)) if np.any(np.isfinite(rel)) else math.nan
@@ -202,7 +226,7 @@ class ReachAvoidCheck:
     """Trajectories from the initial set under a reach-avoid certificate: how many entered the unsafe set
     before the goal (``entered``, the first of them ``first_entered``), how many were not in the goal by
     the time bound (``late``, the first ``first_late``), the largest relative unsafe margin before the
-    goal (as :class:`SafetyCheck`) and the largest time before the goal over the bound (``reach_ratio``,
+    goal (:func:`scaled_margin`, as :class:`SafetyCheck`) and the largest time before the goal over the bound (``reach_ratio``,
     a trajectory that never reached it counting its whole simulated time; NaN: none); ``unreached``:
     the trajectories not in the goal at any of their points (late, or simulated too briefly to tell)."""
 
@@ -222,11 +246,12 @@ class ReachAvoidCheck:
 
 def check_reach_avoid(series: Sequence[tuple[FloatArray, FloatArray, FloatArray]], bound_s: float) -> ReachAvoidCheck:
     """``series[i] = (t, unsafe margin, goal margin)`` at the points of trajectory ``i`` (which started
-    in the initial set), simulated beyond ``bound_s (1 + TRAJECTORY_CHECK_REL_TOL)``
-    (:func:`reach_horizon`). The goal is reached at the first point whose relative goal margin is at
-    least ``-TRAJECTORY_CHECK_REL_TOL``; the time before it is the point before that one (a lower
-    bound of the time it was reached). Late: that time beyond ``bound_s (1 + TRAJECTORY_CHECK_REL_TOL)``;
-    entered: a relative unsafe margin above ``TRAJECTORY_CHECK_REL_TOL`` at a point before the goal."""
+    in the initial set; margins of :func:`scaled_margin`), simulated beyond ``bound_s (1 +
+    TRAJECTORY_CHECK_REL_TOL)`` (:func:`reach_horizon`). The goal is reached at the first point whose
+    goal margin is at least ``-TRAJECTORY_CHECK_REL_TOL``; the time before it is the point before that
+    one (a lower bound of the time it was reached). Late: that time beyond ``bound_s (1 +
+    TRAJECTORY_CHECK_REL_TOL)``; entered: an unsafe margin above ``TRAJECTORY_CHECK_REL_TOL`` at a point
+    before the goal."""
     entered = late = unreached = 0
     first_entered: int | None = None
     first_late: int | None = None
@@ -235,7 +260,7 @@ def check_reach_avoid(series: Sequence[tuple[FloatArray, FloatArray, FloatArray]
         t = np.asarray(t, dtype=np.float64)
         if not t.size:
             continue
-        reached = np.flatnonzero(relative_margin(goal) >= -TRAJECTORY_CHECK_REL_TOL)
+        reached = np.flatnonzero(np.asarray(goal, dtype=np.float64) >= -TRAJECTORY_CHECK_REL_TOL)
         k = int(reached[0]) if reached.size else t.size  # the first point in the goal (t.size: none)
         unreached += not reached.size
         before = 0.0 if k == 0 else float(t[k - 1])
@@ -243,7 +268,7 @@ def check_reach_avoid(series: Sequence[tuple[FloatArray, FloatArray, FloatArray]
         if before > bound_s * (1 + TRAJECTORY_CHECK_REL_TOL):
             late += 1
             first_late = i if first_late is None else first_late
-        rel = relative_margin(np.asarray(unsafe, dtype=np.float64)[:k])  # its scale before the goal too
+        rel = np.asarray(unsafe, dtype=np.float64)[:k]
         top = float(np.nanmax(rel)) if np.any(np.isfinite(rel)) else math.nan
         if math.isfinite(top):
             worst = top if math.isnan(worst) else max(worst, top)
@@ -334,6 +359,6 @@ def ray_boundary(function: PointFunction, level: float, directions: FloatArray,
 
 
 __all__ = ["rise", "RegionCheck", "check_region", "GlobalCheck", "check_global", "check_storage",
-           "check_ges_envelope", "relative_margin", "SafetyCheck", "check_safety", "ReachAvoidCheck",
+           "check_ges_envelope", "scaled_margin", "SafetyCheck", "check_safety", "ReachAvoidCheck",
            "check_reach_avoid", "reach_horizon", "bound_exceeded", "certificate_function", "ray_boundary", "RAY_RADII",
            "BISECTIONS"]
