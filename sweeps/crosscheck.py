@@ -24,8 +24,8 @@ class of the stored certificate is checked with :mod:`lyapcheck.models.engines.c
   (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
   :func:`~lyapcheck.models.engines.crosscheck.check_reach_avoid`). Figures: ``unsafe_margin`` (the largest
   unsafe margin reached, each inequality relative to the size of its terms:
-  :func:`~lyapcheck.models.engines.crosscheck.scaled_margin`; ``< 0`` none entered) and ``reach_ratio`` (the latest time before the
-  goal over the bound);
+  :func:`~lyapcheck.models.engines.crosscheck.scaled_margin`; ``< 0`` none entered) and ``reach_ratio``
+  (the latest time before the goal over the bound);
 * ``sos_bound``: the worst-case disturbance search (:func:`lyapcheck.models.surfaces.simulate.search_worst_case`,
   its deterministic screening round) must not find a tail sup of an output above its certified
   bound beyond :data:`sweeps.soundness.BOUND_REL_TOL`, nor a diverging disturbance.
@@ -345,7 +345,8 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
         if not safe.ok:
             assert safe.first is not None
             out.violations.append(f"barrier at {where}: of {safe.trajectories} trajectories from the initial set "
-                                  f"{safe.entered} entered the unsafe set (margin {safe.worst_margin:.3g} of its terms' size), "
+                                  f"{safe.entered} entered the unsafe set (margin {safe.worst_margin:.3g} of its "
+                                  "terms' size), "
                                   f"the first from {start(mine[safe.first])}")
     if "reach_avoid" not in certified:
         return

@@ -225,9 +225,9 @@ def check_safety(unsafe_margins: Sequence[FloatArray]) -> SafetyCheck:
 class ReachAvoidCheck:
     """Trajectories from the initial set under a reach-avoid certificate: how many entered the unsafe set
     before the goal (``entered``, the first of them ``first_entered``), how many were not in the goal by
-    the time bound (``late``, the first ``first_late``), the largest relative unsafe margin before the
-    goal (:func:`scaled_margin`, as :class:`SafetyCheck`) and the largest time before the goal over the bound (``reach_ratio``,
-    a trajectory that never reached it counting its whole simulated time; NaN: none); ``unreached``:
+    the time bound (``late``, the first ``first_late``), the largest unsafe margin before the goal
+    (:func:`scaled_margin`, as :class:`SafetyCheck`) and the largest time before the goal over the bound
+    (``reach_ratio``, a trajectory that never reached it counting its whole simulated time; NaN: none); ``unreached``:
     the trajectories not in the goal at any of their points (late, or simulated too briefly to tell)."""
 
     trajectories: int
