@@ -12,6 +12,20 @@ class of the stored certificate is checked with :mod:`lyapcheck.models.engines.c
   of twice the certificate's state scales around the equilibrium) must not escape, V must not rise
   and must stay below ``V(0) exp(-rate t)`` (the certified rate of V); a GES certificate's
   ``|x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)`` too;
+* ``barrier`` and ``reach_avoid`` (:func:`check_sets`, shared with :mod:`sweeps.recast_crosscheck`): starts
+  drawn from the model's ``[sets] initial`` (:func:`lyapcheck.models.classes.falsify.sample_set`, a quarter on
+  its boundary), each simulated with every disturbance at 0 and, for a claim over every disturbance
+  (``"disturbances": "all"``), at each vertex of the disturbance box held constant (at most
+  :data:`MAX_VERTICES`), over the falsification's horizon
+  (:func:`lyapcheck.models.classes.falsify.default_horizon`; both classes read the same trajectories). A
+  barrier's must not enter ``unsafe``; a reach-avoid's must be in ``goal`` by the certified
+  ``reach_time_bound_s`` and not enter ``unsafe`` before it, and when one is not in the goal by the
+  horizon and the bound is beyond it, all are simulated again to just past the bound
+  (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
+  :func:`~lyapcheck.models.engines.crosscheck.check_reach_avoid`). Figures: ``unsafe_margin`` (the largest
+  unsafe margin reached, each inequality relative to the size of its terms:
+  :func:`~lyapcheck.models.engines.crosscheck.scaled_margin`; ``< 0`` none entered) and ``reach_ratio``
+  (the latest time before the goal over the bound);
 * ``sos_bound``: the worst-case disturbance search (:func:`lyapcheck.models.surfaces.simulate.search_worst_case`,
   its deterministic screening round) must not find a tail sup of an output above its certified
   bound beyond :data:`sweeps.soundness.BOUND_REL_TOL`, nor a diverging disturbance.
@@ -28,7 +42,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Final, Mapping, Sequence
+from typing import Any, Callable, Final, Mapping, Optional, Sequence
 
 import numpy as np
 
@@ -45,6 +59,14 @@ CONVERGED_FRACTION: Final = 1e-3
 REGION_FRACTIONS: Final = (0.5, 0.999)
 #: the global starts' box without a [domain]: this many certificate state scales around x_eq
 DEFAULT_REGION_SCALES: Final = 2.0
+#: the classes simulated from the initial set (:func:`check_sets`)
+SAFETY_CLASSES: Final = ("barrier", "reach_avoid")
+#: the vertices of the disturbance box held constant for a claim over every disturbance (2**m, at most this many)
+MAX_VERTICES: Final = 8
+#: a loop's simulation for :func:`check_sets`: ``run(starts, t_end, disturbances)`` with starts ``(k, n)``
+#: (declared states), ``t_end`` in s (None: the loop's falsification horizon) and a constant disturbance
+#: per row ``(k, m)`` (None: all 0); per row the times and states of the integrator's own points
+Runs = Callable[[np.ndarray, Optional[float], Optional[np.ndarray]], list[tuple[np.ndarray, np.ndarray]]]
 
 @dataclass
 class CrossCheck:
@@ -56,6 +78,8 @@ class CrossCheck:
     worst_envelope: float = math.nan
     ges_ratio: float = math.nan
     not_converged: int = 0
+    unsafe_margin: float = math.nan
+    reach_ratio: float = math.nan
     sim_worst: dict[str, float] = field(default_factory=dict)
     violations: list[str] = field(default_factory=list)
 
@@ -140,6 +164,7 @@ def cross_check(model: Model, doc: Mapping[str, Any], points: Sequence[Mapping[s
         out.points += 1
         if sets:
             _trajectories(here, sets, scales, rng, starts, point, out)
+        check_sets(here, doc, _point_text(point), rng, starts, _polynomial_runs(here), out)
         if bounds and worst_case:
             _bounds(here, bounds, point, out, bound_cond.get("bounds_reference") or {})
     return out
@@ -230,6 +255,130 @@ def _trajectories(model: Model, sets: Sequence[_Set], scales: Sequence[Fraction]
                                       f"envelope {st.k:.4g} |x0| exp(-{st.ges_rate:.4g} t)")
 
 
+def _polynomial_runs(model: Model) -> Runs:
+    """The polynomial loop's simulation for :func:`check_sets` (the project's integrator,
+    :func:`lyapcheck.models.engines.trajectories.simulate`, escape as the falsification's)."""
+    from lyapcheck.models.classes.falsify import ESCAPE_FACTOR, default_horizon
+    from lyapcheck.models.engines.trajectories import simulate
+
+    eq = np.array([float(v) for v in model.equilibrium])
+
+    def run(x0: np.ndarray, t_end: float | None,
+            disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
+        half = np.maximum(np.max(np.abs(x0 - eq), axis=0), np.maximum(np.abs(eq), 1.0) * 1e-6)
+        horizon = default_horizon(model, half) if t_end is None else t_end
+        with np.errstate(all="ignore"):
+            runs = simulate(model, x0, t_end=horizon, half_widths=half, disturbances=disturbances,
+                            escape_factor=ESCAPE_FACTOR)
+        return [tr.nodes for tr in runs]
+
+    return run
+
+
+def _vertices(model: Any, cond: Mapping[str, Any]) -> list[np.ndarray]:
+    """The constant disturbances a claim is simulated under: 0, then for a claim over every disturbance
+    the box's vertices (the first :data:`MAX_VERTICES` in sign order)."""
+    from itertools import islice, product
+
+    bounds = np.array([float(b) for b in (getattr(model, "disturbances", None) or {}).values()])
+    out = [np.zeros(bounds.size)]
+    if bounds.size and cond.get("disturbances") == "all":
+        out += [np.array(signs) * bounds for signs in islice(product((-1.0, 1.0), repeat=bounds.size), MAX_VERTICES)]
+    return out
+
+
+def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int, run: Runs,
+               out: CrossCheck) -> None:
+    """A certified ``barrier`` or ``reach_avoid`` of ``doc`` against trajectories of ``run`` from ``starts``
+    random points of ``model``'s initial set (module doc). ``model``: a polynomial loop or a loop with
+    functions at the point (its ``sets`` evaluated there; ``n``, ``equilibrium``, ``domain``,
+    ``disturbances``); ``where`` names the point in a violation's detail."""
+    from lyapcheck.models.classes.falsify import sample_set
+    from lyapcheck.models.engines.crosscheck import check_reach_avoid, check_safety, reach_horizon, scaled_margin
+    from lyapcheck.models.language.sets import margin
+
+    sets = getattr(model, "sets", None) or {}
+    conditions = doc.get("conditions") or {}
+    certified = [cls for cls in SAFETY_CLASSES if isinstance(conditions.get(cls), dict)
+                 and conditions[cls].get("status") == "certified" and sets.get("initial") and sets.get("unsafe")
+                 and (cls == "barrier" or sets.get("goal"))]
+    if not certified:
+        return
+    bound = float(conditions["reach_avoid"].get("reach_time_bound_s") or math.nan) \
+        if "reach_avoid" in certified else math.nan
+    if "reach_avoid" in certified and not (math.isfinite(bound) and bound > 0):
+        out.violations.append(f"reach_avoid at {where}: the certified time bound {bound!r} s is not a positive number")
+        certified.remove("reach_avoid")
+    try:
+        x0, _ = sample_set(model, sets["initial"], margin, starts, rng)
+    except ValueError:  # no point of the initial set found: nothing to simulate
+        return
+    # one set of trajectories for both claims, under every disturbance either claims
+    vertices = _vertices(model, {"disturbances": "all" if any(conditions[c].get("disturbances") == "all"
+                                                               for c in certified) else "zero"})
+    X0 = np.tile(x0, (len(vertices), 1))
+    D = np.repeat(np.array(vertices), len(x0), axis=0) if vertices[0].size else None
+    runs = run(X0, None, D)  # the falsification's horizon
+    eq = np.array([float(v) for v in model.equilibrium])
+    extent = np.max(np.abs(X0 - eq), axis=0)  # the problem's scale per state, for the margins' sizes
+    extent = np.where(extent > 0, extent, np.maximum(np.abs(eq), 1.0))
+
+    def at(key: str, x: np.ndarray) -> np.ndarray:
+        return scaled_margin(sets[key], x, extent)
+    out.trajectories += len(runs)
+
+    def start(i: int) -> str:
+        text = ", ".join(f"{x} = {v:.6g}" for x, v in zip(model.states, X0[i]))
+        if D is not None:
+            text += " with " + ", ".join(f"{d} = {v:+.6g}" for d, v in zip(model.disturbances, D[i]))
+        return text
+
+    def rows(cls: str) -> list[int]:  # a nominal claim's trajectories: those with every disturbance 0
+        if D is None or conditions[cls].get("disturbances") == "all":
+            return list(range(len(runs)))
+        return list(range(len(x0)))
+
+    if "barrier" in certified:
+        mine = rows("barrier")
+        safe = check_safety([at("unsafe", runs[i][1]) for i in mine])
+        out.worse("unsafe_margin", safe.worst_margin)
+        if not safe.ok:
+            assert safe.first is not None
+            out.violations.append(f"barrier at {where}: of {safe.trajectories} trajectories from the initial set "
+                                  f"{safe.entered} entered the unsafe set (margin {safe.worst_margin:.3g} of its "
+                                  "terms' size), "
+                                  f"the first from {start(mine[safe.first])}")
+    if "reach_avoid" not in certified:
+        return
+    mine = rows("reach_avoid")
+
+    def reach(found_runs: list[tuple[np.ndarray, np.ndarray]]) -> Any:
+        return check_reach_avoid([(found_runs[i][0], at("unsafe", found_runs[i][1]), at("goal", found_runs[i][1]))
+                                  for i in mine], bound)
+
+    found = reach(runs)
+    end = reach_horizon(bound)
+    if found.unreached and min(float(runs[i][0][-1]) for i in mine) < end:
+        # some trajectory was not in the goal by the falsification's horizon, before the bound: on to the bound
+        runs = run(X0, end, D)
+        out.trajectories += len(runs)
+        found = reach(runs)
+    out.worse("unsafe_margin", found.worst_margin)
+    out.worse("reach_ratio", found.reach_ratio)
+    if found.entered:
+        assert found.first_entered is not None
+        out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "
+                              f"{found.entered} entered the unsafe set before the goal (margin "
+                              f"{found.worst_margin:.3g} of its terms' size), the first from "
+                              f"{start(mine[found.first_entered])}")
+    if found.late:
+        assert found.first_late is not None
+        out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "
+                              f"{found.late} were not in the goal by the certified time bound {bound:.6g} s "
+                              f"(one still out at {found.reach_ratio:.6g} times it), the first from "
+                              f"{start(mine[found.first_late])}")
+
+
 def _bounds(model: Model, bounds: Mapping[str, Any], point: Mapping[str, Fraction], out: CrossCheck,
             references: Mapping[str, Any]) -> None:
     """The worst case found against each bound. A bound is on ``|y - y_eq|`` (``references``: each
@@ -254,4 +403,4 @@ def _bounds(model: Model, bounds: Mapping[str, Any], point: Mapping[str, Fractio
                                   f"exceeds the certified bound {float(bound):.6g}{extra}")
 
 
-__all__ = ["CrossCheck", "cross_check", "WORST_CASE_SCREENING_ONLY"]
+__all__ = ["CrossCheck", "cross_check", "check_sets", "SAFETY_CLASSES", "WORST_CASE_SCREENING_ONLY"]

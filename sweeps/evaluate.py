@@ -473,6 +473,8 @@ def _store_cross(found: CrossCheck, out: dict[str, np.ndarray], j: int) -> None:
     out["cross_check_worst_envelope"][j] = found.worst_envelope
     out["cross_check_ges_ratio"][j] = found.ges_ratio
     out["cross_check_not_converged"][j] = found.not_converged
+    out["cross_check_unsafe_margin"][j] = found.unsafe_margin
+    out["cross_check_reach_ratio"][j] = found.reach_ratio
     for y, sup in found.sim_worst.items():
         if f"sim_worst_{y}" in out:
             out[f"sim_worst_{y}"][j] = sup

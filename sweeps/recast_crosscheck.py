@@ -27,6 +27,9 @@ certificate            starts                                      must hold
 ``sos_bound``          uniform over the comparison box; each        the largest ``|y|`` after 60 s (stored as
                        disturbance bang-bang against ``y``'s sign   ``sim_worst_<y>``) within the certified
                        or a square wave at its bound, RK4, 120 s    bound
+``barrier``,           random points of ``[sets] initial``, from    never in ``unsafe``; ``reach_avoid``: in
+``reach_avoid``        ``[*seed, 2]`` (:func:`sweeps.crosscheck.     ``goal`` by ``reach_time_bound_s``, not in
+                       check_sets`, the polynomial loop's check)    ``unsafe`` before it
 =====================  ==========================================  ==========================================
 
 V is the certificate's exact polynomial in its ``variables`` (the states, then the auxiliaries),
@@ -45,7 +48,8 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 import numpy as np
 
-from sweeps.crosscheck import CONVERGED_FRACTION, ESCAPE_EXTENTS, REGION_FRACTIONS, CrossCheck
+from sweeps.crosscheck import (CONVERGED_FRACTION, ESCAPE_EXTENTS, REGION_FRACTIONS, SAFETY_CLASSES, CrossCheck, Runs,
+                               check_sets)
 
 if TYPE_CHECKING:
     from lyapcheck.models.language.recast import RecastModel, RecastSystem
@@ -86,15 +90,17 @@ class _Nodes:
 
 
 class _TrueField:
-    """The true field as the batched system's field (no disturbance)."""
+    """The true field as the batched system's field (no disturbance); its coefficients converted once
+    (:class:`~lyapcheck.models.engines.recast_numeric.FloatLoop`), not at every call of the integrator."""
 
     def __init__(self, system: RecastSystem) -> None:
+        from lyapcheck.models.engines.recast_numeric import FloatLoop
+
         self.system = system
+        self.loop = FloatLoop(system)
 
     def __call__(self, y: np.ndarray, d: Any = None) -> np.ndarray:
-        from lyapcheck.models.engines.recast_numeric import field_values
-
-        return field_values(self.system, y)
+        return self.loop(y)
 
 
 def _v_function(system: RecastSystem, cert: Mapping[str, Any]) -> PointFunction:
@@ -161,6 +167,7 @@ def cross_check_recast(model: RecastModel, doc: Mapping[str, Any], point: Mappin
                                   "not converge")
     if "sos_bound" in conditions and model.robust is not None:
         _check_bound(model, conditions["sos_bound"], starts, seed, where, out)
+    check_sets(model, doc, where, np.random.default_rng([*seed, 2]), starts, _recast_runs(model), out)
     checked = [c for c in (*GLOBAL_CLASSES, REGION_CLASS) if c in conditions]
     if not checked:
         return out
@@ -267,24 +274,34 @@ def cross_check_recast_box(points: Sequence[tuple[RecastModel, Mapping[str, Frac
     parameter points (``(the loop there, the point)``; the ``k``-th point's starts from
     ``[*seed, k]``), the figures merged (the worst of each, counts summed). Returns the merged check
     and, for every point where :func:`box_mismatch` says the certificates do not apply, why (those
-    points are not simulated and not counted)."""
+    points are not simulated and not counted, except for a certified ``barrier`` or ``reach_avoid``:
+    a claim about the model's sets and its true loop, which names no certificate function, is
+    simulated there all the same, and the reason says so)."""
     out = CrossCheck()
     skipped: list[str] = []
-    for k, (model, point) in enumerate(points):
-        why = box_mismatch(model, doc)
-        if why is not None:
-            where = ", ".join(f"{name} = {float(v):.6g}" for name, v in point.items())
-            skipped.append(f"at {where}: {why}")
-            continue
-        found = cross_check_recast(model, doc, point, starts=starts, seed=(*seed, k))
+
+    def merge(found: CrossCheck) -> None:
         out.points += found.points
         out.trajectories += found.trajectories
         out.not_converged += found.not_converged
-        for attr in ("worst_rise", "worst_envelope", "ges_ratio"):
+        for attr in ("worst_rise", "worst_envelope", "ges_ratio", "unsafe_margin", "reach_ratio"):
             out.worse(attr, getattr(found, attr))
         for y, sup in found.sim_worst.items():
             out.sim_worst[y] = max(out.sim_worst.get(y, 0.0), sup)
         out.violations += found.violations
+
+    for k, (model, point) in enumerate(points):
+        why = box_mismatch(model, doc)
+        if why is not None:
+            where = ", ".join(f"{name} = {float(v):.6g}" for name, v in point.items())
+            safety = {c: v for c, v in (doc.get("conditions") or {}).items()
+                      if c in SAFETY_CLASSES and isinstance(v, dict) and v.get("status") == "certified"}
+            if safety:
+                merge(cross_check_recast(model, {**doc, "conditions": safety}, point, starts=starts, seed=(*seed, k)))
+                why += f" ({' and '.join(safety)} simulated there all the same)"
+            skipped.append(f"at {where}: {why}")
+            continue
+        merge(cross_check_recast(model, doc, point, starts=starts, seed=(*seed, k)))
     return out, skipped
 
 
@@ -360,11 +377,50 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
                                   f"{float(bound):.6g}")
 
 
-def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np.ndarray
-              ) -> list[tuple[np.ndarray, np.ndarray]]:
+class _DisturbedField:
+    """The true field with a disturbance per row (the loop recast with its disturbances as the last
+    states, :attr:`~lyapcheck.models.language.recast.RecastModel.robust`)."""
+
+    def __init__(self, robust: RecastSystem, n: int) -> None:
+        from lyapcheck.models.engines.recast_numeric import FloatLoop
+
+        self.loop = FloatLoop(robust)
+        self.n = n
+
+    def __call__(self, y: np.ndarray, d: np.ndarray) -> np.ndarray:
+        return np.asarray(self.loop(np.column_stack([y, d]))[:, :self.n], dtype=np.float64)
+
+
+def _recast_runs(model: RecastModel) -> Runs:
+    """The true loop's simulation for :func:`sweeps.crosscheck.check_sets`: escape as the
+    falsification's (never in an angle), the barrier's horizon the falsification's of the true field."""
+    from lyapcheck.models.classes.falsify import ESCAPE_FACTOR, default_horizon
+    from lyapcheck.models.classes.recast_classes import angle_states
+
+    eq = np.array([float(v) for v in model.equilibrium])
+    angles = angle_states(model.system)
+
+    def run(x0: np.ndarray, t_end: float | None,
+            disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
+        Z0 = x0 - eq
+        extent = np.maximum(np.max(np.abs(Z0), axis=0), np.maximum(np.abs(eq), 1.0) * 1e-6)
+        escape = np.array([np.inf if s in angles else ESCAPE_FACTOR * e for s, e in zip(model.states, extent)])
+        true_field = _TrueField(model.system)
+        horizon = default_horizon(model, extent, true_field) if t_end is None else t_end  # type: ignore[arg-type]
+        if model.robust is None:  # no disturbance kept by the recasting: the nominal loop only
+            disturbances = None
+        runs = _simulate(model, Z0, escape, extent, t_end=horizon, disturbances=disturbances)
+        return [(t, z + eq) for t, z in runs]
+
+    return run
+
+
+def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np.ndarray, *, t_end: float | None = None,
+              disturbances: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
     """Integrate the true loop from the deviations ``Z0`` (rows) with the project's batched DOPRI5 over
-    :func:`lyapcheck.models.surfaces.recast_simulate.default_horizon`: per row, its own points' times and
-    deviations. A row farther than ``escape`` from the equilibrium in a state stops moving there."""
+    ``t_end`` (default :func:`lyapcheck.models.surfaces.recast_simulate.default_horizon`): per row, its own
+    points' times and deviations. A row farther than ``escape`` from the equilibrium in a state stops
+    moving there. ``disturbances``: a constant value of each disturbance per row (None: all 0)."""
     from lyapcheck.models.engines.numeric import ModelSystem
     from lyapcheck.models.surfaces.recast_simulate import default_horizon
     from lyapcheck.models.engines.trajectories import MIN_STEPS, RTOL
@@ -372,8 +428,13 @@ def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np
 
     system = model.system
     eq = np.array([float(v) for v in model.equilibrium])
-    t_end = default_horizon(model)
-    batch = ModelSystem(_TrueField(system), len(Z0), escape=escape, center=eq)  # type: ignore[arg-type]
+    t_end = default_horizon(model) if t_end is None else t_end
+    if disturbances is None or model.robust is None:
+        batch = ModelSystem(_TrueField(system), len(Z0), escape=escape, center=eq)  # type: ignore[arg-type]
+    else:
+        table = np.asarray(disturbances, dtype=np.float64)
+        batch = ModelSystem(_DisturbedField(model.robust, model.n), len(Z0),  # type: ignore[arg-type]
+                            disturbance=lambda t, y, index: table[index], escape=escape, center=eq)
     nodes = _Nodes()
     with np.errstate(all="ignore"):
         integrate(batch, 0.0, Z0 + eq, t_end, rtol=RTOL, atol=np.maximum(extent * 1e-7, 1e-300),

@@ -60,7 +60,11 @@ Variables (``<c>`` a class of the sweep, ``<y>`` an output of the model):
   certified V along a trajectory, relative to V(0)), ``cross_check_worst_envelope`` (largest excess
   of V over its certified decay envelope), ``cross_check_ges_ratio`` (largest
   ``|x(t)| / (k |x0| exp(-rate t))``), ``cross_check_not_converged`` (trajectories not at the
-  equilibrium by the end of the horizon: a figure, not a violation), and with ``sos_bound``
+  equilibrium by the end of the horizon: a figure, not a violation), with ``barrier`` or
+  ``reach_avoid`` ``cross_check_unsafe_margin`` (the largest margin of the unsafe set reached, ``>= 0``
+  inside, each inequality over the size of its terms there, in [-1, 1]: ``< 0`` none entered) and with
+  ``reach_avoid`` ``cross_check_reach_ratio`` (the latest time before the goal over the certified
+  bound), and with ``sos_bound``
   ``sim_worst_<y>`` (the worst-case search's largest tail sup of ``|y|``) and ``tightness_<y>``
   (certified bound / that);
 * ``soundness_violation`` bool and ``violation_detail`` (string): a simulated trajectory left a
@@ -345,6 +349,9 @@ def _model_common(classes: Sequence[str], outputs: Sequence[str], what: str) -> 
         Variable("cross_check_worst_envelope", f8, np.nan, "largest excess of V over V(0) exp(-rate t), of V(0)"),
         Variable("cross_check_ges_ratio", f8, np.nan, "largest |x(t) - x_eq| / (k |x0 - x_eq| exp(-rate t))"),
         Variable("cross_check_not_converged", i32, 0, "trajectories not at the equilibrium by the horizon"),
+        Variable("cross_check_unsafe_margin", f8, np.nan, "barrier, reach_avoid: largest unsafe-set margin reached "
+                 "(>= 0 inside), each inequality over the size of its terms there"),
+        Variable("cross_check_reach_ratio", f8, np.nan, "reach_avoid: latest time before the goal / certified bound"),
     ]
     if "sos_bound" in classes:
         for y in outputs:

@@ -293,6 +293,10 @@ def summarize_model_arrays(mode: str, dims: Sequence[str], scales: Mapping[str, 
         "worst_ges_ratio": _worst(np.asarray(data["cross_check_ges_ratio"], float).ravel()[certified]),
         "not_converged": int(np.asarray(data["cross_check_not_converged"]).ravel()[certified].sum()),
     }
+    for key, name in (("worst_unsafe_margin", "cross_check_unsafe_margin"),
+                      ("worst_reach_ratio", "cross_check_reach_ratio")):
+        if name in data:  # (a store written before these figures has none)
+            cross[key] = _worst(np.asarray(data[name], float).ravel()[certified])
     if "sos_bound" in classes:
         cross["sim_worst"] = {y: _range(np.asarray(data[f"sim_worst_{y}"], float).ravel()[certified]) for y in outputs}
         cross["tightness"] = {y: _range(np.asarray(data[f"tightness_{y}"], float).ravel()[certified]) for y in outputs}

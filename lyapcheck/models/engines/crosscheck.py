@@ -15,12 +15,24 @@ certificate         what must hold along a simulated trajectory           check
 ``sos_bound``       the storage function stays below its envelope          :func:`check_storage`
                     ``1 + (V(0) - 1) exp(-lam t)``; the tail sup of each
                     output stays below its certified bound                  :func:`bound_exceeded`
+``barrier``         a start in the initial set never enters the unsafe     :func:`check_safety`
+                    set
+``reach_avoid``     a start in the initial set is in the goal by the       :func:`check_reach_avoid`
+                    certified time bound, and does not enter the unsafe
+                    set before it reaches the goal
 ==================  ===================================================  ========================
 
 A rise, an excess or a ratio counts only beyond
 :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL` (relative), which absorbs the integrator's
 error, never a modelling slack. Every check reads the integrator's own points
 (:attr:`lyapcheck.models.engines.trajectories.Trajectory.nodes`).
+
+The two set checks read a set's margin along a trajectory, each inequality relative to the size of its
+terms there (:func:`scaled_margin`: ``>= 0`` inside, in ``[-1, 1]``, independent of the states' units):
+the unsafe set is entered only where it exceeds the tolerance, the goal is reached where it is above
+minus the tolerance. A time is read as the last point before the goal was
+reached (a lower bound of the time it was reached, up to a graze between two points), and the time
+bound is exceeded only beyond the tolerance, relative to the bound.
 
 Two helpers feed them: :func:`certificate_function` turns a certificate's exact ``V`` (in the
 declared states shifted to the equilibrium; over a box also in the box's parameters) into a float
@@ -141,6 +153,137 @@ def bound_exceeded(bound: float, simulated: float, rel_tol: float) -> bool:
     return bool(simulated > bound * (1 + rel_tol))
 
 
+def scaled_margin(state_set: Sequence[Sequence[Any]], points: FloatArray, scale: FloatArray) -> FloatArray:
+    """A set's margin at each row of ``points`` (``(k, n)``, the declared states), each inequality
+    ``p >= 0`` divided by the size of its terms there: ``p(x) / sum_m |c_m| prod_i (|x_i| + scale_i)**m_i``,
+    in ``[-1, 1]``; a piece's the smallest of its inequalities', the set's the largest of its pieces'
+    (``>= 0`` exactly where :func:`lyapcheck.models.language.sets.margin` is). The denominator bounds
+    what rounding and the integrator's error (relative to the states, or to ``scale``: the problem's
+    extent per state) can do to ``p(x)``, so that a figure above a small tolerance is conclusive, and
+    the figure does not depend on the states' units nor shrink along a trajectory that runs far away.
+    ``state_set``: pieces of polynomials of a state ring (the states first, any others at exponent 0)."""
+    x = np.atleast_2d(np.asarray(points, dtype=np.float64))
+    ax = np.abs(x) + np.asarray(scale, dtype=np.float64)[None, :]
+    n = x.shape[1]
+    out = np.full(x.shape[0], -np.inf)
+    with np.errstate(all="ignore"):
+        for piece in state_set:
+            inner = np.full(x.shape[0], np.inf)
+            for p in piece:
+                exponents = np.array([tuple(int(e) for e in m) for m in p.monoms()], dtype=np.int64)
+                coefficients = np.array([float(Fraction(int(c.p), int(c.q))) for c in p.coeffs()])
+                if not coefficients.size:
+                    inner = np.minimum(inner, 0.0)
+                    continue
+                exponents = exponents.reshape(len(coefficients), -1)
+                if exponents.shape[1] < n or exponents[:, n:].any():
+                    raise ValueError(f"a point has {n} coordinates; the set's polynomial {p} needs the states of "
+                                     "its ring")
+                e = exponents[:, :n]
+                value = np.prod(x[:, None, :] ** e[None, :, :], axis=2) @ coefficients
+                size = np.prod(ax[:, None, :] ** e[None, :, :], axis=2) @ np.abs(coefficients)
+                inner = np.minimum(inner, np.where(size > 0, value / size, 0.0))
+            out = np.maximum(out, inner)
+    return np.asarray(np.where(np.isnan(out), -np.inf, out), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class SafetyCheck:
+    """Trajectories from the initial set under a barrier certificate (the unsafe set is never entered):
+    how many, how many entered the unsafe set, which first (index, None: none) and the largest
+    unsafe margin reached (:func:`scaled_margin`; ``< 0``: none came inside; NaN: none)."""
+
+    trajectories: int
+    entered: int
+    first: int | None
+    worst_margin: float
+
+    @property
+    def ok(self) -> bool:
+        return self.entered == 0
+
+
+def check_safety(unsafe_margins: Sequence[FloatArray]) -> SafetyCheck:
+    """``unsafe_margins[i]``: the unsafe set's margin (:func:`scaled_margin`) at the points of trajectory
+    ``i`` (which started in the initial set); it entered where that exceeds
+    :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL`."""
+    entered, first, worst = 0, None, math.nan
+    for i, values in enumerate(unsafe_margins):
+        rel = np.asarray(values, dtype=np.float64)
+        if not rel.size:
+            continue
+        top = float(np.nanmax(rel)) if np.any(np.isfinite(rel)) else math.nan
+        if math.isfinite(top):
+            worst = top if math.isnan(worst) else max(worst, top)
+        if top > TRAJECTORY_CHECK_REL_TOL:
+            entered += 1
+            first = i if first is None else first
+    return SafetyCheck(len(unsafe_margins), entered, first, worst)
+
+
+@dataclass(frozen=True)
+class ReachAvoidCheck:
+    """Trajectories from the initial set under a reach-avoid certificate: how many entered the unsafe set
+    before the goal (``entered``, the first of them ``first_entered``), how many were not in the goal by
+    the time bound (``late``, the first ``first_late``), the largest unsafe margin before the goal
+    (:func:`scaled_margin`, as :class:`SafetyCheck`) and the largest time before the goal over the bound
+    (``reach_ratio``, a trajectory that never reached it counting its whole simulated time; NaN: none); ``unreached``:
+    the trajectories not in the goal at any of their points (late, or simulated too briefly to tell)."""
+
+    trajectories: int
+    entered: int
+    late: int
+    unreached: int
+    first_entered: int | None
+    first_late: int | None
+    worst_margin: float
+    reach_ratio: float
+
+    @property
+    def ok(self) -> bool:
+        return self.entered == 0 and self.late == 0
+
+
+def check_reach_avoid(series: Sequence[tuple[FloatArray, FloatArray, FloatArray]], bound_s: float) -> ReachAvoidCheck:
+    """``series[i] = (t, unsafe margin, goal margin)`` at the points of trajectory ``i`` (which started
+    in the initial set; margins of :func:`scaled_margin`), simulated beyond ``bound_s (1 +
+    TRAJECTORY_CHECK_REL_TOL)`` (:func:`reach_horizon`). The goal is reached at the first point whose
+    goal margin is at least ``-TRAJECTORY_CHECK_REL_TOL``; the time before it is the point before that
+    one (a lower bound of the time it was reached). Late: that time beyond ``bound_s (1 +
+    TRAJECTORY_CHECK_REL_TOL)``; entered: an unsafe margin above ``TRAJECTORY_CHECK_REL_TOL`` at a point
+    before the goal."""
+    entered = late = unreached = 0
+    first_entered: int | None = None
+    first_late: int | None = None
+    worst, ratio = math.nan, math.nan
+    for i, (t, unsafe, goal) in enumerate(series):
+        t = np.asarray(t, dtype=np.float64)
+        if not t.size:
+            continue
+        reached = np.flatnonzero(np.asarray(goal, dtype=np.float64) >= -TRAJECTORY_CHECK_REL_TOL)
+        k = int(reached[0]) if reached.size else t.size  # the first point in the goal (t.size: none)
+        unreached += not reached.size
+        before = 0.0 if k == 0 else float(t[k - 1])
+        ratio = before / bound_s if math.isnan(ratio) else max(ratio, before / bound_s)
+        if before > bound_s * (1 + TRAJECTORY_CHECK_REL_TOL):
+            late += 1
+            first_late = i if first_late is None else first_late
+        rel = np.asarray(unsafe, dtype=np.float64)[:k]
+        top = float(np.nanmax(rel)) if np.any(np.isfinite(rel)) else math.nan
+        if math.isfinite(top):
+            worst = top if math.isnan(worst) else max(worst, top)
+        if top > TRAJECTORY_CHECK_REL_TOL:
+            entered += 1
+            first_entered = i if first_entered is None else first_entered
+    return ReachAvoidCheck(len(series), entered, late, unreached, first_entered, first_late, worst, ratio)
+
+
+def reach_horizon(bound_s: float) -> float:
+    """How long a reach-avoid cross-check simulates: past the certified time bound by twice the
+    tolerance, so that a trajectory not in the goal by then is conclusively late."""
+    return bound_s * (1 + 2 * TRAJECTORY_CHECK_REL_TOL)
+
+
 def certificate_function(terms: Mapping[str, Any], names: Sequence[str], n: int, values: Mapping[str, Fraction],
                          scales: Sequence[Fraction]) -> PointFunction:
     """A certificate's exact polynomial as a float function of the scaled states ``u``.
@@ -216,4 +359,6 @@ def ray_boundary(function: PointFunction, level: float, directions: FloatArray,
 
 
 __all__ = ["rise", "RegionCheck", "check_region", "GlobalCheck", "check_global", "check_storage",
-           "check_ges_envelope", "bound_exceeded", "certificate_function", "ray_boundary", "RAY_RADII", "BISECTIONS"]
+           "check_ges_envelope", "scaled_margin", "SafetyCheck", "check_safety", "ReachAvoidCheck",
+           "check_reach_avoid", "reach_horizon", "bound_exceeded", "certificate_function", "ray_boundary", "RAY_RADII",
+           "BISECTIONS"]
