@@ -161,3 +161,23 @@ def test_an_undecided_box_is_split_in_halves_as_a_polynomial_models_box(tmp_path
     assert list(data["parent"]) == [-1, 0, 0] and list(data["level"]) == [0, 1, 1]
     assert list(data["lo_b"]) == [0.5, 0.5, 1.25] and list(data["hi_b"]) == [2.0, 1.25, 2.0]
     assert all(str(c) == "" for c in data["certificate"])
+
+
+def test_random_points_of_a_box_with_decimal_edges_are_read_again_from_the_model_text() -> None:
+    """The cross-check reads a loop with functions again at each random point of a box, as ``--set
+    NAME=VALUE``; with edges such as 0.8 (not dyadic) a float's exact value had dozens of digits and
+    every point was refused, so the box was never simulated. The points are short decimals now."""
+    from lyapcheck.exact import exact_decimal
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.language.parameter_box import ModelBox
+    from lyapcheck.models.language.recast import RecastModel
+    from tests.feature_matrix import FUNCTIONS
+
+    box = ModelBox((("a", Fraction(4, 5), Fraction(6, 5)),))
+    points = box.points(8, 7)
+    assert len({p["a"] for p in points}) == 8
+    for point in points:
+        written = exact_decimal(point["a"])
+        assert Fraction(4, 5) <= point["a"] <= Fraction(6, 5) and len(written) <= 10, written
+        model = parse_any_model(FUNCTIONS, "functions.toml", {"a": written})
+        assert isinstance(model, RecastModel) and model.parameters["a"] == point["a"]

@@ -10,7 +10,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Iterator, Mapping, Sequence
+from typing import Final, Iterator, Mapping, Sequence
+
+#: a random point of a box (:meth:`ModelBox.points`): the uniform fraction of each interval on a grid
+#: of this many steps, and a log-uniform value to this many significant digits (its exact decimal is
+#: then short: a point is read again from the model text as ``--set NAME=VALUE``)
+POINT_STEPS: Final = 10**6
+POINT_DIGITS: Final = 7
 
 
 @dataclass(frozen=True)
@@ -51,7 +57,11 @@ class ModelBox:
 
     def points(self, count: int, seed: int) -> list[dict[str, Fraction]]:
         """``count`` points of the box, uniform in each parameter (log-uniform where the range is
-        positive and spans more than a factor of 10), from a generator seeded by ``seed`` alone."""
+        positive and spans more than a factor of 10), from a generator seeded by ``seed`` alone.
+        Each value is a short exact decimal (the uniform fraction on a grid of ``POINT_STEPS``, a
+        log-uniform value to ``POINT_DIGITS`` significant digits): a point is read again from the
+        model text as ``--set NAME=VALUE``, and a float's exact binary value written out has dozens of
+        digits where an edge such as 0.8 is not dyadic."""
         import numpy as np
 
         rng = np.random.default_rng(seed)
@@ -61,9 +71,9 @@ class ModelBox:
             for name, lo, hi in self.bounds:
                 u = float(rng.random())
                 if lo > 0 and hi / lo > 10:
-                    value = Fraction(math.exp(math.log(lo) + u * (math.log(hi) - math.log(lo))))
+                    value = Fraction(f"{math.exp(math.log(lo) + u * (math.log(hi) - math.log(lo))):.{POINT_DIGITS}g}")
                 else:
-                    value = lo + (hi - lo) * Fraction(u)
+                    value = lo + (hi - lo) * Fraction(round(u * POINT_STEPS), POINT_STEPS)
                 point[name] = min(max(value, lo), hi)
             out.append(point)
         return out
