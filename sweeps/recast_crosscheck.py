@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 import numpy as np
 
+from lyapcheck.models.engines.recast_numeric import TrueField
 from sweeps.crosscheck import (CONVERGED_FRACTION, ESCAPE_EXTENTS, REGION_FRACTIONS, SAFETY_CLASSES, CrossCheck, Runs,
                                check_sets)
 
@@ -87,20 +88,6 @@ class _Nodes:
         index, t, y = index[order], t[order], y[order]
         cuts = np.searchsorted(index, np.arange(count + 1))
         return [(t[a:b], y[a:b]) for a, b in zip(cuts[:-1], cuts[1:])]
-
-
-class _TrueField:
-    """The true field as the batched system's field (no disturbance); its coefficients converted once
-    (:class:`~lyapcheck.models.engines.recast_numeric.FloatLoop`), not at every call of the integrator."""
-
-    def __init__(self, system: RecastSystem) -> None:
-        from lyapcheck.models.engines.recast_numeric import FloatLoop
-
-        self.system = system
-        self.loop = FloatLoop(system)
-
-    def __call__(self, y: np.ndarray, d: Any = None) -> np.ndarray:
-        return self.loop(y)
 
 
 def _v_function(system: RecastSystem, cert: Mapping[str, Any]) -> PointFunction:
@@ -377,20 +364,6 @@ def _check_bound(model: RecastModel, cond: Mapping[str, Any], starts: int, seed:
                                   f"{float(bound):.6g}")
 
 
-class _DisturbedField:
-    """The true field with a disturbance per row (the loop recast with its disturbances as the last
-    states, :attr:`~lyapcheck.models.language.recast.RecastModel.robust`)."""
-
-    def __init__(self, robust: RecastSystem, n: int) -> None:
-        from lyapcheck.models.engines.recast_numeric import FloatLoop
-
-        self.loop = FloatLoop(robust)
-        self.n = n
-
-    def __call__(self, y: np.ndarray, d: np.ndarray) -> np.ndarray:
-        return np.asarray(self.loop(np.column_stack([y, d]))[:, :self.n], dtype=np.float64)
-
-
 def _recast_runs(model: RecastModel) -> Runs:
     """The true loop's simulation for :func:`sweeps.crosscheck.check_sets`: escape as the
     falsification's (never in an angle), the barrier's horizon the falsification's of the true field."""
@@ -405,8 +378,7 @@ def _recast_runs(model: RecastModel) -> Runs:
         Z0 = x0 - eq
         extent = np.maximum(np.max(np.abs(Z0), axis=0), np.maximum(np.abs(eq), 1.0) * 1e-6)
         escape = np.array([np.inf if s in angles else ESCAPE_FACTOR * e for s, e in zip(model.states, extent)])
-        true_field = _TrueField(model.system)
-        horizon = default_horizon(model, extent, true_field) if t_end is None else t_end  # type: ignore[arg-type]
+        horizon = default_horizon(model, extent, TrueField(model)) if t_end is None else t_end  # type: ignore[arg-type]
         if model.robust is None:  # no disturbance kept by the recasting: the nominal loop only
             disturbances = None
         runs = _simulate(model, Z0, escape, extent, t_end=horizon, disturbances=disturbances)
@@ -426,15 +398,16 @@ def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np
     from lyapcheck.models.engines.trajectories import MIN_STEPS, RTOL
     from lyapcheck.integrator import integrate
 
-    system = model.system
     eq = np.array([float(v) for v in model.equilibrium])
     t_end = default_horizon(model) if t_end is None else t_end
+    # the true field, with each row's disturbance where the recasting kept the disturbances
+    field = TrueField(model)
     if disturbances is None or model.robust is None:
-        batch = ModelSystem(_TrueField(system), len(Z0), escape=escape, center=eq)  # type: ignore[arg-type]
+        batch = ModelSystem(field, len(Z0), escape=escape, center=eq)  # type: ignore[arg-type]
     else:
         table = np.asarray(disturbances, dtype=np.float64)
-        batch = ModelSystem(_DisturbedField(model.robust, model.n), len(Z0),  # type: ignore[arg-type]
-                            disturbance=lambda t, y, index: table[index], escape=escape, center=eq)
+        batch = ModelSystem(field, len(Z0), disturbance=lambda t, y, index: table[index],  # type: ignore[arg-type]
+                            escape=escape, center=eq)
     nodes = _Nodes()
     with np.errstate(all="ignore"):
         integrate(batch, 0.0, Z0 + eq, t_end, rtol=RTOL, atol=np.maximum(extent * 1e-7, 1e-300),

@@ -256,18 +256,14 @@ def model_file(directory: Path, kind: str) -> Path:
 
 
 def certify_cells(directory: Path, kind: str, *, box: bool) -> dict[str, tuple[Outcome, Path]]:
-    """``lyapcheck certify FILE --classes C1,C2,... [--box] --out CERT --json``: one run for every class that
-    reads the same file (the certificate then feeds ``verify`` and ``report`` once); where that run is
-    refused in one line, each of its classes is run alone, so that each refusal is the class's own."""
-    groups: dict[Path, list[str]] = {}
-    for cls in CLASSES:
-        groups.setdefault(model_file(directory, kind), []).append(cls)
-    found: dict[str, tuple[Outcome, Path]] = {}
-    for path, classes in groups.items():
-        found.update(_certify_run(path, classes, box=box))
-        if any(not found[c][0].supported and found[c][0].via == "run" for c in classes):
-            for cls in classes:
-                found.update(_certify_run(path, [cls], box=box))
+    """``lyapcheck certify FILE --classes C1,C2,... [--box] --out CERT --json``: one run for every class
+    (the certificate then feeds ``verify`` and ``report`` once); where that run is refused in one line,
+    each class is run alone, so that each refusal is the class's own."""
+    path = model_file(directory, kind)
+    found = _certify_run(path, list(CLASSES), box=box)
+    if any(not found[c][0].supported and found[c][0].via == "run" for c in CLASSES):
+        for cls in CLASSES:
+            found.update(_certify_run(path, [cls], box=box))
     return found
 
 

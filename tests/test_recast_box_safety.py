@@ -19,26 +19,12 @@ import numpy as np
 import pytest
 
 from lyapcheck import api
+from tests.feature_matrix import BOXES_SPEC, FUNCTIONS
 from tests.recast_loops import rk4
 from tests.test_model_sweeps import arrays, run
 
-#: two units coupled through a sine and a saturation (the feature matrix's loop with functions)
-COUPLED = """[model]
-name = "two units coupled through a sine and a saturation"
-states = ["x1", "x2"]
-[parameters]
-a = 1
-[dynamics]
-x1 = "-a*x1 + sin(x2)/2"
-x2 = "-x2 + sat(x1, 1)/2"
-[domain]
-x1 = [-3, 3]
-x2 = [-3, 3]
-[sets]
-initial = ["(x1 - 2)**2 + x2**2 <= 0.25"]
-unsafe = ["(x1 + 1)**2 + (x2 - 2)**2 <= 0.25"]
-goal = ["x1**2 + x2**2 <= 0.25"]
-"""
+#: two units coupled through a sine and a saturation: the feature matrix's loop with functions
+COUPLED = FUNCTIONS
 BOX = ["a=0.8..1.2"]
 
 #: a pulse through a sine: from near (0, 2) x1 peaks at about 0.56 a, so the unsafe set x1 >= 1 is
@@ -186,22 +172,7 @@ def test_a_tiny_boxes_sweep_of_a_loop_with_functions_certifies_a_barrier_per_box
 
     (tmp_path / "m.toml").write_text(COUPLED)
     spec = tmp_path / "spec.toml"
-    spec.write_text("""[sweep]
-model = "m.toml"
-mode = "boxes"
-classes = ["barrier"]
-chunk_size = 1
-[[sweep.axes]]
-name = "a"
-start = 0.8
-stop = 1.2
-num = 2
-[sweep.boxes]
-max_boxes = 1
-cross_check_points = 1
-[simulation]
-starts = 2
-""")
+    spec.write_text(BOXES_SPEC.format(model="m.toml", classes='["barrier"]'))
     out = tmp_path / "out.zarr"
     run(spec, out)
     data = arrays(out)

@@ -154,3 +154,6 @@ def test_a_counterexample_over_a_box_is_re_simulated_at_its_point_of_the_box(tmp
     rejected(beyond, "barrier", "the parameter a = 3 is not a point of the box")
     unnamed = verify_forged(tmp_path, doc, "barrier", lambda r: r.pop("parameters"))
     rejected(unnamed, "barrier", "names the point of the box where it was found")
+    # a point whose exact value would take minutes to build is refused before it is read
+    huge = verify_forged(tmp_path, doc, "barrier", lambda r: r.__setitem__("parameters", {"a": "1e999999999"}))
+    rejected(huge, "barrier", "is not a plain decimal number")

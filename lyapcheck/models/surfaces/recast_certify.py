@@ -18,8 +18,9 @@ the verdict. It never calls a solver.
 from __future__ import annotations
 
 import hashlib
+import re
 from fractions import Fraction
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Final, Sequence
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
@@ -384,6 +385,11 @@ def _check_true_counterexamples(doc: dict[str, Any], model: RecastModel, box: Mo
     check_counterexamples(model, doc["conditions"], rows, check)
 
 
+#: the longest decimal a counterexample's point of the box may be written with (the box's centre or a
+#: corner, as exact decimals of the box's edges: far shorter)
+MAX_POINT_TEXT: Final = 200
+
+
 def _counterexample_loop(ref: dict[str, Any], model: RecastModel, box: ModelBox | None
                          ) -> tuple[RecastModel | None, str]:
     """The model a counterexample is re-simulated on, and the words for the point of the box (empty when
@@ -403,7 +409,12 @@ def _counterexample_loop(ref: dict[str, Any], model: RecastModel, box: ModelBox 
                       f"{', '.join(box.names)}")
     values = {}
     for name, lo, hi in box.bounds:
-        value = Fraction(str(stated[name]))
+        text = str(stated[name])
+        # a point of the box is written as a plain decimal (recast_barrier.at_point); anything else, as
+        # "1e999999999" whose exact value would take minutes to build, is refused before it is read
+        if len(text) > MAX_POINT_TEXT or not re.fullmatch(r"-?[0-9]+(\.[0-9]+)?", text):
+            return None, f"the parameter {name} = {text!r} of the counterexample is not a plain decimal number"
+        value = Fraction(text)
         if not lo <= value <= hi:
             return None, f"the parameter {name} = {stated[name]} is not a point of the box [{lo}, {hi}]"
         values[name] = exact_decimal(value)
