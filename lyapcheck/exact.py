@@ -8,6 +8,7 @@ tuples of tuples of Fractions.
 from __future__ import annotations
 
 import math
+import re
 from decimal import ROUND_CEILING, ROUND_HALF_EVEN, Context, Decimal, localcontext
 from fractions import Fraction
 from typing import Any, Iterable, Sequence
@@ -25,6 +26,95 @@ def to_rational(x: float, digits: int = 15) -> Fraction:
     if x == 0.0:  # the same value without the decimal round trip (zero blocks of sparse certificates)
         return Fraction(0)
     return Fraction(Decimal(f"{x:.{digits - 1}e}"))
+
+
+#: a whole text that :class:`~fractions.Fraction` reads as a decimal with an exponent (``2.5e+3``,
+#: `` -1E-7 ``); group 1 is the exponent. A hash such as ``"3e5a..."`` or a sentence does not match
+_DECIMAL_WITH_EXPONENT = re.compile(r"\s*[+-]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE]([+-]?[0-9_]+)\s*")
+
+
+def _oversized(text: str) -> bool:
+    """``text`` is a decimal whose exponent is beyond :data:`lyapcheck.tolerances.MAX_READ_EXPONENT`
+    (decided on its digits, before any number is built from them)."""
+    from lyapcheck.tolerances import MAX_READ_EXPONENT
+
+    found = _DECIMAL_WITH_EXPONENT.fullmatch(text)
+    digits = found.group(1).lstrip("+-").replace("_", "").lstrip("0") if found is not None else ""
+    return len(digits) > len(str(MAX_READ_EXPONENT)) or (bool(digits) and int(digits) > MAX_READ_EXPONENT)
+
+
+def read_rational(value: Any, key: str = "a number") -> Fraction:
+    """A number read from a document (a certificate, a store, a spec) as an exact rational.
+
+    Parameters
+    ----------
+    value
+        A JSON integer, a finite float (read as the decimal it prints as: ``0.1`` is 1/10, as
+        ``Fraction(str(value))``), a :class:`~fractions.Fraction`, or a text that
+        :class:`~fractions.Fraction` reads (``"3"``, ``"-7/2"``, ``"0.125"``, ``"1e-7"``).
+    key
+        What the number is, for the error message.
+
+    Raises
+    ------
+    ValueError
+        Naming ``key``: a boolean, a non-finite float, a text that is not a number, or a decimal
+        exponent beyond :data:`lyapcheck.tolerances.MAX_READ_EXPONENT` (its exact value would take
+        minutes to build: it is refused before it is built).
+    """
+    from lyapcheck.tolerances import MAX_READ_EXPONENT
+
+    if isinstance(value, bool):
+        raise ValueError(f"{key}: {value!r} is not a number")
+    if isinstance(value, (int, Fraction)):
+        return Fraction(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"{key}: {value!r} is not a finite number")
+        value = str(value)  # the decimal it prints as (0.1 is 1/10), as the JSON text wrote it
+    if not isinstance(value, str):
+        raise ValueError(f"{key}: {type(value).__name__} is not a number")
+    if _oversized(value):
+        raise ValueError(f"{key}: the exponent of {value[:40]!r} is beyond +-{MAX_READ_EXPONENT}")
+    try:
+        return Fraction(value)
+    except (ValueError, ZeroDivisionError) as exc:
+        raise ValueError(f"{key}: {value[:40]!r} is not a number ({exc})") from None
+
+
+def oversized_number(tree: Any, path: str = "") -> str | None:
+    """Where a document (parsed JSON) writes a number whose decimal exponent is beyond
+    :data:`lyapcheck.tolerances.MAX_READ_EXPONENT` (``"1e999999999"``), or None.
+
+    ``verify`` calls it on a whole document before it reads any number of it, so that no reader,
+    :func:`read_rational` or a plain :class:`~fractions.Fraction`, ever builds such a value: a
+    forged certificate is refused in milliseconds instead of stalling the check for minutes.
+    A text is a number when :class:`~fractions.Fraction` would read the whole of it; a model's text
+    is not one (the model-file reader refuses such numbers itself), nor is a hash or a sentence.
+    """
+    stack: list[tuple[Any, str]] = [(tree, path)]
+    while stack:
+        node, where = stack.pop()
+        if isinstance(node, dict):
+            stack.extend((v, f"{where}.{k}" if where else str(k)) for k, v in node.items())
+        elif isinstance(node, list):
+            stack.extend((v, f"{where}[{i}]") for i, v in enumerate(node))
+        elif isinstance(node, str) and _oversized(node):
+            return where or "the document"
+    return None
+
+
+def refuse_oversized_numbers(doc: Any) -> None:
+    """A document that writes a number with a decimal exponent beyond
+    :data:`lyapcheck.tolerances.MAX_READ_EXPONENT` is malformed (one line naming where), before any of
+    its numbers is read (:func:`lyapcheck.exact.oversized_number`)."""
+    from lyapcheck.errors import CertificateError
+    from lyapcheck.tolerances import MAX_READ_EXPONENT
+
+    where = oversized_number(doc)
+    if where is not None:
+        raise CertificateError(f"certificate is malformed: {where} writes a number with a decimal exponent beyond "
+                               f"+-{MAX_READ_EXPONENT}")
 
 
 def matrix(rows: Iterable[Iterable[int | str | Fraction]]) -> Matrix:

@@ -250,3 +250,8 @@ VS_SOLVES: Final = 150
 #: van-der-pol-reversed-mu3's 62, the tests' models at most 114 (the ladder's own end, 30 rounds
 #: of 2 solves at each of 3 degrees, is 180)
 ROA_ENLARGE_SOLVES: Final = 150
+#: the largest decimal exponent a number read from a document may carry (lyapcheck.exact.read_rational):
+#: "1e999999999" is a short text whose exact value has a billion digits, minutes and gigabytes to
+#: build, so a forged certificate could stall verify. A float's exponent is at most 308 and every
+#: rational lyapcheck writes is "p" or "p/q" (no exponent); 1000 leaves room for hand-written values
+MAX_READ_EXPONENT: Final = 1000

@@ -154,6 +154,11 @@ def test_a_counterexample_over_a_box_is_re_simulated_at_its_point_of_the_box(tmp
     rejected(beyond, "barrier", "the parameter a = 3 is not a point of the box")
     unnamed = verify_forged(tmp_path, doc, "barrier", lambda r: r.pop("parameters"))
     rejected(unnamed, "barrier", "names the point of the box where it was found")
-    # a point whose exact value would take minutes to build is refused before it is read
+    # a point whose exact value would take minutes to build is refused before it is read: the whole
+    # document, naming the field (lyapcheck.exact.refuse_oversized_numbers)
     huge = verify_forged(tmp_path, doc, "barrier", lambda r: r.__setitem__("parameters", {"a": "1e999999999"}))
-    rejected(huge, "barrier", "is not a plain decimal number")
+    assert huge.exit_code == 1 and "conditions.barrier.refutation.parameters.a writes a number with a decimal " \
+        "exponent beyond" in huge.output, huge.output
+    # a point written otherwise than as a plain decimal is refused by the counterexample's own check
+    odd = verify_forged(tmp_path, doc, "barrier", lambda r: r.__setitem__("parameters", {"a": "25e-1"}))
+    rejected(odd, "barrier", "is not a plain decimal number")

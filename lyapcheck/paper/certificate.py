@@ -170,8 +170,11 @@ def read_document(path: str | Path) -> dict[str, Any]:
 
 def check_document(doc: Any, source: str) -> dict[str, Any]:
     """``doc`` if it is a certificate document this version reads (kind and schema), else a one-line error."""
+    from lyapcheck.exact import refuse_oversized_numbers
+
     if not isinstance(doc, dict) or doc.get("kind") != KIND:
         raise InputFileError(f"{source} is not a lyapcheck certificate (missing kind '{KIND}')")
+    refuse_oversized_numbers(doc)
     if doc.get("schema_version") != SCHEMA_VERSION:
         raise InputFileError(f"{source} has schema_version {doc.get('schema_version')!r}; "
                              f"this lyapcheck reads {SCHEMA_VERSION}")
@@ -388,6 +391,9 @@ def _switching_figures(c: dict[str, Any], system: Any) -> list[tuple[str, str, b
 
 def verify_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
     """Exact re-check of every claim in the document; returns (condition, ok, message) rows."""
+    from lyapcheck.exact import refuse_oversized_numbers
+
+    refuse_oversized_numbers(doc)
     if isinstance(doc, dict) and "box" in doc:
         return verify_box_document(doc)
     from lyapcheck import exact

@@ -26,6 +26,8 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
+from lyapcheck.exact import read_rational
+
 if TYPE_CHECKING:
     from lyapcheck.models.language.parameter_box import ModelBox
 
@@ -281,7 +283,7 @@ def v_text(terms: Mapping[str, Any], variables: Sequence[str], shifts: Mapping[s
         for name, e in zip(variables, exponents):
             if e == 0:
                 continue
-            shift = Fraction(str(shifts.get(name, 0)))
+            shift = read_rational(shifts.get(name, 0))
             base = name if shift == 0 else f"({name} {'-' if shift > 0 else '+'} {float(abs(shift)):.{V_DIGITS}g})"
             factors.append(base if e == 1 else f"{base}**{e}")
         magnitude = f"{float(abs(c)):.{V_DIGITS}g}"
@@ -298,7 +300,7 @@ def v_expression(terms: Mapping[str, Any], variables: Sequence[str], shifts: Map
 
     shifts = shifts or {}
     def rational(value: Any) -> Any:  # through Fraction's own reader: no text reaches sympy's parser
-        exact = Fraction(str(value))
+        exact = read_rational(value)
         return sp.Rational(exact.numerator, exact.denominator)
 
     symbols = [sp.Symbol(name) - rational(shifts.get(name, 0)) for name in variables]

@@ -45,6 +45,7 @@ from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterVa
 from lyapcheck.results import ConditionResult, Property
 from lyapcheck.sos.certificates import piece_generators
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
+from lyapcheck.exact import read_rational
 
 #: the certificate's kind (``verify`` dispatches on it)
 KIND: Final = "recast_barrier"
@@ -482,7 +483,7 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
     if isinstance(head, str):
         return False, head
     B, N, D = head
-    lam = Fraction(str(cert["lambda_per_s"]))
+    lam = read_rational(cert["lambda_per_s"])
     initial = piece_relations(loop, model.state_ring, model.sets["initial"], "initial")
     unsafe = piece_relations(loop, model.state_ring, model.sets["unsafe"], "unsafe")
     stored = list(cert["initial"]) + list(cert["unsafe"]) + [cert["decrease"]]

@@ -58,6 +58,7 @@ from lyapcheck.models.engines.recast_sos import (ConditionCertificate, Condition
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, why_none
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Monomial, Poly, degree_in, monomials, to_fmpq
+from lyapcheck.exact import read_rational
 
 #: decay rates ``lam`` of the dissipation inequality tried (1/s: the loop is not scaled)
 LAMBDA_GRID: Final = (Fraction(1, 20), Fraction(1, 5), Fraction(3, 5), Fraction(3, 2), Fraction(4))
@@ -461,7 +462,7 @@ def check_bound(model: RecastModel, c: Mapping[str, Any], box: ModelBox | None =
             cert.get("disturbances") != {d: str(b) for d, b in made.disturbances.items()} or \
             cert.get("angles") != list(made.loop.angles):
         return False, "variables, auxiliaries, shift, disturbances or angles differ from the model text's recasting"
-    if Fraction(str(cert["positivity_epsilon"])) != POSITIVITY_EPSILON:
+    if read_rational(cert["positivity_epsilon"]) != POSITIVITY_EPSILON:
         return False, "positivity_epsilon is not the class's"
     loop, why = check_root_proofs(made.loop, cert["recasting"]["roots"])
     if loop is None:
@@ -489,7 +490,7 @@ def check_bound(model: RecastModel, c: Mapping[str, Any], box: ModelBox | None =
             return False, f"{name}: {why}"
         if item.get("V_text") != v_text(system, V):
             return False, f"{name}: V_text is not V written with the functions"
-        lam, B, bound = (Fraction(str(item[k])) for k in ("lam", "B", "bound"))
+        lam, B, bound = (read_rational(item[k]) for k in ("lam", "B", "bound"))
         if lam <= 0 or B < 0 or bound < 0 or bound * bound < B:
             return False, f"{name}: lam must be > 0 and bound^2 >= B >= 0"
         polys = conditions(bl, V, N, y, lam, B)

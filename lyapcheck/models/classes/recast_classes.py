@@ -34,6 +34,7 @@ from lyapcheck.models.engines.recast_sos import (ConditionCertificate, Condition
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
+from lyapcheck.exact import read_rational
 
 #: the margin eps of positivity and decrease (times |z|^2), tried in turn
 EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
@@ -344,7 +345,7 @@ def check_root_proofs(base: Loop, data: Any) -> tuple[Loop | None, str]:
         aux = next((a for a in base.system.auxiliaries if a.name == name and a.function == "sqrt"), None)
         if aux is None or aux.argument is None:
             return None, f"recasting.roots: {name!r} is not a square root of the loop"
-        c = Fraction(str(item["bound"]))
+        c = read_rational(item["bound"])
         if c <= 0:
             return None, f"recasting.roots.{name}: the bound must be > 0"
         if item.get("constants", False) not in (True, False):
@@ -391,7 +392,7 @@ def check_denominator_proofs(loop: Loop, names: Sequence[str], stored: Any) -> t
     for d, item in zip(distinct, stored):
         if poly_from_json(ring, item["poly"], "denominator") != d:
             return False, "a stored denominator is not the field's", N
-        bound = Fraction(str(item["bound"]))
+        bound = read_rational(item["bound"])
         if bound <= 0:
             return False, "a denominator's bound must be > 0", N
         proof = ConditionCertificate.from_json(ring, item["proof"], len(loop.relations))
@@ -628,7 +629,7 @@ def _sharpen_decrease(loop: Loop, cert: dict[str, Any], budget: Budget) -> None:
     N, _, _ = common_denominator(loop, v_names(loop, V))
     l2 = state_square(loop)
     search = Search(ring, budget)
-    eps = Fraction(str(cert["epsilon"]))
+    eps = read_rational(cert["epsilon"])
     for margin in SHARPER_DECREASE:
         if margin <= eps or budget.left() <= 0:
             return
@@ -667,8 +668,8 @@ def ges_of(loop: Loop, cert: dict[str, Any]) -> dict[str, Fraction] | None:
             P[i][i] = c
         else:
             P[i][j] = P[j][i] = c / 2
-    eps = Fraction(str(cert["epsilon"]))
-    decrease = Fraction(str(cert.get("decrease_epsilon", eps)))
+    eps = read_rational(cert["epsilon"])
+    decrease = read_rational(cert.get("decrease_epsilon", eps))
     lam = np.linalg.eigvalsh(np.array([[float(x) for x in row] for row in P]))
     c2 = Fraction(float(lam[-1]) * (1 + 1e-6)).limit_denominator(10 ** 12) + Fraction(1, 10 ** 12)
     if not is_positive_definite([[c2 * int(i == j) - P[i][j] for j in range(n)] for i in range(n)]):

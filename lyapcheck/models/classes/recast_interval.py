@@ -31,6 +31,7 @@ from lyapcheck.models.classes.recast_classes import Loop, v_text
 from lyapcheck.models.engines.recast_sos import poly_from_json, poly_to_json
 from lyapcheck.models.engines.search import Budget
 from lyapcheck.results import ConditionResult
+from lyapcheck.exact import read_rational
 
 #: each retry lowers the proposed level by this factor (the proof failing near the level set's edge)
 RETRY_LEVEL_FACTOR: Final = Fraction(9, 10)
@@ -307,16 +308,16 @@ def claim_of(loop: Loop, cert: dict[str, Any]) -> IntervalClaim:
     box = cert["box"]
     if list(box) != list(system.states):
         raise ValueError("box: one interval per state, in the states' order")
-    lo = tuple(Fraction(str(box[s][0])) for s in system.states)
-    hi = tuple(Fraction(str(box[s][1])) for s in system.states)
-    return IntervalClaim(V, Fraction(str(cert["level"])), lo, hi)
+    lo = tuple(read_rational(box[s][0]) for s in system.states)
+    hi = tuple(read_rational(box[s][1]) for s in system.states)
+    return IntervalClaim(V, read_rational(cert["level"]), lo, hi)
 
 
 def claim_sentence(cert: dict[str, Any]) -> str:
     """What the certificate proves, from the certificate alone (``verify`` re-makes and compares)."""
     from lyapcheck.models.classes.claims import rounded
 
-    level = Fraction(str(cert["level"]))
+    level = read_rational(cert["level"])
     n = len(cert["box"])
     written = "V(x, a(x))" if any(any(e[n:]) for _, e in cert["V"]["terms"]) else "V(x)"
     # the box rounded towards the weaker claim: outwards where the set is said to lie in it, inwards

@@ -49,6 +49,7 @@ from lyapcheck.models.engines.recast_sos import (ConditionCertificate, Condition
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
+from lyapcheck.exact import read_rational
 
 #: the certificate's kind (``verify`` dispatches on it)
 KIND: Final = "recast_reach_avoid"
@@ -222,7 +223,7 @@ def certificate_json(loop: Loop, found: Found, D: Poly, dens: list[Any]) -> dict
 
 def reach_time(cert: dict[str, Any]) -> Fraction:
     """The certified time bound ``C / eps`` (s) of a certificate of this kind."""
-    return time_bound(Fraction(str(cert["C"])), Fraction(str(cert["eps_per_s"])))
+    return time_bound(read_rational(cert["C"]), read_rational(cert["eps_per_s"]))
 
 
 def sentence(cert: dict[str, Any]) -> str:
@@ -312,7 +313,7 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
         return False, "the model has no [sets] initial, unsafe and a one-piece goal for reach_avoid"
     loop = flat_loop(proved)
     ring = loop.ring
-    eps, C, delta = (Fraction(str(cert[key])) for key in ("eps_per_s", "C", "delta"))
+    eps, C, delta = (read_rational(cert[key]) for key in ("eps_per_s", "C", "delta"))
     if not (eps > 0 and delta > 0 and C >= 0):
         return False, "eps and delta must be > 0 and C >= 0"
     head = check_polynomial(loop, cert, "V", "a reach-avoid function")

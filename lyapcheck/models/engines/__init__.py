@@ -11,5 +11,5 @@
 - :mod:`~lyapcheck.models.engines.reasons`: what a search tried and what to try next, in one sentence.
 
 May import: lyapcheck.models.language, lyapcheck.sos, lyapcheck.integrator, lyapcheck.degrees,
-lyapcheck.fileio, lyapcheck.tolerances, lyapcheck.errors
+lyapcheck.exact, lyapcheck.fileio, lyapcheck.tolerances, lyapcheck.errors
 """

@@ -52,6 +52,7 @@ import numpy as np
 import numpy.typing as npt
 
 from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
+from lyapcheck.exact import read_rational
 
 FloatArray = npt.NDArray[np.float64]
 #: a float function of a batch of points ``(k, n)`` (scaled states): ``(k,)`` values
@@ -318,7 +319,7 @@ def certificate_function(terms: Mapping[str, Any], names: Sequence[str], n: int,
         if not isinstance(term, (list, tuple)) or len(term) != 2 or len(term[1]) != len(names):
             raise ValueError(f"a term must be [coefficient, {len(names)} exponents], got {str(term)[:80]}")
         key = tuple(int(e) for e in term[1])
-        merged[key] = merged.get(key, Fraction(0)) + Fraction(str(term[0]))
+        merged[key] = merged.get(key, Fraction(0)) + read_rational(term[0])
     ring = Ring(tuple(names))
     poly = ring.from_terms(merged)
     others = {name: values[name] for name in names[n:]}

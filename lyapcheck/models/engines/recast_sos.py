@@ -34,6 +34,7 @@ from lyapcheck.sos.certificates import GramPoly
 from lyapcheck.sos.definiteness import is_positive_semidefinite
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials
 from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Structure, Term, full_blocks
+from lyapcheck.exact import read_rational
 
 T = TypeVar("T")
 
@@ -58,7 +59,7 @@ def poly_from_json(ring: Ring, data: Any, key: str) -> Poly:
                 len(term[1]) != ring.nvars:
             raise ValueError(f"{key}: a term must be [coefficient, [{ring.nvars} exponents]]")
         m = tuple(exponent(e, key) for e in term[1])
-        out[m] = out.get(m, Fraction(0)) + Fraction(str(term[0]))
+        out[m] = out.get(m, Fraction(0)) + read_rational(term[0])
     return ring.from_terms(out)
 
 

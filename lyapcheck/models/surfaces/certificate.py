@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from lyapcheck.errors import CertificateError, InputFileError
+from lyapcheck.exact import refuse_oversized_numbers
 from lyapcheck.models.surfaces.certify import ModelCertification
 from lyapcheck.models.surfaces.counterexamples import check_counterexamples, describe_exception as _describe
 from lyapcheck.models.surfaces.documents import KIND, SCHEMA_VERSION, with_verdict as _with_verdict
@@ -74,10 +75,11 @@ def is_model_document(doc: Any) -> bool:
 
 
 def read_json(path: str | Path) -> Any:
-    """A JSON file, with one-line errors (missing, not JSON, unreadable)."""
+    """A JSON file, with one-line errors (missing, not JSON, unreadable, a number written with an
+    oversized exponent: :func:`lyapcheck.exact.refuse_oversized_numbers`)."""
     p = Path(path)
     try:
-        return json.loads(p.read_text())
+        doc = json.loads(p.read_text())
     except FileNotFoundError:
         raise InputFileError(f"certificate file '{p}' does not exist") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -86,10 +88,13 @@ def read_json(path: str | Path) -> Any:
         raise InputFileError(f"certificate file '{p}' cannot be read: {exc}") from None
     except OSError as exc:
         raise InputFileError(f"certificate file '{p}' cannot be read: {exc.strerror or exc}") from None
+    refuse_oversized_numbers(doc)  # (before any reader of the file's numbers: a report, simulate --certificate)
+    return doc
 
 
 def verify_document(doc: dict[str, Any]) -> list[Row]:
     """Re-check every claim of a model certificate exactly; (check, ok, message) rows."""
+    refuse_oversized_numbers(doc)
     if doc.get("schema_version") != SCHEMA_VERSION:
         raise InputFileError(f"model certificate has schema_version {doc.get('schema_version')!r}; this lyapcheck "
                              f"reads {SCHEMA_VERSION}")

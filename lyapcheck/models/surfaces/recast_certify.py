@@ -37,6 +37,7 @@ from lyapcheck.models.classes.recast_reach_avoid import KIND as RECAST_REACH_AVO
 from lyapcheck.models.surfaces.stated import Stated, check_declared, check_stated
 from lyapcheck.results import ConditionResult, Disturbances
 from lyapcheck.sos.polynomials import degree_in, to_fmpq
+from lyapcheck.exact import read_rational
 
 Row = tuple[str, bool, str]
 
@@ -164,13 +165,13 @@ def claim_sentence(cert: dict[str, Any]) -> str:
     eps = cert["epsilon"]
     if "ges" in cert:
         eps = cert.get("decrease_epsilon", eps)
-        ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
+        ges = {k: read_rational(v) for k, v in cert["ges"].items()}
         return (f"globally exponentially stable: |x(t) - x_eq| <= {rounded(ges['k'], 6, 'up')} |x0 - x_eq| exp(-r t) "
                 f"with r = {with_unit(ges['rate'], RATE_UNIT, 6, 'down')}, from every start (exactly k = {ges['k']}, "
                 f"r = {ges['rate']}: V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} "
                 "|z|^2, proved exactly on the recasting's relations; V_text in the certificate)")
     if "level" in cert:
-        level = Fraction(str(cert["level"]))
+        level = read_rational(cert["level"])
         return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "
                 f"{rounded(level, 6, 'down')} (exactly {level}) converges to the equilibrium{modulo} (V positive definite "
                 f"and V' <= -{eps} |dx|^2 / D there, D > 0, proved exactly on the recasting's relations; V_text in "
@@ -202,8 +203,8 @@ def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, s
         i = next(k for k in range(n) if m[k])
         j = next(k for k in range(n - 1, -1, -1) if m[k])
         P[i][j] = P[j][i] = coefficient if i == j else coefficient / 2
-    ges = {k: Fraction(str(v)) for k, v in cert["ges"].items()}
-    eps = Fraction(str(cert.get("decrease_epsilon", cert["epsilon"])))
+    ges = {k: read_rational(v) for k, v in cert["ges"].items()}
+    eps = read_rational(cert.get("decrease_epsilon", cert["epsilon"]))
     if set(ges) != {"c1", "c2", "rate", "k"} or ges["c1"] <= 0 or ges["c2"] <= 0 or \
             ges["rate"] != eps / (2 * ges["c2"]) or ges["k"] < 0 or ges["k"] ** 2 < ges["c2"] / ges["c1"]:
         return False, "the exponential bound's c1, c2, rate and k do not follow from V and epsilon"
@@ -325,10 +326,10 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
     if kind == KIND:
         from lyapcheck.models.classes.recast_bound import bound_claim
 
-        claim = bound_claim(model, {out: Fraction(str(item["bound"])) for out, item in cert["outputs"].items()})
+        claim = bound_claim(model, {out: read_rational(item["bound"]) for out, item in cert["outputs"].items()})
         return Stated("ultimate_bound", {k: v for k, v in claim.items() if k != "status"})
     if kind == "interval":
-        return Stated("ROA", {"level": Fraction(str(cert["level"]))})
+        return Stated("ROA", {"level": read_rational(cert["level"])})
     if kind == RECAST_BARRIER:
         if name != "barrier":
             raise ValueError(f"a barrier certificate under the class {name}")
@@ -336,7 +337,7 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
         degree = max((sum(e) for _, e in B), default=0)
         if isinstance(degree, bool) or not isinstance(degree, int):
             raise ValueError("B: exponents must be integers")
-        return Stated("safety", {"degree": degree, "lambda_per_s": Fraction(str(cert["lambda_per_s"]))})
+        return Stated("safety", {"degree": degree, "lambda_per_s": read_rational(cert["lambda_per_s"])})
     if kind == RECAST_REACH_AVOID:
         from lyapcheck.models.classes.recast_reach_avoid import reach_time
 
@@ -350,11 +351,11 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
     if isinstance(degree, bool) or not isinstance(degree, int):
         raise ValueError("V: exponents must be integers")
     if "level" in cert:
-        return Stated("ROA", {"degree": degree, "level": Fraction(str(cert["level"]))})
+        return Stated("ROA", {"degree": degree, "level": read_rational(cert["level"])})
     if "ges" in cert:
         ges = cert["ges"]
-        return Stated("GES", {"degree": degree, "k": Fraction(str(ges["k"])),
-                              "decay_rate_per_s": Fraction(str(ges["rate"]))})
+        return Stated("GES", {"degree": degree, "k": read_rational(ges["k"]),
+                              "decay_rate_per_s": read_rational(ges["rate"])})
     return Stated("GAS", {"degree": degree})
 
 
@@ -522,19 +523,19 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     if not ok:
         return False, why
     l2 = state_square(loop)
-    eps = Fraction(str(cert["epsilon"]))
+    eps = read_rational(cert["epsilon"])
     if eps <= 0:
         return False, "epsilon must be > 0"
     region = None
     pos_eps = eps
     if "level" in cert:
-        level = Fraction(str(cert["level"]))
+        level = read_rational(cert["level"])
         if level <= 0:
             return False, "the level must be > 0"
         if c.get("level") is not None and c.get("level") != float(level):
             return False, "the stated level is not the certificate's"
         region = V - to_fmpq(level)
-        pos_eps = Fraction(str(cert["positivity_epsilon"]))
+        pos_eps = read_rational(cert["positivity_epsilon"])
         if pos_eps <= 0:
             return False, "positivity_epsilon must be > 0"
     pos = ConditionCertificate.from_json(ring, cert["positivity"], len(loop.relations))
@@ -544,7 +545,7 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     dec = ConditionCertificate.from_json(ring, cert["decrease"], len(loop.relations))
     if (region is None) != (dec.rho is None):
         return False, "a region's decrease needs its multiplier rho, and only a region's"
-    decrease = Fraction(str(cert.get("decrease_epsilon", eps)))
+    decrease = read_rational(cert.get("decrease_epsilon", eps))
     if decrease < eps:
         return False, "decrease_epsilon must be at least epsilon"
     ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(decrease), loop.relations, dec, region=region)

@@ -26,6 +26,7 @@ from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, to_fmpq
 from lyapcheck.tolerances import CONVERGED_BALL_RADIUS
+from lyapcheck.exact import read_rational
 
 if TYPE_CHECKING:
     from lyapcheck.models.engines.numeric import SetCrossCheck
@@ -415,7 +416,7 @@ def set_cross_check(loop: Loop, result: ConditionResult, starts: Any, angles: tu
     if "epsilon" in cert and "denominator" in cert:
         value, q, D = certified_value(loop, result, state_square(loop),
                                       poly_from_json(loop.ring, cert["denominator"], "denominator"))
-        decrease = CertifiedDecrease(epsilon=float(Fraction(str(cert["epsilon"]))), q=q, D=D)
+        decrease = CertifiedDecrease(epsilon=float(read_rational(cert["epsilon"])), q=q, D=D)
     else:
         value, = certified_value(loop, result)
     field = FloatLoop(system)

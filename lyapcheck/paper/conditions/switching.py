@@ -55,6 +55,7 @@ from lyapcheck.paper.claims import ARGUMENT_SWITCHING, ARGUMENT_VERTEX
 from lyapcheck.paper.conditions.base import System
 from lyapcheck.results import ConditionResult
 from lyapcheck.errors import CertificateError, InvalidParameter, SolverError
+from lyapcheck.exact import read_rational
 
 if TYPE_CHECKING:
     import numpy as np
@@ -382,7 +383,7 @@ def growth_upper_bound(trace: Interval, det: Interval) -> float:
 
 
 def _fraction_field(cert: dict[str, Any], key: str) -> Fraction:
-    value = Fraction(str(cert[key]))
+    value = read_rational(cert[key])
     if value.numerator.bit_length() > MAX_NUMBER_BITS or value.denominator.bit_length() > MAX_NUMBER_BITS:
         raise ValueError(f"'{key}' has more than {MAX_NUMBER_BITS} bits")
     return value
@@ -397,7 +398,7 @@ def _int_pair(cert: dict[str, Any], key: str, upper: int) -> list[int]:
 
 
 def _interval_field(cert: dict[str, Any], key: str) -> Interval:
-    lo, hi = (Fraction(str(x)) for x in cert[key])
+    lo, hi = (read_rational(x) for x in cert[key])
     if lo > hi:
         raise ValueError(f"'{key}' is an empty interval")
     return lo, hi
@@ -774,15 +775,15 @@ def verify(system: System, certificate: dict[str, Any]) -> tuple[bool, str]:
     try:
         argument = certificate["argument"]
         if argument == ARGUMENT_SWITCHING:
-            rhos = [Fraction(str(r)) for r in certificate["rho"]]
+            rhos = [read_rational(r) for r in certificate["rho"]]
             if len(rhos) != 2:
                 raise ValueError("'rho' must hold two values")
         elif argument == ARGUMENT_VERTEX:
-            rhos = [Fraction(str(certificate["rho"]))]
+            rhos = [read_rational(certificate["rho"])]
         elif argument == ARGUMENT_CQLF:
-            rho_lo = Fraction(str(certificate["rho_lo"]))
+            rho_lo = read_rational(certificate["rho_lo"])
             p = exact.from_json(certificate["P"])
-            rate = Fraction(str(certificate["decay_rate"]))
+            rate = read_rational(certificate["decay_rate"])
         else:
             raise ValueError(f"unknown argument {argument!r}")
     except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
