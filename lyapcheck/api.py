@@ -384,19 +384,15 @@ def _certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     from lyapcheck.models.surfaces.certify import certify_model
 
     recast = _recast_model(model, settings, candidate)
-    if recast is not None:
-        from lyapcheck.models.surfaces.recast_certify import certify_recast
-
-        recast_box = None
-        if box:
-            recast, recast_box = _recast_at_box_centre(recast, settings, candidate, box)
+    loaded: "Model | RecastModel"
+    if recast is not None:  # a loop with functions over a box is read at the box's centre
+        loaded, parsed = _recast_at_box_centre(recast, settings, candidate, box) if box else (recast, None)
+    else:
+        polynomial = _load_with_settings(model, settings)
         with _argument_names():
-            verdict, results, document = certify_recast(recast, classes=classes, candidate=candidate,
-                                                        time_limit_s=time_limit_s, box=recast_box)
-        return CertifyResult(verdict=verdict, dynamics="model", conditions=results, document=document)
-    loaded = _load_with_settings(model, settings)
+            parsed = parse_model_box(polynomial, box) if box else None
+        loaded = polynomial
     with _argument_names():
-        parsed = parse_model_box(loaded, box) if box else None
         found = certify_model(loaded, classes=classes, candidate=candidate, time_limit_s=time_limit_s, box=parsed)
     return CertifyResult(verdict=found.verdict, dynamics="model", conditions=found.results,
                          document=build_document(found))

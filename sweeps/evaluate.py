@@ -41,13 +41,12 @@ took (which the store does not keep: a wall time would make a resumed store diff
 uninterrupted one).
 
 * A point: :func:`lyapcheck.models.surfaces.certify.certify_model` on the model with the point's exact
-  parameters (``Fraction`` of the stored float); for a loop with functions,
-  :func:`lyapcheck.models.surfaces.recast_certify.certify_recast` on the model text read again with them
-  (:meth:`sweeps.spec.ModelSweepSpec.model_at`), cross-checked by :mod:`sweeps.recast_crosscheck`.
+  parameters (``Fraction`` of the stored float); for a loop with functions, on the model text read
+  again with them (:meth:`sweeps.spec.ModelSweepSpec.model_at`), cross-checked by :mod:`sweeps.recast_crosscheck`.
 * A box: first the linearization, exactly, at the box's corners (milliseconds): an unstable corner
   proves that no stability class can certify the box (its status is ``refuted``, and the stability
   classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box.
-  A box of a loop with functions: ``certify_recast`` over the box on the model read at its centre
+  A box of a loop with functions: ``certify_model`` over the box on the model read at its centre
   (what ``lyapcheck certify FILE --box`` runs), no corner check, cross-checked at random parameter
   points by :func:`sweeps.recast_crosscheck.cross_check_recast_box`.
 
@@ -498,26 +497,23 @@ class _Point:
 
 
 def _certify_point(spec: ModelSweepSpec, row: Sequence[float]) -> _Point:
-    """Certify one grid point (``certify_model``, or ``certify_recast`` for a loop with functions)."""
+    """Certify one grid point (``certify_model``, on either kind of loop)."""
+    from lyapcheck.errors import ModelFileError
     from lyapcheck.models.engines import store
     from lyapcheck.models.surfaces.certificate import build_document
     from lyapcheck.models.surfaces.certify import certify_model
     from lyapcheck.models.language.modelfile import Model
 
     model = spec.model_at(row)
-    if isinstance(model, Model):
+    try:
         with store.disabled():  # a point of its own (lyapcheck.models.engines.store.disabled)
             found = certify_model(model, classes=spec.classes)
-        return _Point(model, found.results, lambda: build_document(found))
-    from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.surfaces.recast_certify import certify_recast
-
-    try:
-        _, results, document = certify_recast(model, classes=spec.classes)
     except ModelFileError as exc:  # the recasting's own proof (a square root's argument >= 0) failed here
+        if isinstance(model, Model):
+            raise
         why = f"the loop could not be recast at this point: {exc}"
         return _Point(model, {c: ConditionResult(c, "not_certified", why) for c in spec.classes}, dict, why)
-    return _Point(model, results, lambda: document)
+    return _Point(model, found.results, lambda: build_document(found))
 
 
 def evaluate_model_points(worker_text: str, coords: np.ndarray) -> dict[str, np.ndarray]:
@@ -621,12 +617,13 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
 def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Fraction, Fraction]],
                 out: dict[str, np.ndarray], j: int) -> None:
     """One box of a loop with functions, as ``lyapcheck certify FILE --box`` certifies it: the model
-    read at the box's centre (:meth:`sweeps.spec.ModelSweepSpec.recast_box`), then ``certify_recast``
+    read at the box's centre (:meth:`sweeps.spec.ModelSweepSpec.recast_box`), then ``certify_model``
     over the box; a certified box is simulated at its random parameter points
     (:func:`sweeps.recast_crosscheck.cross_check_recast_box`), and the points where its certificates
     do not apply are named in the note. No corner is checked (``unstable_corners`` stays -1)."""
     from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.surfaces.recast_certify import certify_recast
+    from lyapcheck.models.surfaces.certificate import build_document
+    from lyapcheck.models.surfaces.certify import certify_model
     from sweeps.recast_crosscheck import cross_check_recast_box
 
     assert spec.boxes is not None
@@ -635,7 +632,8 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     try:
         with UNIT_LOCK:
             model, box = spec.recast_box(cell)
-            _, results, document = certify_recast(model, classes=spec.classes, box=box)
+            certified = certify_model(model, classes=spec.classes, box=box)
+            results, document = certified.results, build_document(certified)
     except ModelFileError as exc:  # the recasting over this box (a square root's argument, the equilibrium) failed
         note = f"the loop could not be recast over this box: {exc}"
         model, results, document = None, {c: ConditionResult(c, "not_certified", note) for c in spec.classes}, {}

@@ -91,7 +91,7 @@ model text read again with the point's values as overrides (:meth:`ModelSweepSpe
 the loop is recast at them. Its boxes (``mode = "boxes"``, classes :func:`recast_box_classes`) are
 each what ``lyapcheck certify FILE --box`` certifies: the model read again at the box's centre
 (:meth:`ModelSweepSpec.recast_box`), then
-:func:`lyapcheck.models.surfaces.recast_certify.certify_recast` over the box. No corner is checked for
+:func:`lyapcheck.models.surfaces.certify.certify_model` over the box. No corner is checked for
 instability there (``unstable_corners`` -1): an undecided box is split.
 
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):

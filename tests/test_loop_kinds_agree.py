@@ -68,7 +68,7 @@ def test_the_point_classes_over_a_box_say_the_same_sentence(tmp_path: Path) -> N
 @pytest.mark.parametrize("box", [False, True])
 def test_a_class_not_taken_on_a_loop_with_functions_is_never_listed_as_taken(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, box: bool) -> None:
-    """The generic refusal of ``certify_recast`` (a class its runner gave no answer for) listed every
+    """The generic refusal of ``certify_model`` on a loop with functions (a class its runner gave no answer for) listed every
     class, the refused one too ("...: the classes here are linearization, ..., barrier")."""
     import lyapcheck
     from lyapcheck.models.surfaces import recast_run

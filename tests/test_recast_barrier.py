@@ -15,7 +15,7 @@ from click.testing import CliRunner, Result
 from lyapcheck.cli import app
 from lyapcheck.models.language.modelfile import parse_any_model
 from lyapcheck.models.language.recast import RecastModel
-from lyapcheck.models.surfaces.recast_certify import verify_recast
+from lyapcheck.models.surfaces.certificate import verify_document
 
 app._register_commands()
 
@@ -75,13 +75,13 @@ def test_an_unsafe_saturated_acc_gets_a_counterexample_on_the_true_loop(tmp_path
     assert barrier["refutation"]["point"][0] <= 5 + 1e-6 and barrier["refutation"]["time"] > 0  # the gap closed
     # the sentence names the true loop's simulation, and verify re-simulates the counterexample on it
     assert "true loop" in barrier["summary"]
-    assert all(ok for _, ok, _ in verify_recast(doc)), verify_recast(doc)
+    assert all(ok for _, ok, _ in verify_document(doc)), verify_document(doc)
 
 
 def _forged(doc: dict[str, Any], change: Any) -> list[tuple[str, bool, str]]:
     forged = copy.deepcopy(doc)
     change(forged)
-    return verify_recast(forged)
+    return verify_document(forged)
 
 
 def _failed(rows: list[tuple[str, bool, str]]) -> list[str]:
@@ -101,7 +101,7 @@ def test_a_safe_acc_with_a_function_gets_a_barrier_that_verify_re_checks(tmp_pat
     assert barrier["summary"].startswith("safety: no trajectory that starts in the initial set")
     assert doc["answers"]["safety"]["answer"] == "safe"
     assert barrier["falsification"]["entry"] is None
-    assert not _failed(verify_recast(doc))
+    assert not _failed(verify_document(doc))
     assert run_cli("verify", str(out)).exit_code == 0
 
     cert = barrier["certificate"]

@@ -17,7 +17,7 @@ from click.testing import CliRunner, Result
 
 from lyapcheck import api
 from lyapcheck.cli import app
-from lyapcheck.models.surfaces.recast_certify import verify_recast
+from lyapcheck.models.surfaces.certificate import verify_document
 from tests.recast_loops import PENDULUM, SPRING
 from tests.test_recast_box_safety import PULSE
 
@@ -74,7 +74,7 @@ def test_a_barrier_counterexample_is_re_simulated_on_the_true_loop(swinging: tup
     doc, out = swinging
     checked = run_cli("verify", str(out))
     assert checked.exit_code == 0, checked.output
-    row = next(why for name, ok, why in verify_recast(doc) if name == "barrier")
+    row = next(why for name, ok, why in verify_document(doc) if name == "barrier")
     assert row.startswith("the counterexample re-simulated from its start and disturbance enters the unsafe set at")
 
 
@@ -125,13 +125,13 @@ def test_a_reach_avoid_counterexample_is_re_simulated_until_the_goal(tmp_path: P
     assert text != doc["model"]["text"]
     regoaled = copy.deepcopy(doc)
     regoaled["model"].update(text=text, sha256=hashlib.sha256(text.encode()).hexdigest())
-    rows = {name: (ok, why) for name, ok, why in verify_recast(regoaled)}
+    rows = {name: (ok, why) for name, ok, why in verify_document(regoaled)}
     assert rows["model"][0]
     ok, why = rows["reach_avoid"]
     assert not ok and "does not enter the unsafe set before it reaches the goal" in why, why
     as_barrier = copy.deepcopy(regoaled)
     as_barrier["conditions"]["barrier"] = {**as_barrier["conditions"].pop("reach_avoid"), "property": "safety"}
-    rows = {name: (ok, why) for name, ok, why in verify_recast(as_barrier)}
+    rows = {name: (ok, why) for name, ok, why in verify_document(as_barrier)}
     assert rows["barrier"][0], rows["barrier"]
 
 

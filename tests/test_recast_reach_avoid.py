@@ -16,7 +16,7 @@ from click.testing import CliRunner, Result
 from lyapcheck.cli import app
 from lyapcheck.models.language.modelfile import parse_any_model
 from lyapcheck.models.language.recast import RecastModel
-from lyapcheck.models.surfaces.recast_certify import verify_recast
+from lyapcheck.models.surfaces.certificate import verify_document
 from tests.recast_loops import PENDULUM, SPRING, rk4
 from tests.test_recast_barrier import _failed, _forged
 
@@ -58,7 +58,7 @@ def test_a_spring_with_a_sine_gets_a_reach_avoid_function_that_verify_re_checks(
     assert cert["kind"] == "recast_reach_avoid" and ra["reach_time_bound_s"] == float(bound)
     assert ra["summary"].startswith("reach-avoid: every trajectory that starts in the initial set reaches the goal")
     assert ra["falsification"]["entry"] is None and ra["closest_approach"] < 0
-    assert not _failed(verify_recast(doc))
+    assert not _failed(verify_document(doc))
     assert run_cli("verify", str(out)).exit_code == 0
 
     # the claim on the true loop, by an independent integrator: starts on the initial circle reach the
@@ -135,7 +135,7 @@ def test_an_unsafe_set_crossed_before_the_goal_is_a_counterexample_on_the_true_l
         X = rk4(spring_field, X, step, step)
         assert np.sum(X ** 2) > 0.1
     assert X[0, 0] <= -0.5 + 1e-3, X
-    assert not _failed(verify_recast(doc))
+    assert not _failed(verify_document(doc))
 
 
 def test_a_saturated_loop_says_why_a_reach_avoid_function_is_hard_to_find(tmp_path: Path) -> None:

@@ -261,16 +261,16 @@ def test_a_false_certificate_of_the_pendulum_raises_the_alarm() -> None:
 def test_a_sweep_shouts_a_violation_its_certifier_reported(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A certificate whose own simulation when certified found a start that did not converge (here
     put there by a wrapper) is a soundness violation of the sweep: exit 1, shouted."""
-    import lyapcheck.models.surfaces.recast_certify as recast_certify
+    import lyapcheck.models.surfaces.certify as certify
 
-    honest = recast_certify.certify_recast
+    honest = certify.certify_model
 
     def flagged(*args: Any, **kwargs: Any) -> Any:
-        verdict, results, document = honest(*args, **kwargs)
-        document["conditions"]["sos_gas"].update({"soundness_violation": True, "starts_in_set_not_converged": 1})
-        return verdict, results, document
+        found = honest(*args, **kwargs)
+        found.results["sos_gas"].numbers.update({"soundness_violation": True, "starts_in_set_not_converged": 1})
+        return found
 
-    monkeypatch.setattr(recast_certify, "certify_recast", flagged)
+    monkeypatch.setattr(certify, "certify_model", flagged)
     spec = write(tmp_path, KAPPA.replace("num = 3", "num = 2"), ILOS)
     result = cli("sweep", str(spec), "--out", str(tmp_path / "out.zarr"), "--workers", "0", "--quiet")
     assert result.exit_code == 1, result.output

@@ -46,10 +46,19 @@ Row = tuple[str, bool, str]
 
 
 def build_document(result: ModelCertification) -> dict[str, Any]:
+    """The certificate document of either kind of loop: a polynomial or rational loop states its
+    cleared ``field`` (denominators' proofs, scaling), a loop with functions its ``recast`` table (the
+    recasting's auxiliaries, flows and relations, and its angles); the rest is common."""
     from lyapcheck.answers import answers_of
     from lyapcheck.numerics import package_versions
 
     model = result.model
+    recast: Any = model  # (a loop with functions has its recasting's loop; lyapcheck.models.language.recast
+    #                      is not imported for a polynomial one)
+    loop = ({"recast": {**recast.system.to_json(), "angles": {a: list(sc) for a, sc in result.loop.angles.items()}}}
+            if result.loop is not None else
+            {"field": {"denominators": result.denominators,
+                       "scaling": result.scaling.to_json() if result.scaling is not None else None}})
     return {
         "schema_version": SCHEMA_VERSION,
         "kind": KIND,
@@ -60,8 +69,7 @@ def build_document(result: ModelCertification) -> dict[str, Any]:
         "equilibrium": {s: str(v) for s, v in zip(model.states, model.equilibrium)},
         "parameters": {k: str(v) for k, v in model.parameters.items()},
         "disturbances": {k: str(v) for k, v in model.disturbances.items()},
-        "field": {"denominators": result.denominators,
-                  "scaling": result.scaling.to_json() if result.scaling is not None else None},
+        **loop,
         **({"box": result.box.to_json()} if result.box is not None else {}),
         "conditions": (conditions := {name: r.to_json() for name, r in result.results.items()}),
         "answers": answers_of(conditions),
@@ -99,38 +107,58 @@ def verify_document(doc: dict[str, Any]) -> list[Row]:
         raise InputFileError(f"model certificate has schema_version {doc.get('schema_version')!r}; this lyapcheck "
                              f"reads {SCHEMA_VERSION}")
     try:
+        model, rows = _read_model(doc)
+        if model is None:
+            return rows
         if isinstance(doc.get("recast"), dict):  # a loop with functions (lyapcheck.models.surfaces.recast_certify)
             from lyapcheck.models.surfaces.recast_certify import verify_recast
 
-            return verify_recast(doc)
-        return _verify(doc)
+            return verify_recast(doc, model, rows)
+        return _verify(doc, model, rows)
     except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError, RecursionError) as exc:
         text = repr(exc)
         raise CertificateError(f"certificate is malformed: {text[:200]}") from None
 
 
-def _verify(doc: dict[str, Any]) -> list[Row]:
+def _read_model(doc: dict[str, Any]) -> tuple[Any, list[Row]]:
+    """The document's model, read again from its text (with its ``--set`` overrides and, on a loop with
+    functions, its candidate recast along), and the rows every document starts with: the text's
+    SHA-256, its parse, its kind (a ``recast`` table exactly when the loop has functions), the stated
+    parameters and equilibrium, and the declared figures; (None, rows) when the rest cannot be
+    checked."""
     from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.loop.field import Scaling, apply_scaling, clear, shifted_field
-    from lyapcheck.models.language.modelfile import parse_model
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.language.recast import RecastModel
     from lyapcheck.models.surfaces.stated import check_declared
 
-    rows: list[Row] = []
-    model_part = doc["model"]
-    text = model_part["text"]
-    digest = hashlib.sha256(text.encode()).hexdigest()
-    if digest != model_part["sha256"]:
-        return [("model", False, "the model text does not match its SHA-256: the text was changed")]
+    part = doc["model"]
+    text = part["text"]
+    if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
+        return None, [("model", False, "the model text does not match its SHA-256: the text was changed")]
     try:
-        model = parse_model(text, model_part.get("file", "<certificate>"), doc.get("overrides") or {})
+        model = parse_any_model(text, part.get("file", "<certificate>"), doc.get("overrides") or {},
+                                candidate=doc.get("candidate"))
     except ModelFileError as exc:
-        return [("model", False, f"the stored model text no longer parses: {exc}")]
-    rows.append(("model", True, "the model text matches its SHA-256 and parses"))
+        return None, [("model", False, f"the stored model text no longer parses: {exc}")]
+    recast = isinstance(doc.get("recast"), dict)
+    if recast != isinstance(model, RecastModel):
+        return None, [("model", False, "the stored model has no functions: it is not a recast loop" if recast else
+                       "the stored model uses functions: its certificate must state its recasting ('recast')")]
+    rows: list[Row] = [("model", True, "the model text matches its SHA-256, parses and is recast again from it"
+                        if recast else "the model text matches its SHA-256 and parses")]
     same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
             and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
     rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
                  "the stated parameters or equilibrium differ from the model text's"))
     rows.append(check_declared(doc, model))
+    return model, rows
+
+
+def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
+    """The rest of a polynomial or rational loop's document (after :func:`_read_model`'s rows)."""
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.loop.field import Scaling, apply_scaling, clear, shifted_field
+
     box = None
     if "box" in doc:
         from lyapcheck.models.loop.boxes import ModelBox, check_box

@@ -50,6 +50,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from lyapcheck.models.engines.numeric import SetCrossCheck
     from lyapcheck.models.language.parameter_box import ModelBox
+    from lyapcheck.models.language.recast import RecastModel
 
 log = logging.getLogger(__name__)
 
@@ -81,15 +82,21 @@ class Candidate:
 
 @dataclass
 class ModelCertification:
-    """What ``certify --model`` found (the document is :func:`lyapcheck.models.surfaces.certificate.build_document`)."""
+    """What ``certify --model`` found, on either kind of loop (the document is
+    :func:`lyapcheck.models.surfaces.certificate.build_document`).
 
-    model: Model
+    A polynomial or rational loop carries its cleared field's ``denominators`` and ``scaling``; a loop
+    with functions (``model`` a :class:`~lyapcheck.models.language.recast.RecastModel`) carries its
+    recasting's ``loop`` (its angles, the document's ``recast`` table)."""
+
+    model: "Model | RecastModel"
     candidate: Candidate | None
     results: dict[str, ConditionResult]
     denominators: list[dict[str, Any]] = field(default_factory=list)
     scaling: Scaling | None = None
     seconds: dict[str, float] = field(default_factory=dict)
     box: "ModelBox | None" = None
+    loop: Any = None
 
     @property
     def verdict(self) -> str:
@@ -131,7 +138,7 @@ def parse_candidate(model: Model, text: str) -> Candidate:
     return Candidate(text=text, poly=poly)
 
 
-def _has_safety_sets(model: Model, goal: bool = False) -> bool:
+def _has_safety_sets(model: "Model | RecastModel", goal: bool = False) -> bool:
     """The model's ``[sets]`` has the two a barrier needs, ``initial`` and ``unsafe`` (and, with
     ``goal``, the ``goal`` that reach_avoid needs too)."""
     sets = getattr(model, "sets", None) or {}
@@ -153,8 +160,12 @@ def refuse_candidate_over_box(source: str, candidate: str | None, box: object | 
         raise ModelFileError(source, "--candidate", "not over a --box (the candidate class certifies a point)")
 
 
-def class_selection(classes: str | Sequence[str] | None, model: Model, candidate: Candidate | None) -> tuple[str, ...]:
-    """``None`` (every class that applies), a comma-separated string or names."""
+def class_selection(classes: str | Sequence[str] | None, model: "Model | RecastModel", candidate: Candidate | None
+                    ) -> tuple[str, ...]:
+    """The classes to run on either kind of loop: ``None`` (every class that applies: ``candidate``
+    with ``--candidate``, ``sos_bound`` with disturbances, ``barrier`` with ``[sets]`` initial and
+    unsafe, ``reach_avoid`` with a goal too), a comma-separated string or names (a safety class named
+    needs its sets: one line at ``[sets]`` otherwise)."""
     if classes is None or classes == "all":
         chosen = [c for c in MODEL_CLASSES if (c != "candidate" or candidate is not None)
                   and (c != "sos_bound" or model.disturbances) and (c != "barrier" or _has_safety_sets(model))
@@ -169,21 +180,25 @@ def class_selection(classes: str | Sequence[str] | None, model: Model, candidate
     from lyapcheck.models.language.sets import require_sets
 
     for name in names:  # a safety class asked for by name needs its sets (one line at [sets], exit 2)
-        require_sets(model, name)
+        require_sets(model, name)  # type: ignore[arg-type]  # (a loop with functions too: it reads source and sets)
     return tuple(c for c in MODEL_CLASSES if c in names)
 
 
-def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, candidate: str | None = None,
-                  time_limit_s: float | None = None, box: "ModelBox | None" = None) -> ModelCertification:
-    """Run the chosen classes on ``model`` (see the module docstring); with a ``box`` of parameters,
-    each certified class holds for every parameter value in it (:mod:`lyapcheck.models.loop.boxes`:
-    ``quadratic``, ``sos_gas``, ``roa`` and ``sos_bound``; the others are not_applicable)."""
+def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] | None = None,
+                  candidate: str | None = None, time_limit_s: float | None = None, box: "ModelBox | None" = None
+                  ) -> ModelCertification:
+    """Run the chosen classes on ``model``, a polynomial or rational loop or a loop with functions
+    (see the module docstring); with a ``box`` of parameters, each certified class holds for every
+    parameter value in it (:mod:`lyapcheck.models.loop.boxes`; a loop with functions is read at the
+    box's centre, :func:`lyapcheck.models.surfaces.recast_run.certify_box`)."""
     import time
 
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
     refuse_candidate_over_box(model.source, candidate, box)
+    if not isinstance(model, Model):  # a loop with functions: its classes run on the recasting
+        return _certify_functions(model, classes, candidate, limit, box)
     cand = parse_candidate(model, candidate) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
     out = ModelCertification(model=model, candidate=cand, results={}, box=box)
@@ -332,6 +347,49 @@ def certify_model(model: Model, *, classes: str | Sequence[str] | None = None, c
         if text is not None:
             r.summary = text
     return out
+
+
+def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None, candidate: str | None,
+                       limit: float, box: "ModelBox | None") -> ModelCertification:
+    """:func:`certify_model` on a loop with functions: the classes run on its recasting
+    (:func:`lyapcheck.models.surfaces.recast_run.certify`), each certified one's sentence made from its
+    certificate; with ``box`` (``model`` read at its centre), every certified claim holds for every value
+    of it and says so first, and a refutation is the centre's and says so."""
+    from lyapcheck.models.classes.claims import box_prefix, covered
+    from lyapcheck.models.classes.recast_interval import box_units
+    from lyapcheck.models.surfaces import recast_run
+    from lyapcheck.models.surfaces.recast_certify import sentence_of
+
+    cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
+    chosen = class_selection(classes, model, cand)
+    results, loop, seconds = recast_run.certify(model, chosen, model.candidate_v if cand is not None else None,
+                                                limit, box)
+    if "candidate" in chosen and "candidate" not in results:  # asked for without --candidate
+        results["candidate"] = ConditionResult("candidate", "not_applicable", reasons.NEEDS_CANDIDATE)
+    for name in chosen:
+        if name not in results:  # (the sentence never lists the class it refuses)
+            where = " over a box: certify a point (--set NAME=VALUE)" if box is not None else ""
+            results[name] = ConditionResult(name, "not_applicable", "not taken yet for a loop with functions (sin, "
+                                            "sqrt, sat, ...)" + where)
+    results = {name: results[name] for name in chosen}
+    # the loop is recast with every disturbance at 0
+    coverage: Disturbances | None = "zero" if model.disturbances else None
+    units = box_units(model)
+    for name, r in results.items():
+        if r.status == "certified" and name not in ("linearization", "sos_bound"):  # (sos_bound's is its own)
+            if units is not None and r.certificate.get("kind") == "interval":
+                r.certificate["units"] = units  # (the box it prints, in the states' units)
+            r.summary = sentence_of(r.certificate)
+        if coverage is not None and name != "sos_bound":
+            if r.disturbances is None:  # ("all": a region proved for every disturbance value)
+                r.disturbances = coverage
+            if r.status in ("certified", "refuted"):
+                r.summary = covered(r.disturbances, r.summary)
+    if box is not None:
+        for name, r in results.items():
+            if r.status in ("certified", "refuted"):
+                r.summary = box_prefix(box, r.status) + r.summary
+    return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds, box=box, loop=loop)
 
 
 def _ball_after_sos(out: ModelCertification, model: Model, box: "ModelBox | None", stopped: list[BaseException],

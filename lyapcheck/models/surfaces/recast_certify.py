@@ -1,4 +1,4 @@
-"""``certify --model`` and ``verify`` for a loop with functions (sin, sqrt, sat, ...).
+"""``verify`` of a loop with functions (sin, sqrt, sat, ...), and the sentences of its certificates.
 
 The certificate document is a model certificate (``kind`` lyapcheck-model-certificate, schema 1;
 :mod:`lyapcheck.models.surfaces.certificate`) with a ``"recast"`` table: the recasting's variables, each
@@ -17,125 +17,27 @@ the verdict. It never calls a solver.
 
 from __future__ import annotations
 
-import hashlib
 import re
 from fractions import Fraction
-from typing import Any, Callable, Final, Sequence
+from typing import Any, Callable, Final
 
-from lyapcheck.errors import InvalidParameter, ModelFileError
+from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel
 from lyapcheck.models.classes.recast_bound import KIND, check_bound
 from lyapcheck.models.classes.recast_interval import box_units
 from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
                                              jacobian, lie, state_square, v_names, v_text)
-from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES, box_robust, boxed_loop, robust_of
+from lyapcheck.models.surfaces.recast_run import box_robust, boxed_loop, robust_of
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered
 from lyapcheck.models.classes.recast_barrier import KIND as RECAST_BARRIER
 from lyapcheck.models.classes.recast_reach_avoid import KIND as RECAST_REACH_AVOID
-from lyapcheck.models.surfaces.stated import Stated, check_declared, check_stated
-from lyapcheck.results import ConditionResult, Disturbances
+from lyapcheck.models.surfaces.stated import Stated, check_stated
 from lyapcheck.sos.polynomials import degree_in, to_fmpq
 from lyapcheck.exact import read_rational
 
 Row = tuple[str, bool, str]
-
-
-def chosen_classes(classes: str | Sequence[str] | None, candidate: str | None, disturbed: bool = False,
-                   model: RecastModel | None = None) -> tuple[str, ...]:
-    """The classes asked for among every model class; the default is every recast class (``candidate``
-    with ``--candidate``, ``sos_bound`` with disturbances, ``barrier`` with ``[sets]`` initial and
-    unsafe, ``reach_avoid`` with a goal too). A safety class named needs its sets (``model``: one line
-    at ``[sets]`` otherwise)."""
-    from lyapcheck.models.classes.registry import NAMES
-    from lyapcheck.models.language.sets import require_sets
-
-    sets = model.sets if model is not None else {}
-    if classes is None or classes == "all":
-        names = [c for c in RECAST_CLASSES if (c != "candidate" or candidate is not None)
-                 and (c != "sos_bound" or disturbed) and (c != "barrier" or ("initial" in sets and "unsafe" in sets))
-                 and (c != "reach_avoid" or ("initial" in sets and "unsafe" in sets and "goal" in sets))]
-    else:
-        names = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes)]
-        bad = [c for c in names if c not in NAMES]
-        if not names or bad:
-            raise InvalidParameter("classes", "classes among " + ", ".join(NAMES), ",".join(map(str, names)))
-        for name in ("barrier", "reach_avoid"):
-            if model is not None and name in names:
-                require_sets(model, name)  # type: ignore[arg-type]  # (it reads only source and sets)
-    return tuple(c for c in NAMES if c in names)
-
-
-def certify_recast(model: RecastModel, *, classes: str | Sequence[str] | None = None, candidate: str | None = None,
-                   time_limit_s: float | None = None, box: ModelBox | None = None
-                   ) -> tuple[str, dict[str, ConditionResult], dict[str, Any]]:
-    """Run the classes on a recast loop: the verdict, the results and the certificate document.
-    With ``box`` (``model`` read at its centre), every certified claim holds for every value of it and
-    says so first; a refutation is the centre's and says so."""
-    from lyapcheck import tolerances as tol
-    from lyapcheck.models.surfaces import recast_run
-    from lyapcheck.models.engines import reasons
-    from lyapcheck.models.surfaces.certify import refuse_candidate_over_box, verdict_of
-
-    limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
-    refuse_candidate_over_box(model.source, candidate, box)  # (as on a polynomial loop: exit 2)
-    chosen = chosen_classes(classes, candidate, bool(model.disturbances), model)
-    V = model.candidate_v if candidate is not None else None
-    results, loop, _ = recast_run.certify(model, chosen, V, limit, box)
-    if "candidate" in chosen and "candidate" not in results:  # asked for without --candidate
-        results["candidate"] = ConditionResult("candidate", "not_applicable", reasons.NEEDS_CANDIDATE)
-    for name in chosen:
-        if name not in results:  # (the sentence never lists the class it refuses)
-            where = " over a box: certify a point (--set NAME=VALUE)" if box is not None else ""
-            results[name] = ConditionResult(name, "not_applicable", "not taken yet for a loop with functions (sin, "
-                                            "sqrt, sat, ...)" + where)
-    results = {name: results[name] for name in chosen}
-    # the loop is recast with every disturbance at 0
-    coverage: Disturbances | None = "zero" if model.disturbances else None
-    units = box_units(model)
-    for name, r in results.items():
-        if r.status == "certified" and name not in ("linearization", "sos_bound"):  # (sos_bound's is its own)
-            if units is not None and r.certificate.get("kind") == "interval":
-                r.certificate["units"] = units  # (the box it prints, in the states' units)
-            r.summary = sentence_of(r.certificate)
-        if coverage is not None and name != "sos_bound":
-            if r.disturbances is None:  # ("all": a region proved for every disturbance value)
-                r.disturbances = coverage
-            if r.status in ("certified", "refuted"):
-                r.summary = covered(r.disturbances, r.summary)
-    if box is not None:
-        for name, r in results.items():
-            if r.status in ("certified", "refuted"):
-                r.summary = box_prefix(box, r.status) + r.summary
-    conditions = {name: r.to_json() for name, r in results.items()}
-    verdict = verdict_of(conditions)
-    return verdict, results, build_document(model, loop, candidate, conditions, verdict, box)
-
-
-def build_document(model: RecastModel, loop: Loop, candidate: str | None, conditions: dict[str, Any],
-                   verdict: str, box: ModelBox | None = None) -> dict[str, Any]:
-    from lyapcheck.answers import answers_of
-    from lyapcheck.models.surfaces.documents import KIND, SCHEMA_VERSION
-    from lyapcheck.numerics import package_versions
-
-    return {
-        "schema_version": SCHEMA_VERSION,
-        "kind": KIND,
-        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text},
-        "overrides": dict(model.overrides),
-        "candidate": candidate,
-        "states": list(model.states),
-        "equilibrium": {s: str(v) for s, v in zip(model.states, model.equilibrium)},
-        "parameters": {k: str(v) for k, v in model.parameters.items()},
-        "disturbances": {d: str(b) for d, b in model.disturbances.items()},
-        "recast": {**model.system.to_json(), "angles": {a: list(sc) for a, sc in loop.angles.items()}},
-        **({"box": box.to_json()} if box is not None else {}),
-        "conditions": conditions,
-        "answers": answers_of(conditions),
-        "verdict": verdict,
-        "versions": package_versions(),
-    }
 
 
 def sentence_of(cert: dict[str, Any]) -> str:
@@ -216,29 +118,12 @@ def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, s
 
 
 
-def verify_recast(doc: dict[str, Any]) -> list[Row]:
-    """Re-check a recast loop's certificate exactly; (check, ok, message) rows."""
+def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> list[Row]:
+    """The rest of a loop with functions' document, after the rows every document starts with
+    (:func:`lyapcheck.models.surfaces.certificate.verify_document` reads the model again and makes them):
+    the recasting, the box, every decided condition's proof, the counterexamples and the candidate."""
     from lyapcheck.models.surfaces.documents import with_verdict as _with_verdict
-    from lyapcheck.models.language.modelfile import parse_any_model
 
-    rows: list[Row] = []
-    part = doc["model"]
-    text = part["text"]
-    if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
-        return [("model", False, "the model text does not match its SHA-256: the text was changed")]
-    try:
-        model = parse_any_model(text, part.get("file", "<certificate>"), doc.get("overrides") or {},
-                                candidate=doc.get("candidate"))
-    except ModelFileError as exc:
-        return [("model", False, f"the stored model text no longer parses: {exc}")]
-    if not isinstance(model, RecastModel):
-        return [("model", False, "the stored model has no functions: it is not a recast loop")]
-    rows.append(("model", True, "the model text matches its SHA-256, parses and is recast again from it"))
-    same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
-            and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
-    rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
-                 "the stated parameters or equilibrium differ from the model text's"))
-    rows.append(check_declared(doc, model))
     stated = doc["recast"]
     derived = model.system.to_json()
     recast_ok = all(stated.get(k) == derived[k] for k in derived)
@@ -623,4 +508,4 @@ def _checked_on_recasting(c: dict[str, Any], base: Loop, check: Callable[[Loop],
     return ok, why
 
 
-__all__ = ["certify_recast", "verify_recast", "claim_sentence", "sentence_of", "proved_claims"]
+__all__ = ["verify_recast", "claim_sentence", "sentence_of", "proved_claims"]
