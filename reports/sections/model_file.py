@@ -69,8 +69,9 @@ METHODS: Final = {
 SHOWN_ELSEWHERE: Final = ("status", "summary", "property", "certificate", "refutation", "solver", "rounds", "history")
 #: the certificate kinds of a loop with functions (lyapcheck.models.surfaces.recast_certify, recast_interval)
 RECAST_KINDS: Final = ("recast", "interval")
-#: keys of a recast or interval certificate's condition shown elsewhere on the page
-RECAST_SHOWN_ELSEWHERE: Final = SHOWN_ELSEWHERE[:6]
+#: keys of a recast or interval certificate's condition shown elsewhere on the page (rounds of a search,
+#: which its class does not keep today, would be shown among its stored figures)
+RECAST_SHOWN_ELSEWHERE: Final = tuple(k for k in SHOWN_ELSEWHERE if k not in ("rounds", "history"))
 #: the titles of a loop with functions' classes (the section of the model RECAST_LOOP)
 RECAST_TITLES: Final = {
     "linearization": "Linearization at the equilibrium",
