@@ -23,7 +23,6 @@ from reports.sections import section_for
 from reports.subjects.base import STATUS_MEANING, Subject, canonical_json
 from reports.subjects.model_file import ModelFileSubject
 from reports.subjects.paper import PaperSubject
-from reports.subjects.recast_loop import RecastLoopSubject, is_recast_document
 from reports.typeset import Equations, versions
 from reports.views import as_dict
 
@@ -36,9 +35,7 @@ SUBJECTS: Final[dict[str, Callable[[dict[str, Any]], Subject]]] = {
 
 def subject_of(doc: dict[str, Any]) -> Subject:
     """The subject of a certificate document (a document of no kind is the paper's; a model
-    certificate with a ``"recast"`` table is that of a loop with functions)."""
-    if doc.get("kind") == "lyapcheck-model-certificate" and is_recast_document(doc):
-        return RecastLoopSubject(doc)
+    certificate, of a polynomial loop or of a loop with functions, is a model file's)."""
     kind = doc.get("kind")
     make = SUBJECTS.get(kind if isinstance(kind, str) else "", PaperSubject)
     return make(doc)

@@ -1,5 +1,5 @@
-"""The report page of a loop with functions (reports.subjects.recast_loop, reports.sections.recast,
-reports.recast_portrait): ``certify FILE --report`` and ``report CERT --html/--pdf`` write it, it
+"""The report page of a loop with functions (reports.subjects.model_file, reports.sections.model_file,
+reports.phase_portrait): ``certify FILE --report`` and ``report CERT --html/--pdf`` write it, it
 shows the model, the recasting, each class's sentence and V_text, and for two states a phase
 portrait in the loop's own states whose certified set is the certificate's.
 
@@ -111,8 +111,8 @@ def test_certify_report_writes_the_page_with_the_recasting_and_each_claim(pendul
 
 def test_the_drawn_set_is_the_certificates_set_in_the_original_states(pendulum: dict[str, Any],
                                                                       pendulum_context: dict[str, Any]) -> None:
-    from reports.recast_portrait import gauge
-    from reports.sections.recast import RecastSection
+    from reports.phase_portrait import gauge
+    from reports.sections import RECAST_SECTION
 
     doc = pendulum["doc"]
     figure = pendulum_context["portrait"]
@@ -125,7 +125,7 @@ def test_the_drawn_set_is_the_certificates_set_in_the_original_states(pendulum: 
     # the gauge is <= 1 exactly where the certificate's set is: x - x_eq in its box and V <= level,
     # V evaluated from its exact terms (the states only) at random points of the view
     cond = doc["conditions"]["roa"]
-    spec = RecastSection().portrait_set("roa", cond)
+    spec = RECAST_SECTION.portrait_set("roa", cond)
     assert spec is not None and spec.box is not None
     model = model_of(doc)
     rng = np.random.default_rng(7)
@@ -162,8 +162,8 @@ def test_a_recast_set_is_evaluated_with_its_auxiliaries_and_drawn_modulo_2_pi(pe
     alarm of the failed exact re-check."""
     from reports.certificate_page import certificate_context
     from reports.html import render_html
-    from reports.recast_portrait import gauge
-    from reports.sections.recast import RecastSection
+    from reports.phase_portrait import gauge
+    from reports.sections import RECAST_SECTION
 
     doc = copy.deepcopy(pendulum["doc"])
     names = doc["recast"]["variables"]
@@ -175,7 +175,7 @@ def test_a_recast_set_is_evaluated_with_its_auxiliaries_and_drawn_modulo_2_pi(pe
             "positivity_epsilon": "1/100"}
     doc["conditions"]["roa"] = {"status": "certified", "property": "ROA", "level": 1.5, "summary": sentence_of(cert),
                                 "certificate": cert}
-    spec = RecastSection().portrait_set("roa", doc["conditions"]["roa"])
+    spec = RECAST_SECTION.portrait_set("roa", doc["conditions"]["roa"])
     assert spec is not None and spec.angles == ("theta",) and spec.box is None
     model = model_of(doc)
     # the auxiliaries at their definitions: V(theta, omega) = 1 - cos(theta) + omega**2/2, a copy every 2 pi
@@ -241,7 +241,7 @@ unsafe = ["theta <= -0.6"]
 def test_the_portrait_of_a_loop_with_functions_draws_its_sets_and_its_counterexample(tmp_path: Path) -> None:
     """As a polynomial loop's portrait does: the [sets] shaded, and the barrier's counterexample simulated
     again on the true loop (with sin) from its stored start, entering the unsafe set where the class said."""
-    from reports.recast_portrait import recast_portrait
+    from reports.phase_portrait import phase_portrait
 
     model_file, cert = tmp_path / "unsafe.toml", tmp_path / "unsafe.json"
     model_file.write_text(UNSAFE_PENDULUM)
@@ -249,7 +249,7 @@ def test_the_portrait_of_a_loop_with_functions_draws_its_sets_and_its_counterexa
     assert run.returncode == 1, run.stderr
     doc = json.loads(cert.read_text())
     assert doc["conditions"]["barrier"]["status"] == "counterexample"
-    figure = recast_portrait(doc, model_of(doc)).figure
+    figure = phase_portrait(doc, model_of(doc)).figure
     assert figure is not None
     assert figure.data["model_sets_drawn"] == ["initial", "unsafe"]
     (drawn,) = figure.data["counterexamples"]

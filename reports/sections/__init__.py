@@ -8,8 +8,8 @@ section (module)                        model           classes
 ``output_bound.OutputBoundSection``     a model file    sos_bound (one storage function per output)
 ``safety.SafetySection``                a model file    barrier, reach_avoid (+ their invariant sets)
 ``model_file.ModelFileSection``         a model file    any other class (fallback)
-``recast.RecastSection``                a loop with     linearization, quadratic, sos_gas, roa,
-                                        functions       candidate, and any other (fallback): recast
+``model_file.ModelFileSection`` made    a loop with     linearization, quadratic, sos_gas, roa,
+for ``RECAST_LOOP``                     functions       candidate, and any other (fallback): recast
                                                         and interval certificates, their sets
 ``paper.PaperSection``                  the paper's     prop41_ges, prop41_iss, stabcond2,
                                         loop            sector_ges, ultimate_bound, sos_bound, and
@@ -37,20 +37,21 @@ from __future__ import annotations
 
 from typing import Final
 
-from reports.sections.base import MODEL_FILE, PAPER, Section
-from reports.sections.model_file import ModelFileSection
+from reports.sections.base import MODEL_FILE, PAPER, RECAST_LOOP, Section
+from reports.sections.model_file import RECAST_TITLES, ModelFileSection
 from reports.sections.output_bound import OutputBoundSection
 from reports.sections.paper import PaperSection
-from reports.sections.recast import RECAST_LOOP, RecastSection
 from reports.sections.safety import SafetySection
 from reports.sections.stability import StabilitySection
 
 #: every section, in no particular order (a class name is claimed by one section per model)
+#: a loop with functions: one section, the model file's made for its model, shows every class
+RECAST_SECTION: Final = ModelFileSection(RECAST_LOOP, RECAST_TITLES)
 SECTIONS: Final[tuple[Section, ...]] = (StabilitySection(), OutputBoundSection(), SafetySection(), PaperSection(),
-                                        RecastSection())
+                                        RECAST_SECTION)
 #: the section of a class no section names, per model
 FALLBACK: Final[dict[str, Section]] = {MODEL_FILE: ModelFileSection(), PAPER: PaperSection(),
-                                       RECAST_LOOP: RecastSection()}
+                                       RECAST_LOOP: RECAST_SECTION}
 
 
 def _table() -> dict[tuple[str, str], Section]:
@@ -69,7 +70,7 @@ BY_CLASS: Final = _table()
 
 def section_for(model: str, name: str) -> Section:
     """The section that shows the class ``name`` of a document of ``model`` (:data:`PAPER`, :data:`MODEL_FILE`
-    or :data:`~reports.sections.recast.RECAST_LOOP`)."""
+    or :data:`~reports.sections.base.RECAST_LOOP`)."""
     found = BY_CLASS.get((model, name))
     if found is not None:
         return found
@@ -78,4 +79,4 @@ def section_for(model: str, name: str) -> Section:
     return FALLBACK[model]
 
 
-__all__ = ["SECTIONS", "FALLBACK", "BY_CLASS", "section_for", "PAPER", "MODEL_FILE", "RECAST_LOOP"]
+__all__ = ["SECTIONS", "FALLBACK", "BY_CLASS", "section_for", "PAPER", "MODEL_FILE", "RECAST_LOOP", "RECAST_SECTION"]

@@ -30,6 +30,12 @@ from reports.views import Item
 #: paper.toml``), or any model file (``lyapcheck certify --model FILE``)
 PAPER: Final = "paper"
 MODEL_FILE: Final = "model-file"
+#: a loop with functions (a model certificate with a ``"recast"`` table): its classes are shown by the
+#: model file's section (:class:`reports.sections.model_file.ModelFileSection`) made for this model
+RECAST_LOOP: Final = "recast-loop"
+#: the colour of each class's certified region on the phase portrait (a polynomial loop's and a
+#: loop with functions')
+SET_COLOURS: Final = {"roa": "#1a7f37", "candidate": "#0969da"}
 
 
 def text_of(value: object) -> str:
@@ -162,7 +168,7 @@ class Section:
     Attributes
     ----------
     model
-        :data:`PAPER` or :data:`MODEL_FILE`: the model whose documents carry these classes.
+        :data:`PAPER`, :data:`MODEL_FILE` or :data:`RECAST_LOOP`: the model whose documents carry these classes.
     titles
         Class name -> what a reader should call it; the keys are the classes this section renders.
     """
@@ -182,5 +188,5 @@ class Section:
         return PortraitPart()
 
 
-__all__ = ["PAPER", "MODEL_FILE", "ClassView", "ClassContext", "PolynomialView", "LevelSet", "GlobalV",
-           "PortraitPart", "Section", "TableView", "text_of"]
+__all__ = ["PAPER", "MODEL_FILE", "RECAST_LOOP", "SET_COLOURS", "ClassView", "ClassContext", "PolynomialView",
+           "LevelSet", "GlobalV", "PortraitPart", "Section", "TableView", "text_of"]

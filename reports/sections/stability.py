@@ -10,15 +10,12 @@ checked along every trajectory that starts in it), and each global ``V`` (``quad
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Final
+from typing import Any
 
 from reports.polynomials import ExactPolynomial
-from reports.sections.base import GlobalV, LevelSet, PortraitPart
+from reports.sections.base import SET_COLOURS, GlobalV, LevelSet, PortraitPart
 from reports.sections.model_file import ModelFileSection
 from reports.views import as_dict, as_fraction, as_number, fmt_float
-
-#: the colour of each class's certified region on the phase portrait
-SET_COLOURS: Final = {"roa": "#1a7f37", "candidate": "#0969da"}
 
 
 class StabilitySection(ModelFileSection):

@@ -1,4 +1,5 @@
-"""A model file (``lyapcheck certify --model FILE``) as a certificate page's subject.
+"""A model file (``lyapcheck certify --model FILE``) as a certificate page's subject: a polynomial or
+rational loop, or a loop with functions.
 
 Its parts: the model as the certificate stores it (name, source, states, parameters as given and
 SI, a box's ranges, disturbances, equilibrium, outputs, domain, the dynamics as written, the
@@ -9,8 +10,17 @@ certificate **re-checked exactly** on the spot (:func:`lyapcheck.models.surfaces
 no solver, well under a second; a failure is an alarm at the top); the command line and the
 model file verbatim.
 
+A **loop with functions** (a model certificate with a ``"recast"`` table,
+:mod:`lyapcheck.models.surfaces.recast_certify`) has the same page (:class:`ModelFileSubject`, with the
+per-kind words of :data:`WITH_FUNCTIONS`), with the **recasting** the certificates are proved on in
+place of the field (each auxiliary with its definition, its value at the equilibrium and its flow;
+the relations between them; the states taken modulo 2 pi), its classes shown by the model file's
+section made for :data:`~reports.sections.base.RECAST_LOOP`, and the portrait in the loop's own
+states; its exact re-check recasts the model text again.
+
 The model text is re-read only by the model-file parser (:func:`lyapcheck.models.language.modelfile.parse_model`,
-a whitelist over Python's ``ast``) and by :mod:`tomllib`; nothing from it is evaluated.
+or :func:`~lyapcheck.models.language.modelfile.parse_any_model` for a loop with functions, a whitelist
+over Python's ``ast``) and by :mod:`tomllib`; nothing from it is evaluated.
 """
 
 from __future__ import annotations
@@ -28,9 +38,10 @@ from markupsafe import Markup
 from lyapcheck.errors import InputFileError, LyapcheckError
 from lyapcheck.models.surfaces.certificate import KIND, is_model_document
 from lyapcheck.models.language.modelfile import Model
+from lyapcheck.models.language.recast import RecastModel
 from reports.figures import Figure
 from reports.phase_portrait import CrossCheck, phase_portrait
-from reports.sections.base import MODEL_FILE, ClassContext, text_of
+from reports.sections.base import MODEL_FILE, RECAST_LOOP, ClassContext, text_of
 from reports.subjects.base import STATUS_MEANING, Glance, Quantity, Subject, verdict_head
 from reports.typeset import Equations
 from reports.views import as_dict, as_fraction, as_number, fmt_float
@@ -42,6 +53,40 @@ EXTRA_STATUS_MEANING: Final = {
     "not_applicable": "the class needs something the model or the command did not give (the summary says what)",
     "counterexample": "numerical evidence against the property (a reproducible trajectory), not an exact proof",
 }
+
+
+#: what each kind of relation of a loop with functions' recasting says
+RELATION_WORDS: Final = {"eq": "= 0", "ge": "≥ 0"}
+
+
+@dataclass(frozen=True)
+class LoopKind:
+    """What the page of one kind of model loop says in its own words.
+
+    ``model`` and ``template``: its classes' sections and its template of the subject's parts;
+    ``second``: the table of contents' entry after the model (anchor, title: the field, or the
+    recasting); ``unparsed`` why there is no portrait when the stored text does not parse, and
+    ``failed`` what a portrait that raised is called.
+    """
+
+    model: str
+    template: str
+    second: tuple[str, str]
+    unparsed: str
+    failed: str
+
+
+#: a polynomial or rational loop, and a loop with functions
+POLYNOMIAL: Final = LoopKind(MODEL_FILE, "model_file.html.j2", ("field", "The field the certificates use"),
+                             "nothing can be simulated", "the simulation failed")
+WITH_FUNCTIONS: Final = LoopKind(RECAST_LOOP, "recast_loop.html.j2",
+                                 ("recasting", "The recasting the certificates are proved on"),
+                                 "its field cannot be drawn", "the portrait failed")
+
+
+def is_recast_document(doc: object) -> bool:
+    """A certificate of a loop with functions: a model certificate with a ``"recast"`` table."""
+    return isinstance(doc, dict) and isinstance(doc.get("recast"), dict)
 
 
 @dataclass
@@ -195,17 +240,49 @@ def recheck_rows(doc: dict[str, Any]) -> tuple[list[tuple[str, bool, str]], str]
         return [], str(exc)
 
 
-def portrait(doc: dict[str, Any], model: Model | None, simulate: bool) -> tuple[Figure | None, str, list[CrossCheck]]:
+def portrait(doc: dict[str, Any], model: Model | RecastModel | None, simulate: bool,
+             kind: LoopKind = POLYNOMIAL) -> tuple[Figure | None, str, list[CrossCheck]]:
     if not simulate:
         return None, "not requested", []
     if model is None:
-        return None, "the stored model text does not parse, so nothing can be simulated", []
+        return None, f"the stored model text does not parse, so {kind.unparsed}", []
     try:
         drawn = phase_portrait(doc, model)
     except (LyapcheckError, ValueError, ArithmeticError, FloatingPointError) as exc:
         log.warning("no phase portrait for the report: %s", exc)
-        return None, f"the simulation failed: {exc}", []
+        return None, f"{kind.failed}: {exc}", []
     return drawn.figure, drawn.reason, drawn.checks
+
+
+def auxiliary_rows(recast: dict[str, Any]) -> list[tuple[str, str, str, str]]:
+    """(auxiliary, definition, value at the equilibrium, flow) per auxiliary of the recasting."""
+    flows, values = as_dict(recast.get("flows")), as_dict(recast.get("values"))
+    rows = []
+    for name, definition in as_dict(recast.get("auxiliaries")).items():
+        value = text_of(values[name]) if name in values else "a constant (not shifted)"
+        flow = text_of(flows[name]) if name in flows else "none: not differentiable here (a V may not use it)"
+        rows.append((str(name), text_of(definition), value, flow))
+    return rows
+
+
+def relation_rows(recast: dict[str, Any]) -> list[tuple[str, str, str]]:
+    """(polynomial, "= 0" or ">= 0", why it holds) per relation of the recasting."""
+    rows = []
+    relations = recast.get("relations")
+    for rel in relations if isinstance(relations, list) else []:
+        rel = as_dict(rel)
+        kind = text_of(rel.get("kind"))
+        rows.append((text_of(rel.get("poly")), RELATION_WORDS.get(kind, kind), text_of(rel.get("why", ""))))
+    return rows
+
+
+def angle_rows(recast: dict[str, Any]) -> list[tuple[str, str]]:
+    """(state, the auxiliaries that carry it) for each state the loop sees only through sine and cosine."""
+    rows = []
+    for state, pair in as_dict(recast.get("angles")).items():
+        names = ", ".join(map(text_of, pair)) if isinstance(pair, list) else text_of(pair)
+        rows.append((str(state), names))
+    return rows
 
 
 def page_head(name: str, file: str, origin: str, doc: dict[str, Any], second: tuple[str, str]) -> dict[str, Any]:
@@ -230,42 +307,20 @@ def page_head(name: str, file: str, origin: str, doc: dict[str, Any], second: tu
     }
 
 
-class ModelCertificateChecks:
-    """What the page of every model certificate shares (a polynomial loop's or a loop with
-    functions'): the fingerprints of its model text and its exact re-check."""
-
-    doc: dict[str, Any]
-
-    def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:
-        return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
-                ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
-                ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
-
-    def checked(self, recheck: bool) -> dict[str, Any]:
-        rows, error = recheck_rows(self.doc) if recheck else ([], "not requested")
-        return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
-
-
-class ModelFileSubject(ModelCertificateChecks, Subject):
-    model = MODEL_FILE
-    template = "model_file.html.j2"
+class ModelFileSubject(Subject):
+    """The page of a model certificate: a polynomial or rational loop's, or a loop with functions'
+    (:func:`is_recast_document`; :data:`WITH_FUNCTIONS`)."""
 
     def __init__(self, doc: dict[str, Any]) -> None:
-        from lyapcheck.models.language.modelfile import parse_model
-
         if not is_model_document(doc):
             raise InputFileError(f"not a model certificate (missing kind '{KIND}')")
         super().__init__(doc)
+        self.kind = WITH_FUNCTIONS if is_recast_document(doc) else POLYNOMIAL
+        self.model, self.template = self.kind.model, self.kind.template
         stored = as_dict(doc.get("model")).get("text")
         self.text = stored if isinstance(stored, str) else ""
         self.overrides = {str(k): v for k, v in as_dict(doc.get("overrides")).items()}
-        self.parsed: Model | None = None
-        self.error = ""
-        try:
-            self.parsed = parse_model(self.text, text_of(as_dict(doc.get("model")).get("file", "<certificate>")),
-                                      self.overrides)
-        except LyapcheckError as exc:
-            self.error = str(exc)
+        self.parsed, self.error = self.read_model()
         try:
             self.raw = tomllib.loads(self.text)
         except tomllib.TOMLDecodeError:
@@ -274,6 +329,23 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
         if self.parsed is not None and not states:
             states = list(self.parsed.states)
         self.states = states
+
+    def read_model(self) -> tuple[Model | RecastModel | None, str]:
+        """The stored model text, parsed as its kind of loop, or None and why not."""
+        from lyapcheck.models.language.modelfile import parse_any_model, parse_model
+
+        file = text_of(as_dict(self.doc.get("model")).get("file", "<certificate>"))
+        try:
+            if self.kind is POLYNOMIAL:
+                return parse_model(self.text, file, self.overrides), ""
+            candidate = self.doc.get("candidate")
+            parsed = parse_any_model(self.text, file, self.overrides,
+                                     candidate=candidate if isinstance(candidate, str) else None)
+        except LyapcheckError as exc:
+            return None, str(exc)
+        if isinstance(parsed, RecastModel):
+            return parsed, ""
+        return None, "it has no functions, so it is not the loop with functions this certificate is about"
 
     def class_context(self, eqs: Equations) -> ClassContext:
         equilibrium = as_dict(self.doc.get("equilibrium"))
@@ -285,54 +357,78 @@ class ModelFileSubject(ModelCertificateChecks, Subject):
     def parts(self, eqs: Equations, *, ledger: bool, simulate: bool) -> dict[str, Any]:
         doc, model, raw = self.doc, self.parsed, self.raw
         model_part = as_dict(doc.get("model"))
+        figure, figure_reason, checks = portrait(doc, model, simulate, self.kind)
+        digest = hashlib.sha256(self.text.encode()).hexdigest()
+        equilibrium = as_dict(doc.get("equilibrium"))
+        name = text_of(model_part.get("name", "model"))
+        box = None if self.kind is WITH_FUNCTIONS else as_dict(doc.get("box"))
+        return {
+            **page_head(name, text_of(model_part.get("file", "")),
+                        model.origin if model is not None else text_of(as_dict(raw.get("model")).get("source", "")),
+                        doc, self.kind.second),
+            "states": self.states,
+            "equilibrium": [(s, text_of(equilibrium.get(s, "0"))) for s in self.states],
+            "parameters": quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), self.overrides,
+                                     box),
+            "domain": [(str(k), text_of(v)) for k, v in as_dict(raw.get("domain")).items()],
+            "dynamics": [(s, text_of(as_dict(raw.get("dynamics")).get(s, "—"))) for s in self.states],
+            "candidate": doc.get("candidate") if isinstance(doc.get("candidate"), str) else "",
+            "model_error": self.error,
+            "sha256_stated": text_of(model_part.get("sha256", "")),
+            "sha256_text": digest,
+            "sha256_matches": digest == text_of(model_part.get("sha256", "")),
+            "portrait": figure,
+            "figure_reason": figure_reason,
+            **(self.recasting() if self.kind is WITH_FUNCTIONS else self.field(checks)),
+            **page_tail(doc, self.text),
+        }
+
+    def field(self, checks: list[CrossCheck]) -> dict[str, Any]:
+        """A polynomial loop's own parts: its box, disturbances, outputs, field, and the portrait's cross-checks."""
+        doc, model, raw = self.doc, self.parsed, self.raw
         try:
             from lyapcheck.models.classes.claims import box_words
 
             box_text = box_words(as_dict(doc.get("box"))) if as_dict(doc.get("box")) else ""
         except (TypeError, ValueError, ArithmeticError):
             box_text = "a box of parameters (its bounds are malformed)"
-        figure, figure_reason, checks = portrait(doc, model, simulate)
-        digest = hashlib.sha256(self.text.encode()).hexdigest()
-        stated = text_of(model_part.get("sha256", ""))
         fld = as_dict(doc.get("field"))
         disturbances = [str(d) for d in as_dict(doc.get("disturbances"))]
-        outputs_text = dict(model.output_text) if model is not None else {
+        outputs_text = dict(model.output_text) if isinstance(model, Model) else {
             str(k): text_of(v) for k, v in as_dict(raw.get("outputs")).items()}
         failed_checks = [c for c in checks if not c.ok]
         alarm = ""
         if failed_checks:
             alarm = ("SOUNDNESS: a simulation contradicts a certificate: "
                      + "; ".join(f"{c.what} ({c.detail})" for c in failed_checks) + ".")
-        equilibrium = as_dict(doc.get("equilibrium"))
-        name = text_of(model_part.get("name", "model"))
         return {
-            **page_head(name, text_of(model_part.get("file", "")),
-                        model.origin if model is not None else text_of(as_dict(raw.get("model")).get("source", "")),
-                        doc, ("field", "The field the certificates use")),
-            "states": self.states,
-            "equilibrium": [(s, text_of(equilibrium.get(s, "0"))) for s in self.states],
-            "parameters": quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), self.overrides,
-                                     as_dict(doc.get("box"))),
             "box_words": box_text,
             "disturbances": quantities(as_dict(doc.get("disturbances")), as_dict(raw.get("disturbances")),
                                        self.overrides),
             "outputs": list(outputs_text.items()),
-            "domain": [(str(k), text_of(v)) for k, v in as_dict(raw.get("domain")).items()],
-            "dynamics": [(s, text_of(as_dict(raw.get("dynamics")).get(s, "—"))) for s in self.states],
-            "candidate": doc.get("candidate") if isinstance(doc.get("candidate"), str) else "",
-            "model_error": self.error,
             "model_text": self.text,
-            "sha256_stated": stated,
-            "sha256_text": digest,
-            "sha256_matches": digest == stated,
             "denominators": denominators(fld),
             "scaling": scaling(fld, self.states, disturbances, list(outputs_text)),
-            "portrait": figure,
-            "figure_reason": figure_reason,
             "checks": checks,
             "soundness": alarm,
-            **page_tail(doc, self.text),
         }
+
+    def recasting(self) -> dict[str, Any]:
+        """A loop with functions' own part: the recasting its certificates are proved on."""
+        recast = as_dict(self.doc.get("recast"))
+        variables = recast.get("variables")
+        return {"variables": [text_of(v) for v in variables] if isinstance(variables, list) else [],
+                "auxiliaries": auxiliary_rows(recast), "relations": relation_rows(recast),
+                "angles": angle_rows(recast)}
+
+    def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:
+        return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
+                ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
+                ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
+
+    def checked(self, recheck: bool) -> dict[str, Any]:
+        rows, error = recheck_rows(self.doc) if recheck else ([], "not requested")
+        return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
 
 
 def page_tail(doc: dict[str, Any], text: str) -> dict[str, Any]:
@@ -351,5 +447,6 @@ def page_tail(doc: dict[str, Any], text: str) -> dict[str, Any]:
     }
 
 
-__all__ = ["ModelFileSubject", "page_tail", "ModelCertificateChecks", "page_head", "EXTRA_STATUS_MEANING", "quantities",
-           "denominators", "scaling", "solvers", "command", "recheck_rows", "portrait"]
+__all__ = ["ModelFileSubject", "page_tail", "page_head", "EXTRA_STATUS_MEANING", "quantities", "LoopKind",
+           "POLYNOMIAL", "WITH_FUNCTIONS", "is_recast_document", "denominators", "scaling", "solvers", "command",
+           "recheck_rows", "portrait", "auxiliary_rows", "relation_rows", "angle_rows"]
