@@ -713,7 +713,7 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
                         plot: str | Path | None = None, series: bool = True) -> SimulationReport:
     """``lyapcheck simulate --model``: the model's closed loop from its starts under its disturbance
     scenarios, batched (:mod:`lyapcheck.models.surfaces.simulate`; docs/simulation.md has the JSON keys). A
-    loop with functions is the same, on its true loop (:mod:`lyapcheck.models.surfaces.recast_simulate`).
+    loop with functions is the same, on its true loop (:func:`~lyapcheck.models.surfaces.simulate.prepare`).
 
     Errors name these arguments (``x0``, ``t_end``, ``settings``, ...): an
     :class:`~lyapcheck.errors.InvalidParameter`, or a :class:`~lyapcheck.errors.ModelFileError` for
@@ -757,15 +757,10 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     if worst_case and scenarios:
         raise InvalidParameter("scenarios", "left out with worst_case=True (the search tries every family)",
                                ",".join(scenarios))
-    # a loop with functions is simulated on its true loop by the same machinery (lyapcheck.models.surfaces.recast_simulate)
+    # a loop with functions is simulated on its true loop by the same machinery (sim.prepare's constructors)
     recast = _recast_model(model, settings, None)
     loaded = recast if recast is not None else _load_with_settings(model, settings)
-    if recast is not None:
-        from lyapcheck.models.surfaces.recast_simulate import prepare_true_loop
-
-        prepared = prepare_true_loop(recast)
-    else:
-        prepared = sim.prepare(loaded)
+    prepared = sim.prepare(loaded)
     starts = model_starts(loaded, x0)  # type: ignore[arg-type]  # (a RecastModel has the states it reads)
     if grid is not None:
         starts += list(sim.grid_over_domain(loaded, grid))

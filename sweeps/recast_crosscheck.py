@@ -390,11 +390,11 @@ def _recast_runs(model: RecastModel) -> Runs:
 def _simulate(model: RecastModel, Z0: np.ndarray, escape: np.ndarray, extent: np.ndarray, *, t_end: float | None = None,
               disturbances: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
     """Integrate the true loop from the deviations ``Z0`` (rows) with the project's batched DOPRI5 over
-    ``t_end`` (default :func:`lyapcheck.models.surfaces.recast_simulate.default_horizon`): per row, its own
+    ``t_end`` (default :func:`lyapcheck.models.surfaces.simulate.crosscheck_horizon`): per row, its own
     points' times and deviations. A row farther than ``escape`` from the equilibrium in a state stops
     moving there. ``disturbances``: a constant value of each disturbance per row (None: all 0)."""
     from lyapcheck.models.engines.numeric import ModelSystem
-    from lyapcheck.models.surfaces.recast_simulate import default_horizon
+    from lyapcheck.models.surfaces.simulate import crosscheck_horizon as default_horizon
     from lyapcheck.models.engines.trajectories import MIN_STEPS, RTOL
     from lyapcheck.integrator import integrate
 

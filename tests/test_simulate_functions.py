@@ -1,5 +1,6 @@
 """``simulate`` of a loop with functions (sin, sqrt, sat, ...): its true loop through the same pipeline
-as a polynomial loop (:mod:`lyapcheck.models.surfaces.simulate`, :mod:`lyapcheck.models.surfaces.recast_simulate`).
+as a polynomial loop (:mod:`lyapcheck.models.surfaces.simulate`, its constructor
+:func:`~lyapcheck.models.surfaces.simulate.prepare_true_loop`).
 
 Figures are checked against closed forms and against a polynomial twin: the linear cascade of
 ``examples/models/linear-disturbed-l1.toml`` written with ``sat(., 100)`` around terms that never

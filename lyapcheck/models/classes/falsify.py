@@ -87,9 +87,7 @@ import numpy.typing as npt
 
 from lyapcheck.models.language.modelfile import Model
 from lyapcheck.models.engines.numeric import FieldEvaluator, ModelSystem
-from lyapcheck.models.engines.trajectories import (
-    FAST_TIME_CONSTANTS_CRITICAL, SLOW_TIME_CONSTANTS, jacobian_eigenvalues,
-)
+from lyapcheck.models.engines.trajectories import horizon as horizon_of, jacobian_eigenvalues
 from lyapcheck.integrator import STATUS_OK, hermite, integrate
 from lyapcheck.sos.polynomials import Poly
 
@@ -664,14 +662,8 @@ def default_horizon(model: Model, scale: FloatArray | None = None, evaluate: Any
     evaluate = FieldEvaluator.of(model) if evaluate is None else evaluate
     eq = np.array([float(v) for v in model.equilibrium])
     scale = np.ones(model.n) if scale is None else scale
-    eig = jacobian_eigenvalues(evaluate, eq, scale)
-    mags = np.abs(eig) if eig.size else np.array([0.0])
-    fastest = float(mags.max())
-    fast_time = 1.0 / fastest if fastest > 0 else 1.0
-    real = eig.real if eig.size else np.array([0.0])
-    if eig.size and np.all(real < 0):
-        return float(min(SLOW_TIME_CONSTANTS / float(np.min(-real)), FAST_TIME_CONSTANTS_CAP * fast_time))
-    return FAST_TIME_CONSTANTS_CRITICAL * fast_time
+    # the phase portraits' rule, with a longer cap (a falsification may take its time)
+    return horizon_of(jacobian_eigenvalues(evaluate, eq, scale), fast_cap=FAST_TIME_CONSTANTS_CAP)
 
 
 # -- the search ---------------------------------------------------------------------------------

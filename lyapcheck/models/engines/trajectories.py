@@ -124,16 +124,18 @@ def jacobian_eigenvalues(evaluate: FieldEvaluator, equilibrium: FloatArray, scal
     return np.linalg.eigvals(J)
 
 
-def horizon(eigenvalues: npt.NDArray[Any]) -> float:
+def horizon(eigenvalues: npt.NDArray[Any], fast_cap: float = FAST_TIME_CONSTANTS_MAX) -> float:
     """How long to simulate: :data:`SLOW_TIME_CONSTANTS` of the slowest mode of an exponentially
-    stable equilibrium, capped at :data:`FAST_TIME_CONSTANTS_MAX` of the fastest; otherwise
-    :data:`FAST_TIME_CONSTANTS_CRITICAL` of the fastest (1 s when the Jacobian is 0)."""
+    stable equilibrium, capped at ``fast_cap`` (default :data:`FAST_TIME_CONSTANTS_MAX`) of the
+    fastest; otherwise :data:`FAST_TIME_CONSTANTS_CRITICAL` of the fastest (1 s when the Jacobian
+    is 0, or has no finite eigenvalues). :func:`lyapcheck.models.classes.falsify.default_horizon`
+    is the same rule with its own cap."""
     magnitudes = np.abs(eigenvalues) if eigenvalues.size else np.array([0.0])
     fastest = float(magnitudes.max())
     fast_time = 1.0 / fastest if fastest > 0 else 1.0
     real = eigenvalues.real if eigenvalues.size else np.array([0.0])
     if np.all(real < 0):
-        return float(min(SLOW_TIME_CONSTANTS / float(np.min(-real)), FAST_TIME_CONSTANTS_MAX * fast_time))
+        return float(min(SLOW_TIME_CONSTANTS / float(np.min(-real)), fast_cap * fast_time))
     return FAST_TIME_CONSTANTS_CRITICAL * fast_time
 
 

@@ -5,8 +5,7 @@
 - :mod:`~lyapcheck.models.surfaces.certificate`, :mod:`~lyapcheck.models.surfaces.documents`,
   :mod:`~lyapcheck.models.surfaces.stated`, :mod:`~lyapcheck.models.surfaces.counterexamples`: certificate
   documents and ``verify``;
-- :mod:`~lyapcheck.models.surfaces.simulate`, :mod:`~lyapcheck.models.surfaces.recast_simulate`:
-  ``simulate --model``.
+- :mod:`~lyapcheck.models.surfaces.simulate`: ``simulate --model``, one implementation for every loop kind.
 
 May import: lyapcheck.models.language, lyapcheck.models.engines, lyapcheck.models.loop,
 lyapcheck.models.classes, lyapcheck.sos, lyapcheck.integrator, lyapcheck.answers, lyapcheck.results,

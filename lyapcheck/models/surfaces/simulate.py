@@ -36,13 +36,32 @@ stopped, or the integrator failed: overflow, a step too small, the step budget).
 is, per state, the largest of: the starts' distance from the equilibrium, the domain's
 half-width, the steady response of the linearisation to the bounds, ``|x_eq|``; 1 if all vanish.
 
-The field is evaluated behind one small interface, :class:`LoopField` (``x' = f(x, d)`` row by
-row): a polynomial (rational) loop's is :class:`_Field`, from its exact polynomials; a loop with
-functions' (sin, sqrt, sat, ...) is the true loop, each function evaluated by numpy
-(:mod:`lyapcheck.models.surfaces.recast_simulate`), never its recast polynomial loop. Everything else
-(scenarios, starts, tail sups, the series, the plots, the worst-case search) is the same for both;
-an angle that enters the loop only through its sine and cosine is measured modulo 2 pi (its
-deviation from the equilibrium wrapped into ``(-pi, pi]``, and it never leaves the escape box).
+Both loop kinds are simulated by this one module over one object, the simulated loop
+(:class:`Prepared`), built once per model by :func:`prepare`, which has one constructor per kind.
+What differs between the kinds sits behind it: the float field (:class:`LoopField`, ``x' = f(x, d)``
+row by row), each output's gain ``G_k = dy'/dd_k`` (:class:`OutputGain`), the linearisation at the
+equilibrium, the angles and the document's extra keys:
+
+- a polynomial (rational) loop (:func:`prepare_polynomial`): the field :class:`_Field`, from its
+  exact polynomials; the gains and the linearisation exact (:class:`_OutputFeedback`);
+- a loop with functions (sin, sqrt, sat, ...) (:func:`prepare_true_loop`): its true loop
+  (:class:`lyapcheck.models.engines.recast_numeric.TrueField`), each function evaluated by numpy,
+  never the recast polynomial loop, which only holds on its relations' set; under a disturbance,
+  the loop recast with its disturbances as variables
+  (:attr:`~lyapcheck.models.language.recast.RecastModel.robust`), and where the recasting could not
+  keep a disturbance a variable, the loop is simulated with it held at 0 (scenario ``none`` only)
+  and the document says so. The gains (:class:`TrueOutputGain`): ``dy/dx`` exact (the outputs are
+  polynomials in the states), ``df/dd_k`` a central difference of the true field. The
+  linearisation: the exact Jacobian of the true field at the equilibrium
+  (:func:`lyapcheck.models.classes.recast_classes.jacobian`), central differences where it has none
+  (a function not differentiable there). The document adds ``kind`` ("recast"), ``field`` (what
+  was integrated) and ``angles_modulo_2pi``.
+
+Everything else (scenarios, starts, horizons, tail sups, the series, the plots, the worst-case
+search, the ultimate bounds' tightness) is written once; an angle that enters the loop only through
+its sine and cosine (:func:`lyapcheck.models.classes.recast_classes.angle_states`) is measured
+modulo 2 pi (its deviation from the equilibrium wrapped into ``(-pi, pi]``, and it never leaves the
+escape box).
 
 :func:`search_worst_case` searches the disturbance ``|d_k| <= b_k`` that maximises each output's
 tail sup: constant, feedback, square waves over the frequency range, then a local pattern search
@@ -61,21 +80,20 @@ import time
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final, Mapping, Protocol, Sequence
+from typing import Any, Final, Mapping, Protocol, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
 from lyapcheck.errors import InvalidParameter
+from lyapcheck.models.engines.recast_numeric import TrueField
 from lyapcheck.models.language.modelfile import Model, field_at
+from lyapcheck.models.language.recast import RecastModel, RecastSystem
 from lyapcheck.integrator import (
     DEFAULT_RTOL, INTEGRATOR_NAME, STATUS_OK, Evaluation, IntegrationResult, hermite, integrate,
 )
-from lyapcheck.sos.polynomials import Poly, Ring
+from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 from lyapcheck.tolerances import SIM_MAX_STEPS, SIM_REL_TOL
-
-if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.models.language.recast import RecastModel
 
 logger = logging.getLogger(__name__)
 
@@ -150,6 +168,16 @@ MAX_EXAMPLES: Final = 5
 MAX_SWITCH_TABLE: Final = 20_000_000
 #: sample points inside each step for the sups (fractions of the step)
 SAMPLE_THETAS: Final = (0.0, 0.25, 0.5, 0.75, 1.0)
+#: a loop with functions: the central differences of its gains, the step in a disturbance as a
+#: fraction of its bound; of its linearisation where the exact Jacobian does not exist, the step
+#: as a fraction of max(1, |x_eq|) (a state) or of the bound (a disturbance)
+GAIN_STEP: Final = 1e-3
+JACOBIAN_STEP: Final = 1e-6
+#: a loop with functions: what the document's ``field`` says was integrated
+FIELD_TEXT: Final = "the true loop: each function evaluated by numpy, not the recast polynomial loop"
+#: the sweeps' cross-checks of a loop with functions (:func:`crosscheck_horizon`): HORIZON_TIME_CONSTANTS
+#: slowest time constants of the exact linearisation, this many seconds without a decaying one
+CROSSCHECK_FALLBACK_HORIZON_S: Final = 60.0
 
 KIND_NONE, KIND_CONSTANT, KIND_FEEDBACK, KIND_SQUARE = 0, 1, 2, 3
 
@@ -281,9 +309,9 @@ class _OutputFeedback:
 
 @dataclass(frozen=True)
 class Prepared:
-    """A model ready to simulate: its field, outputs and linearisation in floating point (a
-    polynomial loop: :func:`prepare`; a loop with functions:
-    :func:`lyapcheck.models.surfaces.recast_simulate.prepare_true_loop`)."""
+    """The simulated loop: a model's field, outputs, gains and linearisation in floating point,
+    built once per model by :func:`prepare` (one constructor per loop kind: :func:`prepare_polynomial`,
+    :func:`prepare_true_loop`); everything else in this module reads the loop through it."""
 
     model: "Model | RecastModel"
     field: LoopField
@@ -339,12 +367,26 @@ def _output_poly(model: Model, name: str) -> Poly:
 
 
 def prepare(model: "Model | RecastModel") -> Prepared:
-    """The model's field, outputs, feedback gains and linearisation, once per model. A loop with
-    functions is prepared by :func:`lyapcheck.models.surfaces.recast_simulate.prepare_true_loop` (which builds
-    on this module, so it is its caller that chooses: :func:`lyapcheck.api.simulate`), and its
-    ``Prepared`` passed to :func:`run_model` or :func:`search_worst_case`."""
-    if not isinstance(model, Model):
-        raise TypeError("a loop with functions is prepared by lyapcheck.models.surfaces.recast_simulate.prepare_true_loop")
+    """The simulated loop of a model, once per model: :func:`prepare_polynomial` for a polynomial
+    (rational) loop, :func:`prepare_true_loop` for a loop with functions."""
+    return prepare_polynomial(model) if isinstance(model, Model) else prepare_true_loop(model)
+
+
+def _prepared(model: "Model | RecastModel", field_: LoopField, outputs: Sequence[Poly],
+              feedback: Mapping[str, OutputGain], A: Sequence[Sequence[Fraction | float]],
+              B: Sequence[Sequence[Fraction | float]], C: Mapping[str, Sequence[Fraction | float]], **kind: Any) -> Prepared:
+    """The :class:`Prepared` of either kind from what differs between them (the field, the outputs as
+    polynomials of the states, the gains, ``A``, ``B``, ``C``; ``kind``: the angles, ...)."""
+    return Prepared(model=model, field=field_, output_polys=CompiledPolys(Ring(model.states), outputs),
+                    output_names=tuple(model.outputs), feedback=feedback, linearization=linearization(A, B, C),
+                    equilibrium=np.array([float(v) for v in model.equilibrium]),
+                    bounds=np.array([float(b) for b in model.disturbances.values()]),
+                    output_text=dict(model.output_text), **kind)
+
+
+def prepare_polynomial(model: Model) -> Prepared:
+    """A polynomial (rational) loop's field, outputs, feedback gains and linearisation, all from its
+    exact polynomials."""
     full = model.state_ring
     states = Ring(model.states)
     rhs = field_at(model)
@@ -386,13 +428,120 @@ def prepare(model: "Model | RecastModel") -> Prepared:
                 per_k.append(tuple(range(first, first + len(pieces))))
                 columns += [q for piece in pieces for q in piece]
         feedback[name] = _OutputFeedback(CompiledPolys(states, columns) if columns else None, tuple(per_k))
-    lin = linearization(A, B, C)
     field_ = _Field(CompiledPolys(full, [r.numerator for r in rhs] + [r.denominator for r in rhs]), n, m)
-    return Prepared(model=model, field=field_, output_polys=CompiledPolys(states, output_polys),
-                    output_names=tuple(model.outputs), feedback=feedback, linearization=lin,
-                    equilibrium=np.array([float(v) for v in model.equilibrium]),
-                    bounds=np.array([float(b) for b in model.disturbances.values()]),
-                    output_text=dict(model.output_text))
+    return _prepared(model, field_, output_polys, feedback, A, B, C)
+
+
+def prepare_true_loop(model: RecastModel) -> Prepared:
+    """A loop with functions' true field, outputs, bang-bang gains, linearisation and angles (the
+    module docstring)."""
+    from lyapcheck.models.classes.recast_classes import angle_states
+
+    states = Ring(model.states)
+    eq = np.array([float(v) for v in model.equilibrium])
+    bounds = np.array([float(b) for b in model.disturbances.values()])
+    field_ = TrueField(model)
+    feedback: dict[str, TrueOutputGain] = {}
+    C: dict[str, list[Fraction]] = {}
+    for name in model.outputs:
+        y = model.outputs[name]
+        grad = [y.derivative(s) for s in model.states]
+        C[name] = [states.evaluate(g, list(model.equilibrium)) for g in grad]
+        feedback[name] = TrueOutputGain(field_, CompiledPolys(states, grad), _dependence(model, grad), bounds)
+    A, B = _true_jacobian(model, field_, eq, bounds)
+    angles = tuple(angle_states(model.system))
+    held = None
+    text = FIELD_TEXT
+    if model.disturbances and model.robust is None:
+        held = ("its disturbances cannot be kept as variables of the recast loop: it is simulated with "
+                f"{', '.join(model.disturbances)} held at 0")
+        text += f"; the disturbances {', '.join(model.disturbances)} held at 0 (scenario none only)"
+    return _prepared(model, field_, list(model.outputs.values()), feedback, A, B, C,
+                     angles=tuple(model.states.index(a) for a in angles), undisturbed_only=held,
+                     document_keys={"kind": "recast", "field": text, "angles_modulo_2pi": list(angles)})
+
+
+@dataclass(frozen=True)
+class TrueOutputGain:
+    """``G_k = dy'/dd_k`` at ``d = 0`` on the true loop of a loop with functions: ``sum_i dy/dx_i
+    df_i/dd_k``, the first factor exact, the second a central difference (an :class:`OutputGain`)."""
+
+    field: TrueField
+    gradient: CompiledPolys
+    dependent: tuple[bool, ...]
+    bounds: Any
+
+    def depends(self, k: int) -> bool:
+        return self.dependent[k]
+
+    def gain(self, k: int, x: FloatArray) -> FloatArray:
+        h = GAIN_STEP * float(self.bounds[k])
+        step = np.zeros((x.shape[0], len(self.bounds)))
+        step[:, k] = h
+        slope = (self.field(x, step) - self.field(x, -step)) / (2 * h)
+        return np.sum(self.gradient(x) * slope, axis=1)
+
+
+def _moved_by(system: RecastSystem, disturbance: str) -> list[str]:
+    """The disturbance and every auxiliary whose argument depends on it (through earlier ones)."""
+    ring = system.ring
+    moved = [disturbance]
+    for a in system.auxiliaries:
+        if a.argument is not None and degree_in(ring, a.argument, moved) > 0:
+            moved.append(a.name)
+    return moved
+
+
+def _dependence(model: RecastModel, output_gradient: Sequence[Any]) -> tuple[bool, ...]:
+    """Per disturbance, whether ``y'`` may depend on it: a state whose rate ``y`` feels (its
+    ``dy/dx_i`` is not identically 0) has a field that uses the disturbance or a function of it.
+    (Structural: a term that cancels still counts, and its gain is then 0.)"""
+    robust = model.robust
+    if robust is None:
+        return tuple(False for _ in model.disturbances)
+    ring = robust.ring
+    out = []
+    for d in model.disturbances:
+        moved = _moved_by(robust, d)
+        out.append(any(not dy.is_zero() and (degree_in(ring, r.numerator, moved) > 0
+                                             or degree_in(ring, r.denominator, moved) > 0)
+                       for dy, r in zip(output_gradient, robust.field[:model.n])))
+    return tuple(out)
+
+
+def _true_jacobian(model: RecastModel, field_: TrueField, equilibrium: FloatArray, bounds: FloatArray
+                   ) -> tuple[list[list[Any]], list[list[Any]]]:
+    """A loop with functions' ``A = df/dx``, ``B = df/dd`` at the equilibrium (``d = 0``): exact (the
+    chain rule through the auxiliaries, :func:`lyapcheck.models.classes.recast_classes.jacobian`),
+    else central differences of the true field."""
+    from lyapcheck.models.classes.recast_classes import base_loop, jacobian
+
+    n, m = model.n, len(model.disturbances)
+    system = model.robust if m and model.robust is not None else model.system
+    exact = jacobian(base_loop(system))
+    if not isinstance(exact, str):
+        A = [row[:n] for row in exact[:n]]
+        B = [row[n:n + m] if system is model.robust else [Fraction(0)] * m for row in exact[:n]]
+        return A, B
+    x0, d0 = equilibrium[None, :], np.zeros((1, m))
+    A_num = np.zeros((n, n))
+    for j in range(n):
+        h = JACOBIAN_STEP * max(1.0, abs(float(equilibrium[j])))
+        e = np.zeros((1, n))
+        e[0, j] = h
+        with np.errstate(all="ignore"):
+            A_num[:, j] = (field_(x0 + e, d0 if m else None) - field_(x0 - e, d0 if m else None))[0] / (2 * h)
+    B_num = np.zeros((n, m))
+    if field_.disturbed is not None:
+        for k in range(m):
+            h = JACOBIAN_STEP * float(bounds[k])
+            e = np.zeros((1, m))
+            e[0, k] = h
+            with np.errstate(all="ignore"):
+                B_num[:, k] = (field_(x0, e) - field_(x0, -e))[0] / (2 * h)
+    A_num[~np.isfinite(A_num)] = 0.0
+    B_num[~np.isfinite(B_num)] = 0.0
+    return A_num.tolist(), B_num.tolist()
 
 
 def linearization(A: Sequence[Sequence[Fraction | float]], B: Sequence[Sequence[Fraction | float]],
@@ -459,6 +608,21 @@ def default_horizon(prepared: Prepared) -> float:
         top = float(np.max(np.abs(lin.eigenvalues))) if lin.eigenvalues.size else 0.0
         slow = 1.0 / top if top > 0 else 1.0
     return HORIZON_TIME_CONSTANTS * slow
+
+
+def crosscheck_horizon(model: RecastModel) -> float:
+    """The horizon of the sweeps' cross-checks of a loop with functions (:mod:`sweeps.recast_crosscheck`):
+    ``HORIZON_TIME_CONSTANTS`` slowest time constants of the exact linearisation of its loop without
+    disturbances, ``CROSSCHECK_FALLBACK_HORIZON_S`` without a decaying one (or without an exact
+    Jacobian). ``simulate`` itself takes :func:`default_horizon`, for either kind."""
+    from lyapcheck.models.classes.recast_classes import base_loop, jacobian
+
+    J = jacobian(base_loop(model.system))
+    if isinstance(J, str):
+        return CROSSCHECK_FALLBACK_HORIZON_S
+    real = np.linalg.eigvals(np.array([[float(x) for x in row] for row in J])).real
+    slowest = np.max(real)
+    return float(HORIZON_TIME_CONSTANTS / -slowest) if slowest < 0 else CROSSCHECK_FALLBACK_HORIZON_S
 
 
 def default_frequencies(prepared: Prepared, t_end: float) -> FloatArray:
@@ -1551,7 +1715,8 @@ def _plot_worst(prepared: Prepared, batches: Sequence[tuple[_Batch, int, int]], 
     plt.close(fig)
 
 
-__all__ = ["SCENARIOS", "ModelDisturbance", "Prepared", "prepare", "simulate_model", "run_model", "ModelRun",
+__all__ = ["SCENARIOS", "ModelDisturbance", "Prepared", "prepare", "prepare_polynomial", "prepare_true_loop",
+           "TrueOutputGain", "crosscheck_horizon", "simulate_model", "run_model", "ModelRun",
            "search_worst_case",
            "tightness", "certified_bounds_of", "parse_start", "parse_frequencies", "parse_horizon", "grid_over_domain",
            "default_starts", "default_horizon", "default_frequencies", "state_scale", "scenario_disturbances"]
