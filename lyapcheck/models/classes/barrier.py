@@ -31,8 +31,7 @@ from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.classes.claims import BARRIER_SENTENCE
 from lyapcheck.models.loop.field import ScaledField, StateField
-from lyapcheck.models.classes.lyapunov import (BLOCK_COST_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials,
-                                        vanishing_monomials)
+from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable, on_remainder_faces
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      box_support, exact_grams, multiplier_grams, one, param, why_none)
@@ -235,24 +234,14 @@ def search_barrier(field: StateField, initial: Pieces, unsafe: Pieces, search: S
             continue
         outcomes: dict[str, int] = {}
         for lam in LAMBDAS:
-            structure: Structure | str = full
-            drop: frozenset[tuple[str, Monomial]] = frozenset()
-            for _ in range(FACIAL_ROUNDS + 1):
-                assert isinstance(structure, Structure)
-                search.budget.check()
-                found, solution = attempt(field, structure, degree, initial, unsafe, lam, search)
-                if found is not None:
-                    found["degree"] = degree
-                    tried.append(f"degree {degree}: found at lam = {lam}")
-                    return found, tried
-                # on the boundary (a remainder that must be singular, e.g. -B' where B's top degree
-                # meets the field's): leave out the vanishing rows and the kernels' supports, again
-                vanishing = frozenset((g.name, m) for g in structure.grams if g.name.startswith("R")
-                                      for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
-                reduced = barrier_structure(field, initial, unsafe, degree, drop | vanishing) if vanishing else None
-                if not isinstance(reduced, Structure):
-                    break
-                drop, structure = drop | vanishing, reduced
+            # (the lambdas run within this iteration: degree and lam are this iteration's)
+            found, solution = on_remainder_faces(
+                full, lambda drop: barrier_structure(field, initial, unsafe, degree, drop),
+                lambda structure: attempt(field, structure, degree, initial, unsafe, lam, search), search)
+            if found is not None:
+                found["degree"] = degree
+                tried.append(f"degree {degree}: found at lam = {lam}")
+                return found, tried
             why = why_none(solution)
             outcomes[why] = outcomes.get(why, 0) + 1
         tried.append(f"degree {degree}: none at lam = {', '.join(str(x) for x in LAMBDAS)} (scaled time): "

@@ -263,6 +263,29 @@ def kernel_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
     return frozenset(out)
 
 
+def on_remainder_faces(structure: Structure, rebuild: Callable[[frozenset[tuple[str, Monomial]]], "Structure | str"],
+                       attempt: Callable[[Structure], tuple[Any, Solution]], search: Search
+                       ) -> tuple[Any, Solution]:
+    """Solve ``structure`` and, while its exact check refuses, its facial reductions: the remainders'
+    (the Gram matrices named ``R...``) vanishing rows, else their kernels' supports
+    (:func:`vanishing_monomials`, :func:`kernel_monomials`), left out by ``rebuild(drop)``, at most
+    :data:`FACIAL_ROUNDS` times (a remainder that must be singular, e.g. ``-B'`` where ``B``'s top
+    degree meets the field's). What ``attempt`` found (None when nothing passed) and the last solve."""
+    drop: frozenset[tuple[str, Monomial]] = frozenset()
+    for _ in range(FACIAL_ROUNDS + 1):
+        search.budget.check()
+        found, solution = attempt(structure)
+        if found is not None:
+            return found, solution
+        vanishing = frozenset((g.name, m) for g in structure.grams if g.name.startswith("R")
+                              for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+        reduced = rebuild(drop | vanishing) if vanishing else None
+        if not isinstance(reduced, Structure):
+            break
+        drop, structure = drop | vanishing, reduced
+    return None, solution
+
+
 def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], found: dict[str, Any]) -> dict[str, Any]:
     """The certificate of the largest ``mu`` found, starting from ``found`` (``mu = 0``): step down
     geometrically from :data:`MU_MAX` to the first ``mu`` proved (none when :data:`MU_MIN` is not

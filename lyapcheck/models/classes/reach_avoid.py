@@ -38,8 +38,7 @@ from lyapcheck.models.classes.barrier import (BudgetExhausted, Pieces, _b_basis,
                                       set_values)
 from lyapcheck.models.loop.field import ScaledField, StateField
 from lyapcheck.models.engines import reasons
-from lyapcheck.models.classes.lyapunov import (BLOCK_COST_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, kernel_monomials,
-                                        vanishing_monomials)
+from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable, on_remainder_faces
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import (ParameterValues, Search, box_multipliers, box_multipliers_of, box_support,
                                      exact_grams, multiplier_grams, one, param, why_none)
@@ -258,24 +257,15 @@ def search_reach(field: StateField, initial: Pieces, unsafe: Pieces, goal: Seque
         if isinstance(structure, str):
             tried.append(f"degree {degree}: {structure}")
             continue
-        drop: frozenset[tuple[str, Monomial]] = frozenset()
-        why = "none found"
-        for _ in range(FACIAL_ROUNDS + 1):
-            assert isinstance(structure, Structure)
-            search.budget.check()
-            found, solution = attempt(field, structure, degree, initial, unsafe, goal, search)
-            if found is not None:
-                found["degree"] = degree
-                tried.append(f"degree {degree}: found")
-                return found, tried
-            why = why_none(solution)
-            vanishing = frozenset((g.name, m) for g in structure.grams if g.name.startswith("R")
-                                  for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
-            reduced = reach_structure(field, initial, unsafe, goal, degree, drop | vanishing) if vanishing else None
-            if not isinstance(reduced, Structure):
-                break
-            drop, structure = drop | vanishing, reduced
-        tried.append(f"degree {degree}: {why}")
+        # (the lambdas run within this iteration: degree is this iteration's)
+        found, solution = on_remainder_faces(
+            structure, lambda drop: reach_structure(field, initial, unsafe, goal, degree, drop),
+            lambda program: attempt(field, program, degree, initial, unsafe, goal, search), search)
+        if found is not None:
+            found["degree"] = degree
+            tried.append(f"degree {degree}: found")
+            return found, tried
+        tried.append(f"degree {degree}: {why_none(solution)}")
     return None, tried
 
 
