@@ -60,7 +60,7 @@ def pole(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Doc, Any]:
 
 
 def test_a_rational_loop_no_sos_class_takes_gets_its_region_by_ball_arithmetic(pole: tuple[Path, Doc, Any]) -> None:
-    from lyapcheck.models.classes.recast_interval import claim_sentence
+    from lyapcheck.models.classes.claims import interval_sentence as claim_sentence
 
     path, doc, done = pole
     assert done.exit_code == 0, done.output
@@ -104,7 +104,7 @@ def refused(doc: Doc) -> dict[str, str]:
 def test_a_tampered_ball_region_is_refused(pole: tuple[Path, Doc, Any]) -> None:
     """Each edit is refused by the check that names it; an edit of the claim itself, with its
     sentence made again to match, by the proof run again."""
-    from lyapcheck.models.classes.recast_interval import claim_sentence
+    from lyapcheck.models.classes.claims import interval_sentence as claim_sentence
 
     _, doc, _ = pole
 

@@ -26,7 +26,7 @@ from markupsafe import escape
 from lyapcheck import api
 from lyapcheck.models.language.modelfile import parse_any_model
 from lyapcheck.models.language.recast import RecastModel
-from lyapcheck.models.surfaces.recast_certify import sentence_of
+from lyapcheck.models.classes.claims import sentence_of
 from lyapcheck.models.engines.recast_numeric import v_values
 from lyapcheck.models.engines.recast_sos import poly_from_json
 from tests.conftest import ROOT

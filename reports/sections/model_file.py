@@ -26,7 +26,7 @@ kind              V is a polynomial in                   the certified set (``ro
 ================  =====================================  ==============================================
 
 Such a certificate is shown from its own keys (:meth:`ModelFileSection.recast_view`): the sentence it
-supports (:func:`lyapcheck.models.surfaces.recast_certify.sentence_of`, as ``verify`` re-makes it, never
+supports (:func:`lyapcheck.models.classes.claims.sentence_of`, as ``verify`` re-makes it, never
 the file's text), ``V`` typeset in the recasting's variables and ``V_text`` (V written with the
 functions), the level, the box, the exact proof's sizes. For the phase portrait of a 2-state loop it
 names each certified set (:meth:`ModelFileSection.portrait_set`, drawn by :mod:`reports.phase_portrait`).
@@ -381,7 +381,7 @@ def recast_sentence(cert: dict[str, Any], coverage: Any = None) -> str:
     """The claim a recast or interval certificate supports, made from the certificate alone (with
     ``(d = 0)`` in front where the condition says its disturbances were held at 0)."""
     from lyapcheck.models.classes.claims import covered
-    from lyapcheck.models.surfaces.recast_certify import sentence_of
+    from lyapcheck.models.classes.claims import sentence_of
 
     try:
         return covered(coverage if coverage in ("zero", "all") else None, sentence_of(cert))

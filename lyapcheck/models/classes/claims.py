@@ -44,6 +44,12 @@ BARRIER_SENTENCE = ("safety: no trajectory that starts in the initial set ever e
 #: inside and its ``[units]`` accept only ``time = "s"`` (lyapcheck.models.language.dimensions)
 TIME_UNIT = "s"
 RATE_UNIT = "1/s"
+#: the certificate kinds of a loop with functions' safety classes (lyapcheck.models.classes.recast_barrier,
+#: recast_reach_avoid; :func:`sentence_of`)
+RECAST_BARRIER_KIND = "recast_barrier"
+RECAST_REACH_AVOID_KIND = "recast_reach_avoid"
+#: how a ball-arithmetic region is proved (its sentence says so: :func:`interval_sentence`)
+INTERVAL_METHOD = "ball arithmetic (python-flint arb) on the true field"
 #: significant digits of a figure in a sentence (the JSON keeps the full figure)
 FIGURE_DIGITS = 4
 
@@ -324,5 +330,74 @@ def box_prefix(box: ModelBox, status: str) -> str:
     return f"at the box's centre ({centre}), so not for every value of the box: "
 
 
+# -- loops with functions: a certificate's own sentence --------------------------------------------------
+
+def sentence_of(cert: dict[str, Any]) -> str:
+    """The claim sentence of a certificate of a loop with functions, of any kind (a barrier's is the
+    polynomial loops' one): certify writes it, ``verify`` and the report re-make it from the certificate."""
+    if cert.get("kind") == RECAST_BARRIER_KIND:
+        return BARRIER_SENTENCE
+    if cert.get("kind") == RECAST_REACH_AVOID_KIND:  # (C / eps seconds: recast_reach_avoid.reach_time)
+        time_s = read_rational(cert["C"]) / read_rational(cert["eps_per_s"])
+        text = summary("reach_avoid", {"status": "certified", "reach_time_bound_s": float(time_s)})
+        assert text is not None  # (a certified reach_avoid always has its sentence)
+        return text
+    if cert.get("kind") == "interval":
+        return interval_sentence(cert)
+    return lyapunov_sentence(cert)
+
+
+def lyapunov_sentence(cert: dict[str, Any]) -> str:
+    """What a certified recast condition proves, in one sentence made from its certificate alone
+    (``verify`` re-makes it and compares: a printed sentence never claims more than the proof). A
+    distance is to the equilibrium, a rate in 1/s (:func:`lyapcheck.models.classes.claims.with_unit`)."""
+    angles = list(cert["angles"])
+    modulo = (f" modulo 2 pi in {', '.join(angles)} (the loop is periodic in {'it' if len(angles) == 1 else 'them'})"
+              if angles else "")
+    eps = cert["epsilon"]
+    if "ges" in cert:
+        eps = cert.get("decrease_epsilon", eps)
+        ges = {k: read_rational(v) for k, v in cert["ges"].items()}
+        return (f"globally exponentially stable: |x(t) - x_eq| <= {rounded(ges['k'], 6, 'up')} |x0 - x_eq| exp(-r t) "
+                f"with r = {with_unit(ges['rate'], RATE_UNIT, 6, 'down')}, from every start (exactly k = {ges['k']}, "
+                f"r = {ges['rate']}: V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} "
+                "|z|^2, proved exactly on the recasting's relations; V_text in the certificate)")
+    if "level" in cert:
+        level = read_rational(cert["level"])
+        return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "
+                f"{rounded(level, 6, 'down')} (exactly {level}) converges to the equilibrium{modulo} (V positive definite "
+                f"and V' <= -{eps} |dx|^2 / D there, D > 0, proved exactly on the recasting's relations; V_text in "
+                "the certificate)")
+    return (f"globally asymptotically stable{modulo}: V(x, a(x)) >= {cert.get('positivity_epsilon', eps)} |dx|^2 and "
+            f"V' <= -{eps} |dx|^2 / D everywhere, D > 0 (proved exactly on the recasting's relations; V_text in the "
+            "certificate)")
+
+
+def interval_sentence(cert: dict[str, Any]) -> str:
+    """What a ball-arithmetic region (certificate kind ``interval``) proves, from the certificate alone
+    (``verify`` re-makes and compares)."""
+    level = read_rational(cert["level"])
+    n = len(cert["box"])
+    written = "V(x, a(x))" if any(any(e[n:]) for _, e in cert["V"]["terms"]) else "V(x)"
+    # the box rounded towards the weaker claim: outwards where the set is said to lie in it, inwards
+    # where the proved set is the part of {V <= level} in it
+    out, inward = ("down", "up") if cert.get("whole") else ("up", "down")
+    units = cert.get("units") or {}
+    box = ", ".join(f"{s} - eq in [{rounded(Fraction(a), 6, out)}, {rounded(Fraction(b), 6, inward)}]"
+                    + (f" {units[s]}" if units.get(s) else "") for s, (a, b) in cert["box"].items())
+    level_text = rounded(level, 6, "down")
+    if cert.get("whole"):
+        return (f"region of attraction: every trajectory of the true loop starting where {written} <= "
+                f"{level_text} (exactly {level}) converges to the equilibrium itself (the whole set lies in "
+                f"{box}: V > level outside it, and V' < 0 on the set except at the equilibrium; proved by {INTERVAL_METHOD}, "
+                "with an exact Hessian argument at the equilibrium and an exact growth bound of V far out; V_text "
+                "in the certificate)")
+    return (f"region of attraction: every trajectory of the true loop starting where {written} <= {level_text} "
+            f"(exactly {level}) with {box} converges to the equilibrium itself (V > level on that box's boundary, "
+            f"V' < 0 on the set except at the equilibrium; proved by {INTERVAL_METHOD}, with an exact Hessian argument at the "
+            "equilibrium; V_text in the certificate)")
+
+
 __all__ = ["summary", "box_words", "box_prefix", "ball_words", "with_unit", "deviation", "state_unit_figures", "v_text",
-           "v_expression", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT", "RATE_UNIT"]
+           "v_expression", "sentence_of", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
+           "RATE_UNIT"]

@@ -34,7 +34,7 @@ from typing import Any, Final, Iterator, Sequence
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.classes.barrier import FALSIFICATION_FEW_ABOVE, FALSIFICATION_SAMPLES, LAMBDAS
-from lyapcheck.models.classes.claims import BARRIER_SENTENCE
+from lyapcheck.models.classes.claims import BARRIER_SENTENCE, RECAST_BARRIER_KIND
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel, Relation, written_poly
 from lyapcheck.models.classes.recast_classes import (Loop, _set, base_loop, common_denominator, lie, prove_denominators,
@@ -48,7 +48,7 @@ from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials
 from lyapcheck.exact import read_rational
 
 #: the certificate's kind (``verify`` dispatches on it)
-KIND: Final = "recast_barrier"
+KIND: Final = RECAST_BARRIER_KIND
 #: degrees of B tried, in turn
 RECAST_BARRIER_DEGREES: Final = (2, 4)
 #: the owner of a set's relation (:attr:`lyapcheck.models.language.recast.Relation.owner`)

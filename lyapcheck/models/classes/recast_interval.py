@@ -32,6 +32,7 @@ from lyapcheck.models.engines.recast_sos import poly_from_json, poly_to_json
 from lyapcheck.models.engines.search import Budget
 from lyapcheck.results import ConditionResult
 from lyapcheck.exact import read_rational
+from lyapcheck.models.classes.claims import INTERVAL_METHOD, interval_sentence
 
 #: each retry lowers the proposed level by this factor (the proof failing near the level set's edge)
 RETRY_LEVEL_FACTOR: Final = Fraction(9, 10)
@@ -46,7 +47,7 @@ WHOLE_SET_CELL_LIMIT: Final = 20_000
 #: tighter (a parameter enters several entries of V''s Hessian, which the enclosure treats apart)
 PARAMETER_SPLITS: Final = 3
 #: what the route proves with, in every sentence and certificate
-METHOD: Final = "ball arithmetic (python-flint arb) on the true field"
+METHOD: Final = INTERVAL_METHOD
 
 
 @dataclass(frozen=True)
@@ -183,7 +184,7 @@ def _prove_lowering(loop: Loop, claim: IntervalClaim, budget: Budget, name: str,
             cert = certificate(loop, claim, proof)
             if robust is not None:
                 robust.stamp(cert)
-            return ConditionResult(name, "certified", claim_sentence(cert), property="ROA", certificate=cert,
+            return ConditionResult(name, "certified", interval_sentence(cert), property="ROA", certificate=cert,
                                    numbers={"level": float(claim.level), "V_from": v_from, "cells": proof.cells,
                                             "boundary_cells": proof.boundary_cells, "proof_seconds": proof.seconds,
                                             **numbers, "tried": reasons + [f"level {float(claim.level):.6g}: proved"]})
@@ -313,32 +314,6 @@ def claim_of(loop: Loop, cert: dict[str, Any]) -> IntervalClaim:
     return IntervalClaim(V, read_rational(cert["level"]), lo, hi)
 
 
-def claim_sentence(cert: dict[str, Any]) -> str:
-    """What the certificate proves, from the certificate alone (``verify`` re-makes and compares)."""
-    from lyapcheck.models.classes.claims import rounded
-
-    level = read_rational(cert["level"])
-    n = len(cert["box"])
-    written = "V(x, a(x))" if any(any(e[n:]) for _, e in cert["V"]["terms"]) else "V(x)"
-    # the box rounded towards the weaker claim: outwards where the set is said to lie in it, inwards
-    # where the proved set is the part of {V <= level} in it
-    out, inward = ("down", "up") if cert.get("whole") else ("up", "down")
-    units = cert.get("units") or {}
-    box = ", ".join(f"{s} - eq in [{rounded(Fraction(a), 6, out)}, {rounded(Fraction(b), 6, inward)}]"
-                    + (f" {units[s]}" if units.get(s) else "") for s, (a, b) in cert["box"].items())
-    level_text = rounded(level, 6, "down")
-    if cert.get("whole"):
-        return (f"region of attraction: every trajectory of the true loop starting where {written} <= "
-                f"{level_text} (exactly {level}) converges to the equilibrium itself (the whole set lies in "
-                f"{box}: V > level outside it, and V' < 0 on the set except at the equilibrium; proved by {METHOD}, "
-                "with an exact Hessian argument at the equilibrium and an exact growth bound of V far out; V_text "
-                "in the certificate)")
-    return (f"region of attraction: every trajectory of the true loop starting where {written} <= {level_text} "
-            f"(exactly {level}) with {box} converges to the equilibrium itself (V > level on that box's boundary, "
-            f"V' < 0 on the set except at the equilibrium; proved by {METHOD}, with an exact Hessian argument at the "
-            "equilibrium; V_text in the certificate)")
-
-
 def box_units(model: RecastModel) -> dict[str, str] | None:
     """Each state's unit as ``[units]`` declares it (``''`` dimensionless), which a certificate's box
     is printed in (its ``units``); None without ``[units]``. ``verify`` re-makes it from the model."""
@@ -381,7 +356,7 @@ def check_interval(loop: Loop, c: dict[str, Any], robust: Robust | None = None) 
             return False, f"the whole sublevel set is not proved to lie in the box: {why}"
     from lyapcheck.models.classes.claims import covered
 
-    if c.get("summary") != covered(c.get("disturbances"), claim_sentence(cert)):
+    if c.get("summary") != covered(c.get("disturbances"), interval_sentence(cert)):
         return False, "the printed sentence is not the one the certificate supports"
     if cert.get("V_text") != v_text(system, claim.V):
         return False, "V_text is not V written with the functions"
@@ -390,4 +365,4 @@ def check_interval(loop: Loop, c: dict[str, Any], robust: Robust | None = None) 
                   f"{proof.local_radius} by the Hessian), by {METHOD}")
 
 
-__all__ = ["interval_roa", "interval_candidate", "check_interval", "claim_sentence", "box_units", "METHOD"]
+__all__ = ["interval_roa", "interval_candidate", "check_interval", "box_units", "METHOD"]

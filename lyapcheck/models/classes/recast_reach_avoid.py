@@ -50,9 +50,10 @@ from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterVa
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
 from lyapcheck.exact import read_rational
+from lyapcheck.models.classes.claims import RECAST_REACH_AVOID_KIND
 
 #: the certificate's kind (``verify`` dispatches on it)
-KIND: Final = "recast_reach_avoid"
+KIND: Final = RECAST_REACH_AVOID_KIND
 #: the search's lower bounds on eps (1/s) and delta, and on C: the check needs eps, delta > 0 and C >= 0;
 #: a small floor leaves the program free (a smaller eps only lengthens the time bound C / eps)
 FLOORS: Final = {"eps": Fraction(1, 1000), "C": Fraction(0), "delta": Fraction(1, 1000)}
@@ -227,12 +228,11 @@ def reach_time(cert: dict[str, Any]) -> Fraction:
 
 
 def sentence(cert: dict[str, Any]) -> str:
-    """The claim of a certificate of this kind: the polynomial loops' reach-avoid sentence."""
-    from lyapcheck.models.classes.claims import summary
+    """The claim of a certificate of this kind: the polynomial loops' reach-avoid sentence
+    (:func:`lyapcheck.models.classes.claims.sentence_of`)."""
+    from lyapcheck.models.classes.claims import sentence_of
 
-    text = summary("reach_avoid", {"status": "certified", "reach_time_bound_s": float(reach_time(cert))})
-    assert text is not None  # (a certified reach_avoid always has its sentence)
-    return text
+    return sentence_of(cert)
 
 
 # -- the class ----------------------------------------------------------------------------------------

@@ -32,7 +32,7 @@ proves is taken only when the whole sublevel set is proved to lie in its box, so
 ``{V <= level}`` as every polynomial ``roa`` states it (reports draw that set, sweeps simulate
 from it). The condition says which engine proved it: ``engine`` = ``"ball_arithmetic"`` (the SOS
 route's conditions carry no ``engine`` key, so that their documents stay as they were); its
-sentence is the recast route's (:func:`lyapcheck.models.classes.recast_interval.claim_sentence`).
+sentence is the recast route's (:func:`lyapcheck.models.classes.claims.interval_sentence`).
 """
 
 from __future__ import annotations
@@ -136,7 +136,8 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
     ``not_applicable`` becomes ``not_certified``: the class was tried)."""
     from lyapcheck.models.classes.claims import covered
     from lyapcheck.models.engines.interval_region import prove_bounded
-    from lyapcheck.models.classes.recast_interval import METHOD, claim_of, claim_sentence, interval_roa
+    from lyapcheck.models.classes.claims import interval_sentence
+    from lyapcheck.models.classes.recast_interval import METHOD, claim_of, interval_roa
     from lyapcheck.models.surfaces.recast_run import comparison_box, proved_loop, robust_of, simulated_check
 
     recast = as_recast(model)
@@ -168,7 +169,7 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
     if found.disturbances is None and model.disturbances:
         found.disturbances = "zero"  # proved on the loop with its disturbances at 0
     # the recast route's sentence, from the certificate as it now stands (whole), with the coverage
-    found.summary = covered(found.disturbances, claim_sentence(found.certificate))
+    found.summary = covered(found.disturbances, interval_sentence(found.certificate))
     V = found.certificate["V"]["terms"]
     found.numbers.update({"engine": ENGINE, "degree": max(sum(e[:model.n]) for _, e in V),
                           "tried": [f"sums of squares: {sos.summary}", *found.numbers.get("tried", [])]})

@@ -355,10 +355,9 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     (:func:`lyapcheck.models.surfaces.recast_run.certify`), each certified one's sentence made from its
     certificate; with ``box`` (``model`` read at its centre), every certified claim holds for every value
     of it and says so first, and a refutation is the centre's and says so."""
-    from lyapcheck.models.classes.claims import box_prefix, covered
+    from lyapcheck.models.classes.claims import box_prefix, covered, sentence_of
     from lyapcheck.models.classes.recast_interval import box_units
     from lyapcheck.models.surfaces import recast_run
-    from lyapcheck.models.surfaces.recast_certify import sentence_of
 
     cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
     chosen = class_selection(classes, model, cand)

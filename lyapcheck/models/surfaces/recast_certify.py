@@ -30,7 +30,7 @@ from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_deno
                                              jacobian, lie, state_square, v_names, v_text)
 from lyapcheck.models.surfaces.recast_run import box_robust, boxed_loop, robust_of
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
-from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered
+from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered, lyapunov_sentence
 from lyapcheck.models.classes.recast_barrier import KIND as RECAST_BARRIER
 from lyapcheck.models.classes.recast_reach_avoid import KIND as RECAST_REACH_AVOID
 from lyapcheck.models.surfaces.stated import Stated, check_stated
@@ -38,49 +38,6 @@ from lyapcheck.sos.polynomials import degree_in, to_fmpq
 from lyapcheck.exact import read_rational
 
 Row = tuple[str, bool, str]
-
-
-def sentence_of(cert: dict[str, Any]) -> str:
-    """The claim sentence of a recast certificate of any kind (a barrier's is the polynomial loops' one)."""
-    if cert.get("kind") == RECAST_BARRIER:
-        return BARRIER_SENTENCE
-    if cert.get("kind") == RECAST_REACH_AVOID:
-        from lyapcheck.models.classes.recast_reach_avoid import sentence
-
-        return sentence(cert)
-    if cert.get("kind") == "interval":
-        from lyapcheck.models.classes.recast_interval import claim_sentence as interval_sentence
-
-        return interval_sentence(cert)
-    return claim_sentence(cert)
-
-
-def claim_sentence(cert: dict[str, Any]) -> str:
-    """What a certified recast condition proves, in one sentence made from its certificate alone
-    (``verify`` re-makes it and compares: a printed sentence never claims more than the proof). A
-    distance is to the equilibrium, a rate in 1/s (:func:`lyapcheck.models.classes.claims.with_unit`)."""
-    from lyapcheck.models.classes.claims import RATE_UNIT, rounded, with_unit
-
-    angles = list(cert["angles"])
-    modulo = (f" modulo 2 pi in {', '.join(angles)} (the loop is periodic in {'it' if len(angles) == 1 else 'them'})"
-              if angles else "")
-    eps = cert["epsilon"]
-    if "ges" in cert:
-        eps = cert.get("decrease_epsilon", eps)
-        ges = {k: read_rational(v) for k, v in cert["ges"].items()}
-        return (f"globally exponentially stable: |x(t) - x_eq| <= {rounded(ges['k'], 6, 'up')} |x0 - x_eq| exp(-r t) "
-                f"with r = {with_unit(ges['rate'], RATE_UNIT, 6, 'down')}, from every start (exactly k = {ges['k']}, "
-                f"r = {ges['rate']}: V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} "
-                "|z|^2, proved exactly on the recasting's relations; V_text in the certificate)")
-    if "level" in cert:
-        level = read_rational(cert["level"])
-        return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "
-                f"{rounded(level, 6, 'down')} (exactly {level}) converges to the equilibrium{modulo} (V positive definite "
-                f"and V' <= -{eps} |dx|^2 / D there, D > 0, proved exactly on the recasting's relations; V_text in "
-                "the certificate)")
-    return (f"globally asymptotically stable{modulo}: V(x, a(x)) >= {cert.get('positivity_epsilon', eps)} |dx|^2 and "
-            f"V' <= -{eps} |dx|^2 / D everywhere, D > 0 (proved exactly on the recasting's relations; V_text in the "
-            "certificate)")
 
 
 # -- verify ------------------------------------------------------------------------------------------
@@ -440,7 +397,7 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
         ok, why = _verify_ges(loop, cert, region is not None)
         if not ok:
             return False, why
-    if c.get("summary") != covered(c.get("disturbances"), claim_sentence(cert)):
+    if c.get("summary") != covered(c.get("disturbances"), lyapunov_sentence(cert)):
         return False, "the printed sentence is not the one the certificate supports"
     if cert.get("V_text") != v_text(system, V):
         return False, "V_text is not V written with the functions"
@@ -508,4 +465,4 @@ def _checked_on_recasting(c: dict[str, Any], base: Loop, check: Callable[[Loop],
     return ok, why
 
 
-__all__ = ["verify_recast", "claim_sentence", "sentence_of", "proved_claims"]
+__all__ = ["verify_recast", "proved_claims"]
