@@ -51,7 +51,7 @@ FIELD_TEXT: Final = "the true loop: each function evaluated by numpy, not the re
 
 
 def default_horizon(model: RecastModel) -> float:
-    """The horizon of the sweeps' cross-checks (:mod:`sweeps.recast_crosscheck`): 40 slowest time
+    """The horizon of the sweeps' cross-checks (:mod:`sweeps.crosscheck`): 40 slowest time
     constants of the exact linearisation, 60 s without a decaying one. (``simulate`` takes
     :func:`lyapcheck.models.surfaces.simulate.default_horizon`, the same for a polynomial loop.)"""
     from lyapcheck.models.classes.recast_classes import base_loop, jacobian
