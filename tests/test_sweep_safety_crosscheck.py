@@ -269,3 +269,21 @@ def test_reach_avoid_reads_the_time_before_the_goal_and_the_unsafe_set_before_it
     assert (before.entered, before.first_entered) == (1, 0) and not before.ok
     never = check_reach_avoid([(np.array([0.0, 1.0, 2.0 * (1 + 2e-5)]), outside[:3], outside[:3])], bound_s=2.0)
     assert never.late == 1 and reach_horizon(2.0) > 2.0 * (1 + TRAJECTORY_CHECK_REL_TOL)
+
+
+@pytest.mark.parametrize("loop", ["polynomial", "with_functions"])
+def test_a_barrier_its_certifier_s_own_simulation_contradicted_raises_the_alarm_on_either_loop(
+        loop: str, request: pytest.FixtureRequest) -> None:
+    """A certified barrier whose falsification beside the proof entered the unsafe set
+    (``soundness_violation`` in its document) is a violation of the sweep on either loop kind, though the
+    sweep's own trajectories (the unsafe set far away) are clean; without the flag there is none."""
+    data, _ = request.getfixturevalue(loop)
+    check = check_polynomial if loop == "polynomial" else check_with_functions
+    doc = doctored(data)
+    doc["conditions"] = {"barrier": {**doc["conditions"]["barrier"], "soundness_violation": True}}
+    flagged = check(FAR, doc)
+    assert flagged.unsafe_margin < 0
+    assert len(flagged.violations) == 1 and flagged.violations[0].startswith("barrier at "), flagged.violations
+    assert "its own simulation when certified found a trajectory into the unsafe set" in flagged.violations[0]
+    del doc["conditions"]["barrier"]["soundness_violation"]
+    assert not check(FAR, doc).violation
