@@ -90,7 +90,7 @@ def main() -> None:
     args = parser.parse_args()
 
     from lyapcheck.api import verify
-    from sweeps.crosscheck import cross_check
+    from sweeps.crosscheck import cross_check_box
     from sweeps.run import run_model_sweep
     from sweeps.runners import make_runner
     from sweeps.schema import BOX_STATUS_CODES
@@ -145,8 +145,8 @@ def main() -> None:
     if boxes:
         for b, pts in sorted(sample_points(spec, boxes, weights, args.points, rng).items()):
             doc = json.loads(str(data["certificate"][rows[b]]))
-            found = cross_check(spec.model, doc, pts, starts=spec.simulation.starts, seed=(args.seed, int(rows[b])),
-                                worst_case=spec.simulation.worst_case)
+            found, _ = cross_check_box([(spec.model, p) for p in pts], doc, starts=spec.simulation.starts,
+                                       seed=(args.seed, int(rows[b])), worst_case=spec.simulation.worst_case)
             simulated += found.points
             trajectories += found.trajectories
             violations += len(found.violations)

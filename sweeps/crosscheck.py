@@ -1,40 +1,79 @@
-"""The simulation cross-check of a certified point or box of a model file's sweep.
+"""The simulation cross-check of a certified point or box of a model file's sweep, on either loop kind.
 
-At each parameter point (the point itself, or random points of a box drawn from ``(seed, box
-id)`` so that a box's result does not depend on the unit it was grouped in), the model is
-simulated with the project's integrator (:mod:`lyapcheck.models.engines.trajectories`) and every certified
-class of the stored certificate is checked with :mod:`lyapcheck.models.engines.crosscheck`:
+One entry per job, each taking a polynomial or rational loop
+(:class:`~lyapcheck.models.language.modelfile.Model`) or a loop with functions (sin, sqrt, sat, ...;
+:class:`~lyapcheck.models.language.recast.RecastModel`): :func:`cross_check_point` (a grid point) and
+:func:`cross_check_box` (random parameter points of a certified box, each simulated on the loop there; a
+point of a loop with functions where the box's certificates are not functions of that loop's variables,
+:func:`box_mismatch`, is not simulated, and the reason is returned to be stored). Every certified class of
+the stored certificate is checked with the checks of :mod:`lyapcheck.models.engines.crosscheck`:
 
-* ``roa``: starts drawn inside ``{V <= level}`` (random directions, between half the way and
-  just inside the set's boundary, found by bisection along each ray) must not escape and V must
-  not rise along them (so they stay in the set);
-* ``quadratic`` and ``sos_gas``: starts across the model's ``[domain]`` (or, without one, the box
-  of twice the certificate's state scales around the equilibrium) must not escape, V must not rise
-  and must stay below ``V(0) exp(-rate t)`` (the certified rate of V); a GES certificate's
-  ``|x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)`` too;
-* ``barrier`` and ``reach_avoid`` (:func:`check_sets`, shared with :mod:`sweeps.recast_crosscheck`): starts
-  drawn from the model's ``[sets] initial`` (:func:`lyapcheck.models.classes.falsify.sample_set`, a quarter on
-  its boundary), each simulated with every disturbance at 0 and, for a claim over every disturbance
-  (``"disturbances": "all"``), at each vertex of the disturbance box held constant (at most
-  :data:`MAX_VERTICES`), over the falsification's horizon
-  (:func:`lyapcheck.models.classes.falsify.default_horizon`; both classes read the same trajectories). A
-  barrier's must not enter ``unsafe``; a reach-avoid's must be in ``goal`` by the certified
-  ``reach_time_bound_s`` and not enter ``unsafe`` before it, and when one is not in the goal by the
-  horizon and the bound is beyond it, all are simulated again to just past the bound
-  (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
-  :func:`~lyapcheck.models.engines.crosscheck.check_reach_avoid`). Figures: ``unsafe_margin`` (the largest
-  unsafe margin reached, each inequality relative to the size of its terms:
-  :func:`~lyapcheck.models.engines.crosscheck.scaled_margin`; ``< 0`` none entered) and ``reach_ratio``
-  (the latest time before the goal over the bound);
-* ``sos_bound``: the worst-case disturbance search (:func:`lyapcheck.models.surfaces.simulate.search_worst_case`,
-  its deterministic screening round) must not find a tail sup of an output above its certified
-  bound beyond :data:`sweeps.soundness.BOUND_REL_TOL`, nor a diverging disturbance.
+=====================  ===========================================  ==========================================
+certificate            starts                                       must hold
+=====================  ===========================================  ==========================================
+``roa``, {V <= level}  random rays from the equilibrium, between    no escape; V never rises (on a polynomial
+                       half-way and just inside the set's boundary  loop, along every trajectory that starts
+                       (with functions: within the certificate's    in the set, any start's)
+                       ``box`` for a ball-arithmetic one, else
+                       within the comparison box below)
+``quadratic``,         uniform over the model's ``[domain]``; else  no escape; V never rises; ``V(t) <= V(0)
+``sos_gas``            polynomial: twice the certificate's state    exp(-rate t)`` with a certified rate of V;
+                       scales around x_eq; with functions: +-pi in  a GES certificate's ``|x(t) - x_eq| <= k
+                       an angle and +-4 elsewhere (the comparison   |x0 - x_eq| exp(-rate t)``
+                       box of the classes)
+any class              its own simulation when it was certified     not flagged ``soundness_violation``
+``sos_bound``          polynomial (with ``worst_case``): the        the tail sup of each output within its
+                       worst-case disturbance search                certified bound (polynomial: beyond
+                       (:func:`lyapcheck.models.surfaces.simulate.  :data:`sweeps.soundness.BOUND_REL_TOL`, and
+                       search_worst_case`, its screening round);    no diverging disturbance; with functions:
+                       with functions: uniform over the comparison  the largest ``|y|`` after 60 s, stored as
+                       box, each disturbance bang-bang against      ``sim_worst_<y>``)
+                       ``y``'s sign or a square wave at its bound,
+                       RK4, 120 s
+``barrier``,           random points of ``[sets] initial``          never in ``unsafe``; ``reach_avoid``: in
+``reach_avoid``        (:func:`check_sets`: a quarter on its        ``goal`` by ``reach_time_bound_s``, not in
+                       boundary), each at every disturbance 0 and,  ``unsafe`` before it
+                       for a claim over every disturbance, at each
+                       vertex of the disturbance box held constant
+                       (at most :data:`MAX_VERTICES`)
+=====================  ===========================================  ==========================================
 
-A V over a box may depend on the parameters: it is evaluated at each point's own values. The
-horizon is :func:`lyapcheck.models.engines.trajectories.horizon` of the point's linearization. Trajectories
-not at the equilibrium by then are counted (``not_converged``): a finite simulation cannot refute
-convergence, so this is a figure; a certified decay rate (V's, or a GES envelope) is what makes
-slow convergence a violation. Any breach is a soundness violation, with a one-line detail.
+Safety (:func:`check_sets`): simulated over the falsification's horizon
+(:func:`lyapcheck.models.classes.falsify.default_horizon`; both classes read the same trajectories); when a
+reach-avoid's trajectory is not in the goal by then and the bound is beyond it, all are simulated again to just
+past the bound (:func:`lyapcheck.models.engines.crosscheck.check_safety`,
+:func:`~lyapcheck.models.engines.crosscheck.check_reach_avoid`). Figures: ``unsafe_margin`` (the largest
+unsafe margin reached, each inequality relative to the size of its terms:
+:func:`~lyapcheck.models.engines.crosscheck.scaled_margin`; ``< 0`` none entered) and ``reach_ratio`` (the
+latest time before the goal over the bound).
+
+What differs between the kinds is how the loop is simulated and V evaluated in floating point, behind
+:class:`SimulatedLoop` (:class:`_PolynomialLoop`, :class:`_FunctionsLoop`):
+
+* a polynomial loop is integrated on its own field, over :func:`lyapcheck.models.engines.trajectories.horizon`
+  of its linearization; a V is the certificate's exact polynomial (over a box, at the point's own
+  parameter values) in the certificate's scaled states
+  (:func:`lyapcheck.models.engines.crosscheck.certificate_function`). Its global starts are drawn once for
+  all global certificates, and each certificate reads every trajectory that starts in its set;
+* a loop with functions is integrated on its true field, each function evaluated by numpy
+  (:class:`lyapcheck.models.engines.recast_numeric.TrueField`), never the recast polynomial loop, which
+  holds only on its relations' set, over :func:`lyapcheck.models.surfaces.simulate.crosscheck_horizon`;
+  a V is the certificate's polynomial in its ``variables`` (the states, then the auxiliaries), each
+  shifted by the certificate's ``shift``, at the true auxiliaries of the simulated states. Each certificate
+  reads its own starts. An angle state (one the loop sees only through its sine and cosine) is never an
+  escape: on the cylinder the loop may turn several times before it settles; converged is taken modulo
+  2 pi in the angles the certificate's claim is modulo.
+
+The random starts of a point come from ``numpy.random.default_rng``: on a polynomial loop one stream,
+``[*seed, k]`` for the ``k``-th point of a box (``[*seed, 0]`` at a grid point), read by the Lyapunov
+classes then the safety ones; on a loop with functions three, ``[*prefix, 0]`` (Lyapunov classes),
+``[*prefix, 1]`` (``sos_bound``) and ``[*prefix, 2]`` (safety), with ``prefix`` the grid point's seed or
+``(*seed, k)`` in a box (the draws of the two modules this one replaced, so that a stored sweep
+reproduces). A point's result does not depend on the unit it was grouped in.
+
+Trajectories not at the equilibrium by the horizon are counted (``not_converged``): a finite simulation
+cannot refute convergence, so this is a figure; a certified decay rate (V's, or a GES envelope) is what
+makes slow convergence a violation. Any breach is a soundness violation, with a one-line detail.
 """
 
 from __future__ import annotations
@@ -42,12 +81,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Callable, Final, Mapping, Optional, Sequence
+from functools import cached_property
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Optional, Protocol, Sequence
 
 import numpy as np
 
 from lyapcheck.models.language.modelfile import Model
 from sweeps.soundness import BOUND_REL_TOL, WORST_CASE_SCREENING_ONLY
+
+if TYPE_CHECKING:
+    from lyapcheck.models.language.recast import RecastModel
 
 #: trajectories leave the cross-check's box only this many start extents from the equilibrium (a
 #: trajectory under a certificate stays in a sublevel set of V through its start, which may reach
@@ -57,16 +100,32 @@ ESCAPE_EXTENTS: Final = 30.0
 CONVERGED_FRACTION: Final = 1e-3
 #: starts of a region of attraction: between these fractions of the way to the set's boundary
 REGION_FRACTIONS: Final = (0.5, 0.999)
-#: the global starts' box without a [domain]: this many certificate state scales around x_eq
+#: the global starts' box of a polynomial loop without a [domain]: this many certificate state scales around x_eq
 DEFAULT_REGION_SCALES: Final = 2.0
-#: the classes simulated from the initial set (:func:`check_sets`)
+#: the classes whose V is simulated (the global ones, then the region), and those simulated from the
+#: initial set (:func:`check_sets`)
+GLOBAL_CLASSES: Final = ("quadratic", "sos_gas")
+REGION_CLASS: Final = "roa"
 SAFETY_CLASSES: Final = ("barrier", "reach_avoid")
 #: the vertices of the disturbance box held constant for a claim over every disturbance (2**m, at most this many)
 MAX_VERTICES: Final = 8
+#: a loop with functions' ``sos_bound``: the disturbance signals (bang-bang against the sign of the
+#: output, then square waves of these periods, s, each at the disturbance's bound), the simulation
+#: (RK4): its horizon, step, and the time from which the tail sup is taken (s)
+BOUND_SIGNAL_PERIODS: Final = (0.5, 2.0, 8.0)
+BOUND_HORIZON_S: Final = 120.0
+BOUND_STEP_S: Final = 0.02
+BOUND_TAIL_FROM_S: Final = 60.0
 #: a loop's simulation for :func:`check_sets`: ``run(starts, t_end, disturbances)`` with starts ``(k, n)``
 #: (declared states), ``t_end`` in s (None: the loop's falsification horizon) and a constant disturbance
 #: per row ``(k, m)`` (None: all 0); per row the times and states of the integrator's own points
 Runs = Callable[[np.ndarray, Optional[float], Optional[np.ndarray]], list[tuple[np.ndarray, np.ndarray]]]
+#: a float function of a batch of points ``(k, n)``: ``(k,)`` values
+PointFunction = Callable[[np.ndarray], np.ndarray]
+#: the end of trajectory ``i`` checked against a claim modulo 2 pi in the given angles: ``converged``,
+#: ``escaped`` or ``other``
+Outcome = Callable[[int, tuple[str, ...]], str]
+
 
 @dataclass
 class CrossCheck:
@@ -95,149 +154,209 @@ class CrossCheck:
 
 @dataclass(frozen=True)
 class _Set:
-    """A certified function of the document at one parameter point."""
+    """A certified V of the document at one parameter point."""
 
     cls: str
-    V: Any  # a float function of the scaled states (lyapcheck.models.engines.crosscheck.certificate_function)
+    V: PointFunction  # of the loop's scaled deviations u (SimulatedLoop.scales)
+    region: PointFunction | None = None  # roa: V where the rays look for the set's boundary
     level: float = math.nan  # roa
     rate: float = 0.0  # certified decay rate of V, 1/s
     k: float = math.nan  # GES envelope
     ges_rate: float = math.nan
+    angles: tuple[str, ...] = ()  # the claim holds modulo 2 pi in these states
+
+
+class SimulatedLoop(Protocol):
+    """One loop kind at one parameter point, in floating point: all that differs between the kinds.
+
+    ``model`` is the loop there (``states``, ``n``, ``equilibrium``, ``domain``, ``disturbances``,
+    ``sets``). V-s are functions of ``u = (x - x_eq) / scales`` (rays are drawn there); starts are rows
+    in the loop's own frame (:meth:`start`, :meth:`global_box`), which :meth:`simulate` takes."""
+
+    model: Any
+    scales: np.ndarray
+    #: True: the global starts are drawn once for every global V, and each V reads every trajectory that
+    #: starts in its set; False: each V its own starts
+    pooled: bool
+
+    def streams(self, seed: Sequence[int], index: int | None) -> tuple[np.random.Generator, ...]:
+        """The random streams (the Lyapunov classes', sos_bound's, the safety classes'; module doc) of the
+        ``index``-th point of a box job, or of a grid point's job (None)."""
+
+    def functions(self, cls: str, cert: Mapping[str, Any]) -> tuple[PointFunction, PointFunction | None,
+                                                                     tuple[str, ...]]:
+        """A certificate's V, the V its set's rays read (roa), and the angles its claim is modulo."""
+
+    def start(self, u: np.ndarray) -> np.ndarray:
+        """Starts at the scaled deviations ``u``."""
+
+    def global_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The box the global starts are drawn uniformly from."""
+
+    def simulate(self, starts: np.ndarray) -> tuple[list[tuple[np.ndarray, np.ndarray]], Outcome]:
+        """Per start the times and deviations ``x - x_eq`` of the integrator's own points, and how each ended."""
+
+    def runs(self) -> Runs:
+        """The simulation :func:`check_sets` takes."""
+
+    def check_bound(self, cond: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int,
+                    worst_case: bool, out: CrossCheck) -> None:
+        """A certified ``sos_bound`` against simulated disturbances."""
 
 
 def _point_text(point: Mapping[str, Fraction]) -> str:
     return ", ".join(f"{k} = {float(v):.6g}" for k, v in point.items())
 
 
-def _sets(doc: Mapping[str, Any], model: Model, point: Mapping[str, Fraction], scales: Sequence[Fraction]) -> list[_Set]:
-    from lyapcheck.models.engines.crosscheck import certificate_function
-
-    box = list((doc.get("box") or {}).keys())
-    names = list(model.states) + box
-    out = []
-    for cls, cond in (doc.get("conditions") or {}).items():
-        if not isinstance(cond, dict) or cond.get("status") != "certified" or cls not in ("quadratic", "sos_gas", "roa"):
-            continue
-        cert = cond.get("certificate") or {}
-        V = certificate_function(cert["V"], names, model.n, point, scales)
-        if cls == "roa":
-            out.append(_Set(cls, V, level=float(Fraction(str(cert["level"])))))
-            continue
-        rate = float(cond.get("decay_rate_V_per_s") or 0.0)
-        if cond.get("property") == "GES" and cond.get("k") is not None and cond.get("decay_rate_per_s") is not None:
-            out.append(_Set(cls, V, rate=rate, k=float(cond["k"]), ges_rate=float(cond["decay_rate_per_s"])))
-        else:
-            out.append(_Set(cls, V, rate=rate))
-    return out
+def _loop(model: Any, doc: Mapping[str, Any], point: Mapping[str, Fraction]) -> SimulatedLoop:
+    return _PolynomialLoop(model, doc, point) if isinstance(model, Model) else _FunctionsLoop(model)
 
 
-def cross_check(model: Model, doc: Mapping[str, Any], points: Sequence[Mapping[str, Fraction]], *, starts: int,
-                seed: Sequence[int], worst_case: bool) -> CrossCheck:
-    """Simulate ``model`` at each parameter point of ``points`` against the certificate ``doc``.
+def cross_check_point(model: Model | RecastModel, doc: Mapping[str, Any], point: Mapping[str, Fraction], *,
+                      starts: int, seed: Sequence[int], worst_case: bool = True) -> CrossCheck:
+    """Simulate the loop ``model`` at the parameter point ``point`` against the certificate document ``doc``.
 
     Parameters
     ----------
     model
-        The sweep's model (its other parameters as the spec sets them).
+        A polynomial or rational loop (its parameters are set to ``point`` here), or a loop with
+        functions read at the point (:meth:`sweeps.spec.ModelSweepSpec.model_at`).
     doc
-        The certificate document of the point or box (:func:`lyapcheck.models.surfaces.certificate.build_document`).
-    points
-        Exact values of the swept parameters, one mapping per point to simulate.
+        Its certificate document (:func:`lyapcheck.models.surfaces.certificate.build_document`,
+        :func:`lyapcheck.models.surfaces.certify.certify_model`).
+    point
+        The swept parameters' exact values (named in a violation's detail).
     starts
-        Starts per point and certified set.
+        Starts per certified set.
     seed
-        The random starts come from ``numpy.random.default_rng([*seed, j])`` for the j-th point.
+        The random starts' seed (module doc).
     worst_case
-        Run the worst-case disturbance search against ``sos_bound``'s bounds.
+        Run the worst-case disturbance search against a polynomial loop's ``sos_bound``.
     """
-    from lyapcheck.models.language.modelfile import with_parameters
-
     out = CrossCheck()
-    scaling = (doc.get("field") or {}).get("scaling") or {}
-    scales = [Fraction(str(s)) for s in scaling.get("states", [])] or [Fraction(1)] * model.n
-    bound_cond = (doc.get("conditions") or {}).get("sos_bound") or {}
-    bounds = bound_cond.get("bounds") if bound_cond.get("status") == "certified" else None
-    for j, point in enumerate(points):
-        here = with_parameters(model, dict(point))
-        sets = _sets(doc, model, point, scales)
-        rng = np.random.default_rng([*seed, j])
-        out.points += 1
-        if sets:
-            _trajectories(here, sets, scales, rng, starts, point, out)
-        check_sets(here, doc, _point_text(point), rng, starts, _polynomial_runs(here), out)
-        if bounds and worst_case:
-            _bounds(here, bounds, point, out, bound_cond.get("bounds_reference") or {})
+    loop = _loop(model, doc, point)
+    _check(loop, doc, _point_text(point), loop.streams(seed, None), starts, worst_case, out)
     return out
 
 
-def _region_starts(V: Any, level: float, n: int, rng: np.random.Generator, count: int) -> np.ndarray | None:
-    """``count`` starts (scaled states) inside ``{V <= level}``, or None when its boundary is not found."""
-    from lyapcheck.models.engines.crosscheck import ray_boundary
+def cross_check_box(points: Sequence[tuple[Model | RecastModel, Mapping[str, Fraction]]], doc: Mapping[str, Any], *,
+                    starts: int, seed: Sequence[int], worst_case: bool = True) -> tuple[CrossCheck, list[str]]:
+    """A certified box: :func:`cross_check_point` at each of its random parameter points (``(the loop
+    there, the point)``, as that function takes them; the ``k``-th point's starts from ``seed`` and ``k``,
+    module doc), the figures merged (the worst of each, counts summed). Returns the merged check and,
+    for every point where :func:`box_mismatch` says the certificates do not apply, why (those points are
+    not simulated and not counted, except for a certified ``barrier`` or ``reach_avoid``: a claim about
+    the model's sets and its true loop, which names no certificate function, is simulated there all the
+    same, and the reason says so)."""
+    out = CrossCheck()
+    skipped: list[str] = []
+    for k, (model, point) in enumerate(points):
+        where = _point_text(point)
+        checked = doc
+        why = box_mismatch(model, doc)
+        if why is not None:
+            safety = {c: v for c, v in (doc.get("conditions") or {}).items()
+                      if c in SAFETY_CLASSES and isinstance(v, dict) and v.get("status") == "certified"}
+            if safety:
+                checked = {**doc, "conditions": safety}
+                why += f" ({' and '.join(safety)} simulated there all the same)"
+            skipped.append(f"at {where}: {why}")
+            if not safety:
+                continue
+        loop = _loop(model, checked, point)
+        _check(loop, checked, where, loop.streams(seed, k), starts, worst_case, out)
+    return out, skipped
 
-    directions = rng.standard_normal((count, n))
-    directions /= np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-300)
-    boundary = ray_boundary(V, level, directions)
-    if boundary is None:
-        return None
-    return np.asarray(boundary * rng.uniform(*REGION_FRACTIONS, size=(count, 1)), dtype=np.float64)
+
+def _check(loop: SimulatedLoop, doc: Mapping[str, Any], where: str, streams: tuple[np.random.Generator, ...],
+           starts: int, worst_case: bool, out: CrossCheck) -> None:
+    """Every certified class of ``doc`` at one point of ``loop`` (module doc), into ``out``."""
+    lyapunov, bound, safety = streams
+    conditions = {name: c for name, c in (doc.get("conditions") or {}).items()
+                  if isinstance(c, dict) and c.get("status") == "certified"}
+    out.points += 1
+    for name, cond in conditions.items():  # the simulation beside the proof contradicted it
+        if cond.get("soundness_violation"):
+            found = ("a trajectory into the unsafe set" if name in SAFETY_CLASSES else
+                     f"{cond.get('starts_in_set_not_converged', 'some')} starts in the set that did not converge")
+            out.violations.append(f"{name} at {where}: its own simulation when certified found {found}")
+    sets = [_certified_set(loop, cls, conditions[cls]) for cls in (*GLOBAL_CLASSES, REGION_CLASS) if cls in conditions]
+    if sets:
+        _trajectories(loop, sets, lyapunov, starts, where, out)
+    check_sets(loop.model, doc, where, safety, starts, loop.runs(), out)
+    if "sos_bound" in conditions:
+        loop.check_bound(conditions["sos_bound"], where, bound, starts, worst_case, out)
 
 
-def _global_starts(model: Model, eq: np.ndarray, s: np.ndarray, rng: np.random.Generator, count: int) -> np.ndarray:
-    if model.domain:
-        lo = np.array([float(model.domain[x][0]) for x in model.states])
-        hi = np.array([float(model.domain[x][1]) for x in model.states])
-    else:
-        lo, hi = eq - DEFAULT_REGION_SCALES * s, eq + DEFAULT_REGION_SCALES * s
-    return np.asarray(lo + (hi - lo) * rng.random((count, model.n)), dtype=np.float64)
+def _certified_set(loop: SimulatedLoop, cls: str, cond: Mapping[str, Any]) -> _Set:
+    cert = cond.get("certificate") or {}
+    V, region, angles = loop.functions(cls, cert)
+    if cls == REGION_CLASS:
+        return _Set(cls, V, region, level=float(Fraction(str(cert["level"]))), angles=angles)
+    rate = float(cond.get("decay_rate_V_per_s") or 0.0)
+    if cond.get("property") == "GES" and cond.get("k") is not None and cond.get("decay_rate_per_s") is not None:
+        return _Set(cls, V, rate=rate, k=float(cond["k"]), ges_rate=float(cond["decay_rate_per_s"]), angles=angles)
+    return _Set(cls, V, rate=rate, angles=angles)
 
 
-def _trajectories(model: Model, sets: Sequence[_Set], scales: Sequence[Fraction], rng: np.random.Generator,
-                  starts: int, point: Mapping[str, Fraction], out: CrossCheck) -> None:
-    from lyapcheck.models.engines.crosscheck import check_ges_envelope, check_global, check_region
-    from lyapcheck.models.engines.numeric import FieldEvaluator
-    from lyapcheck.models.engines.trajectories import horizon, jacobian_eigenvalues, simulate
+def _uniform(box: tuple[np.ndarray, np.ndarray], rng: np.random.Generator, count: int) -> np.ndarray:
+    lo, hi = box
+    return np.asarray(lo + (hi - lo) * rng.random((count, lo.size)), dtype=np.float64)
 
-    n = model.n
-    eq = np.array([float(v) for v in model.equilibrium])
-    s = np.array([float(v) for v in scales])
-    where = _point_text(point)
+
+def _trajectories(loop: SimulatedLoop, sets: Sequence[_Set], rng: np.random.Generator, starts: int, where: str,
+                  out: CrossCheck) -> None:
+    """The Lyapunov-type certificates (``roa``, ``quadratic``, ``sos_gas``) against trajectories of ``loop``."""
+    from lyapcheck.models.engines.crosscheck import check_ges_envelope, check_global, check_region, ray_boundary
+    from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
+
+    n = loop.model.n
     blocks: list[np.ndarray] = []
-    owner: list[int] = []  # which roa set a start was drawn for (-1: a global start)
+    owner: list[int] = []  # which set a start was drawn for (-1: a global start of every global set)
     for k, st in enumerate(sets):
-        if st.cls != "roa":
+        if st.cls != REGION_CLASS:
+            if not loop.pooled:
+                blocks.append(_uniform(loop.global_box(), rng, starts))
+                owner += [k] * starts
             continue
-        u = _region_starts(st.V, st.level, n, rng, starts)
-        if u is None:
+        assert st.region is not None
+        directions = rng.standard_normal((starts, n))
+        directions /= np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-300)
+        boundary = ray_boundary(st.region, st.level, directions)
+        if boundary is None:
             out.violations.append(f"roa at {where}: the certified set {{V <= {st.level:.6g}}} does not contain the "
                                   "equilibrium or is unbounded")
             continue
-        blocks.append(eq + s * u)
-        owner += [k] * len(u)
-    if any(st.cls != "roa" for st in sets):
-        blocks.append(_global_starts(model, eq, s, rng, starts))
+        blocks.append(loop.start(np.asarray(boundary * rng.uniform(*REGION_FRACTIONS, size=(starts, 1)),
+                                            dtype=np.float64)))
+        owner += [k] * starts
+    if loop.pooled and any(st.cls != REGION_CLASS for st in sets):
+        blocks.append(_uniform(loop.global_box(), rng, starts))
         owner += [-1] * starts
     if not blocks:
         return
-    x0 = np.vstack(blocks)
-    half = np.maximum(np.max(np.abs(x0 - eq), axis=0), s * 1e-6)
-    t_end = horizon(jacobian_eigenvalues(FieldEvaluator.of(model), eq, half))
-    runs = simulate(model, x0, t_end=t_end, half_widths=half, escape_factor=ESCAPE_EXTENTS,
-                    converged_fraction=CONVERGED_FRACTION)
-    out.trajectories += len(runs)
-    out.not_converged += sum(tr.outcome == "other" for tr in runs)
-    nodes = [tr.nodes for tr in runs]
-    u_paths = [(x - eq) / s for _, x in nodes]
+    nodes, outcome = loop.simulate(np.vstack(blocks))
+    out.trajectories += len(nodes)
+    out.not_converged += sum(outcome(i, sets[k].angles if k >= 0 else ()) == "other" for i, k in enumerate(owner))
+    u_paths = [z / loop.scales for _, z in nodes]
     for k, st in enumerate(sets):
-        if st.cls == "roa":
-            inside = [i for i, u in enumerate(u_paths) if owner[i] == k or st.V(u[:1])[0] <= st.level]
-            found = check_region([st.V(u_paths[i]) for i in inside], [runs[i].outcome for i in inside])
+        if not loop.pooled:
+            rows = [i for i, mine in enumerate(owner) if mine == k]
+        elif st.cls == REGION_CLASS:  # every trajectory that starts in the set
+            rows = [i for i, u in enumerate(u_paths) if owner[i] == k or st.V(u[:1])[0] <= st.level]
+        else:
+            rows = list(range(len(nodes)))
+        if not rows:
+            continue
+        outcomes = [outcome(i, st.angles) for i in rows]
+        if st.cls == REGION_CLASS:
+            found = check_region([st.V(u_paths[i]) for i in rows], outcomes)
             out.worse("worst_rise", found.worst_rise)
             if not found.ok:
                 out.violations.append(f"roa at {where}: of {found.starts} starts in {{V <= {st.level:.6g}}}, "
                                       f"{found.escaped} escaped; V rose by {found.worst_rise:.3g} of V(0)")
             continue
-        series = [(t, st.V(u)) for (t, _), u in zip(nodes, u_paths)]
-        glob = check_global(series, [tr.outcome for tr in runs], st.rate)
+        glob = check_global([(nodes[i][0], st.V(u_paths[i])) for i in rows], outcomes, st.rate)
         out.worse("worst_rise", glob.worst_rise)
         if st.rate > 0:
             out.worse("worst_envelope", glob.worst_envelope)
@@ -246,33 +365,328 @@ def _trajectories(model: Model, sets: Sequence[_Set], scales: Sequence[Fraction]
                                   f"V rose by {glob.worst_rise:.3g} and exceeded V(0) exp(-{st.rate:.4g} t) by "
                                   f"{glob.worst_envelope:.3g} of V(0)")
         if math.isfinite(st.k):
-            ratio = check_ges_envelope([(t, np.linalg.norm(x - eq, axis=1)) for t, x in nodes], st.k, st.ges_rate)
+            ratio = check_ges_envelope([(nodes[i][0], np.linalg.norm(nodes[i][1], axis=1)) for i in rows], st.k,
+                                       st.ges_rate)
             out.worse("ges_ratio", ratio)
-            from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
-
             if ratio > 1 + TRAJECTORY_CHECK_REL_TOL:
                 out.violations.append(f"{st.cls} at {where}: |x(t)| reached {ratio:.6g} times the certified GES "
                                       f"envelope {st.k:.4g} |x0| exp(-{st.ges_rate:.4g} t)")
 
 
-def _polynomial_runs(model: Model) -> Runs:
-    """The polynomial loop's simulation for :func:`check_sets` (the project's integrator,
-    :func:`lyapcheck.models.engines.trajectories.simulate`, escape as the falsification's)."""
-    from lyapcheck.models.classes.falsify import ESCAPE_FACTOR, default_horizon
-    from lyapcheck.models.engines.trajectories import simulate
+class _PolynomialLoop:
+    """A polynomial or rational loop at a parameter point (module doc)."""
 
-    eq = np.array([float(v) for v in model.equilibrium])
+    pooled = True
 
-    def run(x0: np.ndarray, t_end: float | None,
-            disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
-        half = np.maximum(np.max(np.abs(x0 - eq), axis=0), np.maximum(np.abs(eq), 1.0) * 1e-6)
-        horizon = default_horizon(model, half) if t_end is None else t_end
+    def __init__(self, model: Model, doc: Mapping[str, Any], point: Mapping[str, Fraction]) -> None:
+        from lyapcheck.models.language.modelfile import with_parameters
+
+        self.model = with_parameters(model, dict(point))
+        self.point = point
+        #: the certificate's variables: the states, then a box's parameters
+        self.names = list(model.states) + list((doc.get("box") or {}).keys())
+        scaling = (doc.get("field") or {}).get("scaling") or {}
+        self.exact_scales = [Fraction(str(s)) for s in scaling.get("states", [])] or [Fraction(1)] * model.n
+        self.scales = np.array([float(v) for v in self.exact_scales])
+        self.eq = np.array([float(v) for v in self.model.equilibrium])
+
+    def streams(self, seed: Sequence[int], index: int | None) -> tuple[np.random.Generator, ...]:
+        rng = np.random.default_rng([*seed, 0 if index is None else index])
+        return rng, rng, rng
+
+    def functions(self, cls: str, cert: Mapping[str, Any]) -> tuple[PointFunction, PointFunction | None,
+                                                                     tuple[str, ...]]:
+        from lyapcheck.models.engines.crosscheck import certificate_function
+
+        V = certificate_function(cert["V"], self.names, self.model.n, self.point, self.exact_scales)
+        return V, V, ()
+
+    def start(self, u: np.ndarray) -> np.ndarray:
+        return self.eq + self.scales * u
+
+    def global_box(self) -> tuple[np.ndarray, np.ndarray]:
+        model = self.model
+        if model.domain:
+            return (np.array([float(model.domain[x][0]) for x in model.states]),
+                    np.array([float(model.domain[x][1]) for x in model.states]))
+        return self.eq - DEFAULT_REGION_SCALES * self.scales, self.eq + DEFAULT_REGION_SCALES * self.scales
+
+    def simulate(self, starts: np.ndarray) -> tuple[list[tuple[np.ndarray, np.ndarray]], Outcome]:
+        from lyapcheck.models.engines.numeric import FieldEvaluator
+        from lyapcheck.models.engines.trajectories import horizon, jacobian_eigenvalues, simulate
+
+        eq = self.eq
+        half = np.maximum(np.max(np.abs(starts - eq), axis=0), self.scales * 1e-6)
+        t_end = horizon(jacobian_eigenvalues(FieldEvaluator.of(self.model), eq, half))
+        runs = simulate(self.model, starts, t_end=t_end, half_widths=half, escape_factor=ESCAPE_EXTENTS,
+                        converged_fraction=CONVERGED_FRACTION)
+        return [(t, x - eq) for t, x in (tr.nodes for tr in runs)], lambda i, angles: runs[i].outcome
+
+    def runs(self) -> Runs:
+        """The project's integrator (:func:`lyapcheck.models.engines.trajectories.simulate`), escape as
+        the falsification's."""
+        from lyapcheck.models.classes.falsify import ESCAPE_FACTOR, default_horizon
+        from lyapcheck.models.engines.trajectories import simulate
+
+        model, eq = self.model, self.eq
+
+        def run(x0: np.ndarray, t_end: float | None,
+                disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
+            half = np.maximum(np.max(np.abs(x0 - eq), axis=0), np.maximum(np.abs(eq), 1.0) * 1e-6)
+            horizon = default_horizon(model, half) if t_end is None else t_end
+            with np.errstate(all="ignore"):
+                runs = simulate(model, x0, t_end=horizon, half_widths=half, disturbances=disturbances,
+                                escape_factor=ESCAPE_FACTOR)
+            return [tr.nodes for tr in runs]
+
+        return run
+
+    def check_bound(self, cond: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int,
+                    worst_case: bool, out: CrossCheck) -> None:
+        """The worst case found against each bound (with ``worst_case``). A bound is on ``|y - y_eq|``
+        (``bounds_reference``: each ``y_eq``), the search's figure on ``|y|``: by the triangle inequality
+        ``|y| <= |y_eq| + bound`` is what the bound implies, so only beyond that is a violation shown
+        (never a false alarm)."""
+        from lyapcheck.models.engines.crosscheck import bound_exceeded
+        from lyapcheck.models.surfaces.simulate import search_worst_case
+
+        bounds = cond.get("bounds")
+        if not bounds or not worst_case:
+            return
+        references = cond.get("bounds_reference") or {}
+        found = search_worst_case(self.model, budget_s=WORST_CASE_SCREENING_ONLY)
+        if found.get("diverged"):
+            out.violations.append(f"sos_bound at {where}: a disturbance within its bounds made the loop diverge")
+        for name, bound in bounds.items():
+            sup = (found.get("sup_abs_output_tail") or {}).get(name)
+            if sup is None:
+                continue
+            out.sim_worst[name] = max(out.sim_worst.get(name, -math.inf), float(sup))
+            reference = abs(float(references.get(name) or 0.0))
+            extra = f" plus |{name}_eq| = {reference:.6g}" if reference else ""
+            if bound_exceeded(float(bound) + reference, float(sup), BOUND_REL_TOL):
+                out.violations.append(f"sos_bound at {where}: the worst case found, limsup |{name}| >= "
+                                      f"{float(sup):.6g}, exceeds the certified bound {float(bound):.6g}{extra}")
+
+
+class _FunctionsLoop:
+    """A loop with functions read at a parameter point, simulated on its true field (module doc)."""
+
+    pooled = False
+
+    def __init__(self, model: RecastModel) -> None:
+        from lyapcheck.models.classes.recast_classes import angle_states
+
+        self.model = model
+        self.system = model.system
+        self.scales = np.ones(model.n)
+        self.eq = np.array([float(v) for v in model.equilibrium])
+        self.angles = angle_states(self.system)
+
+    def streams(self, seed: Sequence[int], index: int | None) -> tuple[np.random.Generator, ...]:
+        prefix = tuple(seed) if index is None else (*seed, index)
+        return tuple(np.random.default_rng([*prefix, stream]) for stream in range(3))
+
+    @cached_property
+    def comparison(self) -> tuple[np.ndarray, np.ndarray]:
+        """The comparison box of the classes (deviations): the model's ``[domain]``, else +-pi in an
+        angle and +-4 elsewhere (:func:`lyapcheck.models.surfaces.recast_run.comparison_box`)."""
+        from lyapcheck.models.classes.recast_classes import base_loop
+        from lyapcheck.models.surfaces.recast_run import comparison_box
+
+        lo, hi = comparison_box(self.model, base_loop(self.system))
+        return np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+
+    def functions(self, cls: str, cert: Mapping[str, Any]) -> tuple[PointFunction, PointFunction | None,
+                                                                     tuple[str, ...]]:
+        """V (:func:`_v_function`); a set's rays read it within the certificate's ``box`` (a
+        ball-arithmetic region) or else the comparison box."""
+        V = _v_function(self.model, cert)
+        angles = tuple(str(a) for a in (cert.get("angles") or ()))
+        if cls != REGION_CLASS:
+            return V, None, angles
+        box = cert.get("box")
+        lo, hi = self.comparison if box is None else (
+            np.array([float(Fraction(str(box[s][0]))) for s in self.model.states]),
+            np.array([float(Fraction(str(box[s][1]))) for s in self.model.states]))
+        return V, _within(V, lo, hi), angles
+
+    def start(self, u: np.ndarray) -> np.ndarray:
+        return u  # deviations (scales 1)
+
+    def global_box(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.comparison
+
+    def _escape(self, factor: float) -> np.ndarray:
+        """Escape factors per state: ``factor``, never in an angle (on the cylinder the loop may turn before it settles)."""
+        return np.array([np.inf if s in self.angles else factor for s in self.model.states])
+
+    def _integrate(self, deviations: np.ndarray, factors: np.ndarray, extent: np.ndarray, t_end: float,
+                   disturbances: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The true loop from ``x_eq + deviations`` (rows), escape ``factors * extent``, over ``t_end``:
+        per row, its own points' times and deviations. ``disturbances``: a constant value of each
+        disturbance per row (None: all 0; ignored where the recasting kept no disturbance)."""
+        from lyapcheck.models.engines.trajectories import simulate
+
+        eq = self.eq
         with np.errstate(all="ignore"):
-            runs = simulate(model, x0, t_end=horizon, half_widths=half, disturbances=disturbances,
-                            escape_factor=ESCAPE_FACTOR)
-        return [tr.nodes for tr in runs]
+            runs = simulate(self.model, deviations + eq, t_end=t_end, half_widths=extent, escape_factor=factors,
+                            disturbances=None if self.model.robust is None else disturbances)
+        return [(t, x - eq) for t, x in (tr.nodes for tr in runs)]
 
-    return run
+    def simulate(self, starts: np.ndarray) -> tuple[list[tuple[np.ndarray, np.ndarray]], Outcome]:
+        """Over :func:`lyapcheck.models.surfaces.simulate.crosscheck_horizon`; converged within
+        :data:`CONVERGED_FRACTION` of the starts' extent, modulo 2 pi in a claim's angles."""
+        from lyapcheck.models.engines.recast_numeric import distances
+        from lyapcheck.models.surfaces.simulate import crosscheck_horizon
+
+        extent = np.maximum(np.max(np.abs(starts), axis=0), 1e-6)
+        factors = self._escape(ESCAPE_EXTENTS)
+        nodes = self._integrate(starts, factors, extent, crosscheck_horizon(self.model))
+        escape, radius = factors * extent, CONVERGED_FRACTION * float(np.linalg.norm(extent))
+
+        def outcome(i: int, angles: tuple[str, ...]) -> str:
+            end = nodes[i][1][-1]
+            if not np.all(np.isfinite(end)) or np.any(np.abs(end) >= escape * (1 - 1e-9)):
+                return "escaped"
+            return "converged" if distances(self.system, end[None, :], angles)[0] <= radius else "other"
+
+        return nodes, outcome
+
+    def runs(self) -> Runs:
+        """Escape as the falsification's (never in an angle), the horizon the falsification's of the true field."""
+        from lyapcheck.models.classes.falsify import ESCAPE_FACTOR, default_horizon
+        from lyapcheck.models.engines.recast_numeric import TrueField
+
+        eq, factors = self.eq, self._escape(ESCAPE_FACTOR)
+
+        def run(x0: np.ndarray, t_end: float | None,
+                disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
+            Z0 = x0 - eq
+            extent = np.maximum(np.max(np.abs(Z0), axis=0), np.maximum(np.abs(eq), 1.0) * 1e-6)
+            horizon = default_horizon(self.model, extent, TrueField(self.model)) if t_end is None else t_end  # type: ignore[arg-type]
+            return [(t, z + eq) for t, z in self._integrate(Z0, factors, extent, horizon, disturbances)]
+
+        return run
+
+    def check_bound(self, cond: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int,
+                    worst_case: bool, out: CrossCheck) -> None:
+        """The true loop (``model.robust``, its disturbances as the last columns) from random starts of
+        the comparison box, each disturbance a bang-bang or square-wave signal at its bound; the largest
+        ``|y|`` after BOUND_TAIL_FROM_S is ``sim_worst`` and may not exceed the certified bound (beyond
+        TRAJECTORY_CHECK_REL_TOL)."""
+        from lyapcheck.models.engines.recast_numeric import FloatLoop, poly_values
+        from lyapcheck.sos.polynomials import Ring
+        from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
+
+        model, robust = self.model, self.model.robust
+        if robust is None:
+            return
+        state_ring = Ring(model.states)
+        bounds = np.array([float(b) for b in model.disturbances.values()])
+        lo, hi = self.comparison
+        Z0 = lo + (hi - lo) * rng.random((max(starts, 1), model.n))
+        loop_field = FloatLoop(robust)
+        for name, bound in (cond.get("bounds") or {}).items():
+            y = model.outputs.get(name)
+            if y is None:
+                continue
+            y_eq = float((cond.get("bounds_reference") or {}).get(name) or 0.0)  # the bound is on |y - y_eq|
+
+            def output(X: np.ndarray) -> np.ndarray:
+                return poly_values(state_ring, y, {s: X[:, k] for k, s in enumerate(model.states)}, len(X)) - y_eq
+
+            policies = 1 + len(BOUND_SIGNAL_PERIODS)
+            X = np.tile(Z0 + self.eq, (policies, 1))
+            period = np.repeat([0.0, *BOUND_SIGNAL_PERIODS], len(Z0))
+            worst = 0.0
+            steps = int(round(BOUND_HORIZON_S / BOUND_STEP_S))
+            with np.errstate(all="ignore"):
+                for k in range(steps):
+                    t = k * BOUND_STEP_S
+                    wave = np.sign(np.sin(2 * np.pi * t / np.where(period > 0, period, 1.0)) + 1e-12)
+                    sign = np.where(period > 0, wave, np.sign(output(X) + 1e-12))
+                    D = sign[:, None] * bounds[None, :]
+
+                    def f(Y: np.ndarray) -> np.ndarray:
+                        return loop_field(np.column_stack([Y, D]))[:, :model.n]
+
+                    k1 = f(X)
+                    k2 = f(X + BOUND_STEP_S / 2 * k1)
+                    k3 = f(X + BOUND_STEP_S / 2 * k2)
+                    k4 = f(X + BOUND_STEP_S * k3)
+                    X = X + BOUND_STEP_S / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                    if t >= BOUND_TAIL_FROM_S:
+                        values = np.abs(output(X))
+                        worst = max(worst, float(np.max(np.where(np.isfinite(values), values, np.inf))))
+            out.trajectories += len(X)
+            out.sim_worst[name] = max(out.sim_worst.get(name, 0.0), worst)
+            if worst > float(bound) * (1 + TRAJECTORY_CHECK_REL_TOL):
+                out.violations.append(f"sos_bound at {where}: under a disturbance at its bounds "
+                                      f"|{name}{f' - {y_eq:.6g}' if y_eq else ''}| reached "
+                                      f"{worst:.6g} after {BOUND_TAIL_FROM_S:g} s, above the certified limsup "
+                                      f"{float(bound):.6g}")
+
+
+def _v_function(model: RecastModel, cert: Mapping[str, Any]) -> PointFunction:
+    """A loop with functions' certificate V as a float function of state deviations (rows): its
+    polynomial in its ``variables``, each minus its ``shift``, at the true auxiliaries of ``x_eq + z``."""
+    from lyapcheck.models.engines.recast_numeric import poly_values, variable_values
+    from lyapcheck.models.engines.recast_sos import poly_from_json
+    from lyapcheck.sos.polynomials import Ring
+
+    system = model.system
+    ring = Ring(tuple(str(v) for v in cert["variables"]))
+    V = poly_from_json(ring, cert["V"], "V")
+    shift = {str(k): float(Fraction(str(v))) for k, v in (cert.get("shift") or {}).items()}
+    eq = np.array([float(system.values[s]) for s in system.states])
+
+    def at(Z: np.ndarray) -> np.ndarray:
+        Z = np.atleast_2d(np.asarray(Z, dtype=np.float64))
+        cols = variable_values(system, Z + eq)
+        return poly_values(ring, V, {n: cols[n] - shift.get(n, 0.0) for n in ring.names}, Z.shape[0])
+
+    return at
+
+
+def _within(V: PointFunction, lo: np.ndarray, hi: np.ndarray) -> PointFunction:
+    """V inside the box ``[lo, hi]`` of deviations, +inf outside (a set ``{V <= level}`` cut by the box)."""
+    def at(Z: np.ndarray) -> np.ndarray:
+        values = np.asarray(V(Z), dtype=np.float64)
+        return np.where(np.all((Z >= lo) & (Z <= hi), axis=1), values, np.inf)
+
+    return at
+
+
+def box_mismatch(model: Model | RecastModel, doc: Mapping[str, Any]) -> str | None:
+    """Why the certificates of a box's document cannot be simulated on the loop ``model`` of one
+    point of the box (None: they can; always on a polynomial loop, whose box certificates are functions
+    of the box's parameters). A loop with functions' check evaluates each ``V`` on the point's own
+    auxiliaries, shifted by the certificate's ``shift`` (the box centre's values at the equilibrium);
+    that is the certificate's function only when every auxiliary it names is defined alike at the point
+    and has the same value at the equilibrium (an auxiliary with a box parameter in it, such as
+    ``sin(b*x)``, is not)."""
+    if isinstance(model, Model):
+        return None
+    definitions = model.system.definitions()
+    values = {k: Fraction(v) for k, v in model.system.values.items()}
+    for name, cond in (doc.get("conditions") or {}).items():
+        if not isinstance(cond, dict) or cond.get("status") != "certified" or \
+                name not in (*GLOBAL_CLASSES, REGION_CLASS):
+            continue
+        cert = cond.get("certificate") or {}
+        missing = [str(v) for v in cert.get("variables") or () if str(v) not in model.system.ring.names]
+        if missing:  # a box parameter kept as a bounded variable of the recasting
+            return (f"the {name} certificate's V is a function of {', '.join(missing)}, not a variable of the "
+                    "point's loop")
+        for aux, text in (cert.get("auxiliaries") or {}).items():
+            if definitions.get(aux) != text:
+                return f"the auxiliary {aux} = {text} of the {name} certificate is not one of the point's recasting"
+        for var, shift in (cert.get("shift") or {}).items():
+            if var in values and values[var] != Fraction(str(shift)):
+                return (f"the {name} certificate's {var} is shifted by {shift} (the box centre's value at the "
+                        "equilibrium), not by the point's own value")
+    return None
 
 
 def _vertices(model: Any, cond: Mapping[str, Any]) -> list[np.ndarray]:
@@ -379,28 +793,5 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
                               f"{start(mine[found.first_late])}")
 
 
-def _bounds(model: Model, bounds: Mapping[str, Any], point: Mapping[str, Fraction], out: CrossCheck,
-            references: Mapping[str, Any]) -> None:
-    """The worst case found against each bound. A bound is on ``|y - y_eq|`` (``references``: each
-    ``y_eq``), the search's figure on ``|y|``: by the triangle inequality ``|y| <= |y_eq| + bound``
-    is what the bound implies, so only beyond that is a violation shown (never a false alarm)."""
-    from lyapcheck.models.engines.crosscheck import bound_exceeded
-    from lyapcheck.models.surfaces.simulate import search_worst_case
-
-    found = search_worst_case(model, budget_s=WORST_CASE_SCREENING_ONLY)
-    where = _point_text(point)
-    if found.get("diverged"):
-        out.violations.append(f"sos_bound at {where}: a disturbance within its bounds made the loop diverge")
-    for name, bound in bounds.items():
-        sup = (found.get("sup_abs_output_tail") or {}).get(name)
-        if sup is None:
-            continue
-        out.sim_worst[name] = max(out.sim_worst.get(name, -math.inf), float(sup))
-        reference = abs(float(references.get(name) or 0.0))
-        extra = f" plus |{name}_eq| = {reference:.6g}" if reference else ""
-        if bound_exceeded(float(bound) + reference, float(sup), BOUND_REL_TOL):
-            out.violations.append(f"sos_bound at {where}: the worst case found, limsup |{name}| >= {float(sup):.6g}, "
-                                  f"exceeds the certified bound {float(bound):.6g}{extra}")
-
-
-__all__ = ["CrossCheck", "cross_check", "check_sets", "SAFETY_CLASSES", "WORST_CASE_SCREENING_ONLY"]
+__all__ = ["CrossCheck", "cross_check_point", "cross_check_box", "box_mismatch", "check_sets", "SimulatedLoop",
+           "GLOBAL_CLASSES", "REGION_CLASS", "SAFETY_CLASSES", "WORST_CASE_SCREENING_ONLY"]

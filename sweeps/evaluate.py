@@ -42,13 +42,14 @@ uninterrupted one).
 
 * A point: :func:`lyapcheck.models.surfaces.certify.certify_model` on the model with the point's exact
   parameters (``Fraction`` of the stored float); for a loop with functions, on the model text read
-  again with them (:meth:`sweeps.spec.ModelSweepSpec.model_at`), cross-checked by :mod:`sweeps.recast_crosscheck`.
+  again with them (:meth:`sweeps.spec.ModelSweepSpec.model_at`); either cross-checked by
+  :func:`sweeps.crosscheck.cross_check_point`.
 * A box: first the linearization, exactly, at the box's corners (milliseconds): an unstable corner
   proves that no stability class can certify the box (its status is ``refuted``, and the stability
   classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box.
   A box of a loop with functions: ``certify_model`` over the box on the model read at its centre
   (what ``lyapcheck certify FILE --box`` runs), no corner check, cross-checked at random parameter
-  points by :func:`sweeps.recast_crosscheck.cross_check_recast_box`.
+  points; either by :func:`sweeps.crosscheck.cross_check_box`.
 
 A point or box is ``certified`` when any class certified; ``refuted`` when the equilibrium is proved
 unstable there (the linearization, exactly) and nothing certified; else ``not_certified``. Every
@@ -456,14 +457,6 @@ def _model_record(spec: ModelSweepSpec, result: Any, out: dict[str, np.ndarray],
     return status
 
 
-def _cross(spec: ModelSweepSpec, document: dict[str, Any], points: Sequence[dict[str, Fraction]], seed: Sequence[int],
-           out: dict[str, np.ndarray], j: int) -> None:
-    from sweeps.crosscheck import cross_check
-
-    _store_cross(cross_check(spec.polynomial, document, points, starts=spec.simulation.starts, seed=seed,
-                             worst_case=spec.simulation.worst_case), out, j)
-
-
 def _store_cross(found: CrossCheck, out: dict[str, np.ndarray], j: int) -> None:
     """A cross-check's figures into row ``j``."""
     out["cross_check_points"][j] = found.points
@@ -534,14 +527,11 @@ def evaluate_model_points(worker_text: str, coords: np.ndarray) -> dict[str, np.
             out["certificate"][j] = certificate_json(document)
             index = int(np.ravel_multi_index(tuple(int(np.searchsorted(a.values, v)) for a, v in zip(spec.axes, row)),
                                              spec.shape))
-            seed = (spec.simulation.seed, index)
-            if spec.has_functions:
-                from sweeps.recast_crosscheck import cross_check_recast
+            from sweeps.crosscheck import cross_check_point
 
-                _store_cross(cross_check_recast(point.model, document, spec.parameters_at(row),
-                                                starts=spec.simulation.starts, seed=seed), out, j)
-            else:
-                _cross(spec, document, [spec.parameters_at(row)], seed, out, j)
+            _store_cross(cross_check_point(point.model, document, spec.parameters_at(row),
+                                           starts=spec.simulation.starts, seed=(spec.simulation.seed, index),
+                                           worst_case=spec.simulation.worst_case), out, j)
         out["seconds_certify"][j] = middle - begin
         out["seconds_cross_check"][j] = time.perf_counter() - middle
         out["done"][j] = True
@@ -606,7 +596,12 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
             out["certificate"][j] = certificate_json(document)
             points = box.points(spec.boxes.cross_check_points, box_seed(spec.boxes.seed, box_id))
             if points:
-                _cross(spec, document, points, (spec.simulation.seed, box_id), out, j)
+                from sweeps.crosscheck import cross_check_box
+
+                found, _ = cross_check_box([(spec.polynomial, p) for p in points], document,
+                                           starts=spec.simulation.starts, seed=(spec.simulation.seed, box_id),
+                                           worst_case=spec.simulation.worst_case)
+                _store_cross(found, out, j)
         out["unstable_corners"][j] = corners
         out["seconds_certify"][j] = middle - begin
         out["seconds_cross_check"][j] = time.perf_counter() - middle
@@ -619,12 +614,12 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     """One box of a loop with functions, as ``lyapcheck certify FILE --box`` certifies it: the model
     read at the box's centre (:meth:`sweeps.spec.ModelSweepSpec.recast_box`), then ``certify_model``
     over the box; a certified box is simulated at its random parameter points
-    (:func:`sweeps.recast_crosscheck.cross_check_recast_box`), and the points where its certificates
+    (:func:`sweeps.crosscheck.cross_check_box`), and the points where its certificates
     do not apply are named in the note. No corner is checked (``unstable_corners`` stays -1)."""
     from lyapcheck.errors import ModelFileError
     from lyapcheck.models.surfaces.certificate import build_document
     from lyapcheck.models.surfaces.certify import certify_model
-    from sweeps.recast_crosscheck import cross_check_recast_box
+    from sweeps.crosscheck import cross_check_box
 
     assert spec.boxes is not None
     begin = time.perf_counter()
@@ -651,8 +646,8 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
             except ModelFileError as exc:
                 where = ", ".join(f"{name} = {float(v):.6g}" for name, v in point.items())
                 skipped.append(f"at {where}: the loop could not be read there ({exc})")
-        found, mismatched = cross_check_recast_box(loops, document, starts=spec.simulation.starts,
-                                                   seed=(spec.simulation.seed, box_id))
+        found, mismatched = cross_check_box(loops, document, starts=spec.simulation.starts,
+                                            seed=(spec.simulation.seed, box_id), worst_case=spec.simulation.worst_case)
         skipped += mismatched
         _store_cross(found, out, j)
         if skipped:

@@ -310,10 +310,10 @@ def doc_with(conditions: dict[str, Any], scale: str = "1") -> dict[str, Any]:
 
 def check(model_text: str, doc: dict[str, Any], a: str = "1") -> Any:
     from lyapcheck.models.language.modelfile import parse_model
-    from sweeps.crosscheck import cross_check
+    from sweeps.crosscheck import cross_check_point
 
     model = parse_model(model_text, "m.toml")
-    return cross_check(model, doc, [{"a": Fraction(a)}], starts=6, seed=(0,), worst_case=True)
+    return cross_check_point(model, doc, {"a": Fraction(a)}, starts=6, seed=(0,), worst_case=True)
 
 
 def test_a_region_of_attraction_too_large_raises_the_alarm() -> None:

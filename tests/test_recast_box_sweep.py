@@ -98,7 +98,7 @@ def test_a_box_whose_certificate_does_not_apply_at_a_point_says_so() -> None:
     parameter in it, such as ``sin(b*theta)``): the cross-check names the point and the reason and
     simulates nothing there."""
     from lyapcheck.models.language.modelfile import parse_any_model
-    from sweeps.recast_crosscheck import box_mismatch, cross_check_recast_box
+    from sweeps.crosscheck import box_mismatch, cross_check_box
 
     model = parse_any_model(PENDULUM, "m.toml", {"b": "1"})
     cert = {"variables": ["theta", "omega", "s1", "c1"], "auxiliaries": model.system.definitions(),
@@ -106,7 +106,7 @@ def test_a_box_whose_certificate_does_not_apply_at_a_point_says_so() -> None:
     doc: dict[str, Any] = {"conditions": {"roa": {"status": "certified", "certificate": cert}}}
     assert box_mismatch(model, doc) is None
     doc["conditions"]["roa"]["certificate"] = {**cert, "shift": {**cert["shift"], "c1": "1/2"}}
-    found, skipped = cross_check_recast_box([(model, {"b": Fraction(1)})], doc, starts=2, seed=(0, 0))
+    found, skipped = cross_check_box([(model, {"b": Fraction(1)})], doc, starts=2, seed=(0, 0))
     assert found.points == 0 and found.trajectories == 0
     assert len(skipped) == 1 and skipped[0].startswith("at b = 1: the roa certificate's c1 is shifted by 1/2")
     doc["conditions"]["roa"]["certificate"] = {**cert, "auxiliaries": {"s1": "sin(2*theta)"}}

@@ -135,12 +135,12 @@ def test_a_bound_below_what_the_loop_reaches_raises_the_alarm() -> None:
     """A certified sos_bound halved: the disturbed ILOS reaches more than it under a disturbance at its
     bound (yi settles at d Delta / (kappa sqrt(U^2 - d^2)) for a constant d), and the sweep says so."""
     from lyapcheck.models.language.modelfile import parse_any_model
-    from sweeps.recast_crosscheck import cross_check_recast
+    from sweeps.crosscheck import cross_check_point
 
     text = (ROOT / "examples" / "models" / "recast-ilos-course-disturbed.toml").read_text()
     model = parse_any_model(text, "m.toml", {"kappa": "0.5"})
     claim = {"conditions": {"sos_bound": {"status": "certified", "bounds": {"yi": 0.1}}}}
-    found = cross_check_recast(model, claim, {"kappa": Fraction(1, 2)}, starts=4, seed=(0, 2))
+    found = cross_check_point(model, claim, {"kappa": Fraction(1, 2)}, starts=4, seed=(0, 2))
     assert found.violation and found.violations[0].startswith("sos_bound at kappa = 0.5: ")
     assert found.sim_worst["yi"] > 0.2
 
@@ -236,7 +236,7 @@ def test_a_false_certificate_of_the_pendulum_raises_the_alarm() -> None:
     """``V = theta**2 + omega**2`` claimed GAS: starts at high speed turn over the saddle and V rises.
     The energy ``1 - cos(theta) + omega**2/2`` (``V' = -b omega**2 <= 0``) never rises: no alarm."""
     from lyapcheck.models.language.modelfile import parse_any_model
-    from sweeps.recast_crosscheck import cross_check_recast
+    from sweeps.crosscheck import cross_check_point
 
     model = parse_any_model(PENDULUM, "m.toml", {"b": "0.5"})
     names = list(model.system.ring.names)  # theta, omega, then sin(theta) and cos(theta)
@@ -251,10 +251,10 @@ def test_a_false_certificate_of_the_pendulum_raises_the_alarm() -> None:
             "V": {"terms": terms}}}}}
 
     false = claim([["1", power("theta", 2)], ["1", power("omega", 2)]])
-    found = cross_check_recast(model, false, {"b": Fraction(1, 2)}, starts=8, seed=(0, 1))
+    found = cross_check_point(model, false, {"b": Fraction(1, 2)}, starts=8, seed=(0, 1))
     assert found.violation and found.worst_rise > 1e-5 and found.violations[0].startswith("sos_gas at b = 0.5")
     energy = claim([["-1", power(cosine, 1)], ["1/2", power("omega", 2)]])  # cos shifted: c - 1
-    found = cross_check_recast(model, energy, {"b": Fraction(1, 2)}, starts=8, seed=(0, 1))
+    found = cross_check_point(model, energy, {"b": Fraction(1, 2)}, starts=8, seed=(0, 1))
     assert not found.violation and found.trajectories == 8 and found.worst_rise <= 1e-5
 
 

@@ -117,10 +117,10 @@ def doctored(data: dict[str, np.ndarray], shrink: float = 1.0) -> dict[str, Any]
 
 def check_polynomial(unsafe: str, doc: dict[str, Any]) -> Any:
     from lyapcheck.models.language.modelfile import parse_model
-    from sweeps.crosscheck import cross_check
+    from sweeps.crosscheck import cross_check_point
 
     model = parse_model(POLYNOMIAL.replace("UNSAFE", unsafe), "m.toml")
-    return cross_check(model, doc, [{"a": Fraction(1)}], starts=STARTS, seed=(0,), worst_case=False)
+    return cross_check_point(model, doc, {"a": Fraction(1)}, starts=STARTS, seed=(0,), worst_case=False)
 
 
 def recast(unsafe: str) -> Any:
@@ -134,9 +134,9 @@ def recast(unsafe: str) -> Any:
 
 
 def check_with_functions(unsafe: str, doc: dict[str, Any]) -> Any:
-    from sweeps.recast_crosscheck import cross_check_recast
+    from sweeps.crosscheck import cross_check_point
 
-    return cross_check_recast(recast(unsafe), doc, {"k": Fraction(1)}, starts=STARTS, seed=(0,))
+    return cross_check_point(recast(unsafe), doc, {"k": Fraction(1)}, starts=STARTS, seed=(0,))
 
 
 @pytest.mark.parametrize("loop, check", [("polynomial", check_polynomial), ("with_functions", check_with_functions)])
@@ -165,14 +165,14 @@ def test_a_box_s_safety_claims_are_simulated_at_a_point_where_its_v_is_not_the_p
     """A box certificate whose ``quadratic`` V is a function of the box's parameter is not simulated at a
     point of the box (``box_mismatch``); its barrier and reach_avoid, claims about the model's sets and
     its true loop, are, and a contradicted one raises the alarm there."""
-    from sweeps.recast_crosscheck import cross_check_recast_box
+    from sweeps.crosscheck import cross_check_box
 
     data, _ = with_functions
     doc = doctored(data)
     doc["conditions"]["quadratic"] = {"status": "certified", "certificate": {"variables": ["x1", "x2", "k"]}}
 
     def check(unsafe: str) -> tuple[Any, list[str]]:
-        return cross_check_recast_box([(recast(unsafe), {"k": Fraction(1)})], doc, starts=STARTS, seed=(0,))
+        return cross_check_box([(recast(unsafe), {"k": Fraction(1)})], doc, starts=STARTS, seed=(0,))
 
     (clean, skipped), (moved, _) = check(FAR), check(CROSSED["with_functions"])
     assert len(skipped) == 1 and "V is a function of k" in skipped[0], skipped
@@ -187,7 +187,7 @@ def test_a_claim_over_every_disturbance_is_simulated_at_the_vertices_of_the_dist
     ``d = 1`` does not either (it tends to 1); the unsafe set ``x >= 0.9`` is reached with ``d = 1`` only, so a
     claim over every disturbance is contradicted there, a nominal one (``d = 0``) is not."""
     from lyapcheck.models.language.modelfile import parse_model
-    from sweeps.crosscheck import cross_check
+    from sweeps.crosscheck import cross_check_point
 
     text = ('[model]\nstates = ["x"]\n[parameters]\na = 1\n[disturbances]\nd = 1\n[dynamics]\nx = "-a*x + d"\n'
             '[sets]\ninitial = ["0 <= x <= 0.5"]\nunsafe = [UNSAFE]\n')
@@ -195,7 +195,7 @@ def test_a_claim_over_every_disturbance_is_simulated_at_the_vertices_of_the_dist
     def check(unsafe: str, disturbances: str) -> Any:
         model = parse_model(text.replace("UNSAFE", unsafe), "m.toml")
         doc = {"conditions": {"barrier": {"status": "certified", "disturbances": disturbances}}}
-        return cross_check(model, doc, [{"a": Fraction(1)}], starts=STARTS, seed=(0,), worst_case=False)
+        return cross_check_point(model, doc, {"a": Fraction(1)}, starts=STARTS, seed=(0,), worst_case=False)
 
     nominal, every = check('"x >= 0.9"', "zero"), check('"x >= 0.9"', "all")
     assert nominal.trajectories == STARTS and not nominal.violation, nominal.violations
@@ -209,13 +209,13 @@ def test_a_goal_not_reached_by_the_horizon_is_simulated_on_to_the_certified_boun
     horizon (12 s) the trajectories are simulated again to just past it, and are late there; with ``x <= 0.5``
     (reached by ``t = ln 4``) one simulation is enough."""
     from lyapcheck.models.language.modelfile import parse_model
-    from sweeps.crosscheck import cross_check
+    from sweeps.crosscheck import cross_check_point
 
     def check(goal: str) -> Any:
         model = parse_model('[model]\nstates = ["x"]\n[parameters]\na = 1\n[dynamics]\nx = "-a*x"\n[sets]\n'
                             f'initial = ["1 <= x <= 2"]\nunsafe = ["x >= 3"]\ngoal = ["{goal}"]\n', "m.toml")
         doc = {"conditions": {"reach_avoid": {"status": "certified", "reach_time_bound_s": 100.0}}}
-        return cross_check(model, doc, [{"a": Fraction(1)}], starts=STARTS, seed=(0,), worst_case=False)
+        return cross_check_point(model, doc, {"a": Fraction(1)}, starts=STARTS, seed=(0,), worst_case=False)
 
     never, reached = check("x <= -1"), check("x <= 0.5")
     assert never.trajectories == 2 * STARTS and never.reach_ratio > 1 + TRAJECTORY_CHECK_REL_TOL
@@ -269,3 +269,21 @@ def test_reach_avoid_reads_the_time_before_the_goal_and_the_unsafe_set_before_it
     assert (before.entered, before.first_entered) == (1, 0) and not before.ok
     never = check_reach_avoid([(np.array([0.0, 1.0, 2.0 * (1 + 2e-5)]), outside[:3], outside[:3])], bound_s=2.0)
     assert never.late == 1 and reach_horizon(2.0) > 2.0 * (1 + TRAJECTORY_CHECK_REL_TOL)
+
+
+@pytest.mark.parametrize("loop", ["polynomial", "with_functions"])
+def test_a_barrier_its_certifier_s_own_simulation_contradicted_raises_the_alarm_on_either_loop(
+        loop: str, request: pytest.FixtureRequest) -> None:
+    """A certified barrier whose falsification beside the proof entered the unsafe set
+    (``soundness_violation`` in its document) is a violation of the sweep on either loop kind, though the
+    sweep's own trajectories (the unsafe set far away) are clean; without the flag there is none."""
+    data, _ = request.getfixturevalue(loop)
+    check = check_polynomial if loop == "polynomial" else check_with_functions
+    doc = doctored(data)
+    doc["conditions"] = {"barrier": {**doc["conditions"]["barrier"], "soundness_violation": True}}
+    flagged = check(FAR, doc)
+    assert flagged.unsafe_margin < 0
+    assert len(flagged.violations) == 1 and flagged.violations[0].startswith("barrier at "), flagged.violations
+    assert "its own simulation when certified found a trajectory into the unsafe set" in flagged.violations[0]
+    del doc["conditions"]["barrier"]["soundness_violation"]
+    assert not check(FAR, doc).violation

@@ -150,7 +150,7 @@ def _per_row(values: FloatArray) -> Callable[[FloatArray, FloatArray, IntArray],
 
 
 def simulate(model: Model | RecastModel, starts: FloatArray, *, t_end: float, half_widths: FloatArray,
-             disturbances: FloatArray | None = None, escape_factor: float = ESCAPE_FACTOR,
+             disturbances: FloatArray | None = None, escape_factor: float | FloatArray = ESCAPE_FACTOR,
              converged_fraction: float = CONVERGED_FRACTION) -> list[Trajectory]:
     """Simulate every start (rows of ``starts``, declared coordinates) until ``t_end``, in one batch.
 
@@ -170,7 +170,8 @@ def simulate(model: Model | RecastModel, starts: FloatArray, *, t_end: float, ha
         ``(k, m)``: a constant value of every disturbance per start; None for all 0.
     escape_factor, converged_fraction
         The escape box and the convergence radius in half-widths (defaults :data:`ESCAPE_FACTOR`,
-        :data:`CONVERGED_FRACTION`: the phase portrait's view).
+        :data:`CONVERGED_FRACTION`: the phase portrait's view); ``escape_factor`` may be one per state
+        (inf: that state never escapes, such as an angle of a loop with functions).
     """
     from lyapcheck.models.engines.recast_numeric import TrueField
 

@@ -611,7 +611,7 @@ def default_horizon(prepared: Prepared) -> float:
 
 
 def crosscheck_horizon(model: RecastModel) -> float:
-    """The horizon of the sweeps' cross-checks of a loop with functions (:mod:`sweeps.recast_crosscheck`):
+    """The horizon of the sweeps' cross-checks of a loop with functions (:mod:`sweeps.crosscheck`):
     ``HORIZON_TIME_CONSTANTS`` slowest time constants of the exact linearisation of its loop without
     disturbances, ``CROSSCHECK_FALLBACK_HORIZON_S`` without a decaying one (or without an exact
     Jacobian). ``simulate`` itself takes :func:`default_horizon`, for either kind."""
