@@ -85,10 +85,10 @@ with ``model`` in its ``[sweep]`` table::
 
 A loop with functions (sin, cos, exp, sqrt, atan, tanh, abs, min, max, sat: what
 :func:`lyapcheck.models.language.modelfile.parse_any_model` reads as a
-:class:`~lyapcheck.models.language.recast.RecastModel`) is swept point by point over the classes
-of :data:`lyapcheck.models.surfaces.recast_run.RECAST_CLASSES` (but ``candidate``): each grid point is the
+:class:`~lyapcheck.models.language.recast.RecastModel`) is swept over the same classes as a
+polynomial loop (:data:`MODEL_POINT_CLASSES`, :data:`MODEL_BOX_CLASSES`): each grid point is the
 model text read again with the point's values as overrides (:meth:`ModelSweepSpec.model_at`), so
-the loop is recast at them. Its boxes (``mode = "boxes"``, classes :func:`recast_box_classes`) are
+the loop is recast at them. Its boxes (``mode = "boxes"``) are
 each what ``lyapcheck certify FILE --box`` certifies: the model read again at the box's centre
 (:meth:`ModelSweepSpec.recast_box`), then
 :func:`lyapcheck.models.surfaces.certify.certify_model` over the box. No corner is checked for
@@ -739,31 +739,9 @@ def _readable(axis: ModelAxis, where: str) -> ModelAxis:
     return axis
 
 
-def recast_point_classes() -> tuple[str, ...]:
-    """The classes of a points sweep of a loop with functions: those of
-    :data:`lyapcheck.models.surfaces.recast_run.RECAST_CLASSES` a sweep can run (not the user's ``candidate``),
-    in :data:`MODEL_POINT_CLASSES`' order."""
-    from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES
-
-    return tuple(c for c in MODEL_POINT_CLASSES if c in RECAST_CLASSES)
-
-
-#: the classes :func:`lyapcheck.models.surfaces.recast_run.certify_box` proves over a box (the others are
-#: ``not_applicable`` there); ``barrier`` and ``reach_avoid`` with the model's sets (:func:`_model_classes`)
-_RECAST_OVER_BOX: Final = ("quadratic", "sos_gas", "roa", "sos_bound", "barrier", "reach_avoid")
-
-
-def recast_box_classes() -> tuple[str, ...]:
-    """The classes of a box sweep of a loop with functions, in :data:`MODEL_BOX_CLASSES`' order."""
-    return tuple(c for c in MODEL_BOX_CLASSES if c in _RECAST_OVER_BOX)
-
-
 def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[str, ...]:
     polynomial = isinstance(model, Model)
-    if polynomial:
-        allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES
-    else:
-        allowed = recast_point_classes() if mode == "points" else recast_box_classes()
+    allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES  # (the same on every loop)
     # (any loop: barrier with its sets only, reach_avoid with its goal too; a class the model cannot ask is
     # not picked by default, and naming it is refused here rather than at the first point)
     if not ("initial" in model.sets and "unsafe" in model.sets):
@@ -961,5 +939,5 @@ def cached_model_spec(worker_text: str) -> ModelSweepSpec:
 __all__ = ["Axis", "SimulationSettings", "Refinement", "BoxSettings", "SweepSpec", "parse_spec", "load_spec",
            "cached_spec", "read_spec_text", "axis_values", "ModelAxis", "ModelSimulation", "ModelSweepSpec",
            "parse_model_spec", "load_model_spec", "cached_model_spec", "initial_cells", "window_box", "exact_decimal",
-           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "recast_point_classes", "recast_box_classes", "initial_boxes",
+           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "initial_boxes",
            "relative_width", "split_cell", "Cell"]

@@ -10,9 +10,7 @@ target  its specs                               its classes                     
 ======  ======================================  ===============================================  ==============
 model   ``[sweep] model = "FILE.toml"``         :data:`lyapcheck.models.classes.registry.CLASSES`         points, boxes
         (any polynomial or rational model,      (but ``candidate``; boxes: those with box
-        or a loop with functions)               certificates; functions: those of
-                                                :func:`sweeps.spec.recast_point_classes`, boxes:
-                                                :func:`sweeps.spec.recast_box_classes`)
+        or a loop with functions)               certificates; the same on every loop)
 paper   the paper's sections (gains, swimmer,   the paper's condition classes                    points (and its
         ...) with ``[[sweep.axes]]``            (:data:`sweeps.schema.CLASSES`; boxes:           quadtree), boxes
                                                 :data:`sweeps.spec.BOX_CLASSES`)

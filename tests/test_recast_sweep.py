@@ -202,12 +202,17 @@ def test_a_bad_spec_is_one_line_exit_2_and_writes_nothing(tmp_path: Path, spec: 
     assert_refused(write(tmp_path, spec, model), needle)
 
 
-def test_the_classes_of_a_loop_with_functions_are_the_recast_ones_a_sweep_can_run() -> None:
-    from lyapcheck.models.surfaces.recast_run import RECAST_CLASSES
-    from sweeps.spec import MODEL_POINT_CLASSES, recast_point_classes
+def test_a_loop_with_functions_is_swept_over_the_classes_of_a_polynomial_loop() -> None:
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.language.recast import RecastModel
+    from sweeps.spec import MODEL_BOX_CLASSES, MODEL_POINT_CLASSES, _model_classes
 
-    assert set(recast_point_classes()) == set(RECAST_CLASSES) - {"candidate"}
-    assert list(recast_point_classes()) == [c for c in MODEL_POINT_CLASSES if c in RECAST_CLASSES]
+    pendulum = parse_any_model(PENDULUM)
+    assert isinstance(pendulum, RecastModel) and not pendulum.sets and not pendulum.disturbances
+    without_sets = ("sos_bound", "barrier", "reach_avoid")  # (no disturbances, no [sets])
+    assert "candidate" not in MODEL_POINT_CLASSES  # (the user's V: a sweep cannot run it)
+    assert _model_classes(None, "points", pendulum) == tuple(c for c in MODEL_POINT_CLASSES if c not in without_sets)
+    assert _model_classes(None, "boxes", pendulum) == tuple(c for c in MODEL_BOX_CLASSES if c not in without_sets)
 
 
 # -- workers, a point the recasting cannot take, the alarm -----------------------------------------------------

@@ -33,14 +33,17 @@ new class from its entry alone.
 
 What else must change today, because those places name each class rather than read this list:
 
-4. :func:`lyapcheck.models.surfaces.certify.certify_model`: one ``if "<name>" in chosen: run("<name>", ...)``
-   calling the implementation (in the branch with the cleared field ``sc`` when ``cleared``); without
-   it the class is selectable but never runs, and is missing from the certificate;
-5. ``lyapcheck/models/surfaces/certificate.py``, ``_verify_class``: a branch calling the implementation's exact
-   check (an unknown certificate kind fails verification); and, when the class proves its claim with
-   the disturbances at 0 only, the tuple in ``_check_disturbance_keys``;
-6. :func:`lyapcheck.models.classes.claims.summary`: the sentence a ``certified`` condition states (verify
-   compares it with the document's summary);
+4. the runners, one per kind of loop: :func:`lyapcheck.models.surfaces.certify.certify_model` (a polynomial
+   or rational loop: one ``if "<name>" in chosen: run("<name>", ...)``, in the branch with the cleared
+   field ``sc`` when ``cleared``) and :func:`lyapcheck.models.surfaces.recast_run.certify` (a loop with
+   functions; a class it gives no answer for is ``not_applicable`` there, naming the loop);
+5. verify, one per kind of loop: ``_verify_class`` in ``lyapcheck/models/surfaces/certificate.py`` and
+   ``_verify_condition`` in ``lyapcheck/models/surfaces/recast_certify.py``, each a branch calling the
+   implementation's exact check (an unknown certificate kind fails verification); and, when the class
+   proves its claim with the disturbances at 0 only, the tuple in ``_check_disturbance_keys``;
+6. :mod:`lyapcheck.models.classes.claims`: the sentence a ``certified`` condition states, ``summary``
+   (and ``sentence_of`` for a loop with functions' certificate kinds); verify compares it with the
+   document's summary;
 7. :data:`lyapcheck.results.PROPERTY`: the class's default property, equal to ``proves``
    (``tests/test_model_class_registry.py`` checks it); a new property (``safety``, ``reach_avoid``) is
    also one more value of :data:`lyapcheck.results.Property`.

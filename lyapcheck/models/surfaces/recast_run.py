@@ -38,11 +38,6 @@ def class_budget(seconds: float) -> Budget:
     return Budget(seconds, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
 
 
-#: the classes a recast loop takes, in order
-RECAST_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier",
-                         "reach_avoid")
-
-
 def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float,
             box: ModelBox | None = None) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
     """Run the chosen classes; the loop (with its proved square-root bounds) and the seconds each took.
