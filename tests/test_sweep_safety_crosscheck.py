@@ -287,3 +287,17 @@ def test_a_barrier_its_certifier_s_own_simulation_contradicted_raises_the_alarm_
     assert "its own simulation when certified found a trajectory into the unsafe set" in flagged.violations[0]
     del doc["conditions"]["barrier"]["soundness_violation"]
     assert not check(FAR, doc).violation
+
+
+def test_the_store_report_shows_the_safety_cross_check(tmp_path: Path) -> None:
+    """The HTML report of a safety sweep's store states the two figures the cross-check stores for it:
+    the largest margin of the unsafe set reached and the latest time to the goal over its bound."""
+    from reports.render import read_store, sweep_html
+    from reports.views import fmt_float
+    from sweeps.summary import summarize_dataset
+
+    sweep_one(tmp_path / "p", POLYNOMIAL, "a")
+    page = sweep_html(tmp_path / "p" / "out.zarr")
+    cross = summarize_dataset(read_store(tmp_path / "p" / "out.zarr")).cross_check
+    assert "largest margin of the unsafe set reached" in page and fmt_float(cross["worst_unsafe_margin"], 3) in page
+    assert "latest time to the goal / certified time bound" in page and fmt_float(cross["worst_reach_ratio"], 3) in page

@@ -146,6 +146,15 @@ def model_store_context(ds: Any) -> dict[str, Any]:
         ("trajectories not at the equilibrium by the horizon (a figure, not a violation)",
          str(cross["not_converged"])),
     ]
+    if "worst_unsafe_margin" in cross and {"barrier", "reach_avoid"} & set(summary.classes):
+        # (>= 0: a trajectory entered the unsafe set; a store written before these figures has none)
+        margin = cross["worst_unsafe_margin"]
+        cross_rows.append(("largest margin of the unsafe set reached (>= 0: inside; < 0: none entered)",
+                           "—" if margin is None else fmt_float(margin, 3)))
+    if "worst_reach_ratio" in cross and "reach_avoid" in summary.classes:
+        ratio = cross["worst_reach_ratio"]
+        cross_rows.append(("latest time to the goal / certified time bound",
+                           "—" if ratio is None else fmt_float(ratio, 3)))
     for y, span in (cross.get("sim_worst") or {}).items():
         cross_rows.append((f"worst-case search: tail sup of |{y}|", _span(span)))
     for y, span in (cross.get("tightness") or {}).items():
