@@ -249,34 +249,13 @@ def b_degree(ring: Ring, B: Poly) -> int:
 
 # -- falsification on the true loop -------------------------------------------------------------------
 
-class _TrueField:
-    """The true loop's field as :func:`lyapcheck.models.classes.falsify.falsify` calls it: ``(x, d)`` rows,
-    the disturbances at 0 (the nominal loop). With ``stop`` (a set), a state inside it stays there
-    (field 0): a trajectory is watched only until it reaches that set (reach-avoid's goal)."""
-
-    def __init__(self, model: RecastModel, stop: Any = None) -> None:
-        from lyapcheck.models.engines.recast_numeric import FloatLoop
-
-        self.loop = FloatLoop(model.system)
-        self.stop = stop
-
-    def __call__(self, x: Any, d: Any = None) -> Any:
-        import numpy as np
-
-        with np.errstate(all="ignore"):  # a far start overflows: the integrator treats it as an escape
-            f = self.loop(x)
-            if self.stop is not None:
-                from lyapcheck.models.language.sets import margin
-
-                f = np.where((margin(self.stop, x) >= 0)[:, None], 0.0, f)
-            return f
-
-
 def true_field(model: RecastModel) -> Any:
     """The true loop's field as :func:`falsification` simulates it (each function evaluated by numpy, the
-    disturbances at 0), unstopped: ``verify`` replays a counterexample with it
+    disturbances at 0: the nominal loop), unstopped: ``verify`` replays a counterexample with it
     (:func:`lyapcheck.models.classes.falsify.replay`, which stops a trajectory at the goal itself)."""
-    return _TrueField(model)
+    from lyapcheck.models.engines.recast_numeric import TrueField
+
+    return TrueField(model.system)
 
 
 def falsification(model: RecastModel, stop: Any = None) -> Any:
@@ -288,10 +267,10 @@ def falsification(model: RecastModel, stop: Any = None) -> Any:
 
     samples = FALSIFICATION_SAMPLES if model.n <= FALSIFICATION_FEW_ABOVE else FALSIFICATION_SAMPLES // 2
     # the horizon is the true loop's (stopped at a goal around the equilibrium, its Jacobian there is 0)
-    horizon = None if stop is None else default_horizon(model, evaluate=_TrueField(model))  # type: ignore[arg-type]
-    try:
+    horizon = None if stop is None else default_horizon(model, evaluate=true_field(model))  # type: ignore[arg-type]
+    try:  # (with stop, falsify holds the field at 0 in the goal: a trajectory is watched until it gets there)
         return falsify(model, model.sets["initial"], model.sets["unsafe"], margin,  # type: ignore[arg-type]
-                       samples=samples, disturbed=False, evaluate=_TrueField(model, stop), horizon=horizon)
+                       samples=samples, disturbed=False, evaluate=true_field(model), horizon=horizon, stop=stop)
     except ValueError:
         return None
 

@@ -164,9 +164,10 @@ class TrueField:
 
     def __call__(self, x: np.ndarray, d: np.ndarray | None = None) -> np.ndarray:
         x = np.atleast_2d(np.asarray(x, dtype=np.float64))
-        if d is None or self.disturbed is None or not d.size:
-            return self.nominal(x)
-        return self.disturbed(np.concatenate([x, np.asarray(d, dtype=np.float64)], axis=1))[:, :self.n]
+        with np.errstate(all="ignore"):  # a far start overflows: the integrator treats it as an escape
+            if d is None or self.disturbed is None or not d.size:
+                return self.nominal(x)
+            return self.disturbed(np.concatenate([x, np.asarray(d, dtype=np.float64)], axis=1))[:, :self.n]
 
 
 def distances(system: RecastSystem, deviations: np.ndarray, angles: tuple[str, ...] = ()) -> np.ndarray:
