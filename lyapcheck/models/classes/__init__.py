@@ -8,10 +8,11 @@
   (sos_bound), :mod:`~lyapcheck.models.classes.barrier`, :mod:`~lyapcheck.models.classes.reach_avoid`;
 - loops with functions: :mod:`~lyapcheck.models.classes.recast_classes`,
   :mod:`~lyapcheck.models.classes.recast_bound`, :mod:`~lyapcheck.models.classes.recast_barrier`,
+  :mod:`~lyapcheck.models.classes.recast_reach_avoid`,
   :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
   (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_improve`;
 - :mod:`~lyapcheck.models.classes.falsify` (counterexamples to safety) and
-  :mod:`~lyapcheck.models.classes.claims` (the sentence of each decided class).
+  :mod:`~lyapcheck.models.classes.claims` (the sentence of each decided class, on every loop kind).
 
 May import: lyapcheck.models.language, lyapcheck.models.engines, lyapcheck.models.loop, lyapcheck.sos,
 lyapcheck.integrator, lyapcheck.results, lyapcheck.degrees, lyapcheck.exact, lyapcheck.tolerances,
