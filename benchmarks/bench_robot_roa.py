@@ -1,0 +1,191 @@
+"""Regions of attraction of the robot examples of issue 42 on their true loops: status, time and size.
+
+The six examples are closed loops on true nonlinear robot dynamics (sin, cos, mass-matrix
+denominators): the cart-pole, the acrobot, the pendubot and the planar quadrotor balanced by LQR
+gains from ``control.lqr`` (``examples/models/robot-*-lqr.toml``), the pendulum held upright by a
+saturated PD law over its whole range of angles (``robot-pendulum-sat-pd.toml``) and the inverted
+pendulum with a saturated state feedback (``recast-inverted-pendulum-sat.toml``).
+
+For each example it runs, each in a fresh process timed as a whole (imports included):
+
+* ``lyapcheck certify FILE --classes linearization,roa --json``;
+* for the LQR examples, ``lyapcheck certify FILE --classes linearization,candidate --candidate
+  "z' S z" --json`` with ``S`` the LQR cost-to-go of ``control.lqr`` on the robot's linearization
+  (``benchmarks/robot_lqr.py``, rounded to 6 significant digits), a Lyapunov function on a
+  neighbourhood of the equilibrium by construction;
+
+each with ``--time-limit`` (a class that reaches it is ``inconclusive``). It prints one row per
+class run: the example, its number of states, the class, its status, the process's wall time, the
+share of the simulated region of attraction within the ``[domain]`` box that the certified set covers
+(``roa_share`` of the condition's JSON: lyapcheck's own simulation of the true loop on a grid of the
+set's box), the certified level of ``V`` and the largest ball ``|x - x_eq| <= r`` inside the set
+(``ball_radius``, where the certificate states one). Then, per example, issue 42's targets (a
+certified region of attraction in under 120 s covering at least 25 % of the simulated region), and
+the summary and the reason of each class that did not certify. A crash (exit 3) or an unreadable output is printed
+with its command and its stderr.
+
+Run:  python benchmarks/bench_robot_roa.py [--only NAME ...] [--time-limit S]
+The lyapcheck that runs is the one ``python -m lyapcheck`` imports from a scratch directory (the
+editable install, or the checkout ``PYTHONPATH`` names); the first line printed says which.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import robot_lqr  # noqa: E402  (beside this file)
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ROOT / "examples" / "models"
+
+#: (label, model file stem, number of states, the LQR cost-to-go is a candidate)
+EXAMPLES: list[tuple[str, str, int, bool]] = [
+    ("cart-pole", "robot-cart-pole-lqr", 4, True),
+    ("acrobot", "robot-acrobot-lqr", 4, True),
+    ("pendubot", "robot-pendubot-lqr", 4, True),
+    ("planar-quadrotor", "robot-planar-quadrotor-lqr", 6, True),
+    ("pendulum-sat-pd", "robot-pendulum-sat-pd", 2, False),
+    ("inv-pendulum-sat", "recast-inverted-pendulum-sat", 2, False),
+]
+#: issue 42's targets for every example
+TARGET_SECONDS, TARGET_SHARE = 120.0, 0.25
+
+
+@dataclass
+class Run:
+    """One certify process: the class whose row it gives, its command, wall time and document."""
+
+    label: str
+    states: int
+    klass: str
+    command: list[str]
+    wall: float
+    exit: int
+    doc: dict[str, Any] | None
+    error: str = ""
+
+    def condition(self) -> dict[str, Any]:
+        return (self.doc or {}).get("conditions", {}).get(self.klass, {})
+
+
+def lyapcheck(*args: str, timeout: float) -> subprocess.CompletedProcess[str]:
+    """``python -m lyapcheck ARGS`` run from a scratch directory: ``-m`` puts the working directory first
+    on the path, so running from ROOT would import ROOT's checkout whatever PYTHONPATH says."""
+    with tempfile.TemporaryDirectory(prefix="bench-robot-") as cwd:
+        return subprocess.run([sys.executable, "-m", "lyapcheck", *args], capture_output=True, text=True,
+                              cwd=cwd, timeout=timeout)
+
+
+def imported_lyapcheck() -> str:
+    with tempfile.TemporaryDirectory(prefix="bench-robot-") as cwd:
+        done = subprocess.run([sys.executable, "-c", "import lyapcheck; print(lyapcheck.__file__)"],
+                              capture_output=True, text=True, cwd=cwd, timeout=120)
+    return done.stdout.strip() or done.stderr.strip()[-200:]
+
+
+def run(label: str, stem: str, states: int, klass: str, extra: list[str], time_limit: float) -> Run:
+    args = ["certify", str(MODELS / f"{stem}.toml"), "--classes", f"linearization,{klass}", *extra,
+            "--time-limit", f"{time_limit:g}", "--json"]
+    t0 = time.perf_counter()
+    # each class stops at its time limit; the process's own limit is only against a hang
+    done = lyapcheck(*args, timeout=10 * time_limit + 600)
+    wall = time.perf_counter() - t0
+    command = ["lyapcheck", *args]
+    try:
+        doc = json.loads(done.stdout)
+    except json.JSONDecodeError:
+        return Run(label, states, klass, command, wall, done.returncode, None,
+                   (done.stderr.strip() or done.stdout.strip())[-600:])
+    return Run(label, states, klass, command, wall, done.returncode, doc)
+
+
+def figure(cond: dict[str, Any], key: str, fmt: str) -> str:
+    value = cond.get(key)
+    return "-" if value is None else format(float(value), fmt)
+
+
+def share_text(cond: dict[str, Any]) -> str:
+    value = cond.get("roa_share")
+    return "-" if value is None else f"{100 * float(value):.1f} %"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", nargs="+", metavar="NAME",
+                        help="labels or file stems (e.g. cart-pole, robot-acrobot-lqr)")
+    parser.add_argument("--time-limit", type=float, default=60.0, metavar="S",
+                        help="each class's time limit in seconds, passed to certify (default 60, certify's own)")
+    args = parser.parse_args()
+    if args.time_limit <= 0:
+        parser.error(f"--time-limit must be a number of seconds > 0, got {args.time_limit:g}")
+    examples = [e for e in EXAMPLES if not args.only or e[0] in args.only or e[1] in args.only]
+    if not examples:
+        parser.error(f"no example matches --only {' '.join(args.only)} (examples: "
+                     f"{', '.join(e[0] for e in EXAMPLES)})")
+
+    print(f"lyapcheck: {lyapcheck('--version', timeout=120).stdout.strip() or '(no --version)'}, imported from "
+          f"{imported_lyapcheck()}")
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start; "
+          f"--time-limit {args.time_limit:g} s per class\n")
+    head = (f"{'example':<17} {'states':>6}  {'class':<9}  {'status':<13} {'time s':>7}  {'share of sim. ROA':>17}  "
+            f"{'level':>9}  {'ball radius':>11}")
+    print(head)
+    print("-" * len(head))
+    runs: list[Run] = []
+    for label, stem, states, lqr in examples:
+        plan: list[tuple[str, list[str]]] = [("roa", [])]
+        if lqr:
+            plan.append(("candidate", ["--candidate", robot_lqr.cost_to_go(stem)]))
+        for klass, extra in plan:
+            r = run(label, stem, states, klass, extra, args.time_limit)
+            runs.append(r)
+            cond = r.condition()
+            status = cond.get("status", f"exit {r.exit}" if r.doc is None else "absent")
+            print(f"{label:<17} {states:>6}  {klass:<9}  {status:<13} {r.wall:7.1f}  {share_text(cond):>17}  "
+                  f"{figure(cond, 'level', '.4g'):>9}  {figure(cond, 'ball_radius', '.4g'):>11}", flush=True)
+    print("(time: the whole certify process with --classes linearization,CLASS, imports included; share: roa_share, "
+          "the share of lyapcheck's simulated region of attraction in the [domain] box inside the certified set)\n")
+
+    print(f"Targets of issue 42 (a certified region of attraction on the true loop in < {TARGET_SECONDS:g} s, "
+          f"covering >= {100 * TARGET_SHARE:g} % of the simulated region):")
+    for label, *_ in examples:
+        mine = [r for r in runs if r.label == label]
+        met = [r for r in mine if r.condition().get("status") == "certified" and r.wall < TARGET_SECONDS
+               and float(r.condition().get("roa_share") or 0) >= TARGET_SHARE]
+        lin = {r.doc["conditions"].get("linearization", {}).get("status") for r in mine if r.doc is not None}
+        best = max((float(r.condition().get("roa_share") or 0) for r in mine
+                    if r.condition().get("status") == "certified"), default=None)
+        print(f"  {label:<17} linearization {', '.join(sorted(s for s in lin if s)) or '-'}; "
+              f"best certified share {'-' if best is None else f'{100 * best:.1f} %'}: "
+              f"{'target met' if met else 'target missed'}")
+    print()
+
+    print("Classes that did not certify, with their summaries:")
+    problems = 0
+    for r in runs:
+        cond = r.condition()
+        if r.doc is None:
+            problems += 1
+            print(f"  {r.label} {r.klass}: EXIT {r.exit}, no JSON. Command: {' '.join(r.command)}\n    {r.error}")
+        elif cond.get("status") != "certified":
+            summary = str(cond.get("summary", "(no summary)"))
+            print(f"  {r.label} {r.klass} ({cond.get('status')}): {summary[:400]}{'...' if len(summary) > 400 else ''}")
+            if cond.get("reason"):  # the technical detail (--verbose's)
+                print(f"    reason: {str(cond['reason'])[:400]}")
+    if all(r.doc is not None and r.condition().get("status") == "certified" for r in runs):
+        print("  (none)")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

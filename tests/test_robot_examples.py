@@ -1,0 +1,96 @@
+"""The robot examples of issue 42 (``examples/models/robot-*.toml``): each file parses, its
+``linearization`` is certified (LES), the closed-loop Jacobian lyapcheck proves it on is exactly
+``A - B K`` of an independent sympy derivation of the open-loop robot (``benchmarks/robot_lqr.py``),
+and the gains the files write are ``control.lqr``'s on that linearization to the digits written.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from fractions import Fraction
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from lyapcheck import certify
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ROOT / "examples" / "models"
+ROBOTS = ["robot-cart-pole-lqr", "robot-acrobot-lqr", "robot-pendubot-lqr", "robot-planar-quadrotor-lqr",
+          "robot-pendulum-sat-pd"]
+LQR = ["robot-cart-pole-lqr", "robot-acrobot-lqr", "robot-pendubot-lqr", "robot-planar-quadrotor-lqr"]
+
+
+def robot_lqr() -> ModuleType:
+    """benchmarks/robot_lqr.py as a module."""
+    name = "robot_lqr"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / "robot_lqr.py")
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return sys.modules[name]
+
+
+def half_unit(value: float) -> float:
+    """Half a unit of the last significant digit of ``value`` as written (shortest repr)."""
+    digits = format(value, ".15g").lstrip("-").replace(".", "").lstrip("0")
+    return 10.0 ** (np.floor(np.log10(abs(value))) - len(digits) + 1) / 2
+
+
+def linearization_of(stem: str) -> dict[str, Any]:
+    result = certify(model=str(MODELS / f"{stem}.toml"), classes=["linearization"])
+    return result.to_dict()["conditions"]["linearization"]
+
+
+@pytest.mark.parametrize("stem", ROBOTS)
+def test_robot_example_is_locally_exponentially_stable(stem: str) -> None:
+    condition = linearization_of(stem)
+    assert condition["status"] == "certified", condition["summary"]
+    assert condition["property"] == "LES"
+
+
+@pytest.mark.parametrize("stem", LQR)
+def test_closed_loop_jacobian_is_a_minus_bk(stem: str) -> None:
+    """The file's [dynamics] linearize to A - B K exactly, A and B from the sympy derivation."""
+    A, B = robot_lqr().linearization(stem)
+    K = robot_lqr().file_gain(stem)
+    expected = (A - B * K).applyfunc(sp.nsimplify)
+    got = linearization_of(stem)["certificate"]["jacobian"]
+    assert [[Fraction(x) for x in row] for row in got] == [
+        [Fraction(int(sp.numer(x)), int(sp.denom(x))) for x in row] for row in expected.tolist()]
+
+
+@pytest.mark.parametrize("stem", LQR)
+def test_file_gain_is_lqr_to_the_digits_written(stem: str) -> None:
+    """Each written gain is control.lqr's rounded to its significant digits: within half a unit of
+    its last digit (the rounding), not closer to any other number of that many digits."""
+    K, _ = robot_lqr().lqr(stem)
+    written = robot_lqr().file_parameters(stem)
+    names = robot_lqr().PLANTS[stem].gains
+    for i, row in enumerate(names):
+        for j, name in enumerate(row):
+            value = float(written[name])
+            assert abs(K[i, j] - value) <= half_unit(value) * (1 + 1e-9), (name, K[i, j], value)
+
+
+def test_cart_pole_gain_is_lqr_of_its_own_linearization() -> None:
+    """The cart-pole's K: the closed loop's own Jacobian (lyapcheck's, exact) is A - B K, and the
+    A of its derivation with the file's B gives control.lqr's K back to the 6 digits written."""
+    import control
+
+    stem = "robot-cart-pole-lqr"
+    A, B = robot_lqr().linearization(stem)
+    J = np.array([[float(Fraction(x)) for x in row] for row in linearization_of(stem)["certificate"]["jacobian"]])
+    Bf = np.array(B, dtype=float)
+    K_file = np.array(robot_lqr().file_gain(stem), dtype=float)
+    A_from_file = J + Bf @ K_file  # the open loop recovered from the file's closed loop
+    K, _, _ = control.lqr(A_from_file, Bf, np.diag([10, 1, 10, 1]), np.eye(1))
+    tolerance = np.vectorize(half_unit)(K_file) * (1 + 1e-9)
+    assert np.all(np.abs(K - K_file) <= tolerance), (K, K_file)
