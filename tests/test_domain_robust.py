@@ -45,9 +45,11 @@ def _share_of(result: object, theta: float) -> float:
     certified set (:func:`lyapcheck.models.surfaces.recast_run.certified_value`)."""
     from lyapcheck.models.classes import recast_classes as rc
     from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.language.recast import RecastModel
     from lyapcheck.models.surfaces.recast_run import certified_value
 
     model = parse_any_model(PENDULUM.format(t0=-2, t1=2), "m.toml")
+    assert isinstance(model, RecastModel)
     loop = rc.base_loop(model.system)
     roa = result.conditions["roa"]  # type: ignore[attr-defined]
     value, = certified_value(loop, roa)

@@ -344,7 +344,7 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corne
     return FittedV(proposal, sampled)
 
 
-def _solve_fit(cost: np.ndarray, A: np.ndarray, b: np.ndarray, bounds: list[tuple[float | None, float | None]]
+def _solve_fit(cost: np.ndarray, A: np.ndarray, b: np.ndarray, bounds: Sequence[tuple[float | None, float | None]]
                ) -> np.ndarray | str:
     """The fitting program's solution, or HiGHS's word on why there is none.
 
