@@ -156,11 +156,11 @@ class _Sampling:
     local: float
 
 
-def _sampling(system: RecastSystem, box: tuple[Any, Any]) -> _Sampling:
+def _sampling(system: RecastSystem, box: tuple[Any, Any], growth: float = FIT_GROWTH) -> _Sampling:
     lo, hi = (np.asarray(b, dtype=float) for b in box)
     centre, half = (lo + hi) / 2, (hi - lo) / 2
     return _Sampling(np.array([float(system.values[s]) for s in system.states]), lo, hi,
-                     centre - FIT_GROWTH * half, centre + FIT_GROWTH * half, FIT_LOCAL_SHARE * float(np.min(half)))
+                     centre - growth * half, centre + growth * half, FIT_LOCAL_SHARE * float(np.min(half)))
 
 
 def _jacobian(system: RecastSystem) -> np.ndarray:
@@ -244,24 +244,35 @@ def common_lyapunov(jacobians: Sequence[np.ndarray]) -> np.ndarray | None:
     return value
 
 
-def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corners | None = None,
-          max_steps: int | None = None) -> FittedV | str:
-    """A proposed claim (V, level, box) for the ball-arithmetic proof, or why none (one line). With
-    ``corners``, V is asked to serve every corner of the constants (its quadratic part a common
-    Lyapunov function of their linearizations, its decrease at the samples at each corner);
-    ``max_steps``: each simulated row's step budget (a row stopped by it does not converge)."""
-    from scipy.linalg import solve_continuous_lyapunov
-    from scipy.optimize import linprog
-
-    from lyapcheck.models.engines.recast_numeric import distances, field_values, simulate_ends
-
+def fit_excluded(system: RecastSystem) -> str | None:
+    """Why no V is fitted to this loop whatever the box (one line), or None: the route takes 1 to 3
+    states, and a linearization that is Hurwitz (the V's quadratic part comes from it)."""
     n = system.n
     if n not in FIT_GRID:
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
     J = _jacobian(system)
     if not np.all(np.isfinite(J)) or np.max(np.linalg.eigvals(J).real) >= -1e-9:
         return "the linearization is not Hurwitz: no quadratic V to start from"
-    at = _sampling(system, box)
+    return None
+
+
+def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corners | None = None,
+          max_steps: int | None = None, growth: float = FIT_GROWTH) -> FittedV | str:
+    """A proposed claim (V, level, box) for the ball-arithmetic proof, or why none (one line). With
+    ``corners``, V is asked to serve every corner of the constants (its quadratic part a common
+    Lyapunov function of their linearizations, its decrease at the samples at each corner);
+    ``max_steps``: each simulated row's step budget (a row stopped by it does not converge);
+    ``growth``: the sampled box is ``box`` scaled by this about its centre."""
+    from scipy.linalg import solve_continuous_lyapunov
+
+    from lyapcheck.models.engines.recast_numeric import distances, field_values, simulate_ends
+
+    n = system.n
+    unfit = fit_excluded(system)
+    if unfit is not None:
+        return unfit
+    J = _jacobian(system)
+    at = _sampling(system, box, growth)
     eq, lo, hi, blo, bhi, local = at.eq, at.lo, at.hi, at.blo, at.bhi, at.local
     if corners is None:
         P0 = solve_continuous_lyapunov(J.T, -np.eye(n))
@@ -304,10 +315,10 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corne
         return "no simulated trajectory from the box converges"
     cost = Vc[inside].sum(axis=0)
     bounds = [(FIT_MIN_ALPHA, None)] + [(None, None)] * len(mons)
-    lp = linprog(cost / max(1.0, float(np.abs(cost).max())), A_ub=A, b_ub=b, bounds=bounds, method="highs")
-    if lp.status != 0:
-        return f"the fitting linear program found no V ({lp.message.strip()})"
-    w = lp.x
+    lp = _solve_fit(cost / max(1.0, float(np.abs(cost).max())), A, b, bounds)
+    if isinstance(lp, str):
+        return f"the fitting linear program found no V ({lp})"
+    w = lp
     # V exactly: dyadic coefficients, the quadratic part alpha P0 rounded as a whole
     terms: dict[tuple[int, ...], Fraction] = {}
     for i in range(n):
@@ -331,6 +342,36 @@ def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corne
     dev_in = converges & np.all((Z >= lo) & (Z <= hi), axis=1)
     sampled = float(np.mean((Vc[dev_in] @ w) <= float(proposal.level))) if dev_in.any() else 0.0
     return FittedV(proposal, sampled)
+
+
+def _solve_fit(cost: np.ndarray, A: np.ndarray, b: np.ndarray, bounds: Sequence[tuple[float | None, float | None]]
+               ) -> np.ndarray | str:
+    """The fitting program's solution, or HiGHS's word on why there is none.
+
+    The program's columns are V's monomials at the samples, up to about 1e8 apart on a wide box:
+    on an infeasible program HiGHS's simplex then thrashes (a minute or more over a hundred
+    iterations, to end "model_status is Unknown"). So feasibility is decided first on the same
+    program with each column scaled to a largest entry of 1 (the same feasible set, conditioned; a
+    second or so); only a feasible program is solved as it stands (the V proposed is the one it
+    always was), and where that solve fails numerically, the conditioned program's optimum is taken.
+    Nothing here is trusted: the proof decides.
+    """
+    from scipy.optimize import linprog
+
+    scale = np.abs(A).max(axis=0)
+    scale[~(scale > 0)] = 1.0
+    scaled_bounds = [(None if lo is None else lo * s, None if hi is None else hi * s)
+                     for (lo, hi), s in zip(bounds, scale)]
+    feasible = linprog(np.zeros(len(scale)), A_ub=A / scale, b_ub=b, bounds=scaled_bounds, method="highs")
+    if feasible.status == 2:  # proved infeasible (HiGHS Status 8)
+        return feasible.message.strip()
+    lp = linprog(cost, A_ub=A, b_ub=b, bounds=bounds, method="highs")
+    if lp.status == 0:
+        return np.asarray(lp.x)
+    conditioned = linprog(cost / scale, A_ub=A / scale, b_ub=b, bounds=scaled_bounds, method="highs")
+    if conditioned.status == 0:
+        return np.asarray(conditioned.x) / scale
+    return lp.message.strip()
 
 
 def _level_and_box(system: RecastSystem, V: Poly, values: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
@@ -388,7 +429,7 @@ def _level_and_box(system: RecastSystem, V: Poly, values: Callable[[np.ndarray],
 
 
 def propose_robust_level(system: RecastSystem, robust: RecastSystem, intervals: Sequence[tuple[Fraction, Fraction]],
-                         V: Poly, box: tuple[Any, Any]) -> IntervalClaim | str:
+                         V: Poly, box: tuple[Any, Any], growth: float = FIT_GROWTH) -> IntervalClaim | str:
     """A claim for ``V`` (over the states) that should hold for every value of some constants: its
     level from sampling, with ``V'`` the largest over the corners of their ``intervals`` (a
     disturbance's ``+-b``, a box parameter's ``lo`` and ``hi``; the loop ``robust`` has them as its
@@ -400,7 +441,7 @@ def propose_robust_level(system: RecastSystem, robust: RecastSystem, intervals: 
     n = system.n
     if n not in FIT_GRID:
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
-    at = _sampling(system, box)
+    at = _sampling(system, box, growth)
     field = FloatLoop(robust)
     corners = [np.array(c, dtype=float) for c in product(*[(float(lo), float(hi)) for lo, hi in intervals])]
     ring = system.ring
@@ -438,4 +479,4 @@ def propose_level(system: RecastSystem, V: Poly, box: tuple[Any, Any]) -> Interv
     return _level_and_box(system, V, values, at.blo, at.bhi, at.local, None)
 
 
-__all__ = ["FittedV", "Corners", "common_lyapunov", "fit_v", "propose_level", "propose_robust_level"]
+__all__ = ["FittedV", "Corners", "common_lyapunov", "fit_excluded", "fit_v", "propose_level", "propose_robust_level"]

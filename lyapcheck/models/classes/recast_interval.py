@@ -48,6 +48,15 @@ WHOLE_SET_CELL_LIMIT: Final = 20_000
 PARAMETER_SPLITS: Final = 3
 #: what the route proves with, in every sentence and certificate
 METHOD: Final = INTERVAL_METHOD
+#: where the route proves nothing with V fitted over the ``[domain]`` (the fitting program infeasible:
+#: no polynomial V of the fit's degree decreases at every converging sample of the box twice the
+#: domain's size, as for a pendulum over +-pi; or the proof fails at every level tried), it is tried
+#: again with V fitted to less, in this order, until one proves a set: each entry is (the share of
+#: the domain, about the equilibrium, whose converging samples V is fitted to; the sampled box's size
+#: over that part's, FIT_GROWTH = 2 at first). A count, not a time. A set proved from a part of the
+#: domain lies in the region of attraction all the same, and its figures (roa_share) are taken over
+#: the whole domain, so a larger domain never loses the set a smaller one gets from these attempts
+DOMAIN_RETRIES: Final = ((Fraction(1), 1.5), (Fraction(1), 1.25), (Fraction(3, 4), 1.25), (Fraction(1, 2), 1.25))
 
 
 @dataclass(frozen=True)
@@ -116,7 +125,70 @@ class Robust:
 
 def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robust | None = None,
                  fit_steps: int | None = None) -> ConditionResult | str:
-    """The ball-arithmetic region of attraction, or why there is none (one line). With ``robust``
+    """The ball-arithmetic region of attraction, or why there is none (one line): V fitted over the
+    domain ``box`` first (:func:`_interval_roa_in`, the arguments' meaning there); where that proves
+    nothing, V fitted over less of it (each of :data:`DOMAIN_RETRIES`), and of the sets those prove,
+    the one covering most of the domain (:func:`domain_share`). The condition's ``tried`` then
+    opens with the attempts that proved nothing or less, and ``fitted_domain_share`` says what share
+    of the domain V was fitted to."""
+    from lyapcheck.models.classes.fitted_v import FIT_GROWTH, fit_excluded
+    from lyapcheck.models.engines.interval_region import SAFETY_NET
+
+    found = _interval_roa_in(loop, budget, box, robust, fit_steps, FIT_GROWTH)
+    if isinstance(found, ConditionResult) or fit_excluded(loop.system) is not None:
+        return found  # (a loop the fit does not take fails the same way on any box)
+    others = [f"V fitted over the domain: {found}"]
+    best: tuple[float, str, float, ConditionResult] | None = None  # (its share of the domain, ...)
+    lo, hi = box
+    for share, growth in DOMAIN_RETRIES:
+        if budget.left() <= 0:
+            others.append(SAFETY_NET)
+            break
+        where = (f"V fitted over {'the domain' if share == 1 else f'{float(share):g} of the domain'}, sampled "
+                 f"{growth:g} times as wide")
+        found = _interval_roa_in(loop, budget, (lo * float(share), hi * float(share)), robust, fit_steps, growth)
+        if isinstance(found, str):
+            others.append(f"{where}: {found}")
+            continue
+        covers = domain_share(loop, found.certificate, box)
+        if best is not None and covers <= best[0]:
+            others.append(f"{where}: level {float(found.numbers['level']):.6g} proved, covering "
+                          f"{100 * covers:.1f} % of the domain (less)")
+            continue
+        if best is not None:
+            others.append(f"{best[1]}: level {float(best[3].numbers['level']):.6g} proved, covering "
+                          f"{100 * best[0]:.1f} % of the domain (less)")
+        best = (covers, where, float(share), found)
+    if best is None:
+        return "; ".join(others)
+    covers, where, share_f, result = best
+    result.numbers["tried"] = others + [f"{where}: {t}" for t in result.numbers.get("tried", [])] + \
+        [f"{where}: covering {100 * covers:.1f} % of the domain (sampled)"]
+    result.numbers["fitted_domain_share"] = share_f
+    return result
+
+
+def domain_share(loop: Loop, cert: dict[str, Any], box: tuple[Any, Any]) -> float:
+    """The share of fixed uniform samples of the domain ``box`` (deviations) in an interval
+    certificate's set (``{V <= level}``, within its box unless the whole set is proved to lie in it):
+    which of several proved sets to state (each is proved; this only compares them)."""
+    import numpy as np
+
+    from lyapcheck.models.engines.recast_numeric import v_values
+
+    claim = claim_of(loop, cert)
+    lo, hi = (np.asarray(b, dtype=float) for b in box)
+    Z = lo + (hi - lo) * np.random.default_rng(0).random((4000, loop.n))
+    inside = v_values(loop.system, claim.V, Z) <= float(claim.level)
+    if not cert.get("whole"):
+        inside &= np.all((Z >= [float(x) for x in claim.lo]) & (Z <= [float(x) for x in claim.hi]), axis=1)
+    return float(np.mean(inside))
+
+
+def _interval_roa_in(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robust | None,
+                     fit_steps: int | None, growth: float) -> ConditionResult | str:
+    """The ball-arithmetic region of attraction with V fitted over ``box`` (sampled ``growth`` times as
+    wide, :func:`~lyapcheck.models.classes.fitted_v.fit_v`), or why there is none (one line). With ``robust``
     disturbances that vanish at the equilibrium, the set is proved for every disturbance value first
     (the claim then covers them: ``"all"``), else with them at 0. With a parameter box in ``robust``,
     only the claim for every value of it is tried (``loop`` is the box's centre). ``fit_steps``: the
@@ -125,7 +197,7 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robus
 
     # over a box of parameters V must serve every value: fitted at the box's corners as well
     corners = Corners.of(robust.system, robust.intervals()) if robust is not None and robust.box is not None else None
-    fitted = fit_v(loop.system, loop.ring, box, corners, max_steps=fit_steps)
+    fitted = fit_v(loop.system, loop.ring, box, corners, max_steps=fit_steps, growth=growth)
     if isinstance(fitted, str):
         return fitted
     v_from = "a V fitted to simulations of the true loop (linear program), proved by " + METHOD
@@ -136,8 +208,8 @@ def interval_roa(loop: Loop, budget: Budget, box: tuple[Any, Any], robust: Robus
     if robust is not None and not uses_auxiliaries(loop, fitted.claim.V):
         from lyapcheck.models.classes.fitted_v import propose_robust_level
 
-        proposal = propose_robust_level(loop.system, robust.system, robust.intervals(), fitted.claim.V, box) \
-            if robust.vanishes() else None
+        proposal = propose_robust_level(loop.system, robust.system, robust.intervals(), fitted.claim.V, box,
+                                        growth) if robust.vanishes() else None
         if isinstance(proposal, IntervalClaim):
             found = _prove_lowering(loop, proposal, budget, "roa", v_from, {"sampled_share": fitted.sampled_share},
                                     robust)
@@ -365,4 +437,4 @@ def check_interval(loop: Loop, c: dict[str, Any], robust: Robust | None = None) 
                   f"{proof.local_radius} by the Hessian), by {METHOD}")
 
 
-__all__ = ["interval_roa", "interval_candidate", "check_interval", "box_units", "METHOD"]
+__all__ = ["interval_roa", "domain_share", "interval_candidate", "check_interval", "box_units", "METHOD"]

@@ -60,6 +60,8 @@ ESTIMATES: Final[Mapping[str, str]] = {
     "relative_margin": "the smallest eigenvalue margin of the solver's Gram matrices, relative (before rounding)",
     "rounds": "the region search's rounds: each level and its share",
     "history": "the region search's rounds: each level and its share",
+    "fitted_domain_share": "the share of the domain (about the equilibrium) the proved V was fitted to, where V "
+                           "fitted over the whole domain proved nothing (sampled_share is then of that part)",
     # records of the proof's work
     "cells": "cells the ball-arithmetic proof took",
     "boundary_cells": "cells of the set's boundary the ball-arithmetic proof took",
