@@ -470,6 +470,10 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
     region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
     region.numbers.setdefault("tried_first", interval)
     if region.status != "certified":
+        ball = candidate_ball_level(loop, V, budget, box)
+        if isinstance(ball, ConditionResult):
+            return ball
+        region.numbers.setdefault("detail", []).append(ball) if isinstance(region.numbers.get("detail"), list) else None
         why = reasons.reason("the candidate's derivative could not be proved negative definite (V' <= 0 alone needs "
                              "LaSalle's argument, which this class does not make), and no level set of it was proved "
                              "a region of attraction", ("other_candidate", "domain", "time"),
@@ -477,3 +481,16 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
         region.summary = why.summary
         region.numbers["detail"] = why.detail
     return region
+
+
+def candidate_ball_level(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+    """A quadratic candidate's largest level by ball arithmetic at any number of states
+    (:func:`lyapcheck.models.classes.recast_ball_level.ball_level`: from the exact local level upwards),
+    for when the SOS route proved none; why not otherwise."""
+    from lyapcheck.models.classes.recast_ball_level import ball_level
+
+    found = ball_level(loop, V, budget, "candidate", "the candidate, proved by ball arithmetic from its exact "
+                                                     "local level upwards")
+    if isinstance(found, ConditionResult):
+        simulated_check(loop, found, box)
+    return found

@@ -1,0 +1,101 @@
+"""The largest level of a quadratic ``V = z^T P z`` (the LQR cost-to-go, a Lyapunov equation's ``P``)
+proved on the true loop by ball arithmetic, at any number of states.
+
+The first level is the exact local argument: the Hessian of ``V'`` is negative definite on a box
+``N = [-r, r]^n`` around the equilibrium (ball arithmetic, one enclosure of the whole box:
+:func:`~lyapcheck.models.engines.interval_region.local_radius`), and ``level (P^-1)_ii <= r^2`` for
+every state (rational arithmetic) puts the whole ellipsoid ``{V <= level}`` inside ``N``. A strict
+local Lyapunov function (``V' `` with a negative definite Hessian at the equilibrium, as the
+linearization's ``P`` has) always gets that level, however many states the loop has. Larger levels
+are the same claim over a larger box, whose faces are proved exactly (``level (P^-1)_ii < c^2``)
+and whose cells outside ``N`` are bisected (each attempt within :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS`
+cells); :func:`~lyapcheck.models.classes.level_search.largest_proved_level` keeps the largest level
+proved. The certificate is the ball-arithmetic route's (``kind`` "interval", ``"boundary": "exact"``):
+``verify`` runs the same proof again.
+"""
+
+from __future__ import annotations
+
+import time
+from fractions import Fraction
+from typing import Any, Final
+
+from lyapcheck import tolerances
+from lyapcheck.models.classes.recast_classes import Loop
+from lyapcheck.models.engines.search import Budget, BudgetExhausted
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.polynomials import Poly
+
+#: levels tried upwards from the local one (each the last times BALL_LEVEL_GROWTH), then halvings of
+#: the bracket between the largest proved and the smallest failed level
+BALL_LEVEL_GROWTH: Final = Fraction(4)
+BALL_LEVEL_GROWTH_STEPS: Final = 8
+BALL_LEVEL_BISECTIONS: Final = 4
+#: each state's side of the box is the ellipsoid's extent times this (room for the exact faces)
+BALL_LEVEL_BOX_ROOM: Final = Fraction(9, 8)
+#: the local box is sought within [-2^this, 2^this]^n (halved until the Hessian test passes)
+BALL_LEVEL_FIRST_RADIUS_BITS: Final = 3
+#: significant bits of a level tried
+LEVEL_BITS: Final = 12
+
+
+def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> ConditionResult | str:
+    """``name``'s region ``{V <= level}`` for a positive definite quadratic form ``V`` over the states,
+    proved by ball arithmetic (module docstring), or why there is none (one line)."""
+    from lyapcheck.models.classes.claims import interval_sentence
+    from lyapcheck.models.classes.level_search import largest_proved_level
+    from lyapcheck.models.classes.recast_classes import _dyadic
+    from lyapcheck.models.classes.recast_interval import METHOD, certificate, prove
+    from lyapcheck.models.engines.interval_field import BallLoop, LieDerivative
+    from lyapcheck.models.engines.interval_region import (IntervalClaim, dyadic_ceil, inverse_diagonal, local_radius,
+                                                          quadratic_form)
+
+    n = loop.n
+    P = quadratic_form(loop.ring, V, n)
+    diagonal = None if P is None else inverse_diagonal(P)
+    if diagonal is None:
+        return f"{METHOD} at any number of states takes V a positive definite quadratic form in the states"
+    side = Fraction(2) ** BALL_LEVEL_FIRST_RADIUS_BITS
+    r = local_radius(LieDerivative(BallLoop(loop.system), loop.ring, V), (-side,) * n, (side,) * n)
+    if r is None:
+        return "the Hessian of V' is not proved negative definite on any box around the equilibrium"
+    top = max(diagonal)
+    first = _dyadic(r * r / top, LEVEL_BITS)  # the ellipsoid inside N (exactly: level * (P^-1)_ii <= r^2)
+
+    def claim_at(level: Fraction) -> IntervalClaim:
+        # each side the ellipsoid's extent with room (a dyadic above sqrt(level (P^-1)_ii) 9/8), and at least
+        # 2^LOCAL_FIRST_SHIFT r, so that the prover's local box is N again
+        from lyapcheck.models.engines.interval_region import LOCAL_FIRST_SHIFT
+
+        least = r * 2 ** LOCAL_FIRST_SHIFT
+        half = [max(least, dyadic_ceil(Fraction(float(level * d) ** 0.5) * BALL_LEVEL_BOX_ROOM)) for d in diagonal]
+        return IntervalClaim(V, level, tuple(-h for h in half), tuple(half), exact_boundary=True)
+
+    def attempt(level: Fraction) -> tuple[IntervalClaim, Any] | None:
+        if budget.left() <= 0:
+            raise BudgetExhausted(budget.reached())
+        claim = claim_at(level)
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), cells=tolerances.BALL_LEVEL_CELLS)
+        return (claim, proof) if proof.ok else None
+
+    try:
+        found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH, growth_steps=BALL_LEVEL_GROWTH_STEPS,
+                                     halvings=0, bisections=BALL_LEVEL_BISECTIONS,
+                                     rounded=lambda x: _dyadic(x, LEVEL_BITS))
+    except BudgetExhausted as exc:
+        return f"{METHOD}: {exc}"
+    if found.proof is None or found.level is None:
+        return f"{METHOD}: the local level {float(first):.3g} (the ellipsoid in the box of half-width {r} where " \
+               "the Hessian of V' is negative definite) was not proved"
+    claim, proof = found.proof
+    cert = certificate(loop, claim, proof)
+    tried = [f"level {float(level):.6g}: {'proved' if ok else 'not proved'}" for level, ok in found.tried]
+    if found.stopped:
+        tried.append(f"stopped: {found.stopped}")
+    return ConditionResult(name, "certified", interval_sentence(cert), property="ROA", certificate=cert,
+                           numbers={"level": float(claim.level), "V_from": v_from, "cells": proof.cells,
+                                    "boundary_cells": proof.boundary_cells, "proof_seconds": proof.seconds,
+                                    "local_level": float(first), "tried": tried})
+
+
+__all__ = ["ball_level"]
