@@ -9,8 +9,8 @@ local Lyapunov function (``V' `` with a negative definite Hessian at the equilib
 linearization's ``P`` has) always gets that level, however many states the loop has. Larger levels
 are the same claim over a larger box, whose faces are proved exactly (``level (P^-1)_ii < c^2``)
 and whose cells outside ``N`` are bisected (each attempt within :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS`
-cells); :func:`~lyapcheck.models.classes.level_search.largest_proved_level` keeps the largest level
-proved. The certificate is the ball-arithmetic route's (``kind`` "interval", ``"boundary": "exact"``):
+cells, the whole search within :data:`~lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS`);
+:func:`~lyapcheck.models.classes.level_search.largest_proved_level` keeps the largest level proved. The certificate is the ball-arithmetic route's (``kind`` "interval", ``"boundary": "exact"``):
 ``verify`` runs the same proof again.
 """
 
@@ -71,11 +71,19 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
         half = [max(least, dyadic_ceil(Fraction(float(level * d) ** 0.5) * BALL_LEVEL_BOX_ROOM)) for d in diagonal]
         return IntervalClaim(V, level, tuple(-h for h in half), tuple(half), exact_boundary=True)
 
+    spent = [0]  # the cells of every attempt so far: the search stops at BALL_LEVEL_TOTAL_CELLS (a count)
+
     def attempt(level: Fraction) -> tuple[IntervalClaim, Any] | None:
+        left = tolerances.BALL_LEVEL_TOTAL_CELLS - spent[0]
+        if left <= 0:
+            raise BudgetExhausted(f"the search's {tolerances.BALL_LEVEL_TOTAL_CELLS} cells were spent "
+                                  "(lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS)")
         if budget.left() <= 0:
             raise BudgetExhausted(budget.reached())
         claim = claim_at(level)
-        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), cells=tolerances.BALL_LEVEL_CELLS)
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(),
+                      cells=min(tolerances.BALL_LEVEL_CELLS, left))
+        spent[0] += proof.cells + proof.boundary_cells
         return (claim, proof) if proof.ok else None
 
     try:
@@ -98,4 +106,19 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
                                     "local_level": float(first), "tried": tried})
 
 
-__all__ = ["ball_level"]
+def state_quadratic(loop: Loop, J: list[list[Fraction]]) -> Poly | None:
+    """``z^T P z`` over the states themselves (an angle too: the claim is then in the states, not modulo
+    2 pi) with ``J^T P + P J = -I`` (exact), when ``P > 0``; None otherwise."""
+    from lyapcheck.models.classes.linearization import lyapunov_solution
+    from lyapcheck.sos.definiteness import is_positive_definite
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    P = lyapunov_solution(J)
+    if P is None or not is_positive_definite(P):
+        return None
+    ring = loop.ring
+    z = [ring.gen(s) for s in loop.system.states]
+    return sum((z[i] * z[j] * to_fmpq(P[i][j]) for i in range(loop.n) for j in range(loop.n)), ring.zero())
+
+
+__all__ = ["ball_level", "state_quadratic"]
