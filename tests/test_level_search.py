@@ -13,14 +13,24 @@ import pytest
 from lyapcheck.models.classes import recast_classes as rc
 from lyapcheck.models.classes.claims import covered
 from lyapcheck.models.classes.level_search import largest_proved_level
-from lyapcheck.models.classes.recast_ball_level import ball_level
+from lyapcheck.models.classes.recast_ball_level import ball_level, state_quadratic
 from lyapcheck.models.classes.recast_interval import check_interval
 from lyapcheck.models.engines import recast_sos
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.models.language.modelfile import load_any_model, parse_any_model
-from tests.recast_loops import SPRING
+from tests.recast_loops import PENDULUM, SPRING
 
 CARTPOLE = Path(__file__).parent / "data" / "cartpole-lqr.toml"
+
+THREE_STATES = """
+[model]
+name = "a pendulum with a first-order actuator"
+states = ["theta", "omega", "u"]
+[dynamics]
+theta = "omega"
+omega = "-sin(theta) - omega + u"
+u = "-2*u - tanh(omega)"
+"""
 
 
 def search_of(attempt: Any, first: Fraction) -> Any:
@@ -88,10 +98,13 @@ def test_the_recast_level_search_keeps_its_proved_level_when_a_larger_attempt_ru
     assert kept.level * 2 > threshold or kept.level == rc._scale_of(loop, V0)  # the largest below it tried
 
 
-def test_a_quadratic_v_of_the_linearization_gets_a_level_by_ball_arithmetic_and_verify_rechecks_it() -> None:
-    model = parse_any_model(SPRING, "spring.toml")
+@pytest.mark.parametrize("text", [SPRING, PENDULUM, THREE_STATES], ids=["spring", "pendulum", "three-states"])
+def test_a_quadratic_v_of_the_linearization_gets_a_level_by_ball_arithmetic_and_verify_rechecks_it(text: str) -> None:
+    model = parse_any_model(text, "loop.toml")
     loop = rc.base_loop(model.system)
-    V0 = rc.quadratic_candidate(loop, rc.jacobian(loop))
+    J = rc.jacobian(loop)
+    assert not isinstance(J, str)
+    V0 = state_quadratic(loop, J)  # z^T P z in the states themselves (an angle too)
     assert V0 is not None
     result = ball_level(loop, V0, Budget(120, "test"), "candidate", "the linearization")
     assert not isinstance(result, str), result
