@@ -694,6 +694,9 @@ class Region:
     level: Fraction
     certificate: dict[str, Any]
     rho: Poly
+    #: what ended the level search before its bisection did (a budget's words), "" otherwise: the
+    #: level is then the largest proved before it (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`)
+    stopped: str = ""
 
 
 def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fraction | None = None) -> Region | str:
@@ -703,7 +706,7 @@ def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fract
         return found
     level, cert = found
     rho = cert.pop("_rho")
-    return Region(label, V, level, cert, rho)
+    return Region(label, V, level, cert, rho, cert.pop("_stopped", ""))
 
 
 def box_share(loop: Loop, region: Region, box: tuple[Any, Any]) -> float:
@@ -821,6 +824,8 @@ def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fractio
                 "decrease": cert.to_json(ring)})
     assert cert.rho is not None
     out["_rho"] = cert.rho.poly(ring)
+    if found.stopped:
+        out["_stopped"] = found.stopped
     return level, out
 
 

@@ -299,8 +299,9 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
             return ball
         return best_region(loop, [], [skipped, f"{label}: {first}", ball], box, search)
     more, tried = improved_regions(loop, first, budget, box)
-    result = best_region(loop, [first, *more], [skipped, f"{label}: level {float(first.level):.6g}", *tried], box,
-                         search)
+    stopped = f" (the largest proved when {first.stopped})" if first.stopped else ""
+    result = best_region(loop, [first, *more], [skipped, f"{label}: level {float(first.level):.6g}{stopped}", *tried],
+                         box, search)
     if result.status == "certified":
         simulated_check(loop, result, box)
     return result
