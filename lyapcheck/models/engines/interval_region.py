@@ -255,7 +255,7 @@ def exact_faces(ring: Ring, claim: IntervalClaim, n: int) -> str | None:
     for i in range(n):
         for side in (claim.lo[i], claim.hi[i]):
             if not claim.level * diagonal[i] < side * side:
-                return f"V > level is not proved on the face where the state {i + 1} is {side} (exactly)"
+                return f"V > level is not proved on the face where {ring.names[i]} - eq is {side} (exactly)"
     return None
 
 

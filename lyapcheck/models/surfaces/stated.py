@@ -60,6 +60,8 @@ ESTIMATES: Final[Mapping[str, str]] = {
     "relative_margin": "the smallest eigenvalue margin of the solver's Gram matrices, relative (before rounding)",
     "rounds": "the region search's rounds: each level and its share",
     "history": "the region search's rounds: each level and its share",
+    "local_level": "the ball-arithmetic level search's first level (the ellipsoid in the box where the Hessian of V' is "
+                   "negative definite); the certified level is at least this",
     # records of the proof's work
     "cells": "cells the ball-arithmetic proof took",
     "boundary_cells": "cells of the set's boundary the ball-arithmetic proof took",
