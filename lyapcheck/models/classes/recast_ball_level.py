@@ -2,9 +2,10 @@
 proved on the true loop by ball arithmetic, at any number of states.
 
 The first level is the exact local argument: the Hessian of ``V'`` is negative definite on a box
-``N = [-r, r]^n`` around the equilibrium (ball arithmetic, one enclosure of the whole box:
-:func:`~lyapcheck.models.engines.interval_region.local_radius`), and ``level (P^-1)_ii <= r^2`` for
-every state (rational arithmetic) puts the whole ellipsoid ``{V <= level}`` inside ``N``. A strict
+``N = prod [-r_i, r_i]`` around the equilibrium shaped like the ellipsoid's bounding box (ball
+arithmetic, one enclosure of the whole box: :func:`~lyapcheck.models.engines.interval_region.local_box`),
+and ``level (P^-1)_ii <= r_i^2`` for every state (rational arithmetic) puts the whole ellipsoid
+``{V <= level}`` inside ``N``. A strict
 local Lyapunov function (``V' `` with a negative definite Hessian at the equilibrium, as the
 linearization's ``P`` has) always gets that level, however many states the loop has. Larger levels
 are the same claim over a larger box, whose faces are proved exactly (``level (P^-1)_ii < c^2``)
@@ -33,8 +34,10 @@ BALL_LEVEL_GROWTH_STEPS: Final = 8
 BALL_LEVEL_BISECTIONS: Final = 4
 #: each state's side of the box is the ellipsoid's extent times this (room for the exact faces)
 BALL_LEVEL_BOX_ROOM: Final = Fraction(9, 8)
-#: the local box is sought within [-2^this, 2^this]^n (halved until the Hessian test passes)
-BALL_LEVEL_FIRST_RADIUS_BITS: Final = 3
+#: the first level tried for the local one has an ellipsoid this wide in its widest state; each next
+#: is a quarter of the last (the ellipsoid half as wide), at most BALL_LEVEL_LOCAL_STEPS of them
+BALL_LEVEL_FIRST_EXTENT: Final = 4
+BALL_LEVEL_LOCAL_STEPS: Final = 40
 #: significant bits of a level tried
 LEVEL_BITS: Final = 12
 
@@ -47,29 +50,32 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
     from lyapcheck.models.classes.recast_classes import _dyadic
     from lyapcheck.models.classes.recast_interval import METHOD, certificate, prove
     from lyapcheck.models.engines.interval_field import BallLoop, LieDerivative
-    from lyapcheck.models.engines.interval_region import (IntervalClaim, dyadic_ceil, inverse_diagonal, local_radius,
-                                                          quadratic_form)
+    from lyapcheck.models.engines.interval_region import (IntervalClaim, dyadic_ceil, inside_local_box,
+                                                          inverse_diagonal, local_box, quadratic_form)
 
     n = loop.n
     P = quadratic_form(loop.ring, V, n)
     diagonal = None if P is None else inverse_diagonal(P)
     if diagonal is None:
         return f"{METHOD} at any number of states takes V a positive definite quadratic form in the states"
-    side = Fraction(2) ** BALL_LEVEL_FIRST_RADIUS_BITS
-    r = local_radius(LieDerivative(BallLoop(loop.system), loop.ring, V), (-side,) * n, (side,) * n)
-    if r is None:
-        return "the Hessian of V' is not proved negative definite on any box around the equilibrium"
-    top = max(diagonal)
-    first = _dyadic(r * r / top, LEVEL_BITS)  # the ellipsoid inside N (exactly: level * (P^-1)_ii <= r^2)
 
     def claim_at(level: Fraction) -> IntervalClaim:
-        # each side the ellipsoid's extent with room (a dyadic above sqrt(level (P^-1)_ii) 9/8), and at least
-        # 2^LOCAL_FIRST_SHIFT r, so that the prover's local box is N again
-        from lyapcheck.models.engines.interval_region import LOCAL_FIRST_SHIFT
-
-        least = r * 2 ** LOCAL_FIRST_SHIFT
-        half = [max(least, dyadic_ceil(Fraction(float(level * d) ** 0.5) * BALL_LEVEL_BOX_ROOM)) for d in diagonal]
+        # each side the ellipsoid's extent with room: a dyadic above sqrt(level (P^-1)_ii) 9/8
+        half = [dyadic_ceil(Fraction(float(level * d) ** 0.5) * BALL_LEVEL_BOX_ROOM) for d in diagonal]
         return IntervalClaim(V, level, tuple(-h for h in half), tuple(half), exact_boundary=True)
+
+    # the first level: the largest (down from an ellipsoid 4 wide, by quarters) whose ellipsoid lies in the local
+    # box N of its own claim, as the prover finds it: that claim is then proved without a cell
+    lie = LieDerivative(BallLoop(loop.system), loop.ring, V)
+    first = _dyadic(Fraction(BALL_LEVEL_FIRST_EXTENT ** 2) / max(diagonal), LEVEL_BITS)
+    for _ in range(BALL_LEVEL_LOCAL_STEPS):
+        claim = claim_at(first)
+        radii = local_box(lie, claim.lo, claim.hi)
+        if radii is not None and inside_local_box(loop.ring, claim, n, radii):
+            break
+        first = _dyadic(first / 4, LEVEL_BITS)
+    else:
+        return "the Hessian of V' is not proved negative definite on any box around the equilibrium"
 
     spent = [0]  # the cells of every attempt so far: the search stops at BALL_LEVEL_TOTAL_CELLS (a count)
 
@@ -93,8 +99,8 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
     except BudgetExhausted as exc:
         return f"{METHOD}: {exc}"
     if found.proof is None or found.level is None:
-        return f"{METHOD}: the local level {float(first):.3g} (the ellipsoid in the box of half-width {r} where " \
-               "the Hessian of V' is negative definite) was not proved"
+        return f"{METHOD}: the local level {float(first):.3g} (the ellipsoid in the box of smallest half-width " \
+               f"{min(radii)} where the Hessian of V' is negative definite) was not proved"
     claim, proof = found.proof
     cert = certificate(loop, claim, proof)
     tried = [f"level {float(level):.6g}: {'proved' if ok else 'not proved'}" for level, ok in found.tried]

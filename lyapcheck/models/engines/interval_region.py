@@ -259,12 +259,28 @@ def exact_faces(ring: Ring, claim: IntervalClaim, n: int) -> str | None:
     return None
 
 
-def inside_local_box(ring: Ring, claim: IntervalClaim, n: int, r: Fraction) -> bool:
-    """The whole set ``{V <= level}`` lies in ``[-r, r]^n``, exactly: ``level (P^-1)_ii <= r^2`` for each
-    state (``V = z^T P z`` positive definite; ``max {z_i : z^T P z <= level} = sqrt(level (P^-1)_ii)``)."""
+def inside_local_box(ring: Ring, claim: IntervalClaim, n: int, radii: list[Fraction]) -> bool:
+    """The whole set ``{V <= level}`` lies in ``prod [-r_i, r_i]``, exactly: ``level (P^-1)_ii <= r_i^2`` for
+    each state (``V = z^T P z`` positive definite; ``max {z_i : z^T P z <= level} = sqrt(level (P^-1)_ii)``)."""
     P = quadratic_form(ring, claim.V, n)
     diagonal = None if P is None else inverse_diagonal(P)
-    return diagonal is not None and all(claim.level * d <= r * r for d in diagonal)
+    return diagonal is not None and all(claim.level * d <= r * r for d, r in zip(diagonal, radii))
+
+
+def local_box(lie: LieDerivative, lo: tuple[Fraction, ...], hi: tuple[Fraction, ...]) -> list[Fraction] | None:
+    """For an exact-boundary claim: the local box ``N`` is the claim's box (its symmetric part) shrunk by the
+    first power of 2 (from 1, at most LOCAL_HALVINGS halvings) on which the Hessian of ``g`` is negative
+    definite, its half-widths; None when none is. Shaped like the box, so like the ellipsoid of a
+    quadratic ``V`` (an ill-conditioned ``P`` fits no cube)."""
+    halves = [min(-l, h) for l, h in zip(lo, hi)]
+    if min(halves) <= 0:
+        return None
+    for j in range(LOCAL_HALVINGS):
+        radii = [h / 2 ** j for h in halves]
+        jet = lie.jet([flint.arb(0, float(r)) for r in radii], 2)
+        if jet.hess is not None and negative_definite(jet.hess):
+            return radii
+    return None
 
 
 def low_order_terms(ring: Ring, V: Poly, n: int) -> bool:
@@ -341,12 +357,13 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
                 stack.extend(reversed(halves))
     boundary = count
     # 3. the local box around the equilibrium
-    r = local_radius(lie, claim.lo, claim.hi)
+    radii = local_box(lie, claim.lo, claim.hi) if claim.exact_boundary else None
+    r = min(radii) if radii is not None else None if claim.exact_boundary else local_radius(lie, claim.lo, claim.hi)
     if r is None:
         return failed("the Hessian of V' is not proved negative definite on any box around the equilibrium",
                       boundary=boundary)
-    rf = float(r)
-    if claim.exact_boundary and inside_local_box(ring, claim, n, r):  # the set lies in N: part 3 covers it
+    local = [float(x) for x in radii] if radii is not None else [float(r)] * n  # N's half-widths
+    if radii is not None and inside_local_box(ring, claim, n, radii):  # the set lies in N: part 3 covers it
         return IntervalProof(True, "proved", 0, boundary, r, time.perf_counter() - start)
     # 2. the decrease on every cell of B that meets {V <= level}
     stack = [box]
@@ -358,7 +375,7 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
             return failed(why, count, boundary, r)
         if deadline is not None and count % 256 == 0 and time.perf_counter() > deadline:
             return failed(SAFETY_NET, count, boundary, r)
-        if all(-rf <= a and b <= rf for a, b in cell):
+        if all(-x <= a and b <= x for (a, b), x in zip(cell, local)):
             continue  # inside N: part 3
         if _v_above(lie, cells, cell, level, mean_value=False):
             continue
