@@ -210,6 +210,15 @@ CONVERGED_BALL_RADIUS: Final = 2e-2
 #: that passes, recast-pendulum-actuator's at level 0.98, takes 65,193 cells (about 26 s of one
 #: core of the 2-core CI machine); the two-state examples take at most a few thousand
 INTERVAL_ATTEMPT_CELLS: Final = 100_000
+#: the cells one attempt of the ball-arithmetic level search of a quadratic V may examine
+#: (lyapcheck.models.classes.recast_ball_level; its faces are proved exactly, so these are the decrease's
+#: cells outside the local box): a count, so that the level is the same on any machine. A 4-state
+#: cell costs about half a millisecond, so an attempt stays within a few seconds
+BALL_LEVEL_CELLS: Final = 8_000
+#: the cells of the whole ball-arithmetic level search of a quadratic V (every attempt together): the
+#: largest level proved when they are spent is the answer. On the 4-state cart-pole with the Lyapunov
+#: equation's P the levels up to 3.7e-4 take about 6,000 cells (a few seconds of one core)
+BALL_LEVEL_TOTAL_CELLS: Final = 20_000
 #: the integrator steps one trajectory of the ball-arithmetic route's fit of V (and of its simulated check) may take when the
 #: route runs after the SOS route on a polynomial or rational loop (lyapcheck.models.surfaces.ball_roa):
 #: a rational loop's trajectory that runs into a pole crawls towards it step by step (1-state

@@ -10,7 +10,10 @@
   :mod:`~lyapcheck.models.classes.recast_bound`, :mod:`~lyapcheck.models.classes.recast_barrier`,
   :mod:`~lyapcheck.models.classes.recast_reach_avoid`,
   :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
-  (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_improve`;
+  (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_ball_level` (a quadratic V's
+  largest level by ball arithmetic, from its exact local level, at any number of states),
+  :mod:`~lyapcheck.models.classes.recast_improve`;
+- :mod:`~lyapcheck.models.classes.level_search` (the one monotone search of a fixed V's largest proved level);
 - :mod:`~lyapcheck.models.classes.falsify` (counterexamples to safety) and
   :mod:`~lyapcheck.models.classes.claims` (the sentence of each decided class, on every loop kind).
 

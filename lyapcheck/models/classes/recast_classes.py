@@ -46,6 +46,10 @@ LEVEL_BISECTIONS: Final = 7
 LEVEL_GROWTH: Final = 4
 #: at most this many levels upwards
 LEVEL_GROWTH_STEPS: Final = 10
+#: at most this many levels downwards (each half the last) from a first level that failed, before the
+#: bisection between the proved and the failed level: a strict local Lyapunov function's small levels
+#: are provable, so the search goes down far enough to reach one (2^-16 of the first level)
+LEVEL_HALVINGS: Final = 16
 
 
 # -- the loop in deviations -------------------------------------------------------------------------
@@ -690,6 +694,9 @@ class Region:
     level: Fraction
     certificate: dict[str, Any]
     rho: Poly
+    #: what ended the level search before its bisection did (a budget's words), "" otherwise: the
+    #: level is then the largest proved before it (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`)
+    stopped: str = ""
 
 
 def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fraction | None = None) -> Region | str:
@@ -699,7 +706,7 @@ def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fract
         return found
     level, cert = found
     rho = cert.pop("_rho")
-    return Region(label, V, level, cert, rho)
+    return Region(label, V, level, cert, rho, cert.pop("_stopped", ""))
 
 
 def box_share(loop: Loop, region: Region, box: tuple[Any, Any]) -> float:
@@ -799,35 +806,26 @@ def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fractio
 
         return solve_on_faces(search, build, values, accept)[0]
 
-    level = _scale_of(loop, V) if start is None else start
-    best: tuple[Fraction, ConditionCertificate] | None = None
-    lo, hi = Fraction(0), None
-    for _ in range(LEVEL_GROWTH_STEPS):  # grow while it works
-        cert = attempt(level)
-        if cert is None:
-            hi = level
-            break
-        best, lo = (level, cert), level
-        level *= LEVEL_GROWTH
-    if hi is None:
-        hi = level
-    for _ in range(LEVEL_BISECTIONS):
-        mid = _dyadic((lo + hi) / 2)
-        if not lo < mid < hi:
-            break
-        cert = attempt(mid)
-        if cert is None:
-            hi = mid
-        else:
-            best, lo = (mid, cert), mid
-    if best is None:
-        return f"no level found (the smallest tried was {float(hi):.3g})"
+    # a program too large to build is too large at every level: say so, not "no level found"
+    program = build(frozenset())
+    if isinstance(program, str):
+        return f"the level program was not built: {program}"
+    from lyapcheck.models.classes.level_search import largest_proved_level
+
+    found = largest_proved_level(attempt, _scale_of(loop, V) if start is None else start, growth=Fraction(LEVEL_GROWTH),
+                                 growth_steps=LEVEL_GROWTH_STEPS, halvings=LEVEL_HALVINGS,
+                                 bisections=LEVEL_BISECTIONS, rounded=_dyadic)
+    if found.level is None or found.proof is None:
+        return f"no level found (the smallest tried was {float(found.failed or 0):.3g})"
+    best = (found.level, found.proof)
     level, cert = best
     out = certificate_head(loop, V, eps, D, dens)
     out.update({"level": str(level), "positivity_epsilon": str(eps_pos), "positivity": pos.to_json(ring),
                 "decrease": cert.to_json(ring)})
     assert cert.rho is not None
     out["_rho"] = cert.rho.poly(ring)
+    if found.stopped:
+        out["_stopped"] = found.stopped
     return level, out
 
 

@@ -109,7 +109,9 @@ def improved_regions(loop: "Loop", first: "Region", budget: "Budget", box: tuple
                 tried.append(f"{label}: {found}")
                 break
             share = covered(found)
-            tried.append(f"{label}: level {float(found.level):.6g}, {100 * share:.1f} % of the converging samples")
+            stopped = f" (the largest proved when {found.stopped})" if found.stopped else ""
+            tried.append(f"{label}: level {float(found.level):.6g}{stopped}, {100 * share:.1f} % of the converging "
+                         "samples")
             out.append(found)
             region = found
             if share < best_share + VS_MIN_GAIN:  # no longer growing: the next degree, from the best set

@@ -367,6 +367,9 @@ def certificate(loop: Loop, claim: IntervalClaim, proof: IntervalProof, deadline
             "box": {s: [str(a), str(b)] for s, a, b in zip(system.states, claim.lo, claim.hi)},
             "cells": proof.cells, "boundary_cells": proof.boundary_cells, "local_radius": str(proof.local_radius),
             "whole": False}
+    if claim.exact_boundary:  # the faces proved exactly (V a quadratic form); the claim is the set in the box
+        cert["boundary"] = "exact"
+        return cert
     if not uses_auxiliaries(loop, claim.V):
         whole, _, outer_cells, R = prove_bounded(system, claim, deadline, cell_limit=WHOLE_SET_CELL_LIMIT)
         if whole:
@@ -383,7 +386,9 @@ def claim_of(loop: Loop, cert: dict[str, Any]) -> IntervalClaim:
         raise ValueError("box: one interval per state, in the states' order")
     lo = tuple(read_rational(box[s][0]) for s in system.states)
     hi = tuple(read_rational(box[s][1]) for s in system.states)
-    return IntervalClaim(V, read_rational(cert["level"]), lo, hi)
+    if cert.get("boundary", "cells") not in ("cells", "exact"):
+        raise ValueError("boundary: 'exact' or absent")
+    return IntervalClaim(V, read_rational(cert["level"]), lo, hi, exact_boundary=cert.get("boundary") == "exact")
 
 
 def box_units(model: RecastModel) -> dict[str, str] | None:

@@ -94,6 +94,11 @@ class IntervalClaim:
     level: Fraction
     lo: tuple[Fraction, ...]
     hi: tuple[Fraction, ...]
+    #: ``V`` is a positive definite quadratic form over the states and the boundary is proved exactly
+    #: (:func:`exact_faces`) instead of by bisecting the faces; a set that lies in the local box
+    #: ``N`` (:func:`inside_local_box`) then needs no cell of the decrease (a certificate's
+    #: ``"boundary": "exact"``)
+    exact_boundary: bool = False
 
 
 @dataclass(frozen=True)
@@ -204,6 +209,80 @@ def local_radius(lie: LieDerivative, lo: tuple[Fraction, ...], hi: tuple[Fractio
     return None
 
 
+def quadratic_form(ring: Ring, V: Poly, n: int) -> list[list[Fraction]] | None:
+    """``P`` with ``V = z^T P z`` (exact) when ``V`` is a quadratic form in the first ``n`` variables, else None."""
+    P = [[Fraction(0)] * n for _ in range(n)]
+    for m, c in ring.terms(V).items():
+        if sum(m) != 2 or any(m[n:]):
+            return None
+        i = next(k for k in range(n) if m[k])
+        j = next(k for k in range(n - 1, -1, -1) if m[k])
+        if i == j:
+            P[i][i] = Fraction(c)
+        else:
+            P[i][j] = P[j][i] = Fraction(c) / 2
+    return P
+
+
+def inverse_diagonal(P: list[list[Fraction]]) -> list[Fraction] | None:
+    """The diagonal of ``P^-1`` (exact, Gauss-Jordan in rationals), or None when ``P`` is not
+    positive definite (checked exactly). ``min {z^T P z : z_i = h} = h^2 / (P^-1)_ii``: the
+    smallest value of ``V`` on the hyperplane of a face, hence on the face."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    n = len(P)
+    if not is_positive_definite(P):
+        return None
+    A = [list(row) + [Fraction(int(i == j)) for j in range(n)] for i, row in enumerate(P)]
+    for k in range(n):  # pivots are > 0: P is positive definite
+        pivot = A[k][k]
+        A[k] = [x / pivot for x in A[k]]
+        for i in range(n):
+            if i != k and A[i][k]:
+                factor = A[i][k]
+                A[i] = [x - factor * y for x, y in zip(A[i], A[k])]
+    return [A[i][n + i] for i in range(n)]
+
+
+def exact_faces(ring: Ring, claim: IntervalClaim, n: int) -> str | None:
+    """Part 1 exactly, for a positive definite quadratic form ``V = z^T P z``: ``V > level`` on the face
+    ``z_i = c`` because ``level (P^-1)_ii < c^2`` (rational arithmetic); None when every face is
+    proved, else why not."""
+    P = quadratic_form(ring, claim.V, n)
+    diagonal = None if P is None else inverse_diagonal(P)
+    if diagonal is None:
+        return "an exact boundary needs V a positive definite quadratic form over the states"
+    for i in range(n):
+        for side in (claim.lo[i], claim.hi[i]):
+            if not claim.level * diagonal[i] < side * side:
+                return f"V > level is not proved on the face where {ring.names[i]} - eq is {side} (exactly)"
+    return None
+
+
+def inside_local_box(ring: Ring, claim: IntervalClaim, n: int, radii: list[Fraction]) -> bool:
+    """The whole set ``{V <= level}`` lies in ``prod [-r_i, r_i]``, exactly: ``level (P^-1)_ii <= r_i^2`` for
+    each state (``V = z^T P z`` positive definite; ``max {z_i : z^T P z <= level} = sqrt(level (P^-1)_ii)``)."""
+    P = quadratic_form(ring, claim.V, n)
+    diagonal = None if P is None else inverse_diagonal(P)
+    return diagonal is not None and all(claim.level * d <= r * r for d, r in zip(diagonal, radii))
+
+
+def local_box(lie: LieDerivative, lo: tuple[Fraction, ...], hi: tuple[Fraction, ...]) -> list[Fraction] | None:
+    """For an exact-boundary claim: the local box ``N`` is the claim's box (its symmetric part) shrunk by the
+    first power of 2 (from 1, at most LOCAL_HALVINGS halvings) on which the Hessian of ``g`` is negative
+    definite, its half-widths; None when none is. Shaped like the box, so like the ellipsoid of a
+    quadratic ``V`` (an ill-conditioned ``P`` fits no cube)."""
+    halves = [min(-l, h) for l, h in zip(lo, hi)]
+    if min(halves) <= 0:
+        return None
+    for j in range(LOCAL_HALVINGS):
+        radii = [h / 2 ** j for h in halves]
+        jet = lie.jet([flint.arb(0, float(r)) for r in radii], 2)
+        if jet.hess is not None and negative_definite(jet.hess):
+            return radii
+    return None
+
+
 def low_order_terms(ring: Ring, V: Poly, n: int) -> bool:
     """Whether ``V`` has a constant or linear term, or uses a variable beyond the first ``n`` (exact)."""
     for m in ring.terms(V):
@@ -256,8 +335,10 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
             return f"more than the attempt's {cell_budget} cells (lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS)"
         return f"more than {INTERVAL_CELL_LIMIT} cells" if part > INTERVAL_CELL_LIMIT else None
 
-    # 1. the boundary: V > level on each face
-    for i in range(n):
+    # 1. the boundary: V > level on each face (exactly for a quadratic form, if the claim says so)
+    if claim.exact_boundary and (why := exact_faces(ring, claim, n)) is not None:
+        return failed(why)
+    for i in range(n if not claim.exact_boundary else 0):
         for side in (box[i][0], box[i][1]):
             stack = [box[:i] + ((side, side),) + box[i + 1:]]
             while stack:
@@ -276,11 +357,14 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
                 stack.extend(reversed(halves))
     boundary = count
     # 3. the local box around the equilibrium
-    r = local_radius(lie, claim.lo, claim.hi)
+    radii = local_box(lie, claim.lo, claim.hi) if claim.exact_boundary else None
+    r = min(radii) if radii is not None else None if claim.exact_boundary else local_radius(lie, claim.lo, claim.hi)
     if r is None:
         return failed("the Hessian of V' is not proved negative definite on any box around the equilibrium",
                       boundary=boundary)
-    rf = float(r)
+    local = [float(x) for x in radii] if radii is not None else [float(r)] * n  # N's half-widths
+    if radii is not None and inside_local_box(ring, claim, n, radii):  # the set lies in N: part 3 covers it
+        return IntervalProof(True, "proved", 0, boundary, r, time.perf_counter() - start)
     # 2. the decrease on every cell of B that meets {V <= level}
     stack = [box]
     count = 0
@@ -291,7 +375,7 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
             return failed(why, count, boundary, r)
         if deadline is not None and count % 256 == 0 and time.perf_counter() > deadline:
             return failed(SAFETY_NET, count, boundary, r)
-        if all(-rf <= a and b <= rf for a, b in cell):
+        if all(-x <= a and b <= x for (a, b), x in zip(cell, local)):
             continue  # inside N: part 3
         if _v_above(lie, cells, cell, level, mean_value=False):
             continue

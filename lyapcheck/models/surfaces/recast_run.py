@@ -289,10 +289,14 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
                                    ("time", "domain"))
         return ConditionResult("roa", "inconclusive", late.summary, numbers=late.numbers(), property="ROA")
     if isinstance(first, str):
-        return best_region(loop, [], [skipped, f"{label}: {first}"], box, search)
+        ball = linearization_ball_level(loop, J, budget, box)
+        if isinstance(ball, ConditionResult):
+            return ball
+        return best_region(loop, [], [skipped, f"{label}: {first}", ball], box, search)
     more, tried = improved_regions(loop, first, budget, box)
-    result = best_region(loop, [first, *more], [skipped, f"{label}: level {float(first.level):.6g}", *tried], box,
-                         search)
+    stopped = f" (the largest proved when {first.stopped})" if first.stopped else ""
+    result = best_region(loop, [first, *more], [skipped, f"{label}: level {float(first.level):.6g}{stopped}", *tried],
+                         box, search)
     if result.status == "certified":
         simulated_check(loop, result, box)
     return result
@@ -465,10 +469,42 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
     region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
     region.numbers.setdefault("tried_first", interval)
     if region.status != "certified":
+        ball = candidate_ball_level(loop, V, budget, box)
+        if isinstance(ball, ConditionResult):
+            return ball
         why = reasons.reason("the candidate's derivative could not be proved negative definite (V' <= 0 alone needs "
                              "LaSalle's argument, which this class does not make), and no level set of it was proved "
                              "a region of attraction", ("other_candidate", "domain", "time"),
-                             [interval, *region.numbers.get("detail", [])])
+                             [interval, *region.numbers.get("detail", []), ball])
         region.summary = why.summary
         region.numbers["detail"] = why.detail
     return region
+
+
+def candidate_ball_level(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+    """A quadratic candidate's largest level by ball arithmetic at any number of states
+    (:func:`lyapcheck.models.classes.recast_ball_level.ball_level`: from the exact local level upwards),
+    for when the SOS route proved none; why not otherwise."""
+    from lyapcheck.models.classes.recast_ball_level import ball_level
+
+    found = ball_level(loop, V, budget, "candidate", "the candidate, proved by ball arithmetic from its exact "
+                                                     "local level upwards")
+    if isinstance(found, ConditionResult):
+        simulated_check(loop, found, box)
+    return found
+
+
+def linearization_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+    """``roa`` where the SOS route proved no level of the linearization's V: ``z^T P z`` over the states
+    (``J^T P + P J = -I``), its largest level by ball arithmetic from the exact local one
+    (:func:`lyapcheck.models.classes.recast_ball_level.ball_level`, any number of states); why not otherwise."""
+    from lyapcheck.models.classes.recast_ball_level import ball_level, state_quadratic
+
+    V = None if isinstance(J, str) else state_quadratic(loop, J)
+    if V is None:
+        return "ball arithmetic from the local level: the linearization gives no quadratic V in the states"
+    found = ball_level(loop, V, budget, "roa", "the linearization (J^T P + P J = -I) in the states, proved by ball "
+                                               "arithmetic from its exact local level upwards")
+    if isinstance(found, ConditionResult):
+        simulated_check(loop, found, box)
+    return found

@@ -62,6 +62,8 @@ ESTIMATES: Final[Mapping[str, str]] = {
     "history": "the region search's rounds: each level and its share",
     "fitted_domain_share": "the share of the domain (about the equilibrium) the proved V was fitted to, where V "
                            "fitted over the whole domain proved nothing (sampled_share is then of that part)",
+    "local_level": "the ball-arithmetic level search's first level (the ellipsoid in the box where the Hessian of V' is "
+                   "negative definite); the certified level is at least this",
     # records of the proof's work
     "cells": "cells the ball-arithmetic proof took",
     "boundary_cells": "cells of the set's boundary the ball-arithmetic proof took",

@@ -1,0 +1,87 @@
+"""The largest proved level of a fixed ``V``: one monotone search for every route that proves levels.
+
+A route gives ``attempt(level)``: a proof that ``{V <= level}`` is a region of attraction (a
+certificate that passed its exact check), or None where none was found at that level. The search
+never loses a proved level:
+
+- from the first level it grows (times ``growth``) while the attempts succeed, or halves while they
+  fail, until it holds a proved level ``lo`` and a failed one ``hi``;
+- then it bisects between them; a failure at a larger level only lowers ``hi``, never ``lo``;
+- when the work runs out (:class:`~lyapcheck.models.engines.search.BudgetExhausted` from an attempt),
+  the largest level proved so far is the answer (the exception only propagates when none was).
+
+Halving from a failed first level is the same path the former bisection on ``(0, first]`` took, so a
+level this search returns is never below the one that bisection returned with the same budget.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Callable, Generic, TypeVar
+
+from lyapcheck.models.engines.search import BudgetExhausted
+
+T = TypeVar("T")
+
+
+@dataclass
+class LevelSearch(Generic[T]):
+    """The outcome of :func:`largest_proved_level`: the largest proved level and its proof (None
+    when no level was proved), the smallest level that failed above it (None: none failed), and
+    what stopped the search early (the budget's words, or "")."""
+
+    level: Fraction | None
+    proof: T | None
+    failed: Fraction | None
+    stopped: str = ""
+    tried: list[tuple[Fraction, bool]] = field(default_factory=list)
+
+
+def largest_proved_level(attempt: Callable[[Fraction], T | None], first: Fraction, *, growth: Fraction,
+                         growth_steps: int, halvings: int, bisections: int,
+                         rounded: Callable[[Fraction], Fraction] = lambda x: x) -> LevelSearch[T]:
+    """The largest level ``attempt`` proves (module docstring). ``growth_steps``: levels tried upwards
+    at most; ``halvings``: levels tried downwards from a failed first one at most; ``bisections``:
+    halvings of the bracket between the proved and the failed level; ``rounded``: a level as tried
+    (short numbers), never above its argument."""
+    out: LevelSearch[T] = LevelSearch(None, None, None)
+
+    def run(level: Fraction) -> bool:
+        proof = attempt(level)
+        out.tried.append((level, proof is not None))
+        if proof is None:
+            out.failed = level if out.failed is None else min(out.failed, level)
+            return False
+        if out.level is None or level > out.level:
+            out.level, out.proof = level, proof
+        return True
+
+    try:
+        level = first
+        if run(level):
+            for _ in range(growth_steps - 1):  # grow while it works
+                level = rounded(level * growth)
+                if out.level is None or level <= out.level or not run(level):
+                    break
+        else:
+            for _ in range(halvings):  # down from a failed first level: the first proved one
+                level = rounded(level / 2)
+                if level <= 0 or run(level):
+                    break
+        if out.level is not None:
+            hi = out.failed if out.failed is not None and out.failed > out.level else out.level * growth
+            for _ in range(bisections):
+                mid = rounded((out.level + hi) / 2)
+                if not out.level < mid < hi:
+                    break
+                if not run(mid):
+                    hi = mid
+    except BudgetExhausted as exc:
+        if out.level is None:
+            raise
+        out.stopped = str(exc)
+    return out
+
+
+__all__ = ["LevelSearch", "largest_proved_level"]

@@ -1,0 +1,130 @@
+"""The largest level of a quadratic ``V = z^T P z`` (the LQR cost-to-go, a Lyapunov equation's ``P``)
+proved on the true loop by ball arithmetic, at any number of states.
+
+The first level is the exact local argument: the Hessian of ``V'`` is negative definite on a box
+``N = prod [-r_i, r_i]`` around the equilibrium shaped like the ellipsoid's bounding box (ball
+arithmetic, one enclosure of the whole box: :func:`~lyapcheck.models.engines.interval_region.local_box`),
+and ``level (P^-1)_ii <= r_i^2`` for every state (rational arithmetic) puts the whole ellipsoid
+``{V <= level}`` inside ``N``. A strict
+local Lyapunov function (``V' `` with a negative definite Hessian at the equilibrium, as the
+linearization's ``P`` has) always gets that level, however many states the loop has. Larger levels
+are the same claim over a larger box, whose faces are proved exactly (``level (P^-1)_ii < c^2``)
+and whose cells outside ``N`` are bisected (each attempt within :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS`
+cells, the whole search within :data:`~lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS`);
+:func:`~lyapcheck.models.classes.level_search.largest_proved_level` keeps the largest level proved. The certificate is the ball-arithmetic route's (``kind`` "interval", ``"boundary": "exact"``):
+``verify`` runs the same proof again.
+"""
+
+from __future__ import annotations
+
+import time
+from fractions import Fraction
+from typing import Any, Final
+
+from lyapcheck import tolerances
+from lyapcheck.models.classes.recast_classes import Loop
+from lyapcheck.models.engines.search import Budget, BudgetExhausted
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos.polynomials import Poly
+
+#: levels tried upwards from the local one (each the last times BALL_LEVEL_GROWTH), then halvings of
+#: the bracket between the largest proved and the smallest failed level
+BALL_LEVEL_GROWTH: Final = Fraction(4)
+BALL_LEVEL_GROWTH_STEPS: Final = 8
+BALL_LEVEL_BISECTIONS: Final = 4
+#: each state's side of the box is the ellipsoid's extent times this (room for the exact faces)
+BALL_LEVEL_BOX_ROOM: Final = Fraction(9, 8)
+#: the first level tried for the local one has an ellipsoid this wide in its widest state; each next
+#: is a quarter of the last (the ellipsoid half as wide), at most BALL_LEVEL_LOCAL_STEPS of them
+BALL_LEVEL_FIRST_EXTENT: Final = 4
+BALL_LEVEL_LOCAL_STEPS: Final = 40
+#: significant bits of a level tried
+LEVEL_BITS: Final = 12
+
+
+def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> ConditionResult | str:
+    """``name``'s region ``{V <= level}`` for a positive definite quadratic form ``V`` over the states,
+    proved by ball arithmetic (module docstring), or why there is none (one line)."""
+    from lyapcheck.models.classes.claims import interval_sentence
+    from lyapcheck.models.classes.level_search import largest_proved_level
+    from lyapcheck.models.classes.recast_classes import _dyadic
+    from lyapcheck.models.classes.recast_interval import METHOD, certificate, prove
+    from lyapcheck.models.engines.interval_field import BallLoop, LieDerivative
+    from lyapcheck.models.engines.interval_region import (IntervalClaim, dyadic_ceil, inside_local_box,
+                                                          inverse_diagonal, local_box, quadratic_form)
+
+    n = loop.n
+    P = quadratic_form(loop.ring, V, n)
+    diagonal = None if P is None else inverse_diagonal(P)
+    if diagonal is None:
+        return f"{METHOD} at any number of states takes V a positive definite quadratic form in the states"
+
+    def claim_at(level: Fraction) -> IntervalClaim:
+        # each side the ellipsoid's extent with room: a dyadic above sqrt(level (P^-1)_ii) 9/8
+        half = [dyadic_ceil(Fraction(float(level * d) ** 0.5) * BALL_LEVEL_BOX_ROOM) for d in diagonal]
+        return IntervalClaim(V, level, tuple(-h for h in half), tuple(half), exact_boundary=True)
+
+    # the first level: the largest (down from an ellipsoid 4 wide, by quarters) whose ellipsoid lies in the local
+    # box N of its own claim, as the prover finds it: that claim is then proved without a cell
+    lie = LieDerivative(BallLoop(loop.system), loop.ring, V)
+    first = _dyadic(Fraction(BALL_LEVEL_FIRST_EXTENT ** 2) / max(diagonal), LEVEL_BITS)
+    for _ in range(BALL_LEVEL_LOCAL_STEPS):
+        claim = claim_at(first)
+        radii = local_box(lie, claim.lo, claim.hi)
+        if radii is not None and inside_local_box(loop.ring, claim, n, radii):
+            break
+        first = _dyadic(first / 4, LEVEL_BITS)
+    else:
+        return "the Hessian of V' is not proved negative definite on any box around the equilibrium"
+
+    spent = [0]  # the cells of every attempt so far: the search stops at BALL_LEVEL_TOTAL_CELLS (a count)
+
+    def attempt(level: Fraction) -> tuple[IntervalClaim, Any] | None:
+        left = tolerances.BALL_LEVEL_TOTAL_CELLS - spent[0]
+        if left <= 0:
+            raise BudgetExhausted(f"the search's {tolerances.BALL_LEVEL_TOTAL_CELLS} cells were spent "
+                                  "(lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS)")
+        if budget.left() <= 0:
+            raise BudgetExhausted(budget.reached())
+        claim = claim_at(level)
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(),
+                      cells=min(tolerances.BALL_LEVEL_CELLS, left))
+        spent[0] += proof.cells + proof.boundary_cells
+        return (claim, proof) if proof.ok else None
+
+    try:
+        found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH, growth_steps=BALL_LEVEL_GROWTH_STEPS,
+                                     halvings=0, bisections=BALL_LEVEL_BISECTIONS,
+                                     rounded=lambda x: _dyadic(x, LEVEL_BITS))
+    except BudgetExhausted as exc:
+        return f"{METHOD}: {exc}"
+    if found.proof is None or found.level is None:
+        return f"{METHOD}: the local level {float(first):.3g} (the ellipsoid in the box of smallest half-width " \
+               f"{min(radii)} where the Hessian of V' is negative definite) was not proved"
+    claim, proof = found.proof
+    cert = certificate(loop, claim, proof)
+    tried = [f"level {float(level):.6g}: {'proved' if ok else 'not proved'}" for level, ok in found.tried]
+    if found.stopped:
+        tried.append(f"stopped: {found.stopped}")
+    return ConditionResult(name, "certified", interval_sentence(cert), property="ROA", certificate=cert,
+                           numbers={"level": float(claim.level), "V_from": v_from, "cells": proof.cells,
+                                    "boundary_cells": proof.boundary_cells, "proof_seconds": proof.seconds,
+                                    "local_level": float(first), "tried": tried})
+
+
+def state_quadratic(loop: Loop, J: list[list[Fraction]]) -> Poly | None:
+    """``z^T P z`` over the states themselves (an angle too: the claim is then in the states, not modulo
+    2 pi) with ``J^T P + P J = -I`` (exact), when ``P > 0``; None otherwise."""
+    from lyapcheck.models.classes.linearization import lyapunov_solution
+    from lyapcheck.sos.definiteness import is_positive_definite
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    P = lyapunov_solution(J)
+    if P is None or not is_positive_definite(P):
+        return None
+    ring = loop.ring
+    z = [ring.gen(s) for s in loop.system.states]
+    return sum((z[i] * z[j] * to_fmpq(P[i][j]) for i in range(loop.n) for j in range(loop.n)), ring.zero())
+
+
+__all__ = ["ball_level", "state_quadratic"]

@@ -1,0 +1,140 @@
+"""The level search of a fixed V (issue 42, item 2): monotone (a proved level is never lost because a
+larger one failed or the work ran out), and a quadratic V of the linearization always gets a proved
+level on the true loop, at 2 states and at 4 (the cart-pole closed with an LQR gain)."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from lyapcheck.models.classes import recast_classes as rc
+from lyapcheck.models.classes.claims import covered
+from lyapcheck.models.classes.level_search import largest_proved_level
+from lyapcheck.models.classes.recast_ball_level import ball_level, state_quadratic
+from lyapcheck.models.classes.recast_interval import check_interval
+from lyapcheck.models.engines import recast_sos
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
+from lyapcheck.models.language.modelfile import load_any_model, parse_any_model
+from tests.recast_loops import PENDULUM, SPRING
+
+CARTPOLE = Path(__file__).parent / "data" / "cartpole-lqr.toml"
+
+THREE_STATES = """
+[model]
+name = "a pendulum with a first-order actuator"
+states = ["theta", "omega", "u"]
+[dynamics]
+theta = "omega"
+omega = "-sin(theta) - omega + u"
+u = "-2*u - tanh(omega)"
+"""
+
+
+def search_of(attempt: Any, first: Fraction) -> Any:
+    return largest_proved_level(attempt, first, growth=Fraction(4), growth_steps=10, halvings=16, bisections=7)
+
+
+@pytest.mark.parametrize("truth", [Fraction(5), Fraction(1, 3), Fraction(1, 10 ** 4)])
+def test_the_search_returns_the_largest_level_it_proved_and_never_one_that_failed(truth: Fraction) -> None:
+    tried: list[Fraction] = []
+
+    def attempt(level: Fraction) -> Fraction | None:
+        tried.append(level)
+        return level if level <= truth else None
+
+    found = search_of(attempt, Fraction(1))
+    assert found.level is not None and found.proof == found.level
+    assert found.level == max(t for t in tried if t <= truth)  # the largest proved, kept to the end
+    assert found.failed is not None and found.failed > found.level
+    assert found.level > truth / 2  # the bisection closed in on the truth from the proved side
+
+
+def test_a_failure_above_a_proved_level_never_discards_it_even_when_the_checker_is_not_monotone() -> None:
+    # proves 1 and 3 but not 4 nor 2: whatever fails later, the search keeps the largest level proved
+    proved = {Fraction(1), Fraction(3)}
+    found = search_of(lambda level: level if level in proved else None, Fraction(1))
+    assert found.level == Fraction(1)
+    found = largest_proved_level(lambda level: level if level in proved else None, Fraction(3), growth=Fraction(4),
+                                 growth_steps=3, halvings=4, bisections=3)
+    assert found.level == Fraction(3)
+
+
+def test_running_out_of_work_keeps_the_proved_level_and_says_so() -> None:
+    def attempt(level: Fraction) -> Fraction | None:
+        if level > 1:
+            raise BudgetExhausted("the budget of the test")
+        return level
+
+    found = search_of(attempt, Fraction(1))
+    assert found.level == Fraction(1) and "budget of the test" in found.stopped
+    with pytest.raises(BudgetExhausted):  # nothing proved: the exhaustion is the answer
+        search_of(attempt, Fraction(2))
+
+
+def test_the_recast_level_search_keeps_its_proved_level_when_a_larger_attempt_runs_out(monkeypatch: Any) -> None:
+    """The real search of ``certify_region`` with real certificates; the level attempts above a threshold
+    run out of work (as the class's time limit or a budget of solves would)."""
+    model = parse_any_model(SPRING, "spring.toml")
+    loop = rc.base_loop(model.system)
+    V0 = rc.quadratic_candidate(loop, rc.jacobian(loop))
+    assert V0 is not None
+    free = rc.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "free")
+    assert not isinstance(free, str)
+    threshold = free.level / 3
+    original = recast_sos.solve_on_faces
+
+    def limited(search: Any, build: Any, values: Any, accept: Any) -> Any:
+        if "W_R" in values.exact and -values.exact["W_R"][0] > threshold:  # the region's constant: -level
+            raise BudgetExhausted("out of work above the threshold")
+        return original(search, build, values, accept)
+
+    monkeypatch.setattr(rc, "solve_on_faces", limited)
+    kept = rc.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "limited")
+    assert not isinstance(kept, str)
+    assert 0 < kept.level <= threshold
+    assert kept.level * 2 > threshold or kept.level == rc._scale_of(loop, V0)  # the largest below it tried
+
+
+@pytest.mark.parametrize("text", [SPRING, PENDULUM, THREE_STATES], ids=["spring", "pendulum", "three-states"])
+def test_a_quadratic_v_of_the_linearization_gets_a_level_by_ball_arithmetic_and_verify_rechecks_it(text: str) -> None:
+    model = parse_any_model(text, "loop.toml")
+    loop = rc.base_loop(model.system)
+    J = rc.jacobian(loop)
+    assert not isinstance(J, str)
+    V0 = state_quadratic(loop, J)  # z^T P z in the states themselves (an angle too)
+    assert V0 is not None
+    result = ball_level(loop, V0, Budget(120, "test"), "candidate", "the linearization")
+    assert not isinstance(result, str), result
+    assert result.status == "certified" and result.certificate["boundary"] == "exact"
+    assert result.numbers["level"] >= result.numbers["local_level"] > 0
+    stated = {"certificate": result.certificate, "level": result.numbers["level"],
+              "summary": covered(None, result.summary)}
+    ok, why = check_interval(loop, stated)
+    assert ok, why
+    # a level far above the proved one is refused by the same check (the faces or the decrease fail)
+    inflated = dict(result.certificate, level=str(Fraction(result.certificate["level"]) * 10 ** 6))
+    ok, _ = check_interval(loop, {**stated, "certificate": inflated, "level": None})
+    assert not ok
+
+
+def test_the_cartpole_lqr_cost_to_go_gets_a_level_at_4_states(monkeypatch: Any) -> None:
+    """At 4 states the SOS level program is too large (said so, not "no level found"), and the ball
+    arithmetic proves the exact local level; the larger attempts are cut by a small count of cells."""
+    from lyapcheck import tolerances
+    from lyapcheck.models.surfaces import recast_run
+
+    model = load_any_model(CARTPOLE, candidate=CARTPOLE.read_text().splitlines()[5].lstrip("# "))
+    loop = rc.for_v(recast_run.proved_loop(model, 60), model.candidate_v)
+    V = model.candidate_v
+    why = rc.certify_region(loop, V, Search(loop.ring, Budget(60, "test")), "the LQR cost-to-go")
+    assert isinstance(why, str) and "not built" in why and "no level found" not in why
+    monkeypatch.setattr(tolerances, "BALL_LEVEL_CELLS", 200)
+    result = ball_level(loop, V, Budget(120, "test"), "candidate", "the LQR cost-to-go")
+    assert not isinstance(result, str), result
+    assert result.status == "certified" and result.numbers["level"] >= result.numbers["local_level"] > 0
+    ok, why = check_interval(loop, {"certificate": result.certificate, "level": result.numbers["level"],
+                                    "summary": covered(None, result.summary)})
+    assert ok, why
