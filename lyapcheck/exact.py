@@ -190,6 +190,23 @@ def det(m: Matrix) -> Fraction:
     return result
 
 
+def inverse(m: Sequence[Sequence[Fraction]]) -> list[list[Fraction]]:
+    """The exact inverse of an invertible square matrix (Gauss-Jordan elimination with row
+    pivoting, in rationals; for the small matrices of scalings and quadratic forms)."""
+    n = len(m)
+    a = [list(row) + [Fraction(int(i == j)) for j in range(n)] for i, row in enumerate(m)]
+    for c in range(n):
+        pivot = next(r for r in range(c, n) if a[r][c] != 0)
+        a[c], a[pivot] = a[pivot], a[c]
+        p = a[c][c]
+        a[c] = [x / p for x in a[c]]
+        for r in range(n):
+            if r != c and a[r][c]:
+                f = a[r][c]
+                a[r] = [x - f * y for x, y in zip(a[r], a[c])]
+    return [row[n:] for row in a]
+
+
 def solve(m: Matrix, b: Sequence[Fraction]) -> list[Fraction]:
     """``x`` with ``m x = b`` for a square, invertible ``m`` (fraction-exact Gaussian elimination);
     ValueError when ``m`` is singular."""

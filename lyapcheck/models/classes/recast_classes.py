@@ -654,6 +654,7 @@ def ges_of(loop: Loop, cert: dict[str, Any]) -> dict[str, Fraction] | None:
     import numpy as np
 
     from lyapcheck import exact
+    from lyapcheck.models.engines.interval_region import quadratic_form
     from lyapcheck.sos.definiteness import is_positive_definite
 
     ring = loop.ring
@@ -662,16 +663,9 @@ def ges_of(loop: Loop, cert: dict[str, Any]) -> dict[str, Fraction] | None:
     if D != ring.constant(1):
         return None
     V = poly_from_json(ring, cert["V"], "V")
-    P = [[Fraction(0)] * n for _ in range(n)]
-    for m, c in ring.terms(V).items():
-        if sum(m) != 2 or any(m[n:]):
-            return None
-        i = next(k for k in range(n) if m[k])
-        j = next(k for k in range(n - 1, -1, -1) if m[k])
-        if i == j:
-            P[i][i] = c
-        else:
-            P[i][j] = P[j][i] = c / 2
+    P = quadratic_form(ring, V, n)
+    if P is None:
+        return None
     eps = read_rational(cert["epsilon"])
     decrease = read_rational(cert.get("decrease_epsilon", eps))
     lam = np.linalg.eigvalsh(np.array([[float(x) for x in row] for row in P]))

@@ -228,20 +228,12 @@ def inverse_diagonal(P: list[list[Fraction]]) -> list[Fraction] | None:
     """The diagonal of ``P^-1`` (exact, Gauss-Jordan in rationals), or None when ``P`` is not
     positive definite (checked exactly). ``min {z^T P z : z_i = h} = h^2 / (P^-1)_ii``: the
     smallest value of ``V`` on the hyperplane of a face, hence on the face."""
+    from lyapcheck.exact import inverse
     from lyapcheck.sos.definiteness import is_positive_definite
 
-    n = len(P)
     if not is_positive_definite(P):
         return None
-    A = [list(row) + [Fraction(int(i == j)) for j in range(n)] for i, row in enumerate(P)]
-    for k in range(n):  # pivots are > 0: P is positive definite
-        pivot = A[k][k]
-        A[k] = [x / pivot for x in A[k]]
-        for i in range(n):
-            if i != k and A[i][k]:
-                factor = A[i][k]
-                A[i] = [x - factor * y for x, y in zip(A[i], A[k])]
-    return [A[i][n + i] for i in range(n)]
+    return [row[i] for i, row in enumerate(inverse(P))]
 
 
 def exact_faces(ring: Ring, claim: IntervalClaim, n: int) -> str | None:

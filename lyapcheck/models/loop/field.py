@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
+from lyapcheck.exact import inverse
 from lyapcheck.models.language.expressions import Rational
 from lyapcheck.models.language.modelfile import Model, field_at
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
@@ -89,7 +90,7 @@ class Scaling:
     def matrix(self) -> list[list[Fraction]]:
         """``A`` with ``z = A w~``: ``N^-1 S``."""
         n = len(self.states)
-        inv = _inverse(self.transform) if self.transform is not None else _identity(n)
+        inv = inverse(self.transform) if self.transform is not None else _identity(n)
         return [[inv[i][j] * self.states[j] for j in range(n)] for i in range(n)]
 
     def inverse_matrix(self) -> list[list[Fraction]]:
@@ -108,22 +109,6 @@ class Scaling:
 
 def _identity(n: int) -> list[list[Fraction]]:
     return [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
-
-
-def _inverse(m: Sequence[Sequence[Fraction]]) -> list[list[Fraction]]:
-    """Exact inverse by Gauss-Jordan elimination (small matrices)."""
-    n = len(m)
-    a = [list(row) + _identity(n)[i] for i, row in enumerate(m)]
-    for c in range(n):
-        pivot = next(r for r in range(c, n) if a[r][c] != 0)
-        a[c], a[pivot] = a[pivot], a[c]
-        p = a[c][c]
-        a[c] = [x / p for x in a[c]]
-        for r in range(n):
-            if r != c and a[r][c]:
-                f = a[r][c]
-                a[r] = [x - f * y for x, y in zip(a[r], a[c])]
-    return [row[n:] for row in a]
 
 
 def linear_images(ring: Ring, n: int, matrix: Sequence[Sequence[Fraction]]) -> list[Poly]:
@@ -340,7 +325,7 @@ def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, F
     ring = cleared.ring
     transform = adapted_transform(cleared)
     if transform is not None:
-        images = linear_images(ring, n, _inverse(transform))
+        images = linear_images(ring, n, inverse(transform))
         g_w = [sum((ring.compose(gj, images) * to_fmpq(transform[i][j]) for j, gj in enumerate(cleared.g)
                     if transform[i][j]), ring.zero()) for i in range(n)]
         D_w = ring.compose(cleared.D, images)

@@ -46,6 +46,7 @@ def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, s
     """The exponential bound of a quadratic certificate: V quadratic in the states, no denominator,
     ``P - c1 I`` and ``c2 I - P`` positive definite, ``rate = eps/(2 c2)`` and ``k^2 >= c2/c1`` (all
     exact)."""
+    from lyapcheck.models.engines.interval_region import quadratic_form
     from lyapcheck.sos.definiteness import is_positive_definite
 
     ring = loop.ring
@@ -54,14 +55,9 @@ def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, s
         return False, "an exponential bound is stated for a global quadratic V in the states only"
     if poly_from_json(ring, cert["denominator"], "denominator") != ring.constant(1):
         return False, "an exponential bound needs a field without denominators (D = 1)"
-    V = poly_from_json(ring, cert["V"], "V")
-    P = [[Fraction(0)] * n for _ in range(n)]
-    for m, coefficient in ring.terms(V).items():
-        if sum(m) != 2 or any(m[n:]):
-            return False, "an exponential bound needs V quadratic in the states alone"
-        i = next(k for k in range(n) if m[k])
-        j = next(k for k in range(n - 1, -1, -1) if m[k])
-        P[i][j] = P[j][i] = coefficient if i == j else coefficient / 2
+    P = quadratic_form(ring, poly_from_json(ring, cert["V"], "V"), n)
+    if P is None:
+        return False, "an exponential bound needs V quadratic in the states alone"
     ges = {k: read_rational(v) for k, v in cert["ges"].items()}
     eps = read_rational(cert.get("decrease_epsilon", cert["epsilon"]))
     if set(ges) != {"c1", "c2", "rate", "k"} or ges["c1"] <= 0 or ges["c2"] <= 0 or \
