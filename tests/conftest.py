@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import sys
 import tempfile
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -25,6 +28,18 @@ PAPER_TOML = ROOT / "examples" / "paper.toml"
 #: gains far from the paper's where eq:stabCond is feasible (k_d Delta large against 1/U)
 EASY_GAINS = {"gains.alpha_d": "1", "gains.sigma0": "0.1", "gains.k_d": "5", "gains.delta_los": "1 m",
               "swimmer.e11": "1 m"}
+
+
+def benchmark_module(stem: str) -> ModuleType:
+    """``benchmarks/<stem>.py`` as a module, registered in ``sys.modules`` (a dataclass of it needs that),
+    loaded once: the tests that check a benchmark's own derivations import it this way."""
+    if stem not in sys.modules:
+        spec = importlib.util.spec_from_file_location(stem, ROOT / "benchmarks" / f"{stem}.py")
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[stem] = module
+        spec.loader.exec_module(module)
+    return sys.modules[stem]
 
 
 @pytest.fixture(scope="session")

@@ -11,13 +11,13 @@ found, no fast negative given a global class. The whole suite and its timings:
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 import tomllib
 from pathlib import Path
 from types import ModuleType
 
 import pytest
+
+from tests.conftest import benchmark_module
 
 ROOT = Path(__file__).resolve().parents[1]
 SUITE = ROOT / "benchmarks" / "completeness"
@@ -25,14 +25,7 @@ SUITE = ROOT / "benchmarks" / "completeness"
 
 def bench() -> ModuleType:
     """benchmarks/bench_completeness.py as a module (registered: its dataclass needs that)."""
-    name = "bench_completeness"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / "bench_completeness.py")
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
+    return benchmark_module("bench_completeness")
 
 
 INDEX = tomllib.loads((SUITE / "index.toml").read_text())

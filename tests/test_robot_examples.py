@@ -6,8 +6,6 @@ and the gains the files write are ``control.lqr``'s on that linearization to the
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from fractions import Fraction
 from pathlib import Path
 from types import ModuleType
@@ -18,6 +16,7 @@ import pytest
 import sympy as sp
 
 from lyapcheck import certify
+from tests.conftest import benchmark_module
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "examples" / "models"
@@ -28,14 +27,7 @@ LQR = ["robot-cart-pole-lqr", "robot-acrobot-lqr", "robot-pendubot-lqr", "robot-
 
 def robot_lqr() -> ModuleType:
     """benchmarks/robot_lqr.py as a module."""
-    name = "robot_lqr"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / "robot_lqr.py")
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
+    return benchmark_module("robot_lqr")
 
 
 def half_unit(value: float) -> float:

@@ -332,14 +332,19 @@ def box_prefix(box: ModelBox, status: str) -> str:
 
 # -- loops with functions: a certificate's own sentence --------------------------------------------------
 
+def recast_reach_time(cert: dict[str, Any]) -> Fraction:
+    """The certified time bound ``C / eps`` (s) of a reach-avoid certificate of a loop with functions
+    (its time is in seconds: the loop is not scaled)."""
+    return read_rational(cert["C"]) / read_rational(cert["eps_per_s"])
+
+
 def sentence_of(cert: dict[str, Any]) -> str:
     """The claim sentence of a certificate of a loop with functions, of any kind (a barrier's is the
     polynomial loops' one): certify writes it, ``verify`` and the report re-make it from the certificate."""
     if cert.get("kind") == RECAST_BARRIER_KIND:
         return BARRIER_SENTENCE
-    if cert.get("kind") == RECAST_REACH_AVOID_KIND:  # (C / eps seconds: recast_reach_avoid.reach_time)
-        time_s = read_rational(cert["C"]) / read_rational(cert["eps_per_s"])
-        text = summary("reach_avoid", {"status": "certified", "reach_time_bound_s": float(time_s)})
+    if cert.get("kind") == RECAST_REACH_AVOID_KIND:
+        text = summary("reach_avoid", {"status": "certified", "reach_time_bound_s": float(recast_reach_time(cert))})
         assert text is not None  # (a certified reach_avoid always has its sentence)
         return text
     if cert.get("kind") == "interval":
@@ -399,5 +404,5 @@ def interval_sentence(cert: dict[str, Any]) -> str:
 
 
 __all__ = ["summary", "box_words", "box_prefix", "ball_words", "with_unit", "deviation", "state_unit_figures", "v_text",
-           "v_expression", "sentence_of", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
+           "v_expression", "sentence_of", "recast_reach_time", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
            "RATE_UNIT"]

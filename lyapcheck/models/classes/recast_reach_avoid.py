@@ -50,7 +50,7 @@ from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterVa
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
 from lyapcheck.exact import read_rational
-from lyapcheck.models.classes.claims import RECAST_REACH_AVOID_KIND
+from lyapcheck.models.classes.claims import RECAST_REACH_AVOID_KIND, recast_reach_time, sentence_of
 
 #: the certificate's kind (``verify`` dispatches on it)
 KIND: Final = RECAST_REACH_AVOID_KIND
@@ -222,19 +222,6 @@ def certificate_json(loop: Loop, found: Found, D: Poly, dens: list[Any]) -> dict
             "proofs": {name: proof.to_json(ring) for name, proof in found.proofs.items()}}
 
 
-def reach_time(cert: dict[str, Any]) -> Fraction:
-    """The certified time bound ``C / eps`` (s) of a certificate of this kind."""
-    return time_bound(read_rational(cert["C"]), read_rational(cert["eps_per_s"]))
-
-
-def sentence(cert: dict[str, Any]) -> str:
-    """The claim of a certificate of this kind: the polynomial loops' reach-avoid sentence
-    (:func:`lyapcheck.models.classes.claims.sentence_of`)."""
-    from lyapcheck.models.classes.claims import sentence_of
-
-    return sentence_of(cert)
-
-
 # -- the class ----------------------------------------------------------------------------------------
 
 def run(model: RecastModel, loop: Loop, budget: Budget, box: ModelBox | None = None) -> ConditionResult:
@@ -272,8 +259,8 @@ def run(model: RecastModel, loop: Loop, budget: Budget, box: ModelBox | None = N
         return not_found(tried, search.log, searched_degrees(REACH_DEGREES), simulated)
     found, D, dens = result
     certificate = certificate_json(flat, found, D, dens)
-    return ConditionResult("reach_avoid", "certified", sentence(certificate),  # (V's degree, not its template's)
-                           numbers=certified_numbers(certificate["degree"], reach_time(certificate), trial),
+    return ConditionResult("reach_avoid", "certified", sentence_of(certificate),  # (V's degree, not its template's)
+                           numbers=certified_numbers(certificate["degree"], recast_reach_time(certificate), trial),
                            certificate=certificate, solver={"solves": search.log}, property="reach_avoid")
 
 
@@ -340,4 +327,4 @@ def check(model: RecastModel, proved: Loop, c: dict[str, Any]) -> tuple[bool, st
                   "delta |x|^2 - C on the recasting's relations, exactly")
 
 
-__all__ = ["KIND", "FLOORS", "run", "check", "certificate_json", "reach_time", "sentence", "goal_relations"]
+__all__ = ["KIND", "FLOORS", "run", "check", "certificate_json", "goal_relations"]

@@ -177,7 +177,7 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
             raise ValueError("B: exponents must be integers")
         return Stated("safety", {"degree": degree, "lambda_per_s": read_rational(cert["lambda_per_s"])})
     if kind == RECAST_REACH_AVOID:
-        from lyapcheck.models.classes.recast_reach_avoid import reach_time
+        from lyapcheck.models.classes.claims import recast_reach_time as reach_time
 
         if name != "reach_avoid":
             raise ValueError(f"a reach-avoid certificate under the class {name}")
@@ -440,12 +440,13 @@ def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[
 def _verify_reach_avoid(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
     """A recast reach-avoid certificate (:func:`lyapcheck.models.classes.recast_reach_avoid.check`), its
     recasting's square-root proofs and its sentence (the polynomial loops' reach-avoid one)."""
-    from lyapcheck.models.classes.recast_reach_avoid import check, sentence
+    from lyapcheck.models.classes.claims import sentence_of
+    from lyapcheck.models.classes.recast_reach_avoid import check
 
     cert = c["certificate"]
     if c.get("status") != "certified" or cert.get("kind") != RECAST_REACH_AVOID:
         return False, f"a reach_avoid certificate's kind must be {RECAST_REACH_AVOID!r}, not {cert.get('kind')!r}"
-    return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), sentence(cert))
+    return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), sentence_of(cert))
 
 
 def _checked_on_recasting(c: dict[str, Any], base: Loop, check: Callable[[Loop], tuple[bool, str]],
