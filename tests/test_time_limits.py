@@ -210,3 +210,26 @@ def test_a_proof_found_before_the_limit_is_kept(monkeypatch: pytest.MonkeyPatch)
     assert cut.status == "certified", cut.summary
     assert cut.numbers["degree"] == 4
     assert cut.numbers["decay_rate_V_per_s"] <= gas.numbers["decay_rate_V_per_s"]
+
+
+def test_a_region_search_cut_by_the_time_limit_is_inconclusive(monkeypatch: pytest.MonkeyPatch, tmp_path: Any) -> None:
+    """A loop with functions whose candidate is positive but not strictly decreasing goes on to a level
+    search; when the class's time runs out inside it (here: the level search spends the budget), the
+    answer is ``inconclusive`` naming the limit, not ``not_certified`` (a planar quadrotor's candidate
+    came out ``not_certified`` with the reason "time limit of 60 s reached")."""
+    from lyapcheck import api
+    from lyapcheck.models.classes import recast_classes
+    from lyapcheck.models.engines.search import BudgetExhausted, Search
+    from tests.recast_loops import PENDULUM
+
+    def out_of_time(loop: Any, V: Any, search: Search, label: str, start: Any = None) -> Any:
+        search.budget.start -= search.budget.seconds + 1.0  # the whole limit spent inside this search
+        raise BudgetExhausted(search.budget.reached())
+
+    monkeypatch.setattr(recast_classes, "certify_region", out_of_time)
+    path = tmp_path / "pendulum.toml"
+    path.write_text(PENDULUM)
+    found = api.certify(model=path, classes="candidate", candidate="1 - cos(theta) + omega**2/2")
+    cand = found.conditions["candidate"]
+    assert cand.status == "inconclusive", cand.summary
+    assert "time limit" in cand.summary and "--time-limit" in cand.summary

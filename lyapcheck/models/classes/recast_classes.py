@@ -717,6 +717,14 @@ def box_share(loop: Loop, region: Region, box: tuple[Any, Any]) -> float:
 def best_region(loop: Loop, regions: Sequence[Region], tried: Sequence[str], box: tuple[Any, Any],
                 search: Search, name: str = "roa") -> ConditionResult:
     """The region covering the largest share of the box, as the class's result."""
+    if not regions and search.budget.left() <= 0:
+        # the class's time ran out before a level was proved: the search was cut short, so the answer is
+        # inconclusive (a class at its limit), not a "not found"
+        late = reasons.out_of_time("a region of attraction", search.budget.seconds, tried,
+                                   ("time", "domain") if name != "candidate" else ("time", "other_candidate"))
+        return ConditionResult(name, "inconclusive", late.summary, property="ROA",
+                               numbers=late.numbers({"reason": search.budget.reached()}),
+                               solver={"solves": search.log})
     if not regions:
         which = "the candidate V" if name == "candidate" else "the V functions tried"
         none = reasons.reason(f"no region of attraction was proved: no level set of {which} could be proved to shrink",

@@ -472,10 +472,15 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
         ball = candidate_ball_level(loop, V, budget, box)
         if isinstance(ball, ConditionResult):
             return ball
-        why = reasons.reason("the candidate's derivative could not be proved negative definite (V' <= 0 alone needs "
-                             "LaSalle's argument, which this class does not make), and no level set of it was proved "
-                             "a region of attraction", ("other_candidate", "domain", "time"),
-                             [interval, *region.numbers.get("detail", []), ball])
+        detail = [interval, *region.numbers.get("detail", []), ball]
+        if budget.left() <= 0:  # the time limit cut the search: inconclusive, as a class at its limit is
+            why = reasons.out_of_time("a region of attraction from the candidate", budget.seconds, detail,
+                                      ("time", "other_candidate"))
+            region.status = "inconclusive"
+        else:
+            why = reasons.reason("the candidate's derivative could not be proved negative definite (V' <= 0 alone "
+                                 "needs LaSalle's argument, which this class does not make), and no level set of it "
+                                 "was proved a region of attraction", ("other_candidate", "domain", "time"), detail)
         region.summary = why.summary
         region.numbers["detail"] = why.detail
     return region
