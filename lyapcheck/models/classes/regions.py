@@ -59,6 +59,9 @@ LEVEL_REL_TOL: Final = 1e-3
 LEVEL_MARGIN_MIN: Final = 1e-8
 #: at most this many bisection solves per level
 LEVEL_MAX_SOLVES: Final = 24
+#: exact attempts at levels below the smallest numerically feasible one (each half the last), after
+#: every feasible level failed its exact check
+LEVEL_EXACT_HALVINGS: Final = 3
 #: degrees of V that ``roa`` enlarges to after the quadratic start, in turn (rounds each)
 ROA_DEGREES: Final = (4, 6, 8)
 #: rounds of the V step per degree (stopped early when the covered share does not grow for
@@ -367,7 +370,12 @@ def largest_level(field: StateField, V: GramPoly, search: Search, c_top: float,
         c = Fraction(math.sqrt(lo * hi) if lo > 0 else hi / 4).limit_denominator(10**9)
         if lo == 0 and hi < c_top * 1e-6:
             break
-    for c in sorted(feasible, reverse=True)[:4]:
+    # every feasible level, largest first, then levels below the smallest: a level that rounds to an exact
+    # certificate is never lost because the larger ones (thinner margins) did not (issue 42, item 2)
+    tries = sorted(feasible, reverse=True)
+    if tries:
+        tries += [tries[-1] / 2 ** (k + 1) for k in range(LEVEL_EXACT_HALVINGS)]
+    for c in tries:
         cert, _ = level_attempt(field, structure, V, c, search, exact=True)
         if cert is not None:
             return cert
