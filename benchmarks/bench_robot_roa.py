@@ -24,7 +24,14 @@ certified region of attraction in under 120 s covering at least 25 % of the simu
 the summary and the reason of each class that did not certify. A crash (exit 3) or an unreadable output is printed
 with its command and its stderr.
 
-Run:  python benchmarks/bench_robot_roa.py [--only NAME ...] [--time-limit S]
+With ``--drake-python PYTHON`` (a Python with ``pydrake``: ``pip install drake==1.51.1``, an optional
+extra, never the tests'), it then runs Drake's ``RegionOfAttraction`` on each LQR example's cubic
+Taylor model with the same ``V = z' S z`` (``benchmarks/drake_taylor_roa.py``) and prints, on one set
+of uniform starts in the ``[domain]`` box simulated on the true loop, the share of the converging
+ones inside Drake's set and inside lyapcheck's certified set, and how many starts in Drake's set do
+not converge (its set is the Taylor model's, not proved for the true loop).
+
+Run:  python benchmarks/bench_robot_roa.py [--only NAME ...] [--time-limit S] [--drake-python PYTHON]
 The lyapcheck that runs is the one ``python -m lyapcheck`` imports from a scratch directory (the
 editable install, or the checkout ``PYTHONPATH`` names); the first line printed says which.
 """
@@ -119,12 +126,105 @@ def share_text(cond: dict[str, Any]) -> str:
     return "-" if value is None else f"{100 * float(value):.1f} %"
 
 
+#: uniform starts in the [domain] box for the shares compared with Drake, the simulation's horizon (s),
+#: step (s) and the radius counted as converged
+COMPARE_SAMPLES, COMPARE_HORIZON_S, COMPARE_STEP_S, COMPARE_CONVERGED = 2000, 30.0, 0.01, 1e-3
+
+
+def converged_starts(stem: str, seed: int = 0) -> tuple["Any", "Any"]:
+    """Uniform starts in the model's ``[domain]`` box and which of them converge on the true closed loop
+    (RK4, :data:`COMPARE_HORIZON_S`; independent of lyapcheck: the field is ``robot_lqr``'s sympy one)."""
+    import tomllib
+
+    import numpy as np
+    import sympy as sp
+
+    z, f = robot_lqr.closed_loop(stem)
+    domain = tomllib.loads((MODELS / f"{stem}.toml").read_text())["domain"]
+    lo = np.array([float(domain[str(s)][0]) for s in z])
+    hi = np.array([float(domain[str(s)][1]) for s in z])
+    starts = lo + (hi - lo) * np.random.default_rng(seed).random((COMPARE_SAMPLES, len(z)))
+    rhs = sp.lambdify(z, f, "numpy")
+
+    def field(X: Any) -> Any:
+        return np.stack([np.broadcast_to(np.asarray(c, dtype=float), X.shape[:1]) for c in rhs(*X.T)], axis=1)
+
+    X = starts.copy()
+    h = COMPARE_STEP_S
+    with np.errstate(all="ignore"):
+        for _ in range(int(COMPARE_HORIZON_S / h)):
+            k1 = field(X)
+            k2 = field(X + h / 2 * k1)
+            k3 = field(X + h / 2 * k2)
+            k4 = field(X + h * k3)
+            X = X + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            X[~np.isfinite(X).all(axis=1)] = np.inf  # diverged: stays out
+    return starts, np.linalg.norm(X, axis=1) < COMPARE_CONVERGED
+
+
+def rounded_cost_to_go(stem: str) -> "Any":
+    """The ``S`` of the candidate text :func:`robot_lqr.cost_to_go` writes (6 significant digits)."""
+    import numpy as np
+
+    _, S = robot_lqr.lqr(stem)
+    R = np.array([[float(f"{S[i, j] * (1 if i == j else 2):.6g}") / (1 if i == j else 2) for j in range(len(S))]
+                  for i in range(len(S))])
+    return np.triu(R) + np.triu(R, 1).T
+
+
+def drake_comparison(drake_python: str, runs: list[Run], examples: list[tuple[str, str, int, bool]]) -> None:
+    """Drake 1.51's ``RegionOfAttraction`` on the cubic Taylor model of each LQR example, V = z' S z, and
+    the share of the same simulated starts (true loop) inside each tool's set {z' S z <= level}."""
+    import numpy as np
+
+    print("Drake's RegionOfAttraction on the cubic Taylor model (floating point, for the Taylor model only), "
+          "V = z' S z as lyapcheck's candidate:")
+    head = (f"  {'example':<17} {'Drake level':>11} {'Drake s':>8} {'Drake share':>11} {'non-conv. in':>12}  "
+            f"{'lyapcheck level':>15} {'lyapcheck s':>11} {'lyapcheck share':>15}")
+    print(head)
+    for label, stem, _, lqr in examples:
+        if not lqr:
+            continue
+        S = rounded_cost_to_go(stem)
+        states = list(robot_lqr.PLANTS[stem].states)
+        payload = json.dumps({"states": states, "field": robot_lqr.taylor_terms(stem), "S": S.tolist()})
+        t0 = time.perf_counter()
+        try:
+            done = subprocess.run([drake_python, str(Path(__file__).with_name("drake_taylor_roa.py"))],
+                                  input=payload, capture_output=True, text=True, timeout=1800)
+            drake = json.loads(done.stdout)
+        except (subprocess.TimeoutExpired, json.JSONDecodeError) as exc:
+            print(f"  {label:<17} Drake gave no level ({type(exc).__name__}): "
+                  f"{locals().get('done') and done.stderr.strip()[-300:]}")
+            continue
+        drake_wall = time.perf_counter() - t0
+        starts, converged = converged_starts(stem)
+        V = np.einsum("ni,ij,nj->n", starts, S, starts)
+        mine = next((r for r in runs if r.label == label and r.klass == "candidate"), None)
+        level = float(mine.condition().get("level") or 0) if mine and mine.condition().get("status") == "certified" \
+            else None
+
+        def share(c: float | None) -> str:
+            return "-" if c is None else f"{100 * np.mean(V[converged] <= c):.1f} %"
+
+        bad = int(np.sum((V <= drake["level"]) & ~converged))
+        print(f"  {label:<17} {drake['level']:11.4g} {drake_wall:8.1f} {share(drake['level']):>11} {bad:>12}  "
+              f"{'-' if level is None else format(level, '.4g'):>15} "
+              f"{'-' if mine is None else format(mine.wall, '.1f'):>11} {share(level):>15}", flush=True)
+    print(f"  (shares: of {COMPARE_SAMPLES} uniform starts in the [domain] box, those that converge on the true loop "
+          f"(RK4, {COMPARE_HORIZON_S:g} s), the share inside each set; 'non-conv. in': starts in Drake's set that do "
+          "not converge on the true loop; times: Drake's whole process, imports included, run after lyapcheck's)\n")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="+", metavar="NAME",
                         help="labels or file stems (e.g. cart-pole, robot-acrobot-lqr)")
     parser.add_argument("--time-limit", type=float, default=60.0, metavar="S",
                         help="each class's time limit in seconds, passed to certify (default 60, certify's own)")
+    parser.add_argument("--drake-python", metavar="PYTHON",
+                        help="a Python with pydrake (pip install drake==1.51.1): also run Drake's region of "
+                             "attraction on each LQR example's cubic Taylor model and compare the shares")
     args = parser.parse_args()
     if args.time_limit <= 0:
         parser.error(f"--time-limit must be a number of seconds > 0, got {args.time_limit:g}")
@@ -155,6 +255,9 @@ def main() -> int:
                   f"{figure(cond, 'level', '.4g'):>9}  {figure(cond, 'ball_radius', '.4g'):>11}", flush=True)
     print("(time: the whole certify process with --classes linearization,CLASS, imports included; share: roa_share, "
           "the share of lyapcheck's simulated region of attraction in the [domain] box inside the certified set)\n")
+
+    if args.drake_python:
+        drake_comparison(args.drake_python, runs, examples)
 
     print(f"Targets of issue 42 (a certified region of attraction on the true loop in < {TARGET_SECONDS:g} s, "
           f"covering >= {100 * TARGET_SHARE:g} % of the simulated region):")

@@ -136,3 +136,30 @@ def cost_to_go(stem: str, digits: int = 6) -> str:
             if c != 0:
                 terms.append(f"{c:.{digits}g}*{a}**2" if i == j else f"{c:.{digits}g}*{a}*{names[j]}")
     return " + ".join(terms).replace("+ -", "- ")
+
+
+def closed_loop(stem: str) -> tuple[list[sp.Symbol], list[sp.Expr]]:
+    """The states and the true closed-loop field ``f(z, -K z)`` with the file's ``K`` and parameters (exact)."""
+    plant = PLANTS[stem]
+    params = file_parameters(stem)
+    z = {s: sp.Symbol(s) for s in plant.states}
+    K = file_gain(stem)
+    u_values = -K * sp.Matrix(list(z.values()))
+    u = {s: sp.Symbol(s) for s in plant.inputs}
+    f = plant.field(params, z, u)
+    return list(z.values()), [fi.subs({u[s]: u_values[k] for k, s in enumerate(plant.inputs)}) for fi in f]
+
+
+def taylor_terms(stem: str, order: int = 3) -> list[list[tuple[float, list[int]]]]:
+    """The closed loop's Taylor polynomial of degree ``order`` at the equilibrium, per state, as
+    ``[(coefficient, exponents), ...]`` (the model Drake's comparison of issue 42 analyses: Drake's
+    region of attraction needs a polynomial field)."""
+    z, f = closed_loop(stem)
+    t = sp.Symbol("t")
+    out = []
+    for fi in f:
+        scaled = fi.subs({zi: t * zi for zi in z}, simultaneous=True)
+        poly = sp.series(scaled, t, 0, order + 1).removeO().subs(t, 1)
+        terms = sp.Poly(sp.expand(poly), *z).terms()
+        out.append([(float(c), list(m)) for m, c in terms if c != 0])
+    return out
