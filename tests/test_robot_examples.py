@@ -86,3 +86,21 @@ def test_cart_pole_gain_is_lqr_of_its_own_linearization() -> None:
     K, _, _ = control.lqr(A_from_file, Bf, np.diag([10, 1, 10, 1]), np.eye(1))
     tolerance = np.vectorize(half_unit)(K_file) * (1 + 1e-9)
     assert np.all(np.abs(K - K_file) <= tolerance), (K, K_file)
+
+
+def test_taylor_model_for_drake_starts_with_the_closed_loop_jacobian() -> None:
+    """The cubic Taylor model bench_robot_roa gives Drake: its linear terms are lyapcheck's exact closed-loop
+    Jacobian, it has no constant or quadratic term (the cart-pole's field is odd in the states), and it agrees
+    with the true field near the equilibrium to third order (error ~ |z|^5 there, odd field)."""
+    stem = "robot-cart-pole-lqr"
+    terms = robot_lqr().taylor_terms(stem)
+    J = [[float(Fraction(x)) for x in row] for row in linearization_of(stem)["certificate"]["jacobian"]]
+    for i, row in enumerate(terms):
+        assert all(sum(e) in (1, 3) for _, e in row), row
+        linear = {e.index(1): c for c, e in row if sum(e) == 1}
+        assert [linear.get(j, 0.0) for j in range(4)] == pytest.approx(J[i], rel=1e-9, abs=1e-12)
+    z, f = robot_lqr().closed_loop(stem)
+    point = {zi: sp.Rational(1, 100) * (k + 1) for k, zi in enumerate(z)}
+    for fi, row in zip(f, terms):
+        taylor = sum(c * np.prod([float(point[zi]) ** e for zi, e in zip(z, ex)]) for c, ex in row)
+        assert abs(float(fi.subs(point)) - taylor) < 1e-6
