@@ -188,7 +188,7 @@ def size_figure(doc: dict[str, Any], model: Any) -> tuple[Figure | None, str]:
              f"{len(slices)} planes through the equilibrium, two states each, the others at the equilibrium")
     caption = (f"The certified set of {name} (green, V = level: its slice) against the simulated region of attraction "
                f"in {which}: blue dots are grid starts that converged on the true loop (disturbances 0), red ones did "
-               "not; dashed, the largest ball proved inside the set; purple, the set's proved reach along each state's "
+               "not; dashed, the largest ball proved inside the set (a circle in the states' coordinates, an ellipse where the two axes' scales differ); purple, the set's proved reach along each state's "
                "axis (its reach through the equilibrium, not its projection). The dots are simulations, evidence "
                "not proof; the set, the ball and the segments are the certificate's.")
     alt = f"slices of the certified region of {name} with the simulated region of attraction"
