@@ -197,14 +197,15 @@ def region_size(V: Mapping[Monomial, Fraction], level: Fraction, states: Sequenc
     elif mu is not None:
         raise ValueError("ball_mu is stated, but V has no quadratic part in the states")
     out = RegionSize(ball_mu=mu)
-    radii = [r for r in (_ball(V, level, n, extras, variant, P, mu) for variant in variants) if r is not None]
+    radii = [r for r in (_ball(V, level, n, variant, P, mu) for variant in variants) if r is not None]
     out.ball_radius = max(radii) if radii else None
     for i, s in enumerate(states):
-        reaches = [_axis(V, level, n, i, extras, variant) for variant in variants]
+        reaches = [_axis(V, level, n, i, variant) for variant in variants]
+        # (each variant is sound, so the largest reach holds; None: a variant holds the whole line)
         reach = None if any(r is None for r in reaches) else max(r for r in reaches if r is not None)
         if box is not None and s in box:
             lo, hi = box[s]
-            side = min(-lo, hi)
+            side = max(min(-lo, hi), Fraction(0))
             reach = side if reach is None or side < reach else reach
         if reach is None:
             out.unbounded_axes.append(s)
@@ -212,7 +213,7 @@ def region_size(V: Mapping[Monomial, Fraction], level: Fraction, states: Sequenc
             out.axis_extents[s] = floor_digits(reach, SIZE_DIGITS) if reach > 0 else Fraction(0)
     if box is not None and out.ball_radius is not None:
         side = min(min(-lo, hi) for lo, hi in box.values())
-        out.ball_radius = min(out.ball_radius, side)
+        out.ball_radius = max(min(out.ball_radius, side), Fraction(0))
     if out.ball_radius is not None and out.ball_radius > 0:
         out.ball_radius = floor_digits(out.ball_radius, SIZE_DIGITS)
     out.method = _method(V, n, P is not None, bool(used), box is not None)
@@ -308,9 +309,8 @@ def _add(poly: Univariate, degree: int, c: Fraction) -> None:
     poly[degree] += c
 
 
-def _ball(V: Mapping[Monomial, Fraction], level: Fraction, n: int, extras: Sequence[Extra],
-          variant: Sequence[DeviationBound | None], P: list[list[Fraction]] | None, mu: Fraction | None
-          ) -> Fraction | None:
+def _ball(V: Mapping[Monomial, Fraction], level: Fraction, n: int, variant: Sequence[DeviationBound | None],
+          P: list[list[Fraction]] | None, mu: Fraction | None) -> Fraction | None:
     """The largest ``r`` (exact lower bound) with ``B(r) <= level``, for this variant of the bounds."""
     B: Univariate = []
     if P is not None:
@@ -335,8 +335,8 @@ def _ball(V: Mapping[Monomial, Fraction], level: Fraction, n: int, extras: Seque
     return None if root is None else root[0]
 
 
-def _axis(V: Mapping[Monomial, Fraction], level: Fraction, n: int, i: int, extras: Sequence[Extra],
-          variant: Sequence[DeviationBound | None]) -> Fraction | None:
+def _axis(V: Mapping[Monomial, Fraction], level: Fraction, n: int, i: int, variant: Sequence[DeviationBound | None]
+          ) -> Fraction | None:
     """The reach along ``e_i`` (exact lower bound; None: the whole line lies in the set)."""
     exact: Univariate = []
     bound: Univariate = []
