@@ -89,6 +89,16 @@ def test_quartic_by_hand_and_box_cap() -> None:
     assert boxed.axis_extents["x"] == F(1, 2) and boxed.ball_radius == F(1, 2)
 
 
+def test_ball_of_a_mixed_quartic_is_tight() -> None:
+    """V = x^2 + y^2 + x^2 y^2, level 2: on the circle of radius r, V peaks at x = y with r^2 + r^4 / 4,
+    so the largest ball has r^2 = 2 sqrt(3) - 2 (the monomial's peak 1/4 on the unit sphere, not 1)."""
+    V = {(2, 0): F(1), (0, 2): F(1), (2, 2): F(1)}
+    size = region_size(V, F(2), ["x", "y"])
+    r = size.ball_radius
+    assert float(r) == pytest.approx(math.sqrt(2 * math.sqrt(3) - 2), rel=1e-8)
+    assert value(V, (r / 2 ** 0.5, r / 2 ** 0.5)) <= 2 + 1e-12
+
+
 def test_axis_reach_is_not_the_projection() -> None:
     """V = (y - x^2)^2 + x^2 (level 1): along x the set reaches 1 exactly, though it spans more of x elsewhere."""
     V = {(0, 2): F(1), (2, 1): F(-2), (4, 0): F(1), (2, 0): F(1)}

@@ -9,7 +9,8 @@ unscaled), each a lower bound proved in rational arithmetic from ``V`` and ``lev
   bounded above on the ball by a polynomial ``B(r)`` with non-negative coefficients: the quadratic
   part in the states ``z^T P z`` by ``mu r^2``, with ``mu`` a rational whose ``mu I - P`` is proved
   positive semidefinite exactly (:func:`lyapcheck.sos.definiteness.is_positive_semidefinite`), and
-  every other term ``c_a z^a`` by ``|c_a| r^|a|`` (the triangle inequality, ``|z_i| <= r``). ``r`` is
+  every other term ``c_a z^a`` by ``|c_a| peak_a r^|a|`` (the triangle inequality), where
+  ``peak_a >= prod (a_i / |a|)^(a_i / 2)``, the largest ``|z^a|`` on the unit sphere. ``r`` is
   the root of ``B(r) = level`` (``B`` increases), bracketed exactly (:mod:`lyapcheck.roots`); for a
   quadratic V it is ``sqrt(level / mu)`` rounded down.
 * ``axis_extents``: for each state ``x_i`` an ``a_i`` such that the segment ``{x_eq + t e_i : |t| <= a_i}``
@@ -44,6 +45,8 @@ from lyapcheck.roots import Univariate, evaluate, first_positive_root, trim
 SIZE_DIGITS: Final = 10
 #: functions whose deviation is at most their argument's (Lipschitz constant 1)
 LIPSCHITZ_ONE: Final = frozenset({"sin", "cos", "tanh", "atan", "sat", "abs"})
+#: digits of the upper bound of a monomial's peak on the unit sphere (the ball's bound of V)
+PEAK_DIGITS: Final = 12
 #: tries of a float guess of ``mu`` (lyapcheck.tolerances.SIZE_MU_ROOM) before Gershgorin's bound
 MU_TRIES: Final = 8
 
@@ -225,7 +228,7 @@ def _method(V: Mapping[Monomial, Fraction], n: int, quadratic_part: bool, auxili
     ball = ("ball: r^2 = level / mu, mu I - P proved positive semidefinite exactly" if quadratic else
             "ball: the largest r with B(r) <= level, B bounding V on |x - x_eq| <= r"
             + (" (mu r^2 for its quadratic part, mu I - P proved positive semidefinite exactly; " if quadratic_part
-               else " (") + "|c| r^|a| for every other term" + ("; each auxiliary by its deviation bound" if auxiliaries
+               else " (") + "|c| r^|a| prod (a_i/|a|)^(a_i/2) for every other term" + ("; each auxiliary by its deviation bound" if auxiliaries
                                                                else "") + ")")
     axes = ("axes: the first root of level - V(t e_i) on each side, isolated exactly"
             + ("; an auxiliary's term bounded by its deviation bound" if auxiliaries else ""))
@@ -309,6 +312,19 @@ def _add(poly: Univariate, degree: int, c: Fraction) -> None:
     poly[degree] += c
 
 
+def _sphere_peak(a: Sequence[int]) -> Fraction:
+    """A rational upper bound of ``max |x^a|`` on the unit sphere: ``prod (a_i / |a|)^(a_i / 2)``
+    (Lagrange: the maximum is at ``x_i^2 = a_i / |a|``), so ``|x^a| <= peak r^|a|`` on the ball; 1
+    for ``|a| = 0``."""
+    d = sum(a)
+    if d == 0:
+        return Fraction(1)
+    q = Fraction(1)
+    for e in a:
+        q *= Fraction(e, d) ** e
+    return sqrt_upper(q, PEAK_DIGITS)
+
+
 def _ball(V: Mapping[Monomial, Fraction], level: Fraction, n: int, variant: Sequence[DeviationBound | None],
           P: list[list[Fraction]] | None, mu: Fraction | None) -> Fraction | None:
     """The largest ``r`` (exact lower bound) with ``B(r) <= level``, for this variant of the bounds."""
@@ -325,7 +341,7 @@ def _ball(V: Mapping[Monomial, Fraction], level: Fraction, n: int, variant: Sequ
         if P is not None and sum(m) == 2 and not any(m[n:]):
             continue
         k, d = _term_bound(m, n, norms, unit_variant)
-        _add(B, d, abs(c) * k)
+        _add(B, d, abs(c) * k * _sphere_peak(m[:n]))
     B = trim(B)
     if len(B) <= 1:
         return None  # (V constant: no ball bounds it)
