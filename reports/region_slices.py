@@ -140,7 +140,7 @@ def size_figure(doc: dict[str, Any], model: Any) -> tuple[Figure | None, str]:
     eq = np.array([float(v) for v in model.equilibrium])
     lo, hi = _window(model, cond, eq)
     half = (hi - lo) / 2
-    field = TrueField(model) if isinstance(model, RecastModel) else FieldEvaluator.of(model)
+    field: Any = TrueField(model) if isinstance(model, RecastModel) else FieldEvaluator.of(model)
     t_end = horizon(jacobian_eigenvalues(field, eq, half))
     size = as_dict(cond.get("size"))
     radius = size.get("ball_radius")

@@ -233,12 +233,13 @@ def size_words(condition: Mapping[str, Any]) -> str:
     (``ball_radius``), both proved. ``''`` when the condition states no size (the certificate's
     ``size.omitted`` then says why, and is printed instead)."""
     size = condition.get("size")
-    cert = condition.get("certificate") if isinstance(condition.get("certificate"), Mapping) else {}
-    table = cert.get("size") if isinstance(cert.get("size"), Mapping) else {}
+    found = condition.get("certificate")
+    cert: Mapping[str, Any] = found if isinstance(found, Mapping) else {}
+    table: Mapping[str, Any] = cert["size"] if isinstance(cert.get("size"), Mapping) else {}
     if not isinstance(size, Mapping) or not size:
         omitted = table.get("omitted")
         return f"size: not stated ({omitted})" if isinstance(omitted, str) and omitted else ""
-    units = table.get("units") if isinstance(table.get("units"), Mapping) else {}
+    units: Mapping[str, Any] = table["units"] if isinstance(table.get("units"), Mapping) else {}
     parts = []
     radii = [r for r in (size.get("ball_radius"), condition.get("ball_radius"))
              if isinstance(r, (int, float)) and not isinstance(r, bool)]

@@ -41,6 +41,8 @@ from typing import Any, Final, Mapping, Sequence
 from lyapcheck.exact import floor_digits, read_rational, sqrt_lower, sqrt_upper
 from lyapcheck.roots import Univariate, evaluate, first_positive_root, trim
 
+#: the classes whose certified set's size is stated
+SIZED_CLASSES: Final = ("roa", "candidate")
 #: significant digits a size figure is rounded down to
 SIZE_DIGITS: Final = 10
 #: functions whose deviation is at most their argument's (Lipschitz constant 1)
@@ -285,7 +287,7 @@ def _find_mu(P: list[list[Fraction]]) -> Fraction:
             return _checked_mu(P, guess)
         except ValueError:
             continue
-    return _checked_mu(P, max(max(sum(abs(x) for x in row) for row in P), Fraction(0)))
+    return _checked_mu(P, max(max(sum((abs(x) for x in row), Fraction(0)) for row in P), Fraction(0)))
 
 
 def _term_bound(m: Monomial, n: int, scale: Sequence[Fraction], variant: Sequence[DeviationBound | None]
@@ -451,5 +453,24 @@ def check_size(c: Mapping[str, Any], states: Sequence[str], extras: Sequence[Ext
     return True, "the largest ball and the axis extents are re-derived exactly from V and the level"
 
 
-__all__ = ["DeviationBound", "Extra", "LIPSCHITZ_ONE", "RegionSize", "SIZE_DIGITS", "attach", "auxiliary_extras",
-           "extras_of", "check_size", "condition_size", "read_terms", "region_size", "state_units"]
+def check_size_rows(model: Any, conditions: Mapping[str, Any], rows: list[tuple[str, bool, str]],
+                    variables: Sequence[str] | None = None, system: Any = None) -> None:
+    """``verify``'s row for each certified region whose certificate states its size, named by its
+    class (a failed row demotes the class): :func:`check_size`. ``variables``: V's variables as the
+    model gives them (None: the certificate's, each auxiliary's bound taken from ``system``, the
+    model's recasting, never from the certificate)."""
+    for name, c in conditions.items():
+        if name not in SIZED_CLASSES or not isinstance(c, Mapping) or c.get("status") != "certified" or \
+                not isinstance(c.get("certificate"), Mapping) or ("size" not in c and "size" not in c["certificate"]):
+            continue
+        try:
+            names = variables if variables is not None else c["certificate"]["variables"]
+            ok, why = check_size(c, model.states, extras_of(names, model.states, system), model.units)
+        except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
+            ok, why = False, f"the size is malformed: {type(exc).__name__}: {str(exc)[:200]}"
+        rows.append((name, ok, why if ok else f"{name}: {why}"))
+
+
+__all__ = ["DeviationBound", "Extra", "LIPSCHITZ_ONE", "RegionSize", "SIZED_CLASSES", "SIZE_DIGITS", "attach",
+           "auxiliary_extras", "extras_of", "check_size", "check_size_rows", "condition_size", "read_terms",
+           "region_size", "state_units"]

@@ -32,7 +32,7 @@ import hashlib
 import json
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable
 
 from lyapcheck.errors import CertificateError, InputFileError
 from lyapcheck.exact import refuse_oversized_numbers
@@ -228,6 +228,8 @@ def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
             except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
                 ok, why = False, f"malformed certificate: {_describe(exc)}"
             rows.append((name, ok, why if ok else f"{name}: {why}"))
+    from lyapcheck.models.classes.region_size import check_size_rows
+
     check_size_rows(model, conditions, rows, list(model.states) + (list(box.names) if box is not None else []))
     check_counterexamples(model, conditions, rows)
     _check_stated_v(model, box, conditions, rows)
@@ -236,27 +238,6 @@ def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
     _check_summaries(model, conditions, rows, doc.get("box"))
     _check_stated_claims(model, conditions, rows)
     return _with_verdict(doc, rows)
-
-
-def check_size_rows(model: Any, conditions: dict[str, Any], rows: list[Row], variables: Sequence[str] | None = None,
-                    system: Any = None) -> None:
-    """A row per certified region whose certificate states its size (largest ball, axis extents):
-    re-derived from its V and level (:func:`lyapcheck.models.classes.region_size.check_size`).
-    ``variables``: V's variables as the model gives them (None: the certificate's, each auxiliary's
-    bound taken from ``system``, the model's recasting)."""
-    from lyapcheck.models.classes.region_size import check_size, extras_of
-    from lyapcheck.models.surfaces.certify import SIZED_CLASSES
-
-    for name, c in conditions.items():
-        if name not in SIZED_CLASSES or not isinstance(c, dict) or c.get("status") != "certified" or \
-                not isinstance(c.get("certificate"), dict) or ("size" not in c and "size" not in c["certificate"]):
-            continue
-        try:
-            names = variables if variables is not None else c["certificate"]["variables"]
-            ok, why = check_size(c, model.states, extras_of(names, model.states, system), model.units)
-        except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
-            ok, why = False, f"the size is malformed: {_describe(exc)}"
-        rows.append((name, ok, why if ok else f"{name}: {why}"))
 
 
 def _check_stated_v(model: Any, box: Any, conditions: dict[str, Any], rows: list[Row]) -> None:

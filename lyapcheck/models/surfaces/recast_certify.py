@@ -143,7 +143,7 @@ def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> l
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
         rows.append((name, ok, f"{why}; {claims}" if ok else f"{name}: {why}"))
-    from lyapcheck.models.surfaces.certificate import check_size_rows
+    from lyapcheck.models.classes.region_size import check_size_rows
 
     check_size_rows(model, doc["conditions"], rows, system=model.system)
     _check_true_counterexamples(doc, model, box, rows)
