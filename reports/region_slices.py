@@ -5,10 +5,10 @@ through the equilibrium spanned by two states, the others held at the equilibriu
 itself for a loop of 2 states, and for more the pairs (x1, x2), (x3, x4), ... (the last state paired
 with the one before it when their count is odd), at most :data:`MAX_SLICES` panels. On each:
 
-- the simulated region of attraction: a grid of :data:`SLICE_GRID` x :data:`SLICE_GRID` starts over
-  the ``[domain]``'s rectangle of the pair (without a domain, :data:`REACH` times the set's reach
-  along each axis), each simulated on the true loop (disturbances 0) with the phase portrait's
-  simulator (:func:`lyapcheck.models.engines.trajectories.simulate`) and drawn as a dot where it
+- the simulated region of attraction: a grid of starts over the ``[domain]``'s rectangle of the
+  pair (without a domain, :data:`REACH` times the set's reach along each axis), each simulated on the true loop (disturbances 0) with the phase portrait's
+  simulator (:func:`lyapcheck.models.engines.trajectories.simulate`; :data:`SLICE_STARTS` starts
+  shared by the panels, at most :data:`SLICE_GRID` per side) and drawn as a dot where it
   converged; the grid, not the random starts of ``roa_share`` (those lie off the slice in more than
   two states);
 - the certified set's slice: V's level curve ``V = level`` (and a ball-arithmetic region's box),
@@ -30,8 +30,10 @@ import numpy as np
 from reports.figures import Figure
 from reports.views import as_dict, as_fraction
 
-#: starts per side of a slice's grid of simulated starts
+#: starts per side of a slice's grid of simulated starts, at most
 SLICE_GRID: Final = 24
+#: simulated starts of all the panels together (a 6-state loop's 3 panels: 20 x 20 each)
+SLICE_STARTS: Final = 1200
 #: points per side of the grid V is contoured on
 CONTOUR_GRID: Final = 120
 #: the most panels drawn (pairs of states)
@@ -148,10 +150,11 @@ def size_figure(doc: dict[str, Any], model: Any) -> tuple[Figure | None, str]:
     fig, axes = _new(3.2 * ((len(slices) + 1) // 2), ncols=min(len(slices), 2), nrows=(len(slices) + 1) // 2)
     flat = axes.ravel()
     counts = []
+    grid = min(SLICE_GRID, int((SLICE_STARTS / len(slices)) ** 0.5))
     for k, (i, j) in enumerate(slices):
         ax = flat[k]
-        gx, gy = (np.linspace(lo[i], hi[i], SLICE_GRID), np.linspace(lo[j], hi[j], SLICE_GRID))
-        X = np.tile(eq, (SLICE_GRID * SLICE_GRID, 1))
+        gx, gy = (np.linspace(lo[i], hi[i], grid), np.linspace(lo[j], hi[j], grid))
+        X = np.tile(eq, (grid * grid, 1))
         mx, my = np.meshgrid(gx, gy, indexing="ij")
         X[:, i], X[:, j] = mx.ravel(), my.ravel()
         runs = simulate(model, X, t_end=t_end, half_widths=half)
@@ -196,4 +199,4 @@ def size_figure(doc: dict[str, Any], model: Any) -> tuple[Figure | None, str]:
                                               "converged": counts, "class": name}), ""
 
 
-__all__ = ["CONTOUR_GRID", "MAX_SLICES", "SLICE_GRID", "pairs", "size_figure", "sized_condition"]
+__all__ = ["CONTOUR_GRID", "MAX_SLICES", "SLICE_GRID", "SLICE_STARTS", "pairs", "size_figure", "sized_condition"]
