@@ -479,6 +479,24 @@ def sqrt_upper(q: Fraction, digits: int = 30) -> Fraction:
     return guess + k * step
 
 
+def sqrt_lower(q: Fraction, digits: int = 30) -> Fraction:
+    """A rational ``r <= sqrt(q)``, exact: ``q / sqrt_upper(q)`` (``sqrt(q) = q / sqrt(q)``, and a
+    larger divisor gives a smaller quotient)."""
+    if q < 0:
+        raise ValueError("q must be non-negative")
+    return Fraction(0) if q == 0 else q / sqrt_upper(q, digits)
+
+
+def floor_digits(x: Fraction, digits: int) -> Fraction:
+    """The largest decimal with ``digits`` significant digits that is ``<= x`` (exact; ``x > 0``): a
+    certified lower bound written short."""
+    if x <= 0:
+        raise ValueError("x must be positive")
+    exponent = math.floor(math.log10(x.numerator) - math.log10(x.denominator)) - digits + 1
+    quantum = Fraction(10) ** exponent
+    return math.floor(x / quantum) * quantum
+
+
 def has_negative_real_eigenvalue_2x2(m: Matrix) -> bool:
     """Exact: does the real 2x2 matrix M have a real eigenvalue < 0?"""
     tr = m[0][0] + m[1][1]

@@ -264,3 +264,8 @@ ROA_ENLARGE_SOLVES: Final = 150
 #: build, so a forged certificate could stall verify. A float's exponent is at most 308 and every
 #: rational lyapcheck writes is "p" or "p/q" (no exponent); 1000 leaves room for hand-written values
 MAX_READ_EXPONENT: Final = 1000
+#: relative room of the first guess of ``mu`` above the floating-point largest eigenvalue of a
+#: region's quadratic part (lyapcheck.models.classes.region_size: its largest ball), widened a
+#: thousandfold per try until ``mu I - P`` is proved positive semidefinite exactly. Speed only: the
+#: check is exact, and Gershgorin's bound ends the tries
+SIZE_MU_ROOM: Final = 1e-9

@@ -200,9 +200,10 @@ def test_vdp_page_shows_every_class_the_exact_v_and_the_phase_portrait(vdp: Any,
     # the exact re-check ran and holds; the simulation cross-check holds
     assert "Re-checked exactly while this report was made: every certified claim re-checks" in text
     assert "THE EXACT RE-CHECK FAILS" not in text and "SOUNDNESS" not in text
-    # one figure, an SVG with the set and the trajectories
+    # two figures: the phase portrait, an SVG with the set and the trajectories, then the certified set's
+    # size against the simulated region of attraction (reports.region_slices)
     figs = figures_of(page)
-    assert len(figs) == 1 and len(page.find("figure")) == 1
+    assert len(figs) == 2 and [a.get("id") for t, a in page.tags if t == "figure"] == ["fig-phase", "fig-size"]
     svg = svg_of(figs[0])
     assert svg.startswith(b"<?xml") and svg.count(b"<path") > 40
     assert "Phase portrait of the model in its declared coordinates (x1, x2)" in text

@@ -214,10 +214,15 @@ def what_it_means(doc: Mapping[str, Any], cond: Mapping[str, Any]) -> str:
     ``sos_bound``."""
     from lyapcheck.models.classes.claims import V_SHORT_TERMS, v_text
 
+    from lyapcheck.models.classes.claims import size_words
+
     text = str(cond["summary"])
     cert = cond.get("certificate")
     if cond.get("status") != "certified" or not isinstance(cert, Mapping):
         return text
+    size = size_words(cond)
+    if size:
+        text += f"\n{size}"
     shifts = doc.get("equilibrium") if isinstance(doc.get("equilibrium"), Mapping) else {}
     parts = [("V", cert)] if "V_text" in cert else []
     outputs = cert.get("outputs")

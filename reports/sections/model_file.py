@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Final
 
-from lyapcheck.models.classes.claims import RATE_UNIT, deviation, rounded, with_unit
+from lyapcheck.models.classes.claims import RATE_UNIT, deviation, rounded, size_words, with_unit
 from reports.polynomials import MAX_PLAIN_CHARS, ExactPolynomial
 from reports.sections.base import (MODEL_FILE, RECAST_LOOP, SET_COLOURS, ClassContext, ClassView, PolynomialView,
                                    Section, text_of)
@@ -103,6 +103,9 @@ def key_figures(cond: dict[str, Any]) -> list[str]:
     domain_share = as_number(cond.get("simulated_roa_share_of_domain"))
     if domain_share is not None:
         out.append(f"simulated region of attraction: {percent(domain_share)} of the domain")
+    size = size_words(cond)
+    if size:
+        out.append(size)
     k, rate = as_number(cond.get("k")), as_number(cond.get("decay_rate_per_s"))
     if k is not None and rate is not None:
         out.append(f"|x(t) - x_eq| <= {rounded(k, 4, 'up')} |x0 - x_eq| exp(-r t), r = "
@@ -190,6 +193,19 @@ def exact_rows(values: dict[str, Any], named: tuple[tuple[str, str], ...]) -> li
     return rows
 
 
+def size_rows(cert: dict[str, Any]) -> list[tuple[str, str, str]]:
+    """A certified region's size, exactly (:mod:`lyapcheck.models.classes.region_size`): the largest
+    ball's radius, the bound ``mu`` behind it, and the reach along each state's axis."""
+    size = as_dict(cert.get("size"))
+    rows = exact_rows(size, (("ball_radius", "size: radius r of a ball |x - x_eq| <= r inside the set"),
+                             ("ball_mu", "size: mu >= the largest eigenvalue of V's quadratic part (mu I - P >= 0)")))
+    for state, value in as_dict(size.get("axis_extents")).items():
+        exact = as_fraction(value)
+        if exact is not None:
+            rows.append(exact_row(f"size: reach along {state} (|t| <= a with x_eq + t e_{state} in the set)", exact))
+    return rows
+
+
 def level_rows(cert: dict[str, Any]) -> list[tuple[str, str, str]]:
     """The certified level of a certificate, approximately and exactly (none when it has none)."""
     level = as_fraction(cert.get("level"))
@@ -261,6 +277,7 @@ class ModelFileSection(Section):
         view.exact.extend(level_rows(cert))
         view.exact.extend(exact_rows(as_dict(cert.get("ball")), (
             ("radius", "radius r of a ball |x - x_eq| <= r inside {V <= c}"),)))
+        view.exact.extend(size_rows(cert))
         view.exact.extend(exact_rows(cert, (
             ("c1", "c1 in c1 I < P"), ("c2", "c2 in P < c2 I"), ("k", "k = sqrt(c2 / c1), rounded up"),
             ("mu_scaled", "mu in V' <= -mu V (scaled time)"))))
@@ -302,6 +319,7 @@ class ModelFileSection(Section):
         for state, (lo, hi) in (box or {}).items():
             view.exact.append((f"box: {state} - {state}_eq in", f"[{fmt_float(float(lo))}, {fmt_float(float(hi))}]",
                                f"[{lo}, {hi}]"))
+        view.exact.extend(size_rows(cert))
         view.exact.extend(exact_rows(cert, (
             ("epsilon", "epsilon in V' <= -epsilon |dx|^2 / D"),
             ("positivity_epsilon", "epsilon in V >= epsilon |dx|^2"),
@@ -515,5 +533,5 @@ def v_view(cert: dict[str, Any], ctx: ClassContext) -> PolynomialView:
 
 
 __all__ = ["ModelFileSection", "PROPERTY_MEANING", "METHODS", "key_figures", "polynomial_view", "gram_sizes",
-           "shown_summary", "exact_row", "exact_rows", "level_rows", "percent", "RECAST_KINDS", "RECAST_TITLES",
+           "shown_summary", "exact_row", "exact_rows", "level_rows", "size_rows", "percent", "RECAST_KINDS", "RECAST_TITLES",
            "RecastSet", "recast_sentence", "box_of", "set_words", "proof_sizes", "v_view"]

@@ -254,6 +254,23 @@ def portrait(doc: dict[str, Any], model: Model | RecastModel | None, simulate: b
     return drawn.figure, drawn.reason, drawn.checks
 
 
+def region_slices(doc: dict[str, Any], model: Model | RecastModel | None, simulate: bool
+                  ) -> tuple[Figure | None, str]:
+    """The certified region against the simulated one, in 2-D slices (:mod:`reports.region_slices`),
+    or None and why not."""
+    from reports.region_slices import size_figure
+
+    if not simulate:
+        return None, "not requested"
+    if model is None:
+        return None, "the stored model text does not parse"
+    try:
+        return size_figure(doc, model)
+    except (LyapcheckError, ValueError, ArithmeticError, FloatingPointError, KeyError, TypeError) as exc:
+        log.warning("no slices of the certified region for the report: %s", exc)
+        return None, f"the slices could not be drawn: {exc}"
+
+
 def auxiliary_rows(recast: dict[str, Any]) -> list[tuple[str, str, str, str]]:
     """(auxiliary, definition, value at the equilibrium, flow) per auxiliary of the recasting."""
     flows, values = as_dict(recast.get("flows")), as_dict(recast.get("values"))
@@ -301,6 +318,7 @@ def page_head(name: str, file: str, origin: str, doc: dict[str, Any], second: tu
                          ("certified", "refuted", "counterexample", "not_certified", "inconclusive",
                           "not_applicable")),
         "toc": [("model", "The model"), second, ("classes", "Classes, one by one"), ("phase", "Phase portrait"),
+                ("size", "Size of the certified region"),
                 ("recheck", "Exact re-check"), ("reproduce", "Reproducibility")],
         "classes_anchor": "classes",
         "classes_heading": "Classes, one by one",
@@ -358,6 +376,7 @@ class ModelFileSubject(Subject):
         doc, model, raw = self.doc, self.parsed, self.raw
         model_part = as_dict(doc.get("model"))
         figure, figure_reason, checks = portrait(doc, model, simulate, self.kind)
+        slices, slices_reason = region_slices(doc, model, simulate)
         digest = hashlib.sha256(self.text.encode()).hexdigest()
         equilibrium = as_dict(doc.get("equilibrium"))
         name = text_of(model_part.get("name", "model"))
@@ -379,6 +398,8 @@ class ModelFileSubject(Subject):
             "sha256_matches": digest == text_of(model_part.get("sha256", "")),
             "portrait": figure,
             "figure_reason": figure_reason,
+            "size_figure": slices,
+            "size_reason": slices_reason,
             **(self.recasting() if self.kind is WITH_FUNCTIONS else self.field(checks)),
             **page_tail(doc, self.text),
         }

@@ -14,10 +14,11 @@
   largest level by ball arithmetic, from its exact local level, at any number of states),
   :mod:`~lyapcheck.models.classes.recast_improve`;
 - :mod:`~lyapcheck.models.classes.level_search` (the one monotone search of a fixed V's largest proved level);
+- :mod:`~lyapcheck.models.classes.region_size` (a certified region's largest ball and reach along each axis, exact);
 - :mod:`~lyapcheck.models.classes.falsify` (counterexamples to safety) and
   :mod:`~lyapcheck.models.classes.claims` (the sentence of each decided class, on every loop kind).
 
 May import: lyapcheck.models.language, lyapcheck.models.engines, lyapcheck.models.loop, lyapcheck.sos,
-lyapcheck.integrator, lyapcheck.results, lyapcheck.degrees, lyapcheck.exact, lyapcheck.tolerances,
+lyapcheck.integrator, lyapcheck.results, lyapcheck.degrees, lyapcheck.exact, lyapcheck.roots, lyapcheck.tolerances,
 lyapcheck.units, lyapcheck.errors
 """

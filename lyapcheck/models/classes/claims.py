@@ -225,6 +225,41 @@ def ball_words(condition: Mapping[str, Any]) -> str:
             + (" (the Euclidean norm of the states' SI values: they have different units)" if mixed else ""))
 
 
+def size_words(condition: Mapping[str, Any]) -> str:
+    """``size: the ball |x - x_eq| <= 1.13 m lies in the set; its reach along each state's axis from
+    x_eq: x1 +-2.002 m, x2 +-2.167 m/s``: a certified region's size figures
+    (:mod:`lyapcheck.models.classes.region_size`), each rounded down, in the states' units where
+    ``[units]`` gives them; the ball is the larger of the size's and the SOS containment's
+    (``ball_radius``), both proved. ``''`` when the condition states no size (the certificate's
+    ``size.omitted`` then says why, and is printed instead)."""
+    size = condition.get("size")
+    found = condition.get("certificate")
+    cert: Mapping[str, Any] = found if isinstance(found, Mapping) else {}
+    table: Mapping[str, Any] = cert["size"] if isinstance(cert.get("size"), Mapping) else {}
+    if not isinstance(size, Mapping) or not size:
+        omitted = table.get("omitted")
+        return f"size: not stated ({omitted})" if isinstance(omitted, str) and omitted else ""
+    units: Mapping[str, Any] = table["units"] if isinstance(table.get("units"), Mapping) else {}
+    parts = []
+    radii = [r for r in (size.get("ball_radius"), condition.get("ball_radius"))
+             if isinstance(r, (int, float)) and not isinstance(r, bool)]
+    if radii:
+        shared = set(units.values())
+        unit = shared.pop() if len(shared) == 1 else None
+        mixed = len(shared) > 1
+        parts.append(f"the ball |x - x_eq| <= {with_unit(max(radii), unit, direction='down')} lies in the set"
+                     + (" (a norm of SI values of different units)" if mixed else ""))
+    extents = size.get("axis_extents")
+    if isinstance(extents, Mapping) and extents:
+        reach = ", ".join(f"{s} +-{with_unit(_number(extents, s), units.get(s) or None, direction='down')}"
+                          for s in extents)
+        parts.append(f"its reach along each state's axis from x_eq: {reach}")
+    unbounded = table.get("unbounded_axes")
+    if isinstance(unbounded, list) and unbounded:
+        parts.append(f"it holds the whole axis of {', '.join(map(str, unbounded))}")
+    return "size: " + "; ".join(parts) if parts else ""
+
+
 def _bounds(condition: Mapping[str, Any], outputs: Sequence[str]) -> str:
     bounds = condition["bounds"]
     if not isinstance(bounds, dict):
@@ -403,6 +438,6 @@ def interval_sentence(cert: dict[str, Any]) -> str:
             "equilibrium; V_text in the certificate)")
 
 
-__all__ = ["summary", "box_words", "box_prefix", "ball_words", "with_unit", "deviation", "state_unit_figures", "v_text",
+__all__ = ["summary", "box_words", "box_prefix", "ball_words", "size_words", "with_unit", "deviation", "state_unit_figures", "v_text",
            "v_expression", "sentence_of", "recast_reach_time", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
            "RATE_UNIT"]

@@ -228,6 +228,9 @@ def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
             except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
                 ok, why = False, f"malformed certificate: {_describe(exc)}"
             rows.append((name, ok, why if ok else f"{name}: {why}"))
+    from lyapcheck.models.classes.region_size import check_size_rows
+
+    check_size_rows(model, conditions, rows, list(model.states) + (list(box.names) if box is not None else []))
     check_counterexamples(model, conditions, rows)
     _check_stated_v(model, box, conditions, rows)
     _check_disturbance_keys(model, conditions, rows)
@@ -325,9 +328,9 @@ def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any]
 #: certificate itself, each in the direction that keeps the claim true (a stated rate or level at
 #: most the certified one, a bound or a time at least it); a GES claim adds ``k`` and its rate
 _CHECKED_FIGURES: dict[str, tuple[str, ...]] = {
-    "lyapunov": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius"),
-    "quadratic_ball": ("level", "ball_radius"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
-    "sos_bound": ("bounds", "bounds_reference"), "interval": ("level",),
+    "lyapunov": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius", "size"),
+    "quadratic_ball": ("level", "ball_radius", "size"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
+    "sos_bound": ("bounds", "bounds_reference"), "interval": ("level", "size"),
 }
 #: what a certificate of each kind proves (a Lyapunov certificate: GAS, or GES where
 #: :func:`_verify_ges` passed)

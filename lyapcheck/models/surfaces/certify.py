@@ -335,6 +335,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     for r in out.results.values():  # every condition of a disturbed model says which it covers
         if model.disturbances and r.disturbances is None:
             r.disturbances = "all" if r.name == "sos_bound" else "zero"  # e.g. not_applicable ones
+    from lyapcheck.models.classes import region_size
     from lyapcheck.models.classes.claims import state_unit_figures, summary
 
     for name, r in out.results.items():
@@ -343,6 +344,8 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
                 data["variables"] = variables
                 data["V_text"] = readable_v(model, data["V"], variables)
             r.numbers.update(state_unit_figures(model.units, model.states, r.numbers))
+            if name in region_size.SIZED_CLASSES:
+                _attach_size(r, model, list(model.states) + (list(box.names) if box is not None else []))
         text = summary(name, r.to_json(), tuple(model.outputs), box.to_json() if box is not None else None)
         if text is not None:
             r.summary = text
@@ -355,6 +358,7 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     (:func:`lyapcheck.models.surfaces.recast_run.certify`), each certified one's sentence made from its
     certificate; with ``box`` (``model`` read at its centre), every certified claim holds for every value
     of it and says so first, and a refutation is the centre's and says so."""
+    from lyapcheck.models.classes import region_size
     from lyapcheck.models.classes.claims import box_prefix, covered, sentence_of
     from lyapcheck.models.classes.recast_interval import box_units
     from lyapcheck.models.surfaces import recast_run
@@ -379,6 +383,8 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
             if units is not None and r.certificate.get("kind") == "interval":
                 r.certificate["units"] = units  # (the box it prints, in the states' units)
             r.summary = sentence_of(r.certificate)
+            if name in region_size.SIZED_CLASSES:
+                _attach_size(r, model, r.certificate.get("variables", []), model.system)
         if coverage is not None and name != "sos_bound":
             if r.disturbances is None:  # ("all": a region proved for every disturbance value)
                 r.disturbances = coverage
@@ -406,6 +412,17 @@ def _ball_after_sos(out: ModelCertification, model: Model, box: "ModelBox | None
     seconds = out.seconds.get("roa", 0.0)
     run("roa", lambda budget: ball_roa.after_sos(model, sos, budget))
     out.seconds["roa"] += seconds
+
+
+def _attach_size(r: ConditionResult, model: "Model | RecastModel", variables: Sequence[str], system: Any = None
+                 ) -> None:
+    """A certified region's largest ball and axis extents (:mod:`lyapcheck.models.classes.region_size`),
+    into its certificate and figures; a certificate without a V and a level has none."""
+    from lyapcheck.models.classes import region_size
+
+    if "V" not in r.certificate or "level" not in r.certificate:
+        return
+    region_size.attach(r, model.states, region_size.extras_of(variables, model.states, system), model.units)
 
 
 def stated_polynomials(model: Model, box: "ModelBox | None", name: str, certificate: dict[str, Any]

@@ -143,6 +143,9 @@ def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> l
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
         rows.append((name, ok, f"{why}; {claims}" if ok else f"{name}: {why}"))
+    from lyapcheck.models.classes.region_size import check_size_rows
+
+    check_size_rows(model, doc["conditions"], rows, system=model.system)
     _check_true_counterexamples(doc, model, box, rows)
     rows.extend(_check_candidate(doc, model))
     return _with_verdict(doc, rows)
@@ -166,8 +169,8 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
 
         claim = bound_claim(model, {out: read_rational(item["bound"]) for out, item in cert["outputs"].items()})
         return Stated("ultimate_bound", {k: v for k, v in claim.items() if k != "status"})
-    if kind == "interval":
-        return Stated("ROA", {"level": read_rational(cert["level"])})
+    if kind == "interval":  # (its size: re-derived in a row of its own, check_size_rows)
+        return Stated("ROA", {"level": read_rational(cert["level"])}, frozenset({"size"}))
     if kind == RECAST_BARRIER:
         if name != "barrier":
             raise ValueError(f"a barrier certificate under the class {name}")
@@ -189,7 +192,7 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
     if isinstance(degree, bool) or not isinstance(degree, int):
         raise ValueError("V: exponents must be integers")
     if "level" in cert:
-        return Stated("ROA", {"degree": degree, "level": read_rational(cert["level"])})
+        return Stated("ROA", {"degree": degree, "level": read_rational(cert["level"])}, frozenset({"size"}))
     if "ges" in cert:
         ges = cert["ges"]
         return Stated("GES", {"degree": degree, "k": read_rational(ges["k"]),
