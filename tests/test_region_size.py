@@ -51,7 +51,11 @@ def test_sqrt_lower_and_floor_digits_are_lower_bounds() -> None:
 def test_first_positive_root_brackets_the_first_sign_change() -> None:
     # (t - 1)^2 (t - 3): the double root 1 comes first (no sign change, still the first root)
     lo, hi = first_positive_root([F(-3), F(7), F(-5), F(1)])
-    assert lo < 1 <= hi and hi - lo <= hi / 2**40
+    assert 0 < lo <= 1 <= hi and hi - lo <= hi / 2**40
+    lo, hi = first_positive_root([F(-2), F(0), F(1)])  # sqrt 2, irrational: a strict bracket
+    assert lo ** 2 < 2 < hi ** 2 and hi - lo <= hi / 2**40
+    lo, hi = first_positive_root([F(6), F(-5), F(1)])  # 2 before 3
+    assert lo <= 2 <= hi < 3
     assert first_positive_root([F(1), F(0), F(1)]) is None  # t^2 + 1: no real root
 
 
