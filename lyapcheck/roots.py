@@ -9,7 +9,7 @@ exact and no float enters a result.
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Final, Sequence
+from typing import Any, Final, Sequence, cast
 
 import flint
 
@@ -59,7 +59,8 @@ def first_positive_root(p: Sequence[Fraction], bits: int = ROOT_BITS) -> tuple[F
     while True:
         saved, flint.ctx.prec = flint.ctx.prec, prec
         try:
-            roots = integer.complex_roots()
+            # (python-flint types the result as acb; it is a list of (root, multiplicity))
+            roots = cast(list[tuple[Any, int]], integer.complex_roots())
         finally:
             flint.ctx.prec = saved
         real = [c.real for c, _ in roots if c.imag.is_zero()]
