@@ -41,8 +41,9 @@ polynomial loop, 1/s on a loop with functions), then around the best one (:data:
 the exact check, and the smallest certified ``B`` is the bound. On a loop with functions, where the
 minimizing point fails the check, ``B`` is raised by :data:`B_SLACK` and the Gram margins maximized
 (:func:`_attempt_on_relations`), ``V``'s variables are tried in turn (:func:`variable_choices`), and the
-lowest degree that gives a bound is kept (the relational route's rule: a higher one costs far more there). The bound in declared units is ``s_y sqrt(B)`` rounded up
-exactly (:func:`lyapcheck.exact.sqrt_upper`; ``s_y = 1`` on a loop with functions).
+lowest degree that gives a bound is kept (the relational route's rule: a higher one costs far more there).
+The bound in declared units is ``s_y sqrt(B)`` rounded up exactly (:func:`lyapcheck.exact.sqrt_upper`;
+``s_y = 1`` on a loop with functions).
 """
 
 from __future__ import annotations
@@ -95,7 +96,7 @@ B_FLOOR: Final = Fraction(1, 10**6)
 class BoundField:
     """What the program of ``sos_bound`` reads of a loop, of either kind: a polynomial or rational loop
     (:meth:`of_scaled`: its scaled states, disturbances and a box's normalized parameters) or a loop with
-    functions (:func:`functions_field`: the recasting's states, auxiliaries and bounded constants, with
+    functions (:meth:`BoundLoop.field`: the recasting's states, auxiliaries and bounded constants, with
     the relations that tie them). A polynomial loop is the case with no relations: its program is the
     one this class has always built, term for term."""
 
@@ -165,7 +166,9 @@ def relation_multipliers(field: BoundField, name: str, target: set[Monomial], ge
     """The S-procedure terms of a loop with functions' relations in identity ``name`` (``D`` or ``E``):
     ``- lambda_i h_i`` (``lambda_i`` free, its coefficients the scalars ``L<name>_<i>_<k>``) per equality
     and ``- tau_j g_j`` (``tau_j`` the Gram ``T<name>_<j>``) per inequality, of the degree the identity's
-    other terms reach (:data:`field.multiplied`; none on a polynomial loop), and the monomials they add."""
+    other terms reach (the relations of :attr:`BoundField.multiplied`; none on a polynomial loop), and the
+    monomials they add. (:class:`~lyapcheck.models.engines.recast_sos.ConditionProgram` builds the same terms
+    for the relational classes, with their own naming and margins.)"""
     ring = field.ring
     nv = ring.nvars
     top = max((sum(q) for q in target), default=2)
@@ -360,7 +363,8 @@ def _attempt_on_relations(field: BoundField, structure: Structure, y: Poly, lam:
                                      for i in structure.identities), objective=("max_margin",))
     values = bound_values(field, fixed, y, lam)
     zero = tuple([0] * field.ring.nvars)
-    values.set_poly(field.ring, "E0", -(y * y) + field.ring.constant(B - 1), list(set(field.ring.support(y * y)) | {zero}))
+    values.set_poly(field.ring, "E0", -(y * y) + field.ring.constant(B - 1),
+                    list(set(field.ring.support(y * y)) | {zero}))
     del values.floats["floor"]
     # a point on a face of the cone (a monomial whose diagonal the identity forces to 0, which the generic
     # Newton polytope of the relations' products cannot see) has no margin: drop the face, solve again
@@ -462,7 +466,8 @@ def best_bound(scaled: "ScaledField | BoundField", y: Poly, search: Search, degr
             tried.append(f"degree {degree}: found")
         else:
             tried.append(f"degree {degree}: none at the rates lam = {', '.join(f'{x:g}' for x in LAMBDA_GRID)} "
-                         f"(scaled time), on the full basis and {len(chain) - 1} facial reduction(s): "
+                         f"({'1/s' if scaled.relations else 'scaled time'}), on the full basis and "
+                         f"{len(chain) - 1} facial reduction(s): "
                          + ", ".join(f"{why} ({count})" for why, count in outcomes.items()))
     return best, tried
 
@@ -642,8 +647,8 @@ class BoundLoop:
         ring = self.ring
         loop = self.loop
         index = {name: i for i, name in enumerate(ring.names)}
-        d_rel = [next(j for j, r in enumerate(loop.relations) if r.owner == CONSTANT and degree_in(ring, r.poly, [d]) > 0)
-                 for d in self.disturbances]  # each disturbance's b^2 - d^2 >= 0 (base_loop)
+        d_rel = [next(j for j, r in enumerate(loop.relations)
+                      if r.owner == CONSTANT and degree_in(ring, r.poly, [d]) > 0) for d in self.disturbances]  # each disturbance's b^2 - d^2 >= 0 (base_loop)
         coordinates = tuple(ring.names.index(s) for s in loop.states() if s not in loop.angles)
         flows = tuple((index[name], N[name]) for name in names if not N[name].is_zero())
         moving = tuple(index[name] for name in names if name not in self.box_names)
