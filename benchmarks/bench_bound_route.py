@@ -74,7 +74,7 @@ def main() -> None:
     print("| example | kind | status | bounds | s | flags |")
     print("|---|---|---|---|---|---|")
     kept: dict[str, Any] = {}
-    runs = [(path.stem, path, None) for path in files]
+    runs: list[tuple[str, Path, list[str] | None]] = [(path.stem, path, None) for path in files]
     runs += [(f"{path.stem} --box {' '.join(BOXES[path.stem])}", path, BOXES[path.stem]) for path in files
              if BOXES.get(path.stem)]
     for label, path, box in runs:

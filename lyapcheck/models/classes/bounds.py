@@ -50,7 +50,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence, cast
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.engines import reasons
@@ -305,8 +305,11 @@ def attempt(scaled: "ScaledField | BoundField", structure: Structure, y: Poly, l
 
 
 def attempt_with_solution(field: "ScaledField | BoundField", structure: Structure, y: Poly, lam: Fraction,
-                          search: Search) -> tuple[dict[str, Any] | None, Solution]:
-    """One solve at decay rate ``lam``; the exact certificate if it passes (and the solve)."""
+                          search: Search, faces: dict[Structure, frozenset[tuple[str, Monomial]]] | None = None
+                          ) -> tuple[dict[str, Any] | None, Solution]:
+    """One solve at decay rate ``lam``; the exact certificate if it passes (and the solve). ``faces``: on a
+    loop with functions, the face each program's margin solve was reduced to at an earlier rate (read and
+    kept, :func:`_attempt_on_relations`)."""
     field = as_bound_field(field)
     point, solution = search.solve_exact(structure, bound_values(field, structure, y, lam))
     if point is None:
@@ -316,7 +319,7 @@ def attempt_with_solution(field: "ScaledField | BoundField", structure: Structur
     taus = [grams[f"tau{k}"] for k in range(len(field.bounds))]
     B, v0 = point.scalars["B"], point.scalars["v0"]
     if field.relations:  # a loop with functions: the identities on the recasting's relations
-        return _attempt_on_relations(field, structure, y, lam, search, point, solution)
+        return _attempt_on_relations(field, structure, y, lam, search, point, solution, {} if faces is None else faces)
     g = [gi for _, gi in field.flows]
     box_d = box_multipliers_of(point.grams, multiplier_grams(structure, "rD"))
     box_e = box_multipliers_of(point.grams, multiplier_grams(structure, "rE"))
@@ -343,11 +346,13 @@ def _on_relations(field: BoundField, structure: Structure, y: Poly, lam: Fractio
 
 
 def _attempt_on_relations(field: BoundField, structure: Structure, y: Poly, lam: Fraction, search: Search,
-                          point: Any, solution: Solution) -> tuple[dict[str, Any] | None, Solution]:
+                          point: Any, solution: Solution, faces: dict[Structure, frozenset[tuple[str, Monomial]]]
+                          ) -> tuple[dict[str, Any] | None, Solution]:
     """The minimized ``B``'s point, if it passes; else, as the relational route has always done (its
     relations leave a minimizing point on the boundary, where rounding fails), ``B`` raised by
     :data:`B_SLACK` (and :data:`B_FLOOR`) and fixed, and every Gram matrix's margin maximized: an interior
-    point, which the exact check decides."""
+    point, which the exact check decides. The face that solve is reduced to depends on the program's terms,
+    not on the rate: kept in ``faces``, it is where the next rate's margin solve starts (fewer solves)."""
     from dataclasses import replace
 
     from lyapcheck.models.engines.recast_sos import FACE_ROUNDS, zero_face
@@ -366,6 +371,10 @@ def _attempt_on_relations(field: BoundField, structure: Structure, y: Poly, lam:
     values.set_poly(field.ring, "E0", -(y * y) + field.ring.constant(B - 1),
                     list(set(field.ring.support(y * y)) | {zero}))
     del values.floats["floor"]
+    known = faces.get(structure, frozenset())
+    face_so_far: frozenset[tuple[str, Monomial]] = frozenset()
+    if known and (reduced := _without(fixed, set(known))) is not None:
+        fixed, face_so_far = reduced, known
     # a point on a face of the cone (a monomial whose diagonal the identity forces to 0, which the generic
     # Newton polytope of the relations' products cannot see) has no margin: drop the face, solve again
     for _ in range(FACE_ROUNDS + 1):
@@ -373,12 +382,14 @@ def _attempt_on_relations(field: BoundField, structure: Structure, y: Poly, lam:
         if point is not None:
             found = _on_relations(field, fixed, y, lam, point, B)
             if found is not None:
+                faces[structure] = face_so_far
                 return found, solution
-        face = zero_face(fixed, solution.grams) if solution.usable else set()
+        # (zero_face reads a program's Gram matrices alone, their names and bases, which a structure has too)
+        face = zero_face(cast(Any, fixed), solution.grams) if solution.usable else set()
         smaller = _without(fixed, face) if face else None
         if smaller is None:
             return None, solution
-        fixed = smaller
+        fixed, face_so_far = smaller, face_so_far | frozenset(face)
     return None, solution
 
 
@@ -407,6 +418,7 @@ def best_bound(scaled: "ScaledField | BoundField", y: Poly, search: Search, degr
     from lyapcheck.models.classes.lyapunov import FACIAL_ROUNDS, vanishing_monomials
 
     scaled = as_bound_field(scaled)
+    faces: dict[Structure, frozenset[tuple[str, Monomial]]] = {}  # (a loop with functions' margin solves)
     best: dict[str, Any] | None = None
     tried: list[str] = []
     for degree in searched_degrees(BOUND_DEGREES) if degrees is None else degrees:
@@ -442,7 +454,7 @@ def best_bound(scaled: "ScaledField | BoundField", y: Poly, search: Search, degr
                         exhausted = True
                         return None
                     chain.append((reduced, drop | vanishing))
-                found, solution = attempt_with_solution(scaled, chain[i][0], y, lam, search)
+                found, solution = attempt_with_solution(scaled, chain[i][0], y, lam, search, faces)
                 if found is not None:
                     return found
                 why = why_none(solution)
