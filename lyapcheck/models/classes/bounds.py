@@ -40,8 +40,9 @@ polynomial loop, 1/s on a loop with functions), then around the best one (:data:
 ``V`` of degree 2, then 4 where the field allows, with facial reduction; every candidate is decided by
 the exact check, and the smallest certified ``B`` is the bound. On a loop with functions, where the
 minimizing point fails the check, ``B`` is raised by :data:`B_SLACK` and the Gram margins maximized
-(:func:`_attempt_on_relations`), ``V``'s variables are tried in turn (:func:`variable_choices`), and the
-lowest degree that gives a bound is kept (the relational route's rule: a higher one costs far more there).
+(:func:`_attempt_on_relations`), and ``V``'s variables (:func:`variable_choices`) and degrees are tried in
+turn, cheapest first: the first that gives a bound is kept (a richer ``V`` costs far more there, with the
+auxiliaries and bounded constants in its programs).
 The bound in declared units is ``s_y sqrt(B)`` rounded up exactly (:func:`lyapcheck.exact.sqrt_upper`;
 ``s_y = 1`` on a loop with functions).
 """
@@ -857,14 +858,14 @@ def run_functions(model: "RecastModel", budget: "Budget", box: "ModelBox | None"
             tried: list[str] = []
             for degree in searched_degrees(BOUND_DEGREES):
                 if best is not None:
-                    break  # the next degree costs far more (its programs have more variables than a polynomial
-                    # loop's: the auxiliaries and bounded constants): the bound of this one is kept
+                    break  # the next degree costs far more: the bound of this one is kept
                 for field, dens in fields:
                     found, lines = best_bound(field, y, search, (degree,))
                     label = ", ".join(bl.ring.names[i] for i in field.v_vars + field.v_params)
                     tried.extend(f"V in {label}, {line}" for line in lines)
-                    if found is not None and (best is None or found["B"] < best[0]["B"]):
+                    if found is not None:  # the next variables cost more (more rows, another denominator)
                         best = (found, field, dens)
+                        break
             if best is None:
                 missing.append(f"{name} ({'; '.join(skipped + tried) or 'no form of V could be built'})")
                 detail.extend(f"{name}: {line}" for line in skipped + tried)
