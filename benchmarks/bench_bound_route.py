@@ -8,7 +8,9 @@ figures; ``--compare FILE`` prints beside each figure the one kept before and fl
 
 * ``LOST``: a status that was ``certified`` and is not any more;
 * ``WORSE``: a bound that grew (a polynomial loop's must be identical, a loop with functions' equal or
-  smaller).
+  smaller);
+* ``PROGRAMS``: a polynomial loop whose search solved other programs than before (the sequence of the
+  structures' keys in the solver log, hashed: a polynomial loop's programs must be the same ones).
 
     python benchmarks/bench_bound_route.py [--json after.json] [--compare before.json] [--time-limit 120]
                                            [FILE.toml ...]
@@ -20,6 +22,7 @@ Without files: every example with disturbances but the paper's (``paper-*``, min
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import time
 from pathlib import Path
@@ -43,8 +46,10 @@ def run(path: Path, limit: float, box: list[str] | None = None) -> dict[str, Any
     with store.disabled():  # (each run searches: no certificate kept from an earlier one)
         found = api.certify(model=path, classes="sos_bound", time_limit_s=limit, box=box)
     result = found.conditions["sos_bound"]
+    keys = [entry.get("program") for entry in (result.solver or {}).get("solves", [])]
     return {"kind": "polynomial" if isinstance(model, Model) else "functions", "status": result.status,
-            "bounds": result.numbers.get("bounds") or {}, "seconds": round(time.perf_counter() - start, 1)}
+            "bounds": result.numbers.get("bounds") or {}, "seconds": round(time.perf_counter() - start, 1),
+            "solves": len(keys), "programs": hashlib.sha256(json.dumps(keys).encode()).hexdigest()[:16]}
 
 
 def row(name: str, now: dict[str, Any], before: dict[str, Any] | None) -> str:
@@ -57,8 +62,11 @@ def row(name: str, now: dict[str, Any], before: dict[str, Any] | None) -> str:
             new = now["bounds"].get(k)
             if new is None or (new != old if now["kind"] == "polynomial" else new > old):
                 flags.append(f"WORSE {k}")
+        if now["kind"] == "polynomial" and before.get("programs") not in (None, now["programs"]):
+            flags.append("PROGRAMS")
         bounds += " (before: " + (", ".join(f"{k} {v:.6g}" for k, v in before["bounds"].items()) or "none") + ")"
-    return f"| {name} | {now['kind']} | {now['status']} | {bounds} | {now['seconds']} | {' '.join(flags)} |"
+    return (f"| {name} | {now['kind']} | {now['status']} | {bounds} | {now['seconds']} | {now['solves']} | "
+            f"{' '.join(flags)} |")
 
 
 def main() -> None:
@@ -71,8 +79,8 @@ def main() -> None:
     files = args.files or [p for p in sorted((ROOT / "examples" / "models").glob("*.toml"))
                            if "\n[disturbances]" in p.read_text() and not p.stem.startswith(SKIPPED)]
     before = json.loads(args.compare.read_text()) if args.compare else {}
-    print("| example | kind | status | bounds | s | flags |")
-    print("|---|---|---|---|---|---|")
+    print("| example | kind | status | bounds | s | solves | flags |")
+    print("|---|---|---|---|---|---|---|")
     kept: dict[str, Any] = {}
     runs: list[tuple[str, Path, list[str] | None]] = [(path.stem, path, None) for path in files]
     runs += [(f"{path.stem} --box {' '.join(BOXES[path.stem])}", path, BOXES[path.stem]) for path in files
