@@ -117,7 +117,8 @@ def test_a_certificate_of_the_older_relational_format_is_refused_in_one_line(ilo
     assert "run lyapcheck certify again" in refused[0] and "\n" not in refused[0]
 
 
-@pytest.mark.parametrize("change", ["B", "bound", "lam", "V", "gram_V", "summary", "coverage", "v_variables"])
+@pytest.mark.parametrize("change", ["B", "bound", "lam", "V", "gram_V", "lambda", "summary", "coverage",
+                                    "v_variables"])
 def test_a_changed_bound_certificate_does_not_verify(ilos, change: str) -> None:
     doc = copy.deepcopy(ilos.document)
     c = doc["conditions"]["sos_bound"]
@@ -133,6 +134,11 @@ def test_a_changed_bound_certificate_does_not_verify(ilos, change: str) -> None:
         item["V"]["terms"][0][0] = str(Fraction(item["V"]["terms"][0][0]) * 2)
     elif change == "gram_V":  # the Gram matrix and V changed alike: then the identities fail
         item["gram_V"]["Q"][0][0] = str(Fraction(item["gram_V"]["Q"][0][0]) * 2)
+    elif change == "lambda":  # a relation's free multiplier in the dissipation identity
+        lambdas = item["dissipation"]["lambdas"]
+        assert lambdas, "the dissipation identity uses the square root's relation r^2 = q"
+        term = next(iter(lambdas.values()))["terms"][0]
+        term[0] = str(Fraction(term[0]) + 1)
     elif change == "summary":
         c["summary"] = c["summary"].replace("limsup |y| <= ", "limsup |y| <= 0.0")
     elif change == "coverage":
