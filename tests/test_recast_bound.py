@@ -1,10 +1,11 @@
-"""``sos_bound`` on loops with functions: a global ultimate bound for every disturbance signal.
+"""``sos_bound`` on loops with functions: a global ultimate bound for every disturbance signal, by the
+class's one formulation (:mod:`lyapcheck.models.classes.bounds`) with the recasting's relations.
 
 The bounds are checked against what is true of the loop, computed here without lyapcheck: the ILOS
 loop under a constant disturbance settles where its integral state is ``d Delta / (kappa
 sqrt(U^2 - d^2))``, so no bound below that may be certified, and a bang-bang disturbance simulated
 with numpy's own functions never leaves the bounds. Every certificate re-checks exactly and a
-changed one does not.
+changed one does not; one of the relational route's older format is refused in one line.
 """
 
 from __future__ import annotations
@@ -20,9 +21,11 @@ import numpy as np
 import pytest
 
 from lyapcheck import api
-from lyapcheck.models.classes import recast_bound
+from lyapcheck.models.classes import bounds
+from lyapcheck.models.classes.recast_classes import check_denominator_proofs, check_root_proofs
 from lyapcheck.models.language.modelfile import load_any_model
-from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
+from lyapcheck.models.engines.recast_sos import ConditionCertificate
+from lyapcheck.sos.certificates import GramPoly
 from lyapcheck.sos.polynomials import Ring
 from tests.recast_loops import rk4
 
@@ -64,43 +67,58 @@ def test_ilos_under_a_bounded_disturbance_gets_a_bound_on_both_states_that_verif
 
 def test_the_certificate_says_what_v_and_its_variables_are(ilos) -> None:
     cert = ilos.conditions["sos_bound"].certificate
-    assert cert["kind"] == recast_bound.KIND
+    assert cert["kind"] == bounds.KIND
     assert cert["variables"] == ["y", "yi", "d", "r1"]  # the states, the disturbance, the auxiliary
     assert cert["auxiliaries"] == {"r1": "sqrt(y**2 + y*yi + 1/4*yi**2 + 4)"}
     assert cert["disturbances"] == {"d": "1/20"}
     for item in cert["outputs"].values():
         assert "d" not in item["v_variables"] and set(item["v_variables"]) <= set(cert["variables"])
         assert Fraction(item["bound"]) ** 2 >= Fraction(item["B"])
+        gram = GramPoly.from_json(item["gram_V"], len(cert["variables"]))
+        assert gram.positive_definite()  # V = z^T Q z + v0, Q > 0: radially unbounded in the states
+        assert all(cert["variables"][i] in item["v_variables"] for m in gram.basis for i, e in enumerate(m) if e)
 
 
 def test_each_identity_holds_on_the_relations_and_fails_without_the_disturbance_bound(ilos) -> None:
     """The identities themselves, re-checked here; with the relation |d| <= b dropped (a weaker set
     of facts), the dissipation identity no longer holds: the bound uses it, as it must."""
     model = load_any_model(ILOS)
-    made = recast_bound.bound_loop(model)
+    made = bounds.bound_loop(model)
     assert not isinstance(made, str)
     roots = ilos.conditions["sos_bound"].certificate["recasting"]["roots"]
-    loop, why = recast_bound.check_root_proofs(made.loop, roots)
+    loop, why = check_root_proofs(made.loop, roots)
     assert loop is not None, why
     bl = made.with_loop(loop)
     ring = bl.ring
     item = ilos.conditions["sos_bound"].certificate["outputs"]["y"]
-    ok, why, N = recast_bound.check_denominator_proofs(loop, item["v_variables"], item["denominators"])
+    ok, why, N = check_denominator_proofs(loop, item["v_variables"], item["denominators"])
     assert ok, why
-    V = poly_from_json(ring, item["V"], "V")
+    field = bl.field(item["v_variables"], N)
     y = bl.output(model.outputs["y"], Ring(model.states))
-    polys = recast_bound.conditions(bl, V, N, y, Fraction(item["lam"]), Fraction(item["B"]))
+    gram = GramPoly.from_json(item["gram_V"], ring.nvars)
+    v0, lam, B = (Fraction(item[k]) for k in ("V_constant", "lam", "B"))
+    dissipation, output = (ConditionCertificate.from_json(ring, item[k], len(loop.relations))
+                           for k in ("dissipation", "output"))
+    assert bounds.check_on_relations(field, gram, v0, lam, B, y, dissipation, output)[0]
     index = next(i for i, r in enumerate(loop.relations) if r.why == "|d| <= 1/20")
-    for key in ("positivity", "dissipation", "output"):
-        proof = ConditionCertificate.from_json(ring, item[key], len(loop.relations))
-        assert check_condition(ring, polys[key], loop.relations, proof)[0], key
-    dissipation = ConditionCertificate.from_json(ring, item["dissipation"], len(loop.relations))
     assert index in dissipation.taus  # the disturbance's bound is used
     dissipation.taus.pop(index)
-    assert not check_condition(ring, polys["dissipation"], loop.relations, dissipation)[0]
+    ok, why = bounds.check_on_relations(field, gram, v0, lam, B, y, dissipation, output)
+    assert not ok and why.startswith("dissipation: ")
 
 
-@pytest.mark.parametrize("change", ["B", "bound", "lam", "V", "summary", "coverage", "v_variables"])
+def test_a_certificate_of_the_older_relational_format_is_refused_in_one_line(ilos) -> None:
+    doc = copy.deepcopy(ilos.document)
+    doc["conditions"]["sos_bound"]["certificate"]["kind"] = "recast_bound"
+    report = api.verify(doc)
+    assert not report.valid
+    refused = [c.message for c in report.checks if not c.ok and c.check == "sos_bound"]
+    assert refused == [f"sos_bound: {bounds.OLD_FORMAT}"]  # (and the verdict and exit code follow from it)
+    assert "run lyapcheck certify again" in refused[0] and "\n" not in refused[0]
+
+
+@pytest.mark.parametrize("change", ["B", "bound", "lam", "V", "gram_V", "lambda", "summary", "coverage",
+                                    "v_variables"])
 def test_a_changed_bound_certificate_does_not_verify(ilos, change: str) -> None:
     doc = copy.deepcopy(ilos.document)
     c = doc["conditions"]["sos_bound"]
@@ -114,6 +132,13 @@ def test_a_changed_bound_certificate_does_not_verify(ilos, change: str) -> None:
         item["lam"] = str(Fraction(item["lam"]) * 2)
     elif change == "V":
         item["V"]["terms"][0][0] = str(Fraction(item["V"]["terms"][0][0]) * 2)
+    elif change == "gram_V":  # the Gram matrix and V changed alike: then the identities fail
+        item["gram_V"]["Q"][0][0] = str(Fraction(item["gram_V"]["Q"][0][0]) * 2)
+    elif change == "lambda":  # a relation's free multiplier in the dissipation identity
+        lambdas = item["dissipation"]["lambdas"]
+        assert lambdas, "the dissipation identity uses the square root's relation r^2 = q"
+        term = next(iter(lambdas.values()))["terms"][0]
+        term[0] = str(Fraction(term[0]) + 1)
     elif change == "summary":
         c["summary"] = c["summary"].replace("limsup |y| <= ", "limsup |y| <= 0.0")
     elif change == "coverage":

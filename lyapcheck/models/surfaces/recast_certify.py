@@ -24,7 +24,7 @@ from typing import Any, Callable, Final
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel
-from lyapcheck.models.classes.recast_bound import KIND, check_bound
+from lyapcheck.models.classes.bounds import KIND, OLD_KIND, check_functions as check_bound
 from lyapcheck.models.classes.recast_interval import box_units
 from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
                                              jacobian, lie, state_square, v_names, v_text)
@@ -108,7 +108,7 @@ def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> l
         robust_claim = (coverage is not None and c.get("disturbances") == "all"
                         and isinstance(c.get("certificate"), dict)
                         and (c["certificate"].get("kind") == "interval"
-                             or (name == "sos_bound" and c["certificate"].get("kind") == KIND)))
+                             or (name == "sos_bound" and c["certificate"].get("kind") in (KIND, OLD_KIND))))
         if c.get("disturbances") != coverage and not robust_claim:
             rows.append((name, False, f"{name}: a loop with functions is certified with its disturbances at 0 (or, by "
                                       "ball arithmetic, for every value of them); the stated coverage "
@@ -164,8 +164,8 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
     if not isinstance(cert, dict):
         raise ValueError("certificate: must be a table")
     kind = cert.get("kind")
-    if kind == KIND:
-        from lyapcheck.models.classes.recast_bound import bound_claim
+    if kind in (KIND, OLD_KIND):  # (an older one is refused by its check, with the advice to certify again)
+        from lyapcheck.models.classes.bounds import bound_claim
 
         claim = bound_claim(model, {out: read_rational(item["bound"]) for out, item in cert["outputs"].items()})
         return Stated("ultimate_bound", {k: v for k, v in claim.items() if k != "status"})

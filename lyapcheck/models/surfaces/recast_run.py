@@ -1,6 +1,6 @@
 """The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
 ``candidate``, ``sos_bound``, ``barrier``, ``reach_avoid`` (:mod:`lyapcheck.models.classes.recast_classes` has each
-condition, :mod:`lyapcheck.models.classes.recast_bound`, :mod:`lyapcheck.models.classes.recast_barrier` and
+condition, :mod:`lyapcheck.models.classes.bounds`, :mod:`lyapcheck.models.classes.recast_barrier` and
 :mod:`lyapcheck.models.classes.recast_reach_avoid` the last three; this
 module orders them, gives each its time budget, runs ``roa``'s V-s iteration,
 :mod:`lyapcheck.models.classes.recast_improve`, and the classes over a box of parameters, :func:`certify_box`).
@@ -72,7 +72,7 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         results["candidate"] = run_candidate(loop, candidate, class_budget(time_limit_s), comparison_box(model, loop))
         seconds["candidate"] = time.perf_counter() - start
     if "sos_bound" in classes:
-        from lyapcheck.models.classes.recast_bound import sos_bound
+        from lyapcheck.models.classes.bounds import run_functions as sos_bound
 
         start = time.perf_counter()
         results["sos_bound"] = sos_bound(model, class_budget(time_limit_s))
@@ -131,7 +131,7 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
             box_roa(model, loop, box, class_budget(time_limit_s))
         seconds["roa"] = time.perf_counter() - start
     if "sos_bound" in classes:
-        from lyapcheck.models.classes.recast_bound import sos_bound
+        from lyapcheck.models.classes.bounds import run_functions as sos_bound
 
         start = time.perf_counter()
         results["sos_bound"] = sos_bound(model, class_budget(time_limit_s), box)
