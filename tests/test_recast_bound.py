@@ -36,7 +36,7 @@ PENDULUM = EXAMPLES / "recast-pendulum-torque.toml"
 
 @pytest.fixture(scope="module")
 def ilos() -> api.ModelCertification:
-    return api.certify(model=ILOS, classes="sos_bound")
+    return api.certify(model=ILOS, classes="sos_bound", time_limit_s=900)  # (the limit a safety net only)
 
 
 def test_ilos_under_a_bounded_disturbance_gets_a_bound_on_both_states_that_verifies(ilos) -> None:
