@@ -11,7 +11,7 @@ import math
 import re
 from decimal import ROUND_CEILING, ROUND_HALF_EVEN, Context, Decimal, localcontext
 from fractions import Fraction
-from typing import Any, Iterable, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 Matrix = tuple[tuple[Fraction, ...], ...]
 
@@ -188,6 +188,22 @@ def det(m: Matrix) -> Fraction:
                 for c in range(col, n):
                     work[r][c] -= factor * work[col][c]
     return result
+
+
+def quadratic_matrix(terms: Mapping[tuple[int, ...], Fraction], n: int) -> list[list[Fraction]]:
+    """The symmetric ``P`` with ``z^T P z`` the terms of degree 2 in the first ``n`` variables alone
+    (``terms``: exponents to coefficient; every other term is left out)."""
+    P = [[Fraction(0)] * n for _ in range(n)]
+    for m, c in terms.items():
+        if sum(m) != 2 or any(m[n:]):
+            continue
+        i, j = (k for k in range(n) for _ in range(m[k]))
+        if i == j:
+            P[i][i] += c
+        else:
+            P[i][j] += c / 2
+            P[j][i] += c / 2
+    return P
 
 
 def inverse(m: Sequence[Sequence[Fraction]]) -> list[list[Fraction]]:

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Final, Mapping, Sequence
 
-from lyapcheck.exact import floor_digits, read_rational, sqrt_lower, sqrt_upper
+from lyapcheck.exact import floor_digits, quadratic_matrix, read_rational, sqrt_lower, sqrt_upper
 from lyapcheck.roots import Univariate, evaluate, first_positive_root, trim
 
 #: the classes whose certified set's size is stated
@@ -247,20 +247,9 @@ def _variants(extras: Sequence[Extra]) -> list[list[DeviationBound | None]]:
 
 def _quadratic_part(V: Mapping[Monomial, Fraction], n: int) -> list[list[Fraction]] | None:
     """``P`` of the terms of degree 2 in the states alone (None when there are none)."""
-    P = [[Fraction(0)] * n for _ in range(n)]
-    found = False
-    for m, c in V.items():
-        if sum(m) != 2 or any(m[n:]):
-            continue
-        found = True
-        idx = [i for i in range(n) for _ in range(m[i])]
-        i, j = idx
-        if i == j:
-            P[i][i] += c
-        else:
-            P[i][j] += c / 2
-            P[j][i] += c / 2
-    return P if found else None
+    if not any(sum(m) == 2 and not any(m[n:]) for m in V):
+        return None
+    return quadratic_matrix(V, n)
 
 
 def _checked_mu(P: list[list[Fraction]], mu: Fraction) -> Fraction:

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
-from lyapcheck.exact import inverse
+from lyapcheck.exact import inverse, quadratic_matrix
 from lyapcheck.models.language.expressions import Rational
 from lyapcheck.models.language.modelfile import Model, field_at
 from lyapcheck.sos.polynomials import Poly, Ring, to_fmpq
@@ -286,15 +286,7 @@ def adapted_transform(cleared: ClearedField) -> tuple[tuple[Fraction, ...], ...]
         quad = {m: c for m, c in ring.terms(den).items() if sum(m) == 2 and not any(m[n:])}
         if not quad:
             continue
-        Q = [[Fraction(0)] * n for _ in range(n)]
-        for m, c in quad.items():
-            idx = [i for i in range(n) for _ in range(m[i])]
-            i, j = idx
-            if i == j:
-                Q[i][i] += c
-            else:
-                Q[i][j] += c / 2
-                Q[j][i] += c / 2
+        Q = quadratic_matrix(quad, n)
         k = next((i for i in range(n) if Q[i][i] != 0 and i not in used), None)
         if k is None:
             continue
