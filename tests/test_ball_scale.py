@@ -104,11 +104,18 @@ def test_a_preconditioned_hessian_test_refuses_an_indefinite_enclosure() -> None
 
 
 def test_a_false_claim_is_refused_with_a_point_where_v_does_not_decrease() -> None:
-    _, _, lie, P = cartpole()
-    # far beyond the region of attraction: V' >= 0 somewhere in the ellipsoid, proved at a cell's centre
-    proof = ec.prove_ellipsoid(lie, P, Fraction(10 ** 4), [], 5_000, 5_000)
-    assert not proof.ok
-    assert proof.counterexample_v is not None and proof.counterexample_v <= 10 ** 4
+    from lyapcheck.models.engines.interval_region import (IntervalClaim, dyadic_ceil, inverse_diagonal,
+                                                          prove_region)
+
+    loop, V, _, P = cartpole()
+    level = Fraction(100)  # far beyond the region of attraction: V' >= 0 somewhere in the ellipsoid
+    diagonal = inverse_diagonal(P)
+    assert diagonal is not None
+    half = [dyadic_ceil(Fraction(float(level * d) ** 0.5) * Fraction(9, 8)) for d in diagonal]
+    claim = IntervalClaim(V, level, tuple(-h for h in half), tuple(half), exact_boundary=True)
+    proof = prove_region(loop.system, claim, cell_budget=5_000)
+    assert not proof.ok and "V' >= 0" in proof.why
+    assert proof.counterexample_v is not None and proof.counterexample_v <= level
 
 
 @pytest.mark.slow
@@ -124,13 +131,17 @@ def test_the_cartpole_cost_to_go_gets_a_larger_level_than_the_box_cells_within_t
     from lyapcheck.models.engines import interval_region
     from lyapcheck.models.engines.search import Budget
 
+    from lyapcheck.models.classes import recast_ball_level
+
     loop, V, _, _ = cartpole()
-    monkeypatch.setattr(tolerances, "BALL_LEVEL_CELLS", 3_000)
-    monkeypatch.setattr(tolerances, "BALL_LEVEL_TOTAL_CELLS", 6_000)
+    monkeypatch.setattr(tolerances, "BALL_LEVEL_CELLS", 4_000)
+    monkeypatch.setattr(tolerances, "BALL_LEVEL_TOTAL_CELLS", 8_000)
     levels = {}
     result: Any = None
-    for states in (5, 4):  # 5: the box's cells at 4 states (as before issue 42); 4: the ellipsoid's
+    for states in (5, 4):  # 5: the box's cells and the search from the local level at 4 states (as before
+        # issue 42); 4: the ellipsoid's cells and the search from the sampled level
         monkeypatch.setattr(interval_region, "ELLIPSOID_MIN_STATES", states)
+        monkeypatch.setattr(recast_ball_level, "ELLIPSOID_JUMP_STATES", states)
         result = ball_level(loop, V, Budget(600, "test"), "candidate", "the LQR cost-to-go")
         assert not isinstance(result, str), result
         levels[states] = result.numbers["level"]

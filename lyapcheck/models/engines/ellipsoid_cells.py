@@ -85,6 +85,42 @@ class EllipsoidProof:
     counterexample_v: float | None = None
 
 
+#: significant bits of each entry of M (a short dyadic: M y of a dyadic cell corner is then exact in arb)
+M_BITS: Final = 24
+
+
+def _short(x: Fraction, bits: int = M_BITS) -> Fraction:
+    """``x`` rounded to ``bits`` significant bits (a dyadic; exact integer arithmetic, the same everywhere)."""
+    if x == 0:
+        return x
+    e = bits - (abs(x.numerator).bit_length() - x.denominator.bit_length())
+    return Fraction(round(x * Fraction(2) ** e)) / Fraction(2) ** e
+
+
+def _inverse_root(P: list[list[Fraction]]) -> list[list[Fraction]] | None:
+    """A dyadic ``M`` near ``L^-T D^-1/2`` for ``P = L D L^T`` (unit triangular ``L``, computed exactly),
+    so that ``M^T P M`` is near the identity; None when a pivot is not > 0. Rationals and integer square
+    roots only, so that ``verify`` on any machine gets the same ``M`` (hence the same cells)."""
+    from math import isqrt
+
+    n = len(P)
+    L = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    D = [Fraction(0)] * n
+    for j in range(n):
+        D[j] = P[j][j] - sum((L[j][k] ** 2 * D[k] for k in range(j)), Fraction(0))
+        if D[j] <= 0:
+            return None
+        for i in range(j + 1, n):
+            L[i][j] = (P[i][j] - sum((L[i][k] * L[j][k] * D[k] for k in range(j)), Fraction(0))) / D[j]
+    inv = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]  # L^-1, unit lower triangular
+    for i in range(n):
+        for j in range(i):
+            inv[i][j] = -sum((L[i][k] * inv[k][j] for k in range(j, i)), Fraction(0))
+    scale = 2 ** 60
+    root = [Fraction(isqrt(int(scale * scale / d)), scale) for d in D]  # about 1 / sqrt(D_j)
+    return [[_short(inv[j][i] * root[j]) for j in range(n)] for i in range(n)]  # M_ij = (L^-T)_ij root_j
+
+
 def whitening(P: list[list[Fraction]], level: Fraction) -> Whitening | None:
     """The coordinates of the module docstring (part 1) for a positive definite ``P``, or None."""
     from lyapcheck.exact import inverse
@@ -92,13 +128,9 @@ def whitening(P: list[list[Fraction]], level: Fraction) -> Whitening | None:
     from lyapcheck.sos.definiteness import is_positive_definite
 
     n = len(P)
-    try:
-        L = np.linalg.cholesky(np.array([[float(x) for x in row] for row in P]))
-    except np.linalg.LinAlgError:
+    Mq = _inverse_root(P)
+    if Mq is None:
         return None
-    M = np.linalg.inv(L).T
-    # a short dyadic per entry, so that M y of a dyadic cell corner stays a short exact product in arb
-    Mq = [[Fraction(float(np.float32(M[i, j]))) for j in range(n)] for i in range(n)]
     Q = [[sum((Mq[k][i] * P[k][l] * Mq[l][j] for k in range(n) for l in range(n)), Fraction(0))
           for j in range(n)] for i in range(n)]
     if not is_positive_definite(Q):
@@ -240,7 +272,8 @@ def negative_definite_preconditioned(H: list[list[Any]]) -> bool:
         return False
     if not np.all(np.isfinite(C)):
         return False
-    Cm = flint.arb_mat([[float(x) for x in row] for row in C])
+    # (rounded to 24 bits: a last-bit difference of another machine's LAPACK then rarely changes a cell)
+    Cm = flint.arb_mat([[float(np.float32(x)) for x in row] for row in C])
     A = Cm.transpose() * flint.arb_mat(H) * Cm
     return negative_definite([[A[i, j] for j in range(n)] for i in range(n)])
 
@@ -300,8 +333,29 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], level: Fraction
             return SAFETY_NET
         return None
 
+    def in_local_box(cell: Cell) -> bool:
+        return bool(N) and all(abs(zi) <= r for zi, r in zip(geo.z_of([flint.arb((a + b) / 2, (b - a) / 2)
+                                                                          for a, b in cell]), N))
+
+    def counterexample(cell: Cell, value: Any = None) -> EllipsoidProof | None:
+        """The end of the proof when ``g >= 0`` is proved at the cell's centre, a point of ``E`` other
+        than the equilibrium (``value``: ``g`` there, when already enclosed)."""
+        if all(a + b == 0 for a, b in cell):
+            return None
+        if value is None:
+            value = lie(geo.z_of([flint.arb((a + b) / 2) for a, b in cell]))
+        if not value >= 0:
+            return None
+        centre = geo.quadratic(tuple(((a + b) / 2, (a + b) / 2) for a, b in cell))
+        if not centre <= c:
+            return None
+        return EllipsoidProof(False, f"V' >= 0 at a point where V = {float(centre.mid()):.6g} <= level (proved): "
+                              "V does not decrease on the whole set at this level", count, level_1,
+                              float(centre.mid()))
+
     # phase 2: the Hessian zone, cells in increasing order of their lower bound of y^T Q y
     zone_width = [x * float(HESSIAN_ZONE_MIN_WIDTH) for x in geo.widths]
+    shell_width = [x * float(SHELL_MIN_WIDTH) for x in geo.widths]
     order = 0  # ties broken by the order of creation: deterministic
     heap: list[tuple[float, int, Cell]] = [(0.0, order, box)]
     lows: dict[Cell, Any] = {box: geo.quadratic(box)}
@@ -313,14 +367,21 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], level: Fraction
         q = lows.pop(cell)
         if q > c:
             continue  # outside E
+        if in_local_box(cell):
+            continue  # the Hessian is negative definite on all of N (so at each point of this cell)
         count += 1
         if (why := over()) is not None:
             return EllipsoidProof(False, why, count, None)
+        if (refuted := counterexample(cell)) is not None:
+            return refuted
         H = geo.hessian_y(lie, cell)
         if H is not None and negative_definite_preconditioned(H):
             zone.append((cell, q, H))
             continue
-        halves = _split(cell, zone_width)
+        # near the equilibrium (a cell wider than its distance from it) down to the shell's finest width:
+        # there the Hessian is negative definite on small enough cells, and the zone must reach beyond N
+        near = max(b - a for a, b in cell) > max(float(q.lower()), 0.0) ** 0.5
+        halves = _split(cell, shell_width if near else zone_width)
         if halves is not None:
             for half in halves:
                 lows[half] = geo.quadratic(half)
@@ -341,17 +402,13 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], level: Fraction
 
     def inside(q: Any, cell: Cell) -> bool:
         """The cell (``y^T Q y`` enclosed over it by ``q``) lies in ``E_1``, or in ``N``."""
-        if c1 is None or bool(q < c1) or bool(q <= c0):
-            return True
-        return bool(N) and all(abs(zi) <= r for zi, r in zip(geo.z_of([flint.arb((a + b) / 2, (b - a) / 2)
-                                                                          for a, b in cell]), N))
+        return c1 is None or bool(q < c1) or bool(q <= c0) or in_local_box(cell)
 
     for cell, q, H in zone:
         if inside(q, cell):
             continue  # g < 0 by the Hessian
         pending.append((cell, (H, True)))
     # phase 3: the shell, by Taylor forms; depth first, in a fixed order
-    shell_width = [x * float(SHELL_MIN_WIDTH) for x in geo.widths]
     stack = list(reversed(pending))
     while stack:
         cell, H = stack.pop()
@@ -362,12 +419,8 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], level: Fraction
         if (why := over()) is not None:
             return EllipsoidProof(False, why, count, level_1)
         value, grad = geo.at_centre(lie, cell)
-        if value >= 0 and any(a + b != 0 for a, b in cell):
-            centre = geo.quadratic(tuple(((a + b) / 2, (a + b) / 2) for a, b in cell))
-            if centre <= c:
-                return EllipsoidProof(False, f"V' >= 0 at a point where V = {float(centre.mid()):.6g} <= level "
-                                      "(proved): V does not decrease on the whole set at this level",
-                                      count, level_1, float(centre.mid()))
+        if (refuted := counterexample(cell, value)) is not None:
+            return refuted
         if grad is not None and H is not None and geo.negative(value, grad, H, cell):
             continue
         own_H = geo.hessian_y(lie, cell) if grad is not None else None
