@@ -78,17 +78,19 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
         return "the Hessian of V' is not proved negative definite on any box around the equilibrium"
 
     spent = [0]  # the cells of every attempt so far: the search stops at BALL_LEVEL_TOTAL_CELLS (a count)
+    scale = cell_cost(lie.loop)  # from 4 states, the budgets are in cells of the cart-pole's cost
+    total, each = int(tolerances.BALL_LEVEL_TOTAL_CELLS / scale), int(tolerances.BALL_LEVEL_CELLS / scale)
+    scaled = "" if scale == 1 else f", over {float(scale):.3g} for this loop's cost of a cell"
 
     def attempt(level: Fraction) -> tuple[IntervalClaim, Any] | None:
-        left = tolerances.BALL_LEVEL_TOTAL_CELLS - spent[0]
+        left = total - spent[0]
         if left <= 0:
-            raise BudgetExhausted(f"the search's {tolerances.BALL_LEVEL_TOTAL_CELLS} cells were spent "
-                                  "(lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS)")
+            raise BudgetExhausted(f"the search's {total} cells were spent "
+                                  f"(lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS{scaled})")
         if budget.left() <= 0:
             raise BudgetExhausted(budget.reached())
         claim = claim_at(level)
-        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(),
-                      cells=min(tolerances.BALL_LEVEL_CELLS, left))
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), cells=min(each, left))
         spent[0] += proof.cells + proof.boundary_cells
         return (claim, proof) if proof.ok else None
 
@@ -126,6 +128,26 @@ JUMP_DIRECTIONS: Final = 4000
 JUMP_RADII: Final = 48
 #: bisections of the bracket above a proved sampled level
 JUMP_BISECTIONS: Final = 2
+
+
+#: the cost of a cell of the cart-pole (robot-cart-pole-lqr.toml) in CELL_COST's units: the budgets of
+#: BALL_LEVEL_CELLS and BALL_LEVEL_TOTAL_CELLS are in cells of this cost from ELLIPSOID_JUMP_STATES states
+REFERENCE_CELL_COST: Final = 928
+
+
+def cell_cost(loop: Any) -> Fraction:
+    """How many of the reference's cells one cell of this loop counts for, from ELLIPSOID_JUMP_STATES
+    states (1 below): the terms' factors of the field's polynomials (its numerators, denominators and
+    auxiliaries' arguments, each function 4) times ``n^2`` (a Hessian's entries), over
+    REFERENCE_CELL_COST, at least 1. A count from the model alone, so that the budget decides the same
+    way on any machine: a 4-state acrobot's cell takes about 2.5 times the cart-pole's time."""
+    n = loop.n
+    if n < ELLIPSOID_JUMP_STATES:
+        return Fraction(1)
+    polys = list(loop.numerators) + [d for d in loop.denominators if d is not None] + \
+        [a[3] for a in loop.auxiliaries if a[3] is not None]
+    ops = sum(1 + sum(k for _, k in factors) for p in polys for _, factors in p.terms) + 4 * len(loop.auxiliaries)
+    return max(Fraction(1), Fraction(ops * n * n, REFERENCE_CELL_COST))
 
 
 def sampled_jump(loop: Loop, P: list[list[Fraction]], first: Fraction) -> Fraction | None:
