@@ -13,6 +13,13 @@ and whose cells outside ``N`` are bisected (each attempt within :data:`~lyapchec
 cells, the whole search within :data:`~lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS`);
 :func:`~lyapcheck.models.classes.level_search.largest_proved_level` keeps the largest level proved. The certificate is the ball-arithmetic route's (``kind`` "interval", ``"boundary": "exact"``):
 ``verify`` runs the same proof again.
+
+From 4 states (issue 42) the decrease is proved on cells of the ellipsoid's own coordinates
+(:mod:`lyapcheck.models.engines.ellipsoid_cells`), where an attempt costs about the same cells at any
+level: the search then starts at JUMP_SHARE of the level at which sampling first sees ``V' >= 0``
+(:func:`sampled_jump`; it only proposes, the proof decides), doubles it once proved and bisects, and
+where that first attempt fails grows from the local level as below 4 states (:func:`jumped_search`).
+Its budgets count cells of the cart-pole's cost (:func:`cell_cost`).
 """
 
 from __future__ import annotations

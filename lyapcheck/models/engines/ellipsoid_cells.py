@@ -327,8 +327,8 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], level: Fraction
 
     def over() -> str | None:
         if count > limit:
-            return (f"more than the attempt's {cell_budget} cells (lyapcheck.tolerances.BALL_LEVEL_CELLS over the loop's "
-                    "cost of a cell)"
+            return (f"more than the attempt's {cell_budget} cells (lyapcheck.tolerances.BALL_LEVEL_CELLS over "
+                    "the loop's cost of a cell)"
                     if cell_budget is not None and cell_budget <= cell_limit else f"more than {cell_limit} cells")
         if deadline is not None and count % 64 == 0 and time.perf_counter() > deadline:
             return SAFETY_NET
