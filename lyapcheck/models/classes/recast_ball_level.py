@@ -139,22 +139,23 @@ JUMP_BISECTIONS: Final = 2
 
 #: the cost of a cell of the cart-pole (robot-cart-pole-lqr.toml) in CELL_COST's units: the budgets of
 #: BALL_LEVEL_CELLS and BALL_LEVEL_TOTAL_CELLS are in cells of this cost from ELLIPSOID_JUMP_STATES states
-REFERENCE_CELL_COST: Final = 928
+REFERENCE_CELL_COST: Final = 3712
 
 
 def cell_cost(loop: Any) -> Fraction:
     """How many of the reference's cells one cell of this loop counts for, from ELLIPSOID_JUMP_STATES
     states (1 below): the terms' factors of the field's polynomials (its numerators, denominators and
-    auxiliaries' arguments, each function 4) times ``n^2`` (a Hessian's entries), over
-    REFERENCE_CELL_COST, at least 1. A count from the model alone, so that the budget decides the same
-    way on any machine: a 4-state acrobot's cell takes about 2.5 times the cart-pole's time."""
+    auxiliaries' arguments, each function 4) times ``n^3`` (a Hessian's entries, and the products of
+    ``n x n`` matrices), over REFERENCE_CELL_COST, at least 1. A count from the model alone, so that the
+    budget decides the same way on any machine: a cell of the 4-state acrobot or of the 6-state planar
+    quadrotor takes about 2.5 times the cart-pole's time."""
     n = loop.n
     if n < ELLIPSOID_JUMP_STATES:
         return Fraction(1)
     polys = list(loop.numerators) + [d for d in loop.denominators if d is not None] + \
         [a[3] for a in loop.auxiliaries if a[3] is not None]
     ops = sum(1 + sum(k for _, k in factors) for p in polys for _, factors in p.terms) + 4 * len(loop.auxiliaries)
-    return max(Fraction(1), Fraction(ops * n * n, REFERENCE_CELL_COST))
+    return max(Fraction(1), Fraction(ops * n ** 3, REFERENCE_CELL_COST))
 
 
 def sampled_jump(loop: Loop, P: list[list[Fraction]], first: Fraction) -> Fraction | None:
