@@ -212,13 +212,16 @@ CONVERGED_BALL_RADIUS: Final = 2e-2
 INTERVAL_ATTEMPT_CELLS: Final = 100_000
 #: the cells one attempt of the ball-arithmetic level search of a quadratic V may examine
 #: (lyapcheck.models.classes.recast_ball_level; its faces are proved exactly, so these are the decrease's
-#: cells outside the local box): a count, so that the level is the same on any machine. A 4-state
-#: cell costs about half a millisecond, so an attempt stays within a few seconds
-BALL_LEVEL_CELLS: Final = 8_000
+#: cells outside the local box; from 4 states the cells of the ellipsoid's own coordinates,
+#: lyapcheck.models.engines.ellipsoid_cells): a count, so that the level is the same on any machine. A
+#: cell costs about a millisecond of one core at 4 to 6 states (a Hessian enclosure or a Taylor form at
+#: its centre), half that at 1 to 3 (issue 42 raised it from 8,000: the 4-state cart-pole's LQR
+#: cost-to-go needs about 20,000 to 27,000 cells at the levels 0.02 to 0.3)
+BALL_LEVEL_CELLS: Final = 30_000
 #: the cells of the whole ball-arithmetic level search of a quadratic V (every attempt together): the
-#: largest level proved when they are spent is the answer. On the 4-state cart-pole with the Lyapunov
-#: equation's P the levels up to 3.7e-4 take about 6,000 cells (a few seconds of one core)
-BALL_LEVEL_TOTAL_CELLS: Final = 20_000
+#: largest level proved when they are spent is the answer; the whole search stays within about 40 s of
+#: one core, inside MODEL_CLASS_TIME_LIMIT_S (issue 42 raised it from 20,000)
+BALL_LEVEL_TOTAL_CELLS: Final = 40_000
 #: the integrator steps one trajectory of the ball-arithmetic route's fit of V (and of its simulated check) may take when the
 #: route runs after the SOS route on a polynomial or rational loop (lyapcheck.models.surfaces.ball_roa):
 #: a rational loop's trajectory that runs into a pole crawls towards it step by step (1-state

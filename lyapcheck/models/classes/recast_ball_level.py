@@ -13,6 +13,13 @@ and whose cells outside ``N`` are bisected (each attempt within :data:`~lyapchec
 cells, the whole search within :data:`~lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS`);
 :func:`~lyapcheck.models.classes.level_search.largest_proved_level` keeps the largest level proved. The certificate is the ball-arithmetic route's (``kind`` "interval", ``"boundary": "exact"``):
 ``verify`` runs the same proof again.
+
+From 4 states (issue 42) the decrease is proved on cells of the ellipsoid's own coordinates
+(:mod:`lyapcheck.models.engines.ellipsoid_cells`), where an attempt costs about the same cells at any
+level: the search then starts at JUMP_SHARE of the level at which sampling first sees ``V' >= 0``
+(:func:`sampled_jump`; it only proposes, the proof decides), doubles it once proved and bisects, and
+where that first attempt fails grows from the local level as below 4 states (:func:`jumped_search`).
+Its budgets count cells of the cart-pole's cost (:func:`cell_cost`).
 """
 
 from __future__ import annotations
@@ -78,24 +85,30 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
         return "the Hessian of V' is not proved negative definite on any box around the equilibrium"
 
     spent = [0]  # the cells of every attempt so far: the search stops at BALL_LEVEL_TOTAL_CELLS (a count)
+    scale = cell_cost(lie.loop)  # from 4 states, the budgets are in cells of the cart-pole's cost
+    total, each = int(tolerances.BALL_LEVEL_TOTAL_CELLS / scale), int(tolerances.BALL_LEVEL_CELLS / scale)
+    scaled = "" if scale == 1 else f", over {float(scale):.3g} for this loop's cost of a cell"
 
     def attempt(level: Fraction) -> tuple[IntervalClaim, Any] | None:
-        left = tolerances.BALL_LEVEL_TOTAL_CELLS - spent[0]
+        left = total - spent[0]
         if left <= 0:
-            raise BudgetExhausted(f"the search's {tolerances.BALL_LEVEL_TOTAL_CELLS} cells were spent "
-                                  "(lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS)")
+            raise BudgetExhausted(f"the search's {total} cells were spent "
+                                  f"(lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS{scaled})")
         if budget.left() <= 0:
             raise BudgetExhausted(budget.reached())
         claim = claim_at(level)
-        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(),
-                      cells=min(tolerances.BALL_LEVEL_CELLS, left))
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), cells=min(each, left))
         spent[0] += proof.cells + proof.boundary_cells
         return (claim, proof) if proof.ok else None
 
+    jump = None if P is None else sampled_jump(loop, P, first)
     try:
-        found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH, growth_steps=BALL_LEVEL_GROWTH_STEPS,
-                                     halvings=0, bisections=BALL_LEVEL_BISECTIONS,
-                                     rounded=lambda x: _dyadic(x, LEVEL_BITS))
+        if jump is None:
+            found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH,
+                                         growth_steps=BALL_LEVEL_GROWTH_STEPS, halvings=0,
+                                         bisections=BALL_LEVEL_BISECTIONS, rounded=lambda x: _dyadic(x, LEVEL_BITS))
+        else:
+            found = jumped_search(attempt, first, _dyadic(jump, LEVEL_BITS), lambda x: _dyadic(x, LEVEL_BITS))
     except BudgetExhausted as exc:
         return f"{METHOD}: {exc}"
     if found.proof is None or found.level is None:
@@ -110,6 +123,105 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
                            numbers={"level": float(claim.level), "V_from": v_from, "cells": proof.cells,
                                     "boundary_cells": proof.boundary_cells, "proof_seconds": proof.seconds,
                                     "local_level": float(first), "tried": tried})
+
+
+#: from ELLIPSOID_JUMP_STATES states (where each attempt's cells cost about the same at any level) the
+#: search starts at this share of the level sampling sees V' < 0 up to, rather than growing from the
+#: local level by BALL_LEVEL_GROWTH (each level proved on the way would cost a whole attempt)
+ELLIPSOID_JUMP_STATES: Final = 4
+JUMP_SHARE: Final = Fraction(1, 4)
+#: sampled directions (in the ellipsoid's coordinates, a fixed seed) and radii along each
+JUMP_DIRECTIONS: Final = 4000
+JUMP_RADII: Final = 48
+#: bisections of the bracket above a proved sampled level
+JUMP_BISECTIONS: Final = 2
+
+
+#: the cost of a cell of the cart-pole (robot-cart-pole-lqr.toml) in CELL_COST's units: the budgets of
+#: BALL_LEVEL_CELLS and BALL_LEVEL_TOTAL_CELLS are in cells of this cost from ELLIPSOID_JUMP_STATES states
+REFERENCE_CELL_COST: Final = 3712
+
+
+def cell_cost(loop: Any) -> Fraction:
+    """How many of the reference's cells one cell of this loop counts for, from ELLIPSOID_JUMP_STATES
+    states (1 below): the terms' factors of the field's polynomials (its numerators, denominators and
+    auxiliaries' arguments, each function 4) times ``n^3`` (a Hessian's entries, and the products of
+    ``n x n`` matrices), over REFERENCE_CELL_COST, at least 1. A count from the model alone, so that the
+    budget decides the same way on any machine: a cell of the 4-state acrobot or of the 6-state planar
+    quadrotor takes about 2.5 times the cart-pole's time."""
+    n = loop.n
+    if n < ELLIPSOID_JUMP_STATES:
+        return Fraction(1)
+    polys = list(loop.numerators) + [d for d in loop.denominators if d is not None] + \
+        [a[3] for a in loop.auxiliaries if a[3] is not None]
+    ops = sum(1 + sum(k for _, k in factors) for p in polys for _, factors in p.terms) + 4 * len(loop.auxiliaries)
+    return max(Fraction(1), Fraction(ops * n ** 3, REFERENCE_CELL_COST))
+
+
+def sampled_jump(loop: Loop, P: list[list[Fraction]], first: Fraction) -> Fraction | None:
+    """Where the level search of a quadratic ``V = z^T P z`` starts from ELLIPSOID_JUMP_STATES states:
+    JUMP_SHARE of the smallest ``V`` at which a sample (floats, a fixed seed: it only proposes a level,
+    the proof decides) has ``V' >= 0``, or the largest ``V`` sampled when none has; None below those
+    states, or when that is not above the local level ``first``."""
+    import numpy as np
+
+    from lyapcheck.models.engines.ellipsoid_cells import whitening
+    from lyapcheck.models.engines.recast_numeric import field_values
+
+    n = loop.n
+    if n < ELLIPSOID_JUMP_STATES:
+        return None
+    w = whitening(P, Fraction(1))
+    if w is None:
+        return None
+    M = np.array(w.M)
+    Pf = np.array([[float(x) for x in row] for row in P])
+    eq = np.array([float(loop.system.values[s]) for s in loop.system.states])
+    U = np.random.default_rng(0).normal(size=(JUMP_DIRECTIONS, n))
+    U /= np.linalg.norm(U, axis=1)[:, None]
+    top = float(first) * 4.0 ** 12  # the largest level sampled: a factor 4^12 above the local one
+    radii = np.sqrt(np.geomspace(float(first), top, JUMP_RADII))
+    bad = top
+    with np.errstate(all="ignore"):
+        for r in radii:
+            Z = (U * r) @ M.T
+            F = field_values(loop.system, Z + eq)
+            g = 2 * np.einsum("ij,jk,ik->i", Z, Pf, F)
+            V = np.einsum("ij,jk,ik->i", Z, Pf, Z)
+            hit = ~(g < 0)
+            if hit.any():
+                bad = float(np.min(V[hit]))
+                break
+    level = Fraction(bad) * JUMP_SHARE
+    return level if level > first else None
+
+
+def jumped_search(attempt: Any, first: Fraction, start: Fraction, rounded: Any) -> Any:
+    """The level search from the sampled level ``start``: the local level ``first`` (proved without a
+    cell), then ``start`` and, proved, its double and JUMP_BISECTIONS bisections; failed, the search of
+    fewer states (growing from ``first`` by BALL_LEVEL_GROWTH) with the cells left. The largest proved
+    level is kept (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`): none is lost."""
+    from lyapcheck.models.classes.level_search import largest_proved_level
+
+    local = largest_proved_level(attempt, first, growth=Fraction(1), growth_steps=1, halvings=0, bisections=0)
+    try:
+        found = largest_proved_level(attempt, start, growth=Fraction(2), growth_steps=2, halvings=0,
+                                     bisections=JUMP_BISECTIONS, rounded=rounded)
+    except BudgetExhausted as exc:  # (the class's time, before anything above the local level was proved)
+        local.stopped = str(exc)
+        return local
+    tried = local.tried + found.tried
+    if found.level is None and not found.stopped:
+        try:
+            found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH,
+                                         growth_steps=BALL_LEVEL_GROWTH_STEPS, halvings=0,
+                                         bisections=BALL_LEVEL_BISECTIONS, rounded=rounded)
+            tried += found.tried[1:]  # (the local level again: proved without a cell)
+        except BudgetExhausted as exc:  # (the local level is proved: only a spent search raises here)
+            local.stopped = str(exc)
+    best = found if found.level is not None and local.level is not None and found.level > local.level else local
+    best.tried = tried
+    return best
 
 
 def state_quadratic(loop: Loop, J: list[list[Fraction]]) -> Poly | None:

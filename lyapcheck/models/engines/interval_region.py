@@ -283,6 +283,25 @@ def low_order_terms(ring: Ring, V: Poly, n: int) -> bool:
     return False
 
 
+#: the least number of states at which an exact-boundary claim's decrease is proved on cells of the
+#: ellipsoid's own coordinates (:mod:`lyapcheck.models.engines.ellipsoid_cells`); below it on the box's cells
+ELLIPSOID_MIN_STATES: Final = 4
+
+
+def _prove_on_ellipsoid(lie: LieDerivative, ring: Ring, claim: IntervalClaim, n: int, radii: list[Fraction],
+                        cell_budget: int | None, deadline: float | None, boundary: int, r: Fraction | None,
+                        start: float) -> IntervalProof:
+    """Part 2 of an exact-boundary claim at ELLIPSOID_MIN_STATES states or more: ``V' < 0`` on the whole
+    ellipsoid ``{V <= level}`` (which the exact faces put inside the box) except at the equilibrium."""
+    from lyapcheck.models.engines.ellipsoid_cells import prove_ellipsoid
+
+    P = quadratic_form(ring, claim.V, n)
+    assert P is not None  # (exact_faces proved it a positive definite quadratic form)
+    found = prove_ellipsoid(lie, P, claim.level, radii, cell_budget, INTERVAL_CELL_LIMIT, deadline)
+    return IntervalProof(found.ok, found.why, found.cells, boundary, r, time.perf_counter() - start,
+                         found.counterexample_v)
+
+
 def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None,
                  lie: Any = None, flat: bool | None = None, cell_budget: int | None = None) -> IntervalProof:
     """Prove the claim's three parts (module docstring) on the true field; deterministic.
@@ -357,6 +376,11 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     local = [float(x) for x in radii] if radii is not None else [float(r)] * n  # N's half-widths
     if radii is not None and inside_local_box(ring, claim, n, radii):  # the set lies in N: part 3 covers it
         return IntervalProof(True, "proved", 0, boundary, r, time.perf_counter() - start)
+    if claim.exact_boundary and radii is not None and n >= ELLIPSOID_MIN_STATES and isinstance(lie, LieDerivative):
+        proof = _prove_on_ellipsoid(lie, ring, claim, n, radii, cell_budget, deadline, boundary, r, start)
+        if proof.ok or cell_budget is not None or proof.counterexample_v is not None:
+            return proof
+        # verify (no budget) of a certificate proved on the box's cells before issue 42: that proof, below
     # 2. the decrease on every cell of B that meets {V <= level}
     stack = [box]
     count = 0

@@ -1,0 +1,442 @@
+"""``V' < 0`` on an ellipsoid ``{z^T P z <= level}`` of a loop with any number of states, by ball
+arithmetic on cells of the ellipsoid's own coordinates (issue 42, item 1).
+
+The exact-boundary claim of :mod:`lyapcheck.models.engines.interval_region` (``V = z^T P z`` positive
+definite, its faces proved exactly) needs ``g = V' < 0`` on the ellipsoid ``E = {z^T P z <= level}``
+except at the equilibrium. Bisecting the box around ``E`` in the states' own axes (the route of 1 to 3
+states) spends nearly all of its cells outside a thin, tilted ``E`` (an LQR cost-to-go's ``P`` has a
+condition number in the thousands) and bounds ``g`` by plain intervals. Here instead:
+
+1. **Coordinates.** ``z = M y`` with ``M`` a float (so exactly dyadic) approximation of ``L^-T``
+   (``P = L L^T``), and ``Q = M^T P M`` computed exactly in rationals: ``E`` is ``{y^T Q y <= level}``, a
+   near-ball, inside the box ``|y_i| <= h_i`` with ``level (Q^-1)_ii <= h_i^2`` (exact). Any ``M`` works:
+   nothing rests on it being close to ``L^-T``. Cells are boxes in ``y``; a cell whose lower bound of
+   ``y^T Q y`` (ball arithmetic) exceeds ``level`` is outside ``E`` and dropped; a cell is split across
+   its widest side, which in ``y`` is the widest in the ellipsoid's metric.
+2. **The Hessian zone, exactly.** ``g(0) = 0`` and ``grad g(0) = 0`` (exact, as for the local box), so
+   ``g(z) = int_0^1 (1 - t) z^T H(t z) z dt``. Cells are taken in increasing order of their lower
+   bound of ``y^T Q y``; each gets an enclosure of the Hessian ``H`` of ``g`` over it and a Cholesky
+   test of ``C^T H C`` (``C`` a float preconditioner: ``C^T H C`` negative definite for every matrix of
+   the enclosure forces ``C`` invertible and ``H`` negative definite). At the first cell that fails at
+   the finest width of this phase (HESSIAN_ZONE_MIN_WIDTH), ``level_1`` is the least lower bound of
+   ``y^T Q y`` over it and the cells not taken yet: every point of ``E_1 = {y^T Q y < level_1}`` lies in
+   a cell where ``H`` is negative definite, ``E_1`` is convex and contains the equilibrium, so ``g < 0``
+   on ``E_1`` except at the equilibrium (when no cell fails, ``E_1`` is ``E`` itself). A cell whose
+   image lies in the local box ``N`` (the same argument, proved before) needs nothing either.
+3. **The shell, by Taylor forms.** Every other cell that meets ``E`` gets
+   ``g(m) + grad g(m) . t + t^T H t / 2`` (``m`` its centre, ``|t_i| <= r_i``, ``H`` enclosed over the
+   cell or over an ancestor, which contains it: Taylor's theorem with the Lagrange remainder), in
+   ``y``; where ``H`` is proved negative definite, ``t^T H t <= 0`` and ``g(m) + grad g(m) . t`` bounds
+   ``g``. A cell that fails is split across the side whose width adds most to the bound (where the
+   margin is thin), not merely the widest. A centre with ``g >= 0`` proved inside ``E`` ends the
+   proof: the claim is false at this level.
+
+The enclosures keep the ellipsoid's correlations: ``grad V = 2 P z`` is enclosed as ``2 W y`` with
+``W = P M`` exact, never as ``P`` times the ball enclosure of ``M`` times a cell (whose corners lie far
+outside the tilted cell: for an LQR ``P`` that box product is hundreds of times too wide), and the
+matrix products group the exact factors first (``M^T P = W^T``). Only the field's own derivatives are
+enclosed over the box around ``M`` times the cell (the chain rule in ball arithmetic, each function's
+exact derivatives, :class:`~lyapcheck.models.engines.interval_field.Jet`).
+
+The cells are deterministic (the same claim gives the same cells), so ``verify`` repeats the proof
+cell for cell from the certificate alone. The work is bounded by a count of cells.
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Final
+
+import flint
+import numpy as np
+
+from lyapcheck.models.engines.interval_field import LieDerivative, ball, negative_definite
+
+#: the finest split of the Hessian zone's phase: a cell whose Hessian is not proved negative definite
+#: is split while its widest side is above this fraction of the ellipsoid's box (then it bounds the zone)
+HESSIAN_ZONE_MIN_WIDTH: Final = Fraction(1, 8)
+#: the finest split of the shell's phase, as a fraction of the ellipsoid's box in each coordinate
+SHELL_MIN_WIDTH: Final = Fraction(1, 2 ** 12)
+
+Cell = tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class Whitening:
+    """``z = M y`` and ``Q = M^T P M`` (exact), the box ``|y_i| <= half_i`` around ``{y^T Q y <= level}``."""
+
+    M: list[list[float]]
+    Q: list[list[Fraction]]
+    half: list[Fraction]
+
+
+@dataclass
+class EllipsoidProof:
+    """What :func:`prove_ellipsoid` established: ``ok`` or why not, the cells it took, the level of the
+    Hessian zone (``level_1``), and ``V`` at a point of ``E`` where ``g >= 0`` was proved (or None)."""
+
+    ok: bool
+    why: str
+    cells: int
+    hessian_level: Fraction | None
+    counterexample_v: float | None = None
+
+
+#: significant bits of each entry of M (a short dyadic: M y of a dyadic cell corner is then exact in arb)
+M_BITS: Final = 24
+
+
+def _short(x: Fraction, bits: int = M_BITS) -> Fraction:
+    """``x`` rounded to ``bits`` significant bits (a dyadic; exact integer arithmetic, the same everywhere)."""
+    if x == 0:
+        return x
+    e = bits - (abs(x.numerator).bit_length() - x.denominator.bit_length())
+    return Fraction(round(x * Fraction(2) ** e)) / Fraction(2) ** e
+
+
+def _inverse_root(P: list[list[Fraction]]) -> list[list[Fraction]] | None:
+    """A dyadic ``M`` near ``L^-T D^-1/2`` for ``P = L D L^T`` (unit triangular ``L``, computed exactly),
+    so that ``M^T P M`` is near the identity; None when a pivot is not > 0. Rationals and integer square
+    roots only, so that ``verify`` on any machine gets the same ``M`` (hence the same cells)."""
+    from math import isqrt
+
+    n = len(P)
+    L = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    D = [Fraction(0)] * n
+    for j in range(n):
+        D[j] = P[j][j] - sum((L[j][k] ** 2 * D[k] for k in range(j)), Fraction(0))
+        if D[j] <= 0:
+            return None
+        for i in range(j + 1, n):
+            L[i][j] = (P[i][j] - sum((L[i][k] * L[j][k] * D[k] for k in range(j)), Fraction(0))) / D[j]
+    inv = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]  # L^-1, unit lower triangular
+    for i in range(n):
+        for j in range(i):
+            inv[i][j] = -sum((L[i][k] * inv[k][j] for k in range(j, i)), Fraction(0))
+    scale = 2 ** 60
+    root = [Fraction(isqrt(int(scale * scale / d)), scale) for d in D]  # about 1 / sqrt(D_j)
+    return [[_short(inv[j][i] * root[j]) for j in range(n)] for i in range(n)]  # M_ij = (L^-T)_ij root_j
+
+
+def whitening(P: list[list[Fraction]], level: Fraction) -> Whitening | None:
+    """The coordinates of the module docstring (part 1) for a positive definite ``P``, or None."""
+    from lyapcheck.exact import inverse
+    from lyapcheck.models.engines.interval_region import dyadic_ceil
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    n = len(P)
+    Mq = _inverse_root(P)
+    if Mq is None:
+        return None
+    Q = [[sum((Mq[k][i] * P[k][l] * Mq[l][j] for k in range(n) for l in range(n)), Fraction(0))
+          for j in range(n)] for i in range(n)]
+    if not is_positive_definite(Q):
+        return None
+    Qinv = inverse(Q)
+    half = []
+    for i in range(n):
+        h = dyadic_ceil(Fraction(float(level * Qinv[i][i]) ** 0.5 * 1.001), 16)
+        while h * h < level * Qinv[i][i]:  # exact: the ellipsoid's extent along y_i is at most h
+            h *= 2
+        half.append(h)
+    return Whitening([[float(x) for x in row] for row in Mq], Q, half)
+
+
+class _Geometry:
+    """Cells of ``y`` and what ball arithmetic says of them: ``z = M y``, ``y^T Q y``, ``g`` and its
+    derivatives in ``y``.
+
+    ``g = grad V . f = 2 (W y) . f(M y)`` with ``W = P M`` (exact): ``grad V`` is enclosed from ``y`` itself,
+    not from the ball enclosure of ``M`` times a cell (whose corners lie far outside the tilted cell:
+    ``P`` times that box is hundreds of times too wide for an LQR ``P``), and the products of matrices
+    are taken with the exact ones grouped first (``M^T P`` is ``W^T``, small, where ``|M^T| |P|`` is not)."""
+
+    def __init__(self, w: Whitening, P: list[list[Fraction]], lie: LieDerivative) -> None:
+        self.n = n = len(w.half)
+        self.loop = lie.loop
+        Mq = [[Fraction(x) for x in row] for row in w.M]
+        W = [[sum((P[i][k] * Mq[k][j] for k in range(n)), Fraction(0)) for j in range(n)] for i in range(n)]
+        self.M = [[flint.arb(x) for x in row] for row in w.M]  # exact (floats)
+        self.Mmat = flint.arb_mat(self.M)
+        self.Mt = self.Mmat.transpose()
+        self.W2 = [[ball(2 * x) for x in row] for row in W]  # grad V = 2 W y
+        self.W2t = flint.arb_mat(self.W2).transpose()
+        self.P2 = [[ball(2 * x) for x in row] for row in P]  # the Hessian of V
+        self.Q = [[ball(x) for x in row] for row in w.Q]
+        self.widths = [2 * float(h) for h in w.half]
+
+    def z_of(self, y: list[Any]) -> list[Any]:
+        return [sum((self.M[i][j] * y[j] for j in range(self.n)), flint.arb(0)) for i in range(self.n)]
+
+    def quadratic(self, cell: Cell) -> Any:
+        """An enclosure of ``y^T Q y`` over the cell (squares enclosed as squares, not as products)."""
+        n = self.n
+        total = flint.arb(0)
+        for i, (a, b) in enumerate(cell):
+            near = 0.0 if a <= 0 <= b else min(abs(a), abs(b))
+            far = max(abs(a), abs(b))
+            square = (flint.arb(near) * flint.arb(near)).union(flint.arb(far) * flint.arb(far))
+            total += self.Q[i][i] * square
+        ys = [flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell]
+        for i in range(n):
+            for j in range(i + 1, n):
+                total += 2 * self.Q[i][j] * ys[i] * ys[j]
+        return total
+
+    def _field(self, ys: list[Any], order: int) -> tuple[list[Any], list[Any]] | None:
+        """``grad V`` and the field as jets in ``z`` (up to ``order``) over the balls ``ys`` of ``y``, or None
+        where the field is not differentiable that often on them."""
+        from lyapcheck.models.engines.interval_field import Jet
+
+        n = self.n
+        Z = self.z_of(ys)
+        f = [fi if isinstance(fi, Jet) else Jet.constant(fi, n, order)
+             for fi in self.loop.field([Jet.variable(zi, i, n, order) for i, zi in enumerate(Z)])]
+        if any(fi.grad is None or (order >= 2 and fi.hess is None) for fi in f):
+            return None
+        p = [sum((self.W2[i][j] * ys[j] for j in range(n)), flint.arb(0)) for i in range(n)]
+        return p, f
+
+    def hessian_y(self, lie: LieDerivative, cell: Cell) -> list[list[Any]] | None:
+        """The Hessian of ``g`` in ``y`` enclosed over the cell, or None: ``M^T (P Jf + Jf^T P) M``
+        ``+ M^T (sum_i p_i Hf_i) M`` with ``p = 2 W y`` (``Jf``, ``Hf_i``: the field's derivatives in ``z``
+        over the ball enclosure of ``M`` times the cell)."""
+        n = self.n
+        got = self._field([flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell], 2)
+        if got is None:
+            return None
+        p, f = got
+        J = flint.arb_mat([fi.grad for fi in f])  # J[i, k] = d f_i / d z_k
+        A = self.W2t * J * self.Mmat  # M^T (2 P) Jf M, with M^T 2P = 2 W^T exact
+        S = [[sum((p[i] * f[i].hess[k][m] for i in range(n)), flint.arb(0)) for m in range(n)] for k in range(n)]
+        B = self.Mt * flint.arb_mat(S) * self.Mmat
+        H = [[A[i, j] + A[j, i] + B[i, j] for j in range(n)] for i in range(n)]
+        if not all(h.is_finite() for row in H for h in row):
+            return None
+        return H
+
+    def at_centre(self, lie: LieDerivative, cell: Cell) -> tuple[Any, list[Any] | None]:
+        """``g`` and its gradient in ``y`` at the cell's centre: ``2 W^T f + M^T Jf^T p``."""
+        n = self.n
+        ys = [flint.arb((a + b) / 2) for a, b in cell]
+        got = self._field(ys, 1)
+        if got is None:
+            return lie.jet(self.z_of(ys), 0).value, None
+        p, f = got
+        value = sum((p[i] * f[i].value for i in range(n)), flint.arb(0))
+        F = flint.arb_mat([[fi.value] for fi in f])
+        Jtp = flint.arb_mat([[sum((f[i].grad[k] * p[i] for i in range(n)), flint.arb(0))] for k in range(n)])
+        gy = self.W2t * F + self.Mt * Jtp
+        return value, [gy[i, 0] for i in range(n)]
+
+    def negative(self, value: Any, grad: list[Any], H: tuple[list[list[Any]], bool], cell: Cell) -> bool:
+        """``g < 0`` on the cell by the Taylor form with ``H`` (enclosed over the cell or an ancestor); when
+        ``H`` is proved negative definite, also by ``g(m) + grad . t`` (``t^T H t <= 0``)."""
+        if self.taylor_upper(value, grad, H[0], cell) < 0:
+            return True
+        if not H[1]:
+            return False
+        zero = flint.arb(0)
+        total = value
+        for gi, (a, b) in zip(grad, cell):
+            r = flint.arb((b - a) / 2)
+            total = total + gi * zero.union(r).union(-r)
+        return bool(total < 0)
+
+    def taylor_upper(self, value: Any, grad: list[Any], H: list[list[Any]], cell: Cell) -> Any:
+        """An enclosure of ``g`` over the cell, ``g(m) + grad . t + t^T H t / 2`` with ``|t_i| <= r_i``."""
+        radii = [flint.arb((b - a) / 2) for a, b in cell]  # exact: dyadic
+        zero = flint.arb(0)
+        total = value
+        for i, gi in enumerate(grad):
+            total = total + gi * zero.union(radii[i]).union(-radii[i])
+            total = total + H[i][i] * zero.union(radii[i] * radii[i] / 2)
+            for j in range(i + 1, self.n):
+                p = radii[i] * radii[j]
+                total = total + H[i][j] * p.union(-p)
+        return total
+
+def negative_definite_preconditioned(H: list[list[Any]]) -> bool:
+    """Every symmetric matrix in the enclosure ``H`` is negative definite: the Cholesky test of ``C^T H C``
+    with ``C = L^-T`` for the float Cholesky factor ``L`` of ``-mid(H)`` (any ``C``: ``C^T H C`` negative
+    definite implies ``C`` invertible, so ``H`` negative definite)."""
+    n = len(H)
+    mid = np.array([[float(H[i][j].mid()) for j in range(n)] for i in range(n)])
+    try:
+        L = np.linalg.cholesky(-(mid + mid.T) / 2)
+        C = np.linalg.inv(L).T
+    except np.linalg.LinAlgError:
+        return False
+    if not np.all(np.isfinite(C)):
+        return False
+    # (rounded to 24 bits: a last-bit difference of another machine's LAPACK then rarely changes a cell)
+    Cm = flint.arb_mat([[float(np.float32(x)) for x in row] for row in C])
+    A = Cm.transpose() * flint.arb_mat(H) * Cm
+    return negative_definite([[A[i, j] for j in range(n)] for i in range(n)])
+
+
+def _split(cell: Cell, min_width: list[float], weights: list[float] | None = None) -> tuple[Cell, Cell] | None:
+    """The two halves across the widest side (in ``y``, the ellipsoid's metric), or with ``weights``
+    across the side of the largest weight times width (what that side adds to the Taylor form's
+    bound: the side where the margin is thinnest); None when every side is at the finest width."""
+    sides = [i for i in range(len(cell)) if cell[i][1] - cell[i][0] > min_width[i]]
+    if not sides:
+        return None
+    k = max(sides, key=lambda i: (cell[i][1] - cell[i][0]) * (1.0 if weights is None else weights[i]))
+    a, b = cell[k]
+    m = (a + b) / 2
+    return cell[:k] + ((a, m),) + cell[k + 1:], cell[:k] + ((m, b),) + cell[k + 1:]
+
+
+def _weights(grad: list[Any], H: list[list[Any]], cell: Cell) -> list[float]:
+    """Each side's share of the Taylor form's spread per unit of its width: ``|g_i| + sum_j |H_ij| r_j``
+    (floats: they only choose the side to split, the proof never rests on them)."""
+    radii = [(b - a) / 2 for a, b in cell]
+    return [abs(float(gi.mid())) + float(gi.rad()) + sum((abs(float(h.mid())) + float(h.rad())) * r
+                                                         for h, r in zip(row, radii))
+            for gi, row in zip(grad, H)]
+
+
+def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], level: Fraction, local: list[Fraction],
+                    cell_budget: int | None, cell_limit: int, deadline: float | None = None) -> EllipsoidProof:
+    """``g < 0`` on ``{z^T P z <= level}`` except at the equilibrium (module docstring); deterministic.
+    ``local``: the half-widths of the local box ``N`` around the equilibrium on which the Hessian of ``g``
+    is proved negative definite (:func:`~lyapcheck.models.engines.interval_region.local_box`; empty:
+    none), so ``g < 0`` on ``N`` but at the equilibrium: a cell whose image lies in ``N`` needs nothing
+    more. ``cell_budget`` (a search's work budget) and ``cell_limit`` (``verify``'s) bound the cells."""
+    from lyapcheck.models.engines.interval_region import SAFETY_NET, inverse_diagonal
+
+    diagonal = inverse_diagonal(P)
+    # {z^T P z <= inner} lies in N: max {z_i : z^T P z <= c} = sqrt(c (P^-1)_ii)
+    inner = min((x * x / d for x, d in zip(local, diagonal)), default=Fraction(0)) if diagonal else Fraction(0)
+    N = [ball(x) for x in local]
+
+    w = whitening(P, level)
+    if w is None:
+        return EllipsoidProof(False, "V's matrix is not proved positive definite in the ellipsoid's coordinates",
+                              0, None)
+    geo = _Geometry(w, P, lie)
+    n = geo.n
+    c = ball(level)
+    box: Cell = tuple((-float(h), float(h)) for h in w.half)
+    count = 0
+    limit = cell_limit if cell_budget is None else min(cell_budget, cell_limit)
+
+    def over() -> str | None:
+        if count > limit:
+            return (f"more than the attempt's {cell_budget} cells (lyapcheck.tolerances.BALL_LEVEL_CELLS over "
+                    "the loop's cost of a cell)"
+                    if cell_budget is not None and cell_budget <= cell_limit else f"more than {cell_limit} cells")
+        if deadline is not None and count % 64 == 0 and time.perf_counter() > deadline:
+            return SAFETY_NET
+        return None
+
+    def in_local_box(cell: Cell) -> bool:
+        return bool(N) and all(abs(zi) <= r for zi, r in zip(geo.z_of([flint.arb((a + b) / 2, (b - a) / 2)
+                                                                          for a, b in cell]), N))
+
+    def counterexample(cell: Cell, value: Any = None) -> EllipsoidProof | None:
+        """The end of the proof when ``g >= 0`` is proved at the cell's centre, a point of ``E`` other
+        than the equilibrium (``value``: ``g`` there, when already enclosed)."""
+        if all(a + b == 0 for a, b in cell):
+            return None
+        if value is None:
+            value = lie(geo.z_of([flint.arb((a + b) / 2) for a, b in cell]))
+        if not value >= 0:
+            return None
+        centre = geo.quadratic(tuple(((a + b) / 2, (a + b) / 2) for a, b in cell))
+        if not centre <= c:
+            return None
+        return EllipsoidProof(False, f"V' >= 0 at a point where V = {float(centre.mid()):.6g} <= level (proved): "
+                              "V does not decrease on the whole set at this level", count, level_1,
+                              float(centre.mid()))
+
+    # phase 2: the Hessian zone, cells in increasing order of their lower bound of y^T Q y
+    zone_width = [x * float(HESSIAN_ZONE_MIN_WIDTH) for x in geo.widths]
+    shell_width = [x * float(SHELL_MIN_WIDTH) for x in geo.widths]
+    order = 0  # ties broken by the order of creation: deterministic
+    heap: list[tuple[float, int, Cell]] = [(0.0, order, box)]
+    lows: dict[Cell, Any] = {box: geo.quadratic(box)}
+    zone: list[tuple[Cell, Any, list[list[Any]]]] = []  # (cell, y^T Q y over it, H over it)
+    pending: list[tuple[Cell, tuple[list[list[Any]], bool] | None]] = []  # (cell, (H, H proved < 0))
+    level_1: Fraction | None = None  # None: the zone is all of E
+    while heap:
+        _, _, cell = heapq.heappop(heap)
+        q = lows.pop(cell)
+        if q > c:
+            continue  # outside E
+        if in_local_box(cell):
+            continue  # the Hessian is negative definite on all of N (so at each point of this cell)
+        count += 1
+        if (why := over()) is not None:
+            return EllipsoidProof(False, why, count, None)
+        if (refuted := counterexample(cell)) is not None:
+            return refuted
+        H = geo.hessian_y(lie, cell)
+        if H is not None and negative_definite_preconditioned(H):
+            zone.append((cell, q, H))
+            continue
+        # near the equilibrium (a cell wider than its distance from it) down to the shell's finest width:
+        # there the Hessian is negative definite on small enough cells, and the zone must reach beyond N
+        near = max(b - a for a, b in cell) > max(float(q.lower()), 0.0) ** 0.5
+        halves = _split(cell, shell_width if near else zone_width)
+        if halves is not None:
+            for half in halves:
+                lows[half] = geo.quadratic(half)
+                order += 1
+                heapq.heappush(heap, (float(lows[half].lower()), order, half))
+            continue
+        # the zone ends here: E_1 = {y^T Q y < level_1}, level_1 a dyadic at most the lower bound of y^T Q y
+        # over this cell and every cell not taken yet (so E_1 meets none of them)
+        pending.append((cell, None if H is None else (H, False)))
+        pending.extend((rest, None) for _, _, rest in sorted(heap))
+        lowest = min([q.lower()] + [lows[rest].lower() for _, _, rest in heap])
+        level_1 = Fraction(max(float(lowest.mid()) - 2 * float(lowest.rad()), 0.0))
+        while level_1 > 0 and not ball(level_1) < lowest:  # (a ball's lower bound is itself a small ball)
+            level_1 = Fraction(float(level_1) * (1 - 2 ** -30))
+        break
+    c1 = None if level_1 is None else ball(level_1)
+    c0 = ball(inner)  # {y^T Q y <= inner} lies in N
+
+    def inside(q: Any, cell: Cell) -> bool:
+        """The cell (``y^T Q y`` enclosed over it by ``q``) lies in ``E_1``, or in ``N``."""
+        return c1 is None or bool(q < c1) or bool(q <= c0) or in_local_box(cell)
+
+    for cell, q, H in zone:
+        if inside(q, cell):
+            continue  # g < 0 by the Hessian
+        pending.append((cell, (H, True)))
+    # phase 3: the shell, by Taylor forms; depth first, in a fixed order
+    stack = list(reversed(pending))
+    while stack:
+        cell, H = stack.pop()
+        q = geo.quadratic(cell)
+        if q > c or inside(q, cell):
+            continue  # outside E, or inside E_1 or N's ellipsoid
+        count += 1
+        if (why := over()) is not None:
+            return EllipsoidProof(False, why, count, level_1)
+        value, grad = geo.at_centre(lie, cell)
+        if (refuted := counterexample(cell, value)) is not None:
+            return refuted
+        if grad is not None and H is not None and geo.negative(value, grad, H, cell):
+            continue
+        own_H = geo.hessian_y(lie, cell) if grad is not None else None
+        own = None if own_H is None else (own_H, negative_definite_preconditioned(own_H))
+        if grad is not None and own is not None and geo.negative(value, grad, own, cell):
+            continue
+        inherited = own if own is not None else H
+        halves = _split(cell, shell_width, None if grad is None or inherited is None else
+                        _weights(grad, inherited[0], cell))
+        if halves is None:
+            where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
+            return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates, at the "
+                                  "finest cells)", count, level_1)
+        stack.extend((half, inherited) for half in reversed(halves))
+    return EllipsoidProof(True, "proved", count, level_1)
+
+
+__all__ = ["EllipsoidProof", "Whitening", "whitening", "prove_ellipsoid", "negative_definite_preconditioned"]
