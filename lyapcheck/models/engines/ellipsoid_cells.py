@@ -45,13 +45,13 @@ cell for cell from the certificate alone. The work is bounded by a count of cell
 from __future__ import annotations
 
 import heapq
+import math
 import time
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Final
 
 import flint
-import numpy as np
 
 from lyapcheck.models.engines.interval_field import LieDerivative, ball, negative_definite
 
@@ -259,21 +259,40 @@ class _Geometry:
                 total = total + H[i][j] * p.union(-p)
         return total
 
+def _inverse_cholesky_transpose(S: list[list[float]]) -> list[list[float]] | None:
+    """``L^-T`` for the Cholesky factor ``L`` of ``S`` (``S = L L^T``), in Python floats, None when ``S``
+    is not numerically positive definite. Written out rather than numpy's LAPACK on purpose: Python's
+    float operations and ``math.sqrt`` are correctly rounded, so every machine gets the same ``C`` and
+    ``verify`` repeats a proof cell for cell (LAPACK's blocking and FMA use vary with the machine).
+    The proof holds for any ``C``: this only chooses a good one."""
+    n = len(S)
+    L = [[0.0] * n for _ in range(n)]
+    for j in range(n):
+        d = S[j][j] - sum(L[j][k] * L[j][k] for k in range(j))
+        if not d > 0 or not math.isfinite(d):
+            return None
+        L[j][j] = math.sqrt(d)
+        for i in range(j + 1, n):
+            L[i][j] = (S[i][j] - sum(L[i][k] * L[j][k] for k in range(j))) / L[j][j]
+    inv = [[0.0] * n for _ in range(n)]  # L^-1, lower triangular, by forward substitution
+    for c in range(n):
+        for i in range(c, n):
+            inv[i][c] = ((1.0 if i == c else 0.0) - sum(L[i][k] * inv[k][c] for k in range(c, i))) / L[i][i]
+    if not all(math.isfinite(x) for row in inv for x in row):
+        return None
+    return [[inv[j][i] for j in range(n)] for i in range(n)]
+
+
 def negative_definite_preconditioned(H: list[list[Any]]) -> bool:
     """Every symmetric matrix in the enclosure ``H`` is negative definite: the Cholesky test of ``C^T H C``
     with ``C = L^-T`` for the float Cholesky factor ``L`` of ``-mid(H)`` (any ``C``: ``C^T H C`` negative
     definite implies ``C`` invertible, so ``H`` negative definite)."""
     n = len(H)
-    mid = np.array([[float(H[i][j].mid()) for j in range(n)] for i in range(n)])
-    try:
-        L = np.linalg.cholesky(-(mid + mid.T) / 2)
-        C = np.linalg.inv(L).T
-    except np.linalg.LinAlgError:
+    mid = [[-(float(H[i][j].mid()) + float(H[j][i].mid())) / 2 for j in range(n)] for i in range(n)]
+    C = _inverse_cholesky_transpose(mid)
+    if C is None:
         return False
-    if not np.all(np.isfinite(C)):
-        return False
-    # (rounded to 24 bits: a last-bit difference of another machine's LAPACK then rarely changes a cell)
-    Cm = flint.arb_mat([[float(np.float32(x)) for x in row] for row in C])
+    Cm = flint.arb_mat(C)
     A = Cm.transpose() * flint.arb_mat(H) * Cm
     return negative_definite([[A[i, j] for j in range(n)] for i in range(n)])
 
