@@ -121,6 +121,12 @@ def figure(cond: dict[str, Any], key: str, fmt: str) -> str:
     return "-" if value is None else format(float(value), fmt)
 
 
+def ball_text(cond: dict[str, Any]) -> str:
+    """The largest proved ball: the SOS route's ``ball_radius`` or the size figures' (``size.ball_radius``)."""
+    radii = [float(r) for r in (cond.get("ball_radius"), (cond.get("size") or {}).get("ball_radius")) if r is not None]
+    return format(max(radii), ".4g") if radii else "-"
+
+
 def share_text(cond: dict[str, Any]) -> str:
     value = cond.get("roa_share")
     return "-" if value is None else f"{100 * float(value):.1f} %"
@@ -252,7 +258,7 @@ def main() -> int:
             cond = r.condition()
             status = cond.get("status", f"exit {r.exit}" if r.doc is None else "absent")
             print(f"{label:<17} {states:>6}  {klass:<9}  {status:<13} {r.wall:7.1f}  {share_text(cond):>17}  "
-                  f"{figure(cond, 'level', '.4g'):>9}  {figure(cond, 'ball_radius', '.4g'):>11}", flush=True)
+                  f"{figure(cond, 'level', '.4g'):>9}  {ball_text(cond):>11}", flush=True)
     print("(time: the whole certify process with --classes linearization,CLASS, imports included; share: roa_share, "
           "the share of lyapcheck's simulated region of attraction in the [domain] box inside the certified set)\n")
 
