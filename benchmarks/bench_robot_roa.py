@@ -135,6 +135,8 @@ def share_text(cond: dict[str, Any]) -> str:
 #: uniform starts in the [domain] box for the shares compared with Drake, the simulation's horizon (s),
 #: step (s) and the radius counted as converged
 COMPARE_SAMPLES, COMPARE_HORIZON_S, COMPARE_STEP_S, COMPARE_CONVERGED = 2000, 30.0, 0.01, 1e-3
+#: how long Drake's run on one example may take
+DRAKE_TIMEOUT_S = 1800.0
 
 
 def converged_starts(stem: str, seed: int = 0) -> tuple["Any", "Any"]:
@@ -197,11 +199,14 @@ def drake_comparison(drake_python: str, runs: list[Run], examples: list[tuple[st
         t0 = time.perf_counter()
         try:
             done = subprocess.run([drake_python, str(Path(__file__).with_name("drake_taylor_roa.py"))],
-                                  input=payload, capture_output=True, text=True, timeout=1800)
+                                  input=payload, capture_output=True, text=True, timeout=DRAKE_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            print(f"  {label:<17} Drake gave no level within {DRAKE_TIMEOUT_S:g} s (stopped)", flush=True)
+            continue
+        try:
             drake = json.loads(done.stdout)
-        except (subprocess.TimeoutExpired, json.JSONDecodeError) as exc:
-            print(f"  {label:<17} Drake gave no level ({type(exc).__name__}): "
-                  f"{locals().get('done') and done.stderr.strip()[-300:]}")
+        except json.JSONDecodeError:
+            print(f"  {label:<17} Drake gave no level (exit {done.returncode}): {done.stderr.strip()[-300:]}")
             continue
         drake_wall = time.perf_counter() - t0
         starts, converged = converged_starts(stem)
