@@ -190,6 +190,23 @@ def det(m: Matrix) -> Fraction:
     return result
 
 
+#: bits after the binary point of the dyadic rationals the ball-arithmetic proofs round their grid
+#: corners and levels to
+DYADIC_BITS = 20
+
+
+def dyadic_floor(x: Fraction, bits: int = DYADIC_BITS) -> Fraction:
+    """The largest multiple of ``2**-bits`` at most ``x``."""
+    scale = 2 ** bits
+    return Fraction(math.floor(x * scale), scale)
+
+
+def dyadic_ceil(x: Fraction, bits: int = DYADIC_BITS) -> Fraction:
+    """The smallest multiple of ``2**-bits`` at least ``x``."""
+    scale = 2 ** bits
+    return Fraction(math.ceil(x * scale), scale)
+
+
 def quadratic_matrix(terms: Mapping[tuple[int, ...], Fraction], n: int) -> list[list[Fraction]]:
     """The symmetric ``P`` with ``z^T P z`` the terms of degree 2 in the first ``n`` variables alone
     (``terms``: exponents to coefficient; every other term is left out)."""

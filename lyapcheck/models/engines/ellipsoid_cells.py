@@ -124,7 +124,7 @@ def _inverse_root(P: list[list[Fraction]]) -> list[list[Fraction]] | None:
 def whitening(P: list[list[Fraction]], level: Fraction) -> Whitening | None:
     """The coordinates of the module docstring (part 1) for a positive definite ``P``, or None."""
     from lyapcheck.exact import inverse
-    from lyapcheck.models.engines.interval_region import dyadic_ceil
+    from lyapcheck.exact import dyadic_ceil
     from lyapcheck.sos.definiteness import is_positive_definite
 
     n = len(P)
@@ -319,16 +319,15 @@ def _weights(grad: list[Any], H: list[list[Any]], cell: Cell) -> list[float]:
             for gi, row in zip(grad, H)]
 
 
-def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], level: Fraction, local: list[Fraction],
-                    cell_budget: int | None, cell_limit: int, deadline: float | None = None) -> EllipsoidProof:
+def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[Fraction], level: Fraction,
+                    local: list[Fraction], cell_budget: int | None, cell_limit: int, deadline: float | None = None,
+                    stopped: str = "stopped at the deadline") -> EllipsoidProof:
     """``g < 0`` on ``{z^T P z <= level}`` except at the equilibrium (module docstring); deterministic.
     ``local``: the half-widths of the local box ``N`` around the equilibrium on which the Hessian of ``g``
     is proved negative definite (:func:`~lyapcheck.models.engines.interval_region.local_box`; empty:
     none), so ``g < 0`` on ``N`` but at the equilibrium: a cell whose image lies in ``N`` needs nothing
-    more. ``cell_budget`` (a search's work budget) and ``cell_limit`` (``verify``'s) bound the cells."""
-    from lyapcheck.models.engines.interval_region import SAFETY_NET, inverse_diagonal
-
-    diagonal = inverse_diagonal(P)
+    more. ``cell_budget`` (a search's work budget) and ``cell_limit`` (``verify``'s) bound the cells.
+    ``diagonal``: the diagonal of ``P^-1`` (exact); ``stopped``: the reason given when ``deadline`` passes."""
     # {z^T P z <= inner} lies in N: max {z_i : z^T P z <= c} = sqrt(c (P^-1)_ii)
     inner = min((x * x / d for x, d in zip(local, diagonal)), default=Fraction(0)) if diagonal else Fraction(0)
     N = [ball(x) for x in local]
@@ -350,7 +349,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], level: Fraction
                     "the loop's cost of a cell)"
                     if cell_budget is not None and cell_budget <= cell_limit else f"more than {cell_limit} cells")
         if deadline is not None and count % 64 == 0 and time.perf_counter() > deadline:
-            return SAFETY_NET
+            return stopped
         return None
 
     def in_local_box(cell: Cell) -> bool:

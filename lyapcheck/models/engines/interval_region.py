@@ -42,6 +42,7 @@ from typing import Any, Final
 
 import flint
 
+from lyapcheck.exact import DYADIC_BITS, dyadic_ceil, dyadic_floor
 from lyapcheck.models.engines.interval_field import BallLoop, LieDerivative, negative_definite
 from lyapcheck.models.language.recast import RecastSystem
 from lyapcheck.sos.polynomials import Poly, Ring
@@ -62,20 +63,6 @@ LOCAL_HALVINGS: Final = 24
 #: the outer radius (beyond which V > level in every direction) is sought within 2^this times the
 #: box's size before a direction cell is accepted with a farther one
 OUTER_RADIUS_SHIFT: Final = 3
-#: the dyadic grid corners and levels are rounded to (bits after the binary point)
-DYADIC_BITS: Final = 20
-
-
-def dyadic_floor(x: Fraction, bits: int = DYADIC_BITS) -> Fraction:
-    scale = 2 ** bits
-    return Fraction((x * scale).__floor__(), scale)
-
-
-def dyadic_ceil(x: Fraction, bits: int = DYADIC_BITS) -> Fraction:
-    scale = 2 ** bits
-    return Fraction((x * scale).__ceil__(), scale)
-
-
 #: a box corner's magnitude is below 2^this: with DYADIC_BITS after the point and the finest
 #: bisection, every cell corner and midpoint is then exact in a double (53 bits)
 MAGNITUDE_BITS: Final = 12
@@ -297,7 +284,10 @@ def _prove_on_ellipsoid(lie: LieDerivative, ring: Ring, claim: IntervalClaim, n:
 
     P = quadratic_form(ring, claim.V, n)
     assert P is not None  # (exact_faces proved it a positive definite quadratic form)
-    found = prove_ellipsoid(lie, P, claim.level, radii, cell_budget, INTERVAL_CELL_LIMIT, deadline)
+    diagonal = inverse_diagonal(P)
+    assert diagonal is not None
+    found = prove_ellipsoid(lie, P, diagonal, claim.level, radii, cell_budget, INTERVAL_CELL_LIMIT, deadline,
+                            SAFETY_NET)
     return IntervalProof(found.ok, found.why, found.cells, boundary, r, time.perf_counter() - start,
                          found.counterexample_v)
 
