@@ -212,9 +212,7 @@ def what_it_means(doc: Mapping[str, Any], cond: Mapping[str, Any]) -> str:
     """A condition's summary and, for a certified V, its short form (the first terms to six
     significant digits; the exact V is in the JSON): ``V = ...``, one line per output for
     ``sos_bound``."""
-    from lyapcheck.models.classes.claims import V_SHORT_TERMS, v_text
-
-    from lyapcheck.models.classes.claims import size_words
+    from lyapcheck.models.classes.claims import V_SHORT_TERMS, size_words, v_text
 
     text = str(cond["summary"])
     cert = cond.get("certificate")
