@@ -283,10 +283,6 @@ def least_squares(rows: Sequence[Sequence[Fraction | int]], rhs: Sequence[Fracti
     return solve(tuple(tuple(r) for r in normal), right)
 
 
-def leading_minors(m: Matrix) -> list[Fraction]:
-    return [det(tuple(row[:k] for row in m[:k])) for k in range(1, len(m) + 1)]
-
-
 def is_symmetric(m: Sequence[Sequence[Any]]) -> bool:
     """Square (every row as long as the matrix) and equal to its transpose."""
     n = len(m)
@@ -298,26 +294,30 @@ def is_positive_definite(m: Matrix) -> bool:
     return is_symmetric(m) and leading_minors_positive(m)
 
 
+def ldl(m: Sequence[Sequence[Fraction]]) -> tuple[list[list[Fraction]], list[Fraction]] | None:
+    """The exact symmetric elimination ``M = L D L^T`` (``L`` unit lower triangular, ``D`` the pivots),
+    or None if a pivot is zero."""
+    n = len(m)
+    L = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    D: list[Fraction] = []
+    for j in range(n):
+        pivot = Fraction(m[j][j]) - sum((L[j][k] ** 2 * D[k] for k in range(j)), Fraction(0))
+        if pivot == 0:
+            return None
+        D.append(pivot)
+        for i in range(j + 1, n):
+            L[i][j] = (Fraction(m[i][j]) - sum((L[i][k] * L[j][k] * D[k] for k in range(j)), Fraction(0))) / pivot
+    return L, D
+
+
 def ldl_pivots(m: Matrix) -> list[Fraction] | None:
     """Pivots of the exact symmetric elimination ``M = L D L^T`` (None if a pivot is zero).
 
     A symmetric matrix is positive definite iff every pivot is positive; this costs
     O(n^3) exact operations instead of the n determinants of Sylvester's criterion.
     """
-    n = len(m)
-    work = [list(row) for row in m]
-    pivots: list[Fraction] = []
-    for k in range(n):
-        pivot = work[k][k]
-        if pivot == 0:
-            return None
-        pivots.append(pivot)
-        for i in range(k + 1, n):
-            factor = work[i][k] / pivot
-            if factor:
-                for j in range(k + 1, n):
-                    work[i][j] -= factor * work[k][j]
-    return pivots
+    found = ldl(m)
+    return None if found is None else found[1]
 
 
 def integer_matrix(m: Sequence[Sequence[Fraction | int]]) -> list[list[int]]:

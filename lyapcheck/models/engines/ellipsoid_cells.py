@@ -103,19 +103,14 @@ def _inverse_root(P: list[list[Fraction]]) -> list[list[Fraction]] | None:
     roots only, so that ``verify`` on any machine gets the same ``M`` (hence the same cells)."""
     from math import isqrt
 
+    from lyapcheck.exact import inverse, ldl
+
     n = len(P)
-    L = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
-    D = [Fraction(0)] * n
-    for j in range(n):
-        D[j] = P[j][j] - sum((L[j][k] ** 2 * D[k] for k in range(j)), Fraction(0))
-        if D[j] <= 0:
-            return None
-        for i in range(j + 1, n):
-            L[i][j] = (P[i][j] - sum((L[i][k] * L[j][k] * D[k] for k in range(j)), Fraction(0))) / D[j]
-    inv = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]  # L^-1, unit lower triangular
-    for i in range(n):
-        for j in range(i):
-            inv[i][j] = -sum((L[i][k] * inv[k][j] for k in range(j, i)), Fraction(0))
+    found = ldl(P)
+    if found is None or any(d <= 0 for d in found[1]):
+        return None
+    L, D = found
+    inv = inverse(L)  # L^-1, unit lower triangular
     scale = 2 ** 60
     root = [Fraction(isqrt(int(scale * scale / d)), scale) for d in D]  # about 1 / sqrt(D_j)
     return [[_short(inv[j][i] * root[j]) for j in range(n)] for i in range(n)]  # M_ij = (L^-T)_ij root_j
