@@ -384,6 +384,10 @@ def sentence_of(cert: dict[str, Any]) -> str:
         return text
     if cert.get("kind") == "interval":
         return interval_sentence(cert)
+    if cert.get("kind") == "lyapunov_relations":  # quadratic, sos_gas: the polynomial loops' implementation
+        from lyapcheck.models.classes.lyapunov import relations_sentence
+
+        return relations_sentence(cert)
     return lyapunov_sentence(cert)
 
 

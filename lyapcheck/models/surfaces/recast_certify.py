@@ -25,6 +25,8 @@ from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel
 from lyapcheck.models.classes.bounds import KIND, OLD_KIND, check_functions as check_bound
+from lyapcheck.models.classes.lyapunov import (OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, check_relations_certificate,
+                                               relations_claim)
 from lyapcheck.models.classes.recast_interval import box_units
 from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
                                              jacobian, lie, state_square, v_names, v_text)
@@ -169,6 +171,8 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
 
         claim = bound_claim(model, {out: read_rational(item["bound"]) for out, item in cert["outputs"].items()})
         return Stated("ultimate_bound", {k: v for k, v in claim.items() if k != "status"})
+    if kind == RELATIONS_KIND and name in ("quadratic", "sos_gas"):
+        return Stated(*relations_claim(cert))
     if kind == "interval":  # (its size: re-derived in a row of its own, check_size_rows)
         return Stated("ROA", {"level": read_rational(cert["level"])}, frozenset({"size"}))
     if kind == RECAST_BARRIER:
@@ -342,6 +346,11 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
         if model is None:
             return False, "a reach-avoid function is certified on the model's own parameters, not over a box"
         return _verify_reach_avoid(c, base, model)
+    if name in ("quadratic", "sos_gas"):  # one implementation for every loop (lyapcheck.models.classes.lyapunov)
+        if cert.get("kind") == OLD_RELATIONS_KIND:
+            return False, OLD_FORMAT
+        proved, why = _proved_recasting(cert, base)
+        return (False, why) if proved is None else check_relations_certificate(name, c, proved)
     if cert.get("kind") == "interval" and name in ("roa", "candidate"):
         from lyapcheck.models.classes.recast_interval import check_interval
 

@@ -16,11 +16,12 @@ from lyapcheck.degrees import searched_degrees
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel, written_poly
-from lyapcheck.models.classes.recast_classes import (EPSILONS, RECAST_GAS_DEGREES, Loop, base_loop, best_region, certify_region,
+from lyapcheck.models.classes.lyapunov import RELATIONS_GAS_DEGREES, run_relations
+from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, base_loop, best_region, certify_region,
                                              common_denominator, jacobian, lie, linearization,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
-                                             quadratic, quadratic_candidate, refute_global, region_of_attraction,
-                                             sos_gas, certificate_head, for_v, state_square, v_names)
+                                             quadratic_candidate, refute_global, region_of_attraction,
+                                             certificate_head, for_v, state_square, v_names)
 from lyapcheck.models.classes.recast_improve import improved_regions
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
@@ -55,12 +56,12 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
     if "quadratic" in classes:
         start = time.perf_counter()
         results["quadratic"] = refute_global(loop, "quadratic") or \
-            quadratic(loop, class_budget(time_limit_s))
+            run_relations(loop, class_budget(time_limit_s), "quadratic", (2,))
         seconds["quadratic"] = time.perf_counter() - start
     if "sos_gas" in classes:
         start = time.perf_counter()
         results["sos_gas"] = refute_global(loop, "sos_gas") or \
-            sos_gas(loop, class_budget(time_limit_s), degrees=searched_degrees(RECAST_GAS_DEGREES))
+            run_relations(loop, class_budget(time_limit_s), "sos_gas", searched_degrees(RELATIONS_GAS_DEGREES))
         seconds["sos_gas"] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()
@@ -119,11 +120,11 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
             results[name] = ConditionResult(name, "not_applicable", reasons.NOT_OVER_A_BOX[name])
     if {"quadratic", "sos_gas", "barrier", "reach_avoid"} & set(classes):
         proved, _ = prove_root_bounds(boxed, Search(boxed.ring, budget))
-        for name, run_class in (("quadratic", quadratic), ("sos_gas", sos_gas)):
+        for name, degrees in (("quadratic", (2,)), ("sos_gas", searched_degrees(RELATIONS_GAS_DEGREES))):
             if name in classes:
                 start = time.perf_counter()
                 results[name] = refute_global(loop, name) or \
-                    run_class(proved, class_budget(time_limit_s))
+                    run_relations(proved, class_budget(time_limit_s), name, degrees)
                 seconds[name] = time.perf_counter() - start
     if "roa" in classes:
         start = time.perf_counter()
