@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Literal, Mapping, Sequence
 
 from lyapcheck.models.engines import reasons, store
 from lyapcheck.models.loop.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
@@ -865,7 +865,7 @@ def relations_certificate(loop: Any, field: Any, dens: Sequence[Any], found: Map
             "decrease": found["decrease"].to_json(ring)}
 
 
-def relations_claim(cert: Mapping[str, Any]) -> tuple[str, dict[str, Any]]:
+def relations_claim(cert: Mapping[str, Any]) -> tuple[Literal["GES", "GAS"], dict[str, Any]]:
     """The property and figures a certificate of :data:`RELATIONS_KIND` proves, exactly, from the
     certificate (after its check): GES with ``k`` and the rate of ``|x|`` where it states ``c1``,
     ``c2`` and ``k``, else GAS; the degree and ``V``'s decay rate (1/s)."""

@@ -1,4 +1,5 @@
-"""The classes on a recast (non-polynomial) loop: ``linearization``, ``sos_gas``, ``roa``, ``candidate``.
+"""The classes on a recast (non-polynomial) loop: ``linearization``, ``roa``, ``candidate`` (``quadratic`` and
+``sos_gas`` are :mod:`lyapcheck.models.classes.lyapunov`'s, for every loop), and the loop they share.
 
 Coordinates: the deviations from the equilibrium of the states and of every non-constant
 auxiliary (:meth:`lyapcheck.models.language.recast.RecastSystem.shift`); the constant roots stay. A
@@ -12,7 +13,7 @@ holds every point ``(z, a(z))`` of the true loop:
   (each distinct factor of the denominators, :func:`prove_denominators`);
 - for a region, the decrease only where ``V <= level`` (a multiplier ``rho`` times ``V - level``).
 
-Then ``sos_gas`` proves global asymptotic stability of the true loop, and ``roa`` that every
+Then ``roa`` proves that every
 trajectory of the true loop starting where ``V(x, a(x)) <= level`` (a bounded set, by the
 positivity) converges to the equilibrium. A loop that enters only through ``sin`` and ``cos`` of an
 angle has its other equilibria (``k pi``) in every such set's complement: no global claim can be
@@ -25,21 +26,18 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Final, Mapping, Sequence
 
-from lyapcheck import tolerances
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.language.expressions import Rational
 from lyapcheck.models.language.recast import RecastSystem, Relation, written_poly
 from lyapcheck.models.engines.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
                                          poly_from_json, poly_to_json, solve_on_faces)
-from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, SolvesSpent
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search
 from lyapcheck.results import ConditionResult
-from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, monomials, to_fmpq
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, to_fmpq
 from lyapcheck.exact import read_rational
 
 #: the margin eps of positivity and decrease (times |z|^2), tried in turn
 EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
-#: degrees of V tried by sos_gas
-RECAST_GAS_DEGREES: Final = (2, 4)
 #: halvings of the level's bracket in roa's bisection
 LEVEL_BISECTIONS: Final = 7
 #: levels tried upwards (each the previous times this) before the bisection
@@ -497,186 +495,6 @@ def v_text(system: RecastSystem, V: Poly) -> str:
     import re
 
     return re.sub(r"\b(" + "|".join(map(re.escape, names)) + r")\b", lambda m: table[m.group(1)], text)
-
-
-def sos_gas(loop: Loop, budget: Budget, degrees: Sequence[int] = RECAST_GAS_DEGREES, name: str = "sos_gas",
-            states_only: bool = False) -> ConditionResult:
-    """Search ``V`` (free, in the states and smooth auxiliaries; ``states_only``: in the states alone)
-    with positivity and a global decrease."""
-    ring = loop.ring
-    search = Search(ring, budget)
-    tried: list[str] = []
-    all_vars = loop.v_variables()
-    coordinates = loop.coordinates()
-    templates = [(dv, vs) for dv in degrees for vs in ([coordinates] if len(all_vars) == len(coordinates) or
-                                                        loop.angles or states_only else [coordinates, all_vars])]
-    templates = [(dv, vs) for dv, vs in templates if vs] if not loop.angles else [(dv, all_vars) for dv in degrees]
-    spent: list[str] = []  # the templates whose budget of solves ended their search
-    for dv, v_vars in templates:
-        basis = [m for m in monomials(ring.nvars, 1, dv) if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
-        # each template (its margins and faces together) gets a budget of solves, so that one large
-        # program leaves the others their turn, the same way on any machine (a count, not seconds)
-        capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
-        # the flows of every V variable (V may use any of them)
-        names = [ring.names[i] for i in v_vars]
-        label = f"degree {dv} in {', '.join(names)}"
-        N, D, distinct = common_denominator(loop, names)
-        dens, failed = prove_denominators(loop, distinct, search)
-        if failed is not None:
-            return ConditionResult(name, "not_applicable", f"the denominator {written_poly(ring, failed)} could "
-                                   "not be proved positive on the recasting's set", property="GAS")
-        l2 = state_square(loop)
-        pos_terms = [(f"v{k}", ring.monomial(m)) for k, m in enumerate(basis)]
-        dec_terms = [(f"v{k}", -lie(loop, ring.monomial(m), N)) for k, m in enumerate(basis)]
-        top_dec = max((sum(mm) for _, p in dec_terms for mm in ring.support(p)), default=2)
-
-        def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
-            program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
-                                       square_free=loop.square_free())
-            for k in range(len(basis)):
-                program.free(f"v{k}")
-            return program.condition("P", ring.support(l2), pos_terms, dv) or \
-                program.condition("D", ring.support(l2), dec_terms, top_dec) or _template_size(program)
-
-        for eps in EPSILONS:
-            values = ParameterValues()
-            _set(values, *known_values(ring, "P", -l2 * to_fmpq(eps), ring.support(l2)))
-            _set(values, *known_values(ring, "D", -l2 * to_fmpq(eps), ring.support(l2)))
-
-            def accept(program: ConditionProgram, point: Any, eps: Fraction = eps) -> tuple[Poly, Any, Any] | None:
-                V = sum((ring.monomial(m, point.scalars[f"v{k}"]) for k, m in enumerate(basis)), ring.zero())
-                pos, dec = program.certificate("P", point), program.certificate("D", point)
-                ok = check_condition(ring, V - l2 * to_fmpq(eps), loop.relations, pos)[0] and \
-                    check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(eps), loop.relations, dec)[0]
-                return (V, pos, dec) if ok else None
-
-            if budget.left() <= 0:
-                late = reasons.out_of_time("a Lyapunov function", budget.seconds, [budget.reached(), *tried])
-                return ConditionResult(name, "inconclusive", late.summary, numbers=late.numbers(),
-                                       property="GAS", solver={"solves": search.log})
-            try:
-                found, why = solve_on_faces(capped, build, values, accept)
-            except SolvesSpent as exc:
-                tried.append(f"{label}, eps {eps}: {exc}")
-                spent.append(exc.limit.words())
-                break
-            except BudgetExhausted as exc:
-                tried.append(f"{label}, eps {eps}: {exc}")
-                break
-            if found is None:
-                tried.append(f"{label}, eps {eps}: {why}")
-                if "size" in why or "rows" in why or "infeasible" in why:
-                    break
-                continue
-            V, pos, dec = found
-            cert = certificate_head(loop, V, eps, D, dens)
-            cert.update({"positivity": pos.to_json(ring), "decrease": dec.to_json(ring)})
-            return ConditionResult(name, "certified",
-                                   f"V(x, a(x)) >= {eps} |x - x_eq|^2 and V' <= -{eps} |x - x_eq|^2 / D with D > 0 on "
-                                   "the recasting's relations (exact): globally asymptotically stable",
-                                   numbers={"degree": dv}, certificate=cert, property="GAS",
-                                   solver={"solves": search.log})
-    none = reasons.not_found("Lyapunov function", degrees, tried,
-                             ("sos_gas", "candidate") if name == "quadratic" else ("degree", "candidate"))
-    if spent:
-        none = reasons.with_budget(none, spent[0])
-    return ConditionResult(name, "not_certified", none.summary, property="GAS",
-                           numbers=none.numbers({"reason": "; ".join(tried)}), solver={"solves": search.log})
-
-
-def _template_size(program: ConditionProgram) -> ConditionProgram | str:
-    """``program``, or why a template's program is too large for sos_gas (its largest matrix
-    above :data:`~lyapcheck.tolerances.TEMPLATE_GRAM_ROWS` rows): a count that decides, where a
-    wall-clock limit per template once did, whether the template is solved."""
-    rows = max((len(g.basis) for g in program.grams), default=0)
-    if rows > tolerances.TEMPLATE_GRAM_ROWS:
-        return reasons.size_limit(rows, "rows of one sum-of-squares matrix", tolerances.TEMPLATE_GRAM_ROWS,
-                                  "TEMPLATE_GRAM_ROWS")
-    return program
-
-
-def quadratic(loop: Loop, budget: Budget) -> ConditionResult:
-    """``quadratic``: ``V = z^T P z`` in the state deviations alone, positive definite and decreasing
-    everywhere on the recasting's relations (GAS). Where the field has no denominator (``D = 1``),
-    ``V' <= -eps |z|^2`` and exact ``c1 <= lambda_min(P)``, ``c2 >= lambda_max(P)`` give **GES**:
-    ``|z(t)| <= k |z0| exp(-rate t)`` with ``rate = eps/(2 c2)`` and ``k >= sqrt(c2/c1)``."""
-    if loop.angles:
-        return ConditionResult("quadratic", "not_applicable", f"{', '.join(loop.angles)} enters the loop only through "
-                               "its sine and cosine: a quadratic in it is not periodic (sos_gas uses the sine and "
-                               "cosine)", property="GAS")
-    result = sos_gas(loop, budget, degrees=(2,), name="quadratic", states_only=True)
-    if result.status != "certified":
-        return result
-    _sharpen_decrease(loop, result.certificate, budget)
-    ges = ges_of(loop, result.certificate)
-    if ges is not None:
-        result.certificate["ges"] = {k: str(v) for k, v in ges.items()}
-        result.property = "GES"
-        result.numbers.update({"k": float(ges["k"]), "decay_rate_per_s": float(ges["rate"])})
-    return result
-
-
-#: the decrease margins tried for a certified quadratic V, largest first (times |z|^2): the GES
-#: rate is this over twice V's largest eigenvalue, so the search margin 1/100 alone says little
-SHARPER_DECREASE: Final = (Fraction(1), Fraction(1, 2), Fraction(1, 4), Fraction(1, 8), Fraction(1, 16),
-                           Fraction(1, 32))
-
-
-def _sharpen_decrease(loop: Loop, cert: dict[str, Any], budget: Budget) -> None:
-    """For a certified quadratic V without denominators: the largest margin of SHARPER_DECREASE with
-    ``-V' - margin |z|^2`` proved non-negative on the relations (exact), stored as
-    ``decrease_epsilon`` with its proof in place of the search's."""
-    ring = loop.ring
-    if poly_from_json(ring, cert["denominator"], "denominator") != ring.constant(1):
-        return
-    V = poly_from_json(ring, cert["V"], "V")
-    N, _, _ = common_denominator(loop, v_names(loop, V))
-    l2 = state_square(loop)
-    search = Search(ring, budget)
-    eps = read_rational(cert["epsilon"])
-    for margin in SHARPER_DECREASE:
-        if margin <= eps or budget.left() <= 0:
-            return
-        try:
-            proof = prove_nonnegative(loop, -lie(loop, V, N) - l2 * to_fmpq(margin), search, "Ds")
-        except BudgetExhausted:
-            return
-        if proof is not None:
-            cert["decrease_epsilon"] = str(margin)
-            cert["decrease"] = proof.to_json(ring)
-            return
-
-
-def ges_of(loop: Loop, cert: dict[str, Any]) -> dict[str, Fraction] | None:
-    """``c1``, ``c2``, ``rate`` and ``k`` of a quadratic certificate without denominators (None
-    otherwise); each exact: ``P - c1 I`` and ``c2 I - P`` positive definite (checked in rationals),
-    ``k^2 >= c2/c1``."""
-    import numpy as np
-
-    from lyapcheck import exact
-    from lyapcheck.models.engines.interval_region import quadratic_form
-    from lyapcheck.sos.definiteness import is_positive_definite
-
-    ring = loop.ring
-    n = loop.n_states
-    D = poly_from_json(ring, cert["denominator"], "denominator")
-    if D != ring.constant(1):
-        return None
-    V = poly_from_json(ring, cert["V"], "V")
-    P = quadratic_form(ring, V, n)
-    if P is None:
-        return None
-    eps = read_rational(cert["epsilon"])
-    decrease = read_rational(cert.get("decrease_epsilon", eps))
-    lam = np.linalg.eigvalsh(np.array([[float(x) for x in row] for row in P]))
-    c2 = Fraction(float(lam[-1]) * (1 + 1e-6)).limit_denominator(10 ** 12) + Fraction(1, 10 ** 12)
-    if not is_positive_definite([[c2 * int(i == j) - P[i][j] for j in range(n)] for i in range(n)]):
-        return None
-    # V >= eps |z|^2 is proved; P's own smallest eigenvalue is usually far larger (a tighter k)
-    c1 = Fraction(float(lam[0]) * (1 - 1e-6)).limit_denominator(10 ** 12)
-    if c1 <= eps or not is_positive_definite([[P[i][j] - c1 * int(i == j) for j in range(n)] for i in range(n)]):
-        c1 = eps
-    return {"c1": c1, "c2": c2, "rate": decrease / (2 * c2), "k": exact.sqrt_upper(c2 / c1, 12)}
 
 
 @dataclass
