@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from lyapcheck import api
-from lyapcheck.models.classes import recast_classes as rc
+from lyapcheck.models.classes import lyapunov, recast_classes as rc
 from lyapcheck.models.language.modelfile import parse_any_model
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.engines.search import Budget, Search
@@ -232,9 +232,11 @@ def test_quadratic_proves_an_exponential_bound_where_the_field_has_no_denominato
     result = api.certify(model=write(tmp_path, "coupled", COUPLED), classes="quadratic")
     q = result.conditions["quadratic"]
     assert q.status == "certified" and q.property == "GES"
-    ges = {k: Fraction(v) for k, v in q.certificate["ges"].items()}
+    assert q.certificate["kind"] == lyapunov.RELATIONS_KIND
+    ges = {k: Fraction(q.certificate[k]) for k in ("c1", "c2", "k")}
+    ges["rate"] = Fraction(q.certificate["mu"]) / 2
     assert 0 < ges["c1"] <= ges["c2"] and ges["k"] ** 2 >= ges["c2"] / ges["c1"] and ges["rate"] > 0
-    assert q.summary.startswith("globally exponentially stable")
+    assert q.summary.startswith("GES: |x(t)| <= ")
     assert api.verify(result).valid
     # the bound holds on the true loop, simulated here with numpy's functions
     rng = np.random.default_rng(5)
@@ -244,26 +246,20 @@ def test_quadratic_proves_an_exponential_bound_where_the_field_has_no_denominato
         end = rk4(field, X0, t, step=0.01)
         bound = float(ges["k"]) * np.linalg.norm(X0, axis=1) * np.exp(-float(ges["rate"]) * t)
         assert np.all(np.linalg.norm(end, axis=1) <= bound)
-    # the decrease margin was sharpened beyond the search's, and a larger one than proved does not verify
-    assert Fraction(q.certificate["decrease_epsilon"]) > Fraction(q.certificate["epsilon"])
-    doc = copy.deepcopy(result.document)
-    stored = doc["conditions"]["quadratic"]["certificate"]
-    stored["decrease_epsilon"] = str(Fraction(stored["decrease_epsilon"]) * 4)
-    assert not api.verify(doc).valid
-    # a smaller k, a larger c1 or a changed rate does not verify
-    for key, factor in (("k", Fraction(1, 2)), ("c1", Fraction(3)), ("rate", Fraction(2))):
+    # a smaller k, a larger c1 or a larger rate than proved does not verify
+    for key, factor in (("k", Fraction(1, 2)), ("c1", Fraction(3)), ("mu", Fraction(2))):
         doc = copy.deepcopy(result.document)
-        stored = doc["conditions"]["quadratic"]["certificate"]["ges"]
+        stored = doc["conditions"]["quadratic"]["certificate"]
         stored[key] = str(Fraction(stored[key]) * factor)
         assert not api.verify(doc).valid, key
 
 
 def test_quadratic_with_a_denominator_is_asymptotic_only_and_an_angle_is_not_quadratic(tmp_path: Path) -> None:
     ilos = api.certify(model=write(tmp_path, "ilos", ILOS), classes="quadratic").conditions["quadratic"]
-    assert ilos.status == "certified" and ilos.property == "GAS" and "ges" not in ilos.certificate
+    assert ilos.status == "certified" and ilos.property == "GAS" and "k" not in ilos.certificate
     model = parse_any_model(PENDULUM, "p.toml")
     loop = rc.base_loop(model.system)
-    assert rc.quadratic(loop, Budget(10.0, "test")).status == "not_applicable"
+    assert lyapunov.run_relations(loop, Budget(10.0, "test"), "quadratic", (2,)).status == "not_applicable"
 
 
 DISTURBED = """

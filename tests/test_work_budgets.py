@@ -20,7 +20,7 @@ from typing import Any, Callable
 import pytest
 
 from lyapcheck import tolerances
-from lyapcheck.models.classes import recast_classes as rc
+from lyapcheck.models.classes import lyapunov, recast_classes as rc
 from lyapcheck.models.engines import search as search_module
 from lyapcheck.models.surfaces.certify import certify_model
 from lyapcheck.models.language.modelfile import load_model, parse_any_model
@@ -63,19 +63,26 @@ def programs(result: ConditionResult) -> list[str]:
     return [entry["program"] for entry in result.solver.get("solves", [])]
 
 
-def actuator_loop() -> Any:
-    text = (MODELS / "recast-pendulum-actuator.toml").read_text()
-    return rc.base_loop(parse_any_model(text, "recast-pendulum-actuator.toml").system)
+def sos_gas(loop: Any, budget: Budget) -> ConditionResult:
+    """The class sos_gas on a loop with functions (lyapunov.run_relations), at its degrees."""
+    return lyapunov.run_relations(loop, budget, "sos_gas", lyapunov.RELATIONS_GAS_DEGREES)
+
+
+def searched_loop() -> Any:
+    """A loop with functions whose sos_gas search is not_certified, and takes more than one solve in a
+    template (facial reduction): recast-tanh-neuron."""
+    text = (MODELS / "recast-tanh-neuron.toml").read_text()
+    return rc.base_loop(parse_any_model(text, "recast-tanh-neuron.toml").system)
 
 
 def test_a_template_budget_of_solves_decides_sos_gas_whatever_the_clock_says(monkeypatch: pytest.MonkeyPatch) -> None:
     """One solve per template: each template of the recast sos_gas search stops after its first
     solve, the class is not_certified saying so (the constant in the detail), and a clock that
     makes every template look minutes long changes nothing."""
-    loop = actuator_loop()
-    full = rc.sos_gas(loop, Budget(SAFETY_NET_S, "test"))
+    loop = searched_loop()
+    full = sos_gas(loop, Budget(SAFETY_NET_S, "test"))
     monkeypatch.setattr(tolerances, "TEMPLATE_SOLVES", 1)
-    idle, loaded, clock = idle_and_loaded(monkeypatch, lambda: rc.sos_gas(loop, Budget(SAFETY_NET_S, "test")))
+    idle, loaded, clock = idle_and_loaded(monkeypatch, lambda: sos_gas(loop, Budget(SAFETY_NET_S, "test")))
     assert clock.readings > 3  # the budget's clock was read: it just decided nothing
     for result in (idle, loaded):
         assert result.status == "not_certified", result.summary
@@ -93,7 +100,7 @@ def test_a_template_budget_of_solves_decides_sos_gas_whatever_the_clock_says(mon
 def test_the_class_time_limit_is_a_safety_net_named_as_one() -> None:
     """A class whose clock has run out stops at its next solve, inconclusive, and the detail says
     that the wall-clock limit is the safety net (not a work budget)."""
-    result = rc.sos_gas(actuator_loop(), Budget(0.0, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+    result = sos_gas(searched_loop(), Budget(0.0, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
     assert result.status == "inconclusive", result.summary
     assert "time limit" in result.summary and "--time-limit" in result.summary
     detail = " ".join(result.numbers["detail"])
