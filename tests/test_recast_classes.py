@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from lyapcheck import api
-from lyapcheck.models.classes import lyapunov, recast_classes as rc
+from lyapcheck.models.classes import lyapunov, lyapunov_relations, recast_classes as rc
 from lyapcheck.models.language.modelfile import parse_any_model
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.engines.search import Budget, Search
@@ -259,7 +259,7 @@ def test_quadratic_with_a_denominator_is_asymptotic_only_and_an_angle_is_not_qua
     assert ilos.status == "certified" and ilos.property == "GAS" and "k" not in ilos.certificate
     model = parse_any_model(PENDULUM, "p.toml")
     loop = rc.base_loop(model.system)
-    assert lyapunov.run_relations(loop, Budget(10.0, "test"), "quadratic", (2,)).status == "not_applicable"
+    assert lyapunov_relations.run_relations(loop, Budget(10.0, "test"), "quadratic", (2,)).status == "not_applicable"
 
 
 DISTURBED = """

@@ -20,7 +20,7 @@ from typing import Any, Callable
 import pytest
 
 from lyapcheck import tolerances
-from lyapcheck.models.classes import lyapunov, recast_classes as rc
+from lyapcheck.models.classes import lyapunov, lyapunov_relations, recast_classes as rc
 from lyapcheck.models.engines import search as search_module
 from lyapcheck.models.surfaces.certify import certify_model
 from lyapcheck.models.language.modelfile import load_model, parse_any_model
@@ -65,7 +65,7 @@ def programs(result: ConditionResult) -> list[str]:
 
 def sos_gas(loop: Any, budget: Budget) -> ConditionResult:
     """The class sos_gas on a loop with functions (lyapunov.run_relations), at its degrees."""
-    return lyapunov.run_relations(loop, budget, "sos_gas", lyapunov.RELATIONS_GAS_DEGREES)
+    return lyapunov_relations.run_relations(loop, budget, "sos_gas", lyapunov.RELATIONS_GAS_DEGREES)
 
 
 def searched_loop() -> Any:

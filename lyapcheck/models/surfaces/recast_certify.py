@@ -25,8 +25,8 @@ from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel
 from lyapcheck.models.classes.bounds import KIND, OLD_KIND, check_functions as check_bound
-from lyapcheck.models.classes.lyapunov import (OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, check_relations_certificate,
-                                               relations_claim)
+from lyapcheck.models.classes.lyapunov import OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, relations_claim, relations_sentence
+from lyapcheck.models.classes.lyapunov_relations import check_relations_certificate
 from lyapcheck.models.classes.recast_interval import box_units
 from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
                                              jacobian, lie, state_square, v_names, v_text)
@@ -353,7 +353,10 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
         if cert.get("kind") == OLD_RELATIONS_KIND:
             return False, OLD_FORMAT
         proved, why = _proved_recasting(cert, base)
-        return (False, why) if proved is None else check_relations_certificate(name, c, proved)
+        ok, why = (False, why) if proved is None else check_relations_certificate(name, c, proved)
+        if ok and c.get("summary") != covered(c.get("disturbances"), relations_sentence(cert)):
+            return False, "the printed sentence is not the one the certificate supports"
+        return ok, why
     if cert.get("kind") == "interval" and name in ("roa", "candidate"):
         from lyapcheck.models.classes.recast_interval import check_interval
 

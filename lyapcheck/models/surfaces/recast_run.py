@@ -16,7 +16,8 @@ from lyapcheck.degrees import searched_degrees
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel, written_poly
-from lyapcheck.models.classes.lyapunov import RELATIONS_GAS_DEGREES, run_relations
+from lyapcheck.models.classes.lyapunov import RELATIONS_GAS_DEGREES
+from lyapcheck.models.classes.lyapunov_relations import run_relations
 from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, base_loop, best_region, certify_region,
                                              common_denominator, jacobian, lie, linearization,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
