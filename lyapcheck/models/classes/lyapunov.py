@@ -149,11 +149,18 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     terms.append(Term(param("muD", ring.support(field.D)), "V"))
     terms.extend(box_terms)
     terms.append(Term(one(ring, -1), "W"))
+    return lyapunov_identity(nv, (Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))),
+                                  Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))), *box_grams), (), terms)
+
+
+def lyapunov_identity(nv: int, grams: Sequence[Gram], scalars: Sequence[Any], terms: Sequence[Term]) -> Structure | str:
+    """The program of ``terms`` (``-grad V . g - mu V D``, the multipliers' terms and ``-W``) ``= 0``, the
+    smallest eigenvalue of every Gram matrix maximized with ``trace Q_V = 1``, or the size limit it
+    exceeds (:data:`BLOCK_COST_LIMIT`): polynomial loops and loops with functions alike."""
     structure = Structure(
         nvars=nv,
-        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))),
-               *box_grams),
-        scalars=(),
+        grams=tuple(grams),
+        scalars=tuple(scalars),
         identities=(Identity("lyapunov", tuple(terms), None, "W"),),
         objective=("max_margin",), trace_one=("V",))
     if affordable(structure) is None:
@@ -189,11 +196,7 @@ def attempt(field: StateField, structure: Structure, mu: Fraction, search: Searc
 
 def attempt_with_solution(field: StateField, structure: Structure, mu: Fraction, search: Search
                           ) -> tuple[dict[str, Any] | None, Solution]:
-    values = lyapunov_values(field, structure, mu)
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None, solution
-    point = search.exact(structure, solution, values)
+    point, solution = exact_try(structure, lyapunov_values(field, structure, mu), search)
     if point is None:
         return None, solution
     V = GramPoly.of(structure.gram("V").basis, point.grams["V"])
@@ -203,6 +206,15 @@ def attempt_with_solution(field: StateField, structure: Structure, mu: Fraction,
     if not ok:
         return None, solution
     return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"], "box": box}, solution
+
+
+def exact_try(structure: Structure, values: ParameterValues, search: Search) -> tuple[Any, Solution]:
+    """One solve, and its exact rounding when the solver's margin is not clearly negative (else None):
+    what every Lyapunov attempt does before its exact check."""
+    solution = search.solve(structure, values)
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
+        return None, solution
+    return search.exact(structure, solution, values), solution
 
 
 def vanishing_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:

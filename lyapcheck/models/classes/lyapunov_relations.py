@@ -31,10 +31,10 @@ from dataclasses import replace
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
-from lyapcheck.models.classes.lyapunov import (BLOCK_COST_LIMIT, EXACT_TRY_MARGIN, LYAPUNOV_FACIAL_ROUNDS,
+from lyapcheck.models.classes.lyapunov import (EXACT_TRY_MARGIN, LYAPUNOV_FACIAL_ROUNDS,
                                                OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, TARGET_LIMIT,
-                                               _fmpq, _products, affordable, best_decay_rate, eigen_bounds, failure,
-                                               kernel_monomials, relations_claim, relations_sentence,
+                                               _fmpq, _products, best_decay_rate, eigen_bounds, exact_try, failure,
+                                               kernel_monomials, lyapunov_identity, relations_claim, relations_sentence,
                                                vanishing_monomials)
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
@@ -43,7 +43,7 @@ from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly
 from lyapcheck.sos.polynomials import Monomial, Poly, monomials
-from lyapcheck.sos.structure import Gram, Identity, Structure, Term
+from lyapcheck.sos.structure import Gram, Structure, Term
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.sos.program import Solution
@@ -116,17 +116,9 @@ def relations_program(field: Any, degree: int, generators: Sequence[Sequence[int
     terms.append(Term(param("muD", ring.support(field.W)), "V"))
     terms.extend(rel_terms)
     terms.append(Term(one(ring, -1), "W"))
-    structure = Structure(
-        nvars=nv,
-        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))),
-               Gram("W", tuple(z_w), tuple(map(tuple, bases.character_blocks(z_w, generators)))), *rel_grams),
-        scalars=tuple(rel_scalars),
-        identities=(Identity("lyapunov", tuple(terms), None, "W"),),
-        objective=("max_margin",), trace_one=("V",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return lyapunov_identity(nv, (Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))),
+                                  Gram("W", tuple(z_w), tuple(map(tuple, bases.character_blocks(z_w, generators)))),
+                                  *rel_grams), rel_scalars, terms)
 
 
 def _reduced(gram: Gram, drop: frozenset[tuple[str, Monomial]]) -> Gram:
@@ -153,11 +145,7 @@ def relations_attempt(field: Any, structure: Structure, mu: Fraction, search: Se
     from lyapcheck.models.classes.bounds import identity_certificate
     from lyapcheck.models.engines.search import exact_grams
 
-    values = relations_values(field, mu)
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None, solution
-    point = search.exact(structure, solution, values)
+    point, solution = exact_try(structure, relations_values(field, mu), search)
     if point is None:
         return None, solution
     V = exact_grams(structure, point)["V"]
