@@ -1061,7 +1061,7 @@ def recast_sets(doc: dict[str, Any]) -> tuple[list[RecastSet], list[str], list[s
         cert = as_dict(cond.get("certificate"))
         if found is not None:
             sets.append(found)
-        elif cert.get("kind") == "recast":
+        elif cert.get("kind") in ("recast", "lyapunov_relations"):  # (quadratic, sos_gas: lyapunov_relations)
             angles = [str(a) for a in cert.get("angles") or []] if isinstance(cert.get("angles"), list) else []
             global_.append(str(name) + (f" (modulo 2π in {', '.join(angles)})" if angles else ""))
     return sets, global_, notes

@@ -229,7 +229,7 @@ def what_it_means(doc: Mapping[str, Any], cond: Mapping[str, Any]) -> str:
     for label, data in parts:
         try:
             names, at = data["variables"], shifts
-            if data.get("kind") == "recast":  # a loop with functions: each auxiliary by its definition
+            if data.get("kind") in ("recast", "lyapunov_relations"):  # a loop with functions: each auxiliary by its definition
                 names = [data["auxiliaries"].get(n, n) for n in data["variables"]]
                 at = {data["auxiliaries"].get(n, n): v for n, v in data["shift"].items()}
             text += f"\n{label} = {v_text(data['V'], names, at, limit=V_SHORT_TERMS)}"

@@ -104,7 +104,9 @@ def relations_program(field: Any, degree: int, generators: Sequence[Sequence[int
     rel_terms = [t for t in rel_terms if not t.decision.startswith("TW_") or t.decision in kept]
     if len(target) > TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
-    z_w = [q for q in bases.sos_basis(nv, target) if ("W", q) not in drop and field.allowed(q)]
+    # every term vanishes at the equilibrium, so W(0) = 0: the constant monomial has no place in W's
+    # basis (with it no Q_W > 0 exists; the relations' monomials would put it there)
+    z_w = [q for q in bases.sos_basis(nv, target) if ("W", q) not in drop and field.allowed(q) and any(q)]
     rows = max([len(z_w), len(z_v)] + [len(g.basis) for g in rel_grams])
     if rows > tolerances.TEMPLATE_GRAM_ROWS:
         return size_limit(rows, "rows of one sum-of-squares matrix", tolerances.TEMPLATE_GRAM_ROWS,
@@ -274,7 +276,7 @@ def run_relations(loop: Any, budget: Any, name: str, degrees: Sequence[int]) -> 
     none = reasons.not_found("Lyapunov function", degrees, tried, steps)
     if spent:
         none = reasons.with_budget(none, spent[0])
-    return ConditionResult(name, "not_certified", none.summary, numbers=none.numbers({"tried": tried}),
+    return ConditionResult(name, "not_certified", none.summary, numbers=none.numbers({"reason": "; ".join(tried)}),
                            solver={"solves": search.log}, property="GAS")
 
 
