@@ -399,13 +399,6 @@ def lyapunov_sentence(cert: dict[str, Any]) -> str:
     modulo = (f" modulo 2 pi in {', '.join(angles)} (the loop is periodic in {'it' if len(angles) == 1 else 'them'})"
               if angles else "")
     eps = cert["epsilon"]
-    if "ges" in cert:
-        eps = cert.get("decrease_epsilon", eps)
-        ges = {k: read_rational(v) for k, v in cert["ges"].items()}
-        return (f"globally exponentially stable: |x(t) - x_eq| <= {rounded(ges['k'], 6, 'up')} |x0 - x_eq| exp(-r t) "
-                f"with r = {with_unit(ges['rate'], RATE_UNIT, 6, 'down')}, from every start (exactly k = {ges['k']}, "
-                f"r = {ges['rate']}: V = z^T P z with {ges['c1']} |z|^2 <= V <= {ges['c2']} |z|^2 and V' <= -{eps} "
-                "|z|^2, proved exactly on the recasting's relations; V_text in the certificate)")
     if "level" in cert:
         level = read_rational(cert["level"])
         return (f"region of attraction: every trajectory of the true loop starting where V(x, a(x)) <= "

@@ -44,35 +44,6 @@ Row = tuple[str, bool, str]
 
 # -- verify ------------------------------------------------------------------------------------------
 
-def _verify_ges(loop: Loop, cert: dict[str, Any], region: bool) -> tuple[bool, str]:
-    """The exponential bound of a quadratic certificate: V quadratic in the states, no denominator,
-    ``P - c1 I`` and ``c2 I - P`` positive definite, ``rate = eps/(2 c2)`` and ``k^2 >= c2/c1`` (all
-    exact)."""
-    from lyapcheck.models.engines.interval_region import quadratic_form
-    from lyapcheck.sos.definiteness import is_positive_definite
-
-    ring = loop.ring
-    n = loop.n_states
-    if region or loop.angles:
-        return False, "an exponential bound is stated for a global quadratic V in the states only"
-    if poly_from_json(ring, cert["denominator"], "denominator") != ring.constant(1):
-        return False, "an exponential bound needs a field without denominators (D = 1)"
-    P = quadratic_form(ring, poly_from_json(ring, cert["V"], "V"), n)
-    if P is None:
-        return False, "an exponential bound needs V quadratic in the states alone"
-    ges = {k: read_rational(v) for k, v in cert["ges"].items()}
-    eps = read_rational(cert.get("decrease_epsilon", cert["epsilon"]))
-    if set(ges) != {"c1", "c2", "rate", "k"} or ges["c1"] <= 0 or ges["c2"] <= 0 or \
-            ges["rate"] != eps / (2 * ges["c2"]) or ges["k"] < 0 or ges["k"] ** 2 < ges["c2"] / ges["c1"]:
-        return False, "the exponential bound's c1, c2, rate and k do not follow from V and epsilon"
-    if not is_positive_definite([[ges["c2"] * int(i == j) - P[i][j] for j in range(n)] for i in range(n)]):
-        return False, "c2 I - P is not positive definite: c2 does not bound V from above"
-    if not is_positive_definite([[P[i][j] - ges["c1"] * int(i == j) for j in range(n)] for i in range(n)]):
-        return False, "P - c1 I is not positive definite: c1 does not bound V from below"
-    return True, "the exponential bound follows"
-
-
-
 def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> list[Row]:
     """The rest of a loop with functions' document, after the rows every document starts with
     (:func:`lyapcheck.models.surfaces.certificate.verify_document` reads the model again and makes them):
@@ -200,10 +171,6 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
         raise ValueError("V: exponents must be integers")
     if "level" in cert:
         return Stated("ROA", {"degree": degree, "level": read_rational(cert["level"])}, frozenset({"size"}))
-    if "ges" in cert:
-        ges = cert["ges"]
-        return Stated("GES", {"degree": degree, "k": read_rational(ges["k"]),
-                              "decay_rate_per_s": read_rational(ges["rate"])})
     return Stated("GAS", {"degree": degree})
 
 
@@ -407,10 +374,6 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
     ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(decrease), loop.relations, dec, region=region)
     if not ok:
         return False, f"decrease: {why}"
-    if "ges" in cert:
-        ok, why = _verify_ges(loop, cert, region is not None)
-        if not ok:
-            return False, why
     if c.get("summary") != covered(c.get("disturbances"), lyapunov_sentence(cert)):
         return False, "the printed sentence is not the one the certificate supports"
     if cert.get("V_text") != v_text(system, V):
