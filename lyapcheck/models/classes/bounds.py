@@ -724,38 +724,31 @@ def relation_certificates(field: BoundField, structure: Structure, point: Any
                           ) -> tuple["ConditionCertificate", "ConditionCertificate"]:
     """The two identities' multipliers of a solved program on a loop with functions, by relation index:
     each disturbance's ``tau_k``, every other relation's multiplier, and the remainder."""
-    from lyapcheck.sos.certificates import GramPoly
-
-    by_name = {g.name: g for g in structure.grams}
-    dissipation = identity_certificate(field, structure, point, "D", "sigD")
-    for k, j in enumerate(field.disturbance_relations):
-        dissipation.taus[j] = GramPoly.of(by_name[f"tau{k}"].basis, point.grams[f"tau{k}"])
-    return dissipation, identity_certificate(field, structure, point, "E", "sigE")
-
-
-def identity_certificate(field: BoundField, structure: Structure, point: Any, name: str, sigma: str
-                         ) -> "ConditionCertificate":
-    """The multipliers of one identity of a solved program (its remainder the Gram ``sigma``), by relation
-    index: each free multiplier ``lambda_i`` of :func:`relation_multipliers`' terms ``L<name>_<i>_<k>``, each
-    sum of squares ``tau_j`` (``T<name>_<j>``), and the remainder."""
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
     from lyapcheck.sos.certificates import GramPoly
 
     ring = field.ring
     by_name = {g.name: g for g in structure.grams}
-    identity = next(i for i in structure.identities if i.remainder == sigma)
-    lambdas: dict[int, Poly] = {}
-    taus: dict[int, GramPoly] = {}
-    for term in identity.terms:
-        if term.decision.startswith(f"L{name}_"):  # the term -q h_i of a free multiplier's monomial q
-            i = int(term.decision.split("_")[1])
-            product = ring.from_terms(dict(zip(term.coefficients.support, term.coefficients.values)))
-            q = -product / field.relations[i].poly  # exact: the term is built as -q h_i
-            lambdas[i] = lambdas.get(i, ring.zero()) + q * to_fmpq(point.scalars[term.decision])
-        elif term.decision.startswith(f"T{name}_"):
-            taus[int(term.decision.split("_")[1])] = GramPoly.of(by_name[term.decision].basis,
-                                                               point.grams[term.decision])
-    return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[sigma].basis, point.grams[sigma]))
+
+    def of(name: str, sigma: str) -> ConditionCertificate:
+        identity = next(i for i in structure.identities if i.remainder == sigma)
+        lambdas: dict[int, Poly] = {}
+        taus: dict[int, GramPoly] = {}
+        for term in identity.terms:
+            if term.decision.startswith(f"L{name}_"):  # the term -q h_i of a free multiplier's monomial q
+                i = int(term.decision.split("_")[1])
+                product = ring.from_terms(dict(zip(term.coefficients.support, term.coefficients.values)))
+                q = -product / field.relations[i].poly  # exact: the term is built as -q h_i
+                lambdas[i] = lambdas.get(i, ring.zero()) + q * to_fmpq(point.scalars[term.decision])
+            elif term.decision.startswith(f"T{name}_"):
+                taus[int(term.decision.split("_")[1])] = GramPoly.of(by_name[term.decision].basis,
+                                                                   point.grams[term.decision])
+        if name == "D":
+            for k, j in enumerate(field.disturbance_relations):
+                taus[j] = GramPoly.of(by_name[f"tau{k}"].basis, point.grams[f"tau{k}"])
+        return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[sigma].basis, point.grams[sigma]))
+
+    return of("D", "sigD"), of("E", "sigE")
 
 
 def check_on_relations(field: BoundField, V: "GramPoly", v0: Fraction, lam: Fraction, B: Fraction, y: Poly,
