@@ -193,7 +193,7 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
         ball = f"; {ball_words(condition)}" if "ball_radius" in condition else ""
         return (f"{what}: every start in {{V <= {rounded(level, 6, 'down')}}} converges to the equilibrium (checked "
                 f"exactly){ball}")
-    if kind != "lyapunov":
+    if kind not in ("lyapunov", "lyapunov_cliques"):
         raise ValueError(f"unknown certificate kind {kind!r}")
     if condition.get("property") == "GES":
         return (f"GES: |x(t) - x_eq| <= {rounded(_number(condition, 'k'), FIGURE_DIGITS, 'up')} |x0 - x_eq| exp(-r t) "
@@ -209,6 +209,8 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
     tail = (f", and V' <= -r V with r = {with_unit(rate, RATE_UNIT, direction='down')} (V decays exponentially from every start)"
             if rate > 0 else "")
     what = "a quadratic V" if degree == 2 else f"a polynomial V of degree {degree}"
+    if kind == "lyapunov_cliques":
+        what += f", a sum over {len(cert['cliques'])} cliques of the states,"
     return f"GAS: {what} with V' < 0 away from the equilibrium{tail} (checked exactly)"
 
 
