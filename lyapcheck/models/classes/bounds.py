@@ -162,14 +162,16 @@ def _embed(a: Monomial, variables: Sequence[int], nv: int) -> Monomial:
     return tuple(out)
 
 
-def relation_multipliers(field: BoundField, name: str, target: set[Monomial], generators: Sequence[Sequence[int]]
-                         ) -> tuple[list[Gram], list[Scalar], list[Term], set[Monomial]]:
+def relation_multipliers(field: BoundField, name: str, target: set[Monomial], generators: Sequence[Sequence[int]],
+                         margin: bool | str = "floor") -> tuple[list[Gram], list[Scalar], list[Term], set[Monomial]]:
     """The S-procedure terms of a loop with functions' relations in identity ``name`` (``D`` or ``E``):
     ``- lambda_i h_i`` (``lambda_i`` free, its coefficients the scalars ``L<name>_<i>_<k>``) per equality
     and ``- tau_j g_j`` (``tau_j`` the Gram ``T<name>_<j>``) per inequality, of the degree the identity's
     other terms reach (the relations of :attr:`BoundField.multiplied`; none on a polynomial loop), and the
     monomials they add. (:class:`~lyapcheck.models.engines.recast_sos.ConditionProgram` builds the same terms
-    for the relational classes, with their own naming and margins.)"""
+    for the relational classes, with their own naming and margins.) ``margin``: the ``tau_j``'s, as
+    :class:`~lyapcheck.sos.program.Gram`'s (a floor parameter here; the program's margin variable in a
+    program that maximizes it, as ``barrier``'s)."""
     ring = field.ring
     nv = ring.nvars
     top = max((sum(q) for q in target), default=2)
@@ -194,7 +196,7 @@ def relation_multipliers(field: BoundField, name: str, target: set[Monomial], ge
             basis = [q for q in monomials(nv, 0, (top - d) // 2) if field.allowed(q)]
             gname = f"T{name}_{i}"
             grams.append(Gram(gname, tuple(basis), tuple(map(tuple, bases.character_blocks(basis, generators))),
-                              margin="floor"))
+                              margin=margin))
             terms.append(Term(Coefficients.literal(ring.terms(-rel.poly)), gname))
             added |= {tuple(a + b + c for a, b, c in zip(x, z, w)) for x in basis for z in basis
                       for w in ring.support(rel.poly)}
