@@ -722,10 +722,13 @@ def bound_sentence(model: "RecastModel", bounds: Mapping[str, float | Fraction])
     return summary("sos_bound", bound_claim(model, bounds), list(model.outputs)) or ""
 
 
-def relation_certificates(field: BoundField, structure: Structure, point: Any
-                          ) -> tuple["ConditionCertificate", "ConditionCertificate"]:
+def relation_certificates(field: BoundField, structure: Structure, point: Any,
+                          identities: Sequence[tuple[str, str]] = (("D", "sigD"), ("E", "sigE"))
+                          ) -> tuple["ConditionCertificate", ...]:
     """The two identities' multipliers of a solved program on a loop with functions, by relation index:
-    each disturbance's ``tau_k``, every other relation's multiplier, and the remainder."""
+    each disturbance's ``tau_k``, every other relation's multiplier, and the remainder. ``identities``:
+    each identity's name (as :func:`relation_multipliers` was given it) and its remainder's (``barrier``'s
+    identities: ``("I0", "RI0")``, ...)."""
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
     from lyapcheck.sos.certificates import GramPoly
 
@@ -750,7 +753,7 @@ def relation_certificates(field: BoundField, structure: Structure, point: Any
                 taus[j] = GramPoly.of(by_name[f"tau{k}"].basis, point.grams[f"tau{k}"])
         return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[sigma].basis, point.grams[sigma]))
 
-    return of("D", "sigD"), of("E", "sigE")
+    return tuple(of(name, sigma) for name, sigma in identities)
 
 
 def check_on_relations(field: BoundField, V: "GramPoly", v0: Fraction, lam: Fraction, B: Fraction, y: Poly,
