@@ -20,6 +20,14 @@ The search: ``B`` of degree 2, then 4, then 6, each at the rates :data:`LAMBDAS`
 first certificate that passes the exact check is the answer. The property is ``safety``: for every
 start in the initial set and every disturbance within its bounds (time-varying ones included: ``B``
 does not depend on ``d``), the state never enters the unsafe set.
+
+One implementation for both kinds of loop: the program reads a
+:class:`~lyapcheck.models.classes.bounds.BoundField` (:func:`as_barrier_field`), of which a polynomial
+loop's robust field is the case without relations (its programs and certificates are the ones this class
+has always built). A loop with functions (:func:`run_functions`; section "loops with functions" below)
+is the same program on its recasting, every identity also carrying the recasting's relations'
+multipliers; its certificate (kind :data:`KIND`) stores each identity's proof by relation index and
+:func:`check_on_relations` re-checks it. ``[sets]`` are read on both kinds, and over a box of parameters.
 """
 
 from __future__ import annotations
