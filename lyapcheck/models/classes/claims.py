@@ -47,6 +47,9 @@ RATE_UNIT = "1/s"
 #: the certificate kinds of a loop with functions' safety classes (lyapcheck.models.classes.recast_barrier,
 #: recast_reach_avoid; :func:`sentence_of`)
 RECAST_BARRIER_KIND = "recast_barrier"
+#: the certificate kind of a loop with functions' barrier since barrier has one implementation (issue 41);
+#: the older kind is refused by verify (lyapcheck.models.classes.barrier.check)
+BARRIER_RELATIONS_KIND = "barrier_relations"
 RECAST_REACH_AVOID_KIND = "recast_reach_avoid"
 #: how a ball-arithmetic region is proved (its sentence says so: :func:`interval_sentence`)
 INTERVAL_METHOD = "ball arithmetic (python-flint arb) on the true field"
@@ -378,7 +381,7 @@ def recast_reach_time(cert: dict[str, Any]) -> Fraction:
 def sentence_of(cert: dict[str, Any]) -> str:
     """The claim sentence of a certificate of a loop with functions, of any kind (a barrier's is the
     polynomial loops' one): certify writes it, ``verify`` and the report re-make it from the certificate."""
-    if cert.get("kind") == RECAST_BARRIER_KIND:
+    if cert.get("kind") in (RECAST_BARRIER_KIND, BARRIER_RELATIONS_KIND):
         return BARRIER_SENTENCE
     if cert.get("kind") == RECAST_REACH_AVOID_KIND:
         text = summary("reach_avoid", {"status": "certified", "reach_time_bound_s": float(recast_reach_time(cert))})

@@ -38,7 +38,7 @@ from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.classes.reach_avoid import (REACH_DEGREES, SCALARS, Condition, certified_numbers, conditions,
                                           goal_of_one_piece, linear_conditions, not_found, out_of_time, time_bound)
 from lyapcheck.models.language.recast import RecastModel, Relation
-from lyapcheck.models.classes.recast_barrier import (SETS_USE_BOX, at_point, box_falsification, check_polynomial,
+from lyapcheck.models.classes.barrier import (SETS_USE_BOX, at_point, box_falsification, check_polynomial,
                                              counterexample, falsification, flat_loop, not_smooth_note,
                                              piece_relations, polynomial_json, recasting_json, sets_use_box,
                                              state_relation, templates)
