@@ -3,8 +3,8 @@ item 1: one implementation of the class for polynomial loops and loops with func
 
 Each loop is certified with the class ``reach_avoid`` alone, in one process, with no stored certificate
 reused: the shipped examples with a ``goal`` in their ``[sets]`` (``examples/models/*.toml``) and the
-loops the tests ask (``tests/test_reach_avoid*.py``, ``tests/test_recast_reach_avoid.py``, built from
-their own texts). The table gives, per loop, its kind, the status, the certified time bound (s), the
+loops the tests ask (``tests/test_reach_avoid*.py``, ``tests/test_recast_reach_avoid.py``,
+``tests/test_recast_box_safety.py``, built from their own texts, over the tests' boxes). The table gives, per loop, its kind, the status, the certified time bound (s), the
 wall time and the solves. ``--json FILE`` keeps the figures; ``--compare FILE`` prints beside each
 figure the one kept before and flags:
 
@@ -40,6 +40,7 @@ def test_loops() -> dict[str, tuple[str, list[str] | None]]:
     from tests import test_reach_avoid_counterexample as cex
     from tests import test_recast_reach_avoid as fun
     from tests.recast_loops import PENDULUM, SPRING
+    from tests.test_recast_box_safety import BOX, COUPLED, PULSE
     from tests.test_recast_barrier import ACC, NEAR, SATURATED, TOO_CLOSE
 
     spring = SPRING + f"[sets]\ninitial = [{fun.INITIAL}]\nunsafe = [{{unsafe}}]\ngoal = [{fun.GOAL}]\n"
@@ -63,6 +64,8 @@ def test_loops() -> dict[str, tuple[str, list[str] | None]]:
                           + 'goal = ["(h - 30)**2 + (v - 20)**2 <= 0.25"]\n', None),
         "pendulum": (pendulum.format(goal="theta**2 + omega**2 <= 0.1"), None),
         "pendulum-omega-goal": (pendulum.format(goal="omega**2 <= 0.1"), None),
+        f"coupled --box {' '.join(BOX)}": (COUPLED, list(BOX)),
+        "pulse --box a=0.5..2.5": (PULSE, ["a=0.5..2.5"]),
     }
 
 
