@@ -17,20 +17,24 @@ below ``-C``, so the goal is reached by the time ``C / eps``. The decrease is de
 goal everywhere, not only on ``{V <= 0}`` (that would make the program bilinear): a sufficient,
 conservative form. The claim is reach-while-avoid; staying in the goal afterwards is not claimed.
 
-:func:`conditions` states these conditions once as polynomials (``F >= 0`` where a set holds): a
-loop with functions (:mod:`lyapcheck.models.classes.recast_reach_avoid`) builds its program from them
-(:func:`linear_conditions`) and proves each on its recasting's relations; the polynomial route here
-writes the same conditions as the Gram identities above, which
-:func:`~lyapcheck.sos.certificates.check_reach_avoid` checks (an engine below this package). Both routes
-share the degrees :data:`REACH_DEGREES`, the goal's form (:func:`goal_of_one_piece`), the time bound
-(:func:`time_bound`) and their results (:func:`not_found`, :func:`out_of_time`, :func:`certified_numbers`).
+:func:`conditions` states these conditions once as polynomials (``F >= 0`` where a set holds), for
+both kinds of loop, which this module serves alike (issue 41: one implementation of the class). On a
+polynomial or rational loop (:func:`run`) they are written as the Gram identities above, which
+:func:`~lyapcheck.sos.certificates.check_reach_avoid` checks (an engine below this package). On a loop
+with functions (:func:`run_functions`, the section "loops with functions" below) the program is built
+from them (:func:`linear_conditions`) and each is proved, and re-checked (:func:`check_functions`), on
+the recasting's relations; its certificate is of kind :data:`KIND`. Both share the degrees
+:data:`REACH_DEGREES`, the goal's form (:func:`goal_of_one_piece`), the time bound (:func:`time_bound`),
+their results (:func:`not_found`, :func:`out_of_time`, :func:`certified_numbers`) and the sentence
+(:func:`lyapcheck.models.classes.claims.summary`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Callable, Final, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.classes.barrier import (BudgetExhausted, Pieces, _b_basis, _decrease_poly, _decrease_support,
@@ -47,6 +51,17 @@ from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import check_reach_avoid
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Solution, Structure, Term, full_blocks
+from lyapcheck.models.classes.claims import RECAST_REACH_AVOID_KIND
+
+if TYPE_CHECKING:
+    from lyapcheck.models.classes.recast_classes import Loop
+    from lyapcheck.models.engines.recast_sos import ConditionCertificate
+    from lyapcheck.models.engines.search import Budget
+    from lyapcheck.models.language.parameter_box import ModelBox
+    from lyapcheck.models.language.recast import RecastModel, Relation
+
+    #: a set's pieces as relations of a loop with functions (one list per piece)
+    RelationPieces = list[list[Relation]]
 
 #: degrees of V tried, in turn
 REACH_DEGREES: Final = (2, 4)
@@ -470,7 +485,332 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
                            solver={"solves": search.log}, property="reach_avoid")
 
 
+
+# -- loops with functions ---------------------------------------------------------------------------------
+#
+# The same class on a loop with functions: the conditions of :func:`conditions` (stated once) on the
+# recasting (:mod:`lyapcheck.models.language.recast`), as a barrier's are: ``V`` is a polynomial in the
+# deviations of the states and of the smooth auxiliaries, ``x' = N / D`` with ``D > 0`` proved on the
+# relations, and each condition is proved on the recasting's relations with a set's inequalities (and
+# their pairwise products) as further relations ``p >= 0`` (:mod:`lyapcheck.models.engines.recast_sos`):
+#
+#     -V >= 0                      on the relations and each initial piece      (V <= 0 on the initial set)
+#     V - 1 >= 0                   on the relations and each unsafe piece       (V >= 1 on the unsafe set)
+#     -grad V . N - eps D >= 0     on the relations and -q_i >= 0, each goal inequality q_i
+#                                                                               (V' <= -eps outside the goal)
+#     V + C - delta |x|^2 >= 0     on the relations                             (V bounded below)
+#
+# with ``eps, delta > 0`` and ``C >= 0``. Every point ``(x, a(x))`` of the true loop lies in the
+# relations' set, so along a trajectory ``v(t) = V(x(t), a(x(t)))`` falls at rate ``eps`` while the goal
+# is not reached: from ``v(0) <= 0`` it stays ``<= 0 < 1`` (the unsafe set is not entered), in the compact
+# ``{|x|^2 <= C / delta}``, and above ``-C``, so the goal is reached by ``C / eps`` seconds (the loop is
+# not scaled). The angles are ordinary states (no claim modulo 2 pi), the loop the nominal one (every
+# disturbance at 0). Before the proof, the true loop (each function evaluated by numpy) is simulated
+# from the initial set, each trajectory until it reaches the goal: one that enters the unsafe set first
+# is a ``counterexample``. The certificate is of kind :data:`KIND`; one of the kind the loops with
+# functions' own module wrote before the class had one implementation (:data:`OLD_KIND`) is refused in
+# one line, with the advice to certify again.
+
+#: the certificate kind of a loop with functions (``verify`` dispatches on it; its sentence:
+#: :func:`lyapcheck.models.classes.claims.sentence_of`)
+KIND: Final = RECAST_REACH_AVOID_KIND
+#: the kind written before ``reach_avoid`` had one implementation for every loop (issue 41): refused
+OLD_KIND: Final = "recast_reach_avoid"
+OLD_FORMAT: Final = ("a certificate of an older format (kind recast_reach_avoid, written before reach_avoid had one "
+                     "implementation for every loop): run lyapcheck certify again to get one that verify checks")
+#: the search's lower bounds on eps (1/s) and delta, and on C: the check needs eps, delta > 0 and C >= 0;
+#: a small floor leaves the program free (a smaller eps only lengthens the time bound C / eps)
+FLOORS: Final = {"eps": Fraction(1, 1000), "C": Fraction(0), "delta": Fraction(1, 1000)}
+#: the time bound's tightening (:func:`tightened`): rounds after the first certificate, and the first step
+TIGHTEN_ROUNDS: Final = 4
+TIGHTEN_FACTOR: Final = Fraction(16)
+#: a point is said to lie outside the goal (in a reason's words, read in floating point) when the goal's
+#: margin there is below minus this
+OUTSIDE_GOAL_MARGIN: Final = 1e-9
+#: the turns of an angle tried for another equilibrium outside the goal (1, -1, 2, -2, ...)
+PERIODS: Final = 8
+
+
+@dataclass
+class FoundOnRelations:
+    """A reach-avoid function of a loop with functions that passed the exact check: ``V`` (deviations),
+    its scalars and each condition's proof by name."""
+
+    V: Poly
+    eps: Fraction
+    C: Fraction
+    delta: Fraction
+    proofs: dict[str, "ConditionCertificate"]
+
+
+def goal_relations(loop: "Loop", state_ring: Ring, goal: Sequence[Poly]) -> list["Relation"]:
+    """Each goal inequality ``q_i >= 0`` failing, ``-q_i >= 0``, as a relation of the loop's ring."""
+    from lyapcheck.models.classes.barrier import state_relation
+
+    return [state_relation(loop, state_ring, -q, f"goal inequality {i + 1} fails") for i, q in enumerate(goal)]
+
+
+def where(loop: "Loop", condition: Condition, initial: "RelationPieces", unsafe: "RelationPieces",
+          outside: list["Relation"]) -> list["Relation"]:
+    """The relations a condition is proved on: the recasting's, and the set it holds on."""
+    extra = {"initial": initial, "unsafe": unsafe, "outside_goal": [[r] for r in outside]}.get(condition.on)
+    return list(loop.relations) + (list(extra[condition.index]) if extra is not None else [])
+
+
+def formulation(loop: "Loop", V: Poly, N: dict[str, Poly], D: Poly, eps: Fraction, C: Fraction, delta: Fraction,
+                initial: "RelationPieces", unsafe: "RelationPieces", outside: list["Relation"]) -> list[Condition]:
+    """:func:`conditions` on this loop (``lie``: ``grad V . N``; ``|z|^2`` its states' squares)."""
+    from lyapcheck.models.classes.recast_classes import lie, state_square
+
+    return conditions(loop.ring, V, lambda p: lie(loop, p, N), D, eps, C, delta, state_square(loop), len(initial),
+                      len(unsafe), len(outside))
+
+
+def search_on_relations(loop: "Loop", initial: "RelationPieces", unsafe: "RelationPieces", outside: list["Relation"],
+                        search: Search) -> tuple[tuple[FoundOnRelations, Poly, list[Any]] | None, list[str]]:
+    """The first reach-avoid function over :data:`REACH_DEGREES` (V in the states first, then with the
+    smooth auxiliaries) that passes the exact check, its time bound then tightened (:func:`tightened`);
+    with its denominator ``D`` and the proofs of ``D > 0``; and what was tried. The program is
+    :func:`linear_conditions` (the conditions affine in the unknowns), each proved on its relations."""
+    from lyapcheck import tolerances
+    from lyapcheck.models.classes.barrier import templates
+    from lyapcheck.models.classes.recast_classes import _set, lie, state_square
+    from lyapcheck.models.engines.recast_sos import ConditionProgram, check_condition, known_values, solve_on_faces
+    from lyapcheck.models.engines.search import SolvesSpent
+
+    ring = loop.ring
+    tried: list[str] = []
+    zero = tuple([0] * ring.nvars)
+    unit = ring.constant(1)
+    square = state_square(loop)
+    for template in templates(loop, REACH_DEGREES, search, tried):
+        dv, basis, label, N, D, dens = (template.degree, template.basis, template.label, template.N, template.D,
+                                        template.dens)
+        capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
+        monos = [ring.monomial(m) for m in basis]
+        linear = linear_conditions(ring, monos, lambda p: lie(loop, p, N), D, square, len(initial), len(unsafe),
+                                   len(outside))
+
+        def build(drop: frozenset[Any], linear: Any = linear, within: Fraction | None = None
+                  ) -> "ConditionProgram | str":
+            program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
+                                       square_free=loop.square_free())
+            for k in range(len(basis)):
+                program.free(f"b{k}")
+            for name in SCALARS:
+                program.free(name)
+            for condition, free in linear:
+                program.relations = where(loop, condition, initial, unsafe, outside)
+                top = max((sum(m) for _, p in free for m in ring.support(p)), default=dv)
+                why = program.condition(condition.name, sorted(set(ring.support(condition.F)) | {zero}), free,
+                                        top, vanishing=False)
+                if why is not None:
+                    return why
+            program.relations = []
+            for name in SCALARS:  # each scalar at least its floor: a 1x1 remainder
+                program.condition(f"floor_{name}", [zero], [(name, unit)], 0, vanishing=False)
+            if within is not None:  # C <= within eps: the time bound C / eps at most ``within``
+                program.condition("within", [zero], [("eps", unit * to_fmpq(within)), ("C", -unit)], 0,
+                                  vanishing=False)
+            return program
+
+        values = ParameterValues()
+        for condition, _ in linear:
+            _set(values, *known_values(ring, condition.name, condition.F,
+                                       sorted(set(ring.support(condition.F)) | {zero})))
+        for name in SCALARS:
+            _set(values, *known_values(ring, f"floor_{name}", ring.constant(-FLOORS[name]), [zero]))
+
+        def accept(program: "ConditionProgram", point: Any, N: dict[str, Poly] = N, D: Poly = D
+                   ) -> FoundOnRelations | None:
+            V = sum((ring.monomial(m, point.scalars[f"b{k}"]) for k, m in enumerate(basis)), ring.zero())
+            eps, C, delta = (Fraction(point.scalars[name]) for name in SCALARS)
+            if not (eps > 0 and delta > 0 and C >= 0):
+                return None
+            proofs = {}
+            for condition in formulation(loop, V, N, D, eps, C, delta, initial, unsafe, outside):
+                proof = program.certificate(condition.name, point)
+                if not check_condition(ring, condition.F, where(loop, condition, initial, unsafe, outside),
+                                       proof)[0]:
+                    return None
+                proofs[condition.name] = proof
+            return FoundOnRelations(V, eps, C, delta, proofs)
+
+        try:
+            found, why = solve_on_faces(capped, build, values, accept)
+        except SolvesSpent as exc:
+            tried.append(f"{label}: {exc}")
+            continue
+        if found is not None:
+            tried.append(f"{label}: found")
+            found = tightened(found, search, build, values, accept)
+            return (found, D, dens), tried
+        tried.append(f"{label}: {why}")
+    return None, tried
+
+
+def tightened(found: FoundOnRelations, search: Search, build: Callable[..., Any], values: ParameterValues,
+              accept: Callable[[Any, Any], FoundOnRelations | None]) -> FoundOnRelations:
+    """The same template solved again with ``C <= T eps`` for shorter bounds ``T`` (the search maximizes
+    the Gram margin, not the time: its first bound is loose): :data:`TIGHTEN_ROUNDS` rounds, each ``T``
+    the best bound over :data:`TIGHTEN_FACTOR`, or (after a ``T`` not reached) the geometric mean of the
+    two; the last certificate that passed its exact check is kept."""
+    from lyapcheck import tolerances
+    from lyapcheck.models.classes.recast_classes import _set
+    from lyapcheck.models.engines.recast_sos import known_values, solve_on_faces
+    from lyapcheck.models.engines.search import SolvesSpent
+
+    tight = ParameterValues(dict(values.floats), dict(values.exact))  # and the parameter of C <= T eps
+    _set(tight, *known_values(search.ring, "within", search.ring.zero(), [tuple([0] * search.ring.nvars)]))
+    best, lo = found, None
+    for _ in range(TIGHTEN_ROUNDS):
+        hi = time_bound(best.C, best.eps)
+        within = hi / TIGHTEN_FACTOR if lo is None else _dyadic_mean(lo, hi)
+        capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
+        try:
+            better, _ = solve_on_faces(capped, lambda drop: build(drop, within=within), tight, accept)
+        except SolvesSpent:
+            better = None
+        if better is not None and time_bound(better.C, better.eps) < hi:
+            best = better
+        else:  # not reached: the next try lies between it and the best bound
+            lo = within
+    return best
+
+
+def _dyadic_mean(a: Fraction, b: Fraction) -> Fraction:
+    """About the geometric mean of ``a`` and ``b`` (a short rational: it enters the program)."""
+    return Fraction(math.sqrt(float(a) * float(b))).limit_denominator(1 << 20)
+
+
+def relations_certificate_json(loop: "Loop", found: FoundOnRelations, D: Poly, dens: list[Any]) -> dict[str, Any]:
+    """The exact certificate of a loop with functions: V in the deviations (``shift``), written with the
+    functions too, its scalars (``eps`` per second), its degree, and every proof (the recasting's, each
+    condition's)."""
+    from lyapcheck.models.classes.barrier import polynomial_json, recasting_json
+
+    ring = loop.ring
+    return {**polynomial_json(loop, KIND, "V", found.V), "eps_per_s": str(found.eps), "C": str(found.C),
+            "delta": str(found.delta), **recasting_json(loop, D, dens),
+            "proofs": {name: proof.to_json(ring) for name, proof in found.proofs.items()}}
+
+
+def run_functions(model: "RecastModel", loop: "Loop", budget: "Budget", box: "ModelBox | None" = None
+                  ) -> ConditionResult:
+    """The class on a loop with functions (the section's comment above). With ``box``, ``loop`` is the
+    loop with the box's parameters as bounded constants (``model`` read at the box's centre): one V for
+    every value of the box, as a barrier's."""
+    from lyapcheck.models.classes.claims import recast_reach_time, sentence_of
+    from lyapcheck.models.classes.barrier import (SETS_USE_BOX, at_point, box_falsification,
+                                                         counterexample as true_counterexample,
+                                                         falsification as true_falsification, flat_loop,
+                                                         not_smooth_note, piece_relations, sets_use_box)
+
+    refused = goal_of_one_piece(model.sets["goal"])
+    if refused is not None:
+        return refused
+    if box is not None and sets_use_box(model, box):
+        return ConditionResult("reach_avoid", "not_applicable", SETS_USE_BOX)
+    trial, at = box_falsification(model, box, goal=True) if box is not None else \
+        (true_falsification(model, stop=model.sets["goal"]), None)
+    if trial is not None and trial.entry is not None:  # entered before the goal: no V can exist
+        return at_point(true_counterexample(model, trial, "reach_avoid", "reach_avoid", " before it reaches the goal"),
+                        at)
+    simulated = {} if trial is None else {"falsification": trial.to_dict()}
+    periodic = periodic_notes(model, loop)
+    if periodic:  # an equilibrium outside the goal: no V of this form exists, and none is searched
+        return not_found(periodic, [], searched_degrees(REACH_DEGREES), simulated,
+                         f"no reach-avoid function of this form can exist: {periodic[0]}")
+    flat = flat_loop(loop)
+    initial = piece_relations(flat, model.state_ring, model.sets["initial"], "initial")
+    unsafe = piece_relations(flat, model.state_ring, model.sets["unsafe"], "unsafe")
+    outside = goal_relations(flat, model.state_ring, model.sets["goal"][0])
+    search = Search(flat.ring, budget)
+    try:
+        result, tried = search_on_relations(flat, initial, unsafe, outside, search)
+    except BudgetExhausted as exc:
+        return out_of_time(budget.seconds, exc, search.log, simulated)
+    if result is None:
+        rough = not_smooth_note(flat, "V", "V' <= -eps outside the goal")
+        if rough:
+            tried.append(rough)
+        return not_found(tried, search.log, searched_degrees(REACH_DEGREES), simulated)
+    found, D, dens = result
+    certificate = relations_certificate_json(flat, found, D, dens)
+    return ConditionResult("reach_avoid", "certified", sentence_of(certificate),  # (V's degree, not its template's)
+                           numbers=certified_numbers(certificate["degree"], recast_reach_time(certificate), trial),
+                           certificate=certificate, solver={"solves": search.log}, property="reach_avoid")
+
+
+def periodic_notes(model: "RecastModel", loop: "Loop") -> list[str]:
+    """Why no V of this form can exist: an angle (a state that enters only through its sine and cosine)
+    makes the equilibrium shifted by 2 pi in it an equilibrium too, where ``V' = 0``; outside the goal
+    (read in floating point: these are words, not a status) ``V' <= -eps`` fails there."""
+    import numpy as np
+
+    from lyapcheck.models.language.sets import margin
+
+    out = []
+    for angle in loop.angles:
+        for turns in (k * sign for k in range(1, PERIODS + 1) for sign in (1, -1)):
+            point = np.array([float(v) for v in model.equilibrium])
+            point[list(model.states).index(angle)] += 2 * math.pi * turns
+            if margin(model.sets["goal"], point)[0] < -OUTSIDE_GOAL_MARGIN:
+                out.append(f"{angle} enters only through its sine and cosine, so {angle} = {angle}_eq "
+                           f"{'+' if turns > 0 else '-'} {2 * abs(turns)} pi (the other states at their equilibrium) "
+                           "is an equilibrium too, outside the goal, where V' = 0: V' <= -eps is demanded outside the "
+                           "goal on the whole state space")
+                break
+    return out
+
+
+def check_functions(model: "RecastModel", proved: "Loop", c: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a reach-avoid certificate of a loop with functions exactly from the certificate and the
+    model text: ``proved`` is the loop with the certificate's square-root bounds already re-checked; the
+    sets are the model's. A certificate of :data:`OLD_KIND` is refused in one line."""
+    from lyapcheck.exact import read_rational
+    from lyapcheck.models.classes.barrier import check_polynomial, flat_loop, piece_relations
+    from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition
+
+    cert = c["certificate"]
+    if cert.get("kind") == OLD_KIND:
+        return False, OLD_FORMAT
+    if c.get("property") != "reach_avoid":
+        return False, "a reach_avoid certificate proves reach_avoid"
+    sets = model.sets
+    if not sets.get("initial") or not sets.get("unsafe") or len(sets.get("goal") or ()) != 1:
+        return False, "the model has no [sets] initial, unsafe and a one-piece goal for reach_avoid"
+    loop = flat_loop(proved)
+    ring = loop.ring
+    eps, C, delta = (read_rational(cert[key]) for key in ("eps_per_s", "C", "delta"))
+    if not (eps > 0 and delta > 0 and C >= 0):
+        return False, "eps and delta must be > 0 and C >= 0"
+    head = check_polynomial(loop, cert, "V", "a reach-avoid function")
+    if isinstance(head, str):
+        return False, head
+    V, N, D = head
+    initial = piece_relations(loop, model.state_ring, sets["initial"], "initial")
+    unsafe = piece_relations(loop, model.state_ring, sets["unsafe"], "unsafe")
+    outside = goal_relations(loop, model.state_ring, sets["goal"][0])
+    stated = cert["proofs"]
+    formulated = formulation(loop, V, N, D, eps, C, delta, initial, unsafe, outside)
+    if not isinstance(stated, dict) or set(stated) != {condition.name for condition in formulated}:
+        return False, ("one proof per piece of the initial and of the unsafe set, per goal inequality and for the "
+                       "lower bound is needed")
+    for condition in formulated:
+        relations = where(loop, condition, initial, unsafe, outside)
+        proof = ConditionCertificate.from_json(ring, stated[condition.name], len(relations))
+        if proof.rho is not None:
+            return False, f"{condition.name}: a reach-avoid identity takes no region multiplier"
+        ok, why = check_condition(ring, condition.F, relations, proof)
+        if not ok:
+            return False, f"{condition.what}: {why}"
+    return True, ("V <= 0 on the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal and V >= "
+                  "delta |x|^2 - C on the recasting's relations, exactly")
+
 __all__ = ["REACH_DEGREES", "SCALARS", "Condition", "conditions", "linear_conditions", "goal_of_one_piece",
            "time_bound", "not_found",
            "out_of_time", "certified_numbers", "reach_structure", "search_reach", "run", "certificate_json",
-           "falsification", "counterexample"]
+           "falsification", "counterexample",
+           "KIND", "OLD_KIND", "OLD_FORMAT", "FLOORS", "goal_relations", "run_functions", "check_functions",
+           "relations_certificate_json"]
