@@ -17,13 +17,17 @@ below ``-C``, so the goal is reached by the time ``C / eps``. The decrease is de
 goal everywhere, not only on ``{V <= 0}`` (that would make the program bilinear): a sufficient,
 conservative form. The claim is reach-while-avoid; staying in the goal afterwards is not claimed.
 
-:func:`conditions` states these conditions once as polynomials (``F >= 0`` where a set holds), for
-both kinds of loop, which this module serves alike (issue 41: one implementation of the class). On a
-polynomial or rational loop (:func:`run`) they are written as the Gram identities above, which
-:func:`~lyapcheck.sos.certificates.check_reach_avoid` checks (an engine below this package). On a loop
-with functions (:func:`run_functions`, the section "loops with functions" below) the program is built
-from them (:func:`linear_conditions`) and each is proved, and re-checked (:func:`check_functions`), on
-the recasting's relations; its certificate is of kind :data:`KIND`. Both share the degrees
+One program for both kinds of loop (issue 41: one implementation of the class): :func:`reach_structure`
+reads a polynomial loop's robust field or a loop with functions' view of the same shape
+(:class:`~lyapcheck.models.classes.bounds.BoundField`, as ``barrier``'s program does). A polynomial or
+rational loop (:func:`run`) is the case without relations: its program is the one this class has always
+built, checked by :func:`~lyapcheck.sos.certificates.check_reach_avoid` (an engine below this package).
+A loop with functions (:func:`run_functions`, the section "loops with functions" below) is the same
+program with the recasting's relations' multipliers in every identity
+(:func:`~lyapcheck.models.classes.bounds.relation_multipliers`; the goal's failing inequality one more
+relation there), each identity's proof stored by relation index and re-checked exactly
+(:func:`check_functions`) against :func:`conditions`, which states the conditions once as polynomials
+(``F >= 0`` where a set holds); its certificate is of kind :data:`KIND`. Both share the degrees
 :data:`REACH_DEGREES`, the goal's form (:func:`goal_of_one_piece`), the time bound (:func:`time_bound`),
 their results (:func:`not_found`, :func:`out_of_time`, :func:`certified_numbers`) and the sentence
 (:func:`lyapcheck.models.classes.claims.summary`).
@@ -38,7 +42,7 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.classes.barrier import (BudgetExhausted, Pieces, _b_basis, _decrease_poly, _decrease_support,
-                                      _shift, scaled_pieces, set_certificates, set_identities,
+                                      _shift, as_barrier_field, scaled_pieces, set_certificates, set_identities,
                                       set_values)
 from lyapcheck.models.loop.field import ScaledField, StateField
 from lyapcheck.models.engines import reasons
@@ -54,6 +58,8 @@ from lyapcheck.sos.program import Coefficients, Gram, Identity, Scalar, Solution
 from lyapcheck.models.classes.claims import RECAST_REACH_AVOID_KIND
 
 if TYPE_CHECKING:
+    from lyapcheck.models.classes.barrier import Template
+    from lyapcheck.models.classes.bounds import BoundField
     from lyapcheck.models.classes.recast_classes import Loop
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
     from lyapcheck.models.engines.search import Budget
@@ -105,23 +111,6 @@ def conditions(ring: Ring, V: Poly, lie: Callable[[Poly], Poly], D: Poly, eps: F
     return out
 
 
-def linear_conditions(ring: Ring, basis: Sequence[Poly], lie: Callable[[Poly], Poly], D: Poly, square: Poly,
-                      initial: int, unsafe: int, goal: int) -> list[tuple[Condition, list[tuple[str, Poly]]]]:
-    """:func:`conditions` with V, eps, C and delta unknown (``V = sum_k b_k basis[k]``): each condition
-    at zero unknowns (its known part, ``F``) and its coefficient of each unknown (``b0, b1, ...``, then
-    :data:`SCALARS`); the conditions are affine in the unknowns, so this is exact."""
-    counts = (initial, unsafe, goal)
-    zero = Fraction(0)
-    known = conditions(ring, ring.zero(), lie, D, zero, zero, zero, square, *counts)
-    units: list[tuple[str, list[Condition]]] = [
-        (f"b{k}", conditions(ring, p, lie, D, zero, zero, zero, square, *counts)) for k, p in enumerate(basis)]
-    for name in SCALARS:
-        at = {s: Fraction(int(s == name)) for s in SCALARS}
-        units.append((name, conditions(ring, ring.zero(), lie, D, at["eps"], at["C"], at["delta"], square, *counts)))
-    return [(c, [(name, unit[i].F - c.F) for name, unit in units if not (unit[i].F - c.F).is_zero()])
-            for i, c in enumerate(known)]
-
-
 def goal_of_one_piece(goal: Sequence[Any]) -> ConditionResult | None:
     """``not_applicable`` when the goal is a union of several pieces (the decrease is demanded where
     one piece's inequality fails); None for one piece."""
@@ -171,42 +160,63 @@ def certified_numbers(degree: int, bound_s: Fraction, trial: Any, margin: float 
     return numbers
 
 
-def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly], degree: int,
-                    drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
-    """The program for ``V`` of this degree, or why there is none (a size limit, named)."""
+def reach_structure(field: "StateField | BoundField", initial: Pieces, unsafe: Pieces, goal: Sequence[Poly],
+                    degree: int, drop: frozenset[tuple[str, Monomial]] = frozenset(), within: bool = False
+                    ) -> Structure | str:
+    """The program for ``V`` of this degree, or why there is none (a size limit, named). ``field``: a
+    polynomial loop's robust field, or a loop with functions' view
+    (:func:`~lyapcheck.models.classes.barrier.relations_field`), whose relations get their multipliers
+    (:func:`~lyapcheck.models.classes.bounds.relation_multipliers`) in every identity; a polynomial loop's
+    program is the one this class has always built. ``within``: also ``T eps - C >= 0`` (``T`` the
+    parameter ``within``: the time bound ``C / eps`` at most ``T``, :func:`tightened`)."""
+    from lyapcheck.models.classes.bounds import relation_multipliers
+
+    view = as_barrier_field(field)
     ring = field.ring
     nv = ring.nvars
-    n = field.n
+    n = view.n
     zero = tuple([0] * nv)
-    v_basis = _b_basis(field, degree)
+    v_basis = _b_basis(view, degree)
     grams: list[Gram] = []
-    on_sets = set_identities(field, v_basis, degree, initial, unsafe, grams, drop)
+    relation_scalars: list[Scalar] = []
+    on_sets = set_identities(view, v_basis, degree, initial, unsafe, grams, drop, relation_scalars)
     if isinstance(on_sets, str):
         return on_sets
     identities = list(on_sets)
-    lie = [(i, _decrease_support(field, m, with_rate=False)) for i, m in enumerate(v_basis)]
-    d_support = ring.support(field.D)
+    lie = [(i, _decrease_support(view, m, with_rate=False)) for i, m in enumerate(v_basis)]
+    d_support = ring.support(view.W)
     for k, q in enumerate(goal):
         terms = [Term(param(f"L{i}", support), f"b{i}") for i, support in lie if support]
         terms.append(Term(param("negD", d_support), "eps"))
         target = {m for _, support in lie for m in support} | set(d_support)
-        top = max((sum(m[:n]) for m in target), default=2)
-        half = max(0, (top - max(sum(m) for m in ring.support(q))) // 2)
-        s_basis = [tuple(list(m) + [0] * (nv - n)) for m in monomials(n, 0, half)]
-        grams.append(Gram(f"sG{k}", tuple(s_basis), full_blocks(s_basis)))
-        terms.append(Term(param(f"q{k}", ring.support(q)), f"sG{k}"))
-        target |= _shift(ring.support(q), [tuple(a + b for a, b in zip(x, y)) for x in s_basis for y in s_basis])
-        box_grams, box_terms = box_multipliers(nv, n, target, with_states=False, prefix=f"rG{k}_")
+        goal_view = view
+        if view.relations:  # a loop with functions: the failing goal inequality, -q >= 0, is one more relation
+            goal_view = outside_goal_view(view, q, k)
+        else:
+            top = max((sum(m[:n]) for m in target), default=2)
+            half = max(0, (top - max(sum(m) for m in ring.support(q))) // 2)
+            s_basis = [tuple(list(m) + [0] * (nv - n)) for m in monomials(n, 0, half)]
+            grams.append(Gram(f"sG{k}", tuple(s_basis), full_blocks(s_basis)))
+            terms.append(Term(param(f"q{k}", ring.support(q)), f"sG{k}"))
+            target |= _shift(ring.support(q), [tuple(a + b for a, b in zip(x, y)) for x in s_basis for y in s_basis])
+        box_grams, box_terms = box_multipliers(nv, n, target, with_states=False, prefix=f"rG{k}_",
+                                               box_vars=view.box_vars)
         target |= box_support(box_grams, nv)
+        rel_grams, rel_scalars, rel_terms, added = relation_multipliers(goal_view, f"goal{k}", target, (),
+                                                                        margin=True)
+        target |= added
         if len(target) > TARGET_LIMIT:
             return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
         name = f"RG{k}"
-        basis = [m for m in bases.sos_basis(nv, target | {zero}) if (name, m) not in drop]
+        basis = [m for m in bases.sos_basis(nv, target | {zero}) if (name, m) not in drop and view.allowed(m)]
         if len(basis) > MAX_GRAM_ROWS:
             return size_limit(len(basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
         grams.append(Gram(name, tuple(basis), full_blocks(basis)))
         grams.extend(box_grams)
         terms.extend(box_terms)
+        grams.extend(rel_grams)
+        terms.extend(rel_terms)
+        relation_scalars.extend(rel_scalars)
         terms.append(Term(one(ring, -1), name))
         identities.append(Identity(f"goal{k}", tuple(terms), None, name))
     # V + C - delta |z|^2 = R_B
@@ -214,12 +224,21 @@ def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Se
     terms.append(Term(one(ring, 1), "C"))
     squares = {tuple(2 * int(j == i) for j in range(nv)): -1 for i in range(n)}
     terms.append(Term(Coefficients.literal(squares), "delta"))
-    basis = [m for m in bases.sos_basis(nv, set(v_basis) | set(squares) | {zero}) if ("RB", m) not in drop]
+    target = set(v_basis) | set(squares) | {zero}
+    rel_grams, rel_scalars, rel_terms, added = relation_multipliers(view, "bounded", target, (), margin=True)
+    basis = [m for m in bases.sos_basis(nv, target | added) if ("RB", m) not in drop and view.allowed(m)]
     grams.append(Gram("RB", tuple(basis), full_blocks(basis)))
+    grams.extend(rel_grams)
+    terms.extend(rel_terms)
+    relation_scalars.extend(rel_scalars)
     terms.append(Term(one(ring, -1), "RB"))
     identities.append(Identity("bounded", tuple(terms), None, "RB"))
+    if within:  # T eps - C = s >= 0
+        grams.append(Gram("RT", (zero,), full_blocks([zero])))
+        identities.append(Identity("within", (Term(param("within", [zero]), "eps"), Term(one(ring, -1), "C"),
+                                              Term(one(ring, -1), "RT")), None, "RT"))
     scalars = tuple(Scalar(f"b{i}") for i in range(len(v_basis))) + (
-        Scalar("eps", "margin"), Scalar("delta", "margin"), Scalar("C", "zero"))
+        Scalar("eps", "margin"), Scalar("delta", "margin"), Scalar("C", "zero")) + tuple(relation_scalars)
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=scalars, identities=tuple(identities),
                           objective=("max_margin",))
     if affordable(structure) is None:
@@ -228,16 +247,31 @@ def reach_structure(field: StateField, initial: Pieces, unsafe: Pieces, goal: Se
     return structure
 
 
-def reach_values(field: StateField, degree: int, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly]
-                 ) -> ParameterValues:
+def outside_goal_view(view: "BoundField", q: Poly, k: int) -> "BoundField":
+    """A loop with functions' view for goal inequality ``k``'s identity: its relations and ``-q >= 0`` (the
+    inequality failing) after them, every one multiplied (its multiplier is built as the recasting's are,
+    :func:`~lyapcheck.models.classes.bounds.relation_multipliers`, and stored at that index, as
+    :func:`where` lists the relations)."""
+    from dataclasses import replace
+
+    from lyapcheck.models.classes.barrier import SET_OWNER
+    from lyapcheck.models.language.recast import Relation
+
+    failing = Relation("ge", -q, f"goal inequality {k + 1} fails", SET_OWNER)
+    return replace(view, relations=view.relations + (failing,), multiplied=view.multiplied + (len(view.relations),))
+
+
+def reach_values(field: "StateField | BoundField", degree: int, initial: Pieces, unsafe: Pieces,
+                 goal: Sequence[Poly]) -> ParameterValues:
+    view = as_barrier_field(field)
     ring = field.ring
     values = ParameterValues()
-    set_values(field, values, initial, unsafe)
-    for i, m in enumerate(_b_basis(field, degree)):
-        support = _decrease_support(field, m, with_rate=False)
+    set_values(view, values, initial, unsafe)
+    for i, m in enumerate(_b_basis(view, degree)):
+        support = _decrease_support(view, m, with_rate=False)
         if support:
-            values.set_poly(ring, f"L{i}", _decrease_poly(field, m, Fraction(0)), support)
-    values.set_poly(ring, "negD", -field.D, ring.support(field.D))
+            values.set_poly(ring, f"L{i}", _decrease_poly(view, m, Fraction(0)), support)
+    values.set_poly(ring, "negD", -view.W, ring.support(view.W))
     for k, q in enumerate(goal):
         values.set_poly(ring, f"q{k}", q, ring.support(q))
     return values
@@ -488,11 +522,15 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
 
 # -- loops with functions ---------------------------------------------------------------------------------
 #
-# The same class on a loop with functions: the conditions of :func:`conditions` (stated once) on the
-# recasting (:mod:`lyapcheck.models.language.recast`), as a barrier's are: ``V`` is a polynomial in the
-# deviations of the states and of the smooth auxiliaries, ``x' = N / D`` with ``D > 0`` proved on the
-# relations, and each condition is proved on the recasting's relations with a set's inequalities (and
-# their pairwise products) as further relations ``p >= 0`` (:mod:`lyapcheck.models.engines.recast_sos`):
+# The same program (:func:`reach_structure`) on the recasting (:mod:`lyapcheck.models.language.recast`),
+# unscaled, as a barrier's (:func:`~lyapcheck.models.classes.barrier.relations_field`): ``V`` is a
+# polynomial in the deviations of the states and of the smooth auxiliaries, ``x' = N / D`` with ``D > 0``
+# proved on the relations, each identity subtracts its relations' multipliers
+# (:func:`~lyapcheck.models.classes.bounds.relation_multipliers`), a set's inequalities (and their pairwise
+# products) are its pieces' S-procedure terms as on a polynomial loop, and the goal's failing inequality
+# ``-q_i >= 0`` is one more relation of its identity. The exact check (:func:`check_functions`) re-reads
+# the conditions of :func:`conditions` with the sets as relations ``p >= 0`` after the recasting's
+# (:func:`where`, :func:`~lyapcheck.models.engines.recast_sos.check_condition`):
 #
 #     -V >= 0                      on the relations and each initial piece      (V <= 0 on the initial set)
 #     V - 1 >= 0                   on the relations and each unsafe piece       (V >= 1 on the unsafe set)
@@ -518,11 +556,10 @@ KIND: Final = RECAST_REACH_AVOID_KIND
 OLD_KIND: Final = "recast_reach_avoid"
 OLD_FORMAT: Final = ("a certificate of an older format (kind recast_reach_avoid, written before reach_avoid had one "
                      "implementation for every loop): run lyapcheck certify again to get one that verify checks")
-#: the search's lower bounds on eps (1/s) and delta, and on C: the check needs eps, delta > 0 and C >= 0;
-#: a small floor leaves the program free (a smaller eps only lengthens the time bound C / eps)
-FLOORS: Final = {"eps": Fraction(1, 1000), "C": Fraction(0), "delta": Fraction(1, 1000)}
 #: the time bound's tightening (:func:`tightened`): rounds after the first certificate, and the first step
-TIGHTEN_ROUNDS: Final = 4
+#: (8 rounds: the bounds of the tests' loops with functions are then at least as short as the relational
+#: route's, which took 4 rounds on its program; benchmarks/bench_reach_route.py)
+TIGHTEN_ROUNDS: Final = 8
 TIGHTEN_FACTOR: Final = Fraction(16)
 #: a point is said to lie outside the goal (in a reason's words, read in floating point) when the goal's
 #: margin there is below minus this
@@ -566,109 +603,145 @@ def formulation(loop: "Loop", V: Poly, N: dict[str, Poly], D: Poly, eps: Fractio
                       len(unsafe), len(outside))
 
 
-def search_on_relations(loop: "Loop", initial: "RelationPieces", unsafe: "RelationPieces", outside: list["Relation"],
-                        search: Search) -> tuple[tuple[FoundOnRelations, Poly, list[Any]] | None, list[str]]:
+def search_on_relations(loop: "Loop", pieces: tuple[Pieces, Pieces, Sequence[Poly]], initial: "RelationPieces",
+                        unsafe: "RelationPieces", outside: list["Relation"], search: Search
+                        ) -> tuple[tuple[FoundOnRelations, "Template"] | None, list[str]]:
     """The first reach-avoid function over :data:`REACH_DEGREES` (V in the states first, then with the
-    smooth auxiliaries) that passes the exact check, its time bound then tightened (:func:`tightened`);
-    with its denominator ``D`` and the proofs of ``D > 0``; and what was tried. The program is
-    :func:`linear_conditions` (the conditions affine in the unknowns), each proved on its relations."""
+    smooth auxiliaries, :func:`~lyapcheck.models.classes.barrier.templates`) that passes the exact check,
+    its time bound then tightened (:func:`tightened`); with its template (``D`` and the proofs of
+    ``D > 0``); and what was tried. The program is :func:`reach_structure` on the loop's view
+    (:func:`~lyapcheck.models.classes.barrier.relations_field`), on the sets' ``pieces`` (initial, unsafe,
+    goal; polynomials of the loop's ring), its faces reduced as a barrier's
+    (:func:`~lyapcheck.models.classes.barrier.on_zero_faces`), each template with a budget of
+    :data:`~lyapcheck.tolerances.TEMPLATE_SOLVES` solves; ``initial``, ``unsafe`` and ``outside``: the same
+    sets as relations, which the exact check reads (:func:`where`)."""
     from lyapcheck import tolerances
-    from lyapcheck.models.classes.barrier import templates
-    from lyapcheck.models.classes.recast_classes import _set, lie, state_square
-    from lyapcheck.models.engines.recast_sos import ConditionProgram, check_condition, known_values, solve_on_faces
+    from lyapcheck.models.classes.barrier import on_zero_faces, relations_field, templates
     from lyapcheck.models.engines.search import SolvesSpent
 
     ring = loop.ring
     tried: list[str] = []
-    zero = tuple([0] * ring.nvars)
-    unit = ring.constant(1)
-    square = state_square(loop)
     for template in templates(loop, REACH_DEGREES, search, tried):
-        dv, basis, label, N, D, dens = (template.degree, template.basis, template.label, template.N, template.D,
-                                        template.dens)
+        names = [ring.names[i] for i in range(ring.nvars) if any(m[i] for m in template.basis)]
+        view = relations_field(loop, names, template.N, template.D)
+        full = reach_structure(view, *pieces, template.degree)
+        if isinstance(full, str):
+            tried.append(f"{template.label}: {full}")
+            continue
         capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
-        monos = [ring.monomial(m) for m in basis]
-        linear = linear_conditions(ring, monos, lambda p: lie(loop, p, N), D, square, len(initial), len(unsafe),
-                                   len(outside))
 
-        def build(drop: frozenset[Any], linear: Any = linear, within: Fraction | None = None
-                  ) -> "ConditionProgram | str":
-            program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots(),
-                                       square_free=loop.square_free())
-            for k in range(len(basis)):
-                program.free(f"b{k}")
-            for name in SCALARS:
-                program.free(name)
-            for condition, free in linear:
-                program.relations = where(loop, condition, initial, unsafe, outside)
-                top = max((sum(m) for _, p in free for m in ring.support(p)), default=dv)
-                why = program.condition(condition.name, sorted(set(ring.support(condition.F)) | {zero}), free,
-                                        top, vanishing=False)
-                if why is not None:
-                    return why
-            program.relations = []
-            for name in SCALARS:  # each scalar at least its floor: a 1x1 remainder
-                program.condition(f"floor_{name}", [zero], [(name, unit)], 0, vanishing=False)
-            if within is not None:  # C <= within eps: the time bound C / eps at most ``within``
-                program.condition("within", [zero], [("eps", unit * to_fmpq(within)), ("C", -unit)], 0,
-                                  vanishing=False)
-            return program
-
-        values = ParameterValues()
-        for condition, _ in linear:
-            _set(values, *known_values(ring, condition.name, condition.F,
-                                       sorted(set(ring.support(condition.F)) | {zero})))
-        for name in SCALARS:
-            _set(values, *known_values(ring, f"floor_{name}", ring.constant(-FLOORS[name]), [zero]))
-
-        def accept(program: "ConditionProgram", point: Any, N: dict[str, Poly] = N, D: Poly = D
-                   ) -> FoundOnRelations | None:
-            V = sum((ring.monomial(m, point.scalars[f"b{k}"]) for k, m in enumerate(basis)), ring.zero())
-            eps, C, delta = (Fraction(point.scalars[name]) for name in SCALARS)
-            if not (eps > 0 and delta > 0 and C >= 0):
-                return None
-            proofs = {}
-            for condition in formulation(loop, V, N, D, eps, C, delta, initial, unsafe, outside):
-                proof = program.certificate(condition.name, point)
-                if not check_condition(ring, condition.F, where(loop, condition, initial, unsafe, outside),
-                                       proof)[0]:
-                    return None
-                proofs[condition.name] = proof
-            return FoundOnRelations(V, eps, C, delta, proofs)
+        def attempt(structure: Structure, view: "BoundField" = view, template: "Template" = template,
+                    within: Fraction | None = None, solver: Search = capped
+                    ) -> tuple[FoundOnRelations | None, Solution]:
+            return attempt_on_relations(loop, view, template, structure, pieces, initial, unsafe, outside, solver,
+                                        within)
 
         try:
-            found, why = solve_on_faces(capped, build, values, accept)
+            found, solution = on_zero_faces(full, attempt, capped)
         except SolvesSpent as exc:
-            tried.append(f"{label}: {exc}")
+            tried.append(f"{template.label}: {exc}")
             continue
         if found is not None:
-            tried.append(f"{label}: found")
-            found = tightened(found, search, build, values, accept)
-            return (found, D, dens), tried
-        tried.append(f"{label}: {why}")
+            tried.append(f"{template.label}: found")
+            return (tightened(found, search, view, template, pieces, attempt), template), tried
+        tried.append(f"{template.label}: {why_none(solution)}")
     return None, tried
 
 
-def tightened(found: FoundOnRelations, search: Search, build: Callable[..., Any], values: ParameterValues,
-              accept: Callable[[Any, Any], FoundOnRelations | None]) -> FoundOnRelations:
-    """The same template solved again with ``C <= T eps`` for shorter bounds ``T`` (the search maximizes
-    the Gram margin, not the time: its first bound is loose): :data:`TIGHTEN_ROUNDS` rounds, each ``T``
-    the best bound over :data:`TIGHTEN_FACTOR`, or (after a ``T`` not reached) the geometric mean of the
-    two; the last certificate that passed its exact check is kept."""
+def attempt_on_relations(loop: "Loop", view: "BoundField", template: "Template", structure: Structure,
+                         pieces: tuple[Pieces, Pieces, Sequence[Poly]], initial: "RelationPieces",
+                         unsafe: "RelationPieces", outside: list["Relation"], search: Search,
+                         within: Fraction | None = None) -> tuple[FoundOnRelations | None, Solution]:
+    """One solve of a loop with functions' program (``within``: its bound ``T`` on ``C / eps``); the
+    certificate if every condition passes its exact check on its relations (:func:`where`)."""
+    from lyapcheck.models.engines.recast_sos import check_condition
+
+    ring = view.ring
+    values = reach_values(view, template.degree, *pieces)
+    if within is not None:
+        values.set_poly(ring, "within", ring.constant(within), [tuple([0] * ring.nvars)])
+    kept = structure.parameters()  # (a multiplier a facial reduction left out takes its parameter with it)
+    values.floats = {k: v for k, v in values.floats.items() if k in kept}
+    values.exact = {k: v for k, v in values.exact.items() if k in kept}
+    point, solution = search.solve_exact(structure, values)
+    if point is None:
+        return None, solution
+    V = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(_b_basis(view, template.degree))})
+    eps, C, delta = (Fraction(point.scalars[name]) for name in SCALARS)
+    if not (eps > 0 and delta > 0 and C >= 0):
+        return None, solution
+    proofs = relation_proofs(view, structure, point, pieces)
+    for condition in formulation(loop, V, template.N, template.D, eps, C, delta, initial, unsafe, outside):
+        if not check_condition(ring, condition.F, where(loop, condition, initial, unsafe, outside),
+                               proofs[condition.name])[0]:
+            return None, solution
+    return FoundOnRelations(V, eps, C, delta, proofs), solution
+
+
+def relation_proofs(view: "BoundField", structure: Structure, point: Any, pieces: tuple[Pieces, Pieces, Sequence[Poly]]
+                    ) -> dict[str, "ConditionCertificate"]:
+    """Each condition's multipliers of a solved program on a loop with functions, by relation index (the
+    recasting's relations, then the set's: a piece's generators, or the goal inequality that fails), with
+    its remainder, by condition name (:func:`conditions`)."""
+    from lyapcheck.models.engines.recast_sos import ConditionCertificate
+    from lyapcheck.sos.certificates import GramPoly, piece_generators
+
+    ring = view.ring
+    by_name = {g.name: g for g in structure.grams}
+    first = len(view.relations)
+
+    def of(name: str, remainder: str, sets: Sequence[str]) -> ConditionCertificate:
+        identity = next(i for i in structure.identities if i.remainder == remainder)
+        lambdas: dict[int, Poly] = {}
+        taus: dict[int, GramPoly] = {}
+        for term in identity.terms:
+            if term.decision.startswith(f"L{name}_"):  # the term -q h_i of a free multiplier's monomial q
+                i = int(term.decision.split("_")[1])
+                product = ring.from_terms(dict(zip(term.coefficients.support, term.coefficients.values)))
+                q = -product / view.relations[i].poly  # exact: the term is built as -q h_i
+                lambdas[i] = lambdas.get(i, ring.zero()) + q * to_fmpq(point.scalars[term.decision])
+            elif term.decision.startswith(f"T{name}_"):
+                taus[int(term.decision.split("_")[1])] = GramPoly.of(by_name[term.decision].basis,
+                                                                   point.grams[term.decision])
+        for j, gram in enumerate(sets):
+            if gram in by_name:  # (a multiplier a facial reduction left out is 0)
+                taus[first + j] = GramPoly.of(by_name[gram].basis, point.grams[gram])
+        return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[remainder].basis, point.grams[remainder]))
+
+    initial, unsafe, goal = pieces
+    out = {}
+    for kind, sets in (("I", initial), ("U", unsafe)):
+        for k, piece in enumerate(sets):
+            out[f"{kind}{k}"] = of(f"{kind}{k}", f"R{kind}{k}",
+                                   [f"s{kind}{k}_{j}" for j in range(len(piece_generators(list(piece))))])
+    for k in range(len(goal)):
+        out[f"goal{k}"] = of(f"goal{k}", f"RG{k}", [f"sG{k}"])
+    out["bounded"] = of("bounded", "RB", [])
+    return out
+
+
+def tightened(found: FoundOnRelations, search: Search, view: "BoundField", template: "Template",
+              pieces: tuple[Pieces, Pieces, Sequence[Poly]], attempt: Callable[..., Any]) -> FoundOnRelations:
+    """The same program solved again with ``C <= T eps`` (:func:`reach_structure`'s ``within``) for shorter
+    bounds ``T`` (the search maximizes the Gram margin, not the time: its first bound is loose):
+    :data:`TIGHTEN_ROUNDS` rounds, each ``T`` the best bound over :data:`TIGHTEN_FACTOR`, or (after a ``T``
+    not reached) the geometric mean of the two, each with a budget of
+    :data:`~lyapcheck.tolerances.TEMPLATE_SOLVES` solves; the last certificate that passed its exact check
+    is kept."""
     from lyapcheck import tolerances
-    from lyapcheck.models.classes.recast_classes import _set
-    from lyapcheck.models.engines.recast_sos import known_values, solve_on_faces
+    from lyapcheck.models.classes.barrier import on_zero_faces
     from lyapcheck.models.engines.search import SolvesSpent
 
-    tight = ParameterValues(dict(values.floats), dict(values.exact))  # and the parameter of C <= T eps
-    _set(tight, *known_values(search.ring, "within", search.ring.zero(), [tuple([0] * search.ring.nvars)]))
+    structure = reach_structure(view, *pieces, template.degree, within=True)
+    if isinstance(structure, str):
+        return found
     best, lo = found, None
     for _ in range(TIGHTEN_ROUNDS):
         hi = time_bound(best.C, best.eps)
         within = hi / TIGHTEN_FACTOR if lo is None else _dyadic_mean(lo, hi)
         capped = search.within(tolerances.TEMPLATE_SOLVES, "per template", "lyapcheck.tolerances.TEMPLATE_SOLVES")
         try:
-            better, _ = solve_on_faces(capped, lambda drop: build(drop, within=within), tight, accept)
+            better, _ = on_zero_faces(structure, lambda s: attempt(s, within=within, solver=capped), capped)
         except SolvesSpent:
             better = None
         if better is not None and time_bound(better.C, better.eps) < hi:
@@ -704,7 +777,8 @@ def run_functions(model: "RecastModel", loop: "Loop", budget: "Budget", box: "Mo
     from lyapcheck.models.classes.barrier import (SETS_USE_BOX, at_point, box_falsification,
                                                          counterexample as true_counterexample,
                                                          falsification as true_falsification, flat_loop,
-                                                         not_smooth_note, piece_relations, sets_use_box)
+                                                         not_smooth_note, piece_relations, relation_pieces,
+                                                         sets_use_box)
 
     refused = goal_of_one_piece(model.sets["goal"])
     if refused is not None:
@@ -725,9 +799,13 @@ def run_functions(model: "RecastModel", loop: "Loop", budget: "Budget", box: "Mo
     initial = piece_relations(flat, model.state_ring, model.sets["initial"], "initial")
     unsafe = piece_relations(flat, model.state_ring, model.sets["unsafe"], "unsafe")
     outside = goal_relations(flat, model.state_ring, model.sets["goal"][0])
+    # the program's pieces: the same sets as polynomials of the loop's ring (the goal, one piece)
+    pieces = (relation_pieces(flat, model.state_ring, model.sets["initial"], "initial"),
+              relation_pieces(flat, model.state_ring, model.sets["unsafe"], "unsafe"),
+              relation_pieces(flat, model.state_ring, model.sets["goal"], "goal")[0])
     search = Search(flat.ring, budget)
     try:
-        result, tried = search_on_relations(flat, initial, unsafe, outside, search)
+        result, tried = search_on_relations(flat, pieces, initial, unsafe, outside, search)
     except BudgetExhausted as exc:
         return out_of_time(budget.seconds, exc, search.log, simulated)
     if result is None:
@@ -735,8 +813,8 @@ def run_functions(model: "RecastModel", loop: "Loop", budget: "Budget", box: "Mo
         if rough:
             tried.append(rough)
         return not_found(tried, search.log, searched_degrees(REACH_DEGREES), simulated)
-    found, D, dens = result
-    certificate = relations_certificate_json(flat, found, D, dens)
+    found, template = result
+    certificate = relations_certificate_json(flat, found, template.D, template.dens)
     return ConditionResult("reach_avoid", "certified", sentence_of(certificate),  # (V's degree, not its template's)
                            numbers=certified_numbers(certificate["degree"], recast_reach_time(certificate), trial),
                            certificate=certificate, solver={"solves": search.log}, property="reach_avoid")
@@ -808,9 +886,9 @@ def check_functions(model: "RecastModel", proved: "Loop", c: dict[str, Any]) -> 
     return True, ("V <= 0 on the initial set, V >= 1 on the unsafe set, V' <= -eps outside the goal and V >= "
                   "delta |x|^2 - C on the recasting's relations, exactly")
 
-__all__ = ["REACH_DEGREES", "SCALARS", "Condition", "conditions", "linear_conditions", "goal_of_one_piece",
+__all__ = ["REACH_DEGREES", "SCALARS", "Condition", "conditions", "goal_of_one_piece",
            "time_bound", "not_found",
            "out_of_time", "certified_numbers", "reach_structure", "search_reach", "run", "certificate_json",
            "falsification", "counterexample",
-           "KIND", "OLD_KIND", "OLD_FORMAT", "FLOORS", "goal_relations", "run_functions", "check_functions",
-           "relations_certificate_json"]
+           "KIND", "OLD_KIND", "OLD_FORMAT", "goal_relations", "run_functions", "check_functions",
+           "relations_certificate_json", "outside_goal_view", "relation_proofs"]
