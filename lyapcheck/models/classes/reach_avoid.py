@@ -683,40 +683,21 @@ def relation_proofs(view: "BoundField", structure: Structure, point: Any, pieces
     """Each condition's multipliers of a solved program on a loop with functions, by relation index (the
     recasting's relations, then the set's: a piece's generators, or the goal inequality that fails), with
     its remainder, by condition name (:func:`conditions`)."""
-    from lyapcheck.models.engines.recast_sos import ConditionCertificate
-    from lyapcheck.sos.certificates import GramPoly, piece_generators
+    from lyapcheck.models.classes.bounds import relation_certificate
+    from lyapcheck.sos.certificates import piece_generators
 
-    ring = view.ring
-    by_name = {g.name: g for g in structure.grams}
     first = len(view.relations)
-
-    def of(name: str, remainder: str, sets: Sequence[str]) -> ConditionCertificate:
-        identity = next(i for i in structure.identities if i.remainder == remainder)
-        lambdas: dict[int, Poly] = {}
-        taus: dict[int, GramPoly] = {}
-        for term in identity.terms:
-            if term.decision.startswith(f"L{name}_"):  # the term -q h_i of a free multiplier's monomial q
-                i = int(term.decision.split("_")[1])
-                product = ring.from_terms(dict(zip(term.coefficients.support, term.coefficients.values)))
-                q = -product / view.relations[i].poly  # exact: the term is built as -q h_i
-                lambdas[i] = lambdas.get(i, ring.zero()) + q * to_fmpq(point.scalars[term.decision])
-            elif term.decision.startswith(f"T{name}_"):
-                taus[int(term.decision.split("_")[1])] = GramPoly.of(by_name[term.decision].basis,
-                                                                   point.grams[term.decision])
-        for j, gram in enumerate(sets):
-            if gram in by_name:  # (a multiplier a facial reduction left out is 0)
-                taus[first + j] = GramPoly.of(by_name[gram].basis, point.grams[gram])
-        return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[remainder].basis, point.grams[remainder]))
-
     initial, unsafe, goal = pieces
     out = {}
     for kind, sets in (("I", initial), ("U", unsafe)):
         for k, piece in enumerate(sets):
-            out[f"{kind}{k}"] = of(f"{kind}{k}", f"R{kind}{k}",
-                                   [f"s{kind}{k}_{j}" for j in range(len(piece_generators(list(piece))))])
-    for k in range(len(goal)):
-        out[f"goal{k}"] = of(f"goal{k}", f"RG{k}", [f"sG{k}"])
-    out["bounded"] = of("bounded", "RB", [])
+            generators = {first + j: f"s{kind}{k}_{j}" for j in range(len(piece_generators(list(piece))))}
+            out[f"{kind}{k}"] = relation_certificate(view.ring, view.relations, structure, point, f"{kind}{k}",
+                                                     f"R{kind}{k}", generators)
+    for k, q in enumerate(goal):  # (the failing inequality's multiplier: its relation's, at index ``first``)
+        out[f"goal{k}"] = relation_certificate(view.ring, outside_goal_view(view, q, k).relations, structure, point,
+                                               f"goal{k}", f"RG{k}")
+    out["bounded"] = relation_certificate(view.ring, view.relations, structure, point, "bounded", "RB")
     return out
 
 
