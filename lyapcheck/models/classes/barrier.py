@@ -637,38 +637,21 @@ def conditions(view: "BoundField", B: Poly, lam: Fraction, initial: Pieces, unsa
 
 def relation_proofs(view: "BoundField", structure: Structure, point: Any, initial: Pieces, unsafe: Pieces
                     ) -> dict[str, "ConditionCertificate"]:
-    """Each identity's multipliers of a solved program on a loop with functions, by relation index (a
-    piece's generators after the recasting's relations) with its remainder, by identity name
-    (:func:`conditions`)."""
-    from lyapcheck.models.engines.recast_sos import ConditionCertificate
+    """Each identity's multipliers of a solved program on a loop with functions, by relation index (the
+    recasting's relations' by :func:`~lyapcheck.models.classes.bounds.relation_certificates`, then a
+    piece's generators' S-procedure multipliers) with its remainder, by identity name (:func:`conditions`)."""
+    from lyapcheck.models.classes.bounds import relation_certificates
 
-    ring = view.ring
     by_name = {g.name: g for g in structure.grams}
-    first = len(view.relations)
-
-    def of(name: str, remainder: str, generators: int) -> ConditionCertificate:
-        identity = next(i for i in structure.identities if i.remainder == remainder)
-        lambdas: dict[int, Poly] = {}
-        taus: dict[int, GramPoly] = {}
-        for term in identity.terms:
-            if term.decision.startswith(f"L{name}_"):  # the term -q h_i of a free multiplier's monomial q
-                i = int(term.decision.split("_")[1])
-                product = ring.from_terms(dict(zip(term.coefficients.support, term.coefficients.values)))
-                q = -product / view.relations[i].poly  # exact: the term is built as -q h_i
-                lambdas[i] = lambdas.get(i, ring.zero()) + q * to_fmpq(point.scalars[term.decision])
-            elif term.decision.startswith(f"T{name}_"):
-                taus[int(term.decision.split("_")[1])] = GramPoly.of(by_name[term.decision].basis,
-                                                                   point.grams[term.decision])
-        for j in range(generators):
+    pieces = [(f"I{k}", p) for k, p in enumerate(initial)] + [(f"U{k}", p) for k, p in enumerate(unsafe)]
+    names = [name for name, _ in pieces] + ["D"]
+    proofs = dict(zip(names, relation_certificates(view, structure, point, [(name, f"R{name}") for name in names])))
+    for name, piece in pieces:
+        for j in range(len(piece_generators(list(piece)))):
             gram = f"s{name}_{j}"
             if gram in by_name:  # (a multiplier a facial reduction left out is 0)
-                taus[first + j] = GramPoly.of(by_name[gram].basis, point.grams[gram])
-        return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[remainder].basis, point.grams[remainder]))
-
-    out = {f"I{k}": of(f"I{k}", f"RI{k}", len(piece_generators(list(p)))) for k, p in enumerate(initial)}
-    out.update({f"U{k}": of(f"U{k}", f"RU{k}", len(piece_generators(list(p)))) for k, p in enumerate(unsafe)})
-    out["D"] = of("D", "RD", 0)
-    return out
+                proofs[name].taus[len(view.relations) + j] = GramPoly.of(by_name[gram].basis, point.grams[gram])
+    return proofs
 
 
 def check_on_relations(view: "BoundField", B: Poly, lam: Fraction, initial: Pieces, unsafe: Pieces,

@@ -722,41 +722,38 @@ def bound_sentence(model: "RecastModel", bounds: Mapping[str, float | Fraction])
     return summary("sos_bound", bound_claim(model, bounds), list(model.outputs)) or ""
 
 
-def relation_certificates(field: BoundField, structure: Structure, point: Any
-                          ) -> tuple["ConditionCertificate", "ConditionCertificate"]:
+def relation_certificates(field: BoundField, structure: Structure, point: Any,
+                          identities: Sequence[tuple[str, str]] = (("D", "sigD"), ("E", "sigE"))
+                          ) -> tuple["ConditionCertificate", ...]:
     """The two identities' multipliers of a solved program on a loop with functions, by relation index:
-    each disturbance's ``tau_k``, every other relation's multiplier, and the remainder."""
-    taus = {j: f"tau{k}" for k, j in enumerate(field.disturbance_relations)}
-    return (relation_certificate(field.ring, field.relations, structure, point, "D", "sigD", taus),
-            relation_certificate(field.ring, field.relations, structure, point, "E", "sigE"))
-
-
-def relation_certificate(ring: Ring, relations: Sequence["Relation"], structure: Structure, point: Any, name: str,
-                         remainder: str, grams: Mapping[int, str] | None = None) -> "ConditionCertificate":
-    """Identity ``name``'s proof from a solved program, by relation index: the multipliers
-    :func:`relation_multipliers` built in it (``L<name>_<i>_<k>``, ``T<name>_<i>``), the Gram matrices
-    ``grams`` names (relation index -> Gram, a multiplier built apart: a disturbance's ``tau_k``, a set
-    piece's generator; one a facial reduction left out is 0) and the remainder."""
+    each disturbance's ``tau_k``, every other relation's multiplier, and the remainder. ``identities``:
+    each identity's name (as :func:`relation_multipliers` was given it) and its remainder's (``barrier``'s
+    identities: ``("I0", "RI0")``, ...)."""
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
     from lyapcheck.sos.certificates import GramPoly
 
+    ring = field.ring
     by_name = {g.name: g for g in structure.grams}
-    identity = next(i for i in structure.identities if i.remainder == remainder)
-    lambdas: dict[int, Poly] = {}
-    taus: dict[int, GramPoly] = {}
-    for term in identity.terms:
-        if term.decision.startswith(f"L{name}_"):  # the term -q h_i of a free multiplier's monomial q
-            i = int(term.decision.split("_")[1])
-            product = ring.from_terms(dict(zip(term.coefficients.support, term.coefficients.values)))
-            q = -product / relations[i].poly  # exact: the term is built as -q h_i
-            lambdas[i] = lambdas.get(i, ring.zero()) + q * to_fmpq(point.scalars[term.decision])
-        elif term.decision.startswith(f"T{name}_"):
-            taus[int(term.decision.split("_")[1])] = GramPoly.of(by_name[term.decision].basis,
-                                                               point.grams[term.decision])
-    for j, gram in (grams or {}).items():
-        if gram in by_name:
-            taus[j] = GramPoly.of(by_name[gram].basis, point.grams[gram])
-    return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[remainder].basis, point.grams[remainder]))
+
+    def of(name: str, sigma: str) -> ConditionCertificate:
+        identity = next(i for i in structure.identities if i.remainder == sigma)
+        lambdas: dict[int, Poly] = {}
+        taus: dict[int, GramPoly] = {}
+        for term in identity.terms:
+            if term.decision.startswith(f"L{name}_"):  # the term -q h_i of a free multiplier's monomial q
+                i = int(term.decision.split("_")[1])
+                product = ring.from_terms(dict(zip(term.coefficients.support, term.coefficients.values)))
+                q = -product / field.relations[i].poly  # exact: the term is built as -q h_i
+                lambdas[i] = lambdas.get(i, ring.zero()) + q * to_fmpq(point.scalars[term.decision])
+            elif term.decision.startswith(f"T{name}_"):
+                taus[int(term.decision.split("_")[1])] = GramPoly.of(by_name[term.decision].basis,
+                                                                   point.grams[term.decision])
+        if name == "D":
+            for k, j in enumerate(field.disturbance_relations):
+                taus[j] = GramPoly.of(by_name[f"tau{k}"].basis, point.grams[f"tau{k}"])
+        return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[sigma].basis, point.grams[sigma]))
+
+    return tuple(of(name, sigma) for name, sigma in identities)
 
 
 def check_on_relations(field: BoundField, V: "GramPoly", v0: Fraction, lam: Fraction, B: Fraction, y: Poly,

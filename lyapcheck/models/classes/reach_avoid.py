@@ -681,24 +681,25 @@ def attempt_on_relations(loop: "Loop", view: "BoundField", template: "Template",
 def relation_proofs(view: "BoundField", structure: Structure, point: Any, pieces: tuple[Pieces, Pieces, Sequence[Poly]]
                     ) -> dict[str, "ConditionCertificate"]:
     """Each condition's multipliers of a solved program on a loop with functions, by relation index (the
-    recasting's relations, then the set's: a piece's generators, or the goal inequality that fails), with
-    its remainder, by condition name (:func:`conditions`)."""
-    from lyapcheck.models.classes.bounds import relation_certificate
-    from lyapcheck.sos.certificates import piece_generators
+    recasting's relations' by :func:`~lyapcheck.models.classes.bounds.relation_certificates`, then the set's:
+    a piece's generators' S-procedure multipliers, or the goal's failing inequality's, which
+    :func:`outside_goal_view` put there), with its remainder, by condition name (:func:`conditions`)."""
+    from lyapcheck.models.classes.bounds import relation_certificates
+    from lyapcheck.sos.certificates import GramPoly, piece_generators
 
-    first = len(view.relations)
+    by_name = {g.name: g for g in structure.grams}
     initial, unsafe, goal = pieces
-    out = {}
-    for kind, sets in (("I", initial), ("U", unsafe)):
-        for k, piece in enumerate(sets):
-            generators = {first + j: f"s{kind}{k}_{j}" for j in range(len(piece_generators(list(piece))))}
-            out[f"{kind}{k}"] = relation_certificate(view.ring, view.relations, structure, point, f"{kind}{k}",
-                                                     f"R{kind}{k}", generators)
-    for k, q in enumerate(goal):  # (the failing inequality's multiplier: its relation's, at index ``first``)
-        out[f"goal{k}"] = relation_certificate(view.ring, outside_goal_view(view, q, k).relations, structure, point,
-                                               f"goal{k}", f"RG{k}")
-    out["bounded"] = relation_certificate(view.ring, view.relations, structure, point, "bounded", "RB")
-    return out
+    sets = [(f"I{k}", p) for k, p in enumerate(initial)] + [(f"U{k}", p) for k, p in enumerate(unsafe)]
+    names = [name for name, _ in sets] + [f"goal{k}" for k in range(len(goal))] + ["bounded"]
+    remainders = {**{name: f"R{name}" for name, _ in sets}, **{f"goal{k}": f"RG{k}" for k in range(len(goal))},
+                  "bounded": "RB"}
+    proofs = dict(zip(names, relation_certificates(view, structure, point, [(n, remainders[n]) for n in names])))
+    for name, piece in sets:
+        for j in range(len(piece_generators(list(piece)))):
+            gram = f"s{name}_{j}"
+            if gram in by_name:  # (a multiplier a facial reduction left out is 0)
+                proofs[name].taus[len(view.relations) + j] = GramPoly.of(by_name[gram].basis, point.grams[gram])
+    return proofs
 
 
 def tightened(found: FoundOnRelations, search: Search, view: "BoundField", template: "Template",
