@@ -45,12 +45,14 @@ BARRIER_SENTENCE = ("safety: no trajectory that starts in the initial set ever e
 TIME_UNIT = "s"
 RATE_UNIT = "1/s"
 #: the certificate kinds of a loop with functions' safety classes (lyapcheck.models.classes.recast_barrier,
-#: recast_reach_avoid; :func:`sentence_of`)
+#: reach_avoid; :func:`sentence_of`)
 RECAST_BARRIER_KIND = "recast_barrier"
 #: the certificate kind of a loop with functions' barrier since barrier has one implementation (issue 41);
 #: the older kind is refused by verify (lyapcheck.models.classes.barrier.check)
 BARRIER_RELATIONS_KIND = "barrier_relations"
-RECAST_REACH_AVOID_KIND = "recast_reach_avoid"
+#: the same for reach_avoid (lyapcheck.models.classes.reach_avoid.check_functions refuses the older kind,
+#: recast_reach_avoid)
+RECAST_REACH_AVOID_KIND = "reach_avoid_relations"
 #: how a ball-arithmetic region is proved (its sentence says so: :func:`interval_sentence`)
 INTERVAL_METHOD = "ball arithmetic (python-flint arb) on the true field"
 #: significant digits of a figure in a sentence (the JSON keeps the full figure)

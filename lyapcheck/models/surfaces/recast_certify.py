@@ -32,7 +32,7 @@ from lyapcheck.models.surfaces.recast_run import box_robust, boxed_loop, robust_
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered, lyapunov_sentence
 from lyapcheck.models.classes.barrier import KIND as BARRIER_KIND, OLD_KIND as RECAST_BARRIER
-from lyapcheck.models.classes.recast_reach_avoid import KIND as RECAST_REACH_AVOID
+from lyapcheck.models.classes.reach_avoid import KIND as RECAST_REACH_AVOID, OLD_KIND as OLD_REACH_AVOID
 from lyapcheck.models.surfaces.stated import Stated, check_stated
 from lyapcheck.sos.polynomials import degree_in, to_fmpq
 from lyapcheck.exact import read_rational
@@ -179,7 +179,7 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
         if isinstance(degree, bool) or not isinstance(degree, int):
             raise ValueError("B: exponents must be integers")
         return Stated("safety", {"degree": degree, "lambda_per_s": read_rational(cert["lambda_per_s"])})
-    if kind == RECAST_REACH_AVOID:
+    if kind in (RECAST_REACH_AVOID, OLD_REACH_AVOID):  # (an older one is refused by its check)
         from lyapcheck.models.classes.claims import recast_reach_time as reach_time
 
         if name != "reach_avoid":
@@ -338,7 +338,7 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
         if model is None:
             return False, "a barrier is certified on the model's own parameters, not over a box"
         return _verify_barrier(c, base, model)
-    if name == "reach_avoid" or cert.get("kind") == RECAST_REACH_AVOID:
+    if name == "reach_avoid" or cert.get("kind") in (RECAST_REACH_AVOID, OLD_REACH_AVOID):
         if model is None:
             return False, "a reach-avoid function is certified on the model's own parameters, not over a box"
         return _verify_reach_avoid(c, base, model)
@@ -444,12 +444,15 @@ def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[
 
 
 def _verify_reach_avoid(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
-    """A recast reach-avoid certificate (:func:`lyapcheck.models.classes.recast_reach_avoid.check`), its
-    recasting's square-root proofs and its sentence (the polynomial loops' reach-avoid one)."""
+    """A reach-avoid certificate of a loop with functions
+    (:func:`lyapcheck.models.classes.reach_avoid.check_functions`), its recasting's square-root proofs and its
+    sentence (the polynomial loops' reach-avoid one); one of the older kind is refused in one line."""
     from lyapcheck.models.classes.claims import sentence_of
-    from lyapcheck.models.classes.recast_reach_avoid import check
+    from lyapcheck.models.classes.reach_avoid import OLD_FORMAT, check_functions as check
 
     cert = c["certificate"]
+    if c.get("status") == "certified" and cert.get("kind") == OLD_REACH_AVOID:
+        return False, OLD_FORMAT
     if c.get("status") != "certified" or cert.get("kind") != RECAST_REACH_AVOID:
         return False, f"a reach_avoid certificate's kind must be {RECAST_REACH_AVOID!r}, not {cert.get('kind')!r}"
     return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), sentence_of(cert))

@@ -1,7 +1,7 @@
 """The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
 ``candidate``, ``sos_bound``, ``barrier``, ``reach_avoid`` (:mod:`lyapcheck.models.classes.recast_classes` has each
 condition, :mod:`lyapcheck.models.classes.bounds`, :mod:`lyapcheck.models.classes.barrier` and
-:mod:`lyapcheck.models.classes.recast_reach_avoid` the last three; this
+:mod:`lyapcheck.models.classes.reach_avoid` the last three; this
 module orders them, gives each its time budget, runs ``roa``'s V-s iteration,
 :mod:`lyapcheck.models.classes.recast_improve`, and the classes over a box of parameters, :func:`certify_box`).
 """
@@ -84,7 +84,7 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         results["barrier"] = run_barrier(model, loop, class_budget(time_limit_s))
         seconds["barrier"] = time.perf_counter() - start
     if "reach_avoid" in classes:
-        from lyapcheck.models.classes.recast_reach_avoid import run as run_reach_avoid
+        from lyapcheck.models.classes.reach_avoid import run_functions as run_reach_avoid
 
         start = time.perf_counter()
         results["reach_avoid"] = run_reach_avoid(model, loop, class_budget(time_limit_s))
@@ -143,7 +143,7 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
         results["barrier"] = run_barrier(model, proved, class_budget(time_limit_s), box)
         seconds["barrier"] = time.perf_counter() - start
     if "reach_avoid" in classes:
-        from lyapcheck.models.classes.recast_reach_avoid import run as run_reach_avoid
+        from lyapcheck.models.classes.reach_avoid import run_functions as run_reach_avoid
 
         start = time.perf_counter()
         results["reach_avoid"] = run_reach_avoid(model, proved, class_budget(time_limit_s), box)
