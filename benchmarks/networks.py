@@ -10,6 +10,8 @@ Each function returns the text of a model file (TOML, the contract of ``docs/mod
 * :func:`platoon` -- a chain of ``m`` vehicles (position error, velocity error) following a leader,
   each with a PD spacing law on its predecessor and quadratic drag ``v |v|`` replaced by the cubic
   ``v^3`` (a polynomial loop); ``n = 2 m`` states, GAS (a cascade of stable second-order blocks).
+* :func:`coupled_pairs` -- LyZNet's 10-state example grown to ``m`` pairs on a ring (polynomial,
+  locally stable only): ``roa`` on a polynomial network;
 * :func:`grid` -- ``m`` generators on a ring of lossless lines (the classical swing equations,
   ``delta_k'' = -d delta_k' - b sum sin(delta_k - delta_j)`` relative to the equilibrium, which
   is at 0 by a choice of the injections), with functions (``sin`` of an angle difference): only a
@@ -96,4 +98,23 @@ def grid(m: int, damping: str = "1", susceptance: str = "1") -> str:
     return "\n".join(lines) + "\n"
 
 
-FAMILIES = {"ring": ring, "platoon": platoon, "grid": grid}
+def coupled_pairs(m: int) -> str:
+    """LyZNet's 10-state example (``examples/models/lyznet-10d.toml``) grown to ``m`` damped 2-state
+    oscillators on a ring, each driven by the square of its predecessor's first state
+    (``x_a' = -x_a + x_b/2 - x_p^2/10``): ``n = 2 m`` states, locally exponentially stable, not
+    globally (the quadratic couplings send large states to infinity), so this family is for ``roa``
+    on the domain ``[-1, 1]^n`` (LyZNet's)."""
+    if m < 1:
+        raise ValueError(f"coupled_pairs: m must be at least 1, got {m}")
+    names = [f"x{k}" for k in range(1, 2 * m + 1)]
+    lines = [f"# {m} coupled damped oscillators on a ring, LyZNet's 10-state example grown ({2 * m} states).",
+             "[model]", f'name = "{m} coupled pairs"', f"states = {_states(names)}", "", "[dynamics]"]
+    for k in range(m):
+        a, b, p = 2 * k + 1, 2 * k + 2, 2 * ((k - 1) % m) + 1
+        drive = f" - 0.1*x{p}**2" if m > 1 else ""
+        lines += [f'x{a} = "-x{a} + 0.5*x{b}{drive}"', f'x{b} = "-0.5*x{a} - x{b}"']
+    lines += ["", "[domain]"] + [f"{s} = [-1, 1]" for s in names]
+    return "\n".join(lines) + "\n"
+
+
+FAMILIES = {"ring": ring, "platoon": platoon, "grid": grid, "pairs": coupled_pairs}

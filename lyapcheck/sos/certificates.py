@@ -11,6 +11,8 @@ kind           identity (all Gram matrices positive definite)      where it hold
 =============  ==================================================  =========================  ================
 Positivity     ``p - c = sigma``, ``c > 0`` (``Q >= 0`` suffices)     everywhere                 ``p >= c > 0``
 Lyapunov       ``-grad V . g - mu V D = sigma``, ``mu >= 0``         everywhere                 GAS; ``V' <= -mu V``
+LyapunovCl.    the same with ``V``, ``sigma`` sums over cliques     everywhere                 the same
+               (:class:`GramSum`, :func:`check_lyapunov_cliques`)
 Sublevel       ``-grad V . g - s (c - V) = sigma``                   ``{V <= c}``               ``{V <= c}`` in the ROA
 Dissipation    ``-grad V . g - lam (V - 1) D - sum tau_k (b_k^2      every ``|d_k| <= b_k``      ``limsup V <= 1``
                - d_k^2) = sigma``, ``lam > 0``
