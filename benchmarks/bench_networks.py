@@ -131,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
         for family in args.family.split(","):
             cls = CLASS_OF[family]
             for size in sizes:
-                n = size if family != "grid" else size + (1 - size % 2)
+                n = size if family != "grid" else size - (1 - size % 2)
                 text = model_text(family, n)
                 if text is None:
                     continue
