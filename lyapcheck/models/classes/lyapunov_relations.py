@@ -144,14 +144,14 @@ def relations_attempt(field: Any, structure: Structure, mu: Fraction, search: Se
                       ) -> tuple[dict[str, Any] | None, Solution]:
     """One solve at decay rate ``mu`` on a loop with functions; the certificate if it passes the exact
     check (:func:`check_relations`)."""
-    from lyapcheck.models.classes.bounds import identity_certificate
+    from lyapcheck.models.classes.bounds import relation_certificates
     from lyapcheck.models.engines.search import exact_grams
 
     point, solution = exact_try(structure, relations_values(field, mu), search)
     if point is None:
         return None, solution
     V = exact_grams(structure, point)["V"]
-    decrease = identity_certificate(field, structure, point, "W", "W")
+    decrease, = relation_certificates(field, structure, point, (("W", "W"),))
     ok, _ = check_relations(field, V, mu, decrease)
     if not ok:
         return None, solution
