@@ -44,6 +44,7 @@ CHEAP = (
     "lyapcheck certify examples/models/sosdemo2-rational.toml --classes linearization,sos_gas --json",
     'lyapcheck certify examples/models/fossil-poly2.toml --candidate "x**2 + y**2"',
     "lyapcheck certify examples/models/unstable-van-der-pol.toml --classes linearization",
+    "lyapcheck certify examples/models/damped-oscillator.toml --classes linearization --minimize c=-1..1",
     "lyapcheck certify examples/models/van-der-pol-reversed.toml --set nu=2",
     'lyapcheck certify examples/models/van-der-pol-reversed.toml --candidate "x1**2 + x2**2 + 1"',
     'lyapcheck simulate examples/models/van-der-pol-reversed.toml --x0 "x1=0.5,x2=0"',
