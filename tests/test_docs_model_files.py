@@ -45,6 +45,8 @@ CHEAP = (
     'lyapcheck certify examples/models/fossil-poly2.toml --candidate "x**2 + y**2"',
     "lyapcheck certify examples/models/unstable-van-der-pol.toml --classes linearization",
     "lyapcheck certify examples/models/damped-oscillator.toml --classes linearization --minimize c=-1..1",
+    'lyapcheck certify examples/models/pid-hardening-spring.toml --box "kp=1.5..2.5" --box "ki=0.5..1.5" --classes linearization',
+    'lyapcheck certify examples/models/pid-hardening-spring.toml --box "kp=1..2" --box "ki=1..2" --classes linearization',
     "lyapcheck certify examples/models/van-der-pol-reversed.toml --set nu=2",
     'lyapcheck certify examples/models/van-der-pol-reversed.toml --candidate "x1**2 + x2**2 + 1"',
     'lyapcheck simulate examples/models/van-der-pol-reversed.toml --x0 "x1=0.5,x2=0"',
