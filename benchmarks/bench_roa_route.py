@@ -8,8 +8,8 @@ route that proved it), the level, the share of the simulated region of attractio
 else the share of the comparison box, ``box_share_estimate``), the certified ball radius, the wall time
 and the solves. A loop with functions' ``roa`` is also run by its SOS route alone (``run_roa`` with
 ``interval=False``: the class tries ball arithmetic first, and on the shipped loops that route proves a
-set before the SOS route is reached). ``--json FILE`` keeps the figures; ``--compare FILE`` prints the figures kept before
-beside them and flags:
+set before the SOS route is reached). ``--json FILE`` keeps the figures; ``--compare FILE`` prints the
+figures kept before beside them and flags:
 
 * ``LOST``: a status that was ``certified`` and is not any more;
 * ``WORSE``: a polynomial loop's level, share or ball radius that changed at all, or a loop with
@@ -17,11 +17,14 @@ beside them and flags:
 * ``PROGRAMS``: a polynomial loop whose search solved other programs than before (the sequence of the
   structures' keys in the solver log, hashed: a polynomial loop's programs must be the same ones).
 
-    python benchmarks/bench_roa_route.py [--json after.json] [--compare before.json] [--time-limit 120]
+    python benchmarks/bench_roa_route.py [--json after.json] [--compare before.json] [--time-limit 60]
                                          [--robots] [--only TEXT] [FILE.toml ...]
 
 Without files: every example but the paper's (``paper-*``, minutes each) and, unless ``--robots``, the
 robots' (``robot-*``, which ``benchmarks/bench_robot_roa.py`` measures on their own: minutes each).
+The time limit is each class's safety net (the searches stop by counts of work): a run that ends near
+it (the actuator pendulum's ball route, about 55 s idle) can come out ``inconclusive`` on a loaded
+machine; run such a row again with a larger ``--time-limit`` on both sides to compare its figures.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from lyapcheck.models.language.modelfile import Model, parse_any_model
+from lyapcheck.tolerances import MODEL_CLASS_TIME_LIMIT_S
 
 ROOT = Path(__file__).resolve().parents[1]
 SKIPPED = ("paper-",)
@@ -84,8 +88,8 @@ def run_sos_route(path: Path, limit: float) -> dict[str, Any]:
     model = parse_any_model(path.read_text(), str(path))
     start = time.perf_counter()
     loop = proved_loop(model, limit)  # type: ignore[arg-type]
-    result = run_roa(loop, linearization(loop), class_budget(limit), comparison_box(model, loop),  # type: ignore[arg-type]
-                     interval=False)
+    box = comparison_box(model, loop)  # type: ignore[arg-type]
+    result = run_roa(loop, linearization(loop), class_budget(limit), box, interval=False)
     numbers = result.numbers or {}
     keys = [entry.get("program") for entry in (result.solver or {}).get("solves", [])]
     return {"kind": "functions", "status": result.status, "route": (result.certificate or {}).get("kind"),
@@ -125,7 +129,8 @@ def row(label: str, now: dict[str, Any], before: dict[str, Any] | None) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("files", nargs="*", type=Path)
-    parser.add_argument("--time-limit", type=float, default=120.0, help="each class's limit, s (default 120)")
+    parser.add_argument("--time-limit", type=float, default=MODEL_CLASS_TIME_LIMIT_S,
+                        help=f"each class's limit, s (default {MODEL_CLASS_TIME_LIMIT_S:g}, the classes' own)")
     parser.add_argument("--robots", action="store_true", help="the robot-* examples too (minutes each)")
     parser.add_argument("--only", default=None, help="the runs whose label holds this text only")
     parser.add_argument("--json", type=Path, default=None, help="keep the figures in this file")

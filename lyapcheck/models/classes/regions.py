@@ -45,8 +45,8 @@ from lyapcheck.models.loop.field import ScaledField, Scaling, StateField, linear
 from lyapcheck.models.classes.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
     symmetry, vanishing_monomials
 from lyapcheck.models.engines.numeric import NumericPoly
-from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, _dyadic, _set, certificate_head, common_denominator, lie,
-                                                    prove_denominators, prove_nonnegative, state_square, v_names)
+from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, _dyadic, _set, certificate_head, common_denominator,
+                                                    lie, prove_denominators, prove_nonnegative, state_square, v_names)
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
                                                  solve_on_faces)
@@ -987,7 +987,8 @@ def relations_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fracti
         return f"the level program was not built: {program}"
     from lyapcheck.models.classes.level_search import largest_proved_level
 
-    found = largest_proved_level(attempt, _scale_of(loop, V) if start is None else start, growth=Fraction(RELATIONS_LEVEL_GROWTH),
+    found = largest_proved_level(attempt, _scale_of(loop, V) if start is None else start,
+                                 growth=Fraction(RELATIONS_LEVEL_GROWTH),
                                  growth_steps=RELATIONS_LEVEL_GROWTH_STEPS, halvings=RELATIONS_LEVEL_HALVINGS,
                                  bisections=RELATIONS_LEVEL_BISECTIONS, rounded=_dyadic)
     if found.level is None or found.proof is None:
@@ -1103,7 +1104,8 @@ def relations_enlarge(loop: Loop, first: Region, budget: Budget, box: tuple[np.n
     return out, tried
 
 
-def relations_v_step(loop: Loop, V_scaled: Poly, rho: Poly, degree: int, samples: np.ndarray, search: Any) -> Poly | str:
+def relations_v_step(loop: Loop, V_scaled: Poly, rho: Poly, degree: int, samples: np.ndarray, search: Any
+                     ) -> Poly | str:
     """One V step (see the module docstring): a new V of ``degree`` in the loop's V variables, or why none."""
     from lyapcheck.models.engines.recast_numeric import variable_values, poly_values
 
