@@ -130,7 +130,7 @@ def test_the_limits_on_the_page_are_the_codes() -> None:
     from lyapcheck.models.language import expressions, modelfile
     from lyapcheck.models.classes import lyapunov
 
-    assert (modelfile.MAX_STATES, modelfile.MAX_PARAMETERS, modelfile.MAX_DISTURBANCES) == (12, 64, 6)
+    assert (modelfile.MAX_STATES, modelfile.MAX_PARAMETERS, modelfile.MAX_DISTURBANCES) == (30, 64, 6)
     assert modelfile.MAX_FILE_BYTES == 256 * 1024
     assert (expressions.MAX_EXPONENT, expressions.MAX_TOTAL_DEGREE, expressions.MAX_TERMS) == (12, 12, 2000)
     assert (expressions.MAX_EXPRESSION_LENGTH, expressions.MAX_DEPTH) == (4000, 60)
@@ -140,7 +140,7 @@ def test_the_limits_on_the_page_are_the_codes() -> None:
     assert hard_stop == 95 and tolerances.SIM_MAX_STEPS == 50_000
     assert certify.MODEL_CLASSES == ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound",
                                      "barrier", "reach_avoid")
-    for text in ("at most 12 (`MAX_STATES`)", "at most 64 (`MAX_PARAMETERS`)", "at most 6 (`MAX_DISTURBANCES`)",
+    for text in ("at most 30 (`MAX_STATES`)", "at most 64 (`MAX_PARAMETERS`)", "at most 6 (`MAX_DISTURBANCES`)",
                  "at most 12 (`MAX_EXPONENT`)", "`MODEL_CLASS_TIME_LIMIT_S` = 60 s", "1.5 x 60 + 5 = 95 s",
                  "`SIM_MAX_STEPS` = 50,000", "`linearization, quadratic, sos_gas, roa, candidate, sos_bound, barrier, reach_avoid`"):
         assert text in TEXT, text

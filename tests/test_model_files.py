@@ -160,8 +160,9 @@ BAD: dict[str, Bad] = {
         "[equilibrium] (default: every state 0)", ("not an equilibrium", "x2' = -1/25000000000000000", "exactly")),
     "equilibrium: unknown state": Bad(VALID + "[equilibrium]\nx9 = 0\n", "[equilibrium] x9", ("no state named 'x9'",)),
     # sizes
-    "13 states": Bad(twelve_states("-x1").replace('"x12"]', '"x12", "x13"]') + 'x13 = "-x13"\n', "[model] states",
-                     ("13 states", f"limit is {MAX_STATES}", "MAX_STATES")),
+    "31 states": Bad("[model]\nstates = [" + ", ".join(f'"x{k}"' for k in range(1, 32)) + "]\n[dynamics]\n"
+                     + "".join(f'x{k} = "-x{k}"\n' for k in range(1, 32)), "[model] states",
+                     ("31 states", f"limit is {MAX_STATES}", "MAX_STATES")),
     "total degree 13": Bad(edit('"-x1 + x2"', '"-x1 - x1**7*x2**6"'), "[dynamics] x1",
                            (f"above {MAX_TOTAL_DEGREE}", "MAX_TOTAL_DEGREE")),
     "total degree 13 in a denominator": Bad(edit('"-x1 + x2"', '"-x1/(1 + x1**7*x2**6)"'), "[dynamics] x1",

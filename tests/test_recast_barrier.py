@@ -1,5 +1,6 @@
-"""The barrier class on loops with functions (lyapcheck.models.classes.recast_barrier): ``[sets]`` taken, the
-true loop simulated for a counterexample, a barrier over the recasting's relations proved and re-checked."""
+"""The barrier class on loops with functions (lyapcheck.models.classes.barrier, its one implementation): ``[sets]``
+taken, the true loop simulated for a counterexample, a barrier over the recasting's relations proved and
+re-checked; a changed multiplier does not verify, and a certificate of the older kind is refused in one line."""
 
 from __future__ import annotations
 
@@ -105,7 +106,7 @@ def test_a_safe_acc_with_a_function_gets_a_barrier_that_verify_re_checks(tmp_pat
     assert run_cli("verify", str(out)).exit_code == 0
 
     cert = barrier["certificate"]
-    assert cert["kind"] == "recast_barrier" and barrier["lambda_per_s"] == float(Fraction(cert["lambda_per_s"]))
+    assert cert["kind"] == "barrier_relations" and barrier["lambda_per_s"] == float(Fraction(cert["lambda_per_s"]))
     recast = parse_any_model(model.read_text(), str(model), {})
     assert isinstance(recast, RecastModel)
     from lyapcheck.models.classes.recast_classes import v_text
@@ -175,3 +176,60 @@ def test_sets_on_a_loop_with_functions_are_read_or_refused_in_one_line(tmp_path:
     assert result.exit_code == 2 and "needs the sets initial and unsafe" in result.output, result.output
     model = parse_any_model(write(tmp_path, "read").read_text(), "read.toml", {})
     assert set(model.sets) == {"initial", "unsafe"} and len(model.sets["initial"][0]) == 4
+
+
+def _certified_safe_acc(tmp_path: Path) -> tuple[Path, dict[str, Any]]:
+    model = write(tmp_path, "safe", v="kp*(h - h0) + kd*(vL - v) + sin(h - h0)/5", initial=NEAR)
+    out = tmp_path / "safe.json"
+    assert run_cli("certify", str(model), "--classes", "barrier", "--out", str(out)).exit_code == 0
+    return out, json.loads(out.read_text())
+
+
+def test_a_changed_multiplier_of_a_barrier_on_relations_does_not_verify(tmp_path: Path) -> None:
+    # the certificate of the one implementation on a loop with functions: each identity's proof by relation
+    # index (the recasting's relations, then the piece's generators); any multiplier changed, it fails
+    _, doc = _certified_safe_acc(tmp_path)
+    cert = doc["conditions"]["barrier"]["certificate"]
+    assert not _failed(verify_document(doc))
+    recast = parse_any_model(write(tmp_path, "safe", v="kp*(h - h0) + kd*(vL - v) + sin(h - h0)/5",
+                                   initial=NEAR).read_text(), "safe.toml", {})
+    assert isinstance(recast, RecastModel)
+    from lyapcheck.models.classes.recast_classes import base_loop
+
+    relations = len(base_loop(recast.system, cylinder=False).relations)
+    # the initial piece's generators follow the recasting's relations: 4 inequalities and their 6 products
+    assert {int(k) for k in cert["initial"][0]["taus"]} >= set(range(relations, relations + 10))
+
+    def set_multiplier(forged: dict[str, Any]) -> None:  # an S-procedure multiplier of the initial piece
+        taus = forged["conditions"]["barrier"]["certificate"]["initial"][0]["taus"]
+        gram = taus[str(relations)]["Q"]
+        gram[0][0] = str(Fraction(gram[0][0]) + 1)
+
+    def relation_multiplier(forged: dict[str, Any]) -> None:  # a free multiplier of an equality relation
+        decrease = forged["conditions"]["barrier"]["certificate"]["decrease"]
+        assert decrease["lambdas"], "the decrease uses the sine's relation s^2 + c^2 = 1"
+        term = next(iter(decrease["lambdas"].values()))["terms"][0]
+        term[0] = str(Fraction(term[0]) + 1)
+
+    def remainder(forged: dict[str, Any]) -> None:
+        sigma = forged["conditions"]["barrier"]["certificate"]["unsafe"][0]["sigma"]["Q"]
+        sigma[0][0] = str(Fraction(sigma[0][0]) * 2 + 1)
+
+    for change, words in ((set_multiplier, "B <= 0 on the initial set"), (relation_multiplier, "B' <= lambda B"),
+                          (remainder, "B >= 1 on the unsafe set")):
+        failed = _failed(_forged(doc, change))
+        assert failed and words in failed[0], (change.__name__, failed)
+
+
+def test_a_barrier_certificate_of_the_older_kind_is_refused_in_one_line(tmp_path: Path) -> None:
+    from lyapcheck.models.classes import barrier
+
+    out, doc = _certified_safe_acc(tmp_path)
+    doc["conditions"]["barrier"]["certificate"]["kind"] = "recast_barrier"
+    failed = [why for check, ok, why in verify_document(doc) if not ok and check == "barrier"]
+    assert failed == [f"barrier: {barrier.OLD_FORMAT}"]  # (and the verdict and exit code follow from it)
+    assert "run lyapcheck certify again" in failed[0] and "\n" not in failed[0]
+    out.write_text(json.dumps(doc))
+    result = run_cli("verify", str(out))
+    assert result.exit_code == 1, result.output
+    assert sum(barrier.OLD_FORMAT in line for line in result.output.splitlines()) == 1, result.output

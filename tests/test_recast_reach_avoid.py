@@ -1,6 +1,8 @@
-"""The reach_avoid class on loops with functions (lyapcheck.models.classes.recast_reach_avoid): the polynomial
-reach-avoid's conditions proved on the recasting's relations and re-checked by verify, a trajectory of
-the true loop into the unsafe set before the goal as a counterexample, a saturated loop's reason."""
+"""The reach_avoid class on loops with functions (lyapcheck.models.classes.reach_avoid, the class's one
+implementation for both kinds of loop): the reach-avoid conditions proved on the recasting's relations and
+re-checked by verify, a changed certificate refused, one of the older format refused in one line, a
+trajectory of the true loop into the unsafe set before the goal as a counterexample, a saturated loop's
+reason."""
 
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ import numpy as np
 from click.testing import CliRunner, Result
 
 from lyapcheck.cli import app
+from lyapcheck.models.classes import reach_avoid
 from lyapcheck.models.language.modelfile import parse_any_model
 from lyapcheck.models.language.recast import RecastModel
 from lyapcheck.models.surfaces.certificate import verify_document
@@ -55,7 +58,7 @@ def test_a_spring_with_a_sine_gets_a_reach_avoid_function_that_verify_re_checks(
     assert doc["answers"]["reach_avoid"]["answer"] == "proved" and doc["verdict"] == "certified"
     cert = ra["certificate"]
     bound = Fraction(cert["C"]) / Fraction(cert["eps_per_s"])
-    assert cert["kind"] == "recast_reach_avoid" and ra["reach_time_bound_s"] == float(bound)
+    assert cert["kind"] == reach_avoid.KIND and ra["reach_time_bound_s"] == float(bound)
     assert ra["summary"].startswith("reach-avoid: every trajectory that starts in the initial set reaches the goal")
     assert ra["falsification"]["entry"] is None and ra["closest_approach"] < 0
     assert not _failed(verify_document(doc))
@@ -193,3 +196,37 @@ def test_a_pendulum_whose_angle_makes_another_equilibrium_outside_the_goal_says_
     wide.write_text(model.read_text().replace("theta**2 + omega**2 <= 0.1", "omega**2 <= 0.1"))
     run_cli("certify", str(wide), "--classes", "reach_avoid", "--out", str(out))
     assert "can exist" not in json.loads(out.read_text())["conditions"]["reach_avoid"]["summary"]
+
+
+def test_a_changed_proof_and_a_certificate_of_the_older_kind_are_refused(tmp_path: Path) -> None:
+    """The certificate of the class's one implementation (kind reach_avoid.KIND) is checked proof by proof:
+    a multiplier of one condition changed fails verify, naming the condition; one of the kind the loops
+    with functions' own module wrote before (recast_reach_avoid) is refused in one line, asking to certify
+    again, and the CLI exits 1."""
+    model = write(tmp_path, "safe")
+    out = tmp_path / "safe.json"
+    assert run_cli("certify", str(model), "--classes", "reach_avoid", "--out", str(out)).exit_code == 0
+    doc = json.loads(out.read_text())
+    assert doc["conditions"]["reach_avoid"]["certificate"]["kind"] == reach_avoid.KIND
+    assert not _failed(verify_document(doc))
+
+    def changed_remainder(forged: dict[str, Any]) -> None:  # the lower bound's remainder (sigma) changed
+        proof = forged["conditions"]["reach_avoid"]["certificate"]["proofs"]["bounded"]
+        Q = proof["sigma"]["Q"]
+        Q[0][0] = str(2 * Fraction(Q[0][0]) + 1)
+
+    failed = _failed(_forged(doc, changed_remainder))
+    assert failed and failed[0].startswith("reach_avoid: V >= delta |z|^2 - C: "), failed
+
+    def older(forged: dict[str, Any]) -> None:
+        forged["conditions"]["reach_avoid"]["certificate"]["kind"] = reach_avoid.OLD_KIND
+
+    refused = [why for name, ok, why in _forged(doc, older) if not ok and name == "reach_avoid"]
+    assert refused == [f"reach_avoid: {reach_avoid.OLD_FORMAT}"] and "\n" not in refused[0]
+    assert "run lyapcheck certify again" in refused[0]
+    old = tmp_path / "old.json"
+    forged = json.loads(json.dumps(doc))
+    older(forged)
+    old.write_text(json.dumps(forged))
+    result = run_cli("verify", str(old))
+    assert result.exit_code == 1 and reach_avoid.OLD_FORMAT in result.output, result.output

@@ -11,6 +11,8 @@ kind           identity (all Gram matrices positive definite)      where it hold
 =============  ==================================================  =========================  ================
 Positivity     ``p - c = sigma``, ``c > 0`` (``Q >= 0`` suffices)     everywhere                 ``p >= c > 0``
 Lyapunov       ``-grad V . g - mu V D = sigma``, ``mu >= 0``         everywhere                 GAS; ``V' <= -mu V``
+LyapunovCl.    the same with ``V``, ``sigma`` sums over cliques     everywhere                 the same
+               (:class:`GramSum`, :func:`check_lyapunov_cliques`)
 Sublevel       ``-grad V . g - s (c - V) = sigma``                   ``{V <= c}``               ``{V <= c}`` in the ROA
 Dissipation    ``-grad V . g - lam (V - 1) D - sum tau_k (b_k^2      every ``|d_k| <= b_k``      ``limsup V <= 1``
                - d_k^2) = sigma``, ``lam > 0``
@@ -158,6 +160,57 @@ def check_lyapunov(ring: Ring, g: Sequence[Poly], D: Poly, V: GramPoly, sigma: G
     if -lie_derivative(ring, v, g) - v * D * _q(mu) - boxed != sigma.poly(ring):
         return False, "the identity -grad V . g - mu V D = sigma does not hold exactly"
     return True, "Q_V > 0, Q_sigma > 0 and -grad V . g - mu V D = sigma, exactly" + (" (on the box)" if box else "")
+
+
+@dataclass(frozen=True)
+class GramSum:
+    """A sum of Gram polynomials over overlapping bases, one per clique of the variables
+    (:mod:`lyapcheck.sos.sparsity`). With every part's ``Q`` positive definite and every monomial
+    of the union of the bases in some part, the sum is ``z^T Q z`` over that union with ``Q`` the
+    sum of the parts' matrices padded with zeros, which is positive definite too: for ``v != 0``
+    some part sees a non-zero ``v_k``, and ``v^T Q v = sum_k v_k^T Q_k v_k > 0``."""
+
+    parts: tuple[GramPoly, ...]
+
+    @property
+    def basis(self) -> tuple[Monomial, ...]:
+        """The union of the parts' bases, in first-seen order."""
+        return tuple(dict.fromkeys(m for part in self.parts for m in part.basis))
+
+    def poly(self, ring: Ring) -> Poly:
+        total = ring.zero()
+        for part in self.parts:
+            total += part.poly(ring)
+        return total
+
+    def positive_definite(self) -> bool:
+        return bool(self.parts) and all(part.positive_definite() for part in self.parts)
+
+
+def check_lyapunov_cliques(ring: Ring, g: Sequence[Poly], D: Poly, V: GramSum, sigma: GramSum, mu: Fraction
+                           ) -> tuple[bool, str]:
+    """Lyapunov with ``V`` and ``sigma`` sums over cliques (:class:`GramSum`):
+    ``-grad V . g - mu V D = sigma`` exactly, every part's ``Q`` positive definite, no constant in
+    ``V``, and a pure power of every state in the union of ``V``'s bases and in that of ``sigma``'s:
+    then ``V >= lambda sum_i z_i^(2 k_i)`` and ``sigma`` likewise, as for one Gram matrix."""
+    n = len(g)
+    if mu < 0:
+        return False, "the decay rate mu must be >= 0"
+    if not V.parts or not has_pure_powers(V.basis, range(n)):
+        return False, "V's bases must hold a pure power of every state (so that V is radially unbounded)"
+    if any(sum(m) == 0 for m in V.basis):
+        return False, "V's bases may not hold the constant monomial (V(0) must be 0)"
+    if not V.positive_definite():
+        return False, "a clique's Q_V is not positive definite (exact)"
+    if not sigma.parts or not has_pure_powers(sigma.basis, range(n)):
+        return False, "sigma's bases must hold a pure power of every state (so that V' < 0 away from 0)"
+    if not sigma.positive_definite():
+        return False, "a clique's Q_sigma is not positive definite (exact)"
+    v = V.poly(ring)
+    if -lie_derivative(ring, v, g) - v * D * _q(mu) != sigma.poly(ring):
+        return False, "the identity -grad V . g - mu V D = sigma does not hold exactly"
+    return True, (f"every clique's Q_V > 0 ({len(V.parts)}), Q_sigma > 0 ({len(sigma.parts)}) and "
+                  "-grad V . g - mu V D = sigma, exactly")
 
 
 def check_sublevel(ring: Ring, g: Sequence[Poly], V: GramPoly, level: Fraction, s: GramPoly, sigma: GramPoly,

@@ -90,11 +90,12 @@ def decision_poly(ring: Ring, structure: Structure, point: ExactPoint, name: str
 
 
 def identity_value(ring: Ring, structure: Structure, ident: Any, point: ExactPoint,
-                   values: Mapping[str, Sequence[Fraction]], *, skip: str | None = None) -> Poly:
-    """``sum(terms) + constant`` exactly (the terms on decision ``skip`` left out)."""
+                   values: Mapping[str, Sequence[Fraction]], *, skip: str | Sequence[str] | None = None) -> Poly:
+    """``sum(terms) + constant`` exactly (the terms on decision ``skip``, or on each of them, left out)."""
+    skipped = {skip} if isinstance(skip, str) else set(skip or ())
     total = ring.zero()
     for term in ident.terms:
-        if term.decision == skip:
+        if term.decision in skipped:
             continue
         total += coefficient_poly(ring, term.coefficients, values) * decision_poly(
             ring, structure, point, term.decision, term.derivative)
@@ -115,12 +116,18 @@ def _classes(gram: Gram) -> dict[Monomial, list[tuple[int, int]]]:
 
 
 def _remainder_factor(ident: Any) -> Fraction:
-    """The literal constant multiplying the remainder (exactly one term, a constant literal)."""
-    terms = [t for t in ident.terms if t.decision == ident.remainder]
-    if len(terms) != 1 or terms[0].derivative is not None or terms[0].coefficients.param is not None \
-            or len(terms[0].coefficients.support) != 1 or any(terms[0].coefficients.support[0]):
-        raise ValueError(f"identity {ident.name}: its remainder must appear once, times a constant literal")
-    return terms[0].coefficients.values[0]
+    """The literal constant multiplying the remainder (each remainder Gram exactly one term, the same
+    constant literal)."""
+    factors = set()
+    for name in ident.remainders():
+        terms = [t for t in ident.terms if t.decision == name]
+        if len(terms) != 1 or terms[0].derivative is not None or terms[0].coefficients.param is not None \
+                or len(terms[0].coefficients.support) != 1 or any(terms[0].coefficients.support[0]):
+            raise ValueError(f"identity {ident.name}: its remainder must appear once, times a constant literal")
+        factors.add(terms[0].coefficients.values[0])
+    if len(factors) != 1:
+        raise ValueError(f"identity {ident.name}: its remainder Grams must share one constant factor")
+    return factors.pop()
 
 
 def exact_point(ring: Ring, structure: Structure, solution: Solution,
@@ -139,38 +146,47 @@ def rounded_point(solution: Solution) -> ExactPoint:
 def project(ring: Ring, structure: Structure, point: ExactPoint,
             values: Mapping[str, Sequence[Fraction]]) -> ExactPoint | None:
     """Steps 2 and 3 on a rounded point (changed in place and returned), or None."""
-    for g in structure.grams:  # zero between blocks, exactly
-        allowed = {(i, j) for idx in g.blocks for i in idx for j in idx}
-        Q = point.grams[g.name]
+    for gram in structure.grams:  # zero between blocks, exactly
+        allowed = {(i, j) for idx in gram.blocks for i in idx for j in idx}
+        Q = point.grams[gram.name]
         for i in range(len(Q)):
             for j in range(len(Q)):
                 if (i, j) not in allowed:
                     Q[i][j] = Fraction(0)
-    remainders = {ident.remainder for ident in structure.identities}
-    classes = {name: _classes(structure.gram(name)) for name in remainders}
+    classes = [_identity_classes(structure, ident) for ident in structure.identities]
     if not _correct(ring, structure, point, values, classes):
         return None
-    for ident in structure.identities:
+    for k, ident in enumerate(structure.identities):
         factor = _remainder_factor(ident)
-        target = identity_value(ring, structure, ident, point, values, skip=ident.remainder)
-        # factor * R + target == 0  ->  R = -target / factor
+        target = identity_value(ring, structure, ident, point, values, skip=ident.remainders())
+        # factor * R + target == 0  ->  R = -target / factor (R the sum of the remainder Grams)
         want = ring.terms(target)
         want = {m: -c / factor for m, c in want.items()}
-        Q = point.grams[ident.remainder]
-        cls = classes[ident.remainder]
+        cls = classes[k]
         if any(m not in cls for m, c in want.items() if c != 0):
             return None
         for m, entries in cls.items():
-            residual = want.get(m, Fraction(0)) - sum((Q[i][j] for i, j in entries), Fraction(0))
+            residual = want.get(m, Fraction(0)) - sum((point.grams[g][i][j] for g, i, j in entries), Fraction(0))
             if residual:
+                # the orthogonal projection: each monomial's entries (over every remainder Gram) are
+                # disjoint from every other monomial's, so its residual is spread equally over them
                 share = residual / len(entries)
-                for i, j in entries:
-                    Q[i][j] += share
+                for g, i, j in entries:
+                    point.grams[g][i][j] += share
     return point
 
 
+def _identity_classes(structure: Structure, ident: Any) -> dict[Monomial, list[tuple[str, int, int]]]:
+    """Monomial -> the entries (Gram, row, column) of the identity's remainder Grams that produce it."""
+    out: dict[Monomial, list[tuple[str, int, int]]] = {}
+    for name in ident.remainders():
+        for m, entries in _classes(structure.gram(name)).items():
+            out.setdefault(m, []).extend((name, i, j) for i, j in entries)
+    return out
+
+
 def _correct(ring: Ring, structure: Structure, point: ExactPoint, values: Mapping[str, Sequence[Fraction]],
-             classes: Mapping[str, Mapping[Monomial, Any]]) -> bool:
+             classes: Sequence[Mapping[Monomial, Any]]) -> bool:
     """Make the identities hold exactly on the monomials their remainders cannot represent, by the
     least-norm change of the other decisions (False if that linear system has no solution).
 
@@ -181,13 +197,13 @@ def _correct(ring: Ring, structure: Structure, point: ExactPoint, values: Mappin
     """
     import flint
 
-    remainders = {ident.remainder for ident in structure.identities}
+    remainders = {name for ident in structure.identities for name in ident.remainders()}
     rows: list[tuple[int, Monomial]] = []
     rhs: list[Fraction] = []
     for k, ident in enumerate(structure.identities):
-        target = ring.terms(identity_value(ring, structure, ident, point, values, skip=ident.remainder))
+        target = ring.terms(identity_value(ring, structure, ident, point, values, skip=ident.remainders()))
         for m in sorted(_generic_support(structure, ident) | set(target)):
-            if m not in classes[ident.remainder]:
+            if m not in classes[k]:
                 rows.append((k, m))
                 rhs.append(-target.get(m, Fraction(0)))
     if not any(rhs):
@@ -260,7 +276,7 @@ def _generic_support(structure: Structure, ident: Any) -> set[Monomial]:
     """Every monomial the identity's non-remainder terms can produce, whatever the decisions."""
     out: set[Monomial] = set()
     for term in ident.terms:
-        if term.decision == ident.remainder:
+        if term.decision in ident.remainders():
             continue
         if any(g.name == term.decision for g in structure.grams):
             g = structure.gram(term.decision)

@@ -82,12 +82,20 @@ class Term:
 @dataclass(frozen=True)
 class Identity:
     """``sum(terms) + constant == 0`` as polynomials; ``remainder`` names the Gram that absorbs
-    rounding (:mod:`lyapcheck.sos.rounding`)."""
+    rounding (:mod:`lyapcheck.sos.rounding`), and ``shared`` further Grams that absorb it with it:
+    a remainder that is a sum of Gram matrices over overlapping bases (one per clique of the
+    variables, correlative sparsity: :mod:`lyapcheck.sos.sparsity`), each in the identity once, with
+    the remainder's factor."""
 
     name: str
     terms: tuple[Term, ...]
     constant: Coefficients | None
     remainder: str
+    shared: tuple[str, ...] = ()
+
+    def remainders(self) -> tuple[str, ...]:
+        """Every Gram that absorbs the rounding of this identity."""
+        return (self.remainder, *self.shared)
 
 
 @dataclass(frozen=True)

@@ -4,13 +4,11 @@
   sweep stores;
 - polynomial and rational loops: :mod:`~lyapcheck.models.classes.linearization`,
   :mod:`~lyapcheck.models.classes.lyapunov` (quadratic, sos_gas, candidate),
-  :mod:`~lyapcheck.models.classes.regions` (roa and candidate's sublevel sets, by SOS, on loops with functions
+  :mod:`~lyapcheck.models.classes.regions` (roa and candidate's sublevel sets by SOS, on loops with functions
   too), :mod:`~lyapcheck.models.classes.bounds`
-  (sos_bound, on loops with functions too), :mod:`~lyapcheck.models.classes.barrier`,
-  :mod:`~lyapcheck.models.classes.reach_avoid`;
+  (sos_bound, on loops with functions too), :mod:`~lyapcheck.models.classes.barrier` (on loops with
+  functions too), :mod:`~lyapcheck.models.classes.reach_avoid` (on loops with functions too);
 - loops with functions: :mod:`~lyapcheck.models.classes.recast_classes`,
-  :mod:`~lyapcheck.models.classes.recast_barrier`,
-  :mod:`~lyapcheck.models.classes.recast_reach_avoid`,
   :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
   (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_ball_level` (a quadratic V's
   largest level by ball arithmetic, from its exact local level, at any number of states);

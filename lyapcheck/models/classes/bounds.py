@@ -162,14 +162,16 @@ def _embed(a: Monomial, variables: Sequence[int], nv: int) -> Monomial:
     return tuple(out)
 
 
-def relation_multipliers(field: BoundField, name: str, target: set[Monomial], generators: Sequence[Sequence[int]]
-                         ) -> tuple[list[Gram], list[Scalar], list[Term], set[Monomial]]:
+def relation_multipliers(field: BoundField, name: str, target: set[Monomial], generators: Sequence[Sequence[int]],
+                         margin: bool | str = "floor") -> tuple[list[Gram], list[Scalar], list[Term], set[Monomial]]:
     """The S-procedure terms of a loop with functions' relations in identity ``name`` (``D`` or ``E``):
     ``- lambda_i h_i`` (``lambda_i`` free, its coefficients the scalars ``L<name>_<i>_<k>``) per equality
     and ``- tau_j g_j`` (``tau_j`` the Gram ``T<name>_<j>``) per inequality, of the degree the identity's
     other terms reach (the relations of :attr:`BoundField.multiplied`; none on a polynomial loop), and the
     monomials they add. (:class:`~lyapcheck.models.engines.recast_sos.ConditionProgram` builds the same terms
-    for the relational classes, with their own naming and margins.)"""
+    for the relational classes, with their own naming and margins.) ``margin``: the ``tau_j``'s, as
+    :class:`~lyapcheck.sos.program.Gram`'s (a floor parameter here; the program's margin variable in a
+    program that maximizes it, as ``barrier``'s)."""
     ring = field.ring
     nv = ring.nvars
     top = max((sum(q) for q in target), default=2)
@@ -194,7 +196,7 @@ def relation_multipliers(field: BoundField, name: str, target: set[Monomial], ge
             basis = [q for q in monomials(nv, 0, (top - d) // 2) if field.allowed(q)]
             gname = f"T{name}_{i}"
             grams.append(Gram(gname, tuple(basis), tuple(map(tuple, bases.character_blocks(basis, generators))),
-                              margin="floor"))
+                              margin=margin))
             terms.append(Term(Coefficients.literal(ring.terms(-rel.poly)), gname))
             added |= {tuple(a + b + c for a, b, c in zip(x, z, w)) for x in basis for z in basis
                       for w in ring.support(rel.poly)}
@@ -720,10 +722,13 @@ def bound_sentence(model: "RecastModel", bounds: Mapping[str, float | Fraction])
     return summary("sos_bound", bound_claim(model, bounds), list(model.outputs)) or ""
 
 
-def relation_certificates(field: BoundField, structure: Structure, point: Any
-                          ) -> tuple["ConditionCertificate", "ConditionCertificate"]:
+def relation_certificates(field: BoundField, structure: Structure, point: Any,
+                          identities: Sequence[tuple[str, str]] = (("D", "sigD"), ("E", "sigE"))
+                          ) -> tuple["ConditionCertificate", ...]:
     """The two identities' multipliers of a solved program on a loop with functions, by relation index:
-    each disturbance's ``tau_k``, every other relation's multiplier, and the remainder."""
+    each disturbance's ``tau_k``, every other relation's multiplier, and the remainder. ``identities``:
+    each identity's name (as :func:`relation_multipliers` was given it) and its remainder's (``barrier``'s
+    identities: ``("I0", "RI0")``, ...)."""
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
     from lyapcheck.sos.certificates import GramPoly
 
@@ -748,7 +753,7 @@ def relation_certificates(field: BoundField, structure: Structure, point: Any
                 taus[j] = GramPoly.of(by_name[f"tau{k}"].basis, point.grams[f"tau{k}"])
         return ConditionCertificate(lambdas, taus, GramPoly.of(by_name[sigma].basis, point.grams[sigma]))
 
-    return of("D", "sigD"), of("E", "sigE")
+    return tuple(of(name, sigma) for name, sigma in identities)
 
 
 def check_on_relations(field: BoundField, V: "GramPoly", v0: Fraction, lam: Fraction, B: Fraction, y: Poly,

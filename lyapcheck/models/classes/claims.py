@@ -45,9 +45,14 @@ BARRIER_SENTENCE = ("safety: no trajectory that starts in the initial set ever e
 TIME_UNIT = "s"
 RATE_UNIT = "1/s"
 #: the certificate kinds of a loop with functions' safety classes (lyapcheck.models.classes.recast_barrier,
-#: recast_reach_avoid; :func:`sentence_of`)
+#: reach_avoid; :func:`sentence_of`)
 RECAST_BARRIER_KIND = "recast_barrier"
-RECAST_REACH_AVOID_KIND = "recast_reach_avoid"
+#: the certificate kind of a loop with functions' barrier since barrier has one implementation (issue 41);
+#: the older kind is refused by verify (lyapcheck.models.classes.barrier.check)
+BARRIER_RELATIONS_KIND = "barrier_relations"
+#: the same for reach_avoid (lyapcheck.models.classes.reach_avoid.check_functions refuses the older kind,
+#: recast_reach_avoid)
+RECAST_REACH_AVOID_KIND = "reach_avoid_relations"
 #: how a ball-arithmetic region is proved (its sentence says so: :func:`interval_sentence`)
 INTERVAL_METHOD = "ball arithmetic (python-flint arb) on the true field"
 #: significant digits of a figure in a sentence (the JSON keeps the full figure)
@@ -193,7 +198,7 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
         ball = f"; {ball_words(condition)}" if "ball_radius" in condition else ""
         return (f"{what}: every start in {{V <= {rounded(level, 6, 'down')}}} converges to the equilibrium (checked "
                 f"exactly){ball}")
-    if kind != "lyapunov":
+    if kind not in ("lyapunov", "lyapunov_cliques"):
         raise ValueError(f"unknown certificate kind {kind!r}")
     if condition.get("property") == "GES":
         return (f"GES: |x(t) - x_eq| <= {rounded(_number(condition, 'k'), FIGURE_DIGITS, 'up')} |x0 - x_eq| exp(-r t) "
@@ -209,6 +214,8 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
     tail = (f", and V' <= -r V with r = {with_unit(rate, RATE_UNIT, direction='down')} (V decays exponentially from every start)"
             if rate > 0 else "")
     what = "a quadratic V" if degree == 2 else f"a polynomial V of degree {degree}"
+    if kind == "lyapunov_cliques":
+        what += f", a sum over {len(cert['cliques'])} cliques of the states,"
     return f"GAS: {what} with V' < 0 away from the equilibrium{tail} (checked exactly)"
 
 
@@ -376,7 +383,7 @@ def recast_reach_time(cert: dict[str, Any]) -> Fraction:
 def sentence_of(cert: dict[str, Any]) -> str:
     """The claim sentence of a certificate of a loop with functions, of any kind (a barrier's is the
     polynomial loops' one): certify writes it, ``verify`` and the report re-make it from the certificate."""
-    if cert.get("kind") == RECAST_BARRIER_KIND:
+    if cert.get("kind") in (RECAST_BARRIER_KIND, BARRIER_RELATIONS_KIND):
         return BARRIER_SENTENCE
     if cert.get("kind") == RECAST_REACH_AVOID_KIND:
         text = summary("reach_avoid", {"status": "certified", "reach_time_bound_s": float(recast_reach_time(cert))})

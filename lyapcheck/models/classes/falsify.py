@@ -711,7 +711,7 @@ def falsify(model: Model, initial: StateSet, unsafe: StateSet, margin_fn: Margin
     evaluate
         The field ``evaluate(x, d)`` (rows), default the polynomial model's
         (:class:`~lyapcheck.models.engines.numeric.FieldEvaluator`); a loop with functions gives its true
-        field (:mod:`lyapcheck.models.classes.recast_barrier`), ``model`` then any object with the
+        field (:mod:`lyapcheck.models.classes.barrier`), ``model`` then any object with the
         attributes read here (``n``, ``states``, ``equilibrium``, ``domain``, ``disturbances``).
     stop
         A set (reach-avoid's goal): each trajectory is watched only until it reaches it (module doc,

@@ -385,8 +385,17 @@ def stated_v(scaled: ScaledField, field: StateField, v_scaled: Poly) -> dict[str
 
 def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, Any]) -> dict[str, Any]:
     """The exact certificate: V in the declared (shifted) states, and the Gram matrices in the
-    scaled ones (the scaling is at the document's top) over ``field``'s ring."""
+    scaled ones (the scaling is at the document's top) over ``field``'s ring. In the clique form
+    (kind ``lyapunov_cliques``) ``gram_V`` and ``gram_sigma`` are lists, one Gram matrix per clique,
+    and ``cliques`` names each clique's states."""
     v_scaled = found["V"].poly(field.ring)
+    if "cliques" in found:
+        names = field.ring.names
+        return {"kind": "lyapunov_cliques", "degree": found["degree"], "mu_scaled": str(found["mu"]),
+                "V": stated_v(scaled, field, v_scaled), "form": found["form"],
+                "cliques": [[names[i] for i in c] for c in found["cliques"]],
+                "gram_V": [part.to_json() for part in found["V"].parts],
+                "gram_sigma": [part.to_json() for part in found["W"].parts]}
     out = {"kind": "lyapunov", "degree": found["degree"], "mu_scaled": str(found["mu"]),
            "V": stated_v(scaled, field, v_scaled), "gram_V": found["V"].to_json(),
            "gram_sigma": found["W"].to_json()}
@@ -410,6 +419,8 @@ def ges_bounds(scaled: ScaledField, found: dict[str, Any]) -> tuple[Fraction, Fr
     from lyapcheck.sos.definiteness import is_positive_definite
 
     n = scaled.n
+    if "cliques" in found:
+        return None  # GES figures are derived for one Gram matrix (a clique form states GAS and V's rate)
     basis = found["V"].basis
     if found["degree"] != 2 or any(any(m[n:]) for m in basis):
         return None  # GES is claimed for a quadratic V common to the box only
@@ -453,8 +464,12 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                 search.budget.check()  # also before a degree whose program is skipped unsolved
                 found, why = search_degree(field, degree, search, param_degree)
                 tried.append(why)
+                if found is None and field.p == 0 and reasons.size_limits([why]):
+                    # the dense form is too large: V and -V' as sums over cliques of the states
+                    found, why = clique_search(field, degree, search)
+                    tried.append(why)
                 if found is not None:
-                    if key is not None:
+                    if key is not None and "cliques" not in found:
                         store.keep(key, {"found": found_json(found), "solves": len(search.log)})
                     return _certified(scaled, field, name, found, {"solves": search.log})
     except BudgetExhausted as exc:
@@ -538,6 +553,152 @@ def _certified(scaled: ScaledField, field: StateField, name: str, found: dict[st
                                    certificate=cert, solver=solver, property="GES")
     tail = f", and V' <= -{rate_v:.4g} V (V decays exponentially from every start)" if mu > 0 else ""
     what = "a quadratic V" if found["degree"] == 2 else f"a polynomial V of degree {found['degree']}"
+    if "cliques" in found:
+        what += f", a sum over {len(found['cliques'])} cliques of the states,"
     return ConditionResult(name, "certified", f"GAS: {what} with V' < 0 away from the equilibrium{tail} "
                                               "(checked exactly)",
                            numbers=numbers, certificate=cert, solver=solver, property="GAS")
+
+
+# -- correlative sparsity: V and -V' as sums over cliques of the states (issue 43) -----------------
+
+#: the most monomials the identity of the clique form may have (one equality each); the clique form
+#: exists for networks, whose identities are long but whose Gram matrices are small
+CLIQUE_TARGET_LIMIT: Final = 40_000
+#: the clique forms tried, in turn: the states' closed neighbourhoods in the field's interaction
+#: graph (small: a subsystem and its neighbours), then the cliques of its chordal completion
+CLIQUE_FORMS: Final = ("neighbourhoods", "chordal")
+
+
+def field_couplings(field: StateField) -> list[set[int]]:
+    """Per state ``i``, the states ``g_i`` depends on (the field's interaction graph)."""
+    n = field.n
+    return [{j for m in field.ring.support(gi) for j in range(n) if m[j] > 0} for gi in field.g]
+
+
+def clique_cover(field: StateField, form: str) -> list[tuple[int, ...]]:
+    """The cliques of the states of one of :data:`CLIQUE_FORMS` (:mod:`lyapcheck.sos.sparsity`)."""
+    from lyapcheck.sos import sparsity
+
+    couplings = field_couplings(field)
+    if form == "neighbourhoods":
+        return sparsity.neighbourhood_cliques(field.n, couplings)
+    return sparsity.chordal_cliques(field.n, couplings)
+
+
+def clique_program(field: StateField, degree: int, generators: Sequence[Sequence[int]],
+                   cliques: Sequence[tuple[int, ...]], drop: frozenset[tuple[str, Monomial]] = frozenset()
+                   ) -> Structure | str:
+    """The Lyapunov identity with ``V = sum_k V_k`` and ``-V' - mu V D = sum_k sigma_k``, each
+    ``V_k`` (Gram ``V<k>``) and ``sigma_k`` (Gram ``W<k>``) over the monomials of clique ``k`` of
+    the states (``V_k`` of degree 1 to ``degree / 2``, ``sigma_k`` Newton-reduced against the
+    identity's support); ``drop``: (Gram, monomial) pairs left out (facial reduction). Or why there
+    is none (a size limit, or no pure power of some state left)."""
+    from lyapcheck.sos import sparsity
+
+    ring = field.ring
+    nv = ring.nvars
+    v_grams: list[Gram] = []
+    for k, clique in enumerate(cliques):
+        basis = [m for m in sparsity.clique_candidates(clique, nv, 1, degree // 2) if (f"V{k}", m) not in drop]
+        if basis:
+            v_grams.append(Gram(f"V{k}", tuple(basis), tuple(map(tuple, bases.character_blocks(basis, generators)))))
+    if not bases.has_pure_powers([m for g in v_grams for m in g.basis], range(field.n)):
+        return ("no strict certificate of this form exists (V's bases, reduced to the face the solver found, "
+                "keep no pure power of some state)")
+    target: set[Monomial] = set()
+    for gram in v_grams:
+        products = _products(gram.basis, gram.blocks)
+        for i, gi in enumerate(field.g):
+            derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
+            target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+    if len(target) > CLIQUE_TARGET_LIMIT:
+        return size_limit(len(target), "monomials in one polynomial identity", CLIQUE_TARGET_LIMIT,
+                          "CLIQUE_TARGET_LIMIT")
+    half = max(sum(m) for m in target) // 2
+    candidates = [sparsity.clique_candidates(c, nv, 1, half) for c in cliques]
+    reduced = sparsity.reduce_clique_bases(cliques, candidates, target)
+    w_grams = [Gram(f"W{k}", tuple(b), tuple(map(tuple, bases.character_blocks(b, generators))))
+               for k, basis in enumerate(reduced) if (b := [m for m in basis if (f"W{k}", m) not in drop])]
+    if any(len(g.basis) > MAX_GRAM_ROWS for g in (*v_grams, *w_grams)):
+        return size_limit(max(len(g.basis) for g in (*v_grams, *w_grams)), "monomials per sum-of-squares matrix",
+                          MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
+    if not w_grams or not bases.has_pure_powers([m for g in w_grams for m in g.basis], range(field.n)):
+        return ("no strict certificate of this form exists (the Newton polytope of -V' leaves no pure power of "
+                "every state in the cliques' bases)")
+    terms = [Term(param(f"g{i}", ring.support(field.g[i])), gram.name, derivative=i)
+             for gram in v_grams for i in sorted({i for m in gram.basis for i in range(field.n) if m[i] > 0})]
+    terms += [Term(param("muD", ring.support(field.D)), gram.name) for gram in v_grams]
+    terms += [Term(one(ring, -1), gram.name) for gram in w_grams]
+    structure = Structure(
+        nvars=nv, grams=(*v_grams, *w_grams), scalars=(),
+        identities=(Identity("lyapunov", tuple(terms), None, w_grams[0].name,
+                             shared=tuple(g.name for g in w_grams[1:])),),
+        objective=("max_margin",))  # no trace normalization: t <= 1 fixes the scale (every Q >= t I)
+    if affordable(structure) is None:
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
+    return structure
+
+
+def clique_attempt(field: StateField, structure: Structure, mu: Fraction, search: Search
+                   ) -> tuple[dict[str, Any] | None, Solution]:
+    """One solve of the clique form at decay rate ``mu``; the exact certificate if it passes."""
+    from lyapcheck.sos.certificates import GramSum, check_lyapunov_cliques
+
+    values = lyapunov_values(field, structure, mu)
+    solution = search.solve(structure, values)
+    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
+        return None, solution
+    point = search.exact(structure, solution, values)
+    if point is None:
+        return None, solution
+    parts = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+    V = GramSum(tuple(p for name, p in parts.items() if name.startswith("V")))
+    W = GramSum(tuple(p for name, p in parts.items() if name.startswith("W")))
+    ok, _ = check_lyapunov_cliques(field.ring, field.g, field.D, V, W, mu)
+    if not ok:
+        return None, solution
+    # the margin relative to V's size, as the dense form's (whose V has trace 1)
+    trace = sum(float(sum(Q[i][i] for i in range(len(Q)))) for name, Q in solution.grams.items() if name.startswith("V"))
+    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"] / trace if trace > 0 else None, "box": []}, solution
+
+
+def clique_search(field: StateField, degree: int, search: Search) -> tuple[dict[str, Any] | None, str]:
+    """:func:`search_degree` in the clique form (each of :data:`CLIQUE_FORMS` in turn): a
+    certificate whose ``V`` and remainder are sums over cliques of the states, or None and why."""
+    generators = symmetry(field)
+    whys: list[str] = []
+    seen: list[list[tuple[int, ...]]] = []
+    for form in CLIQUE_FORMS:
+        cliques = clique_cover(field, form)
+        if cliques in seen or len(cliques) < 2:
+            continue  # the same cliques again, or one clique: the dense form, which was too large
+        seen.append(cliques)
+        label = f"degree {degree}, V a sum over {len(cliques)} cliques of the states ({form})"
+        drop: frozenset[tuple[str, Monomial]] = frozenset()
+        why = "none found"
+        found = None
+        for _ in range(LYAPUNOV_FACIAL_ROUNDS + 1):
+            structure = clique_program(field, degree, generators, cliques, drop)
+            if isinstance(structure, str):
+                why = structure + (f" (after facial reduction, where {why})" if drop else "")
+                break
+            solved = structure
+            found, solution = clique_attempt(field, solved, Fraction(0), search)
+            if found is not None:
+                break
+            why = failure(solution, exact_tried=solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+            vanishing = frozenset((g.name, m) for g in structure.grams
+                                  for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+            if not vanishing:
+                break
+            drop = drop | vanishing
+        if found is None:
+            whys.append(f"{label}: {why}")
+            continue
+        found = best_decay_rate(lambda mu: clique_attempt(field, solved, mu, search)[0], found)
+        found.update({"degree": degree, "param_degree": 0, "cliques": [list(c) for c in cliques], "form": form})
+        return found, f"{label}: found"
+    return None, "; ".join(whys) if whys else f"degree {degree}: no clique form smaller than the whole"

@@ -42,8 +42,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.recast import RecastModel
     from lyapcheck.units import SIQuantity
 
-#: the most states a model may have
-MAX_STATES: Final = 12
+#: the most states a model may have: the networks of issue 43 reach 30, where sos_gas works on
+#: cliques of the states (lyapcheck.sos.sparsity); each class has its own size limits below this
+MAX_STATES: Final = 30
 #: the most parameters and the most disturbances
 MAX_PARAMETERS: Final = 64
 MAX_DISTURBANCES: Final = 6

@@ -328,13 +328,13 @@ def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any]
 #: certificate itself, each in the direction that keeps the claim true (a stated rate or level at
 #: most the certified one, a bound or a time at least it); a GES claim adds ``k`` and its rate
 _CHECKED_FIGURES: dict[str, tuple[str, ...]] = {
-    "lyapunov": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius", "size"),
+    "lyapunov": ("decay_rate_V_per_s",), "lyapunov_cliques": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius", "size"),
     "quadratic_ball": ("level", "ball_radius", "size"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
     "sos_bound": ("bounds", "bounds_reference"), "interval": ("level", "size"),
 }
 #: what a certificate of each kind proves (a Lyapunov certificate: GAS, or GES where
 #: :func:`_verify_ges` passed)
-_KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "sublevel": "ROA", "quadratic_ball": "ROA", "barrier": "safety",
+_KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "lyapunov_cliques": "GAS", "sublevel": "ROA", "quadratic_ball": "ROA", "barrier": "safety",
                                   "reach_avoid": "reach_avoid", "sos_bound": "ultimate_bound", "interval": "ROA"}
 
 
@@ -443,6 +443,34 @@ def _at_least(stated: Any, proved: Fraction) -> bool:
     return stated is None or Fraction(float(stated)) >= proved - abs(proved) / 10**12
 
 
+def _verify_cliques(c: dict[str, Any], cert: dict[str, Any], scaled: Any, field: Any) -> tuple[bool, str]:
+    """A Lyapunov certificate in the clique form (kind ``lyapunov_cliques``, :func:`lyapcheck.models.
+    classes.lyapunov.clique_search`): ``V`` and the remainder sums of Gram matrices, checked exactly
+    (:func:`~lyapcheck.sos.certificates.check_lyapunov_cliques`)."""
+    from lyapcheck.sos.certificates import GramSum, check_lyapunov_cliques
+
+    if field.p:
+        return False, "a certificate in the clique form is for a field without box coordinates"
+    if not isinstance(cert.get("gram_V"), list) or not isinstance(cert.get("gram_sigma"), list):
+        return False, "a certificate in the clique form has lists 'gram_V' and 'gram_sigma'"
+    nv = field.ring.nvars
+    V = GramSum(tuple(_gram(part, nv) for part in cert["gram_V"]))
+    sigma = GramSum(tuple(_gram(part, nv) for part in cert["gram_sigma"]))
+    if not _v_matches(scaled, field, V, cert["V"]):
+        return False, "the stated V (declared states) is not the certificate's Gram V unscaled"
+    mu = Fraction(cert["mu_scaled"])
+    ok, why = check_lyapunov_cliques(field.ring, field.g, field.D, V, sigma, mu)
+    if not ok:
+        return False, why
+    if not isinstance(cert.get("cliques"), list) or len(cert["cliques"]) != len(V.parts):
+        return False, "'cliques' must name the states of each of V's Gram matrices"
+    if not _at_most(c.get("decay_rate_V_per_s"), mu / scaled.scaling.time):
+        return False, "the stated decay rate of V exceeds the certified one"
+    if c.get("property") not in ("GAS", None):
+        return False, f"a Lyapunov certificate in the clique form proves GAS, not {c.get('property')}"
+    return True, why
+
+
 def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]:
     from lyapcheck.models.loop.field import StateField, state_field
     from lyapcheck.sos.certificates import check_containment, check_dissipation, check_lyapunov, check_output_bound, \
@@ -504,6 +532,8 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
                 return False, ("'disturbances': 'all' is claimed, but a disturbance moves the equilibrium, so no "
                                "stability claim can hold for every disturbance")
             field = robust
+    if cert.get("kind") == "lyapunov_cliques":
+        return _verify_cliques(c, cert, scaled, field)
     ring, n = field.ring, field.n
     nv = ring.nvars
     V = _gram(cert["gram_V"], nv)

@@ -31,8 +31,8 @@ from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_deno
 from lyapcheck.models.surfaces.recast_run import box_robust, boxed_loop, robust_of
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
 from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered, lyapunov_sentence
-from lyapcheck.models.classes.recast_barrier import KIND as RECAST_BARRIER
-from lyapcheck.models.classes.recast_reach_avoid import KIND as RECAST_REACH_AVOID
+from lyapcheck.models.classes.barrier import KIND as BARRIER_KIND, OLD_KIND as RECAST_BARRIER
+from lyapcheck.models.classes.reach_avoid import KIND as RECAST_REACH_AVOID, OLD_KIND as OLD_REACH_AVOID
 from lyapcheck.models.surfaces.stated import Stated, check_stated
 from lyapcheck.sos.polynomials import degree_in, to_fmpq
 from lyapcheck.exact import read_rational
@@ -171,7 +171,7 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
         return Stated("ultimate_bound", {k: v for k, v in claim.items() if k != "status"})
     if kind == "interval":  # (its size: re-derived in a row of its own, check_size_rows)
         return Stated("ROA", {"level": read_rational(cert["level"])}, frozenset({"size"}))
-    if kind == RECAST_BARRIER:
+    if kind in (BARRIER_KIND, RECAST_BARRIER):  # (an older one is refused by its check, with the advice)
         if name != "barrier":
             raise ValueError(f"a barrier certificate under the class {name}")
         B = cert["B"]["terms"]
@@ -179,7 +179,7 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
         if isinstance(degree, bool) or not isinstance(degree, int):
             raise ValueError("B: exponents must be integers")
         return Stated("safety", {"degree": degree, "lambda_per_s": read_rational(cert["lambda_per_s"])})
-    if kind == RECAST_REACH_AVOID:
+    if kind in (RECAST_REACH_AVOID, OLD_REACH_AVOID):  # (an older one is refused by its check)
         from lyapcheck.models.classes.claims import recast_reach_time as reach_time
 
         if name != "reach_avoid":
@@ -203,10 +203,10 @@ def proved_claims(name: str, c: dict[str, Any], model: RecastModel) -> Stated:
 def _check_true_counterexamples(doc: dict[str, Any], model: RecastModel, box: ModelBox | None, rows: list[Row]
                                 ) -> None:
     """A ``counterexample`` of barrier or reach_avoid re-simulated on the true loop, as certify's falsification
-    simulated it (:func:`lyapcheck.models.classes.recast_barrier.falsification`): the polynomial loops' checks
+    simulated it (:func:`lyapcheck.models.classes.barrier.falsification`): the polynomial loops' checks
     (:func:`lyapcheck.models.surfaces.counterexamples.check_counterexamples`) with the true loop's field, its
     disturbances at 0, and over a box at the point of the box where it was found."""
-    from lyapcheck.models.classes.recast_barrier import true_field
+    from lyapcheck.models.classes.barrier import true_field
     from lyapcheck.models.surfaces.counterexamples import check_counterexamples, verify_counterexample
 
     def check(name: str, c: dict[str, Any], model: RecastModel) -> tuple[bool, str]:
@@ -236,7 +236,7 @@ def _counterexample_loop(ref: dict[str, Any], model: RecastModel, box: ModelBox 
                          ) -> tuple[RecastModel | None, str]:
     """The model a counterexample is re-simulated on, and the words for the point of the box (empty when
     there is no box): over a box, the model text read again at the refutation's ``parameters`` (the point
-    of the box where it was found, :func:`lyapcheck.models.classes.recast_barrier.at_point`), which must lie
+    of the box where it was found, :func:`lyapcheck.models.classes.barrier.at_point`), which must lie
     in the box; else the model itself. (None, why) when it cannot be."""
     from lyapcheck.exact import exact_decimal
     from lyapcheck.models.language.modelfile import parse_any_model
@@ -252,7 +252,7 @@ def _counterexample_loop(ref: dict[str, Any], model: RecastModel, box: ModelBox 
     values = {}
     for name, lo, hi in box.bounds:
         text = str(stated[name])
-        # a point of the box is written as a plain decimal (recast_barrier.at_point); anything else, as
+        # a point of the box is written as a plain decimal (barrier.at_point); anything else, as
         # "1e999999999" whose exact value would take minutes to build, is refused before it is read
         if len(text) > MAX_POINT_TEXT or not re.fullmatch(r"-?[0-9]+(\.[0-9]+)?", text):
             return None, f"the parameter {name} = {text!r} of the counterexample is not a plain decimal number"
@@ -334,11 +334,11 @@ def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = No
             return False, "the printed sentence is not the one the refutation supports"
         return ok, why
     cert = c["certificate"]
-    if name == "barrier" or cert.get("kind") == RECAST_BARRIER:
+    if name == "barrier" or cert.get("kind") in (BARRIER_KIND, RECAST_BARRIER):
         if model is None:
             return False, "a barrier is certified on the model's own parameters, not over a box"
         return _verify_barrier(c, base, model)
-    if name == "reach_avoid" or cert.get("kind") == RECAST_REACH_AVOID:
+    if name == "reach_avoid" or cert.get("kind") in (RECAST_REACH_AVOID, OLD_REACH_AVOID):
         if model is None:
             return False, "a reach-avoid function is certified on the model's own parameters, not over a box"
         return _verify_reach_avoid(c, base, model)
@@ -410,7 +410,7 @@ def _verify_box_safety(name: str, c: dict[str, Any], boxed: Loop, model: RecastM
     """A barrier or a reach-avoid function over a box: its proofs re-checked on the loop recast again
     with the box's parameters as bounded constants (``boxed``), so one B or V serves every value of it,
     with the sets the model text gives (none of which may name a box parameter)."""
-    from lyapcheck.models.classes.recast_barrier import SETS_USE_BOX, sets_use_box
+    from lyapcheck.models.classes.barrier import SETS_USE_BOX, sets_use_box
 
     if sets_use_box(model, box):
         return False, SETS_USE_BOX
@@ -430,23 +430,29 @@ def _proved_recasting(cert: dict[str, Any], base: Loop) -> tuple[Loop | None, st
 
 
 def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
-    """A recast barrier (:func:`lyapcheck.models.classes.recast_barrier.check`), its recasting's square-root
-    proofs and its sentence (the polynomial loops' :data:`~lyapcheck.models.classes.claims.BARRIER_SENTENCE`)."""
-    from lyapcheck.models.classes.recast_barrier import check
+    """A loop with functions' barrier (:func:`lyapcheck.models.classes.barrier.check`), its recasting's square-root
+    proofs and its sentence (the polynomial loops' :data:`~lyapcheck.models.classes.claims.BARRIER_SENTENCE`);
+    a certificate of the older kind is refused in one line."""
+    from lyapcheck.models.classes.barrier import OLD_FORMAT, check
 
     cert = c["certificate"]
-    if c.get("status") != "certified" or cert.get("kind") != RECAST_BARRIER:
-        return False, f"a barrier's certificate kind must be {RECAST_BARRIER!r}, not {cert.get('kind')!r}"
+    if cert.get("kind") == RECAST_BARRIER:
+        return False, OLD_FORMAT
+    if c.get("status") != "certified" or cert.get("kind") != BARRIER_KIND:
+        return False, f"a barrier's certificate kind must be {BARRIER_KIND!r}, not {cert.get('kind')!r}"
     return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), BARRIER_SENTENCE)
 
 
 def _verify_reach_avoid(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
-    """A recast reach-avoid certificate (:func:`lyapcheck.models.classes.recast_reach_avoid.check`), its
-    recasting's square-root proofs and its sentence (the polynomial loops' reach-avoid one)."""
+    """A reach-avoid certificate of a loop with functions
+    (:func:`lyapcheck.models.classes.reach_avoid.check_functions`), its recasting's square-root proofs and its
+    sentence (the polynomial loops' reach-avoid one); one of the older kind is refused in one line."""
     from lyapcheck.models.classes.claims import sentence_of
-    from lyapcheck.models.classes.recast_reach_avoid import check
+    from lyapcheck.models.classes.reach_avoid import OLD_FORMAT, check_functions as check
 
     cert = c["certificate"]
+    if c.get("status") == "certified" and cert.get("kind") == OLD_REACH_AVOID:
+        return False, OLD_FORMAT
     if c.get("status") != "certified" or cert.get("kind") != RECAST_REACH_AVOID:
         return False, f"a reach_avoid certificate's kind must be {RECAST_REACH_AVOID!r}, not {cert.get('kind')!r}"
     return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), sentence_of(cert))

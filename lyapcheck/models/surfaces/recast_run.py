@@ -1,7 +1,7 @@
 """The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
 ``candidate``, ``sos_bound``, ``barrier``, ``reach_avoid`` (:mod:`lyapcheck.models.classes.recast_classes` has each
-condition, :mod:`lyapcheck.models.classes.bounds`, :mod:`lyapcheck.models.classes.recast_barrier` and
-:mod:`lyapcheck.models.classes.recast_reach_avoid` the last three; this
+condition, :mod:`lyapcheck.models.classes.bounds`, :mod:`lyapcheck.models.classes.barrier` and
+:mod:`lyapcheck.models.classes.reach_avoid` the last three; this
 module orders them, gives each its time budget, runs ``roa``'s and ``candidate``'s SOS route,
 :mod:`lyapcheck.models.classes.regions` (the classes' one SOS implementation, both kinds of loop), and the
 classes over a box of parameters, :func:`certify_box`).
@@ -79,13 +79,13 @@ def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, 
         results["sos_bound"] = sos_bound(model, class_budget(time_limit_s))
         seconds["sos_bound"] = time.perf_counter() - start
     if "barrier" in classes:
-        from lyapcheck.models.classes.recast_barrier import run as run_barrier
+        from lyapcheck.models.classes.barrier import run_functions as run_barrier
 
         start = time.perf_counter()
         results["barrier"] = run_barrier(model, loop, class_budget(time_limit_s))
         seconds["barrier"] = time.perf_counter() - start
     if "reach_avoid" in classes:
-        from lyapcheck.models.classes.recast_reach_avoid import run as run_reach_avoid
+        from lyapcheck.models.classes.reach_avoid import run_functions as run_reach_avoid
 
         start = time.perf_counter()
         results["reach_avoid"] = run_reach_avoid(model, loop, class_budget(time_limit_s))
@@ -103,7 +103,7 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
     the centre's, which lies in the box. ``roa`` is the ball-arithmetic set proved with each parameter
     a ball over its interval (the set's ``V'`` negative for every value at once), and ``sos_bound``
     takes the parameters as it takes the disturbances. ``barrier`` and ``reach_avoid`` are proved on the
-    same boxed loop (one B or V for every value; :func:`lyapcheck.models.classes.recast_barrier.run`), their
+    same boxed loop (one B or V for every value; :func:`lyapcheck.models.classes.barrier.run_functions`), their
     sets read at the model's values; a trajectory of the true loop at the centre or a corner that enters
     the unsafe set is a counterexample at that point. ``linearization`` and ``candidate`` certify a
     point: ``not_applicable`` over a box.
@@ -138,13 +138,13 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
         results["sos_bound"] = sos_bound(model, class_budget(time_limit_s), box)
         seconds["sos_bound"] = time.perf_counter() - start
     if "barrier" in classes:
-        from lyapcheck.models.classes.recast_barrier import run as run_barrier
+        from lyapcheck.models.classes.barrier import run_functions as run_barrier
 
         start = time.perf_counter()
         results["barrier"] = run_barrier(model, proved, class_budget(time_limit_s), box)
         seconds["barrier"] = time.perf_counter() - start
     if "reach_avoid" in classes:
-        from lyapcheck.models.classes.recast_reach_avoid import run as run_reach_avoid
+        from lyapcheck.models.classes.reach_avoid import run_functions as run_reach_avoid
 
         start = time.perf_counter()
         results["reach_avoid"] = run_reach_avoid(model, proved, class_budget(time_limit_s), box)
