@@ -28,6 +28,8 @@ re-checked and compares them with the stated ones.
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 from typing import Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import InvalidParameter
@@ -88,8 +90,11 @@ def _nominal(condition: Mapping[str, Any]) -> str:
 def _stability(conditions: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
     unstable = [n for n, c in conditions.items() if _is_unstable(n, c)]
     if unstable:
+        point = (conditions[unstable[0]].get("refutation") or {}).get("point")
+        where = (" at " + ", ".join(f"{k} = {float(Fraction(v)):.6g}" for k, v in point.items())
+                 + ", a value of the box,") if isinstance(point, dict) and point else ""
         return {"answer": "unstable", "by": unstable[0],
-                "text": "UNSTABLE: the Jacobian at the equilibrium has an eigenvalue with positive real part "
+                "text": f"UNSTABLE:{where} the Jacobian at the equilibrium has an eigenvalue with positive real part "
                         "(proved exactly)"}
     best: tuple[tuple[int, int], str, Mapping[str, Any]] | None = None
     for name, c in conditions.items():

@@ -362,6 +362,54 @@ def _recast_model(model: object, settings: Mapping[str, object] | Sequence[str] 
         return loaded if isinstance(loaded, RecastModel) else None
 
 
+def certify_extremum(model: "str | Path | Model", parameter_range: str, *, direction: str = "max",
+                     steps: int | str | None = None, settings: Sequence[str] | None = None, candidate: str | None = None,
+                     classes: str | Sequence[str] | None = None, require: str | Sequence[str] | None = None,
+                     degree: int | None = None, time_limit_s: float | None = None) -> Any:
+    """The largest (``direction="max"``) or smallest (``"min"``) value of one parameter or disturbance
+    bound at which certifying ``model`` succeeds (``certify`` would exit 0: no negative answer, some
+    claim proved, every ``require`` met), by bisection with a whole exact certification at each value
+    (:mod:`lyapcheck.models.surfaces.extremum`).
+
+    Parameters
+    ----------
+    parameter_range
+        ``"NAME=LO..HI"``, numbers in the model file's units.
+    steps
+        Bisection steps after the two ends (default :data:`~lyapcheck.models.surfaces.extremum.DEFAULT_STEPS`).
+    settings, candidate, classes, require, degree, time_limit_s
+        As for :func:`certify` (``settings`` may not set the searched parameter).
+
+    Returns
+    -------
+    Extremum
+        ``proved`` (the value, or None), ``proved_result`` (its :class:`CertifyResult`), ``failed`` (the
+        first value that failed, with ``outcome`` "refuted" or "not proved"), ``steps``, ``sentence()``.
+    """
+    from lyapcheck.answers import OK_VERDICTS, parse_requirements, unmet_requirements
+    from lyapcheck.models.surfaces import extremum
+
+    flag = "maximize" if direction == "max" else "minimize"
+    if direction not in ("max", "min"):
+        raise InvalidParameter("direction", '"max" or "min"', direction)
+    name, low, high = extremum.parse_range(parameter_range, flag)
+    count = extremum.DEFAULT_STEPS if steps is None else extremum.check_steps(steps)
+    base = list(settings or ())
+    if any(str(s).partition("=")[0].strip() == name for s in base):
+        raise InvalidParameter("set", f"a parameter other than the one --{flag} searches ({name})",
+                               next(s for s in base if str(s).partition("=")[0].strip() == name))
+    required = parse_requirements(require)
+
+    def certify_at(value: str) -> tuple[dict[str, Any], bool, Any]:
+        found = certify_model_file(model, settings=[*base, f"{name}={value}"], candidate=candidate, classes=classes,
+                                   time_limit_s=time_limit_s, degree=degree)
+        doc = found.to_json()
+        passed = doc.get("verdict") in OK_VERDICTS and not unmet_requirements(doc.get("conditions") or {}, required)
+        return doc, passed, found
+
+    return extremum.search(name, low, high, direction, certify_at, count)
+
+
 def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
                        candidate: str | None = None, classes: str | Sequence[str] | None = None,
                        time_limit_s: float | None = None, box: Sequence[str] | Mapping[str, Any] | None = None,
@@ -998,5 +1046,5 @@ def report(source: str | Path | CertifyResult, *, html: str | Path | None = None
     return report_files(source, html, pdf)
 
 
-__all__ = ["certify", "certify_box", "certify_model_file", "verify", "simulate", "simulate_model_file", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
+__all__ = ["certify", "certify_box", "certify_extremum", "certify_model_file", "verify", "simulate", "simulate_model_file", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
            "SimulationReport", "SweepResult", "problem_from", "class_selection"]

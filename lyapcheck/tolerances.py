@@ -246,7 +246,7 @@ TEMPLATE_SOLVES: Final = 4
 #: programs have at most 27 rows (solved in under a second) or 50-55 rows (10-30 s a solve,
 #: none certified: recast-inverted-pendulum-sat, recast-los-heading at degree 4)
 TEMPLATE_GRAM_ROWS: Final = 40
-#: the solves one level step of the recast V-s iteration (lyapcheck.models.classes.recast_improve: a
+#: the solves one level step of the recast V-s iteration (lyapcheck.models.classes.regions.relations_enlarge: a
 #: level's growth and bisection, each level its face reductions) may spend; it replaced a 15 s
 #: wall-clock limit. Calibrated on the tests' pendulum (the route without ball arithmetic): its
 #: level steps take 12 to 15 solves

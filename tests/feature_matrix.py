@@ -175,7 +175,6 @@ def cells(kinds: Sequence[str], classes: Sequence[str], surfaces: Sequence[str])
     return frozenset((k, c, s) for k in kinds for c in classes for s in surfaces)
 
 
-_OVER_A_BOX = ("--box", "sweep boxes")
 #: the surfaces the box kind runs over its box
 _BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
 
@@ -185,11 +184,12 @@ REFUSALS: tuple[Refusal, ...] = (
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
-    Refusal(cells(KINDS, ("linearization",), _OVER_A_BOX) | cells(("box",), ("linearization",), _BOX_KIND),
-            ("the Jacobian depends on the parameters", "the linearization class certifies a point",
-             "in a boxes sweep"),
-            "The linearization is a statement about one Jacobian matrix; over a box the Jacobian is a family of "
-            "matrices, and one quadratic V for every matrix of the family is the class `quadratic` over the box."),
+    Refusal(cells(("functions",), ("linearization",), ("--box",)) | cells(KINDS, ("linearization",), ("sweep boxes",)),
+            ("the Jacobian depends on the parameters", "in a boxes sweep"),
+            "Over a box, the linearization of a polynomial or rational loop is decided for every parameter value "
+            "(its Hurwitz conditions proved positive on the box by exact Bernstein coefficients); on a loop with "
+            "functions that Jacobian over a box is not built yet (a gap, not a theorem), and a boxes sweep runs the "
+            "linearization at each box's corners before its classes rather than as a class of its own."),
     Refusal(cells(KINDS, ("candidate",), ("--box",)) | cells(("box",), ("candidate",), _BOX_KIND),
             ("not over a --box", "not over a box"),
             "Your V is checked at one parameter point; over a box it would have to decrease for every value of "

@@ -186,3 +186,13 @@ def test_a_thirty_state_model_is_read() -> None:
     assert MAX_STATES == 30
     model = parse_any_model(networks.ring(15), "ring30.toml")
     assert len(model.states) == 30
+
+
+def test_the_report_names_the_clique_matrices(ring8: tuple[Path, dict]) -> None:
+    from reports.sections.model_file import gram_sizes
+
+    _, doc = ring8
+    cert = doc["conditions"]["sos_gas"]["certificate"]
+    sizes = gram_sizes(cert)
+    assert any(s.startswith(f"gram_V: {len(cert['gram_V'])} matrices, one per clique") for s in sizes), sizes
+    assert any(s.startswith("gram_sigma: ") for s in sizes), sizes

@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 
 from lyapcheck.models.classes import recast_classes as rc
+from lyapcheck.models.classes import regions
 from lyapcheck.models.classes.claims import covered
 from lyapcheck.models.classes.level_search import largest_proved_level
 from lyapcheck.models.classes.recast_ball_level import ball_level, state_quadratic
@@ -81,7 +82,7 @@ def test_the_recast_level_search_keeps_its_proved_level_when_a_larger_attempt_ru
     loop = rc.base_loop(model.system)
     V0 = rc.quadratic_candidate(loop, rc.jacobian(loop))
     assert V0 is not None
-    free = rc.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "free")
+    free = regions.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "free")
     assert not isinstance(free, str)
     threshold = free.level / 3
     original = recast_sos.solve_on_faces
@@ -91,11 +92,11 @@ def test_the_recast_level_search_keeps_its_proved_level_when_a_larger_attempt_ru
             raise BudgetExhausted("out of work above the threshold")
         return original(search, build, values, accept)
 
-    monkeypatch.setattr(rc, "solve_on_faces", limited)
-    kept = rc.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "limited")
+    monkeypatch.setattr(regions, "solve_on_faces", limited)
+    kept = regions.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "limited")
     assert not isinstance(kept, str)
     assert 0 < kept.level <= threshold
-    assert kept.level * 2 > threshold or kept.level == rc._scale_of(loop, V0)  # the largest below it tried
+    assert kept.level * 2 > threshold or kept.level == regions._scale_of(loop, V0)  # the largest below it tried
 
 
 @pytest.mark.parametrize("text", [SPRING, PENDULUM, THREE_STATES], ids=["spring", "pendulum", "three-states"])
@@ -129,7 +130,7 @@ def test_the_cartpole_lqr_cost_to_go_gets_a_level_at_4_states(monkeypatch: Any) 
     model = load_any_model(CARTPOLE, candidate=CARTPOLE.read_text().splitlines()[5].lstrip("# "))
     loop = rc.for_v(recast_run.proved_loop(model, 60), model.candidate_v)
     V = model.candidate_v
-    why = rc.certify_region(loop, V, Search(loop.ring, Budget(60, "test")), "the LQR cost-to-go")
+    why = regions.certify_region(loop, V, Search(loop.ring, Budget(60, "test")), "the LQR cost-to-go")
     assert isinstance(why, str) and "not built" in why and "no level found" not in why
     monkeypatch.setattr(tolerances, "BALL_LEVEL_CELLS", 200)
     result = ball_level(loop, V, Budget(120, "test"), "candidate", "the LQR cost-to-go")

@@ -218,7 +218,7 @@ def test_a_region_search_cut_by_the_time_limit_is_inconclusive(monkeypatch: pyte
     answer is ``inconclusive`` naming the limit, not ``not_certified`` (a planar quadrotor's candidate
     came out ``not_certified`` with the reason "time limit of 60 s reached")."""
     from lyapcheck import api
-    from lyapcheck.models.classes import recast_classes
+    from lyapcheck.models.classes import regions
     from lyapcheck.models.engines.search import BudgetExhausted, Search
     from tests.recast_loops import PENDULUM
 
@@ -226,7 +226,7 @@ def test_a_region_search_cut_by_the_time_limit_is_inconclusive(monkeypatch: pyte
         search.budget.start -= search.budget.seconds + 1.0  # the whole limit spent inside this search
         raise BudgetExhausted(search.budget.reached())
 
-    monkeypatch.setattr(recast_classes, "certify_region", out_of_time)
+    monkeypatch.setattr(regions, "certify_region", out_of_time)
     path = tmp_path / "pendulum.toml"
     path.write_text(PENDULUM)
     found = api.certify(model=path, classes="candidate", candidate="1 - cos(theta) + omega**2/2")

@@ -63,6 +63,40 @@ def _finish(result: Any, out: str | None, report: str | None, as_json: bool, wri
     raise SystemExit(exit_code(doc, unmet))
 
 
+def _extremum(model_file: str, maximize: str | None, minimize: str | None, steps: str | None,
+              boxes: Sequence[str], report: str | None, out: str | None, as_json: bool, **certify_args: Any) -> None:
+    """``--maximize`` / ``--minimize``: the search (:func:`lyapcheck.api.certify_extremum`), a line per value
+    tried and the answer; ``--out`` the proved value's certificate. Exit 0 when a value was proved."""
+    from lyapcheck.api import certify_extremum
+
+    if maximize is not None and minimize is not None:
+        raise InvalidParameter("minimize", "not given with --maximize (one search at a time)", minimize)
+    if maximize is None and minimize is None:
+        raise InvalidParameter("steps", "used with --maximize or --minimize", steps)
+    if boxes:
+        raise InvalidParameter("box", "not given with --maximize/--minimize (the search varies one parameter)",
+                           " ".join(boxes))
+    if report is not None:
+        raise InvalidParameter("report", "not given with --maximize/--minimize (report the proved value with "
+                               "certify --set and --report)", report)
+    found = certify_extremum(model_file, str(maximize if maximize is not None else minimize),
+                             direction="max" if maximize is not None else "min",
+                             steps=steps, **certify_args)
+    if out and found.proved_result is not None:
+        found.proved_result.write(out)
+    if as_json:
+        emit_json({"extremum": found.to_json(),
+                   "certificate": None if found.proved_result is None else found.proved_result.to_json()})
+    else:
+        for step in found.steps:
+            click.echo(f"  {found.parameter} = {step.value_text():>14}  {step.outcome:10}  verdict {step.verdict}"
+                       f"  ({step.seconds:.1f} s)")
+        click.echo(found.sentence())
+        if out and found.proved_result is not None:
+            click.echo(f"certificate of {found.parameter} = {found.proved_text()} written to {out}")
+    raise SystemExit(EXIT_OK if found.proved is not None else EXIT_NEGATIVE)
+
+
 #: the longest ``--time-limit`` accepted, in seconds (a day: a class that needs more is not one to wait for)
 MAX_TIME_LIMIT_S = 86_400.0
 
@@ -123,6 +157,13 @@ def register(group: click.Group) -> None:
                   "costs more).")
     @click.option("--time-limit", "time_limit", metavar="SECONDS", help="A model file: each class's time limit in "
                   "seconds (default 60); past it the class is inconclusive and says so.")
+    @click.option("--maximize", "maximize", metavar="NAME=LO..HI", help="A model file: the largest value of one "
+                  "parameter (or disturbance bound) in LO..HI at which certify succeeds, by bisection with an exact "
+                  "certification at each value; --out writes the certificate of the value proved.")
+    @click.option("--minimize", "minimize", metavar="NAME=LO..HI", help="A model file: the smallest such value "
+                  "(e.g. the smallest safe gap).")
+    @click.option("--steps", "steps", metavar="N", help="With --maximize/--minimize: bisection steps after the "
+                  "two ends (default 6).")
     @click.option("--verbose", is_flag=True, help="Show each condition's technical detail (solver statuses, size "
                   "limits) under its summary.")
     @one_line_errors
@@ -130,7 +171,7 @@ def register(group: click.Group) -> None:
                 linear_views: bool, classes: str | None, worst_case: bool, boxes: tuple[str, ...],
                 model_file: str | None, settings: tuple[str, ...], candidate: str | None, no_store: bool,
                 require: str | None, degree: str | None, time_limit: str | None, verbose: bool,
-                **flags: str | None) -> None:
+                maximize: str | None, minimize: str | None, steps: str | None, **flags: str | None) -> None:
         """Certify any closed loop from a model file (FILE or --model FILE), or a gain set of the
         paper's ILOS/ODS loop (its worked example: a gain file, flags, or both): every condition
         class, each checked exactly.
@@ -181,6 +222,10 @@ def register(group: click.Group) -> None:
             paper_flags = {"--linear-views": linear_views, "--worst-case": worst_case, "--dynamics": dynamics != "derived",
                            **{f"--{k.replace('_', '-')}": v is not None for k, v in flags.items()}}
             check_model_flags(model_file, stray, settings, paper_flags)
+            if maximize is not None or minimize is not None or steps is not None:
+                _extremum(model_file, maximize, minimize, steps, boxes, report, out, as_json, settings=settings,
+                          candidate=candidate, classes=classes, require=require, degree=max_degree,
+                          time_limit_s=seconds)
             with flag_names():
                 result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes,
                                        box=list(boxes) or None, degree=max_degree, time_limit_s=seconds)
@@ -190,6 +235,9 @@ def register(group: click.Group) -> None:
         if settings or candidate is not None:
             raise InvalidParameter("set" if settings else "candidate", "used with a model file",
                                    settings[0] if settings else candidate)
+        if maximize is not None or minimize is not None or steps is not None:
+            raise InvalidParameter("maximize" if maximize is not None else "minimize" if minimize is not None
+                                   else "steps", "used with a model file", maximize or minimize or steps)
         if degree is not None or time_limit is not None:  # the paper's classes have their own degrees and costs
             raise InvalidParameter("degree" if degree is not None else "time-limit", "used with a model file",
                                    degree if degree is not None else time_limit)

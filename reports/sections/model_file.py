@@ -160,6 +160,10 @@ def gram_sizes(cert: dict[str, Any], prefix: str = "") -> list[str]:
         if isinstance(value, dict) and str(key).startswith("gram") and isinstance(value.get("basis"), list):
             n = len(value["basis"])
             out.append(f"{prefix}{key}: {n} x {n}")
+        elif isinstance(value, list) and str(key).startswith("gram") and value and \
+                all(isinstance(v, dict) and isinstance(v.get("basis"), list) for v in value):
+            largest = max(len(v["basis"]) for v in value)  # one Gram matrix per clique (kind lyapunov_cliques)
+            out.append(f"{prefix}{key}: {len(value)} matrices, one per clique, the largest {largest} x {largest}")
         elif isinstance(value, dict) and key != "V" and not str(key).startswith("gram"):
             out.extend(gram_sizes(value, f"{prefix}{key}."))
     return out

@@ -4,14 +4,14 @@
   sweep stores;
 - polynomial and rational loops: :mod:`~lyapcheck.models.classes.linearization`,
   :mod:`~lyapcheck.models.classes.lyapunov` (quadratic, sos_gas, candidate),
-  :mod:`~lyapcheck.models.classes.regions` (roa), :mod:`~lyapcheck.models.classes.bounds`
+  :mod:`~lyapcheck.models.classes.regions` (roa and candidate's sublevel sets by SOS, on loops with functions
+  too), :mod:`~lyapcheck.models.classes.bounds`
   (sos_bound, on loops with functions too), :mod:`~lyapcheck.models.classes.barrier` (on loops with
   functions too), :mod:`~lyapcheck.models.classes.reach_avoid` (on loops with functions too);
 - loops with functions: :mod:`~lyapcheck.models.classes.recast_classes`,
   :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
   (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_ball_level` (a quadratic V's
-  largest level by ball arithmetic, from its exact local level, at any number of states),
-  :mod:`~lyapcheck.models.classes.recast_improve`;
+  largest level by ball arithmetic, from its exact local level, at any number of states);
 - :mod:`~lyapcheck.models.classes.level_search` (the one monotone search of a fixed V's largest proved level);
 - :mod:`~lyapcheck.models.classes.region_size` (a certified region's largest ball and reach along each axis, exact);
 - :mod:`~lyapcheck.models.classes.falsify` (counterexamples to safety) and

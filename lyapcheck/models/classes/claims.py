@@ -152,7 +152,7 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
         text = DISTURBANCE_PREFIX[disturbances] + text
     if "robust_attempt" in condition:
         text += ROBUST_NOT_FOUND
-    if box:
+    if box and not (name == "linearization" and status == "refuted"):  # (a refutation names its point of the box)
         text = f"for every {box_words(box)}: {text}"
     return text
 
@@ -183,6 +183,16 @@ def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     if status == "refuted" and method == "lyapunov_inertia":
         return ("the Jacobian has an eigenvalue with positive real part (J^T P + P J = -I with P not positive "
                 "definite, exact; inertia theorem): the equilibrium is unstable")
+    if status == "certified" and method == "box_hurwitz":
+        from lyapcheck.models.classes.linearization import BOX_SENTENCE
+
+        return BOX_SENTENCE
+    if status == "refuted" and method == "box_point":
+        from lyapcheck.models.classes.linearization import _lower_first, _point_words
+
+        point = {k: Fraction(v) for k, v in data["point"].items()}
+        inner = _linearization("refuted", {"refutation": data["at_point"]})
+        return f"at {_point_words(point)}, a value of the box, {_lower_first(inner)}"
     if status == "refuted" and method == "root_isolation":
         return (f"the Jacobian has an eigenvalue with positive real part (rigorous enclosure {data['root']}): the "
                 "equilibrium is unstable")

@@ -230,3 +230,172 @@ def verify_jacobian(J: Matrix, status: str, data: dict[str, Any]) -> tuple[bool,
         return (True, "a rigorous root enclosure with real part > 0") if right_half_plane_root(coeffs) else \
             (False, "no root enclosure with real part > 0")
     return False, f"unknown method {method!r} for status {status!r}"
+
+
+# -- over a box of parameters: the Jacobian for every value of the box (issue 45, item 1) -----------
+
+#: the method of a box certificate: every Hurwitz condition positive on the box (Bernstein, exact)
+BOX_METHOD = "box_hurwitz"
+#: the method of a box refutation: a point of the box where the Jacobian is proved unstable
+BOX_POINT_METHOD = "box_point"
+
+
+def jacobian_over_box(shifted: ShiftedField) -> tuple[list[list[Any]], Any] | str:
+    """``J(u)`` at the equilibrium as polynomials in the box's normalized parameters ``u`` (the ring of
+    :attr:`ShiftedField.box_names`), with that ring; or why not (a denominator at the equilibrium
+    that depends on the parameters: the Jacobian is then rational in them)."""
+    from lyapcheck.sos.polynomials import Ring
+
+    ring = shifted.ring
+    n = shifted.n
+    box_ring = Ring(shifted.box_names)
+    at_equilibrium = {name: Fraction(0) for name in ring.names[:n]}
+    J = []
+    for i, (num, den) in enumerate(zip(shifted.numerators, shifted.denominators)):
+        d0 = ring.restrict(ring.substitute(den, at_equilibrium), box_ring)
+        if not d0.is_constant() or d0.is_zero():
+            return (f"the denominator of {shifted.model.states[i]}' at the equilibrium depends on the box's "
+                    "parameters (the Jacobian is rational in them)")
+        scale = 1 / d0.leading_coefficient()
+        J.append([ring.restrict(ring.substitute(num.derivative(j), at_equilibrium), box_ring) * scale
+                  for j in range(n)])
+    return J, box_ring
+
+
+def characteristic_polynomial_of(M: Sequence[Sequence[Any]], ring: Any) -> list[Any]:
+    """``det(s I - M)`` of a matrix of polynomials, lowest degree first (Faddeev-LeVerrier: exact, one
+    matrix product per degree; the divisions are by integers)."""
+    import flint
+
+    n = len(M)
+    zero = ring.zero()
+    coeffs: list[Any] = [zero] * (n + 1)
+    coeffs[n] = ring.constant(1)
+    W = [[zero] * n for _ in range(n)]  # M_0 = 0
+    for k in range(1, n + 1):
+        # M_k = M M_(k-1) + c_(n-k+1) I ;  c_(n-k) = -tr(M M_k) / k
+        W = [[sum((M[i][t] * W[t][j] for t in range(n)), zero) + (coeffs[n - k + 1] if i == j else zero)
+              for j in range(n)] for i in range(n)]
+        trace = sum((sum((M[i][t] * W[t][i] for t in range(n)), zero) for i in range(n)), zero)
+        coeffs[n - k] = trace * flint.fmpq(-1, k)
+    return coeffs
+
+
+def hurwitz_conditions(coeffs: Sequence[Any], ring: Any) -> list[tuple[str, Any]]:
+    """The polynomials that are all positive exactly where the monic ``p(s) = sum c_k s^k`` is Hurwitz:
+    the Hurwitz determinants ``Delta_1 .. Delta_(n-1)`` and ``a_n = c_0`` (``Delta_n = a_n
+    Delta_(n-1)``), each named."""
+    n = len(coeffs) - 1
+    a = [coeffs[n - k] for k in range(n + 1)]
+    zero = ring.zero()
+
+    def entry(i: int, j: int) -> Any:
+        k = 2 * (j + 1) - (i + 1)
+        return a[k] if 0 <= k <= n else zero
+
+    out = []
+    for k in range(1, n):
+        H = [[entry(i, j) for j in range(k)] for i in range(k)]
+        det = characteristic_polynomial_of(H, ring)[0] * (-1) ** k  # det M = (-1)^k det(0 I - M)
+        out.append((f"Delta_{k}", det))
+    out.append((f"a_{n}", a[n]))
+    return out
+
+
+def _u_box(m: int) -> tuple[tuple[Fraction, Fraction], ...]:
+    return tuple((Fraction(-1), Fraction(1)) for _ in range(m))
+
+
+def run_over_box(shifted: ShiftedField) -> ConditionResult:
+    """``linearization`` for every parameter value of ``shifted``'s box: ``certified`` when every
+    Hurwitz condition of ``J(u)`` is proved positive on the box (:mod:`~lyapcheck.models.engines.bernstein`,
+    exact), ``refuted`` when a point of the box has an unstable Jacobian (proved exactly there: no
+    claim can hold for every value of the box), else ``not_certified`` naming the condition."""
+    from lyapcheck.models.engines import bernstein, reasons
+
+    assert shifted.box is not None
+    built = jacobian_over_box(shifted)
+    if isinstance(built, str):
+        why = reasons.reason(built, ("box",))
+        return ConditionResult("linearization", "not_certified", why.summary, numbers=why.numbers())
+    J, ring = built
+    conditions = hurwitz_conditions(characteristic_polynomial_of(J, ring), ring)
+    box = _u_box(ring.nvars)
+    examined = 0
+    for name, q in conditions:
+        found = bernstein.positive_on_box(ring.terms(q), box)
+        examined += found.boxes
+        if found.proved:
+            continue
+        if found.witness is not None:
+            point = _parameter_point(shifted, found.witness)
+            at = decide(_jacobian_at(J, ring, found.witness))
+            if at.status == "refuted":
+                data = {"method": BOX_POINT_METHOD, "point": {k: str(v) for k, v in point.items()},
+                        "at_point": at.refutation}
+                return ConditionResult("linearization", "refuted",
+                                       f"at {_point_words(point)}, a value of the box, {_lower_first(at.summary)}",
+                                       numbers=at.numbers, refutation=data)
+            where = f"it is <= 0 at {_point_words(point)}, where the linearization is {at.status}"
+        else:
+            where = f"not proved within {bernstein.MAX_BOXES} sub-boxes"
+        why = reasons.reason(f"the Hurwitz condition {name} > 0 was not proved on the whole box ({where})",
+                             ("box",))
+        return ConditionResult("linearization", "not_certified", why.summary, numbers=why.numbers())
+    cert = {"method": BOX_METHOD, "conditions": [name for name, _ in conditions], "sub_boxes": examined,
+            "jacobian": [[_poly_json(ring, p) for p in row] for row in J]}
+    return ConditionResult("linearization", "certified", BOX_SENTENCE, certificate=cert)
+
+
+#: what a certified box linearization states (the box's words come first: lyapcheck.models.classes.claims)
+BOX_SENTENCE = ("the Jacobian at the equilibrium is Hurwitz (every Hurwitz determinant > 0 on the whole box, by "
+                "exact Bernstein coefficients): locally exponentially stable")
+
+
+def _poly_json(ring: Any, p: Any) -> list[list[Any]]:
+    return [[str(c), list(m)] for m, c in sorted(ring.terms(p).items())]
+
+
+def _jacobian_at(J: Sequence[Sequence[Any]], ring: Any, u: Sequence[Fraction]) -> Matrix:
+    return [[ring.evaluate(p, list(u)) for p in row] for row in J]
+
+
+def _parameter_point(shifted: ShiftedField, u: Sequence[Fraction]) -> dict[str, Fraction]:
+    """The parameter values of normalized ``u`` (``theta = c + h u``)."""
+    box = shifted.box
+    assert box is not None
+    return {name: box.center(name) + box.half(name) * x for name, x in zip(box.names, u)}
+
+
+def _point_words(point: dict[str, Fraction]) -> str:
+    return ", ".join(f"{k} = {float(v):.6g}" for k, v in point.items())
+
+
+def _lower_first(text: str) -> str:
+    return text[:1].lower() + text[1:]
+
+
+def verify_over_box(shifted: ShiftedField, status: str, data: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a box linearization: a certificate by running the same exact proof again from the model
+    (deterministic), a refutation by the exact point check at the stated point of the box."""
+    built = jacobian_over_box(shifted)
+    if isinstance(built, str):
+        return False, built
+    J, ring = built
+    if status == "certified":
+        if data.get("method") != BOX_METHOD:
+            return False, f"a box linearization's method must be {BOX_METHOD!r}"
+        again = run_over_box(shifted)
+        return (True, "every Hurwitz condition > 0 on the box (Bernstein coefficients), exactly") \
+            if again.status == "certified" else (False, "the Hurwitz conditions are not proved on the box")
+    if status == "refuted" and data.get("method") == BOX_POINT_METHOD:
+        box = shifted.box
+        assert box is not None
+        point = {k: Fraction(v) for k, v in (data.get("point") or {}).items()}
+        if set(point) != set(box.names):
+            return False, "the stated point does not name every parameter of the box"
+        if any(not box.interval(k)[0] <= v <= box.interval(k)[1] for k, v in point.items()):
+            return False, "the stated point is not in the box"
+        u = [(point[k] - box.center(k)) / box.half(k) for k in box.names]
+        return verify_jacobian(_jacobian_at(J, ring, u), "refuted", data.get("at_point") or {})
+    return False, f"unknown method {data.get('method')!r} for status {status!r} over a box"

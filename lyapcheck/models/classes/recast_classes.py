@@ -1,5 +1,6 @@
-"""The classes on a recast (non-polynomial) loop: ``linearization``, ``roa``, ``candidate`` (``quadratic`` and
-``sos_gas`` are :mod:`lyapcheck.models.classes.lyapunov`'s, for every loop), and the loop they share.
+"""The classes on a recast (non-polynomial) loop: ``linearization`` (``quadratic`` and ``sos_gas``:
+:mod:`lyapcheck.models.classes.lyapunov_relations`; ``roa`` and ``candidate``'s sublevel sets:
+:mod:`lyapcheck.models.classes.regions`), on this module's loop and proofs.
 
 Coordinates: the deviations from the equilibrium of the states and of every non-constant
 auxiliary (:meth:`lyapcheck.models.language.recast.RecastSystem.shift`); the constant roots stay. A
@@ -13,8 +14,7 @@ holds every point ``(z, a(z))`` of the true loop:
   (each distinct factor of the denominators, :func:`prove_denominators`);
 - for a region, the decrease only where ``V <= level`` (a multiplier ``rho`` times ``V - level``).
 
-Then ``roa`` proves that every
-trajectory of the true loop starting where ``V(x, a(x)) <= level`` (a bounded set, by the
+Then ``roa`` proves that every trajectory of the true loop starting where ``V(x, a(x)) <= level`` (a bounded set, by the
 positivity) converges to the equilibrium. A loop that enters only through ``sin`` and ``cos`` of an
 angle has its other equilibria (``k pi``) in every such set's complement: no global claim can be
 proved (none is false-certified: the identities would have to hold at those points too).
@@ -38,16 +38,6 @@ from lyapcheck.exact import read_rational
 
 #: the margin eps of positivity and decrease (times |z|^2), tried in turn
 EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
-#: halvings of the level's bracket in roa's bisection
-LEVEL_BISECTIONS: Final = 7
-#: levels tried upwards (each the previous times this) before the bisection
-LEVEL_GROWTH: Final = 4
-#: at most this many levels upwards
-LEVEL_GROWTH_STEPS: Final = 10
-#: at most this many levels downwards (each half the last) from a first level that failed, before the
-#: bisection between the proved and the failed level: a strict local Lyapunov function's small levels
-#: are provable, so the search goes down far enough to reach one (2^-16 of the first level)
-LEVEL_HALVINGS: Final = 16
 
 
 # -- the loop in deviations -------------------------------------------------------------------------
@@ -497,158 +487,6 @@ def v_text(system: RecastSystem, V: Poly) -> str:
     return re.sub(r"\b(" + "|".join(map(re.escape, names)) + r")\b", lambda m: table[m.group(1)], text)
 
 
-@dataclass
-class Region:
-    """A certified sublevel set ``{V <= level}``: its V, its certificate (JSON) and its multiplier rho."""
-
-    label: str
-    V: Poly
-    level: Fraction
-    certificate: dict[str, Any]
-    rho: Poly
-    #: what ended the level search before its bisection did (a budget's words), "" otherwise: the
-    #: level is then the largest proved before it (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`)
-    stopped: str = ""
-
-
-def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fraction | None = None) -> Region | str:
-    """The largest certified level of a fixed ``V`` (bisection), or why there is none."""
-    found = _largest_level(loop, V, search, state_square(loop), start)
-    if isinstance(found, str):
-        return found
-    level, cert = found
-    rho = cert.pop("_rho")
-    return Region(label, V, level, cert, rho, cert.pop("_stopped", ""))
-
-
-def box_share(loop: Loop, region: Region, box: tuple[Any, Any]) -> float:
-    """The share of fixed uniform samples of the box (deviations ``lo..hi``) inside the region."""
-    import numpy as np
-
-    from lyapcheck.models.engines.recast_numeric import v_values
-
-    lo, hi = box
-    Z = lo + (hi - lo) * np.random.default_rng(0).random((4000, loop.n))
-    return float(np.mean(v_values(loop.system, region.V, Z) <= float(region.level)))
-
-
-def best_region(loop: Loop, regions: Sequence[Region], tried: Sequence[str], box: tuple[Any, Any],
-                search: Search, name: str = "roa") -> ConditionResult:
-    """The region covering the largest share of the box, as the class's result."""
-    if not regions and search.budget.left() <= 0:
-        # the class's time ran out before a level was proved: the search was cut short, so the answer is
-        # inconclusive (a class at its limit), not a "not found"
-        late = reasons.out_of_time("a region of attraction", search.budget.seconds, tried,
-                                   ("time", "domain") if name != "candidate" else ("time", "other_candidate"))
-        return ConditionResult(name, "inconclusive", late.summary, property="ROA",
-                               numbers=late.numbers({"reason": search.budget.reached()}),
-                               solver={"solves": search.log})
-    if not regions:
-        which = "the candidate V" if name == "candidate" else "the V functions tried"
-        none = reasons.reason(f"no region of attraction was proved: no level set of {which} could be proved to shrink",
-                              ("domain", "candidate", "time") if name != "candidate"
-                              else ("other_candidate", "domain", "time"), tried)
-        return ConditionResult(name, "not_certified", none.summary, property="ROA",
-                               numbers=none.numbers({"reason": "; ".join(tried)}), solver={"solves": search.log})
-    shares = [box_share(loop, r, box) for r in regions]
-    k = max(range(len(regions)), key=lambda i: shares[i])
-    best = regions[k]
-    modulo = (f" (modulo 2 pi in {', '.join(loop.angles)}: the loop is periodic in "
-              f"{'it' if len(loop.angles) == 1 else 'them'})") if loop.angles else ""
-    return ConditionResult(name, "certified",
-                           f"every trajectory of the true loop starting where V(x, a(x)) <= {float(best.level):.6g} "
-                           f"converges to the equilibrium{modulo} (V from {best.label}; positivity and decrease on the "
-                           "recasting's relations, exact)",
-                           numbers={"level": float(best.level), "V_from": best.label, "tried": list(tried),
-                                    "box_share_estimate": shares[k]},
-                           certificate=dict(best.certificate), property="ROA", solver={"solves": search.log})
-
-
-def region_of_attraction(loop: Loop, budget: Budget, candidates: Sequence[tuple[str, Poly]], box: tuple[Any, Any],
-                         name: str = "roa") -> ConditionResult:
-    """Each fixed ``V``'s largest certified level; the region covering most of the box is the answer."""
-    search = Search(loop.ring, budget)
-    regions: list[Region] = []
-    tried: list[str] = []
-    for label, V in candidates:
-        try:
-            found = certify_region(loop, V, search, label)
-        except BudgetExhausted as exc:
-            tried.append(f"{label}: {exc}")
-            break
-        if isinstance(found, str):
-            tried.append(f"{label}: {found}")
-            continue
-        tried.append(f"{label}: level {float(found.level):.6g}")
-        regions.append(found)
-    return best_region(loop, regions, tried, box, search, name)
-
-
-def _largest_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fraction | None = None
-                   ) -> tuple[Fraction, dict[str, Any]] | str:
-    ring = loop.ring
-    names = v_names(loop, V)
-    N, D, distinct = common_denominator(loop, names)
-    dens, failed = prove_denominators(loop, distinct, search)
-    if failed is not None:
-        return f"the denominator {written_poly(ring, failed)} could not be proved positive"
-    # positivity of V itself
-    eps_pos = None
-    pos = None
-    for eps in EPSILONS:
-        pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pv")
-        if pos is not None:
-            eps_pos = eps
-            break
-    if pos is None or eps_pos is None:
-        return "V could not be proved positive definite in the states on the recasting's set"
-    dV = lie(loop, V, N)
-    support_known = sorted(set(ring.support(dV)) | set(ring.support(l2)))
-    region_support = sorted(set(ring.support(V)) | {tuple([0] * ring.nvars)})
-    top = max(max(sum(m) for m in support_known), max(sum(m) for r in loop.relations for m in ring.support(r.poly)))
-    eps = EPSILONS[-1]
-    F = -dV - l2 * to_fmpq(eps)
-
-    def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
-        program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots())
-        return program.condition("R", support_known, [], top, region_support=region_support) or program
-
-    def attempt(level: Fraction) -> ConditionCertificate | None:
-        values = ParameterValues()
-        _set(values, *known_values(ring, "R", F, support_known))
-        W = V - to_fmpq(level)
-        terms = ring.terms(W)
-        _set(values, "W_R", [terms.get(tuple(m), Fraction(0)) for m in region_support])
-
-        def accept(program: ConditionProgram, point: Any) -> ConditionCertificate | None:
-            cert = program.certificate("R", point)
-            return cert if check_condition(ring, F, loop.relations, cert, region=W)[0] else None
-
-        return solve_on_faces(search, build, values, accept)[0]
-
-    # a program too large to build is too large at every level: say so, not "no level found"
-    program = build(frozenset())
-    if isinstance(program, str):
-        return f"the level program was not built: {program}"
-    from lyapcheck.models.classes.level_search import largest_proved_level
-
-    found = largest_proved_level(attempt, _scale_of(loop, V) if start is None else start, growth=Fraction(LEVEL_GROWTH),
-                                 growth_steps=LEVEL_GROWTH_STEPS, halvings=LEVEL_HALVINGS,
-                                 bisections=LEVEL_BISECTIONS, rounded=_dyadic)
-    if found.level is None or found.proof is None:
-        return f"no level found (the smallest tried was {float(found.failed or 0):.3g})"
-    best = (found.level, found.proof)
-    level, cert = best
-    out = certificate_head(loop, V, eps, D, dens)
-    out.update({"level": str(level), "positivity_epsilon": str(eps_pos), "positivity": pos.to_json(ring),
-                "decrease": cert.to_json(ring)})
-    assert cert.rho is not None
-    out["_rho"] = cert.rho.poly(ring)
-    if found.stopped:
-        out["_stopped"] = found.stopped
-    return level, out
-
-
 def _dyadic(x: Fraction, bits: int = 12) -> Fraction:
     """``x`` rounded to ``bits`` significant bits (short certificates)."""
     if x <= 0:
@@ -658,17 +496,6 @@ def _dyadic(x: Fraction, bits: int = 12) -> Fraction:
     e = math.floor(math.log2(x))
     step = Fraction(2) ** (e - bits)
     return (x // step) * step
-
-
-def _scale_of(loop: Loop, V: Poly) -> Fraction:
-    """A first level to try: V's value at a small state deviation (a tenth in each state)."""
-    import numpy as np
-
-    from lyapcheck.models.engines.recast_numeric import v_values
-
-    pts = np.eye(loop.n) * 0.1
-    vals = v_values(loop.system, V, pts)
-    return _dyadic(Fraction(max(float(np.min(vals)), 1e-6)))
 
 
 def quadratic_candidate(loop: Loop, J: list[list[Fraction]]) -> Poly | None:

@@ -1,4 +1,7 @@
-"""``roa`` and ``candidate``: sublevel sets ``{V <= c}`` proved inside the region of attraction.
+"""``roa`` and ``candidate``: sublevel sets ``{V <= c}`` proved inside the region of attraction, by SOS, on
+both kinds of loop: a polynomial or rational loop (below), and a loop with functions, proved on its
+recasting's relations (the last part of this module, :func:`certify_region`, :func:`relations_enlarge`).
+The ball-arithmetic route is another engine (:mod:`lyapcheck.models.classes.recast_interval`).
 
 Certificate (kind Sublevel of :mod:`lyapcheck.sos.certificates`), in scaled coordinates:
 
@@ -42,8 +45,15 @@ from lyapcheck.models.loop.field import ScaledField, Scaling, StateField, linear
 from lyapcheck.models.classes.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
     symmetry, vanishing_monomials
 from lyapcheck.models.engines.numeric import NumericPoly
-from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, SolvesSpent,
-                                     box_multipliers, box_multipliers_of, box_support, multiplier_grams, one, param)
+from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, _dyadic, _set, certificate_head, common_denominator,
+                                                    lie, prove_denominators, prove_nonnegative, state_square, v_names)
+from lyapcheck.models.engines import reasons
+from lyapcheck.models.engines.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
+                                                 solve_on_faces)
+from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, Budget, BudgetExhausted, ParameterValues, Search,
+                                             SolvesSpent, box_multipliers, box_multipliers_of, box_support,
+                                             multiplier_grams, one, param)
+from lyapcheck.models.language.recast import written_poly
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_containment, check_lyapunov, check_sublevel, lie_derivative
@@ -810,3 +820,346 @@ def gram_of(field: StateField, p: Poly, search: Search) -> GramPoly | None:
         return None
     V = GramPoly.of(basis, point.grams["V"])
     return V if V.poly(ring) == p and V.positive_definite() else None
+
+
+# -- loops with functions: the same classes on the recasting's relations ------------------------------
+#
+# A loop with functions (:class:`~lyapcheck.models.classes.recast_classes.Loop`) is proved on the set of its
+# recasting's relations, which holds every point ``(z, a(z))`` of the true loop: positivity
+# ``V - eps |z|^2 >= 0`` and the decrease ``-grad V . N - eps |z|^2 - rho (level - V) >= 0`` there, each an
+# identity with a free multiplier per equality and an SOS multiplier per inequality
+# (:class:`~lyapcheck.models.engines.recast_sos.ConditionProgram`), with ``x' = N / D`` and each factor
+# of ``D`` proved positive. The level step is the monotone search of
+# :func:`~lyapcheck.models.classes.level_search.largest_proved_level` (each level's certificate checked
+# exactly before it counts); the V step, with ``rho`` fixed and ``V`` scaled to level 1, is the V-s
+# iteration of Jarvis-Wloszek et al. ("Some controls applications of sum of squares programming",
+# CDC 2003; Topcu, Packard & Seiler, Automatica 2008): a new ``V`` that keeps ``V - eps l >= 0``,
+# ``-V' - eps l - rho (1 - V) >= 0`` and ``{V <= 1}`` holding the current set, as small as it can be on
+# sample states whose simulated trajectories of the true loop converge (their mean ``V``). Its answer is
+# only a candidate: rounded to short rationals, the level step certifies it from scratch.
+
+#: the level search of a fixed V on the recasting's relations
+#: (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`): halvings of the level's bracket
+RELATIONS_LEVEL_BISECTIONS: Final = 7
+#: levels tried upwards (each the previous times this) before the bisection
+RELATIONS_LEVEL_GROWTH: Final = 4
+#: at most this many levels upwards
+RELATIONS_LEVEL_GROWTH_STEPS: Final = 10
+#: at most this many levels downwards (each half the last) from a first level that failed, before the
+#: bisection between the proved and the failed level: a strict local Lyapunov function's small levels
+#: are provable, so the search goes down far enough to reach one (2^-16 of the first level)
+RELATIONS_LEVEL_HALVINGS: Final = 16
+
+
+@dataclass
+class Region:
+    """A certified sublevel set ``{V <= level}``: its V, its certificate (JSON) and its multiplier rho."""
+
+    label: str
+    V: Poly
+    level: Fraction
+    certificate: dict[str, Any]
+    rho: Poly
+    #: what ended the level search before its bisection did (a budget's words), "" otherwise: the
+    #: level is then the largest proved before it (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`)
+    stopped: str = ""
+
+
+def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fraction | None = None) -> Region | str:
+    """The largest certified level of a fixed ``V`` (bisection), or why there is none."""
+    found = relations_level(loop, V, search, state_square(loop), start)
+    if isinstance(found, str):
+        return found
+    level, cert = found
+    rho = cert.pop("_rho")
+    return Region(label, V, level, cert, rho, cert.pop("_stopped", ""))
+
+
+def box_share(loop: Loop, region: Region, box: tuple[Any, Any]) -> float:
+    """The share of fixed uniform samples of the box (deviations ``lo..hi``) inside the region."""
+    import numpy as np
+
+    from lyapcheck.models.engines.recast_numeric import v_values
+
+    lo, hi = box
+    Z = lo + (hi - lo) * np.random.default_rng(0).random((4000, loop.n))
+    return float(np.mean(v_values(loop.system, region.V, Z) <= float(region.level)))
+
+
+def best_region(loop: Loop, regions: Sequence[Region], tried: Sequence[str], box: tuple[Any, Any],
+                search: Search, name: str = "roa") -> ConditionResult:
+    """The region covering the largest share of the box, as the class's result."""
+    if not regions and search.budget.left() <= 0:
+        # the class's time ran out before a level was proved: the search was cut short, so the answer is
+        # inconclusive (a class at its limit), not a "not found"
+        late = reasons.out_of_time("a region of attraction", search.budget.seconds, tried,
+                                   ("time", "domain") if name != "candidate" else ("time", "other_candidate"))
+        return ConditionResult(name, "inconclusive", late.summary, property="ROA",
+                               numbers=late.numbers({"reason": search.budget.reached()}),
+                               solver={"solves": search.log})
+    if not regions:
+        which = "the candidate V" if name == "candidate" else "the V functions tried"
+        none = reasons.reason(f"no region of attraction was proved: no level set of {which} could be proved to shrink",
+                              ("domain", "candidate", "time") if name != "candidate"
+                              else ("other_candidate", "domain", "time"), tried)
+        return ConditionResult(name, "not_certified", none.summary, property="ROA",
+                               numbers=none.numbers({"reason": "; ".join(tried)}), solver={"solves": search.log})
+    shares = [box_share(loop, r, box) for r in regions]
+    k = max(range(len(regions)), key=lambda i: shares[i])
+    best = regions[k]
+    modulo = (f" (modulo 2 pi in {', '.join(loop.angles)}: the loop is periodic in "
+              f"{'it' if len(loop.angles) == 1 else 'them'})") if loop.angles else ""
+    return ConditionResult(name, "certified",
+                           f"every trajectory of the true loop starting where V(x, a(x)) <= {float(best.level):.6g} "
+                           f"converges to the equilibrium{modulo} (V from {best.label}; positivity and decrease on the "
+                           "recasting's relations, exact)",
+                           numbers={"level": float(best.level), "V_from": best.label, "tried": list(tried),
+                                    "box_share_estimate": shares[k]},
+                           certificate=dict(best.certificate), property="ROA", solver={"solves": search.log})
+
+
+def region_of_attraction(loop: Loop, budget: Budget, candidates: Sequence[tuple[str, Poly]], box: tuple[Any, Any],
+                         name: str = "roa") -> ConditionResult:
+    """Each fixed ``V``'s largest certified level on the recasting's relations; the region covering most of
+    the box is the answer (``candidate``: the user's V alone)."""
+    search = Search(loop.ring, budget)
+    regions: list[Region] = []
+    tried: list[str] = []
+    for label, V in candidates:
+        try:
+            found = certify_region(loop, V, search, label)
+        except BudgetExhausted as exc:
+            tried.append(f"{label}: {exc}")
+            break
+        if isinstance(found, str):
+            tried.append(f"{label}: {found}")
+            continue
+        tried.append(f"{label}: level {float(found.level):.6g}")
+        regions.append(found)
+    return best_region(loop, regions, tried, box, search, name)
+
+
+def relations_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fraction | None = None
+                   ) -> tuple[Fraction, dict[str, Any]] | str:
+    ring = loop.ring
+    names = v_names(loop, V)
+    N, D, distinct = common_denominator(loop, names)
+    dens, failed = prove_denominators(loop, distinct, search)
+    if failed is not None:
+        return f"the denominator {written_poly(ring, failed)} could not be proved positive"
+    # positivity of V itself
+    eps_pos = None
+    pos = None
+    for eps in EPSILONS:
+        pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pv")
+        if pos is not None:
+            eps_pos = eps
+            break
+    if pos is None or eps_pos is None:
+        return "V could not be proved positive definite in the states on the recasting's set"
+    dV = lie(loop, V, N)
+    support_known = sorted(set(ring.support(dV)) | set(ring.support(l2)))
+    region_support = sorted(set(ring.support(V)) | {tuple([0] * ring.nvars)})
+    top = max(max(sum(m) for m in support_known), max(sum(m) for r in loop.relations for m in ring.support(r.poly)))
+    eps = EPSILONS[-1]
+    F = -dV - l2 * to_fmpq(eps)
+
+    def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
+        program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots())
+        return program.condition("R", support_known, [], top, region_support=region_support) or program
+
+    def attempt(level: Fraction) -> ConditionCertificate | None:
+        values = ParameterValues()
+        _set(values, *known_values(ring, "R", F, support_known))
+        W = V - to_fmpq(level)
+        terms = ring.terms(W)
+        _set(values, "W_R", [terms.get(tuple(m), Fraction(0)) for m in region_support])
+
+        def accept(program: ConditionProgram, point: Any) -> ConditionCertificate | None:
+            cert = program.certificate("R", point)
+            return cert if check_condition(ring, F, loop.relations, cert, region=W)[0] else None
+
+        return solve_on_faces(search, build, values, accept)[0]
+
+    # a program too large to build is too large at every level: say so, not "no level found"
+    program = build(frozenset())
+    if isinstance(program, str):
+        return f"the level program was not built: {program}"
+    from lyapcheck.models.classes.level_search import largest_proved_level
+
+    found = largest_proved_level(attempt, _scale_of(loop, V) if start is None else start,
+                                 growth=Fraction(RELATIONS_LEVEL_GROWTH),
+                                 growth_steps=RELATIONS_LEVEL_GROWTH_STEPS, halvings=RELATIONS_LEVEL_HALVINGS,
+                                 bisections=RELATIONS_LEVEL_BISECTIONS, rounded=_dyadic)
+    if found.level is None or found.proof is None:
+        return f"no level found (the smallest tried was {float(found.failed or 0):.3g})"
+    best = (found.level, found.proof)
+    level, cert = best
+    out = certificate_head(loop, V, eps, D, dens)
+    out.update({"level": str(level), "positivity_epsilon": str(eps_pos), "positivity": pos.to_json(ring),
+                "decrease": cert.to_json(ring)})
+    assert cert.rho is not None
+    out["_rho"] = cert.rho.poly(ring)
+    if found.stopped:
+        out["_stopped"] = found.stopped
+    return level, out
+
+
+def _scale_of(loop: Loop, V: Poly) -> Fraction:
+    """A first level to try: V's value at a small state deviation (a tenth in each state)."""
+    import numpy as np
+
+    from lyapcheck.models.engines.recast_numeric import v_values
+
+    pts = np.eye(loop.n) * 0.1
+    vals = v_values(loop.system, V, pts)
+    return _dyadic(Fraction(max(float(np.min(vals)), 1e-6)))
+
+
+#: V-s iterations at most (each a level step and a V step)
+VS_ITERATIONS: Final = 4
+#: degrees of the improved V, in turn
+VS_DEGREES: Final = (2, 4)
+#: sample states for the V step's objective (those that converge in simulation)
+VS_SAMPLES: Final = 200
+#: the V step's margin of the decrease (times |z|^2): the level step's smallest (a larger one
+#: shrinks the set the V step can find, 63 % -> 40 % of the pendulum's box)
+VS_MARGIN: Final = Fraction(1, 10000)
+#: the V step's margin of positivity: twice the level step's largest, room for the rounding
+VS_POSITIVITY_MARGIN: Final = Fraction(1, 50)
+#: how long each sample is simulated (the loop's time unit)
+VS_HORIZON_S: Final = 25.0
+#: bits kept of the V step's coefficients (short certificates; the level step decides)
+VS_ROUND_BITS: Final = 20
+#: a step that adds less than this share of the converging samples ends the iteration at its degree
+VS_MIN_GAIN: Final = 0.01
+# The iteration's work is counted, not timed (the same regions on any machine): a V step is one
+# solve (its length bounded by SOLVER_MAX_ITER), a level step at most
+# lyapcheck.tolerances.VS_LEVEL_SOLVES solves, the whole iteration at most VS_SOLVES.
+
+
+def relations_samples(loop: Loop, box: tuple[np.ndarray, np.ndarray], rng: np.random.Generator) -> np.ndarray:
+    """Deviations in the box whose simulated trajectories of the true loop converge (modulo 2 pi in
+    the angles): the region the V step pulls ``{V <= 1}`` towards."""
+    from lyapcheck.models.engines.recast_numeric import converges_modulo
+
+    lo, hi = box
+    Z = lo + (hi - lo) * rng.random((VS_SAMPLES * 3, loop.n))
+    eq = np.array([float(loop.system.values[s]) for s in loop.system.states])
+    ok = converges_modulo(loop.system, Z + eq, tuple(loop.angles), horizon=VS_HORIZON_S)
+    return Z[ok][:VS_SAMPLES]
+
+
+def relations_enlarge(loop: Loop, first: Region, budget: Budget, box: tuple[np.ndarray, np.ndarray]
+                     ) -> tuple[list[Region], list[str]]:
+    """Regions from the V-s iteration started at ``first`` (each certified exactly by the level
+    step), and what was tried."""
+    from lyapcheck.models.engines.recast_numeric import v_values
+
+    samples = relations_samples(loop, box, np.random.default_rng(1))
+    tried: list[str] = []
+    if len(samples) == 0:
+        return [], ["the V-s iteration: no sample of the box converges in simulation"]
+    out: list[Region] = []
+    # the whole iteration's budget of solves: what is left of the class's work goes to the exact
+    # checks of the regions found, whatever the machine's speed
+    search = Search(loop.ring, budget).within(tolerances.VS_SOLVES, "for the V-s iteration",
+                                              "lyapcheck.tolerances.VS_SOLVES")
+
+    def covered(r: Region) -> float:
+        """The share of the converging samples inside a region (the iteration's progress)."""
+        return float(np.mean(v_values(loop.system, r.V, samples) <= float(r.level)))
+
+    best, best_share = first, covered(first)
+    for degree in searched_degrees(VS_DEGREES):
+        region = best
+        for k in range(VS_ITERATIONS):
+            label = f"the V-s iteration (degree {degree}, step {k + 1})"
+            try:
+                outside = samples[v_values(loop.system, region.V, samples) > float(region.level)]
+                V = relations_v_step(loop, region.V * to_fmpq(1 / region.level), region.rho, degree,
+                           outside if len(outside) else samples, search)
+                if isinstance(V, str):
+                    tried.append(f"{label}: {V}")
+                    break
+                # each level step gets a budget of solves (a count: the same steps on any machine)
+                level_search = search.within(tolerances.VS_LEVEL_SOLVES, "per level step",
+                                             "lyapcheck.tolerances.VS_LEVEL_SOLVES")
+                found = certify_region(loop, V, level_search, label, start=Fraction(1, 2))
+            except BudgetExhausted as exc:  # a budget of solves spent, or the class's time limit (the safety net)
+                tried.append(f"{label}: {exc}")
+                return out, tried
+            if isinstance(found, str):
+                tried.append(f"{label}: {found}")
+                break
+            share = covered(found)
+            stopped = f" (the largest proved when {found.stopped})" if found.stopped else ""
+            tried.append(f"{label}: level {float(found.level):.6g}{stopped}, {100 * share:.1f} % of the converging "
+                         "samples")
+            out.append(found)
+            region = found
+            if share < best_share + VS_MIN_GAIN:  # no longer growing: the next degree, from the best set
+                break
+            best, best_share = found, share
+    return out, tried
+
+
+def relations_v_step(loop: Loop, V_scaled: Poly, rho: Poly, degree: int, samples: np.ndarray, search: Any
+                     ) -> Poly | str:
+    """One V step (see the module docstring): a new V of ``degree`` in the loop's V variables, or why none."""
+    from lyapcheck.models.engines.recast_numeric import variable_values, poly_values
+
+    ring = loop.ring
+    v_vars = loop.v_variables()
+    basis: list[Monomial] = [m for m in monomials(ring.nvars, 1, degree)
+                             if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
+    names = [ring.names[i] for i in v_vars]
+    N, D, _ = common_denominator(loop, names)
+    eps = VS_MARGIN
+    l2 = state_square(loop)
+    # the objective's weights: each basis monomial's mean over the samples (deviations)
+    system = loop.system
+    eq = np.array([float(system.values[s]) for s in system.states])
+    cols = variable_values(system, samples + eq)
+    shifted = {n: v - float(system.values[n]) if n in system.values else v for n, v in cols.items()}
+    weights = [float(np.mean(poly_values(ring, ring.monomial(m), shifted, len(samples)))) for m in basis]
+    program = ConditionProgram(ring, loop.relations, frozenset(), loop.unused(), margin=False, roots=loop.roots())
+    for k in range(len(basis)):
+        program.free(f"v{k}")
+    pos_terms = [(f"v{k}", ring.monomial(m)) for k, m in enumerate(basis)]
+    dec_terms = [(f"v{k}", -lie(loop, ring.monomial(m), N) + rho * ring.monomial(m)) for k, m in enumerate(basis)]
+    top = max((sum(mm) for _, p in dec_terms for mm in ring.support(p)), default=2)
+    known_dec = -l2 * to_fmpq(eps) - rho
+    # the new set contains the old one: 1 - V >= s (1 - V_old) (the iteration never shrinks it)
+    zero = tuple([0] * ring.nvars)
+    contain_terms = [(f"v{k}", -ring.monomial(m)) for k, m in enumerate(basis)]
+    old_support = sorted(set(ring.support(V_scaled)) | {zero})
+    why = program.condition("P", ring.support(l2), pos_terms, degree) or \
+        program.condition("D", ring.support(known_dec), dec_terms, top) or \
+        program.condition("C", [zero], contain_terms, degree, region_support=old_support, vanishing=False)
+    if why is not None:
+        return f"the V step was not built: {why}"
+    program.minimize([(f"v{k}", w) for k, w in enumerate(weights)])
+    values = ParameterValues()
+    # positivity with the level step's largest margin, so that the rounded V passes its exact check there
+    _set(values, *known_values(ring, "P", -l2 * to_fmpq(VS_POSITIVITY_MARGIN), ring.support(l2)))
+    _set(values, *known_values(ring, "D", known_dec, ring.support(known_dec)))
+    _set(values, *known_values(ring, "C", ring.constant(1), [zero]))
+    old_terms = ring.terms(V_scaled - 1)
+    _set(values, "W_C", [old_terms.get(m, Fraction(0)) for m in old_support])
+    solution = search.solve(program.structure(), values)
+    if not solution.usable:
+        from lyapcheck.models.engines.search import why_none
+
+        return f"the V step found no V ({why_none(solution)})"
+    from lyapcheck.sos.rounding import round_scalar
+
+    V = ring.zero()
+    peak = max(abs(solution.scalars[f"v{k}"]) for k in range(len(basis)))
+    for k, m in enumerate(basis):
+        value = solution.scalars[f"v{k}"]
+        c = round_scalar(value, VS_ROUND_BITS) if abs(value) > 1e-9 * peak else 0
+        if c:
+            V += ring.monomial(m, c)
+    del D
+    return V if not V.is_zero() else "the V step gave V = 0"

@@ -184,7 +184,10 @@ def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
         from lyapcheck.models.classes import linearization
 
         data = lin.get("certificate") if lin["status"] == "certified" else lin.get("refutation")
-        row("linearization", lambda: linearization.verify(shifted, lin["status"], data or {}))
+        if shifted.box is not None:  # the Jacobian for every value of the box
+            row("linearization", lambda: linearization.verify_over_box(shifted, lin["status"], data or {}))
+        else:
+            row("linearization", lambda: linearization.verify(shifted, lin["status"], data or {}))
 
     from lyapcheck.models.surfaces.ball_roa import is_ball_region, verify_ball_roa
 

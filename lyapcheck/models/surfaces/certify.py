@@ -211,8 +211,9 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
         out.seconds[name] = time.perf_counter() - start
 
     if "linearization" in chosen and box is not None:
-        out.results["linearization"] = ConditionResult("linearization", "not_applicable",
-                                                       reasons.NOT_OVER_A_BOX["linearization"])
+        from lyapcheck.models.classes import linearization
+
+        run("linearization", lambda budget: linearization.run_over_box(shifted))
     elif "linearization" in chosen:
         from lyapcheck.models.classes import linearization
 

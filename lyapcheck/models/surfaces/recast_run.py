@@ -2,8 +2,9 @@
 ``candidate``, ``sos_bound``, ``barrier``, ``reach_avoid`` (:mod:`lyapcheck.models.classes.recast_classes` has each
 condition, :mod:`lyapcheck.models.classes.bounds`, :mod:`lyapcheck.models.classes.barrier` and
 :mod:`lyapcheck.models.classes.reach_avoid` the last three; this
-module orders them, gives each its time budget, runs ``roa``'s V-s iteration,
-:mod:`lyapcheck.models.classes.recast_improve`, and the classes over a box of parameters, :func:`certify_box`).
+module orders them, gives each its time budget, runs ``roa``'s and ``candidate``'s SOS route,
+:mod:`lyapcheck.models.classes.regions` (the classes' one SOS implementation, both kinds of loop), and the
+classes over a box of parameters, :func:`certify_box`).
 """
 
 from __future__ import annotations
@@ -18,12 +19,12 @@ from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel, written_poly
 from lyapcheck.models.classes.lyapunov import RELATIONS_GAS_DEGREES
 from lyapcheck.models.classes.lyapunov_relations import run_relations
-from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, base_loop, best_region, certify_region,
+from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, base_loop,
                                              common_denominator, jacobian, lie, linearization,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
-                                             quadratic_candidate, refute_global, region_of_attraction,
+                                             quadratic_candidate, refute_global,
                                              certificate_head, for_v, state_square, v_names)
-from lyapcheck.models.classes.recast_improve import improved_regions
+from lyapcheck.models.classes import regions
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, to_fmpq
@@ -285,7 +286,7 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
         return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
     label = "the linearization (J^T P + P J = -I)"
     try:
-        first = certify_region(loop, V0, search, label)
+        first = regions.certify_region(loop, V0, search, label)
     except BudgetExhausted as exc:
         late = reasons.out_of_time("a region of attraction", budget.seconds, [skipped, f"{label}: {exc}"],
                                    ("time", "domain"))
@@ -294,11 +295,11 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
         ball = linearization_ball_level(loop, J, budget, box)
         if isinstance(ball, ConditionResult):
             return ball
-        return best_region(loop, [], [skipped, f"{label}: {first}", ball], box, search)
-    more, tried = improved_regions(loop, first, budget, box)
+        return regions.best_region(loop, [], [skipped, f"{label}: {first}", ball], box, search)
+    more, tried = regions.relations_enlarge(loop, first, budget, box)
     stopped = f" (the largest proved when {first.stopped})" if first.stopped else ""
-    result = best_region(loop, [first, *more], [skipped, f"{label}: level {float(first.level):.6g}{stopped}", *tried],
-                         box, search)
+    result = regions.best_region(loop, [first, *more],
+                                 [skipped, f"{label}: level {float(first.level):.6g}{stopped}", *tried], box, search)
     if result.status == "certified":
         simulated_check(loop, result, box)
     return result
@@ -468,7 +469,7 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
                              "level set of it was proved a region of attraction on the true loop",
                              ("other_candidate", "domain"), interval)
         return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
-    region = region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
+    region = regions.region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
     region.numbers.setdefault("tried_first", interval)
     if region.status != "certified":
         ball = candidate_ball_level(loop, V, budget, box)
