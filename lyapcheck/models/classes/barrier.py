@@ -650,16 +650,24 @@ def relation_proofs(view: "BoundField", structure: Structure, point: Any, initia
     piece's generators' S-procedure multipliers) with its remainder, by identity name (:func:`conditions`)."""
     from lyapcheck.models.classes.bounds import relation_certificates
 
-    by_name = {g.name: g for g in structure.grams}
     pieces = [(f"I{k}", p) for k, p in enumerate(initial)] + [(f"U{k}", p) for k, p in enumerate(unsafe)]
     names = [name for name, _ in pieces] + ["D"]
     proofs = dict(zip(names, relation_certificates(view, structure, point, [(name, f"R{name}") for name in names])))
+    add_piece_multipliers(proofs, pieces, view, structure, point)
+    return proofs
+
+
+def add_piece_multipliers(proofs: dict[str, "ConditionCertificate"], pieces: Sequence[tuple[str, Any]],
+                          view: "BoundField", structure: Structure, point: Any) -> None:
+    """Each set piece's S-procedure multipliers (Grams ``s<identity>_<j>``, one per generator of the
+    piece) into its identity's proof, after the recasting's relations (the barrier's and the
+    reach-avoid's identities on a loop with functions)."""
+    by_name = {g.name: g for g in structure.grams}
     for name, piece in pieces:
         for j in range(len(piece_generators(list(piece)))):
             gram = f"s{name}_{j}"
             if gram in by_name:  # (a multiplier a facial reduction left out is 0)
                 proofs[name].taus[len(view.relations) + j] = GramPoly.of(by_name[gram].basis, point.grams[gram])
-    return proofs
 
 
 def check_on_relations(view: "BoundField", B: Poly, lam: Fraction, initial: Pieces, unsafe: Pieces,
@@ -1026,7 +1034,7 @@ SUMMARY: Final = BARRIER_SENTENCE
 __all__ = ["BARRIER_DEGREES", "LAMBDAS", "SUMMARY", "barrier_structure", "search_barrier", "attempt", "run",
            "scaled_pieces", "certificate_json", "as_barrier_field", "KIND", "OLD_KIND", "OLD_FORMAT",
            "RECAST_BARRIER_DEGREES", "run_functions", "check", "check_on_relations", "relations_field",
-           "relation_pieces", "relation_proofs", "conditions", "certificate_functions", "falsification", "flat_loop",
+           "relation_pieces", "relation_proofs", "add_piece_multipliers", "conditions", "certificate_functions", "falsification", "flat_loop",
            "piece_relations", "state_relation", "not_smooth_note", "Template", "templates", "polynomial_json",
            "recasting_json", "check_polynomial", "counterexample", "SETS_USE_BOX", "BOX_CORNERS", "sets_use_box",
            "box_points", "box_falsification", "at_point", "BoxPoint", "true_field"]

@@ -42,8 +42,8 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.classes.barrier import (BudgetExhausted, Pieces, _b_basis, _decrease_poly, _decrease_support,
-                                      _shift, as_barrier_field, scaled_pieces, set_certificates, set_identities,
-                                      set_values)
+                                      _shift, add_piece_multipliers, as_barrier_field, scaled_pieces, set_certificates,
+                                      set_identities, set_values)
 from lyapcheck.models.loop.field import ScaledField, StateField
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable, on_remainder_faces
@@ -685,20 +685,14 @@ def relation_proofs(view: "BoundField", structure: Structure, point: Any, pieces
     a piece's generators' S-procedure multipliers, or the goal's failing inequality's, which
     :func:`outside_goal_view` put there), with its remainder, by condition name (:func:`conditions`)."""
     from lyapcheck.models.classes.bounds import relation_certificates
-    from lyapcheck.sos.certificates import GramPoly, piece_generators
 
-    by_name = {g.name: g for g in structure.grams}
     initial, unsafe, goal = pieces
     sets = [(f"I{k}", p) for k, p in enumerate(initial)] + [(f"U{k}", p) for k, p in enumerate(unsafe)]
     names = [name for name, _ in sets] + [f"goal{k}" for k in range(len(goal))] + ["bounded"]
     remainders = {**{name: f"R{name}" for name, _ in sets}, **{f"goal{k}": f"RG{k}" for k in range(len(goal))},
                   "bounded": "RB"}
     proofs = dict(zip(names, relation_certificates(view, structure, point, [(n, remainders[n]) for n in names])))
-    for name, piece in sets:
-        for j in range(len(piece_generators(list(piece)))):
-            gram = f"s{name}_{j}"
-            if gram in by_name:  # (a multiplier a facial reduction left out is 0)
-                proofs[name].taus[len(view.relations) + j] = GramPoly.of(by_name[gram].basis, point.grams[gram])
+    add_piece_multipliers(proofs, sets, view, structure, point)
     return proofs
 
 
