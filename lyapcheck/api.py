@@ -401,8 +401,15 @@ def certify_extremum(model: "str | Path | Model", parameter_range: str, *, direc
     required = parse_requirements(require)
 
     def certify_at(value: str) -> tuple[dict[str, Any], bool, Any]:
-        found = certify_model_file(model, settings=[*base, f"{name}={value}"], candidate=candidate, classes=classes,
-                                   time_limit_s=time_limit_s, degree=degree)
+        try:
+            found = certify_model_file(model, settings=[*base, f"{name}={value}"], candidate=candidate,
+                                       classes=classes, time_limit_s=time_limit_s, degree=degree)
+        except ModelFileError as exc:
+            if exc.key != f"settings['{name}']":
+                raise
+            # the searched name is the flag's, not a --set the user gave: say so
+            raise ModelFileError(exc.source, f"--{flag} {name}",
+                                 str(exc).removeprefix(f"{exc.source}: {exc.key}: ")) from None
         doc = found.to_json()
         passed = doc.get("verdict") in OK_VERDICTS and not unmet_requirements(doc.get("conditions") or {}, required)
         return doc, passed, found

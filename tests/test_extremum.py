@@ -75,3 +75,8 @@ def test_bad_uses_exit_2_in_one_line() -> None:
         done = RUNNER.invoke(app.cli, ["certify", str(OSCILLATOR), "--classes", "linearization", *args])
         assert done.exit_code == 2, (args, done.output)
         assert len(done.output.strip().splitlines()) == 1, done.output
+
+
+def test_an_unknown_searched_name_is_named_by_its_flag() -> None:
+    done = RUNNER.invoke(app.cli, ["certify", str(OSCILLATOR), "--classes", "linearization", "--maximize", "nu=0..1"])
+    assert done.exit_code == 2 and "--maximize nu: no parameter or disturbance named 'nu'" in done.output, done.output

@@ -223,9 +223,10 @@ def register(group: click.Group) -> None:
                            **{f"--{k.replace('_', '-')}": v is not None for k, v in flags.items()}}
             check_model_flags(model_file, stray, settings, paper_flags)
             if maximize is not None or minimize is not None or steps is not None:
-                _extremum(model_file, maximize, minimize, steps, boxes, report, out, as_json, settings=settings,
-                          candidate=candidate, classes=classes, require=require, degree=max_degree,
-                          time_limit_s=seconds)
+                with flag_names():
+                    _extremum(model_file, maximize, minimize, steps, boxes, report, out, as_json, settings=settings,
+                              candidate=candidate, classes=classes, require=require, degree=max_degree,
+                              time_limit_s=seconds)
             with flag_names():
                 result = certify_gains(model=model_file, settings=settings, candidate=candidate, classes=classes,
                                        box=list(boxes) or None, degree=max_degree, time_limit_s=seconds)
