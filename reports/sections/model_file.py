@@ -328,9 +328,6 @@ class ModelFileSection(Section):
             ("epsilon", "epsilon in V' <= -epsilon |dx|^2 / D"),
             ("positivity_epsilon", "epsilon in V >= epsilon |dx|^2"),
             ("local_radius", "half-width of the equilibrium's box (the Hessian argument)"))))
-        view.exact.extend(exact_rows(as_dict(cert.get("ges")), (
-            ("c1", "c1 in c1 |z|^2 <= V"), ("c2", "c2 in V <= c2 |z|^2"),
-            ("k", "k in |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"), ("rate", "rate (per unit time)"))))
         view.notes.extend(recast_set_notes(kind, as_fraction(cert.get("level")), box, angles))
         if kind == "interval":
             cells, boundary = cert.get("cells"), cert.get("boundary_cells")

@@ -38,7 +38,7 @@ from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, BudgetExhausted, 
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_lyapunov
-from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 from lyapcheck.sos.structure import Gram, Identity, Structure, Term
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -90,7 +90,8 @@ def field_degree(field: StateField) -> int:
                + [sum(m) for m in field.ring.support(field.D)] + [1])
 
 
-def _products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) -> set[Monomial]:
+def gram_products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) -> set[Monomial]:
+    """Every monomial a Gram form over ``basis`` with these blocks can have."""
     return {tuple(a + b for a, b in zip(basis[i], basis[j])) for idx in blocks for i in idx for j in idx}
 
 
@@ -125,7 +126,7 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
         return ("no strict certificate of this form exists (V's basis, reduced to the face the solver found, "
                 "keeps no pure power of some state)")
     v_blocks = bases.character_blocks(z_v, generators)
-    products = _products(z_v, v_blocks)
+    products = gram_products(z_v, v_blocks)
     target: set[Monomial] = set()
     for i, gi in enumerate(field.g):
         derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
@@ -134,7 +135,7 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators)
     for g in box_grams:
         sq = {tuple(2 * int(k == multiplier_variable(g.name)) for k in range(nv)), tuple([0] * nv)}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in _products(g.basis, g.blocks) for s in sq}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in gram_products(g.basis, g.blocks) for s in sq}
     if len(target) > TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
     z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
@@ -179,14 +180,8 @@ def lyapunov_values(field: StateField, structure: Structure, mu: Fraction) -> Pa
     ring = field.ring
     for i, gi in enumerate(field.g):
         values.set_poly(ring, f"g{i}", -gi, ring.support(gi))
-    values.set_poly(ring, "muD", field.D * _fmpq(-mu), ring.support(field.D))
+    values.set_poly(ring, "muD", field.D * to_fmpq(-mu), ring.support(field.D))
     return values
-
-
-def _fmpq(x: Fraction) -> Any:
-    import flint
-
-    return flint.fmpq(x.numerator, x.denominator)
 
 
 def attempt(field: StateField, structure: Structure, mu: Fraction, search: Search) -> dict[str, Any] | None:
@@ -696,7 +691,7 @@ def clique_program(field: StateField, degree: int, generators: Sequence[Sequence
                 "keep no pure power of some state)")
     target: set[Monomial] = set()
     for gram in v_grams:
-        products = _products(gram.basis, gram.blocks)
+        products = gram_products(gram.basis, gram.blocks)
         for i, gi in enumerate(field.g):
             derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
             target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}

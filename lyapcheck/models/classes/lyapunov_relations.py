@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 from lyapcheck.models.classes.lyapunov import (EXACT_TRY_MARGIN, LYAPUNOV_FACIAL_ROUNDS,
                                                OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, TARGET_LIMIT,
-                                               _fmpq, _products, best_decay_rate, eigen_bounds, exact_try, failure,
+                                               gram_products, best_decay_rate, eigen_bounds, exact_try, failure,
                                                kernel_monomials, lyapunov_identity, relations_claim, relations_sentence,
                                                vanishing_monomials)
 from lyapcheck.models.engines import reasons
@@ -42,7 +42,7 @@ from lyapcheck.models.engines.search import BudgetExhausted, ParameterValues, Se
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly
-from lyapcheck.sos.polynomials import Monomial, Poly, monomials
+from lyapcheck.sos.polynomials import Monomial, Poly, monomials, to_fmpq
 from lyapcheck.sos.structure import Gram, Structure, Term
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -88,7 +88,7 @@ def relations_program(field: Any, degree: int, generators: Sequence[Sequence[int
         return ("no strict certificate of this form exists (V's basis, reduced to the face the solver found, "
                 "keeps no pure power of some state)")
     v_blocks = bases.character_blocks(z_v, generators)
-    products = _products(z_v, v_blocks)
+    products = gram_products(z_v, v_blocks)
     target: set[Monomial] = set()
     for i, gi in field.flows:
         derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
@@ -136,7 +136,7 @@ def relations_values(field: Any, mu: Fraction) -> ParameterValues:
     ring = field.ring
     for i, gi in field.flows:
         values.set_poly(ring, f"g{i}", -gi, ring.support(gi))
-    values.set_poly(ring, "muD", field.W * _fmpq(-mu), ring.support(field.W))
+    values.set_poly(ring, "muD", field.W * to_fmpq(-mu), ring.support(field.W))
     return values
 
 
@@ -180,7 +180,7 @@ def check_relations(field: Any, V: GramPoly, mu: Fraction, decrease: Any) -> tup
     flow = ring.zero()
     for i, gi in field.flows:
         flow += v.derivative(i) * gi
-    ok, why = check_condition(ring, -flow - v * field.W * _fmpq(mu), field.relations, decrease)
+    ok, why = check_condition(ring, -flow - v * field.W * to_fmpq(mu), field.relations, decrease)
     if not ok:
         return False, f"decrease: {why}"
     return True, ("Q_V > 0, Q_W > 0 and -grad V . N - mu V D = W on the recasting's relations, D > 0 proved: "
