@@ -188,11 +188,11 @@ def _linearization(status: str, condition: Mapping[str, Any]) -> str:
 
         return BOX_SENTENCE
     if status == "refuted" and method == "box_point":
-        from lyapcheck.models.classes.linearization import _lower_first, _point_words
+        from lyapcheck.models.classes.linearization import lower_first, point_words
 
         point = {k: Fraction(v) for k, v in data["point"].items()}
         inner = _linearization("refuted", {"refutation": data["at_point"]})
-        return f"at {_point_words(point)}, a value of the box, {_lower_first(inner)}"
+        return f"at {point_words(point)}, a value of the box, {lower_first(inner)}"
     if status == "refuted" and method == "root_isolation":
         return (f"the Jacobian has an eigenvalue with positive real part (rigorous enclosure {data['root']}): the "
                 "equilibrium is unstable")

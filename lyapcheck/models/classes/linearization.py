@@ -92,19 +92,26 @@ def characteristic_polynomial(J: Matrix) -> list[Fraction]:
     return [to_fraction(c) for c in _fmpq_mat(J).charpoly().coeffs()]
 
 
+def hurwitz_matrix(coeffs: Sequence[Any], zero: Any) -> list[list[Any]]:
+    """The Hurwitz matrix of the monic ``p(s) = sum c_k s^k`` (``c`` lowest degree first, numbers or
+    polynomials; ``zero`` the zero of their kind): entry ``(i, j)`` is ``a_(2j - i)`` (1-based) with
+    ``p = a_0 s^n + a_1 s^(n-1) + ... + a_n``, 0 outside ``0..n``."""
+    n = len(coeffs) - 1
+    a = [coeffs[n - k] for k in range(n + 1)]
+
+    def entry(i: int, j: int) -> Any:
+        k = 2 * (j + 1) - (i + 1)
+        return a[k] if 0 <= k <= n else zero
+
+    return [[entry(i, j) for j in range(n)] for i in range(n)]
+
+
 def hurwitz_determinants(coeffs: Sequence[Fraction]) -> list[Fraction]:
     """The Hurwitz determinants of the monic ``p(s) = sum c_k s^k`` (all > 0 iff Hurwitz)."""
     from lyapcheck import exact
 
-    n = len(coeffs) - 1
-    a = [coeffs[n - k] for k in range(n + 1)]  # a_0 s^n + a_1 s^(n-1) + ... + a_n, a_0 = 1
-
-    def entry(i: int, j: int) -> Fraction:
-        k = 2 * (j + 1) - (i + 1)
-        return a[k] if 0 <= k <= n else Fraction(0)
-
-    H = [[entry(i, j) for j in range(n)] for i in range(n)]
-    return [exact.det(tuple(tuple(row[:k]) for row in H[:k])) for k in range(1, n + 1)]
+    H = hurwitz_matrix(coeffs, Fraction(0))
+    return [exact.det(tuple(tuple(row[:k]) for row in H[:k])) for k in range(1, len(H) + 1)]
 
 
 def right_half_plane_root(coeffs: Sequence[Fraction]) -> str | None:
@@ -286,19 +293,13 @@ def hurwitz_conditions(coeffs: Sequence[Any], ring: Any) -> list[tuple[str, Any]
     the Hurwitz determinants ``Delta_1 .. Delta_(n-1)`` and ``a_n = c_0`` (``Delta_n = a_n
     Delta_(n-1)``), each named."""
     n = len(coeffs) - 1
-    a = [coeffs[n - k] for k in range(n + 1)]
-    zero = ring.zero()
-
-    def entry(i: int, j: int) -> Any:
-        k = 2 * (j + 1) - (i + 1)
-        return a[k] if 0 <= k <= n else zero
-
+    H = hurwitz_matrix(coeffs, ring.zero())
     out = []
     for k in range(1, n):
-        H = [[entry(i, j) for j in range(k)] for i in range(k)]
-        det = characteristic_polynomial_of(H, ring)[0] * (-1) ** k  # det M = (-1)^k det(0 I - M)
+        leading = [row[:k] for row in H[:k]]
+        det = characteristic_polynomial_of(leading, ring)[0] * (-1) ** k  # det M = (-1)^k det(0 I - M)
         out.append((f"Delta_{k}", det))
-    out.append((f"a_{n}", a[n]))
+    out.append((f"a_{n}", coeffs[0]))
     return out
 
 
@@ -334,9 +335,9 @@ def run_over_box(shifted: ShiftedField) -> ConditionResult:
                 data = {"method": BOX_POINT_METHOD, "point": {k: str(v) for k, v in point.items()},
                         "at_point": at.refutation}
                 return ConditionResult("linearization", "refuted",
-                                       f"at {_point_words(point)}, a value of the box, {_lower_first(at.summary)}",
+                                       f"at {point_words(point)}, a value of the box, {lower_first(at.summary)}",
                                        numbers=at.numbers, refutation=data)
-            where = f"it is <= 0 at {_point_words(point)}, where the linearization is {at.status}"
+            where = f"it is <= 0 at {point_words(point)}, where the linearization is {at.status}"
         else:
             where = f"not proved within {bernstein.MAX_BOXES} sub-boxes"
         why = reasons.reason(f"the Hurwitz condition {name} > 0 was not proved on the whole box ({where})",
@@ -367,11 +368,13 @@ def _parameter_point(shifted: ShiftedField, u: Sequence[Fraction]) -> dict[str, 
     return {name: box.center(name) + box.half(name) * x for name, x in zip(box.names, u)}
 
 
-def _point_words(point: dict[str, Fraction]) -> str:
+def point_words(point: dict[str, Fraction]) -> str:
+    """``k = 1, ki = 2``: a parameter point as a sentence names it."""
     return ", ".join(f"{k} = {float(v):.6g}" for k, v in point.items())
 
 
-def _lower_first(text: str) -> str:
+def lower_first(text: str) -> str:
+    """A sentence that follows a comma."""
     return text[:1].lower() + text[1:]
 
 

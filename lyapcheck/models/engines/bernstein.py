@@ -55,7 +55,6 @@ def _shift_to_unit(terms: Terms, box: Box) -> dict[Exponents, Fraction]:
 def bernstein_coefficients(terms: Terms, box: Box, degrees: Sequence[int]) -> dict[Exponents, Fraction]:
     """Every Bernstein coefficient of ``q`` on ``box`` (degrees ``degrees`` per variable)."""
     coeffs = _shift_to_unit(terms, box)
-    grid: dict[Exponents, Fraction] = {}
 
     def indices(j: int) -> list[Exponents]:
         if j == len(degrees):
