@@ -25,13 +25,13 @@ with functions of :data:`FUNCTION_LOOPS` (the ones with a box also over it).
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
+
+from route_runs import certificate_digest, loop_kind, solve_log, timed_certify  # (beside this script)
 
 ROOT = Path(__file__).resolve().parents[1]
 SKIPPED = ("paper-",)
@@ -59,22 +59,13 @@ def function_loops() -> dict[str, tuple[str, list[str] | None]]:
 
 def run(path: Path, limit: float, box: list[str] | None = None) -> dict[str, Any]:
     """The class's status, figures and wall time on one model file (over ``box``, a box of its parameters)."""
-    from lyapcheck import api
-    from lyapcheck.models.engines import store
-    from lyapcheck.models.language.modelfile import Model, parse_any_model
-
-    model = parse_any_model(path.read_text(), str(path))
-    start = time.perf_counter()
-    with store.disabled():  # (each run searches: no certificate kept from an earlier one)
-        found = api.certify(model=path, classes="barrier", time_limit_s=limit, box=box)
+    found, seconds = timed_certify(path, classes="barrier", time_limit_s=limit, box=box)
     result = found.conditions["barrier"]
-    keys = [entry.get("program") for entry in (result.solver or {}).get("solves", [])]
-    cert = json.dumps(result.certificate, sort_keys=True) if result.certificate is not None else ""
-    return {"kind": "polynomial" if isinstance(model, Model) else "functions", "status": result.status,
+    solves, programs = solve_log(result)
+    return {"kind": loop_kind(path.read_text(), str(path)), "status": result.status,
             "degree": result.numbers.get("degree"), "lambda_per_s": result.numbers.get("lambda_per_s"),
-            "seconds": round(time.perf_counter() - start, 1), "solves": len(keys),
-            "programs": hashlib.sha256(json.dumps(keys).encode()).hexdigest()[:16],
-            "certificate": hashlib.sha256(cert.encode()).hexdigest()[:16]}
+            "seconds": round(seconds, 1), "solves": solves, "programs": programs,
+            "certificate": certificate_digest(result)}
 
 
 def row(name: str, now: dict[str, Any], before: dict[str, Any] | None) -> str:

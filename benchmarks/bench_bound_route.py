@@ -22,13 +22,11 @@ Without files: every example with disturbances but the paper's (``paper-*``, min
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
-import time
 from pathlib import Path
 from typing import Any
 
-from lyapcheck.models.language.modelfile import Model, parse_any_model
+from route_runs import loop_kind, solve_log, timed_certify  # (beside this script)
 
 ROOT = Path(__file__).resolve().parents[1]
 SKIPPED = ("paper-",)
@@ -38,18 +36,12 @@ BOXES = {"recast-ilos-course-disturbed": ["kappa=0.4..0.6"], "linear-scalar-dist
 
 def run(path: Path, limit: float, box: list[str] | None = None) -> dict[str, Any]:
     """The class's status, bounds and wall time on one example (over ``box``, a box of its parameters)."""
-    from lyapcheck import api
-    from lyapcheck.models.engines import store
-
-    model = parse_any_model(path.read_text(), str(path))
-    start = time.perf_counter()
-    with store.disabled():  # (each run searches: no certificate kept from an earlier one)
-        found = api.certify(model=path, classes="sos_bound", time_limit_s=limit, box=box)
+    found, seconds = timed_certify(path, classes="sos_bound", time_limit_s=limit, box=box)
     result = found.conditions["sos_bound"]
-    keys = [entry.get("program") for entry in (result.solver or {}).get("solves", [])]
-    return {"kind": "polynomial" if isinstance(model, Model) else "functions", "status": result.status,
-            "bounds": result.numbers.get("bounds") or {}, "seconds": round(time.perf_counter() - start, 1),
-            "solves": len(keys), "programs": hashlib.sha256(json.dumps(keys).encode()).hexdigest()[:16]}
+    solves, programs = solve_log(result)
+    return {"kind": loop_kind(path.read_text(), str(path)), "status": result.status,
+            "bounds": result.numbers.get("bounds") or {}, "seconds": round(seconds, 1),
+            "solves": solves, "programs": programs}
 
 
 def row(name: str, now: dict[str, Any], before: dict[str, Any] | None) -> str:

@@ -22,15 +22,14 @@ Without files: every example but the paper's (``paper-*``, minutes each) and the
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
-from lyapcheck.models.language.modelfile import Model, parse_any_model
+from route_runs import loop_kind, solve_log, timed_certify  # (beside this script)
+
 
 ROOT = Path(__file__).resolve().parents[1]
 SKIPPED = ("paper-",)
@@ -50,23 +49,16 @@ def test_loops() -> dict[str, str]:
 
 def run(path: Path, limit: float) -> dict[str, Any]:
     """Each class's status, figures and wall time on one model file."""
-    from lyapcheck import api
-    from lyapcheck.models.engines import store
-
-    model = parse_any_model(path.read_text(), str(path))
-    kind = "polynomial" if isinstance(model, Model) else "functions"
+    kind = loop_kind(path.read_text(), str(path))
     out: dict[str, Any] = {}
-    start = time.perf_counter()
-    with store.disabled():  # (each run searches: no certificate kept from an earlier one)
-        found = api.certify(model=path, classes=",".join(CLASSES), time_limit_s=limit)
-    seconds = round(time.perf_counter() - start, 1)
+    found, wall = timed_certify(path, classes=",".join(CLASSES), time_limit_s=limit)
+    seconds = round(wall, 1)
     for name in CLASSES:
         result = found.conditions[name]
-        keys = [entry.get("program") for entry in (result.solver or {}).get("solves", [])]
+        solves, programs = solve_log(result)
         out[name] = {"kind": kind, "status": result.status, "property": result.property,
                      "figures": {k: result.numbers.get(k) for k in FIGURES if result.numbers.get(k) is not None},
-                     "seconds": seconds, "solves": len(keys),
-                     "programs": hashlib.sha256(json.dumps(keys).encode()).hexdigest()[:16]}
+                     "seconds": seconds, "solves": solves, "programs": programs}
     return out
 
 

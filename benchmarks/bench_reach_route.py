@@ -22,13 +22,13 @@ figure the one kept before and flags:
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
+
+from route_runs import certificate_digest, loop_kind, solve_log, timed_certify  # (beside this script)
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # (the tests' loop texts: tests/ is a package of the checkout)
@@ -78,25 +78,17 @@ def loops() -> dict[str, tuple[str, list[str] | None]]:
 
 def run(name: str, text: str, limit: float, box: list[str] | None) -> dict[str, Any]:
     """The class's status, time bound, wall time, solves and hashes on one loop."""
-    from lyapcheck import api
-    from lyapcheck.models.engines import store
-    from lyapcheck.models.language.modelfile import Model, parse_any_model
-
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"{name.split()[0]}.toml"
         path.write_text(text)
-        model = parse_any_model(text, str(path))
-        start = time.perf_counter()
-        with store.disabled():  # (each run searches: no certificate kept from an earlier one)
-            found = api.certify(model=path, classes="reach_avoid", time_limit_s=limit, box=box)
-        seconds = time.perf_counter() - start
+        kind = loop_kind(text, str(path))
+        found, seconds = timed_certify(path, classes="reach_avoid", time_limit_s=limit, box=box)
     result = found.conditions["reach_avoid"]
-    keys = [entry.get("program") for entry in (result.solver or {}).get("solves", [])]
-    cert = json.dumps(result.certificate, sort_keys=True) if result.certificate is not None else ""
-    return {"kind": "polynomial" if isinstance(model, Model) else "functions", "status": result.status,
+    solves, programs = solve_log(result)
+    return {"kind": kind, "status": result.status,
             "bound": (result.numbers or {}).get("reach_time_bound_s"), "seconds": round(seconds, 1),
-            "solves": len(keys), "programs": hashlib.sha256(json.dumps(keys).encode()).hexdigest()[:16],
-            "certificate": hashlib.sha256(cert.encode()).hexdigest()[:16], "summary": result.summary}
+            "solves": solves, "programs": programs, "certificate": certificate_digest(result),
+            "summary": result.summary}
 
 
 def row(name: str, now: dict[str, Any], before: dict[str, Any] | None) -> str:

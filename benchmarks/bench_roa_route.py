@@ -36,6 +36,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from route_runs import loop_kind, solve_log, timed_certify  # (beside this script)
+
 from lyapcheck.models.language.modelfile import Model, parse_any_model
 from lyapcheck.tolerances import MODEL_CLASS_TIME_LIMIT_S
 
@@ -57,26 +59,19 @@ FIGURES = ("level", "roa_share", "box_share_estimate", "ball_radius")
 
 def run(path: Path, limit: float, name: str, candidate: str | None = None) -> dict[str, Any]:
     """The class's status, figures and wall time on one example."""
-    from lyapcheck import api
-    from lyapcheck.models.engines import store
-
-    model = parse_any_model(path.read_text(), str(path))
+    kind = loop_kind(path.read_text(), str(path))
     start = time.perf_counter()
     try:
-        with store.disabled():  # (each run searches: no certificate kept from an earlier one)
-            found = api.certify(model=path, classes=name, time_limit_s=limit, candidate=candidate)
+        found, seconds = timed_certify(path, classes=name, time_limit_s=limit, candidate=candidate)
     except Exception as exc:  # (an example that refuses the class: its row says why)
-        return {"kind": "polynomial" if isinstance(model, Model) else "functions",
-                "status": f"refused: {str(exc)[:80]}", "route": None, "figures": {},
+        return {"kind": kind, "status": f"refused: {str(exc)[:80]}", "route": None, "figures": {},
                 "seconds": round(time.perf_counter() - start, 1), "solves": 0, "programs": None}
     result = found.conditions[name]
-    keys = [entry.get("program") for entry in (result.solver or {}).get("solves", [])]
+    solves, programs = solve_log(result)
     numbers = result.numbers or {}
     figures = {k: numbers[k] for k in FIGURES if isinstance(numbers.get(k), (int, float))}
-    return {"kind": "polynomial" if isinstance(model, Model) else "functions", "status": result.status,
-            "route": (result.certificate or {}).get("kind"), "figures": figures,
-            "seconds": round(time.perf_counter() - start, 1), "solves": len(keys),
-            "programs": hashlib.sha256(json.dumps(keys).encode()).hexdigest()[:16]}
+    return {"kind": kind, "status": result.status, "route": (result.certificate or {}).get("kind"),
+            "figures": figures, "seconds": round(seconds, 1), "solves": solves, "programs": programs}
 
 
 def run_sos_route(path: Path, limit: float) -> dict[str, Any]:
