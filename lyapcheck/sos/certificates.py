@@ -126,7 +126,7 @@ def lie_derivative(ring: Ring, V: Poly, g: Sequence[Poly]) -> Poly:
     return total
 
 
-def check_positive_definite_v(V: GramPoly, n: int) -> tuple[bool, str]:
+def check_positive_definite_v(V: "GramPoly | GramSum", n: int) -> tuple[bool, str]:
     """``V = z^T Q z`` with ``Q > 0``, no constant monomial and a pure power of every state in the
     basis: ``V >= lambda sum_i z_i^(2 k_i)``, so ``V`` is positive definite and radially unbounded
     (``V(0) = 0``, sublevel sets compact)."""
@@ -196,12 +196,9 @@ def check_lyapunov_cliques(ring: Ring, g: Sequence[Poly], D: Poly, V: GramSum, s
     n = len(g)
     if mu < 0:
         return False, "the decay rate mu must be >= 0"
-    if not V.parts or not has_pure_powers(V.basis, range(n)):
-        return False, "V's bases must hold a pure power of every state (so that V is radially unbounded)"
-    if any(sum(m) == 0 for m in V.basis):
-        return False, "V's bases may not hold the constant monomial (V(0) must be 0)"
-    if not V.positive_definite():
-        return False, "a clique's Q_V is not positive definite (exact)"
+    ok, why = check_positive_definite_v(V, n)  # (over the union of the bases; every part's Q_V > 0)
+    if not ok:
+        return False, why
     if not sigma.parts or not has_pure_powers(sigma.basis, range(n)):
         return False, "sigma's bases must hold a pure power of every state (so that V' < 0 away from 0)"
     if not sigma.positive_definite():
