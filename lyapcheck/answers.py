@@ -77,6 +77,14 @@ def _question(name: str, condition: Mapping[str, Any]) -> str | None:
     return QUESTION_OF.get(str(prop)) if prop is not None else None
 
 
+#: the instability a refuted linearization proves, by its refutation's method, where it is not an
+#: eigenvalue of a continuous loop's Jacobian with positive real part
+UNSTABLE_BY_METHOD: Final[Mapping[str, str]] = {
+    "sampled_routh": "the sampled-data loop's Jacobian over one period has an eigenvalue of modulus > 1 (proved in "
+                     "ball arithmetic)",
+}
+
+
 def _is_unstable(name: str, condition: Mapping[str, Any]) -> bool:
     """An exact proof that the equilibrium is unstable: the linearization refuted (an eigenvalue with
     positive real part). A refuted search class (no quadratic V exists) proves nothing of the kind."""
@@ -90,12 +98,13 @@ def _nominal(condition: Mapping[str, Any]) -> str:
 def _stability(conditions: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
     unstable = [n for n, c in conditions.items() if _is_unstable(n, c)]
     if unstable:
-        point = (conditions[unstable[0]].get("refutation") or {}).get("point")
+        refutation = conditions[unstable[0]].get("refutation") or {}
+        point = refutation.get("point")
         where = (" at " + ", ".join(f"{k} = {float(Fraction(v)):.6g}" for k, v in point.items())
                  + ", a value of the box,") if isinstance(point, dict) and point else ""
-        return {"answer": "unstable", "by": unstable[0],
-                "text": f"UNSTABLE:{where} the Jacobian at the equilibrium has an eigenvalue with positive real part "
-                        "(proved exactly)"}
+        why = UNSTABLE_BY_METHOD.get(str(refutation.get("method")), "the Jacobian at the equilibrium has an eigenvalue "
+                                                                     "with positive real part (proved exactly)")
+        return {"answer": "unstable", "by": unstable[0], "text": f"UNSTABLE:{where} {why}"}
     best: tuple[tuple[int, int], str, Mapping[str, Any]] | None = None
     for name, c in conditions.items():
         prop = str(c.get("property"))

@@ -438,6 +438,9 @@ def _certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     from lyapcheck.models.surfaces.certificate import build_document
     from lyapcheck.models.surfaces.certify import certify_model
 
+    sampled = _certify_sampled(model, settings=settings, candidate=candidate, classes=classes, box=box)
+    if sampled is not None:
+        return sampled
     recast = _recast_model(model, settings, candidate)
     loaded: "Model | RecastModel"
     if recast is not None:  # a loop with functions over a box is read at the box's centre
@@ -451,6 +454,30 @@ def _certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
         found = certify_model(loaded, classes=classes, candidate=candidate, time_limit_s=time_limit_s, box=parsed)
     return CertifyResult(verdict=found.verdict, dynamics="model", conditions=found.results,
                          document=build_document(found))
+
+
+def _certify_sampled(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None,
+                     candidate: str | None, classes: str | Sequence[str] | None,
+                     box: Sequence[str] | Mapping[str, Any] | None) -> CertifyResult | None:
+    """A sampled-data model file's certification (:mod:`lyapcheck.models.surfaces.sampled_run`), or None
+    when the file is not one."""
+    from lyapcheck.models.language.sampling import file_is_sampled
+
+    if not (isinstance(model, (str, Path)) and file_is_sampled(model)):
+        return None
+    from lyapcheck.models.language.sampling import load_sampled
+    from lyapcheck.models.surfaces.sampled_run import build_sampled_document, certify_sampled
+
+    for given, what in ((box, "box"), (candidate, "candidate")):
+        if given:
+            raise InvalidParameter(what, f"nothing on a sampled-data loop ({model}: [sampling]): its linearization "
+                                         "over one period is decided at the file's parameters", given)
+    with _settings_named():
+        loaded = load_sampled(model, model_settings(settings, str(model)))
+    with _argument_names():
+        results = certify_sampled(loaded, classes)
+    document = build_sampled_document(loaded, results)
+    return CertifyResult(verdict=document["verdict"], dynamics="model", conditions=results, document=document)
 
 
 def _recast_at_box_centre(recast: "RecastModel", settings: Mapping[str, object] | Sequence[str] | None,

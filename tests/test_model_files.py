@@ -178,7 +178,7 @@ BAD: dict[str, Bad] = {
     "disturbance in a denominator": Bad(edit('"-mu*x2 + d"', '"-mu*x2 + 1/(2 + d**2) - 1/2"'), "[dynamics] x2",
                                         ("disturbance 'd'", "denominator")),
     # unknown sections and keys
-    "unknown section": Bad(VALID + "[controller]\nk = 1\n", "[controller]", ("unknown section",)),
+    "unknown section": Bad(VALID + "[controllers]\nk = 1\n", "[controllers]", ("unknown section",)),
     "unknown key in [model]": Bad(edit('name = "two states"', 'name = "two states"\nauthor = "me"'),
                                   "[model] author", ("unknown key",)),
     "a key with a line break": Bad(edit("mu = 1", 'mu = 1\n"a\\nb" = 2'), "[parameters] a\\nb",
@@ -587,6 +587,12 @@ def test_every_example_loads_with_its_text_and_hash(path: Path) -> None:
     from lyapcheck.models.language.recast import RecastModel
 
     raw = path.read_bytes()
+    from lyapcheck.models.language.sampling import file_is_sampled, load_sampled
+
+    if file_is_sampled(path):  # a sampled-data loop has its own reader (tests/test_sampled_loops.py)
+        sampled = load_sampled(path)
+        assert sampled.text == raw.decode("utf-8") and sampled.sha256 == hashlib.sha256(raw).hexdigest()
+        return
     model = load_any_model(path)
     assert model.text == raw.decode("utf-8")
     assert model.sha256 == hashlib.sha256(raw).hexdigest()

@@ -26,16 +26,18 @@ number of right half-plane roots of every polynomial of the balls (Routh's theor
 
 A ball containing 0 is retried at a higher precision, up to :data:`MAX_PRECISION_BITS`; an
 eigenvalue on the unit circle (the critical period itself) stays ``inconclusive``, as it must.
-
-May import: lyapcheck.results, lyapcheck.tolerances
 """
 
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 from lyapcheck.results import ConditionResult
+from lyapcheck.sos.polynomials import Ring
+
+if TYPE_CHECKING:
+    from lyapcheck.models.language.sampling import SampledModel
 
 Matrix = Sequence[Sequence[Fraction]]
 
@@ -143,6 +145,21 @@ def _spectral_radius_estimate(A: Matrix, B: Matrix, K: Matrix, period: Fraction)
         return None
 
 
+def seconds_text(period: Fraction) -> str:
+    """``period`` as an exact decimal where it has one (``1/50`` is ``0.02``), else ``p/q``."""
+    d, twos, fives = period.denominator, 0, 0
+    while d % 2 == 0:
+        d, twos = d // 2, twos + 1
+    while d % 5 == 0:
+        d, fives = d // 5, fives + 1
+    if d != 1:
+        return str(period)
+    places = max(twos, fives)
+    digits = str(abs(period.numerator) * 10 ** places // period.denominator).rjust(places + 1, "0")
+    text = digits if places == 0 else f"{digits[:-places]}.{digits[-places:]}"
+    return ("-" if period < 0 else "") + text
+
+
 def _data(A: Matrix, B: Matrix, K: Matrix, period: Fraction) -> dict[str, Any]:
     def text(rows: Matrix) -> list[list[str]]:
         return [[str(x) for x in row] for row in rows]
@@ -165,21 +182,22 @@ def decide(A: Matrix, B: Matrix, K: Matrix, period: Fraction) -> ConditionResult
             break
         bits *= 2
     data = {**_data(A, B, K, period), "precision_bits": bits, "routh_first_column": [str(c) for c in column]}
+    at = seconds_text(period)
     if changes == 0:
         return ConditionResult(
             "linearization", "certified",
-            f"the sampled-data loop (zero-order hold, period {period} s) is locally exponentially stable: every "
+            f"the sampled-data loop (zero-order hold, period {at} s) is locally exponentially stable: every "
             "eigenvalue of its Jacobian over one period, exp(A T) + Gamma(T) B K, has modulus < 1 (Cayley transform "
             "and Routh's array in ball arithmetic, rigorous)", numbers=numbers, certificate=data)
     if changes is not None:
         return ConditionResult(
             "linearization", "refuted",
-            f"the sampled-data loop (zero-order hold, period {period} s) is unstable: its Jacobian over one period "
+            f"the sampled-data loop (zero-order hold, period {at} s) is unstable: its Jacobian over one period "
             f"has {changes} eigenvalue(s) of modulus > 1 (Cayley transform and Routh's array in ball arithmetic, "
             "rigorous)", numbers=numbers, refutation=data)
     return ConditionResult(
         "linearization", "inconclusive",
-        f"at period {period} s the Jacobian over one period could not be placed inside or outside the unit circle "
+        f"at period {at} s the Jacobian over one period could not be placed inside or outside the unit circle "
         f"at {MAX_PRECISION_BITS} bits (an eigenvalue on or near the unit circle: a critical period); try a "
         "slightly different period", numbers={**numbers, "reason": "critical"})
 
@@ -205,5 +223,35 @@ def verify(A: Matrix, B: Matrix, K: Matrix, period: Fraction, status: str, data:
     return False, f"status {status!r} is not checked"
 
 
-__all__ = ["FIRST_PRECISION_BITS", "MAX_PRECISION_BITS", "METHOD", "cayley_routh_column", "decide",
+def linear_parts(model: "SampledModel") -> tuple[list[list[Fraction]], list[list[Fraction]], list[list[Fraction]]] | str:
+    """``A = df/dx``, ``B = df/du`` and ``K = dk/dx`` at the equilibrium, exactly, or why there are
+    none (a function of the plant not differentiable there, an irrational entry)."""
+    from lyapcheck.models.language.modelfile import Model
+
+    n, m = model.n, len(model.controls)
+    if isinstance(model.plant, Model):
+        from lyapcheck.models.classes.linearization import jacobian
+        from lyapcheck.models.loop.field import shifted_field
+
+        J: Any = jacobian(shifted_field(model.plant))
+    else:
+        from lyapcheck.models.classes.recast_classes import base_loop
+        from lyapcheck.models.classes.recast_classes import jacobian as true_jacobian
+
+        J = true_jacobian(base_loop(model.plant.system))
+        if isinstance(J, str):
+            return J
+    ring = Ring(model.states)
+    point = list(model.equilibrium)
+    K = []
+    for u in model.controls:
+        law = model.controller[u]
+        d0 = ring.evaluate(law.denominator, point)
+        n0 = ring.evaluate(law.numerator, point)
+        K.append([(ring.evaluate(law.numerator.derivative(j), point) * d0
+                   - n0 * ring.evaluate(law.denominator.derivative(j), point)) / (d0 * d0) for j in range(n)])
+    return [row[:n] for row in J[:n]], [row[n:n + m] for row in J[:n]], K
+
+
+__all__ = ["linear_parts", "FIRST_PRECISION_BITS", "MAX_PRECISION_BITS", "METHOD", "cayley_routh_column", "decide",
            "sampled_jacobian", "verify"]

@@ -52,11 +52,20 @@ MAX_DISTURBANCES: Final = 6
 MAX_FILE_BYTES: Final = 256 * 1024
 
 SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibrium", "outputs", "domain", "sets",
-                    "units")
+                    "units", "sampling", "controller")
 MODEL_KEYS: Final = ("name", "states", "source", "time")
 #: the values of ``[model] time``: a file says which time its [dynamics] are in, and a value lyapcheck
 #: does not take is refused, so that a file never means another system than its author wrote
 TIME_KINDS: Final = ("continuous",)
+#: what a sampled-data file ([sampling], [controller]) can be given to: the readers of continuous loops refuse it
+SAMPLED_TAKEN_BY: Final = ("a sampled-data loop (a continuous plant under a digital controller with a zero-order "
+                           "hold) is taken by 'certify' and 'verify' (and lyapcheck.api's certify and verify), which "
+                           "decide its linearization over one sampling period; this command does not take it yet")
+
+
+def is_sampled(data: Mapping[str, Any]) -> bool:
+    """Whether a model file's TOML tables make it a sampled-data loop (:mod:`lyapcheck.models.language.sampling`)."""
+    return "sampling" in data or "controller" in data
 
 
 @dataclass(frozen=True)
@@ -171,19 +180,50 @@ def parse_model(text: str, source: str = "<model>", overrides: Mapping[str, obje
 
 
 def parse_any_model(text: str, source: str = "<model>", overrides: Mapping[str, object] | None = None,
-                    candidate: str | None = None) -> "Model | RecastModel":
+                    candidate: str | None = None, tables: Mapping[str, Any] | None = None) -> "Model | RecastModel":
     """A model file's text: a :class:`Model` (polynomial or rational loop) or, when its
     ``[dynamics]`` use functions or pi, a :class:`~lyapcheck.models.language.recast.RecastModel` (with a
-    ``candidate`` V recast along, whose functions may be new ones)."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise _error(source, "file", f"is not valid TOML ({exc})") from None
+    ``candidate`` V recast along, whose functions may be new ones). ``tables``, when given, are read
+    instead of the text's own (a sampled-data file's plant, :mod:`lyapcheck.models.language.sampling`);
+    the text stays the model's, for its SHA-256."""
+    if tables is not None:
+        data = dict(tables)
+    else:
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise _error(source, "file", f"is not valid TOML ({exc})") from None
     reader = _Reader(source, text, data, dict(overrides or {}))
     dynamics = data.get("dynamics")
     if isinstance(dynamics, dict) and uses_functions(list(dynamics.values())):
         return reader.recast_model(candidate)
     return reader.model()
+
+
+def read_laws(text: str, source: str, tables: Mapping[str, Any], overrides: Mapping[str, object] | None,
+              section: str, laws: Mapping[str, object]) -> tuple[dict[str, Fraction], tuple[Fraction, ...],
+                                                                 dict[str, Rational]]:
+    """A sampled-data file's parameters (with ``overrides``), its equilibrium and its ``[section]``
+    laws (each polynomial or rational in the states and parameters, returned with the parameters set,
+    in ``Ring(states)``), read from ``tables`` (the file's, without its plant) with the model
+    reader's one-line errors."""
+    reader = _Reader(source, text, dict(tables), dict(overrides or {}))
+    _, _, states = reader.head()
+    params, _ = reader.quantities("parameters", MAX_PARAMETERS)
+    reader.check_unique(states, params, {})
+    params, _, _ = reader.apply_overrides(params, {}, {})
+    ring = Ring(states + tuple(params))
+    state_ring = Ring(states)
+    out = {}
+    for name, law in laws.items():
+        reader.check_name(f"[{section}] {name}", name)
+        expr = reader.expression(f"[{section}] {name}", law, ring)
+        num = ring.restrict(ring.substitute(expr.numerator, params), state_ring)
+        den = ring.restrict(ring.substitute(expr.denominator, params), state_ring)
+        if den.is_zero():
+            raise reader.fail(f"[{section}] {name}", "division by zero with the parameters' values")
+        out[name] = Rational(state_ring, num, den).normalized()
+    return params, reader.equilibrium(states, ring), out
 
 
 def file_uses_functions(path: str | Path) -> bool:
@@ -229,6 +269,8 @@ class _Reader:
         unknown = [k for k in self.data if k not in SECTIONS]
         if unknown:
             raise self.fail(f"[{unknown[0]}]", f"unknown section (sections: {', '.join(SECTIONS)})")
+        if is_sampled(self.data):  # another system than a continuous loop: only its own reader takes it
+            raise self.fail("[sampling]" if "sampling" in self.data else "[controller]", SAMPLED_TAKEN_BY)
         head = self.table("model")
         if "model" not in self.data:
             raise self.fail("[model]", "missing (it declares the states)")

@@ -107,6 +107,10 @@ def verify_document(doc: dict[str, Any]) -> list[Row]:
         raise InputFileError(f"model certificate has schema_version {doc.get('schema_version')!r}; this lyapcheck "
                              f"reads {SCHEMA_VERSION}")
     try:
+        if isinstance(doc.get("sampling"), dict):  # a sampled-data loop (lyapcheck.models.surfaces.sampled_run)
+            from lyapcheck.models.surfaces.sampled_run import verify_sampled
+
+            return verify_sampled(doc)
         model, rows = _read_model(doc)
         if model is None:
             return rows

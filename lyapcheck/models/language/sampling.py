@@ -1,0 +1,213 @@
+"""Sampled-data loops in model files: ``[sampling]`` and ``[controller]`` (issue 44, item 2;
+DESIGN.md, "Sampled data").
+
+A sampled-data model file is a continuous plant whose ``[dynamics]`` use the names of
+``[controller]``; each controller name is computed from the states at every sampling instant and
+held (zero-order hold) until the next::
+
+    [sampling]
+    period = "20 ms"            # a time, or the name of a [parameters] entry that is one
+
+    [controller]
+    u = "-Kp*theta - Kd*omega"  # polynomial or rational in the states and parameters
+
+Written as a parameter's name (``period = "T"`` with ``T = "20 ms"`` in ``[parameters]``), the period
+takes ``--set T=...``, ``certify --maximize T=a..b`` and everything else a parameter takes.
+
+Such a file is not a continuous loop (reading ``u`` as ``k(x(t))`` would be another system, the
+"emulation"), so :class:`~lyapcheck.models.language.modelfile.Model`'s readers refuse it by name, and
+only :func:`parse_sampled` reads it, into a :class:`SampledModel`. The plant is read as a continuous
+loop over the states and the controller names (each a constant state, ``u' = 0``, at its value at the
+equilibrium), by the same reader as any model (so the plant may use functions, recast as usual), which
+gives ``[[A, B], [0, 0]]`` exactly (:func:`lyapcheck.models.classes.sampled.linear_parts`); the
+controller's gain ``K`` is differentiated exactly.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Final, Mapping
+
+from lyapcheck.errors import InvalidParameter, ModelFileError
+from lyapcheck.models.language.expressions import Rational, uses_functions
+from lyapcheck.models.language.modelfile import is_sampled
+from lyapcheck.sos.polynomials import Ring
+
+if TYPE_CHECKING:
+    from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.language.recast import RecastModel
+
+#: the sections a sampled-data model file may have; the others ([disturbances], [outputs], [domain],
+#: [sets], [units]) ask questions the sampled route does not answer yet, and are refused rather than ignored
+SAMPLED_SECTIONS: Final = ("model", "parameters", "dynamics", "equilibrium", "sampling", "controller")
+#: the most controller names
+MAX_CONTROLS: Final = 6
+def file_is_sampled(path: object) -> bool:
+    """Whether the file is a sampled-data model file (False when it cannot be read: the reader says why)."""
+    if not isinstance(path, (str, Path)):
+        return False
+    try:
+        return is_sampled(tomllib.loads(Path(path).read_bytes().decode("utf-8")))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, RecursionError):
+        return False
+
+
+@dataclass(frozen=True)
+class SampledModel:
+    """A validated sampled-data model file.
+
+    ``plant`` is the continuous loop over the states and then the controller names (each constant,
+    at its equilibrium value ``control_equilibrium``), with the parameters set; ``controller`` maps each
+    controller name to its law, exact, in ``Ring(states)``; ``period`` is in seconds."""
+
+    source: str
+    text: str
+    name: str
+    states: tuple[str, ...]
+    controls: tuple[str, ...]
+    parameters: dict[str, Fraction]
+    equilibrium: tuple[Fraction, ...]
+    control_equilibrium: tuple[Fraction, ...]
+    period: Fraction
+    period_text: str
+    controller_text: dict[str, str]
+    controller: dict[str, Rational]
+    plant: "Model | RecastModel"
+    overrides: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def sha256(self) -> str:
+        import hashlib
+
+        return hashlib.sha256(self.text.encode()).hexdigest()
+
+    @property
+    def n(self) -> int:
+        return len(self.states)
+
+    def to_json(self) -> dict[str, Any]:
+        """The document's ``sampling`` table."""
+        return {"period": str(self.period), "period_given": self.period_text, "controller": dict(self.controller_text),
+                "control_equilibrium": {u: str(v) for u, v in zip(self.controls, self.control_equilibrium)}}
+
+
+def _error(source: str, key: str, message: str) -> ModelFileError:
+    return ModelFileError(source, key, message)
+
+
+def load_sampled(path: str | Path, overrides: Mapping[str, object] | None = None) -> SampledModel:
+    """Read a sampled-data model file (one-line errors as :func:`~lyapcheck.models.language.modelfile.load_model`)."""
+    from lyapcheck.models.language.modelfile import MAX_FILE_BYTES
+
+    source = str(path)
+    p = Path(path)
+    try:
+        if p.stat().st_size > MAX_FILE_BYTES:
+            raise _error(source, "file", f"is {p.stat().st_size} bytes; the limit is {MAX_FILE_BYTES} (MAX_FILE_BYTES)")
+        text = p.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise _error(source, "file", "does not exist") from None
+    except UnicodeDecodeError:
+        raise _error(source, "file", "is not UTF-8 text") from None
+    except OSError as exc:
+        raise _error(source, "file", f"cannot be read ({exc.strerror or exc})") from None
+    return parse_sampled(text, source, overrides)
+
+
+def parse_sampled(text: str, source: str = "<model>", overrides: Mapping[str, object] | None = None) -> SampledModel:
+    """A sampled-data model file's text, validated (module docstring)."""
+    from lyapcheck.models.language.modelfile import parse_any_model, read_laws
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise _error(source, "file", f"is not valid TOML ({exc})") from None
+    extra = [k for k in data if k not in SAMPLED_SECTIONS]
+    if extra:
+        raise _error(source, f"[{extra[0]}]", f"is not taken with [sampling] yet (a sampled-data loop may have: "
+                                              f"{', '.join(SAMPLED_SECTIONS)})")
+    for name in ("sampling", "controller"):
+        if not isinstance(data.get(name), dict):
+            raise _error(source, f"[{name}]", "a sampled-data loop needs both [sampling] (its period) and "
+                                              "[controller] (the law held between samples)")
+    head = data.get("model")
+    states = head.get("states") if isinstance(head, dict) else None
+    if not isinstance(states, list) or not states or not all(isinstance(s, str) for s in states):
+        raise _error(source, "[model] states", f"must be a non-empty list of names, got {states!r}")
+    if isinstance(head, dict) and head.get("time", "continuous") != "continuous":
+        raise _error(source, "[model] time", f"a sampled-data loop's plant is continuous (\"continuous\"); got "
+                                             f"{head.get('time')!r}")
+    controls = tuple(data["controller"])
+    if not controls or len(controls) > MAX_CONTROLS:
+        raise _error(source, "[controller]", f"must name 1 to {MAX_CONTROLS} controls; got {len(controls)}")
+    for u in controls:
+        if u in states or u in data.get("parameters", {}):
+            raise _error(source, f"[controller] {u}", f"the name '{u}' is declared twice (also a "
+                                                      f"{'state' if u in states else 'parameter'})")
+    laws = {u: data["controller"][u] for u in controls}
+    for u, law in laws.items():
+        if not isinstance(law, (str, int, float)) or isinstance(law, bool):
+            raise _error(source, f"[controller] {u}", f"must be an expression in a string, got {law!r}")
+    if uses_functions([str(v) for v in laws.values()]):
+        raise _error(source, "[controller]", "a controller law with functions (sin, sat, ...) is not taken yet: "
+                                             "write it polynomial or rational in the states")
+    plain = {k: v for k, v in data.items() if k not in ("sampling", "controller")}
+    params, x_eq, controller = read_laws(text, source, plain, overrides, "controller", laws)
+    period, period_text = _period(source, data["sampling"], params)
+    ring = Ring(tuple(states))
+    u_eq = []
+    for u, law in controller.items():
+        den = ring.evaluate(law.denominator, list(x_eq))
+        if den == 0:
+            raise _error(source, f"[controller] {u}", "its denominator is 0 at the equilibrium")
+        u_eq.append(ring.evaluate(law.numerator, list(x_eq)) / den)
+    plant = parse_any_model(text, source, overrides, tables=_plant_view(data, controls, tuple(u_eq)))
+    return SampledModel(source=source, text=text, name=str(head.get("name", Path(source).stem)) if isinstance(head, dict)
+                        else Path(source).stem, states=tuple(states), controls=controls, parameters=params,
+                        equilibrium=x_eq, control_equilibrium=tuple(u_eq), period=period, period_text=period_text,
+                        controller_text={u: str(v) for u, v in laws.items()}, controller=controller, plant=plant,
+                        overrides={k: str(v) for k, v in (overrides or {}).items()})
+
+
+def _plant_view(data: Mapping[str, Any], controls: tuple[str, ...], u_eq: tuple[Fraction, ...]) -> dict[str, Any]:
+    """The file's tables as a continuous loop over the states and the controls, each control a
+    constant state (``u' = 0``) at its equilibrium value: its Jacobian is ``[[A, B], [0, 0]]``."""
+    states = list(data["model"]["states"])
+    return {**{k: v for k, v in data.items() if k not in ("sampling", "controller")},
+            "model": {**data["model"], "states": states + list(controls)},
+            "dynamics": {**data["dynamics"], **{u: "0" for u in controls}},
+            "equilibrium": {**data.get("equilibrium", {}), **dict(zip(controls, u_eq))}}
+
+
+def _period(source: str, table: Mapping[str, Any], params: Mapping[str, Fraction]) -> tuple[Fraction, str]:
+    """``[sampling] period``: a time (``"20 ms"``; a bare number is seconds) or a parameter's name; > 0."""
+    from lyapcheck.units import parse_si_with_dimension
+
+    unknown = [k for k in table if k != "period"]
+    if unknown:
+        raise _error(source, f"[sampling] {unknown[0]}", "unknown key (keys: period)")
+    if "period" not in table:
+        raise _error(source, "[sampling] period", "missing (the sampling period, e.g. \"20 ms\")")
+    raw = table["period"]
+    if isinstance(raw, str) and raw.strip() in params:
+        value = params[raw.strip()]
+    else:
+        try:
+            quantity = parse_si_with_dimension("period", raw)
+        except InvalidParameter as exc:
+            raise _error(source, "[sampling] period", f"must be a time such as \"20 ms\" or a parameter's name "
+                                                      f"({exc.expected}); got {raw!r}") from None
+        if quantity.unit and str(quantity.dimension) != "[time]":
+            raise _error(source, "[sampling] period", f"must be a time (s, ms, ...), got {raw!r} "
+                                                      f"(dimension {quantity.dimension})")
+        value = quantity.value
+    if not value > 0:
+        raise _error(source, "[sampling] period", f"must be > 0 seconds, got {raw!r}")
+    return value, str(raw)
+
+
+__all__ = ["MAX_CONTROLS", "SAMPLED_SECTIONS", "SampledModel", "file_is_sampled", "is_sampled",
+           "load_sampled", "parse_sampled"]

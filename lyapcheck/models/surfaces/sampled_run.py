@@ -1,0 +1,143 @@
+"""``certify`` and ``verify`` of a sampled-data model file (issue 44, item 2).
+
+A sampled-data loop is decided by its linearization over one sampling period
+(:mod:`lyapcheck.models.classes.sampled`). The other classes state conditions on a continuous field
+or a map that this loop does not have in closed form (the flow over one period); each is
+``not_applicable``, saying so, rather than answered for the emulated continuous loop, which is
+another system.
+
+The document has the keys of every model certificate (:func:`lyapcheck.models.surfaces.certificate.build_document`)
+with a ``sampling`` table in place of ``field``/``recast``: the period (exact seconds, and as given),
+the controller's laws as written and the controls' values at the equilibrium. ``verify`` reads the
+model text again, re-derives ``A``, ``B``, ``K`` and the period from it, re-runs the decision
+(milliseconds) and compares each condition with the document's, then the verdict and the answers.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from typing import Any, Sequence
+
+from lyapcheck.models.classes import sampled
+from lyapcheck.models.classes.registry import NAMES
+from lyapcheck.models.language.sampling import SampledModel
+from lyapcheck.results import ConditionResult
+
+Row = tuple[str, bool, str]
+
+#: the classes a sampled-data loop gets by default: its linearization, and a line for each Lyapunov
+#: class saying why it is not decided (so the user sees what was not asked of the loop)
+DEFAULT_CLASSES = ("linearization", "quadratic", "sos_gas", "roa")
+
+
+def _not_yet(name: str) -> ConditionResult:
+    return ConditionResult(name, "not_applicable",
+                           f"{name} is not decided for sampled-data loops yet: the loop's flow over one period has no "
+                           "closed form to prove it on; its linearization over one period is decided (linearization)")
+
+
+def run_linearization(model: SampledModel) -> ConditionResult:
+    """The sampled-data linearization at the model's period, or why it cannot be formed."""
+    parts = sampled.linear_parts(model)
+    if isinstance(parts, str):
+        return ConditionResult("linearization", "inconclusive",
+                               f"the plant's Jacobian at the equilibrium cannot be formed exactly: {parts}")
+    A, B, K = parts
+    return sampled.decide(A, B, K, model.period)
+
+
+def certify_sampled(model: SampledModel, classes: str | Sequence[str] | None = None) -> dict[str, ConditionResult]:
+    """The conditions of a sampled-data loop, by name, in the classes' order: ``classes`` as
+    ``certify`` takes them (None or ``"all"``: :data:`DEFAULT_CLASSES`)."""
+    from lyapcheck.errors import InvalidParameter
+
+    if classes is None or classes == "all":
+        chosen: Sequence[str] = DEFAULT_CLASSES
+    else:
+        chosen = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes) if c and c.strip()]
+        unknown = [c for c in chosen if c not in NAMES]
+        if not chosen or unknown:
+            raise InvalidParameter("classes", "names among " + ", ".join(NAMES), ",".join(unknown) or str(classes))
+    return {name: (run_linearization(model) if name == "linearization" else _not_yet(name))
+            for name in NAMES if name in chosen}
+
+
+def build_sampled_document(model: SampledModel, results: dict[str, ConditionResult]) -> dict[str, Any]:
+    """The certificate document (module docstring)."""
+    from lyapcheck.answers import answers_of, verdict_of
+    from lyapcheck.models.surfaces.documents import KIND, SCHEMA_VERSION
+    from lyapcheck.numerics import package_versions
+
+    conditions = {name: r.to_json() for name, r in results.items()}
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "kind": KIND,
+        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text},
+        "overrides": dict(model.overrides),
+        "candidate": None,
+        "states": list(model.states),
+        "equilibrium": {s: str(v) for s, v in zip(model.states, model.equilibrium)},
+        "parameters": {k: str(v) for k, v in model.parameters.items()},
+        "disturbances": {},
+        "sampling": model.to_json(),
+        "conditions": conditions,
+        "answers": answers_of(conditions),
+        "verdict": verdict_of(conditions),
+        "versions": package_versions(),
+    }
+
+
+def is_sampled_document(doc: dict[str, Any]) -> bool:
+    return isinstance(doc.get("sampling"), dict)
+
+
+def verify_sampled(doc: dict[str, Any]) -> list[Row]:
+    """Re-check a sampled-data loop's document (module docstring); (check, ok, message) rows."""
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.language.sampling import parse_sampled
+    from lyapcheck.models.surfaces.documents import with_verdict
+    from lyapcheck.models.surfaces.stated import check_declared
+
+    part = doc["model"]
+    text = part["text"]
+    if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
+        return [("model", False, "the model text does not match its SHA-256: the text was changed")]
+    try:
+        model = parse_sampled(text, part.get("file", "<certificate>"), doc.get("overrides") or {})
+    except ModelFileError as exc:
+        return [("model", False, f"the stored model text no longer parses as a sampled-data loop: {exc}")]
+    rows: list[Row] = [("model", True, "the model text matches its SHA-256 and parses as a sampled-data loop")]
+    same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
+            and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"]
+            and doc.get("disturbances") == {} and doc.get("candidate") is None)
+    rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
+                 "the stated parameters, equilibrium, disturbances or candidate differ from the model text's"))
+    rows.append(check_declared(doc, model))
+    stated_sampling = doc["sampling"] == model.to_json()
+    rows.append(("sampling", stated_sampling, "the period, the controller and its equilibrium values as stated"
+                 if stated_sampling else "sampling: the stated period or controller differs from the model text's"))
+    conditions: dict[str, Any] = doc["conditions"]
+    if not isinstance(conditions, dict) or any(name not in NAMES for name in conditions):
+        rows.append(("conditions", False, "the conditions must be named by classes"))
+        return rows
+    derived = certify_sampled(model, list(conditions))
+    for name, stated in conditions.items():
+        again = derived[name].to_json()
+        estimate = "spectral_radius_estimate"  # floating point, claims nothing: left as stated
+        same_claim = {k: v for k, v in stated.items() if k != estimate} == {k: v for k, v in again.items()
+                                                                              if k != estimate}
+        ok, why = same_claim, "re-derived from the model text: the same answer, summary and data"
+        if same_claim and stated.get("status") in ("certified", "refuted"):
+            parts = sampled.linear_parts(model)
+            data = stated.get("certificate") if stated["status"] == "certified" else stated.get("refutation")
+            ok, why = (False, "no exact Jacobian") if isinstance(parts, str) else \
+                sampled.verify(*parts, model.period, stated["status"], data or {})
+        elif not same_claim:
+            why = (f"stated '{stated.get('status')}' ({str(stated.get('summary'))[:80]}...) but the model gives "
+                   f"'{again['status']}' with other data or figures")
+        rows.append((name, ok, why if ok else f"{name}: {why}"))
+    return with_verdict(doc, rows)
+
+
+__all__ = ["DEFAULT_CLASSES", "build_sampled_document", "certify_sampled", "is_sampled_document", "run_linearization",
+           "verify_sampled"]
