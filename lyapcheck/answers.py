@@ -93,6 +93,10 @@ def _stability(conditions: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
         point = (conditions[unstable[0]].get("refutation") or {}).get("point")
         where = (" at " + ", ".join(f"{k} = {float(Fraction(v)):.6g}" for k, v in point.items())
                  + ", a value of the box,") if isinstance(point, dict) and point else ""
+        if (conditions[unstable[0]].get("refutation") or {}).get("time") == "discrete":  # a map's
+            return {"answer": "unstable", "by": unstable[0],
+                    "text": "UNSTABLE: the map's Jacobian at the fixed point has an eigenvalue of modulus > 1 (proved "
+                            "exactly)"}
         return {"answer": "unstable", "by": unstable[0],
                 "text": f"UNSTABLE:{where} the Jacobian at the equilibrium has an eigenvalue with positive real part "
                         "(proved exactly)"}
