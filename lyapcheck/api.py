@@ -678,10 +678,12 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
              model: "str | Path | Model | None" = None, settings: Mapping[str, object] | Sequence[str] | None = None,
              x0: Any = (), grid: int | None = None, t_end: str | float | None = None,
              scenarios: Sequence[str] | None = None, frequencies: str | None = None,
-             certificate: str | Path | None = None, series: bool = True) -> SimulationReport:
+             certificate: str | Path | None = None, series: bool = True, steps: int | str | None = None
+             ) -> SimulationReport:
     """Simulate the saturated ILOS/ODS closed loop (a scenario TOML or one of the paper's presets),
     or any closed loop from a model file (``model=``; its arguments ``settings``, ``x0``, ``grid``,
-    ``t_end``, ``scenarios``, ``frequencies`` and ``certificate`` are :func:`simulate_model_file`'s).
+    ``t_end``, ``scenarios``, ``frequencies``, ``certificate`` and, for a discrete-time map, ``steps`` are
+    :func:`simulate_model_file`'s).
 
     Parameters
     ----------
@@ -711,9 +713,9 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
                                    str(scenario if scenario is not None else preset))
         return simulate_model_file(model, settings=settings, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios,
                                    frequencies=frequencies, worst_case=worst_case, budget_s=budget_s,
-                                   certificate=certificate, plot=plot, series=series)
+                                   certificate=certificate, plot=plot, series=series, steps=steps)
     model_only = {"settings": settings, "x0": x0, "grid": grid, "t_end": t_end, "scenarios": scenarios,
-                  "frequencies": frequencies, "certificate": certificate}
+                  "frequencies": frequencies, "certificate": certificate, "steps": steps}
     given = [k for k, v in model_only.items() if v is not None and not (isinstance(v, (list, tuple)) and not v)]
     if given:
         raise InvalidParameter(given[0], "used with a model file (model=...; the paper's loop takes a scenario or a "

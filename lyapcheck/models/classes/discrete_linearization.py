@@ -194,9 +194,13 @@ def is_discrete_certificate(data: Any) -> bool:
 
 def verify(shifted: ShiftedField, status: str, data: dict[str, Any]) -> tuple[bool, str]:
     """Re-check a map's ``linearization`` certificate or refutation exactly against the shifted map."""
+    return verify_matrix(jacobian(shifted), status, data)
+
+
+def verify_matrix(A: Matrix, status: str, data: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a map's ``linearization`` certificate or refutation of the exact Jacobian ``A``."""
     if not is_discrete_certificate(data):
         return False, 'the certificate is not a discrete-time one ("time": "discrete"), and the model is a map'
-    A = jacobian(shifted)
     if data.get("jacobian") != [[str(x) for x in row] for row in A]:
         return False, "the stored Jacobian differs from the map's"
     method = data.get("method")
@@ -237,5 +241,5 @@ def sentence(status: str, data: dict[str, Any]) -> str:
     raise ValueError(f"unknown discrete-time linearization method {method!r} for status {status!r}")
 
 
-__all__ = ["stein_solution", "stein_residual_ok", "cayley", "run", "decide", "verify", "sentence",
+__all__ = ["stein_solution", "stein_residual_ok", "cayley", "run", "decide", "verify", "verify_matrix", "sentence",
            "is_discrete_certificate", "TIME_KEY", "TIME_VALUE"]
