@@ -823,9 +823,10 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     # a loop with functions is simulated on its true loop by the same machinery (sim.prepare's constructors)
     recast = _recast_model(model, settings, None)
     loaded = recast if recast is not None else _load_with_settings(model, settings)
+    from lyapcheck.models.language.modelfile import Model as FileModel
     from lyapcheck.models.loop.discrete import is_discrete
 
-    if is_discrete(loaded):  # a map is iterated, never integrated as a field
+    if is_discrete(loaded) and isinstance(loaded, FileModel):  # a map is iterated, never integrated as a field
         return _iterate_map(loaded, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios, frequencies=frequencies,
                             worst_case=worst_case, certificate=certificate, plot=plot, series=series, steps=steps)
     if steps is not None:
@@ -869,7 +870,7 @@ def _iterate_map(model: "Model", *, x0: Any, grid: int | None, t_end: object, sc
                                  ("frequencies (--frequencies)", frequencies is not None, held),
                                  ("worst_case (--worst-case)", worst_case, held),
                                  ("certificate (--certificate)", certificate is not None, held),
-                                 ("scenarios (--scenario)", bool(scenarios) and list(scenarios) != ["none"],
+                                 ("scenarios (--scenario)", bool(scenarios) and list(scenarios or ()) != ["none"],
                                   held + " (scenario none)")):
         if given:
             refuse(model, name, instead)

@@ -25,7 +25,7 @@ from lyapcheck.cli import app
 from lyapcheck.errors import LyapcheckError, ModelFileError
 from lyapcheck.models.classes import discrete_linearization as dl
 from lyapcheck.models.classes.registry import CLASSES, DISCRETE
-from lyapcheck.models.language.modelfile import parse_model
+from lyapcheck.models.language.modelfile import Model, parse_model
 
 app._register_commands()
 
@@ -123,7 +123,7 @@ def test_from_sympy_keeps_the_time_and_its_text_round_trips() -> None:
 
     x, y = sp.symbols("x y")
     model = from_sympy([x, y], [x / 2 + y ** 2 / 10, -3 * x / 10 + 3 * y / 5], time="discrete")
-    assert model.time == "discrete" and parse_model(model.to_toml()).time == "discrete"
+    assert isinstance(model, Model) and model.time == "discrete" and parse_model(model.to_toml()).time == "discrete"
     assert from_sympy([x], [-x]).to_toml().count("time") == 0  # a field's text is as before
     with pytest.raises(LyapcheckError, match="time"):
         from_sympy([x], [-x], time="sampled")

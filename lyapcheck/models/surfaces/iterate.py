@@ -16,6 +16,7 @@ iterates in the plane as dots.
 from __future__ import annotations
 
 import time
+from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Final, Sequence
 
 import numpy as np
@@ -124,7 +125,7 @@ def default_starts(model: Model) -> "tuple[FloatArray, str]":
             f"the fixed point and x_eq +- {NEAR_START_FRACTION:g} x the state scale along each state (no [domain])")
 
 
-def run_map(model: Model, starts: "FloatArray", how: str, *, steps: int | None = None, plot: str | None = None,
+def run_map(model: Model, starts: "FloatArray", how: str, *, steps: int | str | None = None, plot: str | None = None,
             series: bool = False) -> ModelRun:
     """Iterate the map from each start (see the module docstring); the document and, with ``series``, the
     iterates as an :class:`xarray.Dataset` over ``step``."""
@@ -140,10 +141,10 @@ def run_map(model: Model, starts: "FloatArray", how: str, *, steps: int | None =
     out_polys = CompiledPolys(Ring(model.states), [_without_disturbances(model, y) for y in names])
     flat = xs.reshape(-1, model.n)
     finite = np.all(np.isfinite(flat), axis=1)
-    ys = np.full((flat.shape[0], len(names)), np.nan)
+    values = np.full((flat.shape[0], len(names)), np.nan)
     if finite.any():
-        ys[finite] = out_polys(flat[finite])
-    ys = ys.reshape(xs.shape[0], count + 1, len(names))
+        values[finite] = out_polys(flat[finite])
+    ys = values.reshape(xs.shape[0], count + 1, len(names))
     y_eq = out_polys(eq[None, :])[0]
     first_tail = int(np.floor((1 - TAIL_FRACTION) * count))
     final = xs[:, -1]
@@ -208,7 +209,7 @@ def _without_disturbances(model: Model, name: str) -> Any:
     """An output as a polynomial of the states alone (outputs never depend on a disturbance)."""
     full = model.state_ring
     y = _output_poly(model, name)
-    return full.restrict(full.substitute(y, {d: 0 for d in model.disturbances}), Ring(model.states))
+    return full.restrict(full.substitute(y, {d: Fraction(0) for d in model.disturbances}), Ring(model.states))
 
 
 def _dataset(model: Model, xs: "FloatArray", ys: "FloatArray", names: Sequence[str], converged: "FloatArray",
