@@ -25,6 +25,7 @@ from lyapcheck.cli import app
 from lyapcheck.errors import LyapcheckError, ModelFileError
 from lyapcheck.models.classes import discrete_linearization as dl
 from lyapcheck.models.classes.registry import CLASSES, DISCRETE
+from lyapcheck.models.language.build import Model as BuiltModel
 from lyapcheck.models.language.modelfile import Model, parse_model
 
 app._register_commands()
@@ -127,6 +128,23 @@ def test_from_sympy_keeps_the_time_and_its_text_round_trips() -> None:
     assert from_sympy([x], [-x]).to_toml().count("time") == 0  # a field's text is as before
     with pytest.raises(LyapcheckError, match="time"):
         from_sympy([x], [-x], time="sampled")
+
+
+def test_a_discrete_time_state_space_closed_with_a_gain_is_a_map() -> None:
+    """x+ = (A - B K) x with A = [[1, 0.1], [0, 1]], B = [[0], [0.1]], K = [[2, 3]]: eigenvalues of modulus < 1."""
+    control = pytest.importorskip("control")
+    from lyapcheck.models.surfaces.certify import certify_model
+
+    system = control.ss([[1, 0.1], [0, 1]], [[0], [0.1]], [[1, 0]], [[0]], dt=0.1)
+    model = BuiltModel.from_control(system, [[2, 3]])
+    assert isinstance(model, Model) and model.time == "discrete"
+    A: list[list[Any]] = [[1, Fraction(1, 10)], [Fraction(-2, 10), Fraction(7, 10)]]
+    assert certify_model(model, classes="linearization").results["linearization"].certificate["jacobian"] == \
+        [[str(x) for x in row] for row in F(A)]
+    assert max(abs(np.linalg.eigvals(np.array(A, dtype=float)))) < 1
+    assert certify_model(model, classes="linearization").results["linearization"].status == "certified"
+    with pytest.raises(LyapcheckError, match="time"):
+        BuiltModel.from_control(system, [[2, 3]], time="continuous")
 
 
 # -- the linearization, exact -----------------------------------------------------------------------

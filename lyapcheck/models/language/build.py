@@ -614,13 +614,15 @@ def from_control(system: object, gain: object, *, equilibrium: Sequence[object] 
     """A python-control ``StateSpace`` ``x' = A x + B u`` closed with ``u = -K (x - x_eq)``.
 
     The loop is ``x' = (A - B K)(x - x_eq) + A x_eq``, each entry exact: the matrices' floats are
-    read by their decimal reprs (``0.1`` is ``1/10``), so ``A - B K`` is computed in rationals.
+    read by their decimal reprs (``0.1`` is ``1/10``), so ``A - B K`` is computed in rationals. A
+    discrete-time system (``dt`` set) gives the map ``x+ = (A - B K)(x - x_eq) + A x_eq`` (``[model] time =
+    "discrete"``; its sampling period plays no part in the map).
 
     Parameters
     ----------
     system
-        A continuous-time ``control.StateSpace``. A ``NonlinearIOSystem`` (Python callables, which
-        cannot be read exactly) is refused: give its sympy plant to :func:`close_loop`.
+        A ``control.StateSpace``, continuous-time or discrete-time. A ``NonlinearIOSystem`` (Python
+        callables, which cannot be read exactly) is refused: give its sympy plant to :func:`close_loop`.
     gain
         ``K``, inputs x states (``control.lqr``'s first result).
     equilibrium
@@ -641,9 +643,10 @@ def from_control(system: object, gain: object, *, equilibrium: Sequence[object] 
                                    type(system).__name__)
         raise InvalidParameter("system", "a control.StateSpace (convert a transfer function with control.ss)",
                                type(system).__name__)
-    if system.isdtime(strict=True):
-        raise InvalidParameter("system", "a continuous-time StateSpace (discrete-time maps are not supported yet)",
-                               f"dt = {system.dt}")
+    time = "discrete" if system.isdtime(strict=True) else "continuous"
+    if model.get("time", time) != time:  # the system says which time it is in
+        raise InvalidParameter("time", f'"{time}", the system\'s (dt = {system.dt})', model["time"])
+    model["time"] = time
     n, m = system.nstates, system.ninputs
     A, B, K = _matrix("system.A", system.A, n, n), _matrix("system.B", system.B, n, m), _matrix("gain", gain, m, n)
     if states is None:
