@@ -102,8 +102,12 @@ def _stability(conditions: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
         point = refutation.get("point")
         where = (" at " + ", ".join(f"{k} = {float(Fraction(v)):.6g}" for k, v in point.items())
                  + ", a value of the box,") if isinstance(point, dict) and point else ""
-        why = UNSTABLE_BY_METHOD.get(str(refutation.get("method")), "the Jacobian at the equilibrium has an eigenvalue "
-                                                                     "with positive real part (proved exactly)")
+        if refutation.get("time") == "discrete":  # a map's
+            why = "the map's Jacobian at the fixed point has an eigenvalue of modulus > 1 (proved exactly)"
+        else:
+            why = UNSTABLE_BY_METHOD.get(str(refutation.get("method")), "the Jacobian at the equilibrium has an "
+                                                                         "eigenvalue with positive real part (proved "
+                                                                         "exactly)")
         return {"answer": "unstable", "by": unstable[0], "text": f"UNSTABLE:{where} {why}"}
     best: tuple[tuple[int, int], str, Mapping[str, Any]] | None = None
     for name, c in conditions.items():

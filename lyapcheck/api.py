@@ -705,10 +705,12 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
              model: "str | Path | Model | None" = None, settings: Mapping[str, object] | Sequence[str] | None = None,
              x0: Any = (), grid: int | None = None, t_end: str | float | None = None,
              scenarios: Sequence[str] | None = None, frequencies: str | None = None,
-             certificate: str | Path | None = None, series: bool = True) -> SimulationReport:
+             certificate: str | Path | None = None, series: bool = True, steps: int | str | None = None
+             ) -> SimulationReport:
     """Simulate the saturated ILOS/ODS closed loop (a scenario TOML or one of the paper's presets),
     or any closed loop from a model file (``model=``; its arguments ``settings``, ``x0``, ``grid``,
-    ``t_end``, ``scenarios``, ``frequencies`` and ``certificate`` are :func:`simulate_model_file`'s).
+    ``t_end``, ``scenarios``, ``frequencies``, ``certificate`` and, for a discrete-time map, ``steps`` are
+    :func:`simulate_model_file`'s).
 
     Parameters
     ----------
@@ -738,9 +740,9 @@ def simulate(scenario: str | Path | None = None, *, preset: str | None = None,
                                    str(scenario if scenario is not None else preset))
         return simulate_model_file(model, settings=settings, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios,
                                    frequencies=frequencies, worst_case=worst_case, budget_s=budget_s,
-                                   certificate=certificate, plot=plot, series=series)
+                                   certificate=certificate, plot=plot, series=series, steps=steps)
     model_only = {"settings": settings, "x0": x0, "grid": grid, "t_end": t_end, "scenarios": scenarios,
-                  "frequencies": frequencies, "certificate": certificate}
+                  "frequencies": frequencies, "certificate": certificate, "steps": steps}
     given = [k for k, v in model_only.items() if v is not None and not (isinstance(v, (list, tuple)) and not v)]
     if given:
         raise InvalidParameter(given[0], "used with a model file (model=...; the paper's loop takes a scenario or a "
@@ -792,7 +794,8 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
                         x0: Any = (), grid: int | None = None, t_end: str | float | None = None,
                         scenarios: Sequence[str] | None = None, frequencies: str | None = None,
                         worst_case: bool = False, budget_s: float = 20.0, certificate: str | Path | None = None,
-                        plot: str | Path | None = None, series: bool = True) -> SimulationReport:
+                        plot: str | Path | None = None, series: bool = True, steps: int | str | None = None
+                        ) -> SimulationReport:
     """``lyapcheck simulate --model``: the model's closed loop from its starts under its disturbance
     scenarios, batched (:mod:`lyapcheck.models.surfaces.simulate`; docs/simulation.md has the JSON keys). A
     loop with functions is the same, on its true loop (:func:`~lyapcheck.models.surfaces.simulate.prepare`).
@@ -826,6 +829,11 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     series
         Keep the time series (:attr:`SimulationReport.series`: :mod:`lyapcheck.models.engines.series`);
         a worst-case search keeps none.
+    steps
+        A discrete-time map only (``[model] time = "discrete"``): the number of iterations (default
+        :data:`~lyapcheck.models.surfaces.iterate.DEFAULT_STEPS`); the map is iterated, not integrated
+        (:mod:`lyapcheck.models.surfaces.iterate`), and ``t_end``, ``frequencies``, scenarios other than
+        ``none``, ``worst_case`` and ``certificate`` are refused there.
     """
     import numpy as np
 
@@ -842,6 +850,15 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     # a loop with functions is simulated on its true loop by the same machinery (sim.prepare's constructors)
     recast = _recast_model(model, settings, None)
     loaded = recast if recast is not None else _load_with_settings(model, settings)
+    from lyapcheck.models.language.modelfile import Model as FileModel
+    from lyapcheck.models.loop.discrete import is_discrete
+
+    if is_discrete(loaded) and isinstance(loaded, FileModel):  # a map is iterated, never integrated as a field
+        return _iterate_map(loaded, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios, frequencies=frequencies,
+                            worst_case=worst_case, certificate=certificate, plot=plot, series=series, steps=steps)
+    if steps is not None:
+        raise InvalidParameter("steps", 'used with a discrete-time map ([model] time = "discrete"); a continuous-time '
+                               "loop takes t_end", steps)
     prepared = sim.prepare(loaded)
     starts = model_starts(loaded, x0)  # type: ignore[arg-type]  # (a RecastModel has the states it reads)
     if grid is not None:
@@ -861,6 +878,38 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
         doc, dataset = run.document, run.series
     return SimulationReport(diverged=bool(doc["diverged"] or doc.get("soundness_violation", False)), document=doc,
                             series=dataset)
+
+
+def _iterate_map(model: "Model", *, x0: Any, grid: int | None, t_end: object, scenarios: Sequence[str] | None,
+                 frequencies: object, worst_case: bool, certificate: object, plot: str | Path | None, series: bool,
+                 steps: int | str | None) -> SimulationReport:
+    """:func:`simulate_model_file` on a discrete-time map: its iterates
+    (:func:`lyapcheck.models.surfaces.iterate.run_map`), the disturbances held at 0; what only a field
+    takes is refused in one line naming ``time = "discrete"``."""
+    import numpy as np
+
+    from lyapcheck.models.loop.discrete import refuse
+    from lyapcheck.models.surfaces import iterate
+    from lyapcheck.models.surfaces import simulate as sim
+
+    held = "its disturbances are held at 0"
+    for name, given, instead in (("t_end (--t-end)", t_end is not None, "give the number of iterations (--steps N)"),
+                                 ("frequencies (--frequencies)", frequencies is not None, held),
+                                 ("worst_case (--worst-case)", worst_case, held),
+                                 ("certificate (--certificate)", certificate is not None, held),
+                                 ("scenarios (--scenario)", bool(scenarios) and list(scenarios or ()) != ["none"],
+                                  held + " (scenario none)")):
+        if given:
+            refuse(model, name, instead)
+    starts = model_starts(model, x0)
+    if grid is not None:
+        starts += list(sim.grid_over_domain(model, grid))
+    if starts:
+        start_arr, how = sim._check_starts(model, np.array(starts)), "given"
+    else:
+        start_arr, how = iterate.default_starts(model)
+    run = iterate.run_map(model, start_arr, how, steps=steps, plot=None if plot is None else str(plot), series=series)
+    return SimulationReport(diverged=bool(run.document["diverged"]), document=run.document, series=run.series)
 
 
 @contextlib.contextmanager

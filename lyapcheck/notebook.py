@@ -195,7 +195,8 @@ def series_line(series: Any) -> str:
         return "  series: none (worst-case searches and series=False keep no time series)"
     sizes = dict(series.sizes)
     shape = [f"{sizes['trajectory']} trajectories"] if "trajectory" in sizes else []
-    shape.append(f"{sizes.get('time', 0)} times")
+    # (a discrete-time map's iterates are over steps, not times: lyapcheck.models.surfaces.iterate)
+    shape.append(f"{sizes['step']} steps" if "step" in sizes else f"{sizes.get('time', 0)} times")
     names = ", ".join(str(v) for v in series.data_vars)
     return f"  series: xarray.Dataset of {_short(names, 60)} over {' x '.join(shape)} (result.series)"
 

@@ -886,6 +886,10 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     known_keys(sweep, _MODEL_SWEEP_KEYS, "sweep")
     model_file, model_text = _model(sweep, source, model_text)
     declared = parse_any_model(model_text, model_file)
+    from lyapcheck.models.loop.discrete import refuse
+
+    # a sweep's classes, boxes and cross-checks read [dynamics] as a field: a map is refused, not swept
+    refuse(declared, "sweep.model", "certify one point at a time (lyapcheck certify FILE --set NAME=VALUE)")
     fixed = _overrides(sweep.get("set"), declared)
     model = parse_any_model(model_text, model_file, fixed) if fixed else declared
     mode = sweep.get("mode", "points")

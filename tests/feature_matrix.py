@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
-KINDS = ("polynomial", "rational", "functions", "disturbances", "box")
+KINDS = ("polynomial", "rational", "functions", "disturbances", "box", "discrete")
 CLASSES = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier", "reach_avoid")
 CLASS_SURFACES = ("certify", "verify", "--box", "sweep points", "sweep boxes", "report", "API result", "repr")
 LOOP_SURFACES = ("simulate", "simulate --plot", "series", "repr")
@@ -107,8 +107,20 @@ unsafe = ["1.25 <= x1"]
 goal = ["x1**2 + x2**2 <= 0.25"]
 """
 
+#: a discrete-time map (issue 44): Jacobian eigenvalues a/2 +- i/4, modulus < 1 at a = 1
+DISCRETE = """[model]
+name = "a contracting rotation with a cubic term, a discrete-time map"
+states = ["x1", "x2"]
+time = "discrete"
+[parameters]
+a = 1
+[dynamics]
+x1 = "a*x1/2 + x2/4"
+x2 = "-x1/4 + a*x2/2 - x2**3/8"
+""" + _SETS + _GOAL
+
 MODELS: Mapping[str, str] = {"polynomial": POLYNOMIAL, "rational": RATIONAL, "functions": FUNCTIONS,
-                             "disturbances": DISTURBANCES, "box": POLYNOMIAL}
+                             "disturbances": DISTURBANCES, "box": POLYNOMIAL, "discrete": DISCRETE}
 
 #: the point sweeps' and box sweeps' specs (the class list and the model file's name are filled in)
 POINTS_SPEC = """[sweep]
@@ -196,6 +208,14 @@ REFUSALS: tuple[Refusal, ...] = (
             "the box, a search of box multipliers for a fixed V that is not built (a gap, not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
+    Refusal(cells(("discrete",), CLASSES[1:], CLASS_SURFACES)
+            | cells(("discrete",), ("linearization",), ("--box", "sweep points", "sweep boxes", "report")),
+            ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
+             '"discrete")'),
+            "A discrete-time map (`[model] time = \"discrete\"`) takes the `linearization` class (every eigenvalue of "
+            "the map's Jacobian of modulus < 1, exact) at a point; every other class is `not_applicable` until its "
+            "discrete-time condition is built, and `--box`, sweeps and reports, which read `[dynamics]` as a field, "
+            "refuse a map in one line (a gap, not a theorem)."),
 )
 
 
@@ -301,19 +321,23 @@ def verify_cell(checks: Sequence[Mapping[str, Any]], cls: str, source: Outcome) 
     return Outcome(True, "valid")
 
 
-def report_file(cert: Path) -> str:
-    """``lyapcheck report CERT --html FILE``: exit 0; the page."""
+def report_file(cert: Path) -> str | Outcome:
+    """``lyapcheck report CERT --html FILE``: exit 0; the page (or its refusal in one line, exit 2)."""
     html = cert.with_suffix(".html")
     code, stdout, stderr = cli("report", str(cert), "--html", str(html))
+    if code == 2:
+        return Outcome(False, _one_line(stderr, f"report {cert.name}"))
     if code != 0 or not html.exists():
         raise Crash(f"report {cert.name}: exit {code}: {stderr.strip()[-300:]}")
     return html.read_text(encoding="utf-8")
 
 
-def report_cell(page: str, cls: str, source: Outcome) -> Outcome:
+def report_cell(page: str | Outcome, cls: str, source: Outcome) -> Outcome:
     """The report of the certificate has the class's section (its name on the page)."""
     if not source.supported:
         return _inherit(source, "certify")
+    if isinstance(page, Outcome):  # the report refused the certificate
+        return page
     if cls not in page:
         raise Crash(f"report: {cls} is not on the page")
     return Outcome(True, "written")
@@ -428,9 +452,10 @@ def simulate_cells(directory: Path, kind: str) -> dict[str, Outcome]:
     if series is None:
         cells["series"] = Outcome(False, "series is None")
     else:
-        if "x" not in series or series["x"].sizes.get("time", 0) < 2:
+        axis = "step" if "step" in series.dims else "time"  # a map's iterates are over steps
+        if "x" not in series or series["x"].sizes.get(axis, 0) < 2:
             raise Crash(f"lyapcheck.simulate({kind}).series: {series!r:.300}")
-        cells["series"] = Outcome(True, f"{series['x'].sizes['time']} times")
+        cells["series"] = Outcome(True, f"{series['x'].sizes[axis]} {axis}s")
     text = repr(report)
     if not isinstance(text, str) or not text.strip():
         raise Crash(f"repr of lyapcheck.simulate({kind}) is empty")
@@ -467,7 +492,7 @@ def build(directory: Path, kinds: Sequence[str] = KINDS, progress: Callable[[str
         over_box = certified if kind == "box" else timed(f"{kind} --box",
                                                          lambda: certify_cells(directory, kind, box=True))
         verified: dict[Path, list[dict[str, Any]]] = {}
-        pages: dict[Path, str] = {}
+        pages: dict[Path, str | Outcome] = {}
         for cls in CLASSES:
             cert, path = certified[cls]
             if cert.supported and path not in verified:  # each certificate file once, for all its classes
@@ -553,6 +578,7 @@ KIND_TITLES = {
     "disturbances": "**Loop with disturbances** (`x1' = -a*x1 + x2 + d`, `|d| <= 0.1`)",
     "box": "**Over a box** (`--box a=0.8..1.2` on certify, verify, report and the API; the sweeps are the "
            "polynomial loop's over that interval)",
+    "discrete": "**Discrete-time map** (`[model] time = \"discrete\"`: `x2+ = -x1/4 + a*x2/2 - x2**3/8`)",
 }
 
 

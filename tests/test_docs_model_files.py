@@ -54,6 +54,8 @@ CHEAP = (
     'lyapcheck simulate examples/models/van-der-pol-reversed.toml --x0 "x1=0.5,x2=0"',
     'lyapcheck simulate examples/models/van-der-pol-reversed.toml --x0 "x1=2.5,x2=0"',
     "lyapcheck simulate examples/models/damped-oscillator.toml --grid 3",
+    "lyapcheck certify examples/models/discrete-stable-map.toml",
+    "lyapcheck certify examples/models/discrete-unstable-map.toml",
 )
 
 

@@ -5,8 +5,8 @@ What is asserted, through ``lyapcheck certify`` (exit 2, one line on stderr, no 
 ``math.sin(x)`` in ``[dynamics]`` is refused as attribute access with ``sin(x)`` to write (not
 "functions are taken in [dynamics]", where it stands); a bare ``t`` says time is not a name of the
 model (not "functions and constants such as pi are not part of the language"); ``[model] time``
-takes ``"continuous"`` only, and ``"discrete"`` is refused by name, so that a map is never read as
-an ODE.
+takes ``"continuous"`` and ``"discrete"`` (a map, issue 44: tests/test_discrete_maps.py) and refuses
+anything else naming both.
 """
 
 from __future__ import annotations
@@ -73,22 +73,24 @@ def test_outside_dynamics_a_function_or_pi_gets_the_sections_rule(tmp_path: Path
                     "polynomial or rational in the states (pi is taken in [dynamics], in an argument of sin or cos)")
 
 
-@pytest.mark.parametrize("time", ['"discrete"', '"Discrete-time"'])
-def test_a_discrete_time_map_is_refused(tmp_path: Path, time: str) -> None:
-    line = refusal(model_file(tmp_path, "-x/2", head=f"time = {time}"))
-    assert line == ("[model] time: discrete-time maps are not supported yet ([dynamics] gives time derivatives "
-                    f"x' = f(x), not x[k+1] = f(x[k])); supported: \"continuous\"; got '{time[1:-1]}'")
+def test_a_discrete_time_map_is_read_as_a_map_not_as_an_ode(tmp_path: Path) -> None:
+    """``x+ = y, y+ = -x/2``: its classes without a discrete-time condition are not_applicable, never run."""
+    done = CliRunner().invoke(app.cli, ["certify", str(model_file(tmp_path, "-x/2", head='time = "discrete"')),
+                                        "--classes", "quadratic", "--no-store", "--json"])
+    assert done.exit_code == 1, done.output
+    condition = json.loads(done.stdout)["conditions"]["quadratic"]
+    assert condition["status"] == "not_applicable" and "not yet decided for discrete-time maps" in condition["summary"]
 
 
 @pytest.mark.parametrize(("time", "got"), [('"sampled"', "'sampled'"), ("1", "1"),
-                                           ('["continuous"]', "['continuous']")])
+                                           ('["continuous"]', "['continuous']"), ('"Discrete-time"', "'Discrete-time'")])
 def test_another_time_is_refused_naming_the_supported_ones(tmp_path: Path, time: str, got: str) -> None:
     assert refusal(model_file(tmp_path, "-x - y", head=f"time = {time}")) == \
-        f'[model] time: must be one of "continuous", got {got}'
+        f'[model] time: must be one of "continuous", "discrete", got {got}'
 
 
 def test_continuous_time_is_the_default_and_is_accepted(tmp_path: Path) -> None:
-    assert TIME_KINDS == ("continuous",)
+    assert TIME_KINDS == ("continuous", "discrete")
     for head in ("", 'time = "continuous"'):
         done = CliRunner().invoke(app.cli, ["certify", str(model_file(tmp_path, "-x - y", head=head)), "--classes",
                                             "quadratic", "--no-store", "--json"])

@@ -49,12 +49,31 @@ def _print_worst_case(doc: dict[str, Any]) -> None:
     say(console, f"{doc['candidates_tried']} candidates; a search, not a proof: the certified bound is the proof")
 
 
+def _print_map_lines(doc: dict[str, Any]) -> None:
+    """``simulate`` of a discrete-time map: its iterates' counts and each output's tail sup, in lines."""
+    from rich.console import Console
+
+    from lyapcheck.cli.tables import figure, say
+
+    console = Console()
+    w0, w1 = doc["tail_window_steps"]
+    say(console, f"lyapcheck simulate: {doc['model']['name']}, a discrete-time map iterated {doc['steps']} steps "
+                 f"(disturbances held at 0)")
+    say(console, f"starts: {doc['n_trajectories']} ({doc['starts_from']}); converged: {doc['n_converged']}, "
+                 f"diverged: {doc['n_diverged']}")
+    for y, value in doc["sup_abs_output_tail"].items():
+        say(console, f"tail sup |{y} - {y}_eq| over steps {w0}-{w1}: {figure(value)}")
+
+
 def _print_model_table(doc: dict[str, Any]) -> None:
     from rich.console import Console
     from rich.text import Text
 
     from lyapcheck.cli.tables import figure, print_model_simulation, say
 
+    if doc.get("time") == "discrete":
+        _print_map_lines(doc)
+        return
     console = Console()
     print_model_simulation(console, doc)
     if doc.get("field"):  # a loop with functions: what was integrated
@@ -140,7 +159,8 @@ def _flag_names() -> Iterator[None]:
 
 def _run_model(model_file: str, settings: tuple[str, ...], x0: tuple[str, ...], grid: int | None,
                t_end: str | None, scenario_kinds: tuple[str, ...], frequencies: str | None, worst_case: bool,
-               budget: float, certificate: str | None, plot: str | None, as_json: bool) -> None:
+               budget: float, certificate: str | None, plot: str | None, as_json: bool, steps: str | None = None
+               ) -> None:
     """``simulate --model``: call the API, print, exit (0, or 1 on divergence or a violation)."""
     from lyapcheck.api import simulate_model_file
 
@@ -148,7 +168,7 @@ def _run_model(model_file: str, settings: tuple[str, ...], x0: tuple[str, ...], 
         result = simulate_model_file(model_file, settings=settings, x0=x0, grid=grid, t_end=t_end,
                                      scenarios=scenario_kinds or None, frequencies=frequencies,
                                      worst_case=worst_case, budget_s=budget, certificate=certificate, plot=plot,
-                                     series=False)
+                                     series=False, steps=steps)
     doc = result.to_json()
     if as_json:
         emit_json(doc)
@@ -191,11 +211,13 @@ def register(group: click.Group) -> None:
     @click.option("--certificate", type=click.Path(dir_okay=False),
                   help="With --model --worst-case: a certificate with sos_bound certified; prints tightness_ratio "
                        "= certified bound / worst simulated per output (exit 1 if one is below 1).")
+    @click.option("--steps", metavar="N", help='With a discrete-time map ([model] time = "discrete"): the number '
+                  "of iterations (default 50).")
     @one_line_errors
     def simulate(files: tuple[str, ...], preset: str | None, as_json: bool, plot: str | None, worst_case: bool,
                  budget: float, model_file: str | None, settings: tuple[str, ...], x0: tuple[str, ...],
                  grid: int | None, t_end: str | None, scenario_kinds: tuple[str, ...], frequencies: str | None,
-                 certificate: str | None) -> None:
+                 certificate: str | None, steps: str | None) -> None:
         """Simulate any closed loop from a model file (FILE or --model FILE), or the paper's
         saturated ILOS/ODS loop (a scenario FILE or a --preset)."""
         from lyapcheck.api import simulate as run_simulation
@@ -203,7 +225,8 @@ def register(group: click.Group) -> None:
         from lyapcheck.errors import InvalidParameter
 
         model_given = {"--set": settings, "--x0": x0, "--grid": grid, "--t-end": t_end,
-                       "--scenario": scenario_kinds, "--frequencies": frequencies, "--certificate": certificate}
+                       "--scenario": scenario_kinds, "--frequencies": frequencies, "--certificate": certificate,
+                       "--steps": steps}
         model_file, scenario = split_model_argument(files[0] if files else None, model_file)
         # a word beside the model file, or after the first file: a value split from --set or --x0, or a second file
         stray = scenario if model_file is not None and scenario is not None else files[1] if len(files) > 1 else None
@@ -214,7 +237,7 @@ def register(group: click.Group) -> None:
                                        f"--x0 {x0[-1]} {stray}")
             check_model_flags(model_file, stray, settings, {"--preset": preset is not None})
             _run_model(model_file, settings, x0, grid, t_end, scenario_kinds, frequencies, worst_case, budget,
-                       certificate, plot, as_json)
+                       certificate, plot, as_json, steps)
         if stray is not None:
             raise InvalidParameter("FILE", "one scenario file or model file", " ".join(files))
         used = [flag for flag, value in model_given.items() if value not in (None, ())]

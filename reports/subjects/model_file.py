@@ -339,6 +339,10 @@ class ModelFileSubject(Subject):
         self.text = stored if isinstance(stored, str) else ""
         self.overrides = {str(k): v for k, v in as_dict(doc.get("overrides")).items()}
         self.parsed, self.error = self.read_model()
+        from lyapcheck.models.loop.discrete import refuse
+
+        # the report's phase portraits, region slices and cross-checks integrate the loop as a field
+        refuse(self.parsed, "report", "lyapcheck certify FILE and lyapcheck verify CERT.json show a map's answers")
         try:
             self.raw = tomllib.loads(self.text)
         except tomllib.TOMLDecodeError:

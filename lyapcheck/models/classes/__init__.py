@@ -2,6 +2,8 @@
 
 - :mod:`~lyapcheck.models.classes.registry`: the one list of classes, what each proves and what a
   sweep stores;
+- discrete-time maps: :mod:`~lyapcheck.models.classes.discrete_linearization` (the spectral radius of the
+  map's Jacobian, exact);
 - polynomial and rational loops: :mod:`~lyapcheck.models.classes.linearization`,
   :mod:`~lyapcheck.models.classes.lyapunov` (quadratic, sos_gas, candidate),
   :mod:`~lyapcheck.models.classes.regions` (roa and candidate's sublevel sets by SOS, on loops with functions

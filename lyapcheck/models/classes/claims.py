@@ -175,6 +175,10 @@ def _number(condition: Mapping[str, Any], key: str) -> float:
 def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     data = condition.get("certificate" if status == "certified" else "refutation") or {}
     method = data.get("method")
+    from lyapcheck.models.classes import discrete_linearization
+
+    if discrete_linearization.is_discrete_certificate(data):  # a map's: its own methods and words
+        return discrete_linearization.sentence(status, data)
     if status == "certified" and method == "lyapunov_equation":
         return ("the Jacobian at the equilibrium is Hurwitz (J^T P + P J = -I with P > 0, exact): locally "
                 "exponentially stable")

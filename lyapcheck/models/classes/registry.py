@@ -105,6 +105,9 @@ class ModelClass:
     figures: tuple[Figure, ...] = ()
     #: its figure per output of the model, if any
     output_figure: OutputFigure | None = None
+    #: it has a discrete-time condition and runs on a map (``[model] time = "discrete"``); a class
+    #: without one is ``not_applicable`` there (lyapcheck.models.loop.discrete), never given the map as a field
+    discrete: bool = False
 
     @property
     def point_only(self) -> bool:
@@ -116,7 +119,7 @@ _V_RATE: Final = Figure("decay_rate_V_per_s", "decay_rate_V_per_s", "certified d
 
 #: every class of a model file, in the order ``certify --model`` runs them (cheapest first)
 CLASSES: Final[tuple[ModelClass, ...]] = (
-    ModelClass("linearization", "stability", "LES", over_box=False, stability=True, cleared=False),
+    ModelClass("linearization", "stability", "LES", over_box=False, stability=True, cleared=False, discrete=True),
     ModelClass("quadratic", "stability", "GES", over_box=True, stability=True,
                figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"),
                         Figure("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s"))),
@@ -151,6 +154,8 @@ POINT_ONLY: Final = _names(point_only=True)
 STABILITY: Final = _names(stability=True)
 #: the classes that need the user's input (``--candidate``)
 USER_GIVEN: Final = _names(user_given=True)
+#: the classes with a discrete-time condition (they run on a map)
+DISCRETE: Final = _names(discrete=True)
 #: class name -> its entry
 BY_NAME: Final[dict[str, ModelClass]] = {c.name: c for c in CLASSES}
 
@@ -166,4 +171,4 @@ def _check() -> None:
 _check()
 
 __all__ = ["Figure", "OutputFigure", "ModelClass", "CLASSES", "NAMES", "CLEARED", "OVER_BOX", "POINT_ONLY",
-           "STABILITY", "USER_GIVEN", "BY_NAME"]
+           "STABILITY", "USER_GIVEN", "DISCRETE", "BY_NAME"]

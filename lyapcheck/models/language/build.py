@@ -346,7 +346,7 @@ def from_sympy(states: Sequence["sp.Symbol"], rhs: Sequence[object] | Mapping[An
                outputs: Mapping[str, object] | None = None,
                domain: Mapping[Any, tuple[object, object]] | None = None,
                sets: Mapping[str, object] | None = None, name: str = "model built with sympy",
-               origin: str = "") -> "FileModel | RecastModel":
+               origin: str = "", time: str = "continuous") -> "FileModel | RecastModel":
     """A model from sympy expressions, read as the model file :meth:`Model.to_toml` returns.
 
     Parameters
@@ -371,6 +371,9 @@ def from_sympy(states: Sequence["sp.Symbol"], rhs: Sequence[object] | Mapping[An
         a list of them (all hold) or a list of lists (a union); ``"stay_in_goal": True``.
     name, origin
         ``[model] name`` and ``source``.
+    time
+        ``[model] time``: ``"continuous"`` (``rhs`` are time derivatives) or ``"discrete"`` (``rhs`` are
+        each state's next value, a map).
 
     Returns
     -------
@@ -389,7 +392,17 @@ def from_sympy(states: Sequence["sp.Symbol"], rhs: Sequence[object] | Mapping[An
         not an identifier, an equilibrium that is not one): ``<from_sympy>: KEY: what``.
     """
     return _parse(model_text(states, rhs, parameters=parameters, disturbances=disturbances, equilibrium=equilibrium,
-                             outputs=outputs, domain=domain, sets=sets, name=name, origin=origin), "<from_sympy>")
+                             outputs=outputs, domain=domain, sets=sets, name=name, origin=origin, time=time),
+                  "<from_sympy>")
+
+
+def _time_line(time: object) -> list[str]:
+    """``[model] time``'s line: none for the default (a continuous model's text is as before)."""
+    from lyapcheck.models.language.modelfile import TIME_KINDS
+
+    if not isinstance(time, str) or time not in TIME_KINDS:
+        raise InvalidParameter("time", "one of " + ", ".join(f'"{k}"' for k in TIME_KINDS), _quoted(time))
+    return [] if time == TIME_KINDS[0] else [f"time = {_toml_string(time)}"]
 
 
 def model_text(states: Sequence["sp.Symbol"], rhs: Sequence[object] | Mapping[Any, object], *,
@@ -398,7 +411,7 @@ def model_text(states: Sequence["sp.Symbol"], rhs: Sequence[object] | Mapping[An
                outputs: Mapping[str, object] | None = None,
                domain: Mapping[Any, tuple[object, object]] | None = None,
                sets: Mapping[str, object] | None = None, name: str = "model built with sympy",
-               origin: str = "") -> str:
+               origin: str = "", time: str = "continuous") -> str:
     """The model file's text for :func:`from_sympy`'s arguments (not yet validated by the parser)."""
     sp = _sympy()
     symbols = _symbols("states", states, "the states")
@@ -416,6 +429,7 @@ def model_text(states: Sequence["sp.Symbol"], rhs: Sequence[object] | Mapping[An
              "states = [" + ", ".join(_toml_string(s) for s in state_names) + "]"]
     if origin:
         lines.append(f"source = {_toml_string(origin)}")
+    lines += _time_line(time)
     for section, table in (("parameters", params), ("disturbances", dists)):
         if table:
             lines += ["", f"[{section}]"]
@@ -600,13 +614,15 @@ def from_control(system: object, gain: object, *, equilibrium: Sequence[object] 
     """A python-control ``StateSpace`` ``x' = A x + B u`` closed with ``u = -K (x - x_eq)``.
 
     The loop is ``x' = (A - B K)(x - x_eq) + A x_eq``, each entry exact: the matrices' floats are
-    read by their decimal reprs (``0.1`` is ``1/10``), so ``A - B K`` is computed in rationals.
+    read by their decimal reprs (``0.1`` is ``1/10``), so ``A - B K`` is computed in rationals. A
+    discrete-time system (``dt`` set) gives the map ``x+ = (A - B K)(x - x_eq) + A x_eq`` (``[model] time =
+    "discrete"``; its sampling period plays no part in the map).
 
     Parameters
     ----------
     system
-        A continuous-time ``control.StateSpace``. A ``NonlinearIOSystem`` (Python callables, which
-        cannot be read exactly) is refused: give its sympy plant to :func:`close_loop`.
+        A ``control.StateSpace``, continuous-time or discrete-time. A ``NonlinearIOSystem`` (Python
+        callables, which cannot be read exactly) is refused: give its sympy plant to :func:`close_loop`.
     gain
         ``K``, inputs x states (``control.lqr``'s first result).
     equilibrium
@@ -627,9 +643,10 @@ def from_control(system: object, gain: object, *, equilibrium: Sequence[object] 
                                    type(system).__name__)
         raise InvalidParameter("system", "a control.StateSpace (convert a transfer function with control.ss)",
                                type(system).__name__)
-    if system.isdtime(strict=True):
-        raise InvalidParameter("system", "a continuous-time StateSpace (discrete-time maps are not supported yet)",
-                               f"dt = {system.dt}")
+    time = "discrete" if system.isdtime(strict=True) else "continuous"
+    if model.get("time", time) != time:  # the system says which time it is in
+        raise InvalidParameter("time", f'"{time}", the system\'s (dt = {system.dt})', model["time"])
+    model["time"] = time
     n, m = system.nstates, system.ninputs
     A, B, K = _matrix("system.A", system.A, n, n), _matrix("system.B", system.B, n, m), _matrix("gain", gain, m, n)
     if states is None:

@@ -161,6 +161,15 @@ def check_dynamics(state: str, text: str, units: UnitTable, names: Mapping[str, 
     _Walker(text, names, closed=True).check(f"[dynamics] {state}", expected, why)
 
 
+def check_map(state: str, text: str, units: UnitTable, names: Mapping[str, Named]) -> None:
+    """A discrete-time map's right-hand side is ``state``'s next value: every term has the dimension
+    of ``state`` itself, not per time (else :class:`DimensionError` at ``[dynamics] state``)."""
+    unit, dimension = units.states[state]
+    why = f"the dimension of {state}+ ({state} in {unit}: a map gives the next value)" if unit else \
+        f"the dimension of {state}+ ({state} dimensionless: a map gives the next value)"
+    _Walker(text, names, closed=True).check(f"[dynamics] {state}", dimension, why)
+
+
 def check_output(name: str, text: str, names: Mapping[str, Named]) -> Dimension:
     """An output's terms agree in every sum (nothing declares its unit); its dimension."""
     return _Walker(text, names).check(f"[outputs] {name}", None, "")
@@ -456,5 +465,5 @@ def _holds_sum(node: ast.AST) -> bool:
             return isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub))
 
 
-__all__ = ["DimensionError", "OutsideLanguage", "Named", "UnitTable", "read_units", "check_dynamics", "check_output", "check_value",
+__all__ = ["DimensionError", "OutsideLanguage", "Named", "UnitTable", "read_units", "check_dynamics", "check_map", "check_output", "check_value",
            "TIME_KEY"]

@@ -3,11 +3,12 @@
 The format (docs/model-files.md, the reference; DESIGN.md's "Model files (contract)")::
 
     [model]          name, states (the order of the state vector), source (optional), time
-                     (optional: "continuous", the only kind yet)
+                     (optional: "continuous", the default, or "discrete": [dynamics] gives each
+                     state's next value, x+ = f(x), a map; lyapcheck.models.loop.discrete)
     [parameters]     name = number or "number unit" (SI inside)
     [disturbances]   name = bound b, meaning |d(t)| <= b
-    [dynamics]       one entry per state: its time derivative, an expression
-    [equilibrium]    optional; default every state 0; checked exactly
+    [dynamics]       one entry per state: its time derivative (or, time = "discrete", its next value)
+    [equilibrium]    optional; default every state 0; checked exactly (a map's: a fixed point)
     [outputs]        optional; default each state
     [domain]         optional: a box of initial states, name = [lo, hi]
     [sets]           optional: initial, unsafe, goal, each inequalities over the states (a list:
@@ -55,8 +56,11 @@ SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibri
                     "units", "sampling", "controller")
 MODEL_KEYS: Final = ("name", "states", "source", "time")
 #: the values of ``[model] time``: a file says which time its [dynamics] are in, and a value lyapcheck
-#: does not take is refused, so that a file never means another system than its author wrote
-TIME_KINDS: Final = ("continuous",)
+#: does not take is refused, so that a file never means another system than its author wrote;
+#: "discrete": [dynamics] gives each state's next value x+ = f(x) (lyapcheck.models.loop.discrete)
+TIME_KINDS: Final = ("continuous", "discrete")
+#: ``[model] time`` of a discrete-time map
+DISCRETE: Final = "discrete"
 #: what a sampled-data file ([sampling], [controller]) can be given to: the readers of continuous loops refuse it
 SAMPLED_TAKEN_BY: Final = ("a sampled-data loop (a continuous plant under a digital controller with a zero-order "
                            "hold) is taken by 'certify' and 'verify' (and lyapcheck.api's certify and verify), which "
@@ -107,6 +111,15 @@ class Model:
     set_forms: dict[str, SetForms] = field(default_factory=dict)
     #: ``[sets] stay_in_goal = true``: reach_avoid also proves that the state stays in the goal
     stay_in_goal: bool = False
+    #: ``[model] time``: "continuous" (``dynamics`` are time derivatives) or "discrete" (``dynamics``
+    #: are the next values of a map; only the classes and surfaces that know maps take it:
+    #: lyapcheck.models.loop.discrete)
+    time: str = "continuous"
+
+    @property
+    def discrete(self) -> bool:
+        """A discrete-time map: ``dynamics`` gives each state's next value."""
+        return self.time == DISCRETE
 
     @property
     def sha256(self) -> str:
@@ -254,6 +267,8 @@ class _Reader:
         self.divisors: list[tuple[Poly, ...]] = []
         #: each parameter's and disturbance's quantity as the file gives it (its dimension, for [units])
         self.read: dict[str, dict[str, SIQuantity]] = {"parameters": {}, "disturbances": {}}
+        #: ``[model] time`` once :meth:`head` read it
+        self.time = TIME_KINDS[0]
 
     def fail(self, key: str, message: str) -> ModelFileError:
         return _error(self.source, key, message)
@@ -286,15 +301,12 @@ class _Reader:
         return name, origin, self.states(head)
 
     def check_time(self, value: object) -> None:
-        """``[model] time`` is one of :data:`TIME_KINDS`; a discrete-time map is refused by name (read
-        as [dynamics], its right-hand sides would be taken as time derivatives: another system)."""
-        if value in TIME_KINDS:
+        """``[model] time`` is one of :data:`TIME_KINDS` (kept in ``self.time``); anything else is refused,
+        naming the accepted values and the value given."""
+        if isinstance(value, str) and value in TIME_KINDS:
+            self.time = value
             return
         kinds = ", ".join(f'"{k}"' for k in TIME_KINDS)
-        if isinstance(value, str) and "discrete" in value.lower():
-            raise self.fail("[model] time", f"discrete-time maps are not supported yet ([dynamics] gives time "
-                                            f"derivatives x' = f(x), not x[k+1] = f(x[k])); supported: {kinds}; "
-                                            f"got {value!r}")
         raise self.fail("[model] time", f"must be one of {kinds}, got {value!r}")
 
     def model(self) -> Model:
@@ -318,7 +330,7 @@ class _Reader:
                       dynamics=dynamics, equilibrium=equilibrium, outputs=outputs, output_text=output_text,
                       domain=domain, overrides={k: str(v) for k, v in self.overrides.items()},
                       divisors=tuple(self.divisors), units=units, sets=sets, set_text=set_text,
-                      set_forms=set_forms, stay_in_goal=stay_in_goal)
+                      set_forms=set_forms, stay_in_goal=stay_in_goal, time=self.time)
         check_equilibrium(model)
         return model
 
@@ -332,6 +344,11 @@ class _Reader:
         from lyapcheck.models.language.recast import RecastModel, recast_dynamics  # only a loop with functions needs it
 
         name, origin, states = self.head()
+        if self.time == DISCRETE:
+            # the recasting gives each auxiliary its time derivative by the chain rule, which a map does
+            # not have: a map with functions would be another system
+            raise self.fail("[model] time", 'a discrete-time map (time = "discrete") with functions (sin, sqrt, sat, '
+                                            '...) is not taken yet: write its [dynamics] polynomial or rational')
         params, params_given = self.quantities("parameters", MAX_PARAMETERS)
         dists = self.disturbance_bounds()
         self.check_unique(states, params, dists)
@@ -651,8 +668,9 @@ class _Reader:
             for key, value in self.overrides.items():
                 dims.check_value(f"--set {key}", value, names[key].dimension,
                                  f"{key} (given as '{file_given[key]}' in the file)")
-            for s in states:
-                dims.check_dynamics(s, str(self.table("dynamics")[s]), units, names)
+            for s in states:  # a map's next value has its state's own unit, a field's the state's per time
+                check = dims.check_map if self.time == DISCRETE else dims.check_dynamics
+                check(s, str(self.table("dynamics")[s]), units, names)
             for key, text in self.table("outputs").items():
                 dims.check_output(key, str(text), names)
             for key, value in self.table("equilibrium").items():
@@ -713,7 +731,8 @@ def field_at(model: Model, parameters: Mapping[str, Fraction] | None = None) -> 
 
 def check_equilibrium(model: Model) -> None:
     """The stated equilibrium is one, exactly: every denominator non-zero and every right-hand side
-    zero there, with the disturbances 0 (else a :class:`ModelFileError` naming the state)."""
+    zero there (a map's: equal to the state's value there, a fixed point ``f(x_eq) = x_eq``), with the
+    disturbances 0 (else a :class:`ModelFileError` naming the state)."""
     ring = model.state_ring
     point = list(model.equilibrium) + [Fraction(0)] * len(model.disturbances)
     where = "[equilibrium]" if any(model.equilibrium) else "[equilibrium] (default: every state 0)"
@@ -732,9 +751,21 @@ def check_equilibrium(model: Model) -> None:
             raise ModelFileError(model.source, where, f"the right-hand side of {s} is not defined there "
                                                       "(its denominator is 0)")
         value = ring.evaluate(rhs.numerator, point) / den
+        if model.discrete:
+            _check_fixed_point(model, where, s, value)
+            continue
         if value != 0:
             raise ModelFileError(model.source, where, f"is not an equilibrium: {s}' = {value} there, not 0 "
                                                       f"(checked exactly, with the disturbances 0)")
+
+
+def _check_fixed_point(model: Model, where: str, state: str, value: Fraction) -> None:
+    """A map's equilibrium is a fixed point: ``state``'s next value there, ``value``, is its own
+    (checked exactly; never ``f(x_eq) = 0``, which is a field's)."""
+    own = model.equilibrium[model.states.index(state)]
+    if value != own:
+        raise ModelFileError(model.source, where, f"is not a fixed point of the map: {state}+ = {value} there, not "
+                                                  f"{own} (checked exactly, with the disturbances 0)")
 
 
 def with_parameters(model: Model, values: Mapping[str, Fraction]) -> Model:
@@ -759,5 +790,5 @@ def degree_of_field(model: Model) -> int:
                for r in model.dynamics)
 
 
-__all__ = ["Model", "is_model_file", "load_model", "parse_model", "field_at", "check_equilibrium", "with_parameters",
+__all__ = ["Model", "TIME_KINDS", "DISCRETE", "is_model_file", "load_model", "parse_model", "field_at", "check_equilibrium", "with_parameters",
            "degree_of_field", "MAX_STATES"]

@@ -8,7 +8,8 @@
   the model again and makes the rows every document starts with), the rest of a loop with functions'
   document checked by :mod:`~lyapcheck.models.surfaces.recast_certify`; :mod:`~lyapcheck.models.surfaces.documents`,
   :mod:`~lyapcheck.models.surfaces.stated`, :mod:`~lyapcheck.models.surfaces.counterexamples`: what both share;
-- :mod:`~lyapcheck.models.surfaces.simulate`: ``simulate --model``, one implementation for every loop kind.
+- :mod:`~lyapcheck.models.surfaces.simulate`: ``simulate --model``, one implementation for every loop kind;
+  :mod:`~lyapcheck.models.surfaces.iterate`: a discrete-time map iterated instead.
 
 May import: lyapcheck.models.language, lyapcheck.models.engines, lyapcheck.models.loop,
 lyapcheck.models.classes, lyapcheck.sos, lyapcheck.integrator, lyapcheck.answers, lyapcheck.results,

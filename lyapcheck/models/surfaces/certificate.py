@@ -176,6 +176,10 @@ def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
         except ModelFileError as exc:
             return [*rows, ("box", False, f"the box is not valid for the model: {exc}")]
         rows.append(("box", True, f"the box {box.describe()} is valid for the model"))
+    from lyapcheck.models.loop.discrete import is_discrete
+
+    if is_discrete(model):  # a map: only the classes with a discrete-time check, on the shifted map
+        return _verify_map(doc, model, rows, box)
     shifted = shifted_field(model, box=box)
     conditions: dict[str, Any] = doc["conditions"]
 
@@ -188,7 +192,12 @@ def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
         from lyapcheck.models.classes import linearization
 
         data = lin.get("certificate") if lin["status"] == "certified" else lin.get("refutation")
-        if shifted.box is not None:  # the Jacobian for every value of the box
+        from lyapcheck.models.classes.discrete_linearization import is_discrete_certificate
+
+        if is_discrete_certificate(data):  # a map's test never re-checks a field
+            rows.append(("linearization", False, 'linearization: a discrete-time certificate ("time": "discrete"), '
+                                                 "and the model is a continuous-time field"))
+        elif shifted.box is not None:  # the Jacobian for every value of the box
             row("linearization", lambda: linearization.verify_over_box(shifted, lin["status"], data or {}))
         else:
             row("linearization", lambda: linearization.verify(shifted, lin["status"], data or {}))
@@ -243,6 +252,34 @@ def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
     _check_disturbance_keys(model, conditions, rows)
     _check_candidate(doc, model, conditions, rows)
     _check_summaries(model, conditions, rows, doc.get("box"))
+    _check_stated_claims(model, conditions, rows)
+    return _with_verdict(doc, rows)
+
+
+def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> list[Row]:
+    """The rest of a discrete-time map's document: the linearization re-derived with the discrete-time
+    test on the shifted map; a certified condition of a class without a discrete-time check fails (it
+    cannot be re-checked on a map, so it cannot stand), as does a box (refused on a map)."""
+    from lyapcheck.models.classes import discrete_linearization
+    from lyapcheck.models.classes.registry import DISCRETE
+    from lyapcheck.models.loop.discrete import shifted_map
+
+    if box is not None:
+        return _with_verdict(doc, [*rows, ("box", False, 'a box is not taken on a discrete-time map ([model] time = '
+                                                         '"discrete")')])
+    conditions: dict[str, Any] = doc["conditions"]
+    for name, c in conditions.items():
+        if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted", "counterexample"):
+            continue
+        if name != "linearization" or name not in DISCRETE or c["status"] == "counterexample":
+            rows.append((name, False, f"{name}: a {c.get('status')} claim on a discrete-time map that no "
+                                      "discrete-time check re-derives"))
+            continue
+        data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
+        ok, why = discrete_linearization.verify(shifted_map(model), c["status"], data or {})
+        rows.append((name, ok, why if ok else f"{name}: {why}"))
+    _check_disturbance_keys(model, conditions, rows)
+    _check_summaries(model, conditions, rows, None)
     _check_stated_claims(model, conditions, rows)
     return _with_verdict(doc, rows)
 

@@ -197,6 +197,10 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
     refuse_candidate_over_box(model.source, candidate, box)
+    from lyapcheck.models.loop.discrete import is_discrete
+
+    if is_discrete(model):  # a map never reaches the classes that read [dynamics] as a field
+        return _certify_map(model, classes, candidate, limit, box)  # type: ignore[arg-type]
     if not isinstance(model, Model):  # a loop with functions: its classes run on the recasting
         return _certify_functions(model, classes, candidate, limit, box)
     cand = parse_candidate(model, candidate) if candidate is not None else None
@@ -348,6 +352,46 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
             if name in region_size.SIZED_CLASSES:
                 _attach_size(r, model, list(model.states) + (list(box.names) if box is not None else []))
         text = summary(name, r.to_json(), tuple(model.outputs), box.to_json() if box is not None else None)
+        if text is not None:
+            r.summary = text
+    return out
+
+
+def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: str | None, limit: float,
+                 box: "ModelBox | None") -> ModelCertification:
+    """:func:`certify_model` on a discrete-time map (``[model] time = "discrete"``): the one place where a
+    map's classes are chosen. A class with a discrete-time condition
+    (:data:`lyapcheck.models.classes.registry.DISCRETE`) runs on the shifted map; every other one asked for
+    is ``not_applicable`` (:func:`lyapcheck.models.loop.discrete.not_decided`), never run on the map as if
+    it were a field. ``--box`` is refused in one line (exit 2)."""
+    import time
+
+    from lyapcheck.models.classes.registry import DISCRETE
+    from lyapcheck.models.loop.discrete import not_decided, refuse, shifted_map
+
+    if box is not None:
+        refuse(model, "--box", "certify a point (--set NAME=VALUE)")
+    cand = parse_candidate(model, candidate) if candidate is not None else None
+    chosen = class_selection(classes, model, cand)
+    out = ModelCertification(model=model, candidate=cand, results={})
+    for name in chosen:
+        if name not in DISCRETE:
+            out.results[name] = ConditionResult(name, "not_applicable", not_decided(name, DISCRETE))
+    if "linearization" in chosen:
+        from lyapcheck.models.classes import discrete_linearization
+
+        start = time.perf_counter()
+        shifted = shifted_map(model)
+        out.results["linearization"] = _guarded("linearization", lambda: discrete_linearization.run(shifted), limit)
+        out.seconds["linearization"] = time.perf_counter() - start
+    out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
+    for r in out.results.values():  # the linearization is the Jacobian at d = 0
+        if model.disturbances:
+            r.disturbances = "zero"
+    from lyapcheck.models.classes.claims import summary
+
+    for name, r in out.results.items():
+        text = summary(name, r.to_json(), tuple(model.outputs), None)
         if text is not None:
             r.summary = text
     return out

@@ -39,6 +39,7 @@ NOT_FIGURES: Final = frozenset({"status", "summary", "property", "certificate", 
 ESTIMATES: Final[Mapping[str, str]] = {
     # simulation and sampling estimates
     "max_real_part_estimate": "the largest real part of the Jacobian's eigenvalues, in floating point",
+    "spectral_radius_estimate": "the largest modulus of a map's Jacobian's eigenvalues, in floating point",
     "roa_share": "the share of the simulated starts that converge which lie in the certified set",
     "simulated_roa_share_of_box": "the share of the simulated starts of the box that converge",
     "simulated_roa_share_of_domain": "the share of the simulated starts of the domain that converge",
