@@ -10,6 +10,7 @@
   too), :mod:`~lyapcheck.models.classes.bounds`
   (sos_bound, on loops with functions too), :mod:`~lyapcheck.models.classes.barrier` (on loops with
   functions too), :mod:`~lyapcheck.models.classes.reach_avoid` (on loops with functions too);
+- discrete-time maps ``e+ = F(e)``: :mod:`~lyapcheck.models.classes.discrete_lyapunov` (quadratic and sos_gas);
 - loops with functions: :mod:`~lyapcheck.models.classes.recast_classes`,
   :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
   (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_ball_level` (a quadratic V's
