@@ -22,6 +22,7 @@ import sympy as sp
 
 from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.language.modelfile import load_model, parse_model
+from tests.conftest import ROOT
 from lyapcheck.models.loop.field import ShiftedField, shifted_field
 from lyapcheck.results import ConditionResult
 
@@ -217,3 +218,23 @@ def test_programs_are_dpp_and_one_structure_serves_every_decay_rate() -> None:
 def test_a_map_with_a_state_dependent_denominator_is_not_applicable() -> None:
     result = dl.run(map_of({"x": "0.5*x/(1 + y**2)", "y": "0.5*y"}), "sos_gas")
     assert result.status == "not_applicable" and "denominator" in result.summary
+
+
+@pytest.mark.parametrize("example, certified", [("fossil-dt-two-room-temp", ("linearization", "quadratic", "sos_gas")),
+                                                ("fossil-dt-ahmadi", ("linearization", "sos_gas"))])
+def test_the_fossil_examples_certify_as_their_comments_say_and_verify(example: str, certified: tuple[str, ...]) -> None:
+    """FOSSIL 2.0's discrete-time rows as shipped examples ([model] time = "discrete"): TwoRoomTemp in
+    temperatures with its fixed point at 15 degrees (GES), DTAhmadi GAS with a quartic V and no quadratic one."""
+    from lyapcheck.api import certify, verify
+
+    result = certify(model=ROOT / "examples" / "models" / f"{example}.toml")
+    statuses = {name: c["status"] for name, c in result.document["conditions"].items()}
+    assert {name for name, status in statuses.items() if status == "certified"} == set(certified)
+    assert result.document["verdict"] == "certified"
+    if "quadratic" in certified:
+        assert result.document["conditions"]["quadratic"]["property"] == "GES"
+        assert result.document["conditions"]["quadratic"]["certificate"]["kind"] == "discrete_quadratic"
+    else:
+        assert statuses["quadratic"] == "not_certified"
+        assert result.document["conditions"]["sos_gas"]["certificate"]["degree"] == 4
+    assert verify(result.document).valid

@@ -221,11 +221,18 @@ def test_a_certified_class_without_a_discrete_time_check_fails_verify(tmp_path: 
     from lyapcheck.models.surfaces.certificate import verify_document
 
     doc = _certificate(tmp_path, MAP)
+    doc["conditions"]["roa"] = {"status": "certified", "property": "ROA", "summary": "forged",
+                                "certificate": {"kind": "sublevel"}}
+    rows = verify_document(doc)
+    assert ("roa", False, "roa: a certified claim on a discrete-time map that no discrete-time check "
+                          "re-derives") in rows
+    # a continuous-time certificate of a class that has a discrete-time check is not one of its kinds
+    doc = _certificate(tmp_path, MAP)
     doc["conditions"]["quadratic"] = {"status": "certified", "property": "GES", "summary": "forged",
                                       "certificate": {"kind": "lyapunov"}}
     rows = verify_document(doc)
-    assert ("quadratic", False, "quadratic: a certified claim on a discrete-time map that no discrete-time check "
-                                "re-derives") in rows
+    assert any(name == "quadratic" and not ok and "not a certificate of a discrete-time map" in why
+               for name, ok, why in rows)
 
 
 # -- the guard: every class and every surface on a map ------------------------------------------------
@@ -236,10 +243,15 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert done.exit_code == 0, done.output
     conditions = json.loads(done.stdout)["conditions"]
     assert list(conditions) == [c.name for c in CLASSES]
-    assert DISCRETE == ("linearization",)  # (the other helper's classes switch on here)
+    assert DISCRETE == ("linearization", "quadratic", "sos_gas")
     assert conditions["linearization"]["status"] == "certified"
     assert conditions["linearization"]["summary"].startswith("every eigenvalue of the map's Jacobian at the fixed "
                                                              "point has modulus < 1")
+    for name in ("quadratic", "sos_gas"):  # their discrete-time answers (lyapcheck.models.classes.discrete_lyapunov)
+        c = conditions[name]
+        assert c["status"] in ("certified", "not_certified")
+        assert "discrete-time map" in c["summary"]
+        assert c["status"] != "certified" or c["certificate"]["time"] == "discrete"
     for c in CLASSES:
         if c.name not in DISCRETE:
             assert conditions[c.name]["status"] == "not_applicable"

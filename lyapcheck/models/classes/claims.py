@@ -203,9 +203,30 @@ def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     raise ValueError(f"unknown linearization method {method!r} for status {status!r}")
 
 
+def discrete_lyapunov_sentence(kind: str, degree: int, mu: Fraction, figures: Mapping[str, Fraction] | None) -> str:
+    """The claim of a discrete-time map's ``quadratic`` or ``sos_gas`` certificate
+    (:mod:`lyapcheck.models.classes.discrete_lyapunov`), from its figures alone: ``k`` and ``r`` rounded
+    up, the contraction ``1 - mu`` of V rounded up (a weaker claim, never a stronger one)."""
+    if figures is not None:
+        return (f"GES of the discrete-time map: |e_k| <= {rounded(figures['k'], 4, 'up')} |e_0| "
+                f"{rounded(figures['r'], 4, 'up')}^k from every start (a quadratic V with V(F(e)) <= (1 - mu) V(e), "
+                "checked exactly)")
+    what = "a quadratic V" if degree == 2 else f"a polynomial V of degree {degree}"
+    tail = f", and V(F(e)) <= {rounded(1 - mu, 4, 'up')} V(e) (V decays geometrically)" if mu > 0 else ""
+    return (f"GAS of the discrete-time map: {what} with V(F(e)) < V(e) away from the equilibrium{tail} "
+            "(checked exactly)")
+
+
+#: the certificate kinds of a discrete-time map's quadratic and sos_gas (lyapcheck.models.classes.discrete_lyapunov)
+DISCRETE_LYAPUNOV_KINDS = ("discrete_quadratic", "discrete_sos")
+
+
 def _stability(name: str, condition: Mapping[str, Any]) -> str:
     cert = condition.get("certificate") or {}
     kind = cert.get("kind")
+    if kind in DISCRETE_LYAPUNOV_KINDS:
+        figures = {key: read_rational(cert[key]) for key in ("k", "r")} if kind == "discrete_quadratic" else None
+        return discrete_lyapunov_sentence(kind, int(cert["degree"]), read_rational(cert["mu"]), figures)
     if kind in ("sublevel", "quadratic_ball"):
         what = SET_NAMES.get(name, name)
         level = _number(condition, "level")

@@ -322,14 +322,11 @@ def ges_figures(V: GramPoly, mu: Fraction, n: int) -> dict[str, Fraction] | None
 
 
 def sentence(kind: str, degree: int, mu: Fraction, figures: Mapping[str, Fraction] | None) -> str:
-    """The claim's words, from the certificate's figures alone (``verify`` re-makes and compares them)."""
-    if figures is not None:
-        return (f"GES of the discrete-time map: |e_k| <= {float(figures['k']):.4g} |e_0| {float(figures['r']):.4g}^k "
-                "from every start (a quadratic V with V(F(e)) <= (1 - mu) V(e), checked exactly)")
-    what = "a quadratic V" if degree == 2 else f"a polynomial V of degree {degree}"
-    tail = f", and V(F(e)) <= {float(1 - mu):.4g} V(e) (V decays geometrically)" if mu > 0 else ""
-    return (f"GAS of the discrete-time map: {what} with V(F(e)) < V(e) away from the equilibrium{tail} "
-            "(checked exactly)")
+    """The claim's words, from the certificate's figures alone (``verify`` re-makes and compares them):
+    :func:`lyapcheck.models.classes.claims.discrete_lyapunov_sentence`."""
+    from lyapcheck.models.classes.claims import discrete_lyapunov_sentence
+
+    return discrete_lyapunov_sentence(kind, degree, mu, figures)
 
 
 def certified(shifted: ShiftedField, ring: Ring, name: ClassName, found: dict[str, Any], solver: dict[str, Any]

@@ -120,10 +120,10 @@ _V_RATE: Final = Figure("decay_rate_V_per_s", "decay_rate_V_per_s", "certified d
 #: every class of a model file, in the order ``certify --model`` runs them (cheapest first)
 CLASSES: Final[tuple[ModelClass, ...]] = (
     ModelClass("linearization", "stability", "LES", over_box=False, stability=True, cleared=False, discrete=True),
-    ModelClass("quadratic", "stability", "GES", over_box=True, stability=True,
+    ModelClass("quadratic", "stability", "GES", over_box=True, stability=True, discrete=True,
                figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"),
                         Figure("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s"))),
-    ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,)),
+    ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,), discrete=True),
     ModelClass("roa", "stability", "ROA", over_box=True, stability=True,
                figures=(Figure("level", "level", "the certified region of attraction is {V <= level}"),
                         Figure("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI"))),

@@ -271,12 +271,18 @@ def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> l
     for name, c in conditions.items():
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted", "counterexample"):
             continue
-        if name != "linearization" or name not in DISCRETE or c["status"] == "counterexample":
+        if name not in DISCRETE or c["status"] == "counterexample" or (name != "linearization"
+                                                                        and c["status"] != "certified"):
             rows.append((name, False, f"{name}: a {c.get('status')} claim on a discrete-time map that no "
                                       "discrete-time check re-derives"))
             continue
-        data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
-        ok, why = discrete_linearization.verify(shifted_map(model), c["status"], data or {})
+        if name == "linearization":
+            data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
+            ok, why = discrete_linearization.verify(shifted_map(model), c["status"], data or {})
+        else:  # quadratic, sos_gas: V(F(e)) - V(e) <= -mu V(e) - W(e), checked from the condition's JSON
+            from lyapcheck.models.classes import discrete_lyapunov
+
+            ok, why = discrete_lyapunov.verify(shifted_map(model), c["status"], c)
         rows.append((name, ok, why if ok else f"{name}: {why}"))
     _check_disturbance_keys(model, conditions, rows)
     _check_summaries(model, conditions, rows, None)

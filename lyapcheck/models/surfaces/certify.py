@@ -384,6 +384,14 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
         shifted = shifted_map(model)
         out.results["linearization"] = _guarded("linearization", lambda: discrete_linearization.run(shifted), limit)
         out.seconds["linearization"] = time.perf_counter() - start
+    for name in ("quadratic", "sos_gas"):
+        if name in chosen and name in DISCRETE:
+            from lyapcheck.models.classes import discrete_lyapunov
+
+            start = time.perf_counter()
+            shifted = shifted_map(model)
+            out.results[name] = _guarded(name, lambda: discrete_lyapunov.run(shifted, name), limit)  # type: ignore[arg-type]
+            out.seconds[name] = time.perf_counter() - start
     out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
     for r in out.results.values():  # the linearization is the Jacobian at d = 0
         if model.disturbances:
