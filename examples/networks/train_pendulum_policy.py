@@ -67,7 +67,7 @@ def train(K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def quantized(W: np.ndarray) -> np.ndarray:
-    return np.round(W * 2 ** QUANTUM_BITS) / 2 ** QUANTUM_BITS
+    return np.asarray(np.round(W * 2 ** QUANTUM_BITS) / 2 ** QUANTUM_BITS)
 
 
 def write_onnx(W1: np.ndarray, W2: np.ndarray, path: Path) -> None:
