@@ -310,6 +310,10 @@ def test_verify_rechecks_the_certificate_and_fails_once_the_network_changes(
     folder, cert, _ = certified_copy
     done = CliRunner().invoke(app.cli, ["verify", str(cert)])
     assert done.exit_code == 0 and "certificate verified" in done.output, done.output
+    assert "ok   networks: each network file is the one certified" in done.output
+    stated = json.loads(cert.read_text())["model"]["networks"]
+    assert stated == {"pi": {"file": "../networks/pendulum_tanh_policy.npz",
+                             "sha256": network_of(load_any_model(folder / "models" / EXAMPLE.name)).sha256}}
     npz = folder / "networks" / "pendulum_tanh_policy.npz"
     with np.load(npz) as f:
         arrays = {k: f[k] for k in f.files}
@@ -317,6 +321,8 @@ def test_verify_rechecks_the_certificate_and_fails_once_the_network_changes(
     np.savez(npz, **arrays)
     done = CliRunner().invoke(app.cli, ["verify", str(cert)])
     assert done.exit_code == 1, done.output
+    assert "FAIL networks: the file '../networks/pendulum_tanh_policy.npz' of [networks.pi] is not the one " \
+           "certified: its SHA-256 differs" in done.output, done.output
     assert "FAIL recasting: the stated recasting differs" in done.output, done.output
     assert "FAIL linearization" in done.output and "certificate FAILS" in done.output, done.output
 
@@ -328,3 +334,17 @@ def test_the_onnx_variant_certifies_the_same_linearization() -> None:
     lin = json.loads(done.stdout)["conditions"]["linearization"]
     assert lin["status"] == "certified" and lin["property"] == "LES"
 
+
+
+def test_a_relu_network_is_a_loop_with_abs_and_its_linearization_says_why_it_decides_nothing(tmp_path: Path) -> None:
+    """relu(z) = max(0, z) = (z + abs(z))/2: not differentiable at the equilibrium, where every bias-free
+    ReLU neuron's argument is 0; the class names the neuron instead of guessing a Jacobian."""
+    W1 = np.array([[1.0, 0.5], [-0.5, -1.0]])
+    save_npz(tmp_path / "n.npz", [(W1, np.zeros(2)), ([[-1.0, 1.0]], [0.0])], "relu")
+    path = model_file(tmp_path, "n.npz")
+    model = load_any_model(path)
+    assert isinstance(model, RecastModel) and [a.function for a in model.system.auxiliaries] == ["abs", "abs"]
+    done = CliRunner().invoke(app.cli, ["certify", str(path), "--classes", "linearization", "--no-store", "--json"])
+    lin = json.loads(done.stdout)["conditions"]["linearization"]
+    assert lin["status"] == "not_applicable"
+    assert lin["summary"].startswith("neuron 1 of layer 1 of [networks.pi]: abs is not differentiable"), lin

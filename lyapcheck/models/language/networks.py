@@ -434,6 +434,27 @@ def outputs_at(source: str, network: Network, point: Mapping[str, Fraction]) -> 
     return tuple(h)
 
 
+# -- in certificates -------------------------------------------------------------------------------
+
+def stated_files(networks: Sequence[Network]) -> dict[str, dict[str, str]]:
+    """``model.networks`` of a certificate: each network's file as the model file writes it and the
+    SHA-256 of its bytes (the model text's own SHA-256 does not cover them)."""
+    return {n.name: {"file": n.file, "sha256": n.sha256} for n in networks}
+
+
+def check_stated_files(stated: object, networks: Sequence[Network]) -> tuple[bool, str]:
+    """Whether a certificate's ``model.networks`` are the files the model reads now (``verify``'s row)."""
+    if stated == stated_files(networks):
+        return True, "each network file is the one certified (its SHA-256)"
+    if not isinstance(stated, dict):
+        return False, "the certificate does not state its network files' SHA-256"
+    for n in networks:
+        entry = stated.get(n.name)
+        if not isinstance(entry, dict) or entry.get("sha256") != n.sha256:
+            return False, f"the file '{n.file}' of {n.key} is not the one certified: its SHA-256 differs"
+    return False, "the stated networks are not the model text's"
+
+
 # -- lowering --------------------------------------------------------------------------------------
 
 def lower(network: Network, ring: "Ring", calls: "FunctionCalls") -> dict[str, "Rational"]:
@@ -472,4 +493,5 @@ def lower(network: Network, ring: "Ring", calls: "FunctionCalls") -> dict[str, "
     return dict(zip(network.outputs, h))
 
 
-__all__ = ["ACTIVATIONS", "Layer", "Network", "read_networks", "read_layers", "lower", "MAX_NEURONS"]
+__all__ = ["ACTIVATIONS", "Layer", "Network", "read_networks", "read_layers", "outputs_at", "lower", "stated_files",
+           "check_stated_files", "MAX_NEURONS"]
