@@ -348,3 +348,32 @@ def test_a_relu_network_is_a_loop_with_abs_and_its_linearization_says_why_it_dec
     lin = json.loads(done.stdout)["conditions"]["linearization"]
     assert lin["status"] == "not_applicable"
     assert lin["summary"].startswith("neuron 1 of layer 1 of [networks.pi]: abs is not differentiable"), lin
+
+
+def reference_outputs(path: Path, X: Any) -> Any:
+    """The ONNX file evaluated by the onnx package's own reference evaluator (float32)."""
+    from onnx.reference import ReferenceEvaluator
+
+    model = onnx.load(str(path))
+    [result] = ReferenceEvaluator(model).run(None, {model.graph.input[0].name: np.asarray(X, dtype=np.float32)})
+    return np.asarray(result, dtype=np.float64)
+
+
+def test_the_onnx_files_read_are_the_networks_onnx_itself_evaluates(tmp_path: Path) -> None:
+    """The orientation and Gemm's attributes (alpha, beta, transB) as the ONNX operators define them: the
+    network read evaluates as onnx's reference evaluator evaluates the file (to float32's precision)."""
+    rng = np.random.default_rng(5)
+    X = rng.uniform(-2, 2, size=(50, 2))
+    shipped = ROOT / "examples" / "networks" / "pendulum_tanh_policy.onnx"
+    net = network_of(load_any_model(EXAMPLE_ONNX))
+    np.testing.assert_allclose(net.forward(X), reference_outputs(shipped, X), rtol=1e-5, atol=1e-5)
+    W = rng.normal(size=(2, 3)).astype(np.float32)  # (in, out): transB = 0
+    V = (np.round(rng.normal(size=(1, 3)) * 256) / 256).astype(np.float32)  # (out, in): transB = 1
+    c = np.array([0.25, -0.5, 0.125], dtype=np.float32)
+    d = -(V @ np.maximum(2.0 * c, 0))  # exact (dyadic): the output is 0 at the origin, an exact equilibrium
+    nodes = [helper.make_node("Gemm", ["x", "W", "c"], ["z"], alpha=0.5, beta=2.0),
+             helper.make_node("Relu", ["z"], ["h"]),
+             helper.make_node("Gemm", ["h", "V", "d"], ["y"], transB=1)]
+    path = onnx_file(tmp_path / "n.onnx", nodes, {"W": W, "c": c, "V": V, "d": d})
+    net = network_of(load_any_model(model_file(tmp_path, "n.onnx")))
+    np.testing.assert_allclose(net.forward(X), reference_outputs(path, X), rtol=1e-5, atol=1e-5)
