@@ -377,3 +377,33 @@ def test_the_onnx_files_read_are_the_networks_onnx_itself_evaluates(tmp_path: Pa
     path = onnx_file(tmp_path / "n.onnx", nodes, {"W": W, "c": c, "V": V, "d": d})
     net = network_of(load_any_model(model_file(tmp_path, "n.onnx")))
     np.testing.assert_allclose(net.forward(X), reference_outputs(path, X), rtol=1e-5, atol=1e-5)
+
+
+def test_the_training_script_gives_the_shipped_policy(tmp_path: Path) -> None:
+    """examples/networks/train_pendulum_policy.py (fixed seed) writes the shipped network again: the same
+    weights (to one quantum of 2**-10, in case another BLAS rounds a gradient step differently), no biases."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("train_pendulum_policy",
+                                                  ROOT / "examples" / "networks" / "train_pendulum_policy.py")
+    assert spec is not None and spec.loader is not None
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    script.main(tmp_path)
+    with np.load(tmp_path / "pendulum_tanh_policy.npz") as new, \
+            np.load(ROOT / "examples" / "networks" / "pendulum_tanh_policy.npz") as shipped:
+        assert sorted(new.files) == sorted(shipped.files) == ["W1", "W2", "activation", "b1", "b2"]
+        for k in ("W1", "W2"):
+            np.testing.assert_allclose(new[k], shipped[k], rtol=0, atol=2 ** -10)
+        assert not new["b1"].any() and not new["b2"].any()
+    fresh = network_of(load_any_model(model_file(tmp_path, "pendulum_tanh_policy.onnx", inputs='["x1", "x2"]')))
+    assert fresh.neurons == 8
+
+
+def test_the_limits_the_page_quotes_are_the_codes() -> None:
+    from lyapcheck.models.language import networks
+
+    text = (ROOT / "docs" / "model-files.md").read_text()
+    assert networks.MAX_NEURONS == 64 and "more than 64 neurons with an activation in all (`MAX_NEURONS`)" in text
+    assert networks.MAX_NETWORK_BYTES == 4 * 1024 * 1024 and "a file over 4 MiB (`MAX_NETWORK_BYTES`)" in text
+    assert networks.ONNX_OPS == ("Gemm", "MatMul", "Add", "Tanh", "Relu", "Sigmoid")

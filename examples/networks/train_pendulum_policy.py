@@ -85,7 +85,8 @@ def write_onnx(W1: np.ndarray, W2: np.ndarray, path: Path) -> None:
     path.write_bytes(model.SerializeToString())
 
 
-def main() -> None:
+def main(folder: Path = HERE) -> None:
+    """Train and write both files into ``folder`` (by default beside this script)."""
     K = lqr_gain()
     W1, W2 = (quantized(W) for W in train(K))
     assert np.array_equal(W1.astype(np.float32).astype(np.float64), W1)  # exact in float32 too
@@ -94,8 +95,8 @@ def main() -> None:
     rms = float(np.sqrt(np.mean((np.tanh(X @ W1.T) @ W2.T + X @ K.T) ** 2)))
     gain = W2 @ W1  # the network's slope at 0 (tanh'(0) = 1): u ~ gain x near the origin
     print(f"LQR K = {K.ravel()}, network slope at 0 = {gain.ravel()}, rms error on the box = {rms:.4f}")
-    np.savez(HERE / f"{NAME}.npz", W1=W1, b1=np.zeros(HIDDEN), W2=W2, b2=np.zeros(1), activation=np.array("tanh"))
-    write_onnx(W1, W2, HERE / f"{NAME}.onnx")
+    np.savez(folder / f"{NAME}.npz", W1=W1, b1=np.zeros(HIDDEN), W2=W2, b2=np.zeros(1), activation=np.array("tanh"))
+    write_onnx(W1, W2, folder / f"{NAME}.onnx")
 
 
 if __name__ == "__main__":
