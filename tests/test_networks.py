@@ -174,6 +174,9 @@ def write_case(tmp_path: Path, case: str) -> Path:
     if case == "tanh bias":
         save_npz(tmp_path / "n.npz", [([[1.0, 0.0], [0.0, 1.0]], [0.125, 0.0]), GOOD[1]])
         return model_file(tmp_path, "n.npz")
+    if case == "too many neurons":
+        save_npz(tmp_path / "n.npz", [(np.ones((65, 2)), np.zeros(65)), (np.ones((1, 65)), np.zeros(1))])
+        return model_file(tmp_path, "n.npz")
     raise AssertionError(case)
 
 
@@ -195,6 +198,7 @@ CASES = {
     "onnx not a chain": ("[networks.pi]:", "must add an initializer to the previous output"),
     "onnx outputs": ("[networks.pi] outputs:", "names 1 outputs, but the network's last layer gives 2"),
     "onnx garbage": ("[networks.pi] file:", "'n.onnx' is not a readable ONNX model"),
+    "too many neurons": ("[networks]:", "have 65 neurons with an activation; the limit is 64 (MAX_NEURONS)"),
     # a bias moves a tanh neuron's value at the equilibrium to tanh(b), irrational: a clear refusal
     "tanh bias": ("[networks.pi]:", "neuron 1 of layer 1 (tanh) has the argument 0.125 at the equilibrium"),
 }
