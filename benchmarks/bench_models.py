@@ -98,6 +98,8 @@ EXPECT: dict[str, dict[str, Any]] = {
     "recast-pendulum-actuator": {"certified": ("linearization", "roa")},
     "recast-ilos-course-disturbed": {"certified": ("linearization", "sos_gas", "sos_bound")},
     "recast-pendulum-torque": {"certified": ("linearization", "roa", "sos_bound"), "refuted": ("sos_gas",)},
+    "pendulum-tanh-policy": {"certified": ("linearization", "roa")},
+    "pendulum-tanh-policy-onnx": {"certified": ("linearization", "roa")},
 }
 #: the safety examples run with ``--classes barrier`` alone; the FOSSIL ones carry issue 32's targets
 BARRIER_EXAMPLES = ("fossil-barr1", "fossil-barr3", "fossil-highord4", "fossil-highord6", "fossil-highord8",

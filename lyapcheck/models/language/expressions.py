@@ -145,8 +145,8 @@ def parse_expression(text: str, ring: Ring) -> Rational:
 
 
 def parse_with_divisors(text: str, ring: Ring, *, calls: "FunctionCalls | None" = None,
-                        names: Sequence[str] | None = None, constants: Mapping[str, Fraction] | None = None
-                        ) -> tuple[Rational, tuple[Poly, ...]]:
+                        names: Sequence[str] | None = None, constants: Mapping[str, Fraction] | None = None,
+                        defined: Mapping[str, Rational] | None = None) -> tuple[Rational, tuple[Poly, ...]]:
     """The exact rational function of ``text``, over ``ring`` (whose names are the declared ones),
     and every non-constant divisor as written (the numerator of each ``/``'s right operand, before
     any common factor is cancelled: ``-x**2/x`` gives ``-x`` and the divisor ``x``).
@@ -155,6 +155,8 @@ def parse_with_divisors(text: str, ring: Ring, *, calls: "FunctionCalls | None" 
     and the constant ``pi`` are handed to it, which returns each as a rational function of new
     variables of ``ring`` (its auxiliaries); ``names`` are then the names the user may write (the
     ring has more) and ``constants`` the names read as exact numbers (parameters at their values).
+    ``defined`` are names that stand for expressions already built in ``ring`` (a network's outputs:
+    :mod:`lyapcheck.models.language.networks`).
 
     Raises
     ------
@@ -177,7 +179,7 @@ def parse_with_divisors(text: str, ring: Ring, *, calls: "FunctionCalls | None" 
         raise ExpressionError(f"not a valid expression ({exc.msg}{_where(exc.offset)})") from None
     except (RecursionError, MemoryError, ValueError):
         raise ExpressionError("not a valid expression (too deeply nested)") from None
-    builder = _Builder(text.strip(), ring, calls, names, constants)
+    builder = _Builder(text.strip(), ring, calls, names, constants, defined)
     try:
         result = builder.build(tree.body, 0)
     except RecursionError:  # a backstop only: the builder's own depth limit comes first
@@ -213,12 +215,14 @@ class _Builder:
     """Walks a parsed tree, accepting only the contract's nodes (see the module docstring)."""
 
     def __init__(self, source: str, ring: Ring, calls: "FunctionCalls | None" = None,
-                 names: Sequence[str] | None = None, constants: Mapping[str, Fraction] | None = None) -> None:
+                 names: Sequence[str] | None = None, constants: Mapping[str, Fraction] | None = None,
+                 defined: Mapping[str, Rational] | None = None) -> None:
         self.source = source
         self.ring = ring
         self.calls = calls
         self.names = tuple(ring.names if names is None else names)
         self.constants = dict(constants or {})
+        self.defined = dict(defined or {})
         # node positions are UTF-8 byte offsets; on one line they slice these bytes directly
         # (ast.get_source_segment splits the whole text on every call: a second for 1000 numbers)
         self.source_bytes = source.encode("utf-8")
@@ -234,6 +238,8 @@ class _Builder:
         if isinstance(node, ast.Name):
             if node.id in self.constants:
                 return Rational.polynomial(self.ring, self.ring.constant(self.constants[node.id]))
+            if node.id in self.defined:
+                return self.defined[node.id]
             if self.calls is not None and node.id == "pi" and node.id not in self.names:
                 return self.calls.pi()
             if node.id not in self.names:

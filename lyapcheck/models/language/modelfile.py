@@ -15,6 +15,8 @@ The format (docs/model-files.md, the reference; DESIGN.md's "Model files (contra
                      all hold; a list of lists: a union); lyapcheck.models.language.sets
     [units]          optional: a unit per state and time = "s"; every right-hand side is then
                      dimension-checked term by term (lyapcheck.models.language.dimensions)
+    [networks.NAME]  optional: a feedforward network (file, inputs, outputs) whose outputs [dynamics]
+                     may use; a loop with one is a loop with functions (lyapcheck.models.language.networks)
 
 Every error is one line naming the file, the key and what is wrong (:class:`ModelFileError`,
 exit code 2 on the command line). The file's text is kept as it was read, with its SHA-256:
@@ -40,6 +42,7 @@ from lyapcheck.sos.polynomials import Poly, Ring, degree_in
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.dimensions import UnitTable
+    from lyapcheck.models.language.networks import Network
     from lyapcheck.models.language.recast import RecastModel
     from lyapcheck.units import SIQuantity
 
@@ -53,7 +56,7 @@ MAX_DISTURBANCES: Final = 6
 MAX_FILE_BYTES: Final = 256 * 1024
 
 SECTIONS: Final = ("model", "parameters", "disturbances", "dynamics", "equilibrium", "outputs", "domain", "sets",
-                    "units", "sampling", "controller")
+                    "units", "networks", "sampling", "controller")
 MODEL_KEYS: Final = ("name", "states", "source", "time")
 #: the values of ``[model] time``: a file says which time its [dynamics] are in, and a value lyapcheck
 #: does not take is refused, so that a file never means another system than its author wrote;
@@ -208,7 +211,7 @@ def parse_any_model(text: str, source: str = "<model>", overrides: Mapping[str, 
             raise _error(source, "file", f"is not valid TOML ({exc})") from None
     reader = _Reader(source, text, data, dict(overrides or {}))
     dynamics = data.get("dynamics")
-    if isinstance(dynamics, dict) and uses_functions(list(dynamics.values())):
+    if isinstance(dynamics, dict) and (uses_functions(list(dynamics.values())) or "networks" in data):
         return reader.recast_model(candidate)
     return reader.model()
 
@@ -247,7 +250,7 @@ def file_uses_functions(path: str | Path) -> bool:
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return False
     dynamics = data.get("dynamics")
-    return isinstance(dynamics, dict) and uses_functions(list(dynamics.values()))
+    return isinstance(dynamics, dict) and (uses_functions(list(dynamics.values())) or "networks" in data)
 
 
 def load_any_model(path: str | Path, overrides: Mapping[str, object] | None = None, candidate: str | None = None
@@ -369,6 +372,7 @@ class _Reader:
         equilibrium = self.equilibrium(states, Ring(states))
         domain = self.domain(states)
         outputs, output_text = self.recast_outputs(states, params, dists)
+        networks = self.networks(states, params, dists, output_text)
         set_text, recast_sets = self.recast_sets(states, params, dists)
         # [units]: the texts as written, term by term, before the recasting (which moves a field to
         # auxiliaries whose dimensions no longer show); None where a text stood aside for the parser
@@ -378,21 +382,39 @@ class _Reader:
             units = None
         # the nominal loop: every disturbance at 0 (a claim about it says "(d = 0)")
         system, V = recast_dynamics(self.source, states, table, {**params, **{d: Fraction(0) for d in dists}},
-                                    equilibrium, candidate)
+                                    equilibrium, candidate, networks)
         if units is None:  # the recasting's parser took every text after all: each is checked now
             units = self.units(states, set_text)
         robust = None
         if dists:  # and the loop with its disturbances as states without a flow, for robust claims
             try:
                 robust, _ = recast_dynamics(self.source, states + tuple(dists), {**table, **{d: "0" for d in dists}},
-                                            params, tuple(equilibrium) + (Fraction(0),) * len(dists))
+                                            params, tuple(equilibrium) + (Fraction(0),) * len(dists),
+                                            networks=networks)
             except ModelFileError:  # (a disturbance where the recasting cannot keep it: nominal claims only)
                 robust = None
         return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
                            parameters=params, equilibrium=equilibrium, domain=domain, system=system,
                            overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V,
                            disturbances=dists, robust=robust, outputs=outputs, output_text=output_text,
-                           sets=recast_sets, set_text=set_text, units=units)
+                           sets=recast_sets, set_text=set_text, units=units, networks=networks)
+
+    def networks(self, states: tuple[str, ...], params: Mapping[str, Fraction], dists: Mapping[str, Fraction],
+                 outputs: Mapping[str, str]) -> "tuple[Network, ...]":
+        """``[networks.NAME]`` (:func:`lyapcheck.models.language.networks.read_networks`): each network's
+        outputs are new names, distinct from every name the file declares and from the language's."""
+        if "networks" not in self.data:
+            return ()
+        from lyapcheck.models.language.networks import read_networks
+
+        if "units" in self.data:  # a network's outputs have no declared dimension to check [dynamics] against
+            raise self.fail("[units]", "a model with [networks] is not dimension-checked yet: remove [units] (the "
+                                       "states' units may stay in comments)")
+        taken = {**{s: "a state" for s in states}, **{p: "a parameter" for p in params},
+                 **{d: "a disturbance" for d in dists}, **{o: "an output in [outputs]" for o in outputs
+                                                           if "outputs" in self.data},
+                 **{f: "a function of the language" for f in (*FUNCTIONS, "pi")}}
+        return read_networks(self.source, self.data["networks"], states, taken)
 
     def recast_sets(self, states: tuple[str, ...], params: Mapping[str, Fraction], dists: Mapping[str, Fraction]
                     ) -> tuple[dict[str, SetText], dict[str, StateSet]]:

@@ -61,12 +61,15 @@ import ast
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.expressions import (FUNCTIONS, ExpressionError, Rational, first_function_use, parse_with_divisors,
                                           uses_functions, written_tree)
 from lyapcheck.sos.polynomials import Poly, Ring, degree_in, to_fmpq, to_fraction
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.language.networks import Network
 
 #: an upper bound of pi/2 = 1.5707963...: |atan u| < pi/2 < 1.571
 ATAN_RANGE: Final = Fraction(1571, 1000)
@@ -530,13 +533,18 @@ def count_calls(texts: Sequence[str]) -> int:
 
 def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, object],
                     constants: Mapping[str, Fraction], equilibrium: Sequence[Fraction],
-                    candidate: str | None = None) -> tuple[RecastSystem, Poly | None]:
+                    candidate: str | None = None, networks: Sequence["Network"] = ()
+                    ) -> tuple[RecastSystem, Poly | None]:
     """Parse each state's right-hand side with the functions recast (one-line
     :class:`~lyapcheck.errors.ModelFileError` naming the key on anything refused); with a
     ``candidate`` V (``--candidate``, the same language), its functions are recast too and it is
-    returned as a polynomial in the recast ring's deviations (0 at the equilibrium)."""
+    returned as a polynomial in the recast ring's deviations (0 at the equilibrium). ``networks``
+    (``[networks.NAME]``, :mod:`lyapcheck.models.language.networks`) are lowered first, their neurons the
+    first auxiliaries, and their outputs are names the texts may use."""
     slots = count_calls([str(t) for t in texts.values()] + ([candidate] if candidate is not None else []))
+    slots += 2 * sum(n.neurons for n in networks)
     recaster = Recaster(states, tuple(equilibrium), slots)
+    defined = network_outputs(source, recaster, networks)
     rhs: list[Rational] = []
     for s in states:
         key = f"[dynamics] {s}"
@@ -544,7 +552,8 @@ def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, ob
         if not isinstance(text, (str, int, float)) or isinstance(text, bool):
             raise ModelFileError(source, key, f"must be an expression in a string, got {text!r}")
         try:
-            r, _ = parse_with_divisors(str(text), recaster.ring, calls=recaster, names=states, constants=constants)
+            r, _ = parse_with_divisors(str(text), recaster.ring, calls=recaster, names=states, constants=constants,
+                                       defined=defined)
         except ExpressionError as exc:
             raise ModelFileError(source, key, str(exc)) from None
         if degree_in(recaster.ring, r.numerator, [PI_MARK]) > 0 or degree_in(recaster.ring, r.denominator, [PI_MARK]) > 0:
@@ -554,7 +563,8 @@ def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, ob
     extra: list[Rational] = []
     if candidate is not None:
         try:
-            v, _ = parse_with_divisors(str(candidate), recaster.ring, calls=recaster, names=states, constants=constants)
+            v, _ = parse_with_divisors(str(candidate), recaster.ring, calls=recaster, names=states, constants=constants,
+                                       defined=defined)
         except ExpressionError as exc:
             raise ModelFileError(source, "--candidate", str(exc)) from None
         if not v.is_polynomial():
@@ -577,6 +587,23 @@ def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, ob
         raise ModelFileError(source, "--candidate", f"must be 0 at the equilibrium, got {written_poly(system.ring, at0)} "
                                                     "there")
     return system, V
+
+
+def network_outputs(source: str, recaster: Recaster, networks: Sequence["Network"]) -> dict[str, Rational]:
+    """Every network's outputs as expressions of the recaster's ring (its neurons made auxiliaries), after
+    checking that each network's value at the equilibrium is exact
+    (:func:`lyapcheck.models.language.networks.outputs_at`)."""
+    from lyapcheck.models.language.networks import lower, outputs_at
+
+    point = dict(zip(recaster.states, recaster.equilibrium))
+    defined: dict[str, Rational] = {}
+    for network in networks:
+        outputs_at(source, network, point)
+        try:
+            defined.update(lower(network, recaster.ring, recaster))
+        except ExpressionError as exc:  # pragma: no cover - an affine argument of tanh or max is always taken
+            raise ModelFileError(source, network.key, str(exc)) from None
+    return defined
 
 
 def _finish(source: str, recaster: Recaster, rhs: Sequence[Rational], flows: Mapping[int, Rational],
@@ -728,6 +755,8 @@ class RecastModel:
     #: the ``[units]`` table as written (empty when the model declares none): the right-hand sides
     #: were dimension-checked as written, before the recasting (lyapcheck.models.language.dimensions)
     units: dict[str, str] = field(default_factory=dict)
+    #: ``[networks.NAME]`` as read (lyapcheck.models.language.networks): every recasting of the loop lowers them
+    networks: tuple["Network", ...] = ()
 
     @property
     def state_ring(self) -> Ring:
@@ -776,6 +805,7 @@ def recast_with_constants(model: RecastModel, constants: Mapping[str, Fraction])
     params.update({d: Fraction(0) for d in model.disturbances if d not in constants})
     texts: dict[str, object] = {**model.dynamics_text, **{n: "0" for n in names}}
     system, _ = recast_dynamics(model.source, model.states + names, texts, params,
-                                tuple(model.equilibrium) + tuple(constants[n] for n in names))
+                                tuple(model.equilibrium) + tuple(constants[n] for n in names),
+                                networks=model.networks)
     return system
 

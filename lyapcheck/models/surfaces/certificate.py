@@ -5,7 +5,8 @@ Schema (version 1)::
     {
       "schema_version": 1,
       "kind": "lyapcheck-model-certificate",
-      "model": {"name": .., "file": .., "sha256": .., "text": "<the model file, verbatim>"},
+      "model": {"name": .., "file": .., "sha256": .., "text": "<the model file, verbatim>",
+                "networks": {"pi": {"file": .., "sha256": ..}}},   # only with [networks.NAME]
       "overrides": {"mu": "2"},                      # --set, as given
       "candidate": "x1**2 + x2**2" | null,            # --candidate, as given
       "states": [..], "equilibrium": {"x1": "0", ..}, "parameters": {"mu": "2"},  # exact SI
@@ -62,7 +63,8 @@ def build_document(result: ModelCertification) -> dict[str, Any]:
     return {
         "schema_version": SCHEMA_VERSION,
         "kind": KIND,
-        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text},
+        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text,
+                  **_network_files(model)},
         "overrides": dict(model.overrides),
         "candidate": result.candidate.text if result.candidate is not None else None,
         "states": list(model.states),
@@ -76,6 +78,16 @@ def build_document(result: ModelCertification) -> dict[str, Any]:
         "verdict": result.verdict,
         "versions": package_versions(),
     }
+
+
+def _network_files(model: Any) -> dict[str, Any]:
+    """``{"networks": ...}`` for a loop with ``[networks.NAME]`` (their files' SHA-256), else nothing: the
+    documents of every other model stay as they were."""
+    if not getattr(model, "networks", ()):
+        return {}
+    from lyapcheck.models.language.networks import stated_files
+
+    return {"networks": stated_files(model.networks)}
 
 
 def is_model_document(doc: Any) -> bool:
@@ -155,6 +167,10 @@ def _read_model(doc: dict[str, Any]) -> tuple[Any, list[Row]]:
     rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
                  "the stated parameters or equilibrium differ from the model text's"))
     rows.append(check_declared(doc, model))
+    if getattr(model, "networks", ()) or "networks" in part:
+        from lyapcheck.models.language.networks import check_stated_files
+
+        rows.append(("networks", *check_stated_files(part.get("networks"), getattr(model, "networks", ()))))
     return model, rows
 
 
