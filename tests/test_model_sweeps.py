@@ -138,8 +138,8 @@ AXIS = '[[sweep.axes]]\nname = "a"\nstart = 0.5\nstop = 2\nnum = 3\n'
     # a model without [sets] cannot ask the safety questions: refused by the spec, not at the first point
     ('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n' + AXIS, LINEAR, "'sweep.classes' parameter must be"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["reach_avoid"]\n' + AXIS, LINEAR, "'sweep.classes' parameter must be"),
-    ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["linearization"]\n' + AXIS, LINEAR,
-     "in a boxes sweep, a list of distinct names from 'quadratic'"),
+    ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["candidate"]\n' + AXIS, LINEAR,
+     "in a boxes sweep, a list of distinct names from 'linearization', 'quadratic'"),
     ('[sweep]\nmodel = "m.toml"\n[sweep.set]\nq = 1\n' + AXIS, LINEAR, "'sweep.set.q' parameter must be a parameter "
      "or disturbance declared in the model"),
     ('[sweep]\nmodel = "m.toml"\n[sweep.boxes]\nmax_boxes = 4\n' + AXIS, LINEAR, "'sweep.boxes' parameter must be "

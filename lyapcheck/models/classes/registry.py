@@ -119,7 +119,7 @@ _V_RATE: Final = Figure("decay_rate_V_per_s", "decay_rate_V_per_s", "certified d
 
 #: every class of a model file, in the order ``certify --model`` runs them (cheapest first)
 CLASSES: Final[tuple[ModelClass, ...]] = (
-    ModelClass("linearization", "stability", "LES", over_box=False, stability=True, cleared=False, discrete=True),
+    ModelClass("linearization", "stability", "LES", over_box=True, stability=True, cleared=False, discrete=True),
     ModelClass("quadratic", "stability", "GES", over_box=True, stability=True, discrete=True,
                figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"),
                         Figure("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s"))),
