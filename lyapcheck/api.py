@@ -512,7 +512,7 @@ def tune(model: "str | Path | Model", box: Sequence[str], objective: str, *, gri
     tried = tuning.search(boxes, count, goal.sense, evaluate)
     found = tuning.Tuning(goal, boxes, count, tried, settings=base)
     best = tuning.best_point(tried, goal.sense)
-    if best is None:
+    if best is None or best.value is None:
         found.why = f"none of the {len(tried)} points tried proved it"
         return found
     margin = [f"{goal.target}={decimal(best.value)}"] if goal.kind == "safety" else []

@@ -71,13 +71,13 @@ def test_the_neighbourhood_halves_its_box_until_the_factor_is_proved_and_never_c
         return got, "certified", {"box": texts}
 
     nb = tune.neighbourhood(objective, boxes, {"k": Fraction(2)}, Fraction(1), 2, certify_box, True)
-    # threshold 1/2: the box of width 4 gives 0 and width 2 gives 1/2, which meets it
+    # threshold 1/2: half a grid step (2) either way is the whole box, width 4, which gives 0; then width 2
+    # gives 1/2, which meets it
     assert asked == [["k=0..4"], ["k=1..3"]]
     assert nb["certified"] and nb["box"] == {"k": ["1", "3"]} and Fraction(nb["threshold_exact"]) == Fraction(1, 2)
     never = tune.neighbourhood(objective, boxes, {"k": Fraction(2)}, Fraction(1), 2,
                                lambda texts, need: (None, "not_certified", None), True)
-    # one grid step (4) either way is the whole box, so is half of it (clipped: tried once), then k=1..3
-    assert not never["certified"] and [t["box"] for t in never["tries"]] == [["k=0..4"], ["k=1..3"]]
+    assert not never["certified"] and [t["box"] for t in never["tries"]] == [["k=0..4"], ["k=1..3"], ["k=1.5..2.5"]]
     assert "no certified neighbourhood" in tune.neighbourhood_sentence(objective, never)
     assert not tune.neighbourhood(objective, boxes, {"k": Fraction(2)}, Fraction(1), 2, certify_box, False)["certified"]
 

@@ -33,7 +33,7 @@ The search (a bounded amount of work, every point a whole exact certification):
    (at most ``2 k`` points, those inside the box and not tried yet);
 3. the winner (the largest or smallest figure; the first in that order on a tie) is certified again
    with its values as ``--set`` overrides: that certificate is the one written, with the figure in it;
-4. its neighbourhood: a box around the winner (one grid step either way, within the search box),
+4. its neighbourhood: a box around the winner (half a grid step either way, within the search box),
    certified with the objective's class over the box (its box certificate covers every gain in it)
    and accepted when its figure is within :data:`FACTOR` of the winner's (at least half of it for
    a maximized figure, at most twice it for a minimized one; for ``safety``: the box certified safe
@@ -349,13 +349,14 @@ def _nudge(exact: Fraction, sense: str) -> Fraction:
 
 def neighbourhood_boxes(boxes: Sequence[tuple[str, Fraction, Fraction]], winner: Mapping[str, Fraction], grid: int
                         ) -> list[dict[str, tuple[Fraction, Fraction]]]:
-    """The boxes tried around the winner: one grid step either way (within the search box), then
-    halved, :data:`NEIGHBOURHOOD_TRIES` in all; corners are decimals of :data:`DIGITS` digits."""
+    """The boxes tried around the winner: half a grid step either way (as far as the refinement
+    went; within the search box), then halved, :data:`NEIGHBOURHOOD_TRIES` in all (a box that clipping
+    makes the same as the one before is tried once); corners are decimals of :data:`DIGITS` digits."""
     out = []
     for t in range(NEIGHBOURHOOD_TRIES):
         box = {}
         for name, lo, hi in boxes:
-            half = step(lo, hi, grid) / 2 ** t
+            half = step(lo, hi, grid) / 2 ** (t + 1)
             w = winner[name]
             box[name] = (max(lo, rounded(w - half)), min(hi, rounded(w + half)))
         if all(a < b for a, b in box.values()) and box not in out:  # (a clipped box may repeat)
