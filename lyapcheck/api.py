@@ -445,13 +445,14 @@ def tune(model: "str | Path | Model", box: Sequence[str], objective: str, *, gri
     -------
     Tuning
         ``tried`` (every point with its figure or outcome), ``winner``, ``value`` (exact), ``result``
-        (the winner's :class:`CertifyResult`), ``neighbourhood``, ``document()``, ``write(path)``.
+        (the winner's :class:`CertifyResult`), ``neighbourhood``, ``document()`` (its certificate with the
+        ``tune`` table, which :func:`verify` re-checks).
     """
-    from lyapcheck.answers import OK_VERDICTS, parse_requirements, unmet_requirements
-    from lyapcheck.models.classes.registry import OVER_BOX
+    from lyapcheck.answers import parse_requirements, unmet_requirements
+    from lyapcheck.models.classes.registry import NAMES, OVER_BOX
     from lyapcheck.models.language.modelfile import Model, load_any_model
     from lyapcheck.models.surfaces import tune as tuning
-    from lyapcheck.models.surfaces.extremum import decimal
+    from lyapcheck.models.surfaces.extremum import NEGATIVE_VERDICTS, decimal
     from lyapcheck.models.surfaces.extremum import search as bisection
 
     count = tuning.DEFAULT_GRID if grid is None else tuning.check_grid(grid)
@@ -467,6 +468,8 @@ def tune(model: "str | Path | Model", box: Sequence[str], objective: str, *, gri
         boxes = tuning.parse_boxes([str(b) for b in box], loaded, goal, base, count)
     required = parse_requirements(require)
     extra = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes or ()) if c.strip()]
+    if any(c not in NAMES for c in extra):  # refused once, not at every point
+        raise InvalidParameter("classes", "names among " + ", ".join(NAMES), classes)
     chosen = ",".join(dict.fromkeys([goal.cls, *extra]))
     centre = [f"{n}={decimal(tuning.axis_values(lo, hi, 1)[0])}" for n, lo, hi in boxes]
     with _settings_named():  # every setting valid once, before any point is certified
@@ -480,7 +483,7 @@ def tune(model: "str | Path | Model", box: Sequence[str], objective: str, *, gri
 
     def judged(doc: dict[str, Any]) -> tuple[Any, str]:
         value, why = tuning.figure(goal, doc)
-        if doc.get("verdict") not in OK_VERDICTS and doc.get("verdict") in ("unstable", "unsafe"):
+        if doc.get("verdict") in NEGATIVE_VERDICTS:
             return None, f"refuted ({doc.get('verdict')})"
         unmet = unmet_requirements(doc.get("conditions") or {}, required)
         if value is not None and unmet:
@@ -506,7 +509,7 @@ def tune(model: "str | Path | Model", box: Sequence[str], objective: str, *, gri
             if found.proved is None:
                 return None, f"no {goal.target} in {decimal(goal.low)}..{decimal(goal.high)} proved safe", detail
             return found.proved, "certified", detail
-        except (ModelFileError, InvalidParameter) as exc:  # a point the model refuses (a divisor that vanishes)
+        except ModelFileError as exc:  # a point the model refuses (a divisor that vanishes there)
             return None, f"refused: {exc}", {}
 
     tried = tuning.search(boxes, count, goal.sense, evaluate)

@@ -88,7 +88,11 @@ def register(group: click.Group) -> None:
                                classes=classes, require=require, degree=check_degree(degree),
                                time_limit_s=_time_limit(time_limit))
         if out and found.result is not None:
-            found.write(out)
+            import json
+
+            from lyapcheck.fileio import atomic_write
+
+            atomic_write(out, json.dumps(found.document(), indent=2) + "\n")
         if as_json:
             emit_json({"tune": found.to_json(), "certificate": None if found.result is None else found.result.to_json()})
         else:

@@ -445,18 +445,9 @@ class Tuning:
             return None
         return {**self.result.to_json(), "tune": self.to_json()}
 
-    def write(self, path: str) -> None:
-        import json
-
-        from lyapcheck.fileio import atomic_write
-
-        doc = self.document()
-        if doc is not None:
-            atomic_write(path, json.dumps(doc, indent=2) + "\n")
-
     def sentence(self) -> str:
         if self.winner is None or self.value is None:
-            return f"no winner: {self.why or 'no point was certified'} ({self.objective.cls}: {self.objective.words()})"
+            return f"no winner: {self.why or 'no point was certified'} ({self.objective.words()})"
         point = ", ".join(f"{k} = {decimal(v)}" for k, v in self.winner.values.items())
         extra = ""
         if self.objective.kind == "safety":
