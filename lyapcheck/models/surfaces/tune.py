@@ -333,18 +333,10 @@ def threshold(value: Fraction, sense: str) -> Fraction:
     """The figure the neighbourhood must prove: ``FACTOR x value`` (max) or ``value / FACTOR`` (min),
     as a decimal of :data:`DIGITS` digits rounded towards the stronger claim (up for max, down for min:
     a safety margin's threshold is given to ``--set``, and proving it keeps the factor true)."""
-    return _nudge(value * FACTOR if sense == "max" else value / FACTOR, sense)
+    from lyapcheck.models.classes.claims import rounded as rounded_text
 
-
-def _nudge(exact: Fraction, sense: str) -> Fraction:
-    """``exact`` rounded to :data:`DIGITS` significant digits, up (``max``) or down (``min``)."""
-    if exact == 0:
-        return exact
-    exponent = math.floor(math.log10(abs(float(exact)))) - DIGITS + 1
-    quantum = Fraction(10) ** exponent
-    steps = exact / quantum
-    whole = math.ceil(steps) if sense == "max" else math.floor(steps)
-    return whole * quantum
+    exact = value * FACTOR if sense == "max" else value / FACTOR
+    return exact if exact == 0 else Fraction(rounded_text(exact, DIGITS, "up" if sense == "max" else "down"))
 
 
 def neighbourhood_boxes(boxes: Sequence[tuple[str, Fraction, Fraction]], winner: Mapping[str, Fraction], grid: int
