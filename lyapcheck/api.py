@@ -417,6 +417,128 @@ def certify_extremum(model: "str | Path | Model", parameter_range: str, *, direc
     return extremum.search(name, low, high, direction, certify_at, count)
 
 
+def tune(model: "str | Path | Model", box: Sequence[str], objective: str, *, grid: int | str | None = None,
+         settings: Mapping[str, object] | Sequence[str] | None = None, classes: str | Sequence[str] | None = None,
+         require: str | Sequence[str] | None = None, degree: int | None = None,
+         time_limit_s: float | None = None) -> Any:
+    """The gains in a box of a model's parameters with the best certified figure (``lyapcheck tune``):
+    a grid, one refinement around its best point, the winner certified again, and a neighbourhood
+    proved with a box certificate (:mod:`lyapcheck.models.surfaces.tune`).
+
+    Parameters
+    ----------
+    box
+        ``["kp=0.5..4", "ki=0.25..2"]``: the parameters searched, decimal numbers in the file's units.
+    objective
+        ``"decay_rate"``, ``"roa"``, ``"bound:OUTPUT"``, ``"safety:PARAM=LO..HI"`` or
+        ``"safety:min:PARAM=LO..HI"``.
+    grid
+        Points per axis (default :data:`~lyapcheck.models.surfaces.tune.DEFAULT_GRID`).
+    settings, degree, time_limit_s
+        As for :func:`certify` (``settings`` may not set a searched parameter).
+    classes
+        Classes run at every point besides the objective's own (default: the objective's alone).
+    require
+        Properties a point must also prove to count (as ``certify --require``).
+
+    Returns
+    -------
+    Tuning
+        ``tried`` (every point with its figure or outcome), ``winner``, ``value`` (exact), ``result``
+        (the winner's :class:`CertifyResult`), ``neighbourhood``, ``document()`` (its certificate with the
+        ``tune`` table, which :func:`verify` re-checks).
+    """
+    from lyapcheck.answers import parse_requirements, unmet_requirements
+    from lyapcheck.models.classes.registry import NAMES, OVER_BOX
+    from lyapcheck.models.language.modelfile import Model, load_any_model
+    from lyapcheck.models.surfaces import tune as tuning
+    from lyapcheck.models.surfaces.extremum import NEGATIVE_VERDICTS, decimal
+    from lyapcheck.models.surfaces.extremum import search as bisection
+
+    count = tuning.DEFAULT_GRID if grid is None else tuning.check_grid(grid)
+    source = model.source if isinstance(model, Model) else str(model)
+    base = [f"{k}={v}" for k, v in model_settings(settings, source).items()]
+    with _settings_named():
+        loaded = load_model_file(model, base) if isinstance(model, Model) else load_any_model(model, model_settings(base))
+    goal = tuning.parse_objective(objective, loaded)
+    if goal.kind == "safety" and any(s.partition("=")[0] == goal.target for s in base):
+        raise ModelFileError(source, "--objective", f"must search a parameter not given by --set; got {objective!r} "
+                                                    f"with --set {goal.target}")
+    with _argument_names():
+        boxes = tuning.parse_boxes([str(b) for b in box], loaded, goal, base, count)
+    required = parse_requirements(require)
+    extra = [c.strip() for c in (classes.split(",") if isinstance(classes, str) else classes or ()) if c.strip()]
+    if any(c not in NAMES for c in extra):  # refused once, not at every point
+        raise InvalidParameter("classes", "names among " + ", ".join(NAMES), classes)
+    chosen = ",".join(dict.fromkeys([goal.cls, *extra]))
+    centre = [f"{n}={decimal(tuning.axis_values(lo, hi, 1)[0])}" for n, lo, hi in boxes]
+    with _settings_named():  # every setting valid once, before any point is certified
+        load_model_file(model, [*base, *centre]) if isinstance(model, Model) else \
+            load_any_model(model, model_settings([*base, *centre]))
+
+    def run(extra_settings: Sequence[str], over: Sequence[str] | None = None, which: str = chosen) -> dict[str, Any]:
+        found = certify_model_file(model, settings=[*base, *extra_settings], classes=which, box=over,
+                                   time_limit_s=time_limit_s, degree=degree)
+        return {"doc": found.to_json(), "result": found}
+
+    def judged(doc: dict[str, Any]) -> tuple[Any, str]:
+        value, why = tuning.figure(goal, doc)
+        if doc.get("verdict") in NEGATIVE_VERDICTS:
+            return None, f"refuted ({doc.get('verdict')})"
+        unmet = unmet_requirements(doc.get("conditions") or {}, required)
+        if value is not None and unmet:
+            return None, "unmet --require " + ",".join(unmet)
+        return value, why
+
+    def point_settings(values: Mapping[str, Any]) -> list[str]:
+        return [f"{k}={decimal(v)}" for k, v in values.items()]
+
+    def evaluate(values: dict[str, Any]) -> tuple[Any, str, dict[str, Any]]:
+        try:
+            if goal.kind != "safety":
+                return (*judged(run(point_settings(values))["doc"]), {})
+
+            def certify_at(v: str) -> tuple[dict[str, Any], bool, Any]:
+                done = run([*point_settings(values), f"{goal.target}={v}"])
+                return done["doc"], judged(done["doc"])[0] is not None, None
+
+            found = bisection(goal.target, goal.low, goal.high, goal.sense, certify_at, tuning.SAFETY_STEPS)
+            detail = {"margin_tried": len(found.steps),
+                      "first_failed": None if found.failed is None else decimal(found.failed.value),
+                      "first_failed_outcome": None if found.failed is None else found.failed.outcome}
+            if found.proved is None:
+                return None, f"no {goal.target} in {decimal(goal.low)}..{decimal(goal.high)} proved safe", detail
+            return found.proved, "certified", detail
+        except ModelFileError as exc:  # a point the model refuses (a divisor that vanishes there)
+            return None, f"refused: {exc}", {}
+
+    tried = tuning.search(boxes, count, goal.sense, evaluate)
+    found = tuning.Tuning(goal, boxes, count, tried, settings=base)
+    best = tuning.best_point(tried, goal.sense)
+    if best is None or best.value is None:
+        found.why = f"none of the {len(tried)} points tried proved it"
+        return found
+    margin = [f"{goal.target}={decimal(best.value)}"] if goal.kind == "safety" else []
+    again = run([*point_settings(best.values), *margin])
+    value, why = judged(again["doc"])
+    if value is None:
+        found.why = f"the best point did not certify again ({why})"
+        return found
+    found.winner, found.value, found.result = best, value, again["result"]
+
+    def certify_box(texts: list[str], need: Any) -> tuple[Any, str, dict[str, Any] | None]:
+        at = [f"{goal.target}={decimal(need)}"] if goal.kind == "safety" else []
+        try:
+            done = run(at, over=texts, which=goal.cls)
+        except (ModelFileError, InvalidParameter) as exc:
+            return None, f"refused: {exc}", None
+        got, word = tuning.figure(goal, done["doc"])
+        return got, word, done["doc"]
+
+    found.neighbourhood = tuning.neighbourhood(goal, boxes, best.values, value, count, certify_box, goal.cls in OVER_BOX)
+    return found
+
+
 def certify_model_file(model: "str | Path | Model", *, settings: Mapping[str, object] | Sequence[str] | None = None,
                        candidate: str | None = None, classes: str | Sequence[str] | None = None,
                        time_limit_s: float | None = None, box: Sequence[str] | Mapping[str, Any] | None = None,
@@ -651,6 +773,10 @@ def verify(certificate: str | Path | Mapping[str, Any] | CertifyResult) -> Verif
         raise InvalidParameter("certificate", "a path, a certificate document or a CertifyResult",
                                type(certificate).__name__)
     rows = model_certificate.verify_document(doc) if model_certificate.is_model_document(doc) else verify_document(doc)
+    if model_certificate.is_model_document(doc) and "tune" in doc:  # lyapcheck tune's value and neighbourhood
+        from lyapcheck.models.surfaces.tune import check_tune
+
+        rows = [*rows, *check_tune(doc)]
     checks = tuple(Check(n, ok, m) for n, ok, m in rows)
     return VerifyResult(valid=all(c.ok for c in checks), checks=checks)
 
@@ -1129,5 +1255,5 @@ def report(source: str | Path | CertifyResult, *, html: str | Path | None = None
     return report_files(source, html, pdf)
 
 
-__all__ = ["certify", "certify_box", "certify_extremum", "certify_model_file", "verify", "simulate", "simulate_model_file", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
+__all__ = ["certify", "certify_box", "certify_extremum", "tune", "certify_model_file", "verify", "simulate", "simulate_model_file", "sweep", "report", "CertifyResult", "VerifyResult", "Check",
            "SimulationReport", "SweepResult", "problem_from", "class_selection"]

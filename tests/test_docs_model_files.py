@@ -47,6 +47,8 @@ CHEAP = (
     'lyapcheck certify examples/models/fossil-poly2.toml --candidate "x**2 + y**2"',
     "lyapcheck certify examples/models/unstable-van-der-pol.toml --classes linearization",
     "lyapcheck certify examples/models/damped-oscillator.toml --classes linearization --minimize c=-1..1",
+    "lyapcheck tune examples/models/linear-scalar-disturbed.toml --box a=1..4 --objective bound:y --grid 2",
+    "lyapcheck tune examples/models/damped-oscillator.toml --box k=1..2 --objective bound:x1",
     'lyapcheck certify examples/models/pid-hardening-spring.toml --box "kp=1.5..2.5" --box "ki=0.5..1.5" --classes linearization',
     'lyapcheck certify examples/models/pid-hardening-spring.toml --box "kp=1..2" --box "ki=1..2" --classes linearization',
     "lyapcheck certify examples/models/van-der-pol-reversed.toml --set nu=2",

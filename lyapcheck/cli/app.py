@@ -76,9 +76,9 @@ def cli() -> None:
 
 def _register_commands() -> None:
     """One module per command; each imports its libraries only when the command runs."""
-    from lyapcheck.cli import certify, derive, report, simulate, sweep
+    from lyapcheck.cli import certify, derive, report, simulate, sweep, tune
 
-    for module in (derive, certify, simulate, sweep, report):
+    for module in (derive, certify, simulate, sweep, report, tune):
         module.register(cli)
 
 
