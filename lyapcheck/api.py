@@ -460,6 +460,9 @@ def tune(model: "str | Path | Model", box: Sequence[str], objective: str, *, gri
     base = [f"{k}={v}" for k, v in model_settings(settings, source).items()]
     with _settings_named():
         loaded = load_model_file(model, base) if isinstance(model, Model) else load_any_model(model, model_settings(base))
+    if getattr(loaded, "time", "continuous") == "discrete":  # its figures are per step, and a box is refused on a map
+        raise ModelFileError(source, "[model] time", 'tune takes continuous-time loops; a discrete-time map (time = '
+                                                     '"discrete") is certified value by value (--set, --maximize)')
     goal = tuning.parse_objective(objective, loaded)
     if goal.kind == "safety" and any(s.partition("=")[0] == goal.target for s in base):
         raise ModelFileError(source, "--objective", f"must search a parameter not given by --set; got {objective!r} "
