@@ -49,6 +49,7 @@ CHEAP = (
     "lyapcheck certify examples/models/damped-oscillator.toml --classes linearization --minimize c=-1..1",
     "lyapcheck tune examples/models/linear-scalar-disturbed.toml --box a=1..4 --objective bound:y --grid 2",
     "lyapcheck tune examples/models/damped-oscillator.toml --box k=1..2 --objective bound:x1",
+    "lyapcheck tune examples/models/pid-hardening-spring.toml --box kp=0.5..4 --box ki=0.25..2 --objective local_decay_rate",
     'lyapcheck certify examples/models/pid-hardening-spring.toml --box "kp=1.5..2.5" --box "ki=0.5..1.5" --classes linearization',
     'lyapcheck certify examples/models/pid-hardening-spring.toml --box "kp=1..2" --box "ki=1..2" --classes linearization',
     "lyapcheck certify examples/models/van-der-pol-reversed.toml --set nu=2",

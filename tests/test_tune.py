@@ -125,6 +125,47 @@ def test_the_decay_rate_is_maximized_on_the_oscillator(tmp_path: Path) -> None:
     assert RUNNER.invoke(app.cli, ["verify", str(out)]).exit_code == 0
 
 
+def test_the_local_rate_is_proved_below_the_spectral_abscissa() -> None:
+    from lyapcheck.models.classes.linearization import LOCAL_RATE_BITS, hurwitz_determinants, characteristic_polynomial
+    from lyapcheck.models.classes.linearization import local_rate
+
+    J = [[Fraction(-1), Fraction(5)], [Fraction(0), Fraction(-3)]]  # eigenvalues -1 and -3: the rate is 1
+    rate = local_rate(J)
+    assert rate is not None and 1 - Fraction(2, 2 ** LOCAL_RATE_BITS) <= rate < 1
+    shifted = [[J[i][j] + (rate if i == j else 0) for j in range(2)] for i in range(2)]
+    assert all(h > 0 for h in hurwitz_determinants(characteristic_polynomial(shifted)))
+    assert local_rate([[Fraction(1), Fraction(0)], [Fraction(0), Fraction(-1)]]) is None
+    assert local_rate([[Fraction(0), Fraction(1)], [Fraction(-1), Fraction(0)]]) is None  # a centre: no rate
+
+
+def _pid_abscissa(kp: Fraction, ki: Fraction, kd: float = 1.5) -> float:
+    import numpy as np
+
+    return float(-max(np.roots([1.0, kd, float(kp), float(ki)]).real))
+
+
+def test_the_pid_loop_is_tuned_for_its_local_rate_beyond_its_own_gains(tmp_path: Path) -> None:
+    """Issue 45's tune target on the PID loop, with the rate the linearization proves (no quadratic V
+    exists there, so no GES rate): the winner's proved rate is at least the file's own gains' (kp = 2,
+    ki = 1), every rate tried is below the true one, and verify re-checks the tune table."""
+    out = tmp_path / "pid.json"
+    done = RUNNER.invoke(app.cli, ["tune", str(PID), "--box", "kp=0.5..4", "--box", "ki=0.25..2",
+                                   "--objective", "local_decay_rate", "--out", str(out), "--json"])
+    assert done.exit_code == 0, done.output
+    t = json.loads(done.output)["tune"]
+    for p in t["tried"]:
+        if p["value_exact"] is not None:
+            assert 0 < Fraction(p["value_exact"]) < _pid_abscissa(Fraction(p["point"]["kp"]), Fraction(p["point"]["ki"]))
+        else:  # ki > 1.5 kp: unstable, refuted exactly
+            assert Fraction(p["point"]["ki"]) > Fraction(3, 2) * Fraction(p["point"]["kp"])
+    assert Fraction(t["value_exact"]) > _pid_abscissa(Fraction(2), Fraction(1))  # beyond the file's own gains
+    assert RUNNER.invoke(app.cli, ["verify", str(out)]).exit_code == 0
+    doc = json.loads(out.read_text())
+    doc["tune"]["value_exact"] = str(Fraction(t["value_exact"]) * 2)
+    out.write_text(json.dumps(doc))
+    assert RUNNER.invoke(app.cli, ["verify", str(out)]).exit_code == 1
+
+
 def test_the_pid_loop_has_no_ges_rate_so_no_winner() -> None:
     """The hardening spring's -x^3 leaves every quadratic V's derivative with an indefinite quartic
     term: quadratic certifies no point, the table says so and the exit code is 1."""
@@ -161,7 +202,7 @@ def test_bad_input_is_one_line_naming_the_flag(model: Path, args: list[str], nam
 
 def test_an_objective_refusal_says_what_is_accepted_and_what_was_given() -> None:
     done = RUNNER.invoke(app.cli, ["tune", str(OSCILLATOR), "--box", "k=1..2", "--objective", "bound:x1"])
-    assert "--objective: must be one of decay_rate, roa, bound:OUTPUT" in done.output
+    assert "--objective: must be one of decay_rate, local_decay_rate, roa, bound:OUTPUT" in done.output
     assert "needs a model with [disturbances]" in done.output
     assert "got 'bound:x1'" in done.output
 

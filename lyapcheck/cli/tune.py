@@ -46,7 +46,8 @@ def register(group: click.Group) -> None:
     @click.option("--box", "boxes", multiple=True, metavar="NAME=LO..HI",
                   help="A parameter to tune and its range, e.g. --box kp=0.5..4 (repeatable).")
     @click.option("--objective", required=True, metavar="OBJ",
-                  help="decay_rate (GES rate, quadratic; max), roa (radius of the largest ball proved inside the "
+                  help="decay_rate (GES rate, quadratic; max), local_decay_rate (every eigenvalue's real part < "
+                       "-r, linearization; max), roa (radius of the largest ball proved inside the "
                        "region; max), bound:OUTPUT (sos_bound; min), safety:PARAM=LO..HI (the largest PARAM at which "
                        "barrier proves safety; max) or safety:min:PARAM=LO..HI (the smallest; min).")
     @click.option("--grid", "grid", metavar="N", help="Grid points per axis (1 to 9, default 3); then one refinement "

@@ -114,6 +114,34 @@ def hurwitz_determinants(coeffs: Sequence[Fraction]) -> list[Fraction]:
     return [exact.det(tuple(tuple(row[:k]) for row in H[:k])) for k in range(1, len(H) + 1)]
 
 
+#: the relative precision of :func:`local_rate`'s bisection, in bits
+LOCAL_RATE_BITS = 20
+
+
+def local_rate(J: Matrix, bits: int = LOCAL_RATE_BITS) -> Fraction | None:
+    """A proved local exponential rate of the exact Jacobian ``J``: the largest ``r`` found, by
+    bisection to ``2**-bits`` of its upper bound, with ``J + r I`` Hurwitz (every Hurwitz
+    determinant of its characteristic polynomial > 0, exact), so that every eigenvalue of ``J`` has
+    real part ``< -r`` and, near the equilibrium, solutions decay like ``exp(-r t)``; None when ``J``
+    itself is not Hurwitz. The upper bound is ``-trace(J)/n`` (the eigenvalues' mean real part), which
+    the largest real part is at least."""
+    n = len(J)
+
+    def hurwitz_at(r: Fraction) -> bool:
+        shifted = [[J[i][j] + (r if i == j else 0) for j in range(n)] for i in range(n)]
+        return all(h > 0 for h in hurwitz_determinants(characteristic_polynomial(shifted)))
+
+    if n == 0 or not hurwitz_at(Fraction(0)):
+        return None
+    high = -sum((J[i][i] for i in range(n)), Fraction(0)) / n
+    low = Fraction(0)
+    step = high / 2 ** bits
+    while high - low > step:
+        mid = (low + high) / 2
+        low, high = (mid, high) if hurwitz_at(mid) else (low, mid)
+    return low
+
+
 def right_half_plane_root(coeffs: Sequence[Fraction]) -> str | None:
     """A root enclosure with real part certainly > 0 (FLINT/Arb, rigorous), as text, or None."""
     import flint

@@ -9,6 +9,10 @@ objective                       sense   the figure (class)
 ==============================  ======  =========================================================
 ``decay_rate``                  max     the GES rate ``r`` of ``|x - x_eq| <= k |x0 - x_eq| e^(-r t)``
                                         (``quadratic``, property GES: ``mu / 2`` of its ``V' <= -mu V``)
+``local_decay_rate``            max     a local rate ``r``: every eigenvalue of the Jacobian at the
+                                        equilibrium has real part ``< -r`` (``linearization``: ``J + r I``
+                                        Hurwitz, exact; :func:`~lyapcheck.models.classes.linearization.local_rate`),
+                                        so solutions near the equilibrium decay like ``e^(-r t)``
 ``roa``                         max     the radius of a ball ``|x - x_eq| <= r`` proved inside the
                                         certified region (``roa``: the larger of its ball certificate's
                                         ``ball_radius`` and ``size.ball_radius``), in the states' units
@@ -69,9 +73,10 @@ NEIGHBOURHOOD_TRIES: Final = 3
 #: bisection steps of a ``safety:`` margin at each gain point (after the range's two ends)
 SAFETY_STEPS: Final = 4
 #: the objectives' names and their classes
-OBJECTIVE_CLASS: Final = {"decay_rate": "quadratic", "roa": "roa", "bound": "sos_bound", "safety": "barrier"}
+OBJECTIVE_CLASS: Final = {"decay_rate": "quadratic", "local_decay_rate": "linearization", "roa": "roa",
+                           "bound": "sos_bound", "safety": "barrier"}
 #: what ``--objective`` accepts (every refusal says it)
-ACCEPTED: Final = ("decay_rate, roa, bound:OUTPUT (a model with [disturbances]), safety:PARAM=LO..HI or "
+ACCEPTED: Final = ("decay_rate, local_decay_rate, roa, bound:OUTPUT (a model with [disturbances]), safety:PARAM=LO..HI or "
                    "safety:min:PARAM=LO..HI (a model with [sets] initial and unsafe)")
 
 
@@ -80,7 +85,7 @@ class Objective:
     """A parsed ``--objective``: its kind, its target (an output or a parameter), the sense of the search."""
 
     text: str
-    kind: str  # decay_rate | roa | bound | safety
+    kind: str  # decay_rate | local_decay_rate | roa | bound | safety
     target: str = ""
     low: Fraction = Fraction(0)
     high: Fraction = Fraction(0)
@@ -94,6 +99,8 @@ class Objective:
         """What the figure is, in one phrase."""
         if self.kind == "decay_rate":
             return "the GES decay rate r of |x - x_eq| (quadratic), 1/s"
+        if self.kind == "local_decay_rate":
+            return "a local decay rate r: every eigenvalue of the Jacobian has real part < -r (linearization), 1/s"
         if self.kind == "roa":
             return "the radius of the largest ball around the equilibrium proved inside the certified region (roa)"
         if self.kind == "bound":
@@ -111,7 +118,7 @@ def parse_objective(text: str, model: Any) -> Objective:
         return ModelFileError(source, "--objective", f"must be one of {ACCEPTED}{why}; got {text!r}")
 
     word, _, rest = str(text).strip().partition(":")
-    if word in ("decay_rate", "roa") and not rest:
+    if word in ("decay_rate", "local_decay_rate", "roa") and not rest:
         return Objective(text, word)
     if word == "bound":
         if not model.disturbances:
@@ -220,6 +227,16 @@ def figure(objective: Objective, doc: Mapping[str, Any]) -> tuple[Fraction | Non
             if prop == "GES":
                 return Fraction(figures["decay_rate_per_s"]), "certified"
         return None, "no GES rate in its certificate"
+    if objective.kind == "local_decay_rate":
+        # a point's exact Jacobian (a continuous loop's certificate, not a box's polynomial one nor a map's)
+        point = cert.get("method") in ("lyapunov_equation", "routh_hurwitz") and cert.get("time") is None
+        jacobian = cert.get("jacobian") if point else None
+        if not isinstance(jacobian, list):
+            return None, "no Jacobian at a point in its certificate (a box's linearization proves no rate)"
+        from lyapcheck.models.classes.linearization import local_rate
+
+        rate = local_rate([[Fraction(x) for x in row] for row in jacobian])
+        return (rate, "certified") if rate is not None and rate > 0 else (None, "no positive rate")
     if objective.kind == "roa":
         radii = [Fraction(cert["ball"]["radius"])] if isinstance(cert.get("ball"), dict) else []
         size = cert.get("size")
@@ -488,7 +505,7 @@ def _objective_of(t: Mapping[str, Any]) -> Objective:
     were made when it was written; the figure is what is re-checked here)."""
     text = str(t["objective"])
     word, _, rest = text.partition(":")
-    if word in ("decay_rate", "roa"):
+    if word in ("decay_rate", "local_decay_rate", "roa"):
         return Objective(text, word)
     if word == "bound":
         return Objective(text, "bound", rest, sense="min")
