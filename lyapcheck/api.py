@@ -963,6 +963,11 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
         :data:`~lyapcheck.models.surfaces.iterate.DEFAULT_STEPS`); the map is iterated, not integrated
         (:mod:`lyapcheck.models.surfaces.iterate`), and ``t_end``, ``frequencies``, scenarios other than
         ``none``, ``worst_case`` and ``certificate`` are refused there.
+
+    A sampled-data file (``[sampling]``, ``[controller]``) is simulated by
+    :func:`lyapcheck.models.surfaces.sampled_simulate.run_sampled`: the true plant between samples with each
+    control held, over ``t_end`` (default: a number of periods from its linearization); ``worst_case``,
+    ``certificate``, ``frequencies``, scenarios other than ``none``, ``steps`` and ``grid`` are refused there.
     """
     import numpy as np
 
