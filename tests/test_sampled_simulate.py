@@ -195,3 +195,28 @@ def test_the_continuous_readers_name_simulate_among_the_commands_that_take_it() 
 
     with pytest.raises(ModelFileError, match=r"'certify' and 'verify'.*'simulate'"):
         load_model(STABLE)
+
+
+def test_the_integrators_first_step_continues_a_trajectory_to_the_same_answer() -> None:
+    """``integrate(first_step=...)`` (one call per period starts from the last period's step): the error
+    control still decides, so y' = -y from 1 ends at exp(-2) either way; a step <= 0 is refused."""
+    from lyapcheck.integrator import Evaluation, integrate
+
+    class Decay:
+        size = 2
+
+        def take(self, index: np.ndarray) -> "Decay":
+            return self
+
+        def rhs(self, t: np.ndarray, y: np.ndarray, t_segment: np.ndarray) -> Evaluation:
+            return Evaluation(-y, np.zeros(y.shape[0]), np.empty((y.shape[0], 0)))
+
+        def next_breakpoint(self, t: np.ndarray) -> np.ndarray:
+            return np.full(t.shape, np.inf)
+
+    y0 = np.ones((2, 1))
+    for first in (None, np.array([1.0, 1e-3])):
+        result = integrate(Decay(), 0.0, y0, 2.0, rtol=1e-10, atol=1e-12, first_step=first)
+        assert np.allclose(result.y[:, 0], math.exp(-2.0), rtol=1e-8)
+    with pytest.raises(ValueError, match="first_step"):
+        integrate(Decay(), 0.0, y0, 2.0, atol=1e-12, first_step=0.0)
