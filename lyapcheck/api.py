@@ -963,6 +963,11 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
         :data:`~lyapcheck.models.surfaces.iterate.DEFAULT_STEPS`); the map is iterated, not integrated
         (:mod:`lyapcheck.models.surfaces.iterate`), and ``t_end``, ``frequencies``, scenarios other than
         ``none``, ``worst_case`` and ``certificate`` are refused there.
+
+    A sampled-data file (``[sampling]``, ``[controller]``) is simulated by
+    :func:`lyapcheck.models.surfaces.sampled_simulate.run_sampled`: the true plant between samples with each
+    control held, over ``t_end`` (default: a number of periods from its linearization); ``worst_case``,
+    ``certificate``, ``frequencies``, scenarios other than ``none``, ``steps`` and ``grid`` are refused there.
     """
     import numpy as np
 
@@ -970,6 +975,12 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
 
     if plot is not None and Path(plot).suffix.lower() != ".png":
         raise InvalidParameter("plot", "a file name ending in .png", str(plot))
+    from lyapcheck.models.language.sampling import file_is_sampled
+
+    if isinstance(model, (str, Path)) and file_is_sampled(model):  # the plant under held controls, period by period
+        return _simulate_sampled(model, settings=settings, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios,
+                                 frequencies=frequencies, worst_case=worst_case, certificate=certificate, plot=plot,
+                                 series=series, steps=steps)
     if certificate is not None and not worst_case:
         raise InvalidParameter("certificate", "used with worst_case=True (the tightness ratio compares the "
                                "certified bound with the worst case found)", str(certificate))
@@ -1038,6 +1049,45 @@ def _iterate_map(model: "Model", *, x0: Any, grid: int | None, t_end: object, sc
     else:
         start_arr, how = iterate.default_starts(model)
     run = iterate.run_map(model, start_arr, how, steps=steps, plot=None if plot is None else str(plot), series=series)
+    return SimulationReport(diverged=bool(run.document["diverged"]), document=run.document, series=run.series)
+
+
+def _simulate_sampled(model: "str | Path", *, settings: Mapping[str, object] | Sequence[str] | None, x0: Any,
+                      grid: int | None, t_end: str | float | None, scenarios: Sequence[str] | None,
+                      frequencies: object, worst_case: bool, certificate: object, plot: str | Path | None,
+                      series: bool, steps: object) -> SimulationReport:
+    """:func:`simulate_model_file` on a sampled-data loop: the true plant between samples with each control
+    held (:func:`lyapcheck.models.surfaces.sampled_simulate.run_sampled`); what does not apply is refused in
+    one line naming the flag and ``[sampling]``."""
+    import numpy as np
+
+    from lyapcheck.models.language.sampling import load_sampled
+    from lyapcheck.models.surfaces import sampled_simulate
+    from lyapcheck.models.surfaces import simulate as sim
+
+    source = str(model)
+    none = "it has no disturbances: only the scenario none applies"
+    for name, given, instead in (("worst_case (--worst-case)", worst_case, none),
+                                 ("certificate (--certificate)", certificate is not None, none),
+                                 ("frequencies (--frequencies)", frequencies is not None, none),
+                                 ("scenarios (--scenario)", bool(scenarios) and list(scenarios or ()) != ["none"],
+                                  none),
+                                 ("steps (--steps)", steps is not None, "it is integrated over time: give t_end "
+                                                                        "(--t-end)"),
+                                 ("grid (--grid)", grid is not None, "it has no [domain] to lay a grid over: give "
+                                                                     "the starts as x0 (--x0)")):
+        if given:
+            raise sampled_simulate.refuse(source, name, instead)
+    with _settings_named():
+        loaded = load_sampled(model, model_settings(settings, source))
+    starts = model_starts(loaded, x0)  # type: ignore[arg-type]  # (a SampledModel has the states it reads)
+    if starts:
+        start_arr, how = sim._check_starts(loaded, np.array(starts)), "given"  # type: ignore[arg-type]
+    else:
+        start_arr, how = sampled_simulate.default_starts(loaded)
+    horizon = sim.parse_horizon(str(t_end)) if t_end is not None else None
+    run = sampled_simulate.run_sampled(loaded, start_arr, how, t_end=horizon, plot=None if plot is None else str(plot),
+                                       series=series)
     return SimulationReport(diverged=bool(run.document["diverged"]), document=run.document, series=run.series)
 
 

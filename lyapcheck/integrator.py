@@ -245,7 +245,8 @@ def _initial_step(system: BatchedSystem, t0: FloatArray, y0: FloatArray, f0: Flo
 def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_end: float | FloatArray,
               *, rtol: float = DEFAULT_RTOL, atol: FloatArray | float, max_step: float | FloatArray = np.inf,
               observer: StepObserver | None = None, switch_atol: FloatArray | float = 0.0,
-              max_iterations: int = SIM_MAX_STEPS) -> IntegrationResult:
+              max_iterations: int = SIM_MAX_STEPS, first_step: FloatArray | float | None = None
+              ) -> IntegrationResult:
     """Integrate every row of ``system`` from ``t0`` to ``t_end`` with DOPRI5 (see module doc).
 
     Parameters
@@ -270,6 +271,10 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
         both ends of the step (a kink that small is below the tolerance; without it a state
         converging to a switching surface, e.g. eps -> 0, would trigger endless retries).
         Scalar, ``(k,)`` or ``(n, k)``.
+    first_step
+        The first step to try, scalar or ``(n,)`` (bounded by ``max_step``; the error test still
+        decides it), for a caller that continues a trajectory in several calls and knows its step
+        size (a sampled-data loop, one call per period); default: Hairer–Nørsett–Wanner's heuristic.
     max_iterations
         Step budget: bound on loop iterations, i.e. on the steps (accepted, rejected or retried
         at a kink) of any one trajectory; rows unfinished after it get ``STATUS_MAX_ITERATIONS``.
@@ -316,7 +321,12 @@ def integrate(system: BatchedSystem, t0: float | FloatArray, y0: FloatArray, t_e
     n_events = 0
     if observer is not None:
         observer.start(gidx, t, y, f)
-    h = _initial_step(sys_w, t, y, f, atol_w, rtol, hmax)
+    if first_step is None:
+        h = _initial_step(sys_w, t, y, f, atol_w, rtol, hmax)
+    else:
+        h = np.minimum(np.broadcast_to(np.asarray(first_step, dtype=np.float64), (n,)), hmax)
+        if np.any(~(h > 0)):
+            raise ValueError("The 'first_step' parameter must be positive. Got a non-positive entry instead.")
     # per row, the step size to resume after a retry up to a kink (0: none pending)
     resume = np.zeros(n)
     rows_evaluated += n

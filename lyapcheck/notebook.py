@@ -178,6 +178,9 @@ def simulation_lines(doc: Mapping[str, Any]) -> list[str]:
         modulo = (f", converged modulo 2 pi in {', '.join(map(str, angles))}" if isinstance(angles, list) and angles
                   else "")
         lines = [f"model '{name}': {counts}{which}{_window(doc)}{modulo}"]
+        if doc.get("mode") == "sampled":  # a sampled-data loop: its period and the number of periods
+            lines.append(f"  sampled every {_figure(doc.get('period_s'))} s (zero-order hold), "
+                         f"{doc.get('periods', '?')} periods")
         return lines + _per_output(doc.get("sup_abs_output_tail"))
     if doc.get("mode") == "worst_case":
         return [f"worst case of {doc.get('scenario', '?')}: tail sup |eps| {_figure(doc.get('sup_abs_eps_tail_m'))} m "

@@ -155,11 +155,11 @@ def test_a_non_zero_equilibrium_uses_the_controls_value_there(tmp_path: Path) ->
     assert code == 2 and "[equilibrium]" in text and "Traceback" not in text
 
 
-@pytest.mark.parametrize("command", [("simulate", "--model"), ("certify", "--box", "Kp=20..40"),
+@pytest.mark.parametrize("command", [("simulate", "--worst-case"), ("certify", "--box", "Kp=20..40"),
                                      ("certify", "--candidate", "theta**2 + omega**2")])
 def test_other_commands_refuse_a_sampled_file_in_one_line(command: tuple[str, ...]) -> None:
-    if command[0] == "simulate":
-        code, text = _invoke("simulate", "--model", str(STABLE))
+    if command[0] == "simulate":  # simulate takes the file (tests/test_sampled_simulate.py), not --worst-case
+        code, text = _invoke("simulate", "--model", str(STABLE), "--worst-case")
     else:
         code, text = _invoke(command[0], str(STABLE), *command[1:])
     assert code == 2, text

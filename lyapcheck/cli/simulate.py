@@ -65,6 +65,17 @@ def _print_map_lines(doc: dict[str, Any]) -> None:
         say(console, f"tail sup |{y} - {y}_eq| over steps {w0}-{w1}: {figure(value)}")
 
 
+def _print_sampling_line(doc: dict[str, Any]) -> None:
+    """``simulate`` of a sampled-data loop: the period, the held controls and the horizon in periods."""
+    from rich.console import Console
+
+    from lyapcheck.cli.tables import figure, say
+
+    laws = ", ".join(f"{u} = {law}" for u, law in doc["sampling"]["controller"].items())
+    say(Console(), f"sampled-data loop: the plant integrated between samples every {figure(doc['period_s'])} s, "
+                   f"{laws} held (zero-order hold); {doc['periods']} periods")
+
+
 def _print_model_table(doc: dict[str, Any]) -> None:
     from rich.console import Console
     from rich.text import Text
@@ -75,6 +86,8 @@ def _print_model_table(doc: dict[str, Any]) -> None:
         _print_map_lines(doc)
         return
     console = Console()
+    if doc.get("mode") == "sampled":
+        _print_sampling_line(doc)
     print_model_simulation(console, doc)
     if doc.get("field"):  # a loop with functions: what was integrated
         say(console, f"field: {doc['field']}")

@@ -253,5 +253,16 @@ def linear_parts(model: "SampledModel") -> tuple[list[list[Fraction]], list[list
     return [row[:n] for row in J[:n]], [row[n:n + m] for row in J[:n]], K
 
 
-__all__ = ["linear_parts", "FIRST_PRECISION_BITS", "MAX_PRECISION_BITS", "METHOD", "cayley_routh_column", "decide",
+def spectral_radius_estimate(model: "SampledModel") -> float | None:
+    """A floating-point estimate of the spectral radius of ``model``'s Jacobian over one period at its
+    period (``simulate`` takes its default horizon from it); None when the Jacobian cannot be formed.
+    Never a proof: :func:`decide` is."""
+    parts = linear_parts(model)
+    if isinstance(parts, str):
+        return None
+    A, B, K = parts
+    return _spectral_radius_estimate(A, B, K, model.period)
+
+
+__all__ = ["linear_parts", "spectral_radius_estimate", "FIRST_PRECISION_BITS", "MAX_PRECISION_BITS", "METHOD", "cayley_routh_column", "decide",
            "sampled_jacobian", "verify"]

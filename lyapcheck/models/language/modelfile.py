@@ -66,8 +66,9 @@ TIME_KINDS: Final = ("continuous", "discrete")
 DISCRETE: Final = "discrete"
 #: what a sampled-data file ([sampling], [controller]) can be given to: the readers of continuous loops refuse it
 SAMPLED_TAKEN_BY: Final = ("a sampled-data loop (a continuous plant under a digital controller with a zero-order "
-                           "hold) is taken by 'certify' and 'verify' (and lyapcheck.api's certify and verify), which "
-                           "decide its linearization over one sampling period; this command does not take it yet")
+                           "hold) is taken by 'certify' and 'verify', which decide its linearization over one "
+                           "sampling period, and 'simulate', which integrates the plant between samples (and "
+                           "lyapcheck.api's certify, verify and simulate); this command does not take it yet")
 
 
 def is_sampled(data: Mapping[str, Any]) -> bool:
