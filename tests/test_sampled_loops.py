@@ -201,3 +201,16 @@ def test_the_api_takes_the_classes_and_settings() -> None:
     assert list(result.conditions) == ["linearization"] and result.verdict == "unstable"
     with pytest.raises(InvalidParameter):
         certify(model=STABLE, classes="nonsense")
+
+
+def test_report_and_sweeps_refuse_a_sampled_loop_in_one_line(tmp_path: Path) -> None:
+    cert, html = tmp_path / "c.json", tmp_path / "c.html"
+    assert _invoke("certify", str(STABLE), "--out", str(cert))[0] == 0
+    code, text = _invoke("report", str(cert), "--html", str(html))
+    assert code == 2 and "sampled-data" in text and len(text.strip().splitlines()) == 1
+    assert not html.exists()
+    spec = tmp_path / "sweep.toml"
+    spec.write_text(f'[sweep]\nmodel = "{STABLE}"\n[[sweep.axes]]\nname = "T"\nstart = 0.1\nstop = 0.5\nnum = 3\n')
+    code, text = _invoke("sweep", str(spec), "--out", str(tmp_path / "s.zarr"))
+    assert code == 2 and "[sampling]" in text and len(text.strip().splitlines()) == 1
+    assert not (tmp_path / "s.zarr").exists()

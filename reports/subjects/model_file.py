@@ -332,6 +332,9 @@ class ModelFileSubject(Subject):
     def __init__(self, doc: dict[str, Any]) -> None:
         if not is_model_document(doc):
             raise InputFileError(f"not a model certificate (missing kind '{KIND}')")
+        if isinstance(doc.get("sampling"), dict):  # its loop is a plant under held controls, not a field to integrate
+            raise InputFileError("report: a sampled-data loop's certificate ([sampling]) has no report yet; "
+                                 "lyapcheck certify FILE and lyapcheck verify CERT.json show its answers")
         super().__init__(doc)
         self.kind = WITH_FUNCTIONS if is_recast_document(doc) else POLYNOMIAL
         self.model, self.template = self.kind.model, self.kind.template
