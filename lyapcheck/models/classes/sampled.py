@@ -147,17 +147,12 @@ def _spectral_radius_estimate(A: Matrix, B: Matrix, K: Matrix, period: Fraction)
 
 def seconds_text(period: Fraction) -> str:
     """``period`` as an exact decimal where it has one (``1/50`` is ``0.02``), else ``p/q``."""
-    d, twos, fives = period.denominator, 0, 0
-    while d % 2 == 0:
-        d, twos = d // 2, twos + 1
-    while d % 5 == 0:
-        d, fives = d // 5, fives + 1
-    if d != 1:
+    from lyapcheck.exact import exact_decimal
+
+    try:
+        return exact_decimal(period)
+    except ValueError:
         return str(period)
-    places = max(twos, fives)
-    digits = str(abs(period.numerator) * 10 ** places // period.denominator).rjust(places + 1, "0")
-    text = digits if places == 0 else f"{digits[:-places]}.{digits[-places:]}"
-    return ("-" if period < 0 else "") + text
 
 
 def _data(A: Matrix, B: Matrix, K: Matrix, period: Fraction) -> dict[str, Any]:
