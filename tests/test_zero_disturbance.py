@@ -155,7 +155,7 @@ def test_a_sweep_with_zero_bounds_in_sweep_set(tmp_path: Path) -> None:
                     '[simulation]\nstarts = 2\nseed = 0\n')
     result = sweep(spec, tmp_path / "out.zarr", workers=0)
     assert result.summary.computed == 2
-    group = zarr.open_group(str(tmp_path / "out.zarr"), mode="r")
+    group: Any = zarr.open_group(str(tmp_path / "out.zarr"), mode="r")
     assert np.all(np.asarray(group["status_barrier"][...]) == 1)  # 1: certified
     assert np.all(np.asarray(group["status_sos_bound"][...]) == 1)
     for cert in np.asarray(group["certificate"][...]):
