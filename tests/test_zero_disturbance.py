@@ -162,3 +162,14 @@ def test_a_sweep_with_zero_bounds_in_sweep_set(tmp_path: Path) -> None:
         doc = json.loads(str(cert))
         assert Fraction(doc["disturbances"]["d1"]) == 0
         assert verify(doc).valid
+
+
+def test_maximize_a_disturbance_bound_from_zero() -> None:
+    """``--maximize d1=0..3`` certifies its low end, d1 = 0 (this exited 3 after the high end was refuted);
+    the two ends only (``steps=0``): 3 is unsafe (a simulated trajectory enters the wall), 0 is proved."""
+    from lyapcheck.api import certify_extremum, verify
+
+    found = certify_extremum(TUBE, "d1=0..3", steps=0, classes="barrier")
+    assert [(s.value, s.outcome) for s in found.steps] == [(3, "refuted"), (0, "proved")]
+    assert found.proved == 0 and found.proved_result.conditions["barrier"].status == "certified"
+    assert verify(found.proved_result).valid
