@@ -24,12 +24,13 @@ declared unit). A state's distance is always to the equilibrium: ``|x(t) - x_eq|
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
 from lyapcheck.exact import read_rational
 
 if TYPE_CHECKING:
     from lyapcheck.models.language.parameter_box import ModelBox
+    from lyapcheck.results import Disturbances
 
 #: what a ``certified`` sublevel set of each class is called in its sentence
 SET_NAMES = {"roa": "region of attraction", "candidate": "the user's V"}
@@ -108,6 +109,17 @@ def deviation(name: str, reference: float | None, unit: str | None) -> str:
         return name
     sign = "-" if reference > 0 else "+"
     return f"{name} {sign} {with_unit(abs(reference), unit, digits=6)}"
+
+
+def nominal_coverage(bounds: Iterable[Fraction]) -> "Disturbances | None":
+    """What a claim proved with every disturbance held at 0 covers (DESIGN.md, "Disturbances in claims"):
+    None for a model without disturbances; ``"all"`` where every bound is 0 (each disturbance is then
+    identically 0: the loop at d = 0 is the only one, and its claim holds for every admissible signal);
+    ``"zero"`` otherwise."""
+    bounds = list(bounds)
+    if not bounds:
+        return None
+    return "all" if all(b == 0 for b in bounds) else "zero"
 
 
 def covered(coverage: str | None, text: str) -> str:

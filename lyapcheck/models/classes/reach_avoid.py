@@ -478,6 +478,9 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
         return counterexample(model, trial)
     simulated = {} if trial is None else {"falsification": trial.to_dict()}
     field = state_field(scaled, robust=True)
+    # the program lives in the robust field's ring, which drops every disturbance with bound 0 or that
+    # does not enter (the scaled ring the caller's search was made for keeps them all)
+    search = search.over(field.ring)
     initial = scaled_pieces(scaled, field, model.sets["initial"])
     unsafe = scaled_pieces(scaled, field, model.sets["unsafe"])
     (goal,) = scaled_pieces(scaled, field, model.sets["goal"])

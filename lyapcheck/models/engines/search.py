@@ -112,6 +112,12 @@ class Search:
         (:class:`SolveLimit`): a solve past it raises :class:`SolvesSpent`."""
         return Search(self.ring, self.budget, self.log, (*self.limits, SolveLimit(solves, per, limit_name)))
 
+    def over(self, ring: Ring) -> "Search":
+        """This search (same budget, log and budgets of solves) for programs whose polynomials live in
+        ``ring``: a class that builds its own view of the loop (a robust field keeps only the
+        disturbances with a bound > 0 that enter it) rounds its points in that view's ring."""
+        return Search(ring, self.budget, self.log, self.limits)
+
     def solve(self, structure: Structure, values: "ParameterValues") -> Solution:
         from lyapcheck.sos.program import SOSProgram
 

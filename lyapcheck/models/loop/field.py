@@ -345,6 +345,8 @@ def choose_scaling(cleared: ClearedField, domain: Mapping[str, tuple[Fraction, F
 
     for i, gi in enumerate(g_w):
         for mono, c in ring.float_terms(gi).items():
+            if any(mono[n + k] for k in range(m) if bounds[k] == 0):
+                continue  # a disturbance of bound 0 is identically 0 (apply_scaling): its terms are not there
             row = [0.0] * (n + 2)
             for k in range(n):
                 row[k] += mono[k]
@@ -413,7 +415,8 @@ class ScaledField:
 
 def apply_scaling(cleared: ClearedField, scaling: Scaling) -> ScaledField:
     """The exact field in the scaled coordinates: ``g~ = (T / c_D) A^-1 g(A w~, S_d d~)``,
-    ``D~ = D(A w~) / c_D``, ``y~ = y(A w~) / s_y`` (see :class:`Scaling`)."""
+    ``D~ = D(A w~) / c_D``, ``y~ = y(A w~) / s_y`` (see :class:`Scaling`). A disturbance of bound 0 is
+    identically 0 and set to 0 there (its variable stays in the ring, in no polynomial)."""
     ring = cleared.ring
     n = cleared.n
     model = cleared.shifted.model
@@ -421,7 +424,11 @@ def apply_scaling(cleared: ClearedField, scaling: Scaling) -> ScaledField:
     Ainv = scaling.inverse_matrix()
     gens = ring.gens()
     m = len(scaling.disturbances)
-    images = (linear_images(ring, n, A)[:n] + [g * to_fmpq(s) for g, s in zip(gens[n:n + m], scaling.disturbances)]
+    # a disturbance of bound 0 is identically 0: its image is 0, so that no class, and no check of its
+    # certificate, carries a variable that only a multiplier of |d| <= 0 could hold (ill-posed programs)
+    images = (linear_images(ring, n, A)[:n]
+              + [g * to_fmpq(s) if b > 0 else ring.zero()
+                 for g, s, b in zip(gens[n:n + m], scaling.disturbances, model.disturbances.values())]
               + list(gens[n + m:]))
     composed = [ring.compose(gi, images) for gi in cleared.g]
     factor = to_fmpq(scaling.time / scaling.denominator)

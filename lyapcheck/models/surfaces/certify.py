@@ -316,7 +316,10 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     if "roa" in out.results:  # the ball-arithmetic engine, where the SOS route did not certify
         _ball_after_sos(out, model, box, roa_stopped, scaled is not None, run)
     if "linearization" in out.results and model.disturbances:
-        out.results["linearization"].disturbances = "zero"  # the Jacobian at d = 0
+        from lyapcheck.models.classes.claims import nominal_coverage
+
+        # the Jacobian at d = 0: every admissible disturbance where each bound is 0
+        out.results["linearization"].disturbances = nominal_coverage(model.disturbances.values())
     if "sos_bound" in out.results and model.disturbances:
         out.results["sos_bound"].disturbances = "all"
     if "barrier" in chosen and "barrier" not in out.results:
@@ -412,7 +415,7 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     certificate; with ``box`` (``model`` read at its centre), every certified claim holds for every value
     of it and says so first, and a refutation is the centre's and says so."""
     from lyapcheck.models.classes import region_size
-    from lyapcheck.models.classes.claims import box_prefix, covered, sentence_of
+    from lyapcheck.models.classes.claims import box_prefix, covered, nominal_coverage, sentence_of
     from lyapcheck.models.classes.recast_interval import box_units
     from lyapcheck.models.surfaces import recast_run
 
@@ -428,8 +431,8 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
             results[name] = ConditionResult(name, "not_applicable", "not taken yet for a loop with functions (sin, "
                                             "sqrt, sat, ...)" + where)
     results = {name: results[name] for name in chosen}
-    # the loop is recast with every disturbance at 0
-    coverage: Disturbances | None = "zero" if model.disturbances else None
+    # the loop is recast with every disturbance at 0 (which covers them all where each bound is 0)
+    coverage = nominal_coverage(model.disturbances.values())
     units = box_units(model)
     for name, r in results.items():
         if r.status == "certified" and name not in ("linearization", "sos_bound"):  # (sos_bound's is its own)

@@ -32,7 +32,7 @@ from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_deno
                                              jacobian, lie, state_square, v_names, v_text)
 from lyapcheck.models.surfaces.recast_run import box_robust, boxed_loop, robust_of
 from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
-from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered, lyapunov_sentence
+from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered, lyapunov_sentence, nominal_coverage
 from lyapcheck.models.classes.barrier import KIND as BARRIER_KIND, OLD_KIND as RECAST_BARRIER
 from lyapcheck.models.classes.reach_avoid import KIND as RECAST_REACH_AVOID, OLD_KIND as OLD_REACH_AVOID
 from lyapcheck.models.surfaces.stated import Stated, check_stated
@@ -57,7 +57,7 @@ def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> l
                                          "gives" if recast_ok else "the stated recasting differs from the one the "
                                                                    "model text gives"))
     base = base_loop(model.system)
-    coverage = "zero" if model.disturbances else None
+    coverage = nominal_coverage(model.disturbances.values())
     declared = {d: str(b) for d, b in model.disturbances.items()}
     if doc.get("disturbances", {}) != declared:
         rows.append(("disturbances", False, "the stated disturbances are not the model text's"))
