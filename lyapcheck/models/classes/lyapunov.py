@@ -489,9 +489,10 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                     if key is not None and "cliques" not in found:
                         store.keep(key, {"found": found_json(found), "solves": len(search.log)})
                     return _certified(scaled, field, name, found, {"solves": search.log})
-            if lyapunov_vertices.applies(field):
+            if name == "sos_gas" and lyapunov_vertices.applies(field):
                 # the box form failed at this degree: V affine in the parameters, proved at the box's
-                # vertices (not kept in the certificate store: a later run searches again)
+                # vertices (not kept in the certificate store: a later run searches again). Not for
+                # quadratic, whose claim over a box is GES with one V and its bounds
                 search.budget.check()
                 found, why = lyapunov_vertices.search_vertices(field, degree, search)
                 tried.append(why)

@@ -1,4 +1,4 @@
-"""The vertex form of ``quadratic`` and ``sos_gas`` over a box of parameters: ``V(z, u)`` affine in the
+"""The vertex form of ``sos_gas`` over a box of parameters: ``V(z, u)`` affine in the
 box's normalized parameters ``u in [-1, 1]^p``, proved at the box's vertices.
 
 Where the field is multi-affine in ``u`` (a gain that multiplies a state, as in a PID loop), take
