@@ -13,6 +13,9 @@ Positivity     ``p - c = sigma``, ``c > 0`` (``Q >= 0`` suffices)     everywhere
 Lyapunov       ``-grad V . g - mu V D = sigma``, ``mu >= 0``         everywhere                 GAS; ``V' <= -mu V``
 LyapunovCl.    the same with ``V``, ``sigma`` sums over cliques     everywhere                 the same
                (:class:`GramSum`, :func:`check_lyapunov_cliques`)
+LyapunovVert.  the same at every vertex of a box, ``V`` and the     every ``u`` of the box     the same
+               identity's left side multi-affine in ``u``
+               (:func:`check_lyapunov_vertices`)
 Sublevel       ``-grad V . g - s (c - V) = sigma``                   ``{V <= c}``               ``{V <= c}`` in the ROA
 Dissipation    ``-grad V . g - lam (V - 1) D - sum tau_k (b_k^2      every ``|d_k| <= b_k``      ``limsup V <= 1``
                - d_k^2) = sigma``, ``lam > 0``
@@ -160,6 +163,71 @@ def check_lyapunov(ring: Ring, g: Sequence[Poly], D: Poly, V: GramPoly, sigma: G
     if -lie_derivative(ring, v, g) - v * D * _q(mu) - boxed != sigma.poly(ring):
         return False, "the identity -grad V . g - mu V D = sigma does not hold exactly"
     return True, "Q_V > 0, Q_sigma > 0 and -grad V . g - mu V D = sigma, exactly" + (" (on the box)" if box else "")
+
+
+def box_vertices(ring: Ring, n: int) -> list[tuple[int, ...]]:
+    """Every vertex of the box ``[-1, 1]^p`` of the ring's variables after the first ``n`` (the
+    states), in a fixed order (the last variable's sign changing fastest)."""
+    from itertools import product
+
+    return list(product((-1, 1), repeat=ring.nvars - n))
+
+
+def at_vertex(ring: Ring, p: Poly, n: int, vertex: Sequence[int]) -> Poly:
+    """``p`` with the box variables (after the first ``n``) set to the vertex's signs."""
+    return ring.substitute(p, {ring.names[n + j]: Fraction(s) for j, s in enumerate(vertex)})
+
+
+def multi_affine(ring: Ring, polys: Sequence[Poly], n: int) -> bool:
+    """Every polynomial has degree at most 1 in each variable after the first ``n`` (products of
+    distinct ones allowed): then, for fixed states, it is the multilinear interpolation of its values
+    at the box's vertices, a convex combination of them for every point of the box."""
+    return all(all(e <= 1 for e in m[n:]) for p in polys for m in ring.support(p))
+
+
+def check_lyapunov_vertices(ring: Ring, g: Sequence[Poly], D: Poly, V: Poly, positive: Sequence[GramPoly],
+                            sigmas: Sequence[GramPoly], mu: Fraction) -> tuple[bool, str]:
+    """Lyapunov over a box by its vertices. The box's variables ``u`` are the ring's variables after
+    the states, each in ``[-1, 1]``. ``V(z, u)`` and ``P = -grad_z V . g - mu V D`` are both
+    multi-affine in ``u`` (degree at most 1 in each ``u_j``, computed here), and at every vertex
+    ``u_k`` of the box ``V(z, u_k) = positive_k`` and ``P(z, u_k) = sigma_k``, each Gram matrix positive
+    definite with a pure power of every state in its basis.
+
+    Why it holds on the whole box: a multi-affine function of ``u`` equals the multilinear
+    interpolation of its vertex values, ``sum_k lambda_k(u) f(u_k)`` with weights
+    ``lambda_k(u) = prod_j (1 + s_kj u_j) / 2 >= 0`` summing to 1. So for every ``u`` of the box
+    ``V(., u) = sum_k lambda_k positive_k`` is positive definite and radially unbounded (uniformly in
+    ``u``), and ``-V' D = P = sum_k lambda_k sigma_k > 0`` away from ``z = 0``: each parameter value's
+    loop is GAS with its own ``V(., u)``, and ``V' <= -mu V``."""
+    n = len(g)
+    if mu < 0:
+        return False, "the decay rate mu must be >= 0"
+    P = -lie_derivative(ring, V, g) - V * D * _q(mu)
+    if not multi_affine(ring, [V], n):
+        return False, "V is not multi-affine in the box's variables, so its vertices do not bound it"
+    if not multi_affine(ring, [P], n):
+        return False, "-grad V . g - mu V D is not multi-affine in the box's variables, so its vertices do not bound it"
+    vertices = box_vertices(ring, n)
+    if len(positive) != len(vertices) or len(sigmas) != len(vertices):
+        return False, (f"a vertex certificate needs one Gram matrix of V and one of sigma per vertex of the box "
+                       f"({len(vertices)}), not {len(positive)} and {len(sigmas)}")
+    for vertex, pos, sigma in zip(vertices, positive, sigmas):
+        at = f"at the vertex {list(vertex)}"
+        if any(any(m[n:]) for m in (*pos.basis, *sigma.basis)):
+            return False, f"the Gram matrices {at} may not depend on the box's variables"
+        ok, why = check_positive_definite_v(pos, n)
+        if not ok:
+            return False, f"{why} ({at})"
+        if not has_pure_powers(sigma.basis, range(n)):
+            return False, f"sigma's basis must hold a pure power of every state ({at})"
+        if not sigma.positive_definite():
+            return False, f"Q_sigma is not positive definite (exact, {at})"
+        if at_vertex(ring, V, n, vertex) != pos.poly(ring):
+            return False, f"V is not its Gram form {at}, exactly"
+        if at_vertex(ring, P, n, vertex) != sigma.poly(ring):
+            return False, f"the identity -grad V . g - mu V D = sigma does not hold exactly {at}"
+    return True, (f"V and -grad V . g - mu V D are multi-affine in the box's parameters, and at each of the box's "
+                  f"{len(vertices)} vertices Q_V > 0, Q_sigma > 0 and -grad V . g - mu V D = sigma, exactly")
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,7 @@ import math
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final, Literal, Mapping, Sequence
 
+from lyapcheck.models.classes import lyapunov_vertices
 from lyapcheck.models.engines import reasons, store
 from lyapcheck.models.loop.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
 from lyapcheck.models.engines.reasons import size_limit
@@ -395,7 +396,7 @@ def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, An
     scaled ones (the scaling is at the document's top) over ``field``'s ring. In the clique form
     (kind ``lyapunov_cliques``) ``gram_V`` and ``gram_sigma`` are lists, one Gram matrix per clique,
     and ``cliques`` names each clique's states."""
-    v_scaled = found["V"].poly(field.ring)
+    v_scaled = found["V_poly"] if "V_poly" in found else found["V"].poly(field.ring)
     if "cliques" in found:
         names = field.ring.names
         return {"kind": "lyapunov_cliques", "degree": found["degree"], "mu_scaled": str(found["mu"]),
@@ -403,6 +404,8 @@ def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, An
                 "cliques": [[names[i] for i in c] for c in found["cliques"]],
                 "gram_V": [part.to_json() for part in found["V"].parts],
                 "gram_sigma": [part.to_json() for part in found["W"].parts]}
+    if "vertices" in found:  # the vertex form (:mod:`lyapcheck.models.classes.lyapunov_vertices`)
+        return lyapunov_vertices.certificate_json(stated_v(scaled, field, v_scaled), field, found)
     out = {"kind": "lyapunov", "degree": found["degree"], "mu_scaled": str(found["mu"]),
            "V": stated_v(scaled, field, v_scaled), "gram_V": found["V"].to_json(),
            "gram_sigma": found["W"].to_json()}
@@ -422,7 +425,7 @@ def ges_bounds(scaled: ScaledField, found: dict[str, Any]) -> tuple[Fraction, Fr
     """Exact ``c1 <= lambda_min(P) <= lambda_max(P) <= c2`` of the quadratic ``V = x^T P x`` in the
     declared (shifted) states, or None (only for degree 2)."""
     n = scaled.n
-    if "cliques" in found:
+    if "cliques" in found or "vertices" in found:
         return None  # GES figures are derived for one Gram matrix (a clique form states GAS and V's rate)
     basis = found["V"].basis
     if found["degree"] != 2 or any(any(m[n:]) for m in basis):
@@ -485,6 +488,15 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                 if found is not None:
                     if key is not None and "cliques" not in found:
                         store.keep(key, {"found": found_json(found), "solves": len(search.log)})
+                    return _certified(scaled, field, name, found, {"solves": search.log})
+            if name == "sos_gas" and lyapunov_vertices.applies(field):
+                # the box form failed at this degree: V affine in the parameters, proved at the box's
+                # vertices (not kept in the certificate store: a later run searches again). Not for
+                # quadratic, whose claim over a box is GES with one V and its bounds
+                search.budget.check()
+                found, why = lyapunov_vertices.search_vertices(field, degree, search)
+                tried.append(why)
+                if found is not None:
                     return _certified(scaled, field, name, found, {"solves": search.log})
     except BudgetExhausted as exc:
         late = reasons.out_of_time("a Lyapunov function", search.budget.seconds, [str(exc), *tried])

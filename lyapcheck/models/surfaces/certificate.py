@@ -509,6 +509,38 @@ def _at_least(stated: Any, proved: Fraction) -> bool:
     return stated is None or Fraction(float(stated)) >= proved - abs(proved) / 10**12
 
 
+def _verify_vertices(c: dict[str, Any], cert: dict[str, Any], scaled: Any, field: Any) -> tuple[bool, str]:
+    """A Lyapunov certificate in the vertex form (``form = "vertices"``, :mod:`lyapcheck.models.classes.
+    lyapunov_vertices`): ``V(z, u)`` exact (``V_scaled``), a Gram matrix of ``V`` and of the remainder at
+    each vertex of the box, checked exactly (:func:`~lyapcheck.sos.certificates.check_lyapunov_vertices`)."""
+    from lyapcheck.models.classes.lyapunov import stated_v
+    from lyapcheck.sos.certificates import check_lyapunov_vertices, exponent
+
+    if not field.p or field.disturbances:
+        return False, "a certificate in the vertex form is for a box of parameters (and no disturbance)"
+    if not isinstance(cert.get("gram_V_vertices"), list) or not isinstance(cert.get("gram_sigma_vertices"), list):
+        return False, "a certificate in the vertex form has lists 'gram_V_vertices' and 'gram_sigma_vertices'"
+    ring, nv = field.ring, field.ring.nvars
+    _check_terms(cert["V_scaled"])
+    if any(len(m) != nv for _, m in cert["V_scaled"]["terms"]):
+        return False, f"V_scaled: a monomial must have {nv} exponents"
+    V = ring.from_terms({tuple(exponent(e, "V_scaled") for e in m): Fraction(v) for v, m in cert["V_scaled"]["terms"]})
+    _check_terms(cert["V"])
+    if stated_v(scaled, field, V) != cert["V"]:
+        return False, "the stated V (declared states) is not the certificate's V_scaled unscaled"
+    positive = [_gram(part, nv) for part in cert["gram_V_vertices"]]
+    sigmas = [_gram(part, nv) for part in cert["gram_sigma_vertices"]]
+    mu = Fraction(cert["mu_scaled"])
+    ok, why = check_lyapunov_vertices(ring, field.g, field.D, V, positive, sigmas, mu)
+    if not ok:
+        return False, why
+    if not _at_most(c.get("decay_rate_V_per_s"), mu / scaled.scaling.time):
+        return False, "the stated decay rate of V exceeds the certified one"
+    if c.get("property") not in ("GAS", None):
+        return False, f"a Lyapunov certificate in the vertex form proves GAS, not {c.get('property')}"
+    return True, why
+
+
 def _verify_cliques(c: dict[str, Any], cert: dict[str, Any], scaled: Any, field: Any) -> tuple[bool, str]:
     """A Lyapunov certificate in the clique form (kind ``lyapunov_cliques``, :func:`lyapcheck.models.
     classes.lyapunov.clique_search`): ``V`` and the remainder sums of Gram matrices, checked exactly
@@ -600,6 +632,8 @@ def _verify_class(name: str, c: dict[str, Any], scaled: Any) -> tuple[bool, str]
             field = robust
     if cert.get("kind") == "lyapunov_cliques":
         return _verify_cliques(c, cert, scaled, field)
+    if cert.get("kind") == "lyapunov" and cert.get("form") == "vertices":
+        return _verify_vertices(c, cert, scaled, field)
     ring, n = field.ring, field.n
     nv = ring.nvars
     V = _gram(cert["gram_V"], nv)
