@@ -184,6 +184,8 @@ def test_the_continuous_readers_refuse_a_sampled_file() -> None:
     (('u = "-Kp*theta - Kd*omega"', 'u = "-Kp*theta - Kd*w"'), "[controller] u"),
     (('u = "-Kp*theta - Kd*omega"', 'theta = "0"'), "[controller] theta"),
     (("[sampling]", "[sets]\ninitial = [\"theta <= 1\"]\n[sampling]"), "[sets]"),
+    (('omega = "g_over_l*sin(theta) - c*omega + u"', 'omega = "g_over_l*sin(theta) - c*omega + u"\nu = "0"'),
+     "[dynamics] u"),
 ])
 def test_bad_sampling_input_is_one_line_naming_the_field(tmp_path: Path, edit: tuple[str, str], field: str) -> None:
     path = tmp_path / "bad.toml"

@@ -143,10 +143,14 @@ def parse_sampled(text: str, source: str = "<model>", overrides: Mapping[str, ob
     controls = tuple(data["controller"])
     if not controls or len(controls) > MAX_CONTROLS:
         raise _error(source, "[controller]", f"must name 1 to {MAX_CONTROLS} controls; got {len(controls)}")
+    dynamics = data.get("dynamics")
     for u in controls:
         if u in states or u in data.get("parameters", {}):
             raise _error(source, f"[controller] {u}", f"the name '{u}' is declared twice (also a "
                                                       f"{'state' if u in states else 'parameter'})")
+        if isinstance(dynamics, dict) and u in dynamics:  # (the plant reads each control as a constant state)
+            raise _error(source, f"[dynamics] {u}", f"an equation for the control '{u}': a control is computed by "
+                                                    "[controller] at each sample and held, it has no dynamics")
     laws = {u: data["controller"][u] for u in controls}
     for u, law in laws.items():
         if not isinstance(law, (str, int, float)) or isinstance(law, bool):
