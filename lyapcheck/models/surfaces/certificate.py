@@ -510,8 +510,8 @@ def _at_least(stated: Any, proved: Fraction) -> bool:
 
 
 def _verify_vertices(c: dict[str, Any], cert: dict[str, Any], scaled: Any, field: Any) -> tuple[bool, str]:
-    """A Lyapunov certificate in the vertex form (``form = "vertices"``, :mod:`lyapcheck.models.classes.
-    lyapunov_vertices`): ``V(z, u)`` exact (``V_scaled``), a Gram matrix of ``V`` and of the remainder at
+    """A Lyapunov certificate in the vertex form (``form = "vertices"``, the vertex form of
+    :mod:`lyapcheck.models.classes.lyapunov`): ``V(z, u)`` exact (``V_scaled``), a Gram matrix of ``V`` and of the remainder at
     each vertex of the box, checked exactly (:func:`~lyapcheck.sos.certificates.check_lyapunov_vertices`)."""
     from lyapcheck.models.classes.lyapunov import stated_v
     from lyapcheck.sos.certificates import check_lyapunov_vertices, exponent
