@@ -42,6 +42,7 @@ from typing import Any, Final, Literal, Mapping, Sequence
 
 from lyapcheck import tolerances as tol
 from lyapcheck.models.classes import lyapunov
+from lyapcheck.models.classes.claims import discrete_lyapunov_sentence
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, Budget, BudgetExhausted, ParameterValues, Search,
@@ -321,14 +322,6 @@ def ges_figures(V: GramPoly, mu: Fraction, n: int) -> dict[str, Fraction] | None
             "r": exact.sqrt_upper(1 - mu, FIGURE_DIGITS)}
 
 
-def sentence(kind: str, degree: int, mu: Fraction, figures: Mapping[str, Fraction] | None) -> str:
-    """The claim's words, from the certificate's figures alone (``verify`` re-makes and compares them):
-    :func:`lyapcheck.models.classes.claims.discrete_lyapunov_sentence`."""
-    from lyapcheck.models.classes.claims import discrete_lyapunov_sentence
-
-    return discrete_lyapunov_sentence(kind, degree, mu, figures)
-
-
 def certified(shifted: ShiftedField, ring: Ring, name: ClassName, found: dict[str, Any], solver: dict[str, Any]
               ) -> ConditionResult:
     V, W, mu = found["V"], found["W"], found["mu"]
@@ -343,7 +336,7 @@ def certified(shifted: ShiftedField, ring: Ring, name: ClassName, found: dict[st
     if figures is not None:
         cert.update({key: str(value) for key, value in figures.items()})
         numbers.update({"k": float(figures["k"]), "contraction_per_step": float(figures["r"])})
-    return ConditionResult(name, "certified", sentence(kind, found["degree"], mu, figures), numbers=numbers,
+    return ConditionResult(name, "certified", discrete_lyapunov_sentence(kind, found["degree"], mu, figures), numbers=numbers,
                            certificate=cert, solver=solver, property="GES" if figures is not None else "GAS")
 
 
@@ -393,7 +386,7 @@ def verify(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple
         return False, why_figures
     if data.get("property") != ("GES" if kind == QUADRATIC_KIND else "GAS"):
         return False, f"a {kind} certificate does not prove {data.get('property')}"
-    if data.get("summary") != sentence(kind, degree, mu, figures):
+    if data.get("summary") != discrete_lyapunov_sentence(kind, degree, mu, figures):
         return False, "the stated sentence is not the certificate's"
     return True, why
 

@@ -150,14 +150,6 @@ class _Rows:
             o.step(self.rows[index], *args)
 
 
-def spectral_radius(model: "SampledModel") -> float | None:
-    """A floating-point estimate of the spectral radius of the sampled loop's Jacobian over one period
-    (:func:`lyapcheck.models.classes.sampled.spectral_radius_estimate`); None when it cannot be formed."""
-    from lyapcheck.models.classes.sampled import spectral_radius_estimate
-
-    return spectral_radius_estimate(model)
-
-
 def default_periods(radius: float | None) -> int:
     """The default horizon in periods from the sampled linearization's spectral radius (module docstring)."""
     if radius is None or not math.isfinite(radius) or radius >= 1:
@@ -224,7 +216,9 @@ def run_sampled(model: "SampledModel", starts: "FloatArray", how: str, *, t_end:
     p = prepare_sampled(model)
     n, m = model.n, len(model.controls)
     T = float(model.period)
-    radius = spectral_radius(model)
+    from lyapcheck.models.classes.sampled import spectral_radius_estimate
+
+    radius = spectral_radius_estimate(model)
     horizon = check_horizon(T, t_end, radius)
     grid_t = instants(T, horizon)
     law = ControlLaw(model)
@@ -445,4 +439,4 @@ def plot_sampled(model: "SampledModel", p: Prepared, observer: _TailObserver, ro
 
 __all__ = ["MODE", "MIN_PERIODS", "MAX_DEFAULT_PERIODS", "FALLBACK_PERIODS", "MAX_PERIODS", "ControlLaw",
            "check_horizon", "default_periods", "default_starts", "instants", "plot_sampled", "prepare_sampled",
-           "refuse", "run_sampled", "spectral_radius"]
+           "refuse", "run_sampled"]
