@@ -47,8 +47,11 @@ def positivity_structure(ring: Ring, p: Poly, free: int | None = None) -> Struct
     free = n if free is None else free
     support = set(ring.support(p)) | {tuple([0] * n)}
     generators = bases.sign_symmetries(n, [(ring.support(p), None)])
+    # only the parameters p depends on get a multiplier: p > 0 for every value of the others is p > 0
+    # (a multiplier on an absent parameter only adds monomials that the rounding must cancel exactly)
+    present = [j for j in range(free, n) if any(m[j] for m in ring.support(p))]
     box_grams, box_terms = box_multipliers(n, free, support, with_states=False, generators=generators,
-                                           margin=False)  # its objective is c, not the margin
+                                           box_vars=present, margin=False)  # its objective is c, not the margin
     for g in box_grams:
         j = multiplier_variable(g.name)
         sq = {tuple(2 * int(k == j) for k in range(n)), tuple([0] * n)}
