@@ -82,8 +82,13 @@ def _extremum(model_file: str, maximize: str | None, minimize: str | None, steps
     found = certify_extremum(model_file, str(maximize if maximize is not None else minimize),
                              direction="max" if maximize is not None else "min",
                              steps=steps, **certify_args)
-    if out and found.proved_result is not None:
-        found.proved_result.write(out)
+    written = found.document()  # the proved value's certificate with the search's table (its report shows both)
+    if out and written is not None:
+        import json
+
+        from lyapcheck.fileio import atomic_write
+
+        atomic_write(out, json.dumps(written, indent=2) + "\n")
     if as_json:
         emit_json({"extremum": found.to_json(),
                    "certificate": None if found.proved_result is None else found.proved_result.to_json()})
