@@ -164,7 +164,7 @@ def box_map(names: Sequence[str], box: Sequence[tuple[float, float]], tried: Seq
                                    zorder=1))
             ax.add_patch(Rectangle((a, c), b - a, d - c, fill=False, edgecolor=PROVED_COLOUR, ls="--", lw=1.4,
                                    zorder=2, gid="neighbourhood"))
-        values = [float(tried[i].value) for i in proved if tried[i].value is not None]
+        values = [v for v in (tried[i].value for i in proved) if v is not None]
         lo_v, hi_v = (min(values), max(values)) if values else (0.0, 1.0)
         norm = Normalize(vmin=lo_v, vmax=hi_v if hi_v > lo_v else lo_v + max(abs(lo_v), 1.0) * 1e-6)
         cmap = "viridis" if sense == "max" else "viridis_r"
