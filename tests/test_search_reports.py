@@ -176,6 +176,19 @@ def test_a_changed_extremum_table_raises_the_alarm_and_fails_verify(bisected: di
         assert ALARM in page.text and said in page.text, said
 
 
+@pytest.mark.parametrize("table", [[], "x", None, {"range": 5}, {"range": ["0", "1/0"]},
+                                   {"range": ["0", "1"], "direction": "max", "parameter": "c", "steps": [[1]]}])
+def test_a_malformed_search_table_fails_verify_in_one_row(tuned: dict[str, Any], bisected: dict[str, Any],
+                                                          table: Any) -> None:
+    """Any value where a table was: one failing row naming the table, never an exception (exit 3)."""
+    from lyapcheck.api import verify
+
+    for doc, key in ((tuned, "tune"), (bisected, "extremum")):
+        result = verify({**doc, key: table})
+        failed = [c for c in result.checks if not c.ok]
+        assert not result.valid and failed[0].check == key and "malformed" in failed[0].message, failed
+
+
 # -- the figures and the records, on their own ---------------------------------------------------------
 def test_the_box_map_of_two_gains_marks_each_outcome_and_the_trace_keeps_the_best() -> None:
     from reports.search_figures import Tried, box_map, objective_trace

@@ -80,12 +80,16 @@ class Extremum:
     def from_json(cls, table: Mapping[str, Any]) -> "Extremum":
         """The search as its ``extremum`` table states it (:meth:`to_json`), for a report or a check;
         KeyError, TypeError or ValueError on a malformed table. ``proved_result`` is None."""
+        if not isinstance(table, Mapping):
+            raise TypeError(f"the table is {type(table).__name__}, not a table")
         low, high = (Fraction(str(x)) for x in table["range"])
         direction = str(table["direction"])
         if direction not in ("max", "min"):
             raise ValueError(f"direction {direction!r} is neither 'max' nor 'min'")
         found = cls(str(table["parameter"]), direction, low, high)
         for s in table["steps"]:
+            if not isinstance(s, Mapping):
+                raise TypeError(f"a value tried is {type(s).__name__}, not a table")
             found.steps.append(Step(Fraction(str(s["value"])), bool(s["passed"]), str(s["verdict"]),
                                     str(s["outcome"]), float(s.get("seconds") or 0.0)))
         if table.get("proved") is not None:
@@ -230,7 +234,7 @@ def check_extremum(doc: Mapping[str, Any]) -> list[tuple[str, bool, str]]:
         rows.append(("extremum", ok, f"the certificate at the proved value succeeds (verdict {doc.get('verdict')})"
                      if ok else f"the certificate at the proved value does not succeed (verdict {doc.get('verdict')})"))
         rows.append(record_row(found))
-    except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
         rows.append(("extremum", False, f"the table is malformed ({type(exc).__name__}: {exc})"))
     return rows
 

@@ -465,6 +465,8 @@ class Tuning:
         points in the order tried, the winner the first point tried at the stated ``point`` (None if
         none is), ``value`` the stated exact figure; ``result`` is None. KeyError, TypeError or
         ValueError on a malformed table."""
+        if not isinstance(t, Mapping):
+            raise TypeError(f"the table is {type(t).__name__}, not a table")
         objective = _objective_of(t)
         boxes = [(str(n), Fraction(str(lo)), Fraction(str(hi))) for n, (lo, hi) in dict(t["box"]).items()]
         tried = []
@@ -548,7 +550,7 @@ def check_tune(doc: Mapping[str, Any]) -> list[tuple[str, bool, str]]:
             t.get("certified_points") == sum(p.value is not None for p in found.tried)
         rows.append(record_row(found) if counted else ("tune", False, "the search's record is inconsistent: the "
                                                                       "counts of points are not the table's"))
-    except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:  # (a table where a mapping was)
         rows.append(("tune", False, f"the table is malformed ({type(exc).__name__}: {exc})"))
     return rows
 
