@@ -77,8 +77,8 @@ def _extremum(model_file: str, maximize: str | None, minimize: str | None, steps
         raise InvalidParameter("box", "not given with --maximize/--minimize (the search varies one parameter)",
                            " ".join(boxes))
     if report is not None:
-        raise InvalidParameter("report", "not given with --maximize/--minimize (report the proved value with "
-                               "certify --set and --report)", report)
+        raise InvalidParameter("report", "not given with --maximize/--minimize (write the search with --out CERT.json, "
+                               "then lyapcheck report CERT.json shows every value tried and the proved one)", report)
     found = certify_extremum(model_file, str(maximize if maximize is not None else minimize),
                              direction="max" if maximize is not None else "min",
                              steps=steps, **certify_args)
