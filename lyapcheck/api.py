@@ -776,10 +776,10 @@ def verify(certificate: str | Path | Mapping[str, Any] | CertifyResult) -> Verif
         raise InvalidParameter("certificate", "a path, a certificate document or a CertifyResult",
                                type(certificate).__name__)
     rows = model_certificate.verify_document(doc) if model_certificate.is_model_document(doc) else verify_document(doc)
-    if model_certificate.is_model_document(doc) and "tune" in doc:  # lyapcheck tune's value and neighbourhood
-        from lyapcheck.models.surfaces.tune import check_tune
+    if model_certificate.is_model_document(doc):  # a search's table: tune's value and neighbourhood, --maximize's value
+        from lyapcheck.models.surfaces.search_tables import search_rows
 
-        rows = [*rows, *check_tune(doc)]
+        rows = [*rows, *search_rows(doc)]
     checks = tuple(Check(n, ok, m) for n, ok, m in rows)
     return VerifyResult(valid=all(c.ok for c in checks), checks=checks)
 

@@ -23,6 +23,7 @@ from reports.sections import section_for
 from reports.subjects.base import STATUS_MEANING, Subject, canonical_json
 from reports.subjects.model_file import ModelFileSubject
 from reports.subjects.paper import PaperSubject
+from reports.subjects.search import ExtremumSubject, TuneSubject
 from reports.typeset import Equations, versions
 from reports.views import as_dict
 
@@ -32,10 +33,23 @@ SUBJECTS: Final[dict[str, Callable[[dict[str, Any]], Subject]]] = {
     "lyapcheck-certificate": PaperSubject,
 }
 
+#: a model certificate written by a search -> its subject, by the search's table
+#: (:data:`lyapcheck.models.surfaces.search_tables.SEARCH_TABLES`): the model's page with the search in front
+SEARCH_SUBJECTS: Final[dict[str, Callable[[dict[str, Any]], Subject]]] = {
+    "tune": TuneSubject,
+    "extremum": ExtremumSubject,
+}
+
 
 def subject_of(doc: dict[str, Any]) -> Subject:
     """The subject of a certificate document (a document of no kind is the paper's; a model
-    certificate, of a polynomial loop or of a loop with functions, is a model file's)."""
+    certificate, of a polynomial loop or of a loop with functions, is a model file's; one written by a
+    search, ``tune`` or ``--maximize``, is that search's)."""
+    from lyapcheck.models.surfaces.search_tables import search_table
+
+    table = search_table(doc)
+    if table is not None:
+        return SEARCH_SUBJECTS[table](doc)
     kind = doc.get("kind")
     make = SUBJECTS.get(kind if isinstance(kind, str) else "", PaperSubject)
     return make(doc)
@@ -111,4 +125,4 @@ def read_certificate(path: str | Path) -> dict[str, Any]:
     return doc
 
 
-__all__ = ["certificate_context", "read_certificate", "subject_of", "SUBJECTS"]
+__all__ = ["certificate_context", "read_certificate", "subject_of", "SUBJECTS", "SEARCH_SUBJECTS"]

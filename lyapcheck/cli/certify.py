@@ -77,13 +77,18 @@ def _extremum(model_file: str, maximize: str | None, minimize: str | None, steps
         raise InvalidParameter("box", "not given with --maximize/--minimize (the search varies one parameter)",
                            " ".join(boxes))
     if report is not None:
-        raise InvalidParameter("report", "not given with --maximize/--minimize (report the proved value with "
-                               "certify --set and --report)", report)
+        raise InvalidParameter("report", "not given with --maximize/--minimize (write the search with --out CERT.json, "
+                               "then lyapcheck report CERT.json shows every value tried and the proved one)", report)
     found = certify_extremum(model_file, str(maximize if maximize is not None else minimize),
                              direction="max" if maximize is not None else "min",
                              steps=steps, **certify_args)
-    if out and found.proved_result is not None:
-        found.proved_result.write(out)
+    written = found.document()  # the proved value's certificate with the search's table (its report shows both)
+    if out and written is not None:
+        import json
+
+        from lyapcheck.fileio import atomic_write
+
+        atomic_write(out, json.dumps(written, indent=2) + "\n")
     if as_json:
         emit_json({"extremum": found.to_json(),
                    "certificate": None if found.proved_result is None else found.proved_result.to_json()})

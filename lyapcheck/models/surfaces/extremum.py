@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Callable, Final
+from typing import Any, Callable, Final, Mapping
 
 #: bisection steps after the two ends: the gap shrinks to (HI - LO) / 2^steps
 DEFAULT_STEPS: Final = 6
@@ -68,6 +68,37 @@ class Extremum:
 
     def proved_text(self) -> str:
         return "" if self.proved is None else decimal(self.proved)
+
+    def document(self) -> dict[str, Any] | None:
+        """The proved value's certificate document with the ``extremum`` table (None when no value was
+        proved): what ``certify --maximize/--minimize --out`` writes, so that its report shows the search."""
+        if self.proved_result is None:
+            return None
+        return {**self.proved_result.to_json(), "extremum": self.to_json()}
+
+    @classmethod
+    def from_json(cls, table: Mapping[str, Any]) -> "Extremum":
+        """The search as its ``extremum`` table states it (:meth:`to_json`), for a report or a check;
+        KeyError, TypeError or ValueError on a malformed table. ``proved_result`` is None."""
+        if not isinstance(table, Mapping):
+            raise TypeError(f"the table is {type(table).__name__}, not a table")
+        low, high = (Fraction(str(x)) for x in table["range"])
+        direction = str(table["direction"])
+        if direction not in ("max", "min"):
+            raise ValueError(f"direction {direction!r} is neither 'max' nor 'min'")
+        found = cls(str(table["parameter"]), direction, low, high)
+        for s in table["steps"]:
+            if not isinstance(s, Mapping):
+                raise TypeError(f"a value tried is {type(s).__name__}, not a table")
+            found.steps.append(Step(Fraction(str(s["value"])), bool(s["passed"]), str(s["verdict"]),
+                                    str(s["outcome"]), float(s.get("seconds") or 0.0)))
+        if table.get("proved") is not None:
+            found.proved = Fraction(str(table["proved"]))
+        if table.get("failed") is not None:
+            failed = Fraction(str(table["failed"]))
+            found.failed = next((s for s in found.steps if s.value == failed and not s.passed),
+                                Step(failed, False, "", str(table.get("failed_outcome")), 0.0))
+        return found
 
     def sentence(self) -> str:
         """The answer in words."""
@@ -180,5 +211,62 @@ def check_steps(value: Any) -> int:
     return steps
 
 
-__all__ = ["DEFAULT_STEPS", "MAX_STEPS", "DIGITS", "Step", "Extremum", "decimal", "midpoint", "parse_range", "search",
+def check_extremum(doc: Mapping[str, Any]) -> list[tuple[str, bool, str]]:
+    """The rows ``verify`` adds for a document with an ``extremum`` table (``certify --maximize/--minimize
+    --out``): the proved value is the certificate's own override of the parameter, the certificate is a
+    success (its verdict one that exits 0; the certificate's claims are re-checked by ``verify`` itself),
+    and the table's record is the bisection's: the proved value is the best value that passed and the
+    stated failure the closest value that failed, beyond it. (Each other value tried was decided when it
+    was tried; only the proved one is re-checked.)"""
+    from lyapcheck.answers import OK_VERDICTS
+
+    rows: list[tuple[str, bool, str]] = []
+    try:
+        found = Extremum.from_json(doc["extremum"])
+        if found.proved is None:
+            return [("extremum", False, "the table states no proved value, yet a certificate comes with it")]
+        override = (doc.get("overrides") or {}).get(found.parameter)
+        same = override is not None and Fraction(str(override)) == found.proved
+        rows.append(("extremum", same, f"the proved value {decimal(found.proved)} is the certificate's "
+                                       f"{found.parameter}" if same else
+                     f"the proved value is not the certificate's {found.parameter} ({override!r})"))
+        ok = doc.get("verdict") in OK_VERDICTS
+        rows.append(("extremum", ok, f"the certificate at the proved value succeeds (verdict {doc.get('verdict')})"
+                     if ok else f"the certificate at the proved value does not succeed (verdict {doc.get('verdict')})"))
+        rows.append(record_row(found))
+    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
+        rows.append(("extremum", False, f"the table is malformed ({type(exc).__name__}: {exc})"))
+    return rows
+
+
+def record_row(found: Extremum) -> tuple[str, bool, str]:
+    """Whether a stated search is the bisection's record: every value in the range, the proved value
+    among those that passed and the best of them, the stated failure among those that failed, the
+    closest to the proved value and beyond it (further in the search's direction)."""
+    sign = 1 if found.direction == "max" else -1
+    passed = [s.value for s in found.steps if s.passed]
+    failed = [s.value for s in found.steps if not s.passed]
+    problems = []
+    if any(not found.low <= s.value <= found.high for s in found.steps):
+        problems.append("a value tried lies outside the range")
+    if found.proved is None:
+        if passed:
+            problems.append("values passed, yet the table states no proved value")
+    elif found.proved not in passed or any(sign * (v - found.proved) > 0 for v in passed):
+        problems.append("the proved value is not the best value that passed")
+    if found.failed is not None:
+        if found.failed.value not in failed or any(sign * (v - found.failed.value) < 0 for v in failed):
+            problems.append("the stated failure is not the closest value that failed")
+        elif found.proved is not None and sign * (found.failed.value - found.proved) <= 0:
+            problems.append("the stated failure is not beyond the proved value")
+    elif failed:
+        problems.append("values failed, yet the table states no failure")
+    if problems:
+        return "extremum", False, "the search's record is inconsistent: " + "; ".join(problems)
+    return "extremum", True, (f"the search's record is consistent: {len(found.steps)} values tried, the proved "
+                              "value the best that passed" + ("" if found.failed is None else
+                                                              ", the stated failure the closest beyond it"))
+
+
+__all__ = ["check_extremum", "record_row", "DEFAULT_STEPS", "MAX_STEPS", "DIGITS", "Step", "Extremum", "decimal", "midpoint", "parse_range", "search",
            "check_steps", "NEGATIVE_VERDICTS"]

@@ -457,12 +457,66 @@ class Tuning:
     def sentence(self) -> str:
         if self.winner is None or self.value is None:
             return f"no winner: {self.why or 'no point was certified'} ({self.objective.words()})"
-        point = ", ".join(f"{k} = {decimal(v)}" for k, v in self.winner.values.items())
-        extra = ""
-        if self.objective.kind == "safety":
-            extra = f" ({self.objective.target} = {decimal(self.value)})"
-        return (f"winner: {point}: {self.objective.words()} = {weaker_float(self.value, self.objective.sense):.6g}"
-                f"{extra}, certified again exactly")
+        return winner_sentence(self.objective, self.winner.values, self.value)
+
+    @classmethod
+    def from_json(cls, t: Mapping[str, Any]) -> "Tuning":
+        """The search as a ``tune`` table states it (:meth:`to_json`), for a report or a check: the
+        points in the order tried, the winner the first point tried at the stated ``point`` (None if
+        none is), ``value`` the stated exact figure; ``result`` is None. KeyError, TypeError or
+        ValueError on a malformed table."""
+        if not isinstance(t, Mapping):
+            raise TypeError(f"the table is {type(t).__name__}, not a table")
+        objective = _objective_of(t)
+        boxes = [(str(n), Fraction(str(lo)), Fraction(str(hi))) for n, (lo, hi) in dict(t["box"]).items()]
+        tried = []
+        for p in t["tried"]:
+            if not isinstance(p, Mapping):
+                raise TypeError(f"a point tried is {type(p).__name__}, not a table")
+            detail = {k: v for k, v in p.items() if k not in ("point", "phase", "value", "value_exact", "outcome",
+                                                               "seconds")}
+            exact = p.get("value_exact")
+            tried.append(Point({str(k): Fraction(str(v)) for k, v in dict(p["point"]).items()}, str(p["phase"]),
+                               None if exact is None else Fraction(str(exact)), str(p.get("outcome", "")),
+                               float(p.get("seconds") or 0.0), detail))
+        point = t.get("point")
+        stated = None if point is None else {str(k): Fraction(str(v)) for k, v in dict(point).items()}
+        winner = next((p for p in tried if p.values == stated), None)
+        exact = t.get("value_exact")
+        return cls(objective, boxes, int(t["grid"]), tried, winner, None if exact is None else Fraction(str(exact)),
+                   None, t.get("neighbourhood"), [str(x) for x in t.get("settings") or []], str(t.get("why", "")))
+
+
+def winner_sentence(objective: Objective, point: Mapping[str, Fraction], value: Fraction) -> str:
+    """What ``tune`` says of its winner: the point, the objective's figure there (a float on the weaker
+    side), certified again."""
+    at = ", ".join(f"{k} = {decimal(v)}" for k, v in point.items())
+    extra = f" ({objective.target} = {decimal(value)})" if objective.kind == "safety" else ""
+    return (f"winner: {at}: {objective.words()} = {weaker_float(value, objective.sense):.6g}"
+            f"{extra}, certified again exactly")
+
+
+def record_row(found: Tuning) -> tuple[str, bool, str]:
+    """Whether a stated search is a record ``tune`` could have made: every point in the box, the grid's
+    points before the refinement's, the counts as stated, and the winner a point tried whose recorded
+    figure no other point tried beats (the figures themselves were proved when tried, not re-checked)."""
+    problems = []
+    box = {n: (lo, hi) for n, lo, hi in found.boxes}
+    if any(set(p.values) != set(box) or any(not box[k][0] <= v <= box[k][1] for k, v in p.values.items())
+           for p in found.tried):
+        problems.append("a point tried is not in the box")
+    phases = [p.phase for p in found.tried]
+    if any(ph not in ("grid", "refine") for ph in phases) or phases != sorted(phases, key=lambda ph: ph != "grid"):
+        problems.append("the phases are not the grid's points, then the refinement's")
+    winner = found.winner
+    if winner is None or winner.value is None:
+        problems.append("the winner is not a point tried with a proved figure")
+    elif any(p.value is not None and better(p.value, winner.value, found.objective.sense) for p in found.tried):
+        problems.append("a point tried has a better recorded figure than the winner's")
+    if problems:
+        return "tune", False, "the search's record is inconsistent: " + "; ".join(problems)
+    return "tune", True, (f"the search's record is consistent: {len(found.tried)} points in the box, the winner the "
+                          "best recorded figure")
 
 
 # -- verify's check of a ``tune`` table ---------------------------------------------------------------
@@ -470,7 +524,8 @@ def check_tune(doc: Mapping[str, Any]) -> list[tuple[str, bool, str]]:
     """The rows ``verify`` adds for a document with a ``tune`` table: the stated value is the figure
     the document's certificate proves (exactly), the point is the document's overrides, and a
     certified neighbourhood's box certificate passes its own exact check with a figure within the
-    stated factor. (The other points tried are a record of the search, not re-checked.)"""
+    stated factor. (The other points tried are a record of the search, not re-checked: only that the
+    record is consistent, :func:`record_row`.)"""
     from lyapcheck.models.surfaces.certificate import verify_document
 
     rows: list[tuple[str, bool, str]] = []
@@ -490,7 +545,12 @@ def check_tune(doc: Mapping[str, Any]) -> list[tuple[str, bool, str]]:
         nb = t.get("neighbourhood") or {}
         if nb.get("certified"):
             rows.extend(_check_neighbourhood(objective, nb, stated, verify_document))
-    except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+        found = Tuning.from_json(t)
+        counted = t.get("points") == len(found.tried) and \
+            t.get("certified_points") == sum(p.value is not None for p in found.tried)
+        rows.append(record_row(found) if counted else ("tune", False, "the search's record is inconsistent: the "
+                                                                      "counts of points are not the table's"))
+    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:  # (a table where a mapping was)
         rows.append(("tune", False, f"the table is malformed ({type(exc).__name__}: {exc})"))
     return rows
 
@@ -542,4 +602,4 @@ def _check_neighbourhood(objective: Objective, nb: Mapping[str, Any], value: Fra
 __all__ = ["DEFAULT_GRID", "MAX_GRID", "MAX_GRID_POINTS", "FACTOR", "NEIGHBOURHOOD_TRIES", "SAFETY_STEPS",
            "OBJECTIVE_CLASS", "Objective", "parse_objective", "check_grid", "parse_boxes", "axis_values", "figure",
            "Point", "search", "best_point", "threshold", "neighbourhood", "neighbourhood_sentence", "Tuning",
-           "check_tune", "weaker_float"]
+           "check_tune", "weaker_float", "winner_sentence", "record_row"]
