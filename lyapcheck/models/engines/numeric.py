@@ -113,18 +113,22 @@ def _evaluate_stacked(stacked: tuple[np.ndarray, np.ndarray, MonomialPlan], x: n
 class ModelSystem:
     """The model as the integrator's batched system, with a disturbance per row: ``disturbance(t, x,
     rows)`` returns ``(batch, m)`` values (None: no disturbance). With ``escape`` (per state), a row
-    farther than that from ``center`` stops moving there (a diverging start, counted as such)."""
+    farther than that from ``center`` stops moving there (a diverging start, counted as such); with
+    ``settle`` (per state), a row closer than that to ``center`` in every state stops moving there (a
+    converged start: its step then grows at once and it ends, instead of being integrated to the horizon
+    at the error test's tightest steps; only for simulations that propose, never for a cross-check)."""
 
     def __init__(self, field: FieldEvaluator, rows: int,
                  disturbance: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = None,
                  index: np.ndarray | None = None, escape: np.ndarray | None = None,
-                 center: np.ndarray | None = None) -> None:
+                 center: np.ndarray | None = None, settle: np.ndarray | None = None) -> None:
         self.field = field
         self.rows = rows
         self.disturbance = disturbance
         self.index = np.arange(rows) if index is None else index
         self.escape = escape
         self.center = center
+        self.settle = settle
 
     @property
     def size(self) -> int:
@@ -136,10 +140,13 @@ class ModelSystem:
         if self.escape is not None:
             far = np.any(np.abs(y - self.center) > self.escape, axis=1)
             dy[far] = 0.0
+        if self.settle is not None:
+            dy[np.all(np.abs(y - self.center) < self.settle, axis=1)] = 0.0
         return Evaluation(dy, np.sqrt(np.sum(y * y, axis=1)), np.empty((y.shape[0], 0)))
 
     def take(self, index: np.ndarray) -> "ModelSystem":
-        return ModelSystem(self.field, self.rows, self.disturbance, self.index[index], self.escape, self.center)
+        return ModelSystem(self.field, self.rows, self.disturbance, self.index[index], self.escape, self.center,
+                           self.settle)
 
     def next_breakpoint(self, t: np.ndarray) -> np.ndarray:
         return np.full(t.shape, np.inf)

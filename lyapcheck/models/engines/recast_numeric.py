@@ -125,11 +125,14 @@ ATOL: Final = 1e-9
 
 
 def simulate_ends(system: RecastSystem, X0: np.ndarray, horizon: float, escape: float | None = None,
-                  max_steps: int | None = None) -> tuple[np.ndarray, Any]:
+                  max_steps: int | None = None, settle: float | np.ndarray | None = None, rtol: float = RTOL,
+                  atol: float = ATOL) -> tuple[np.ndarray, Any]:
     """Integrate the true field from every start at once with the project's batched DOPRI5
     (:func:`lyapcheck.integrator.integrate`, through the model files' batched system
     :class:`lyapcheck.models.engines.numeric.ModelSystem`); a row farther than ``escape`` from the
-    equilibrium in a state stops moving there; ``max_steps``: each row's step budget (default
+    equilibrium in a state stops moving there, and one closer than ``settle`` in every state too (a
+    converged start: for simulations that only propose; per state, or one for all); ``rtol``, ``atol``: the
+    error test's (:data:`RTOL`, :data:`ATOL` by default); ``max_steps``: each row's step budget (default
     :data:`~lyapcheck.tolerances.SIM_MAX_STEPS`). The final deviations from the equilibrium, and the
     integrator's result (per row: ``t``, ``status``, ``failure``)."""
     from lyapcheck.models.engines.numeric import ModelSystem
@@ -138,9 +141,10 @@ def simulate_ends(system: RecastSystem, X0: np.ndarray, horizon: float, escape: 
     X0 = np.atleast_2d(np.asarray(X0, dtype=np.float64))
     eq = np.array([float(system.values[s]) for s in system.states])
     batch = ModelSystem(TrueField(system), len(X0),  # type: ignore[arg-type]
-                        escape=None if escape is None else np.full(system.n, escape), center=eq)
+                        escape=None if escape is None else np.full(system.n, escape), center=eq,
+                        settle=None if settle is None else np.broadcast_to(np.asarray(settle, dtype=np.float64), (system.n,)))
     with np.errstate(all="ignore"):
-        result = integrate(batch, 0.0, X0, horizon, rtol=RTOL, atol=ATOL,
+        result = integrate(batch, 0.0, X0, horizon, rtol=rtol, atol=atol,
                            max_iterations=SIM_MAX_STEPS if max_steps is None else max_steps)
     return result.y - eq, result
 
