@@ -65,7 +65,8 @@ def test_the_saturated_pendulum_is_les_for_every_gain_of_the_box_and_verify_reje
     widened["overrides"]["kp"] = widened["parameters"]["kp"] = "14"  # (read at the stated box's centre)
     claim = widened["conditions"]["linearization"]
     claim["summary"] = claim["summary"].replace("kp in [15, 25]", "kp in [3, 25]")
-    del claim["certificate"]["jacobian"]  # (so that the proof itself is run again, and fails)
+    # the Jacobian of the wider box (kp = 14 + 11 u1), so that the proof itself is run again, and fails
+    claim["certificate"]["jacobian"][1][0] = [[str((MGL - 14) * 4), [0, 0]], ["-44", [1, 0]]]
     done = verify(widened, tmp_path / "widened.json")
     assert done.exit_code == 1 and "the Hurwitz conditions are not proved on the box" in done.output, done.output
     # a Jacobian that is not the model's

@@ -435,7 +435,7 @@ def verify_jacobian_over_box(J: Sequence[Sequence[Any]], ring: Any, box: "ModelB
     if status == "certified":
         if data.get("method") != BOX_METHOD:
             return False, f"a box linearization's method must be {BOX_METHOD!r}"
-        if "jacobian" in data and data["jacobian"] != [[_poly_json(ring, p) for p in row] for row in J]:
+        if data.get("jacobian") != [[_poly_json(ring, p) for p in row] for row in J]:
             return False, "the stored Jacobian over the box differs from the model's"
         again = decide_over_box(J, ring, box)
         return (True, "every Hurwitz condition > 0 on the box (Bernstein coefficients), exactly") \
