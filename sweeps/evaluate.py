@@ -48,8 +48,9 @@ uninterrupted one).
   proves that no stability class can certify the box (its status is ``refuted``, and the stability
   classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box.
   A box of a loop with functions: ``certify_model`` over the box on the model read at its centre
-  (what ``lyapcheck certify FILE --box`` runs), no corner check, cross-checked at random parameter
-  points; either by :func:`sweeps.crosscheck.cross_check_box`.
+  (what ``lyapcheck certify FILE --box`` runs), its corners checked only where the linearization over
+  the box is refuted (whether to split it), cross-checked at random parameter points; either by
+  :func:`sweeps.crosscheck.cross_check_box`.
 
 A point or box is ``certified`` when any class certified; ``refuted`` when the equilibrium is proved
 unstable there (the linearization, exactly) and nothing certified; else ``not_certified``. Every
@@ -558,6 +559,23 @@ def unstable_corners(spec: ModelSweepSpec, box: Any) -> tuple[int, dict[str, str
     return count, first
 
 
+def recast_unstable_corners(spec: ModelSweepSpec, box: Any) -> int:
+    """How many corners of ``box`` of a loop with functions have an unstable equilibrium (the
+    linearization of the model read there refuted, exactly); a corner where the model cannot be read
+    counts as not unstable (so the box may still be split)."""
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.surfaces.certify import certify_model
+
+    count = 0
+    for corner in box.corners():
+        try:
+            at = spec.recast_at(corner)
+        except ModelFileError:
+            continue
+        count += certify_model(at, classes=("linearization",)).results["linearization"].status == "refuted"
+    return count
+
+
 def box_seed(seed: int, box_id: int) -> int:
     """The seed of a box's random parameter points: a function of ``(seed, box id)`` alone."""
     return int(np.random.SeedSequence([seed, box_id]).generate_state(1, dtype=np.uint64)[0])
@@ -615,7 +633,8 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     read at the box's centre (:meth:`sweeps.spec.ModelSweepSpec.recast_box`), then ``certify_model``
     over the box; a certified box is simulated at its random parameter points
     (:func:`sweeps.crosscheck.cross_check_box`), and the points where its certificates
-    do not apply are named in the note. No corner is checked (``unstable_corners`` stays -1)."""
+    do not apply are named in the note. Corners are checked only where the linearization over the box
+    is refuted (:func:`recast_unstable_corners`; elsewhere ``unstable_corners`` stays -1)."""
     from lyapcheck.errors import ModelFileError
     from lyapcheck.models.surfaces.certificate import build_document
     from lyapcheck.models.surfaces.certify import certify_model
@@ -636,6 +655,8 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     status = _model_record(spec, _Point(model, results, lambda: document), out, j)
     if note is not None:
         out["note"][j] = note
+    if status == "refuted":  # (the linearization over the box: the tree splits a box not unstable throughout)
+        out["unstable_corners"][j] = recast_unstable_corners(spec, box)
     if status == "certified":
         out["certificate"][j] = certificate_json(document)
         points = box.points(spec.boxes.cross_check_points, box_seed(spec.boxes.seed, box_id))
@@ -659,4 +680,5 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
 
 __all__ = ["evaluate", "evaluate_unit", "certify_point", "simulate_points", "empty_result", "Evaluator", "evaluate_boxes",
            "evaluate_model_points", "evaluate_model_boxes", "certificate_json", "box_seed", "unstable_corners",
+           "recast_unstable_corners",
            "MODEL_STABILITY_CLASSES", "UNIT_LOCK"]

@@ -57,8 +57,8 @@ with ``model`` in its ``[sweep]`` table::
     model = "../van-der-pol-reversed.toml"   # relative to this spec's directory
     mode = "boxes"                 # "points" (default): a grid of points; "boxes": proved boxes
     classes = ["roa"]              # points: any of linearization, quadratic, sos_gas, roa, sos_bound;
-                                   # boxes: linearization (polynomial and rational loops: LES for every
-                                   # value of the box), quadratic, sos_gas, roa, sos_bound (default: every one
+                                   # boxes: linearization (LES for every value of the box), quadratic,
+                                   # sos_gas, roa, sos_bound (default: every one
                                    # that applies; sos_bound needs [disturbances] in the model)
     chunk_size = 4                 # points (or at most this many boxes) per unit of work
 
@@ -745,8 +745,6 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
     allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES  # (the same on every loop)
     # (any loop: barrier with its sets only, reach_avoid with its goal too; a class the model cannot ask is
     # not picked by default, and naming it is refused here rather than at the first point)
-    if mode == "boxes" and not polynomial:  # the Jacobian over a box is built for polynomial and rational loops only
-        allowed = tuple(c for c in allowed if c != "linearization")
     if not ("initial" in model.sets and "unsafe" in model.sets):
         allowed = tuple(c for c in allowed if c != "barrier")
     if not ("initial" in model.sets and "unsafe" in model.sets and "goal" in model.sets):

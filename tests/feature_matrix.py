@@ -196,12 +196,6 @@ REFUSALS: tuple[Refusal, ...] = (
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
-    Refusal(cells(("functions",), ("linearization",), ("--box", "sweep boxes")),
-            ("the Jacobian depends on the parameters", "in a boxes sweep"),
-            "Over a box, the linearization of a polynomial or rational loop is decided for every parameter value "
-            "(its Hurwitz conditions proved positive on the box by exact Bernstein coefficients), by `--box` and "
-            "by boxes sweeps alike; on a loop with functions that Jacobian over a box is not built yet (a gap, not "
-            "a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("--box",)) | cells(("box",), ("candidate",), _BOX_KIND),
             ("not over a --box", "not over a box"),
             "Your V is checked at one parameter point; over a box it would have to decrease for every value of "

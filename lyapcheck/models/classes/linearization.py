@@ -20,12 +20,15 @@
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 from lyapcheck.models.loop.field import ShiftedField
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.definiteness import is_positive_definite
 from lyapcheck.sos.polynomials import to_fraction
+
+if TYPE_CHECKING:
+    from lyapcheck.models.language.parameter_box import ModelBox
 
 Matrix = list[list[Fraction]]
 
@@ -336,11 +339,9 @@ def _u_box(m: int) -> tuple[tuple[Fraction, Fraction], ...]:
 
 
 def run_over_box(shifted: ShiftedField) -> ConditionResult:
-    """``linearization`` for every parameter value of ``shifted``'s box: ``certified`` when every
-    Hurwitz condition of ``J(u)`` is proved positive on the box (:mod:`~lyapcheck.models.engines.bernstein`,
-    exact), ``refuted`` when a point of the box has an unstable Jacobian (proved exactly there: no
-    claim can hold for every value of the box), else ``not_certified`` naming the condition."""
-    from lyapcheck.models.engines import bernstein, reasons
+    """``linearization`` for every parameter value of ``shifted``'s box (:func:`decide_over_box`), or
+    ``not_certified`` where ``J(u)`` is not polynomial in the parameters."""
+    from lyapcheck.models.engines import reasons
 
     assert shifted.box is not None
     built = jacobian_over_box(shifted)
@@ -348,16 +349,28 @@ def run_over_box(shifted: ShiftedField) -> ConditionResult:
         why = reasons.reason(built, ("box",))
         return ConditionResult("linearization", "not_certified", why.summary, numbers=why.numbers())
     J, ring = built
+    return decide_over_box(J, ring, shifted.box)
+
+
+def decide_over_box(J: Sequence[Sequence[Any]], ring: Any, box: "ModelBox") -> ConditionResult:
+    """Decide the Jacobian ``J(u)`` of every value of ``box`` (polynomials in its normalized parameters
+    ``u``, the variables of ``ring`` in the box's order, ``theta = c + h u``), whatever kind of loop it
+    comes from: ``certified`` when every Hurwitz condition of ``J(u)`` is proved positive on the box
+    (:mod:`~lyapcheck.models.engines.bernstein`, exact), ``refuted`` when a point of the box has an
+    unstable Jacobian (proved exactly there: no claim can hold for every value of the box), else
+    ``not_certified`` naming the condition."""
+    from lyapcheck.models.engines import bernstein, reasons
+
     conditions = hurwitz_conditions(characteristic_polynomial_of(J, ring), ring)
-    box = _u_box(ring.nvars)
+    u_box = _u_box(ring.nvars)
     examined = 0
     for name, q in conditions:
-        found = bernstein.positive_on_box(ring.terms(q), box)
+        found = bernstein.positive_on_box(ring.terms(q), u_box)
         examined += found.boxes
         if found.proved:
             continue
         if found.witness is not None:
-            point = _parameter_point(shifted, found.witness)
+            point = _parameter_point(box, found.witness)
             at = decide(_jacobian_at(J, ring, found.witness))
             if at.status == "refuted":
                 data = {"method": BOX_POINT_METHOD, "point": {k: str(v) for k, v in point.items()},
@@ -389,10 +402,8 @@ def _jacobian_at(J: Sequence[Sequence[Any]], ring: Any, u: Sequence[Fraction]) -
     return [[ring.evaluate(p, list(u)) for p in row] for row in J]
 
 
-def _parameter_point(shifted: ShiftedField, u: Sequence[Fraction]) -> dict[str, Fraction]:
+def _parameter_point(box: "ModelBox", u: Sequence[Fraction]) -> dict[str, Fraction]:
     """The parameter values of normalized ``u`` (``theta = c + h u``)."""
-    box = shifted.box
-    assert box is not None
     return {name: box.center(name) + box.half(name) * x for name, x in zip(box.names, u)}
 
 
@@ -407,21 +418,29 @@ def lower_first(text: str) -> str:
 
 
 def verify_over_box(shifted: ShiftedField, status: str, data: dict[str, Any]) -> tuple[bool, str]:
-    """Re-check a box linearization: a certificate by running the same exact proof again from the model
-    (deterministic), a refutation by the exact point check at the stated point of the box."""
+    """Re-check a box linearization of a polynomial or rational loop (:func:`verify_jacobian_over_box`)."""
     built = jacobian_over_box(shifted)
     if isinstance(built, str):
         return False, built
     J, ring = built
+    assert shifted.box is not None
+    return verify_jacobian_over_box(J, ring, shifted.box, status, data)
+
+
+def verify_jacobian_over_box(J: Sequence[Sequence[Any]], ring: Any, box: "ModelBox", status: str,
+                             data: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a box linearization of the Jacobian ``J(u)`` the model gives (:func:`decide_over_box`'s
+    arguments): a certificate by running the same exact proof again (deterministic), a refutation by the
+    exact point check at the stated point of the box."""
     if status == "certified":
         if data.get("method") != BOX_METHOD:
             return False, f"a box linearization's method must be {BOX_METHOD!r}"
-        again = run_over_box(shifted)
+        if data.get("jacobian") != [[_poly_json(ring, p) for p in row] for row in J]:
+            return False, "the stored Jacobian over the box differs from the model's"
+        again = decide_over_box(J, ring, box)
         return (True, "every Hurwitz condition > 0 on the box (Bernstein coefficients), exactly") \
             if again.status == "certified" else (False, "the Hurwitz conditions are not proved on the box")
     if status == "refuted" and data.get("method") == BOX_POINT_METHOD:
-        box = shifted.box
-        assert box is not None
         point = {k: Fraction(v) for k, v in (data.get("point") or {}).items()}
         if set(point) != set(box.names):
             return False, "the stated point does not name every parameter of the box"

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.language.expressions import Rational
@@ -35,6 +35,9 @@ from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterVa
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, degree_in, to_fmpq
 from lyapcheck.exact import read_rational
+
+if TYPE_CHECKING:
+    from lyapcheck.models.language.parameter_box import ModelBox
 
 #: the margin eps of positivity and decrease (times |z|^2), tried in turn
 EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
@@ -616,6 +619,132 @@ def linearization(loop: Loop) -> ConditionResult:
     if isinstance(J, str):
         return ConditionResult("linearization", "not_applicable", J, property="LES")
     return decide(J)
+
+
+# -- the linearization over a box of parameters (issue 45, item 1) ------------------------------------
+
+def jacobian_over_box(loop: Loop) -> tuple[list[list[Poly]], Ring] | str:
+    """``J(u)``: the exact Jacobian of the true field at the equilibrium for every value of a box, as
+    polynomials in the box's normalized parameters ``u`` (``theta = c + h u``, ``u`` in ``[-1, 1]``; the
+    ring returned, in the box's order), on ``loop`` recast with the box's parameters as bounded
+    constants (:attr:`Loop.fixed`); or why there is none, one line.
+
+    The chain rule of :func:`jacobian`, with each auxiliary's value and derivative at the equilibrium
+    as polynomials in ``u`` where they are exact for every value of the box: ``sin``, ``atan``, ``tanh``
+    (0, slope 1), ``cos`` (1, slope 0) and ``exp`` (1, slope 1) of an argument that is 0 there for every
+    value; ``sqrt`` of an argument whose value there does not depend on the parameters; ``abs`` of an
+    argument of one strict sign on the whole box, and ``sat`` of one strictly inside (slope 1) or
+    strictly beyond (slope 0) its limits on the whole box, both proved by exact Bernstein coefficients
+    (:mod:`~lyapcheck.models.engines.bernstein`). Every right-hand side must be 0 at the equilibrium
+    for every value (as a polynomial in ``u``, exactly), and its denominator there a nonzero constant."""
+    from lyapcheck.models.engines.bernstein import positive_on_box
+
+    system = loop.system
+    ring = loop.ring
+    box_ring = Ring(tuple(loop.fixed))
+    unit = tuple((Fraction(-1), Fraction(1)) for _ in loop.fixed)
+    states = loop.states()
+    n = loop.n_states
+    zero, one = ring.zero(), ring.constant(1)
+    # each variable at the equilibrium, a polynomial in u (a parameter's own variable stands for its u)
+    images: dict[str, Poly] = {s: ring.constant(system.values[s]) for s in states}
+    images.update({p: ring.gen(p) * to_fmpq(h) + to_fmpq(system.values[p]) for p, h in loop.fixed.items()})
+    grads: dict[str, list[Poly]] = {s: [one if i == j else zero for j in range(n)] for i, s in enumerate(states)}
+    grads.update({p: [zero] * n for p in loop.fixed})
+
+    def at_equilibrium(p: Poly) -> Poly:
+        return system.reduce(ring.compose(p, [images.get(name, ring.gen(name)) for name in ring.names]))
+
+    def in_u(p: Poly) -> Poly | None:
+        """``p`` in the box's ring, or None when it is not rational there (a constant root remains)."""
+        return ring.restrict(p, box_ring) if all(degree_in(ring, p, [r]) <= 0 for r in system.roots()) else None
+
+    def positive(p: Poly) -> bool:
+        q = in_u(p)
+        return q is not None and positive_on_box(box_ring.terms(q), unit).proved
+
+    def gradient(p: Poly) -> list[Poly]:
+        out = [zero] * n
+        for i, name in enumerate(ring.names):
+            if degree_in(ring, p, [name]) <= 0 or not any(not g.is_zero() for g in grads[name]):
+                continue  # (a variable that does not move to first order: its partial does not matter)
+            partial = at_equilibrium(p.derivative(i))
+            out = [system.reduce(o + partial * g) for o, g in zip(out, grads[name])]
+        return out
+
+    for a in system.auxiliaries:
+        if a.argument is None:  # a constant root
+            grads[a.name] = [zero] * n
+            continue
+        u0 = at_equilibrium(a.argument)
+        du = gradient(a.argument)
+        where = f"{a.written_as or a.definition}: its argument at the equilibrium"
+        f = a.function
+        if f in ("sin", "cos", "exp", "atan", "tanh"):
+            if not u0.is_zero():
+                return (f"{where} is not 0 for every value of the box (sin, cos, exp, atan and tanh have exact values "
+                        "and slopes only at 0)")
+            value, factor = (one, zero if f == "cos" else one) if f in ("cos", "exp") else (zero, one)
+        elif f == "sqrt":
+            assert a.value is not None
+            if any(degree_in(ring, u0, [p]) > 0 for p in loop.fixed):
+                return (f"{where} depends on the box's parameters (the square root's value and slope there are not "
+                        "polynomial in them)")
+            if not a.value:
+                return f"{a.written_as}: sqrt is not differentiable where its argument is 0 (the equilibrium)"
+            value, factor = ring.constant(a.value), ring.constant(1 / (2 * a.value))
+        elif f == "abs":
+            if positive(u0):
+                value, factor = u0, one
+            elif positive(-u0):
+                value, factor = -u0, -one
+            else:
+                return (f"{where} is not proved of one strict sign on the whole box (abs is neither polynomial nor "
+                        "differentiable across 0)")
+        elif f == "sat":
+            assert a.limit is not None
+            L = to_fmpq(a.limit)
+            if positive(u0 + L) and positive(L - u0):
+                value, factor = u0, one
+            elif positive(u0 - L):  # saturated on the whole box: constant near the equilibrium
+                value, factor = ring.constant(a.limit), zero
+            elif positive(-u0 - L):
+                value, factor = ring.constant(-a.limit), zero
+            else:
+                return (f"{where} is not proved strictly inside (or strictly beyond) the limits +-{a.limit} for every "
+                        "value of the box (sat is neither polynomial nor differentiable across its corners)")
+        else:  # pragma: no cover - every function is above
+            return f"{a.written_as}: no derivative"
+        images[a.name] = value
+        grads[a.name] = [system.reduce(factor * d) for d in du]
+    J: list[list[Poly]] = []
+    for s, r in zip(states, system.field):
+        if not at_equilibrium(r.numerator).is_zero():
+            return (f"{s}' at the equilibrium is not 0 for every value of the box as a polynomial in its parameters "
+                    "(the equilibrium moves with them)")
+        d0 = in_u(at_equilibrium(r.denominator))
+        if d0 is None or not d0.is_constant() or d0.is_zero():
+            return (f"the denominator of {s}' at the equilibrium is not a nonzero rational constant over the box (the "
+                    "Jacobian is not polynomial in the parameters)")
+        row = [in_u(x) for x in gradient(r.numerator)]
+        if any(x is None for x in row):
+            return "the Jacobian has an irrational entry (sqrt 2 or sqrt 3); its stability is not decided exactly here"
+        J.append([x * (1 / d0.leading_coefficient()) for x in row if x is not None])
+    return J, box_ring
+
+
+def linearization_over_box(loop: Loop, box: ModelBox) -> ConditionResult:
+    """``linearization`` for every value of ``box`` on ``loop`` recast with its parameters as bounded
+    constants: :func:`jacobian_over_box` decided by the polynomial loops' box test
+    (:func:`lyapcheck.models.classes.linearization.decide_over_box`), or ``not_applicable`` with why."""
+    from lyapcheck.models.classes.linearization import decide_over_box
+
+    assert tuple(loop.fixed) == box.names, "the boxed loop's constants are the box's parameters, in its order"
+    built = jacobian_over_box(loop)
+    if isinstance(built, str):
+        return ConditionResult("linearization", "not_applicable", f"over this box: {built}", property="LES")
+    J, ring = built
+    return decide_over_box(J, ring, box)
 
 
 # -- another equilibrium: no global claim -------------------------------------------------------------

@@ -66,8 +66,6 @@ DEGREE_WORDS: Final[Mapping[int, str]] = {2: "quadratic", 4: "quartic"}
 #: why a class that certifies a point is ``not_applicable`` over a ``--box``: one sentence per class, the
 #: same on a polynomial loop and on a loop with functions
 NOT_OVER_A_BOX: Final[Mapping[str, str]] = {
-    "linearization": "over a box the Jacobian depends on the parameters: certify a point (--set NAME=VALUE) for "
-                     "the linearization",
     "candidate": "not over a box (the candidate class certifies a point: certify one with --set NAME=VALUE)",
 }
 #: why ``candidate`` asked for without ``--candidate`` is ``not_applicable`` (on every kind of loop)

@@ -448,8 +448,8 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
                 r.summary = covered(r.disturbances, r.summary)
     if box is not None:
         for name, r in results.items():
-            if r.status in ("certified", "refuted"):
-                r.summary = box_prefix(box, r.status) + r.summary
+            if r.status in ("certified", "refuted") and not (name == "linearization" and r.status == "refuted"):
+                r.summary = box_prefix(box, r.status) + r.summary  # (a linearization's refutation names its point)
     return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds, box=box, loop=loop)
 
 

@@ -107,8 +107,9 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
     takes the parameters as it takes the disturbances. ``barrier`` and ``reach_avoid`` are proved on the
     same boxed loop (one B or V for every value; :func:`lyapcheck.models.classes.barrier.run_functions`), their
     sets read at the model's values; a trajectory of the true loop at the centre or a corner that enters
-    the unsafe set is a counterexample at that point. ``linearization`` and ``candidate`` certify a
-    point: ``not_applicable`` over a box.
+    the unsafe set is a counterexample at that point. ``linearization`` decides the Jacobian of every value
+    of the box on the same boxed loop (:func:`lyapcheck.models.classes.recast_classes.linearization_over_box`);
+    ``candidate`` certifies a point: ``not_applicable`` over a box.
     """
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
@@ -117,9 +118,11 @@ def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float,
     boxed = boxed_loop(model, box)
     for name in ("linearization", "candidate"):
         if name in classes:
+            from lyapcheck.models.classes.recast_classes import linearization_over_box
             from lyapcheck.models.engines import reasons
 
-            results[name] = ConditionResult(name, "not_applicable", reasons.NOT_OVER_A_BOX[name])
+            results[name] = linearization_over_box(boxed, box) if name == "linearization" else \
+                ConditionResult(name, "not_applicable", reasons.NOT_OVER_A_BOX[name])
     if {"quadratic", "sos_gas", "barrier", "reach_avoid"} & set(classes):
         proved, _ = prove_root_bounds(boxed, Search(boxed.ring, budget))
         for name, degrees in (("quadratic", (2,)), ("sos_gas", searched_degrees(RELATIONS_GAS_DEGREES))):
