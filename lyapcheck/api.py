@@ -535,7 +535,7 @@ def tune(model: "str | Path | Model", box: Sequence[str], objective: str, *, gri
             done = run(at, over=texts, which=goal.cls)
         except (ModelFileError, InvalidParameter) as exc:
             return None, f"refused: {exc}", None
-        got, word = tuning.figure(goal, done["doc"])
+        got, word = tuning.figure(goal, done["doc"], need)
         return got, word, done["doc"]
 
     found.neighbourhood = tuning.neighbourhood(goal, boxes, best.values, value, count, certify_box, goal.cls in OVER_BOX)

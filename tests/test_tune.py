@@ -159,11 +159,31 @@ def test_the_pid_loop_is_tuned_for_its_local_rate_beyond_its_own_gains(tmp_path:
         else:  # ki > 1.5 kp: unstable, refuted exactly
             assert Fraction(p["point"]["ki"]) > Fraction(3, 2) * Fraction(p["point"]["kp"])
     assert Fraction(t["value_exact"]) > _pid_abscissa(Fraction(2), Fraction(1))  # beyond the file's own gains
+    # the neighbourhood: half the winner's rate for every gain of a box around it (J(u) + r I Hurwitz there)
+    nb = t["neighbourhood"]
+    assert nb["certified"], nb
+    need = Fraction(nb["threshold_exact"])
+    assert Fraction(t["value_exact"]) / 2 <= need < Fraction(t["value_exact"]) / 2 + Fraction(1, 10**9)
+    for kp in nb["box"]["kp"]:
+        for ki in nb["box"]["ki"]:  # the box's corners: the true rate there is above the proved one
+            assert _pid_abscissa(Fraction(kp), Fraction(ki)) > need
     assert RUNNER.invoke(app.cli, ["verify", str(out)]).exit_code == 0
     doc = json.loads(out.read_text())
     doc["tune"]["value_exact"] = str(Fraction(t["value_exact"]) * 2)
     out.write_text(json.dumps(doc))
     assert RUNNER.invoke(app.cli, ["verify", str(out)]).exit_code == 1
+
+
+def test_a_rate_over_a_box_is_proved_only_below_the_slowest_eigenvalue() -> None:
+    """J(u) = [[-(2 + u)]] on u in [-1, 1]: its eigenvalue -(2 + u) is at most -1, so a rate below 1 is
+    proved for every value and 1 (reached at u = -1) or more is not."""
+    from lyapcheck.models.classes.linearization import BOX_METHOD, rate_over_box
+
+    data = {"method": BOX_METHOD, "jacobian": [[[["-2", [0]], ["-1", [1]]]]]}
+    assert rate_over_box(data, ["k"], Fraction(9, 10))
+    assert not rate_over_box(data, ["k"], Fraction(1))
+    assert not rate_over_box(data, ["k"], Fraction(11, 10))
+    assert not rate_over_box({**data, "method": "routh_hurwitz"}, ["k"], Fraction(1, 2))
 
 
 def test_the_pid_loop_has_no_ges_rate_so_no_winner() -> None:

@@ -389,6 +389,25 @@ def decide_over_box(J: Sequence[Sequence[Any]], ring: Any, box: "ModelBox") -> C
     return ConditionResult("linearization", "certified", BOX_SENTENCE, certificate=cert)
 
 
+def rate_over_box(data: dict[str, Any], names: Sequence[str], rate: Fraction) -> bool:
+    """Whether every eigenvalue of the stored ``J(u)`` (a certified box linearization's ``"jacobian"``,
+    polynomials in the box's normalized parameters ``names``) has real part ``< -rate`` for every value of
+    the box: ``J(u) + rate I`` Hurwitz there, by the same exact Bernstein test as :func:`decide_over_box`.
+    The local decay rate over a box (``tune --objective local_decay_rate``'s neighbourhood); the caller
+    has checked that the stored ``J(u)`` is the model's (:func:`verify_jacobian_over_box`)."""
+    from lyapcheck.models.engines import bernstein
+    from lyapcheck.sos.polynomials import Ring
+
+    if data.get("method") != BOX_METHOD or not isinstance(data.get("jacobian"), list):
+        return False
+    ring = Ring(tuple(names))
+    J = [[ring.from_terms({tuple(int(k) for k in m): Fraction(str(c)) for c, m in p}) for p in row]
+         for row in data["jacobian"]]
+    shifted = [[p + ring.constant(rate) if i == j else p for j, p in enumerate(row)] for i, row in enumerate(J)]
+    conditions = hurwitz_conditions(characteristic_polynomial_of(shifted, ring), ring)
+    return all(bernstein.positive_on_box(ring.terms(q), _u_box(ring.nvars)).proved for _, q in conditions)
+
+
 #: what a certified box linearization states (the box's words come first: lyapcheck.models.classes.claims)
 BOX_SENTENCE = ("the Jacobian at the equilibrium is Hurwitz (every Hurwitz determinant > 0 on the whole box, by "
                 "exact Bernstein coefficients): locally exponentially stable")

@@ -204,9 +204,11 @@ def step(low: Fraction, high: Fraction, n: int) -> Fraction:
 
 
 # -- the exact figure of a certificate document --------------------------------------------------------
-def figure(objective: Objective, doc: Mapping[str, Any]) -> tuple[Fraction | None, str]:
+def figure(objective: Objective, doc: Mapping[str, Any], need: Fraction | None = None) -> tuple[Fraction | None, str]:
     """The objective's figure proved by ``doc`` (a point's or a box's certificate document), exactly,
-    from its certificate; ``(None, why)`` when the objective's class did not certify it."""
+    from its certificate; ``(None, why)`` when the objective's class did not certify it. ``need``: the
+    figure a box must reach (``local_decay_rate`` over a box proves a given rate, not the largest one:
+    the figure is then ``need`` when proved)."""
     c = (doc.get("conditions") or {}).get(objective.cls)
     if not isinstance(c, dict):
         return None, f"{objective.cls} not run"
@@ -231,8 +233,15 @@ def figure(objective: Objective, doc: Mapping[str, Any]) -> tuple[Fraction | Non
         # a point's exact Jacobian (a continuous loop's certificate, not a box's polynomial one nor a map's)
         point = cert.get("method") in ("lyapunov_equation", "routh_hurwitz") and cert.get("time") is None
         jacobian = cert.get("jacobian") if point else None
+        if not point and isinstance(doc.get("box"), dict) and need is not None and need > 0:
+            from lyapcheck.models.classes.linearization import rate_over_box
+
+            # every eigenvalue of J(u) + need I in the left half-plane, for every value of the box
+            return (need, "certified") if rate_over_box(cert, list(doc["box"]), need) else \
+                (None, f"the rate {float(need):.6g} is not proved for every value of the box")
         if not isinstance(jacobian, list):
-            return None, "no Jacobian at a point in its certificate (a box's linearization proves no rate)"
+            return None, "no Jacobian at a point in its certificate (a box's linearization proves a rate only "\
+                         "when one is asked)"
         from lyapcheck.models.classes.linearization import local_rate
 
         rate = local_rate([[Fraction(x) for x in row] for row in jacobian])
@@ -593,7 +602,7 @@ def _check_neighbourhood(objective: Objective, nb: Mapping[str, Any], value: Fra
     stated = {k: [Fraction(a), Fraction(b)] for k, (a, b) in nb["box"].items()}
     if box != stated:
         return [("tune", False, "the neighbourhood's box is not its certificate's")]
-    got, why = figure(objective, sub)
+    got, why = figure(objective, sub, need)
     ok = got is not None and (got >= need if objective.sense == "max" else got <= need)
     return [("tune", ok, "the neighbourhood's box certificate checks and proves the stated factor" if ok else
              f"the neighbourhood's certificate does not prove the stated factor ({why})")]
