@@ -26,7 +26,10 @@ new class from its entry alone.
 1. one :class:`ModelClass` entry per class in :data:`CLASSES` (here; its place is its place in the
    order of ``certify --model``);
 2. its implementation module, ``lyapcheck/models/classes/<family>.py``: the search, returning a
-   :class:`~lyapcheck.results.ConditionResult`, and the exact check of its certificate;
+   :class:`~lyapcheck.results.ConditionResult`, and the exact check of its certificate on each kind
+   of loop, named by the entry's ``verify_field`` and ``verify_functions`` (each takes the condition
+   and a :mod:`~lyapcheck.models.classes.contexts` object; :func:`verify` is the one dispatch of
+   ``verify``, and a certificate under a name that is no class fails);
 3. one module in ``reports/sections/``, the one the entries' ``family`` names (a
    :class:`reports.sections.base.Section` naming the classes in its ``titles``), and that section in
    :data:`reports.sections.SECTIONS` (``reports/README.md``).
@@ -37,10 +40,8 @@ What else must change today, because those places name each class rather than re
    or rational loop: one ``if "<name>" in chosen: run("<name>", ...)``, in the branch with the cleared
    field ``sc`` when ``cleared``) and :func:`lyapcheck.models.surfaces.recast_run.certify` (a loop with
    functions; a class it gives no answer for is ``not_applicable`` there, naming the loop);
-5. verify, one per kind of loop: ``_verify_class`` in ``lyapcheck/models/surfaces/certificate.py`` and
-   ``_verify_condition`` in ``lyapcheck/models/surfaces/recast_certify.py``, each a branch calling the
-   implementation's exact check (an unknown certificate kind fails verification); and, when the class
-   proves its claim with the disturbances at 0 only, the tuple in ``_check_disturbance_keys``;
+5. when the class proves its claim with the disturbances at 0 only, the tuple in
+   ``_check_disturbance_keys`` (``lyapcheck/models/surfaces/certificate.py``);
 6. :mod:`lyapcheck.models.classes.claims`: the sentence a ``certified`` condition states, ``summary``
    (and ``sentence_of`` for a loop with functions' certificate kinds); verify compares it with the
    document's summary;
@@ -56,9 +57,16 @@ summarised, and simulated against its claim only once the cross-check learns tha
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Final, NamedTuple
+from typing import Any, Callable, Final, NamedTuple, TypeVar
 
+from lyapcheck.models.classes import verify_field as _field, verify_functions as _functions
+from lyapcheck.models.classes.contexts import FieldCheck, FunctionsCheck
 from lyapcheck.results import Property
+
+_Check = TypeVar("_Check", FieldCheck, FunctionsCheck)
+#: a class's exact check of a decided condition (its name, the condition as stored, what verify
+#: re-derived from the model text) -> (ok, why)
+Verify = Callable[[str, dict[str, Any], _Check], tuple[bool, str]]
 
 
 class Figure(NamedTuple):
@@ -108,6 +116,10 @@ class ModelClass:
     #: it has a discrete-time condition and runs on a map (``[model] time = "discrete"``); a class
     #: without one is ``not_applicable`` there (lyapcheck.models.loop.discrete), never given the map as a field
     discrete: bool = False
+    #: its exact check on a polynomial or rational loop (:mod:`lyapcheck.models.classes.verify_field`)
+    verify_field: "Verify[FieldCheck] | None" = None
+    #: its exact check on a loop with functions (:mod:`lyapcheck.models.classes.verify_functions`)
+    verify_functions: "Verify[FunctionsCheck] | None" = None
 
     @property
     def point_only(self) -> bool:
@@ -119,20 +131,28 @@ _V_RATE: Final = Figure("decay_rate_V_per_s", "decay_rate_V_per_s", "certified d
 
 #: every class of a model file, in the order ``certify --model`` runs them (cheapest first)
 CLASSES: Final[tuple[ModelClass, ...]] = (
-    ModelClass("linearization", "stability", "LES", over_box=True, stability=True, cleared=False, discrete=True),
+    ModelClass("linearization", "stability", "LES", over_box=True, stability=True, cleared=False, discrete=True,
+               verify_field=_field.verify_linearization, verify_functions=_functions.verify_linearization),
     ModelClass("quadratic", "stability", "GES", over_box=True, stability=True, discrete=True,
+               verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_lyapunov,
                figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"),
                         Figure("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s"))),
-    ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,), discrete=True),
+    ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,), discrete=True,
+               verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_lyapunov),
     ModelClass("roa", "stability", "ROA", over_box=True, stability=True,
+               verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region,
                figures=(Figure("level", "level", "the certified region of attraction is {V <= level}"),
                         Figure("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI"))),
-    ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True),
+    ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True,
+               verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region),
     ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
+               verify_field=_field.verify_sos_bound, verify_functions=_functions.verify_sos_bound,
                output_figure=OutputFigure("bounds", "limsup |{y} - {y}_eq| <= this, SI ({y}_eq: bounds_reference)")),
     ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
+               verify_field=_field.verify_barrier, verify_functions=_functions.verify_barrier,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
     ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False,
+               verify_field=_field.verify_reach_avoid, verify_functions=_functions.verify_reach_avoid,
                figures=(Figure("reach_time_bound_s", "reach_time_bound_s",
                                "the goal is reached within this time, s"),)),
 )
@@ -166,9 +186,25 @@ def _check() -> None:
     for c in CLASSES:
         if c.user_given and c.over_box:
             raise RuntimeError(f"{c.name}: a class needing the user's input certifies a point only")
+        if c.verify_field is None or c.verify_functions is None:
+            raise RuntimeError(f"{c.name}: every class has an exact check on each kind of loop")
 
 
 _check()
 
+
+def verify(name: str, c: dict[str, Any], check: FieldCheck | FunctionsCheck) -> tuple[bool, str]:
+    """Re-check one decided condition exactly: the one dispatch of ``verify``, by the class's entry
+    (its ``verify_field`` or ``verify_functions``, by the kind of ``check``); a name that is no class
+    fails. A malformed certificate raises (verify reports it in one row)."""
+    entry = BY_NAME.get(name)
+    if entry is None:
+        return False, f"no class named {name!r} (the classes: {', '.join(NAMES)})"
+    if isinstance(check, FunctionsCheck):
+        assert entry.verify_functions is not None  # (_check)
+        return entry.verify_functions(name, c, check)
+    assert entry.verify_field is not None
+    return entry.verify_field(name, c, check)
+
 __all__ = ["Figure", "OutputFigure", "ModelClass", "CLASSES", "NAMES", "CLEARED", "OVER_BOX", "POINT_ONLY",
-           "STABILITY", "USER_GIVEN", "DISCRETE", "BY_NAME"]
+           "STABILITY", "USER_GIVEN", "DISCRETE", "BY_NAME", "Verify", "verify"]

@@ -36,7 +36,7 @@ from lyapcheck.degrees import searched_degrees
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.classes.registry import CLEARED, NAMES
 from lyapcheck.models.loop.field import ScaledField, Scaling, ShiftedField, StateField, active_disturbances, \
-    apply_scaling, choose_scaling, clear, disturbances_vanish, shifted_field, state_field
+    apply_scaling, choose_scaling, clear, robust_field, shifted_field, state_field
 from lyapcheck.models.language.modelfile import Model
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
@@ -502,16 +502,6 @@ def readable_v(model: Model, terms: dict[str, Any], variables: list[str]) -> str
     from lyapcheck.models.classes.claims import v_text
 
     return v_text(terms, variables, dict(zip(model.states, model.equilibrium)))
-
-
-def robust_field(scaled: ScaledField) -> StateField | None:
-    """The field with every disturbance a box coordinate (:func:`state_field`, robust), where a
-    robust stability claim can exist: the model has disturbances that enter the field, and they
-    vanish at the equilibrium. None otherwise (no disturbance enters: the nominal claim covers them
-    all; or one moves the equilibrium: only ``sos_bound`` can speak of it)."""
-    if not active_disturbances(scaled) or not disturbances_vanish(scaled):
-        return None
-    return state_field(scaled, robust=True)
 
 
 def covering_disturbances(model: Model, robust: StateField | None, nominal: StateField, enters: bool,
