@@ -3,9 +3,10 @@
 
 Each takes a decided condition as stored (``c``) and the
 :class:`~lyapcheck.models.classes.contexts.FunctionsCheck` verify re-derived from the model text, and
-returns ``(ok, why)`` (each is given its class's name too, which some certificates state); a malformed certificate raises (``KeyError``, ``ValueError``, ...), which verify
-reports in one row. Every class but ``linearization`` and ``sos_bound`` is refuted the same way
-(another equilibrium, proved exactly: :func:`verify_refutation`).
+returns ``(ok, why)`` (each is given its class's name too, which some certificates state); a malformed
+certificate raises (``KeyError``, ``ValueError``, ...), which verify reports in one row. Every class but
+``linearization`` and ``sos_bound`` is refuted the same way (another equilibrium, proved exactly:
+:func:`verify_refutation`).
 """
 
 from __future__ import annotations

@@ -30,7 +30,7 @@ from lyapcheck.models.classes.lyapunov import OLD_FORMAT, OLD_RELATIONS_KIND, RE
 from lyapcheck.models.classes.recast_interval import box_units
 from lyapcheck.models.classes.recast_classes import Loop, base_loop
 from lyapcheck.models.classes.registry import verify
-from lyapcheck.models.surfaces.recast_run import box_robust, boxed_loop, robust_of
+from lyapcheck.models.classes.recast_regions import box_robust, boxed_loop, robust_of
 from lyapcheck.models.engines.recast_sos import poly_from_json
 from lyapcheck.models.classes.claims import box_prefix, nominal_coverage
 from lyapcheck.models.classes.barrier import KIND as BARRIER_KIND, OLD_KIND as RECAST_BARRIER
