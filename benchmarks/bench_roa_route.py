@@ -78,7 +78,7 @@ def run_sos_route(path: Path, limit: float) -> dict[str, Any]:
     """A loop with functions' ``roa`` by the SOS route alone (the ball-arithmetic route, tried first by
     the class, not run: on the shipped loops it proves a set first and the SOS route is not reached)."""
     from lyapcheck.models.classes.recast_classes import linearization
-    from lyapcheck.models.surfaces.recast_run import class_budget, comparison_box, proved_loop, run_roa
+    from lyapcheck.models.classes.recast_regions import class_budget, comparison_box, proved_loop, run_roa
 
     model = parse_any_model(path.read_text(), str(path))
     start = time.perf_counter()

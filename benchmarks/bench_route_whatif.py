@@ -3,7 +3,7 @@
 Each shipped polynomial or rational example is certified twice in one process, alternating: by its own
 route (scaled polynomial identities, :mod:`lyapcheck.models.surfaces.certify`) and read as a loop with
 functions that has no auxiliaries, so that the relational route runs on it
-(:mod:`lyapcheck.models.surfaces.recast_run`: the classes of :mod:`lyapcheck.models.classes.recast_classes`,
+(:mod:`lyapcheck.models.classes.recast_regions`: the classes of :mod:`lyapcheck.models.classes.recast_classes`,
 ``recast_bound``, ``recast_barrier``, ``recast_reach_avoid``). It prints, per example, each route's time and
 every class whose status or key figure differs. A certificate the relational route loses here is one
 users would lose if that route became the only implementation of its class.

@@ -197,7 +197,7 @@ FIGURE_MODEL_ROA_LEVEL_RTOL: Final = 1e-3
 #: start of a certified set whose trajectory stays in the set, outside this ball (radius in the
 #: certificate's squared distance q, the recast classes' state_square), for longer than the
 #: certificate's own decrease V' <= -epsilon q / D allows, contradicts the proof; the same radius
-#: as the recast cross-check's convergence (lyapcheck.models.surfaces.recast_run.CONVERGED_RADIUS)
+#: as the recast cross-check's convergence (lyapcheck.models.classes.recast_regions.CONVERGED_RADIUS)
 CONVERGED_BALL_RADIUS: Final = 2e-2
 
 

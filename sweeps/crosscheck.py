@@ -490,9 +490,9 @@ class _FunctionsLoop:
     @cached_property
     def comparison(self) -> tuple[np.ndarray, np.ndarray]:
         """The comparison box of the classes (deviations): the model's ``[domain]``, else +-pi in an
-        angle and +-4 elsewhere (:func:`lyapcheck.models.surfaces.recast_run.comparison_box`)."""
+        angle and +-4 elsewhere (:func:`lyapcheck.models.classes.recast_regions.comparison_box`)."""
         from lyapcheck.models.classes.recast_classes import base_loop
-        from lyapcheck.models.surfaces.recast_run import comparison_box
+        from lyapcheck.models.classes.recast_regions import comparison_box
 
         lo, hi = comparison_box(self.model, base_loop(self.system))
         return np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)

@@ -834,7 +834,7 @@ def _check_defined(spec: ModelSweepSpec, source: str) -> None:
                                      f"the model is not defined there ({exc})") from None
         return
     if spec.has_functions:
-        from lyapcheck.models.surfaces.recast_run import boxed_loop
+        from lyapcheck.models.classes.recast_regions import boxed_loop
 
         for cell in initial_cells(spec):  # the recasting with the box's parameters as bounded constants
             try:

@@ -22,10 +22,10 @@ CARTPOLE = Path(__file__).parent / "data" / "cartpole-lqr.toml"
 
 
 def cartpole() -> tuple[Any, Any, LieDerivative, list[list[Fraction]]]:
-    from lyapcheck.models.surfaces import recast_run
+    from lyapcheck.models.classes import recast_regions
 
     model: Any = load_any_model(CARTPOLE, candidate=CARTPOLE.read_text().splitlines()[5].lstrip("# "))
-    loop = rc.for_v(recast_run.proved_loop(model, 60), model.candidate_v)
+    loop = rc.for_v(recast_regions.proved_loop(model, 60), model.candidate_v)
     V = model.candidate_v
     P = quadratic_form(loop.ring, V, loop.n)
     assert P is not None

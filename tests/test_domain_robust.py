@@ -42,11 +42,11 @@ omega = [-8, 8]
 
 def _share_of(result: object, theta: float) -> float:
     """The share of a 40 x 40 grid of the domain ``theta in +-theta``, ``omega in +-8`` inside the
-    certified set (:func:`lyapcheck.models.surfaces.recast_run.certified_value`)."""
+    certified set (:func:`lyapcheck.models.classes.recast_regions.certified_value`)."""
     from lyapcheck.models.classes import recast_classes as rc
     from lyapcheck.models.language.modelfile import parse_any_model
     from lyapcheck.models.language.recast import RecastModel
-    from lyapcheck.models.surfaces.recast_run import certified_value
+    from lyapcheck.models.classes.recast_regions import certified_value
 
     model = parse_any_model(PENDULUM.format(t0=-2, t1=2), "m.toml")
     assert isinstance(model, RecastModel)

@@ -22,7 +22,7 @@ from click.testing import CliRunner
 from lyapcheck.cli import app
 from lyapcheck.models.classes import recast_classes as rc
 from lyapcheck.models.language.modelfile import parse_any_model
-from lyapcheck.models.surfaces.recast_run import comparison_box, simulated_check
+from lyapcheck.models.classes.recast_regions import comparison_box, simulated_check
 from lyapcheck.models.engines.recast_sos import poly_to_json
 from lyapcheck.results import ConditionResult
 from tests.recast_loops import LOSSLESS as LOSSLESS_LOOP

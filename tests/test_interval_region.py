@@ -385,7 +385,7 @@ def interval_route(text: str) -> tuple[object, str]:
     model's text, with a safety net far away: its certificate (None when it proved nothing) and why."""
     from lyapcheck.models.classes import recast_classes as rc
     from lyapcheck.models.classes.recast_interval import interval_roa
-    from lyapcheck.models.surfaces.recast_run import comparison_box
+    from lyapcheck.models.classes.recast_regions import comparison_box
     from lyapcheck.models.engines.search import Budget
 
     model = parse_any_model(text, "model.toml")

@@ -125,10 +125,10 @@ def test_the_cartpole_lqr_cost_to_go_gets_a_level_at_4_states(monkeypatch: Any) 
     """At 4 states the SOS level program is too large (said so, not "no level found"), and the ball
     arithmetic proves the exact local level; the larger attempts are cut by a small count of cells."""
     from lyapcheck import tolerances
-    from lyapcheck.models.surfaces import recast_run
+    from lyapcheck.models.classes import recast_regions
 
     model = load_any_model(CARTPOLE, candidate=CARTPOLE.read_text().splitlines()[5].lstrip("# "))
-    loop = rc.for_v(recast_run.proved_loop(model, 60), model.candidate_v)
+    loop = rc.for_v(recast_regions.proved_loop(model, 60), model.candidate_v)
     V = model.candidate_v
     why = regions.certify_region(loop, V, Search(loop.ring, Budget(60, "test")), "the LQR cost-to-go")
     assert isinstance(why, str) and "not built" in why and "no level found" not in why

@@ -71,17 +71,18 @@ def test_the_point_classes_over_a_box_say_the_same_sentence(tmp_path: Path) -> N
 @pytest.mark.parametrize("box", [False, True])
 def test_a_class_not_taken_on_a_loop_with_functions_is_never_listed_as_taken(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, box: bool) -> None:
-    """The generic refusal of ``certify_model`` on a loop with functions (a class its runner gave no answer for) listed every
-    class, the refused one too ("...: the classes here are linearization, ..., barrier")."""
+    """The generic refusal of ``certify_model`` on a loop with functions (a class whose registry entry has no
+    search on it) listed every class, the refused one too ("...: the classes here are linearization, ...,
+    barrier")."""
+    import dataclasses
+
     import lyapcheck
-    from lyapcheck.models.surfaces import recast_run
+    from lyapcheck.models.classes import registry
 
-    real = recast_run.certify
-
-    def without_barrier(model: Any, classes: Any, candidate: Any, limit: float, box: Any = None) -> Any:
-        return real(model, [c for c in classes if c != "barrier"], candidate, limit, box)
-
-    monkeypatch.setattr(recast_run, "certify", without_barrier)
+    # a barrier entry with no search on a loop with functions (the runner then has no answer for it)
+    without_barrier = tuple(dataclasses.replace(c, run_functions=None) if c.name == "barrier" else c
+                            for c in registry.CLASSES)
+    monkeypatch.setattr(registry, "CLASSES", without_barrier)
     result = lyapcheck.certify(model=fm.model_file(tmp_path, "functions"), classes=["barrier"],
                                **({"box": [fm.BOX]} if box else {}))
     cond = result.document["conditions"]["barrier"]

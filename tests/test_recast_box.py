@@ -190,7 +190,7 @@ def test_a_wide_box_is_proved_on_its_halves_and_verify_splits_it_the_same_way() 
     from lyapcheck.models.language.modelfile import load_any_model
     from lyapcheck.models.classes.recast_classes import base_loop
     from lyapcheck.models.classes.recast_interval import claim_of, prove
-    from lyapcheck.models.surfaces.recast_run import box_robust
+    from lyapcheck.models.classes.recast_regions import box_robust
     from lyapcheck.models.language.parameter_box import ModelBox
 
     result = api.certify(model=EXAMPLES / "recast-pendulum.toml", box=["b=0.3..3"], classes="roa")

@@ -101,7 +101,7 @@ def test_pendulum_region_holds_on_the_true_loop_and_global_stability_is_refuted(
 def test_pendulum_region_on_the_recasting_relations_is_modulo_2_pi(tmp_path: Path) -> None:
     """The route taken where ball arithmetic does not apply (more than 3 states): V over (sin, cos - 1,
     omega), proved exactly on the recasting's relations, and its claim modulo 2 pi."""
-    from lyapcheck.models.surfaces.recast_run import comparison_box, run_roa
+    from lyapcheck.models.classes.recast_regions import comparison_box, run_roa
 
     model = parse_any_model(PENDULUM, "pendulum.toml")
     loop = rc.base_loop(model.system)

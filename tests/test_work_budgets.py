@@ -108,7 +108,7 @@ def test_the_class_time_limit_is_a_safety_net_named_as_one() -> None:
 
 
 def pendulum_region(budget_s: float = SAFETY_NET_S) -> ConditionResult:
-    from lyapcheck.models.surfaces.recast_run import comparison_box, run_roa
+    from lyapcheck.models.classes.recast_regions import comparison_box, run_roa
 
     model = parse_any_model(PENDULUM, "pendulum.toml")
     loop = rc.base_loop(model.system)

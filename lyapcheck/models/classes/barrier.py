@@ -837,7 +837,7 @@ def run_functions(model: "RecastModel", loop: "Loop", budget: "Budget", box: "Mo
                   ) -> ConditionResult:
     """The ``barrier`` class on a loop with functions (the section's comment above). With ``box``, ``loop``
     is the loop with the box's parameters as bounded constants
-    (:func:`lyapcheck.models.surfaces.recast_run.boxed_loop`, ``model`` read at the box's centre): one B for
+    (:func:`lyapcheck.models.classes.recast_regions.boxed_loop`, ``model`` read at the box's centre): one B for
     every value of the box."""
     if box is not None and sets_use_box(model, box):
         return ConditionResult("barrier", "not_applicable", SETS_USE_BOX)

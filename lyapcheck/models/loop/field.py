@@ -546,3 +546,13 @@ def state_field(scaled: ScaledField, robust: bool = False) -> StateField:
 
     return StateField(ring=ring, g=tuple(restricted(gi) for gi in scaled.g), D=restricted(scaled.D),
                       disturbances=len(kept))
+
+
+def robust_field(scaled: ScaledField) -> StateField | None:
+    """The field with every disturbance a box coordinate (:func:`state_field`, robust), where a
+    robust stability claim can exist: the model has disturbances that enter the field, and they
+    vanish at the equilibrium. None otherwise (no disturbance enters: the nominal claim covers them
+    all; or one moves the equilibrium: only ``sos_bound`` can speak of it)."""
+    if not active_disturbances(scaled) or not disturbances_vanish(scaled):
+        return None
+    return state_field(scaled, robust=True)

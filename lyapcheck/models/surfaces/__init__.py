@@ -1,12 +1,13 @@
 """What a user calls: certify a model, write and verify its certificate, simulate it.
 
 - :mod:`~lyapcheck.models.surfaces.certify`: ``certify_model``, the one entry for every loop kind (its class
-  selection, its sentences and coverage), running a polynomial or rational loop's classes itself and a loop
-  with functions' through :mod:`~lyapcheck.models.surfaces.recast_run`; :mod:`~lyapcheck.models.surfaces.ball_roa`,
+  selection, its sentences and coverage) and the one runner of the classes (each by its entry in
+  :mod:`lyapcheck.models.classes.registry`); :mod:`~lyapcheck.models.surfaces.ball_roa`,
   the ball-arithmetic region on a polynomial or rational loop;
 - :mod:`~lyapcheck.models.surfaces.certificate`: the one certificate document and ``verify`` entry (it reads
   the model again and makes the rows every document starts with), the rest of a loop with functions'
-  document checked by :mod:`~lyapcheck.models.surfaces.recast_certify`; :mod:`~lyapcheck.models.surfaces.documents`,
+  document checked by :mod:`~lyapcheck.models.surfaces.recast_certify` (each class's exact check by its
+  registry entry, :func:`lyapcheck.models.classes.registry.verify`); :mod:`~lyapcheck.models.surfaces.documents`,
   :mod:`~lyapcheck.models.surfaces.stated`, :mod:`~lyapcheck.models.surfaces.counterexamples`: what both share;
 - :mod:`~lyapcheck.models.surfaces.simulate`: ``simulate --model``, one implementation for every loop kind;
   :mod:`~lyapcheck.models.surfaces.iterate`: a discrete-time map iterated instead.

@@ -138,7 +138,7 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
     from lyapcheck.models.engines.interval_region import prove_bounded
     from lyapcheck.models.classes.claims import interval_sentence
     from lyapcheck.models.classes.recast_interval import METHOD, claim_of, interval_roa
-    from lyapcheck.models.surfaces.recast_run import comparison_box, proved_loop, robust_of, simulated_check
+    from lyapcheck.models.classes.recast_regions import comparison_box, proved_loop, robust_of, simulated_check
 
     recast = as_recast(model)
     loop = proved_loop(recast, budget.seconds)  # (no square root to prove: the loop has no auxiliary)
@@ -194,7 +194,7 @@ def verify_ball_roa(name: str, c: dict[str, Any], model: "Model", box: Any) -> t
     the proof's own comparison."""
     from lyapcheck.models.classes.recast_classes import v_text
     from lyapcheck.models.classes.recast_interval import check_interval
-    from lyapcheck.models.surfaces.recast_run import proved_loop, robust_of
+    from lyapcheck.models.classes.recast_regions import proved_loop, robust_of
     from lyapcheck.models.engines.recast_sos import poly_from_json
     from lyapcheck.tolerances import MODEL_CLASS_TIME_LIMIT_S
 

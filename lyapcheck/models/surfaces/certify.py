@@ -32,23 +32,19 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
 from lyapcheck import answers as _answers
-from lyapcheck.degrees import searched_degrees
 from lyapcheck.errors import InvalidParameter, ModelFileError
-from lyapcheck.models.classes.registry import CLEARED, NAMES
-from lyapcheck.models.loop.field import ScaledField, Scaling, ShiftedField, StateField, active_disturbances, \
-    apply_scaling, choose_scaling, clear, disturbances_vanish, shifted_field, state_field
+from lyapcheck.models.classes.contexts import Candidate, FieldRun
+from lyapcheck.models.classes.registry import CLEARED, NAMES, ModelClass
+from lyapcheck.models.loop.field import Scaling, ShiftedField, active_disturbances, apply_scaling, choose_scaling, \
+    clear, robust_field, shifted_field, state_field
 from lyapcheck.models.language.modelfile import Model
 from lyapcheck.models.engines import reasons
-from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
-from lyapcheck.results import ConditionResult, Disturbances
+from lyapcheck.models.engines.search import Budget, BudgetExhausted
+from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly
 from lyapcheck.timing import ClassTimeLimit, time_limit
 
 if TYPE_CHECKING:  # pragma: no cover
-    import numpy as np  # imported where a class computes with floats: reading a model, or re-checking a
-    # stored certificate (lyapcheck.models.engines.store), needs none of it
-
-    from lyapcheck.models.engines.numeric import SetCrossCheck
     from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.models.language.recast import RecastModel
 
@@ -58,26 +54,11 @@ log = logging.getLogger(__name__)
 MODEL_CLASSES: Final = NAMES
 #: the classes that need the field multiplied through (every denominator of one sign proved)
 CLEARED_CLASSES: Final = CLEARED
-#: grid of simulated starts per state for the roa share, by number of states (beyond: random starts)
-ROA_GRID: Final = {1: 401, 2: 101, 3: 21}
-ROA_RANDOM_STARTS: Final = 4000
-#: simulated time of the roa cross-check, in units of the loop's typical time
-ROA_HORIZON: Final = 60.0
-#: over a box, sos_gas's V may depend on the parameters up to these degrees, in turn
-BOX_PARAM_DEGREES: Final = (0, 1)
 #: a class's hard stop (:func:`lyapcheck.timing.time_limit`) comes at its limit times this plus
 #: HARD_STOP_GRACE_S: past the cooperative budget, for a solve, exact check or simulation that
 #: overruns it. With the 60 s limit: 95 s
 HARD_STOP_FACTOR: Final = 1.5
 HARD_STOP_GRACE_S: Final = 5.0
-
-
-@dataclass
-class Candidate:
-    """The user's ``V``: the text as given, and the polynomial in the declared (unshifted) states."""
-
-    text: str
-    poly: Poly
 
 
 @dataclass
@@ -190,9 +171,13 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     """Run the chosen classes on ``model``, a polynomial or rational loop or a loop with functions
     (see the module docstring); with a ``box`` of parameters, each certified class holds for every
     parameter value in it (:mod:`lyapcheck.models.loop.boxes`; a loop with functions is read at the
-    box's centre, :func:`lyapcheck.models.surfaces.recast_run.certify_box`)."""
-    import time
+    box's centre, :func:`lyapcheck.models.classes.recast_regions.functions_run`).
 
+    Every kind of loop but a map runs its classes through one runner (:func:`_run_classes`): each class of
+    :data:`lyapcheck.models.classes.registry.CLASSES` in order, by its entry for the kind of loop, given
+    one context object (:mod:`lyapcheck.models.classes.contexts`); the rules every class shares
+    (:func:`_needs_input`, :func:`_field_rule`, :func:`roa_after_gas`, the disturbances each claim
+    covers, the ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
@@ -207,26 +192,13 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     chosen = class_selection(classes, model, cand)
     out = ModelCertification(model=model, candidate=cand, results={}, box=box)
     shifted = shifted_field(model, box=box)
+    ctx = FieldRun(model=model, shifted=shifted, box=box, candidate=cand, results=out.results)
 
     def run(name: str, compute: Callable[[Budget], ConditionResult]) -> None:
-        start = time.perf_counter()
-        budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-        out.results[name] = _guarded(name, lambda: compute(budget), limit)
-        out.seconds[name] = time.perf_counter() - start
+        _timed(name, compute, out.results, out.seconds, limit, guarded=True)
 
-    if "linearization" in chosen and box is not None:
-        from lyapcheck.models.classes import linearization
-
-        run("linearization", lambda budget: linearization.run_over_box(shifted))
-    elif "linearization" in chosen:
-        from lyapcheck.models.classes import linearization
-
-        run("linearization", lambda budget: linearization.run(shifted))
     needing = [c for c in chosen if c in CLEARED_CLASSES]
-    scaled: ScaledField | None = None
-    from lyapcheck.models.surfaces import ball_roa
-
-    roa_stopped: list[BaseException] = []  # what ended roa's SOS route, where it raised
+    uncleared: tuple[str, str] | None = None  # why the classes needing the cleared field cannot run; the denominator
     if needing:
         from lyapcheck.models.loop.positivity import prove_denominators
 
@@ -242,103 +214,51 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
         if failed is not None:
             why = (f"the denominator {_text(shifted, failed)} (in x - x_eq) could not be proved of one sign for every "
                    "state, so the field cannot be multiplied through")
-            for name in needing:
-                out.results[name] = ConditionResult(name, "not_applicable", why, numbers={"denominator":
-                                                                                          _text(shifted, failed)})
+            uncleared = why, _text(shifted, failed)
         else:
             cleared = clear(shifted, signs)
             out.scaling = choose_scaling(cleared, model.domain)
-            scaled = apply_scaling(cleared, out.scaling)
-    if scaled is not None:
-        sc = scaled
-        from lyapcheck.models.classes import lyapunov
+            sc = ctx.scaled = apply_scaling(cleared, out.scaling)
+            ctx.robust = robust_field(sc)
+            ctx.nominal = state_field(sc)
+            ctx.enters = bool(active_disturbances(sc))
+            #: what a claim on the nominal field covers
+            ctx.nominal_covers = ("all" if not ctx.enters else "zero") if model.disturbances else None
 
-        robust = robust_field(sc)
-        nominal = state_field(sc)
-        enters = bool(active_disturbances(sc))
-        #: what a claim on the nominal field covers
-        nominal_covers: Disturbances | None = ("all" if not enters else "zero") if model.disturbances else None
+    def decide(entry: ModelClass) -> ConditionResult | None:
+        given = _needs_input(entry.name, box, cand)
+        if given is not None:
+            return given
+        if entry.cleared and uncleared is not None:
+            return ConditionResult(entry.name, "not_applicable", uncleared[0], numbers={"denominator": uncleared[1]})
+        return _field_rule(entry.name, model, box, out.results)
 
-        def stability(attempt: Callable[[StateField, Search], ConditionResult]) -> Callable[[Budget], ConditionResult]:
-            return lambda budget: covering_disturbances(
-                model, robust, nominal, enters, lambda f: attempt(f, Search(f.ring, budget)))
+    from lyapcheck.models.surfaces import ball_roa
 
-        if "quadratic" in chosen:
-            run("quadratic", stability(lambda f, search: lyapunov.run(sc, "quadratic", (2,), search,
-                                                                                   field=f)))
-        if "sos_gas" in chosen:
-            run("sos_gas", stability(lambda f, search: lyapunov.run(
-                sc, "sos_gas", searched_degrees(lyapunov.SOS_GAS_DEGREES), search, param_degrees=BOX_PARAM_DEGREES, field=f)))
-        if "roa" in chosen:
-            lin = out.results.get("linearization")
-            gas = {r.disturbances: name for name, r in out.results.items()
-                   if name in ("quadratic", "sos_gas") and r.status == "certified"}
-            covering = "all" if model.disturbances else None
-            if covering in gas:
-                out.results["roa"] = ConditionResult(
-                    "roa", "not_applicable", f"global asymptotic stability is certified ({gas[covering]}): the region "
-                    "of attraction is the whole state space", property="ROA", disturbances=covering)
-            else:
-                def roa(budget: Budget) -> ConditionResult:
-                    memo: dict[str, Any] = {}
-                    if robust is not None:
-                        found = run_roa(sc, budget, lin, robust, memo)
-                        if found.status == "certified":
-                            return _covers(found, "all")
-                    if "zero" in gas:
-                        return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified "
-                                               f"({gas['zero']}, d = 0): with every disturbance held at 0 the region "
-                                               "of attraction is the whole state space", property="ROA",
-                                               disturbances="zero")
-                    return _covers(run_roa(sc, budget, lin, nominal, memo), nominal_covers)
+    roa_stopped: list[BaseException] = []  # what ended roa's SOS route, where it raised
 
-                run("roa", ball_roa.recording(roa, roa_stopped))
-        if "candidate" in chosen and cand is not None:  # without --candidate: not_applicable, below
-            # the user's V is tried on the nominal loop (its global test has no box multipliers yet)
-            run("candidate", lambda budget: _covers(run_candidate(sc, cand, budget), nominal_covers))
-        if "barrier" in chosen and _has_safety_sets(model) and not _sets_use_box(model, box):
-            from lyapcheck.models.classes import barrier
+    def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
+        run_field = entry.run_field
+        if run_field is None:
+            return None
 
-            run("barrier", lambda budget: barrier.run(sc, Search(sc.ring, budget)))
-        if "reach_avoid" in chosen and _has_safety_sets(model, goal=True) and not _sets_use_box(model, box):
-            from lyapcheck.models.classes import reach_avoid
+        def found(budget: Budget) -> ConditionResult:
+            return run_field(ctx, budget)
 
-            run("reach_avoid", lambda budget: reach_avoid.run(sc, Search(sc.ring, budget)))
-        if "sos_bound" in chosen:
-            from lyapcheck.models.classes import bounds
+        # the ball-arithmetic engine runs after roa's SOS route (below) where that did not certify
+        return ball_roa.recording(found, roa_stopped) if entry.name == "roa" else found
 
-            if not model.disturbances:
-                out.results["sos_bound"] = ConditionResult("sos_bound", "not_applicable",
-                                                           "the model has no [disturbances]: add one (name = bound) to "
-                                                           "bound its outputs")
-            else:
-                run("sos_bound", lambda budget: bounds.run(sc, Search(sc.ring, budget)))
+    _run_classes(chosen, out.results, out.seconds, limit, decide, compute, guarded=True)
     if "roa" in out.results:  # the ball-arithmetic engine, where the SOS route did not certify
-        _ball_after_sos(out, model, box, roa_stopped, scaled is not None, run)
+        _ball_after_sos(out, model, box, roa_stopped, ctx.scaled is not None, run)
     if "linearization" in out.results and model.disturbances:
         from lyapcheck.models.classes.claims import nominal_coverage
 
         # the Jacobian at d = 0: every admissible disturbance where each bound is 0
         out.results["linearization"].disturbances = nominal_coverage(model.disturbances.values())
-    if "sos_bound" in out.results and model.disturbances:
-        out.results["sos_bound"].disturbances = "all"
-    if "barrier" in chosen and "barrier" not in out.results:
-        why = ("over a box the sets may not depend on a parameter of the box (they are read at the model's values)"
-               if _has_safety_sets(model) and _sets_use_box(model, box) else
-               "the model's [sets] needs 'initial' and 'unsafe' (docs/model-files.md, [sets])")
-        out.results["barrier"] = ConditionResult("barrier", "not_applicable", why)
-    if "reach_avoid" in chosen and "reach_avoid" not in out.results:
-        why = ("over a box the sets may not depend on a parameter of the box (they are read at the model's values)"
-               if _has_safety_sets(model, goal=True) and _sets_use_box(model, box) else
-               "the model's [sets] needs 'initial', 'unsafe' and 'goal' (docs/model-files.md, [sets])")
-        out.results["reach_avoid"] = ConditionResult("reach_avoid", "not_applicable", why)
-    for name in ("barrier", "reach_avoid"):
+    for name in ("sos_bound", "barrier", "reach_avoid"):
         if name in out.results and model.disturbances:
-            out.results[name].disturbances = "all"  # B or V serves every disturbance (the robust field)
-    if "candidate" in chosen and box is not None:
-        out.results["candidate"] = ConditionResult("candidate", "not_applicable", reasons.NOT_OVER_A_BOX["candidate"])
-    elif "candidate" in chosen and cand is None:
-        out.results["candidate"] = ConditionResult("candidate", "not_applicable", reasons.NEEDS_CANDIDATE)
+            out.results[name].disturbances = "all"  # (B or V serves every disturbance: the robust field)
     out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
     for r in out.results.values():  # every condition of a disturbed model says which it covers
         if model.disturbances and r.disturbances is None:
@@ -358,6 +278,88 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
         if text is not None:
             r.summary = text
     return out
+
+
+def _run_classes(chosen: Sequence[str], results: dict[str, ConditionResult], seconds: dict[str, float], limit: float,
+                 decide: Callable[[ModelClass], ConditionResult | None],
+                 compute: Callable[[ModelClass], Callable[[Budget], ConditionResult] | None], guarded: bool) -> None:
+    """The one runner: each chosen class of :data:`lyapcheck.models.classes.registry.CLASSES`, in its order,
+    decided by a rule every class shares (``decide``: an input that was not given, ``roa`` once GAS is
+    certified, ...) or else run by its entry for this kind of loop (``compute``; None: the class has no
+    search on it, and the caller says so), each with a budget of its own and timed."""
+    from lyapcheck.models.classes import registry
+
+    for entry in registry.CLASSES:
+        if entry.name not in chosen or entry.name in results:
+            continue
+        ruled = decide(entry)
+        if ruled is not None:
+            results[entry.name] = ruled
+            continue
+        found = compute(entry)
+        if found is not None:
+            _timed(entry.name, found, results, seconds, limit, guarded)
+
+
+def _timed(name: str, compute: Callable[[Budget], ConditionResult], results: dict[str, ConditionResult],
+           seconds: dict[str, float], limit: float, guarded: bool) -> None:
+    """One class run with a budget of its own (``guarded``: its numerical trouble or hard time limit
+    becomes ``inconclusive``, :func:`_guarded`), its seconds recorded."""
+    import time
+
+    start = time.perf_counter()
+    budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+    results[name] = _guarded(name, lambda: compute(budget), limit) if guarded else compute(budget)
+    seconds[name] = time.perf_counter() - start
+
+
+def _needs_input(name: str, box: "ModelBox | None", cand: object | None) -> ConditionResult | None:
+    """``candidate`` is ``not_applicable`` over a box (it certifies a point) and without ``--candidate``, on
+    every kind of loop; None otherwise."""
+    if name == "candidate" and box is not None:
+        return ConditionResult("candidate", "not_applicable", reasons.NOT_OVER_A_BOX["candidate"])
+    if name == "candidate" and cand is None:
+        return ConditionResult("candidate", "not_applicable", reasons.NEEDS_CANDIDATE)
+    return None
+
+
+def _field_rule(name: str, model: Model, box: "ModelBox | None", results: dict[str, ConditionResult]
+                ) -> ConditionResult | None:
+    """What a polynomial or rational loop decides before a class runs: ``roa`` once GAS is certified
+    covering what its claim would (every disturbance, or none declared), a safety class without its
+    sets (or with sets naming a parameter of the box), ``sos_bound`` without disturbances; None: run it."""
+    if name == "roa":
+        gas = {r.disturbances: c for c, r in results.items()
+               if c in ("quadratic", "sos_gas") and r.status == "certified"}
+        covering = "all" if model.disturbances else None
+        if covering in gas:
+            return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified "
+                                   f"({gas[covering]}): the region of attraction is the whole state space",
+                                   property="ROA", disturbances=covering)
+    if name in ("barrier", "reach_avoid"):
+        goal = name == "reach_avoid"
+        if not _has_safety_sets(model, goal=goal) or _sets_use_box(model, box):
+            why = ("over a box the sets may not depend on a parameter of the box (they are read at the model's values)"
+                   if _has_safety_sets(model, goal=goal) and _sets_use_box(model, box) else
+                   "the model's [sets] needs 'initial', 'unsafe' and 'goal' (docs/model-files.md, [sets])" if goal else
+                   "the model's [sets] needs 'initial' and 'unsafe' (docs/model-files.md, [sets])")
+            return ConditionResult(name, "not_applicable", why)
+    if name == "sos_bound" and not model.disturbances:
+        return ConditionResult("sos_bound", "not_applicable", "the model has no [disturbances]: add one (name = bound) "
+                                                              "to bound its outputs")
+    return None
+
+
+def roa_after_gas(results: dict[str, ConditionResult], where: str) -> ConditionResult | None:
+    """On a loop with functions, ``roa`` is ``not_applicable`` once ``quadratic`` or ``sos_gas`` certified GAS
+    (``where``: said of the claim, as " for every value of the box"); None otherwise. (A polynomial loop's
+    twin, :func:`_field_rule`, also weighs which disturbances each claim covers.)"""
+    gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
+                and results[c].status == "certified"), None)
+    if gas is None:
+        return None
+    return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified ({gas}){where}: the "
+                           "region of attraction is the whole state space", property="ROA")
 
 
 def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: str | None, limit: float,
@@ -411,20 +413,31 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
 def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None, candidate: str | None,
                        limit: float, box: "ModelBox | None") -> ModelCertification:
     """:func:`certify_model` on a loop with functions: the classes run on its recasting
-    (:func:`lyapcheck.models.surfaces.recast_run.certify`), each certified one's sentence made from its
-    certificate; with ``box`` (``model`` read at its centre), every certified claim holds for every value
-    of it and says so first, and a refutation is the centre's and says so."""
+    (:func:`lyapcheck.models.classes.recast_regions.functions_run`, the one runner), each certified one's
+    sentence made from its certificate; with ``box`` (``model`` read at its centre), every certified claim
+    holds for every value of it and says so first, and a refutation is the centre's and says so."""
     from lyapcheck.models.classes import region_size
     from lyapcheck.models.classes.claims import box_prefix, covered, nominal_coverage, sentence_of
     from lyapcheck.models.classes.recast_interval import box_units
-    from lyapcheck.models.surfaces import recast_run
+    from lyapcheck.models.classes.recast_regions import functions_run
 
     cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
-    results, loop, seconds = recast_run.certify(model, chosen, model.candidate_v if cand is not None else None,
-                                                limit, box)
-    if "candidate" in chosen and "candidate" not in results:  # asked for without --candidate
-        results["candidate"] = ConditionResult("candidate", "not_applicable", reasons.NEEDS_CANDIDATE)
+    results: dict[str, ConditionResult] = {}
+    seconds: dict[str, float] = {}
+    ctx = functions_run(model, chosen, model.candidate_v if cand is not None else None, limit, box, results)
+    where = " for every value of the box" if box is not None else ""
+
+    def decide(entry: ModelClass) -> ConditionResult | None:
+        return _needs_input(entry.name, box, cand) or (roa_after_gas(results, where) if entry.name == "roa" else None)
+
+    def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
+        run_functions = entry.run_functions
+        return None if run_functions is None else lambda budget: run_functions(ctx, budget)
+
+    # (unguarded, as this loop's classes always ran: each stops at its own budget)
+    _run_classes(chosen, results, seconds, limit, decide, compute, guarded=False)
+    loop = ctx.loop
     for name in chosen:
         if name not in results:  # (the sentence never lists the class it refuses)
             where = " over a box: certify a point (--set NAME=VALUE)" if box is not None else ""
@@ -504,46 +517,6 @@ def readable_v(model: Model, terms: dict[str, Any], variables: list[str]) -> str
     return v_text(terms, variables, dict(zip(model.states, model.equilibrium)))
 
 
-def robust_field(scaled: ScaledField) -> StateField | None:
-    """The field with every disturbance a box coordinate (:func:`state_field`, robust), where a
-    robust stability claim can exist: the model has disturbances that enter the field, and they
-    vanish at the equilibrium. None otherwise (no disturbance enters: the nominal claim covers them
-    all; or one moves the equilibrium: only ``sos_bound`` can speak of it)."""
-    if not active_disturbances(scaled) or not disturbances_vanish(scaled):
-        return None
-    return state_field(scaled, robust=True)
-
-
-def covering_disturbances(model: Model, robust: StateField | None, nominal: StateField, enters: bool,
-                          attempt: Callable[[StateField], ConditionResult]) -> ConditionResult:
-    """A stability class on a model, saying which disturbances its claim covers (DESIGN.md,
-    "Disturbances in claims"): without disturbances, the plain claim; where no disturbance enters
-    the field (``enters`` false: a bound of 0, or one that acts on an output only), the nominal claim,
-    which then covers them all; with disturbances that vanish at the equilibrium (``robust``), first
-    the robust claim (``V`` common to every disturbance value, so it holds for every disturbance
-    signal: ``"all"``), and only if that is not found the nominal one (``"zero"``, saying that the
-    robust one was tried); otherwise (a disturbance moves the equilibrium) the nominal one
-    (``"zero"``)."""
-    if not model.disturbances:
-        return attempt(nominal)
-    if not enters:
-        return _covers(attempt(nominal), "all")
-    if robust is not None:
-        found = attempt(robust)
-        if found.status in ("certified", "inconclusive"):
-            return _covers(found, "all")
-        fallback = _covers(attempt(nominal), "zero")
-        if fallback.status == "certified":
-            fallback.numbers["robust_attempt"] = found.summary
-        return fallback
-    return _covers(attempt(nominal), "zero")
-
-
-def _covers(result: ConditionResult, disturbances: "Disturbances | None") -> ConditionResult:
-    result.disturbances = disturbances
-    return result
-
-
 def box_start(model: Model, box: "ModelBox | None") -> int | None:
     """The index of a box's first parameter in the shifted field's ring (after the states and the
     disturbances), or None without a box."""
@@ -586,222 +559,6 @@ def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) ->
         why = reasons.numerical_trouble(reasons.searched_for(name), reason)
     log.info("%s inconclusive: %s", name, reason)
     return ConditionResult(name, "inconclusive", why.summary, numbers=why.numbers({"reason": reason}))
-
-
-# -- roa and candidate -------------------------------------------------------------------------------
-
-def simulated_region(scaled: ScaledField, samples_declared: np.ndarray) -> np.ndarray:
-    """Which declared starts converge to the equilibrium (disturbances 0); over a box, at every
-    parameter point of :func:`parameter_points` (its centre and corners)."""
-    import numpy as np
-
-    from lyapcheck.models.engines.numeric import converges, typical_time
-
-    model = scaled.cleared.shifted.model
-    half = _half_widths(model)
-    converged = np.ones(len(samples_declared), dtype=bool)
-    for params in parameter_points(scaled):
-        T = typical_time(model, params)
-        converged &= converges(model, samples_declared, t_end=ROA_HORIZON * T, radius=half * 1e-3, escape=half * 1e3,
-                               parameters=params).converged
-    return converged
-
-
-def parameter_points(scaled: ScaledField) -> list[dict[str, Fraction]]:
-    """The model's parameters, and over a box those at its centre and corners."""
-    model = scaled.cleared.shifted.model
-    box = scaled.cleared.shifted.box
-    if box is None:
-        return [dict(model.parameters)]
-    centre = {name: box.center(name) for name in box.names}
-    return [{**model.parameters, **centre}] + [{**model.parameters, **corner} for corner in box.corners()]
-
-
-def _half_widths(model: Model) -> np.ndarray:
-    import numpy as np
-
-    if model.domain:
-        return np.array([max(abs(float(model.domain[s][0] - e)), abs(float(model.domain[s][1] - e)))
-                         for s, e in zip(model.states, model.equilibrium)])
-    return np.ones(model.n)
-
-
-def roa_starts(model: Model, seed: int = 0) -> np.ndarray:
-    import numpy as np
-
-    from lyapcheck.models.engines.numeric import grid_starts
-
-    assert model.domain is not None
-    per_axis = ROA_GRID.get(model.n)
-    if per_axis is None:  # beyond ROA_GRID: random starts (two per axis would be the domain's corners alone)
-        return grid_starts(model.domain, model.states, ROA_RANDOM_STARTS, ROA_RANDOM_STARTS, seed=seed)
-    return grid_starts(model.domain, model.states, per_axis, per_axis ** model.n, seed=seed)
-
-
-def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult | None,
-            field_: StateField | None = None, memo: dict[str, Any] | None = None) -> ConditionResult:
-    """The ``roa`` class on ``field_`` (default: the nominal :func:`state_field`; the robust one
-    proves a set common to every disturbance value). ``memo`` keeps the simulated starts between
-    the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0)."""
-    import numpy as np
-
-    from lyapcheck.models.engines import reasons
-    from lyapcheck.models.classes import regions
-
-    model = scaled.cleared.shifted.model
-    if field_ is None:
-        field_ = state_field(scaled)
-    search = Search(field_.ring, budget)
-    A = np.array([[float(x) for x in row] for row in scaled.scaling.matrix()])
-    eq = np.array([float(v) for v in model.equilibrium])
-    if regions.lyapunov_quadratic(field_) is None:
-        why = reasons.reason("the Jacobian at the equilibrium is not Hurwitz"
-                             + (" at the box's centre" if field_.p > field_.disturbances
-                                else " with the disturbances at 0" if field_.p else "")
-                             + ", so no quadratic Lyapunov function starts the search (see linearization)",
-                             ("candidate",))
-        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
-    memo = {} if memo is None else memo
-    if "starts" not in memo:
-        if model.domain:
-            starts = roa_starts(model)
-        else:
-            rng = np.random.default_rng(0)
-            starts = eq + rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n)) @ A.T
-        memo["starts"], memo["converged"] = starts, simulated_region(scaled, starts)
-    starts, converged = memo["starts"], memo["converged"]
-    samples = scaled.scaling.to_scaled(starts - eq)
-    outcome = regions.enlarge(field_, search, samples, converged)
-    if outcome.certificate is None:
-        why = reasons.reason("no region of attraction was proved: no level set of the linearization's quadratic V "
-                             "could be proved to shrink", ("domain", "candidate", "time"),
-                             "no sublevel set passed the exact check")
-        return ConditionResult("roa", "not_certified", why.summary, property="ROA",
-                               solver={"solves": search.log}, numbers=why.numbers({"history": outcome.history}))
-    cert = outcome.certificate
-    inside = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))(regions.on_states(field_, samples)) \
-        <= float(cert.level)
-    numbers: dict[str, Any] = {"degree": 2 * max(sum(m) for m in cert.V.basis), "simulated_starts": int(len(starts))}
-    if model.domain:
-        if converged.any():  # (no simulated start converged in the horizon: no share to state, not a share of 0)
-            numbers["roa_share"] = float(np.mean(inside[converged]))
-        numbers["simulated_roa_share_of_domain"] = float(np.mean(converged))
-    suspicious = inside & ~converged
-    if suspicious.any():  # a start in a proved set that did not converge: simulate it far longer, V watched
-        V = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))
-
-        def value(X: np.ndarray) -> np.ndarray:
-            return V(regions.on_states(field_, scaled.scaling.to_scaled(np.atleast_2d(X) - eq)))
-
-        try:
-            again = simulated_region_long(scaled, starts[suspicious], value, float(cert.level))
-        except ClassTimeLimit:  # the hard stop may end this check, never the proof before it
-            numbers["long_simulation"] = "stopped by the class's hard time limit"
-        else:
-            numbers.update(again.numbers())
-    numbers["rounds"] = outcome.history
-    return regions.level_result("roa", scaled, field_, cert, search, numbers, "region of attraction")
-
-
-def simulated_region_long(scaled: ScaledField, starts: np.ndarray, value: Callable[[np.ndarray], np.ndarray],
-                          level: float) -> SetCrossCheck:
-    """Starts (declared states, rows) in the certified set ``{value <= level}`` that did not converge
-    in the first simulation, simulated twenty times longer at every parameter point with V watched
-    (:func:`lyapcheck.models.engines.numeric.check_certified_set`): a violation only where one leaves the
-    set (the certificate gives no decrease rate to bound the time to converge); the others, still
-    converging, are not checked."""
-    import numpy as np
-
-    from lyapcheck.models.engines.numeric import FieldEvaluator, ModelSystem, SetCrossCheck, check_certified_set, typical_time
-    from lyapcheck.models.engines.trajectories import RTOL
-
-    model = scaled.cleared.shifted.model
-    half = _half_widths(model)
-    eq = np.array([float(v) for v in model.equilibrium])
-    left = np.zeros(len(starts), dtype=bool)
-    converged = np.ones(len(starts), dtype=bool)
-    for params in parameter_points(scaled):
-        system = ModelSystem(FieldEvaluator.of(model, params), len(starts), escape=half * 1e3, center=eq)
-        found = check_certified_set(system, starts, 20 * ROA_HORIZON * typical_time(model, params), value=value,
-                                    level=level, converged=lambda X: np.all(np.abs(X - eq) <= half * 1e-3, axis=1),
-                                    rtol=RTOL, atol=half * 1e-6, max_iterations=200_000)
-        left |= found.left
-        converged &= found.converged
-    return SetCrossCheck(left=left, overdue=np.zeros(len(starts), dtype=bool), converged=converged & ~left)
-
-
-def run_candidate(scaled: ScaledField, cand: Candidate | None, budget: Budget) -> ConditionResult:
-    import numpy as np
-
-    from lyapcheck.models.engines import reasons
-    from lyapcheck.models.classes import regions
-    from lyapcheck.models.classes.lyapunov import best_decay_rate, stated_v
-    from lyapcheck.sos.polynomials import to_fmpq
-
-    assert cand is not None
-    model = scaled.cleared.shifted.model
-    field_ = state_field(scaled)
-    ring = field_.ring
-    search = Search(ring, budget)
-    full = model.state_ring
-    # V(x_eq + S z): the candidate in the scaled states
-    from lyapcheck.models.loop.field import linear_images
-
-    images = linear_images(full, model.n, scaled.scaling.matrix())
-    images = [im + to_fmpq(e) for im, e in zip(images[:model.n], model.equilibrium)] + images[model.n:]
-    v_scaled = full.restrict(full.compose(cand.poly, images), ring)
-    V = regions.gram_of(field_, v_scaled, search)
-    if V is None:
-        why = reasons.reason("the candidate V could not be proved positive definite and radially unbounded",
-                             ("other_candidate",), "no positive definite Gram matrix over its reduced basis with a "
-                             "pure power of every state")
-        return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
-                               solver={"solves": search.log}, property="ROA")
-    sigma = regions.global_decrease(field_, V, Fraction(0), search)
-    if sigma is not None:
-        def attempt(mu: Fraction) -> dict[str, Any] | None:
-            s = regions.global_decrease(field_, V, mu, search)
-            return None if s is None else {"sigma": s, "mu": mu}
-
-        best = best_decay_rate(attempt, {"sigma": sigma, "mu": Fraction(0)})
-        rate = float(best["mu"] / scaled.scaling.time)
-        tail = f", V' <= -{rate:.4g} V" if best["mu"] > 0 else ""
-        return ConditionResult("candidate", "certified", f"GAS: V' < 0 away from the equilibrium everywhere{tail} "
-                                                         "(checked exactly)",
-                               numbers={"decay_rate_V_per_s": rate},
-                               certificate={"kind": "lyapunov", "mu_scaled": str(best["mu"]),
-                                            "V": stated_v(scaled, field_, V.poly(ring)), "gram_V": V.to_json(),
-                                            "gram_sigma": best["sigma"].to_json()},
-                               solver={"solves": search.log}, property="GAS")
-    radius = float(np.max(np.abs(scaled.scaling.to_scaled(np.diag(_half_widths(model)))))) * 4
-    top = regions.supremum_estimate(field_, V, radius)
-    if top is None:
-        # no sample with V' >= 0 out to 4 half-widths: search the level upwards from V's largest
-        # value there, each step an SOS lower bound of min {V : V' >= 0} (no sample needed)
-        rng = np.random.default_rng(0)
-        ball = rng.normal(size=(200, field_.n))
-        ball *= radius / np.linalg.norm(ball, axis=1, keepdims=True)
-        guess = float(np.max(regions.NumericPoly(ring, V.poly(ring))(regions.on_states(field_, ball))))
-        cert = regions.largest_level(field_, V, search, guess, regions.symmetry(field_), grow=True)
-        if cert is None:
-            why = reasons.reason("V' < 0 could not be proved everywhere, nor on any level set {V <= c} (no point with "
-                                 "V' >= 0 was sampled)", ("other_candidate", "domain", "time"),
-                                 f"no level from {guess:.6g} upwards passed the level program")
-            return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
-                                   solver={"solves": search.log}, property="ROA")
-        return regions.level_result("candidate", scaled, field_, cert, search, {"level_search": "upwards, by SOS"},
-                                    "the user's V")
-    cert = regions.largest_level(field_, V, search, top, regions.symmetry(field_))
-    if cert is None:
-        why = reasons.reason("V' < 0 could not be proved everywhere, nor on any level set {V <= c} below the "
-                             f"sampled points where V' >= 0 (V = {top:.6g})", ("other_candidate", "time"),
-                             f"no level of V passed the exact check (sampled supremum {top:.6g})")
-        return ConditionResult("candidate", "not_certified", why.summary,
-                               numbers=why.numbers({"level_supremum_estimate": top}),
-                               solver={"solves": search.log}, property="ROA")
-    return regions.level_result("candidate", scaled, field_, cert, search,
-                                {"level_supremum_estimate": top, "level_ratio_to_estimate": float(cert.level) / top},
-                                "the user's V")
 
 
 __all__ = ["MODEL_CLASSES", "ModelCertification", "certify_model", "parse_candidate", "class_selection",

@@ -19,24 +19,23 @@ from __future__ import annotations
 
 import re
 from fractions import Fraction
-from typing import Any, Callable, Final
+from typing import Any, Final
 
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel
-from lyapcheck.models.classes.bounds import KIND, OLD_KIND, check_functions as check_bound
-from lyapcheck.models.classes.lyapunov import OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, relations_claim, relations_sentence
-from lyapcheck.models.classes.lyapunov_relations import check_relations_certificate
+from lyapcheck.models.classes.bounds import KIND, OLD_KIND
+from lyapcheck.models.classes.contexts import FunctionsCheck
+from lyapcheck.models.classes.lyapunov import OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, relations_claim
 from lyapcheck.models.classes.recast_interval import box_units
-from lyapcheck.models.classes.recast_classes import (Loop, base_loop, check_denominator_proofs, check_root_proofs, for_v,
-                                             jacobian, lie, state_square, v_names, v_text)
-from lyapcheck.models.surfaces.recast_run import box_robust, boxed_loop, robust_of
-from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition, poly_from_json
-from lyapcheck.models.classes.claims import BARRIER_SENTENCE, box_prefix, covered, lyapunov_sentence, nominal_coverage
+from lyapcheck.models.classes.recast_classes import Loop, base_loop
+from lyapcheck.models.classes.registry import verify
+from lyapcheck.models.classes.recast_regions import box_robust, boxed_loop, robust_of
+from lyapcheck.models.engines.recast_sos import poly_from_json
+from lyapcheck.models.classes.claims import box_prefix, nominal_coverage
 from lyapcheck.models.classes.barrier import KIND as BARRIER_KIND, OLD_KIND as RECAST_BARRIER
 from lyapcheck.models.classes.reach_avoid import KIND as RECAST_REACH_AVOID, OLD_KIND as OLD_REACH_AVOID
 from lyapcheck.models.surfaces.stated import Stated, check_stated
-from lyapcheck.sos.polynomials import degree_in, to_fmpq
 from lyapcheck.exact import read_rational
 
 Row = tuple[str, bool, str]
@@ -102,15 +101,14 @@ def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> l
             if interval and c["certificate"].get("units") != box_units(model):
                 ok, why = False, "the units its box is printed in are not the states' units of the model text"
             elif name == "sos_bound":
-                ok, why = check_bound(model, c, box) if c["status"] == "certified" else \
-                    (False, "sos_bound refutes nothing")
+                ok, why = verify(name, c, FunctionsCheck(base, model=model, box=box))
             elif box is not None and name == "linearization":
                 assert boxed is not None
                 ok, why = _verify_box_linearization(c, boxed, box)
             elif box is not None and c["status"] == "certified" and name == "roa":
                 # the set covers the disturbances too where its certificate says so (else d = 0)
                 disturbed = "disturbances" in (c.get("certificate") or {})
-                ok, why = _verify_condition(name, c, base, box_robust(model, box, disturbed=disturbed))
+                ok, why = verify(name, c, FunctionsCheck(base, box_robust(model, box, disturbed=disturbed)))
                 if c["certificate"].get("kind") != "interval":
                     ok, why = False, "over a box, roa is proved by ball arithmetic"
             elif box is not None and c["status"] == "certified" and name in ("barrier", "reach_avoid"):
@@ -118,9 +116,9 @@ def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> l
                 ok, why = _verify_box_safety(name, c, boxed, model, box)
             elif box is not None and c["status"] == "certified":
                 assert boxed is not None
-                ok, why = _verify_condition(name, c, boxed)
+                ok, why = verify(name, c, FunctionsCheck(boxed))
             else:
-                ok, why = _verify_condition(name, c, base, robust_of(model), model)
+                ok, why = verify(name, c, FunctionsCheck(base, robust_of(model), model))
         except (KeyError, ValueError, ArithmeticError, TypeError, IndexError, AttributeError) as exc:
             ok, why = False, f"malformed certificate: {str(exc)[:200]}"
         rows.append((name, ok, f"{why}; {claims}" if ok else f"{name}: {why}"))
@@ -289,6 +287,7 @@ def _box_of(doc: dict[str, Any], model: RecastModel) -> tuple[ModelBox | None, L
     return box, boxed, ""
 
 
+
 def _verify_box_linearization(c: dict[str, Any], boxed: Loop, box: ModelBox) -> tuple[bool, str]:
     """A linearization over a box (its summary without the box's words): the Jacobian of every value
     built again from the loop recast with the box's parameters as bounded constants
@@ -308,106 +307,6 @@ def _verify_box_linearization(c: dict[str, Any], boxed: Loop, box: ModelBox) -> 
         return False, "the printed sentence is not the one the certificate supports"
     return ok, why
 
-
-def _verify_condition(name: str, c: dict[str, Any], base: Loop, robust: Any = None,
-                      model: RecastModel | None = None) -> tuple[bool, str]:
-    """Re-check one decided condition exactly (``model``: the model text's, for a barrier's sets)."""
-    from lyapcheck.models.classes.linearization import verify_jacobian
-
-    if name == "linearization":
-        from lyapcheck.models.classes.claims import summary
-
-        J = jacobian(base)
-        if isinstance(J, str):
-            return False, f"the model's Jacobian is not exact here: {J}"
-        data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
-        ok, why = verify_jacobian(J, c["status"], data or {})
-        if ok and c.get("summary") != summary(name, c):
-            return False, "the printed sentence is not the one the certificate supports"
-        return ok, why
-    if c["status"] == "refuted":
-        from lyapcheck.models.classes.recast_classes import check_refutation, refutation_sentence
-
-        ok, why = check_refutation(base, c.get("refutation"))
-        if ok and c.get("summary") != covered(c.get("disturbances"), refutation_sentence(c["refutation"]["point"])):
-            return False, "the printed sentence is not the one the refutation supports"
-        return ok, why
-    cert = c["certificate"]
-    if name == "barrier" or cert.get("kind") in (BARRIER_KIND, RECAST_BARRIER):
-        if model is None:
-            return False, "a barrier is certified on the model's own parameters, not over a box"
-        return _verify_barrier(c, base, model)
-    if name == "reach_avoid" or cert.get("kind") in (RECAST_REACH_AVOID, OLD_REACH_AVOID):
-        if model is None:
-            return False, "a reach-avoid function is certified on the model's own parameters, not over a box"
-        return _verify_reach_avoid(c, base, model)
-    if name in ("quadratic", "sos_gas"):  # one implementation for every loop (lyapcheck.models.classes.lyapunov)
-        if cert.get("kind") == OLD_RELATIONS_KIND:
-            return False, OLD_FORMAT
-        proved, why = _proved_recasting(cert, base)
-        ok, why = (False, why) if proved is None else check_relations_certificate(name, c, proved)
-        if ok and c.get("summary") != covered(c.get("disturbances"), relations_sentence(cert)):
-            return False, "the printed sentence is not the one the certificate supports"
-        return ok, why
-    if cert.get("kind") == "interval" and name in ("roa", "candidate"):
-        from lyapcheck.models.classes.recast_interval import check_interval
-
-        return check_interval(base, c, robust)
-    if cert.get("kind") != "recast":
-        return False, "not a recast certificate"
-    system = base.system
-    proved, why = _proved_recasting(cert, base)
-    if proved is None:
-        return False, why
-    ring = proved.ring
-    V = poly_from_json(ring, cert["V"], "V")
-    loop = for_v(proved, V)
-    if cert.get("angles") != list(loop.angles):
-        return False, "the angles taken modulo 2 pi are not the ones this V allows"
-    allowed = {ring.names[i] for i in loop.v_variables()}
-    if any(degree_in(ring, V, [n]) > 0 for n in ring.names if n not in allowed):
-        return False, "V uses a variable a Lyapunov function may not (an angle, a root, or a non-smooth function)"
-    ok, why, N = check_denominator_proofs(loop, v_names(loop, V), cert["recasting"]["denominators"])
-    if not ok:
-        return False, why
-    l2 = state_square(loop)
-    eps = read_rational(cert["epsilon"])
-    if eps <= 0:
-        return False, "epsilon must be > 0"
-    region = None
-    pos_eps = eps
-    if "level" in cert:
-        level = read_rational(cert["level"])
-        if level <= 0:
-            return False, "the level must be > 0"
-        if c.get("level") is not None and c.get("level") != float(level):
-            return False, "the stated level is not the certificate's"
-        region = V - to_fmpq(level)
-        pos_eps = read_rational(cert["positivity_epsilon"])
-        if pos_eps <= 0:
-            return False, "positivity_epsilon must be > 0"
-    pos = ConditionCertificate.from_json(ring, cert["positivity"], len(loop.relations))
-    ok, why = check_condition(ring, V - l2 * to_fmpq(pos_eps), loop.relations, pos)
-    if not ok:
-        return False, f"positivity: {why}"
-    dec = ConditionCertificate.from_json(ring, cert["decrease"], len(loop.relations))
-    if (region is None) != (dec.rho is None):
-        return False, "a region's decrease needs its multiplier rho, and only a region's"
-    decrease = read_rational(cert.get("decrease_epsilon", eps))
-    if decrease < eps:
-        return False, "decrease_epsilon must be at least epsilon"
-    ok, why = check_condition(ring, -lie(loop, V, N) - l2 * to_fmpq(decrease), loop.relations, dec, region=region)
-    if not ok:
-        return False, f"decrease: {why}"
-    if c.get("summary") != covered(c.get("disturbances"), lyapunov_sentence(cert)):
-        return False, "the printed sentence is not the one the certificate supports"
-    if cert.get("V_text") != v_text(system, V):
-        return False, "V_text is not V written with the functions"
-    what = "on {V <= level}" if region is not None else "everywhere"
-    modulo = " (modulo 2 pi in the angles)" if loop.angles else ""
-    return True, f"positivity and decrease {what}{modulo} on the recasting's relations, exactly"
-
-
 def _verify_box_safety(name: str, c: dict[str, Any], boxed: Loop, model: RecastModel, box: ModelBox
                        ) -> tuple[bool, str]:
     """A barrier or a reach-avoid function over a box: its proofs re-checked on the loop recast again
@@ -417,61 +316,9 @@ def _verify_box_safety(name: str, c: dict[str, Any], boxed: Loop, model: RecastM
 
     if sets_use_box(model, box):
         return False, SETS_USE_BOX
-    ok, why = _verify_condition(name, c, boxed, None, model)
+    ok, why = verify(name, c, FunctionsCheck(boxed, None, model))
     return ok, (f"{why}, for every value of the box (its parameters bounded constants of the recasting)" if ok
                 else why)
-
-
-def _proved_recasting(cert: dict[str, Any], base: Loop) -> tuple[Loop | None, str]:
-    """The loop a recast certificate's V (or B) lives on: its variables, auxiliaries and shift must be
-    the recasting of the model text, and its square roots' lower bounds are re-proved; or why not."""
-    system = base.system
-    if cert.get("variables") != list(system.ring.names) or cert.get("auxiliaries") != system.definitions() or \
-            cert.get("shift") != {k: str(v) for k, v in system.values.items()}:
-        return None, "variables, auxiliaries or shift differ from the recasting of the model text"
-    return check_root_proofs(base, cert["recasting"]["roots"])
-
-
-def _verify_barrier(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
-    """A loop with functions' barrier (:func:`lyapcheck.models.classes.barrier.check`), its recasting's square-root
-    proofs and its sentence (the polynomial loops' :data:`~lyapcheck.models.classes.claims.BARRIER_SENTENCE`);
-    a certificate of the older kind is refused in one line."""
-    from lyapcheck.models.classes.barrier import OLD_FORMAT, check
-
-    cert = c["certificate"]
-    if cert.get("kind") == RECAST_BARRIER:
-        return False, OLD_FORMAT
-    if c.get("status") != "certified" or cert.get("kind") != BARRIER_KIND:
-        return False, f"a barrier's certificate kind must be {BARRIER_KIND!r}, not {cert.get('kind')!r}"
-    return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), BARRIER_SENTENCE)
-
-
-def _verify_reach_avoid(c: dict[str, Any], base: Loop, model: RecastModel) -> tuple[bool, str]:
-    """A reach-avoid certificate of a loop with functions
-    (:func:`lyapcheck.models.classes.reach_avoid.check_functions`), its recasting's square-root proofs and its
-    sentence (the polynomial loops' reach-avoid one); one of the older kind is refused in one line."""
-    from lyapcheck.models.classes.claims import sentence_of
-    from lyapcheck.models.classes.reach_avoid import OLD_FORMAT, check_functions as check
-
-    cert = c["certificate"]
-    if c.get("status") == "certified" and cert.get("kind") == OLD_REACH_AVOID:
-        return False, OLD_FORMAT
-    if c.get("status") != "certified" or cert.get("kind") != RECAST_REACH_AVOID:
-        return False, f"a reach_avoid certificate's kind must be {RECAST_REACH_AVOID!r}, not {cert.get('kind')!r}"
-    return _checked_on_recasting(c, base, lambda proved: check(model, proved, c), sentence_of(cert))
-
-
-def _checked_on_recasting(c: dict[str, Any], base: Loop, check: Callable[[Loop], tuple[bool, str]],
-                          sentence: str) -> tuple[bool, str]:
-    """A certificate of a safety class: its recasting's square-root proofs, its class's ``check`` on the
-    loop they prove, and its printed sentence."""
-    proved, why = _proved_recasting(c["certificate"], base)
-    if proved is None:
-        return False, why
-    ok, why = check(proved)
-    if ok and c.get("summary") != covered(c.get("disturbances"), sentence):
-        return False, "the printed sentence is not the one the certificate supports"
-    return ok, why
 
 
 __all__ = ["verify_recast", "proved_claims"]

@@ -1,28 +1,31 @@
-"""The classes of a loop with functions, run in turn: ``linearization``, ``quadratic``, ``sos_gas``, ``roa``,
-``candidate``, ``sos_bound``, ``barrier``, ``reach_avoid`` (:mod:`lyapcheck.models.classes.recast_classes` has each
-condition, :mod:`lyapcheck.models.classes.bounds`, :mod:`lyapcheck.models.classes.barrier` and
-:mod:`lyapcheck.models.classes.reach_avoid` the last three; this
-module orders them, gives each its time budget, runs ``roa``'s and ``candidate``'s SOS route,
-:mod:`lyapcheck.models.classes.regions` (the classes' one SOS implementation, both kinds of loop), and the
-classes over a box of parameters, :func:`certify_box`).
+"""``roa`` and ``candidate`` on a loop with functions, and the loop a class of it runs on.
+
+The loop: :func:`proved_loop` (the recasting in deviations, its square roots' lower bounds proved),
+:func:`boxed_loop` (recast again with a box's parameters as bounded constants), :func:`box_robust` and
+:func:`robust_of` (the box's parameters or the disturbances as balls), :func:`comparison_box` (where
+regions are compared and simulated). The classes' entries (:mod:`lyapcheck.models.classes.runs`) are
+given them in one :class:`~lyapcheck.models.classes.contexts.FunctionsRun`, in the order of
+:mod:`lyapcheck.models.classes.registry`, by the one runner
+(:func:`lyapcheck.models.surfaces.certify.certify_model`).
+
+``roa`` (:func:`run_roa`; over a box :func:`box_roa`) and ``candidate`` (:func:`run_candidate`): the
+ball-arithmetic region on the true field first, then the SOS route of
+:mod:`lyapcheck.models.classes.regions` (the classes' one SOS implementation, both kinds of loop), each
+certified set simulated on the true loop (:func:`simulated_check`).
 """
 
 from __future__ import annotations
 
-import time
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Final, Sequence
 
-from lyapcheck.degrees import searched_degrees
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel, written_poly
-from lyapcheck.models.classes.lyapunov import RELATIONS_GAS_DEGREES
-from lyapcheck.models.classes.lyapunov_relations import run_relations
 from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, base_loop,
-                                             common_denominator, jacobian, lie, linearization,
+                                             common_denominator, jacobian, lie,
                                              prove_denominators, prove_nonnegative, prove_root_bounds,
-                                             quadratic_candidate, refute_global,
+                                             quadratic_candidate,
                                              certificate_head, for_v, state_square, v_names)
 from lyapcheck.models.classes import regions
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
@@ -32,140 +35,34 @@ from lyapcheck.tolerances import CONVERGED_BALL_RADIUS
 from lyapcheck.exact import read_rational
 
 if TYPE_CHECKING:
+    from lyapcheck.models.classes.contexts import FunctionsRun
     from lyapcheck.models.engines.numeric import SetCrossCheck
 
-# -- the model's classes ------------------------------------------------------------------------------
+# -- the loop they run on ------------------------------------------------------------------------------
 
 def class_budget(seconds: float) -> Budget:
     """One class's time budget, named after the limit it comes from (the message says which)."""
     return Budget(seconds, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
 
 
-def certify(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float,
-            box: ModelBox | None = None) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
-    """Run the chosen classes; the loop (with its proved square-root bounds) and the seconds each took.
-    With ``box`` (``model`` read at its centre), :func:`certify_box` runs them over it."""
-    if box is not None:
-        return certify_box(model, classes, time_limit_s, box)
-    results: dict[str, ConditionResult] = {}
-    seconds: dict[str, float] = {}
-    loop = proved_loop(model, time_limit_s)
-    start = time.perf_counter()
-    lin = linearization(loop)
-    if "linearization" in classes:
-        results["linearization"] = lin
-        seconds["linearization"] = time.perf_counter() - start
-    if "quadratic" in classes:
-        start = time.perf_counter()
-        results["quadratic"] = refute_global(loop, "quadratic") or \
-            run_relations(loop, class_budget(time_limit_s), "quadratic", (2,))
-        seconds["quadratic"] = time.perf_counter() - start
-    if "sos_gas" in classes:
-        start = time.perf_counter()
-        results["sos_gas"] = refute_global(loop, "sos_gas") or \
-            run_relations(loop, class_budget(time_limit_s), "sos_gas", searched_degrees(RELATIONS_GAS_DEGREES))
-        seconds["sos_gas"] = time.perf_counter() - start
-    if "roa" in classes:
-        start = time.perf_counter()
-        results["roa"] = roa_after_gas(results, "") or \
-            run_roa(loop, lin, class_budget(time_limit_s), comparison_box(model, loop), robust=robust_of(model))
-        seconds["roa"] = time.perf_counter() - start
-    if "candidate" in classes and candidate is not None:
-        start = time.perf_counter()
-        results["candidate"] = run_candidate(loop, candidate, class_budget(time_limit_s), comparison_box(model, loop))
-        seconds["candidate"] = time.perf_counter() - start
-    if "sos_bound" in classes:
-        from lyapcheck.models.classes.bounds import run_functions as sos_bound
+def functions_run(model: RecastModel, classes: Sequence[str], candidate: Poly | None, time_limit_s: float,
+                  box: ModelBox | None, results: dict[str, ConditionResult]) -> FunctionsRun:
+    """The loop the chosen classes run on (:class:`~lyapcheck.models.classes.contexts.FunctionsRun`): the
+    proved recasting (over a box, at its centre), and over a box the loop recast with its parameters as
+    bounded constants, its square roots' bounds proved where a class on the relations needs it; one-line
+    :class:`ModelFileError` where the loop cannot be proved or recast so."""
+    from lyapcheck.models.classes.contexts import FunctionsRun
 
-        start = time.perf_counter()
-        results["sos_bound"] = sos_bound(model, class_budget(time_limit_s))
-        seconds["sos_bound"] = time.perf_counter() - start
-    if "barrier" in classes:
-        from lyapcheck.models.classes.barrier import run_functions as run_barrier
-
-        start = time.perf_counter()
-        results["barrier"] = run_barrier(model, loop, class_budget(time_limit_s))
-        seconds["barrier"] = time.perf_counter() - start
-    if "reach_avoid" in classes:
-        from lyapcheck.models.classes.reach_avoid import run_functions as run_reach_avoid
-
-        start = time.perf_counter()
-        results["reach_avoid"] = run_reach_avoid(model, loop, class_budget(time_limit_s))
-        seconds["reach_avoid"] = time.perf_counter() - start
-    return results, loop, seconds
-
-
-def certify_box(model: RecastModel, classes: Sequence[str], time_limit_s: float, box: ModelBox
-                ) -> tuple[dict[str, ConditionResult], Loop, dict[str, float]]:
-    """The classes over a box of parameters (``model`` is read at the box's centre).
-
-    ``quadratic`` and ``sos_gas`` are proved on the loop recast with the box's parameters as bounded
-    constants (:func:`boxed_loop`: each a variable without a flow, ``h^2 - dp^2 >= 0``), with a ``V``
-    that uses none of them, so one ``V`` serves every value; a refutation (another equilibrium) is
-    the centre's, which lies in the box. ``roa`` is the ball-arithmetic set proved with each parameter
-    a ball over its interval (the set's ``V'`` negative for every value at once), and ``sos_bound``
-    takes the parameters as it takes the disturbances. ``barrier`` and ``reach_avoid`` are proved on the
-    same boxed loop (one B or V for every value; :func:`lyapcheck.models.classes.barrier.run_functions`), their
-    sets read at the model's values; a trajectory of the true loop at the centre or a corner that enters
-    the unsafe set is a counterexample at that point. ``linearization`` decides the Jacobian of every value
-    of the box on the same boxed loop (:func:`lyapcheck.models.classes.recast_classes.linearization_over_box`);
-    ``candidate`` certifies a point: ``not_applicable`` over a box.
-    """
-    results: dict[str, ConditionResult] = {}
-    seconds: dict[str, float] = {}
+    if box is None:
+        loop = proved_loop(model, time_limit_s)
+        return FunctionsRun(model=model, loop=loop, proved=loop, box=None, candidate=candidate, results=results)
     budget = class_budget(time_limit_s)
     loop = proved_loop(model, time_limit_s)  # the box's centre
     boxed = boxed_loop(model, box)
-    for name in ("linearization", "candidate"):
-        if name in classes:
-            from lyapcheck.models.classes.recast_classes import linearization_over_box
-            from lyapcheck.models.engines import reasons
-
-            results[name] = linearization_over_box(boxed, box) if name == "linearization" else \
-                ConditionResult(name, "not_applicable", reasons.NOT_OVER_A_BOX[name])
+    proved = boxed
     if {"quadratic", "sos_gas", "barrier", "reach_avoid"} & set(classes):
         proved, _ = prove_root_bounds(boxed, Search(boxed.ring, budget))
-        for name, degrees in (("quadratic", (2,)), ("sos_gas", searched_degrees(RELATIONS_GAS_DEGREES))):
-            if name in classes:
-                start = time.perf_counter()
-                results[name] = refute_global(loop, name) or \
-                    run_relations(proved, class_budget(time_limit_s), name, degrees)
-                seconds[name] = time.perf_counter() - start
-    if "roa" in classes:
-        start = time.perf_counter()
-        results["roa"] = roa_after_gas(results, " for every value of the box") or \
-            box_roa(model, loop, box, class_budget(time_limit_s))
-        seconds["roa"] = time.perf_counter() - start
-    if "sos_bound" in classes:
-        from lyapcheck.models.classes.bounds import run_functions as sos_bound
-
-        start = time.perf_counter()
-        results["sos_bound"] = sos_bound(model, class_budget(time_limit_s), box)
-        seconds["sos_bound"] = time.perf_counter() - start
-    if "barrier" in classes:
-        from lyapcheck.models.classes.barrier import run_functions as run_barrier
-
-        start = time.perf_counter()
-        results["barrier"] = run_barrier(model, proved, class_budget(time_limit_s), box)
-        seconds["barrier"] = time.perf_counter() - start
-    if "reach_avoid" in classes:
-        from lyapcheck.models.classes.reach_avoid import run_functions as run_reach_avoid
-
-        start = time.perf_counter()
-        results["reach_avoid"] = run_reach_avoid(model, proved, class_budget(time_limit_s), box)
-        seconds["reach_avoid"] = time.perf_counter() - start
-    return results, loop, seconds
-
-
-def roa_after_gas(results: dict[str, ConditionResult], where: str) -> ConditionResult | None:
-    """``roa`` is ``not_applicable`` once ``quadratic`` or ``sos_gas`` certified GAS (``where``: said
-    of the claim, as " for every value of the box"); None otherwise."""
-    gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
-                and results[c].status == "certified"), None)
-    if gas is None:
-        return None
-    return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified ({gas}){where}: the "
-                           "region of attraction is the whole state space", property="ROA")
+    return FunctionsRun(model=model, loop=loop, proved=proved, box=box, candidate=candidate, results=results)
 
 
 def proved_loop(model: RecastModel, time_limit_s: float) -> Loop:

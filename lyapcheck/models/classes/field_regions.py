@@ -1,0 +1,280 @@
+"""``roa`` and ``candidate`` on a polynomial or rational loop (the field multiplied through and scaled), and
+the disturbances a stability class's claim covers.
+
+``roa`` (:func:`run_roa`): the linearization's quadratic V and its sublevel sets enlarged by SOS
+(:mod:`lyapcheck.models.classes.regions`), the certified set compared with, and cross-checked
+against, simulations of the true loop. ``candidate`` (:func:`run_candidate`): the user's V, GAS where
+its decrease holds everywhere, else its largest certified level. :func:`covering_disturbances`: a
+stability class tried robustly first (one V for every disturbance value), then nominally.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Callable, Final
+
+from lyapcheck.models.engines.search import Budget, Search
+from lyapcheck.models.language.modelfile import Model
+from lyapcheck.models.loop.field import ScaledField, StateField, state_field
+from lyapcheck.results import ConditionResult, Disturbances
+from lyapcheck.timing import ClassTimeLimit
+
+if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np
+
+    from lyapcheck.models.classes.contexts import Candidate
+    from lyapcheck.models.engines.numeric import SetCrossCheck
+
+#: grid of simulated starts per state for the roa share, by number of states (beyond: random starts)
+ROA_GRID: Final = {1: 401, 2: 101, 3: 21}
+ROA_RANDOM_STARTS: Final = 4000
+#: simulated time of the roa cross-check, in units of the loop's typical time
+ROA_HORIZON: Final = 60.0
+
+
+def covering_disturbances(model: Model, robust: StateField | None, nominal: StateField, enters: bool,
+                          attempt: Callable[[StateField], ConditionResult]) -> ConditionResult:
+    """A stability class on a model, saying which disturbances its claim covers (DESIGN.md,
+    "Disturbances in claims"): without disturbances, the plain claim; where no disturbance enters
+    the field (``enters`` false: a bound of 0, or one that acts on an output only), the nominal claim,
+    which then covers them all; with disturbances that vanish at the equilibrium (``robust``), first
+    the robust claim (``V`` common to every disturbance value, so it holds for every disturbance
+    signal: ``"all"``), and only if that is not found the nominal one (``"zero"``, saying that the
+    robust one was tried); otherwise (a disturbance moves the equilibrium) the nominal one
+    (``"zero"``)."""
+    if not model.disturbances:
+        return attempt(nominal)
+    if not enters:
+        return covers(attempt(nominal), "all")
+    if robust is not None:
+        found = attempt(robust)
+        if found.status in ("certified", "inconclusive"):
+            return covers(found, "all")
+        fallback = covers(attempt(nominal), "zero")
+        if fallback.status == "certified":
+            fallback.numbers["robust_attempt"] = found.summary
+        return fallback
+    return covers(attempt(nominal), "zero")
+
+
+def covers(result: ConditionResult, disturbances: "Disturbances | None") -> ConditionResult:
+    result.disturbances = disturbances
+    return result
+
+
+def simulated_region(scaled: ScaledField, samples_declared: np.ndarray) -> np.ndarray:
+    """Which declared starts converge to the equilibrium (disturbances 0); over a box, at every
+    parameter point of :func:`parameter_points` (its centre and corners)."""
+    import numpy as np
+
+    from lyapcheck.models.engines.numeric import converges, typical_time
+
+    model = scaled.cleared.shifted.model
+    half = _half_widths(model)
+    converged = np.ones(len(samples_declared), dtype=bool)
+    for params in parameter_points(scaled):
+        T = typical_time(model, params)
+        converged &= converges(model, samples_declared, t_end=ROA_HORIZON * T, radius=half * 1e-3, escape=half * 1e3,
+                               parameters=params).converged
+    return converged
+
+
+def parameter_points(scaled: ScaledField) -> list[dict[str, Fraction]]:
+    """The model's parameters, and over a box those at its centre and corners."""
+    model = scaled.cleared.shifted.model
+    box = scaled.cleared.shifted.box
+    if box is None:
+        return [dict(model.parameters)]
+    centre = {name: box.center(name) for name in box.names}
+    return [{**model.parameters, **centre}] + [{**model.parameters, **corner} for corner in box.corners()]
+
+
+def _half_widths(model: Model) -> np.ndarray:
+    import numpy as np
+
+    if model.domain:
+        return np.array([max(abs(float(model.domain[s][0] - e)), abs(float(model.domain[s][1] - e)))
+                         for s, e in zip(model.states, model.equilibrium)])
+    return np.ones(model.n)
+
+
+def roa_starts(model: Model, seed: int = 0) -> np.ndarray:
+    import numpy as np
+
+    from lyapcheck.models.engines.numeric import grid_starts
+
+    assert model.domain is not None
+    per_axis = ROA_GRID.get(model.n)
+    if per_axis is None:  # beyond ROA_GRID: random starts (two per axis would be the domain's corners alone)
+        return grid_starts(model.domain, model.states, ROA_RANDOM_STARTS, ROA_RANDOM_STARTS, seed=seed)
+    return grid_starts(model.domain, model.states, per_axis, per_axis ** model.n, seed=seed)
+
+
+def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult | None,
+            field_: StateField | None = None, memo: dict[str, Any] | None = None) -> ConditionResult:
+    """The ``roa`` class on ``field_`` (default: the nominal :func:`state_field`; the robust one
+    proves a set common to every disturbance value). ``memo`` keeps the simulated starts between
+    the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0)."""
+    import numpy as np
+
+    from lyapcheck.models.engines import reasons
+    from lyapcheck.models.classes import regions
+
+    model = scaled.cleared.shifted.model
+    if field_ is None:
+        field_ = state_field(scaled)
+    search = Search(field_.ring, budget)
+    A = np.array([[float(x) for x in row] for row in scaled.scaling.matrix()])
+    eq = np.array([float(v) for v in model.equilibrium])
+    if regions.lyapunov_quadratic(field_) is None:
+        why = reasons.reason("the Jacobian at the equilibrium is not Hurwitz"
+                             + (" at the box's centre" if field_.p > field_.disturbances
+                                else " with the disturbances at 0" if field_.p else "")
+                             + ", so no quadratic Lyapunov function starts the search (see linearization)",
+                             ("candidate",))
+        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
+    memo = {} if memo is None else memo
+    if "starts" not in memo:
+        if model.domain:
+            starts = roa_starts(model)
+        else:
+            rng = np.random.default_rng(0)
+            starts = eq + rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n)) @ A.T
+        memo["starts"], memo["converged"] = starts, simulated_region(scaled, starts)
+    starts, converged = memo["starts"], memo["converged"]
+    samples = scaled.scaling.to_scaled(starts - eq)
+    outcome = regions.enlarge(field_, search, samples, converged)
+    if outcome.certificate is None:
+        why = reasons.reason("no region of attraction was proved: no level set of the linearization's quadratic V "
+                             "could be proved to shrink", ("domain", "candidate", "time"),
+                             "no sublevel set passed the exact check")
+        return ConditionResult("roa", "not_certified", why.summary, property="ROA",
+                               solver={"solves": search.log}, numbers=why.numbers({"history": outcome.history}))
+    cert = outcome.certificate
+    inside = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))(regions.on_states(field_, samples)) \
+        <= float(cert.level)
+    numbers: dict[str, Any] = {"degree": 2 * max(sum(m) for m in cert.V.basis), "simulated_starts": int(len(starts))}
+    if model.domain:
+        if converged.any():  # (no simulated start converged in the horizon: no share to state, not a share of 0)
+            numbers["roa_share"] = float(np.mean(inside[converged]))
+        numbers["simulated_roa_share_of_domain"] = float(np.mean(converged))
+    suspicious = inside & ~converged
+    if suspicious.any():  # a start in a proved set that did not converge: simulate it far longer, V watched
+        V = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))
+
+        def value(X: np.ndarray) -> np.ndarray:
+            return V(regions.on_states(field_, scaled.scaling.to_scaled(np.atleast_2d(X) - eq)))
+
+        try:
+            again = simulated_region_long(scaled, starts[suspicious], value, float(cert.level))
+        except ClassTimeLimit:  # the hard stop may end this check, never the proof before it
+            numbers["long_simulation"] = "stopped by the class's hard time limit"
+        else:
+            numbers.update(again.numbers())
+    numbers["rounds"] = outcome.history
+    return regions.level_result("roa", scaled, field_, cert, search, numbers, "region of attraction")
+
+
+def simulated_region_long(scaled: ScaledField, starts: np.ndarray, value: Callable[[np.ndarray], np.ndarray],
+                          level: float) -> SetCrossCheck:
+    """Starts (declared states, rows) in the certified set ``{value <= level}`` that did not converge
+    in the first simulation, simulated twenty times longer at every parameter point with V watched
+    (:func:`lyapcheck.models.engines.numeric.check_certified_set`): a violation only where one leaves the
+    set (the certificate gives no decrease rate to bound the time to converge); the others, still
+    converging, are not checked."""
+    import numpy as np
+
+    from lyapcheck.models.engines.numeric import FieldEvaluator, ModelSystem, SetCrossCheck, check_certified_set, typical_time
+    from lyapcheck.models.engines.trajectories import RTOL
+
+    model = scaled.cleared.shifted.model
+    half = _half_widths(model)
+    eq = np.array([float(v) for v in model.equilibrium])
+    left = np.zeros(len(starts), dtype=bool)
+    converged = np.ones(len(starts), dtype=bool)
+    for params in parameter_points(scaled):
+        system = ModelSystem(FieldEvaluator.of(model, params), len(starts), escape=half * 1e3, center=eq)
+        found = check_certified_set(system, starts, 20 * ROA_HORIZON * typical_time(model, params), value=value,
+                                    level=level, converged=lambda X: np.all(np.abs(X - eq) <= half * 1e-3, axis=1),
+                                    rtol=RTOL, atol=half * 1e-6, max_iterations=200_000)
+        left |= found.left
+        converged &= found.converged
+    return SetCrossCheck(left=left, overdue=np.zeros(len(starts), dtype=bool), converged=converged & ~left)
+
+
+def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget) -> ConditionResult:
+    import numpy as np
+
+    from lyapcheck.models.engines import reasons
+    from lyapcheck.models.classes import regions
+    from lyapcheck.models.classes.lyapunov import best_decay_rate, stated_v
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    assert cand is not None
+    model = scaled.cleared.shifted.model
+    field_ = state_field(scaled)
+    ring = field_.ring
+    search = Search(ring, budget)
+    full = model.state_ring
+    # V(x_eq + S z): the candidate in the scaled states
+    from lyapcheck.models.loop.field import linear_images
+
+    images = linear_images(full, model.n, scaled.scaling.matrix())
+    images = [im + to_fmpq(e) for im, e in zip(images[:model.n], model.equilibrium)] + images[model.n:]
+    v_scaled = full.restrict(full.compose(cand.poly, images), ring)
+    V = regions.gram_of(field_, v_scaled, search)
+    if V is None:
+        why = reasons.reason("the candidate V could not be proved positive definite and radially unbounded",
+                             ("other_candidate",), "no positive definite Gram matrix over its reduced basis with a "
+                             "pure power of every state")
+        return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
+                               solver={"solves": search.log}, property="ROA")
+    sigma = regions.global_decrease(field_, V, Fraction(0), search)
+    if sigma is not None:
+        def attempt(mu: Fraction) -> dict[str, Any] | None:
+            s = regions.global_decrease(field_, V, mu, search)
+            return None if s is None else {"sigma": s, "mu": mu}
+
+        best = best_decay_rate(attempt, {"sigma": sigma, "mu": Fraction(0)})
+        rate = float(best["mu"] / scaled.scaling.time)
+        tail = f", V' <= -{rate:.4g} V" if best["mu"] > 0 else ""
+        return ConditionResult("candidate", "certified", f"GAS: V' < 0 away from the equilibrium everywhere{tail} "
+                                                         "(checked exactly)",
+                               numbers={"decay_rate_V_per_s": rate},
+                               certificate={"kind": "lyapunov", "mu_scaled": str(best["mu"]),
+                                            "V": stated_v(scaled, field_, V.poly(ring)), "gram_V": V.to_json(),
+                                            "gram_sigma": best["sigma"].to_json()},
+                               solver={"solves": search.log}, property="GAS")
+    radius = float(np.max(np.abs(scaled.scaling.to_scaled(np.diag(_half_widths(model)))))) * 4
+    top = regions.supremum_estimate(field_, V, radius)
+    if top is None:
+        # no sample with V' >= 0 out to 4 half-widths: search the level upwards from V's largest
+        # value there, each step an SOS lower bound of min {V : V' >= 0} (no sample needed)
+        rng = np.random.default_rng(0)
+        ball = rng.normal(size=(200, field_.n))
+        ball *= radius / np.linalg.norm(ball, axis=1, keepdims=True)
+        guess = float(np.max(regions.NumericPoly(ring, V.poly(ring))(regions.on_states(field_, ball))))
+        cert = regions.largest_level(field_, V, search, guess, regions.symmetry(field_), grow=True)
+        if cert is None:
+            why = reasons.reason("V' < 0 could not be proved everywhere, nor on any level set {V <= c} (no point with "
+                                 "V' >= 0 was sampled)", ("other_candidate", "domain", "time"),
+                                 f"no level from {guess:.6g} upwards passed the level program")
+            return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
+                                   solver={"solves": search.log}, property="ROA")
+        return regions.level_result("candidate", scaled, field_, cert, search, {"level_search": "upwards, by SOS"},
+                                    "the user's V")
+    cert = regions.largest_level(field_, V, search, top, regions.symmetry(field_))
+    if cert is None:
+        why = reasons.reason("V' < 0 could not be proved everywhere, nor on any level set {V <= c} below the "
+                             f"sampled points where V' >= 0 (V = {top:.6g})", ("other_candidate", "time"),
+                             f"no level of V passed the exact check (sampled supremum {top:.6g})")
+        return ConditionResult("candidate", "not_certified", why.summary,
+                               numbers=why.numbers({"level_supremum_estimate": top}),
+                               solver={"solves": search.log}, property="ROA")
+    return regions.level_result("candidate", scaled, field_, cert, search,
+                                {"level_supremum_estimate": top, "level_ratio_to_estimate": float(cert.level) / top},
+                                "the user's V")
+
+
+__all__ = ["ROA_GRID", "ROA_RANDOM_STARTS", "ROA_HORIZON", "covering_disturbances", "covers", "simulated_region",
+           "parameter_points", "roa_starts", "run_roa", "simulated_region_long", "run_candidate"]
