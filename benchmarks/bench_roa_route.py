@@ -59,8 +59,12 @@ FIGURES = ("level", "roa_share", "box_share_estimate", "ball_radius")
 
 def run(path: Path, limit: float, name: str, candidate: str | None = None) -> dict[str, Any]:
     """The class's status, figures and wall time on one example."""
-    kind = loop_kind(path.read_text(), str(path))
     start = time.perf_counter()
+    try:
+        kind = loop_kind(path.read_text(), str(path))
+    except Exception as exc:  # (a file this reader refuses, a sampled-data loop: its row says why)
+        return {"kind": "other", "status": f"refused: {str(exc)[:80]}", "route": None, "figures": {},
+                "seconds": 0.0, "solves": 0, "programs": None}
     try:
         found, seconds = timed_certify(path, classes=name, time_limit_s=limit, candidate=candidate)
     except Exception as exc:  # (an example that refuses the class: its row says why)
@@ -91,6 +95,15 @@ def run_sos_route(path: Path, limit: float) -> dict[str, Any]:
             "figures": {k: numbers[k] for k in FIGURES if isinstance(numbers.get(k), (int, float))},
             "seconds": round(time.perf_counter() - start, 1), "solves": len(keys),
             "programs": hashlib.sha256(json.dumps(keys).encode()).hexdigest()[:16]}
+
+
+def with_functions(path: Path) -> bool:
+    """A loop with functions (a file the ``roa`` route of loops with functions reads; a sampled-data
+    loop, which that parser refuses, is not one)."""
+    try:
+        return not isinstance(parse_any_model(path.read_text(), str(path)), Model)
+    except Exception:  # (a file this reader refuses: its ``roa`` row says why)
+        return False
 
 
 def flags_of(now: dict[str, Any], before: dict[str, Any]) -> list[str]:
@@ -140,7 +153,7 @@ def main() -> None:
     kept: dict[str, Any] = {}
     runs: list[tuple[str, Path, str, str | None]] = [(f"{path.stem} roa", path, "roa", None) for path in files]
     runs += [(f"{path.stem} roa, SOS route alone", path, "sos_route", None) for path in files
-             if not isinstance(parse_any_model(path.read_text(), str(path)), Model)]
+             if with_functions(path)]
     runs += [(f"{path.stem} candidate {v}", path, "candidate", v) for path in files
              for v in CANDIDATES.get(path.stem, [])]
     for label, path, name, candidate in runs:

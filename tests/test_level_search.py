@@ -16,7 +16,6 @@ from lyapcheck.models.classes.claims import covered
 from lyapcheck.models.classes.level_search import largest_proved_level
 from lyapcheck.models.classes.recast_ball_level import ball_level, state_quadratic
 from lyapcheck.models.classes.recast_interval import check_interval
-from lyapcheck.models.engines import recast_sos
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.models.language.modelfile import load_any_model, parse_any_model
 from tests.recast_loops import PENDULUM, SPRING
@@ -85,14 +84,14 @@ def test_the_recast_level_search_keeps_its_proved_level_when_a_larger_attempt_ru
     free = regions.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "free")
     assert not isinstance(free, str)
     threshold = free.level / 3
-    original = recast_sos.solve_on_faces
+    original = regions.relations_level_attempt
 
-    def limited(search: Any, build: Any, values: Any, accept: Any) -> Any:
-        if "W_R" in values.exact and -values.exact["W_R"][0] > threshold:  # the region's constant: -level
+    def limited(field: Any, V: Any, F: Any, level: Fraction, search: Any, build: Any) -> Any:
+        if level > threshold:
             raise BudgetExhausted("out of work above the threshold")
-        return original(search, build, values, accept)
+        return original(field, V, F, level, search, build)
 
-    monkeypatch.setattr(regions, "solve_on_faces", limited)
+    monkeypatch.setattr(regions, "relations_level_attempt", limited)
     kept = regions.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "limited")
     assert not isinstance(kept, str)
     assert 0 < kept.level <= threshold

@@ -74,3 +74,30 @@ def test_a_changed_multiplier_of_the_sos_route_region_fails_its_exact_check(sos_
 
     failed = refusals(edited(sos_region, change_rho))
     assert any(name == "roa" and "decrease" in message for name, message in failed), failed
+
+
+def test_a_loop_with_a_constant_root_gets_a_level_of_its_linearization_that_the_exact_check_accepts() -> None:
+    """The two-machine power loop's recasting holds the constant root ``rt3`` (``rt3^2 = 3``): the level
+    program (the polynomial one with the relations' multipliers) puts it in its bases, so the linearization's
+    V gets a level, and its certificate passes the check verify runs, at that level and not at twice it."""
+    from lyapcheck.models.classes import recast_classes as rc
+    from lyapcheck.models.classes import regions
+    from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition
+    from lyapcheck.models.engines.search import Budget, Search
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.surfaces.recast_run import proved_loop
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    path = MODELS / "recast-power-two-machine.toml"
+    loop = proved_loop(parse_any_model(path.read_text(), str(path)), 60)  # type: ignore[arg-type]
+    assert loop.roots()
+    V0 = rc.quadratic_candidate(loop, rc.jacobian(loop))  # type: ignore[arg-type]
+    assert V0 is not None
+    found = regions.certify_region(loop, V0, Search(loop.ring, Budget(60, "test")), "the linearization")
+    assert not isinstance(found, str), found
+    ring = loop.ring
+    N, _, _ = rc.common_denominator(loop, rc.v_names(loop, V0))
+    F = -rc.lie(loop, V0, N) - rc.state_square(loop) * to_fmpq(Fraction(found.certificate["epsilon"]))
+    decrease = ConditionCertificate.from_json(ring, found.certificate["decrease"], len(loop.relations))
+    assert check_condition(ring, F, loop.relations, decrease, region=V0 - to_fmpq(found.level))[0]
+    assert not check_condition(ring, F, loop.relations, decrease, region=V0 - to_fmpq(2 * found.level))[0]

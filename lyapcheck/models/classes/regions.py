@@ -1,6 +1,7 @@
 """``roa`` and ``candidate``: sublevel sets ``{V <= c}`` proved inside the region of attraction, by SOS, on
 both kinds of loop: a polynomial or rational loop (below), and a loop with functions, proved on its
-recasting's relations (the last part of this module, :func:`certify_region`, :func:`relations_enlarge`).
+recasting's relations by the same level program and V step with the relations' multipliers added (the last
+part of this module, :func:`certify_region`, :func:`relations_enlarge`).
 The ball-arithmetic route is another engine (:mod:`lyapcheck.models.classes.recast_interval`).
 
 Certificate (kind Sublevel of :mod:`lyapcheck.sos.certificates`), in scaled coordinates:
@@ -33,9 +34,9 @@ its largest certified level.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass, field as dc_field, replace
 from fractions import Fraction
-from typing import Any, Final, Sequence
+from typing import TYPE_CHECKING, Any, Final, Sequence
 
 import numpy as np
 
@@ -45,11 +46,10 @@ from lyapcheck.models.loop.field import ScaledField, Scaling, StateField, linear
 from lyapcheck.models.classes.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
     symmetry, vanishing_monomials
 from lyapcheck.models.engines.numeric import NumericPoly
-from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, _dyadic, _set, certificate_head, common_denominator,
+from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, _dyadic, certificate_head, common_denominator,
                                                     lie, prove_denominators, prove_nonnegative, state_square, v_names)
 from lyapcheck.models.engines import reasons
-from lyapcheck.models.engines.recast_sos import (ConditionCertificate, ConditionProgram, check_condition, known_values,
-                                                 solve_on_faces)
+from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition
 from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, Budget, BudgetExhausted, ParameterValues, Search,
                                              SolvesSpent, box_multipliers, box_multipliers_of, box_support,
                                              multiplier_grams, one, param)
@@ -59,6 +59,9 @@ from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, check_containment, check_lyapunov, check_sublevel, lie_derivative
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 from lyapcheck.sos.program import Gram, Identity, Scalar, Solution, Structure, Term
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.classes.bounds import BoundField
 
 #: relative width at which the level bisection stops (the certified level is within this of the
 #: largest level the solver finds feasible)
@@ -502,17 +505,7 @@ def vstep(field: StateField, v_degree: int, current: LevelCertificate, samples: 
     samples = on_states(field, samples)
     # the samples the current set does not hold yet weigh; the others (already in) a little
     v_now = NumericPoly(ring, current.V.poly(ring))(samples) / float(current.level)
-    outside = samples[v_now > 1]
-    weighted = outside if outside.shape[0] else samples
-    if VSTEP_NEAREST < 1.0 and outside.shape[0]:
-        order = np.argsort(v_now[v_now > 1])
-        weighted = outside[order[:max(1, int(np.ceil(VSTEP_NEAREST * outside.shape[0])))]]
-    Z = _monomial_vectors(z_v, weighted)
-    if VSTEP_NORMALIZE:
-        norms = np.linalg.norm(Z, axis=1, keepdims=True)
-        Z = Z[norms[:, 0] > 0] / norms[norms[:, 0] > 0]
-    M = Z.T @ Z / max(weighted.shape[0], 1)
-    values.set_matrix("M", (M + M.T) / 2)
+    values.set_matrix("M", sample_moments(_monomial_vectors(z_v, samples), v_now))
     values.set_scalar("floor", ROA_FLOOR)
     solution = search.solve(structure, values)
     if not solution.usable:
@@ -826,17 +819,19 @@ def gram_of(field: StateField, p: Poly, search: Search) -> GramPoly | None:
 #
 # A loop with functions (:class:`~lyapcheck.models.classes.recast_classes.Loop`) is proved on the set of its
 # recasting's relations, which holds every point ``(z, a(z))`` of the true loop: positivity
-# ``V - eps |z|^2 >= 0`` and the decrease ``-grad V . N - eps |z|^2 - rho (level - V) >= 0`` there, each an
-# identity with a free multiplier per equality and an SOS multiplier per inequality
-# (:class:`~lyapcheck.models.engines.recast_sos.ConditionProgram`), with ``x' = N / D`` and each factor
-# of ``D`` proved positive. The level step is the monotone search of
-# :func:`~lyapcheck.models.classes.level_search.largest_proved_level` (each level's certificate checked
-# exactly before it counts); the V step, with ``rho`` fixed and ``V`` scaled to level 1, is the V-s
-# iteration of Jarvis-Wloszek et al. ("Some controls applications of sum of squares programming",
-# CDC 2003; Topcu, Packard & Seiler, Automatica 2008): a new ``V`` that keeps ``V - eps l >= 0``,
-# ``-V' - eps l - rho (1 - V) >= 0`` and ``{V <= 1}`` holding the current set, as small as it can be on
-# sample states whose simulated trajectories of the true loop converge (their mean ``V``). Its answer is
-# only a candidate: rounded to short rationals, the level step certifies it from scratch.
+# ``V - eps |z|^2 >= 0`` (:func:`~lyapcheck.models.classes.recast_classes.prove_nonnegative`) and the decrease
+# ``-grad V . N - eps |z|^2 - rho (level - V) >= 0`` there, with ``x' = N / D`` and each factor of ``D``
+# proved positive. The decrease is the polynomial loops' level program with the relations' multipliers
+# added (:func:`relations_level_structure`: a free ``lambda_i`` per equality, a sum of squares ``tau_j`` per
+# inequality, as every class builds them, :func:`~lyapcheck.models.classes.bounds.relation_multipliers`),
+# checked exactly by :func:`~lyapcheck.models.engines.recast_sos.check_condition` (the check verify runs).
+# The level step is the monotone search of :func:`~lyapcheck.models.classes.level_search.largest_proved_level`
+# (each level's certificate checked exactly before it counts); the V step, with ``rho`` fixed and ``V``
+# scaled to level 1, is the polynomial loops' V step (:func:`vstep`) with the same multipliers
+# (:func:`relations_vstep_structure`), the V-s iteration of Jarvis-Wloszek et al. ("Some controls
+# applications of sum of squares programming", CDC 2003; Topcu, Packard & Seiler, Automatica 2008) on sample
+# states whose simulated trajectories of the true loop converge. Its answer is only a candidate: rounded to
+# short rationals, the level step certifies it from scratch.
 
 #: the level search of a fixed V on the recasting's relations
 #: (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`): halvings of the level's bracket
@@ -939,6 +934,142 @@ def region_of_attraction(loop: Loop, budget: Budget, candidates: Sequence[tuple[
     return best_region(loop, regions, tried, box, search, name)
 
 
+#: the positivity margin ``V - eps |z|^2 >= 0`` a loop with functions' level step tries last, after
+#: :data:`~lyapcheck.models.classes.recast_classes.EPSILONS`: half the V step's :data:`ROA_FLOOR`
+#: (``Q_V >= ROA_FLOOR I``), so that a V the V step found keeps a proof of its positivity (the inverted
+#: pendulum's second V had none at 1e-4; a floor of 1/50 instead shrank the pendulum's set, 72 % -> 57 %)
+POSITIVITY_LAST_EPSILON: Final = Fraction(1, 2 * 10**6)
+#: extra half-degree of the level step's multiplier ``s`` on a loop with functions (the polynomial loops'
+#: is :data:`MULTIPLIER_EXTRA`)
+RELATIONS_MULTIPLIER_EXTRA: Final = 0
+
+
+def level_field(loop: Loop, names: Sequence[str], N: dict[str, Poly], D: Poly) -> "BoundField":
+    """The level step's and the V step's view of a loop with functions
+    (:func:`~lyapcheck.models.classes.lyapunov_relations.relations_field`), with two differences: a constant
+    root (``rt3``, ``rt3^2 = 3``) is a variable of the bases, each at most once, as the identity's terms hold
+    it; and the squares a relation reduces (a cosine's ``c^2 = -s^2 - 2 c``) stay in the bases, the remainder
+    here need only be a sum of squares (the margin is ``eps |z|^2`` in ``F``; without ``c^2`` the pendulum's
+    V-s candidates got no level at all, its free multiplier then cannot trade ``c^2`` for ``-s^2 - 2 c``)."""
+    from lyapcheck.models.classes.lyapunov_relations import relations_field
+
+    return replace(relations_field(loop, names, N, D), unused=loop.unused(), square_free=loop.roots())
+
+
+def relations_level_symmetry(field: "BoundField", V: Poly, F: Poly) -> list[tuple[int, ...]]:
+    """The sign changes that leave the level program of a loop with functions invariant: each flow changes
+    like its variable, and ``D``, every relation, ``V`` and ``F`` are invariant."""
+    ring = field.ring
+    odd = [(ring.support(gi), i) for i, gi in field.flows] + [(ring.support(field.W), None)]
+    odd += [(ring.support(field.relations[j].poly), None) for j in field.multiplied]
+    odd += [(ring.support(V), None), (ring.support(F), None)]
+    return bases.sign_symmetries(ring.nvars, odd)
+
+
+def relations_level_structure(field: "BoundField", V: Poly, F: Poly, generators: Sequence[Sequence[int]],
+                              drop: frozenset[tuple[str, Monomial]] = frozenset(), extra: int = 0,
+                              roots: frozenset[int] = frozenset()) -> Structure | str:
+    """The level step's program of :func:`_level_structure` on a loop with functions: the same identity with
+    the relations' multipliers (:func:`~lyapcheck.models.classes.bounds.relation_multipliers`: a free
+    ``lambda_i`` per equality, a sum of squares ``tau_j`` per inequality) and the known part ``F`` in place
+    of ``-grad V . g``:
+
+        F + s (V - c) - sum_i lambda_i h_i - sum_j tau_j g_j = sigma,
+
+    ``F = -grad V . N - eps |z|^2`` (the margin is in ``F``: ``sigma`` need only be a sum of squares). Every
+    term vanishes at the equilibrium: ``s`` and ``sigma`` have no constant, nor a ``tau_j`` whose ``g_j``
+    does not vanish to second order there. ``drop``: (Gram, monomial) pairs left out (the zero face a
+    solve found); ``extra``: as :func:`multiplier_half_degree`'s; ``roots``: the constant roots' variables
+    (``rt3``: constants, of no degree in the deviations). Returns why not (a size) when too large."""
+    from lyapcheck.models.classes.bounds import relation_multipliers
+    from lyapcheck.models.classes.lyapunov_relations import _reduced
+    from lyapcheck.models.engines.reasons import size_limit
+    from lyapcheck.models.engines.recast_sos import MAX_RECAST_GRAM_ROWS, mdeg, order_at_origin
+
+    ring = field.ring
+    nv = ring.nvars
+    zero = tuple([0] * nv)
+    dg = max((sum(m) for _, gi in field.flows for m in ring.support(gi)), default=1)
+    ks = max(1, math.ceil((dg - 1) / 2)) + extra  # (multiplier_half_degree's rule, over the flows N)
+    z_s = [m for m in monomials(nv, 1, ks + len(roots)) if 1 <= mdeg(m, roots) <= ks and field.allowed(m)
+           and ("s", m) not in drop]
+    if not z_s:
+        return "the multiplier s has no monomial left"
+    s_blocks = bases.character_blocks(z_s, generators)
+    v_support = set(ring.support(V)) | {zero}
+    s_products = {tuple(a + b for a, b in zip(z_s[i], z_s[j])) for idx in s_blocks for i in idx for j in idx}
+    target = set(ring.support(F)) | {tuple(a + b for a, b in zip(m, v)) for m in s_products for v in v_support}
+    rel_grams, rel_scalars, rel_terms, added = relation_multipliers(field, "R", target, generators, margin=True)
+    target |= added
+    # tau_j(0) g_j(0) would be the identity's only constant term where g_j(0) != 0: no constant there
+    constants = {(g.name, q) for g in rel_grams for q in g.basis if mdeg(q, roots) == 0
+                 and order_at_origin(ring, field.relations[int(g.name.split("_")[1])].poly, roots) < 2}
+    rel_grams = [_reduced(g, drop | constants) for g in rel_grams]
+    kept = {g.name for g in rel_grams if g.basis}
+    rel_grams = [g for g in rel_grams if g.basis]
+    rel_terms = [t for t in rel_terms if not t.decision.startswith("TR_") or t.decision in kept]
+    if len(target) > TARGET_LIMIT:
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
+    z_sigma = [q for q in bases.sos_basis(nv, target) if mdeg(q, roots) >= 1 and field.allowed(q)
+               and ("sigma", q) not in drop]
+    rows = max([len(z_sigma), len(z_s)] + [len(g.basis) for g in rel_grams])
+    if not z_sigma or rows > MAX_RECAST_GRAM_ROWS:
+        return size_limit(rows, "rows of one sum-of-squares matrix", MAX_RECAST_GRAM_ROWS, "MAX_RECAST_GRAM_ROWS")
+    terms = (Term(param("Vc", v_support), "s"), *rel_terms, Term(one(ring, -1), "sigma"))
+    # (the size limit is the rows' alone, not the polynomial loops' BLOCK_COST_LIMIT: a degree-4 V of the
+    # saturated inverted pendulum exceeds that one and its level step, within the rows, is solved in seconds)
+    return Structure(nvars=nv, grams=(Gram("s", tuple(z_s), tuple(map(tuple, s_blocks))),
+                                      Gram("sigma", tuple(z_sigma),
+                                           tuple(map(tuple, bases.character_blocks(z_sigma, generators)))),
+                                      *rel_grams),
+                     scalars=tuple(rel_scalars),
+                     identities=(Identity("R", terms, param("LV", ring.support(F) or [zero]), "sigma"),),
+                     objective=("max_margin",))
+
+
+def relations_level_certificate(field: "BoundField", structure: Structure, point: Any) -> ConditionCertificate:
+    """The multipliers of a solved :func:`relations_level_structure` by relation index, ``rho`` the
+    multiplier ``s`` (the form :func:`~lyapcheck.models.engines.recast_sos.check_condition` reads)."""
+    from lyapcheck.models.classes.bounds import relation_certificates
+
+    cert, = relation_certificates(field, structure, point, (("R", "sigma"),))
+    return replace(cert, rho=GramPoly.of(structure.gram("s").basis, point.grams["s"]))
+
+
+def relations_level_attempt(field: "BoundField", V: Poly, F: Poly, level: Fraction, search: Search,
+                            build: Any) -> ConditionCertificate | None:
+    """:func:`level_attempt` on a loop with functions: one solve of the level program at ``level``, its exact
+    rounding and the exact check (:func:`~lyapcheck.models.engines.recast_sos.check_condition`, the one
+    verify runs); where the check refuses a point on a face of the cone, that face is dropped and the
+    program solved again (at most :data:`~lyapcheck.models.engines.recast_sos.FACE_ROUNDS` times).
+    ``build(drop)``: the program (:func:`relations_level_structure`) or why not."""
+    from lyapcheck.models.engines.recast_sos import FACE_ROUNDS, zero_face
+
+    ring = field.ring
+    region = V - to_fmpq(level)
+    drop: frozenset[tuple[str, Monomial]] = frozenset()
+    for _ in range(FACE_ROUNDS + 1):
+        structure = build(drop)
+        if isinstance(structure, str):
+            return None
+        values = ParameterValues()
+        ident = structure.identities[0]
+        values.set_poly(ring, "LV", F, ident.constant.support)
+        values.set_poly(ring, "Vc", region, ident.terms[0].coefficients.support)
+        point, solution = search.solve_exact(structure, values)
+        if point is not None:
+            cert = relations_level_certificate(field, structure, point)
+            if check_condition(ring, F, field.relations, cert, region=region)[0]:
+                return cert
+        if not solution.usable:
+            return None
+        face = zero_face(structure, solution.grams) - drop  # type: ignore[arg-type]  # (its grams, by name)
+        if not face:
+            return None
+        drop = drop | face
+    return None
+
+
 def relations_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fraction | None = None
                    ) -> tuple[Fraction, dict[str, Any]] | str:
     ring = loop.ring
@@ -950,7 +1081,7 @@ def relations_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fracti
     # positivity of V itself
     eps_pos = None
     pos = None
-    for eps in EPSILONS:
+    for eps in (*EPSILONS, POSITIVITY_LAST_EPSILON):
         pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pv")
         if pos is not None:
             eps_pos = eps
@@ -958,28 +1089,20 @@ def relations_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fracti
     if pos is None or eps_pos is None:
         return "V could not be proved positive definite in the states on the recasting's set"
     dV = lie(loop, V, N)
-    support_known = sorted(set(ring.support(dV)) | set(ring.support(l2)))
-    region_support = sorted(set(ring.support(V)) | {tuple([0] * ring.nvars)})
-    top = max(max(sum(m) for m in support_known), max(sum(m) for r in loop.relations for m in ring.support(r.poly)))
     eps = EPSILONS[-1]
     F = -dV - l2 * to_fmpq(eps)
+    field = level_field(loop, names, N, D)
+    generators = relations_level_symmetry(field, V, F)
+    programs: dict[frozenset[tuple[str, Monomial]], Structure | str] = {}
 
-    def build(drop: frozenset[tuple[str, Monomial]]) -> ConditionProgram | str:
-        program = ConditionProgram(ring, loop.relations, drop, loop.unused(), roots=loop.roots())
-        return program.condition("R", support_known, [], top, region_support=region_support) or program
+    def build(drop: frozenset[tuple[str, Monomial]]) -> Structure | str:
+        if drop not in programs:  # (the program does not depend on the level: built once per face)
+            programs[drop] = relations_level_structure(field, V, F, generators, drop, RELATIONS_MULTIPLIER_EXTRA,
+                                                       loop.roots())
+        return programs[drop]
 
     def attempt(level: Fraction) -> ConditionCertificate | None:
-        values = ParameterValues()
-        _set(values, *known_values(ring, "R", F, support_known))
-        W = V - to_fmpq(level)
-        terms = ring.terms(W)
-        _set(values, "W_R", [terms.get(tuple(m), Fraction(0)) for m in region_support])
-
-        def accept(program: ConditionProgram, point: Any) -> ConditionCertificate | None:
-            cert = program.certificate("R", point)
-            return cert if check_condition(ring, F, loop.relations, cert, region=W)[0] else None
-
-        return solve_on_faces(search, build, values, accept)[0]
+        return relations_level_attempt(field, V, F, level, search, build)
 
     # a program too large to build is too large at every level: say so, not "no level found"
     program = build(frozenset())
@@ -1025,8 +1148,6 @@ VS_SAMPLES: Final = 200
 #: the V step's margin of the decrease (times |z|^2): the level step's smallest (a larger one
 #: shrinks the set the V step can find, 63 % -> 40 % of the pendulum's box)
 VS_MARGIN: Final = Fraction(1, 10000)
-#: the V step's margin of positivity: twice the level step's largest, room for the rounding
-VS_POSITIVITY_MARGIN: Final = Fraction(1, 50)
 #: how long each sample is simulated (the loop's time unit)
 VS_HORIZON_S: Final = 25.0
 #: bits kept of the V step's coefficients (short certificates; the level step decides)
@@ -1104,62 +1225,106 @@ def relations_enlarge(loop: Loop, first: Region, budget: Budget, box: tuple[np.n
     return out, tried
 
 
+def relations_vstep_structure(field: "BoundField", v_degree: int, s: Poly, known: Poly,
+                              generators: Sequence[Sequence[int]], roots: frozenset[int] = frozenset()
+                              ) -> Structure | str:
+    """:func:`vstep_structure` on a loop with functions: with ``s`` fixed, ``V = z^T Q_V z`` over the field's
+    variables (``Q_V >= floor I``) and the relations' multipliers
+    (:func:`~lyapcheck.models.classes.bounds.relation_multipliers`) in the identity
+
+        -grad V . N - s (1 - V) - eps |z|^2 - sum_i lambda_i h_i - sum_j tau_j g_j = sigma,
+
+    ``known`` its constant part ``-s - eps |z|^2``; minimize ``<Q_V, M>``; ``roots`` as
+    :func:`relations_level_structure`'s. Returns why not (a size)."""
+    from lyapcheck.models.classes.bounds import _embed, relation_multipliers
+    from lyapcheck.models.engines.reasons import size_limit
+    from lyapcheck.models.engines.recast_sos import MAX_RECAST_GRAM_ROWS, mdeg
+
+    ring = field.ring
+    nv = ring.nvars
+    z_v = [_embed(a, field.v_vars, nv) for a in monomials(len(field.v_vars), 1, v_degree // 2)]
+    v_blocks = bases.character_blocks(z_v, generators)
+    s_support = ring.support(s) or [tuple([0] * nv)]
+    products = {tuple(a + b for a, b in zip(z_v[i], z_v[j])) for idx in v_blocks for i in idx for j in idx}
+    target: set[Monomial] = set(ring.support(known))
+    for i, gi in field.flows:
+        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
+        target |= {tuple(a + b for a, b in zip(m, q)) for m in derived for q in ring.support(gi)}
+    target |= {tuple(a + b for a, b in zip(m, q)) for m in products for q in s_support}
+    rel_grams, rel_scalars, rel_terms, added = relation_multipliers(field, "D", target, generators, margin=False)
+    target |= added
+    if len(target) > TARGET_LIMIT:
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
+    z_sigma = [q for q in bases.sos_basis(nv, target | {tuple([0] * nv)}) if mdeg(q, roots) >= 1 and field.allowed(q)]
+    rows = max([len(z_sigma), len(z_v)] + [len(g.basis) for g in rel_grams])
+    if not z_sigma or rows > MAX_RECAST_GRAM_ROWS:
+        return size_limit(rows, "rows of one sum-of-squares matrix", MAX_RECAST_GRAM_ROWS, "MAX_RECAST_GRAM_ROWS")
+    terms = [Term(param(f"g{i}", ring.support(gi)), "V", derivative=i) for i, gi in field.flows]
+    terms += [Term(param("s1", s_support), "V"), *rel_terms, Term(one(ring, -1), "sigma")]
+    return Structure(nvars=nv, grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks)), margin="floor"),
+                                      Gram("sigma", tuple(z_sigma),
+                                           tuple(map(tuple, bases.character_blocks(z_sigma, generators))),
+                                           margin=False), *rel_grams),
+                     scalars=(Scalar("J"), *rel_scalars),
+                     identities=(Identity("sublevel_1", tuple(terms), param("negs1", ring.support(known)),
+                                          "sigma"),),
+                     objective=("min", "J"), inner=(("J", "V", "M"),))
+
+
 def relations_v_step(loop: Loop, V_scaled: Poly, rho: Poly, degree: int, samples: np.ndarray, search: Any
                      ) -> Poly | str:
-    """One V step (see the module docstring): a new V of ``degree`` in the loop's V variables, or why none."""
-    from lyapcheck.models.engines.recast_numeric import variable_values, poly_values
+    """One V step (see the module docstring): a new V of ``degree`` in the loop's V variables, or why none:
+    the polynomial loops' V step (:func:`vstep`) on the recasting's relations
+    (:func:`relations_vstep_structure`), its objective the samples' moments as :func:`vstep` weighs them.
+    ``V_scaled``: the current V at level 1, which picks the samples outside its set."""
+    from lyapcheck.models.engines.recast_numeric import poly_values, variable_values
+    from lyapcheck.models.engines.search import why_none
+    from lyapcheck.sos.rounding import round_matrix
 
     ring = loop.ring
-    v_vars = loop.v_variables()
-    basis: list[Monomial] = [m for m in monomials(ring.nvars, 1, degree)
-                             if all(m[i] == 0 for i in range(ring.nvars) if i not in v_vars)]
-    names = [ring.names[i] for i in v_vars]
+    names = [ring.names[i] for i in loop.v_variables()]
     N, D, _ = common_denominator(loop, names)
-    eps = VS_MARGIN
-    l2 = state_square(loop)
-    # the objective's weights: each basis monomial's mean over the samples (deviations)
+    field = level_field(loop, names, N, D)
+    known = -rho - state_square(loop) * to_fmpq(VS_MARGIN)
+    generators = relations_level_symmetry(field, rho, known)
+    structure = relations_vstep_structure(field, degree, rho, known, generators, loop.roots())
+    if isinstance(structure, str):
+        return f"the V step was not built: {structure}"
     system = loop.system
     eq = np.array([float(system.values[s]) for s in system.states])
     cols = variable_values(system, samples + eq)
     shifted = {n: v - float(system.values[n]) if n in system.values else v for n, v in cols.items()}
-    weights = [float(np.mean(poly_values(ring, ring.monomial(m), shifted, len(samples)))) for m in basis]
-    program = ConditionProgram(ring, loop.relations, frozenset(), loop.unused(), margin=False, roots=loop.roots())
-    for k in range(len(basis)):
-        program.free(f"v{k}")
-    pos_terms = [(f"v{k}", ring.monomial(m)) for k, m in enumerate(basis)]
-    dec_terms = [(f"v{k}", -lie(loop, ring.monomial(m), N) + rho * ring.monomial(m)) for k, m in enumerate(basis)]
-    top = max((sum(mm) for _, p in dec_terms for mm in ring.support(p)), default=2)
-    known_dec = -l2 * to_fmpq(eps) - rho
-    # the new set contains the old one: 1 - V >= s (1 - V_old) (the iteration never shrinks it)
-    zero = tuple([0] * ring.nvars)
-    contain_terms = [(f"v{k}", -ring.monomial(m)) for k, m in enumerate(basis)]
-    old_support = sorted(set(ring.support(V_scaled)) | {zero})
-    why = program.condition("P", ring.support(l2), pos_terms, degree) or \
-        program.condition("D", ring.support(known_dec), dec_terms, top) or \
-        program.condition("C", [zero], contain_terms, degree, region_support=old_support, vanishing=False)
-    if why is not None:
-        return f"the V step was not built: {why}"
-    program.minimize([(f"v{k}", w) for k, w in enumerate(weights)])
+    z_v = structure.gram("V").basis
+    Z = np.column_stack([poly_values(ring, ring.monomial(m), shifted, len(samples)) for m in z_v])
+    v_now = poly_values(ring, V_scaled, shifted, len(samples))
     values = ParameterValues()
-    # positivity with the level step's largest margin, so that the rounded V passes its exact check there
-    _set(values, *known_values(ring, "P", -l2 * to_fmpq(VS_POSITIVITY_MARGIN), ring.support(l2)))
-    _set(values, *known_values(ring, "D", known_dec, ring.support(known_dec)))
-    _set(values, *known_values(ring, "C", ring.constant(1), [zero]))
-    old_terms = ring.terms(V_scaled - 1)
-    _set(values, "W_C", [old_terms.get(m, Fraction(0)) for m in old_support])
-    solution = search.solve(program.structure(), values)
+    for i, gi in field.flows:
+        values.set_poly(ring, f"g{i}", -gi, ring.support(gi))
+    values.set_poly(ring, "s1", rho, ring.support(rho) or [tuple([0] * ring.nvars)])
+    values.set_poly(ring, "negs1", known, ring.support(known))
+    values.set_matrix("M", sample_moments(Z, v_now))
+    values.set_scalar("floor", ROA_FLOOR)
+    solution = search.solve(structure, values)
     if not solution.usable:
-        from lyapcheck.models.engines.search import why_none
-
         return f"the V step found no V ({why_none(solution)})"
-    from lyapcheck.sos.rounding import round_scalar
-
-    V = ring.zero()
-    peak = max(abs(solution.scalars[f"v{k}"]) for k in range(len(basis)))
-    for k, m in enumerate(basis):
-        value = solution.scalars[f"v{k}"]
-        c = round_scalar(value, VS_ROUND_BITS) if abs(value) > 1e-9 * peak else 0
-        if c:
-            V += ring.monomial(m, c)
-    del D
+    V = GramPoly.of(z_v, round_matrix(solution.grams["V"], VS_ROUND_BITS)).poly(ring)
     return V if not V.is_zero() else "the V step gave V = 0"
+
+
+def sample_moments(Z: np.ndarray, v_now: np.ndarray, nearest: float = VSTEP_NEAREST,
+                   normalize: bool = VSTEP_NORMALIZE) -> np.ndarray:
+    """The V step's objective matrix ``M`` (``<Q_V, M>``, the weighted mean of ``V`` over samples): ``Z`` the
+    samples' monomial vectors (rows), ``v_now`` the current ``V`` at level 1 there. The samples outside the
+    current set weigh (this share of them, the nearest to it), each vector normalized where ``normalize``;
+    all samples where none is outside."""
+    outside = v_now > 1
+    weighted = Z[outside] if np.any(outside) else Z
+    if nearest < 1.0 and np.any(outside):
+        order = np.argsort(v_now[outside])
+        weighted = weighted[order[:max(1, int(np.ceil(nearest * weighted.shape[0])))]]
+    count = weighted.shape[0]
+    if normalize:
+        norms = np.linalg.norm(weighted, axis=1, keepdims=True)
+        weighted = weighted[norms[:, 0] > 0] / norms[norms[:, 0] > 0]
+    M = weighted.T @ weighted / max(count, 1)
+    return (M + M.T) / 2
