@@ -85,7 +85,7 @@ def test_a_loop_with_a_constant_root_gets_a_level_of_its_linearization_that_the_
     from lyapcheck.models.engines.recast_sos import ConditionCertificate, check_condition
     from lyapcheck.models.engines.search import Budget, Search
     from lyapcheck.models.language.modelfile import parse_any_model
-    from lyapcheck.models.surfaces.recast_run import proved_loop
+    from lyapcheck.models.classes.recast_regions import proved_loop
     from lyapcheck.sos.polynomials import to_fmpq
 
     path = MODELS / "recast-power-two-machine.toml"
