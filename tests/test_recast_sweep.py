@@ -186,10 +186,10 @@ AXIS = '[[sweep.axes]]\nname = "b"\nvalues = [0.5, 1]\n'
 @pytest.mark.parametrize("spec, model, needle", [
     ('[sweep]\nmodel = "m.toml"\n[[sweep.axes]]\nname = "g"\nvalues = [1, 2]\n', PENDULUM,
      "'sweep.axes[0].name' parameter must be a parameter declared in the model (b). Got 'g' instead."),
-    ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["linearization"]\n[[sweep.axes]]\nname = "b"\n'
+    ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["barrier"]\n[[sweep.axes]]\nname = "b"\n'
      'start = 0.5\nstop = 2\nnum = 3\n', PENDULUM,
      "'sweep.classes' parameter must be in a boxes sweep of a loop with functions, a list of distinct names from "
-     "'quadratic', 'sos_gas', 'roa', 'sos_bound'. Got ['linearization'] instead."),
+     "'linearization', 'quadratic', 'sos_gas', 'roa', 'sos_bound'. Got ['barrier'] instead."),
     ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["sos_gas"]\n[[sweep.axes]]\nname = "Delta"\n'
      'values = [-1, 0, 1]\n', ILOS, "sweep.axes, the box Delta in [-1, 0]: the loop cannot be recast over all of it"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\n' + AXIS, PENDULUM,
@@ -218,10 +218,9 @@ def test_a_loop_with_functions_is_swept_over_the_classes_of_a_polynomial_loop() 
     without_sets = ("sos_bound", "barrier", "reach_avoid")  # (no disturbances, no [sets])
     assert "candidate" not in MODEL_POINT_CLASSES  # (the user's V: a sweep cannot run it)
     assert _model_classes(None, "points", pendulum) == tuple(c for c in MODEL_POINT_CLASSES if c not in without_sets)
-    # but the linearization over a box: its Jacobian over a box is built for polynomial and rational loops only
-    # (the documented refusal of tests/feature_matrix.py)
-    assert _model_classes(None, "boxes", pendulum) == tuple(c for c in MODEL_BOX_CLASSES
-                                                            if c not in (*without_sets, "linearization"))
+    # and over boxes too, the linearization included (its Jacobian over a box, by the chain rule)
+    assert "linearization" in MODEL_BOX_CLASSES
+    assert _model_classes(None, "boxes", pendulum) == tuple(c for c in MODEL_BOX_CLASSES if c not in without_sets)
 
 
 # -- workers, a point the recasting cannot take, the alarm -----------------------------------------------------
