@@ -142,7 +142,8 @@ def simulate_ends(system: RecastSystem, X0: np.ndarray, horizon: float, escape: 
     eq = np.array([float(system.values[s]) for s in system.states])
     batch = ModelSystem(TrueField(system), len(X0),  # type: ignore[arg-type]
                         escape=None if escape is None else np.full(system.n, escape), center=eq,
-                        settle=None if settle is None else np.broadcast_to(np.asarray(settle, dtype=np.float64), (system.n,)))
+                        settle=None if settle is None else
+                        np.broadcast_to(np.asarray(settle, dtype=np.float64), (system.n,)))
     with np.errstate(all="ignore"):
         result = integrate(batch, 0.0, X0, horizon, rtol=rtol, atol=atol,
                            max_iterations=SIM_MAX_STEPS if max_steps is None else max_steps)
