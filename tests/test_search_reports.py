@@ -221,3 +221,26 @@ def test_the_records_are_checked_for_what_a_search_would_have_made() -> None:
     assert not extremum.record_row(wrong)[1]
     outside = extremum.Extremum.from_json({**good.to_json(), "range": ["0", "0.9"]})
     assert not extremum.record_row(outside)[1]
+
+
+# -- the search's report straight from the command ---------------------------------------------------------
+def test_tune_and_minimize_write_the_search_report_with_report(tmp_path: Path) -> None:
+    """``tune --report`` and ``certify --minimize --report`` write the page ``lyapcheck report`` draws of
+    the document ``--out`` writes; a report name that is neither .html nor .pdf is one line, exit 2."""
+    page = tmp_path / "tune.html"
+    done = RUNNER.invoke(app.cli, ["tune", str(SCALAR), "--box", "a=1..4", "--objective", "bound:y", "--grid", "2",
+                                   "--report", str(page)])
+    assert done.exit_code == 0, done.output
+    assert f"report of the search written to {page}" in done.output
+    text = Page(page.read_text()).text
+    assert "winner: a = 4" in text and ALARM not in text
+    page = tmp_path / "smallest-c.html"
+    done = RUNNER.invoke(app.cli, ["certify", str(OSCILLATOR), "--classes", "linearization", "--minimize", "c=-1..1",
+                                   "--steps", "4", "--report", str(page)])
+    assert done.exit_code == 0, done.output
+    text = Page(page.read_text()).text
+    assert "c: the smallest value proved is 0.125; 0 was not proved" in text and ALARM not in text
+    done = RUNNER.invoke(app.cli, ["tune", str(SCALAR), "--box", "a=1..4", "--objective", "bound:y",
+                                   "--report", str(tmp_path / "page.txt")])
+    assert done.exit_code == 2 and "'report' parameter" in done.output and "page.txt" in done.output
+    assert len(done.output.strip().splitlines()) == 1

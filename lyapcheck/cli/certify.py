@@ -76,9 +76,6 @@ def _extremum(model_file: str, maximize: str | None, minimize: str | None, steps
     if boxes:
         raise InvalidParameter("box", "not given with --maximize/--minimize (the search varies one parameter)",
                            " ".join(boxes))
-    if report is not None:
-        raise InvalidParameter("report", "not given with --maximize/--minimize (write the search with --out CERT.json, "
-                               "then lyapcheck report CERT.json shows every value tried and the proved one)", report)
     found = certify_extremum(model_file, str(maximize if maximize is not None else minimize),
                              direction="max" if maximize is not None else "min",
                              steps=steps, **certify_args)
@@ -89,6 +86,10 @@ def _extremum(model_file: str, maximize: str | None, minimize: str | None, steps
         from lyapcheck.fileio import atomic_write
 
         atomic_write(out, json.dumps(written, indent=2) + "\n")
+    if report is not None and written is not None:  # the page of lyapcheck report on that document
+        from reports.render import certificate_report
+
+        certificate_report(written, report)
     if as_json:
         emit_json({"extremum": found.to_json(),
                    "certificate": None if found.proved_result is None else found.proved_result.to_json()})
@@ -99,6 +100,9 @@ def _extremum(model_file: str, maximize: str | None, minimize: str | None, steps
         click.echo(found.sentence())
         if out and found.proved_result is not None:
             click.echo(f"certificate of {found.parameter} = {found.proved_text()} written to {out}")
+        if report is not None:
+            click.echo(f"report of the search written to {report}" if written is not None else
+                       "no report: no value was proved (the values tried are listed above)")
     raise SystemExit(EXIT_OK if found.proved is not None else EXIT_NEGATIVE)
 
 

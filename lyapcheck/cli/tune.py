@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import click
@@ -62,11 +63,13 @@ def register(group: click.Group) -> None:
                   "(default 60).")
     @click.option("--out", type=click.Path(dir_okay=False), help="Write the winner's certificate (with its tune "
                   "table) here.")
+    @click.option("--report", type=click.Path(dir_okay=False), help="Write the search's report, HTML or PDF (by "
+                  "extension): the box map with the winner and its neighbourhood, the objective along the search.")
     @click.option("--json", "as_json", is_flag=True, help="Print {\"tune\": ..., \"certificate\": ...} as JSON.")
     @one_line_errors
     def tune(file: str, boxes: tuple[str, ...], objective: str, grid: str | None, settings: tuple[str, ...],
              classes: str | None, require: str | None, degree: str | None, time_limit: str | None,
-             out: str | None, as_json: bool) -> None:
+             out: str | None, report: str | None, as_json: bool) -> None:
         """Search a box of a model's parameters for the gains with the best certified figure: a grid,
         one refinement around its best point, the winner certified again exactly (--out), and a
         neighbourhood of the winner proved with a box certificate, where the figure stays within a
@@ -85,6 +88,8 @@ def register(group: click.Group) -> None:
             raise InvalidParameter("FILE", "a model file (tune searches a model file's parameters; the paper's "
                                    "gain files are not searched: use certify --box for the paper's gains)", other)
         with flag_names():
+            if report is not None and Path(report).suffix.lower() not in (".html", ".pdf"):
+                raise InvalidParameter("report", "a file name ending in .html or .pdf", report)
             found = tune_model(model_file, list(boxes), objective, grid=grid, settings=list(settings),
                                classes=classes, require=require, degree=check_degree(degree),
                                time_limit_s=_time_limit(time_limit))
@@ -94,8 +99,16 @@ def register(group: click.Group) -> None:
             from lyapcheck.fileio import atomic_write
 
             atomic_write(out, json.dumps(found.document(), indent=2) + "\n")
+        document = found.document()  # None without a winner
+        if report is not None and document is not None:  # the page lyapcheck report draws of that document
+            from reports.render import certificate_report
+
+            certificate_report(document, report)
         if as_json:
             emit_json({"tune": found.to_json(), "certificate": None if found.result is None else found.result.to_json()})
         else:
             _print(found, out)
+            if report is not None:
+                click.echo(f"report of the search written to {report}" if found.result is not None else
+                           "no report: no point was proved (the points tried are listed above)")
         raise SystemExit(EXIT_OK if found.result is not None else EXIT_NEGATIVE)
