@@ -306,22 +306,25 @@ def _verify_barrier(c: dict[str, Any], cert: dict[str, Any], scaled: Any) -> tup
     if stated_v(scaled, field, B) != cert["B"]:
         return False, "the stated B (declared states) is not the certificate's B unscaled"
 
-    def pieces(key: str, count: int) -> list[tuple[list[Any], Any]]:
-        data = cert[key]
-        if not isinstance(data, list) or len(data) != count:
-            raise ValueError(f"{key}: one entry per piece of the set is needed")
-        return [([_gram(g, nv) for g in item["multipliers"]], _gram(item["remainder"], nv)) for item in data]
-
     lam = Fraction(cert["lambda_scaled"])
     box = _multipliers(cert.get("box_multipliers"), nv, n)
-    ok, why = check_barrier(ring, field.g, field.D, B, lam, initial, pieces("initial", len(initial)), unsafe,
-                            pieces("unsafe", len(unsafe)), _gram(cert["gram_decrease"], nv), box)
+    ok, why = check_barrier(ring, field.g, field.D, B, lam, initial, _set_pieces(cert, "initial", len(initial), nv),
+                            unsafe, _set_pieces(cert, "unsafe", len(unsafe), nv), _gram(cert["gram_decrease"], nv), box)
     if not ok:
         return False, why
     stated = c.get("lambda_per_s")
     if stated is not None and abs(float(stated) - float(lam / scaled.scaling.time)) > 1e-9 * (1 + abs(float(stated))):
         return False, "the stated rate lambda_per_s is not the certificate's"
     return True, why
+
+
+def _set_pieces(cert: dict[str, Any], key: str, count: int, nv: int) -> list[tuple[list[Any], Any]]:
+    """A barrier's or reach-avoid's multipliers and remainder for each piece of one set (``key``: "initial",
+    "unsafe", ...), one entry per piece."""
+    data = cert[key]
+    if not isinstance(data, list) or len(data) != count:
+        raise ValueError(f"{key}: one entry per piece of the set is needed")
+    return [([_gram(g, nv) for g in item["multipliers"]], _gram(item["remainder"], nv)) for item in data]
 
 
 def _verify_reach_avoid(c: dict[str, Any], cert: dict[str, Any], scaled: Any) -> tuple[bool, str]:
@@ -351,12 +354,6 @@ def _verify_reach_avoid(c: dict[str, Any], cert: dict[str, Any], scaled: Any) ->
     if stated_v(scaled, field, V) != cert["V"]:
         return False, "the stated V (declared states) is not the certificate's V unscaled"
 
-    def pieces(key: str, count: int) -> list[tuple[list[Any], Any]]:
-        data = cert[key]
-        if not isinstance(data, list) or len(data) != count:
-            raise ValueError(f"{key}: one entry per piece of the set is needed")
-        return [([_gram(g, nv) for g in item["multipliers"]], _gram(item["remainder"], nv)) for item in data]
-
     if "stay" in cert:  # reach {W <= 0}, inside the goal and never left, instead of the goal itself
         from lyapcheck.sos.certificates import check_goal_invariant
 
@@ -377,8 +374,8 @@ def _verify_reach_avoid(c: dict[str, Any], cert: dict[str, Any], scaled: Any) ->
     goal_certs = [(_gram(item["multiplier"], nv), _gram(item["remainder"], nv)) for item in cert["goal"]]
     boxes = [_multipliers(box, nv, n) for box in cert.get("box_multipliers") or [[] for _ in goal]]
     eps, delta, C = Fraction(cert["eps_scaled"]), Fraction(cert["delta_scaled"]), Fraction(cert["C_scaled"])
-    ok, why = check_reach_avoid(ring, field.g, field.D, V, eps, C, delta, initial, pieces("initial", len(initial)),
-                                unsafe, pieces("unsafe", len(unsafe)), goal, goal_certs,
+    ok, why = check_reach_avoid(ring, field.g, field.D, V, eps, C, delta, initial,
+                                _set_pieces(cert, "initial", len(initial), nv), unsafe, _set_pieces(cert, "unsafe", len(unsafe), nv), goal, goal_certs,
                                 _gram(cert["gram_bounded"], nv), boxes)
     if not ok:
         return False, why
