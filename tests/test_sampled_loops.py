@@ -180,7 +180,7 @@ def test_the_continuous_readers_refuse_a_sampled_file() -> None:
     (('period = "T"', 'period = "20 mm"'), "[sampling] period"),
     (('period = "T"', 'period = "0 s"'), "[sampling] period"),
     (('period = "T"', 'period = "T"\nrate = 3'), "[sampling] rate"),
-    (('u = "-Kp*theta - Kd*omega"', 'u = "-Kp*sat(theta, 1)"'), "[controller]"),
+    (('u = "-Kp*theta - Kd*omega"', 'u = "-Kp*tanh(theta + 1)"'), "[controller] u"),  # tanh(1): not exact
     (('u = "-Kp*theta - Kd*omega"', 'u = "-Kp*theta - Kd*w"'), "[controller] u"),
     (('u = "-Kp*theta - Kd*omega"', 'theta = "0"'), "[controller] theta"),
     (("[sampling]", "[sets]\ninitial = [\"theta <= 1\"]\n[sampling]"), "[sets]"),

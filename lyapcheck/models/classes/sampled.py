@@ -236,6 +236,11 @@ def linear_parts(model: "SampledModel") -> tuple[list[list[Fraction]], list[list
         J = true_jacobian(base_loop(model.plant.system))
         if isinstance(J, str):
             return J
+    if model.controller_system is not None:
+        gain = control_gain(model)
+        if isinstance(gain, str):
+            return gain
+        return [row[:n] for row in J[:n]], [row[n:n + m] for row in J[:n]], gain
     ring = Ring(model.states)
     point = list(model.equilibrium)
     K = []
@@ -246,6 +251,33 @@ def linear_parts(model: "SampledModel") -> tuple[list[list[Fraction]], list[list
         K.append([(ring.evaluate(law.numerator.derivative(j), point) * d0
                    - n0 * ring.evaluate(law.denominator.derivative(j), point)) / (d0 * d0) for j in range(n)])
     return [row[:n] for row in J[:n]], [row[n:n + m] for row in J[:n]], K
+
+
+def control_gain(model: "SampledModel") -> list[list[Fraction]] | str:
+    """``K = dk/dx`` at the equilibrium, exactly, for laws with functions
+    (:attr:`~lyapcheck.models.language.sampling.SampledModel.controller_system`): the chain rule through
+    the laws' auxiliaries (:func:`~lyapcheck.models.classes.recast_classes.gradient_at_equilibrium`, as a
+    continuous loop's Jacobian) and the quotient rule; or why there is none (a function not
+    differentiable there, ``abs`` at 0 or ``sat`` at its corner, or an irrational entry), naming it."""
+    from lyapcheck.models.classes.recast_classes import base_loop, gradient_at_equilibrium
+    from lyapcheck.models.language.recast import value_at_equilibrium
+
+    system = model.controller_system
+    if system is None:
+        raise ValueError("control_gain takes laws with functions (controller_system)")
+    loop = base_loop(system, cylinder=False)
+    K = []
+    for u in model.controls:
+        law = model.controller[u]
+        n0, d0 = value_at_equilibrium(system, law.numerator), value_at_equilibrium(system, law.denominator)
+        if n0 is None or not d0:  # (refused when the file was read)
+            return f"[controller] {u}: its value at the equilibrium is not an exact rational"  # pragma: no cover
+        dn = gradient_at_equilibrium(loop, system.shift(law.numerator))
+        dd = gradient_at_equilibrium(loop, system.shift(law.denominator))
+        if isinstance(dn, str) or isinstance(dd, str):
+            return f"[controller] {u}: {dn if isinstance(dn, str) else dd}"
+        K.append([(a * d0 - n0 * b) / (d0 * d0) for a, b in zip(dn, dd)])
+    return K
 
 
 def spectral_radius_estimate(model: "SampledModel") -> float | None:
@@ -259,5 +291,5 @@ def spectral_radius_estimate(model: "SampledModel") -> float | None:
     return _spectral_radius_estimate(A, B, K, model.period)
 
 
-__all__ = ["linear_parts", "spectral_radius_estimate", "FIRST_PRECISION_BITS", "MAX_PRECISION_BITS", "METHOD", "cayley_routh_column", "decide",
+__all__ = ["control_gain", "linear_parts", "spectral_radius_estimate", "FIRST_PRECISION_BITS", "MAX_PRECISION_BITS", "METHOD", "cayley_routh_column", "decide",
            "sampled_jacobian", "verify"]

@@ -809,3 +809,46 @@ def recast_with_constants(model: RecastModel, constants: Mapping[str, Fraction])
                                 networks=model.networks)
     return system
 
+
+def recast_laws(source: str, section: str, states: tuple[str, ...], laws: Mapping[str, object],
+                constants: Mapping[str, Fraction], equilibrium: Sequence[Fraction]
+                ) -> tuple[RecastSystem, dict[str, Rational]]:
+    """Laws that use functions (a sampled-data file's ``[controller]``,
+    :mod:`lyapcheck.models.language.sampling`), recast by the same builder as a loop's right-hand sides:
+    the system over the states, each frozen (``x' = 0``: only its auxiliaries, their relations and
+    their exact values at the equilibrium matter), and each law a rational function of its ring (states,
+    then auxiliaries; not shifted). One-line :class:`~lyapcheck.errors.ModelFileError` naming
+    ``[section] NAME`` on anything refused, a transcendental value at the equilibrium included
+    (``tanh(1)``: refused as in ``[dynamics]``)."""
+    texts = {name: str(text) for name, text in laws.items()}
+    recaster = Recaster(states, tuple(equilibrium), count_calls(list(texts.values())))
+    parsed: list[Rational] = []
+    for name, text in texts.items():
+        key = f"[{section}] {name}"
+        try:
+            r, _ = parse_with_divisors(text, recaster.ring, calls=recaster, names=states, constants=constants)
+        except ExpressionError as exc:
+            raise ModelFileError(source, key, str(exc)) from None
+        if degree_in(recaster.ring, r.numerator, [PI_MARK]) > 0 or degree_in(recaster.ring, r.denominator, [PI_MARK]) > 0:
+            raise ModelFileError(source, key, "pi may appear only in an argument of sin or cos (as k*pi/12 added to "
+                                              "the rest); elsewhere it would be a transcendental coefficient")
+        parsed.append(r)
+    frozen = [Rational.polynomial(recaster.ring, recaster.ring.zero()) for _ in states]
+    try:
+        system, moved = _finish(source, recaster, frozen, recaster.flows(frozen), equilibrium, parsed)
+    except ModelFileError as exc:  # keyed [dynamics] there: the law whose text has the call instead
+        message = str(exc).removeprefix(f"{exc.source}: {exc.key}: ")
+        compact = message.split("'")[1].replace(" ", "") if message.count("'") >= 2 else ""
+        key = next((f"[{section}] {name}" for name, text in texts.items() if compact and compact in text.replace(" ", "")),
+                   f"[{section}]")
+        raise ModelFileError(source, key, message) from None
+    return system, dict(zip(texts, moved))
+
+
+def value_at_equilibrium(system: RecastSystem, p: Poly) -> Fraction | None:
+    """``p`` (over ``system.ring``, not shifted) at the equilibrium, exactly: every state and auxiliary
+    at its value, the constant roots reduced; None when the value is irrational (a root remains)."""
+    at = system.reduce(system.ring.substitute(p, {name: v for name, v in system.values.items()}))
+    if not at.is_constant():
+        return None
+    return to_fraction(at.leading_coefficient()) if not at.is_zero() else Fraction(0)

@@ -9,7 +9,7 @@ held (zero-order hold) until the next::
     period = "20 ms"            # a time, or the name of a [parameters] entry that is one
 
     [controller]
-    u = "-Kp*theta - Kd*omega"  # polynomial or rational in the states and parameters
+    u = "-Kp*theta - Kd*omega"  # in the states and parameters; functions (sat, tanh, ...) are recast
 
 Written as a parameter's name (``period = "T"`` with ``T = "20 ms"`` in ``[parameters]``), the period
 takes ``--set T=...``, ``certify --maximize T=a..b`` and everything else a parameter takes.
@@ -20,7 +20,11 @@ only :func:`parse_sampled` reads it, into a :class:`SampledModel`. The plant is 
 loop over the states and the controller names (each a constant state, ``u' = 0``, at its value at the
 equilibrium), by the same reader as any model (so the plant may use functions, recast as usual), which
 gives ``[[A, B], [0, 0]]`` exactly (:func:`lyapcheck.models.classes.sampled.linear_parts`); the
-controller's gain ``K`` is differentiated exactly.
+controller's gain ``K`` is differentiated exactly. A law with functions (``sat(-Kp*theta - Kd*omega, 20)``)
+is recast by the same builder (:func:`lyapcheck.models.language.recast.recast_laws`): its value at the
+equilibrium is exact or the file is refused naming the law, and its gain is the chain rule through the
+auxiliaries (``not_applicable`` where a function is not differentiable there: ``abs`` at 0, ``sat`` at a
+corner).
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ from lyapcheck.sos.polynomials import Ring
 
 if TYPE_CHECKING:
     from lyapcheck.models.language.modelfile import Model
-    from lyapcheck.models.language.recast import RecastModel
+    from lyapcheck.models.language.recast import RecastModel, RecastSystem
 
 #: the sections a sampled-data model file may have; the others ([disturbances], [outputs], [domain],
 #: [sets], [units]) ask questions the sampled route does not answer yet, and are refused rather than ignored
@@ -77,6 +81,10 @@ class SampledModel:
     controller: dict[str, Rational]
     plant: "Model | RecastModel"
     overrides: dict[str, str] = field(default_factory=dict)
+    #: laws with functions (``sat``, ``tanh``, ...): recast over the states (frozen, each auxiliary at its
+    #: exact value at the equilibrium), and then each ``controller`` law is a rational function of this
+    #: system's ring (states, then auxiliaries), not of ``Ring(states)``; None for polynomial or rational laws
+    controller_system: "RecastSystem | None" = None
 
     @property
     def sha256(self) -> str:
@@ -155,25 +163,49 @@ def parse_sampled(text: str, source: str = "<model>", overrides: Mapping[str, ob
     for u, law in laws.items():
         if not isinstance(law, (str, int, float)) or isinstance(law, bool):
             raise _error(source, f"[controller] {u}", f"must be an expression in a string, got {law!r}")
-    if uses_functions([str(v) for v in laws.values()]):
-        raise _error(source, "[controller]", "a controller law with functions (sin, sat, ...) is not taken yet: "
-                                             "write it polynomial or rational in the states")
     plain = {k: v for k, v in data.items() if k not in ("sampling", "controller")}
-    params, x_eq, controller = read_laws(text, source, plain, overrides, "controller", laws)
+    with_functions = uses_functions([str(v) for v in laws.values()])
+    # (laws with functions are recast below; read here as "0", their names are still checked)
+    params, x_eq, controller = read_laws(text, source, plain, overrides, "controller",
+                                         {u: "0" for u in laws} if with_functions else laws)
     period, period_text = _period(source, data["sampling"], params)
     ring = Ring(tuple(states))
-    u_eq = []
-    for u, law in controller.items():
-        den = ring.evaluate(law.denominator, list(x_eq))
-        if den == 0:
-            raise _error(source, f"[controller] {u}", "its denominator is 0 at the equilibrium")
-        u_eq.append(ring.evaluate(law.numerator, list(x_eq)) / den)
+    u_eq: list[Fraction] = []
+    laws_system = None
+    if with_functions:  # recast as a loop's right-hand sides are; the values at the equilibrium exact
+        laws_system, controller, u_eq = _function_laws(source, tuple(states), laws, params, x_eq)
+    else:
+        for u, law in controller.items():
+            den = ring.evaluate(law.denominator, list(x_eq))
+            if den == 0:
+                raise _error(source, f"[controller] {u}", "its denominator is 0 at the equilibrium")
+            u_eq.append(ring.evaluate(law.numerator, list(x_eq)) / den)
     plant = parse_any_model(text, source, overrides, tables=_plant_view(data, controls, tuple(u_eq)))
     return SampledModel(source=source, text=text, name=str(head.get("name", Path(source).stem)) if isinstance(head, dict)
                         else Path(source).stem, states=tuple(states), controls=controls, parameters=params,
                         equilibrium=x_eq, control_equilibrium=tuple(u_eq), period=period, period_text=period_text,
                         controller_text={u: str(v) for u, v in laws.items()}, controller=controller, plant=plant,
-                        overrides={k: str(v) for k, v in (overrides or {}).items()})
+                        overrides={k: str(v) for k, v in (overrides or {}).items()}, controller_system=laws_system)
+
+
+def _function_laws(source: str, states: tuple[str, ...], laws: Mapping[str, object], params: Mapping[str, Fraction],
+                   x_eq: tuple[Fraction, ...]) -> tuple["RecastSystem", dict[str, Rational], list[Fraction]]:
+    """Controller laws with functions, recast as a loop's right-hand sides are
+    (:func:`lyapcheck.models.language.recast.recast_laws`), and each law's exact value at the equilibrium
+    (a law whose value there is irrational, or whose denominator is 0 there, is refused in one line)."""
+    from lyapcheck.models.language.recast import recast_laws, value_at_equilibrium
+
+    system, recast = recast_laws(source, "controller", states, laws, params, x_eq)
+    u_eq = []
+    for u, law in recast.items():
+        num, den = value_at_equilibrium(system, law.numerator), value_at_equilibrium(system, law.denominator)
+        if num is None or den is None:
+            raise _error(source, f"[controller] {u}", "its value at the equilibrium is irrational (sqrt 2 or sqrt 3): "
+                                                      "the control held there must be an exact rational")
+        if den == 0:
+            raise _error(source, f"[controller] {u}", "its denominator is 0 at the equilibrium")
+        u_eq.append(num / den)
+    return system, recast, u_eq
 
 
 def _plant_view(data: Mapping[str, Any], controls: tuple[str, ...], u_eq: tuple[Fraction, ...]) -> dict[str, Any]:

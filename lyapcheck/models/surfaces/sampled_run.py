@@ -38,6 +38,11 @@ def _not_yet(name: str) -> ConditionResult:
 
 def run_linearization(model: SampledModel) -> ConditionResult:
     """The sampled-data linearization at the model's period, or why it cannot be formed."""
+    if model.controller_system is not None:  # a law with functions: its gain may not exist (abs at 0)
+        gain = sampled.control_gain(model)
+        if isinstance(gain, str):
+            return ConditionResult("linearization", "not_applicable", "the controller's gain K = dk/dx at the "
+                                   f"equilibrium cannot be formed exactly: {gain}", property="LES")
     parts = sampled.linear_parts(model)
     if isinstance(parts, str):
         return ConditionResult("linearization", "inconclusive",

@@ -81,9 +81,13 @@ def prepare_sampled(model: "SampledModel") -> Prepared:
     :attr:`SampledModel.plant`), its angles left only where no controller law uses them (module
     docstring)."""
     prepared = prepare(model.plant)
-    ring = Ring(model.states)
+    ring = Ring(model.states) if model.controller_system is None else model.controller_system.ring
+    # (with functions, also every auxiliary's argument: each auxiliary comes from a law)
     used = {s for s in model.states for law in model.controller.values()
             if degree_in(ring, law.numerator, [s]) > 0 or degree_in(ring, law.denominator, [s]) > 0}
+    if model.controller_system is not None:
+        used |= {s for s in model.states for a in model.controller_system.auxiliaries
+                 if a.argument is not None and degree_in(ring, a.argument, [s]) > 0}
     angles = tuple(i for i in prepared.angles if model.plant.states[i] not in used)
     keys = dict(prepared.document_keys)
     if "angles_modulo_2pi" in keys:
@@ -92,14 +96,25 @@ def prepare_sampled(model: "SampledModel") -> Prepared:
 
 
 class ControlLaw:
-    """Each controller law ``k(x)`` at ``(batch, n)`` states: numerators and denominators in one evaluation."""
+    """Each controller law ``k(x)`` at ``(batch, n)`` states: numerators and denominators in one evaluation;
+    a law with functions over its auxiliaries, each evaluated by numpy from its definition
+    (:class:`~lyapcheck.models.engines.recast_numeric.FloatLoop`, as the continuous ``simulate`` evaluates a
+    loop with functions)."""
 
     def __init__(self, model: "SampledModel") -> None:
         laws = [model.controller[u] for u in model.controls]
         self.m = len(laws)
-        self.polys = CompiledPolys(Ring(model.states), [r.numerator for r in laws] + [r.denominator for r in laws])
+        self.variables = None
+        ring = Ring(model.states)
+        if model.controller_system is not None:
+            from lyapcheck.models.engines.recast_numeric import FloatLoop
+
+            self.variables, ring = FloatLoop(model.controller_system), model.controller_system.ring
+        self.polys = CompiledPolys(ring, [r.numerator for r in laws] + [r.denominator for r in laws])
 
     def __call__(self, x: "FloatArray") -> "FloatArray":
+        if self.variables is not None:  # the states, then every auxiliary at them
+            x = np.column_stack(self.variables.columns(np.atleast_2d(x)))
         values = self.polys(x)
         with np.errstate(all="ignore"):  # a denominator 0 or an overflow: a non-finite control, diverged
             return values[:, :self.m] / values[:, self.m:]
