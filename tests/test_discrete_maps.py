@@ -221,11 +221,18 @@ def test_a_certified_class_without_a_discrete_time_check_fails_verify(tmp_path: 
     from lyapcheck.models.surfaces.certificate import verify_document
 
     doc = _certificate(tmp_path, MAP)
-    doc["conditions"]["roa"] = {"status": "certified", "property": "ROA", "summary": "forged",
+    doc["conditions"]["barrier"] = {"status": "certified", "property": "safety", "summary": "forged",
+                                    "certificate": {"kind": "barrier"}}
+    rows = verify_document(doc)
+    assert ("barrier", False, "barrier: a certified claim on a discrete-time map that no discrete-time check "
+                              "re-derives") in rows
+    # a continuous-time region certificate is not a map's (lyapcheck.models.classes.discrete_regions)
+    doc = _certificate(tmp_path, MAP)
+    doc["conditions"]["roa"] = {"status": "certified", "property": "ROA", "summary": "forged", "level": 1.0,
                                 "certificate": {"kind": "sublevel"}}
     rows = verify_document(doc)
-    assert ("roa", False, "roa: a certified claim on a discrete-time map that no discrete-time check "
-                          "re-derives") in rows
+    assert any(name == "roa" and not ok and "not a region certificate of a discrete-time map" in why
+               for name, ok, why in rows)
     # a continuous-time certificate of a class that has a discrete-time check is not one of its kinds
     doc = _certificate(tmp_path, MAP)
     doc["conditions"]["quadratic"] = {"status": "certified", "property": "GES", "summary": "forged",
@@ -243,7 +250,7 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert done.exit_code == 0, done.output
     conditions = json.loads(done.stdout)["conditions"]
     assert list(conditions) == [c.name for c in CLASSES]
-    assert DISCRETE == ("linearization", "quadratic", "sos_gas")
+    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate")
     assert conditions["linearization"]["status"] == "certified"
     assert conditions["linearization"]["summary"].startswith("every eigenvalue of the map's Jacobian at the fixed "
                                                              "point has modulus < 1")
@@ -252,6 +259,11 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
         assert c["status"] in ("certified", "not_certified")
         assert "discrete-time map" in c["summary"]
         assert c["status"] != "certified" or c["certificate"]["time"] == "discrete"
+    for name in ("roa", "candidate"):  # (lyapcheck.models.classes.discrete_regions; roa after GAS: the whole space)
+        c = conditions[name]
+        assert c["status"] in ("certified", "not_certified", "not_applicable")
+        assert c["status"] != "certified" or c["certificate"]["kind"] == "discrete_sublevel"
+        assert c["status"] != "not_applicable" or "the region of attraction is the whole state space" in c["summary"]
     for c in CLASSES:
         if c.name not in DISCRETE:
             assert conditions[c.name]["status"] == "not_applicable"
@@ -312,13 +324,15 @@ def test_simulate_iterates_the_map(tmp_path: Path) -> None:
 
 
 # -- the shipped examples -----------------------------------------------------------------------------
-@pytest.mark.parametrize(("name", "status", "code"), [("discrete-stable-map", "certified", 0),
-                                                      ("discrete-unstable-map", "refuted", 1)])
-def test_the_examples_certify_and_verify(tmp_path: Path, name: str, status: str, code: int) -> None:
+@pytest.mark.parametrize(("name", "status", "code", "verdict"), [("discrete-stable-map", "certified", 0, "certified"),
+                                                                 ("discrete-unstable-map", "refuted", 1, "unstable")])
+def test_the_examples_certify_and_verify(tmp_path: Path, name: str, status: str, code: int, verdict: str) -> None:
     out = tmp_path / f"{name}.json"
     done = cli("certify", str(EXAMPLES / f"{name}.toml"), "--no-store", "--json", "--out", str(out))
     assert done.exit_code == code, done.output
     doc = json.loads(done.stdout)
     assert doc["conditions"]["linearization"]["status"] == status
-    assert doc["verdict"] == ("certified_local" if code == 0 else "unstable")
+    assert doc["verdict"] == verdict
+    # the stable map is not GAS: its region of attraction is a set of the linearization's V (issue 44, roa on maps)
+    assert doc["conditions"]["roa"]["status"] == ("certified" if code == 0 else "not_certified")
     assert cli("verify", str(out)).exit_code == 0

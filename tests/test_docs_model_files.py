@@ -62,6 +62,7 @@ CHEAP = (
     'lyapcheck simulate examples/models/van-der-pol-reversed.toml --x0 "x1=2.5,x2=0"',
     "lyapcheck simulate examples/models/damped-oscillator.toml --grid 3",
     "lyapcheck certify examples/models/discrete-stable-map.toml",
+    "lyapcheck certify examples/models/discrete-local-map.toml --classes roa",
     "lyapcheck certify examples/models/fossil-dt-two-room-temp.toml",
     "lyapcheck certify examples/models/fossil-dt-ahmadi.toml",
     "lyapcheck certify examples/models/discrete-unstable-map.toml",

@@ -231,6 +231,18 @@ def discrete_lyapunov_sentence(kind: str, degree: int, mu: Fraction, figures: Ma
 
 #: the certificate kinds of a discrete-time map's quadratic and sos_gas (lyapcheck.models.classes.discrete_lyapunov)
 DISCRETE_LYAPUNOV_KINDS = ("discrete_quadratic", "discrete_sos")
+#: the certificate kind of a discrete-time map's roa and candidate (lyapcheck.models.classes.discrete_regions)
+DISCRETE_REGION_KIND = "discrete_sublevel"
+
+
+def discrete_region_sentence(name: str, level: float) -> str:
+    """The claim of a discrete-time map's ``roa`` or ``candidate`` certificate
+    (:mod:`lyapcheck.models.classes.discrete_regions`): the set, its level rounded down, and that it is a
+    region of attraction of the map."""
+    prefix = "the user's V: " if name == "candidate" else ""
+    return (f"{prefix}{{V <= {rounded(level, 6, 'down')}}} is a region of attraction of the discrete-time map: every "
+            "start in it stays in it and its iterates converge to the fixed point (V(F(e)) <= V(e) - eps m(e) on the "
+            "set, checked exactly)")
 
 
 def _stability(name: str, condition: Mapping[str, Any]) -> str:
@@ -239,6 +251,8 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
     if kind in DISCRETE_LYAPUNOV_KINDS:
         figures = {key: read_rational(cert[key]) for key in ("k", "r")} if kind == "discrete_quadratic" else None
         return discrete_lyapunov_sentence(kind, int(cert["degree"]), read_rational(cert["mu"]), figures)
+    if kind == DISCRETE_REGION_KIND:
+        return discrete_region_sentence(name, _number(condition, "level"))
     if kind in ("sublevel", "quadratic_ball"):
         what = SET_NAMES.get(name, name)
         level = _number(condition, "level")

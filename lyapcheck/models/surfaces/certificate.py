@@ -293,11 +293,19 @@ def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> l
         if name == "linearization":
             data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
             ok, why = discrete_linearization.verify(shifted_map(model), c["status"], data or {})
+        elif name in ("roa", "candidate"):  # V(F(e)) <= V(e) - eps m(e) on {V <= c}, from the condition's JSON
+            from lyapcheck.models.classes import discrete_regions
+
+            ok, why = discrete_regions.verify(shifted_map(model), name, c)
         else:  # quadratic, sos_gas: V(F(e)) - V(e) <= -mu V(e) - W(e), checked from the condition's JSON
             from lyapcheck.models.classes import discrete_lyapunov
 
             ok, why = discrete_lyapunov.verify(shifted_map(model), c["status"], c)
         rows.append((name, ok, why if ok else f"{name}: {why}"))
+    from lyapcheck.models.classes.region_size import check_size_rows
+
+    check_size_rows(model, conditions, rows, list(model.states))
+    _check_candidate(doc, model, conditions, rows)
     _check_disturbance_keys(model, conditions, rows)
     _check_summaries(model, conditions, rows, None)
     _check_stated_claims(model, conditions, rows)
@@ -395,11 +403,13 @@ _CHECKED_FIGURES: dict[str, tuple[str, ...]] = {
     "lyapunov": ("decay_rate_V_per_s",), "lyapunov_cliques": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius", "size"),
     "quadratic_ball": ("level", "ball_radius", "size"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
     "sos_bound": ("bounds", "bounds_reference"), "interval": ("level", "size"),
+    "discrete_sublevel": ("level", "size"),
 }
 #: what a certificate of each kind proves (a Lyapunov certificate: GAS, or GES where
 #: :func:`lyapcheck.models.classes.verify_field._verify_ges` passed)
 _KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "lyapunov_cliques": "GAS", "sublevel": "ROA", "quadratic_ball": "ROA", "barrier": "safety",
-                                  "reach_avoid": "reach_avoid", "sos_bound": "ultimate_bound", "interval": "ROA"}
+                                  "reach_avoid": "reach_avoid", "sos_bound": "ultimate_bound", "interval": "ROA",
+                                  "discrete_sublevel": "ROA"}
 
 
 def _check_stated_claims(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:

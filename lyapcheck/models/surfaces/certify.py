@@ -397,6 +397,7 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
             shifted = shifted_map(model)
             out.results[name] = _guarded(name, lambda: discrete_lyapunov.run(shifted, name), limit)  # type: ignore[arg-type]
             out.seconds[name] = time.perf_counter() - start
+    _map_regions(model, chosen, cand, limit, out)
     out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
     for r in out.results.values():  # the linearization is the Jacobian at d = 0
         if model.disturbances:
@@ -408,6 +409,38 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
         if text is not None:
             r.summary = text
     return out
+
+
+def _map_regions(model: Model, chosen: Sequence[str], cand: Candidate | None, limit: float,
+                 out: ModelCertification) -> None:
+    """``roa`` and ``candidate`` on a map (:mod:`lyapcheck.models.classes.discrete_regions`), after its GAS
+    classes: ``roa`` is ``not_applicable`` once one of them certified (:func:`roa_after_gas`), ``candidate``
+    without ``--candidate`` (:func:`_needs_input`); a certified set's size is attached as in continuous time."""
+    import time
+
+    from lyapcheck.models.classes import discrete_regions
+    from lyapcheck.models.classes.registry import DISCRETE
+    from lyapcheck.models.loop.discrete import shifted_map
+
+    for name in ("roa", "candidate"):
+        if name not in chosen or name not in DISCRETE:
+            continue
+        ruled = _needs_input(name, None, cand) or (roa_after_gas(out.results, "") if name == "roa" else None)
+        if ruled is not None:
+            out.results[name] = ruled
+            continue
+        start = time.perf_counter()
+        shifted = shifted_map(model)
+        budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+        if name == "roa":
+            out.results[name] = _guarded(name, lambda: discrete_regions.run_roa(model, shifted, budget), limit)
+        else:
+            assert cand is not None  # (_needs_input)
+            out.results[name] = _guarded(name, lambda: discrete_regions.run_candidate(model, shifted, cand, budget),
+                                         limit)
+        if out.results[name].status == "certified":
+            _attach_size(out.results[name], model, list(model.states))
+        out.seconds[name] = time.perf_counter() - start
 
 
 def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None, candidate: str | None,
