@@ -287,8 +287,8 @@ def run(shifted: ShiftedField, name: ClassName, search: Search | None = None,
         return ConditionResult(name, "inconclusive", late.summary,
                                numbers=late.numbers({"reason": str(exc), "tried": tried, "time": "discrete"}),
                                solver={"solves": search.log})
-    # no candidate V to suggest: the candidate class does not read maps (yet)
-    steps = ("sos_gas",) if name == "quadratic" else ("degree",)
+    # (a V the user knows is proved on a sublevel set by the candidate class, lyapcheck.models.classes.discrete_regions)
+    steps = ("sos_gas", "candidate") if name == "quadratic" else ("degree", "candidate")
     none = reasons.not_found("Lyapunov function of the discrete-time map", degrees, tried, steps)
     return ConditionResult(name, "not_certified", none.summary,
                            numbers=none.numbers({"tried": tried, "time": "discrete"}),
