@@ -40,7 +40,7 @@ import tomllib
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final, Mapping
+from typing import TYPE_CHECKING, Any, Final, Literal, Mapping
 
 from lyapcheck.errors import InvalidParameter, ModelFileError
 from lyapcheck.models.language.expressions import Rational, uses_functions
@@ -49,12 +49,15 @@ from lyapcheck.sos.polynomials import Ring
 
 if TYPE_CHECKING:
     from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.language.dimensions import Named
     from lyapcheck.models.language.networks import Network
+    from lyapcheck.units import Dimension, SIQuantity
     from lyapcheck.models.language.recast import RecastModel, RecastSystem
 
 #: the sections a sampled-data model file may have; the others ([disturbances], [outputs], [domain],
-#: [sets], [units]) ask questions the sampled route does not answer yet, and are refused rather than ignored
-SAMPLED_SECTIONS: Final = ("model", "parameters", "dynamics", "equilibrium", "sampling", "controller", "networks")
+#: [sets]) ask questions the sampled route does not answer yet, and are refused rather than ignored
+SAMPLED_SECTIONS: Final = ("model", "parameters", "dynamics", "equilibrium", "sampling", "controller", "networks",
+                           "units")
 #: the most controller names
 MAX_CONTROLS: Final = 6
 def file_is_sampled(path: object) -> bool:
@@ -181,11 +184,12 @@ def parse_sampled(text: str, source: str = "<model>", overrides: Mapping[str, ob
     # (laws with functions are recast below; read here as "0", their names are still checked)
     params, x_eq, controller = read_laws(text, source, plain, overrides, "controller",
                                          {u: "0" for u in laws} if with_functions else laws)
-    period, period_text = _period(source, data["sampling"], params)
+    period, period_text = _period(source, data["sampling"], params, data.get("parameters"))
     ring = Ring(tuple(states))
     u_eq: list[Fraction] = []
     laws_system = None
     networks = controller_networks(source, data, tuple(states), controls, params)
+    units = _plant_units(source, data, tuple(states), controls, networks) if "units" in data else None
     if with_functions:  # recast as a loop's right-hand sides are; the values at the equilibrium exact
         laws_system, controller, u_eq = _function_laws(source, tuple(states), laws, params, x_eq, networks)
     else:
@@ -194,7 +198,10 @@ def parse_sampled(text: str, source: str = "<model>", overrides: Mapping[str, ob
             if den == 0:
                 raise _error(source, f"[controller] {u}", "its denominator is 0 at the equilibrium")
             u_eq.append(ring.evaluate(law.numerator, list(x_eq)) / den)
-    plant = parse_any_model(text, source, overrides, tables=_plant_view(data, controls, tuple(u_eq)))
+    if units is not None:  # each law in the dimension the plant needs for its control (the plant is checked next)
+        _check_laws(source, laws, units[1], units[2])
+    plant = parse_any_model(text, source, overrides, tables=_plant_view(data, controls, tuple(u_eq),
+                                                                       None if units is None else units[0]))
     return SampledModel(source=source, text=text, name=str(head.get("name", Path(source).stem)) if isinstance(head, dict)
                         else Path(source).stem, states=tuple(states), controls=controls, parameters=params,
                         equilibrium=x_eq, control_equilibrium=tuple(u_eq), period=period, period_text=period_text,
@@ -254,19 +261,95 @@ def controller_networks(source: str, data: Mapping[str, Any], states: tuple[str,
     return networks
 
 
-def _plant_view(data: Mapping[str, Any], controls: tuple[str, ...], u_eq: tuple[Fraction, ...]) -> dict[str, Any]:
+def _plant_units(source: str, data: Mapping[str, Any], states: tuple[str, ...], controls: tuple[str, ...],
+                 networks: tuple["Network", ...]) -> tuple[dict[str, str], dict[str, "Named"], dict[str, "Dimension"]]:
+    """``[units]`` beside ``[sampling]``: the plant's ``[units]`` table with each control's SI unit added, the
+    one its right-hand sides need for it (:func:`lyapcheck.models.language.dimensions.infer_controls`), so
+    that the plant reader dimension-checks the plant as any continuous loop's; and the names' dimensions
+    and the controls' for :func:`_check_laws`. One-line errors naming the key."""
+    from lyapcheck.models.language import dimensions as dims
+    from lyapcheck.units import DIMENSIONLESS, model_unit, parse_si_with_dimension
+
+    if networks:  # a network's outputs have no declared dimension to check a law against (as in [dynamics])
+        raise _error(source, "[units]", "a sampled-data loop with [networks] is not dimension-checked yet: remove "
+                                        "[units] (the states' units may stay in comments)")
+    table, params, dynamics = data["units"], data.get("parameters", {}), data.get("dynamics")
+    if not isinstance(table, dict):
+        raise _error(source, "[units]", f"must be a table, got {type(table).__name__}")
+    for u in controls:
+        if u in table:
+            raise _error(source, f"[units] {u}", f"'{u}' is a control ([controller]): it takes the dimension the plant's "
+                                                 "[dynamics] need for it, and its law is checked against that; [units] "
+                                                 "lists states (and time)")
+    try:
+        units = dims.read_units(table, states, list(params))
+        quantities: dict[str, tuple[Literal["parameter", "disturbance"], SIQuantity]] = {
+            k: ("parameter", parse_si_with_dimension(k, v)) for k, v in params.items()}  # (each read and checked before)
+        names = dims.named_table(units, quantities, {k: str(v) for k, v in params.items()})
+    except dims.DimensionError as exc:
+        raise _error(source, exc.key, exc.message) from None
+    texts = {s: str(t) for s, t in dynamics.items() if s in states} if isinstance(dynamics, dict) else {}
+    inferred = dims.infer_controls(texts, units, names, controls)
+    plant = dict(table)
+    for u, dimension in inferred.items():
+        unit = dimension.si_unit()
+        try:
+            if unit:
+                model_unit(u, unit, unit)
+        except InvalidParameter:
+            raise _error(source, f"[controller] {u}", f"the plant's [dynamics] need it in {dimension}, which has no "
+                                                      "SI unit to check the law against") from None
+        plant[u] = unit
+    # the plant's right-hand sides with each control in that dimension first (the plant reader checks them
+    # again): a plant that needs two dimensions for one control is named there, not blamed on the law
+    with_controls = dims.UnitTable({**units.states, **{u: (plant.get(u, ""), inferred.get(u, DIMENSIONLESS))
+                                                       for u in controls}}, units.time)
+    named = {**names, **{u: dims.Named("state", with_controls.dimension(u), with_controls.states[u][0] or "1", True)
+                         for u in controls}}
+    for s, text in texts.items():
+        try:
+            dims.check_dynamics(s, text, with_controls, named)
+        except dims.OutsideLanguage:
+            continue  # the plant's parser says what is wrong
+        except dims.DimensionError as exc:
+            raise _error(source, exc.key, exc.message) from None
+    return plant, names, inferred
+
+
+def _check_laws(source: str, laws: Mapping[str, object], names: Mapping[str, "Named"],
+                inferred: Mapping[str, "Dimension"]) -> None:
+    """Each ``[controller]`` law has the dimension the plant needs for its control (every term, as a
+    right-hand side's), or, where the plant does not tell it, agrees with itself; every function's argument
+    is dimensionless (``sin`` of a length is refused, naming it)."""
+    from lyapcheck.models.language import dimensions as dims
+
+    for u, law in laws.items():
+        dimension = inferred.get(u)
+        why = f"the dimension the plant's [dynamics] need for the control {u}" if dimension is not None else ""
+        try:
+            dims.check_law(u, str(law), dimension, why, names)
+        except dims.DimensionError as exc:
+            raise _error(source, exc.key, exc.message) from None
+
+
+def _plant_view(data: Mapping[str, Any], controls: tuple[str, ...], u_eq: tuple[Fraction, ...],
+                units: Mapping[str, str] | None = None) -> dict[str, Any]:
     """The file's tables as a continuous loop over the states and the controls, each control a
     constant state (``u' = 0``) at its equilibrium value: its Jacobian is ``[[A, B], [0, 0]]``
-    (without ``[networks]``: they are the controller's)."""
+    (without ``[networks]``: they are the controller's; ``units``, when given, is its ``[units]`` with the
+    controls' units, :func:`_plant_units`)."""
     states = list(data["model"]["states"])
     return {**{k: v for k, v in data.items() if k not in ("sampling", "controller", "networks")},
+            **({"units": dict(units)} if units is not None else {}),
             "model": {**data["model"], "states": states + list(controls)},
             "dynamics": {**data["dynamics"], **{u: "0" for u in controls}},
             "equilibrium": {**data.get("equilibrium", {}), **dict(zip(controls, u_eq))}}
 
 
-def _period(source: str, table: Mapping[str, Any], params: Mapping[str, Fraction]) -> tuple[Fraction, str]:
-    """``[sampling] period``: a time (``"20 ms"``; a bare number is seconds) or a parameter's name; > 0."""
+def _period(source: str, table: Mapping[str, Any], params: Mapping[str, Fraction],
+            given: object = None) -> tuple[Fraction, str]:
+    """``[sampling] period``: a time (``"20 ms"``; a bare number is seconds) or a parameter's name (``given``,
+    the file's ``[parameters]``: one given with a unit must be a time); > 0."""
     from lyapcheck.units import parse_si_with_dimension
 
     unknown = [k for k in table if k != "period"]
@@ -277,6 +360,11 @@ def _period(source: str, table: Mapping[str, Any], params: Mapping[str, Fraction
     raw = table["period"]
     if isinstance(raw, str) and raw.strip() in params:
         value = params[raw.strip()]
+        written = given.get(raw.strip()) if isinstance(given, dict) else None
+        quantity = parse_si_with_dimension(raw.strip(), written) if isinstance(written, str) else None
+        if quantity is not None and quantity.unit and str(quantity.dimension) != "[time]":
+            raise _error(source, "[sampling] period", f"must be a time: the parameter {raw.strip()} = '{written}' has "
+                                                      f"dimension {quantity.dimension}")
     else:
         try:
             quantity = parse_si_with_dimension("period", raw)
