@@ -284,7 +284,7 @@ def _plant_units(source: str, data: Mapping[str, Any], states: tuple[str, ...], 
     try:
         units = dims.read_units(table, states, list(params))
         quantities: dict[str, tuple[Literal["parameter", "disturbance"], SIQuantity]] = {
-            k: ("parameter", parse_si_with_dimension(k, v)) for k, v in params.items()}  # (each read and checked before)
+            k: ("parameter", parse_si_with_dimension(k, v)) for k, v in params.items()}  # (each checked before)
         names = dims.named_table(units, quantities, {k: str(v) for k, v in params.items()})
     except dims.DimensionError as exc:
         raise _error(source, exc.key, exc.message) from None
