@@ -40,6 +40,7 @@ CHEAP = (
     "lyapcheck certify examples/models/linear-scalar-disturbed.toml",
     "lyapcheck certify examples/models/pendulum-digital-pd.toml",
     "lyapcheck certify examples/models/pendulum-digital-pd-slow.toml",
+    "lyapcheck certify examples/models/pendulum-digital-tanh-policy.toml",
     'lyapcheck certify examples/models/damped-oscillator.toml --box "k=0.8..1.2" --classes quadratic',
     'lyapcheck certify examples/models/drake-cubic-polynomial.toml --candidate "x**2" --out cubic.json',
     "lyapcheck verify cubic.json",

@@ -43,7 +43,7 @@ from typing import Final, Literal, Mapping, Sequence
 from lyapcheck.errors import InvalidParameter
 from lyapcheck.models.language.expressions import (FUNCTIONS, MAX_EXPRESSION_LENGTH, ExpressionError, parse_quietly,
                                           refuse_deep_nesting)
-from lyapcheck.units import DIMENSIONLESS, Dimension, model_unit, parse_si_with_dimension
+from lyapcheck.units import DIMENSIONLESS, Dimension, SIQuantity, model_unit, parse_si_with_dimension
 
 #: the table's key for the time unit
 TIME_KEY: Final = "time"
@@ -437,6 +437,83 @@ class _Walker:
         return self.compare(node, base ** exponent, expected, why)
 
 
+def named_table(units: UnitTable, quantities: Mapping[str, tuple[Literal["parameter", "disturbance"], SIQuantity]],
+                given: Mapping[str, str]) -> dict[str, Named]:
+    """Every name of a model with its dimension, for the walker: each state's from ``[units]``, each
+    parameter's and disturbance's from the unit of its value as the file gives it (``given``)."""
+    names: dict[str, Named] = {}
+    for s, (unit, dimension) in units.states.items():
+        names[s] = Named("state", dimension, unit, bool(unit))
+    for key, (kind, quantity) in quantities.items():
+        names[key] = Named(kind, quantity.dimension, given[key], bool(quantity.unit))
+    return names
+
+
+def infer_controls(dynamics: Mapping[str, str], units: UnitTable, names: Mapping[str, Named],
+                   controls: Sequence[str]) -> dict[str, Dimension]:
+    """The dimension each control of a sampled-data loop must have for the plant's right-hand sides to
+    check (:func:`check_dynamics`), where the walker can tell: each control stands for an unknown base
+    dimension of its own while the right-hand sides are walked, and where a term's dimension then differs
+    from the one expected only through that unknown (``u`` where ``[length] / [time] ** 2`` is expected,
+    or ``k*u**2``), the equation is solved for it. A control the right-hand sides do not determine is
+    left out; a mismatch that does not involve a control is left to :func:`check_dynamics` (the plant's
+    own check reports it)."""
+    unknown = {u: Dimension.of({f"<{u}>": 1}) for u in controls}
+    known: dict[str, Dimension] = {}
+    trees = {}
+    for state, text in dynamics.items():
+        try:
+            refuse_deep_nesting(text)
+            trees[state] = parse_quietly(str(text).strip())
+        except (ExpressionError, SyntaxError, ValueError, RecursionError, MemoryError):
+            continue  # the parser says what is wrong
+    for _ in range(len(controls) * max(1, len(trees)) + 1):  # each round fixes one control, or ends
+        trial = {**names, **{u: Named("state", known.get(u, unknown[u]), "", True) for u in controls}}
+        solved = None
+        for state, tree in trees.items():
+            expected = units.dimension(state) / TIME
+            try:
+                _Walker(str(dynamics[state]), trial, closed=True).walk(tree.body, expected, "", 0)
+            except _Mismatch as exc:
+                solved = _solve_for_control(exc.found, exc.expected, {u: d for u, d in unknown.items()
+                                                                      if u not in known})
+            except OutsideLanguage:
+                continue
+            if solved is not None:
+                break
+        if solved is None:
+            break
+        known[solved[0]] = solved[1]
+    return known
+
+
+def _solve_for_control(found: Dimension, expected: Dimension, unknown: Mapping[str, Dimension]
+                       ) -> tuple[str, Dimension] | None:
+    """The control whose unknown dimension makes ``found`` equal ``expected``, and that dimension: with
+    ``e_f`` and ``e_e`` the unknown's exponents in each, ``D ** (e_f - e_e)`` is the rest of ``expected``
+    over the rest of ``found``; None when no control's unknown alone explains the difference."""
+    def without(d: Dimension, base: str) -> Dimension:
+        return Dimension.of({k: e for k, e in d.exponents if k != base})
+
+    for u, marker in unknown.items():
+        base = marker.exponents[0][0]
+        e_f, e_e = dict(found.exponents).get(base, Fraction(0)), dict(expected.exponents).get(base, Fraction(0))
+        if e_f == e_e:
+            continue
+        solution = (without(expected, base) / without(found, base)) ** (1 / (e_f - e_e))
+        if not any(k.startswith("<") for k, _ in solution.exponents):  # free of the other controls' unknowns
+            return u, solution
+    return None
+
+
+def check_law(control: str, text: str, dimension: Dimension | None, why: str, names: Mapping[str, Named]) -> None:
+    """A sampled-data loop's ``[controller]`` law: every term has ``dimension`` (the one the plant needs for
+    the control, ``why`` says so) where it is known, else the law agrees with itself (each sum's terms,
+    each function's argument dimensionless), as an output (else :class:`DimensionError` at
+    ``[controller] control``)."""
+    _Walker(text, names, closed=True).check(f"[controller] {control}", dimension, why)
+
+
 def _is_zero(node: ast.AST) -> bool:
     """The literal 0 (``0``, ``0.0``, ``-0``): a term that fits any dimension."""
     while isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
@@ -466,4 +543,4 @@ def _holds_sum(node: ast.AST) -> bool:
 
 
 __all__ = ["DimensionError", "OutsideLanguage", "Named", "UnitTable", "read_units", "check_dynamics", "check_map", "check_output", "check_value",
-           "TIME_KEY"]
+           "TIME_KEY", "check_law", "infer_controls", "named_table"]

@@ -680,14 +680,9 @@ class _Reader:
                       for key, value in self.table(section).items()}
         try:
             units = dims.read_units(table, states, list(self.read["parameters"]) + list(self.read["disturbances"]))
-            names: dict[str, dims.Named] = {}
-            for s in states:
-                unit, dimension = units.states[s]
-                names[s] = dims.Named("state", dimension, unit, bool(unit))
-            for key, quantity in self.read["parameters"].items():
-                names[key] = dims.Named("parameter", quantity.dimension, file_given[key], bool(quantity.unit))
-            for key, quantity in self.read["disturbances"].items():
-                names[key] = dims.Named("disturbance", quantity.dimension, file_given[key], bool(quantity.unit))
+            names = dims.named_table(units, {**{k: ("parameter", q) for k, q in self.read["parameters"].items()},
+                                             **{k: ("disturbance", q) for k, q in self.read["disturbances"].items()}},
+                                     file_given)
             for key, value in self.overrides.items():
                 dims.check_value(f"--set {key}", value, names[key].dimension,
                                  f"{key} (given as '{file_given[key]}' in the file)")

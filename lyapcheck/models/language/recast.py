@@ -811,22 +811,27 @@ def recast_with_constants(model: RecastModel, constants: Mapping[str, Fraction])
 
 
 def recast_laws(source: str, section: str, states: tuple[str, ...], laws: Mapping[str, object],
-                constants: Mapping[str, Fraction], equilibrium: Sequence[Fraction]
-                ) -> tuple[RecastSystem, dict[str, Rational]]:
+                constants: Mapping[str, Fraction], equilibrium: Sequence[Fraction],
+                networks: Sequence["Network"] = ()) -> tuple[RecastSystem, dict[str, Rational]]:
     """Laws that use functions (a sampled-data file's ``[controller]``,
     :mod:`lyapcheck.models.language.sampling`), recast by the same builder as a loop's right-hand sides:
     the system over the states, each frozen (``x' = 0``: only its auxiliaries, their relations and
     their exact values at the equilibrium matter), and each law a rational function of its ring (states,
     then auxiliaries; not shifted). One-line :class:`~lyapcheck.errors.ModelFileError` naming
     ``[section] NAME`` on anything refused, a transcendental value at the equilibrium included
-    (``tanh(1)``: refused as in ``[dynamics]``)."""
+    (``tanh(1)``: refused as in ``[dynamics]``). ``networks`` are lowered first, as
+    :func:`recast_dynamics` lowers them (their neurons the first auxiliaries), and their outputs are
+    names the laws may use."""
     texts = {name: str(text) for name, text in laws.items()}
-    recaster = Recaster(states, tuple(equilibrium), count_calls(list(texts.values())))
+    slots = count_calls(list(texts.values())) + 2 * sum(n.neurons for n in networks)
+    recaster = Recaster(states, tuple(equilibrium), slots)
+    defined = network_outputs(source, recaster, networks)
     parsed: list[Rational] = []
     for name, text in texts.items():
         key = f"[{section}] {name}"
         try:
-            r, _ = parse_with_divisors(text, recaster.ring, calls=recaster, names=states, constants=constants)
+            r, _ = parse_with_divisors(text, recaster.ring, calls=recaster, names=states, constants=constants,
+                                       defined=defined)
         except ExpressionError as exc:
             raise ModelFileError(source, key, str(exc)) from None
         if degree_in(recaster.ring, r.numerator, [PI_MARK]) > 0 or degree_in(recaster.ring, r.denominator, [PI_MARK]) > 0:

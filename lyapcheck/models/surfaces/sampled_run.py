@@ -10,7 +10,9 @@ The document has the keys of every model certificate (:func:`lyapcheck.models.su
 with a ``sampling`` table in place of ``field``/``recast``: the period (exact seconds, and as given),
 the controller's laws as written and the controls' values at the equilibrium. ``verify`` reads the
 model text again, re-derives ``A``, ``B``, ``K`` and the period from it, re-runs the decision
-(milliseconds) and compares each condition with the document's, then the verdict and the answers.
+(milliseconds) and compares each condition with the document's, then the verdict and the answers. A
+controller with ``[networks.NAME]`` has each network file's SHA-256 in ``model.networks`` (as a continuous
+loop's certificate), and ``verify`` fails when a file now holds another network.
 """
 
 from __future__ import annotations
@@ -77,7 +79,8 @@ def build_sampled_document(model: SampledModel, results: dict[str, ConditionResu
     return {
         "schema_version": SCHEMA_VERSION,
         "kind": KIND,
-        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text},
+        "model": {"name": model.name, "file": model.source, "sha256": model.sha256, "text": model.text,
+                  **network_files(model)},
         "overrides": dict(model.overrides),
         "candidate": None,
         "states": list(model.states),
@@ -90,6 +93,17 @@ def build_sampled_document(model: SampledModel, results: dict[str, ConditionResu
         "verdict": verdict_of(conditions),
         "versions": package_versions(),
     }
+
+
+def network_files(model: SampledModel) -> dict[str, Any]:
+    """``{"networks": ...}`` (each network file's SHA-256, as a continuous loop's certificate states them:
+    the model text's SHA-256 does not cover the weights) for a controller with ``[networks.NAME]``, else
+    nothing: the other sampled-data documents stay as they were."""
+    if not model.networks:
+        return {}
+    from lyapcheck.models.language.networks import stated_files
+
+    return {"networks": stated_files(model.networks)}
 
 
 def is_sampled_document(doc: dict[str, Any]) -> bool:
@@ -118,6 +132,10 @@ def verify_sampled(doc: dict[str, Any]) -> list[Row]:
     rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
                  "the stated parameters, equilibrium, disturbances or candidate differ from the model text's"))
     rows.append(check_declared(doc, model))
+    if model.networks or "networks" in part:  # the files read again now are the ones certified
+        from lyapcheck.models.language.networks import check_stated_files
+
+        rows.append(("networks", *check_stated_files(part.get("networks"), model.networks)))
     stated_sampling = doc["sampling"] == model.to_json()
     rows.append(("sampling", stated_sampling, "the period, the controller and its equilibrium values as stated"
                  if stated_sampling else "sampling: the stated period or controller differs from the model text's"))
@@ -144,5 +162,5 @@ def verify_sampled(doc: dict[str, Any]) -> list[Row]:
     return with_verdict(doc, rows)
 
 
-__all__ = ["DEFAULT_CLASSES", "build_sampled_document", "certify_sampled", "is_sampled_document", "run_linearization",
-           "verify_sampled"]
+__all__ = ["DEFAULT_CLASSES", "build_sampled_document", "certify_sampled", "is_sampled_document", "network_files",
+           "run_linearization", "verify_sampled"]
