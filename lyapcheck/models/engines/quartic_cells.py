@@ -61,19 +61,6 @@ def split_quadratic(ring: Ring, V: Poly, n: int) -> tuple[list[list[Fraction]], 
     return P, ring.from_terms(rest)
 
 
-def _quadratic_terms(P: list[list[Fraction]], nvars: int) -> dict[tuple[int, ...], Fraction]:
-    """The terms of ``z^T P z`` (exact)."""
-    n = len(P)
-    out: dict[tuple[int, ...], Fraction] = {}
-    for i in range(n):
-        for j in range(i, n):
-            m = [0] * nvars
-            m[i] += 1
-            m[j] += 1
-            out[tuple(m)] = P[i][j] * (1 if i == j else 2)
-    return {m: c for m, c in out.items() if c}
-
-
 class QuarticGeometry(_Geometry):
     """The ellipsoid engine's cells for ``V = z^T P z + R``: its enclosures of the quadratic part's ``g``
     plus those of ``grad R . f`` (module docstring, part 2)."""
@@ -90,20 +77,20 @@ class QuarticGeometry(_Geometry):
         gens = ring.gens()
         images = [sum((gens[j] * to_fmpq(Fraction(w.M[i][j])) for j in range(n)), ring.zero()) if i < n else gens[i]
                   for i in range(ring.nvars)]
-        Vy = ring.compose(ring.from_terms({m: c for m, c in ring.terms(R).items()}) + ring.from_terms(
-            {m: c for m, c in _quadratic_terms(P, ring.nvars).items()}), images)
-        self.v_bank = _PolynomialBank(ring, n, [Vy])
-        self.grad_bank = _PolynomialBank(ring, n, [Vy.derivative(i) for i in range(n)])
+        Ry = ring.compose(R, images)
+        self.r_bank = _PolynomialBank(ring, n, [Ry])
+        self.r_grad_bank = _PolynomialBank(ring, n, [Ry.derivative(i) for i in range(n)])
 
     def v_above(self, cell: Cell, c: Any) -> bool:
-        """``V > c`` on the cell: ``V(M y)`` (exact in ``y``) by its natural enclosure, else by the
-        mean-value form ``V(m) + grad V(cell) . t``."""
+        """``V > c`` on the cell: ``y^T Q y`` (squares as squares, :meth:`quadratic`) plus ``R(M y)``
+        (exact in ``y``) by its natural enclosure, else by the mean-value form ``R(m) + grad R(cell) . t``."""
         balls = [flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell]
-        if self.v_bank(balls)[0] > c:
+        q = self.quadratic(cell)
+        if q + self.r_bank(balls)[0] > c:
             return True
         zero = flint.arb(0)
-        total = self.v_bank([flint.arb((a + b) / 2) for a, b in cell])[0]
-        for gi, (a, b) in zip(self.grad_bank(balls), cell):
+        total = q + self.r_bank([flint.arb((a + b) / 2) for a, b in cell])[0]
+        for gi, (a, b) in zip(self.r_grad_bank(balls), cell):
             r = flint.arb((b - a) / 2)
             total = total + gi * zero.union(r).union(-r)
         return bool(total > c)
@@ -112,7 +99,7 @@ class QuarticGeometry(_Geometry):
         return self.z_of([flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell])
 
     def v_upper(self, cell: Cell) -> Any:
-        return self.v_bank([flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell])[0]
+        return self.quadratic(cell) + self.r_bank([flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell])[0]
 
     def outside(self, q: Any, cell: Cell, c: Any) -> bool:
         return self.v_above(cell, c)
