@@ -36,10 +36,10 @@ from lyapcheck.sos.polynomials import Poly, Ring
 #: the sampled box is the comparison box scaled by this about its centre
 FIT_GROWTH: Final = 2.0
 #: samples per state of the grid over the sampled box, by number of states
-FIT_GRID: Final = {1: 401, 2: 81, 3: 29}
+FIT_GRID: Final = {1: 401, 2: 81, 3: 29, 4: 11}
 #: the extra grid near the equilibrium (its half-width is this share of the box's smallest half-width)
 FIT_LOCAL_SHARE: Final = 0.4
-FIT_LOCAL_GRID: Final = {1: 101, 2: 31, 3: 11}
+FIT_LOCAL_GRID: Final = {1: 101, 2: 31, 3: 11, 4: 7}
 #: the decrease and positivity margin at the samples (times |x|^2)
 FIT_EPSILON: Final = 0.02
 #: V at a sample that does not converge (or on the edge) is at least 1 + this
@@ -47,13 +47,17 @@ FIT_OUTSIDE_MARGIN: Final = 0.05
 #: V's top-degree form at points of the unit cube's faces is at least this over the box's largest
 #: half-width to the degree (so V grows in every direction), at this many points per face side
 FIT_TOP_MARGIN: Final = 1e-2
-FIT_TOP_DIRECTIONS: Final = {1: 1, 2: 33, 3: 9}
+FIT_TOP_DIRECTIONS: Final = {1: 1, 2: 33, 3: 9, 4: 5}
 #: the smallest alpha (V's quadratic part is alpha x^T P0 x)
 FIT_MIN_ALPHA: Final = 1e-3
 #: V's degree, by number of states
-FIT_DEGREE: Final = {1: 8, 2: 6, 3: 4}
+FIT_DEGREE: Final = {1: 8, 2: 6, 3: 4, 4: 4}
 #: the fine grid on which the level is proposed (samples per state)
-LEVEL_GRID: Final = {1: 4001, 2: 401, 3: 61}
+LEVEL_GRID: Final = {1: 4001, 2: 401, 3: 61, 4: 25}
+#: the sizes the roa route fits a V at (the dictionaries above also hold 4 states, for
+#: ``fit_v(..., any_size=True)``: issue 42's measurement of a quartic V at 4 states, whose proof at
+#: that size does not fit the class's budget yet)
+ROUTE_STATES: Final = (1, 2, 3)
 #: the level proposed is this share of the smallest V where the fine grid sees V' >= 0
 LEVEL_SHARE: Final = 0.98
 #: random points of the proposed set checked in floating point before the proof (rounds, points)
@@ -256,11 +260,12 @@ def common_lyapunov(jacobians: Sequence[np.ndarray]) -> np.ndarray | None:
     return value
 
 
-def fit_excluded(system: RecastSystem) -> str | None:
+def fit_excluded(system: RecastSystem, any_size: bool = False) -> str | None:
     """Why no V is fitted to this loop whatever the box (one line), or None: the route takes 1 to 3
-    states, and a linearization that is Hurwitz (the V's quadratic part comes from it)."""
+    states (``any_size``: every size of FIT_GRID), and a linearization that is Hurwitz (the V's
+    quadratic part comes from it)."""
     n = system.n
-    if n not in FIT_GRID:
+    if n not in (FIT_GRID if any_size else ROUTE_STATES):
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
     J = _jacobian(system)
     if not np.all(np.isfinite(J)) or np.max(np.linalg.eigvals(J).real) >= -1e-9:
@@ -269,24 +274,29 @@ def fit_excluded(system: RecastSystem) -> str | None:
 
 
 def fit_v(system: RecastSystem, ring: Ring, box: tuple[Any, Any], corners: Corners | None = None,
-          max_steps: int | None = None, growth: float = FIT_GROWTH) -> FittedV | str:
+          max_steps: int | None = None, growth: float = FIT_GROWTH, any_size: bool = False,
+          quadratic: np.ndarray | None = None) -> FittedV | str:
     """A proposed claim (V, level, box) for the ball-arithmetic proof, or why none (one line). With
     ``corners``, V is asked to serve every corner of the constants (its quadratic part a common
     Lyapunov function of their linearizations, its decrease at the samples at each corner);
     ``max_steps``: each simulated row's step budget (a row stopped by it does not converge);
-    ``growth``: the sampled box is ``box`` scaled by this about its centre."""
+    ``growth``: the sampled box is ``box`` scaled by this about its centre; ``any_size``: also at the
+    sizes beyond the route's (FIT_GRID's, issue 42's measurement at 4 states); ``quadratic``: V's
+    quadratic part is ``alpha`` times this matrix (an LQR cost-to-go) instead of the Lyapunov equation's."""
     from scipy.linalg import solve_continuous_lyapunov
 
     from lyapcheck.models.engines.recast_numeric import distances, field_values, simulate_ends
 
     n = system.n
-    unfit = fit_excluded(system)
+    unfit = fit_excluded(system, any_size)
     if unfit is not None:
         return unfit
     J = _jacobian(system)
     at = _sampling(system, box, growth)
     eq, lo, hi, blo, bhi, local = at.eq, at.lo, at.hi, at.blo, at.bhi, at.local
-    if corners is None:
+    if quadratic is not None:
+        P0 = np.asarray(quadratic, dtype=float)
+    elif corners is None:
         P0 = solve_continuous_lyapunov(J.T, -np.eye(n))
     else:
         common = common_lyapunov([J, *corners.jacobians(eq, n)])
@@ -452,7 +462,7 @@ def propose_robust_level(system: RecastSystem, robust: RecastSystem, intervals: 
     from lyapcheck.models.engines.recast_numeric import FloatLoop, poly_values
 
     n = system.n
-    if n not in FIT_GRID:
+    if n not in ROUTE_STATES:
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
     at = _sampling(system, box, growth)
     field = FloatLoop(robust)
@@ -478,7 +488,7 @@ def propose_level(system: RecastSystem, V: Poly, box: tuple[Any, Any]) -> Interv
     from lyapcheck.models.engines.recast_numeric import field_values, v_values
 
     n = system.n
-    if n not in FIT_GRID:
+    if n not in ROUTE_STATES:
         return f"the ball-arithmetic route takes loops of 1 to 3 states, not {n}"
     at = _sampling(system, box)
 

@@ -227,6 +227,18 @@ class _Geometry:
         gy = self.W2t * F + self.Mt * Jtp
         return value, [gy[i, 0] for i in range(n)]
 
+    def v_upper(self, cell: Cell) -> Any:
+        """An enclosure of ``V`` over the cell (here ``y^T Q y``)."""
+        return self.quadratic(cell)
+
+    def outside(self, q: Any, cell: Cell, c: Any) -> bool:
+        """The cell lies outside ``{V <= level}`` (``q``: ``y^T Q y`` enclosed over it, ``c``: the level)."""
+        return bool(q > c)
+
+    def zone_outside(self, q: Any, c: Any) -> bool:
+        """The Hessian zone's phase may leave the cell out: it lies outside the convex ``{y^T Q y <= level}``."""
+        return bool(q > c)
+
     def negative(self, value: Any, grad: list[Any], H: tuple[list[list[Any]], bool], cell: Cell) -> bool:
         """``g < 0`` on the cell by the Taylor form with ``H`` (enclosed over the cell or an ancestor); when
         ``H`` is proved negative definite, also by ``g(m) + grad . t`` (``t^T H t <= 0``)."""
@@ -316,22 +328,26 @@ def _weights(grad: list[Any], H: list[list[Any]], cell: Cell) -> list[float]:
 
 def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[Fraction], level: Fraction,
                     local: list[Fraction], cell_budget: int | None, cell_limit: int, deadline: float | None = None,
-                    stopped: str = "stopped at the deadline") -> EllipsoidProof:
+                    stopped: str = "stopped at the deadline", geometry: Any = None,
+                    box_level: Fraction | None = None) -> EllipsoidProof:
     """``g < 0`` on ``{z^T P z <= level}`` except at the equilibrium (module docstring); deterministic.
     ``local``: the half-widths of the local box ``N`` around the equilibrium on which the Hessian of ``g``
     is proved negative definite (:func:`~lyapcheck.models.engines.interval_region.local_box`; empty:
     none), so ``g < 0`` on ``N`` but at the equilibrium: a cell whose image lies in ``N`` needs nothing
     more. ``cell_budget`` (a search's work budget) and ``cell_limit`` (``verify``'s) bound the cells.
-    ``diagonal``: the diagonal of ``P^-1`` (exact); ``stopped``: the reason given when ``deadline`` passes."""
+    ``diagonal``: the diagonal of ``P^-1`` (exact); ``stopped``: the reason given when ``deadline`` passes.
+    ``geometry`` (a function of the :class:`Whitening` giving a :class:`_Geometry`) and ``box_level`` (the
+    cells' box is that of ``{y^T Q y <= box_level}``): a ``V`` whose quadratic part is ``z^T P z``, with
+    its own test of a cell outside ``{V <= level}`` (:mod:`lyapcheck.models.engines.quartic_cells`)."""
     # {z^T P z <= inner} lies in N: max {z_i : z^T P z <= c} = sqrt(c (P^-1)_ii)
     inner = min((x * x / d for x, d in zip(local, diagonal)), default=Fraction(0)) if diagonal else Fraction(0)
     N = [ball(x) for x in local]
 
-    w = whitening(P, level)
+    w = whitening(P, level if box_level is None else box_level)
     if w is None:
         return EllipsoidProof(False, "V's matrix is not proved positive definite in the ellipsoid's coordinates",
                               0, None)
-    geo = _Geometry(w, P, lie)
+    geo = _Geometry(w, P, lie) if geometry is None else geometry(w)
     n = geo.n
     c = ball(level)
     box: Cell = tuple((-float(h), float(h)) for h in w.half)
@@ -360,7 +376,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
             value = lie(geo.z_of([flint.arb((a + b) / 2) for a, b in cell]))
         if not value >= 0:
             return None
-        centre = geo.quadratic(tuple(((a + b) / 2, (a + b) / 2) for a, b in cell))
+        centre = geo.v_upper(tuple(((a + b) / 2, (a + b) / 2) for a, b in cell))
         if not centre <= c:
             return None
         return EllipsoidProof(False, f"V' >= 0 at a point where V = {float(centre.mid()):.6g} <= level (proved): "
@@ -379,7 +395,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
     while heap:
         _, _, cell = heapq.heappop(heap)
         q = lows.pop(cell)
-        if q > c:
+        if geo.zone_outside(q, c):
             continue  # outside E
         if in_local_box(cell):
             continue  # the Hessian is negative definite on all of N (so at each point of this cell)
@@ -427,7 +443,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
     while stack:
         cell, H = stack.pop()
         q = geo.quadratic(cell)
-        if q > c or inside(q, cell):
+        if geo.outside(q, cell, c) or inside(q, cell):
             continue  # outside E, or inside E_1 or N's ellipsoid
         count += 1
         if (why := over()) is not None:
