@@ -6,6 +6,7 @@ class by its entry for the kind of loop (lyapcheck.models.classes.registry: ``ru
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 from typing import Any, cast
 
@@ -70,3 +71,63 @@ def test_verify_checks_a_condition_by_its_registry_entry(tmp_path: Path, monkeyp
 def test_a_condition_under_a_name_that_is_no_class_fails() -> None:
     ok, why = registry.verify("lyapunov_v2", {"status": "certified"}, FieldCheck(shifted=cast(Any, None)))
     assert not ok and why.startswith("no class named 'lyapunov_v2'")
+
+
+def _numerical_errors() -> list[BaseException]:
+    """One error of each kind of numerical trouble the runner turns into ``inconclusive``."""
+    import numpy as np
+
+    from lyapcheck.errors import SolverError
+
+    return [SolverError("the solver reported a numerical error"), np.linalg.LinAlgError("Matrix is singular"),
+            ZeroDivisionError("a pivot of 0")]
+
+
+@pytest.mark.parametrize("error", _numerical_errors(), ids=lambda e: type(e).__name__)
+def test_numerical_trouble_in_a_class_is_inconclusive_on_every_kind_of_loop(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, error: BaseException) -> None:
+    """A class whose search raises numerical trouble (SolverError, LinAlgError, an ArithmeticError) is
+    ``inconclusive`` naming the error, on a loop with functions as on a polynomial loop (one runner, guarded
+    alike): the other classes still decide, and the command line exits as it does for the polynomial loop
+    (0 or 1), with no traceback."""
+
+    def trouble(ctx: Any, budget: Any) -> ConditionResult:
+        raise error
+
+    replaced = tuple(dataclasses.replace(c, run_field=trouble, run_functions=trouble) if c.name == "quadratic" else c
+                     for c in registry.CLASSES)
+    monkeypatch.setattr(registry, "CLASSES", replaced)
+    codes = {}
+    for kind in ("polynomial", "functions"):
+        code, stdout, stderr = fm.cli("certify", str(fm.model_file(tmp_path, kind)), "--classes",
+                                      "linearization,quadratic", "--json")
+        conditions = json.loads(stdout)["conditions"]
+        quadratic = conditions["quadratic"]
+        assert quadratic["status"] == "inconclusive", (kind, quadratic)
+        assert "numerical trouble" in quadratic["summary"], (kind, quadratic["summary"])
+        assert quadratic["reason"] == f"{type(error).__name__}: {error}", (kind, quadratic)
+        assert conditions["linearization"]["status"] == "certified", kind  # (its own entry, untouched)
+        assert "Traceback" not in stderr
+        codes[kind] = code
+    assert codes["functions"] == codes["polynomial"] and codes["polynomial"] in (0, 1), codes
+
+
+def test_numerical_trouble_in_an_engine_of_a_loop_with_functions_is_inconclusive(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The relations' Lyapunov search (the engine of ``quadratic`` and ``sos_gas`` on a loop with functions)
+    failing with a LinAlgError makes those classes ``inconclusive``, not a traceback."""
+    import numpy as np
+
+    from lyapcheck.models.classes import lyapunov_relations
+
+    def singular(*args: Any, **kwargs: Any) -> ConditionResult:
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(lyapunov_relations, "run_relations", singular)
+    result = lyapcheck.certify(model=fm.model_file(tmp_path, "functions"),
+                               classes=["linearization", "quadratic", "sos_gas"])
+    conditions = result.document["conditions"]
+    for name in ("quadratic", "sos_gas"):
+        assert conditions[name]["status"] == "inconclusive", conditions[name]
+        assert conditions[name]["reason"] == "LinAlgError: Singular matrix"
+    assert conditions["linearization"]["status"] == "certified"

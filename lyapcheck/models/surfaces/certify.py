@@ -195,7 +195,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     ctx = FieldRun(model=model, shifted=shifted, box=box, candidate=cand, results=out.results)
 
     def run(name: str, compute: Callable[[Budget], ConditionResult]) -> None:
-        _timed(name, compute, out.results, out.seconds, limit, guarded=True)
+        _timed(name, compute, out.results, out.seconds, limit)
 
     needing = [c for c in chosen if c in CLEARED_CLASSES]
     uncleared: tuple[str, str] | None = None  # why the classes needing the cleared field cannot run; the denominator
@@ -248,7 +248,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
         # the ball-arithmetic engine runs after roa's SOS route (below) where that did not certify
         return ball_roa.recording(found, roa_stopped) if entry.name == "roa" else found
 
-    _run_classes(chosen, out.results, out.seconds, limit, decide, compute, guarded=True)
+    _run_classes(chosen, out.results, out.seconds, limit, decide, compute)
     if "roa" in out.results:  # the ball-arithmetic engine, where the SOS route did not certify
         _ball_after_sos(out, model, box, roa_stopped, ctx.scaled is not None, run)
     if "linearization" in out.results and model.disturbances:
@@ -282,11 +282,12 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
 
 def _run_classes(chosen: Sequence[str], results: dict[str, ConditionResult], seconds: dict[str, float], limit: float,
                  decide: Callable[[ModelClass], ConditionResult | None],
-                 compute: Callable[[ModelClass], Callable[[Budget], ConditionResult] | None], guarded: bool) -> None:
+                 compute: Callable[[ModelClass], Callable[[Budget], ConditionResult] | None]) -> None:
     """The one runner: each chosen class of :data:`lyapcheck.models.classes.registry.CLASSES`, in its order,
     decided by a rule every class shares (``decide``: an input that was not given, ``roa`` once GAS is
     certified, ...) or else run by its entry for this kind of loop (``compute``; None: the class has no
-    search on it, and the caller says so), each with a budget of its own and timed."""
+    search on it, and the caller says so), each with a budget of its own, guarded and timed (:func:`_timed`),
+    on every kind of loop alike."""
     from lyapcheck.models.classes import registry
 
     for entry in registry.CLASSES:
@@ -298,18 +299,18 @@ def _run_classes(chosen: Sequence[str], results: dict[str, ConditionResult], sec
             continue
         found = compute(entry)
         if found is not None:
-            _timed(entry.name, found, results, seconds, limit, guarded)
+            _timed(entry.name, found, results, seconds, limit)
 
 
 def _timed(name: str, compute: Callable[[Budget], ConditionResult], results: dict[str, ConditionResult],
-           seconds: dict[str, float], limit: float, guarded: bool) -> None:
-    """One class run with a budget of its own (``guarded``: its numerical trouble or hard time limit
-    becomes ``inconclusive``, :func:`_guarded`), its seconds recorded."""
+           seconds: dict[str, float], limit: float) -> None:
+    """One class run with a budget of its own, guarded (its numerical trouble, its budget or its hard time
+    limit becomes ``inconclusive``, :func:`_guarded`), its seconds recorded."""
     import time
 
     start = time.perf_counter()
     budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-    results[name] = _guarded(name, lambda: compute(budget), limit) if guarded else compute(budget)
+    results[name] = _guarded(name, lambda: compute(budget), limit)
     seconds[name] = time.perf_counter() - start
 
 
@@ -435,8 +436,8 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
         run_functions = entry.run_functions
         return None if run_functions is None else lambda budget: run_functions(ctx, budget)
 
-    # (unguarded, as this loop's classes always ran: each stops at its own budget)
-    _run_classes(chosen, results, seconds, limit, decide, compute, guarded=False)
+    # guarded as a polynomial loop's: a hard stop at the time limit, numerical trouble inconclusive
+    _run_classes(chosen, results, seconds, limit, decide, compute)
     loop = ctx.loop
     for name in chosen:
         if name not in results:  # (the sentence never lists the class it refuses)
