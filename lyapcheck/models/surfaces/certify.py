@@ -176,8 +176,8 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     Every kind of loop but a map runs its classes through one runner (:func:`_run_classes`): each class of
     :data:`lyapcheck.models.classes.registry.CLASSES` in order, by its entry for the kind of loop, given
     one context object (:mod:`lyapcheck.models.classes.contexts`); the rules every class shares
-    (:func:`_needs_input`, :func:`_field_rule`, :func:`roa_after_gas`, the disturbances each claim
-    covers, the ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
+    (:func:`_needs_input`, :func:`_field_rule`, :func:`lyapcheck.models.classes.claims.roa_after_gas`, the
+    disturbances each claim covers, the ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
@@ -330,13 +330,9 @@ def _field_rule(name: str, model: Model, box: "ModelBox | None", results: dict[s
     covering what its claim would (every disturbance, or none declared), a safety class without its
     sets (or with sets naming a parameter of the box), ``sos_bound`` without disturbances; None: run it."""
     if name == "roa":
-        gas = {r.disturbances: c for c, r in results.items()
-               if c in ("quadratic", "sos_gas") and r.status == "certified"}
-        covering = "all" if model.disturbances else None
-        if covering in gas:
-            return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified "
-                                   f"({gas[covering]}): the region of attraction is the whole state space",
-                                   property="ROA", disturbances=covering)
+        from lyapcheck.models.classes.claims import roa_after_gas
+
+        return roa_after_gas(results, "all" if model.disturbances else None, over_box=box is not None)
     if name in ("barrier", "reach_avoid"):
         goal = name == "reach_avoid"
         if not _has_safety_sets(model, goal=goal) or _sets_use_box(model, box):
@@ -349,18 +345,6 @@ def _field_rule(name: str, model: Model, box: "ModelBox | None", results: dict[s
         return ConditionResult("sos_bound", "not_applicable", "the model has no [disturbances]: add one (name = bound) "
                                                               "to bound its outputs")
     return None
-
-
-def roa_after_gas(results: dict[str, ConditionResult], where: str) -> ConditionResult | None:
-    """On a loop with functions, ``roa`` is ``not_applicable`` once ``quadratic`` or ``sos_gas`` certified GAS
-    (``where``: said of the claim, as " for every value of the box"); None otherwise. (A polynomial loop's
-    twin, :func:`_field_rule`, also weighs which disturbances each claim covers.)"""
-    gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
-                and results[c].status == "certified"), None)
-    if gas is None:
-        return None
-    return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified ({gas}){where}: the "
-                           "region of attraction is the whole state space", property="ROA")
 
 
 def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: str | None, limit: float,
@@ -418,7 +402,7 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     sentence made from its certificate; with ``box`` (``model`` read at its centre), every certified claim
     holds for every value of it and says so first, and a refutation is the centre's and says so."""
     from lyapcheck.models.classes import region_size
-    from lyapcheck.models.classes.claims import box_prefix, covered, nominal_coverage, sentence_of
+    from lyapcheck.models.classes.claims import box_prefix, covered, nominal_coverage, roa_after_gas, sentence_of
     from lyapcheck.models.classes.recast_interval import box_units
     from lyapcheck.models.classes.recast_regions import functions_run
 
@@ -427,10 +411,14 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
     ctx = functions_run(model, chosen, model.candidate_v if cand is not None else None, limit, box, results)
-    where = " for every value of the box" if box is not None else ""
+    nominal = nominal_coverage(model.disturbances.values())  # what a claim on the recasting covers (d = 0)
 
     def decide(entry: ModelClass) -> ConditionResult | None:
-        return _needs_input(entry.name, box, cand) or (roa_after_gas(results, where) if entry.name == "roa" else None)
+        # roa after GAS, weighed as on a polynomial loop; GAS with d = 0 answers at once here (this loop's roa
+        # has no route that tries a region for every disturbance alone first)
+        return _needs_input(entry.name, box, cand) or (
+            roa_after_gas(results, "all" if model.disturbances else None, nominal, box is not None)
+            or roa_after_gas(results, "zero", nominal, box is not None) if entry.name == "roa" else None)
 
     def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
         run_functions = entry.run_functions
