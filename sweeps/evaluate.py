@@ -541,7 +541,10 @@ def evaluate_model_points(worker_text: str, coords: np.ndarray) -> dict[str, np.
 
 def unstable_corners(spec: ModelSweepSpec, box: Any) -> tuple[int, dict[str, str] | None]:
     """How many corners of ``box`` have an unstable equilibrium (the linearization refuted, exactly),
-    and the first as ``{"note": ...}`` (None when none); ``(-1, None)`` when no stability class is asked."""
+    and the first as ``{"note": ...}`` (None when none); ``(-1, None)`` when no stability class is asked.
+    On either kind of loop: a loop with functions is read again at each corner, and a corner where it
+    cannot be read counts as not unstable (so the box may still be split)."""
+    from lyapcheck.errors import ModelFileError
     from lyapcheck.models.surfaces.certify import certify_model
     from lyapcheck.models.language.modelfile import with_parameters
 
@@ -549,7 +552,10 @@ def unstable_corners(spec: ModelSweepSpec, box: Any) -> tuple[int, dict[str, str
         return -1, None
     count, first = 0, None
     for corner in box.corners():
-        at = with_parameters(spec.polynomial, corner)
+        try:
+            at = spec.recast_at(corner) if spec.has_functions else with_parameters(spec.polynomial, corner)
+        except ModelFileError:
+            continue
         lin = certify_model(at, classes=("linearization",)).results["linearization"]
         if lin.status == "refuted":
             count += 1
@@ -559,21 +565,11 @@ def unstable_corners(spec: ModelSweepSpec, box: Any) -> tuple[int, dict[str, str
     return count, first
 
 
-def recast_unstable_corners(spec: ModelSweepSpec, box: Any) -> int:
-    """How many corners of ``box`` of a loop with functions have an unstable equilibrium (the
-    linearization of the model read there refuted, exactly); a corner where the model cannot be read
-    counts as not unstable (so the box may still be split)."""
-    from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.surfaces.certify import certify_model
-
-    count = 0
-    for corner in box.corners():
-        try:
-            at = spec.recast_at(corner)
-        except ModelFileError:
-            continue
-        count += certify_model(at, classes=("linearization",)).results["linearization"].status == "refuted"
-    return count
+def classes_left(spec: ModelSweepSpec, unstable: dict[str, str] | None) -> tuple[str, ...]:
+    """The classes still run on a box, on either kind of loop: all of them, or where a corner is unstable
+    (:func:`unstable_corners`) those that prove no stability property (an unstable point of the box refutes
+    every stability class over it: they are stored ``refuted``, not run)."""
+    return spec.classes if unstable is None else tuple(c for c in spec.classes if c not in MODEL_STABILITY_CLASSES)
 
 
 def box_seed(seed: int, box_id: int) -> int:
@@ -600,7 +596,7 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
         box = window_box(spec, {name: (Fraction(lo), Fraction(hi)) for name, (lo, hi) in edges.items()})
         with UNIT_LOCK:
             corners, unstable = unstable_corners(spec, box)
-            classes = spec.classes if unstable is None else tuple(c for c in spec.classes if c == "sos_bound")
+            classes = classes_left(spec, unstable)
             with store.disabled():
                 result = certify_model(spec.polynomial, classes=classes, box=box) if classes else None
         middle = time.perf_counter()
@@ -633,8 +629,9 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     read at the box's centre (:meth:`sweeps.spec.ModelSweepSpec.recast_box`), then ``certify_model``
     over the box; a certified box is simulated at its random parameter points
     (:func:`sweeps.crosscheck.cross_check_box`), and the points where its certificates
-    do not apply are named in the note. Corners are checked only where the linearization over the box
-    is refuted (:func:`recast_unstable_corners`; elsewhere ``unstable_corners`` stays -1)."""
+    do not apply are named in the note. As a polynomial loop's box, its corners are checked first
+    (:func:`unstable_corners`): where one is unstable, the stability classes are stored ``refuted`` and
+    not run (:func:`classes_left`)."""
     from lyapcheck.errors import ModelFileError
     from lyapcheck.models.surfaces.certificate import build_document
     from lyapcheck.models.surfaces.certify import certify_model
@@ -643,20 +640,23 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     assert spec.boxes is not None
     begin = time.perf_counter()
     note = None
+    unstable: dict[str, str] | None = None
     try:
         with UNIT_LOCK:
             model, box = spec.recast_box(cell)
-            certified = certify_model(model, classes=spec.classes, box=box)
-            results, document = certified.results, build_document(certified)
+            # (the tree splits a box not unstable throughout: how many corners are, before the classes)
+            out["unstable_corners"][j], unstable = unstable_corners(spec, box)
+            classes = classes_left(spec, unstable)
+            certified = certify_model(model, classes=classes, box=box) if classes else None
+            results, document = ({}, {}) if certified is None else (certified.results, build_document(certified))
     except ModelFileError as exc:  # the recasting over this box (a square root's argument, the equilibrium) failed
         note = f"the loop could not be recast over this box: {exc}"
         model, results, document = None, {c: ConditionResult(c, "not_certified", note) for c in spec.classes}, {}
+        unstable = None
     middle = time.perf_counter()
-    status = _model_record(spec, _Point(model, results, lambda: document), out, j)
+    status = _model_record(spec, _Point(model, results, lambda: document), out, j, unstable)
     if note is not None:
         out["note"][j] = note
-    if status == "refuted":  # (the linearization over the box: the tree splits a box not unstable throughout)
-        out["unstable_corners"][j] = recast_unstable_corners(spec, box)
     if status == "certified":
         out["certificate"][j] = certificate_json(document)
         points = box.points(spec.boxes.cross_check_points, box_seed(spec.boxes.seed, box_id))
@@ -680,5 +680,4 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
 
 __all__ = ["evaluate", "evaluate_unit", "certify_point", "simulate_points", "empty_result", "Evaluator", "evaluate_boxes",
            "evaluate_model_points", "evaluate_model_boxes", "certificate_json", "box_seed", "unstable_corners",
-           "recast_unstable_corners",
-           "MODEL_STABILITY_CLASSES", "UNIT_LOCK"]
+           "classes_left", "MODEL_STABILITY_CLASSES", "UNIT_LOCK"]

@@ -92,8 +92,9 @@ model text read again with the point's values as overrides (:meth:`ModelSweepSpe
 the loop is recast at them. Its boxes (``mode = "boxes"``) are
 each what ``lyapcheck certify FILE --box`` certifies: the model read again at the box's centre
 (:meth:`ModelSweepSpec.recast_box`), then
-:func:`lyapcheck.models.surfaces.certify.certify_model` over the box. No corner is checked for
-instability there (``unstable_corners`` -1): an undecided box is split.
+:func:`lyapcheck.models.surfaces.certify.certify_model` over the box, after its corners are checked for
+instability as a polynomial model's box's (:func:`sweeps.evaluate.unstable_corners`: where one is
+unstable, the stability classes are stored ``refuted``, not run); an undecided box is split.
 
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks

@@ -6,6 +6,7 @@ class by its entry for the kind of loop (lyapcheck.models.classes.registry: ``ru
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 from typing import Any, cast
 
@@ -16,6 +17,7 @@ from lyapcheck.models.classes import registry
 from lyapcheck.models.classes.contexts import FieldCheck, FieldRun, FunctionsCheck, FunctionsRun
 from lyapcheck.results import ConditionResult
 from tests import feature_matrix as fm
+from tests.conftest import ROOT
 
 
 @pytest.mark.parametrize("kind", ["polynomial", "functions"])
@@ -70,3 +72,115 @@ def test_verify_checks_a_condition_by_its_registry_entry(tmp_path: Path, monkeyp
 def test_a_condition_under_a_name_that_is_no_class_fails() -> None:
     ok, why = registry.verify("lyapunov_v2", {"status": "certified"}, FieldCheck(shifted=cast(Any, None)))
     assert not ok and why.startswith("no class named 'lyapunov_v2'")
+
+
+def _numerical_errors() -> list[BaseException]:
+    """One error of each kind of numerical trouble the runner turns into ``inconclusive``."""
+    import numpy as np
+
+    from lyapcheck.errors import SolverError
+
+    return [SolverError("the solver reported a numerical error"), np.linalg.LinAlgError("Matrix is singular"),
+            ZeroDivisionError("a pivot of 0")]
+
+
+@pytest.mark.parametrize("error", _numerical_errors(), ids=lambda e: type(e).__name__)
+def test_numerical_trouble_in_a_class_is_inconclusive_on_every_kind_of_loop(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, error: BaseException) -> None:
+    """A class whose search raises numerical trouble (SolverError, LinAlgError, an ArithmeticError) is
+    ``inconclusive`` naming the error, on a loop with functions as on a polynomial loop (one runner, guarded
+    alike): the other classes still decide, and the command line exits as it does for the polynomial loop
+    (0 or 1), with no traceback."""
+
+    def trouble(ctx: Any, budget: Any) -> ConditionResult:
+        raise error
+
+    replaced = tuple(dataclasses.replace(c, run_field=trouble, run_functions=trouble) if c.name == "quadratic" else c
+                     for c in registry.CLASSES)
+    monkeypatch.setattr(registry, "CLASSES", replaced)
+    codes = {}
+    for kind in ("polynomial", "functions"):
+        code, stdout, stderr = fm.cli("certify", str(fm.model_file(tmp_path, kind)), "--classes",
+                                      "linearization,quadratic", "--json")
+        conditions = json.loads(stdout)["conditions"]
+        quadratic = conditions["quadratic"]
+        assert quadratic["status"] == "inconclusive", (kind, quadratic)
+        assert "numerical trouble" in quadratic["summary"], (kind, quadratic["summary"])
+        assert quadratic["reason"] == f"{type(error).__name__}: {error}", (kind, quadratic)
+        assert conditions["linearization"]["status"] == "certified", kind  # (its own entry, untouched)
+        assert "Traceback" not in stderr
+        codes[kind] = code
+    assert codes["functions"] == codes["polynomial"] and codes["polynomial"] in (0, 1), codes
+
+
+def test_numerical_trouble_in_an_engine_of_a_loop_with_functions_is_inconclusive(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The relations' Lyapunov search (the engine of ``quadratic`` and ``sos_gas`` on a loop with functions)
+    failing with a LinAlgError makes those classes ``inconclusive``, not a traceback."""
+    import numpy as np
+
+    from lyapcheck.models.classes import lyapunov_relations
+
+    def singular(*args: Any, **kwargs: Any) -> ConditionResult:
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(lyapunov_relations, "run_relations", singular)
+    result = lyapcheck.certify(model=fm.model_file(tmp_path, "functions"),
+                               classes=["linearization", "quadratic", "sos_gas"])
+    conditions = result.document["conditions"]
+    for name in ("quadratic", "sos_gas"):
+        assert conditions[name]["status"] == "inconclusive", conditions[name]
+        assert conditions[name]["reason"] == "LinAlgError: Singular matrix"
+    assert conditions["linearization"]["status"] == "certified"
+
+
+#: the feature matrix's loop with functions, pushed by a bounded disturbance that moves its equilibrium
+FUNCTIONS_DISTURBED = fm.FUNCTIONS.replace("[dynamics]", "[disturbances]\nd = 0.1\n[dynamics]").replace(
+    'x1 = "-a*x1 + sin(x2)/2"', 'x1 = "-a*x1 + sin(x2)/2 + d"')
+
+
+@pytest.mark.parametrize("kind", ["polynomial", "functions"])
+def test_roa_after_gas_is_one_rule_weighing_the_disturbances_on_every_kind_of_loop(tmp_path: Path, kind: str) -> None:
+    """``roa`` once GAS is certified (lyapcheck.models.classes.claims.roa_after_gas, one rule): without
+    disturbances, the whole state space; with a disturbance that moves the equilibrium, GAS holds with d = 0
+    only, and roa says so (``"zero"``, ``d = 0`` in its sentence) on a loop with functions as on a polynomial
+    loop; over a box, for every value of it."""
+    path = tmp_path / "disturbed.toml"
+    assert FUNCTIONS_DISTURBED != fm.FUNCTIONS
+    path.write_text(FUNCTIONS_DISTURBED if kind == "functions" else fm.DISTURBANCES)
+    plain = lyapcheck.certify(model=fm.model_file(tmp_path, kind), classes=["quadratic", "roa"]).document
+    assert plain["conditions"]["quadratic"]["status"] == "certified"
+    assert plain["conditions"]["roa"] == {**plain["conditions"]["roa"], "status": "not_applicable",
+                                          "summary": "global asymptotic stability is certified (quadratic): the "
+                                                     "region of attraction is the whole state space"}
+    assert "disturbances" not in plain["conditions"]["roa"]
+    disturbed = lyapcheck.certify(model=path, classes=["quadratic", "roa"]).document["conditions"]
+    assert disturbed["quadratic"]["status"] == "certified" and disturbed["quadratic"]["disturbances"] == "zero"
+    assert disturbed["roa"]["status"] == "not_applicable" and disturbed["roa"]["disturbances"] == "zero"
+    assert disturbed["roa"]["summary"] == ("global asymptotic stability is certified (quadratic, d = 0): with every "
+                                           "disturbance held at 0 the region of attraction is the whole state space")
+    # (the functions loop's quadratic V is not common to its box: the ILOS loop's is, for every kappa)
+    boxed = lyapcheck.certify(model=fm.model_file(tmp_path, kind) if kind == "polynomial" else
+                              ROOT / "examples" / "models" / "recast-ilos-course.toml", classes=["quadratic", "roa"],
+                              box=[fm.BOX if kind == "polynomial" else "kappa=0.4..0.6"]).document["conditions"]
+    assert boxed["quadratic"]["status"] == "certified"
+    assert boxed["roa"]["summary"] == ("global asymptotic stability is certified (quadratic) for every value of the "
+                                       "box: the region of attraction is the whole state space")
+
+
+def test_roa_after_gas_reads_what_each_gas_claim_covers() -> None:
+    """The rule's weighing alone: a GAS claim answers roa only where it covers what roa's claim would; a
+    result that states no coverage covers the loop's nominal one; of two GAS claims, the last is named."""
+    from lyapcheck.models.classes.claims import roa_after_gas
+
+    def gas(disturbances: Any) -> ConditionResult:
+        return ConditionResult("quadratic", "certified", "GAS", disturbances=disturbances)
+
+    assert roa_after_gas({"quadratic": gas("zero")}, "all") is None
+    assert roa_after_gas({"quadratic": gas(None)}, "all", nominal="zero") is None
+    assert roa_after_gas({"quadratic": gas(None)}, "all", nominal="all") is not None
+    answered = roa_after_gas({"quadratic": gas(None)}, "zero", nominal="zero")
+    assert answered is not None and answered.disturbances == "zero" and "(quadratic, d = 0)" in answered.summary
+    both = roa_after_gas({"quadratic": gas(None), "sos_gas": dataclasses.replace(gas(None), name="sos_gas")}, None)
+    assert both is not None and both.status == "not_applicable" and "(sos_gas)" in both.summary
+    assert roa_after_gas({"quadratic": dataclasses.replace(gas(None), status="not_certified")}, None) is None

@@ -62,7 +62,7 @@ def test_both_boxes_of_the_pendulum_are_certified_by_roa_for_every_damping_of_th
     assert list(data["level"]) == [0, 0] and list(data["parent"]) == [-1, -1]
     for note, lo, hi in zip(data["note"], data["lo_b"], data["hi_b"]):
         assert str(note).startswith("certified by roa"), note
-    assert list(data["unstable_corners"]) == [-1, -1]  # not checked on a loop with functions
+    assert list(data["unstable_corners"]) == [0, 0]  # checked as on a polynomial loop: b > 0 at every corner
 
 
 def test_each_box_certificate_is_the_box_claim_and_passes_verify(box_store: tuple[Path, dict[str, np.ndarray]]) -> None:
@@ -179,3 +179,46 @@ def test_random_points_of_a_box_with_decimal_edges_are_read_again_from_the_model
         assert Fraction(4, 5) <= point["a"] <= Fraction(6, 5) and len(written) <= 10, written
         model = parse_any_model(FUNCTIONS, "functions.toml", {"a": written})
         assert isinstance(model, RecastModel) and model.parameters["a"] == point["a"]
+
+
+#: the pendulum's linear part, a polynomial loop with the same damping b
+LINEAR_PENDULUM = """[model]
+name = "the damped pendulum's linearization"
+states = ["x1", "x2"]
+[parameters]
+b = 1
+[dynamics]
+x1 = "x2"
+x2 = "-x1 - b*x2"
+[domain]
+x1 = [-3, 3]
+x2 = [-4, 4]
+"""
+
+
+@pytest.mark.parametrize("kind", ["functions", "polynomial"])
+def test_a_box_with_an_unstable_corner_skips_the_stability_classes_on_both_kinds_of_loop(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, kind: str) -> None:
+    """b in [-0.5, 0.5]: at the corner b = -0.5 the equilibrium is unstable (the linearization refuted,
+    exactly), so no stability class can hold over the box: on a loop with functions as on a polynomial
+    loop, the box is refuted naming that corner, and ``roa`` is stored refuted without being run."""
+    import dataclasses
+
+    from lyapcheck.models.classes import registry
+    from sweeps.schema import BOX_STATUS_CODES, STATUS_CODES
+
+    def never(ctx: Any, budget: Any) -> Any:
+        raise AssertionError("roa ran over a box with an unstable corner")
+
+    monkeypatch.setattr(registry, "CLASSES", tuple(
+        dataclasses.replace(c, run_field=never, run_functions=never) if c.name == "roa" else c
+        for c in registry.CLASSES))
+    spec = BOXES.replace('["roa"]', '["linearization", "roa"]').replace("start = 0.5", "start = -0.5") \
+        .replace("stop = 2", "stop = 0.5").replace("num = 3", "num = 2").replace("max_boxes = 2", "max_boxes = 1")
+    out = tmp_path / "out.zarr"
+    run(write(tmp_path, spec, PENDULUM if kind == "functions" else LINEAR_PENDULUM), out)
+    data = arrays(out)
+    assert list(data["status"]) == [BOX_STATUS_CODES["refuted"]], list(data["note"])
+    assert list(data["status_linearization"]) == list(data["status_roa"]) == [STATUS_CODES["refuted"]]
+    assert list(data["unstable_corners"]) == [1]
+    assert str(data["note"][0]).startswith("unstable at the corner b = -0.5: "), data["note"][0]

@@ -27,6 +27,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
 from lyapcheck.exact import read_rational
+from lyapcheck.results import ConditionResult
 
 if TYPE_CHECKING:
     from lyapcheck.models.language.parameter_box import ModelBox
@@ -120,6 +121,36 @@ def nominal_coverage(bounds: Iterable[Fraction]) -> "Disturbances | None":
     if not bounds:
         return None
     return "all" if all(b == 0 for b in bounds) else "zero"
+
+
+#: the classes whose certified claim is global asymptotic stability, in the order they run (the last one
+#: certified is the one :func:`roa_after_gas` names)
+GAS_CLASSES = ("quadratic", "sos_gas")
+
+
+def roa_after_gas(results: Mapping[str, ConditionResult], covering: "Disturbances | None",
+                  nominal: "Disturbances | None" = None, over_box: bool = False) -> ConditionResult | None:
+    """``roa`` once GAS is certified, on every kind of loop (one rule): ``not_applicable``, the region of
+    attraction being the whole state space, where ``quadratic`` or ``sos_gas`` certified GAS covering
+    ``covering`` (DESIGN.md, "Disturbances in claims"); None otherwise (roa runs).
+
+    ``covering``: what roa's own claim would cover, None on a loop without disturbances, ``"all"`` with
+    disturbances (a GAS claim for every disturbance leaves roa nothing to add); ``"zero"`` once a region
+    for every disturbance was not proved, the GAS claim with the disturbances held at 0 then answering
+    roa's question for that loop (the sentence says ``d = 0``). A GAS result that does not state what it
+    covers covers ``nominal`` (a loop with functions states its claims' coverage after its classes ran:
+    its recasting has every disturbance at 0, :func:`nominal_coverage`). ``over_box``: the claim is for
+    every value of a box of parameters, and says so."""
+    gas = {(r.disturbances if r.disturbances is not None else nominal): name for name in GAS_CLASSES
+           if (r := results.get(name)) is not None and r.status == "certified"}
+    if covering not in gas:
+        return None
+    where = " for every value of the box" if over_box else ""
+    why = (f"({gas[covering]}, d = 0){where}: with every disturbance held at 0 the region of attraction is the whole "
+           "state space" if covering == "zero" else f"({gas[covering]}){where}: the region of attraction is the whole "
+                                                    "state space")
+    return ConditionResult("roa", "not_applicable", "global asymptotic stability is certified " + why, property="ROA",
+                           disturbances=covering)
 
 
 def covered(coverage: str | None, text: str) -> str:
@@ -503,6 +534,6 @@ def interval_sentence(cert: dict[str, Any]) -> str:
             "equilibrium; V_text in the certificate)")
 
 
-__all__ = ["summary", "box_words", "box_prefix", "ball_words", "size_words", "with_unit", "deviation", "state_unit_figures", "v_text",
+__all__ = ["summary", "roa_after_gas", "GAS_CLASSES", "box_words", "box_prefix", "ball_words", "size_words", "with_unit", "deviation", "state_unit_figures", "v_text",
            "v_expression", "sentence_of", "recast_reach_time", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
            "RATE_UNIT"]

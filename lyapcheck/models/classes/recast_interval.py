@@ -95,7 +95,12 @@ class Robust:
         return [ball(lo).union(ball(hi)) for lo, hi in self.intervals()]
 
     def vanishes(self) -> bool:
-        """``f(x_eq, d) = 0`` for every ``d`` in the bounds, proved: each component's ball is exactly 0."""
+        """``f(x_eq, d) = 0`` for every ``d`` in the bounds, proved: exactly by substitution
+        (:func:`lyapcheck.models.language.recast.stays_put`), else each component's ball is exactly 0."""
+        from lyapcheck.models.language.recast import stays_put
+
+        if stays_put(self.system, tuple(self.bounds)):
+            return True
         loop = BallLoop(self.system, self.balls())
         return all(not isinstance(v, Jet) and v.is_zero() for v in loop.field([flint.arb(0)] * loop.n))
 

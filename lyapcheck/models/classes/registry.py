@@ -16,6 +16,8 @@ name                                              derived from
 :data:`sweeps.evaluate.MODEL_STABILITY_CLASSES`   :data:`STABILITY`: an unstable point refutes them
 :data:`sweeps.schema.FIGURES`                     each class's ``figures``, stored per point or box
 :data:`sweeps.schema.OUTPUT_FIGURES`              each class's ``output_figure``
+:data:`ZERO_DISTURBANCE_ONLY`                     ``zero_disturbance_only``: ``verify`` refuses their
+                                                  ``"all"`` claims (on both kinds of loop)
 ================================================  =================================================
 
 so the sweeps of model files (store variables, units of work, summaries, the report of a store) take a
@@ -48,12 +50,10 @@ new class from its entry alone.
 
 What else must change today, because those places name each class rather than read this list:
 
-4. when the class proves its claim with the disturbances at 0 only, the tuple in
-   ``_check_disturbance_keys`` (``lyapcheck/models/surfaces/certificate.py``);
-5. :mod:`lyapcheck.models.classes.claims`: the sentence a ``certified`` condition states, ``summary``
+4. :mod:`lyapcheck.models.classes.claims`: the sentence a ``certified`` condition states, ``summary``
    (and ``sentence_of`` for a loop with functions' certificate kinds); verify compares it with the
    document's summary;
-6. :data:`lyapcheck.results.PROPERTY`: the class's default property, equal to ``proves``
+5. :data:`lyapcheck.results.PROPERTY`: the class's default property, equal to ``proves``
    (``tests/test_model_class_registry.py`` checks it); a new property (``safety``, ``reach_avoid``) is
    also one more value of :data:`lyapcheck.results.Property`.
 
@@ -124,6 +124,9 @@ class ModelClass:
     cleared: bool = True
     #: it needs the user's input (``--candidate``): a sweep cannot run it
     user_given: bool = False
+    #: it proves its claim with the disturbances at 0 only: a certified claim of it covering every
+    #: disturbance (``"all"``) is refused by ``verify`` where a disturbance enters the loop
+    zero_disturbance_only: bool = False
     #: its key figures, stored by sweeps per point or box
     figures: tuple[Figure, ...] = ()
     #: its figure per output of the model, if any
@@ -151,6 +154,7 @@ _V_RATE: Final = Figure("decay_rate_V_per_s", "decay_rate_V_per_s", "certified d
 #: every class of a model file, in the order ``certify --model`` runs them (cheapest first)
 CLASSES: Final[tuple[ModelClass, ...]] = (
     ModelClass("linearization", "stability", "LES", over_box=True, stability=True, cleared=False, discrete=True,
+               zero_disturbance_only=True,
                run_field=_runs.linearization_field, run_functions=_runs.linearization_functions,
                verify_field=_field.verify_linearization, verify_functions=_functions.verify_linearization),
     ModelClass("quadratic", "stability", "GES", over_box=True, stability=True, discrete=True,
@@ -167,6 +171,7 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                figures=(Figure("level", "level", "the certified region of attraction is {V <= level}"),
                         Figure("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI"))),
     ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True, discrete=True,
+               zero_disturbance_only=True,
                run_field=_runs.candidate_field, run_functions=_runs.candidate_functions,
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region),
     ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
@@ -203,6 +208,8 @@ STABILITY: Final = _names(stability=True)
 USER_GIVEN: Final = _names(user_given=True)
 #: the classes with a discrete-time condition (they run on a map)
 DISCRETE: Final = _names(discrete=True)
+#: the classes that prove their claim with the disturbances at 0 only (never ``"all"`` where one enters)
+ZERO_DISTURBANCE_ONLY: Final = _names(zero_disturbance_only=True)
 #: class name -> its entry
 BY_NAME: Final[dict[str, ModelClass]] = {c.name: c for c in CLASSES}
 
@@ -235,4 +242,4 @@ def verify(name: str, c: dict[str, Any], check: FieldCheck | FunctionsCheck) -> 
     return entry.verify_field(name, c, check)
 
 __all__ = ["Figure", "OutputFigure", "ModelClass", "CLASSES", "NAMES", "CLEARED", "OVER_BOX", "POINT_ONLY",
-           "STABILITY", "USER_GIVEN", "DISCRETE", "BY_NAME", "verify"]
+           "STABILITY", "USER_GIVEN", "DISCRETE", "ZERO_DISTURBANCE_ONLY", "BY_NAME", "verify"]

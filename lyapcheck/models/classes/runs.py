@@ -69,23 +69,19 @@ def roa_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":
     """A region of attraction by SOS (:func:`lyapcheck.models.classes.field_regions.run_roa`): common to every
     disturbance value first, else with the disturbances at 0 (where GAS with d = 0 is certified, the
     whole state space)."""
+    from lyapcheck.models.classes.claims import roa_after_gas
     from lyapcheck.models.classes.field_regions import covers, run_roa
-    from lyapcheck.results import ConditionResult
 
     sc = ctx.cleared
     lin = ctx.results.get("linearization")
-    gas = {r.disturbances: name for name, r in ctx.results.items()
-           if name in ("quadratic", "sos_gas") and r.status == "certified"}
     memo: dict[str, Any] = {}
     if ctx.robust is not None:
         found = run_roa(sc, budget, lin, ctx.robust, memo)
         if found.status == "certified":
             return covers(found, "all")
-    if "zero" in gas:
-        return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified "
-                               f"({gas['zero']}, d = 0): with every disturbance held at 0 the region "
-                               "of attraction is the whole state space", property="ROA",
-                               disturbances="zero")
+    answered = roa_after_gas(ctx.results, "zero", over_box=ctx.box is not None)  # (GAS with d = 0)
+    if answered is not None:
+        return answered
     return covers(run_roa(sc, budget, lin, ctx.nominal, memo), ctx.nominal_covers)
 
 

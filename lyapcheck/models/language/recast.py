@@ -721,6 +721,39 @@ def _check_equilibrium(source: str, system: RecastSystem) -> None:
                                  f"{written_poly(ring, num)} there, not 0 (checked exactly)")
 
 
+def stays_put(system: RecastSystem, constants: Sequence[str]) -> bool:
+    """Whether ``f(x_eq, c) = 0`` for every value of ``constants`` (variables of ``system`` without a flow:
+    a box's parameters, disturbances), proved exactly by substitution, or False where this cannot show it.
+
+    Every other state is set to its equilibrium value; then an auxiliary whose argument has become a
+    number is its value at the equilibrium, and one whose argument has become the same polynomial as an
+    earlier auxiliary's of the same function is that auxiliary (``sin(x + p)`` is ``sin(p)`` at ``x =
+    0``). Each is an identity for every value of the constants, so a right-hand side whose numerator is
+    then 0 (the root relations reduced), over a non-zero number, is 0 for every one of them. Ball
+    arithmetic, evaluating ``sin(p) - sin(p)`` on an interval of ``p``, cannot show this."""
+    ring = system.ring
+    images: dict[str, Poly] = {s: ring.constant(system.values[s]) for s in system.states if s not in constants}
+    seen: dict[tuple[Any, ...], Poly] = {}
+
+    def substituted(p: Poly) -> Poly:
+        return system.reduce(ring.compose(p, [images.get(n, ring.gen(n)) for n in ring.names]))
+
+    for a in system.auxiliaries:
+        if a.argument is None or a.name not in system.values:  # (a constant root: a number already)
+            continue
+        argument = substituted(a.argument)
+        if argument.is_constant():  # (the same number as at the equilibrium, so the same value)
+            images[a.name] = ring.constant(system.values[a.name])
+            continue
+        key = (a.function, a.limit, a.radicand, tuple(sorted(ring.terms(argument).items())))
+        images[a.name] = seen.setdefault(key, ring.gen(a.name))
+    for r in system.field:
+        den = substituted(r.denominator)
+        if not substituted(r.numerator).is_zero() or not den.is_constant() or den.is_zero():
+            return False
+    return True
+
+
 @dataclass(frozen=True)
 class RecastModel:
     """A model file whose loop uses functions: what :func:`lyapcheck.models.language.modelfile.parse_any_model`

@@ -335,7 +335,11 @@ def _check_stated_v(model: Any, box: Any, conditions: dict[str, Any], rows: list
 def _check_disturbance_keys(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
     """Every condition of a model with disturbances says which it covers, and only such a model's
     conditions carry the key (DESIGN.md, "Disturbances in claims"). Whether an ``"all"`` claim
-    holds is checked with its class (:func:`lyapcheck.models.classes.registry.verify`)."""
+    holds is checked with its class (:func:`lyapcheck.models.classes.registry.verify`); a class that proves
+    its claim with the disturbances at 0 only (:data:`~lyapcheck.models.classes.registry.ZERO_DISTURBANCE_ONLY`)
+    may not claim them all where one enters."""
+    from lyapcheck.models.classes.registry import ZERO_DISTURBANCE_ONLY
+
     for name, c in conditions.items():
         if not isinstance(c, dict):
             continue
@@ -345,7 +349,7 @@ def _check_disturbance_keys(model: Any, conditions: dict[str, Any], rows: list[R
                                       f"or 'all'; it is {stated!r}"))
         elif not model.disturbances and stated is not None:
             rows.append((name, False, f"{name}: the key 'disturbances' is {stated!r}, but the model has none"))
-        elif name in ("linearization", "candidate") and stated == "all" and c.get("status") == "certified" \
+        elif name in ZERO_DISTURBANCE_ONLY and stated == "all" and c.get("status") == "certified" \
                 and _disturbances_enter(model):
             rows.append((name, False, f"{name}: this class proves its claim with the disturbances at 0 only, not "
                                       "'all'"))

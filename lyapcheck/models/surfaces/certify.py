@@ -40,7 +40,7 @@ from lyapcheck.models.loop.field import Scaling, ShiftedField, active_disturbanc
 from lyapcheck.models.language.modelfile import Model
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted
-from lyapcheck.results import ConditionResult
+from lyapcheck.results import ConditionResult, Disturbances
 from lyapcheck.sos.polynomials import Poly
 from lyapcheck.timing import ClassTimeLimit, time_limit
 
@@ -176,8 +176,8 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     Every kind of loop but a map runs its classes through one runner (:func:`_run_classes`): each class of
     :data:`lyapcheck.models.classes.registry.CLASSES` in order, by its entry for the kind of loop, given
     one context object (:mod:`lyapcheck.models.classes.contexts`); the rules every class shares
-    (:func:`_needs_input`, :func:`_field_rule`, :func:`roa_after_gas`, the disturbances each claim
-    covers, the ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
+    (:func:`_needs_input`, :func:`_field_rule`, :func:`lyapcheck.models.classes.claims.roa_after_gas`, the
+    disturbances each claim covers, the ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
@@ -195,7 +195,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     ctx = FieldRun(model=model, shifted=shifted, box=box, candidate=cand, results=out.results)
 
     def run(name: str, compute: Callable[[Budget], ConditionResult]) -> None:
-        _timed(name, compute, out.results, out.seconds, limit, guarded=True)
+        _timed(name, compute, out.results, out.seconds, limit)
 
     needing = [c for c in chosen if c in CLEARED_CLASSES]
     uncleared: tuple[str, str] | None = None  # why the classes needing the cleared field cannot run; the denominator
@@ -248,7 +248,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
         # the ball-arithmetic engine runs after roa's SOS route (below) where that did not certify
         return ball_roa.recording(found, roa_stopped) if entry.name == "roa" else found
 
-    _run_classes(chosen, out.results, out.seconds, limit, decide, compute, guarded=True)
+    _run_classes(chosen, out.results, out.seconds, limit, decide, compute)
     if "roa" in out.results:  # the ball-arithmetic engine, where the SOS route did not certify
         _ball_after_sos(out, model, box, roa_stopped, ctx.scaled is not None, run)
     if "linearization" in out.results and model.disturbances:
@@ -282,11 +282,12 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
 
 def _run_classes(chosen: Sequence[str], results: dict[str, ConditionResult], seconds: dict[str, float], limit: float,
                  decide: Callable[[ModelClass], ConditionResult | None],
-                 compute: Callable[[ModelClass], Callable[[Budget], ConditionResult] | None], guarded: bool) -> None:
+                 compute: Callable[[ModelClass], Callable[[Budget], ConditionResult] | None]) -> None:
     """The one runner: each chosen class of :data:`lyapcheck.models.classes.registry.CLASSES`, in its order,
     decided by a rule every class shares (``decide``: an input that was not given, ``roa`` once GAS is
     certified, ...) or else run by its entry for this kind of loop (``compute``; None: the class has no
-    search on it, and the caller says so), each with a budget of its own and timed."""
+    search on it, and the caller says so), each with a budget of its own, guarded and timed (:func:`_timed`),
+    on every kind of loop alike."""
     from lyapcheck.models.classes import registry
 
     for entry in registry.CLASSES:
@@ -298,18 +299,18 @@ def _run_classes(chosen: Sequence[str], results: dict[str, ConditionResult], sec
             continue
         found = compute(entry)
         if found is not None:
-            _timed(entry.name, found, results, seconds, limit, guarded)
+            _timed(entry.name, found, results, seconds, limit)
 
 
 def _timed(name: str, compute: Callable[[Budget], ConditionResult], results: dict[str, ConditionResult],
-           seconds: dict[str, float], limit: float, guarded: bool) -> None:
-    """One class run with a budget of its own (``guarded``: its numerical trouble or hard time limit
-    becomes ``inconclusive``, :func:`_guarded`), its seconds recorded."""
+           seconds: dict[str, float], limit: float) -> None:
+    """One class run with a budget of its own, guarded (its numerical trouble, its budget or its hard time
+    limit becomes ``inconclusive``, :func:`_guarded`), its seconds recorded."""
     import time
 
     start = time.perf_counter()
     budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-    results[name] = _guarded(name, lambda: compute(budget), limit) if guarded else compute(budget)
+    results[name] = _guarded(name, lambda: compute(budget), limit)
     seconds[name] = time.perf_counter() - start
 
 
@@ -329,13 +330,9 @@ def _field_rule(name: str, model: Model, box: "ModelBox | None", results: dict[s
     covering what its claim would (every disturbance, or none declared), a safety class without its
     sets (or with sets naming a parameter of the box), ``sos_bound`` without disturbances; None: run it."""
     if name == "roa":
-        gas = {r.disturbances: c for c, r in results.items()
-               if c in ("quadratic", "sos_gas") and r.status == "certified"}
-        covering = "all" if model.disturbances else None
-        if covering in gas:
-            return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified "
-                                   f"({gas[covering]}): the region of attraction is the whole state space",
-                                   property="ROA", disturbances=covering)
+        from lyapcheck.models.classes.claims import roa_after_gas
+
+        return roa_after_gas(results, "all" if model.disturbances else None, over_box=box is not None)
     if name in ("barrier", "reach_avoid"):
         goal = name == "reach_avoid"
         if not _has_safety_sets(model, goal=goal) or _sets_use_box(model, box):
@@ -348,18 +345,6 @@ def _field_rule(name: str, model: Model, box: "ModelBox | None", results: dict[s
         return ConditionResult("sos_bound", "not_applicable", "the model has no [disturbances]: add one (name = bound) "
                                                               "to bound its outputs")
     return None
-
-
-def roa_after_gas(results: dict[str, ConditionResult], where: str) -> ConditionResult | None:
-    """On a loop with functions, ``roa`` is ``not_applicable`` once ``quadratic`` or ``sos_gas`` certified GAS
-    (``where``: said of the claim, as " for every value of the box"); None otherwise. (A polynomial loop's
-    twin, :func:`_field_rule`, also weighs which disturbances each claim covers.)"""
-    gas = next((c for c in ("quadratic", "sos_gas") if results.get(c) is not None
-                and results[c].status == "certified"), None)
-    if gas is None:
-        return None
-    return ConditionResult("roa", "not_applicable", f"global asymptotic stability is certified ({gas}){where}: the "
-                           "region of attraction is the whole state space", property="ROA")
 
 
 def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: str | None, limit: float,
@@ -419,13 +404,17 @@ def _map_regions(model: Model, chosen: Sequence[str], cand: Candidate | None, li
     import time
 
     from lyapcheck.models.classes import discrete_regions
+    from lyapcheck.models.classes.claims import roa_after_gas
     from lyapcheck.models.classes.registry import DISCRETE
     from lyapcheck.models.loop.discrete import shifted_map
 
     for name in ("roa", "candidate"):
         if name not in chosen or name not in DISCRETE:
             continue
-        ruled = _needs_input(name, None, cand) or (roa_after_gas(out.results, "") if name == "roa" else None)
+        # (a map's classes are decided with its disturbances at 0: lyapcheck.models.loop.discrete)
+        zero: Disturbances | None = "zero" if model.disturbances else None
+        ruled = _needs_input(name, None, cand) or (roa_after_gas(out.results, zero, nominal=zero) if name == "roa"
+                                                   else None)
         if ruled is not None:
             out.results[name] = ruled
             continue
@@ -450,7 +439,7 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     sentence made from its certificate; with ``box`` (``model`` read at its centre), every certified claim
     holds for every value of it and says so first, and a refutation is the centre's and says so."""
     from lyapcheck.models.classes import region_size
-    from lyapcheck.models.classes.claims import box_prefix, covered, nominal_coverage, sentence_of
+    from lyapcheck.models.classes.claims import box_prefix, covered, nominal_coverage, roa_after_gas, sentence_of
     from lyapcheck.models.classes.recast_interval import box_units
     from lyapcheck.models.classes.recast_regions import functions_run
 
@@ -459,17 +448,21 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
     ctx = functions_run(model, chosen, model.candidate_v if cand is not None else None, limit, box, results)
-    where = " for every value of the box" if box is not None else ""
+    nominal = nominal_coverage(model.disturbances.values())  # what a claim on the recasting covers (d = 0)
 
     def decide(entry: ModelClass) -> ConditionResult | None:
-        return _needs_input(entry.name, box, cand) or (roa_after_gas(results, where) if entry.name == "roa" else None)
+        # roa after GAS, weighed as on a polynomial loop; GAS with d = 0 answers at once here (this loop's roa
+        # has no route that tries a region for every disturbance alone first)
+        return _needs_input(entry.name, box, cand) or (
+            roa_after_gas(results, "all" if model.disturbances else None, nominal, box is not None)
+            or roa_after_gas(results, "zero", nominal, box is not None) if entry.name == "roa" else None)
 
     def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
         run_functions = entry.run_functions
         return None if run_functions is None else lambda budget: run_functions(ctx, budget)
 
-    # (unguarded, as this loop's classes always ran: each stops at its own budget)
-    _run_classes(chosen, results, seconds, limit, decide, compute, guarded=False)
+    # guarded as a polynomial loop's: a hard stop at the time limit, numerical trouble inconclusive
+    _run_classes(chosen, results, seconds, limit, decide, compute)
     loop = ctx.loop
     for name in chosen:
         if name not in results:  # (the sentence never lists the class it refuses)

@@ -29,7 +29,7 @@ from lyapcheck.models.classes.contexts import FunctionsCheck
 from lyapcheck.models.classes.lyapunov import OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, relations_claim
 from lyapcheck.models.classes.recast_interval import box_units
 from lyapcheck.models.classes.recast_classes import Loop, base_loop
-from lyapcheck.models.classes.registry import verify
+from lyapcheck.models.classes.registry import ZERO_DISTURBANCE_ONLY, verify
 from lyapcheck.models.classes.recast_regions import box_robust, boxed_loop, robust_of
 from lyapcheck.models.engines.recast_sos import poly_from_json
 from lyapcheck.models.classes.claims import box_prefix, nominal_coverage
@@ -79,7 +79,8 @@ def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> l
                                           "a point)"))
                 continue
             c = {**c, "summary": c["summary"][len(prefix):]}
-        robust_claim = (coverage is not None and c.get("disturbances") == "all"
+        # a claim for every disturbance value: by ball arithmetic or sos_bound's kind, of a class that can make one
+        robust_claim = (coverage is not None and c.get("disturbances") == "all" and name not in ZERO_DISTURBANCE_ONLY
                         and isinstance(c.get("certificate"), dict)
                         and (c["certificate"].get("kind") == "interval"
                              or (name == "sos_bound" and c["certificate"].get("kind") in (KIND, OLD_KIND))))
