@@ -485,12 +485,6 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                     # the dense form is too large: V and -V' as sums over cliques of the states
                     found, why = clique_search(field, degree, search)
                     tried.append(why)
-                if found is None and name == "sos_gas":  # the last form: a vector Lyapunov function, once
-                    from lyapcheck.models.classes import vector_lyapunov
-
-                    vector = vector_lyapunov.fallback(scaled, field, name, search, tried)
-                    if vector is not None:
-                        return vector
                 if found is not None:
                     if key is not None and "cliques" not in found:
                         store.keep(key, {"found": found_json(found), "solves": len(search.log)})

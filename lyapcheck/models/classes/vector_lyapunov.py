@@ -197,10 +197,15 @@ def local_functions(field: StateField, groups: Sequence[tuple[int, ...]], degree
         key = _shape(sub)
         if key not in found:
             local, why = search_degree(sub, degree, search.over(sub.ring))
-            found[key] = None if local is None else local["V"]
+            names = ", ".join(sub.ring.names)
             if local is None:
-                names = ", ".join(sub.ring.names)
                 return None, f"no V of degree {degree} for the isolated subsystem of {names} ({why})"
+            if local["mu"] <= 0:
+                # a Hurwitz Metzler A has A_ii < 0, and where the other groups' states are 0 the comparison
+                # says V_i' <= A_ii V_i along the isolated subsystem: V_i must decay exponentially there
+                return None, (f"the isolated subsystem of {names} has a V of degree {degree} but none found with "
+                              "V' <= -mu V, mu > 0, which a Hurwitz comparison matrix needs (A_ii < 0)")
+            found[key] = local["V"]
         V = found[key]
         assert V is not None
         out.append(embed_gram(V, group, field.ring.nvars))
@@ -387,22 +392,27 @@ def comparison_search(field: StateField, groups: Sequence[tuple[int, ...]], Vs: 
     return None, why
 
 
-def tried(detail: Sequence[str]) -> bool:
-    """Whether the vector form was tried already (one of ``detail``'s lines is its own)."""
-    return any(line.startswith(LABEL) for line in detail)
-
-
-def fallback(scaled: "ScaledField", field: StateField, name: str, search: Search, detail: list[str]
-             ) -> "ConditionResult | None":
-    """``sos_gas``'s last form, once per run, where a dense form reached a size limit (``detail``: the
-    lines of what was tried, to which this form's is added): the certified result, or None."""
+def after(scaled: "ScaledField", field: StateField, name: str, search: Search, result: "ConditionResult"
+          ) -> "ConditionResult":
+    """``sos_gas``'s last form: where the dense and clique forms left ``result`` not certified and one of
+    them reached a size limit (a network too large for them), a vector Lyapunov function of the
+    network's subsystems, within the class's remaining time; else ``result`` with this form's line
+    added to what it tried (``tried``)."""
     from lyapcheck.models.engines import reasons
+    from lyapcheck.models.engines.search import BudgetExhausted
 
-    if name != "sos_gas" or field.p or field.disturbances or tried(detail) or not reasons.size_limits(detail):
-        return None
-    found, why = search_vector(field, search)
-    detail.append(why)
-    return None if found is None else certified(scaled, field, name, found, {"solves": search.log})
+    detail = result.numbers.get("tried")
+    if result.status != "not_certified" or not isinstance(detail, list) or not reasons.size_limits(detail) \
+            or field.p or field.disturbances:
+        return result
+    try:
+        found, why = search_vector(field, search)
+    except BudgetExhausted as exc:
+        found, why = None, f"{LABEL}: {exc}"
+    if found is not None:
+        return certified(scaled, field, name, found, {"solves": search.log})
+    result.numbers["tried"] = [*detail, why]
+    return result
 
 
 # -- the certificate, its claim and its check -----------------------------------------------------
