@@ -165,3 +165,12 @@ def test_a_network_whose_comparison_matrix_cannot_be_hurwitz_is_not_certified_by
     lines = [line for line in condition["tried"] if line.startswith(vector_lyapunov.LABEL)]
     assert len(lines) == 1 and not lines[0].endswith(": found"), lines
     assert "V' <= -mu V, mu > 0, which a Hurwitz comparison matrix needs" in lines[0]
+
+
+def test_the_report_names_one_matrix_per_subsystem(swarm6: tuple[Path, dict]) -> None:
+    from reports.sections.model_file import gram_sizes
+
+    _, doc = swarm6
+    sizes = gram_sizes(doc["conditions"]["sos_gas"]["certificate"])
+    assert any(s.startswith("gram_V: 3 matrices, one per subsystem") for s in sizes), sizes
+    assert any(s.startswith("gram_sigma: 3 matrices, one per subsystem") for s in sizes), sizes
