@@ -174,3 +174,10 @@ def test_the_report_names_one_matrix_per_subsystem(swarm6: tuple[Path, dict]) ->
     sizes = gram_sizes(doc["conditions"]["sos_gas"]["certificate"])
     assert any(s.startswith("gram_V: 3 matrices, one per subsystem") for s in sizes), sizes
     assert any(s.startswith("gram_sigma: 3 matrices, one per subsystem") for s in sizes), sizes
+
+
+def test_the_limits_the_page_quotes_are_the_codes() -> None:
+    text = (ROOT / "docs" / "model-files.md").read_text()
+    assert vector_lyapunov.MAX_GROUP_STATES == 4 and "at most 4 states (`MAX_GROUP_STATES`" in text
+    assert vector_lyapunov.VECTOR_DEGREES == (2, 4) and "at degree 2, then 4 (`VECTOR_DEGREES`)" in text
+    assert vector_lyapunov.VECTOR_COST_LIMIT == 4 * 10**9 and "`VECTOR_COST_LIMIT` = 4.0e9" in text
