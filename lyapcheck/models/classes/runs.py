@@ -63,10 +63,11 @@ def sos_gas_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":
     from lyapcheck.models.classes import vector_lyapunov
 
     sc = ctx.cleared
-    # where the dense and clique forms found nothing and one reached a size limit, a vector Lyapunov
-    # function of the network's subsystems (vector_lyapunov.after)
-    return _stability(ctx, budget, lambda f, search: vector_lyapunov.after(sc, f, "sos_gas", search, lyapunov.run(
-        sc, "sos_gas", searched_degrees(lyapunov.SOS_GAS_DEGREES), search, param_degrees=BOX_PARAM_DEGREES, field=f)))
+    # where the dense and clique forms of a degree found nothing and one reached a size limit, a vector
+    # Lyapunov function of the network's subsystems, once (vector_lyapunov.fallback)
+    return _stability(ctx, budget, lambda f, search: lyapunov.run(
+        sc, "sos_gas", searched_degrees(lyapunov.SOS_GAS_DEGREES), search, param_degrees=BOX_PARAM_DEGREES, field=f,
+        fallback=lambda tried: vector_lyapunov.fallback(sc, f, "sos_gas", search, tried)))
 
 
 def roa_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":

@@ -415,27 +415,21 @@ def comparison_search(field: StateField, groups: Sequence[tuple[int, ...]], Vs: 
     return None, why
 
 
-def after(scaled: "ScaledField", field: StateField, name: str, search: Search, result: "ConditionResult"
-          ) -> "ConditionResult":
-    """``sos_gas``'s last form: where the dense and clique forms left ``result`` not certified and one of
-    them reached a size limit (a network too large for them), a vector Lyapunov function of the
-    network's subsystems, within the class's remaining time; else ``result`` with this form's line
-    added to what it tried (``tried``)."""
+def fallback(scaled: "ScaledField", field: StateField, name: str, search: Search, detail: list[str]
+             ) -> "ConditionResult | None":
+    """``sos_gas``'s last form (:func:`lyapcheck.models.classes.lyapunov.run` calls it after the dense and
+    clique forms of each degree found nothing): once per run, and only where one of them reached a size
+    limit (a network too large for them), a vector Lyapunov function of the network's subsystems. Its
+    line joins ``detail`` (what was tried); the certified result, or None. The class's time limit
+    (:class:`~lyapcheck.models.engines.search.BudgetExhausted`) ends it as it ends the other forms."""
     from lyapcheck.models.engines import reasons
-    from lyapcheck.models.engines.search import BudgetExhausted
 
-    detail = result.numbers.get("tried")
-    if result.status != "not_certified" or not isinstance(detail, list) or not reasons.size_limits(detail) \
-            or field.p or field.disturbances:
-        return result
-    try:
-        found, why = search_vector(field, search)
-    except BudgetExhausted as exc:
-        found, why = None, f"{LABEL}: {exc}"
-    if found is not None:
-        return certified(scaled, field, name, found, {"solves": search.log})
-    result.numbers["tried"] = [*detail, why]
-    return result
+    if field.p or field.disturbances or any(line.startswith(LABEL) for line in detail) \
+            or not reasons.size_limits(detail):
+        return None
+    found, why = search_vector(field, search)
+    detail.append(why)
+    return None if found is None else certified(scaled, field, name, found, {"solves": search.log})
 
 
 # -- the certificate, its claim and its check -----------------------------------------------------
