@@ -10,8 +10,9 @@ positive constant), with the states partitioned into groups ``I_1, ..., I_m``:
   unbounded in ``z_Ii``;
 * a rational ``m x m`` matrix ``A``, Metzler (``A_ij >= 0`` for ``i != j``), and a vector ``d > 0`` with
   ``d^T A < 0`` componentwise (for a Metzler matrix, a proof that it is Hurwitz);
-* per group, the identity ``d_i (sum_j A_ij V_j D - grad V_i . g) = sigma_i`` with ``sigma_i = z^T R_i z``,
-  ``R_i >= 0`` (exact).
+* per group, the identity ``d_i (sum_j A_ij V_j D - grad V_i . g) = sigma_i`` with ``sigma_i`` a sum of
+  Gram forms ``z_k^T R_ik z_k``, one per pair of group ``i`` and a group it reads (:func:`remainder_bases`),
+  every ``R_ik >= 0`` (exact).
 
 Then ``V_i' = grad V_i . g / D <= sum_j A_ij V_j`` everywhere: ``v = (V_1, ..., V_m)`` satisfies
 ``v' <= A v``, and the certified function is ``W = d^T v = sum_i d_i V_i``: ``W' <= (d^T A) v <= -c W``
@@ -26,8 +27,12 @@ The search, in two steps (each linear):
    on the isolated subsystem (the group's equations with every other state at 0), with its best decay
    rate; groups whose isolated subsystems are the same polynomials (up to renaming) share one search;
 2. with the ``V_i`` fixed, one SOS program in ``B_ij = d_i A_ij >= 0`` (``j`` a group that group ``i``'s
-   equations read), ``d_i >= t``, ``s_j = -(d^T A)_j >= t`` and the Gram matrices ``R_i >= t I``: the
-   diagonal ``B_ii = -s_i - sum_k B_ki`` is written through the others, so that every constraint is linear.
+   equations read), ``d_i >= t``, ``s_j = -(d^T A)_j >= t`` and the Gram matrices ``R_ik >= t I``: the
+   diagonal ``B_ii = -s_i - sum_k B_ki`` is written through the others, so that every constraint is linear
+   (with the facial reduction of the clique form where the remainders must be singular).
+
+It is ``sos_gas``'s last form (:func:`fallback`, which :func:`lyapcheck.models.classes.lyapunov.run` calls
+after the dense and clique forms of each degree): tried once, where one of those reached a size limit.
 
 Groups (:func:`subsystem_groups`): the strongly connected components of the field's interaction graph
 when there are at least two and each has at most :data:`MAX_GROUP_STATES` states (a cascade, e.g. the
