@@ -58,9 +58,7 @@ def quadratic_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":
 def sos_gas_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":
     """A polynomial V of the searched degrees (over a box, V may depend on the parameters)."""
     from lyapcheck.degrees import searched_degrees
-    from lyapcheck.models.classes import lyapunov
-
-    from lyapcheck.models.classes import vector_lyapunov
+    from lyapcheck.models.classes import lyapunov, vector_lyapunov
 
     sc = ctx.cleared
     # where the dense and clique forms of a degree found nothing and one reached a size limit, a vector
