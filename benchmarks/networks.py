@@ -67,6 +67,25 @@ def platoon(m: int, kp: str = "1", kd: str = "2") -> str:
     return "\n".join(lines) + "\n"
 
 
+def swarm(m: int, damping: str = "1", coupling: str = "0.2") -> str:
+    """``m`` damped Duffing oscillators (as in :func:`ring`), each pulled by a linear spring towards the
+    mean position of all the others (all-to-all, mean-field coupling of total stiffness ``kc``);
+    ``n = 2 m`` states (``m >= 2``). GAS (the energy ``sum p_k^2/2 + q_k^2/2 + q_k^4/4`` plus the
+    coupling springs' decreases), and every position reads every other: the interaction graph's
+    cliques are as large as the network."""
+    if m < 2:
+        raise ValueError(f"swarm: m must be at least 2, got {m}")
+    names = [v for k in range(1, m + 1) for v in (f"q{k}", f"p{k}")]
+    lines = [f"# {m} damped oscillators with cubic springs, coupled all-to-all to their mean ({2 * m} states).",
+             "[model]", f'name = "swarm of {m} Duffing oscillators"', f"states = {_states(names)}", "",
+             "[parameters]", f'c = "{damping}"', f'kc = "{coupling}"', "", "[dynamics]"]
+    for k in range(1, m + 1):
+        others = " + ".join(f"q{j}" for j in range(1, m + 1) if j != k)
+        mean = f"({others})/{m - 1}" if m > 2 else others
+        lines += [f'q{k} = "p{k}"', f'p{k} = "-q{k} - q{k}**3 - c*p{k} - kc*(q{k} - {mean})"']
+    return "\n".join(lines) + "\n"
+
+
 def grid(m: int, damping: str = "1", susceptance: str = "1") -> str:
     """``m`` generators on a ring of lossless lines (swing equations), angles relative to generator
     ``m``; ``n = 2 m - 1`` states (``m >= 2``)."""
@@ -117,4 +136,4 @@ def coupled_pairs(m: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-FAMILIES = {"ring": ring, "platoon": platoon, "grid": grid, "pairs": coupled_pairs}
+FAMILIES = {"ring": ring, "platoon": platoon, "grid": grid, "pairs": coupled_pairs, "swarm": swarm}

@@ -290,6 +290,11 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
         ball = f"; {ball_words(condition)}" if "ball_radius" in condition else ""
         return (f"{what}: every start in {{V <= {rounded(level, 6, 'down')}}} converges to the equilibrium (checked "
                 f"exactly){ball}")
+    if kind == "lyapunov_vector":  # a vector Lyapunov function (lyapcheck.models.classes.vector_lyapunov)
+        from lyapcheck.models.classes.vector_lyapunov import sentence
+
+        return sentence(len(cert["groups"]), int(cert["degree"]),
+                        with_unit(_number(condition, "decay_rate_V_per_s"), RATE_UNIT, direction="down"))
     if kind not in ("lyapunov", "lyapunov_cliques"):
         raise ValueError(f"unknown certificate kind {kind!r}")
     if condition.get("property") == "GES":

@@ -459,12 +459,15 @@ def eigen_bounds(P: Sequence[Sequence[Fraction]]) -> tuple[Fraction, Fraction] |
 
 
 def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
-        param_degrees: Sequence[int] = (0,), field: StateField | None = None) -> ConditionResult:
+        param_degrees: Sequence[int] = (0,), field: StateField | None = None,
+        fallback: Callable[[list[str]], ConditionResult | None] | None = None) -> ConditionResult:
     """``quadratic`` (degrees ``(2,)``) or ``sos_gas`` (rising degrees) on ``field`` (default: the
     nominal :func:`state_field`; the robust one makes every disturbance a box coordinate); over a
     box, ``V`` may depend on the parameters up to each of ``param_degrees`` in turn (not with
     disturbances in the ring: the basis' parameter degree counts them too, and V must not depend
-    on a disturbance)."""
+    on a disturbance). ``fallback``: a further form the caller tries after the dense and clique forms
+    of each degree found nothing, given what was tried (it may add lines): its result when it
+    certifies (``sos_gas``: :func:`lyapcheck.models.classes.vector_lyapunov.fallback`)."""
     if field is None:
         field = state_field(scaled)
     key = (store.problem_key("lyapunov", stored_problem(field, name, degrees, param_degrees))
@@ -485,6 +488,10 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                     # the dense form is too large: V and -V' as sums over cliques of the states
                     found, why = clique_search(field, degree, search)
                     tried.append(why)
+                if found is None and fallback is not None:
+                    last = fallback(tried)
+                    if last is not None:
+                        return last
                 if found is not None:
                     if key is not None and "cliques" not in found:
                         store.keep(key, {"found": found_json(found), "solves": len(search.log)})

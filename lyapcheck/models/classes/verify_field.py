@@ -222,6 +222,10 @@ def verify_lyapunov(name: str, c: dict[str, Any], check: "FieldCheck") -> tuple[
             field = robust
     if cert.get("kind") == "lyapunov_cliques":
         return _verify_cliques(c, cert, scaled, field)
+    if cert.get("kind") == "lyapunov_vector":
+        from lyapcheck.models.classes import vector_lyapunov
+
+        return vector_lyapunov.verify(c, cert, scaled, field)
     if cert.get("kind") == "lyapunov" and cert.get("form") == "vertices":
         return _verify_vertices(c, cert, scaled, field)
     ring, n = field.ring, field.n

@@ -404,16 +404,17 @@ def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any]
 #: certificate itself, each in the direction that keeps the claim true (a stated rate or level at
 #: most the certified one, a bound or a time at least it); a GES claim adds ``k`` and its rate
 _CHECKED_FIGURES: dict[str, tuple[str, ...]] = {
-    "lyapunov": ("decay_rate_V_per_s",), "lyapunov_cliques": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius", "size"),
+    "lyapunov": ("decay_rate_V_per_s",), "lyapunov_cliques": ("decay_rate_V_per_s",),
+    "lyapunov_vector": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius", "size"),
     "quadratic_ball": ("level", "ball_radius", "size"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
     "sos_bound": ("bounds", "bounds_reference"), "interval": ("level", "size"),
     "discrete_sublevel": ("level", "size"),
 }
 #: what a certificate of each kind proves (a Lyapunov certificate: GAS, or GES where
 #: :func:`lyapcheck.models.classes.verify_field._verify_ges` passed)
-_KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "lyapunov_cliques": "GAS", "sublevel": "ROA", "quadratic_ball": "ROA", "barrier": "safety",
-                                  "reach_avoid": "reach_avoid", "sos_bound": "ultimate_bound", "interval": "ROA",
-                                  "discrete_sublevel": "ROA"}
+_KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "lyapunov_cliques": "GAS", "lyapunov_vector": "GAS", "sublevel": "ROA",
+                                  "quadratic_ball": "ROA", "barrier": "safety", "reach_avoid": "reach_avoid",
+                                  "sos_bound": "ultimate_bound", "interval": "ROA", "discrete_sublevel": "ROA"}
 
 
 def _check_stated_claims(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
