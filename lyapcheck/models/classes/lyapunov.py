@@ -496,6 +496,7 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
     tried: list[str] = []
     # a benchmark's knob (LYAPCHECK_FORCE_CONE): sos_gas's programs in one of the cheaper cones only
     forced = forced_cone() if name == "sos_gas" and field.p == 0 else "psd"
+    limited: list[tuple[int, bool]] = []  # degrees whose dense form was too large: (degree, cliques too large)
     try:
         for degree in degrees:
             for param_degree in (param_degrees if field.p and not field.disturbances else (0,)):
@@ -509,9 +510,9 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                     found, clique_why = clique_search(field, degree, search, forced)
                     tried.append(clique_why)
                 if found is None and name == "sos_gas" and field.p == 0 and dense_too_large and forced == "psd":
-                    # both forms too large or the cliques' failed: the same programs in cheaper cones
-                    found, whys = cone_fallback(field, degree, search, bool(reasons.size_limits([clique_why])))
-                    tried.extend(whys)
+                    # the dense form too large, the cliques' too large or failed: the cheaper cones'
+                    # turn comes after every semidefinite form of every degree (below)
+                    limited.append((degree, bool(reasons.size_limits([clique_why]))))
                 if found is not None:
                     if key is not None and "cliques" not in found and "cone" not in found:
                         store.keep(key, {"found": found_json(found), "solves": len(search.log)})
@@ -530,9 +531,16 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
         return ConditionResult(name, "inconclusive", late.summary,
                                numbers=late.numbers({"reason": str(exc), "tried": tried}),
                                solver={"solves": search.log})
+    # the semidefinite forms found nothing: the sentence says so, as before the cones, whatever they do
     steps = ("sos_gas", "candidate") if name == "quadratic" else ("degree", "candidate")
     none = reasons.not_found("Lyapunov function", degrees, tried, steps)
-    return ConditionResult(name, "not_certified", none.summary, numbers=none.numbers({"tried": tried}),
+    fallback: list[str] = []
+    if limited:
+        found, fallback = cone_fallbacks(field, limited, search)
+        if found is not None:
+            return _certified(scaled, field, name, found, {"solves": search.log})
+    return ConditionResult(name, "not_certified", none.summary,
+                           numbers={**none.numbers({"tried": tried + fallback}), "detail": [*none.detail, *fallback]},
                            solver={"solves": search.log}, property="GAS" if name != "quadratic" else None)
 
 
@@ -1086,6 +1094,9 @@ CONE_GRAM_ROWS: Final = 500
 #: the most decisions of a cone program's blocks (:meth:`~lyapcheck.sos.structure.Structure.cone_size`)
 CONE_SIZE_LIMIT: Final = 400_000
 CONE_LIMITS: Final = (CONE_CANDIDATE_LIMIT, CONE_TARGET_LIMIT, CONE_GRAM_ROWS)
+#: the solves the fallback may spend in all (a count, so that a loaded machine does the same work): the
+#: 8-state platoon's SDSOS certificate took 2 solves (one facial reduction) and 2 more for its decay rate
+CONE_FALLBACK_SOLVES: Final = 40
 #: the benchmark knob: ``sdd`` or ``dd`` makes every program of sos_gas (dense and cliques) use that
 #: cone, never the semidefinite one (for measuring the cones alone; not a user option)
 FORCE_CONE_ENV: Final = "LYAPCHECK_FORCE_CONE"
@@ -1132,6 +1143,27 @@ def cone_identity(nv: int, grams: Sequence[Gram], terms: Sequence[Term], cone: s
         identities=(Identity("lyapunov", tuple(terms), None, "W"),),
         objective=("max_margin",), trace_one=("V",))
     return cone_structure(structure, cone)
+
+
+def cone_fallbacks(field: StateField, limited: Sequence[tuple[int, bool]], search: Search
+                   ) -> tuple[dict[str, Any] | None, list[str]]:
+    """:func:`cone_fallback` at each degree whose dense semidefinite form was too large (``limited``:
+    ``(degree, the clique form too large as well)``, rising), within a budget of
+    :data:`CONE_FALLBACK_SOLVES` solves: a certificate or None, and the detail lines. Run after every
+    semidefinite form has found nothing, so it can only add a certificate: where its budget (or the
+    class's time limit, the safety net) ends it, the class's answer is the semidefinite forms' one,
+    and a detail line says where the fallback stopped."""
+    within = search.within(CONE_FALLBACK_SOLVES, "in the cheaper cones' fallback", "CONE_FALLBACK_SOLVES")
+    whys: list[str] = []
+    try:
+        for degree, cliques_too_large in limited:
+            found, more = cone_fallback(field, degree, within, cliques_too_large)
+            whys.extend(more)
+            if found is not None:
+                return found, whys
+    except BudgetExhausted as exc:
+        whys.append(f"the cheaper cones' fallback was stopped: {exc}")
+    return None, whys
 
 
 def cone_fallback(field: StateField, degree: int, search: Search, cliques_too_large: bool
