@@ -17,7 +17,11 @@ directly, with the parameters (the field's coefficients, a level, a floor) enter
   ``trace_one`` normalizations and the ``inner`` products;
 * nonnegative cone: ``t <= 1`` and the scalars' lower bounds (``>= 0`` or ``>= t``);
 * one PSD-triangle cone per Gram block: ``X - t I`` (or ``X - phi I``, or ``X``), the upper
-  triangle column by column with off-diagonal entries times ``sqrt 2`` (Clarabel's convention).
+  triangle column by column with off-diagonal entries times ``sqrt 2`` (Clarabel's convention);
+* for a block whose :attr:`~lyapcheck.sos.structure.Gram.cone` is ``"sdd"`` or ``"dd"`` instead, the
+  same ``X - t I`` in the scaled diagonally dominant cone (a second-order cone of dimension 3 per pair
+  of rows, and the diagonals in the zero cone) or the diagonally dominant one (nonnegative rows), with
+  auxiliary decisions per pair (:meth:`DirectProgram._cone_rows`), after every PSD cone.
 
 A structure's data is built once per process (a few milliseconds) and kept in memory; each
 solve fills in the parameter values (:meth:`DirectProgram.solve`). The answer is evidence only,
