@@ -486,16 +486,17 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
     on a disturbance)."""
     if field is None:
         field = state_field(scaled)
+    # a benchmark's knob (LYAPCHECK_FORCE_CONE): sos_gas's programs in one of the cheaper cones only
+    # (the store, which keeps semidefinite certificates, is then neither read nor written)
+    forced = forced_cone() if name == "sos_gas" and field.p == 0 else "psd"
     key = (store.problem_key("lyapunov", stored_problem(field, name, degrees, param_degrees))
-           if store.enabled() else None)
+           if store.enabled() and forced == "psd" else None)
     if key is not None:
         recalled = recall_certificate(field, key, degrees)
         if recalled is not None:
             return _certified(scaled, field, name, recalled, {"solves": [], "stored": {
                 "key": key, "check": "exact, in this run"}})
     tried: list[str] = []
-    # a benchmark's knob (LYAPCHECK_FORCE_CONE): sos_gas's programs in one of the cheaper cones only
-    forced = forced_cone() if name == "sos_gas" and field.p == 0 else "psd"
     limited: list[tuple[int, bool]] = []  # degrees whose dense form was too large: (degree, cliques too large)
     try:
         for degree in degrees:
