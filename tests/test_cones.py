@@ -245,10 +245,19 @@ def test_verify_rechecks_a_cone_certificate_and_refuses_a_tampered_one(fallback_
     result = CliRunner().invoke(app.cli, ["verify", str(bad)])
     assert result.exit_code == 1 and "does not hold exactly" in result.output
     renamed = json.loads(json.dumps(doc))
-    renamed["conditions"]["sos_gas"]["certificate"]["cone"] = "dd"  # the sentence then names another cone
+    renamed["conditions"]["sos_gas"]["certificate"]["cone"] = "dd"  # not the condition's, nor its sentence's
     bad.write_text(json.dumps(renamed))
     result = CliRunner().invoke(app.cli, ["verify", str(bad)])
     assert result.exit_code == 1, result.output
+    for where in ("condition", "both"):  # the condition's cone alone, and both with the sentence left as it was
+        renamed = json.loads(json.dumps(doc))
+        renamed["conditions"]["sos_gas"]["cone"] = "dd"
+        if where == "both":
+            renamed["conditions"]["sos_gas"]["certificate"]["cone"] = "dd"
+        bad.write_text(json.dumps(renamed))
+        result = CliRunner().invoke(app.cli, ["verify", str(bad)])
+        assert result.exit_code == 1, (where, result.output)
+        assert where == "both" or "the condition's cone is not the certificate's" in result.output
 
 
 def test_the_benchmark_knob_is_validated(monkeypatch: pytest.MonkeyPatch) -> None:
