@@ -15,6 +15,12 @@ generators (swing equations, ``sin``) with ``roa``. Per model, in a fresh proces
 
     python benchmarks/bench_networks.py [--family ring,platoon,grid] [--sizes 2,4,6,8,10,12,16,20,30]
                                         [--time-limit 600] [--drake-python PY] [--drake-timeout 900]
+                                        [--cone sdd|dd]
+
+``--cone sdd`` (or ``dd``) forces every program of ``sos_gas`` into that cone (SDSOS or DSOS, dense and
+cliques alike) through the benchmark knob ``LYAPCHECK_FORCE_CONE`` (not a user option): the cones
+measured alone. Without it, ``sos_gas`` uses them only as its fallback, where the semidefinite forms
+are too large; the method column then reads ``lyapunov/sdd`` (the certificate's ``cone``).
 
 Prints one row per model and the issue's targets beside the figures (GAS for the ring at
 n = 8 ... 16 within 120 s, at 20 and 30 within 600 s, peak memory below 8 GB at 30): a report,
@@ -77,8 +83,10 @@ def timed(command: list[str], env: dict[str, str], timeout: float | None) -> tup
     return code, wall, usage.ru_maxrss / 1e6, text
 
 
-def run_lyapcheck(path: Path, cls: str, limit: float, work: Path) -> dict[str, Any]:
+def run_lyapcheck(path: Path, cls: str, limit: float, work: Path, cone: str | None = None) -> dict[str, Any]:
     env = dict(os.environ, LYAPCHECK_CACHE_DIR=str(work / "store"))
+    if cone:
+        env["LYAPCHECK_FORCE_CONE"] = cone
     cert = work / (path.stem + ".json")
     command = [sys.executable, "-m", "lyapcheck", "certify", str(path), "--classes", cls, "--time-limit", str(limit),
                "--out", str(cert)]
@@ -89,10 +97,13 @@ def run_lyapcheck(path: Path, cls: str, limit: float, work: Path) -> dict[str, A
         data = json.loads(cert.read_text())
         condition = data["conditions"].get(cls, {})
         row["status"] = condition.get("status", "error")
-        row["method"] = (condition.get("certificate") or {}).get("kind")
+        found = condition.get("certificate") or {}
+        row["method"] = found.get("kind") if "cone" not in found else f"{found.get('kind')}/{found['cone']}"
         if row["status"] == "certified":
-            vcode, vwall, _, _ = timed([sys.executable, "-m", "lyapcheck", "verify", str(cert)], env, timeout=1800)
+            vcode, vwall, _, vtext = timed([sys.executable, "-m", "lyapcheck", "verify", str(cert)], env, timeout=1800)
             row["verify_s"] = round(vwall, 1) if vcode == 0 else "FAILED"
+            if vcode != 0:
+                row["verify_output"] = vtext.strip()[-400:]
         detail = condition.get("summary", "")
         row["detail"] = detail[:90]
         if row["status"] == "certified" and "level" in condition:
@@ -124,9 +135,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--time-limit", type=float, default=600.0)
     parser.add_argument("--drake-python", default=None)
     parser.add_argument("--drake-timeout", type=float, default=900.0)
+    parser.add_argument("--cone", choices=("sdd", "dd"), default=None,
+                        help="force sos_gas's programs into this cone (the LYAPCHECK_FORCE_CONE knob)")
     args = parser.parse_args(argv)
     sizes = [int(s) for s in args.sizes.split(",")]
-    print(f"{'family':8} {'n':>3} {'class':8} {'status':14} {'method':17} {'s':>7} {'GB':>5} {'verify s':>8}  "
+    print(f"{'family':8} {'n':>3} {'class':8} {'status':14} {'method':22} {'s':>7} {'GB':>5} {'verify s':>8}  "
           f"{'target':>7}  {'Drake':>20}")
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
@@ -139,16 +152,18 @@ def main(argv: list[str] | None = None) -> int:
                     continue
                 path = work / f"{family}-{n}.toml"
                 path.write_text(text)
-                ours = run_lyapcheck(path, cls, args.time_limit, work)
+                ours = run_lyapcheck(path, cls, args.time_limit, work, args.cone)
                 drake = "-"
                 if args.drake_python and cls == "sos_gas":
                     d = run_drake(args.drake_python, path, args.drake_timeout)
                     drake = f"{d['found']} {d['seconds']} s"
                 target = f"{RING_TARGET_S[n]} s" if family == "ring" and n in RING_TARGET_S else "-"
-                print(f"{family:8} {n:>3} {cls:8} {ours['status']:14} {str(ours['method']):17} {ours['seconds']:>7} "
+                print(f"{family:8} {n:>3} {cls:8} {ours['status']:14} {str(ours['method']):22} {ours['seconds']:>7} "
                       f"{ours['peak_gb']:>5} {str(ours['verify_s']):>8}  {target:>7}  {drake:>20}", flush=True)
                 if ours["status"] != "certified" or cls == "roa":
                     print(f"{'':12} {ours.get('detail', '')}", flush=True)
+                if "verify_output" in ours:
+                    print(f"{'':12} verify: {ours['verify_output']}", flush=True)
     print(f"targets: ring GAS within the seconds shown; peak memory below {MEMORY_TARGET_GB} GB at n = 30")
     return 0
 

@@ -17,7 +17,11 @@ directly, with the parameters (the field's coefficients, a level, a floor) enter
   ``trace_one`` normalizations and the ``inner`` products;
 * nonnegative cone: ``t <= 1`` and the scalars' lower bounds (``>= 0`` or ``>= t``);
 * one PSD-triangle cone per Gram block: ``X - t I`` (or ``X - phi I``, or ``X``), the upper
-  triangle column by column with off-diagonal entries times ``sqrt 2`` (Clarabel's convention).
+  triangle column by column with off-diagonal entries times ``sqrt 2`` (Clarabel's convention);
+* for a block whose :attr:`~lyapcheck.sos.structure.Gram.cone` is ``"sdd"`` or ``"dd"`` instead, the
+  same ``X - t I`` in the scaled diagonally dominant cone (a second-order cone of dimension 3 per pair
+  of rows, and the diagonals in the zero cone) or the diagonally dominant one (nonnegative rows), with
+  auxiliary decisions per pair (:meth:`DirectProgram._cone_rows`), after every PSD cone.
 
 A structure's data is built once per process (a few milliseconds) and kept in memory; each
 solve fills in the parameter values (:meth:`DirectProgram.solve`). The answer is evidence only,
@@ -101,6 +105,7 @@ class DirectProgram:
         n_vars += len(structure.scalars)
         self._t = n_vars
         n_vars += 1
+        n_vars = self._allocate_cone_parts(n_vars)
         self.n = n_vars
 
         A = _Entries()
@@ -177,6 +182,8 @@ class DirectProgram:
         # -- PSD cones: X - t I, X - phi I or X, per block ----------------------------------------
         self._psd: list[int] = []
         for g in structure.grams:
+            if g.cone != "psd":
+                continue  # its cones follow the PSD ones (:meth:`_cone_rows`)
             for idx, cols in self._blocks[g.name]:
                 for j in range(len(idx)):
                     for i in range(j + 1):
@@ -190,6 +197,7 @@ class DirectProgram:
                                 b.add(row, 0, -1.0, self._slots[g.margin][0])
                         row += 1
                 self._psd.append(len(idx))
+        row = self._cone_rows(A, b, row, one)
         self.m = row
 
         # -- the objective -------------------------------------------------------------------------
@@ -219,6 +227,99 @@ class DirectProgram:
         self._b_factors = np.asarray(b.factors)
         self._b_params = np.asarray(b.slots, dtype=np.int64)
         self._cones: list[Any] | None = None
+
+    # -- the SDD and DD cones (Gram blocks with ``cone`` "sdd" or "dd") -------------------------------
+    #
+    # The block's entries ``X_ij`` stay the decisions (the identities, the rounding and the exact
+    # checks read them as for a PSD block); the cone is stated on ``X - margin I`` with auxiliary
+    # decisions per pair of rows ``i < j``:
+    #
+    # * "sdd": ``X - margin I = sum_(i<j) M_ij``, ``M_ij = [[a_ij, X_ij], [X_ij, c_ij]]`` on rows i, j
+    #   PSD, i.e. ``(a + c, a - c, 2 X_ij)`` in the second-order cone of dimension 3; the diagonal
+    #   ``X_ii - margin = sum of the a's and c's on row i`` (zero cone). A block of one row: ``X_00 >= margin``.
+    # * "dd": ``u_ij >= |X_ij|`` (two linear rows) and ``X_ii - margin >= sum_j u_ij`` (nonnegative cone).
+
+    def _allocate_cone_parts(self, n_vars: int) -> int:
+        """Columns for the auxiliary decisions of every SDD and DD block; the next free column."""
+        #: per (Gram, block): {(i, j): (columns of the pair's parts)} in block positions, i < j
+        self._parts: dict[tuple[str, int], dict[tuple[int, int], tuple[int, ...]]] = {}
+        for g in self.structure.grams:
+            if g.cone == "psd":
+                continue
+            width = 2 if g.cone == "sdd" else 1
+            for k, (idx, _) in enumerate(self._blocks[g.name]):
+                pairs = {}
+                for j in range(len(idx)):
+                    for i in range(j):
+                        pairs[(i, j)] = tuple(range(n_vars, n_vars + width))
+                        n_vars += width
+                self._parts[(g.name, k)] = pairs
+        return n_vars
+
+    def _cone_rows(self, A: _Entries, b: _Entries, row: int, one: int) -> int:
+        """The rows of every SDD and DD block (after the PSD cones), grouped by cone; the next row.
+        ``self._other_cones`` lists the cones in row order."""
+        self._other_cones: list[tuple[str, int]] = []
+        grams = [g for g in self.structure.grams if g.cone != "psd"]
+
+        def margin(g: Any, r: int, sign: float) -> None:
+            # the margin's part of a diagonal row: ``sign`` on t in A (-1 in a zero row, A x = b; +1
+            # in a nonnegative row, b - A x >= 0), a floor parameter moved to b with the other sign
+            if g.margin is True:
+                A.add(r, self._t, sign, one)
+            elif isinstance(g.margin, str):
+                b.add(r, 0, -sign, self._slots[g.margin][0])
+
+        start = row  # zero cone: the SDD blocks' diagonals (X_ii - margin - parts = 0)
+        for g in grams:
+            if g.cone != "sdd":
+                continue
+            for k, (idx, cols) in enumerate(self._blocks[g.name]):
+                if len(idx) < 2:
+                    continue
+                for i in range(len(idx)):
+                    A.add(row, cols[(i, i)], 1.0, one)
+                    margin(g, row, -1.0)
+                    for (p, q), (a, c) in self._parts[(g.name, k)].items():
+                        if i in (p, q):
+                            A.add(row, a if i == p else c, -1.0, one)
+                    row += 1
+        if row > start:
+            self._other_cones.append(("zero", row - start))
+        start = row  # nonnegative cone: 1-row SDD blocks, and the DD blocks' rows
+        for g in grams:
+            for k, (idx, cols) in enumerate(self._blocks[g.name]):
+                if g.cone == "sdd" and len(idx) >= 2:
+                    continue
+                pairs = self._parts[(g.name, k)]
+                for (p, q), (u,) in pairs.items():  # u - X_pq >= 0, u + X_pq >= 0
+                    A.add(row, u, -1.0, one)
+                    A.add(row, cols[(p, q)], 1.0, one)
+                    A.add(row + 1, u, -1.0, one)
+                    A.add(row + 1, cols[(p, q)], -1.0, one)
+                    row += 2
+                for i in range(len(idx)):  # X_ii - margin - sum_j u_ij >= 0
+                    A.add(row, cols[(i, i)], -1.0, one)
+                    margin(g, row, 1.0)
+                    for (p, q), (u,) in pairs.items():
+                        if i in (p, q):
+                            A.add(row, u, 1.0, one)
+                    row += 1
+        if row > start:
+            self._other_cones.append(("nonneg", row - start))
+        for g in grams:  # second-order cones: (a + c, a - c, 2 X_ij) per pair of an SDD block
+            if g.cone != "sdd":
+                continue
+            for k, (idx, cols) in enumerate(self._blocks[g.name]):
+                for (p, q), (a, c) in self._parts[(g.name, k)].items():
+                    A.add(row, a, -1.0, one)
+                    A.add(row, c, -1.0, one)
+                    A.add(row + 1, a, -1.0, one)
+                    A.add(row + 1, c, 1.0, one)
+                    A.add(row + 2, cols[(p, q)], -2.0, one)
+                    row += 3
+                    self._other_cones.append(("soc", 3))
+        return row
 
     def _gram_entries(self, name: str, derivative: int | None) -> list[tuple[tuple[int, ...], int, float]]:
         """``(monomial, column, coefficient)`` of ``L(z^T X z)`` in the block variables."""
@@ -277,6 +378,13 @@ class DirectProgram:
             if self._nonneg:
                 cones.append(clarabel.NonnegativeConeT(self._nonneg))
             cones += [clarabel.PSDTriangleConeT(k) for k in self._psd]
+            for kind, size in self._other_cones:
+                if kind == "zero":
+                    cones.append(clarabel.ZeroConeT(size))
+                elif kind == "nonneg":
+                    cones.append(clarabel.NonnegativeConeT(size))
+                else:
+                    cones.append(clarabel.SecondOrderConeT(size))
             if self._psd:
                 _load_lapack_modules()
             self._cones = cones

@@ -67,7 +67,10 @@ def build_cvxpy(structure: Structure) -> tuple[Any, dict[str, Any], dict[str, An
             X = cp.Variable((len(idx), len(idx)), symmetric=True, name=_block_name(g.name, b))
             variables[_block_name(g.name, b)] = X
             blocks[g.name].append(X)
-            if g.margin is True:
+            if g.cone != "psd":
+                floor: Any = t if g.margin is True else params[g.margin] if isinstance(g.margin, str) else 0
+                cons += _cone_constraints(g.cone, X, floor)
+            elif g.margin is True:
                 cons.append(X >> t * np.eye(len(idx)))
             elif isinstance(g.margin, str):
                 cons.append(X >> params[g.margin] * np.eye(len(idx)))
@@ -160,6 +163,31 @@ def build_cvxpy(structure: Structure) -> tuple[Any, dict[str, Any], dict[str, An
     else:  # pragma: no cover - a programming error
         raise ValueError(f"unknown objective {structure.objective}")
     return cp.Problem(objective, cons), params, variables
+
+
+def _cone_constraints(cone: str, X: Any, floor: Any) -> list[Any]:
+    """``X - floor I`` scaled diagonally dominant (``"sdd"``: a sum of 2x2 PSD matrices, one per pair
+    of rows, as second-order cones) or diagonally dominant (``"dd"``), stated independently of
+    :mod:`lyapcheck.sos.direct`'s construction."""
+    import cvxpy as cp
+
+    k = X.shape[0]
+    pairs = [(i, j) for j in range(k) for i in range(j)]
+    if not pairs:
+        return [X[0, 0] >= floor]
+    if cone == "sdd":
+        a = cp.Variable(len(pairs))
+        c = cp.Variable(len(pairs))
+        cons: list[Any] = [cp.SOC(a[p] + c[p], cp.hstack([a[p] - c[p], 2 * X[i, j]])) for p, (i, j) in enumerate(pairs)]
+        for r in range(k):
+            parts = [a[p] if i == r else c[p] for p, (i, j) in enumerate(pairs) if r in (i, j)]
+            cons.append(X[r, r] - floor == cp.sum(cp.hstack(parts)))
+        return cons
+    u = cp.Variable(len(pairs))
+    cons = [u >= cp.hstack([X[i, j] for i, j in pairs]), u >= -cp.hstack([X[i, j] for i, j in pairs])]
+    for r in range(k):
+        cons.append(X[r, r] - floor >= cp.sum(cp.hstack([u[p] for p, (i, j) in enumerate(pairs) if r in (i, j)])))
+    return cons
 
 
 # -- the program, built once per process -------------------------------------------------------------

@@ -26,6 +26,10 @@ from lyapcheck.sos.polynomials import Monomial
 #: bump when the meaning of a structure changes (older cached programs are then ignored)
 STRUCTURE_VERSION: Final = 1
 
+#: the cones a Gram block may lie in (:attr:`Gram.cone`)
+Cone = Literal["psd", "sdd", "dd"]
+CONES: Final = ("psd", "sdd", "dd")
+
 
 # -- the structure ----------------------------------------------------------------------------------
 
@@ -40,6 +44,18 @@ class Gram:
     basis: tuple[Monomial, ...]
     blocks: tuple[tuple[int, ...], ...]
     margin: bool | str = True
+    #: the cone each block (minus its margin) lies in: ``"psd"`` (semidefinite), ``"sdd"`` (scaled
+    #: diagonally dominant: a sum of 2x2 PSD matrices, one per pair of rows, second-order cones) or
+    #: ``"dd"`` (diagonally dominant, linear): the two inner approximations of Ahmadi & Majumdar
+    #: (DSOS/SDSOS), far cheaper to solve; the exact checks are the same for all three
+    cone: Cone = "psd"
+
+    def __repr__(self) -> str:
+        # the dataclass's own repr, with the cone only where it is not "psd": the structure's hash
+        # (:meth:`Structure.key`) of every program that predates the cones is unchanged
+        cone = f", cone={self.cone!r}" if self.cone != "psd" else ""
+        return (f"Gram(name={self.name!r}, basis={self.basis!r}, blocks={self.blocks!r}, "
+                f"margin={self.margin!r}{cone})")
 
 
 @dataclass(frozen=True)
@@ -124,8 +140,19 @@ class Structure:
         """The sum over the PSD blocks of ``(k (k + 1) / 2)^3`` for a block of ``k`` rows: an
         interior-point iteration factors each block's dense scaling matrix (side ``k (k + 1) / 2``),
         so this is what a solve costs up to a constant (the searches skip a structure above their
-        limit)."""
-        return sum((len(idx) * (len(idx) + 1) // 2) ** 3 for g in self.grams for idx in g.blocks)
+        limit). SDD and DD blocks have no dense scaling matrix (3 x 3 and 1 x 1 ones per pair of
+        rows): they count in :meth:`cone_size` instead."""
+        return sum((len(idx) * (len(idx) + 1) // 2) ** 3 for g in self.grams if g.cone == "psd"
+                   for idx in g.blocks)
+
+    def cone_size(self) -> int:
+        """The decisions of the SDD and DD blocks: each block's ``k (k + 1) / 2`` entries and the
+        auxiliary ones of :mod:`lyapcheck.sos.direct` (two per pair of rows in SDD, one in DD). Their
+        cones' scaling matrices are block diagonal with blocks of 3 x 3 at most, so an
+        interior-point iteration's work grows with this count and with the identities' rows (the
+        sparse factorization of the KKT system), not with a cube of the blocks."""
+        return sum(len(idx) * (len(idx) + 1) // 2 + (2 if g.cone == "sdd" else 1) * (len(idx) * (len(idx) - 1) // 2)
+                   for g in self.grams if g.cone != "psd" for idx in g.blocks)
 
     def parameters(self) -> dict[str, tuple[int, ...]]:
         """Every parameter's shape (a vector per :class:`Coefficients`, a matrix per ``inner``)."""
@@ -154,3 +181,13 @@ def _engine_hash() -> str:
 
 def full_blocks(basis: Sequence[Monomial]) -> tuple[tuple[int, ...], ...]:
     return (tuple(range(len(basis))),) if basis else ()
+
+
+def with_cone(structure: Structure, cone: Cone) -> Structure:
+    """``structure`` with every Gram block in ``cone`` (the SDSOS or DSOS version of a program: the
+    same identities, a smaller feasible set, far cheaper solves)."""
+    from dataclasses import replace
+
+    if cone not in CONES:
+        raise ValueError(f"cone must be one of {', '.join(CONES)}, got {cone!r}")
+    return replace(structure, grams=tuple(replace(g, cone=cone) for g in structure.grams))

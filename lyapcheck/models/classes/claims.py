@@ -313,7 +313,12 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
     what = "a quadratic V" if degree == 2 else f"a polynomial V of degree {degree}"
     if kind == "lyapunov_cliques":
         what += f", a sum over {len(cert['cliques'])} cliques of the states,"
-    return f"GAS: {what} with V' < 0 away from the equilibrium{tail} (checked exactly)"
+    from lyapcheck.models.classes.lyapunov import CONE_WORDS, cone_words
+
+    cone = cert.get("cone")
+    if cone is not None and cone not in CONE_WORDS:
+        raise ValueError(f"unknown cone {cone!r} (one of {', '.join(CONE_WORDS)})")
+    return f"GAS: {what} with V' < 0 away from the equilibrium{tail} (checked exactly{cone_words(cone)})"
 
 
 def ball_words(condition: Mapping[str, Any]) -> str:

@@ -106,7 +106,7 @@ def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequ
 
 def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequence[int]],
                      drop: frozenset[Monomial] = frozenset(), param_degree: int = 0,
-                     drop_v: frozenset[Monomial] = frozenset()) -> Structure | str:
+                     drop_v: frozenset[Monomial] = frozenset(), cone: str = "psd") -> Structure | str:
     """The program for a ``V`` of this degree, or why there is none: a size limit (named), or no
     strict certificate can exist in this form (the remainder's reduced basis lacks a pure power of
     some state: the Newton polytope of ``-V'`` leaves no room for one). ``drop``: monomials the
@@ -114,13 +114,19 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     :func:`vanishing_monomials`: a ``V`` whose Gram matrix must be singular over the full basis,
     e.g. one without ``x1^4`` where an ``x1^4`` would leave odd terms in ``-V'``). Over a box of
     parameters (the ring's variables after the states) ``V``'s basis monomials may carry the
-    parameters up to ``param_degree`` and the box's multipliers join the identity."""
+    parameters up to ``param_degree`` and the box's multipliers join the identity. ``cone``
+    ``"sdd"`` or ``"dd"``: every Gram block in that cone (SDSOS, DSOS), with the cones' size
+    limits (:data:`CONE_LIMITS`) instead of the semidefinite ones."""
     n = field.n
     ring = field.ring
     nv = ring.nvars
-    if bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree) > CANDIDATE_LIMIT:
+    candidate_limit, target_limit, rows_limit = (CANDIDATE_LIMIT, TARGET_LIMIT, MAX_GRAM_ROWS) if cone == "psd" \
+        else CONE_LIMITS
+    limit_names = ("CANDIDATE_LIMIT", "TARGET_LIMIT", "MAX_GRAM_ROWS") if cone == "psd" \
+        else ("CONE_CANDIDATE_LIMIT", "CONE_TARGET_LIMIT", "CONE_GRAM_ROWS")
+    if bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree) > candidate_limit:
         return size_limit(bases.candidate_count(nv, degree - 1 + field_degree(field) + 2 * param_degree),
-                          "candidate monomials", CANDIDATE_LIMIT, "CANDIDATE_LIMIT")
+                          "candidate monomials", candidate_limit, limit_names[0])
     z_v = [m for m in monomials(nv, 1, degree // 2 + param_degree)
            if 1 <= sum(m[:n]) <= degree // 2 and sum(m[n:]) <= param_degree and m not in drop_v]
     if not bases.has_pure_powers(z_v, range(n)):
@@ -137,12 +143,12 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     for g in box_grams:
         sq = {tuple(2 * int(k == multiplier_variable(g.name)) for k in range(nv)), tuple([0] * nv)}
         target |= {tuple(a + b for a, b in zip(m, s)) for m in gram_products(g.basis, g.blocks) for s in sq}
-    if len(target) > TARGET_LIMIT:
-        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
+    if len(target) > target_limit:
+        return size_limit(len(target), "monomials in one polynomial identity", target_limit, limit_names[1])
     z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
-    if len(z_w) > MAX_GRAM_ROWS or len(z_v) > MAX_GRAM_ROWS:
-        return size_limit(max(len(z_w), len(z_v)), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS,
-                          "MAX_GRAM_ROWS")
+    if len(z_w) > rows_limit or len(z_v) > rows_limit:
+        return size_limit(max(len(z_w), len(z_v)), "monomials per sum-of-squares matrix", rows_limit,
+                          limit_names[2])
     if not z_w or not bases.has_pure_powers(z_w, range(n)):
         return ("no strict certificate of this form exists (the Newton polytope of -V' leaves no pure power of "
                 "every state in its basis)")
@@ -151,8 +157,11 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     terms.append(Term(param("muD", ring.support(field.D)), "V"))
     terms.extend(box_terms)
     terms.append(Term(one(ring, -1), "W"))
-    return lyapunov_identity(nv, (Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))),
-                                  Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))), *box_grams), (), terms)
+    grams = (Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))),
+             *box_grams)
+    if cone != "psd":
+        return cone_identity(nv, grams, terms, cone)
+    return lyapunov_identity(nv, grams, (), terms)
 
 
 def lyapunov_identity(nv: int, grams: Sequence[Gram], scalars: Sequence[Any], terms: Sequence[Term]) -> Structure | str:
@@ -348,18 +357,21 @@ def failure(solution: Solution, exact_tried: bool) -> str:
             "certificate of this form was found")
 
 
-def search_degree(field: StateField, degree: int, search: Search, param_degree: int = 0
+def search_degree(field: StateField, degree: int, search: Search, param_degree: int = 0, cone: str = "psd"
                   ) -> tuple[dict[str, Any] | None, str]:
     """A certificate with ``V`` of this degree (and its best decay rate), or None and why not: the
     size limit that was reached, no strict certificate of the form, the solver's verdict on the
-    program, or the exact check that refused its solution."""
+    program, or the exact check that refused its solution. ``cone``: the Gram blocks' cone
+    (:data:`CONE_WORDS`; the certificate then names it)."""
     generators = symmetry(field)
     drop: frozenset[Monomial] = frozenset()
     drop_v: frozenset[Monomial] = frozenset()
     label = f"degree {degree}" + (f" ({param_degree} in the parameters)" if field.p > field.disturbances else "")
+    if cone != "psd":
+        label += f" ({CONE_WORDS[cone]})"
     why = "none found"
     for _ in range(LYAPUNOV_FACIAL_ROUNDS + 1):
-        structure = lyapunov_program(field, degree, generators, drop, param_degree, drop_v)
+        structure = lyapunov_program(field, degree, generators, drop, param_degree, drop_v, cone)
         if isinstance(structure, str):
             return None, f"{label}: {structure}" + (f" (after facial reduction, where {why})" if drop or drop_v else "")
         found, solution = attempt_with_solution(field, structure, Fraction(0), search)
@@ -381,6 +393,8 @@ def search_degree(field: StateField, degree: int, search: Search, param_degree: 
     found = best_decay_rate(lambda mu: attempt(field, structure, mu, search), found)
     found["degree"] = degree
     found["param_degree"] = param_degree
+    if cone != "psd":
+        found["cone"] = cone
     return found, f"{label}: found"
 
 
@@ -399,11 +413,14 @@ def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, An
     v_scaled = found["V_poly"] if "V_poly" in found else found["V"].poly(field.ring)
     if "cliques" in found:
         names = field.ring.names
-        return {"kind": "lyapunov_cliques", "degree": found["degree"], "mu_scaled": str(found["mu"]),
-                "V": stated_v(scaled, field, v_scaled), "form": found["form"],
-                "cliques": [[names[i] for i in c] for c in found["cliques"]],
-                "gram_V": [part.to_json() for part in found["V"].parts],
-                "gram_sigma": [part.to_json() for part in found["W"].parts]}
+        cliques = {"kind": "lyapunov_cliques", "degree": found["degree"], "mu_scaled": str(found["mu"]),
+                   "V": stated_v(scaled, field, v_scaled), "form": found["form"],
+                   "cliques": [[names[i] for i in c] for c in found["cliques"]],
+                   "gram_V": [part.to_json() for part in found["V"].parts],
+                   "gram_sigma": [part.to_json() for part in found["W"].parts]}
+        if "cone" in found:  # only then: a certificate of the semidefinite forms is as before
+            cliques["cone"] = found["cone"]
+        return cliques
     if "vertices" in found:  # the vertex form (below)
         return vertex_certificate_json(stated_v(scaled, field, v_scaled), field, found)
     out = {"kind": "lyapunov", "degree": found["degree"], "mu_scaled": str(found["mu"]),
@@ -412,6 +429,8 @@ def certificate_json(scaled: ScaledField, field: StateField, found: dict[str, An
     if found.get("box"):
         out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]
         out["param_degree"] = found.get("param_degree", 0)
+    if "cone" in found:
+        out["cone"] = found["cone"]
     return out
 
 
@@ -470,30 +489,40 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
     certifies (``sos_gas``: :func:`lyapcheck.models.classes.vector_lyapunov.fallback`)."""
     if field is None:
         field = state_field(scaled)
+    # a benchmark's knob (LYAPCHECK_FORCE_CONE): sos_gas's programs in one of the cheaper cones only
+    # (the store, which keeps semidefinite certificates, is then neither read nor written)
+    forced = forced_cone() if name == "sos_gas" and field.p == 0 else "psd"
     key = (store.problem_key("lyapunov", stored_problem(field, name, degrees, param_degrees))
-           if store.enabled() else None)
+           if store.enabled() and forced == "psd" else None)
     if key is not None:
         recalled = recall_certificate(field, key, degrees)
         if recalled is not None:
             return _certified(scaled, field, name, recalled, {"solves": [], "stored": {
                 "key": key, "check": "exact, in this run"}})
     tried: list[str] = []
+    limited: list[tuple[int, bool]] = []  # degrees whose dense form was too large: (degree, cliques too large)
     try:
         for degree in degrees:
             for param_degree in (param_degrees if field.p and not field.disturbances else (0,)):
                 search.budget.check()  # also before a degree whose program is skipped unsolved
-                found, why = search_degree(field, degree, search, param_degree)
+                found, why = search_degree(field, degree, search, param_degree, forced)
                 tried.append(why)
-                if found is None and field.p == 0 and reasons.size_limits([why]):
+                dense_too_large = bool(reasons.size_limits([why]))
+                clique_why = ""
+                if found is None and field.p == 0 and dense_too_large:
                     # the dense form is too large: V and -V' as sums over cliques of the states
-                    found, why = clique_search(field, degree, search)
-                    tried.append(why)
+                    found, clique_why = clique_search(field, degree, search, forced)
+                    tried.append(clique_why)
                 if found is None and fallback is not None:
                     last = fallback(tried)
                     if last is not None:
                         return last
+                if found is None and name == "sos_gas" and field.p == 0 and dense_too_large and forced == "psd":
+                    # the dense form too large, the cliques' too large or failed: the cheaper cones'
+                    # turn comes after every semidefinite form of every degree (below)
+                    limited.append((degree, bool(reasons.size_limits([clique_why]))))
                 if found is not None:
-                    if key is not None and "cliques" not in found:
+                    if key is not None and "cliques" not in found and "cone" not in found:
                         store.keep(key, {"found": found_json(found), "solves": len(search.log)})
                     return _certified(scaled, field, name, found, {"solves": search.log})
             if name == "sos_gas" and applies(field):
@@ -510,9 +539,17 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
         return ConditionResult(name, "inconclusive", late.summary,
                                numbers=late.numbers({"reason": str(exc), "tried": tried}),
                                solver={"solves": search.log})
+    # the semidefinite forms found nothing: the sentence says so, as before the cones, whatever they do
     steps = ("sos_gas", "candidate") if name == "quadratic" else ("degree", "candidate")
     none = reasons.not_found("Lyapunov function", degrees, tried, steps)
-    return ConditionResult(name, "not_certified", none.summary, numbers=none.numbers({"tried": tried}),
+    cone_lines: list[str] = []
+    if limited:
+        found, cone_lines = cone_fallbacks(field, limited, search)
+        if found is not None:
+            return _certified(scaled, field, name, found, {"solves": search.log})
+    return ConditionResult(name, "not_certified", none.summary,
+                           numbers={**none.numbers({"tried": tried + cone_lines}),
+                                    "detail": [*none.detail, *cone_lines]},
                            solver={"solves": search.log}, property="GAS" if name != "quadratic" else None)
 
 
@@ -588,8 +625,10 @@ def _certified(scaled: ScaledField, field: StateField, name: str, found: dict[st
     what = "a quadratic V" if found["degree"] == 2 else f"a polynomial V of degree {found['degree']}"
     if "cliques" in found:
         what += f", a sum over {len(found['cliques'])} cliques of the states,"
+    if "cone" in found:
+        numbers["cone"] = found["cone"]
     return ConditionResult(name, "certified", f"GAS: {what} with V' < 0 away from the equilibrium{tail} "
-                                              "(checked exactly)",
+                                              f"(checked exactly{cone_words(found.get('cone'))})",
                            numbers=numbers, certificate=cert, solver=solver, property="GAS")
 
 
@@ -689,8 +728,8 @@ def clique_cover(field: StateField, form: str) -> list[tuple[int, ...]]:
 
 
 def clique_program(field: StateField, degree: int, generators: Sequence[Sequence[int]],
-                   cliques: Sequence[tuple[int, ...]], drop: frozenset[tuple[str, Monomial]] = frozenset()
-                   ) -> Structure | str:
+                   cliques: Sequence[tuple[int, ...]], drop: frozenset[tuple[str, Monomial]] = frozenset(),
+                   cone: str = "psd") -> Structure | str:
     """The Lyapunov identity with ``V = sum_k V_k`` and ``-V' - mu V D = sum_k sigma_k``, each
     ``V_k`` (Gram ``V<k>``) and ``sigma_k`` (Gram ``W<k>``) over the monomials of clique ``k`` of
     the states (``V_k`` of degree 1 to ``degree / 2``, ``sigma_k`` Newton-reduced against the
@@ -738,6 +777,8 @@ def clique_program(field: StateField, degree: int, generators: Sequence[Sequence
         identities=(Identity("lyapunov", tuple(terms), None, w_grams[0].name,
                              shared=tuple(g.name for g in w_grams[1:])),),
         objective=("max_margin",))  # no trace normalization: t <= 1 fixes the scale (every Q >= t I)
+    if cone != "psd":
+        return cone_structure(structure, cone)
     if affordable(structure) is None:
         return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
                           "BLOCK_COST_LIMIT")
@@ -767,9 +808,11 @@ def clique_attempt(field: StateField, structure: Structure, mu: Fraction, search
     return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"] / trace if trace > 0 else None, "box": []}, solution
 
 
-def clique_search(field: StateField, degree: int, search: Search) -> tuple[dict[str, Any] | None, str]:
+def clique_search(field: StateField, degree: int, search: Search, cone: str = "psd"
+                  ) -> tuple[dict[str, Any] | None, str]:
     """:func:`search_degree` in the clique form (each of :data:`CLIQUE_FORMS` in turn): a
-    certificate whose ``V`` and remainder are sums over cliques of the states, or None and why."""
+    certificate whose ``V`` and remainder are sums over cliques of the states, or None and why.
+    ``cone``: the Gram blocks' cone (:data:`CONE_WORDS`)."""
     generators = symmetry(field)
     whys: list[str] = []
     seen: list[list[tuple[int, ...]]] = []
@@ -779,11 +822,13 @@ def clique_search(field: StateField, degree: int, search: Search) -> tuple[dict[
             continue  # the same cliques again, or one clique: the dense form, which was too large
         seen.append(cliques)
         label = f"degree {degree}, V a sum over {len(cliques)} cliques of the states ({form})"
+        if cone != "psd":
+            label += f" ({CONE_WORDS[cone]})"
         drop: frozenset[tuple[str, Monomial]] = frozenset()
         why = "none found"
         found = None
         for _ in range(LYAPUNOV_FACIAL_ROUNDS + 1):
-            structure = clique_program(field, degree, generators, cliques, drop)
+            structure = clique_program(field, degree, generators, cliques, drop, cone)
             if isinstance(structure, str):
                 why = structure + (f" (after facial reduction, where {why})" if drop else "")
                 break
@@ -802,6 +847,8 @@ def clique_search(field: StateField, degree: int, search: Search) -> tuple[dict[
             continue
         found = best_decay_rate(lambda mu: clique_attempt(field, solved, mu, search)[0], found)
         found.update({"degree": degree, "param_degree": 0, "cliques": [list(c) for c in cliques], "form": form})
+        if cone != "psd":
+            found["cone"] = cone
         return found, f"{label}: found"
     return None, "; ".join(whys) if whys else f"degree {degree}: no clique form smaller than the whole"
 
@@ -1028,3 +1075,119 @@ def search_vertices(field: StateField, degree: int, search: Search) -> tuple[dic
     found["degree"] = degree
     found["param_degree"] = 1
     return found, f"{label}: found"
+
+
+# -- cheaper cones: SDSOS and DSOS programs where the semidefinite ones are too large (issue 43) ---------
+#
+# Where ``sos_gas``'s dense program is beyond its size limits and the clique form finds nothing (too
+# large as well, or no certificate of its form), the dense program is solved again with every Gram
+# block in a cheaper cone (:attr:`lyapcheck.sos.structure.Gram.cone`): scaled diagonally dominant
+# ("sdd", SDSOS: second-order cones), then diagonally dominant ("dd", DSOS: a linear program), and,
+# where the clique form was too large, the clique form in the same cones. Both are inner
+# approximations of the semidefinite cone (Ahmadi & Majumdar), so a certificate found is an SOS
+# certificate like any other: the exact check is the same (its Gram matrices proved positive definite
+# exactly, :func:`lyapcheck.sos.definiteness.is_positive_definite`, whose diagonal-dominance tests
+# decide these matrices in O(n^2)), and ``verify`` re-checks it without knowing the cone. The
+# certificate names the cone (``"cone": "sdd"``), and only then, so that every other one is as before.
+
+#: the cheaper cones tried in turn, and their words in a sentence or a detail line
+FALLBACK_CONES: Final = ("sdd", "dd")
+CONE_WORDS: Final[Mapping[str, str]] = {"sdd": "SDSOS, scaled diagonally dominant Gram matrices",
+                                        "dd": "DSOS, diagonally dominant Gram matrices"}
+#: the cones' size limits: an SDSOS/DSOS program has no dense block to factor, so the semidefinite
+#: limits on Gram rows and on the blocks' cost (BLOCK_COST_LIMIT) give way to these, measured on the
+#: networks of benchmarks/bench_networks.py (benchmarks/README.md, issue 43)
+CONE_CANDIDATE_LIMIT: Final = 1_000
+CONE_TARGET_LIMIT: Final = 6_000
+CONE_GRAM_ROWS: Final = 500
+#: the most decisions of a cone program's blocks (:meth:`~lyapcheck.sos.structure.Structure.cone_size`)
+CONE_SIZE_LIMIT: Final = 400_000
+CONE_LIMITS: Final = (CONE_CANDIDATE_LIMIT, CONE_TARGET_LIMIT, CONE_GRAM_ROWS)
+#: the solves the fallback may spend in all (a count, so that a loaded machine does the same work): the
+#: 8-state platoon's SDSOS certificate took 2 solves (one facial reduction) and 2 more for its decay rate
+CONE_FALLBACK_SOLVES: Final = 40
+#: the benchmark knob: ``sdd`` or ``dd`` makes every program of sos_gas (dense and cliques) use that
+#: cone, never the semidefinite one (for measuring the cones alone; not a user option)
+FORCE_CONE_ENV: Final = "LYAPCHECK_FORCE_CONE"
+
+
+def forced_cone() -> str:
+    """The cone :data:`FORCE_CONE_ENV` forces (``"psd"`` when unset); InvalidParameter otherwise."""
+    import os
+
+    from lyapcheck.errors import InvalidParameter
+
+    value = os.environ.get(FORCE_CONE_ENV, "").strip().lower()
+    if not value:
+        return "psd"
+    if value not in ("psd", *FALLBACK_CONES):
+        raise InvalidParameter(FORCE_CONE_ENV, "one of psd, sdd, dd (a benchmark knob)", value)
+    return value
+
+
+def cone_words(cone: str | None) -> str:
+    """``, SDSOS: scaled diagonally dominant Gram matrices`` for a sentence's parenthesis ('' for psd)."""
+    if cone is None or cone == "psd":
+        return ""
+    return f"; {CONE_WORDS[cone]}"
+
+
+def cone_structure(structure: Structure, cone: str) -> Structure | str:
+    """``structure`` with every Gram block in ``cone``, or the cone's size limit it exceeds."""
+    from lyapcheck.sos.structure import with_cone
+
+    out = with_cone(structure, cone)  # type: ignore[arg-type]
+    if out.cone_size() > CONE_SIZE_LIMIT:
+        return size_limit(out.cone_size(), "decisions of the cone program", CONE_SIZE_LIMIT, "CONE_SIZE_LIMIT")
+    return out
+
+
+def cone_identity(nv: int, grams: Sequence[Gram], terms: Sequence[Term], cone: str) -> Structure | str:
+    """:func:`lyapunov_identity`'s program with every Gram block in ``cone`` (its size limit instead
+    of :data:`BLOCK_COST_LIMIT`)."""
+    structure = Structure(
+        nvars=nv,
+        grams=tuple(grams),
+        scalars=(),
+        identities=(Identity("lyapunov", tuple(terms), None, "W"),),
+        objective=("max_margin",), trace_one=("V",))
+    return cone_structure(structure, cone)
+
+
+def cone_fallbacks(field: StateField, limited: Sequence[tuple[int, bool]], search: Search
+                   ) -> tuple[dict[str, Any] | None, list[str]]:
+    """:func:`cone_fallback` at each degree whose dense semidefinite form was too large (``limited``:
+    ``(degree, the clique form too large as well)``, rising), within a budget of
+    :data:`CONE_FALLBACK_SOLVES` solves: a certificate or None, and the detail lines. Run after every
+    semidefinite form has found nothing, so it can only add a certificate: where its budget (or the
+    class's time limit, the safety net) ends it, the class's answer is the semidefinite forms' one,
+    and a detail line says where the fallback stopped."""
+    within = search.within(CONE_FALLBACK_SOLVES, "in the cheaper cones' fallback", "CONE_FALLBACK_SOLVES")
+    whys: list[str] = []
+    try:
+        for degree, cliques_too_large in limited:
+            found, more = cone_fallback(field, degree, within, cliques_too_large)
+            whys.extend(more)
+            if found is not None:
+                return found, whys
+    except BudgetExhausted as exc:
+        whys.append(f"the cheaper cones' fallback was stopped: {exc}")
+    return None, whys
+
+
+def cone_fallback(field: StateField, degree: int, search: Search, cliques_too_large: bool
+                  ) -> tuple[dict[str, Any] | None, list[str]]:
+    """The dense program of this degree in each of :data:`FALLBACK_CONES` in turn, and the clique
+    form in them where it was too large as a semidefinite program: a certificate (naming its cone)
+    or None, and the detail lines of what was tried."""
+    whys: list[str] = []
+    for cone in FALLBACK_CONES:
+        search.budget.check()
+        found, why = search_degree(field, degree, search, 0, cone)
+        whys.append(why)
+        if found is None and cliques_too_large:
+            found, why = clique_search(field, degree, search, cone)
+            whys.append(why)
+        if found is not None:
+            return found, whys
+    return None, whys

@@ -210,6 +210,8 @@ def verify_lyapunov(name: str, c: dict[str, Any], check: "FieldCheck") -> tuple[
 
     scaled = _scaled(check)
     cert = c["certificate"]
+    if c.get("cone") != cert.get("cone"):  # the method the condition names (SDSOS, DSOS) is the certificate's
+        return False, "the condition's cone is not the certificate's"
     field = state_field(scaled)
     if c.get("disturbances") == "all":
         from lyapcheck.models.loop.field import active_disturbances, robust_field
