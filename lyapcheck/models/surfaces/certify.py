@@ -185,7 +185,11 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     from lyapcheck.models.loop.discrete import is_discrete
 
     if is_discrete(model):  # a map never reaches the classes that read [dynamics] as a field
-        return _certify_map(model, classes, candidate, limit, box)  # type: ignore[arg-type]
+        if not isinstance(model, Model):  # a map with functions (lyapcheck.models.surfaces.map_functions)
+            from lyapcheck.models.surfaces.map_functions import certify_map_functions
+
+            return certify_map_functions(model, classes, candidate, limit, box)
+        return _certify_map(model, classes, candidate, limit, box)
     if not isinstance(model, Model):  # a loop with functions: its classes run on the recasting
         return _certify_functions(model, classes, candidate, limit, box)
     cand = parse_candidate(model, candidate) if candidate is not None else None
