@@ -2,59 +2,51 @@
 ``tanh``, ``[networks]``, ...; issue 44, item 1): the classes of
 :mod:`lyapcheck.models.classes.discrete_functions` (``linearization`` and ``roa``), every other class
 ``not_applicable`` in one line. Called from :func:`lyapcheck.models.surfaces.certify.certify_model` and
-:func:`lyapcheck.models.surfaces.recast_certify.verify_recast` (one call site each)."""
+:func:`lyapcheck.models.surfaces.recast_certify.verify_recast` (one call site each; this module imports
+neither)."""
 
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from lyapcheck.results import ConditionResult
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.recast import RecastModel
-    from lyapcheck.models.loop.boxes import ModelBox
-    from lyapcheck.models.surfaces.certify import ModelCertification
 
 Row = tuple[str, bool, str]
 
 
-def certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | None, candidate: str | None,
-                          limit: float, box: "ModelBox | None") -> "ModelCertification":
-    """The chosen classes on the map: ``linearization``, then ``roa`` (``not_applicable`` once the map is
-    refuted, as the region would be empty; by ball arithmetic otherwise); ``--box`` refused (exit 2)."""
+def map_results(model: "RecastModel", chosen: Sequence[str], limit: float,
+                guarded: Callable[[str, Callable[[], ConditionResult], float], ConditionResult]
+                ) -> tuple[dict[str, ConditionResult], dict[str, float], Any]:
+    """The ``chosen`` classes on the map (results and seconds, in the order chosen) and the loop the document
+    states: ``linearization`` and ``roa`` (:mod:`lyapcheck.models.classes.discrete_functions`), each under
+    ``guarded`` (certify's: numerical trouble or the time limit become ``inconclusive``); every other class
+    ``not_applicable`` in one line (:data:`~lyapcheck.models.classes.discrete_functions.NOT_YET`)."""
     from lyapcheck.models.classes import discrete_functions
     from lyapcheck.models.classes.recast_classes import base_loop
     from lyapcheck.models.engines.search import Budget
-    from lyapcheck.models.loop.discrete import refuse
-    from lyapcheck.models.surfaces.certify import (Candidate, ModelCertification, _guarded, _needs_input,
-                                                   class_selection)
 
-    if box is not None:
-        refuse(model, "--box", "certify a point (--set NAME=VALUE)")
-    cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
-    chosen = class_selection(classes, model, cand)
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
     for name in chosen:
         if name not in discrete_functions.TAKEN:
-            results[name] = _needs_input(name, None, cand) or ConditionResult(name, "not_applicable",
-                                                                              discrete_functions.NOT_YET)
+            results[name] = ConditionResult(name, "not_applicable", discrete_functions.NOT_YET)
     if "linearization" in chosen:
         start = time.perf_counter()
-        results["linearization"] = _guarded("linearization", lambda: discrete_functions.linearization(model), limit)
+        results["linearization"] = guarded("linearization", lambda: discrete_functions.linearization(model), limit)
         seconds["linearization"] = time.perf_counter() - start
     if "roa" in chosen:
         start = time.perf_counter()
         budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-        results["roa"] = _guarded("roa", lambda: discrete_functions.roa(model, budget), limit)
+        results["roa"] = guarded("roa", lambda: discrete_functions.roa(model, budget), limit)
         seconds["roa"] = time.perf_counter() - start
     if model.disturbances:
         for r in results.values():  # the map is read with its disturbances at 0
             r.disturbances = "zero"
-    results = {name: results[name] for name in chosen}
-    return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds,
-                              loop=base_loop(model.system, cylinder=False))
+    return {name: results[name] for name in chosen}, seconds, base_loop(model.system, cylinder=False)
 
 
 def verify_map_functions(doc: dict[str, Any], model: "RecastModel", rows: list[Row]) -> list[Row]:
@@ -91,4 +83,4 @@ def verify_map_functions(doc: dict[str, Any], model: "RecastModel", rows: list[R
     return with_verdict(doc, rows)
 
 
-__all__ = ["certify_map_functions", "verify_map_functions"]
+__all__ = ["map_results", "verify_map_functions"]
