@@ -604,8 +604,8 @@ KIND_TITLES = {
     "box": "**Over a box** (`--box a=0.8..1.2` on certify, verify, report and the API; the sweeps are the "
            "polynomial loop's over that interval)",
     "discrete": "**Discrete-time map** (`[model] time = \"discrete\"`: `x2+ = -x1/4 + a*x2/2 - x2**3/8`)",
-    "map_functions": "**Discrete-time map with functions** (`x2+ = -x1/4 + a*tanh(x2)/2`, `x1+ = x1/2 + "
-                     "sin(x2)/4`)",
+    "map_functions": "**Discrete-time map with functions** (`x1+ = x1/2 + sin(x2)/4`, `x2+ = -x1/4 + "
+                     "a*tanh(x2)/2`)",
 }
 
 
