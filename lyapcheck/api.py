@@ -993,6 +993,11 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     from lyapcheck.models.language.modelfile import Model as FileModel
     from lyapcheck.models.loop.discrete import is_discrete
 
+    if is_discrete(loaded) and not isinstance(loaded, FileModel):  # a map with functions: not iterated yet
+        from lyapcheck.models.loop.discrete import refuse
+
+        refuse(loaded, "simulate", "a map with functions (sin, tanh, [networks], ...) is not iterated yet; certify "
+                                   "takes it")
     if is_discrete(loaded) and isinstance(loaded, FileModel):  # a map is iterated, never integrated as a field
         return _iterate_map(loaded, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios, frequencies=frequencies,
                             worst_case=worst_case, certificate=certificate, plot=plot, series=series, steps=steps)

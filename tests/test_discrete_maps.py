@@ -109,12 +109,13 @@ def test_units_of_a_map_are_the_states_own() -> None:
     assert parse_model(head.format("0.5 1/s").replace('time = "discrete"\n', "")).units == {"x": "m"}
 
 
-def test_a_map_with_functions_is_refused_in_one_line() -> None:
+def test_a_map_with_functions_is_read_as_a_map() -> None:
     from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.language.recast import RecastModel
 
-    with pytest.raises(ModelFileError, match=r'\[model\] time: a discrete-time map \(time = "discrete"\) with '
-                                             "functions"):
-        parse_any_model(MAP.replace('"a*x/2 + y/4"', '"sin(x)/2 + y/4"'))
+    # (taken since issue 44's maps with functions: tests/test_discrete_functions.py)
+    model = parse_any_model(MAP.replace('"a*x/2 + y/4"', '"sin(x)/2 + y/4"'))
+    assert isinstance(model, RecastModel) and model.time == "discrete" and model.system.flows == {}
 
 
 def test_from_sympy_keeps_the_time_and_its_text_round_trips() -> None:

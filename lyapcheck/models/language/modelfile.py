@@ -348,11 +348,6 @@ class _Reader:
         from lyapcheck.models.language.recast import RecastModel, recast_dynamics  # only a loop with functions needs it
 
         name, origin, states = self.head()
-        if self.time == DISCRETE:
-            # the recasting gives each auxiliary its time derivative by the chain rule, which a map does
-            # not have: a map with functions would be another system
-            raise self.fail("[model] time", 'a discrete-time map (time = "discrete") with functions (sin, sqrt, sat, '
-                                            '...) is not taken yet: write its [dynamics] polynomial or rational')
         params, params_given = self.quantities("parameters", MAX_PARAMETERS)
         dists = self.disturbance_bounds()
         self.check_unique(states, params, dists)
@@ -382,6 +377,9 @@ class _Reader:
         except OutsideLanguage:
             units = None
         # the nominal loop: every disturbance at 0 (a claim about it says "(d = 0)")
+        if self.time == DISCRETE:  # a map: its displacement F(x) - x (lyapcheck.models.classes.discrete_functions)
+            return self.recast_map(name, origin, states, params, dists, table, equilibrium, domain, outputs,
+                                   output_text, networks, set_text, recast_sets, units, candidate)
         system, V = recast_dynamics(self.source, states, table, {**params, **{d: Fraction(0) for d in dists}},
                                     equilibrium, candidate, networks)
         if units is None:  # the recasting's parser took every text after all: each is checked now
@@ -399,6 +397,45 @@ class _Reader:
                            overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V,
                            disturbances=dists, robust=robust, outputs=outputs, output_text=output_text,
                            sets=recast_sets, set_text=set_text, units=units, networks=networks)
+
+    def recast_map(self, name: str, origin: str, states: tuple[str, ...], params: dict[str, Fraction],
+                   dists: dict[str, Fraction], table: Mapping[str, object], equilibrium: tuple[Fraction, ...],
+                   domain: Any, outputs: Any, output_text: Any, networks: "tuple[Network, ...]", set_text: Any,
+                   sets: Any, units: dict[str, str] | None, candidate: str | None) -> "RecastModel":
+        """A discrete-time map with functions (issue 44): ``[dynamics]`` gives ``x+ = F(x)``, and what is recast
+        is the displacement ``F(x) - x``, each text as ``(F_s) - (s)``: the recasting's check that every
+        right-hand side is 0 at the equilibrium, exactly (each function's value exact there), is then the
+        fixed-point check ``F(x_eq) = x_eq``, and the classes of a map
+        (:mod:`lyapcheck.models.classes.discrete_functions`) read ``F = x + (F - x)`` back. The auxiliaries'
+        flows would be the chain rule of a field
+        that is not this map's: they are not derived, nor the relations (``for_map``), and no class of a
+        continuous loop runs on a map (``time`` is ``"discrete"``). Disturbances stay at 0 (claims say
+        ``(d = 0)``)."""
+        from lyapcheck.models.language.recast import RecastModel, recast_dynamics
+
+        displaced: dict[str, object] = {
+            s: (f"({table[s]}) - ({s})" if isinstance(table[s], (str, int, float)) and not isinstance(table[s], bool)
+                else table[s]) for s in states}
+        try:
+            system, V = recast_dynamics(self.source, states, displaced, {**params, **{d: Fraction(0) for d in dists}},
+                                        equilibrium, candidate, networks, for_map=True)
+        except ModelFileError as exc:
+            if exc.key != "[equilibrium]":
+                raise
+            # (the recasting's words are a field's: x' = r there; here r = F(x_eq) - x_eq)
+            message = str(exc).removeprefix(f"{exc.source}: {exc.key}: ")
+            message = message.replace("is not an equilibrium: ", "is not a fixed point of the map: ")
+            for s in states:
+                message = message.replace(f" {s}' = ", f" {s}+ - {s} = ")
+            raise ModelFileError(self.source, "[equilibrium]", message) from None
+        if units is None:  # the recasting's parser took every text after all: each is checked now
+            units = self.units(states, set_text)
+        return RecastModel(source=self.source, text=self.text, name=name, origin=origin, states=states,
+                           parameters=params, equilibrium=equilibrium, domain=domain, system=system,
+                           overrides={k: str(v) for k, v in self.overrides.items()}, candidate_v=V,
+                           disturbances=dists, robust=None, outputs=outputs, output_text=output_text,
+                           sets=sets, set_text=set_text, units=units,
+                           networks=networks, time=DISCRETE)
 
     def networks(self, states: tuple[str, ...], params: Mapping[str, Fraction], dists: Mapping[str, Fraction],
                  outputs: Mapping[str, str]) -> "tuple[Network, ...]":

@@ -533,14 +533,17 @@ def count_calls(texts: Sequence[str]) -> int:
 
 def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, object],
                     constants: Mapping[str, Fraction], equilibrium: Sequence[Fraction],
-                    candidate: str | None = None, networks: Sequence["Network"] = ()
+                    candidate: str | None = None, networks: Sequence["Network"] = (), for_map: bool = False
                     ) -> tuple[RecastSystem, Poly | None]:
     """Parse each state's right-hand side with the functions recast (one-line
     :class:`~lyapcheck.errors.ModelFileError` naming the key on anything refused); with a
     ``candidate`` V (``--candidate``, the same language), its functions are recast too and it is
     returned as a polynomial in the recast ring's deviations (0 at the equilibrium). ``networks``
     (``[networks.NAME]``, :mod:`lyapcheck.models.language.networks`) are lowered first, their neurons the
-    first auxiliaries, and their outputs are names the texts may use."""
+    first auxiliaries, and their outputs are names the texts may use. ``for_map`` (a map's displacement
+    ``F(x) - x``, which is no field): neither the auxiliaries' flows nor their relations are derived (both
+    empty: a map's classes evaluate the true map and differentiate it at its fixed point, and moving a
+    2 x 32 network's relations to the final ring alone takes minutes)."""
     slots = count_calls([str(t) for t in texts.values()] + ([candidate] if candidate is not None else []))
     slots += 2 * sum(n.neurons for n in networks)
     recaster = Recaster(states, tuple(equilibrium), slots)
@@ -572,9 +575,11 @@ def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, ob
                                                         "by an expression of the states)")
         extra.append(v)
     try:
-        flows = recaster.flows(rhs)
+        flows = recaster.flows(rhs) if not for_map else {}
     except ExpressionError as exc:  # pragma: no cover - defensive
         raise ModelFileError(source, "[dynamics]", str(exc)) from None
+    if for_map:
+        recaster.relations.clear()
     system, moved = _finish(source, recaster, rhs, flows, equilibrium, extra)
     if not moved:
         return system, None
@@ -790,6 +795,9 @@ class RecastModel:
     units: dict[str, str] = field(default_factory=dict)
     #: ``[networks.NAME]`` as read (lyapcheck.models.language.networks): every recasting of the loop lowers them
     networks: tuple["Network", ...] = ()
+    #: ``[model] time``: ``"discrete"`` for a map, whose :attr:`system` is then the recast displacement
+    #: ``F(x) - x`` (lyapcheck.models.language.modelfile, ``recast_map``), never a field
+    time: str = "continuous"
 
     @property
     def state_ring(self) -> Ring:

@@ -185,7 +185,16 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     from lyapcheck.models.loop.discrete import is_discrete
 
     if is_discrete(model):  # a map never reaches the classes that read [dynamics] as a field
-        return _certify_map(model, classes, candidate, limit, box)  # type: ignore[arg-type]
+        if not isinstance(model, Model):  # a map with functions (lyapcheck.models.surfaces.map_functions)
+            from lyapcheck.models.loop.discrete import refuse
+            from lyapcheck.models.surfaces.map_functions import map_results
+
+            if box is not None:
+                refuse(model, "--box", "certify a point (--set NAME=VALUE)")
+            cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
+            results, seconds, loop = map_results(model, class_selection(classes, model, cand), limit, _guarded)
+            return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds, loop=loop)
+        return _certify_map(model, classes, candidate, limit, box)
     if not isinstance(model, Model):  # a loop with functions: its classes run on the recasting
         return _certify_functions(model, classes, candidate, limit, box)
     cand = parse_candidate(model, candidate) if candidate is not None else None

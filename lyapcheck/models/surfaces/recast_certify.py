@@ -49,6 +49,10 @@ def verify_recast(doc: dict[str, Any], model: RecastModel, rows: list[Row]) -> l
     the recasting, the box, every decided condition's proof, the counterexamples and the candidate."""
     from lyapcheck.models.surfaces.documents import with_verdict as _with_verdict
 
+    if getattr(model, "time", "continuous") == "discrete":  # a map with functions: its own checks
+        from lyapcheck.models.surfaces.map_functions import verify_map_functions
+
+        return verify_map_functions(doc, model, rows)
     stated = doc["recast"]
     derived = model.system.to_json()
     recast_ok = all(stated.get(k) == derived[k] for k in derived)

@@ -1,0 +1,309 @@
+"""Discrete-time maps with functions (``[model] time = "discrete"`` with ``sin``, ``tanh``, ``[networks]``, ...;
+issue 44, item 1): ``linearization`` and ``roa``.
+
+The map ``x+ = F(x)`` is read by the recasting of continuous loops, applied to its displacement
+``F(x) - x`` (:meth:`lyapcheck.models.language.modelfile._Reader.recast_map`): the recasting's exact check
+that every right-hand side is 0 at the equilibrium is the fixed-point check ``F(x_eq) = x_eq``, each
+function's value exact there. In deviations ``e = x - x_eq`` the map is ``e+ = e + d(e)`` with
+``d(e) = F(x_eq + e) - x_eq - e``.
+
+``linearization``: the exact Jacobian of ``d`` at the fixed point by the chain rule through the
+auxiliaries (:func:`lyapcheck.models.classes.recast_classes.jacobian`, the continuous loops' own), plus the
+identity, then the exact Schur decision of :func:`lyapcheck.models.classes.discrete_linearization.decide`
+(spectral radius < 1 certified, > 1 refuted). A function not differentiable at the fixed point:
+``not_applicable`` naming it.
+
+``roa``: ``V(e) = e^T P e`` with ``P`` a short dyadic rounding of the solution of ``A^T P A - P = -I``
+(``A`` the exact Jacobian), ``P > 0`` checked exactly, and ``g(e) = V(e + d(e)) - V(e) < 0`` on
+``E = {V <= c}`` except at the fixed point, proved by ball arithmetic on the true map (every function and
+the network in outward-rounded ``arb`` balls, :class:`~lyapcheck.models.engines.interval_field.BallLoop`)
+on the cells of :func:`~lyapcheck.models.engines.ellipsoid_cells.prove_ellipsoid`, with this module's
+geometry (:class:`MapGeometry`: ``g`` and its derivatives instead of a Lie derivative). ``g(0) = 0`` and
+``grad g(0) = 0`` (the fixed point), so the Hessian-zone argument of that module holds unchanged.
+
+Why ``E`` is then a region of attraction: for ``e`` in ``E``, ``V(F(e)) <= V(e) <= c`` (``g <= 0``), so
+``F(E)`` lies in ``E`` (forward invariance) and ``V`` is non-increasing along every orbit from ``E``. ``g``
+is continuous and ``< 0`` on the compact ``E`` minus any open ball ``B_r`` around the fixed point, so there
+``g <= -m_r < 0``: an orbit that stayed outside ``B_r`` would decrease ``V`` by ``m_r`` at each step
+without bound, which ``V >= 0`` forbids; and once in the sublevel set ``{V <= min_{E \\ B_r} V}`` (inside
+``B_r`` for small sublevels) it stays there. Hence ``V(e_k) -> 0`` and ``e_k -> 0`` for every start in ``E``:
+asymptotic stability with ``E`` inside the region of attraction.
+
+The level is the largest one proved by a monotone search
+(:func:`~lyapcheck.models.classes.level_search.largest_proved_level`: growth by a factor, then bisections)
+within cell budgets (counts, :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS` per attempt,
+:data:`~lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS` in all). The certificate (kind
+``discrete_interval``) states ``P`` and the level; :func:`verify_roa` repeats the proof, cell for cell.
+
+``quadratic``, ``sos_gas`` and ``candidate`` on such a map are ``not_applicable`` (one line: :data:`NOT_YET`).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Final
+
+import flint
+
+from lyapcheck import tolerances
+from lyapcheck.models.engines.ellipsoid_cells import Cell, Whitening, _Geometry
+from lyapcheck.models.engines.interval_field import BallLoop, Jet, ball
+from lyapcheck.results import ConditionResult
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.engines.search import Budget
+    from lyapcheck.models.language.recast import RecastModel
+
+#: the certificate kind of ``roa`` on a map with functions
+KIND: Final = "discrete_interval"
+#: the classes a map with functions takes
+TAKEN: Final = ("linearization", "roa")
+#: the reason of every other class on such a map
+NOT_YET: Final = ('not taken yet on a discrete-time map with functions ([model] time = "discrete" with sin, tanh, '
+                  "[networks], ...): the classes taken are linearization and roa")
+#: significant bits of each entry of V's matrix (short dyadics: V's balls stay exact)
+P_BITS: Final = 30
+#: significant bits of a level tried
+LEVEL_BITS: Final = 12
+#: levels tried upwards (each the last times MAP_LEVEL_GROWTH), then bisections of the bracket
+MAP_LEVEL_GROWTH: Final = Fraction(4)
+MAP_LEVEL_GROWTH_STEPS: Final = 16
+MAP_LEVEL_BISECTIONS: Final = 4
+#: the first level tried: the ellipsoid this wide (in its widest state) ...
+MAP_FIRST_EXTENT: Final = Fraction(1, 2)
+#: ... and, if not proved, a quarter of it at most this many times
+MAP_LOCAL_STEPS: Final = 12
+
+
+def exact_jacobian(model: "RecastModel") -> list[list[Fraction]] | str:
+    """``A = I + Jd`` at the fixed point (exact), or why there is none (a function not differentiable
+    there, named; an irrational entry)."""
+    from lyapcheck.models.classes.recast_classes import base_loop, jacobian
+
+    J = jacobian(base_loop(model.system, cylinder=False))
+    if isinstance(J, str):
+        return J
+    return [[x + (1 if i == j else 0) for j, x in enumerate(row)] for i, row in enumerate(J)]
+
+
+def linearization(model: "RecastModel") -> ConditionResult:
+    """The map's linearization decided exactly (module docstring)."""
+    from lyapcheck.models.classes import discrete_linearization
+
+    A = exact_jacobian(model)
+    if isinstance(A, str):
+        return ConditionResult("linearization", "not_applicable", f"the map's Jacobian at the fixed point: {A}",
+                               property="LES")
+    return discrete_linearization.decide(A)
+
+
+def verify_linearization(model: "RecastModel", status: str, data: dict[str, Any]) -> tuple[bool, str]:
+    """A map's linearization re-derived: the exact Jacobian again, then the discrete-time test."""
+    from lyapcheck.models.classes import discrete_linearization
+
+    A = exact_jacobian(model)
+    if isinstance(A, str):
+        return False, f"the map's Jacobian is not exact here: {A}"
+    return discrete_linearization.verify_matrix(A, status, data)
+
+
+class MapDifference:
+    """``g(z) = V(z + d(z)) - V(z)`` for ``V = z^T P z`` on balls (the interface
+    :func:`~lyapcheck.models.engines.ellipsoid_cells.prove_ellipsoid` asks of a Lie derivative)."""
+
+    def __init__(self, loop: BallLoop, P: list[list[Fraction]]) -> None:
+        self.loop = loop
+        self.n = loop.n
+        self.P = [[ball(x) for x in row] for row in P]
+
+    def quadratic(self, z: list[Any]) -> Any:
+        n = self.n
+        total: Any = flint.arb(0)
+        for i in range(n):
+            total = z[i] * (self.P[i][i] * z[i]) + total
+            for j in range(i + 1, n):
+                total = (z[i] * z[j]) * (2 * self.P[i][j]) + total
+        return total
+
+    def __call__(self, z: list[Any]) -> Any:
+        d = self.loop.field(z)
+        return self.quadratic([zi + di for zi, di in zip(z, d)]) - self.quadratic(z)
+
+
+class MapGeometry(_Geometry):
+    """The cells of :mod:`~lyapcheck.models.engines.ellipsoid_cells` with ``g = V(F(z)) - V(z)``: ``g`` is
+    carried as a :class:`~lyapcheck.models.engines.interval_field.Jet` of the cell's own coordinates ``y``
+    (``z = M y``, ``M`` exact), so its gradient and Hessian come out in ``y`` by the chain rule. ``V(z)`` is
+    ``y^T Q y`` (``Q = M^T P M``, exact), ``V(F(z))`` the quadratic form of ``P`` on the map's image."""
+
+    def __init__(self, w: Whitening, P: list[list[Fraction]], diff: MapDifference) -> None:
+        super().__init__(w, P, diff)  # type: ignore[arg-type]
+        self.diff = diff
+
+    def _g(self, ys: list[Any], order: int) -> Jet | None:
+        n = self.n
+        Y = [Jet.variable(y, i, n, order) for i, y in enumerate(ys)]
+        Z = [sum((Y[j].scaled(self.M[i][j]) for j in range(n)), Jet.constant(flint.arb(0), n, order))
+             for i in range(n)]
+        D = self.loop.field(Z)
+        D = [di if isinstance(di, Jet) else Jet.constant(di, n, order) for di in D]
+        if any(di.grad is None or (order >= 2 and di.hess is None) for di in D):
+            return None
+        image = [zi + di for zi, di in zip(Z, D)]
+        q_old = Jet.constant(flint.arb(0), n, order)
+        for i in range(n):
+            q_old = q_old + (Y[i] * Y[i]).scaled(self.Q[i][i])
+            for j in range(i + 1, n):
+                q_old = q_old + (Y[i] * Y[j]).scaled(2 * self.Q[i][j])
+        q_new = Jet.constant(flint.arb(0), n, order)
+        P = self.diff.P
+        for i in range(n):
+            q_new = q_new + (image[i] * image[i]).scaled(P[i][i])
+            for j in range(i + 1, n):
+                q_new = q_new + (image[i] * image[j]).scaled(2 * P[i][j])
+        return q_new - q_old
+
+    def hessian_y(self, lie: Any, cell: Cell) -> list[list[Any]] | None:
+        g = self._g([flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell], 2)
+        if g is None or g.hess is None:
+            return None
+        H = g.hess
+        if not all(h.is_finite() for row in H for h in row):
+            return None
+        return H
+
+    def at_centre(self, lie: Any, cell: Cell) -> tuple[Any, list[Any] | None]:
+        ys = [flint.arb((a + b) / 2) for a, b in cell]
+        g = self._g(ys, 1)
+        if g is None or g.grad is None:
+            return self.diff(self.z_of(ys)), None
+        return g.value, g.grad
+
+
+def rounded_p(A: list[list[Fraction]]) -> list[list[Fraction]] | None:
+    """``P`` of ``A^T P A - P = -I`` rounded to :data:`P_BITS` significant bits (symmetric), or None."""
+    from lyapcheck.models.classes.discrete_linearization import stein_solution
+    from lyapcheck.models.engines.ellipsoid_cells import _short
+
+    P = stein_solution(A)
+    if P is None:
+        return None
+    n = len(P)
+    return [[_short(P[min(i, j)][max(i, j)], P_BITS) for j in range(n)] for i in range(n)]
+
+
+def prove_level(model: "RecastModel", P: list[list[Fraction]], level: Fraction, cells: int) -> Any:
+    """``g < 0`` on ``{e^T P e <= level}`` but at the fixed point (deterministic; at most ``cells`` cells)."""
+    from lyapcheck.exact import inverse
+    from lyapcheck.models.engines.ellipsoid_cells import prove_ellipsoid
+
+    diff = MapDifference(BallLoop(model.system), P)
+    diagonal = [inverse(P)[i][i] for i in range(len(P))]
+    return prove_ellipsoid(diff, P, diagonal, level, [], None, cells,  # type: ignore[arg-type]
+                           geometry=lambda w: MapGeometry(w, P, diff))
+
+
+def _v_terms(P: list[list[Fraction]], states: tuple[str, ...], equilibrium: tuple[Fraction, ...]) -> str:
+    parts = []
+    names = [s if x == 0 else f"({s} - {x})" for s, x in zip(states, equilibrium)]
+    for i in range(len(P)):
+        for j in range(i, len(P)):
+            c = P[i][j] * (1 if i == j else 2)
+            if c:
+                parts.append(f"{c}*{names[i]}*{names[j]}" if i != j else f"{c}*{names[i]}**2")
+    return " + ".join(parts)
+
+
+def area(P: list[list[Fraction]], level: Fraction) -> float | None:
+    """The area of ``{e^T P e <= level}`` for 2 states: ``pi level / sqrt(det P)``; None otherwise."""
+    import math
+
+    if len(P) != 2:
+        return None
+    det = P[0][0] * P[1][1] - P[0][1] * P[1][0]
+    return math.pi * float(level) / math.sqrt(float(det))
+
+
+def roa(model: "RecastModel", budget: "Budget") -> ConditionResult:
+    """The largest sublevel set of the linearization's ``V`` proved a region of attraction (module docstring)."""
+    from lyapcheck.exact import inverse
+    from lyapcheck.models.classes.level_search import largest_proved_level
+    from lyapcheck.models.classes.recast_classes import _dyadic
+    from lyapcheck.models.engines.search import BudgetExhausted
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    A = exact_jacobian(model)
+    if isinstance(A, str):
+        return ConditionResult("roa", "not_applicable", f"the map's Jacobian at the fixed point: {A}", property="ROA")
+    P = rounded_p(A)
+    if P is None or not is_positive_definite(P):
+        return ConditionResult("roa", "not_certified", "the discrete Lyapunov equation A^T P A - P = -I of the exact "
+                               "Jacobian has no positive definite solution (rounded): no quadratic V to start from",
+                               property="ROA")
+    widest = max(inverse(P)[i][i] for i in range(len(P)))
+    spent = [0]
+    total, each = tolerances.BALL_LEVEL_TOTAL_CELLS, tolerances.BALL_LEVEL_CELLS
+
+    def attempt(level: Fraction) -> tuple[Fraction, Any] | None:
+        left = total - spent[0]
+        if left <= 0:
+            raise BudgetExhausted(f"the search's {total} cells were spent (lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS)")
+        if budget.left() <= 0:
+            raise BudgetExhausted(budget.reached())
+        proof = prove_level(model, P, level, min(each, left))
+        spent[0] += proof.cells
+        return (level, proof) if proof.ok else None
+
+    first = _dyadic(MAP_FIRST_EXTENT ** 2 / widest, LEVEL_BITS)
+    try:
+        for _ in range(MAP_LOCAL_STEPS):
+            if attempt(first) is not None:
+                break
+            first = _dyadic(first / 4, LEVEL_BITS)
+        found = largest_proved_level(attempt, first, growth=MAP_LEVEL_GROWTH, growth_steps=MAP_LEVEL_GROWTH_STEPS,
+                                     halvings=0, bisections=MAP_LEVEL_BISECTIONS,
+                                     rounded=lambda x: _dyadic(x, LEVEL_BITS))
+    except BudgetExhausted as exc:
+        return ConditionResult("roa", "inconclusive", f"ball arithmetic on the true map: {exc}", property="ROA")
+    if found.proof is None or found.level is None:
+        return ConditionResult("roa", "not_certified", "ball arithmetic on the true map: V(F(e)) < V(e) was not "
+                               f"proved on the smallest ellipsoid tried (level {float(first):.3g})", property="ROA")
+    level, proof = found.proof
+    cert = {"kind": KIND, "method": "ball arithmetic on the true map (python-flint arb), cells of the ellipsoid",
+            "time": "discrete", "variables": list(model.states),
+            "P": [[str(x) for x in row] for row in P], "level": str(level), "cells": proof.cells,
+            "V_text": _v_terms(P, model.states, model.equilibrium)}
+    tried = [f"level {float(lv):.6g}: {'proved' if ok else 'not proved'}" for lv, ok in found.tried]
+    size = area(P, level)
+    summary = (f"region of attraction of the map: {{V <= {float(level):.6g}}} with V = e^T P e (P from the discrete "
+               "Lyapunov equation of the exact Jacobian), V(F(e)) < V(e) proved on it by ball arithmetic on the true "
+               "map (every start in it stays in it and converges to the fixed point)")
+    numbers: dict[str, Any] = {"level": float(level), "cells": proof.cells, "cells_spent": spent[0], "tried": tried}
+    if size is not None:
+        numbers["area"] = size
+    return ConditionResult("roa", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+
+
+def verify_roa(model: "RecastModel", c: dict[str, Any]) -> tuple[bool, str]:
+    """A ``discrete_interval`` region re-proved from its certificate: ``P`` symmetric and positive definite
+    (exact), then the same cells at the stated level (at most :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS`)."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    cert = c.get("certificate")
+    if not isinstance(cert, dict) or cert.get("kind") != KIND:
+        return False, f"a certified roa on a map with functions states a certificate of kind '{KIND}'"
+    n = len(model.states)
+    P = [[Fraction(str(x)) for x in row] for row in cert["P"]]
+    level = Fraction(str(cert["level"]))
+    if len(P) != n or any(len(row) != n for row in P) or any(P[i][j] != P[j][i] for i in range(n) for j in range(n)):
+        return False, "P must be a symmetric matrix over the states"
+    if not level > 0 or not is_positive_definite(P):
+        return False, "P must be positive definite and the level > 0 (checked exactly)"
+    proof = prove_level(model, P, level, tolerances.BALL_LEVEL_CELLS)
+    if not proof.ok:
+        return False, f"V(F(e)) < V(e) is not proved on {{V <= {cert['level']}}}: {proof.why}"
+    return True, f"V(F(e)) < V(e) proved again on {{V <= {cert['level']}}} by ball arithmetic ({proof.cells} cells)"
+
+
+__all__ = ["KIND", "TAKEN", "NOT_YET", "exact_jacobian", "linearization", "verify_linearization", "MapDifference",
+           "MapGeometry", "roa", "verify_roa", "area"]
