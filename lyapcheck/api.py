@@ -993,12 +993,7 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
     from lyapcheck.models.language.modelfile import Model as FileModel
     from lyapcheck.models.loop.discrete import is_discrete
 
-    if is_discrete(loaded) and not isinstance(loaded, FileModel):  # a map with functions: not iterated yet
-        from lyapcheck.models.loop.discrete import refuse
-
-        refuse(loaded, "simulate", "a map with functions (sin, tanh, [networks], ...) is not iterated yet; certify "
-                                   "takes it")
-    if is_discrete(loaded) and isinstance(loaded, FileModel):  # a map is iterated, never integrated as a field
+    if is_discrete(loaded):  # a map (with functions or not) is iterated, never integrated as a field
         return _iterate_map(loaded, x0=x0, grid=grid, t_end=t_end, scenarios=scenarios, frequencies=frequencies,
                             worst_case=worst_case, certificate=certificate, plot=plot, series=series, steps=steps)
     if steps is not None:
@@ -1025,7 +1020,7 @@ def simulate_model_file(model: "str | Path | Model", *, settings: Mapping[str, o
                             series=dataset)
 
 
-def _iterate_map(model: "Model", *, x0: Any, grid: int | None, t_end: object, scenarios: Sequence[str] | None,
+def _iterate_map(model: "Model | RecastModel", *, x0: Any, grid: int | None, t_end: object, scenarios: Sequence[str] | None,
                  frequencies: object, worst_case: bool, certificate: object, plot: str | Path | None, series: bool,
                  steps: int | str | None) -> SimulationReport:
     """:func:`simulate_model_file` on a discrete-time map: its iterates
@@ -1046,7 +1041,7 @@ def _iterate_map(model: "Model", *, x0: Any, grid: int | None, t_end: object, sc
                                   held + " (scenario none)")):
         if given:
             refuse(model, name, instead)
-    starts = model_starts(model, x0)
+    starts = model_starts(model, x0)  # type: ignore[arg-type]  # (a RecastModel has the states it reads)
     if grid is not None:
         starts += list(sim.grid_over_domain(model, grid))
     if starts:

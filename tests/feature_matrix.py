@@ -236,9 +236,7 @@ REFUSALS: tuple[Refusal, ...] = (
 )
 
 #: loop surfaces refused today, with the refusal's words: (kinds, the words)
-LOOP_REFUSALS: tuple[tuple[tuple[str, ...], str], ...] = (
-    (("map_functions",), "a map with functions (sin, tanh, [networks], ...) is not iterated yet"),
-)
+LOOP_REFUSALS: tuple[tuple[tuple[str, ...], str], ...] = ()
 
 
 # -- running the public surfaces ------------------------------------------------------------------------

@@ -30,6 +30,8 @@ from lyapcheck.sos.polynomials import Ring
 if TYPE_CHECKING:  # pragma: no cover
     from numpy.typing import NDArray
 
+    from lyapcheck.models.language.recast import RecastModel
+
     FloatArray = NDArray[np.float64]
 
 #: iterations when ``--steps`` is not given
@@ -54,21 +56,33 @@ def check_steps(steps: object) -> int:
 
 class MapIterator:
     """``f`` of a map at ``(batch, n)`` states, every disturbance 0: numerators and denominators in one
-    evaluation."""
+    evaluation. A map with functions (a :class:`~lyapcheck.models.language.recast.RecastModel`, whose
+    system is the recast displacement ``F(x) - x``) is ``x`` plus that displacement, every function
+    evaluated by numpy from its definition (:class:`~lyapcheck.models.engines.recast_numeric.FloatLoop`, as
+    ``simulate`` evaluates a loop with functions)."""
 
-    def __init__(self, model: Model) -> None:
-        rhs = field_at(model)
+    def __init__(self, model: "Model | RecastModel") -> None:
         self.n, self.m = model.n, len(model.disturbances)
+        self.displacement = None
+        if not isinstance(model, Model):
+            from lyapcheck.models.engines.recast_numeric import FloatLoop
+
+            self.displacement = FloatLoop(model.system)  # (its disturbances at 0: lyapcheck.models.language.recast)
+            return
+        rhs = field_at(model)
         self.polys = CompiledPolys(model.state_ring, [r.numerator for r in rhs] + [r.denominator for r in rhs])
 
     def __call__(self, x: "FloatArray") -> "FloatArray":
+        if self.displacement is not None:
+            with np.errstate(all="ignore"):  # an overflow or a pole: a non-finite iterate, diverged
+                return x + self.displacement(x)
         xd = x if not self.m else np.concatenate([x, np.zeros((x.shape[0], self.m))], axis=1)
         values = self.polys(xd)
         with np.errstate(all="ignore"):  # a denominator 0 or an overflow: a non-finite iterate, diverged
             return values[:, :self.n] / values[:, self.n:]
 
 
-def iterate(model: Model, starts: "FloatArray", steps: int) -> "FloatArray":
+def iterate(model: "Model | RecastModel", starts: "FloatArray", steps: int) -> "FloatArray":
     """The iterates, ``(starts, steps + 1, n)`` (the start first); a row that leaves the escape box or is not
     finite keeps that iterate and NaN after it."""
     f = MapIterator(model)
@@ -88,7 +102,7 @@ def iterate(model: Model, starts: "FloatArray", steps: int) -> "FloatArray":
     return out
 
 
-def scale_of(model: Model, starts: "FloatArray") -> "FloatArray":
+def scale_of(model: "Model | RecastModel", starts: "FloatArray") -> "FloatArray":
     """Per state, the natural scale: the largest of the fixed point's size, the starts' distance from it
     and the ``[domain]``'s half-width (:data:`UNIT_SCALE` where all are 0)."""
     eq = np.array([float(v) for v in model.equilibrium])
@@ -102,7 +116,7 @@ def scale_of(model: Model, starts: "FloatArray") -> "FloatArray":
     return np.where(scale > 0, scale, UNIT_SCALE)
 
 
-def default_starts(model: Model) -> "tuple[FloatArray, str]":
+def default_starts(model: "Model | RecastModel") -> "tuple[FloatArray, str]":
     """The fixed point and a grid over the ``[domain]`` (as in continuous time:
     :func:`lyapcheck.models.surfaces.simulate.default_starts`), or without a domain the fixed point and
     ``x_eq +- NEAR_START_FRACTION`` state scales along each state; and a sentence saying which."""
@@ -125,7 +139,7 @@ def default_starts(model: Model) -> "tuple[FloatArray, str]":
             f"the fixed point and x_eq +- {NEAR_START_FRACTION:g} x the state scale along each state (no [domain])")
 
 
-def run_map(model: Model, starts: "FloatArray", how: str, *, steps: int | str | None = None, plot: str | None = None,
+def run_map(model: "Model | RecastModel", starts: "FloatArray", how: str, *, steps: int | str | None = None, plot: str | None = None,
             series: bool = False) -> ModelRun:
     """Iterate the map from each start (see the module docstring); the document and, with ``series``, the
     iterates as an :class:`xarray.Dataset` over ``step``."""
@@ -205,14 +219,16 @@ def run_map(model: Model, starts: "FloatArray", how: str, *, steps: int | str | 
     return ModelRun(document=doc, series=_dataset(model, xs, ys, names, converged, diverged) if series else None)
 
 
-def _without_disturbances(model: Model, name: str) -> Any:
+def _without_disturbances(model: "Model | RecastModel", name: str) -> Any:
     """An output as a polynomial of the states alone (outputs never depend on a disturbance)."""
+    if not isinstance(model, Model):  # a map with functions: its outputs are read over the states already
+        return model.outputs[name]
     full = model.state_ring
     y = _output_poly(model, name)
     return full.restrict(full.substitute(y, {d: Fraction(0) for d in model.disturbances}), Ring(model.states))
 
 
-def _dataset(model: Model, xs: "FloatArray", ys: "FloatArray", names: Sequence[str], converged: "FloatArray",
+def _dataset(model: "Model | RecastModel", xs: "FloatArray", ys: "FloatArray", names: Sequence[str], converged: "FloatArray",
              diverged: "FloatArray") -> Any:
     """The iterates as an :class:`xarray.Dataset`: ``x`` (trajectory, step, state) and ``y`` (trajectory,
     step, output), ``step`` a coordinate (a map has steps, not seconds)."""
@@ -227,7 +243,7 @@ def _dataset(model: Model, xs: "FloatArray", ys: "FloatArray", names: Sequence[s
         attrs={"model": model.name, "file": str(model.source), "time": "discrete", "steps": int(steps[-1])})
 
 
-def plot_iterates(model: Model, xs: "FloatArray", ys: "FloatArray", names: Sequence[str], diverged: "FloatArray",
+def plot_iterates(model: "Model | RecastModel", xs: "FloatArray", ys: "FloatArray", names: Sequence[str], diverged: "FloatArray",
                   first_tail: int, path: str) -> None:
     """Each output against the step as a staircase (the tail steps shaded) and, for two states, the
     iterates in the plane (dots joined by thin lines)."""
