@@ -531,6 +531,22 @@ def count_calls(texts: Sequence[str]) -> int:
     return 2 * total + len(ROOTS) + 2
 
 
+def _parse_recast(source: str, key: str, text: str, recaster: Recaster, states: tuple[str, ...],
+                  constants: Mapping[str, Fraction], defined: Mapping[str, Rational]) -> Rational:
+    """One right-hand side or law, read with its calls recast by ``recaster``; a one-line
+    :class:`~lyapcheck.errors.ModelFileError` at ``key`` on anything refused, ``pi`` outside an argument of
+    ``sin``/``cos`` included (it would be a transcendental coefficient)."""
+    try:
+        r, _ = parse_with_divisors(text, recaster.ring, calls=recaster, names=states, constants=constants,
+                                   defined=defined)
+    except ExpressionError as exc:
+        raise ModelFileError(source, key, str(exc)) from None
+    if degree_in(recaster.ring, r.numerator, [PI_MARK]) > 0 or degree_in(recaster.ring, r.denominator, [PI_MARK]) > 0:
+        raise ModelFileError(source, key, "pi may appear only in an argument of sin or cos (as k*pi/12 added to "
+                                          "the rest); elsewhere it would be a transcendental coefficient")
+    return r
+
+
 def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, object],
                     constants: Mapping[str, Fraction], equilibrium: Sequence[Fraction],
                     candidate: str | None = None, networks: Sequence["Network"] = (), for_map: bool = False
@@ -554,15 +570,7 @@ def recast_dynamics(source: str, states: tuple[str, ...], texts: Mapping[str, ob
         text = texts[s]
         if not isinstance(text, (str, int, float)) or isinstance(text, bool):
             raise ModelFileError(source, key, f"must be an expression in a string, got {text!r}")
-        try:
-            r, _ = parse_with_divisors(str(text), recaster.ring, calls=recaster, names=states, constants=constants,
-                                       defined=defined)
-        except ExpressionError as exc:
-            raise ModelFileError(source, key, str(exc)) from None
-        if degree_in(recaster.ring, r.numerator, [PI_MARK]) > 0 or degree_in(recaster.ring, r.denominator, [PI_MARK]) > 0:
-            raise ModelFileError(source, key, "pi may appear only in an argument of sin or cos (as k*pi/12 added to "
-                                              "the rest); elsewhere it would be a transcendental coefficient")
-        rhs.append(r)
+        rhs.append(_parse_recast(source, key, str(text), recaster, states, constants, defined))
     extra: list[Rational] = []
     if candidate is not None:
         try:
@@ -869,16 +877,7 @@ def recast_laws(source: str, section: str, states: tuple[str, ...], laws: Mappin
     defined = network_outputs(source, recaster, networks)
     parsed: list[Rational] = []
     for name, text in texts.items():
-        key = f"[{section}] {name}"
-        try:
-            r, _ = parse_with_divisors(text, recaster.ring, calls=recaster, names=states, constants=constants,
-                                       defined=defined)
-        except ExpressionError as exc:
-            raise ModelFileError(source, key, str(exc)) from None
-        if degree_in(recaster.ring, r.numerator, [PI_MARK]) > 0 or degree_in(recaster.ring, r.denominator, [PI_MARK]) > 0:
-            raise ModelFileError(source, key, "pi may appear only in an argument of sin or cos (as k*pi/12 added to "
-                                              "the rest); elsewhere it would be a transcendental coefficient")
-        parsed.append(r)
+        parsed.append(_parse_recast(source, f"[{section}] {name}", text, recaster, states, constants, defined))
     frozen = [Rational.polynomial(recaster.ring, recaster.ring.zero()) for _ in states]
     try:
         system, moved = _finish(source, recaster, frozen, recaster.flows(frozen), equilibrium, parsed)
