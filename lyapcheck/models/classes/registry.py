@@ -178,7 +178,7 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                run_field=_runs.sos_bound_field, run_functions=_runs.sos_bound_functions,
                verify_field=_field.verify_sos_bound, verify_functions=_functions.verify_sos_bound,
                output_figure=OutputFigure("bounds", "limsup |{y} - {y}_eq| <= this, SI ({y}_eq: bounds_reference)")),
-    ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
+    ModelClass("barrier", "safety", "safety", over_box=True, stability=False, discrete=True,
                run_field=_runs.barrier_field, run_functions=_runs.barrier_functions,
                verify_field=_field.verify_barrier, verify_functions=_functions.verify_barrier,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
