@@ -251,7 +251,7 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert done.exit_code == 0, done.output
     conditions = json.loads(done.stdout)["conditions"]
     assert list(conditions) == [c.name for c in CLASSES]
-    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate")
+    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate", "barrier")
     assert conditions["linearization"]["status"] == "certified"
     assert conditions["linearization"]["summary"].startswith("every eigenvalue of the map's Jacobian at the fixed "
                                                              "point has modulus < 1")
@@ -265,6 +265,10 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
         assert c["status"] in ("certified", "not_certified", "not_applicable")
         assert c["status"] != "certified" or c["certificate"]["kind"] == "discrete_sublevel"
         assert c["status"] != "not_applicable" or "the region of attraction is the whole state space" in c["summary"]
+    # barrier: its discrete-time answer (lyapcheck.models.classes.discrete_safety; the rotation contracts to 0)
+    assert conditions["barrier"]["status"] in ("certified", "not_certified")
+    assert conditions["barrier"]["status"] != "certified" or \
+        conditions["barrier"]["certificate"]["kind"] == "discrete_barrier"
     for c in CLASSES:
         if c.name not in DISCRETE:
             assert conditions[c.name]["status"] == "not_applicable"

@@ -377,20 +377,22 @@ def falsify_map(model: "Model", ring: Ring, F: Sequence[Poly], initial: Pieces, 
 
 # -- the classes ------------------------------------------------------------------------------------------------
 
-def _no_sets(name: str, model: "Model", keys: Sequence[str]) -> ConditionResult | None:
+def _no_sets(name: str, model: "Model") -> ConditionResult | None:
+    """``not_applicable`` with the continuous safety classes' sentence when the model lacks the class's sets
+    (:data:`~lyapcheck.models.language.sets.CLASS_SETS`); None when it has them."""
     from lyapcheck.models.language.sets import CLASS_SETS
 
-    missing = [k for k in CLASS_SETS.get(name, keys) if not model.sets.get(k)]
-    if missing:
-        return ConditionResult(name, "not_applicable", f"{name} needs the [sets] {', '.join(CLASS_SETS[name])}; "
-                                                       f"the model does not give {', '.join(missing)}")
-    return None
+    needed = CLASS_SETS[name]
+    if all(model.sets.get(k) for k in needed):
+        return None
+    return ConditionResult(name, "not_applicable", f"the model's [sets] needs {', '.join(repr(k) for k in needed[:-1])} "
+                                                   f"and {needed[-1]!r} (docs/model-files.md, [sets])")
 
 
 def run_barrier(model: "Model", shifted: "ShiftedField", budget: Budget) -> ConditionResult:
     """``barrier`` on the map (module docstring): the falsification first (``refuted`` with an iterate
     proved unsafe), then the search for ``B``; ``certified`` only after :func:`check_discrete_barrier`."""
-    ruled = _no_sets("barrier", model, ("initial", "unsafe"))
+    ruled = _no_sets("barrier", model)
     if ruled is not None:
         return ruled
     try:
