@@ -222,11 +222,18 @@ def test_a_certified_class_without_a_discrete_time_check_fails_verify(tmp_path: 
     from lyapcheck.models.surfaces.certificate import verify_document
 
     doc = _certificate(tmp_path, MAP)
+    doc["conditions"]["sos_bound"] = {"status": "certified", "property": "ultimate_bound", "summary": "forged",
+                                      "certificate": {"kind": "sos_bound"}}
+    rows = verify_document(doc)
+    assert ("sos_bound", False, "sos_bound: a certified claim on a discrete-time map that no discrete-time check "
+                                "re-derives") in rows
+    # a continuous-time barrier certificate is not a map's (lyapcheck.models.classes.discrete_safety)
+    doc = _certificate(tmp_path, MAP)
     doc["conditions"]["barrier"] = {"status": "certified", "property": "safety", "summary": "forged",
                                     "certificate": {"kind": "barrier"}}
     rows = verify_document(doc)
-    assert ("barrier", False, "barrier: a certified claim on a discrete-time map that no discrete-time check "
-                              "re-derives") in rows
+    assert any(name == "barrier" and not ok and "not a barrier certificate of a discrete-time map" in why
+               for name, ok, why in rows)
     # a continuous-time region certificate is not a map's (lyapcheck.models.classes.discrete_regions)
     doc = _certificate(tmp_path, MAP)
     doc["conditions"]["roa"] = {"status": "certified", "property": "ROA", "summary": "forged", "level": 1.0,
