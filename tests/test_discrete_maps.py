@@ -258,7 +258,7 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert done.exit_code == 0, done.output
     conditions = json.loads(done.stdout)["conditions"]
     assert list(conditions) == [c.name for c in CLASSES]
-    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate", "barrier")
+    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate", "barrier", "reach_avoid")
     assert conditions["linearization"]["status"] == "certified"
     assert conditions["linearization"]["summary"].startswith("every eigenvalue of the map's Jacobian at the fixed "
                                                              "point has modulus < 1")
@@ -276,6 +276,9 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert conditions["barrier"]["status"] in ("certified", "not_certified")
     assert conditions["barrier"]["status"] != "certified" or \
         conditions["barrier"]["certificate"]["kind"] == "discrete_barrier"
+    assert conditions["reach_avoid"]["status"] in ("certified", "not_certified")
+    assert conditions["reach_avoid"]["status"] != "certified" or \
+        conditions["reach_avoid"]["certificate"]["kind"] == "discrete_reach_avoid"
     for c in CLASSES:
         if c.name not in DISCRETE:
             assert conditions[c.name]["status"] == "not_applicable"

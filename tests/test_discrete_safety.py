@@ -9,6 +9,9 @@ independent of the class's code); a certificate with ``B``, ``lambda`` or a Gram
 certifies: it is ``refuted`` by a start whose iterate is proved unsafe, which ``verify`` re-derives and which a
 changed start or step count does not pass; a map without ``[sets]`` is ``not_applicable`` with the sets'
 sentence (and naming the class on the command line is refused in one line, exit 2, as on a field).
+``reach_avoid``: a contracting rotation certifies with a steps bound that sampled iterates respect (a
+changed bound or eps fails ``verify``); the unsafe map with a goal is refuted by an unsafe iterate before
+the goal, and an iterate that is not proved outside the goal does not count; ``stay_in_goal`` is refused.
 """
 
 from __future__ import annotations
@@ -188,10 +191,81 @@ def test_a_map_without_sets_is_not_applicable_and_naming_the_class_is_refused(tm
     assert done.exit_code == 0 and "barrier" not in json.loads(done.stdout)["conditions"]
 
 
-def test_reach_avoid_stays_not_decided_on_a_map(tmp_path: Path) -> None:
-    text = SAFE.read_text().replace('unsafe = ["y >= 2"]', 'unsafe = ["y >= 2"]\ngoal = ["x**2 + y**2 <= 0.01"]')
-    path = tmp_path / "goal.toml"
-    path.write_text(text)
+ROTATION = """[model]
+name = "a contracting rotation"
+states = ["x", "y"]
+time = "discrete"
+[dynamics]
+x = "0.6*x - 0.6*y"
+y = "0.6*x + 0.6*y"
+[sets]
+initial = ["(x - 1)**2 + y**2 <= 0.04"]
+unsafe = ["(x + 1)**2 + (y - 1)**2 <= 0.04"]
+goal = ["x**2 + y**2 <= 0.01"]
+"""
+
+
+def test_reach_avoid_certifies_with_a_steps_bound_that_the_iterates_respect(tmp_path: Path) -> None:
+    path = tmp_path / "rotation.toml"
+    path.write_text(ROTATION)
+    out = tmp_path / "rotation.json"
+    done = cli("certify", str(path), "--classes", "reach_avoid", "--no-store", "--json", "--out", str(out))
+    assert done.exit_code == 0, done.output
+    doc = json.loads(out.read_text())
+    c = doc["conditions"]["reach_avoid"]
+    assert c["status"] == "certified" and c["certificate"]["kind"] == "discrete_reach_avoid"
+    bound = c["reach_steps_bound"]
+    assert bound == int(Fraction(c["certificate"]["C"]) / Fraction(c["certificate"]["eps"]))
+    assert f"within {bound} steps" in c["summary"] and "for all t" not in c["summary"]
+    assert cli("verify", str(out)).exit_code == 0
+    # every start sampled in the initial set reaches the goal within the bound, never unsafe before
+    rng = np.random.default_rng(3)
+    r = 0.2 * np.sqrt(rng.uniform(size=200))
+    angle = rng.uniform(0, 2 * np.pi, size=200)
+    x = np.stack([1 + r * np.cos(angle), r * np.sin(angle)], axis=1)
+    reached = np.zeros(len(x), dtype=bool)
+    for _ in range(min(bound, 1000) + 1):
+        reached |= x[:, 0] ** 2 + x[:, 1] ** 2 <= 0.01
+        assert not np.any(~reached & ((x[:, 0] + 1) ** 2 + (x[:, 1] - 1) ** 2 <= 0.04))
+        x = np.stack([0.6 * x[:, 0] - 0.6 * x[:, 1], 0.6 * x[:, 0] + 0.6 * x[:, 1]], axis=1)
+    assert reached.all()
+
+    def bound_down(c: dict[str, Any]) -> None:
+        c["reach_steps_bound"] -= 1
+        c["certificate"]["reach_steps_bound"] -= 1
+
+    def eps_up(c: dict[str, Any]) -> None:
+        c["certificate"]["eps"] = str(Fraction(c["certificate"]["eps"]) * 2)
+
+    for k, change in enumerate((bound_down, eps_up)):
+        bad = copy.deepcopy(doc)
+        change(bad["conditions"]["reach_avoid"])
+        (tmp_path / f"bad{k}.json").write_text(json.dumps(bad))
+        assert cli("verify", str(tmp_path / f"bad{k}.json")).exit_code == 1, change.__name__
+
+
+def test_reach_avoid_is_refuted_by_an_unsafe_iterate_before_the_goal(tmp_path: Path) -> None:
+    path = tmp_path / "unsafe-goal.toml"
+    path.write_text(UNSAFE.read_text().replace('[sets]\n', '[sets]\ngoal = ["x**2 + y**2 <= 0.01"]\n'))
+    out = tmp_path / "u.json"
+    done = cli("certify", str(path), "--classes", "reach_avoid", "--no-store", "--json", "--out", str(out))
+    assert done.exit_code == 1, done.output
+    c = json.loads(out.read_text())["conditions"]["reach_avoid"]
+    assert c["status"] == "refuted" and "before any iterate is in the goal" in c["summary"]
+    assert cli("verify", str(out)).exit_code == 0
+    # a goal that holds the start: the iterate is no longer 'before the goal', the check refuses it
+    model = parse_model(path.read_text().replace('goal = ["x**2 + y**2 <= 0.01"]', 'goal = ["(x - 3)**2 + y**2 <= 1"]'),
+                        "g.toml")
+    ring, F = ds.map_polynomials(shifted_map(model))
+    sets = ds.map_sets(model, ring)
+    start = [Fraction(3), Fraction(0)]
+    assert ds.check_iterate(ring, F, sets["initial"], sets["unsafe"], start, 1)[0]
+    assert not ds.check_iterate(ring, F, sets["initial"], sets["unsafe"], start, 1, sets["goal"][0])[0]
+
+
+def test_reach_avoid_with_stay_in_goal_is_not_taken_on_a_map(tmp_path: Path) -> None:
+    path = tmp_path / "stay.toml"
+    path.write_text(ROTATION + "stay_in_goal = true\n")
     done = cli("certify", str(path), "--classes", "reach_avoid", "--no-store", "--json")
     c = json.loads(done.stdout)["conditions"]["reach_avoid"]
-    assert c["status"] == "not_applicable" and c["summary"].startswith("reach_avoid is not yet decided")
+    assert c["status"] == "not_applicable" and c["summary"] == ds.STAY_NOT_TAKEN

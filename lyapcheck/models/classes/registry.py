@@ -182,7 +182,7 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                run_field=_runs.barrier_field, run_functions=_runs.barrier_functions,
                verify_field=_field.verify_barrier, verify_functions=_functions.verify_barrier,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
-    ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False,
+    ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False, discrete=True,
                run_field=_runs.reach_avoid_field, run_functions=_runs.reach_avoid_functions,
                verify_field=_field.verify_reach_avoid, verify_functions=_functions.verify_reach_avoid,
                figures=(Figure("reach_time_bound_s", "reach_time_bound_s",
