@@ -365,7 +365,7 @@ def falsify_map(model: "Model", ring: Ring, F: Sequence[Poly], initial: Pieces, 
 
     rng = np.random.default_rng(20261130)
     try:
-        starts = sample_set(model, model.sets["initial"], margin, FALSIFY_STARTS, rng)[0]  # type: ignore[arg-type]
+        starts = sample_set(model, model.sets["initial"], margin, FALSIFY_STARTS, rng)[0]
     except ValueError:
         return None
     eq = np.array([float(v) for v in model.equilibrium])
@@ -742,12 +742,13 @@ def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any], model: "Mod
         kind = KIND if name == "barrier" else REACH_KIND
         if cert.get("kind") != kind or cert.get("time") != "discrete":
             return False, f"not a {name} certificate of a discrete-time map (kind {cert.get('kind')!r})"
+        found: DiscreteBarrier | DiscreteReach
         if goal is None:
-            found: DiscreteBarrier | DiscreteReach = DiscreteBarrier.from_json(ring, cert)
-            ok, why = check_discrete_barrier(ring, F, sets["initial"], sets["unsafe"], found)  # type: ignore[arg-type]
+            found = barrier = DiscreteBarrier.from_json(ring, cert)
+            ok, why = check_discrete_barrier(ring, F, sets["initial"], sets["unsafe"], barrier)
         else:
-            found = DiscreteReach.from_json(ring, cert)
-            ok, why = check_discrete_reach(ring, F, sets["initial"], sets["unsafe"], goal, found)
+            found = reach = DiscreteReach.from_json(ring, cert)
+            ok, why = check_discrete_reach(ring, F, sets["initial"], sets["unsafe"], goal, reach)
     except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError, IndexError, NotAMap) as exc:
         return False, f"malformed certificate: {exc}"
     if not ok:
