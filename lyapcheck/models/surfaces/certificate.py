@@ -285,7 +285,7 @@ def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> l
     for name, c in conditions.items():
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted", "counterexample"):
             continue
-        if name not in DISCRETE or c["status"] == "counterexample" or (name != "linearization"
+        if name not in DISCRETE or c["status"] == "counterexample" or (name not in ("linearization", "barrier", "reach_avoid")
                                                                         and c["status"] != "certified"):
             rows.append((name, False, f"{name}: a {c.get('status')} claim on a discrete-time map that no "
                                       "discrete-time check re-derives"))
@@ -293,6 +293,10 @@ def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> l
         if name == "linearization":
             data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
             ok, why = discrete_linearization.verify(shifted_map(model), c["status"], data or {})
+        elif name in ("barrier", "reach_avoid"):  # (lyapcheck.models.classes.discrete_safety)
+            from lyapcheck.models.classes import discrete_safety
+
+            ok, why = discrete_safety.verify(shifted_map(model), name, c, model)
         elif name in ("roa", "candidate"):  # V(F(e)) <= V(e) - eps m(e) on {V <= c}, from the condition's JSON
             from lyapcheck.models.classes import discrete_regions
 

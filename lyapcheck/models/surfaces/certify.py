@@ -392,6 +392,15 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
             out.results[name] = _guarded(name, lambda: discrete_lyapunov.run(shifted, name), limit)  # type: ignore[arg-type]
             out.seconds[name] = time.perf_counter() - start
     _map_regions(model, chosen, cand, limit, out)
+    # the safety classes of a map (lyapcheck.models.classes.discrete_safety): run_barrier, run_reach_avoid
+    for name in ("barrier", "reach_avoid"):
+        if name in chosen and name in DISCRETE:
+            from lyapcheck.models.classes import discrete_safety
+
+            run = discrete_safety.run_barrier if name == "barrier" else discrete_safety.run_reach_avoid
+            start, budget = time.perf_counter(), Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+            out.results[name] = _guarded(name, lambda: run(model, shifted_map(model), budget), limit)
+            out.seconds[name] = time.perf_counter() - start
     out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
     for r in out.results.values():  # the linearization is the Jacobian at d = 0
         if model.disturbances:
