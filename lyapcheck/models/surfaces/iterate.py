@@ -85,20 +85,17 @@ class MapIterator:
 def iterate(model: "Model | RecastModel", starts: "FloatArray", steps: int) -> "FloatArray":
     """The iterates, ``(starts, steps + 1, n)`` (the start first); a row that leaves the escape box or is not
     finite keeps that iterate and NaN after it."""
-    f = MapIterator(model)
+    from lyapcheck.models.engines.iteration import iterate_map
+
     eq = np.array([float(v) for v in model.equilibrium])
-    escape = ESCAPE_FACTOR * scale_of(model, starts)
     out = np.full((starts.shape[0], steps + 1, model.n), np.nan)
     out[:, 0] = starts
-    alive = np.ones(starts.shape[0], dtype=bool)
-    x = starts.copy()
-    for k in range(1, steps + 1):
-        if not alive.any():
-            break
-        x[alive] = f(x[alive])
-        out[alive, k] = x[alive]
-        gone = alive & ~(np.all(np.isfinite(x), axis=1) & np.all(np.abs(x - eq) <= escape, axis=1))
-        alive &= ~gone
+
+    def record(k: int, rows: "NDArray[np.intp]", x: "FloatArray") -> None:
+        out[rows, k] = x
+
+    iterate_map(MapIterator(model), starts, steps, center=eq, escape=ESCAPE_FACTOR * scale_of(model, starts),
+                observe=record)
     return out
 
 
