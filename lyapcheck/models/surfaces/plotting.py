@@ -53,8 +53,8 @@ def history_panel(ax: Any, tail: tuple[float, float], xlabel: str, ylabel: str, 
     ax.grid(alpha=0.3)
 
 
-def phase_plane(ax: Any, point: Sequence[float], states: Sequence[str], *, label: str | None = None,
-                title: str | None = None) -> None:
+def phase_plane(ax: Any, point: "Sequence[float] | NDArray[np.float64]", states: Sequence[str], *,
+                label: str | None = None, title: str | None = None) -> None:
     """The phase plane's frame: the equilibrium (or fixed point) marked, the two states as labels, the
     title and the legend."""
     ax.plot(*[float(v) for v in point[:2]], "k+", ms=10, label=label)
