@@ -10,6 +10,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+from tests.test_sampled_simulate import DOUBLE_INTEGRATOR
+
 #: a name long enough that the title on one line is wider than the figure (asserted below)
 LONG_NAME = "a linear loop whose name is " + "very " * 20 + "long indeed"
 
@@ -26,28 +28,10 @@ x2 = "-x1 - x2"
 y = "x1"
 """
 
-#: x'' = -x - x' sampled every 0.1 s: from x = 0.05, v = 1 the position swings out to about 0.5 and back
-#: to 0, while its state scale is the start's 0.05 (the view box: PLOT_CLIP = 2 scales, x in [-0.1, 0.1])
-SAMPLED = """
-[model]
-name = "double integrator, digital PD"
-states = ["x", "v"]
-
-[parameters]
-kp = 1
-kd = 1
-T = "100 ms"
-
-[dynamics]
-x = "v"
-v = "u"
-
-[sampling]
-period = "T"
-
-[controller]
-u = "-kp*x - kd*v"
-"""
+#: x'' = -x - x' sampled every 0.1 s (test_sampled_simulate's loop): from x = 0.05, v = 1 the position swings
+#: out to about 0.5 and back to 0, while its state scale is the start's 0.05 (the view box: PLOT_CLIP = 2
+#: scales, x in [-0.1, 0.1])
+SAMPLED = DOUBLE_INTEGRATOR
 
 
 @pytest.fixture
