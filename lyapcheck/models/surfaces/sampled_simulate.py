@@ -136,12 +136,7 @@ class _HeldPlant:
         return _HeldPlant(self.prepared, self.escape, int(np.asarray(index).size))
 
     def rhs(self, t: "FloatArray", y: "FloatArray", t_segment: "FloatArray") -> Evaluation:
-        with np.errstate(over="ignore", invalid="ignore"):
-            dy = self.prepared.field(y, None)
-        far = np.any(np.abs(y - self.prepared.equilibrium) > self.escape, axis=1)
-        if far.any():
-            dy[far] = 0.0
-        return Evaluation(dy, np.zeros(y.shape[0]), np.empty((y.shape[0], 0)))
+        return self.prepared.field_stopped_beyond(y, None, self.escape)
 
     def next_breakpoint(self, t: "FloatArray") -> "FloatArray":
         return np.full(t.shape, np.inf)

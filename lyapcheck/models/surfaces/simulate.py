@@ -348,6 +348,17 @@ class Prepared:
             dev[..., a] = np.angle(np.exp(1j * dev[..., a]))
         return dev
 
+    def field_stopped_beyond(self, y: FloatArray, d: FloatArray | None, escape: FloatArray) -> Evaluation:
+        """The integrator's evaluation of the field at ``(batch, n)`` states: ``x' = f(x, d)``, 0 on a row
+        farther than ``escape`` from the equilibrium (it stops there: one diverging row neither
+        overflows nor slows the others)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            dy = self.field(y, d)
+        far = np.any(np.abs(y - self.equilibrium) > escape, axis=1)
+        if far.any():
+            dy[far] = 0.0
+        return Evaluation(dy, np.zeros(y.shape[0]), np.empty((y.shape[0], 0)))
+
     def box(self, factor: float, scale: FloatArray) -> FloatArray:
         """Half-widths ``factor * scale`` around the equilibrium, infinite along an angle (a
         pendulum that turns over has not left anything)."""
@@ -799,12 +810,7 @@ class _ScenarioSystem:
 
     def rhs(self, t: FloatArray, y: FloatArray, t_segment: FloatArray) -> Evaluation:
         d = self.disturbance(t_segment, y) if self.prepared.bounds.size else None
-        with np.errstate(over="ignore", invalid="ignore"):
-            dy = self.prepared.field(y, d)
-        far = np.any(np.abs(y - self.prepared.equilibrium) > self.escape, axis=1)
-        if far.any():
-            dy[far] = 0.0
-        return Evaluation(dy, np.zeros(y.shape[0]), np.empty((y.shape[0], 0)))
+        return self.prepared.field_stopped_beyond(y, d, self.escape)
 
     def next_breakpoint(self, t: FloatArray) -> FloatArray:
         out = np.where(t < self.t_tail, self.t_tail, np.inf)
