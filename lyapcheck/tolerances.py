@@ -7,6 +7,7 @@ floating-point simulations; none of them can turn a failed exact check into a pa
 
 from __future__ import annotations
 
+from fractions import Fraction
 from typing import Any, Final
 
 #: Clarabel's gap / feasibility tolerances for certificate searches (tighter than defaults,
@@ -222,6 +223,20 @@ BALL_LEVEL_CELLS: Final = 30_000
 #: largest level proved when they are spent is the answer; the whole search stays within about 40 s of
 #: one core, inside MODEL_CLASS_TIME_LIMIT_S (issue 42 raised it from 20,000)
 BALL_LEVEL_TOTAL_CELLS: Final = 40_000
+#: significant bits of each entry of V's matrix P on a discrete-time map with functions
+#: (lyapcheck.models.classes.discrete_functions: the Stein solution of A^T P A - P = -I rounded to a
+#: short dyadic). Short entries keep V's balls exact at a cell's dyadic corners (no widening from V
+#: itself), while 30 bits move P by about 2^-30 relative, far inside the margin -I. Soundness never
+#: depends on it: whatever P is, V(F(e)) < V(e) is proved cell by cell
+P_BITS: Final = 30
+#: that class's level search: levels tried upwards from the first proved one, each MAP_LEVEL_GROWTH
+#: times the last, at most MAP_LEVEL_GROWTH_STEPS of them (4^16, about 4e9: from the smallest
+#: ellipsoid tried to any region a map plausibly has), then MAP_LEVEL_BISECTIONS bisections of the
+#: last bracket (the level to a sixteenth of it: a figure, and each bisection is a whole cell proof).
+#: Resolution and time only: every level reported is proved, and BALL_LEVEL_TOTAL_CELLS bounds the cells
+MAP_LEVEL_GROWTH: Final = Fraction(4)
+MAP_LEVEL_GROWTH_STEPS: Final = 16
+MAP_LEVEL_BISECTIONS: Final = 4
 #: the integrator steps one trajectory of the ball-arithmetic route's fit of V (and of its simulated check) may take when the
 #: route runs after the SOS route on a polynomial or rational loop (lyapcheck.models.surfaces.ball_roa):
 #: a rational loop's trajectory that runs into a pole crawls towards it step by step (1-state

@@ -146,10 +146,15 @@ class Search:
             return None
         return exact_point(self.ring, structure, solution, values.exact)
 
-    def solve_exact(self, structure: Structure, values: "ParameterValues") -> tuple[ExactPoint | None, Solution]:
+    def solve_exact(self, structure: Structure, values: "ParameterValues", *, near_only: bool = False
+                    ) -> tuple[ExactPoint | None, Solution]:
         """One solve and, when the solver returned a point, its exact rounding (None when there is
-        none): what every class's attempt does before its exact check."""
+        none): what every class's attempt does before its exact check. ``near_only``: round only a point
+        whose margin ``t`` is not below ``-EXACT_TRY_MARGIN`` (a program without ``t`` counts as near):
+        a clearly infeasible point is not worth the rounding."""
         solution = self.solve(structure, values)
+        if near_only and solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
+            return None, solution
         return self.exact(structure, solution, values), solution
 
 
