@@ -1103,6 +1103,8 @@ def search_vertices(field: StateField, degree: int, search: Search) -> tuple[dic
 # exactly, :func:`lyapcheck.sos.definiteness.is_positive_definite`, whose diagonal-dominance tests
 # decide these matrices in O(n^2)), and ``verify`` re-checks it without knowing the cone. The
 # certificate names the cone (``"cone": "sdd"``), and only then, so that every other one is as before.
+# They run after every semidefinite form, unless a later degree's semidefinite forms would not leave
+# them their time: then before those (:func:`cones_first` states the rule).
 
 #: the cheaper cones tried in turn, and their words in a sentence or a detail line
 FALLBACK_CONES: Final = ("sdd", "dd")
