@@ -96,9 +96,6 @@ CONE_DECISIONS_PER_SECOND: Final = 2_500.0
 #: a form (its facial reductions and decay-rate steps) is estimated at this many solves of its first
 #: program: later rounds are smaller (measured 1.4 to 4.2 times the first, 7.6 with its decay rate)
 FORM_SOLVES_ESTIMATE: Final = 4
-#: the pace of a run (its solves' seconds over their estimate, at least 1) is trusted once the
-#: estimates of its solves add up to this many seconds (below it, the compile floor dominates)
-PACE_MIN_ESTIMATED_S: Final = 1.0
 
 
 # -- figures of the paper's classes across floating-point platforms (issue 24) ------------------

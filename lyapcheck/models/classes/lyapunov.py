@@ -1193,9 +1193,10 @@ def cones_first(field: StateField, degree: int, pending: tuple[int, bool], searc
     where within their size limits) are estimated at :data:`~lyapcheck.tolerances.FORM_SOLVES_ESTIMATE`
     solves of their first program, and the cones' first form (the dense SDSOS program of the pending
     degree, or its clique form where the dense one is beyond the cones' limits) likewise
-    (:func:`~lyapcheck.models.engines.search.estimated_seconds`). When the two together, at the run's
-    pace (:meth:`~lyapcheck.models.engines.search.Budget.pace`), do not fit in the class's time left,
-    the cones run first; the semidefinite forms run after them all the same (the time limit, never
+    (:func:`~lyapcheck.models.engines.search.estimated_seconds`). When the two together do not fit in
+    the class's time limit less the estimates of the work already done
+    (:meth:`~lyapcheck.models.engines.search.Budget.fits`: estimates only, never the clock, so that the
+    order is the same on a loaded machine), the cones run first; the semidefinite forms run after them all the same (the time limit, never
     this rule, may end them). Where they fit, nothing changes: the cones come after every semidefinite
     form, as before. An order only: every certificate is decided by the same exact checks."""
     generators = symmetry(field)
@@ -1231,8 +1232,8 @@ def cones_first(field: StateField, degree: int, pending: tuple[int, bool], searc
     if budget.fits(form, reserve):
         return None
     return (f"the cheaper cones of degree {cone_degree} were tried before the semidefinite forms of degree {degree}: "
-            f"those estimated at {form:.3g} s and the cones at {reserve:.3g} s, at this run's pace "
-            f"{budget.pace():.2g}, exceed the {max(budget.left(), 0.0):.3g} s left of the time limit")
+            f"those estimated at {form:.3g} s and the cones at {reserve:.3g} s exceed the time limit's "
+            f"{max(budget.seconds - budget.estimated, 0.0):.3g} s left by the estimates of the work done")
 
 
 def cone_fallback(field: StateField, degree: int, search: Search, cliques_too_large: bool

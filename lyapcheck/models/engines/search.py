@@ -13,9 +13,9 @@ rounding (:func:`lyapcheck.sos.rounding.exact_point`'s ``checkpoint``), so that 
 its limit plus the longest single step (one solve, capped by its time limit, or one rounding step).
 
 A search that has several forms to try (``sos_gas`` on a network) may order them by what they will
-cost against the budget left: :func:`estimated_seconds` of a program (from its size, with the
-rates of :mod:`lyapcheck.tolerances`) times the run's :meth:`Budget.pace` (how much slower than
-the estimates its solves have been, on this machine under its load).
+cost against the budget: :func:`estimated_seconds` of a program (from its size, with the rates of
+:mod:`lyapcheck.tolerances`) against the budget less the estimates of the work already done
+(:meth:`Budget.fits`), never against the clock, so that the order is the same under load.
 """
 
 from __future__ import annotations
@@ -93,31 +93,24 @@ class Budget:
     seconds: float
     limit_name: str
     start: float = field(default_factory=lambda: _now())
-    #: the estimated seconds (:func:`estimated_seconds`) of the solves and roundings done so far, and
-    #: the seconds they took: :meth:`pace`
+    #: the estimated seconds (:func:`estimated_seconds`) of the solves and roundings done so far: the
+    #: run's work on a deterministic clock (:meth:`fits`)
     estimated: float = 0.0
-    spent: float = 0.0
 
     def left(self) -> float:
         return self.seconds - (_now() - self.start)
 
-    def record(self, estimated: float, spent: float) -> None:
-        """One solve (or rounding) done: its estimate and the seconds it took (for :meth:`pace`)."""
+    def record(self, estimated: float) -> None:
+        """One solve (or rounding) done, at its estimated seconds (for :meth:`fits`)."""
         self.estimated += estimated
-        self.spent += spent
-
-    def pace(self) -> float:
-        """How many times slower than :func:`estimated_seconds` this run's solves and roundings have
-        been (at least 1; 1 until their estimates add up to
-        :data:`~lyapcheck.tolerances.PACE_MIN_ESTIMATED_S`): a loaded machine's estimates grow with it."""
-        if self.estimated < tol.PACE_MIN_ESTIMATED_S:
-            return 1.0
-        return max(1.0, self.spent / self.estimated)
 
     def fits(self, estimate: float, reserve: float = 0.0) -> bool:
         """Whether work estimated at ``estimate`` seconds, with ``reserve`` seconds kept for work that
-        must follow it, fits in the time left at this run's :meth:`pace`."""
-        return (estimate + reserve) * self.pace() <= self.left()
+        must follow it, fits in the budget less the estimates of the work already done. Estimates
+        only, never the clock: the order a search takes from it is the same on a loaded machine
+        (issue 40: work decides outcomes, the clock only guards), and the time limit stays the
+        safety net."""
+        return estimate + reserve <= self.seconds - self.estimated
 
     def reached(self) -> str:
         """The detail line of this limit reached (it names the limit as the safety net it is)."""
@@ -162,10 +155,9 @@ class Search:
             limit.used += 1
         # the class's time left is the solver's limit: a safety net far above a normal solve, whose
         # length SOLVER_MAX_ITER bounds (a count of iterations)
-        started = _now()
         solution = program.solve(values.floats, time_limit=max(self.budget.left(), 0.05))
-        # the solve's share of the estimate (the rounding's is recorded by exact): the run's pace
-        self.budget.record(estimated_seconds(structure) / 2, _now() - started)
+        # the solve's share of the estimate (the rounding's is recorded by exact): the run's work so far
+        self.budget.record(estimated_seconds(structure) / 2)
         entry = solution.report.to_json()
         entry["program"] = structure.key()
         if "t" in solution.scalars:
@@ -178,11 +170,10 @@ class Search:
 
         if not solution.usable:
             return None
-        started = _now()
         # the budget is checked between the rounding's steps: a large program's rounding takes as
         # long as its solve, and must not carry the class past its time limit
         point = exact_point(self.ring, structure, solution, values.exact, checkpoint=self.budget.check)
-        self.budget.record(estimated_seconds(structure) / 2, _now() - started)
+        self.budget.record(estimated_seconds(structure) / 2)
         return point
 
     def solve_exact(self, structure: Structure, values: "ParameterValues") -> tuple[ExactPoint | None, Solution]:
