@@ -123,6 +123,7 @@ import numpy as np
 from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
 from lyapcheck.models.classes import registry as model_classes
 from lyapcheck.models.language.modelfile import Model
+from lyapcheck.models.loop.discrete import is_discrete
 from lyapcheck.paper.boxes.box import ParameterBox
 from lyapcheck.paper.params import (
     FIELD_BY_KEY, POSITIVE, FieldSpec, Interval, Problem, build_problem, flatten_tables, validate_field,
@@ -744,6 +745,8 @@ def _readable(axis: ModelAxis, where: str) -> ModelAxis:
 def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[str, ...]:
     polynomial = isinstance(model, Model)
     allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES  # (the same on every loop)
+    if is_discrete(model):  # a map: only the classes with a discrete-time condition (every other not_applicable)
+        allowed = tuple(c for c in allowed if c in map_classes(model))
     # (any loop: barrier with its sets only, reach_avoid with its goal too; a class the model cannot ask is
     # not picked by default, and naming it is refused here rather than at the first point)
     if not ("initial" in model.sets and "unsafe" in model.sets):
@@ -755,12 +758,24 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         return tuple(c for c in allowed if c != "sos_bound" or disturbances)
     if not isinstance(raw, list) or not raw or any(c not in allowed for c in raw) or len(set(raw)) != len(raw):
         kind = "" if polynomial else " of a loop with functions"
+        kind += ' of a discrete-time map ([model] time = "discrete")' if is_discrete(model) else ""
         raise InvalidParameter("sweep.classes", f"in a {mode} sweep{kind}, a list of distinct names from "
                                + ", ".join(repr(c) for c in allowed), raw)
     if "sos_bound" in raw and not disturbances:
         raise InvalidParameter("sweep.classes", "classes that apply to the model: sos_bound needs [disturbances] "
                                "in the model file", raw)
     return tuple(c for c in allowed if c in raw)  # canonical order: cheapest first
+
+
+def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
+    """The classes a discrete-time map takes: those with a discrete-time condition
+    (:data:`lyapcheck.models.classes.registry.DISCRETE`), on a map with functions only
+    :data:`lyapcheck.models.classes.discrete_functions.TAKEN`."""
+    if isinstance(model, Model):
+        return model_classes.DISCRETE
+    from lyapcheck.models.classes.discrete_functions import TAKEN
+
+    return TAKEN
 
 
 def _model_simulation(raw: object) -> ModelSimulation:
@@ -890,13 +905,13 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     declared = parse_any_model(model_text, model_file)
     from lyapcheck.models.loop.discrete import refuse
 
-    # a sweep's classes, boxes and cross-checks read [dynamics] as a field: a map is refused, not swept
-    refuse(declared, "sweep.model", "certify one point at a time (lyapcheck certify FILE --set NAME=VALUE)")
     fixed = _overrides(sweep.get("set"), declared)
     model = parse_any_model(model_text, model_file, fixed) if fixed else declared
     mode = sweep.get("mode", "points")
     if mode not in _MODES:
         raise InvalidParameter("sweep.mode", "one of " + ", ".join(repr(m) for m in _MODES), mode)
+    if mode == "boxes":  # a box's corner checks and certificates read [dynamics] as a field: not on a map yet
+        refuse(declared, "sweep.mode", 'boxes are not taken on maps yet; mode = "points" sweeps a map point by point')
     raw_axes = sweep.get("axes")
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",
