@@ -96,6 +96,12 @@ each what ``lyapcheck certify FILE --box`` certifies: the model read again at th
 instability as a polynomial model's box's (:func:`sweeps.evaluate.unstable_corners`: where one is
 unstable, the stability classes are stored ``refuted``, not run); an undecided box is split.
 
+A discrete-time map (``[model] time = "discrete"``, polynomial or with functions) is swept point by point
+only: its classes are those with a discrete-time condition (:func:`map_classes`; a class a map does not take
+is refused by the spec, in one line), each point certified as a map by ``certify_model`` and cross-checked by
+iterating it (:class:`sweeps.crosscheck._MapLoop`, never integrated); ``mode = "boxes"`` is refused in one
+line (a box's corner checks and certificates read ``[dynamics]`` as a field).
+
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks
 that the file still has the SHA-256 stored with the results. A swept value is validated through
@@ -758,9 +764,12 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         return tuple(c for c in allowed if c != "sos_bound" or disturbances)
     if not isinstance(raw, list) or not raw or any(c not in allowed for c in raw) or len(set(raw)) != len(raw):
         kind = "" if polynomial else " of a loop with functions"
-        kind += ' of a discrete-time map ([model] time = "discrete")' if is_discrete(model) else ""
+        others = ""
+        if is_discrete(model):
+            kind = " of a discrete-time map" + ("" if polynomial else " with functions")
+            others = ' (the other classes are not taken yet for a discrete-time map ([model] time = "discrete"))'
         raise InvalidParameter("sweep.classes", f"in a {mode} sweep{kind}, a list of distinct names from "
-                               + ", ".join(repr(c) for c in allowed), raw)
+                               + ", ".join(repr(c) for c in allowed) + others, raw)
     if "sos_bound" in raw and not disturbances:
         raise InvalidParameter("sweep.classes", "classes that apply to the model: sos_bound needs [disturbances] "
                                "in the model file", raw)
@@ -768,14 +777,20 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
 
 
 def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
-    """The classes a discrete-time map takes: those with a discrete-time condition
-    (:data:`lyapcheck.models.classes.registry.DISCRETE`), on a map with functions only
+    """The classes a sweep of a discrete-time map takes: those with a discrete-time condition
+    (:data:`lyapcheck.models.classes.registry.DISCRETE`) but :data:`MAP_UNSWEPT`, on a map with functions
     :data:`lyapcheck.models.classes.discrete_functions.TAKEN`."""
     if isinstance(model, Model):
-        return model_classes.DISCRETE
+        # barrier and reach_avoid are certified on a map at a point, but a sweep's cross-check of them (by
+        # iteration, sweeps.crosscheck.check_sets) is not built yet: a point sweep does not take them
+        return tuple(c for c in model_classes.DISCRETE if c not in MAP_UNSWEPT)
     from lyapcheck.models.classes.discrete_functions import TAKEN
 
     return TAKEN
+
+
+#: classes a map takes at a point that a sweep of a map does not take yet (:func:`map_classes`)
+MAP_UNSWEPT: Final = ("barrier", "reach_avoid")
 
 
 def _model_simulation(raw: object) -> ModelSimulation:
