@@ -524,9 +524,9 @@ class _MapLoop:
         if cert.get("kind") == "discrete_interval":
             P = np.array([[float(Fraction(str(v))) for v in row] for row in cert["P"]], dtype=np.float64)
 
-            def V(e: np.ndarray) -> np.ndarray:
+            def quadratic(e: np.ndarray) -> np.ndarray:
                 return np.asarray(np.einsum("ki,ij,kj->k", e, P, e), dtype=np.float64)
-            return V, V, ()
+            return quadratic, quadratic, ()
         n = self.model.n
         V = certificate_function(cert["V"], list(self.model.states), n, {}, [Fraction(1)] * n)
         return V, V, ()

@@ -130,3 +130,23 @@ def test_boxes_and_classes_a_map_does_not_take_are_refused_in_one_line(tmp_path:
     points = tmp_path / "points.toml"
     points.write_text('[sweep]\nmodel = "m.toml"\n[[sweep.axes]]\nname = "a"\nstart = 0.3\nstop = 0.9\nnum = 2\n')
     assert load_model_spec(points).classes == ("linearization", "quadratic", "sos_gas", "roa")
+
+
+def test_a_map_with_functions_is_cross_checked_by_iterating_its_true_map(monkeypatch: pytest.MonkeyPatch,
+                                                                         tmp_path: Path) -> None:
+    """roa of a map with functions (discrete_interval, V = e^T P e): the iterates of starts inside it, the
+    functions evaluated by numpy; no integrator."""
+    import lyapcheck.models.engines.trajectories as trajectories
+    from lyapcheck.api import certify
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from tests.test_discrete_reports import WITH_FUNCTIONS
+
+    monkeypatch.setattr(trajectories, "simulate", never_integrate)
+    path = tmp_path / "sine-map.toml"
+    path.write_text(WITH_FUNCTIONS)
+    doc = dict(certify(model=path, classes="linearization,roa").document)
+    assert doc["conditions"]["roa"]["certificate"]["kind"] == "discrete_interval"
+    from sweeps.crosscheck import cross_check_point
+
+    found = cross_check_point(parse_any_model(WITH_FUNCTIONS, str(path)), doc, {}, starts=8, seed=(0, 0))
+    assert not found.violation and found.trajectories == 8 and found.not_converged == 0
