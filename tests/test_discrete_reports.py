@@ -182,3 +182,37 @@ def test_pdf_carries_the_map_sections(local: dict[str, Any]) -> None:
     document = pypdfium2.PdfDocument(str(pdf))
     text = " ".join(document[i].get_textpage().get_text_range() for i in range(len(document)))
     assert "Iterates of the map" in text and "The certified region, iterated" in text
+
+
+@pytest.mark.slow
+def test_three_states_are_drawn_in_the_slice_of_the_first_two(tmp_path: Path) -> None:
+    """A 3-state map: starts in the (x, y) slice through the fixed point, the set's slice filled, the
+    iterates projected; every state on the staircase."""
+    from lyapcheck.models.language.modelfile import parse_model
+    from reports.map_figures import map_figures
+
+    path = tmp_path / "map3.toml"
+    path.write_text(THREE_STATES)
+    doc = certify(path, tmp_path / "map3.json", "linearization", "roa")
+    assert doc["conditions"]["roa"]["status"] == "certified"
+    drawn = map_figures(doc, parse_model(THREE_STATES, "map3"))
+    assert drawn.iterates is not None and drawn.region is not None and drawn.series is not None
+    assert "starts in the slice z = z_eq" in drawn.iterates.caption and "(its slice through the fixed point)" in \
+        drawn.region.caption
+    assert all(check.ok for check in drawn.checks) and drawn.region.data["inside_starts"] == 8
+    assert len(re.findall(r'<g id="staircase-\d+-0"', drawn.series.svg.decode())) == 3
+
+
+THREE_STATES = """[model]
+name = "a three-state contracting map"
+states = ["x", "y", "z"]
+time = "discrete"
+[dynamics]
+x = "0.5*x + 0.1*y**2"
+y = "0.5*y - 0.2*z"
+z = "0.3*z + 0.1*x*y"
+[domain]
+x = [-1, 1]
+y = [-1, 1]
+z = [-1, 1]
+"""
