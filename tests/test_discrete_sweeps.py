@@ -64,6 +64,12 @@ def test_the_gain_sweep_certifies_the_stable_range_and_refutes_the_unstable_one(
         # the cross-check iterated the map from the certified set: no rise, no escape, no alarm
         assert data["cross_check_points"][j] == 1 and data["cross_check_trajectories"][j] > 0
         assert data["cross_check_worst_rise"][j] <= 1e-9 and not data["soundness_violation"][j]
+    # the store's page says the map was iterated, in steps
+    from reports.render import sweep_html
+
+    page = sweep_html(str(path))
+    assert "Cross-check by iterating the map" in page and "sequences of iterates iterated" in page
+    assert "trajector" not in page and "Cross-check by simulation" not in page
 
 
 @pytest.fixture(scope="module")
