@@ -163,7 +163,8 @@ def test_a_map_with_functions_and_a_one_state_map(tmp_path: Path) -> None:
     assert doc["conditions"]["roa"]["certificate"]["kind"] == "discrete_interval"
     assert cli("report", str(tmp_path / "sine.json"), "--html", str(tmp_path / "sine.html")).exit_code == 0
     page = (tmp_path / "sine.html").read_text("utf-8")
-    assert "a loop with functions" in page and "discrete-time map" in page
+    assert "a loop with functions" in page and "discrete-time map" in page and "The functions of the map" in page
+    assert "<th>flow</th>" not in page and "The recasting the certificates are proved on" not in page
     assert all(f'<figure id="{ident}">' in page for ident in ("fig-iterates", "fig-region", "fig-staircase"))
     assert "SOUNDNESS" not in page and "Iteration against the certificates" in page
     logistic = certify(LOGISTIC, tmp_path / "logistic.json")

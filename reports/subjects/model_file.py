@@ -276,7 +276,8 @@ def soundness_alarm(checks: list[CrossCheck], what: str) -> str:
 
 
 #: a map's page: the toc's entries whose words differ from a continuous model's
-MAP_TOC: Final = {"phase": "Iterates of the map", "size": "The certified region, iterated"}
+MAP_TOC: Final = {"phase": "Iterates of the map", "size": "The certified region, iterated",
+                  "recasting": "The functions of the map"}
 
 
 def map_figures_of(doc: dict[str, Any], model: Model | RecastModel | None, simulate: bool
