@@ -48,7 +48,14 @@ unsafe margin reached, each inequality relative to the size of its terms:
 latest time before the goal over the bound).
 
 What differs between the kinds is how the loop is simulated and V evaluated in floating point, behind
-:class:`SimulatedLoop` (:class:`_PolynomialLoop`, :class:`_FunctionsLoop`):
+:class:`SimulatedLoop` (:class:`_PolynomialLoop`, :class:`_FunctionsLoop`, :class:`_MapLoop`):
+
+* a discrete-time map (``[model] time = "discrete"``, polynomial or with functions) is never integrated: it
+  is iterated (:func:`lyapcheck.models.surfaces.iterate.iterate`, :data:`MAP_STEPS` steps), the step number
+  standing for the time. The checks are the iterated analogues: from a start in a certified ``{V <= level}``
+  V never rises from one step to the next and no iterate escapes; a global V (``quadratic``, ``sos_gas``
+  on a map) never rises, ``V(e_k) <= (1 - mu)^k V(e_0)`` with its certified ``mu`` per step, and a GES
+  map's ``|e_k| <= k |e_0| r^k``. The classes a map does not take (safety, ``sos_bound``) are never certified on it;
 
 * a polynomial loop is integrated on its own field, over :func:`lyapcheck.models.engines.trajectories.horizon`
   of its linearization; a V is the certificate's exact polynomial (over a box, at the point's own
@@ -102,6 +109,9 @@ CONVERGED_FRACTION: Final = 1e-3
 REGION_FRACTIONS: Final = (0.5, 0.999)
 #: the global starts' box of a polynomial loop without a [domain]: this many certificate state scales around x_eq
 DEFAULT_REGION_SCALES: Final = 2.0
+#: a discrete-time map's cross-check: the iterations from every start (its certified maps contract
+#: geometrically; a sampled loop's map, which moves little per step, reaches the fixed point within them too)
+MAP_STEPS: Final = 400
 #: the classes whose V is simulated (the global ones, then the region), and those simulated from the
 #: initial set (:func:`check_sets`)
 GLOBAL_CLASSES: Final = ("quadratic", "sos_gas")
@@ -209,6 +219,10 @@ def _point_text(point: Mapping[str, Fraction]) -> str:
 
 
 def _loop(model: Any, doc: Mapping[str, Any], point: Mapping[str, Fraction]) -> SimulatedLoop:
+    from lyapcheck.models.loop.discrete import is_discrete
+
+    if is_discrete(model):  # a map is iterated, never integrated as a field
+        return _MapLoop(model, point)
     return _PolynomialLoop(model, doc, point) if isinstance(model, Model) else _FunctionsLoop(model)
 
 
@@ -293,6 +307,12 @@ def _certified_set(loop: SimulatedLoop, cls: str, cond: Mapping[str, Any]) -> _S
     V, region, angles = loop.functions(cls, cert)
     if cls == REGION_CLASS:
         return _Set(cls, V, region, level=float(Fraction(str(cert["level"]))), angles=angles)
+    if isinstance(loop, _MapLoop):  # per step: V(e_k) <= (1 - mu)^k V(e_0), |e_k| <= k |e_0| r^k, as exp(-rate k)
+        rate = _per_step_rate(1 - float(cond.get("decay_rate_V_per_step") or 0.0))
+        if cond.get("property") == "GES" and cond.get("k") is not None and cond.get("contraction_per_step") is not None:
+            return _Set(cls, V, rate=rate, k=float(cond["k"]),
+                        ges_rate=_per_step_rate(float(cond["contraction_per_step"])))
+        return _Set(cls, V, rate=rate)
     rate = float(cond.get("decay_rate_V_per_s") or 0.0)
     if cond.get("property") == "GES" and cond.get("k") is not None and cond.get("decay_rate_per_s") is not None:
         return _Set(cls, V, rate=rate, k=float(cond["k"]), ges_rate=float(cond["decay_rate_per_s"]), angles=angles)
@@ -467,6 +487,91 @@ class _PolynomialLoop:
             if bound_exceeded(float(bound) + reference, float(sup), BOUND_REL_TOL):
                 out.violations.append(f"sos_bound at {where}: the worst case found, limsup |{name}| >= "
                                       f"{float(sup):.6g}, exceeds the certified bound {float(bound):.6g}{extra}")
+
+
+def _per_step_rate(factor: float) -> float:
+    """A certified factor per step (``0 < factor <= 1``) as the rate of ``exp(-rate k)``; 0 when none."""
+    return -math.log(factor) if 0 < factor < 1 else 0.0
+
+
+class _MapLoop:
+    """A discrete-time map (``[model] time = "discrete"``, polynomial or with functions) at a parameter point:
+    iterated by :func:`lyapcheck.models.surfaces.iterate.iterate` (the iterator of ``simulate``), never
+    integrated. A "trajectory" is the sequence of iterates over :data:`MAP_STEPS` steps, its "times" the step
+    numbers, so the checks of :func:`_trajectories` read as their iterated analogues: V never rises from one
+    step to the next, a certified rate per step bounds ``V(e_k)`` (and a GES map's ``|e_k|``), none escapes.
+    V-s are in the declared shifted states (a map's certificates have no scaling): ``discrete_sublevel``,
+    ``discrete_quadratic`` and ``discrete_sos`` polynomials, ``discrete_interval``'s ``e^T P e``."""
+
+    pooled = True
+
+    def __init__(self, model: Model | RecastModel, point: Mapping[str, Fraction]) -> None:
+        from lyapcheck.models.language.modelfile import with_parameters
+
+        self.model = with_parameters(model, dict(point)) if isinstance(model, Model) else model
+        self.point = point
+        self.scales = np.ones(model.n)
+        self.eq = np.array([float(v) for v in self.model.equilibrium])
+
+    def streams(self, seed: Sequence[int], index: int | None) -> tuple[np.random.Generator, ...]:
+        rng = np.random.default_rng([*seed, 0 if index is None else index])
+        return rng, rng, rng
+
+    def functions(self, cls: str, cert: Mapping[str, Any]) -> tuple[PointFunction, PointFunction | None,
+                                                                     tuple[str, ...]]:
+        from lyapcheck.models.engines.crosscheck import certificate_function
+
+        if cert.get("kind") == "discrete_interval":
+            P = np.array([[float(Fraction(str(v))) for v in row] for row in cert["P"]], dtype=np.float64)
+
+            def quadratic(e: np.ndarray) -> np.ndarray:
+                return np.asarray(np.einsum("ki,ij,kj->k", e, P, e), dtype=np.float64)
+            return quadratic, quadratic, ()
+        n = self.model.n
+        V = certificate_function(cert["V"], list(self.model.states), n, {}, [Fraction(1)] * n)
+        return V, V, ()
+
+    def start(self, u: np.ndarray) -> np.ndarray:
+        return self.eq + u
+
+    def global_box(self) -> tuple[np.ndarray, np.ndarray]:
+        model = self.model
+        if model.domain:
+            return (np.array([float(model.domain[x][0]) for x in model.states]),
+                    np.array([float(model.domain[x][1]) for x in model.states]))
+        return self.eq - DEFAULT_REGION_SCALES, self.eq + DEFAULT_REGION_SCALES
+
+    def simulate(self, starts: np.ndarray) -> tuple[list[tuple[np.ndarray, np.ndarray]], Outcome]:
+        """The iterates over :data:`MAP_STEPS` steps: escaped where the iterator stopped a row (it left
+        :data:`~lyapcheck.models.surfaces.simulate.ESCAPE_FACTOR` state scales or is not finite), converged
+        within :data:`CONVERGED_FRACTION` of the starts' extent."""
+        from lyapcheck.models.surfaces.iterate import iterate
+
+        paths = iterate(self.model, starts, MAP_STEPS)
+        eq = self.eq
+        radius = CONVERGED_FRACTION * float(np.linalg.norm(np.maximum(np.max(np.abs(starts - eq), axis=0), 1e-6)))
+        nodes = []
+        for path in paths:
+            finite = path[np.all(np.isfinite(path), axis=1)]
+            nodes.append((np.arange(len(finite), dtype=np.float64), finite - eq))
+        escaped = [not np.all(np.isfinite(path[-1])) for path in paths]
+
+        def outcome(i: int, angles: tuple[str, ...]) -> str:
+            if escaped[i]:
+                return "escaped"
+            return "converged" if float(np.linalg.norm(nodes[i][1][-1])) <= radius else "other"
+
+        return nodes, outcome
+
+    def runs(self) -> Runs:
+        def run(x0: np.ndarray, t_end: float | None,
+                disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
+            raise NotImplementedError("barrier and reach_avoid are not taken on a discrete-time map")
+        return run
+
+    def check_bound(self, cond: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int,
+                    worst_case: bool, out: CrossCheck) -> None:
+        """``sos_bound`` is not taken on a map (never certified there): nothing to check."""
 
 
 class _FunctionsLoop:

@@ -96,6 +96,12 @@ each what ``lyapcheck certify FILE --box`` certifies: the model read again at th
 instability as a polynomial model's box's (:func:`sweeps.evaluate.unstable_corners`: where one is
 unstable, the stability classes are stored ``refuted``, not run); an undecided box is split.
 
+A discrete-time map (``[model] time = "discrete"``, polynomial or with functions) is swept point by point
+only: its classes are those with a discrete-time condition (:func:`map_classes`; a class a map does not take
+is refused by the spec, in one line), each point certified as a map by ``certify_model`` and cross-checked by
+iterating it (:class:`sweeps.crosscheck._MapLoop`, never integrated); ``mode = "boxes"`` is refused in one
+line (a box's corner checks and certificates read ``[dynamics]`` as a field).
+
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks
 that the file still has the SHA-256 stored with the results. A swept value is validated through
@@ -123,6 +129,7 @@ import numpy as np
 from lyapcheck.errors import InputFileError, InvalidParameter, ModelFileError
 from lyapcheck.models.classes import registry as model_classes
 from lyapcheck.models.language.modelfile import Model
+from lyapcheck.models.loop.discrete import is_discrete
 from lyapcheck.paper.boxes.box import ParameterBox
 from lyapcheck.paper.params import (
     FIELD_BY_KEY, POSITIVE, FieldSpec, Interval, Problem, build_problem, flatten_tables, validate_field,
@@ -744,6 +751,8 @@ def _readable(axis: ModelAxis, where: str) -> ModelAxis:
 def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[str, ...]:
     polynomial = isinstance(model, Model)
     allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES  # (the same on every loop)
+    if is_discrete(model):  # a map: only the classes with a discrete-time condition (every other not_applicable)
+        allowed = tuple(c for c in allowed if c in map_classes(model))
     # (any loop: barrier with its sets only, reach_avoid with its goal too; a class the model cannot ask is
     # not picked by default, and naming it is refused here rather than at the first point)
     if not ("initial" in model.sets and "unsafe" in model.sets):
@@ -755,12 +764,33 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         return tuple(c for c in allowed if c != "sos_bound" or disturbances)
     if not isinstance(raw, list) or not raw or any(c not in allowed for c in raw) or len(set(raw)) != len(raw):
         kind = "" if polynomial else " of a loop with functions"
+        others = ""
+        if is_discrete(model):
+            kind = " of a discrete-time map" + ("" if polynomial else " with functions")
+            others = ' (the other classes are not taken yet for a discrete-time map ([model] time = "discrete"))'
         raise InvalidParameter("sweep.classes", f"in a {mode} sweep{kind}, a list of distinct names from "
-                               + ", ".join(repr(c) for c in allowed), raw)
+                               + ", ".join(repr(c) for c in allowed) + others, raw)
     if "sos_bound" in raw and not disturbances:
         raise InvalidParameter("sweep.classes", "classes that apply to the model: sos_bound needs [disturbances] "
                                "in the model file", raw)
     return tuple(c for c in allowed if c in raw)  # canonical order: cheapest first
+
+
+def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
+    """The classes a sweep of a discrete-time map takes: those with a discrete-time condition
+    (:data:`lyapcheck.models.classes.registry.DISCRETE`) but :data:`MAP_UNSWEPT`, on a map with functions
+    :data:`lyapcheck.models.classes.discrete_functions.TAKEN`."""
+    if isinstance(model, Model):
+        # barrier and reach_avoid are certified on a map at a point, but a sweep's cross-check of them (by
+        # iteration, sweeps.crosscheck.check_sets) is not built yet: a point sweep does not take them
+        return tuple(c for c in model_classes.DISCRETE if c not in MAP_UNSWEPT)
+    from lyapcheck.models.classes.discrete_functions import TAKEN
+
+    return TAKEN
+
+
+#: classes a map takes at a point that a sweep of a map does not take yet (:func:`map_classes`)
+MAP_UNSWEPT: Final = ("barrier", "reach_avoid")
 
 
 def _model_simulation(raw: object) -> ModelSimulation:
@@ -890,13 +920,13 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     declared = parse_any_model(model_text, model_file)
     from lyapcheck.models.loop.discrete import refuse
 
-    # a sweep's classes, boxes and cross-checks read [dynamics] as a field: a map is refused, not swept
-    refuse(declared, "sweep.model", "certify one point at a time (lyapcheck certify FILE --set NAME=VALUE)")
     fixed = _overrides(sweep.get("set"), declared)
     model = parse_any_model(model_text, model_file, fixed) if fixed else declared
     mode = sweep.get("mode", "points")
     if mode not in _MODES:
         raise InvalidParameter("sweep.mode", "one of " + ", ".join(repr(m) for m in _MODES), mode)
+    if mode == "boxes":  # a box's corner checks and certificates read [dynamics] as a field: not on a map yet
+        refuse(declared, "sweep.mode", 'boxes are not taken on maps yet; mode = "points" sweeps a map point by point')
     raw_axes = sweep.get("axes")
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",

@@ -341,7 +341,8 @@ def summarize_model_store(store: Any) -> ModelSweepSummary:
     spec = store.spec
     scales = {a.name: a.measure for a in spec.axes}
     data = {v.name: store.read(v.name) for v in store.variables}
-    model = {"name": spec.model.name, "file": spec.model_file, "sha256": spec.model_sha256}
+    model = {"name": spec.model.name, "file": spec.model_file, "sha256": spec.model_sha256,
+             "time": str(getattr(spec.model, "time", "continuous"))}
     if spec.mode == "boxes":
         window = {a.name: (a.values[0], a.values[-1]) for a in spec.axes}
         return summarize_model_arrays(BOXES_MODE, spec.dims, scales, spec.classes, spec.outputs, data, window=window,

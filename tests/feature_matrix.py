@@ -216,25 +216,27 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
     Refusal(cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
-            | cells(("discrete",), CLASSES[:5] + ("barrier", "reach_avoid"),
-                    ("--box", "sweep points", "sweep boxes", "report")),
+            | cells(("discrete",), CLASSES[:5], ("--box", "sweep boxes"))
+            | cells(("discrete",), ("barrier", "reach_avoid"), ("--box", "sweep points", "sweep boxes")),
             ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
              '"discrete")'),
             "A discrete-time map (`[model] time = \"discrete\"`) takes `linearization` (every eigenvalue of the map's "
             "Jacobian of modulus < 1, exact), `quadratic` and `sos_gas` (`V(F(e)) - V(e) <= -mu V(e)`, exact), `roa` "
             "and `candidate` (a set `{V <= c}` on which `V(F(e)) <= V(e) - eps |e|^2`, exact), `barrier` (`B(F(x)) <= "
             "lambda B(x)`, exact) and `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) at a point; "
-            "`sos_bound` is `not_applicable` until its discrete-time condition is built, and `--box`, sweeps and reports, "
-            "which read `[dynamics]` as a field, refuse a map in one line (a gap, not a theorem)."),
+            "`sos_bound` is `not_applicable` until its discrete-time condition is built; reports and point sweeps "
+            "iterate the map (a sweep's cross-check of `barrier` and `reach_avoid` by iteration is not built yet, so "
+            "a point sweep does not take them), while `--box` and box sweeps, which read `[dynamics]` as a field, "
+            "refuse a map in one line (a gap, not a theorem)."),
     Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "candidate", "sos_bound", "barrier", "reach_avoid"),
                   CLASS_SURFACES)
-            | cells(("map_functions",), ("linearization", "roa"), ("--box", "sweep points", "sweep boxes", "report")),
+            | cells(("map_functions",), ("linearization", "roa"), ("--box", "sweep boxes")),
             ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
              'time = "discrete")'),
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
             "then the exact discrete-time test) and `roa` (ball arithmetic on the true map) at a point; every other "
-            "class is `not_applicable` until it is built for such a map, and `--box`, sweeps and reports refuse a map "
-            "in one line, as for a polynomial map (a gap, not a theorem)."),
+            "class is `not_applicable` until it is built for such a map; reports and point sweeps take it as a "
+            "polynomial map, and `--box` and box sweeps refuse it in one line (a gap, not a theorem)."),
 )
 
 #: loop surfaces refused today, with the refusal's words: (kinds, the words)

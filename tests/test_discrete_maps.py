@@ -286,23 +286,25 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert cli("verify", str(tmp_path / "c.json")).exit_code == 0
 
 
-def test_box_report_and_sweeps_refuse_a_map_in_one_line(tmp_path: Path) -> None:
+def test_box_and_box_sweeps_refuse_a_map_in_one_line_reports_and_point_sweeps_take_it(tmp_path: Path) -> None:
+    """--box and a boxes sweep read [dynamics] as a field: refused in one line. A report iterates the map
+    (tests/test_discrete_reports.py) and a points sweep certifies it point by point
+    (tests/test_discrete_sweeps.py): both are taken."""
     from sweeps.spec import load_model_spec
 
     path = write(tmp_path, MAP)
     assert "--box" in refused_line(cli("certify", str(path), "--box", "a=0.8..1.2", "--classes", "linearization"))
     cert = tmp_path / "c.json"
     assert cli("certify", str(path), "--classes", "linearization", "--no-store", "--out", str(cert)).exit_code == 0
-    assert "report" in refused_line(cli("report", str(cert), "--html", str(tmp_path / "c.html")))
-    assert not (tmp_path / "c.html").exists()
-    assert "report" in refused_line(cli("certify", str(path), "--classes", "linearization", "--no-store",
-                                        "--report", str(tmp_path / "d.html")))
-    for mode in ("points", "boxes"):
-        spec = write(tmp_path, f'[sweep]\nmodel = "map.toml"\nmode = "{mode}"\nclasses = ["linearization"]\n'
-                               '[[sweep.axes]]\nname = "a"\nstart = 0.8\nstop = 1.2\nnum = 2\n', f"{mode}.toml")
-        with pytest.raises(ModelFileError, match=r'sweep.model: not taken yet for a discrete-time map \(\[model\] '
-                                                 r'time = "discrete"\)'):
-            load_model_spec(spec)
+    assert cli("report", str(cert), "--html", str(tmp_path / "c.html")).exit_code == 0
+    assert "the map" in (tmp_path / "c.html").read_text()
+    specs = {mode: write(tmp_path, f'[sweep]\nmodel = "map.toml"\nmode = "{mode}"\nclasses = ["linearization"]\n'
+                                   '[[sweep.axes]]\nname = "a"\nstart = 0.8\nstop = 1.2\nnum = 2\n', f"{mode}.toml")
+             for mode in ("points", "boxes")}
+    with pytest.raises(ModelFileError, match=r'sweep.mode: not taken yet for a discrete-time map \(\[model\] '
+                                             r'time = "discrete"\); boxes are not taken on maps yet'):
+        load_model_spec(specs["boxes"])
+    assert load_model_spec(specs["points"]).classes == ("linearization",)
 
 
 def test_maximize_on_a_map_brackets_the_true_boundary(tmp_path: Path) -> None:

@@ -110,8 +110,11 @@ def _print_model_summary(summary: Any, report: Any) -> None:
         by_class.add_row(cls, f"{share:.3f}", str(summary.counts_by_class.get(cls, 0)))
     console.print(by_class)
     cross = summary.cross_check
-    console.print(f"cross-check: {cross['parameter_points']} parameter points and {cross['trajectories']} trajectories "
-                  f"of {cross['checked']} certified {what} simulated; worst V rise "
+    # a map's cross-check iterates it (sweeps.crosscheck._MapLoop): its sequences of iterates, never trajectories
+    runs = "sequences of iterates" if summary.model.get("time") == "discrete" else "trajectories"
+    done = "iterated" if summary.model.get("time") == "discrete" else "simulated"
+    console.print(f"cross-check: {cross['parameter_points']} parameter points and {cross['trajectories']} {runs} "
+                  f"of {cross['checked']} certified {what} {done}; worst V rise "
                   + ("n/a" if cross["worst_rise"] is None else f"{cross['worst_rise']:.3g}") + " of V(0)")
 
 

@@ -126,6 +126,24 @@ def _violations(summary: ModelSweepSummary) -> tuple[list[tuple[str, str]], int]
     return rows[:MAX_VIOLATION_ROWS], more + max(0, len(rows) - MAX_VIOLATION_ROWS)
 
 
+#: the cross-check's words for a loop integrated in time, and for a discrete-time map iterated step by step
+FLOW_WORDS: Final = {"done": "simulated", "runs": "trajectories", "run": "a trajectory",
+                     "envelope": "V(0) exp(-rate t)", "norm": "|x(t)|"}
+MAP_WORDS: Final = {"done": "iterated", "runs": "sequences of iterates", "run": "the iterates",
+                    "envelope": "(1 - mu)^k V(0)", "norm": "|x_k|"}
+
+
+def is_map_text(model_text: str) -> bool:
+    """Whether a stored model text is a discrete-time map (``[model] time = "discrete"``; :mod:`tomllib` only)."""
+    import tomllib
+
+    try:
+        model = tomllib.loads(model_text).get("model")
+    except tomllib.TOMLDecodeError:
+        return False
+    return isinstance(model, dict) and model.get("time") == "discrete"
+
+
 def model_store_context(ds: Any) -> dict[str, Any]:
     """Everything ``model_sweep.html.j2`` shows, as plain strings (the template escapes them). ``ds``
     is a model sweep store, loaded and checked by :func:`sweeps.schema.check_model_dataset`."""
@@ -133,17 +151,21 @@ def model_store_context(ds: Any) -> dict[str, Any]:
     boxes = summary.mode == BOXES_MODE
     part = _box_part(ds, summary) if boxes else _point_part(ds, summary)
     cross = summary.cross_check
+    model_text = str(ds.attrs.get("model_toml", ""))
+    # a map's cross-check iterated it (sweeps.crosscheck._MapLoop): its figures in steps, not seconds
+    words = MAP_WORDS if is_map_text(model_text) else FLOW_WORDS
     cross_rows = [
         ("certified " + ("boxes" if boxes else "points") + " cross-checked", f"{cross['checked']} of "
                                                                               f"{summary.counts['certified']}"),
-        ("parameter points simulated", str(cross["parameter_points"])),
-        ("trajectories simulated", str(cross["trajectories"])),
-        ("largest rise of a certified V along a trajectory (of V(0))",
+        (f"parameter points {words['done']}", str(cross["parameter_points"])),
+        (f"{words['runs']} {words['done']}", str(cross["trajectories"])),
+        (f"largest rise of a certified V along {words['run']} (of V(0))",
          "—" if cross["worst_rise"] is None else fmt_float(cross["worst_rise"], 3)),
-        ("largest excess of V over V(0) exp(-rate t) (of V(0))",
+        (f"largest excess of V over {words['envelope']} (of V(0))",
          "—" if cross["worst_envelope"] is None else fmt_float(cross["worst_envelope"], 3)),
-        ("largest |x(t)| / GES envelope", "—" if cross["worst_ges_ratio"] is None else fmt_float(cross["worst_ges_ratio"], 6)),
-        ("trajectories not at the equilibrium by the horizon (a figure, not a violation)",
+        (f"largest {words['norm']} / GES envelope",
+         "—" if cross["worst_ges_ratio"] is None else fmt_float(cross["worst_ges_ratio"], 6)),
+        (f"{words['runs']} not at the equilibrium by the horizon (a figure, not a violation)",
          str(cross["not_converged"])),
     ]
     if "worst_unsafe_margin" in cross and {"barrier", "reach_avoid"} & set(summary.classes):
@@ -160,11 +182,11 @@ def model_store_context(ds: Any) -> dict[str, Any]:
     for y, span in (cross.get("tightness") or {}).items():
         cross_rows.append((f"certified bound on |{y}| / worst found", _span(span)))
     violations, more = _violations(summary)
-    model_text = str(ds.attrs.get("model_toml", ""))
     sha_ok = hashlib.sha256(model_text.encode()).hexdigest() == str(ds.attrs.get("model_sha256"))
     what = "boxes" if boxes else "points"
     return {
         "kind": "model_sweep",
+        "discrete": words is MAP_WORDS,
         "title": "lyapcheck model sweep report",
         "boxes": boxes,
         "what": what,

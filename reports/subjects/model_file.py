@@ -39,6 +39,7 @@ from lyapcheck.errors import InputFileError, LyapcheckError
 from lyapcheck.models.surfaces.certificate import KIND, is_model_document
 from lyapcheck.models.language.modelfile import Model
 from lyapcheck.models.language.recast import RecastModel
+from lyapcheck.models.loop.discrete import is_discrete
 from reports.figures import Figure
 from reports.phase_portrait import CrossCheck, phase_portrait
 from reports.sections.base import MODEL_FILE, RECAST_LOOP, ClassContext, text_of
@@ -82,6 +83,17 @@ POLYNOMIAL: Final = LoopKind(MODEL_FILE, "model_file.html.j2", ("field", "The fi
 WITH_FUNCTIONS: Final = LoopKind(RECAST_LOOP, "recast_loop.html.j2",
                                  ("recasting", "The recasting the certificates are proved on"),
                                  "its field cannot be drawn", "the portrait failed")
+
+
+def is_map_document(doc: object) -> bool:
+    """A certificate of a discrete-time map: its stored model text says ``[model] time = "discrete"``
+    (read by :mod:`tomllib` only, so that a text that no longer parses is still known as a map)."""
+    text = as_dict(as_dict(doc).get("model")).get("text") if isinstance(doc, dict) else None
+    try:
+        raw = tomllib.loads(text) if isinstance(text, str) else {}
+    except tomllib.TOMLDecodeError:
+        return False
+    return as_dict(raw.get("model")).get("time") == "discrete"
 
 
 def is_recast_document(doc: object) -> bool:
@@ -254,6 +266,36 @@ def portrait(doc: dict[str, Any], model: Model | RecastModel | None, simulate: b
     return drawn.figure, drawn.reason, drawn.checks
 
 
+def soundness_alarm(checks: list[CrossCheck], what: str) -> str:
+    """The alarm at the top of the page when ``what`` (a simulation, an iteration) contradicts a
+    certificate, or ``""``."""
+    failed = [c for c in checks if not c.ok]
+    if not failed:
+        return ""
+    return f"SOUNDNESS: {what} contradicts a certificate: " + "; ".join(f"{c.what} ({c.detail})" for c in failed) + "."
+
+
+#: a map's page: the toc's entries whose words differ from a continuous model's
+MAP_TOC: Final = {"phase": "Iterates of the map", "size": "The certified region, iterated",
+                  "recasting": "The functions of the map"}
+
+
+def map_figures_of(doc: dict[str, Any], model: Model | RecastModel | None, simulate: bool
+                   ) -> tuple[Any, str]:
+    """A map's figures (:func:`reports.map_figures.map_figures`), or None and why not."""
+    from reports.map_figures import map_figures
+
+    if not simulate:
+        return None, "not requested"
+    if model is None:
+        return None, "the stored model text does not parse, so nothing can be iterated"
+    try:
+        return map_figures(doc, model), ""
+    except (LyapcheckError, ValueError, ArithmeticError, FloatingPointError, KeyError, TypeError) as exc:
+        log.warning("no iterates for the report: %s", exc)
+        return None, f"the iteration failed: {exc}"
+
+
 def region_slices(doc: dict[str, Any], model: Model | RecastModel | None, simulate: bool
                   ) -> tuple[Figure | None, str]:
     """The certified region against the simulated one, in 2-D slices (:mod:`reports.region_slices`),
@@ -342,10 +384,8 @@ class ModelFileSubject(Subject):
         self.text = stored if isinstance(stored, str) else ""
         self.overrides = {str(k): v for k, v in as_dict(doc.get("overrides")).items()}
         self.parsed, self.error = self.read_model()
-        from lyapcheck.models.loop.discrete import refuse
-
-        # the report's phase portraits, region slices and cross-checks integrate the loop as a field
-        refuse(self.parsed, "report", "lyapcheck certify FILE and lyapcheck verify CERT.json show a map's answers")
+        # a map is never integrated as a field: its page iterates it instead (reports.map_figures)
+        self.discrete = is_map_document(doc) or is_discrete(self.parsed)
         try:
             self.raw = tomllib.loads(self.text)
         except tomllib.TOMLDecodeError:
@@ -382,16 +422,20 @@ class ModelFileSubject(Subject):
     def parts(self, eqs: Equations, *, ledger: bool, simulate: bool) -> dict[str, Any]:
         doc, model, raw = self.doc, self.parsed, self.raw
         model_part = as_dict(doc.get("model"))
-        figure, figure_reason, checks = portrait(doc, model, simulate, self.kind)
-        slices, slices_reason = region_slices(doc, model, simulate)
+        # a map is iterated, never integrated: its own figures stand where the portrait and the slices do
+        visuals = self.map_visuals(simulate) if self.discrete else self.flow_visuals(simulate)
         digest = hashlib.sha256(self.text.encode()).hexdigest()
         equilibrium = as_dict(doc.get("equilibrium"))
         name = text_of(model_part.get("name", "model"))
         box = None if self.kind is WITH_FUNCTIONS else as_dict(doc.get("box"))
+        head = page_head(name, text_of(model_part.get("file", "")),
+                         model.origin if model is not None else text_of(as_dict(raw.get("model")).get("source", "")),
+                         doc, self.kind.second)
+        if self.discrete:
+            head["toc"] = [(anchor, MAP_TOC.get(anchor, title)) for anchor, title in head["toc"]]
         return {
-            **page_head(name, text_of(model_part.get("file", "")),
-                        model.origin if model is not None else text_of(as_dict(raw.get("model")).get("source", "")),
-                        doc, self.kind.second),
+            **head,
+            "discrete": self.discrete,
             "states": self.states,
             "equilibrium": [(s, text_of(equilibrium.get(s, "0"))) for s in self.states],
             "parameters": quantities(as_dict(doc.get("parameters")), as_dict(raw.get("parameters")), self.overrides,
@@ -403,16 +447,32 @@ class ModelFileSubject(Subject):
             "sha256_stated": text_of(model_part.get("sha256", "")),
             "sha256_text": digest,
             "sha256_matches": digest == text_of(model_part.get("sha256", "")),
-            "portrait": figure,
-            "figure_reason": figure_reason,
-            "size_figure": slices,
-            "size_reason": slices_reason,
-            **(self.recasting() if self.kind is WITH_FUNCTIONS else self.field(checks)),
+            **visuals,
+            **(self.recasting() if self.kind is WITH_FUNCTIONS else self.field()),
+            "soundness": soundness_alarm(visuals["checks"], "an iteration" if self.discrete else "a simulation"),
             **page_tail(doc, self.text),
         }
 
-    def field(self, checks: list[CrossCheck]) -> dict[str, Any]:
-        """A polynomial loop's own parts: its box, disturbances, outputs, field, and the portrait's cross-checks."""
+    def flow_visuals(self, simulate: bool) -> dict[str, Any]:
+        """A continuous loop's figures: the phase portrait with its cross-checks, and the region's slices."""
+        figure, figure_reason, checks = portrait(self.doc, self.parsed, simulate, self.kind)
+        slices, slices_reason = region_slices(self.doc, self.parsed, simulate)
+        return {"portrait": figure, "figure_reason": figure_reason, "size_figure": slices,
+                "size_reason": slices_reason, "checks": checks}
+
+    def map_visuals(self, simulate: bool) -> dict[str, Any]:
+        """A discrete-time map's figures (:mod:`reports.map_figures`): the iterates, the certified region with
+        the iterates of starts inside it, the staircase, and the checks of those iterates."""
+        figures, reason = map_figures_of(self.doc, self.parsed, simulate)
+        if figures is None:
+            return {"portrait": None, "figure_reason": reason, "size_figure": None, "size_reason": reason,
+                    "series_figure": None, "series_reason": reason, "checks": []}
+        return {"portrait": figures.iterates, "figure_reason": figures.iterates_reason,
+                "size_figure": figures.region, "size_reason": figures.region_reason,
+                "series_figure": figures.series, "series_reason": figures.series_reason, "checks": figures.checks}
+
+    def field(self) -> dict[str, Any]:
+        """A polynomial loop's own parts: its box, disturbances, outputs and field."""
         doc, model, raw = self.doc, self.parsed, self.raw
         try:
             from lyapcheck.models.classes.claims import box_words
@@ -424,11 +484,6 @@ class ModelFileSubject(Subject):
         disturbances = [str(d) for d in as_dict(doc.get("disturbances"))]
         outputs_text = dict(model.output_text) if isinstance(model, Model) else {
             str(k): text_of(v) for k, v in as_dict(raw.get("outputs")).items()}
-        failed_checks = [c for c in checks if not c.ok]
-        alarm = ""
-        if failed_checks:
-            alarm = ("SOUNDNESS: a simulation contradicts a certificate: "
-                     + "; ".join(f"{c.what} ({c.detail})" for c in failed_checks) + ".")
         return {
             "box_words": box_text,
             "disturbances": quantities(as_dict(doc.get("disturbances")), as_dict(raw.get("disturbances")),
@@ -437,8 +492,6 @@ class ModelFileSubject(Subject):
             "model_text": self.text,
             "denominators": denominators(fld),
             "scaling": scaling(fld, self.states, disturbances, list(outputs_text)),
-            "checks": checks,
-            "soundness": alarm,
         }
 
     def recasting(self) -> dict[str, Any]:
@@ -475,6 +528,7 @@ def page_tail(doc: dict[str, Any], text: str) -> dict[str, Any]:
     }
 
 
-__all__ = ["ModelFileSubject", "page_tail", "page_head", "EXTRA_STATUS_MEANING", "quantities", "LoopKind",
+__all__ = ["ModelFileSubject", "is_map_document", "map_figures_of", "soundness_alarm", "MAP_TOC", "page_tail",
+           "page_head", "EXTRA_STATUS_MEANING", "quantities", "LoopKind",
            "POLYNOMIAL", "WITH_FUNCTIONS", "is_recast_document", "denominators", "scaling", "solvers", "command",
            "recheck_rows", "portrait", "auxiliary_rows", "relation_rows", "angle_rows"]

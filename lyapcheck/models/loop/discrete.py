@@ -11,9 +11,10 @@ field is another system, often refuted). Two places guard it:
 - classes: :data:`lyapcheck.models.classes.registry.DISCRETE` lists the classes with a discrete-time
   condition (``ModelClass.discrete``); every other class is ``not_applicable`` on a map with
   :func:`not_decided` (``lyapcheck.models.surfaces.certify``, where classes are chosen);
-- surfaces that would integrate or bound the map as a field (``--box``, sweeps, reports,
-  ``--maximize``, cross-checks by simulation) call :func:`refuse` first: one line, exit 2, naming
-  ``time = "discrete"``.
+- surfaces that would integrate or bound the map as a field (``--box``, box sweeps) call :func:`refuse`
+  first: one line, exit 2, naming ``time = "discrete"``. Reports and point sweeps iterate a map instead
+  (:mod:`reports.map_figures`, :class:`sweeps.crosscheck._MapLoop`, through
+  :func:`lyapcheck.models.surfaces.iterate.iterate`).
 """
 
 from __future__ import annotations
