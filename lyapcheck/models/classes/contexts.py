@@ -20,9 +20,12 @@ context                     for
 :class:`MapFunctionsRun`    a class's search on a discrete-time map with functions: its model (the
                             recasting of its displacement ``F(x) - x``)
 :class:`MapFunctionsCheck`  verify on such a map: its model, read again from the model text
+:class:`SampledRun`         a class's search on a sampled-data loop: its model (plant, controller,
+                            period)
+:class:`SampledCheck`       verify on a sampled-data loop: its model, read again from the model text
 ==========================  =========================================================================
 
-A check context of a kind of loop where some classes have no check (a map) says
+A check context of a kind of loop where some classes have no check (a map, a sampled-data loop) says
 in :meth:`MapCheck.not_checked` (and its siblings') words why a decided claim of such a class fails
 (:func:`lyapcheck.models.classes.registry.verify`).
 
@@ -41,6 +44,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.modelfile import Model
     from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.models.language.recast import RecastModel
+    from lyapcheck.models.language.sampling import SampledModel
     from lyapcheck.models.loop.field import ScaledField, ShiftedField, StateField
     from lyapcheck.models.classes.recast_classes import Loop
     from lyapcheck.results import ConditionResult, Disturbances
@@ -188,5 +192,25 @@ class MapFunctionsCheck:
         return f"a {status} claim on a discrete-time map with functions that no check re-derives"
 
 
+@dataclass
+class SampledRun:
+    """A sampled-data loop as its classes are run on it."""
+
+    #: the plant, the controller's laws and the period (:mod:`lyapcheck.models.language.sampling`)
+    model: "SampledModel"
+
+
+@dataclass(frozen=True)
+class SampledCheck:
+    """A sampled-data loop as verify re-reads it from the model text."""
+
+    model: "SampledModel"
+
+    @staticmethod
+    def not_checked(status: object) -> str:
+        """Why a decided claim of a class without a check on a sampled-data loop fails."""
+        return f"a {status} claim on a sampled-data loop that no check re-derives"
+
+
 __all__ = ["Candidate", "FieldRun", "FunctionsRun", "FieldCheck", "FunctionsCheck", "MapRun", "MapCheck",
-           "MapFunctionsRun", "MapFunctionsCheck"]
+           "MapFunctionsRun", "MapFunctionsCheck", "SampledRun", "SampledCheck"]

@@ -70,15 +70,15 @@ from typing import TYPE_CHECKING, Any, Callable, Final, NamedTuple, TypeVar
 from lyapcheck.models.classes import runs as _runs, runs_discrete as _discrete, verify_discrete as _vdiscrete, \
     verify_field as _field, verify_functions as _functions
 from lyapcheck.models.classes.contexts import FieldCheck, FieldRun, FunctionsCheck, FunctionsRun, MapCheck, \
-    MapFunctionsCheck, MapFunctionsRun, MapRun
+    MapFunctionsCheck, MapFunctionsRun, MapRun, SampledCheck, SampledRun
 from lyapcheck.results import Property
 
 if TYPE_CHECKING:  # pragma: no cover  (the search engine is imported where a class runs)
     from lyapcheck.models.engines.search import Budget
     from lyapcheck.results import ConditionResult
 
-    _Check = TypeVar("_Check", FieldCheck, FunctionsCheck, MapCheck, MapFunctionsCheck)
-    _Run = TypeVar("_Run", FieldRun, FunctionsRun, MapRun, MapFunctionsRun)
+    _Check = TypeVar("_Check", FieldCheck, FunctionsCheck, MapCheck, MapFunctionsCheck, SampledCheck)
+    _Run = TypeVar("_Run", FieldRun, FunctionsRun, MapRun, MapFunctionsRun, SampledRun)
     #: a class's exact check of a decided condition (its name, the condition as stored, what verify
     #: re-derived from the model text) -> (ok, why)
     Verify = Callable[[str, dict[str, Any], _Check], tuple[bool, str]]
@@ -153,6 +153,10 @@ class ModelClass:
     run_map_functions: "Run[MapFunctionsRun] | None" = None
     #: its exact check on such a map
     verify_map_functions: "Verify[MapFunctionsCheck] | None" = None
+    #: its search on a sampled-data loop (None: ``not_applicable`` there, naming the loop)
+    run_sampled: "Run[SampledRun] | None" = None
+    #: its exact check on a sampled-data loop
+    verify_sampled: "Verify[SampledCheck] | None" = None
 
     @property
     def point_only(self) -> bool:
@@ -170,7 +174,8 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                verify_field=_field.verify_linearization, verify_functions=_functions.verify_linearization,
                run_map=_discrete.linearization_map, verify_map=_vdiscrete.verify_linearization_map,
                run_map_functions=_discrete.linearization_map_functions,
-               verify_map_functions=_vdiscrete.verify_linearization_map_functions),
+               verify_map_functions=_vdiscrete.verify_linearization_map_functions,
+               run_sampled=_discrete.linearization_sampled, verify_sampled=_vdiscrete.verify_linearization_sampled),
     ModelClass("quadratic", "stability", "GES", over_box=True, stability=True,
                run_field=_runs.quadratic_field, run_functions=_runs.quadratic_functions,
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_lyapunov,
@@ -229,6 +234,8 @@ USER_GIVEN: Final = _names(user_given=True)
 DISCRETE: Final = tuple(c.name for c in CLASSES if c.run_map is not None)
 #: the classes that run on a discrete-time map with functions (their ``run_map_functions``)
 MAP_FUNCTIONS: Final = tuple(c.name for c in CLASSES if c.run_map_functions is not None)
+#: the classes that run on a sampled-data loop (their ``run_sampled``)
+SAMPLED: Final = tuple(c.name for c in CLASSES if c.run_sampled is not None)
 #: the classes that prove their claim with the disturbances at 0 only (never ``"all"`` where one enters)
 ZERO_DISTURBANCE_ONLY: Final = _names(zero_disturbance_only=True)
 #: class name -> its entry
@@ -236,10 +243,12 @@ BY_NAME: Final[dict[str, ModelClass]] = {c.name: c for c in CLASSES}
 
 
 #: the discrete-time kinds of loop: each one's search and exact check, as :class:`ModelClass` fields
-_DISCRETE_KINDS: Final = (("run_map", "verify_map"), ("run_map_functions", "verify_map_functions"))
+_DISCRETE_KINDS: Final = (("run_map", "verify_map"), ("run_map_functions", "verify_map_functions"),
+                          ("run_sampled", "verify_sampled"))
 #: the entry field that checks a condition, by the type of verify's check context
 _VERIFY_FIELD: Final[dict[type, str]] = {FieldCheck: "verify_field", FunctionsCheck: "verify_functions",
-                                         MapCheck: "verify_map", MapFunctionsCheck: "verify_map_functions"}
+                                         MapCheck: "verify_map", MapFunctionsCheck: "verify_map_functions",
+                                         SampledCheck: "verify_sampled"}
 
 
 def _check() -> None:
@@ -260,10 +269,10 @@ _check()
 
 
 def verify(name: str, c: dict[str, Any],
-           check: FieldCheck | FunctionsCheck | MapCheck | MapFunctionsCheck) -> tuple[bool, str]:
+           check: FieldCheck | FunctionsCheck | MapCheck | MapFunctionsCheck | SampledCheck) -> tuple[bool, str]:
     """Re-check one decided condition exactly: the one dispatch of ``verify``, by the class's entry for the
-    kind of loop ``check`` is the context of (its ``verify_field``, ``verify_functions``, ``verify_map`` or
-    ``verify_map_functions``); a name that is no class fails, as does a class without a
+    kind of loop ``check`` is the context of (its ``verify_field``, ``verify_functions``, ``verify_map``,
+    ``verify_map_functions`` or ``verify_sampled``); a name that is no class fails, as does a class without a
     check on that kind of loop (in the context's words: ``check.not_checked``). A malformed certificate
     raises (verify reports it in one row)."""
     entry = BY_NAME.get(name)
@@ -271,12 +280,12 @@ def verify(name: str, c: dict[str, Any],
         return False, f"no class named {name!r} (the classes: {', '.join(NAMES)})"
     check_of: "Verify[Any] | None" = getattr(entry, _VERIFY_FIELD[type(check)])
     if check_of is None:
-        # (never on the continuous kinds: _check; on a map, a class without its condition)
+        # (never on the continuous kinds: _check; on a map or a sampled-data loop, a class without its condition)
         assert not isinstance(check, (FieldCheck, FunctionsCheck))
         return False, check.not_checked(c.get("status"))
     return check_of(name, c, check)
 
 
 __all__ = ["Figure", "OutputFigure", "ModelClass", "CLASSES", "NAMES", "CLEARED", "OVER_BOX", "POINT_ONLY",
-           "STABILITY", "USER_GIVEN", "DISCRETE", "MAP_FUNCTIONS", "ZERO_DISTURBANCE_ONLY", "BY_NAME",
+           "STABILITY", "USER_GIVEN", "DISCRETE", "MAP_FUNCTIONS", "SAMPLED", "ZERO_DISTURBANCE_ONLY", "BY_NAME",
            "verify"]

@@ -1,8 +1,9 @@
 """The search of each class on the discrete-time kinds of loop, as its entry in
-:mod:`lyapcheck.models.classes.registry` names it (``run_map``, ``run_map_functions``).
+:mod:`lyapcheck.models.classes.registry` names it (``run_map``, ``run_map_functions``, ``run_sampled``).
 
 Each takes the loop's run context (:class:`~lyapcheck.models.classes.contexts.MapRun`,
-:class:`~lyapcheck.models.classes.contexts.MapFunctionsRun`) and the class's
+:class:`~lyapcheck.models.classes.contexts.MapFunctionsRun` or
+:class:`~lyapcheck.models.classes.contexts.SampledRun`) and the class's
 :class:`~lyapcheck.models.engines.search.Budget`, and returns the class's
 :class:`~lyapcheck.results.ConditionResult`, as :mod:`lyapcheck.models.classes.runs` does for continuous
 loops. What is decided for every class alike (a class without an entry for the kind of loop, an input that
@@ -15,7 +16,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.models.classes.contexts import MapFunctionsRun, MapRun
+    from lyapcheck.models.classes.contexts import MapFunctionsRun, MapRun, SampledRun
     from lyapcheck.models.engines.search import Budget
     from lyapcheck.results import ConditionResult
 
@@ -79,5 +80,15 @@ def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionRes
     return discrete_functions.roa(ctx.model, budget)
 
 
+# -- a sampled-data loop (lyapcheck.models.classes.sampled) ---------------------------------------------------
+
+def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResult":
+    """The Jacobian over one sampling period, decided in ball arithmetic
+    (:func:`lyapcheck.models.classes.sampled.linearization`)."""
+    from lyapcheck.models.classes import sampled
+
+    return sampled.linearization(ctx.model)
+
+
 __all__ = ["linearization_map", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
-           "linearization_map_functions", "roa_map_functions"]
+           "linearization_map_functions", "roa_map_functions", "linearization_sampled"]

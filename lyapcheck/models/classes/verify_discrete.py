@@ -1,11 +1,12 @@
 """The exact check of each class's certificate on the discrete-time kinds of loop, one callable per class and
-kind (the ``verify_map`` and ``verify_map_functions`` of its entry in
+kind (the ``verify_map``, ``verify_map_functions`` and ``verify_sampled`` of its entry in
 :mod:`lyapcheck.models.classes.registry`).
 
 Each takes the class's name, a decided condition as stored (``c``: ``certified``, ``refuted`` or
 ``counterexample``) and the check context verify re-derived from the model text
-(:class:`~lyapcheck.models.classes.contexts.MapCheck` or
-:class:`~lyapcheck.models.classes.contexts.MapFunctionsCheck`), and returns ``(ok, why)``. A status the class
+(:class:`~lyapcheck.models.classes.contexts.MapCheck`,
+:class:`~lyapcheck.models.classes.contexts.MapFunctionsCheck` or
+:class:`~lyapcheck.models.classes.contexts.SampledCheck`), and returns ``(ok, why)``. A status the class
 has no check of on that loop (a refuted region, a counterexample) fails in the context's words
 (``not_checked``): only ``linearization`` is ever refuted on these loops, by its Jacobian.
 """
@@ -15,7 +16,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # pragma: no cover
-    from lyapcheck.models.classes.contexts import MapCheck, MapFunctionsCheck
+    from lyapcheck.models.classes.contexts import MapCheck, MapFunctionsCheck, SampledCheck
 
 #: the statuses a linearization's check re-derives (its certificate or its refutation)
 _JACOBIAN_STATUSES = ("certified", "refuted")
@@ -82,5 +83,17 @@ def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsC
     return discrete_functions.verify_roa(check.model, c)
 
 
+# -- a sampled-data loop ------------------------------------------------------------------------------------
+
+def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCheck") -> tuple[bool, str]:
+    """``linearization``: ``A``, ``B``, ``K`` and the period re-derived, the decision checked again in ball
+    arithmetic (:func:`lyapcheck.models.classes.sampled.verify_linearization`)."""
+    from lyapcheck.models.classes import sampled
+
+    if c["status"] not in _JACOBIAN_STATUSES:
+        return False, check.not_checked(c["status"])
+    return sampled.verify_linearization(check.model, c["status"], _data(c))
+
+
 __all__ = ["verify_linearization_map", "verify_lyapunov_map", "verify_region_map",
-           "verify_linearization_map_functions", "verify_roa_map_functions"]
+           "verify_linearization_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]

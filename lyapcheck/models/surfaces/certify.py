@@ -427,7 +427,7 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
 
 def _discrete_rule(entry: ModelClass, run: object, not_taken: str, results: dict[str, ConditionResult],
                    cand: object | None, disturbed: bool) -> ConditionResult | None:
-    """What every discrete-time kind of loop (a map, a map with functions) decides before
+    """What every discrete-time kind of loop (a map, a map with functions, a sampled-data loop) decides before
     a class runs: a class without an entry for the kind (``run`` None) is ``not_applicable`` (``not_taken``:
     the kind's sentence); ``candidate`` without ``--candidate`` (:func:`_needs_input`); ``roa`` once GAS is
     certified with the disturbances at 0, which is what a map's classes are decided with
