@@ -281,9 +281,9 @@ def control_gain(model: "SampledModel") -> list[list[Fraction]] | str:
 
 
 def linearization(model: "SampledModel") -> ConditionResult:
-    """The sampled-data linearization at the model's period (:func:`decide`), or why it cannot be formed:
-    the controller's gain (a law with a function not differentiable at the equilibrium, ``abs`` at 0),
-    or the plant's Jacobian."""
+    """The sampled-data linearization at the model's period (:func:`decide`), or ``not_applicable`` naming
+    why it cannot be formed: the controller's gain (a law with a function not differentiable at the
+    equilibrium, ``abs`` at 0) or the plant's Jacobian (the same in the plant)."""
     if model.controller_system is not None:  # a law with functions: its gain may not exist (abs at 0)
         gain = control_gain(model)
         if isinstance(gain, str):
@@ -291,8 +291,11 @@ def linearization(model: "SampledModel") -> ConditionResult:
                                    f"equilibrium cannot be formed exactly: {gain}", property="LES")
     parts = linear_parts(model)
     if isinstance(parts, str):
-        return ConditionResult("linearization", "inconclusive",
-                               f"the plant's Jacobian at the equilibrium cannot be formed exactly: {parts}")
+        # not_applicable, as a continuous loop's linearization for the same reason (recast_classes.linearization):
+        # the test needs the Jacobian, so the class does not apply; nothing was left undecided by a search
+        return ConditionResult("linearization", "not_applicable",
+                               f"the plant's Jacobian at the equilibrium cannot be formed exactly: {parts}",
+                               property="LES")
     A, B, K = parts
     return decide(A, B, K, model.period)
 
