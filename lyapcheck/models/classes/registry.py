@@ -18,6 +18,9 @@ name                                              derived from
 :data:`sweeps.schema.OUTPUT_FIGURES`              each class's ``output_figure``
 :data:`ZERO_DISTURBANCE_ONLY`                     ``zero_disturbance_only``: ``verify`` refuses their
                                                   ``"all"`` claims (on both kinds of loop)
+:data:`DISCRETE`, :data:`MAP_FUNCTIONS`,          the classes with a ``run_map``, ``run_map_functions``,
+:data:`SAMPLED`                                   ``run_sampled`` entry: those that run on a map, a map
+                                                  with functions, a sampled-data loop
 ================================================  =================================================
 
 so the sweeps of model files (store variables, units of work, summaries, the report of a store) take a
@@ -40,8 +43,17 @@ new class from its entry alone.
      functions, naming the loop;
    - ``verify_field`` and ``verify_functions`` (:mod:`~lyapcheck.models.classes.verify_field`,
      :mod:`~lyapcheck.models.classes.verify_functions`): its exact check, given the condition as stored
-     and a check context; :func:`verify` is the one dispatch of ``verify`` (a certificate under a name
-     that is no class fails);
+     and a check context; :func:`verify` is the one dispatch of ``verify``, by the type of the check
+     context (a certificate under a name that is no class fails);
+   - where the class has a discrete-time condition, its search and exact check on each discrete-time
+     kind of loop (:mod:`~lyapcheck.models.classes.runs_discrete`,
+     :mod:`~lyapcheck.models.classes.verify_discrete`), in pairs: ``run_map`` and ``verify_map`` on a
+     polynomial map (``[model] time = "discrete"``; :data:`DISCRETE` is derived from them),
+     ``run_map_functions`` and ``verify_map_functions`` on a map with functions (:data:`MAP_FUNCTIONS`),
+     ``run_sampled`` and ``verify_sampled`` on a sampled-data loop (:data:`SAMPLED`). The same runner
+     runs them with the rules of those loops (an input that was not given, ``roa`` once GAS is
+     certified with the disturbances at 0); a class without the entry is ``not_applicable`` there,
+     naming the loop, and a decided claim of it fails ``verify`` (never given the map as a field);
 
    (the contexts: :mod:`~lyapcheck.models.classes.contexts`);
 3. one module in ``reports/sections/``, the one the entries' ``family`` names (a

@@ -173,11 +173,13 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     parameter value in it (:mod:`lyapcheck.models.loop.boxes`; a loop with functions is read at the
     box's centre, :func:`lyapcheck.models.classes.recast_regions.functions_run`).
 
-    Every kind of loop but a map runs its classes through one runner (:func:`_run_classes`): each class of
+    Every kind of loop runs its classes through one runner (:func:`_run_classes`; a sampled-data loop's too,
+    :func:`lyapcheck.models.surfaces.sampled_run.certify_sampled`): each class of
     :data:`lyapcheck.models.classes.registry.CLASSES` in order, by its entry for the kind of loop, given
     one context object (:mod:`lyapcheck.models.classes.contexts`); the rules every class shares
-    (:func:`_needs_input`, :func:`_field_rule`, :func:`lyapcheck.models.classes.claims.roa_after_gas`, the
-    disturbances each claim covers, the ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
+    (:func:`_needs_input`, :func:`_field_rule`, :func:`_discrete_rule`,
+    :func:`lyapcheck.models.classes.claims.roa_after_gas`, the disturbances each claim covers, the
+    ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
