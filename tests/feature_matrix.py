@@ -215,14 +215,16 @@ REFUSALS: tuple[Refusal, ...] = (
             "the box, a search of box multipliers for a fixed V that is not built (a gap, not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("discrete",), CLASSES[5:], CLASS_SURFACES)
-            | cells(("discrete",), CLASSES[:5], ("--box", "sweep points", "sweep boxes", "report")),
+    Refusal(cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
+            | cells(("discrete",), CLASSES[:5] + ("barrier", "reach_avoid"),
+                    ("--box", "sweep points", "sweep boxes", "report")),
             ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
              '"discrete")'),
             "A discrete-time map (`[model] time = \"discrete\"`) takes `linearization` (every eigenvalue of the map's "
             "Jacobian of modulus < 1, exact), `quadratic` and `sos_gas` (`V(F(e)) - V(e) <= -mu V(e)`, exact), `roa` "
-            "and `candidate` (a set `{V <= c}` on which `V(F(e)) <= V(e) - eps |e|^2`, exact) at a point; every other "
-            "class is `not_applicable` until its discrete-time condition is built, and `--box`, sweeps and reports, "
+            "and `candidate` (a set `{V <= c}` on which `V(F(e)) <= V(e) - eps |e|^2`, exact), `barrier` (`B(F(x)) <= "
+            "lambda B(x)`, exact) and `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) at a point; "
+            "`sos_bound` is `not_applicable` until its discrete-time condition is built, and `--box`, sweeps and reports, "
             "which read `[dynamics]` as a field, refuse a map in one line (a gap, not a theorem)."),
     Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "candidate", "sos_bound", "barrier", "reach_avoid"),
                   CLASS_SURFACES)

@@ -222,11 +222,18 @@ def test_a_certified_class_without_a_discrete_time_check_fails_verify(tmp_path: 
     from lyapcheck.models.surfaces.certificate import verify_document
 
     doc = _certificate(tmp_path, MAP)
+    doc["conditions"]["sos_bound"] = {"status": "certified", "property": "ultimate_bound", "summary": "forged",
+                                      "certificate": {"kind": "sos_bound"}}
+    rows = verify_document(doc)
+    assert ("sos_bound", False, "sos_bound: a certified claim on a discrete-time map that no discrete-time check "
+                                "re-derives") in rows
+    # a continuous-time barrier certificate is not a map's (lyapcheck.models.classes.discrete_safety)
+    doc = _certificate(tmp_path, MAP)
     doc["conditions"]["barrier"] = {"status": "certified", "property": "safety", "summary": "forged",
                                     "certificate": {"kind": "barrier"}}
     rows = verify_document(doc)
-    assert ("barrier", False, "barrier: a certified claim on a discrete-time map that no discrete-time check "
-                              "re-derives") in rows
+    assert any(name == "barrier" and not ok and "not a barrier certificate of a discrete-time map" in why
+               for name, ok, why in rows)
     # a continuous-time region certificate is not a map's (lyapcheck.models.classes.discrete_regions)
     doc = _certificate(tmp_path, MAP)
     doc["conditions"]["roa"] = {"status": "certified", "property": "ROA", "summary": "forged", "level": 1.0,
@@ -251,7 +258,7 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert done.exit_code == 0, done.output
     conditions = json.loads(done.stdout)["conditions"]
     assert list(conditions) == [c.name for c in CLASSES]
-    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate")
+    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate", "barrier", "reach_avoid")
     assert conditions["linearization"]["status"] == "certified"
     assert conditions["linearization"]["summary"].startswith("every eigenvalue of the map's Jacobian at the fixed "
                                                              "point has modulus < 1")
@@ -265,6 +272,13 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
         assert c["status"] in ("certified", "not_certified", "not_applicable")
         assert c["status"] != "certified" or c["certificate"]["kind"] == "discrete_sublevel"
         assert c["status"] != "not_applicable" or "the region of attraction is the whole state space" in c["summary"]
+    # barrier: its discrete-time answer (lyapcheck.models.classes.discrete_safety; the rotation contracts to 0)
+    assert conditions["barrier"]["status"] in ("certified", "not_certified")
+    assert conditions["barrier"]["status"] != "certified" or \
+        conditions["barrier"]["certificate"]["kind"] == "discrete_barrier"
+    assert conditions["reach_avoid"]["status"] in ("certified", "not_certified")
+    assert conditions["reach_avoid"]["status"] != "certified" or \
+        conditions["reach_avoid"]["certificate"]["kind"] == "discrete_reach_avoid"
     for c in CLASSES:
         if c.name not in DISCRETE:
             assert conditions[c.name]["status"] == "not_applicable"

@@ -67,6 +67,8 @@ CHEAP = (
     "lyapcheck certify examples/models/fossil-dt-two-room-temp.toml",
     "lyapcheck certify examples/models/fossil-dt-ahmadi.toml",
     "lyapcheck certify examples/models/discrete-unstable-map.toml",
+    "lyapcheck certify examples/models/discrete-safety-map.toml --classes barrier",
+    "lyapcheck certify examples/models/discrete-unsafe-map.toml --classes barrier",
 )
 
 

@@ -437,6 +437,16 @@ def _on_sets(ring: Ring, F: Poly, name: str, initial: Sequence[SetPiece], initia
     return True, f"{name} <= 0 on the initial set and {name} >= 1 on the unsafe set"
 
 
+def check_on_sets(ring: Ring, F: Poly, name: str, initial: Sequence[SetPiece],
+                  initial_certs: Sequence[PieceCertificate], unsafe: Sequence[SetPiece],
+                  unsafe_certs: Sequence[PieceCertificate]) -> tuple[bool, str]:
+    """``F <= 0`` on every initial piece and ``F >= 1`` on every unsafe piece, each by its S-procedure
+    identity with exact positive semidefinite multipliers and remainder: the part of a barrier that does
+    not depend on the dynamics (a discrete-time map's barrier,
+    :mod:`lyapcheck.models.classes.discrete_safety`, pairs it with its own step condition)."""
+    return _on_sets(ring, F, name, initial, initial_certs, unsafe, unsafe_certs)
+
+
 def check_barrier(ring: Ring, g: Sequence[Poly], D: Poly, B: Poly, lam: Fraction,
                   initial: Sequence[SetPiece], initial_certs: Sequence[PieceCertificate],
                   unsafe: Sequence[SetPiece], unsafe_certs: Sequence[PieceCertificate],

@@ -42,6 +42,24 @@ ROBUST_NOT_FOUND = "; with the declared disturbances acting, no certificate of t
 #: what a certified ``barrier`` states (:mod:`lyapcheck.models.classes.barrier`)
 BARRIER_SENTENCE = ("safety: no trajectory that starts in the initial set ever enters the unsafe set (B <= 0 on the "
                     "initial set, B >= 1 on the unsafe set, B' <= lambda B everywhere; checked exactly)")
+#: the certificate kind of a discrete-time map's barrier (:mod:`lyapcheck.models.classes.discrete_safety`) and
+#: what it states: a map has steps, not times, so its sentence says "every iterate"
+DISCRETE_BARRIER_KIND = "discrete_barrier"
+DISCRETE_BARRIER_SENTENCE = ("safety of the discrete-time map: no iterate of a start in the initial set is ever in the "
+                             "unsafe set, at every step (B <= 0 on the initial set, B >= 1 on the unsafe set, "
+                             "B(F(x)) <= lambda B(x) for every state with lambda >= 0, so B <= 0 at every iterate; "
+                             "checked exactly)")
+#: the certificate kind of a discrete-time map's reach_avoid (lyapcheck.models.classes.discrete_safety)
+DISCRETE_REACH_KIND = "discrete_reach_avoid"
+
+
+def discrete_reach_sentence(steps: int) -> str:
+    """The claim of a discrete-time map's ``reach_avoid`` certificate: a bound in steps, not a time."""
+    return (f"reach-avoid of the discrete-time map: every start in the initial set has an iterate in the goal within "
+            f"{steps} steps, and no iterate before it is in the unsafe set (V <= 0 on the initial set, V >= 1 on the "
+            "unsafe set, V(F(x)) <= V(x) - eps for every state outside the goal, V bounded below; checked exactly)")
+
+
 #: the unit of every time a sentence prints, and of every rate (its inverse): a model file is SI
 #: inside and its ``[units]`` accept only ``time = "s"`` (lyapcheck.models.language.dimensions)
 TIME_UNIT = "s"
@@ -179,7 +197,10 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
     elif name == "sos_bound":
         text = _bounds(condition, outputs)
     elif name == "barrier":
-        text = BARRIER_SENTENCE
+        discrete = (condition.get("certificate") or {}).get("kind") == DISCRETE_BARRIER_KIND
+        text = DISCRETE_BARRIER_SENTENCE if discrete else BARRIER_SENTENCE
+    elif name == "reach_avoid" and (condition.get("certificate") or {}).get("kind") == DISCRETE_REACH_KIND:
+        text = discrete_reach_sentence(int(condition["reach_steps_bound"]))
     elif name == "reach_avoid":
         text = (f"reach-avoid: every trajectory that starts in the initial set reaches the goal within "
                 f"{with_unit(_number(condition, 'reach_time_bound_s'), TIME_UNIT, direction='up')} without entering the unsafe set "
@@ -546,4 +567,5 @@ def interval_sentence(cert: dict[str, Any]) -> str:
 
 __all__ = ["summary", "roa_after_gas", "GAS_CLASSES", "box_words", "box_prefix", "ball_words", "size_words", "with_unit", "deviation", "state_unit_figures", "v_text",
            "v_expression", "sentence_of", "recast_reach_time", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
-           "RATE_UNIT"]
+           "RATE_UNIT", "DISCRETE_BARRIER_KIND", "DISCRETE_BARRIER_SENTENCE",
+           "DISCRETE_REACH_KIND", "discrete_reach_sentence"]

@@ -217,10 +217,12 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
     ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
                run_field=_runs.barrier_field, run_functions=_runs.barrier_functions,
                verify_field=_field.verify_barrier, verify_functions=_functions.verify_barrier,
+               run_map=_discrete.barrier_map, verify_map=_vdiscrete.verify_safety_map,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
     ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False,
                run_field=_runs.reach_avoid_field, run_functions=_runs.reach_avoid_functions,
                verify_field=_field.verify_reach_avoid, verify_functions=_functions.verify_reach_avoid,
+               run_map=_discrete.reach_avoid_map, verify_map=_vdiscrete.verify_safety_map,
                figures=(Figure("reach_time_bound_s", "reach_time_bound_s",
                                "the goal is reached within this time, s"),)),
 )

@@ -62,6 +62,22 @@ def candidate_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
     return discrete_regions.run_candidate(ctx.model, ctx.shifted, ctx.candidate, budget)
 
 
+def barrier_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """A barrier ``lam B - B(F)`` SOS, or an unsafe iterate proved
+    (:func:`lyapcheck.models.classes.discrete_safety.run_barrier`)."""
+    from lyapcheck.models.classes import discrete_safety
+
+    return discrete_safety.run_barrier(ctx.model, ctx.shifted, budget)
+
+
+def reach_avoid_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """A V falling by eps per step outside the goal, or an unsafe iterate proved
+    (:func:`lyapcheck.models.classes.discrete_safety.run_reach_avoid`)."""
+    from lyapcheck.models.classes import discrete_safety
+
+    return discrete_safety.run_reach_avoid(ctx.model, ctx.shifted, budget)
+
+
 # -- a discrete-time map with functions (lyapcheck.models.classes.discrete_functions) -----------------------
 
 def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
@@ -90,5 +106,6 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
     return sampled.linearization(ctx.model)
 
 
-__all__ = ["linearization_map", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
+__all__ = ["linearization_map", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map", "barrier_map",
+           "reach_avoid_map",
            "linearization_map_functions", "roa_map_functions", "linearization_sampled"]

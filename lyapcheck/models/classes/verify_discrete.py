@@ -8,7 +8,8 @@ Each takes the class's name, a decided condition as stored (``c``: ``certified``
 :class:`~lyapcheck.models.classes.contexts.MapFunctionsCheck` or
 :class:`~lyapcheck.models.classes.contexts.SampledCheck`), and returns ``(ok, why)``. A status the class
 has no check of on that loop (a refuted region, a counterexample) fails in the context's words
-(``not_checked``): only ``linearization`` is ever refuted on these loops, by its Jacobian.
+(``not_checked``): on these loops only ``linearization`` (by its Jacobian) and a map's ``barrier`` and
+``reach_avoid`` (by an unsafe iterate) are ever refuted.
 """
 
 from __future__ import annotations
@@ -60,6 +61,16 @@ def verify_region_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[
     return discrete_regions.verify(check.shifted, name, c)
 
 
+def verify_safety_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
+    """``barrier``, ``reach_avoid``: the certificate's identities on the map and the sets, or a refutation's
+    unsafe iterate, re-derived from the model text (:func:`lyapcheck.models.classes.discrete_safety.verify`)."""
+    from lyapcheck.models.classes import discrete_safety
+
+    if c["status"] not in ("certified", "refuted"):
+        return False, check.not_checked(c["status"])
+    return discrete_safety.verify(check.shifted, name, c, check.model)
+
+
 # -- a discrete-time map with functions ---------------------------------------------------------------------
 
 def verify_linearization_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck"
@@ -95,5 +106,5 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
     return sampled.verify_linearization(check.model, c["status"], _data(c))
 
 
-__all__ = ["verify_linearization_map", "verify_lyapunov_map", "verify_region_map",
+__all__ = ["verify_linearization_map", "verify_lyapunov_map", "verify_region_map", "verify_safety_map",
            "verify_linearization_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]

@@ -1,0 +1,789 @@
+"""``barrier`` on a polynomial discrete-time map: no iterate of a start in the initial set is ever in the
+unsafe set, found by SOS and checked exactly; or an iterate that is, proved in rationals and balls.
+
+The map is the model's, shifted to its fixed point (``e+ = F(e)``, ``F(0) = 0``,
+:func:`~lyapcheck.models.loop.discrete.shifted_map`); the ``[sets]`` are written in the user's states,
+so each set polynomial ``p(x)`` is moved to ``p(x_eq + e)`` (:func:`map_sets`), exactly. Everything below
+is in the shifted states ``e`` (no scaling: a map's iterates are compared with the sets directly).
+
+The certificate (kind :data:`KIND`), with ``B`` a free polynomial of the states of degree ``d``:
+
+    -B - sum_i s_i h_i = r_I                         each initial piece   (B <= 0 there)
+    B - 1 - sum_j t_j h_j = r_U                      each unsafe piece    (B >= 1 there)
+    lam B - B(F) = r_S                               everywhere           (the step condition)
+
+with every ``s``, ``t``, ``r`` a sum of squares (exact positive semidefinite Gram matrices), ``h`` each
+inequality of the piece and each product of two
+(:func:`~lyapcheck.sos.certificates.piece_generators`) and ``lam >= 0`` a fixed rational.
+
+Why it proves safety, for every step: the step condition gives ``B(F(e)) <= lam B(e)`` for every ``e``;
+where ``B(e) <= 0`` and ``lam >= 0`` the right side is ``<= 0``, so ``{B <= 0}`` is forward invariant
+(any ``lam >= 0`` is sound; ``lam <= 1`` is the usual choice, the search also tries 2). A start in
+the initial set has ``B <= 0``, hence so does every iterate ``e_k``, ``k = 0, 1, 2, ...``, while
+``B >= 1`` on the unsafe set: no iterate is ever in it. The step condition is asked of the whole state
+space (a constant multiplier): a map whose iterates grow faster than ``B`` does at infinity needs a
+``B`` that is negative far out, which a degree-4 ``B`` may be.
+
+The search: ``B`` of degree 2, then 4 (:data:`BARRIER_DEGREES`), each at the rates :data:`LAMBDAS`,
+the first certificate that passes :func:`check_discrete_barrier` is the answer (cvxpy/Clarabel, rounded to
+rationals by :mod:`lyapcheck.sos.rounding`, the remainders' facial reduction of the continuous class).
+
+Before it, the falsification (:func:`falsify_map`): the map iterated in floating point from starts
+sampled in the initial set; an iterate that enters the unsafe set is re-derived exactly
+(:func:`check_iterate`): its start rounded to a short rational and checked to be in the initial set in
+rationals, its iterates computed in ball arithmetic (python-flint ``arb``, :data:`ITERATE_BITS` bits,
+every rounding enclosed), and every inequality of an unsafe piece proved ``>= 0`` on the ball. That is a
+proof that the property fails: the class is ``refuted`` with the start and the step (kind
+:data:`REFUTATION_KIND`), which ``verify`` re-derives from the model text.
+
+``reach_avoid`` (:func:`run_reach_avoid`): a ``V`` that falls by ``eps`` at every step outside the goal and is
+bounded below, with the same sets' identities and the same falsification (an unsafe iterate before any in
+the goal); its figure ``reach_steps_bound`` is a number of steps (the section "reach_avoid" below).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+
+from lyapcheck.models.classes.claims import (DISCRETE_BARRIER_KIND, DISCRETE_BARRIER_SENTENCE, DISCRETE_REACH_KIND,
+                                             discrete_reach_sentence)
+from lyapcheck.models.classes.discrete_lyapunov import NotAMap, compose, map_polynomials
+from lyapcheck.models.engines import reasons
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, exact_grams, one, \
+    param, why_none
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos import bases
+from lyapcheck.sos.certificates import GramPoly, PieceCertificate, check_on_sets, piece_generators
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials
+from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, full_blocks
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.loop.field import ShiftedField
+
+#: the certificate kind (claims words it; verify dispatches on it)
+KIND: Final = DISCRETE_BARRIER_KIND
+#: the refutation kind: a start in the initial set with an iterate in the unsafe set
+REFUTATION_KIND: Final = "discrete_iterate"
+#: degrees of B tried, in turn
+BARRIER_DEGREES: Final = (2, 4)
+#: rates lam of B(F(e)) <= lam B(e) tried at each degree (any lam >= 0 is sound: module docstring)
+LAMBDAS: Final = (Fraction(1), Fraction(1, 2), Fraction(0), Fraction(2))
+#: the largest Gram basis the search builds (rows)
+MAX_GRAM_ROWS: Final = 120
+#: the falsification: starts sampled in the initial set, and iterations of the map from each
+FALSIFY_STARTS: Final = 400
+FALSIFY_STEPS: Final = 200
+#: significant digits of a counterexample's start (rounded to a short rational before its exact check)
+START_DIGITS: Final = 10
+#: working precision (bits) of the ball arithmetic that re-derives a counterexample's iterates
+ITERATE_BITS: Final = 256
+#: the most steps a stated counterexample may have (verify refuses more: a bound on its work)
+MAX_STEPS: Final = 10_000
+
+Pieces = Sequence[Sequence[Poly]]
+
+
+# -- the sets in the shifted states -------------------------------------------------------------------------
+
+def map_sets(model: "Model", ring: Ring) -> dict[str, list[list[Poly]]]:
+    """Each of the model's ``[sets]`` (polynomials of the declared states, :attr:`Model.state_ring`) moved
+    to the map's shifted states: ``p(x_eq + e)``, in ``ring`` (the states alone), exactly."""
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    full = model.state_ring
+    gens = full.gens()
+    images = [g + to_fmpq(e) for g, e in zip(gens[:model.n], model.equilibrium)] + list(gens[model.n:])
+    return {key: [[full.restrict(full.compose(p, images), ring) for p in piece] for piece in pieces]
+            for key, pieces in model.sets.items()}
+
+
+# -- the certificate and its exact check ---------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class DiscreteBarrier:
+    """A certificate of kind :data:`KIND` (module docstring), exact."""
+
+    B: Poly
+    lam: Fraction
+    initial: tuple[PieceCertificate, ...]
+    unsafe: tuple[PieceCertificate, ...]
+    step: GramPoly
+
+    def to_json(self, ring: Ring) -> dict[str, Any]:
+        from lyapcheck.models.classes.lyapunov import terms_json
+
+        def piece(cert: PieceCertificate) -> dict[str, Any]:
+            multipliers, remainder = cert
+            return {"multipliers": [s.to_json() for s in multipliers], "remainder": remainder.to_json()}
+
+        return {"kind": KIND, "time": "discrete", "coordinates": "shifted", "degree": poly_degree(ring, self.B),
+                "lambda": str(self.lam), "B": terms_json(ring, self.B),
+                "initial": [piece(c) for c in self.initial], "unsafe": [piece(c) for c in self.unsafe],
+                "gram_step": self.step.to_json()}
+
+    @classmethod
+    def from_json(cls, ring: Ring, cert: Mapping[str, Any]) -> "DiscreteBarrier":
+        from lyapcheck.exact import read_rational
+        from lyapcheck.models.engines.recast_sos import poly_from_json
+
+        n = ring.nvars
+
+        def piece(data: Mapping[str, Any]) -> PieceCertificate:
+            return ([GramPoly.from_json(s, n) for s in data["multipliers"]], GramPoly.from_json(data["remainder"], n))
+
+        return cls(poly_from_json(ring, cert["B"], "B"), read_rational(cert["lambda"], "lambda"),
+                   tuple(piece(c) for c in cert["initial"]), tuple(piece(c) for c in cert["unsafe"]),
+                   GramPoly.from_json(cert["gram_step"], n))
+
+
+def poly_degree(ring: Ring, p: Poly) -> int:
+    return max([sum(m) for m in ring.support(p)] + [0])
+
+
+def check_discrete_barrier(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, cert: DiscreteBarrier
+                           ) -> tuple[bool, str]:
+    """The three identities of the module docstring, exactly, with ``lam >= 0`` and every Gram matrix
+    positive semidefinite: then no iterate of a start in ``initial`` is ever in ``unsafe``. Reads the
+    certificate, the map and the sets alone."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    if cert.lam < 0:
+        return False, "the rate lambda must be >= 0 (for {B <= 0} to be invariant)"
+    ok, why = check_on_sets(ring, cert.B, "B", [tuple(p) for p in initial], cert.initial,
+                            [tuple(p) for p in unsafe], cert.unsafe)
+    if not ok:
+        return False, why
+    if not is_positive_semidefinite(cert.step.Q):
+        return False, "the step remainder is not positive semidefinite (exact)"
+    if cert.B * ring.constant(cert.lam) - compose(ring, cert.B, F) != cert.step.poly(ring):
+        return False, "the step identity lambda B - B(F) = r does not hold exactly"
+    return True, (f"{why}, and lambda B - B(F) = r with r a sum of squares and lambda = {cert.lam} >= 0, exactly: "
+                  "B(F(e)) <= lambda B(e) for every state, so {B <= 0} holds at every step (discrete-time map)")
+
+
+# -- the program -------------------------------------------------------------------------------------------
+
+def _step_support(ring: Ring, F: Sequence[Poly], m: Monomial) -> list[Monomial]:
+    """The support of ``lam e^m - (e^m)(F)`` for every rate (``e^m`` and its image's monomials)."""
+    return sorted(set(ring.support(compose(ring, ring.monomial(m), F))) | {m})
+
+
+def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, degree: int,
+                      drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
+    """The program for ``B`` of this degree, or why there is none (a size limit, named). The sets'
+    identities are the continuous barrier's (:func:`lyapcheck.models.classes.barrier.set_identities`, on
+    the map's ring without disturbances or relations); the step identity is this module's."""
+    from lyapcheck.models.classes.barrier import set_identities
+    from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable
+    from lyapcheck.models.engines.reasons import size_limit
+    from lyapcheck.models.loop.field import StateField
+
+    n = ring.nvars
+    zero = tuple([0] * n)
+    field = StateField(ring=ring, g=tuple(F), D=ring.constant(1))
+    b_basis = monomials(n, 0, degree)
+    scalars = [Scalar(f"b{k}") for k in range(len(b_basis))]
+    grams: list[Gram] = []
+    on_sets = set_identities(field, b_basis, degree, initial, unsafe, grams, drop, scalars)
+    if isinstance(on_sets, str):
+        return on_sets
+    terms = []
+    target: set[Monomial] = set()
+    for i, m in enumerate(b_basis):
+        support = _step_support(ring, F, m)
+        terms.append(Term(param(f"sB{i}", support), f"b{i}"))
+        target |= set(support)
+    if len(target) > TARGET_LIMIT:
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
+    step_basis = [m for m in bases.sos_basis(n, target | {zero}) if ("RS", m) not in drop]
+    if len(step_basis) > MAX_GRAM_ROWS:
+        return size_limit(len(step_basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
+    grams.append(Gram("RS", tuple(step_basis), full_blocks(step_basis)))
+    terms.append(Term(one(ring, -1), "RS"))
+    identities = [*on_sets, Identity("step", tuple(terms), None, "RS")]
+    structure = Structure(nvars=n, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
+                          objective=("max_margin",))
+    if affordable(structure) is None:
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
+    return structure
+
+
+def barrier_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction
+                   ) -> ParameterValues:
+    """The program's parameters: the sets' inequalities (the continuous class's) and each of B's
+    monomials' step coefficient ``lam e^m - (e^m)(F)``."""
+    from lyapcheck.models.classes.barrier import set_values
+    from lyapcheck.models.loop.field import StateField
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    values = ParameterValues()
+    set_values(StateField(ring=ring, g=tuple(F), D=ring.constant(1)), values, initial, unsafe)
+    for i, m in enumerate(monomials(ring.nvars, 0, degree)):
+        zm = ring.monomial(m)
+        values.set_poly(ring, f"sB{i}", zm * to_fmpq(lam) - compose(ring, zm, F), _step_support(ring, F, m))
+    return values
+
+
+def attempt(ring: Ring, F: Sequence[Poly], structure: Structure, degree: int, initial: Pieces, unsafe: Pieces,
+            lam: Fraction, search: Search) -> tuple[DiscreteBarrier | None, Any]:
+    """One solve at rate ``lam``: the exact certificate when it passes :func:`check_discrete_barrier`."""
+    from lyapcheck.models.classes.barrier import set_certificates
+
+    values = barrier_values(ring, F, degree, initial, unsafe, lam)
+    point, solution = search.solve_exact(structure, values)
+    if point is None:
+        return None, solution
+    B = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(monomials(ring.nvars, 0, degree))})
+    grams = exact_grams(structure, point)
+    initial_certs, unsafe_certs = set_certificates(structure, grams, initial, unsafe)
+    cert = DiscreteBarrier(B, lam, tuple(initial_certs), tuple(unsafe_certs), grams["RS"])
+    if not check_discrete_barrier(ring, F, initial, unsafe, cert)[0]:
+        return None, solution
+    return cert, solution
+
+
+def search_barrier(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, search: Search
+                   ) -> tuple[DiscreteBarrier | None, list[str]]:
+    """The first certificate over :data:`BARRIER_DEGREES` and :data:`LAMBDAS`, and what was tried."""
+    from lyapcheck.degrees import searched_degrees
+    from lyapcheck.models.classes.lyapunov import on_remainder_faces
+
+    tried: list[str] = []
+    for degree in searched_degrees(BARRIER_DEGREES):
+        full = barrier_structure(ring, F, initial, unsafe, degree)
+        if isinstance(full, str):
+            tried.append(f"degree {degree}: {full}")
+            continue
+        outcomes: dict[str, int] = {}
+        for lam in LAMBDAS:
+            # (the lambdas run within this iteration: degree and lam are this iteration's)
+            found, solution = on_remainder_faces(
+                full, lambda drop: barrier_structure(ring, F, initial, unsafe, degree, drop),
+                lambda structure: attempt(ring, F, structure, degree, initial, unsafe, lam, search), search)
+            if found is not None:
+                tried.append(f"degree {degree}: found at lambda = {lam}")
+                return found, tried
+            why = why_none(solution)
+            outcomes[why] = outcomes.get(why, 0) + 1
+        tried.append(f"degree {degree}: none at lambda = {', '.join(str(x) for x in LAMBDAS)}: "
+                     + ", ".join(f"{why} ({count})" for why, count in outcomes.items()))
+    return None, tried
+
+
+# -- the falsification and its exact re-derivation -------------------------------------------------------------
+
+def _in_piece_exact(ring: Ring, piece: Sequence[Poly], point: Sequence[Fraction]) -> bool:
+    values = dict(zip(ring.names, point))
+    return all(ring.terms(ring.substitute(p, values)).get(tuple([0] * ring.nvars), Fraction(0)) >= 0 for p in piece)
+
+
+def _ball_value(ring: Ring, p: Poly, x: Sequence[Any]) -> Any:
+    """``p`` at a vector of balls (flint ``arb``), every coefficient exact as an ``fmpq`` ball."""
+    import flint
+
+    total = flint.arb(0)
+    for m, c in ring.terms(p).items():
+        term = flint.arb(flint.fmpq(c.numerator, c.denominator))
+        for xi, k in zip(x, m):
+            if k:
+                term *= xi ** k
+        total += term
+    return total
+
+
+def _outside(ring: Ring, goal: Sequence[Poly], x: Sequence[Any]) -> bool:
+    """Some inequality of the goal (one piece) is ``< 0`` on the whole ball ``x`` (proved)."""
+    return any(_ball_value(ring, q, x) < 0 for q in goal)  # (arb: True only when certain)
+
+
+def check_iterate(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, start: Sequence[Fraction],
+                  steps: int, goal: Sequence[Poly] | None = None) -> tuple[bool, str]:
+    """Whether the start ``e_0`` (shifted states, exact) lies in the initial set (rationals) and its
+    iterate ``e_steps`` in the unsafe set (ball arithmetic at :data:`ITERATE_BITS` bits: every inequality
+    of one unsafe piece ``>= 0`` on the whole ball that encloses the iterate): a proof that the property
+    fails. With ``goal`` (reach_avoid's one piece), every iterate before, ``e_0 .. e_(steps - 1)``, must
+    also be proved outside the goal (some goal inequality ``< 0`` on its ball)."""
+    import flint
+
+    if not 1 <= steps <= MAX_STEPS:
+        return False, f"the step count must be in [1, {MAX_STEPS}], not {steps}"
+    if not any(_in_piece_exact(ring, piece, start) for piece in initial):
+        return False, "the start is not in the initial set (exact)"
+    saved = flint.ctx.prec
+    flint.ctx.prec = ITERATE_BITS
+    try:
+        x = [flint.arb(flint.fmpq(v.numerator, v.denominator)) for v in start]
+        for k in range(steps):
+            if goal is not None and not _outside(ring, goal, x):
+                return False, f"iterate {k} of the start is not proved to lie outside the goal (ball arithmetic)"
+            x = [_ball_value(ring, fi, x) for fi in F]
+        for k, piece in enumerate(unsafe):
+            if all(_ball_value(ring, p, x) >= 0 for p in piece):  # (arb: True only when certain)
+                return True, (f"the start is in the initial set (exact) and its iterate {steps} lies in piece {k + 1} "
+                              f"of the unsafe set (ball arithmetic, {ITERATE_BITS} bits)")
+    finally:
+        flint.ctx.prec = saved
+    return False, f"iterate {steps} of the start is not proved to lie in the unsafe set (ball arithmetic)"
+
+
+@dataclass(frozen=True)
+class Counterexample:
+    """A start (shifted states, exact) whose iterate ``steps`` is in the unsafe set, proved."""
+
+    start: tuple[Fraction, ...]
+    steps: int
+
+    def to_json(self, model: "Model") -> dict[str, Any]:
+        from lyapcheck.exact import exact_decimal
+
+        def written(v: Fraction) -> str:  # a finite decimal where one exists (the start is rounded to digits)
+            try:
+                return exact_decimal(v)
+            except ValueError:
+                return str(v)
+
+        x0 = {name: written(e + xe) for name, e, xe in zip(model.states, self.start, model.equilibrium)}
+        return {"kind": REFUTATION_KIND, "time": "discrete", "start": x0, "steps": self.steps}
+
+
+def falsify_map(model: "Model", ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces,
+                goal: Sequence[Poly] | None = None) -> Counterexample | None:
+    """Iterate the map (floating point) from starts sampled in the initial set; the first iterate that
+    enters the unsafe set is re-derived exactly (:func:`check_iterate`), its start rounded to
+    :data:`START_DIGITS` digits. None when no iterate is proved unsafe (or no start could be sampled).
+    With ``goal`` (reach_avoid), a start is followed only until an iterate is in the goal."""
+    import numpy as np
+
+    from lyapcheck.exact import to_rational
+    from lyapcheck.models.classes.falsify import sample_set
+    from lyapcheck.models.engines.numeric import NumericPoly
+    from lyapcheck.models.language.sets import margin
+
+    rng = np.random.default_rng(20261130)
+    try:
+        starts = sample_set(model, model.sets["initial"], margin, FALSIFY_STARTS, rng)[0]
+    except ValueError:
+        return None
+    eq = np.array([float(v) for v in model.equilibrium])
+    maps = [NumericPoly(ring, fi) for fi in F]
+    goal_maps = [NumericPoly(ring, q) for q in goal] if goal is not None else []
+    x = starts - eq
+    alive = np.all(np.isfinite(x), axis=1)
+    with np.errstate(all="ignore"):
+        for step in range(1, FALSIFY_STEPS + 1):
+            if goal_maps:  # (a start whose iterate reached the goal is done: reach_avoid holds for it)
+                alive &= ~np.all(np.stack([q(x) >= 0 for q in goal_maps], axis=1), axis=1)
+            x = np.stack([f(x) for f in maps], axis=1)
+            alive &= np.all(np.isfinite(x), axis=1)
+            hit = alive & (margin(model.sets["unsafe"], x + eq) >= 0)
+            for k in np.flatnonzero(hit):
+                start = tuple(to_rational(float(v), START_DIGITS) - xe
+                              for v, xe in zip(starts[k], model.equilibrium))
+                if check_iterate(ring, F, initial, unsafe, start, step, goal)[0]:
+                    return Counterexample(start, step)
+            if not alive.any():
+                break
+    return None
+
+
+# -- reach_avoid ---------------------------------------------------------------------------------------------
+#
+# The certificate (kind :data:`REACH_KIND`), with ``V`` a free polynomial of the states, a rational
+# ``eps > 0`` and a rational ``C``, the goal one piece ``{q_1 >= 0, ..., q_m >= 0}``:
+#
+#     -V - sum_i s_i h_i = r_I                   each initial piece     (V <= 0 there)
+#     V - 1 - sum_j t_j h_j = r_U                each unsafe piece      (V >= 1 there)
+#     V - V(F) - eps + g_k q_k = r_k             each goal inequality   (V(F(e)) <= V(e) - eps where q_k(e) <= 0)
+#     V + C = r_B                                everywhere             (V >= -C)
+#
+# every ``s, t, g, r`` a sum of squares. Why it proves reach-while-avoid, counted in steps: outside the
+# goal some ``q_k < 0``, so each step from there lowers ``V`` by ``eps`` at least. A start has ``V(e_0) <= 0``;
+# while ``e_0, ..., e_(k-1)`` are all outside the goal, ``V(e_k) <= V(e_0) - k eps <= 0``, so no iterate up to the
+# first one in the goal is unsafe (``V >= 1`` there), and ``V >= -C`` gives ``k eps <= C``: some iterate
+# ``e_k`` with ``k <= floor(C / eps)`` (the figure ``reach_steps_bound``, a number of steps, not a time) is in
+# the goal. As in continuous time, the decrease is asked outside the goal everywhere (not only on
+# ``{V <= 0}``: that would be bilinear), and staying in the goal afterwards is not claimed.
+
+#: the certificate kind of a map's reach_avoid
+REACH_KIND: Final = DISCRETE_REACH_KIND
+#: degrees of V tried, in turn
+REACH_DEGREES: Final = (2, 4)
+#: why a map's reach_avoid does not take ``[sets] stay_in_goal = true``
+STAY_NOT_TAKEN: Final = ("[sets] stay_in_goal = true is not taken on a discrete-time map yet (reach_avoid proves "
+                         "reaching the goal there, not staying in it): remove it to decide reach_avoid on the map")
+
+
+@dataclass(frozen=True)
+class DiscreteReach:
+    """A certificate of kind :data:`REACH_KIND` (the section's comment), exact."""
+
+    V: Poly
+    eps: Fraction
+    C: Fraction
+    initial: tuple[PieceCertificate, ...]
+    unsafe: tuple[PieceCertificate, ...]
+    goal: tuple[tuple[GramPoly, GramPoly], ...]
+    below: GramPoly
+
+    def steps_bound(self) -> int:
+        """``floor(C / eps)``: the goal is reached at a step at most this (0 when ``C < 0``: then no start
+        has ``V <= 0``, the initial set is empty)."""
+        return max(0, (self.C / self.eps).__floor__())
+
+    def to_json(self, ring: Ring) -> dict[str, Any]:
+        from lyapcheck.models.classes.lyapunov import terms_json
+
+        def piece(cert: PieceCertificate) -> dict[str, Any]:
+            multipliers, remainder = cert
+            return {"multipliers": [s.to_json() for s in multipliers], "remainder": remainder.to_json()}
+
+        return {"kind": REACH_KIND, "time": "discrete", "coordinates": "shifted", "degree": poly_degree(ring, self.V),
+                "eps": str(self.eps), "C": str(self.C), "reach_steps_bound": self.steps_bound(),
+                "V": terms_json(ring, self.V), "initial": [piece(c) for c in self.initial],
+                "unsafe": [piece(c) for c in self.unsafe],
+                "goal": [{"multiplier": g.to_json(), "remainder": r.to_json()} for g, r in self.goal],
+                "gram_below": self.below.to_json()}
+
+    @classmethod
+    def from_json(cls, ring: Ring, cert: Mapping[str, Any]) -> "DiscreteReach":
+        from lyapcheck.exact import read_rational
+        from lyapcheck.models.engines.recast_sos import poly_from_json
+
+        n = ring.nvars
+
+        def piece(data: Mapping[str, Any]) -> PieceCertificate:
+            return ([GramPoly.from_json(s, n) for s in data["multipliers"]], GramPoly.from_json(data["remainder"], n))
+
+        return cls(poly_from_json(ring, cert["V"], "V"), read_rational(cert["eps"], "eps"),
+                   read_rational(cert["C"], "C"), tuple(piece(c) for c in cert["initial"]),
+                   tuple(piece(c) for c in cert["unsafe"]),
+                   tuple((GramPoly.from_json(g["multiplier"], n), GramPoly.from_json(g["remainder"], n))
+                         for g in cert["goal"]),
+                   GramPoly.from_json(cert["gram_below"], n))
+
+
+def check_discrete_reach(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, goal: Sequence[Poly],
+                         cert: DiscreteReach) -> tuple[bool, str]:
+    """The identities of the section's comment, exactly, with ``eps > 0`` and every Gram matrix positive
+    semidefinite: then every start in ``initial`` has an iterate in the goal at a step at most
+    ``floor(C / eps)``, and no iterate before it is in ``unsafe``. Reads the certificate, the map and the
+    sets alone."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    if cert.eps <= 0:
+        return False, "the decrease per step eps must be > 0"
+    ok, why = check_on_sets(ring, cert.V, "V", [tuple(p) for p in initial], cert.initial,
+                            [tuple(p) for p in unsafe], cert.unsafe)
+    if not ok:
+        return False, why
+    if len(cert.goal) != len(goal):
+        return False, "one proof per inequality of the goal is needed"
+    step = cert.V - compose(ring, cert.V, F) - ring.constant(cert.eps)
+    for k, (q, (g, r)) in enumerate(zip(goal, cert.goal)):
+        if not is_positive_semidefinite(g.Q) or not is_positive_semidefinite(r.Q):
+            return False, f"goal inequality {k + 1}: a Gram matrix is not positive semidefinite (exact)"
+        if step + g.poly(ring) * q != r.poly(ring):
+            return False, f"goal inequality {k + 1}: V - V(F) - eps + g q = r does not hold exactly"
+    if not is_positive_semidefinite(cert.below.Q) or cert.V + ring.constant(cert.C) != cert.below.poly(ring):
+        return False, "V + C = r (V bounded below) does not hold exactly with r a sum of squares"
+    return True, (f"{why}, V(F(e)) <= V(e) - eps outside the goal (eps = {cert.eps} > 0) and V >= -C (C = {cert.C}), "
+                  f"exactly: the goal is reached within {cert.steps_bound()} steps, no iterate unsafe before "
+                  "(discrete-time map)")
+
+
+def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, goal: Sequence[Poly],
+                    degree: int, drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
+    """The program for ``V`` of this degree (the sets' identities the barrier's; the goal's and the bound
+    below this section's), or why there is none (a size limit, named)."""
+    from lyapcheck.models.classes.barrier import set_identities
+    from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable
+    from lyapcheck.models.engines.reasons import size_limit
+    from lyapcheck.models.engines.search import literal
+    from lyapcheck.models.loop.field import StateField
+
+    n = ring.nvars
+    zero = tuple([0] * n)
+    field = StateField(ring=ring, g=tuple(F), D=ring.constant(1))
+    v_basis = monomials(n, 0, degree)
+    scalars = [Scalar(f"b{k}") for k in range(len(v_basis))]
+    grams: list[Gram] = []
+    on_sets = set_identities(field, v_basis, degree, initial, unsafe, grams, drop, scalars)
+    if isinstance(on_sets, str):
+        return on_sets
+    identities = list(on_sets)
+    step_support: set[Monomial] = set()
+    for m in v_basis:
+        step_support |= set(_step_support(ring, F, m))
+    top = max(sum(m) for m in step_support)
+    for k, q in enumerate(goal):
+        half = max(0, (top - poly_degree(ring, q) + 1) // 2)
+        g_basis = monomials(n, 0, half)
+        products = {tuple(a + b for a, b in zip(x, y)) for x in g_basis for y in g_basis}
+        target = step_support | {zero} | {tuple(a + b for a, b in zip(x, y)) for x in products
+                                          for y in ring.support(q)}
+        if len(target) > TARGET_LIMIT:
+            return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
+        basis = [m for m in bases.sos_basis(n, target) if (f"RG{k}", m) not in drop]
+        if len(basis) > MAX_GRAM_ROWS:
+            return size_limit(len(basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
+        # (the multiplier is named R... too: the facial reduction of on_remainder_faces then also drops the rows
+        # the top degree forces to 0 in it, as where F's growth leaves V's top form no room)
+        g_basis = [m for m in g_basis if (f"Rg{k}", m) not in drop]
+        if not g_basis:
+            return "the goal's multiplier has no row left"
+        grams += [Gram(f"Rg{k}", tuple(g_basis), full_blocks(g_basis)), Gram(f"RG{k}", tuple(basis), full_blocks(basis))]
+        terms = [Term(param(f"sV{i}", _step_support(ring, F, m)), f"b{i}") for i, m in enumerate(v_basis)]
+        terms += [Term(one(ring, -1), "eps"), Term(param(f"q{k}", ring.support(q)), f"Rg{k}"),
+                  Term(one(ring, -1), f"RG{k}")]
+        identities.append(Identity(f"G{k}", tuple(terms), None, f"RG{k}"))
+    below = [m for m in bases.sos_basis(n, set(v_basis) | {zero}) if ("RB", m) not in drop]
+    grams.append(Gram("RB", tuple(below), full_blocks(below)))
+    terms = [Term(literal(ring, {m: 1}), f"b{i}") for i, m in enumerate(v_basis)]
+    terms += [Term(one(ring), "C"), Term(one(ring, -1), "RB")]
+    identities.append(Identity("below", tuple(terms), None, "RB"))
+    scalars += [Scalar("eps", lower="margin"), Scalar("C")]
+    structure = Structure(nvars=n, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
+                          objective=("max_margin",))
+    if affordable(structure) is None:
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
+    return structure
+
+
+def reach_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly]
+                 ) -> ParameterValues:
+    """The program's parameters: the sets' inequalities, each of V's monomials' step coefficient
+    ``e^m - (e^m)(F)`` and each goal inequality."""
+    from lyapcheck.models.classes.barrier import set_values
+    from lyapcheck.models.loop.field import StateField
+
+    values = ParameterValues()
+    set_values(StateField(ring=ring, g=tuple(F), D=ring.constant(1)), values, initial, unsafe)
+    for i, m in enumerate(monomials(ring.nvars, 0, degree)):
+        zm = ring.monomial(m)
+        values.set_poly(ring, f"sV{i}", zm - compose(ring, zm, F), _step_support(ring, F, m))
+    for k, q in enumerate(goal):
+        values.set_poly(ring, f"q{k}", q, ring.support(q))
+    return values
+
+
+def attempt_reach(ring: Ring, F: Sequence[Poly], structure: Structure, degree: int, initial: Pieces, unsafe: Pieces,
+                  goal: Sequence[Poly], search: Search) -> tuple[DiscreteReach | None, Any]:
+    """One solve: the exact certificate when it passes :func:`check_discrete_reach`."""
+    from lyapcheck.models.classes.barrier import set_certificates
+
+    values = reach_values(ring, F, degree, initial, unsafe, goal)
+    point, solution = search.solve_exact(structure, values)
+    if point is None:
+        return None, solution
+    V = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(monomials(ring.nvars, 0, degree))})
+    grams = exact_grams(structure, point)
+    initial_certs, unsafe_certs = set_certificates(structure, grams, initial, unsafe)
+    cert = DiscreteReach(V, point.scalars["eps"], point.scalars["C"], tuple(initial_certs), tuple(unsafe_certs),
+                         tuple((grams[f"Rg{k}"], grams[f"RG{k}"]) for k in range(len(goal))), grams["RB"])
+    if not check_discrete_reach(ring, F, initial, unsafe, goal, cert)[0]:
+        return None, solution
+    return cert, solution
+
+
+def search_reach(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, goal: Sequence[Poly],
+                 search: Search) -> tuple[DiscreteReach | None, list[str]]:
+    """The first certificate over :data:`REACH_DEGREES`, and what was tried."""
+    from lyapcheck.degrees import searched_degrees
+    from lyapcheck.models.classes.lyapunov import on_remainder_faces
+
+    tried: list[str] = []
+    for degree in searched_degrees(REACH_DEGREES):
+        full = reach_structure(ring, F, initial, unsafe, goal, degree)
+        if isinstance(full, str):
+            tried.append(f"degree {degree}: {full}")
+            continue
+        found, solution = on_remainder_faces(
+            full, lambda drop: reach_structure(ring, F, initial, unsafe, goal, degree, drop),
+            lambda structure: attempt_reach(ring, F, structure, degree, initial, unsafe, goal, search), search)
+        if found is not None:
+            tried.append(f"degree {degree}: found")
+            return found, tried
+        tried.append(f"degree {degree}: {why_none(solution)}")
+    return None, tried
+
+
+# -- the classes ------------------------------------------------------------------------------------------------
+
+def _no_sets(name: str, model: "Model") -> ConditionResult | None:
+    """``not_applicable`` with the continuous safety classes' sentence when the model lacks the class's sets
+    (:data:`~lyapcheck.models.language.sets.CLASS_SETS`); None when it has them."""
+    from lyapcheck.models.language.sets import CLASS_SETS
+
+    needed = CLASS_SETS[name]
+    if all(model.sets.get(k) for k in needed):
+        return None
+    return ConditionResult(name, "not_applicable", f"the model's [sets] needs {', '.join(repr(k) for k in needed[:-1])} "
+                                                   f"and {needed[-1]!r} (docs/model-files.md, [sets])")
+
+
+def _refuted(name: str, model: "Model", found: Counterexample, when: str = "") -> ConditionResult:
+    """``refuted`` with the proved counterexample (``when``: reach_avoid's words on the goal)."""
+    data = found.to_json(model)
+    where = ", ".join(f"{k} = {v}" for k, v in data["start"].items())
+    return ConditionResult(name, "refuted",
+                           f"refuted: the start ({where}) is in the initial set and its iterate {found.steps} is in the "
+                           f"unsafe set{when} (the start checked in rationals, the iterates in ball arithmetic)",
+                           numbers={"steps_to_unsafe": found.steps, "time": "discrete"}, refutation=data,
+                           property="safety" if name == "barrier" else "reach_avoid")
+
+
+def run_barrier(model: "Model", shifted: "ShiftedField", budget: Budget) -> ConditionResult:
+    """``barrier`` on the map (module docstring): the falsification first (``refuted`` with an iterate
+    proved unsafe), then the search for ``B``; ``certified`` only after :func:`check_discrete_barrier`."""
+    ruled = _no_sets("barrier", model)
+    if ruled is not None:
+        return ruled
+    try:
+        ring, F = map_polynomials(shifted)
+    except NotAMap as exc:
+        return ConditionResult("barrier", "not_applicable", f"not a polynomial map: {exc}")
+    sets = map_sets(model, ring)
+    initial, unsafe = sets["initial"], sets["unsafe"]
+    found_cx = falsify_map(model, ring, F, initial, unsafe)
+    if found_cx is not None:
+        return _refuted("barrier", model, found_cx)
+    search = Search(ring, budget)
+    try:
+        cert, tried = search_barrier(ring, F, initial, unsafe, search)
+    except BudgetExhausted as exc:
+        late = reasons.out_of_time("a barrier of the discrete-time map", budget.seconds, str(exc))
+        return ConditionResult("barrier", "inconclusive", late.summary, solver={"solves": search.log},
+                               numbers=late.numbers({"reason": str(exc), "time": "discrete"}), property="safety")
+    if cert is None:
+        from lyapcheck.degrees import searched_degrees
+
+        none = reasons.not_found("barrier", searched_degrees(BARRIER_DEGREES), tried, ("degree", "sets", "time"))
+        return ConditionResult("barrier", "not_certified", none.summary, solver={"solves": search.log},
+                               numbers=none.numbers({"tried": tried, "time": "discrete"}), property="safety")
+    return ConditionResult("barrier", "certified", DISCRETE_BARRIER_SENTENCE,
+                           numbers={"degree": poly_degree(ring, cert.B), "lambda": float(cert.lam),
+                                    "time": "discrete"},
+                           certificate=cert.to_json(ring), solver={"solves": search.log}, property="safety")
+
+
+def run_reach_avoid(model: "Model", shifted: "ShiftedField", budget: Budget) -> ConditionResult:
+    """``reach_avoid`` on the map (the section above): the falsification first (``refuted`` with an iterate
+    proved unsafe before any is in the goal), then the search for ``V``; ``certified`` only after
+    :func:`check_discrete_reach`, with the steps bound ``floor(C / eps)``."""
+    from lyapcheck.models.classes.reach_avoid import goal_of_one_piece
+
+    ruled = _no_sets("reach_avoid", model)
+    if ruled is not None:
+        return ruled
+    if model.stay_in_goal:
+        return ConditionResult("reach_avoid", "not_applicable", STAY_NOT_TAKEN, property="reach_avoid")
+    one_piece = goal_of_one_piece(model.sets["goal"])
+    if one_piece is not None:
+        return one_piece
+    try:
+        ring, F = map_polynomials(shifted)
+    except NotAMap as exc:
+        return ConditionResult("reach_avoid", "not_applicable", f"not a polynomial map: {exc}")
+    sets = map_sets(model, ring)
+    initial, unsafe, goal = sets["initial"], sets["unsafe"], sets["goal"][0]
+    found_cx = falsify_map(model, ring, F, initial, unsafe, goal)
+    if found_cx is not None:
+        return _refuted("reach_avoid", model, found_cx, " before any iterate is in the goal")
+    search = Search(ring, budget)
+    try:
+        cert, tried = search_reach(ring, F, initial, unsafe, goal, search)
+    except BudgetExhausted as exc:
+        late = reasons.out_of_time("a reach-avoid certificate of the discrete-time map", budget.seconds, str(exc))
+        return ConditionResult("reach_avoid", "inconclusive", late.summary, solver={"solves": search.log},
+                               numbers=late.numbers({"reason": str(exc), "time": "discrete"}), property="reach_avoid")
+    if cert is None:
+        from lyapcheck.degrees import searched_degrees
+
+        none = reasons.not_found("reach-avoid certificate", searched_degrees(REACH_DEGREES), tried,
+                                 ("degree", "sets", "time"))
+        return ConditionResult("reach_avoid", "not_certified", none.summary, solver={"solves": search.log},
+                               numbers=none.numbers({"tried": tried, "time": "discrete"}), property="reach_avoid")
+    return ConditionResult("reach_avoid", "certified", discrete_reach_sentence(cert.steps_bound()),
+                           numbers={"degree": poly_degree(ring, cert.V), "reach_steps_bound": cert.steps_bound(),
+                                    "time": "discrete"},
+                           certificate=cert.to_json(ring), solver={"solves": search.log}, property="reach_avoid")
+
+
+# -- verify ---------------------------------------------------------------------------------------------------
+
+def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any], model: "Model") -> tuple[bool, str]:
+    """Re-check a map's ``barrier`` or ``reach_avoid`` from its JSON and the model text alone, without a
+    solver: a certified one's identities exactly (:func:`check_discrete_barrier`,
+    :func:`check_discrete_reach`; the sets re-read from the model) and its stated figures; a refuted one's
+    start and iterate (:func:`check_iterate`)."""
+    from lyapcheck.models.language.sets import CLASS_SETS
+
+    prop = {"barrier": "safety", "reach_avoid": "reach_avoid"}.get(name)
+    if prop is None:
+        return False, f"{name} has no discrete-time safety check"
+    if c.get("property") != prop:
+        return False, f"a {name} claim is about {prop}, not {c.get('property')}"
+    if not all(model.sets.get(k) for k in CLASS_SETS[name]):
+        return False, f"the model has no [sets] {', '.join(CLASS_SETS[name])} for {name}"
+    if name == "reach_avoid" and (model.stay_in_goal or len(model.sets["goal"]) != 1):
+        return False, "a map's reach_avoid takes a goal of one piece and no stay_in_goal"
+    try:
+        ring, F = map_polynomials(shifted)
+        sets = map_sets(model, ring)
+        goal = sets["goal"][0] if name == "reach_avoid" else None
+        if c.get("status") == "refuted":
+            return _verify_refutation(model, ring, F, sets, c, goal)
+        cert = c["certificate"]
+        kind = KIND if name == "barrier" else REACH_KIND
+        if cert.get("kind") != kind or cert.get("time") != "discrete":
+            return False, f"not a {name} certificate of a discrete-time map (kind {cert.get('kind')!r})"
+        found: DiscreteBarrier | DiscreteReach
+        if goal is None:
+            found = barrier = DiscreteBarrier.from_json(ring, cert)
+            ok, why = check_discrete_barrier(ring, F, sets["initial"], sets["unsafe"], barrier)
+        else:
+            found = reach = DiscreteReach.from_json(ring, cert)
+            ok, why = check_discrete_reach(ring, F, sets["initial"], sets["unsafe"], goal, reach)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError, IndexError, NotAMap) as exc:
+        return False, f"malformed certificate: {exc}"
+    if not ok:
+        return False, why
+    poly = found.B if isinstance(found, DiscreteBarrier) else found.V
+    if cert.get("degree") != poly_degree(ring, poly) or c.get("degree") != cert.get("degree"):
+        return False, "the stated degree is not the certificate's polynomial's"
+    if isinstance(found, DiscreteBarrier):
+        if cert.get("lambda") != str(found.lam) or c.get("lambda") != float(found.lam):
+            return False, "the stated lambda is not the certificate's"
+    elif cert.get("reach_steps_bound") != found.steps_bound() or c.get("reach_steps_bound") != found.steps_bound():
+        return False, "the stated reach_steps_bound is not floor(C / eps)"
+    return True, why
+
+
+def _verify_refutation(model: "Model", ring: Ring, F: Sequence[Poly], sets: Mapping[str, Pieces],
+                       c: Mapping[str, Any], goal: Sequence[Poly] | None) -> tuple[bool, str]:
+    from lyapcheck.exact import read_rational
+
+    data = c["refutation"]
+    if data.get("kind") != REFUTATION_KIND:
+        return False, f"not an iterate refutation of a discrete-time map (kind {data.get('kind')!r})"
+    steps = data["steps"]
+    if isinstance(steps, bool) or not isinstance(steps, int):
+        return False, "the step count must be an integer"
+    if set(data["start"]) != set(model.states):
+        return False, "the start must give one value per state"
+    start = [read_rational(data["start"][s], f"start.{s}") - xe for s, xe in zip(model.states, model.equilibrium)]
+    if c.get("steps_to_unsafe") != steps:
+        return False, "the stated steps_to_unsafe is not the refutation's"
+    return check_iterate(ring, F, sets["initial"], sets["unsafe"], start, steps, goal)
+
+
+__all__ = ["KIND", "REFUTATION_KIND", "BARRIER_DEGREES", "LAMBDAS", "DiscreteBarrier", "Counterexample",
+           "map_sets", "check_discrete_barrier", "barrier_structure", "barrier_values", "search_barrier",
+           "check_iterate", "falsify_map", "run_barrier", "run_reach_avoid", "verify", "REACH_KIND", "REACH_DEGREES",
+           "DiscreteReach", "check_discrete_reach", "reach_structure", "reach_values", "search_reach",
+           "STAY_NOT_TAKEN"]
