@@ -7,6 +7,7 @@ floating-point simulations; none of them can turn a failed exact check into a pa
 
 from __future__ import annotations
 
+from fractions import Fraction
 from typing import Any, Final
 
 #: Clarabel's gap / feasibility tolerances for certificate searches (tighter than defaults,
@@ -67,6 +68,35 @@ ENVELOPE_REL_TOL: Final = 1e-6
 #: there and the class reports ``inconclusive`` naming this limit; the other classes still run.
 #: The examples' slowest class (roa on the reversed Van der Pol with mu = 3) takes about 10 s.
 MODEL_CLASS_TIME_LIMIT_S: Final = 60.0
+
+# -- sos_gas on networks: the cheaper cones and the order of its forms against its time (issue 43) ---
+#
+# (the cones' limits moved here from lyapcheck.models.classes.lyapunov, which re-exports them; the
+# estimates below only order the forms of a search: every certificate is still decided exactly)
+
+#: the SDSOS/DSOS programs' size limits: a cone program has no dense block to factor, so the
+#: semidefinite limits on Gram rows and on the blocks' cost (BLOCK_COST_LIMIT) give way to these,
+#: measured on the networks of benchmarks/bench_networks.py (benchmarks/README.md, issue 43)
+CONE_CANDIDATE_LIMIT: Final = 1_000
+CONE_TARGET_LIMIT: Final = 6_000
+CONE_GRAM_ROWS: Final = 500
+#: the most decisions of a cone program's blocks (lyapcheck.sos.structure.Structure.cone_size)
+CONE_SIZE_LIMIT: Final = 400_000
+#: the solves the cones may spend in all (a count, so that a loaded machine does the same work): the
+#: 8-state platoon's SDSOS certificate took 2 solves (one facial reduction) and 2 more for its decay rate
+CONE_FALLBACK_SOLVES: Final = 40
+#: the estimated seconds of one solve and its exact rounding (lyapcheck.models.engines.search.
+#: estimated_seconds): a floor for the compile and the solver's start, plus the program's semidefinite
+#: work units (Structure.cost) at PSD_WORK_PER_SECOND and its cone decisions (Structure.cone_size) at
+#: CONE_DECISIONS_PER_SECOND. Measured on the 8-state platoon and lyznet-10d, one solve and its
+#: rounding, on an idle core: 4.4e8 units in 3.5 s, 8.5e8 in 5.7 s, 1.4e8 in 2.1 s (about 1.3e8/s,
+#: the rates below are the slower end); 31,452 cone decisions in 17 s, 21,346 in 8 s, 9,921 in 2.8 s
+ESTIMATE_SOLVE_FLOOR_S: Final = 0.1
+PSD_WORK_PER_SECOND: Final = 1.0e8
+CONE_DECISIONS_PER_SECOND: Final = 2_500.0
+#: a form (its facial reductions and decay-rate steps) is estimated at this many solves of its first
+#: program: later rounds are smaller (measured 1.4 to 4.2 times the first, 7.6 with its decay rate)
+FORM_SOLVES_ESTIMATE: Final = 4
 
 
 # -- figures of the paper's classes across floating-point platforms (issue 24) ------------------
@@ -222,6 +252,20 @@ BALL_LEVEL_CELLS: Final = 30_000
 #: largest level proved when they are spent is the answer; the whole search stays within about 40 s of
 #: one core, inside MODEL_CLASS_TIME_LIMIT_S (issue 42 raised it from 20,000)
 BALL_LEVEL_TOTAL_CELLS: Final = 40_000
+#: significant bits of each entry of V's matrix P on a discrete-time map with functions
+#: (lyapcheck.models.classes.discrete_functions: the Stein solution of A^T P A - P = -I rounded to a
+#: short dyadic). Short entries keep V's balls exact at a cell's dyadic corners (no widening from V
+#: itself), while 30 bits move P by about 2^-30 relative, far inside the margin -I. Soundness never
+#: depends on it: whatever P is, V(F(e)) < V(e) is proved cell by cell
+P_BITS: Final = 30
+#: that class's level search: levels tried upwards from the first proved one, each MAP_LEVEL_GROWTH
+#: times the last, at most MAP_LEVEL_GROWTH_STEPS of them (4^16, about 4e9: from the smallest
+#: ellipsoid tried to any region a map plausibly has), then MAP_LEVEL_BISECTIONS bisections of the
+#: last bracket (the level to a sixteenth of it: a figure, and each bisection is a whole cell proof).
+#: Resolution and time only: every level reported is proved, and BALL_LEVEL_TOTAL_CELLS bounds the cells
+MAP_LEVEL_GROWTH: Final = Fraction(4)
+MAP_LEVEL_GROWTH_STEPS: Final = 16
+MAP_LEVEL_BISECTIONS: Final = 4
 #: the integrator steps one trajectory of the ball-arithmetic route's fit of V (and of its simulated check) may take when the
 #: route runs after the SOS route on a polynomial or rational loop (lyapcheck.models.surfaces.ball_roa):
 #: a rational loop's trajectory that runs into a pole crawls towards it step by step (1-state

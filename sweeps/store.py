@@ -31,7 +31,7 @@ import platform
 import shutil
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Callable, Final, Mapping, Sequence
+from typing import Any, Callable, Final, Mapping, Self, Sequence
 
 import numpy as np
 
@@ -206,7 +206,7 @@ class GridStore(_StoreLayout):
 
     # -- the layout -----------------------------------------------------------------------------
     @classmethod
-    def open_or_create(cls, path: str | Path, spec: Any) -> Any:
+    def open_or_create(cls, path: str | Path, spec: Any) -> Self:
         """Open ``path`` to resume, or create it; refuse a store made from another spec."""
         target = Path(path)
 
@@ -293,7 +293,8 @@ class TreeStore(_StoreLayout):
         self.capacity = spec.boxes.max_boxes
 
     @classmethod
-    def open_or_create(cls, path: str | Path, spec: Any) -> Any:
+    def open_or_create(cls, path: str | Path, spec: Any) -> Self:
+        """Open ``path`` to resume, or create it; refuse a store made from another spec."""
         assert spec.boxes is not None
         target = Path(path)
         rows = spec.boxes.max_boxes
@@ -360,11 +361,6 @@ class Store(GridStore):
     def coord_attributes(cls, axis: Any) -> dict[str, Any]:
         return {"units": COORD_UNITS[axis.name], "scale": axis.scale, "parameter": SWEEPABLE[axis.name]}
 
-    @classmethod
-    def open_or_create(cls, path: str | Path, spec: Any) -> "Store":
-        store: Store = super().open_or_create(path, spec)
-        return store
-
 
 class BoxStore(TreeStore):
     """The paper's box store (``mode = "boxes"``): :func:`sweeps.schema.box_variables`; attributes
@@ -381,11 +377,6 @@ class BoxStore(TreeStore):
         return {"mode": "boxes", **_paper_attrs(spec), "dims": json.dumps(list(spec.dims)),
                 "classes": json.dumps(list(spec.classes)),
                 "axis_scales": json.dumps({a.name: a.scale for a in spec.axes})}
-
-    @classmethod
-    def open_or_create(cls, path: str | Path, spec: Any) -> "BoxStore":
-        store: BoxStore = super().open_or_create(path, spec)
-        return store
 
 
 # -- a model file ---------------------------------------------------------------------------------
@@ -414,7 +405,20 @@ def _open_model_group(path: Path, spec: ModelSweepSpec, build: Callable[[Path], 
     return group
 
 
-class ModelPointStore(GridStore):
+class _ModelFileStore(_StoreLayout):
+    """What both layouts of a model file's store say alike: their attributes (:func:`_model_attrs`) and
+    the checks of a store opened to resume (:func:`_open_model_group`)."""
+
+    @classmethod
+    def attrs_of(cls, spec: Any) -> dict[str, Any]:
+        return _model_attrs(spec)
+
+    @classmethod
+    def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
+        return _open_model_group(target, spec, build)
+
+
+class ModelPointStore(_ModelFileStore, GridStore):
     """A model file's points store (:func:`sweeps.schema.point_variables`). Certificates are stored
     without their solver logs (wall times), so a resumed sweep ends byte-for-byte identical."""
 
@@ -425,24 +429,11 @@ class ModelPointStore(GridStore):
         return point_variables(spec.classes, spec.outputs)
 
     @classmethod
-    def attrs_of(cls, spec: Any) -> dict[str, Any]:
-        return _model_attrs(spec)
-
-    @classmethod
     def coord_attributes(cls, axis: Any) -> dict[str, Any]:
         return {"scale": axis.scale, "parameter": axis.name, "units": "SI (as the model file reads its parameters)"}
 
-    @classmethod
-    def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
-        return _open_model_group(target, spec, build)
 
-    @classmethod
-    def open_or_create(cls, path: str | Path, spec: Any) -> "ModelPointStore":
-        store: ModelPointStore = super().open_or_create(path, spec)
-        return store
-
-
-class ModelBoxStore(TreeStore):
+class ModelBoxStore(_ModelFileStore, TreeStore):
     """A model file's boxes store (:func:`sweeps.schema.model_box_variables`)."""
 
     spec: ModelSweepSpec
@@ -450,19 +441,6 @@ class ModelBoxStore(TreeStore):
     @classmethod
     def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
         return model_box_variables(spec.dims, spec.classes, spec.outputs)
-
-    @classmethod
-    def attrs_of(cls, spec: Any) -> dict[str, Any]:
-        return _model_attrs(spec)
-
-    @classmethod
-    def open_group(cls, target: Path, spec: Any, build: Callable[[Path], None]) -> Any:
-        return _open_model_group(target, spec, build)
-
-    @classmethod
-    def open_or_create(cls, path: str | Path, spec: Any) -> "ModelBoxStore":
-        store: ModelBoxStore = super().open_or_create(path, spec)
-        return store
 
 
 def open_model_store(path: str | Path, spec: ModelSweepSpec) -> ModelPointStore | ModelBoxStore:

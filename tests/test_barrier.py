@@ -176,3 +176,18 @@ def test_a_barrier_over_a_box_of_parameters(tmp_path: Path) -> None:
     run_cli("certify", str(model), "--box", "w=0.9..1.1", "--classes", "barrier", "--out", str(out))
     barrier = json.loads(out.read_text())["conditions"]["barrier"]
     assert barrier["status"] == "not_applicable" and "parameter of the box" in barrier["summary"]
+
+
+def test_the_degree_figure_is_the_stated_barriers_and_fossil_barr1_verifies(tmp_path: Path) -> None:
+    """FOSSIL's barr1 is found at degree 4 with B's quartic terms rounded to 0: the ``degree`` figure is B's
+    own degree (the one verify re-derives from the stated B), not the search's bound, and its certificate
+    passes verify (it failed with "the stated figure 'degree' = 4 is not the certificate's (3)")."""
+    out = tmp_path / "barr1.json"
+    models = Path(__file__).resolve().parents[1] / "examples" / "models"
+    r = run_cli("certify", str(models / "fossil-barr1.toml"), "--classes", "barrier", "--out", str(out))
+    assert r.exit_code == 0, r.output
+    c = json.loads(out.read_text())["conditions"]["barrier"]
+    assert c["status"] == "certified"
+    assert c["degree"] == max(sum(e) for _, e in c["certificate"]["B"]["terms"])
+    v = run_cli("verify", str(out))
+    assert v.exit_code == 0, v.output

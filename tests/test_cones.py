@@ -271,3 +271,139 @@ def test_the_benchmark_knob_is_validated(monkeypatch: pytest.MonkeyPatch) -> Non
         lyapunov.forced_cone()
     monkeypatch.delenv(lyapunov.FORCE_CONE_ENV)
     assert lyapunov.forced_cone() == "psd"
+
+
+# -- the order of the forms against the time left (issue 43: a limit falls through to the next method) ----
+
+#: the 4-state platoon's identity size limit for these tests: its dense programs of every degree are beyond
+#: it, while its clique forms (CLIQUE_TARGET_LIMIT) at degrees 6 and 8 and its dense SDSOS program at
+#: degree 4 (CONE_TARGET_LIMIT) are not: a network where a degree already too large leaves the cones
+#: pending while later degrees still have semidefinite forms to solve
+SMALL_TARGET_LIMIT = 60
+
+
+def ordered_run(monkeypatch: pytest.MonkeyPatch, budget: Any) -> tuple[Any, list[tuple[str, int, str]]]:
+    """``sos_gas`` on the 4-state platoon with :data:`SMALL_TARGET_LIMIT`, and the forms it tried, in
+    order: ``(form, degree, cone)``."""
+    from lyapcheck.models.classes import lyapunov
+    from lyapcheck.models.engines import store
+    from lyapcheck.models.engines.search import Search
+
+    monkeypatch.setattr(lyapunov, "TARGET_LIMIT", SMALL_TARGET_LIMIT)
+    calls: list[tuple[str, int, str]] = []
+    dense, cliques = lyapunov.search_degree, lyapunov.clique_search
+
+    def spy_dense(field: Any, degree: int, search: Any, param_degree: int = 0, cone: str = "psd") -> Any:
+        calls.append(("dense", degree, cone))
+        return dense(field, degree, search, param_degree, cone)
+
+    def spy_cliques(field: Any, degree: int, search: Any, cone: str = "psd") -> Any:
+        calls.append(("cliques", degree, cone))
+        return cliques(field, degree, search, cone)
+
+    monkeypatch.setattr(lyapunov, "search_degree", spy_dense)
+    monkeypatch.setattr(lyapunov, "clique_search", spy_cliques)
+    from lyapcheck.models.language.modelfile import parse_model
+    from lyapcheck.models.loop.field import apply_scaling, choose_scaling, clear, state_field
+    from lyapcheck.models.surfaces.certify import shifted_field
+
+    model = parse_model(networks.platoon(2))
+    cleared = clear(shifted_field(model), [])
+    scaled = apply_scaling(cleared, choose_scaling(cleared, model.domain))
+    with store.disabled():
+        result = lyapunov.run(scaled, "sos_gas", lyapunov.SOS_GAS_DEGREES, Search(state_field(scaled).ring, budget))
+    return result, calls
+
+
+def test_with_time_to_spare_the_cones_come_after_every_semidefinite_form(monkeypatch: pytest.MonkeyPatch) -> None:
+    from lyapcheck.models.engines.search import Budget
+
+    result, calls = ordered_run(monkeypatch, Budget(1e6, "test"))
+    assert result.status == "certified", result.summary
+    assert result.certificate["cone"] == "sdd" and result.certificate["degree"] == 4
+    first_cone = next(i for i, c in enumerate(calls) if c[2] != "psd")
+    assert ("cliques", 6, "psd") in calls[:first_cone] and ("cliques", 8, "psd") in calls[:first_cone], calls
+
+
+def test_a_semidefinite_form_that_does_not_fit_the_time_left_goes_after_the_cheaper_cone(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A budget of 1 s on a clock that stands still (so that it never runs out as a time limit): degree 6's clique form, estimated from its program's size, does not fit beside the cones'
+    degree 4, so the cones go first and certify; no semidefinite form of degree 6 or 8 is solved."""
+    from lyapcheck.models.engines import search as search_module
+    from lyapcheck.models.engines.search import Budget
+
+    monkeypatch.setattr(search_module, "_now", lambda: 0.0)
+    result, calls = ordered_run(monkeypatch, Budget(1.0, "test"))
+    assert result.status == "certified", result.summary
+    assert result.certificate["cone"] == "sdd" and result.certificate["degree"] == 4 and result.numbers["cone"] == "sdd"
+    assert calls[-1] == ("dense", 4, "sdd") and not any(c[1] >= 6 for c in calls), calls
+
+
+def test_the_order_rule_falls_back_to_the_semidefinite_forms_when_the_cones_find_nothing(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """With the cones first and finding nothing (their budget of solves taken away), the semidefinite
+    forms of the later degrees still run, and the detail says the cones went first and why."""
+    from lyapcheck.models.classes import lyapunov
+    from lyapcheck.models.engines import search as search_module
+    from lyapcheck.models.engines.search import Budget
+
+    monkeypatch.setattr(search_module, "_now", lambda: 0.0)
+    monkeypatch.setattr(lyapunov, "CONE_FALLBACK_SOLVES", 0)
+    result, calls = ordered_run(monkeypatch, Budget(1.0, "test"))
+    assert result.status == "not_certified", result.summary
+    assert ("dense", 4, "sdd") in calls and ("cliques", 6, "psd") in calls
+    assert calls.index(("dense", 4, "sdd")) < calls.index(("cliques", 6, "psd")), calls
+    detail = " ".join(result.numbers["detail"])
+    assert "the cheaper cones of degree 4 were tried before the semidefinite forms of degree 6" in detail
+    assert "CONE_FALLBACK_SOLVES" in detail
+
+
+def test_a_class_out_of_time_stops_with_the_budgets_words(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A clock that advances one second per reading and a budget of 12 s: the search stops part-way
+    (in a solve's preparation, a rounding or the cones) and says so in the time limit's words, never
+    certified on a search cut short."""
+    from lyapcheck.models.engines import search as search_module
+    from lyapcheck.models.engines.search import Budget
+
+    ticks = iter(range(10**6))
+    monkeypatch.setattr(search_module, "_now", lambda: float(next(ticks)))
+    result, calls = ordered_run(monkeypatch, Budget(12.0, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+    assert result.status in ("inconclusive", "not_certified"), result.summary
+    assert calls  # it stopped part-way, not before its first form
+    words = " ".join([result.summary, *result.numbers.get("detail", [])])
+    assert "time limit of 12 s reached (a safety net: lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S)" in words
+
+
+def test_the_exact_rounding_checks_the_budget_between_its_steps() -> None:
+    """A solve's rounding run on a budget already spent raises the budget's words instead of finishing;
+    with time left the same rounding gives the exact point the check then judges."""
+    from lyapcheck.models.classes import lyapunov
+    from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
+
+    field = scaled_field(networks.platoon(2))
+    structure = lyapunov.lyapunov_structure(field, 4, lyapunov.symmetry(field))
+    assert structure is not None
+    values = lyapunov.lyapunov_values(field, structure, Fraction(0))
+    search = Search(field.ring, Budget(60.0, "test"))
+    solution = search.solve(structure, values)
+    assert search.exact(structure, solution, values) is not None
+    spent = Search(field.ring, Budget(0.0, "SOME_LIMIT"))
+    with pytest.raises(BudgetExhausted, match=r"time limit of 0 s reached \(a safety net: SOME_LIMIT\)"):
+        spent.exact(structure, solution, values)
+
+
+def test_the_order_reads_the_estimates_of_the_work_done_never_the_clock(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``fits`` compares estimates with the budget less the estimates recorded so far; a clock that makes
+    the machine look thousands of times slower changes nothing (issue 40: work decides, the clock guards)."""
+    from lyapcheck.models.engines import search as search_module
+    from lyapcheck.models.engines.search import Budget
+
+    budget = Budget(60.0, "test")
+    assert budget.fits(30.0, 30.0) and not budget.fits(30.0, 30.5)
+    budget.record(20.0)
+    assert budget.fits(20.0, 20.0) and not budget.fits(20.0, 20.5)
+    ticks = iter(range(0, 10**9, 1000))
+    monkeypatch.setattr(search_module, "_now", lambda: float(next(ticks)))
+    slow = Budget(60.0, "test")
+    slow.record(20.0)
+    assert slow.fits(20.0, 20.0) and not slow.fits(20.0, 20.5)

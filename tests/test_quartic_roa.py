@@ -105,3 +105,13 @@ def test_the_cells_enclosures_of_a_quartic_v_contain_sampled_values(tmp_path: Pa
         if geo.v_above(cell, flint.arb(0)):  # V > 0 proved on the cell: every sampled V is > 0 there
             assert all(float(lie.value_of_v([flint.arb(float(x)) for x in M @ (centre + rng.uniform(-r, r, 2))])
                              .mid()) > 0 for _ in range(10))
+
+
+def test_a_spent_budget_is_named_as_the_caller_set_it(tmp_path: Path) -> None:
+    """The ellipsoid engine serves callers with different budgets: the reason names the one the quartic
+    proof's caller set, never another caller's constant."""
+    system, ring, V = pendulum(tmp_path, QUARTIC)
+    lie = LieDerivative(BallLoop(system), ring, V)
+    found = qc.prove_sublevel(lie, ring, V, Fraction(1), Fraction(2), 60, budget_name="the test's BUDGET")
+    assert not found.ok and found.face_cells < 60
+    assert "the test's BUDGET, less the faces'" in found.why and "BALL_LEVEL_CELLS" not in found.why

@@ -20,13 +20,13 @@ every exact check (certificates and refutations); it never imports cvxpy.
 
 from __future__ import annotations
 
-import json
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 from lyapcheck.answers import answers_row, checked_conditions
 from lyapcheck.errors import CertificateError, InputFileError
+from lyapcheck.fileio import read_json
 from lyapcheck.numerics import package_versions  # noqa: F401 (re-exported)
 
 SCHEMA_VERSION = 1
@@ -152,20 +152,8 @@ def verify_box_document(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
 
 
 def read_document(path: str | Path) -> dict[str, Any]:
-    p = Path(path)
-    try:
-        doc = json.loads(p.read_text())
-    except FileNotFoundError:
-        raise InputFileError(f"certificate file '{p}' does not exist") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputFileError(f"certificate file '{p}' is not valid JSON: {exc}") from None
-    except ValueError as exc:  # valid JSON syntax that Python will not read: an integer of > 4300 digits
-        raise InputFileError(f"certificate file '{p}' cannot be read: {exc}") from None
-    except RecursionError:
-        raise InputFileError(f"certificate file '{p}' is nested too deeply to be a certificate") from None
-    except OSError as exc:  # a directory, a device, no permission
-        raise InputFileError(f"certificate file '{p}' cannot be read: {exc.strerror or exc}") from None
-    return check_document(doc, f"'{p}'")
+    """A paper certificate file (:func:`lyapcheck.fileio.read_json`), checked by :func:`check_document`."""
+    return check_document(read_json(path), f"'{Path(path)}'")
 
 
 def check_document(doc: Any, source: str) -> dict[str, Any]:

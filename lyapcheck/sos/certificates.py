@@ -447,6 +447,23 @@ def check_on_sets(ring: Ring, F: Poly, name: str, initial: Sequence[SetPiece],
     return _on_sets(ring, F, name, initial, initial_certs, unsafe, unsafe_certs)
 
 
+def _rate_identity(ring: Ring, g: Sequence[Poly], D: Poly, P: Poly, rate: Fraction, remainder: GramPoly,
+                   box: BoxMultipliers, what: str, left: str) -> str | None:
+    """``-grad P . g + rate P D - sum_k r_k (1 - u_k^2) = sigma`` with ``sigma`` (and the ``r``) positive
+    semidefinite, exactly: ``P' <= rate P`` for every ``u`` in the box (a barrier's decrease, a goal's
+    invariance). None, or why not (``what``: the remainder's name, ``left``: the identity's left side)."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    if not is_positive_semidefinite(remainder.Q):
+        return f"the {what} remainder is not positive semidefinite (exact)"
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return box_why
+    if -lie_derivative(ring, P, g) + P * D * _q(rate) - boxed != remainder.poly(ring):
+        return f"the identity {left} = sigma does not hold exactly"
+    return None
+
+
 def check_barrier(ring: Ring, g: Sequence[Poly], D: Poly, B: Poly, lam: Fraction,
                   initial: Sequence[SetPiece], initial_certs: Sequence[PieceCertificate],
                   unsafe: Sequence[SetPiece], unsafe_certs: Sequence[PieceCertificate],
@@ -462,21 +479,15 @@ def check_barrier(ring: Ring, g: Sequence[Poly], D: Poly, B: Poly, lam: Fraction
     ``u`` in the box). Then ``B(t) exp(-lam t)`` never increases, ``B`` stays ``<= 0`` along a
     trajectory that starts with ``B <= 0`` (any real ``lam``), and the unsafe set, where ``B >= 1``,
     is never reached. ``B`` depends on the states only (a disturbance's value may change at any time)."""
-    from lyapcheck.sos.definiteness import is_positive_semidefinite
-
     n = len(g)
     if any(any(m[n:]) for m in ring.support(B)):
         return False, "B may depend on the states only"
     ok, why = _on_sets(ring, B, "B", initial, initial_certs, unsafe, unsafe_certs)
     if not ok:
         return False, why
-    if not is_positive_semidefinite(decrease.Q):
-        return False, "the decrease remainder is not positive semidefinite (exact)"
-    boxed, box_why = box_terms(ring, box)
-    if box_why is not None:
-        return False, box_why
-    if -lie_derivative(ring, B, g) + B * D * _q(lam) - boxed != decrease.poly(ring):
-        return False, "the identity -grad B . g + lam B D = sigma does not hold exactly"
+    failed = _rate_identity(ring, g, D, B, lam, decrease, box, "decrease", "-grad B . g + lam B D")
+    if failed is not None:
+        return False, failed
     return True, ("B <= 0 on the initial set, B >= 1 on the unsafe set and B' <= lam B everywhere"
                   + (" (for every value in the box)" if box else "") + ", exactly")
 
@@ -554,13 +565,9 @@ def check_goal_invariant(ring: Ring, g: Sequence[Poly], D: Poly, W: Poly, mu: Fr
     for i, (q, sigma) in enumerate(zip(goal, inside)):
         if not is_positive_semidefinite(sigma.Q) or W + q != sigma.poly(ring):
             return False, f"goal inequality {i + 1}: W + q = sigma does not hold with sigma >= 0 (exact)"
-    if not is_positive_semidefinite(decrease.Q):
-        return False, "the invariance remainder is not positive semidefinite (exact)"
-    boxed, box_why = box_terms(ring, box)
-    if box_why is not None:
-        return False, box_why
-    if -lie_derivative(ring, W, g) + W * D * _q(mu) - boxed != decrease.poly(ring):
-        return False, "the identity -grad W . g + mu W D = sigma does not hold exactly"
+    failed = _rate_identity(ring, g, D, W, mu, decrease, box, "invariance", "-grad W . g + mu W D")
+    if failed is not None:
+        return False, failed
     return True, "{W <= 0} lies in the goal and W' <= mu W, exactly: no trajectory leaves it"
 
 

@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Final, Mapping, Sequence
+from typing import Any, Callable, Final, Mapping, Sequence
 
 import numpy as np
 
@@ -36,6 +36,10 @@ from lyapcheck.sos.program import Coefficients, Gram, Solution, Structure
 
 #: bits kept below the largest entry of a rounded matrix (and of a scalar)
 ROUND_BITS: Final = 30
+
+#: the correction's columns (unknowns) between two of the caller's checkpoints: each column's
+#: polynomial products take about a millisecond on a large network's program
+CHECKPOINT_COLUMNS: Final = 64
 
 ExactMatrix = list[list[Fraction]]
 
@@ -130,11 +134,25 @@ def _remainder_factor(ident: Any) -> Fraction:
     return factors.pop()
 
 
+#: what :func:`exact_point` calls between its steps (a caller's time budget: it may raise to stop
+#: the rounding; it decides nothing about the point)
+Checkpoint = Callable[[], None]
+
+
+def _no_checkpoint() -> None:
+    return None
+
+
 def exact_point(ring: Ring, structure: Structure, solution: Solution,
-                values: Mapping[str, Sequence[Fraction]]) -> ExactPoint | None:
+                values: Mapping[str, Sequence[Fraction]], checkpoint: Checkpoint = _no_checkpoint
+                ) -> ExactPoint | None:
     """Round, correct and project (see the module docstring); None when no exact point results
-    (a residual the remainders cannot absorb and the correction cannot remove)."""
-    return project(ring, structure, rounded_point(solution), values)
+    (a residual the remainders cannot absorb and the correction cannot remove). ``checkpoint`` is
+    called between the steps (and between the correction's columns): a caller's time limit raises
+    there, so that a large program's rounding stops within one step of it."""
+    rounded = rounded_point(solution)
+    checkpoint()
+    return project(ring, structure, rounded, values, checkpoint)
 
 
 def rounded_point(solution: Solution) -> ExactPoint:
@@ -144,8 +162,10 @@ def rounded_point(solution: Solution) -> ExactPoint:
 
 
 def project(ring: Ring, structure: Structure, point: ExactPoint,
-            values: Mapping[str, Sequence[Fraction]]) -> ExactPoint | None:
-    """Steps 2 and 3 on a rounded point (changed in place and returned), or None."""
+            values: Mapping[str, Sequence[Fraction]], checkpoint: Checkpoint = _no_checkpoint
+            ) -> ExactPoint | None:
+    """Steps 2 and 3 on a rounded point (changed in place and returned), or None; ``checkpoint``
+    as :func:`exact_point`'s."""
     for gram in structure.grams:  # zero between blocks, exactly
         allowed = {(i, j) for idx in gram.blocks for i in idx for j in idx}
         Q = point.grams[gram.name]
@@ -154,9 +174,11 @@ def project(ring: Ring, structure: Structure, point: ExactPoint,
                 if (i, j) not in allowed:
                     Q[i][j] = Fraction(0)
     classes = [_identity_classes(structure, ident) for ident in structure.identities]
-    if not _correct(ring, structure, point, values, classes):
+    checkpoint()
+    if not _correct(ring, structure, point, values, classes, checkpoint):
         return None
     for k, ident in enumerate(structure.identities):
+        checkpoint()
         factor = _remainder_factor(ident)
         target = identity_value(ring, structure, ident, point, values, skip=ident.remainders())
         # factor * R + target == 0  ->  R = -target / factor (R the sum of the remainder Grams)
@@ -186,7 +208,7 @@ def _identity_classes(structure: Structure, ident: Any) -> dict[Monomial, list[t
 
 
 def _correct(ring: Ring, structure: Structure, point: ExactPoint, values: Mapping[str, Sequence[Fraction]],
-             classes: Sequence[Mapping[Monomial, Any]]) -> bool:
+             classes: Sequence[Mapping[Monomial, Any]], checkpoint: Checkpoint = _no_checkpoint) -> bool:
     """Make the identities hold exactly on the monomials their remainders cannot represent, by the
     least-norm change of the other decisions (False if that linear system has no solution).
 
@@ -201,6 +223,7 @@ def _correct(ring: Ring, structure: Structure, point: ExactPoint, values: Mappin
     rows: list[tuple[int, Monomial]] = []
     rhs: list[Fraction] = []
     for k, ident in enumerate(structure.identities):
+        checkpoint()
         target = ring.terms(identity_value(ring, structure, ident, point, values, skip=ident.remainders()))
         for m in sorted(_generic_support(structure, ident) | set(target)):
             if m not in classes[k]:
@@ -217,6 +240,8 @@ def _correct(ring: Ring, structure: Structure, point: ExactPoint, values: Mappin
     row_index = {r: n for n, r in enumerate(rows)}
     entries: dict[tuple[int, int], Fraction] = {}
     for c, (name, i, j) in enumerate(columns):
+        if c % CHECKPOINT_COLUMNS == 0:
+            checkpoint()
         unit = _unit_point(structure, name, i, j)
         for k, ident in enumerate(structure.identities):
             contribution = ring.zero()
@@ -235,6 +260,7 @@ def _correct(ring: Ring, structure: Structure, point: ExactPoint, values: Mappin
     dense = [[flint.fmpq(0)] * len(used) for _ in rows]
     for (r, c), v in entries.items():
         dense[r][where[c]] = flint.fmpq(v.numerator, v.denominator)
+    checkpoint()
     A = flint.fmpq_mat(dense)
     b = flint.fmpq_mat([[flint.fmpq(v.numerator, v.denominator)] for v in rhs])
     independent = _independent_rows(A)

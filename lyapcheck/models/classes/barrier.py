@@ -486,16 +486,18 @@ def run(scaled: ScaledField, search: Search) -> ConditionResult:
         return ConditionResult("barrier", "not_certified", none.summary, numbers=numbers, solver={"solves": search.log},
                                property="safety")
     T = scaled.scaling.time
-    numbers = {"degree": found["degree"], "lambda_per_s": float(found["lam"] / T),
-               "relative_margin": found["margin"]}
+    certificate = certificate_json(scaled, field, found)
+    # the figure is B's own degree in the states (what verify re-derives from the stated B): the search's
+    # degree is only its bound, and rounding may leave B's top terms 0 (fossil-barr1: degree 3 at degree 4)
+    degree = max((sum(e[:scaled.n]) for _, e in certificate["B"]["terms"]), default=0)
+    numbers = {"degree": degree, "lambda_per_s": float(found["lam"] / T), "relative_margin": found["margin"]}
     if trial is not None:
         numbers["falsification"] = trial.to_dict()
         numbers["closest_approach"] = trial.closest_approach
         if trial.entered:  # a trajectory into a set proved unreachable: the proof or the simulation is wrong
             numbers["soundness_violation"] = True
     return ConditionResult("barrier", "certified", SUMMARY, numbers=numbers,
-                           certificate=certificate_json(scaled, field, found), solver={"solves": search.log},
-                           property="safety")
+                           certificate=certificate, solver={"solves": search.log}, property="safety")
 
 
 #: starts simulated from the initial set beside every barrier search; half as many above

@@ -60,14 +60,8 @@ KIND: Final = "discrete_interval"
 #: classes a map with functions takes, MAP_FUNCTIONS) on such a map
 NOT_YET: Final = ('not taken yet on a discrete-time map with functions ([model] time = "discrete" with sin, tanh, '
                   "[networks], ...): the classes taken are linearization and roa")
-#: significant bits of each entry of V's matrix (short dyadics: V's balls stay exact)
-P_BITS: Final = 30
 #: significant bits of a level tried
 LEVEL_BITS: Final = 12
-#: levels tried upwards (each the last times MAP_LEVEL_GROWTH), then bisections of the bracket
-MAP_LEVEL_GROWTH: Final = Fraction(4)
-MAP_LEVEL_GROWTH_STEPS: Final = 16
-MAP_LEVEL_BISECTIONS: Final = 4
 #: the first level tried: the ellipsoid this wide (in its widest state) ...
 MAP_FIRST_EXTENT: Final = Fraction(1, 2)
 #: ... and, if not proved, a quarter of it at most this many times
@@ -180,7 +174,7 @@ class MapGeometry(_Geometry):
 
 
 def rounded_p(A: list[list[Fraction]]) -> list[list[Fraction]] | None:
-    """``P`` of ``A^T P A - P = -I`` rounded to :data:`P_BITS` significant bits (symmetric), or None."""
+    """``P`` of ``A^T P A - P = -I`` rounded to :data:`~lyapcheck.tolerances.P_BITS` significant bits (symmetric), or None."""
     from lyapcheck.models.classes.discrete_linearization import stein_solution
     from lyapcheck.models.engines.ellipsoid_cells import _short
 
@@ -188,7 +182,7 @@ def rounded_p(A: list[list[Fraction]]) -> list[list[Fraction]] | None:
     if P is None:
         return None
     n = len(P)
-    return [[_short(P[min(i, j)][max(i, j)], P_BITS) for j in range(n)] for i in range(n)]
+    return [[_short(P[min(i, j)][max(i, j)], tolerances.P_BITS) for j in range(n)] for i in range(n)]
 
 
 def prove_level(model: "RecastModel", P: list[list[Fraction]], level: Fraction, cells: int) -> Any:
@@ -259,8 +253,9 @@ def roa(model: "RecastModel", budget: "Budget") -> ConditionResult:
             if attempt(first) is not None:
                 break
             first = _dyadic(first / 4, LEVEL_BITS)
-        found = largest_proved_level(attempt, first, growth=MAP_LEVEL_GROWTH, growth_steps=MAP_LEVEL_GROWTH_STEPS,
-                                     halvings=0, bisections=MAP_LEVEL_BISECTIONS,
+        found = largest_proved_level(attempt, first, growth=tolerances.MAP_LEVEL_GROWTH,
+                                     growth_steps=tolerances.MAP_LEVEL_GROWTH_STEPS,
+                                     halvings=0, bisections=tolerances.MAP_LEVEL_BISECTIONS,
                                      rounded=lambda x: _dyadic(x, LEVEL_BITS))
     except BudgetExhausted as exc:
         return ConditionResult("roa", "inconclusive", f"ball arithmetic on the true map: {exc}", property="ROA")

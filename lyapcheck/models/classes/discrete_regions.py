@@ -324,17 +324,11 @@ def simulated_region(ring: Ring, F: Sequence[Poly], starts: "np.ndarray", half: 
     :data:`ESCAPE_RADIUS` times it, or not finite, diverged)."""
     import numpy as np
 
+    from lyapcheck.models.engines.iteration import iterate_map, stacked_map
     from lyapcheck.models.engines.numeric import NumericPoly
 
-    maps = [NumericPoly(ring, fi) for fi in F]
-    x = starts.copy()
-    alive = np.ones(len(x), dtype=bool)
-    with np.errstate(all="ignore"):
-        for _ in range(ITERATIONS):
-            if not alive.any():
-                break
-            x[alive] = np.stack([f(x[alive]) for f in maps], axis=1)
-            alive &= np.all(np.isfinite(x), axis=1) & np.all(np.abs(x) <= ESCAPE_RADIUS * half, axis=1)
+    f = stacked_map([NumericPoly(ring, fi) for fi in F])
+    x, alive = iterate_map(f, starts, ITERATIONS, escape=ESCAPE_RADIUS * half)
     return alive & np.all(np.abs(np.where(alive[:, None], x, 0.0)) <= CONVERGED_RADIUS * half, axis=1)
 
 
@@ -343,16 +337,17 @@ def left_set(ring: Ring, F: Sequence[Poly], V: Poly, level: float, starts: "np.n
     level (beyond :data:`LEFT_SET_SLACK`): 0 unless the certificate is wrong (a soundness alarm)."""
     import numpy as np
 
+    from lyapcheck.models.engines.iteration import iterate_map, stacked_map
     from lyapcheck.models.engines.numeric import NumericPoly
 
-    maps = [NumericPoly(ring, fi) for fi in F]
     v_num = NumericPoly(ring, V)
-    x = starts.copy()
-    out = np.zeros(len(x), dtype=bool)
-    with np.errstate(all="ignore"):
-        for _ in range(ITERATIONS):
-            x = np.stack([f(x) for f in maps], axis=1)
-            out |= ~(v_num(x) <= level * (1 + LEFT_SET_SLACK))
+    out = np.zeros(len(starts), dtype=bool)
+
+    def above(k: int, rows: "np.ndarray", x: "np.ndarray") -> None:
+        out[rows] |= ~(v_num(x) <= level * (1 + LEFT_SET_SLACK))
+
+    # every row every step (no escape box): a row that runs away counts from its first iterate above the level
+    iterate_map(stacked_map([NumericPoly(ring, fi) for fi in F]), starts, ITERATIONS, observe=above)
     return int(np.sum(out))
 
 

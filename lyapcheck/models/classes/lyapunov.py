@@ -34,8 +34,10 @@ from lyapcheck.models.engines import reasons, store
 from lyapcheck.models.loop.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
-                                     literal, multiplier_grams, multiplier_variable, one, param)
+                                     estimated_seconds, literal, multiplier_grams, multiplier_variable, one, param)
 from lyapcheck.results import ConditionResult
+from lyapcheck.tolerances import (CONE_CANDIDATE_LIMIT, CONE_FALLBACK_SOLVES, CONE_GRAM_ROWS, CONE_SIZE_LIMIT,
+                                  CONE_TARGET_LIMIT, FORM_SOLVES_ESTIMATE)
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import (GramPoly, at_vertex, box_vertices, check_lyapunov, check_lyapunov_vertices,
                                        lie_derivative, multi_affine)
@@ -501,10 +503,22 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                 "key": key, "check": "exact, in this run"}})
     tried: list[str] = []
     limited: list[tuple[int, bool]] = []  # degrees whose dense form was too large: (degree, cliques too large)
+    cone_lines: list[str] = []
+    # one budget of solves for the cheaper cones, whether they run before a later degree or at the end
+    cones = search.within(CONE_FALLBACK_SOLVES, "in the cheaper cones' fallback", "CONE_FALLBACK_SOLVES")
     try:
         for degree in degrees:
             for param_degree in (param_degrees if field.p and not field.disturbances else (0,)):
                 search.budget.check()  # also before a degree whose program is skipped unsolved
+                first = cones_first(field, degree, limited[0], search) if limited else None
+                if first is not None:
+                    # this degree's semidefinite forms would not leave the cones their time: the cones
+                    # of the degrees already too large first, then this degree's forms all the same
+                    found, more = cone_fallbacks(field, limited, cones)
+                    cone_lines.extend([first, *more])
+                    limited = []
+                    if found is not None:
+                        return _certified(scaled, field, name, found, {"solves": search.log})
                 found, why = search_degree(field, degree, search, param_degree, forced)
                 tried.append(why)
                 dense_too_large = bool(reasons.size_limits([why]))
@@ -535,16 +549,16 @@ def run(scaled: ScaledField, name: str, degrees: Sequence[int], search: Search,
                 if found is not None:
                     return _certified(scaled, field, name, found, {"solves": search.log})
     except BudgetExhausted as exc:
-        late = reasons.out_of_time("a Lyapunov function", search.budget.seconds, [str(exc), *tried])
+        late = reasons.out_of_time("a Lyapunov function", search.budget.seconds, [str(exc), *tried, *cone_lines])
         return ConditionResult(name, "inconclusive", late.summary,
-                               numbers=late.numbers({"reason": str(exc), "tried": tried}),
+                               numbers=late.numbers({"reason": str(exc), "tried": tried + cone_lines}),
                                solver={"solves": search.log})
     # the semidefinite forms found nothing: the sentence says so, as before the cones, whatever they do
     steps = ("sos_gas", "candidate") if name == "quadratic" else ("degree", "candidate")
     none = reasons.not_found("Lyapunov function", degrees, tried, steps)
-    cone_lines: list[str] = []
     if limited:
-        found, cone_lines = cone_fallbacks(field, limited, search)
+        found, more = cone_fallbacks(field, limited, cones)
+        cone_lines.extend(more)
         if found is not None:
             return _certified(scaled, field, name, found, {"solves": search.log})
     return ConditionResult(name, "not_certified", none.summary,
@@ -1089,23 +1103,16 @@ def search_vertices(field: StateField, degree: int, search: Search) -> tuple[dic
 # exactly, :func:`lyapcheck.sos.definiteness.is_positive_definite`, whose diagonal-dominance tests
 # decide these matrices in O(n^2)), and ``verify`` re-checks it without knowing the cone. The
 # certificate names the cone (``"cone": "sdd"``), and only then, so that every other one is as before.
+# They run after every semidefinite form, unless a later degree's semidefinite forms would not leave
+# them their time: then before those (:func:`cones_first` states the rule).
 
 #: the cheaper cones tried in turn, and their words in a sentence or a detail line
 FALLBACK_CONES: Final = ("sdd", "dd")
 CONE_WORDS: Final[Mapping[str, str]] = {"sdd": "SDSOS, scaled diagonally dominant Gram matrices",
                                         "dd": "DSOS, diagonally dominant Gram matrices"}
-#: the cones' size limits: an SDSOS/DSOS program has no dense block to factor, so the semidefinite
-#: limits on Gram rows and on the blocks' cost (BLOCK_COST_LIMIT) give way to these, measured on the
-#: networks of benchmarks/bench_networks.py (benchmarks/README.md, issue 43)
-CONE_CANDIDATE_LIMIT: Final = 1_000
-CONE_TARGET_LIMIT: Final = 6_000
-CONE_GRAM_ROWS: Final = 500
-#: the most decisions of a cone program's blocks (:meth:`~lyapcheck.sos.structure.Structure.cone_size`)
-CONE_SIZE_LIMIT: Final = 400_000
+#: the cones' size limits and their budget of solves: :mod:`lyapcheck.tolerances` (``CONE_*``, with
+#: the estimates that order the forms, :func:`cones_first`)
 CONE_LIMITS: Final = (CONE_CANDIDATE_LIMIT, CONE_TARGET_LIMIT, CONE_GRAM_ROWS)
-#: the solves the fallback may spend in all (a count, so that a loaded machine does the same work): the
-#: 8-state platoon's SDSOS certificate took 2 solves (one facial reduction) and 2 more for its decay rate
-CONE_FALLBACK_SOLVES: Final = 40
 #: the benchmark knob: ``sdd`` or ``dd`` makes every program of sos_gas (dense and cliques) use that
 #: cone, never the semidefinite one (for measuring the cones alone; not a user option)
 FORCE_CONE_ENV: Final = "LYAPCHECK_FORCE_CONE"
@@ -1154,15 +1161,16 @@ def cone_identity(nv: int, grams: Sequence[Gram], terms: Sequence[Term], cone: s
     return cone_structure(structure, cone)
 
 
-def cone_fallbacks(field: StateField, limited: Sequence[tuple[int, bool]], search: Search
+def cone_fallbacks(field: StateField, limited: Sequence[tuple[int, bool]], within: Search
                    ) -> tuple[dict[str, Any] | None, list[str]]:
     """:func:`cone_fallback` at each degree whose dense semidefinite form was too large (``limited``:
-    ``(degree, the clique form too large as well)``, rising), within a budget of
-    :data:`CONE_FALLBACK_SOLVES` solves: a certificate or None, and the detail lines. Run after every
-    semidefinite form has found nothing, so it can only add a certificate: where its budget (or the
-    class's time limit, the safety net) ends it, the class's answer is the semidefinite forms' one,
-    and a detail line says where the fallback stopped."""
-    within = search.within(CONE_FALLBACK_SOLVES, "in the cheaper cones' fallback", "CONE_FALLBACK_SOLVES")
+    ``(degree, the clique form too large as well)``, rising), ``within`` the run's budget of
+    :data:`CONE_FALLBACK_SOLVES` solves (:meth:`~lyapcheck.models.engines.search.Search.within`, one for
+    the whole run): a certificate or None, and the detail lines. Run after the semidefinite forms of
+    those degrees have found nothing (and before a later degree's where :func:`cones_first` says so),
+    so it can only add a certificate: where its budget (or the class's time limit, the safety net)
+    ends it, the class's answer is the semidefinite forms' one, and a detail line says where the
+    fallback stopped."""
     whys: list[str] = []
     try:
         for degree, cliques_too_large in limited:
@@ -1173,6 +1181,59 @@ def cone_fallbacks(field: StateField, limited: Sequence[tuple[int, bool]], searc
     except BudgetExhausted as exc:
         whys.append(f"the cheaper cones' fallback was stopped: {exc}")
     return None, whys
+
+
+def cones_first(field: StateField, degree: int, pending: tuple[int, bool], search: Search) -> str | None:
+    """Whether the cheaper cones of a degree already too large (``pending``, as :func:`cone_fallbacks`
+    takes it) go before the semidefinite forms of ``degree``: the words of a detail line saying so, or
+    None (the forms keep their order).
+
+    The rule (issue 43: a limit falls through to the next method, never ends the search while one
+    could still run): the semidefinite forms of ``degree`` (the dense program, and each clique form,
+    where within their size limits) are estimated at :data:`~lyapcheck.tolerances.FORM_SOLVES_ESTIMATE`
+    solves of their first program, and the cones' first form (the dense SDSOS program of the pending
+    degree, or its clique form where the dense one is beyond the cones' limits) likewise
+    (:func:`~lyapcheck.models.engines.search.estimated_seconds`). When the two together do not fit in
+    the class's time limit less the estimates of the work already done
+    (:meth:`~lyapcheck.models.engines.search.Budget.fits`: estimates only, never the clock, so that the
+    order is the same on a loaded machine), the cones run first; the semidefinite forms run after them all the same (the time limit, never
+    this rule, may end them). Where they fit, nothing changes: the cones come after every semidefinite
+    form, as before. An order only: every certificate is decided by the same exact checks."""
+    generators = symmetry(field)
+    form = 0.0
+    dense = lyapunov_program(field, degree, generators)
+    if isinstance(dense, Structure):
+        form += estimated_seconds(dense)
+    for cover in CLIQUE_FORMS:
+        cliques = clique_cover(field, cover)
+        if len(cliques) >= 2:
+            program = clique_program(field, degree, generators, cliques)
+            if isinstance(program, Structure):
+                form += estimated_seconds(program)
+    if form == 0.0:
+        return None  # every semidefinite form of this degree is refused by its size limits, at once
+    cone_degree, cliques_too_large = pending
+    cone = FALLBACK_CONES[0] if FALLBACK_CONES else None
+    if cone is None:
+        return None
+    reserve = 0.0
+    dense_cone = lyapunov_program(field, cone_degree, generators, cone=cone)
+    if isinstance(dense_cone, Structure):
+        reserve = estimated_seconds(dense_cone)
+    elif cliques_too_large:
+        for cover in CLIQUE_FORMS:
+            cliques = clique_cover(field, cover)
+            program = clique_program(field, cone_degree, generators, cliques, cone=cone) if len(cliques) >= 2 else ""
+            if isinstance(program, Structure):
+                reserve = estimated_seconds(program)
+                break
+    form, reserve = form * FORM_SOLVES_ESTIMATE, reserve * FORM_SOLVES_ESTIMATE
+    budget = search.budget
+    if budget.fits(form, reserve):
+        return None
+    return (f"the cheaper cones of degree {cone_degree} were tried before the semidefinite forms of degree {degree}: "
+            f"those estimated at {form:.3g} s and the cones at {reserve:.3g} s exceed the time limit's "
+            f"{max(budget.seconds - budget.estimated, 0.0):.3g} s left by the estimates of the work done")
 
 
 def cone_fallback(field: StateField, degree: int, search: Search, cliques_too_large: bool

@@ -97,7 +97,8 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
         if budget.left() <= 0:
             raise BudgetExhausted(budget.reached())
         claim = claim_at(level)
-        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), cells=min(each, left))
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), cells=min(each, left),
+                      cells_name=f"lyapcheck.tolerances.BALL_LEVEL_CELLS{scaled}")
         spent[0] += proof.cells + proof.boundary_cells
         return (claim, proof) if proof.ok else None
 

@@ -23,8 +23,8 @@ from typing import Any, Final
 import flint
 
 from lyapcheck.models.engines.interval_field import BallLoop, Jet, LieDerivative, ball
-from lyapcheck.models.engines.interval_region import (IntervalClaim, IntervalProof, dyadic_floor, low_order_terms,
-                                              prove_bounded, prove_region)
+from lyapcheck.models.engines.interval_region import (ATTEMPT_CELLS_NAME, IntervalClaim, IntervalProof, dyadic_floor,
+                                                     low_order_terms, prove_bounded, prove_region)
 from lyapcheck.models.language.parameter_box import ModelBox
 from lyapcheck.models.language.recast import RecastModel, RecastSystem
 from lyapcheck.models.classes.recast_classes import Loop, v_text
@@ -301,11 +301,11 @@ def derivative_of(loop: Loop, V: Any) -> tuple[Any, bool] | str:
 
 
 def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None, robust: Robust | None = None,
-          cells: int | None = None) -> IntervalProof:
+          cells: int | None = None, cells_name: str = ATTEMPT_CELLS_NAME) -> IntervalProof:
     """:func:`prove_region` with the evaluator ``claim.V`` needs (one path for the search and ``verify``);
     with ``robust``, on the loop with every disturbance value in its bounds (``V`` over the states).
-    ``cells``: the work budget of the whole attempt (every part of a box together); None: each part
-    within INTERVAL_CELL_LIMIT (``verify``)."""
+    ``cells``: the work budget of the whole attempt (every part of a box together), ``cells_name`` the
+    constant it comes from (named when it is spent); None: each part within INTERVAL_CELL_LIMIT (``verify``)."""
     if robust is not None:
         if uses_auxiliaries(loop, claim.V) or low_order_terms(loop.ring, claim.V, loop.n):
             return IntervalProof(False, "a claim for every disturbance value takes a V over the states alone, "
@@ -313,23 +313,24 @@ def prove(loop: Loop, claim: IntervalClaim, deadline: float | None = None, robus
         if not robust.vanishes():
             return IntervalProof(False, "a disturbance moves the equilibrium", 0, 0, None, 0.0)
         return _prove_parts(loop, claim, deadline, robust, PARAMETER_SPLITS if robust.box is not None else 0,
-                            None if cells is None else [cells])
+                            None if cells is None else [cells], cells_name)
     how = derivative_of(loop, claim.V)
     if isinstance(how, str):
         return IntervalProof(False, how, 0, 0, None, 0.0)
     evaluator, flat = how
-    return prove_region(loop.system, claim, deadline=deadline, lie=evaluator, flat=flat, cell_budget=cells)
+    return prove_region(loop.system, claim, deadline=deadline, lie=evaluator, flat=flat, cell_budget=cells,
+                        budget_name=cells_name)
 
 
 def _prove_parts(loop: Loop, claim: IntervalClaim, deadline: float | None, robust: Robust, depth: int,
-                 cells: list[int] | None = None) -> IntervalProof:
+                 cells: list[int] | None = None, cells_name: str = ATTEMPT_CELLS_NAME) -> IntervalProof:
     """The proof for every value of ``robust``'s constants; over a box, where it fails without a
     proved counterexample, on each half of the box (deterministic, so ``verify`` splits the same way).
     ``cells``: the cells left to the whole attempt (one counter shared by every part), or None."""
     lie = LieDerivative(BallLoop(robust.system, robust.balls()), robust.system.ring,
                         robust.embedded(loop.ring, claim.V))
     proof = prove_region(loop.system, claim, deadline=deadline, lie=lie, flat=True,
-                         cell_budget=None if cells is None else max(cells[0], 0))
+                         cell_budget=None if cells is None else max(cells[0], 0), budget_name=cells_name)
     if cells is not None:
         cells[0] -= proof.cells + proof.boundary_cells
     if proof.ok or depth == 0 or robust.box is None or proof.counterexample_v is not None:
@@ -338,7 +339,7 @@ def _prove_parts(loop: Loop, claim: IntervalClaim, deadline: float | None, robus
         return proof  # the attempt's work budget is spent: its reason says so
     parts: list[IntervalProof] = []
     for half in robust.halves():  # in order, stopping at the first failure (the budget is shared)
-        parts.append(_prove_parts(loop, claim, deadline, half, depth - 1, cells))
+        parts.append(_prove_parts(loop, claim, deadline, half, depth - 1, cells, cells_name))
         if not parts[-1].ok:
             break
     failed = next((p for p in parts if not p.ok), None)

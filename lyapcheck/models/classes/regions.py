@@ -699,10 +699,7 @@ def _containment(field: StateField, cert: LevelCertificate | BallCertificate, p:
     values = ParameterValues()
     values.set_poly(ring, "pr", p - ring.constant(r2), structure.identities[0].terms[0].coefficients.support)
     values.set_poly(ring, "cV", ring.constant(cert.level) - v_poly, structure.identities[0].constant.support)  # type: ignore[union-attr]
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None
-    point = search.exact(structure, solution, values)
+    point, _ = search.solve_exact(structure, values, near_only=True)
     if point is None:
         return None
     s = GramPoly.of(z_s, point.grams["s"])
@@ -805,10 +802,7 @@ def gram_of(field: StateField, p: Poly, search: Search) -> GramPoly | None:
                           objective=("max_margin",))
     values = ParameterValues()
     values.set_poly(ring, "P", p, structure.identities[0].constant.support)  # type: ignore[union-attr]
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None
-    point = search.exact(structure, solution, values)
+    point, _ = search.solve_exact(structure, values, near_only=True)
     if point is None:
         return None
     V = GramPoly.of(basis, point.grams["V"])

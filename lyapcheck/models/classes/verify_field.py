@@ -88,8 +88,7 @@ def _verify_vertices(c: dict[str, Any], cert: dict[str, Any], scaled: Any, field
     """A Lyapunov certificate in the vertex form (``form = "vertices"``, the vertex form of
     :mod:`lyapcheck.models.classes.lyapunov`): ``V(z, u)`` exact (``V_scaled``), a Gram matrix of ``V`` and of the remainder at
     each vertex of the box, checked exactly (:func:`~lyapcheck.sos.certificates.check_lyapunov_vertices`)."""
-    from lyapcheck.models.classes.lyapunov import stated_v
-    from lyapcheck.sos.certificates import check_lyapunov_vertices, exponent
+    from lyapcheck.sos.certificates import check_lyapunov_vertices
 
     if not field.p or field.disturbances:
         return False, "a certificate in the vertex form is for a box of parameters (and no disturbance)"
@@ -99,10 +98,9 @@ def _verify_vertices(c: dict[str, Any], cert: dict[str, Any], scaled: Any, field
     _check_terms(cert["V_scaled"])
     if any(len(m) != nv for _, m in cert["V_scaled"]["terms"]):
         return False, f"V_scaled: a monomial must have {nv} exponents"
-    V = ring.from_terms({tuple(exponent(e, "V_scaled") for e in m): Fraction(v) for v, m in cert["V_scaled"]["terms"]})
-    _check_terms(cert["V"])
-    if stated_v(scaled, field, V) != cert["V"]:
-        return False, "the stated V (declared states) is not the certificate's V_scaled unscaled"
+    V, differs = _scaled_and_stated(scaled, field, cert, "V", "V_scaled")
+    if differs is not None:
+        return False, differs
     positive = [_gram(part, nv) for part in cert["gram_V_vertices"]]
     sigmas = [_gram(part, nv) for part in cert["gram_sigma_vertices"]]
     mu = Fraction(cert["mu_scaled"])
@@ -288,29 +286,21 @@ def _verify_barrier(c: dict[str, Any], cert: dict[str, Any], scaled: Any) -> tup
     """A barrier certificate on the robust field (every disturbance that enters a box coordinate),
     with the sets re-read from the model (a widened initial set or a shrunk unsafe set in the
     model's text makes an identity fail), B stated in the declared states as its scaled form."""
-    from lyapcheck.models.classes.barrier import scaled_pieces
-    from lyapcheck.models.loop.field import state_field
-    from lyapcheck.models.classes.lyapunov import stated_v
-    from lyapcheck.sos.certificates import check_barrier, exponent
+    from lyapcheck.sos.certificates import check_barrier
 
     if cert.get("kind") != "barrier":
         return False, f"a barrier's certificate kind must be 'barrier', not {cert.get('kind')!r}"
     if c.get("property") != "safety":
         return False, "a barrier certificate proves safety"
-    model = scaled.cleared.shifted.model
-    sets = getattr(model, "sets", None) or {}
+    _, sets = _model_sets(scaled)
     if not sets.get("initial") or not sets.get("unsafe"):
         return False, "the model has no [sets] initial and unsafe for a barrier"
-    field = state_field(scaled, robust=True)
+    field, initial, unsafe = _robust_pieces(scaled, sets)
     ring, n = field.ring, field.n
     nv = ring.nvars
-    initial = scaled_pieces(scaled, field, sets["initial"])
-    unsafe = scaled_pieces(scaled, field, sets["unsafe"])
-    terms = cert["B_scaled"]["terms"]
-    B = ring.from_terms({tuple(exponent(e, "B_scaled") for e in m): Fraction(v) for v, m in terms})
-    _check_terms(cert["B"])
-    if stated_v(scaled, field, B) != cert["B"]:
-        return False, "the stated B (declared states) is not the certificate's B unscaled"
+    B, differs = _scaled_and_stated(scaled, field, cert, "B")
+    if differs is not None:
+        return False, differs
 
     lam = Fraction(cert["lambda_scaled"])
     box = _multipliers(cert.get("box_multipliers"), nv, n)
@@ -322,6 +312,38 @@ def _verify_barrier(c: dict[str, Any], cert: dict[str, Any], scaled: Any) -> tup
     if stated is not None and abs(float(stated) - float(lam / scaled.scaling.time)) > 1e-9 * (1 + abs(float(stated))):
         return False, "the stated rate lambda_per_s is not the certificate's"
     return True, why
+
+
+def _model_sets(scaled: Any) -> tuple[Any, dict[str, Any]]:
+    """The model and its ``[sets]`` (empty without), read again from the model's text."""
+    model = scaled.cleared.shifted.model
+    return model, getattr(model, "sets", None) or {}
+
+
+def _robust_pieces(scaled: Any, sets: dict[str, Any]) -> tuple[Any, Any, Any]:
+    """The robust field (every disturbance that enters a box coordinate) and the initial and unsafe sets'
+    pieces in its scaled coordinates."""
+    from lyapcheck.models.classes.barrier import scaled_pieces
+    from lyapcheck.models.loop.field import state_field
+
+    field = state_field(scaled, robust=True)
+    return field, scaled_pieces(scaled, field, sets["initial"]), scaled_pieces(scaled, field, sets["unsafe"])
+
+
+def _scaled_and_stated(scaled: Any, field: Any, cert: dict[str, Any], name: str, scaled_name: str | None = None
+                       ) -> tuple[Any, str | None]:
+    """A certificate's polynomial ``cert[name + "_scaled"]`` (scaled coordinates, exactly) and None, or why
+    its stated form ``cert[name]`` (declared states) is not it unscaled (``scaled_name``: what the reason
+    calls the scaled one, ``name`` by default)."""
+    from lyapcheck.models.classes.lyapunov import stated_v
+    from lyapcheck.sos.certificates import exponent
+
+    key = f"{name}_scaled"
+    P = field.ring.from_terms({tuple(exponent(e, key) for e in m): Fraction(v) for v, m in cert[key]["terms"]})
+    _check_terms(cert[name])
+    if stated_v(scaled, field, P) != cert[name]:
+        return P, f"the stated {name} (declared states) is not the certificate's {scaled_name or name} unscaled"
+    return P, None
 
 
 def _set_pieces(cert: dict[str, Any], key: str, count: int, nv: int) -> list[tuple[list[Any], Any]]:
@@ -337,38 +359,30 @@ def _verify_reach_avoid(c: dict[str, Any], cert: dict[str, Any], scaled: Any) ->
     """A reach-avoid certificate on the robust field, the sets re-read from the model's text, V
     stated in the declared states as its scaled form, and the stated time bound the certified one."""
     from lyapcheck.models.classes.barrier import scaled_pieces
-    from lyapcheck.models.loop.field import state_field
-    from lyapcheck.models.classes.lyapunov import stated_v
-    from lyapcheck.sos.certificates import check_reach_avoid, exponent
+    from lyapcheck.sos.certificates import check_reach_avoid
 
     if cert.get("kind") != "reach_avoid":
         return False, f"a reach_avoid certificate's kind must be 'reach_avoid', not {cert.get('kind')!r}"
     if c.get("property") != "reach_avoid":
         return False, "a reach_avoid certificate proves reach_avoid"
-    model = scaled.cleared.shifted.model
-    sets = getattr(model, "sets", None) or {}
+    model, sets = _model_sets(scaled)
     if not sets.get("initial") or not sets.get("unsafe") or len(sets.get("goal") or ()) != 1:
         return False, "the model has no [sets] initial, unsafe and a one-piece goal for reach_avoid"
-    field = state_field(scaled, robust=True)
+    field, initial, unsafe = _robust_pieces(scaled, sets)
     ring, n = field.ring, field.n
     nv = ring.nvars
-    initial = scaled_pieces(scaled, field, sets["initial"])
-    unsafe = scaled_pieces(scaled, field, sets["unsafe"])
     (goal,) = scaled_pieces(scaled, field, sets["goal"])
-    V = ring.from_terms({tuple(exponent(e, "V_scaled") for e in m): Fraction(v) for v, m in cert["V_scaled"]["terms"]})
-    _check_terms(cert["V"])
-    if stated_v(scaled, field, V) != cert["V"]:
-        return False, "the stated V (declared states) is not the certificate's V unscaled"
+    V, differs = _scaled_and_stated(scaled, field, cert, "V")
+    if differs is not None:
+        return False, differs
 
     if "stay" in cert:  # reach {W <= 0}, inside the goal and never left, instead of the goal itself
         from lyapcheck.sos.certificates import check_goal_invariant
 
         stay = cert["stay"]
-        W = ring.from_terms({tuple(exponent(e, "W_scaled") for e in m): Fraction(v)
-                             for v, m in stay["W_scaled"]["terms"]})
-        _check_terms(stay["W"])
-        if stated_v(scaled, field, W) != stay["W"]:
-            return False, "the stated W (declared states) is not the certificate's W unscaled"
+        W, differs = _scaled_and_stated(scaled, field, stay, "W")
+        if differs is not None:
+            return False, differs
         ok, why = check_goal_invariant(ring, field.g, field.D, W, Fraction(stay["mu_scaled"]), goal,
                                        [_gram(g, nv) for g in stay["inside"]], _gram(stay["gram_invariant"], nv),
                                        _multipliers(stay.get("box_multipliers"), nv, n))

@@ -7,6 +7,7 @@
   :mod:`~lyapcheck.models.engines.interval_region` (V' < 0 proved cell by cell);
 - floating point and simulation: :mod:`~lyapcheck.models.engines.numeric`,
   :mod:`~lyapcheck.models.engines.recast_numeric`, :mod:`~lyapcheck.models.engines.trajectories`,
+  :mod:`~lyapcheck.models.engines.iteration` (a discrete-time map's iterates),
   :mod:`~lyapcheck.models.engines.series`, :mod:`~lyapcheck.models.engines.crosscheck`;
 - :mod:`~lyapcheck.models.engines.reasons`: what a search tried and what to try next, in one sentence.
 

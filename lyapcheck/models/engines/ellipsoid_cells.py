@@ -329,7 +329,7 @@ def _weights(grad: list[Any], H: list[list[Any]], cell: Cell) -> list[float]:
 def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[Fraction], level: Fraction,
                     local: list[Fraction], cell_budget: int | None, cell_limit: int, deadline: float | None = None,
                     stopped: str = "stopped at the deadline", geometry: Any = None,
-                    box_level: Fraction | None = None) -> EllipsoidProof:
+                    box_level: Fraction | None = None, budget_name: str | None = None) -> EllipsoidProof:
     """``g < 0`` on ``{z^T P z <= level}`` except at the equilibrium (module docstring); deterministic.
     ``local``: the half-widths of the local box ``N`` around the equilibrium on which the Hessian of ``g``
     is proved negative definite (:func:`~lyapcheck.models.engines.interval_region.local_box`; empty:
@@ -356,9 +356,9 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
 
     def over() -> str | None:
         if count > limit:
-            return (f"more than the attempt's {cell_budget} cells (lyapcheck.tolerances.BALL_LEVEL_CELLS over "
-                    "the loop's cost of a cell)"
-                    if cell_budget is not None and cell_budget <= cell_limit else f"more than {cell_limit} cells")
+            if cell_budget is None or cell_budget > cell_limit:
+                return f"more than {cell_limit} cells"
+            return f"more than the attempt's {cell_budget} cells" + (f" ({budget_name})" if budget_name else "")
         if deadline is not None and count % 64 == 0 and time.perf_counter() > deadline:
             return stopped
         return None

@@ -50,6 +50,8 @@ from lyapcheck.sos.polynomials import Poly, Ring
 #: the most cells a proof may examine in each part (the boundary, the decrease) before it gives up
 #: (``verify``'s bound; a search's attempt has its own, smaller one: INTERVAL_ATTEMPT_CELLS)
 INTERVAL_CELL_LIMIT: Final = 400_000
+#: how a reason names the usual attempt's cell budget (a caller with another budget names its own)
+ATTEMPT_CELLS_NAME: Final = "lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS"
 #: why a proof stopped at its deadline: the class's wall-clock limit, a safety net only (the work
 #: budgets above decide every outcome a test or a documented figure depends on)
 SAFETY_NET: Final = "stopped by the class's time limit (a safety net; lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S)"
@@ -277,7 +279,7 @@ ELLIPSOID_MIN_STATES: Final = 4
 
 def _prove_on_ellipsoid(lie: LieDerivative, ring: Ring, claim: IntervalClaim, n: int, radii: list[Fraction],
                         cell_budget: int | None, deadline: float | None, boundary: int, r: Fraction | None,
-                        start: float) -> IntervalProof:
+                        start: float, budget_name: str) -> IntervalProof:
     """Part 2 of an exact-boundary claim at ELLIPSOID_MIN_STATES states or more: ``V' < 0`` on the whole
     ellipsoid ``{V <= level}`` (which the exact faces put inside the box) except at the equilibrium."""
     from lyapcheck.models.engines.ellipsoid_cells import prove_ellipsoid
@@ -287,13 +289,14 @@ def _prove_on_ellipsoid(lie: LieDerivative, ring: Ring, claim: IntervalClaim, n:
     diagonal = inverse_diagonal(P)
     assert diagonal is not None
     found = prove_ellipsoid(lie, P, diagonal, claim.level, radii, cell_budget, INTERVAL_CELL_LIMIT, deadline,
-                            SAFETY_NET)
+                            SAFETY_NET, budget_name=budget_name)
     return IntervalProof(found.ok, found.why, found.cells, boundary, r, time.perf_counter() - start,
                          found.counterexample_v)
 
 
 def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | None = None,
-                 lie: Any = None, flat: bool | None = None, cell_budget: int | None = None) -> IntervalProof:
+                 lie: Any = None, flat: bool | None = None, cell_budget: int | None = None,
+                 budget_name: str = ATTEMPT_CELLS_NAME) -> IntervalProof:
     """Prove the claim's three parts (module docstring) on the true field; deterministic.
 
     ``V`` over the states alone by default; for a ``V`` that uses auxiliaries, ``lie`` is its
@@ -301,7 +304,8 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     gradient in the states vanish at the equilibrium, decided exactly by the caller (part 3 needs it).
     ``cell_budget`` bounds the cells of the boundary and the decrease together (a search's work budget,
     :data:`~lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS`: the outcome is the same on any machine and
-    under any load); each part is also bounded by INTERVAL_CELL_LIMIT. ``deadline`` (a
+    under any load; ``budget_name``: the constant the caller set it from, named when it is spent); each
+    part is also bounded by INTERVAL_CELL_LIMIT. ``deadline`` (a
     ``time.perf_counter()`` value) is only a safety net: the class's time limit, named as such when
     it stops the proof.
     """
@@ -333,7 +337,7 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     def out_of_cells(part: int, total: int) -> str | None:
         """Why the proof stops at this many cells of the part and of both parts, or None."""
         if cell_budget is not None and total > cell_budget:
-            return f"more than the attempt's {cell_budget} cells (lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS)"
+            return f"more than the attempt's {cell_budget} cells ({budget_name})"
         return f"more than {INTERVAL_CELL_LIMIT} cells" if part > INTERVAL_CELL_LIMIT else None
 
     # 1. the boundary: V > level on each face (exactly for a quadratic form, if the claim says so)
@@ -367,7 +371,8 @@ def prove_region(system: RecastSystem, claim: IntervalClaim, deadline: float | N
     if radii is not None and inside_local_box(ring, claim, n, radii):  # the set lies in N: part 3 covers it
         return IntervalProof(True, "proved", 0, boundary, r, time.perf_counter() - start)
     if claim.exact_boundary and radii is not None and n >= ELLIPSOID_MIN_STATES and isinstance(lie, LieDerivative):
-        proof = _prove_on_ellipsoid(lie, ring, claim, n, radii, cell_budget, deadline, boundary, r, start)
+        proof = _prove_on_ellipsoid(lie, ring, claim, n, radii, cell_budget, deadline, boundary, r, start,
+                                    budget_name)
         if proof.ok or cell_budget is not None or proof.counterexample_v is not None:
             return proof
         # verify (no budget) of a certificate proved on the box's cells before issue 42: that proof, below

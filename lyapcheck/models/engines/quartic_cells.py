@@ -171,10 +171,11 @@ def faces_above(geo: QuarticGeometry, c: Any, half: list[Fraction], limit: int) 
 
 
 def prove_sublevel(lie: LieDerivative, ring: Ring, V: Poly, level: Fraction, box_level: Fraction,
-                   cell_budget: int, deadline: float | None = None, stopped: str = "stopped at the deadline"
-                   ) -> QuarticProof:
+                   cell_budget: int, deadline: float | None = None, stopped: str = "stopped at the deadline",
+                   budget_name: str = "the caller's cell_budget") -> QuarticProof:
     """The module's claim for ``(V, level, box_level)`` (``lie``: ``V'`` on the loop's true field),
-    deterministic, within ``cell_budget`` cells (the faces' pieces and the decrease's cells together)."""
+    deterministic, within ``cell_budget`` cells (the faces' pieces and the decrease's cells together);
+    ``budget_name``: what set ``cell_budget`` (named when the decrease's cells spend it)."""
     from lyapcheck.models.engines.ellipsoid_cells import whitening
     from lyapcheck.models.engines.interval_region import inverse_diagonal, local_box
 
@@ -208,7 +209,8 @@ def prove_sublevel(lie: LieDerivative, ring: Ring, V: Poly, level: Fraction, box
     radii = local_box(lie, tuple(-h for h in zhalf), tuple(zhalf)) or []
     found: EllipsoidProof = prove_ellipsoid(lie, P, diagonal, level, radii, cell_budget - faces, cell_budget,
                                             deadline, stopped, geometry=lambda ww: QuarticGeometry(ww, P, lie, ring, R),
-                                            box_level=box_level)
+                                            box_level=box_level,
+                                            budget_name=f"{budget_name}, less the faces' {faces} cells")
     return QuarticProof(found.ok, found.why, faces, found.cells, time.perf_counter() - start,
                         found.counterexample_v)
 

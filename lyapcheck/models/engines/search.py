@@ -7,7 +7,15 @@ search by its budget of solves (:class:`SolveLimit`, :meth:`Search.within`; a st
 raises :class:`SolvesSpent`, and its class says so in its reason). The wall-time budget
 (:class:`Budget`) is only a safety net: every solve gets at most the class's time left (Clarabel's
 own time limit, far above a normal solve), and a search that runs out raises
-:class:`BudgetExhausted`, which the class reports as ``inconclusive`` naming the limit.
+:class:`BudgetExhausted`, which the class reports as ``inconclusive`` naming the limit. The budget
+is checked before and after each program is built, each solve, and between the steps of each exact
+rounding (:func:`lyapcheck.sos.rounding.exact_point`'s ``checkpoint``), so that a class ends within
+its limit plus the longest single step (one solve, capped by its time limit, or one rounding step).
+
+A search that has several forms to try (``sos_gas`` on a network) may order them by what they will
+cost against the budget: :func:`estimated_seconds` of a program (from its size, with the rates of
+:mod:`lyapcheck.tolerances`) against the budget less the estimates of the work already done
+(:meth:`Budget.fits`), never against the clock, so that the order is the same under load.
 """
 
 from __future__ import annotations
@@ -17,6 +25,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
+from lyapcheck import tolerances as tol
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring
 from lyapcheck.sos.structure import Coefficients, Structure
 
@@ -84,9 +93,24 @@ class Budget:
     seconds: float
     limit_name: str
     start: float = field(default_factory=lambda: _now())
+    #: the estimated seconds (:func:`estimated_seconds`) of the solves and roundings done so far: the
+    #: run's work on a deterministic clock (:meth:`fits`)
+    estimated: float = 0.0
 
     def left(self) -> float:
         return self.seconds - (_now() - self.start)
+
+    def record(self, estimated: float) -> None:
+        """One solve (or rounding) done, at its estimated seconds (for :meth:`fits`)."""
+        self.estimated += estimated
+
+    def fits(self, estimate: float, reserve: float = 0.0) -> bool:
+        """Whether work estimated at ``estimate`` seconds, with ``reserve`` seconds kept for work that
+        must follow it, fits in the budget less the estimates of the work already done. Estimates
+        only, never the clock: the order a search takes from it is the same on a loaded machine
+        (issue 40: work decides outcomes, the clock only guards), and the time limit stays the
+        safety net."""
+        return estimate + reserve <= self.seconds - self.estimated
 
     def reached(self) -> str:
         """The detail line of this limit reached (it names the limit as the safety net it is)."""
@@ -132,6 +156,8 @@ class Search:
         # the class's time left is the solver's limit: a safety net far above a normal solve, whose
         # length SOLVER_MAX_ITER bounds (a count of iterations)
         solution = program.solve(values.floats, time_limit=max(self.budget.left(), 0.05))
+        # the solve's share of the estimate (the rounding's is recorded by exact): the run's work so far
+        self.budget.record(estimated_seconds(structure) / 2)
         entry = solution.report.to_json()
         entry["program"] = structure.key()
         if "t" in solution.scalars:
@@ -144,12 +170,21 @@ class Search:
 
         if not solution.usable:
             return None
-        return exact_point(self.ring, structure, solution, values.exact)
+        # the budget is checked between the rounding's steps: a large program's rounding takes as
+        # long as its solve, and must not carry the class past its time limit
+        point = exact_point(self.ring, structure, solution, values.exact, checkpoint=self.budget.check)
+        self.budget.record(estimated_seconds(structure) / 2)
+        return point
 
-    def solve_exact(self, structure: Structure, values: "ParameterValues") -> tuple[ExactPoint | None, Solution]:
+    def solve_exact(self, structure: Structure, values: "ParameterValues", *, near_only: bool = False
+                    ) -> tuple[ExactPoint | None, Solution]:
         """One solve and, when the solver returned a point, its exact rounding (None when there is
-        none): what every class's attempt does before its exact check."""
+        none): what every class's attempt does before its exact check. ``near_only``: round only a point
+        whose margin ``t`` is not below ``-EXACT_TRY_MARGIN`` (a program without ``t`` counts as near):
+        a clearly infeasible point is not worth the rounding."""
         solution = self.solve(structure, values)
+        if near_only and solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
+            return None, solution
         return self.exact(structure, solution, values), solution
 
 
@@ -158,6 +193,17 @@ def exact_grams(structure: Structure, point: ExactPoint) -> dict[str, Any]:
     from lyapcheck.sos.certificates import GramPoly
 
     return {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
+
+
+def estimated_seconds(structure: Structure) -> float:
+    """The estimated seconds of one solve of ``structure`` and its exact rounding on an idle core:
+    :data:`~lyapcheck.tolerances.ESTIMATE_SOLVE_FLOOR_S` plus its semidefinite work units
+    (:meth:`~lyapcheck.sos.structure.Structure.cost`) at :data:`~lyapcheck.tolerances.PSD_WORK_PER_SECOND`
+    and its cone decisions (:meth:`~lyapcheck.sos.structure.Structure.cone_size`) at
+    :data:`~lyapcheck.tolerances.CONE_DECISIONS_PER_SECOND`. An estimate, for ordering a search's
+    forms against its time (:meth:`Budget.fits`); never part of a decision about a certificate."""
+    return (tol.ESTIMATE_SOLVE_FLOOR_S + structure.cost() / tol.PSD_WORK_PER_SECOND
+            + structure.cone_size() / tol.CONE_DECISIONS_PER_SECOND)
 
 
 def why_none(solution: Solution) -> str:

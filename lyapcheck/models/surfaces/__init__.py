@@ -10,10 +10,11 @@
   registry entry, :func:`lyapcheck.models.classes.registry.verify`); :mod:`~lyapcheck.models.surfaces.documents`,
   :mod:`~lyapcheck.models.surfaces.stated`, :mod:`~lyapcheck.models.surfaces.counterexamples`: what both share;
 - :mod:`~lyapcheck.models.surfaces.simulate`: ``simulate --model``, one implementation for every loop kind;
-  :mod:`~lyapcheck.models.surfaces.iterate`: a discrete-time map iterated instead.
+  :mod:`~lyapcheck.models.surfaces.iterate`: a discrete-time map iterated instead;
+  :mod:`~lyapcheck.models.surfaces.plotting`: the frame every ``--plot`` figure shares.
 
 May import: lyapcheck.models.language, lyapcheck.models.engines, lyapcheck.models.loop,
 lyapcheck.models.classes, lyapcheck.sos, lyapcheck.integrator, lyapcheck.answers, lyapcheck.results,
 lyapcheck.degrees, lyapcheck.exact, lyapcheck.numerics, lyapcheck.timing, lyapcheck.tolerances,
-lyapcheck.units, lyapcheck.errors
+lyapcheck.units, lyapcheck.errors, lyapcheck.fileio
 """

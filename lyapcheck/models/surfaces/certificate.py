@@ -30,12 +30,12 @@ proves. It never imports cvxpy or calls a solver.
 from __future__ import annotations
 
 import hashlib
-import json
 from pathlib import Path
 from typing import Any, Callable
 
 from lyapcheck.errors import CertificateError, InputFileError
 from lyapcheck.exact import refuse_oversized_numbers
+from lyapcheck.fileio import read_json as read_json_file
 from lyapcheck.models.surfaces.certify import ModelCertification
 from lyapcheck.models.surfaces.counterexamples import check_counterexamples, describe_exception as _describe
 from lyapcheck.models.surfaces.documents import KIND, SCHEMA_VERSION, with_verdict as _with_verdict
@@ -96,17 +96,7 @@ def is_model_document(doc: Any) -> bool:
 def read_json(path: str | Path) -> Any:
     """A JSON file, with one-line errors (missing, not JSON, unreadable, a number written with an
     oversized exponent: :func:`lyapcheck.exact.refuse_oversized_numbers`)."""
-    p = Path(path)
-    try:
-        doc = json.loads(p.read_text())
-    except FileNotFoundError:
-        raise InputFileError(f"certificate file '{p}' does not exist") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputFileError(f"certificate file '{p}' is not valid JSON: {exc}") from None
-    except (ValueError, RecursionError) as exc:
-        raise InputFileError(f"certificate file '{p}' cannot be read: {exc}") from None
-    except OSError as exc:
-        raise InputFileError(f"certificate file '{p}' cannot be read: {exc.strerror or exc}") from None
+    doc = read_json_file(path)
     refuse_oversized_numbers(doc)  # (before any reader of the file's numbers: a report, simulate --certificate)
     return doc
 

@@ -85,20 +85,17 @@ class MapIterator:
 def iterate(model: "Model | RecastModel", starts: "FloatArray", steps: int) -> "FloatArray":
     """The iterates, ``(starts, steps + 1, n)`` (the start first); a row that leaves the escape box or is not
     finite keeps that iterate and NaN after it."""
-    f = MapIterator(model)
+    from lyapcheck.models.engines.iteration import iterate_map
+
     eq = np.array([float(v) for v in model.equilibrium])
-    escape = ESCAPE_FACTOR * scale_of(model, starts)
     out = np.full((starts.shape[0], steps + 1, model.n), np.nan)
     out[:, 0] = starts
-    alive = np.ones(starts.shape[0], dtype=bool)
-    x = starts.copy()
-    for k in range(1, steps + 1):
-        if not alive.any():
-            break
-        x[alive] = f(x[alive])
-        out[alive, k] = x[alive]
-        gone = alive & ~(np.all(np.isfinite(x), axis=1) & np.all(np.abs(x - eq) <= escape, axis=1))
-        alive &= ~gone
+
+    def record(k: int, rows: "NDArray[np.intp]", x: "FloatArray") -> None:
+        out[rows, k] = x
+
+    iterate_map(MapIterator(model), starts, steps, center=eq, escape=ESCAPE_FACTOR * scale_of(model, starts),
+                observe=record)
     return out
 
 
@@ -247,40 +244,26 @@ def plot_iterates(model: "Model | RecastModel", xs: "FloatArray", ys: "FloatArra
                   first_tail: int, path: str) -> None:
     """Each output against the step as a staircase (the tail steps shaded) and, for two states, the
     iterates in the plane (dots joined by thin lines)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from lyapcheck.models.surfaces.plotting import finish_figure, history_panel, new_figure, phase_plane
 
     rows = sorted(set(np.linspace(0, xs.shape[0] - 1, min(xs.shape[0], MAX_PLOTTED_ROWS)).round().astype(int)))
-    panels = len(names) + (1 if model.n == 2 else 0)
-    fig, axes = plt.subplots(panels, 1, figsize=(8.5, 3.0 * panels + 0.6), squeeze=False)
+    fig, axes = new_figure(len(names) + (1 if model.n == 2 else 0), 3.0)
     steps = np.arange(xs.shape[1])
     for o, y in enumerate(names):
         ax = axes[o, 0]
         for i, r in enumerate(rows):
             ax.step(steps, ys[r, :, o], where="post", color=f"C{i % 10}", lw=0.9, alpha=0.8,
                     ls="--" if diverged[r] else "-")
-        ax.axvspan(first_tail, steps[-1], color="0.85", alpha=0.5, lw=0)
-        ax.set_xlabel("step k")
         text = model.output_text.get(y, y)
-        ax.set_ylabel(y if text == y else f"{y} = {text}")
-        ax.grid(alpha=0.3)
+        history_panel(ax, (first_tail, steps[-1]), "step k", y if text == y else f"{y} = {text}")
     if model.n == 2:
         ax = axes[-1, 0]
         for i, r in enumerate(rows):
             ax.plot(xs[r, :, 0], xs[r, :, 1], ".-", color=f"C{i % 10}", lw=0.4, ms=3, alpha=0.8)
-        ax.plot(*[float(v) for v in model.equilibrium], "k+", ms=10, label="fixed point")
-        ax.set_xlabel(model.states[0])
-        ax.set_ylabel(model.states[1])
-        ax.set_title("iterates in the plane", fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=7)
-    fig.suptitle(f"lyapcheck simulate: {model.name}, a discrete-time map iterated (tail steps shaded: the last "
-                 f"{TAIL_FRACTION:.0%})", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        phase_plane(ax, [float(v) for v in model.equilibrium], model.states, label="fixed point",
+                    title="iterates in the plane")
+    finish_figure(fig, f"lyapcheck simulate: {model.name}, a discrete-time map iterated (tail steps shaded: the last "
+                       f"{TAIL_FRACTION:.0%})", path)
 
 
 __all__ = ["DEFAULT_STEPS", "MAX_STEPS", "MODE", "check_steps", "MapIterator", "iterate", "scale_of", "default_starts",

@@ -136,12 +136,7 @@ class _HeldPlant:
         return _HeldPlant(self.prepared, self.escape, int(np.asarray(index).size))
 
     def rhs(self, t: "FloatArray", y: "FloatArray", t_segment: "FloatArray") -> Evaluation:
-        with np.errstate(over="ignore", invalid="ignore"):
-            dy = self.prepared.field(y, None)
-        far = np.any(np.abs(y - self.prepared.equilibrium) > self.escape, axis=1)
-        if far.any():
-            dy[far] = 0.0
-        return Evaluation(dy, np.zeros(y.shape[0]), np.empty((y.shape[0], 0)))
+        return self.prepared.field_stopped_beyond(y, None, self.escape)
 
     def next_breakpoint(self, t: "FloatArray") -> "FloatArray":
         return np.full(t.shape, np.inf)
@@ -403,21 +398,20 @@ def plot_sampled(model: "SampledModel", p: Prepared, observer: _TailObserver, ro
                  held: "FloatArray | None", grid_t: "FloatArray", diverged: Any, scale: "FloatArray", t_tail: float,
                  path: str) -> None:
     """Each state against time and each held control as a staircase (the tail window shaded); for two
-    states also the phase plane, dots at the sampling instants."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    states also the phase plane, dots at the starts. Every recorded trajectory is drawn whole; each view
+    is the data's range within :data:`~lyapcheck.models.surfaces.simulate.PLOT_CLIP` state scales of the
+    equilibrium, and matplotlib clips a curve at the axes (one that leaves that box and comes back is
+    drawn on both sides of its excursion; a diverging one does not flatten the others)."""
+    from lyapcheck.models.surfaces.plotting import clip_view, finish_figure, history_panel, new_figure, phase_plane
 
     n, m = model.n, len(model.controls)
-    panels = n + m + (1 if n == 2 else 0)
-    fig, axes = plt.subplots(panels, 1, figsize=(8.5, 2.6 * panels + 0.6), squeeze=False)
+    fig, axes = new_figure(n + m + (1 if n == 2 else 0), 2.6)
     box = p.box(PLOT_CLIP, scale)
+    lo, hi = p.equilibrium - box, p.equilibrium + box
+    drawn: list["FloatArray"] = []  # every drawn state and control, per column, for the views
     for i, r in enumerate(rows):
         colour, style = f"C{i % 10}", "--" if diverged[r] else "-"
-        t, xs = observer.trajectory(r, PLOT_SAMPLES, p.equilibrium, box)
-        xs = xs.copy()
-        xs[np.any(np.abs(xs - p.equilibrium) > box, axis=1)] = np.nan
+        t, xs = observer.trajectory(r, PLOT_SAMPLES)
         for j in range(n):
             axes[j, 0].plot(t, xs[:, j], color=colour, lw=0.9, alpha=0.8, ls=style)
         for c in range(m):
@@ -427,30 +421,23 @@ def plot_sampled(model: "SampledModel", p: Prepared, observer: _TailObserver, ro
                                     alpha=0.8, ls=style)
             else:
                 axes[n + c, 0].step(t, xs[:, n + c], where="post", color=colour, lw=0.9, alpha=0.8, ls=style)
+        drawn.append(xs)  # (the controls are constant states of the plant's loop: their held values)
         if n == 2:
             axes[-1, 0].plot(xs[:, 0], xs[:, 1], color=colour, lw=0.8, alpha=0.8, ls=style)
             axes[-1, 0].plot(xs[0, 0], xs[0, 1], ".", color=colour, ms=3)
+    every = np.vstack(drawn) if drawn else np.empty((0, n + m))
     labels = [*model.states, *(f"{u} = {model.controller_text[u]} (held)" for u in model.controls)]
     for j, label in enumerate(labels):
-        ax = axes[j, 0]
-        ax.axvspan(t_tail, float(grid_t[-1]), color="0.85", alpha=0.5, lw=0)
-        ax.set_xlabel("t (s)")
-        ax.set_ylabel(label, fontsize=8 if j >= n else None)
-        ax.grid(alpha=0.3)
+        history_panel(axes[j, 0], (t_tail, float(grid_t[-1])), "t (s)", label, 8 if j >= n else None)
+        clip_view(axes[j, 0], "y", every[:, j], float(lo[j]), float(hi[j]))
     if n == 2:
         ax = axes[-1, 0]
-        ax.plot(*p.equilibrium[:2], "k+", ms=10, label="equilibrium")
-        ax.set_xlabel(model.states[0])
-        ax.set_ylabel(model.states[1])
-        ax.set_title("phase plane (dots: starts; dashed: diverged)", fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=7)
-    fig.suptitle(f"lyapcheck simulate: {model.name}, sampled every {float(model.period):.6g} s, zero-order hold\n"
-                 f"(tail window shaded: the last {TAIL_FRACTION:.0%})", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
+        phase_plane(ax, p.equilibrium[:2], model.states, label="equilibrium",
+                    title="phase plane (dots: starts; dashed: diverged)")
+        for j, axis in enumerate("xy"):
+            clip_view(ax, axis, every[:, j], float(lo[j]), float(hi[j]))
+    finish_figure(fig, f"lyapcheck simulate: {model.name}, sampled every {float(model.period):.6g} s, zero-order "
+                       f"hold\n(tail window shaded: the last {TAIL_FRACTION:.0%})", path)
 
 __all__ = ["MODE", "MIN_PERIODS", "MAX_DEFAULT_PERIODS", "FALLBACK_PERIODS", "MAX_PERIODS", "ControlLaw",
            "check_horizon", "default_periods", "default_starts", "instants", "plot_sampled", "prepare_sampled",

@@ -160,7 +160,8 @@ MAX_BUDGET_S: Final = 3600.0
 #: time histories drawn by --plot: at most this many rows, resampled at PLOT_SAMPLES points
 MAX_PLOTTED_ROWS: Final = 200
 PLOT_SAMPLES: Final = 1500
-#: a plotted trajectory is cut where it is farther than this many state scales from the equilibrium
+#: a plotted trajectory is cut where it is farther than this many state scales from the equilibrium (a
+#: sampled-data loop's plot draws it whole and clips its views at this box instead: sampled_simulate)
 PLOT_CLIP: Final = 2.0
 #: the worst-case document lists at most this many diverged candidates (disturbance, start, why)
 MAX_EXAMPLES: Final = 5
@@ -346,6 +347,17 @@ class Prepared:
             a = list(self.angles)
             dev[..., a] = np.angle(np.exp(1j * dev[..., a]))
         return dev
+
+    def field_stopped_beyond(self, y: FloatArray, d: FloatArray | None, escape: FloatArray) -> Evaluation:
+        """The integrator's evaluation of the field at ``(batch, n)`` states: ``x' = f(x, d)``, 0 on a row
+        farther than ``escape`` from the equilibrium (it stops there: one diverging row neither
+        overflows nor slows the others)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            dy = self.field(y, d)
+        far = np.any(np.abs(y - self.equilibrium) > escape, axis=1)
+        if far.any():
+            dy[far] = 0.0
+        return Evaluation(dy, np.zeros(y.shape[0]), np.empty((y.shape[0], 0)))
 
     def box(self, factor: float, scale: FloatArray) -> FloatArray:
         """Half-widths ``factor * scale`` around the equilibrium, infinite along an angle (a
@@ -798,12 +810,7 @@ class _ScenarioSystem:
 
     def rhs(self, t: FloatArray, y: FloatArray, t_segment: FloatArray) -> Evaluation:
         d = self.disturbance(t_segment, y) if self.prepared.bounds.size else None
-        with np.errstate(over="ignore", invalid="ignore"):
-            dy = self.prepared.field(y, d)
-        far = np.any(np.abs(y - self.prepared.equilibrium) > self.escape, axis=1)
-        if far.any():
-            dy[far] = 0.0
-        return Evaluation(dy, np.zeros(y.shape[0]), np.empty((y.shape[0], 0)))
+        return self.prepared.field_stopped_beyond(y, d, self.escape)
 
     def next_breakpoint(self, t: FloatArray) -> FloatArray:
         out = np.where(t < self.t_tail, self.t_tail, np.inf)
@@ -1616,15 +1623,11 @@ def plot_batch(prepared: Prepared, batch: _Batch, rows: Sequence[int], labels: S
                title: str) -> None:
     """Time histories of every output for the recorded rows (colour per label), the tail window
     shaded; for two states also the phase plane."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from lyapcheck.models.surfaces.plotting import finish_figure, history_panel, new_figure, phase_plane
 
     names = prepared.output_names
     n = prepared.model.n
-    panels = len(names) + (1 if n == 2 else 0)
-    fig, axes = plt.subplots(panels, 1, figsize=(8.5, 3.0 * panels + 0.6), squeeze=False)
+    fig, axes = new_figure(len(names) + (1 if n == 2 else 0), 3.0)
     colours = {lab: f"C{i % 10}" for i, lab in enumerate(dict.fromkeys(labels))}
     curves = [(r, lab, *_clipped(prepared, batch, r)) for r, lab in zip(rows, labels)]
     for o, y in enumerate(names):
@@ -1635,32 +1638,22 @@ def plot_batch(prepared: Prepared, batch: _Batch, rows: Sequence[int], labels: S
             ax.plot(t, vals, color=colours[lab], lw=0.9, alpha=0.8, label=None if lab in seen else lab,
                     ls="--" if batch.diverged[r] else "-")
             seen.add(lab)
-        ax.axvspan(batch.t_tail, batch.t_end, color="0.85", alpha=0.5, lw=0)
-        ax.set_xlabel("t (s)")
         text = prepared.output_text.get(y, y)
-        ax.set_ylabel(y if text == y else f"{y} = {text}")
-        ax.grid(alpha=0.3)
+        history_panel(ax, (batch.t_tail, batch.t_end), "t (s)", y if text == y else f"{y} = {text}")
         ax.legend(loc="upper right", fontsize=7)
     if n == 2:
         ax = axes[-1, 0]
         for r, lab, t, xs in curves:
             ax.plot(xs[:, 0], xs[:, 1], color=colours[lab], lw=0.8, alpha=0.8, ls="--" if batch.diverged[r] else "-")
             ax.plot(xs[0, 0], xs[0, 1], ".", color=colours[lab], ms=3)
-        ax.plot(*prepared.equilibrium, "k+", ms=10, label="equilibrium")
         model = prepared.model
         if model.domain:
             (a0, a1), (b0, b1) = ([float(v) for v in model.domain[s]] for s in model.states)
             ax.set_xlim(a0 - 0.1 * (a1 - a0), a1 + 0.1 * (a1 - a0))
             ax.set_ylim(b0 - 0.1 * (b1 - b0), b1 + 0.1 * (b1 - b0))
-        ax.set_xlabel(model.states[0])
-        ax.set_ylabel(model.states[1])
-        ax.set_title("phase plane (dots: starts; dashed: diverged)", fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=7)
-    fig.suptitle(title + f" (tail window shaded: the last {TAIL_FRACTION:.0%})", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        phase_plane(ax, prepared.equilibrium, model.states, label="equilibrium",
+                    title="phase plane (dots: starts; dashed: diverged)")
+    finish_figure(fig, title + f" (tail window shaded: the last {TAIL_FRACTION:.0%})", path)
 
 
 def _clipped(prepared: Prepared, batch: _Batch, row: int, samples: int = PLOT_SAMPLES) -> tuple[FloatArray, FloatArray]:
@@ -1676,15 +1669,11 @@ def _clipped(prepared: Prepared, batch: _Batch, row: int, samples: int = PLOT_SA
 
 def _plot_worst(prepared: Prepared, batches: Sequence[tuple[_Batch, int, int]], path: str) -> None:
     """Each output's worst trajectory: one figure, one panel per output (and the phase plane)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from lyapcheck.models.surfaces.plotting import finish_figure, history_panel, new_figure, phase_plane
 
     names = prepared.output_names
     n = prepared.model.n
-    panels = len(batches) + (1 if n == 2 else 0)
-    fig, axes = plt.subplots(panels, 1, figsize=(8.5, 3.0 * panels + 0.6), squeeze=False)
+    fig, axes = new_figure(len(batches) + (1 if n == 2 else 0), 3.0)
     for i, (batch, row, o) in enumerate(batches):
         t, xs = _clipped(prepared, batch, row, PLOT_SAMPLES)
         y = names[o]
@@ -1694,25 +1683,14 @@ def _plot_worst(prepared: Prepared, batches: Sequence[tuple[_Batch, int, int]], 
         if math.isfinite(sup):
             for s in (sup, -sup):
                 ax.axhline(s, color="k", ls=":", lw=0.8)
-        ax.axvspan(batch.t_tail, batch.t_end, color="0.85", alpha=0.5, lw=0)
         desc = batch.disturbances[row].describe(prepared.model)
         ax.set_title(f"worst {y}: tail sup {sup:.6g} ({desc['kind']})", fontsize=9)
-        ax.set_xlabel("t (s)")
-        ax.set_ylabel(y)
-        ax.grid(alpha=0.3)
+        history_panel(ax, (batch.t_tail, batch.t_end), "t (s)", y)
         if n == 2:
             axes[-1, 0].plot(xs[:, 0], xs[:, 1], color=f"C{i % 10}", lw=0.8, label=f"worst {y}")
     if n == 2:
-        ax = axes[-1, 0]
-        ax.plot(*prepared.equilibrium, "k+", ms=10)
-        ax.set_xlabel(prepared.model.states[0])
-        ax.set_ylabel(prepared.model.states[1])
-        ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=7)
-    fig.suptitle(f"lyapcheck simulate --model --worst-case: {prepared.model.name}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        phase_plane(axes[-1, 0], prepared.equilibrium, prepared.model.states)
+    finish_figure(fig, f"lyapcheck simulate --model --worst-case: {prepared.model.name}", path)
 
 
 __all__ = ["SCENARIOS", "ModelDisturbance", "Prepared", "prepare", "prepare_polynomial", "prepare_true_loop",
