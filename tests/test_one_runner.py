@@ -1,7 +1,8 @@
 """One runner and one verify dispatch, driven by the class registry (issue 41 item 1): ``certify`` runs each
 class by its entry for the kind of loop (lyapcheck.models.classes.registry: ``run_field``,
-``run_functions``), and ``verify`` checks each decided condition by its entry (``verify_field``,
-``verify_functions``); nothing else names the class."""
+``run_functions``, and on the discrete-time kinds ``run_map``, ``run_map_functions``, ``run_sampled``), and
+``verify`` checks each decided condition by its entry (``verify_field``, ``verify_functions``, ``verify_map``,
+``verify_map_functions``, ``verify_sampled``); nothing else names the class."""
 
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ import pytest
 
 import lyapcheck
 from lyapcheck.models.classes import registry
-from lyapcheck.models.classes.contexts import FieldCheck, FieldRun, FunctionsCheck, FunctionsRun
+from lyapcheck.models.classes.contexts import FieldCheck, FieldRun, FunctionsCheck, FunctionsRun, MapCheck, \
+    MapFunctionsCheck, MapFunctionsRun, MapRun, SampledCheck, SampledRun
 from lyapcheck.results import ConditionResult
 from tests import feature_matrix as fm
 from tests.conftest import ROOT
@@ -184,3 +186,121 @@ def test_roa_after_gas_reads_what_each_gas_claim_covers() -> None:
     both = roa_after_gas({"quadratic": gas(None), "sos_gas": dataclasses.replace(gas(None), name="sos_gas")}, None)
     assert both is not None and both.status == "not_applicable" and "(sos_gas)" in both.summary
     assert roa_after_gas({"quadratic": dataclasses.replace(gas(None), status="not_certified")}, None) is None
+
+
+# -- the discrete-time kinds of loop: a map, a map with functions, a sampled-data loop (issue 41) --------------
+
+#: per kind: the model file (the feature matrix's, or a shipped sampled-data loop), a class the kind takes, its
+#: entry's search and exact check, and the context types they are given
+DISCRETE_KINDS = {
+    "discrete": ("quadratic", "run_map", "verify_map", MapRun, MapCheck),
+    "map_functions": ("roa", "run_map_functions", "verify_map_functions", MapFunctionsRun, MapFunctionsCheck),
+    "sampled": ("linearization", "run_sampled", "verify_sampled", SampledRun, SampledCheck),
+}
+
+
+def _discrete_model(tmp_path: Path, kind: str) -> Path:
+    return ROOT / "examples" / "models" / "pendulum-digital-pd.toml" if kind == "sampled" else \
+        fm.model_file(tmp_path, kind)
+
+
+@pytest.mark.parametrize("kind", list(DISCRETE_KINDS))
+def test_certify_runs_a_discrete_time_class_by_its_registry_entry(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                  kind: str) -> None:
+    """On a map, a map with functions and a sampled-data loop, the class's entry for that kind is what certify
+    runs (given the kind's context object), guarded and timed by the one runner."""
+    name, run_key, _, run_type, _ = DISCRETE_KINDS[kind]
+    given: list[Any] = []
+
+    def stub(ctx: Any, budget: Any) -> ConditionResult:
+        given.append(ctx)
+        return ConditionResult(name, "inconclusive", "the replaced search ran")
+
+    replaced = tuple(dataclasses.replace(c, **{run_key: stub}) if c.name == name else c for c in registry.CLASSES)
+    monkeypatch.setattr(registry, "CLASSES", replaced)
+    chosen = ["linearization", name] if name != "linearization" else ["linearization", "quadratic"]
+    conditions = lyapcheck.certify(model=_discrete_model(tmp_path, kind), classes=chosen).document["conditions"]
+    assert conditions[name]["status"] == "inconclusive"
+    assert conditions[name]["summary"] == "the replaced search ran"
+    assert len(given) == 1 and isinstance(given[0], run_type)
+    other = chosen[0] if chosen[1] == name else chosen[1]
+    assert conditions[other]["status"] in ("certified", "not_applicable")  # (its own entry, or none)
+    if kind == "discrete":
+        assert given[0].shifted.numerators and given[0].candidate is None
+
+
+@pytest.mark.parametrize("kind", ["discrete", "map_functions"])
+def test_a_class_without_an_entry_for_a_map_is_not_run_there_and_one_given_an_entry_is(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, kind: str) -> None:
+    """Whether a class runs on a map is its entry alone: ``roa`` without its map entry is ``not_applicable``
+    (not searched); ``sos_bound``, which has none, runs once given one."""
+    _, run_key, _, _, _ = DISCRETE_KINDS[kind]
+    ran: list[str] = []
+
+    def stub(ctx: Any, budget: Any) -> ConditionResult:
+        ran.append("sos_bound")
+        return ConditionResult("sos_bound", "inconclusive", "the given search ran")
+
+    replaced = tuple(dataclasses.replace(c, **{run_key: None}) if c.name == "roa" else
+                     dataclasses.replace(c, **{run_key: stub}) if c.name == "sos_bound" else c
+                     for c in registry.CLASSES)
+    monkeypatch.setattr(registry, "CLASSES", replaced)
+    conditions = lyapcheck.certify(model=fm.model_file(tmp_path, kind),
+                                   classes=["roa", "sos_bound"]).document["conditions"]
+    assert conditions["roa"]["status"] == "not_applicable"
+    assert "discrete-time map" in conditions["roa"]["summary"]
+    assert ran == ["sos_bound"] and conditions["sos_bound"]["summary"] == "the given search ran"
+
+
+@pytest.mark.parametrize("kind", list(DISCRETE_KINDS))
+def test_verify_checks_a_discrete_time_condition_by_its_registry_entry(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, kind: str) -> None:
+    """A certified linearization of each discrete-time kind verifies; with its entry's check for that kind
+    replaced by one that refuses, verify reports the refusal on its row, given the kind's check context."""
+    _, _, verify_key, _, check_type = DISCRETE_KINDS[kind]
+    document = lyapcheck.certify(model=_discrete_model(tmp_path, kind), classes=["linearization"]).document
+    assert document["conditions"]["linearization"]["status"] == "certified"
+    assert lyapcheck.verify(document).valid
+    seen: list[Any] = []
+
+    def refuse(name: str, c: dict[str, Any], check: Any) -> tuple[bool, str]:
+        seen.append(check)
+        return False, "the replaced check refused"
+
+    monkeypatch.setitem(registry.BY_NAME, "linearization",
+                        dataclasses.replace(registry.BY_NAME["linearization"], **{verify_key: refuse}))
+    checked = lyapcheck.verify(document)
+    assert not checked.valid
+    assert [c.message for c in checked.checks if c.check == "linearization" and not c.ok] == \
+        ["linearization: the replaced check refused"]
+    assert len(seen) == 1 and isinstance(seen[0], check_type)
+
+
+@pytest.mark.parametrize("kind, check, words", [
+    ("discrete", MapCheck(shifted=cast(Any, None), model=cast(Any, None)),
+     "a certified claim on a discrete-time map that no discrete-time check re-derives"),
+    ("map_functions", MapFunctionsCheck(model=cast(Any, None)),
+     "a certified claim on a discrete-time map with functions that no check re-derives"),
+    ("sampled", SampledCheck(model=cast(Any, None)), "a certified claim on a sampled-data loop that no check re-derives"),
+])
+def test_a_decided_claim_of_a_class_without_an_entry_for_the_kind_fails_in_its_words(kind: str, check: Any,
+                                                                                      words: str) -> None:
+    """The dispatch picks the entry by the check context's type; a class without one for that kind fails (never
+    reaching another kind's check), in the words of the kind."""
+    assert registry.BY_NAME["sos_bound"].verify_map is None  # (sos_bound has no discrete-time condition)
+    assert registry.verify("sos_bound", {"status": "certified"}, check) == (False, words)
+
+
+def test_the_discrete_time_names_are_derived_from_the_entries() -> None:
+    """DISCRETE, MAP_FUNCTIONS and SAMPLED are the classes with each kind's search, and every such class has
+    the kind's exact check (no claim certify prints goes unchecked by verify)."""
+    from lyapcheck.models.classes.discrete_functions import NOT_YET
+
+    for names, run_key, verify_key in ((registry.DISCRETE, "run_map", "verify_map"),
+                                       (registry.MAP_FUNCTIONS, "run_map_functions", "verify_map_functions"),
+                                       (registry.SAMPLED, "run_sampled", "verify_sampled")):
+        assert names == tuple(c.name for c in registry.CLASSES if getattr(c, run_key) is not None)
+        assert all((getattr(c, run_key) is None) == (getattr(c, verify_key) is None) for c in registry.CLASSES)
+        assert "linearization" in names
+    assert all(name in NOT_YET for name in registry.MAP_FUNCTIONS)  # (its sentence names what a map with
+    #                                                                   functions takes)

@@ -101,6 +101,32 @@ def test_a_function_not_differentiable_at_the_equilibrium_is_not_applicable(tmp_
     assert _invoke("verify", str(out))[0] == 0
 
 
+@pytest.mark.parametrize("plant", ["-abs(x) + u", "-x + sat(x + 1, 1) - 1 + u"])
+def test_a_plant_not_differentiable_at_the_equilibrium_is_not_applicable_as_a_continuous_loop(
+        tmp_path: Path, plant: str) -> None:
+    """The plant's Jacobian cannot be formed exactly: the sampled-data linearization is ``not_applicable`` for the
+    reason the continuous loop with the same field gives (not ``inconclusive``: no search was left undecided), and
+    verify re-derives it."""
+    from lyapcheck.api import certify
+
+    sampled = tmp_path / "sampled.toml"
+    sampled.write_text(f'[model]\nstates = ["x"]\n[dynamics]\nx = "{plant}"\n[sampling]\nperiod = "0.1 s"\n'
+                       '[controller]\nu = "-x"\n')
+    continuous = tmp_path / "continuous.toml"
+    continuous.write_text(f'[model]\nstates = ["x"]\n[dynamics]\nx = "{plant.replace("+ u", "- x")}"\n')
+    field = certify(model=continuous, classes=["linearization"]).document["conditions"]["linearization"]
+    assert field["status"] == "not_applicable" and "not differentiable" in field["summary"]
+    out = tmp_path / "cert.json"
+    code, text = _invoke("certify", str(sampled), "--out", str(out))
+    assert "Traceback" not in text
+    doc = json.loads(out.read_text())
+    result = doc["conditions"]["linearization"]
+    assert result["status"] == "not_applicable" and doc["verdict"] == "not_certified" and code == 1
+    assert result["summary"] == "the plant's Jacobian at the equilibrium cannot be formed exactly: " + field["summary"]
+    assert result["property"] == field["property"] == "LES"
+    assert _invoke("verify", str(out))[0] == 0
+
+
 @pytest.mark.parametrize("law, says", [
     # each function's value is kept exactly: tanh(1) is transcendental even where the two cancel
     ("tanh(theta + 1) - tanh(1)", "tanh(1)"),

@@ -3,7 +3,9 @@
 - :mod:`~lyapcheck.models.classes.registry`: the one list of classes, what each proves and what a
   sweep stores, each one's entries (:mod:`~lyapcheck.models.classes.runs`: its search on each kind of loop;
   :mod:`~lyapcheck.models.classes.verify_field` and :mod:`~lyapcheck.models.classes.verify_functions`: its
-  exact check), given one :mod:`~lyapcheck.models.classes.contexts` object;
+  exact check; :mod:`~lyapcheck.models.classes.runs_discrete` and
+  :mod:`~lyapcheck.models.classes.verify_discrete`: the same on maps and sampled-data loops), given one
+  :mod:`~lyapcheck.models.classes.contexts` object;
 - discrete-time maps: :mod:`~lyapcheck.models.classes.discrete_linearization` (the spectral radius of the
   map's Jacobian, exact);
 - polynomial and rational loops: :mod:`~lyapcheck.models.classes.linearization`,

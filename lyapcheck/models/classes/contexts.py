@@ -1,19 +1,33 @@
 """What each class's entry in :mod:`lyapcheck.models.classes.registry` is given: one context object per kind
 of loop, built once by the surface that runs or verifies it.
 
-======================  =========================================================================
-context                 for
-======================  =========================================================================
-:class:`FieldRun`       a class's search on a polynomial or rational loop: the field in deviations,
-                        multiplied through and scaled, its nominal and robust forms, the box
-:class:`FunctionsRun`   a class's search on a loop with functions: the proved recasting (and the
-                        one with a box's parameters as bounded constants), the box
-:class:`FieldCheck`     verify on a polynomial or rational loop: the field re-derived from the model
-                        text (shifted; cleared and scaled once its denominators' proofs passed)
-:class:`FunctionsCheck` verify on a loop with functions: the recasting re-derived from the model
-                        text (or recast again with a box's parameters as bounded constants), the
-                        disturbances (or the box's parameters) as balls, the model text
-======================  =========================================================================
+==========================  =========================================================================
+context                     for
+==========================  =========================================================================
+:class:`FieldRun`           a class's search on a polynomial or rational loop: the field in deviations,
+                            multiplied through and scaled, its nominal and robust forms, the box
+:class:`FunctionsRun`       a class's search on a loop with functions: the proved recasting (and the
+                            one with a box's parameters as bounded constants), the box
+:class:`FieldCheck`         verify on a polynomial or rational loop: the field re-derived from the model
+                            text (shifted; cleared and scaled once its denominators' proofs passed)
+:class:`FunctionsCheck`     verify on a loop with functions: the recasting re-derived from the model
+                            text (or recast again with a box's parameters as bounded constants), the
+                            disturbances (or the box's parameters) as balls, the model text
+:class:`MapRun`             a class's search on a polynomial discrete-time map: the map shifted to its
+                            fixed point, the user's V
+:class:`MapCheck`           verify on a polynomial discrete-time map: the shifted map re-derived from the
+                            model text
+:class:`MapFunctionsRun`    a class's search on a discrete-time map with functions: its model (the
+                            recasting of its displacement ``F(x) - x``)
+:class:`MapFunctionsCheck`  verify on such a map: its model, read again from the model text
+:class:`SampledRun`         a class's search on a sampled-data loop: its model (plant, controller,
+                            period)
+:class:`SampledCheck`       verify on a sampled-data loop: its model, read again from the model text
+==========================  =========================================================================
+
+A check context of a kind of loop where some classes have no check (a map, a sampled-data loop) says
+in :meth:`MapCheck.not_checked` (and its siblings') words why a decided claim of such a class fails
+(:func:`lyapcheck.models.classes.registry.verify`).
 
 Every entry's run callable takes a run context and the class's :class:`~lyapcheck.models.engines.search.Budget`
 and returns its :class:`~lyapcheck.results.ConditionResult`; every verify callable takes the class's
@@ -30,6 +44,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.modelfile import Model
     from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.models.language.recast import RecastModel
+    from lyapcheck.models.language.sampling import SampledModel
     from lyapcheck.models.loop.field import ScaledField, ShiftedField, StateField
     from lyapcheck.models.classes.recast_classes import Loop
     from lyapcheck.results import ConditionResult, Disturbances
@@ -128,4 +143,74 @@ class FunctionsCheck:
     box: "ModelBox | None" = None
 
 
-__all__ = ["Candidate", "FieldRun", "FunctionsRun", "FieldCheck", "FunctionsCheck"]
+@dataclass
+class MapRun:
+    """A polynomial discrete-time map as its classes are run on it (its disturbances at 0:
+    :mod:`lyapcheck.models.loop.discrete`)."""
+
+    model: "Model"
+    #: the map shifted to its fixed point, ``e+ = f(x_eq + e) - x_eq``
+    #: (:func:`lyapcheck.models.loop.discrete.shifted_map`)
+    shifted: "ShiftedField"
+    #: the user's V (``--candidate``), if given
+    candidate: "Candidate | None"
+    #: the decided classes so far
+    results: "dict[str, ConditionResult]"
+
+
+@dataclass(frozen=True)
+class MapCheck:
+    """A polynomial discrete-time map as verify re-derives it."""
+
+    #: the map shifted to its fixed point, re-derived from the model text
+    shifted: "ShiftedField"
+    model: "Model"
+
+    @staticmethod
+    def not_checked(status: object) -> str:
+        """Why a decided claim of a class without a check on a map fails."""
+        return f"a {status} claim on a discrete-time map that no discrete-time check re-derives"
+
+
+@dataclass
+class MapFunctionsRun:
+    """A discrete-time map with functions as its classes are run on it."""
+
+    #: the map, its displacement ``F(x) - x`` recast (:mod:`lyapcheck.models.classes.discrete_functions`)
+    model: "RecastModel"
+
+
+@dataclass(frozen=True)
+class MapFunctionsCheck:
+    """A discrete-time map with functions as verify re-reads it from the model text."""
+
+    model: "RecastModel"
+
+    @staticmethod
+    def not_checked(status: object) -> str:
+        """Why a decided claim of a class without a check on such a map fails."""
+        return f"a {status} claim on a discrete-time map with functions that no check re-derives"
+
+
+@dataclass
+class SampledRun:
+    """A sampled-data loop as its classes are run on it."""
+
+    #: the plant, the controller's laws and the period (:mod:`lyapcheck.models.language.sampling`)
+    model: "SampledModel"
+
+
+@dataclass(frozen=True)
+class SampledCheck:
+    """A sampled-data loop as verify re-reads it from the model text."""
+
+    model: "SampledModel"
+
+    @staticmethod
+    def not_checked(status: object) -> str:
+        """Why a decided claim of a class without a check on a sampled-data loop fails."""
+        return f"a {status} claim on a sampled-data loop that no check re-derives"
+
+
+__all__ = ["Candidate", "FieldRun", "FunctionsRun", "FieldCheck", "FunctionsCheck", "MapRun", "MapCheck",
+           "MapFunctionsRun", "MapFunctionsCheck", "SampledRun", "SampledCheck"]

@@ -56,9 +56,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: the certificate kind of ``roa`` on a map with functions
 KIND: Final = "discrete_interval"
-#: the classes a map with functions takes
-TAKEN: Final = ("linearization", "roa")
-#: the reason of every other class on such a map
+#: the reason of every class without a ``run_map_functions`` entry (lyapcheck.models.classes.registry: the
+#: classes a map with functions takes, MAP_FUNCTIONS) on such a map
 NOT_YET: Final = ('not taken yet on a discrete-time map with functions ([model] time = "discrete" with sin, tanh, '
                   "[networks], ...): the classes taken are linearization and roa")
 #: significant bits of a level tried
@@ -300,5 +299,5 @@ def verify_roa(model: "RecastModel", c: dict[str, Any]) -> tuple[bool, str]:
     return True, f"V(F(e)) < V(e) proved again on {{V <= {cert['level']}}} by ball arithmetic ({proof.cells} cells)"
 
 
-__all__ = ["KIND", "TAKEN", "NOT_YET", "exact_jacobian", "linearization", "verify_linearization", "MapDifference",
+__all__ = ["KIND", "NOT_YET", "exact_jacobian", "linearization", "verify_linearization", "MapDifference",
            "MapGeometry", "roa", "verify_roa", "area"]

@@ -260,10 +260,11 @@ def search_degree(ring: Ring, F: Sequence[Poly], degree: int, search: Search) ->
 
 
 def run(shifted: ShiftedField, name: ClassName, search: Search | None = None,
-        degrees: Sequence[int] | None = None) -> ConditionResult:
+        degrees: Sequence[int] | None = None, budget: Budget | None = None) -> ConditionResult:
     """``quadratic`` (degree 2) or ``sos_gas`` (the rising :data:`SOS_GAS_DEGREES`) on the map
     ``e+ = F(e)`` of ``shifted`` (its numerators read as next values). ``search``: the class's
-    search (default: its own, with the continuous classes' safety net, MODEL_CLASS_TIME_LIMIT_S)."""
+    search (default: its own, on ``budget``, by default the continuous classes' safety net,
+    MODEL_CLASS_TIME_LIMIT_S)."""
     if degrees is None:
         degrees = (2,) if name == "quadratic" else SOS_GAS_DEGREES
     try:
@@ -273,7 +274,8 @@ def run(shifted: ShiftedField, name: ClassName, search: Search | None = None,
     if search is None:
         # the continuous classes' safety net (the work itself is bounded by counts: the facial-reduction
         # rounds and the decay-rate steps)
-        search = Search(ring, Budget(tol.MODEL_CLASS_TIME_LIMIT_S, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+        search = Search(ring, budget if budget is not None else
+                        Budget(tol.MODEL_CLASS_TIME_LIMIT_S, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
     tried: list[str] = []
     try:
         for degree in degrees:

@@ -18,6 +18,9 @@ name                                              derived from
 :data:`sweeps.schema.OUTPUT_FIGURES`              each class's ``output_figure``
 :data:`ZERO_DISTURBANCE_ONLY`                     ``zero_disturbance_only``: ``verify`` refuses their
                                                   ``"all"`` claims (on both kinds of loop)
+:data:`DISCRETE`, :data:`MAP_FUNCTIONS`,          the classes with a ``run_map``, ``run_map_functions``,
+:data:`SAMPLED`                                   ``run_sampled`` entry: those that run on a map, a map
+                                                  with functions, a sampled-data loop
 ================================================  =================================================
 
 so the sweeps of model files (store variables, units of work, summaries, the report of a store) take a
@@ -40,8 +43,17 @@ new class from its entry alone.
      functions, naming the loop;
    - ``verify_field`` and ``verify_functions`` (:mod:`~lyapcheck.models.classes.verify_field`,
      :mod:`~lyapcheck.models.classes.verify_functions`): its exact check, given the condition as stored
-     and a check context; :func:`verify` is the one dispatch of ``verify`` (a certificate under a name
-     that is no class fails);
+     and a check context; :func:`verify` is the one dispatch of ``verify``, by the type of the check
+     context (a certificate under a name that is no class fails);
+   - where the class has a discrete-time condition, its search and exact check on each discrete-time
+     kind of loop (:mod:`~lyapcheck.models.classes.runs_discrete`,
+     :mod:`~lyapcheck.models.classes.verify_discrete`), in pairs: ``run_map`` and ``verify_map`` on a
+     polynomial map (``[model] time = "discrete"``; :data:`DISCRETE` is derived from them),
+     ``run_map_functions`` and ``verify_map_functions`` on a map with functions (:data:`MAP_FUNCTIONS`),
+     ``run_sampled`` and ``verify_sampled`` on a sampled-data loop (:data:`SAMPLED`). The same runner
+     runs them with the rules of those loops (an input that was not given, ``roa`` once GAS is
+     certified with the disturbances at 0); a class without the entry is ``not_applicable`` there,
+     naming the loop, and a decided claim of it fails ``verify`` (never given the map as a field);
 
    (the contexts: :mod:`~lyapcheck.models.classes.contexts`);
 3. one module in ``reports/sections/``, the one the entries' ``family`` names (a
@@ -67,16 +79,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, Final, NamedTuple, TypeVar
 
-from lyapcheck.models.classes import runs as _runs, verify_field as _field, verify_functions as _functions
-from lyapcheck.models.classes.contexts import FieldCheck, FieldRun, FunctionsCheck, FunctionsRun
+from lyapcheck.models.classes import runs as _runs, runs_discrete as _discrete, verify_discrete as _vdiscrete, \
+    verify_field as _field, verify_functions as _functions
+from lyapcheck.models.classes.contexts import FieldCheck, FieldRun, FunctionsCheck, FunctionsRun, MapCheck, \
+    MapFunctionsCheck, MapFunctionsRun, MapRun, SampledCheck, SampledRun
 from lyapcheck.results import Property
 
 if TYPE_CHECKING:  # pragma: no cover  (the search engine is imported where a class runs)
     from lyapcheck.models.engines.search import Budget
     from lyapcheck.results import ConditionResult
 
-    _Check = TypeVar("_Check", FieldCheck, FunctionsCheck)
-    _Run = TypeVar("_Run", FieldRun, FunctionsRun)
+    _Check = TypeVar("_Check", FieldCheck, FunctionsCheck, MapCheck, MapFunctionsCheck, SampledCheck)
+    _Run = TypeVar("_Run", FieldRun, FunctionsRun, MapRun, MapFunctionsRun, SampledRun)
     #: a class's exact check of a decided condition (its name, the condition as stored, what verify
     #: re-derived from the model text) -> (ok, why)
     Verify = Callable[[str, dict[str, Any], _Check], tuple[bool, str]]
@@ -131,9 +145,6 @@ class ModelClass:
     figures: tuple[Figure, ...] = ()
     #: its figure per output of the model, if any
     output_figure: OutputFigure | None = None
-    #: it has a discrete-time condition and runs on a map (``[model] time = "discrete"``); a class
-    #: without one is ``not_applicable`` there (lyapcheck.models.loop.discrete), never given the map as a field
-    discrete: bool = False
     #: its search on a polynomial or rational loop (:mod:`lyapcheck.models.classes.runs`)
     run_field: "Run[FieldRun] | None" = None
     #: its search on a loop with functions (None: ``not_applicable`` there, naming the loop)
@@ -142,6 +153,22 @@ class ModelClass:
     verify_field: "Verify[FieldCheck] | None" = None
     #: its exact check on a loop with functions (:mod:`lyapcheck.models.classes.verify_functions`)
     verify_functions: "Verify[FunctionsCheck] | None" = None
+    #: its search on a polynomial discrete-time map (``[model] time = "discrete"``;
+    #: :mod:`lyapcheck.models.classes.runs_discrete`): a class with one has a discrete-time condition
+    #: (:data:`DISCRETE`); a class without one is ``not_applicable`` on a map
+    #: (:func:`lyapcheck.models.loop.discrete.not_decided`), never given the map as a field
+    run_map: "Run[MapRun] | None" = None
+    #: its exact check on such a map (:mod:`lyapcheck.models.classes.verify_discrete`)
+    verify_map: "Verify[MapCheck] | None" = None
+    #: its search on a discrete-time map with functions (None: ``not_applicable`` there,
+    #: :data:`lyapcheck.models.classes.discrete_functions.NOT_YET`)
+    run_map_functions: "Run[MapFunctionsRun] | None" = None
+    #: its exact check on such a map
+    verify_map_functions: "Verify[MapFunctionsCheck] | None" = None
+    #: its search on a sampled-data loop (None: ``not_applicable`` there, naming the loop)
+    run_sampled: "Run[SampledRun] | None" = None
+    #: its exact check on a sampled-data loop
+    verify_sampled: "Verify[SampledCheck] | None" = None
 
     @property
     def point_only(self) -> bool:
@@ -153,38 +180,49 @@ _V_RATE: Final = Figure("decay_rate_V_per_s", "decay_rate_V_per_s", "certified d
 
 #: every class of a model file, in the order ``certify --model`` runs them (cheapest first)
 CLASSES: Final[tuple[ModelClass, ...]] = (
-    ModelClass("linearization", "stability", "LES", over_box=True, stability=True, cleared=False, discrete=True,
+    ModelClass("linearization", "stability", "LES", over_box=True, stability=True, cleared=False,
                zero_disturbance_only=True,
                run_field=_runs.linearization_field, run_functions=_runs.linearization_functions,
-               verify_field=_field.verify_linearization, verify_functions=_functions.verify_linearization),
-    ModelClass("quadratic", "stability", "GES", over_box=True, stability=True, discrete=True,
+               verify_field=_field.verify_linearization, verify_functions=_functions.verify_linearization,
+               run_map=_discrete.linearization_map, verify_map=_vdiscrete.verify_linearization_map,
+               run_map_functions=_discrete.linearization_map_functions,
+               verify_map_functions=_vdiscrete.verify_linearization_map_functions,
+               run_sampled=_discrete.linearization_sampled, verify_sampled=_vdiscrete.verify_linearization_sampled),
+    ModelClass("quadratic", "stability", "GES", over_box=True, stability=True,
                run_field=_runs.quadratic_field, run_functions=_runs.quadratic_functions,
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_lyapunov,
+               run_map=_discrete.quadratic_map, verify_map=_vdiscrete.verify_lyapunov_map,
                figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"),
                         Figure("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s"))),
-    ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,), discrete=True,
+    ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,),
                run_field=_runs.sos_gas_field, run_functions=_runs.sos_gas_functions,
-               verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_lyapunov),
-    ModelClass("roa", "stability", "ROA", over_box=True, stability=True, discrete=True,
+               verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_lyapunov,
+               run_map=_discrete.sos_gas_map, verify_map=_vdiscrete.verify_lyapunov_map),
+    ModelClass("roa", "stability", "ROA", over_box=True, stability=True,
                run_field=_runs.roa_field, run_functions=_runs.roa_functions,
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region,
+               run_map=_discrete.roa_map, verify_map=_vdiscrete.verify_region_map,
+               run_map_functions=_discrete.roa_map_functions, verify_map_functions=_vdiscrete.verify_roa_map_functions,
                figures=(Figure("level", "level", "the certified region of attraction is {V <= level}"),
                         Figure("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI"))),
-    ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True, discrete=True,
+    ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True,
                zero_disturbance_only=True,
                run_field=_runs.candidate_field, run_functions=_runs.candidate_functions,
-               verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region),
+               verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region,
+               run_map=_discrete.candidate_map, verify_map=_vdiscrete.verify_region_map),
     ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
                run_field=_runs.sos_bound_field, run_functions=_runs.sos_bound_functions,
                verify_field=_field.verify_sos_bound, verify_functions=_functions.verify_sos_bound,
                output_figure=OutputFigure("bounds", "limsup |{y} - {y}_eq| <= this, SI ({y}_eq: bounds_reference)")),
-    ModelClass("barrier", "safety", "safety", over_box=True, stability=False, discrete=True,
+    ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
                run_field=_runs.barrier_field, run_functions=_runs.barrier_functions,
                verify_field=_field.verify_barrier, verify_functions=_functions.verify_barrier,
+               run_map=_discrete.barrier_map, verify_map=_vdiscrete.verify_safety_map,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
-    ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False, discrete=True,
+    ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False,
                run_field=_runs.reach_avoid_field, run_functions=_runs.reach_avoid_functions,
                verify_field=_field.verify_reach_avoid, verify_functions=_functions.verify_reach_avoid,
+               run_map=_discrete.reach_avoid_map, verify_map=_vdiscrete.verify_safety_map,
                figures=(Figure("reach_time_bound_s", "reach_time_bound_s",
                                "the goal is reached within this time, s"),)),
 )
@@ -206,12 +244,25 @@ POINT_ONLY: Final = _names(point_only=True)
 STABILITY: Final = _names(stability=True)
 #: the classes that need the user's input (``--candidate``)
 USER_GIVEN: Final = _names(user_given=True)
-#: the classes with a discrete-time condition (they run on a map)
-DISCRETE: Final = _names(discrete=True)
+#: the classes with a discrete-time condition (they run on a polynomial map: their ``run_map``)
+DISCRETE: Final = tuple(c.name for c in CLASSES if c.run_map is not None)
+#: the classes that run on a discrete-time map with functions (their ``run_map_functions``)
+MAP_FUNCTIONS: Final = tuple(c.name for c in CLASSES if c.run_map_functions is not None)
+#: the classes that run on a sampled-data loop (their ``run_sampled``)
+SAMPLED: Final = tuple(c.name for c in CLASSES if c.run_sampled is not None)
 #: the classes that prove their claim with the disturbances at 0 only (never ``"all"`` where one enters)
 ZERO_DISTURBANCE_ONLY: Final = _names(zero_disturbance_only=True)
 #: class name -> its entry
 BY_NAME: Final[dict[str, ModelClass]] = {c.name: c for c in CLASSES}
+
+
+#: the discrete-time kinds of loop: each one's search and exact check, as :class:`ModelClass` fields
+_DISCRETE_KINDS: Final = (("run_map", "verify_map"), ("run_map_functions", "verify_map_functions"),
+                          ("run_sampled", "verify_sampled"))
+#: the entry field that checks a condition, by the type of verify's check context
+_VERIFY_FIELD: Final[dict[type, str]] = {FieldCheck: "verify_field", FunctionsCheck: "verify_functions",
+                                         MapCheck: "verify_map", MapFunctionsCheck: "verify_map_functions",
+                                         SampledCheck: "verify_sampled"}
 
 
 def _check() -> None:
@@ -223,23 +274,32 @@ def _check() -> None:
         if c.run_field is None or c.verify_field is None or c.verify_functions is None:
             raise RuntimeError(f"{c.name}: every class has a search on a polynomial loop and an exact check on "
                                "each kind of loop")
+        for run, check in _DISCRETE_KINDS:  # (a claim verify could not re-check would be printed)
+            if (getattr(c, run) is None) != (getattr(c, check) is None):
+                raise RuntimeError(f"{c.name}: a class with {run} has {check}, and only such a class")
 
 
 _check()
 
 
-def verify(name: str, c: dict[str, Any], check: FieldCheck | FunctionsCheck) -> tuple[bool, str]:
-    """Re-check one decided condition exactly: the one dispatch of ``verify``, by the class's entry
-    (its ``verify_field`` or ``verify_functions``, by the kind of ``check``); a name that is no class
-    fails. A malformed certificate raises (verify reports it in one row)."""
+def verify(name: str, c: dict[str, Any],
+           check: FieldCheck | FunctionsCheck | MapCheck | MapFunctionsCheck | SampledCheck) -> tuple[bool, str]:
+    """Re-check one decided condition exactly: the one dispatch of ``verify``, by the class's entry for the
+    kind of loop ``check`` is the context of (its ``verify_field``, ``verify_functions``, ``verify_map``,
+    ``verify_map_functions`` or ``verify_sampled``); a name that is no class fails, as does a class without a
+    check on that kind of loop (in the context's words: ``check.not_checked``). A malformed certificate
+    raises (verify reports it in one row)."""
     entry = BY_NAME.get(name)
     if entry is None:
         return False, f"no class named {name!r} (the classes: {', '.join(NAMES)})"
-    if isinstance(check, FunctionsCheck):
-        assert entry.verify_functions is not None  # (_check)
-        return entry.verify_functions(name, c, check)
-    assert entry.verify_field is not None
-    return entry.verify_field(name, c, check)
+    check_of: "Verify[Any] | None" = getattr(entry, _VERIFY_FIELD[type(check)])
+    if check_of is None:
+        # (never on the continuous kinds: _check; on a map or a sampled-data loop, a class without its condition)
+        assert not isinstance(check, (FieldCheck, FunctionsCheck))
+        return False, check.not_checked(c.get("status"))
+    return check_of(name, c, check)
+
 
 __all__ = ["Figure", "OutputFigure", "ModelClass", "CLASSES", "NAMES", "CLEARED", "OVER_BOX", "POINT_ONLY",
-           "STABILITY", "USER_GIVEN", "DISCRETE", "ZERO_DISTURBANCE_ONLY", "BY_NAME", "verify"]
+           "STABILITY", "USER_GIVEN", "DISCRETE", "MAP_FUNCTIONS", "SAMPLED", "ZERO_DISTURBANCE_ONLY", "BY_NAME",
+           "verify"]

@@ -280,6 +280,35 @@ def control_gain(model: "SampledModel") -> list[list[Fraction]] | str:
     return K
 
 
+def linearization(model: "SampledModel") -> ConditionResult:
+    """The sampled-data linearization at the model's period (:func:`decide`), or ``not_applicable`` naming
+    why it cannot be formed: the controller's gain (a law with a function not differentiable at the
+    equilibrium, ``abs`` at 0) or the plant's Jacobian (the same in the plant)."""
+    if model.controller_system is not None:  # a law with functions: its gain may not exist (abs at 0)
+        gain = control_gain(model)
+        if isinstance(gain, str):
+            return ConditionResult("linearization", "not_applicable", "the controller's gain K = dk/dx at the "
+                                   f"equilibrium cannot be formed exactly: {gain}", property="LES")
+    parts = linear_parts(model)
+    if isinstance(parts, str):
+        # not_applicable, as a continuous loop's linearization for the same reason (recast_classes.linearization):
+        # the test needs the Jacobian, so the class does not apply; nothing was left undecided by a search
+        return ConditionResult("linearization", "not_applicable",
+                               f"the plant's Jacobian at the equilibrium cannot be formed exactly: {parts}",
+                               property="LES")
+    A, B, K = parts
+    return decide(A, B, K, model.period)
+
+
+def verify_linearization(model: "SampledModel", status: str, data: dict[str, Any]) -> tuple[bool, str]:
+    """Re-check a ``linearization`` certificate or refutation (:func:`verify`) on ``A``, ``B``, ``K`` and the
+    period re-derived from the model."""
+    parts = linear_parts(model)
+    if isinstance(parts, str):
+        return False, "no exact Jacobian"
+    return verify(*parts, model.period, status, data)
+
+
 def spectral_radius_estimate(model: "SampledModel") -> float | None:
     """A floating-point estimate of the spectral radius of ``model``'s Jacobian over one period at its
     period (``simulate`` takes its default horizon from it); None when the Jacobian cannot be formed.
@@ -291,5 +320,5 @@ def spectral_radius_estimate(model: "SampledModel") -> float | None:
     return _spectral_radius_estimate(A, B, K, model.period)
 
 
-__all__ = ["control_gain", "linear_parts", "spectral_radius_estimate", "FIRST_PRECISION_BITS", "MAX_PRECISION_BITS", "METHOD", "cayley_routh_column", "decide",
+__all__ = ["control_gain", "linear_parts", "linearization", "verify_linearization", "spectral_radius_estimate", "FIRST_PRECISION_BITS", "MAX_PRECISION_BITS", "METHOD", "cayley_routh_column", "decide",
            "sampled_jacobian", "verify"]

@@ -8,9 +8,13 @@ a fixed point, ``f(x_eq) = x_eq`` (checked exactly when the file is read:
 Soundness first: a map must never reach code that reads ``[dynamics]`` as an ODE (a stable map read as a
 field is another system, often refuted). Two places guard it:
 
-- classes: :data:`lyapcheck.models.classes.registry.DISCRETE` lists the classes with a discrete-time
-  condition (``ModelClass.discrete``); every other class is ``not_applicable`` on a map with
-  :func:`not_decided` (``lyapcheck.models.surfaces.certify``, where classes are chosen);
+- classes: a class with a discrete-time condition has a ``run_map`` and a ``verify_map`` entry in
+  :mod:`lyapcheck.models.classes.registry` (a map with functions: ``run_map_functions`` and
+  ``verify_map_functions``), given the shifted map (:class:`~lyapcheck.models.classes.contexts.MapRun`,
+  :class:`~lyapcheck.models.classes.contexts.MapCheck`); :data:`lyapcheck.models.classes.registry.DISCRETE`
+  lists them. The one runner (``lyapcheck.models.surfaces.certify``, where classes are chosen) makes every
+  other class ``not_applicable`` on a map with :func:`not_decided`, and ``verify`` fails a decided claim
+  of one (:func:`lyapcheck.models.classes.registry.verify`);
 - surfaces that would integrate or bound the map as a field (``--box``, box sweeps) call :func:`refuse`
   first: one line, exit 2, naming ``time = "discrete"``. Reports and point sweeps iterate a map instead
   (:mod:`reports.map_figures`, :class:`sweeps.crosscheck._MapLoop`, through
@@ -41,8 +45,8 @@ def is_discrete(model: object) -> bool:
 
 
 def not_decided(name: str, taken: "Sequence[str]") -> str:
-    """The ``not_applicable`` sentence of a class without a discrete-time condition, on a map; ``taken``:
-    the classes that have one (:data:`lyapcheck.models.classes.registry.DISCRETE`)."""
+    """The ``not_applicable`` sentence of a class without a discrete-time condition (no ``run_map`` entry), on a
+    map; ``taken``: the classes that have one (:data:`lyapcheck.models.classes.registry.DISCRETE`)."""
     return (f"{name} is not yet decided for discrete-time maps ({TIME_WORDS}: [dynamics] gives each state's next "
             f"value, not its time derivative); the classes taken on a map: {', '.join(taken)}")
 

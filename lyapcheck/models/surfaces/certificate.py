@@ -261,40 +261,24 @@ def _verify(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
 
 
 def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> list[Row]:
-    """The rest of a discrete-time map's document: the linearization re-derived with the discrete-time
-    test on the shifted map; a certified condition of a class without a discrete-time check fails (it
-    cannot be re-checked on a map, so it cannot stand), as does a box (refused on a map)."""
-    from lyapcheck.models.classes import discrete_linearization
-    from lyapcheck.models.classes.registry import DISCRETE
+    """The rest of a discrete-time map's document: each decided condition checked by its class's entry for a
+    map (:func:`lyapcheck.models.classes.registry.verify` with a
+    :class:`~lyapcheck.models.classes.contexts.MapCheck`: the discrete-time test on the shifted map re-derived
+    from the model text); a decided claim of a class without a discrete-time check fails (it cannot be
+    re-checked on a map, so it cannot stand), as does a box (refused on a map)."""
+    from lyapcheck.models.classes.contexts import MapCheck
+    from lyapcheck.models.classes.registry import verify
     from lyapcheck.models.loop.discrete import shifted_map
 
     if box is not None:
         return _with_verdict(doc, [*rows, ("box", False, 'a box is not taken on a discrete-time map ([model] time = '
                                                          '"discrete")')])
     conditions: dict[str, Any] = doc["conditions"]
+    check = MapCheck(shifted=shifted_map(model), model=model)
     for name, c in conditions.items():
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted", "counterexample"):
             continue
-        if name not in DISCRETE or c["status"] == "counterexample" or (name not in ("linearization", "barrier", "reach_avoid")
-                                                                        and c["status"] != "certified"):
-            rows.append((name, False, f"{name}: a {c.get('status')} claim on a discrete-time map that no "
-                                      "discrete-time check re-derives"))
-            continue
-        if name == "linearization":
-            data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
-            ok, why = discrete_linearization.verify(shifted_map(model), c["status"], data or {})
-        elif name in ("barrier", "reach_avoid"):  # (lyapcheck.models.classes.discrete_safety)
-            from lyapcheck.models.classes import discrete_safety
-
-            ok, why = discrete_safety.verify(shifted_map(model), name, c, model)
-        elif name in ("roa", "candidate"):  # V(F(e)) <= V(e) - eps m(e) on {V <= c}, from the condition's JSON
-            from lyapcheck.models.classes import discrete_regions
-
-            ok, why = discrete_regions.verify(shifted_map(model), name, c)
-        else:  # quadratic, sos_gas: V(F(e)) - V(e) <= -mu V(e) - W(e), checked from the condition's JSON
-            from lyapcheck.models.classes import discrete_lyapunov
-
-            ok, why = discrete_lyapunov.verify(shifted_map(model), c["status"], c)
+        ok, why = verify(name, c, check)
         rows.append((name, ok, why if ok else f"{name}: {why}"))
     from lyapcheck.models.classes.region_size import check_size_rows
 

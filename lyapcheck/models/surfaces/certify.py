@@ -173,11 +173,13 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     parameter value in it (:mod:`lyapcheck.models.loop.boxes`; a loop with functions is read at the
     box's centre, :func:`lyapcheck.models.classes.recast_regions.functions_run`).
 
-    Every kind of loop but a map runs its classes through one runner (:func:`_run_classes`): each class of
+    Every kind of loop runs its classes through one runner (:func:`_run_classes`; a sampled-data loop's too,
+    :func:`lyapcheck.models.surfaces.sampled_run.certify_sampled`): each class of
     :data:`lyapcheck.models.classes.registry.CLASSES` in order, by its entry for the kind of loop, given
     one context object (:mod:`lyapcheck.models.classes.contexts`); the rules every class shares
-    (:func:`_needs_input`, :func:`_field_rule`, :func:`lyapcheck.models.classes.claims.roa_after_gas`, the
-    disturbances each claim covers, the ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
+    (:func:`_needs_input`, :func:`_field_rule`, :func:`_discrete_rule`,
+    :func:`lyapcheck.models.classes.claims.roa_after_gas`, the disturbances each claim covers, the
+    ball-arithmetic engine after ``roa``'s SOS route) are applied here."""
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
@@ -185,15 +187,8 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     from lyapcheck.models.loop.discrete import is_discrete
 
     if is_discrete(model):  # a map never reaches the classes that read [dynamics] as a field
-        if not isinstance(model, Model):  # a map with functions (lyapcheck.models.surfaces.map_functions)
-            from lyapcheck.models.loop.discrete import refuse
-            from lyapcheck.models.surfaces.map_functions import map_results
-
-            if box is not None:
-                refuse(model, "--box", "certify a point (--set NAME=VALUE)")
-            cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
-            results, seconds, loop = map_results(model, class_selection(classes, model, cand), limit, _guarded)
-            return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds, loop=loop)
+        if not isinstance(model, Model):  # a map with functions (lyapcheck.models.classes.discrete_functions)
+            return _certify_map_functions(model, classes, candidate, limit, box)
         return _certify_map(model, classes, candidate, limit, box)
     if not isinstance(model, Model):  # a loop with functions: its classes run on the recasting
         return _certify_functions(model, classes, candidate, limit, box)
@@ -359,12 +354,14 @@ def _field_rule(name: str, model: Model, box: "ModelBox | None", results: dict[s
 def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: str | None, limit: float,
                  box: "ModelBox | None") -> ModelCertification:
     """:func:`certify_model` on a discrete-time map (``[model] time = "discrete"``): the one place where a
-    map's classes are chosen. A class with a discrete-time condition
-    (:data:`lyapcheck.models.classes.registry.DISCRETE`) runs on the shifted map; every other one asked for
-    is ``not_applicable`` (:func:`lyapcheck.models.loop.discrete.not_decided`), never run on the map as if
-    it were a field. ``--box`` is refused in one line (exit 2)."""
-    import time
-
+    map's classes are chosen. A class with a discrete-time condition (its ``run_map`` entry;
+    :data:`lyapcheck.models.classes.registry.DISCRETE`) runs on the shifted map through the one runner
+    (:func:`_run_classes`); every other one asked for is ``not_applicable``
+    (:func:`lyapcheck.models.loop.discrete.not_decided`), never run on the map as if it were a field. A
+    certified region's size is attached as in continuous time. ``--box`` is refused in one line (exit 2)."""
+    from lyapcheck.models.classes import region_size
+    from lyapcheck.models.classes.claims import summary
+    from lyapcheck.models.classes.contexts import MapRun
     from lyapcheck.models.classes.registry import DISCRETE
     from lyapcheck.models.loop.discrete import not_decided, refuse, shifted_map
 
@@ -373,81 +370,77 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
     cand = parse_candidate(model, candidate) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
     out = ModelCertification(model=model, candidate=cand, results={})
-    for name in chosen:
-        if name not in DISCRETE:
-            out.results[name] = ConditionResult(name, "not_applicable", not_decided(name, DISCRETE))
-    if "linearization" in chosen:
-        from lyapcheck.models.classes import discrete_linearization
+    ctx = MapRun(model=model, shifted=shifted_map(model), candidate=cand, results=out.results)
 
-        start = time.perf_counter()
-        shifted = shifted_map(model)
-        out.results["linearization"] = _guarded("linearization", lambda: discrete_linearization.run(shifted), limit)
-        out.seconds["linearization"] = time.perf_counter() - start
-    for name in ("quadratic", "sos_gas"):
-        if name in chosen and name in DISCRETE:
-            from lyapcheck.models.classes import discrete_lyapunov
+    def decide(entry: ModelClass) -> ConditionResult | None:
+        return _discrete_rule(entry, entry.run_map, not_decided(entry.name, DISCRETE), out.results, cand,
+                              bool(model.disturbances))
 
-            start = time.perf_counter()
-            shifted = shifted_map(model)
-            out.results[name] = _guarded(name, lambda: discrete_lyapunov.run(shifted, name), limit)  # type: ignore[arg-type]
-            out.seconds[name] = time.perf_counter() - start
-    _map_regions(model, chosen, cand, limit, out)
-    # the safety classes of a map (lyapcheck.models.classes.discrete_safety): run_barrier, run_reach_avoid
-    for name in ("barrier", "reach_avoid"):
-        if name in chosen and name in DISCRETE:
-            from lyapcheck.models.classes import discrete_safety
+    def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
+        run_map = entry.run_map
+        return None if run_map is None else lambda budget: run_map(ctx, budget)
 
-            run = discrete_safety.run_barrier if name == "barrier" else discrete_safety.run_reach_avoid
-            start, budget = time.perf_counter(), Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-            out.results[name] = _guarded(name, lambda: run(model, shifted_map(model), budget), limit)
-            out.seconds[name] = time.perf_counter() - start
-    out.results = {name: out.results[name] for name in MODEL_CLASSES if name in out.results}
-    for r in out.results.values():  # the linearization is the Jacobian at d = 0
-        if model.disturbances:
-            r.disturbances = "zero"
-    from lyapcheck.models.classes.claims import summary
-
+    _run_classes(chosen, out.results, out.seconds, limit, decide, compute)
     for name, r in out.results.items():
+        if model.disturbances:  # (every class of a map is decided with its disturbances at 0)
+            r.disturbances = "zero"
+        if r.status == "certified" and name in region_size.SIZED_CLASSES:
+            _attach_size(r, model, list(model.states))
         text = summary(name, r.to_json(), tuple(model.outputs), None)
         if text is not None:
             r.summary = text
     return out
 
 
-def _map_regions(model: Model, chosen: Sequence[str], cand: Candidate | None, limit: float,
-                 out: ModelCertification) -> None:
-    """``roa`` and ``candidate`` on a map (:mod:`lyapcheck.models.classes.discrete_regions`), after its GAS
-    classes: ``roa`` is ``not_applicable`` once one of them certified (:func:`roa_after_gas`), ``candidate``
-    without ``--candidate`` (:func:`_needs_input`); a certified set's size is attached as in continuous time."""
-    import time
+def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | None, candidate: str | None,
+                           limit: float, box: "ModelBox | None") -> ModelCertification:
+    """:func:`certify_model` on a discrete-time map with functions: each class with a ``run_map_functions``
+    entry (:mod:`lyapcheck.models.classes.discrete_functions`: ``linearization`` and ``roa``) through the one
+    runner, every other one ``not_applicable`` in one line
+    (:data:`~lyapcheck.models.classes.discrete_functions.NOT_YET`); the document states the map's recasting
+    (the loop of its displacement). ``--box`` is refused in one line (exit 2)."""
+    from lyapcheck.models.classes.contexts import MapFunctionsRun
+    from lyapcheck.models.classes.discrete_functions import NOT_YET
+    from lyapcheck.models.classes.recast_classes import base_loop
+    from lyapcheck.models.loop.discrete import refuse
 
-    from lyapcheck.models.classes import discrete_regions
+    if box is not None:
+        refuse(model, "--box", "certify a point (--set NAME=VALUE)")
+    cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
+    chosen = class_selection(classes, model, cand)
+    results: dict[str, ConditionResult] = {}
+    seconds: dict[str, float] = {}
+    ctx = MapFunctionsRun(model=model)
+
+    def decide(entry: ModelClass) -> ConditionResult | None:
+        return _discrete_rule(entry, entry.run_map_functions, NOT_YET, results, cand, bool(model.disturbances))
+
+    def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
+        run_map_functions = entry.run_map_functions
+        return None if run_map_functions is None else lambda budget: run_map_functions(ctx, budget)
+
+    _run_classes(chosen, results, seconds, limit, decide, compute)
+    if model.disturbances:
+        for r in results.values():  # the map is read with its disturbances at 0
+            r.disturbances = "zero"
+    return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds,
+                              loop=base_loop(model.system, cylinder=False))
+
+
+def _discrete_rule(entry: ModelClass, run: object, not_taken: str, results: dict[str, ConditionResult],
+                   cand: object | None, disturbed: bool) -> ConditionResult | None:
+    """What every discrete-time kind of loop (a map, a map with functions, a sampled-data loop) decides before
+    a class runs: a class without an entry for the kind (``run`` None) is ``not_applicable`` (``not_taken``:
+    the kind's sentence); ``candidate`` without ``--candidate`` (:func:`_needs_input`); ``roa`` once GAS is
+    certified with the disturbances at 0, which is what a map's classes are decided with
+    (:func:`~lyapcheck.models.classes.claims.roa_after_gas`); None: run it."""
     from lyapcheck.models.classes.claims import roa_after_gas
-    from lyapcheck.models.classes.registry import DISCRETE
-    from lyapcheck.models.loop.discrete import shifted_map
 
-    for name in ("roa", "candidate"):
-        if name not in chosen or name not in DISCRETE:
-            continue
-        # (a map's classes are decided with its disturbances at 0: lyapcheck.models.loop.discrete)
-        zero: Disturbances | None = "zero" if model.disturbances else None
-        ruled = _needs_input(name, None, cand) or (roa_after_gas(out.results, zero, nominal=zero) if name == "roa"
-                                                   else None)
-        if ruled is not None:
-            out.results[name] = ruled
-            continue
-        start = time.perf_counter()
-        shifted = shifted_map(model)
-        budget = Budget(limit, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
-        if name == "roa":
-            out.results[name] = _guarded(name, lambda: discrete_regions.run_roa(model, shifted, budget), limit)
-        else:
-            assert cand is not None  # (_needs_input)
-            out.results[name] = _guarded(name, lambda: discrete_regions.run_candidate(model, shifted, cand, budget),
-                                         limit)
-        if out.results[name].status == "certified":
-            _attach_size(out.results[name], model, list(model.states))
-        out.seconds[name] = time.perf_counter() - start
+    if run is None:
+        return ConditionResult(entry.name, "not_applicable", not_taken)
+    zero: Disturbances | None = "zero" if disturbed else None
+    return _needs_input(entry.name, None, cand) or (roa_after_gas(results, zero, nominal=zero)
+                                                    if entry.name == "roa" else None)
 
 
 def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None, candidate: str | None,

@@ -18,12 +18,15 @@ loop's certificate), and ``verify`` fails when a file now holds another network.
 from __future__ import annotations
 
 import hashlib
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
-from lyapcheck.models.classes import sampled
 from lyapcheck.models.classes.registry import NAMES
 from lyapcheck.models.language.sampling import SampledModel
 from lyapcheck.results import ConditionResult
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.classes.registry import ModelClass
+    from lyapcheck.models.engines.search import Budget
 
 Row = tuple[str, bool, str]
 
@@ -32,31 +35,22 @@ Row = tuple[str, bool, str]
 DEFAULT_CLASSES = ("linearization", "quadratic", "sos_gas", "roa")
 
 
-def _not_yet(name: str) -> ConditionResult:
-    return ConditionResult(name, "not_applicable",
-                           f"{name} is not decided for sampled-data loops yet: the loop's flow over one period has no "
-                           "closed form to prove it on; its linearization over one period is decided (linearization)")
-
-
-def run_linearization(model: SampledModel) -> ConditionResult:
-    """The sampled-data linearization at the model's period, or why it cannot be formed."""
-    if model.controller_system is not None:  # a law with functions: its gain may not exist (abs at 0)
-        gain = sampled.control_gain(model)
-        if isinstance(gain, str):
-            return ConditionResult("linearization", "not_applicable", "the controller's gain K = dk/dx at the "
-                                   f"equilibrium cannot be formed exactly: {gain}", property="LES")
-    parts = sampled.linear_parts(model)
-    if isinstance(parts, str):
-        return ConditionResult("linearization", "inconclusive",
-                               f"the plant's Jacobian at the equilibrium cannot be formed exactly: {parts}")
-    A, B, K = parts
-    return sampled.decide(A, B, K, model.period)
+def _not_yet(name: str) -> str:
+    return (f"{name} is not decided for sampled-data loops yet: the loop's flow over one period has no closed form "
+            "to prove it on; its linearization over one period is decided (linearization)")
 
 
 def certify_sampled(model: SampledModel, classes: str | Sequence[str] | None = None) -> dict[str, ConditionResult]:
     """The conditions of a sampled-data loop, by name, in the classes' order: ``classes`` as
-    ``certify`` takes them (None or ``"all"``: :data:`DEFAULT_CLASSES`)."""
+    ``certify`` takes them (None or ``"all"``: :data:`DEFAULT_CLASSES`). Each class with a ``run_sampled``
+    entry (:data:`lyapcheck.models.classes.registry.SAMPLED`) runs through the one runner
+    (:func:`lyapcheck.models.surfaces.certify.certify_model`'s, guarded and timed at
+    :data:`~lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S`); every other one is ``not_applicable``, saying
+    why."""
+    from lyapcheck import tolerances as tol
     from lyapcheck.errors import InvalidParameter
+    from lyapcheck.models.classes.contexts import SampledRun
+    from lyapcheck.models.surfaces.certify import _discrete_rule, _run_classes
 
     if classes is None or classes == "all":
         chosen: Sequence[str] = DEFAULT_CLASSES
@@ -65,8 +59,18 @@ def certify_sampled(model: SampledModel, classes: str | Sequence[str] | None = N
         unknown = [c for c in chosen if c not in NAMES]
         if not chosen or unknown:
             raise InvalidParameter("classes", "names among " + ", ".join(NAMES), ",".join(unknown) or str(classes))
-    return {name: (run_linearization(model) if name == "linearization" else _not_yet(name))
-            for name in NAMES if name in chosen}
+    results: dict[str, ConditionResult] = {}
+    ctx = SampledRun(model=model)
+
+    def decide(entry: ModelClass) -> ConditionResult | None:
+        return _discrete_rule(entry, entry.run_sampled, _not_yet(entry.name), results, None, False)
+
+    def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
+        run_sampled = entry.run_sampled
+        return None if run_sampled is None else lambda budget: run_sampled(ctx, budget)
+
+    _run_classes(chosen, results, {}, tol.MODEL_CLASS_TIME_LIMIT_S, decide, compute)
+    return results
 
 
 def build_sampled_document(model: SampledModel, results: dict[str, ConditionResult]) -> dict[str, Any]:
@@ -113,6 +117,8 @@ def is_sampled_document(doc: dict[str, Any]) -> bool:
 def verify_sampled(doc: dict[str, Any]) -> list[Row]:
     """Re-check a sampled-data loop's document (module docstring); (check, ok, message) rows."""
     from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.classes.contexts import SampledCheck
+    from lyapcheck.models.classes.registry import verify
     from lyapcheck.models.language.sampling import parse_sampled
     from lyapcheck.models.surfaces.documents import with_verdict
     from lyapcheck.models.surfaces.stated import check_declared
@@ -144,17 +150,15 @@ def verify_sampled(doc: dict[str, Any]) -> list[Row]:
         rows.append(("conditions", False, "the conditions must be named by classes"))
         return rows
     derived = certify_sampled(model, list(conditions))
+    check = SampledCheck(model=model)
     for name, stated in conditions.items():
         again = derived[name].to_json()
         estimate = "spectral_radius_estimate"  # floating point, claims nothing: left as stated
         same_claim = {k: v for k, v in stated.items() if k != estimate} == {k: v for k, v in again.items()
                                                                               if k != estimate}
         ok, why = same_claim, "re-derived from the model text: the same answer, summary and data"
-        if same_claim and stated.get("status") in ("certified", "refuted"):
-            parts = sampled.linear_parts(model)
-            data = stated.get("certificate") if stated["status"] == "certified" else stated.get("refutation")
-            ok, why = (False, "no exact Jacobian") if isinstance(parts, str) else \
-                sampled.verify(*parts, model.period, stated["status"], data or {})
+        if same_claim and stated.get("status") in ("certified", "refuted"):  # its class's exact check
+            ok, why = verify(name, stated, check)
         elif not same_claim:
             why = (f"stated '{stated.get('status')}' ({str(stated.get('summary'))[:80]}...) but the model gives "
                    f"'{again['status']}' with other data or figures")
@@ -163,4 +167,4 @@ def verify_sampled(doc: dict[str, Any]) -> list[Row]:
 
 
 __all__ = ["DEFAULT_CLASSES", "build_sampled_document", "certify_sampled", "is_sampled_document", "network_files",
-           "run_linearization", "verify_sampled"]
+           "verify_sampled"]

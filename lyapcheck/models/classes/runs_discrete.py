@@ -1,0 +1,111 @@
+"""The search of each class on the discrete-time kinds of loop, as its entry in
+:mod:`lyapcheck.models.classes.registry` names it (``run_map``, ``run_map_functions``, ``run_sampled``).
+
+Each takes the loop's run context (:class:`~lyapcheck.models.classes.contexts.MapRun`,
+:class:`~lyapcheck.models.classes.contexts.MapFunctionsRun` or
+:class:`~lyapcheck.models.classes.contexts.SampledRun`) and the class's
+:class:`~lyapcheck.models.engines.search.Budget`, and returns the class's
+:class:`~lyapcheck.results.ConditionResult`, as :mod:`lyapcheck.models.classes.runs` does for continuous
+loops. What is decided for every class alike (a class without an entry for the kind of loop, an input that
+was not given, ``roa`` once GAS is certified) is the runner's,
+:func:`lyapcheck.models.surfaces.certify.certify_model`, not an entry's.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.classes.contexts import MapFunctionsRun, MapRun, SampledRun
+    from lyapcheck.models.engines.search import Budget
+    from lyapcheck.results import ConditionResult
+
+
+# -- a polynomial discrete-time map (shifted to its fixed point; lyapcheck.models.loop.discrete) -------------
+
+def linearization_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """The map's Jacobian at the fixed point, by the discrete-time test
+    (:func:`lyapcheck.models.classes.discrete_linearization.run`)."""
+    from lyapcheck.models.classes import discrete_linearization
+
+    return discrete_linearization.run(ctx.shifted)
+
+
+def quadratic_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """A quadratic V with ``V(F(e)) < V(e)`` (:func:`lyapcheck.models.classes.discrete_lyapunov.run`)."""
+    from lyapcheck.models.classes import discrete_lyapunov
+
+    return discrete_lyapunov.run(ctx.shifted, "quadratic", budget=budget)
+
+
+def sos_gas_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """A polynomial V of the searched degrees (:func:`lyapcheck.models.classes.discrete_lyapunov.run`)."""
+    from lyapcheck.models.classes import discrete_lyapunov
+
+    return discrete_lyapunov.run(ctx.shifted, "sos_gas", budget=budget)
+
+
+def roa_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """The linearization's quadratic V on its largest proved level
+    (:func:`lyapcheck.models.classes.discrete_regions.run_roa`)."""
+    from lyapcheck.models.classes import discrete_regions
+
+    return discrete_regions.run_roa(ctx.model, ctx.shifted, budget)
+
+
+def candidate_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """The user's V on its largest proved level (:func:`lyapcheck.models.classes.discrete_regions.run_candidate`)."""
+    from lyapcheck.models.classes import discrete_regions
+
+    if ctx.candidate is None:
+        raise ValueError("the candidate class runs with --candidate")
+    return discrete_regions.run_candidate(ctx.model, ctx.shifted, ctx.candidate, budget)
+
+
+def barrier_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """A barrier ``lam B - B(F)`` SOS, or an unsafe iterate proved
+    (:func:`lyapcheck.models.classes.discrete_safety.run_barrier`)."""
+    from lyapcheck.models.classes import discrete_safety
+
+    return discrete_safety.run_barrier(ctx.model, ctx.shifted, budget)
+
+
+def reach_avoid_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """A V falling by eps per step outside the goal, or an unsafe iterate proved
+    (:func:`lyapcheck.models.classes.discrete_safety.run_reach_avoid`)."""
+    from lyapcheck.models.classes import discrete_safety
+
+    return discrete_safety.run_reach_avoid(ctx.model, ctx.shifted, budget)
+
+
+# -- a discrete-time map with functions (lyapcheck.models.classes.discrete_functions) -----------------------
+
+def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """The exact Jacobian of the map at its fixed point, by the discrete-time test
+    (:func:`lyapcheck.models.classes.discrete_functions.linearization`)."""
+    from lyapcheck.models.classes import discrete_functions
+
+    return discrete_functions.linearization(ctx.model)
+
+
+def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A quadratic V's largest level proved by ball arithmetic on the true map
+    (:func:`lyapcheck.models.classes.discrete_functions.roa`)."""
+    from lyapcheck.models.classes import discrete_functions
+
+    return discrete_functions.roa(ctx.model, budget)
+
+
+# -- a sampled-data loop (lyapcheck.models.classes.sampled) ---------------------------------------------------
+
+def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResult":
+    """The Jacobian over one sampling period, decided in ball arithmetic
+    (:func:`lyapcheck.models.classes.sampled.linearization`)."""
+    from lyapcheck.models.classes import sampled
+
+    return sampled.linearization(ctx.model)
+
+
+__all__ = ["linearization_map", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map", "barrier_map",
+           "reach_avoid_map",
+           "linearization_map_functions", "roa_map_functions", "linearization_sampled"]

@@ -1,0 +1,110 @@
+"""The exact check of each class's certificate on the discrete-time kinds of loop, one callable per class and
+kind (the ``verify_map``, ``verify_map_functions`` and ``verify_sampled`` of its entry in
+:mod:`lyapcheck.models.classes.registry`).
+
+Each takes the class's name, a decided condition as stored (``c``: ``certified``, ``refuted`` or
+``counterexample``) and the check context verify re-derived from the model text
+(:class:`~lyapcheck.models.classes.contexts.MapCheck`,
+:class:`~lyapcheck.models.classes.contexts.MapFunctionsCheck` or
+:class:`~lyapcheck.models.classes.contexts.SampledCheck`), and returns ``(ok, why)``. A status the class
+has no check of on that loop (a refuted region, a counterexample) fails in the context's words
+(``not_checked``): on these loops only ``linearization`` (by its Jacobian) and a map's ``barrier`` and
+``reach_avoid`` (by an unsafe iterate) are ever refuted.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.classes.contexts import MapCheck, MapFunctionsCheck, SampledCheck
+
+#: the statuses a linearization's check re-derives (its certificate or its refutation)
+_JACOBIAN_STATUSES = ("certified", "refuted")
+
+
+def _data(c: dict[str, Any]) -> dict[str, Any]:
+    """A linearization's certificate or refutation, by its status."""
+    data = c.get("certificate") if c["status"] == "certified" else c.get("refutation")
+    return data or {}
+
+
+# -- a polynomial discrete-time map -------------------------------------------------------------------------
+
+def verify_linearization_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
+    """``linearization``: the discrete-time test on the shifted map's Jacobian
+    (:func:`lyapcheck.models.classes.discrete_linearization.verify`)."""
+    from lyapcheck.models.classes import discrete_linearization
+
+    if c["status"] not in _JACOBIAN_STATUSES:
+        return False, check.not_checked(c["status"])
+    return discrete_linearization.verify(check.shifted, c["status"], _data(c))
+
+
+def verify_lyapunov_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
+    """``quadratic``, ``sos_gas``: ``V(F(e)) - V(e) <= -mu V(e) - W(e)`` from the condition's JSON
+    (:func:`lyapcheck.models.classes.discrete_lyapunov.verify`)."""
+    from lyapcheck.models.classes import discrete_lyapunov
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return discrete_lyapunov.verify(check.shifted, c["status"], c)
+
+
+def verify_region_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
+    """``roa``, ``candidate``: ``V(F(e)) <= V(e) - eps m(e)`` on ``{V <= c}`` from the condition's JSON
+    (:func:`lyapcheck.models.classes.discrete_regions.verify`)."""
+    from lyapcheck.models.classes import discrete_regions
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return discrete_regions.verify(check.shifted, name, c)
+
+
+def verify_safety_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
+    """``barrier``, ``reach_avoid``: the certificate's identities on the map and the sets, or a refutation's
+    unsafe iterate, re-derived from the model text (:func:`lyapcheck.models.classes.discrete_safety.verify`)."""
+    from lyapcheck.models.classes import discrete_safety
+
+    if c["status"] not in ("certified", "refuted"):
+        return False, check.not_checked(c["status"])
+    return discrete_safety.verify(check.shifted, name, c, check.model)
+
+
+# -- a discrete-time map with functions ---------------------------------------------------------------------
+
+def verify_linearization_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck"
+                                       ) -> tuple[bool, str]:
+    """``linearization``: the exact Jacobian again, then the discrete-time test
+    (:func:`lyapcheck.models.classes.discrete_functions.verify_linearization`)."""
+    from lyapcheck.models.classes import discrete_functions
+
+    if c["status"] not in _JACOBIAN_STATUSES:
+        return False, check.not_checked(c["status"])
+    return discrete_functions.verify_linearization(check.model, c["status"], _data(c))
+
+
+def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
+    """``roa``: the ``discrete_interval`` region proved again, cell for cell
+    (:func:`lyapcheck.models.classes.discrete_functions.verify_roa`)."""
+    from lyapcheck.models.classes import discrete_functions
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return discrete_functions.verify_roa(check.model, c)
+
+
+# -- a sampled-data loop ------------------------------------------------------------------------------------
+
+def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCheck") -> tuple[bool, str]:
+    """``linearization``: ``A``, ``B``, ``K`` and the period re-derived, the decision checked again in ball
+    arithmetic (:func:`lyapcheck.models.classes.sampled.verify_linearization`)."""
+    from lyapcheck.models.classes import sampled
+
+    if c["status"] not in _JACOBIAN_STATUSES:
+        return False, check.not_checked(c["status"])
+    return sampled.verify_linearization(check.model, c["status"], _data(c))
+
+
+__all__ = ["verify_linearization_map", "verify_lyapunov_map", "verify_region_map", "verify_safety_map",
+           "verify_linearization_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]
