@@ -779,14 +779,12 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
 def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
     """The classes a sweep of a discrete-time map takes: those with a discrete-time condition
     (:data:`lyapcheck.models.classes.registry.DISCRETE`) but :data:`MAP_UNSWEPT`, on a map with functions
-    :data:`lyapcheck.models.classes.discrete_functions.TAKEN`."""
+    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS` but :data:`MAP_UNSWEPT`."""
     if isinstance(model, Model):
         # barrier and reach_avoid are certified on a map at a point, but a sweep's cross-check of them (by
         # iteration, sweeps.crosscheck.check_sets) is not built yet: a point sweep does not take them
         return tuple(c for c in model_classes.DISCRETE if c not in MAP_UNSWEPT)
-    from lyapcheck.models.classes.discrete_functions import TAKEN
-
-    return TAKEN
+    return tuple(c for c in model_classes.MAP_FUNCTIONS if c not in MAP_UNSWEPT)
 
 
 #: classes a map takes at a point that a sweep of a map does not take yet (:func:`map_classes`)
