@@ -33,6 +33,19 @@ and the exact checks of ``V`` (:func:`~lyapcheck.sos.certificates.check_positive
 The map is the :class:`~lyapcheck.models.loop.field.ShiftedField` of a model whose ``[dynamics]``
 give next values: its numerators are ``F`` (each denominator a constant, already divided out).
 No scaling of the states is applied: the certificate is in the declared shifted states.
+
+Over a box of parameters (``certify --box``, :mod:`lyapcheck.models.loop.boxes`) the ring holds the
+states, then the box's parameters normalized to ``u in [-1, 1]`` (``F = F(e, u)``, the fixed point
+proved not to move over the box when the box was read). ``V`` stays a polynomial of the states alone,
+common to the box (as the continuous ``quadratic`` over a box, whose GES claim needs one ``V``), and
+the decrease carries the S-procedure multipliers ``r_j (1 - u_j^2)``
+(:func:`lyapcheck.models.engines.search.box_multipliers`):
+
+    V(e) - V(F(e, u)) - mu V(e) - sum_j r_j(e, u) (1 - u_j^2) = z_W^T Q_W z_W,   Q_W > 0,  Q_rj >= 0,
+
+so on the box (``1 - u_j^2 >= 0``) ``V(F(e, u)) - V(e) <= -mu V(e) - W(e, u) < 0`` away from 0 for
+every parameter value of the box, and the GES figures hold with the same ``k`` and ``r`` for each.
+A box widened after the fact changes the normalization, so the identity fails in ``verify``.
 """
 
 from __future__ import annotations
@@ -42,15 +55,16 @@ from typing import Any, Final, Literal, Mapping, Sequence
 
 from lyapcheck import tolerances as tol
 from lyapcheck.models.classes import lyapunov
-from lyapcheck.models.classes.claims import discrete_lyapunov_sentence
+from lyapcheck.models.classes.claims import box_prefix, discrete_lyapunov_sentence
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, Budget, BudgetExhausted, ParameterValues, Search,
-                                             literal, one, param)
+                                             box_multipliers, box_multipliers_from_json, box_multipliers_of,
+                                             literal, multiplier_grams, multiplier_variable, one, param)
 from lyapcheck.models.loop.field import ShiftedField, StateField
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
-from lyapcheck.sos.certificates import GramPoly, check_positive_definite_v
+from lyapcheck.sos.certificates import BoxMultipliers, GramPoly, box_terms, check_positive_definite_v
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term
 
@@ -71,33 +85,35 @@ ClassName = Literal["quadratic", "sos_gas"]
 
 class NotAMap(ValueError):
     """The shifted loop is not a polynomial map this module can read (a non-constant denominator,
-    a box of parameters, or ``F(0) != 0``)."""
+    or ``F(0) != 0``)."""
 
 
 def map_polynomials(shifted: ShiftedField) -> tuple[Ring, tuple[Poly, ...]]:
-    """``F`` of ``e+ = F(e)`` in the ring of the states alone (disturbances held at 0), exactly;
-    :class:`NotAMap` naming what is missing when the loop is not a polynomial map with ``F(0) = 0``."""
-    if shifted.box is not None:
-        raise NotAMap("a box of parameters is not supported on a discrete-time map here")
+    """``F`` of ``e+ = F(e)`` in the ring of the states alone (disturbances held at 0), exactly, then a
+    box's normalized parameters if the map has one (``F(e, u)``); :class:`NotAMap` naming what is missing
+    when the loop is not a polynomial map with ``F(0) = 0`` (for every ``u``)."""
     full = shifted.ring
     n = shifted.n
-    ring = Ring(full.names[:n])
-    zero = {name: Fraction(0) for name in full.names[n:]}
+    kept = full.names[:n] + shifted.box_names
+    ring = Ring(kept)
+    zero = {name: Fraction(0) for name in full.names if name not in kept}
     F = []
     for name, num, den in zip(full.names, shifted.numerators, shifted.denominators):
         if not den.is_constant():
             raise NotAMap(f"the next value of {name} has a denominator depending on the states (a polynomial map "
                           "is needed)")
         F.append(full.restrict(full.substitute(num * (1 / den.leading_coefficient()), zero), ring))
-    origin = {name: Fraction(0) for name in ring.names}
+    origin = {name: Fraction(0) for name in ring.names[:n]}
     if any(ring.substitute(fi, origin) != ring.zero() for fi in F):
-        raise NotAMap("F(0) != 0: the equilibrium is not a fixed point of the map")
+        raise NotAMap("F(0) != 0: the equilibrium is not a fixed point of the map"
+                      + (" for every value of the box" if shifted.box is not None else ""))
     return ring, tuple(F)
 
 
 def compose(ring: Ring, p: Poly, F: Sequence[Poly]) -> Poly:
-    """``p(F(e))`` exactly (``F`` one image per state; the ring holds the states alone)."""
-    return ring.compose(p, list(F))
+    """``p(F(e))`` exactly (``F`` one image per state, the states the ring's first variables; a box's
+    parameters, the ring's last ones, are left as they are)."""
+    return ring.compose(p, list(F) + list(ring.gens()[len(F):]))
 
 
 def map_degree(ring: Ring, F: Sequence[Poly]) -> int:
@@ -129,12 +145,14 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
     or why there is none: a size limit (the continuous classes' constants, named), or no strict
     certificate of this form. ``drop``/``drop_v``: monomials the remainder's / ``V``'s basis leaves
     out (facial reduction, as :func:`lyapcheck.models.classes.lyapunov.lyapunov_program`)."""
-    n = ring.nvars
+    nv = ring.nvars
+    n = len(F)
     top = degree * map_degree(ring, F)
-    if bases.candidate_count(n, top) > lyapunov.CANDIDATE_LIMIT:
-        return size_limit(bases.candidate_count(n, top), "candidate monomials", lyapunov.CANDIDATE_LIMIT,
+    if bases.candidate_count(nv, top) > lyapunov.CANDIDATE_LIMIT:
+        return size_limit(bases.candidate_count(nv, top), "candidate monomials", lyapunov.CANDIDATE_LIMIT,
                           "CANDIDATE_LIMIT")
-    z_v = [m for m in monomials(n, 1, degree // 2) if m not in drop_v]
+    # V is of the states alone (common to a box): its monomials carry no parameter
+    z_v = [m + (0,) * (nv - n) for m in monomials(n, 1, degree // 2) if m + (0,) * (nv - n) not in drop_v]
     if not bases.has_pure_powers(z_v, range(n)):
         return ("no strict certificate of this form exists (V's basis, reduced to the face the solver found, "
                 "keeps no pure power of some state)")
@@ -142,9 +160,11 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
     alphas = sorted(lyapunov.gram_products(z_v, v_blocks))
     supports = [decrease_support(ring, F, a) for a in alphas]
     target = set().union(*supports)
+    box_grams, box_terms_ = box_multipliers(nv, n, target, with_states=True, generators=generators)
+    target |= box_support(box_grams, nv)
     if len(target) > lyapunov.TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", lyapunov.TARGET_LIMIT, "TARGET_LIMIT")
-    z_w = [m for m in bases.sos_basis(n, target) if m not in drop]
+    z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
     if len(z_w) > lyapunov.MAX_GRAM_ROWS or len(z_v) > lyapunov.MAX_GRAM_ROWS:
         return size_limit(max(len(z_w), len(z_v)), "monomials per sum-of-squares matrix", lyapunov.MAX_GRAM_ROWS,
                           "MAX_GRAM_ROWS")
@@ -157,10 +177,12 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
     gram_terms.append(Term(one(ring, -1), "V"))
     # identity 2: sum_a c_a ((1 - mu) e^a - F^a) = W
     decrease_terms = [Term(param(decrease_name(k), s), coefficient_name(k)) for k, s in enumerate(supports)]
+    decrease_terms.extend(box_terms_)  # over a box: - sum_j r_j (1 - u_j^2)
     decrease_terms.append(Term(one(ring, -1), "W"))
     structure = Structure(
-        nvars=n,
-        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks)))),
+        nvars=nv,
+        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))),
+               *box_grams),
         scalars=tuple(Scalar(coefficient_name(k)) for k in range(len(alphas))),
         identities=(Identity("gram_V", tuple(gram_terms), None, "V"),
                     Identity("decrease", tuple(decrease_terms), None, "W")),
@@ -169,6 +191,15 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
         return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{lyapunov.BLOCK_COST_LIMIT:.1e}",
                           "BLOCK_COST_LIMIT")
     return structure, alphas
+
+
+def box_support(grams: Sequence[Gram], nv: int) -> set[Monomial]:
+    """The monomials the box's multiplier terms ``r_j (1 - u_j^2)`` can produce (none at a point)."""
+    out: set[Monomial] = set()
+    for g in grams:
+        sq = (tuple([0] * nv), tuple(2 * int(k == multiplier_variable(g.name)) for k in range(nv)))
+        out |= {tuple(a + b for a, b in zip(m, s)) for m in lyapunov.gram_products(g.basis, g.blocks) for s in sq}
+    return out
 
 
 def decrease_support(ring: Ring, F: Sequence[Poly], a: Monomial) -> set[Monomial]:
@@ -187,12 +218,14 @@ def decrease_values(ring: Ring, F: Sequence[Poly], alphas: Sequence[Monomial], m
 
 # -- the exact check (the certificate alone and the map) ---------------------------------------------
 
-def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramPoly, mu: Fraction
-                            ) -> tuple[bool, str]:
-    """``V - V(F) - mu V = W`` exactly, ``0 <= mu < 1``, ``V`` positive definite and radially unbounded
-    (:func:`~lyapcheck.sos.certificates.check_positive_definite_v`) and ``W`` with ``Q_W > 0`` and a
-    pure power of every state: then ``V(F(e)) - V(e) <= -mu V(e) - W(e) < 0`` away from 0."""
-    n = ring.nvars
+def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramPoly, mu: Fraction,
+                            box: BoxMultipliers = ()) -> tuple[bool, str]:
+    """``V - V(F) - mu V - sum_j r_j (1 - u_j^2) = W`` exactly, ``0 <= mu < 1``, ``V`` positive definite,
+    radially unbounded (:func:`~lyapcheck.sos.certificates.check_positive_definite_v`) and of the states
+    alone, ``W`` with ``Q_W > 0`` and a pure power of every state, each multiplier ``r_j`` PSD on a box
+    variable (none at a point): then ``V(F(e, u)) - V(e) <= -mu V(e) - W(e, u) < 0`` away from 0 for every
+    ``u`` of the box."""
+    n = len(F)
     if not 0 <= mu < MU_CEILING:
         return False, "the decay rate mu must satisfy 0 <= mu < 1"
     ok, why = check_positive_definite_v(V, n)
@@ -202,9 +235,20 @@ def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramP
         return False, "W's basis must hold a pure power of every state (so that V(F) - V < 0 away from 0)"
     if not W.positive_definite():
         return False, "Q_W is not positive definite (exact)"
+    if any(any(m[n:]) for m in V.basis):
+        return False, "V must be a polynomial of the states alone (one V for every value of the box)"
+    if any(not n <= j < ring.nvars for j, _ in box):
+        return False, "a box multiplier names a variable that is not one of the box's parameters"
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
     v = V.poly(ring)
-    if v - compose(ring, v, F) - v * to_fmpq(mu) != W.poly(ring):
-        return False, "the identity V - V(F) - mu V = W does not hold exactly"
+    if v - compose(ring, v, F) - v * to_fmpq(mu) - boxed != W.poly(ring):
+        return False, "the identity V - V(F) - mu V = W does not hold exactly" + (" (with the box's multipliers)"
+                                                                                    if box else "")
+    if box:
+        return True, ("Q_V > 0, Q_W > 0, the box's multipliers PSD and V - V(F) - mu V - sum r_j (1 - u_j^2) = W, "
+                      "exactly (discrete-time map, every value of the box)")
     return True, "Q_V > 0, Q_W > 0 and V - V(F) - mu V = W, exactly (discrete-time map)"
 
 
@@ -220,10 +264,11 @@ def attempt(ring: Ring, F: Sequence[Poly], structure: Structure, alphas: Sequenc
         return None, solution
     V = GramPoly.of(structure.gram("V").basis, point.grams["V"])
     W = GramPoly.of(structure.gram("W").basis, point.grams["W"])
-    ok, _ = check_discrete_lyapunov(ring, F, V, W, mu)
+    box = box_multipliers_of(point.grams, multiplier_grams(structure))
+    ok, _ = check_discrete_lyapunov(ring, F, V, W, mu, box)
     if not ok:
         return None, solution
-    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"]}, solution
+    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"], "box": box}, solution
 
 
 def search_degree(ring: Ring, F: Sequence[Poly], degree: int, search: Search) -> tuple[dict[str, Any] | None, str]:
@@ -300,10 +345,12 @@ def run(shifted: ShiftedField, name: ClassName, search: Search | None = None,
 # -- the claim ----------------------------------------------------------------------------------------
 
 def quadratic_matrix_of(V: GramPoly, n: int) -> list[list[Fraction]] | None:
-    """``P`` of ``V = e^T P e`` when ``V``'s basis is exactly the states' degree-1 monomials, else None."""
-    if len(V.basis) != n or any(sum(m) != 1 for m in V.basis):
+    """``P`` of ``V = e^T P e`` when ``V``'s basis is exactly the ``n`` states' degree-1 monomials, else None
+    (the monomials may carry a box's parameters after the states, at exponent 0)."""
+    if len(V.basis) != n or any(sum(m) != 1 or any(m[n:]) for m in V.basis):
         return None
-    order = [V.basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
+    nv = len(V.basis[0])
+    order = [V.basis.index(tuple(int(k == i) for k in range(nv))) for i in range(n)]
     return [[V.Q[order[i]][order[j]] for j in range(n)] for i in range(n)]
 
 
@@ -327,12 +374,14 @@ def ges_figures(V: GramPoly, mu: Fraction, n: int) -> dict[str, Fraction] | None
 def certified(shifted: ShiftedField, ring: Ring, name: ClassName, found: dict[str, Any], solver: dict[str, Any]
               ) -> ConditionResult:
     V, W, mu = found["V"], found["W"], found["mu"]
-    n = ring.nvars
+    n = shifted.n
     figures = ges_figures(V, mu, n) if name == "quadratic" else None
     kind = QUADRATIC_KIND if figures is not None else SOS_KIND
     cert: dict[str, Any] = {"kind": kind, "time": "discrete", "degree": found["degree"], "mu": str(mu),
                             "V": lyapunov.terms_json(ring, V.poly(ring)), "gram_V": V.to_json(),
                             "gram_W": W.to_json()}
+    if found.get("box"):  # over a box: the S-procedure multipliers of 1 - u_j^2 (the box itself is the document's)
+        cert["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]
     numbers: dict[str, Any] = {"degree": found["degree"], "time": "discrete", "decay_rate_V_per_step": float(mu),
                                "relative_margin": found["margin"]}
     if figures is not None:
@@ -357,14 +406,17 @@ def verify(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple
         if kind not in (QUADRATIC_KIND, SOS_KIND) or cert.get("time") != "discrete":
             return False, f"not a certificate of a discrete-time map (kind {kind!r})"
         ring, F = map_polynomials(shifted)
-        n = ring.nvars
-        V = GramPoly.from_json(cert["gram_V"], n)
-        W = GramPoly.from_json(cert["gram_W"], n)
+        nv, n = ring.nvars, len(F)
+        V = GramPoly.from_json(cert["gram_V"], nv)
+        W = GramPoly.from_json(cert["gram_W"], nv)
         mu = Fraction(cert["mu"])
         degree = int(cert["degree"])
+        box = box_multipliers_from_json(cert.get("box_multipliers", []), nv)
     except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
         return False, f"malformed certificate: {exc}"
-    ok, why = check_discrete_lyapunov(ring, F, V, W, mu)
+    if box and shifted.box is None:
+        return False, "box multipliers in the certificate of a map without a box"
+    ok, why = check_discrete_lyapunov(ring, F, V, W, mu, box)
     if not ok:
         return False, why
     if lyapunov.terms_json(ring, V.poly(ring)) != cert.get("V"):
@@ -388,7 +440,8 @@ def verify(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple
         return False, why_figures
     if data.get("property") != ("GES" if kind == QUADRATIC_KIND else "GAS"):
         return False, f"a {kind} certificate does not prove {data.get('property')}"
-    if data.get("summary") != discrete_lyapunov_sentence(kind, degree, mu, figures):
+    prefix = box_prefix(shifted.box, "certified") if shifted.box is not None else ""
+    if data.get("summary") != prefix + discrete_lyapunov_sentence(kind, degree, mu, figures):
         return False, "the stated sentence is not the certificate's"
     return True, why
 
@@ -423,3 +476,19 @@ def _check_ges_figures(P: Sequence[Sequence[Fraction]], mu: Fraction, figures: M
     if r < 0 or r * r < 1 - mu:
         return False, "r is below sqrt(1 - mu)"
     return True, "a quadratic V with V(F) <= (1 - mu) V and c1 I < P < c2 I: GES of the map, exactly"
+
+
+# -- a map over a box: what is taken ------------------------------------------------------------------
+
+#: the classes a polynomial map takes over a box of parameters (``certify --box``): one V for every value
+BOX_CLASSES: Final = ("quadratic", "sos_gas")
+
+
+def not_over_box(name: str) -> str:
+    """The ``not_applicable`` sentence of a class other than :data:`BOX_CLASSES` on a map over a box."""
+    if name == "linearization":
+        what = "linearization decides its Jacobian at one parameter value only on a map"
+    else:
+        what = f"{name} is decided at one parameter value only on a map"
+    return (f"{what} (certify a point with --set NAME=VALUE); over a box, quadratic proves GES and sos_gas GAS "
+            "for every value of the box")

@@ -78,9 +78,13 @@ def check_box(model: Model, box: ModelBox) -> None:
     from lyapcheck.models.loop.field import shifted_field
     from lyapcheck.sos.polynomials import Ring
 
+    from lyapcheck.models.loop.discrete import is_discrete, shifted_map
+
     where = f"--box {', '.join(box.names)}"
     try:
-        shifted = shifted_field(model, box=box)
+        # a map's fixed point must stay put: its shifted map e+ = f(x_eq + e) - x_eq vanishes at e = 0 for every
+        # value of the box (a field's equilibrium: its right-hand sides vanish there)
+        shifted = shifted_map(model, box=box) if is_discrete(model) else shifted_field(model, box=box)
     except ValueError as exc:  # an output divided by a box parameter: not supported over a box
         raise ModelFileError(model.source, where, str(exc)) from None
     ring = shifted.ring
@@ -89,8 +93,9 @@ def check_box(model: Model, box: ModelBox) -> None:
     u_ring = Ring(box.names)
     for s, num, den in zip(model.states, shifted.numerators, shifted.denominators):
         if not ring.substitute(num, origin).is_zero():
-            raise ModelFileError(model.source, where, f"the equilibrium moves with the box's parameters: {s}' is not 0 "
-                                                      "there for every value of the box (checked exactly)")
+            moved = (f"{s}+ - {s} is not 0 at the fixed point" if is_discrete(model) else f"{s}' is not 0 there")
+            raise ModelFileError(model.source, where, f"the equilibrium moves with the box's parameters: {moved} "
+                                                      "for every value of the box (checked exactly)")
         den_eq = ring.restrict(ring.substitute(den, origin), u_ring)
         if not _nonzero_on_box(u_ring, den_eq):
             raise ModelFileError(model.source, where, f"the model is not defined on the whole box: the denominator of "
