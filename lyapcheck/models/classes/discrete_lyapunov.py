@@ -481,14 +481,92 @@ def _check_ges_figures(P: Sequence[Sequence[Fraction]], mu: Fraction, figures: M
 # -- a map over a box: what is taken ------------------------------------------------------------------
 
 #: the classes a polynomial map takes over a box of parameters (``certify --box``): one V for every value
-BOX_CLASSES: Final = ("quadratic", "sos_gas")
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas")
 
 
 def not_over_box(name: str) -> str:
     """The ``not_applicable`` sentence of a class other than :data:`BOX_CLASSES` on a map over a box."""
-    if name == "linearization":
-        what = "linearization decides its Jacobian at one parameter value only on a map"
-    else:
-        what = f"{name} is decided at one parameter value only on a map"
-    return (f"{what} (certify a point with --set NAME=VALUE); over a box, quadratic proves GES and sos_gas GAS "
-            "for every value of the box")
+    return (f"{name} is decided at one parameter value only on a map (certify a point with --set NAME=VALUE); "
+            "over a box, linearization proves LES, quadratic GES and sos_gas GAS for every value of the box")
+
+
+# -- linearization over a box: one Stein certificate for every Jacobian of the box --------------------
+
+#: the method a map's linearization over a box states (its certificate carries ``"time": "discrete"``)
+BOX_STEIN_METHOD: Final = "box_stein"
+
+
+def jacobian_map(ring: Ring, F: Sequence[Poly]) -> tuple[Poly, ...]:
+    """``A(u) e``: each component's terms of degree exactly 1 in the states (any degree in a box's
+    parameters), the linear map whose matrix is the Jacobian at the fixed point, exactly."""
+    n = len(F)
+    out = []
+    for fi in F:
+        linear = {m: c for m, c in ring.terms(fi).items() if sum(m[:n]) == 1}
+        out.append(ring.from_terms(linear) if linear else ring.zero())
+    return tuple(out)
+
+
+def run_linearization_box(shifted: ShiftedField, budget: Budget | None = None) -> ConditionResult:
+    """``linearization`` of a map over a box: a quadratic ``V = e^T P e`` common to the box with
+    ``V(A(u) e) - V(e) <= -mu V(e) - W(e, u)`` for every ``u`` (the quadratic class's program on the linear
+    map ``A(u) e``, box multipliers and all). Then every ``A(u)`` has ``A(u)^T P A(u) - P < 0``: every
+    eigenvalue of modulus < 1, so the fixed point is locally exponentially stable for every value of the
+    box. None found is ``not_certified`` (a box reaching an unstable gain has none; a stable box may need a
+    ``P`` that depends on the parameters, not taken here)."""
+    from lyapcheck.models.classes.claims import DISCRETE_BOX_STEIN_SENTENCE
+
+    try:
+        ring, F = map_polynomials(shifted)
+    except NotAMap as exc:
+        return ConditionResult("linearization", "not_applicable", f"not a polynomial map: {exc}")
+    A = jacobian_map(ring, F)
+    search = Search(ring, budget if budget is not None else
+                    Budget(tol.MODEL_CLASS_TIME_LIMIT_S, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+    try:
+        found, why = search_degree(ring, A, 2, search)
+    except BudgetExhausted as exc:
+        late = reasons.out_of_time("a Stein certificate common to the box", search.budget.seconds, [str(exc)])
+        return ConditionResult("linearization", "inconclusive", late.summary,
+                               numbers=late.numbers({"reason": str(exc), "time": "discrete"}),
+                               solver={"solves": search.log})
+    if found is None:
+        none = reasons.reason("no P > 0 with A(p)^T P A(p) - P < 0 for every p of the box was found (" + why + ")",
+                              (), "a narrower box, or certify a point with --set NAME=VALUE")
+        return ConditionResult("linearization", "not_certified", none.summary,
+                               numbers=none.numbers({"time": "discrete"}), solver={"solves": search.log})
+    V, W, mu = found["V"], found["W"], found["mu"]
+    cert: dict[str, Any] = {"time": "discrete", "method": BOX_STEIN_METHOD, "mu": str(mu),
+                            "jacobian_map": [lyapunov.terms_json(ring, a) for a in A],
+                            "gram_V": V.to_json(), "gram_W": W.to_json(),
+                            "box_multipliers": [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]}
+    return ConditionResult("linearization", "certified", DISCRETE_BOX_STEIN_SENTENCE, certificate=cert,
+                           numbers={"time": "discrete"},
+                           solver={"solves": search.log})
+
+
+def verify_linearization_box(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple[bool, str]:
+    """Re-check a map's ``linearization`` over a box: ``A(u) e`` re-derived from the shifted map with the box's
+    coordinates, the identity with its multipliers, ``V`` quadratic and positive definite, exactly."""
+    if status != "certified":
+        return False, f"a {status} linearization over a box, which a map never states"
+    try:
+        if data.get("time") != "discrete" or data.get("method") != BOX_STEIN_METHOD:
+            return False, f"not a map's linearization over a box (method {data.get('method')!r})"
+        ring, F = map_polynomials(shifted)
+        nv, n = ring.nvars, len(F)
+        V = GramPoly.from_json(data["gram_V"], nv)
+        W = GramPoly.from_json(data["gram_W"], nv)
+        mu = Fraction(data["mu"])
+        box = box_multipliers_from_json(data.get("box_multipliers", []), nv)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+        return False, f"malformed certificate: {exc}"
+    A = jacobian_map(ring, F)
+    if data.get("jacobian_map") != [lyapunov.terms_json(ring, a) for a in A]:
+        return False, "the stored Jacobian differs from the map's over the box"
+    if quadratic_matrix_of(V, n) is None:
+        return False, "V must be quadratic in the states (V = e^T P e)"
+    ok, why = check_discrete_lyapunov(ring, A, V, W, mu, box)
+    if not ok:
+        return False, why
+    return True, "one P > 0 with A(u)^T P A(u) - P < 0 for every u of the box (box multipliers), exactly"
