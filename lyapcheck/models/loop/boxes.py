@@ -10,7 +10,8 @@ after the fact changes ``c`` and ``h``, so the identities no longer hold and ``v
 
 A box is checked when it is given: its names are the model's parameters, each range non-empty
 (``lo < hi``), the equilibrium is one for every value in the box (exactly: the right-hand sides at
-the equilibrium vanish identically in the box's parameters), and the model is defined on the whole
+the equilibrium vanish identically in the box's parameters; a discrete-time map's fixed point stays
+put, ``f(x_eq) = x_eq`` identically), and the model is defined on the whole
 box (every denominator at the equilibrium is proved non-zero on it). Bad boxes are one-line exit-2
 errors naming the field.
 """
@@ -75,10 +76,9 @@ def parse_box_of(source: str, parameters: Mapping[str, Any], specs: Sequence[str
 
 def check_box(model: Model, box: ModelBox) -> None:
     """The equilibrium is one for every parameter of the box, and the model is defined there."""
+    from lyapcheck.models.loop.discrete import is_discrete, shifted_map
     from lyapcheck.models.loop.field import shifted_field
     from lyapcheck.sos.polynomials import Ring
-
-    from lyapcheck.models.loop.discrete import is_discrete, shifted_map
 
     where = f"--box {', '.join(box.names)}"
     try:
@@ -93,9 +93,12 @@ def check_box(model: Model, box: ModelBox) -> None:
     u_ring = Ring(box.names)
     for s, num, den in zip(model.states, shifted.numerators, shifted.denominators):
         if not ring.substitute(num, origin).is_zero():
-            moved = (f"{s}+ - {s} is not 0 at the fixed point" if is_discrete(model) else f"{s}' is not 0 there")
-            raise ModelFileError(model.source, where, f"the equilibrium moves with the box's parameters: {moved} "
-                                                      "for every value of the box (checked exactly)")
+            if is_discrete(model):
+                raise ModelFileError(model.source, where, f"the map's fixed point moves with the box's parameters: "
+                                                          f"{s}+ is not {s} there for some value of the box (checked "
+                                                          "exactly); certify a point with --set NAME=VALUE")
+            raise ModelFileError(model.source, where, f"the equilibrium moves with the box's parameters: {s}' is not 0 "
+                                                      "there for every value of the box (checked exactly)")
         den_eq = ring.restrict(ring.substitute(den, origin), u_ring)
         if not _nonzero_on_box(u_ring, den_eq):
             raise ModelFileError(model.source, where, f"the model is not defined on the whole box: the denominator of "
