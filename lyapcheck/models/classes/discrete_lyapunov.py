@@ -74,6 +74,10 @@ SOS_KIND: Final = "discrete_sos"
 #: degrees of V that ``sos_gas`` tries on a map, in turn (``quadratic`` is degree 2 alone): the
 #: decrease has degree ``deg V * deg F``, so the programs grow faster than in continuous time
 SOS_GAS_DEGREES: Final = (2, 4, 6)
+#: the degrees ``sos_gas`` tries on a map over a box: the box's coordinates join the decrease and its
+#: multipliers, and at degree 6 one solve of a cubic map over a one-parameter box took more than the class's
+#: time limit (MODEL_CLASS_TIME_LIMIT_S, 60 s) where degree 4 takes about a second
+BOX_SOS_GAS_DEGREES: Final = (2, 4)
 #: the largest decay rate tried: ``V(F) <= (1 - mu) V`` with ``mu >= 1`` asks ``V(F) <= 0``, which
 #: no ``F`` other than 0 meets; the search stays below 1 so that ``r = sqrt(1 - mu) > 0``
 MU_CEILING: Final = Fraction(1)
@@ -303,6 +307,10 @@ def run(shifted: ShiftedField, name: ClassName, search: Search | None = None,
     ``e+ = F(e)`` of ``shifted`` (its numerators read as next values). ``search``: the class's
     search (default: its own, on ``budget``, by default the continuous classes' safety net,
     MODEL_CLASS_TIME_LIMIT_S)."""
+    if degrees is None and name == "sos_gas" and shifted.box is not None:
+        from lyapcheck.degrees import searched_degrees
+
+        degrees = searched_degrees(BOX_SOS_GAS_DEGREES)  # (certify --degree 6 asks for more, at its cost)
     if degrees is None:
         degrees = (2,) if name == "quadratic" else SOS_GAS_DEGREES
     try:

@@ -376,8 +376,12 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
     ctx = MapRun(model=model, shifted=shifted_map(model, box=box), candidate=cand, results=out.results)
 
     def decide(entry: ModelClass) -> ConditionResult | None:
-        if box is not None and entry.name not in BOX_CLASSES:
-            return ConditionResult(entry.name, "not_applicable", not_over_box(entry.name))
+        if box is not None:  # candidate over a box as on every loop; a class a map takes at a point only, named
+            given = _needs_input(entry.name, box, cand)
+            if given is not None:
+                return given
+            if entry.run_map is not None and entry.name not in BOX_CLASSES:
+                return ConditionResult(entry.name, "not_applicable", not_over_box(entry.name))
         return _discrete_rule(entry, entry.run_map, not_decided(entry.name, DISCRETE), out.results, cand,
                               bool(model.disturbances))
 
