@@ -216,8 +216,8 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
     Refusal(cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
-            | cells(("discrete",), CLASSES[:5], ("--box", "sweep boxes"))
-            | cells(("discrete",), ("barrier", "reach_avoid"), ("--box", "sweep points", "sweep boxes")),
+            | cells(("discrete",), CLASSES[:5], ("sweep boxes",))
+            | cells(("discrete",), ("barrier", "reach_avoid"), ("sweep points", "sweep boxes")),
             ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
              '"discrete")'),
             "A discrete-time map (`[model] time = \"discrete\"`) takes `linearization` (every eigenvalue of the map's "
@@ -226,8 +226,13 @@ REFUSALS: tuple[Refusal, ...] = (
             "lambda B(x)`, exact) and `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) at a point; "
             "`sos_bound` is `not_applicable` until its discrete-time condition is built; reports and point sweeps "
             "iterate the map (a sweep's cross-check of `barrier` and `reach_avoid` by iteration is not built yet, so "
-            "a point sweep does not take them), while `--box` and box sweeps, which read `[dynamics]` as a field, "
-            "refuse a map in one line (a gap, not a theorem)."),
+            "a point sweep does not take them), while box sweeps, which read `[dynamics]` as a field, refuse a map "
+            "in one line (a gap, not a theorem)."),
+    Refusal(cells(("discrete",), ("roa", "barrier", "reach_avoid"), ("--box",)),
+            ("decided at one parameter value only on a map",),
+            "Over a `--box` a map takes `linearization` (one Stein `P` for every Jacobian of the box), `quadratic` "
+            "and `sos_gas` (one `V` for every value, box multipliers, exact); its region and safety classes are "
+            "decided at a point only (their conditions over a box are not built: a gap, not a theorem)."),
     Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "candidate", "sos_bound", "barrier", "reach_avoid"),
                   CLASS_SURFACES)
             | cells(("map_functions",), ("linearization", "roa"), ("--box", "sweep boxes")),

@@ -286,14 +286,16 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert cli("verify", str(tmp_path / "c.json")).exit_code == 0
 
 
-def test_box_and_box_sweeps_refuse_a_map_in_one_line_reports_and_point_sweeps_take_it(tmp_path: Path) -> None:
-    """--box and a boxes sweep read [dynamics] as a field: refused in one line. A report iterates the map
-    (tests/test_discrete_reports.py) and a points sweep certifies it point by point
-    (tests/test_discrete_sweeps.py): both are taken."""
+def test_box_sweeps_refuse_a_map_in_one_line_reports_point_sweeps_and_box_certify_take_it(tmp_path: Path) -> None:
+    """A boxes sweep reads [dynamics] as a field: refused in one line. ``certify --box`` takes a map (its classes
+    over a box: tests/test_discrete_boxes.py), a report iterates the map (tests/test_discrete_reports.py) and a
+    points sweep certifies it point by point (tests/test_discrete_sweeps.py)."""
     from sweeps.spec import load_model_spec
 
     path = write(tmp_path, MAP)
-    assert "--box" in refused_line(cli("certify", str(path), "--box", "a=0.8..1.2", "--classes", "linearization"))
+    boxed = cli("certify", str(path), "--box", "a=0.8..1.2", "--classes", "linearization", "--no-store", "--json")
+    assert boxed.exit_code == 0, boxed.output
+    assert json.loads(boxed.stdout)["conditions"]["linearization"]["status"] == "certified"
     cert = tmp_path / "c.json"
     assert cli("certify", str(path), "--classes", "linearization", "--no-store", "--out", str(cert)).exit_code == 0
     assert cli("report", str(cert), "--html", str(tmp_path / "c.html")).exit_code == 0

@@ -241,6 +241,8 @@ def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     method = data.get("method")
     from lyapcheck.models.classes import discrete_linearization
 
+    if discrete_linearization.is_discrete_certificate(data) and method == "box_stein":  # a map's over a box
+        return DISCRETE_BOX_STEIN_SENTENCE
     if discrete_linearization.is_discrete_certificate(data):  # a map's: its own methods and words
         return discrete_linearization.sentence(status, data)
     if status == "certified" and method == "lyapunov_equation":
@@ -281,6 +283,11 @@ def discrete_lyapunov_sentence(kind: str, degree: int, mu: Fraction, figures: Ma
             "(checked exactly)")
 
 
+#: the claim of a map's linearization over a box (lyapcheck.models.classes.discrete_lyapunov.run_linearization_box;
+#: the summary puts "for every <box>: " in front)
+DISCRETE_BOX_STEIN_SENTENCE = ("every eigenvalue of the map's Jacobian at the fixed point has modulus < 1 (one P > 0 "
+                               "with A^T P A - P < 0 for every Jacobian A of the box, by S-procedure multipliers, "
+                               "exact): the discrete-time map is locally exponentially stable there")
 #: the certificate kinds of a discrete-time map's quadratic and sos_gas (lyapcheck.models.classes.discrete_lyapunov)
 DISCRETE_LYAPUNOV_KINDS = ("discrete_quadratic", "discrete_sos")
 #: the certificate kind of a discrete-time map's roa and candidate (lyapcheck.models.classes.discrete_regions)

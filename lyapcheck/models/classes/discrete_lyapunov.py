@@ -33,6 +33,19 @@ and the exact checks of ``V`` (:func:`~lyapcheck.sos.certificates.check_positive
 The map is the :class:`~lyapcheck.models.loop.field.ShiftedField` of a model whose ``[dynamics]``
 give next values: its numerators are ``F`` (each denominator a constant, already divided out).
 No scaling of the states is applied: the certificate is in the declared shifted states.
+
+Over a box of parameters (``certify --box``, :mod:`lyapcheck.models.loop.boxes`) the ring holds the
+states, then the box's parameters normalized to ``u in [-1, 1]`` (``F = F(e, u)``, the fixed point
+proved not to move over the box when the box was read). ``V`` stays a polynomial of the states alone,
+common to the box (as the continuous ``quadratic`` over a box, whose GES claim needs one ``V``), and
+the decrease carries the S-procedure multipliers ``r_j (1 - u_j^2)``
+(:func:`lyapcheck.models.engines.search.box_multipliers`):
+
+    V(e) - V(F(e, u)) - mu V(e) - sum_j r_j(e, u) (1 - u_j^2) = z_W^T Q_W z_W,   Q_W > 0,  Q_rj >= 0,
+
+so on the box (``1 - u_j^2 >= 0``) ``V(F(e, u)) - V(e) <= -mu V(e) - W(e, u) < 0`` away from 0 for
+every parameter value of the box, and the GES figures hold with the same ``k`` and ``r`` for each.
+A box widened after the fact changes the normalization, so the identity fails in ``verify``.
 """
 
 from __future__ import annotations
@@ -42,15 +55,16 @@ from typing import Any, Final, Literal, Mapping, Sequence
 
 from lyapcheck import tolerances as tol
 from lyapcheck.models.classes import lyapunov
-from lyapcheck.models.classes.claims import discrete_lyapunov_sentence
+from lyapcheck.models.classes.claims import box_prefix, discrete_lyapunov_sentence
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, Budget, BudgetExhausted, ParameterValues, Search,
-                                             literal, one, param)
+                                             box_multipliers, box_multipliers_from_json, box_multipliers_of,
+                                             literal, multiplier_grams, one, param)
 from lyapcheck.models.loop.field import ShiftedField, StateField
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
-from lyapcheck.sos.certificates import GramPoly, check_positive_definite_v
+from lyapcheck.sos.certificates import BoxMultipliers, GramPoly, box_terms, check_positive_definite_v
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term
 
@@ -60,6 +74,10 @@ SOS_KIND: Final = "discrete_sos"
 #: degrees of V that ``sos_gas`` tries on a map, in turn (``quadratic`` is degree 2 alone): the
 #: decrease has degree ``deg V * deg F``, so the programs grow faster than in continuous time
 SOS_GAS_DEGREES: Final = (2, 4, 6)
+#: the degrees ``sos_gas`` tries on a map over a box: the box's coordinates join the decrease and its
+#: multipliers, and at degree 6 one solve of a cubic map over a one-parameter box took more than the class's
+#: time limit (MODEL_CLASS_TIME_LIMIT_S, 60 s) where degree 4 takes about a second
+BOX_SOS_GAS_DEGREES: Final = (2, 4)
 #: the largest decay rate tried: ``V(F) <= (1 - mu) V`` with ``mu >= 1`` asks ``V(F) <= 0``, which
 #: no ``F`` other than 0 meets; the search stays below 1 so that ``r = sqrt(1 - mu) > 0``
 MU_CEILING: Final = Fraction(1)
@@ -71,33 +89,35 @@ ClassName = Literal["quadratic", "sos_gas"]
 
 class NotAMap(ValueError):
     """The shifted loop is not a polynomial map this module can read (a non-constant denominator,
-    a box of parameters, or ``F(0) != 0``)."""
+    or ``F(0) != 0``)."""
 
 
 def map_polynomials(shifted: ShiftedField) -> tuple[Ring, tuple[Poly, ...]]:
-    """``F`` of ``e+ = F(e)`` in the ring of the states alone (disturbances held at 0), exactly;
-    :class:`NotAMap` naming what is missing when the loop is not a polynomial map with ``F(0) = 0``."""
-    if shifted.box is not None:
-        raise NotAMap("a box of parameters is not supported on a discrete-time map here")
+    """``F`` of ``e+ = F(e)`` in the ring of the states alone (disturbances held at 0), exactly, then a
+    box's normalized parameters if the map has one (``F(e, u)``); :class:`NotAMap` naming what is missing
+    when the loop is not a polynomial map with ``F(0) = 0`` (for every ``u``)."""
     full = shifted.ring
     n = shifted.n
-    ring = Ring(full.names[:n])
-    zero = {name: Fraction(0) for name in full.names[n:]}
+    kept = full.names[:n] + shifted.box_names
+    ring = Ring(kept)
+    zero = {name: Fraction(0) for name in full.names if name not in kept}
     F = []
     for name, num, den in zip(full.names, shifted.numerators, shifted.denominators):
         if not den.is_constant():
             raise NotAMap(f"the next value of {name} has a denominator depending on the states (a polynomial map "
                           "is needed)")
         F.append(full.restrict(full.substitute(num * (1 / den.leading_coefficient()), zero), ring))
-    origin = {name: Fraction(0) for name in ring.names}
+    origin = {name: Fraction(0) for name in ring.names[:n]}
     if any(ring.substitute(fi, origin) != ring.zero() for fi in F):
-        raise NotAMap("F(0) != 0: the equilibrium is not a fixed point of the map")
+        raise NotAMap("F(0) != 0: the equilibrium is not a fixed point of the map"
+                      + (" for every value of the box" if shifted.box is not None else ""))
     return ring, tuple(F)
 
 
 def compose(ring: Ring, p: Poly, F: Sequence[Poly]) -> Poly:
-    """``p(F(e))`` exactly (``F`` one image per state; the ring holds the states alone)."""
-    return ring.compose(p, list(F))
+    """``p(F(e))`` exactly (``F`` one image per state, the states the ring's first variables; a box's
+    parameters, the ring's last ones, are left as they are)."""
+    return ring.compose(p, list(F) + list(ring.gens()[len(F):]))
 
 
 def map_degree(ring: Ring, F: Sequence[Poly]) -> int:
@@ -129,12 +149,14 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
     or why there is none: a size limit (the continuous classes' constants, named), or no strict
     certificate of this form. ``drop``/``drop_v``: monomials the remainder's / ``V``'s basis leaves
     out (facial reduction, as :func:`lyapcheck.models.classes.lyapunov.lyapunov_program`)."""
-    n = ring.nvars
+    nv = ring.nvars
+    n = len(F)
     top = degree * map_degree(ring, F)
-    if bases.candidate_count(n, top) > lyapunov.CANDIDATE_LIMIT:
-        return size_limit(bases.candidate_count(n, top), "candidate monomials", lyapunov.CANDIDATE_LIMIT,
+    if bases.candidate_count(nv, top) > lyapunov.CANDIDATE_LIMIT:
+        return size_limit(bases.candidate_count(nv, top), "candidate monomials", lyapunov.CANDIDATE_LIMIT,
                           "CANDIDATE_LIMIT")
-    z_v = [m for m in monomials(n, 1, degree // 2) if m not in drop_v]
+    # V is of the states alone (common to a box): its monomials carry no parameter
+    z_v = [m + (0,) * (nv - n) for m in monomials(n, 1, degree // 2) if m + (0,) * (nv - n) not in drop_v]
     if not bases.has_pure_powers(z_v, range(n)):
         return ("no strict certificate of this form exists (V's basis, reduced to the face the solver found, "
                 "keeps no pure power of some state)")
@@ -142,9 +164,13 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
     alphas = sorted(lyapunov.gram_products(z_v, v_blocks))
     supports = [decrease_support(ring, F, a) for a in alphas]
     target = set().union(*supports)
+    # over a box, the multipliers' bases lie in the half Newton polytope of the decrease; W's basis is not widened
+    # by their products (as the continuous box form does): the monomials that adds (e.g. y^4 u where V(F) has no
+    # y^8 u^2) are forced to 0 in W, and no strict certificate is left (tried on x+ = a x + y^2/5, y+ = y/2)
+    box_grams, box_terms_ = box_multipliers(nv, n, target, with_states=True, generators=generators)
     if len(target) > lyapunov.TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", lyapunov.TARGET_LIMIT, "TARGET_LIMIT")
-    z_w = [m for m in bases.sos_basis(n, target) if m not in drop]
+    z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
     if len(z_w) > lyapunov.MAX_GRAM_ROWS or len(z_v) > lyapunov.MAX_GRAM_ROWS:
         return size_limit(max(len(z_w), len(z_v)), "monomials per sum-of-squares matrix", lyapunov.MAX_GRAM_ROWS,
                           "MAX_GRAM_ROWS")
@@ -157,10 +183,12 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
     gram_terms.append(Term(one(ring, -1), "V"))
     # identity 2: sum_a c_a ((1 - mu) e^a - F^a) = W
     decrease_terms = [Term(param(decrease_name(k), s), coefficient_name(k)) for k, s in enumerate(supports)]
+    decrease_terms.extend(box_terms_)  # over a box: - sum_j r_j (1 - u_j^2)
     decrease_terms.append(Term(one(ring, -1), "W"))
     structure = Structure(
-        nvars=n,
-        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks)))),
+        nvars=nv,
+        grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))),
+               *box_grams),
         scalars=tuple(Scalar(coefficient_name(k)) for k in range(len(alphas))),
         identities=(Identity("gram_V", tuple(gram_terms), None, "V"),
                     Identity("decrease", tuple(decrease_terms), None, "W")),
@@ -187,12 +215,14 @@ def decrease_values(ring: Ring, F: Sequence[Poly], alphas: Sequence[Monomial], m
 
 # -- the exact check (the certificate alone and the map) ---------------------------------------------
 
-def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramPoly, mu: Fraction
-                            ) -> tuple[bool, str]:
-    """``V - V(F) - mu V = W`` exactly, ``0 <= mu < 1``, ``V`` positive definite and radially unbounded
-    (:func:`~lyapcheck.sos.certificates.check_positive_definite_v`) and ``W`` with ``Q_W > 0`` and a
-    pure power of every state: then ``V(F(e)) - V(e) <= -mu V(e) - W(e) < 0`` away from 0."""
-    n = ring.nvars
+def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramPoly, mu: Fraction,
+                            box: BoxMultipliers = ()) -> tuple[bool, str]:
+    """``V - V(F) - mu V - sum_j r_j (1 - u_j^2) = W`` exactly, ``0 <= mu < 1``, ``V`` positive definite,
+    radially unbounded (:func:`~lyapcheck.sos.certificates.check_positive_definite_v`) and of the states
+    alone, ``W`` with ``Q_W > 0`` and a pure power of every state, each multiplier ``r_j`` PSD on a box
+    variable (none at a point): then ``V(F(e, u)) - V(e) <= -mu V(e) - W(e, u) < 0`` away from 0 for every
+    ``u`` of the box."""
+    n = len(F)
     if not 0 <= mu < MU_CEILING:
         return False, "the decay rate mu must satisfy 0 <= mu < 1"
     ok, why = check_positive_definite_v(V, n)
@@ -202,9 +232,20 @@ def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramP
         return False, "W's basis must hold a pure power of every state (so that V(F) - V < 0 away from 0)"
     if not W.positive_definite():
         return False, "Q_W is not positive definite (exact)"
+    if any(any(m[n:]) for m in V.basis):
+        return False, "V must be a polynomial of the states alone (one V for every value of the box)"
+    if any(not n <= j < ring.nvars for j, _ in box):
+        return False, "a box multiplier names a variable that is not one of the box's parameters"
+    boxed, box_why = box_terms(ring, box)
+    if box_why is not None:
+        return False, box_why
     v = V.poly(ring)
-    if v - compose(ring, v, F) - v * to_fmpq(mu) != W.poly(ring):
-        return False, "the identity V - V(F) - mu V = W does not hold exactly"
+    if v - compose(ring, v, F) - v * to_fmpq(mu) - boxed != W.poly(ring):
+        return False, "the identity V - V(F) - mu V = W does not hold exactly" + (" (with the box's multipliers)"
+                                                                                    if box else "")
+    if box:
+        return True, ("Q_V > 0, Q_W > 0, the box's multipliers PSD and V - V(F) - mu V - sum r_j (1 - u_j^2) = W, "
+                      "exactly (discrete-time map, every value of the box)")
     return True, "Q_V > 0, Q_W > 0 and V - V(F) - mu V = W, exactly (discrete-time map)"
 
 
@@ -220,10 +261,11 @@ def attempt(ring: Ring, F: Sequence[Poly], structure: Structure, alphas: Sequenc
         return None, solution
     V = GramPoly.of(structure.gram("V").basis, point.grams["V"])
     W = GramPoly.of(structure.gram("W").basis, point.grams["W"])
-    ok, _ = check_discrete_lyapunov(ring, F, V, W, mu)
+    box = box_multipliers_of(point.grams, multiplier_grams(structure))
+    ok, _ = check_discrete_lyapunov(ring, F, V, W, mu, box)
     if not ok:
         return None, solution
-    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"]}, solution
+    return {"V": V, "W": W, "mu": mu, "margin": solution.scalars["t"], "box": box}, solution
 
 
 def search_degree(ring: Ring, F: Sequence[Poly], degree: int, search: Search) -> tuple[dict[str, Any] | None, str]:
@@ -265,6 +307,10 @@ def run(shifted: ShiftedField, name: ClassName, search: Search | None = None,
     ``e+ = F(e)`` of ``shifted`` (its numerators read as next values). ``search``: the class's
     search (default: its own, on ``budget``, by default the continuous classes' safety net,
     MODEL_CLASS_TIME_LIMIT_S)."""
+    if degrees is None and name == "sos_gas" and shifted.box is not None:
+        from lyapcheck.degrees import searched_degrees
+
+        degrees = searched_degrees(BOX_SOS_GAS_DEGREES)  # (certify --degree 6 asks for more, at its cost)
     if degrees is None:
         degrees = (2,) if name == "quadratic" else SOS_GAS_DEGREES
     try:
@@ -300,10 +346,12 @@ def run(shifted: ShiftedField, name: ClassName, search: Search | None = None,
 # -- the claim ----------------------------------------------------------------------------------------
 
 def quadratic_matrix_of(V: GramPoly, n: int) -> list[list[Fraction]] | None:
-    """``P`` of ``V = e^T P e`` when ``V``'s basis is exactly the states' degree-1 monomials, else None."""
-    if len(V.basis) != n or any(sum(m) != 1 for m in V.basis):
+    """``P`` of ``V = e^T P e`` when ``V``'s basis is exactly the ``n`` states' degree-1 monomials, else None
+    (the monomials may carry a box's parameters after the states, at exponent 0)."""
+    if len(V.basis) != n or any(sum(m) != 1 or any(m[n:]) for m in V.basis):
         return None
-    order = [V.basis.index(tuple(int(k == i) for k in range(n))) for i in range(n)]
+    nv = len(V.basis[0])
+    order = [V.basis.index(tuple(int(k == i) for k in range(nv))) for i in range(n)]
     return [[V.Q[order[i]][order[j]] for j in range(n)] for i in range(n)]
 
 
@@ -327,12 +375,14 @@ def ges_figures(V: GramPoly, mu: Fraction, n: int) -> dict[str, Fraction] | None
 def certified(shifted: ShiftedField, ring: Ring, name: ClassName, found: dict[str, Any], solver: dict[str, Any]
               ) -> ConditionResult:
     V, W, mu = found["V"], found["W"], found["mu"]
-    n = ring.nvars
+    n = shifted.n
     figures = ges_figures(V, mu, n) if name == "quadratic" else None
     kind = QUADRATIC_KIND if figures is not None else SOS_KIND
     cert: dict[str, Any] = {"kind": kind, "time": "discrete", "degree": found["degree"], "mu": str(mu),
                             "V": lyapunov.terms_json(ring, V.poly(ring)), "gram_V": V.to_json(),
                             "gram_W": W.to_json()}
+    if found.get("box"):  # over a box: the S-procedure multipliers of 1 - u_j^2 (the box itself is the document's)
+        cert["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]
     numbers: dict[str, Any] = {"degree": found["degree"], "time": "discrete", "decay_rate_V_per_step": float(mu),
                                "relative_margin": found["margin"]}
     if figures is not None:
@@ -357,14 +407,17 @@ def verify(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple
         if kind not in (QUADRATIC_KIND, SOS_KIND) or cert.get("time") != "discrete":
             return False, f"not a certificate of a discrete-time map (kind {kind!r})"
         ring, F = map_polynomials(shifted)
-        n = ring.nvars
-        V = GramPoly.from_json(cert["gram_V"], n)
-        W = GramPoly.from_json(cert["gram_W"], n)
+        nv, n = ring.nvars, len(F)
+        V = GramPoly.from_json(cert["gram_V"], nv)
+        W = GramPoly.from_json(cert["gram_W"], nv)
         mu = Fraction(cert["mu"])
         degree = int(cert["degree"])
+        box = box_multipliers_from_json(cert.get("box_multipliers", []), nv)
     except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
         return False, f"malformed certificate: {exc}"
-    ok, why = check_discrete_lyapunov(ring, F, V, W, mu)
+    if box and shifted.box is None:
+        return False, "box multipliers in the certificate of a map without a box"
+    ok, why = check_discrete_lyapunov(ring, F, V, W, mu, box)
     if not ok:
         return False, why
     if lyapunov.terms_json(ring, V.poly(ring)) != cert.get("V"):
@@ -388,7 +441,8 @@ def verify(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple
         return False, why_figures
     if data.get("property") != ("GES" if kind == QUADRATIC_KIND else "GAS"):
         return False, f"a {kind} certificate does not prove {data.get('property')}"
-    if data.get("summary") != discrete_lyapunov_sentence(kind, degree, mu, figures):
+    prefix = box_prefix(shifted.box, "certified") if shifted.box is not None else ""
+    if data.get("summary") != prefix + discrete_lyapunov_sentence(kind, degree, mu, figures):
         return False, "the stated sentence is not the certificate's"
     return True, why
 
@@ -423,3 +477,97 @@ def _check_ges_figures(P: Sequence[Sequence[Fraction]], mu: Fraction, figures: M
     if r < 0 or r * r < 1 - mu:
         return False, "r is below sqrt(1 - mu)"
     return True, "a quadratic V with V(F) <= (1 - mu) V and c1 I < P < c2 I: GES of the map, exactly"
+
+
+# -- a map over a box: what is taken ------------------------------------------------------------------
+
+#: the classes a polynomial map takes over a box of parameters (``certify --box``): one V for every value
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas")
+
+
+def not_over_box(name: str) -> str:
+    """The ``not_applicable`` sentence of a class other than :data:`BOX_CLASSES` on a map over a box."""
+    return (f"{name} is decided at one parameter value only on a map (certify a point with --set NAME=VALUE); "
+            "over a box, linearization proves LES, quadratic GES and sos_gas GAS for every value of the box")
+
+
+# -- linearization over a box: one Stein certificate for every Jacobian of the box --------------------
+
+#: the method a map's linearization over a box states (its certificate carries ``"time": "discrete"``)
+BOX_STEIN_METHOD: Final = "box_stein"
+
+
+def jacobian_map(ring: Ring, F: Sequence[Poly]) -> tuple[Poly, ...]:
+    """``A(u) e``: each component's terms of degree exactly 1 in the states (any degree in a box's
+    parameters), the linear map whose matrix is the Jacobian at the fixed point, exactly."""
+    n = len(F)
+    out = []
+    for fi in F:
+        linear = {m: c for m, c in ring.terms(fi).items() if sum(m[:n]) == 1}
+        out.append(ring.from_terms(linear) if linear else ring.zero())
+    return tuple(out)
+
+
+def run_linearization_box(shifted: ShiftedField, budget: Budget | None = None) -> ConditionResult:
+    """``linearization`` of a map over a box: a quadratic ``V = e^T P e`` common to the box with
+    ``V(A(u) e) - V(e) <= -mu V(e) - W(e, u)`` for every ``u`` (the quadratic class's program on the linear
+    map ``A(u) e``, box multipliers and all). Then every ``A(u)`` has ``A(u)^T P A(u) - P < 0``: every
+    eigenvalue of modulus < 1, so the fixed point is locally exponentially stable for every value of the
+    box. None found is ``not_certified`` (a box reaching an unstable gain has none; a stable box may need a
+    ``P`` that depends on the parameters, not taken here)."""
+    from lyapcheck.models.classes.claims import DISCRETE_BOX_STEIN_SENTENCE
+
+    try:
+        ring, F = map_polynomials(shifted)
+    except NotAMap as exc:
+        return ConditionResult("linearization", "not_applicable", f"not a polynomial map: {exc}")
+    A = jacobian_map(ring, F)
+    search = Search(ring, budget if budget is not None else
+                    Budget(tol.MODEL_CLASS_TIME_LIMIT_S, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
+    try:
+        found, why = search_degree(ring, A, 2, search)
+    except BudgetExhausted as exc:
+        late = reasons.out_of_time("a Stein certificate common to the box", search.budget.seconds, [str(exc)])
+        return ConditionResult("linearization", "inconclusive", late.summary,
+                               numbers=late.numbers({"reason": str(exc), "time": "discrete"}),
+                               solver={"solves": search.log})
+    if found is None:
+        none = reasons.reason("no P > 0 with A(p)^T P A(p) - P < 0 for every p of the box was found (" + why + ")",
+                              (), "a narrower box, or certify a point with --set NAME=VALUE")
+        return ConditionResult("linearization", "not_certified", none.summary,
+                               numbers=none.numbers({"time": "discrete"}), solver={"solves": search.log})
+    V, W, mu = found["V"], found["W"], found["mu"]
+    cert: dict[str, Any] = {"time": "discrete", "method": BOX_STEIN_METHOD, "mu": str(mu),
+                            "jacobian_map": [lyapunov.terms_json(ring, a) for a in A],
+                            "gram_V": V.to_json(), "gram_W": W.to_json(),
+                            "box_multipliers": [{"variable": j, "gram": r.to_json()} for j, r in found["box"]]}
+    return ConditionResult("linearization", "certified", DISCRETE_BOX_STEIN_SENTENCE, certificate=cert,
+                           numbers={"time": "discrete"},
+                           solver={"solves": search.log})
+
+
+def verify_linearization_box(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple[bool, str]:
+    """Re-check a map's ``linearization`` over a box: ``A(u) e`` re-derived from the shifted map with the box's
+    coordinates, the identity with its multipliers, ``V`` quadratic and positive definite, exactly."""
+    if status != "certified":
+        return False, f"a {status} linearization over a box, which a map never states"
+    try:
+        if data.get("time") != "discrete" or data.get("method") != BOX_STEIN_METHOD:
+            return False, f"not a map's linearization over a box (method {data.get('method')!r})"
+        ring, F = map_polynomials(shifted)
+        nv, n = ring.nvars, len(F)
+        V = GramPoly.from_json(data["gram_V"], nv)
+        W = GramPoly.from_json(data["gram_W"], nv)
+        mu = Fraction(data["mu"])
+        box = box_multipliers_from_json(data.get("box_multipliers", []), nv)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+        return False, f"malformed certificate: {exc}"
+    A = jacobian_map(ring, F)
+    if data.get("jacobian_map") != [lyapunov.terms_json(ring, a) for a in A]:
+        return False, "the stored Jacobian differs from the map's over the box"
+    if quadratic_matrix_of(V, n) is None:
+        return False, "V must be quadratic in the states (V = e^T P e)"
+    ok, why = check_discrete_lyapunov(ring, A, V, W, mu, box)
+    if not ok:
+        return False, why
+    return True, "one P > 0 with A(u)^T P A(u) - P < 0 for every u of the box (box multipliers), exactly"

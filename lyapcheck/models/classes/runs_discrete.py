@@ -28,7 +28,17 @@ def linearization_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
     (:func:`lyapcheck.models.classes.discrete_linearization.run`)."""
     from lyapcheck.models.classes import discrete_linearization
 
+    if ctx.shifted.box is not None:
+        return linearization_map_box(ctx, budget)
     return discrete_linearization.run(ctx.shifted)
+
+
+def linearization_map_box(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """Over a box: one Stein certificate for every Jacobian of the box
+    (:func:`lyapcheck.models.classes.discrete_lyapunov.run_linearization_box`)."""
+    from lyapcheck.models.classes import discrete_lyapunov
+
+    return discrete_lyapunov.run_linearization_box(ctx.shifted, budget)
 
 
 def quadratic_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
@@ -106,6 +116,6 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
     return sampled.linearization(ctx.model)
 
 
-__all__ = ["linearization_map", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map", "barrier_map",
+__all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map", "barrier_map",
            "reach_avoid_map",
            "linearization_map_functions", "roa_map_functions", "linearization_sampled"]

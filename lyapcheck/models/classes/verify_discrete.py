@@ -38,7 +38,17 @@ def verify_linearization_map(name: str, c: dict[str, Any], check: "MapCheck") ->
 
     if c["status"] not in _JACOBIAN_STATUSES:
         return False, check.not_checked(c["status"])
+    if check.shifted.box is not None:
+        return verify_linearization_map_box(name, c, check)
     return discrete_linearization.verify(check.shifted, c["status"], _data(c))
+
+
+def verify_linearization_map_box(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
+    """``linearization`` over a box: one Stein certificate for every Jacobian of the box
+    (:func:`lyapcheck.models.classes.discrete_lyapunov.verify_linearization_box`)."""
+    from lyapcheck.models.classes import discrete_lyapunov
+
+    return discrete_lyapunov.verify_linearization_box(check.shifted, c["status"], _data(c))
 
 
 def verify_lyapunov_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
@@ -106,5 +116,5 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
     return sampled.verify_linearization(check.model, c["status"], _data(c))
 
 
-__all__ = ["verify_linearization_map", "verify_lyapunov_map", "verify_region_map", "verify_safety_map",
+__all__ = ["verify_linearization_map", "verify_linearization_map_box", "verify_lyapunov_map", "verify_region_map", "verify_safety_map",
            "verify_linearization_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]

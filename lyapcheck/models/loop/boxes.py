@@ -10,7 +10,8 @@ after the fact changes ``c`` and ``h``, so the identities no longer hold and ``v
 
 A box is checked when it is given: its names are the model's parameters, each range non-empty
 (``lo < hi``), the equilibrium is one for every value in the box (exactly: the right-hand sides at
-the equilibrium vanish identically in the box's parameters), and the model is defined on the whole
+the equilibrium vanish identically in the box's parameters; a discrete-time map's fixed point stays
+put, ``f(x_eq) = x_eq`` identically), and the model is defined on the whole
 box (every denominator at the equilibrium is proved non-zero on it). Bad boxes are one-line exit-2
 errors naming the field.
 """
@@ -75,12 +76,15 @@ def parse_box_of(source: str, parameters: Mapping[str, Any], specs: Sequence[str
 
 def check_box(model: Model, box: ModelBox) -> None:
     """The equilibrium is one for every parameter of the box, and the model is defined there."""
+    from lyapcheck.models.loop.discrete import is_discrete, shifted_map
     from lyapcheck.models.loop.field import shifted_field
     from lyapcheck.sos.polynomials import Ring
 
     where = f"--box {', '.join(box.names)}"
     try:
-        shifted = shifted_field(model, box=box)
+        # a map's fixed point must stay put: its shifted map e+ = f(x_eq + e) - x_eq vanishes at e = 0 for every
+        # value of the box (a field's equilibrium: its right-hand sides vanish there)
+        shifted = shifted_map(model, box=box) if is_discrete(model) else shifted_field(model, box=box)
     except ValueError as exc:  # an output divided by a box parameter: not supported over a box
         raise ModelFileError(model.source, where, str(exc)) from None
     ring = shifted.ring
@@ -89,6 +93,10 @@ def check_box(model: Model, box: ModelBox) -> None:
     u_ring = Ring(box.names)
     for s, num, den in zip(model.states, shifted.numerators, shifted.denominators):
         if not ring.substitute(num, origin).is_zero():
+            if is_discrete(model):
+                raise ModelFileError(model.source, where, f"the map's fixed point moves with the box's parameters: "
+                                                          f"{s}+ is not {s} there for some value of the box (checked "
+                                                          "exactly); certify a point with --set NAME=VALUE")
             raise ModelFileError(model.source, where, f"the equilibrium moves with the box's parameters: {s}' is not 0 "
                                                       "there for every value of the box (checked exactly)")
         den_eq = ring.restrict(ring.substitute(den, origin), u_ring)

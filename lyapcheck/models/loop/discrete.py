@@ -15,10 +15,12 @@ field is another system, often refuted). Two places guard it:
   lists them. The one runner (``lyapcheck.models.surfaces.certify``, where classes are chosen) makes every
   other class ``not_applicable`` on a map with :func:`not_decided`, and ``verify`` fails a decided claim
   of one (:func:`lyapcheck.models.classes.registry.verify`);
-- surfaces that would integrate or bound the map as a field (``--box``, box sweeps) call :func:`refuse`
+- surfaces that would integrate or bound the map as a field (box sweeps) call :func:`refuse`
   first: one line, exit 2, naming ``time = "discrete"``. Reports and point sweeps iterate a map instead
   (:mod:`reports.map_figures`, :class:`sweeps.crosscheck._MapLoop`, through
-  :func:`lyapcheck.models.surfaces.iterate.iterate`).
+  :func:`lyapcheck.models.surfaces.iterate.iterate`). ``certify --box`` takes a polynomial map: ``quadratic``
+  and ``sos_gas`` prove a V for every parameter value of the box
+  (:mod:`lyapcheck.models.classes.discrete_lyapunov`), the other classes are ``not_applicable`` over a box.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from typing import Mapping, Sequence
 
     from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.models.loop.field import ShiftedField
 
 #: the words every refusal and every not_applicable sentence names
@@ -60,18 +63,21 @@ def refuse(model: object, surface: str, what: str = "") -> None:
                                               + (f"; {what}" if what else ""))
 
 
-def shifted_map(model: "Model", parameters: "Mapping[str, Fraction] | None" = None) -> "ShiftedField":
+def shifted_map(model: "Model", parameters: "Mapping[str, Fraction] | None" = None,
+                box: "ModelBox | None" = None) -> "ShiftedField":
     """``e+ = f(x_eq + e) - x_eq`` as a :class:`~lyapcheck.models.loop.field.ShiftedField` (numerators over
     denominators, exact): :func:`~lyapcheck.models.loop.field.shifted_field` moves the argument, and each
     numerator ``N_i`` becomes ``N_i - x_eq,i D_i`` so that 0 is the map's fixed point (``N_i(0) = 0``, which
-    the Jacobian's quotient rule in :func:`lyapcheck.models.classes.linearization.jacobian` relies on)."""
+    the Jacobian's quotient rule in :func:`lyapcheck.models.classes.linearization.jacobian` relies on). With a
+    ``box``, its parameters stay variables of the ring, normalized to ``[-1, 1]``, as in
+    :func:`~lyapcheck.models.loop.field.shifted_field`."""
     from dataclasses import replace
 
     from lyapcheck.models.loop.field import shifted_field
 
     if not is_discrete(model):
         raise ValueError("shifted_map takes a discrete-time map")
-    shifted = shifted_field(model, parameters)
+    shifted = shifted_field(model, parameters, box=box)
     numerators = tuple(num - den * to_fmpq(x) if x else num
                        for num, den, x in zip(shifted.numerators, shifted.denominators, model.equilibrium))
     return replace(shifted, numerators=numerators)

@@ -265,18 +265,22 @@ def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> l
     map (:func:`lyapcheck.models.classes.registry.verify` with a
     :class:`~lyapcheck.models.classes.contexts.MapCheck`: the discrete-time test on the shifted map re-derived
     from the model text); a decided claim of a class without a discrete-time check fails (it cannot be
-    re-checked on a map, so it cannot stand), as does a box (refused on a map)."""
+    re-checked on a map, so it cannot stand), as does one over a box of a class a map decides at a point only."""
     from lyapcheck.models.classes.contexts import MapCheck
+    from lyapcheck.models.classes.discrete_lyapunov import BOX_CLASSES
     from lyapcheck.models.classes.registry import verify
     from lyapcheck.models.loop.discrete import shifted_map
 
-    if box is not None:
-        return _with_verdict(doc, [*rows, ("box", False, 'a box is not taken on a discrete-time map ([model] time = '
-                                                         '"discrete")')])
     conditions: dict[str, Any] = doc["conditions"]
-    check = MapCheck(shifted=shifted_map(model), model=model)
+    # over a box (checked above: the fixed point stays put), the map re-derived with the box's normalized
+    # parameters: a box widened after the fact changes them and the identities fail
+    check = MapCheck(shifted=shifted_map(model, box=box), model=model)
     for name, c in conditions.items():
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted", "counterexample"):
+            continue
+        if box is not None and name not in BOX_CLASSES:  # decided at a point only: no claim over a box stands
+            rows.append((name, False, f"{name}: a {c.get('status')} claim over a box, which a map decides at a "
+                                      "point only"))
             continue
         ok, why = verify(name, c, check)
         rows.append((name, ok, why if ok else f"{name}: {why}"))
@@ -285,7 +289,7 @@ def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> l
     check_size_rows(model, conditions, rows, list(model.states))
     _check_candidate(doc, model, conditions, rows)
     _check_disturbance_keys(model, conditions, rows)
-    _check_summaries(model, conditions, rows, None)
+    _check_summaries(model, conditions, rows, doc.get("box"))
     _check_stated_claims(model, conditions, rows)
     return _with_verdict(doc, rows)
 

@@ -358,21 +358,30 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
     :data:`lyapcheck.models.classes.registry.DISCRETE`) runs on the shifted map through the one runner
     (:func:`_run_classes`); every other one asked for is ``not_applicable``
     (:func:`lyapcheck.models.loop.discrete.not_decided`), never run on the map as if it were a field. A
-    certified region's size is attached as in continuous time. ``--box`` is refused in one line (exit 2)."""
+    certified region's size is attached as in continuous time. Over a ``box`` (checked when it was read: the
+    fixed point does not move over it) the map's ring carries the box's normalized parameters, ``quadratic`` and
+    ``sos_gas`` prove one V for every value of the box
+    (:data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`) and every other class is ``not_applicable``
+    (:func:`~lyapcheck.models.classes.discrete_lyapunov.not_over_box`)."""
     from lyapcheck.models.classes import region_size
     from lyapcheck.models.classes.claims import summary
     from lyapcheck.models.classes.contexts import MapRun
+    from lyapcheck.models.classes.discrete_lyapunov import BOX_CLASSES, not_over_box
     from lyapcheck.models.classes.registry import DISCRETE
-    from lyapcheck.models.loop.discrete import not_decided, refuse, shifted_map
+    from lyapcheck.models.loop.discrete import not_decided, shifted_map
 
-    if box is not None:
-        refuse(model, "--box", "certify a point (--set NAME=VALUE)")
     cand = parse_candidate(model, candidate) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
-    out = ModelCertification(model=model, candidate=cand, results={})
-    ctx = MapRun(model=model, shifted=shifted_map(model), candidate=cand, results=out.results)
+    out = ModelCertification(model=model, candidate=cand, results={}, box=box)
+    ctx = MapRun(model=model, shifted=shifted_map(model, box=box), candidate=cand, results=out.results)
 
     def decide(entry: ModelClass) -> ConditionResult | None:
+        if box is not None:  # candidate over a box as on every loop; a class a map takes at a point only, named
+            given = _needs_input(entry.name, box, cand)
+            if given is not None:
+                return given
+            if entry.run_map is not None and entry.name not in BOX_CLASSES:
+                return ConditionResult(entry.name, "not_applicable", not_over_box(entry.name))
         return _discrete_rule(entry, entry.run_map, not_decided(entry.name, DISCRETE), out.results, cand,
                               bool(model.disturbances))
 
@@ -386,7 +395,7 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
             r.disturbances = "zero"
         if r.status == "certified" and name in region_size.SIZED_CLASSES:
             _attach_size(r, model, list(model.states))
-        text = summary(name, r.to_json(), tuple(model.outputs), None)
+        text = summary(name, r.to_json(), tuple(model.outputs), box.to_json() if box is not None else None)
         if text is not None:
             r.summary = text
     return out
