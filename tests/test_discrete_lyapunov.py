@@ -238,3 +238,18 @@ def test_the_fossil_examples_certify_as_their_comments_say_and_verify(example: s
         assert statuses["quadratic"] == "not_certified"
         assert result.document["conditions"]["sos_gas"]["certificate"]["degree"] == 4
     assert verify(result.document).valid
+
+
+def test_sos_gas_on_a_map_takes_certify_s_degree() -> None:
+    """``--degree`` caps a map's sos_gas ladder as every other sos_gas search (its not_certified sentence
+    suggests it): DTAhmadi, proved with a quartic V, is not proved at degree 2 alone, and only degree 2 was
+    tried; with the default ladder it is certified."""
+    from lyapcheck.degrees import degree_ceiling
+    from lyapcheck.models.loop.discrete import shifted_map
+
+    shifted = shifted_map(load_model(ROOT / "examples" / "models" / "fossil-dt-ahmadi.toml"))
+    with degree_ceiling(2):
+        capped = dl.run(shifted, "sos_gas")
+    assert capped.status == "not_certified"
+    assert [line.split(":")[0] for line in capped.numbers["tried"]] == ["degree 2"]
+    assert dl.run(shifted, "sos_gas").status == "certified"

@@ -307,12 +307,14 @@ def run(shifted: ShiftedField, name: ClassName, search: Search | None = None,
     ``e+ = F(e)`` of ``shifted`` (its numerators read as next values). ``search``: the class's
     search (default: its own, on ``budget``, by default the continuous classes' safety net,
     MODEL_CLASS_TIME_LIMIT_S)."""
-    if degrees is None and name == "sos_gas" and shifted.box is not None:
+    if degrees is None and name == "sos_gas":
         from lyapcheck.degrees import searched_degrees
 
-        degrees = searched_degrees(BOX_SOS_GAS_DEGREES)  # (certify --degree 6 asks for more, at its cost)
+        # the ladder under certify's --degree, as every other sos_gas search (its not_certified sentence
+        # suggests --degree); over a box it stops at 4 unless --degree asks for more, at its cost
+        degrees = searched_degrees(BOX_SOS_GAS_DEGREES if shifted.box is not None else SOS_GAS_DEGREES)
     if degrees is None:
-        degrees = (2,) if name == "quadratic" else SOS_GAS_DEGREES
+        degrees = (2,)
     try:
         ring, F = map_polynomials(shifted)
     except NotAMap as exc:
