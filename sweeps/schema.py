@@ -50,7 +50,9 @@ Variables (``<c>`` a class of the sweep, ``<y>`` an output of the model):
   ``quadratic_k`` and ``quadratic_decay_rate_per_s`` (GES: ``|x| <= k |x0| exp(-rate t)``),
   ``sos_gas_decay_rate_V_per_s``, ``roa_level`` and ``roa_ball_radius`` (the certified set
   ``{V <= level}`` and the largest ball in it, SI), ``sos_bound_<y>`` (the certified
-  ``limsup |y|``, in the output's SI units);
+  ``limsup |y|``, in the output's SI units); a discrete-time map's per step instead
+  (:data:`MAP_FIGURES`: ``quadratic_decay_rate_V_per_step``, ``quadratic_k``,
+  ``quadratic_contraction_per_step``, ``sos_gas_decay_rate_V_per_step``, ``reach_avoid_reach_steps_bound``);
 * ``certificate`` (string): the certificate document (JSON, kind
   ``lyapcheck-model-certificate``, its ``solver`` logs left out) of every certified point or box,
   empty elsewhere: ``lyapcheck verify`` re-checks it exactly;
