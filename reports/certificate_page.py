@@ -23,6 +23,7 @@ from reports.sections import section_for
 from reports.subjects.base import STATUS_MEANING, Subject, canonical_json
 from reports.subjects.model_file import ModelFileSubject
 from reports.subjects.paper import PaperSubject
+from reports.subjects.sampled import SampledSubject, is_sampled_document
 from reports.subjects.search import ExtremumSubject, TuneSubject
 from reports.typeset import Equations, versions
 from reports.views import as_dict
@@ -43,14 +44,17 @@ SEARCH_SUBJECTS: Final[dict[str, Callable[[dict[str, Any]], Subject]]] = {
 
 def subject_of(doc: dict[str, Any]) -> Subject:
     """The subject of a certificate document (a document of no kind is the paper's; a model
-    certificate, of a polynomial loop or of a loop with functions, is a model file's; one written by a
-    search, ``tune`` or ``--maximize``, is that search's)."""
+    certificate, of a polynomial loop or of a loop with functions, is a model file's, of a sampled-data
+    loop (``[sampling]``) a sampled loop's; one written by a search, ``tune`` or ``--maximize``, is that
+    search's)."""
     from lyapcheck.models.surfaces.search_tables import search_table
 
     table = search_table(doc)
     if table is not None:
         return SEARCH_SUBJECTS[table](doc)
     kind = doc.get("kind")
+    if kind == "lyapcheck-model-certificate" and is_sampled_document(doc):  # a plant under held controls
+        return SampledSubject(doc)
     make = SUBJECTS.get(kind if isinstance(kind, str) else "", PaperSubject)
     return make(doc)
 

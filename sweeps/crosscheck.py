@@ -55,7 +55,11 @@ What differs between the kinds is how the loop is simulated and V evaluated in f
   standing for the time. The checks are the iterated analogues: from a start in a certified ``{V <= level}``
   V never rises from one step to the next and no iterate escapes; a global V (``quadratic``, ``sos_gas``
   on a map) never rises, ``V(e_k) <= (1 - mu)^k V(e_0)`` with its certified ``mu`` per step, and a GES
-  map's ``|e_k| <= k |e_0| r^k``. The classes a map does not take (safety, ``sos_bound``) are never certified on it;
+  map's ``|e_k| <= k |e_0| r^k``. ``barrier`` and ``reach_avoid`` on a map (:func:`check_sets`) read the
+  iterates of starts in the initial set: no iterate in the unsafe set; some iterate ``e_k`` with ``k <=``
+  the certified ``reach_steps_bound`` in the goal and none unsafe before it (:func:`map_reach_avoid`:
+  steps are counted exactly), iterated on to the bound when :data:`MAP_STEPS` did not tell.
+  ``sos_bound`` is not taken on a map, never certified on it;
 
 * a polynomial loop is integrated on its own field, over :func:`lyapcheck.models.engines.trajectories.horizon`
   of its linearization; a V is the certificate's exact polynomial (over a box, at the point's own
@@ -112,6 +116,10 @@ DEFAULT_REGION_SCALES: Final = 2.0
 #: a discrete-time map's cross-check: the iterations from every start (its certified maps contract
 #: geometrically; a sampled loop's map, which moves little per step, reaches the fixed point within them too)
 MAP_STEPS: Final = 400
+#: a map's ``reach_avoid`` whose goal an iterate has not reached within :data:`MAP_STEPS` steps is iterated
+#: on to its certified ``reach_steps_bound``, at most this many steps (beyond it a late start is not seen:
+#: a figure missed, never a false alarm)
+MAP_REACH_MAX_STEPS: Final = 20_000
 #: the classes whose V is simulated (the global ones, then the region), and those simulated from the
 #: initial set (:func:`check_sets`)
 GLOBAL_CLASSES: Final = ("quadratic", "sos_gas")
@@ -564,9 +572,25 @@ class _MapLoop:
         return nodes, outcome
 
     def runs(self) -> Runs:
+        """The iterates of each start (:func:`lyapcheck.models.engines.iteration.iterate_map` through
+        :func:`lyapcheck.models.surfaces.iterate.iterate`, every disturbance 0: a map's claims are nominal),
+        the step numbers standing for the times: over :data:`MAP_STEPS` steps (``t_end`` None), else
+        ``ceil(t_end)`` steps, at most :data:`MAP_REACH_MAX_STEPS`. A row that left the escape box or is not
+        finite ends at its last finite iterate."""
+        from lyapcheck.models.surfaces.iterate import iterate
+
+        model = self.model
+
         def run(x0: np.ndarray, t_end: float | None,
                 disturbances: np.ndarray | None) -> list[tuple[np.ndarray, np.ndarray]]:
-            raise NotImplementedError("barrier and reach_avoid are not taken on a discrete-time map")
+            if disturbances is not None and np.any(disturbances != 0):
+                raise ValueError("a discrete-time map is iterated with every disturbance 0")
+            steps = MAP_STEPS if t_end is None else min(max(int(math.ceil(t_end)), 1), MAP_REACH_MAX_STEPS)
+            out = []
+            for path in iterate(model, x0, steps):
+                finite = path[np.all(np.isfinite(path), axis=1)]
+                out.append((np.arange(len(finite), dtype=np.float64), finite))
+            return out
         return run
 
     def check_bound(self, cond: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int,
@@ -815,6 +839,7 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
     from lyapcheck.models.classes.falsify import sample_set
     from lyapcheck.models.engines.crosscheck import check_reach_avoid, check_safety, reach_horizon, scaled_margin
     from lyapcheck.models.language.sets import margin
+    from lyapcheck.models.loop.discrete import is_discrete
 
     sets = getattr(model, "sets", None) or {}
     conditions = doc.get("conditions") or {}
@@ -823,10 +848,13 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
                  and (cls == "barrier" or sets.get("goal"))]
     if not certified:
         return
-    bound = float(conditions["reach_avoid"].get("reach_time_bound_s") or math.nan) \
-        if "reach_avoid" in certified else math.nan
-    if "reach_avoid" in certified and not (math.isfinite(bound) and bound > 0):
-        out.violations.append(f"reach_avoid at {where}: the certified time bound {bound!r} s is not a positive number")
+    steps = is_discrete(model)  # a map's reach_avoid bounds the steps to the goal, not a time
+    key, unit = ("reach_steps_bound", "steps") if steps else ("reach_time_bound_s", "s")
+    raw = conditions["reach_avoid"].get(key) if "reach_avoid" in certified else None
+    bound = float(raw) if isinstance(raw, (int, float)) and not isinstance(raw, bool) else math.nan
+    if "reach_avoid" in certified and not (math.isfinite(bound) and (bound >= 0 if steps else bound > 0)):
+        out.violations.append(f"reach_avoid at {where}: the certified bound {raw!r} {unit} is not a "
+                              f"{'whole number >= 0' if steps else 'positive number'}")
         certified.remove("reach_avoid")
     try:
         x0, _ = sample_set(model, sets["initial"], margin, starts, rng)
@@ -872,11 +900,12 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
     mine = rows("reach_avoid")
 
     def reach(found_runs: list[tuple[np.ndarray, np.ndarray]]) -> Any:
-        return check_reach_avoid([(found_runs[i][0], at("unsafe", found_runs[i][1]), at("goal", found_runs[i][1]))
-                                  for i in mine], bound)
+        check = map_reach_avoid if steps else check_reach_avoid
+        return check([(found_runs[i][0], at("unsafe", found_runs[i][1]), at("goal", found_runs[i][1]))
+                      for i in mine], bound)
 
     found = reach(runs)
-    end = reach_horizon(bound)
+    end = bound if steps else reach_horizon(bound)  # (a map: the iterates e_0, ..., e_bound tell)
     if found.unreached and min(float(runs[i][0][-1]) for i in mine) < end:
         # some trajectory was not in the goal by the falsification's horizon, before the bound: on to the bound
         runs = run(X0, end, D)
@@ -893,10 +922,51 @@ def check_sets(model: Any, doc: Mapping[str, Any], where: str, rng: np.random.Ge
     if found.late:
         assert found.first_late is not None
         out.violations.append(f"reach_avoid at {where}: of {found.trajectories} trajectories from the initial set "
-                              f"{found.late} were not in the goal by the certified time bound {bound:.6g} s "
+                              f"{found.late} were not in the goal by the certified "
+                              f"{f'{bound:.0f} steps' if steps else f'time bound {bound:.6g} s'} "
                               f"(one still out at {found.reach_ratio:.6g} times it), the first from "
                               f"{start(mine[found.first_late])}")
 
 
-__all__ = ["CrossCheck", "cross_check_point", "cross_check_box", "box_mismatch", "check_sets", "SimulatedLoop",
+def map_reach_avoid(series: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]], bound: float) -> Any:
+    """A map's reach-avoid against its iterates: ``series[i] = (steps, unsafe margin, goal margin)`` at the
+    iterates ``e_0, e_1, ...`` of start ``i`` (margins of
+    :func:`lyapcheck.models.engines.crosscheck.scaled_margin`). The claim counts steps exactly (some iterate
+    ``e_k``, ``k <= bound``, is in the goal, none before it unsafe), so unlike a sampled trajectory's time
+    there is no point between two iterates to allow for: late is a first goal iterate beyond ``bound`` (or
+    none among iterates beyond it); ``reach_ratio`` is the first goal step over the bound (a start never in
+    the goal counting its last step; a bound 0: 0 when every start is in the goal, else inf). Entering
+    and reaching read :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL`, as in continuous time. Returns
+    a :class:`lyapcheck.models.engines.crosscheck.ReachAvoidCheck`."""
+    from lyapcheck.models.engines.crosscheck import ReachAvoidCheck
+    from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
+
+    entered = late = unreached = 0
+    first_entered: int | None = None
+    first_late: int | None = None
+    worst, ratio = math.nan, math.nan
+    for i, (k_steps, unsafe, goal) in enumerate(series):
+        k_steps = np.asarray(k_steps, dtype=np.float64)
+        if not k_steps.size:
+            continue
+        reached = np.flatnonzero(np.asarray(goal, dtype=np.float64) >= -TRAJECTORY_CHECK_REL_TOL)
+        k = int(reached[0]) if reached.size else k_steps.size  # the first iterate in the goal (size: none)
+        unreached += not reached.size
+        step = float(k_steps[k]) if reached.size else float(k_steps[-1])
+        this = step / bound if bound > 0 else (0.0 if step == 0 else math.inf)
+        ratio = this if math.isnan(ratio) else max(ratio, this)
+        if step > bound if reached.size else step >= bound:  # (never in e_0..e_bound: late too)
+            late += 1
+            first_late = i if first_late is None else first_late
+        rel = np.asarray(unsafe, dtype=np.float64)[:k]
+        top = float(np.nanmax(rel)) if np.any(np.isfinite(rel)) else math.nan
+        if math.isfinite(top):
+            worst = top if math.isnan(worst) else max(worst, top)
+        if top > TRAJECTORY_CHECK_REL_TOL:
+            entered += 1
+            first_entered = i if first_entered is None else first_entered
+    return ReachAvoidCheck(len(series), entered, late, unreached, first_entered, first_late, worst, ratio)
+
+
+__all__ = ["CrossCheck", "map_reach_avoid", "cross_check_point", "cross_check_box", "box_mismatch", "check_sets", "SimulatedLoop",
            "GLOBAL_CLASSES", "REGION_CLASS", "SAFETY_CLASSES", "WORST_CASE_SCREENING_ONLY"]

@@ -80,8 +80,8 @@ from lyapcheck.results import ConditionResult
 from lyapcheck.paper.params import Problem
 from lyapcheck.paper.boxes.box import ParameterBox
 from sweeps.schema import (
-    BOUND_CLASSES, BOX_STATUS_CODES, DISTURBANCE_SCENARIOS, FIGURES, MARGIN_SOURCE, OUTPUT_FIGURES, STATUS_CODES,
-    VARIABLES, point_variables, status_code,
+    BOUND_CLASSES, BOX_STATUS_CODES, DISTURBANCE_SCENARIOS, MARGIN_SOURCE, OUTPUT_FIGURES, STATUS_CODES,
+    VARIABLES, class_figures, point_variables, status_code,
 )
 from sweeps.crosscheck import CrossCheck
 from sweeps.soundness import BOUND_REL_TOL, WORST_CASE_SCREENING_ONLY, violations
@@ -398,7 +398,7 @@ MODEL_STABILITY_CLASSES: Final = model_classes.STABILITY
 
 def _model_empty(spec: ModelSweepSpec, n: int) -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
-    for var in point_variables(spec.classes, spec.outputs):
+    for var in point_variables(spec.classes, spec.outputs, spec.discrete):
         if var.dtype.kind == "T":
             out[var.name] = np.full(n, "", dtype=object)
         else:
@@ -436,7 +436,7 @@ def _model_record(spec: ModelSweepSpec, result: Any, out: dict[str, np.ndarray],
     certified = [c for c in spec.classes if statuses.get(c) == "certified"]
     for c in certified:
         numbers = result.results[c].numbers
-        for suffix, key, _ in FIGURES.get(c, ()):
+        for suffix, key, _ in class_figures(c, spec.discrete):
             if numbers.get(key) is not None:
                 out[f"{c}_{suffix}"][j] = float(numbers[key])
         if c in OUTPUT_FIGURES:

@@ -50,7 +50,9 @@ Variables (``<c>`` a class of the sweep, ``<y>`` an output of the model):
   ``quadratic_k`` and ``quadratic_decay_rate_per_s`` (GES: ``|x| <= k |x0| exp(-rate t)``),
   ``sos_gas_decay_rate_V_per_s``, ``roa_level`` and ``roa_ball_radius`` (the certified set
   ``{V <= level}`` and the largest ball in it, SI), ``sos_bound_<y>`` (the certified
-  ``limsup |y|``, in the output's SI units);
+  ``limsup |y|``, in the output's SI units); a discrete-time map's per step instead
+  (:data:`MAP_FIGURES`: ``quadratic_decay_rate_V_per_step``, ``quadratic_k``,
+  ``quadratic_contraction_per_step``, ``sos_gas_decay_rate_V_per_step``, ``reach_avoid_reach_steps_bound``);
 * ``certificate`` (string): the certificate document (JSON, kind
   ``lyapcheck-model-certificate``, its ``solver`` logs left out) of every certified point or box,
   empty elsewhere: ``lyapcheck verify`` re-checks it exactly;
@@ -319,12 +321,46 @@ FIGURES: Final[dict[str, tuple[tuple[str, str, str], ...]]] = {
 #: value}``, description); stored as ``<class>_<output>``
 OUTPUT_FIGURES: Final[dict[str, tuple[str, str]]] = {
     c.name: c.output_figure for c in model_classes.CLASSES if c.output_figure is not None}
+#: a discrete-time map's figures where they are not :data:`FIGURES`' (a map states its rates per step and
+#: its reach bound in steps, under keys of their own: ``discrete_lyapunov``'s and ``discrete_safety``'s
+#: numbers; its barrier's ``lambda`` is a factor per step of its certificate, not a figure), so that a
+#: map's store has columns that say per step and a continuous loop's store is what it was
+MAP_FIGURES: Final[dict[str, tuple[tuple[str, str, str], ...]]] = {
+    "quadratic": (("decay_rate_V_per_step", "decay_rate_V_per_step",
+                   "certified decrease of V per step: V(x_k+1) <= (1 - mu) V(x_k)"),
+                  ("k", "k", "GES constant: |x_k - x_eq| <= k |x_0 - x_eq| r^k"),
+                  ("contraction_per_step", "contraction_per_step", "GES contraction r of |x_k - x_eq| per step")),
+    "sos_gas": (("decay_rate_V_per_step", "decay_rate_V_per_step",
+                 "certified decrease of V per step: V(x_k+1) <= (1 - mu) V(x_k)"),),
+    "barrier": (),
+    "reach_avoid": (("reach_steps_bound", "reach_steps_bound", "the goal is reached within this many steps"),),
+}
 
 
-def _figures(classes: Sequence[str], outputs: Sequence[str]) -> list[Variable]:
+def class_figures(cls: str, discrete: bool = False) -> tuple[tuple[str, str, str], ...]:
+    """The key figures of class ``cls`` as (variable suffix, key of its numbers, description): on a
+    discrete-time map (``discrete``) :data:`MAP_FIGURES`' where it has the class, else :data:`FIGURES`'."""
+    if discrete and cls in MAP_FIGURES:
+        return MAP_FIGURES[cls]
+    return tuple(FIGURES.get(cls, ()))
+
+
+def is_map_store(ds: Any) -> bool:
+    """Whether a model sweep store (loaded) is of a discrete-time map: its stored model text says
+    ``[model] time = "discrete"`` (read by :mod:`tomllib` alone, never parsed as a model)."""
+    import tomllib
+
+    try:
+        model = tomllib.loads(str(ds.attrs.get("model_toml", ""))).get("model")
+    except tomllib.TOMLDecodeError:
+        return False
+    return isinstance(model, dict) and model.get("time") == "discrete"
+
+
+def _figures(classes: Sequence[str], outputs: Sequence[str], discrete: bool = False) -> list[Variable]:
     f8 = np.dtype("float64")
     out = [Variable(f"{c}_{suffix}", f8, np.nan, f"{c}: {text} (NaN: not certified)")
-           for c in classes for suffix, _, text in FIGURES.get(c, ())]
+           for c in classes for suffix, _, text in class_figures(c, discrete)]
     for c in classes:
         if c in OUTPUT_FIGURES:
             text = OUTPUT_FIGURES[c][1]
@@ -332,13 +368,13 @@ def _figures(classes: Sequence[str], outputs: Sequence[str]) -> list[Variable]:
     return out
 
 
-def _model_common(classes: Sequence[str], outputs: Sequence[str], what: str) -> list[Variable]:
+def _model_common(classes: Sequence[str], outputs: Sequence[str], what: str, discrete: bool = False) -> list[Variable]:
     i8, i16, i32, f8, b1 = (np.dtype(t) for t in ("int8", "int16", "int32", "float64", "bool"))
     out = [Variable("status", i8, NOT_COMPUTED, "1 certified, 2 refuted (unstable, exactly), 0 not certified, "
                     "3 split, -1 not computed")]
     out += [Variable(f"status_{c}", i8, NOT_COMPUTED, f"{c} over the {what}: 0 not_certified, 1 certified, 2 refuted, "
                      "3 inconclusive, 4 not_applicable, -1 not computed") for c in classes]
-    out += _figures(classes, outputs)
+    out += _figures(classes, outputs, discrete)
     out += [
         Variable("certificate", STRING, "", "the certificate document (JSON) of a certified " + what
                  + "; verify re-checks it"),
@@ -365,9 +401,10 @@ def _model_common(classes: Sequence[str], outputs: Sequence[str], what: str) -> 
     return out
 
 
-def point_variables(classes: Sequence[str], outputs: Sequence[str]) -> tuple[Variable, ...]:
-    """Every variable of a points store, in a fixed order (``done`` last)."""
-    return tuple(_model_common(classes, outputs, "point"))
+def point_variables(classes: Sequence[str], outputs: Sequence[str], discrete: bool = False) -> tuple[Variable, ...]:
+    """Every variable of a points store, in a fixed order (``done`` last); ``discrete``: of a
+    discrete-time map (its figures per step, :func:`class_figures`)."""
+    return tuple(_model_common(classes, outputs, "point", discrete))
 
 
 def model_box_variables(dims: Sequence[str], classes: Sequence[str], outputs: Sequence[str]) -> tuple[Variable, ...]:
@@ -424,7 +461,7 @@ def check_model_dataset(ds: Any, source: str) -> None:
             if values.ndim != 1 or values.dtype.kind != "f" or not np.all(np.isfinite(values)) \
                     or np.any(np.diff(values) <= 0):
                 raise bad(f"coordinate '{d}' is not a finite, strictly increasing list of numbers")
-        variables, expected = point_variables(classes, outputs), dims
+        variables, expected = point_variables(classes, outputs, is_map_store(ds)), dims
     for var in variables:
         if var.name not in ds.data_vars:
             raise bad(f"no variable '{var.name}'")

@@ -606,6 +606,11 @@ class ModelSweepSpec(_AxesGrid):
         return self.model.sha256
 
     @property
+    def discrete(self) -> bool:
+        """Whether the model is a discrete-time map (``[model] time = "discrete"``)."""
+        return is_discrete(self.model)
+
+    @property
     def has_functions(self) -> bool:
         """Whether the model is a loop with functions (:class:`~lyapcheck.models.language.recast.RecastModel`)."""
         return not isinstance(self.model, Model)
@@ -778,17 +783,10 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
 
 def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
     """The classes a sweep of a discrete-time map takes: those with a discrete-time condition
-    (:data:`lyapcheck.models.classes.registry.DISCRETE`) but :data:`MAP_UNSWEPT`, on a map with functions
-    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS` but :data:`MAP_UNSWEPT`."""
-    if isinstance(model, Model):
-        # barrier and reach_avoid are certified on a map at a point, but a sweep's cross-check of them (by
-        # iteration, sweeps.crosscheck.check_sets) is not built yet: a point sweep does not take them
-        return tuple(c for c in model_classes.DISCRETE if c not in MAP_UNSWEPT)
-    return tuple(c for c in model_classes.MAP_FUNCTIONS if c not in MAP_UNSWEPT)
-
-
-#: classes a map takes at a point that a sweep of a map does not take yet (:func:`map_classes`)
-MAP_UNSWEPT: Final = ("barrier", "reach_avoid")
+    (:data:`lyapcheck.models.classes.registry.DISCRETE`; ``barrier`` and ``reach_avoid`` cross-checked by
+    iterating, :func:`sweeps.crosscheck.check_sets`), on a map with functions
+    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS`."""
+    return model_classes.DISCRETE if isinstance(model, Model) else model_classes.MAP_FUNCTIONS
 
 
 def _model_simulation(raw: object) -> ModelSimulation:
@@ -944,7 +942,7 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
         points = int(np.prod([a.size for a in axes]))
         if points > MAX_MODEL_POINTS:
             raise InvalidParameter("sweep.axes", f"at most {MAX_MODEL_POINTS} grid points in all", points)
-        reserved = {v.name for v in point_variables(classes, tuple(model.outputs))}
+        reserved = {v.name for v in point_variables(classes, tuple(model.outputs), is_discrete(model))}
         for i, name in enumerate(names):
             if name in reserved:
                 raise InvalidParameter(f"sweep.axes[{i}].name", "a parameter whose name is not one of the results' "

@@ -426,7 +426,7 @@ class ModelPointStore(_ModelFileStore, GridStore):
 
     @classmethod
     def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
-        return point_variables(spec.classes, spec.outputs)
+        return point_variables(spec.classes, spec.outputs, spec.discrete)
 
     @classmethod
     def coord_attributes(cls, axis: Any) -> dict[str, Any]:

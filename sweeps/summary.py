@@ -20,7 +20,7 @@ and one count of soundness violations (:func:`violation_count`):
   window; the shares are those of the cells. A certified point proves that point only: its cell's
   share is a sampled estimate, never a proof for the values between the points (the report says so).
   ``share_by_class`` is the share where each class certified, ``counts`` the leaves (or points) of
-  each status, ``figures`` the range of each class's figures (:data:`sweeps.schema.FIGURES`) over
+  each status, ``figures`` the range of each class's figures (:func:`sweeps.schema.class_figures`) over
   the certified ones, and the cross-check figures are the worst over the certified ones.
 """
 
@@ -34,7 +34,8 @@ from typing import Any, Final, Mapping, Sequence
 
 import numpy as np
 
-from sweeps.schema import BOX_STATUS_CODES, BOXES_MODE, CLASSES, FIGURES, OUTPUT_FIGURES, POINTS_MODE, STATUS_CODES
+from sweeps.schema import (BOX_STATUS_CODES, BOXES_MODE, CLASSES, OUTPUT_FIGURES, POINTS_MODE, STATUS_CODES,
+                           class_figures)
 from sweeps.store import Store
 
 #: soundness violations listed one by one (the rest counted)
@@ -279,7 +280,7 @@ def summarize_model_arrays(mode: str, dims: Sequence[str], scales: Mapping[str, 
         counts_by_class[c] = int(mine.sum())
     figures: dict[str, list[float] | None] = {}
     for c in classes:
-        for suffix, _, _ in FIGURES.get(c, ()):
+        for suffix, _, _ in class_figures(c, (model or {}).get("time") == "discrete"):
             figures[f"{c}_{suffix}"] = _range(np.asarray(data[f"{c}_{suffix}"], float).ravel()[certified])
         if c in OUTPUT_FIGURES:
             for y in outputs:
@@ -354,19 +355,20 @@ def summarize_model_store(store: Any) -> ModelSweepSummary:
 
 def summarize_dataset(ds: Any) -> ModelSweepSummary:
     """The summary of a store loaded as an xarray Dataset (the report), from its attributes alone."""
-    from sweeps.schema import json_list, model_box_variables, point_variables
+    from sweeps.schema import is_map_store, json_list, model_box_variables, point_variables
 
     dims, classes, outputs = (json_list(ds, k) for k in ("dims", "classes", "outputs"))
     raw = json.loads(str(ds.attrs.get("axis_scales", "{}")))
     scales = {d: ("log" if raw.get(d) == "log" else "linear") for d in dims}
     model = {"name": str(ds.attrs.get("model_name", "")), "file": str(ds.attrs.get("model_file", "")),
-             "sha256": str(ds.attrs.get("model_sha256", ""))}
+             "sha256": str(ds.attrs.get("model_sha256", "")), "time": "discrete" if is_map_store(ds) else "continuous"}
     if ds.attrs["mode"] == BOXES_MODE:
         data = {v.name: np.asarray(ds[v.name].values) for v in model_box_variables(dims, classes, outputs)}
         window = stored_window(ds, dims, data)
         return summarize_model_arrays(BOXES_MODE, dims, scales, classes, outputs, data, window=window, model=model,
                                 total=int(np.sum(data["done"])))
-    data = {v.name: np.asarray(ds[v.name].transpose(*dims).values) for v in point_variables(classes, outputs)}
+    data = {v.name: np.asarray(ds[v.name].transpose(*dims).values)
+            for v in point_variables(classes, outputs, model["time"] == "discrete")}
     coords = {d: np.asarray(ds.coords[d].values) for d in dims}
     return summarize_model_arrays(POINTS_MODE, dims, scales, classes, outputs, data, coords=coords, model=model)
 

@@ -217,7 +217,7 @@ REFUSALS: tuple[Refusal, ...] = (
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
     Refusal(cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
             | cells(("discrete",), CLASSES[:5], ("sweep boxes",))
-            | cells(("discrete",), ("barrier", "reach_avoid"), ("sweep points", "sweep boxes")),
+            | cells(("discrete",), ("barrier", "reach_avoid"), ("sweep boxes",)),
             ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
              '"discrete")'),
             "A discrete-time map (`[model] time = \"discrete\"`) takes `linearization` (every eigenvalue of the map's "
@@ -225,9 +225,9 @@ REFUSALS: tuple[Refusal, ...] = (
             "and `candidate` (a set `{V <= c}` on which `V(F(e)) <= V(e) - eps |e|^2`, exact), `barrier` (`B(F(x)) <= "
             "lambda B(x)`, exact) and `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) at a point; "
             "`sos_bound` is `not_applicable` until its discrete-time condition is built; reports and point sweeps "
-            "iterate the map (a sweep's cross-check of `barrier` and `reach_avoid` by iteration is not built yet, so "
-            "a point sweep does not take them), while box sweeps, which read `[dynamics]` as a field, refuse a map "
-            "in one line (a gap, not a theorem)."),
+            "iterate the map (a point sweep's cross-check of `barrier` and `reach_avoid` iterates from the initial "
+            "set), while box sweeps, which read `[dynamics]` as a field, refuse a map in one line (a gap, not a "
+            "theorem)."),
     Refusal(cells(("discrete",), ("roa", "barrier", "reach_avoid"), ("--box",)),
             ("decided at one parameter value only on a map",),
             "Over a `--box` a map takes `linearization` (one Stein `P` for every Jacobian of the box), `quadratic` "

@@ -205,12 +205,47 @@ def test_the_api_takes_the_classes_and_settings() -> None:
         certify(model=STABLE, classes="nonsense")
 
 
-def test_report_and_sweeps_refuse_a_sampled_loop_in_one_line(tmp_path: Path) -> None:
+@pytest.mark.slow
+@pytest.mark.parametrize("path, status, verdict_exit", [(STABLE, "certified", 0), (SLOW, "refuted", 1)])
+def test_a_sampled_loop_s_report_has_its_sampling_and_its_staircase_simulation(tmp_path: Path, path: Path,
+                                                                              status: str, verdict_exit: int) -> None:
+    """The page of a stable (20 ms) and of an unstable (0.5 s) period: the linearization's answer in the page's
+    words, the period and the controller, the exact re-check, and simulate --plot's staircase figure, whose
+    trajectories all converge at the stable period and some diverge at the unstable one; no phase portrait
+    and no region."""
+    import base64
+    import re
+
+    from lyapcheck.models.language.sampling import load_sampled
+    from reports.certificate_page import certificate_context, read_certificate
+
     cert, html = tmp_path / "c.json", tmp_path / "c.html"
-    assert _invoke("certify", str(STABLE), "--out", str(cert))[0] == 0
+    assert _invoke("certify", str(path), "--out", str(cert))[0] == verdict_exit
     code, text = _invoke("report", str(cert), "--html", str(html))
-    assert code == 2 and "sampled-data" in text and len(text.strip().splitlines()) == 1
-    assert not html.exists()
+    assert code == 0, text
+    page = html.read_text()
+    assert 'id="sampling"' in page and "Sampling and controller" in page and "-Kp*theta - Kd*omega" in page
+    model = load_sampled(path)
+    assert f"{float(model.period):g} s" in page and "zero-order" in page
+    found = re.search(r'<figure id="fig-staircase"><img src="data:image/svg\+xml;base64,([^"]+)"', page)
+    assert found is not None and base64.b64decode(found.group(1)).lstrip().startswith(b"<?xml")
+    assert "fig-phase" not in page and "fig-size" not in page and "Phase portrait" not in page
+    assert "the figures of this condition are malformed" not in page
+    context = certificate_context(read_certificate(cert))
+    linearization = next(c for c in context["conditions"] if c.name == "linearization")
+    assert linearization.status == status
+    assert ("locally exponentially stable" if status == "certified" else "unstable") in linearization.summary
+    assert context["recheck"] and not context["recheck_failed"]
+    counts = context["series_figure"].data
+    assert counts["trajectories"] == 1 + 2 * model.n  # simulate's default starts: x_eq and +- along each state
+    if status == "certified":
+        assert counts["converged"] == counts["trajectories"] and counts["diverged"] == 0
+    else:
+        assert counts["diverged"] > 0
+    assert f"{counts['diverged']} diverged" in context["series_figure"].caption
+
+
+def test_sweeps_refuse_a_sampled_loop_in_one_line(tmp_path: Path) -> None:
     spec = tmp_path / "sweep.toml"
     spec.write_text(f'[sweep]\nmodel = "{STABLE}"\n[[sweep.axes]]\nname = "T"\nstart = 0.1\nstop = 0.5\nnum = 3\n')
     code, text = _invoke("sweep", str(spec), "--out", str(tmp_path / "s.zarr"))

@@ -375,8 +375,8 @@ class ModelFileSubject(Subject):
         if not is_model_document(doc):
             raise InputFileError(f"not a model certificate (missing kind '{KIND}')")
         if isinstance(doc.get("sampling"), dict):  # its loop is a plant under held controls, not a field to integrate
-            raise InputFileError("report: a sampled-data loop's certificate ([sampling]) has no report yet; "
-                                 "lyapcheck certify FILE and lyapcheck verify CERT.json show its answers")
+            raise InputFileError("a sampled-data loop's certificate ([sampling]) is the subject of "
+                                 "reports.subjects.sampled, not of a model file's page")
         super().__init__(doc)
         self.kind = WITH_FUNCTIONS if is_recast_document(doc) else POLYNOMIAL
         self.model, self.template = self.kind.model, self.kind.template
