@@ -115,13 +115,9 @@ class DiscreteBarrier:
     def to_json(self, ring: Ring) -> dict[str, Any]:
         from lyapcheck.models.classes.lyapunov import terms_json
 
-        def piece(cert: PieceCertificate) -> dict[str, Any]:
-            multipliers, remainder = cert
-            return {"multipliers": [s.to_json() for s in multipliers], "remainder": remainder.to_json()}
-
         return {"kind": KIND, "time": "discrete", "coordinates": "shifted", "degree": poly_degree(ring, self.B),
                 "lambda": str(self.lam), "B": terms_json(ring, self.B),
-                "initial": [piece(c) for c in self.initial], "unsafe": [piece(c) for c in self.unsafe],
+                "initial": [piece_json(c) for c in self.initial], "unsafe": [piece_json(c) for c in self.unsafe],
                 "gram_step": self.step.to_json()}
 
     @classmethod
@@ -131,12 +127,20 @@ class DiscreteBarrier:
 
         n = ring.nvars
 
-        def piece(data: Mapping[str, Any]) -> PieceCertificate:
-            return ([GramPoly.from_json(s, n) for s in data["multipliers"]], GramPoly.from_json(data["remainder"], n))
-
         return cls(poly_from_json(ring, cert["B"], "B"), read_rational(cert["lambda"], "lambda"),
-                   tuple(piece(c) for c in cert["initial"]), tuple(piece(c) for c in cert["unsafe"]),
+                   tuple(piece_of(c, n) for c in cert["initial"]), tuple(piece_of(c, n) for c in cert["unsafe"]),
                    GramPoly.from_json(cert["gram_step"], n))
+
+
+def piece_json(cert: PieceCertificate) -> dict[str, Any]:
+    """One set piece's certificate (its multipliers and remainder) as a certificate writes it."""
+    multipliers, remainder = cert
+    return {"multipliers": [s.to_json() for s in multipliers], "remainder": remainder.to_json()}
+
+
+def piece_of(data: Mapping[str, Any], n: int) -> PieceCertificate:
+    """A set piece's certificate read back (:func:`piece_json`), Gram matrices over ``n`` variables."""
+    return ([GramPoly.from_json(s, n) for s in data["multipliers"]], GramPoly.from_json(data["remainder"], n))
 
 
 def poly_degree(ring: Ring, p: Poly) -> int:
@@ -437,14 +441,10 @@ class DiscreteReach:
     def to_json(self, ring: Ring) -> dict[str, Any]:
         from lyapcheck.models.classes.lyapunov import terms_json
 
-        def piece(cert: PieceCertificate) -> dict[str, Any]:
-            multipliers, remainder = cert
-            return {"multipliers": [s.to_json() for s in multipliers], "remainder": remainder.to_json()}
-
         return {"kind": REACH_KIND, "time": "discrete", "coordinates": "shifted", "degree": poly_degree(ring, self.V),
                 "eps": str(self.eps), "C": str(self.C), "reach_steps_bound": self.steps_bound(),
-                "V": terms_json(ring, self.V), "initial": [piece(c) for c in self.initial],
-                "unsafe": [piece(c) for c in self.unsafe],
+                "V": terms_json(ring, self.V), "initial": [piece_json(c) for c in self.initial],
+                "unsafe": [piece_json(c) for c in self.unsafe],
                 "goal": [{"multiplier": g.to_json(), "remainder": r.to_json()} for g, r in self.goal],
                 "gram_below": self.below.to_json()}
 
@@ -455,12 +455,9 @@ class DiscreteReach:
 
         n = ring.nvars
 
-        def piece(data: Mapping[str, Any]) -> PieceCertificate:
-            return ([GramPoly.from_json(s, n) for s in data["multipliers"]], GramPoly.from_json(data["remainder"], n))
-
         return cls(poly_from_json(ring, cert["V"], "V"), read_rational(cert["eps"], "eps"),
-                   read_rational(cert["C"], "C"), tuple(piece(c) for c in cert["initial"]),
-                   tuple(piece(c) for c in cert["unsafe"]),
+                   read_rational(cert["C"], "C"), tuple(piece_of(c, n) for c in cert["initial"]),
+                   tuple(piece_of(c, n) for c in cert["unsafe"]),
                    tuple((GramPoly.from_json(g["multiplier"], n), GramPoly.from_json(g["remainder"], n))
                          for g in cert["goal"]),
                    GramPoly.from_json(cert["gram_below"], n))
