@@ -71,6 +71,16 @@ def verify_safety_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[
     return discrete_safety.verify(check.shifted, name, c, check.model)
 
 
+def verify_bound_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
+    """``sos_bound``: each output's step and output identities on the disturbances' box, re-derived from the
+    model text (:func:`lyapcheck.models.classes.discrete_bounds.verify`)."""
+    from lyapcheck.models.classes import discrete_bounds
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return discrete_bounds.verify(check.shifted, c, check.model)
+
+
 # -- a discrete-time map with functions ---------------------------------------------------------------------
 
 def verify_linearization_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck"
@@ -106,5 +116,5 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
     return sampled.verify_linearization(check.model, c["status"], _data(c))
 
 
-__all__ = ["verify_linearization_map", "verify_lyapunov_map", "verify_region_map", "verify_safety_map",
+__all__ = ["verify_linearization_map", "verify_lyapunov_map", "verify_region_map", "verify_safety_map", "verify_bound_map",
            "verify_linearization_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]
