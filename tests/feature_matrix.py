@@ -205,7 +205,9 @@ _BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
 
 #: every refused cell of today, with its reason (the footnotes of the docs' table, in this order)
 REFUSALS: tuple[Refusal, ...] = (
-    Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES),
+    Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
+            | cells(("discrete",), ("sos_bound",),
+                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep boxes"))),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
@@ -215,16 +217,16 @@ REFUSALS: tuple[Refusal, ...] = (
             "the box, a search of box multipliers for a fixed V that is not built (a gap, not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
-            | cells(("discrete",), CLASSES[:5], ("--box", "sweep boxes"))
+    Refusal(cells(("discrete",), CLASSES[:6], ("--box", "sweep boxes"))
             | cells(("discrete",), ("barrier", "reach_avoid"), ("--box", "sweep points", "sweep boxes")),
             ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
              '"discrete")'),
             "A discrete-time map (`[model] time = \"discrete\"`) takes `linearization` (every eigenvalue of the map's "
             "Jacobian of modulus < 1, exact), `quadratic` and `sos_gas` (`V(F(e)) - V(e) <= -mu V(e)`, exact), `roa` "
             "and `candidate` (a set `{V <= c}` on which `V(F(e)) <= V(e) - eps |e|^2`, exact), `barrier` (`B(F(x)) <= "
-            "lambda B(x)`, exact) and `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) at a point; "
-            "`sos_bound` is `not_applicable` until its discrete-time condition is built; reports and point sweeps "
+            "lambda B(x)`, exact), `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) and, with "
+            "`[disturbances]`, `sos_bound` (`V(F(x, d)) <= lam V(x) + 1 - lam`, exact) at a point; reports and point "
+            "sweeps "
             "iterate the map (a sweep's cross-check of `barrier` and `reach_avoid` by iteration is not built yet, so "
             "a point sweep does not take them), while `--box` and box sweeps, which read `[dynamics]` as a field, "
             "refuse a map in one line (a gap, not a theorem)."),
