@@ -163,3 +163,25 @@ def test_a_negative_disturbance_bound_is_refused_in_one_line() -> None:
     assert done.exit_code == 2
     assert "d" in done.output and ">= 0" in done.output and "-1" in done.output
     assert len(done.output.strip().splitlines()) == 1
+
+
+def test_the_maps_nominal_claims_beside_the_bound_verify_and_a_forged_coverage_does_not(tmp_path: Path) -> None:
+    """With disturbances, a map's other classes are decided with them at 0 and say ``(d = 0)``; their exact checks
+    compare the sentence without it (lyapcheck.models.classes.verify_discrete), and a claim restated for every
+    disturbance fails."""
+    out = tmp_path / "all.json"
+    done = cli("certify", str(EXAMPLE), "--classes", "linearization,sos_gas,sos_bound", "--no-store", "--out", str(out))
+    assert done.exit_code == 0, done.output
+    doc = json.loads(out.read_text())
+    gas = doc["conditions"]["sos_gas"]
+    assert gas["status"] == "certified" and gas["disturbances"] == "zero" and gas["summary"].startswith("(d = 0) ")
+    assert doc["conditions"]["sos_bound"]["disturbances"] == "all"
+    assert cli("verify", str(out)).exit_code == 0
+    bad = copy.deepcopy(doc)
+    forged = bad["conditions"]["sos_gas"]
+    forged["disturbances"] = "all"
+    forged["summary"] = "for every disturbance signal within its bounds: " + forged["summary"][len("(d = 0) "):]
+    path = tmp_path / "forged.json"
+    path.write_text(json.dumps(bad))
+    done = cli("verify", str(path))
+    assert done.exit_code == 1 and "sos_gas" in done.output
