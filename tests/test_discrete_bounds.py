@@ -185,3 +185,20 @@ def test_the_maps_nominal_claims_beside_the_bound_verify_and_a_forged_coverage_d
     path.write_text(json.dumps(bad))
     done = cli("verify", str(path))
     assert done.exit_code == 1 and "sos_gas" in done.output
+
+
+def test_an_output_the_disturbance_cannot_bound_is_named_not_bounded(tmp_path: Path) -> None:
+    """``x+ = x/2 + d`` is bounded (``|x|`` tends to at most ``b / (1 - 1/2) = 1``), ``y+ = y`` keeps any start: the
+    claim bounds x alone, no smaller than the true limit, says "no bound for y", and verifies."""
+    path = tmp_path / "partial.toml"
+    path.write_text('[model]\nname = "partial"\nstates = ["x", "y"]\ntime = "discrete"\n\n[disturbances]\nd = 0.5\n\n'
+                    '[dynamics]\nx = "0.5*x + d"\ny = "y"\n\n[outputs]\nx = "x"\ny = "y"\n')
+    out = tmp_path / "partial.json"
+    cli("certify", str(path), "--classes", "sos_bound", "--no-store", "--out", str(out))
+    c = json.loads(out.read_text())["conditions"]["sos_bound"]
+    assert c["status"] == "certified" and set(c["bounds"]) == {"x"} and "no bound for y" in c["summary"]
+    x = 0.0
+    for _ in range(200):  # d = +b at every step drives x to its limit 1
+        x = 0.5 * x + 0.5
+    assert x <= c["bounds"]["x"] and x > 0.99
+    assert cli("verify", str(out)).exit_code == 0

@@ -246,18 +246,20 @@ def attempt(dm: DisturbedMap, y: Poly, structure: Structure, alphas: Sequence[Mo
             "box_E": box_E}, "found"
 
 
-def best_bound(dm: DisturbedMap, y: Poly, search: Search, degrees: Sequence[int] = BOUND_DEGREES
+def best_bound(dm: DisturbedMap, y: Poly, search: Search, degrees: Sequence[int] | None = None
                ) -> tuple[dict[str, Any] | None, list[str]]:
     """The smallest certified ``B`` over :data:`LAMBDAS`, at the first degree of ``degrees`` that gives
-    one, and what each degree met. Where every program so far fails at a rate, a probe (the continuous
+    one (:data:`BOUND_DEGREES` under ``--degree``'s ceiling by default), and what each degree met. Where every program so far fails at a rate, a probe (the continuous
     classes' :func:`~lyapcheck.models.classes.lyapunov.face_probe`) names the remainders' basis monomials
     that must vanish, and the program without them is tried next (facial reduction, at most
     :data:`~lyapcheck.models.classes.lyapunov.FACIAL_ROUNDS` rounds per degree): the floor on every Gram
     matrix makes a program whose remainder must be singular over the full basis infeasible."""
     from lyapcheck.models.classes.lyapunov import FACIAL_ROUNDS, face_probe, vanishing_monomials
 
+    from lyapcheck.degrees import searched_degrees
+
     tried: list[str] = []
-    for degree in degrees:
+    for degree in searched_degrees(BOUND_DEGREES) if degrees is None else degrees:
         search.budget.check()
         built = bound_program(dm, y, degree)
         if isinstance(built, str):
@@ -358,9 +360,8 @@ def run(model: "Model", shifted: "ShiftedField", budget: Budget) -> ConditionRes
         return ConditionResult("sos_bound", "not_certified", none.summary,
                                numbers=none.numbers({"tried": detail, "time": "discrete"}),
                                solver={"solves": search.log})
+    # (an output without a bound is named by the sentence: "no bound for ...")
     numbers: dict[str, Any] = {"bounds": bounds, **bound_figures(model, dm, list(bounds)), "time": "discrete"}
-    if detail:
-        numbers["detail"] = detail
     certificate = {"kind": KIND, "time": "discrete", "outputs": certs}
     text = summary("sos_bound", {"status": "certified", **numbers, "certificate": certificate},
                    list(dm.outputs)) or ""
