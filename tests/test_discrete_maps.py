@@ -225,8 +225,10 @@ def test_a_certified_class_without_a_discrete_time_check_fails_verify(tmp_path: 
     doc["conditions"]["sos_bound"] = {"status": "certified", "property": "ultimate_bound", "summary": "forged",
                                       "certificate": {"kind": "sos_bound"}}
     rows = verify_document(doc)
-    assert ("sos_bound", False, "sos_bound: a certified claim on a discrete-time map that no discrete-time check "
-                                "re-derives") in rows
+    # (sos_bound has a map check since issue 44's bounds: a continuous-time bound certificate is not a map's,
+    # lyapcheck.models.classes.discrete_bounds; a class without a map check: tests/test_one_runner.py)
+    assert ("sos_bound", False, "sos_bound: not a certificate of a discrete-time map's bound (kind 'sos_bound')") \
+        in rows
     # a continuous-time barrier certificate is not a map's (lyapcheck.models.classes.discrete_safety)
     doc = _certificate(tmp_path, MAP)
     doc["conditions"]["barrier"] = {"status": "certified", "property": "safety", "summary": "forged",
@@ -258,7 +260,8 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert done.exit_code == 0, done.output
     conditions = json.loads(done.stdout)["conditions"]
     assert list(conditions) == [c.name for c in CLASSES]
-    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate", "barrier", "reach_avoid")
+    assert DISCRETE == ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier",
+                        "reach_avoid")
     assert conditions["linearization"]["status"] == "certified"
     assert conditions["linearization"]["summary"].startswith("every eigenvalue of the map's Jacobian at the fixed "
                                                              "point has modulus < 1")
@@ -279,6 +282,9 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert conditions["reach_avoid"]["status"] in ("certified", "not_certified")
     assert conditions["reach_avoid"]["status"] != "certified" or \
         conditions["reach_avoid"]["certificate"]["kind"] == "discrete_reach_avoid"
+    # sos_bound: the map has no [disturbances], so the loop's sentence (its bounds: tests/test_discrete_bounds.py)
+    assert conditions["sos_bound"]["status"] == "not_applicable"
+    assert "the model has no [disturbances]" in conditions["sos_bound"]["summary"]
     for c in CLASSES:
         if c.name not in DISCRETE:
             assert conditions[c.name]["status"] == "not_applicable"

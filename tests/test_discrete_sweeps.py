@@ -128,7 +128,7 @@ def test_boxes_and_classes_a_map_does_not_take_are_refused_in_one_line(tmp_path:
                      'stop = 0.9\nnum = 2\n')
     assert_refused(boxes, 'boxes are not taken on maps yet')
     barrier = tmp_path / "barrier.toml"
-    barrier.write_text('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\n[[sweep.axes]]\nname = "a"\n'
+    barrier.write_text('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n[[sweep.axes]]\nname = "a"\n'
                        'start = 0.3\nstop = 0.9\nnum = 2\n')
     with pytest.raises(InvalidParameter, match=r"sweep.classes.*discrete-time map.*'linearization', 'quadratic', "
                                                r"'sos_gas', 'roa'"):

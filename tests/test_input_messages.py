@@ -75,15 +75,15 @@ def test_outside_dynamics_a_function_or_pi_gets_the_sections_rule(tmp_path: Path
 
 def test_a_discrete_time_map_is_read_as_a_map_not_as_an_ode(tmp_path: Path) -> None:
     """``x+ = y, y+ = -x/2``: quadratic is decided with its discrete-time condition (GES of the map, eigenvalues of
-    modulus 1/sqrt(2)); roa is then the whole state space, as in continuous time; a class without a discrete-time
-    condition is not_applicable, never run."""
+    modulus 1/sqrt(2)); roa is then the whole state space, as in continuous time; sos_bound (its discrete-time
+    condition: tests/test_discrete_bounds.py) is not_applicable for want of [disturbances], never run as an ODE."""
     done = CliRunner().invoke(app.cli, ["certify", str(model_file(tmp_path, "-x/2", head='time = "discrete"')),
                                         "--classes", "quadratic,roa,sos_bound", "--no-store", "--json"])
     assert done.exit_code == 0, done.output
     quadratic, roa, bound = (json.loads(done.stdout)["conditions"][name] for name in ("quadratic", "roa", "sos_bound"))
     assert quadratic["status"] == "certified" and quadratic["summary"].startswith("GES of the discrete-time map")
     assert roa["status"] == "not_applicable" and "the region of attraction is the whole state space" in roa["summary"]
-    assert bound["status"] == "not_applicable" and "not yet decided for discrete-time maps" in bound["summary"]
+    assert bound["status"] == "not_applicable" and "the model has no [disturbances]" in bound["summary"]
 
 
 @pytest.mark.parametrize(("time", "got"), [('"sampled"', "'sampled'"), ("1", "1"),

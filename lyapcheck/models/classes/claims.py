@@ -51,6 +51,9 @@ DISCRETE_BARRIER_SENTENCE = ("safety of the discrete-time map: no iterate of a s
                              "checked exactly)")
 #: the certificate kind of a discrete-time map's reach_avoid (lyapcheck.models.classes.discrete_safety)
 DISCRETE_REACH_KIND = "discrete_reach_avoid"
+#: the certificate kind of a discrete-time map's sos_bound (lyapcheck.models.classes.discrete_bounds): its
+#: sentence speaks of iterates and steps (a limsup over the steps, not over time)
+DISCRETE_BOUND_KIND = "discrete_bound"
 
 
 def discrete_reach_sentence(steps: int) -> str:
@@ -195,7 +198,8 @@ def summary(name: str, condition: Mapping[str, Any], outputs: Sequence[str] = ()
     elif (condition.get("certificate") or {}).get("kind") == "interval":
         return None  # a ball-arithmetic region's sentence is the recast route's, re-made by its check (ball_roa)
     elif name == "sos_bound":
-        text = _bounds(condition, outputs)
+        text = _bounds(condition, outputs,
+                       discrete=(condition.get("certificate") or {}).get("kind") == DISCRETE_BOUND_KIND)
     elif name == "barrier":
         discrete = (condition.get("certificate") or {}).get("kind") == DISCRETE_BARRIER_KIND
         text = DISCRETE_BARRIER_SENTENCE if discrete else BARRIER_SENTENCE
@@ -397,7 +401,7 @@ def size_words(condition: Mapping[str, Any]) -> str:
     return "size: " + "; ".join(parts) if parts else ""
 
 
-def _bounds(condition: Mapping[str, Any], outputs: Sequence[str]) -> str:
+def _bounds(condition: Mapping[str, Any], outputs: Sequence[str], discrete: bool = False) -> str:
     bounds = condition["bounds"]
     if not isinstance(bounds, dict):
         raise TypeError("figure 'bounds' must be a table of outputs")
@@ -415,7 +419,14 @@ def _bounds(condition: Mapping[str, Any], outputs: Sequence[str]) -> str:
         if reference is None:
             text += f" (of {k} itself: its value at the equilibrium depends on the box's parameters)"
         parts.append(text)
-    out = f"for every disturbance within its bounds and every start: {', '.join(parts)} (checked exactly)"
+    if discrete:
+        # a limsup over the steps: from any start each output comes, and stays, within any margin above its
+        # bound (within the bound itself from a start in {V <= 1}, which no iterate leaves)
+        out = (f"for every disturbance sequence within its bounds and every start, limsup over the steps: "
+               f"{', '.join(parts)} (every iterate eventually stays within any margin above each bound; "
+               "checked exactly)")
+    else:
+        out = f"for every disturbance within its bounds and every start: {', '.join(parts)} (checked exactly)"
     missing = [k for k in outputs if k not in bounds]
     if missing:
         out += f"; no bound for {', '.join(missing)}"
@@ -575,4 +586,4 @@ def interval_sentence(cert: dict[str, Any]) -> str:
 __all__ = ["summary", "roa_after_gas", "GAS_CLASSES", "box_words", "box_prefix", "ball_words", "size_words", "with_unit", "deviation", "state_unit_figures", "v_text",
            "v_expression", "sentence_of", "recast_reach_time", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
            "RATE_UNIT", "DISCRETE_BARRIER_KIND", "DISCRETE_BARRIER_SENTENCE",
-           "DISCRETE_REACH_KIND", "discrete_reach_sentence"]
+           "DISCRETE_REACH_KIND", "DISCRETE_BOUND_KIND", "discrete_reach_sentence"]

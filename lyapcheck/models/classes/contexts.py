@@ -146,7 +146,8 @@ class FunctionsCheck:
 @dataclass
 class MapRun:
     """A polynomial discrete-time map as its classes are run on it (its disturbances at 0:
-    :mod:`lyapcheck.models.loop.discrete`)."""
+    :mod:`lyapcheck.models.loop.discrete`; but ``sos_bound``, which reads them from the shifted map's ring:
+    :mod:`lyapcheck.models.classes.discrete_bounds`)."""
 
     model: "Model"
     #: the map shifted to its fixed point, ``e+ = f(x_eq + e) - x_eq``

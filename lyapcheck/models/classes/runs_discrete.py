@@ -88,6 +88,14 @@ def reach_avoid_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
     return discrete_safety.run_reach_avoid(ctx.model, ctx.shifted, budget)
 
 
+def sos_bound_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
+    """A V with ``V(F(x, d)) <= lam V(x) + 1 - lam`` for every bounded disturbance, and each output's
+    ``y^2 <= B + V - 1`` (:func:`lyapcheck.models.classes.discrete_bounds.run`)."""
+    from lyapcheck.models.classes import discrete_bounds
+
+    return discrete_bounds.run(ctx.model, ctx.shifted, budget)
+
+
 # -- a discrete-time map with functions (lyapcheck.models.classes.discrete_functions) -----------------------
 
 def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
@@ -116,6 +124,6 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
     return sampled.linearization(ctx.model)
 
 
-__all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map", "barrier_map",
-           "reach_avoid_map",
+__all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
+           "barrier_map", "reach_avoid_map", "sos_bound_map",
            "linearization_map_functions", "roa_map_functions", "linearization_sampled"]

@@ -70,6 +70,8 @@ NOT_OVER_A_BOX: Final[Mapping[str, str]] = {
 }
 #: why ``candidate`` asked for without ``--candidate`` is ``not_applicable`` (on every kind of loop)
 NEEDS_CANDIDATE: Final = 'needs --candidate "EXPR" (the user\'s V); not run'
+#: why ``sos_bound`` on a model without ``[disturbances]`` is ``not_applicable`` (on a loop and on a map)
+NO_DISTURBANCES: Final = "the model has no [disturbances]: add one (name = bound) to bound its outputs"
 
 
 class Reason(NamedTuple):
@@ -208,6 +210,6 @@ def numerical_trouble(thing: str, detail: str | Iterable[str]) -> Reason:
                   detail)
 
 
-__all__ = ["NEXT", "SEARCHED_FOR", "NOT_OVER_A_BOX", "NEEDS_CANDIDATE", "Reason", "searched_for", "size_limit",
+__all__ = ["NEXT", "SEARCHED_FOR", "NOT_OVER_A_BOX", "NEEDS_CANDIDATE", "NO_DISTURBANCES", "Reason", "searched_for", "size_limit",
            "size_limits", "reason", "not_found", "out_of_time", "with_budget", "numerical_trouble", "advice",
            "degree_words"]

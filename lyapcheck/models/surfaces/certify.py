@@ -346,8 +346,7 @@ def _field_rule(name: str, model: Model, box: "ModelBox | None", results: dict[s
                    "the model's [sets] needs 'initial' and 'unsafe' (docs/model-files.md, [sets])")
             return ConditionResult(name, "not_applicable", why)
     if name == "sos_bound" and not model.disturbances:
-        return ConditionResult("sos_bound", "not_applicable", "the model has no [disturbances]: add one (name = bound) "
-                                                              "to bound its outputs")
+        return ConditionResult("sos_bound", "not_applicable", reasons.NO_DISTURBANCES)
     return None
 
 
@@ -391,8 +390,9 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
 
     _run_classes(chosen, out.results, out.seconds, limit, decide, compute)
     for name, r in out.results.items():
-        if model.disturbances:  # (every class of a map is decided with its disturbances at 0)
-            r.disturbances = "zero"
+        if model.disturbances:  # (every class of a map is decided with its disturbances at 0, but sos_bound,
+            # whose V serves every disturbance sequence within the bounds)
+            r.disturbances = "all" if name == "sos_bound" else "zero"
         if r.status == "certified" and name in region_size.SIZED_CLASSES:
             _attach_size(r, model, list(model.states))
         text = summary(name, r.to_json(), tuple(model.outputs), box.to_json() if box is not None else None)
