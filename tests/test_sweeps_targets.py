@@ -49,7 +49,7 @@ def test_a_new_class_gets_its_store_variables_unit_and_summary_from_the_class_li
     assert "status_barrier" in names and "quadratic_k" in names
     assert "status_barrier" in [v.name for v in schema.model_box_variables(("p",), classes, outputs)]
 
-    fake = SimpleNamespace(classes=classes, outputs=outputs)
+    fake = SimpleNamespace(classes=classes, outputs=outputs, discrete=False)
     out = evaluate._model_empty(fake, 1)  # type: ignore[arg-type]
     result = SimpleNamespace(results={
         "quadratic": SimpleNamespace(status="not_certified", numbers={}, disturbances=None),
