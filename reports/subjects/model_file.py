@@ -242,6 +242,20 @@ def command(doc: dict[str, Any]) -> str:
             "lyapcheck report certificate.json --html report.html --pdf report.pdf")
 
 
+def model_text_fingerprints(context: dict[str, Any]) -> list[tuple[str, str]]:
+    """The fingerprints a model certificate's page shows: the model text's SHA-256 as stored and as
+    recomputed, and the whole certificate's (every model page: a loop's and a sampled-data loop's)."""
+    return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
+            ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
+            ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
+
+
+def model_recheck(doc: dict[str, Any], recheck: bool) -> dict[str, Any]:
+    """The page's exact re-check of a model certificate (:func:`recheck_rows`), or "not requested"."""
+    rows, error = recheck_rows(doc) if recheck else ([], "not requested")
+    return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
+
+
 def recheck_rows(doc: dict[str, Any]) -> tuple[list[tuple[str, bool, str]], str]:
     """Re-check every claim exactly (no solver); (rows, error if it could not run)."""
     from lyapcheck.models.surfaces.certificate import verify_document
@@ -503,13 +517,10 @@ class ModelFileSubject(Subject):
                 "angles": angle_rows(recast)}
 
     def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:
-        return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
-                ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
-                ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
+        return model_text_fingerprints(context)
 
     def checked(self, recheck: bool) -> dict[str, Any]:
-        rows, error = recheck_rows(self.doc) if recheck else ([], "not requested")
-        return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
+        return model_recheck(self.doc, recheck)
 
 
 def page_tail(doc: dict[str, Any], text: str) -> dict[str, Any]:
@@ -531,4 +542,4 @@ def page_tail(doc: dict[str, Any], text: str) -> dict[str, Any]:
 __all__ = ["ModelFileSubject", "is_map_document", "map_figures_of", "soundness_alarm", "MAP_TOC", "page_tail",
            "page_head", "EXTRA_STATUS_MEANING", "quantities", "LoopKind",
            "POLYNOMIAL", "WITH_FUNCTIONS", "is_recast_document", "denominators", "scaling", "solvers", "command",
-           "recheck_rows", "portrait", "auxiliary_rows", "relation_rows", "angle_rows"]
+           "recheck_rows", "model_recheck", "model_text_fingerprints", "portrait", "auxiliary_rows", "relation_rows", "angle_rows"]

@@ -28,7 +28,7 @@ from lyapcheck.errors import InputFileError, LyapcheckError
 from lyapcheck.models.surfaces.certificate import KIND, is_model_document
 from reports.sections.base import MODEL_FILE, ClassContext, text_of
 from reports.subjects.base import Subject
-from reports.subjects.model_file import page_head, page_tail, quantities, recheck_rows
+from reports.subjects.model_file import model_recheck, model_text_fingerprints, page_head, page_tail, quantities
 from reports.typeset import Equations
 from reports.views import as_dict, as_fraction, fmt_float
 
@@ -136,13 +136,10 @@ class SampledSubject(Subject):
         }
 
     def fingerprints(self, context: dict[str, Any]) -> list[tuple[str, str]]:
-        return [("SHA-256 of the model text (stored)", context["sha256_stated"]),
-                ("SHA-256 of the model text (recomputed)", context["sha256_text"]),
-                ("SHA-256 of the whole certificate (canonical JSON)", context["hash_document"])]
+        return model_text_fingerprints(context)
 
     def checked(self, recheck: bool) -> dict[str, Any]:
-        rows, error = recheck_rows(self.doc) if recheck else ([], "not requested")
-        return {"recheck": rows, "recheck_error": error, "recheck_failed": [r for r in rows if not r[1]]}
+        return model_recheck(self.doc, recheck)
 
 
 __all__ = ["SampledSubject", "is_sampled_document"]

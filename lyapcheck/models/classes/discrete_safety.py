@@ -175,25 +175,54 @@ def _step_support(ring: Ring, F: Sequence[Poly], m: Monomial) -> list[Monomial]:
     return sorted(set(ring.support(compose(ring, ring.monomial(m), F))) | {m})
 
 
+def _on_sets_program(ring: Ring, F: Sequence[Poly], basis: Sequence[Monomial], degree: int, initial: Pieces,
+                     unsafe: Pieces, drop: frozenset[tuple[str, Monomial]]
+                     ) -> tuple[list[Scalar], list[Gram], list[Identity]] | str:
+    """What a map's barrier and reach_avoid programs share: a free polynomial on ``basis`` (its coefficients
+    the scalars ``b0, b1, ...``) with the sets' identities of the continuous barrier
+    (:func:`lyapcheck.models.classes.barrier.set_identities`, on the map's ring without disturbances or
+    relations): the scalars, the Gram matrices so far and those identities, or why there are none."""
+    from lyapcheck.models.classes.barrier import set_identities
+    from lyapcheck.models.loop.field import StateField
+
+    field = StateField(ring=ring, g=tuple(F), D=ring.constant(1))
+    scalars = [Scalar(f"b{k}") for k in range(len(basis))]
+    grams: list[Gram] = []
+    on_sets = set_identities(field, basis, degree, initial, unsafe, grams, drop, scalars)
+    if isinstance(on_sets, str):
+        return on_sets
+    return scalars, grams, list(on_sets)
+
+
+def _affordable_program(n: int, grams: Sequence[Gram], scalars: Sequence[Scalar], identities: Sequence[Identity]
+                        ) -> Structure | str:
+    """The program (margin maximised), or the size limit it exceeds (BLOCK_COST_LIMIT, named)."""
+    from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, affordable
+    from lyapcheck.models.engines.reasons import size_limit
+
+    structure = Structure(nvars=n, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
+                          objective=("max_margin",))
+    if affordable(structure) is None:
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
+    return structure
+
+
 def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, degree: int,
                       drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
     """The program for ``B`` of this degree, or why there is none (a size limit, named). The sets'
     identities are the continuous barrier's (:func:`lyapcheck.models.classes.barrier.set_identities`, on
     the map's ring without disturbances or relations); the step identity is this module's."""
-    from lyapcheck.models.classes.barrier import set_identities
-    from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable
+    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
     from lyapcheck.models.engines.reasons import size_limit
-    from lyapcheck.models.loop.field import StateField
 
     n = ring.nvars
     zero = tuple([0] * n)
-    field = StateField(ring=ring, g=tuple(F), D=ring.constant(1))
     b_basis = monomials(n, 0, degree)
-    scalars = [Scalar(f"b{k}") for k in range(len(b_basis))]
-    grams: list[Gram] = []
-    on_sets = set_identities(field, b_basis, degree, initial, unsafe, grams, drop, scalars)
-    if isinstance(on_sets, str):
-        return on_sets
+    sets = _on_sets_program(ring, F, b_basis, degree, initial, unsafe, drop)
+    if isinstance(sets, str):
+        return sets
+    scalars, grams, on_sets = sets
     terms = []
     target: set[Monomial] = set()
     for i, m in enumerate(b_basis):
@@ -207,13 +236,7 @@ def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pi
         return size_limit(len(step_basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
     grams.append(Gram("RS", tuple(step_basis), full_blocks(step_basis)))
     terms.append(Term(one(ring, -1), "RS"))
-    identities = [*on_sets, Identity("step", tuple(terms), None, "RS")]
-    structure = Structure(nvars=n, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
-                          objective=("max_margin",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return _affordable_program(n, grams, scalars, [*on_sets, Identity("step", tuple(terms), None, "RS")])
 
 
 def barrier_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction
@@ -496,21 +519,17 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
                     degree: int, drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
     """The program for ``V`` of this degree (the sets' identities the barrier's; the goal's and the bound
     below this section's), or why there is none (a size limit, named)."""
-    from lyapcheck.models.classes.barrier import set_identities
-    from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable
+    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
     from lyapcheck.models.engines.reasons import size_limit
     from lyapcheck.models.engines.search import literal
-    from lyapcheck.models.loop.field import StateField
 
     n = ring.nvars
     zero = tuple([0] * n)
-    field = StateField(ring=ring, g=tuple(F), D=ring.constant(1))
     v_basis = monomials(n, 0, degree)
-    scalars = [Scalar(f"b{k}") for k in range(len(v_basis))]
-    grams: list[Gram] = []
-    on_sets = set_identities(field, v_basis, degree, initial, unsafe, grams, drop, scalars)
-    if isinstance(on_sets, str):
-        return on_sets
+    sets = _on_sets_program(ring, F, v_basis, degree, initial, unsafe, drop)
+    if isinstance(sets, str):
+        return sets
+    scalars, grams, on_sets = sets
     identities = list(on_sets)
     step_support: set[Monomial] = set()
     for m in v_basis:
@@ -543,12 +562,7 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
     terms += [Term(one(ring), "C"), Term(one(ring, -1), "RB")]
     identities.append(Identity("below", tuple(terms), None, "RB"))
     scalars += [Scalar("eps", lower="margin"), Scalar("C")]
-    structure = Structure(nvars=n, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
-                          objective=("max_margin",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return _affordable_program(n, grams, scalars, identities)
 
 
 def reach_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly]
