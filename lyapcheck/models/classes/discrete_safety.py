@@ -387,6 +387,7 @@ def falsify_map(model: "Model", ring: Ring, F: Sequence[Poly], initial: Pieces, 
 
     from lyapcheck.exact import to_rational
     from lyapcheck.models.classes.falsify import sample_set
+    from lyapcheck.models.engines.iteration import BoolArray, FloatArray, IntArray, iterate_map, stacked_map
     from lyapcheck.models.engines.numeric import NumericPoly
     from lyapcheck.models.language.sets import margin
 
@@ -398,23 +399,27 @@ def falsify_map(model: "Model", ring: Ring, F: Sequence[Poly], initial: Pieces, 
     eq = np.array([float(v) for v in model.equilibrium])
     maps = [NumericPoly(ring, fi) for fi in F]
     goal_maps = [NumericPoly(ring, q) for q in goal] if goal is not None else []
-    x = starts - eq
-    alive = np.all(np.isfinite(x), axis=1)
-    with np.errstate(all="ignore"):
-        for step in range(1, FALSIFY_STEPS + 1):
-            if goal_maps:  # (a start whose iterate reached the goal is done: reach_avoid holds for it)
-                alive &= ~np.all(np.stack([q(x) >= 0 for q in goal_maps], axis=1), axis=1)
-            x = np.stack([f(x) for f in maps], axis=1)
-            alive &= np.all(np.isfinite(x), axis=1)
-            hit = alive & (margin(model.sets["unsafe"], x + eq) >= 0)
-            for k in np.flatnonzero(hit):
-                start = tuple(to_rational(float(v), START_DIGITS) - xe
-                              for v, xe in zip(starts[k], model.equilibrium))
-                if check_iterate(ring, F, initial, unsafe, start, step, goal)[0]:
-                    return Counterexample(start, step)
-            if not alive.any():
-                break
-    return None
+    found: list[Counterexample] = []
+
+    def stop(x: FloatArray) -> BoolArray:
+        """A row that is not finite is done; so is one in the goal (reach_avoid holds for that start)."""
+        done = ~np.all(np.isfinite(x), axis=1)
+        if goal_maps:
+            done |= np.all(np.stack([q(x) >= 0 for q in goal_maps], axis=1), axis=1)
+        return done
+
+    def unsafe_hit(step: int, rows: IntArray, x: FloatArray) -> bool:
+        """Re-derive exactly each finite iterate found in the unsafe set; True at the first proved one."""
+        hit = np.all(np.isfinite(x), axis=1) & (margin(model.sets["unsafe"], x + eq) >= 0)
+        for k in rows[hit]:
+            start = tuple(to_rational(float(v), START_DIGITS) - xe for v, xe in zip(starts[k], model.equilibrium))
+            if check_iterate(ring, F, initial, unsafe, start, step, goal)[0]:
+                found.append(Counterexample(start, step))
+                return True
+        return False
+
+    iterate_map(stacked_map(maps), starts - eq, FALSIFY_STEPS, observe=unsafe_hit, stop=stop)
+    return found[0] if found else None
 
 
 # -- reach_avoid ---------------------------------------------------------------------------------------------
