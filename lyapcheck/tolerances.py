@@ -29,6 +29,16 @@ SCREEN_MARGIN: Final = 1e-9
 
 
 
+#: a map's reach_avoid, its steps bound floor(C / eps) tightened after the certificate is found
+#: (lyapcheck.models.classes.discrete_safety.tighten_reach): at most this many solves that minimise C
+#: with eps fixed, eps multiplied by REACH_TIGHTEN_GROWTH after each one that lowered the bound, and
+#: every Gram matrix kept above REACH_TIGHTEN_FLOOR * eps so that the rounded point passes the exact
+#: check. Search only: the exact check decides every certificate
+REACH_TIGHTEN_SOLVES: Final = 4
+REACH_TIGHTEN_GROWTH: Final = Fraction(4)
+REACH_TIGHTEN_FLOOR: Final = 1e-4
+
+
 #: Simulator accuracy contract (relative to the state scale), tested against solve_ivp.
 SIM_REL_TOL: Final = 1e-6
 #: Step budget of one simulated trajectory (steps tried: accepted, rejected or retried at a
