@@ -243,7 +243,10 @@ def _number(condition: Mapping[str, Any], key: str) -> float:
 def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     data = condition.get("certificate" if status == "certified" else "refutation") or {}
     method = data.get("method")
-    from lyapcheck.models.classes import discrete_linearization
+    from lyapcheck.models.classes import discrete_linearization, piecewise_linearization
+
+    if status == "certified" and piecewise_linearization.is_certificate(data):  # a kink at the equilibrium
+        return piecewise_linearization.sentence(data)
 
     if discrete_linearization.is_discrete_certificate(data) and method == "box_stein":  # a map's over a box
         return DISCRETE_BOX_STEIN_SENTENCE

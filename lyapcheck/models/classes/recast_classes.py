@@ -617,7 +617,11 @@ def linearization(loop: Loop) -> ConditionResult:
 
     J = jacobian(loop)
     if isinstance(J, str):
-        return ConditionResult("linearization", "not_applicable", J, property="LES")
+        # a kink at the equilibrium (abs, ReLU, sat's corner): the piecewise-linear first-order part instead
+        from lyapcheck.models.classes.piecewise_linearization import run as run_piecewise
+
+        kinked = run_piecewise(loop, J)
+        return kinked or ConditionResult("linearization", "not_applicable", J, property="LES")
     return decide(J)
 
 
