@@ -6,8 +6,8 @@ What is asserted: a map with ``sin`` and ``tanh`` has its fixed point checked ex
 is refused in one line, exit 2); its Jacobian is the chain rule's, exactly; ``linearization`` is certified on
 a contracting map and refuted on one whose Jacobian has determinant 3/2; ``roa`` is certified within the
 search's cell budget, every sampled start in the certified set converges when the map is iterated, ``verify``
-re-proves it, and a level raised 64-fold fails ``verify``; ``abs`` at the fixed point makes both classes
-``not_applicable`` naming it; the other classes are ``not_applicable`` in one line; the Yin-Seiler-Arcak
+re-proves it, and a level raised 64-fold fails ``verify``; ``abs`` at the fixed point makes ``roa``
+``not_applicable`` naming it, while ``linearization`` proves LES from the piecewise-linear step form; the other classes are ``not_applicable`` in one line; the Yin-Seiler-Arcak
 pendulum (slow) certifies a set larger than any ellipsoid their LMI's constraints allow.
 """
 
