@@ -22,7 +22,7 @@ from click.testing import CliRunner
 
 from lyapcheck.cli import app
 from lyapcheck.models.classes import piecewise_linearization as pw
-from lyapcheck.models.classes.recast_classes import base_loop, linearization
+from lyapcheck.models.classes.recast_classes import base_loop
 from lyapcheck.models.language.modelfile import load_any_model
 from lyapcheck.models.language.recast import RecastModel
 
@@ -159,7 +159,7 @@ def test_the_tanh_policys_weights_under_relu_are_not_certified_and_not_refuted(t
     np.savez(tmp_path / "same.npz", W1=W1, b1=np.zeros(8), W2=W2 / 2, b2=np.zeros(1), activation=np.array("relu"))
     text = RELU.read_text().replace("../networks/pendulum_relu_policy.npz", "same.npz")
     (tmp_path / "same.toml").write_text(text)
-    result = linearization(base_loop(loaded(tmp_path / "same.toml").system))
+    result = pw.linearization(base_loop(loaded(tmp_path / "same.toml").system))
     assert result.status == "not_certified", result.summary
     assert "abs is not differentiable" in result.summary and "Nothing is refuted" in result.summary
     # and indeed it is not stable: a start 1e-3 from upright grows (explicit Euler, small step)
@@ -175,7 +175,7 @@ def test_abs_feedback_is_certified(tmp_path: Path) -> None:
     path.write_text('[model]\nname = "m"\nstates = ["x1", "x2"]\n[dynamics]\nx1 = "x2"\n'
                     'x2 = "-x1 - x2 - 0.5*abs(x1)"\n')
     loop = base_loop(loaded(path).system)
-    result = linearization(loop)
+    result = pw.linearization(loop)
     assert result.status == "certified" and result.certificate["kind"] == pw.KIND
     pl = pw.derive(loop)
     assert isinstance(pl, pw.PiecewiseLinear)
@@ -192,10 +192,10 @@ def test_a_saturations_corner(tmp_path: Path, rhs: str, shape: str, status: str)
     loop = base_loop(one_state(tmp_path, rhs).system)
     pl = pw.derive(loop)
     assert isinstance(pl, pw.PiecewiseLinear) and [k.shape for k in pl.kinks] == [shape]
-    result = linearization(loop)
+    result = pw.linearization(loop)
     assert result.status == status, result.summary
 
 
 def test_without_a_kink_the_route_keeps_the_jacobians_reason(tmp_path: Path) -> None:
-    result = linearization(base_loop(one_state(tmp_path, "-sqrt(x**2)").system))
+    result = pw.linearization(base_loop(one_state(tmp_path, "-sqrt(x**2)").system))
     assert result.status == "not_applicable" and "sqrt is not differentiable" in result.summary

@@ -423,6 +423,18 @@ def _result(pl: PiecewiseLinear, discrete: bool, kinked: str) -> ConditionResult
     return ConditionResult("linearization", "not_certified", why, numbers=numbers, property="LES")
 
 
+def linearization(loop: "Loop") -> ConditionResult:
+    """``linearization`` of a loop with functions: its Jacobian's decision
+    (:func:`lyapcheck.models.classes.recast_classes.linearization`), or where a kink leaves it without one,
+    this route's (the Jacobian's reason kept when this route does not apply either)."""
+    from lyapcheck.models.classes.recast_classes import linearization as by_jacobian
+
+    result = by_jacobian(loop)
+    if result.status != "not_applicable":
+        return result
+    return run(loop, result.summary) or result
+
+
 def run(loop: "Loop", kinked: str) -> ConditionResult | None:
     """``linearization`` of a loop with functions whose Jacobian does not exist (``kinked``, why not), or None
     when this route does not apply either (:func:`derive`'s reason: the caller keeps its own)."""
@@ -464,5 +476,5 @@ def verify(loop: "Loop", discrete: bool, status: str, data: Any) -> tuple[bool, 
 
 
 __all__ = ["KIND", "SHAPES", "Kink", "PiecewiseLinear", "derive", "nonnegative_forms", "equalities", "pairs",
-           "form_matrix", "check", "prove", "certificate", "is_certificate", "sentence", "run", "run_map", "map_loop",
+           "form_matrix", "check", "prove", "certificate", "is_certificate", "sentence", "linearization", "run", "run_map", "map_loop",
            "verify"]
