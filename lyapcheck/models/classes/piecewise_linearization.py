@@ -220,17 +220,18 @@ def nonnegative_forms(pl: PiecewiseLinear) -> list[tuple[int, list[Fraction]]]:
     return out
 
 
-def equalities(pl: PiecewiseLinear) -> list[Matrix]:
-    """The quadratic forms ``= 0`` on the kinks' set (symmetric matrices in ``w``): ``phi^2 - z^2`` for abs,
-    ``phi (phi - z)`` for a saturation's corner."""
-    out: list[Matrix] = []
+#: a quadratic form ``sum c (g . w)(h . w)``, as its terms ``(c, g, h)``
+Products = list[tuple[int, list[Fraction], list[Fraction]]]
+
+
+def equalities(pl: PiecewiseLinear) -> list[Products]:
+    """The quadratic forms ``= 0`` on the kinks' set: ``phi^2 - z^2`` for abs, ``phi (phi - z)`` (that is
+    ``phi^2 - phi z``) for a saturation's corner."""
+    out: list[Products] = []
     for i, k in enumerate(pl.kinks):
         phi = _unit(pl.width, pl.n + i)
         z = list(k.form)
-        if k.shape == "abs":
-            out.append(_minus(_outer(phi, phi), _outer(z, z)))
-        else:
-            out.append(_minus(_outer(phi, phi), _outer(phi, z)))
+        out.append([(1, phi, phi), (-1, z, z)] if k.shape == "abs" else [(1, phi, phi), (-1, phi, z)])
     return out
 
 
@@ -241,13 +242,16 @@ def pairs(pl: PiecewiseLinear) -> list[tuple[int, int]]:
     return [(a, b) for a in range(len(forms)) for b in range(a + 1, len(forms)) if every or forms[a][0] == forms[b][0]]
 
 
-def _outer(g: Sequence[Fraction], h: Sequence[Fraction]) -> Matrix:
-    """The symmetric matrix of ``(g . w)(h . w)``."""
-    return [[(g[i] * h[j] + h[i] * g[j]) / 2 for j in range(len(g))] for i in range(len(g))]
-
-
-def _minus(a: Matrix, b: Matrix) -> Matrix:
-    return [[x - y for x, y in zip(r, s)] for r, s in zip(a, b)]
+def _add_outer(M: Matrix, c: Fraction, g: Sequence[Fraction], h: Sequence[Fraction]) -> None:
+    """``M += c (g h^T + h g^T) / 2`` (the symmetric matrix of ``c (g . w)(h . w)``), over the forms' nonzero
+    entries only (each kink's form is sparse: a network's has the states and one layer's kinks)."""
+    half = c / 2
+    right = [(j, y) for j, y in enumerate(h) if y]
+    for i, x in enumerate(g):
+        if x:
+            for j, y in right:
+                M[i][j] += half * x * y
+                M[j][i] += half * x * y
 
 
 def _stacked(pl: PiecewiseLinear, discrete: bool) -> tuple[Matrix, Matrix]:
@@ -277,14 +281,13 @@ def form_matrix(pl: PiecewiseLinear, discrete: bool, P: Matrix, eps: Fraction, l
                 M[j][i] += PC[i][j]
     for i in range(n):
         M[i][i] += eps
-    for c, Q in zip(lam, equalities(pl)):
-        if c:
-            M = [[x - c * q for x, q in zip(r, s)] for r, s in zip(M, Q)]
+    for c, terms in zip(lam, equalities(pl)):
+        for sign, g, h in terms if c else ():
+            _add_outer(M, -c * sign, g, h)
     forms = nonnegative_forms(pl)
     for c, (a, b) in zip(nu, products):
         if c:
-            G = _outer(forms[a][1], forms[b][1])
-            M = [[x + c * g for x, g in zip(r, s)] for r, s in zip(M, G)]
+            _add_outer(M, c, forms[a][1], forms[b][1])
     del E
     return M
 
@@ -341,8 +344,15 @@ def _solve(pl: PiecewiseLinear, discrete: bool, eps: Fraction, products: Sequenc
 
     n, N = pl.n, pl.width
     E, C = (np.array([[float(x) for x in row] for row in m]) for m in _stacked(pl, discrete))
-    eqs = [np.array([[float(x) for x in row] for row in Q]) for Q in equalities(pl)]
-    forms = [np.array([float(x) for x in g]) for _, g in nonnegative_forms(pl)]
+
+    def sym(g: Any, h: Any) -> Any:
+        return (np.outer(g, h) + np.outer(h, g)) / 2
+
+    def vector(g: Sequence[Fraction]) -> Any:
+        return np.array([float(x) for x in g])
+
+    eqs = [sum(sign * sym(vector(g), vector(h)) for sign, g, h in terms) for terms in equalities(pl)]
+    forms = [vector(g) for _, g in nonnegative_forms(pl)]
     P = cp.Variable((n, n), symmetric=True)
     lam = cp.Variable(len(eqs))
     nu = cp.Variable(len(products), nonneg=True)
@@ -351,8 +361,7 @@ def _solve(pl: PiecewiseLinear, discrete: bool, eps: Fraction, products: Sequenc
     if eqs:
         M = M - cp.reshape(np.column_stack([q.ravel(order="F") for q in eqs]) @ lam, (N, N), order="F")
     if products:
-        G = np.column_stack([(np.outer(forms[a], forms[b]) + np.outer(forms[b], forms[a])).ravel(order="F") / 2
-                             for a, b in products])
+        G = np.column_stack([sym(forms[a], forms[b]).ravel(order="F") for a, b in products])
         M = M + cp.reshape(G @ nu, (N, N), order="F")
     M = (M + M.T) / 2
     problem = cp.Problem(cp.Minimize(cp.trace(P)), [P >> np.eye(n), M << -tolerances.PIECEWISE_ROOM * np.eye(N)])
