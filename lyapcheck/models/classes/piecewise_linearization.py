@@ -485,5 +485,5 @@ def verify(loop: "Loop", discrete: bool, status: str, data: Any) -> tuple[bool, 
 
 
 __all__ = ["KIND", "SHAPES", "Kink", "PiecewiseLinear", "derive", "nonnegative_forms", "equalities", "pairs",
-           "form_matrix", "check", "prove", "certificate", "is_certificate", "sentence", "linearization", "run", "run_map", "map_loop",
-           "verify"]
+           "form_matrix", "check", "prove", "certificate", "is_certificate", "sentence", "linearization", "run",
+           "run_map", "map_loop", "verify"]
