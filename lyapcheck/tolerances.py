@@ -326,3 +326,16 @@ MAX_READ_EXPONENT: Final = 1000
 #: thousandfold per try until ``mu I - P`` is proved positive semidefinite exactly. Speed only: the
 #: check is exact, and Gershgorin's bound ends the tries
 SIZE_MU_ROOM: Final = 1e-9
+#: the margins eps of the piecewise-linear local proof (lyapcheck.models.classes.piecewise_linearization:
+#: the form 2 e'P(A e + B phi) + eps |e|^2, or its map's step form, <= 0 on the kinks' set), tried in turn; P
+#: is normalized by P >= I, so eps is relative to P's smallest eigenvalue
+PIECEWISE_EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
+#: the room the solver is asked to leave (the S-procedure matrix <= -PIECEWISE_ROOM I), so that the rounded
+#: P, lambda, nu still pass the exact check; speed only: a rounding that fails is refused exactly
+PIECEWISE_ROOM: Final = 1e-6
+#: the most nonnegative linear forms (three per abs kink, two per saturation corner) whose products of
+#: every pair enter the S-procedure; with more, only the products within one kink (the LMI's multipliers
+#: grow with the square of the forms: 8 ReLU neurons' 24 forms give 276 products)
+PIECEWISE_PAIR_FORMS: Final = 30
+#: significant bits P, lambda and nu are rounded to before the exact check
+PIECEWISE_BITS: Final = 24

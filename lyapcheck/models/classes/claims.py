@@ -243,7 +243,10 @@ def _number(condition: Mapping[str, Any], key: str) -> float:
 def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     data = condition.get("certificate" if status == "certified" else "refutation") or {}
     method = data.get("method")
-    from lyapcheck.models.classes import discrete_linearization
+    from lyapcheck.models.classes import discrete_linearization, piecewise_linearization
+
+    if status == "certified" and piecewise_linearization.is_certificate(data):  # a kink at the equilibrium
+        return piecewise_linearization.sentence(data)
 
     if method == SAMPLED_METHOD:  # a sampled-data loop's: its period is a figure of the certificate
         return sampled_linearization_sentence(status, read_rational(data["period"], "period"))

@@ -111,8 +111,8 @@ class FunctionsRun:
     def linearization(self) -> "ConditionResult":
         """The recasting's linearization at the equilibrium (computed once: ``linearization`` and
         ``roa`` read it)."""
-        if self._linearization is None:
-            from lyapcheck.models.classes.recast_classes import linearization
+        if self._linearization is None:  # (the Jacobian's, or at a kink the piecewise-linear route's)
+            from lyapcheck.models.classes.piecewise_linearization import linearization
 
             self._linearization = linearization(self.loop)
         return self._linearization

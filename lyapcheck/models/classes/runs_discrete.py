@@ -101,9 +101,12 @@ def sos_bound_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
 def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """The exact Jacobian of the map at its fixed point, by the discrete-time test
     (:func:`lyapcheck.models.classes.discrete_functions.linearization`)."""
-    from lyapcheck.models.classes import discrete_functions
+    from lyapcheck.models.classes import discrete_functions, piecewise_linearization
 
-    return discrete_functions.linearization(ctx.model)
+    result = discrete_functions.linearization(ctx.model)
+    if result.status == "not_applicable":  # a kink at the fixed point: the piecewise-linear step form instead
+        return piecewise_linearization.run_map(ctx.model, result.summary) or result
+    return result
 
 
 def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":

@@ -113,10 +113,17 @@ def verify_linearization_map_functions(name: str, c: dict[str, Any], check: "Map
                                        ) -> tuple[bool, str]:
     """``linearization``: the exact Jacobian again, then the discrete-time test
     (:func:`lyapcheck.models.classes.discrete_functions.verify_linearization`)."""
-    from lyapcheck.models.classes import discrete_functions
+    from lyapcheck.models.classes import discrete_functions, piecewise_linearization
+    from lyapcheck.models.classes.claims import summary
 
     if c["status"] not in _JACOBIAN_STATUSES:
         return False, check.not_checked(c["status"])
+    if piecewise_linearization.is_certificate(_data(c)):  # a kink at the fixed point: the step form's check
+        model = check.model
+        ok, why = piecewise_linearization.verify(piecewise_linearization.map_loop(model), True, c["status"], _data(c))
+        if ok and c.get("summary") != summary(name, c):
+            return False, "the printed sentence is not the one the certificate supports"
+        return ok, why
     return discrete_functions.verify_linearization(check.model, c["status"], _data(c))
 
 
