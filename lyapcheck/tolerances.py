@@ -272,6 +272,10 @@ MAP_LEVEL_BISECTIONS: Final = 4
 #: machine; a part costs one jet evaluation of the map (milliseconds). Resolution only: every part counted as
 #: proved is proved, and a box reaching an unstable value is never proved however many parts it is cut in
 MAP_BOX_PIECES: Final = 256
+#: values per parameter of the grid whose Jacobians the SDP proposing a P common to a map's box must serve
+#: (lyapcheck.models.classes.discrete_functions_box.common_p; ends included): a proposal only, decided over
+#: the whole box in ball arithmetic
+MAP_BOX_GRID: Final = 5
 #: the integrator steps one trajectory of the ball-arithmetic route's fit of V (and of its simulated check) may take when the
 #: route runs after the SOS route on a polynomial or rational loop (lyapcheck.models.surfaces.ball_roa):
 #: a rational loop's trajectory that runs into a pole crawls towards it step by step (1-state

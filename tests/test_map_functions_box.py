@@ -10,7 +10,8 @@ candidate's (even a P whose level is true) or whose level is raised fails ``veri
 a quadratic form is ``not_applicable`` saying so, one whose P is not positive definite ``not_certified``
 saying so. Over ``--box k=0.6..0.95`` ``linearization`` and ``roa`` are certified for every k and ``verify``
 re-derives them, every sampled k of the box has its iterates stay in the set; a document whose roa level is
-raised fails; a box reaching unstable gains certifies nothing; a box moving the fixed point exits 2 in one
+raised, or whose box is widened, fails; over ``k=0.5..1.1``, which the centre's P does not cover, the P proved
+is another that decreases at every sampled k; a box reaching unstable gains certifies nothing; a box moving the fixed point exits 2 in one
 line; the ball-matrix Stein test refuses a box holding an unstable Jacobian.
 """
 
@@ -188,6 +189,23 @@ def test_a_forged_box_document_fails_verify(box_doc: tuple[dict[str, Any], Path]
     done = _tampered(doc, tmp_path, wider)
     assert done.exit_code == 1, done.output
     assert "FAIL linearization" in done.output
+
+
+def test_a_box_the_centres_p_misses_takes_a_p_common_to_its_grid(tmp_path: Path) -> None:
+    """Over k in [0.5, 1.1] the centre's Stein P stops decreasing near k = 0.95: the P proved is another (the
+    grid's SDP proposal), and it does decrease at every sampled k of the box, in floating point too."""
+    done, doc, out = certify(tmp_path, "--classes", "linearization", "--box", "k=0.5..1.1")
+    assert done.exit_code == 0, done.output
+    lin = doc["conditions"]["linearization"]
+    assert lin["status"] == "certified", lin["summary"]
+    P = np.array([[float(Fraction(x)) for x in row] for row in lin["certificate"]["P"]])
+    centre = np.array([[0.0, 1.0], [-0.5, 0.8]])
+    assert not np.allclose(P / P[0, 0], np.linalg.solve(np.eye(4) - np.kron(centre.T, centre.T),
+                                                        np.eye(2).ravel()).reshape(2, 2) / P[0, 0], rtol=1e-2)
+    for k in np.linspace(0.5, 1.1, 61):
+        A = np.array([[0.0, 1.0], [-0.5, k]])
+        assert np.max(np.linalg.eigvalsh(A.T @ P @ A - P)) < 0
+    assert cli("verify", str(out)).exit_code == 0
 
 
 def test_a_box_reaching_unstable_gains_certifies_nothing(tmp_path: Path) -> None:

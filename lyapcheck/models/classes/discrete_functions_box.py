@@ -10,7 +10,8 @@ is refused in one line (exit 2), as on a polynomial map.
 
 ``linearization`` (:func:`linearization`): ``P`` is the short dyadic rounding of the Stein solution of the
 exact Jacobian at the box's centre (:func:`lyapcheck.models.classes.discrete_functions.rounded_p`), positive
-definite (exact). The Jacobians ``A(p) = I + Jd(p)`` over a part of the box are enclosed by the chain rule in
+definite (exact); where that one is not proved over the whole box, one proposed by a small SDP common to the
+Jacobians of a grid of the box (:func:`common_p`: a solver's point, a proposal only). The Jacobians ``A(p) = I + Jd(p)`` over a part of the box are enclosed by the chain rule in
 ball arithmetic (jets of the state deviations at the fixed point, the parameters balls), and
 ``M(p) = P - A(p)^T P A(p)`` with them. ``M(p)`` is symmetric for every ``p``; with ``C`` the midpoints of the
 entries' enclosures and ``R`` their radii (rationals, exact), ``M(p) = C + E`` with ``|E_ij| <= R_ij``, so
@@ -196,6 +197,71 @@ def _centre_p(model: "RecastModel", name: str) -> list[list[Fraction]] | Conditi
     return P
 
 
+def grid_points(box: "ModelBox") -> list[dict[str, Interval]]:
+    """The box's grid of :data:`~lyapcheck.tolerances.MAP_BOX_GRID` values per parameter (its ends included),
+    each as a part of zero width."""
+    from itertools import product
+
+    count = tolerances.MAP_BOX_GRID
+    axes = [[lo + (hi - lo) * Fraction(i, count - 1) for i in range(count)] for _, lo, hi in box.bounds]
+    return [{name: (v, v) for name, v in zip(box.names, values)} for values in product(*axes)]
+
+
+def common_p(system: "RecastSystem", box: "ModelBox") -> list[list[Fraction]] | None:
+    """A ``P`` with ``A^T P A - P <= -I`` at every Jacobian of the box's grid (a small SDP; None where the
+    solver finds none), rounded to short dyadics: a proposal only, which :func:`prove_over_box` decides over
+    the whole box."""
+    import cvxpy as cp
+    import numpy as np
+
+    from lyapcheck.models.engines.ellipsoid_cells import _short
+
+    jacobians = []
+    for point in grid_points(box):
+        A = jacobian_balls(boxed_map(system, point))
+        if A is None:
+            return None
+        jacobians.append(np.array([[float(a.mid()) for a in row] for row in A]))
+    n = jacobians[0].shape[0]
+    P = cp.Variable((n, n), symmetric=True)
+    cons = [P >> np.eye(n)] + [A.T @ P @ A - P << -np.eye(n) for A in jacobians]
+    problem = cp.Problem(cp.Minimize(cp.trace(P)), cons)
+    try:
+        problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError:
+        return None
+    if problem.status != "optimal" or P.value is None:
+        return None
+    value = (P.value + P.value.T) / 2
+    return [[_short(Fraction(float(value[min(i, j), max(i, j)])), tolerances.P_BITS) for j in range(n)]
+            for i in range(n)]
+
+
+def box_p(model: "RecastModel", system: "RecastSystem", box: "ModelBox", name: str
+          ) -> tuple[list[list[Fraction]], int, list[dict[str, Interval]]] | ConditionResult:
+    """The ``P`` proved over the box, the parts examined and the parts proved: the centre's ``P`` first, then,
+    where that is not proved over the whole box, one common to the box's grid (:func:`common_p`); or
+    ``name``'s not_certified result saying why neither is."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    P = _centre_p(model, name)
+    if isinstance(P, ConditionResult):
+        return P
+    ok, parts, why, proved = prove_over_box(system, box, P)
+    if ok:
+        return P, parts, proved
+    other = common_p(system, box)
+    if other is not None and is_positive_definite(other):
+        ok, parts, also, proved = prove_over_box(system, box, other)
+        if ok:
+            return other, parts, proved
+        why = f"{why}; nor the one common to the box's grid ({also})"
+    else:
+        why = f"{why}; and no P common to the box's grid was found"
+    return ConditionResult(name, "not_certified", "no P was proved with A(p)^T P A(p) - P < 0 for every value of the box "
+                           f"in ball arithmetic: the centre's {why}")
+
+
 def _prefix(box: "ModelBox") -> str:
     from lyapcheck.models.classes.claims import box_prefix
 
@@ -204,16 +270,12 @@ def _prefix(box: "ModelBox") -> str:
 
 def linearization(model: "RecastModel", box: "ModelBox") -> ConditionResult:
     """One ``P`` with ``A(p)^T P A(p) - P < 0`` for every ``p`` of the box (module docstring)."""
-    P = _centre_p(model, "linearization")
-    if isinstance(P, ConditionResult):
-        P.property = "LES"
-        return P
     system = boxed_system(model, box)
-    ok, parts, why, _ = prove_over_box(system, box, P)
-    if not ok:
-        return ConditionResult("linearization", "not_certified", "no P from the box's centre was proved with A(p)^T P "
-                               f"A(p) - P < 0 for every value of the box in ball arithmetic: {why}",
-                               property="LES", numbers={"box_parts": parts})
+    found = box_p(model, system, box, "linearization")
+    if isinstance(found, ConditionResult):
+        found.property = "LES"
+        return found
+    P, parts, _ = found
     cert = {"time": "discrete", "method": METHOD, "P": [[str(x) for x in row] for row in P], "box_parts": parts,
             "parameter_box": box.to_json()}
     summary = (_prefix(box) + "the map's fixed point is locally exponentially stable: one P > 0 with A(p)^T P A(p) - P "
@@ -245,22 +307,20 @@ def verify_linearization(model: "RecastModel", box: "ModelBox", status: str, dat
 def roa(model: "RecastModel", box: "ModelBox", budget: "Budget") -> ConditionResult:
     """The largest sublevel set of the centre's ``V = e^T P e`` proved a region of attraction for every value of
     the box (module docstring)."""
-    P = _centre_p(model, "roa")
-    if isinstance(P, ConditionResult):
-        P.property = "ROA"
-        return P
     system = boxed_system(model, box)
-    ok, _, why, parts = prove_over_box(system, box, P)
-    if not ok:  # (the parts on which the Hessian at the fixed point is negative definite in balls)
-        return ConditionResult("roa", "not_certified", "no region over the box: V = e^T P e of the box's centre does "
-                               f"not decrease to first order for every value of the box ({why})", property="ROA")
+    chosen = box_p(model, system, box, "roa")  # (its parts: there the Hessian of g at 0 is negative definite in balls)
+    if isinstance(chosen, ConditionResult):
+        chosen.property = "ROA"
+        chosen.summary = f"no region over the box: V = e^T P e does not decrease to first order ({chosen.summary})"
+        return chosen
+    P, _, parts = chosen
     found = dfn.level_search(model, P, budget, "roa", [boxed_map(system, part) for part in parts])
     if isinstance(found, ConditionResult):
         return found
     cert = {**dfn.region_certificate(model, P, found), "parameter_box": box.to_json(), "box_parts": len(parts)}
     summary = (_prefix(box) + f"region of attraction of the map: {{V <= {float(found.level):.6g}}} with V = e^T P e (P "
-               "from the discrete Lyapunov equation of the exact Jacobian at the box's centre), V(F(e)) < V(e) proved "
-               "on it by ball arithmetic on the true map with the box's parameters as balls")
+               "the linearization's over the box), V(F(e)) < V(e) proved on it by ball arithmetic on the true map "
+               "with the box's parameters as balls")
     numbers = found.numbers()
     size = dfn.area(P, found.level)
     if size is not None:
@@ -286,4 +346,4 @@ def verify_roa(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tupl
 
 
 __all__ = ["BOX_CLASSES", "METHOD", "NOT_OVER_BOX", "boxed_system", "whole", "boxed_map", "jacobian_balls",
-           "stein_margin_proved", "prove_over_box", "linearization", "verify_linearization", "roa", "verify_roa"]
+           "stein_margin_proved", "prove_over_box", "grid_points", "common_p", "box_p", "linearization", "verify_linearization", "roa", "verify_roa"]
