@@ -11,8 +11,8 @@ a quadratic form is ``not_applicable`` saying so, one whose P is not positive de
 saying so. Over ``--box k=0.6..0.95`` ``linearization`` and ``roa`` are certified for every k and ``verify``
 re-derives them, every sampled k of the box has its iterates stay in the set; a document whose roa level is
 raised, or whose box is widened, fails; over ``k=0.5..1.1``, which the centre's P does not cover, the P proved
-is another that decreases at every sampled k; a box reaching unstable gains certifies nothing; a box moving the fixed point exits 2 in one
-line; the ball-matrix Stein test refuses a box holding an unstable Jacobian.
+is another that decreases at every sampled k; a box reaching unstable gains certifies nothing; a box moving the
+fixed point exits 2 in one line; the ball-matrix Stein test refuses a box holding an unstable Jacobian.
 """
 
 from __future__ import annotations

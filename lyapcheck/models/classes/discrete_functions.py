@@ -410,5 +410,5 @@ def verify_candidate(model: "RecastModel", c: dict[str, Any]) -> tuple[bool, str
 
 
 __all__ = ["KIND", "NOT_YET", "exact_jacobian", "linearization", "verify_linearization", "MapDifference",
-           "MapGeometry", "Found", "prove_on_all", "level_search", "region_certificate", "roa", "verify_roa", "candidate_matrix",
-           "candidate", "verify_candidate", "area"]
+           "MapGeometry", "Found", "prove_on_all", "level_search", "region_certificate", "roa", "verify_roa",
+           "candidate_matrix", "candidate", "verify_candidate", "area"]

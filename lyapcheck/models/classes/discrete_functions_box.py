@@ -8,28 +8,28 @@ every value of the box at once. The fixed point must stay put over the box: the 
 is proved 0 for every value (exactly by substitution, else each component's ball exactly 0); otherwise the box
 is refused in one line (exit 2), as on a polynomial map.
 
-``linearization`` (:func:`linearization`): ``P`` is the short dyadic rounding of the Stein solution of the
-exact Jacobian at the box's centre (:func:`lyapcheck.models.classes.discrete_functions.rounded_p`), positive
-definite (exact); where that one is not proved over the whole box, one proposed by a small SDP common to the
-Jacobians of a grid of the box (:func:`common_p`: a solver's point, a proposal only). The Jacobians ``A(p) = I + Jd(p)`` over a part of the box are enclosed by the chain rule in
-ball arithmetic (jets of the state deviations at the fixed point, the parameters balls), and
-``M(p) = P - A(p)^T P A(p)`` with them. ``M(p)`` is symmetric for every ``p``; with ``C`` the midpoints of the
-entries' enclosures and ``R`` their radii (rationals, exact), ``M(p) = C + E`` with ``|E_ij| <= R_ij``, so
-``lambda_min(M(p)) >= lambda_min(C) - rho(E)`` and ``rho(E) <= max_i sum_j R_ij`` (any induced norm bounds
-the spectral radius): ``C - r I`` positive definite (exact) with ``r`` that row sum proves ``M(p) > 0`` for every
-``p`` of the part, i.e. ``A(p)^T P A(p) - P < 0``: every ``A(p)`` is Schur stable with the one ``P``, and
-the fixed point is locally exponentially stable for every value of the box. A part not proved is halved at
-its widest parameter, at most :data:`~lyapcheck.tolerances.MAP_BOX_PIECES` parts in all (a count, the same on
-any machine); ``verify`` runs the same deterministic splitting with the stated ``P``.
+``linearization`` (:func:`linearization`): ``P`` is the short dyadic rounding of the Stein solution of the exact
+Jacobian at the box's centre (:func:`lyapcheck.models.classes.discrete_functions.rounded_p`), positive definite
+(exact); where that one is not proved over the whole box, one proposed by a small SDP common to the Jacobians of
+a grid of the box (:func:`common_p`: a solver's point, a proposal only). The Jacobians ``A(p) = I + Jd(p)`` over a
+part of the box are enclosed by the chain rule in ball arithmetic (jets of the state deviations at the fixed
+point, the parameters balls), and ``M(p) = P - A(p)^T P A(p)`` with them. ``M(p)`` is symmetric for every ``p``;
+with ``C`` the midpoints of the entries' enclosures and ``R`` their radii (rationals, exact), ``M(p) = C + E``
+with ``|E_ij| <= R_ij``, so ``lambda_min(M(p)) >= lambda_min(C) - rho(E)`` and ``rho(E) <= max_i sum_j R_ij``
+(any induced norm bounds the spectral radius): ``C - r I`` positive definite (exact) with ``r`` that row sum
+proves ``M(p) > 0`` for every ``p`` of the part, i.e. ``A(p)^T P A(p) - P < 0``: every ``A(p)`` is Schur stable
+with the one ``P``, and the fixed point is locally exponentially stable for every value of the box. A part not
+proved is halved at its widest parameter, at most :data:`~lyapcheck.tolerances.MAP_BOX_PIECES` parts in all (a
+count, the same on any machine); ``verify`` runs the same deterministic splitting with the stated ``P``.
 
-``roa`` (:func:`roa`): the level search of :func:`lyapcheck.models.classes.discrete_functions.level_search`
-with ``V = e^T P e`` (``P`` as above) and the true map with the parameters as balls: ``V(F(e)) < V(e)`` on
-``{V <= c}`` but at the fixed point, for every value of the box (``g(0) = 0`` and ``grad g(0) = 0`` hold for
-each value, the fixed point staying put, so the cells' Hessian zone argument holds for each). A level is
-proved on each part of the linearization's splitting of the box (on those, the Hessian of ``g`` at the
-fixed point, ``2 (A(p)^T P A(p) - P)``, is negative definite in balls; on the whole box the balls' widening
-can hide that), the parts covering the box. ``verify`` re-derives the parts from the stated ``P`` and proves
-the stated level again on the same cells of each.
+``roa`` (:func:`roa`): the level search of :func:`lyapcheck.models.classes.discrete_functions.level_search` with
+``V = e^T P e`` (``P`` as above) and the true map with the parameters as balls: ``V(F(e)) < V(e)`` on ``{V <=
+c}`` but at the fixed point, for every value of the box (``g(0) = 0`` and ``grad g(0) = 0`` hold for each value,
+the fixed point staying put, so the cells' Hessian zone argument holds for each). A level is proved on each part
+of the linearization's splitting of the box (on those, the Hessian of ``g`` at the fixed point, ``2 (A(p)^T P
+A(p) - P)``, is negative definite in balls; on the whole box the balls' widening can hide that), the parts
+covering the box. ``verify`` re-derives the parts from the stated ``P`` and proves the stated level again on the
+same cells of each.
 
 Other classes over a box are ``not_applicable`` (:data:`NOT_OVER_BOX`).
 """
@@ -258,8 +258,8 @@ def box_p(model: "RecastModel", system: "RecastSystem", box: "ModelBox", name: s
         why = f"{why}; nor the one common to the box's grid ({also})"
     else:
         why = f"{why}; and no P common to the box's grid was found"
-    return ConditionResult(name, "not_certified", "no P was proved with A(p)^T P A(p) - P < 0 for every value of the box "
-                           f"in ball arithmetic: the centre's {why}")
+    return ConditionResult(name, "not_certified", "no P was proved with A(p)^T P A(p) - P < 0 for every value of the "
+                           f"box in ball arithmetic: the centre's {why}")
 
 
 def _prefix(box: "ModelBox") -> str:
@@ -346,4 +346,5 @@ def verify_roa(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tupl
 
 
 __all__ = ["BOX_CLASSES", "METHOD", "NOT_OVER_BOX", "boxed_system", "whole", "boxed_map", "jacobian_balls",
-           "stein_margin_proved", "prove_over_box", "grid_points", "common_p", "box_p", "linearization", "verify_linearization", "roa", "verify_roa"]
+           "stein_margin_proved", "prove_over_box", "grid_points", "common_p", "box_p", "linearization",
+           "verify_linearization", "roa", "verify_roa"]
