@@ -276,6 +276,16 @@ P_BITS: Final = 30
 MAP_LEVEL_GROWTH: Final = Fraction(4)
 MAP_LEVEL_GROWTH_STEPS: Final = 16
 MAP_LEVEL_BISECTIONS: Final = 4
+#: the parts of a box a map with functions' linearization over the box may examine
+#: (lyapcheck.models.classes.discrete_functions_box: one P with A(p)^T P A(p) - P < 0 proved in ball arithmetic
+#: on each part, a part not proved halved at its widest parameter). A count, so the answer is the same on any
+#: machine; a part costs one jet evaluation of the map (milliseconds). Resolution only: every part counted as
+#: proved is proved, and a box reaching an unstable value is never proved however many parts it is cut in
+MAP_BOX_PIECES: Final = 256
+#: values per parameter of the grid whose Jacobians the SDP proposing a P common to a map's box must serve
+#: (lyapcheck.models.classes.discrete_functions_box.common_p; ends included): a proposal only, decided over
+#: the whole box in ball arithmetic
+MAP_BOX_GRID: Final = 5
 #: the integrator steps one trajectory of the ball-arithmetic route's fit of V (and of its simulated check) may take when the
 #: route runs after the SOS route on a polynomial or rational loop (lyapcheck.models.surfaces.ball_roa):
 #: a rational loop's trajectory that runs into a pole crawls towards it step by step (1-state

@@ -236,15 +236,17 @@ REFUSALS: tuple[Refusal, ...] = (
             "Over a `--box` a map takes `linearization` (one Stein `P` for every Jacobian of the box), `quadratic` "
             "and `sos_gas` (one `V` for every value, box multipliers, exact); its region, bound and safety classes "
             "are decided at a point only (their conditions over a box are not built: a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "candidate", "sos_bound", "barrier", "reach_avoid"),
+    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier", "reach_avoid"),
                   CLASS_SURFACES)
-            | cells(("map_functions",), ("linearization", "roa"), ("--box", "sweep boxes")),
+            | cells(("map_functions",), ("linearization", "roa", "candidate"), ("sweep boxes",)),
             ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
              'time = "discrete")'),
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
-            "then the exact discrete-time test) and `roa` (ball arithmetic on the true map) at a point; every other "
-            "class is `not_applicable` until it is built for such a map; reports and point sweeps take it as a "
-            "polynomial map, and `--box` and box sweeps refuse it in one line (a gap, not a theorem)."),
+            "then the exact discrete-time test), `roa` (ball arithmetic on the true map) and `candidate` (your "
+            "quadratic V, the same route) at a point, and `linearization` and `roa` over a `--box` (ball arithmetic "
+            "with the parameters as balls); every other class is `not_applicable` until it is built for such a "
+            "map; reports and point sweeps take it as a polynomial map, and box sweeps refuse it in one line (a gap, "
+            "not a theorem)."),
 )
 
 #: loop surfaces refused today, with the refusal's words: (kinds, the words)

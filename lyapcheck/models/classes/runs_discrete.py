@@ -100,9 +100,14 @@ def sos_bound_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
 
 def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """The exact Jacobian of the map at its fixed point, by the discrete-time test
-    (:func:`lyapcheck.models.classes.discrete_functions.linearization`)."""
-    from lyapcheck.models.classes import discrete_functions, piecewise_linearization
+    (:func:`lyapcheck.models.classes.discrete_functions.linearization`; at a kink at the fixed point the
+    piecewise-linear step form, :func:`lyapcheck.models.classes.piecewise_linearization.run_map`); over a box,
+    one ``P`` for every Jacobian of the box in ball arithmetic
+    (:func:`lyapcheck.models.classes.discrete_functions_box.linearization`)."""
+    from lyapcheck.models.classes import discrete_functions, discrete_functions_box, piecewise_linearization
 
+    if ctx.box is not None:
+        return discrete_functions_box.linearization(ctx.model, ctx.box)
     result = discrete_functions.linearization(ctx.model)
     if result.status == "not_applicable":  # a kink at the fixed point: the piecewise-linear step form instead
         return piecewise_linearization.run_map(ctx.model, result.summary) or result
@@ -111,10 +116,21 @@ def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Co
 
 def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A quadratic V's largest level proved by ball arithmetic on the true map
-    (:func:`lyapcheck.models.classes.discrete_functions.roa`)."""
+    (:func:`lyapcheck.models.classes.discrete_functions.roa`); over a box, with its parameters as balls
+    (:func:`lyapcheck.models.classes.discrete_functions_box.roa`)."""
+    from lyapcheck.models.classes import discrete_functions, discrete_functions_box
+
+    if ctx.box is not None:
+        return discrete_functions_box.roa(ctx.model, ctx.box, budget)
+    return discrete_functions.roa(ctx.model, budget)
+
+
+def candidate_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """The user's quadratic V, its largest level proved by ball arithmetic on the true map
+    (:func:`lyapcheck.models.classes.discrete_functions.candidate`)."""
     from lyapcheck.models.classes import discrete_functions
 
-    return discrete_functions.roa(ctx.model, budget)
+    return discrete_functions.candidate(ctx.model, budget)
 
 
 # -- a sampled-data loop (lyapcheck.models.classes.sampled) ---------------------------------------------------
@@ -129,4 +145,4 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
 
 __all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
            "barrier_map", "reach_avoid_map", "sos_bound_map",
-           "linearization_map_functions", "roa_map_functions", "linearization_sampled"]
+           "linearization_map_functions", "roa_map_functions", "candidate_map_functions", "linearization_sampled"]

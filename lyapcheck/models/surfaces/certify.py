@@ -407,21 +407,29 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
     entry (:mod:`lyapcheck.models.classes.discrete_functions`: ``linearization`` and ``roa``) through the one
     runner, every other one ``not_applicable`` in one line
     (:data:`~lyapcheck.models.classes.discrete_functions.NOT_YET`); the document states the map's recasting
-    (the loop of its displacement). ``--box`` is refused in one line (exit 2)."""
+    (the loop of its displacement). Over a ``box`` (``model`` read at its centre) ``linearization`` and ``roa``
+    hold for every value of it (:mod:`lyapcheck.models.classes.discrete_functions_box`: a box moving the fixed
+    point is refused in one line, exit 2) and every other class is ``not_applicable``."""
     from lyapcheck.models.classes.contexts import MapFunctionsRun
     from lyapcheck.models.classes.discrete_functions import NOT_YET
+    from lyapcheck.models.classes.discrete_functions_box import BOX_CLASSES, NOT_OVER_BOX, boxed_system
     from lyapcheck.models.classes.recast_classes import base_loop
-    from lyapcheck.models.loop.discrete import refuse
 
-    if box is not None:
-        refuse(model, "--box", "certify a point (--set NAME=VALUE)")
+    if box is not None:  # the fixed point must stay put over the box (one line, exit 2, before any class runs)
+        boxed_system(model, box)
     cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
-    ctx = MapFunctionsRun(model=model)
+    ctx = MapFunctionsRun(model=model, box=box)
 
     def decide(entry: ModelClass) -> ConditionResult | None:
+        if box is not None:
+            given = _needs_input(entry.name, box, cand)
+            if given is not None:
+                return given
+            if entry.run_map_functions is not None and entry.name not in BOX_CLASSES:
+                return ConditionResult(entry.name, "not_applicable", NOT_OVER_BOX)
         return _discrete_rule(entry, entry.run_map_functions, NOT_YET, results, cand, bool(model.disturbances))
 
     def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
@@ -432,7 +440,7 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
     if model.disturbances:
         for r in results.values():  # the map is read with its disturbances at 0
             r.disturbances = "zero"
-    return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds,
+    return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds, box=box,
                               loop=base_loop(model.system, cylinder=False))
 
 
