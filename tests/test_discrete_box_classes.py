@@ -14,6 +14,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import sympy as sp
 from click.testing import CliRunner
 
@@ -112,3 +113,106 @@ def test_a_stable_box_is_not_refuted(tmp_path: Path) -> None:
     code, doc = certify(write(tmp_path, model_text(LINEAR)), "a=0.3..0.6", "--classes", "linearization")
     assert code == 0 and doc["conditions"]["linearization"]["status"] == "certified"
     assert doc["conditions"]["linearization"]["certificate"]["method"] == "box_stein"
+
+
+# -- 2. roa and candidate over a box: one set {V <= c} for every value ----------------------------------------
+
+#: x+ = a x + 0.1 y^2, y+ = -0.3 x + 0.6 y (discrete-gain-map.toml's map): a region of attraction for |a| < 1, no
+#: global V (y^2 feeds x)
+GAIN = {"x": "a*x + 0.1*y**2", "y": "-0.3*x + 0.6*y"}
+DOMAIN = "[domain]\nx = [-1, 1]\ny = [-1, 1]\n"
+
+
+def gram_poly(symbols: list[sp.Symbol], data: dict[str, Any]) -> sp.Expr:
+    """A Gram polynomial of the states alone (its monomials must carry no parameter of the box)."""
+    n = len(symbols)
+    assert all(not any(m[n:]) for m in data["basis"]), "V must not depend on the box's parameter"
+    z = sp.Matrix([sp.Mul(*[s ** e for s, e in zip(symbols, m[:n])]) for m in data["basis"]])
+    Q = sp.Matrix([[sp.Rational(x) for x in row] for row in data["Q"]])
+    return sp.expand((z.T * Q * z)[0, 0])
+
+
+def check_region_over_box(dynamics: dict[str, str], cert: dict[str, Any], lo: float, hi: float) -> None:
+    """The certified set, re-checked on the test's own map at values spread over the box: V positive definite
+    (exact), and from sampled starts in {V <= c} V falls along the map and no iterate leaves the set."""
+    symbols = sp.symbols(list(dynamics))
+    a = sp.Symbol("a")
+    local = {**dict(zip(dynamics, symbols)), "a": a}
+    F = [sp.sympify(v, locals=local) for v in dynamics.values()]
+    V = gram_poly(symbols, cert["gram_V"])
+    assert sp.Matrix([[sp.Rational(x) for x in row] for row in cert["gram_V"]["Q"]]).is_positive_definite
+    level = float(Fraction(cert["level"]))
+    v = sp.lambdify(symbols, V, "numpy")
+    # (a quadratic V here: the set lies in the ball of radius sqrt(level / lambda_min(Q)))
+    Q = np.array([[float(Fraction(x)) for x in row] for row in cert["gram_V"]["Q"]])
+    reach = float(np.sqrt(level / np.min(np.linalg.eigvalsh(Q))))
+    rng = np.random.default_rng(7)
+    for value in np.linspace(lo, hi, 5):
+        f = sp.lambdify(symbols, [fi.subs(a, value) for fi in F], "numpy")
+        e = rng.uniform(-reach, reach, size=(20000, len(symbols)))
+        e = e[v(*e.T) <= level][:500]
+        assert len(e) > 50
+        for _ in range(30):
+            nxt = np.array(f(*e.T), dtype=float).T
+            assert np.all(v(*nxt.T) <= v(*e.T) * (1 + 1e-9) + 1e-12) and np.all(v(*nxt.T) <= level * (1 + 1e-9))
+            e = nxt
+
+
+def test_roa_over_a_box_is_one_region_for_every_gain_and_verifies(tmp_path: Path) -> None:
+    path = write(tmp_path, model_text(GAIN, extra=DOMAIN))
+    code, doc = certify(path, "a=0.3..0.6", "--classes", "roa")
+    assert code == 0
+    roa = doc["conditions"]["roa"]
+    assert roa["status"] == "certified" and roa["summary"].startswith("for every a in [0.3, 0.6]: ")
+    cert = roa["certificate"]
+    assert cert["kind"] == "discrete_sublevel" and cert["box_multipliers"]
+    check_region_over_box(GAIN, cert, 0.3, 0.6)
+    assert verify(doc, tmp_path).exit_code == 0
+    wide = json.loads(json.dumps(doc))
+    wide["box"] = {"a": ["3/10", "9/10"]}  # the multipliers hold for [0.3, 0.6] only
+    done = verify(wide, tmp_path, "wide.json")
+    assert done.exit_code != 0 and "FAIL roa" in done.output and "does not hold exactly" in done.output, done.output
+
+
+def test_candidate_over_a_box_is_the_users_v_for_every_gain_and_verifies(tmp_path: Path) -> None:
+    path = write(tmp_path, model_text(GAIN, extra=DOMAIN))
+    code, doc = certify(path, "a=0.3..0.6", "--classes", "candidate", "--candidate", "x**2 + 2*y**2")
+    assert code == 0
+    cand = doc["conditions"]["candidate"]
+    assert cand["status"] == "certified" and cand["summary"].startswith("for every a in [0.3, 0.6]: ")
+    x, y = sp.symbols("x y")
+    assert sp.expand(gram_poly([x, y], cand["certificate"]["gram_V"]) - (x ** 2 + 2 * y ** 2)) == 0
+    check_region_over_box(GAIN, cand["certificate"], 0.3, 0.6)
+    assert verify(doc, tmp_path).exit_code == 0
+    other = json.loads(json.dumps(doc))
+    other["candidate"] = "x**2 + 3*y**2"  # the text must be the certified V
+    assert verify(other, tmp_path, "other.json").exit_code != 0
+
+
+def test_candidate_over_a_box_is_refused_where_it_must_be(tmp_path: Path) -> None:
+    # a V naming the box's parameter is not one V for the box: one line, exit 2
+    path = write(tmp_path, model_text(GAIN))
+    done = cli("certify", str(path), "--box", "a=0.3..0.6", "--candidate", "x**2 + a*y**2", "--no-store")
+    assert done.exit_code == 2 and len(done.stderr.splitlines()) == 1
+    assert "--candidate" in done.stderr and "parameter a" in done.stderr
+    # a continuous loop still certifies a candidate at a point only
+    loop = write(tmp_path, "[model]\nname = \"a loop\"\nstates = [\"x\"]\n[parameters]\na = 1\n[dynamics]\nx = \"-a*x\"\n",
+                 "loop.toml")
+    done = cli("certify", str(loop), "--box", "a=1..2", "--candidate", "x**2", "--no-store")
+    assert done.exit_code == 2 and "not over a --box" in done.stderr
+
+
+def test_roa_over_a_box_reaching_an_unstable_gain_is_not_certified(tmp_path: Path) -> None:
+    path = write(tmp_path, model_text(GAIN, extra=DOMAIN))
+    code, doc = certify(path, "a=0.9..1.1", "--classes", "roa")  # a = 1.1: unstable, a = 1: critical
+    assert code == 1 and doc["conditions"]["roa"]["status"] == "not_certified"
+    assert "common to the box" in doc["conditions"]["roa"]["summary"]
+
+
+def test_a_class_a_map_takes_at_a_point_only_is_named_over_a_box(tmp_path: Path) -> None:
+    sets = '[sets]\ninitial = ["x**2 + y**2 <= 0.01"]\nunsafe = ["x >= 2"]\n'
+    path = write(tmp_path, model_text(GAIN, extra=sets))
+    code, doc = certify(path, "a=0.3..0.6", "--classes", "barrier")
+    assert code == 1
+    assert doc["conditions"]["barrier"]["status"] == "not_applicable"
+    assert "one parameter value only on a map" in doc["conditions"]["barrier"]["summary"]
