@@ -216,3 +216,45 @@ def test_a_class_a_map_takes_at_a_point_only_is_named_over_a_box(tmp_path: Path)
     assert code == 1
     assert doc["conditions"]["barrier"]["status"] == "not_applicable"
     assert "one parameter value only on a map" in doc["conditions"]["barrier"]["summary"]
+
+
+# -- 3. sos_bound over a box: one bound per output for every value and every disturbance sequence ------------
+
+#: x+ = a x + 0.2 y, y+ = 0.6 y + d, |d| <= 1/2: |y| tends to at most 1.25, |x| to at most 0.25 / (1 - a)
+DISTURBED = {"x": "a*x + 0.2*y", "y": "0.6*y + d"}
+DISTURBANCE = '[disturbances]\nd = 0.5\n[outputs]\nx = "x"\ny = "y"\n'
+
+
+def test_sos_bound_over_a_box_bounds_every_output_for_every_gain_and_verifies(tmp_path: Path) -> None:
+    path = write(tmp_path, model_text(DISTURBED, extra=DISTURBANCE))
+    code, doc = certify(path, "a=0.3..0.6", "--classes", "sos_bound")
+    assert code == 0
+    bound = doc["conditions"]["sos_bound"]
+    assert bound["status"] == "certified" and bound["summary"].startswith("for every a in [0.3, 0.6]: ")
+    assert set(bound["bounds"]) == {"x", "y"}
+    for data in bound["certificate"]["outputs"].values():
+        assert all(not any(m[2:]) for _, m in data["V"]["terms"])  # V of the states alone: one V for the box
+    # by hand: the worst constant disturbance at the box's top gain reaches |y| = 1.25, |x| = 0.25 / 0.4
+    assert bound["bounds"]["y"] >= 1.25 and bound["bounds"]["x"] >= 0.625
+    # iterated on the test's own map at gains spread over the box, under random and extreme disturbances
+    rng = np.random.default_rng(11)
+    for a in np.linspace(0.3, 0.6, 4):
+        e = rng.uniform(-5, 5, size=(400, 2))
+        for step in range(300):
+            d = np.where(rng.random(400) < 0.5, rng.uniform(-0.5, 0.5, 400), np.sign(rng.normal(size=400)) * 0.5)
+            e = np.stack([a * e[:, 0] + 0.2 * e[:, 1], 0.6 * e[:, 1] + d], axis=1)
+            if step >= 200:
+                assert np.all(np.abs(e[:, 0]) <= bound["bounds"]["x"]) and np.all(np.abs(e[:, 1]) <= bound["bounds"]["y"])
+    assert verify(doc, tmp_path).exit_code == 0
+    wide = json.loads(json.dumps(doc))
+    wide["box"] = {"a": ["3/10", "9/10"]}  # the multipliers hold for [0.3, 0.6] only
+    done = verify(wide, tmp_path, "wide.json")
+    assert done.exit_code != 0 and "FAIL sos_bound" in done.output and "does not hold exactly" in done.output, \
+        done.output
+
+
+def test_sos_bound_over_a_box_without_disturbances_is_not_applicable(tmp_path: Path) -> None:
+    code, doc = certify(write(tmp_path, model_text(DISTURBED).replace("+ d", "")), "a=0.3..0.6", "--classes",
+                        "sos_bound")
+    assert doc["conditions"]["sos_bound"]["status"] == "not_applicable"
+    assert "no [disturbances]" in doc["conditions"]["sos_bound"]["summary"]
