@@ -63,7 +63,8 @@ def spectral_radius(dynamics: dict[str, str], value: Fraction) -> float:
     symbols = sp.symbols(list(dynamics))
     a = sp.Symbol("a")
     local = {**dict(zip(dynamics, symbols)), "a": a}
-    F = [sp.nsimplify(sp.sympify(v, locals=local), rational=True).subs(a, sp.Rational(value)) for v in dynamics.values()]
+    F = [sp.nsimplify(sp.sympify(v, locals=local), rational=True).subs(a, sp.Rational(value))
+         for v in dynamics.values()]
     A = sp.Matrix([[sp.diff(f, s).subs({t: 0 for t in symbols}) for s in symbols] for f in F])
     return max(abs(complex(v)) for v in A.eigenvals())
 
@@ -196,7 +197,7 @@ def test_candidate_over_a_box_is_refused_where_it_must_be(tmp_path: Path) -> Non
     assert done.exit_code == 2 and len(done.stderr.splitlines()) == 1
     assert "--candidate" in done.stderr and "parameter a" in done.stderr
     # a continuous loop still certifies a candidate at a point only
-    loop = write(tmp_path, "[model]\nname = \"a loop\"\nstates = [\"x\"]\n[parameters]\na = 1\n[dynamics]\nx = \"-a*x\"\n",
+    loop = write(tmp_path, '[model]\nname = "a loop"\nstates = ["x"]\n[parameters]\na = 1\n[dynamics]\nx = "-a*x"\n',
                  "loop.toml")
     done = cli("certify", str(loop), "--box", "a=1..2", "--candidate", "x**2", "--no-store")
     assert done.exit_code == 2 and "not over a --box" in done.stderr
@@ -244,7 +245,8 @@ def test_sos_bound_over_a_box_bounds_every_output_for_every_gain_and_verifies(tm
             d = np.where(rng.random(400) < 0.5, rng.uniform(-0.5, 0.5, 400), np.sign(rng.normal(size=400)) * 0.5)
             e = np.stack([a * e[:, 0] + 0.2 * e[:, 1], 0.6 * e[:, 1] + d], axis=1)
             if step >= 200:
-                assert np.all(np.abs(e[:, 0]) <= bound["bounds"]["x"]) and np.all(np.abs(e[:, 1]) <= bound["bounds"]["y"])
+                assert np.all(np.abs(e[:, 0]) <= bound["bounds"]["x"])
+                assert np.all(np.abs(e[:, 1]) <= bound["bounds"]["y"])
     assert verify(doc, tmp_path).exit_code == 0
     wide = json.loads(json.dumps(doc))
     wide["box"] = {"a": ["3/10", "9/10"]}  # the multipliers hold for [0.3, 0.6] only

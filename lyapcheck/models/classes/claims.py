@@ -245,12 +245,6 @@ def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     method = data.get("method")
     from lyapcheck.models.classes import discrete_linearization
 
-    if status == "refuted" and method == "box_point":  # a value of the box (a loop's or a map's), then its words
-        from lyapcheck.models.classes.linearization import lower_first, point_words
-
-        point = {k: Fraction(v) for k, v in data["point"].items()}
-        inner = _linearization("refuted", {"refutation": data["at_point"]})
-        return f"at {point_words(point)}, a value of the box, {lower_first(inner)}"
     if discrete_linearization.is_discrete_certificate(data) and method == "box_stein":  # a map's over a box
         return DISCRETE_BOX_STEIN_SENTENCE
     if discrete_linearization.is_discrete_certificate(data):  # a map's: its own methods and words
@@ -267,6 +261,12 @@ def _linearization(status: str, condition: Mapping[str, Any]) -> str:
         from lyapcheck.models.classes.linearization import BOX_SENTENCE
 
         return BOX_SENTENCE
+    if status == "refuted" and method == "box_point":
+        from lyapcheck.models.classes.linearization import lower_first, point_words
+
+        point = {k: Fraction(v) for k, v in data["point"].items()}
+        inner = _linearization("refuted", {"refutation": data["at_point"]})
+        return f"at {point_words(point)}, a value of the box, {lower_first(inner)}"
     if status == "refuted" and method == "root_isolation":
         return (f"the Jacobian has an eigenvalue with positive real part (rigorous enclosure {data['root']}): the "
                 "equilibrium is unstable")

@@ -131,9 +131,9 @@ class DiscreteSublevel:
     def to_json(self, ring: Ring) -> dict[str, Any]:
         from lyapcheck.models.classes.lyapunov import terms_json
 
-        out = {"kind": KIND, "time": "discrete", "V": terms_json(ring, self.V.poly(ring)), "level": str(self.level),
-               "eps": str(self.eps), "gram_V": self.V.to_json(), "gram_s": self.s.to_json(),
-               "gram_sigma": self.sigma.to_json()}
+        out: dict[str, Any] = {"kind": KIND, "time": "discrete", "V": terms_json(ring, self.V.poly(ring)),
+                               "level": str(self.level), "eps": str(self.eps), "gram_V": self.V.to_json(),
+                               "gram_s": self.s.to_json(), "gram_sigma": self.sigma.to_json()}
         if self.box:
             out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in self.box]
         return out
