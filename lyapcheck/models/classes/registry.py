@@ -129,7 +129,8 @@ class ModelClass:
     #: what a ``certified`` proves by default (a result may state another: ``quadratic`` GES or GAS)
     proves: Property
     #: it certifies every parameter value of a ``--box`` (:mod:`lyapcheck.models.loop.boxes`); else it
-    #: certifies a point only and is ``not_applicable`` over a box
+    #: certifies a point only and is ``not_applicable`` over a box (a polynomial map's own list is
+    #: :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`, which takes ``candidate`` too)
     over_box: bool
     #: it proves a stability property of the equilibrium: an unstable equilibrium (the linearization
     #: refuted, exactly) refutes it
