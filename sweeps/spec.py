@@ -778,8 +778,9 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         others = ""
         if is_discrete(model):
             kind = " of a discrete-time map" + ("" if polynomial else " with functions")
-            others = (' (the other classes are not taken yet for a discrete-time map ([model] time = "discrete")'
-                      + (", over a box: they are decided at a point only)" if mode == "boxes" else ")"))
+            others = (' (over a box a discrete-time map ([model] time = "discrete") takes these only: the others are '
+                      'decided at a point)' if mode == "boxes" else
+                      ' (the other classes are not taken yet for a discrete-time map ([model] time = "discrete"))')
         raise InvalidParameter("sweep.classes", f"in a {mode} sweep{kind}, a list of distinct names from "
                                + ", ".join(repr(c) for c in allowed) + others, raw)
     if "sos_bound" in raw and not disturbances:
