@@ -207,7 +207,7 @@ _BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
 REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
             | cells(("discrete",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep points", "sweep boxes"))),
+                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep boxes"))),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
@@ -217,25 +217,12 @@ REFUSALS: tuple[Refusal, ...] = (
             "the box, a search of box multipliers for a fixed V that is not built (a gap, not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("discrete",), CLASSES[:6], ("sweep boxes",))
-            | cells(("discrete",), ("sos_bound",), ("sweep points",))
-            | cells(("discrete",), ("barrier", "reach_avoid"), ("sweep boxes",)),
-            ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
-             '"discrete")'),
-            "A discrete-time map (`[model] time = \"discrete\"`) takes `linearization` (every eigenvalue of the map's "
-            "Jacobian of modulus < 1, exact), `quadratic` and `sos_gas` (`V(F(e)) - V(e) <= -mu V(e)`, exact), `roa` "
-            "and `candidate` (a set `{V <= c}` on which `V(F(e)) <= V(e) - eps |e|^2`, exact), `barrier` (`B(F(x)) <= "
-            "lambda B(x)`, exact), `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) and, with "
-            "`[disturbances]`, `sos_bound` (`V(F(x, d)) <= lam V(x) + 1 - lam`, exact) at a point; reports and point "
-            "sweeps iterate the map (a point sweep's cross-check of `barrier` and `reach_avoid` iterates from the "
-            "initial set; `sos_bound`'s cross-check by iterating under disturbances is not built, so a point sweep "
-            "does not take it), while box sweeps, which read `[dynamics]` as a field, refuse a map in one line (a "
-            "gap, not a theorem)."),
-    Refusal(cells(("discrete",), ("roa", "sos_bound", "barrier", "reach_avoid"), ("--box",)),
-            ("decided at one parameter value only on a map",),
-            "Over a `--box` a map takes `linearization` (one Stein `P` for every Jacobian of the box), `quadratic` "
-            "and `sos_gas` (one `V` for every value, box multipliers, exact); its region, bound and safety classes "
-            "are decided at a point only (their conditions over a box are not built: a gap, not a theorem)."),
+    Refusal(cells(("discrete",), ("roa", "sos_bound", "barrier", "reach_avoid"), ("--box", "sweep boxes")),
+            ("decided at one parameter value only on a map", "the others are decided at a point"),
+            "Over a `--box` (and in a box sweep, each box iterated at its corners and random points) a map takes "
+            "`linearization` (one Stein `P` for every Jacobian of the box), `quadratic` and `sos_gas` (one `V` for "
+            "every value, box multipliers, exact); its region, bound and safety classes are decided at a point only "
+            "(their conditions over a box are not built: a gap, not a theorem)."),
     Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "candidate", "sos_bound", "barrier", "reach_avoid"),
                   CLASS_SURFACES)
             | cells(("map_functions",), ("linearization", "roa"), ("--box", "sweep boxes")),
