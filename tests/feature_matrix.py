@@ -207,7 +207,7 @@ _BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
 REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
             | cells(("discrete",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s not in ("sweep points", "sweep boxes"))),
+                    tuple(s for s in CLASS_SURFACES if s != "sweep boxes")),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
@@ -219,27 +219,16 @@ REFUSALS: tuple[Refusal, ...] = (
             "not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("discrete",), CLASSES[:6], ("sweep boxes",))
-            | cells(("discrete",), ("sos_bound",), ("sweep points",))
-            | cells(("discrete",), ("barrier", "reach_avoid"), ("sweep boxes",)),
-            ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
-             '"discrete")'),
-            "A discrete-time map (`[model] time = \"discrete\"`) takes `linearization` (every eigenvalue of the map's "
-            "Jacobian of modulus < 1, exact), `quadratic` and `sos_gas` (`V(F(e)) - V(e) <= -mu V(e)`, exact), `roa` "
-            "and `candidate` (a set `{V <= c}` on which `V(F(e)) <= V(e) - eps |e|^2`, exact), `barrier` (`B(F(x)) <= "
-            "lambda B(x)`, exact), `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) and, with "
-            "`[disturbances]`, `sos_bound` (`V(F(x, d)) <= lam V(x) + 1 - lam`, exact) at a point; reports and point "
-            "sweeps iterate the map (a point sweep's cross-check of `barrier` and `reach_avoid` iterates from the "
-            "initial set; `sos_bound`'s cross-check by iterating under disturbances is not built, so a point sweep "
-            "does not take it), while box sweeps, which read `[dynamics]` as a field, refuse a map in one line (a "
-            "gap, not a theorem)."),
-    Refusal(cells(("discrete",), ("barrier", "reach_avoid"), ("--box",)),
-            ("decided at one parameter value only on a map",),
-            "Over a `--box` a map takes `linearization` (one Stein `P` for every Jacobian of the box, or an unstable "
-            "corner), `quadratic` and `sos_gas` (one `V` for every value, box multipliers, exact), `roa`, "
-            "`candidate` and `sos_bound` (one set or one bound for every value, box multipliers, exact); its "
-            "safety classes are decided at a point only (their conditions over a box are not built: a gap, not a "
-            "theorem)."),
+    Refusal(cells(("discrete",), ("barrier", "reach_avoid"), ("--box",))
+            | cells(("discrete",), ("roa", "sos_bound", "barrier", "reach_avoid"), ("sweep boxes",)),
+            ("decided at one parameter value only on a map", "cross-check over a box is not built"),
+            "A discrete-time map (`[model] time = \"discrete\"`) takes every class at a point, each checked "
+            "exactly, and reports and point sweeps iterate it. Over a `--box` it takes `linearization` (one Stein "
+            "`P` for every Jacobian of the box, or an unstable corner), `quadratic` and `sos_gas` (one `V` for every "
+            "value, box multipliers, exact), `roa`, `candidate` and `sos_bound` (one set or one bound for every "
+            "value); its safety classes are decided at a point only. A box sweep takes `linearization`, "
+            "`quadratic` and `sos_gas`, each box iterated at its corners and random points; the cross-check of a "
+            "set or a bound over a box is not built (a gap, not a theorem)."),
     Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier", "reach_avoid"),
                   CLASS_SURFACES)
             | cells(("map_functions",), ("linearization", "roa", "candidate"), ("sweep boxes",)),
