@@ -106,6 +106,22 @@ def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Co
     return discrete_functions.linearization(ctx.model)
 
 
+def quadratic_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A quadratic V of the states with ``V(F) <= (1 - mu) V - W`` on the recasting's relations
+    (:func:`lyapcheck.models.classes.map_relations.run`)."""
+    from lyapcheck.models.classes import map_relations
+
+    return map_relations.run(ctx.model, "quadratic", budget)
+
+
+def sos_gas_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A polynomial V of the states of the searched degrees, on the recasting's relations
+    (:func:`lyapcheck.models.classes.map_relations.run`)."""
+    from lyapcheck.models.classes import map_relations
+
+    return map_relations.run(ctx.model, "sos_gas", budget)
+
+
 def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A quadratic V's largest level proved by ball arithmetic on the true map
     (:func:`lyapcheck.models.classes.discrete_functions.roa`)."""
@@ -126,4 +142,4 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
 
 __all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
            "barrier_map", "reach_avoid_map", "sos_bound_map",
-           "linearization_map_functions", "roa_map_functions", "linearization_sampled"]
+           "linearization_map_functions", "quadratic_map_functions", "sos_gas_map_functions", "roa_map_functions", "linearization_sampled"]
