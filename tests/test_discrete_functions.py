@@ -85,15 +85,22 @@ def test_a_point_that_is_not_fixed_is_refused_in_one_line(tmp_path: Path) -> Non
 def test_abs_at_the_fixed_point_is_named(tmp_path: Path) -> None:
     text = '[model]\nname = "m"\nstates = ["x"]\ntime = "discrete"\n[dynamics]\nx = "0.5*abs(x)"\n'
     out = tmp_path / "abs.json"
-    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "linearization,roa,quadratic",
+    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "linearization,roa,sos_bound",
                "--no-store", "--json", "--out", str(out))
     assert done.exit_code == 1, done.output  # (the verdict not_certified)
     conditions = json.loads(out.read_text())["conditions"]
     for name in ("linearization", "roa"):
         assert conditions[name]["status"] == "not_applicable"
         assert "abs is not differentiable" in conditions[name]["summary"]
-    assert conditions["quadratic"]["status"] == "not_applicable"
-    assert conditions["quadratic"]["summary"] == dfn.NOT_YET
+    assert conditions["sos_bound"]["status"] == "not_applicable"
+    assert conditions["sos_bound"]["summary"] == dfn.NOT_YET
+    # quadratic needs no derivative: V = x^2 with V(F) = V/4 on the relations of b = |x| (b^2 = x^2), GES
+    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "quadratic", "--no-store",
+               "--out", str(out))
+    assert done.exit_code == 0, done.output
+    quadratic = json.loads(out.read_text())["conditions"]["quadratic"]
+    assert quadratic["status"] == "certified" and quadratic["property"] == "GES"
+    assert Fraction(quadratic["certificate"]["r"]) ** 2 >= Fraction(1, 4)  # no faster than the map's true 1/2
 
 
 @pytest.fixture(scope="module")
