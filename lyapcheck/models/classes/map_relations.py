@@ -42,11 +42,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Final, Literal, Mapping, Sequence
 
 from lyapcheck import tolerances
 from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import lyapunov
+from lyapcheck.models.classes.claims import DISCRETE_RELATIONS_KIND
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
@@ -62,7 +63,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.sos.structure import Gram, Scalar, Structure, Term
 
 #: the certificate kind of ``quadratic`` and ``sos_gas`` on a map with functions
-KIND: Final = "discrete_relations"
+KIND: Final = DISCRETE_RELATIONS_KIND
 
 
 class NotTaken(ValueError):
@@ -259,11 +260,12 @@ def run(model: "RecastModel", name: dl.ClassName, budget: Budget, degrees: Seque
             degrees = searched_degrees(dl.SOS_GAS_DEGREES)
         else:
             degrees = (2,)
-    prop = "GES" if name == "quadratic" else "GAS"
+    # (as a polynomial map's: a quadratic's failure claims nothing, sos_gas's is about GAS)
+    prop: Literal["GAS"] | None = "GAS" if name == "sos_gas" else None
     try:
         system, ring, F = next_state(model)
     except NotTaken as exc:
-        return ConditionResult(name, "not_applicable", f"not taken on this map with functions: {exc}", property=prop)
+        return ConditionResult(name, "not_applicable", f"not taken on this map with functions: {exc}")
     if ring.nvars > tolerances.MAP_RELATIONS_VARIABLES:  # (before any relation is derived: a network's are many)
         none = reasons.reason("no Lyapunov function of the map on the recasting's relations was searched: "
                               + size_limit(ring.nvars, "variables (states and functions)",
@@ -293,13 +295,20 @@ def run(model: "RecastModel", name: dl.ClassName, budget: Budget, degrees: Seque
         late = reasons.out_of_time("a Lyapunov function of the map", search.budget.seconds, [str(exc), *tried])
         return ConditionResult(name, "inconclusive", late.summary,
                                numbers=late.numbers({"reason": str(exc), "tried": tried, "time": "discrete"}),
-                               solver={"solves": search.log}, property=prop)
+                               solver={"solves": search.log})
     steps = ("sos_gas",) if name == "quadratic" else ("degree",)
     none = reasons.not_found("Lyapunov function of the discrete-time map on the recasting's relations", degrees,
                              tried, steps)
     return ConditionResult(name, "not_certified", none.summary, numbers=none.numbers({"tried": tried,
                                                                                       "time": "discrete"}),
                            solver={"solves": search.log}, property=prop)
+
+
+def v_of_states(m: MapOnRelations, v: Poly) -> dict[str, Any]:
+    """``V``'s exact terms over the states alone (exponents per state, as a polynomial map's certificate
+    states its V, which sweeps and reports read): V is a polynomial of the states."""
+    states = Ring(m.ring.names[:m.n])
+    return lyapunov.terms_json(states, m.ring.restrict(v, states))
 
 
 def certified(m: MapOnRelations, name: dl.ClassName, found: dict[str, Any], solver: dict[str, Any]
@@ -313,7 +322,7 @@ def certified(m: MapOnRelations, name: dl.ClassName, found: dict[str, Any], solv
     v = V.poly(ring)
     cert: dict[str, Any] = {"kind": KIND, "time": "discrete", "variables": list(ring.names),
                             "auxiliaries": m.system.definitions(), "degree": found["degree"], "mu": str(mu),
-                            "V": lyapunov.terms_json(ring, v), "V_text": v_text(m.system, v), "gram_V": V.to_json(),
+                            "V": v_of_states(m, v), "V_text": v_text(m.system, v), "gram_V": V.to_json(),
                             "decrease": found["decrease"].to_json(ring)}
     numbers: dict[str, Any] = {"degree": found["degree"], "time": "discrete", "decay_rate_V_per_step": float(mu),
                                "relative_margin": found["margin"]}
@@ -352,7 +361,7 @@ def verify(model: "RecastModel", name: str, data: Mapping[str, Any]) -> tuple[bo
     ok, why = check_map_relations(m, V, mu, decrease)
     if not ok:
         return False, why
-    if lyapunov.terms_json(ring, V.poly(ring)) != cert.get("V"):
+    if v_of_states(m, V.poly(ring)) != cert.get("V"):
         return False, "the stated V is not the certificate's Gram V"
     if degree != 2 * max(sum(q) for q in V.basis) or (name == "quadratic" and degree != 2):
         return False, "the stated degree is not V's"
