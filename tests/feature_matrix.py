@@ -236,13 +236,13 @@ REFUSALS: tuple[Refusal, ...] = (
             "Over a `--box` a map takes `linearization` (one Stein `P` for every Jacobian of the box), `quadratic` "
             "and `sos_gas` (one `V` for every value, box multipliers, exact); its region, bound and safety classes "
             "are decided at a point only (their conditions over a box are not built: a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "candidate", "sos_bound", "barrier", "reach_avoid"),
-                  CLASS_SURFACES)
-            | cells(("map_functions",), ("linearization", "roa"), ("--box", "sweep boxes")),
+    Refusal(cells(("map_functions",), ("candidate", "sos_bound", "barrier", "reach_avoid"), CLASS_SURFACES)
+            | cells(("map_functions",), ("linearization", "quadratic", "sos_gas", "roa"), ("--box", "sweep boxes")),
             ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
              'time = "discrete")'),
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
-            "then the exact discrete-time test) and `roa` (ball arithmetic on the true map) at a point; every other "
+            "then the exact discrete-time test), `quadratic` and `sos_gas` (a V of the states with `V(F) <= (1 - mu) V "
+            "- W` on the recasting's relations, exact) and `roa` (ball arithmetic on the true map) at a point; every other "
             "class is `not_applicable` until it is built for such a map; reports and point sweeps take it as a "
             "polynomial map, and `--box` and box sweeps refuse it in one line (a gap, not a theorem)."),
 )
