@@ -119,3 +119,41 @@ def test_a_network_map_is_refused_quickly() -> None:
     result = map_relations.run(model, "quadratic", _budget())
     assert result.status == "not_certified" and "too large" in result.summary
     assert time.monotonic() - start < 30  # a count refuses it before any relation is derived
+
+
+SAT_SIN = """
+[model]
+name = "a map through saturations and a sine"
+states = ["x", "y"]
+time = "discrete"
+source = "test"
+
+[dynamics]
+x = "0.5*x + 0.4*sat(y, 1)"
+y = "0.6*y - 0.4*sat(x, 1) + 0.1*sin(x)"
+"""
+
+
+def test_equality_relations_take_free_multipliers() -> None:
+    # sat's (u - q)(L^2 - q^2) = 0 and sin^2 + cos^2 = 1 are equalities: their multipliers are free polynomials,
+    # and the identity holds on them exactly; the claim is then checked on the true map at sampled points
+    model = parse_any_model(SAT_SIN)
+    result = map_relations.run(model, "quadratic", _budget())
+    assert result.status == "certified", result.summary
+    data = result.to_json()
+    assert map_relations.verify(model, "quadratic", data)[0]
+    relations = map_relations.on_relations(model).relations
+    lambdas = data["certificate"]["decrease"]["lambdas"]
+    assert all(relations[int(i)].kind == "eq" for i in lambdas)
+    cert = data["certificate"]
+    mu = float(Fraction(cert["mu"]))
+    V = GramPoly.from_json(cert["gram_V"], len(cert["variables"]))
+    index = [V.basis.index(tuple(int(k == i) for k in range(len(cert["variables"])))) for i in range(2)]
+    P = np.array([[float(V.Q[a][b]) for b in index] for a in index])
+
+    def F(e: np.ndarray) -> np.ndarray:
+        x, y = e
+        return np.array([0.5 * x + 0.4 * np.clip(y, -1, 1), 0.6 * y - 0.4 * np.clip(x, -1, 1) + 0.1 * math.sin(x)])
+
+    for e in np.random.default_rng(1).uniform(-20, 20, size=(300, 2)):
+        assert F(e) @ P @ F(e) <= (1 - mu) * (e @ P @ e) * (1 + 1e-9)
