@@ -157,3 +157,10 @@ def test_equality_relations_take_free_multipliers() -> None:
 
     for e in np.random.default_rng(1).uniform(-20, 20, size=(300, 2)):
         assert F(e) @ P @ F(e) <= (1 - mu) * (e @ P @ e) * (1 + 1e-9)
+
+
+def test_a_square_root_of_the_states_is_not_taken() -> None:
+    # r^2 = q says nothing where q < 0 (no real r): without a proof that q >= 0 the class claims nothing
+    text = SAT_SIN.replace('"0.5*x + 0.4*sat(y, 1)"', '"0.5*x + 0.1*(sqrt(1 + y**2) - 1)"')
+    result = map_relations.run(parse_any_model(text), "sos_gas", _budget())
+    assert result.status == "not_applicable" and "sqrt(1 + y**2)" in result.summary

@@ -91,10 +91,16 @@ class MapOnRelations:
 
 def next_state(model: "RecastModel") -> tuple["RecastSystem", Ring, tuple[Poly, ...]]:
     """``F(e, a) = e + d(e, a)`` in deviations, exactly; :class:`NotTaken` when a displacement has a
-    denominator depending on the variables."""
+    denominator depending on the variables, or a square root of an expression (its argument's sign unproved)."""
     from lyapcheck.models.classes.recast_classes import base_loop
 
     system = model.system
+    for a in system.auxiliaries:
+        if a.function == "sqrt" and a.radicand is None:
+            # (r^2 = q has no real point where q < 0: the identity would say nothing there, and the claim "from
+            # every start" is only sound once q >= 0 is proved along the orbits, which is not built for a map)
+            raise NotTaken(f"'{a.written_as}' is a square root of an expression of the states, whose argument is "
+                           "not proved non-negative on a map")
     loop = base_loop(system, cylinder=False)
     ring = loop.ring
     F = []
