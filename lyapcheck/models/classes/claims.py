@@ -243,7 +243,13 @@ def _number(condition: Mapping[str, Any], key: str) -> float:
 def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     data = condition.get("certificate" if status == "certified" else "refutation") or {}
     method = data.get("method")
-    from lyapcheck.models.classes import discrete_linearization
+    from lyapcheck.models.classes import discrete_linearization, piecewise_linearization
+
+    if status == "certified" and piecewise_linearization.is_certificate(data):  # a kink at the equilibrium
+        return piecewise_linearization.sentence(data)
+
+    if method == SAMPLED_METHOD:  # a sampled-data loop's: its period is a figure of the certificate
+        return sampled_linearization_sentence(status, read_rational(data["period"], "period"))
 
     if discrete_linearization.is_discrete_certificate(data) and method == "box_stein":  # a map's over a box
         return DISCRETE_BOX_STEIN_SENTENCE
@@ -285,6 +291,35 @@ def discrete_lyapunov_sentence(kind: str, degree: int, mu: Fraction, figures: Ma
     tail = f", and V(F(e)) <= {rounded(1 - mu, 4, 'up')} V(e) (V decays geometrically)" if mu > 0 else ""
     return (f"GAS of the discrete-time map: {what} with V(F(e)) < V(e) away from the equilibrium{tail} "
             "(checked exactly)")
+
+
+#: the method of a sampled-data loop's linearization (lyapcheck.models.classes.sampled)
+SAMPLED_METHOD = "sampled_routh"
+
+
+def seconds_text(period: Fraction) -> str:
+    """``period`` as an exact decimal where it has one (``1/50`` is ``0.02``), else ``p/q``."""
+    from lyapcheck.exact import exact_decimal
+
+    try:
+        return exact_decimal(period)
+    except ValueError:
+        return str(period)
+
+
+def sampled_linearization_sentence(status: str, period: Fraction) -> str:
+    """The claim of a sampled-data loop's decided linearization (:mod:`lyapcheck.models.classes.sampled`,
+    ``certified`` or ``refuted``) at ``period`` seconds, written exactly (an exact decimal where it has one,
+    else ``p/q``): the claim holds at that period, and a rounded one near the critical period would name
+    another loop."""
+    loop = f"the sampled-data loop (zero-order hold, period {seconds_text(period)} s)"
+    if status == "certified":
+        return (f"{loop} is locally exponentially stable: every eigenvalue of its Jacobian over one period has "
+                "modulus < 1 (checked in ball arithmetic)")
+    if status == "refuted":
+        return (f"{loop} is unstable: its Jacobian over one period has an eigenvalue of modulus > 1 (checked in ball "
+                "arithmetic)")
+    raise ValueError(f"a sampled-data linearization states nothing when {status!r}")
 
 
 #: the claim of a map's linearization over a box (lyapcheck.models.classes.discrete_lyapunov.run_linearization_box;
@@ -591,4 +626,5 @@ def interval_sentence(cert: dict[str, Any]) -> str:
 __all__ = ["summary", "roa_after_gas", "GAS_CLASSES", "box_words", "box_prefix", "ball_words", "size_words", "with_unit", "deviation", "state_unit_figures", "v_text",
            "v_expression", "sentence_of", "recast_reach_time", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
            "RATE_UNIT", "DISCRETE_BARRIER_KIND", "DISCRETE_BARRIER_SENTENCE",
-           "DISCRETE_REACH_KIND", "DISCRETE_BOUND_KIND", "discrete_reach_sentence"]
+           "DISCRETE_REACH_KIND", "DISCRETE_BOUND_KIND", "discrete_reach_sentence", "SAMPLED_METHOD",
+           "sampled_linearization_sentence", "seconds_text"]

@@ -54,7 +54,7 @@ from fractions import Fraction
 from typing import Any, Callable, Final, Literal, Mapping, Sequence
 
 from lyapcheck import tolerances as tol
-from lyapcheck.models.classes import lyapunov
+from lyapcheck.models.classes import discrete_linearization, lyapunov
 from lyapcheck.models.classes.claims import box_prefix, discrete_lyapunov_sentence
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
@@ -520,13 +520,14 @@ def _check_ges_figures(P: Sequence[Sequence[Fraction]], mu: Fraction, figures: M
 # -- a map over a box: what is taken ------------------------------------------------------------------
 
 #: the classes a polynomial map takes over a box of parameters (``certify --box``): one V for every value
-BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas")
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
 
 
 def not_over_box(name: str) -> str:
     """The ``not_applicable`` sentence of a class other than :data:`BOX_CLASSES` on a map over a box."""
     return (f"{name} is decided at one parameter value only on a map (certify a point with --set NAME=VALUE); "
-            "over a box, linearization proves LES, quadratic GES and sos_gas GAS for every value of the box")
+            "over a box, linearization proves LES, quadratic GES, sos_gas GAS, roa and candidate a region of "
+            "attraction and sos_bound an ultimate bound for every value of the box")
 
 
 # -- linearization over a box: one Stein certificate for every Jacobian of the box --------------------
@@ -546,13 +547,28 @@ def jacobian_map(ring: Ring, F: Sequence[Poly]) -> tuple[Poly, ...]:
     return tuple(out)
 
 
+def jacobian_at(ring: Ring, A: Sequence[Poly], shifted: ShiftedField, point: Mapping[str, Fraction]
+                ) -> list[list[Fraction]]:
+    """The exact Jacobian at the fixed point for one parameter value of the box (``point``, by name): the
+    linear map ``A(u) e`` of :func:`jacobian_map` at that value's normalized ``u = (p - centre) / half``."""
+    assert shifted.box is not None
+    n = len(A)
+    box = shifted.box
+    at = {coordinate: (point[name] - box.center(name)) / box.half(name)
+          for coordinate, name in zip(shifted.box_names, box.names)}
+    units = [tuple(int(k == j) for k in range(ring.nvars)) for j in range(n)]
+    return [[Fraction(ring.terms(ring.substitute(a, at)).get(unit, 0)) for unit in units] for a in A]
+
+
 def run_linearization_box(shifted: ShiftedField, budget: Budget | None = None) -> ConditionResult:
     """``linearization`` of a map over a box: a quadratic ``V = e^T P e`` common to the box with
     ``V(A(u) e) - V(e) <= -mu V(e) - W(e, u)`` for every ``u`` (the quadratic class's program on the linear
     map ``A(u) e``, box multipliers and all). Then every ``A(u)`` has ``A(u)^T P A(u) - P < 0``: every
     eigenvalue of modulus < 1, so the fixed point is locally exponentially stable for every value of the
-    box. None found is ``not_certified`` (a box reaching an unstable gain has none; a stable box may need a
-    ``P`` that depends on the parameters, not taken here)."""
+    box. First the box's corners and centre are decided exactly at their values
+    (:func:`~lyapcheck.models.classes.discrete_linearization.refute_over_box`): an unstable one is ``refuted``
+    for the box, naming it. None found is ``not_certified`` (a box reaching an unstable value strictly inside
+    has none; a stable box may need a ``P`` that depends on the parameters, not taken here)."""
     from lyapcheck.models.classes.claims import DISCRETE_BOX_STEIN_SENTENCE
 
     try:
@@ -560,6 +576,11 @@ def run_linearization_box(shifted: ShiftedField, budget: Budget | None = None) -
     except NotAMap as exc:
         return ConditionResult("linearization", "not_applicable", f"not a polynomial map: {exc}")
     A = jacobian_map(ring, F)
+    assert shifted.box is not None
+    # an unstable corner (or centre) first: exact and cheap, and it decides the box where no P could exist
+    unstable = discrete_linearization.refute_over_box(lambda point: jacobian_at(ring, A, shifted, point), shifted.box)
+    if unstable is not None:
+        return unstable
     search = Search(ring, budget if budget is not None else
                     Budget(tol.MODEL_CLASS_TIME_LIMIT_S, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
     try:
@@ -586,7 +607,18 @@ def run_linearization_box(shifted: ShiftedField, budget: Budget | None = None) -
 
 def verify_linearization_box(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-check a map's ``linearization`` over a box: ``A(u) e`` re-derived from the shifted map with the box's
-    coordinates, the identity with its multipliers, ``V`` quadratic and positive definite, exactly."""
+    coordinates, the identity with its multipliers, ``V`` quadratic and positive definite, exactly; a
+    refutation by the point decision at its stated value of the box
+    (:func:`~lyapcheck.models.classes.discrete_linearization.verify_box_point`)."""
+    if status == "refuted":
+        try:
+            ring, F = map_polynomials(shifted)
+        except NotAMap as exc:
+            return False, f"not a polynomial map: {exc}"
+        A = jacobian_map(ring, F)
+        assert shifted.box is not None
+        return discrete_linearization.verify_box_point(lambda point: jacobian_at(ring, A, shifted, point),
+                                                       shifted.box, dict(data))
     if status != "certified":
         return False, f"a {status} linearization over a box, which a map never states"
     try:

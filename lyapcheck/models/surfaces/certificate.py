@@ -286,7 +286,7 @@ def _verify_map(doc: dict[str, Any], model: Any, rows: list[Row], box: Any) -> l
         rows.append((name, ok, why if ok else f"{name}: {why}"))
     from lyapcheck.models.classes.region_size import check_size_rows
 
-    check_size_rows(model, conditions, rows, list(model.states))
+    check_size_rows(model, conditions, rows, list(model.states) + (list(box.names) if box is not None else []))
     _check_candidate(doc, model, conditions, rows)
     _check_disturbance_keys(model, conditions, rows)
     _check_summaries(model, conditions, rows, doc.get("box"))
@@ -376,8 +376,14 @@ def _check_candidate(doc: dict[str, Any], model: Any, conditions: dict[str, Any]
     shifted_v = ring.compose(cand.poly, images)
     from lyapcheck.sos.polynomials import Ring
 
+    # (a map's candidate over a box states V in the states and the box's parameters, at exponent 0: one V)
+    box_names = tuple(str(k) for k in doc["box"]) if isinstance(doc.get("box"), dict) else ()
     states = Ring(ring.names[:model.n])
-    same = terms_json(states, ring.restrict(shifted_v, states)) == (c.get("certificate") or {}).get("V")
+    on = Ring(ring.names[:model.n] + box_names)
+    v = ring.restrict(shifted_v, states)
+    stated = (c.get("certificate") or {}).get("V")
+    same = terms_json(states, v) == stated or (bool(box_names) and terms_json(on, on.from_terms(
+        {m + (0,) * len(box_names): k for m, k in states.terms(v).items()})) == stated)
     rows.append(("candidate", same, "the candidate text is the certified V" if same else
                  "candidate: the candidate text is not the V of the certified candidate condition"))
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.models.language.recast import RecastModel
 
 Row = tuple[str, bool, str]
@@ -32,9 +33,13 @@ def verify_map_functions(doc: dict[str, Any], model: "RecastModel", rows: list[R
     rows.append(("recasting", same, "the stated recasting of the map's displacement F(x) - x is the one the model "
                                     "text gives" if same else "the stated recasting differs from the one the model "
                                                               "text gives"))
-    if "box" in doc:
-        rows.append(("box", False, 'a box is not taken on a discrete-time map ([model] time = "discrete")'))
-    check = MapFunctionsCheck(model=model)
+    box = None
+    if "box" in doc:  # read at the box's centre, the fixed point staying put over it (re-derived here)
+        box, why = _box_of(doc, model)
+        rows.append(("box", box is not None, why))
+        if box is None:
+            return with_verdict(doc, rows)
+    check = MapFunctionsCheck(model=model, box=box)
     for name, c in doc["conditions"].items():
         if not isinstance(c, dict) or c.get("status") not in ("certified", "refuted", "counterexample"):
             continue
@@ -45,6 +50,31 @@ def verify_map_functions(doc: dict[str, Any], model: "RecastModel", rows: list[R
             ok, why = False, f"malformed certificate: {type(exc).__name__}: {exc}"[:200]
         rows.append((name, ok, why if ok else f"{name}: {why}"))
     return with_verdict(doc, rows)
+
+
+def _box_of(doc: dict[str, Any], model: "RecastModel") -> tuple["ModelBox | None", str]:
+    """The document's box, its parameters the model's and read at its centre, and the map recast with them as
+    balls keeping its fixed point (:func:`lyapcheck.models.classes.discrete_functions_box.boxed_system`); or
+    (None, why not)."""
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.classes.discrete_functions_box import boxed_system
+    from lyapcheck.models.language.parameter_box import ModelBox
+
+    try:
+        box = ModelBox.from_json(doc["box"])
+    except (TypeError, ValueError, AttributeError, ZeroDivisionError) as exc:
+        return None, f"malformed box: {exc}"
+    for name, lo, hi in box.bounds:
+        if name not in model.parameters or not lo < hi:
+            return None, f"box: {name!r} is not a parameter of the model with lo < hi"
+        if model.parameters[name] != box.center(name):
+            return None, f"box: the model is not read at the box's centre ({name} = {model.parameters[name]})"
+    try:
+        boxed_system(model, box)
+    except ModelFileError as exc:
+        return None, f"box: {exc}"
+    return box, ("each box parameter is read at the box's centre, and the map's fixed point is proved to stay put "
+                 "over the box")
 
 
 __all__ = ["verify_map_functions"]
