@@ -310,6 +310,12 @@ TEMPLATE_SOLVES: Final = 4
 #: programs have at most 27 rows (solved in under a second) or 50-55 rows (10-30 s a solve,
 #: none certified: recast-inverted-pendulum-sat, recast-los-heading at degree 4)
 TEMPLATE_GRAM_ROWS: Final = 40
+#: the most variables (states and auxiliaries) of a discrete-time map with functions whose quadratic and
+#: sos_gas derive the recasting's relations (lyapcheck.models.classes.map_relations): a larger map is refused
+#: as too large before any relation is derived. A count, measured: ysa-pendulum's 68 variables (2 x 32 tanh
+#: neurons, sin, cos) take over a minute to shift their 261 relations to the deviations and then stop at
+#: TARGET_LIMIT (1753 monomials in the degree-2 identity); discrete-tanh-map's 3 take under a second
+MAP_RELATIONS_VARIABLES: Final = 24
 #: the solves one level step of the recast V-s iteration (lyapcheck.models.classes.regions.relations_enlarge: a
 #: level's growth and bisection, each level its face reductions) may spend; it replaced a 15 s
 #: wall-clock limit. Calibrated on the tests' pendulum (the route without ball arithmetic): its

@@ -87,7 +87,7 @@ def test_abs_at_the_fixed_point_is_named_and_linearization_is_piecewise_linear(t
     roa names the kink (it starts from a Jacobian)."""
     text = '[model]\nname = "m"\nstates = ["x"]\ntime = "discrete"\n[dynamics]\nx = "0.5*abs(x)"\n'
     out = tmp_path / "abs.json"
-    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "linearization,roa,quadratic",
+    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "linearization,roa,sos_bound",
                "--no-store", "--json", "--out", str(out))
     assert done.exit_code == 0, done.output  # (the verdict certified_local)
     conditions = json.loads(out.read_text())["conditions"]
@@ -97,8 +97,15 @@ def test_abs_at_the_fixed_point_is_named_and_linearization_is_piecewise_linear(t
     assert conditions["roa"]["status"] == "not_applicable"
     assert "abs is not differentiable" in conditions["roa"]["summary"]
     assert cli("verify", str(out)).exit_code == 0
-    assert conditions["quadratic"]["status"] == "not_applicable"
-    assert conditions["quadratic"]["summary"] == dfn.NOT_YET
+    assert conditions["sos_bound"]["status"] == "not_applicable"
+    assert conditions["sos_bound"]["summary"] == dfn.NOT_YET
+    # quadratic needs no derivative: V = x^2 with V(F) = V/4 on the relations of b = |x| (b^2 = x^2), GES
+    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "quadratic", "--no-store",
+               "--out", str(out))
+    assert done.exit_code == 0, done.output
+    quadratic = json.loads(out.read_text())["conditions"]["quadratic"]
+    assert quadratic["status"] == "certified" and quadratic["property"] == "GES"
+    assert Fraction(quadratic["certificate"]["r"]) ** 2 >= Fraction(1, 4)  # no faster than the map's true 1/2
 
 
 @pytest.fixture(scope="module")

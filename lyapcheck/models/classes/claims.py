@@ -329,6 +329,9 @@ DISCRETE_BOX_STEIN_SENTENCE = ("every eigenvalue of the map's Jacobian at the fi
                                "exact): the discrete-time map is locally exponentially stable there")
 #: the certificate kinds of a discrete-time map's quadratic and sos_gas (lyapcheck.models.classes.discrete_lyapunov)
 DISCRETE_LYAPUNOV_KINDS = ("discrete_quadratic", "discrete_sos")
+#: the certificate kind of a discrete-time map with functions' quadratic and sos_gas
+#: (lyapcheck.models.classes.map_relations): the same sentences, GES where it states k and r
+DISCRETE_RELATIONS_KIND = "discrete_relations"
 #: the certificate kind of a discrete-time map's roa and candidate (lyapcheck.models.classes.discrete_regions)
 DISCRETE_REGION_KIND = "discrete_sublevel"
 
@@ -346,9 +349,11 @@ def discrete_region_sentence(name: str, level: float) -> str:
 def _stability(name: str, condition: Mapping[str, Any]) -> str:
     cert = condition.get("certificate") or {}
     kind = cert.get("kind")
-    if kind in DISCRETE_LYAPUNOV_KINDS:
-        figures = {key: read_rational(cert[key]) for key in ("k", "r")} if kind == "discrete_quadratic" else None
-        return discrete_lyapunov_sentence(kind, int(cert["degree"]), read_rational(cert["mu"]), figures)
+    if kind in DISCRETE_LYAPUNOV_KINDS or kind == DISCRETE_RELATIONS_KIND:
+        ges = kind == "discrete_quadratic" or (kind == DISCRETE_RELATIONS_KIND and "k" in cert)
+        figures = {key: read_rational(cert[key]) for key in ("k", "r")} if ges else None
+        return discrete_lyapunov_sentence("discrete_quadratic" if ges else "discrete_sos", int(cert["degree"]),
+                                          read_rational(cert["mu"]), figures)
     if kind == DISCRETE_REGION_KIND:
         return discrete_region_sentence(name, _number(condition, "level"))
     if kind in ("sublevel", "quadratic_ball"):

@@ -13,7 +13,7 @@ was not given, ``roa`` once GAS is certified) is the runner's,
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.classes.contexts import MapFunctionsRun, MapRun, SampledRun
@@ -114,6 +114,31 @@ def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Co
     return result
 
 
+def _map_relations(ctx: "MapFunctionsRun", name: "Literal['quadratic', 'sos_gas']", budget: "Budget"
+                   ) -> "ConditionResult":
+    """``quadratic`` or ``sos_gas`` on the recasting's relations, at a point only: over a box the runner says
+    ``not_applicable`` first; a direct call over a box says so too, never a claim proved at the centre alone."""
+    from lyapcheck.models.classes import map_relations
+    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
+    from lyapcheck.results import ConditionResult
+
+    if ctx.box is not None:
+        return ConditionResult(name, "not_applicable", NOT_OVER_BOX)
+    return map_relations.run(ctx.model, name, budget)
+
+
+def quadratic_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A quadratic V of the states with ``V(F) <= (1 - mu) V - W`` on the recasting's relations
+    (:func:`lyapcheck.models.classes.map_relations.run`)."""
+    return _map_relations(ctx, "quadratic", budget)
+
+
+def sos_gas_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A polynomial V of the states of the searched degrees, on the recasting's relations
+    (:func:`lyapcheck.models.classes.map_relations.run`)."""
+    return _map_relations(ctx, "sos_gas", budget)
+
+
 def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A quadratic V's largest level proved by ball arithmetic on the true map
     (:func:`lyapcheck.models.classes.discrete_functions.roa`); over a box, with its parameters as balls
@@ -145,4 +170,5 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
 
 __all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
            "barrier_map", "reach_avoid_map", "sos_bound_map",
-           "linearization_map_functions", "roa_map_functions", "candidate_map_functions", "linearization_sampled"]
+           "linearization_map_functions", "quadratic_map_functions", "sos_gas_map_functions", "roa_map_functions",
+           "candidate_map_functions", "linearization_sampled"]

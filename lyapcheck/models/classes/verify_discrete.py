@@ -131,6 +131,16 @@ def verify_linearization_map_functions(name: str, c: dict[str, Any], check: "Map
     return discrete_functions.verify_linearization(check.model, c["status"], _data(c))
 
 
+def verify_lyapunov_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
+    """``quadratic``, ``sos_gas``: the map and its relations re-derived, the identity re-checked exactly
+    (:func:`lyapcheck.models.classes.map_relations.verify`)."""
+    from lyapcheck.models.classes import map_relations
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return map_relations.verify(check.model, name, _without_nominal_prefix(c))
+
+
 def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
     """``roa``: the ``discrete_interval`` region proved again, cell for cell
     (:func:`lyapcheck.models.classes.discrete_functions.verify_roa`; over a box with its parameters as balls,
@@ -171,4 +181,4 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
 
 __all__ = ["verify_linearization_map", "verify_linearization_map_box", "verify_lyapunov_map", "verify_region_map",
            "verify_safety_map", "verify_bound_map",
-           "verify_linearization_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]
+           "verify_linearization_map_functions", "verify_lyapunov_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]

@@ -1,7 +1,7 @@
 """``verify`` of a discrete-time map with functions (``[model] time = "discrete"`` with ``sin``, ``tanh``,
 ``[networks]``, ...; issue 44, item 1): its recasting as the model text gives it, and each decided condition
 by its class's ``verify_map_functions`` entry (:mod:`lyapcheck.models.classes.discrete_functions`:
-``linearization`` and ``roa``). Called from :func:`lyapcheck.models.surfaces.recast_certify.verify_recast`
+``linearization`` and ``roa``; :mod:`lyapcheck.models.classes.map_relations`: ``quadratic`` and ``sos_gas``). Called from :func:`lyapcheck.models.surfaces.recast_certify.verify_recast`
 (one call site; this module does not import it). Such a map is certified by the one runner,
 :func:`lyapcheck.models.surfaces.certify.certify_model`."""
 
@@ -20,7 +20,8 @@ def verify_map_functions(doc: dict[str, Any], model: "RecastModel", rows: list[R
     """The rest of a map with functions' document: its recasting as the model text gives it, each decided
     claim checked by its class's entry (:func:`lyapcheck.models.classes.registry.verify` with a
     :class:`~lyapcheck.models.classes.contexts.MapFunctionsCheck`: the linearization re-derived, a
-    ``discrete_interval`` region proved again); any other decided claim fails (no check of this map
+    ``discrete_interval`` region proved again, a ``discrete_relations`` identity re-checked on the relations
+    derived again); any other decided claim fails (no check of this map
     re-derives it)."""
     from lyapcheck.models.classes.contexts import MapFunctionsCheck
     from lyapcheck.models.classes.registry import verify
