@@ -1,5 +1,5 @@
 """Discrete-time maps with functions (``[model] time = "discrete"`` with ``sin``, ``tanh``, ``[networks]``, ...;
-issue 44, item 1): ``linearization`` and ``roa``.
+issue 44, item 1): ``linearization``, ``roa`` and ``candidate``.
 
 The map ``x+ = F(x)`` is read by the recasting of continuous loops, applied to its displacement
 ``F(x) - x`` (:meth:`lyapcheck.models.language.modelfile._Reader.recast_map`): the recasting's exact check
@@ -43,7 +43,10 @@ rounding): its largest proved level. Its certificate is the ``roa`` kind with ``
 
 Over a box of parameters (``--box``): :mod:`lyapcheck.models.classes.discrete_functions_box`.
 
-``quadratic`` and ``sos_gas`` on such a map are ``not_applicable`` (one line: :data:`NOT_YET`).
+``quadratic`` and ``sos_gas`` on such a map: :mod:`lyapcheck.models.classes.map_relations` (a V of the states
+on the recasting's relations); a linearization at a kink of the fixed point:
+:mod:`lyapcheck.models.classes.piecewise_linearization`; every other class is ``not_applicable`` (one line:
+:data:`NOT_YET`).
 """
 
 from __future__ import annotations
