@@ -29,6 +29,16 @@ SCREEN_MARGIN: Final = 1e-9
 
 
 
+#: a map's reach_avoid, its steps bound floor(C / eps) tightened after the certificate is found
+#: (lyapcheck.models.classes.discrete_safety.tighten_reach): at most this many solves that minimise C
+#: with eps fixed, eps multiplied by REACH_TIGHTEN_GROWTH after each one that lowered the bound, and
+#: every Gram matrix kept above REACH_TIGHTEN_FLOOR * eps so that the rounded point passes the exact
+#: check. Search only: the exact check decides every certificate
+REACH_TIGHTEN_SOLVES: Final = 4
+REACH_TIGHTEN_GROWTH: Final = Fraction(4)
+REACH_TIGHTEN_FLOOR: Final = 1e-4
+
+
 #: Simulator accuracy contract (relative to the state scale), tested against solve_ivp.
 SIM_REL_TOL: Final = 1e-6
 #: Step budget of one simulated trajectory (steps tried: accepted, rejected or retried at a
@@ -266,6 +276,16 @@ P_BITS: Final = 30
 MAP_LEVEL_GROWTH: Final = Fraction(4)
 MAP_LEVEL_GROWTH_STEPS: Final = 16
 MAP_LEVEL_BISECTIONS: Final = 4
+#: the parts of a box a map with functions' linearization over the box may examine
+#: (lyapcheck.models.classes.discrete_functions_box: one P with A(p)^T P A(p) - P < 0 proved in ball arithmetic
+#: on each part, a part not proved halved at its widest parameter). A count, so the answer is the same on any
+#: machine; a part costs one jet evaluation of the map (milliseconds). Resolution only: every part counted as
+#: proved is proved, and a box reaching an unstable value is never proved however many parts it is cut in
+MAP_BOX_PIECES: Final = 256
+#: values per parameter of the grid whose Jacobians the SDP proposing a P common to a map's box must serve
+#: (lyapcheck.models.classes.discrete_functions_box.common_p; ends included): a proposal only, decided over
+#: the whole box in ball arithmetic
+MAP_BOX_GRID: Final = 5
 #: the integrator steps one trajectory of the ball-arithmetic route's fit of V (and of its simulated check) may take when the
 #: route runs after the SOS route on a polynomial or rational loop (lyapcheck.models.surfaces.ball_roa):
 #: a rational loop's trajectory that runs into a pole crawls towards it step by step (1-state
@@ -290,6 +310,12 @@ TEMPLATE_SOLVES: Final = 4
 #: programs have at most 27 rows (solved in under a second) or 50-55 rows (10-30 s a solve,
 #: none certified: recast-inverted-pendulum-sat, recast-los-heading at degree 4)
 TEMPLATE_GRAM_ROWS: Final = 40
+#: the most variables (states and auxiliaries) of a discrete-time map with functions whose quadratic and
+#: sos_gas derive the recasting's relations (lyapcheck.models.classes.map_relations): a larger map is refused
+#: as too large before any relation is derived. A count, measured: ysa-pendulum's 68 variables (2 x 32 tanh
+#: neurons, sin, cos) take over a minute to shift their 261 relations to the deviations and then stop at
+#: TARGET_LIMIT (1753 monomials in the degree-2 identity); discrete-tanh-map's 3 take under a second
+MAP_RELATIONS_VARIABLES: Final = 24
 #: the solves one level step of the recast V-s iteration (lyapcheck.models.classes.regions.relations_enlarge: a
 #: level's growth and bisection, each level its face reductions) may spend; it replaced a 15 s
 #: wall-clock limit. Calibrated on the tests' pendulum (the route without ball arithmetic): its
@@ -316,3 +342,16 @@ MAX_READ_EXPONENT: Final = 1000
 #: thousandfold per try until ``mu I - P`` is proved positive semidefinite exactly. Speed only: the
 #: check is exact, and Gershgorin's bound ends the tries
 SIZE_MU_ROOM: Final = 1e-9
+#: the margins eps of the piecewise-linear local proof (lyapcheck.models.classes.piecewise_linearization:
+#: the form 2 e'P(A e + B phi) + eps |e|^2, or its map's step form, <= 0 on the kinks' set), tried in turn; P
+#: is normalized by P >= I, so eps is relative to P's smallest eigenvalue
+PIECEWISE_EPSILONS: Final = (Fraction(1, 100), Fraction(1, 10000))
+#: the room the solver is asked to leave (the S-procedure matrix <= -PIECEWISE_ROOM I), so that the rounded
+#: P, lambda, nu still pass the exact check; speed only: a rounding that fails is refused exactly
+PIECEWISE_ROOM: Final = 1e-6
+#: the most nonnegative linear forms (three per abs kink, two per saturation corner) whose products of
+#: every pair enter the S-procedure; with more, only the products within one kink (the LMI's multipliers
+#: grow with the square of the forms: 8 ReLU neurons' 24 forms give 276 products)
+PIECEWISE_PAIR_FORMS: Final = 30
+#: significant bits P, lambda and nu are rounded to before the exact check
+PIECEWISE_BITS: Final = 24

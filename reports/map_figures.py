@@ -320,13 +320,12 @@ def _region_figure(model: "Model | RecastModel", eq: "FloatArray", inside: Seque
         ax.set_ylabel(model.states[0])
         what = "the certified interval on the state's axis, and the iterates of starts at its ends against the step"
     else:
-        u = np.linspace(eq[0] - view[0], eq[0] + view[0], GRID)
-        v = np.linspace(eq[1] - view[1], eq[1] + view[1], GRID)
-        U, W = np.meshgrid(u, v)
-        points = np.zeros((U.size, model.n))
-        points[:, 0], points[:, 1] = U.ravel() - eq[0], W.ravel() - eq[1]
+        from reports.region_slices import plane_points
+
+        U, W, points = plane_points(eq, 0, 1, np.linspace(eq[0] - view[0], eq[0] + view[0], GRID),
+                                    np.linspace(eq[1] - view[1], eq[1] + view[1], GRID))
         for k, ((st, _), p) in enumerate(zip(inside, paths)):
-            gauge = (st.V(points) / st.level).reshape(U.shape)
+            gauge = (st.V(points - eq) / st.level).reshape(U.shape)  # (V of the deviations from the fixed point)
             filled = ax.contourf(U, W, gauge, levels=[-np.inf, 1.0], colors=[colours[k % 2]], alpha=0.2)
             filled.set_gid(f"certified-set-{st.cls}")
             ax.contour(U, W, gauge, levels=[1.0], colors=[colours[k % 2]], linewidths=1.2)

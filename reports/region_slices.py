@@ -54,6 +54,18 @@ def pairs(n: int) -> list[tuple[int, int]]:
     return out[:MAX_SLICES]
 
 
+def plane_points(eq: np.ndarray, i: int, j: int, xs: np.ndarray, ys: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The grid ``xs`` x ``ys`` on the plane of states ``i`` and ``j`` through ``eq`` (every other state at
+    its value in ``eq``): the meshes of the two coordinates (``ij`` indexing, ``len(xs) x len(ys)``) and the
+    grid's points, one a row of all the states. The one slice through a point that the report's figures
+    draw (a continuous loop's panels here, a map's certified region in :mod:`reports.map_figures`)."""
+    mx, my = np.meshgrid(xs, ys, indexing="ij")
+    points = np.tile(np.asarray(eq, dtype=np.float64), (mx.size, 1))
+    points[:, i], points[:, j] = mx.ravel(), my.ravel()
+    return mx, my, points
+
+
 def sized_condition(doc: dict[str, Any]) -> tuple[str, dict[str, Any]] | None:
     """The first certified class of :data:`SIZED` whose certificate has a V and a level."""
     conditions = as_dict(doc.get("conditions"))
@@ -153,16 +165,11 @@ def size_figure(doc: dict[str, Any], model: Any) -> tuple[Figure | None, str]:
     grid = min(SLICE_GRID, int((SLICE_STARTS / len(slices)) ** 0.5))
     for k, (i, j) in enumerate(slices):
         ax = flat[k]
-        gx, gy = (np.linspace(lo[i], hi[i], grid), np.linspace(lo[j], hi[j], grid))
-        X = np.tile(eq, (grid * grid, 1))
-        mx, my = np.meshgrid(gx, gy, indexing="ij")
-        X[:, i], X[:, j] = mx.ravel(), my.ravel()
+        X = plane_points(eq, i, j, np.linspace(lo[i], hi[i], grid), np.linspace(lo[j], hi[j], grid))[2]
         runs = simulate(model, X, t_end=t_end, half_widths=half)
         converged = np.array([r.outcome == "converged" for r in runs])
-        cx, cy = (np.linspace(lo[i], hi[i], CONTOUR_GRID), np.linspace(lo[j], hi[j], CONTOUR_GRID))
-        C = np.tile(eq, (CONTOUR_GRID * CONTOUR_GRID, 1))
-        ux, uy = np.meshgrid(cx, cy, indexing="ij")
-        C[:, i], C[:, j] = ux.ravel(), uy.ravel()
+        ux, uy, C = plane_points(eq, i, j, np.linspace(lo[i], hi[i], CONTOUR_GRID),
+                                 np.linspace(lo[j], hi[j], CONTOUR_GRID))
         G = gauge(C - eq).reshape(CONTOUR_GRID, CONTOUR_GRID)
         ax.contourf(ux, uy, G, levels=[-1e300, 1.0], colors=["#1a7f37"], alpha=0.25)
         ax.contour(ux, uy, G, levels=[1.0], colors=["#1a7f37"], linewidths=1.2)
@@ -199,4 +206,5 @@ def size_figure(doc: dict[str, Any], model: Any) -> tuple[Figure | None, str]:
                                               "converged": counts, "class": name}), ""
 
 
-__all__ = ["CONTOUR_GRID", "MAX_SLICES", "SLICE_GRID", "SLICE_STARTS", "pairs", "size_figure", "sized_condition"]
+__all__ = ["CONTOUR_GRID", "MAX_SLICES", "SLICE_GRID", "SLICE_STARTS", "pairs", "plane_points", "size_figure",
+           "sized_condition"]

@@ -58,8 +58,14 @@ What differs between the kinds is how the loop is simulated and V evaluated in f
   map's ``|e_k| <= k |e_0| r^k``. ``barrier`` and ``reach_avoid`` on a map (:func:`check_sets`) read the
   iterates of starts in the initial set: no iterate in the unsafe set; some iterate ``e_k`` with ``k <=``
   the certified ``reach_steps_bound`` in the goal and none unsafe before it (:func:`map_reach_avoid`:
-  steps are counted exactly), iterated on to the bound when :data:`MAP_STEPS` did not tell.
-  ``sos_bound`` is not taken on a map, never certified on it;
+  steps are counted exactly), iterated on to the bound when :data:`MAP_STEPS` did not tell. A map's
+  ``sos_bound`` (:meth:`_MapLoop.check_bound`) is iterated under disturbance sequences within its bounds
+  (uniform random, bang-bang, each vertex held constant; :func:`map_disturbances`) from the fixed point and
+  random starts: each output stays within the certificate's envelope ``bound^2 + lam^k max(V(e_0) - 1, 0)``
+  at every step, and ``sim_worst_<y>`` is the tail sup of ``|y - y_eq|``. Over a box (``mode = "boxes"``)
+  the box's corners and random points are iterated alike (a box's V is one V of the states), and a
+  ``linearization`` over the box (one ``P`` for every Jacobian of the box) is checked along the iterates of
+  the map's Jacobian at each of them (:meth:`_MapLoop.check_box_linearization`);
 
 * a polynomial loop is integrated on its own field, over :func:`lyapcheck.models.engines.trajectories.horizon`
   of its linearization; a V is the certificate's exact polynomial (over a box, at the point's own
@@ -120,6 +126,13 @@ MAP_STEPS: Final = 400
 #: on to its certified ``reach_steps_bound``, at most this many steps (beyond it a late start is not seen:
 #: a figure missed, never a false alarm)
 MAP_REACH_MAX_STEPS: Final = 20_000
+#: a map's ``sos_bound``: the steps of the tail whose sup of each output is ``sim_worst_<y>`` (the last ones
+#: of :data:`MAP_STEPS`); the certified envelope is checked at every step
+MAP_BOUND_TAIL_STEPS: Final = 200
+#: a map's linearization over a box (``method`` ``box_stein``,
+#: :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_STEIN_METHOD`): its quadratic ``V = e^T P e`` is
+#: checked along this many iterates of the map's Jacobian at each checked parameter point
+MAP_LINEAR_STEPS: Final = 60
 #: the classes whose V is simulated (the global ones, then the region), and those simulated from the
 #: initial set (:func:`check_sets`)
 GLOBAL_CLASSES: Final = ("quadratic", "sos_gas")
@@ -230,7 +243,7 @@ def _loop(model: Any, doc: Mapping[str, Any], point: Mapping[str, Fraction]) -> 
     from lyapcheck.models.loop.discrete import is_discrete
 
     if is_discrete(model):  # a map is iterated, never integrated as a field
-        return _MapLoop(model, point)
+        return _MapLoop(model, point, doc)
     return _PolynomialLoop(model, doc, point) if isinstance(model, Model) else _FunctionsLoop(model)
 
 
@@ -308,6 +321,11 @@ def _check(loop: SimulatedLoop, doc: Mapping[str, Any], where: str, streams: tup
     check_sets(loop.model, doc, where, safety, starts, loop.runs(), out)
     if "sos_bound" in conditions:
         loop.check_bound(conditions["sos_bound"], where, bound, starts, worst_case, out)
+    if isinstance(loop, _MapLoop) and "linearization" in conditions:
+        from lyapcheck.models.classes.discrete_lyapunov import BOX_STEIN_METHOD
+
+        if (conditions["linearization"].get("certificate") or {}).get("method") == BOX_STEIN_METHOD:
+            loop.check_box_linearization(conditions["linearization"], where, lyapunov, starts, out)
 
 
 def _certified_set(loop: SimulatedLoop, cls: str, cond: Mapping[str, Any]) -> _Set:
@@ -513,11 +531,15 @@ class _MapLoop:
 
     pooled = True
 
-    def __init__(self, model: Model | RecastModel, point: Mapping[str, Fraction]) -> None:
+    def __init__(self, model: Model | RecastModel, point: Mapping[str, Fraction],
+                 doc: Mapping[str, Any] | None = None) -> None:
         from lyapcheck.models.language.modelfile import with_parameters
 
         self.model = with_parameters(model, dict(point)) if isinstance(model, Model) else model
         self.point = point
+        #: a certificate's variables: the states, then a box's parameters (at exponent 0 in a map's V: one V
+        #: for every value of the box)
+        self.names = list(model.states) + [str(k) for k in (doc or {}).get("box") or {}]
         self.scales = np.ones(model.n)
         self.eq = np.array([float(v) for v in self.model.equilibrium])
 
@@ -536,7 +558,8 @@ class _MapLoop:
                 return np.asarray(np.einsum("ki,ij,kj->k", e, P, e), dtype=np.float64)
             return quadratic, quadratic, ()
         n = self.model.n
-        V = certificate_function(cert["V"], list(self.model.states), n, {}, [Fraction(1)] * n)
+        V = certificate_function(cert["V"], self.names, n, {k: self.point[k] for k in self.names[n:]},
+                                 [Fraction(1)] * n)
         return V, V, ()
 
     def start(self, u: np.ndarray) -> np.ndarray:
@@ -595,7 +618,195 @@ class _MapLoop:
 
     def check_bound(self, cond: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int,
                     worst_case: bool, out: CrossCheck) -> None:
-        """``sos_bound`` is not taken on a map (never certified there): nothing to check."""
+        """A map's certified ``sos_bound`` (``limsup_k |y_k - y_eq| <= bound`` for every disturbance sequence
+        within its bounds) against the map iterated :data:`MAP_STEPS` steps, always (iterating is cheap:
+        ``worst_case`` is the continuous loop's search), from the fixed point and ``starts`` uniform points of
+        :meth:`global_box`, under each disturbance policy of :func:`map_disturbances` (uniform random,
+        bang-bang at the bounds, each vertex held constant). Along every sequence each output must stay within
+        the certified envelope ``|y_k - y_eq|^2 <= bound^2 + lam^k max(V(e_0) - 1, 0)`` (the certificate's step
+        identity by induction; ``bound^2`` alone on its tail when its ``V`` or ``lam`` cannot be read), up to
+        :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL`; ``sim_worst_<y>`` is the largest
+        ``|y_k - y_eq|`` over the last :data:`MAP_BOUND_TAIL_STEPS` steps."""
+        from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
+
+        if not isinstance(self.model, Model) or not cond.get("bounds"):
+            return  # (a map with functions takes no sos_bound)
+        model = self.model
+        bounds = np.array([float(b) for b in model.disturbances.values()])
+        lo, hi = self.global_box()
+        X0 = np.vstack([self.eq[None, :], lo + (hi - lo) * rng.random((max(starts, 1), model.n))])
+        policies = map_disturbances(bounds, len(X0), MAP_STEPS, rng)
+        X = np.tile(X0, (len(policies), 1))
+        D = np.concatenate(policies, axis=1)  # (steps, rows, m)
+        xs = iterate_disturbed(model, X, D)
+        out.trajectories += len(X)
+        ys = map_outputs(model, xs)
+        certs = (cond.get("certificate") or {}).get("outputs") or {}
+        references = cond.get("bounds_reference") or {}
+        for name, stated in cond["bounds"].items():
+            if name not in ys:
+                continue
+            y = np.abs(ys[name] - float(references.get(name) or 0.0))  # (rows, steps + 1)
+            envelope = _bound_envelope(certs.get(name), float(stated), xs - self.eq, list(model.states),
+                                       list(model.disturbances))
+            tail = y[:, -MAP_BOUND_TAIL_STEPS:]
+            finite = np.where(np.isfinite(tail), tail, -np.inf)
+            worst = float(np.max(finite)) if finite.size else -math.inf
+            if math.isfinite(worst):
+                out.sim_worst[name] = max(out.sim_worst.get(name, -math.inf), worst)
+            with np.errstate(invalid="ignore"):
+                excess = np.where(np.isfinite(y) & np.isfinite(envelope),
+                                  y - envelope * (1 + TRAJECTORY_CHECK_REL_TOL), -1.0)
+            if np.any(excess > 0):
+                r, k = (int(i) for i in np.unravel_index(int(np.argmax(excess)), excess.shape))
+                start = ", ".join(f"{s} = {v:.6g}" for s, v in zip(model.states, X[r]))
+                policy = MAP_POLICY_NAMES[min(r // len(X0), len(MAP_POLICY_NAMES) - 1)]
+                out.violations.append(f"sos_bound at {where}: under a disturbance sequence within its bounds "
+                                      f"({policy}) "
+                                      f"|{name} - {name}_eq| reached {y[r, k]:.6g} at step {k} from {start}, above "
+                                      f"the certified {float(stated):.6g}" + (
+                                          f" (its envelope there {envelope[r, k]:.6g})"
+                                          if envelope[r, k] > float(stated) * (1 + 1e-9) else ""))
+
+    def check_box_linearization(self, cond: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int,
+                                out: CrossCheck) -> None:
+        """A map's ``linearization`` over a box (one ``V = e^T P e`` with ``V(A e) <= (1 - mu) V(e)`` for the
+        Jacobian ``A`` of every value of the box) at this parameter point: the Jacobian of the map here
+        (exact, :func:`lyapcheck.models.classes.linearization.jacobian`, then floats) iterated
+        :data:`MAP_LINEAR_STEPS` steps from ``starts`` random directions; ``V`` may never rise from one step to
+        the next nor leave ``(1 - mu)^k V(e_0)``, as a global V's check (the same figures and messages)."""
+        from lyapcheck.models.classes.linearization import jacobian
+        from lyapcheck.models.engines.crosscheck import check_global
+        from lyapcheck.models.loop.discrete import shifted_map
+
+        if not isinstance(self.model, Model):
+            return
+        cert = cond.get("certificate") or {}
+        n = self.model.n
+        try:
+            P = _stein_matrix(cert["gram_V"], n)
+            mu = float(Fraction(str(cert["mu"])))
+        except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+            out.violations.append(f"linearization at {where}: its certificate cannot be read ({exc})")
+            return
+        A = np.array([[float(v) for v in row] for row in jacobian(shifted_map(self.model))], dtype=np.float64)
+        e = rng.standard_normal((max(starts, 1), n))
+        path = [e]
+        for _ in range(MAP_LINEAR_STEPS):
+            path.append(path[-1] @ A.T)
+        es = np.stack(path, axis=1)  # (starts, steps + 1, n)
+        V = np.einsum("rki,ij,rkj->rk", es, P, es)
+        steps = np.arange(MAP_LINEAR_STEPS + 1, dtype=np.float64)
+        rate = _per_step_rate(1 - mu)
+        glob = check_global([(steps, v) for v in V], ["converged"] * len(V), rate)
+        out.trajectories += len(V)
+        out.worse("worst_rise", glob.worst_rise)
+        if rate > 0:
+            out.worse("worst_envelope", glob.worst_envelope)
+        if not glob.ok:
+            out.violations.append(f"linearization at {where}: along the iterates of the map's Jacobian there "
+                                  f"V = e^T P e rose by {glob.worst_rise:.3g} and exceeded V(0) exp(-{rate:.4g} k) by "
+                                  f"{glob.worst_envelope:.3g} of V(0)")
+
+
+#: the disturbance policies of a map's ``sos_bound`` cross-check (:func:`map_disturbances`), in order
+MAP_POLICY_NAMES: Final = ("uniform random", "bang-bang at the bounds", "constant at a vertex of the bounds")
+
+
+def map_disturbances(bounds: np.ndarray, rows: int, steps: int, rng: np.random.Generator) -> list[np.ndarray]:
+    """Disturbance sequences within ``|d_j| <= bounds_j`` for ``rows`` starts, each ``(steps, rows, m)``: uniform
+    random, bang-bang (each step's sign random, at the bound), then each vertex of the bounds' box held constant
+    (the first :data:`MAX_VERTICES` in sign order)."""
+    from itertools import islice, product
+
+    m = bounds.size
+    out = [rng.uniform(-1.0, 1.0, size=(steps, rows, m)) * bounds,
+           rng.choice([-1.0, 1.0], size=(steps, rows, m)) * bounds]
+    for signs in islice(product((-1.0, 1.0), repeat=m), MAX_VERTICES):
+        out.append(np.broadcast_to(np.array(signs) * bounds, (steps, rows, m)))
+    return out
+
+
+def iterate_disturbed(model: Model, starts: np.ndarray, disturbances: np.ndarray) -> np.ndarray:
+    """The iterates ``x_{k+1} = f(x_k, d_k)`` of a polynomial (rational) map with ``d_k = disturbances[k]``
+    (``(steps, rows, m)``): ``(rows, steps + 1, n)``, the start first. No escape box (a bound holds from every
+    start); a row that overflows stays non-finite, which the checks skip."""
+    from lyapcheck.models.language.modelfile import field_at
+    from lyapcheck.models.surfaces.simulate import CompiledPolys
+
+    rhs = field_at(model)
+    polys = CompiledPolys(model.state_ring, [r.numerator for r in rhs] + [r.denominator for r in rhs])
+    n = model.n
+    out = np.empty((starts.shape[0], disturbances.shape[0] + 1, n))
+    x = np.array(starts, dtype=np.float64)
+    out[:, 0] = x
+    with np.errstate(all="ignore"):
+        for k in range(disturbances.shape[0]):
+            values = polys(np.concatenate([x, disturbances[k]], axis=1))
+            x = values[:, :n] / values[:, n:]
+            out[:, k + 1] = x
+    return out
+
+
+def map_outputs(model: Model, xs: np.ndarray) -> dict[str, np.ndarray]:
+    """Each output of a polynomial map at the iterates ``xs`` (``(rows, steps + 1, n)``), its parameters set
+    (an output never reads a disturbance): ``{name: (rows, steps + 1)}``."""
+    from lyapcheck.models.surfaces.simulate import CompiledPolys
+    from lyapcheck.sos.polynomials import Ring
+
+    ring, states = model.ring, Ring(model.states)
+    flat = xs.reshape(-1, model.n)
+    out = {}
+    with np.errstate(all="ignore"):
+        for name, expr in model.outputs.items():
+            num = ring.restrict(ring.substitute(expr.numerator, model.parameters), states)
+            den = ring.restrict(ring.substitute(expr.denominator, model.parameters), states)
+            values = CompiledPolys(states, [num, den])(np.where(np.isfinite(flat), flat, np.nan))
+            out[name] = (values[:, 0] / values[:, 1]).reshape(xs.shape[:2])
+    return out
+
+
+def _bound_envelope(cert: Mapping[str, Any] | None, bound: float, es: np.ndarray, states: list[str],
+                    disturbances: list[str]) -> np.ndarray:
+    """The certified envelope of ``|y_k - y_eq|`` along the deviations ``es`` (``(rows, steps + 1, n)``):
+    ``sqrt(bound^2 + lam^k max(V(e_0) - 1, 0))`` with the output's certificate ``V`` and ``lam``; when they
+    cannot be read, ``bound`` on the last :data:`MAP_BOUND_TAIL_STEPS` steps and no limit before."""
+    from lyapcheck.models.engines.crosscheck import certificate_function
+
+    rows, count, n = es.shape
+    tail_only = np.full((rows, count), np.inf)
+    tail_only[:, -MAP_BOUND_TAIL_STEPS:] = bound
+    if cert is None:
+        return tail_only
+    try:
+        lam = float(Fraction(str(cert["lam"])))
+        V = certificate_function(cert["V"], states + disturbances, n, {d: Fraction(0) for d in disturbances},
+                                 [Fraction(1)] * n)
+        excess = np.maximum(np.asarray(V(es[:, 0]), dtype=np.float64) - 1.0, 0.0)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return tail_only
+    if not 0 <= lam < 1 or not np.all(np.isfinite(excess)):  # (no induction to read: the claim on its tail alone)
+        return tail_only
+    with np.errstate(over="ignore"):
+        return np.sqrt(bound ** 2 + excess[:, None] * lam ** np.arange(count, dtype=np.float64)[None, :])
+
+
+def _stein_matrix(gram: Mapping[str, Any], n: int) -> np.ndarray:
+    """``P`` of a quadratic ``V = e^T P e`` given as a Gram matrix over the states' linear monomials (a box's
+    parameters at exponent 0); ValueError otherwise."""
+    basis = gram["basis"]
+    Q = np.array([[float(Fraction(str(v))) for v in row] for row in gram["Q"]], dtype=np.float64)
+    index = []
+    for mono in basis:
+        exps = [int(e) for e in mono]
+        if sum(exps[:n]) != 1 or any(exps[n:]) or len(exps) < n:
+            raise ValueError(f"the monomial {mono} of V's basis is not a state")
+        index.append(exps.index(1))
+    P = np.zeros((n, n))
+    for a, i in enumerate(index):
+        for b, j in enumerate(index):
+            P[i, j] += Q[a, b]
+    return P
 
 
 class _FunctionsLoop:

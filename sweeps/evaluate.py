@@ -46,7 +46,10 @@ uninterrupted one).
   :func:`sweeps.crosscheck.cross_check_point`.
 * A box: first the linearization, exactly, at the box's corners (milliseconds): an unstable corner
   proves that no stability class can certify the box (its status is ``refuted``, and the stability
-  classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box.
+  classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box. A
+  certified box of a polynomial discrete-time map (the classes of
+  :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`) is cross-checked by iterating the map at
+  each corner of the box, then at its random points.
   A box of a loop with functions: ``certify_model`` over the box on the model read at its centre
   (what ``lyapcheck certify FILE --box`` runs), its corners checked only where the linearization over
   the box is refuted (whether to split it), cross-checked at random parameter points; either by
@@ -609,6 +612,8 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
             document = build_document(result)
             out["certificate"][j] = certificate_json(document)
             points = box.points(spec.boxes.cross_check_points, box_seed(spec.boxes.seed, box_id))
+            if spec.discrete:  # a map is iterated (milliseconds a point): at every corner of the box too
+                points = box.corners() + points
             if points:
                 from sweeps.crosscheck import cross_check_box
 

@@ -407,15 +407,17 @@ def point_variables(classes: Sequence[str], outputs: Sequence[str], discrete: bo
     return tuple(_model_common(classes, outputs, "point", discrete))
 
 
-def model_box_variables(dims: Sequence[str], classes: Sequence[str], outputs: Sequence[str]) -> tuple[Variable, ...]:
-    """Every variable of a boxes store: the box's edges and place in the tree, then the common ones."""
+def model_box_variables(dims: Sequence[str], classes: Sequence[str], outputs: Sequence[str],
+                        discrete: bool = False) -> tuple[Variable, ...]:
+    """Every variable of a boxes store: the box's edges and place in the tree, then the common ones
+    (``discrete``: of a discrete-time map, its figures per step, :func:`class_figures`)."""
     f8, i16, i32 = np.dtype("float64"), np.dtype("int16"), np.dtype("int32")
     out = edge_variables(dims)
     out += [Variable("level", i16, -1, "refinement depth (0: a cell of the axes' grid)"),
             Variable("parent", i32, -1, "row of the box this one is a half of (-1: none)"),
             Variable("unstable_corners", np.dtype("int8"), -1, "corners of the box where the equilibrium is proved "
                      "unstable (linearization refuted, exactly); -1 not checked")]
-    return tuple(out + _model_common(classes, outputs, "box"))
+    return tuple(out + _model_common(classes, outputs, "box", discrete))
 
 
 def is_model_dataset(ds: Any) -> bool:
@@ -451,7 +453,7 @@ def check_model_dataset(ds: Any, source: str) -> None:
     if ds.attrs["mode"] == BOXES_MODE:
         if tuple(map(str, ds.dims)) != (BOX_DIM,):
             raise bad(f"dimensions {list(map(str, ds.dims))}, expected ['{BOX_DIM}']")
-        variables = model_box_variables(dims, classes, outputs)
+        variables = model_box_variables(dims, classes, outputs, is_map_store(ds))
         expected: tuple[str, ...] = (BOX_DIM,)
     else:
         if set(map(str, ds.dims)) != set(dims):

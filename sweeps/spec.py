@@ -58,8 +58,8 @@ with ``model`` in its ``[sweep]`` table::
     mode = "boxes"                 # "points" (default): a grid of points; "boxes": proved boxes
     classes = ["roa"]              # points: any of linearization, quadratic, sos_gas, roa, sos_bound;
                                    # boxes: linearization (LES for every value of the box), quadratic,
-                                   # sos_gas, roa, sos_bound (default: every one
-                                   # that applies; sos_bound needs [disturbances] in the model)
+                                   # sos_gas, roa, sos_bound (a map: linearization, quadratic, sos_gas;
+                                   # default: every one that applies; sos_bound needs [disturbances])
     chunk_size = 4                 # points (or at most this many boxes) per unit of work
 
     [[sweep.axes]]                 # one to three axes, each a parameter declared in the model
@@ -97,10 +97,16 @@ instability as a polynomial model's box's (:func:`sweeps.evaluate.unstable_corne
 unstable, the stability classes are stored ``refuted``, not run); an undecided box is split.
 
 A discrete-time map (``[model] time = "discrete"``, polynomial or with functions) is swept point by point
-only: its classes are those with a discrete-time condition (:func:`map_classes`; a class a map does not take
-is refused by the spec, in one line), each point certified as a map by ``certify_model`` and cross-checked by
-iterating it (:class:`sweeps.crosscheck._MapLoop`, never integrated); ``mode = "boxes"`` is refused in one
-line (a box's corner checks and certificates read ``[dynamics]`` as a field).
+with the classes that have a discrete-time condition (:func:`map_classes`, ``sos_bound`` included on a
+polynomial map; a class a map does not take is refused by the spec, in one line), each point certified as a
+map by ``certify_model`` and cross-checked by iterating it (:class:`sweeps.crosscheck._MapLoop`, never
+integrated; ``sos_bound`` under random, bang-bang and constant disturbances within its bounds). A polynomial
+map is also swept box by box (``mode = "boxes"``) with the classes ``certify --box`` proves over a box of a map
+(:func:`map_box_classes`: ``linearization``, ``quadratic``, ``sos_gas``; any other is refused in one line naming
+``sweep.classes``): the same tree, store and corner checks as a polynomial loop's boxes (a corner's
+linearization is the map's: an eigenvalue of modulus > 1 refutes the box), each certified box iterated at its
+corners and random points. ``mode = "boxes"`` on a map with functions is refused in one line (its recasting is
+read at a point: ``certify --box`` refuses it too).
 
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks
@@ -757,7 +763,7 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
     polynomial = isinstance(model, Model)
     allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES  # (the same on every loop)
     if is_discrete(model):  # a map: only the classes with a discrete-time condition (every other not_applicable)
-        allowed = tuple(c for c in allowed if c in map_classes(model))
+        allowed = tuple(c for c in allowed if c in (map_classes(model) if mode == "points" else map_box_classes()))
     # (any loop: barrier with its sets only, reach_avoid with its goal too; a class the model cannot ask is
     # not picked by default, and naming it is refused here rather than at the first point)
     if not ("initial" in model.sets and "unsafe" in model.sets):
@@ -772,7 +778,9 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         others = ""
         if is_discrete(model):
             kind = " of a discrete-time map" + ("" if polynomial else " with functions")
-            others = ' (the other classes are not taken yet for a discrete-time map ([model] time = "discrete"))'
+            others = (' (a box sweep of a discrete-time map ([model] time = "discrete") takes these only: the '
+                      "others' cross-check over a box is not built)" if mode == "boxes" else
+                      ' (the other classes are not taken yet for a discrete-time map ([model] time = "discrete"))')
         raise InvalidParameter("sweep.classes", f"in a {mode} sweep{kind}, a list of distinct names from "
                                + ", ".join(repr(c) for c in allowed) + others, raw)
     if "sos_bound" in raw and not disturbances:
@@ -782,18 +790,28 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
 
 
 def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
-    """The classes a sweep of a discrete-time map takes: those with a discrete-time condition
+    """The classes a point sweep of a discrete-time map takes: those with a discrete-time condition
     (:data:`lyapcheck.models.classes.registry.DISCRETE`; ``barrier`` and ``reach_avoid`` cross-checked by
-    iterating, :func:`sweeps.crosscheck.check_sets`), on a map with functions
-    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS`, but :data:`MAP_UNSWEPT`."""
-    taken = model_classes.DISCRETE if isinstance(model, Model) else model_classes.MAP_FUNCTIONS
-    return tuple(c for c in taken if c not in MAP_UNSWEPT)
+    iterating, :func:`sweeps.crosscheck.check_sets`; ``sos_bound`` by iterating under disturbances,
+    :meth:`sweeps.crosscheck._MapLoop.check_bound`), on a map with functions
+    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS`."""
+    return model_classes.DISCRETE if isinstance(model, Model) else model_classes.MAP_FUNCTIONS
 
 
-#: classes a map takes at a point that a sweep of a map does not take yet: a map's sos_bound has no
-#: cross-check by iterating under disturbances (sweeps.crosscheck._MapLoop.check_bound), and a sweep
-#: cross-checks every certified point
-MAP_UNSWEPT: Final = ("sos_bound",)
+#: the classes a box sweep of a polynomial map takes: those ``certify --box`` proves over a box of a map whose
+#: certified boxes the sweep can cross-check by iterating (a global V that never rises, a Stein ``P`` along the
+#: Jacobian's iterates); a map's ``roa``, ``candidate`` and ``sos_bound`` are proved over a box by ``certify
+#: --box`` too, but a box sweep's cross-check of a set or a bound over a box is not built
+MAP_BOX_SWEPT: Final = ("linearization", "quadratic", "sos_gas")
+
+
+def map_box_classes() -> tuple[str, ...]:
+    """The classes a box sweep of a polynomial map takes (:data:`MAP_BOX_SWEPT`, each among
+    :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`: one V, or one Stein ``P``, for every value
+    of the box), in :data:`MODEL_BOX_CLASSES` order; every other class of a map is not swept over boxes."""
+    from lyapcheck.models.classes.discrete_lyapunov import BOX_CLASSES
+
+    return tuple(c for c in MODEL_BOX_CLASSES if c in MAP_BOX_SWEPT and c in BOX_CLASSES)
 
 
 def _model_simulation(raw: object) -> ModelSimulation:
@@ -928,8 +946,10 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     mode = sweep.get("mode", "points")
     if mode not in _MODES:
         raise InvalidParameter("sweep.mode", "one of " + ", ".join(repr(m) for m in _MODES), mode)
-    if mode == "boxes":  # a box's corner checks and certificates read [dynamics] as a field: not on a map yet
-        refuse(declared, "sweep.mode", 'boxes are not taken on maps yet; mode = "points" sweeps a map point by point')
+    if mode == "boxes" and not isinstance(declared, Model):  # (a map with functions over boxes: not built)
+        refuse(declared, "sweep.mode", "boxes are not taken on a map with functions (certify --box proves its "
+               "linearization and roa over a box, but their cross-check by iterating over a box is not built); "
+               'mode = "points" sweeps it point by point')
     raw_axes = sweep.get("axes")
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",
@@ -978,5 +998,5 @@ def cached_model_spec(worker_text: str) -> ModelSweepSpec:
 __all__ = ["Axis", "SimulationSettings", "Refinement", "BoxSettings", "SweepSpec", "parse_spec", "load_spec",
            "cached_spec", "read_spec_text", "axis_values", "ModelAxis", "ModelSimulation", "ModelSweepSpec",
            "parse_model_spec", "load_model_spec", "cached_model_spec", "initial_cells", "window_box", "exact_decimal",
-           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "initial_boxes",
+           "MODEL_POINT_CLASSES", "MODEL_BOX_CLASSES", "initial_boxes", "map_classes", "map_box_classes",
            "relative_width", "split_cell", "Cell"]

@@ -440,7 +440,7 @@ class ModelBoxStore(_ModelFileStore, TreeStore):
 
     @classmethod
     def variables_of(cls, spec: Any) -> tuple[Variable, ...]:
-        return model_box_variables(spec.dims, spec.classes, spec.outputs)
+        return model_box_variables(spec.dims, spec.classes, spec.outputs, spec.discrete)
 
 
 def open_model_store(path: str | Path, spec: ModelSweepSpec) -> ModelPointStore | ModelBoxStore:

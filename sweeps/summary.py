@@ -363,7 +363,8 @@ def summarize_dataset(ds: Any) -> ModelSweepSummary:
     model = {"name": str(ds.attrs.get("model_name", "")), "file": str(ds.attrs.get("model_file", "")),
              "sha256": str(ds.attrs.get("model_sha256", "")), "time": "discrete" if is_map_store(ds) else "continuous"}
     if ds.attrs["mode"] == BOXES_MODE:
-        data = {v.name: np.asarray(ds[v.name].values) for v in model_box_variables(dims, classes, outputs)}
+        data = {v.name: np.asarray(ds[v.name].values)
+                for v in model_box_variables(dims, classes, outputs, model["time"] == "discrete")}
         window = stored_window(ds, dims, data)
         return summarize_model_arrays(BOXES_MODE, dims, scales, classes, outputs, data, window=window, model=model,
                                 total=int(np.sum(data["done"])))

@@ -207,44 +207,45 @@ _BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
 REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
             | cells(("discrete",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep points", "sweep boxes"))),
+                    tuple(s for s in CLASS_SURFACES if s != "sweep boxes")),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
-    Refusal(cells(KINDS, ("candidate",), ("--box",)) | cells(("box",), ("candidate",), _BOX_KIND),
+    Refusal(cells(tuple(k for k in KINDS if k != "discrete"), ("candidate",), ("--box",))
+            | cells(("box",), ("candidate",), _BOX_KIND),
             ("not over a --box", "not over a box"),
             "Your V is checked at one parameter point; over a box it would have to decrease for every value of "
-            "the box, a search of box multipliers for a fixed V that is not built (a gap, not a theorem)."),
+            "the box, a search of box multipliers for a fixed V that is built for a polynomial map only (a gap, "
+            "not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("discrete",), CLASSES[:6], ("sweep boxes",))
-            | cells(("discrete",), ("sos_bound",), ("sweep points",))
-            | cells(("discrete",), ("barrier", "reach_avoid"), ("sweep boxes",)),
-            ("not yet decided for discrete-time maps", 'not taken yet for a discrete-time map ([model] time = '
-             '"discrete")'),
-            "A discrete-time map (`[model] time = \"discrete\"`) takes `linearization` (every eigenvalue of the map's "
-            "Jacobian of modulus < 1, exact), `quadratic` and `sos_gas` (`V(F(e)) - V(e) <= -mu V(e)`, exact), `roa` "
-            "and `candidate` (a set `{V <= c}` on which `V(F(e)) <= V(e) - eps |e|^2`, exact), `barrier` (`B(F(x)) <= "
-            "lambda B(x)`, exact), `reach_avoid` (`V(F(x)) <= V(x) - eps` outside the goal, exact) and, with "
-            "`[disturbances]`, `sos_bound` (`V(F(x, d)) <= lam V(x) + 1 - lam`, exact) at a point; reports and point "
-            "sweeps iterate the map (a point sweep's cross-check of `barrier` and `reach_avoid` iterates from the "
-            "initial set; `sos_bound`'s cross-check by iterating under disturbances is not built, so a point sweep "
-            "does not take it), while box sweeps, which read `[dynamics]` as a field, refuse a map in one line (a "
-            "gap, not a theorem)."),
-    Refusal(cells(("discrete",), ("roa", "sos_bound", "barrier", "reach_avoid"), ("--box",)),
-            ("decided at one parameter value only on a map",),
-            "Over a `--box` a map takes `linearization` (one Stein `P` for every Jacobian of the box), `quadratic` "
-            "and `sos_gas` (one `V` for every value, box multipliers, exact); its region, bound and safety classes "
-            "are decided at a point only (their conditions over a box are not built: a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "candidate", "sos_bound", "barrier", "reach_avoid"),
-                  CLASS_SURFACES)
-            | cells(("map_functions",), ("linearization", "roa"), ("--box", "sweep boxes")),
+    Refusal(cells(("discrete",), ("barrier", "reach_avoid"), ("--box",))
+            | cells(("discrete",), ("roa", "sos_bound", "barrier", "reach_avoid"), ("sweep boxes",)),
+            ("decided at one parameter value only on a map", "cross-check over a box is not built"),
+            "A discrete-time map (`[model] time = \"discrete\"`) takes every class at a point, each checked "
+            "exactly, and reports and point sweeps iterate it. Over a `--box` it takes `linearization` (one Stein "
+            "`P` for every Jacobian of the box, or an unstable corner), `quadratic` and `sos_gas` (one `V` for every "
+            "value, box multipliers, exact), `roa`, `candidate` and `sos_bound` (one set or one bound for every "
+            "value); its safety classes are decided at a point only. A box sweep takes `linearization`, "
+            "`quadratic` and `sos_gas`, each box iterated at its corners and random points; the cross-check of a "
+            "set or a bound over a box is not built (a gap, not a theorem)."),
+    Refusal(cells(("map_functions",), ("sos_bound", "barrier", "reach_avoid"), CLASS_SURFACES)
+            | cells(("map_functions",), ("linearization", "quadratic", "sos_gas", "roa", "candidate"),
+                    ("sweep boxes",)),
             ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
              'time = "discrete")'),
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
-            "then the exact discrete-time test) and `roa` (ball arithmetic on the true map) at a point; every other "
-            "class is `not_applicable` until it is built for such a map; reports and point sweeps take it as a "
-            "polynomial map, and `--box` and box sweeps refuse it in one line (a gap, not a theorem)."),
+            "then the exact discrete-time test), `quadratic` and `sos_gas` (a V of the states with `V(F) <= (1 - mu) "
+            "V - W` on the recasting's relations, exact), `roa` (ball arithmetic on the true map) and `candidate` "
+            "(your quadratic V, the same route) at a point, and `linearization` and `roa` over a `--box` (ball "
+            "arithmetic with the parameters as balls); every other class is `not_applicable` until it is built for "
+            "such a map; reports and point sweeps take it as a polynomial map, and box sweeps refuse it in one line "
+            "(a gap, not a theorem)."),
+    Refusal(cells(("map_functions",), ("quadratic", "sos_gas"), ("--box",)),
+            ("over a box a discrete-time map with functions takes linearization and roa only",),
+            "Over a `--box` a map with functions takes `linearization` and `roa` only; its `quadratic` and `sos_gas` "
+            "are decided at a point (one V for every value of the box, the parameters among the relations' "
+            "variables, is not built: a gap, not a theorem)."),
 )
 
 #: loop surfaces refused today, with the refusal's words: (kinds, the words)
@@ -312,19 +313,25 @@ def certify_cells(directory: Path, kind: str, *, box: bool) -> dict[str, tuple[O
     (the certificate then feeds ``verify`` and ``report`` once); where that run is refused in one line,
     each class is run alone, so that each refusal is the class's own."""
     path = model_file(directory, kind)
-    found = _certify_run(path, list(CLASSES), box=box)
+    with_candidate = kind in CANDIDATE_OVER_BOX
+    found = _certify_run(path, list(CLASSES), box=box, with_candidate=with_candidate)
     if any(not found[c][0].supported and found[c][0].via == "run" for c in CLASSES):
         for cls in CLASSES:
             found.update(_certify_run(path, [cls], box=box))
     return found
 
 
-def _certify_run(path: Path, classes: Sequence[str], *, box: bool) -> dict[str, tuple[Outcome, Path]]:
+#: the kinds whose ``certify --box`` takes ``--candidate`` (a polynomial map: one V for every value of the box)
+CANDIDATE_OVER_BOX = ("discrete",)
+
+
+def _certify_run(path: Path, classes: Sequence[str], *, box: bool, with_candidate: bool = False
+                 ) -> dict[str, tuple[Outcome, Path]]:
     out = path.with_name(f"{path.stem}-{'-'.join(classes) if len(classes) == 1 else 'all'}{'-box' if box else ''}.json")
     args = ["certify", str(path), "--classes", ",".join(classes), "--time-limit", str(TIME_LIMIT_S), "--json",
             "--out", str(out)]
-    if "candidate" in classes and (len(classes) == 1 or not box):  # a run of several over a box: the class
-        args += ["--candidate", CANDIDATE]                             # says why it does not apply
+    if "candidate" in classes and (len(classes) == 1 or not box or with_candidate):  # a run of several over a
+        args += ["--candidate", CANDIDATE]  # box: the class says why it does not apply (but where it is taken)
     if box:
         args += ["--box", BOX]
     code, stdout, stderr = cli(*args)

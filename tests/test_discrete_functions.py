@@ -6,8 +6,8 @@ What is asserted: a map with ``sin`` and ``tanh`` has its fixed point checked ex
 is refused in one line, exit 2); its Jacobian is the chain rule's, exactly; ``linearization`` is certified on
 a contracting map and refuted on one whose Jacobian has determinant 3/2; ``roa`` is certified within the
 search's cell budget, every sampled start in the certified set converges when the map is iterated, ``verify``
-re-proves it, and a level raised 64-fold fails ``verify``; ``abs`` at the fixed point makes both classes
-``not_applicable`` naming it; the other classes are ``not_applicable`` in one line; the Yin-Seiler-Arcak
+re-proves it, and a level raised 64-fold fails ``verify``; ``abs`` at the fixed point makes ``roa``
+``not_applicable`` naming it, while ``linearization`` proves LES from the piecewise-linear step form; the other classes are ``not_applicable`` in one line; the Yin-Seiler-Arcak
 pendulum (slow) certifies a set larger than any ellipsoid their LMI's constraints allow.
 """
 
@@ -82,18 +82,30 @@ def test_a_point_that_is_not_fixed_is_refused_in_one_line(tmp_path: Path) -> Non
     assert len(done.output.strip().splitlines()) == 1
 
 
-def test_abs_at_the_fixed_point_is_named(tmp_path: Path) -> None:
+def test_abs_at_the_fixed_point_is_named_and_linearization_is_piecewise_linear(tmp_path: Path) -> None:
+    """x+ = |x|/2: no Jacobian at 0; linearization proves LES from the step form (the piecewise-linear route),
+    roa names the kink (it starts from a Jacobian)."""
     text = '[model]\nname = "m"\nstates = ["x"]\ntime = "discrete"\n[dynamics]\nx = "0.5*abs(x)"\n'
     out = tmp_path / "abs.json"
-    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "linearization,roa,quadratic",
+    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "linearization,roa,sos_bound",
                "--no-store", "--json", "--out", str(out))
-    assert done.exit_code == 1, done.output  # (the verdict not_certified)
+    assert done.exit_code == 0, done.output  # (the verdict certified_local)
     conditions = json.loads(out.read_text())["conditions"]
-    for name in ("linearization", "roa"):
-        assert conditions[name]["status"] == "not_applicable"
-        assert "abs is not differentiable" in conditions[name]["summary"]
-    assert conditions["quadratic"]["status"] == "not_applicable"
-    assert conditions["quadratic"]["summary"] == dfn.NOT_YET
+    assert conditions["linearization"]["status"] == "certified"
+    assert conditions["linearization"]["certificate"]["kind"] == "piecewise_linear"
+    assert conditions["linearization"]["certificate"]["discrete"] is True
+    assert conditions["roa"]["status"] == "not_applicable"
+    assert "abs is not differentiable" in conditions["roa"]["summary"]
+    assert cli("verify", str(out)).exit_code == 0
+    assert conditions["sos_bound"]["status"] == "not_applicable"
+    assert conditions["sos_bound"]["summary"] == dfn.NOT_YET
+    # quadratic needs no derivative: V = x^2 with V(F) = V/4 on the relations of b = |x| (b^2 = x^2), GES
+    done = cli("certify", str(write(tmp_path, "abs.toml", text)), "--classes", "quadratic", "--no-store",
+               "--out", str(out))
+    assert done.exit_code == 0, done.output
+    quadratic = json.loads(out.read_text())["conditions"]["quadratic"]
+    assert quadratic["status"] == "certified" and quadratic["property"] == "GES"
+    assert Fraction(quadratic["certificate"]["r"]) ** 2 >= Fraction(1, 4)  # no faster than the map's true 1/2
 
 
 @pytest.fixture(scope="module")

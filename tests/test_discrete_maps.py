@@ -292,10 +292,10 @@ def test_every_class_on_a_map_is_its_discrete_time_answer_or_not_applicable(tmp_
     assert cli("verify", str(tmp_path / "c.json")).exit_code == 0
 
 
-def test_box_sweeps_refuse_a_map_in_one_line_reports_point_sweeps_and_box_certify_take_it(tmp_path: Path) -> None:
-    """A boxes sweep reads [dynamics] as a field: refused in one line. ``certify --box`` takes a map (its classes
-    over a box: tests/test_discrete_boxes.py), a report iterates the map (tests/test_discrete_reports.py) and a
-    points sweep certifies it point by point (tests/test_discrete_sweeps.py)."""
+def test_sweeps_reports_and_box_certify_take_a_map(tmp_path: Path) -> None:
+    """``certify --box`` takes a map (its classes over a box: tests/test_discrete_boxes.py), a report iterates the
+    map (tests/test_discrete_reports.py), a points sweep certifies it point by point and a boxes sweep box by box,
+    with the classes --box takes (tests/test_discrete_sweeps.py)."""
     from sweeps.spec import load_model_spec
 
     path = write(tmp_path, MAP)
@@ -309,9 +309,7 @@ def test_box_sweeps_refuse_a_map_in_one_line_reports_point_sweeps_and_box_certif
     specs = {mode: write(tmp_path, f'[sweep]\nmodel = "map.toml"\nmode = "{mode}"\nclasses = ["linearization"]\n'
                                    '[[sweep.axes]]\nname = "a"\nstart = 0.8\nstop = 1.2\nnum = 2\n', f"{mode}.toml")
              for mode in ("points", "boxes")}
-    with pytest.raises(ModelFileError, match=r'sweep.mode: not taken yet for a discrete-time map \(\[model\] '
-                                             r'time = "discrete"\); boxes are not taken on maps yet'):
-        load_model_spec(specs["boxes"])
+    assert load_model_spec(specs["boxes"]).classes == ("linearization",)
     assert load_model_spec(specs["points"]).classes == ("linearization",)
 
 

@@ -269,3 +269,47 @@ def test_reach_avoid_with_stay_in_goal_is_not_taken_on_a_map(tmp_path: Path) -> 
     done = cli("certify", str(path), "--classes", "reach_avoid", "--no-store", "--json")
     c = json.loads(done.stdout)["conditions"]["reach_avoid"]
     assert c["status"] == "not_applicable" and c["summary"] == ds.STAY_NOT_TAKEN
+
+
+def _rotation_reach() -> tuple[Any, Any, Any, Any, Any]:
+    model = parse_model(ROTATION, "rotation.toml")
+    ring, F = ds.map_polynomials(shifted_map(model))
+    sets = ds.map_sets(model, ring)
+    return ring, F, sets["initial"], sets["unsafe"], sets["goal"][0]
+
+
+def test_the_steps_bound_is_tightened_near_the_best_a_quadratic_v_gives() -> None:
+    from lyapcheck.models.engines.search import Search
+
+    ring, F, initial, unsafe, goal = _rotation_reach()
+    search = Search(ring, Budget(60.0, "test"))
+    structure = ds.reach_structure(ring, F, initial, unsafe, goal, 2)
+    assert not isinstance(structure, str)
+    loose, _ = ds.attempt_reach(ring, F, structure, 2, initial, unsafe, goal, search)
+    assert loose is not None
+    tight = ds.tighten_reach(ring, F, structure, 2, initial, unsafe, goal, loose, search)
+    assert ds.check_discrete_reach(ring, F, initial, unsafe, goal, tight)[0]
+    # For V = a |e|^2 - c (this map's V: rotation-invariant): V <= 0 on the initial disc needs c >= 1.44 a
+    # (its farthest point, |e| = 1.2); the step lowers V by a (1 - 2 * 0.36) |e|^2 >= 0.0028 a outside the
+    # goal (|e|^2 >= 0.01), so C / eps >= 1.44 / 0.0028 = 514.3 for any quadratic certificate, and no lower.
+    assert 514 <= tight.steps_bound() <= 2 * 515 < loose.steps_bound()
+
+
+def test_a_tighter_certificate_that_fails_the_exact_check_leaves_the_found_one(monkeypatch: pytest.MonkeyPatch) -> None:
+    from lyapcheck.models.engines.search import Search
+
+    ring, F, initial, unsafe, goal = _rotation_reach()
+    search = Search(ring, Budget(60.0, "test"))
+    structure = ds.reach_structure(ring, F, initial, unsafe, goal, 2)
+    assert not isinstance(structure, str)
+    loose, _ = ds.attempt_reach(ring, F, structure, 2, initial, unsafe, goal, search)
+    assert loose is not None
+    checked: list[int] = []
+
+    def refuse_the_tighter(*args: Any) -> tuple[bool, str]:
+        checked.append(args[-1].steps_bound())
+        return False, "refused"
+
+    monkeypatch.setattr(ds, "check_discrete_reach", refuse_the_tighter)
+    assert ds.tighten_reach(ring, F, structure, 2, initial, unsafe, goal, loose, search) is loose
+    assert checked and checked[0] < loose.steps_bound()  # a tighter one was found, and its check decided

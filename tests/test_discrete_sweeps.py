@@ -1,15 +1,18 @@
-"""Point sweeps of a discrete-time map (``[sweep] model = FILE`` with ``[model] time = "discrete"``): each grid
-point certified as ``certify FILE --set`` certifies the map, each certified point cross-checked by iterating
-the map (sweeps.crosscheck._MapLoop), never by integrating it; ``mode = "boxes"`` refused in one line.
+"""Sweeps of a discrete-time map (``[sweep] model = FILE`` with ``[model] time = "discrete"``): each grid point
+certified as ``certify FILE --set`` certifies the map, each box as ``certify FILE --box`` does (a polynomial
+map: linearization, quadratic, sos_gas), each certified point or box cross-checked by iterating the map
+(sweeps.crosscheck._MapLoop), never by integrating it; a map's sos_bound iterated under disturbances within
+its bounds; boxes of a map with functions, and classes a map does not take over a box, refused in one line.
 
-The shipped example examples/models/sweeps/points-discrete-map.toml sweeps the gain a of
-discrete-gain-map.toml (Jacobian eigenvalues a and 3/5: stable for |a| < 1, unstable for a > 1).
+The shipped examples examples/models/sweeps/points-discrete-map.toml and boxes-discrete-map.toml sweep the
+gain a of discrete-gain-map.toml (Jacobian eigenvalues a and 3/5: stable for |a| < 1, unstable for a > 1).
 """
 
 from __future__ import annotations
 
 import copy
 import json
+import math
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -119,14 +122,14 @@ def test_a_global_map_certificate_is_checked_per_step(monkeypatch: pytest.Monkey
     assert found.violation and found.worst_envelope > 0.1 and "exceeded V(0) exp(-" in found.violations[0]
 
 
-def test_boxes_and_classes_a_map_does_not_take_are_refused_in_one_line(tmp_path: Path) -> None:
+def test_classes_a_map_does_not_take_are_refused_in_one_line(tmp_path: Path) -> None:
     from sweeps.spec import load_model_spec
 
     (tmp_path / "m.toml").write_text(GAIN_MAP)
     boxes = tmp_path / "boxes.toml"
     boxes.write_text('[sweep]\nmodel = "m.toml"\nmode = "boxes"\n[[sweep.axes]]\nname = "a"\nstart = 0.3\n'
                      'stop = 0.9\nnum = 2\n')
-    assert_refused(boxes, 'boxes are not taken on maps yet')
+    assert load_model_spec(boxes).classes == ("linearization", "quadratic", "sos_gas")  # what --box takes on a map
     barrier = tmp_path / "barrier.toml"
     barrier.write_text('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n[[sweep.axes]]\nname = "a"\n'
                        'start = 0.3\nstop = 0.9\nnum = 2\n')
@@ -265,3 +268,196 @@ def test_a_map_s_rates_are_stored_per_step(tmp_path: Path) -> None:
     from reports.render import sweep_html
 
     assert "decay_rate_V_per_step" in sweep_html(str(tmp_path / "rates.zarr"))
+
+
+# -- a map's sos_bound, swept point by point: iterated under disturbances within its bounds ----------------
+DISTURBED = (EXAMPLES / "discrete-disturbed-map.toml").read_text()
+#: discrete-disturbed-map.toml with the gain of x made a parameter: x+ = a x + y^2/10, y+ = 3y/5 + d, |d| <= 1/2
+GAINED = DISTURBED.replace('[disturbances]', '[parameters]\na = 0.5\n\n[disturbances]').replace(
+    'x = "0.5*x + 0.1*y**2"', 'x = "a*x + 0.1*y**2"')
+
+
+@pytest.mark.slow
+def test_a_map_s_sos_bound_is_swept_and_its_bound_iterated_under_disturbances(tmp_path: Path) -> None:
+    """At a = 1/4 and 1/2 each output's bound certifies and verifies; iterated under the three disturbance
+    policies (the constant d = 1/2 drives y to (1/2)/(1 - 3/5) = 5/4 and x to (5/4)^2/10/(1 - a)), the tail sup
+    stays under it, no alarm, and the constant policy reaches those limits (the check is not vacuous)."""
+    import lyapcheck.models.engines.trajectories as trajectories
+    from lyapcheck.api import verify
+
+    (tmp_path / "m.toml").write_text(GAINED)
+    spec = tmp_path / "bound.toml"
+    spec.write_text('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\nchunk_size = 1\n[[sweep.axes]]\nname = "a"\n'
+                    'values = [0.25, 0.5]\n[simulation]\nstarts = 8\n')
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(trajectories, "simulate", never_integrate)
+        run(spec, tmp_path / "bound.zarr")
+    data = arrays(tmp_path / "bound.zarr")
+    assert list(data["status_sos_bound"]) == [CODES["certified"]] * 2
+    for j, a in enumerate(data["a"]):
+        doc = json.loads(str(data["certificate"][j]))
+        assert verify(doc).valid and doc["conditions"]["sos_bound"]["disturbances"] == "all"
+        limit_y, limit_x = 1.25, 1.25 ** 2 / 10 / (1 - a)
+        assert limit_y * 0.99 <= data["sim_worst_y"][j] <= data["sos_bound_y"][j]
+        assert limit_x * 0.99 <= data["sim_worst_x"][j] <= data["sos_bound_x"][j]
+        assert data["tightness_x"][j] == pytest.approx(data["sos_bound_x"][j] / data["sim_worst_x"][j])
+        # 1 + 8 starts, each under uniform, bang-bang and both constant vertices
+        assert data["cross_check_trajectories"][j] == 9 * 4 and not data["soundness_violation"][j]
+
+
+@pytest.fixture(scope="module")
+def bound_doc() -> tuple[Any, dict[str, Any]]:
+    from lyapcheck.api import certify
+    from lyapcheck.models.language.modelfile import parse_model
+
+    doc = dict(certify(model=EXAMPLES / "discrete-disturbed-map.toml", classes="sos_bound").document)
+    assert doc["conditions"]["sos_bound"]["status"] == "certified"
+    return parse_model(DISTURBED, "disturbed"), doc
+
+
+def test_the_map_bound_cross_check_passes_and_catches_a_bound_too_small(bound_doc: tuple[Any, dict[str, Any]],
+                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The certified bounds pass; a bound stated below the constant disturbance's limit (|x| -> 0.3125) is
+    contradicted by the iterates (its certificate's V and lam are the true ones), and so is a forged V of 0
+    (whose envelope would be the bound itself from the first step)."""
+    import lyapcheck.models.engines.trajectories as trajectories
+    from sweeps.crosscheck import cross_check_point
+
+    monkeypatch.setattr(trajectories, "simulate", never_integrate)
+    model, doc = bound_doc
+    found = cross_check_point(model, doc, {}, starts=8, seed=(0, 0))
+    assert not found.violation and found.trajectories == 9 * 4
+    assert 0.3125 * 0.99 <= found.sim_worst["x"] <= doc["conditions"]["sos_bound"]["bounds"]["x"]
+    small = copy.deepcopy(doc)
+    small["conditions"]["sos_bound"]["bounds"]["x"] = 0.3
+    found = cross_check_point(model, small, {}, starts=8, seed=(0, 0))
+    assert len(found.violations) == 1 and found.violations[0].startswith("sos_bound at")
+    assert "|x - x_eq| reached" in found.violations[0] and "above the certified 0.3" in found.violations[0]
+    flat = copy.deepcopy(doc)
+    for cert in flat["conditions"]["sos_bound"]["certificate"]["outputs"].values():
+        cert["V"] = {"terms": []}
+    found = cross_check_point(model, flat, {}, starts=8, seed=(0, 0))  # starts outside the bound: above it at step 0
+    assert found.violation and all(v.startswith("sos_bound at") for v in found.violations)
+
+
+def test_the_map_bound_envelope_is_the_certificate_s_induction() -> None:
+    """|y_k|^2 <= bound^2 + lam^k max(V(e_0) - 1, 0): V(e_0) = 5, lam = 1/2 gives bound^2 + 4, + 2, + 1, ...;
+    a start inside {V <= 1} gets the bound at every step; an unreadable certificate, the bound on the tail only."""
+    from sweeps.crosscheck import MAP_BOUND_TAIL_STEPS, _bound_envelope
+
+    cert = {"lam": "1/2", "V": {"terms": [["1", [2, 0]]]}}  # V = x^2 (the ring: x, then the disturbance d)
+    es = np.zeros((2, 4, 1))
+    es[0, 0, 0], es[1, 0, 0] = math.sqrt(5.0), 0.5
+    envelope = _bound_envelope(cert, 3.0, es, ["x"], ["d"])
+    assert envelope[0] == pytest.approx(np.sqrt(9 + 4 * 0.5 ** np.arange(4)))
+    assert envelope[1] == pytest.approx([3.0] * 4)
+    blind = _bound_envelope(None, 3.0, np.zeros((1, MAP_BOUND_TAIL_STEPS + 5, 1)), ["x"], ["d"])
+    assert np.all(np.isinf(blind[0, :5])) and np.all(blind[0, 5:] == 3.0)
+
+
+# -- a map swept box by box ------------------------------------------------------------------------------
+BOX_SPEC = EXAMPLES / "sweeps" / "boxes-discrete-map.toml"
+#: a linear map whose gain a is Schur stable for a < 1.12 (the Jacobian's spectral radius < 1) and unstable beyond
+LINEAR_MAP = ('[model]\nname = "a linear map with a gain a"\nstates = ["x", "y"]\ntime = "discrete"\n'
+              '[parameters]\na = 0.5\n[dynamics]\nx = "a*x + 0.4*y"\ny = "-0.3*x + 0.6*y"\n')
+
+
+@pytest.mark.slow
+def test_the_gain_map_s_boxes_are_proved_below_one_and_refuted_above(tmp_path: Path) -> None:
+    """The example: boxes inside a < 1 certified by linearization over the box (verify re-checks it), each
+    iterated at its two corners and two random points (the Jacobian's iterates: no rise of V); boxes with a
+    corner a > 1 refuted, exactly; no integrator anywhere; the store's report page is written."""
+    import lyapcheck.models.engines.trajectories as trajectories
+    from lyapcheck.api import verify
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(trajectories, "simulate", never_integrate)
+        result = run(BOX_SPEC, tmp_path / "boxes.zarr")
+    data = arrays(tmp_path / "boxes.zarr")
+    assert result.mode == "model_boxes"
+    done = data["done"].astype(bool)
+    leaf = done & (data["status"] != 3)
+    certified = leaf & (data["status"] == CODES["certified"])
+    refuted = leaf & (data["status"] == CODES["refuted"])
+    assert certified.any() and refuted.any() and not (leaf & (data["status"] == CODES["not_certified"])).any()
+    assert np.all(data["hi_a"][certified] < 1) and np.all(data["hi_a"][refuted] > 1)
+    assert "quadratic_decay_rate_V_per_step" in data and "quadratic_decay_rate_V_per_s" not in data
+    for j in np.flatnonzero(certified):
+        doc = json.loads(str(data["certificate"][j]))
+        assert verify(doc).valid and doc["conditions"]["linearization"]["status"] == "certified"
+        # (a split box's exact edges, stored as floats)
+        assert [float(Fraction(v)) for v in doc["box"]["a"]] == [data["lo_a"][j], data["hi_a"][j]]
+        assert data["cross_check_points"][j] == 2 + 2 and data["cross_check_trajectories"][j] > 0
+        assert data["cross_check_worst_rise"][j] <= 1e-9 and not data["soundness_violation"][j]
+    for j in np.flatnonzero(refuted):
+        assert "eigenvalue of modulus > 1" in str(data["note"][j]) and data["unstable_corners"][j] >= 1
+    # the store's report reads the map's per-step columns (it once asked for the per-second ones: KeyError)
+    from tests.test_discrete_reports import cli
+
+    page = tmp_path / "boxes.html"
+    assert cli("report", str(tmp_path / "boxes.zarr"), "--html", str(page)).exit_code == 0
+    assert "Cross-check by iterating the map" in page.read_text()
+
+
+@pytest.fixture(scope="module")
+def linear_box_doc(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, dict[str, Any]]:
+    from lyapcheck.api import certify
+    from lyapcheck.models.language.modelfile import parse_model
+
+    path = tmp_path_factory.mktemp("linear") / "linear.toml"
+    path.write_text(LINEAR_MAP)
+    doc = dict(certify(model=path, box=["a=0.3..0.6"], classes="linearization,quadratic").document)
+    assert all(doc["conditions"][c]["status"] == "certified" for c in ("linearization", "quadratic"))
+    return parse_model(LINEAR_MAP, "linear"), doc
+
+
+def test_a_map_s_box_certificates_are_iterated_at_its_corners_and_false_ones_caught(
+        linear_box_doc: tuple[Any, dict[str, Any]], monkeypatch: pytest.MonkeyPatch) -> None:
+    """The box's quadratic (GES, per step) and linearization (one P for every Jacobian) pass at the box's
+    corners; the same certificates at a = 1.2 (outside the box, the map unstable there), a contraction per step
+    forged to 0.5 and a linearization's mu forged to 0.9 are each caught by iterating."""
+    import lyapcheck.models.engines.trajectories as trajectories
+    from sweeps.crosscheck import cross_check_box
+
+    monkeypatch.setattr(trajectories, "simulate", never_integrate)
+    model, doc = linear_box_doc
+    corners = [(model, {"a": Fraction(3, 10)}), (model, {"a": Fraction(3, 5)})]
+    found, skipped = cross_check_box(corners, doc, starts=8, seed=(0, 0))
+    assert not found.violation and not skipped and found.points == 2
+    assert found.worst_rise <= 1e-9 and found.ges_ratio <= 1 and found.trajectories == 2 * (8 + 8)
+    found, _ = cross_check_box([(model, {"a": Fraction(6, 5)})], doc, starts=8, seed=(0, 0))
+    assert any(v.startswith("quadratic at a = 1.2") for v in found.violations)
+    assert any(v.startswith("linearization at a = 1.2") and "Jacobian" in v for v in found.violations)
+    fast = copy.deepcopy(doc)
+    fast["conditions"]["quadratic"]["contraction_per_step"] = 0.5
+    found, _ = cross_check_box(corners, fast, starts=8, seed=(0, 0))
+    assert found.ges_ratio > 1 and any("GES envelope" in v for v in found.violations)
+    steep = copy.deepcopy(doc)
+    steep["conditions"]["linearization"]["certificate"]["mu"] = "9/10"
+    found, _ = cross_check_box(corners, steep, starts=8, seed=(0, 0))
+    assert [v for v in found.violations if v.startswith("linearization at")] and found.worst_envelope > 0.1
+
+
+def test_a_map_s_box_sweep_refuses_classes_it_does_not_take_and_a_map_with_functions(tmp_path: Path) -> None:
+    """Over boxes a map takes linearization, quadratic and sos_gas: roa is refused in one line naming the field,
+    the accepted classes and what was given (exit 2, nothing written); a map with functions over boxes too."""
+    from sweeps.spec import load_model_spec
+    from tests.test_discrete_reports import WITH_FUNCTIONS
+
+    (tmp_path / "m.toml").write_text(GAIN_MAP)
+    roa = tmp_path / "roa.toml"
+    roa.write_text('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["linearization", "roa"]\n[[sweep.axes]]\n'
+                   'name = "a"\nstart = 0.3\nstop = 0.9\nnum = 2\n')
+    assert_refused(roa, "'sweep.classes' parameter must be in a boxes sweep of a discrete-time map")
+    with pytest.raises(InvalidParameter) as refused:
+        load_model_spec(roa)
+    line = str(refused.value)
+    assert "a discrete-time map" in line and "'linearization', 'quadratic', 'sos_gas' (" in line and "'roa'" in line
+    functions = tmp_path / "functions"
+    functions.mkdir()
+    (functions / "f.toml").write_text(WITH_FUNCTIONS)
+    boxes = functions / "boxes.toml"  # (refused before its axes are read: the map declares no parameter)
+    boxes.write_text('[sweep]\nmodel = "f.toml"\nmode = "boxes"\n[[sweep.axes]]\nname = "k"\nstart = 0.3\n'
+                     'stop = 0.4\nnum = 2\n')
+    assert_refused(boxes, "sweep.mode: not taken yet for a discrete-time map")
+    assert_refused(boxes, "boxes are not taken on a map with functions")

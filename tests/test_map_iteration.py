@@ -1,6 +1,7 @@
 """One loop iterates every discrete-time map (:mod:`lyapcheck.models.engines.iteration`): a row that leaves
 the escape box is frozen at the iterate where it left, the others go on; without a box every row is
-iterated every step; the observer sees exactly the rows iterated."""
+iterated every step; the observer sees exactly the rows iterated; a row that meets the caller's `stop` is frozen
+there, and an observer that returns True ends the iteration."""
 
 from __future__ import annotations
 
@@ -43,3 +44,26 @@ def test_without_a_box_every_row_is_iterated_every_step() -> None:
     x, alive = iterate_map(stacked_map([lambda x: 3 * x[:, 0]]), starts, 5, observe=observe)
     assert count[0] == 5 and alive.all()
     np.testing.assert_allclose(x[:, 0], [0.5 * 3**5, 2.0 * 3**5])
+
+
+def test_a_row_that_meets_stop_is_frozen_after_the_observer_saw_it_and_a_start_that_meets_it_never_moves() -> None:
+    starts = np.array([[1.0], [0.1], [5.0]])  # doubling; stop at x >= 4: row 2 at once, row 0 after 2 steps
+    seen: list[tuple[int, list[int], list[float]]] = []
+    x, alive = iterate_map(lambda x: 2 * x, starts, 6, stop=lambda x: x[:, 0] >= 4,
+                           observe=lambda k, rows, xs: seen.append((k, rows.tolist(), xs[:, 0].tolist())))
+    assert alive.tolist() == [False, False, False]
+    np.testing.assert_allclose(x[:, 0], [4.0, 6.4, 5.0])  # row 1: 0.1 * 2**6 = 6.4, stopped at the last step
+    assert seen[0] == (1, [0, 1], [2.0, 0.2]) and seen[1] == (2, [0, 1], [4.0, 0.4])
+    assert all(rows == [1] for _, rows, _ in seen[2:]) and len(seen) == 6
+
+
+def test_an_observer_that_returns_true_ends_the_iteration_after_that_step() -> None:
+    steps: list[int] = []
+
+    def observe(k: int, rows: np.ndarray, xs: np.ndarray) -> bool:
+        steps.append(k)
+        return bool(np.any(xs[:, 0] > 10))
+
+    x, alive = iterate_map(lambda x: 3 * x, np.array([[1.0], [0.5]]), 20, observe=observe)
+    assert steps == [1, 2, 3] and alive.all()  # 27 > 10 after step 3; nothing frozen
+    np.testing.assert_allclose(x[:, 0], [27.0, 13.5])

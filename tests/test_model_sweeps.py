@@ -270,11 +270,20 @@ def interrupted(spec: Path, out: Path, after: int) -> None:
         run(spec, out, progress=progress)
 
 
-@pytest.mark.parametrize("spec_text", [BOXES, POINTS.replace("num = 7", "num = 5")], ids=["boxes", "points"])
-def test_a_resumed_sweep_is_byte_for_byte_an_uninterrupted_one(tmp_path: Path, spec_text: str) -> None:
-    whole = write(tmp_path / "whole", spec_text)
+#: a discrete-time map's box sweep (examples/models/discrete-gain-map.toml: stable for |a| < 1): the same tree,
+#: store and resume as a continuous loop's
+MAP_BOXES = BOXES.replace('classes = ["quadratic"]', 'classes = ["linearization", "quadratic"]').replace(
+    "start = -0.9", "start = 0.3").replace("stop = 2", "stop = 1.5").replace("num = 4", "num = 3")
+
+
+@pytest.mark.parametrize("spec_text, model", [
+    (BOXES, LINEAR), (POINTS.replace("num = 7", "num = 5"), LINEAR),
+    (MAP_BOXES, (Path(__file__).resolve().parents[1] / "examples" / "models" / "discrete-gain-map.toml").read_text()),
+], ids=["boxes", "points", "map-boxes"])
+def test_a_resumed_sweep_is_byte_for_byte_an_uninterrupted_one(tmp_path: Path, spec_text: str, model: str) -> None:
+    whole = write(tmp_path / "whole", spec_text, model)
     run(whole, tmp_path / "whole" / "out.zarr")
-    parts = write(tmp_path / "parts", spec_text)
+    parts = write(tmp_path / "parts", spec_text, model)
     interrupted(parts, tmp_path / "parts" / "out.zarr", after=2)
     partial = arrays(tmp_path / "parts" / "out.zarr")
     assert 0 < partial["done"].sum() < arrays(tmp_path / "whole" / "out.zarr")["done"].sum()

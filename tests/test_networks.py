@@ -340,9 +340,10 @@ def test_the_onnx_variant_certifies_the_same_linearization() -> None:
 
 
 
-def test_a_relu_network_is_a_loop_with_abs_and_its_linearization_says_why_it_decides_nothing(tmp_path: Path) -> None:
+def test_a_relu_network_is_a_loop_with_abs_and_its_linearization_is_piecewise_linear(tmp_path: Path) -> None:
     """relu(z) = max(0, z) = (z + abs(z))/2: not differentiable at the equilibrium, where every bias-free
-    ReLU neuron's argument is 0; the class names the neuron instead of guessing a Jacobian."""
+    ReLU neuron's argument is 0; no Jacobian is guessed: the class proves LES from the piecewise-linear first-order
+    part (lyapcheck.models.classes.piecewise_linearization), one kink per neuron, named in its certificate."""
     W1 = np.array([[1.0, 0.5], [-0.5, -1.0]])
     save_npz(tmp_path / "n.npz", [(W1, np.zeros(2)), ([[-1.0, 1.0]], [0.0])], "relu")
     path = model_file(tmp_path, "n.npz")
@@ -350,8 +351,10 @@ def test_a_relu_network_is_a_loop_with_abs_and_its_linearization_says_why_it_dec
     assert isinstance(model, RecastModel) and [a.function for a in model.system.auxiliaries] == ["abs", "abs"]
     done = CliRunner().invoke(app.cli, ["certify", str(path), "--classes", "linearization", "--no-store", "--json"])
     lin = json.loads(done.stdout)["conditions"]["linearization"]
-    assert lin["status"] == "not_applicable"
-    assert lin["summary"].startswith("neuron 1 of layer 1 of [networks.pi]: abs is not differentiable"), lin
+    assert lin["status"] == "certified" and lin["property"] == "LES", lin
+    assert lin["certificate"]["kind"] == "piecewise_linear"
+    assert [k["call"] for k in lin["certificate"]["kinks"]] == [f"neuron {j} of layer 1 of [networks.pi]"
+                                                                for j in (1, 2)]
 
 
 def reference_outputs(path: Path, X: Any) -> Any:

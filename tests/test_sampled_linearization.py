@@ -79,3 +79,19 @@ def test_without_an_input_the_map_is_exp_AT() -> None:
 def test_a_non_positive_period_is_refused() -> None:
     with pytest.raises(ValueError):
         sampled.decide(A, B, K, F(0))
+
+
+def test_the_sentence_is_the_claims_one_made_from_the_status_and_the_period_alone() -> None:
+    from lyapcheck.models.classes.claims import summary
+
+    for period, status in ((F(1, 3), "certified"), (F(1, 2), "refuted")):
+        c = sampled.decide(A, B, K, period).to_json()
+        assert c["status"] == status
+        assert summary("linearization", c) == c["summary"]  # what certify printed, verify and the report re-make
+        assert "period 1/3 s" in c["summary"] if period == F(1, 3) else "period 0.5 s" in c["summary"]
+        data = c["certificate" if status == "certified" else "refutation"]
+        moved = {**c, ("certificate" if status == "certified" else "refutation"): {**data, "period": "1/4"}}
+        assert summary("linearization", moved) != c["summary"]  # the sentence follows the stated period
+        with pytest.raises(ValueError):  # a malformed period: verify reports a failed check
+            summary("linearization", {**c, ("certificate" if status == "certified" else "refutation"):
+                                      {**data, "period": "a while"}})

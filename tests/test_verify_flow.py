@@ -55,11 +55,13 @@ def test_a_box_naming_no_parameter_ends_verify_at_the_box(tmp_path: Path, kind: 
     assert (rows[-2][0] == "verdict") is (kind == "functions")
 
 
-def test_a_map_with_functions_refuses_a_box_and_checks_its_conditions(tmp_path: Path) -> None:
-    """A map with functions takes no box: its box row fails, and its conditions are still re-checked."""
+def test_a_map_with_functions_box_not_read_at_its_centre_ends_verify_at_the_box(tmp_path: Path) -> None:
+    """A map with functions takes a box read at its centre: one added to a point's document, around another
+    centre than the model's value, fails its row, and no condition is checked (the verdict row follows)."""
     document = copy.deepcopy(linearization_document(tmp_path, "map_functions"))
-    document["box"] = {"a": ["4/5", "6/5"]}
+    document["box"] = {"a": ["1/5", "3/5"]}  # (the model reads a = 1)
     rows = rows_of(document)
-    assert ("box", False, 'a box is not taken on a discrete-time map ([model] time = "discrete")') in rows
-    assert [ok for check, ok, _ in rows if check == "linearization"] == [True]
-    assert not lyapcheck.verify(document).valid
+    failed = [row for row in rows if not row[1]]
+    assert failed[0][0] == "box" and "centre" in failed[0][2]
+    assert all(check != "linearization" for check, _, _ in rows)
+    assert rows[-2][0] == "verdict" and not lyapcheck.verify(document).valid

@@ -70,7 +70,7 @@ METHODS: Final = {
 }
 #: keys of a class shown elsewhere on the page (solver outcomes under Reproducibility)
 SHOWN_ELSEWHERE: Final = ("status", "summary", "property", "certificate", "refutation", "solver", "rounds", "history")
-#: the certificate kinds of a loop with functions (lyapcheck.models.surfaces.recast_certify, recast_interval)
+#: the certificate kinds of a loop with functions (lyapcheck.models.surfaces.verify, recast_interval)
 RECAST_KINDS: Final = ("recast", "interval")
 #: keys of a recast or interval certificate's condition shown elsewhere on the page (rounds of a search,
 #: which its class does not keep today, would be shown among its stored figures)
@@ -179,30 +179,11 @@ def shown_summary(name: str, cond: dict[str, Any], outputs: tuple[str, ...], box
     text; for the others, the file's reason."""
     from lyapcheck.models.classes.claims import summary
 
-    sampled = sampled_sentence(cond)
-    if sampled is not None:
-        return sampled
     try:
         text = summary(name, cond, outputs, box if isinstance(box, dict) else None)
     except (KeyError, TypeError, ValueError, ArithmeticError):
         return "(no sentence: the figures of this condition are malformed)"
     return text if text is not None else text_of(cond.get("summary", ""))
-
-
-def sampled_sentence(cond: dict[str, Any]) -> str | None:
-    """A sampled-data loop's decided linearization (method ``sampled_routh``) in the page's words, from
-    the figures ``verify`` re-derives (its status and its certificate's period), never the file's text;
-    None for any other condition."""
-    status = cond.get("status")
-    data = as_dict(cond.get("certificate")) or as_dict(cond.get("refutation"))
-    period = as_fraction(data.get("period"))
-    if data.get("method") != "sampled_routh" or status not in ("certified", "refuted") or period is None:
-        return None
-    at = f"the sampled-data loop (zero-order hold, period {fmt_float(float(period))} s)"
-    if status == "certified":
-        return (f"{at} is locally exponentially stable: every eigenvalue of its Jacobian over one period has "
-                "modulus < 1 (checked in ball arithmetic)")
-    return f"{at} is unstable: its Jacobian over one period has an eigenvalue of modulus > 1 (checked in ball arithmetic)"
 
 
 def exact_row(what: str, value: Fraction) -> tuple[str, str, str]:

@@ -27,7 +27,7 @@ import numpy as np
 from reports import figures
 from reports.stores.common import LEAF_NAMES, BoxAxis, Leaves, box_map, mpl, provenance, window_percent
 from reports.views import fmt_float
-from sweeps.schema import BOX_STATUS_CODES, BOXES_MODE, json_list, model_box_variables as box_variables
+from sweeps.schema import BOX_STATUS_CODES, BOXES_MODE, is_map_store, json_list, model_box_variables as box_variables
 from sweeps.summary import LEAF_STATUSES, ModelSweepSummary, stored_window, summarize_dataset, violation_count
 
 #: what each status means on this page
@@ -57,7 +57,8 @@ def _where_box(dims: Sequence[str], lo: Sequence[float], hi: Sequence[float]) ->
 
 def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
     dims, classes, outputs = summary.dims, summary.classes, tuple(json_list(ds, "outputs"))
-    data = {v.name: np.asarray(ds[v.name].values) for v in box_variables(dims, classes, outputs)}
+    # (a map's store has its figures per step: its columns are named after them)
+    data = {v.name: np.asarray(ds[v.name].values) for v in box_variables(dims, classes, outputs, is_map_store(ds))}
     done = data["done"].astype(bool)
     leaf = done & (data["status"] != BOX_STATUS_CODES["split"])
     rows = np.flatnonzero(leaf)

@@ -16,6 +16,8 @@
   functions too), :mod:`~lyapcheck.models.classes.reach_avoid` (on loops with functions too);
 - discrete-time maps ``e+ = F(e)``: :mod:`~lyapcheck.models.classes.discrete_lyapunov` (quadratic and sos_gas);
 - loops with functions: :mod:`~lyapcheck.models.classes.recast_classes`,
+  :mod:`~lyapcheck.models.classes.piecewise_linearization` (``linearization`` where abs, a ReLU or sat sits at its
+  kink at the equilibrium, on maps with functions too),
   :mod:`~lyapcheck.models.classes.recast_regions` (roa and candidate, and the loop a class runs on),
   :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
   (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_ball_level` (a quadratic V's

@@ -243,7 +243,13 @@ def _number(condition: Mapping[str, Any], key: str) -> float:
 def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     data = condition.get("certificate" if status == "certified" else "refutation") or {}
     method = data.get("method")
-    from lyapcheck.models.classes import discrete_linearization
+    from lyapcheck.models.classes import discrete_linearization, piecewise_linearization
+
+    if status == "certified" and piecewise_linearization.is_certificate(data):  # a kink at the equilibrium
+        return piecewise_linearization.sentence(data)
+
+    if method == SAMPLED_METHOD:  # a sampled-data loop's: its period is a figure of the certificate
+        return sampled_linearization_sentence(status, read_rational(data["period"], "period"))
 
     if discrete_linearization.is_discrete_certificate(data) and method == "box_stein":  # a map's over a box
         return DISCRETE_BOX_STEIN_SENTENCE
@@ -287,6 +293,35 @@ def discrete_lyapunov_sentence(kind: str, degree: int, mu: Fraction, figures: Ma
             "(checked exactly)")
 
 
+#: the method of a sampled-data loop's linearization (lyapcheck.models.classes.sampled)
+SAMPLED_METHOD = "sampled_routh"
+
+
+def seconds_text(period: Fraction) -> str:
+    """``period`` as an exact decimal where it has one (``1/50`` is ``0.02``), else ``p/q``."""
+    from lyapcheck.exact import exact_decimal
+
+    try:
+        return exact_decimal(period)
+    except ValueError:
+        return str(period)
+
+
+def sampled_linearization_sentence(status: str, period: Fraction) -> str:
+    """The claim of a sampled-data loop's decided linearization (:mod:`lyapcheck.models.classes.sampled`,
+    ``certified`` or ``refuted``) at ``period`` seconds, written exactly (an exact decimal where it has one,
+    else ``p/q``): the claim holds at that period, and a rounded one near the critical period would name
+    another loop."""
+    loop = f"the sampled-data loop (zero-order hold, period {seconds_text(period)} s)"
+    if status == "certified":
+        return (f"{loop} is locally exponentially stable: every eigenvalue of its Jacobian over one period has "
+                "modulus < 1 (checked in ball arithmetic)")
+    if status == "refuted":
+        return (f"{loop} is unstable: its Jacobian over one period has an eigenvalue of modulus > 1 (checked in ball "
+                "arithmetic)")
+    raise ValueError(f"a sampled-data linearization states nothing when {status!r}")
+
+
 #: the claim of a map's linearization over a box (lyapcheck.models.classes.discrete_lyapunov.run_linearization_box;
 #: the summary puts "for every <box>: " in front)
 DISCRETE_BOX_STEIN_SENTENCE = ("every eigenvalue of the map's Jacobian at the fixed point has modulus < 1 (one P > 0 "
@@ -294,6 +329,9 @@ DISCRETE_BOX_STEIN_SENTENCE = ("every eigenvalue of the map's Jacobian at the fi
                                "exact): the discrete-time map is locally exponentially stable there")
 #: the certificate kinds of a discrete-time map's quadratic and sos_gas (lyapcheck.models.classes.discrete_lyapunov)
 DISCRETE_LYAPUNOV_KINDS = ("discrete_quadratic", "discrete_sos")
+#: the certificate kind of a discrete-time map with functions' quadratic and sos_gas
+#: (lyapcheck.models.classes.map_relations): the same sentences, GES where it states k and r
+DISCRETE_RELATIONS_KIND = "discrete_relations"
 #: the certificate kind of a discrete-time map's roa and candidate (lyapcheck.models.classes.discrete_regions)
 DISCRETE_REGION_KIND = "discrete_sublevel"
 
@@ -311,9 +349,11 @@ def discrete_region_sentence(name: str, level: float) -> str:
 def _stability(name: str, condition: Mapping[str, Any]) -> str:
     cert = condition.get("certificate") or {}
     kind = cert.get("kind")
-    if kind in DISCRETE_LYAPUNOV_KINDS:
-        figures = {key: read_rational(cert[key]) for key in ("k", "r")} if kind == "discrete_quadratic" else None
-        return discrete_lyapunov_sentence(kind, int(cert["degree"]), read_rational(cert["mu"]), figures)
+    if kind in DISCRETE_LYAPUNOV_KINDS or kind == DISCRETE_RELATIONS_KIND:
+        ges = kind == "discrete_quadratic" or (kind == DISCRETE_RELATIONS_KIND and "k" in cert)
+        figures = {key: read_rational(cert[key]) for key in ("k", "r")} if ges else None
+        return discrete_lyapunov_sentence("discrete_quadratic" if ges else "discrete_sos", int(cert["degree"]),
+                                          read_rational(cert["mu"]), figures)
     if kind == DISCRETE_REGION_KIND:
         return discrete_region_sentence(name, _number(condition, "level"))
     if kind in ("sublevel", "quadratic_ball"):
@@ -586,4 +626,5 @@ def interval_sentence(cert: dict[str, Any]) -> str:
 __all__ = ["summary", "roa_after_gas", "GAS_CLASSES", "box_words", "box_prefix", "ball_words", "size_words", "with_unit", "deviation", "state_unit_figures", "v_text",
            "v_expression", "sentence_of", "recast_reach_time", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
            "RATE_UNIT", "DISCRETE_BARRIER_KIND", "DISCRETE_BARRIER_SENTENCE",
-           "DISCRETE_REACH_KIND", "DISCRETE_BOUND_KIND", "discrete_reach_sentence"]
+           "DISCRETE_REACH_KIND", "DISCRETE_BOUND_KIND", "discrete_reach_sentence", "SAMPLED_METHOD",
+           "sampled_linearization_sentence", "seconds_text"]

@@ -111,8 +111,8 @@ class FunctionsRun:
     def linearization(self) -> "ConditionResult":
         """The recasting's linearization at the equilibrium (computed once: ``linearization`` and
         ``roa`` read it)."""
-        if self._linearization is None:
-            from lyapcheck.models.classes.recast_classes import linearization
+        if self._linearization is None:  # (the Jacobian's, or at a kink the piecewise-linear route's)
+            from lyapcheck.models.classes.piecewise_linearization import linearization
 
             self._linearization = linearization(self.loop)
         return self._linearization
@@ -177,8 +177,12 @@ class MapCheck:
 class MapFunctionsRun:
     """A discrete-time map with functions as its classes are run on it."""
 
-    #: the map, its displacement ``F(x) - x`` recast (:mod:`lyapcheck.models.classes.discrete_functions`)
+    #: the map, its displacement ``F(x) - x`` recast (:mod:`lyapcheck.models.classes.discrete_functions`;
+    #: over a box, read at the box's centre)
     model: "RecastModel"
+    #: the box of parameters its classes hold over (``--box``), if any
+    #: (:mod:`lyapcheck.models.classes.discrete_functions_box`)
+    box: "ModelBox | None" = None
 
 
 @dataclass(frozen=True)
@@ -186,6 +190,8 @@ class MapFunctionsCheck:
     """A discrete-time map with functions as verify re-reads it from the model text."""
 
     model: "RecastModel"
+    #: the document's box (its fixed point checked to stay put over it), if any
+    box: "ModelBox | None" = None
 
     @staticmethod
     def not_checked(status: object) -> str:

@@ -6,6 +6,13 @@ The map is the model's, shifted to its fixed point with the disturbances at 0
 states ``e`` (no scaling). Each disturbance is written ``d_k = b_k u_k`` with ``u_k`` in ``[-1, 1]``
 (``b_k`` its ``[disturbances]`` bound), so the ring's variables after the states are the ``u_k``.
 
+Over a box of parameters (``certify --box``) the box's normalized parameters follow the disturbances in the
+ring, each in ``[-1, 1]`` too, and get the same S-procedure multipliers: ``V`` stays of the states alone, so one
+certificate holds for every parameter value of the box. (A parameter is constant along an orbit while a
+disturbance may change every step; the identities hold for every ``u`` of the box at each step, so they cover
+the constant case, at the cost of the conservatism that is.) The output's reference ``y_eq`` is its value at the
+fixed point with the disturbances at 0 and the parameters at the box's centre.
+
 The certificate (kind :data:`KIND`), per output ``y`` (its deviation ``y - y_eq`` from its value at the
 fixed point, as the continuous class states it), with ``V`` a free polynomial of the states of degree
 ``k``, ``lam`` a fixed rational in ``[0, 1)`` and ``B >= 0`` a rational:
@@ -72,24 +79,25 @@ MAX_GRAM_ROWS: Final = 120
 
 
 class DisturbedMap:
-    """The map ``e+ = F(e, b u)`` in the ring of the states and the normalized disturbances ``u``."""
+    """The map ``e+ = F(e, b u)`` in the ring of the states and the normalized disturbances ``u`` (then a box's
+    normalized parameters, if the map has one)."""
 
     def __init__(self, shifted: "ShiftedField") -> None:
         from lyapcheck.models.classes.discrete_lyapunov import NotAMap
 
         model = shifted.model
-        if shifted.box is not None:
-            raise NotAMap("a box of parameters is not supported on a discrete-time map here")
         self.ring: Ring = shifted.ring
         self.n: int = shifted.n
         self.names: list[str] = list(model.disturbances)
-        if list(self.ring.names[self.n:]) != self.names:
-            raise NotAMap("the map's ring does not list its disturbances after its states")
+        if list(self.ring.names[self.n:]) != self.names + list(shifted.box_names):
+            raise NotAMap("the map's ring does not list its disturbances after its states (then a box's parameters)")
         self.bounds: tuple[Fraction, ...] = tuple(Fraction(b) for b in model.disturbances.values())
         gens = self.ring.gens()
-        # d_k = b_k u_k: the ring's variable n + k is read as u_k from here on
+        # d_k = b_k u_k: the ring's variable n + k is read as u_k from here on (a box's parameters, already
+        # normalized, stay as they are)
         self.images: list[Poly] = list(gens[:self.n]) + [gens[self.n + k] * to_fmpq(b)
-                                                         for k, b in enumerate(self.bounds)]
+                                                         for k, b in enumerate(self.bounds)] \
+            + list(gens[self.n + len(self.bounds):])
         F = []
         for name, num, den in zip(self.ring.names, shifted.numerators, shifted.denominators):
             if not den.is_constant():
@@ -120,7 +128,7 @@ def check_map_bound(dm: DisturbedMap, y: Poly, V: Poly, lam: Fraction, B: Fracti
                     sigma_E: GramPoly, box_D: Sequence[tuple[int, GramPoly]], box_E: Sequence[tuple[int, GramPoly]]
                     ) -> tuple[bool, str]:
     """The two identities of the module docstring, exactly: then ``limsup |y_k| <= sqrt(B)`` along every
-    disturbance sequence within its bounds, from every start."""
+    disturbance sequence within its bounds, from every start (for every parameter value of a box)."""
     ring, n = dm.ring, dm.n
     if not 0 <= lam < 1:
         return False, "the rate lam must satisfy 0 <= lam < 1"
@@ -129,7 +137,7 @@ def check_map_bound(dm: DisturbedMap, y: Poly, V: Poly, lam: Fraction, B: Fracti
     if any(any(m[n:]) for m in ring.support(V)):
         return False, "V may depend on the states only"
     if any(not n <= j < ring.nvars for j, _ in (*box_D, *box_E)):
-        return False, "a multiplier names a variable that is no disturbance"
+        return False, "a multiplier names a variable that is no disturbance (nor a parameter of the box)"
     if not sigma_D.positive_definite() or not sigma_E.positive_definite():
         return False, "Q_sigma_D or Q_sigma_E is not positive definite (exact)"
     boxed_D, why = box_terms(ring, box_D)

@@ -1,5 +1,5 @@
 """Discrete-time maps with functions (``[model] time = "discrete"`` with ``sin``, ``tanh``, ``[networks]``, ...;
-issue 44, item 1): ``linearization`` and ``roa``.
+issue 44, item 1): ``linearization``, ``roa`` and ``candidate``.
 
 The map ``x+ = F(x)`` is read by the recasting of continuous loops, applied to its displacement
 ``F(x) - x`` (:meth:`lyapcheck.models.language.modelfile._Reader.recast_map`): the recasting's exact check
@@ -35,13 +35,24 @@ within cell budgets (counts, :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS` per 
 :data:`~lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS` in all). The certificate (kind
 ``discrete_interval``) states ``P`` and the level; :func:`verify_roa` repeats the proof, cell for cell.
 
-``quadratic``, ``sos_gas`` and ``candidate`` on such a map are ``not_applicable`` (one line: :data:`NOT_YET`).
+``candidate`` (:func:`candidate`): the user's ``--candidate`` V, which must be a quadratic form
+``e^T P e`` in the state deviations (its ``P`` read exactly; a V with any other term is ``not_applicable``,
+a ``P`` not positive definite ``not_certified``), proved by the same route as ``roa`` with that ``P`` (no
+rounding): its largest proved level. Its certificate is the ``roa`` kind with ``"V_from": "candidate"``;
+:func:`verify_candidate` checks that the stated ``P`` is the candidate's, then proves the level again.
+
+Over a box of parameters (``--box``): :mod:`lyapcheck.models.classes.discrete_functions_box`.
+
+``quadratic`` and ``sos_gas`` on such a map: :mod:`lyapcheck.models.classes.map_relations` (a V of the states
+on the recasting's relations); a linearization at a kink of the fixed point:
+:mod:`lyapcheck.models.classes.piecewise_linearization`; every other class is ``not_applicable`` (one line:
+:data:`NOT_YET`).
 """
 
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final
+from typing import TYPE_CHECKING, Any, Final, Sequence
 
 import flint
 
@@ -59,7 +70,7 @@ KIND: Final = "discrete_interval"
 #: the reason of every class without a ``run_map_functions`` entry (lyapcheck.models.classes.registry: the
 #: classes a map with functions takes, MAP_FUNCTIONS) on such a map
 NOT_YET: Final = ('not taken yet on a discrete-time map with functions ([model] time = "discrete" with sin, tanh, '
-                  "[networks], ...): the classes taken are linearization and roa")
+                  "[networks], ...): the classes taken are linearization, quadratic, sos_gas, roa and candidate")
 #: significant bits of a level tried
 LEVEL_BITS: Final = 12
 #: the first level tried: the ellipsoid this wide (in its widest state) ...
@@ -185,12 +196,15 @@ def rounded_p(A: list[list[Fraction]]) -> list[list[Fraction]] | None:
     return [[_short(P[min(i, j)][max(i, j)], tolerances.P_BITS) for j in range(n)] for i in range(n)]
 
 
-def prove_level(model: "RecastModel", P: list[list[Fraction]], level: Fraction, cells: int) -> Any:
-    """``g < 0`` on ``{e^T P e <= level}`` but at the fixed point (deterministic; at most ``cells`` cells)."""
+def prove_level(model: "RecastModel", P: list[list[Fraction]], level: Fraction, cells: int,
+                loop: BallLoop | None = None) -> Any:
+    """``g < 0`` on ``{e^T P e <= level}`` but at the fixed point (deterministic; at most ``cells`` cells).
+    ``loop``: the true map in balls (default the model's at its parameters; over a box, the map with the
+    box's parameters as balls, :func:`lyapcheck.models.classes.discrete_functions_box.boxed_map`)."""
     from lyapcheck.exact import inverse
     from lyapcheck.models.engines.ellipsoid_cells import prove_ellipsoid
 
-    diff = MapDifference(BallLoop(model.system), P)
+    diff = MapDifference(BallLoop(model.system) if loop is None else loop, P)
     diagonal = [inverse(P)[i][i] for i in range(len(P))]
     return prove_ellipsoid(diff, P, diagonal, level, [], None, cells,  # type: ignore[arg-type]
                            geometry=lambda w: MapGeometry(w, P, diff))
@@ -217,35 +231,54 @@ def area(P: list[list[Fraction]], level: Fraction) -> float | None:
     return math.pi * float(level) / math.sqrt(float(det))
 
 
-def roa(model: "RecastModel", budget: "Budget") -> ConditionResult:
-    """The largest sublevel set of the linearization's ``V`` proved a region of attraction (module docstring)."""
+class Found:
+    """A level search's outcome: the level proved and its proof's cells, the cells spent, the levels tried."""
+
+    def __init__(self, level: Fraction, cells: int, spent: int, tried: list[tuple[Fraction, bool]]) -> None:
+        self.level, self.cells, self.spent, self.tried = level, cells, spent, tried
+
+    def numbers(self) -> dict[str, Any]:
+        """The figures a certified region states."""
+        return {"level": float(self.level), "cells": self.cells, "cells_spent": self.spent,
+                "tried": [f"level {float(lv):.6g}: {'proved' if ok else 'not proved'}" for lv, ok in self.tried]}
+
+
+def prove_on_all(model: "RecastModel", P: list[list[Fraction]], level: Fraction, cells: int,
+                 loops: Sequence[BallLoop | None]) -> tuple[bool, int, str]:
+    """:func:`prove_level` on each of ``loops`` (the parts of a box; ``[None]``: the model's map), within
+    ``cells`` cells in all: (proved on every one, cells examined, why not)."""
+    used = 0
+    for loop in loops:
+        proof = prove_level(model, P, level, max(cells - used, 0), loop)
+        used += proof.cells
+        if not proof.ok:
+            return False, used, proof.why
+    return True, used, ""
+
+
+def level_search(model: "RecastModel", P: list[list[Fraction]], budget: "Budget", name: str,
+                 loops: Sequence[BallLoop | None] = (None,)) -> Found | ConditionResult:
+    """The largest level of ``{e^T P e <= level}`` proved (``P`` positive definite, exact) on every one of
+    ``loops`` (default the model's map), within the cell budgets (module docstring), or ``name``'s
+    inconclusive or not_certified result saying why."""
     from lyapcheck.exact import inverse
     from lyapcheck.models.classes.level_search import largest_proved_level
     from lyapcheck.models.classes.recast_classes import _dyadic
     from lyapcheck.models.engines.search import BudgetExhausted
-    from lyapcheck.sos.definiteness import is_positive_definite
 
-    A = exact_jacobian(model)
-    if isinstance(A, str):
-        return ConditionResult("roa", "not_applicable", f"the map's Jacobian at the fixed point: {A}", property="ROA")
-    P = rounded_p(A)
-    if P is None or not is_positive_definite(P):
-        return ConditionResult("roa", "not_certified", "the discrete Lyapunov equation A^T P A - P = -I of the exact "
-                               "Jacobian has no positive definite solution (rounded): no quadratic V to start from",
-                               property="ROA")
     widest = max(inverse(P)[i][i] for i in range(len(P)))
     spent = [0]
     total, each = tolerances.BALL_LEVEL_TOTAL_CELLS, tolerances.BALL_LEVEL_CELLS
 
-    def attempt(level: Fraction) -> tuple[Fraction, Any] | None:
+    def attempt(level: Fraction) -> tuple[Fraction, int] | None:
         left = total - spent[0]
         if left <= 0:
             raise BudgetExhausted(f"the search's {total} cells were spent (lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS)")
         if budget.left() <= 0:
             raise BudgetExhausted(budget.reached())
-        proof = prove_level(model, P, level, min(each, left))
-        spent[0] += proof.cells
-        return (level, proof) if proof.ok else None
+        ok, cells, _ = prove_on_all(model, P, level, min(each, left), loops)
+        spent[0] += cells
+        return (level, cells) if ok else None
 
     first = _dyadic(MAP_FIRST_EXTENT ** 2 / widest, LEVEL_BITS)
     try:
@@ -258,29 +291,93 @@ def roa(model: "RecastModel", budget: "Budget") -> ConditionResult:
                                      halvings=0, bisections=tolerances.MAP_LEVEL_BISECTIONS,
                                      rounded=lambda x: _dyadic(x, LEVEL_BITS))
     except BudgetExhausted as exc:
-        return ConditionResult("roa", "inconclusive", f"ball arithmetic on the true map: {exc}", property="ROA")
+        return ConditionResult(name, "inconclusive", f"ball arithmetic on the true map: {exc}", property="ROA")
     if found.proof is None or found.level is None:
-        return ConditionResult("roa", "not_certified", "ball arithmetic on the true map: V(F(e)) < V(e) was not "
+        return ConditionResult(name, "not_certified", "ball arithmetic on the true map: V(F(e)) < V(e) was not "
                                f"proved on the smallest ellipsoid tried (level {float(first):.3g})", property="ROA")
-    level, proof = found.proof
-    cert = {"kind": KIND, "method": "ball arithmetic on the true map (python-flint arb), cells of the ellipsoid",
+    level, cells = found.proof
+    return Found(level, cells, spent[0], list(found.tried))
+
+
+def region_certificate(model: "RecastModel", P: list[list[Fraction]], found: Found) -> dict[str, Any]:
+    """The ``discrete_interval`` certificate of a proved level."""
+    return {"kind": KIND, "method": "ball arithmetic on the true map (python-flint arb), cells of the ellipsoid",
             "time": "discrete", "variables": list(model.states),
-            "P": [[str(x) for x in row] for row in P], "level": str(level), "cells": proof.cells,
+            "P": [[str(x) for x in row] for row in P], "level": str(found.level), "cells": found.cells,
             "V_text": _v_terms(P, model.states, model.equilibrium)}
-    tried = [f"level {float(lv):.6g}: {'proved' if ok else 'not proved'}" for lv, ok in found.tried]
-    size = area(P, level)
-    summary = (f"region of attraction of the map: {{V <= {float(level):.6g}}} with V = e^T P e (P from the discrete "
-               "Lyapunov equation of the exact Jacobian), V(F(e)) < V(e) proved on it by ball arithmetic on the true "
-               "map (every start in it stays in it and converges to the fixed point)")
-    numbers: dict[str, Any] = {"level": float(level), "cells": proof.cells, "cells_spent": spent[0], "tried": tried}
+
+
+def roa(model: "RecastModel", budget: "Budget") -> ConditionResult:
+    """The largest sublevel set of the linearization's ``V`` proved a region of attraction (module docstring)."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    A = exact_jacobian(model)
+    if isinstance(A, str):
+        return ConditionResult("roa", "not_applicable", f"the map's Jacobian at the fixed point: {A}", property="ROA")
+    P = rounded_p(A)
+    if P is None or not is_positive_definite(P):
+        return ConditionResult("roa", "not_certified", "the discrete Lyapunov equation A^T P A - P = -I of the exact "
+                               "Jacobian has no positive definite solution (rounded): no quadratic V to start from",
+                               property="ROA")
+    found = level_search(model, P, budget, "roa")
+    if isinstance(found, ConditionResult):
+        return found
+    summary = (f"region of attraction of the map: {{V <= {float(found.level):.6g}}} with V = e^T P e (P from the "
+               "discrete Lyapunov equation of the exact Jacobian), V(F(e)) < V(e) proved on it by ball arithmetic on "
+               "the true map (every start in it stays in it and converges to the fixed point)")
+    numbers = found.numbers()
+    size = area(P, found.level)
     if size is not None:
         numbers["area"] = size
-    return ConditionResult("roa", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+    return ConditionResult("roa", "certified", summary, property="ROA", certificate=region_certificate(model, P, found),
+                           numbers=numbers)
 
 
-def verify_roa(model: "RecastModel", c: dict[str, Any]) -> tuple[bool, str]:
+def candidate_matrix(model: "RecastModel") -> list[list[Fraction]] | str:
+    """``P`` of the user's ``V = e^T P e`` (exact), or why the candidate is not such a form."""
+    from lyapcheck.models.engines.interval_region import quadratic_form
+
+    V = model.candidate_v
+    if V is None:
+        return "no candidate was given (--candidate)"
+    P = quadratic_form(model.system.ring, V, len(model.states))
+    if P is None:
+        return ("the candidate is not a quadratic form e^T P e in the state deviations (a term of another degree, or "
+                "a function of the states): on a map with functions the candidate class proves the sublevel sets of "
+                "a quadratic V only, by ball arithmetic on the true map")
+    return P
+
+
+def candidate(model: "RecastModel", budget: "Budget") -> ConditionResult:
+    """The user's quadratic ``V``: its largest level proved a region of attraction (module docstring)."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    P = candidate_matrix(model)
+    if isinstance(P, str):
+        return ConditionResult("candidate", "not_applicable", P, property="ROA")
+    if not is_positive_definite(P):
+        return ConditionResult("candidate", "not_certified", "the candidate V = e^T P e has P not positive definite "
+                               "(checked exactly): its sublevel sets are no bounded neighbourhoods of the fixed "
+                               "point, so none is a region of attraction", property="ROA")
+    found = level_search(model, P, budget, "candidate")
+    if isinstance(found, ConditionResult):
+        return found
+    cert = {**region_certificate(model, P, found), "V_from": "candidate"}
+    summary = (f"region of attraction of the map: {{V <= {float(found.level):.6g}}} with V the candidate, "
+               "V(F(e)) < V(e) proved on it by ball arithmetic on the true map (every start in it stays in it and "
+               "converges to the fixed point)")
+    numbers = found.numbers()
+    size = area(P, found.level)
+    if size is not None:
+        numbers["area"] = size
+    return ConditionResult("candidate", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+
+
+def verify_roa(model: "RecastModel", c: dict[str, Any], loops: Sequence[BallLoop | None] = (None,)
+               ) -> tuple[bool, str]:
     """A ``discrete_interval`` region re-proved from its certificate: ``P`` symmetric and positive definite
-    (exact), then the same cells at the stated level (at most :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS`)."""
+    (exact), then the same cells at the stated level (at most :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS`);
+    ``loops``: over a box, the map with each part of the box's parameters as balls."""
     from lyapcheck.sos.definiteness import is_positive_definite
 
     cert = c.get("certificate")
@@ -293,11 +390,28 @@ def verify_roa(model: "RecastModel", c: dict[str, Any]) -> tuple[bool, str]:
         return False, "P must be a symmetric matrix over the states"
     if not level > 0 or not is_positive_definite(P):
         return False, "P must be positive definite and the level > 0 (checked exactly)"
-    proof = prove_level(model, P, level, tolerances.BALL_LEVEL_CELLS)
-    if not proof.ok:
-        return False, f"V(F(e)) < V(e) is not proved on {{V <= {cert['level']}}}: {proof.why}"
-    return True, f"V(F(e)) < V(e) proved again on {{V <= {cert['level']}}} by ball arithmetic ({proof.cells} cells)"
+    ok, cells, why = prove_on_all(model, P, level, tolerances.BALL_LEVEL_CELLS, loops)
+    if not ok:
+        return False, f"V(F(e)) < V(e) is not proved on {{V <= {cert['level']}}}: {why}"
+    return True, f"V(F(e)) < V(e) proved again on {{V <= {cert['level']}}} by ball arithmetic ({cells} cells)"
+
+
+def verify_candidate(model: "RecastModel", c: dict[str, Any]) -> tuple[bool, str]:
+    """A certified ``candidate``: its certificate says the V is the user's (``"V_from": "candidate"``), its
+    ``P`` is the candidate's as the model text and the document's candidate give it (exactly), and the
+    level is proved again (:func:`verify_roa`)."""
+    cert = c.get("certificate")
+    if not isinstance(cert, dict) or cert.get("V_from") != "candidate":
+        return False, "a certified candidate on a map with functions states the user's V (\"V_from\": \"candidate\")"
+    P = candidate_matrix(model)
+    if isinstance(P, str):
+        return False, f"the document's candidate: {P}"
+    stated = [[Fraction(str(x)) for x in row] for row in cert["P"]]
+    if stated != P:
+        return False, "the stated P is not the candidate's (V = e^T P e of the document's candidate text)"
+    return verify_roa(model, c)
 
 
 __all__ = ["KIND", "NOT_YET", "exact_jacobian", "linearization", "verify_linearization", "MapDifference",
-           "MapGeometry", "roa", "verify_roa", "area"]
+           "MapGeometry", "Found", "prove_on_all", "level_search", "region_certificate", "roa", "verify_roa",
+           "candidate_matrix", "candidate", "verify_candidate", "area"]

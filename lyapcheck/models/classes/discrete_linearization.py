@@ -26,7 +26,7 @@ only on a map, and a continuous-time one never verifies against a map (nor this 
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Final, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
 from lyapcheck.models.classes.linearization import (Matrix, _fmpq_mat, characteristic_polynomial,
                                                     hurwitz_determinants, imaginary_axis_roots, jacobian,
@@ -35,6 +35,9 @@ from lyapcheck.models.loop.field import ShiftedField
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.definiteness import is_positive_definite
 from lyapcheck.sos.polynomials import to_fraction
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.language.parameter_box import ModelBox
 
 #: the key and value every discrete-time linearization certificate carries
 TIME_KEY: Final = "time"
@@ -187,6 +190,64 @@ def decide(A: Matrix) -> ConditionResult:
     return ConditionResult("linearization", "inconclusive", why.summary, numbers=why.numbers(numbers))
 
 
+# -- over a box of parameters: an unstable corner (or centre) refutes the box's claim ------------------------
+
+#: the method of a map's refutation over a box: a value of the box (a corner or the centre) whose Jacobian is
+#: proved unstable by :func:`decide` (the same word as the continuous loops' box refutation)
+BOX_POINT_METHOD: Final = "box_point"
+
+
+def box_points(box: "ModelBox") -> list[dict[str, Fraction]]:
+    """The values of ``box`` decided one by one: its corners (where a gain is most extreme: an unstable value
+    of a box is most often at one), then its centre."""
+    return [*box.corners(), {name: box.center(name) for name in box.names}]
+
+
+def box_point_sentence(point: dict[str, Fraction], at: str) -> str:
+    """The claim of a refutation at ``point`` of the box (``at``: the point decision's sentence)."""
+    from lyapcheck.models.classes.linearization import lower_first, point_words
+
+    return f"at {point_words(point)}, a value of the box, {lower_first(at)}"
+
+
+def refute_over_box(jacobian_at: Callable[[dict[str, Fraction]], Matrix], box: "ModelBox") -> ConditionResult | None:
+    """``refuted`` for the whole box when the exact Jacobian at one of :func:`box_points` (``jacobian_at``
+    of a parameter point) has an eigenvalue of modulus > 1 (:func:`decide`: one value of the box where the
+    fixed point is unstable makes a claim for every value false), naming that value; None when none is
+    (a corner or centre that is stable or critical proves nothing about the rest of the box)."""
+    for point in box_points(box):
+        at = decide(jacobian_at(point))
+        if at.status == "refuted":
+            data = {TIME_KEY: TIME_VALUE, "method": BOX_POINT_METHOD, "point": {k: str(v) for k, v in point.items()},
+                    "at_point": at.refutation}
+            return ConditionResult("linearization", "refuted", box_point_sentence(point, at.summary),
+                                   numbers=at.numbers, refutation=data)
+    return None
+
+
+def verify_box_point(jacobian_at: Callable[[dict[str, Fraction]], Matrix], box: "ModelBox", data: dict[str, Any]
+                     ) -> tuple[bool, str]:
+    """Re-check a refutation of :func:`refute_over_box`: the stated point in the box (every parameter named,
+    exact bounds) and the point refutation again on the Jacobian the map gives there."""
+    if not is_discrete_certificate(data) or data.get("method") != BOX_POINT_METHOD:
+        return False, f"not a map's refutation at a value of the box (method {data.get('method')!r})"
+    try:
+        point = {str(k): Fraction(v) for k, v in (data.get("point") or {}).items()}
+    except (TypeError, ValueError, ZeroDivisionError) as exc:
+        return False, f"malformed point: {exc}"
+    if set(point) != set(box.names):
+        return False, "the stated point does not name every parameter of the box"
+    for name, value in point.items():
+        lo, hi = box.interval(name)
+        if not lo <= value <= hi:
+            return False, f"the stated {name} = {value} is not in the box [{lo}, {hi}]"
+    at = data.get("at_point")
+    if not isinstance(at, dict):
+        return False, "the refutation at the point is missing"
+    ok, why = verify_matrix(jacobian_at(point), "refuted", at)
+    return (True, f"at a value of the box: {why}") if ok else (False, f"at the stated point: {why}")
+
+
 def is_discrete_certificate(data: Any) -> bool:
     """A linearization certificate or refutation of a map (it says ``"time": "discrete"``)."""
     return isinstance(data, dict) and data.get(TIME_KEY) == TIME_VALUE
@@ -238,8 +299,12 @@ def sentence(status: str, data: dict[str, Any]) -> str:
         return REFUTED_STEIN
     if status == "refuted" and method == "cayley_root_isolation":
         return refuted_root(str(data["root"]))
+    if status == "refuted" and method == BOX_POINT_METHOD:  # over a box: the value, then the point's own words
+        point = {str(k): Fraction(v) for k, v in data["point"].items()}
+        return box_point_sentence(point, sentence("refuted", data["at_point"]))
     raise ValueError(f"unknown discrete-time linearization method {method!r} for status {status!r}")
 
 
 __all__ = ["stein_solution", "stein_residual_ok", "cayley", "run", "decide", "verify", "verify_matrix", "sentence",
-           "is_discrete_certificate", "TIME_KEY", "TIME_VALUE"]
+           "is_discrete_certificate", "TIME_KEY", "TIME_VALUE", "BOX_POINT_METHOD", "box_points", "box_point_sentence",
+           "refute_over_box", "verify_box_point"]

@@ -51,10 +51,10 @@ A box widened after the fact changes the normalization, so the identity fails in
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Final, Literal, Mapping, Sequence
+from typing import Any, Callable, Final, Literal, Mapping, Sequence
 
 from lyapcheck import tolerances as tol
-from lyapcheck.models.classes import lyapunov
+from lyapcheck.models.classes import discrete_linearization, lyapunov
 from lyapcheck.models.classes.claims import box_prefix, discrete_lyapunov_sentence
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
@@ -85,6 +85,11 @@ MU_CEILING: Final = Fraction(1)
 FIGURE_DIGITS: Final = 12
 
 ClassName = Literal["quadratic", "sos_gas"]
+#: the S-procedure terms a map's decrease carries beyond ``V - V(F) - mu V`` (a box's ``r_j (1 - u_j^2)``, a map
+#: with functions' relations): given the decrease's monomials, its Grams, scalars, terms and the monomials they add
+Multipliers = Callable[[set[Monomial]], tuple[list[Gram], list[Scalar], list[Term], set[Monomial]]]
+#: one solve at decay rate ``mu`` on a built program: the exact certificate (or None) and the solver's answer
+Attempt = Callable[[Structure, Sequence[Monomial], Fraction], tuple["dict[str, Any] | None", Any]]
 
 
 class NotAMap(ValueError):
@@ -143,12 +148,16 @@ def decrease_name(k: int) -> str:
 
 
 def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Sequence[Sequence[int]],
-                     drop: frozenset[Monomial] = frozenset(), drop_v: frozenset[Monomial] = frozenset()
+                     drop: frozenset[Monomial] = frozenset(), drop_v: frozenset[Monomial] = frozenset(),
+                     multipliers: Multipliers | None = None, allowed: Callable[[Monomial], bool] | None = None
                      ) -> tuple[Structure, list[Monomial]] | str:
     """The program for a ``V`` of this degree and the monomials ``e^a`` its coefficients stand for,
     or why there is none: a size limit (the continuous classes' constants, named), or no strict
     certificate of this form. ``drop``/``drop_v``: monomials the remainder's / ``V``'s basis leaves
-    out (facial reduction, as :func:`lyapcheck.models.classes.lyapunov.lyapunov_program`)."""
+    out (facial reduction, as :func:`lyapcheck.models.classes.lyapunov.lyapunov_program`).
+    ``multipliers``: the decrease's S-procedure terms (default: a box's, none at a point; a map with
+    functions: its relations', :mod:`lyapcheck.models.classes.map_relations`); ``allowed``: the monomials
+    W's basis may hold (default: all; a relation may reduce some, as a cosine's square)."""
     nv = ring.nvars
     n = len(F)
     top = degree * map_degree(ring, F)
@@ -167,10 +176,15 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
     # over a box, the multipliers' bases lie in the half Newton polytope of the decrease; W's basis is not widened
     # by their products (as the continuous box form does): the monomials that adds (e.g. y^4 u where V(F) has no
     # y^8 u^2) are forced to 0 in W, and no strict certificate is left (tried on x+ = a x + y^2/5, y+ = y/2)
-    box_grams, box_terms_ = box_multipliers(nv, n, target, with_states=True, generators=generators)
+    if multipliers is None:
+        box_grams, box_terms_ = box_multipliers(nv, n, target, with_states=True, generators=generators)
+        extra_scalars: list[Scalar] = []
+    else:
+        box_grams, extra_scalars, box_terms_, added = multipliers(target)
+        target |= added
     if len(target) > lyapunov.TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", lyapunov.TARGET_LIMIT, "TARGET_LIMIT")
-    z_w = [m for m in bases.sos_basis(nv, target) if m not in drop]
+    z_w = [m for m in bases.sos_basis(nv, target) if m not in drop and (allowed is None or allowed(m))]
     if len(z_w) > lyapunov.MAX_GRAM_ROWS or len(z_v) > lyapunov.MAX_GRAM_ROWS:
         return size_limit(max(len(z_w), len(z_v)), "monomials per sum-of-squares matrix", lyapunov.MAX_GRAM_ROWS,
                           "MAX_GRAM_ROWS")
@@ -189,7 +203,7 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
         nvars=nv,
         grams=(Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks))),
                *box_grams),
-        scalars=tuple(Scalar(coefficient_name(k)) for k in range(len(alphas))),
+        scalars=tuple(Scalar(coefficient_name(k)) for k in range(len(alphas))) + tuple(extra_scalars),
         identities=(Identity("gram_V", tuple(gram_terms), None, "V"),
                     Identity("decrease", tuple(decrease_terms), None, "W")),
         objective=("max_margin",), trace_one=("V",))
@@ -215,14 +229,11 @@ def decrease_values(ring: Ring, F: Sequence[Poly], alphas: Sequence[Monomial], m
 
 # -- the exact check (the certificate alone and the map) ---------------------------------------------
 
-def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramPoly, mu: Fraction,
-                            box: BoxMultipliers = ()) -> tuple[bool, str]:
-    """``V - V(F) - mu V - sum_j r_j (1 - u_j^2) = W`` exactly, ``0 <= mu < 1``, ``V`` positive definite,
-    radially unbounded (:func:`~lyapcheck.sos.certificates.check_positive_definite_v`) and of the states
-    alone, ``W`` with ``Q_W > 0`` and a pure power of every state, each multiplier ``r_j`` PSD on a box
-    variable (none at a point): then ``V(F(e, u)) - V(e) <= -mu V(e) - W(e, u) < 0`` away from 0 for every
-    ``u`` of the box."""
-    n = len(F)
+def check_forms(V: GramPoly, W: GramPoly, mu: Fraction, n: int) -> tuple[bool, str]:
+    """What a map's certificate asks of its forms, exactly, whatever its identity: ``0 <= mu < 1``, ``V``
+    positive definite, radially unbounded (:func:`~lyapcheck.sos.certificates.check_positive_definite_v`) and
+    a polynomial of the ``n`` states alone (the ring's first variables), ``Q_W > 0`` with a pure power of every
+    state in W's basis (``W > 0`` away from the fixed point, whatever the other variables)."""
     if not 0 <= mu < MU_CEILING:
         return False, "the decay rate mu must satisfy 0 <= mu < 1"
     ok, why = check_positive_definite_v(V, n)
@@ -234,6 +245,20 @@ def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramP
         return False, "Q_W is not positive definite (exact)"
     if any(any(m[n:]) for m in V.basis):
         return False, "V must be a polynomial of the states alone (one V for every value of the box)"
+    return True, "the forms are"
+
+
+def check_discrete_lyapunov(ring: Ring, F: Sequence[Poly], V: GramPoly, W: GramPoly, mu: Fraction,
+                            box: BoxMultipliers = ()) -> tuple[bool, str]:
+    """``V - V(F) - mu V - sum_j r_j (1 - u_j^2) = W`` exactly, ``0 <= mu < 1``, ``V`` positive definite,
+    radially unbounded (:func:`~lyapcheck.sos.certificates.check_positive_definite_v`) and of the states
+    alone, ``W`` with ``Q_W > 0`` and a pure power of every state, each multiplier ``r_j`` PSD on a box
+    variable (none at a point): then ``V(F(e, u)) - V(e) <= -mu V(e) - W(e, u) < 0`` away from 0 for every
+    ``u`` of the box."""
+    n = len(F)
+    ok, why = check_forms(V, W, mu, n)
+    if not ok:
+        return False, why
     if any(not n <= j < ring.nvars for j, _ in box):
         return False, "a box multiplier names a variable that is not one of the box's parameters"
     boxed, box_why = box_terms(ring, box)
@@ -272,16 +297,27 @@ def search_degree(ring: Ring, F: Sequence[Poly], degree: int, search: Search) ->
     """A certificate with ``V`` of this degree and its best decay rate, or None and why not (the
     loop of :func:`lyapcheck.models.classes.lyapunov.search_degree`, on the map's program)."""
     generators = symmetry(ring, F)
+    return search_program(
+        degree, lambda drop, drop_v: discrete_program(ring, F, degree, generators, drop, drop_v),
+        lambda structure, alphas, mu: attempt(ring, F, structure, alphas, mu, search))
+
+
+def search_program(degree: int,
+                   build: Callable[[frozenset[Monomial], frozenset[Monomial]], tuple[Structure, list[Monomial]] | str],
+                   solve: Attempt) -> tuple[dict[str, Any] | None, str]:
+    """:func:`search_degree` on any map's program: ``build`` (the faces left out of W's and V's bases) and
+    ``solve`` (one solve and its exact check at a decay rate): facial reduction at ``mu = 0``, then the best
+    decay rate (:func:`~lyapcheck.models.classes.lyapunov.best_decay_rate`)."""
     drop: frozenset[Monomial] = frozenset()
     drop_v: frozenset[Monomial] = frozenset()
     label = f"degree {degree}"
     why = "none found"
     for _ in range(lyapunov.LYAPUNOV_FACIAL_ROUNDS + 1):
-        built = discrete_program(ring, F, degree, generators, drop, drop_v)
+        built = build(drop, drop_v)
         if isinstance(built, str):
             return None, f"{label}: {built}" + (f" (after facial reduction, where {why})" if drop or drop_v else "")
         structure, alphas = built
-        found, solution = attempt(ring, F, structure, alphas, Fraction(0), search)
+        found, solution = solve(structure, alphas, Fraction(0))
         if found is not None:
             break
         why = lyapunov.failure(solution, exact_tried=solution.usable
@@ -296,7 +332,7 @@ def search_degree(ring: Ring, F: Sequence[Poly], degree: int, search: Search) ->
         drop, drop_v = drop | vanishing, drop_v | vanishing_v
     else:
         return None, f"{label}: {why} (after {lyapunov.LYAPUNOV_FACIAL_ROUNDS} rounds of facial reduction)"
-    found = lyapunov.best_decay_rate(lambda mu: attempt(ring, F, structure, alphas, mu, search)[0], found)
+    found = lyapunov.best_decay_rate(lambda mu: solve(structure, alphas, mu)[0], found)
     found["degree"] = degree
     return found, f"{label}: found"
 
@@ -484,13 +520,14 @@ def _check_ges_figures(P: Sequence[Sequence[Fraction]], mu: Fraction, figures: M
 # -- a map over a box: what is taken ------------------------------------------------------------------
 
 #: the classes a polynomial map takes over a box of parameters (``certify --box``): one V for every value
-BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas")
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
 
 
 def not_over_box(name: str) -> str:
     """The ``not_applicable`` sentence of a class other than :data:`BOX_CLASSES` on a map over a box."""
     return (f"{name} is decided at one parameter value only on a map (certify a point with --set NAME=VALUE); "
-            "over a box, linearization proves LES, quadratic GES and sos_gas GAS for every value of the box")
+            "over a box, linearization proves LES, quadratic GES, sos_gas GAS, roa and candidate a region of "
+            "attraction and sos_bound an ultimate bound for every value of the box")
 
 
 # -- linearization over a box: one Stein certificate for every Jacobian of the box --------------------
@@ -510,13 +547,28 @@ def jacobian_map(ring: Ring, F: Sequence[Poly]) -> tuple[Poly, ...]:
     return tuple(out)
 
 
+def jacobian_at(ring: Ring, A: Sequence[Poly], shifted: ShiftedField, point: Mapping[str, Fraction]
+                ) -> list[list[Fraction]]:
+    """The exact Jacobian at the fixed point for one parameter value of the box (``point``, by name): the
+    linear map ``A(u) e`` of :func:`jacobian_map` at that value's normalized ``u = (p - centre) / half``."""
+    assert shifted.box is not None
+    n = len(A)
+    box = shifted.box
+    at = {coordinate: (point[name] - box.center(name)) / box.half(name)
+          for coordinate, name in zip(shifted.box_names, box.names)}
+    units = [tuple(int(k == j) for k in range(ring.nvars)) for j in range(n)]
+    return [[Fraction(ring.terms(ring.substitute(a, at)).get(unit, 0)) for unit in units] for a in A]
+
+
 def run_linearization_box(shifted: ShiftedField, budget: Budget | None = None) -> ConditionResult:
     """``linearization`` of a map over a box: a quadratic ``V = e^T P e`` common to the box with
     ``V(A(u) e) - V(e) <= -mu V(e) - W(e, u)`` for every ``u`` (the quadratic class's program on the linear
     map ``A(u) e``, box multipliers and all). Then every ``A(u)`` has ``A(u)^T P A(u) - P < 0``: every
     eigenvalue of modulus < 1, so the fixed point is locally exponentially stable for every value of the
-    box. None found is ``not_certified`` (a box reaching an unstable gain has none; a stable box may need a
-    ``P`` that depends on the parameters, not taken here)."""
+    box. First the box's corners and centre are decided exactly at their values
+    (:func:`~lyapcheck.models.classes.discrete_linearization.refute_over_box`): an unstable one is ``refuted``
+    for the box, naming it. None found is ``not_certified`` (a box reaching an unstable value strictly inside
+    has none; a stable box may need a ``P`` that depends on the parameters, not taken here)."""
     from lyapcheck.models.classes.claims import DISCRETE_BOX_STEIN_SENTENCE
 
     try:
@@ -524,6 +576,11 @@ def run_linearization_box(shifted: ShiftedField, budget: Budget | None = None) -
     except NotAMap as exc:
         return ConditionResult("linearization", "not_applicable", f"not a polynomial map: {exc}")
     A = jacobian_map(ring, F)
+    assert shifted.box is not None
+    # an unstable corner (or centre) first: exact and cheap, and it decides the box where no P could exist
+    unstable = discrete_linearization.refute_over_box(lambda point: jacobian_at(ring, A, shifted, point), shifted.box)
+    if unstable is not None:
+        return unstable
     search = Search(ring, budget if budget is not None else
                     Budget(tol.MODEL_CLASS_TIME_LIMIT_S, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S"))
     try:
@@ -550,7 +607,18 @@ def run_linearization_box(shifted: ShiftedField, budget: Budget | None = None) -
 
 def verify_linearization_box(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-check a map's ``linearization`` over a box: ``A(u) e`` re-derived from the shifted map with the box's
-    coordinates, the identity with its multipliers, ``V`` quadratic and positive definite, exactly."""
+    coordinates, the identity with its multipliers, ``V`` quadratic and positive definite, exactly; a
+    refutation by the point decision at its stated value of the box
+    (:func:`~lyapcheck.models.classes.discrete_linearization.verify_box_point`)."""
+    if status == "refuted":
+        try:
+            ring, F = map_polynomials(shifted)
+        except NotAMap as exc:
+            return False, f"not a polynomial map: {exc}"
+        A = jacobian_map(ring, F)
+        assert shifted.box is not None
+        return discrete_linearization.verify_box_point(lambda point: jacobian_at(ring, A, shifted, point),
+                                                       shifted.box, dict(data))
     if status != "certified":
         return False, f"a {status} linearization over a box, which a map never states"
     try:

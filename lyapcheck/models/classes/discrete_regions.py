@@ -52,10 +52,10 @@ from lyapcheck.models.classes.claims import discrete_region_sentence
 from lyapcheck.models.classes.discrete_lyapunov import NotAMap, compose, map_degree, map_polynomials
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import EXACT_TRY_MARGIN, Budget, BudgetExhausted, ParameterValues, Search, \
-    literal, one, param
+    box_multipliers, box_multipliers_from_json, box_multipliers_of, box_support, literal, multiplier_grams, one, param
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
-from lyapcheck.sos.certificates import GramPoly, check_positive_definite_v
+from lyapcheck.sos.certificates import BoxMultipliers, GramPoly, box_terms, check_positive_definite_v
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term
 
@@ -94,53 +94,66 @@ ESCAPE_RADIUS: Final = 1e6
 #: a simulated iterate of a start in the set with V above the level times (1 + this) left the set: a
 #: soundness alarm (floating-point slack only: the certificate proves V(e_k) <= level)
 LEFT_SET_SLACK: Final = 1e-9
+#: over a box, the multiplier ``s`` may carry the box's parameters up to this degree (as the continuous
+#: classes' :data:`lyapcheck.models.classes.regions.MULTIPLIER_PARAM_DEGREE`: the set is common, the
+#: decrease it needs is not)
+BOX_MULTIPLIER_PARAM_DEGREE: Final = 1
 
 
 # -- the certificate and its exact check --------------------------------------------------------------
 
-def margin_polynomial(ring: Ring, V: GramPoly) -> Poly:
-    """``m(e) = sum_i e_i^(2 k_i)``, ``e_i^(k_i)`` the lowest pure power of ``e_i`` in ``V``'s basis
+def margin_polynomial(ring: Ring, V: GramPoly, n: int | None = None) -> Poly:
+    """``m(e) = sum_i e_i^(2 k_i)``, ``e_i^(k_i)`` the lowest pure power of ``e_i`` in ``V``'s basis, over the
+    ``n`` states (the ring's first variables; by default all of them, a box's parameters after them)
     (ValueError when a state has none: such a ``V`` is not positive definite either)."""
-    n = ring.nvars
+    n = ring.nvars if n is None else n
     m = ring.zero()
     for i in range(n):
         powers = [b[i] for b in V.basis if b[i] > 0 and sum(b) == b[i]]
         if not powers:
             raise ValueError(f"V's basis holds no pure power of {ring.names[i]}")
-        m += ring.monomial(tuple(2 * min(powers) if k == i else 0 for k in range(n)))
+        m += ring.monomial(tuple(2 * min(powers) if k == i else 0 for k in range(ring.nvars)))
     return m
 
 
 @dataclass(frozen=True)
 class DiscreteSublevel:
-    """A certificate of kind :data:`KIND` (module docstring), exact."""
+    """A certificate of kind :data:`KIND` (module docstring), exact; over a box, with the S-procedure
+    multipliers ``r_j`` of ``1 - u_j^2`` (``box``; the box itself is the document's)."""
 
     V: GramPoly
     level: Fraction
     eps: Fraction
     s: GramPoly
     sigma: GramPoly
+    box: BoxMultipliers = ()
 
     def to_json(self, ring: Ring) -> dict[str, Any]:
         from lyapcheck.models.classes.lyapunov import terms_json
 
-        return {"kind": KIND, "time": "discrete", "V": terms_json(ring, self.V.poly(ring)), "level": str(self.level),
-                "eps": str(self.eps), "gram_V": self.V.to_json(), "gram_s": self.s.to_json(),
-                "gram_sigma": self.sigma.to_json()}
+        out: dict[str, Any] = {"kind": KIND, "time": "discrete", "V": terms_json(ring, self.V.poly(ring)),
+                               "level": str(self.level), "eps": str(self.eps), "gram_V": self.V.to_json(),
+                               "gram_s": self.s.to_json(), "gram_sigma": self.sigma.to_json()}
+        if self.box:
+            out["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in self.box]
+        return out
 
     @classmethod
-    def from_json(cls, cert: Mapping[str, Any], n: int) -> "DiscreteSublevel":
-        return cls(GramPoly.from_json(cert["gram_V"], n), Fraction(cert["level"]), Fraction(cert["eps"]),
-                   GramPoly.from_json(cert["gram_s"], n), GramPoly.from_json(cert["gram_sigma"], n))
+    def from_json(cls, cert: Mapping[str, Any], nv: int) -> "DiscreteSublevel":
+        return cls(GramPoly.from_json(cert["gram_V"], nv), Fraction(cert["level"]), Fraction(cert["eps"]),
+                   GramPoly.from_json(cert["gram_s"], nv), GramPoly.from_json(cert["gram_sigma"], nv),
+                   tuple(box_multipliers_from_json(cert.get("box_multipliers", []), nv)))
 
 
 def check_discrete_sublevel(ring: Ring, F: Sequence[Poly], cert: DiscreteSublevel) -> tuple[bool, str]:
-    """``V - V(F) - eps m - s (c - V) = sigma`` exactly, with ``c > 0``, ``eps > 0``, ``V`` positive definite
-    and radially unbounded, ``Q_s, Q_sigma >= 0``: then ``{V <= c}`` is a forward-invariant region of
-    attraction of the map (module docstring). Reads the certificate and the map alone."""
+    """``V - V(F) - eps m - s (c - V) - sum_j r_j (1 - u_j^2) = sigma`` exactly, with ``c > 0``, ``eps > 0``,
+    ``V`` positive definite, radially unbounded and of the states alone, ``Q_s, Q_sigma >= 0``, each ``r_j``
+    PSD on a box variable (none at a point): then ``{V <= c}`` is a forward-invariant region of attraction
+    of the map for every parameter value of the box (module docstring: on the box ``1 - u_j^2 >= 0``).
+    Reads the certificate and the map alone."""
     from lyapcheck.sos.definiteness import is_positive_semidefinite
 
-    n = ring.nvars
+    n = len(F)
     if cert.level <= 0:
         return False, "the level c must be > 0"
     if cert.eps <= 0:
@@ -150,11 +163,23 @@ def check_discrete_sublevel(ring: Ring, F: Sequence[Poly], cert: DiscreteSubleve
         return False, why
     if not is_positive_semidefinite(cert.s.Q) or not is_positive_semidefinite(cert.sigma.Q):
         return False, "Q_s or Q_sigma is not positive semidefinite (exact)"
+    if any(any(m[n:]) for m in cert.V.basis):
+        return False, "V must be a polynomial of the states alone (one set for every value of the box)"
+    if any(not n <= j < ring.nvars for j, _ in cert.box):
+        return False, "a box multiplier names a variable that is not one of the box's parameters"
+    boxed, box_why = box_terms(ring, cert.box)
+    if box_why is not None:
+        return False, box_why
     v = cert.V.poly(ring)
-    lhs = v - compose(ring, v, F) - margin_polynomial(ring, cert.V) * to_fmpq(cert.eps) \
-        - cert.s.poly(ring) * (ring.constant(cert.level) - v)
+    lhs = v - compose(ring, v, F) - margin_polynomial(ring, cert.V, n) * to_fmpq(cert.eps) \
+        - cert.s.poly(ring) * (ring.constant(cert.level) - v) - boxed
     if lhs != cert.sigma.poly(ring):
-        return False, "the identity V - V(F) - eps m - s (c - V) = sigma does not hold exactly"
+        return False, ("the identity V - V(F) - eps m - s (c - V) = sigma does not hold exactly"
+                       + (" (with the box's multipliers)" if cert.box else ""))
+    if cert.box:
+        return True, ("Q_V > 0, Q_s >= 0, Q_sigma >= 0, the box's multipliers PSD, eps > 0 and V - V(F) - eps m - "
+                      "s (c - V) - sum r_j (1 - u_j^2) = sigma, exactly: V(F(e, u)) <= V(e) - eps m(e) on {V <= c} "
+                      "for every value of the box (discrete-time map)")
     return True, ("Q_V > 0, Q_s >= 0, Q_sigma >= 0, eps > 0 and V - V(F) - eps m - s (c - V) = sigma, exactly: "
                   "V(F(e)) <= V(e) - eps m(e) on {V <= c} (discrete-time map)")
 
@@ -183,25 +208,30 @@ def level_program(ring: Ring, F: Sequence[Poly], V: GramPoly, generators: Sequen
     from lyapcheck.models.classes.lyapunov import CANDIDATE_LIMIT, MAX_GRAM_ROWS, TARGET_LIMIT, affordable
     from lyapcheck.models.engines.reasons import size_limit
 
-    n = ring.nvars
-    zero = tuple([0] * n)
+    nv, n = ring.nvars, len(F)
+    zero = tuple([0] * nv)
     v = V.poly(ring)
     decrease = v - compose(ring, v, F)
     ks = multiplier_half_degree(ring, F, v)
     dv = max(sum(m) for m in ring.support(v))
-    if bases.candidate_count(n, max(dv * map_degree(ring, F), 2 * ks + dv)) > CANDIDATE_LIMIT:
-        return size_limit(bases.candidate_count(n, 2 * ks + dv), "candidate monomials", CANDIDATE_LIMIT,
+    pd = BOX_MULTIPLIER_PARAM_DEGREE if nv > n else 0  # over a box, s may depend on the box's parameters
+    if bases.candidate_count(nv, max(dv * map_degree(ring, F), 2 * ks + dv) + 2 * pd) > CANDIDATE_LIMIT:
+        return size_limit(bases.candidate_count(nv, 2 * ks + dv + 2 * pd), "candidate monomials", CANDIDATE_LIMIT,
                           "CANDIDATE_LIMIT")
-    z_s = monomials(n, 1, ks)
+    # (at a point nv == n and pd == 0: the monomials of degree 1 to ks of the states, as ever)
+    z_s = [m for m in monomials(nv, 1, ks + pd) if 1 <= sum(m[:n]) <= ks and sum(m[n:]) <= pd]
     s_blocks = bases.character_blocks(z_s, generators)
     v_support = set(ring.support(v)) | {zero}
-    margin = margin_polynomial(ring, V)
+    margin = margin_polynomial(ring, V, n)
     s_products = {tuple(a + b for a, b in zip(z_s[i], z_s[j])) for idx in s_blocks for i in idx for j in idx}
     target = set(ring.support(decrease)) | set(ring.support(margin)) \
         | {tuple(a + b for a, b in zip(m, q)) for m in s_products for q in v_support}
+    # over a box: - sum_j r_j (1 - u_j^2), the multipliers' bases matched to the identity's other terms
+    box_grams, box_terms_ = box_multipliers(nv, n, target, with_states=True, generators=generators)
+    target |= box_support(box_grams, nv)
     if len(target) > TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
-    z_sigma = [m for m in bases.sos_basis(n, target) if m not in drop]
+    z_sigma = [m for m in bases.sos_basis(nv, target) if m not in drop]
     if not z_sigma:
         return "no strict certificate of this form exists (sigma's basis is empty)"
     if max(len(z_sigma), len(z_s)) > MAX_GRAM_ROWS:
@@ -210,9 +240,9 @@ def level_program(ring: Ring, F: Sequence[Poly], V: GramPoly, generators: Sequen
     sigma_blocks = bases.character_blocks(z_sigma, generators)
     terms = (Term(param("Vc", v_support), "s"), Term(literal(ring, {m: -c for m, c in ring.terms(margin).items()}),
                                                      "eps"),
-             Term(one(ring, -1), "sigma"))
-    structure = Structure(nvars=n, grams=(Gram("s", tuple(z_s), tuple(map(tuple, s_blocks))),
-                                          Gram("sigma", tuple(z_sigma), tuple(map(tuple, sigma_blocks)))),
+             *box_terms_, Term(one(ring, -1), "sigma"))
+    structure = Structure(nvars=nv, grams=(Gram("s", tuple(z_s), tuple(map(tuple, s_blocks))),
+                                           Gram("sigma", tuple(z_sigma), tuple(map(tuple, sigma_blocks))), *box_grams),
                           scalars=(Scalar("eps", lower="margin"),),
                           identities=(Identity(KIND, terms, param("DV", ring.support(decrease) or [zero]), "sigma"),),
                           objective=("max_margin",))
@@ -260,7 +290,8 @@ class LevelProgram:
                 if point is not None:
                     cert = DiscreteSublevel(self.V, level, point.scalars["eps"],
                                             GramPoly.of(structure.gram("s").basis, point.grams["s"]),
-                                            GramPoly.of(structure.gram("sigma").basis, point.grams["sigma"]))
+                                            GramPoly.of(structure.gram("sigma").basis, point.grams["sigma"]),
+                                            tuple(box_multipliers_of(point.grams, multiplier_grams(structure))))
                     if check_discrete_sublevel(self.ring, self.F, cert)[0]:
                         return cert
             vanishing = vanishing_monomials(structure.gram("sigma"), solution)
@@ -297,17 +328,20 @@ def largest_level(ring: Ring, F: Sequence[Poly], V: GramPoly, search: Search, fi
 def level_estimate(ring: Ring, F: Sequence[Poly], V: Poly, radius: float) -> tuple[float, bool]:
     """``min V`` over sampled ``e`` (a ball of ``radius``) where ``V(F(e)) >= V(e)``, ``e != 0``: a numerical
     upper bound of the largest provable level, and True; where no sample has it, ``max V`` over the
-    samples and False (the search then grows the level from there)."""
+    samples and False (the search then grows the level from there). Over a box, the samples are taken at
+    its centre and its corners (:func:`lyapcheck.models.classes.regions.box_samples`): the set is common."""
     import numpy as np
 
+    from lyapcheck.models.classes.regions import box_samples
     from lyapcheck.models.engines.numeric import NumericPoly
 
-    n = ring.nvars
+    n = len(F)
     rng = np.random.default_rng(20261129)
     directions = rng.normal(size=(ESTIMATE_DIRECTIONS, n))
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     radii = np.linspace(radius / ESTIMATE_RADII, radius, ESTIMATE_RADII)
-    points = (directions[:, None, :] * radii[None, :, None]).reshape(-1, n)
+    states = (directions[:, None, :] * radii[None, :, None]).reshape(-1, n)
+    points = np.vstack([np.hstack([states, np.tile(u, (states.shape[0], 1))]) for u in box_samples(ring.nvars - n)])
     v_num = NumericPoly(ring, V)
     dv_num = NumericPoly(ring, compose(ring, V, F) - V)
     with np.errstate(all="ignore"):
@@ -371,6 +405,30 @@ def stein_v(ring: Ring, F: Sequence[Poly]) -> GramPoly | None:
         return None
     basis = [tuple(int(k == i) for k in range(n)) for i in range(n)]
     return GramPoly.of(basis, P)
+
+
+def at_centre(ring: Ring, F: Sequence[Poly]) -> tuple[Ring, tuple[Poly, ...]]:
+    """The map at the box's centre (``u = 0``) in the ring of the states alone; the map itself at a point."""
+    n = len(F)
+    if ring.nvars == n:
+        return ring, tuple(F)
+    states = Ring(ring.names[:n])
+    centre = {name: Fraction(0) for name in ring.names[n:]}
+    return states, tuple(ring.restrict(ring.substitute(fi, centre), states) for fi in F)
+
+
+def on_box(V: GramPoly, nv: int) -> GramPoly:
+    """A ``V`` of the states alone (its basis over the states) in the ring of the states and a box's
+    parameters (the basis padded with exponents 0: one ``V`` for every value of the box)."""
+    pad = nv - len(V.basis[0])
+    return V if pad == 0 else GramPoly.of([tuple(b) + (0,) * pad for b in V.basis], V.Q)
+
+
+def on_states(V: GramPoly, n: int) -> GramPoly:
+    """The inverse of :func:`on_box`: a ``V`` of the states alone with its basis over the ``n`` states."""
+    if any(any(b[n:]) for b in V.basis):
+        raise ValueError("V depends on the box's parameters")
+    return GramPoly.of([tuple(b[:n]) for b in V.basis], V.Q)
 
 
 def _ring_map(shifted: "ShiftedField", name: str) -> tuple[Ring, tuple[Poly, ...]] | ConditionResult:
@@ -439,10 +497,12 @@ def _simulated(model: "Model", ring: Ring, F: Sequence[Poly], cert: DiscreteSubl
     from lyapcheck.models.classes.field_regions import roa_starts
     from lyapcheck.models.engines.numeric import NumericPoly
 
+    # over a box, the map at its centre (an estimate; the certificate holds for every value)
+    ring, F = at_centre(ring, F)
     eq = np.array([float(x) for x in model.equilibrium])
     starts = roa_starts(model) - eq
     converged = simulated_region(ring, F, starts, _half_width(model))
-    v = cert.V.poly(ring)
+    v = on_states(cert.V, ring.nvars).poly(ring)
     inside = NumericPoly(ring, v)(starts) <= float(cert.level)
     out: dict[str, Any] = {"simulated_starts": int(len(starts)),
                            "simulated_roa_share_of_domain": float(np.mean(converged))}
@@ -455,12 +515,39 @@ def _simulated(model: "Model", ring: Ring, F: Sequence[Poly], cert: DiscreteSubl
     return out
 
 
+def box_stein_v(ring: Ring, F: Sequence[Poly], budget: Budget) -> GramPoly | None:
+    """Over a box: a quadratic ``V`` whose decrease along the Jacobian map ``A(u) e`` is proved for every
+    value of the box (the certificate of ``linearization`` over a box,
+    :func:`lyapcheck.models.classes.discrete_lyapunov.run_linearization_box`'s program), or None. The centre's
+    Stein ``V`` need not decrease at the box's corners; this one does, near the fixed point."""
+    from lyapcheck.models.classes.discrete_lyapunov import jacobian_map, search_degree
+
+    found, _ = search_degree(ring, jacobian_map(ring, F), 2, Search(ring, budget))
+    return None if found is None else found["V"]
+
+
 def run_roa(model: "Model", shifted: "ShiftedField", budget: Budget) -> ConditionResult:
-    """``roa`` on the map: the largest proved level of the linearization's quadratic ``V``."""
+    """``roa`` on the map: the largest proved level of the linearization's quadratic ``V`` (over a box, one
+    common to the box's Jacobians, :func:`box_stein_v`, and one level for every value of the box)."""
     found = _ring_map(shifted, "roa")
     if isinstance(found, ConditionResult):
         return found
     ring, F = found
+    if ring.nvars > len(F):
+        try:
+            V = box_stein_v(ring, F, budget)
+        except BudgetExhausted as exc:
+            late = reasons.out_of_time("a quadratic V common to the box's Jacobians", budget.seconds, str(exc),
+                                       ("time",))
+            return ConditionResult("roa", "inconclusive", late.summary, property="ROA",
+                                   numbers=late.numbers({"reason": str(exc), "time": "discrete"}))
+        if V is None:
+            why = reasons.reason("no P > 0 with A(p)^T P A(p) - P < 0 for every p of the box was found (see "
+                                 "linearization), so no quadratic V common to the box starts the search",
+                                 ("candidate",), "a narrower box, or certify a point with --set NAME=VALUE")
+            return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers({"time": "discrete"}),
+                                   property="ROA")
+        return region("roa", model, ring, F, V, budget, "the quadratic V common to the box's linearizations")
     V = stein_v(ring, F)
     if V is None:
         why = reasons.reason("A^T P A - P = -I has no positive definite solution P for the map's Jacobian A at the "
@@ -484,8 +571,12 @@ def run_candidate(model: "Model", shifted: "ShiftedField", cand: "Candidate", bu
     full = model.state_ring
     gens = full.gens()
     images = [g + to_fmpq(e) for g, e in zip(gens[:model.n], model.equilibrium)] + list(gens[model.n:])
-    v = full.restrict(full.compose(cand.poly, images), ring)
-    V = gram_of(StateField(ring=ring, g=F, D=ring.constant(1)), v, Search(ring, budget))
+    # V is of the states alone (over a box, one V for every value: a parameter in the text is the model's value,
+    # parse_candidate), shown positive definite in their ring, then read in the map's
+    states, F_states = at_centre(ring, F)
+    v = full.restrict(full.compose(cand.poly, images), states)
+    shown = gram_of(StateField(ring=states, g=F_states, D=states.constant(1)), v, Search(states, budget))
+    V = None if shown is None else on_box(shown, ring.nvars)
     if V is None:
         why = reasons.reason("the candidate V could not be proved positive definite and radially unbounded",
                              ("other_candidate",), "no positive definite Gram matrix over its reduced basis with a "
@@ -500,7 +591,8 @@ def run_candidate(model: "Model", shifted: "ShiftedField", cand: "Candidate", bu
 def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-check a certified ``roa`` or ``candidate`` of a map from its JSON and the map alone, without a
     solver: the identity and the signs exactly (:func:`check_discrete_sublevel`), the stated ``V`` the Gram
-    ``V``, the stated level at most the certified one, the property and the sentence."""
+    ``V``, the stated level at most the certified one, the property and the sentence. Over a box the map is
+    re-derived with the box's coordinates (``shifted``), so a box widened after the fact fails the identity."""
     if c.get("status") != "certified":
         return True, f"status {c.get('status')}: no certificate to check"
     try:
@@ -512,6 +604,8 @@ def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any]) -> tuple[bo
         stated = c["level"]
     except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError, NotAMap) as exc:
         return False, f"malformed certificate: {exc}"
+    if found.box and shifted.box is None:
+        return False, "box multipliers in the certificate of a map without a box"
     try:
         ok, why = check_discrete_sublevel(ring, F, found)
     except ValueError as exc:
@@ -530,4 +624,5 @@ def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any]) -> tuple[bo
 
 
 __all__ = ["KIND", "DiscreteSublevel", "margin_polynomial", "check_discrete_sublevel", "level_program",
-           "largest_level", "level_estimate", "simulated_region", "stein_v", "run_roa", "run_candidate", "verify"]
+           "largest_level", "level_estimate", "simulated_region", "stein_v", "box_stein_v", "at_centre", "on_box",
+           "on_states", "run_roa", "run_candidate", "verify"]

@@ -616,7 +616,7 @@ def linearization(loop: Loop) -> ConditionResult:
     from lyapcheck.models.classes.linearization import decide
 
     J = jacobian(loop)
-    if isinstance(J, str):
+    if isinstance(J, str):  # (a kink at the equilibrium: lyapcheck.models.classes.piecewise_linearization then)
         return ConditionResult("linearization", "not_applicable", J, property="LES")
     return decide(J)
 

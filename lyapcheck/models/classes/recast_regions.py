@@ -179,6 +179,12 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
     V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
     from lyapcheck.models.engines import reasons
 
+    if V0 is None and isinstance(J, str):  # (a kink at the equilibrium: linearization may still prove LES)
+        why = reasons.reason(f"no region of attraction was proved: the Jacobian does not exist at the equilibrium "
+                             f"({J}), so the SOS route has no quadratic V to start from, and a piecewise-linear "
+                             "proof of linearization holds in a neighbourhood whose size it does not bound",
+                             ("candidate",), [skipped, f"no Jacobian: {J}"])
+        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
     if V0 is None:
         why = reasons.reason("no region of attraction was proved: the linearization gives no quadratic V to start "
                              "the search from (see linearization)", ("candidate",),

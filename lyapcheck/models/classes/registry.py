@@ -129,7 +129,8 @@ class ModelClass:
     #: what a ``certified`` proves by default (a result may state another: ``quadratic`` GES or GAS)
     proves: Property
     #: it certifies every parameter value of a ``--box`` (:mod:`lyapcheck.models.loop.boxes`); else it
-    #: certifies a point only and is ``not_applicable`` over a box
+    #: certifies a point only and is ``not_applicable`` over a box (a polynomial map's own list is
+    #: :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`, which takes ``candidate`` too)
     over_box: bool
     #: it proves a stability property of the equilibrium: an unstable equilibrium (the linearization
     #: refuted, exactly) refutes it
@@ -192,12 +193,16 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                run_field=_runs.quadratic_field, run_functions=_runs.quadratic_functions,
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_lyapunov,
                run_map=_discrete.quadratic_map, verify_map=_vdiscrete.verify_lyapunov_map,
+               run_map_functions=_discrete.quadratic_map_functions,
+               verify_map_functions=_vdiscrete.verify_lyapunov_map_functions,
                figures=(_V_RATE, Figure("k", "k", "GES constant: |x(t) - x_eq| <= k |x0 - x_eq| exp(-rate t)"),
                         Figure("decay_rate_per_s", "decay_rate_per_s", "GES decay rate of |x|, 1/s"))),
     ModelClass("sos_gas", "stability", "GAS", over_box=True, stability=True, figures=(_V_RATE,),
                run_field=_runs.sos_gas_field, run_functions=_runs.sos_gas_functions,
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_lyapunov,
-               run_map=_discrete.sos_gas_map, verify_map=_vdiscrete.verify_lyapunov_map),
+               run_map=_discrete.sos_gas_map, verify_map=_vdiscrete.verify_lyapunov_map,
+               run_map_functions=_discrete.sos_gas_map_functions,
+               verify_map_functions=_vdiscrete.verify_lyapunov_map_functions),
     ModelClass("roa", "stability", "ROA", over_box=True, stability=True,
                run_field=_runs.roa_field, run_functions=_runs.roa_functions,
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region,
@@ -209,7 +214,9 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                zero_disturbance_only=True,
                run_field=_runs.candidate_field, run_functions=_runs.candidate_functions,
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region,
-               run_map=_discrete.candidate_map, verify_map=_vdiscrete.verify_region_map),
+               run_map=_discrete.candidate_map, verify_map=_vdiscrete.verify_region_map,
+               run_map_functions=_discrete.candidate_map_functions,
+               verify_map_functions=_vdiscrete.verify_candidate_map_functions),
     ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
                run_field=_runs.sos_bound_field, run_functions=_runs.sos_bound_functions,
                verify_field=_field.verify_sos_bound, verify_functions=_functions.verify_sos_bound,

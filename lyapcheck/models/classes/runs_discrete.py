@@ -13,7 +13,7 @@ was not given, ``roa`` once GAS is certified) is the runner's,
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.classes.contexts import MapFunctionsRun, MapRun, SampledRun
@@ -100,18 +100,62 @@ def sos_bound_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
 
 def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """The exact Jacobian of the map at its fixed point, by the discrete-time test
-    (:func:`lyapcheck.models.classes.discrete_functions.linearization`)."""
-    from lyapcheck.models.classes import discrete_functions
+    (:func:`lyapcheck.models.classes.discrete_functions.linearization`; at a kink at the fixed point the
+    piecewise-linear step form, :func:`lyapcheck.models.classes.piecewise_linearization.run_map`); over a box,
+    one ``P`` for every Jacobian of the box in ball arithmetic
+    (:func:`lyapcheck.models.classes.discrete_functions_box.linearization`)."""
+    from lyapcheck.models.classes import discrete_functions, discrete_functions_box, piecewise_linearization
 
-    return discrete_functions.linearization(ctx.model)
+    if ctx.box is not None:
+        return discrete_functions_box.linearization(ctx.model, ctx.box)
+    result = discrete_functions.linearization(ctx.model)
+    if result.status == "not_applicable":  # a kink at the fixed point: the piecewise-linear step form instead
+        return piecewise_linearization.run_map(ctx.model, result.summary) or result
+    return result
+
+
+def _map_relations(ctx: "MapFunctionsRun", name: "Literal['quadratic', 'sos_gas']", budget: "Budget"
+                   ) -> "ConditionResult":
+    """``quadratic`` or ``sos_gas`` on the recasting's relations, at a point only: over a box the runner says
+    ``not_applicable`` first; a direct call over a box says so too, never a claim proved at the centre alone."""
+    from lyapcheck.models.classes import map_relations
+    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
+    from lyapcheck.results import ConditionResult
+
+    if ctx.box is not None:
+        return ConditionResult(name, "not_applicable", NOT_OVER_BOX)
+    return map_relations.run(ctx.model, name, budget)
+
+
+def quadratic_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A quadratic V of the states with ``V(F) <= (1 - mu) V - W`` on the recasting's relations
+    (:func:`lyapcheck.models.classes.map_relations.run`)."""
+    return _map_relations(ctx, "quadratic", budget)
+
+
+def sos_gas_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A polynomial V of the states of the searched degrees, on the recasting's relations
+    (:func:`lyapcheck.models.classes.map_relations.run`)."""
+    return _map_relations(ctx, "sos_gas", budget)
 
 
 def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A quadratic V's largest level proved by ball arithmetic on the true map
-    (:func:`lyapcheck.models.classes.discrete_functions.roa`)."""
+    (:func:`lyapcheck.models.classes.discrete_functions.roa`); over a box, with its parameters as balls
+    (:func:`lyapcheck.models.classes.discrete_functions_box.roa`)."""
+    from lyapcheck.models.classes import discrete_functions, discrete_functions_box
+
+    if ctx.box is not None:
+        return discrete_functions_box.roa(ctx.model, ctx.box, budget)
+    return discrete_functions.roa(ctx.model, budget)
+
+
+def candidate_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """The user's quadratic V, its largest level proved by ball arithmetic on the true map
+    (:func:`lyapcheck.models.classes.discrete_functions.candidate`)."""
     from lyapcheck.models.classes import discrete_functions
 
-    return discrete_functions.roa(ctx.model, budget)
+    return discrete_functions.candidate(ctx.model, budget)
 
 
 # -- a sampled-data loop (lyapcheck.models.classes.sampled) ---------------------------------------------------
@@ -126,4 +170,5 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
 
 __all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
            "barrier_map", "reach_avoid_map", "sos_bound_map",
-           "linearization_map_functions", "roa_map_functions", "linearization_sampled"]
+           "linearization_map_functions", "quadratic_map_functions", "sos_gas_map_functions", "roa_map_functions",
+           "candidate_map_functions", "linearization_sampled"]

@@ -33,6 +33,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Sequence
 
+from lyapcheck.models.classes.claims import SAMPLED_METHOD, sampled_linearization_sentence, seconds_text
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Ring
 
@@ -45,8 +46,8 @@ Matrix = Sequence[Sequence[Fraction]]
 FIRST_PRECISION_BITS = 64
 #: the last: beyond it a ball of Routh's first column that still contains 0 leaves the case undecided
 MAX_PRECISION_BITS = 1024
-#: the certificate's method
-METHOD = "sampled_routh"
+#: the certificate's method (claims words its sentence)
+METHOD = SAMPLED_METHOD
 
 
 def _arb_matrix(rows: Matrix) -> Any:
@@ -145,16 +146,6 @@ def _spectral_radius_estimate(A: Matrix, B: Matrix, K: Matrix, period: Fraction)
         return None
 
 
-def seconds_text(period: Fraction) -> str:
-    """``period`` as an exact decimal where it has one (``1/50`` is ``0.02``), else ``p/q``."""
-    from lyapcheck.exact import exact_decimal
-
-    try:
-        return exact_decimal(period)
-    except ValueError:
-        return str(period)
-
-
 def _data(A: Matrix, B: Matrix, K: Matrix, period: Fraction) -> dict[str, Any]:
     def text(rows: Matrix) -> list[list[str]]:
         return [[str(x) for x in row] for row in rows]
@@ -178,18 +169,12 @@ def decide(A: Matrix, B: Matrix, K: Matrix, period: Fraction) -> ConditionResult
         bits *= 2
     data = {**_data(A, B, K, period), "precision_bits": bits, "routh_first_column": [str(c) for c in column]}
     at = seconds_text(period)
-    if changes == 0:
-        return ConditionResult(
-            "linearization", "certified",
-            f"the sampled-data loop (zero-order hold, period {at} s) is locally exponentially stable: every "
-            "eigenvalue of its Jacobian over one period, exp(A T) + Gamma(T) B K, has modulus < 1 (Cayley transform "
-            "and Routh's array in ball arithmetic, rigorous)", numbers=numbers, certificate=data)
+    if changes == 0:  # (the sentence is the claims module's, from the status and the period alone)
+        return ConditionResult("linearization", "certified", sampled_linearization_sentence("certified", period),
+                               numbers=numbers, certificate=data)
     if changes is not None:
-        return ConditionResult(
-            "linearization", "refuted",
-            f"the sampled-data loop (zero-order hold, period {at} s) is unstable: its Jacobian over one period "
-            f"has {changes} eigenvalue(s) of modulus > 1 (Cayley transform and Routh's array in ball arithmetic, "
-            "rigorous)", numbers=numbers, refutation=data)
+        return ConditionResult("linearization", "refuted", sampled_linearization_sentence("refuted", period),
+                               numbers=numbers, refutation=data)
     return ConditionResult(
         "linearization", "inconclusive",
         f"at period {at} s the Jacobian over one period could not be placed inside or outside the unit circle "

@@ -113,21 +113,58 @@ def verify_linearization_map_functions(name: str, c: dict[str, Any], check: "Map
                                        ) -> tuple[bool, str]:
     """``linearization``: the exact Jacobian again, then the discrete-time test
     (:func:`lyapcheck.models.classes.discrete_functions.verify_linearization`)."""
-    from lyapcheck.models.classes import discrete_functions
+    from lyapcheck.models.classes import discrete_functions, piecewise_linearization
+    from lyapcheck.models.classes.claims import summary
 
     if c["status"] not in _JACOBIAN_STATUSES:
         return False, check.not_checked(c["status"])
+    if check.box is not None:  # one P for every Jacobian of the box, decided again in ball arithmetic
+        from lyapcheck.models.classes import discrete_functions_box
+
+        return discrete_functions_box.verify_linearization(check.model, check.box, c["status"], _data(c))
+    if piecewise_linearization.is_certificate(_data(c)):  # a kink at the fixed point: the step form's check
+        model = check.model
+        ok, why = piecewise_linearization.verify(piecewise_linearization.map_loop(model), True, c["status"], _data(c))
+        if ok and c.get("summary") != summary(name, c):
+            return False, "the printed sentence is not the one the certificate supports"
+        return ok, why
     return discrete_functions.verify_linearization(check.model, c["status"], _data(c))
+
+
+def verify_lyapunov_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
+    """``quadratic``, ``sos_gas``: the map and its relations re-derived, the identity re-checked exactly
+    (:func:`lyapcheck.models.classes.map_relations.verify`)."""
+    from lyapcheck.models.classes import map_relations
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return map_relations.verify(check.model, name, _without_nominal_prefix(c))
 
 
 def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
     """``roa``: the ``discrete_interval`` region proved again, cell for cell
-    (:func:`lyapcheck.models.classes.discrete_functions.verify_roa`)."""
+    (:func:`lyapcheck.models.classes.discrete_functions.verify_roa`; over a box with its parameters as balls,
+    :func:`lyapcheck.models.classes.discrete_functions_box.verify_roa`)."""
     from lyapcheck.models.classes import discrete_functions
 
     if c["status"] != "certified":
         return False, check.not_checked(c["status"])
+    if check.box is not None:
+        from lyapcheck.models.classes import discrete_functions_box
+
+        return discrete_functions_box.verify_roa(check.model, check.box, c)
     return discrete_functions.verify_roa(check.model, c)
+
+
+def verify_candidate_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
+    """``candidate``: the stated V is the document's candidate, and its level is proved again
+    (:func:`lyapcheck.models.classes.discrete_functions.verify_candidate`); never over a box (it certifies a
+    point)."""
+    from lyapcheck.models.classes import discrete_functions
+
+    if c["status"] != "certified" or check.box is not None:
+        return False, check.not_checked(c["status"]) + (" over a box" if check.box is not None else "")
+    return discrete_functions.verify_candidate(check.model, c)
 
 
 # -- a sampled-data loop ------------------------------------------------------------------------------------
@@ -144,4 +181,4 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
 
 __all__ = ["verify_linearization_map", "verify_linearization_map_box", "verify_lyapunov_map", "verify_region_map",
            "verify_safety_map", "verify_bound_map",
-           "verify_linearization_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]
+           "verify_linearization_map_functions", "verify_lyapunov_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]

@@ -22,10 +22,16 @@ if TYPE_CHECKING:  # pragma: no cover
 def verify_linearization(name: str, c: dict[str, Any], check: "FunctionsCheck") -> tuple[bool, str]:
     """``linearization``: the recasting's Jacobian (exact) against the certificate or refutation, and
     its sentence."""
+    from lyapcheck.models.classes import piecewise_linearization
     from lyapcheck.models.classes.claims import summary
     from lyapcheck.models.classes.linearization import verify_jacobian
     from lyapcheck.models.classes.recast_classes import jacobian
 
+    if piecewise_linearization.is_certificate(c.get("certificate")):  # a kink at the equilibrium
+        ok, why = piecewise_linearization.verify(check.base, False, c["status"], c["certificate"])
+        if ok and c.get("summary") != summary(name, c):
+            return False, "the printed sentence is not the one the certificate supports"
+        return ok, why
     J = jacobian(check.base)
     if isinstance(J, str):
         return False, f"the model's Jacobian is not exact here: {J}"

@@ -249,8 +249,7 @@ class Recaster:
         self.made[key] = index
         x = self.ring.gen(self._slot(index))
         self.chain[index] = (Rational.polynomial(self.ring, self.ring.zero()), self.ring.zero())
-        self.relations.append(Relation("eq", x * x - radicand, f"rt{radicand}^2 = {radicand}", str(index)))
-        self.relations.append(Relation("ge", x, f"rt{radicand} >= 0", str(index)))
+        self.relations += [Relation(r.kind, r.poly, r.why, str(index)) for r in root_relations(x, radicand)]
         return index
 
     def _constant(self, name: str, value: Fraction, text: str) -> Rational:
@@ -302,51 +301,23 @@ class Recaster:
         index = self._new(Auxiliary("", function, definition, u, None, smooth, text, limit))
         self.made[key] = index
         x = ring.gen(self._slot(index))
+        c: Poly | None = None
         if function == "sin":
             cos_index = self._new(Auxiliary("", "cos", f"cos({self.written(u)})", u, None, smooth, text))
             c = ring.gen(self._slot(cos_index))
-            u2 = u * u
-            self.relations += [Relation("eq", x * x + c * c - 1, "sin^2 + cos^2 = 1"),
-                               Relation("ge", u2 - x * x, "|sin u| <= |u|"),
-                               Relation("ge", u2 * to_fmpq(Fraction(1, 2)) - 1 + c, "1 - cos u <= u^2/2"),
-                               Relation("ge", u * x - u2 + u2 * u2 * to_fmpq(Fraction(1, 6)),
-                                        "u sin u >= u^2 - u^4/6 (Taylor, alternating)"),
-                               Relation("ge", 1 - u2 * to_fmpq(Fraction(1, 2)) + u2 * u2 * to_fmpq(Fraction(1, 24)) - c,
-                                        "cos u <= 1 - u^2/2 + u^4/24 (Taylor, alternating)")]
-            if smooth:
-                self.chain[index] = (Rational.polynomial(ring, c), u)
-                self.chain[cos_index] = (-Rational.polynomial(ring, x), u)
-        elif function == "exp":
-            self.relations += [Relation("ge", x, "exp u >= 0"), Relation("ge", x - 1 - u, "exp u >= 1 + u"),
-                               Relation("ge", 1 - x * (1 - u), "exp(u) (1 - u) <= 1")]
-            if smooth:
-                self.chain[index] = (Rational.polynomial(ring, x), u)
-        elif function == "sqrt":
-            self.relations += [Relation("eq", x * x - u, "r^2 = q"), Relation("ge", x, "r >= 0")]
-            if smooth:  # r' = q'/(2 r): usable where 2 r > 0 is proved (a class proves its denominators)
-                self.chain[index] = (Rational(ring, ring.constant(1), 2 * x), u)
-        elif function == "atan":
-            self.relations += [Relation("ge", x * u, "atan(u) u >= 0"), Relation("ge", u * u - x * x, "|atan u| <= |u|"),
-                               Relation("ge", ring.constant(ATAN_RANGE ** 2) - x * x, "|atan u| < pi/2 < 1.571"),
-                               Relation("ge", u * x - u * u + u * u * u * u * to_fmpq(Fraction(1, 3)),
-                                        "u atan u >= u^2 - u^4/3 (Taylor, alternating)")]
-            if smooth:
-                self.chain[index] = (Rational(ring, ring.constant(1), 1 + u * u), u)
-        elif function == "tanh":
-            self.relations += [Relation("ge", 1 - x * x, "|tanh u| <= 1"), Relation("ge", x * u, "tanh(u) u >= 0"),
-                               Relation("ge", x * (u - x), "tanh(u) (u - tanh u) >= 0"),
-                               Relation("ge", u * x - u * u + u * u * u * u * to_fmpq(Fraction(1, 3)),
-                                        "u tanh u >= u^2 - u^4/3 (Taylor: tanh u >= u - u^3/3 for u >= 0)")]
-            if smooth:
-                self.chain[index] = (Rational.polynomial(ring, 1 - x * x), u)
-        elif function == "abs":
-            self.relations += [Relation("eq", x * x - u * u, "|u|^2 = u^2"), Relation("ge", x, "|u| >= 0")]
-        elif function == "sat":
-            assert limit is not None
-            L2 = to_fmpq(limit * limit)
-            self.relations += [Relation("eq", (u - x) * (L2 - x * x), "sat(u) = u unless |sat(u)| = L"),
-                               Relation("ge", L2 - x * x, "|sat(u)| <= L"),
-                               Relation("ge", x * (u - x), "sat(u) (u - sat(u)) >= 0")]
+        self.relations += function_relations(ring, function, x, u, cosine=c, limit=limit)
+        if smooth and function == "sin":
+            assert c is not None
+            self.chain[index] = (Rational.polynomial(ring, c), u)
+            self.chain[cos_index] = (-Rational.polynomial(ring, x), u)
+        elif smooth and function == "exp":
+            self.chain[index] = (Rational.polynomial(ring, x), u)
+        elif smooth and function == "sqrt":  # r' = q'/(2 r): usable where 2 r > 0 is proved (a class proves its denominators)
+            self.chain[index] = (Rational(ring, ring.constant(1), 2 * x), u)
+        elif smooth and function == "atan":
+            self.chain[index] = (Rational(ring, ring.constant(1), 1 + u * u), u)
+        elif smooth and function == "tanh":
+            self.chain[index] = (Rational.polynomial(ring, 1 - x * x), u)
         self.relations[first_relation:] = [Relation(r.kind, r.poly, r.why, str(index))
                                            for r in self.relations[first_relation:]]
         return index
@@ -390,6 +361,56 @@ class Recaster:
         for i in range(len(self.auxiliaries)):
             text = text.replace(self._slot(i), _parenthesized(self.auxiliaries[i].definition))
         return text
+
+
+def root_relations(x: Poly, radicand: int) -> list[Relation]:
+    """The relations of the constant root ``x = sqrt(radicand)`` (``rt2``, ``rt3``)."""
+    return [Relation("eq", x * x - radicand, f"rt{radicand}^2 = {radicand}"),
+            Relation("ge", x, f"rt{radicand} >= 0")]
+
+
+def function_relations(ring: Ring, function: str, x: Poly, u: Poly, cosine: Poly | None = None,
+                       limit: Fraction | None = None) -> list[Relation]:
+    """The relations (the module docstring's table) of ``x = function(u)`` in ``ring`` (no owner set):
+    ``cosine`` is a sine's pair, ``limit`` a saturation's ``L``. The one place they are written: the recaster
+    calls it while it builds a loop, and a map's classes
+    (:mod:`lyapcheck.models.classes.map_relations`) call it again on the finished system, whose relations a
+    map's recasting does not derive."""
+    if function == "sin":
+        assert cosine is not None
+        c = cosine
+        u2 = u * u
+        return [Relation("eq", x * x + c * c - 1, "sin^2 + cos^2 = 1"),
+                Relation("ge", u2 - x * x, "|sin u| <= |u|"),
+                Relation("ge", u2 * to_fmpq(Fraction(1, 2)) - 1 + c, "1 - cos u <= u^2/2"),
+                Relation("ge", u * x - u2 + u2 * u2 * to_fmpq(Fraction(1, 6)),
+                         "u sin u >= u^2 - u^4/6 (Taylor, alternating)"),
+                Relation("ge", 1 - u2 * to_fmpq(Fraction(1, 2)) + u2 * u2 * to_fmpq(Fraction(1, 24)) - c,
+                         "cos u <= 1 - u^2/2 + u^4/24 (Taylor, alternating)")]
+    if function == "exp":
+        return [Relation("ge", x, "exp u >= 0"), Relation("ge", x - 1 - u, "exp u >= 1 + u"),
+                Relation("ge", 1 - x * (1 - u), "exp(u) (1 - u) <= 1")]
+    if function == "sqrt":
+        return [Relation("eq", x * x - u, "r^2 = q"), Relation("ge", x, "r >= 0")]
+    if function == "atan":
+        return [Relation("ge", x * u, "atan(u) u >= 0"), Relation("ge", u * u - x * x, "|atan u| <= |u|"),
+                Relation("ge", ring.constant(ATAN_RANGE ** 2) - x * x, "|atan u| < pi/2 < 1.571"),
+                Relation("ge", u * x - u * u + u * u * u * u * to_fmpq(Fraction(1, 3)),
+                         "u atan u >= u^2 - u^4/3 (Taylor, alternating)")]
+    if function == "tanh":
+        return [Relation("ge", 1 - x * x, "|tanh u| <= 1"), Relation("ge", x * u, "tanh(u) u >= 0"),
+                Relation("ge", x * (u - x), "tanh(u) (u - tanh u) >= 0"),
+                Relation("ge", u * x - u * u + u * u * u * u * to_fmpq(Fraction(1, 3)),
+                         "u tanh u >= u^2 - u^4/3 (Taylor: tanh u >= u - u^3/3 for u >= 0)")]
+    if function == "abs":
+        return [Relation("eq", x * x - u * u, "|u|^2 = u^2"), Relation("ge", x, "|u| >= 0")]
+    if function == "sat":
+        assert limit is not None
+        L2 = to_fmpq(limit * limit)
+        return [Relation("eq", (u - x) * (L2 - x * x), "sat(u) = u unless |sat(u)| = L"),
+                Relation("ge", L2 - x * x, "|sat(u)| <= L"),
+                Relation("ge", x * (u - x), "sat(u) (u - sat(u)) >= 0")]
+    return []
 
 
 def _parenthesized(definition: str) -> str:

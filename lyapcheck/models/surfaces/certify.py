@@ -135,10 +135,28 @@ def _sets_use_box(model: Model, box: "ModelBox | None") -> bool:
 
 
 def refuse_candidate_over_box(source: str, candidate: str | None, box: object | None) -> None:
-    """``--candidate`` with ``--box`` is bad input on every kind of loop (exit 2 naming ``--candidate``): the
-    candidate class certifies a point (docs/model-files.md, "Boxes of parameters")."""
+    """``--candidate`` with ``--box`` is bad input on every kind of loop but a polynomial map (exit 2 naming
+    ``--candidate``): the candidate class certifies a point there (docs/model-files.md, "Boxes of parameters")."""
     if box is not None and candidate is not None:
         raise ModelFileError(source, "--candidate", "not over a --box (the candidate class certifies a point)")
+
+
+def refuse_box_in_candidate(model: Model, candidate: str, box: "ModelBox") -> None:
+    """A map's candidate over a box is one ``V`` for every value of the box: a text naming a parameter of the
+    box (which would be read at the model's value, :func:`parse_candidate`) is bad input (exit 2 naming
+    ``--candidate``)."""
+    from lyapcheck.models.language.expressions import ExpressionError, parse_expression
+
+    try:
+        expr = parse_expression(candidate, model.ring)
+    except ExpressionError:
+        return  # (parse_candidate words the error)
+    ring = model.ring
+    named = sorted({ring.names[k] for p in (expr.numerator, expr.denominator) for m in ring.support(p)
+                    for k, e in enumerate(m) if e and ring.names[k] in box.names})
+    if named:
+        raise ModelFileError(model.source, "--candidate", "over a --box V must be of the states alone (one V for "
+                             f"every value of the box); it names the box's parameter {', '.join(named)}")
 
 
 def class_selection(classes: str | Sequence[str] | None, model: "Model | RecastModel", candidate: Candidate | None
@@ -183,9 +201,10 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     from lyapcheck import tolerances as tol
 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
-    refuse_candidate_over_box(model.source, candidate, box)
     from lyapcheck.models.loop.discrete import is_discrete
 
+    if not (is_discrete(model) and isinstance(model, Model)):  # (a polynomial map takes a candidate over a box)
+        refuse_candidate_over_box(model.source, candidate, box)
     if is_discrete(model):  # a map never reaches the classes that read [dynamics] as a field
         if not isinstance(model, Model):  # a map with functions (lyapcheck.models.classes.discrete_functions)
             return _certify_map_functions(model, classes, candidate, limit, box)
@@ -358,9 +377,9 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
     (:func:`_run_classes`); every other one asked for is ``not_applicable``
     (:func:`lyapcheck.models.loop.discrete.not_decided`), never run on the map as if it were a field. A
     certified region's size is attached as in continuous time. Over a ``box`` (checked when it was read: the
-    fixed point does not move over it) the map's ring carries the box's normalized parameters, ``quadratic`` and
-    ``sos_gas`` prove one V for every value of the box
-    (:data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`) and every other class is ``not_applicable``
+    fixed point does not move over it) the map's ring carries the box's normalized parameters, the classes of
+    :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES` prove one V (one set) for every value of the box
+    (``candidate`` too: the user's V is of the states alone) and every other class is ``not_applicable``
     (:func:`~lyapcheck.models.classes.discrete_lyapunov.not_over_box`)."""
     from lyapcheck.models.classes import region_size
     from lyapcheck.models.classes.claims import summary
@@ -369,20 +388,20 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
     from lyapcheck.models.classes.registry import DISCRETE
     from lyapcheck.models.loop.discrete import not_decided, shifted_map
 
+    if candidate is not None and box is not None:
+        refuse_box_in_candidate(model, candidate, box)
     cand = parse_candidate(model, candidate) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
     out = ModelCertification(model=model, candidate=cand, results={}, box=box)
     ctx = MapRun(model=model, shifted=shifted_map(model, box=box), candidate=cand, results=out.results)
 
     def decide(entry: ModelClass) -> ConditionResult | None:
-        if box is not None:  # candidate over a box as on every loop; a class a map takes at a point only, named
-            given = _needs_input(entry.name, box, cand)
-            if given is not None:
-                return given
-            if entry.run_map is not None and entry.name not in BOX_CLASSES:
-                return ConditionResult(entry.name, "not_applicable", not_over_box(entry.name))
+        # over a box, a class a map takes at a point only is named; a map's candidate is taken over a box (its V
+        # is common to the box: one set for every value), without --candidate it is not run, as at a point
+        if box is not None and entry.run_map is not None and entry.name not in BOX_CLASSES:
+            return ConditionResult(entry.name, "not_applicable", not_over_box(entry.name))
         return _discrete_rule(entry, entry.run_map, not_decided(entry.name, DISCRETE), out.results, cand,
-                              bool(model.disturbances))
+                              bool(model.disturbances), over_box=box is not None)
 
     def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
         run_map = entry.run_map
@@ -393,8 +412,8 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
         if model.disturbances:  # (every class of a map is decided with its disturbances at 0, but sos_bound,
             # whose V serves every disturbance sequence within the bounds)
             r.disturbances = "all" if name == "sos_bound" else "zero"
-        if r.status == "certified" and name in region_size.SIZED_CLASSES:
-            _attach_size(r, model, list(model.states))
+        if r.status == "certified" and name in region_size.SIZED_CLASSES:  # (V's exponents: states, box's parameters)
+            _attach_size(r, model, list(model.states) + (list(box.names) if box is not None else []))
         text = summary(name, r.to_json(), tuple(model.outputs), box.to_json() if box is not None else None)
         if text is not None:
             r.summary = text
@@ -404,24 +423,33 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
 def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | None, candidate: str | None,
                            limit: float, box: "ModelBox | None") -> ModelCertification:
     """:func:`certify_model` on a discrete-time map with functions: each class with a ``run_map_functions``
-    entry (:mod:`lyapcheck.models.classes.discrete_functions`: ``linearization`` and ``roa``) through the one
+    entry (:mod:`lyapcheck.models.classes.discrete_functions`: ``linearization`` and ``roa``;
+    :mod:`lyapcheck.models.classes.map_relations`: ``quadratic`` and ``sos_gas``) through the one
     runner, every other one ``not_applicable`` in one line
     (:data:`~lyapcheck.models.classes.discrete_functions.NOT_YET`); the document states the map's recasting
-    (the loop of its displacement). ``--box`` is refused in one line (exit 2)."""
+    (the loop of its displacement). Over a ``box`` (``model`` read at its centre) ``linearization`` and ``roa``
+    hold for every value of it (:mod:`lyapcheck.models.classes.discrete_functions_box`: a box moving the fixed
+    point is refused in one line, exit 2) and every other class is ``not_applicable``."""
     from lyapcheck.models.classes.contexts import MapFunctionsRun
     from lyapcheck.models.classes.discrete_functions import NOT_YET
+    from lyapcheck.models.classes.discrete_functions_box import BOX_CLASSES, NOT_OVER_BOX, boxed_system
     from lyapcheck.models.classes.recast_classes import base_loop
-    from lyapcheck.models.loop.discrete import refuse
 
-    if box is not None:
-        refuse(model, "--box", "certify a point (--set NAME=VALUE)")
+    if box is not None:  # the fixed point must stay put over the box (one line, exit 2, before any class runs)
+        boxed_system(model, box)
     cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
     results: dict[str, ConditionResult] = {}
     seconds: dict[str, float] = {}
-    ctx = MapFunctionsRun(model=model)
+    ctx = MapFunctionsRun(model=model, box=box)
 
     def decide(entry: ModelClass) -> ConditionResult | None:
+        if box is not None:
+            given = _needs_input(entry.name, box, cand)
+            if given is not None:
+                return given
+            if entry.run_map_functions is not None and entry.name not in BOX_CLASSES:
+                return ConditionResult(entry.name, "not_applicable", NOT_OVER_BOX)
         return _discrete_rule(entry, entry.run_map_functions, NOT_YET, results, cand, bool(model.disturbances))
 
     def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
@@ -432,23 +460,24 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
     if model.disturbances:
         for r in results.values():  # the map is read with its disturbances at 0
             r.disturbances = "zero"
-    return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds,
+    return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds, box=box,
                               loop=base_loop(model.system, cylinder=False))
 
 
 def _discrete_rule(entry: ModelClass, run: object, not_taken: str, results: dict[str, ConditionResult],
-                   cand: object | None, disturbed: bool) -> ConditionResult | None:
+                   cand: object | None, disturbed: bool, over_box: bool = False) -> ConditionResult | None:
     """What every discrete-time kind of loop (a map, a map with functions, a sampled-data loop) decides before
     a class runs: a class without an entry for the kind (``run`` None) is ``not_applicable`` (``not_taken``:
     the kind's sentence); ``candidate`` without ``--candidate`` (:func:`_needs_input`); ``roa`` once GAS is
     certified with the disturbances at 0, which is what a map's classes are decided with
-    (:func:`~lyapcheck.models.classes.claims.roa_after_gas`); None: run it."""
+    (:func:`~lyapcheck.models.classes.claims.roa_after_gas`; ``over_box``: for every value of a map's box);
+    None: run it."""
     from lyapcheck.models.classes.claims import roa_after_gas
 
     if run is None:
         return ConditionResult(entry.name, "not_applicable", not_taken)
     zero: Disturbances | None = "zero" if disturbed else None
-    return _needs_input(entry.name, None, cand) or (roa_after_gas(results, zero, nominal=zero)
+    return _needs_input(entry.name, None, cand) or (roa_after_gas(results, zero, nominal=zero, over_box=over_box)
                                                     if entry.name == "roa" else None)
 
 
@@ -608,4 +637,4 @@ def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) ->
 
 
 __all__ = ["MODEL_CLASSES", "ModelCertification", "certify_model", "parse_candidate", "class_selection",
-           "refuse_candidate_over_box"]
+           "refuse_candidate_over_box", "refuse_box_in_candidate"]

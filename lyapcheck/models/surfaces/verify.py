@@ -496,22 +496,48 @@ def _counterexample_loop(ref: dict[str, Any], model: "RecastModel", box: "ModelB
     return there, ", ".join(f"{name} = {text}" for name, text in values.items())
 
 
-def _read_box_map_functions(doc: dict[str, Any], model: Any, rows: list[Row]) -> Box:
-    """A map with functions takes no box (its conditions are still checked, at the model's point)."""
-    if "box" in doc:
-        rows.append(("box", False, 'a box is not taken on a discrete-time map ([model] time = "discrete")'))
-    return Box()
+def _read_box_map_functions(doc: dict[str, Any], model: Any, rows: list[Row]) -> Box | Stop:
+    """The document's box, its parameters the model's and read at its centre, and the map recast with them as
+    balls keeping its fixed point (:func:`lyapcheck.models.classes.discrete_functions_box.boxed_system`; its
+    row appended), or :class:`Stop` with the row saying why not."""
+    if "box" not in doc:
+        return Box()
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.classes.discrete_functions_box import boxed_system
+    from lyapcheck.models.language.parameter_box import ModelBox
+
+    def refused(why: str) -> Stop:
+        rows.append(("box", False, why))
+        return Stop(verdict=True)
+
+    try:
+        box = ModelBox.from_json(doc["box"])
+    except (TypeError, ValueError, AttributeError, ZeroDivisionError) as exc:
+        return refused(f"malformed box: {exc}")
+    for name, lo, hi in box.bounds:
+        if name not in model.parameters or not lo < hi:
+            return refused(f"box: {name!r} is not a parameter of the model with lo < hi")
+        if model.parameters[name] != box.center(name):
+            return refused(f"box: the model is not read at the box's centre ({name} = {model.parameters[name]})")
+    try:
+        boxed_system(model, box)
+    except ModelFileError as exc:
+        return refused(f"box: {exc}")
+    rows.append(("box", True, "each box parameter is read at the box's centre, and the map's fixed point is proved "
+                              "to stay put over the box"))
+    return Box(box)
 
 
 def _conditions_of_map_functions(doc: dict[str, Any], model: Any, box: Box, rows: list[Row]) -> bool:
     """A map with functions' decided claims, each by its class's entry (a
     :class:`~lyapcheck.models.classes.contexts.MapFunctionsCheck`: the linearization re-derived, a
-    ``discrete_interval`` region proved again); any other decided claim fails (no check of this map
-    re-derives it)."""
+    ``discrete_interval`` region proved again, a ``discrete_relations`` identity re-checked on the relations
+    derived again; over a box, with its parameters as balls); any other decided claim fails (no check of this
+    map re-derives it)."""
     from lyapcheck.models.classes.contexts import MapFunctionsCheck
     from lyapcheck.models.classes.registry import verify
 
-    check = MapFunctionsCheck(model=model)
+    check = MapFunctionsCheck(model=model, box=box.box)
     _each(doc["conditions"], rows, _status_in("certified", "refuted", "counterexample"),
           lambda n, c: verify(n, c, check),
           lambda exc: f"malformed certificate: {type(exc).__name__}: {exc}"[:200])
@@ -529,8 +555,8 @@ FIELD: Final = LoopKind(
 #: a polynomial discrete-time map (``[model] time = "discrete"``; its counterexamples: its classes' checks)
 MAP: Final = LoopKind(
     "polynomial map", None, _read_box_polynomial, _conditions_of_map,
-    size=lambda model, box: {"variables": list(model.states)}, counterexamples=None,
-    candidate=candidate_of_polynomial, stated_figures=True)
+    size=lambda model, box: {"variables": list(model.states) + (list(box.box.names) if box.box is not None else [])},
+    counterexamples=None, candidate=candidate_of_polynomial, stated_figures=True)
 #: a loop with functions (sin, sqrt, sat, ...; its document states its recasting)
 FUNCTIONS: Final = LoopKind(
     "loop with functions", _prelude_of_functions, _read_box_functions, _conditions_of_functions,

@@ -1,0 +1,350 @@
+"""A discrete-time map with functions over a box of its parameters (``certify --box``; issue 44, item 1):
+``linearization`` and ``roa`` for every value of the box, in ball arithmetic.
+
+The map is recast again with the box's parameters as variables without a flow, after the states, at the box's
+centre (:func:`boxed_system`); its true map is then evaluated with each parameter a ball covering its interval
+(:class:`~lyapcheck.models.engines.interval_field.BallLoop` with ``fixed`` balls), so every enclosure holds for
+every value of the box at once. The fixed point must stay put over the box: the displacement ``F(x_eq) - x_eq``
+is proved 0 for every value (exactly by substitution, else each component's ball exactly 0); otherwise the box
+is refused in one line (exit 2), as on a polynomial map.
+
+``linearization`` (:func:`linearization`): ``P`` is the short dyadic rounding of the Stein solution of the exact
+Jacobian at the box's centre (:func:`lyapcheck.models.classes.discrete_functions.rounded_p`), positive definite
+(exact); where that one is not proved over the whole box, one proposed by a small SDP common to the Jacobians of
+a grid of the box (:func:`common_p`: a solver's point, a proposal only). The Jacobians ``A(p) = I + Jd(p)`` over a
+part of the box are enclosed by the chain rule in ball arithmetic (jets of the state deviations at the fixed
+point, the parameters balls), and ``M(p) = P - A(p)^T P A(p)`` with them. ``M(p)`` is symmetric for every ``p``;
+with ``C`` the midpoints of the entries' enclosures and ``R`` their radii (rationals, exact), ``M(p) = C + E``
+with ``|E_ij| <= R_ij``, so ``lambda_min(M(p)) >= lambda_min(C) - rho(E)`` and ``rho(E) <= max_i sum_j R_ij``
+(any induced norm bounds the spectral radius): ``C - r I`` positive definite (exact) with ``r`` that row sum
+proves ``M(p) > 0`` for every ``p`` of the part, i.e. ``A(p)^T P A(p) - P < 0``: every ``A(p)`` is Schur stable
+with the one ``P``, and the fixed point is locally exponentially stable for every value of the box. A part not
+proved is halved at its widest parameter, at most :data:`~lyapcheck.tolerances.MAP_BOX_PIECES` parts in all (a
+count, the same on any machine); ``verify`` runs the same deterministic splitting with the stated ``P``.
+
+``roa`` (:func:`roa`): the level search of :func:`lyapcheck.models.classes.discrete_functions.level_search` with
+``V = e^T P e`` (``P`` as above) and the true map with the parameters as balls: ``V(F(e)) < V(e)`` on ``{V <=
+c}`` but at the fixed point, for every value of the box (``g(0) = 0`` and ``grad g(0) = 0`` hold for each value,
+the fixed point staying put, so the cells' Hessian zone argument holds for each). A level is proved on each part
+of the linearization's splitting of the box (on those, the Hessian of ``g`` at the fixed point, ``2 (A(p)^T P
+A(p) - P)``, is negative definite in balls; on the whole box the balls' widening can hide that), the parts
+covering the box. ``verify`` re-derives the parts from the stated ``P`` and proves the stated level again on the
+same cells of each.
+
+Other classes over a box are ``not_applicable`` (:data:`NOT_OVER_BOX`).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Final
+
+import flint
+
+from lyapcheck import tolerances
+from lyapcheck.errors import ModelFileError
+from lyapcheck.models.classes import discrete_functions as dfn
+from lyapcheck.models.engines.interval_field import BallLoop, Jet, ball
+from lyapcheck.results import ConditionResult
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.engines.search import Budget
+    from lyapcheck.models.language.parameter_box import ModelBox
+    from lyapcheck.models.language.recast import RecastModel, RecastSystem
+
+#: the classes a map with functions decides over a box
+BOX_CLASSES: Final = ("linearization", "roa")
+#: the method a map with functions' linearization over a box states
+METHOD: Final = "box_ball_stein"
+#: the reason of every other class over a box
+NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes linearization and roa only (each proved "
+                       "in ball arithmetic for every value of the box); certify a point with --set NAME=VALUE")
+
+Interval = tuple[Fraction, Fraction]
+
+
+def boxed_system(model: "RecastModel", box: "ModelBox") -> "RecastSystem":
+    """The map's displacement ``F(x) - x`` recast with the box's parameters as variables without a flow (after
+    the states, at the box's centre); a one-line :class:`~lyapcheck.errors.ModelFileError` naming ``--box``
+    where the recasting cannot keep one a variable or the fixed point is not proved to stay put over the box."""
+    from lyapcheck.models.classes.recast_interval import Robust
+    from lyapcheck.models.language.recast import recast_dynamics
+
+    where = f"--box {', '.join(box.names)}"
+    names = tuple(box.names)
+    constants = {k: v for k, v in model.parameters.items() if k not in names}
+    constants.update({d: Fraction(0) for d in model.disturbances})
+    texts: dict[str, object] = {s: f"({t}) - ({s})" for s, t in model.dynamics_text.items()}
+    texts.update({name: "0" for name in names})
+    try:
+        system, _ = recast_dynamics(model.source, model.states + names, texts, constants,
+                                    tuple(model.equilibrium) + tuple(box.center(n) for n in names),
+                                    networks=model.networks, for_map=True)
+    except ModelFileError as exc:
+        why = str(exc).removeprefix(exc.source + ": ")
+        raise ModelFileError(model.source, where, f"the map cannot be recast with the box's parameters as variables "
+                                                  f"({why}): certify points with --set") from None
+    if not Robust(system, {n: box.half(n) for n in names}, box).vanishes():
+        raise ModelFileError(model.source, where, "the map's fixed point moves with the box's parameters: F(x_eq) = "
+                                                  "x_eq is not proved for every value of the box (in ball arithmetic); "
+                                                  "certify a point with --set NAME=VALUE")
+    return system
+
+
+def whole(box: "ModelBox") -> dict[str, Interval]:
+    """The box as intervals, by name."""
+    return {name: (lo, hi) for name, lo, hi in box.bounds}
+
+
+def boxed_map(system: "RecastSystem", part: dict[str, Interval]) -> BallLoop:
+    """The true map with the parameters of ``part`` as balls covering their intervals (exactly enclosed)."""
+    return BallLoop(system, [ball(lo).union(ball(hi)) for lo, hi in part.values()])
+
+
+def jacobian_balls(loop: BallLoop) -> list[list[Any]] | None:
+    """``A = I + Jd`` at the fixed point, each entry a ball holding it for every parameter value of the loop's
+    balls (the chain rule on jets); None where a function is not known differentiable there."""
+    n = loop.n
+    zero = flint.arb(0)
+    D = loop.field([Jet.variable(zero, i, n, 1) for i in range(n)])
+    rows = []
+    for i, d in enumerate(D):
+        grad = d.grad if isinstance(d, Jet) else [zero] * n
+        if grad is None or not all(g.is_finite() for g in grad):
+            return None
+        rows.append([g + (1 if i == j else 0) for j, g in enumerate(grad)])
+    return rows
+
+
+def _endpoints(x: Any) -> Interval:
+    """A finite ball's exact ends."""
+    def exact(e: Any) -> Fraction:
+        mantissa, exponent = e.man_exp()
+        return Fraction(int(mantissa)) * Fraction(2) ** int(exponent)
+
+    return exact(x.lower()), exact(x.upper())
+
+
+def stein_margin_proved(P: list[list[Fraction]], A: list[list[Any]]) -> bool:
+    """``P - A^T P A > 0`` for every matrix of the ball matrix ``A`` (module docstring: midpoints, radii, an
+    induced norm's bound, then an exact test)."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    n = len(P)
+    Pb = [[ball(x) for x in row] for row in P]
+    PA = [[sum((Pb[k][l] * A[l][j] for l in range(n)), flint.arb(0)) for j in range(n)] for k in range(n)]
+    C = [[Fraction(0)] * n for _ in range(n)]
+    R = [[Fraction(0)] * n for _ in range(n)]
+    for i in range(n):
+        for j in range(i, n):
+            m = Pb[i][j] - sum((A[k][i] * PA[k][j] for k in range(n)), flint.arb(0))
+            if not m.is_finite():
+                return False
+            lo, hi = _endpoints(m)
+            C[i][j] = C[j][i] = (lo + hi) / 2
+            R[i][j] = R[j][i] = (hi - lo) / 2
+    r = max(sum(row) for row in R)
+    return is_positive_definite([[C[i][j] - (r if i == j else 0) for j in range(n)] for i in range(n)])
+
+
+def _halves(part: dict[str, Interval]) -> tuple[dict[str, Interval], dict[str, Interval]]:
+    """The part split at the middle of its widest parameter interval (exact; the first such name on a tie)."""
+    name = max(part, key=lambda k: part[k][1] - part[k][0])
+    lo, hi = part[name]
+    mid = (lo + hi) / 2
+    return {**part, name: (lo, mid)}, {**part, name: (mid, hi)}
+
+
+def prove_over_box(system: "RecastSystem", box: "ModelBox", P: list[list[Fraction]]
+                   ) -> tuple[bool, int, str, list[dict[str, Interval]]]:
+    """``A(p)^T P A(p) - P < 0`` for every ``p`` of the box, deterministically: each part proved or halved,
+    depth first, at most :data:`~lyapcheck.tolerances.MAP_BOX_PIECES` parts examined. (proved, parts examined,
+    why not, the parts proved: they cover the box when it is proved)."""
+    stack = [whole(box)]
+    count = 0
+    proved: list[dict[str, Interval]] = []
+    while stack:
+        part = stack.pop()
+        count += 1
+        if count > tolerances.MAP_BOX_PIECES:
+            words = ", ".join(f"{k} in [{float(lo):.6g}, {float(hi):.6g}]" for k, (lo, hi) in part.items())
+            return False, count - 1, (f"not proved on the part {words} after {tolerances.MAP_BOX_PIECES} parts of the "
+                                      "box (lyapcheck.tolerances.MAP_BOX_PIECES)"), proved
+        A = jacobian_balls(boxed_map(system, part))
+        if A is None:
+            return (False, count, "a function of the map is not known differentiable at the fixed point over the box",
+                    proved)
+        if stein_margin_proved(P, A):
+            proved.append(part)
+        else:
+            stack.extend(reversed(_halves(part)))
+    return True, count, "", proved
+
+
+def _centre_p(model: "RecastModel", name: str) -> list[list[Fraction]] | ConditionResult:
+    """``P`` from the exact Jacobian at the box's centre (the model is read there), or ``name``'s result
+    saying why there is none."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    A = dfn.exact_jacobian(model)
+    if isinstance(A, str):
+        return ConditionResult(name, "not_applicable", f"the map's Jacobian at the fixed point: {A}")
+    P = dfn.rounded_p(A)
+    if P is None or not is_positive_definite(P):
+        return ConditionResult(name, "not_certified", "at the box's centre the discrete Lyapunov equation A^T P A - P "
+                               "= -I of the exact Jacobian has no positive definite solution (rounded): no P to prove "
+                               "over the box (the centre's linearization is not Schur stable)")
+    return P
+
+
+def grid_points(box: "ModelBox") -> list[dict[str, Interval]]:
+    """The box's grid of :data:`~lyapcheck.tolerances.MAP_BOX_GRID` values per parameter (its ends included),
+    each as a part of zero width."""
+    from itertools import product
+
+    count = tolerances.MAP_BOX_GRID
+    axes = [[lo + (hi - lo) * Fraction(i, count - 1) for i in range(count)] for _, lo, hi in box.bounds]
+    return [{name: (v, v) for name, v in zip(box.names, values)} for values in product(*axes)]
+
+
+def common_p(system: "RecastSystem", box: "ModelBox") -> list[list[Fraction]] | None:
+    """A ``P`` with ``A^T P A - P <= -I`` at every Jacobian of the box's grid (a small SDP; None where the
+    solver finds none), rounded to short dyadics: a proposal only, which :func:`prove_over_box` decides over
+    the whole box."""
+    import cvxpy as cp
+    import numpy as np
+
+    from lyapcheck.models.engines.ellipsoid_cells import _short
+
+    jacobians = []
+    for point in grid_points(box):
+        A = jacobian_balls(boxed_map(system, point))
+        if A is None:
+            return None
+        jacobians.append(np.array([[float(a.mid()) for a in row] for row in A]))
+    n = jacobians[0].shape[0]
+    P = cp.Variable((n, n), symmetric=True)
+    cons = [P >> np.eye(n)] + [A.T @ P @ A - P << -np.eye(n) for A in jacobians]
+    problem = cp.Problem(cp.Minimize(cp.trace(P)), cons)
+    try:
+        problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError:
+        return None
+    if problem.status != "optimal" or P.value is None:
+        return None
+    value = (P.value + P.value.T) / 2
+    return [[_short(Fraction(float(value[min(i, j), max(i, j)])), tolerances.P_BITS) for j in range(n)]
+            for i in range(n)]
+
+
+def box_p(model: "RecastModel", system: "RecastSystem", box: "ModelBox", name: str
+          ) -> tuple[list[list[Fraction]], int, list[dict[str, Interval]]] | ConditionResult:
+    """The ``P`` proved over the box, the parts examined and the parts proved: the centre's ``P`` first, then,
+    where that is not proved over the whole box, one common to the box's grid (:func:`common_p`); or
+    ``name``'s not_certified result saying why neither is."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    P = _centre_p(model, name)
+    if isinstance(P, ConditionResult):
+        return P
+    ok, parts, why, proved = prove_over_box(system, box, P)
+    if ok:
+        return P, parts, proved
+    other = common_p(system, box)
+    if other is not None and is_positive_definite(other):
+        ok, parts, also, proved = prove_over_box(system, box, other)
+        if ok:
+            return other, parts, proved
+        why = f"{why}; nor the one common to the box's grid ({also})"
+    else:
+        why = f"{why}; and no P common to the box's grid was found"
+    return ConditionResult(name, "not_certified", "no P was proved with A(p)^T P A(p) - P < 0 for every value of the "
+                           f"box in ball arithmetic: the centre's {why}")
+
+
+def _prefix(box: "ModelBox") -> str:
+    from lyapcheck.models.classes.claims import box_prefix
+
+    return box_prefix(box, "certified")
+
+
+def linearization(model: "RecastModel", box: "ModelBox") -> ConditionResult:
+    """One ``P`` with ``A(p)^T P A(p) - P < 0`` for every ``p`` of the box (module docstring)."""
+    system = boxed_system(model, box)
+    found = box_p(model, system, box, "linearization")
+    if isinstance(found, ConditionResult):
+        found.property = "LES"
+        return found
+    P, parts, _ = found
+    cert = {"time": "discrete", "method": METHOD, "P": [[str(x) for x in row] for row in P], "box_parts": parts,
+            "parameter_box": box.to_json()}
+    summary = (_prefix(box) + "the map's fixed point is locally exponentially stable: one P > 0 with A(p)^T P A(p) - P "
+               f"< 0 for every Jacobian A(p) of the box, proved in ball arithmetic on {parts} part(s) of the box")
+    return ConditionResult("linearization", "certified", summary, property="LES", certificate=cert,
+                           numbers={"box_parts": parts})
+
+
+def verify_linearization(model: "RecastModel", box: "ModelBox", status: str, data: dict[str, Any]
+                         ) -> tuple[bool, str]:
+    """A linearization over a box decided again: ``P`` symmetric and positive definite (exact), then the same
+    splitting of the box re-derived from the model text."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    if status != "certified" or data.get("method") != METHOD:
+        return False, f"a {status} linearization over a box of a map with functions states method {METHOD!r}"
+    n = len(model.states)
+    P = [[Fraction(str(x)) for x in row] for row in data["P"]]
+    if len(P) != n or any(len(row) != n for row in P) or any(P[i][j] != P[j][i] for i in range(n) for j in range(n)):
+        return False, "P must be a symmetric matrix over the states"
+    if not is_positive_definite(P):
+        return False, "P must be positive definite (checked exactly)"
+    ok, parts, why, _ = prove_over_box(boxed_system(model, box), box, P)
+    if not ok:
+        return False, f"A(p)^T P A(p) - P < 0 is not proved over the box: {why}"
+    return True, f"A(p)^T P A(p) - P < 0 proved again for every value of the box ({parts} part(s), ball arithmetic)"
+
+
+def roa(model: "RecastModel", box: "ModelBox", budget: "Budget") -> ConditionResult:
+    """The largest sublevel set of the centre's ``V = e^T P e`` proved a region of attraction for every value of
+    the box (module docstring)."""
+    system = boxed_system(model, box)
+    chosen = box_p(model, system, box, "roa")  # (its parts: there the Hessian of g at 0 is negative definite in balls)
+    if isinstance(chosen, ConditionResult):
+        chosen.property = "ROA"
+        chosen.summary = f"no region over the box: V = e^T P e does not decrease to first order ({chosen.summary})"
+        return chosen
+    P, _, parts = chosen
+    found = dfn.level_search(model, P, budget, "roa", [boxed_map(system, part) for part in parts])
+    if isinstance(found, ConditionResult):
+        return found
+    cert = {**dfn.region_certificate(model, P, found), "parameter_box": box.to_json(), "box_parts": len(parts)}
+    summary = (_prefix(box) + f"region of attraction of the map: {{V <= {float(found.level):.6g}}} with V = e^T P e (P "
+               "the linearization's over the box), V(F(e)) < V(e) proved on it by ball arithmetic on the true map "
+               "with the box's parameters as balls")
+    numbers = found.numbers()
+    size = dfn.area(P, found.level)
+    if size is not None:
+        numbers["area"] = size
+    return ConditionResult("roa", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+
+
+def verify_roa(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tuple[bool, str]:
+    """A region over a box proved again: the certificate's box is the document's, then the level on the same
+    cells with the box's parameters as balls (:func:`lyapcheck.models.classes.discrete_functions.verify_roa`)."""
+    cert = c.get("certificate")
+    if not isinstance(cert, dict) or cert.get("parameter_box") != box.to_json():
+        return False, "a region over a box states that box (parameter_box) as the document's"
+    P = [[Fraction(str(x)) for x in row] for row in cert["P"]]
+    n = len(model.states)
+    if len(P) != n or any(len(row) != n for row in P):
+        return False, "P must be a matrix over the states"
+    system = boxed_system(model, box)
+    ok, _, why, parts = prove_over_box(system, box, P)  # the same parts as certify's (deterministic)
+    if not ok:
+        return False, f"the box's parts are not re-derived from P: {why}"
+    return dfn.verify_roa(model, c, [boxed_map(system, part) for part in parts])
+
+
+__all__ = ["BOX_CLASSES", "METHOD", "NOT_OVER_BOX", "boxed_system", "whole", "boxed_map", "jacobian_balls",
+           "stein_margin_proved", "prove_over_box", "grid_points", "common_p", "box_p", "linearization",
+           "verify_linearization", "roa", "verify_roa"]
