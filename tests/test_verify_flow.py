@@ -65,3 +65,32 @@ def test_a_map_with_functions_box_not_read_at_its_centre_ends_verify_at_the_box(
     assert failed[0][0] == "box" and "centre" in failed[0][2]
     assert all(check != "linearization" for check, _, _ in rows)
     assert rows[-2][0] == "verdict" and not lyapcheck.verify(document).valid
+
+
+def test_a_map_with_functions_region_is_held_to_its_figures_and_sentence(tmp_path: Path) -> None:
+    """A map with functions' roa (ball arithmetic): its stated level, area and sentence are re-derived from the
+    certificate, so a document whose proof is intact but whose printed level or sentence is edited fails."""
+    document = lyapcheck.certify(model=fm.model_file(tmp_path, "map_functions"), classes=["roa"]).document
+    roa = document["conditions"]["roa"]
+    assert roa["status"] == "certified" and lyapcheck.verify(document).valid
+    for key, value in (("level", roa["level"] * 4), ("area", roa["area"] * 4),
+                       ("summary", "GES of the discrete-time map from every start"), ("cells_spent", 1)):
+        forged = copy.deepcopy(document)
+        forged["conditions"]["roa"][key] = value
+        failed = [row for row in rows_of(forged) if not row[1]]
+        if key == "cells_spent":  # a record of the search's work, left as stated and named as such
+            assert not failed
+        else:
+            assert failed and failed[0][0] == "roa", key
+
+
+def test_a_refuted_claim_nothing_re_derives_fails(tmp_path: Path) -> None:
+    """On a polynomial loop only the linearization is ever refuted: a certified quadratic edited to
+    'refuted' has no check behind it, and verify fails it instead of counting it silently as not certified."""
+    document = lyapcheck.certify(model=fm.model_file(tmp_path, "polynomial"), classes=["quadratic"]).document
+    assert document["conditions"]["quadratic"]["status"] == "certified"
+    forged = copy.deepcopy(document)
+    forged["conditions"]["quadratic"]["status"] = "refuted"
+    assert ("quadratic", False, "quadratic: a refuted claim that no check of this kind of loop re-derives") \
+        in rows_of(forged)
+    assert not lyapcheck.verify(forged).valid

@@ -82,6 +82,8 @@ ESTIMATES: Final[Mapping[str, str]] = {
                    "negative definite); the certified level is at least this",
     # records of the proof's work
     "cells": "cells the ball-arithmetic proof took",
+    "cells_spent": "cells the ball-arithmetic level search examined in all (every level it tried)",
+    "box_parts": "parts of the box the ball-arithmetic proof split it into",
     "boundary_cells": "cells of the set's boundary the ball-arithmetic proof took",
     "proof_seconds": "wall time of the proof",
 }
@@ -273,12 +275,13 @@ _CHECKED_FIGURES: dict[str, tuple[str, ...]] = {
     "lyapunov_vector": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius", "size"),
     "quadratic_ball": ("level", "ball_radius", "size"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
     "sos_bound": ("bounds", "bounds_reference"), "interval": ("level", "size"),
-    "discrete_sublevel": ("level", "size"),
+    "discrete_sublevel": ("level", "size"), "discrete_interval": (),
 }
 #: what a certificate of each kind proves (a Lyapunov certificate: GAS, or GES where
 _KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "lyapunov_cliques": "GAS", "lyapunov_vector": "GAS", "sublevel": "ROA",
                                   "quadratic_ball": "ROA", "barrier": "safety", "reach_avoid": "reach_avoid",
-                                  "sos_bound": "ultimate_bound", "interval": "ROA", "discrete_sublevel": "ROA"}
+                                  "sos_bound": "ultimate_bound", "interval": "ROA", "discrete_sublevel": "ROA",
+                                  "discrete_interval": "ROA"}
 
 
 def check_stated_claims(model: Any, conditions: dict[str, Any], rows: list[Row]) -> None:
@@ -303,12 +306,29 @@ def check_stated_claims(model: Any, conditions: dict[str, Any], rows: list[Row])
                 checked = _CHECKED_FIGURES[kind] + (("k", "decay_rate_per_s") if prop == "GES" else ())
                 stated = cert.get("B" if kind == "barrier" else "V")
                 figures = {} if stated is None else {"degree": max(sum(e[:model.n]) for _, e in stated["terms"])}
+                if kind == "discrete_interval":  # (a map with functions' region: V = e^T P e, its level, its area)
+                    figures = _interval_region_figures(cert)
                 proved = Stated(prop, figures, frozenset(checked))
             ok, why = check_stated(c, proved)
         except (KeyError, ValueError, TypeError, ArithmeticError) as exc:
             ok, why = False, f"the stated figures are malformed: {_describe(exc)}"
         if not ok:
             rows.append((name, False, f"{name}: {why}"))
+
+
+def _interval_region_figures(cert: Mapping[str, Any]) -> dict[str, Any]:
+    """The figures a map with functions' ``discrete_interval`` region proves: its level, and with two states the
+    area of ``{e^T P e <= level}`` (:func:`lyapcheck.models.classes.discrete_functions.area`, in floating point
+    as certify computes it)."""
+    from lyapcheck.models.classes.discrete_functions import area
+
+    P = [[Fraction(str(x)) for x in row] for row in cert["P"]]
+    level = Fraction(str(cert["level"]))
+    figures: dict[str, Any] = {"level": level}
+    size = area(P, level)
+    if size is not None:
+        figures["area"] = size
+    return figures
 
 
 def check_summaries(model: Any, conditions: dict[str, Any], rows: list[Row], box: Any) -> None:

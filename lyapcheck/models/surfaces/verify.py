@@ -8,7 +8,8 @@ figures); :func:`verify_model` then runs the same steps on every loop, in this o
    re-derived from the text, so that a certificate cannot bring its own);
 2. the box, read and held to the model (:attr:`LoopKind.read_box`);
 3. each decided condition through its class's entry (:func:`lyapcheck.models.classes.registry.verify`, with
-   the check context of the loop's kind; :attr:`LoopKind.conditions`). Where the mathematics differs it is a
+   the check context of the loop's kind; :attr:`LoopKind.conditions`); a ``certified`` or ``refuted`` one
+   that no check re-derived fails (:func:`_unchecked_claims`). Where the mathematics differs it is a
    named step of this one: a polynomial or rational loop's cleared field (:func:`_cleared_field`: its
    denominators' positivity proofs and its scaling) under its SOS certificates, and its ball-arithmetic
    regions on the true field; a loop with functions' claim over a box, its disturbance coverage and its
@@ -106,6 +107,7 @@ def verify_model(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
     if not kind.conditions(doc, model, box, rows):
         return with_verdict(doc, rows)
     conditions: dict[str, Any] = doc["conditions"]
+    _unchecked_claims(conditions, rows)
     if kind.size is not None:
         from lyapcheck.models.classes.region_size import check_size_rows
 
@@ -122,6 +124,17 @@ def verify_model(doc: dict[str, Any], model: Any, rows: list[Row]) -> list[Row]:
         check_summaries(model, conditions, rows, doc.get("box"))
         check_stated_claims(model, conditions, rows)
     return with_verdict(doc, rows)
+
+
+def _unchecked_claims(conditions: dict[str, Any], rows: list[Row]) -> None:
+    """A ``certified`` or ``refuted`` condition that no check of step 3 re-derived fails: a document that says
+    ``refuted`` where nothing proves it (a certified ``quadratic`` edited to ``refuted`` on a polynomial loop,
+    whose refutations are the linearization's only) would otherwise show an unproved claim beside a verdict
+    that ignores it."""
+    checked = {name for name, _, _ in rows}
+    for name, c in conditions.items():
+        if isinstance(c, dict) and c.get("status") in ("certified", "refuted") and name not in checked:
+            rows.append((name, False, f"{name}: a {c['status']} claim that no check of this kind of loop re-derives"))
 
 
 def _each(conditions: dict[str, Any], rows: list[Row], decided: Callable[[str, Any], bool],
@@ -565,7 +578,7 @@ FUNCTIONS: Final = LoopKind(
 #: a discrete-time map with functions (issue 44; the recasting of its displacement F(x) - x)
 MAP_FUNCTIONS: Final = LoopKind(
     "map with functions", _recasting("the stated recasting of the map's displacement F(x) - x is the one the model text gives"), _read_box_map_functions,
-    _conditions_of_map_functions, size=None, counterexamples=None, candidate=None)
+    _conditions_of_map_functions, size=None, counterexamples=None, candidate=None, stated_figures=True)
 
 
 def loop_kind(model: Any) -> LoopKind:
