@@ -13,7 +13,6 @@ import pytest
 
 import lyapcheck
 from lyapcheck.models.classes import registry
-from lyapcheck.models.surfaces import recast_certify
 from tests import feature_matrix as fm
 from tests.test_one_runner import FUNCTIONS_DISTURBED
 
@@ -58,6 +57,6 @@ def test_a_loop_with_functions_reads_the_same_field(tmp_path: Path, monkeypatch:
     edited["conditions"]["roa"]["disturbances"] = "all"
     rows = failed_rows(edited, "roa")
     assert rows and all(NEITHER_ROW not in row for row in rows)  # (roa's robust check refuses it)
-    monkeypatch.setattr(recast_certify, "ZERO_DISTURBANCE_ONLY", ("roa",))
+    monkeypatch.setattr(registry, "ZERO_DISTURBANCE_ONLY", ("roa",))
     rows = failed_rows(edited, "roa")
     assert len(rows) == 1 and rows[0].startswith(f"roa: {NEITHER_ROW}") and "'all' is neither" in rows[0]

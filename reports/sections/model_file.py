@@ -70,7 +70,7 @@ METHODS: Final = {
 }
 #: keys of a class shown elsewhere on the page (solver outcomes under Reproducibility)
 SHOWN_ELSEWHERE: Final = ("status", "summary", "property", "certificate", "refutation", "solver", "rounds", "history")
-#: the certificate kinds of a loop with functions (lyapcheck.models.surfaces.recast_certify, recast_interval)
+#: the certificate kinds of a loop with functions (lyapcheck.models.surfaces.verify, recast_interval)
 RECAST_KINDS: Final = ("recast", "interval")
 #: keys of a recast or interval certificate's condition shown elsewhere on the page (rounds of a search,
 #: which its class does not keep today, would be shown among its stored figures)

@@ -11,7 +11,7 @@ no solver, well under a second; a failure is an alarm at the top); the command l
 model file verbatim.
 
 A **loop with functions** (a model certificate with a ``"recast"`` table,
-:mod:`lyapcheck.models.surfaces.recast_certify`) has the same page (:class:`ModelFileSubject`, with the
+:mod:`lyapcheck.models.surfaces.verify`) has the same page (:class:`ModelFileSubject`, with the
 per-kind words of :data:`WITH_FUNCTIONS`), with the **recasting** the certificates are proved on in
 place of the field (each auxiliary with its definition, its value at the equilibrium and its flow;
 the relations between them; the states taken modulo 2 pi), its classes shown by the model file's

@@ -251,6 +251,8 @@ def _linearization(status: str, condition: Mapping[str, Any]) -> str:
     if method == SAMPLED_METHOD:  # a sampled-data loop's: its period is a figure of the certificate
         return sampled_linearization_sentence(status, read_rational(data["period"], "period"))
 
+    if status == "certified" and method == BOX_BALL_STEIN_METHOD:  # a map with functions' over a box
+        return box_ball_stein_sentence(int(data["box_parts"]))
     if discrete_linearization.is_discrete_certificate(data) and method == "box_stein":  # a map's over a box
         return DISCRETE_BOX_STEIN_SENTENCE
     if discrete_linearization.is_discrete_certificate(data):  # a map's: its own methods and words
@@ -336,6 +338,36 @@ DISCRETE_RELATIONS_KIND = "discrete_relations"
 DISCRETE_REGION_KIND = "discrete_sublevel"
 
 
+#: the certificate kind of a discrete-time map with functions' roa and candidate, proved by ball arithmetic
+#: (lyapcheck.models.classes.discrete_functions; over a box, discrete_functions_box)
+DISCRETE_INTERVAL_KIND = "discrete_interval"
+#: the method of a map with functions' linearization over a box (lyapcheck.models.classes.discrete_functions_box)
+BOX_BALL_STEIN_METHOD = "box_ball_stein"
+
+
+def discrete_interval_sentence(name: str, level: Fraction, over_box: bool) -> str:
+    """The claim of a ``discrete_interval`` certificate (a map with functions' ``roa`` or ``candidate``, proved by
+    ball arithmetic on the true map; ``over_box``: with the box's parameters as balls, the box's words put first
+    by :func:`summary`), its level as the certificate states it (6 significant digits)."""
+    if name == "candidate":
+        V = "V the candidate"
+    elif over_box:
+        V = "V = e^T P e (P the linearization's over the box)"
+    else:
+        V = "V = e^T P e (P from the discrete Lyapunov equation of the exact Jacobian)"
+    tail = (" with the box's parameters as balls" if over_box else
+            " (every start in it stays in it and converges to the fixed point)")
+    return (f"region of attraction of the map: {{V <= {float(level):.6g}}} with {V}, V(F(e)) < V(e) proved on it by "
+            f"ball arithmetic on the true map{tail}")
+
+
+def box_ball_stein_sentence(parts: int) -> str:
+    """The claim of a map with functions' linearization over a box (one ``P`` for every Jacobian of the box,
+    proved in ball arithmetic on ``parts`` parts of it); the box's words are put first by :func:`summary`."""
+    return ("the map's fixed point is locally exponentially stable: one P > 0 with A(p)^T P A(p) - P < 0 for every "
+            f"Jacobian A(p) of the box, proved in ball arithmetic on {parts} part(s) of the box")
+
+
 def discrete_region_sentence(name: str, level: float) -> str:
     """The claim of a discrete-time map's ``roa`` or ``candidate`` certificate
     (:mod:`lyapcheck.models.classes.discrete_regions`): the set, its level rounded down, and that it is a
@@ -356,6 +388,8 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
                                           read_rational(cert["mu"]), figures)
     if kind == DISCRETE_REGION_KIND:
         return discrete_region_sentence(name, _number(condition, "level"))
+    if kind == DISCRETE_INTERVAL_KIND:
+        return discrete_interval_sentence(name, read_rational(cert["level"]), "parameter_box" in cert)
     if kind in ("sublevel", "quadratic_ball"):
         what = SET_NAMES.get(name, name)
         level = _number(condition, "level")

@@ -57,6 +57,7 @@ from typing import TYPE_CHECKING, Any, Final, Sequence
 import flint
 
 from lyapcheck import tolerances
+from lyapcheck.models.classes.claims import DISCRETE_INTERVAL_KIND, discrete_interval_sentence
 from lyapcheck.models.engines.ellipsoid_cells import Cell, Whitening, _Geometry
 from lyapcheck.models.engines.interval_field import BallLoop, Jet, ball
 from lyapcheck.results import ConditionResult
@@ -66,7 +67,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.recast import RecastModel
 
 #: the certificate kind of ``roa`` on a map with functions
-KIND: Final = "discrete_interval"
+KIND: Final = DISCRETE_INTERVAL_KIND
 #: the reason of every class without a ``run_map_functions`` entry (lyapcheck.models.classes.registry: the
 #: classes a map with functions takes, MAP_FUNCTIONS) on such a map
 NOT_YET: Final = ('not taken yet on a discrete-time map with functions ([model] time = "discrete" with sin, tanh, '
@@ -322,9 +323,7 @@ def roa(model: "RecastModel", budget: "Budget") -> ConditionResult:
     found = level_search(model, P, budget, "roa")
     if isinstance(found, ConditionResult):
         return found
-    summary = (f"region of attraction of the map: {{V <= {float(found.level):.6g}}} with V = e^T P e (P from the "
-               "discrete Lyapunov equation of the exact Jacobian), V(F(e)) < V(e) proved on it by ball arithmetic on "
-               "the true map (every start in it stays in it and converges to the fixed point)")
+    summary = discrete_interval_sentence("roa", found.level, over_box=False)
     numbers = found.numbers()
     size = area(P, found.level)
     if size is not None:
@@ -363,9 +362,7 @@ def candidate(model: "RecastModel", budget: "Budget") -> ConditionResult:
     if isinstance(found, ConditionResult):
         return found
     cert = {**region_certificate(model, P, found), "V_from": "candidate"}
-    summary = (f"region of attraction of the map: {{V <= {float(found.level):.6g}}} with V the candidate, "
-               "V(F(e)) < V(e) proved on it by ball arithmetic on the true map (every start in it stays in it and "
-               "converges to the fixed point)")
+    summary = discrete_interval_sentence("candidate", found.level, over_box=False)
     numbers = found.numbers()
     size = area(P, found.level)
     if size is not None:

@@ -44,6 +44,7 @@ import flint
 from lyapcheck import tolerances
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.classes import discrete_functions as dfn
+from lyapcheck.models.classes.claims import BOX_BALL_STEIN_METHOD, box_ball_stein_sentence, discrete_interval_sentence
 from lyapcheck.models.engines.interval_field import BallLoop, Jet, ball
 from lyapcheck.results import ConditionResult
 
@@ -55,7 +56,7 @@ if TYPE_CHECKING:  # pragma: no cover
 #: the classes a map with functions decides over a box
 BOX_CLASSES: Final = ("linearization", "roa")
 #: the method a map with functions' linearization over a box states
-METHOD: Final = "box_ball_stein"
+METHOD: Final = BOX_BALL_STEIN_METHOD
 #: the reason of every other class over a box
 NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes linearization and roa only (each proved "
                        "in ball arithmetic for every value of the box); certify a point with --set NAME=VALUE")
@@ -278,8 +279,7 @@ def linearization(model: "RecastModel", box: "ModelBox") -> ConditionResult:
     P, parts, _ = found
     cert = {"time": "discrete", "method": METHOD, "P": [[str(x) for x in row] for row in P], "box_parts": parts,
             "parameter_box": box.to_json()}
-    summary = (_prefix(box) + "the map's fixed point is locally exponentially stable: one P > 0 with A(p)^T P A(p) - P "
-               f"< 0 for every Jacobian A(p) of the box, proved in ball arithmetic on {parts} part(s) of the box")
+    summary = _prefix(box) + box_ball_stein_sentence(parts)
     return ConditionResult("linearization", "certified", summary, property="LES", certificate=cert,
                            numbers={"box_parts": parts})
 
@@ -318,9 +318,7 @@ def roa(model: "RecastModel", box: "ModelBox", budget: "Budget") -> ConditionRes
     if isinstance(found, ConditionResult):
         return found
     cert = {**dfn.region_certificate(model, P, found), "parameter_box": box.to_json(), "box_parts": len(parts)}
-    summary = (_prefix(box) + f"region of attraction of the map: {{V <= {float(found.level):.6g}}} with V = e^T P e (P "
-               "the linearization's over the box), V(F(e)) < V(e) proved on it by ball arithmetic on the true map "
-               "with the box's parameters as balls")
+    summary = _prefix(box) + discrete_interval_sentence("roa", found.level, over_box=True)
     numbers = found.numbers()
     size = dfn.area(P, found.level)
     if size is not None:

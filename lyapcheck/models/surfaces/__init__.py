@@ -5,9 +5,9 @@
   :mod:`lyapcheck.models.classes.registry`); :mod:`~lyapcheck.models.surfaces.ball_roa`,
   the ball-arithmetic region on a polynomial or rational loop;
 - :mod:`~lyapcheck.models.surfaces.certificate`: the one certificate document and ``verify`` entry (it reads
-  the model again and makes the rows every document starts with), the rest of a loop with functions'
-  document checked by :mod:`~lyapcheck.models.surfaces.recast_certify` (each class's exact check by its
-  registry entry, :func:`lyapcheck.models.classes.registry.verify`); :mod:`~lyapcheck.models.surfaces.documents`,
+  the model again and makes the rows every document starts with); :mod:`~lyapcheck.models.surfaces.verify`:
+  the rest of ``verify``, one flow for every kind of loop (each class's exact check by its registry entry,
+  :func:`lyapcheck.models.classes.registry.verify`); :mod:`~lyapcheck.models.surfaces.documents`,
   :mod:`~lyapcheck.models.surfaces.stated`, :mod:`~lyapcheck.models.surfaces.counterexamples`: what both share;
 - :mod:`~lyapcheck.models.surfaces.simulate`: ``simulate --model``, one implementation for every loop kind;
   :mod:`~lyapcheck.models.surfaces.iterate`: a discrete-time map iterated instead;

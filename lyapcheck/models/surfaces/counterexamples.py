@@ -3,9 +3,9 @@
 A counterexample is numerical evidence, not a proof: ``verify`` re-simulates its trajectory as certify
 simulated it (:func:`lyapcheck.models.classes.falsify.replay`) and checks its start, its disturbance, and
 its first entry into the unsafe set (before the goal for reach_avoid) at the stated time and point. The
-polynomial loops (:mod:`lyapcheck.models.surfaces.certificate`) and the loops with functions (their true loop,
-:mod:`lyapcheck.models.surfaces.recast_certify`) share these checks; a module of its own so that neither
-imports the other.
+polynomial loops and the loops with functions (their true loop) share these checks, in one step of
+:func:`lyapcheck.models.surfaces.verify.verify_model`; the simulation's side of them is kept here, apart from
+that flow.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ def check_counterexamples(model: Any, conditions: dict[str, Any], rows: list[Row
                           check: Check | None = None) -> None:
     """A ``counterexample`` of barrier or reach_avoid re-simulated from its start and disturbance alone
     (``check``, by default :func:`verify_counterexample` on the model's polynomial field; a loop with
-    functions gives its true loop's: :mod:`lyapcheck.models.surfaces.recast_certify`); a row per
+    functions gives its true loop's: :func:`lyapcheck.models.surfaces.verify._true_loop_replay`); a row per
     counterexample, failed when it does not reproduce."""
     check = verify_counterexample if check is None else check
     for name in ("barrier", "reach_avoid"):

@@ -1,8 +1,9 @@
 """What every model certificate document shares: its kind, its schema and the verdict row.
 
-Kept apart from :mod:`lyapcheck.models.surfaces.certificate` (polynomial and rational loops) and
-:mod:`lyapcheck.models.surfaces.recast_certify` (loops with functions), which both write and re-check such
-documents, so that neither imports the other's module to learn them.
+Kept apart from :mod:`lyapcheck.models.surfaces.certificate` (which writes such documents),
+:mod:`lyapcheck.models.surfaces.verify` (which re-checks them) and
+:mod:`lyapcheck.models.surfaces.sampled_run` (a sampled-data loop's), so that none imports another's module to
+learn them.
 """
 
 from __future__ import annotations
