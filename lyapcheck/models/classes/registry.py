@@ -221,6 +221,8 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                run_field=_runs.sos_bound_field, run_functions=_runs.sos_bound_functions,
                verify_field=_field.verify_sos_bound, verify_functions=_functions.verify_sos_bound,
                run_map=_discrete.sos_bound_map, verify_map=_vdiscrete.verify_bound_map,
+               run_map_functions=_discrete.sos_bound_map_functions,
+               verify_map_functions=_vdiscrete.verify_bound_map_functions,
                output_figure=OutputFigure("bounds", "limsup |{y} - {y}_eq| <= this, SI ({y}_eq: bounds_reference)")),
     ModelClass("barrier", "safety", "safety", over_box=True, stability=False,
                run_field=_runs.barrier_field, run_functions=_runs.barrier_functions,
