@@ -231,23 +231,24 @@ REFUSALS: tuple[Refusal, ...] = (
             "value); its safety classes are decided at a point only. A box sweep takes `linearization`, "
             "`quadratic` and `sos_gas`, each box iterated at its corners and random points; the cross-check of a "
             "set or a bound over a box is not built (a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("barrier", "reach_avoid"), CLASS_SURFACES)
-            | cells(("map_functions",), ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound"),
-                    ("sweep boxes",)),
+    Refusal(cells(("map_functions",), ("reach_avoid",), CLASS_SURFACES)
+            | cells(("map_functions",), ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound",
+                                         "barrier"), ("sweep boxes",)),
             ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
              'time = "discrete")'),
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
             "then the exact discrete-time test), `quadratic` and `sos_gas` (a V of the states with `V(F) <= (1 - mu) "
             "V - W` on the recasting's relations, exact), `roa` (ball arithmetic on the true map), `candidate` "
             "(your quadratic V, the same route) and `sos_bound` (a V of the states with `V(F(x, d)) <= lam V + 1 - "
-            "lam` on the relations and the disturbances' box, exact) at a point, and `linearization` and `roa` over a `--box` (ball "
+            "lam` on the relations and the disturbances' box, exact) and `barrier` (a B of the states with `B(F) <= lam "
+            "B` on the relations, exact; never refuted there) at a point, and `linearization` and `roa` over a `--box` (ball "
             "arithmetic with the parameters as balls); every other class is `not_applicable` until it is built for "
             "such a map; reports and point sweeps take it as a polynomial map, and box sweeps refuse it in one line "
             "(a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound"), ("--box",)),
+    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier"), ("--box",)),
             ("over a box a discrete-time map with functions takes linearization and roa only",),
-            "Over a `--box` a map with functions takes `linearization` and `roa` only; its `quadratic`, `sos_gas` "
-            "and `sos_bound` are decided at a point (one V for every value of the box, the parameters among the relations' "
+            "Over a `--box` a map with functions takes `linearization` and `roa` only; its `quadratic`, `sos_gas`, "
+            "`sos_bound` and `barrier` are decided at a point (one V for every value of the box, the parameters among the relations' "
             "variables, is not built: a gap, not a theorem)."),
 )
 

@@ -61,6 +61,7 @@ from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, ful
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.language.recast import RecastModel
     from lyapcheck.models.loop.field import ShiftedField
 
 #: the certificate kind (claims words it; verify dispatches on it)
@@ -711,7 +712,7 @@ def tighten_reach(ring: Ring, F: Sequence[Poly], structure: Structure, degree: i
 
 # -- the classes ------------------------------------------------------------------------------------------------
 
-def _no_sets(name: str, model: "Model") -> ConditionResult | None:
+def no_sets(name: str, model: "Model | RecastModel") -> ConditionResult | None:
     """``not_applicable`` with the continuous safety classes' sentence when the model lacks the class's sets
     (:data:`~lyapcheck.models.language.sets.CLASS_SETS`); None when it has them."""
     from lyapcheck.models.language.sets import CLASS_SETS
@@ -737,7 +738,7 @@ def _refuted(name: str, model: "Model", found: Counterexample, when: str = "") -
 def run_barrier(model: "Model", shifted: "ShiftedField", budget: Budget) -> ConditionResult:
     """``barrier`` on the map (module docstring): the falsification first (``refuted`` with an iterate
     proved unsafe), then the search for ``B``; ``certified`` only after :func:`check_discrete_barrier`."""
-    ruled = _no_sets("barrier", model)
+    ruled = no_sets("barrier", model)
     if ruled is not None:
         return ruled
     try:
@@ -774,7 +775,7 @@ def run_reach_avoid(model: "Model", shifted: "ShiftedField", budget: Budget) -> 
     :func:`check_discrete_reach`, with the steps bound ``floor(C / eps)``."""
     from lyapcheck.models.classes.reach_avoid import goal_of_one_piece
 
-    ruled = _no_sets("reach_avoid", model)
+    ruled = no_sets("reach_avoid", model)
     if ruled is not None:
         return ruled
     if model.stay_in_goal:
@@ -881,6 +882,6 @@ def _verify_refutation(model: "Model", ring: Ring, F: Sequence[Poly], sets: Mapp
 
 __all__ = ["KIND", "REFUTATION_KIND", "BARRIER_DEGREES", "LAMBDAS", "DiscreteBarrier", "Counterexample",
            "map_sets", "check_discrete_barrier", "barrier_structure", "barrier_values", "search_barrier",
-           "check_iterate", "falsify_map", "run_barrier", "run_reach_avoid", "verify", "REACH_KIND", "REACH_DEGREES",
+           "check_iterate", "falsify_map", "no_sets", "run_barrier", "run_reach_avoid", "verify", "REACH_KIND", "REACH_DEGREES",
            "DiscreteReach", "check_discrete_reach", "reach_structure", "reach_values", "search_reach",
            "tightened_structure", "tighten_reach", "STAY_NOT_TAKEN"]

@@ -228,6 +228,8 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                run_field=_runs.barrier_field, run_functions=_runs.barrier_functions,
                verify_field=_field.verify_barrier, verify_functions=_functions.verify_barrier,
                run_map=_discrete.barrier_map, verify_map=_vdiscrete.verify_safety_map,
+               run_map_functions=_discrete.barrier_map_functions,
+               verify_map_functions=_vdiscrete.verify_barrier_map_functions,
                figures=(Figure("lambda_per_s", "lambda_per_s", "the barrier's rate: B' <= lambda B, 1/s"),)),
     ModelClass("reach_avoid", "safety", "reach_avoid", over_box=True, stability=False,
                run_field=_runs.reach_avoid_field, run_functions=_runs.reach_avoid_functions,
