@@ -1,7 +1,9 @@
 """``sos_bound`` on a discrete-time map with functions (:mod:`lyapcheck.models.classes.map_relations_bounds`):
 the shipped example certified and its bounds checked by iterating the true map under random and bang-bang
 disturbances, its step inequality checked on the true map at sampled points, verify, forged certificates
-refused, a disturbance inside a function taken, and the cases that are not certified or not taken."""
+refused, a disturbance inside a function taken, and the cases that are not certified or not taken; then
+``barrier`` on such a map (:mod:`lyapcheck.models.classes.map_relations_safety`): certified and checked on
+the true map, verify and forgeries, an unsafe map not certified (never refuted), no sets."""
 
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from lyapcheck.models.classes import map_relations, map_relations_safety as mrs
 from lyapcheck.models.classes import map_relations_bounds as mrb
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.recast_sos import poly_from_json
@@ -190,3 +193,71 @@ def test_without_disturbances_and_with_a_square_root_it_is_not_applicable() -> N
     text = DISTURBED_ARGUMENT.replace('"0.5*y"', '"0.5*y + 0.1*(sqrt(1 + y**2) - 1)"')
     result = mrb.run(_map(text), _budget())
     assert result.status == "not_applicable" and "sqrt(1 + y**2)" in result.summary
+
+
+# -- barrier on a map with functions (lyapcheck.models.classes.map_relations_safety) -------------------------
+
+SAFETY = MODELS / "discrete-tanh-safety-map.toml"
+
+
+@pytest.fixture(scope="module")
+def barrier_certified() -> tuple[RecastModel, dict[str, Any]]:
+    model = _map(SAFETY)
+    result = mrs.run_barrier(model, _budget())
+    assert result.status == "certified", result.summary
+    return model, result.to_json()
+
+
+def _b_value(model: RecastModel, data: dict[str, Any], x: float, y: float) -> float:
+    m = map_relations.on_relations(model)
+    B = poly_from_json(m.ring, data["certificate"]["B"], "B")
+    return float(m.ring.evaluate(B, [Fraction(x), Fraction(y)] + [Fraction(0)] * (m.ring.nvars - 2)))
+
+
+def test_barrier_certified_holds_on_the_true_map(barrier_certified: tuple[RecastModel, dict[str, Any]]) -> None:
+    # B <= 0 on sampled initial points, B >= 1 on sampled unsafe points, B(F) <= lam B with the true tanh, and
+    # the iterates of initial starts never unsafe
+    model, data = barrier_certified
+    lam = float(Fraction(data["certificate"]["lambda"]))
+    rng = np.random.default_rng(5)
+    for r, t in zip(0.1 * np.sqrt(rng.random(60)), rng.uniform(0, 2 * math.pi, 60)):
+        x, y = 0.5 + r * math.cos(t), r * math.sin(t)
+        assert _b_value(model, data, x, y) <= 1e-9
+        for _ in range(60):
+            x, y = y, -0.5 * x + 0.8 * math.tanh(y)
+            assert x < 1.5
+    for x, y in zip(rng.uniform(1.5, 6, 60), rng.uniform(-6, 6, 60)):
+        assert _b_value(model, data, x, y) >= 1 - 1e-9
+    for x, y in zip(rng.uniform(-4, 4, 100), rng.uniform(-4, 4, 100)):
+        b = _b_value(model, data, x, y)
+        assert _b_value(model, data, y, -0.5 * x + 0.8 * math.tanh(y)) <= lam * b + 1e-9 * (1 + abs(b))
+
+
+def test_barrier_verify_passes_and_forgeries_fail(barrier_certified: tuple[RecastModel, dict[str, Any]]) -> None:
+    model, data = barrier_certified
+    ok, why = mrs.verify_barrier(model, data)
+    assert ok, why
+    rate = copy.deepcopy(data)
+    rate["certificate"]["lambda"] = "1/10"
+    rate["lambda"] = 0.1
+    ok, why = mrs.verify_barrier(model, rate)
+    assert not ok and "does not hold exactly" in why
+    shifted = copy.deepcopy(data)  # B's constant moved: B <= 0 on the initial set no longer follows
+    constant = next(t for t in shifted["certificate"]["B"]["terms"] if not any(t[1]))
+    constant[0] = str(Fraction(constant[0]) + 1)
+    assert not mrs.verify_barrier(model, shifted)[0]
+    other = _map(SAFETY.read_text().replace('unsafe = ["1.5 <= x"]', 'unsafe = ["0.55 <= x"]'))
+    assert not mrs.verify_barrier(other, data)[0]
+
+
+def test_an_unsafe_map_is_not_certified_never_refuted() -> None:
+    # the initial disc itself meets the unsafe set: no barrier exists, and no iterate is searched on such a map
+    text = SAFETY.read_text().replace('unsafe = ["1.5 <= x"]', 'unsafe = ["0.55 <= x"]')
+    result = mrs.run_barrier(_map(text), _budget())
+    assert result.status == "not_certified"
+    assert "not_certified is not refuted" in result.summary
+
+
+def test_barrier_without_sets_is_not_applicable() -> None:
+    result = mrs.run_barrier(_map(EXAMPLE), _budget())
+    assert result.status == "not_applicable" and "[sets]" in result.summary
