@@ -100,7 +100,7 @@ def disturbed_map(model: "RecastModel") -> DisturbedMapOnRelations:
     from lyapcheck.models.language.recast import recast_dynamics
 
     table = tomllib.loads(model.text)["dynamics"]
-    if any(not isinstance(table[s], str) for s in model.states):
+    if any(isinstance(table[s], bool) or not isinstance(table[s], (str, int, float)) for s in model.states):
         raise NotTaken("a right-hand side that is not one expression (a table) is not recast with its disturbances")
     dists = dict(model.disturbances)
     texts: dict[str, object] = {**{s: f"({table[s]}) - ({s})" for s in model.states}, **{d: "0" for d in dists}}
