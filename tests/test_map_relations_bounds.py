@@ -3,7 +3,8 @@ the shipped example certified and its bounds checked by iterating the true map u
 disturbances, its step inequality checked on the true map at sampled points, verify, forged certificates
 refused, a disturbance inside a function taken, and the cases that are not certified or not taken; then
 ``barrier`` on such a map (:mod:`lyapcheck.models.classes.map_relations_safety`): certified and checked on
-the true map, verify and forgeries, an unsafe map not certified (never refuted), no sets."""
+the true map, verify and forgeries, an unsafe map refuted by an iterate proved in ball arithmetic, a barrier
+that cannot exist not certified, no sets."""
 
 from __future__ import annotations
 
@@ -250,12 +251,39 @@ def test_barrier_verify_passes_and_forgeries_fail(barrier_certified: tuple[Recas
     assert not mrs.verify_barrier(other, data)[0]
 
 
-def test_an_unsafe_map_is_not_certified_never_refuted() -> None:
-    # the initial disc itself meets the unsafe set: no barrier exists, and no iterate is searched on such a map
-    text = SAFETY.read_text().replace('unsafe = ["1.5 <= x"]', 'unsafe = ["0.55 <= x"]')
+def test_an_unsafe_map_is_refuted_by_an_iterate_proved_in_balls() -> None:
+    # from (0.5, 0): x2 = y1 = -1/4 + 0.8 tanh(y0) < -0.2, an unsafe iterate of the true map, proved in ball
+    # arithmetic through tanh; verify re-derives it, and a forged step count fails
+    text = SAFETY.read_text().replace('unsafe = ["1.5 <= x"]', 'unsafe = ["x <= -0.2"]')
+    model = _map(text)
+    result = mrs.run_barrier(model, _budget())
+    assert result.status == "refuted", result.summary
+    data = result.to_json()
+    steps = data["refutation"]["steps"]
+    x, y = (float(Fraction(data["refutation"]["start"][s])) for s in ("x", "y"))
+    assert (x - 0.5) ** 2 + y ** 2 <= 0.01
+    for _ in range(steps):
+        x, y = y, -0.5 * x + 0.8 * math.tanh(y)
+    assert x <= -0.2
+    ok, why = mrs.verify_barrier(model, data)
+    assert ok and "ball arithmetic through the functions" in why
+    forged = copy.deepcopy(data)
+    forged["refutation"]["steps"] = steps + 1
+    forged["steps_to_unsafe"] = steps + 1
+    assert not mrs.verify_barrier(model, forged)[0]
+    moved = copy.deepcopy(data)
+    moved["refutation"]["start"]["x"] = "0.3"  # outside the initial disc
+    ok, why = mrs.verify_barrier(model, moved)
+    assert not ok and "initial set" in why
+
+
+def test_a_barrier_that_cannot_exist_is_not_certified_with_a_reason() -> None:
+    # the initial disc touches the unsafe half-plane at (0.6, 0): no B is <= 0 and >= 1 there, and no iterate
+    # of the map (x1 = y0, |y0| <= 0.1, then |x| stays small) is unsafe: not_certified, naming the degrees
+    text = SAFETY.read_text().replace('unsafe = ["1.5 <= x"]', 'unsafe = ["0.6 <= x"]')
     result = mrs.run_barrier(_map(text), _budget())
     assert result.status == "not_certified"
-    assert "not_certified is not refuted" in result.summary
+    assert "barrier" in result.summary and any("degree 4" in line for line in result.numbers["tried"])
 
 
 def test_barrier_without_sets_is_not_applicable() -> None:

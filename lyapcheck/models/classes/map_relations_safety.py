@@ -19,9 +19,10 @@ the initial set and misses the unsafe set, so no iterate of an initial start is 
 map's argument, :mod:`lyapcheck.models.classes.discrete_safety`).
 
 The search: ``B`` of degree 2 then 4, at the polynomial map's rates; the first certificate that passes
-:func:`check_map_barrier` is the answer. There is no falsification yet: an unsafe map is ``not_certified``,
-never ``refuted`` (an iterate's hit would have to be re-derived in ball arithmetic through the true functions,
-which is not built here).
+:func:`check_map_barrier` is the answer. Before it, the falsification (:func:`falsify`): the true map iterated
+in floating point from starts sampled in the initial set, and an iterate found in the unsafe set re-derived
+from its rounded start in ball arithmetic through the true functions (:func:`check_iterate_functions`): then
+``refuted`` (kind ``discrete_iterate``, as a polynomial map's), which ``verify`` re-derives from the model.
 """
 
 from __future__ import annotations
@@ -178,6 +179,86 @@ def search_barrier(m: MapOnRelations, initial: Pieces, unsafe: Pieces, search: S
     return None, tried
 
 
+# -- the falsification and its re-derivation in ball arithmetic -------------------------------------------
+
+def check_iterate_functions(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces,
+                            start: Sequence[Fraction], steps: int) -> tuple[bool, str]:
+    """Whether the start ``e_0`` (deviations, exact) lies in the initial set (rationals) and its iterate
+    ``e_steps`` of the TRUE map in the unsafe set: the iterates in ball arithmetic through the recasting's
+    true functions (:class:`~lyapcheck.models.engines.interval_field.BallLoop` of the displacement,
+    ``e+ = e + d(e)``, every function an outward-rounded ``arb`` ball, :data:`ITERATE_BITS` bits), every
+    inequality of one unsafe piece ``>= 0`` on the whole final ball: a proof that the property fails."""
+    import flint
+
+    from lyapcheck.models.engines.interval_field import BallLoop
+
+    if not 1 <= steps <= ds.MAX_STEPS:
+        return False, f"the step count must be in [1, {ds.MAX_STEPS}], not {steps}"
+    ring = m.ring
+    if len(start) != m.n:
+        return False, "the start must give one value per state"
+    if not any(ds.in_piece_exact(ring, piece, start) for piece in initial):
+        return False, "the start is not in the initial set (exact)"
+    saved = flint.ctx.prec
+    flint.ctx.prec = ds.ITERATE_BITS
+    try:
+        loop = BallLoop(m.system)  # (built at this precision: its constants' balls are)
+        z = [flint.arb(flint.fmpq(v.numerator, v.denominator)) for v in start]
+        for _ in range(steps):
+            z = [zi + di for zi, di in zip(z, loop.field(z))]
+        for k, piece in enumerate(unsafe):
+            if all(ds.ball_value(ring, p, z) >= 0 for p in piece):  # (arb: True only when certain)
+                return True, (f"the start is in the initial set (exact) and its iterate {steps} of the true map lies "
+                              f"in piece {k + 1} of the unsafe set (ball arithmetic through the functions, "
+                              f"{ds.ITERATE_BITS} bits)")
+    finally:
+        flint.ctx.prec = saved
+    return False, f"iterate {steps} of the start is not proved to lie in the unsafe set (ball arithmetic)"
+
+
+def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces) -> ds.Counterexample | None:
+    """The true map iterated in floating point (each function by numpy,
+    :class:`~lyapcheck.models.engines.recast_numeric.TrueField` of the displacement) from starts sampled in
+    the initial set, as a polynomial map's :func:`~lyapcheck.models.classes.discrete_safety.falsify_map`; the
+    first iterate in the unsafe set is re-derived by :func:`check_iterate_functions`, its start rounded to
+    :data:`~lyapcheck.models.classes.discrete_safety.START_DIGITS` digits. None when none is proved."""
+    import numpy as np
+
+    from lyapcheck.exact import to_rational
+    from lyapcheck.models.classes.falsify import sample_set
+    from lyapcheck.models.engines.iteration import BoolArray, FloatArray, IntArray, iterate_map
+    from lyapcheck.models.engines.recast_numeric import TrueField
+    from lyapcheck.models.language.sets import margin
+
+    rng = np.random.default_rng(20261130)
+    try:
+        starts = sample_set(model, model.sets["initial"], margin, ds.FALSIFY_STARTS, rng)[0]  # type: ignore[arg-type]
+    except ValueError:
+        return None
+    eq = np.array([float(v) for v in model.equilibrium])
+    displacement = TrueField(model.system)
+    found: list[ds.Counterexample] = []
+
+    def step(e: FloatArray) -> FloatArray:
+        with np.errstate(all="ignore"):  # (an overflow gives a row that is not finite: that start is done)
+            return np.asarray(e + displacement(e + eq), dtype=np.float64)
+
+    def stop(x: FloatArray) -> BoolArray:
+        return np.asarray(~np.all(np.isfinite(x), axis=1))
+
+    def unsafe_hit(k_step: int, rows: IntArray, x: FloatArray) -> bool:
+        hit = np.all(np.isfinite(x), axis=1) & (margin(model.sets["unsafe"], x + eq) >= 0)
+        for k in rows[hit]:
+            start = tuple(to_rational(float(v), ds.START_DIGITS) - xe for v, xe in zip(starts[k], model.equilibrium))
+            if check_iterate_functions(model, m, initial, unsafe, start, k_step)[0]:
+                found.append(ds.Counterexample(start, k_step))
+                return True
+        return False
+
+    iterate_map(step, starts - eq, ds.FALSIFY_STEPS, observe=unsafe_hit, stop=stop)
+    return found[0] if found else None
+
+
 # -- the class -------------------------------------------------------------------------------------------
 
 def _proofs_json(m: MapOnRelations, proofs: Mapping[str, "ConditionCertificate"]) -> dict[str, Any]:
@@ -185,8 +266,8 @@ def _proofs_json(m: MapOnRelations, proofs: Mapping[str, "ConditionCertificate"]
 
 
 def run_barrier(model: "RecastModel", budget: Budget) -> ConditionResult:
-    """``barrier`` on a map with functions (module docstring): ``certified`` only after
-    :func:`check_map_barrier`; never ``refuted`` (no falsification yet)."""
+    """``barrier`` on a map with functions (module docstring): the falsification first (``refuted`` with an
+    iterate proved unsafe), then ``certified`` only after :func:`check_map_barrier`."""
     from lyapcheck import tolerances
     from lyapcheck.models.classes.lyapunov import terms_json
     from lyapcheck.models.engines.reasons import size_limit
@@ -208,6 +289,9 @@ def run_barrier(model: "RecastModel", budget: Budget) -> ConditionResult:
         sets = map_sets(model, m)
     except ValueError as exc:  # (a set of a disturbance: the map is read with its disturbances at 0)
         return ConditionResult("barrier", "not_applicable", f"not taken on this map with functions: {exc}")
+    found_cx = falsify(model, m, sets["initial"], sets["unsafe"])
+    if found_cx is not None:
+        return ds.refuted_result("barrier", model, found_cx)
     search = Search(m.ring, budget)
     try:
         found, tried = search_barrier(m, sets["initial"], sets["unsafe"], search)
@@ -220,10 +304,7 @@ def run_barrier(model: "RecastModel", budget: Budget) -> ConditionResult:
 
         none = reasons.not_found("barrier on the recasting's relations", searched_degrees(ds.BARRIER_DEGREES), tried,
                                  ("degree", "sets", "time"))
-        return ConditionResult("barrier", "not_certified",
-                               none.summary + " (an unsafe iterate is not searched on a map with functions yet: "
-                                              "not_certified is not refuted)",
-                               solver={"solves": search.log}, numbers=none.numbers({"tried": tried, "time": "discrete"}),
+        return ConditionResult("barrier", "not_certified", none.summary, solver={"solves": search.log}, numbers=none.numbers({"tried": tried, "time": "discrete"}),
                                property="safety")
     ring = m.ring
     cert = {"kind": KIND, "time": "discrete", "coordinates": "shifted", "variables": list(ring.names),
@@ -245,6 +326,16 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, st
         return False, f"a barrier claim is about safety, not {c.get('property')}"
     if ds.no_sets("barrier", model) is not None:
         return False, "the model has no [sets] initial and unsafe for barrier"
+    if c.get("status") == "refuted":
+        try:
+            m = on_relations(model)
+            sets = map_sets(model, m)
+            return ds.verify_refutation(model, c, lambda start, steps: check_iterate_functions(
+                model, m, sets["initial"], sets["unsafe"], start, steps))
+        except NotTaken as exc:
+            return False, str(exc)
+        except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
+            return False, f"malformed refutation: {exc}"
     try:
         cert = c["certificate"]
         if cert.get("kind") != KIND or cert.get("time") != "discrete":
@@ -279,5 +370,5 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, st
     return True, why
 
 
-__all__ = ["KIND", "map_sets", "step_of", "check_map_barrier", "barrier_structure", "search_barrier", "run_barrier",
-           "verify_barrier"]
+__all__ = ["KIND", "map_sets", "step_of", "check_map_barrier", "barrier_structure", "search_barrier",
+           "check_iterate_functions", "falsify", "run_barrier", "verify_barrier"]
