@@ -239,7 +239,7 @@ REFUSALS: tuple[Refusal, ...] = (
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
             "then the exact discrete-time test), `quadratic` and `sos_gas` (a V of the states with `V(F) <= (1 - mu) "
             "V - W` on the recasting's relations, exact), `roa` (ball arithmetic on the true map), `candidate` "
-            "(your quadratic V, the same route) and `sos_bound` (a V of the states with `V(F(x, d)) <= lam V + 1 - "
+            "(your quadratic V, the same route), `sos_bound` (a V of the states with `V(F(x, d)) <= lam V + 1 - "
             "lam` on the relations and the disturbances' box, exact) and `barrier` (a B of the states with `B(F) <= lam "
             "B` on the relations, exact; refuted by an unsafe iterate proved in balls) at a point, and `linearization` and `roa` over a `--box` (ball "
             "arithmetic with the parameters as balls); every other class is `not_applicable` until it is built for "
