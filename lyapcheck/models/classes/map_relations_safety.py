@@ -203,7 +203,7 @@ def check_iterate_functions(model: "RecastModel", m: MapOnRelations, initial: Pi
     flint.ctx.prec = ds.ITERATE_BITS
     try:
         loop = BallLoop(m.system)  # (built at this precision: its constants' balls are)
-        z = [flint.arb(flint.fmpq(v.numerator, v.denominator)) for v in start]
+        z: list[Any] = [flint.arb(flint.fmpq(v.numerator, v.denominator)) for v in start]
         for _ in range(steps):
             z = [zi + di for zi, di in zip(z, loop.field(z))]
         for k, piece in enumerate(unsafe):
