@@ -207,7 +207,9 @@ _BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
 REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
             | cells(("discrete",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s != "sweep boxes")),
+                    tuple(s for s in CLASS_SURFACES if s != "sweep boxes"))
+            | cells(("map_functions",), ("sos_bound",),
+                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep boxes"))),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
@@ -229,22 +231,24 @@ REFUSALS: tuple[Refusal, ...] = (
             "value); its safety classes are decided at a point only. A box sweep takes `linearization`, "
             "`quadratic` and `sos_gas`, each box iterated at its corners and random points; the cross-check of a "
             "set or a bound over a box is not built (a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("sos_bound", "barrier", "reach_avoid"), CLASS_SURFACES)
-            | cells(("map_functions",), ("linearization", "quadratic", "sos_gas", "roa", "candidate"),
-                    ("sweep boxes",)),
+    Refusal(cells(("map_functions",), ("reach_avoid",), CLASS_SURFACES)
+            | cells(("map_functions",), ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound",
+                                         "barrier"), ("sweep boxes",)),
             ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
              'time = "discrete")'),
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
             "then the exact discrete-time test), `quadratic` and `sos_gas` (a V of the states with `V(F) <= (1 - mu) "
-            "V - W` on the recasting's relations, exact), `roa` (ball arithmetic on the true map) and `candidate` "
-            "(your quadratic V, the same route) at a point, and `linearization` and `roa` over a `--box` (ball "
+            "V - W` on the recasting's relations, exact), `roa` (ball arithmetic on the true map), `candidate` "
+            "(your quadratic V, the same route), `sos_bound` (a V of the states with `V(F(x, d)) <= lam V + 1 - "
+            "lam` on the relations and the disturbances' box, exact) and `barrier` (a B of the states with `B(F) <= lam "
+            "B` on the relations, exact; refuted by an unsafe iterate proved in balls) at a point, and `linearization` and `roa` over a `--box` (ball "
             "arithmetic with the parameters as balls); every other class is `not_applicable` until it is built for "
             "such a map; reports and point sweeps take it as a polynomial map, and box sweeps refuse it in one line "
             "(a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas"), ("--box",)),
+    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier"), ("--box",)),
             ("over a box a discrete-time map with functions takes linearization and roa only",),
-            "Over a `--box` a map with functions takes `linearization` and `roa` only; its `quadratic` and `sos_gas` "
-            "are decided at a point (one V for every value of the box, the parameters among the relations' "
+            "Over a `--box` a map with functions takes `linearization` and `roa` only; its `quadratic`, `sos_gas`, "
+            "`sos_bound` and `barrier` are decided at a point (one V for every value of the box, the parameters among the relations' "
             "variables, is not built: a gap, not a theorem)."),
 )
 

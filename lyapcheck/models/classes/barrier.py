@@ -634,17 +634,18 @@ def decrease_of(view: "BoundField", B: Poly, lam: Fraction) -> Poly:
     return total
 
 
-def conditions(view: "BoundField", B: Poly, lam: Fraction, initial: Pieces, unsafe: Pieces
-               ) -> list[tuple[str, Poly, list["Relation"]]]:
+def conditions(view: "BoundField", B: Poly, lam: Fraction, initial: Pieces, unsafe: Pieces,
+               decrease: Poly | None = None) -> list[tuple[str, Poly, list["Relation"]]]:
     """Each identity's name, its ``F >= 0`` and the relations it is proved on (the recasting's, then a
-    piece's generators)."""
+    piece's generators). ``decrease``: the step condition's ``F`` in place of ``B'``'s (a discrete-time
+    map's ``lam B - B(F)``, :mod:`lyapcheck.models.classes.map_relations_safety`)."""
     ring = view.ring
     out = [(f"I{k}", -B, list(view.relations) + _generator_relations(view, piece, f"initial piece {k}"))
            for k, piece in enumerate(initial)]
     out += [(f"U{k}", B - ring.constant(1), list(view.relations) + _generator_relations(view, piece,
                                                                                        f"unsafe piece {k}"))
             for k, piece in enumerate(unsafe)]
-    out.append(("D", decrease_of(view, B, lam), list(view.relations)))
+    out.append(("D", decrease_of(view, B, lam) if decrease is None else decrease, list(view.relations)))
     return out
 
 
@@ -676,12 +677,14 @@ def add_piece_multipliers(proofs: dict[str, "ConditionCertificate"], pieces: Seq
 
 
 def check_on_relations(view: "BoundField", B: Poly, lam: Fraction, initial: Pieces, unsafe: Pieces,
-                       proofs: dict[str, "ConditionCertificate"]) -> tuple[bool, str]:
+                       proofs: dict[str, "ConditionCertificate"], decrease: Poly | None = None
+                       ) -> tuple[bool, str]:
     """Exactly, on a loop with functions: each identity of :func:`conditions` on its relations
-    (:func:`~lyapcheck.models.engines.recast_sos.check_condition`), with no region multiplier."""
+    (:func:`~lyapcheck.models.engines.recast_sos.check_condition`), with no region multiplier
+    (``decrease``: as :func:`conditions`)."""
     from lyapcheck.models.engines.recast_sos import check_condition
 
-    for name, F, relations in conditions(view, B, lam, initial, unsafe):
+    for name, F, relations in conditions(view, B, lam, initial, unsafe, decrease):
         proof = proofs[name]
         if proof.rho is not None:
             return False, f"{name}: a barrier's identity takes no region multiplier"

@@ -71,7 +71,8 @@ KIND: Final = DISCRETE_INTERVAL_KIND
 #: the reason of every class without a ``run_map_functions`` entry (lyapcheck.models.classes.registry: the
 #: classes a map with functions takes, MAP_FUNCTIONS) on such a map
 NOT_YET: Final = ('not taken yet on a discrete-time map with functions ([model] time = "discrete" with sin, tanh, '
-                  "[networks], ...): the classes taken are linearization, quadratic, sos_gas, roa and candidate")
+                  "[networks], ...): the classes taken are linearization, quadratic, sos_gas, roa, candidate, "
+                  "sos_bound and barrier")
 #: significant bits of a level tried
 LEVEL_BITS: Final = 12
 #: the first level tried: the ellipsoid this wide (in its widest state) ...

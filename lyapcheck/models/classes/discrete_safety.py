@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 from lyapcheck.models.classes.claims import (DISCRETE_BARRIER_KIND, DISCRETE_BARRIER_SENTENCE, DISCRETE_REACH_KIND,
                                              discrete_reach_sentence)
@@ -61,6 +61,7 @@ from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, ful
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.modelfile import Model
+    from lyapcheck.models.language.recast import RecastModel
     from lyapcheck.models.loop.field import ShiftedField
 
 #: the certificate kind (claims words it; verify dispatches on it)
@@ -303,12 +304,12 @@ def search_barrier(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piece
 
 # -- the falsification and its exact re-derivation -------------------------------------------------------------
 
-def _in_piece_exact(ring: Ring, piece: Sequence[Poly], point: Sequence[Fraction]) -> bool:
+def in_piece_exact(ring: Ring, piece: Sequence[Poly], point: Sequence[Fraction]) -> bool:
     values = dict(zip(ring.names, point))
     return all(ring.terms(ring.substitute(p, values)).get(tuple([0] * ring.nvars), Fraction(0)) >= 0 for p in piece)
 
 
-def _ball_value(ring: Ring, p: Poly, x: Sequence[Any]) -> Any:
+def ball_value(ring: Ring, p: Poly, x: Sequence[Any]) -> Any:
     """``p`` at a vector of balls (flint ``arb``), every coefficient exact as an ``fmpq`` ball."""
     import flint
 
@@ -324,7 +325,7 @@ def _ball_value(ring: Ring, p: Poly, x: Sequence[Any]) -> Any:
 
 def _outside(ring: Ring, goal: Sequence[Poly], x: Sequence[Any]) -> bool:
     """Some inequality of the goal (one piece) is ``< 0`` on the whole ball ``x`` (proved)."""
-    return any(_ball_value(ring, q, x) < 0 for q in goal)  # (arb: True only when certain)
+    return any(ball_value(ring, q, x) < 0 for q in goal)  # (arb: True only when certain)
 
 
 def check_iterate(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, start: Sequence[Fraction],
@@ -338,7 +339,7 @@ def check_iterate(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces
 
     if not 1 <= steps <= MAX_STEPS:
         return False, f"the step count must be in [1, {MAX_STEPS}], not {steps}"
-    if not any(_in_piece_exact(ring, piece, start) for piece in initial):
+    if not any(in_piece_exact(ring, piece, start) for piece in initial):
         return False, "the start is not in the initial set (exact)"
     saved = flint.ctx.prec
     flint.ctx.prec = ITERATE_BITS
@@ -347,9 +348,9 @@ def check_iterate(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces
         for k in range(steps):
             if goal is not None and not _outside(ring, goal, x):
                 return False, f"iterate {k} of the start is not proved to lie outside the goal (ball arithmetic)"
-            x = [_ball_value(ring, fi, x) for fi in F]
+            x = [ball_value(ring, fi, x) for fi in F]
         for k, piece in enumerate(unsafe):
-            if all(_ball_value(ring, p, x) >= 0 for p in piece):  # (arb: True only when certain)
+            if all(ball_value(ring, p, x) >= 0 for p in piece):  # (arb: True only when certain)
                 return True, (f"the start is in the initial set (exact) and its iterate {steps} lies in piece {k + 1} "
                               f"of the unsafe set (ball arithmetic, {ITERATE_BITS} bits)")
     finally:
@@ -364,7 +365,7 @@ class Counterexample:
     start: tuple[Fraction, ...]
     steps: int
 
-    def to_json(self, model: "Model") -> dict[str, Any]:
+    def to_json(self, model: "Model | RecastModel") -> dict[str, Any]:
         from lyapcheck.exact import exact_decimal
 
         def written(v: Fraction) -> str:  # a finite decimal where one exists (the start is rounded to digits)
@@ -711,7 +712,7 @@ def tighten_reach(ring: Ring, F: Sequence[Poly], structure: Structure, degree: i
 
 # -- the classes ------------------------------------------------------------------------------------------------
 
-def _no_sets(name: str, model: "Model") -> ConditionResult | None:
+def no_sets(name: str, model: "Model | RecastModel") -> ConditionResult | None:
     """``not_applicable`` with the continuous safety classes' sentence when the model lacks the class's sets
     (:data:`~lyapcheck.models.language.sets.CLASS_SETS`); None when it has them."""
     from lyapcheck.models.language.sets import CLASS_SETS
@@ -723,7 +724,7 @@ def _no_sets(name: str, model: "Model") -> ConditionResult | None:
                                                    f"and {needed[-1]!r} (docs/model-files.md, [sets])")
 
 
-def _refuted(name: str, model: "Model", found: Counterexample, when: str = "") -> ConditionResult:
+def refuted_result(name: str, model: "Model | RecastModel", found: Counterexample, when: str = "") -> ConditionResult:
     """``refuted`` with the proved counterexample (``when``: reach_avoid's words on the goal)."""
     data = found.to_json(model)
     where = ", ".join(f"{k} = {v}" for k, v in data["start"].items())
@@ -737,7 +738,7 @@ def _refuted(name: str, model: "Model", found: Counterexample, when: str = "") -
 def run_barrier(model: "Model", shifted: "ShiftedField", budget: Budget) -> ConditionResult:
     """``barrier`` on the map (module docstring): the falsification first (``refuted`` with an iterate
     proved unsafe), then the search for ``B``; ``certified`` only after :func:`check_discrete_barrier`."""
-    ruled = _no_sets("barrier", model)
+    ruled = no_sets("barrier", model)
     if ruled is not None:
         return ruled
     try:
@@ -748,7 +749,7 @@ def run_barrier(model: "Model", shifted: "ShiftedField", budget: Budget) -> Cond
     initial, unsafe = sets["initial"], sets["unsafe"]
     found_cx = falsify_map(model, ring, F, initial, unsafe)
     if found_cx is not None:
-        return _refuted("barrier", model, found_cx)
+        return refuted_result("barrier", model, found_cx)
     search = Search(ring, budget)
     try:
         cert, tried = search_barrier(ring, F, initial, unsafe, search)
@@ -774,7 +775,7 @@ def run_reach_avoid(model: "Model", shifted: "ShiftedField", budget: Budget) -> 
     :func:`check_discrete_reach`, with the steps bound ``floor(C / eps)``."""
     from lyapcheck.models.classes.reach_avoid import goal_of_one_piece
 
-    ruled = _no_sets("reach_avoid", model)
+    ruled = no_sets("reach_avoid", model)
     if ruled is not None:
         return ruled
     if model.stay_in_goal:
@@ -790,7 +791,7 @@ def run_reach_avoid(model: "Model", shifted: "ShiftedField", budget: Budget) -> 
     initial, unsafe, goal = sets["initial"], sets["unsafe"], sets["goal"][0]
     found_cx = falsify_map(model, ring, F, initial, unsafe, goal)
     if found_cx is not None:
-        return _refuted("reach_avoid", model, found_cx, " before any iterate is in the goal")
+        return refuted_result("reach_avoid", model, found_cx, " before any iterate is in the goal")
     search = Search(ring, budget)
     try:
         cert, tried = search_reach(ring, F, initial, unsafe, goal, search)
@@ -863,6 +864,15 @@ def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any], model: "Mod
 
 def _verify_refutation(model: "Model", ring: Ring, F: Sequence[Poly], sets: Mapping[str, Pieces],
                        c: Mapping[str, Any], goal: Sequence[Poly] | None) -> tuple[bool, str]:
+    return verify_refutation(model, c, lambda start, steps: check_iterate(ring, F, sets["initial"], sets["unsafe"],
+                                                                        start, steps, goal))
+
+
+def verify_refutation(model: "Model | RecastModel", c: Mapping[str, Any],
+                      check_at: Callable[[list[Fraction], int], tuple[bool, str]]) -> tuple[bool, str]:
+    """A refuted claim's start and step count read from its JSON (the start in the user's states, moved to
+    the shifted states) and re-derived by ``check_at(start, steps)`` (:func:`check_iterate` on a polynomial
+    map; a map with functions' own, :mod:`lyapcheck.models.classes.map_relations_safety`)."""
     from lyapcheck.exact import read_rational
 
     data = c["refutation"]
@@ -876,11 +886,12 @@ def _verify_refutation(model: "Model", ring: Ring, F: Sequence[Poly], sets: Mapp
     start = [read_rational(data["start"][s], f"start.{s}") - xe for s, xe in zip(model.states, model.equilibrium)]
     if c.get("steps_to_unsafe") != steps:
         return False, "the stated steps_to_unsafe is not the refutation's"
-    return check_iterate(ring, F, sets["initial"], sets["unsafe"], start, steps, goal)
+    return check_at(start, steps)
 
 
 __all__ = ["KIND", "REFUTATION_KIND", "BARRIER_DEGREES", "LAMBDAS", "DiscreteBarrier", "Counterexample",
            "map_sets", "check_discrete_barrier", "barrier_structure", "barrier_values", "search_barrier",
-           "check_iterate", "falsify_map", "run_barrier", "run_reach_avoid", "verify", "REACH_KIND", "REACH_DEGREES",
+           "check_iterate", "falsify_map", "no_sets", "in_piece_exact", "ball_value", "refuted_result",
+           "verify_refutation", "run_barrier", "run_reach_avoid", "verify", "REACH_KIND", "REACH_DEGREES",
            "DiscreteReach", "check_discrete_reach", "reach_structure", "reach_values", "search_reach",
            "tightened_structure", "tighten_reach", "STAY_NOT_TAKEN"]

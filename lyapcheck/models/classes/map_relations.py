@@ -92,16 +92,24 @@ class MapOnRelations:
 def next_state(model: "RecastModel") -> tuple["RecastSystem", Ring, tuple[Poly, ...]]:
     """``F(e, a) = e + d(e, a)`` in deviations, exactly; :class:`NotTaken` when a displacement has a
     denominator depending on the variables, or a square root of an expression (its argument's sign unproved)."""
+    system = model.system
+    ring, F = next_state_of(system)
+    return system, ring, F
+
+
+def next_state_of(system: "RecastSystem", fixed: Mapping[str, Fraction] | None = None
+                  ) -> tuple[Ring, tuple[Poly, ...]]:
+    """:func:`next_state` of a recast displacement; ``fixed``: its last "states" that are bounded constants
+    (a map's disturbances, :mod:`lyapcheck.models.classes.map_relations_bounds`), which get no next value."""
     from lyapcheck.models.classes.recast_classes import base_loop
 
-    system = model.system
     for a in system.auxiliaries:
         if a.function == "sqrt" and a.radicand is None:
             # (r^2 = q has no real point where q < 0: the identity would say nothing there, and the claim "from
             # every start" is only sound once q >= 0 is proved along the orbits, which is not built for a map)
             raise NotTaken(f"'{a.written_as}' is a square root of an expression of the states, whose argument is "
                            "not proved non-negative on a map")
-    loop = base_loop(system, cylinder=False)
+    loop = base_loop(system, cylinder=False, fixed=fixed)
     ring = loop.ring
     F = []
     for s in loop.states():
@@ -110,7 +118,7 @@ def next_state(model: "RecastModel") -> tuple["RecastSystem", Ring, tuple[Poly, 
             raise NotTaken(f"the next value of {s} divides by an expression of the states or functions (a "
                            "polynomial map in the states and the functions is needed)")
         F.append(ring.gen(s) + d.numerator * (1 / d.denominator.leading_coefficient()))
-    return system, ring, tuple(F)
+    return ring, tuple(F)
 
 
 def derived_relations(system: "RecastSystem") -> tuple["Relation", ...]:

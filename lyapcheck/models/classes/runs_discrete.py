@@ -139,6 +139,31 @@ def sos_gas_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Conditio
     return _map_relations(ctx, "sos_gas", budget)
 
 
+def sos_bound_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A V of the states with ``V(F(x, d)) <= lam V(x) + 1 - lam`` on the recasting's relations and the
+    disturbances' box, and each output's ``y^2 <= B + V - 1``
+    (:func:`lyapcheck.models.classes.map_relations_bounds.run`); at a point only."""
+    from lyapcheck.models.classes import map_relations_bounds
+    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
+    from lyapcheck.results import ConditionResult
+
+    if ctx.box is not None:
+        return ConditionResult("sos_bound", "not_applicable", NOT_OVER_BOX)
+    return map_relations_bounds.run(ctx.model, budget)
+
+
+def barrier_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A barrier of the states with ``B(F) <= lam B`` on the recasting's relations
+    (:func:`lyapcheck.models.classes.map_relations_safety.run_barrier`); at a point only."""
+    from lyapcheck.models.classes import map_relations_safety
+    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
+    from lyapcheck.results import ConditionResult
+
+    if ctx.box is not None:
+        return ConditionResult("barrier", "not_applicable", NOT_OVER_BOX)
+    return map_relations_safety.run_barrier(ctx.model, budget)
+
+
 def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A quadratic V's largest level proved by ball arithmetic on the true map
     (:func:`lyapcheck.models.classes.discrete_functions.roa`); over a box, with its parameters as balls
@@ -171,4 +196,4 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
 __all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
            "barrier_map", "reach_avoid_map", "sos_bound_map",
            "linearization_map_functions", "quadratic_map_functions", "sos_gas_map_functions", "roa_map_functions",
-           "candidate_map_functions", "linearization_sampled"]
+           "candidate_map_functions", "sos_bound_map_functions", "barrier_map_functions", "linearization_sampled"]

@@ -141,6 +141,27 @@ def verify_lyapunov_map_functions(name: str, c: dict[str, Any], check: "MapFunct
     return map_relations.verify(check.model, name, _without_nominal_prefix(c))
 
 
+def verify_bound_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
+    """``sos_bound``: the map recast with its disturbances, its relations and each output's two identities
+    re-checked exactly (:func:`lyapcheck.models.classes.map_relations_bounds.verify`)."""
+    from lyapcheck.models.classes import map_relations_bounds
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return map_relations_bounds.verify(check.model, c)
+
+
+def verify_barrier_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
+    """``barrier``: the map, its relations and the sets re-derived, every identity re-checked exactly; a refuted
+    one's iterate re-derived in ball arithmetic through the true functions
+    (:func:`lyapcheck.models.classes.map_relations_safety.verify_barrier`)."""
+    from lyapcheck.models.classes import map_relations_safety
+
+    if c["status"] not in ("certified", "refuted"):
+        return False, check.not_checked(c["status"])
+    return map_relations_safety.verify_barrier(check.model, _without_nominal_prefix(c))
+
+
 def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
     """``roa``: the ``discrete_interval`` region proved again, cell for cell
     (:func:`lyapcheck.models.classes.discrete_functions.verify_roa`; over a box with its parameters as balls,
@@ -181,4 +202,5 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
 
 __all__ = ["verify_linearization_map", "verify_linearization_map_box", "verify_lyapunov_map", "verify_region_map",
            "verify_safety_map", "verify_bound_map",
-           "verify_linearization_map_functions", "verify_lyapunov_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]
+           "verify_linearization_map_functions", "verify_lyapunov_map_functions", "verify_bound_map_functions",
+           "verify_barrier_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]

@@ -424,7 +424,8 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
                            limit: float, box: "ModelBox | None") -> ModelCertification:
     """:func:`certify_model` on a discrete-time map with functions: each class with a ``run_map_functions``
     entry (:mod:`lyapcheck.models.classes.discrete_functions`: ``linearization`` and ``roa``;
-    :mod:`lyapcheck.models.classes.map_relations`: ``quadratic`` and ``sos_gas``) through the one
+    :mod:`lyapcheck.models.classes.map_relations`: ``quadratic`` and ``sos_gas``;
+    :mod:`lyapcheck.models.classes.map_relations_bounds`: ``sos_bound``) through the one
     runner, every other one ``not_applicable`` in one line
     (:data:`~lyapcheck.models.classes.discrete_functions.NOT_YET`); the document states the map's recasting
     (the loop of its displacement). Over a ``box`` (``model`` read at its centre) ``linearization`` and ``roa``
@@ -458,8 +459,9 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
 
     _run_classes(chosen, results, seconds, limit, decide, compute)
     if model.disturbances:
-        for r in results.values():  # the map is read with its disturbances at 0
-            r.disturbances = "zero"
+        for name, r in results.items():  # the map is read with its disturbances at 0, but by sos_bound
+            # (lyapcheck.models.classes.map_relations_bounds: its V serves every disturbance sequence)
+            r.disturbances = "all" if name == "sos_bound" else "zero"
     return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds, box=box,
                               loop=base_loop(model.system, cylinder=False))
 

@@ -1,0 +1,374 @@
+"""``barrier`` on a discrete-time map with functions (issue 44, item 1): no iterate of a start in the initial
+set is ever in the unsafe set, proved on the recasting's relations and checked exactly.
+
+The map is read as :mod:`lyapcheck.models.classes.map_relations` reads it (deviations, states ``e``,
+auxiliaries ``a``, ``F(e, a)`` polynomial, every auxiliary's relations ``h_i = 0``, ``g_j >= 0``), with its
+disturbances at 0 (as a polynomial map's barrier: the claim says ``(d = 0)``). The ``[sets]`` are moved to
+the deviations (:func:`lyapcheck.models.classes.barrier.relation_pieces`). With ``B`` a free polynomial of
+the states, the certificate (kind :data:`KIND`, the polynomial map's, with the recasting's ``variables``
+and ``auxiliaries``) is the continuous barrier's on relations
+(:func:`lyapcheck.models.classes.barrier.conditions`) with the step condition of a map in place of ``B'``:
+
+    -B - sum (relations' and the piece's multipliers) = R_I            each initial piece   (B <= 0 there)
+    B - 1 - sum (relations' and the piece's multipliers) = R_U         each unsafe piece    (B >= 1 there)
+    lam B - B(F(e, a)) - sum_i lambda_i h_i - sum_j tau_j g_j = R_D    (the step)
+
+every remainder and ``tau`` a sum of squares, ``lam >= 0`` rational. At every true point the relations'
+terms are ``<= 0``, so ``B(F(e)) <= lam B(e)`` for every state: ``{B <= 0}`` is forward invariant, holds on
+the initial set and misses the unsafe set, so no iterate of an initial start is ever unsafe (the polynomial
+map's argument, :mod:`lyapcheck.models.classes.discrete_safety`).
+
+The search: ``B`` of degree 2 then 4, at the polynomial map's rates; the first certificate that passes
+:func:`check_map_barrier` is the answer. Before it, the falsification (:func:`falsify`): the true map iterated
+in floating point from starts sampled in the initial set, and an iterate found in the unsafe set re-derived
+from its rounded start in ball arithmetic through the true functions (:func:`check_iterate_functions`): then
+``refuted`` (kind ``discrete_iterate``, as a polynomial map's), which ``verify`` re-derives from the model.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+
+from lyapcheck.models.classes import discrete_lyapunov as dl
+from lyapcheck.models.classes import discrete_safety as ds
+from lyapcheck.models.classes.claims import DISCRETE_BARRIER_KIND, DISCRETE_BARRIER_SENTENCE
+from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations
+from lyapcheck.models.engines import reasons
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, one, param, why_none
+from lyapcheck.results import ConditionResult
+from lyapcheck.sos import bases
+from lyapcheck.sos.polynomials import Monomial, Poly, to_fmpq
+from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, full_blocks
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.engines.recast_sos import ConditionCertificate
+    from lyapcheck.models.language.recast import RecastModel
+
+#: the certificate kind: the polynomial map's (its sentence), stating the recasting's variables besides
+KIND: Final = DISCRETE_BARRIER_KIND
+
+Pieces = Sequence[Sequence[Poly]]
+
+
+def map_sets(model: "RecastModel", m: MapOnRelations) -> dict[str, list[list[Poly]]]:
+    """The model's ``initial`` and ``unsafe`` sets in the map's ring, in the deviations."""
+    from lyapcheck.models.classes.barrier import relation_pieces
+    from lyapcheck.models.classes.recast_classes import base_loop
+
+    loop = base_loop(m.system, cylinder=False)
+    return {key: relation_pieces(loop, model.state_ring, model.sets[key], key) for key in ("initial", "unsafe")}
+
+
+def step_of(m: MapOnRelations, B: Poly, lam: Fraction) -> Poly:
+    """``lam B - B(F)``: the step condition's left side."""
+    return B * to_fmpq(lam) - dl.compose(m.ring, B, m.F)
+
+
+# -- the exact check -------------------------------------------------------------------------------------
+
+def check_map_barrier(m: MapOnRelations, B: Poly, lam: Fraction, initial: Pieces, unsafe: Pieces,
+                      proofs: dict[str, "ConditionCertificate"]) -> tuple[bool, str]:
+    """The identities of the module docstring, exactly: ``lam >= 0``, ``B`` of the states alone, and each
+    identity on its relations (:func:`lyapcheck.models.classes.barrier.check_on_relations` with the map's step)."""
+    from lyapcheck.models.classes.barrier import check_on_relations
+
+    if lam < 0:
+        return False, "the rate lambda must be >= 0 (for {B <= 0} to be invariant)"
+    if any(any(q[m.n:]) for q in m.ring.support(B)):
+        return False, "B may depend on the states only"
+    ok, why = check_on_relations(m.field, B, lam, initial, unsafe, proofs, decrease=step_of(m, B, lam))
+    if not ok:
+        return False, why
+    return True, ("B <= 0 on the initial set, B >= 1 on the unsafe set and lambda B - B(F) >= 0 on the recasting's "
+                  f"relations with lambda = {lam} >= 0, exactly: {{B <= 0}} holds at every step (discrete-time map "
+                  "with functions)")
+
+
+# -- the program -----------------------------------------------------------------------------------------
+
+def barrier_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, degree: int) -> Structure | str:
+    """The program for ``B`` of this degree (the sets' identities of a loop with functions, the map's step
+    with the relations' multipliers), or why there is none (a size limit, named)."""
+    from lyapcheck.models.classes.barrier import _b_basis, set_identities
+    from lyapcheck.models.classes.bounds import relation_multipliers
+    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
+    from lyapcheck.models.engines.reasons import size_limit
+
+    ring, view = m.ring, m.field
+    nv = ring.nvars
+    zero = tuple([0] * nv)
+    b_basis = _b_basis(view, degree)
+    scalars = [Scalar(f"b{k}") for k in range(len(b_basis))]
+    grams: list[Gram] = []
+    on_sets = set_identities(view, b_basis, degree, initial, unsafe, grams, frozenset(), scalars)
+    if isinstance(on_sets, str):
+        return on_sets
+    terms = []
+    target: set[Monomial] = set()
+    for i, q in enumerate(b_basis):
+        support = sorted(set(ring.support(dl.compose(ring, ring.monomial(q), m.F))) | {q})
+        terms.append(Term(param(f"sB{i}", support), f"b{i}"))
+        target |= set(support)
+    rel_grams, rel_scalars, rel_terms, added = relation_multipliers(view, "D", target, (), margin=True)
+    grams.extend(rel_grams)
+    scalars.extend(rel_scalars)
+    terms.extend(rel_terms)
+    target |= added
+    if len(target) > TARGET_LIMIT:
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
+    step_basis = [q for q in bases.sos_basis(nv, target | {zero}) if view.allowed(q)]
+    if len(step_basis) > ds.MAX_GRAM_ROWS:
+        return size_limit(len(step_basis), "monomials per sum-of-squares matrix", ds.MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
+    grams.append(Gram("RD", tuple(step_basis), full_blocks(step_basis)))
+    terms.append(Term(one(ring, -1), "RD"))
+    return ds._affordable_program(nv, grams, scalars, [*on_sets, Identity("D", tuple(terms), None, "RD")])
+
+
+def barrier_values(m: MapOnRelations, degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction
+                   ) -> ParameterValues:
+    from lyapcheck.models.classes.barrier import _b_basis, set_values
+
+    ring = m.ring
+    values = ParameterValues()
+    set_values(m.field, values, initial, unsafe)
+    for i, q in enumerate(_b_basis(m.field, degree)):
+        zq = ring.monomial(q)
+        after = dl.compose(ring, zq, m.F)
+        values.set_poly(ring, f"sB{i}", zq * to_fmpq(lam) - after, sorted(set(ring.support(after)) | {q}))
+    return values
+
+
+def attempt(m: MapOnRelations, structure: Structure, degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction,
+            search: Search) -> tuple[dict[str, Any] | None, Any]:
+    """One solve at rate ``lam``: the exact certificate if it passes :func:`check_map_barrier`."""
+    from lyapcheck.models.classes.barrier import _b_basis, relation_proofs
+
+    point, solution = search.solve_exact(structure, barrier_values(m, degree, initial, unsafe, lam))
+    if point is None:
+        return None, solution
+    B = m.ring.from_terms({q: point.scalars[f"b{i}"] for i, q in enumerate(_b_basis(m.field, degree))})
+    proofs = relation_proofs(m.field, structure, point, initial, unsafe)
+    if not check_map_barrier(m, B, lam, initial, unsafe, proofs)[0]:
+        return None, solution
+    return {"B": B, "lam": lam, "proofs": proofs}, solution
+
+
+def search_barrier(m: MapOnRelations, initial: Pieces, unsafe: Pieces, search: Search
+                   ) -> tuple[dict[str, Any] | None, list[str]]:
+    """The first certificate over the degrees and rates, and what was tried."""
+    from lyapcheck.degrees import searched_degrees
+
+    tried: list[str] = []
+    for degree in searched_degrees(ds.BARRIER_DEGREES):
+        search.budget.check()
+        structure = barrier_structure(m, initial, unsafe, degree)
+        if isinstance(structure, str):
+            tried.append(f"degree {degree}: {structure}")
+            continue
+        outcomes: dict[str, int] = {}
+        for lam in ds.LAMBDAS:
+            found, solution = attempt(m, structure, degree, initial, unsafe, lam, search)
+            if found is not None:
+                tried.append(f"degree {degree}: found at lambda = {lam}")
+                return {**found, "degree": degree}, tried
+            why = why_none(solution) if solution is not None else "none"
+            outcomes[why] = outcomes.get(why, 0) + 1
+        tried.append(f"degree {degree}: none at lambda = {', '.join(str(x) for x in ds.LAMBDAS)}: "
+                     + ", ".join(f"{why} ({count})" for why, count in outcomes.items()))
+    return None, tried
+
+
+# -- the falsification and its re-derivation in ball arithmetic -------------------------------------------
+
+def check_iterate_functions(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces,
+                            start: Sequence[Fraction], steps: int) -> tuple[bool, str]:
+    """Whether the start ``e_0`` (deviations, exact) lies in the initial set (rationals) and its iterate
+    ``e_steps`` of the TRUE map in the unsafe set: the iterates in ball arithmetic through the recasting's
+    true functions (:class:`~lyapcheck.models.engines.interval_field.BallLoop` of the displacement,
+    ``e+ = e + d(e)``, every function an outward-rounded ``arb`` ball, :data:`ITERATE_BITS` bits), every
+    inequality of one unsafe piece ``>= 0`` on the whole final ball: a proof that the property fails."""
+    import flint
+
+    from lyapcheck.models.engines.interval_field import BallLoop
+
+    if not 1 <= steps <= ds.MAX_STEPS:
+        return False, f"the step count must be in [1, {ds.MAX_STEPS}], not {steps}"
+    ring = m.ring
+    if len(start) != m.n:
+        return False, "the start must give one value per state"
+    if not any(ds.in_piece_exact(ring, piece, start) for piece in initial):
+        return False, "the start is not in the initial set (exact)"
+    saved = flint.ctx.prec
+    flint.ctx.prec = ds.ITERATE_BITS
+    try:
+        loop = BallLoop(m.system)  # (built at this precision: its constants' balls are)
+        z: list[Any] = [flint.arb(flint.fmpq(v.numerator, v.denominator)) for v in start]
+        for _ in range(steps):
+            z = [zi + di for zi, di in zip(z, loop.field(z))]
+        for k, piece in enumerate(unsafe):
+            if all(ds.ball_value(ring, p, z) >= 0 for p in piece):  # (arb: True only when certain)
+                return True, (f"the start is in the initial set (exact) and its iterate {steps} of the true map lies "
+                              f"in piece {k + 1} of the unsafe set (ball arithmetic through the functions, "
+                              f"{ds.ITERATE_BITS} bits)")
+    finally:
+        flint.ctx.prec = saved
+    return False, f"iterate {steps} of the start is not proved to lie in the unsafe set (ball arithmetic)"
+
+
+def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces) -> ds.Counterexample | None:
+    """The true map iterated in floating point (each function by numpy,
+    :class:`~lyapcheck.models.engines.recast_numeric.TrueField` of the displacement) from starts sampled in
+    the initial set, as a polynomial map's :func:`~lyapcheck.models.classes.discrete_safety.falsify_map`; the
+    first iterate in the unsafe set is re-derived by :func:`check_iterate_functions`, its start rounded to
+    :data:`~lyapcheck.models.classes.discrete_safety.START_DIGITS` digits. None when none is proved."""
+    import numpy as np
+
+    from lyapcheck.exact import to_rational
+    from lyapcheck.models.classes.falsify import sample_set
+    from lyapcheck.models.engines.iteration import BoolArray, FloatArray, IntArray, iterate_map
+    from lyapcheck.models.engines.recast_numeric import TrueField
+    from lyapcheck.models.language.sets import margin
+
+    rng = np.random.default_rng(20261130)
+    try:
+        starts = sample_set(model, model.sets["initial"], margin, ds.FALSIFY_STARTS, rng)[0]  # type: ignore[arg-type]
+    except ValueError:
+        return None
+    eq = np.array([float(v) for v in model.equilibrium])
+    displacement = TrueField(model.system)
+    found: list[ds.Counterexample] = []
+
+    def step(e: FloatArray) -> FloatArray:
+        with np.errstate(all="ignore"):  # (an overflow gives a row that is not finite: that start is done)
+            return np.asarray(e + displacement(e + eq), dtype=np.float64)
+
+    def stop(x: FloatArray) -> BoolArray:
+        return np.asarray(~np.all(np.isfinite(x), axis=1))
+
+    def unsafe_hit(k_step: int, rows: IntArray, x: FloatArray) -> bool:
+        hit = np.all(np.isfinite(x), axis=1) & (margin(model.sets["unsafe"], x + eq) >= 0)
+        for k in rows[hit]:
+            start = tuple(to_rational(float(v), ds.START_DIGITS) - xe for v, xe in zip(starts[k], model.equilibrium))
+            if check_iterate_functions(model, m, initial, unsafe, start, k_step)[0]:
+                found.append(ds.Counterexample(start, k_step))
+                return True
+        return False
+
+    iterate_map(step, starts - eq, ds.FALSIFY_STEPS, observe=unsafe_hit, stop=stop)
+    return found[0] if found else None
+
+
+# -- the class -------------------------------------------------------------------------------------------
+
+def _proofs_json(m: MapOnRelations, proofs: Mapping[str, "ConditionCertificate"]) -> dict[str, Any]:
+    return {name: proof.to_json(m.ring) for name, proof in proofs.items()}
+
+
+def run_barrier(model: "RecastModel", budget: Budget) -> ConditionResult:
+    """``barrier`` on a map with functions (module docstring): the falsification first (``refuted`` with an
+    iterate proved unsafe), then ``certified`` only after :func:`check_map_barrier`."""
+    from lyapcheck import tolerances
+    from lyapcheck.models.classes.lyapunov import terms_json
+    from lyapcheck.models.engines.reasons import size_limit
+
+    ruled = ds.no_sets("barrier", model)
+    if ruled is not None:
+        return ruled
+    try:
+        m = on_relations(model)
+    except NotTaken as exc:
+        return ConditionResult("barrier", "not_applicable", f"not taken on this map with functions: {exc}")
+    if m.ring.nvars > tolerances.MAP_RELATIONS_VARIABLES:
+        none = reasons.reason("no barrier of the map was searched on the recasting's relations: "
+                              + size_limit(m.ring.nvars, "variables (states and functions)",
+                                           tolerances.MAP_RELATIONS_VARIABLES, "MAP_RELATIONS_VARIABLES"), ("fewer",))
+        return ConditionResult("barrier", "not_certified", none.summary, property="safety",
+                               numbers=none.numbers({"time": "discrete"}))
+    try:
+        sets = map_sets(model, m)
+    except ValueError as exc:  # (a set of a disturbance: the map is read with its disturbances at 0)
+        return ConditionResult("barrier", "not_applicable", f"not taken on this map with functions: {exc}")
+    found_cx = falsify(model, m, sets["initial"], sets["unsafe"])
+    if found_cx is not None:
+        return ds.refuted_result("barrier", model, found_cx)
+    search = Search(m.ring, budget)
+    try:
+        found, tried = search_barrier(m, sets["initial"], sets["unsafe"], search)
+    except BudgetExhausted as exc:
+        late = reasons.out_of_time("a barrier of the discrete-time map", budget.seconds, str(exc))
+        return ConditionResult("barrier", "inconclusive", late.summary, solver={"solves": search.log},
+                               numbers=late.numbers({"reason": str(exc), "time": "discrete"}), property="safety")
+    if found is None:
+        from lyapcheck.degrees import searched_degrees
+
+        none = reasons.not_found("barrier on the recasting's relations", searched_degrees(ds.BARRIER_DEGREES), tried,
+                                 ("degree", "sets", "time"))
+        return ConditionResult("barrier", "not_certified", none.summary, solver={"solves": search.log}, numbers=none.numbers({"tried": tried, "time": "discrete"}),
+                               property="safety")
+    ring = m.ring
+    cert = {"kind": KIND, "time": "discrete", "coordinates": "shifted", "variables": list(ring.names),
+            "auxiliaries": m.system.definitions(), "degree": found["degree"], "lambda": str(found["lam"]),
+            "B": terms_json(ring, found["B"]), "proofs": _proofs_json(m, found["proofs"])}
+    return ConditionResult("barrier", "certified", DISCRETE_BARRIER_SENTENCE,
+                           numbers={"degree": found["degree"], "lambda": float(found["lam"]), "time": "discrete"},
+                           certificate=cert, solver={"solves": search.log}, property="safety")
+
+
+def verify_barrier(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
+    """Re-check a certified ``barrier`` of a map with functions from its JSON and the model text alone: the map,
+    its relations and the sets re-derived, every identity exactly, the stated degree, rate and sentence."""
+    from lyapcheck.exact import read_rational
+    from lyapcheck.models.classes.barrier import conditions
+    from lyapcheck.models.engines.recast_sos import ConditionCertificate, poly_from_json
+
+    if c.get("property") != "safety":
+        return False, f"a barrier claim is about safety, not {c.get('property')}"
+    if ds.no_sets("barrier", model) is not None:
+        return False, "the model has no [sets] initial and unsafe for barrier"
+    if c.get("status") == "refuted":
+        try:
+            m = on_relations(model)
+            sets = map_sets(model, m)
+            return ds.verify_refutation(model, c, lambda start, steps: check_iterate_functions(
+                model, m, sets["initial"], sets["unsafe"], start, steps))
+        except NotTaken as exc:
+            return False, str(exc)
+        except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
+            return False, f"malformed refutation: {exc}"
+    try:
+        cert = c["certificate"]
+        if cert.get("kind") != KIND or cert.get("time") != "discrete":
+            return False, f"not a barrier certificate of a discrete-time map (kind {cert.get('kind')!r})"
+        m = on_relations(model)
+        ring = m.ring
+        if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != m.system.definitions():
+            return False, "the certificate's variables or functions are not the map's"
+        sets = map_sets(model, m)
+        B = poly_from_json(ring, cert["B"], "B")
+        lam = read_rational(cert["lambda"], "lambda")
+        wanted = conditions(m.field, B, lam, sets["initial"], sets["unsafe"], step_of(m, B, lam))
+        stated = cert["proofs"]
+        if set(stated) != {name for name, _, _ in wanted}:
+            return False, "the certificate's identities are not the sets' pieces and the step"
+        proofs = {name: ConditionCertificate.from_json(ring, stated[name], len(relations))
+                  for name, _, relations in wanted}
+    except NotTaken as exc:
+        return False, str(exc)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError, IndexError) as exc:
+        return False, f"malformed certificate: {exc}"
+    ok, why = check_map_barrier(m, B, lam, sets["initial"], sets["unsafe"], proofs)
+    if not ok:
+        return False, why
+    degree = ds.poly_degree(ring, B)
+    if cert.get("degree") != degree or c.get("degree") != degree:
+        return False, "the stated degree is not the certificate's polynomial's"
+    if c.get("lambda") != float(lam):
+        return False, "the stated lambda is not the certificate's"
+    if c.get("summary") != DISCRETE_BARRIER_SENTENCE:
+        return False, "the stated sentence is not the certificate's"
+    return True, why
+
+
+__all__ = ["KIND", "map_sets", "step_of", "check_map_barrier", "barrier_structure", "search_barrier",
+           "check_iterate_functions", "falsify", "run_barrier", "verify_barrier"]
