@@ -431,6 +431,7 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
     (the loop of its displacement). Over a ``box`` (``model`` read at its centre) ``linearization`` and ``roa``
     hold for every value of it (:mod:`lyapcheck.models.classes.discrete_functions_box`: a box moving the fixed
     point is refused in one line, exit 2) and every other class is ``not_applicable``."""
+    from lyapcheck.models.classes.claims import summary
     from lyapcheck.models.classes.contexts import MapFunctionsRun
     from lyapcheck.models.classes.discrete_functions import NOT_YET
     from lyapcheck.models.classes.discrete_functions_box import BOX_CLASSES, NOT_OVER_BOX, boxed_system
@@ -458,10 +459,14 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
         return None if run_map_functions is None else lambda budget: run_map_functions(ctx, budget)
 
     _run_classes(chosen, results, seconds, limit, decide, compute)
-    if model.disturbances:
-        for name, r in results.items():  # the map is read with its disturbances at 0, but by sos_bound
+    for name, r in results.items():
+        if model.disturbances:  # the map is read with its disturbances at 0, but by sos_bound
             # (lyapcheck.models.classes.map_relations_bounds: its V serves every disturbance sequence)
             r.disturbances = "all" if name == "sos_bound" else "zero"
+        # the sentence verify re-makes (lyapcheck.models.classes.claims), with the disturbances it covers and the box
+        text = summary(name, r.to_json(), tuple(model.outputs), box.to_json() if box is not None else None)
+        if text is not None:
+            r.summary = text
     return ModelCertification(model=model, candidate=cand, results=results, seconds=seconds, box=box,
                               loop=base_loop(model.system, cylinder=False))
 
