@@ -11,7 +11,8 @@ the states and ``phi`` one coordinate per kink, with ``v - v(eq) = L_v . w(e) + 
 ``w(e)`` holds the exact piecewise-linear values below:
 
 - a state: its unit vector; a smooth function of ``u`` (``sin``, ``tanh``, ...) and a kinked one away from
-  its kink: its slope at ``u(eq)`` times ``L_u`` (the chain rule, as ``jacobian`` does it);
+  its kink: its slope at ``u(eq)`` times ``L_u`` (the chain rule: ``jacobian``'s own walk,
+  :func:`~lyapcheck.models.classes.recast_classes.first_order`, with the kinks below as coordinates);
 - a kink ``a_i = |u_i|`` with ``u_i(eq) = 0``: a new coordinate ``phi_i = |z_i|`` with
   ``z_i = l_i . w``, ``l_i = L_{u_i}`` (it uses only ``e`` and earlier ``phi``). Since ``|.|`` is
   1-Lipschitz, ``|a_i - phi_i| <= |u_i - z_i| = O(|e|^2)`` by induction on ``i``;
@@ -70,9 +71,6 @@ Matrix = list[list[Fraction]]
 KIND: Final = "piecewise_linear"
 #: the shapes of a kink: ``phi = |z|``, ``phi = max(0, z)`` (sat's lower corner), ``phi = min(0, z)`` (upper)
 SHAPES: Final = ("abs", "max0", "min0")
-#: the functions smooth at 0, with their slope there (the recasting makes their arguments 0 at the equilibrium)
-_SLOPE_AT_0: Final = {"sin": Fraction(1), "cos": Fraction(0), "exp": Fraction(1), "atan": Fraction(1),
-                      "tanh": Fraction(1)}
 
 CERTIFIED_FIELD: Final = ("locally exponentially stable: near the equilibrium the field is A e + B phi + O(|e|^2), "
                           "phi the kinked functions' piecewise-linear values (abs, ReLU, a saturation's corner at "
@@ -112,89 +110,26 @@ class PiecewiseLinear:
 
 def derive(loop: "Loop") -> PiecewiseLinear | str:
     """The first-order part (module docstring) of ``loop``'s field, or why there is none here (no kink at
-    the equilibrium, a square root at 0, an irrational entry, a box's bounded constants)."""
-    from lyapcheck.models.classes.recast_classes import _argument_value
+    the equilibrium, a square root at 0, an irrational entry, a box's bounded constants): the Jacobian's
+    chain rule (:func:`lyapcheck.models.classes.recast_classes.first_order`) with a coordinate per kink."""
+    from lyapcheck.models.classes.recast_classes import _argument_value, first_order
 
     system = loop.system
     if loop.fixed:
         return "the piecewise-linear route is not built over a box of parameters"
     n = system.n
     at: dict[str, Fraction] = {a.name: _argument_value(system, a) for a in system.auxiliaries if a.argument is not None}
-    kinked = [a for a in system.auxiliaries if a.argument is not None and
+    kinked = [a.name for a in system.auxiliaries if a.argument is not None and
               ((a.function == "abs" and at[a.name] == 0) or (a.function == "sat" and abs(at[a.name]) == a.limit))]
     if not kinked:
         return "no abs, ReLU or saturation sits at its kink at the equilibrium"
-    width = n + len(kinked)
-    zero = [Fraction(0)] * width
-    forms: dict[str, list[Fraction]] = {s: [Fraction(int(i == j)) for j in range(width)]
-                                        for i, s in enumerate(system.states)}
-    kinks: list[Kink] = []
-    for a in system.auxiliaries:
-        if a.argument is None:  # a constant root
-            forms[a.name] = list(zero)
-            continue
-        du = _form(loop, system.shift(a.argument), forms, width)
-        if isinstance(du, str):
-            return du
-        u0 = at[a.name]
-        f = a.function
-        if f in _SLOPE_AT_0:
-            forms[a.name] = [_SLOPE_AT_0[f] * d for d in du]
-        elif f == "sqrt":
-            if not a.value:
-                return f"{a.written_as}: sqrt is not differentiable where its argument is 0 (the equilibrium)"
-            forms[a.name] = [d / (2 * a.value) for d in du]
-        elif f == "abs" and u0 != 0:
-            forms[a.name] = [(1 if u0 > 0 else -1) * d for d in du]
-        elif f == "sat" and abs(u0) != a.limit:
-            assert a.limit is not None
-            forms[a.name] = list(du) if abs(u0) < a.limit else list(zero)
-        elif f in ("abs", "sat"):
-            shape = "abs" if f == "abs" else ("min0" if u0 > 0 else "max0")
-            index = n + len(kinks)
-            kinks.append(Kink(a.name, a.written_as or a.definition, shape, tuple(du)))
-            forms[a.name] = [Fraction(int(j == index)) for j in range(width)]
-        else:  # pragma: no cover - every function is above
-            return f"{a.written_as}: no derivative"
-    A: Matrix = []
-    B: Matrix = []
-    from lyapcheck.models.classes.recast_classes import _at_origin
-
-    for r in system.field:
-        d0 = _at_origin(loop, system.shift(r.denominator))
-        if d0 is None or d0 == 0:
-            return "a denominator of the field is irrational or 0 at the equilibrium"
-        row = _form(loop, system.shift(r.numerator), forms, width)
-        if isinstance(row, str):
-            return row
-        A.append([x / d0 for x in row[:n]])
-        B.append([x / d0 for x in row[n:]])
-    return PiecewiseLinear(n, tuple(kinks), A, B)
-
-
-def _form(loop: "Loop", p: Any, forms: dict[str, list[Fraction]], width: int) -> list[Fraction] | str:
-    """The linear form in ``w`` of ``p`` (a polynomial in the deviations, 0 at the equilibrium): its partials
-    there times each variable's form."""
-    from lyapcheck.models.classes.recast_classes import _at_origin
-    from lyapcheck.sos.polynomials import degree_in
-
-    ring = loop.ring
-    out = [Fraction(0)] * width
-    for i, name in enumerate(ring.names):
-        if degree_in(ring, p, [name]) <= 0:
-            continue
-        form = forms.get(name)
-        if form is not None and not any(form):
-            continue  # a variable that does not move to first order (cos at 0): its partial does not matter
-        partial = _at_origin(loop, p.derivative(i))
-        if partial is None:
-            return "the first-order part has an irrational entry (sqrt 2 or sqrt 3); it is not decided exactly here"
-        if partial == 0:
-            continue
-        if form is None:  # pragma: no cover - every variable of the ring has a form by now
-            return f"{name}: no first-order form"
-        out = [o + partial * g for o, g in zip(out, form)]
-    return out
+    walked = first_order(loop, kinked)
+    if isinstance(walked, str):
+        return walked
+    kinks = tuple(Kink(a.name, a.written_as or a.definition,
+                       "abs" if a.function == "abs" else ("min0" if at[a.name] > 0 else "max0"), tuple(du))
+                  for a, du in walked.kinks)
+    return PiecewiseLinear(n, kinks, [row[:n] for row in walked.rows], [row[n:] for row in walked.rows])
 
 
 # -- the S-procedure's pieces ------------------------------------------------------------------------
