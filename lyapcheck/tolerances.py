@@ -353,5 +353,13 @@ PIECEWISE_ROOM: Final = 1e-6
 #: every pair enter the S-procedure; with more, only the products within one kink (the LMI's multipliers
 #: grow with the square of the forms: 8 ReLU neurons' 24 forms give 276 products)
 PIECEWISE_PAIR_FORMS: Final = 30
+#: the most kinks at the equilibrium the piecewise-linear route builds its LMI for: with more it says
+#: not_certified, naming this limit, before building anything. A count (its LMI is (n + kinks) square, with
+#: three multipliers per kink, and the exact check of its rounded solution grows with the cube of that
+#: size), so that a loaded machine refuses the same loops. Calibrated on the ysa pendulum's 2 x 32 network
+#: with ReLU activations (benchmarks/bench_piecewise.py --widths 16,12,8 --discrete): all 64 kinks took 28 s
+#: (two infeasible solves of about 11 s) before this limit and are refused in 0.5 s with it; cut to 2 x 16
+#: (32 kinks) 3.0 s (map 1.7 s), 2 x 12 0.6 s, 2 x 8 0.2 s, each not_certified (those loops are unstable)
+PIECEWISE_MAX_KINKS: Final = 32
 #: significant bits P, lambda and nu are rounded to before the exact check
 PIECEWISE_BITS: Final = 24

@@ -200,3 +200,73 @@ def test_a_saturations_corner(tmp_path: Path, rhs: str, shape: str, status: str)
 def test_without_a_kink_the_route_keeps_the_jacobians_reason(tmp_path: Path) -> None:
     result = pw.linearization(base_loop(one_state(tmp_path, "-sqrt(x**2)").system))
     assert result.status == "not_applicable" and "sqrt is not differentiable" in result.summary
+
+
+def test_the_kinks_share_the_jacobians_chain_rule(tmp_path: Path) -> None:
+    """Away from the kink's coordinate the first-order part is the Jacobian of the loop without the kink:
+    one walk (sin through the chain rule, the kink a coordinate of its own)."""
+    from lyapcheck.models.classes.recast_classes import first_order, jacobian
+
+    def loop_of(name: str, x2: str) -> Any:
+        path = tmp_path / name
+        path.write_text(f'[model]\nname = "m"\nstates = ["x1", "x2"]\n[dynamics]\nx1 = "x2"\nx2 = "{x2}"\n')
+        return base_loop(loaded(path).system)
+
+    kinked = loop_of("k.toml", "-x1 - x2 - 0.5*abs(sin(x1 - x2)) + 2*sin(x1)")
+    smooth = loop_of("s.toml", "-x1 - x2 + 2*sin(x1)")
+    pl = pw.derive(kinked)
+    assert isinstance(pl, pw.PiecewiseLinear) and pl.A == jacobian(smooth) == [[0, 1], [1, -1]]
+    assert pl.B == [[0], [Fraction(-1, 2)]] and pl.kinks[0].form == (1, -1, 0)
+    # without the kink asked for, the same walk stops there with the Jacobian's reason
+    walked = first_order(kinked)
+    assert isinstance(walked, str) and "abs is not differentiable" in walked
+    assert walked == jacobian(kinked)
+
+
+def test_more_kinks_than_the_limit_are_refused_by_their_count(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Above PIECEWISE_MAX_KINKS the route says not_certified naming the limit, before the chain rule's walk."""
+    from lyapcheck import tolerances
+
+    model = loaded(RELU_MAP)
+    monkeypatch.setattr(tolerances, "PIECEWISE_MAX_KINKS", 7)
+
+    def no_walk(loop: Any) -> Any:
+        raise AssertionError("derived although refused by the count")
+
+    monkeypatch.setattr(pw, "derive", no_walk)
+    result = pw.run_map(model, "kinked")
+    assert result is not None and result.status == "not_certified"
+    assert "8 kinks at the equilibrium where the limit is 7" in result.summary
+    assert "PIECEWISE_MAX_KINKS" in result.summary and not result.certificate
+    loop_result = pw.run(base_loop(loaded(RELU).system), "kinked")
+    assert loop_result is not None and loop_result.status == "not_certified"
+
+
+def test_a_spent_budget_stops_the_search_inconclusive() -> None:
+    """The class's budget is checked between the solves and the exact steps: spent, the route is inconclusive
+    and names the limit (never certified without its exact check)."""
+    from lyapcheck.models.engines.search import Budget
+
+    spent = Budget(0.0, "the test's budget")
+    result = pw.run_map(loaded(RELU_MAP), "kinked", spent)
+    assert result is not None and result.status == "inconclusive", result.summary
+    assert "the test's budget" in result.summary and not result.certificate
+    fresh = pw.run_map(loaded(RELU_MAP), "kinked", Budget(60.0, "the test's budget"))
+    assert fresh is not None and fresh.status == "certified"
+
+
+def test_the_ysa_policy_as_relu_is_refused_by_its_64_kinks(tmp_path: Path) -> None:
+    """The 2 x 32 policy of ysa-pendulum with ReLU activations on the Euler pendulum: 64 kinks, above
+    PIECEWISE_MAX_KINKS, refused by the count (no LMI built, no proof claimed)."""
+    from lyapcheck import tolerances
+
+    data = np.load(EXAMPLES / "networks" / "ysa_pendulum_tanh.npz", allow_pickle=False)
+    arrays = {k: np.array(data[k]) for k in data.files}
+    arrays["activation"] = np.array("relu")
+    np.savez(tmp_path / "ysa_relu.npz", **arrays)
+    text = RELU_MAP.read_text().replace("../networks/pendulum_relu_policy.npz", "ysa_relu.npz")
+    (tmp_path / "ysa_relu.toml").write_text(text)
+    model = loaded(tmp_path / "ysa_relu.toml")
+    assert len(pw.kinks_at_equilibrium(pw.map_loop(model))) == 64 > tolerances.PIECEWISE_MAX_KINKS
+    result = pw.run_map(model, "kinked")
+    assert result is not None and result.status == "not_certified" and "64 kinks" in result.summary

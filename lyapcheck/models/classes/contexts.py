@@ -47,6 +47,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.sampling import SampledModel
     from lyapcheck.models.loop.field import ScaledField, ShiftedField, StateField
     from lyapcheck.models.classes.recast_classes import Loop
+    from lyapcheck.models.engines.search import Budget
     from lyapcheck.results import ConditionResult, Disturbances
     from lyapcheck.sos.polynomials import Poly
 
@@ -108,13 +109,13 @@ class FunctionsRun:
     results: "dict[str, ConditionResult]"
     _linearization: "ConditionResult | None" = None
 
-    def linearization(self) -> "ConditionResult":
+    def linearization(self, budget: "Budget | None" = None) -> "ConditionResult":
         """The recasting's linearization at the equilibrium (computed once: ``linearization`` and
-        ``roa`` read it)."""
+        ``roa`` read it; ``budget`` the first caller's class's, for the piecewise-linear route's search)."""
         if self._linearization is None:  # (the Jacobian's, or at a kink the piecewise-linear route's)
             from lyapcheck.models.classes.piecewise_linearization import linearization
 
-            self._linearization = linearization(self.loop)
+            self._linearization = linearization(self.loop, budget)
         return self._linearization
 
 

@@ -523,67 +523,104 @@ def quadratic_candidate(loop: Loop, J: list[list[Fraction]]) -> Poly | None:
 
 # -- the linearization ------------------------------------------------------------------------------
 
-def jacobian(loop: Loop) -> list[list[Fraction]] | str:
-    """The exact Jacobian of the true field at the equilibrium (chain rule through the
-    auxiliaries), or why there is none (a non-differentiable function there, or an irrational entry)."""
+#: the functions smooth where the recasting evaluates them, with their slope there (their arguments are 0 at
+#: the equilibrium; sqrt's slope is 1 / (2 sqrt(u0)), read from the auxiliary's value)
+_SLOPE_AT_0: Final = {"sin": Fraction(1), "cos": Fraction(0), "exp": Fraction(1), "atan": Fraction(1),
+                      "tanh": Fraction(1)}
+#: why an exact first-order part has no rational entry, by what is asked for (the Jacobian; the kinks' form)
+_IRRATIONAL: Final = {False: "the Jacobian has an irrational entry (sqrt 2 or sqrt 3); its stability is not decided "
+                             "exactly here",
+                      True: "the first-order part has an irrational entry (sqrt 2 or sqrt 3); it is not decided "
+                            "exactly here"}
+
+
+@dataclass(frozen=True)
+class FirstOrder:
+    """The chain rule's walk through the auxiliaries at the equilibrium: each variable's linear form in
+    ``w = (e, phi)`` (``e`` the states' deviations, ``phi`` one coordinate per kink asked for), the kinks
+    met (each auxiliary with its argument's form), and the field's rows (divided by their denominators'
+    values). With no kink asked for, ``w = e`` and the rows are the Jacobian."""
+
+    forms: dict[str, list[Fraction]]
+    kinks: list[tuple[Any, list[Fraction]]]
+    rows: list[list[Fraction]]
+
+
+def first_order(loop: Loop, kinks: Sequence[str] = (), field_rows: bool = True) -> FirstOrder | str:
+    """The one chain-rule walk behind :func:`jacobian`, :func:`gradient_at_equilibrium` and the kinks'
+    linearization (:func:`lyapcheck.models.classes.piecewise_linearization.derive`): every variable's
+    linear form, ``kinks`` (auxiliary names, at their kink at the equilibrium) each given a coordinate of
+    its own; or why there is none (a kink not asked for, sqrt at 0, an irrational entry, a denominator
+    0 at the equilibrium). ``field_rows`` False: the forms only."""
     system = loop.system
-    grads = variable_gradients(loop)
-    if isinstance(grads, str):
-        return grads
-    J = []
-    for r in system.field:
-        num, den = system.shift(r.numerator), system.shift(r.denominator)
-        d0 = _at_origin(loop, den)
+    n = loop.n
+    width = n + len(kinks)
+    zero = [Fraction(0)] * width
+    forms: dict[str, list[Fraction]] = {s: [Fraction(int(i == j)) for j in range(width)]
+                                        for i, s in enumerate(system.states)}
+    met: list[tuple[Any, list[Fraction]]] = []
+    irrational = _IRRATIONAL[bool(kinks)]
+    for a in system.auxiliaries:
+        if a.argument is None:  # a constant root
+            forms[a.name] = list(zero)
+            continue
+        du = _linear_form(loop, system.shift(a.argument), forms, width, irrational)
+        if isinstance(du, str):
+            return du
+        u0 = Fraction(0) if a.value is None else _argument_value(system, a)
+        f = a.function
+        if f in _SLOPE_AT_0:
+            forms[a.name] = [_SLOPE_AT_0[f] * d for d in du]
+        elif f == "sqrt":
+            if not a.value:
+                return f"{a.written_as}: sqrt is not differentiable where its argument is 0"
+            forms[a.name] = [d / (2 * a.value) for d in du]
+        elif f == "abs" and u0 != 0:
+            forms[a.name] = [(1 if u0 > 0 else -1) * d for d in du]
+        elif f == "sat" and abs(u0) != a.limit:
+            assert a.limit is not None
+            forms[a.name] = list(du) if abs(u0) < a.limit else list(zero)
+        elif f in ("abs", "sat") and a.name in kinks:  # a kink at the equilibrium: a coordinate of its own
+            index = n + len(met)
+            met.append((a, du))
+            forms[a.name] = [Fraction(int(j == index)) for j in range(width)]
+        elif f == "abs":
+            return f"{a.written_as}: abs is not differentiable where its argument is 0 (the equilibrium)"
+        elif f == "sat":
+            return f"{a.written_as}: sat is not differentiable at its corner (the equilibrium)"
+        else:  # pragma: no cover - every function of the recasting is above
+            return f"{a.written_as}: no derivative"
+    rows: list[list[Fraction]] = []
+    for r in system.field if field_rows else ():
+        d0 = _at_origin(loop, system.shift(r.denominator))
         if d0 is None or d0 == 0:
             return "a denominator of the field is irrational or 0 at the equilibrium"
-        row = _total_gradient(loop, num, grads)
+        row = _linear_form(loop, system.shift(r.numerator), forms, width, irrational)
         if isinstance(row, str):
             return row
-        J.append([x / d0 for x in row])
-    return J
+        rows.append([x / d0 for x in row])
+    return FirstOrder(forms, met, rows)
+
+
+def jacobian(loop: Loop) -> list[list[Fraction]] | str:
+    """The exact Jacobian of the true field at the equilibrium (chain rule through the
+    auxiliaries, :func:`first_order` with no kink), or why there is none (a non-differentiable function
+    there, or an irrational entry)."""
+    walked = first_order(loop)
+    return walked if isinstance(walked, str) else walked.rows
 
 
 def gradient_at_equilibrium(loop: Loop, p: Poly) -> list[Fraction] | str:
     """The exact gradient in the states, at the equilibrium, of ``p`` (a polynomial in the
     deviations of the states and auxiliaries), by the chain rule; or why there is none."""
     grads = variable_gradients(loop)
-    return grads if isinstance(grads, str) else _total_gradient(loop, p, grads)
+    return grads if isinstance(grads, str) else _linear_form(loop, p, grads, loop.n, _IRRATIONAL[False])
 
 
 def variable_gradients(loop: Loop) -> dict[str, list[Fraction]] | str:
     """Each state's and auxiliary's gradient in the states at the equilibrium (exact), or why not."""
-    system = loop.system
-    n = loop.n
-    # d a_k / d z_j at the origin, in order
-    grads: dict[str, list[Fraction]] = {s: [Fraction(int(i == j)) for j in range(n)] for i, s in enumerate(system.states)}
-    for a in system.auxiliaries:
-        if a.argument is None:
-            grads[a.name] = [Fraction(0)] * n
-            continue
-        u = system.shift(a.argument)
-        du = _total_gradient(loop, u, grads)
-        if isinstance(du, str):
-            return du
-        u0 = Fraction(0) if a.value is None else _argument_value(system, a)
-        if a.function in ("sin", "cos", "exp", "atan", "tanh", "sqrt"):
-            factor = {"sin": Fraction(1), "cos": Fraction(0), "exp": Fraction(1), "atan": Fraction(1),
-                      "tanh": Fraction(1)}.get(a.function)
-            if a.function == "sqrt":
-                if not a.value:
-                    return f"{a.written_as}: sqrt is not differentiable where its argument is 0"
-                factor = 1 / (2 * a.value)
-            assert factor is not None
-            grads[a.name] = [factor * d for d in du]
-        elif a.function == "abs":
-            if u0 == 0:
-                return f"{a.written_as}: abs is not differentiable where its argument is 0 (the equilibrium)"
-            grads[a.name] = [(1 if u0 > 0 else -1) * d for d in du]
-        elif a.function == "sat":
-            assert a.limit is not None
-            if abs(u0) == a.limit:
-                return f"{a.written_as}: sat is not differentiable at its corner (the equilibrium)"
-            grads[a.name] = list(du) if abs(u0) < a.limit else [Fraction(0)] * n
-    return grads
+    walked = first_order(loop, field_rows=False)
+    return walked if isinstance(walked, str) else walked.forms
 
 
 def _argument_value(system: RecastSystem, a: Any) -> Fraction:
@@ -592,23 +629,25 @@ def _argument_value(system: RecastSystem, a: Any) -> Fraction:
     return ring.evaluate(a.argument, point)
 
 
-def _total_gradient(loop: Loop, p: Poly, grads: dict[str, list[Fraction]]) -> list[Fraction] | str:
+def _linear_form(loop: Loop, p: Poly, forms: Mapping[str, list[Fraction]], width: int, irrational: str
+                 ) -> list[Fraction] | str:
+    """The linear form of ``p`` (a polynomial in the deviations, 0 at the equilibrium): its partials there
+    times each variable's form (``irrational``: the reason when a partial is not rational)."""
     ring = loop.ring
-    n = loop.n
-    out = [Fraction(0)] * n
+    out = [Fraction(0)] * width
     for i, name in enumerate(ring.names):
         if degree_in(ring, p, [name]) <= 0:
             continue
-        if name in grads and not any(grads[name]):
+        if name in forms and not any(forms[name]):
             continue  # the variable does not move to first order (cos at 0): its partial does not matter
         partial = _at_origin(loop, p.derivative(i))
         if partial is None:
-            return "the Jacobian has an irrational entry (sqrt 2 or sqrt 3); its stability is not decided exactly here"
+            return irrational
         if partial == 0:
             continue
-        if name not in grads:
+        if name not in forms:
             return f"{name}: no derivative"  # pragma: no cover
-        out = [o + partial * g for o, g in zip(out, grads[name])]
+        out = [o + partial * g for o, g in zip(out, forms[name])]
     return out
 
 

@@ -132,7 +132,7 @@ def linearization_functions(ctx: "FunctionsRun", budget: "Budget") -> "Condition
         from lyapcheck.models.classes.recast_classes import linearization_over_box
 
         return linearization_over_box(ctx.proved, ctx.box)
-    return ctx.linearization()
+    return ctx.linearization(budget)
 
 
 def _relations(name: str, degrees: Any, ctx: "FunctionsRun", budget: "Budget") -> "ConditionResult":
@@ -164,7 +164,7 @@ def roa_functions(ctx: "FunctionsRun", budget: "Budget") -> "ConditionResult":
 
     if ctx.box is not None:
         return box_roa(ctx.model, ctx.loop, ctx.box, budget)
-    return run_roa(ctx.loop, ctx.linearization(), budget, comparison_box(ctx.model, ctx.loop),
+    return run_roa(ctx.loop, ctx.linearization(budget), budget, comparison_box(ctx.model, ctx.loop),
                    robust=robust_of(ctx.model))
 
 

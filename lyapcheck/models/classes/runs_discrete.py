@@ -110,7 +110,7 @@ def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Co
         return discrete_functions_box.linearization(ctx.model, ctx.box)
     result = discrete_functions.linearization(ctx.model)
     if result.status == "not_applicable":  # a kink at the fixed point: the piecewise-linear step form instead
-        return piecewise_linearization.run_map(ctx.model, result.summary) or result
+        return piecewise_linearization.run_map(ctx.model, result.summary, budget) or result
     return result
 
 
