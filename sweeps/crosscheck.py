@@ -63,9 +63,12 @@ What differs between the kinds is how the loop is simulated and V evaluated in f
   (uniform random, bang-bang, each vertex held constant; :func:`map_disturbances`) from the fixed point and
   random starts: each output stays within the certificate's envelope ``bound^2 + lam^k max(V(e_0) - 1, 0)``
   at every step, and ``sim_worst_<y>`` is the tail sup of ``|y - y_eq|``. Over a box (``mode = "boxes"``)
-  the box's corners and random points are iterated alike (a box's V is one V of the states), and a
-  ``linearization`` over the box (one ``P`` for every Jacobian of the box) is checked along the iterates of
-  the map's Jacobian at each of them (:meth:`_MapLoop.check_box_linearization`);
+  the box's corners and random points are iterated alike (a box's V, its set {V <= c} and its bound's V are
+  each one function of the states for every value of the box: ``roa`` from starts in the certified set,
+  ``sos_bound`` within its envelope under disturbances), and a ``linearization`` over the box (one ``P`` for
+  every Jacobian of the box) is checked along the iterates of the map's Jacobian at each of them
+  (:meth:`_MapLoop.check_box_linearization`; on a map with functions, its true map iterated at each point,
+  :meth:`_MapLoop.check_ball_linearization`: the exact Jacobian there, else the true map from tiny starts);
 
 * a polynomial loop is integrated on its own field, over :func:`lyapcheck.models.engines.trajectories.horizon`
   of its linearization; a V is the certificate's exact polynomial (over a box, at the point's own
@@ -133,6 +136,9 @@ MAP_BOUND_TAIL_STEPS: Final = 200
 #: :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_STEIN_METHOD`): its quadratic ``V = e^T P e`` is
 #: checked along this many iterates of the map's Jacobian at each checked parameter point
 MAP_LINEAR_STEPS: Final = 60
+#: a map with functions' linearization over a box without an exact Jacobian: the true map is iterated from
+#: starts this far from the fixed point (its nonlinear part changes V's steps by a relative ~1e-7 there)
+MAP_TINY_START: Final = 1e-7
 #: the classes whose V is simulated (the global ones, then the region), and those simulated from the
 #: initial set (:func:`check_sets`)
 GLOBAL_CLASSES: Final = ("quadratic", "sos_gas")
@@ -322,10 +328,14 @@ def _check(loop: SimulatedLoop, doc: Mapping[str, Any], where: str, streams: tup
     if "sos_bound" in conditions:
         loop.check_bound(conditions["sos_bound"], where, bound, starts, worst_case, out)
     if isinstance(loop, _MapLoop) and "linearization" in conditions:
+        from lyapcheck.models.classes.discrete_functions_box import METHOD as BALL_STEIN_METHOD
         from lyapcheck.models.classes.discrete_lyapunov import BOX_STEIN_METHOD
 
-        if (conditions["linearization"].get("certificate") or {}).get("method") == BOX_STEIN_METHOD:
+        method = (conditions["linearization"].get("certificate") or {}).get("method")
+        if method == BOX_STEIN_METHOD:
             loop.check_box_linearization(conditions["linearization"], where, lyapunov, starts, out)
+        elif method == BALL_STEIN_METHOD:
+            loop.check_ball_linearization(conditions["linearization"], where, lyapunov, starts, out)
 
 
 def _certified_set(loop: SimulatedLoop, cls: str, cond: Mapping[str, Any]) -> _Set:
@@ -630,7 +640,7 @@ class _MapLoop:
         from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 
         if not isinstance(self.model, Model) or not cond.get("bounds"):
-            return  # (a map with functions takes no sos_bound)
+            return  # (a map with functions' point sweep takes no sos_bound: sweeps.spec.MAP_FUNCTIONS_UNSWEPT)
         model = self.model
         bounds = np.array([float(b) for b in model.disturbances.values()])
         lo, hi = self.global_box()
@@ -648,7 +658,7 @@ class _MapLoop:
                 continue
             y = np.abs(ys[name] - float(references.get(name) or 0.0))  # (rows, steps + 1)
             envelope = _bound_envelope(certs.get(name), float(stated), xs - self.eq, list(model.states),
-                                       list(model.disturbances))
+                                       list(model.disturbances), {k: self.point[k] for k in self.names[model.n:]})
             tail = y[:, -MAP_BOUND_TAIL_STEPS:]
             finite = np.where(np.isfinite(tail), tail, -np.inf)
             worst = float(np.max(finite)) if finite.size else -math.inf
@@ -676,7 +686,6 @@ class _MapLoop:
         :data:`MAP_LINEAR_STEPS` steps from ``starts`` random directions; ``V`` may never rise from one step to
         the next nor leave ``(1 - mu)^k V(e_0)``, as a global V's check (the same figures and messages)."""
         from lyapcheck.models.classes.linearization import jacobian
-        from lyapcheck.models.engines.crosscheck import check_global
         from lyapcheck.models.loop.discrete import shifted_map
 
         if not isinstance(self.model, Model):
@@ -691,22 +700,79 @@ class _MapLoop:
             return
         A = np.array([[float(v) for v in row] for row in jacobian(shifted_map(self.model))], dtype=np.float64)
         e = rng.standard_normal((max(starts, 1), n))
-        path = [e]
-        for _ in range(MAP_LINEAR_STEPS):
-            path.append(path[-1] @ A.T)
-        es = np.stack(path, axis=1)  # (starts, steps + 1, n)
+        self._stein_along(P, _linear_iterates(A, e), _per_step_rate(1 - mu), where, "the map's Jacobian", out)
+
+    def check_ball_linearization(self, cond: Mapping[str, Any], where: str, rng: np.random.Generator, starts: int,
+                                 out: CrossCheck) -> None:
+        """A map with functions' ``linearization`` over a box (method
+        :data:`lyapcheck.models.classes.discrete_functions_box.METHOD`: one ``P`` with ``A(p)^T P A(p) - P < 0``
+        for every Jacobian of the box, no rate) at this parameter point, ``V = e^T P e`` never rising along:
+
+        * the iterates of the map's exact Jacobian at its fixed point here
+          (:func:`lyapcheck.models.classes.discrete_functions.exact_jacobian`, then floats), from ``starts``
+          random directions, when there is one;
+        * else (a function not differentiable there, an irrational entry) the iterates of the true map from
+          ``starts`` random starts :data:`MAP_TINY_START` from the fixed point. The true map is its linearization
+          there up to ``o(|e|)``, so ``V``'s step changes by a relative ``O(|e|)`` (about 1e-7, far below
+          :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL`): a ``P`` that some Jacobian of the box makes
+          rise shows as a rise here too. It is an alarm only, never a proof (a rise smaller than that tolerance
+          is not seen), as every cross-check is."""
+        from lyapcheck.models.classes.discrete_functions import exact_jacobian
+
+        if isinstance(self.model, Model):
+            return
+        cert = cond.get("certificate") or {}
+        n = self.model.n
+        try:
+            P = np.array([[float(Fraction(str(v))) for v in row] for row in cert["P"]], dtype=np.float64)
+            if P.shape != (n, n):
+                raise ValueError(f"P is {P.shape[0]} x {P.shape[1] if P.ndim == 2 else 0}, not over the {n} states")
+        except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+            out.violations.append(f"linearization at {where}: its certificate cannot be read ({exc})")
+            return
+        directions = rng.standard_normal((max(starts, 1), n))
+        A = exact_jacobian(self.model)
+        if not isinstance(A, str):
+            es = _linear_iterates(np.array([[float(v) for v in row] for row in A], dtype=np.float64), directions)
+            self._stein_along(P, es, 0.0, where, "the map's Jacobian", out)
+            return
+        from lyapcheck.models.surfaces.iterate import iterate
+
+        unit = directions / np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-300)
+        paths = iterate(self.model, self.eq + MAP_TINY_START * unit, MAP_LINEAR_STEPS) - self.eq
+        self._stein_along(P, paths, 0.0, where, f"the true map from starts {MAP_TINY_START:g} from its fixed point",
+                          out)
+
+    def _stein_along(self, P: np.ndarray, es: np.ndarray, rate: float, where: str, along: str,
+                     out: CrossCheck) -> None:
+        """``V = e^T P e`` along the deviations ``es`` (``(rows, steps + 1, n)``): never rising, and within
+        ``V(e_0) exp(-rate k)`` when ``rate > 0``, as a global V's check (the same figures and messages). A row
+        that left the escape box (NaN after it) is an escape."""
+        from lyapcheck.models.engines.crosscheck import check_global
+
         V = np.einsum("rki,ij,rkj->rk", es, P, es)
-        steps = np.arange(MAP_LINEAR_STEPS + 1, dtype=np.float64)
-        rate = _per_step_rate(1 - mu)
-        glob = check_global([(steps, v) for v in V], ["converged"] * len(V), rate)
+        steps = np.arange(es.shape[1], dtype=np.float64)
+        finite = [bool(np.all(np.isfinite(v))) for v in V]
+        glob = check_global([(steps[np.isfinite(v)], v[np.isfinite(v)]) for v in V],
+                            ["converged" if ok else "escaped" for ok in finite], rate)
         out.trajectories += len(V)
         out.worse("worst_rise", glob.worst_rise)
         if rate > 0:
             out.worse("worst_envelope", glob.worst_envelope)
         if not glob.ok:
-            out.violations.append(f"linearization at {where}: along the iterates of the map's Jacobian there "
-                                  f"V = e^T P e rose by {glob.worst_rise:.3g} and exceeded V(0) exp(-{rate:.4g} k) by "
-                                  f"{glob.worst_envelope:.3g} of V(0)")
+            out.violations.append(f"linearization at {where}: along the iterates of {along} V = e^T P e rose by "
+                                  f"{glob.worst_rise:.3g}" + (f" and exceeded V(0) exp(-{rate:.4g} k) by "
+                                                              f"{glob.worst_envelope:.3g} of V(0)" if rate > 0 else "")
+                                  + (f"; {glob.escaped} escaped" if glob.escaped else ""))
+
+
+def _linear_iterates(A: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """The iterates ``e_{k+1} = A e_k`` of the rows of ``e`` over :data:`MAP_LINEAR_STEPS` steps:
+    ``(rows, steps + 1, n)``."""
+    path = [e]
+    for _ in range(MAP_LINEAR_STEPS):
+        path.append(path[-1] @ A.T)
+    return np.stack(path, axis=1)
 
 
 #: the disturbance policies of a map's ``sos_bound`` cross-check (:func:`map_disturbances`), in order
@@ -767,10 +833,12 @@ def map_outputs(model: Model, xs: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def _bound_envelope(cert: Mapping[str, Any] | None, bound: float, es: np.ndarray, states: list[str],
-                    disturbances: list[str]) -> np.ndarray:
+                    disturbances: list[str], box: Mapping[str, Fraction] | None = None) -> np.ndarray:
     """The certified envelope of ``|y_k - y_eq|`` along the deviations ``es`` (``(rows, steps + 1, n)``):
     ``sqrt(bound^2 + lam^k max(V(e_0) - 1, 0))`` with the output's certificate ``V`` and ``lam``; when they
-    cannot be read, ``bound`` on the last :data:`MAP_BOUND_TAIL_STEPS` steps and no limit before."""
+    cannot be read, ``bound`` on the last :data:`MAP_BOUND_TAIL_STEPS` steps and no limit before. Over a box
+    ``V``'s variables are the states, the disturbances, then the box's parameters (``box``: their values at
+    this point; ``V`` is of the states alone, the others at exponent 0, so one envelope for the whole box)."""
     from lyapcheck.models.engines.crosscheck import certificate_function
 
     rows, count, n = es.shape
@@ -780,8 +848,8 @@ def _bound_envelope(cert: Mapping[str, Any] | None, bound: float, es: np.ndarray
         return tail_only
     try:
         lam = float(Fraction(str(cert["lam"])))
-        V = certificate_function(cert["V"], states + disturbances, n, {d: Fraction(0) for d in disturbances},
-                                 [Fraction(1)] * n)
+        V = certificate_function(cert["V"], states + disturbances + list(box or {}), n,
+                                 {**{d: Fraction(0) for d in disturbances}, **(box or {})}, [Fraction(1)] * n)
         excess = np.maximum(np.asarray(V(es[:, 0]), dtype=np.float64) - 1.0, 0.0)
     except (KeyError, TypeError, ValueError, ZeroDivisionError):
         return tail_only

@@ -52,8 +52,8 @@ uninterrupted one).
   each corner of the box, then at its random points.
   A box of a loop with functions: ``certify_model`` over the box on the model read at its centre
   (what ``lyapcheck certify FILE --box`` runs), its corners checked only where the linearization over
-  the box is refuted (whether to split it), cross-checked at random parameter points; either by
-  :func:`sweeps.crosscheck.cross_check_box`.
+  the box is refuted (whether to split it), cross-checked at random parameter points (a map with functions:
+  its true map iterated at the box's corners too); either by :func:`sweeps.crosscheck.cross_check_box`.
 
 A point or box is ``certified`` when any class certified; ``refuted`` when the equilibrium is proved
 unstable there (the linearization, exactly) and nothing certified; else ``not_certified``. Every
@@ -633,8 +633,8 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     """One box of a loop with functions, as ``lyapcheck certify FILE --box`` certifies it: the model
     read at the box's centre (:meth:`sweeps.spec.ModelSweepSpec.recast_box`), then ``certify_model``
     over the box; a certified box is simulated at its random parameter points
-    (:func:`sweeps.crosscheck.cross_check_box`), and the points where its certificates
-    do not apply are named in the note. As a polynomial loop's box, its corners are checked first
+    (:func:`sweeps.crosscheck.cross_check_box`; a map with functions at the box's corners too), and the points
+    where its certificates do not apply are named in the note. As a polynomial loop's box, its corners are checked first
     (:func:`unstable_corners`): where one is unstable, the stability classes are stored ``refuted`` and
     not run (:func:`classes_left`)."""
     from lyapcheck.errors import ModelFileError
@@ -665,6 +665,8 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
     if status == "certified":
         out["certificate"][j] = certificate_json(document)
         points = box.points(spec.boxes.cross_check_points, box_seed(spec.boxes.seed, box_id))
+        if spec.discrete:  # a map's true map is iterated (milliseconds a point): at every corner of the box too
+            points = box.corners() + points
         loops, skipped = [], []
         for point in points:
             try:

@@ -100,13 +100,16 @@ A discrete-time map (``[model] time = "discrete"``, polynomial or with functions
 with the classes that have a discrete-time condition (:func:`map_classes`, ``sos_bound`` included on a
 polynomial map; a class a map does not take is refused by the spec, in one line), each point certified as a
 map by ``certify_model`` and cross-checked by iterating it (:class:`sweeps.crosscheck._MapLoop`, never
-integrated; ``sos_bound`` under random, bang-bang and constant disturbances within its bounds). A polynomial
-map is also swept box by box (``mode = "boxes"``) with the classes ``certify --box`` proves over a box of a map
-(:func:`map_box_classes`: ``linearization``, ``quadratic``, ``sos_gas``; any other is refused in one line naming
-``sweep.classes``): the same tree, store and corner checks as a polynomial loop's boxes (a corner's
-linearization is the map's: an eigenvalue of modulus > 1 refutes the box), each certified box iterated at its
-corners and random points. ``mode = "boxes"`` on a map with functions is refused in one line (its recasting is
-read at a point: ``certify --box`` refuses it too).
+integrated; ``sos_bound`` under random, bang-bang and constant disturbances within its bounds). A map is
+also swept box by box (``mode = "boxes"``) with the classes ``certify --box`` proves over a box of it whose
+certified boxes the sweep cross-checks by iterating (:func:`map_box_classes`): on a polynomial map
+``linearization``, ``quadratic``, ``sos_gas``, ``roa`` and ``sos_bound``; on a map with functions
+``linearization`` and ``roa`` (one ``P``, ball arithmetic, the parameters as balls:
+:mod:`lyapcheck.models.classes.discrete_functions_box`), its boxes certified as a loop with functions' are
+(the model read at the box's centre); any other class is refused in one line naming ``sweep.classes``. The same
+tree, store and corner checks as a loop's boxes (a corner's linearization is the map's: an eigenvalue of
+modulus > 1 refutes the box), each certified box iterated at its corners and random points (the true map of a
+map with functions; :mod:`sweeps.crosscheck`).
 
 The model's text is read once, here, and kept with the spec (:attr:`ModelSweepSpec.worker_text`):
 workers (local processes or a Dask cluster) never open the model file, and a resumed run checks
@@ -763,7 +766,7 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
     polynomial = isinstance(model, Model)
     allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES  # (the same on every loop)
     if is_discrete(model):  # a map: only the classes with a discrete-time condition (every other not_applicable)
-        allowed = tuple(c for c in allowed if c in (map_classes(model) if mode == "points" else map_box_classes()))
+        allowed = tuple(c for c in allowed if c in (map_classes(model) if mode == "points" else map_box_classes(model)))
     # (any loop: barrier with its sets only, reach_avoid with its goal too; a class the model cannot ask is
     # not picked by default, and naming it is refused here rather than at the first point)
     if not ("initial" in model.sets and "unsafe" in model.sets):
@@ -779,7 +782,8 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         if is_discrete(model):
             kind = " of a discrete-time map" + ("" if polynomial else " with functions")
             others = (' (a box sweep of a discrete-time map ([model] time = "discrete") takes these only: the '
-                      "others' cross-check over a box is not built)" if mode == "boxes" else
+                      "classes certify --box proves over a box of it and the sweep cross-checks by iterating)"
+                      if mode == "boxes" else
                       ' (the other classes are not taken yet for a discrete-time map ([model] time = "discrete"))')
         raise InvalidParameter("sweep.classes", f"in a {mode} sweep{kind}, a list of distinct names from "
                                + ", ".join(repr(c) for c in allowed) + others, raw)
@@ -794,21 +798,36 @@ def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
     (:data:`lyapcheck.models.classes.registry.DISCRETE`; ``barrier`` and ``reach_avoid`` cross-checked by
     iterating, :func:`sweeps.crosscheck.check_sets`; ``sos_bound`` by iterating under disturbances,
     :meth:`sweeps.crosscheck._MapLoop.check_bound`), on a map with functions
-    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS`."""
-    return model_classes.DISCRETE if isinstance(model, Model) else model_classes.MAP_FUNCTIONS
+    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS` but :data:`MAP_FUNCTIONS_UNSWEPT`."""
+    if isinstance(model, Model):
+        return model_classes.DISCRETE
+    return tuple(c for c in model_classes.MAP_FUNCTIONS if c not in MAP_FUNCTIONS_UNSWEPT)
+
+
+#: the classes a map with functions takes at a point that its point sweep does not: a sweep cross-checks every
+#: certified point, and the cross-check of a map with functions under disturbances (its true map iterated with
+#: each disturbance policy) is not built
+MAP_FUNCTIONS_UNSWEPT: Final = ("sos_bound",)
 
 
 #: the classes a box sweep of a polynomial map takes: those ``certify --box`` proves over a box of a map whose
-#: certified boxes the sweep can cross-check by iterating (a global V that never rises, a Stein ``P`` along the
-#: Jacobian's iterates); a map's ``roa``, ``candidate`` and ``sos_bound`` are proved over a box by ``certify
-#: --box`` too, but a box sweep's cross-check of a set or a bound over a box is not built
-MAP_BOX_SWEPT: Final = ("linearization", "quadratic", "sos_gas")
+#: certified boxes the sweep cross-checks by iterating at the box's corners and random points (a global V that
+#: never rises, a Stein ``P`` along the Jacobian's iterates, a set {V <= c} its starts never leave, a bound under
+#: disturbances within its envelope); ``candidate`` needs the user's V and is never swept
+MAP_BOX_SWEPT: Final = ("linearization", "quadratic", "sos_gas", "roa", "sos_bound")
 
 
-def map_box_classes() -> tuple[str, ...]:
-    """The classes a box sweep of a polynomial map takes (:data:`MAP_BOX_SWEPT`, each among
-    :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`: one V, or one Stein ``P``, for every value
-    of the box), in :data:`MODEL_BOX_CLASSES` order; every other class of a map is not swept over boxes."""
+def map_box_classes(model: Model | RecastModel | None = None) -> tuple[str, ...]:
+    """The classes a box sweep of a discrete-time map takes, in :data:`MODEL_BOX_CLASSES` order: on a polynomial
+    map (``model`` a :class:`Model` or None) :data:`MAP_BOX_SWEPT`, each among
+    :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES` (one V, one Stein ``P`` or one bound for every
+    value of the box); on a map with functions
+    :data:`lyapcheck.models.classes.discrete_functions_box.BOX_CLASSES` (``linearization`` and ``roa``, each
+    cross-checked by iterating its true map). Every other class of a map is not swept over boxes."""
+    if model is not None and not isinstance(model, Model):
+        from lyapcheck.models.classes.discrete_functions_box import BOX_CLASSES as FUNCTIONS_BOX_CLASSES
+
+        return tuple(c for c in MODEL_BOX_CLASSES if c in FUNCTIONS_BOX_CLASSES)
     from lyapcheck.models.classes.discrete_lyapunov import BOX_CLASSES
 
     return tuple(c for c in MODEL_BOX_CLASSES if c in MAP_BOX_SWEPT and c in BOX_CLASSES)
@@ -886,11 +905,15 @@ def _check_defined(spec: ModelSweepSpec, source: str) -> None:
                                      f"the model is not defined there ({exc})") from None
         return
     if spec.has_functions:
+        from lyapcheck.models.classes.discrete_functions_box import boxed_system
         from lyapcheck.models.classes.recast_regions import boxed_loop
 
-        for cell in initial_cells(spec):  # the recasting with the box's parameters as bounded constants
+        # the recasting with the box's parameters as bounded constants (a map's: as variables without a flow, its
+        # fixed point proved to stay put over the box, as certify --box checks before any class)
+        boxed = boxed_system if spec.discrete else boxed_loop
+        for cell in initial_cells(spec):
             try:
-                boxed_loop(*spec.recast_box(cell))
+                boxed(*spec.recast_box(cell))
             except ModelFileError as exc:
                 raise ModelFileError(source, f"sweep.axes, the box {_describe(cell)}",
                                      f"the loop cannot be recast over all of it ({exc})") from None
@@ -939,17 +962,11 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     known_keys(sweep, _MODEL_SWEEP_KEYS, "sweep")
     model_file, model_text = _model(sweep, source, model_text)
     declared = parse_any_model(model_text, model_file)
-    from lyapcheck.models.loop.discrete import refuse
-
     fixed = _overrides(sweep.get("set"), declared)
     model = parse_any_model(model_text, model_file, fixed) if fixed else declared
     mode = sweep.get("mode", "points")
     if mode not in _MODES:
         raise InvalidParameter("sweep.mode", "one of " + ", ".join(repr(m) for m in _MODES), mode)
-    if mode == "boxes" and not isinstance(declared, Model):  # (a map with functions over boxes: not built)
-        refuse(declared, "sweep.mode", "boxes are not taken on a map with functions (certify --box proves its "
-               "linearization and roa over a box, but their cross-check by iterating over a box is not built); "
-               'mode = "points" sweeps it point by point')
     raw_axes = sweep.get("axes")
     if not isinstance(raw_axes, list) or not 1 <= len(raw_axes) <= 3:
         raise InvalidParameter("sweep.axes", "a list of one to three [[sweep.axes]] tables",

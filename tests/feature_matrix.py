@@ -206,10 +206,9 @@ _BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
 #: every refused cell of today, with its reason (the footnotes of the docs' table, in this order)
 REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
-            | cells(("discrete",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s != "sweep boxes"))
+            | cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
             | cells(("map_functions",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep boxes"))),
+                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep points", "sweep boxes"))),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
@@ -221,21 +220,20 @@ REFUSALS: tuple[Refusal, ...] = (
             "not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("discrete",), ("barrier", "reach_avoid"), ("--box",))
-            | cells(("discrete",), ("roa", "sos_bound", "barrier", "reach_avoid"), ("sweep boxes",)),
-            ("decided at one parameter value only on a map", "cross-check over a box is not built"),
+    Refusal(cells(("discrete",), ("barrier", "reach_avoid"), ("--box", "sweep boxes")),
+            ("decided at one parameter value only on a map", "takes these only"),
             "A discrete-time map (`[model] time = \"discrete\"`) takes every class at a point, each checked "
             "exactly, and reports and point sweeps iterate it. Over a `--box` it takes `linearization` (one Stein "
             "`P` for every Jacobian of the box, or an unstable corner), `quadratic` and `sos_gas` (one `V` for every "
             "value, box multipliers, exact), `roa`, `candidate` and `sos_bound` (one set or one bound for every "
-            "value); its safety classes are decided at a point only. A box sweep takes `linearization`, "
-            "`quadratic` and `sos_gas`, each box iterated at its corners and random points; the cross-check of a "
-            "set or a bound over a box is not built (a gap, not a theorem)."),
+            "value); its safety classes are decided at a point only. A box sweep takes the classes `--box` proves "
+            "but `candidate` (which needs your V), each box iterated at its corners and random points (a set's "
+            "starts inside it, a bound's under disturbances); a barrier or reach-avoid over a box is not built (a "
+            "gap, not a theorem)."),
     Refusal(cells(("map_functions",), ("reach_avoid",), CLASS_SURFACES)
-            | cells(("map_functions",), ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound",
-                                         "barrier"), ("sweep boxes",)),
+            | cells(("map_functions",), ("sos_bound",), ("sweep points",)),
             ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
-             'time = "discrete")'),
+             'time = "discrete")', "takes these only"),
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
             "then the exact discrete-time test), `quadratic` and `sos_gas` (a V of the states with `V(F) <= (1 - mu) "
             "V - W` on the recasting's relations, exact), `roa` (ball arithmetic on the true map), `candidate` "
@@ -243,12 +241,14 @@ REFUSALS: tuple[Refusal, ...] = (
             "lam` on the relations and the disturbances' box, exact) and `barrier` (a B of the states with `B(F) <= lam "
             "B` on the relations, exact; refuted by an unsafe iterate proved in balls) at a point, and `linearization` and `roa` over a `--box` (ball "
             "arithmetic with the parameters as balls); every other class is `not_applicable` until it is built for "
-            "such a map; reports and point sweeps take it as a polynomial map, and box sweeps refuse it in one line "
-            "(a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier"), ("--box",)),
-            ("over a box a discrete-time map with functions takes linearization and roa only",),
-            "Over a `--box` a map with functions takes `linearization` and `roa` only; its `quadratic`, `sos_gas`, "
-            "`sos_bound` and `barrier` are decided at a point (one V for every value of the box, the parameters among the relations' "
+            "such a map; reports, point sweeps and box sweeps take it as a polynomial map (a box sweep: "
+            "`linearization` and `roa`, its true map iterated; a point sweep not `sos_bound`, whose cross-check "
+            "under disturbances is not built for a map with functions) (a gap, not a theorem)."),
+    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier"), ("--box", "sweep boxes")),
+            ("over a box a discrete-time map with functions takes linearization and roa only", "takes these only"),
+            "Over a `--box` (and in a box sweep) a map with functions takes `linearization` and `roa` only; its "
+            "`quadratic`, `sos_gas`, `sos_bound` and `barrier` are decided at a point (one V for every value of the "
+            "box, the parameters among the relations' "
             "variables, is not built: a gap, not a theorem)."),
 )
 

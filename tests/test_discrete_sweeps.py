@@ -1,11 +1,13 @@
 """Sweeps of a discrete-time map (``[sweep] model = FILE`` with ``[model] time = "discrete"``): each grid point
 certified as ``certify FILE --set`` certifies the map, each box as ``certify FILE --box`` does (a polynomial
-map: linearization, quadratic, sos_gas), each certified point or box cross-checked by iterating the map
-(sweeps.crosscheck._MapLoop), never by integrating it; a map's sos_bound iterated under disturbances within
-its bounds; boxes of a map with functions, and classes a map does not take over a box, refused in one line.
+map: linearization, quadratic, sos_gas, roa, sos_bound; a map with functions: linearization, roa), each certified
+point or box cross-checked by iterating the map (sweeps.crosscheck._MapLoop; a map with functions' true map),
+never by integrating it; a map's sos_bound iterated under disturbances within its bounds; classes a map does not
+take over a box refused in one line.
 
 The shipped examples examples/models/sweeps/points-discrete-map.toml and boxes-discrete-map.toml sweep the
-gain a of discrete-gain-map.toml (Jacobian eigenvalues a and 3/5: stable for |a| < 1, unstable for a > 1).
+gain a of discrete-gain-map.toml (Jacobian eigenvalues a and 3/5: stable for |a| < 1, unstable for a > 1);
+boxes-discrete-tanh-map.toml the gain k of discrete-tanh-gain-map.toml (Schur stable exactly for |k| < 3/2).
 """
 
 from __future__ import annotations
@@ -129,7 +131,8 @@ def test_classes_a_map_does_not_take_are_refused_in_one_line(tmp_path: Path) -> 
     boxes = tmp_path / "boxes.toml"
     boxes.write_text('[sweep]\nmodel = "m.toml"\nmode = "boxes"\n[[sweep.axes]]\nname = "a"\nstart = 0.3\n'
                      'stop = 0.9\nnum = 2\n')
-    assert load_model_spec(boxes).classes == ("linearization", "quadratic", "sos_gas")  # what --box takes on a map
+    # what --box proves over a box of a map and the sweep cross-checks by iterating (sos_bound: no disturbance here)
+    assert load_model_spec(boxes).classes == ("linearization", "quadratic", "sos_gas", "roa")
     barrier = tmp_path / "barrier.toml"
     barrier.write_text('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n[[sweep.axes]]\nname = "a"\n'
                        'start = 0.3\nstop = 0.9\nnum = 2\n')
@@ -438,26 +441,213 @@ def test_a_map_s_box_certificates_are_iterated_at_its_corners_and_false_ones_cau
     assert [v for v in found.violations if v.startswith("linearization at")] and found.worst_envelope > 0.1
 
 
-def test_a_map_s_box_sweep_refuses_classes_it_does_not_take_and_a_map_with_functions(tmp_path: Path) -> None:
-    """Over boxes a map takes linearization, quadratic and sos_gas: roa is refused in one line naming the field,
-    the accepted classes and what was given (exit 2, nothing written); a map with functions over boxes too."""
+def test_a_map_s_box_sweep_refuses_classes_it_does_not_take(tmp_path: Path) -> None:
+    """Over boxes a polynomial map takes linearization, quadratic, sos_gas, roa and sos_bound: barrier is refused
+    in one line naming the field, the accepted classes and what was given (exit 2, nothing written); a map with
+    functions takes linearization and roa (its default), and quadratic over boxes is refused alike."""
     from sweeps.spec import load_model_spec
     from tests.test_discrete_reports import WITH_FUNCTIONS
 
     (tmp_path / "m.toml").write_text(GAIN_MAP)
-    roa = tmp_path / "roa.toml"
-    roa.write_text('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["linearization", "roa"]\n[[sweep.axes]]\n'
-                   'name = "a"\nstart = 0.3\nstop = 0.9\nnum = 2\n')
-    assert_refused(roa, "'sweep.classes' parameter must be in a boxes sweep of a discrete-time map")
+    barrier = tmp_path / "barrier.toml"
+    barrier.write_text('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["linearization", "barrier"]\n'
+                       '[[sweep.axes]]\nname = "a"\nstart = 0.3\nstop = 0.9\nnum = 2\n')
+    assert_refused(barrier, "'sweep.classes' parameter must be in a boxes sweep of a discrete-time map")
     with pytest.raises(InvalidParameter) as refused:
-        load_model_spec(roa)
+        load_model_spec(barrier)
     line = str(refused.value)
-    assert "a discrete-time map" in line and "'linearization', 'quadratic', 'sos_gas' (" in line and "'roa'" in line
+    assert "'linearization', 'quadratic', 'sos_gas', 'roa', 'sos_bound' (" in line and "'barrier'" in line
     functions = tmp_path / "functions"
     functions.mkdir()
-    (functions / "f.toml").write_text(WITH_FUNCTIONS)
-    boxes = functions / "boxes.toml"  # (refused before its axes are read: the map declares no parameter)
+    (functions / "f.toml").write_text(WITH_FUNCTIONS.replace("0.5*tanh(y)", "k*tanh(y)").replace(
+        "[dynamics]", "[parameters]\nk = 0.5\n[dynamics]"))
+    boxes = functions / "boxes.toml"
     boxes.write_text('[sweep]\nmodel = "f.toml"\nmode = "boxes"\n[[sweep.axes]]\nname = "k"\nstart = 0.3\n'
                      'stop = 0.4\nnum = 2\n')
-    assert_refused(boxes, "sweep.mode: not taken yet for a discrete-time map")
-    assert_refused(boxes, "boxes are not taken on a map with functions")
+    assert load_model_spec(boxes).classes == ("linearization", "roa")
+    quadratic = functions / "quadratic.toml"
+    quadratic.write_text(boxes.read_text().replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["quadratic"]'))
+    assert_refused(quadratic, "'sweep.classes' parameter must be in a boxes sweep of a discrete-time map with "
+                              "functions, a list of distinct names from 'linearization', 'roa' (")
+
+
+# -- a polynomial map's roa and sos_bound over boxes: a set and a bound for every value of the box -----------
+@pytest.mark.slow
+def test_a_polynomial_map_s_roa_and_sos_bound_are_swept_over_boxes(tmp_path: Path) -> None:
+    """The gained disturbed map (x+ = a x + y^2/10, y+ = 3y/5 + d) over a in [0.3, 0.6]: roa (one {V <= c}) and
+    sos_bound (one bound) certified for every a of the box (verify re-checks them), each iterated at the box's
+    two corners and two random points, no alarm; the bound's tail sup reaches the constant-disturbance limit."""
+    import lyapcheck.models.engines.trajectories as trajectories
+    from lyapcheck.api import verify
+
+    (tmp_path / "m.toml").write_text(GAINED)
+    spec = tmp_path / "boxes.toml"
+    spec.write_text('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["roa", "sos_bound"]\n[[sweep.axes]]\n'
+                    'name = "a"\nstart = 0.3\nstop = 0.6\nnum = 2\n[sweep.boxes]\nmax_boxes = 1\n'
+                    'cross_check_points = 2\n[simulation]\nstarts = 8\n')
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(trajectories, "simulate", never_integrate)
+        run(spec, tmp_path / "boxes.zarr")
+    data = arrays(tmp_path / "boxes.zarr")
+    assert data["status_roa"][0] == CODES["certified"] and data["status_sos_bound"][0] == CODES["certified"]
+    doc = json.loads(str(data["certificate"][0]))
+    assert verify(doc).valid and [float(Fraction(v)) for v in doc["box"]["a"]] == [0.3, 0.6]
+    assert data["cross_check_points"][0] == 2 + 2 and not data["soundness_violation"][0]
+    assert data["cross_check_worst_rise"][0] <= 1e-9
+    assert 1.25 * (1 - 1e-6) <= data["sim_worst_y"][0] <= data["sos_bound_y"][0]
+
+
+@pytest.fixture(scope="module")
+def gain_box_docs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, dict[str, Any], Any, dict[str, Any]]:
+    """(the gain map, its roa over a in [0.3, 0.9]; the gained disturbed map, its sos_bound over a in [0.3, 0.6])."""
+    from lyapcheck.api import certify
+    from lyapcheck.models.language.modelfile import parse_model
+
+    roa = dict(certify(model=EXAMPLES / "discrete-gain-map.toml", box=["a=0.3..0.9"], classes="roa").document)
+    path = tmp_path_factory.mktemp("gained") / "gained.toml"
+    path.write_text(GAINED)
+    bound = dict(certify(model=path, box=["a=0.3..0.6"], classes="sos_bound").document)
+    assert roa["conditions"]["roa"]["status"] == bound["conditions"]["sos_bound"]["status"] == "certified"
+    return parse_model(GAIN_MAP, "gain"), roa, parse_model(GAINED, "gained"), bound
+
+
+def test_a_map_s_box_set_and_bound_are_iterated_and_forged_ones_caught(
+        gain_box_docs: tuple[Any, dict[str, Any], Any, dict[str, Any]], monkeypatch: pytest.MonkeyPatch) -> None:
+    """At the box's corners the region (starts in {V <= c}) and the bound (under disturbances, within its
+    envelope: read over the box, so finite from the first step) pass; a level forged 100 times larger (starts
+    past the second fixed point escape) and a bound forged to half are caught by iterating."""
+    import lyapcheck.models.engines.trajectories as trajectories
+    from sweeps.crosscheck import _bound_envelope, cross_check_box
+
+    monkeypatch.setattr(trajectories, "simulate", never_integrate)
+    gain, roa, gained, bound = gain_box_docs
+    corners = [(gain, {"a": Fraction(3, 10)}), (gain, {"a": Fraction(9, 10)})]
+    found, skipped = cross_check_box(corners, roa, starts=8, seed=(0, 0))
+    assert not found.violation and not skipped and found.trajectories == 16 and found.worst_rise <= 1e-9
+    forged = copy.deepcopy(roa)
+    cert = forged["conditions"]["roa"]["certificate"]
+    cert["level"] = str(Fraction(cert["level"]) * 100)
+    found, _ = cross_check_box(corners, forged, starts=8, seed=(0, 0))
+    assert found.violation and all(v.startswith("roa at a = ") for v in found.violations)
+    corners = [(gained, {"a": Fraction(3, 10)}), (gained, {"a": Fraction(3, 5)})]
+    found, _ = cross_check_box(corners, bound, starts=8, seed=(0, 0))
+    assert not found.violation and found.sim_worst["y"] >= 1.25 * (1 - 1e-6)
+    cond = bound["conditions"]["sos_bound"]
+    es = np.zeros((1, 5, 2))
+    es[0, 0] = [3.0, 3.0]  # a start outside {V <= 1}: the envelope is above the bound at first, then decays to it
+    envelope = _bound_envelope(cond["certificate"]["outputs"]["y"], cond["bounds"]["y"], es, ["x", "y"], ["d"],
+                               {"a": Fraction(1, 2)})
+    assert np.all(np.isfinite(envelope)) and envelope[0, 0] > envelope[0, -1] >= cond["bounds"]["y"]
+    halved = copy.deepcopy(bound)
+    halved["conditions"]["sos_bound"]["bounds"]["y"] = cond["bounds"]["y"] / 2
+    found, _ = cross_check_box(corners, halved, starts=8, seed=(0, 0))
+    assert any(v.startswith("sos_bound at a = ") and "above the certified" in v for v in found.violations)
+
+
+# -- a map with functions over boxes: linearization and roa, its true map iterated ---------------------------
+TANH_SPEC = EXAMPLES / "sweeps" / "boxes-discrete-tanh-map.toml"
+TANH_MAP = (EXAMPLES / "discrete-tanh-gain-map.toml").read_text()
+
+
+@pytest.fixture(scope="module")
+def tanh_sweep(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The example run inline, with the integrator replaced by a function that fails."""
+    import lyapcheck.models.engines.trajectories as trajectories
+
+    out = tmp_path_factory.mktemp("tanh") / "whole" / "out.zarr"
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(trajectories, "simulate", never_integrate)
+        run(TANH_SPEC, out)
+    return out
+
+
+@pytest.mark.slow
+def test_the_tanh_map_s_boxes_are_proved_below_three_halves_and_refuted_above(tanh_sweep: Path) -> None:
+    """Boxes below k = 3/2 certified (linearization; roa on the narrower ones), each iterated on its true map at
+    its two corners and two random points without an alarm; boxes with a corner k > 3/2 refuted, exactly; the
+    store's report page is written."""
+    from lyapcheck.api import verify
+    from tests.test_discrete_reports import cli
+
+    data = arrays(tanh_sweep)
+    done = data["done"].astype(bool)
+    leaf = done & (data["status"] != 3)
+    certified = leaf & (data["status"] == CODES["certified"])
+    refuted = leaf & (data["status"] == CODES["refuted"])
+    assert certified.any() and refuted.any() and (data["status_roa"][certified] == CODES["certified"]).any()
+    # (a refuted box's upper corner is a hair above 3/2: the split of [1.2000000000000002, 1.8], stored as 1.5)
+    assert np.all(data["hi_k"][certified] < 1.5) and np.all(data["hi_k"][refuted] >= 1.5)
+    for j in np.flatnonzero(certified):
+        assert data["cross_check_points"][j] == 2 + 2 and data["cross_check_trajectories"][j] > 0
+        assert data["cross_check_worst_rise"][j] <= 1e-9 and not data["soundness_violation"][j]
+    for j in np.flatnonzero(refuted):
+        assert "eigenvalue of modulus > 1" in str(data["note"][j]) and data["unstable_corners"][j] >= 1
+    j = int(np.flatnonzero(certified & (data["status_roa"] == CODES["certified"]))[0])
+    doc = json.loads(str(data["certificate"][j]))
+    assert doc["conditions"]["linearization"]["certificate"]["method"] == "box_ball_stein"
+    assert verify(doc).valid
+    page = tanh_sweep.parent / "boxes.html"
+    assert cli("report", str(tanh_sweep), "--html", str(page)).exit_code == 0
+    assert "Cross-check by iterating the map" in page.read_text()
+
+
+@pytest.mark.slow
+def test_the_tanh_map_s_box_sweep_resumes_byte_for_byte(tanh_sweep: Path, tmp_path: Path) -> None:
+    from tests.test_model_sweeps import interrupted
+
+    out = tmp_path / "out.zarr"
+    interrupted(TANH_SPEC, out, after=2)
+    assert 0 < arrays(out)["done"].sum() < arrays(tanh_sweep)["done"].sum()
+    assert 0 < run(TANH_SPEC, out).run.computed_now
+    whole = {p.relative_to(tanh_sweep): p.read_bytes() for p in tanh_sweep.rglob("*") if p.is_file()}
+    parts = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert whole.keys() == parts.keys() and all(whole[k] == parts[k] for k in whole)
+
+
+@pytest.fixture(scope="module")
+def tanh_box_doc(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    from lyapcheck.api import certify
+
+    doc = dict(certify(model=EXAMPLES / "discrete-tanh-gain-map.toml", box=["k=0.6..0.95"],
+                       classes="linearization,roa").document)
+    assert all(doc["conditions"][c]["status"] == "certified" for c in ("linearization", "roa"))
+    return doc
+
+
+@pytest.mark.slow
+def test_a_map_with_functions_box_certificates_are_iterated_and_forged_ones_caught(
+        tanh_box_doc: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
+    """At the box's corners (the true map read there) the ellipsoid and the one P pass; a level forged 1000 times
+    larger, a P forged to the identity (it rises along the Jacobian) and the certificates at k = 1.6 (outside the
+    box, unstable) are caught. Without an exact Jacobian the true map is iterated from tiny starts: the same
+    verdicts."""
+    import lyapcheck.models.classes.discrete_functions as dfn
+    import lyapcheck.models.engines.trajectories as trajectories
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from sweeps.crosscheck import cross_check_box
+
+    monkeypatch.setattr(trajectories, "simulate", never_integrate)
+
+    def at(k: str) -> tuple[Any, dict[str, Fraction]]:
+        return parse_any_model(TANH_MAP, "tanh", {"k": k}), {"k": Fraction(k)}
+
+    corners = [at("0.6"), at("0.95")]
+    found, skipped = cross_check_box(corners, tanh_box_doc, starts=8, seed=(0, 0))
+    assert not found.violation and not skipped and found.points == 2 and found.worst_rise <= 1e-9
+    assert found.trajectories == 2 * (8 + 8)  # the ellipsoid's starts, then the Jacobian's directions
+    level = copy.deepcopy(tanh_box_doc)
+    level["conditions"]["roa"]["certificate"]["level"] = str(Fraction(level["conditions"]["roa"]["certificate"]
+                                                                      ["level"]) * 1000)
+    found, _ = cross_check_box(corners, level, starts=8, seed=(0, 0))
+    assert found.violation and all(v.startswith("roa at k = ") for v in found.violations)
+    identity = copy.deepcopy(tanh_box_doc)
+    identity["conditions"]["linearization"]["certificate"]["P"] = [["1", "0"], ["0", "1"]]
+    found, _ = cross_check_box(corners, identity, starts=8, seed=(0, 0))
+    assert [v for v in found.violations if v.startswith("linearization at k = ") and "Jacobian" in v]
+    found, _ = cross_check_box([at("1.6")], tanh_box_doc, starts=8, seed=(0, 0))
+    assert any(v.startswith("linearization at k = 1.6") for v in found.violations)
+    monkeypatch.setattr(dfn, "exact_jacobian", lambda model: "no exact Jacobian (test)")
+    found, _ = cross_check_box(corners, tanh_box_doc, starts=8, seed=(0, 0))
+    assert not found.violation and found.worst_rise <= 1e-5
+    found, _ = cross_check_box(corners, identity, starts=8, seed=(0, 0))
+    assert [v for v in found.violations if v.startswith("linearization at k = ") and "true map from starts" in v]
