@@ -303,13 +303,15 @@ def _prelude_of_functions(doc: dict[str, Any], model: Any, rows: list[Row]) -> N
         rows.append(("disturbances", False, "the stated disturbances are not the model text's"))
 
 
-def _read_box_functions(doc: dict[str, Any], model: "RecastModel", rows: list[Row]) -> Box | Stop:
-    """The document's box, each parameter read at its centre, and the loop recast with them as bounded
-    constants; or a failed row (a parameter not read at the centre, a box the loop cannot take)."""
+def _read_box_at_centre(doc: dict[str, Any], model: "RecastModel", rows: list[Row],
+                        recast: Callable[["RecastModel", "ModelBox"], Any], done: str) -> Box | Stop:
+    """A loop with functions' or a map with functions' box: the document's box, each parameter the model's and
+    read at its centre, and ``recast(model, box)`` (the loop with the box's parameters as bounded constants, or
+    the map with them as balls keeping its fixed point), its row saying ``done``; or a failed row and
+    :class:`Stop` (a parameter not read at the centre, a box the loop cannot take)."""
     if "box" not in doc:
         return Box()
     from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.classes.recast_regions import boxed_loop
     from lyapcheck.models.language.parameter_box import ModelBox
 
     def refused(why: str) -> Stop:
@@ -326,12 +328,20 @@ def _read_box_functions(doc: dict[str, Any], model: "RecastModel", rows: list[Ro
         if model.parameters[name] != box.center(name):
             return refused(f"box: the model is not read at the box's centre ({name} = {model.parameters[name]})")
     try:
-        boxed = boxed_loop(model, box)
+        recast_again = recast(model, box)
     except ModelFileError as exc:
         return refused(f"box: {exc}")
-    rows.append(("box", True, "each box parameter is read at the box's centre, and the loop is recast with them "
-                              "as bounded constants again"))
-    return Box(box, boxed)
+    rows.append(("box", True, done))
+    return Box(box, recast_again)
+
+
+def _read_box_functions(doc: dict[str, Any], model: "RecastModel", rows: list[Row]) -> Box | Stop:
+    """A loop with functions' box (:func:`_read_box_at_centre`), the loop recast with its parameters as bounded
+    constants (:func:`lyapcheck.models.classes.recast_regions.boxed_loop`)."""
+    from lyapcheck.models.classes.recast_regions import boxed_loop
+
+    return _read_box_at_centre(doc, model, rows, boxed_loop, "each box parameter is read at the box's centre, and "
+                               "the loop is recast with them as bounded constants again")
 
 
 def _conditions_of_functions(doc: dict[str, Any], model: "RecastModel", box: Box, rows: list[Row]) -> bool:
@@ -510,35 +520,13 @@ def _counterexample_loop(ref: dict[str, Any], model: "RecastModel", box: "ModelB
 
 
 def _read_box_map_functions(doc: dict[str, Any], model: Any, rows: list[Row]) -> Box | Stop:
-    """The document's box, its parameters the model's and read at its centre, and the map recast with them as
-    balls keeping its fixed point (:func:`lyapcheck.models.classes.discrete_functions_box.boxed_system`; its
-    row appended), or :class:`Stop` with the row saying why not."""
-    if "box" not in doc:
-        return Box()
-    from lyapcheck.errors import ModelFileError
+    """A map with functions' box (:func:`_read_box_at_centre`), the map recast with its parameters as balls
+    keeping its fixed point (:func:`lyapcheck.models.classes.discrete_functions_box.boxed_system`)."""
     from lyapcheck.models.classes.discrete_functions_box import boxed_system
-    from lyapcheck.models.language.parameter_box import ModelBox
 
-    def refused(why: str) -> Stop:
-        rows.append(("box", False, why))
-        return Stop(verdict=True)
-
-    try:
-        box = ModelBox.from_json(doc["box"])
-    except (TypeError, ValueError, AttributeError, ZeroDivisionError) as exc:
-        return refused(f"malformed box: {exc}")
-    for name, lo, hi in box.bounds:
-        if name not in model.parameters or not lo < hi:
-            return refused(f"box: {name!r} is not a parameter of the model with lo < hi")
-        if model.parameters[name] != box.center(name):
-            return refused(f"box: the model is not read at the box's centre ({name} = {model.parameters[name]})")
-    try:
-        boxed_system(model, box)
-    except ModelFileError as exc:
-        return refused(f"box: {exc}")
-    rows.append(("box", True, "each box parameter is read at the box's centre, and the map's fixed point is proved "
-                              "to stay put over the box"))
-    return Box(box)
+    box = _read_box_at_centre(doc, model, rows, boxed_system, "each box parameter is read at the box's centre, "
+                              "and the map's fixed point is proved to stay put over the box")
+    return box if isinstance(box, Stop) else Box(box.box)
 
 
 def _conditions_of_map_functions(doc: dict[str, Any], model: Any, box: Box, rows: list[Row]) -> bool:
