@@ -61,7 +61,8 @@ What differs between the kinds is how the loop is simulated and V evaluated in f
   steps are counted exactly), iterated on to the bound when :data:`MAP_STEPS` did not tell. A map's
   ``sos_bound`` (:meth:`_MapLoop.check_bound`) is iterated under disturbance sequences within its bounds
   (uniform random, bang-bang, each vertex held constant; :func:`map_disturbances`) from the fixed point and
-  random starts: each output stays within the certificate's envelope ``bound^2 + lam^k max(V(e_0) - 1, 0)``
+  random starts (a map with functions: its true map, each function by numpy, :func:`iterate_disturbed`; its
+  V read over the states from the certificate's ``variables``): each output stays within the certificate's envelope ``bound^2 + lam^k max(V(e_0) - 1, 0)``
   at every step, and ``sim_worst_<y>`` is the tail sup of ``|y - y_eq|``. Over a box (``mode = "boxes"``)
   the box's corners and random points are iterated alike (a box's V, its set {V <= c} and its bound's V are
   each one function of the states for every value of the box: ``roa`` from starts in the certified set,
