@@ -61,7 +61,8 @@ What differs between the kinds is how the loop is simulated and V evaluated in f
   steps are counted exactly), iterated on to the bound when :data:`MAP_STEPS` did not tell. A map's
   ``sos_bound`` (:meth:`_MapLoop.check_bound`) is iterated under disturbance sequences within its bounds
   (uniform random, bang-bang, each vertex held constant; :func:`map_disturbances`) from the fixed point and
-  random starts: each output stays within the certificate's envelope ``bound^2 + lam^k max(V(e_0) - 1, 0)``
+  random starts (a map with functions: its true map, each function by numpy, :func:`iterate_disturbed`; its
+  V read over the states from the certificate's ``variables``): each output stays within the certificate's envelope ``bound^2 + lam^k max(V(e_0) - 1, 0)``
   at every step, and ``sim_worst_<y>`` is the tail sup of ``|y - y_eq|``. Over a box (``mode = "boxes"``)
   the box's corners and random points are iterated alike (a box's V, its set {V <= c} and its bound's V are
   each one function of the states for every value of the box: ``roa`` from starts in the certified set,
@@ -636,11 +637,14 @@ class _MapLoop:
         the certified envelope ``|y_k - y_eq|^2 <= bound^2 + lam^k max(V(e_0) - 1, 0)`` (the certificate's step
         identity by induction; ``bound^2`` alone on its tail when its ``V`` or ``lam`` cannot be read), up to
         :data:`~lyapcheck.tolerances.TRAJECTORY_CHECK_REL_TOL`; ``sim_worst_<y>`` is the largest
-        ``|y_k - y_eq|`` over the last :data:`MAP_BOUND_TAIL_STEPS` steps."""
+        ``|y_k - y_eq|`` over the last :data:`MAP_BOUND_TAIL_STEPS` steps. A map with functions is its true map
+        (:func:`iterate_disturbed`), its ``V`` read over the states from the certificate's ``variables``
+        (:func:`_over_states`)."""
+        from lyapcheck.models.classes.map_relations import NotTaken
         from lyapcheck.tolerances import TRAJECTORY_CHECK_REL_TOL
 
-        if not isinstance(self.model, Model) or not cond.get("bounds"):
-            return  # (a map with functions' point sweep takes no sos_bound: sweeps.spec.MAP_FUNCTIONS_UNSWEPT)
+        if not cond.get("bounds"):
+            return
         model = self.model
         bounds = np.array([float(b) for b in model.disturbances.values()])
         lo, hi = self.global_box()
@@ -648,17 +652,26 @@ class _MapLoop:
         policies = map_disturbances(bounds, len(X0), MAP_STEPS, rng)
         X = np.tile(X0, (len(policies), 1))
         D = np.concatenate(policies, axis=1)  # (steps, rows, m)
-        xs = iterate_disturbed(model, X, D)
+        try:
+            xs = iterate_disturbed(model, X, D)
+        except NotTaken as exc:  # (the class that certified it recast the map so: a document of another map)
+            out.violations.append(f"sos_bound at {where}: certified, but its map cannot be iterated under its "
+                                  f"disturbances ({exc})")
+            return
         out.trajectories += len(X)
         ys = map_outputs(model, xs)
-        certs = (cond.get("certificate") or {}).get("outputs") or {}
+        cert = cond.get("certificate") or {}
+        certs = cert.get("outputs") or {}
+        dists, box = list(model.disturbances), {k: self.point[k] for k in self.names[model.n:]}
+        if not isinstance(model, Model):  # V over the recasting's variables: read over the states alone
+            certs = {name: _over_states(c, cert.get("variables") or (), model.states) for name, c in certs.items()}
+            dists, box = [], {}
         references = cond.get("bounds_reference") or {}
         for name, stated in cond["bounds"].items():
             if name not in ys:
                 continue
             y = np.abs(ys[name] - float(references.get(name) or 0.0))  # (rows, steps + 1)
-            envelope = _bound_envelope(certs.get(name), float(stated), xs - self.eq, list(model.states),
-                                       list(model.disturbances), {k: self.point[k] for k in self.names[model.n:]})
+            envelope = _bound_envelope(certs.get(name), float(stated), xs - self.eq, list(model.states), dists, box)
             tail = y[:, -MAP_BOUND_TAIL_STEPS:]
             finite = np.where(np.isfinite(tail), tail, -np.inf)
             worst = float(np.max(finite)) if finite.size else -math.inf
@@ -793,43 +806,93 @@ def map_disturbances(bounds: np.ndarray, rows: int, steps: int, rng: np.random.G
     return out
 
 
-def iterate_disturbed(model: Model, starts: np.ndarray, disturbances: np.ndarray) -> np.ndarray:
-    """The iterates ``x_{k+1} = f(x_k, d_k)`` of a polynomial (rational) map with ``d_k = disturbances[k]``
-    (``(steps, rows, m)``): ``(rows, steps + 1, n)``, the start first. No escape box (a bound holds from every
-    start); a row that overflows stays non-finite, which the checks skip."""
+def iterate_disturbed(model: Model | RecastModel, starts: np.ndarray, disturbances: np.ndarray) -> np.ndarray:
+    """The iterates ``x_{k+1} = f(x_k, d_k)`` of a map with ``d_k = disturbances[k]`` (``(steps, rows, m)``):
+    ``(rows, steps + 1, n)``, the start first. A polynomial (rational) map is its exact field in floats; a map
+    with functions is its true map, ``x + (F(x, d) - x)`` with every function evaluated by numpy from its
+    definition (:class:`~lyapcheck.models.engines.recast_numeric.FloatLoop` of the displacement recast with its
+    disturbances as variables, :func:`lyapcheck.models.classes.map_relations_bounds.disturbed_map`: the map its
+    ``sos_bound`` is proved on; ``simulate``'s iterator holds them at 0). No escape box (a bound holds from every
+    start); a row that overflows stays non-finite, which the checks skip. Raises
+    :class:`~lyapcheck.models.classes.map_relations.NotTaken` where a map with functions cannot be recast with
+    its disturbances as variables."""
+    n = model.n
+    out = np.empty((starts.shape[0], disturbances.shape[0] + 1, n))
+    x = np.array(starts, dtype=np.float64)
+    out[:, 0] = x
+    step = _disturbed_step(model)
+    with np.errstate(all="ignore"):
+        for k in range(disturbances.shape[0]):
+            x = step(x, disturbances[k])
+            out[:, k + 1] = x
+    return out
+
+
+def _disturbed_step(model: Model | RecastModel) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """``f(x, d)`` of a map at rows of states and disturbances (:func:`iterate_disturbed`)."""
+    n = model.n
+    if not isinstance(model, Model):
+        from lyapcheck.models.classes.map_relations_bounds import disturbed_map
+        from lyapcheck.models.engines.recast_numeric import FloatLoop
+
+        displacement = FloatLoop(disturbed_map(model).system)  # (its variables: the states, then the disturbances)
+        return lambda x, d: x + displacement(np.concatenate([x, d], axis=1))[:, :n]
     from lyapcheck.models.language.modelfile import field_at
     from lyapcheck.models.surfaces.simulate import CompiledPolys
 
     rhs = field_at(model)
     polys = CompiledPolys(model.state_ring, [r.numerator for r in rhs] + [r.denominator for r in rhs])
-    n = model.n
-    out = np.empty((starts.shape[0], disturbances.shape[0] + 1, n))
-    x = np.array(starts, dtype=np.float64)
-    out[:, 0] = x
-    with np.errstate(all="ignore"):
-        for k in range(disturbances.shape[0]):
-            values = polys(np.concatenate([x, disturbances[k]], axis=1))
-            x = values[:, :n] / values[:, n:]
-            out[:, k + 1] = x
-    return out
+
+    def step(x: np.ndarray, d: np.ndarray) -> np.ndarray:
+        values = polys(np.concatenate([x, d], axis=1))
+        return np.asarray(values[:, :n] / values[:, n:], dtype=np.float64)
+
+    return step
 
 
-def map_outputs(model: Model, xs: np.ndarray) -> dict[str, np.ndarray]:
-    """Each output of a polynomial map at the iterates ``xs`` (``(rows, steps + 1, n)``), its parameters set
-    (an output never reads a disturbance): ``{name: (rows, steps + 1)}``."""
+def map_outputs(model: Model | RecastModel, xs: np.ndarray) -> dict[str, np.ndarray]:
+    """Each output of a map at the iterates ``xs`` (``(rows, steps + 1, n)``), its parameters set (an output
+    never reads a disturbance; a map with functions' outputs are polynomials of its states already):
+    ``{name: (rows, steps + 1)}``."""
     from lyapcheck.models.surfaces.simulate import CompiledPolys
     from lyapcheck.sos.polynomials import Ring
 
-    ring, states = model.ring, Ring(model.states)
-    flat = xs.reshape(-1, model.n)
+    states = Ring(model.states)
+    flat = np.where(np.isfinite(xs), xs, np.nan).reshape(-1, model.n)
     out = {}
     with np.errstate(all="ignore"):
+        if not isinstance(model, Model):
+            for name, poly in model.outputs.items():
+                out[name] = CompiledPolys(states, [poly])(flat)[:, 0].reshape(xs.shape[:2])
+            return out
+        ring = model.ring
         for name, expr in model.outputs.items():
             num = ring.restrict(ring.substitute(expr.numerator, model.parameters), states)
             den = ring.restrict(ring.substitute(expr.denominator, model.parameters), states)
-            values = CompiledPolys(states, [num, den])(np.where(np.isfinite(flat), flat, np.nan))
+            values = CompiledPolys(states, [num, den])(flat)
             out[name] = (values[:, 0] / values[:, 1]).reshape(xs.shape[:2])
     return out
+
+
+def _over_states(cert: Any, variables: Any, states: Sequence[str]) -> dict[str, Any] | None:
+    """A map with functions' output certificate (``lam``, ``V`` over the certificate's ``variables``: the
+    states, the disturbances, then the auxiliaries, in deviations) with ``V``'s terms over the states alone,
+    as :func:`_bound_envelope` reads a polynomial map's; None when ``V`` cannot be read so (its variables do not
+    begin with the states, a term names another variable or is malformed): the bound on its tail alone."""
+    n = len(states)
+    try:
+        names = [str(v) for v in variables]
+        if names[:n] != list(states) or not isinstance(cert, Mapping):
+            return None
+        terms = []
+        for coefficient, exponents in cert["V"]["terms"]:
+            exps = [int(e) for e in exponents]
+            if len(exps) != len(names) or any(exps[n:]):  # (V is of the states: an auxiliary's term is no V)
+                return None
+            terms.append([coefficient, exps[:n]])
+    except (KeyError, TypeError, ValueError):
+        return None
+    return {"lam": cert.get("lam"), "V": {"terms": terms}}
 
 
 def _bound_envelope(cert: Mapping[str, Any] | None, bound: float, es: np.ndarray, states: list[str],

@@ -798,16 +798,11 @@ def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
     (:data:`lyapcheck.models.classes.registry.DISCRETE`; ``barrier`` and ``reach_avoid`` cross-checked by
     iterating, :func:`sweeps.crosscheck.check_sets`; ``sos_bound`` by iterating under disturbances,
     :meth:`sweeps.crosscheck._MapLoop.check_bound`), on a map with functions
-    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS` but :data:`MAP_FUNCTIONS_UNSWEPT`."""
+    :data:`lyapcheck.models.classes.registry.MAP_FUNCTIONS` (its ``sos_bound`` iterated on its true map under
+    disturbances)."""
     if isinstance(model, Model):
         return model_classes.DISCRETE
-    return tuple(c for c in model_classes.MAP_FUNCTIONS if c not in MAP_FUNCTIONS_UNSWEPT)
-
-
-#: the classes a map with functions takes at a point that its point sweep does not: a sweep cross-checks every
-#: certified point, and the cross-check of a map with functions under disturbances (its true map iterated with
-#: each disturbance policy) is not built
-MAP_FUNCTIONS_UNSWEPT: Final = ("sos_bound",)
+    return model_classes.MAP_FUNCTIONS
 
 
 #: the classes a box sweep of a polynomial map takes: those ``certify --box`` proves over a box of a map whose

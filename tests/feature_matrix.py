@@ -208,7 +208,7 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
             | cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
             | cells(("map_functions",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep points", "sweep boxes"))),
+                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep boxes"))),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
@@ -230,8 +230,7 @@ REFUSALS: tuple[Refusal, ...] = (
             "but `candidate` (which needs your V), each box iterated at its corners and random points (a set's "
             "starts inside it, a bound's under disturbances); a barrier or reach-avoid over a box is not built (a "
             "gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("reach_avoid",), CLASS_SURFACES)
-            | cells(("map_functions",), ("sos_bound",), ("sweep points",)),
+    Refusal(cells(("map_functions",), ("reach_avoid",), CLASS_SURFACES),
             ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
              'time = "discrete")', "takes these only"),
             "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
@@ -242,8 +241,8 @@ REFUSALS: tuple[Refusal, ...] = (
             "B` on the relations, exact; refuted by an unsafe iterate proved in balls) at a point, and `linearization` and `roa` over a `--box` (ball "
             "arithmetic with the parameters as balls); every other class is `not_applicable` until it is built for "
             "such a map; reports, point sweeps and box sweeps take it as a polynomial map (a box sweep: "
-            "`linearization` and `roa`, its true map iterated; a point sweep not `sos_bound`, whose cross-check "
-            "under disturbances is not built for a map with functions) (a gap, not a theorem)."),
+            "`linearization` and `roa`, its true map iterated; a point sweep's `sos_bound` its true map iterated "
+            "under disturbances within their bounds) (a gap, not a theorem)."),
     Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier"), ("--box", "sweep boxes")),
             ("over a box a discrete-time map with functions takes linearization and roa only", "takes these only"),
             "Over a `--box` (and in a box sweep) a map with functions takes `linearization` and `roa` only; its "
