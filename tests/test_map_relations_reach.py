@@ -1,4 +1,5 @@
-"""``reach_avoid`` on a discrete-time map with functions (issue 44; :mod:`lyapcheck.models.classes.map_relations_reach`).
+"""``reach_avoid`` on a discrete-time map with functions (issue 44;
+:mod:`lyapcheck.models.classes.map_relations_reach`).
 
 The tanh reach map (examples/models/discrete-tanh-reach-map.toml) is certified with a steps bound that the
 TRUE map (numpy's tanh, independent of the class's code) obeys from every sampled start of the initial disc:

@@ -358,5 +358,5 @@ def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
     return True, why
 
 
-__all__ = ["KIND", "map_sets", "steps_bound", "conditions", "check_map_reach", "reach_structure", "search_reach", "tighten",
-           "run", "verify"]
+__all__ = ["KIND", "map_sets", "steps_bound", "conditions", "check_map_reach", "reach_structure", "search_reach",
+           "tighten", "run", "verify"]

@@ -213,4 +213,5 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
 __all__ = ["verify_linearization_map", "verify_linearization_map_box", "verify_lyapunov_map", "verify_region_map",
            "verify_safety_map", "verify_bound_map",
            "verify_linearization_map_functions", "verify_lyapunov_map_functions", "verify_bound_map_functions",
-           "verify_barrier_map_functions", "verify_reach_avoid_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]
+           "verify_barrier_map_functions", "verify_reach_avoid_map_functions",
+           "verify_roa_map_functions", "verify_linearization_sampled"]
