@@ -171,3 +171,20 @@ def test_without_a_goal_or_with_a_goal_of_two_pieces_it_is_not_applicable() -> N
     two = REACH.read_text().replace('goal = ["x**2 + y**2 <= 0.04"]',
                                     'goal = [["x**2 + y**2 <= 0.04"], ["(x - 3)**2 + y**2 <= 0.04"]]')
     assert mrr.run(_map(two), Budget(60.0, "test")).status == "not_applicable"
+
+
+def test_a_point_sweep_cross_checks_the_certified_bound_on_the_true_map(certified: tuple[Path, dict[str, Any]]
+                                                                         ) -> None:
+    # a map with functions' point sweep takes reach_avoid (sweeps.spec: MAP_FUNCTIONS but sos_bound), and its
+    # cross-check iterates the true map against reach_steps_bound: no violation, and a bound of 1 step is caught
+    from sweeps.crosscheck import cross_check_point
+    from sweeps.spec import map_classes
+
+    assert "reach_avoid" in map_classes(_map(REACH))
+    _, doc = certified
+    found = cross_check_point(_map(REACH), doc, {}, starts=40, seed=[3])
+    assert found.violations == [] and found.trajectories >= 40 and 0 < found.reach_ratio <= 1
+    late = copy.deepcopy(doc)
+    late["conditions"]["reach_avoid"]["reach_steps_bound"] = 1
+    found = cross_check_point(_map(REACH), late, {}, starts=40, seed=[3])
+    assert any(v.startswith("reach_avoid") and "not in the goal by the certified 1 steps" in v for v in found.violations)
