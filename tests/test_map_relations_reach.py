@@ -187,4 +187,5 @@ def test_a_point_sweep_cross_checks_the_certified_bound_on_the_true_map(certifie
     late = copy.deepcopy(doc)
     late["conditions"]["reach_avoid"]["reach_steps_bound"] = 1
     found = cross_check_point(_map(REACH), late, {}, starts=40, seed=[3])
-    assert any(v.startswith("reach_avoid") and "not in the goal by the certified 1 steps" in v for v in found.violations)
+    assert any(v.startswith("reach_avoid") and "not in the goal by the certified 1 steps" in v
+               for v in found.violations)
