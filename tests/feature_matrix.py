@@ -230,24 +230,12 @@ REFUSALS: tuple[Refusal, ...] = (
             "but `candidate` (which needs your V), each box iterated at its corners and random points (a set's "
             "starts inside it, a bound's under disturbances); a barrier or reach-avoid over a box is not built (a "
             "gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("reach_avoid",), CLASS_SURFACES),
-            ("not taken yet on a discrete-time map with functions", 'not taken yet for a discrete-time map ([model] '
-             'time = "discrete")', "takes these only"),
-            "A discrete-time map with functions takes `linearization` (the exact Jacobian through the functions, "
-            "then the exact discrete-time test), `quadratic` and `sos_gas` (a V of the states with `V(F) <= (1 - mu) "
-            "V - W` on the recasting's relations, exact), `roa` (ball arithmetic on the true map), `candidate` "
-            "(your quadratic V, the same route), `sos_bound` (a V of the states with `V(F(x, d)) <= lam V + 1 - "
-            "lam` on the relations and the disturbances' box, exact) and `barrier` (a B of the states with `B(F) <= lam "
-            "B` on the relations, exact; refuted by an unsafe iterate proved in balls) at a point, and `linearization` and `roa` over a `--box` (ball "
-            "arithmetic with the parameters as balls); every other class is `not_applicable` until it is built for "
-            "such a map; reports, point sweeps and box sweeps take it as a polynomial map (a box sweep: "
-            "`linearization` and `roa`, its true map iterated; a point sweep's `sos_bound` its true map iterated "
-            "under disturbances within their bounds) (a gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier"), ("--box", "sweep boxes")),
+    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier", "reach_avoid"),
+                  ("--box", "sweep boxes")),
             ("over a box a discrete-time map with functions takes linearization and roa only", "takes these only"),
             "Over a `--box` (and in a box sweep) a map with functions takes `linearization` and `roa` only; its "
-            "`quadratic`, `sos_gas`, `sos_bound` and `barrier` are decided at a point (one V for every value of the "
-            "box, the parameters among the relations' "
+            "`quadratic`, `sos_gas`, `sos_bound`, `barrier` and `reach_avoid` are decided at a point (one V for every "
+            "value of the box, the parameters among the relations' "
             "variables, is not built: a gap, not a theorem)."),
 )
 

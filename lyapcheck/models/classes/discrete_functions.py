@@ -72,7 +72,7 @@ KIND: Final = DISCRETE_INTERVAL_KIND
 #: classes a map with functions takes, MAP_FUNCTIONS) on such a map
 NOT_YET: Final = ('not taken yet on a discrete-time map with functions ([model] time = "discrete" with sin, tanh, '
                   "[networks], ...): the classes taken are linearization, quadratic, sos_gas, roa, candidate, "
-                  "sos_bound and barrier")
+                  "sos_bound, barrier and reach_avoid")
 #: significant bits of a level tried
 LEVEL_BITS: Final = 12
 #: the first level tried: the ellipsoid this wide (in its widest state) ...

@@ -235,6 +235,8 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                run_field=_runs.reach_avoid_field, run_functions=_runs.reach_avoid_functions,
                verify_field=_field.verify_reach_avoid, verify_functions=_functions.verify_reach_avoid,
                run_map=_discrete.reach_avoid_map, verify_map=_vdiscrete.verify_safety_map,
+               run_map_functions=_discrete.reach_avoid_map_functions,
+               verify_map_functions=_vdiscrete.verify_reach_avoid_map_functions,
                figures=(Figure("reach_time_bound_s", "reach_time_bound_s",
                                "the goal is reached within this time, s"),)),
 )

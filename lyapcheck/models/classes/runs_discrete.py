@@ -164,6 +164,18 @@ def barrier_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Conditio
     return map_relations_safety.run_barrier(ctx.model, budget)
 
 
+def reach_avoid_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
+    """A V of the states falling by eps per step outside the goal on the recasting's relations
+    (:func:`lyapcheck.models.classes.map_relations_reach.run`); at a point only, never refuted."""
+    from lyapcheck.models.classes import map_relations_reach
+    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
+    from lyapcheck.results import ConditionResult
+
+    if ctx.box is not None:
+        return ConditionResult("reach_avoid", "not_applicable", NOT_OVER_BOX)
+    return map_relations_reach.run(ctx.model, budget)
+
+
 def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A quadratic V's largest level proved by ball arithmetic on the true map
     (:func:`lyapcheck.models.classes.discrete_functions.roa`); over a box, with its parameters as balls
@@ -196,4 +208,5 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
 __all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
            "barrier_map", "reach_avoid_map", "sos_bound_map",
            "linearization_map_functions", "quadratic_map_functions", "sos_gas_map_functions", "roa_map_functions",
-           "candidate_map_functions", "sos_bound_map_functions", "barrier_map_functions", "linearization_sampled"]
+           "candidate_map_functions", "sos_bound_map_functions", "barrier_map_functions",
+           "reach_avoid_map_functions", "linearization_sampled"]

@@ -162,6 +162,16 @@ def verify_barrier_map_functions(name: str, c: dict[str, Any], check: "MapFuncti
     return map_relations_safety.verify_barrier(check.model, _without_nominal_prefix(c))
 
 
+def verify_reach_avoid_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
+    """``reach_avoid``: the map, its relations and the sets re-derived, every identity re-checked exactly, the
+    steps bound ``floor(C / eps)`` (:func:`lyapcheck.models.classes.map_relations_reach.verify`; never refuted)."""
+    from lyapcheck.models.classes import map_relations_reach
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return map_relations_reach.verify(check.model, _without_nominal_prefix(c))
+
+
 def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
     """``roa``: the ``discrete_interval`` region proved again, cell for cell
     (:func:`lyapcheck.models.classes.discrete_functions.verify_roa`; over a box with its parameters as balls,
@@ -203,4 +213,5 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
 __all__ = ["verify_linearization_map", "verify_linearization_map_box", "verify_lyapunov_map", "verify_region_map",
            "verify_safety_map", "verify_bound_map",
            "verify_linearization_map_functions", "verify_lyapunov_map_functions", "verify_bound_map_functions",
-           "verify_barrier_map_functions", "verify_roa_map_functions", "verify_linearization_sampled"]
+           "verify_barrier_map_functions", "verify_reach_avoid_map_functions",
+           "verify_roa_map_functions", "verify_linearization_sampled"]
