@@ -423,10 +423,11 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
 def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | None, candidate: str | None,
                            limit: float, box: "ModelBox | None") -> ModelCertification:
     """:func:`certify_model` on a discrete-time map with functions: each class with a ``run_map_functions``
-    entry (:mod:`lyapcheck.models.classes.discrete_functions`: ``linearization`` and ``roa``;
+    entry (:mod:`lyapcheck.models.classes.discrete_functions`: ``linearization``, ``roa`` and ``candidate``;
     :mod:`lyapcheck.models.classes.map_relations`: ``quadratic`` and ``sos_gas``;
-    :mod:`lyapcheck.models.classes.map_relations_bounds`: ``sos_bound``) through the one
-    runner, every other one ``not_applicable`` in one line
+    :mod:`lyapcheck.models.classes.map_relations_bounds`: ``sos_bound``;
+    :mod:`lyapcheck.models.classes.map_relations_safety` and ``map_relations_reach``: ``barrier`` and
+    ``reach_avoid``) through the one runner, any other one ``not_applicable`` in one line
     (:data:`~lyapcheck.models.classes.discrete_functions.NOT_YET`); the document states the map's recasting
     (the loop of its displacement). Over a ``box`` (``model`` read at its centre) ``linearization`` and ``roa``
     hold for every value of it (:mod:`lyapcheck.models.classes.discrete_functions_box`: a box moving the fixed
