@@ -38,6 +38,7 @@ from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
 from lyapcheck.models.classes.claims import DISCRETE_REACH_KIND, discrete_reach_sentence
 from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations
+from lyapcheck.models.classes.map_relations_safety import map_sets, relations_and_sets
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, one, param, why_none
 from lyapcheck.results import ConditionResult
@@ -53,16 +54,6 @@ if TYPE_CHECKING:  # pragma: no cover
 KIND: Final = DISCRETE_REACH_KIND
 
 Pieces = Sequence[Sequence[Poly]]
-
-
-def map_sets(model: "RecastModel", m: MapOnRelations) -> dict[str, list[list[Poly]]]:
-    """The model's ``initial``, ``unsafe`` and ``goal`` sets in the map's ring, in the deviations."""
-    from lyapcheck.models.classes.barrier import relation_pieces
-    from lyapcheck.models.classes.recast_classes import base_loop
-
-    loop = base_loop(m.system, cylinder=False)
-    return {key: relation_pieces(loop, model.state_ring, model.sets[key], key)
-            for key in ("initial", "unsafe", "goal")}
 
 
 def steps_bound(C: Fraction, eps: Fraction) -> int:
@@ -257,11 +248,9 @@ def tighten(m: MapOnRelations, structure: Structure, degree: int, sets: Mapping[
 def run(model: "RecastModel", budget: Budget) -> ConditionResult:
     """``reach_avoid`` on a map with functions (module docstring): ``certified`` only after
     :func:`check_map_reach`, with the steps bound ``floor(C / eps)``; never ``refuted``."""
-    from lyapcheck import tolerances
     from lyapcheck.models.classes.claims import summary
     from lyapcheck.models.classes.lyapunov import terms_json
     from lyapcheck.models.classes.reach_avoid import goal_of_one_piece
-    from lyapcheck.models.engines.reasons import size_limit
 
     ruled = ds.no_sets("reach_avoid", model)
     if ruled is not None:
@@ -270,20 +259,11 @@ def run(model: "RecastModel", budget: Budget) -> ConditionResult:
     one_piece = goal_of_one_piece(model.sets["goal"])
     if one_piece is not None:
         return one_piece
-    try:
-        m = on_relations(model)
-    except NotTaken as exc:
-        return ConditionResult("reach_avoid", "not_applicable", f"not taken on this map with functions: {exc}")
-    if m.ring.nvars > tolerances.MAP_RELATIONS_VARIABLES:
-        none = reasons.reason("no reach-avoid certificate of the map was searched on the recasting's relations: "
-                              + size_limit(m.ring.nvars, "variables (states and functions)",
-                                           tolerances.MAP_RELATIONS_VARIABLES, "MAP_RELATIONS_VARIABLES"), ("fewer",))
-        return ConditionResult("reach_avoid", "not_certified", none.summary, property="reach_avoid",
-                               numbers=none.numbers({"time": "discrete"}))
-    try:
-        sets = map_sets(model, m)
-    except ValueError as exc:  # (a set of a disturbance: the map is read with its disturbances at 0)
-        return ConditionResult("reach_avoid", "not_applicable", f"not taken on this map with functions: {exc}")
+    ready = relations_and_sets("reach_avoid", model, "reach-avoid certificate", "reach_avoid",
+                               ("initial", "unsafe", "goal"))
+    if isinstance(ready, ConditionResult):
+        return ready
+    m, sets = ready
     search = Search(m.ring, budget)
     try:
         found, tried = search_reach(m, sets, search)
@@ -333,7 +313,7 @@ def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
         ring = m.ring
         if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != m.system.definitions():
             return False, "the certificate's variables or functions are not the map's"
-        sets = map_sets(model, m)
+        sets = map_sets(model, m, ("initial", "unsafe", "goal"))
         V = poly_from_json(ring, cert["V"], "V")
         eps, C = read_rational(cert["eps"], "eps"), read_rational(cert["C"], "C")
         wanted = conditions(m, V, eps, C, sets["initial"], sets["unsafe"], sets["goal"][0])
@@ -358,5 +338,5 @@ def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
     return True, why
 
 
-__all__ = ["KIND", "map_sets", "steps_bound", "conditions", "check_map_reach", "reach_structure", "search_reach",
+__all__ = ["KIND", "steps_bound", "conditions", "check_map_reach", "reach_structure", "search_reach",
            "tighten", "run", "verify"]

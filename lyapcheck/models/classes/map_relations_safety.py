@@ -42,6 +42,7 @@ from lyapcheck.sos.polynomials import Monomial, Poly, to_fmpq
 from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, full_blocks
 
 if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.results import Property
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
     from lyapcheck.models.language.recast import RecastModel
 
@@ -51,13 +52,39 @@ KIND: Final = DISCRETE_BARRIER_KIND
 Pieces = Sequence[Sequence[Poly]]
 
 
-def map_sets(model: "RecastModel", m: MapOnRelations) -> dict[str, list[list[Poly]]]:
-    """The model's ``initial`` and ``unsafe`` sets in the map's ring, in the deviations."""
+def map_sets(model: "RecastModel", m: MapOnRelations, keys: Sequence[str] = ("initial", "unsafe")
+             ) -> dict[str, list[list[Poly]]]:
+    """The model's sets named ``keys`` in the map's ring, in the deviations."""
     from lyapcheck.models.classes.barrier import relation_pieces
     from lyapcheck.models.classes.recast_classes import base_loop
 
     loop = base_loop(m.system, cylinder=False)
-    return {key: relation_pieces(loop, model.state_ring, model.sets[key], key) for key in ("initial", "unsafe")}
+    return {key: relation_pieces(loop, model.state_ring, model.sets[key], key) for key in keys}
+
+
+def relations_and_sets(name: str, model: "RecastModel", what: str, prop: "Property", keys: Sequence[str]
+                       ) -> tuple[MapOnRelations, dict[str, list[list[Poly]]]] | ConditionResult:
+    """What a safety class of a map with functions is searched on: the recasting's relations and the sets
+    ``keys`` in its ring; or its result where it is not searched (``not_applicable``: a map the relations do
+    not take, a set of a disturbance; ``not_certified``: more variables than
+    :data:`~lyapcheck.tolerances.MAP_RELATIONS_VARIABLES`). ``what``: the certificate the reason names."""
+    from lyapcheck import tolerances
+    from lyapcheck.models.engines.reasons import size_limit
+
+    try:
+        m = on_relations(model)
+    except NotTaken as exc:
+        return ConditionResult(name, "not_applicable", f"not taken on this map with functions: {exc}")
+    if m.ring.nvars > tolerances.MAP_RELATIONS_VARIABLES:
+        none = reasons.reason(f"no {what} of the map was searched on the recasting's relations: "
+                              + size_limit(m.ring.nvars, "variables (states and functions)",
+                                           tolerances.MAP_RELATIONS_VARIABLES, "MAP_RELATIONS_VARIABLES"), ("fewer",))
+        return ConditionResult(name, "not_certified", none.summary, property=prop,
+                               numbers=none.numbers({"time": "discrete"}))
+    try:
+        return m, map_sets(model, m, keys)
+    except ValueError as exc:  # (a set of a disturbance: the map is read with its disturbances at 0)
+        return ConditionResult(name, "not_applicable", f"not taken on this map with functions: {exc}")
 
 
 def step_of(m: MapOnRelations, B: Poly, lam: Fraction) -> Poly:
@@ -268,27 +295,15 @@ def _proofs_json(m: MapOnRelations, proofs: Mapping[str, "ConditionCertificate"]
 def run_barrier(model: "RecastModel", budget: Budget) -> ConditionResult:
     """``barrier`` on a map with functions (module docstring): the falsification first (``refuted`` with an
     iterate proved unsafe), then ``certified`` only after :func:`check_map_barrier`."""
-    from lyapcheck import tolerances
     from lyapcheck.models.classes.lyapunov import terms_json
-    from lyapcheck.models.engines.reasons import size_limit
 
     ruled = ds.no_sets("barrier", model)
     if ruled is not None:
         return ruled
-    try:
-        m = on_relations(model)
-    except NotTaken as exc:
-        return ConditionResult("barrier", "not_applicable", f"not taken on this map with functions: {exc}")
-    if m.ring.nvars > tolerances.MAP_RELATIONS_VARIABLES:
-        none = reasons.reason("no barrier of the map was searched on the recasting's relations: "
-                              + size_limit(m.ring.nvars, "variables (states and functions)",
-                                           tolerances.MAP_RELATIONS_VARIABLES, "MAP_RELATIONS_VARIABLES"), ("fewer",))
-        return ConditionResult("barrier", "not_certified", none.summary, property="safety",
-                               numbers=none.numbers({"time": "discrete"}))
-    try:
-        sets = map_sets(model, m)
-    except ValueError as exc:  # (a set of a disturbance: the map is read with its disturbances at 0)
-        return ConditionResult("barrier", "not_applicable", f"not taken on this map with functions: {exc}")
+    ready = relations_and_sets("barrier", model, "barrier", "safety", ("initial", "unsafe"))
+    if isinstance(ready, ConditionResult):
+        return ready
+    m, sets = ready
     found_cx = falsify(model, m, sets["initial"], sets["unsafe"])
     if found_cx is not None:
         return ds.refuted_result("barrier", model, found_cx)
