@@ -563,9 +563,19 @@ def unstable_corners(spec: ModelSweepSpec, box: Any) -> tuple[int, dict[str, str
         if lin.status == "refuted":
             count += 1
             if first is None:
-                where = ", ".join(f"{k} = {float(v):.6g}" for k, v in corner.items())
+                where = ", ".join(f"{k} = {value_text(v)}" for k, v in corner.items())
                 first = {"note": f"unstable at the corner {where}: {lin.summary}"}
     return count, first
+
+
+def value_text(value: Fraction) -> str:
+    """A parameter value as a note prints it: six significant digits where they are the value exactly, else the
+    exact fraction and its decimal (a split box's edge just above 3/2 must not read "1.5", a value that was not
+    refuted)."""
+    short = f"{float(value):.6g}"
+    if Fraction(short) == value:
+        return short
+    return f"{value.numerator}/{value.denominator} (about {float(value):.10g})"
 
 
 def classes_left(spec: ModelSweepSpec, unstable: dict[str, str] | None) -> tuple[str, ...]:

@@ -471,3 +471,18 @@ def test_a_region_of_attraction_family_is_proved_box_by_box(tmp_path: Path) -> N
     assert 0 < data["roa_ball_radius"][0] <= 1.0
     assert data["cross_check_trajectories"][0] == 12 and not data["soundness_violation"][0]
     assert data["cross_check_worst_rise"][0] <= 1e-5 and not math.isnan(data["cross_check_worst_rise"][0])
+
+
+def test_a_box_note_never_rounds_a_corner_onto_another_value() -> None:
+    """A split box's edge just above 3/2 is printed exactly, not as "1.5" (a value that was not refuted);
+    values that six digits state exactly stay short."""
+    from fractions import Fraction
+
+    from sweeps.evaluate import value_text
+
+    assert value_text(Fraction(3, 2)) == "1.5"
+    assert value_text(Fraction(-1, 2)) == "-0.5"
+    above = Fraction(3, 2) + Fraction(1, 2**30)
+    text = value_text(above)
+    assert text.startswith(f"{above.numerator}/{above.denominator}") and "1.5" != text
+    assert Fraction(text.split(" ")[0]) == above
