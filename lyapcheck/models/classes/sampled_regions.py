@@ -464,6 +464,10 @@ def _data(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix], found: Fo
             "radius": str(found.r), "level": str(found.level), "flow": found.flow.to_json()}
 
 
+#: the figures a ``roa`` condition of a sampled-data loop states (:func:`verify` compares each)
+FIGURES = ("level", "ball_radius", "intersample_factor", "remainder_L2", "a_priori_radius", "period_s")
+
+
 def _numbers(model: "SampledModel", found: Found) -> dict[str, Any]:
     return {"level": float(found.level), "ball_radius": float(found.r), "intersample_factor": float(found.flow.Ce),
             "remainder_L2": float(found.flow.L2), "a_priori_radius": float(found.flow.rho),
@@ -556,5 +560,5 @@ def verify(model: "SampledModel", c: dict[str, Any]) -> tuple[bool, str]:
     return True, why
 
 
-__all__ = ["KIND", "METHOD", "FlowBounds", "Decrease", "Found", "TrueLoop", "flow_bounds", "sampled_parts",
+__all__ = ["KIND", "METHOD", "FIGURES", "FlowBounds", "Decrease", "Found", "TrueLoop", "flow_bounds", "sampled_parts",
            "stein_margin", "decrease_of", "level_of", "search", "roa", "verify", "upper"]
