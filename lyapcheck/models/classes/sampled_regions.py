@@ -18,14 +18,18 @@ gradient and Hessian enclosures over a box):
    ``|e(t)| <= Ce |e(0)|`` with ``Ce = exp(Lx T) (1 + Lu Lk T)`` for ``0 <= t <= T`` as long as the path is
    in the box, and ``Ce r < rho`` keeps it there (a continuation argument);
 3. the variation of constants ``e(T) = exp(A T) e0 + Gamma v + int_0^T exp(A (T - s)) h(s) ds`` with
-   ``h = f - A e - B v`` bounded by its Hessian blocks over that box
-   (``|h_i| <= (a_i |e|^2 + 2 b_i |e| |v| + c_i |v|^2) / 2``) and ``|exp(A s)| <= exp(Lx s)``:
-   ``L2 = |Gamma| Lq + T exp(Lx T) Lh``;
+   ``h = f - A e - B v`` bounded equation by equation by its Hessian blocks over that box
+   (``|h_i| <= eta_i |e0|^2``, ``eta_i = (a_i Ce^2 + 2 b_i Ce Lk + c_i Lk^2) / 2``) and ``exp(A s)`` enclosed
+   for every ``s`` in ``[0, T]`` by one ball matrix: ``|R| <= L2 |e|^2`` with
+   ``L2 = |Gamma| Lq + T sum_i |col_i exp(A s)| eta_i``, column by column, so that a nonlinearity entering
+   one equation pays only its column; ``W`` and ``LP`` are the same after ``A_T^T P`` and after ``L^T``
+   (``P = L L^T``, a ball Cholesky factor);
 4. ``V(e) = e^T P e`` with a rational ``P`` (the discrete Lyapunov equation solved in floats at the ball
    centre of ``A_T`` and rounded), ``P - A_T^T P A_T >= lambda_Q I`` proved for every matrix of ``A_T``'s balls
    (the centre's exact positive-definiteness test after a Gershgorin bound of the radii), and
-   ``V(Phi_T(x)) - V(x) <= -(lambda_Q - 2 |A_T^T P| L2 r - |P| L2^2 r^2) |e|^2``; the bracket is proved > 0
-   exactly (every figure an upper bound, a rational);
+   ``V(Phi_T(x)) - V(x) = -e^T (P - A_T^T P A_T) e + 2 e^T A_T^T P R + R^T P R
+   <= -(lambda_Q - 2 W r - LP^2 r^2) |e|^2``; the bracket is proved > 0 exactly (every figure an upper
+   bound, a rational);
 5. the level ``c = lambda_P r^2`` with ``P - lambda_P I >= 0`` proved exactly: ``{V <= c}`` lies in the ball,
    so every start of it at a sampling instant stays in it and converges to the equilibrium, and between
    two instants ``|x(t) - x_eq| <= Ce |x(t_k) - x_eq|`` (the inter-sample excursion, step 2).
@@ -171,19 +175,77 @@ class TrueLoop:
 
 @dataclass(frozen=True)
 class FlowBounds:
-    """Step 1 to 3's figures on the ball ``|e| <= r``, each an exact upper bound (module docstring)."""
+    """Step 1 to 4's figures on the ball ``|e| <= r``, each an exact upper bound (module docstring): ``L2``
+    bounds ``|R(e)| / |e|^2``, ``W`` bounds ``|A_T^T P R(e)| / |e|^2`` (the cross term of V's decrease) and
+    ``LP`` bounds ``|L^T R(e)| / |e|^2`` with ``P = L L^T`` (so ``R^T P R <= LP^2 |e|^4``)."""
 
     Lk: Fraction
     Lq: Fraction
     Lx: Fraction
     Lu: Fraction
     Ce: Fraction
-    Lh: Fraction
     L2: Fraction
+    W: Fraction
+    LP: Fraction
     rho: Fraction
 
     def to_json(self) -> dict[str, str]:
-        return {k: str(getattr(self, k)) for k in ("Lk", "Lq", "Lx", "Lu", "Ce", "Lh", "L2", "rho")}
+        return {k: str(getattr(self, k)) for k in FLOW_FIGURES}
+
+
+#: the flow's figures a certificate states, in order
+FLOW_FIGURES = ("Lk", "Lq", "Lx", "Lu", "Ce", "L2", "W", "LP", "rho")
+
+
+@dataclass(frozen=True)
+class Weights:
+    """The linear parts' norms the remainder is weighed by (upper bounds, balls): ``|Gamma|``, each column
+    of ``exp(A s)`` over ``0 <= s <= T``, and the same after ``X = A_T^T P`` (for ``W``) and after ``L^T``
+    (``P = L L^T``, for ``LP``)."""
+
+    gamma: Any
+    columns: tuple[Any, ...]
+    x_gamma: Any
+    x_columns: tuple[Any, ...]
+    l_gamma: Any
+    l_columns: tuple[Any, ...]
+
+
+def _cholesky(P: list[list[Any]]) -> list[list[Any]] | None:
+    """``L`` lower triangular with ``P = L L^T``, in balls (every symmetric matrix of the balls has its
+    factor in ``L``'s balls), or None when a pivot is not proved > 0."""
+    n = len(P)
+    L = [[flint.arb(0)] * n for _ in range(n)]
+    for j in range(n):
+        d = P[j][j] - sum((L[j][k] * L[j][k] for k in range(j)), flint.arb(0))
+        if not d > 0:
+            return None
+        L[j][j] = d.sqrt()
+        for i in range(j + 1, n):
+            L[i][j] = (P[i][j] - sum((L[i][k] * L[j][k] for k in range(j)), flint.arb(0))) / L[j][j]
+    return L
+
+
+def weights(AT: list[list[Any]], gamma: list[list[Any]], E: list[list[Any]], P: Matrix) -> Weights | None:
+    """:class:`Weights` of ``P`` (``E``: the balls of ``exp(A s)`` for every ``s`` in ``[0, T]``); None when
+    ``P``'s Cholesky factor is not proved."""
+    n = len(P)
+    Pb = [[ball(x) for x in row] for row in P]
+    X = [[sum((AT[k][i] * Pb[k][j] for k in range(n)), flint.arb(0)) for j in range(n)] for i in range(n)]
+    L = _cholesky(Pb)
+    if L is None:
+        return None
+    LT = [[L[j][i] for j in range(n)] for i in range(n)]
+
+    def times(L: list[list[Any]], R: list[list[Any]]) -> list[list[Any]]:
+        return [[sum((L[i][k] * R[k][j] for k in range(len(R))), flint.arb(0)) for j in range(len(R[0]))]
+                for i in range(len(L))] if R and R[0] else [[] for _ in L]
+
+    def columns(M: list[list[Any]]) -> tuple[Any, ...]:
+        return tuple(_frobenius([[row[j]] for row in M]) for j in range(n))
+
+    return Weights(_frobenius(gamma), columns(E), _frobenius(times(X, gamma)), columns(times(X, E)),
+                   _frobenius(times(LT, gamma)), columns(times(LT, E)))
 
 
 def _derivatives(jets: Sequence[Jet], what: str) -> tuple[list[list[Any]], list[list[list[Any]]]] | str:
@@ -197,10 +259,15 @@ def _derivatives(jets: Sequence[Jet], what: str) -> tuple[list[list[Any]], list[
     return grads, hessians
 
 
-def flow_bounds(loop: TrueLoop, period: Fraction, gamma_norm: Any, r: Fraction, rho: Fraction | None
+def flow_bounds(loop: TrueLoop, period: Fraction, w: Weights, r: Fraction, rho: Fraction | None
                 ) -> FlowBounds | str:
-    """Steps 1 to 3 on ``|e| <= r``; ``rho``: the a priori box's half-width (None: found by
-    :data:`~lyapcheck.tolerances.SAMPLED_APRIORI_TRIES` enlargements); or why not."""
+    """Steps 1 to 3 on ``|e| <= r`` and the cross term ``W``; ``rho``: the a priori box's half-width (None:
+    found by :data:`~lyapcheck.tolerances.SAMPLED_APRIORI_TRIES` enlargements); or why not.
+
+    With ``|h_i(s)| <= eta_i |e0|^2`` (each right-hand side's Hessian blocks over the a priori box) and
+    ``R = Gamma q(e0) + int_0^T exp(A (T - s)) h(s) ds``: ``|R| <= |Gamma| Lq |e0|^2 + T sum_i |exp(A s)_i|
+    eta_i |e0|^2`` column by column (a plant whose nonlinearity enters one equation pays only that column),
+    and the same after ``A_T^T P`` for ``W``."""
     n, m = loop.n, loop.m
     T = ball(period)
     half = flint.arb(1) / 2
@@ -213,7 +280,7 @@ def flow_bounds(loop: TrueLoop, period: Fraction, gamma_norm: Any, r: Fraction, 
     Lq = half * flint.arb(sum((_frobenius(H) ** 2 for H in hessians), flint.arb(0))).sqrt()
     v_half = upper(Lk * ball(r))
     current = rho if rho is not None else r * tol.SAMPLED_APRIORI_START
-    for attempt in range(1 if rho is not None else tol.SAMPLED_APRIORI_TRIES):
+    for _ in range(1 if rho is not None else tol.SAMPLED_APRIORI_TRIES):
         e_box = [flint.arb(0, ball(current)) for _ in range(n)]
         v_box = [flint.arb(0, ball(v_half)) for _ in range(m)]
         plant = _derivatives(loop.plant(e_box, v_box), "the plant")
@@ -222,19 +289,19 @@ def flow_bounds(loop: TrueLoop, period: Fraction, gamma_norm: Any, r: Fraction, 
         pg, ph = plant
         Lx = _frobenius([g[:n] for g in pg])
         Lu = _frobenius([g[n:] for g in pg])
-        growth = (Lx * T).exp()
-        Ce = growth * (1 + Lu * Lk * T)
+        Ce = (Lx * T).exp() * (1 + Lu * Lk * T)
         if upper(Ce * ball(r)) < current:
-            total = flint.arb(0)
+            eta = []
             for H in ph:
                 a = _frobenius([row[:n] for row in H[:n]])
                 b = _frobenius([row[n:] for row in H[:n]])
                 c = _frobenius([row[n:] for row in H[n:]])
-                t = half * (a * Ce * Ce + 2 * b * Ce * Lk + c * Lk * Lk)
-                total += t * t
-            Lh = total.sqrt()
-            L2 = gamma_norm * Lq + T * growth * Lh
-            return FlowBounds(upper(Lk), upper(Lq), upper(Lx), upper(Lu), upper(Ce), upper(Lh), upper(L2), current)
+                eta.append(half * (a * Ce * Ce + 2 * b * Ce * Lk + c * Lk * Lk))
+            L2 = w.gamma * Lq + T * sum((col * e for col, e in zip(w.columns, eta)), flint.arb(0))
+            W = w.x_gamma * Lq + T * sum((col * e for col, e in zip(w.x_columns, eta)), flint.arb(0))
+            LP = w.l_gamma * Lq + T * sum((col * e for col, e in zip(w.l_columns, eta)), flint.arb(0))
+            return FlowBounds(upper(Lk), upper(Lq), upper(Lx), upper(Lu), upper(Ce), upper(L2), upper(W), upper(LP),
+                              current)
         if rho is not None:
             break
         # (the flow may leave the box: enlarge it past the excursion found, a dyadic so the figure stays short)
@@ -245,15 +312,15 @@ def flow_bounds(loop: TrueLoop, period: Fraction, gamma_norm: Any, r: Fraction, 
 
 # -- step 4 and 5: V, its decrease and the level ----------------------------------------------------------
 
-def sampled_parts(A: Matrix, B: Matrix, K: Matrix, period: Fraction) -> tuple[list[list[Any]], Any]:
-    """``A_T`` as balls and an upper bound of ``|Gamma|`` (one augmented exponential, as
-    :func:`lyapcheck.models.classes.sampled.sampled_jacobian`), at the current precision."""
+def sampled_parts(A: Matrix, B: Matrix, K: Matrix, period: Fraction
+                  ) -> tuple[list[list[Any]], list[list[Any]], list[list[Any]]]:
+    """``A_T``, ``Gamma = int_0^T exp(A s) ds B`` and ``exp(A s)`` for every ``s`` in ``[0, T]`` (one ball
+    matrix: the exponential of ``A`` times the ball ``[0, T]``), as balls at the current precision (``A_T``
+    as :func:`lyapcheck.models.classes.sampled.sampled_jacobian` makes it)."""
     from lyapcheck.models.classes.sampled import sampled_jacobian
 
     n, m = len(A), len(B[0]) if B else 0
     AT = sampled_jacobian(A, B, K, period)
-    if m == 0:
-        return [[AT[i, j] for j in range(n)] for i in range(n)], flint.arb(0)
     aug = [[Fraction(0)] * (n + m) for _ in range(n + m)]
     for i in range(n):
         for j in range(n):
@@ -261,8 +328,9 @@ def sampled_parts(A: Matrix, B: Matrix, K: Matrix, period: Fraction) -> tuple[li
         for j in range(m):
             aug[i][n + j] = B[i][j] * period
     E = flint.arb_mat([[ball(x) for x in row] for row in aug]).exp()
-    gamma = [[E[i, n + j] for j in range(m)] for i in range(n)]
-    return [[AT[i, j] for j in range(n)] for i in range(n)], _frobenius(gamma)
+    within = (flint.arb_mat([[ball(x) for x in row] for row in A]) * flint.arb(ball(period) / 2, ball(period) / 2)).exp()
+    return ([[AT[i, j] for j in range(n)] for i in range(n)], [[E[i, n + j] for j in range(m)] for i in range(n)],
+            [[within[i, j] for j in range(n)] for i in range(n)])
 
 
 def stein_margin(P: Matrix, AT: list[list[Any]], lam: Fraction) -> bool:
@@ -299,25 +367,21 @@ def _lower_eigen(P: Matrix, test: Callable[[Fraction], bool], estimate: float) -
 
 @dataclass(frozen=True)
 class Decrease:
-    """What step 4 needs of ``P`` besides the remainder: ``lambda_Q``, ``|A_T^T P|`` and ``|P|`` (upper bounds)."""
+    """What step 4 needs of ``P`` besides the flow: ``lambda_Q``, proved."""
 
     lambda_Q: Fraction
-    a: Fraction
-    p: Fraction
 
     def margin(self, flow: FlowBounds, r: Fraction) -> Fraction:
-        """``lambda_Q - 2 a L2 r - p L2^2 r^2``: > 0 proves V's decrease on ``0 < |e| <= r``."""
-        return self.lambda_Q - 2 * self.a * flow.L2 * r - self.p * flow.L2 ** 2 * r * r
+        """``lambda_Q - 2 W r - LP^2 r^2``: > 0 proves V's decrease on ``0 < |e| <= r``, as
+        ``V(Phi_T(x)) - V(x) = -e^T (P - A_T^T P A_T) e + 2 e^T A_T^T P R + R^T P R``."""
+        return self.lambda_Q - 2 * flow.W * r - flow.LP ** 2 * r * r
 
 
 def decrease_of(P: Matrix, AT: list[list[Any]], lambda_Q: Fraction) -> Decrease | str:
     """Step 4's figures of ``P``, ``lambda_Q`` proved; or why not."""
     if not stein_margin(P, AT, lambda_Q):
         return "P - A_T^T P A_T >= lambda_Q I is not proved for the balls of A_T"
-    n = len(P)
-    Pb = [[ball(x) for x in row] for row in P]
-    ATP = [[sum((AT[k][i] * Pb[k][j] for k in range(n)), flint.arb(0)) for j in range(n)] for i in range(n)]
-    return Decrease(lambda_Q, upper(_frobenius(ATP)), upper(_frobenius(Pb)))
+    return Decrease(lambda_Q)
 
 
 def level_of(P: Matrix, lambda_P: Fraction, r: Fraction) -> Fraction | None:
@@ -392,7 +456,7 @@ def search(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix]) -> Found
     period = model.period
 
     def run() -> Found | str:
-        AT, gamma_norm = sampled_parts(A, B, K, period)
+        AT, gamma, E = sampled_parts(A, B, K, period)
         proposal = _float_p(AT)
         if proposal is None:
             return ("the Jacobian over one period is not Schur at its ball centre (see linearization): no quadratic V "
@@ -406,9 +470,12 @@ def search(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix]) -> Found
         if isinstance(decrease, str):  # pragma: no cover - lambda_Q was just proved
             return decrease
         loop = TrueLoop(model)
+        w = weights(AT, gamma, E, P)
+        if w is None:  # pragma: no cover - P - lambda_P I >= 0 was proved above
+            return "P's Cholesky factor is not proved in ball arithmetic"
 
         def attempt(r: Fraction) -> FlowBounds | None:
-            flow = flow_bounds(loop, period, gamma_norm, r, None)
+            flow = flow_bounds(loop, period, w, r, None)
             return flow if isinstance(flow, FlowBounds) and decrease.margin(flow, r) > 0 else None
 
         r = tol.SAMPLED_RADIUS_START
@@ -432,7 +499,7 @@ def search(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix]) -> Found
                     high = 2 * r
                     break
             if best is None:
-                why = flow_bounds(loop, period, gamma_norm, r, None)
+                why = flow_bounds(loop, period, w, r, None)
                 return ("no ball around the equilibrium was proved: " + why if isinstance(why, str) else
                         "no ball around the equilibrium was proved: the remainder of the flow over one period is "
                         f"too large for V's decrease margin even at |e| <= {float(r):.3g}")
@@ -524,12 +591,12 @@ def verify(model: "SampledModel", c: dict[str, Any]) -> tuple[bool, str]:
     if not r > 0 or not lambda_Q > 0:
         return False, "the radius and lambda_Q must be > 0"
 
-    if set(stated) != set(FlowBounds.__dataclass_fields__):
-        return False, "the flow figures must be " + ", ".join(FlowBounds.__dataclass_fields__)
+    if set(stated) != set(FLOW_FIGURES):
+        return False, "the flow figures must be " + ", ".join(FLOW_FIGURES)
     claimed = FlowBounds(**stated)
 
     def run() -> Decrease | str:
-        AT, gamma_norm = sampled_parts(*parts, model.period)
+        AT, gamma, E = sampled_parts(*parts, model.period)
         decrease = decrease_of(P, AT, lambda_Q)
         if isinstance(decrease, str):
             return decrease
@@ -537,10 +604,13 @@ def verify(model: "SampledModel", c: dict[str, Any]) -> tuple[bool, str]:
             return "P - lambda_P I >= 0 is not proved"
         if not level <= lambda_P * r * r:
             return f"the level {level} exceeds lambda_P r^2 = {lambda_P * r * r}: {{V <= level}} may leave the ball"
-        flow = flow_bounds(TrueLoop(model), model.period, gamma_norm, r, claimed.rho)
+        w = weights(AT, gamma, E, P)
+        if w is None:
+            return "P's Cholesky factor is not proved in ball arithmetic"
+        flow = flow_bounds(TrueLoop(model), model.period, w, r, claimed.rho)
         if isinstance(flow, str):
             return flow
-        smaller = [k for k in FlowBounds.__dataclass_fields__ if k != "rho" and getattr(claimed, k) < getattr(flow, k)]
+        smaller = [k for k in FLOW_FIGURES if k != "rho" and getattr(claimed, k) < getattr(flow, k)]
         if smaller:
             return f"the stated flow figure(s) {', '.join(smaller)} are below the bounds re-derived"
         if not decrease.margin(claimed, r) > 0:
@@ -560,5 +630,5 @@ def verify(model: "SampledModel", c: dict[str, Any]) -> tuple[bool, str]:
     return True, why
 
 
-__all__ = ["KIND", "METHOD", "FIGURES", "FlowBounds", "Decrease", "Found", "TrueLoop", "flow_bounds", "sampled_parts",
+__all__ = ["KIND", "METHOD", "FIGURES", "FLOW_FIGURES", "Weights", "weights", "FlowBounds", "Decrease", "Found", "TrueLoop", "flow_bounds", "sampled_parts",
            "stein_margin", "decrease_of", "level_of", "search", "roa", "verify", "upper"]
