@@ -198,3 +198,35 @@ def test_verify_runs_the_one_flow_for_a_sampled_loop() -> None:
     bad = json.loads(json.dumps(doc))
     bad["conditions"]["quadratic"]["status"] = "certified"
     assert any(row.check == "quadratic" and not row.ok for row in verify(bad).checks)
+
+
+@pytest.mark.slow
+def test_every_field_of_the_region_given_a_wrong_value_fails_in_its_row() -> None:
+    """Each leaf of the roa condition replaced by a value of another form: verify answers (no exception
+    escapes) and the document is not valid."""
+    from lyapcheck.api import certify, verify
+
+    doc = certify(model=PD, classes="roa").document
+
+    def leaves(node: object, path: tuple[object, ...] = ()):  # type: ignore[no-untyped-def]
+        if isinstance(node, dict):
+            for k, v in node.items():
+                yield from leaves(v, (*path, k))
+        elif isinstance(node, list):
+            for i, v in enumerate(node):
+                yield from leaves(v, (*path, i))
+        else:
+            yield path
+
+    paths = list(leaves(doc["conditions"]["roa"]))
+    assert len(paths) > 20
+    for path in paths:
+        for wrong in ("x", -1, None, [], "-1/3"):
+            bad = json.loads(json.dumps(doc))
+            node = bad["conditions"]["roa"]
+            for key in path[:-1]:
+                node = node[key]
+            if node[path[-1]] == wrong:
+                continue
+            node[path[-1]] = wrong
+            assert not verify(bad).valid, (path, wrong)

@@ -139,16 +139,18 @@ class TrueLoop:
         else:
             self._field = BallLoop(plant.system).field
         laws = [model.controller[u] for u in model.controls]
+        self._variables: Callable[[Sequence[Any]], list[Any]]
         if model.controller_system is None:
             ring = Ring(model.states)
             x_eq = [ball(q) for q in model.equilibrium]
 
-            def variables(e: list[Any]) -> list[Any]:
+            def variables(e: Sequence[Any]) -> list[Any]:
                 return [c + ei for c, ei in zip(x_eq, e)]
+
+            self._variables = variables
         else:
             ring = model.controller_system.ring
-            variables = BallLoop(model.controller_system).variables
-        self._variables = variables
+            self._variables = BallLoop(model.controller_system).variables
         self._laws = [(CompiledPoly(ring, r.numerator), CompiledPoly(ring, r.denominator)) for r in laws]
 
     def plant(self, e: Sequence[Any], v: Sequence[Any]) -> list[Jet]:
