@@ -385,3 +385,6 @@ SAMPLED_RADIUS_DOUBLINGS: Final = 14
 SAMPLED_RADIUS_BISECTIONS: Final = 10
 #: the significant bits a sampled-data roa's flow figures are rounded up to (upper bounds stay upper bounds)
 SAMPLED_FIGURE_BITS: Final = 32
+#: passes of a sampled-data roa's excursion bound by the variation of constants after Gronwall's (each one
+#: tightens the Hessian's weight and then the bound itself; a pass that does not lower it ends them)
+SAMPLED_EXCURSION_PASSES: Final = 3

@@ -211,6 +211,9 @@ class Weights:
     x_columns: tuple[Any, ...]
     l_gamma: Any
     l_columns: tuple[Any, ...]
+    #: ``sup |exp(A t) + Gamma(t) K|`` and ``sup |Gamma(t)|`` over ``[0, T]`` (the linear excursion)
+    mu: Any
+    gamma_t: Any
 
 
 def _cholesky(P: list[list[Any]]) -> list[list[Any]] | None:
@@ -228,9 +231,9 @@ def _cholesky(P: list[list[Any]]) -> list[list[Any]] | None:
     return L
 
 
-def weights(AT: list[list[Any]], gamma: list[list[Any]], E: list[list[Any]], P: Matrix) -> Weights | None:
-    """:class:`Weights` of ``P`` (``E``: the balls of ``exp(A s)`` for every ``s`` in ``[0, T]``); None when
-    ``P``'s Cholesky factor is not proved."""
+def weights(parts: LinearParts, P: Matrix) -> Weights | None:
+    """:class:`Weights` of ``P``; None when ``P``'s Cholesky factor is not proved."""
+    AT, gamma, E = parts.AT, parts.gamma, parts.E
     n = len(P)
     Pb = [[ball(x) for x in row] for row in P]
     X = [[sum((AT[k][i] * Pb[k][j] for k in range(n)), flint.arb(0)) for j in range(n)] for i in range(n)]
@@ -247,7 +250,8 @@ def weights(AT: list[list[Any]], gamma: list[list[Any]], E: list[list[Any]], P: 
         return tuple(_frobenius([[row[j]] for row in M]) for j in range(n))
 
     return Weights(_frobenius(gamma), columns(E), _frobenius(times(X, gamma)), columns(times(X, E)),
-                   _frobenius(times(LT, gamma)), columns(times(LT, E)))
+                   _frobenius(times(LT, gamma)), columns(times(LT, E)), _spectral(parts.growth),
+                   _frobenius(parts.gamma_t))
 
 
 def _derivatives(jets: Sequence[Jet], what: str) -> tuple[list[list[Any]], list[list[list[Any]]]] | str:
@@ -293,12 +297,23 @@ def flow_bounds(loop: TrueLoop, period: Fraction, w: Weights, r: Fraction, rho: 
         Lu = _frobenius([g[n:] for g in pg])
         Ce = (Lx * T).exp() * (1 + Lu * Lk * T)
         if upper(Ce * ball(r)) < current:
-            eta = []
-            for H in ph:
-                a = _frobenius([row[:n] for row in H[:n]])
-                b = _frobenius([row[n:] for row in H[:n]])
-                c = _frobenius([row[n:] for row in H[n:]])
-                eta.append(half * (a * Ce * Ce + 2 * b * Ce * Lk + c * Lk * Lk))
+            blocks = [(_frobenius([row[:n] for row in H[:n]]), _frobenius([row[n:] for row in H[:n]]),
+                       _frobenius([row[n:] for row in H[n:]])) for H in ph]
+
+            def etas(C: Any) -> list[Any]:
+                return [half * (a * C * C + 2 * b * C * Lk + c * Lk * Lk) for a, b, c in blocks]
+
+            eta = etas(Ce)
+            for _ in range(tol.SAMPLED_EXCURSION_PASSES):
+                # the excursion again by the variation of constants, now that the path is known to stay in
+                # the box: |e(t)| <= (mu + (|Gamma(t)| Lq + T sum_i |exp(A s)_i| eta_i) r) |e0|, mu the linear
+                # loop's own growth over the period (near 1 for a short period, where Gronwall's is not)
+                again = w.mu + (w.gamma_t * Lq + T * sum((col * e for col, e in zip(w.columns, eta)),
+                                                         flint.arb(0))) * ball(r)
+                if not again.upper() < Ce.upper():
+                    break
+                Ce = again
+                eta = etas(Ce)
             L2 = w.gamma * Lq + T * sum((col * e for col, e in zip(w.columns, eta)), flint.arb(0))
             W = w.x_gamma * Lq + T * sum((col * e for col, e in zip(w.x_columns, eta)), flint.arb(0))
             LP = w.l_gamma * Lq + T * sum((col * e for col, e in zip(w.l_columns, eta)), flint.arb(0))
@@ -314,11 +329,22 @@ def flow_bounds(loop: TrueLoop, period: Fraction, w: Weights, r: Fraction, rho: 
 
 # -- step 4 and 5: V, its decrease and the level ----------------------------------------------------------
 
-def sampled_parts(A: Matrix, B: Matrix, K: Matrix, period: Fraction
-                  ) -> tuple[list[list[Any]], list[list[Any]], list[list[Any]]]:
-    """``A_T``, ``Gamma = int_0^T exp(A s) ds B`` and ``exp(A s)`` for every ``s`` in ``[0, T]`` (one ball
-    matrix: the exponential of ``A`` times the ball ``[0, T]``), as balls at the current precision (``A_T``
-    as :func:`lyapcheck.models.classes.sampled.sampled_jacobian` makes it)."""
+@dataclass(frozen=True)
+class LinearParts:
+    """The linear loop over one period, in balls at the current precision: ``A_T``, ``Gamma`` (its input
+    block, ``int_0^T exp(A s) ds B``), and for every ``t`` in ``[0, T]`` at once (the exponential of the
+    matrix times the ball ``[0, T]``): ``exp(A t)``, ``Gamma(t)`` and the linear loop's state map
+    ``exp(A t) + Gamma(t) K``."""
+
+    AT: list[list[Any]]
+    gamma: list[list[Any]]
+    E: list[list[Any]]
+    gamma_t: list[list[Any]]
+    growth: list[list[Any]]
+
+
+def sampled_parts(A: Matrix, B: Matrix, K: Matrix, period: Fraction) -> LinearParts:
+    """:class:`LinearParts` (``A_T`` as :func:`lyapcheck.models.classes.sampled.sampled_jacobian` makes it)."""
     from lyapcheck.models.classes.sampled import sampled_jacobian
 
     n, m = len(A), len(B[0]) if B else 0
@@ -326,13 +352,30 @@ def sampled_parts(A: Matrix, B: Matrix, K: Matrix, period: Fraction
     aug = [[Fraction(0)] * (n + m) for _ in range(n + m)]
     for i in range(n):
         for j in range(n):
-            aug[i][j] = A[i][j] * period
+            aug[i][j] = A[i][j]
         for j in range(m):
-            aug[i][n + j] = B[i][j] * period
-    E = flint.arb_mat([[ball(x) for x in row] for row in aug]).exp()
-    within = (flint.arb_mat([[ball(x) for x in row] for row in A]) * flint.arb(ball(period) / 2, ball(period) / 2)).exp()
-    return ([[AT[i, j] for j in range(n)] for i in range(n)], [[E[i, n + j] for j in range(m)] for i in range(n)],
-            [[within[i, j] for j in range(n)] for i in range(n)])
+            aug[i][n + j] = B[i][j]
+    M = flint.arb_mat([[ball(x) for x in row] for row in aug])
+    E = (M * ball(period)).exp()
+    within = (M * flint.arb(ball(period) / 2, ball(period) / 2)).exp()
+    Kb = [[ball(x) for x in row] for row in K]
+    gamma_t = [[within[i, n + j] for j in range(m)] for i in range(n)]
+    growth = [[within[i, j] + sum((gamma_t[i][k] * Kb[k][j] for k in range(m)), flint.arb(0)) for j in range(n)]
+              for i in range(n)]
+    return LinearParts([[AT[i, j] for j in range(n)] for i in range(n)], [[E[i, n + j] for j in range(m)]
+                                                                           for i in range(n)],
+                       [[within[i, j] for j in range(n)] for i in range(n)], gamma_t, growth)
+
+
+def _spectral(M: list[list[Any]]) -> Any:
+    """An upper bound of the spectral norm of every matrix of the balls: the smaller of the Frobenius norm
+    and the square root of a Gershgorin bound of ``M^T M`` (tight for a matrix near the identity)."""
+    n = len(M[0]) if M else 0
+    gram = [[sum((M[k][i] * M[k][j] for k in range(len(M))), flint.arb(0)) for j in range(n)] for i in range(n)]
+    gershgorin = max((sum((abs(x).upper() for x in row), flint.arb(0)) for row in gram), default=flint.arb(0))
+    frobenius = _frobenius(M)
+    root = gershgorin.sqrt()
+    return root if root < frobenius else frobenius
 
 
 def stein_margin(P: Matrix, AT: list[list[Any]], lam: Fraction) -> bool:
@@ -458,7 +501,8 @@ def search(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix]) -> Found
     period = model.period
 
     def run() -> Found | str:
-        AT, gamma, E = sampled_parts(A, B, K, period)
+        linear = sampled_parts(A, B, K, period)
+        AT = linear.AT
         proposal = _float_p(AT)
         if proposal is None:
             return ("the Jacobian over one period is not Schur at its ball centre (see linearization): no quadratic V "
@@ -472,7 +516,7 @@ def search(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix]) -> Found
         if isinstance(decrease, str):  # pragma: no cover - lambda_Q was just proved
             return decrease
         loop = TrueLoop(model)
-        w = weights(AT, gamma, E, P)
+        w = weights(linear, P)
         if w is None:  # pragma: no cover - P - lambda_P I >= 0 was proved above
             return "P's Cholesky factor is not proved in ball arithmetic"
 
@@ -598,15 +642,15 @@ def verify(model: "SampledModel", c: dict[str, Any]) -> tuple[bool, str]:
     claimed = FlowBounds(**stated)
 
     def run() -> Decrease | str:
-        AT, gamma, E = sampled_parts(*parts, model.period)
-        decrease = decrease_of(P, AT, lambda_Q)
+        linear = sampled_parts(*parts, model.period)
+        decrease = decrease_of(P, linear.AT, lambda_Q)
         if isinstance(decrease, str):
             return decrease
         if level_of(P, lambda_P, r) is None:
             return "P - lambda_P I >= 0 is not proved"
         if not level <= lambda_P * r * r:
             return f"the level {level} exceeds lambda_P r^2 = {lambda_P * r * r}: {{V <= level}} may leave the ball"
-        w = weights(AT, gamma, E, P)
+        w = weights(linear, P)
         if w is None:
             return "P's Cholesky factor is not proved in ball arithmetic"
         flow = flow_bounds(TrueLoop(model), model.period, w, r, claimed.rho)
@@ -632,5 +676,5 @@ def verify(model: "SampledModel", c: dict[str, Any]) -> tuple[bool, str]:
     return True, why
 
 
-__all__ = ["KIND", "METHOD", "FIGURES", "FLOW_FIGURES", "Weights", "weights", "FlowBounds", "Decrease", "Found", "TrueLoop", "flow_bounds", "sampled_parts",
+__all__ = ["KIND", "METHOD", "FIGURES", "FLOW_FIGURES", "LinearParts", "Weights", "weights", "FlowBounds", "Decrease", "Found", "TrueLoop", "flow_bounds", "sampled_parts",
            "stein_margin", "decrease_of", "level_of", "search", "roa", "verify", "upper"]
