@@ -210,7 +210,7 @@ def roa_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResult":
     (:func:`lyapcheck.models.classes.sampled_regions.roa`)."""
     from lyapcheck.models.classes import sampled_regions
 
-    return sampled_regions.roa(ctx.model)
+    return sampled_regions.roa(ctx.model, budget)
 
 
 __all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",

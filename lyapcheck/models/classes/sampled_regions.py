@@ -55,6 +55,7 @@ from lyapcheck.models.engines.interval_field import Jet, apply, ball
 from lyapcheck.results import ConditionResult
 
 if TYPE_CHECKING:
+    from lyapcheck.models.engines.search import Budget
     from lyapcheck.models.language.sampling import SampledModel
 
 Matrix = list[list[Fraction]]
@@ -494,9 +495,11 @@ class Found:
     level: Fraction
 
 
-def search(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix]) -> Found | str:
+def search(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix], budget: "Budget | None" = None
+           ) -> Found | str:
     """Steps 1 to 5 with the largest radius found (module docstring), at
-    :data:`~lyapcheck.tolerances.SAMPLED_REGION_BITS`; or why none."""
+    :data:`~lyapcheck.tolerances.SAMPLED_REGION_BITS`; or why none. Its work is bounded by counts (the
+    radii tried); ``budget``, the class's safety net, is checked before each radius."""
     A, B, K = parts
     period = model.period
 
@@ -521,6 +524,8 @@ def search(model: "SampledModel", parts: tuple[Matrix, Matrix, Matrix]) -> Found
             return "P's Cholesky factor is not proved in ball arithmetic"
 
         def attempt(r: Fraction) -> FlowBounds | None:
+            if budget is not None:
+                budget.check()
             flow = flow_bounds(loop, period, w, r, None)
             return flow if isinstance(flow, FlowBounds) and decrease.margin(flow, r) > 0 else None
 
@@ -587,7 +592,7 @@ def _numbers(model: "SampledModel", found: Found) -> dict[str, Any]:
             "period_s": float(model.period)}
 
 
-def roa(model: "SampledModel") -> ConditionResult:
+def roa(model: "SampledModel", budget: "Budget | None" = None) -> ConditionResult:
     """The sampled-data loop's region of attraction (module docstring): ``certified`` once steps 1 to 5
     passed, else ``not_certified`` (or ``not_applicable`` without an exact Jacobian) saying why."""
     from lyapcheck.models.classes.claims import sampled_region_sentence
@@ -595,7 +600,7 @@ def roa(model: "SampledModel") -> ConditionResult:
     parts = _linear(model)
     if isinstance(parts, str):
         return ConditionResult("roa", "not_applicable", parts, property="ROA")
-    found = search(model, parts)
+    found = search(model, parts, budget)
     if isinstance(found, str):
         return ConditionResult("roa", "not_certified", found, property="ROA")
     data = _data(model, parts, found)
