@@ -388,3 +388,7 @@ SAMPLED_FIGURE_BITS: Final = 32
 #: passes of a sampled-data roa's excursion bound by the variation of constants after Gronwall's (each one
 #: tightens the Hessian's weight and then the bound itself; a pass that does not lower it ends them)
 SAMPLED_EXCURSION_PASSES: Final = 3
+#: a sampled-data roa's bootstrap box: the excursion factor proved, times this, is the candidate C, and the
+#: box's half-width is C r times it again (strictly outside the ball C r). Resolution only: the bootstrap is
+#: taken only when the bound it proves is below C
+SAMPLED_BOOTSTRAP_SLACK: Final = 1.05

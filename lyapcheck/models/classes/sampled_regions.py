@@ -315,6 +315,23 @@ def flow_bounds(loop: TrueLoop, period: Fraction, w: Weights, r: Fraction, rho: 
                     break
                 Ce = again
                 eta = etas(Ce)
+            # a smaller box around the excursion just proved, by a bootstrap: with the Hessians over the box
+            # |e_i| <= C r (C a little above Ce), a bound C' < C by the variation of constants holds on every
+            # [0, t] where |e| <= C |e0| held, so that set of times is open and closed: all of [0, T]
+            C = Ce * tol.SAMPLED_BOOTSTRAP_SLACK
+            inner = _dyadic(float(upper(C * ball(r))) * tol.SAMPLED_BOOTSTRAP_SLACK, 20)
+            if inner < current:
+                e_inner = [flint.arb(0, ball(inner)) for _ in range(n)]
+                tight = _derivatives(loop.plant(e_inner, v_box), "the plant")
+                if not isinstance(tight, str) and upper(C * ball(r)) < inner:
+                    inner_blocks = [(_frobenius([row[:n] for row in H[:n]]), _frobenius([row[n:] for row in H[:n]]),
+                                     _frobenius([row[n:] for row in H[n:]])) for H in tight[1]]
+                    inner_eta = [half * (a * C * C + 2 * b * C * Lk + c * Lk * Lk) for a, b, c in inner_blocks]
+                    again = w.mu + (w.gamma_t * Lq + T * sum((col * e for col, e in zip(w.columns, inner_eta)),
+                                                             flint.arb(0))) * ball(r)
+                    if again.upper() < C.lower() and again.upper() < Ce.upper():
+                        Ce = again
+                        eta = [half * (a * Ce * Ce + 2 * b * Ce * Lk + c * Lk * Lk) for a, b, c in inner_blocks]
             L2 = w.gamma * Lq + T * sum((col * e for col, e in zip(w.columns, eta)), flint.arb(0))
             W = w.x_gamma * Lq + T * sum((col * e for col, e in zip(w.x_columns, eta)), flint.arb(0))
             LP = w.l_gamma * Lq + T * sum((col * e for col, e in zip(w.l_columns, eta)), flint.arb(0))
