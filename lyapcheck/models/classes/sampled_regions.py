@@ -16,7 +16,11 @@ gradient and Hessian enclosures over a box):
 2. an a priori enclosure of the flow over one period: on the box ``|e_i| <= rho``, ``|v_j| <= Lk r`` the
    field grows at most as ``|f| <= Lx |e| + Lu |v|`` (its Jacobian blocks' sup norms), so by Gronwall
    ``|e(t)| <= Ce |e(0)|`` with ``Ce = exp(Lx T) (1 + Lu Lk T)`` for ``0 <= t <= T`` as long as the path is
-   in the box, and ``Ce r < rho`` keeps it there (a continuation argument);
+   in the box, and ``Ce r < rho`` keeps it there (a continuation argument). Once the path is known to stay
+   in the box, ``Ce`` is tightened by step 3's variation of constants (the linear loop's own growth
+   ``sup |exp(A t) + Gamma(t) K|`` plus the remainder's), and the Hessians are then taken over a smaller box
+   around the ball ``Ce r`` by a bootstrap (a bound below the assumed one on every ``[0, t]`` where the
+   assumed one held: that set of times is open and closed);
 3. the variation of constants ``e(T) = exp(A T) e0 + Gamma v + int_0^T exp(A (T - s)) h(s) ds`` with
    ``h = f - A e - B v`` bounded equation by equation by its Hessian blocks over that box
    (``|h_i| <= eta_i |e0|^2``, ``eta_i = (a_i Ce^2 + 2 b_i Ce Lk + c_i Lk^2) / 2``) and ``exp(A s)`` enclosed
