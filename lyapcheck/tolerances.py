@@ -363,3 +363,32 @@ PIECEWISE_PAIR_FORMS: Final = 30
 PIECEWISE_MAX_KINKS: Final = 32
 #: significant bits P, lambda and nu are rounded to before the exact check
 PIECEWISE_BITS: Final = 24
+
+#: a sampled-data loop's roa (lyapcheck.models.classes.sampled_regions): the working precision of its ball
+#: arithmetic, in bits, and the most a certificate may ask verify to use. Resolution only: every bound is an
+#: enclosure at any precision; 128 bits keep the rounding far below the figures' own slack
+SAMPLED_REGION_BITS: Final = 128
+SAMPLED_REGION_MAX_BITS: Final = 1024
+#: the a priori box of the flow over one period: first |e_i| <= START r, then, while the Gronwall excursion
+#: Ce r does not fit in it, GROWTH times that excursion, at most TRIES boxes. Time only: a box is accepted
+#: only when the excursion proved on it lies strictly inside it
+SAMPLED_APRIORI_START: Final = Fraction(3, 2)
+SAMPLED_APRIORI_GROWTH: Final = 1.25
+SAMPLED_APRIORI_TRIES: Final = 8
+#: the shares of a floating-point least eigenvalue tried as its proved lower bound (largest first)
+SAMPLED_EIGEN_SHARES: Final = (0.999, 0.99, 0.9, 0.5, 0.1)
+#: the radius search: from START (in the states' SI units), doubled at most DOUBLINGS times while it
+#: passes (halved as often while it does not), then BISECTIONS bisections; each try is a few jet evaluations
+#: over one box (milliseconds). Resolution only: the radius reported is the one proved
+SAMPLED_RADIUS_START: Final = Fraction(1, 64)
+SAMPLED_RADIUS_DOUBLINGS: Final = 14
+SAMPLED_RADIUS_BISECTIONS: Final = 10
+#: the significant bits a sampled-data roa's flow figures are rounded up to (upper bounds stay upper bounds)
+SAMPLED_FIGURE_BITS: Final = 32
+#: passes of a sampled-data roa's excursion bound by the variation of constants after Gronwall's (each one
+#: tightens the Hessian's weight and then the bound itself; a pass that does not lower it ends them)
+SAMPLED_EXCURSION_PASSES: Final = 3
+#: a sampled-data roa's bootstrap box: the excursion factor proved, times this, is the candidate C, and the
+#: box's half-width is C r times it again (strictly outside the ball C r). Resolution only: the bootstrap is
+#: taken only when the bound it proves is below C
+SAMPLED_BOOTSTRAP_SLACK: Final = 1.05

@@ -68,11 +68,13 @@ def test_the_examples_certify_and_refute_as_their_comments_say(tmp_path: Path) -
     code, text = _invoke("certify", str(STABLE), "--out", str(out))
     assert code == 0, text
     doc = json.loads(out.read_text())
-    assert doc["verdict"] == "certified_local"
+    # (the region of attraction on the true flow, roa, makes the verdict more than local)
+    assert doc["verdict"] == "certified"
     assert doc["conditions"]["linearization"]["status"] == "certified"
     assert "period 0.02 s" in doc["conditions"]["linearization"]["summary"]
     assert doc["sampling"]["period"] == "1/50" and doc["sampling"]["controller"] == {"u": "-Kp*theta - Kd*omega"}
-    assert {doc["conditions"][c]["status"] for c in ("quadratic", "sos_gas", "roa")} == {"not_applicable"}
+    assert {doc["conditions"][c]["status"] for c in ("quadratic", "sos_gas")} == {"not_applicable"}
+    assert doc["conditions"]["roa"]["status"] == "certified"
     assert _invoke("verify", str(out))[0] == 0
 
     out = tmp_path / "slow.json"
@@ -80,6 +82,7 @@ def test_the_examples_certify_and_refute_as_their_comments_say(tmp_path: Path) -
     assert code == 1, text
     doc = json.loads(out.read_text())
     assert doc["verdict"] == "unstable"
+    assert doc["conditions"]["roa"]["status"] == "not_certified"  # (no V decreases near an unstable point)
     assert "modulus > 1" in doc["answers"]["stability"]["text"]
     assert "positive real part" not in doc["answers"]["stability"]["text"]
     assert _invoke("verify", str(out))[0] == 0
@@ -101,8 +104,8 @@ def test_a_tampered_document_fails_verify() -> None:
             bad["conditions"]["linearization"]["summary"] += " globally"
         elif change == "controller":
             bad["sampling"]["controller"]["u"] = "-Kp*theta"
-        else:
-            bad["verdict"] = "certified"
+        else:  # (the document's verdict is "certified": a region is proved besides the linearization)
+            bad["verdict"] = "certified_local"
         assert not verify(bad).valid, change
     # the period in the model text itself, with its hash updated: the stored answer no longer follows
     bad = json.loads(json.dumps(doc))
@@ -134,7 +137,7 @@ def test_a_polynomial_plant_matches_the_floating_point_critical_period(tmp_path:
     critical = _critical_period(np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]]),
                                 np.array([[-1.0, -1.0]]), 10.0)
     below, above = f"{critical * 0.999:.6f}", f"{critical * 1.001:.6f}"
-    assert certify(model=path, settings={"T": below}).document["verdict"] == "certified_local"
+    assert certify(model=path, settings={"T": below}).document["verdict"] == "certified"  # (linearization and roa)
     assert certify(model=path, settings={"T": above}).document["verdict"] == "unstable"
 
 
@@ -149,7 +152,7 @@ def test_a_non_zero_equilibrium_uses_the_controls_value_there(tmp_path: Path) ->
     model = load_sampled(path)
     assert model.control_equilibrium == (Fraction(1),)
     assert linear_parts(model) == ([[Fraction(-1)]], [[Fraction(1)]], [[Fraction(-2)]])
-    assert certify(model=path).document["verdict"] == "certified_local"
+    assert certify(model=path).document["verdict"] == "certified"  # (linearization and roa)
     path.write_text(path.read_text().replace('u = "1 - k*(x - 1)"', 'u = "-k*x"'))
     code, text = _invoke("certify", str(path))
     assert code == 2 and "[equilibrium]" in text and "Traceback" not in text

@@ -7,9 +7,9 @@ the certificate **re-checked exactly** on the spot
 (:func:`lyapcheck.models.surfaces.certificate.verify_document`), the command line and the model file
 verbatim. Its own parts: the sampling period (as given and exact), the hold and the controller's laws
 with the controls at the equilibrium (the document's ``sampling`` table), and the staircase simulation
-that ``lyapcheck simulate --plot`` draws (:mod:`reports.sampled_figures`). No phase portrait and no
-certified region: the loop is a plant under held controls, whose claims are about its states at the
-sampling instants.
+that ``lyapcheck simulate --plot`` draws (:mod:`reports.sampled_figures`). No phase portrait and no drawn
+region: the loop is a plant under held controls, whose claims are about its states at the sampling
+instants (a certified ``roa``'s set and inter-sample bound are stated in its sentence, in the table).
 
 The model text is re-read only by the sampled-data parser
 (:func:`lyapcheck.models.language.sampling.parse_sampled`, the model file's whitelist over Python's ``ast``)

@@ -324,6 +324,25 @@ def sampled_linearization_sentence(status: str, period: Fraction) -> str:
     raise ValueError(f"a sampled-data linearization states nothing when {status!r}")
 
 
+#: the certificate kind of a sampled-data loop's roa (lyapcheck.models.classes.sampled_regions)
+SAMPLED_REGION_KIND = "sampled_region"
+
+
+def sampled_region_sentence(period: Fraction, cert: Mapping[str, Any]) -> str:
+    """The claim of a sampled-data loop's ``roa`` certificate (:mod:`lyapcheck.models.classes.sampled_regions`):
+    the set at the sampling instants, the ball it lies in and the inter-sample excursion, each figure rounded
+    the safe way (the level and the radius down, the excursion factor up)."""
+    level = read_rational(cert["level"], "level")
+    radius = read_rational(cert["radius"], "radius")
+    factor = read_rational(cert["flow"]["Ce"], "Ce")
+    return (f"region of attraction of the sampled-data loop (zero-order hold, period {seconds_text(period)} s): every "
+            f"start x(t_k) in {{V <= {rounded(level, 6, 'down')}}} (V = e^T P e, inside |x - x_eq| <= "
+            f"{rounded(radius, 6, 'down')}) stays in it at every sampling instant and converges to the equilibrium, "
+            f"and between samples |x(t) - x_eq| <= {rounded(factor, 6, 'up')} |x(t_k) - x_eq| (V(Phi_T(x)) < V(x) "
+            "proved by ball arithmetic on the true flow over one period: its remainder bounded by Gronwall and the "
+            "field's Hessian)")
+
+
 #: the claim of a map's linearization over a box (lyapcheck.models.classes.discrete_lyapunov.run_linearization_box;
 #: the summary puts "for every <box>: " in front)
 DISCRETE_BOX_STEIN_SENTENCE = ("every eigenvalue of the map's Jacobian at the fixed point has modulus < 1 (one P > 0 "
@@ -388,6 +407,8 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
                                           read_rational(cert["mu"]), figures)
     if kind == DISCRETE_REGION_KIND:
         return discrete_region_sentence(name, _number(condition, "level"))
+    if kind == SAMPLED_REGION_KIND:
+        return sampled_region_sentence(read_rational(cert["period"], "period"), cert)
     if kind == DISCRETE_INTERVAL_KIND:
         return discrete_interval_sentence(name, read_rational(cert["level"]), "parameter_box" in cert)
     if kind in ("sublevel", "quadratic_ball"):
@@ -661,4 +682,5 @@ __all__ = ["summary", "roa_after_gas", "GAS_CLASSES", "box_words", "box_prefix",
            "v_expression", "sentence_of", "recast_reach_time", "lyapunov_sentence", "interval_sentence", "SET_NAMES", "DISTURBANCE_PREFIX", "TIME_UNIT",
            "RATE_UNIT", "DISCRETE_BARRIER_KIND", "DISCRETE_BARRIER_SENTENCE",
            "DISCRETE_REACH_KIND", "DISCRETE_BOUND_KIND", "discrete_reach_sentence", "SAMPLED_METHOD",
-           "sampled_linearization_sentence", "seconds_text"]
+           "sampled_linearization_sentence", "seconds_text",
+           "SAMPLED_REGION_KIND", "sampled_region_sentence"]

@@ -208,6 +208,7 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region,
                run_map=_discrete.roa_map, verify_map=_vdiscrete.verify_region_map,
                run_map_functions=_discrete.roa_map_functions, verify_map_functions=_vdiscrete.verify_roa_map_functions,
+               run_sampled=_discrete.roa_sampled, verify_sampled=_vdiscrete.verify_roa_sampled,
                figures=(Figure("level", "level", "the certified region of attraction is {V <= level}"),
                         Figure("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI"))),
     ModelClass("candidate", "stability", "ROA", over_box=False, stability=True, user_given=True,

@@ -205,8 +205,16 @@ def linearization_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResu
     return sampled.linearization(ctx.model)
 
 
+def roa_sampled(ctx: "SampledRun", budget: "Budget") -> "ConditionResult":
+    """A region of attraction of the sampled-data loop on its true flow over one period
+    (:func:`lyapcheck.models.classes.sampled_regions.roa`)."""
+    from lyapcheck.models.classes import sampled_regions
+
+    return sampled_regions.roa(ctx.model, budget)
+
+
 __all__ = ["linearization_map", "linearization_map_box", "quadratic_map", "sos_gas_map", "roa_map", "candidate_map",
            "barrier_map", "reach_avoid_map", "sos_bound_map",
            "linearization_map_functions", "quadratic_map_functions", "sos_gas_map_functions", "roa_map_functions",
            "candidate_map_functions", "sos_bound_map_functions", "barrier_map_functions",
-           "reach_avoid_map_functions", "linearization_sampled"]
+           "reach_avoid_map_functions", "linearization_sampled", "roa_sampled"]

@@ -210,8 +210,19 @@ def verify_linearization_sampled(name: str, c: dict[str, Any], check: "SampledCh
     return sampled.verify_linearization(check.model, c["status"], _data(c))
 
 
+def verify_roa_sampled(name: str, c: dict[str, Any], check: "SampledCheck") -> tuple[bool, str]:
+    """``roa``: the region re-derived on the true flow over one period from the model text
+    (:func:`lyapcheck.models.classes.sampled_regions.verify`)."""
+    from lyapcheck.models.classes import sampled_regions
+
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    return sampled_regions.verify(check.model, c)
+
+
 __all__ = ["verify_linearization_map", "verify_linearization_map_box", "verify_lyapunov_map", "verify_region_map",
            "verify_safety_map", "verify_bound_map",
            "verify_linearization_map_functions", "verify_lyapunov_map_functions", "verify_bound_map_functions",
            "verify_barrier_map_functions", "verify_reach_avoid_map_functions",
-           "verify_roa_map_functions", "verify_linearization_sampled"]
+           "verify_roa_map_functions", "verify_linearization_sampled",
+           "verify_roa_sampled"]

@@ -109,11 +109,8 @@ def verify_document(doc: dict[str, Any]) -> list[Row]:
         raise InputFileError(f"model certificate has schema_version {doc.get('schema_version')!r}; this lyapcheck "
                              f"reads {SCHEMA_VERSION}")
     try:
-        if isinstance(doc.get("sampling"), dict):  # a sampled-data loop (lyapcheck.models.surfaces.sampled_run)
-            from lyapcheck.models.surfaces.sampled_run import verify_sampled
-
-            return verify_sampled(doc)
-        model, rows = _read_model(doc)
+        # (a sampled-data loop is read by its own reader, then runs the same steps: its kind, verify.SAMPLED)
+        model, rows = _read_sampled(doc) if isinstance(doc.get("sampling"), dict) else _read_model(doc)
         if model is None:
             return rows
         from lyapcheck.models.surfaces.verify import verify_model
@@ -159,6 +156,36 @@ def _read_model(doc: dict[str, Any]) -> tuple[Any, list[Row]]:
         from lyapcheck.models.language.networks import check_stated_files
 
         rows.append(("networks", *check_stated_files(part.get("networks"), getattr(model, "networks", ()))))
+    return model, rows
+
+
+def _read_sampled(doc: dict[str, Any]) -> tuple[Any, list[Row]]:
+    """:func:`_read_model` for a sampled-data loop's document (a ``sampling`` table): the model text read
+    again by the sampled-data reader (:func:`lyapcheck.models.language.sampling.parse_sampled`) and the same
+    first rows (its SHA-256 and parse, the stated parameters and equilibrium, with no disturbances and no
+    candidate, which such a loop never has; the declared states; the networks' files)."""
+    from lyapcheck.errors import ModelFileError
+    from lyapcheck.models.language.networks import check_stated_files
+    from lyapcheck.models.language.sampling import parse_sampled
+    from lyapcheck.models.surfaces.stated import check_declared
+
+    part = doc["model"]
+    text = part["text"]
+    if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
+        return None, [("model", False, "the model text does not match its SHA-256: the text was changed")]
+    try:
+        model = parse_sampled(text, part.get("file", "<certificate>"), doc.get("overrides") or {})
+    except ModelFileError as exc:
+        return None, [("model", False, f"the stored model text no longer parses as a sampled-data loop: {exc}")]
+    rows: list[Row] = [("model", True, "the model text matches its SHA-256 and parses as a sampled-data loop")]
+    same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
+            and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"]
+            and doc.get("disturbances") == {} and doc.get("candidate") is None)
+    rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
+                 "the stated parameters, equilibrium, disturbances or candidate differ from the model text's"))
+    rows.append(check_declared(doc, model))
+    if model.networks or "networks" in part:  # the files read again now are the ones certified
+        rows.append(("networks", *check_stated_files(part.get("networks"), model.networks)))
     return model, rows
 
 

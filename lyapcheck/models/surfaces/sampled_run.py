@@ -1,18 +1,20 @@
-"""``certify`` and ``verify`` of a sampled-data model file (issue 44, item 2).
+"""``certify`` of a sampled-data model file (issue 44, item 2), and its document.
 
 A sampled-data loop is decided by its linearization over one sampling period
-(:mod:`lyapcheck.models.classes.sampled`). The other classes state conditions on a continuous field
-or a map that this loop does not have in closed form (the flow over one period); each is
-``not_applicable``, saying so, rather than answered for the emulated continuous loop, which is
-another system.
+(:mod:`lyapcheck.models.classes.sampled`) and, on its true flow over one period, by a region of attraction
+at the sampling instants with a bound on the excursion between them
+(:mod:`lyapcheck.models.classes.sampled_regions`). The other classes state conditions on a continuous
+field or a map that this loop does not have in closed form; each is ``not_applicable``, saying so, rather
+than answered for the emulated continuous loop, which is another system.
 
 The document has the keys of every model certificate (:func:`lyapcheck.models.surfaces.certificate.build_document`)
 with a ``sampling`` table in place of ``field``/``recast``: the period (exact seconds, and as given),
-the controller's laws as written and the controls' values at the equilibrium. ``verify`` reads the
-model text again, re-derives ``A``, ``B``, ``K`` and the period from it, re-runs the decision
-(milliseconds) and compares each condition with the document's, then the verdict and the answers. A
-controller with ``[networks.NAME]`` has each network file's SHA-256 in ``model.networks`` (as a continuous
-loop's certificate), and ``verify`` fails when a file now holds another network.
+the controller's laws as written and the controls' values at the equilibrium. ``verify`` runs the one flow
+of every kind of loop (:data:`lyapcheck.models.surfaces.verify.SAMPLED`): the model text read again, the
+``sampling`` table, each decided condition's figures, sentence and proof through its class's entry, then
+the verdict and the answers. A controller with ``[networks.NAME]`` has each network file's SHA-256 in
+``model.networks`` (as a continuous loop's certificate), and ``verify`` fails when a file now holds another
+network.
 """
 
 from __future__ import annotations
@@ -37,7 +39,8 @@ DEFAULT_CLASSES = ("linearization", "quadratic", "sos_gas", "roa")
 
 def _not_yet(name: str) -> str:
     return (f"{name} is not decided for sampled-data loops yet: the loop's flow over one period has no closed form "
-            "to prove it on; its linearization over one period is decided (linearization)")
+            "to prove it on; its linearization over one period (linearization) and a region of attraction on the "
+            "true flow (roa) are decided")
 
 
 def certify_sampled(model: SampledModel, classes: str | Sequence[str] | None = None) -> dict[str, ConditionResult]:
@@ -114,57 +117,4 @@ def is_sampled_document(doc: dict[str, Any]) -> bool:
     return isinstance(doc.get("sampling"), dict)
 
 
-def verify_sampled(doc: dict[str, Any]) -> list[Row]:
-    """Re-check a sampled-data loop's document (module docstring); (check, ok, message) rows."""
-    from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.classes.contexts import SampledCheck
-    from lyapcheck.models.classes.registry import verify
-    from lyapcheck.models.language.sampling import parse_sampled
-    from lyapcheck.models.surfaces.documents import with_verdict
-    from lyapcheck.models.surfaces.stated import check_declared
-
-    part = doc["model"]
-    text = part["text"]
-    if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
-        return [("model", False, "the model text does not match its SHA-256: the text was changed")]
-    try:
-        model = parse_sampled(text, part.get("file", "<certificate>"), doc.get("overrides") or {})
-    except ModelFileError as exc:
-        return [("model", False, f"the stored model text no longer parses as a sampled-data loop: {exc}")]
-    rows: list[Row] = [("model", True, "the model text matches its SHA-256 and parses as a sampled-data loop")]
-    same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
-            and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"]
-            and doc.get("disturbances") == {} and doc.get("candidate") is None)
-    rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
-                 "the stated parameters, equilibrium, disturbances or candidate differ from the model text's"))
-    rows.append(check_declared(doc, model))
-    if model.networks or "networks" in part:  # the files read again now are the ones certified
-        from lyapcheck.models.language.networks import check_stated_files
-
-        rows.append(("networks", *check_stated_files(part.get("networks"), model.networks)))
-    stated_sampling = doc["sampling"] == model.to_json()
-    rows.append(("sampling", stated_sampling, "the period, the controller and its equilibrium values as stated"
-                 if stated_sampling else "sampling: the stated period or controller differs from the model text's"))
-    conditions: dict[str, Any] = doc["conditions"]
-    if not isinstance(conditions, dict) or any(name not in NAMES for name in conditions):
-        rows.append(("conditions", False, "the conditions must be named by classes"))
-        return rows
-    derived = certify_sampled(model, list(conditions))
-    check = SampledCheck(model=model)
-    for name, stated in conditions.items():
-        again = derived[name].to_json()
-        estimate = "spectral_radius_estimate"  # floating point, claims nothing: left as stated
-        same_claim = {k: v for k, v in stated.items() if k != estimate} == {k: v for k, v in again.items()
-                                                                              if k != estimate}
-        ok, why = same_claim, "re-derived from the model text: the same answer, summary and data"
-        if same_claim and stated.get("status") in ("certified", "refuted"):  # its class's exact check
-            ok, why = verify(name, stated, check)
-        elif not same_claim:
-            why = (f"stated '{stated.get('status')}' ({str(stated.get('summary'))[:80]}...) but the model gives "
-                   f"'{again['status']}' with other data or figures")
-        rows.append((name, ok, why if ok else f"{name}: {why}"))
-    return with_verdict(doc, rows)
-
-
-__all__ = ["DEFAULT_CLASSES", "build_sampled_document", "certify_sampled", "is_sampled_document", "network_files",
-           "verify_sampled"]
+__all__ = ["DEFAULT_CLASSES", "build_sampled_document", "certify_sampled", "is_sampled_document", "network_files"]

@@ -21,10 +21,11 @@ figures); :func:`verify_model` then runs the same steps on every loop, in this o
    text, the summaries and the stated figures (:mod:`lyapcheck.models.surfaces.stated`);
 7. the verdict and the answers (:func:`lyapcheck.models.surfaces.documents.with_verdict`).
 
-A kind of loop (:data:`FIELD`, :data:`MAP`, :data:`FUNCTIONS`, :data:`MAP_FUNCTIONS`; :func:`loop_kind`)
-supplies its part of each step as a small function, or None where the step has nothing to check on it (a
-map's counterexamples are its classes' own checks, step 3). A sampled-data loop's document is re-derived
-whole instead (:func:`lyapcheck.models.surfaces.sampled_run.verify_sampled`). Nothing here calls a solver.
+A kind of loop (:data:`FIELD`, :data:`MAP`, :data:`FUNCTIONS`, :data:`MAP_FUNCTIONS`, :data:`SAMPLED`;
+:func:`loop_kind`) supplies its part of each step as a small function, or None where the step has nothing to
+check on it (a map's counterexamples are its classes' own checks, step 3; a sampled-data loop's first step
+is its ``sampling`` table, read by :func:`lyapcheck.models.surfaces.certificate.verify_document` with the
+sampled-data reader). Nothing here calls a solver.
 """
 
 from __future__ import annotations
@@ -545,6 +546,65 @@ def _conditions_of_map_functions(doc: dict[str, Any], model: Any, box: Box, rows
     return True
 
 
+# -- a sampled-data loop ---------------------------------------------------------------------------------
+
+def _prelude_of_sampled(doc: dict[str, Any], model: Any, rows: list[Row]) -> None:
+    """The ``sampling`` table is the model text's: the period, the controller's laws as written and the
+    controls' values at the equilibrium."""
+    same = doc["sampling"] == model.to_json()
+    rows.append(("sampling", same, "the period, the controller and its equilibrium values as stated" if same else
+                 "sampling: the stated period or controller differs from the model text's"))
+
+
+def _read_box_sampled(doc: dict[str, Any], model: Any, rows: list[Row]) -> Box | Stop:
+    """A sampled-data loop is certified at its parameters' values only: a document with a box fails."""
+    if "box" in doc:
+        rows.append(("box", False, "a sampled-data loop is certified at a point: its document has no box"))
+        return Stop(verdict=False)
+    return Box()
+
+
+def _conditions_of_sampled(doc: dict[str, Any], model: Any, box: Box, rows: list[Row]) -> bool:
+    """A sampled-data loop's conditions, each named by a class; each decided one's property, figures and
+    sentence held to its certificate (:func:`~lyapcheck.models.surfaces.stated.check_stated`,
+    :func:`~lyapcheck.models.classes.claims.summary`), then its proof by its class's entry with a
+    :class:`~lyapcheck.models.classes.contexts.SampledCheck` (the linear parts, the period and, for ``roa``,
+    the flow's bounds re-derived from the model text). A class without a sampled-data check fails its claim."""
+    from lyapcheck.models.classes.claims import SAMPLED_REGION_KIND, summary
+    from lyapcheck.models.classes.contexts import SampledCheck
+    from lyapcheck.models.classes.registry import NAMES, verify
+    from lyapcheck.models.surfaces.stated import Stated, check_stated
+
+    conditions = doc["conditions"]
+    if not isinstance(conditions, dict) or any(name not in NAMES or not isinstance(c, dict)
+                                               for name, c in conditions.items()):
+        rows.append(("conditions", False, "the conditions must be named by classes"))
+        return False
+    check = SampledCheck(model=model)
+
+    def claims(name: str, c: dict[str, Any]) -> Stated:
+        if name == "linearization":
+            return Stated("LES", {"period_s": model.period})
+        cert = c.get("certificate") or {}
+        if name == "roa" and cert.get("kind") == SAMPLED_REGION_KIND:  # its check compares every figure
+            from lyapcheck.models.classes.sampled_regions import FIGURES
+
+            return Stated("ROA", {}, frozenset(FIGURES))
+        return Stated(str(c.get("property")))  # (its class's entry then says no check re-derives it)
+
+    def one(name: str, c: dict[str, Any]) -> tuple[bool, str]:
+        ok, stated = check_stated(c, claims(name, c))
+        if not ok:
+            return False, stated
+        if c.get("summary") != summary(name, c):
+            return False, "the summary is not what the checked figures say"
+        ok, why = verify(name, c, check)
+        return (True, f"{why}; {stated}") if ok else (False, why)
+
+    _each(conditions, rows, _status_in("certified", "refuted"), one, _malformed)
+    return True
+
+
 # -- the kinds ------------------------------------------------------------------------------------------
 
 #: a polynomial or rational loop
@@ -568,17 +628,26 @@ MAP_FUNCTIONS: Final = LoopKind(
     "map with functions", _recasting("the stated recasting of the map's displacement F(x) - x is the one the model text gives"), _read_box_map_functions,
     _conditions_of_map_functions, size=None, counterexamples=None, candidate=None, stated_figures=True)
 
+#: a sampled-data loop (a continuous plant under controls held between samples; its document states its
+#: ``sampling`` table)
+SAMPLED: Final = LoopKind(
+    "sampled-data loop", _prelude_of_sampled, _read_box_sampled, _conditions_of_sampled, size=None,
+    counterexamples=None, candidate=None)
+
 
 def loop_kind(model: Any) -> LoopKind:
-    """The kind of loop ``model`` is (a loop with functions is a :class:`RecastModel`; a map's ``time`` is
-    ``"discrete"``)."""
+    """The kind of loop ``model`` is (a sampled-data loop is a :class:`SampledModel`; a loop with functions
+    a :class:`RecastModel`; a map's ``time`` is ``"discrete"``)."""
     from lyapcheck.models.language.recast import RecastModel
+    from lyapcheck.models.language.sampling import SampledModel
     from lyapcheck.models.loop.discrete import is_discrete
 
+    if isinstance(model, SampledModel):
+        return SAMPLED
     if isinstance(model, RecastModel):
         return MAP_FUNCTIONS if is_discrete(model) else FUNCTIONS
     return MAP if is_discrete(model) else FIELD
 
 
-__all__ = ["Box", "Stop", "LoopKind", "FIELD", "MAP", "FUNCTIONS", "MAP_FUNCTIONS", "loop_kind", "verify_model",
+__all__ = ["Box", "Stop", "LoopKind", "FIELD", "MAP", "FUNCTIONS", "MAP_FUNCTIONS", "SAMPLED", "loop_kind", "verify_model",
            "MAX_POINT_TEXT"]
