@@ -1,0 +1,409 @@
+"""``sos_gas`` in the cascade form: one ISS-Lyapunov function per subsystem of an acyclic network (issue 43).
+
+Where the interaction graph's strongly connected components (the subsystems, :mod:`vector_lyapunov`'s
+groups) are at least two, their condensation is acyclic: ordered topologically, ``I_1, ..., I_m``, the
+equations of group ``i`` read only its own states ``x_i`` and states ``u_i`` of earlier groups (its
+inputs). No comparison system (small gain) is needed then: in the scaled coordinates of
+:mod:`lyapcheck.models.loop.field` (``z' = g / D``, ``D`` a positive constant), per group
+
+* ``V_i = z_Vi^T Q_Vi z_Vi`` over monomials of ``x_i`` alone, no constant, every ``x_ij`` itself in the
+  basis and ``Q_Vi > 0``: ``V_i - eps_i |x_i|^2`` is SOS (``eps_i`` the smallest eigenvalue), so ``V_i``
+  is positive definite and radially unbounded, ``V_i(0) = 0``;
+* ``W_i = x_i^T Q_Wi x_i`` with ``Q_Wi > 0``: ``W_i - eps_i |x_i|^2`` is SOS;
+* ``R_i = z_Ri^T Q_Ri z_Ri`` over monomials of ``u_i`` alone of degree at least 1, ``Q_Ri >= 0``: SOS
+  with ``R_i(0) = 0`` (``R_i = 0`` for a group without inputs, the first one);
+* the identity, exactly in rationals, ``(R_i - W_i) D - grad V_i . g = sigma_i`` with
+  ``sigma_i = z_i^T S_i z_i``, ``S_i >= 0`` (the dissipation form of ISS).
+
+Then ``V_i' = grad V_i . g / D <= -W_i(x_i) + R_i(u_i)`` along every trajectory of the whole network:
+``V_i`` is an ISS-Lyapunov function of group ``i`` with respect to its inputs (Sontag & Wang,
+"On characterizations of the input-to-state stability property", Systems & Control Letters 24, 1995:
+the dissipation characterization, ``W_i >= eps_i |x_i|^2`` a class-K-infinity bound and ``R_i`` bounded
+by one of class K), group 1 (no input) is GAS, and a cascade of ISS systems driven by a GAS system is
+GAS (Sontag, "Smooth stabilization implies coprime factorization", IEEE TAC 34, 1989; by induction
+along the order: each group's ISS estimate bounds its states by its inputs', which converge, so no
+solution escapes and every group converges). The equilibrium of the whole network is globally
+asymptotically stable. The claim is GAS without a rate: the ISS estimates give no uniform exponential
+one (on the platoon none exists with polynomial ``V_i``: :mod:`vector_lyapunov`'s docstring).
+
+The search: one small SOS program per group, in the group's states and its inputs only, maximizing
+the smallest eigenvalue of every Gram matrix with ``trace Q_Vi = 1``, with ``V_i`` of each degree of
+:data:`CASCADE_DEGREES` in turn (each group its own lowest) and the facial reduction of the remainder
+(:func:`lyapcheck.models.classes.lyapunov.on_remainder_faces`); groups whose equations are the same
+polynomials up to renaming (:func:`vector_lyapunov.subsystem_shape`) share one solve. Each group's
+certificate is checked exactly on its own ring, then the whole certificate on the network's
+(:func:`check_cascade`), and ``verify`` re-checks it from the document alone. The work grows linearly
+with the number of groups (and not at all with copies of one group).
+
+It is a form of ``sos_gas`` (:func:`fallback`), tried once per run where the dense and clique forms of
+a degree found nothing and one reached a size limit, right after the vector form.
+"""
+
+from __future__ import annotations
+
+import heapq
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+
+from lyapcheck.models.engines.search import ParameterValues, Search, literal, one
+from lyapcheck.models.loop.field import StateField
+from lyapcheck.sos import bases
+from lyapcheck.sos.certificates import GramPoly, lie_derivative
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials
+from lyapcheck.sos.structure import Gram, Identity, Structure, Term
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.loop.field import ScaledField
+    from lyapcheck.results import ConditionResult
+    from lyapcheck.sos.program import Solution
+
+#: the certificate kind
+KIND: Final = "lyapunov_cascade"
+#: the degrees of each V_i tried, in turn (each group stops at its first certified degree)
+CASCADE_DEGREES: Final = (2, 4, 6)
+#: the largest program of one group solved (:meth:`~lyapcheck.sos.structure.Structure.cost`): a group of
+#: two states and one input with a sextic V_i costs about 1e6; the dense form's limit (2e9) is about 15 s
+CASCADE_COST_LIMIT: Final = 2_000_000_000
+#: what the detail line of the cascade form starts with (so that it is tried once per run)
+LABEL: Final = "cascade of ISS subsystems"
+
+
+# -- the groups, in a topological order ---------------------------------------------------------------
+
+def cascade_groups(field: StateField) -> tuple[list[tuple[int, ...]], list[list[int]]] | None:
+    """The strongly connected components of the field's interaction graph in a topological order (each
+    group after every group it reads; ties by the smallest state) and, per group, the states of earlier
+    groups its equations read (its inputs, sorted); None where there are fewer than two components or
+    one has more than :data:`vector_lyapunov.MAX_GROUP_STATES` states."""
+    from lyapcheck.models.classes.vector_lyapunov import MAX_GROUP_STATES, couplings, strong_components
+
+    n = field.n
+    reads = couplings(field)
+    components = strong_components(n, reads)
+    if len(components) < 2 or any(len(c) > MAX_GROUP_STATES for c in components):
+        return None
+    owner = {s: k for k, c in enumerate(components) for s in c}
+    needs = [{owner[j] for s in c for j in reads[s]} - {k} for k, c in enumerate(components)]
+    ready = [(components[k][0], k) for k in range(len(components)) if not needs[k]]
+    heapq.heapify(ready)
+    order: list[int] = []
+    while ready:  # Kahn's algorithm: the condensation of the components is acyclic
+        _, k = heapq.heappop(ready)
+        order.append(k)
+        for j in range(len(components)):
+            if k in needs[j]:
+                needs[j].discard(k)
+                if not needs[j]:
+                    heapq.heappush(ready, (components[j][0], j))
+    groups = [components[k] for k in order]
+    inputs = [sorted({j for s in g for j in reads[s]} - set(g)) for g in groups]
+    return groups, inputs
+
+
+def group_field(field: StateField, group: Sequence[int], inputs: Sequence[int]) -> StateField:
+    """Group ``group``'s equations in the ring of its states then its inputs (nothing else: they read
+    nothing else), ``D`` likewise (a constant)."""
+    ring = field.ring
+    sub = Ring(tuple(ring.names[i] for i in (*group, *inputs)))
+    return StateField(ring=sub, g=tuple(ring.restrict(field.g[i], sub) for i in group), D=ring.restrict(field.D, sub))
+
+
+# -- one group's program ------------------------------------------------------------------------------
+
+def group_program(sub: StateField, k: int, degree: int, drop: frozenset[tuple[str, Monomial]] = frozenset()
+                  ) -> Structure | str:
+    """The program of one group (its ``k`` states first in ``sub``'s ring, then its inputs): ``V`` of this
+    degree, ``W`` quadratic, ``U`` (the certificate's ``R_i``) over the inputs' monomials up to half the
+    identity's degree and the remainder ``R`` over the identity's Newton basis (less ``drop``); or why
+    there is none (a size limit, named)."""
+    from lyapcheck.models.classes.lyapunov import field_degree, gram_products, symmetry
+    from lyapcheck.models.engines.reasons import size_limit
+
+    ring, nv = sub.ring, sub.ring.nvars
+    generators = symmetry(sub)
+    z_v = [m for m in monomials(nv, 1, degree // 2) if not any(m[k:]) and ("V", m) not in drop]
+    if any(_unit(i, nv) not in z_v for i in range(k)):
+        return ("no strict certificate of this form exists (V's basis, reduced to the face the solver found, keeps "
+                "no state itself)")
+    z_w = [tuple(int(j == i) for j in range(nv)) for i in range(k)]
+    v_blocks = bases.character_blocks(z_v, generators)
+    w_blocks = bases.character_blocks(z_w, generators)
+    products = gram_products(z_v, v_blocks)
+    target: set[Monomial] = set()
+    for i, gi in enumerate(sub.g):
+        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
+    d_support = ring.support(sub.D)
+    target |= {tuple(a + b for a, b in zip(m, s)) for m in gram_products(z_w, w_blocks) for s in d_support}
+    grams = [Gram("V", tuple(z_v), tuple(map(tuple, v_blocks))), Gram("W", tuple(z_w), tuple(map(tuple, w_blocks)))]
+    terms = [Term(literal(ring, ring.terms(-gi)), "V", derivative=i) for i, gi in enumerate(sub.g)]
+    terms.append(Term(literal(ring, ring.terms(-sub.D)), "W"))
+    if nv > k:
+        # the inputs' gain R_i(u_i), up to the identity's half degree times the field's degree: where the
+        # group rests at x*(u) for a constant input, V_i' = 0 and R_i(u) must dominate sigma_i(x*(u), u),
+        # whose terms grow like the states of x*(u), as fast as u^(field's degree) (the platoon's spacing
+        # rests at e = w^3 / kp): with a lower degree no strictly positive sigma_i exists
+        half = max(sum(m) for m in target) // 2 * field_degree(sub)
+        z_u = [m for m in monomials(nv, 1, max(half, 1)) if not any(m[:k]) and ("U", m) not in drop]
+        if z_u:
+            u_blocks = bases.character_blocks(z_u, generators)
+            target |= {tuple(a + b for a, b in zip(m, s)) for m in gram_products(z_u, u_blocks) for s in d_support}
+            grams.append(Gram("U", tuple(z_u), tuple(map(tuple, u_blocks))))
+            terms.append(Term(literal(ring, ring.terms(sub.D)), "U"))
+    z_r = [m for m in bases.sos_basis(nv, target) if ("R", m) not in drop]
+    if not z_r:
+        return "no strict certificate of this form exists (the remainder's basis is empty)"
+    grams.append(Gram("R", tuple(z_r), tuple(map(tuple, bases.character_blocks(z_r, generators)))))
+    terms.append(Term(one(ring, -1), "R"))
+    structure = Structure(nvars=nv, grams=tuple(grams), scalars=(),
+                          identities=(Identity("dissipation", tuple(terms), None, "R"),),
+                          objective=("max_margin",), trace_one=("V",))
+    if structure.cost() > CASCADE_COST_LIMIT:
+        return size_limit(f"{structure.cost():.1e}", "work units of a subsystem's program", f"{CASCADE_COST_LIMIT:.1e}",
+                          "CASCADE_COST_LIMIT")
+    return structure
+
+
+def group_attempt(sub: StateField, k: int, structure: Structure, search: Search
+                  ) -> tuple[dict[str, GramPoly | None] | None, "Solution"]:
+    """One solve of a group's program; its exact Gram forms (on the group's ring) if they pass
+    :func:`check_group`."""
+    from lyapcheck.models.classes.lyapunov import exact_try
+
+    point, solution = exact_try(structure, ParameterValues(), search)
+    if point is None:
+        return None, solution
+    parts = {name: GramPoly.of(structure.gram(name).basis, point.grams[name])
+             for name in ("V", "W", "U", "R") if any(g.name == name for g in structure.grams)}
+    V, W, R, sigma = parts["V"], parts["W"], parts.get("U"), parts["R"]
+    ok, _ = check_group(sub.ring, sub.g, sub.D, range(k), range(k, sub.ring.nvars), V, W, R, sigma, 1)
+    return ({"V": V, "W": W, "R": R, "sigma": sigma} if ok else None), solution
+
+
+def search_group(sub: StateField, k: int, search: Search) -> tuple[dict[str, Any] | None, str]:
+    """A group's certificate (its ``V`` of each of :data:`CASCADE_DEGREES` in turn), or None and why not;
+    at each degree, while the exact check refuses, the facial reduction of ``V``, ``R_i`` and the
+    remainder (their vanishing rows or kernels' supports left out, at most
+    :data:`~lyapcheck.models.classes.lyapunov.LYAPUNOV_FACIAL_ROUNDS` times, as the dense form does: on
+    the platoon the spacing's quartic term of ``V_i`` must vanish)."""
+    from lyapcheck.models.classes.lyapunov import LYAPUNOV_FACIAL_ROUNDS, failure, kernel_monomials, vanishing_monomials
+    from lyapcheck.models.engines.search import EXACT_TRY_MARGIN
+
+    whys = []
+    for degree in CASCADE_DEGREES:
+        drop: frozenset[tuple[str, Monomial]] = frozenset()
+        why = "none found"
+        for _ in range(LYAPUNOV_FACIAL_ROUNDS + 1):
+            search.budget.check()
+            structure = group_program(sub, k, degree, drop)
+            if isinstance(structure, str):
+                why = structure + (f" (after facial reduction, where {why})" if drop else "")
+                break
+            found, solution = group_attempt(sub, k, structure, search)
+            if found is not None:
+                return {**found, "degree": degree, "margin": solution.scalars.get("t")}, "found"
+            why = failure(solution, solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+            vanishing = frozenset((g.name, m) for g in structure.grams if g.name != "W"
+                                  for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+            if not vanishing:
+                break
+            drop = drop | vanishing
+        whys.append(f"degree {degree}: {why}")
+    return None, "; ".join(whys)
+
+
+def lift(P: GramPoly | None, where: Sequence[int], nv: int) -> GramPoly | None:
+    """A Gram form of a group's ring (its variables at ``where`` in the network's ring) over the network's."""
+    from lyapcheck.models.classes.vector_lyapunov import embed_gram
+
+    return None if P is None else embed_gram(P, where, nv)
+
+
+def search_cascade(field: StateField, search: Search) -> tuple[dict[str, Any] | None, str]:
+    """A cascade certificate (the module's docstring), or None and why not."""
+    from lyapcheck.models.classes.vector_lyapunov import subsystem_shape
+
+    if field.p or field.disturbances:
+        return None, f"{LABEL}: not for a field with box coordinates"
+    found_groups = cascade_groups(field)
+    if found_groups is None:
+        return None, (f"{LABEL}: no cascade (the interaction graph's strongly connected components are fewer than "
+                      "two, or one has more states than MAX_GROUP_STATES)")
+    groups, inputs = found_groups
+    label = f"{LABEL} ({len(groups)} subsystems)"
+    nv = field.ring.nvars
+    solved: dict[tuple[Any, ...], dict[str, Any]] = {}
+    parts: list[dict[str, Any]] = []
+    for group, read in zip(groups, inputs):
+        sub = group_field(field, group, read)
+        key = (len(group), subsystem_shape(sub))
+        if key not in solved:
+            local, why = search_group(sub, len(group), search.over(sub.ring))
+            if local is None:
+                return None, f"{label}: no ISS-Lyapunov function for the subsystem of {', '.join(sub.ring.names[:len(group)])} " \
+                             f"with inputs {', '.join(sub.ring.names[len(group):]) or 'none'} ({why})"
+            solved[key] = local
+        local = solved[key]
+        where = [*group, *read]
+        parts.append({"V": lift(local["V"], where, nv), "W": lift(local["W"], where, nv),
+                      "R": lift(local["R"], where, nv), "sigma": lift(local["sigma"], where, nv),
+                      "degree": local["degree"], "margin": local["margin"]})
+    ok, why = check_cascade(field.ring, field.g, field.D, groups, [p["V"] for p in parts], [p["W"] for p in parts],
+                            [p["R"] for p in parts], [p["sigma"] for p in parts])
+    if not ok:  # (each group's identity passed on its own ring: the lifted ones are the same polynomials)
+        return None, f"{label}: the whole certificate failed its exact check ({why})"
+    return {"groups": groups, "parts": parts, "solves": len(solved)}, f"{label}: found ({len(solved)} distinct solved)"
+
+
+def fallback(scaled: "ScaledField", field: StateField, name: str, search: Search, detail: list[str]
+             ) -> "ConditionResult | None":
+    """``sos_gas``'s cascade form, as :func:`vector_lyapunov.fallback` (and right after it): once per run,
+    where a dense or clique form reached a size limit; its line joins ``detail``; the certified result
+    or None."""
+    from lyapcheck.models.engines import reasons
+
+    if field.p or field.disturbances or any(line.startswith(LABEL) for line in detail) \
+            or not reasons.size_limits(detail) or cascade_groups(field) is None:
+        return None
+    found, why = search_cascade(field, search)
+    detail.append(why)
+    return None if found is None else certified(scaled, field, name, found, {"solves": search.log})
+
+
+# -- the exact check ----------------------------------------------------------------------------------
+
+def _unit(i: int, nv: int) -> Monomial:
+    return tuple(int(j == i) for j in range(nv))
+
+
+def check_group(ring: Ring, g: Sequence[Poly], D: Poly, group: Sequence[int], inputs: Sequence[int],
+                V: GramPoly, W: GramPoly, R: GramPoly | None, sigma: GramPoly, k: int) -> tuple[bool, str]:
+    """One group's part of the certificate, exactly (``g``: the field of ``ring``'s first ``len(g)``
+    variables; ``k``: the group's number, 1-based, for the words): ``V`` over the group's states with no
+    constant, each state itself in its basis and ``Q_V > 0``; ``W`` likewise; ``R`` over the states of
+    ``inputs`` alone (the earlier groups') with no constant and ``Q_R >= 0``, or absent; ``S >= 0`` and
+    ``(R - W) D - grad V . g = z^T S z``."""
+    from lyapcheck.sos.definiteness import is_positive_semidefinite
+
+    nv = ring.nvars
+    others = [i for i in range(nv) if i not in group]
+    for what, P in (("V", V), ("W", W)):
+        if not P.basis or any(m[i] for m in P.basis for i in others) or any(sum(m) == 0 for m in P.basis):
+            return False, f"{what}_{k} may depend on the states of its group only, with no constant"
+        if any(_unit(i, nv) not in P.basis for i in group):
+            return False, f"{what}_{k}'s basis must hold each state of its group (so that {what}_{k} >= eps |x_{k}|^2)"
+        if not P.positive_definite():
+            return False, f"Q_{what}{k} is not positive definite (exact)"
+    if R is not None:
+        if any(sum(m) == 0 for m in R.basis) or any(m[i] for m in R.basis for i in range(nv) if i not in inputs):
+            return False, (f"R_{k} may depend on the states of earlier groups only, with no constant (R_{k}(0) = 0; "
+                           "the first group has no inputs)")
+        if not is_positive_semidefinite(R.Q):
+            return False, f"Q_R{k} is not positive semidefinite (exact)"
+    if not is_positive_semidefinite(sigma.Q):
+        return False, f"the Gram matrix of sigma_{k} is not positive semidefinite (exact)"
+    supply = (R.poly(ring) if R is not None else ring.zero()) - W.poly(ring)
+    if supply * D - lie_derivative(ring, V.poly(ring), g) != sigma.poly(ring):
+        return False, f"the dissipation identity of group {k} does not hold exactly"
+    return True, "found"
+
+
+def check_cascade(ring: Ring, g: Sequence[Poly], D: Poly, groups: Sequence[Sequence[int]], Vs: Sequence[GramPoly],
+                  Ws: Sequence[GramPoly], Rs: Sequence[GramPoly | None], sigmas: Sequence[GramPoly]
+                  ) -> tuple[bool, str]:
+    """The cascade certificate (the module's docstring), exactly: the groups partition the states, at least
+    two; ``D`` is a positive constant; the order is topological (group ``i``'s equations read only its
+    own states and earlier groups'); each group passes :func:`check_group` with its ``R_i`` over earlier
+    groups' states (group 1: none)."""
+    n, m = len(g), len(groups)
+    if sorted(i for group in groups for i in group) != list(range(n)) or m < 2:
+        return False, "the groups must partition the states (each state in exactly one group), at least two of them"
+    if not (len(Vs) == len(Ws) == len(Rs) == len(sigmas) == m):
+        return False, "one V, one W, one R and one sigma per group"
+    terms = ring.terms(D)
+    if set(terms) != {tuple([0] * ring.nvars)} or terms[tuple([0] * ring.nvars)] <= 0:
+        return False, "the cascade form is for a field whose denominator D is a positive constant"
+    seen: list[int] = []
+    for k, group in enumerate(groups):
+        reads = {j for s in group for mono in ring.support(g[s]) for j in range(ring.nvars) if mono[j] > 0}
+        if not reads <= set(group) | set(seen):
+            return False, (f"the groups are not in a topological order: group {k + 1}'s equations read states of a later "
+                           "group (or of none), so the network is not this cascade")
+        ok, why = check_group(ring, g, D, group, seen, Vs[k], Ws[k], Rs[k], sigmas[k], k + 1)
+        if not ok:
+            return False, why
+        seen += list(group)
+    return True, (f"{m} V_i > 0 with V_i' <= -W_i + R_i(earlier groups' states), W_i > 0, R_i >= 0 with R_i(0) = 0, in a "
+                  "topological order: a cascade of ISS subsystems driven by a GAS one, exactly")
+
+
+# -- the certificate, its claim and its check -----------------------------------------------------
+
+def certificate_json(scaled: "ScaledField", field: StateField, found: Mapping[str, Any]) -> dict[str, Any]:
+    """The certificate: the groups in their order (names), each ``V_i`` in the declared states
+    (``V_groups``), and in the scaled states each ``V_i``, ``W_i``, ``R_i`` (None for the first group)
+    and remainder ``sigma_i`` as Gram matrices over the network's ring."""
+    from lyapcheck.models.classes.lyapunov import stated_v
+
+    ring, names = field.ring, field.ring.names
+    parts = found["parts"]
+    return {"kind": KIND, "degree": max(p["degree"] for p in parts),
+            "groups": [[names[i] for i in g] for g in found["groups"]],
+            "V_groups": [stated_v(scaled, field, p["V"].poly(ring)) for p in parts],
+            "gram_V": [p["V"].to_json() for p in parts], "gram_W": [p["W"].to_json() for p in parts],
+            "gram_R": [None if p["R"] is None else p["R"].to_json() for p in parts],
+            "gram_sigma": [p["sigma"].to_json() for p in parts]}
+
+
+def sentence(groups: int, degree: int) -> str:
+    """The claim's words, the same from the search and from the document."""
+    what = "quadratic" if degree == 2 else f"of degree up to {degree}"
+    return (f"GAS: a cascade of {groups} subsystems, each with an ISS-Lyapunov function ({what}) V_i' <= -W_i + "
+            "R_i(inputs) with W_i >= eps |x_i|^2 and R_i(0) = 0, the first with no inputs: a cascade of ISS systems "
+            "driven by a GAS one is GAS (no decay rate is claimed; checked exactly)")
+
+
+def certified(scaled: "ScaledField", field: StateField, name: str, found: Mapping[str, Any],
+              solver: dict[str, Any]) -> "ConditionResult":
+    from lyapcheck.results import ConditionResult
+
+    degree = max(p["degree"] for p in found["parts"])
+    margins = [p["margin"] for p in found["parts"] if p["margin"] is not None]
+    numbers = {"degree": degree, "relative_margin": min(margins) if margins else None}
+    return ConditionResult(name, "certified", sentence(len(found["groups"]), degree), numbers=numbers,
+                           certificate=certificate_json(scaled, field, found), solver=solver, property="GAS")
+
+
+def verify(c: Mapping[str, Any], cert: Mapping[str, Any], scaled: "ScaledField", field: StateField
+           ) -> tuple[bool, str]:
+    """The exact re-check of a certificate of :data:`KIND` on the field verify re-derived."""
+    from lyapcheck.models.classes.lyapunov import stated_v
+
+    if field.p or field.disturbances:
+        return False, "a cascade certificate is for a field without box coordinates or disturbances"
+    ring, nv = field.ring, field.ring.nvars
+    names = list(ring.names[:field.n])
+    for key in ("groups", "V_groups", "gram_V", "gram_W", "gram_R", "gram_sigma"):
+        if not isinstance(cert.get(key), list):
+            raise ValueError(f"{key}: a cascade certificate has a list '{key}'")
+    groups = []
+    for group in cert["groups"]:
+        if not isinstance(group, list) or any(s not in names for s in group):
+            raise ValueError(f"groups: {group!r} is not a list of the model's states")
+        groups.append([names.index(s) for s in group])
+    Vs = [GramPoly.from_json(part, nv) for part in cert["gram_V"]]
+    Ws = [GramPoly.from_json(part, nv) for part in cert["gram_W"]]
+    Rs = [None if part is None else GramPoly.from_json(part, nv) for part in cert["gram_R"]]
+    sigmas = [GramPoly.from_json(part, nv) for part in cert["gram_sigma"]]
+    ok, why = check_cascade(ring, field.g, field.D, groups, Vs, Ws, Rs, sigmas)
+    if not ok:
+        return False, why
+    if [stated_v(scaled, field, V.poly(ring)) for V in Vs] != cert["V_groups"]:
+        return False, "the stated V_groups are not the certificate's Gram V_i unscaled"
+    if int(cert["degree"]) != 2 * max(max(sum(mono) for mono in V.basis) for V in Vs):
+        return False, "the stated degree is not the V_i's"
+    if c.get("degree") is not None and c.get("degree") != int(cert["degree"]):
+        return False, "the condition's degree is not the certificate's"
+    if c.get("property") not in ("GAS", None):
+        return False, f"a cascade certificate proves GAS, not {c.get('property')}"
+    return True, why
