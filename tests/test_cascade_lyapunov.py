@@ -1,9 +1,9 @@
 """The cascade form of ``sos_gas`` (issue 43): one ISS-Lyapunov function per subsystem of a network whose
 subsystems form a cascade (:mod:`lyapcheck.models.classes.cascade_lyapunov`): the groups in a topological
-order, the exact check on a hand-made certificate and its refusals, a certified chain re-checked by
-``verify`` and refused once forged, a strongly connected network left to the other forms, a cascade with an
-unstable downstream block not certified, and the cubic-drag platoon, where no certificate of this form
-exists (the module's and the benchmark's notes say why)."""
+order, the exact check on a hand-made certificate and its refusals, the 3-vehicle platoon and a chain
+certified, the platoon's certificate re-checked by ``verify`` and refused once forged, a strongly
+connected network left to the other forms, a cascade with an unstable downstream block not certified, and
+the platoon's follower, ISS in its slow manifold's coordinates only."""
 
 from __future__ import annotations
 
@@ -60,12 +60,18 @@ def certify(text: str, tmp: Path, monkeypatch: pytest.MonkeyPatch, name: str = "
 
 
 @pytest.fixture(scope="module")
+def platoon(tmp_path_factory: pytest.TempPathFactory) -> dict:
+    with pytest.MonkeyPatch.context() as mp:
+        return certify(networks.platoon(3), tmp_path_factory.mktemp("platoon"), mp)
+
+
+@pytest.fixture(scope="module")
 def chain(tmp_path_factory: pytest.TempPathFactory) -> dict:
     with pytest.MonkeyPatch.context() as mp:
         return certify(CHAIN.format(damping="1"), tmp_path_factory.mktemp("chain"), mp)
 
 
-def hand_made() -> tuple[StateField, list[list[int]], list[GramPoly], list[GramPoly], list[GramPoly | None],
+def hand_made() -> tuple[StateField, list[list[int]], list[GramPoly], list, list, list[GramPoly | None],
                          list[GramPoly]]:
     """``x' = -x``, ``y' = -y + x^2``: ``V_1 = W_1 = x^2`` (``sigma_1 = x^2``), ``V_2 = W_2 = y^2``,
     ``R_2 = x^4`` (``sigma_2 = x^4 - y^2 + 2 y^2 - 2 x^2 y = (x^2 - y)^2``)."""
@@ -74,11 +80,12 @@ def hand_made() -> tuple[StateField, list[list[int]], list[GramPoly], list[GramP
     field = StateField(ring, (-x, -y + x**2), ring.constant(1))
     one = ((Fraction(1),),)
     Vs = [GramPoly(((1, 0),), one), GramPoly(((0, 1),), one)]
-    Ws = list(Vs)
+    phis = [[(0, x)], [(1, y)]]
+    weights = [[Fraction(1)], [Fraction(1)]]
     Rs: list[GramPoly | None] = [None, GramPoly(((2, 0),), one)]
     square = ((Fraction(1), Fraction(-1)), (Fraction(-1), Fraction(1)))
     sigmas = [GramPoly(((1, 0),), one), GramPoly(((2, 0), (0, 1)), square)]
-    return field, [[0], [1]], Vs, Ws, Rs, sigmas
+    return field, [[0], [1]], Vs, phis, weights, Rs, sigmas
 
 
 def test_the_groups_are_the_strong_components_in_a_topological_order() -> None:
@@ -103,63 +110,90 @@ def test_the_groups_are_the_strong_components_in_a_topological_order() -> None:
 
 
 def test_the_exact_check_accepts_a_true_cascade_and_refuses_each_broken_part() -> None:
-    field, groups, Vs, Ws, Rs, sigmas = hand_made()
+    field, groups, Vs, phis, weights, Rs, sigmas = hand_made()
     ring, g, D = field.ring, field.g, field.D
-    ok, why = cascade_lyapunov.check_cascade(ring, g, D, groups, Vs, Ws, Rs, sigmas)
+    check = cascade_lyapunov.check_cascade
+    ok, why = check(ring, g, D, groups, Vs, phis, weights, Rs, sigmas)
     assert ok, why
     # a V_i's entry changed: the identity fails
     bent = GramPoly(((0, 1),), ((Fraction(11, 10),),))
-    ok, why = cascade_lyapunov.check_cascade(ring, g, D, groups, [Vs[0], bent], Ws, Rs, sigmas)
+    ok, why = check(ring, g, D, groups, [Vs[0], bent], phis, weights, Rs, sigmas)
     assert not ok and "dissipation identity of group 2" in why
     # the groups reordered: the first one reads a later one's state
-    ok, why = cascade_lyapunov.check_cascade(ring, g, D, groups[::-1], Vs[::-1], Ws[::-1], Rs[::-1], sigmas[::-1])
+    ok, why = check(ring, g, D, groups[::-1], Vs[::-1], phis[::-1], weights[::-1], Rs[::-1], sigmas[::-1])
     assert not ok and "topological" in why
     # an input gain on the first group (it has no earlier group to read)
-    ok, why = cascade_lyapunov.check_cascade(ring, g, D, groups, Vs, Ws, [Rs[1], Rs[1]], sigmas)
+    ok, why = check(ring, g, D, groups, Vs, phis, weights, [Rs[1], Rs[1]], sigmas)
     assert not ok and "earlier groups only" in why
-    # W_2 not positive definite
-    zero = GramPoly(((0, 1),), ((Fraction(0),),))
-    ok, why = cascade_lyapunov.check_cascade(ring, g, D, groups, Vs, [Ws[0], zero], Rs, sigmas)
-    assert not ok and "Q_W2" in why
-    # a cycle: x reads y as well; the same certificate is refused whatever the order
+    # W_2's weight not positive
+    ok, why = check(ring, g, D, groups, Vs, phis, [weights[0], [Fraction(0)]], Rs, sigmas)
+    assert not ok and "W_2's weights" in why
+    # W_2's coordinate not an automorphism of y fixing 0 (y^2: not radially unbounded as a square root; y + 1)
     x, y = ring.gens()
+    for wrong in (y * y, y + ring.constant(1), y + x):
+        ok, why = check(ring, g, D, groups, Vs, [phis[0], [(1, wrong)]], weights, Rs, sigmas)
+        assert not ok and "triangular" in why, wrong
+    # a cycle: x reads y as well; the same certificate is refused whatever the order
     cyclic = (-x + y**2, -y + x**2)
     for order in (1, -1):
-        ok, why = cascade_lyapunov.check_cascade(ring, cyclic, D, groups[::order], Vs[::order], Ws[::order],
-                                                 Rs[::order], sigmas[::order])
+        ok, why = check(ring, cyclic, D, groups[::order], Vs[::order], phis[::order], weights[::order], Rs[::order],
+                        sigmas[::order])
         assert not ok and "topological" in why
 
 
-def test_a_chain_beyond_the_dense_and_clique_forms_is_certified_by_the_cascade_form(chain: dict) -> None:
-    condition = chain["conditions"]["sos_gas"]
+def test_triangular_coordinates_are_checked_in_their_order() -> None:
+    ring = Ring(("e", "w"))
+    e, w = ring.gens()
+    ok, _ = cascade_lyapunov.check_coordinates(ring, [0, 1], [(0, e - w**3 - 2 * w), (1, w)])
+    assert ok
+    # the same components in the other order: e's coordinate reads w, which comes before it
+    ok, why = cascade_lyapunov.check_coordinates(ring, [0, 1], [(1, w), (0, e - w**3)])
+    assert not ok and "triangular" in why
+    # two coordinates for one state
+    ok, why = cascade_lyapunov.check_coordinates(ring, [0, 1], [(0, e), (0, e)])
+    assert not ok and "one component per state" in why
+
+
+def test_the_platoon_beyond_the_dense_and_clique_forms_is_certified_by_the_cascade_form(platoon: dict) -> None:
+    condition = platoon["conditions"]["sos_gas"]
     assert condition["status"] == "certified" and condition["property"] == "GAS", condition["summary"]
     cert = condition["certificate"]
     assert cert["kind"] == cascade_lyapunov.KIND
-    assert cert["groups"] == [["x1", "y1"], ["x2", "y2"], ["x3", "y3"]]
+    assert cert["groups"] == [["e1", "w1"], ["e2", "w2"], ["e3", "w3"]]
     assert cert["gram_R"][0] is None and all(r is not None for r in cert["gram_R"][1:])
     assert "cascade of 3 subsystems" in condition["summary"] and "no decay rate" in condition["summary"]
     assert "decay_rate_V_per_s" not in condition
-    # each V_i lives on its group's states, each R_i on the previous group's
+    # each V_i lives on its group's states, each R_i on the previous vehicle's speed (its only input)
     for k, (V, R) in enumerate(zip(cert["gram_V"], cert["gram_R"])):
         assert {i for mono in V["basis"] for i, e in enumerate(mono) if e} == {2 * k, 2 * k + 1}
         if R is not None:
-            assert {i for mono in R["basis"] for i, e in enumerate(mono) if e} <= {2 * k - 2, 2 * k - 1}
+            assert {i for mono in R["basis"] for i, e in enumerate(mono) if e} == {2 * k - 1}
+    # the followers' W in their slow manifold's coordinates: the spacing's reads the speed
+    for coords in cert["W_coordinates"][1:]:
+        assert [state for state, _ in coords] == [coords[0][0], coords[1][0]] and coords[0][0].startswith("e")
+        assert any(exps[2 * int(coords[0][0][1:]) - 1] == 3 for _, exps in coords[0][1]["terms"])
 
 
-def test_verify_rechecks_the_cascade_and_refuses_forged_certificates(chain: dict, tmp_path: Path) -> None:
+def test_a_chain_of_quadratically_driven_blocks_is_certified_by_the_cascade_form(chain: dict) -> None:
+    condition = chain["conditions"]["sos_gas"]
+    assert condition["status"] == "certified", condition["summary"]
+    assert condition["certificate"]["kind"] == cascade_lyapunov.KIND
+
+
+def test_verify_rechecks_the_cascade_and_refuses_forged_certificates(platoon: dict, tmp_path: Path) -> None:
     from click.testing import CliRunner
 
     from lyapcheck.cli import app
 
     app._register_commands()
     good = tmp_path / "good.json"
-    good.write_text(json.dumps(chain))
+    good.write_text(json.dumps(platoon))
     result = CliRunner().invoke(app.cli, ["verify", str(good)])
     assert result.exit_code == 0, result.output
     assert "a cascade of ISS subsystems driven by a GAS one, exactly" in result.output
 
     def forged(change: object) -> str:
-        doc = json.loads(json.dumps(chain))
+        doc = json.loads(json.dumps(platoon))
         change(doc["conditions"]["sos_gas"]["certificate"])  # type: ignore[operator]
         bad = tmp_path / "bad.json"
         bad.write_text(json.dumps(doc))
@@ -174,7 +208,7 @@ def test_verify_rechecks_the_cascade_and_refuses_forged_certificates(chain: dict
     assert "dissipation identity of group 2 does not hold exactly" in forged(bend_v)
 
     def reorder(cert: dict) -> None:
-        for key in ("groups", "V_groups", "gram_V", "gram_W", "gram_R", "gram_sigma"):
+        for key in ("groups", "V_groups", "gram_V", "W_coordinates", "W_weights", "gram_R", "gram_sigma"):
             cert[key][0], cert[key][1] = cert[key][1], cert[key][0]
 
     assert "topological" in forged(reorder)
@@ -183,6 +217,11 @@ def test_verify_rechecks_the_cascade_and_refuses_forged_certificates(chain: dict
         cert["V_groups"][0] = cert["V_groups"][1]
 
     assert "V_groups" in forged(restate)
+
+    def untriangular(cert: dict) -> None:
+        cert["W_coordinates"][1].reverse()
+
+    assert "triangular" in forged(untriangular)
 
 
 def test_a_cascade_whose_downstream_block_is_unstable_is_not_certified(tmp_path: Path,
@@ -202,19 +241,24 @@ def test_a_strongly_connected_network_does_not_use_the_cascade_form(tmp_path: Pa
     assert not any(line.startswith(cascade_lyapunov.LABEL) for line in condition.get("tried") or [])
 
 
-def test_the_cubic_drag_platoon_vehicle_has_no_iss_certificate_of_this_form() -> None:
-    """A platoon's following vehicle (``e' = u - w``, ``w' = e + 2 (u - w) - w^3``): ``W >= eps |x|^2`` meets
-    the slow manifold ``e = w^3`` where the drag's speed is only ``e^(1/3)``, and no ``V`` of degree 2 to 6
-    gives a strictly feasible program (benchmarks/README.md, issue 43); its leader (``u = 0``) is proved."""
+def test_the_platoon_follower_is_iss_in_its_slow_manifold_coordinates_only() -> None:
+    """A platoon's following vehicle (``e' = u - w``, ``w' = e + 2 (u - w) - w^3``): with ``W >= eps |x|^2``
+    (the states themselves) no ``V`` of degree 2 to 6 gives a certificate (the drag's speed at a large
+    spacing is ``e^(1/3)``); with ``W = c_1 (e - 2 w - w^3)^2 + c_2 w^2`` a quartic ``V`` does."""
     from lyapcheck.models.engines.search import Budget, Search
 
     ring = Ring(("e", "w", "u"))
     e, w, u = ring.gens()
     follower = StateField(ring, (u - w, e + 2 * (u - w) - w**3), ring.constant(1))
+    choices = cascade_lyapunov.coordinates(follower, 2)
+    assert choices == [[(0, e - w**3 - 2 * w), (1, w)], [(0, e), (1, w)]]
     found, why = cascade_lyapunov.search_group(follower, 2, Search(ring, Budget(60.0, "test")))
+    assert found is not None and found["phi"] == choices[0] and found["degree"] == 4, why
+    assert found["R"] is not None and all(m[:2] == (0, 0) for m in found["R"].basis)
+    monkey = pytest.MonkeyPatch()
+    monkey.setattr(cascade_lyapunov, "coordinates", lambda sub, k: [[(i, sub.ring.gens()[i]) for i in range(k)]])
+    try:
+        found, why = cascade_lyapunov.search_group(follower, 2, Search(ring, Budget(60.0, "test")))
+    finally:
+        monkey.undo()
     assert found is None and "degree 4" in why and "degree 6" in why
-    alone = Ring(("e", "w"))
-    e, w = alone.gens()
-    leader = StateField(alone, (-w, e - 2 * w - w**3), alone.constant(1))
-    found, why = cascade_lyapunov.search_group(leader, 2, Search(alone, Budget(60.0, "test")))
-    assert found is not None and found["R"] is None, why
