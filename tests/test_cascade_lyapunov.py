@@ -247,7 +247,7 @@ def test_a_strongly_connected_network_does_not_use_the_cascade_form(tmp_path: Pa
     assert not any(line.startswith(cascade_lyapunov.LABEL) for line in condition.get("tried") or [])
 
 
-def test_the_platoon_follower_is_iss_in_its_slow_manifold_coordinates_only() -> None:
+def test_the_platoon_follower_is_iss_in_its_slow_manifold_coordinates_only(monkeypatch: pytest.MonkeyPatch) -> None:
     """A platoon's following vehicle (``e' = u - w``, ``w' = e + 2 (u - w) - w^3``): with ``W >= eps |x|^2``
     (the states themselves) no ``V`` of degree 2 or 4 gives a certificate (the drag's speed at a large
     spacing is ``e^(1/3)``); with ``W = c_1 (e - 2 w - w^3)^2 + c_2 w^2`` a quartic ``V`` does."""
@@ -261,10 +261,6 @@ def test_the_platoon_follower_is_iss_in_its_slow_manifold_coordinates_only() -> 
     found, why = cascade_lyapunov.search_group(follower, 2, Search(ring, Budget(60.0, "test")))
     assert found is not None and found["phi"] == choices[0] and found["degree"] == 4, why
     assert found["R"] is not None and all(m[:2] == (0, 0) for m in found["R"].basis)
-    monkey = pytest.MonkeyPatch()
-    monkey.setattr(cascade_lyapunov, "coordinates", lambda sub, k: [[(i, sub.ring.gens()[i]) for i in range(k)]])
-    try:
-        found, why = cascade_lyapunov.search_group(follower, 2, Search(ring, Budget(60.0, "test")))
-    finally:
-        monkey.undo()
+    monkeypatch.setattr(cascade_lyapunov, "coordinates", lambda sub, k: [[(i, sub.ring.gens()[i]) for i in range(k)]])
+    found, why = cascade_lyapunov.search_group(follower, 2, Search(ring, Budget(60.0, "test")))
     assert found is None and "degree 2" in why and "degree 4" in why

@@ -28,9 +28,9 @@ Then ``V_i' = grad V_i . g / D <= -W_i(x_i) + R_i(u_i)`` along every trajectory 
 "On characterizations of the input-to-state stability property", Systems & Control Letters 24, 1995:
 the dissipation characterization: ``W_i`` bounded below by a class-K-infinity function of ``|x_i|``,
 ``R_i`` above by a class-K function of ``|u_i|``), group 1 (no input) is GAS, and a cascade of ISS
-systems driven by a GAS system is GAS (Sontag, "Smooth stabilization implies coprime factorization", IEEE TAC 34, 1989; by induction
-along the order: each group's ISS estimate bounds its states by its inputs', which converge, so no
-solution escapes and every group converges). The equilibrium of the whole network is globally
+systems driven by a GAS system is GAS (Sontag, "Smooth stabilization implies coprime factorization",
+IEEE TAC 34, 1989; by induction along the order: each group's ISS estimate bounds its states by its
+inputs', which converge, so no solution escapes and every group converges). The equilibrium of the whole network is globally
 asymptotically stable. The claim is GAS without a rate: the ISS estimates give no uniform exponential
 one (on the platoon none exists with polynomial ``V_i``: :mod:`vector_lyapunov`'s docstring).
 
@@ -71,8 +71,9 @@ KIND: Final = "lyapunov_cascade"
 #: lyznet-10d (not GAS) its 4-state group's sextic programs cost enough to move the cheaper cones ahead of
 #: degree 8 (lyapunov.cones_first) and end sos_gas inconclusive where it was not_certified
 CASCADE_DEGREES: Final = (2, 4)
-#: the largest program of one group solved (:meth:`~lyapcheck.sos.structure.Structure.cost`): a group of
-#: two states and one input with a sextic V_i costs about 1e6; the dense form's limit (2e9) is about 15 s
+#: the largest program of one group solved (:meth:`~lyapcheck.sos.structure.Structure.cost`): the platoon's
+#: follower (two states, one input) with a quartic V_i costs about 1e5; the dense form's limit (2e9) is
+#: about 15 s a solve
 CASCADE_COST_LIMIT: Final = 2_000_000_000
 #: what the detail line of the cascade form starts with (so that it is tried once per run)
 LABEL: Final = "cascade of ISS subsystems"
@@ -237,8 +238,9 @@ def search_group(sub: StateField, k: int, search: Search) -> tuple[dict[str, Any
     whys = []
     choices = coordinates(sub, k)
     for number, phi in enumerate(choices):
-        words = "" if len(choices) == 1 else (" (W in the slow manifold's coordinates)" if number == 0 and
-                                              len(choices) > 1 else " (W in the states)")
+        # (the last choice is always the states themselves; an earlier one, the slow manifold's)
+        words = "" if len(choices) == 1 else " (W in the states)" if number == len(choices) - 1 \
+            else " (W in the slow manifold's coordinates)"
         for degree in CASCADE_DEGREES:
             drop: frozenset[tuple[str, Monomial]] = frozenset()
             why = "none found"
@@ -413,15 +415,15 @@ def check_cascade(ring: Ring, g: Sequence[Poly], D: Poly, groups: Sequence[Seque
     for k, group in enumerate(groups):
         reads = {j for s in group for mono in ring.support(g[s]) for j in range(ring.nvars) if mono[j] > 0}
         if not reads <= set(group) | set(seen):
-            return False, (f"the groups are not in a topological order: group {k + 1}'s equations read states of a later "
-                           "group, so the network is not this cascade")
+            return False, (f"the groups are not in a topological order: group {k + 1}'s equations read states of "
+                           "a later group, so the network is not this cascade")
         ok, why = check_group(ring, g, D, group, seen, Vs[k], phis[k], weights[k], Rs[k], sigmas[k], k + 1)
         if not ok:
             return False, why
         seen += list(group)
-    return True, (f"{m} V_i > 0 with V_i' <= -W_i + R_i(earlier groups' states), W_i = sum_j c_j Phi_j^2 (c_j > 0, Phi "
-                  "triangular), R_i >= 0 with R_i(0) = 0, in a topological order: a cascade of ISS subsystems driven by "
-                  "a GAS one, exactly")
+    return True, (f"{m} V_i > 0 with V_i' <= -W_i + R_i(earlier groups' states), W_i = sum_j c_j Phi_j^2 "
+                  "(c_j > 0, Phi triangular), R_i >= 0 with R_i(0) = 0, in a topological order: a cascade of ISS "
+                  "subsystems driven by a GAS one, exactly")
 
 
 # -- the certificate, its claim and its check -----------------------------------------------------

@@ -31,8 +31,10 @@ The search, in two steps (each linear):
    diagonal ``B_ii = -s_i - sum_k B_ki`` is written through the others, so that every constraint is linear
    (with the facial reduction of the clique form where the remainders must be singular).
 
-It is ``sos_gas``'s last form (:func:`fallback`, which :func:`lyapcheck.models.classes.lyapunov.run` calls
-after the dense and clique forms of each degree): tried once, where one of those reached a size limit.
+It is ``sos_gas``'s last form but one (:func:`fallback`, which :func:`lyapcheck.models.classes.lyapunov.run`
+calls after the dense and clique forms of each degree; the cascade form of
+:mod:`lyapcheck.models.classes.cascade_lyapunov` follows it): tried once, where one of those reached a
+size limit.
 
 Groups (:func:`subsystem_groups`): the strongly connected components of the field's interaction graph
 when there are at least two and each has at most :data:`MAX_GROUP_STATES` states (a cascade, e.g. the
@@ -422,7 +424,7 @@ def comparison_search(field: StateField, groups: Sequence[tuple[int, ...]], Vs: 
 
 def fallback(scaled: "ScaledField", field: StateField, name: str, search: Search, detail: list[str]
              ) -> "ConditionResult | None":
-    """``sos_gas``'s last form (:func:`lyapcheck.models.classes.lyapunov.run` calls it after the dense and
+    """``sos_gas``'s vector form (:func:`lyapcheck.models.classes.lyapunov.run` calls it after the dense and
     clique forms of each degree found nothing): once per run, and only where one of them reached a size
     limit (a network too large for them), a vector Lyapunov function of the network's subsystems. Its
     line joins ``detail`` (what was tried); the certified result, or None. The class's time limit
