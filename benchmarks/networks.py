@@ -136,4 +136,20 @@ def coupled_pairs(m: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-FAMILIES = {"ring": ring, "platoon": platoon, "grid": grid, "pairs": coupled_pairs, "swarm": swarm}
+def chain(m: int) -> str:
+    """``m`` damped second-order blocks in a chain, each driven by the square of the previous block's
+    position (``y_k' = -x_k - y_k + x_(k-1)^2``): a cascade (each block reads only the one before), GAS,
+    whose quadratic couplings no linear comparison system of the vector form bounds; ``n = 2 m`` states.
+    The cascade form's family (``lyapunov_cascade``)."""
+    if m < 1:
+        raise ValueError(f"chain: m must be at least 1, got {m}")
+    names = [v for k in range(1, m + 1) for v in (f"x{k}", f"y{k}")]
+    lines = [f"# A chain of {m} damped blocks, each driven by the square of the previous one ({2 * m} states).",
+             "[model]", f'name = "chain of {m} driven blocks"', f"states = {_states(names)}", "", "[dynamics]"]
+    for k in range(1, m + 1):
+        drive = f" + x{k - 1}**2" if k > 1 else ""
+        lines += [f'x{k} = "y{k}"', f'y{k} = "-x{k} - y{k}{drive}"']
+    return "\n".join(lines) + "\n"
+
+
+FAMILIES = {"ring": ring, "platoon": platoon, "grid": grid, "pairs": coupled_pairs, "swarm": swarm, "chain": chain}

@@ -155,11 +155,13 @@ def test_a_network_whose_comparison_matrix_cannot_be_hurwitz_is_not_certified_by
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The platoon with cubic drag: no polynomial V of a vehicle decays exponentially at large spacing
     errors (the drag's speed ~ e^(1/3) there), so no V_i' <= a_ii V_i with a_ii < 0 and no Hurwitz A; the
-    vector form is tried and refuses, and the condition is not certified (nothing else fits the lowered
-    size limit, the cheaper cones' fallback taken away: at this size SDSOS proves it)."""
-    from lyapcheck.models.classes import lyapunov
+    vector form is tried and refuses, and the condition is not certified by it (nothing else fits the
+    lowered size limit, the cheaper cones' fallback and the cascade form taken away: at this size SDSOS
+    proves it, and the cascade form, tests/test_cascade_lyapunov.py)."""
+    from lyapcheck.models.classes import cascade_lyapunov, lyapunov
 
     monkeypatch.setattr(lyapunov, "FALLBACK_CONES", ())
+    monkeypatch.setattr(cascade_lyapunov, "cascade_groups", lambda field: None)
     path = tmp_path / "platoon6.toml"
     path.write_text(networks.platoon(3))
     doc = certify(path, monkeypatch)

@@ -166,7 +166,7 @@ def gram_sizes(cert: dict[str, Any], prefix: str = "") -> list[str]:
         elif isinstance(value, list) and str(key).startswith("gram") and value and \
                 all(isinstance(v, dict) and isinstance(v.get("basis"), list) for v in value):
             largest = max(len(v["basis"]) for v in value)  # one Gram matrix per clique (kind lyapunov_cliques)
-            per = "subsystem" if cert.get("kind") == "lyapunov_vector" else "clique"  # (or per subsystem)
+            per = "subsystem" if cert.get("kind") in ("lyapunov_vector", "lyapunov_cascade") else "clique"
             out.append(f"{prefix}{key}: {len(value)} matrices, one per {per}, the largest {largest} x {largest}")
         elif isinstance(value, dict) and key != "V" and not str(key).startswith("gram"):
             out.extend(gram_sizes(value, f"{prefix}{key}."))

@@ -422,6 +422,10 @@ def _stability(name: str, condition: Mapping[str, Any]) -> str:
 
         return sentence(len(cert["groups"]), int(cert["degree"]),
                         with_unit(_number(condition, "decay_rate_V_per_s"), RATE_UNIT, direction="down"))
+    if kind == "lyapunov_cascade":  # ISS-Lyapunov functions of a cascade (lyapcheck.models.classes.cascade_lyapunov)
+        from lyapcheck.models.classes.cascade_lyapunov import sentence as cascade_sentence
+
+        return cascade_sentence(len(cert["groups"]), int(cert["degree"]))
     if kind not in ("lyapunov", "lyapunov_cliques"):
         raise ValueError(f"unknown certificate kind {kind!r}")
     if condition.get("property") == "GES":

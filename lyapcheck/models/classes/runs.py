@@ -58,14 +58,16 @@ def quadratic_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":
 def sos_gas_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":
     """A polynomial V of the searched degrees (over a box, V may depend on the parameters)."""
     from lyapcheck.degrees import searched_degrees
-    from lyapcheck.models.classes import lyapunov, vector_lyapunov
+    from lyapcheck.models.classes import cascade_lyapunov, lyapunov, vector_lyapunov
 
     sc = ctx.cleared
     # where the dense and clique forms of a degree found nothing and one reached a size limit, a vector
-    # Lyapunov function of the network's subsystems, once (vector_lyapunov.fallback)
+    # Lyapunov function of the network's subsystems, once (vector_lyapunov.fallback), then, where the
+    # subsystems form a cascade, one ISS-Lyapunov function per subsystem (cascade_lyapunov.fallback)
     return _stability(ctx, budget, lambda f, search: lyapunov.run(
         sc, "sos_gas", searched_degrees(lyapunov.SOS_GAS_DEGREES), search, param_degrees=BOX_PARAM_DEGREES, field=f,
-        fallback=lambda tried: vector_lyapunov.fallback(sc, f, "sos_gas", search, tried)))
+        fallback=lambda tried: vector_lyapunov.fallback(sc, f, "sos_gas", search, tried)
+        or cascade_lyapunov.fallback(sc, f, "sos_gas", search, tried)))
 
 
 def roa_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":

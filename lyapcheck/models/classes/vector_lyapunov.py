@@ -31,8 +31,10 @@ The search, in two steps (each linear):
    diagonal ``B_ii = -s_i - sum_k B_ki`` is written through the others, so that every constraint is linear
    (with the facial reduction of the clique form where the remainders must be singular).
 
-It is ``sos_gas``'s last form (:func:`fallback`, which :func:`lyapcheck.models.classes.lyapunov.run` calls
-after the dense and clique forms of each degree): tried once, where one of those reached a size limit.
+It is ``sos_gas``'s last form but one (:func:`fallback`, which :func:`lyapcheck.models.classes.lyapunov.run`
+calls after the dense and clique forms of each degree; the cascade form of
+:mod:`lyapcheck.models.classes.cascade_lyapunov` follows it): tried once, where one of those reached a
+size limit.
 
 Groups (:func:`subsystem_groups`): the strongly connected components of the field's interaction graph
 when there are at least two and each has at most :data:`MAX_GROUP_STATES` states (a cascade, e.g. the
@@ -74,13 +76,13 @@ LABEL: Final = "vector Lyapunov function"
 
 # -- the groups ---------------------------------------------------------------------------------------
 
-def _couplings(field: StateField) -> list[set[int]]:
+def couplings(field: StateField) -> list[set[int]]:
     """Per state ``i``, the other states ``g_i`` reads."""
     n = field.n
     return [{j for m in field.ring.support(gi) for j in range(n) if m[j] > 0 and j != i} for i, gi in enumerate(field.g)]
 
 
-def _strong_components(n: int, edges: Sequence[set[int]]) -> list[tuple[int, ...]]:
+def strong_components(n: int, edges: Sequence[set[int]]) -> list[tuple[int, ...]]:
     """The strongly connected components of the graph ``i -> j`` for ``j`` in ``edges[i]`` (Tarjan's
     algorithm, iterative), each sorted, in the order of their smallest state."""
     index: dict[int, int] = {}
@@ -133,8 +135,8 @@ def _fits(groups: Sequence[tuple[int, ...]], n: int) -> bool:
 def subsystem_groups(field: StateField) -> list[tuple[int, ...]] | None:
     """The states' partition into subsystems (see the module's docstring), or None."""
     n = field.n
-    couplings = _couplings(field)
-    components = _strong_components(n, couplings)
+    reads = couplings(field)
+    components = strong_components(n, reads)
     if _fits(components, n):
         return components
     parent = list(range(n))
@@ -145,9 +147,9 @@ def subsystem_groups(field: StateField) -> list[tuple[int, ...]] | None:
             i = parent[i]
         return i
 
-    for i, reads in enumerate(couplings):
-        if len(reads) == 1:  # an integrator: q' = p (up to a factor)
-            parent[find(i)] = find(next(iter(reads)))
+    for i, read in enumerate(reads):
+        if len(read) == 1:  # an integrator: q' = p (up to a factor)
+            parent[find(i)] = find(next(iter(read)))
     pairs: dict[int, list[int]] = {}
     for i in range(n):
         pairs.setdefault(find(i), []).append(i)
@@ -158,8 +160,8 @@ def subsystem_groups(field: StateField) -> list[tuple[int, ...]] | None:
 def neighbours(field: StateField, groups: Sequence[tuple[int, ...]]) -> list[list[int]]:
     """Per group ``i``, the other groups whose states the equations of group ``i`` read."""
     owner = {s: k for k, g in enumerate(groups) for s in g}
-    couplings = _couplings(field)
-    return [sorted({owner[j] for s in g for j in couplings[s]} - {k}) for k, g in enumerate(groups)]
+    reads = couplings(field)
+    return [sorted({owner[j] for s in g for j in reads[s]} - {k}) for k, g in enumerate(groups)]
 
 
 # -- step 1: each group's V_i from its isolated subsystem ---------------------------------------------
@@ -173,7 +175,7 @@ def isolated_field(field: StateField, group: Sequence[int]) -> StateField:
     return StateField(ring=sub, g=g, D=ring.restrict(field.D, sub))
 
 
-def _shape(sub: StateField) -> tuple[Any, ...]:
+def subsystem_shape(sub: StateField) -> tuple[Any, ...]:
     """The isolated subsystem as data without its names (equal subsystems share one search)."""
     ring = sub.ring
     return (tuple(tuple(sorted(ring.terms(gi).items())) for gi in sub.g), tuple(sorted(ring.terms(sub.D).items())))
@@ -199,7 +201,7 @@ def local_functions(field: StateField, groups: Sequence[tuple[int, ...]], degree
     out: list[GramPoly] = []
     for group in groups:
         sub = isolated_field(field, group)
-        key = _shape(sub)
+        key = subsystem_shape(sub)
         if key not in found:
             local, why = search_degree(sub, degree, search.over(sub.ring))
             names = ", ".join(sub.ring.names)
@@ -422,7 +424,7 @@ def comparison_search(field: StateField, groups: Sequence[tuple[int, ...]], Vs: 
 
 def fallback(scaled: "ScaledField", field: StateField, name: str, search: Search, detail: list[str]
              ) -> "ConditionResult | None":
-    """``sos_gas``'s last form (:func:`lyapcheck.models.classes.lyapunov.run` calls it after the dense and
+    """``sos_gas``'s vector form (:func:`lyapcheck.models.classes.lyapunov.run` calls it after the dense and
     clique forms of each degree found nothing): once per run, and only where one of them reached a size
     limit (a network too large for them), a vector Lyapunov function of the network's subsystems. Its
     line joins ``detail`` (what was tried); the certified result, or None. The class's time limit

@@ -226,6 +226,10 @@ def verify_lyapunov(name: str, c: dict[str, Any], check: "FieldCheck") -> tuple[
         from lyapcheck.models.classes import vector_lyapunov
 
         return vector_lyapunov.verify(c, cert, scaled, field)
+    if cert.get("kind") == "lyapunov_cascade":
+        from lyapcheck.models.classes import cascade_lyapunov
+
+        return cascade_lyapunov.verify(c, cert, scaled, field)
     if cert.get("kind") == "lyapunov" and cert.get("form") == "vertices":
         return _verify_vertices(c, cert, scaled, field)
     ring, n = field.ring, field.n

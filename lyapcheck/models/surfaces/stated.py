@@ -272,13 +272,15 @@ def candidate_of_polynomial(doc: dict[str, Any], model: Any, rows: list[Row]) ->
 #: the figures the exact check of each certificate kind (:mod:`lyapcheck.models.classes.verify_field`) compares
 _CHECKED_FIGURES: dict[str, tuple[str, ...]] = {
     "lyapunov": ("decay_rate_V_per_s",), "lyapunov_cliques": ("decay_rate_V_per_s",),
-    "lyapunov_vector": ("decay_rate_V_per_s",), "sublevel": ("level", "ball_radius", "size"),
+    "lyapunov_vector": ("decay_rate_V_per_s",), "lyapunov_cascade": ("degree",),
+    "sublevel": ("level", "ball_radius", "size"),
     "quadratic_ball": ("level", "ball_radius", "size"), "barrier": ("lambda_per_s",), "reach_avoid": ("reach_time_bound_s",),
     "sos_bound": ("bounds", "bounds_reference"), "interval": ("level", "size"),
     "discrete_sublevel": ("level", "size"), "discrete_interval": (),
 }
 #: what a certificate of each kind proves (a Lyapunov certificate: GAS, or GES where
-_KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "lyapunov_cliques": "GAS", "lyapunov_vector": "GAS", "sublevel": "ROA",
+_KIND_PROPERTY: dict[str, str] = {"lyapunov": "GAS", "lyapunov_cliques": "GAS", "lyapunov_vector": "GAS",
+                                  "lyapunov_cascade": "GAS", "sublevel": "ROA",
                                   "quadratic_ball": "ROA", "barrier": "safety", "reach_avoid": "reach_avoid",
                                   "sos_bound": "ultimate_bound", "interval": "ROA", "discrete_sublevel": "ROA",
                                   "discrete_interval": "ROA"}
