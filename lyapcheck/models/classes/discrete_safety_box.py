@@ -75,7 +75,8 @@ def verify_refutation(name: str, model: "Model", ring: Ring, F: Sequence[Poly], 
                       c: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-check a refutation of :func:`refute`: the stated value in the box (every parameter named, exact), the
     stated box the document's, then the point route's check of the start and its iterate on the map at that
-    value (:func:`~lyapcheck.models.classes.discrete_safety.check_iterate`)."""
+    value (:func:`~lyapcheck.models.classes.discrete_safety.check_iterate`); the sentence must name that value."""
+    from lyapcheck.models.classes.discrete_linearization import box_point_sentence
     from lyapcheck.models.classes.discrete_safety import check_iterate, map_sets
     from lyapcheck.models.classes.discrete_safety import verify_refutation as verify_start
 
@@ -92,6 +93,9 @@ def verify_refutation(name: str, model: "Model", ring: Ring, F: Sequence[Poly], 
         lo, hi = box.interval(key)
         if not lo <= value <= hi:
             return False, f"the stated {key} = {value} is not in the box [{lo}, {hi}]"
+    head = box_point_sentence(point, "")
+    if not str(c.get("summary", "")).startswith(head):
+        return False, f"the refutation's sentence does not name its value of the box ({head.rstrip(', ')})"
     states, F_at = map_at(ring, F, box, point)
     sets = map_sets(model, states)
     goal = sets["goal"][0] if name == "reach_avoid" else None
