@@ -12,6 +12,11 @@ number of steps with no unsafe iterate before; a widened box, a changed ``B`` co
 ``g = 0.8`` (the value stated), ``verify`` re-derives the iterate there, and a changed start, a value outside
 the box or a value of the box where the iterate is not unsafe fail it. Sets naming a parameter of the box stay
 ``not_applicable``.
+
+A map with functions' ``reach_avoid`` (:mod:`lyapcheck.models.classes.map_relations_reach`): on
+``examples/models/discrete-tanh-reach-unsafe-map.toml`` it is refuted by a start whose first iterate of the true
+map (numpy's tanh here, independent of the class's code) is unsafe and which is outside the goal; ``verify``
+re-derives it, and a changed start or step count fails; an iterate not proved outside the goal does not count.
 """
 
 from __future__ import annotations
@@ -197,3 +202,61 @@ def test_sets_naming_a_parameter_of_the_box_stay_not_applicable(tmp_path: Path) 
         c = doc["conditions"][name]
         assert c["status"] == "not_applicable"
         assert "may not depend on a parameter of the box" in c["summary"]
+
+
+TANH_UNSAFE = ROTATION.parent / "discrete-tanh-reach-unsafe-map.toml"
+
+
+@pytest.fixture(scope="module")
+def tanh_unsafe(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any], int]:
+    out = tmp_path_factory.mktemp("tanh_unsafe") / "out.json"
+    done = cli("certify", str(TANH_UNSAFE), "--classes", "reach_avoid", "--no-store", "--json", "--out", str(out))
+    return out, json.loads(out.read_text()), done.exit_code
+
+
+def test_a_map_with_functions_reach_avoid_is_refuted_by_an_unsafe_iterate_before_the_goal(
+        tanh_unsafe: tuple[Path, dict[str, Any], int]) -> None:
+    path, doc, code = tanh_unsafe
+    c = doc["conditions"]["reach_avoid"]
+    assert code == 1 and c["status"] == "refuted", c["summary"]
+    assert "before any iterate is in the goal" in c["summary"]
+    data = c["refutation"]
+    x = np.array([float(Fraction(data["start"][s])) for s in ("x", "y")])
+    assert (x[0] - 0.5) ** 2 + x[1] ** 2 <= 0.01
+    for _ in range(data["steps"]):
+        assert x[0] ** 2 + x[1] ** 2 > 0.04  # outside the goal before the unsafe iterate
+        x = np.array([x[1], -0.5 * x[0] + 0.8 * np.tanh(x[1])])
+    assert x[1] <= -0.2
+    assert cli("verify", str(path)).exit_code == 0
+
+
+@pytest.mark.parametrize("forge", ["start", "steps", "outside the initial set"])
+def test_a_forged_refutation_of_a_map_with_functions_fails_verify(tanh_unsafe: tuple[Path, dict[str, Any], int],
+                                                                  tmp_path: Path, forge: str) -> None:
+    _, doc, _ = tanh_unsafe
+    forged = copy.deepcopy(doc)
+    data = forged["conditions"]["reach_avoid"]["refutation"]
+    if forge == "start":
+        data["start"] = {"x": "0.5", "y": "0.09"}  # in the initial disc; its first iterate has y > -0.2
+    elif forge == "steps":
+        data["steps"] = data["steps"] + 1
+        forged["conditions"]["reach_avoid"]["steps_to_unsafe"] = data["steps"]
+    else:
+        data["start"] = {"x": "0.3", "y": "-0.1"}
+    assert verify_code(tmp_path, forged, "forged.json") == 1
+
+
+def test_an_iterate_not_proved_outside_the_goal_does_not_refute() -> None:
+    from lyapcheck.models.classes import map_relations_safety as mrs
+    from lyapcheck.models.classes.map_relations import on_relations
+    from lyapcheck.models.language.modelfile import load_any_model
+
+    model = load_any_model(str(TANH_UNSAFE))
+    m = on_relations(model)
+    sets = mrs.map_sets(model, m, ("initial", "unsafe", "goal"))
+    start = [Fraction(1, 2), Fraction(0)]
+    assert mrs.check_iterate_functions(model, m, sets["initial"], sets["unsafe"], start, 1, sets["goal"][0])[0]
+    # a goal holding the start: the same unsafe iterate no longer comes before the goal
+    wide_goal = [sets["goal"][0][0] + m.ring.constant(1)]
+    ok, why = mrs.check_iterate_functions(model, m, sets["initial"], sets["unsafe"], start, 1, wide_goal)
+    assert not ok and "outside the goal" in why

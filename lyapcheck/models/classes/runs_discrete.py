@@ -166,7 +166,7 @@ def barrier_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Conditio
 
 def reach_avoid_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A V of the states falling by eps per step outside the goal on the recasting's relations
-    (:func:`lyapcheck.models.classes.map_relations_reach.run`); at a point only, never refuted."""
+    (:func:`lyapcheck.models.classes.map_relations_reach.run`); at a point only; refuted by an unsafe iterate proved before any is in the goal."""
     from lyapcheck.models.classes import map_relations_reach
     from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
     from lyapcheck.results import ConditionResult

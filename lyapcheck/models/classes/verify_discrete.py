@@ -164,10 +164,11 @@ def verify_barrier_map_functions(name: str, c: dict[str, Any], check: "MapFuncti
 
 def verify_reach_avoid_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
     """``reach_avoid``: the map, its relations and the sets re-derived, every identity re-checked exactly, the
-    steps bound ``floor(C / eps)`` (:func:`lyapcheck.models.classes.map_relations_reach.verify`; never refuted)."""
+    steps bound ``floor(C / eps)``; a refutation's start and its unsafe iterate before the goal re-derived in ball
+    arithmetic (:func:`lyapcheck.models.classes.map_relations_reach.verify`)."""
     from lyapcheck.models.classes import map_relations_reach
 
-    if c["status"] != "certified":
+    if c["status"] not in ("certified", "refuted"):
         return False, check.not_checked(c["status"])
     return map_relations_reach.verify(check.model, _without_nominal_prefix(c))
 
