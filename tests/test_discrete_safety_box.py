@@ -260,3 +260,26 @@ def test_an_iterate_not_proved_outside_the_goal_does_not_refute() -> None:
     wide_goal = [sets["goal"][0][0] + m.ring.constant(1)]
     ok, why = mrs.check_iterate_functions(model, m, sets["initial"], sets["unsafe"], start, 1, wide_goal)
     assert not ok and "outside the goal" in why
+
+
+@pytest.mark.slow
+def test_a_box_sweep_certifies_the_safe_boxes_and_iterates_them_at_their_corners(tmp_path: Path) -> None:
+    """examples/models/sweeps/boxes-discrete-safety.toml: every box with g <= 0.7 is certified by both classes
+    (verify re-checks its document), iterated at its two corners and two random values with no alarm; every
+    box it refutes reaches g >= 0.725 (a corner where an iterate is proved unsafe)."""
+    from lyapcheck.api import verify
+    from tests.test_model_sweeps import arrays, run
+
+    run(ROTATION.parent / "sweeps" / "boxes-discrete-safety.toml", tmp_path / "boxes.zarr")
+    data = arrays(tmp_path / "boxes.zarr")
+    done = data["done"].astype(bool)
+    certified = done & (data["status_barrier"] == 1) & (data["status_reach_avoid"] == 1)
+    assert certified.any() and np.all(data["hi_g"][certified] <= 0.7 + 1e-12)
+    for j in np.flatnonzero(certified):
+        doc = json.loads(str(data["certificate"][j]))
+        assert verify(doc).valid
+        assert data["cross_check_points"][j] == 2 + 2 and data["cross_check_trajectories"][j] > 0
+        assert not data["soundness_violation"][j]
+        assert data["reach_avoid_reach_steps_bound"][j] >= 1
+    refuted = done & (data["status_barrier"] == 2)
+    assert refuted.any() and np.all(data["hi_g"][refuted] >= 0.725 - 1e-12)
