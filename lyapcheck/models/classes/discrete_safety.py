@@ -39,6 +39,16 @@ proof that the property fails: the class is ``refuted`` with the start and the s
 ``reach_avoid`` (:func:`run_reach_avoid`): a ``V`` that falls by ``eps`` at every step outside the goal and is
 bounded below, with the same sets' identities and the same falsification (an unsafe iterate before any in
 the goal); its figure ``reach_steps_bound`` is a number of steps (the section "reach_avoid" below).
+
+Over a box of parameters (``certify --box``) the ring holds the states, then the box's parameters normalized to
+``u in [-1, 1]`` (:func:`~lyapcheck.models.classes.discrete_lyapunov.map_polynomials`; the fixed point checked
+not to move). ``B`` (``V``) stays a polynomial of the states alone, one for every value of the box, and the step
+identity (each goal identity) subtracts the S-procedure terms ``sum_j r_j(e, u) (1 - u_j^2)``, every ``r_j`` a
+sum of squares (``box_multipliers``): on the box each term is ``>= 0``, so ``B(F(e, u)) <= lam B(e)``
+(``V(F(e, u)) <= V(e) - eps`` outside the goal) for every state and every value, and the arguments above hold
+along the iterates at any value of the box (even one that changes from step to step). The sets' identities
+are the point's (the sets may not name a parameter of the box: certify says so). The falsification runs at
+the box's corners and centre (:mod:`lyapcheck.models.classes.discrete_safety_box`).
 """
 
 from __future__ import annotations
