@@ -48,7 +48,8 @@ sum of squares (``box_multipliers``): on the box each term is ``>= 0``, so ``B(F
 (``V(F(e, u)) <= V(e) - eps`` outside the goal) for every state and every value, and the arguments above hold
 along the iterates at any value of the box (even one that changes from step to step). The sets' identities
 are the point's (the sets may not name a parameter of the box: certify says so). The falsification runs at
-the box's corners and centre (:mod:`lyapcheck.models.classes.discrete_safety_box`).
+the box's corners and centre (:mod:`lyapcheck.models.classes.discrete_safety_box`, which the classes' entries
+run first and whose ``verify`` re-checks a refutation over a box; this module never imports it).
 """
 
 from __future__ import annotations
@@ -896,12 +897,11 @@ def run_barrier(model: "Model", shifted: "ShiftedField", budget: Budget) -> Cond
 
 def _falsified(name: str, model: "Model", shifted: "ShiftedField", ring: Ring, F: Sequence[Poly],
                initial: Pieces, unsafe: Pieces, goal: Sequence[Poly] | None = None) -> ConditionResult | None:
-    """``refuted`` with an unsafe iterate proved (:func:`falsify_map`; over a box at one of its corners or its
-    centre, :func:`lyapcheck.models.classes.discrete_safety_box.refute`), or None."""
+    """``refuted`` with an unsafe iterate proved (:func:`falsify_map`), or None. Over a box, None: the box's
+    refutation (at its corners and centre) is :func:`lyapcheck.models.classes.discrete_safety_box.refute`, which
+    the class's entry runs first (:mod:`lyapcheck.models.classes.runs_discrete`)."""
     if shifted.box is not None:
-        from lyapcheck.models.classes import discrete_safety_box
-
-        return discrete_safety_box.refute(name, model, ring, F, shifted.box)
+        return None
     found_cx = falsify_map(model, ring, F, initial, unsafe, goal)
     if found_cx is None:
         return None
@@ -982,10 +982,8 @@ def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any], model: "Mod
         sets = map_sets(model, ring)
         goal = sets["goal"][0] if name == "reach_avoid" else None
         if c.get("status") == "refuted":
-            if shifted.box is not None:  # the refutation of one value of the box, re-derived there
-                from lyapcheck.models.classes import discrete_safety_box
-
-                return discrete_safety_box.verify_refutation(name, model, ring, F, shifted.box, c)
+            if shifted.box is not None:  # (re-derived at its value of the box: discrete_safety_box.verify)
+                return False, "a refutation over a box is re-checked at its value of the box, not here"
             return _verify_refutation(model, ring, F, sets, c, goal)
         cert = c["certificate"]
         kind = KIND if name == "barrier" else REACH_KIND

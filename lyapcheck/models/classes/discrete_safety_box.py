@@ -27,8 +27,10 @@ from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, Ring
 
 if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.engines.search import Budget
     from lyapcheck.models.language.modelfile import Model
     from lyapcheck.models.language.parameter_box import ModelBox
+    from lyapcheck.models.loop.field import ShiftedField
 
 #: the most values of a box the falsification visits (its corners then its centre, in that order): 2^k corners
 #: grow with the box's parameters, and each value costs one falsification of the map
@@ -71,6 +73,52 @@ def refute(name: str, model: "Model", ring: Ring, F: Sequence[Poly], box: "Model
     return None
 
 
+def run(name: str, model: "Model", shifted: "ShiftedField", budget: "Budget") -> ConditionResult:
+    """``barrier`` or ``reach_avoid`` of the map over its box: :func:`refute` first, then the point class's search
+    (:func:`~lyapcheck.models.classes.discrete_safety.run_barrier`,
+    :func:`~lyapcheck.models.classes.discrete_safety.run_reach_avoid`, one certificate for every value of the
+    box). Where the class is not taken (no sets, not a polynomial map, ...) the point class says why."""
+    from lyapcheck.models.classes import discrete_safety as ds
+    from lyapcheck.models.classes.discrete_lyapunov import NotAMap, map_polynomials
+
+    decide = ds.run_barrier if name == "barrier" else ds.run_reach_avoid
+    assert shifted.box is not None
+    if ds.no_sets(name, model) is None and not (name == "reach_avoid" and (model.stay_in_goal
+                                                                           or len(model.sets["goal"]) != 1)):
+        try:
+            ring, F = map_polynomials(shifted)
+        except NotAMap:
+            return decide(model, shifted, budget)  # (its not_applicable sentence)
+        refuted = refute(name, model, ring, F, shifted.box)
+        if refuted is not None:
+            return refuted
+    return decide(model, shifted, budget)
+
+
+def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any], model: "Model") -> tuple[bool, str]:
+    """Re-check a map's ``barrier`` or ``reach_avoid`` over its box: a certificate by the point class's check
+    (:func:`lyapcheck.models.classes.discrete_safety.verify`, the box's multipliers and ``parameter_box``
+    included), a refutation by :func:`verify_refutation`."""
+    from lyapcheck.models.classes import discrete_safety as ds
+    from lyapcheck.models.classes.discrete_lyapunov import NotAMap, map_polynomials
+
+    if c.get("status") != "refuted":
+        return ds.verify(shifted, name, c, model)
+    prop = {"barrier": "safety", "reach_avoid": "reach_avoid"}.get(name)
+    if prop is None or c.get("property") != prop:
+        return False, f"a refuted {name} over a box is not a claim about {c.get('property')}"
+    if ds.no_sets(name, model) is not None:
+        return False, f"the model has no [sets] for {name}"
+    if name == "reach_avoid" and (model.stay_in_goal or len(model.sets["goal"]) != 1):
+        return False, "a map's reach_avoid takes a goal of one piece and no stay_in_goal"
+    assert shifted.box is not None
+    try:
+        ring, F = map_polynomials(shifted)
+        return verify_refutation(name, model, ring, F, shifted.box, c)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError, IndexError, NotAMap) as exc:
+        return False, f"malformed refutation: {exc}"
+
+
 def verify_refutation(name: str, model: "Model", ring: Ring, F: Sequence[Poly], box: "ModelBox",
                       c: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-check a refutation of :func:`refute`: the stated value in the box (every parameter named, exact), the
@@ -104,4 +152,4 @@ def verify_refutation(name: str, model: "Model", ring: Ring, F: Sequence[Poly], 
     return (True, f"at a value of the box: {why}") if ok else (False, f"at the stated value of the box: {why}")
 
 
-__all__ = ["MAX_BOX_POINTS", "map_at", "refute", "verify_refutation"]
+__all__ = ["MAX_BOX_POINTS", "map_at", "refute", "run", "verify", "verify_refutation"]

@@ -75,16 +75,20 @@ def candidate_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
 def barrier_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
     """A barrier ``lam B - B(F)`` SOS, or an unsafe iterate proved
     (:func:`lyapcheck.models.classes.discrete_safety.run_barrier`)."""
-    from lyapcheck.models.classes import discrete_safety
+    from lyapcheck.models.classes import discrete_safety, discrete_safety_box
 
+    if ctx.shifted.box is not None:  # one B for every value of the box, or an unsafe corner (centre) first
+        return discrete_safety_box.run("barrier", ctx.model, ctx.shifted, budget)
     return discrete_safety.run_barrier(ctx.model, ctx.shifted, budget)
 
 
 def reach_avoid_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
     """A V falling by eps per step outside the goal, or an unsafe iterate proved
     (:func:`lyapcheck.models.classes.discrete_safety.run_reach_avoid`)."""
-    from lyapcheck.models.classes import discrete_safety
+    from lyapcheck.models.classes import discrete_safety, discrete_safety_box
 
+    if ctx.shifted.box is not None:  # one V for every value of the box, or an unsafe corner (centre) first
+        return discrete_safety_box.run("reach_avoid", ctx.model, ctx.shifted, budget)
     return discrete_safety.run_reach_avoid(ctx.model, ctx.shifted, budget)
 
 

@@ -90,10 +90,12 @@ def verify_region_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[
 def verify_safety_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
     """``barrier``, ``reach_avoid``: the certificate's identities on the map and the sets, or a refutation's
     unsafe iterate, re-derived from the model text (:func:`lyapcheck.models.classes.discrete_safety.verify`)."""
-    from lyapcheck.models.classes import discrete_safety
+    from lyapcheck.models.classes import discrete_safety, discrete_safety_box
 
     if c["status"] not in ("certified", "refuted"):
         return False, check.not_checked(c["status"])
+    if check.shifted.box is not None:  # over a box (a refutation at its stated value of the box)
+        return discrete_safety_box.verify(check.shifted, name, c, check.model)
     return discrete_safety.verify(check.shifted, name, c, check.model)
 
 
