@@ -808,8 +808,9 @@ def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
 #: the classes a box sweep of a polynomial map takes: those ``certify --box`` proves over a box of a map whose
 #: certified boxes the sweep cross-checks by iterating at the box's corners and random points (a global V that
 #: never rises, a Stein ``P`` along the Jacobian's iterates, a set {V <= c} its starts never leave, a bound under
-#: disturbances within its envelope); ``candidate`` needs the user's V and is never swept
-MAP_BOX_SWEPT: Final = ("linearization", "quadratic", "sos_gas", "roa", "sos_bound")
+#: disturbances within its envelope, starts in the initial set never unsafe and, for reach_avoid, in the goal
+#: within the certified steps); ``candidate`` needs the user's V and is never swept
+MAP_BOX_SWEPT: Final = ("linearization", "quadratic", "sos_gas", "roa", "sos_bound", "barrier", "reach_avoid")
 
 
 def map_box_classes(model: Model | RecastModel | None = None) -> tuple[str, ...]:

@@ -220,16 +220,6 @@ REFUSALS: tuple[Refusal, ...] = (
             "not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("discrete",), ("barrier", "reach_avoid"), ("--box", "sweep boxes")),
-            ("decided at one parameter value only on a map", "takes these only"),
-            "A discrete-time map (`[model] time = \"discrete\"`) takes every class at a point, each checked "
-            "exactly, and reports and point sweeps iterate it. Over a `--box` it takes `linearization` (one Stein "
-            "`P` for every Jacobian of the box, or an unstable corner), `quadratic` and `sos_gas` (one `V` for every "
-            "value, box multipliers, exact), `roa`, `candidate` and `sos_bound` (one set or one bound for every "
-            "value); its safety classes are decided at a point only. A box sweep takes the classes `--box` proves "
-            "but `candidate` (which needs your V), each box iterated at its corners and random points (a set's "
-            "starts inside it, a bound's under disturbances); a barrier or reach-avoid over a box is not built (a "
-            "gap, not a theorem)."),
     Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier", "reach_avoid"),
                   ("--box", "sweep boxes")),
             ("over a box a discrete-time map with functions takes linearization and roa only", "takes these only"),

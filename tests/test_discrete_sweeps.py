@@ -442,8 +442,8 @@ def test_a_map_s_box_certificates_are_iterated_at_its_corners_and_false_ones_cau
 
 
 def test_a_map_s_box_sweep_refuses_classes_it_does_not_take(tmp_path: Path) -> None:
-    """Over boxes a polynomial map takes linearization, quadratic, sos_gas, roa and sos_bound: barrier is refused
-    in one line naming the field, the accepted classes and what was given (exit 2, nothing written); a map with
+    """Over boxes a polynomial map takes linearization, quadratic, sos_gas, roa, sos_bound, and barrier and
+    reach_avoid with their sets: barrier on a map without sets is refused in one line naming the field, the accepted classes and what was given (exit 2, nothing written); a map with
     functions takes linearization and roa (its default), and quadratic over boxes is refused alike."""
     from sweeps.spec import load_model_spec
     from tests.test_discrete_reports import WITH_FUNCTIONS

@@ -5,8 +5,9 @@ The tanh reach map (examples/models/discrete-tanh-reach-map.toml) is certified w
 TRUE map (numpy's tanh, independent of the class's code) obeys from every sampled start of the initial disc:
 each reaches the goal within the bound and none is unsafe before; ``V`` obeys its inequalities at sampled
 points. ``verify`` (the one flow, the CLI) re-checks it, and a forged steps bound, ``eps`` or ``V`` fails it.
-A goal the iterates never reach is ``not_certified`` with a reason (never ``refuted``: no refutation is
-built), and a model without the sets is ``not_applicable``.
+A goal the iterates never reach is ``not_certified`` with a reason (not ``refuted``: staying out of the goal
+refutes nothing; tests/test_discrete_safety_box.py has the refutation by an unsafe iterate before the goal),
+and a model without the sets is ``not_applicable``.
 """
 
 from __future__ import annotations
@@ -157,7 +158,7 @@ def test_forged_certificates_fail_verify(certified: tuple[Path, dict[str, Any]],
 
 
 def test_a_goal_never_reached_is_not_certified_with_a_reason() -> None:
-    # the iterates tend to the origin: a goal around (3, 0) is never reached (never refuted: no refutation)
+    # the iterates tend to the origin: a goal around (3, 0) is never reached (not refuted: no iterate is unsafe)
     text = REACH.read_text().replace('goal = ["x**2 + y**2 <= 0.04"]', 'goal = ["(x - 3)**2 + y**2 <= 0.04"]')
     result = mrr.run(_map(text), Budget(60.0, "test"))
     assert result.status == "not_certified", result.summary

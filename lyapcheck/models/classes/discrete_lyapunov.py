@@ -520,14 +520,19 @@ def _check_ges_figures(P: Sequence[Sequence[Fraction]], mu: Fraction, figures: M
 # -- a map over a box: what is taken ------------------------------------------------------------------
 
 #: the classes a polynomial map takes over a box of parameters (``certify --box``): one V for every value
-BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+#: (``barrier`` and ``reach_avoid``: one B or V of the states, :mod:`lyapcheck.models.classes.discrete_safety`, with
+#: the box's multipliers in its step identities; refuted at a value of the box,
+#: :mod:`lyapcheck.models.classes.discrete_safety_box`)
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "barrier", "reach_avoid",
+                      "sos_bound")
 
 
 def not_over_box(name: str) -> str:
     """The ``not_applicable`` sentence of a class other than :data:`BOX_CLASSES` on a map over a box."""
     return (f"{name} is decided at one parameter value only on a map (certify a point with --set NAME=VALUE); "
             "over a box, linearization proves LES, quadratic GES, sos_gas GAS, roa and candidate a region of "
-            "attraction and sos_bound an ultimate bound for every value of the box")
+            "attraction, barrier safety, reach_avoid reach-avoid and sos_bound an ultimate bound for every value "
+            "of the box")
 
 
 # -- linearization over a box: one Stein certificate for every Jacobian of the box --------------------

@@ -39,6 +39,17 @@ proof that the property fails: the class is ``refuted`` with the start and the s
 ``reach_avoid`` (:func:`run_reach_avoid`): a ``V`` that falls by ``eps`` at every step outside the goal and is
 bounded below, with the same sets' identities and the same falsification (an unsafe iterate before any in
 the goal); its figure ``reach_steps_bound`` is a number of steps (the section "reach_avoid" below).
+
+Over a box of parameters (``certify --box``) the ring holds the states, then the box's parameters normalized to
+``u in [-1, 1]`` (:func:`~lyapcheck.models.classes.discrete_lyapunov.map_polynomials`; the fixed point checked
+not to move). ``B`` (``V``) stays a polynomial of the states alone, one for every value of the box, and the step
+identity (each goal identity) subtracts the S-procedure terms ``sum_j r_j(e, u) (1 - u_j^2)``, every ``r_j`` a
+sum of squares (``box_multipliers``): on the box each term is ``>= 0``, so ``B(F(e, u)) <= lam B(e)``
+(``V(F(e, u)) <= V(e) - eps`` outside the goal) for every state and every value, and the arguments above hold
+along the iterates at any value of the box (even one that changes from step to step). The sets' identities
+are the point's (the sets may not name a parameter of the box: certify says so). The falsification runs at
+the box's corners and centre (:mod:`lyapcheck.models.classes.discrete_safety_box`, which the classes' entries
+run first and whose ``verify`` re-checks a refutation over a box; this module never imports it).
 """
 
 from __future__ import annotations
@@ -51,11 +62,12 @@ from lyapcheck.models.classes.claims import (DISCRETE_BARRIER_KIND, DISCRETE_BAR
                                              discrete_reach_sentence)
 from lyapcheck.models.classes.discrete_lyapunov import NotAMap, compose, map_polynomials
 from lyapcheck.models.engines import reasons
-from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, exact_grams, one, \
-    param, why_none
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, box_multipliers, \
+    box_multipliers_from_json, box_support, exact_grams, multiplier_grams, multiplier_variable, one, param, why_none
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
-from lyapcheck.sos.certificates import GramPoly, PieceCertificate, check_on_sets, piece_generators
+from lyapcheck.sos.certificates import BoxMultipliers, GramPoly, PieceCertificate, box_terms, check_on_sets, \
+    piece_generators
 from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials
 from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, full_blocks
 
@@ -97,8 +109,33 @@ def map_sets(model: "Model", ring: Ring) -> dict[str, list[list[Poly]]]:
     full = model.state_ring
     gens = full.gens()
     images = [g + to_fmpq(e) for g, e in zip(gens[:model.n], model.equilibrium)] + list(gens[model.n:])
-    return {key: [[full.restrict(full.compose(p, images), ring) for p in piece] for piece in pieces]
+    # over a box the ring ends with the box's normalized parameters, which no set names (certify refuses sets
+    # naming one): the sets are moved in the ring of the variables they share, then embedded
+    shared = Ring(tuple(name for name in ring.names if name in full.names))
+    return {key: [[embed(shared, full.restrict(full.compose(p, images), shared), ring) for p in piece]
+                  for piece in pieces]
             for key, pieces in model.sets.items()}
+
+
+def embed(src: Ring, p: Poly, dst: Ring) -> Poly:
+    """``p`` of ``src`` in ``dst``, a ring holding every variable of ``src`` by name (at exponent 0 the others)."""
+    if src.names == dst.names:
+        return p
+    index = [dst.names.index(name) for name in src.names]
+    terms = {}
+    for m, c in src.terms(p).items():
+        out = [0] * dst.nvars
+        for i, k in zip(index, m):
+            out[i] = k
+        terms[tuple(out)] = c
+    return dst.from_terms(terms)
+
+
+def state_basis(ring: Ring, n: int, degree: int) -> list[Monomial]:
+    """The monomials of degree 0..``degree`` of the ``n`` states (the ring's first variables), embedded in the
+    ring: a barrier's B (a reach-avoid V) is of the states alone, one for every value of a box."""
+    pad = tuple([0] * (ring.nvars - n))
+    return [tuple(m) + pad for m in monomials(n, 0, degree)]
 
 
 # -- the certificate and its exact check ---------------------------------------------------------------------
@@ -112,14 +149,19 @@ class DiscreteBarrier:
     initial: tuple[PieceCertificate, ...]
     unsafe: tuple[PieceCertificate, ...]
     step: GramPoly
+    #: over a box: the step identity's multipliers ``(j, r_j)`` of ``1 - u_j^2`` (none at a point)
+    box: BoxMultipliers = ()
 
     def to_json(self, ring: Ring) -> dict[str, Any]:
         from lyapcheck.models.classes.lyapunov import terms_json
 
-        return {"kind": KIND, "time": "discrete", "coordinates": "shifted", "degree": poly_degree(ring, self.B),
-                "lambda": str(self.lam), "B": terms_json(ring, self.B),
-                "initial": [piece_json(c) for c in self.initial], "unsafe": [piece_json(c) for c in self.unsafe],
-                "gram_step": self.step.to_json()}
+        out = {"kind": KIND, "time": "discrete", "coordinates": "shifted", "degree": poly_degree(ring, self.B),
+               "lambda": str(self.lam), "B": terms_json(ring, self.B),
+               "initial": [piece_json(c) for c in self.initial], "unsafe": [piece_json(c) for c in self.unsafe],
+               "gram_step": self.step.to_json()}
+        if self.box:
+            out["box_multipliers"] = multipliers_json(self.box)
+        return out
 
     @classmethod
     def from_json(cls, ring: Ring, cert: Mapping[str, Any]) -> "DiscreteBarrier":
@@ -130,7 +172,27 @@ class DiscreteBarrier:
 
         return cls(poly_from_json(ring, cert["B"], "B"), read_rational(cert["lambda"], "lambda"),
                    tuple(piece_of(c, n) for c in cert["initial"]), tuple(piece_of(c, n) for c in cert["unsafe"]),
-                   GramPoly.from_json(cert["gram_step"], n))
+                   GramPoly.from_json(cert["gram_step"], n),
+                   tuple(box_multipliers_from_json(cert.get("box_multipliers", []), n)))
+
+
+def multipliers_json(box: BoxMultipliers) -> list[dict[str, Any]]:
+    """A box's multipliers ``(j, r_j)`` as a certificate writes them (``variable``: the ring's index)."""
+    return [{"variable": j, "gram": r.to_json()} for j, r in box]
+
+
+def check_box_form(ring: Ring, n: int, p: Poly, name: str, box: BoxMultipliers) -> tuple[Poly | None, str]:
+    """What a box asks of a map's safety certificate: ``p`` (B or V) of the ``n`` states alone (one for every
+    value of the box) and each multiplier PSD on a box variable (the ring's variables after the states): the
+    term ``sum_j r_j (1 - u_j^2)``, or None and why not."""
+    if any(any(m[n:]) for m in ring.support(p)):
+        return None, f"{name} must be a polynomial of the states alone (one {name} for every value of the box)"
+    if any(not n <= j < ring.nvars for j, _ in box):
+        return None, "a box multiplier names a variable that is not one of the box's parameters"
+    boxed, why = box_terms(ring, box)
+    if why is not None:
+        return None, why
+    return boxed, ""
 
 
 def piece_json(cert: PieceCertificate) -> dict[str, Any]:
@@ -157,14 +219,22 @@ def check_discrete_barrier(ring: Ring, F: Sequence[Poly], initial: Pieces, unsaf
 
     if cert.lam < 0:
         return False, "the rate lambda must be >= 0 (for {B <= 0} to be invariant)"
+    boxed, box_why = check_box_form(ring, len(F), cert.B, "B", cert.box)
+    if boxed is None:
+        return False, box_why
     ok, why = check_on_sets(ring, cert.B, "B", [tuple(p) for p in initial], cert.initial,
                             [tuple(p) for p in unsafe], cert.unsafe)
     if not ok:
         return False, why
     if not is_positive_semidefinite(cert.step.Q):
         return False, "the step remainder is not positive semidefinite (exact)"
-    if cert.B * ring.constant(cert.lam) - compose(ring, cert.B, F) != cert.step.poly(ring):
-        return False, "the step identity lambda B - B(F) = r does not hold exactly"
+    if cert.B * ring.constant(cert.lam) - compose(ring, cert.B, F) - boxed != cert.step.poly(ring):
+        return False, "the step identity lambda B - B(F) = r does not hold exactly" + (
+            " (with the box's multipliers)" if cert.box else "")
+    if ring.nvars > len(F):  # over a box: each r_j (1 - u_j^2) >= 0 there, so B(F(e, u)) <= lambda B(e) on it
+        return True, (f"{why}, and lambda B - B(F) - sum_j r_j (1 - u_j^2) = r with r and every r_j sums of squares "
+                      f"and lambda = {cert.lam} >= 0, exactly: B(F(e, u)) <= lambda B(e) for every state and every "
+                      "value of the box, so {B <= 0} holds at every step (discrete-time map)")
     return True, (f"{why}, and lambda B - B(F) = r with r a sum of squares and lambda = {cert.lam} >= 0, exactly: "
                   "B(F(e)) <= lambda B(e) for every state, so {B <= 0} holds at every step (discrete-time map)")
 
@@ -217,9 +287,9 @@ def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pi
     from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
     from lyapcheck.models.engines.reasons import size_limit
 
-    n = ring.nvars
-    zero = tuple([0] * n)
-    b_basis = monomials(n, 0, degree)
+    nv = ring.nvars
+    zero = tuple([0] * nv)
+    b_basis = state_basis(ring, len(F), degree)
     sets = _on_sets_program(ring, F, b_basis, degree, initial, unsafe, drop)
     if isinstance(sets, str):
         return sets
@@ -230,14 +300,40 @@ def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pi
         support = _step_support(ring, F, m)
         terms.append(Term(param(f"sB{i}", support), f"b{i}"))
         target |= set(support)
+    # over a box: - sum_j r_j(e, u) (1 - u_j^2), the remainder's basis widened by what they add
+    box_grams, box_terms_ = _box_multipliers(ring, len(F), target | {zero}, "RuS", drop)
+    grams.extend(box_grams)
+    terms.extend(box_terms_)
+    target |= box_support(box_grams, nv)
     if len(target) > TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
-    step_basis = [m for m in bases.sos_basis(n, target | {zero}) if ("RS", m) not in drop]
+    step_basis = [m for m in bases.sos_basis(nv, target | {zero}) if ("RS", m) not in drop]
     if len(step_basis) > MAX_GRAM_ROWS:
         return size_limit(len(step_basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
     grams.append(Gram("RS", tuple(step_basis), full_blocks(step_basis)))
     terms.append(Term(one(ring, -1), "RS"))
-    return _affordable_program(n, grams, scalars, [*on_sets, Identity("step", tuple(terms), None, "RS")])
+    return _affordable_program(nv, grams, scalars, [*on_sets, Identity("step", tuple(terms), None, "RS")])
+
+
+def _box_multipliers(ring: Ring, n: int, target: set[Monomial], prefix: str,
+                     drop: frozenset[tuple[str, Monomial]]) -> tuple[list[Gram], list[Term]]:
+    """Over a box (the ring's variables after the ``n`` states), the S-procedure terms ``-r_j (1 - u_j^2)`` of
+    one identity whose other terms span ``target`` (:func:`~lyapcheck.models.engines.search.box_multipliers`,
+    named ``<prefix><j>``, ``R...`` so that facial reduction drops the rows a multiplier must leave at 0, as its
+    constant term where the identity's other terms vanish at the origin for every ``u``), less the monomials
+    facial reduction dropped; none at a point."""
+    from dataclasses import replace
+
+    if ring.nvars == n:
+        return [], []
+    grams, terms = box_multipliers(ring.nvars, n, target, with_states=False, prefix=prefix)
+    kept = []
+    for g in grams:
+        basis = tuple(m for m in g.basis if (g.name, m) not in drop)
+        if basis:
+            kept.append(replace(g, basis=basis, blocks=full_blocks(basis)))
+    names = {g.name for g in kept}
+    return kept, [t for t in terms if t.decision in names]
 
 
 def barrier_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction
@@ -250,7 +346,7 @@ def barrier_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, 
 
     values = ParameterValues()
     set_values(StateField(ring=ring, g=tuple(F), D=ring.constant(1)), values, initial, unsafe)
-    for i, m in enumerate(monomials(ring.nvars, 0, degree)):
+    for i, m in enumerate(state_basis(ring, len(F), degree)):
         zm = ring.monomial(m)
         values.set_poly(ring, f"sB{i}", zm * to_fmpq(lam) - compose(ring, zm, F), _step_support(ring, F, m))
     return values
@@ -265,10 +361,11 @@ def attempt(ring: Ring, F: Sequence[Poly], structure: Structure, degree: int, in
     point, solution = search.solve_exact(structure, values)
     if point is None:
         return None, solution
-    B = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(monomials(ring.nvars, 0, degree))})
+    B = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(state_basis(ring, len(F), degree))})
     grams = exact_grams(structure, point)
     initial_certs, unsafe_certs = set_certificates(structure, grams, initial, unsafe)
-    cert = DiscreteBarrier(B, lam, tuple(initial_certs), tuple(unsafe_certs), grams["RS"])
+    box = tuple((multiplier_variable(g.name), grams[g.name]) for g in multiplier_grams(structure, "RuS"))
+    cert = DiscreteBarrier(B, lam, tuple(initial_certs), tuple(unsafe_certs), grams["RS"], box)
     if not check_discrete_barrier(ring, F, initial, unsafe, cert)[0]:
         return None, solution
     return cert, solution
@@ -461,6 +558,8 @@ class DiscreteReach:
     unsafe: tuple[PieceCertificate, ...]
     goal: tuple[tuple[GramPoly, GramPoly], ...]
     below: GramPoly
+    #: over a box: each goal identity's multipliers ``(j, r_j)`` of ``1 - u_j^2`` (none at a point)
+    box: tuple[BoxMultipliers, ...] = ()
 
     def steps_bound(self) -> int:
         """``floor(C / eps)``: the goal is reached at a step at most this (0 when ``C < 0``: then no start
@@ -474,7 +573,9 @@ class DiscreteReach:
                 "eps": str(self.eps), "C": str(self.C), "reach_steps_bound": self.steps_bound(),
                 "V": terms_json(ring, self.V), "initial": [piece_json(c) for c in self.initial],
                 "unsafe": [piece_json(c) for c in self.unsafe],
-                "goal": [{"multiplier": g.to_json(), "remainder": r.to_json()} for g, r in self.goal],
+                "goal": [{"multiplier": g.to_json(), "remainder": r.to_json(),
+                          **({"box_multipliers": multipliers_json(self.box[k])} if self.box else {})}
+                         for k, (g, r) in enumerate(self.goal)],
                 "gram_below": self.below.to_json()}
 
     @classmethod
@@ -489,7 +590,9 @@ class DiscreteReach:
                    tuple(piece_of(c, n) for c in cert["unsafe"]),
                    tuple((GramPoly.from_json(g["multiplier"], n), GramPoly.from_json(g["remainder"], n))
                          for g in cert["goal"]),
-                   GramPoly.from_json(cert["gram_below"], n))
+                   GramPoly.from_json(cert["gram_below"], n),
+                   tuple(tuple(box_multipliers_from_json(g["box_multipliers"], n)) for g in cert["goal"]
+                         if "box_multipliers" in g))
 
 
 def check_discrete_reach(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, goal: Sequence[Poly],
@@ -506,19 +609,25 @@ def check_discrete_reach(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe:
                             [tuple(p) for p in unsafe], cert.unsafe)
     if not ok:
         return False, why
-    if len(cert.goal) != len(goal):
+    if len(cert.goal) != len(goal) or len(cert.box) not in (0, len(goal)):
         return False, "one proof per inequality of the goal is needed"
     step = cert.V - compose(ring, cert.V, F) - ring.constant(cert.eps)
     for k, (q, (g, r)) in enumerate(zip(goal, cert.goal)):
         if not is_positive_semidefinite(g.Q) or not is_positive_semidefinite(r.Q):
             return False, f"goal inequality {k + 1}: a Gram matrix is not positive semidefinite (exact)"
-        if step + g.poly(ring) * q != r.poly(ring):
-            return False, f"goal inequality {k + 1}: V - V(F) - eps + g q = r does not hold exactly"
+        # over a box each r_j (1 - u_j^2) >= 0 on it: V(F(e, u)) <= V(e) - eps outside the goal, every u
+        boxed, box_why = check_box_form(ring, len(F), cert.V, "V", cert.box[k] if cert.box else ())
+        if boxed is None:
+            return False, box_why
+        if step + g.poly(ring) * q - boxed != r.poly(ring):
+            return False, f"goal inequality {k + 1}: V - V(F) - eps + g q = r does not hold exactly" + (
+                " (with the box's multipliers)" if cert.box else "")
     if not is_positive_semidefinite(cert.below.Q) or cert.V + ring.constant(cert.C) != cert.below.poly(ring):
         return False, "V + C = r (V bounded below) does not hold exactly with r a sum of squares"
-    return True, (f"{why}, V(F(e)) <= V(e) - eps outside the goal (eps = {cert.eps} > 0) and V >= -C (C = {cert.C}), "
-                  f"exactly: the goal is reached within {cert.steps_bound()} steps, no iterate unsafe before "
-                  "(discrete-time map)")
+    every = " for every value of the box" if ring.nvars > len(F) else ""
+    return True, (f"{why}, V(F(e)) <= V(e) - eps outside the goal{every} (eps = {cert.eps} > 0) and V >= -C "
+                  f"(C = {cert.C}), exactly: the goal is reached within {cert.steps_bound()} steps, no iterate unsafe "
+                  "before (discrete-time map)")
 
 
 def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, goal: Sequence[Poly],
@@ -531,7 +640,7 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
 
     n = ring.nvars
     zero = tuple([0] * n)
-    v_basis = monomials(n, 0, degree)
+    v_basis = state_basis(ring, len(F), degree)
     sets = _on_sets_program(ring, F, v_basis, degree, initial, unsafe, drop)
     if isinstance(sets, str):
         return sets
@@ -543,10 +652,13 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
     top = max(sum(m) for m in step_support)
     for k, q in enumerate(goal):
         half = max(0, (top - poly_degree(ring, q) + 1) // 2)
-        g_basis = monomials(n, 0, half)
+        g_basis = state_basis(ring, len(F), half)
         products = {tuple(a + b for a, b in zip(x, y)) for x in g_basis for y in g_basis}
         target = step_support | {zero} | {tuple(a + b for a, b in zip(x, y)) for x in products
                                           for y in ring.support(q)}
+        # over a box: - sum_j r_j(e, u) (1 - u_j^2) in this goal identity, the remainder widened by what it adds
+        box_grams, box_terms_ = _box_multipliers(ring, len(F), target, f"RuG{k}v", drop)
+        target |= box_support(box_grams, n)
         if len(target) > TARGET_LIMIT:
             return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
         basis = [m for m in bases.sos_basis(n, target) if (f"RG{k}", m) not in drop]
@@ -557,9 +669,10 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
         g_basis = [m for m in g_basis if (f"Rg{k}", m) not in drop]
         if not g_basis:
             return "the goal's multiplier has no row left"
-        grams += [Gram(f"Rg{k}", tuple(g_basis), full_blocks(g_basis)), Gram(f"RG{k}", tuple(basis), full_blocks(basis))]
+        grams += [Gram(f"Rg{k}", tuple(g_basis), full_blocks(g_basis)), Gram(f"RG{k}", tuple(basis), full_blocks(basis)),
+                  *box_grams]
         terms = [Term(param(f"sV{i}", _step_support(ring, F, m)), f"b{i}") for i, m in enumerate(v_basis)]
-        terms += [Term(one(ring, -1), "eps"), Term(param(f"q{k}", ring.support(q)), f"Rg{k}"),
+        terms += [Term(one(ring, -1), "eps"), Term(param(f"q{k}", ring.support(q)), f"Rg{k}"), *box_terms_,
                   Term(one(ring, -1), f"RG{k}")]
         identities.append(Identity(f"G{k}", tuple(terms), None, f"RG{k}"))
     below = [m for m in bases.sos_basis(n, set(v_basis) | {zero}) if ("RB", m) not in drop]
@@ -571,6 +684,16 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
     return _affordable_program(n, grams, scalars, identities)
 
 
+def goal_box(structure: Structure, grams: Mapping[str, GramPoly], ring: Ring, n: int, goals: int
+             ) -> tuple[BoxMultipliers, ...]:
+    """Each goal identity's exact box multipliers ``(j, r_j)`` of a solved :func:`reach_structure` (none at a
+    point: the ring has only the ``n`` states)."""
+    if ring.nvars == n:
+        return ()
+    return tuple(tuple((multiplier_variable(g.name), grams[g.name]) for g in multiplier_grams(structure, f"RuG{k}v"))
+                 for k in range(goals))
+
+
 def reach_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly]
                  ) -> ParameterValues:
     """The program's parameters: the sets' inequalities, each of V's monomials' step coefficient
@@ -580,7 +703,7 @@ def reach_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, un
 
     values = ParameterValues()
     set_values(StateField(ring=ring, g=tuple(F), D=ring.constant(1)), values, initial, unsafe)
-    for i, m in enumerate(monomials(ring.nvars, 0, degree)):
+    for i, m in enumerate(state_basis(ring, len(F), degree)):
         zm = ring.monomial(m)
         values.set_poly(ring, f"sV{i}", zm - compose(ring, zm, F), _step_support(ring, F, m))
     for k, q in enumerate(goal):
@@ -597,11 +720,12 @@ def attempt_reach(ring: Ring, F: Sequence[Poly], structure: Structure, degree: i
     point, solution = search.solve_exact(structure, values)
     if point is None:
         return None, solution
-    V = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(monomials(ring.nvars, 0, degree))})
+    V = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(state_basis(ring, len(F), degree))})
     grams = exact_grams(structure, point)
     initial_certs, unsafe_certs = set_certificates(structure, grams, initial, unsafe)
     cert = DiscreteReach(V, point.scalars["eps"], point.scalars["C"], tuple(initial_certs), tuple(unsafe_certs),
-                         tuple((grams[f"Rg{k}"], grams[f"RG{k}"]) for k in range(len(goal))), grams["RB"])
+                         tuple((grams[f"Rg{k}"], grams[f"RG{k}"]) for k in range(len(goal))), grams["RB"],
+                         goal_box(structure, grams, ring, len(F), len(goal)))
     if not check_discrete_reach(ring, F, initial, unsafe, goal, cert)[0]:
         return None, solution
     return cert, solution
@@ -682,11 +806,12 @@ def attempt_tighter(ring: Ring, F: Sequence[Poly], structure: Structure, degree:
     point, _ = search.solve_exact(structure, values)
     if point is None:
         return None
-    V = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(monomials(ring.nvars, 0, degree))})
+    V = ring.from_terms({m: point.scalars[f"b{i}"] for i, m in enumerate(state_basis(ring, len(F), degree))})
     grams = exact_grams(structure, point)
     initial_certs, unsafe_certs = set_certificates(structure, grams, initial, unsafe)
     cert = DiscreteReach(V, eps, point.scalars["C"], tuple(initial_certs), tuple(unsafe_certs),
-                         tuple((grams[f"Rg{k}"], grams[f"RG{k}"]) for k in range(len(goal))), grams["RB"])
+                         tuple((grams[f"Rg{k}"], grams[f"RG{k}"]) for k in range(len(goal))), grams["RB"],
+                         goal_box(structure, grams, ring, len(F), len(goal)))
     return cert if check_discrete_reach(ring, F, initial, unsafe, goal, cert)[0] else None
 
 
@@ -747,9 +872,9 @@ def run_barrier(model: "Model", shifted: "ShiftedField", budget: Budget) -> Cond
         return ConditionResult("barrier", "not_applicable", f"not a polynomial map: {exc}")
     sets = map_sets(model, ring)
     initial, unsafe = sets["initial"], sets["unsafe"]
-    found_cx = falsify_map(model, ring, F, initial, unsafe)
-    if found_cx is not None:
-        return refuted_result("barrier", model, found_cx)
+    refuted = _falsified("barrier", model, shifted, ring, F, initial, unsafe)
+    if refuted is not None:
+        return refuted
     search = Search(ring, budget)
     try:
         cert, tried = search_barrier(ring, F, initial, unsafe, search)
@@ -766,7 +891,28 @@ def run_barrier(model: "Model", shifted: "ShiftedField", budget: Budget) -> Cond
     return ConditionResult("barrier", "certified", DISCRETE_BARRIER_SENTENCE,
                            numbers={"degree": poly_degree(ring, cert.B), "lambda": float(cert.lam),
                                     "time": "discrete"},
-                           certificate=cert.to_json(ring), solver={"solves": search.log}, property="safety")
+                           certificate=_stated_box(cert.to_json(ring), shifted), solver={"solves": search.log},
+                           property="safety")
+
+
+def _falsified(name: str, model: "Model", shifted: "ShiftedField", ring: Ring, F: Sequence[Poly],
+               initial: Pieces, unsafe: Pieces, goal: Sequence[Poly] | None = None) -> ConditionResult | None:
+    """``refuted`` with an unsafe iterate proved (:func:`falsify_map`), or None. Over a box, None: the box's
+    refutation (at its corners and centre) is :func:`lyapcheck.models.classes.discrete_safety_box.refute`, which
+    the class's entry runs first (:mod:`lyapcheck.models.classes.runs_discrete`)."""
+    if shifted.box is not None:
+        return None
+    found_cx = falsify_map(model, ring, F, initial, unsafe, goal)
+    if found_cx is None:
+        return None
+    return refuted_result(name, model, found_cx, "" if goal is None else " before any iterate is in the goal")
+
+
+def _stated_box(cert: dict[str, Any], shifted: "ShiftedField") -> dict[str, Any]:
+    """A certificate over a box states it (``parameter_box``, exact bounds; verify compares the document's)."""
+    if shifted.box is not None:
+        cert["parameter_box"] = shifted.box.to_json()
+    return cert
 
 
 def run_reach_avoid(model: "Model", shifted: "ShiftedField", budget: Budget) -> ConditionResult:
@@ -789,9 +935,9 @@ def run_reach_avoid(model: "Model", shifted: "ShiftedField", budget: Budget) -> 
         return ConditionResult("reach_avoid", "not_applicable", f"not a polynomial map: {exc}")
     sets = map_sets(model, ring)
     initial, unsafe, goal = sets["initial"], sets["unsafe"], sets["goal"][0]
-    found_cx = falsify_map(model, ring, F, initial, unsafe, goal)
-    if found_cx is not None:
-        return refuted_result("reach_avoid", model, found_cx, " before any iterate is in the goal")
+    refuted = _falsified("reach_avoid", model, shifted, ring, F, initial, unsafe, goal)
+    if refuted is not None:
+        return refuted
     search = Search(ring, budget)
     try:
         cert, tried = search_reach(ring, F, initial, unsafe, goal, search)
@@ -809,7 +955,8 @@ def run_reach_avoid(model: "Model", shifted: "ShiftedField", budget: Budget) -> 
     return ConditionResult("reach_avoid", "certified", discrete_reach_sentence(cert.steps_bound()),
                            numbers={"degree": poly_degree(ring, cert.V), "reach_steps_bound": cert.steps_bound(),
                                     "time": "discrete"},
-                           certificate=cert.to_json(ring), solver={"solves": search.log}, property="reach_avoid")
+                           certificate=_stated_box(cert.to_json(ring), shifted), solver={"solves": search.log},
+                           property="reach_avoid")
 
 
 # -- verify ---------------------------------------------------------------------------------------------------
@@ -835,11 +982,15 @@ def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any], model: "Mod
         sets = map_sets(model, ring)
         goal = sets["goal"][0] if name == "reach_avoid" else None
         if c.get("status") == "refuted":
+            if shifted.box is not None:  # (re-derived at its value of the box: discrete_safety_box.verify)
+                return False, "a refutation over a box is re-checked at its value of the box, not here"
             return _verify_refutation(model, ring, F, sets, c, goal)
         cert = c["certificate"]
         kind = KIND if name == "barrier" else REACH_KIND
         if cert.get("kind") != kind or cert.get("time") != "discrete":
             return False, f"not a {name} certificate of a discrete-time map (kind {cert.get('kind')!r})"
+        if cert.get("parameter_box") != (shifted.box.to_json() if shifted.box is not None else None):
+            return False, "the certificate's parameter_box is not the document's box"
         found: DiscreteBarrier | DiscreteReach
         if goal is None:
             found = barrier = DiscreteBarrier.from_json(ring, cert)

@@ -21,10 +21,16 @@ by ``eps`` per step while outside the goal and never below ``-C``: it is in the 
 none is unsafe. (The identities' names and Gram names are the continuous loop with functions' reach-avoid
 program's, :func:`lyapcheck.models.classes.reach_avoid.relation_proofs` reads its multipliers back.)
 
-No refutation: an unsafe iterate refutes reach_avoid only when no iterate before it is in the goal, which
-would need every earlier iterate proved outside the goal in ball arithmetic; that is not built, so this
-class is ``certified``, ``not_certified``, ``inconclusive`` or ``not_applicable``, never ``refuted``.
-The steps bound is then tightened as the polynomial map's (:func:`tighten`: the same structure with ``eps``
+The refutation, before the search: a reach-avoid claim says that EVERY start in the initial set reaches the goal
+without an unsafe iterate before, so one start that touches the unsafe set first refutes it. The true map is
+iterated in floating point from starts sampled in the initial set (followed until an iterate is in the goal),
+and an unsafe iterate is re-derived from its start rounded to a short rational
+(:func:`~lyapcheck.models.classes.map_relations_safety.check_iterate_functions` with the goal): the start in the
+initial set in rationals, every iterate in ball arithmetic through the true functions (256 bits), each earlier
+iterate's ball proved outside the goal (some goal inequality ``< 0`` on all of it) and the last one's inside an
+unsafe piece. Then ``refuted`` (kind ``discrete_iterate``, with the start and the step), which ``verify``
+re-derives from the stated start. An iterate that stays out of the goal for many steps proves nothing (the
+claim bounds no number of steps), and is not a refutation. The steps bound is then tightened as the polynomial map's (:func:`tighten`: the same structure with ``eps``
 fixed and ``C`` minimised, :func:`lyapcheck.models.classes.discrete_safety.tightened_structure`), every
 tighter certificate decided by :func:`check_map_reach`.
 """
@@ -38,7 +44,8 @@ from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
 from lyapcheck.models.classes.claims import DISCRETE_REACH_KIND, discrete_reach_sentence
 from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations
-from lyapcheck.models.classes.map_relations_safety import map_sets, relations_and_sets
+from lyapcheck.models.classes.map_relations_safety import check_iterate_functions, falsify, map_sets, \
+    relations_and_sets
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, one, param, why_none
 from lyapcheck.results import ConditionResult
@@ -246,8 +253,9 @@ def tighten(m: MapOnRelations, structure: Structure, degree: int, sets: Mapping[
 # -- the class -------------------------------------------------------------------------------------------
 
 def run(model: "RecastModel", budget: Budget) -> ConditionResult:
-    """``reach_avoid`` on a map with functions (module docstring): ``certified`` only after
-    :func:`check_map_reach`, with the steps bound ``floor(C / eps)``; never ``refuted``."""
+    """``reach_avoid`` on a map with functions (module docstring): the falsification first (``refuted`` with an
+    iterate proved unsafe before any is in the goal), then ``certified`` only after :func:`check_map_reach`, with
+    the steps bound ``floor(C / eps)``."""
     from lyapcheck.models.classes.claims import summary
     from lyapcheck.models.classes.lyapunov import terms_json
     from lyapcheck.models.classes.reach_avoid import goal_of_one_piece
@@ -264,6 +272,9 @@ def run(model: "RecastModel", budget: Budget) -> ConditionResult:
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
+    found_cx = falsify(model, m, sets["initial"], sets["unsafe"], sets["goal"][0])
+    if found_cx is not None:
+        return ds.refuted_result("reach_avoid", model, found_cx, " before any iterate is in the goal")
     search = Search(m.ring, budget)
     try:
         found, tried = search_reach(m, sets, search)
@@ -303,8 +314,18 @@ def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
         return False, "the model has no [sets] initial, unsafe and goal for reach_avoid"
     if len(model.sets["goal"]) != 1:
         return False, "a map's reach_avoid takes a goal of one piece"
+    if c.get("status") == "refuted":  # the stated start's unsafe iterate before the goal, re-derived
+        try:
+            m = on_relations(model)
+            sets = map_sets(model, m, ("initial", "unsafe", "goal"))
+            return ds.verify_refutation(model, c, lambda start, steps: check_iterate_functions(
+                model, m, sets["initial"], sets["unsafe"], start, steps, sets["goal"][0]))
+        except NotTaken as exc:
+            return False, str(exc)
+        except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
+            return False, f"malformed refutation: {exc}"
     if c.get("status") != "certified":
-        return False, "a map with functions' reach_avoid is never refuted"
+        return False, f"a map with functions' reach_avoid is certified or refuted, not {c.get('status')}"
     try:
         cert = c["certificate"]
         if cert.get("kind") != KIND or cert.get("time") != "discrete":

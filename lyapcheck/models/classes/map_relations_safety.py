@@ -209,12 +209,17 @@ def search_barrier(m: MapOnRelations, initial: Pieces, unsafe: Pieces, search: S
 # -- the falsification and its re-derivation in ball arithmetic -------------------------------------------
 
 def check_iterate_functions(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces,
-                            start: Sequence[Fraction], steps: int) -> tuple[bool, str]:
+                            start: Sequence[Fraction], steps: int, goal: Sequence[Poly] | None = None
+                            ) -> tuple[bool, str]:
     """Whether the start ``e_0`` (deviations, exact) lies in the initial set (rationals) and its iterate
     ``e_steps`` of the TRUE map in the unsafe set: the iterates in ball arithmetic through the recasting's
     true functions (:class:`~lyapcheck.models.engines.interval_field.BallLoop` of the displacement,
     ``e+ = e + d(e)``, every function an outward-rounded ``arb`` ball, :data:`ITERATE_BITS` bits), every
-    inequality of one unsafe piece ``>= 0`` on the whole final ball: a proof that the property fails."""
+    inequality of one unsafe piece ``>= 0`` on the whole final ball: a proof that the property fails. With
+    ``goal`` (reach_avoid's one piece) every iterate before, ``e_0 .. e_(steps - 1)``, must also be proved
+    outside the goal (some goal inequality ``< 0`` on its whole ball): then that start touches the unsafe set
+    before any of its iterates is in the goal, which refutes "every start reaches the goal without an unsafe
+    iterate before"."""
     import flint
 
     from lyapcheck.models.engines.interval_field import BallLoop
@@ -231,24 +236,30 @@ def check_iterate_functions(model: "RecastModel", m: MapOnRelations, initial: Pi
     try:
         loop = BallLoop(m.system)  # (built at this precision: its constants' balls are)
         z: list[Any] = [flint.arb(flint.fmpq(v.numerator, v.denominator)) for v in start]
-        for _ in range(steps):
+        for k in range(steps):
+            if goal is not None and not any(ds.ball_value(ring, q, z) < 0 for q in goal):  # (arb: True if certain)
+                return False, f"iterate {k} of the start is not proved to lie outside the goal (ball arithmetic)"
             z = [zi + di for zi, di in zip(z, loop.field(z))]
         for k, piece in enumerate(unsafe):
             if all(ds.ball_value(ring, p, z) >= 0 for p in piece):  # (arb: True only when certain)
+                before = "" if goal is None else ", every iterate before it outside the goal"
                 return True, (f"the start is in the initial set (exact) and its iterate {steps} of the true map lies "
-                              f"in piece {k + 1} of the unsafe set (ball arithmetic through the functions, "
+                              f"in piece {k + 1} of the unsafe set{before} (ball arithmetic through the functions, "
                               f"{ds.ITERATE_BITS} bits)")
     finally:
         flint.ctx.prec = saved
     return False, f"iterate {steps} of the start is not proved to lie in the unsafe set (ball arithmetic)"
 
 
-def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces) -> ds.Counterexample | None:
+def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces,
+            goal: Sequence[Poly] | None = None) -> ds.Counterexample | None:
     """The true map iterated in floating point (each function by numpy,
     :class:`~lyapcheck.models.engines.recast_numeric.TrueField` of the displacement) from starts sampled in
     the initial set, as a polynomial map's :func:`~lyapcheck.models.classes.discrete_safety.falsify_map`; the
     first iterate in the unsafe set is re-derived by :func:`check_iterate_functions`, its start rounded to
-    :data:`~lyapcheck.models.classes.discrete_safety.START_DIGITS` digits. None when none is proved."""
+    :data:`~lyapcheck.models.classes.discrete_safety.START_DIGITS` digits. None when none is proved. With
+    ``goal`` (reach_avoid), a start is followed only until an iterate is in the goal, and the re-derivation
+    proves every earlier iterate outside it."""
     import numpy as np
 
     from lyapcheck.exact import to_rational
@@ -271,13 +282,17 @@ def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pi
             return np.asarray(e + displacement(e + eq), dtype=np.float64)
 
     def stop(x: FloatArray) -> BoolArray:
-        return np.asarray(~np.all(np.isfinite(x), axis=1))
+        """A row that is not finite is done; so is one in the goal (reach_avoid holds for that start)."""
+        done = ~np.all(np.isfinite(x), axis=1)
+        if goal is not None:
+            done |= margin(model.sets["goal"], x + eq) >= 0
+        return np.asarray(done)
 
     def unsafe_hit(k_step: int, rows: IntArray, x: FloatArray) -> bool:
         hit = np.all(np.isfinite(x), axis=1) & (margin(model.sets["unsafe"], x + eq) >= 0)
         for k in rows[hit]:
             start = tuple(to_rational(float(v), ds.START_DIGITS) - xe for v, xe in zip(starts[k], model.equilibrium))
-            if check_iterate_functions(model, m, initial, unsafe, start, k_step)[0]:
+            if check_iterate_functions(model, m, initial, unsafe, start, k_step, goal)[0]:
                 found.append(ds.Counterexample(start, k_step))
                 return True
         return False

@@ -75,16 +75,20 @@ def candidate_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
 def barrier_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
     """A barrier ``lam B - B(F)`` SOS, or an unsafe iterate proved
     (:func:`lyapcheck.models.classes.discrete_safety.run_barrier`)."""
-    from lyapcheck.models.classes import discrete_safety
+    from lyapcheck.models.classes import discrete_safety, discrete_safety_box
 
+    if ctx.shifted.box is not None:  # one B for every value of the box, or an unsafe corner (centre) first
+        return discrete_safety_box.run("barrier", ctx.model, ctx.shifted, budget)
     return discrete_safety.run_barrier(ctx.model, ctx.shifted, budget)
 
 
 def reach_avoid_map(ctx: "MapRun", budget: "Budget") -> "ConditionResult":
     """A V falling by eps per step outside the goal, or an unsafe iterate proved
     (:func:`lyapcheck.models.classes.discrete_safety.run_reach_avoid`)."""
-    from lyapcheck.models.classes import discrete_safety
+    from lyapcheck.models.classes import discrete_safety, discrete_safety_box
 
+    if ctx.shifted.box is not None:  # one V for every value of the box, or an unsafe corner (centre) first
+        return discrete_safety_box.run("reach_avoid", ctx.model, ctx.shifted, budget)
     return discrete_safety.run_reach_avoid(ctx.model, ctx.shifted, budget)
 
 
@@ -166,7 +170,7 @@ def barrier_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Conditio
 
 def reach_avoid_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A V of the states falling by eps per step outside the goal on the recasting's relations
-    (:func:`lyapcheck.models.classes.map_relations_reach.run`); at a point only, never refuted."""
+    (:func:`lyapcheck.models.classes.map_relations_reach.run`); at a point only; refuted by an unsafe iterate proved before any is in the goal."""
     from lyapcheck.models.classes import map_relations_reach
     from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
     from lyapcheck.results import ConditionResult

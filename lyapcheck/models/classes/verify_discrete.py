@@ -90,10 +90,12 @@ def verify_region_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[
 def verify_safety_map(name: str, c: dict[str, Any], check: "MapCheck") -> tuple[bool, str]:
     """``barrier``, ``reach_avoid``: the certificate's identities on the map and the sets, or a refutation's
     unsafe iterate, re-derived from the model text (:func:`lyapcheck.models.classes.discrete_safety.verify`)."""
-    from lyapcheck.models.classes import discrete_safety
+    from lyapcheck.models.classes import discrete_safety, discrete_safety_box
 
     if c["status"] not in ("certified", "refuted"):
         return False, check.not_checked(c["status"])
+    if check.shifted.box is not None:  # over a box (a refutation at its stated value of the box)
+        return discrete_safety_box.verify(check.shifted, name, c, check.model)
     return discrete_safety.verify(check.shifted, name, c, check.model)
 
 
@@ -164,10 +166,11 @@ def verify_barrier_map_functions(name: str, c: dict[str, Any], check: "MapFuncti
 
 def verify_reach_avoid_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
     """``reach_avoid``: the map, its relations and the sets re-derived, every identity re-checked exactly, the
-    steps bound ``floor(C / eps)`` (:func:`lyapcheck.models.classes.map_relations_reach.verify`; never refuted)."""
+    steps bound ``floor(C / eps)``; a refutation's start and its unsafe iterate before the goal re-derived in ball
+    arithmetic (:func:`lyapcheck.models.classes.map_relations_reach.verify`)."""
     from lyapcheck.models.classes import map_relations_reach
 
-    if c["status"] != "certified":
+    if c["status"] not in ("certified", "refuted"):
         return False, check.not_checked(c["status"])
     return map_relations_reach.verify(check.model, _without_nominal_prefix(c))
 

@@ -337,6 +337,10 @@ def _timed(name: str, compute: Callable[[Budget], ConditionResult], results: dic
     seconds[name] = time.perf_counter() - start
 
 
+#: why a safety class over a box does not take sets naming a parameter of the box
+SETS_NAME_BOX = "over a box the sets may not depend on a parameter of the box (they are read at the model's values)"
+
+
 def _needs_input(name: str, box: "ModelBox | None", cand: object | None) -> ConditionResult | None:
     """``candidate`` is ``not_applicable`` over a box (it certifies a point) and without ``--candidate``, on
     every kind of loop; None otherwise."""
@@ -359,7 +363,7 @@ def _field_rule(name: str, model: Model, box: "ModelBox | None", results: dict[s
     if name in ("barrier", "reach_avoid"):
         goal = name == "reach_avoid"
         if not _has_safety_sets(model, goal=goal) or _sets_use_box(model, box):
-            why = ("over a box the sets may not depend on a parameter of the box (they are read at the model's values)"
+            why = (SETS_NAME_BOX
                    if _has_safety_sets(model, goal=goal) and _sets_use_box(model, box) else
                    "the model's [sets] needs 'initial', 'unsafe' and 'goal' (docs/model-files.md, [sets])" if goal else
                    "the model's [sets] needs 'initial' and 'unsafe' (docs/model-files.md, [sets])")
@@ -400,6 +404,8 @@ def _certify_map(model: Model, classes: str | Sequence[str] | None, candidate: s
         # is common to the box: one set for every value), without --candidate it is not run, as at a point
         if box is not None and entry.run_map is not None and entry.name not in BOX_CLASSES:
             return ConditionResult(entry.name, "not_applicable", not_over_box(entry.name))
+        if entry.name in ("barrier", "reach_avoid") and _sets_use_box(model, box):
+            return ConditionResult(entry.name, "not_applicable", SETS_NAME_BOX)
         return _discrete_rule(entry, entry.run_map, not_decided(entry.name, DISCRETE), out.results, cand,
                               bool(model.disturbances), over_box=box is not None)
 
