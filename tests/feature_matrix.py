@@ -311,8 +311,9 @@ def certify_cells(directory: Path, kind: str, *, box: bool) -> dict[str, tuple[O
     return found
 
 
-#: the kinds whose ``certify --box`` takes ``--candidate`` (a polynomial map: one V for every value of the box)
-CANDIDATE_OVER_BOX = ("discrete",)
+#: the kinds whose ``certify --box`` takes ``--candidate`` (one V for every value of the box: every kind but a map
+#: with functions)
+CANDIDATE_OVER_BOX = ("polynomial", "rational", "functions", "disturbances", "box", "discrete")
 
 
 def _certify_run(path: Path, classes: Sequence[str], *, box: bool, with_candidate: bool = False
