@@ -220,3 +220,16 @@ def test_a_candidate_naming_a_parameter_of_the_box_is_bad_input(tmp_path: Path, 
     done = cli("certify", str(path), "--box", "a=0.8..1.2", "--candidate", "x1**2 + a*x2**2", "--no-store")
     assert done.exit_code == 2 and len(done.stderr.strip().splitlines()) == 1, done.output
     assert "--candidate" in done.stderr and "parameter a" in done.stderr
+
+
+def test_a_disturbed_loop_with_functions_candidate_over_a_box_is_claimed_with_the_disturbance_at_0(tmp_path: Path
+                                                                                                   ) -> None:
+    # as at a point, a candidate's claim is the nominal loop's (d = 0); the document must say so and verify it
+    text = PENDULUM.read_text().replace("[dynamics]", "[disturbances]\nd = 0.05\n\n[dynamics]")
+    text = text.replace('omega = "-sin(theta) - b*omega"', 'omega = "-sin(theta) - b*omega + d"')
+    assert "+ d" in text
+    code, doc = certify(write(tmp_path, text), "b=0.8..1.2", "theta**2 + theta*omega + 2*omega**2")
+    cond = doc["conditions"]["candidate"]
+    assert code == 0 and cond["status"] == "certified" and cond["disturbances"] == "zero", cond
+    assert "(d = 0)" in cond["summary"] and "disturbances" not in cond["certificate"]
+    assert verify(doc, tmp_path).exit_code == 0

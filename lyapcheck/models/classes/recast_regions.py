@@ -162,9 +162,9 @@ def box_candidate(model: RecastModel, loop: Loop, proved: Loop, box: ModelBox, V
         tried.append("on the relations with the box's parameters bounded: " + (
             found.summary if isinstance(found, ConditionResult) else
             "V' < 0 was not proved everywhere" if found else "V was not proved positive definite"))
-    robust = box_robust(model, box)
-    if not robust.vanishes():  # a disturbance moves the equilibrium: the set for every value of the box, d = 0
-        robust = box_robust(model, box, disturbed=False)
+    # the disturbances at 0, as at a point (a candidate's claim never covers every disturbance value:
+    # registry.ZERO_DISTURBANCE_ONLY), the box's parameters as balls
+    robust = box_robust(model, box, disturbed=False)
     domain = comparison_box(model, loop)
     for route in (lambda: interval_candidate(loop, V, budget, domain, robust),
                   lambda: ball_level(loop, V, budget, "candidate", "the candidate, proved by ball arithmetic from "
