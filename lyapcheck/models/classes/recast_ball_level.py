@@ -109,7 +109,8 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robu
         spent[0] += proof.cells + proof.boundary_cells
         return (claim, proof) if proof.ok else None
 
-    jump = None if P is None else sampled_jump(loop, P, first)
+    # (over a box the jump's search takes the centre's local level as proved: it grows from there instead)
+    jump = None if P is None or robust is not None else sampled_jump(loop, P, first)
     try:
         if jump is None:
             found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH,
@@ -225,8 +226,7 @@ def jumped_search(attempt: Any, first: Fraction, start: Fraction, rounded: Any) 
     if found.level is None and not found.stopped:
         try:
             found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH,
-                                         growth_steps=BALL_LEVEL_GROWTH_STEPS,
-                                         halvings=0 if robust is None else BALL_LEVEL_BOX_HALVINGS,
+                                         growth_steps=BALL_LEVEL_GROWTH_STEPS, halvings=0,
                                          bisections=BALL_LEVEL_BISECTIONS, rounded=rounded)
             tried += found.tried[1:]  # (the local level again: proved without a cell)
         except BudgetExhausted as exc:  # (the local level is proved: only a spent search raises here)
