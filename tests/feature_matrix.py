@@ -212,12 +212,11 @@ REFUSALS: tuple[Refusal, ...] = (
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
-    Refusal(cells(tuple(k for k in KINDS if k != "discrete"), ("candidate",), ("--box",))
-            | cells(("box",), ("candidate",), _BOX_KIND),
+    Refusal(cells(("map_functions",), ("candidate",), ("--box",)),
             ("not over a --box", "not over a box"),
-            "Your V is checked at one parameter point; over a box it would have to decrease for every value of "
-            "the box, a search of box multipliers for a fixed V that is built for a polynomial map only (a gap, "
-            "not a theorem)."),
+            "On a map with functions your V is checked at one parameter point; over a box it would have to "
+            "decrease for every value of the box, which is built for the continuous kinds and a polynomial map "
+            "only (a gap, not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
     Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier", "reach_avoid"),
@@ -302,8 +301,9 @@ def certify_cells(directory: Path, kind: str, *, box: bool) -> dict[str, tuple[O
     return found
 
 
-#: the kinds whose ``certify --box`` takes ``--candidate`` (a polynomial map: one V for every value of the box)
-CANDIDATE_OVER_BOX = ("discrete",)
+#: the kinds whose ``certify --box`` takes ``--candidate`` (one V for every value of the box: every kind but a map
+#: with functions)
+CANDIDATE_OVER_BOX = ("polynomial", "rational", "functions", "disturbances", "box", "discrete")
 
 
 def _certify_run(path: Path, classes: Sequence[str], *, box: bool, with_candidate: bool = False

@@ -39,29 +39,37 @@ def test_the_candidate_class_without_candidate_is_not_applicable_naming_the_flag
     assert conds["candidate"]["status"] == "not_applicable" and "--candidate" in conds["candidate"]["summary"]
 
 
-def test_candidate_with_a_box_is_refused_in_one_line_on_both_kinds(tmp_path: Path) -> None:
-    """docs/model-files.md, "Boxes of parameters": ``--candidate`` with ``--box`` is refused (it was
-    ``not_applicable`` on a loop with functions, exit 2 on a polynomial loop)."""
+def test_candidate_with_a_box_is_taken_on_both_kinds_and_a_v_naming_the_box_refused_alike(tmp_path: Path) -> None:
+    """docs/model-files.md, "Boxes of parameters": ``--candidate`` with ``--box`` proves the user's V for every
+    value of the box on both kinds (it was refused, exit 2, on both), and a V naming a parameter of the box is
+    refused in the same one line on both."""
+    for kind in KINDS:
+        code, conds = conditions(tmp_path, kind, "--classes", "candidate", "--candidate", fm.CANDIDATE,
+                                 "--box", fm.BOX)
+        cond = conds["candidate"]
+        assert code == 0 and cond["status"] == "certified", (kind, cond)
+        assert cond["summary"].startswith("for every a in [0.8, 1.2]: "), (kind, cond["summary"])
+        assert cond["certificate"]["parameter_box"] == {"a": ["4/5", "6/5"]}, kind
     lines = {}
     for kind in KINDS:
-        code, out, err = certify(tmp_path, kind, "--classes", "candidate", "--candidate", fm.CANDIDATE,
+        code, out, err = certify(tmp_path, kind, "--classes", "candidate", "--candidate", "x1**2 + a*x2**2",
                                  "--box", fm.BOX)
         assert code == 2 and not out.strip(), (kind, code, out)
         line = fm._one_line(err, kind)
-        assert str(fm.model_file(tmp_path, kind)) in line and "--candidate" in line and "--box" in line, line
+        assert "--candidate" in line and "parameter a" in line, line
         lines[kind] = line.replace(str(fm.model_file(tmp_path, kind)), "FILE")
     assert lines["polynomial"] == lines["functions"], lines
 
 
 def test_the_point_classes_over_a_box_say_the_same_sentence(tmp_path: Path) -> None:
     """``candidate``, asked without ``--candidate``, over a box: one sentence on both kinds (they were
-    worded twice). ``linearization`` over a box is decided on both kinds by the same test (issue 45: the
+    worded twice; over a box too it names the flag, as the class is taken there). ``linearization`` over a box is decided on both kinds by the same test (issue 45: the
     Hurwitz conditions of the Jacobian of every value, on the whole box), with the same sentence."""
     found = {kind: conditions(tmp_path, kind, "--classes", "linearization,candidate", "--box", fm.BOX)
              for kind in KINDS}
     assert found["polynomial"][1]["candidate"] == found["functions"][1]["candidate"], found
     conds = found["functions"][1]
-    assert conds["candidate"]["status"] == "not_applicable" and "not over a box" in conds["candidate"]["summary"]
+    assert conds["candidate"]["status"] == "not_applicable" and "--candidate" in conds["candidate"]["summary"]
     lin = {kind: found[kind][1]["linearization"] for kind in KINDS}
     assert {c["status"] for c in lin.values()} == {"certified"}, lin
     assert {c["certificate"]["method"] for c in lin.values()} == {"box_hurwitz"}, lin

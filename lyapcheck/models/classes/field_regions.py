@@ -17,6 +17,7 @@ from lyapcheck.models.engines.search import Budget, Search
 from lyapcheck.models.language.modelfile import Model
 from lyapcheck.models.loop.field import ScaledField, StateField, state_field
 from lyapcheck.results import ConditionResult, Disturbances
+from lyapcheck.sos.polynomials import Ring
 from lyapcheck.timing import ClassTimeLimit
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -203,6 +204,11 @@ def simulated_region_long(scaled: ScaledField, starts: np.ndarray, value: Callab
 
 
 def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget) -> ConditionResult:
+    """The user's V on the nominal field: GAS where its decrease is proved everywhere, else its largest
+    level proved (:func:`lyapcheck.models.classes.regions.largest_level`). Over a box (the field's ring
+    carries the box's normalized parameters after the states, :attr:`StateField.p`) V is of the states
+    alone and both proofs hold for every value of the box at once: the box's multipliers join the
+    decrease's identity and the level program's, and the certificate states the box (``parameter_box``)."""
     import numpy as np
 
     from lyapcheck.models.engines import reasons
@@ -212,6 +218,7 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
 
     assert cand is not None
     model = scaled.cleared.shifted.model
+    box = scaled.cleared.shifted.box
     field_ = state_field(scaled)
     ring = field_.ring
     search = Search(ring, budget)
@@ -221,7 +228,13 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
 
     images = linear_images(full, model.n, scaled.scaling.matrix())
     images = [im + to_fmpq(e) for im, e in zip(images[:model.n], model.equilibrium)] + images[model.n:]
-    v_scaled = full.restrict(full.compose(cand.poly, images), ring)
+    states = Ring(ring.names[:field_.n])
+    v_states = full.restrict(full.compose(cand.poly, images), states)
+    # (over a box, in the ring with the box's parameters after the states, at exponent 0: one V for the box)
+    v_scaled = ring.from_terms({m + (0,) * field_.p: c for m, c in states.terms(v_states).items()})
+    # (over a box: for every value of it, and the box's words where the proof fails)
+    every = " for every value of the box" if box is not None else ""
+    stamp = {"parameter_box": box.to_json()} if box is not None else {}
     V = regions.gram_of(field_, v_scaled, search)
     if V is None:
         why = reasons.reason("the candidate V could not be proved positive definite and radially unbounded",
@@ -229,24 +242,27 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
                              "pure power of every state")
         return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
                                solver={"solves": search.log}, property="ROA")
-    sigma = regions.global_decrease(field_, V, Fraction(0), search)
-    if sigma is not None:
+    decrease = regions.global_decrease(field_, V, Fraction(0), search)
+    if decrease is not None:
         def attempt(mu: Fraction) -> dict[str, Any] | None:
             s = regions.global_decrease(field_, V, mu, search)
-            return None if s is None else {"sigma": s, "mu": mu}
+            return None if s is None else {"found": s, "mu": mu}
 
-        best = best_decay_rate(attempt, {"sigma": sigma, "mu": Fraction(0)})
+        best = best_decay_rate(attempt, {"found": decrease, "mu": Fraction(0)})
+        found: regions.GlobalDecrease = best["found"]
         rate = float(best["mu"] / scaled.scaling.time)
         tail = f", V' <= -{rate:.4g} V" if best["mu"] > 0 else ""
-        return ConditionResult("candidate", "certified", f"GAS: V' < 0 away from the equilibrium everywhere{tail} "
-                                                         "(checked exactly)",
-                               numbers={"decay_rate_V_per_s": rate},
-                               certificate={"kind": "lyapunov", "mu_scaled": str(best["mu"]),
-                                            "V": stated_v(scaled, field_, V.poly(ring)), "gram_V": V.to_json(),
-                                            "gram_sigma": best["sigma"].to_json()},
+        certificate: dict[str, Any] = {"kind": "lyapunov", "mu_scaled": str(best["mu"]),
+                                       "V": stated_v(scaled, field_, V.poly(ring)), "gram_V": V.to_json(),
+                                       "gram_sigma": found.sigma.to_json()}
+        if found.box:
+            certificate["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found.box]
+        return ConditionResult("candidate", "certified", f"GAS: V' < 0 away from the equilibrium everywhere{tail}"
+                                                         f"{every} (checked exactly)",
+                               numbers={"decay_rate_V_per_s": rate}, certificate={**certificate, **stamp},
                                solver={"solves": search.log}, property="GAS")
     radius = float(np.max(np.abs(scaled.scaling.to_scaled(np.diag(_half_widths(model)))))) * 4
-    top = regions.supremum_estimate(field_, V, radius)
+    top = regions.supremum_estimate(field_, V, radius)  # (over a box: at its centre and corners)
     if top is None:
         # no sample with V' >= 0 out to 4 half-widths: search the level upwards from V's largest
         # value there, each step an SOS lower bound of min {V : V' >= 0} (no sample needed)
@@ -256,24 +272,31 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
         guess = float(np.max(regions.NumericPoly(ring, V.poly(ring))(regions.on_states(field_, ball))))
         cert = regions.largest_level(field_, V, search, guess, regions.symmetry(field_), grow=True)
         if cert is None:
-            why = reasons.reason("V' < 0 could not be proved everywhere, nor on any level set {V <= c} (no point with "
-                                 "V' >= 0 was sampled)", ("other_candidate", "domain", "time"),
+            why = reasons.reason(f"V' < 0 could not be proved everywhere{every}, nor on any level set {{V <= c}} (no "
+                                 "point with V' >= 0 was sampled)", ("other_candidate", "domain", "time"),
                                  f"no level from {guess:.6g} upwards passed the level program")
             return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
                                    solver={"solves": search.log}, property="ROA")
-        return regions.level_result("candidate", scaled, field_, cert, search, {"level_search": "upwards, by SOS"},
-                                    "the user's V")
+        return _stamped(regions.level_result("candidate", scaled, field_, cert, search,
+                                             {"level_search": "upwards, by SOS"}, "the user's V"), stamp)
     cert = regions.largest_level(field_, V, search, top, regions.symmetry(field_))
     if cert is None:
-        why = reasons.reason("V' < 0 could not be proved everywhere, nor on any level set {V <= c} below the "
-                             f"sampled points where V' >= 0 (V = {top:.6g})", ("other_candidate", "time"),
+        where = " (sampled at the box's centre and corners)" if box is not None else ""
+        why = reasons.reason(f"V' < 0 could not be proved everywhere{every}, nor on any level set {{V <= c}} below "
+                             f"the sampled points where V' >= 0 (V = {top:.6g}){where}", ("other_candidate", "time"),
                              f"no level of V passed the exact check (sampled supremum {top:.6g})")
         return ConditionResult("candidate", "not_certified", why.summary,
                                numbers=why.numbers({"level_supremum_estimate": top}),
                                solver={"solves": search.log}, property="ROA")
-    return regions.level_result("candidate", scaled, field_, cert, search,
-                                {"level_supremum_estimate": top, "level_ratio_to_estimate": float(cert.level) / top},
-                                "the user's V")
+    return _stamped(regions.level_result("candidate", scaled, field_, cert, search,
+                                         {"level_supremum_estimate": top,
+                                          "level_ratio_to_estimate": float(cert.level) / top}, "the user's V"), stamp)
+
+
+def _stamped(result: ConditionResult, stamp: dict[str, Any]) -> ConditionResult:
+    """A certified result's certificate with the box it holds over (``parameter_box``; none at a point)."""
+    result.certificate.update(stamp)
+    return result
 
 
 __all__ = ["ROA_GRID", "ROA_RANDOM_STARTS", "ROA_HORIZON", "covering_disturbances", "covers", "simulated_region",

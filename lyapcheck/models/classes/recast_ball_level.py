@@ -47,11 +47,18 @@ BALL_LEVEL_FIRST_EXTENT: Final = 4
 BALL_LEVEL_LOCAL_STEPS: Final = 40
 #: significant bits of a level tried
 LEVEL_BITS: Final = 12
+#: over a box the local level is the centre's, which a corner may not share: levels below it tried, each
+#: half the last (at a point the local level is proved without a cell, so none are needed)
+BALL_LEVEL_BOX_HALVINGS: Final = 4
 
 
-def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> ConditionResult | str:
+def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robust: Any = None
+               ) -> ConditionResult | str:
     """``name``'s region ``{V <= level}`` for a positive definite quadratic form ``V`` over the states,
-    proved by ball arithmetic (module docstring), or why there is none (one line)."""
+    proved by ball arithmetic (module docstring), or why there is none (one line). With ``robust`` (a
+    :class:`~lyapcheck.models.classes.recast_interval.Robust` holding a box of parameters; ``loop`` its
+    centre) every level is proved for every value of the box (the local level is the centre's, a first
+    level to try), and the certificate states the box."""
     from lyapcheck.models.classes.claims import interval_sentence
     from lyapcheck.models.classes.level_search import largest_proved_level
     from lyapcheck.models.classes.recast_classes import _dyadic
@@ -97,16 +104,18 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
         if budget.left() <= 0:
             raise BudgetExhausted(budget.reached())
         claim = claim_at(level)
-        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), cells=min(each, left),
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), robust=robust, cells=min(each, left),
                       cells_name=f"lyapcheck.tolerances.BALL_LEVEL_CELLS{scaled}")
         spent[0] += proof.cells + proof.boundary_cells
         return (claim, proof) if proof.ok else None
 
-    jump = None if P is None else sampled_jump(loop, P, first)
+    # (over a box the jump's search takes the centre's local level as proved: it grows from there instead)
+    jump = None if P is None or robust is not None else sampled_jump(loop, P, first)
     try:
         if jump is None:
             found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH,
-                                         growth_steps=BALL_LEVEL_GROWTH_STEPS, halvings=0,
+                                         growth_steps=BALL_LEVEL_GROWTH_STEPS,
+                                         halvings=0 if robust is None else BALL_LEVEL_BOX_HALVINGS,
                                          bisections=BALL_LEVEL_BISECTIONS, rounded=lambda x: _dyadic(x, LEVEL_BITS))
         else:
             found = jumped_search(attempt, first, _dyadic(jump, LEVEL_BITS), lambda x: _dyadic(x, LEVEL_BITS))
@@ -117,6 +126,8 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str) -> C
                f"{min(radii)} where the Hessian of V' is negative definite) was not proved"
     claim, proof = found.proof
     cert = certificate(loop, claim, proof)
+    if robust is not None:
+        robust.stamp(cert)
     tried = [f"level {float(level):.6g}: {'proved' if ok else 'not proved'}" for level, ok in found.tried]
     if found.stopped:
         tried.append(f"stopped: {found.stopped}")

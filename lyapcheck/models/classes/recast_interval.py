@@ -350,15 +350,18 @@ def _prove_parts(loop: Loop, claim: IntervalClaim, deadline: float | None, robus
                          min(radii) if radii else None, sum(p.seconds for p in parts))
 
 
-def interval_candidate(loop: Loop, V: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+def interval_candidate(loop: Loop, V: Any, budget: Budget, box: tuple[Any, Any], robust: Robust | None = None
+                       ) -> ConditionResult | str:
     """``candidate``'s region by ball arithmetic: the user's ``V`` (it may use the loop's functions),
-    its largest level where sampling sees ``V' < 0``, proved on the true field."""
+    its largest level where sampling sees ``V' < 0``, proved on the true field; with ``robust`` holding a
+    box of parameters (``loop`` its centre), proved for every value of the box (the parameters as balls,
+    the box split as ``roa``'s is; the level proposed at the centre, lowered where the proof fails)."""
     from lyapcheck.models.classes.fitted_v import propose_level
 
     proposal = propose_level(loop.system, V, box)
     if isinstance(proposal, str):
         return proposal
-    return _prove_lowering(loop, proposal, budget, "candidate", "the candidate, proved by " + METHOD, {})
+    return _prove_lowering(loop, proposal, budget, "candidate", "the candidate, proved by " + METHOD, {}, robust)
 
 
 def certificate(loop: Loop, claim: IntervalClaim, proof: IntervalProof, deadline: float | None = None

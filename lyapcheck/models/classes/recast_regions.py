@@ -60,7 +60,7 @@ def functions_run(model: RecastModel, classes: Sequence[str], candidate: Poly | 
     loop = proved_loop(model, time_limit_s)  # the box's centre
     boxed = boxed_loop(model, box)
     proved = boxed
-    if {"quadratic", "sos_gas", "barrier", "reach_avoid"} & set(classes):
+    if {"quadratic", "sos_gas", "candidate", "barrier", "reach_avoid"} & set(classes):
         proved, _ = prove_root_bounds(boxed, Search(boxed.ring, budget))
     return FunctionsRun(model=model, loop=loop, proved=proved, box=box, candidate=candidate, results=results)
 
@@ -135,6 +135,65 @@ def box_roa(model: RecastModel, loop: Loop, box: ModelBox, budget: Budget) -> Co
         return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
     simulated_check(loop, found, comparison_box(model, loop))
     return found
+
+
+def box_candidate(model: RecastModel, loop: Loop, proved: Loop, box: ModelBox, V: Poly, budget: Budget
+                  ) -> ConditionResult:
+    """``candidate`` over a box: the user's V (of the states; ``loop`` the box's centre, ``proved`` the loop
+    recast with the box's parameters as bounded constants, :func:`boxed_loop`) proved for every value of
+    the box. First GAS on ``proved``'s relations (:func:`global_candidate`: the parameters' bounds are
+    relations there); else its largest level by ball arithmetic with the parameters as balls, the level
+    sampled where ``V' < 0`` (:func:`~lyapcheck.models.classes.recast_interval.interval_candidate`), then, for
+    a quadratic V, upwards from the local level (:func:`~lyapcheck.models.classes.recast_ball_level.ball_level`).
+    Each certificate states the box (``parameter_box``); the simulated figures are the centre's."""
+    from lyapcheck.models.classes.recast_ball_level import ball_level
+    from lyapcheck.models.classes.recast_interval import interval_candidate
+    from lyapcheck.models.engines import reasons
+
+    tried: list[str] = []
+    boxed_v = in_ring(loop.ring, proved.ring, V)
+    if boxed_v is None:
+        tried.append("on the relations: V uses a function the loop recast with the box's parameters does not have")
+    else:
+        found = global_candidate(proved, boxed_v, Search(proved.ring, budget))
+        if isinstance(found, ConditionResult) and found.status == "certified":
+            found.certificate["parameter_box"] = box.to_json()
+            return found
+        tried.append("on the relations with the box's parameters bounded: " + (
+            found.summary if isinstance(found, ConditionResult) else
+            "V' < 0 was not proved everywhere" if found else "V was not proved positive definite"))
+    # the disturbances at 0, as at a point (a candidate's claim never covers every disturbance value:
+    # registry.ZERO_DISTURBANCE_ONLY), the box's parameters as balls
+    robust = box_robust(model, box, disturbed=False)
+    domain = comparison_box(model, loop)
+    for route in (lambda: interval_candidate(loop, V, budget, domain, robust),
+                  lambda: ball_level(loop, V, budget, "candidate", "the candidate, proved by ball arithmetic from "
+                                     "its exact local level upwards, for every value of the box", robust)):
+        result = route()
+        if isinstance(result, ConditionResult):
+            simulated_check(loop, result, domain)
+            return result
+        tried.append(result)
+    why = reasons.reason("the candidate V was not proved a Lyapunov function for every value of the box, nor any "
+                         "level set of it a region of attraction for every value (ball arithmetic with the box's "
+                         "parameters as balls)", ("other_candidate", "box", "domain", "time"), tried)
+    return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
+
+
+def in_ring(source: Any, target: Any, p: Poly) -> Poly | None:
+    """``p`` moved from ``source`` to ``target`` by the variables' names; None where it uses one ``target``
+    lacks (an auxiliary the other recasting names differently)."""
+    index = {name: k for k, name in enumerate(target.names)}
+    terms = {}
+    for m, c in source.terms(p).items():
+        out = [0] * target.nvars
+        for k, e in enumerate(m):
+            if e:
+                if source.names[k] not in index:
+                    return None
+                out[index[source.names[k]]] = e
+        terms[tuple(out)] = c
+    return target.from_terms(terms)
 
 
 def robust_of(model: RecastModel) -> Any:
@@ -334,11 +393,14 @@ def set_cross_check(loop: Loop, result: ConditionResult, starts: Any, angles: tu
                                rtol=RTOL, atol=ATOL, decrease=decrease)
 
 
-def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
-    """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
+def global_candidate(loop: Loop, V: Poly, search: Search) -> ConditionResult | bool:
+    """The user's V (shifted) decreasing everywhere on the recasting's relations (GAS, exact): the certified
+    result, else whether V was at least proved positive definite (``V >= eps |x - x_eq|^2``); a
+    ``not_applicable`` result where a denominator of its flows is not proved positive. Over a box ``loop``
+    is the loop recast with the box's parameters as bounded constants (:func:`boxed_loop`): their relations
+    join the others, so the proof holds for every value of the box."""
     loop = for_v(loop, V)
     ring = loop.ring
-    search = Search(ring, budget)
     l2 = state_square(loop)
     names = v_names(loop, V)
     N, D, distinct = common_denominator(loop, names)
@@ -346,7 +408,6 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
     if failed is not None:
         return ConditionResult("candidate", "not_applicable", f"the denominator {written_poly(ring, failed)} could not "
                                "be proved positive on the recasting's set")
-    positive = True
     for eps in EPSILONS:
         pos = prove_nonnegative(loop, V - l2 * to_fmpq(eps), search, "Pc")
         if pos is None:
@@ -358,9 +419,17 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
             return ConditionResult("candidate", "certified", f"the candidate proves global asymptotic stability: "
                                    f"V >= {eps} |x - x_eq|^2 and V' <= -{eps} |x - x_eq|^2 / D on the recasting's "
                                    "relations (exact)", certificate=cert, property="GAS")
-        break
-    else:
-        positive = False
+        return True
+    return False
+
+
+def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
+    """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
+    found = global_candidate(loop, V, Search(loop.ring, budget))
+    if isinstance(found, ConditionResult):
+        return found
+    positive = found
+    loop = for_v(loop, V)
     from lyapcheck.models.classes.recast_interval import interval_candidate
 
     # a sublevel set on the true field (no global positivity needed: the set is compact and V' < 0 on it)

@@ -752,9 +752,21 @@ def level_result(name: str, scaled: ScaledField, field: StateField, cert: LevelC
                            numbers=numbers, certificate=certificate, solver={"solves": search.log}, property="ROA")
 
 
-def global_decrease(field: StateField, V: GramPoly, mu: Fraction, search: Search) -> GramPoly | None:
-    """For a fixed ``V``: ``sigma`` with ``-grad V . g - mu V D = sigma`` exactly (kind Lyapunov), or None."""
+@dataclass(frozen=True)
+class GlobalDecrease:
+    """A fixed ``V``'s decrease everywhere, proved exactly: ``sigma`` and, over a box of parameters, the
+    box's multipliers (``-grad V . g - mu V D - sum_j r_j (1 - u_j^2) = sigma``; none at a point)."""
+
+    sigma: GramPoly
+    box: tuple[tuple[int, GramPoly], ...] = ()
+
+
+def global_decrease(field: StateField, V: GramPoly, mu: Fraction, search: Search) -> GlobalDecrease | None:
+    """For a fixed ``V``: ``sigma`` with ``-grad V . g - mu V D = sigma`` exactly (kind Lyapunov), or None.
+    Over a box (the ring's variables after the states, :attr:`StateField.p`) the box's multipliers join the
+    identity, so that one ``sigma`` proves the decrease for every value of it."""
     ring = field.ring
+    nv = ring.nvars
     v_poly = V.poly(ring)
     target_poly = -lie_derivative(ring, v_poly, field.g) - v_poly * field.D * to_fmpq(mu)
     support = set(ring.support(target_poly))
@@ -762,14 +774,17 @@ def global_decrease(field: StateField, V: GramPoly, mu: Fraction, search: Search
         return None
     n = field.n
     generators = symmetry(field)
+    box_grams, box_terms = box_multipliers(nv, n, support, with_states=True, generators=generators)
     drop: frozenset[Monomial] = frozenset()
     for _ in range(FACIAL_ROUNDS + 1):
-        z_sigma = [m for m in bases.sos_basis(n, support) if m not in drop]
+        target = support | box_support(box_grams, nv)
+        z_sigma = [m for m in bases.sos_basis(nv, target) if m not in drop]
         if not z_sigma or not bases.has_pure_powers(z_sigma, range(n)) or len(z_sigma) > MAX_GRAM_ROWS:
             return None
-        structure = Structure(nvars=n, grams=(Gram("sigma", tuple(z_sigma),
-                                                   tuple(map(tuple, bases.character_blocks(z_sigma, generators)))),),
-                              scalars=(), identities=(Identity("decrease", (Term(one(ring, -1), "sigma"),),
+        structure = Structure(nvars=nv, grams=(Gram("sigma", tuple(z_sigma),
+                                                    tuple(map(tuple, bases.character_blocks(z_sigma, generators)))),
+                                               *box_grams),
+                              scalars=(), identities=(Identity("decrease", (*box_terms, Term(one(ring, -1), "sigma")),
                                                                param("LV", support), "sigma"),),
                               objective=("max_margin",))
         values = ParameterValues()
@@ -779,13 +794,25 @@ def global_decrease(field: StateField, V: GramPoly, mu: Fraction, search: Search
             point = search.exact(structure, solution, values)
             if point is not None:
                 sigma = GramPoly.of(z_sigma, point.grams["sigma"])
-                if check_lyapunov(ring, field.g, field.D, V, sigma, mu)[0]:
-                    return sigma
+                box = box_multipliers_of(point.grams, multiplier_grams(structure))
+                if check_lyapunov(ring, field.g, field.D, V, sigma, mu, box)[0]:
+                    return GlobalDecrease(sigma, tuple(box))
         vanishing = vanishing_monomials(structure.gram("sigma"), solution)
-        if not vanishing:
+        # a box multiplier's monomial the identity forces to 0 (its square appears in no other term: the
+        # half-polytope test is approximate) keeps the margin at 0 too: dropped the same way
+        reduced = [_without(g, vanishing_monomials(g, solution), generators) for g in box_grams]
+        if not vanishing and all(len(r.basis) == len(g.basis) for r, g in zip(reduced, box_grams)):
             return None
         drop = drop | vanishing
+        box_grams = [r for r in reduced if r.basis]
+        box_terms = [t for t in box_terms if any(t.decision == r.name for r in box_grams)]
     return None
+
+
+def _without(gram: Gram, monomials_: frozenset[Monomial], generators: Sequence[Sequence[int]]) -> Gram:
+    """``gram`` with the given monomials left out of its basis (its blocks made again)."""
+    basis = tuple(m for m in gram.basis if m not in monomials_)
+    return Gram(gram.name, basis, tuple(map(tuple, bases.character_blocks(basis, generators))), margin=gram.margin)
 
 
 def gram_of(field: StateField, p: Poly, search: Search) -> GramPoly | None:
@@ -794,10 +821,12 @@ def gram_of(field: StateField, p: Poly, search: Search) -> GramPoly | None:
     ring = field.ring
     n = field.n
     support = set(ring.support(p))
-    basis = bases.sos_basis(n, support)
+    # (over a box the ring has the box's parameters after the states; V of the states alone keeps them at
+    # exponent 0 in its support, so its reduced basis does too)
+    basis = bases.sos_basis(ring.nvars, support)
     if not basis or not bases.has_pure_powers(basis, range(n)) or any(sum(m) == 0 for m in basis):
         return None
-    structure = Structure(nvars=n, grams=(Gram("V", tuple(basis), bases_full(basis)),), scalars=(),
+    structure = Structure(nvars=ring.nvars, grams=(Gram("V", tuple(basis), bases_full(basis)),), scalars=(),
                           identities=(Identity("gram", (Term(one(ring, -1), "V"),), param("P", support), "V"),),
                           objective=("max_margin",))
     values = ParameterValues()

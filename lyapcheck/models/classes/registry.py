@@ -128,9 +128,11 @@ class ModelClass:
     family: str
     #: what a ``certified`` proves by default (a result may state another: ``quadratic`` GES or GAS)
     proves: Property
-    #: it certifies every parameter value of a ``--box`` (:mod:`lyapcheck.models.loop.boxes`); else it
-    #: certifies a point only and is ``not_applicable`` over a box (a polynomial map's own list is
-    #: :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`, which takes ``candidate`` too)
+    #: it certifies every parameter value of a ``--box`` (:mod:`lyapcheck.models.loop.boxes`) and a box sweep
+    #: runs it; else it certifies a point only and is ``not_applicable`` over a box (a polynomial map's own
+    #: list is :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`). ``candidate`` is the one class
+    #: needing the user's input: never swept, it is False here, yet ``certify --box`` takes it on every kind of
+    #: loop but a map with functions (the user's V for every value of the box)
     over_box: bool
     #: it proves a stability property of the equilibrium: an unstable equilibrium (the linearization
     #: refuted, exactly) refutes it

@@ -91,7 +91,8 @@ def roa_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":
 
 
 def candidate_field(ctx: "FieldRun", budget: "Budget") -> "ConditionResult":
-    """The user's V, tried on the nominal loop (its global test has no box multipliers yet)."""
+    """The user's V, tried on the nominal loop (over a box, for every value of it: the field's ring carries the
+    box's parameters, :func:`lyapcheck.models.classes.field_regions.run_candidate`)."""
     from lyapcheck.models.classes.field_regions import covers, run_candidate
 
     return covers(run_candidate(ctx.cleared, ctx.candidate, budget), ctx.nominal_covers)
@@ -171,11 +172,14 @@ def roa_functions(ctx: "FunctionsRun", budget: "Budget") -> "ConditionResult":
 
 
 def candidate_functions(ctx: "FunctionsRun", budget: "Budget") -> "ConditionResult":
-    """The user's V (:func:`lyapcheck.models.classes.recast_regions.run_candidate`)."""
-    from lyapcheck.models.classes.recast_regions import comparison_box, run_candidate
+    """The user's V (:func:`lyapcheck.models.classes.recast_regions.run_candidate`; over a box, for every value of
+    it, :func:`~lyapcheck.models.classes.recast_regions.box_candidate`)."""
+    from lyapcheck.models.classes.recast_regions import box_candidate, comparison_box, run_candidate
 
     if ctx.candidate is None:
         raise ValueError("the candidate class runs with --candidate")
+    if ctx.box is not None:
+        return box_candidate(ctx.model, ctx.loop, ctx.proved, ctx.box, ctx.candidate, budget)
     return run_candidate(ctx.loop, ctx.candidate, budget, comparison_box(ctx.model, ctx.loop))
 
 

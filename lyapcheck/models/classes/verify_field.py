@@ -232,6 +232,10 @@ def verify_lyapunov(name: str, c: dict[str, Any], check: "FieldCheck") -> tuple[
         return cascade_lyapunov.verify(c, cert, scaled, field)
     if cert.get("kind") == "lyapunov" and cert.get("form") == "vertices":
         return _verify_vertices(c, cert, scaled, field)
+    box_json = scaled.cleared.shifted.box.to_json() if scaled.cleared.shifted.box is not None else None
+    if ("parameter_box" in cert or (name == "candidate" and box_json is not None)) \
+            and cert.get("parameter_box") != box_json:
+        return False, "a candidate over a box states that box (parameter_box) as the document's, and only then"
     ring, n = field.ring, field.n
     nv = ring.nvars
     V = _gram(cert["gram_V"], nv)

@@ -63,8 +63,8 @@ DEGREE: Final = re.compile(r"\bdegree (\d+)\b")
 #: the degree words of the common degrees (others: "of degree 6")
 DEGREE_WORDS: Final[Mapping[int, str]] = {2: "quadratic", 4: "quartic"}
 
-#: why a class that certifies a point is ``not_applicable`` over a ``--box``: one sentence per class, the
-#: same on a polynomial loop and on a loop with functions
+#: why a class that certifies a point is ``not_applicable`` over a ``--box``: one sentence per class (today
+#: ``candidate`` on a discrete-time map with functions only; every other kind takes it over a box)
 NOT_OVER_A_BOX: Final[Mapping[str, str]] = {
     "candidate": "not over a box (the candidate class certifies a point: certify one with --set NAME=VALUE)",
 }

@@ -135,25 +135,31 @@ def _sets_use_box(model: Model, box: "ModelBox | None") -> bool:
 
 
 def refuse_candidate_over_box(source: str, candidate: str | None, box: object | None) -> None:
-    """``--candidate`` with ``--box`` is bad input on every kind of loop but a polynomial map (exit 2 naming
-    ``--candidate``): the candidate class certifies a point there (docs/model-files.md, "Boxes of parameters")."""
+    """``--candidate`` with ``--box`` is bad input on a discrete-time map with functions (exit 2 naming
+    ``--candidate``): the candidate class certifies a point there (docs/model-files.md, "Boxes of parameters");
+    every other kind of loop takes it over a box (one V of the states for every value of it)."""
     if box is not None and candidate is not None:
         raise ModelFileError(source, "--candidate", "not over a --box (the candidate class certifies a point)")
 
 
-def refuse_box_in_candidate(model: Model, candidate: str, box: "ModelBox") -> None:
-    """A map's candidate over a box is one ``V`` for every value of the box: a text naming a parameter of the
-    box (which would be read at the model's value, :func:`parse_candidate`) is bad input (exit 2 naming
-    ``--candidate``)."""
-    from lyapcheck.models.language.expressions import ExpressionError, parse_expression
+def refuse_box_in_candidate(model: "Model | RecastModel", candidate: str, box: "ModelBox") -> None:
+    """A candidate over a box is one ``V`` for every value of the box: a text naming a parameter of the
+    box (which would be read at the model's value, :func:`parse_candidate`, or at the box's centre on a loop
+    with functions) is bad input (exit 2 naming ``--candidate``)."""
+    if not isinstance(model, Model):  # a loop with functions: the names the text writes (recast later)
+        import re
 
-    try:
-        expr = parse_expression(candidate, model.ring)
-    except ExpressionError:
-        return  # (parse_candidate words the error)
-    ring = model.ring
-    named = sorted({ring.names[k] for p in (expr.numerator, expr.denominator) for m in ring.support(p)
-                    for k, e in enumerate(m) if e and ring.names[k] in box.names})
+        named = sorted(set(re.findall(r"[A-Za-z_][A-Za-z_0-9]*", candidate)) & set(box.names))
+    else:
+        from lyapcheck.models.language.expressions import ExpressionError, parse_expression
+
+        try:
+            expr = parse_expression(candidate, model.ring)
+        except ExpressionError:
+            return  # (parse_candidate words the error)
+        ring = model.ring
+        named = sorted({ring.names[k] for p in (expr.numerator, expr.denominator) for m in ring.support(p)
+                        for k, e in enumerate(m) if e and ring.names[k] in box.names})
     if named:
         raise ModelFileError(model.source, "--candidate", "over a --box V must be of the states alone (one V for "
                              f"every value of the box); it names the box's parameter {', '.join(named)}")
@@ -203,8 +209,10 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
     from lyapcheck.models.loop.discrete import is_discrete
 
-    if not (is_discrete(model) and isinstance(model, Model)):  # (a polynomial map takes a candidate over a box)
+    if is_discrete(model) and not isinstance(model, Model):  # (every other kind takes a candidate over a box)
         refuse_candidate_over_box(model.source, candidate, box)
+    elif candidate is not None and box is not None and not is_discrete(model):  # (a map's runner checks its own)
+        refuse_box_in_candidate(model, candidate, box)
     if is_discrete(model):  # a map never reaches the classes that read [dynamics] as a field
         if not isinstance(model, Model):  # a map with functions (lyapcheck.models.classes.discrete_functions)
             return _certify_map_functions(model, classes, candidate, limit, box)
@@ -249,7 +257,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
             ctx.nominal_covers = ("all" if not ctx.enters else "zero") if model.disturbances else None
 
     def decide(entry: ModelClass) -> ConditionResult | None:
-        given = _needs_input(entry.name, box, cand)
+        given = _needs_input(entry.name, None, cand)  # (the user's V is proved over a box too)
         if given is not None:
             return given
         if entry.cleared and uncleared is not None:
@@ -342,8 +350,8 @@ SETS_NAME_BOX = "over a box the sets may not depend on a parameter of the box (t
 
 
 def _needs_input(name: str, box: "ModelBox | None", cand: object | None) -> ConditionResult | None:
-    """``candidate`` is ``not_applicable`` over a box (it certifies a point) and without ``--candidate``, on
-    every kind of loop; None otherwise."""
+    """``candidate`` is ``not_applicable`` without ``--candidate``, on every kind of loop, and over a box
+    (``box`` given) on a kind that certifies it at a point only (a map with functions); None otherwise."""
     if name == "candidate" and box is not None:
         return ConditionResult("candidate", "not_applicable", reasons.NOT_OVER_A_BOX["candidate"])
     if name == "candidate" and cand is None:
@@ -516,7 +524,7 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     def decide(entry: ModelClass) -> ConditionResult | None:
         # roa after GAS, weighed as on a polynomial loop; GAS with d = 0 answers at once here (this loop's roa
         # has no route that tries a region for every disturbance alone first)
-        return _needs_input(entry.name, box, cand) or (
+        return _needs_input(entry.name, None, cand) or (  # (the user's V is proved over a box too)
             roa_after_gas(results, "all" if model.disturbances else None, nominal, box is not None)
             or roa_after_gas(results, "zero", nominal, box is not None) if entry.name == "roa" else None)
 

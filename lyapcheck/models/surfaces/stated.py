@@ -425,7 +425,17 @@ def candidate_of_functions(doc: dict[str, Any], model: "RecastModel", rows: list
         rows.append(("candidate", False, "candidate: a certified candidate condition needs the candidate text"))
         return
     try:
-        same = poly_from_json(model.system.ring, c["certificate"]["V"], "V") == model.candidate_v
+        cert = c["certificate"]
+        if "parameter_box" in cert and cert.get("kind") == "recast":
+            # over a box, V on the loop recast with the box's parameters (the ring its certificate names, which
+            # its proof's row holds to the recasting of the model text): the text's V moved there by name
+            from lyapcheck.models.classes.recast_regions import in_ring
+            from lyapcheck.sos.polynomials import Ring
+
+            ring = Ring(tuple(cert["variables"]))
+            same = poly_from_json(ring, cert["V"], "V") == in_ring(model.system.ring, ring, model.candidate_v)
+        else:
+            same = poly_from_json(model.system.ring, cert["V"], "V") == model.candidate_v
     except (KeyError, ValueError, TypeError, ArithmeticError) as exc:
         rows.append(("candidate", False, f"candidate: the certified V is malformed: {str(exc)[:200]}"))
         return

@@ -375,11 +375,14 @@ def _conditions_of_functions(doc: dict[str, Any], model: "RecastModel", box: Box
             return _verify_box_linearization(c, box.boxed, box.box)
         if c["status"] != "certified":
             return verify(name, c, FunctionsCheck(base, robust_of(model), model))
-        if name == "roa":  # the set covers the disturbances too where its certificate says so (else d = 0)
+        if name == "roa" or (name == "candidate" and c["certificate"].get("kind") == "interval"):
+            # the set covers the disturbances too where its certificate says so (else d = 0)
             disturbed = "disturbances" in (c.get("certificate") or {})
             ok, why = verify(name, c, FunctionsCheck(base, box_robust(model, box.box, disturbed=disturbed)))
             return (ok, why) if c["certificate"].get("kind") == "interval" else \
                 (False, "over a box, roa is proved by ball arithmetic")
+        if name == "candidate" and c["certificate"].get("parameter_box") != box.box.to_json():
+            return False, "a candidate over a box states that box (parameter_box) as the document's"
         if name in ("barrier", "reach_avoid"):
             return _verify_box_safety(name, c, box.boxed, model, box.box)
         return verify(name, c, FunctionsCheck(box.boxed))
@@ -389,8 +392,8 @@ def _conditions_of_functions(doc: dict[str, Any], model: "RecastModel", box: Box
             prefix = box_prefix(box.box, c["status"])
             if name == "linearization" and c["status"] == "refuted":  # (it names its own point of the box)
                 prefix = ""
-            if not str(c.get("summary", "")).startswith(prefix) or name == "candidate":
-                return False, f"over a box a claim begins '{prefix}' (and candidate certifies a point)"
+            if not str(c.get("summary", "")).startswith(prefix):
+                return False, f"over a box a claim begins '{prefix}'"
             c = {**c, "summary": c["summary"][len(prefix):]}
         # a claim for every disturbance value: by ball arithmetic or sos_bound's kind, of a class that can make one
         robust_claim = (coverage is not None and c.get("disturbances") == "all"
