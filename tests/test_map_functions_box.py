@@ -208,13 +208,34 @@ def test_a_box_the_centres_p_misses_takes_a_p_common_to_its_grid(tmp_path: Path)
     assert cli("verify", str(out)).exit_code == 0
 
 
-def test_a_box_reaching_unstable_gains_certifies_nothing(tmp_path: Path) -> None:
-    done, doc, _ = certify(tmp_path, "--classes", "linearization,roa", "--box", "k=1..1.8")
+def test_a_box_reaching_unstable_gains_is_refuted_at_a_corner(tmp_path: Path) -> None:
+    """Over k in [1, 1.8] no P is proved; the corner k = 1.8 has the eigenvalue (1.8 + sqrt(1.24))/2 > 1, which
+    Routh's column proves in balls: linearization is refuted there (roa stays not_certified), verify re-proves
+    it, and a document moving the point to a stable gain, or out of the box, fails."""
+    done, doc, out = certify(tmp_path, "--classes", "linearization,roa", "--box", "k=1..1.8")
     assert done.exit_code == 1, done.output
-    for name in ("linearization", "roa"):
-        c = doc["conditions"][name]
-        assert c["status"] == "not_certified", c["summary"]
-        assert "MAP_BOX_PIECES" in c["summary"]
+    lin, roa = doc["conditions"]["linearization"], doc["conditions"]["roa"]
+    assert lin["status"] == "refuted", lin["summary"]
+    data = lin["refutation"]
+    assert data["method"] == "box_point" and data["at_point"]["method"] == dbox.BALL_ROUTH_METHOD
+    k = float(Fraction(data["point"]["k"]))
+    assert 1 <= k <= 1.8 and max(abs(np.linalg.eigvals(np.array([[0.0, 1.0], [-0.5, k]])))) > 1
+    assert lin["summary"].startswith("at k = 1.8, a value of the box, ")
+    assert roa["status"] == "not_certified" and "MAP_BOX_PIECES" in roa["summary"], roa["summary"]
+    assert doc["answers"]["stability"]["answer"] == "unstable"
+    done = cli("verify", str(out))
+    assert done.exit_code == 0, done.output
+    assert "ok   linearization: at a value of the box" in done.output
+
+    def stable_point(d: dict[str, Any]) -> None:  # k = 1 is a value of the box, with spectral radius < 1
+        d["conditions"]["linearization"]["refutation"]["point"] = {"k": "1"}
+
+    def outside(d: dict[str, Any]) -> None:
+        d["conditions"]["linearization"]["refutation"]["point"] = {"k": "2"}
+
+    for forge, words in ((stable_point, "shows no eigenvalue of modulus > 1"), (outside, "is not in the box")):
+        done = _tampered(doc, tmp_path, forge)
+        assert done.exit_code == 1 and "FAIL linearization" in done.output and words in done.output, done.output
 
 
 def test_a_box_moving_the_fixed_point_exits_2(tmp_path: Path) -> None:

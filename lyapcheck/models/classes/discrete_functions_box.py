@@ -61,6 +61,16 @@ METHOD: Final = BOX_BALL_STEIN_METHOD
 NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes linearization and roa only (each proved "
                        "in ball arithmetic for every value of the box); certify a point with --set NAME=VALUE")
 
+#: the method of the refutation at one value of the box (a corner or the centre): Routh's first column of the
+#: bilinear transform of the ball Jacobian's characteristic polynomial changes sign
+BALL_ROUTH_METHOD: Final = "ball_cayley_routh"
+#: the precisions (bits) Routh's column is computed at, in this order, until no ball of it holds 0
+ROUTH_PRECISIONS: Final = (64, 128, 256, 512, 1024)
+#: the sentence of that refutation at the point (claims words it again from the method)
+REFUTED_BALL_ROUTH: Final = ("the map's Jacobian at the fixed point has an eigenvalue of modulus > 1 (Routh's array of "
+                             "its characteristic polynomial's bilinear transform changes sign, in ball arithmetic): "
+                             "the discrete-time map's fixed point is unstable")
+
 Interval = tuple[Fraction, Fraction]
 
 
@@ -182,6 +192,91 @@ def prove_over_box(system: "RecastSystem", box: "ModelBox", P: list[list[Fractio
     return True, count, "", proved
 
 
+# -- an unstable value of the box: the claim for every value is false (refuted) ------------------------------
+
+def routh_at(system: "RecastSystem", point: dict[str, Fraction], bits: int) -> tuple[int | None, list[Any]]:
+    """At the parameter ``point`` (exact values of the box's parameters), the sign changes of Routh's first
+    column of the bilinear transform of the characteristic polynomial of the ball Jacobian ``A = I + Jd``
+    (:func:`lyapcheck.models.classes.sampled.cayley_routh_column`), at ``bits`` of precision: the number of
+    eigenvalues of the true Jacobian of modulus > 1, or None where a ball of the column holds 0 (or a function
+    is not known differentiable there); and the column."""
+    from lyapcheck.models.classes.sampled import _sign_changes, cayley_routh_column
+
+    saved = flint.ctx.prec
+    flint.ctx.prec = bits
+    try:
+        A = jacobian_balls(boxed_map(system, {name: (value, value) for name, value in point.items()}))
+        if A is None:
+            return None, []
+        column = cayley_routh_column(flint.arb_mat(A))
+        return (_sign_changes(column) if len(column) == len(A) + 1 else None), column
+    finally:
+        flint.ctx.prec = saved
+
+
+def unstable_at(system: "RecastSystem", point: dict[str, Fraction]) -> dict[str, Any] | None:
+    """The refutation's data at ``point`` (:data:`BALL_ROUTH_METHOD`) where Routh's column proves an eigenvalue
+    of modulus > 1, trying each precision of :data:`ROUTH_PRECISIONS`; None where none does (a stable or
+    critical value, or one the balls leave undecided: nothing is claimed of it)."""
+    for bits in ROUTH_PRECISIONS:
+        changes, column = routh_at(system, point, bits)
+        if changes is not None:
+            if changes == 0:
+                return None
+            return {"time": "discrete", "method": BALL_ROUTH_METHOD, "precision_bits": bits,
+                    "routh_first_column": [str(c) for c in column]}
+    return None
+
+
+def refute_over_box(system: "RecastSystem", box: "ModelBox") -> ConditionResult | None:
+    """``refuted`` for the whole box when the Jacobian at one of its corners or its centre
+    (:func:`lyapcheck.models.classes.discrete_linearization.box_points`) has an eigenvalue of modulus > 1,
+    proved in ball arithmetic (:func:`unstable_at`): there the fixed point is unstable (Lyapunov's indirect
+    method for maps; the map's functions are smooth at the fixed point, their jets exist), so "locally
+    exponentially stable for every value of the box" is false. The certificate states the point, as a
+    polynomial map's (method ``box_point``); None when no such value is found."""
+    from lyapcheck.models.classes.discrete_linearization import BOX_POINT_METHOD, box_point_sentence, box_points
+
+    for point in box_points(box):
+        at = unstable_at(system, point)
+        if at is not None:
+            data = {"time": "discrete", "method": BOX_POINT_METHOD, "point": {k: str(v) for k, v in point.items()},
+                    "at_point": at}
+            return ConditionResult("linearization", "refuted", box_point_sentence(point, REFUTED_BALL_ROUTH),
+                                   property="LES", refutation=data)
+    return None
+
+
+def verify_refutation(model: "RecastModel", box: "ModelBox", data: dict[str, Any]) -> tuple[bool, str]:
+    """A refutation over a box decided again: the stated point is a value of the box naming every parameter,
+    and Routh's column at the stated precision shows an eigenvalue of modulus > 1 there again."""
+    from lyapcheck.models.classes.discrete_linearization import BOX_POINT_METHOD
+
+    if data.get("time") != "discrete" or data.get("method") != BOX_POINT_METHOD:
+        return False, f"not a map's refutation at a value of the box (method {data.get('method')!r})"
+    try:
+        point = {str(k): Fraction(str(v)) for k, v in (data.get("point") or {}).items()}
+    except (TypeError, ValueError, ZeroDivisionError) as exc:
+        return False, f"malformed point: {exc}"
+    if set(point) != set(box.names):
+        return False, "the stated point does not name every parameter of the box"
+    for name, value in point.items():
+        lo, hi = box.interval(name)
+        if not lo <= value <= hi:
+            return False, f"the stated {name} = {value} is not in the box [{lo}, {hi}]"
+    at = data.get("at_point")
+    if not isinstance(at, dict) or at.get("method") != BALL_ROUTH_METHOD:
+        return False, f"the refutation at the point states method {BALL_ROUTH_METHOD!r}"
+    bits = at.get("precision_bits")
+    if not isinstance(bits, int) or bits not in ROUTH_PRECISIONS:
+        return False, f"precision_bits must be one of {', '.join(map(str, ROUTH_PRECISIONS))}"
+    changes, _ = routh_at(boxed_system(model, box), point, bits)
+    if not changes:
+        return False, "at the stated point Routh's first column shows no eigenvalue of modulus > 1 (ball arithmetic)"
+    return True, (f"at a value of the box: {changes} sign change(s) in Routh's first column of the Jacobian's "
+                  "bilinear transform, in ball arithmetic (an eigenvalue of modulus > 1)")
+
+
 def _centre_p(model: "RecastModel", name: str) -> list[list[Fraction]] | ConditionResult:
     """``P`` from the exact Jacobian at the box's centre (the model is read there), or ``name``'s result
     saying why there is none."""
@@ -274,6 +369,10 @@ def linearization(model: "RecastModel", box: "ModelBox") -> ConditionResult:
     system = boxed_system(model, box)
     found = box_p(model, system, box, "linearization")
     if isinstance(found, ConditionResult):
+        if found.status == "not_certified":  # no P for the whole box: an unstable value of it refutes the claim
+            unstable = refute_over_box(system, box)
+            if unstable is not None:
+                return unstable
         found.property = "LES"
         return found
     P, parts, _ = found
@@ -290,6 +389,8 @@ def verify_linearization(model: "RecastModel", box: "ModelBox", status: str, dat
     splitting of the box re-derived from the model text."""
     from lyapcheck.sos.definiteness import is_positive_definite
 
+    if status == "refuted":
+        return verify_refutation(model, box, data)
     if status != "certified" or data.get("method") != METHOD:
         return False, f"a {status} linearization over a box of a map with functions states method {METHOD!r}"
     n = len(model.states)
@@ -343,6 +444,7 @@ def verify_roa(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tupl
     return dfn.verify_roa(model, c, [boxed_map(system, part) for part in parts])
 
 
-__all__ = ["BOX_CLASSES", "METHOD", "NOT_OVER_BOX", "boxed_system", "whole", "boxed_map", "jacobian_balls",
+__all__ = ["BOX_CLASSES", "METHOD", "BALL_ROUTH_METHOD", "ROUTH_PRECISIONS", "REFUTED_BALL_ROUTH", "routh_at",
+           "unstable_at", "refute_over_box", "verify_refutation", "NOT_OVER_BOX", "boxed_system", "whole", "boxed_map", "jacobian_balls",
            "stein_margin_proved", "prove_over_box", "grid_points", "common_p", "box_p", "linearization",
            "verify_linearization", "roa", "verify_roa"]

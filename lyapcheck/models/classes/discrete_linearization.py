@@ -299,6 +299,10 @@ def sentence(status: str, data: dict[str, Any]) -> str:
         return REFUTED_STEIN
     if status == "refuted" and method == "cayley_root_isolation":
         return refuted_root(str(data["root"]))
+    if status == "refuted" and method == "ball_cayley_routh":  # a map with functions' value of a box, in balls
+        from lyapcheck.models.classes.discrete_functions_box import REFUTED_BALL_ROUTH
+
+        return REFUTED_BALL_ROUTH
     if status == "refuted" and method == BOX_POINT_METHOD:  # over a box: the value, then the point's own words
         point = {str(k): Fraction(v) for k, v in data["point"].items()}
         return box_point_sentence(point, sentence("refuted", data["at_point"]))
