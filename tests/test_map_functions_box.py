@@ -164,7 +164,8 @@ def test_a_stable_box_is_certified_and_verified(box_doc: tuple[dict[str, Any], P
     assert roa["status"] == "certified", roa["summary"]
     assert roa["certificate"]["parameter_box"] == doc["box"]
     starts_stay_and_converge(roa["certificate"], [0.6, 0.7, 0.8, 0.9, 0.95], seed=5)
-    assert doc["conditions"]["quadratic"]["status"] == "not_applicable"
+    # no quadratic V is common to the gains k tanh(y)/y in [0, 0.95] (the relations' sector): not found, not claimed
+    assert doc["conditions"]["quadratic"]["status"] == "not_certified"
     done = cli("verify", str(out))
     assert done.exit_code == 0, done.output
     assert "ok   linearization: A(p)^T P A(p) - P < 0 proved again" in done.output
@@ -189,6 +190,61 @@ def test_a_forged_box_document_fails_verify(box_doc: tuple[dict[str, Any], Path]
     done = _tampered(doc, tmp_path, wider)
     assert done.exit_code == 1, done.output
     assert "FAIL linearization" in done.output
+
+
+@pytest.fixture(scope="module")
+def gas_doc(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Path]:
+    done, doc, out = certify(tmp_path_factory.mktemp("gas"), "--classes", "quadratic,sos_gas,roa",
+                             "--box", "k=0.6..0.85")
+    assert done.exit_code == 0, done.output
+    return doc, out
+
+
+def test_quadratic_and_sos_gas_over_a_box_hold_for_every_value(gas_doc: tuple[dict[str, Any], Path]) -> None:
+    """Over k in [0.6, 0.85] one V of the states decreases for every k (the box's parameter a bounded variable of
+    the relations): GES with its figures, sos_gas GAS, roa not run (GAS for every value); iterated at sampled k
+    from random starts V(F) <= (1 - mu) V holds, and ``verify`` re-checks both identities."""
+    doc, out = gas_doc
+    quad, gas = doc["conditions"]["quadratic"], doc["conditions"]["sos_gas"]
+    assert quad["status"] == "certified" and quad["property"] == "GES", quad["summary"]
+    assert quad["summary"].startswith("for every k in [0.6, 0.85]: GES of the discrete-time map")
+    assert gas["status"] == "certified" and gas["property"] == "GAS", gas["summary"]
+    assert doc["conditions"]["roa"]["status"] == "not_applicable"
+    cert = quad["certificate"]
+    assert cert["parameter_box"] == doc["box"] == {"k": ["3/5", "17/20"]} and "k" in cert["variables"]
+    Q = cert["gram_V"]["Q"]
+    assert [q[2:] for q in cert["gram_V"]["basis"]] == [[0, 0], [0, 0]]  # V of the states alone
+    P = np.array([[float(Fraction(x)) for x in row] for row in Q])
+    mu = float(Fraction(cert["mu"]))
+    rng = np.random.default_rng(3)
+    for k in np.linspace(0.6, 0.85, 11):
+        for _ in range(50):
+            e = rng.normal(size=2) * rng.choice([0.1, 1.0, 30.0])
+            x, y = step(float(e[0]), float(e[1]), float(k))
+            n = np.array([x, y])
+            assert n @ P @ n <= (1 - mu) * (e @ P @ e) * (1 + 1e-9)
+    done = cli("verify", str(out))
+    assert done.exit_code == 0, done.output
+    assert "ok   quadratic: Q_V > 0" in done.output and "ok   sos_gas: Q_V > 0" in done.output
+
+
+def test_a_forged_quadratic_over_a_box_fails_verify(gas_doc: tuple[dict[str, Any], Path], tmp_path: Path) -> None:
+    doc, _ = gas_doc
+
+    def wider(d: dict[str, Any]) -> None:  # the same centre, a box reaching k = 0.975, where no such V exists
+        d["box"] = {"k": ["19/40", "39/40"]}
+        d["conditions"]["quadratic"]["certificate"]["parameter_box"] = d["box"]
+
+    def changed_p(d: dict[str, Any]) -> None:
+        gram = d["conditions"]["quadratic"]["certificate"]["gram_V"]
+        gram["Q"][0][0] = str(Fraction(gram["Q"][0][0]) * 2)
+
+    def elsewhere(d: dict[str, Any]) -> None:  # the certificate's box is not the document's
+        d["conditions"]["quadratic"]["certificate"]["parameter_box"] = {"k": ["13/20", "4/5"]}
+
+    for forge in (wider, changed_p, elsewhere):
+        done = _tampered(doc, tmp_path, forge)
+        assert done.exit_code == 1 and "FAIL quadratic" in done.output, (forge.__name__, done.output)
 
 
 def test_a_box_the_centres_p_misses_takes_a_p_common_to_its_grid(tmp_path: Path) -> None:

@@ -116,15 +116,12 @@ def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Co
 
 def _map_relations(ctx: "MapFunctionsRun", name: "Literal['quadratic', 'sos_gas']", budget: "Budget"
                    ) -> "ConditionResult":
-    """``quadratic`` or ``sos_gas`` on the recasting's relations, at a point only: over a box the runner says
-    ``not_applicable`` first; a direct call over a box says so too, never a claim proved at the centre alone."""
+    """``quadratic`` or ``sos_gas`` on the recasting's relations; over a box, one V of the states for every
+    value of it, the box's parameters bounded variables of the relations
+    (:func:`lyapcheck.models.classes.map_relations.on_relations_box`)."""
     from lyapcheck.models.classes import map_relations
-    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
-    from lyapcheck.results import ConditionResult
 
-    if ctx.box is not None:
-        return ConditionResult(name, "not_applicable", NOT_OVER_BOX)
-    return map_relations.run(ctx.model, name, budget)
+    return map_relations.run(ctx.model, name, budget, box=ctx.box)
 
 
 def quadratic_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":

@@ -138,7 +138,7 @@ def verify_lyapunov_map_functions(name: str, c: dict[str, Any], check: "MapFunct
 
     if c["status"] != "certified":
         return False, check.not_checked(c["status"])
-    return map_relations.verify(check.model, name, _without_nominal_prefix(c))
+    return map_relations.verify(check.model, name, _without_nominal_prefix(c), check.box)
 
 
 def verify_bound_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:

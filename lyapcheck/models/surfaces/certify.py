@@ -453,7 +453,8 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
                 return given
             if entry.run_map_functions is not None and entry.name not in BOX_CLASSES:
                 return ConditionResult(entry.name, "not_applicable", NOT_OVER_BOX)
-        return _discrete_rule(entry, entry.run_map_functions, NOT_YET, results, cand, bool(model.disturbances))
+        return _discrete_rule(entry, entry.run_map_functions, NOT_YET, results, cand, bool(model.disturbances),
+                              over_box=box is not None)
 
     def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
         run_map_functions = entry.run_map_functions
