@@ -305,10 +305,42 @@ def test_a_box_moving_the_fixed_point_exits_2(tmp_path: Path) -> None:
     assert done.exit_code == 0, done.output
 
 
-def test_a_candidate_over_a_box_exits_2() -> None:
-    done = cli("certify", str(MAP), "--no-store", "--box", "k=0.6..0.95", "--candidate", GOOD)
+def test_a_candidate_over_a_box_holds_for_every_value(tmp_path: Path) -> None:
+    """The user's V over k in [0.6, 0.95]: its largest level proved with k a ball on each part of the box, every
+    sampled start iterated at sampled k stays in the set and converges, ``verify`` re-proves it; a document
+    whose P is not the candidate's, whose level is raised or whose box is widened fails."""
+    done, doc, out = certify(tmp_path, "--classes", "candidate", "--box", "k=0.6..0.95", "--candidate", GOOD)
+    assert done.exit_code == 0, done.output
+    c = doc["conditions"]["candidate"]
+    assert c["status"] == "certified", c["summary"]
+    assert c["summary"].startswith("for every k in [0.6, 0.95]: region of attraction of the map")
+    cert = c["certificate"]
+    assert cert["V_from"] == "candidate" and cert["parameter_box"] == doc["box"] and cert["box_parts"] >= 1
+    assert [[Fraction(x) for x in row] for row in cert["P"]] == [[2, -1], [-1, 4]]
+    starts_stay_and_converge(cert, [0.6, 0.75, 0.95], seed=11)
+    done = cli("verify", str(out))
+    assert done.exit_code == 0 and "ok   candidate: V(F(e)) < V(e) proved again" in done.output, done.output
+
+    def other_p(d: dict[str, Any]) -> None:
+        d["conditions"]["candidate"]["certificate"]["P"] = [["2", "-1"], ["-1", "5"]]
+
+    def raised(d: dict[str, Any]) -> None:
+        d["conditions"]["candidate"]["certificate"]["level"] = str(Fraction(cert["level"]) * 64)
+
+    def wider(d: dict[str, Any]) -> None:  # the same centre, k up to 1.6 (unstable there)
+        d["box"] = {"k": ["-1/20", "8/5"]}
+        d["conditions"]["candidate"]["certificate"]["parameter_box"] = d["box"]
+
+    for forge in (other_p, raised, wider):
+        done = _tampered(doc, tmp_path, forge)
+        assert done.exit_code == 1 and "FAIL candidate" in done.output, (forge.__name__, done.output)
+
+
+def test_a_candidate_naming_a_box_parameter_exits_2() -> None:
+    done = cli("certify", str(MAP), "--no-store", "--box", "k=0.6..0.95", "--candidate", "k*x**2 + y**2")
     assert done.exit_code == 2, done.output
-    assert "--candidate" in done.output
+    assert "--candidate" in done.output and "names the box's parameter k" in done.output
+    assert len(done.output.strip().splitlines()) == 1
 
 
 def test_the_ball_stein_test_refuses_an_unstable_jacobian() -> None:

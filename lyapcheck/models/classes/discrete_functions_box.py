@@ -54,7 +54,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.recast import RecastModel, RecastSystem
 
 #: the classes a map with functions decides over a box
-BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa")
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate")
 #: the method a map with functions' linearization over a box states
 METHOD: Final = BOX_BALL_STEIN_METHOD
 #: the reason of every other class over a box
@@ -444,7 +444,56 @@ def verify_roa(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tupl
     return dfn.verify_roa(model, c, [boxed_map(system, part) for part in parts])
 
 
+def candidate(model: "RecastModel", box: "ModelBox", budget: "Budget") -> ConditionResult:
+    """The user's quadratic ``V = e^T P e`` (of the states alone: a text naming a box parameter is refused
+    before, :func:`lyapcheck.models.surfaces.certify.refuse_box_in_candidate`): its largest level proved a
+    region of attraction for every value of the box, as :func:`roa` does with its own ``P``. ``A(p)^T P A(p) -
+    P < 0`` is proved on the parts of the box first (:func:`prove_over_box`: the level search's Hessian zone
+    needs it on each part); a ``P`` for which it is not proved is ``not_certified`` saying so."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    P = dfn.candidate_matrix(model)
+    if isinstance(P, str):
+        return ConditionResult("candidate", "not_applicable", P, property="ROA")
+    if not is_positive_definite(P):
+        return ConditionResult("candidate", "not_certified", "the candidate V = e^T P e has P not positive definite "
+                               "(checked exactly): its sublevel sets are no bounded neighbourhoods of the fixed "
+                               "point, so none is a region of attraction", property="ROA")
+    system = boxed_system(model, box)
+    ok, _, why, parts = prove_over_box(system, box, P)
+    if not ok:
+        return ConditionResult("candidate", "not_certified", "the candidate V does not decrease to first order for "
+                               "every value of the box: A(p)^T P A(p) - P < 0 was not proved in ball arithmetic "
+                               f"({why})", property="ROA")
+    found = dfn.level_search(model, P, budget, "candidate", [boxed_map(system, part) for part in parts])
+    if isinstance(found, ConditionResult):
+        return found
+    cert = {**dfn.region_certificate(model, P, found), "V_from": "candidate", "parameter_box": box.to_json(),
+            "box_parts": len(parts)}
+    summary = _prefix(box) + discrete_interval_sentence("candidate", found.level, over_box=True)
+    numbers = found.numbers()
+    size = dfn.area(P, found.level)
+    if size is not None:
+        numbers["area"] = size
+    return ConditionResult("candidate", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+
+
+def verify_candidate(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tuple[bool, str]:
+    """A candidate's region over a box: its ``P`` is the document's candidate's (exactly, ``"V_from":
+    "candidate"``), then the region proved again as :func:`verify_roa` does (the box stated, the parts
+    re-derived from ``P``, the level on the same cells of each)."""
+    cert = c.get("certificate")
+    if not isinstance(cert, dict) or cert.get("V_from") != "candidate":
+        return False, "a certified candidate on a map with functions states the user's V (\"V_from\": \"candidate\")"
+    P = dfn.candidate_matrix(model)
+    if isinstance(P, str):
+        return False, f"the document's candidate: {P}"
+    if [[Fraction(str(x)) for x in row] for row in cert.get("P", [])] != P:
+        return False, "the stated P is not the candidate's (V = e^T P e of the document's candidate text)"
+    return verify_roa(model, box, c)
+
+
 __all__ = ["BOX_CLASSES", "METHOD", "BALL_ROUTH_METHOD", "ROUTH_PRECISIONS", "REFUTED_BALL_ROUTH", "routh_at",
            "unstable_at", "refute_over_box", "verify_refutation", "NOT_OVER_BOX", "boxed_system", "whole", "boxed_map", "jacobian_balls",
            "stein_margin_proved", "prove_over_box", "grid_points", "common_p", "box_p", "linearization",
-           "verify_linearization", "roa", "verify_roa"]
+           "verify_linearization", "roa", "verify_roa", "candidate", "verify_candidate"]

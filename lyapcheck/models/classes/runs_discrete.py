@@ -186,9 +186,12 @@ def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionRes
 
 def candidate_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """The user's quadratic V, its largest level proved by ball arithmetic on the true map
-    (:func:`lyapcheck.models.classes.discrete_functions.candidate`)."""
-    from lyapcheck.models.classes import discrete_functions
+    (:func:`lyapcheck.models.classes.discrete_functions.candidate`); over a box, for every value of it
+    (:func:`lyapcheck.models.classes.discrete_functions_box.candidate`)."""
+    from lyapcheck.models.classes import discrete_functions, discrete_functions_box
 
+    if ctx.box is not None:
+        return discrete_functions_box.candidate(ctx.model, ctx.box, budget)
     return discrete_functions.candidate(ctx.model, budget)
 
 

@@ -141,12 +141,27 @@ def refuse_candidate_over_box(source: str, candidate: str | None, box: object | 
         raise ModelFileError(source, "--candidate", "not over a --box (the candidate class certifies a point)")
 
 
-def refuse_box_in_candidate(model: Model, candidate: str, box: "ModelBox") -> None:
+def refuse_box_in_candidate(model: "Model | RecastModel", candidate: str, box: "ModelBox") -> None:
     """A map's candidate over a box is one ``V`` for every value of the box: a text naming a parameter of the
     box (which would be read at the model's value, :func:`parse_candidate`) is bad input (exit 2 naming
-    ``--candidate``)."""
+    ``--candidate``). A map with functions' candidate is read in its recasting, whose ring has no parameter:
+    its names are read off the text's syntax tree (never evaluated)."""
     from lyapcheck.models.language.expressions import ExpressionError, parse_expression
 
+    if not isinstance(model, Model):
+        import ast
+
+        from lyapcheck.models.language.expressions import parse_quietly
+
+        try:
+            tree = parse_quietly(candidate)
+        except (SyntaxError, ValueError, RecursionError, ExpressionError):
+            return  # (the candidate's reading words the error)
+        named = sorted({node.id for node in ast.walk(tree) if isinstance(node, ast.Name)} & set(box.names))
+        if named:
+            raise ModelFileError(model.source, "--candidate", "over a --box V must be of the states alone (one V for "
+                                 f"every value of the box); it names the box's parameter {', '.join(named)}")
+        return
     try:
         expr = parse_expression(candidate, model.ring)
     except ExpressionError:
@@ -203,7 +218,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
     from lyapcheck.models.loop.discrete import is_discrete
 
-    if not (is_discrete(model) and isinstance(model, Model)):  # (a polynomial map takes a candidate over a box)
+    if not is_discrete(model):  # (a map, with functions or not, takes a candidate over a box: one V for every value)
         refuse_candidate_over_box(model.source, candidate, box)
     if is_discrete(model):  # a map never reaches the classes that read [dynamics] as a field
         if not isinstance(model, Model):  # a map with functions (lyapcheck.models.classes.discrete_functions)
@@ -440,6 +455,8 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
 
     if box is not None:  # the fixed point must stay put over the box (one line, exit 2, before any class runs)
         boxed_system(model, box)
+        if candidate is not None:  # one V for every value of the box: of the states alone
+            refuse_box_in_candidate(model, candidate, box)
     cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
     results: dict[str, ConditionResult] = {}
@@ -448,7 +465,7 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
 
     def decide(entry: ModelClass) -> ConditionResult | None:
         if box is not None:
-            given = _needs_input(entry.name, box, cand)
+            given = _needs_input(entry.name, None, cand)  # (a candidate over a box: one V for every value)
             if given is not None:
                 return given
             if entry.run_map_functions is not None and entry.name not in BOX_CLASSES:
