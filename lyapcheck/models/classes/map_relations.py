@@ -194,7 +194,10 @@ def on_relations_box(model: "RecastModel", box: "ModelBox") -> MapOnRelations:
                        relations=relations, multiplied=tuple(range(len(relations))),
                        unused=loop.roots(), square_free=loop.square_free())
     index = {name: i for i, name in enumerate(ring.names)}
-    return MapOnRelations(system, ring, F, relations, field, tuple(index[name] for name in box.names))
+    params = tuple(index[name] for name in box.names)
+    if params != tuple(range(n, n + len(params))):  # pragma: no cover - boxed_system puts them after the states
+        raise ValueError("the box's parameters do not follow the states in the recasting's ring")
+    return MapOnRelations(system, ring, F, relations, field, params)
 
 
 # -- the program ----------------------------------------------------------------------------------------
@@ -376,8 +379,9 @@ def run(model: "RecastModel", name: dl.ClassName, budget: Budget, degrees: Seque
 
 def v_of_states(m: MapOnRelations, v: Poly) -> dict[str, Any]:
     """``V``'s exact terms over the states alone (exponents per state, as a polynomial map's certificate
-    states its V, which sweeps and reports read): V is a polynomial of the states."""
-    states = Ring(m.ring.names[:m.n])
+    states its V, which sweeps and reports read): V is a polynomial of the states. Over a box, over the states
+    and then the box's parameters (each at exponent 0), as a polynomial map's V over a box."""
+    states = Ring(m.ring.names[:m.n + len(m.params)])  # (the box's parameters follow the states)
     return lyapunov.terms_json(states, m.ring.restrict(v, states))
 
 
