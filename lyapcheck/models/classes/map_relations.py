@@ -54,7 +54,7 @@ from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly
-from lyapcheck.sos.polynomials import Monomial, Poly, Ring, to_fmpq
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.classes.bounds import BoundField
@@ -220,38 +220,78 @@ def multipliers(m: MapOnRelations, generators: Sequence[Sequence[int]]) -> dl.Mu
     """The relations' S-procedure terms of the decrease (free ``lambda_i``, SOS ``tau_j`` with the program's
     margin). The other terms vanish at the fixed point and ``W >= 0``, so ``tau_j(0) g_j(0) = 0``: a relation
     not tight there (``1 - t^2 >= 0``) keeps no constant in its multiplier's basis (the solver would find
-    that diagonal 0 and no strict certificate)."""
+    that diagonal 0 and no strict certificate). Over a box: :func:`box_multipliers`."""
     from lyapcheck.models.classes.bounds import relation_multipliers
 
     ring = m.ring
+    if m.params:
+        return lambda target: box_multipliers(m, target, generators)
 
     def terms(target: set[Monomial]) -> tuple[list["Gram"], list["Scalar"], list["Term"], set[Monomial]]:
         grams, scalars, terms_, added = relation_multipliers(m.field, "W", target, generators, margin=True)
         kept = []
         for g in grams:
             j = int(g.name.split("_")[1])
-            if not _vanishes_at_origin(ring, m.relations[j].poly, m.params):
-                # (over a box, tau_j(0, u) g_j(0, u) = 0 for every u of the box as well: no monomial of the
-                # parameters alone either, |u| <= h being such a relation)
-                g = _kept(g, [k for k, q in enumerate(g.basis) if m.moving(q)])
-            if m.params:
-                # over a box the decrease has degree 4 at least (u t: a parameter times a function), and a
-                # multiplier's full basis brings products (x^2 y t) whose squares (x^4) nothing else in the
-                # identity holds, so W's margin is 0 on them: keep a basis monomial q only where each 2q + m (m
-                # of g_j) is a monomial of the decrease itself (tau = a t^2 on |u| <= h, a constant on a sector)
-                support = ring.support(m.relations[j].poly)
-                g = _kept(g, [k for k, q in enumerate(g.basis)
-                              if all(tuple(2 * a + b for a, b in zip(q, w)) in target for w in support)])
+            if not _vanishes_at_origin(ring, m.relations[j].poly):
+                g = _kept(g, [k for k, q in enumerate(g.basis) if any(q)])
             kept.append(g)
         names = {g.name for g in kept if g.basis}
-        if m.params:  # (the monomials the kept multipliers bring, no more: W's basis is not widened further)
-            added = {tuple(a + b + c for a, b, c in zip(x, z, w)) for g in kept for x in g.basis for z in g.basis
-                     for w in ring.support(m.relations[int(g.name.split("_")[1])].poly)}
-            added |= {q for t in terms_ if not t.decision.startswith("TW_") for q in t.coefficients.support}
         return ([g for g in kept if g.basis], scalars,
                 [t for t in terms_ if not t.decision.startswith("TW_") or t.decision in names], added)
 
     return terms
+
+
+def box_multipliers(m: MapOnRelations, target: set[Monomial], generators: Sequence[Sequence[int]]
+                    ) -> tuple[list["Gram"], list["Scalar"], list["Term"], set[Monomial]]:
+    """:func:`multipliers` over a box, degrees counted in the states and functions alone (the "moving"
+    variables; the box's parameters ``u`` are bounded constants). The point's terms are kept as they are (each
+    relation's multiplier of the moving degree the decrease reaches, without the parameters), and the box's
+    own ``h^2 - u^2 >= 0`` gets a sum of squares of the moving monomials of half that degree: ``tau(e, a)
+    (h^2 - u^2)`` absorbs the ``u^2 a^2`` the parameter brings (``V(F)`` with ``F = ... + (c + u) t``). A
+    multiplier of full total degree would bring products (``x^2 y t``, ``u^2`` alone) whose squares nothing in
+    the identity holds, and W's margin would be 0 on them. Every multiplier vanishes at the fixed point where
+    its relation does not (``tau(0, u) g(0, u) = 0`` for every ``u``, as ``W(0, u) = 0``)."""
+    from lyapcheck.sos.program import Coefficients, Gram, Scalar, Term
+
+    ring = m.ring
+    nv = ring.nvars
+    params = set(m.params)
+
+    def moving_degree(q: Monomial) -> int:
+        return sum(e for i, e in enumerate(q) if i not in params)
+
+    top = max((moving_degree(q) for q in target), default=2)
+    top += top % 2
+    field = m.field
+    plain = [q for q in monomials(nv, 0, top) if not any(q[i] for i in params) and field.allowed(q)]
+    grams: list[Gram] = []
+    scalars: list[Scalar] = []
+    terms: list[Term] = []
+    added: set[Monomial] = set()
+    for i, rel in enumerate(m.relations):
+        support = ring.support(rel.poly)
+        d = max((moving_degree(q) for q in support), default=0)
+        tight = _vanishes_at_origin(ring, rel.poly, m.params)
+        if rel.kind == "eq":
+            for k, q in enumerate(q for q in plain if moving_degree(q) <= top - d and (tight or m.moving(q))):
+                scalar = f"LW_{i}_{k}"
+                scalars.append(Scalar(scalar))
+                product = ring.monomial(q) * rel.poly
+                terms.append(Term(Coefficients.literal(ring.terms(-product)), scalar))
+                added |= set(ring.support(product))
+            continue
+        if top - d < 0:
+            continue
+        basis = [q for q in plain if moving_degree(q) <= (top - d) // 2 and (tight or m.moving(q))]
+        if not basis:
+            continue
+        name = f"TW_{i}"
+        grams.append(Gram(name, tuple(basis), tuple(map(tuple, bases.character_blocks(basis, generators))),
+                          margin=True))
+        terms.append(Term(Coefficients.literal(ring.terms(-rel.poly)), name))
+        added |= {tuple(a + b + c for a, b, c in zip(x, z, w)) for x in basis for z in basis for w in support}
+    return grams, scalars, terms, added
 
 
 def _kept(g: "Gram", keep: Sequence[int]) -> "Gram":
