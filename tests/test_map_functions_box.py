@@ -247,6 +247,51 @@ def test_a_forged_quadratic_over_a_box_fails_verify(gas_doc: tuple[dict[str, Any
         assert done.exit_code == 1 and "FAIL quadratic" in done.output, (forge.__name__, done.output)
 
 
+DISTURBED = Path(__file__).resolve().parents[1] / "examples" / "models" / "discrete-tanh-disturbed-map.toml"
+
+
+@pytest.mark.slow
+def test_sos_bound_over_a_box_holds_for_every_value(tmp_path: Path) -> None:
+    """The disturbed tanh map with its gain a parameter k over [0.75, 0.85]: one V and one bound per output for
+    every k (k a bounded variable of the relations, with the disturbance's); iterated at sampled k under random
+    and bang-bang disturbances, the tail stays within the bounds; ``verify`` re-checks the identities, and a
+    document whose box is widened or whose B is lowered fails."""
+    model = tmp_path / "gain.toml"
+    model.write_text(DISTURBED.read_text().replace("0.8*tanh(y) + d", "k*tanh(y) + d").replace(
+        "[disturbances]", "[parameters]\nk = 0.8\n\n[disturbances]"))
+    done, doc, out = certify(tmp_path, "--classes", "sos_bound", "--box", "k=0.75..0.85", path=model)
+    assert done.exit_code == 0, done.output
+    c = doc["conditions"]["sos_bound"]
+    assert c["status"] == "certified", c["summary"]
+    assert c["summary"].startswith("for every k in [0.75, 0.85]: ") and c["certificate"]["parameter_box"] == doc["box"]
+    bounds = {name: float(Fraction(v["bound"])) for name, v in c["certificate"]["outputs"].items()}
+    rng = np.random.default_rng(7)
+    for k in (0.75, 0.8, 0.85):
+        for signal in ("random", "bang"):
+            x, y = rng.normal(size=2) * 3
+            tail = [0.0, 0.0]
+            for i in range(400):
+                d = 0.1 * (rng.uniform(-1, 1) if signal == "random" else math.copysign(1, y))
+                x, y = y, -0.5 * x + k * math.tanh(y) + d
+                if i >= 300:
+                    tail = [max(tail[0], abs(x)), max(tail[1], abs(y))]
+            assert tail[0] <= bounds["x"] and tail[1] <= bounds["y"], (k, signal, tail, bounds)
+    done = cli("verify", str(out))
+    assert done.exit_code == 0 and "ok   sos_bound" in done.output, done.output
+
+    def wider(d: dict[str, Any]) -> None:  # the same centre
+        d["box"] = {"k": ["1/2", "11/10"]}
+        d["conditions"]["sos_bound"]["certificate"]["parameter_box"] = d["box"]
+
+    def lower_b(d: dict[str, Any]) -> None:
+        for data in d["conditions"]["sos_bound"]["certificate"]["outputs"].values():
+            data["B"] = str(Fraction(data["B"]) / 2)
+
+    for forge in (wider, lower_b):
+        done = _tampered(doc, tmp_path, forge)
+        assert done.exit_code == 1 and "FAIL sos_bound" in done.output, (forge.__name__, done.output)
+
+
 def test_a_box_the_centres_p_misses_takes_a_p_common_to_its_grid(tmp_path: Path) -> None:
     """Over k in [0.5, 1.1] the centre's Stein P stops decreasing near k = 0.95: the P proved is another (the
     grid's SDP proposal), and it does decrease at every sampled k of the box, in floating point too."""

@@ -242,7 +242,8 @@ def multipliers(m: MapOnRelations, generators: Sequence[Sequence[int]]) -> dl.Mu
     return terms
 
 
-def box_multipliers(m: MapOnRelations, target: set[Monomial], generators: Sequence[Sequence[int]]
+def box_multipliers(m: Any, target: set[Monomial], generators: Sequence[Sequence[int]], name: str = "W",
+                    margin: bool | str = True, vanishing: bool = True
                     ) -> tuple[list["Gram"], list["Scalar"], list["Term"], set[Monomial]]:
     """:func:`multipliers` over a box, degrees counted in the states and functions alone (the "moving"
     variables; the box's parameters ``u`` are bounded constants). The point's terms are kept as they are (each
@@ -251,12 +252,19 @@ def box_multipliers(m: MapOnRelations, target: set[Monomial], generators: Sequen
     (h^2 - u^2)`` absorbs the ``u^2 a^2`` the parameter brings (``V(F)`` with ``F = ... + (c + u) t``). A
     multiplier of full total degree would bring products (``x^2 y t``, ``u^2`` alone) whose squares nothing in
     the identity holds, and W's margin would be 0 on them. Every multiplier vanishes at the fixed point where
-    its relation does not (``tau(0, u) g(0, u) = 0`` for every ``u``, as ``W(0, u) = 0``)."""
+    its relation does not (``tau(0, u) g(0, u) = 0`` for every ``u``, as ``W(0, u) = 0``; ``vanishing`` False:
+    an identity with a constant, as ``sos_bound``'s step, needs no such care). ``m``: a map read on its relations
+    with ``ring``, ``relations``, ``field`` and the box's ``params`` (:class:`MapOnRelations`, or
+    :class:`lyapcheck.models.classes.map_relations_bounds.DisturbedMapOnRelations`); ``name`` and ``margin``:
+    the identity's and the Grams' (:func:`lyapcheck.models.classes.bounds.relation_multipliers`)."""
     from lyapcheck.sos.program import Coefficients, Gram, Scalar, Term
 
     ring = m.ring
     nv = ring.nvars
     params = set(m.params)
+
+    def moving(q: Monomial) -> bool:
+        return not vanishing or any(e for i, e in enumerate(q) if i not in params)
 
     def moving_degree(q: Monomial) -> int:
         return sum(e for i, e in enumerate(q) if i not in params)
@@ -274,8 +282,8 @@ def box_multipliers(m: MapOnRelations, target: set[Monomial], generators: Sequen
         d = max((moving_degree(q) for q in support), default=0)
         tight = _vanishes_at_origin(ring, rel.poly, m.params)
         if rel.kind == "eq":
-            for k, q in enumerate(q for q in plain if moving_degree(q) <= top - d and (tight or m.moving(q))):
-                scalar = f"LW_{i}_{k}"
+            for k, q in enumerate(q for q in plain if moving_degree(q) <= top - d and (tight or moving(q))):
+                scalar = f"L{name}_{i}_{k}"
                 scalars.append(Scalar(scalar))
                 product = ring.monomial(q) * rel.poly
                 terms.append(Term(Coefficients.literal(ring.terms(-product)), scalar))
@@ -283,13 +291,13 @@ def box_multipliers(m: MapOnRelations, target: set[Monomial], generators: Sequen
             continue
         if top - d < 0:
             continue
-        basis = [q for q in plain if moving_degree(q) <= (top - d) // 2 and (tight or m.moving(q))]
+        basis = [q for q in plain if moving_degree(q) <= (top - d) // 2 and (tight or moving(q))]
         if not basis:
             continue
-        name = f"TW_{i}"
-        grams.append(Gram(name, tuple(basis), tuple(map(tuple, bases.character_blocks(basis, generators))),
-                          margin=True))
-        terms.append(Term(Coefficients.literal(ring.terms(-rel.poly)), name))
+        gram = f"T{name}_{i}"
+        grams.append(Gram(gram, tuple(basis), tuple(map(tuple, bases.character_blocks(basis, generators))),
+                          margin=margin))
+        terms.append(Term(Coefficients.literal(ring.terms(-rel.poly)), gram))
         added |= {tuple(a + b + c for a, b, c in zip(x, z, w)) for x in basis for z in basis for w in support}
     return grams, scalars, terms, added
 

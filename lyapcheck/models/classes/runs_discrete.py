@@ -139,14 +139,11 @@ def sos_gas_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Conditio
 def sos_bound_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A V of the states with ``V(F(x, d)) <= lam V(x) + 1 - lam`` on the recasting's relations and the
     disturbances' box, and each output's ``y^2 <= B + V - 1``
-    (:func:`lyapcheck.models.classes.map_relations_bounds.run`); at a point only."""
+    (:func:`lyapcheck.models.classes.map_relations_bounds.run`); over a box, one bound for every value of it (the
+    box's parameters bounded variables of the relations)."""
     from lyapcheck.models.classes import map_relations_bounds
-    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
-    from lyapcheck.results import ConditionResult
 
-    if ctx.box is not None:
-        return ConditionResult("sos_bound", "not_applicable", NOT_OVER_BOX)
-    return map_relations_bounds.run(ctx.model, budget)
+    return map_relations_bounds.run(ctx.model, budget, box=ctx.box)
 
 
 def barrier_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":

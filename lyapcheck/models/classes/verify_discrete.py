@@ -148,7 +148,7 @@ def verify_bound_map_functions(name: str, c: dict[str, Any], check: "MapFunction
 
     if c["status"] != "certified":
         return False, check.not_checked(c["status"])
-    return map_relations_bounds.verify(check.model, c)
+    return map_relations_bounds.verify(check.model, c, check.box)
 
 
 def verify_barrier_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
