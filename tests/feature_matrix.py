@@ -207,16 +207,15 @@ _BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
 REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
             | cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
-            | cells(("map_functions",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep boxes"))),
+            | cells(("map_functions",), ("sos_bound",), CLASS_SURFACES),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
-    Refusal(cells(tuple(k for k in KINDS if k != "discrete"), ("candidate",), ("--box",))
+    Refusal(cells(tuple(k for k in KINDS if k not in ("discrete", "map_functions")), ("candidate",), ("--box",))
             | cells(("box",), ("candidate",), _BOX_KIND),
             ("not over a --box", "not over a box"),
             "Your V is checked at one parameter point; over a box it would have to decrease for every value of "
-            "the box, a search of box multipliers for a fixed V that is built for a polynomial map only (a gap, "
+            "the box, a search of box multipliers for a fixed V that is built for maps only (a gap, "
             "not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
@@ -230,14 +229,15 @@ REFUSALS: tuple[Refusal, ...] = (
             "but `candidate` (which needs your V), each box iterated at its corners and random points (a set's "
             "starts inside it, a bound's under disturbances); a barrier or reach-avoid over a box is not built (a "
             "gap, not a theorem)."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier", "reach_avoid"),
-                  ("--box", "sweep boxes")),
-            ("over a box a discrete-time map with functions takes linearization and roa only", "takes these only"),
-            "Over a `--box` (and in a box sweep) a map with functions takes `linearization` and `roa` only; its "
-            "`quadratic`, `sos_gas`, `sos_bound`, `barrier` and `reach_avoid` are decided at a point (one V for every "
-            "value of the box, the parameters among the relations' "
-            "variables, is not built: a gap, not a theorem)."),
+    Refusal(cells(("map_functions",), ("barrier", "reach_avoid"), ("--box", "sweep boxes")),
+            ("over a box a discrete-time map with functions takes", "takes these only"),
+            "Over a `--box` (and in a box sweep) a map with functions takes `linearization` (or `refuted` at an "
+            "unstable corner, in ball arithmetic), `quadratic`, `sos_gas` and `sos_bound` (one V for every value, "
+            "the box's parameters bounded variables of the relations, exact), `roa` and `candidate` (one set for "
+            "every value, ball arithmetic); its `barrier` and `reach_avoid` are decided at a point (their "
+            "identities with the parameters among the relations' variables are not built: a gap, not a theorem)."),
 )
+
 
 #: loop surfaces refused today, with the refusal's words: (kinds, the words)
 LOOP_REFUSALS: tuple[tuple[tuple[str, ...], str], ...] = ()
@@ -312,8 +312,9 @@ def certify_cells(directory: Path, kind: str, *, box: bool) -> dict[str, tuple[O
     return found
 
 
-#: the kinds whose ``certify --box`` takes ``--candidate`` (a polynomial map: one V for every value of the box)
-CANDIDATE_OVER_BOX = ("discrete",)
+#: the kinds whose ``certify --box`` takes ``--candidate`` (a map, with functions or not: one V for every value
+#: of the box)
+CANDIDATE_OVER_BOX = ("discrete", "map_functions")
 
 
 def _certify_run(path: Path, classes: Sequence[str], *, box: bool, with_candidate: bool = False

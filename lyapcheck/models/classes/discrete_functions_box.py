@@ -1,5 +1,8 @@
-"""A discrete-time map with functions over a box of its parameters (``certify --box``; issue 44, item 1):
-``linearization`` and ``roa`` for every value of the box, in ball arithmetic.
+"""A discrete-time map with functions over a box of its parameters (``certify --box``; issues 44 and 41):
+``linearization``, ``roa`` and ``candidate`` for every value of the box, in ball arithmetic (``quadratic``,
+``sos_gas`` and ``sos_bound`` over a box: :func:`lyapcheck.models.classes.map_relations.on_relations_box` and
+:func:`lyapcheck.models.classes.map_relations_bounds.disturbed_map`, the box's parameters bounded variables of
+the recasting's relations, exact).
 
 The map is recast again with the box's parameters as variables without a flow, after the states, at the box's
 centre (:func:`boxed_system`); its true map is then evaluated with each parameter a ball covering its interval
@@ -31,7 +34,18 @@ A(p) - P)``, is negative definite in balls; on the whole box the balls' widening
 covering the box. ``verify`` re-derives the parts from the stated ``P`` and proves the stated level again on the
 same cells of each.
 
-Other classes over a box are ``not_applicable`` (:data:`NOT_OVER_BOX`).
+``refuted`` (:func:`refute_over_box`): where no ``P`` is proved over the box, the box's corners and centre are
+tried one by one: at each, the ball Jacobian (the parameters exact, the functions' jets in balls) has its
+characteristic polynomial mapped by the bilinear transform and Routh's first column computed in balls
+(:func:`lyapcheck.models.classes.sampled.cayley_routh_column`); a sign change with no ball holding 0 is an
+eigenvalue of modulus > 1 there, so the fixed point is unstable at that value and the claim for every value of
+the box is false. The refutation states the point (method ``box_point``, as a polynomial map's) and the
+precision; ``verify`` computes the column again there.
+
+``candidate`` (:func:`candidate`): the user's quadratic ``V`` of the states, its ``A(p)^T P A(p) - P < 0``
+proved on parts of the box as above, then its largest level as ``roa``'s.
+
+``barrier`` and ``reach_avoid`` over a box are ``not_applicable`` (:data:`NOT_OVER_BOX`).
 """
 
 from __future__ import annotations
@@ -57,10 +71,11 @@ if TYPE_CHECKING:  # pragma: no cover
 BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
 #: the method a map with functions' linearization over a box states
 METHOD: Final = BOX_BALL_STEIN_METHOD
-#: the reason of every other class over a box
-NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes linearization and roa only (each proved "
-                       "in ball arithmetic for every value of the box); certify a point with --set NAME=VALUE")
-
+#: the reason of every other class over a box (barrier and reach_avoid)
+NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes linearization, quadratic, sos_gas, roa, "
+                       "candidate and sos_bound (each for every value of the box); its barrier and reach_avoid are "
+                       "decided at a point (over a box they would need the box's parameters as bounded variables of "
+                       "their identities on the relations, which is not built); certify a point with --set NAME=VALUE")
 #: the method of the refutation at one value of the box (a corner or the centre): Routh's first column of the
 #: bilinear transform of the ball Jacobian's characteristic polynomial changes sign
 BALL_ROUTH_METHOD: Final = "ball_cayley_routh"
