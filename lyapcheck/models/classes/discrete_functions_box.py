@@ -58,6 +58,7 @@ import flint
 from lyapcheck import tolerances
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.classes import discrete_functions as dfn
+from lyapcheck.models.classes import discrete_linearization
 from lyapcheck.models.classes.claims import BOX_BALL_STEIN_METHOD, box_ball_stein_sentence, discrete_interval_sentence
 from lyapcheck.models.engines.interval_field import BallLoop, Jet, ball
 from lyapcheck.results import ConditionResult
@@ -76,15 +77,11 @@ NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes line
                        "candidate and sos_bound (each for every value of the box); its barrier and reach_avoid are "
                        "decided at a point (over a box they would need the box's parameters as bounded variables of "
                        "their identities on the relations, which is not built); certify a point with --set NAME=VALUE")
-#: the method of the refutation at one value of the box (a corner or the centre): Routh's first column of the
-#: bilinear transform of the ball Jacobian's characteristic polynomial changes sign
-BALL_ROUTH_METHOD: Final = "ball_cayley_routh"
+#: the refutation at one value of the box (its method and sentence: the discrete-time linearization's module's)
+BALL_ROUTH_METHOD: Final = discrete_linearization.BALL_ROUTH_METHOD
+REFUTED_BALL_ROUTH: Final = discrete_linearization.REFUTED_BALL_ROUTH
 #: the precisions (bits) Routh's column is computed at, in this order, until no ball of it holds 0
 ROUTH_PRECISIONS: Final = (64, 128, 256, 512, 1024)
-#: the sentence of that refutation at the point (claims words it again from the method)
-REFUTED_BALL_ROUTH: Final = ("the map's Jacobian at the fixed point has an eigenvalue of modulus > 1 (Routh's array of "
-                             "its characteristic polynomial's bilinear transform changes sign, in ball arithmetic): "
-                             "the discrete-time map's fixed point is unstable")
 
 Interval = tuple[Fraction, Fraction]
 
@@ -509,6 +506,6 @@ def verify_candidate(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -
 
 
 __all__ = ["BOX_CLASSES", "METHOD", "BALL_ROUTH_METHOD", "ROUTH_PRECISIONS", "REFUTED_BALL_ROUTH", "routh_at",
-           "unstable_at", "refute_over_box", "verify_refutation", "NOT_OVER_BOX", "boxed_system", "whole", "boxed_map", "jacobian_balls",
-           "stein_margin_proved", "prove_over_box", "grid_points", "common_p", "box_p", "linearization",
-           "verify_linearization", "roa", "verify_roa", "candidate", "verify_candidate"]
+           "unstable_at", "refute_over_box", "verify_refutation", "NOT_OVER_BOX", "boxed_system", "whole",
+           "boxed_map", "jacobian_balls", "stein_margin_proved", "prove_over_box", "grid_points", "common_p",
+           "box_p", "linearization", "verify_linearization", "roa", "verify_roa", "candidate", "verify_candidate"]

@@ -525,4 +525,4 @@ def verify(model: "RecastModel", name: str, data: Mapping[str, Any], box: "Model
 
 
 __all__ = ["KIND", "NotTaken", "MapOnRelations", "next_state", "derived_relations", "on_relations", "on_relations_box",
-           "check_map_relations", "run", "certified", "verify"]
+           "box_multipliers", "check_map_relations", "run", "certified", "verify"]
