@@ -259,8 +259,10 @@ def test_sos_bound_over_a_box_holds_for_every_value(tmp_path: Path) -> None:
     model = tmp_path / "gain.toml"
     model.write_text(DISTURBED.read_text().replace("0.8*tanh(y) + d", "k*tanh(y) + d").replace(
         "[disturbances]", "[parameters]\nk = 0.8\n\n[disturbances]"))
-    done, doc, out = certify(tmp_path, "--classes", "sos_bound", "--box", "k=0.75..0.85", path=model)
+    done, doc, out = certify(tmp_path, "--classes", "quadratic,sos_bound", "--box", "k=0.75..0.85", path=model)
     assert done.exit_code == 0, done.output
+    quad = doc["conditions"]["quadratic"]  # (with d = 0: the box's words, then the disturbances')
+    assert quad["status"] == "certified" and quad["summary"].startswith("for every k in [0.75, 0.85]: (d = 0) GES")
     c = doc["conditions"]["sos_bound"]
     assert c["status"] == "certified", c["summary"]
     assert c["summary"].startswith("for every k in [0.75, 0.85]: ") and c["certificate"]["parameter_box"] == doc["box"]
@@ -277,11 +279,12 @@ def test_sos_bound_over_a_box_holds_for_every_value(tmp_path: Path) -> None:
                     tail = [max(tail[0], abs(x)), max(tail[1], abs(y))]
             assert tail[0] <= bounds["x"] and tail[1] <= bounds["y"], (k, signal, tail, bounds)
     done = cli("verify", str(out))
-    assert done.exit_code == 0 and "ok   sos_bound" in done.output, done.output
+    assert done.exit_code == 0 and "ok   sos_bound" in done.output and "ok   quadratic" in done.output, done.output
 
     def wider(d: dict[str, Any]) -> None:  # the same centre
         d["box"] = {"k": ["1/2", "11/10"]}
         d["conditions"]["sos_bound"]["certificate"]["parameter_box"] = d["box"]
+        d["conditions"]["quadratic"]["certificate"]["parameter_box"] = d["box"]
 
     def lower_b(d: dict[str, Any]) -> None:
         for data in d["conditions"]["sos_bound"]["certificate"]["outputs"].values():

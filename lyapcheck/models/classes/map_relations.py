@@ -516,9 +516,12 @@ def verify(model: "RecastModel", name: str, data: Mapping[str, Any], box: "Model
     kind = dl.QUADRATIC_KIND if figures is not None else dl.SOS_KIND
     text = data.get("summary")
     if box is not None and isinstance(text, str):
-        from lyapcheck.models.classes.claims import box_words
+        from lyapcheck.models.classes.claims import DISTURBANCE_PREFIX, box_words
 
+        # the box's words come first, then a disturbed map's "(d = 0) " (claims.summary)
         text = text.removeprefix(f"for every {box_words(box.to_json())}: ")
+        if data.get("disturbances") == "zero":
+            text = text.removeprefix(DISTURBANCE_PREFIX["zero"])
     if text != discrete_lyapunov_sentence(kind, degree, mu, figures):
         return False, "the stated sentence is not the certificate's"
     return True, why
