@@ -102,8 +102,11 @@ def _stability(conditions: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
         point = refutation.get("point")
         where = (" at " + ", ".join(f"{k} = {float(Fraction(v)):.6g}" for k, v in point.items())
                  + ", a value of the box,") if isinstance(point, dict) and point else ""
-        if refutation.get("time") == "discrete":  # a map's
-            why = "the map's Jacobian at the fixed point has an eigenvalue of modulus > 1 (proved exactly)"
+        if refutation.get("time") == "discrete":  # a map's (a map with functions' over a box: in ball arithmetic)
+            at = refutation.get("at_point")  # (its method: discrete_linearization.BALL_ROUTH_METHOD)
+            balls = isinstance(at, dict) and at.get("method") == "ball_cayley_routh"
+            how = "in ball arithmetic" if balls else "exactly"
+            why = f"the map's Jacobian at the fixed point has an eigenvalue of modulus > 1 (proved {how})"
         else:
             why = UNSTABLE_BY_METHOD.get(str(refutation.get("method")), "the Jacobian at the equilibrium has an "
                                                                          "eigenvalue with positive real part (proved "

@@ -1136,8 +1136,10 @@ def box_mismatch(model: Model | RecastModel, doc: Mapping[str, Any]) -> str | No
     auxiliaries, shifted by the certificate's ``shift`` (the box centre's values at the equilibrium);
     that is the certificate's function only when every auxiliary it names is defined alike at the point
     and has the same value at the equilibrium (an auxiliary with a box parameter in it, such as
-    ``sin(b*x)``, is not)."""
-    if isinstance(model, Model):
+    ``sin(b*x)``, is not). A map's (with functions or not) always can: its certificates' ``V`` are of the states
+    alone (a map with functions' over a box names the box's parameters among its variables, at exponent 0 in
+    ``V``), evaluated on the states by :class:`_MapLoop`, never on the point's auxiliaries."""
+    if isinstance(model, Model) or getattr(model, "time", "continuous") == "discrete":
         return None
     definitions = model.system.definitions()
     values = {k: Fraction(v) for k, v in model.system.values.items()}

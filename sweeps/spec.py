@@ -103,9 +103,10 @@ map by ``certify_model`` and cross-checked by iterating it (:class:`sweeps.cross
 integrated; ``sos_bound`` under random, bang-bang and constant disturbances within its bounds). A map is
 also swept box by box (``mode = "boxes"``) with the classes ``certify --box`` proves over a box of it whose
 certified boxes the sweep cross-checks by iterating (:func:`map_box_classes`): on a polynomial map
-``linearization``, ``quadratic``, ``sos_gas``, ``roa`` and ``sos_bound``; on a map with functions
-``linearization`` and ``roa`` (one ``P``, ball arithmetic, the parameters as balls:
-:mod:`lyapcheck.models.classes.discrete_functions_box`), its boxes certified as a loop with functions' are
+``linearization``, ``quadratic``, ``sos_gas``, ``roa`` and ``sos_bound``; on a map with functions the same
+(``linearization`` and ``roa`` with one ``P`` in ball arithmetic, the parameters as balls:
+:mod:`lyapcheck.models.classes.discrete_functions_box`; ``quadratic``, ``sos_gas`` and ``sos_bound`` with the
+parameters bounded variables of the relations), its boxes certified as a loop with functions' are
 (the model read at the box's centre); any other class is refused in one line naming ``sweep.classes``. The same
 tree, store and corner checks as a loop's boxes (a corner's linearization is the map's: an eigenvalue of
 modulus > 1 refutes the box), each certified box iterated at its corners and random points (the true map of a
@@ -818,8 +819,8 @@ def map_box_classes(model: Model | RecastModel | None = None) -> tuple[str, ...]
     map (``model`` a :class:`Model` or None) :data:`MAP_BOX_SWEPT`, each among
     :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES` (one V, one Stein ``P`` or one bound for every
     value of the box); on a map with functions
-    :data:`lyapcheck.models.classes.discrete_functions_box.BOX_CLASSES` (``linearization`` and ``roa``, each
-    cross-checked by iterating its true map). Every other class of a map is not swept over boxes."""
+    :data:`lyapcheck.models.classes.discrete_functions_box.BOX_CLASSES` but ``candidate`` (each cross-checked
+    by iterating its true map). Every other class of a map is not swept over boxes."""
     if model is not None and not isinstance(model, Model):
         from lyapcheck.models.classes.discrete_functions_box import BOX_CLASSES as FUNCTIONS_BOX_CLASSES
 

@@ -200,33 +200,25 @@ def cells(kinds: Sequence[str], classes: Sequence[str], surfaces: Sequence[str])
     return frozenset((k, c, s) for k in kinds for c in classes for s in surfaces)
 
 
-#: the surfaces the box kind runs over its box
-_BOX_KIND = ("certify", "verify", "--box", "report", "API result", "repr")
-
 #: every refused cell of today, with its reason (the footnotes of the docs' table, in this order)
 REFUSALS: tuple[Refusal, ...] = (
     Refusal(cells(("polynomial", "rational", "functions", "box"), ("sos_bound",), CLASS_SURFACES)
             | cells(("discrete",), ("sos_bound",), CLASS_SURFACES)
-            | cells(("map_functions",), ("sos_bound",),
-                    tuple(s for s in CLASS_SURFACES if s not in ("--box", "sweep boxes"))),
+            | cells(("map_functions",), ("sos_bound",), CLASS_SURFACES),
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
-    Refusal(cells(("map_functions",), ("candidate",), ("--box",)),
-            ("not over a --box", "not over a box"),
-            "On a map with functions your V is checked at one parameter point; over a box it would have to "
-            "decrease for every value of the box, which is built for the continuous kinds and a polynomial map "
-            "only (a gap, not a theorem)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("map_functions",), ("quadratic", "sos_gas", "sos_bound", "barrier", "reach_avoid"),
-                  ("--box", "sweep boxes")),
-            ("over a box a discrete-time map with functions takes linearization and roa only", "takes these only"),
-            "Over a `--box` (and in a box sweep) a map with functions takes `linearization` and `roa` only; its "
-            "`quadratic`, `sos_gas`, `sos_bound`, `barrier` and `reach_avoid` are decided at a point (one V for every "
-            "value of the box, the parameters among the relations' "
-            "variables, is not built: a gap, not a theorem)."),
+    Refusal(cells(("map_functions",), ("barrier", "reach_avoid"), ("--box", "sweep boxes")),
+            ("over a box a discrete-time map with functions takes", "takes these only"),
+            "Over a `--box` (and in a box sweep) a map with functions takes `linearization` (or `refuted` at an "
+            "unstable corner, in ball arithmetic), `quadratic`, `sos_gas` and `sos_bound` (one V for every value, "
+            "the box's parameters bounded variables of the relations, exact), `roa` and `candidate` (one set for "
+            "every value, ball arithmetic); its `barrier` and `reach_avoid` are decided at a point (their "
+            "identities with the parameters among the relations' variables are not built: a gap, not a theorem)."),
 )
+
 
 #: loop surfaces refused today, with the refusal's words: (kinds, the words)
 LOOP_REFUSALS: tuple[tuple[tuple[str, ...], str], ...] = ()
@@ -301,9 +293,8 @@ def certify_cells(directory: Path, kind: str, *, box: bool) -> dict[str, tuple[O
     return found
 
 
-#: the kinds whose ``certify --box`` takes ``--candidate`` (one V for every value of the box: every kind but a map
-#: with functions)
-CANDIDATE_OVER_BOX = ("polynomial", "rational", "functions", "disturbances", "box", "discrete")
+#: the kinds whose ``certify --box`` takes ``--candidate`` (one V for every value of the box: every kind)
+CANDIDATE_OVER_BOX = ("polynomial", "rational", "functions", "disturbances", "box", "discrete", "map_functions")
 
 
 def _certify_run(path: Path, classes: Sequence[str], *, box: bool, with_candidate: bool = False

@@ -443,8 +443,9 @@ def test_a_map_s_box_certificates_are_iterated_at_its_corners_and_false_ones_cau
 
 def test_a_map_s_box_sweep_refuses_classes_it_does_not_take(tmp_path: Path) -> None:
     """Over boxes a polynomial map takes linearization, quadratic, sos_gas, roa, sos_bound, and barrier and
-    reach_avoid with their sets: barrier on a map without sets is refused in one line naming the field, the accepted classes and what was given (exit 2, nothing written); a map with
-    functions takes linearization and roa (its default), and quadratic over boxes is refused alike."""
+    reach_avoid with their sets: barrier on a map without sets is refused in one line naming the field, the
+    accepted classes and what was given (exit 2, nothing written); a map with functions takes linearization,
+    quadratic, sos_gas and roa (its default), and barrier over boxes is refused alike."""
     from sweeps.spec import load_model_spec
     from tests.test_discrete_reports import WITH_FUNCTIONS
 
@@ -464,11 +465,12 @@ def test_a_map_s_box_sweep_refuses_classes_it_does_not_take(tmp_path: Path) -> N
     boxes = functions / "boxes.toml"
     boxes.write_text('[sweep]\nmodel = "f.toml"\nmode = "boxes"\n[[sweep.axes]]\nname = "k"\nstart = 0.3\n'
                      'stop = 0.4\nnum = 2\n')
-    assert load_model_spec(boxes).classes == ("linearization", "roa")
-    quadratic = functions / "quadratic.toml"
-    quadratic.write_text(boxes.read_text().replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["quadratic"]'))
-    assert_refused(quadratic, "'sweep.classes' parameter must be in a boxes sweep of a discrete-time map with "
-                              "functions, a list of distinct names from 'linearization', 'roa' (")
+    assert load_model_spec(boxes).classes == ("linearization", "quadratic", "sos_gas", "roa")
+    refused_class = functions / "barrier.toml"
+    refused_class.write_text(boxes.read_text().replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["barrier"]'))
+    assert_refused(refused_class, "'sweep.classes' parameter must be in a boxes sweep of a discrete-time map with "
+                                  "functions, a list of distinct names from 'linearization', 'quadratic', 'sos_gas', "
+                                  "'roa' (")
 
 
 # -- a polynomial map's roa and sos_bound over boxes: a set and a bound for every value of the box -----------

@@ -1,5 +1,8 @@
-"""A discrete-time map with functions over a box of its parameters (``certify --box``; issue 44, item 1):
-``linearization`` and ``roa`` for every value of the box, in ball arithmetic.
+"""A discrete-time map with functions over a box of its parameters (``certify --box``; issues 44 and 41):
+``linearization``, ``roa`` and ``candidate`` for every value of the box, in ball arithmetic (``quadratic``,
+``sos_gas`` and ``sos_bound`` over a box: :func:`lyapcheck.models.classes.map_relations.on_relations_box` and
+:func:`lyapcheck.models.classes.map_relations_bounds.disturbed_map`, the box's parameters bounded variables of
+the recasting's relations, exact).
 
 The map is recast again with the box's parameters as variables without a flow, after the states, at the box's
 centre (:func:`boxed_system`); its true map is then evaluated with each parameter a ball covering its interval
@@ -31,7 +34,18 @@ A(p) - P)``, is negative definite in balls; on the whole box the balls' widening
 covering the box. ``verify`` re-derives the parts from the stated ``P`` and proves the stated level again on the
 same cells of each.
 
-Other classes over a box are ``not_applicable`` (:data:`NOT_OVER_BOX`).
+``refuted`` (:func:`refute_over_box`): where no ``P`` is proved over the box, the box's corners and centre are
+tried one by one: at each, the ball Jacobian (the parameters exact, the functions' jets in balls) has its
+characteristic polynomial mapped by the bilinear transform and Routh's first column computed in balls
+(:func:`lyapcheck.models.classes.sampled.cayley_routh_column`); a sign change with no ball holding 0 is an
+eigenvalue of modulus > 1 there, so the fixed point is unstable at that value and the claim for every value of
+the box is false. The refutation states the point (method ``box_point``, as a polynomial map's) and the
+precision; ``verify`` computes the column again there.
+
+``candidate`` (:func:`candidate`): the user's quadratic ``V`` of the states, its ``A(p)^T P A(p) - P < 0``
+proved on parts of the box as above, then its largest level as ``roa``'s.
+
+``barrier`` and ``reach_avoid`` over a box are ``not_applicable`` (:data:`NOT_OVER_BOX`).
 """
 
 from __future__ import annotations
@@ -44,6 +58,7 @@ import flint
 from lyapcheck import tolerances
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.classes import discrete_functions as dfn
+from lyapcheck.models.classes import discrete_linearization
 from lyapcheck.models.classes.claims import BOX_BALL_STEIN_METHOD, box_ball_stein_sentence, discrete_interval_sentence
 from lyapcheck.models.engines.interval_field import BallLoop, Jet, ball
 from lyapcheck.results import ConditionResult
@@ -54,12 +69,19 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.recast import RecastModel, RecastSystem
 
 #: the classes a map with functions decides over a box
-BOX_CLASSES: Final = ("linearization", "roa")
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
 #: the method a map with functions' linearization over a box states
 METHOD: Final = BOX_BALL_STEIN_METHOD
-#: the reason of every other class over a box
-NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes linearization and roa only (each proved "
-                       "in ball arithmetic for every value of the box); certify a point with --set NAME=VALUE")
+#: the reason of every other class over a box (barrier and reach_avoid)
+NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes linearization, quadratic, sos_gas, roa, "
+                       "candidate and sos_bound (each for every value of the box); its barrier and reach_avoid are "
+                       "decided at a point (over a box they would need the box's parameters as bounded variables of "
+                       "their identities on the relations, which is not built); certify a point with --set NAME=VALUE")
+#: the refutation at one value of the box (its method and sentence: the discrete-time linearization's module's)
+BALL_ROUTH_METHOD: Final = discrete_linearization.BALL_ROUTH_METHOD
+REFUTED_BALL_ROUTH: Final = discrete_linearization.REFUTED_BALL_ROUTH
+#: the precisions (bits) Routh's column is computed at, in this order, until no ball of it holds 0
+ROUTH_PRECISIONS: Final = (64, 128, 256, 512, 1024)
 
 Interval = tuple[Fraction, Fraction]
 
@@ -182,6 +204,91 @@ def prove_over_box(system: "RecastSystem", box: "ModelBox", P: list[list[Fractio
     return True, count, "", proved
 
 
+# -- an unstable value of the box: the claim for every value is false (refuted) ------------------------------
+
+def routh_at(system: "RecastSystem", point: dict[str, Fraction], bits: int) -> tuple[int | None, list[Any]]:
+    """At the parameter ``point`` (exact values of the box's parameters), the sign changes of Routh's first
+    column of the bilinear transform of the characteristic polynomial of the ball Jacobian ``A = I + Jd``
+    (:func:`lyapcheck.models.classes.sampled.cayley_routh_column`), at ``bits`` of precision: the number of
+    eigenvalues of the true Jacobian of modulus > 1, or None where a ball of the column holds 0 (or a function
+    is not known differentiable there); and the column."""
+    from lyapcheck.models.classes.sampled import _sign_changes, cayley_routh_column
+
+    saved = flint.ctx.prec
+    flint.ctx.prec = bits
+    try:
+        A = jacobian_balls(boxed_map(system, {name: (value, value) for name, value in point.items()}))
+        if A is None:
+            return None, []
+        column = cayley_routh_column(flint.arb_mat(A))
+        return (_sign_changes(column) if len(column) == len(A) + 1 else None), column
+    finally:
+        flint.ctx.prec = saved
+
+
+def unstable_at(system: "RecastSystem", point: dict[str, Fraction]) -> dict[str, Any] | None:
+    """The refutation's data at ``point`` (:data:`BALL_ROUTH_METHOD`) where Routh's column proves an eigenvalue
+    of modulus > 1, trying each precision of :data:`ROUTH_PRECISIONS`; None where none does (a stable or
+    critical value, or one the balls leave undecided: nothing is claimed of it)."""
+    for bits in ROUTH_PRECISIONS:
+        changes, column = routh_at(system, point, bits)
+        if changes is not None:
+            if changes == 0:
+                return None
+            return {"time": "discrete", "method": BALL_ROUTH_METHOD, "precision_bits": bits,
+                    "routh_first_column": [str(c) for c in column]}
+    return None
+
+
+def refute_over_box(system: "RecastSystem", box: "ModelBox") -> ConditionResult | None:
+    """``refuted`` for the whole box when the Jacobian at one of its corners or its centre
+    (:func:`lyapcheck.models.classes.discrete_linearization.box_points`) has an eigenvalue of modulus > 1,
+    proved in ball arithmetic (:func:`unstable_at`): there the fixed point is unstable (Lyapunov's indirect
+    method for maps; the map's functions are smooth at the fixed point, their jets exist), so "locally
+    exponentially stable for every value of the box" is false. The certificate states the point, as a
+    polynomial map's (method ``box_point``); None when no such value is found."""
+    from lyapcheck.models.classes.discrete_linearization import BOX_POINT_METHOD, box_point_sentence, box_points
+
+    for point in box_points(box):
+        at = unstable_at(system, point)
+        if at is not None:
+            data = {"time": "discrete", "method": BOX_POINT_METHOD, "point": {k: str(v) for k, v in point.items()},
+                    "at_point": at}
+            return ConditionResult("linearization", "refuted", box_point_sentence(point, REFUTED_BALL_ROUTH),
+                                   property="LES", refutation=data)
+    return None
+
+
+def verify_refutation(model: "RecastModel", box: "ModelBox", data: dict[str, Any]) -> tuple[bool, str]:
+    """A refutation over a box decided again: the stated point is a value of the box naming every parameter,
+    and Routh's column at the stated precision shows an eigenvalue of modulus > 1 there again."""
+    from lyapcheck.models.classes.discrete_linearization import BOX_POINT_METHOD
+
+    if data.get("time") != "discrete" or data.get("method") != BOX_POINT_METHOD:
+        return False, f"not a map's refutation at a value of the box (method {data.get('method')!r})"
+    try:
+        point = {str(k): Fraction(str(v)) for k, v in (data.get("point") or {}).items()}
+    except (TypeError, ValueError, ZeroDivisionError) as exc:
+        return False, f"malformed point: {exc}"
+    if set(point) != set(box.names):
+        return False, "the stated point does not name every parameter of the box"
+    for name, value in point.items():
+        lo, hi = box.interval(name)
+        if not lo <= value <= hi:
+            return False, f"the stated {name} = {value} is not in the box [{lo}, {hi}]"
+    at = data.get("at_point")
+    if not isinstance(at, dict) or at.get("method") != BALL_ROUTH_METHOD:
+        return False, f"the refutation at the point states method {BALL_ROUTH_METHOD!r}"
+    bits = at.get("precision_bits")
+    if not isinstance(bits, int) or bits not in ROUTH_PRECISIONS:
+        return False, f"precision_bits must be one of {', '.join(map(str, ROUTH_PRECISIONS))}"
+    changes, _ = routh_at(boxed_system(model, box), point, bits)
+    if not changes:
+        return False, "at the stated point Routh's first column shows no eigenvalue of modulus > 1 (ball arithmetic)"
+    return True, (f"at a value of the box: {changes} sign change(s) in Routh's first column of the Jacobian's "
+                  "bilinear transform, in ball arithmetic (an eigenvalue of modulus > 1)")
+
+
 def _centre_p(model: "RecastModel", name: str) -> list[list[Fraction]] | ConditionResult:
     """``P`` from the exact Jacobian at the box's centre (the model is read there), or ``name``'s result
     saying why there is none."""
@@ -274,6 +381,10 @@ def linearization(model: "RecastModel", box: "ModelBox") -> ConditionResult:
     system = boxed_system(model, box)
     found = box_p(model, system, box, "linearization")
     if isinstance(found, ConditionResult):
+        if found.status == "not_certified":  # no P for the whole box: an unstable value of it refutes the claim
+            unstable = refute_over_box(system, box)
+            if unstable is not None:
+                return unstable
         found.property = "LES"
         return found
     P, parts, _ = found
@@ -290,6 +401,8 @@ def verify_linearization(model: "RecastModel", box: "ModelBox", status: str, dat
     splitting of the box re-derived from the model text."""
     from lyapcheck.sos.definiteness import is_positive_definite
 
+    if status == "refuted":
+        return verify_refutation(model, box, data)
     if status != "certified" or data.get("method") != METHOD:
         return False, f"a {status} linearization over a box of a map with functions states method {METHOD!r}"
     n = len(model.states)
@@ -343,6 +456,56 @@ def verify_roa(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tupl
     return dfn.verify_roa(model, c, [boxed_map(system, part) for part in parts])
 
 
-__all__ = ["BOX_CLASSES", "METHOD", "NOT_OVER_BOX", "boxed_system", "whole", "boxed_map", "jacobian_balls",
-           "stein_margin_proved", "prove_over_box", "grid_points", "common_p", "box_p", "linearization",
-           "verify_linearization", "roa", "verify_roa"]
+def candidate(model: "RecastModel", box: "ModelBox", budget: "Budget") -> ConditionResult:
+    """The user's quadratic ``V = e^T P e`` (of the states alone: a text naming a box parameter is refused
+    before, :func:`lyapcheck.models.surfaces.certify.refuse_box_in_candidate`): its largest level proved a
+    region of attraction for every value of the box, as :func:`roa` does with its own ``P``. ``A(p)^T P A(p) -
+    P < 0`` is proved on the parts of the box first (:func:`prove_over_box`: the level search's Hessian zone
+    needs it on each part); a ``P`` for which it is not proved is ``not_certified`` saying so."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    P = dfn.candidate_matrix(model)
+    if isinstance(P, str):
+        return ConditionResult("candidate", "not_applicable", P, property="ROA")
+    if not is_positive_definite(P):
+        return ConditionResult("candidate", "not_certified", "the candidate V = e^T P e has P not positive definite "
+                               "(checked exactly): its sublevel sets are no bounded neighbourhoods of the fixed "
+                               "point, so none is a region of attraction", property="ROA")
+    system = boxed_system(model, box)
+    ok, _, why, parts = prove_over_box(system, box, P)
+    if not ok:
+        return ConditionResult("candidate", "not_certified", "the candidate V does not decrease to first order for "
+                               "every value of the box: A(p)^T P A(p) - P < 0 was not proved in ball arithmetic "
+                               f"({why})", property="ROA")
+    found = dfn.level_search(model, P, budget, "candidate", [boxed_map(system, part) for part in parts])
+    if isinstance(found, ConditionResult):
+        return found
+    cert = {**dfn.region_certificate(model, P, found), "V_from": "candidate", "parameter_box": box.to_json(),
+            "box_parts": len(parts)}
+    summary = _prefix(box) + discrete_interval_sentence("candidate", found.level, over_box=True)
+    numbers = found.numbers()
+    size = dfn.area(P, found.level)
+    if size is not None:
+        numbers["area"] = size
+    return ConditionResult("candidate", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+
+
+def verify_candidate(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tuple[bool, str]:
+    """A candidate's region over a box: its ``P`` is the document's candidate's (exactly, ``"V_from":
+    "candidate"``), then the region proved again as :func:`verify_roa` does (the box stated, the parts
+    re-derived from ``P``, the level on the same cells of each)."""
+    cert = c.get("certificate")
+    if not isinstance(cert, dict) or cert.get("V_from") != "candidate":
+        return False, "a certified candidate on a map with functions states the user's V (\"V_from\": \"candidate\")"
+    P = dfn.candidate_matrix(model)
+    if isinstance(P, str):
+        return False, f"the document's candidate: {P}"
+    if [[Fraction(str(x)) for x in row] for row in cert.get("P", [])] != P:
+        return False, "the stated P is not the candidate's (V = e^T P e of the document's candidate text)"
+    return verify_roa(model, box, c)
+
+
+__all__ = ["BOX_CLASSES", "METHOD", "BALL_ROUTH_METHOD", "ROUTH_PRECISIONS", "REFUTED_BALL_ROUTH", "routh_at",
+           "unstable_at", "refute_over_box", "verify_refutation", "NOT_OVER_BOX", "boxed_system", "whole",
+           "boxed_map", "jacobian_balls", "stein_margin_proved", "prove_over_box", "grid_points", "common_p",
+           "box_p", "linearization", "verify_linearization", "roa", "verify_roa", "candidate", "verify_candidate"]

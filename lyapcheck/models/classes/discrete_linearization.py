@@ -197,6 +197,15 @@ def decide(A: Matrix) -> ConditionResult:
 BOX_POINT_METHOD: Final = "box_point"
 
 
+#: the method of a map with functions' refutation at a value of a box (its ``at_point``): Routh's first column of
+#: the bilinear transform of the ball Jacobian's characteristic polynomial changes sign
+#: (:func:`lyapcheck.models.classes.discrete_functions_box.unstable_at`)
+BALL_ROUTH_METHOD: Final = "ball_cayley_routh"
+REFUTED_BALL_ROUTH: Final = ("the map's Jacobian at the fixed point has an eigenvalue of modulus > 1 (Routh's array of "
+                             "its characteristic polynomial's bilinear transform changes sign, in ball arithmetic): "
+                             "the discrete-time map's fixed point is unstable")
+
+
 def box_points(box: "ModelBox") -> list[dict[str, Fraction]]:
     """The values of ``box`` decided one by one: its corners (where a gain is most extreme: an unstable value
     of a box is most often at one), then its centre."""
@@ -299,6 +308,8 @@ def sentence(status: str, data: dict[str, Any]) -> str:
         return REFUTED_STEIN
     if status == "refuted" and method == "cayley_root_isolation":
         return refuted_root(str(data["root"]))
+    if status == "refuted" and method == BALL_ROUTH_METHOD:  # a map with functions' value of a box, in balls
+        return REFUTED_BALL_ROUTH
     if status == "refuted" and method == BOX_POINT_METHOD:  # over a box: the value, then the point's own words
         point = {str(k): Fraction(v) for k, v in data["point"].items()}
         return box_point_sentence(point, sentence("refuted", data["at_point"]))
@@ -307,4 +318,4 @@ def sentence(status: str, data: dict[str, Any]) -> str:
 
 __all__ = ["stein_solution", "stein_residual_ok", "cayley", "run", "decide", "verify", "verify_matrix", "sentence",
            "is_discrete_certificate", "TIME_KEY", "TIME_VALUE", "BOX_POINT_METHOD", "box_points", "box_point_sentence",
-           "refute_over_box", "verify_box_point"]
+           "refute_over_box", "verify_box_point", "BALL_ROUTH_METHOD", "REFUTED_BALL_ROUTH"]

@@ -54,11 +54,12 @@ from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly
-from lyapcheck.sos.polynomials import Monomial, Poly, Ring, to_fmpq
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.classes.bounds import BoundField
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
+    from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.models.language.recast import RecastModel, RecastSystem, Relation
     from lyapcheck.sos.structure import Gram, Scalar, Structure, Term
 
@@ -83,10 +84,17 @@ class MapOnRelations:
     relations: tuple["Relation", ...]
     #: the relations as :func:`~lyapcheck.models.classes.bounds.relation_multipliers` reads them
     field: "BoundField"
+    #: over a box, the indices of its parameters (bounded constants, after the states; no next value)
+    params: tuple[int, ...] = ()
 
     @property
     def n(self) -> int:
         return len(self.F)
+
+    def moving(self, q: Monomial) -> bool:
+        """``q`` holds a state or a function (it is not a monomial of the box's parameters alone, nor 1): a
+        term of the identity that vanishes at the fixed point for every value of the box."""
+        return any(e for i, e in enumerate(q) if i not in self.params)
 
 
 def next_state(model: "RecastModel") -> tuple["RecastSystem", Ring, tuple[Poly, ...]]:
@@ -165,6 +173,33 @@ def on_relations(model: "RecastModel") -> MapOnRelations:
     return MapOnRelations(system, ring, F, relations, field)
 
 
+def on_relations_box(model: "RecastModel", box: "ModelBox") -> MapOnRelations:
+    """:func:`on_relations` over a box of the map's parameters: the map recast with the box's parameters as
+    variables after the states (:func:`lyapcheck.models.classes.discrete_functions_box.boxed_system`, read at
+    the box's centre, its fixed point proved to stay put), each a bounded constant of the map (no next value;
+    :func:`~lyapcheck.models.classes.recast_classes.base_loop` with ``fixed`` adds ``h^2 - u^2 >= 0``, ``u`` its
+    deviation from the centre and ``h`` the box's half-width) among the relations. ``V`` stays a polynomial of
+    the states: one ``V`` for every value of the box."""
+    from lyapcheck.models.classes.bounds import BoundField
+    from lyapcheck.models.classes.discrete_functions_box import boxed_system
+    from lyapcheck.models.classes.recast_classes import base_loop
+
+    system = boxed_system(model, box)
+    halves = {name: box.half(name) for name in box.names}
+    ring, F = next_state_of(system, fixed=halves)
+    loop = base_loop(replace(system, relations=derived_relations(system)), cylinder=False, fixed=halves)
+    relations = tuple(loop.relations)
+    n = len(F)
+    field = BoundField(ring, n, tuple(range(n)), tuple(range(n)), (), ring.constant(1), (), (),
+                       relations=relations, multiplied=tuple(range(len(relations))),
+                       unused=loop.roots(), square_free=loop.square_free())
+    index = {name: i for i, name in enumerate(ring.names)}
+    params = tuple(index[name] for name in box.names)
+    if params != tuple(range(n, n + len(params))):  # pragma: no cover - boxed_system puts them after the states
+        raise ValueError("the box's parameters do not follow the states in the recasting's ring")
+    return MapOnRelations(system, ring, F, relations, field, params)
+
+
 # -- the program ----------------------------------------------------------------------------------------
 
 def symmetry(m: MapOnRelations) -> list[tuple[int, ...]]:
@@ -176,18 +211,21 @@ def symmetry(m: MapOnRelations) -> list[tuple[int, ...]]:
     return bases.sign_symmetries(ring.nvars, odd)
 
 
-def _vanishes_at_origin(ring: Ring, p: Poly) -> bool:
-    return ring.substitute(p, {name: Fraction(0) for name in ring.names}).is_zero()
+def _vanishes_at_origin(ring: Ring, p: Poly, params: Sequence[int] = ()) -> bool:
+    """``p`` is 0 at the fixed point (the states and the functions 0) for every value of the box's ``params``."""
+    return ring.substitute(p, {name: Fraction(0) for i, name in enumerate(ring.names) if i not in params}).is_zero()
 
 
 def multipliers(m: MapOnRelations, generators: Sequence[Sequence[int]]) -> dl.Multipliers:
     """The relations' S-procedure terms of the decrease (free ``lambda_i``, SOS ``tau_j`` with the program's
     margin). The other terms vanish at the fixed point and ``W >= 0``, so ``tau_j(0) g_j(0) = 0``: a relation
     not tight there (``1 - t^2 >= 0``) keeps no constant in its multiplier's basis (the solver would find
-    that diagonal 0 and no strict certificate)."""
+    that diagonal 0 and no strict certificate). Over a box: :func:`box_multipliers`."""
     from lyapcheck.models.classes.bounds import relation_multipliers
 
     ring = m.ring
+    if m.params:
+        return lambda target: box_multipliers(m, target, generators)
 
     def terms(target: set[Monomial]) -> tuple[list["Gram"], list["Scalar"], list["Term"], set[Monomial]]:
         grams, scalars, terms_, added = relation_multipliers(m.field, "W", target, generators, margin=True)
@@ -195,16 +233,80 @@ def multipliers(m: MapOnRelations, generators: Sequence[Sequence[int]]) -> dl.Mu
         for g in grams:
             j = int(g.name.split("_")[1])
             if not _vanishes_at_origin(ring, m.relations[j].poly):
-                keep = [k for k, q in enumerate(g.basis) if any(q)]
-                new = {k: i for i, k in enumerate(keep)}
-                blocks = tuple(b for b in (tuple(new[k] for k in block if k in new) for block in g.blocks) if b)
-                g = replace(g, basis=tuple(g.basis[k] for k in keep), blocks=blocks)
+                g = _kept(g, [k for k, q in enumerate(g.basis) if any(q)])
             kept.append(g)
         names = {g.name for g in kept if g.basis}
         return ([g for g in kept if g.basis], scalars,
                 [t for t in terms_ if not t.decision.startswith("TW_") or t.decision in names], added)
 
     return terms
+
+
+def box_multipliers(m: Any, target: set[Monomial], generators: Sequence[Sequence[int]], name: str = "W",
+                    margin: bool | str = True, vanishing: bool = True
+                    ) -> tuple[list["Gram"], list["Scalar"], list["Term"], set[Monomial]]:
+    """:func:`multipliers` over a box, degrees counted in the states and functions alone (the "moving"
+    variables; the box's parameters ``u`` are bounded constants). The point's terms are kept as they are (each
+    relation's multiplier of the moving degree the decrease reaches, without the parameters), and the box's
+    own ``h^2 - u^2 >= 0`` gets a sum of squares of the moving monomials of half that degree: ``tau(e, a)
+    (h^2 - u^2)`` absorbs the ``u^2 a^2`` the parameter brings (``V(F)`` with ``F = ... + (c + u) t``). A
+    multiplier of full total degree would bring products (``x^2 y t``, ``u^2`` alone) whose squares nothing in
+    the identity holds, and W's margin would be 0 on them. Every multiplier vanishes at the fixed point where
+    its relation does not (``tau(0, u) g(0, u) = 0`` for every ``u``, as ``W(0, u) = 0``; ``vanishing`` False:
+    an identity with a constant, as ``sos_bound``'s step, needs no such care). ``m``: a map read on its relations
+    with ``ring``, ``relations``, ``field`` and the box's ``params`` (:class:`MapOnRelations`, or
+    :class:`lyapcheck.models.classes.map_relations_bounds.DisturbedMapOnRelations`); ``name`` and ``margin``:
+    the identity's and the Grams' (:func:`lyapcheck.models.classes.bounds.relation_multipliers`)."""
+    from lyapcheck.sos.program import Coefficients, Gram, Scalar, Term
+
+    ring = m.ring
+    nv = ring.nvars
+    params = set(m.params)
+
+    def moving(q: Monomial) -> bool:
+        return not vanishing or any(e for i, e in enumerate(q) if i not in params)
+
+    def moving_degree(q: Monomial) -> int:
+        return sum(e for i, e in enumerate(q) if i not in params)
+
+    top = max((moving_degree(q) for q in target), default=2)
+    top += top % 2
+    field = m.field
+    plain = [q for q in monomials(nv, 0, top) if not any(q[i] for i in params) and field.allowed(q)]
+    grams: list[Gram] = []
+    scalars: list[Scalar] = []
+    terms: list[Term] = []
+    added: set[Monomial] = set()
+    for i, rel in enumerate(m.relations):
+        support = ring.support(rel.poly)
+        d = max((moving_degree(q) for q in support), default=0)
+        tight = _vanishes_at_origin(ring, rel.poly, m.params)
+        if rel.kind == "eq":
+            for k, q in enumerate(q for q in plain if moving_degree(q) <= top - d and (tight or moving(q))):
+                scalar = f"L{name}_{i}_{k}"
+                scalars.append(Scalar(scalar))
+                product = ring.monomial(q) * rel.poly
+                terms.append(Term(Coefficients.literal(ring.terms(-product)), scalar))
+                added |= set(ring.support(product))
+            continue
+        if top - d < 0:
+            continue
+        basis = [q for q in plain if moving_degree(q) <= (top - d) // 2 and (tight or moving(q))]
+        if not basis:
+            continue
+        gram = f"T{name}_{i}"
+        grams.append(Gram(gram, tuple(basis), tuple(map(tuple, bases.character_blocks(basis, generators))),
+                          margin=margin))
+        terms.append(Term(Coefficients.literal(ring.terms(-rel.poly)), gram))
+        added |= {tuple(a + b + c for a, b, c in zip(x, z, w)) for x in basis for z in basis for w in support}
+    return grams, scalars, terms, added
+
+
+def _kept(g: "Gram", keep: Sequence[int]) -> "Gram":
+    """The Gram ``g`` with only the basis monomials at ``keep`` (its blocks cut the same way)."""
+    new = {k: i for i, k in enumerate(keep)}
+    blocks = tuple(b for b in (tuple(new[k] for k in block if k in new) for block in g.blocks) if b)
+    return replace(g, basis=tuple(g.basis[k] for k in keep), blocks=blocks)
 
 
 def attempt(m: MapOnRelations, structure: "Structure", alphas: Sequence[Monomial], mu: Fraction, search: Search
@@ -234,7 +336,7 @@ def search_degree(m: MapOnRelations, degree: int, search: Search) -> tuple[dict[
     return dl.search_program(
         degree,
         lambda drop, drop_v: dl.discrete_program(m.ring, m.F, degree, generators, drop, drop_v, multipliers=extra,
-                                                 allowed=lambda q: field.allowed(q) and any(q)),
+                                                 allowed=lambda q: field.allowed(q) and m.moving(q)),
         lambda structure, alphas, mu: attempt(m, structure, alphas, mu, search))
 
 
@@ -263,10 +365,11 @@ def check_map_relations(m: MapOnRelations, V: GramPoly, mu: Fraction, decrease: 
 
 # -- the class --------------------------------------------------------------------------------------------
 
-def run(model: "RecastModel", name: dl.ClassName, budget: Budget, degrees: Sequence[int] | None = None
-        ) -> ConditionResult:
+def run(model: "RecastModel", name: dl.ClassName, budget: Budget, degrees: Sequence[int] | None = None,
+        box: "ModelBox | None" = None) -> ConditionResult:
     """``quadratic`` (degree 2) or ``sos_gas`` (the searched degrees of a polynomial map) on a map with
-    functions (module docstring)."""
+    functions (module docstring); ``box``: one ``V`` for every value of that box of the map's parameters
+    (:func:`on_relations_box`)."""
     if degrees is None:
         if name == "sos_gas":
             from lyapcheck.degrees import searched_degrees
@@ -277,7 +380,11 @@ def run(model: "RecastModel", name: dl.ClassName, budget: Budget, degrees: Seque
     # (as a polynomial map's: a quadratic's failure claims nothing, sos_gas's is about GAS)
     prop: Literal["GAS"] | None = "GAS" if name == "sos_gas" else None
     try:
-        system, ring, F = next_state(model)
+        if box is None:
+            system, ring, F = next_state(model)
+        else:
+            boxed = on_relations_box(model, box)
+            system, ring, F = boxed.system, boxed.ring, boxed.F
     except NotTaken as exc:
         return ConditionResult(name, "not_applicable", f"not taken on this map with functions: {exc}")
     if ring.nvars > tolerances.MAP_RELATIONS_VARIABLES:  # (before any relation is derived: a network's are many)
@@ -300,11 +407,11 @@ def run(model: "RecastModel", name: dl.ClassName, budget: Budget, degrees: Seque
                                                                 lyapunov.CANDIDATE_LIMIT, "CANDIDATE_LIMIT"))
                 continue
             search.budget.check()
-            m = m or on_relations(model)
+            m = m or (on_relations(model) if box is None else boxed)
             found, why = search_degree(m, degree, search)
             tried.append(why)
             if found is not None:
-                return certified(m, name, found, {"solves": search.log})
+                return certified(m, name, found, {"solves": search.log}, box)
     except BudgetExhausted as exc:
         late = reasons.out_of_time("a Lyapunov function of the map", search.budget.seconds, [str(exc), *tried])
         return ConditionResult(name, "inconclusive", late.summary,
@@ -320,13 +427,14 @@ def run(model: "RecastModel", name: dl.ClassName, budget: Budget, degrees: Seque
 
 def v_of_states(m: MapOnRelations, v: Poly) -> dict[str, Any]:
     """``V``'s exact terms over the states alone (exponents per state, as a polynomial map's certificate
-    states its V, which sweeps and reports read): V is a polynomial of the states."""
-    states = Ring(m.ring.names[:m.n])
+    states its V, which sweeps and reports read): V is a polynomial of the states. Over a box, over the states
+    and then the box's parameters (each at exponent 0), as a polynomial map's V over a box."""
+    states = Ring(m.ring.names[:m.n + len(m.params)])  # (the box's parameters follow the states)
     return lyapunov.terms_json(states, m.ring.restrict(v, states))
 
 
-def certified(m: MapOnRelations, name: dl.ClassName, found: dict[str, Any], solver: dict[str, Any]
-              ) -> ConditionResult:
+def certified(m: MapOnRelations, name: dl.ClassName, found: dict[str, Any], solver: dict[str, Any],
+              box: "ModelBox | None" = None) -> ConditionResult:
     from lyapcheck.models.classes.claims import discrete_lyapunov_sentence
     from lyapcheck.models.classes.recast_classes import v_text
 
@@ -338,6 +446,8 @@ def certified(m: MapOnRelations, name: dl.ClassName, found: dict[str, Any], solv
                             "auxiliaries": m.system.definitions(), "degree": found["degree"], "mu": str(mu),
                             "V": v_of_states(m, v), "V_text": v_text(m.system, v), "gram_V": V.to_json(),
                             "decrease": found["decrease"].to_json(ring)}
+    if box is not None:  # (the box's parameters are among the variables, bounded: one V for every value)
+        cert["parameter_box"] = box.to_json()
     numbers: dict[str, Any] = {"degree": found["degree"], "time": "discrete", "decay_rate_V_per_step": float(mu),
                                "relative_margin": found["margin"]}
     if figures is not None:
@@ -349,10 +459,13 @@ def certified(m: MapOnRelations, name: dl.ClassName, found: dict[str, Any], solv
                            property="GES" if figures is not None else "GAS")
 
 
-def verify(model: "RecastModel", name: str, data: Mapping[str, Any]) -> tuple[bool, str]:
+def verify(model: "RecastModel", name: str, data: Mapping[str, Any], box: "ModelBox | None" = None
+           ) -> tuple[bool, str]:
     """Re-check a certified ``quadratic`` or ``sos_gas`` of a map with functions from its JSON and the model
     text alone, without a solver: the map and its relations re-derived, the identity and the forms exactly,
-    the stated ``V``, the GES figures, the property and the sentence."""
+    the stated ``V``, the GES figures, the property and the sentence. ``box``: the document's box, whose
+    parameters (bounded by it, :func:`on_relations_box`) the certificate states among its variables and whose
+    ``parameter_box`` it states; the sentence is compared without the box's words in front."""
     from lyapcheck.models.classes.claims import discrete_lyapunov_sentence
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
 
@@ -360,7 +473,11 @@ def verify(model: "RecastModel", name: str, data: Mapping[str, Any]) -> tuple[bo
         cert = data["certificate"]
         if cert.get("kind") != KIND or cert.get("time") != "discrete":
             return False, f"a {name} certificate of a map with functions has kind {KIND!r}"
-        m = on_relations(model)
+        if box is not None and cert.get("parameter_box") != box.to_json():
+            return False, "a certificate over a box states that box (parameter_box) as the document's"
+        if box is None and "parameter_box" in cert:
+            return False, "a certificate over a box (parameter_box) in a document without that box"
+        m = on_relations(model) if box is None else on_relations_box(model, box)
         ring = m.ring
         if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != m.system.definitions():
             return False, "the certificate's variables or functions are not the map's"
@@ -397,10 +514,18 @@ def verify(model: "RecastModel", name: str, data: Mapping[str, Any]) -> tuple[bo
     if data.get("property") != ("GES" if figures is not None else "GAS"):
         return False, f"this certificate does not prove {data.get('property')}"
     kind = dl.QUADRATIC_KIND if figures is not None else dl.SOS_KIND
-    if data.get("summary") != discrete_lyapunov_sentence(kind, degree, mu, figures):
+    text = data.get("summary")
+    if box is not None and isinstance(text, str):
+        from lyapcheck.models.classes.claims import DISTURBANCE_PREFIX, box_words
+
+        # the box's words come first, then a disturbed map's "(d = 0) " (claims.summary)
+        text = text.removeprefix(f"for every {box_words(box.to_json())}: ")
+        if data.get("disturbances") == "zero":
+            text = text.removeprefix(DISTURBANCE_PREFIX["zero"])
+    if text != discrete_lyapunov_sentence(kind, degree, mu, figures):
         return False, "the stated sentence is not the certificate's"
     return True, why
 
 
-__all__ = ["KIND", "NotTaken", "MapOnRelations", "next_state", "derived_relations", "on_relations",
-           "check_map_relations", "run", "certified", "verify"]
+__all__ = ["KIND", "NotTaken", "MapOnRelations", "next_state", "derived_relations", "on_relations", "on_relations_box",
+           "box_multipliers", "check_map_relations", "run", "certified", "verify"]

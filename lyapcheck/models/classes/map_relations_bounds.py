@@ -57,6 +57,7 @@ from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.classes.bounds import BoundField
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
+    from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.models.language.recast import RecastModel, RecastSystem, Relation
 
 #: the certificate kind: the polynomial map's (its sentence speaks of steps), stating the recasting's
@@ -76,6 +77,8 @@ class DisturbedMapOnRelations:
     relations: tuple["Relation", ...]
     field: "BoundField"
     disturbances: dict[str, Fraction]
+    #: over a box, the indices of its parameters (bounded constants after the disturbances)
+    params: tuple[int, ...] = ()
 
     @property
     def n(self) -> int:
@@ -91,9 +94,13 @@ class DisturbedMapOnRelations:
         return shifted - ring.constant(ring.terms(shifted).get(tuple([0] * ring.nvars), Fraction(0)))
 
 
-def disturbed_map(model: "RecastModel") -> DisturbedMapOnRelations:
+def disturbed_map(model: "RecastModel", box: "ModelBox | None" = None) -> DisturbedMapOnRelations:
     """The map recast with its disturbances as bounded constants (module docstring); :class:`NotTaken` when
-    the recasting cannot keep a disturbance a variable, or the map is not polynomial in its variables."""
+    the recasting cannot keep a disturbance a variable, or the map is not polynomial in its variables.
+    ``box``: the box's parameters too, after the disturbances, each a bounded constant (``h^2 - u^2 >= 0``,
+    ``u`` its deviation from the box's centre, where ``model`` is read): one ``V`` and one bound for every
+    value of the box (its fixed point proved to stay put over it before,
+    :func:`lyapcheck.models.classes.discrete_functions_box.boxed_system`)."""
     from lyapcheck.errors import ModelFileError
     from lyapcheck.models.classes.bounds import BoundField
     from lyapcheck.models.classes.recast_classes import base_loop
@@ -103,22 +110,28 @@ def disturbed_map(model: "RecastModel") -> DisturbedMapOnRelations:
     if any(isinstance(table[s], bool) or not isinstance(table[s], (str, int, float)) for s in model.states):
         raise NotTaken("a right-hand side that is not one expression (a table) is not recast with its disturbances")
     dists = dict(model.disturbances)
-    texts: dict[str, object] = {**{s: f"({table[s]}) - ({s})" for s in model.states}, **{d: "0" for d in dists}}
+    names = tuple(box.names) if box is not None else ()
+    texts: dict[str, object] = {**{s: f"({table[s]}) - ({s})" for s in model.states}, **{d: "0" for d in dists},
+                                **{p: "0" for p in names}}
+    constants = {k: v for k, v in model.parameters.items() if k not in names}
+    centre = tuple(box.center(p) for p in names) if box is not None else ()
     try:
-        system, _ = recast_dynamics(model.source, model.states + tuple(dists), texts, dict(model.parameters),
-                                    tuple(model.equilibrium) + (Fraction(0),) * len(dists),
+        system, _ = recast_dynamics(model.source, model.states + tuple(dists) + names, texts, constants,
+                                    tuple(model.equilibrium) + (Fraction(0),) * len(dists) + centre,
                                     networks=model.networks, for_map=True)
     except ModelFileError as exc:
-        raise NotTaken(f"the recasting could not keep the disturbances as variables ({exc})") from None
-    ring, F = next_state_of(system, fixed=dists)
-    loop = base_loop(replace(system, relations=derived_relations(system)), cylinder=False, fixed=dists)
+        raise NotTaken(f"the recasting could not keep the disturbances (and the box's parameters) as variables "
+                       f"({exc})") from None
+    fixed = {**dists, **({p: box.half(p) for p in names} if box is not None else {})}
+    ring, F = next_state_of(system, fixed=fixed)
+    loop = base_loop(replace(system, relations=derived_relations(system)), cylinder=False, fixed=fixed)
     relations = tuple(loop.relations)
     n = len(F)
     index = {name: i for i, name in enumerate(ring.names)}
     field = BoundField(ring, n, tuple(range(n)), tuple(range(n)), (), ring.constant(1),
                        tuple(index[d] for d in dists), tuple(dists.values()), relations=relations,
                        multiplied=tuple(range(len(relations))), unused=loop.roots(), square_free=loop.square_free())
-    return DisturbedMapOnRelations(system, ring, F, relations, field, dists)
+    return DisturbedMapOnRelations(system, ring, F, relations, field, dists, tuple(index[p] for p in names))
 
 
 # -- the exact check -------------------------------------------------------------------------------------
@@ -168,7 +181,12 @@ def bound_program(m: DisturbedMapOnRelations, y: Poly, degree: int) -> tuple[Str
     alphas = [tuple(q) + tuple([0] * (nv - n)) for q in monomials(n, 0, degree)]
     steps = [set(ring.support(dl.compose(ring, ring.monomial(a), m.F))) | {a} for a in alphas]
     target: set[Monomial] = set().union(*steps) | {zero}
-    r_grams, r_scalars, r_terms, added = relation_multipliers(m.field, "D", target, [], margin="floor")
+    if m.params:  # over a box: degrees in the states and functions (map_relations.box_multipliers)
+        from lyapcheck.models.classes.map_relations import box_multipliers
+
+        r_grams, r_scalars, r_terms, added = box_multipliers(m, target, [], "D", margin="floor", vanishing=False)
+    else:
+        r_grams, r_scalars, r_terms, added = relation_multipliers(m.field, "D", target, [], margin="floor")
     target |= added
     if len(target) > TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
@@ -268,8 +286,9 @@ def best_bound(m: DisturbedMapOnRelations, y: Poly, search: Search) -> tuple[dic
 
 # -- the class -------------------------------------------------------------------------------------------
 
-def run(model: "RecastModel", budget: Budget) -> ConditionResult:
-    """Every output's certified ``limsup`` over the steps on a map with functions, one certificate each."""
+def run(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None) -> ConditionResult:
+    """Every output's certified ``limsup`` over the steps on a map with functions, one certificate each;
+    ``box``: for every value of that box of its parameters (:func:`disturbed_map`)."""
     from lyapcheck import exact
     from lyapcheck.models.classes.bounds import bound_claim
     from lyapcheck.models.classes.claims import summary
@@ -278,7 +297,7 @@ def run(model: "RecastModel", budget: Budget) -> ConditionResult:
     if not model.disturbances:
         return ConditionResult("sos_bound", "not_applicable", reasons.NO_DISTURBANCES)
     try:
-        m = disturbed_map(model)
+        m = disturbed_map(model, box)
     except NotTaken as exc:
         return ConditionResult("sos_bound", "not_applicable", f"not taken on this map with functions: {exc}")
     ring = m.ring
@@ -320,6 +339,8 @@ def run(model: "RecastModel", budget: Budget) -> ConditionResult:
     numbers["time"] = "discrete"
     certificate = {"kind": KIND, "time": "discrete", "variables": list(ring.names),
                    "auxiliaries": m.system.definitions(), "outputs": certs}
+    if box is not None:  # (the box's parameters are among the variables, bounded: one bound for every value)
+        certificate["parameter_box"] = box.to_json()
     text = summary("sos_bound", {"status": "certified", **numbers, "certificate": certificate},
                    list(model.outputs)) or ""
     return ConditionResult("sos_bound", "certified", text, numbers=numbers, certificate=certificate,
@@ -328,10 +349,12 @@ def run(model: "RecastModel", budget: Budget) -> ConditionResult:
 
 # -- verify ----------------------------------------------------------------------------------------------
 
-def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
+def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = None) -> tuple[bool, str]:
     """Re-check a certified ``sos_bound`` of a map with functions from its JSON and the model text alone,
     without a solver: the map, its relations and outputs re-derived, each output's two identities exactly,
-    its bound ``>= sqrt(B)``, the stated figures (at least the certified bound) and reference points."""
+    its bound ``>= sqrt(B)``, the stated figures (at least the certified bound) and reference points.
+    ``box``: the document's box, which the certificate states (``parameter_box``) and whose parameters are
+    bounded variables of its relations."""
     from lyapcheck.models.classes.bounds import bound_claim
     from lyapcheck.models.engines.recast_sos import ConditionCertificate, poly_from_json
 
@@ -339,7 +362,9 @@ def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
         cert = c["certificate"]
         if cert.get("kind") != KIND or cert.get("time") != "discrete":
             return False, f"not a certificate of a discrete-time map's bound (kind {cert.get('kind')!r})"
-        m = disturbed_map(model)
+        if cert.get("parameter_box") != (box.to_json() if box is not None else None):
+            return False, "the certificate's box (parameter_box) is not the document's"
+        m = disturbed_map(model, box)
         ring = m.ring
         if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != m.system.definitions():
             return False, "the certificate's variables or functions are not the map's"

@@ -120,15 +120,12 @@ def linearization_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Co
 
 def _map_relations(ctx: "MapFunctionsRun", name: "Literal['quadratic', 'sos_gas']", budget: "Budget"
                    ) -> "ConditionResult":
-    """``quadratic`` or ``sos_gas`` on the recasting's relations, at a point only: over a box the runner says
-    ``not_applicable`` first; a direct call over a box says so too, never a claim proved at the centre alone."""
+    """``quadratic`` or ``sos_gas`` on the recasting's relations; over a box, one V of the states for every
+    value of it, the box's parameters bounded variables of the relations
+    (:func:`lyapcheck.models.classes.map_relations.on_relations_box`)."""
     from lyapcheck.models.classes import map_relations
-    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
-    from lyapcheck.results import ConditionResult
 
-    if ctx.box is not None:
-        return ConditionResult(name, "not_applicable", NOT_OVER_BOX)
-    return map_relations.run(ctx.model, name, budget)
+    return map_relations.run(ctx.model, name, budget, box=ctx.box)
 
 
 def quadratic_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
@@ -146,14 +143,11 @@ def sos_gas_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Conditio
 def sos_bound_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A V of the states with ``V(F(x, d)) <= lam V(x) + 1 - lam`` on the recasting's relations and the
     disturbances' box, and each output's ``y^2 <= B + V - 1``
-    (:func:`lyapcheck.models.classes.map_relations_bounds.run`); at a point only."""
+    (:func:`lyapcheck.models.classes.map_relations_bounds.run`); over a box, one bound for every value of it (the
+    box's parameters bounded variables of the relations)."""
     from lyapcheck.models.classes import map_relations_bounds
-    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
-    from lyapcheck.results import ConditionResult
 
-    if ctx.box is not None:
-        return ConditionResult("sos_bound", "not_applicable", NOT_OVER_BOX)
-    return map_relations_bounds.run(ctx.model, budget)
+    return map_relations_bounds.run(ctx.model, budget, box=ctx.box)
 
 
 def barrier_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
@@ -193,9 +187,12 @@ def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionRes
 
 def candidate_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """The user's quadratic V, its largest level proved by ball arithmetic on the true map
-    (:func:`lyapcheck.models.classes.discrete_functions.candidate`)."""
-    from lyapcheck.models.classes import discrete_functions
+    (:func:`lyapcheck.models.classes.discrete_functions.candidate`); over a box, for every value of it
+    (:func:`lyapcheck.models.classes.discrete_functions_box.candidate`)."""
+    from lyapcheck.models.classes import discrete_functions, discrete_functions_box
 
+    if ctx.box is not None:
+        return discrete_functions_box.candidate(ctx.model, ctx.box, budget)
     return discrete_functions.candidate(ctx.model, budget)
 
 

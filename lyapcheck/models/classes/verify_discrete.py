@@ -140,7 +140,7 @@ def verify_lyapunov_map_functions(name: str, c: dict[str, Any], check: "MapFunct
 
     if c["status"] != "certified":
         return False, check.not_checked(c["status"])
-    return map_relations.verify(check.model, name, _without_nominal_prefix(c))
+    return map_relations.verify(check.model, name, _without_nominal_prefix(c), check.box)
 
 
 def verify_bound_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
@@ -150,7 +150,7 @@ def verify_bound_map_functions(name: str, c: dict[str, Any], check: "MapFunction
 
     if c["status"] != "certified":
         return False, check.not_checked(c["status"])
-    return map_relations_bounds.verify(check.model, c)
+    return map_relations_bounds.verify(check.model, c, check.box)
 
 
 def verify_barrier_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
@@ -192,12 +192,16 @@ def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsC
 
 def verify_candidate_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
     """``candidate``: the stated V is the document's candidate, and its level is proved again
-    (:func:`lyapcheck.models.classes.discrete_functions.verify_candidate`); never over a box (it certifies a
-    point)."""
+    (:func:`lyapcheck.models.classes.discrete_functions.verify_candidate`); over a box, for every value of it
+    (:func:`lyapcheck.models.classes.discrete_functions_box.verify_candidate`)."""
     from lyapcheck.models.classes import discrete_functions
 
-    if c["status"] != "certified" or check.box is not None:
-        return False, check.not_checked(c["status"]) + (" over a box" if check.box is not None else "")
+    if c["status"] != "certified":
+        return False, check.not_checked(c["status"])
+    if check.box is not None:
+        from lyapcheck.models.classes import discrete_functions_box
+
+        return discrete_functions_box.verify_candidate(check.model, check.box, c)
     return discrete_functions.verify_candidate(check.model, c)
 
 

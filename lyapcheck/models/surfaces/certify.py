@@ -134,32 +134,35 @@ def _sets_use_box(model: Model, box: "ModelBox | None") -> bool:
     return box is not None and forms_name(model.ring, getattr(model, "set_forms", None) or {}, set(box.names))
 
 
-def refuse_candidate_over_box(source: str, candidate: str | None, box: object | None) -> None:
-    """``--candidate`` with ``--box`` is bad input on a discrete-time map with functions (exit 2 naming
-    ``--candidate``): the candidate class certifies a point there (docs/model-files.md, "Boxes of parameters");
-    every other kind of loop takes it over a box (one V of the states for every value of it)."""
-    if box is not None and candidate is not None:
-        raise ModelFileError(source, "--candidate", "not over a --box (the candidate class certifies a point)")
-
-
 def refuse_box_in_candidate(model: "Model | RecastModel", candidate: str, box: "ModelBox") -> None:
-    """A candidate over a box is one ``V`` for every value of the box: a text naming a parameter of the
-    box (which would be read at the model's value, :func:`parse_candidate`, or at the box's centre on a loop
-    with functions) is bad input (exit 2 naming ``--candidate``)."""
-    if not isinstance(model, Model):  # a loop with functions: the names the text writes (recast later)
-        import re
+    """A candidate over a box is one ``V`` for every value of the box, on every kind of loop: a text naming a
+    parameter of the box (which would be read at the model's value, :func:`parse_candidate`, or at the box's
+    centre on a loop with functions) is bad input (exit 2 naming ``--candidate``). A loop with functions'
+    candidate is read in its recasting, whose ring has no parameter: its names are read off the text's syntax
+    tree (never evaluated)."""
+    from lyapcheck.models.language.expressions import ExpressionError, parse_expression
 
-        named = sorted(set(re.findall(r"[A-Za-z_][A-Za-z_0-9]*", candidate)) & set(box.names))
-    else:
-        from lyapcheck.models.language.expressions import ExpressionError, parse_expression
+    if not isinstance(model, Model):
+        import ast
+
+        from lyapcheck.models.language.expressions import parse_quietly
 
         try:
-            expr = parse_expression(candidate, model.ring)
-        except ExpressionError:
-            return  # (parse_candidate words the error)
-        ring = model.ring
-        named = sorted({ring.names[k] for p in (expr.numerator, expr.denominator) for m in ring.support(p)
-                        for k, e in enumerate(m) if e and ring.names[k] in box.names})
+            tree = parse_quietly(candidate)
+        except (SyntaxError, ValueError, RecursionError, ExpressionError):
+            return  # (the candidate's reading words the error)
+        named = sorted({node.id for node in ast.walk(tree) if isinstance(node, ast.Name)} & set(box.names))
+        if named:
+            raise ModelFileError(model.source, "--candidate", "over a --box V must be of the states alone (one V for "
+                                 f"every value of the box); it names the box's parameter {', '.join(named)}")
+        return
+    try:
+        expr = parse_expression(candidate, model.ring)
+    except ExpressionError:
+        return  # (parse_candidate words the error)
+    ring = model.ring
+    named = sorted({ring.names[k] for p in (expr.numerator, expr.denominator) for m in ring.support(p)
+                    for k, e in enumerate(m) if e and ring.names[k] in box.names})
     if named:
         raise ModelFileError(model.source, "--candidate", "over a --box V must be of the states alone (one V for "
                              f"every value of the box); it names the box's parameter {', '.join(named)}")
@@ -209,9 +212,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
     limit = tol.MODEL_CLASS_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
     from lyapcheck.models.loop.discrete import is_discrete
 
-    if is_discrete(model) and not isinstance(model, Model):  # (every other kind takes a candidate over a box)
-        refuse_candidate_over_box(model.source, candidate, box)
-    elif candidate is not None and box is not None and not is_discrete(model):  # (a map's runner checks its own)
+    if candidate is not None and box is not None and not is_discrete(model):  # (a map's runner checks its own)
         refuse_box_in_candidate(model, candidate, box)
     if is_discrete(model):  # a map never reaches the classes that read [dynamics] as a field
         if not isinstance(model, Model):  # a map with functions (lyapcheck.models.classes.discrete_functions)
@@ -454,6 +455,8 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
 
     if box is not None:  # the fixed point must stay put over the box (one line, exit 2, before any class runs)
         boxed_system(model, box)
+        if candidate is not None:  # one V for every value of the box: of the states alone
+            refuse_box_in_candidate(model, candidate, box)
     cand = Candidate(candidate, model.candidate_v) if candidate is not None else None
     chosen = class_selection(classes, model, cand)
     results: dict[str, ConditionResult] = {}
@@ -462,12 +465,13 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
 
     def decide(entry: ModelClass) -> ConditionResult | None:
         if box is not None:
-            given = _needs_input(entry.name, box, cand)
+            given = _needs_input(entry.name, None, cand)  # (a candidate over a box: one V for every value)
             if given is not None:
                 return given
             if entry.run_map_functions is not None and entry.name not in BOX_CLASSES:
                 return ConditionResult(entry.name, "not_applicable", NOT_OVER_BOX)
-        return _discrete_rule(entry, entry.run_map_functions, NOT_YET, results, cand, bool(model.disturbances))
+        return _discrete_rule(entry, entry.run_map_functions, NOT_YET, results, cand, bool(model.disturbances),
+                              over_box=box is not None)
 
     def compute(entry: ModelClass) -> Callable[[Budget], ConditionResult] | None:
         run_map_functions = entry.run_map_functions
@@ -659,4 +663,4 @@ def _guarded(name: str, compute: Callable[[], ConditionResult], limit: float) ->
 
 
 __all__ = ["MODEL_CLASSES", "ModelCertification", "certify_model", "parse_candidate", "class_selection",
-           "refuse_candidate_over_box", "refuse_box_in_candidate"]
+           "refuse_box_in_candidate"]
