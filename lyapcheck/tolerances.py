@@ -363,3 +363,27 @@ PIECEWISE_PAIR_FORMS: Final = 30
 PIECEWISE_MAX_KINKS: Final = 32
 #: significant bits P, lambda and nu are rounded to before the exact check
 PIECEWISE_BITS: Final = 24
+#: validated integration of boxes into a certified region of attraction (lyapcheck.models.classes.flow_region):
+#: the step is the largest power of 2 at most FLOW_STEP_SCALE / |Df(x_eq)|_inf (a dyadic step keeps every
+#: time exact); each box is integrated for at most FLOW_HORIZON time units; the domain is first cut into
+#: FLOW_INITIAL_CUTS parts per state (by the number of states), a box that does not enter the set is halved
+#: along its widest state down to FLOW_MIN_WIDTH_FRACTION of the domain's width; all boxes together take at
+#: most FLOW_STEP_BUDGET steps (a count, not a time, so the same model gives the same boxes on any machine;
+#: about 0.3 ms a step for 2 states on one core, within MODEL_CLASS_TIME_LIMIT_S with the set's own proof)
+FLOW_STEP_SCALE: Final = Fraction(1, 4)
+FLOW_HORIZON: Final = Fraction(12)
+FLOW_INITIAL_CUTS: Final = {2: 16, 3: 6, 4: 4}
+FLOW_MIN_WIDTH_FRACTION: Final = Fraction(1, 64)
+FLOW_STEP_BUDGET: Final = 40_000
+#: the working precision (bits) of the validated integration
+FLOW_PRECISION_BITS: Final = 53
+#: a box whose floating-point corners enter the set by step k is integrated for at most
+#: FLOW_ESTIMATE_MARGIN * k + FLOW_ESTIMATE_SLACK validated steps; one whose enclosure grows past FLOW_GROWTH times its
+#: own half-width is given up (halved) at once
+FLOW_ESTIMATE_MARGIN: Final = Fraction(3, 2)
+FLOW_ESTIMATE_SLACK: Final = 64
+FLOW_GROWTH: Final = 16.0
+#: a box's set is cut in two in flight where its box of coordinates has doubled since it was made (the wrapping of a
+#: set crossing a kink of sat or abs grows with its width), into at most FLOW_MAX_PIECES pieces; the certificate states
+#: each box's count, which verify uses
+FLOW_MAX_PIECES: Final = 64

@@ -645,6 +645,10 @@ def interval_sentence(cert: dict[str, Any]) -> str:
     box = ", ".join(f"{s} - eq in [{rounded(Fraction(a), 6, out)}, {rounded(Fraction(b), 6, inward)}]"
                     + (f" {units[s]}" if units.get(s) else "") for s, (a, b) in cert["box"].items())
     level_text = rounded(level, 6, "down")
+    if "flow" in cert:  # boxes proved to flow into the set (lyapcheck.models.classes.flow_region)
+        from lyapcheck.models.classes.flow_region import flow_sentence
+
+        return interval_sentence({k: v for k, v in cert.items() if k != "flow"}) + flow_sentence(cert)
     if cert.get("whole"):
         return (f"region of attraction: every trajectory of the true loop starting where {written} <= "
                 f"{level_text} (exactly {level}) converges to the equilibrium itself (the whole set lies in "
