@@ -374,7 +374,7 @@ FLOW_STEP_SCALE: Final = Fraction(1, 4)
 FLOW_HORIZON: Final = Fraction(12)
 FLOW_INITIAL_CUTS: Final = {2: 16, 3: 6, 4: 4}
 FLOW_MIN_WIDTH_FRACTION: Final = Fraction(1, 64)
-FLOW_STEP_BUDGET: Final = 40_000
+FLOW_STEP_BUDGET: Final = 25_000
 #: the working precision (bits) of the validated integration
 FLOW_PRECISION_BITS: Final = 53
 #: a box whose floating-point corners enter the set by step k is integrated for at most
@@ -386,4 +386,4 @@ FLOW_GROWTH: Final = 16.0
 #: a box's set is cut in two in flight where its box of coordinates has doubled since it was made (the wrapping of a
 #: set crossing a kink of sat or abs grows with its width), into at most FLOW_MAX_PIECES pieces; the certificate states
 #: each box's count, which verify uses
-FLOW_MAX_PIECES: Final = 64
+FLOW_MAX_PIECES: Final = 16

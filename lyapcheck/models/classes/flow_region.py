@@ -141,6 +141,10 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
             # validated integration is spent on the boxes that can get there, for about as long as they take
             estimates = _entry_steps(loop, result, queue, h, horizon_steps)
             halves: list[tuple[tuple[Fraction, ...], tuple[Fraction, ...]]] = []
+            # the boxes expected to enter soonest first: the budget proves the most boxes it can
+            order = sorted(range(len(queue)), key=lambda i: (estimates[i] is None, estimates[i] or 0, i))
+            queue = [queue[i] for i in order]
+            estimates = [estimates[i] for i in order]
             for k, ((lo, hi), estimate) in enumerate(zip(queue, estimates)):
                 if steps_used >= FLOW_STEP_BUDGET or budget.left() <= 0:
                     # (the class's time limit: the one stop here that depends on the machine)

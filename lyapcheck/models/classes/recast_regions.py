@@ -162,9 +162,11 @@ def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
 
 
 def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any], interval: bool = True,
-            robust: Any = None) -> ConditionResult:
+            robust: Any = None, flow: bool = False) -> ConditionResult:
     """``roa``: first a V fitted to simulations and proved by ball arithmetic on the true field
-    (:mod:`lyapcheck.models.classes.recast_interval`; loops of 1 to 3 states); where that proves nothing,
+    (:mod:`lyapcheck.models.classes.recast_interval`; loops of 1 to 3 states), the set it proves then
+    enlarged, with ``flow`` (a model with a ``[domain]``), by boxes of the domain proved by validated
+    integration to flow into it (:mod:`lyapcheck.models.classes.flow_region`); where that proves nothing,
     the linearization's V and its largest level on the recasting's relations, then the V-s
     iteration from it, and the region covering most of the box (``interval`` False: that route only)."""
     from lyapcheck.models.classes.recast_interval import interval_roa
@@ -173,7 +175,8 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
     if isinstance(first_route, ConditionResult):
         from lyapcheck.models.classes.flow_region import extend
 
-        extend(loop, first_route, budget, box)  # (boxes proved to flow into the set: the region only grows)
+        if flow:  # (boxes proved to flow into the set: the region only grows)
+            extend(loop, first_route, budget, box)
         simulated_check(loop, first_route, box)
         return first_route
     skipped = first_route

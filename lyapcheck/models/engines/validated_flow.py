@@ -133,7 +133,9 @@ def apriori(loop: BallLoop, X: Sequence[Ball], h: Ball) -> list[Ball] | None:
         image = [x + span * fi for x, fi in zip(X, fB)]
         if _inside(image, B):
             return image
-        B = _inflated([_hull(a, b) for a, b in zip(image, B)], APRIORI_INFLATION)
+        # the next trial is the image itself, widened (a hull with the last trial would keep every overshoot
+        # and let one state's width chase another's)
+        B = _inflated(image, APRIORI_INFLATION)
     return None
 
 
@@ -150,8 +152,7 @@ def _variational(M: Matrix, h: Ball) -> Matrix | None:
         image = identity + (M * P) * span
         if all(P[i, j].contains(image[i, j]) for i in range(n) for j in range(n)):
             return identity + M * h + (M * (M * image)) * (h * h / 2)
-        P = flint.arb_mat([[flint.arb(image[i, j].union(P[i, j]).mid(),
-                                      image[i, j].union(P[i, j]).rad() * APRIORI_INFLATION + 1e-12)
+        P = flint.arb_mat([[flint.arb(image[i, j].mid(), image[i, j].rad() * APRIORI_INFLATION + 1e-12)
                             for j in range(n)] for i in range(n)])
     return None
 
@@ -299,15 +300,16 @@ def flow_into(loop: BallLoop, lo: Sequence[Fraction], hi: Sequence[Fraction], h:
     while stack:
         s, made_at = stack.pop()
         while not target(s.enclosure()):
-            if s.steps >= max_steps:
-                return FlowOutcome(None, f"a piece is not inside the target after {max_steps} steps", taken,
-                                   pieces=made)
+            # a split comes before the step limit: halves may be inside where the whole is not
             if _size(s) > min(split_growth * made_at, cap) and made < max_pieces:
                 s, other = split(s)
                 made += 1
                 stack.append((other, _size(other)))
                 made_at = _size(s)
                 continue
+            if s.steps >= max_steps:
+                return FlowOutcome(None, f"a piece is not inside the target after {max_steps} steps", taken,
+                                   pieces=made)
             nxt = step(loop, s, hb)
             taken += 1
             if nxt is None:
