@@ -369,12 +369,13 @@ PIECEWISE_BITS: Final = 24
 #: FLOW_INITIAL_CUTS parts per state (by the number of states), a box that does not enter the set is halved
 #: along its widest state down to FLOW_MIN_WIDTH_FRACTION of the domain's width; all boxes together take at
 #: most FLOW_STEP_BUDGET steps (a count, not a time, so the same model gives the same boxes on any machine;
-#: about 0.3 ms a step for 2 states on one core, within MODEL_CLASS_TIME_LIMIT_S with the set's own proof)
+#: 0.3 to 0.7 ms a step for 2 states on one core: 12,000 steps take 4 to 9 s, which a roa that took 8 s before
+#: adds, within MODEL_CLASS_TIME_LIMIT_S with the set's own proof)
 FLOW_STEP_SCALE: Final = Fraction(1, 4)
 FLOW_HORIZON: Final = Fraction(12)
 FLOW_INITIAL_CUTS: Final = {2: 16, 3: 6, 4: 4}
 FLOW_MIN_WIDTH_FRACTION: Final = Fraction(1, 64)
-FLOW_STEP_BUDGET: Final = 25_000
+FLOW_STEP_BUDGET: Final = 12_000
 #: the working precision (bits) of the validated integration
 FLOW_PRECISION_BITS: Final = 53
 #: a box whose floating-point corners enter the set by step k is integrated for at most

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 import flint
 
 from lyapcheck.exact import read_rational
+from lyapcheck.models.classes.claims import FLOW_KIND, FLOW_METHOD, flow_volume
 from lyapcheck.models.engines.interval_field import CompiledPoly, ball
 from lyapcheck.models.engines.recast_sos import poly_from_json
 from lyapcheck.models.engines.validated_flow import LipschitzLoop, flow_into, jacobian_at, precision
@@ -40,10 +41,9 @@ if TYPE_CHECKING:
     from lyapcheck.models.engines.search import Budget
 
 #: the ``flow`` part of a certificate
-KIND: Final = "validated_flow"
+KIND: Final = FLOW_KIND
 #: how the boxes are proved, in the certificate and the sentence
-METHOD: Final = ("validated integration of the true loop in ball arithmetic (python-flint arb, outward rounding; "
-                 "second-order Taylor steps with a Picard a priori enclosure and a mean-value (Lohner) form)")
+METHOD: Final = FLOW_METHOD
 #: the states the route takes (those of a ball-arithmetic set; the integrator itself takes any number)
 FLOW_STATES: Final = (2, 3)
 
@@ -99,10 +99,13 @@ def _max_radius(lo: Sequence[Fraction], hi: Sequence[Fraction]) -> float:
     return float(max(b - a for a, b in zip(lo, hi)))
 
 
-def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[Any, Any]) -> None:
+def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[Any, Any],
+           value: Callable[[Any], Any]) -> None:
     """Add to a certified ``roa`` result the boxes of the domain ``box`` (state deviations, floats)
     proved to flow into its set (its certificate's ``flow``, its figures ``flow_*``); nothing where the
-    route does not apply (its reason in ``flow_skipped``). The set's own claim is never changed."""
+    route does not apply (its reason in ``flow_skipped``). ``value``: the set's ``V`` as a float function
+    of the states (rows; +inf outside its box), which only guides where the steps are spent. The set's
+    own claim is never changed."""
     cert = result.certificate
     n = len(loop.system.states)
     why = None
@@ -129,6 +132,7 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
         queue.append((tuple(a + w * d / cuts for a, w, d in zip(lo0, widths, digits)),
                       tuple(a + w * (d + 1) / cuts for a, w, d in zip(lo0, widths, digits))))
     target = _target(loop, cert)
+    level = float(read_rational(cert["level"]))
     field = LipschitzLoop(loop.system)
     horizon_steps = int(FLOW_HORIZON / h)
     radius = _max_radius(lo0, hi0) / 2
@@ -139,7 +143,7 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
         while queue and not stopped:
             # where the box's corners and centre, simulated in floating point, all enter the set: the
             # validated integration is spent on the boxes that can get there, for about as long as they take
-            estimates = _entry_steps(loop, result, queue, h, horizon_steps)
+            estimates = _entry_steps(loop, value, level, queue, h, horizon_steps)
             halves: list[tuple[tuple[Fraction, ...], tuple[Fraction, ...]]] = []
             # the boxes expected to enter soonest first: the budget proves the most boxes it can
             order = sorted(range(len(queue)), key=lambda i: (estimates[i] is None, estimates[i] or 0, i))
@@ -173,7 +177,7 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
         result.numbers["flow_stopped"] = f"stopped by {stopped} with {len(queue)} boxes not tried"
     if not proved:
         return
-    volume = sum(_volume(p["box"]) for p in proved)
+    volume = sum(flow_volume(p["box"]) for p in proved)
     result.numbers["flow_boxes_volume"] = float(volume)
     result.numbers["flow_max_time"] = float(max(read_rational(p["t"]) for p in proved))
     cert["flow"] = {"kind": KIND, "method": METHOD, "step": str(h), "precision_bits": FLOW_PRECISION_BITS,
@@ -184,14 +188,14 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
 SIMULATION_STRIDE: Final = 4
 
 
-def _entry_steps(loop: "Loop", result: ConditionResult, boxes: Sequence[tuple[tuple[Fraction, ...], tuple[Fraction, ...]]],
-                 h: Fraction, horizon_steps: int) -> list[int | None]:
+def _entry_steps(loop: "Loop", value: Callable[[Any], Any], level: float,
+                 boxes: Sequence[tuple[tuple[Fraction, ...], tuple[Fraction, ...]]], h: Fraction,
+                 horizon_steps: int) -> list[int | None]:
     """For each box, the validated step by which its corners and centre, simulated on the true loop in
     floating point (RK4), all lie in the set; None where one does not within the horizon (a guide for
     where to spend the step budget, never part of a proof)."""
     import numpy as np
 
-    from lyapcheck.models.classes.recast_regions import certified_value
     from lyapcheck.models.engines.recast_numeric import FloatLoop
 
     if not boxes:
@@ -202,8 +206,6 @@ def _entry_steps(loop: "Loop", result: ConditionResult, boxes: Sequence[tuple[tu
     corners = np.array([[(i >> j) & 1 for j in range(n)] for i in range(1 << n)] + [[0.5] * n])
     points = np.concatenate([np.array([float(a) for a in lo]) + corners * np.array([float(b - a) for a, b in zip(lo, hi)])
                              for lo, hi in boxes]) + eq
-    value, = certified_value(loop, result)
-    level = float(read_rational(result.certificate["level"]))
     f = FloatLoop(system)
     dt = float(h) * SIMULATION_STRIDE
     entered = np.full(len(points), -1)
@@ -221,13 +223,6 @@ def _entry_steps(loop: "Loop", result: ConditionResult, boxes: Sequence[tuple[tu
             X[~np.isfinite(X).all(axis=1)] = np.inf
     per_box = entered.reshape(len(boxes), len(corners))
     return [None if (row < 0).any() else int(row.max()) for row in per_box]
-
-
-def _volume(corners: dict[str, list[str]]) -> Fraction:
-    v = Fraction(1)
-    for a, b in corners.values():
-        v *= read_rational(b) - read_rational(a)
-    return v
 
 
 def check_flow(loop: "Loop", cert: dict[str, Any]) -> tuple[bool, str]:
@@ -277,19 +272,6 @@ def check_flow(loop: "Loop", cert: dict[str, Any]) -> tuple[bool, str]:
                   f"{METHOD}")
 
 
-def flow_sentence(cert: dict[str, Any]) -> str:
-    """The words a certificate's ``flow`` adds to its set's sentence (from the certificate alone)."""
-    flow = cert["flow"]
-    boxes = flow["boxes"]
-    volume = sum(_volume(p["box"]) for p in boxes)
-    longest = max(read_rational(p["t"]) for p in boxes)
-    return (f"; and every trajectory starting in any of the {len(boxes)} boxes of the certificate's flow (state "
-            f"deviations, rational corners, total volume {float(volume):.6g}) converges to the equilibrium itself "
-            f"too: each box is proved, by {METHOD}, to lie inside that set at its stated time (at most "
-            f"{float(longest):.6g}). The region of attraction proved is the union of the set and the boxes; that "
-            "union is not a sublevel set and is not proved invariant")
-
-
 def in_boxes(cert: dict[str, Any], states: Sequence[str], Z: Any) -> Any:
     """Which rows of ``Z`` (state deviations, floats) lie in a box of the certificate's ``flow``
     (a closed box; floats, for the simulated figures only)."""
@@ -303,4 +285,4 @@ def in_boxes(cert: dict[str, Any], states: Sequence[str], Z: Any) -> Any:
     return out
 
 
-__all__ = ["KIND", "METHOD", "FLOW_STATES", "extend", "check_flow", "flow_sentence", "in_boxes", "step_of"]
+__all__ = ["KIND", "METHOD", "FLOW_STATES", "extend", "check_flow", "in_boxes", "step_of"]

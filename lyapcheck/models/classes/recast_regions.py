@@ -176,7 +176,7 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
         from lyapcheck.models.classes.flow_region import extend
 
         if flow:  # (boxes proved to flow into the set: the region only grows)
-            extend(loop, first_route, budget, box)
+            extend(loop, first_route, budget, box, certified_value(loop, first_route)[0])
         simulated_check(loop, first_route, box)
         return first_route
     skipped = first_route
