@@ -373,7 +373,7 @@ PIECEWISE_BITS: Final = 24
 #: adds, within MODEL_CLASS_TIME_LIMIT_S with the set's own proof)
 FLOW_STEP_SCALE: Final = Fraction(1, 4)
 FLOW_HORIZON: Final = Fraction(12)
-FLOW_INITIAL_CUTS: Final = {2: 16, 3: 6, 4: 4}
+FLOW_INITIAL_CUTS: Final = {2: 16, 3: 6, 4: 4}  # (by the number of states)
 FLOW_MIN_WIDTH_FRACTION: Final = Fraction(1, 64)
 FLOW_STEP_BUDGET: Final = 12_000
 #: the working precision (bits) of the validated integration
