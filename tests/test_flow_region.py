@@ -103,3 +103,14 @@ def test_the_saturated_pd_pendulums_box_starts_all_converge() -> None:
         X = box_starts(roa.certificate, ("phi", "omega"))
         end = rk4(sat_pd_field, X, 30.0, step=0.002)
         assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-3)
+
+
+@pytest.mark.slow
+def test_verify_refuses_boxes_needing_more_steps_than_certify_may_spend(inverted, monkeypatch) -> None:
+    from lyapcheck.models.classes import flow_region
+
+    steps = inverted.conditions["roa"].numbers["flow_steps"]
+    monkeypatch.setattr(flow_region, "FLOW_STEP_BUDGET", steps // 10)
+    report = api.verify(inverted.document)
+    assert not report.valid
+    assert any("more than the" in check.message for check in report.checks if not check.ok)

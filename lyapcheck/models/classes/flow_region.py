@@ -165,6 +165,11 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
                     outcome = flow_into(field, lo, hi, h, target, limit, min(radius, FLOW_GROWTH * box_radius),
                                         max_pieces=FLOW_MAX_PIECES)
                     steps_used += outcome.taken
+                    if steps_used > FLOW_STEP_BUDGET:  # (its pieces overran the budget: not kept, so that verify's
+                        # work, the proved boxes' steps, stays within it)
+                        stopped = f"the step budget ({FLOW_STEP_BUDGET} steps, lyapcheck.tolerances.FLOW_STEP_BUDGET)"
+                        halves.extend(queue[k:])
+                        break
                 if outcome is not None and outcome.steps is not None:
                     if outcome.steps > 0:  # (a box inside the set already adds nothing)
                         proved.append({"box": {s: [str(a), str(b)] for s, a, b in zip(loop.system.states, lo, hi)},
@@ -248,6 +253,7 @@ def check_flow(loop: "Loop", cert: dict[str, Any]) -> tuple[bool, str]:
     target = _target(loop, cert)
     field = LipschitzLoop(loop.system)
     longest = Fraction(0)
+    work = 0  # (certify proved every box within FLOW_STEP_BUDGET steps in all: a certificate needing more is refused)
     with precision(bits):
         for k, entry in enumerate(boxes):
             corners = entry["box"]
@@ -265,9 +271,13 @@ def check_flow(loop: "Loop", cert: dict[str, Any]) -> tuple[bool, str]:
                 return False, f"flow box {k}: pieces must be an integer from 1 to {FLOW_MAX_PIECES}"
             # the same deterministic integration, with the pieces the box was cut into and no other limit
             outcome = flow_into(field, lo, hi, h, target, int(steps), float("inf"), max_pieces=pieces)
+            work += outcome.taken
             if outcome.steps != int(steps):
                 return False, (f"flow box {k} is not proved inside the set at its time t = {t}: "
                                f"{outcome.why or 'its enclosure is not inside'}")
+            if work > FLOW_STEP_BUDGET:
+                return False, (f"flow: the boxes take more than the {FLOW_STEP_BUDGET} steps certify may spend "
+                               "(lyapcheck.tolerances.FLOW_STEP_BUDGET)")
             longest = max(longest, t)
     return True, (f"each of the {len(boxes)} boxes integrated again enters the set (by t = {float(longest):.4g}), by "
                   f"{METHOD}")
