@@ -114,3 +114,35 @@ def test_verify_refuses_boxes_needing_more_steps_than_certify_may_spend(inverted
     report = api.verify(inverted.document)
     assert not report.valid
     assert any("more than the" in check.message for check in report.checks if not check.ok)
+
+
+POLE_WIDE = """[model]
+name = "a rational loop with a pole at x1 = 2, over a domain wider than its ball-arithmetic set"
+states = ["x1", "x2"]
+
+[dynamics]
+x1 = "-x1 + x2"
+x2 = "-x1 - x2 + x1**2/(2 - x1)"
+
+[domain]
+x1 = [-3, 1.5]
+x2 = [-3, 3]
+"""
+
+
+@pytest.mark.slow
+def test_a_polynomial_loops_ball_region_gets_boxes_too(tmp_path: Path) -> None:
+    """The rational loop no SOS class takes (tests/test_poly_ball_roa.py) gets its region by ball arithmetic,
+    and boxes that flow into it, which verify integrates again."""
+    path = tmp_path / "pole.toml"
+    path.write_text(POLE_WIDE)
+    result = api.certify(model=path, classes="roa")
+    roa = result.conditions["roa"]
+    assert roa.status == "certified" and roa.certificate["kind"] == "interval"
+    assert roa.numbers["flow_boxes"] == len(roa.certificate["flow"]["boxes"]) > 0
+    assert roa.numbers["flow_box_starts_not_converged"] == 0
+    X = box_starts(roa.certificate, ("x1", "x2"))
+    end = rk4(lambda Y: np.stack([-Y[:, 0] + Y[:, 1], -Y[:, 0] - Y[:, 1] + Y[:, 0] ** 2 / (2 - Y[:, 0])], axis=1),
+              X, 40.0, step=0.01)
+    assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-3)
+    assert api.verify(result).valid
