@@ -388,3 +388,13 @@ FLOW_GROWTH: Final = 16.0
 #: set crossing a kink of sat or abs grows with its width), into at most FLOW_MAX_PIECES pieces; the certificate states
 #: each box's count, which verify uses
 FLOW_MAX_PIECES: Final = 16
+#: the validated integrator's a priori enclosures (lyapcheck.models.engines.validated_flow): Picard checks tried before
+#: a step is given up, the widening of each trial about its centre, and an absolute floor of that widening
+#: (relative to the value's size: a trial of radius 0 can never hold its own image)
+FLOW_APRIORI_ITERATIONS: Final = 6
+FLOW_APRIORI_INFLATION: Final = 1.5
+FLOW_APRIORI_FLOOR: Final = 1e-12
+#: a piece of a box's set is cut in two once its coordinates' box has grown this many times since it was made
+FLOW_SPLIT_GROWTH: Final = 2.0
+#: the floating-point simulation that picks the boxes worth integrating takes this many validated steps at once
+FLOW_SIMULATION_STRIDE: Final = 4

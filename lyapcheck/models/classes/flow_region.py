@@ -33,8 +33,8 @@ from lyapcheck.models.engines.recast_sos import poly_from_json
 from lyapcheck.models.engines.validated_flow import LipschitzLoop, flow_into, jacobian_at, precision
 from lyapcheck.results import ConditionResult
 from lyapcheck.tolerances import (FLOW_ESTIMATE_MARGIN, FLOW_ESTIMATE_SLACK, FLOW_GROWTH, FLOW_HORIZON,
-                                  FLOW_INITIAL_CUTS, FLOW_MAX_PIECES, FLOW_MIN_WIDTH_FRACTION, FLOW_PRECISION_BITS, FLOW_STEP_BUDGET,
-                                  FLOW_STEP_SCALE)
+                                  FLOW_INITIAL_CUTS, FLOW_MAX_PIECES, FLOW_MIN_WIDTH_FRACTION, FLOW_PRECISION_BITS,
+                                  FLOW_SIMULATION_STRIDE, FLOW_STEP_BUDGET, FLOW_STEP_SCALE)
 
 if TYPE_CHECKING:
     from lyapcheck.models.classes.recast_classes import Loop
@@ -190,8 +190,7 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
                     "boxes": proved}
 
 
-#: the floating-point simulation that picks the boxes worth integrating steps this many validated steps at once
-SIMULATION_STRIDE: Final = 4
+SIMULATION_STRIDE: Final = FLOW_SIMULATION_STRIDE
 
 
 def _entry_steps(loop: "Loop", value: Callable[[Any], Any], level: float,
@@ -210,7 +209,8 @@ def _entry_steps(loop: "Loop", value: Callable[[Any], Any], level: float,
     n = len(system.states)
     eq = np.array([float(system.values[s]) for s in system.states])
     corners = np.array([[(i >> j) & 1 for j in range(n)] for i in range(1 << n)] + [[0.5] * n])
-    points = np.concatenate([np.array([float(a) for a in lo]) + corners * np.array([float(b - a) for a, b in zip(lo, hi)])
+    points = np.concatenate([np.array([float(a) for a in lo])
+                             + corners * np.array([float(b - a) for a, b in zip(lo, hi)])
                              for lo, hi in boxes]) + eq
     f = FloatLoop(system)
     dt = float(h) * SIMULATION_STRIDE

@@ -34,14 +34,13 @@ from typing import Any, Callable, Iterator, Sequence
 import flint
 
 from lyapcheck.models.engines.interval_field import BallLoop, Jet, apply, ball
+from lyapcheck.tolerances import FLOW_APRIORI_FLOOR, FLOW_APRIORI_INFLATION, FLOW_APRIORI_ITERATIONS, FLOW_SPLIT_GROWTH
 
 Ball = Any  # flint.arb
 Matrix = Any  # flint.arb_mat
 
-#: Picard iterations tried for an a priori enclosure before the step is given up
-APRIORI_ITERATIONS = 6
-#: each failed Picard check widens the trial enclosure by this factor about its centre
-APRIORI_INFLATION = 1.5
+APRIORI_ITERATIONS = FLOW_APRIORI_ITERATIONS
+APRIORI_INFLATION = FLOW_APRIORI_INFLATION
 
 
 @contextmanager
@@ -114,7 +113,7 @@ def _inside(inner: Sequence[Ball], outer: Sequence[Ball]) -> bool:
 
 
 def _inflated(X: Sequence[Ball], factor: float) -> list[Ball]:
-    return [flint.arb(x.mid(), x.rad() * factor + 1e-12 * (1 + abs(float(x.mid())))) for x in X]
+    return [flint.arb(x.mid(), x.rad() * factor + FLOW_APRIORI_FLOOR * (1 + abs(float(x.mid())))) for x in X]
 
 
 def apriori(loop: BallLoop, X: Sequence[Ball], h: Ball) -> list[Ball] | None:
@@ -146,13 +145,14 @@ def _variational(M: Matrix, h: Ball) -> Matrix | None:
     identity = flint.arb_mat([[1 if i == j else 0 for j in range(n)] for i in range(n)])
     span = _hull(flint.arb(0), h)
     P = identity + M * span
-    P = flint.arb_mat([[flint.arb(P[i, j].mid(), P[i, j].rad() * APRIORI_INFLATION + 1e-12) for j in range(n)]
+    P = flint.arb_mat([[flint.arb(P[i, j].mid(), P[i, j].rad() * APRIORI_INFLATION + FLOW_APRIORI_FLOOR)
+                        for j in range(n)]
                        for i in range(n)])
     for _ in range(APRIORI_ITERATIONS):
         image = identity + (M * P) * span
         if all(P[i, j].contains(image[i, j]) for i in range(n) for j in range(n)):
             return identity + M * h + (M * (M * image)) * (h * h / 2)
-        P = flint.arb_mat([[flint.arb(image[i, j].mid(), image[i, j].rad() * APRIORI_INFLATION + 1e-12)
+        P = flint.arb_mat([[flint.arb(image[i, j].mid(), image[i, j].rad() * APRIORI_INFLATION + FLOW_APRIORI_FLOOR)
                             for j in range(n)] for i in range(n)])
     return None
 
@@ -280,13 +280,13 @@ def _size(s: FlowSet) -> float:
 
 def flow_into(loop: BallLoop, lo: Sequence[Fraction], hi: Sequence[Fraction], h: Fraction,
               target: Callable[[list[Ball]], bool], max_steps: int, max_radius: float,
-              max_pieces: int = 1, split_growth: float = 2.0) -> FlowOutcome:
+              max_pieces: int = 1, split_growth: float = FLOW_SPLIT_GROWTH) -> FlowOutcome:
     """Integrate the box ``[lo, hi]`` (state deviations) with step ``h`` until every piece of it lies in
     ``target`` (an invariant set: a piece is checked after each step and stops once inside), each piece
     for at most ``max_steps`` steps; a piece whose ``r`` has grown ``split_growth`` times since it was
-    made (or ``split_growth^3`` times the whole box's) is cut in two (:func:`split`), up to ``max_pieces`` pieces; the box is given up where an enclosure's
-    radius exceeds ``max_radius``. Deterministic: the same arguments give the same outcome (``verify``
-    runs it again)."""
+    made (or ``split_growth^3`` times the whole box's) is cut in two (:func:`split`), up to ``max_pieces``
+    pieces; the box is given up where an enclosure's radius exceeds ``max_radius``. Deterministic: the
+    same arguments give the same outcome (``verify`` runs it again)."""
     hb = ball(h)
     first = start(lo, hi)
     # a piece is cut where its box of coordinates has grown split_growth times since it was made, or past
@@ -323,5 +323,6 @@ def flow_into(loop: BallLoop, lo: Sequence[Fraction], hi: Sequence[Fraction], h:
     return FlowOutcome(latest, "", taken, pieces=made)
 
 
-__all__ = ["APRIORI_ITERATIONS", "APRIORI_INFLATION", "FlowOutcome", "FlowSet", "split", "LipschitzLoop", "apriori", "flow_into", "jacobian_at",
+__all__ = ["APRIORI_ITERATIONS", "APRIORI_INFLATION", "FlowOutcome", "FlowSet", "split", "LipschitzLoop", "apriori",
+           "flow_into", "jacobian_at",
            "precision", "start", "step"]
