@@ -20,7 +20,6 @@ time and checks it is inside ``S`` then (:func:`check_flow`): nothing of the sta
 
 from __future__ import annotations
 
-import time
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
