@@ -392,3 +392,39 @@ SAMPLED_EXCURSION_PASSES: Final = 3
 #: box's half-width is C r times it again (strictly outside the ball C r). Resolution only: the bootstrap is
 #: taken only when the bound it proves is below C
 SAMPLED_BOOTSTRAP_SLACK: Final = 1.05
+
+#: validated integration of boxes into a certified region of attraction (lyapcheck.models.classes.flow_region):
+#: the step is the largest power of 2 at most FLOW_STEP_SCALE / |Df(x_eq)|_inf (a dyadic step keeps every
+#: time exact); each box is integrated for at most FLOW_HORIZON time units; the domain is first cut into
+#: FLOW_INITIAL_CUTS parts per state (by the number of states), a box that does not enter the set is halved
+#: along its widest state down to FLOW_MIN_WIDTH_FRACTION of the domain's width; all boxes together take at
+#: most FLOW_STEP_BUDGET steps (a count, not a time, so the same model gives the same boxes on any machine;
+#: 0.3 to 0.7 ms a step for 2 states on one core: 12,000 steps take 4 to 9 s, which a roa that took 8 s before
+#: adds, within MODEL_CLASS_TIME_LIMIT_S with the set's own proof)
+FLOW_STEP_SCALE: Final = Fraction(1, 4)
+FLOW_HORIZON: Final = Fraction(12)
+FLOW_INITIAL_CUTS: Final = {2: 16, 3: 6, 4: 4}  # (by the number of states)
+FLOW_MIN_WIDTH_FRACTION: Final = Fraction(1, 64)
+FLOW_STEP_BUDGET: Final = 12_000
+#: the working precision (bits) of the validated integration
+FLOW_PRECISION_BITS: Final = 53
+#: a box whose floating-point corners enter the set by step k is integrated for at most
+#: FLOW_ESTIMATE_MARGIN * k + FLOW_ESTIMATE_SLACK validated steps; one whose enclosure grows past FLOW_GROWTH times its
+#: own half-width is given up (halved) at once
+FLOW_ESTIMATE_MARGIN: Final = Fraction(3, 2)
+FLOW_ESTIMATE_SLACK: Final = 64
+FLOW_GROWTH: Final = 16.0
+#: a box's set is cut in two in flight where its box of coordinates has doubled since it was made (the wrapping of a
+#: set crossing a kink of sat or abs grows with its width), into at most FLOW_MAX_PIECES pieces; the certificate states
+#: each box's count, which verify uses
+FLOW_MAX_PIECES: Final = 16
+#: the validated integrator's a priori enclosures (lyapcheck.models.engines.validated_flow): Picard checks tried before
+#: a step is given up, the widening of each trial about its centre, and an absolute floor of that widening
+#: (relative to the value's size: a trial of radius 0 can never hold its own image)
+FLOW_APRIORI_ITERATIONS: Final = 6
+FLOW_APRIORI_INFLATION: Final = 1.5
+FLOW_APRIORI_FLOOR: Final = 1e-12
+#: a piece of a box's set is cut in two once its coordinates' box has grown this many times since it was made
+FLOW_SPLIT_GROWTH: Final = 2.0
+#: the floating-point simulation that picks the boxes worth integrating takes this many validated steps at once
+FLOW_SIMULATION_STRIDE: Final = 4

@@ -40,9 +40,10 @@ omega = [-8, 8]
 """
 
 
-def _share_of(result: object, theta: float) -> float:
+def _share_of(result: object, theta: float, with_boxes: bool = False) -> float:
     """The share of a 40 x 40 grid of the domain ``theta in +-theta``, ``omega in +-8`` inside the
-    certified set (:func:`lyapcheck.models.classes.recast_regions.certified_value`)."""
+    certified set (:func:`lyapcheck.models.classes.recast_regions.certified_value`); ``with_boxes``: inside
+    the certified region, the set or a box of its certificate's ``flow`` (boxes proved to flow into it)."""
     from lyapcheck.models.classes import recast_classes as rc
     from lyapcheck.models.language.modelfile import parse_any_model
     from lyapcheck.models.language.recast import RecastModel
@@ -55,7 +56,13 @@ def _share_of(result: object, theta: float) -> float:
     value, = certified_value(loop, roa)
     axes = [np.linspace(-theta, theta, 40), np.linspace(-8, 8, 40)]
     Z = np.column_stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")])
-    return float(np.mean(value(Z) <= float(Fraction(roa.certificate["level"]))))
+    inside = value(Z) <= float(Fraction(roa.certificate["level"]))
+    if with_boxes:
+        for entry in roa.certificate.get("flow", {}).get("boxes", []):
+            lo = np.array([float(Fraction(entry["box"][s][0])) for s in ("theta", "omega")])
+            hi = np.array([float(Fraction(entry["box"][s][1])) for s in ("theta", "omega")])
+            inside |= np.all((Z >= lo) & (Z <= hi), axis=1)
+    return float(np.mean(inside))
 
 
 @pytest.mark.slow
@@ -73,10 +80,11 @@ def test_widening_the_domain_keeps_the_region_and_states_its_share_of_the_domain
     assert 0 < wide.numbers["fitted_domain_share"] <= 1
     assert api.verify(results["wide"]).valid
     # the coverage stated is of the domain given: every start of the wide domain's grid converges
-    # here, so roa_share is the share of that grid in the set
+    # here, so roa_share is the share of that grid in the certified region (the set and the boxes proved
+    # to flow into it)
     assert wide.numbers["simulated_roa_share_of_box"] == 1.0
-    assert wide.numbers["roa_share"] == pytest.approx(_share_of(results["wide"], 3.14159), abs=1e-12)
-    assert narrow.numbers["roa_share"] == pytest.approx(_share_of(results["narrow"], 2), abs=1e-12)
+    assert wide.numbers["roa_share"] == pytest.approx(_share_of(results["wide"], 3.14159, True), abs=1e-12)
+    assert narrow.numbers["roa_share"] == pytest.approx(_share_of(results["narrow"], 2, True), abs=1e-12)
     # and the wide domain's set is no smaller than the narrow one's, on either domain
     for theta in (2, 3.14159):
         assert _share_of(results["wide"], theta) >= _share_of(results["narrow"], theta)

@@ -21,7 +21,9 @@
   :mod:`~lyapcheck.models.classes.recast_regions` (roa and candidate, and the loop a class runs on),
   :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
   (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_ball_level` (a quadratic V's
-  largest level by ball arithmetic, from its exact local level, at any number of states);
+  largest level by ball arithmetic, from its exact local level, at any number of states),
+  :mod:`~lyapcheck.models.classes.flow_region` (that region enlarged by boxes proved, by validated
+  integration, to flow into it);
 - :mod:`~lyapcheck.models.classes.sampled` (a sampled-data loop's linearization over one period, in ball arithmetic);
 - :mod:`~lyapcheck.models.classes.level_search` (the one monotone search of a fixed V's largest proved level);
 - :mod:`~lyapcheck.models.classes.region_size` (a certified region's largest ball and reach along each axis, exact);

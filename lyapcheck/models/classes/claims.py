@@ -24,7 +24,7 @@ declared unit). A state's distance is always to the equilibrium: ``|x(t) - x_eq|
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Final, Iterable, Mapping, Sequence
 
 from lyapcheck.exact import read_rational
 from lyapcheck.results import ConditionResult
@@ -657,6 +657,33 @@ def lyapunov_sentence(cert: dict[str, Any]) -> str:
             "certificate)")
 
 
+#: a ball-arithmetic set's boxes proved to flow into it (lyapcheck.models.classes.flow_region): the kind of the
+#: certificate's ``flow`` and how the boxes are proved
+FLOW_KIND: Final = "validated_flow"
+FLOW_METHOD: Final = ("validated integration of the true loop in ball arithmetic (python-flint arb, outward rounding; "
+                      "second-order Taylor steps with a Picard a priori enclosure and a mean-value (Lohner) form)")
+
+
+def flow_volume(corners: Mapping[str, Sequence[str]]) -> Fraction:
+    """The volume of a box given by each state's ``[lo, hi]`` (rational texts)."""
+    v = Fraction(1)
+    for a, b in corners.values():
+        v *= read_rational(b) - read_rational(a)
+    return v
+
+
+def flow_sentence(cert: dict[str, Any]) -> str:
+    """The words a certificate's ``flow`` adds to its set's sentence (from the certificate alone)."""
+    boxes = cert["flow"]["boxes"]
+    volume = sum((flow_volume(p["box"]) for p in boxes), Fraction(0))
+    longest = max(read_rational(p["t"]) for p in boxes)
+    return (f"; and every trajectory starting in any of the {len(boxes)} boxes of the certificate's flow (state "
+            f"deviations, rational corners, total volume {float(volume):.6g}) converges to the equilibrium itself "
+            f"too: each box is proved, by {FLOW_METHOD}, to lie inside that set by its stated time (at most "
+            f"{float(longest):.6g}). The region of attraction proved is the union of the set and the boxes; that "
+            "union is not a sublevel set and is not proved invariant")
+
+
 def interval_sentence(cert: dict[str, Any]) -> str:
     """What a ball-arithmetic region (certificate kind ``interval``) proves, from the certificate alone
     (``verify`` re-makes and compares)."""
@@ -670,6 +697,8 @@ def interval_sentence(cert: dict[str, Any]) -> str:
     box = ", ".join(f"{s} - eq in [{rounded(Fraction(a), 6, out)}, {rounded(Fraction(b), 6, inward)}]"
                     + (f" {units[s]}" if units.get(s) else "") for s, (a, b) in cert["box"].items())
     level_text = rounded(level, 6, "down")
+    if "flow" in cert:  # boxes proved to flow into the set (lyapcheck.models.classes.flow_region)
+        return interval_sentence({k: v for k, v in cert.items() if k != "flow"}) + flow_sentence(cert)
     if cert.get("whole"):
         return (f"region of attraction: every trajectory of the true loop starting where {written} <= "
                 f"{level_text} (exactly {level}) converges to the equilibrium itself (the whole set lies in "

@@ -447,8 +447,16 @@ def check_interval(loop: Loop, c: dict[str, Any], robust: Robust | None = None) 
     if cert.get("V_text") != v_text(system, claim.V):
         return False, "V_text is not V written with the functions"
     outside = "V > level everywhere outside the box, " if cert["whole"] else "V > level on the box's boundary, "
+    flowed = ""
+    if "flow" in cert:  # boxes proved to flow into the set: every one integrated again
+        from lyapcheck.models.classes.flow_region import check_flow
+
+        ok, why = check_flow(loop, cert)
+        if not ok:
+            return False, why
+        flowed = f"; {why}"
     return True, (f"{outside}V' < 0 on the set ({proof.cells} cells, the equilibrium's box of half-width "
-                  f"{proof.local_radius} by the Hessian), by {METHOD}")
+                  f"{proof.local_radius} by the Hessian), by {METHOD}{flowed}")
 
 
 __all__ = ["interval_roa", "domain_share", "interval_candidate", "check_interval", "box_units", "METHOD"]

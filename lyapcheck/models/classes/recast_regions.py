@@ -221,15 +221,21 @@ def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
 
 
 def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any], interval: bool = True,
-            robust: Any = None) -> ConditionResult:
+            robust: Any = None, flow: bool = False) -> ConditionResult:
     """``roa``: first a V fitted to simulations and proved by ball arithmetic on the true field
-    (:mod:`lyapcheck.models.classes.recast_interval`; loops of 1 to 3 states); where that proves nothing,
+    (:mod:`lyapcheck.models.classes.recast_interval`; loops of 1 to 3 states), the set it proves then
+    enlarged, with ``flow`` (a model with a ``[domain]``), by boxes of the domain proved by validated
+    integration to flow into it (:mod:`lyapcheck.models.classes.flow_region`); where that proves nothing,
     the linearization's V and its largest level on the recasting's relations, then the V-s
     iteration from it, and the region covering most of the box (``interval`` False: that route only)."""
     from lyapcheck.models.classes.recast_interval import interval_roa
 
     first_route = interval_roa(loop, budget, box, robust) if interval else "ball arithmetic: not tried"
     if isinstance(first_route, ConditionResult):
+        from lyapcheck.models.classes.flow_region import extend
+
+        if flow:  # (boxes proved to flow into the set: the region only grows)
+            extend(loop, first_route, budget, box, certified_value(loop, first_route)[0])
         simulated_check(loop, first_route, box)
         return first_route
     skipped = first_route
@@ -304,7 +310,12 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any], m
         Z = lo + (hi - lo) * np.random.default_rng(0).random((count, loop.n))
     eq = np.array([float(system.values[s]) for s in system.states])
     value, = certified_value(loop, result)
-    inside = value(Z + eq) <= float(Fraction(result.certificate["level"]))
+    in_set = value(Z + eq) <= float(Fraction(result.certificate["level"]))
+    inside = in_set
+    if "flow" in result.certificate:  # the region is the set and the boxes proved to flow into it
+        from lyapcheck.models.classes.flow_region import in_boxes
+
+        inside = in_set | in_boxes(result.certificate, system.states, Z)
     dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON,
                                    escape=SIMULATED_ESCAPE * float(np.max(np.asarray(hi) - np.asarray(lo))),
                                    max_steps=max_steps)
@@ -316,7 +327,9 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any], m
     result.numbers["simulated_roa_share_of_box"] = float(np.mean(to_zero))
     # a region proved by ball arithmetic claims convergence to the equilibrium itself, not modulo 2 pi
     angles = () if result.certificate.get("kind") == "interval" else tuple(loop.angles)
-    suspicious = inside & ~(to_zero if not angles else modulo)
+    if "flow" in result.certificate:  # a start in a proved box that does not converge: a soundness alarm
+        result.numbers["flow_box_starts_not_converged"] = int(np.sum(inside & ~in_set & ~to_zero))
+    suspicious = in_set & ~(to_zero if not angles else modulo)
     if suspicious.any():
         result.numbers.update(set_cross_check(loop, result, Z[suspicious] + eq, angles).numbers())
 

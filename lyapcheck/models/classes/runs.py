@@ -168,7 +168,7 @@ def roa_functions(ctx: "FunctionsRun", budget: "Budget") -> "ConditionResult":
     if ctx.box is not None:
         return box_roa(ctx.model, ctx.loop, ctx.box, budget)
     return run_roa(ctx.loop, ctx.linearization(budget), budget, comparison_box(ctx.model, ctx.loop),
-                   robust=robust_of(ctx.model))
+                   robust=robust_of(ctx.model), flow=ctx.model.domain is not None)
 
 
 def candidate_functions(ctx: "FunctionsRun", budget: "Budget") -> "ConditionResult":

@@ -165,6 +165,11 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
         sos.summary = f"{head}; nor was one proved by {METHOD}{sep}{advice}"
         sos.numbers["detail"] = [*sos.numbers.get("detail", []), found]
         return sos
+    if recast.domain is not None:  # boxes of the domain proved to flow into the set (the region only grows)
+        from lyapcheck.models.classes.flow_region import extend
+        from lyapcheck.models.classes.recast_regions import certified_value
+
+        extend(loop, found, budget, box, certified_value(loop, found)[0])
     simulated_check(loop, found, box, max_steps=BALL_FALLBACK_FIT_STEPS)
     if found.disturbances is None and model.disturbances:
         found.disturbances = "zero"  # proved on the loop with its disturbances at 0

@@ -66,6 +66,8 @@ ESTIMATES: Final[Mapping[str, str]] = {
                                               "decrease allows (a soundness alarm)",
     "soundness_violation": "the simulation contradicts the certified claim (a soundness alarm)",
     "sampled_share": "the share of sampled points where the fitted V decreases",
+    "flow_box_starts_not_converged": "simulated starts in a box proved to flow into the set that did not converge "
+                                     "(a soundness alarm)",
     "box_share_estimate": "the share of sampled points of the box in the certified set",
     "level_supremum_estimate": "the largest level where sampling sees V' < 0",
     "level_ratio_to_estimate": "the certified level over level_supremum_estimate",
@@ -86,6 +88,16 @@ ESTIMATES: Final[Mapping[str, str]] = {
     "box_parts": "parts of the box the ball-arithmetic proof split it into",
     "boundary_cells": "cells of the set's boundary the ball-arithmetic proof took",
     "proof_seconds": "wall time of the proof",
+    # the boxes proved to flow into a ball-arithmetic set (lyapcheck.models.classes.flow_region): the sentence
+    # states their count, volume and longest time from the certificate, which verify re-makes
+    "flow_boxes": "boxes of starts proved by validated integration to flow into the set (the certificate's flow)",
+    "flow_boxes_volume": "the total volume of those boxes",
+    "flow_max_time": "the longest of their times",
+    "flow_steps": "integration steps the validated integration took in all (boxes proved or not)",
+    "flow_step": "the validated integration's step",
+    "flow_boxes_left": "boxes not tried when the validated integration stopped",
+    "flow_stopped": "why the validated integration stopped before every box was tried",
+    "flow_skipped": "why no box was integrated",
 }
 
 
