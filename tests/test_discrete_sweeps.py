@@ -470,7 +470,7 @@ def test_a_map_s_box_sweep_refuses_classes_it_does_not_take(tmp_path: Path) -> N
     refused_class.write_text(boxes.read_text().replace('mode = "boxes"', 'mode = "boxes"\nclasses = ["barrier"]'))
     assert_refused(refused_class, "'sweep.classes' parameter must be in a boxes sweep of a discrete-time map with "
                                   "functions, a list of distinct names from 'linearization', 'quadratic', 'sos_gas', "
-                                  "'roa' (")
+                                  "'roa', 'sos_bound' (")
 
 
 # -- a polynomial map's roa and sos_bound over boxes: a set and a bound for every value of the box -----------
