@@ -69,7 +69,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.recast import RecastModel, RecastSystem
 
 #: the classes a map with functions decides over a box
-BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier", "reach_avoid")
 #: the method a map with functions' linearization over a box states
 METHOD: Final = BOX_BALL_STEIN_METHOD
 #: the reason of every other class over a box (barrier and reach_avoid)

@@ -161,7 +161,7 @@ def verify_barrier_map_functions(name: str, c: dict[str, Any], check: "MapFuncti
 
     if c["status"] not in ("certified", "refuted"):
         return False, check.not_checked(c["status"])
-    return map_relations_safety.verify_barrier(check.model, _without_nominal_prefix(c))
+    return map_relations_safety.verify_barrier(check.model, _without_nominal_prefix(c), check.box)
 
 
 def verify_reach_avoid_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
@@ -172,7 +172,7 @@ def verify_reach_avoid_map_functions(name: str, c: dict[str, Any], check: "MapFu
 
     if c["status"] not in ("certified", "refuted"):
         return False, check.not_checked(c["status"])
-    return map_relations_reach.verify(check.model, _without_nominal_prefix(c))
+    return map_relations_reach.verify(check.model, _without_nominal_prefix(c), check.box)
 
 
 def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
