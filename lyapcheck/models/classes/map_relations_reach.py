@@ -347,7 +347,7 @@ def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = 
         cert = c["certificate"]
         if cert.get("kind") != KIND or cert.get("time") != "discrete":
             return False, f"not a reach_avoid certificate of a discrete-time map (kind {cert.get('kind')!r})"
-        ok, why = stated_box(cert, box)
+        ok, why = stated_box(cert, box, model)
         if not ok:
             return False, why
         m = read_map(model, box)

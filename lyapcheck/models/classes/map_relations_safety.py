@@ -80,8 +80,11 @@ def relations_and_sets(name: str, model: "RecastModel", what: str, prop: "Proper
     :data:`~lyapcheck.tolerances.MAP_RELATIONS_VARIABLES`). ``what``: the certificate the reason names;
     ``box``: over that box of the map's parameters (:func:`read_map`)."""
     from lyapcheck import tolerances
+    from lyapcheck.models.classes.barrier import SETS_USE_BOX, sets_use_box
     from lyapcheck.models.engines.reasons import size_limit
 
+    if box is not None and sets_use_box(model, box):  # (the sets are read at the box's centre: refused)
+        return ConditionResult(name, "not_applicable", SETS_USE_BOX)
     try:
         m = read_map(model, box)
     except NotTaken as exc:
@@ -367,8 +370,13 @@ def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pi
 
 # -- the class -------------------------------------------------------------------------------------------
 
-def stated_box(cert: Mapping[str, Any], box: "ModelBox | None") -> tuple[bool, str]:
-    """A certificate's ``parameter_box``: the document's box over a box, absent at a point."""
+def stated_box(cert: Mapping[str, Any], box: "ModelBox | None", model: "RecastModel") -> tuple[bool, str]:
+    """A certificate's ``parameter_box``: the document's box over a box (whose parameters no set names),
+    absent at a point."""
+    from lyapcheck.models.classes.barrier import SETS_USE_BOX, sets_use_box
+
+    if box is not None and sets_use_box(model, box):
+        return False, SETS_USE_BOX
     if box is not None and cert.get("parameter_box") != box.to_json():
         return False, "a certificate over a box states that box (parameter_box) as the document's"
     if box is None and "parameter_box" in cert:
@@ -470,7 +478,7 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | 
         cert = c["certificate"]
         if cert.get("kind") != KIND or cert.get("time") != "discrete":
             return False, f"not a barrier certificate of a discrete-time map (kind {cert.get('kind')!r})"
-        ok, why = stated_box(cert, box)
+        ok, why = stated_box(cert, box, model)
         if not ok:
             return False, why
         m = read_map(model, box)

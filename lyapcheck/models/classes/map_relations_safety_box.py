@@ -84,11 +84,14 @@ def verify_refutation(name: str, model: "RecastModel", box: "ModelBox", c: Mappi
     parameter named, exact), the sentence naming it, then the point route's check of the start and its iterate
     on the map recast at that value
     (:func:`~lyapcheck.models.classes.map_relations_safety.check_iterate_functions`)."""
+    from lyapcheck.models.classes.barrier import SETS_USE_BOX, sets_use_box
     from lyapcheck.models.classes.discrete_linearization import box_point_sentence
     from lyapcheck.models.classes.discrete_safety import verify_refutation as verify_start
     from lyapcheck.models.classes.map_relations import NotTaken
     from lyapcheck.models.classes.map_relations_safety import check_iterate_functions
 
+    if sets_use_box(model, box):
+        return False, SETS_USE_BOX
     try:
         data = c["refutation"]
         if data.get("parameter_box") != box.to_json():
