@@ -297,7 +297,8 @@ def box_multipliers(m: Any, target: set[Monomial], generators: Sequence[Sequence
             continue
         basis = [q for q in plain if moving_degree(q) <= (top - d) // 2 and (tight or moving(q))]
         if param_degree and d == 0:  # (the box's own h^2 - u^2 >= 0: its multiplier may hold the parameters too)
-            powers = [p for p in monomials(nv, 1, param_degree) if not any(e for i, e in enumerate(p) if i not in params)]
+            powers = [p for p in monomials(nv, 1, param_degree)
+                      if not any(e for i, e in enumerate(p) if i not in params)]
             basis += [tuple(a + b for a, b in zip(q, p)) for q in basis for p in powers]
         if not basis:
             continue

@@ -57,57 +57,38 @@ def _sets(name: str, model: "RecastModel") -> tuple[Any, dict[str, Any]]:
 def refute(name: str, model: "RecastModel", box: "ModelBox") -> ConditionResult | None:
     """``refuted`` for the box when the falsification finds an unsafe iterate proved at one of its corners or
     its centre (reach_avoid: before any iterate is in the goal), naming the value; None when none is found."""
-    from lyapcheck.models.classes.discrete_linearization import box_point_sentence, box_points
-    from lyapcheck.models.classes.discrete_safety import refuted_result
-    from lyapcheck.models.classes.discrete_safety_box import MAX_BOX_POINTS
+    from lyapcheck.models.classes.discrete_safety_box import refute_at_points
     from lyapcheck.models.classes.map_relations_safety import falsify
 
-    points = box_points(box)
-    for point in points[:-1][:MAX_BOX_POINTS - 1] + points[-1:]:  # (the centre is always visited)
-        at = model_at(model, point)
-        m, sets = _sets(name, at)
+    def at(point: Mapping[str, Fraction]) -> Any:
+        model_there = model_at(model, point)
+        m, sets = _sets(name, model_there)
         goal = sets["goal"][0] if name == "reach_avoid" else None
-        found = falsify(at, m, sets["initial"], sets["unsafe"], goal)
-        if found is None:
-            continue
-        result = refuted_result(name, model, found, "" if goal is None else " before any iterate is in the goal")
-        result.summary = box_point_sentence(point, result.summary)
-        assert result.refutation is not None
-        result.refutation["point"] = {k: str(v) for k, v in point.items()}
-        result.refutation["parameter_box"] = box.to_json()
-        return result
-    return None
+        return falsify(model_there, m, sets["initial"], sets["unsafe"], goal)
+
+    return refute_at_points(name, model, box, at)
 
 
 def verify_refutation(name: str, model: "RecastModel", box: "ModelBox", c: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-check a refutation of :func:`refute`: the stated box the document's, the stated value in it (every
-    parameter named, exact), the sentence naming it, then the point route's check of the start and its iterate
-    on the map recast at that value
+    parameter named, exact), the sentence naming it
+    (:func:`lyapcheck.models.classes.discrete_safety_box.stated_point`), then the point route's check of the
+    start and its iterate on the map recast at that value
     (:func:`~lyapcheck.models.classes.map_relations_safety.check_iterate_functions`)."""
     from lyapcheck.models.classes.barrier import SETS_USE_BOX, sets_use_box
-    from lyapcheck.models.classes.discrete_linearization import box_point_sentence
     from lyapcheck.models.classes.discrete_safety import verify_refutation as verify_start
+    from lyapcheck.models.classes.discrete_safety_box import stated_point
     from lyapcheck.models.classes.map_relations import NotTaken
     from lyapcheck.models.classes.map_relations_safety import check_iterate_functions
 
     if sets_use_box(model, box):
         return False, SETS_USE_BOX
     try:
-        data = c["refutation"]
-        if data.get("parameter_box") != box.to_json():
-            return False, "the refutation's parameter_box is not the document's box"
-        point = {str(k): Fraction(v) for k, v in (data.get("point") or {}).items()}
-    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
+        point, why = stated_point(box, c)
+    except (KeyError, TypeError, AttributeError) as exc:
         return False, f"malformed refutation: {exc}"
-    if set(point) != set(box.names):
-        return False, "the stated point does not name every parameter of the box"
-    for key, value in point.items():
-        lo, hi = box.interval(key)
-        if not lo <= value <= hi:
-            return False, f"the stated {key} = {value} is not in the box [{lo}, {hi}]"
-    head = box_point_sentence(point, "")
-    if not str(c.get("summary", "")).startswith(head):
-        return False, f"the refutation's sentence does not name its value of the box ({head.rstrip(', ')})"
+    if point is None:
+        return False, why
     try:
         at = model_at(model, point)
         m, sets = _sets(name, at)
