@@ -38,7 +38,7 @@ tighter certificate decided by :func:`check_map_reach`.
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
@@ -252,12 +252,13 @@ def tighten(m: MapOnRelations, structure: Structure, degree: int, sets: Mapping[
 
 # -- the class -------------------------------------------------------------------------------------------
 
-def run(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None) -> ConditionResult:
+def run(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None,
+        refute: "Callable[[], ConditionResult | None] | None" = None) -> ConditionResult:
     """``reach_avoid`` on a map with functions (module docstring): the falsification first (``refuted`` with an
     iterate proved unsafe before any is in the goal), then ``certified`` only after :func:`check_map_reach`, with
     the steps bound ``floor(C / eps)``. ``box``: one ``V`` for every value of that box of the map's parameters
-    (:func:`~lyapcheck.models.classes.map_relations_safety.read_map`), the falsification at its corners and
-    centre (:func:`lyapcheck.models.classes.map_relations_safety_box.refute`)."""
+    (:func:`~lyapcheck.models.classes.map_relations_safety.read_map`), the falsification ``refute`` at its
+    corners and centre instead of the point's (:func:`lyapcheck.models.classes.map_relations_safety_box.refute`)."""
     from lyapcheck.models.classes.claims import summary
     from lyapcheck.models.classes.lyapunov import terms_json
     from lyapcheck.models.classes.reach_avoid import goal_of_one_piece
@@ -274,10 +275,8 @@ def run(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None) -> 
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
-    if box is not None:
-        from lyapcheck.models.classes.map_relations_safety_box import refute
-
-        refuted = refute("reach_avoid", model, box)
+    if refute is not None:
+        refuted = refute()
         if refuted is not None:
             return refuted
     else:
@@ -316,8 +315,8 @@ def run(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None) -> 
 def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = None) -> tuple[bool, str]:
     """Re-check a certified ``reach_avoid`` of a map with functions from its JSON and the model text alone: the
     map, its relations and the sets re-derived, every identity exactly, the stated degree and steps bound.
-    ``box``: the document's box, which a certificate states (``parameter_box``); a refutation's value of the box
-    re-checked (:func:`lyapcheck.models.classes.map_relations_safety_box.verify_refutation`)."""
+    ``box``: the document's box, which a certificate states (``parameter_box``) (a refutation over a box:
+    :func:`lyapcheck.models.classes.map_relations_safety_box.verify_refutation`)."""
     from lyapcheck.exact import read_rational
     from lyapcheck.models.engines.recast_sos import ConditionCertificate, poly_from_json
 
@@ -327,10 +326,8 @@ def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = 
         return False, "the model has no [sets] initial, unsafe and goal for reach_avoid"
     if len(model.sets["goal"]) != 1:
         return False, "a map's reach_avoid takes a goal of one piece"
-    if c.get("status") == "refuted" and box is not None:
-        from lyapcheck.models.classes.map_relations_safety_box import verify_refutation
-
-        return verify_refutation("reach_avoid", model, box, c)
+    if c.get("status") == "refuted" and box is not None:  # (verify_discrete sends it to map_relations_safety_box)
+        return False, "a refutation over a box is re-checked at its value of the box"
     if c.get("status") == "refuted":  # the stated start's unsafe iterate before the goal, re-derived
         try:
             m = on_relations(model)

@@ -28,7 +28,7 @@ from its rounded start in ball arithmetic through the true functions (:func:`che
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
@@ -384,24 +384,29 @@ def stated_box(cert: Mapping[str, Any], box: "ModelBox | None", model: "RecastMo
     return True, ""
 
 
-def without_box_words(text: object, box: "ModelBox | None") -> object:
-    """A claim's sentence without the box's words in front (``for every k in [...]: ``, claims.summary)."""
+def without_box_words(c: Mapping[str, Any], box: "ModelBox | None") -> object:
+    """A claim's sentence without the box's words in front (``for every k in [...]: ``), then a disturbed
+    map's ``(d = 0) `` after them (claims.summary puts them in that order)."""
+    text = c.get("summary")
     if box is None or not isinstance(text, str):
         return text
-    from lyapcheck.models.classes.claims import box_words
+    from lyapcheck.models.classes.claims import DISTURBANCE_PREFIX, box_words
 
-    return text.removeprefix(f"for every {box_words(box.to_json())}: ")
+    text = text.removeprefix(f"for every {box_words(box.to_json())}: ")
+    return text.removeprefix(DISTURBANCE_PREFIX["zero"]) if c.get("disturbances") == "zero" else text
 
 
 def _proofs_json(m: MapOnRelations, proofs: Mapping[str, "ConditionCertificate"]) -> dict[str, Any]:
     return {name: proof.to_json(m.ring) for name, proof in proofs.items()}
 
 
-def run_barrier(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None) -> ConditionResult:
+def run_barrier(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None,
+                refute: "Callable[[], ConditionResult | None] | None" = None) -> ConditionResult:
     """``barrier`` on a map with functions (module docstring): the falsification first (``refuted`` with an
     iterate proved unsafe), then ``certified`` only after :func:`check_map_barrier`. ``box``: one ``B`` for
-    every value of that box of the map's parameters (:func:`read_map`), the falsification at its corners and
-    centre (:func:`lyapcheck.models.classes.map_relations_safety_box.refute`)."""
+    every value of that box of the map's parameters (:func:`read_map`), the falsification ``refute`` at its
+    corners and centre instead of the point's (:func:`lyapcheck.models.classes.map_relations_safety_box.refute`,
+    which imports this module)."""
     from lyapcheck.models.classes.lyapunov import terms_json
 
     ruled = ds.no_sets("barrier", model)
@@ -411,10 +416,8 @@ def run_barrier(model: "RecastModel", budget: Budget, box: "ModelBox | None" = N
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
-    if box is not None:
-        from lyapcheck.models.classes.map_relations_safety_box import refute
-
-        refuted = refute("barrier", model, box)
+    if refute is not None:
+        refuted = refute()
         if refuted is not None:
             return refuted
     else:
@@ -450,8 +453,8 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | 
     """Re-check a certified ``barrier`` of a map with functions from its JSON and the model text alone: the map,
     its relations and the sets re-derived, every identity exactly, the stated degree, rate and sentence.
     ``box``: the document's box, which a certificate states (``parameter_box``) and whose parameters are
-    bounded variables of its relations; a refutation's value of the box re-checked
-    (:func:`lyapcheck.models.classes.map_relations_safety_box.verify_refutation`)."""
+    bounded variables of its relations (a refutation over a box:
+    :func:`lyapcheck.models.classes.map_relations_safety_box.verify_refutation`)."""
     from lyapcheck.exact import read_rational
     from lyapcheck.models.classes.barrier import conditions
     from lyapcheck.models.engines.recast_sos import ConditionCertificate, poly_from_json
@@ -460,10 +463,8 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | 
         return False, f"a barrier claim is about safety, not {c.get('property')}"
     if ds.no_sets("barrier", model) is not None:
         return False, "the model has no [sets] initial and unsafe for barrier"
-    if c.get("status") == "refuted" and box is not None:
-        from lyapcheck.models.classes.map_relations_safety_box import verify_refutation
-
-        return verify_refutation("barrier", model, box, c)
+    if c.get("status") == "refuted" and box is not None:  # (verify_discrete sends it to map_relations_safety_box)
+        return False, "a refutation over a box is re-checked at its value of the box"
     if c.get("status") == "refuted":
         try:
             m = on_relations(model)
@@ -506,7 +507,7 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | 
         return False, "the stated degree is not the certificate's polynomial's"
     if c.get("lambda") != float(lam):
         return False, "the stated lambda is not the certificate's"
-    if without_box_words(c.get("summary"), box) != DISCRETE_BARRIER_SENTENCE:
+    if without_box_words(c, box) != DISCRETE_BARRIER_SENTENCE:
         return False, "the stated sentence is not the certificate's"
     return True, why
 
