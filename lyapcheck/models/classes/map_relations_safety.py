@@ -256,12 +256,12 @@ def search_barrier(m: MapOnRelations, initial: Pieces, unsafe: Pieces, search: S
             continue
         outcomes: dict[str, int] = {}
         for lam in ds.LAMBDAS:
-            at = structure
+            at: Structure | str = structure
             if m.params and lam == 1:  # (over a box, B - B(F) vanishes at the fixed point: barrier_structure)
                 at = barrier_structure(m, initial, unsafe, degree, at_fixed=True)
-                if isinstance(at, str):
-                    outcomes[at] = outcomes.get(at, 0) + 1
-                    continue
+            if isinstance(at, str):
+                outcomes[at] = outcomes.get(at, 0) + 1
+                continue
             found, solution = attempt(m, at, degree, initial, unsafe, lam, search)
             if found is not None:
                 tried.append(f"degree {degree}: found at lambda = {lam}")
