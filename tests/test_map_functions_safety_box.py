@@ -183,3 +183,15 @@ def test_a_box_sweep_takes_both_and_iterates_them(tmp_path: Path) -> None:
         assert np.all(np.asarray(data[f"status_{name}"])[done] == CODES["certified"])
     assert not np.asarray(data["soundness_violation"])[done].any()
     assert np.all(np.asarray(data["cross_check_trajectories"])[done] > 0)
+
+
+def test_a_disturbed_map_s_claims_over_a_box_say_d_0_and_verify(tmp_path: Path) -> None:
+    """With a disturbance (read at 0 by these classes) the sentence carries the box's words, then ``(d = 0)``;
+    verify takes both off before it compares the barrier's sentence."""
+    text = GAINED.replace('"-0.5*x + k*tanh(y)"', '"-0.5*x + k*tanh(y) + d"').replace(
+        "\n[dynamics]\n", "\n[disturbances]\nd = 0.05\n\n[dynamics]\n")
+    doc = _certify(_model(tmp_path, text))
+    for name in ("barrier", "reach_avoid"):
+        c = doc["conditions"][name]
+        assert c["status"] == "certified" and c["summary"].startswith("for every k in [0.6, 0.85]: (d = 0) "), c
+    assert _verify(doc).valid
