@@ -106,7 +106,8 @@ certified boxes the sweep cross-checks by iterating (:func:`map_box_classes`): o
 ``linearization``, ``quadratic``, ``sos_gas``, ``roa`` and ``sos_bound``; on a map with functions the same
 (``linearization`` and ``roa`` with one ``P`` in ball arithmetic, the parameters as balls:
 :mod:`lyapcheck.models.classes.discrete_functions_box`; ``quadratic``, ``sos_gas`` and ``sos_bound`` with the
-parameters bounded variables of the relations), its boxes certified as a loop with functions' are
+parameters bounded variables of the relations, so are ``barrier`` and ``reach_avoid`` with its sets, each box's
+starts in the initial set iterated), its boxes certified as a loop with functions' are
 (the model read at the box's centre); any other class is refused in one line naming ``sweep.classes``. The same
 tree, store and corner checks as a loop's boxes (a corner's linearization is the map's: an eigenvalue of
 modulus > 1 refutes the box), each certified box iterated at its corners and random points (the true map of a

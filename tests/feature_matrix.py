@@ -210,13 +210,6 @@ REFUSALS: tuple[Refusal, ...] = (
             "has nothing to bound (its stability classes say where it converges)."),
     Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
             "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
-    Refusal(cells(("map_functions",), ("barrier", "reach_avoid"), ("--box", "sweep boxes")),
-            ("over a box a discrete-time map with functions takes", "takes these only"),
-            "Over a `--box` (and in a box sweep) a map with functions takes `linearization` (or `refuted` at an "
-            "unstable corner, in ball arithmetic), `quadratic`, `sos_gas` and `sos_bound` (one V for every value, "
-            "the box's parameters bounded variables of the relations, exact), `roa` and `candidate` (one set for "
-            "every value, ball arithmetic); its `barrier` and `reach_avoid` are decided at a point (their "
-            "identities with the parameters among the relations' variables are not built: a gap, not a theorem)."),
 )
 
 

@@ -45,7 +45,9 @@ precision; ``verify`` computes the column again there.
 ``candidate`` (:func:`candidate`): the user's quadratic ``V`` of the states, its ``A(p)^T P A(p) - P < 0``
 proved on parts of the box as above, then its largest level as ``roa``'s.
 
-``barrier`` and ``reach_avoid`` over a box are ``not_applicable`` (:data:`NOT_OVER_BOX`).
+``barrier`` and ``reach_avoid`` over a box: one ``B`` (``V``) of the states for every value, the box's parameters
+bounded variables of the relations, refuted at a corner or the centre
+(:mod:`lyapcheck.models.classes.map_relations_safety_box`).
 """
 
 from __future__ import annotations
@@ -69,14 +71,13 @@ if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.recast import RecastModel, RecastSystem
 
 #: the classes a map with functions decides over a box
-BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound")
+BOX_CLASSES: Final = ("linearization", "quadratic", "sos_gas", "roa", "candidate", "sos_bound", "barrier",
+                      "reach_avoid")
 #: the method a map with functions' linearization over a box states
 METHOD: Final = BOX_BALL_STEIN_METHOD
-#: the reason of every other class over a box (barrier and reach_avoid)
-NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes linearization, quadratic, sos_gas, roa, "
-                       "candidate and sos_bound (each for every value of the box); its barrier and reach_avoid are "
-                       "decided at a point (over a box they would need the box's parameters as bounded variables of "
-                       "their identities on the relations, which is not built); certify a point with --set NAME=VALUE")
+#: the reason of a class without a box route (none today: every class of a map with functions has one)
+NOT_OVER_BOX: Final = ("over a box a discrete-time map with functions takes " + ", ".join(BOX_CLASSES)
+                       + " (each for every value of the box); certify a point with --set NAME=VALUE")
 #: the refutation at one value of the box (its method and sentence: the discrete-time linearization's module's)
 BALL_ROUTH_METHOD: Final = discrete_linearization.BALL_ROUTH_METHOD
 REFUTED_BALL_ROUTH: Final = discrete_linearization.REFUTED_BALL_ROUTH

@@ -21,12 +21,14 @@ rest of the box.
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, Ring
 
 if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.classes.discrete_safety import Counterexample
+    from lyapcheck.models.language.recast import RecastModel
     from lyapcheck.models.engines.search import Budget
     from lyapcheck.models.language.modelfile import Model
     from lyapcheck.models.language.parameter_box import ModelBox
@@ -53,18 +55,33 @@ def map_at(ring: Ring, F: Sequence[Poly], box: "ModelBox", point: Mapping[str, F
 def refute(name: str, model: "Model", ring: Ring, F: Sequence[Poly], box: "ModelBox") -> ConditionResult | None:
     """``refuted`` for the box when the falsification finds an unsafe iterate proved at one of its corners or
     its centre (reach_avoid: before any iterate is in the goal), naming the value; None when none is found."""
-    from lyapcheck.models.classes.discrete_linearization import box_point_sentence, box_points
-    from lyapcheck.models.classes.discrete_safety import falsify_map, map_sets, refuted_result
+    from lyapcheck.models.classes.discrete_safety import falsify_map, map_sets
 
-    points = box_points(box)
-    for point in points[:-1][:MAX_BOX_POINTS - 1] + points[-1:]:  # (the centre is always visited)
+    def at(point: Mapping[str, Fraction]) -> "Counterexample | None":
         states, F_at = map_at(ring, F, box, point)
         sets = map_sets(model, states)
         goal = sets["goal"][0] if name == "reach_avoid" else None
-        found = falsify_map(model, states, F_at, sets["initial"], sets["unsafe"], goal)
+        return falsify_map(model, states, F_at, sets["initial"], sets["unsafe"], goal)
+
+    return refute_at_points(name, model, box, at)
+
+
+def refute_at_points(name: str, model: "Model | RecastModel", box: "ModelBox",
+                     falsify_at: Callable[[Mapping[str, Fraction]], "Counterexample | None"]) -> ConditionResult | None:
+    """``refuted`` for the box at the first of its corners, then its centre (at most :data:`MAX_BOX_POINTS`
+    values), where ``falsify_at`` proves an unsafe iterate (reach_avoid: before any iterate is in the goal), the
+    value named (``point``, ``parameter_box``); None when none is found. A polynomial map's (:func:`refute`) and
+    a map with functions' (:func:`lyapcheck.models.classes.map_relations_safety_box.refute`)."""
+    from lyapcheck.models.classes.discrete_linearization import box_point_sentence, box_points
+    from lyapcheck.models.classes.discrete_safety import refuted_result
+
+    points = box_points(box)
+    for point in points[:-1][:MAX_BOX_POINTS - 1] + points[-1:]:  # (the centre is always visited)
+        found = falsify_at(point)
         if found is None:
             continue
-        result = refuted_result(name, model, found, "" if goal is None else " before any iterate is in the goal")
+        result = refuted_result(name, model, found, " before any iterate is in the goal" if name == "reach_avoid"
+                                else "")
         result.summary = box_point_sentence(point, result.summary)
         assert result.refutation is not None
         result.refutation["point"] = {k: str(v) for k, v in point.items()}
@@ -119,31 +136,41 @@ def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any], model: "Mod
         return False, f"malformed refutation: {exc}"
 
 
+def stated_point(box: "ModelBox", c: Mapping[str, Any]) -> tuple[dict[str, Fraction] | None, str]:
+    """A refutation's value of the box (:func:`refute`), checked: the stated box the document's, every parameter
+    named, exact and in the box, and the sentence naming it; None and why not otherwise."""
+    from lyapcheck.models.classes.discrete_linearization import box_point_sentence
+
+    data = c["refutation"]
+    if data.get("parameter_box") != box.to_json():
+        return None, "the refutation's parameter_box is not the document's box"
+    try:
+        point = {str(k): Fraction(v) for k, v in (data.get("point") or {}).items()}
+    except (TypeError, ValueError, ZeroDivisionError) as exc:
+        return None, f"malformed point: {exc}"
+    if set(point) != set(box.names):
+        return None, "the stated point does not name every parameter of the box"
+    for key, value in point.items():
+        lo, hi = box.interval(key)
+        if not lo <= value <= hi:
+            return None, f"the stated {key} = {value} is not in the box [{lo}, {hi}]"
+    head = box_point_sentence(point, "")
+    if not str(c.get("summary", "")).startswith(head):
+        return None, f"the refutation's sentence does not name its value of the box ({head.rstrip(', ')})"
+    return point, ""
+
+
 def verify_refutation(name: str, model: "Model", ring: Ring, F: Sequence[Poly], box: "ModelBox",
                       c: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-check a refutation of :func:`refute`: the stated value in the box (every parameter named, exact), the
     stated box the document's, then the point route's check of the start and its iterate on the map at that
     value (:func:`~lyapcheck.models.classes.discrete_safety.check_iterate`); the sentence must name that value."""
-    from lyapcheck.models.classes.discrete_linearization import box_point_sentence
     from lyapcheck.models.classes.discrete_safety import check_iterate, map_sets
     from lyapcheck.models.classes.discrete_safety import verify_refutation as verify_start
 
-    data = c["refutation"]
-    if data.get("parameter_box") != box.to_json():
-        return False, "the refutation's parameter_box is not the document's box"
-    try:
-        point = {str(k): Fraction(v) for k, v in (data.get("point") or {}).items()}
-    except (TypeError, ValueError, ZeroDivisionError) as exc:
-        return False, f"malformed point: {exc}"
-    if set(point) != set(box.names):
-        return False, "the stated point does not name every parameter of the box"
-    for key, value in point.items():
-        lo, hi = box.interval(key)
-        if not lo <= value <= hi:
-            return False, f"the stated {key} = {value} is not in the box [{lo}, {hi}]"
-    head = box_point_sentence(point, "")
-    if not str(c.get("summary", "")).startswith(head):
-        return False, f"the refutation's sentence does not name its value of the box ({head.rstrip(', ')})"
+    point, why = stated_point(box, c)
+    if point is None:
+        return False, why
     states, F_at = map_at(ring, F, box, point)
     sets = map_sets(model, states)
     goal = sets["goal"][0] if name == "reach_avoid" else None
@@ -152,4 +179,5 @@ def verify_refutation(name: str, model: "Model", ring: Ring, F: Sequence[Poly], 
     return (True, f"at a value of the box: {why}") if ok else (False, f"at the stated value of the box: {why}")
 
 
-__all__ = ["MAX_BOX_POINTS", "map_at", "refute", "run", "verify", "verify_refutation"]
+__all__ = ["MAX_BOX_POINTS", "map_at", "refute", "refute_at_points", "run", "verify", "stated_point",
+           "verify_refutation"]

@@ -243,7 +243,7 @@ def multipliers(m: MapOnRelations, generators: Sequence[Sequence[int]]) -> dl.Mu
 
 
 def box_multipliers(m: Any, target: set[Monomial], generators: Sequence[Sequence[int]], name: str = "W",
-                    margin: bool | str = True, vanishing: bool = True
+                    margin: bool | str = True, vanishing: bool = True, param_degree: int = 0
                     ) -> tuple[list["Gram"], list["Scalar"], list["Term"], set[Monomial]]:
     """:func:`multipliers` over a box, degrees counted in the states and functions alone (the "moving"
     variables; the box's parameters ``u`` are bounded constants). The point's terms are kept as they are (each
@@ -256,7 +256,11 @@ def box_multipliers(m: Any, target: set[Monomial], generators: Sequence[Sequence
     an identity with a constant, as ``sos_bound``'s step, needs no such care). ``m``: a map read on its relations
     with ``ring``, ``relations``, ``field`` and the box's ``params`` (:class:`MapOnRelations`, or
     :class:`lyapcheck.models.classes.map_relations_bounds.DisturbedMapOnRelations`); ``name`` and ``margin``:
-    the identity's and the Grams' (:func:`lyapcheck.models.classes.bounds.relation_multipliers`)."""
+    the identity's and the Grams' (:func:`lyapcheck.models.classes.bounds.relation_multipliers`).
+    ``param_degree``: the box's own multipliers' basis also holds each of its monomials times the parameters'
+    monomials up to this degree: a ``B`` of degree 4 brings ``u^4 t^4`` (``(c + u)^4 t^4`` in ``B(F)``), which
+    only ``tau(e, a, u) (h^2 - u^2)`` with ``u t^2`` in ``tau``'s basis holds (a safety class's step,
+    :func:`lyapcheck.models.classes.map_relations_safety.step_multipliers`)."""
     from lyapcheck.sos.program import Coefficients, Gram, Scalar, Term
 
     ring = m.ring
@@ -292,6 +296,10 @@ def box_multipliers(m: Any, target: set[Monomial], generators: Sequence[Sequence
         if top - d < 0:
             continue
         basis = [q for q in plain if moving_degree(q) <= (top - d) // 2 and (tight or moving(q))]
+        if param_degree and d == 0:  # (the box's own h^2 - u^2 >= 0: its multiplier may hold the parameters too)
+            powers = [p for p in monomials(nv, 1, param_degree)
+                      if not any(e for i, e in enumerate(p) if i not in params)]
+            basis += [tuple(a + b for a, b in zip(q, p)) for q in basis for p in powers]
         if not basis:
             continue
         gram = f"T{name}_{i}"

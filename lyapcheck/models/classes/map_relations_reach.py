@@ -38,14 +38,14 @@ tighter certificate decided by :func:`check_map_reach`.
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
 from lyapcheck.models.classes.claims import DISCRETE_REACH_KIND, discrete_reach_sentence
 from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations
-from lyapcheck.models.classes.map_relations_safety import check_iterate_functions, falsify, map_sets, \
-    relations_and_sets
+from lyapcheck.models.classes.map_relations_safety import check_iterate_functions, falsify, map_sets, read_map, \
+    relations_and_sets, sets_view, stated_box, step_multipliers, step_supports
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, one, param, why_none
 from lyapcheck.results import ConditionResult
@@ -55,6 +55,7 @@ from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, ful
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
+    from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.models.language.recast import RecastModel, Relation
 
 #: the certificate kind: the polynomial map's (its sentence), stating the recasting's variables besides
@@ -135,18 +136,17 @@ def reach_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, goal: Se
     v_basis = _b_basis(view, degree)
     scalars = [Scalar(f"b{k}") for k in range(len(v_basis))]
     grams: list[Gram] = []
-    on_sets = set_identities(view, v_basis, degree, initial, unsafe, grams, frozenset(), scalars)
+    on_sets = set_identities(sets_view(m), v_basis, degree, initial, unsafe, grams, frozenset(), scalars)
     if isinstance(on_sets, str):
         return on_sets
     identities = list(on_sets)
-    step_support = {i: sorted(set(ring.support(dl.compose(ring, ring.monomial(q), m.F))) | {q})
-                    for i, q in enumerate(v_basis)}
+    step_support = step_supports(m, v_basis)
     for k, q in enumerate(goal):
         terms = [Term(param(f"sV{i}", support), f"b{i}") for i, support in step_support.items()]
         terms.append(Term(one(ring, -1), "eps"))
         target = {x for support in step_support.values() for x in support} | {zero}
-        rel_grams, rel_scalars, rel_terms, added = relation_multipliers(outside_goal_view(view, q, k), f"goal{k}",
-                                                                        target, (), margin=True)
+        rel_grams, rel_scalars, rel_terms, added = step_multipliers(m, outside_goal_view(view, q, k), f"goal{k}",
+                                                                    target)
         target |= added
         if len(target) > TARGET_LIMIT:
             return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
@@ -158,7 +158,7 @@ def reach_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, goal: Se
         identities.append(Identity(f"goal{k}", (*terms, *rel_terms, Term(one(ring, -1), f"RG{k}")), None, f"RG{k}"))
     terms = [Term(literal(ring, {x: 1}), f"b{i}") for i, x in enumerate(v_basis)]
     target = set(v_basis) | {zero}
-    rel_grams, rel_scalars, rel_terms, added = relation_multipliers(view, "bounded", target, (), margin=True)
+    rel_grams, rel_scalars, rel_terms, added = relation_multipliers(sets_view(m), "bounded", target, (), margin=True)
     basis = [x for x in bases.sos_basis(nv, target | added) if view.allowed(x)]
     grams += [*rel_grams, Gram("RB", tuple(basis), full_blocks(basis))]
     scalars += [*rel_scalars, Scalar("eps", lower="margin"), Scalar("C")]
@@ -252,10 +252,13 @@ def tighten(m: MapOnRelations, structure: Structure, degree: int, sets: Mapping[
 
 # -- the class -------------------------------------------------------------------------------------------
 
-def run(model: "RecastModel", budget: Budget) -> ConditionResult:
+def run(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None,
+        refute: "Callable[[], ConditionResult | None] | None" = None) -> ConditionResult:
     """``reach_avoid`` on a map with functions (module docstring): the falsification first (``refuted`` with an
     iterate proved unsafe before any is in the goal), then ``certified`` only after :func:`check_map_reach`, with
-    the steps bound ``floor(C / eps)``."""
+    the steps bound ``floor(C / eps)``. ``box``: one ``V`` for every value of that box of the map's parameters
+    (:func:`~lyapcheck.models.classes.map_relations_safety.read_map`), the falsification ``refute`` at its
+    corners and centre instead of the point's (:func:`lyapcheck.models.classes.map_relations_safety_box.refute`)."""
     from lyapcheck.models.classes.claims import summary
     from lyapcheck.models.classes.lyapunov import terms_json
     from lyapcheck.models.classes.reach_avoid import goal_of_one_piece
@@ -268,13 +271,18 @@ def run(model: "RecastModel", budget: Budget) -> ConditionResult:
     if one_piece is not None:
         return one_piece
     ready = relations_and_sets("reach_avoid", model, "reach-avoid certificate", "reach_avoid",
-                               ("initial", "unsafe", "goal"))
+                               ("initial", "unsafe", "goal"), box)
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
-    found_cx = falsify(model, m, sets["initial"], sets["unsafe"], sets["goal"][0])
-    if found_cx is not None:
-        return ds.refuted_result("reach_avoid", model, found_cx, " before any iterate is in the goal")
+    if refute is not None:
+        refuted = refute()
+        if refuted is not None:
+            return refuted
+    else:
+        found_cx = falsify(model, m, sets["initial"], sets["unsafe"], sets["goal"][0])
+        if found_cx is not None:
+            return ds.refuted_result("reach_avoid", model, found_cx, " before any iterate is in the goal")
     search = Search(m.ring, budget)
     try:
         found, tried = search_reach(m, sets, search)
@@ -295,6 +303,8 @@ def run(model: "RecastModel", budget: Budget) -> ConditionResult:
             "auxiliaries": m.system.definitions(), "degree": found["degree"], "eps": str(found["eps"]),
             "C": str(found["C"]), "reach_steps_bound": bound, "V": terms_json(ring, found["V"]),
             "proofs": {name: proof.to_json(ring) for name, proof in found["proofs"].items()}}
+    if box is not None:  # (the box's parameters are among the variables, bounded: one V for every value)
+        cert["parameter_box"] = box.to_json()
     numbers = {"degree": found["degree"], "reach_steps_bound": bound, "time": "discrete"}
     sentence = summary("reach_avoid", {"status": "certified", "certificate": cert, **numbers})
     assert sentence is not None  # (a certified reach_avoid of this kind always has one)
@@ -302,9 +312,11 @@ def run(model: "RecastModel", budget: Budget) -> ConditionResult:
                            solver={"solves": search.log}, property="reach_avoid")
 
 
-def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
+def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = None) -> tuple[bool, str]:
     """Re-check a certified ``reach_avoid`` of a map with functions from its JSON and the model text alone: the
-    map, its relations and the sets re-derived, every identity exactly, the stated degree and steps bound."""
+    map, its relations and the sets re-derived, every identity exactly, the stated degree and steps bound.
+    ``box``: the document's box, which a certificate states (``parameter_box``) (a refutation over a box:
+    :func:`lyapcheck.models.classes.map_relations_safety_box.verify_refutation`)."""
     from lyapcheck.exact import read_rational
     from lyapcheck.models.engines.recast_sos import ConditionCertificate, poly_from_json
 
@@ -314,6 +326,8 @@ def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
         return False, "the model has no [sets] initial, unsafe and goal for reach_avoid"
     if len(model.sets["goal"]) != 1:
         return False, "a map's reach_avoid takes a goal of one piece"
+    if c.get("status") == "refuted" and box is not None:  # (verify_discrete sends it to map_relations_safety_box)
+        return False, "a refutation over a box is re-checked at its value of the box"
     if c.get("status") == "refuted":  # the stated start's unsafe iterate before the goal, re-derived
         try:
             m = on_relations(model)
@@ -330,11 +344,14 @@ def verify(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
         cert = c["certificate"]
         if cert.get("kind") != KIND or cert.get("time") != "discrete":
             return False, f"not a reach_avoid certificate of a discrete-time map (kind {cert.get('kind')!r})"
-        m = on_relations(model)
+        ok, why = stated_box(cert, box, model)
+        if not ok:
+            return False, why
+        m = read_map(model, box)
         ring = m.ring
         if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != m.system.definitions():
             return False, "the certificate's variables or functions are not the map's"
-        sets = map_sets(model, m, ("initial", "unsafe", "goal"))
+        sets = map_sets(model, m, ("initial", "unsafe", "goal"), box)
         V = poly_from_json(ring, cert["V"], "V")
         eps, C = read_rational(cert["eps"], "eps"), read_rational(cert["C"], "C")
         wanted = conditions(m, V, eps, C, sets["initial"], sets["unsafe"], sets["goal"][0])

@@ -28,12 +28,12 @@ from its rounded start in ball arithmetic through the true functions (:func:`che
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
 from lyapcheck.models.classes.claims import DISCRETE_BARRIER_KIND, DISCRETE_BARRIER_SENTENCE
-from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations
+from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations, on_relations_box
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, one, param, why_none
 from lyapcheck.results import ConditionResult
@@ -42,6 +42,8 @@ from lyapcheck.sos.polynomials import Monomial, Poly, to_fmpq
 from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, full_blocks
 
 if TYPE_CHECKING:  # pragma: no cover
+    from lyapcheck.models.classes.bounds import BoundField
+    from lyapcheck.models.language.parameter_box import ModelBox
     from lyapcheck.results import Property
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
     from lyapcheck.models.language.recast import RecastModel
@@ -52,27 +54,39 @@ KIND: Final = DISCRETE_BARRIER_KIND
 Pieces = Sequence[Sequence[Poly]]
 
 
-def map_sets(model: "RecastModel", m: MapOnRelations, keys: Sequence[str] = ("initial", "unsafe")
-             ) -> dict[str, list[list[Poly]]]:
-    """The model's sets named ``keys`` in the map's ring, in the deviations."""
+def map_sets(model: "RecastModel", m: MapOnRelations, keys: Sequence[str] = ("initial", "unsafe"),
+             box: "ModelBox | None" = None) -> dict[str, list[list[Poly]]]:
+    """The model's sets named ``keys`` in the map's ring, in the deviations (``box``: the ring of
+    :func:`~lyapcheck.models.classes.map_relations.on_relations_box`, the box's parameters after the states)."""
     from lyapcheck.models.classes.barrier import relation_pieces
     from lyapcheck.models.classes.recast_classes import base_loop
 
-    loop = base_loop(m.system, cylinder=False)
+    fixed = {name: box.half(name) for name in box.names} if box is not None else None
+    loop = base_loop(m.system, cylinder=False, fixed=fixed)
     return {key: relation_pieces(loop, model.state_ring, model.sets[key], key) for key in keys}
 
 
-def relations_and_sets(name: str, model: "RecastModel", what: str, prop: "Property", keys: Sequence[str]
+def read_map(model: "RecastModel", box: "ModelBox | None" = None) -> MapOnRelations:
+    """The map on its relations: at the model's point, or over ``box`` (its parameters bounded variables)."""
+    return on_relations(model) if box is None else on_relations_box(model, box)
+
+
+def relations_and_sets(name: str, model: "RecastModel", what: str, prop: "Property", keys: Sequence[str],
+                       box: "ModelBox | None" = None
                        ) -> tuple[MapOnRelations, dict[str, list[list[Poly]]]] | ConditionResult:
     """What a safety class of a map with functions is searched on: the recasting's relations and the sets
     ``keys`` in its ring; or its result where it is not searched (``not_applicable``: a map the relations do
     not take, a set of a disturbance; ``not_certified``: more variables than
-    :data:`~lyapcheck.tolerances.MAP_RELATIONS_VARIABLES`). ``what``: the certificate the reason names."""
+    :data:`~lyapcheck.tolerances.MAP_RELATIONS_VARIABLES`). ``what``: the certificate the reason names;
+    ``box``: over that box of the map's parameters (:func:`read_map`)."""
     from lyapcheck import tolerances
+    from lyapcheck.models.classes.barrier import SETS_USE_BOX, sets_use_box
     from lyapcheck.models.engines.reasons import size_limit
 
+    if box is not None and sets_use_box(model, box):  # (the sets are read at the box's centre: refused)
+        return ConditionResult(name, "not_applicable", SETS_USE_BOX)
     try:
-        m = on_relations(model)
+        m = read_map(model, box)
     except NotTaken as exc:
         return ConditionResult(name, "not_applicable", f"not taken on this map with functions: {exc}")
     if m.ring.nvars > tolerances.MAP_RELATIONS_VARIABLES:
@@ -82,9 +96,55 @@ def relations_and_sets(name: str, model: "RecastModel", what: str, prop: "Proper
         return ConditionResult(name, "not_certified", none.summary, property=prop,
                                numbers=none.numbers({"time": "discrete"}))
     try:
-        return m, map_sets(model, m, keys)
+        return m, map_sets(model, m, keys, box)
     except ValueError as exc:  # (a set of a disturbance: the map is read with its disturbances at 0)
         return ConditionResult(name, "not_applicable", f"not taken on this map with functions: {exc}")
+
+
+def sets_view(m: MapOnRelations) -> "BoundField":
+    """The relations' view the identities on the sets (and reach_avoid's bound below) are searched with: the
+    map's own at a point; over a box, its relations free of the box's parameters, every multiplier's and
+    remainder's basis without them. ``B`` and the sets are of the states alone, so these identities are the
+    point's: a multiplier of full total degree in the parameters would bring monomials (``u^2`` alone, ``u x``)
+    whose squares nothing in the identity holds, and the remainder's margin would be 0 on them (the exact
+    check then rejects the solver's point). Fewer relations multiplied is sound: the check takes every
+    relation, a missing multiplier as 0."""
+    from dataclasses import replace
+
+    view = m.field
+    if not m.params:
+        return view
+    ring, params = m.ring, set(m.params)
+    free = tuple(i for i in view.multiplied
+                 if not any(q[j] for q in ring.support(view.relations[i].poly) for j in params))
+    return replace(view, multiplied=free, unused=view.unused | params)
+
+
+def step_multipliers(m: MapOnRelations, view: "BoundField", name: str, target: set[Monomial],
+                     vanishing: bool = False) -> tuple[list[Gram], list[Scalar], list[Term], set[Monomial]]:
+    """The relations' terms of a step identity (``view``: the map's relations, or reach_avoid's with the
+    failing goal inequality after them): every relation's multiplier of the identity's degree at a point; over a
+    box, :func:`~lyapcheck.models.classes.map_relations.box_multipliers` (degrees in the states and functions,
+    ``tau(e, a) (h^2 - u^2)`` for each parameter; ``vanishing``: a step with no constant, whose multipliers
+    vanish at the fixed point where their relations do not, as a decrease's)."""
+    from dataclasses import replace
+
+    from lyapcheck.models.classes.bounds import relation_multipliers
+    from lyapcheck.models.classes.map_relations import box_multipliers
+
+    if not m.params:
+        return relation_multipliers(view, name, target, (), margin=True)
+    # (the parameters' degree in the step: B(F) of a quartic B holds u^4 t^4, which only a box multiplier
+    # holding u itself covers; of a quadratic one, u^2 t^2, which tau(e, a) (h^2 - u^2) covers)
+    top = max((sum(q[i] for i in m.params) for q in target), default=0)
+    return box_multipliers(replace(m, relations=view.relations, field=view), target, (), name, margin=True,
+                           vanishing=vanishing, param_degree=max(0, (top - 1) // 2))
+
+
+def step_supports(m: MapOnRelations, basis: Sequence[Monomial]) -> dict[int, list[Monomial]]:
+    """Each monomial ``e^q`` of ``B``'s (``V``'s) basis: the support of its step, ``e^q`` and ``(e^q)(F)``."""
+    ring = m.ring
+    return {i: sorted(set(ring.support(dl.compose(ring, ring.monomial(q), m.F))) | {q}) for i, q in enumerate(basis)}
 
 
 def step_of(m: MapOnRelations, B: Poly, lam: Fraction) -> Poly:
@@ -114,11 +174,15 @@ def check_map_barrier(m: MapOnRelations, B: Poly, lam: Fraction, initial: Pieces
 
 # -- the program -----------------------------------------------------------------------------------------
 
-def barrier_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, degree: int) -> Structure | str:
+def barrier_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, degree: int, at_fixed: bool = False
+                      ) -> Structure | str:
     """The program for ``B`` of this degree (the sets' identities of a loop with functions, the map's step
-    with the relations' multipliers), or why there is none (a size limit, named)."""
+    with the relations' multipliers), or why there is none (a size limit, named). ``at_fixed``: the step at
+    ``lam = 1`` over a box, ``B - B(F)``, which is 0 at the fixed point for every value of the box: its
+    remainder's basis holds no constant and the multipliers vanish there (facial reduction by construction:
+    else the remainder's constant diagonal is 0 and so is the program's margin, which the exact check
+    rejects)."""
     from lyapcheck.models.classes.barrier import _b_basis, set_identities
-    from lyapcheck.models.classes.bounds import relation_multipliers
     from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
     from lyapcheck.models.engines.reasons import size_limit
 
@@ -128,23 +192,20 @@ def barrier_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, degree
     b_basis = _b_basis(view, degree)
     scalars = [Scalar(f"b{k}") for k in range(len(b_basis))]
     grams: list[Gram] = []
-    on_sets = set_identities(view, b_basis, degree, initial, unsafe, grams, frozenset(), scalars)
+    on_sets = set_identities(sets_view(m), b_basis, degree, initial, unsafe, grams, frozenset(), scalars)
     if isinstance(on_sets, str):
         return on_sets
-    terms = []
-    target: set[Monomial] = set()
-    for i, q in enumerate(b_basis):
-        support = sorted(set(ring.support(dl.compose(ring, ring.monomial(q), m.F))) | {q})
-        terms.append(Term(param(f"sB{i}", support), f"b{i}"))
-        target |= set(support)
-    rel_grams, rel_scalars, rel_terms, added = relation_multipliers(view, "D", target, (), margin=True)
+    supports = step_supports(m, b_basis)
+    terms = [Term(param(f"sB{i}", support), f"b{i}") for i, support in supports.items()]
+    target = {q for support in supports.values() for q in support}
+    rel_grams, rel_scalars, rel_terms, added = step_multipliers(m, view, "D", target, vanishing=at_fixed)
     grams.extend(rel_grams)
     scalars.extend(rel_scalars)
     terms.extend(rel_terms)
     target |= added
     if len(target) > TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
-    step_basis = [q for q in bases.sos_basis(nv, target | {zero}) if view.allowed(q)]
+    step_basis = [q for q in bases.sos_basis(nv, target | {zero}) if view.allowed(q) and not (at_fixed and q == zero)]
     if len(step_basis) > ds.MAX_GRAM_ROWS:
         return size_limit(len(step_basis), "monomials per sum-of-squares matrix", ds.MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
     grams.append(Gram("RD", tuple(step_basis), full_blocks(step_basis)))
@@ -195,7 +256,13 @@ def search_barrier(m: MapOnRelations, initial: Pieces, unsafe: Pieces, search: S
             continue
         outcomes: dict[str, int] = {}
         for lam in ds.LAMBDAS:
-            found, solution = attempt(m, structure, degree, initial, unsafe, lam, search)
+            at: Structure | str = structure
+            if m.params and lam == 1:  # (over a box, B - B(F) vanishes at the fixed point: barrier_structure)
+                at = barrier_structure(m, initial, unsafe, degree, at_fixed=True)
+            if isinstance(at, str):
+                outcomes[at] = outcomes.get(at, 0) + 1
+                continue
+            found, solution = attempt(m, at, degree, initial, unsafe, lam, search)
             if found is not None:
                 tried.append(f"degree {degree}: found at lambda = {lam}")
                 return {**found, "degree": degree}, tried
@@ -303,25 +370,60 @@ def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pi
 
 # -- the class -------------------------------------------------------------------------------------------
 
+def stated_box(cert: Mapping[str, Any], box: "ModelBox | None", model: "RecastModel") -> tuple[bool, str]:
+    """A certificate's ``parameter_box``: the document's box over a box (whose parameters no set names),
+    absent at a point."""
+    from lyapcheck.models.classes.barrier import SETS_USE_BOX, sets_use_box
+
+    if box is not None and sets_use_box(model, box):
+        return False, SETS_USE_BOX
+    if box is not None and cert.get("parameter_box") != box.to_json():
+        return False, "a certificate over a box states that box (parameter_box) as the document's"
+    if box is None and "parameter_box" in cert:
+        return False, "a certificate over a box (parameter_box) in a document without that box"
+    return True, ""
+
+
+def without_box_words(c: Mapping[str, Any], box: "ModelBox | None") -> object:
+    """A claim's sentence without the box's words in front (``for every k in [...]: ``), then a disturbed
+    map's ``(d = 0) `` after them (claims.summary puts them in that order)."""
+    text = c.get("summary")
+    if box is None or not isinstance(text, str):
+        return text
+    from lyapcheck.models.classes.claims import DISTURBANCE_PREFIX, box_words
+
+    text = text.removeprefix(f"for every {box_words(box.to_json())}: ")
+    return text.removeprefix(DISTURBANCE_PREFIX["zero"]) if c.get("disturbances") == "zero" else text
+
+
 def _proofs_json(m: MapOnRelations, proofs: Mapping[str, "ConditionCertificate"]) -> dict[str, Any]:
     return {name: proof.to_json(m.ring) for name, proof in proofs.items()}
 
 
-def run_barrier(model: "RecastModel", budget: Budget) -> ConditionResult:
+def run_barrier(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None,
+                refute: "Callable[[], ConditionResult | None] | None" = None) -> ConditionResult:
     """``barrier`` on a map with functions (module docstring): the falsification first (``refuted`` with an
-    iterate proved unsafe), then ``certified`` only after :func:`check_map_barrier`."""
+    iterate proved unsafe), then ``certified`` only after :func:`check_map_barrier`. ``box``: one ``B`` for
+    every value of that box of the map's parameters (:func:`read_map`), the falsification ``refute`` at its
+    corners and centre instead of the point's (:func:`lyapcheck.models.classes.map_relations_safety_box.refute`,
+    which imports this module)."""
     from lyapcheck.models.classes.lyapunov import terms_json
 
     ruled = ds.no_sets("barrier", model)
     if ruled is not None:
         return ruled
-    ready = relations_and_sets("barrier", model, "barrier", "safety", ("initial", "unsafe"))
+    ready = relations_and_sets("barrier", model, "barrier", "safety", ("initial", "unsafe"), box)
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
-    found_cx = falsify(model, m, sets["initial"], sets["unsafe"])
-    if found_cx is not None:
-        return ds.refuted_result("barrier", model, found_cx)
+    if refute is not None:
+        refuted = refute()
+        if refuted is not None:
+            return refuted
+    else:
+        found_cx = falsify(model, m, sets["initial"], sets["unsafe"])
+        if found_cx is not None:
+            return ds.refuted_result("barrier", model, found_cx)
     search = Search(m.ring, budget)
     try:
         found, tried = search_barrier(m, sets["initial"], sets["unsafe"], search)
@@ -340,14 +442,19 @@ def run_barrier(model: "RecastModel", budget: Budget) -> ConditionResult:
     cert = {"kind": KIND, "time": "discrete", "coordinates": "shifted", "variables": list(ring.names),
             "auxiliaries": m.system.definitions(), "degree": found["degree"], "lambda": str(found["lam"]),
             "B": terms_json(ring, found["B"]), "proofs": _proofs_json(m, found["proofs"])}
+    if box is not None:  # (the box's parameters are among the variables, bounded: one B for every value)
+        cert["parameter_box"] = box.to_json()
     return ConditionResult("barrier", "certified", DISCRETE_BARRIER_SENTENCE,
                            numbers={"degree": found["degree"], "lambda": float(found["lam"]), "time": "discrete"},
                            certificate=cert, solver={"solves": search.log}, property="safety")
 
 
-def verify_barrier(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, str]:
+def verify_barrier(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = None) -> tuple[bool, str]:
     """Re-check a certified ``barrier`` of a map with functions from its JSON and the model text alone: the map,
-    its relations and the sets re-derived, every identity exactly, the stated degree, rate and sentence."""
+    its relations and the sets re-derived, every identity exactly, the stated degree, rate and sentence.
+    ``box``: the document's box, which a certificate states (``parameter_box``) and whose parameters are
+    bounded variables of its relations (a refutation over a box:
+    :func:`lyapcheck.models.classes.map_relations_safety_box.verify_refutation`)."""
     from lyapcheck.exact import read_rational
     from lyapcheck.models.classes.barrier import conditions
     from lyapcheck.models.engines.recast_sos import ConditionCertificate, poly_from_json
@@ -356,6 +463,8 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, st
         return False, f"a barrier claim is about safety, not {c.get('property')}"
     if ds.no_sets("barrier", model) is not None:
         return False, "the model has no [sets] initial and unsafe for barrier"
+    if c.get("status") == "refuted" and box is not None:  # (verify_discrete sends it to map_relations_safety_box)
+        return False, "a refutation over a box is re-checked at its value of the box"
     if c.get("status") == "refuted":
         try:
             m = on_relations(model)
@@ -370,11 +479,14 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, st
         cert = c["certificate"]
         if cert.get("kind") != KIND or cert.get("time") != "discrete":
             return False, f"not a barrier certificate of a discrete-time map (kind {cert.get('kind')!r})"
-        m = on_relations(model)
+        ok, why = stated_box(cert, box, model)
+        if not ok:
+            return False, why
+        m = read_map(model, box)
         ring = m.ring
         if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != m.system.definitions():
             return False, "the certificate's variables or functions are not the map's"
-        sets = map_sets(model, m)
+        sets = map_sets(model, m, box=box)
         B = poly_from_json(ring, cert["B"], "B")
         lam = read_rational(cert["lambda"], "lambda")
         wanted = conditions(m.field, B, lam, sets["initial"], sets["unsafe"], step_of(m, B, lam))
@@ -395,10 +507,11 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any]) -> tuple[bool, st
         return False, "the stated degree is not the certificate's polynomial's"
     if c.get("lambda") != float(lam):
         return False, "the stated lambda is not the certificate's"
-    if c.get("summary") != DISCRETE_BARRIER_SENTENCE:
+    if without_box_words(c, box) != DISCRETE_BARRIER_SENTENCE:
         return False, "the stated sentence is not the certificate's"
     return True, why
 
 
-__all__ = ["KIND", "map_sets", "step_of", "check_map_barrier", "barrier_structure", "search_barrier",
+__all__ = ["KIND", "map_sets", "read_map", "relations_and_sets", "sets_view", "step_multipliers", "step_supports",
+           "stated_box", "without_box_words", "step_of", "check_map_barrier", "barrier_structure", "search_barrier",
            "check_iterate_functions", "falsify", "run_barrier", "verify_barrier"]

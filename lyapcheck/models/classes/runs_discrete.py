@@ -152,26 +152,24 @@ def sos_bound_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "Condit
 
 def barrier_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A barrier of the states with ``B(F) <= lam B`` on the recasting's relations
-    (:func:`lyapcheck.models.classes.map_relations_safety.run_barrier`); at a point only."""
-    from lyapcheck.models.classes import map_relations_safety
-    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
-    from lyapcheck.results import ConditionResult
+    (:func:`lyapcheck.models.classes.map_relations_safety.run_barrier`); over a box, one B for every value of
+    it (the box's parameters bounded variables of the relations), refuted at a corner or the centre."""
+    from lyapcheck.models.classes import map_relations_safety, map_relations_safety_box
 
-    if ctx.box is not None:
-        return ConditionResult("barrier", "not_applicable", NOT_OVER_BOX)
-    return map_relations_safety.run_barrier(ctx.model, budget)
+    box = ctx.box
+    refute = None if box is None else (lambda: map_relations_safety_box.refute("barrier", ctx.model, box))
+    return map_relations_safety.run_barrier(ctx.model, budget, box=box, refute=refute)
 
 
 def reach_avoid_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":
     """A V of the states falling by eps per step outside the goal on the recasting's relations
-    (:func:`lyapcheck.models.classes.map_relations_reach.run`); at a point only; refuted by an unsafe iterate proved before any is in the goal."""
-    from lyapcheck.models.classes import map_relations_reach
-    from lyapcheck.models.classes.discrete_functions_box import NOT_OVER_BOX
-    from lyapcheck.results import ConditionResult
+    (:func:`lyapcheck.models.classes.map_relations_reach.run`); refuted by an unsafe iterate proved before any is
+    in the goal; over a box, one V for every value of it, refuted at a corner or the centre."""
+    from lyapcheck.models.classes import map_relations_reach, map_relations_safety_box
 
-    if ctx.box is not None:
-        return ConditionResult("reach_avoid", "not_applicable", NOT_OVER_BOX)
-    return map_relations_reach.run(ctx.model, budget)
+    box = ctx.box
+    refute = None if box is None else (lambda: map_relations_safety_box.refute("reach_avoid", ctx.model, box))
+    return map_relations_reach.run(ctx.model, budget, box=box, refute=refute)
 
 
 def roa_map_functions(ctx: "MapFunctionsRun", budget: "Budget") -> "ConditionResult":

@@ -161,7 +161,11 @@ def verify_barrier_map_functions(name: str, c: dict[str, Any], check: "MapFuncti
 
     if c["status"] not in ("certified", "refuted"):
         return False, check.not_checked(c["status"])
-    return map_relations_safety.verify_barrier(check.model, _without_nominal_prefix(c))
+    if c["status"] == "refuted" and check.box is not None:  # at its value of the box
+        from lyapcheck.models.classes import map_relations_safety_box
+
+        return map_relations_safety_box.verify_refutation(name, check.model, check.box, c)
+    return map_relations_safety.verify_barrier(check.model, _without_nominal_prefix(c), check.box)
 
 
 def verify_reach_avoid_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:
@@ -172,7 +176,11 @@ def verify_reach_avoid_map_functions(name: str, c: dict[str, Any], check: "MapFu
 
     if c["status"] not in ("certified", "refuted"):
         return False, check.not_checked(c["status"])
-    return map_relations_reach.verify(check.model, _without_nominal_prefix(c))
+    if c["status"] == "refuted" and check.box is not None:  # at its value of the box
+        from lyapcheck.models.classes import map_relations_safety_box
+
+        return map_relations_safety_box.verify_refutation(name, check.model, check.box, c)
+    return map_relations_reach.verify(check.model, _without_nominal_prefix(c), check.box)
 
 
 def verify_roa_map_functions(name: str, c: dict[str, Any], check: "MapFunctionsCheck") -> tuple[bool, str]:

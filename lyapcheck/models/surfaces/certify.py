@@ -446,7 +446,8 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
     (:data:`~lyapcheck.models.classes.discrete_functions.NOT_YET`); the document states the map's recasting
     (the loop of its displacement). Over a ``box`` (``model`` read at its centre) ``linearization`` and ``roa``
     hold for every value of it (:mod:`lyapcheck.models.classes.discrete_functions_box`: a box moving the fixed
-    point is refused in one line, exit 2) and every other class is ``not_applicable``."""
+    point is refused in one line, exit 2); ``quadratic``, ``sos_gas``, ``sos_bound``, ``barrier`` and
+    ``reach_avoid`` with the box's parameters bounded variables of the relations."""
     from lyapcheck.models.classes.claims import summary
     from lyapcheck.models.classes.contexts import MapFunctionsRun
     from lyapcheck.models.classes.discrete_functions import NOT_YET
