@@ -232,8 +232,7 @@ def search_group(sub: StateField, k: int, search: Search) -> tuple[dict[str, Any
     facial reduction of ``V``, ``R_i`` and the remainder (their vanishing rows or kernels' supports left out,
     at most :data:`~lyapcheck.models.classes.lyapunov.LYAPUNOV_FACIAL_ROUNDS` times, as the dense form does:
     on the platoon the spacing's quartic term of ``V_i`` must vanish)."""
-    from lyapcheck.models.classes.lyapunov import LYAPUNOV_FACIAL_ROUNDS, failure, kernel_monomials, vanishing_monomials
-    from lyapcheck.models.engines.search import EXACT_TRY_MARGIN
+    from lyapcheck.models.classes.lyapunov import LYAPUNOV_FACIAL_ROUNDS, failure, gram_faces
 
     whys = []
     choices = coordinates(sub, k)
@@ -253,9 +252,8 @@ def search_group(sub: StateField, k: int, search: Search) -> tuple[dict[str, Any
                 found, solution = group_attempt(sub, k, phi, structure, search)
                 if found is not None:
                     return {**found, "degree": degree, "margin": solution.scalars.get("t")}, "found"
-                why = failure(solution, solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
-                vanishing = frozenset((g.name, m) for g in structure.grams
-                                      for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+                why = failure(solution)
+                vanishing = gram_faces(structure.grams, solution)
                 if not vanishing:
                     break
                 drop = drop | vanishing

@@ -200,7 +200,7 @@ def bound_structure(ring: Ring, y: Poly, alphas: Sequence[Monomial], steps: Sequ
     and the output identity ``B + V - 1 - y^2 - (output terms) = sigma_E``, ``B`` minimized; ``sigma_D``,
     ``sigma_E`` on the bases ``z_d``, ``z_e``. The constraints' multipliers come as Grams, terms and scalars;
     why there is no program when a size limit is passed."""
-    from lyapcheck.models.classes.lyapunov import affordable
+    from lyapcheck.models.classes.lyapunov import within_cost
     from lyapcheck.models.engines.reasons import size_limit
 
     if not z_d or not z_e or max(len(z_d), len(z_e)) > MAX_GRAM_ROWS:
@@ -220,10 +220,7 @@ def bound_structure(ring: Ring, y: Poly, alphas: Sequence[Monomial], steps: Sequ
                     Identity("output", tuple(terms_e), literal(ring, ring.terms(-(y * y) - ring.constant(1))),
                              "sigE")),
         objective=("min", "B"))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", "BLOCK_COST_LIMIT",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def bound_program(dm: DisturbedMap, y: Poly, degree: int, drop: frozenset[tuple[str, Monomial]] = frozenset()
@@ -448,6 +445,17 @@ def stated_bound_wrong(out: str, data: Mapping[str, Any], B: Fraction, stated: M
     return None
 
 
+def stated_claim_wrong(c: Mapping[str, Any], figures: Mapping[str, Any]) -> str | None:
+    """What is wrong with a map's bound claim beside its certificate (every map's ``verify``): its reference
+    points or units not ``figures`` (the model's, re-made), or its disturbances not ``all``; None when
+    nothing is."""
+    if any(c.get(key) != figures.get(key) for key in ("bounds_reference", "bounds_unit")):
+        return "the bounds' reference points (bounds_reference) or units (bounds_unit) are not the model's"
+    if c.get("disturbances") != "all":
+        return "a map's sos_bound covers every disturbance sequence within its bounds ('all')"
+    return None
+
+
 def verify(shifted: "ShiftedField", c: Mapping[str, Any], model: "Model") -> tuple[bool, str]:
     """Re-check a certified ``sos_bound`` of a map from its JSON and the map re-derived from the model text,
     without a solver: each output's two identities, its bound ``>= sqrt(B)``, the stated figures (at least
@@ -481,12 +489,11 @@ def verify(shifted: "ShiftedField", c: Mapping[str, Any], model: "Model") -> tup
         figures = bound_figures(model, dm, list(cert["outputs"]))
     except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
         return False, f"malformed certificate: {exc}"
-    if any(c.get(key) != figures.get(key) for key in ("bounds_reference", "bounds_unit")):
-        return False, "the bounds' reference points (bounds_reference) or units (bounds_unit) are not the model's"
-    if c.get("disturbances") != "all":
-        return False, "a map's sos_bound covers every disturbance sequence within its bounds ('all')"
+    why_not = stated_claim_wrong(c, figures)
+    if why_not is not None:
+        return False, why_not
     return True, "every output's step and output identities hold exactly on the disturbances' box"
 
 
-__all__ = ["KIND", "LAMBDAS", "BOUND_DEGREES", "DisturbedMap", "bound_preconditions", "check_map_bound", "stated_bound_wrong", "state_monomials", "bound_structure",
+__all__ = ["KIND", "LAMBDAS", "BOUND_DEGREES", "DisturbedMap", "bound_preconditions", "check_map_bound", "stated_bound_wrong", "stated_claim_wrong", "state_monomials", "bound_structure",
            "step_values", "solve_bound", "bound_program", "best_bound", "run", "verify"]

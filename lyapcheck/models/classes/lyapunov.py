@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Callable, Final, Literal, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Iterable, Literal, Mapping, Sequence
 
 from lyapcheck.models.engines import reasons, store
 from lyapcheck.models.loop.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
@@ -180,15 +180,21 @@ def lyapunov_identity(nv: int, grams: Sequence[Gram], scalars: Sequence[Any], te
         scalars=tuple(scalars),
         identities=(Identity("lyapunov", tuple(terms), None, "W"),),
         objective=("max_margin",), trace_one=("V",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def affordable(structure: Structure) -> Structure | None:
     """``structure`` unless its blocks cost more than :data:`BLOCK_COST_LIMIT`."""
     return structure if structure.cost() <= BLOCK_COST_LIMIT else None
+
+
+def within_cost(structure: Structure) -> Structure | str:
+    """``structure``, or the size limit it passes (its blocks cost more than :data:`BLOCK_COST_LIMIT`), named
+    as every class's detail line names it."""
+    if affordable(structure) is None:
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
+    return structure
 
 
 def lyapunov_values(field: StateField, structure: Structure, mu: Fraction) -> ParameterValues:
@@ -221,11 +227,16 @@ def attempt_with_solution(field: StateField, structure: Structure, mu: Fraction,
 
 def exact_try(structure: Structure, values: ParameterValues, search: Search) -> tuple[Any, Solution]:
     """One solve, and its exact rounding when the solver's margin is not clearly negative (else None):
-    what every Lyapunov attempt does before its exact check."""
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None, solution
-    return search.exact(structure, solution, values), solution
+    what every Lyapunov attempt does before its exact check (:meth:`Search.solve_exact`, near only: an unusable
+    solution has no rounding either)."""
+    return search.solve_exact(structure, values, near_only=True)
+
+
+def gram_faces(grams: Iterable[Gram], solution: Solution) -> frozenset[tuple[str, Monomial]]:
+    """Facial reduction of a failed solve: each Gram's vanishing rows (:func:`vanishing_monomials`), else its
+    kernel's support (:func:`kernel_monomials`), as (Gram, monomial) pairs to leave out."""
+    return frozenset((g.name, m) for g in grams
+                     for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
 
 
 def vanishing_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
@@ -300,8 +311,7 @@ def on_remainder_faces(structure: Structure, rebuild: Callable[[frozenset[tuple[
         found, solution = attempt(structure)
         if found is not None:
             return found, solution
-        vanishing = frozenset((g.name, m) for g in structure.grams if g.name.startswith("R")
-                              for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+        vanishing = gram_faces((g for g in structure.grams if g.name.startswith("R")), solution)
         reduced = rebuild(drop | vanishing) if vanishing else None
         if not isinstance(reduced, Structure):
             break
@@ -348,16 +358,17 @@ def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], fou
 INFEASIBLE_MARGIN: Final = FACIAL_MARGIN
 
 
-def failure(solution: Solution, exact_tried: bool) -> str:
+def failure(solution: Solution) -> str:
     """Why one solve gave no certificate, in the words of the not-certified reasons: the solver
     failed, the program is infeasible (margin clearly negative), it sits on the boundary of
-    feasibility, or its solution failed the exact check."""
+    feasibility, or its solution failed the exact check (which :func:`exact_try` tries where the margin is
+    not below ``-EXACT_TRY_MARGIN``)."""
     margin = solution.scalars.get("t")
     if not solution.usable or margin is None:
         return f"the solver returned no usable point (status {solution.report.raw_status})"
     if margin < -INFEASIBLE_MARGIN:
         return f"the solver proved the program infeasible (best margin {margin:.2g} < 0)"
-    if exact_tried:
+    if margin >= -EXACT_TRY_MARGIN:
         return f"the solver's solution failed the exact check (margin {margin:.2g})"
     return (f"the program is on the boundary of feasibility (best margin {margin:.2g}): no strictly positive "
             "certificate of this form was found")
@@ -383,8 +394,7 @@ def search_degree(field: StateField, degree: int, search: Search, param_degree: 
         found, solution = attempt_with_solution(field, structure, Fraction(0), search)
         if found is not None:
             break
-        why = failure(solution, exact_tried=solution.usable
-                      and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+        why = failure(solution)
         vanishing = vanishing_monomials(structure.gram("W"), solution)
         vanishing_v = vanishing_monomials(structure.gram("V"), solution)
         if not vanishing and not vanishing_v:  # no zero diagonal: try the kernels' supports
@@ -797,10 +807,7 @@ def clique_program(field: StateField, degree: int, generators: Sequence[Sequence
         objective=("max_margin",))  # no trace normalization: t <= 1 fixes the scale (every Q >= t I)
     if cone != "psd":
         return cone_structure(structure, cone)
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def clique_attempt(field: StateField, structure: Structure, mu: Fraction, search: Search
@@ -808,11 +815,7 @@ def clique_attempt(field: StateField, structure: Structure, mu: Fraction, search
     """One solve of the clique form at decay rate ``mu``; the exact certificate if it passes."""
     from lyapcheck.sos.certificates import GramSum, check_lyapunov_cliques
 
-    values = lyapunov_values(field, structure, mu)
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None, solution
-    point = search.exact(structure, solution, values)
+    point, solution = exact_try(structure, lyapunov_values(field, structure, mu), search)
     if point is None:
         return None, solution
     parts = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
@@ -854,9 +857,8 @@ def clique_search(field: StateField, degree: int, search: Search, cone: str = "p
             found, solution = clique_attempt(field, solved, Fraction(0), search)
             if found is not None:
                 break
-            why = failure(solution, exact_tried=solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
-            vanishing = frozenset((g.name, m) for g in structure.grams
-                                  for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+            why = failure(solution)
+            vanishing = gram_faces(structure.grams, solution)
             if not vanishing:
                 break
             drop = drop | vanishing
@@ -980,10 +982,7 @@ def vertex_program(field: StateField, degree: int, drop: frozenset[tuple[str, Mo
         identities.append(Identity(f"positive{k}", tuple(positive), None, f"P{k}"))
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
                           objective=("max_margin",), trace_one=("V",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def decrease_poly(ring: Ring, g: Sequence[Poly], D: Poly, m: Monomial, mu: Fraction) -> Poly:
@@ -1079,7 +1078,7 @@ def search_vertices(field: StateField, degree: int, search: Search) -> tuple[dic
         found, solution = vertex_attempt(field, structure, Fraction(0), search)
         if found is not None:
             break
-        why = failure(solution, exact_tried=solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+        why = failure(solution)
         vanishing = frozenset((g.name, m) for g in structure.grams for m in vanishing_monomials(g, solution))
         if not vanishing:
             vanishing = frozenset((g.name, m) for g in structure.grams for m in kernel_monomials(g, solution))

@@ -31,7 +31,7 @@ from dataclasses import replace
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
-from lyapcheck.models.classes.lyapunov import (EXACT_TRY_MARGIN, LYAPUNOV_FACIAL_ROUNDS,
+from lyapcheck.models.classes.lyapunov import (LYAPUNOV_FACIAL_ROUNDS,
                                                OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, TARGET_LIMIT,
                                                gram_products, best_decay_rate, eigen_bounds, exact_try, failure,
                                                kernel_monomials, lyapunov_identity, relations_claim, relations_sentence,
@@ -202,7 +202,7 @@ def relations_search_degree(field: Any, degree: int, search: Search, rates: Sear
         found, solution = relations_attempt(field, structure, Fraction(0), search)
         if found is not None:
             break
-        why = failure(solution, exact_tried=solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+        why = failure(solution)
         vanishing = frozenset((g.name, m) for g in structure.grams for m in vanishing_monomials(g, solution))
         if not vanishing:  # no zero diagonal: try the kernels' supports
             vanishing = frozenset((g.name, m) for g in structure.grams for m in kernel_monomials(g, solution))

@@ -354,10 +354,9 @@ def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = 
         return False, str(exc)
     except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
         return False, f"malformed certificate: {exc}"
-    if any(c.get(key) != claim.get(key) for key in ("bounds_reference", "bounds_unit")):
-        return False, "the bounds' reference points (bounds_reference) or units (bounds_unit) are not the model's"
-    if c.get("disturbances") != "all":
-        return False, "a map's sos_bound covers every disturbance sequence within its bounds ('all')"
+    why_not = db.stated_claim_wrong(c, claim)
+    if why_not is not None:
+        return False, why_not
     return True, ("every output's step identity holds exactly on the recasting's relations and the disturbances' "
                   "box, and its output identity exactly")
 
