@@ -161,7 +161,7 @@ def group_program(sub: StateField, k: int, degree: int, phi: Sequence[tuple[int,
     degree, ``W = sum_j c_j Phi_j^2`` (``c_j`` scalars, ``phi`` the coordinates), ``U`` (the certificate's
     ``R_i``) over the inputs' monomials and the remainder ``R`` over the identity's Newton basis (less
     ``drop``); or why there is none (a size limit, named)."""
-    from lyapcheck.models.classes.lyapunov import field_degree, gram_products, symmetry
+    from lyapcheck.models.classes.lyapunov import field_degree, gram_products, symmetry, widen_by_derivative
     from lyapcheck.models.engines.reasons import size_limit
 
     ring, nv = sub.ring, sub.ring.nvars
@@ -173,9 +173,7 @@ def group_program(sub: StateField, k: int, degree: int, phi: Sequence[tuple[int,
     v_blocks = bases.character_blocks(z_v, generators)
     products = gram_products(z_v, v_blocks)
     target: set[Monomial] = set()
-    for i, gi in enumerate(sub.g):
-        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
+    widen_by_derivative(target, ring, products, enumerate(sub.g))
     squares = [p * p * sub.D for _, p in phi]
     for sq in squares:
         target |= set(ring.support(sq))

@@ -98,6 +98,20 @@ def gram_products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) ->
     return {tuple(a + b for a, b in zip(basis[i], basis[j])) for idx in blocks for i in idx for j in idx}
 
 
+def widen_by_derivative(target: set[Monomial], ring: Ring, products: Iterable[Monomial],
+                        flows: Iterable[tuple[int, Poly]], also: Iterable[Monomial] = ()) -> None:
+    """Add to ``target`` the monomials ``grad(V) . g`` can have, ``V`` a Gram form of these ``products``
+    (each flow ``g_i``, its state's index ``i`` with it, times ``dV/dx_i``'s monomials), then the products
+    times each monomial of ``also`` (the identity's ``V D``, ``V W`` or ``V s`` term), in that order."""
+    products = list(products)
+    for i, gi in flows:
+        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
+    also = list(also)
+    if also:
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in also}
+
+
 def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequence[int]],
                        drop: frozenset[Monomial] = frozenset(), param_degree: int = 0,
                        drop_v: frozenset[Monomial] = frozenset()) -> Structure | None:
@@ -137,10 +151,7 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     v_blocks = bases.character_blocks(z_v, generators)
     products = gram_products(z_v, v_blocks)
     target: set[Monomial] = set()
-    for i, gi in enumerate(field.g):
-        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
-    target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+    widen_by_derivative(target, ring, products, enumerate(field.g), ring.support(field.D))
     box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators)
     # W's basis is widened by the multipliers' products (with and without u_j^2). A map's box form leaves it
     # alone (there the widening forced monomials of W to 0 and left no strict certificate); here it is needed:
@@ -777,11 +788,8 @@ def clique_program(field: StateField, degree: int, generators: Sequence[Sequence
                 "keep no pure power of some state)")
     target: set[Monomial] = set()
     for gram in v_grams:
-        products = gram_products(gram.basis, gram.blocks)
-        for i, gi in enumerate(field.g):
-            derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-            target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+        widen_by_derivative(target, ring, gram_products(gram.basis, gram.blocks), enumerate(field.g),
+                            ring.support(field.D))
     if len(target) > CLIQUE_TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", CLIQUE_TARGET_LIMIT,
                           "CLIQUE_TARGET_LIMIT")
@@ -960,10 +968,7 @@ def vertex_program(field: StateField, degree: int, drop: frozenset[tuple[str, Mo
                 target |= set(support)
                 terms.append(Term(param(f"d{j}_{a}v{k}", support), f"c{j}_{a}"))
                 positive.append(Term(literal(ring, {m: sign[j]}), f"c{j}_{a}"))
-        for i, gi in enumerate(g):
-            derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-            target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(D)}
+        widen_by_derivative(target, ring, products, enumerate(g), ring.support(D))
         if len(target) > TARGET_LIMIT:
             return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
         z_w = [m for m in bases.sos_basis(nv, target) if (f"W{k}", m) not in drop]

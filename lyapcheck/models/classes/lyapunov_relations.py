@@ -35,7 +35,7 @@ from lyapcheck.models.classes.lyapunov import (LYAPUNOV_FACIAL_ROUNDS,
                                                OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, TARGET_LIMIT,
                                                gram_products, best_decay_rate, eigen_bounds, exact_try, failure,
                                                kernel_monomials, lyapunov_identity, relations_claim, relations_sentence,
-                                               vanishing_monomials)
+                                               vanishing_monomials, widen_by_derivative)
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import BudgetExhausted, ParameterValues, Search, one, param
@@ -90,10 +90,7 @@ def relations_program(field: Any, degree: int, generators: Sequence[Sequence[int
     v_blocks = bases.character_blocks(z_v, generators)
     products = gram_products(z_v, v_blocks)
     target: set[Monomial] = set()
-    for i, gi in field.flows:
-        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
-    target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.W)}
+    widen_by_derivative(target, ring, products, field.flows, ring.support(field.W))
     rel_grams, rel_scalars, rel_terms, added = relation_multipliers(field, "W", target, generators)
     target |= added
     # each multiplier a sum of squares with the program's margin, on the face the solver found (a
