@@ -124,16 +124,23 @@ def verify_refutation(name: str, model: "Model", ring: Ring, F: Sequence[Poly], 
     """Re-check a refutation of :func:`refute`: the stated value in the box (every parameter named, exact), the
     stated box the document's, then the point route's check of the start and its iterate on the map at that
     value (:func:`~lyapcheck.models.classes.discrete_safety.check_iterate`); the sentence must name that value."""
-    from lyapcheck.models.classes.discrete_linearization import box_point_sentence, stated_box_point
+    from lyapcheck.models.classes.discrete_linearization import box_point_sentence
     from lyapcheck.models.classes.discrete_safety import check_iterate, map_sets
     from lyapcheck.models.classes.discrete_safety import verify_refutation as verify_start
 
     data = c["refutation"]
     if data.get("parameter_box") != box.to_json():
         return False, "the refutation's parameter_box is not the document's box"
-    point = stated_box_point(data, box)
-    if isinstance(point, str):
-        return False, point
+    try:
+        point = {str(k): Fraction(v) for k, v in (data.get("point") or {}).items()}
+    except (TypeError, ValueError, ZeroDivisionError) as exc:
+        return False, f"malformed point: {exc}"
+    if set(point) != set(box.names):
+        return False, "the stated point does not name every parameter of the box"
+    for key, value in point.items():
+        lo, hi = box.interval(key)
+        if not lo <= value <= hi:
+            return False, f"the stated {key} = {value} is not in the box [{lo}, {hi}]"
     head = box_point_sentence(point, "")
     if not str(c.get("summary", "")).startswith(head):
         return False, f"the refutation's sentence does not name its value of the box ({head.rstrip(', ')})"
