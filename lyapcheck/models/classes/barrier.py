@@ -34,13 +34,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Iterator, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.classes.claims import BARRIER_RELATIONS_KIND, BARRIER_SENTENCE, RECAST_BARRIER_KIND
 from lyapcheck.models.loop.field import ScaledField, StateField
-from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable, on_remainder_faces
+from lyapcheck.models.classes.lyapunov import TARGET_LIMIT, on_remainder_faces, within_cost
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import (BudgetExhausted, ParameterValues, Search, box_multipliers, box_multipliers_of,
                                      box_support, exact_grams, multiplier_grams, one, param, why_none)
@@ -185,7 +185,6 @@ def barrier_structure(field: "StateField | BoundField", initial: Pieces, unsafe:
     view = as_barrier_field(field)
     ring = field.ring
     nv = ring.nvars
-    zero = tuple([0] * nv)
     b_basis = _b_basis(view, degree)
     scalars = [Scalar(f"b{k}") for k in range(len(b_basis))]
     grams: list[Gram] = []
@@ -206,11 +205,9 @@ def barrier_structure(field: "StateField | BoundField", initial: Pieces, unsafe:
     target |= box_support(box_grams, nv)
     rel_grams, rel_scalars, rel_terms, added = relation_multipliers(view, "D", target, (), margin=True)
     target |= added
-    if len(target) > TARGET_LIMIT:
-        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
-    decrease_basis = [m for m in bases.sos_basis(nv, target | {zero}) if ("RD", m) not in drop and view.allowed(m)]
-    if len(decrease_basis) > MAX_GRAM_ROWS:
-        return size_limit(len(decrease_basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
+    decrease_basis = remainder_basis(nv, target, "RD", drop, view.allowed)
+    if isinstance(decrease_basis, str):
+        return decrease_basis
     grams.append(Gram("RD", tuple(decrease_basis), full_blocks(decrease_basis)))
     grams.extend(box_grams)
     terms.extend(box_terms)
@@ -221,10 +218,22 @@ def barrier_structure(field: "StateField | BoundField", initial: Pieces, unsafe:
     identities.append(Identity("decrease", tuple(terms), None, "RD"))
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
                           objective=("max_margin",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
+
+
+def remainder_basis(nv: int, target: set[Monomial], name: str, drop: frozenset[tuple[str, Monomial]],
+                    allowed: Callable[[Monomial], bool] = lambda m: True, max_rows: int = MAX_GRAM_ROWS
+                    ) -> list[Monomial] | str:
+    """The basis of the remainder ``name`` of one identity whose other terms span ``target`` (its constant term
+    besides): the Newton basis less what facial reduction dropped (``drop``) and what ``allowed`` refuses; or
+    the size limit the identity (:data:`~lyapcheck.models.classes.lyapunov.TARGET_LIMIT`) or the basis
+    (``max_rows``, the class's ``MAX_GRAM_ROWS``) passes."""
+    if len(target) > TARGET_LIMIT:
+        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
+    basis = [m for m in bases.sos_basis(nv, target | {tuple([0] * nv)}) if (name, m) not in drop and allowed(m)]
+    if len(basis) > max_rows:
+        return size_limit(len(basis), "monomials per sum-of-squares matrix", max_rows, "MAX_GRAM_ROWS")
+    return basis
 
 
 def _decrease_poly(field: "StateField | BoundField", m: Monomial, lam: Fraction) -> Poly:

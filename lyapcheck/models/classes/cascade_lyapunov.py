@@ -161,7 +161,7 @@ def group_program(sub: StateField, k: int, degree: int, phi: Sequence[tuple[int,
     degree, ``W = sum_j c_j Phi_j^2`` (``c_j`` scalars, ``phi`` the coordinates), ``U`` (the certificate's
     ``R_i``) over the inputs' monomials and the remainder ``R`` over the identity's Newton basis (less
     ``drop``); or why there is none (a size limit, named)."""
-    from lyapcheck.models.classes.lyapunov import field_degree, gram_products, symmetry
+    from lyapcheck.models.classes.lyapunov import field_degree, gram_products, symmetry, widen_by_derivative
     from lyapcheck.models.engines.reasons import size_limit
 
     ring, nv = sub.ring, sub.ring.nvars
@@ -173,9 +173,7 @@ def group_program(sub: StateField, k: int, degree: int, phi: Sequence[tuple[int,
     v_blocks = bases.character_blocks(z_v, generators)
     products = gram_products(z_v, v_blocks)
     target: set[Monomial] = set()
-    for i, gi in enumerate(sub.g):
-        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
+    widen_by_derivative(target, ring, products, enumerate(sub.g))
     squares = [p * p * sub.D for _, p in phi]
     for sq in squares:
         target |= set(ring.support(sq))
@@ -232,8 +230,7 @@ def search_group(sub: StateField, k: int, search: Search) -> tuple[dict[str, Any
     facial reduction of ``V``, ``R_i`` and the remainder (their vanishing rows or kernels' supports left out,
     at most :data:`~lyapcheck.models.classes.lyapunov.LYAPUNOV_FACIAL_ROUNDS` times, as the dense form does:
     on the platoon the spacing's quartic term of ``V_i`` must vanish)."""
-    from lyapcheck.models.classes.lyapunov import LYAPUNOV_FACIAL_ROUNDS, failure, kernel_monomials, vanishing_monomials
-    from lyapcheck.models.engines.search import EXACT_TRY_MARGIN
+    from lyapcheck.models.classes.lyapunov import LYAPUNOV_FACIAL_ROUNDS, failure, gram_faces
 
     whys = []
     choices = coordinates(sub, k)
@@ -253,9 +250,8 @@ def search_group(sub: StateField, k: int, search: Search) -> tuple[dict[str, Any
                 found, solution = group_attempt(sub, k, phi, structure, search)
                 if found is not None:
                     return {**found, "degree": degree, "margin": solution.scalars.get("t")}, "found"
-                why = failure(solution, solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
-                vanishing = frozenset((g.name, m) for g in structure.grams
-                                      for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+                why = failure(solution)
+                vanishing = gram_faces(structure.grams, solution)
                 if not vanishing:
                     break
                 drop = drop | vanishing

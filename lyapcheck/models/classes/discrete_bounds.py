@@ -46,7 +46,7 @@ is kept. The figure is ``bounds`` ``{output: sqrt(B) rounded up}`` (:func:`lyapc
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 from lyapcheck.models.classes.claims import DISCRETE_BOUND_KIND, summary
 from lyapcheck.models.engines import reasons
@@ -62,6 +62,7 @@ from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.modelfile import Model
     from lyapcheck.models.loop.field import ShiftedField
+    from lyapcheck.sos.rounding import ExactPoint
 
 #: the kind of the certificate (``verify`` and the sentence read it)
 KIND: Final = DISCRETE_BOUND_KIND
@@ -124,18 +125,28 @@ class DisturbedMap:
 
 # -- the exact check -----------------------------------------------------------------------------------
 
+def bound_preconditions(ring: Ring, n: int, V: Poly, lam: Fraction, B: Fraction) -> str | None:
+    """What the bound's argument asks of its figures before any identity (every map's, with functions or not):
+    ``0 <= lam < 1``, ``B >= 0`` and ``V`` of the ring's first ``n`` variables (the states) alone; why not,
+    else None."""
+    if not 0 <= lam < 1:
+        return "the rate lam must satisfy 0 <= lam < 1"
+    if B < 0:
+        return "B must be >= 0"
+    if any(any(m[n:]) for m in ring.support(V)):
+        return "V may depend on the states only"
+    return None
+
+
 def check_map_bound(dm: DisturbedMap, y: Poly, V: Poly, lam: Fraction, B: Fraction, sigma_D: GramPoly,
                     sigma_E: GramPoly, box_D: Sequence[tuple[int, GramPoly]], box_E: Sequence[tuple[int, GramPoly]]
                     ) -> tuple[bool, str]:
     """The two identities of the module docstring, exactly: then ``limsup |y_k| <= sqrt(B)`` along every
     disturbance sequence within its bounds, from every start (for every parameter value of a box)."""
     ring, n = dm.ring, dm.n
-    if not 0 <= lam < 1:
-        return False, "the rate lam must satisfy 0 <= lam < 1"
-    if B < 0:
-        return False, "B must be >= 0"
-    if any(any(m[n:]) for m in ring.support(V)):
-        return False, "V may depend on the states only"
+    why_not = bound_preconditions(ring, n, V, lam, B)
+    if why_not is not None:
+        return False, why_not
     if any(not n <= j < ring.nvars for j, _ in (*box_D, *box_E)):
         return False, "a multiplier names a variable that is no disturbance (nor a parameter of the box)"
     if not sigma_D.positive_definite() or not sigma_E.positive_definite():
@@ -172,17 +183,57 @@ def _without(grams: Sequence[Gram], drop: frozenset[tuple[str, Monomial]]) -> li
     return out
 
 
+def state_monomials(ring: Ring, n: int, degree: int) -> list[Monomial]:
+    """The monomials of ``V``: of the ring's first ``n`` variables (the states), degree 0 to ``degree``, in the
+    whole ring's exponents."""
+    pad = tuple([0] * (ring.nvars - n))
+    return [tuple(m) + pad for m in monomials(n, 0, degree)]
+
+
+def bound_structure(ring: Ring, y: Poly, alphas: Sequence[Monomial], steps: Sequence[set[Monomial]],
+                    z_d: Sequence[Monomial], z_e: Sequence[Monomial], step_grams: Sequence[Gram] = (),
+                    step_terms: Sequence[Term] = (), output_grams: Sequence[Gram] = (),
+                    output_terms: Sequence[Term] = (), scalars: Sequence[Scalar] = ()) -> Structure | str:
+    """The bound's program, whatever the map's constraints are (a polynomial map's disturbance box, a map with
+    functions' relations): the step identity ``(1 - lam) + lam V - V(F) - (step terms) = sigma_D`` (``V``'s
+    coefficient ``c_k`` on ``alphas[k]``, its parameter ``p_k`` of support ``steps[k]``, :func:`step_values`)
+    and the output identity ``B + V - 1 - y^2 - (output terms) = sigma_E``, ``B`` minimized; ``sigma_D``,
+    ``sigma_E`` on the bases ``z_d``, ``z_e``. The constraints' multipliers come as Grams, terms and scalars;
+    why there is no program when a size limit is passed."""
+    from lyapcheck.models.classes.lyapunov import within_cost
+    from lyapcheck.models.engines.reasons import size_limit
+
+    if not z_d or not z_e or max(len(z_d), len(z_e)) > MAX_GRAM_ROWS:
+        return size_limit(max(len(z_d), len(z_e)), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS,
+                          "MAX_GRAM_ROWS")
+    zero = tuple([0] * ring.nvars)
+    terms_d = [Term(param(f"p{k}", s), _c(k)) for k, s in enumerate(steps)]
+    terms_d += [*step_terms, Term(one(ring, -1), "sigD")]
+    terms_e = [Term(literal(ring, {a: 1}), _c(k)) for k, a in enumerate(alphas)]
+    terms_e += [Term(one(ring, 1), "B"), *output_terms, Term(one(ring, -1), "sigE")]
+    grams = [Gram("sigD", tuple(z_d), (tuple(range(len(z_d))),), margin="floor"),
+             Gram("sigE", tuple(z_e), (tuple(range(len(z_e))),), margin="floor"), *step_grams, *output_grams]
+    structure = Structure(
+        nvars=ring.nvars, grams=tuple(grams),
+        scalars=(Scalar("B"), *(Scalar(_c(k)) for k in range(len(alphas))), *scalars),
+        identities=(Identity("step", tuple(terms_d), param("lam0", [zero]), "sigD"),
+                    Identity("output", tuple(terms_e), literal(ring, ring.terms(-(y * y) - ring.constant(1))),
+                             "sigE")),
+        objective=("min", "B"))
+    return within_cost(structure)
+
+
 def bound_program(dm: DisturbedMap, y: Poly, degree: int, drop: frozenset[tuple[str, Monomial]] = frozenset()
                   ) -> tuple[Structure, list[Monomial]] | str:
     """The program for a ``V`` of this degree (its coefficients ``c_k``, one per monomial of degree 0 to
     ``degree`` of the states, the monomials returned with it), or why there is none (a size limit).
     ``drop``: (Gram, monomial) pairs the remainders' bases leave out (facial reduction)."""
-    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT, affordable
+    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
     from lyapcheck.models.engines.reasons import size_limit
 
     ring, n, nv = dm.ring, dm.n, dm.nvars
     zero = tuple([0] * nv)
-    alphas = [tuple(m) + tuple([0] * (nv - n)) for m in monomials(n, 0, degree)]
+    alphas = state_monomials(ring, n, degree)
     steps = [set(ring.support(dm.after_step(ring.monomial(a)))) | {a} for a in alphas]
     target: set[Monomial] = set().union(*steps) | {zero}
     u_vars = list(range(n, nv))
@@ -202,49 +253,48 @@ def bound_program(dm: DisturbedMap, y: Poly, degree: int, drop: frozenset[tuple[
     e_target |= box_support(e_grams, nv)
     z_d = [q for q in bases.sos_basis(nv, target) if ("sigD", q) not in drop]
     z_e = [q for q in bases.sos_basis(nv, e_target) if ("sigE", q) not in drop]
-    if not z_d or not z_e or max(len(z_d), len(z_e)) > MAX_GRAM_ROWS:
-        return size_limit(max(len(z_d), len(z_e)), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS,
-                          "MAX_GRAM_ROWS")
-    terms_d = [Term(param(f"p{k}", s), _c(k)) for k, s in enumerate(steps)]
-    terms_d += [*d_terms, Term(one(ring, -1), "sigD")]
-    terms_e = [Term(literal(ring, {a: 1}), _c(k)) for k, a in enumerate(alphas)]
-    terms_e += [Term(one(ring, 1), "B"), *e_terms, Term(one(ring, -1), "sigE")]
-    grams = [Gram("sigD", tuple(z_d), (tuple(range(len(z_d))),), margin="floor"),
-             Gram("sigE", tuple(z_e), (tuple(range(len(z_e))),), margin="floor"), *d_grams, *e_grams]
-    structure = Structure(
-        nvars=nv, grams=tuple(grams), scalars=(Scalar("B"), *(Scalar(_c(k)) for k in range(len(alphas)))),
-        identities=(Identity("step", tuple(terms_d), param("lam0", [zero]), "sigD"),
-                    Identity("output", tuple(terms_e), literal(ring, ring.terms(-(y * y) - ring.constant(1))),
-                             "sigE")),
-        objective=("min", "B"))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", "BLOCK_COST_LIMIT",
-                          "BLOCK_COST_LIMIT")
+    structure = bound_structure(ring, y, alphas, steps, z_d, z_e, d_grams, d_terms, e_grams, e_terms)
+    if isinstance(structure, str):
+        return structure
     return structure, alphas
 
 
-def bound_values(dm: DisturbedMap, alphas: Sequence[Monomial], lam: Fraction) -> ParameterValues:
-    ring = dm.ring
+def step_values(ring: Ring, alphas: Sequence[Monomial], lam: Fraction, after_step: Callable[[Poly], Poly]
+                ) -> ParameterValues:
+    """The parameters of :func:`bound_structure` at rate ``lam``: ``p_k = lam e^a_k - e^a_k(F)`` (``after_step``
+    the map's composition), ``lam0 = 1 - lam`` and the Gram floor."""
     values = ParameterValues()
     for k, a in enumerate(alphas):
         e_a = ring.monomial(a)
-        values.set_poly(ring, f"p{k}", e_a * to_fmpq(lam) - dm.after_step(e_a),
-                        set(ring.support(dm.after_step(e_a))) | {tuple(a)})
+        after = after_step(e_a)
+        values.set_poly(ring, f"p{k}", e_a * to_fmpq(lam) - after, set(ring.support(after)) | {tuple(a)})
     values.set_poly(ring, "lam0", ring.constant(1 - lam), [tuple([0] * ring.nvars)])
     values.set_scalar("floor", BOUND_FLOOR)
     return values
 
 
+def bound_values(dm: DisturbedMap, alphas: Sequence[Monomial], lam: Fraction) -> ParameterValues:
+    return step_values(dm.ring, alphas, lam, dm.after_step)
+
+
+def solve_bound(ring: Ring, structure: Structure, alphas: Sequence[Monomial], values: ParameterValues,
+                search: Search) -> tuple[ExactPoint, dict[str, Any], Poly, Fraction] | str:
+    """One solve of :func:`bound_structure`'s program, rounded: the exact point, its Grams, ``V`` and ``B`` (for
+    the caller's exact check), or why there is no point."""
+    point, solution = search.solve_exact(structure, values)
+    if point is None:
+        return why_none(solution)
+    V = ring.from_terms({a: point.scalars[_c(k)] for k, a in enumerate(alphas)})
+    return point, exact_grams(structure, point), V, point.scalars["B"]
+
+
 def attempt(dm: DisturbedMap, y: Poly, structure: Structure, alphas: Sequence[Monomial], lam: Fraction,
             search: Search) -> tuple[dict[str, Any] | None, str]:
     """One solve at rate ``lam``: the exact certificate if it passes :func:`check_map_bound`, else why not."""
-    ring = dm.ring
-    point, solution = search.solve_exact(structure, bound_values(dm, alphas, lam))
-    if point is None:
-        return None, why_none(solution)
-    grams = exact_grams(structure, point)
-    V = ring.from_terms({a: point.scalars[_c(k)] for k, a in enumerate(alphas)})
-    B = point.scalars["B"]
+    solved = solve_bound(dm.ring, structure, alphas, bound_values(dm, alphas, lam), search)
+    if isinstance(solved, str):
+        return None, solved
+    point, grams, V, B = solved
     box_D = box_multipliers_of(point.grams, multiplier_grams(structure, "rD"))
     box_E = box_multipliers_of(point.grams, multiplier_grams(structure, "rE"))
     ok, why = check_map_bound(dm, y, V, lam, B, grams["sigD"], grams["sigE"], box_D, box_E)
@@ -384,6 +434,28 @@ def _at_least(stated: Any, proved: Fraction) -> bool:
     return stated is not None and Fraction(float(stated)) >= proved - abs(proved) / 10**12
 
 
+def stated_bound_wrong(out: str, data: Mapping[str, Any], B: Fraction, stated: Mapping[str, Any]) -> str | None:
+    """What is wrong with an output's stated bound, its identities checked (every map's ``verify``): the
+    certificate's ``bound`` below ``sqrt(B)``, or the stated figure below that bound; None when nothing is."""
+    bound = Fraction(data["bound"])
+    if bound < 0 or bound * bound < B:
+        return f"output {out}: the stated bound {data['bound']} is below sqrt(B)"
+    if not _at_least(stated.get(out), bound):
+        return f"output {out}: the stated figure is below the certified bound"
+    return None
+
+
+def stated_claim_wrong(c: Mapping[str, Any], figures: Mapping[str, Any]) -> str | None:
+    """What is wrong with a map's bound claim beside its certificate (every map's ``verify``): its reference
+    points or units not ``figures`` (the model's, re-made), or its disturbances not ``all``; None when
+    nothing is."""
+    if any(c.get(key) != figures.get(key) for key in ("bounds_reference", "bounds_unit")):
+        return "the bounds' reference points (bounds_reference) or units (bounds_unit) are not the model's"
+    if c.get("disturbances") != "all":
+        return "a map's sos_bound covers every disturbance sequence within its bounds ('all')"
+    return None
+
+
 def verify(shifted: "ShiftedField", c: Mapping[str, Any], model: "Model") -> tuple[bool, str]:
     """Re-check a certified ``sos_bound`` of a map from its JSON and the map re-derived from the model text,
     without a solver: each output's two identities, its bound ``>= sqrt(B)``, the stated figures (at least
@@ -404,26 +476,24 @@ def verify(shifted: "ShiftedField", c: Mapping[str, Any], model: "Model") -> tup
                 return False, f"no output named {out}"
             y, _ = dm.output(out)
             V = poly_from_json(dm.ring, data["V"], "V")
-            lam, B, bound = Fraction(data["lam"]), Fraction(data["B"]), Fraction(data["bound"])
+            lam, B = Fraction(data["lam"]), Fraction(data["B"])
             ok, why = check_map_bound(dm, y, V, lam, B, GramPoly.from_json(data["gram_sigma_D"], nv),
                                       GramPoly.from_json(data["gram_sigma_E"], nv),
                                       box_multipliers_from_json(data.get("box_multipliers_D", []), nv),
                                       box_multipliers_from_json(data.get("box_multipliers_E", []), nv))
             if not ok:
                 return False, f"output {out}: {why}"
-            if bound < 0 or bound * bound < B:
-                return False, f"output {out}: the stated bound {data['bound']} is below sqrt(B)"
-            if not _at_least(stated.get(out), bound):
-                return False, f"output {out}: the stated figure is below the certified bound"
+            why_not = stated_bound_wrong(out, data, B, stated)
+            if why_not is not None:
+                return False, why_not
         figures = bound_figures(model, dm, list(cert["outputs"]))
     except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
         return False, f"malformed certificate: {exc}"
-    if any(c.get(key) != figures.get(key) for key in ("bounds_reference", "bounds_unit")):
-        return False, "the bounds' reference points (bounds_reference) or units (bounds_unit) are not the model's"
-    if c.get("disturbances") != "all":
-        return False, "a map's sos_bound covers every disturbance sequence within its bounds ('all')"
+    why_not = stated_claim_wrong(c, figures)
+    if why_not is not None:
+        return False, why_not
     return True, "every output's step and output identities hold exactly on the disturbances' box"
 
 
-__all__ = ["KIND", "LAMBDAS", "BOUND_DEGREES", "DisturbedMap", "check_map_bound", "bound_program", "best_bound",
-           "run", "verify"]
+__all__ = ["KIND", "LAMBDAS", "BOUND_DEGREES", "DisturbedMap", "bound_preconditions", "check_map_bound", "stated_bound_wrong", "stated_claim_wrong", "state_monomials", "bound_structure",
+           "step_values", "solve_bound", "bound_program", "best_bound", "run", "verify"]

@@ -309,6 +309,17 @@ def region_certificate(model: "RecastModel", P: list[list[Fraction]], found: Fou
             "V_text": _v_terms(P, model.states, model.equilibrium)}
 
 
+def certified_region(name: str, P: list[list[Fraction]], found: Found, certificate: dict[str, Any],
+                     summary: str) -> ConditionResult:
+    """A proved level's result (``roa`` or ``candidate``, at a point or over a box): its figures and, where
+    the level set's area is known, that area beside them."""
+    numbers = found.numbers()
+    size = area(P, found.level)
+    if size is not None:
+        numbers["area"] = size
+    return ConditionResult(name, "certified", summary, property="ROA", certificate=certificate, numbers=numbers)
+
+
 def roa(model: "RecastModel", budget: "Budget") -> ConditionResult:
     """The largest sublevel set of the linearization's ``V`` proved a region of attraction (module docstring)."""
     from lyapcheck.sos.definiteness import is_positive_definite
@@ -324,13 +335,8 @@ def roa(model: "RecastModel", budget: "Budget") -> ConditionResult:
     found = level_search(model, P, budget, "roa")
     if isinstance(found, ConditionResult):
         return found
-    summary = discrete_interval_sentence("roa", found.level, over_box=False)
-    numbers = found.numbers()
-    size = area(P, found.level)
-    if size is not None:
-        numbers["area"] = size
-    return ConditionResult("roa", "certified", summary, property="ROA", certificate=region_certificate(model, P, found),
-                           numbers=numbers)
+    return certified_region("roa", P, found, region_certificate(model, P, found),
+                            discrete_interval_sentence("roa", found.level, over_box=False))
 
 
 def candidate_matrix(model: "RecastModel") -> list[list[Fraction]] | str:
@@ -348,8 +354,10 @@ def candidate_matrix(model: "RecastModel") -> list[list[Fraction]] | str:
     return P
 
 
-def candidate(model: "RecastModel", budget: "Budget") -> ConditionResult:
-    """The user's quadratic ``V``: its largest level proved a region of attraction (module docstring)."""
+def candidate_p(model: "RecastModel") -> list[list[Fraction]] | ConditionResult:
+    """``P`` of the user's ``V = e^T P e``, positive definite (checked exactly), or the candidate's result saying
+    why it is not such a form (``not_applicable``) or not definite (``not_certified``): at a point and over a
+    box alike."""
     from lyapcheck.sos.definiteness import is_positive_definite
 
     P = candidate_matrix(model)
@@ -359,16 +367,20 @@ def candidate(model: "RecastModel", budget: "Budget") -> ConditionResult:
         return ConditionResult("candidate", "not_certified", "the candidate V = e^T P e has P not positive definite "
                                "(checked exactly): its sublevel sets are no bounded neighbourhoods of the fixed "
                                "point, so none is a region of attraction", property="ROA")
+    return P
+
+
+def candidate(model: "RecastModel", budget: "Budget") -> ConditionResult:
+    """The user's quadratic ``V``: its largest level proved a region of attraction (module docstring)."""
+    P = candidate_p(model)
+    if isinstance(P, ConditionResult):
+        return P
     found = level_search(model, P, budget, "candidate")
     if isinstance(found, ConditionResult):
         return found
     cert = {**region_certificate(model, P, found), "V_from": "candidate"}
-    summary = discrete_interval_sentence("candidate", found.level, over_box=False)
-    numbers = found.numbers()
-    size = area(P, found.level)
-    if size is not None:
-        numbers["area"] = size
-    return ConditionResult("candidate", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+    return certified_region("candidate", P, found, cert,
+                            discrete_interval_sentence("candidate", found.level, over_box=False))
 
 
 def verify_roa(model: "RecastModel", c: dict[str, Any], loops: Sequence[BallLoop | None] = (None,)
@@ -412,4 +424,4 @@ def verify_candidate(model: "RecastModel", c: dict[str, Any]) -> tuple[bool, str
 
 __all__ = ["KIND", "NOT_YET", "exact_jacobian", "linearization", "verify_linearization", "MapDifference",
            "MapGeometry", "Found", "prove_on_all", "level_search", "region_certificate", "roa", "verify_roa",
-           "candidate_matrix", "candidate", "verify_candidate", "area"]
+           "certified_region", "candidate_matrix", "candidate_p", "candidate", "verify_candidate", "area"]

@@ -263,20 +263,13 @@ def refute_over_box(system: "RecastSystem", box: "ModelBox") -> ConditionResult 
 def verify_refutation(model: "RecastModel", box: "ModelBox", data: dict[str, Any]) -> tuple[bool, str]:
     """A refutation over a box decided again: the stated point is a value of the box naming every parameter,
     and Routh's column at the stated precision shows an eigenvalue of modulus > 1 there again."""
-    from lyapcheck.models.classes.discrete_linearization import BOX_POINT_METHOD
+    from lyapcheck.models.classes.discrete_linearization import BOX_POINT_METHOD, stated_box_point
 
     if data.get("time") != "discrete" or data.get("method") != BOX_POINT_METHOD:
         return False, f"not a map's refutation at a value of the box (method {data.get('method')!r})"
-    try:
-        point = {str(k): Fraction(str(v)) for k, v in (data.get("point") or {}).items()}
-    except (TypeError, ValueError, ZeroDivisionError) as exc:
-        return False, f"malformed point: {exc}"
-    if set(point) != set(box.names):
-        return False, "the stated point does not name every parameter of the box"
-    for name, value in point.items():
-        lo, hi = box.interval(name)
-        if not lo <= value <= hi:
-            return False, f"the stated {name} = {value} is not in the box [{lo}, {hi}]"
+    point = stated_box_point(data, box)
+    if isinstance(point, str):
+        return False, point
     at = data.get("at_point")
     if not isinstance(at, dict) or at.get("method") != BALL_ROUTH_METHOD:
         return False, f"the refutation at the point states method {BALL_ROUTH_METHOD!r}"
@@ -432,12 +425,8 @@ def roa(model: "RecastModel", box: "ModelBox", budget: "Budget") -> ConditionRes
     if isinstance(found, ConditionResult):
         return found
     cert = {**dfn.region_certificate(model, P, found), "parameter_box": box.to_json(), "box_parts": len(parts)}
-    summary = _prefix(box) + discrete_interval_sentence("roa", found.level, over_box=True)
-    numbers = found.numbers()
-    size = dfn.area(P, found.level)
-    if size is not None:
-        numbers["area"] = size
-    return ConditionResult("roa", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+    return dfn.certified_region("roa", P, found, cert,
+                                _prefix(box) + discrete_interval_sentence("roa", found.level, over_box=True))
 
 
 def verify_roa(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tuple[bool, str]:
@@ -463,15 +452,9 @@ def candidate(model: "RecastModel", box: "ModelBox", budget: "Budget") -> Condit
     region of attraction for every value of the box, as :func:`roa` does with its own ``P``. ``A(p)^T P A(p) -
     P < 0`` is proved on the parts of the box first (:func:`prove_over_box`: the level search's Hessian zone
     needs it on each part); a ``P`` for which it is not proved is ``not_certified`` saying so."""
-    from lyapcheck.sos.definiteness import is_positive_definite
-
-    P = dfn.candidate_matrix(model)
-    if isinstance(P, str):
-        return ConditionResult("candidate", "not_applicable", P, property="ROA")
-    if not is_positive_definite(P):
-        return ConditionResult("candidate", "not_certified", "the candidate V = e^T P e has P not positive definite "
-                               "(checked exactly): its sublevel sets are no bounded neighbourhoods of the fixed "
-                               "point, so none is a region of attraction", property="ROA")
+    P = dfn.candidate_p(model)
+    if isinstance(P, ConditionResult):
+        return P
     system = boxed_system(model, box)
     ok, _, why, parts = prove_over_box(system, box, P)
     if not ok:
@@ -483,12 +466,8 @@ def candidate(model: "RecastModel", box: "ModelBox", budget: "Budget") -> Condit
         return found
     cert = {**dfn.region_certificate(model, P, found), "V_from": "candidate", "parameter_box": box.to_json(),
             "box_parts": len(parts)}
-    summary = _prefix(box) + discrete_interval_sentence("candidate", found.level, over_box=True)
-    numbers = found.numbers()
-    size = dfn.area(P, found.level)
-    if size is not None:
-        numbers["area"] = size
-    return ConditionResult("candidate", "certified", summary, property="ROA", certificate=cert, numbers=numbers)
+    return dfn.certified_region("candidate", P, found, cert,
+                                _prefix(box) + discrete_interval_sentence("candidate", found.level, over_box=True))
 
 
 def verify_candidate(model: "RecastModel", box: "ModelBox", c: dict[str, Any]) -> tuple[bool, str]:

@@ -26,7 +26,7 @@ only on a map, and a continuous-time one never verifies against a map (nor this 
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
 from lyapcheck.models.classes.linearization import (Matrix, _fmpq_mat, characteristic_polynomial,
                                                     hurwitz_determinants, imaginary_axis_roots, jacobian,
@@ -234,22 +234,31 @@ def refute_over_box(jacobian_at: Callable[[dict[str, Fraction]], Matrix], box: "
     return None
 
 
+def stated_box_point(data: Mapping[str, Any], box: "ModelBox") -> dict[str, Fraction] | str:
+    """The value of the box a refutation states (its ``point``: every parameter named, each exact and within
+    its interval), or why it is not one: what every map's refutation at a value of a box is re-checked from."""
+    try:
+        point = {str(k): Fraction(v) for k, v in (data.get("point") or {}).items()}
+    except (TypeError, ValueError, ZeroDivisionError) as exc:
+        return f"malformed point: {exc}"
+    if set(point) != set(box.names):
+        return "the stated point does not name every parameter of the box"
+    for name, value in point.items():
+        lo, hi = box.interval(name)
+        if not lo <= value <= hi:
+            return f"the stated {name} = {value} is not in the box [{lo}, {hi}]"
+    return point
+
+
 def verify_box_point(jacobian_at: Callable[[dict[str, Fraction]], Matrix], box: "ModelBox", data: dict[str, Any]
                      ) -> tuple[bool, str]:
     """Re-check a refutation of :func:`refute_over_box`: the stated point in the box (every parameter named,
     exact bounds) and the point refutation again on the Jacobian the map gives there."""
     if not is_discrete_certificate(data) or data.get("method") != BOX_POINT_METHOD:
         return False, f"not a map's refutation at a value of the box (method {data.get('method')!r})"
-    try:
-        point = {str(k): Fraction(v) for k, v in (data.get("point") or {}).items()}
-    except (TypeError, ValueError, ZeroDivisionError) as exc:
-        return False, f"malformed point: {exc}"
-    if set(point) != set(box.names):
-        return False, "the stated point does not name every parameter of the box"
-    for name, value in point.items():
-        lo, hi = box.interval(name)
-        if not lo <= value <= hi:
-            return False, f"the stated {name} = {value} is not in the box [{lo}, {hi}]"
+    point = stated_box_point(data, box)
+    if isinstance(point, str):
+        return False, point
     at = data.get("at_point")
     if not isinstance(at, dict):
         return False, "the refutation at the point is missing"

@@ -58,7 +58,7 @@ from lyapcheck.models.classes import discrete_linearization, lyapunov
 from lyapcheck.models.classes.claims import box_prefix, discrete_lyapunov_sentence
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
-from lyapcheck.models.engines.search import (EXACT_TRY_MARGIN, Budget, BudgetExhausted, ParameterValues, Search,
+from lyapcheck.models.engines.search import (Budget, BudgetExhausted, ParameterValues, Search,
                                              box_multipliers, box_multipliers_from_json, box_multipliers_of,
                                              literal, multiplier_grams, one, param)
 from lyapcheck.models.loop.field import ShiftedField, StateField
@@ -207,10 +207,8 @@ def discrete_program(ring: Ring, F: Sequence[Poly], degree: int, generators: Seq
         identities=(Identity("gram_V", tuple(gram_terms), None, "V"),
                     Identity("decrease", tuple(decrease_terms), None, "W")),
         objective=("max_margin",), trace_one=("V",))
-    if lyapunov.affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{lyapunov.BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure, alphas
+    within = lyapunov.within_cost(structure)
+    return within if isinstance(within, str) else (within, alphas)
 
 
 def decrease_support(ring: Ring, F: Sequence[Poly], a: Monomial) -> set[Monomial]:
@@ -320,8 +318,7 @@ def search_program(degree: int,
         found, solution = solve(structure, alphas, Fraction(0))
         if found is not None:
             break
-        why = lyapunov.failure(solution, exact_tried=solution.usable
-                               and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+        why = lyapunov.failure(solution)
         vanishing = lyapunov.vanishing_monomials(structure.gram("W"), solution)
         vanishing_v = lyapunov.vanishing_monomials(structure.gram("V"), solution)
         if not vanishing and not vanishing_v:
@@ -432,6 +429,15 @@ def certified(shifted: ShiftedField, ring: Ring, name: ClassName, found: dict[st
 
 # -- verify -------------------------------------------------------------------------------------------
 
+def _decrease_parts(ring: Ring, cert: Mapping[str, Any]) -> tuple[GramPoly, GramPoly, Fraction, BoxMultipliers]:
+    """What :func:`check_discrete_lyapunov` takes, read from a certificate's JSON (``gram_V``, ``gram_W``,
+    ``mu``, ``box_multipliers``) in the map's ring: every map's certificate of ``V(F) - V <= -mu V`` states
+    them alike. Raises KeyError, TypeError or ValueError where they are malformed."""
+    nv = ring.nvars
+    return (GramPoly.from_json(cert["gram_V"], nv), GramPoly.from_json(cert["gram_W"], nv), Fraction(cert["mu"]),
+            box_multipliers_from_json(cert.get("box_multipliers", []), nv))
+
+
 def verify(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple[bool, str]:
     """Re-check a condition of a discrete-time map from its JSON (``ConditionResult.to_json``) and the
     map alone, without a solver: the identity and the definiteness exactly, the stated ``V``, the
@@ -445,12 +451,9 @@ def verify(shifted: ShiftedField, status: str, data: Mapping[str, Any]) -> tuple
         if kind not in (QUADRATIC_KIND, SOS_KIND) or cert.get("time") != "discrete":
             return False, f"not a certificate of a discrete-time map (kind {kind!r})"
         ring, F = map_polynomials(shifted)
-        nv, n = ring.nvars, len(F)
-        V = GramPoly.from_json(cert["gram_V"], nv)
-        W = GramPoly.from_json(cert["gram_W"], nv)
-        mu = Fraction(cert["mu"])
+        n = len(F)
+        V, W, mu, box = _decrease_parts(ring, cert)
         degree = int(cert["degree"])
-        box = box_multipliers_from_json(cert.get("box_multipliers", []), nv)
     except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
         return False, f"malformed certificate: {exc}"
     if box and shifted.box is None:
@@ -630,11 +633,8 @@ def verify_linearization_box(shifted: ShiftedField, status: str, data: Mapping[s
         if data.get("time") != "discrete" or data.get("method") != BOX_STEIN_METHOD:
             return False, f"not a map's linearization over a box (method {data.get('method')!r})"
         ring, F = map_polynomials(shifted)
-        nv, n = ring.nvars, len(F)
-        V = GramPoly.from_json(data["gram_V"], nv)
-        W = GramPoly.from_json(data["gram_W"], nv)
-        mu = Fraction(data["mu"])
-        box = box_multipliers_from_json(data.get("box_multipliers", []), nv)
+        n = len(F)
+        V, W, mu, box = _decrease_parts(ring, data)
     except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
         return False, f"malformed certificate: {exc}"
     A = jacobian_map(ring, F)

@@ -205,7 +205,7 @@ def level_program(ring: Ring, F: Sequence[Poly], V: GramPoly, generators: Sequen
     size limit of the continuous classes, named): ``s (V - c) - eps m - sigma + (V - V(F)) = 0``, maximizing
     the margin ``t`` with ``Q_s, Q_sigma >= t I`` and ``eps >= t``. ``drop``: monomials ``sigma``'s basis
     leaves out (facial reduction)."""
-    from lyapcheck.models.classes.lyapunov import CANDIDATE_LIMIT, MAX_GRAM_ROWS, TARGET_LIMIT, affordable
+    from lyapcheck.models.classes.lyapunov import CANDIDATE_LIMIT, MAX_GRAM_ROWS, TARGET_LIMIT, within_cost
     from lyapcheck.models.engines.reasons import size_limit
 
     nv, n = ring.nvars, len(F)
@@ -246,12 +246,7 @@ def level_program(ring: Ring, F: Sequence[Poly], V: GramPoly, generators: Sequen
                           scalars=(Scalar("eps", lower="margin"),),
                           identities=(Identity(KIND, terms, param("DV", ring.support(decrease) or [zero]), "sigma"),),
                           objective=("max_margin",))
-    if affordable(structure) is None:
-        from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT
-
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def level_values(ring: Ring, F: Sequence[Poly], V: GramPoly, structure: Structure, level: Fraction

@@ -268,15 +268,11 @@ def _on_sets_program(ring: Ring, F: Sequence[Poly], basis: Sequence[Monomial], d
 def _affordable_program(n: int, grams: Sequence[Gram], scalars: Sequence[Scalar], identities: Sequence[Identity]
                         ) -> Structure | str:
     """The program (margin maximised), or the size limit it exceeds (BLOCK_COST_LIMIT, named)."""
-    from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, affordable
-    from lyapcheck.models.engines.reasons import size_limit
+    from lyapcheck.models.classes.lyapunov import within_cost
 
     structure = Structure(nvars=n, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
                           objective=("max_margin",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pieces, degree: int,
@@ -284,8 +280,7 @@ def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pi
     """The program for ``B`` of this degree, or why there is none (a size limit, named). The sets'
     identities are the continuous barrier's (:func:`lyapcheck.models.classes.barrier.set_identities`, on
     the map's ring without disturbances or relations); the step identity is this module's."""
-    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
-    from lyapcheck.models.engines.reasons import size_limit
+    from lyapcheck.models.classes.barrier import remainder_basis
 
     nv = ring.nvars
     zero = tuple([0] * nv)
@@ -305,11 +300,9 @@ def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pi
     grams.extend(box_grams)
     terms.extend(box_terms_)
     target |= box_support(box_grams, nv)
-    if len(target) > TARGET_LIMIT:
-        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
-    step_basis = [m for m in bases.sos_basis(nv, target | {zero}) if ("RS", m) not in drop]
-    if len(step_basis) > MAX_GRAM_ROWS:
-        return size_limit(len(step_basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
+    step_basis = remainder_basis(nv, target, "RS", drop, max_rows=MAX_GRAM_ROWS)
+    if isinstance(step_basis, str):
+        return step_basis
     grams.append(Gram("RS", tuple(step_basis), full_blocks(step_basis)))
     terms.append(Term(one(ring, -1), "RS"))
     return _affordable_program(nv, grams, scalars, [*on_sets, Identity("step", tuple(terms), None, "RS")])
@@ -634,8 +627,7 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
                     degree: int, drop: frozenset[tuple[str, Monomial]] = frozenset()) -> Structure | str:
     """The program for ``V`` of this degree (the sets' identities the barrier's; the goal's and the bound
     below this section's), or why there is none (a size limit, named)."""
-    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
-    from lyapcheck.models.engines.reasons import size_limit
+    from lyapcheck.models.classes.barrier import remainder_basis
     from lyapcheck.models.engines.search import literal
 
     n = ring.nvars
@@ -659,11 +651,9 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
         # over a box: - sum_j r_j(e, u) (1 - u_j^2) in this goal identity, the remainder widened by what it adds
         box_grams, box_terms_ = _box_multipliers(ring, len(F), target, f"RuG{k}v", drop)
         target |= box_support(box_grams, n)
-        if len(target) > TARGET_LIMIT:
-            return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
-        basis = [m for m in bases.sos_basis(n, target) if (f"RG{k}", m) not in drop]
-        if len(basis) > MAX_GRAM_ROWS:
-            return size_limit(len(basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
+        basis = remainder_basis(n, target, f"RG{k}", drop, max_rows=MAX_GRAM_ROWS)
+        if isinstance(basis, str):
+            return basis
         # (the multiplier is named R... too: the facial reduction of on_remainder_faces then also drops the rows
         # the top degree forces to 0 in it, as where F's growth leaves V's top form no room)
         g_basis = [m for m in g_basis if (f"Rg{k}", m) not in drop]

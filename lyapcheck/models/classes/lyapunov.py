@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Callable, Final, Literal, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Iterable, Literal, Mapping, Sequence
 
 from lyapcheck.models.engines import reasons, store
 from lyapcheck.models.loop.field import ScaledField, StateField, declared_quadratic, state_field, unscale_polynomial
@@ -98,6 +98,20 @@ def gram_products(basis: Sequence[Monomial], blocks: Sequence[Sequence[int]]) ->
     return {tuple(a + b for a, b in zip(basis[i], basis[j])) for idx in blocks for i in idx for j in idx}
 
 
+def widen_by_derivative(target: set[Monomial], ring: Ring, products: Iterable[Monomial],
+                        flows: Iterable[tuple[int, Poly]], also: Iterable[Monomial] = ()) -> None:
+    """Add to ``target`` the monomials ``grad(V) . g`` can have, ``V`` a Gram form of these ``products``
+    (each flow ``g_i``, its state's index ``i`` with it, times ``dV/dx_i``'s monomials), then the products
+    times each monomial of ``also`` (the identity's ``V D``, ``V W`` or ``V s`` term), in that order."""
+    products = list(products)
+    for i, gi in flows:
+        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
+    also = list(also)
+    if also:
+        target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in also}
+
+
 def lyapunov_structure(field: StateField, degree: int, generators: Sequence[Sequence[int]],
                        drop: frozenset[Monomial] = frozenset(), param_degree: int = 0,
                        drop_v: frozenset[Monomial] = frozenset()) -> Structure | None:
@@ -137,10 +151,7 @@ def lyapunov_program(field: StateField, degree: int, generators: Sequence[Sequen
     v_blocks = bases.character_blocks(z_v, generators)
     products = gram_products(z_v, v_blocks)
     target: set[Monomial] = set()
-    for i, gi in enumerate(field.g):
-        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
-    target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+    widen_by_derivative(target, ring, products, enumerate(field.g), ring.support(field.D))
     box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators)
     # W's basis is widened by the multipliers' products (with and without u_j^2). A map's box form leaves it
     # alone (there the widening forced monomials of W to 0 and left no strict certificate); here it is needed:
@@ -180,15 +191,21 @@ def lyapunov_identity(nv: int, grams: Sequence[Gram], scalars: Sequence[Any], te
         scalars=tuple(scalars),
         identities=(Identity("lyapunov", tuple(terms), None, "W"),),
         objective=("max_margin",), trace_one=("V",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def affordable(structure: Structure) -> Structure | None:
     """``structure`` unless its blocks cost more than :data:`BLOCK_COST_LIMIT`."""
     return structure if structure.cost() <= BLOCK_COST_LIMIT else None
+
+
+def within_cost(structure: Structure) -> Structure | str:
+    """``structure``, or the size limit it passes (its blocks cost more than :data:`BLOCK_COST_LIMIT`), named
+    as every class's detail line names it."""
+    if affordable(structure) is None:
+        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
+                          "BLOCK_COST_LIMIT")
+    return structure
 
 
 def lyapunov_values(field: StateField, structure: Structure, mu: Fraction) -> ParameterValues:
@@ -221,11 +238,16 @@ def attempt_with_solution(field: StateField, structure: Structure, mu: Fraction,
 
 def exact_try(structure: Structure, values: ParameterValues, search: Search) -> tuple[Any, Solution]:
     """One solve, and its exact rounding when the solver's margin is not clearly negative (else None):
-    what every Lyapunov attempt does before its exact check."""
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None, solution
-    return search.exact(structure, solution, values), solution
+    what every Lyapunov attempt does before its exact check (:meth:`Search.solve_exact`, near only: an unusable
+    solution has no rounding either)."""
+    return search.solve_exact(structure, values, near_only=True)
+
+
+def gram_faces(grams: Iterable[Gram], solution: Solution) -> frozenset[tuple[str, Monomial]]:
+    """Facial reduction of a failed solve: each Gram's vanishing rows (:func:`vanishing_monomials`), else its
+    kernel's support (:func:`kernel_monomials`), as (Gram, monomial) pairs to leave out."""
+    return frozenset((g.name, m) for g in grams
+                     for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
 
 
 def vanishing_monomials(gram: Gram, solution: Solution) -> frozenset[Monomial]:
@@ -300,8 +322,7 @@ def on_remainder_faces(structure: Structure, rebuild: Callable[[frozenset[tuple[
         found, solution = attempt(structure)
         if found is not None:
             return found, solution
-        vanishing = frozenset((g.name, m) for g in structure.grams if g.name.startswith("R")
-                              for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+        vanishing = gram_faces((g for g in structure.grams if g.name.startswith("R")), solution)
         reduced = rebuild(drop | vanishing) if vanishing else None
         if not isinstance(reduced, Structure):
             break
@@ -348,16 +369,17 @@ def best_decay_rate(attempt_at: Callable[[Fraction], dict[str, Any] | None], fou
 INFEASIBLE_MARGIN: Final = FACIAL_MARGIN
 
 
-def failure(solution: Solution, exact_tried: bool) -> str:
+def failure(solution: Solution) -> str:
     """Why one solve gave no certificate, in the words of the not-certified reasons: the solver
     failed, the program is infeasible (margin clearly negative), it sits on the boundary of
-    feasibility, or its solution failed the exact check."""
+    feasibility, or its solution failed the exact check (which :func:`exact_try` tries where the margin is
+    not below ``-EXACT_TRY_MARGIN``)."""
     margin = solution.scalars.get("t")
     if not solution.usable or margin is None:
         return f"the solver returned no usable point (status {solution.report.raw_status})"
     if margin < -INFEASIBLE_MARGIN:
         return f"the solver proved the program infeasible (best margin {margin:.2g} < 0)"
-    if exact_tried:
+    if margin >= -EXACT_TRY_MARGIN:
         return f"the solver's solution failed the exact check (margin {margin:.2g})"
     return (f"the program is on the boundary of feasibility (best margin {margin:.2g}): no strictly positive "
             "certificate of this form was found")
@@ -383,8 +405,7 @@ def search_degree(field: StateField, degree: int, search: Search, param_degree: 
         found, solution = attempt_with_solution(field, structure, Fraction(0), search)
         if found is not None:
             break
-        why = failure(solution, exact_tried=solution.usable
-                      and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+        why = failure(solution)
         vanishing = vanishing_monomials(structure.gram("W"), solution)
         vanishing_v = vanishing_monomials(structure.gram("V"), solution)
         if not vanishing and not vanishing_v:  # no zero diagonal: try the kernels' supports
@@ -767,11 +788,8 @@ def clique_program(field: StateField, degree: int, generators: Sequence[Sequence
                 "keep no pure power of some state)")
     target: set[Monomial] = set()
     for gram in v_grams:
-        products = gram_products(gram.basis, gram.blocks)
-        for i, gi in enumerate(field.g):
-            derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-            target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.D)}
+        widen_by_derivative(target, ring, gram_products(gram.basis, gram.blocks), enumerate(field.g),
+                            ring.support(field.D))
     if len(target) > CLIQUE_TARGET_LIMIT:
         return size_limit(len(target), "monomials in one polynomial identity", CLIQUE_TARGET_LIMIT,
                           "CLIQUE_TARGET_LIMIT")
@@ -797,10 +815,7 @@ def clique_program(field: StateField, degree: int, generators: Sequence[Sequence
         objective=("max_margin",))  # no trace normalization: t <= 1 fixes the scale (every Q >= t I)
     if cone != "psd":
         return cone_structure(structure, cone)
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def clique_attempt(field: StateField, structure: Structure, mu: Fraction, search: Search
@@ -808,11 +823,7 @@ def clique_attempt(field: StateField, structure: Structure, mu: Fraction, search
     """One solve of the clique form at decay rate ``mu``; the exact certificate if it passes."""
     from lyapcheck.sos.certificates import GramSum, check_lyapunov_cliques
 
-    values = lyapunov_values(field, structure, mu)
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None, solution
-    point = search.exact(structure, solution, values)
+    point, solution = exact_try(structure, lyapunov_values(field, structure, mu), search)
     if point is None:
         return None, solution
     parts = {g.name: GramPoly.of(g.basis, point.grams[g.name]) for g in structure.grams}
@@ -854,9 +865,8 @@ def clique_search(field: StateField, degree: int, search: Search, cone: str = "p
             found, solution = clique_attempt(field, solved, Fraction(0), search)
             if found is not None:
                 break
-            why = failure(solution, exact_tried=solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
-            vanishing = frozenset((g.name, m) for g in structure.grams
-                                  for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+            why = failure(solution)
+            vanishing = gram_faces(structure.grams, solution)
             if not vanishing:
                 break
             drop = drop | vanishing
@@ -958,10 +968,7 @@ def vertex_program(field: StateField, degree: int, drop: frozenset[tuple[str, Mo
                 target |= set(support)
                 terms.append(Term(param(f"d{j}_{a}v{k}", support), f"c{j}_{a}"))
                 positive.append(Term(literal(ring, {m: sign[j]}), f"c{j}_{a}"))
-        for i, gi in enumerate(g):
-            derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-            target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(D)}
+        widen_by_derivative(target, ring, products, enumerate(g), ring.support(D))
         if len(target) > TARGET_LIMIT:
             return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
         z_w = [m for m in bases.sos_basis(nv, target) if (f"W{k}", m) not in drop]
@@ -980,10 +987,7 @@ def vertex_program(field: StateField, degree: int, drop: frozenset[tuple[str, Mo
         identities.append(Identity(f"positive{k}", tuple(positive), None, f"P{k}"))
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=tuple(scalars), identities=tuple(identities),
                           objective=("max_margin",), trace_one=("V",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def decrease_poly(ring: Ring, g: Sequence[Poly], D: Poly, m: Monomial, mu: Fraction) -> Poly:
@@ -1079,7 +1083,7 @@ def search_vertices(field: StateField, degree: int, search: Search) -> tuple[dic
         found, solution = vertex_attempt(field, structure, Fraction(0), search)
         if found is not None:
             break
-        why = failure(solution, exact_tried=solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+        why = failure(solution)
         vanishing = frozenset((g.name, m) for g in structure.grams for m in vanishing_monomials(g, solution))
         if not vanishing:
             vanishing = frozenset((g.name, m) for g in structure.grams for m in kernel_monomials(g, solution))

@@ -31,11 +31,11 @@ from dataclasses import replace
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
-from lyapcheck.models.classes.lyapunov import (EXACT_TRY_MARGIN, LYAPUNOV_FACIAL_ROUNDS,
+from lyapcheck.models.classes.lyapunov import (LYAPUNOV_FACIAL_ROUNDS,
                                                OLD_FORMAT, OLD_RELATIONS_KIND, RELATIONS_KIND, TARGET_LIMIT,
                                                gram_products, best_decay_rate, eigen_bounds, exact_try, failure,
                                                kernel_monomials, lyapunov_identity, relations_claim, relations_sentence,
-                                               vanishing_monomials)
+                                               vanishing_monomials, widen_by_derivative)
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
 from lyapcheck.models.engines.search import BudgetExhausted, ParameterValues, Search, one, param
@@ -90,10 +90,7 @@ def relations_program(field: Any, degree: int, generators: Sequence[Sequence[int
     v_blocks = bases.character_blocks(z_v, generators)
     products = gram_products(z_v, v_blocks)
     target: set[Monomial] = set()
-    for i, gi in field.flows:
-        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-        target |= {tuple(a + b for a, b in zip(m, s)) for m in derived for s in ring.support(gi)}
-    target |= {tuple(a + b for a, b in zip(m, s)) for m in products for s in ring.support(field.W)}
+    widen_by_derivative(target, ring, products, field.flows, ring.support(field.W))
     rel_grams, rel_scalars, rel_terms, added = relation_multipliers(field, "W", target, generators)
     target |= added
     # each multiplier a sum of squares with the program's margin, on the face the solver found (a
@@ -202,7 +199,7 @@ def relations_search_degree(field: Any, degree: int, search: Search, rates: Sear
         found, solution = relations_attempt(field, structure, Fraction(0), search)
         if found is not None:
             break
-        why = failure(solution, exact_tried=solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
+        why = failure(solution)
         vanishing = frozenset((g.name, m) for g in structure.grams for m in vanishing_monomials(g, solution))
         if not vanishing:  # no zero diagonal: try the kernels' supports
             vanishing = frozenset((g.name, m) for g in structure.grams for m in kernel_monomials(g, solution))

@@ -46,13 +46,12 @@ from lyapcheck.models.classes.claims import DISCRETE_BOUND_KIND
 from lyapcheck.models.classes.map_relations import NotTaken, derived_relations, next_state_of
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.reasons import size_limit
-from lyapcheck.models.engines.search import (Budget, BudgetExhausted, ParameterValues, Search, exact_grams, literal,
-                                             one, param, why_none)
+from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly
-from lyapcheck.sos.polynomials import Monomial, Poly, Ring, monomials, to_fmpq
-from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term
+from lyapcheck.sos.polynomials import Monomial, Poly, Ring, to_fmpq
+from lyapcheck.sos.structure import Structure
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.classes.bounds import BoundField
@@ -142,13 +141,10 @@ def check_bound_on_relations(m: DisturbedMapOnRelations, y: Poly, V: Poly, lam: 
     disturbance sequence within its bounds, from every start."""
     from lyapcheck.models.engines.recast_sos import check_condition
 
-    ring, n = m.ring, m.n
-    if not 0 <= lam < 1:
-        return False, "the rate lam must satisfy 0 <= lam < 1"
-    if B < 0:
-        return False, "B must be >= 0"
-    if any(any(q[n:]) for q in ring.support(V)):
-        return False, "V may depend on the states only"
+    ring = m.ring
+    why_not = db.bound_preconditions(ring, m.n, V, lam, B)
+    if why_not is not None:
+        return False, why_not
     if step.rho is not None or output.rho is not None:
         return False, "a global bound has no region multiplier"
     if output.lambdas or output.taus:
@@ -166,19 +162,17 @@ def check_bound_on_relations(m: DisturbedMapOnRelations, y: Poly, V: Poly, lam: 
 
 # -- the program -----------------------------------------------------------------------------------------
 
-def _c(k: int) -> str:
-    return f"c{k}"
-
-
 def bound_program(m: DisturbedMapOnRelations, y: Poly, degree: int) -> tuple[Structure, list[Monomial]] | str:
     """The program for a ``V`` of this degree (coefficients ``c_k`` on the states' monomials of degree 0 to
-    ``degree``, returned with it), or why there is none (a size limit)."""
+    ``degree``, returned with it), or why there is none (a size limit): the polynomial map's
+    (:func:`~lyapcheck.models.classes.discrete_bounds.bound_structure`) with the relations' multipliers in the
+    step identity, and none in the output's."""
     from lyapcheck.models.classes.bounds import relation_multipliers
-    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT, affordable
+    from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
 
     ring, n, nv = m.ring, m.n, m.ring.nvars
     zero = tuple([0] * nv)
-    alphas = [tuple(q) + tuple([0] * (nv - n)) for q in monomials(n, 0, degree)]
+    alphas = db.state_monomials(ring, n, degree)
     steps = [set(ring.support(dl.compose(ring, ring.monomial(a), m.F))) | {a} for a in alphas]
     target: set[Monomial] = set().union(*steps) | {zero}
     if m.params:  # over a box: degrees in the states and functions (map_relations.box_multipliers)
@@ -193,38 +187,10 @@ def bound_program(m: DisturbedMapOnRelations, y: Poly, degree: int) -> tuple[Str
     e_target = set(alphas) | set(ring.support(y * y)) | {zero}
     z_d = [q for q in bases.sos_basis(nv, target) if m.field.allowed(q)]
     z_e = bases.sos_basis(nv, e_target)
-    if not z_d or not z_e or max(len(z_d), len(z_e)) > db.MAX_GRAM_ROWS:
-        return size_limit(max(len(z_d), len(z_e)), "monomials per sum-of-squares matrix", db.MAX_GRAM_ROWS,
-                          "MAX_GRAM_ROWS")
-    terms_d = [Term(param(f"p{k}", s), _c(k)) for k, s in enumerate(steps)]
-    terms_d += [*r_terms, Term(one(ring, -1), "sigD")]
-    terms_e = [Term(literal(ring, {a: 1}), _c(k)) for k, a in enumerate(alphas)]
-    terms_e += [Term(one(ring, 1), "B"), Term(one(ring, -1), "sigE")]
-    grams = [Gram("sigD", tuple(z_d), (tuple(range(len(z_d))),), margin="floor"),
-             Gram("sigE", tuple(z_e), (tuple(range(len(z_e))),), margin="floor"), *r_grams]
-    structure = Structure(
-        nvars=nv, grams=tuple(grams),
-        scalars=(Scalar("B"), *(Scalar(_c(k)) for k in range(len(alphas))), *r_scalars),
-        identities=(Identity("step", tuple(terms_d), param("lam0", [zero]), "sigD"),
-                    Identity("output", tuple(terms_e), literal(ring, ring.terms(-(y * y) - ring.constant(1))),
-                             "sigE")),
-        objective=("min", "B"))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", "BLOCK_COST_LIMIT",
-                          "BLOCK_COST_LIMIT")
+    structure = db.bound_structure(ring, y, alphas, steps, z_d, z_e, r_grams, r_terms, scalars=r_scalars)
+    if isinstance(structure, str):
+        return structure
     return structure, alphas
-
-
-def bound_values(m: DisturbedMapOnRelations, alphas: Sequence[Monomial], lam: Fraction) -> ParameterValues:
-    ring = m.ring
-    values = ParameterValues()
-    for k, a in enumerate(alphas):
-        e_a = ring.monomial(a)
-        after = dl.compose(ring, e_a, m.F)
-        values.set_poly(ring, f"p{k}", e_a * to_fmpq(lam) - after, set(ring.support(after)) | {tuple(a)})
-    values.set_poly(ring, "lam0", ring.constant(1 - lam), [tuple([0] * ring.nvars)])
-    values.set_scalar("floor", db.BOUND_FLOOR)
-    return values
 
 
 def attempt(m: DisturbedMapOnRelations, y: Poly, structure: Structure, alphas: Sequence[Monomial], lam: Fraction,
@@ -234,12 +200,11 @@ def attempt(m: DisturbedMapOnRelations, y: Poly, structure: Structure, alphas: S
     from lyapcheck.models.engines.recast_sos import ConditionCertificate
 
     ring = m.ring
-    point, solution = search.solve_exact(structure, bound_values(m, alphas, lam))
-    if point is None:
-        return None, why_none(solution)
-    grams = exact_grams(structure, point)
-    V = ring.from_terms({a: point.scalars[_c(k)] for k, a in enumerate(alphas)})
-    B = point.scalars["B"]
+    values = db.step_values(ring, alphas, lam, lambda p: dl.compose(ring, p, m.F))
+    solved = db.solve_bound(ring, structure, alphas, values, search)
+    if isinstance(solved, str):
+        return None, solved
+    point, grams, V, B = solved
     step, = relation_certificates(m.field, structure, point, (("D", "sigD"),))
     output = ConditionCertificate({}, {}, grams["sigE"])
     ok, why = check_bound_on_relations(m, y, V, lam, B, step, output)
@@ -375,25 +340,23 @@ def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = 
             if out not in model.outputs:
                 return False, f"no output named {out}"
             V = poly_from_json(ring, data["V"], "V")
-            lam, B, bound = Fraction(data["lam"]), Fraction(data["B"]), Fraction(data["bound"])
+            lam, B = Fraction(data["lam"]), Fraction(data["B"])
             step = ConditionCertificate.from_json(ring, data["step"], len(m.relations))
             output = ConditionCertificate({}, {}, GramPoly.from_json(data["gram_sigma_E"], ring.nvars))
             ok, why = check_bound_on_relations(m, m.output(model, out), V, lam, B, step, output)
             if not ok:
                 return False, f"output {out}: {why}"
-            if bound < 0 or bound * bound < B:
-                return False, f"output {out}: the stated bound {data['bound']} is below sqrt(B)"
-            if not db._at_least(stated.get(out), bound):
-                return False, f"output {out}: the stated figure is below the certified bound"
+            why_not = db.stated_bound_wrong(out, data, B, stated)
+            if why_not is not None:
+                return False, why_not
         claim = bound_claim(model, stated)
     except NotTaken as exc:
         return False, str(exc)
     except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
         return False, f"malformed certificate: {exc}"
-    if any(c.get(key) != claim.get(key) for key in ("bounds_reference", "bounds_unit")):
-        return False, "the bounds' reference points (bounds_reference) or units (bounds_unit) are not the model's"
-    if c.get("disturbances") != "all":
-        return False, "a map's sos_bound covers every disturbance sequence within its bounds ('all')"
+    why_not = db.stated_claim_wrong(c, claim)
+    if why_not is not None:
+        return False, why_not
     return True, ("every output's step identity holds exactly on the recasting's relations and the disturbances' "
                   "box, and its output identity exactly")
 

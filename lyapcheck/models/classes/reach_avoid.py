@@ -42,12 +42,11 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.classes.barrier import (BudgetExhausted, Pieces, _b_basis, _decrease_poly, _decrease_support,
-                                      _shift, add_piece_multipliers, as_barrier_field, scaled_pieces, set_certificates,
-                                      set_identities, set_values)
+                                      _shift, add_piece_multipliers, as_barrier_field, remainder_basis, scaled_pieces,
+                                      set_certificates, set_identities, set_values)
 from lyapcheck.models.loop.field import ScaledField, StateField
 from lyapcheck.models.engines import reasons
-from lyapcheck.models.classes.lyapunov import BLOCK_COST_LIMIT, TARGET_LIMIT, affordable, on_remainder_faces
-from lyapcheck.models.engines.reasons import size_limit
+from lyapcheck.models.classes.lyapunov import on_remainder_faces, within_cost
 from lyapcheck.models.engines.search import (ParameterValues, Search, box_multipliers, box_multipliers_of, box_support,
                                      exact_grams, multiplier_grams, one, param, why_none)
 from lyapcheck.results import ConditionResult
@@ -205,12 +204,10 @@ def reach_structure(field: "StateField | BoundField", initial: Pieces, unsafe: P
         rel_grams, rel_scalars, rel_terms, added = relation_multipliers(goal_view, f"goal{k}", target, (),
                                                                         margin=True)
         target |= added
-        if len(target) > TARGET_LIMIT:
-            return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
         name = f"RG{k}"
-        basis = [m for m in bases.sos_basis(nv, target | {zero}) if (name, m) not in drop and view.allowed(m)]
-        if len(basis) > MAX_GRAM_ROWS:
-            return size_limit(len(basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
+        basis = remainder_basis(nv, target, name, drop, view.allowed, MAX_GRAM_ROWS)
+        if isinstance(basis, str):
+            return basis
         grams.append(Gram(name, tuple(basis), full_blocks(basis)))
         grams.extend(box_grams)
         terms.extend(box_terms)
@@ -241,10 +238,7 @@ def reach_structure(field: "StateField | BoundField", initial: Pieces, unsafe: P
         Scalar("eps", "margin"), Scalar("delta", "margin"), Scalar("C", "zero")) + tuple(relation_scalars)
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=scalars, identities=tuple(identities),
                           objective=("max_margin",))
-    if affordable(structure) is None:
-        return size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                          "BLOCK_COST_LIMIT")
-    return structure
+    return within_cost(structure)
 
 
 def outside_goal_view(view: "BoundField", q: Poly, k: int) -> "BoundField":
@@ -347,21 +341,17 @@ def stay_structure(field: StateField, goal: Sequence[Poly], degree: int) -> Stru
     target = {mm for t in terms for mm in t.coefficients.support} | set(ring.support(field.D))
     box_grams, box_terms = box_multipliers(nv, field.n, target, with_states=False, prefix="rW")
     target |= box_support(box_grams, nv)
-    if len(target) > TARGET_LIMIT:
-        return size_limit(len(target), "monomials in one polynomial identity", TARGET_LIMIT, "TARGET_LIMIT")
-    basis = bases.sos_basis(nv, target | {zero})
-    if len(basis) > MAX_GRAM_ROWS:
-        return size_limit(len(basis), "monomials per sum-of-squares matrix", MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
-    grams.append(Gram("RW", tuple(basis), full_blocks(basis)))
+    w_remainder = remainder_basis(nv, target, "RW", frozenset(), max_rows=MAX_GRAM_ROWS)
+    if isinstance(w_remainder, str):
+        return w_remainder
+    grams.append(Gram("RW", tuple(w_remainder), full_blocks(w_remainder)))
     grams.extend(box_grams)
     terms += [*box_terms, Term(one(ring, -1), "RW")]
     identities.append(Identity("invariant", tuple(terms), param("muD0", ring.support(field.D)), "RW"))
     scalars = tuple(Scalar(f"b{k}") for k in range(len(w_basis)))
     structure = Structure(nvars=nv, grams=tuple(grams), scalars=scalars, identities=tuple(identities),
                           objective=("max_margin",))
-    return structure if affordable(structure) is not None else \
-        size_limit(f"{structure.cost():.1e}", "work units of the program", f"{BLOCK_COST_LIMIT:.1e}",
-                   "BLOCK_COST_LIMIT")
+    return within_cost(structure)
 
 
 def find_goal_invariant(field: StateField, goal: Sequence[Poly], search: Search

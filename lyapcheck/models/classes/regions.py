@@ -44,7 +44,7 @@ from lyapcheck import tolerances
 from lyapcheck.degrees import searched_degrees
 from lyapcheck.models.loop.field import ScaledField, Scaling, StateField, linear_images
 from lyapcheck.models.classes.lyapunov import CANDIDATE_LIMIT, FACIAL_ROUNDS, TARGET_LIMIT, affordable, field_degree, \
-    symmetry, vanishing_monomials
+    symmetry, vanishing_monomials, widen_by_derivative
 from lyapcheck.models.engines.numeric import NumericPoly
 from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, _dyadic, certificate_head, common_denominator,
                                                     lie, prove_denominators, prove_nonnegative, state_square, v_names)
@@ -455,10 +455,7 @@ def vstep_structure(field: StateField, v_degree: int, s: GramPoly, generators: S
     s_support = ring.support(s_poly) or [tuple([0] * nv)]
     products = {tuple(a + b for a, b in zip(z_v[i], z_v[j])) for idx in v_blocks for i in idx for j in idx}
     target: set[Monomial] = set(s_support)
-    for i, gi in enumerate(field.g):
-        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-        target |= {tuple(a + b for a, b in zip(m, q)) for m in derived for q in ring.support(gi)}
-    target |= {tuple(a + b for a, b in zip(m, q)) for m in products for q in s_support}
+    widen_by_derivative(target, ring, products, enumerate(field.g), s_support)
     box_grams, box_terms = box_multipliers(nv, n, target, with_states=True, generators=generators,
                                            margin="floor")  # its objective is J, not the margin
     target |= box_support(box_grams, nv)
@@ -1270,10 +1267,7 @@ def relations_vstep_structure(field: "BoundField", v_degree: int, s: Poly, known
     s_support = ring.support(s) or [tuple([0] * nv)]
     products = {tuple(a + b for a, b in zip(z_v[i], z_v[j])) for idx in v_blocks for i in idx for j in idx}
     target: set[Monomial] = set(ring.support(known))
-    for i, gi in field.flows:
-        derived = {m[:i] + (m[i] - 1,) + m[i + 1:] for m in products if m[i] > 0}
-        target |= {tuple(a + b for a, b in zip(m, q)) for m in derived for q in ring.support(gi)}
-    target |= {tuple(a + b for a, b in zip(m, q)) for m in products for q in s_support}
+    widen_by_derivative(target, ring, products, field.flows, s_support)
     rel_grams, rel_scalars, rel_terms, added = relation_multipliers(field, "D", target, generators, margin=False)
     target |= added
     if len(target) > TARGET_LIMIT:

@@ -49,7 +49,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Final, Mapping, Sequence
 
-from lyapcheck.models.engines.search import EXACT_TRY_MARGIN, ParameterValues, Search, literal, one
+from lyapcheck.models.engines.search import ParameterValues, Search, literal, one
 from lyapcheck.models.loop.field import StateField
 from lyapcheck.sos import bases
 from lyapcheck.sos.certificates import GramPoly, lie_derivative
@@ -283,11 +283,9 @@ def remainder_bases(groups: Sequence[tuple[int, ...]], i: int, near: Sequence[in
 def comparison_attempt(field: StateField, groups: Sequence[tuple[int, ...]], Vs: Sequence[GramPoly],
                        structure: Structure, search: Search) -> tuple[dict[str, Any] | None, "Solution"]:
     """One solve of the comparison program; the exact certificate if it passes :func:`check_vector_lyapunov`."""
-    values = ParameterValues()
-    solution = search.solve(structure, values)
-    if not solution.usable or solution.scalars.get("t", 0.0) < -EXACT_TRY_MARGIN:
-        return None, solution
-    point = search.exact(structure, solution, values)
+    from lyapcheck.models.classes.lyapunov import exact_try
+
+    point, solution = exact_try(structure, ParameterValues(), search)
     if point is None:
         return None, solution
     m = len(groups)
@@ -401,7 +399,7 @@ def comparison_search(field: StateField, groups: Sequence[tuple[int, ...]], Vs: 
     :data:`~lyapcheck.models.classes.lyapunov.LYAPUNOV_FACIAL_ROUNDS` times, as the clique form does):
     where an isolated ``V_i``'s remainder needed a reduced face, the whole Newton basis of the coupled
     one has monomials that must vanish."""
-    from lyapcheck.models.classes.lyapunov import LYAPUNOV_FACIAL_ROUNDS, failure, kernel_monomials, vanishing_monomials
+    from lyapcheck.models.classes.lyapunov import LYAPUNOV_FACIAL_ROUNDS, failure, gram_faces
 
     drop: frozenset[tuple[str, Monomial]] = frozenset()
     why = "none found"
@@ -409,9 +407,8 @@ def comparison_search(field: StateField, groups: Sequence[tuple[int, ...]], Vs: 
         found, solution = comparison_attempt(field, groups, Vs, structure, search)
         if found is not None:
             return found, "found"
-        why = failure(solution, exact_tried=solution.usable and solution.scalars.get("t", -1.0) >= -EXACT_TRY_MARGIN)
-        vanishing = frozenset((g.name, m) for g in structure.grams
-                              for m in (vanishing_monomials(g, solution) or kernel_monomials(g, solution)))
+        why = failure(solution)
+        vanishing = gram_faces(structure.grams, solution)
         if not vanishing:
             break
         drop = drop | vanishing
