@@ -139,21 +139,14 @@ def verify(shifted: "ShiftedField", name: str, c: Mapping[str, Any], model: "Mod
 def stated_point(box: "ModelBox", c: Mapping[str, Any]) -> tuple[dict[str, Fraction] | None, str]:
     """A refutation's value of the box (:func:`refute`), checked: the stated box the document's, every parameter
     named, exact and in the box, and the sentence naming it; None and why not otherwise."""
-    from lyapcheck.models.classes.discrete_linearization import box_point_sentence
+    from lyapcheck.models.classes.discrete_linearization import box_point_sentence, stated_box_point
 
     data = c["refutation"]
     if data.get("parameter_box") != box.to_json():
         return None, "the refutation's parameter_box is not the document's box"
-    try:
-        point = {str(k): Fraction(v) for k, v in (data.get("point") or {}).items()}
-    except (TypeError, ValueError, ZeroDivisionError) as exc:
-        return None, f"malformed point: {exc}"
-    if set(point) != set(box.names):
-        return None, "the stated point does not name every parameter of the box"
-    for key, value in point.items():
-        lo, hi = box.interval(key)
-        if not lo <= value <= hi:
-            return None, f"the stated {key} = {value} is not in the box [{lo}, {hi}]"
+    point = stated_box_point(data, box)
+    if isinstance(point, str):
+        return None, point
     head = box_point_sentence(point, "")
     if not str(c.get("summary", "")).startswith(head):
         return None, f"the refutation's sentence does not name its value of the box ({head.rstrip(', ')})"
