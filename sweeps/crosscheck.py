@@ -38,6 +38,9 @@ any class              its own simulation when it was certified     not flagged 
                        (at most :data:`MAX_VERTICES`)
 =====================  ===========================================  ==========================================
 
+A ``candidate`` (the user's V, a sweep's ``[sweep] candidate``) is checked as ``roa`` where it certified a
+level, and as ``quadratic`` where it certified GAS (no level: a global V, with its certified rate of V).
+
 Safety (:func:`check_sets`): simulated over the falsification's horizon
 (:func:`lyapcheck.models.classes.falsify.default_horizon`; both classes read the same trajectories); when a
 reach-avoid's trajectory is not in the goal by then and the bound is beyond it, all are simulated again to just
@@ -206,6 +209,11 @@ class _Set:
     ges_rate: float = math.nan
     angles: tuple[str, ...] = ()  # the claim holds modulo 2 pi in these states
 
+    @property
+    def bounded(self) -> bool:
+        """A set {V <= level} (roa; a candidate with a level), not a global V (a candidate may prove GAS)."""
+        return not math.isnan(self.level)
+
 
 class SimulatedLoop(Protocol):
     """One loop kind at one parameter point, in floating point: all that differs between the kinds.
@@ -345,7 +353,7 @@ def _check(loop: SimulatedLoop, doc: Mapping[str, Any], where: str, streams: tup
 def _certified_set(loop: SimulatedLoop, cls: str, cond: Mapping[str, Any]) -> _Set:
     cert = cond.get("certificate") or {}
     V, region, angles = loop.functions(cls, cert)
-    if cls in REGION_CLASSES:
+    if cls in REGION_CLASSES and "level" in cert:  # (a candidate certified globally has none: a global V)
         return _Set(cls, V, region, level=float(Fraction(str(cert["level"]))), angles=angles)
     if isinstance(loop, _MapLoop):  # per step: V(e_k) <= (1 - mu)^k V(e_0), |e_k| <= k |e_0| r^k, as exp(-rate k)
         rate = _per_step_rate(1 - float(cond.get("decay_rate_V_per_step") or 0.0))
@@ -374,7 +382,7 @@ def _trajectories(loop: SimulatedLoop, sets: Sequence[_Set], rng: np.random.Gene
     blocks: list[np.ndarray] = []
     owner: list[int] = []  # which set a start was drawn for (-1: a global start of every global set)
     for k, st in enumerate(sets):
-        if st.cls not in REGION_CLASSES:
+        if not st.bounded:
             if not loop.pooled:
                 blocks.append(_uniform(loop.global_box(), rng, starts))
                 owner += [k] * starts
@@ -390,7 +398,7 @@ def _trajectories(loop: SimulatedLoop, sets: Sequence[_Set], rng: np.random.Gene
         blocks.append(loop.start(np.asarray(boundary * rng.uniform(*REGION_FRACTIONS, size=(starts, 1)),
                                             dtype=np.float64)))
         owner += [k] * starts
-    if loop.pooled and any(st.cls not in REGION_CLASSES for st in sets):
+    if loop.pooled and any(not st.bounded for st in sets):
         blocks.append(_uniform(loop.global_box(), rng, starts))
         owner += [-1] * starts
     if not blocks:
@@ -402,14 +410,14 @@ def _trajectories(loop: SimulatedLoop, sets: Sequence[_Set], rng: np.random.Gene
     for k, st in enumerate(sets):
         if not loop.pooled:
             rows = [i for i, mine in enumerate(owner) if mine == k]
-        elif st.cls in REGION_CLASSES:  # every trajectory that starts in the set
+        elif st.bounded:  # every trajectory that starts in the set
             rows = [i for i, u in enumerate(u_paths) if owner[i] == k or st.V(u[:1])[0] <= st.level]
         else:
             rows = list(range(len(nodes)))
         if not rows:
             continue
         outcomes = [outcome(i, st.angles) for i in rows]
-        if st.cls in REGION_CLASSES:
+        if st.bounded:
             found = check_region([st.V(u_paths[i]) for i in rows], outcomes)
             out.worse("worst_rise", found.worst_rise)
             if not found.ok:
