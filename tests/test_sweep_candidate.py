@@ -145,3 +145,22 @@ def test_bad_candidates_exit_2_in_one_line(tmp_path: Path, candidate: str | None
 def test_a_candidate_of_a_map_with_functions_naming_the_swept_gain_is_refused(tmp_path: Path) -> None:
     assert_refused(spec(tmp_path, TANH, "bad", 'name = "k"\nvalues = [0.6, 0.8]', candidate="k*x**2 + y**2",
                         classes='["candidate"]'), "names the swept parameter k")
+
+
+@pytest.mark.slow
+def test_a_candidate_certified_globally_is_cross_checked_as_a_global_v(tmp_path: Path) -> None:
+    """On a damped spiral the user's V = x1**2 + x2**2 proves GAS (no level): its cross-check draws global starts
+    and checks V never rises at the certified rate (it used to look for a level and stop)."""
+    from tests.feature_matrix import POLYNOMIAL
+
+    model = tmp_path / "spiral.toml"
+    model.write_text(POLYNOMIAL)
+    path = spec(tmp_path, model, "g", 'name = "a"\nvalues = [0.8, 1.2]', candidate="x1**2 + x2**2",
+                classes='["candidate"]')
+    run(path, tmp_path / "g.zarr")
+    data = arrays(tmp_path / "g.zarr")
+    assert list(data["status_candidate"]) == [CODES["certified"]] * 2
+    assert np.all(np.isnan(data["candidate_level"]))  # GAS: no level to store
+    for j in range(2):
+        assert json.loads(str(data["certificate"][j]))["conditions"]["candidate"]["property"] == "GAS"
+    assert list(data["cross_check_trajectories"]) == [8, 8] and not data["soundness_violation"].any()
