@@ -12,7 +12,7 @@ the stored certificate is checked with the checks of :mod:`lyapcheck.models.engi
 certificate            starts                                       must hold
 =====================  ===========================================  ==========================================
 ``roa``, {V <= level}  random rays from the equilibrium, between    no escape; V never rises (on a polynomial
-                       half-way and just inside the set's boundary  loop, along every trajectory that starts
+``candidate`` (alike)  half-way and just inside the set's boundary  loop, along every trajectory that starts
                        (with functions: within the certificate's    in the set, any start's)
                        ``box`` for a ball-arithmetic one, else
                        within the comparison box below)
@@ -37,6 +37,9 @@ any class              its own simulation when it was certified     not flagged 
                        vertex of the disturbance box held constant
                        (at most :data:`MAX_VERTICES`)
 =====================  ===========================================  ==========================================
+
+A ``candidate`` (the user's V, a sweep's ``[sweep] candidate``) is checked as ``roa`` where it certified a
+level, and as ``quadratic`` where it certified GAS (no level: a global V, with its certified rate of V).
 
 Safety (:func:`check_sets`): simulated over the falsification's horizon
 (:func:`lyapcheck.models.classes.falsify.default_horizon`; both classes read the same trajectories); when a
@@ -144,6 +147,9 @@ MAP_TINY_START: Final = 1e-7
 #: initial set (:func:`check_sets`)
 GLOBAL_CLASSES: Final = ("quadratic", "sos_gas")
 REGION_CLASS: Final = "roa"
+#: the classes certifying a set {V <= level} (``candidate``: the user's V, a sweep's ``[sweep] candidate``),
+#: each cross-checked as ``roa``'s: starts inside the set, none may leave it nor V rise
+REGION_CLASSES: Final = (REGION_CLASS, "candidate")
 SAFETY_CLASSES: Final = ("barrier", "reach_avoid")
 #: the vertices of the disturbance box held constant for a claim over every disturbance (2**m, at most this many)
 MAX_VERTICES: Final = 8
@@ -202,6 +208,11 @@ class _Set:
     k: float = math.nan  # GES envelope
     ges_rate: float = math.nan
     angles: tuple[str, ...] = ()  # the claim holds modulo 2 pi in these states
+
+    @property
+    def bounded(self) -> bool:
+        """A set {V <= level} (roa; a candidate with a level), not a global V (a candidate may prove GAS)."""
+        return not math.isnan(self.level)
 
 
 class SimulatedLoop(Protocol):
@@ -322,7 +333,7 @@ def _check(loop: SimulatedLoop, doc: Mapping[str, Any], where: str, streams: tup
             found = ("a trajectory into the unsafe set" if name in SAFETY_CLASSES else
                      f"{cond.get('starts_in_set_not_converged', 'some')} starts in the set that did not converge")
             out.violations.append(f"{name} at {where}: its own simulation when certified found {found}")
-    sets = [_certified_set(loop, cls, conditions[cls]) for cls in (*GLOBAL_CLASSES, REGION_CLASS) if cls in conditions]
+    sets = [_certified_set(loop, cls, conditions[cls]) for cls in (*GLOBAL_CLASSES, *REGION_CLASSES) if cls in conditions]
     if sets:
         _trajectories(loop, sets, lyapunov, starts, where, out)
     check_sets(loop.model, doc, where, safety, starts, loop.runs(), out)
@@ -342,7 +353,7 @@ def _check(loop: SimulatedLoop, doc: Mapping[str, Any], where: str, streams: tup
 def _certified_set(loop: SimulatedLoop, cls: str, cond: Mapping[str, Any]) -> _Set:
     cert = cond.get("certificate") or {}
     V, region, angles = loop.functions(cls, cert)
-    if cls == REGION_CLASS:
+    if cls in REGION_CLASSES and "level" in cert:  # (a candidate certified globally has none: a global V)
         return _Set(cls, V, region, level=float(Fraction(str(cert["level"]))), angles=angles)
     if isinstance(loop, _MapLoop):  # per step: V(e_k) <= (1 - mu)^k V(e_0), |e_k| <= k |e_0| r^k, as exp(-rate k)
         rate = _per_step_rate(1 - float(cond.get("decay_rate_V_per_step") or 0.0))
@@ -371,7 +382,7 @@ def _trajectories(loop: SimulatedLoop, sets: Sequence[_Set], rng: np.random.Gene
     blocks: list[np.ndarray] = []
     owner: list[int] = []  # which set a start was drawn for (-1: a global start of every global set)
     for k, st in enumerate(sets):
-        if st.cls != REGION_CLASS:
+        if not st.bounded:
             if not loop.pooled:
                 blocks.append(_uniform(loop.global_box(), rng, starts))
                 owner += [k] * starts
@@ -381,13 +392,13 @@ def _trajectories(loop: SimulatedLoop, sets: Sequence[_Set], rng: np.random.Gene
         directions /= np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-300)
         boundary = ray_boundary(st.region, st.level, directions)
         if boundary is None:
-            out.violations.append(f"roa at {where}: the certified set {{V <= {st.level:.6g}}} does not contain the "
+            out.violations.append(f"{st.cls} at {where}: the certified set {{V <= {st.level:.6g}}} does not contain the "
                                   "equilibrium or is unbounded")
             continue
         blocks.append(loop.start(np.asarray(boundary * rng.uniform(*REGION_FRACTIONS, size=(starts, 1)),
                                             dtype=np.float64)))
         owner += [k] * starts
-    if loop.pooled and any(st.cls != REGION_CLASS for st in sets):
+    if loop.pooled and any(not st.bounded for st in sets):
         blocks.append(_uniform(loop.global_box(), rng, starts))
         owner += [-1] * starts
     if not blocks:
@@ -399,18 +410,18 @@ def _trajectories(loop: SimulatedLoop, sets: Sequence[_Set], rng: np.random.Gene
     for k, st in enumerate(sets):
         if not loop.pooled:
             rows = [i for i, mine in enumerate(owner) if mine == k]
-        elif st.cls == REGION_CLASS:  # every trajectory that starts in the set
+        elif st.bounded:  # every trajectory that starts in the set
             rows = [i for i, u in enumerate(u_paths) if owner[i] == k or st.V(u[:1])[0] <= st.level]
         else:
             rows = list(range(len(nodes)))
         if not rows:
             continue
         outcomes = [outcome(i, st.angles) for i in rows]
-        if st.cls == REGION_CLASS:
+        if st.bounded:
             found = check_region([st.V(u_paths[i]) for i in rows], outcomes)
             out.worse("worst_rise", found.worst_rise)
             if not found.ok:
-                out.violations.append(f"roa at {where}: of {found.starts} starts in {{V <= {st.level:.6g}}}, "
+                out.violations.append(f"{st.cls} at {where}: of {found.starts} starts in {{V <= {st.level:.6g}}}, "
                                       f"{found.escaped} escaped; V rose by {found.worst_rise:.3g} of V(0)")
             continue
         glob = check_global([(nodes[i][0], st.V(u_paths[i])) for i in rows], outcomes, st.rate)
@@ -974,7 +985,7 @@ class _FunctionsLoop:
         ball-arithmetic region) or else the comparison box."""
         V = _v_function(self.model, cert)
         angles = tuple(str(a) for a in (cert.get("angles") or ()))
-        if cls != REGION_CLASS:
+        if cls not in REGION_CLASSES:
             return V, None, angles
         box = cert.get("box")
         lo, hi = self.comparison if box is None else (
@@ -1145,7 +1156,7 @@ def box_mismatch(model: Model | RecastModel, doc: Mapping[str, Any]) -> str | No
     values = {k: Fraction(v) for k, v in model.system.values.items()}
     for name, cond in (doc.get("conditions") or {}).items():
         if not isinstance(cond, dict) or cond.get("status") != "certified" or \
-                name not in (*GLOBAL_CLASSES, REGION_CLASS):
+                name not in (*GLOBAL_CLASSES, *REGION_CLASSES):
             continue
         cert = cond.get("certificate") or {}
         missing = [str(v) for v in cert.get("variables") or () if str(v) not in model.system.ring.names]
@@ -1313,4 +1324,4 @@ def map_reach_avoid(series: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]],
 
 
 __all__ = ["CrossCheck", "map_reach_avoid", "cross_check_point", "cross_check_box", "box_mismatch", "check_sets", "SimulatedLoop",
-           "GLOBAL_CLASSES", "REGION_CLASS", "SAFETY_CLASSES", "WORST_CASE_SCREENING_ONLY"]
+           "GLOBAL_CLASSES", "REGION_CLASS", "REGION_CLASSES", "SAFETY_CLASSES", "WORST_CASE_SCREENING_ONLY"]

@@ -43,7 +43,8 @@ uninterrupted one).
 * A point: :func:`lyapcheck.models.surfaces.certify.certify_model` on the model with the point's exact
   parameters (``Fraction`` of the stored float); for a loop with functions, on the model text read
   again with them (:meth:`sweeps.spec.ModelSweepSpec.model_at`); either cross-checked by
-  :func:`sweeps.crosscheck.cross_check_point`.
+  :func:`sweeps.crosscheck.cross_check_point`. The spec's ``candidate`` (the user's V) is passed as
+  ``certify --candidate`` passes it, at every point and over every box.
 * A box: first the linearization, exactly, at the box's corners (milliseconds): an unstable corner
   proves that no stability class can certify the box (its status is ``refuted``, and the stability
   classes' too), so only ``sos_bound`` still runs there; otherwise ``certify_model`` over the box. A
@@ -502,9 +503,21 @@ def _certify_point(spec: ModelSweepSpec, row: Sequence[float]) -> _Point:
     from lyapcheck.models.language.modelfile import Model
 
     model = spec.model_at(row)
+    classes, candidate, aside = spec.classes, spec.candidate, {}
+    if candidate is not None and isinstance(model, Model):  # the spec's V was read at the file's values; where
+        # it is not a V of this point (not 0 at an equilibrium that moves with the point), it does not apply here
+        from lyapcheck.models.surfaces.certify import parse_candidate
+
+        try:
+            parse_candidate(model, candidate)
+        except ModelFileError as exc:
+            why = f"the spec's candidate is not a V of this point: {exc}"
+            classes, candidate = tuple(c for c in classes if c != "candidate"), None
+            aside = {"candidate": ConditionResult("candidate", "not_applicable", why)}
     try:
         with store.disabled():  # a point of its own (lyapcheck.models.engines.store.disabled)
-            found = certify_model(model, classes=spec.classes)
+            found = certify_model(model, classes=classes, candidate=candidate)
+            found.results.update(aside)
     except ModelFileError as exc:  # the recasting's own proof (a square root's argument >= 0) failed here
         if isinstance(model, Model):
             raise
@@ -611,7 +624,8 @@ def evaluate_model_boxes(worker_text: str, boxes: Sequence[tuple[int, dict[str, 
             corners, unstable = unstable_corners(spec, box)
             classes = classes_left(spec, unstable)
             with store.disabled():
-                result = certify_model(spec.polynomial, classes=classes, box=box) if classes else None
+                result = certify_model(spec.polynomial, classes=classes, box=box,
+                                       candidate=spec.candidate) if classes else None
         middle = time.perf_counter()
         if result is None:  # only stability classes, refuted at a corner
             for c in spec.classes:
@@ -662,7 +676,7 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
             # (the tree splits a box not unstable throughout: how many corners are, before the classes)
             out["unstable_corners"][j], unstable = unstable_corners(spec, box)
             classes = classes_left(spec, unstable)
-            certified = certify_model(model, classes=classes, box=box) if classes else None
+            certified = certify_model(model, classes=classes, box=box, candidate=spec.candidate) if classes else None
             results, document = ({}, {}) if certified is None else (certified.results, build_document(certified))
     except ModelFileError as exc:  # the recasting over this box (a square root's argument, the equilibrium) failed
         note = f"the loop could not be recast over this box: {exc}"

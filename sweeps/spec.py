@@ -550,8 +550,8 @@ def cached_spec(text: str) -> SweepSpec:
 
 
 # -- a spec that names a model file (target "model"; module docstring) ------------------------------
-#: classes of lyapcheck.models a sweep cannot run: those needing the user's input (``candidate``: the
-#: user's own V, ``--candidate``), as :data:`lyapcheck.models.classes.registry.CLASSES` declares them
+#: classes of lyapcheck.models a sweep runs only where its spec gives the user's input (``candidate``: the
+#: user's own V, ``[sweep] candidate = "..."`` as ``--candidate``; never by default), as :data:`lyapcheck.models.classes.registry.CLASSES` declares them
 MODEL_USER_CLASSES: Final = model_classes.USER_GIVEN
 #: classes of lyapcheck.models that certify a point only (``not_applicable`` over a box)
 MODEL_POINT_ONLY_CLASSES: Final = model_classes.POINT_ONLY
@@ -567,7 +567,7 @@ MAX_MODEL_CHUNK: Final = 1_000
 DEFAULT_MODEL_CHUNK: Final = {"points": 4, "boxes": 8}
 MAX_STARTS: Final = 256
 DEFAULT_STARTS: Final = 8
-_MODEL_SWEEP_KEYS: Final = ("model", "mode", "classes", "chunk_size", "axes", "set", "boxes")
+_MODEL_SWEEP_KEYS: Final = ("model", "mode", "classes", "chunk_size", "axes", "set", "boxes", "candidate")
 _MODEL_SIM_KEYS: Final = ("starts", "seed", "worst_case")
 _MODEL_TABLES: Final = ("sweep", "simulation")
 
@@ -611,6 +611,9 @@ class ModelSweepSpec(_AxesGrid):
     chunk_size: int
     simulation: ModelSimulation
     boxes: BoxSettings | None = None
+    #: the user's V (``candidate = "..."`` in ``[sweep]``): one text of the states for every point and box, read
+    #: as ``certify --candidate`` reads it (:func:`_candidate`); None: the ``candidate`` class is not swept
+    candidate: str | None = None
 
     @property
     def model_sha256(self) -> str:
@@ -643,7 +646,7 @@ class ModelSweepSpec(_AxesGrid):
         from lyapcheck.models.language.recast import RecastModel
 
         point = {k: decimal_of(Fraction(v)) for k, v in values.items()}
-        model = parse_any_model(self.model_text, self.model_file, {**dict(self.overrides), **point})
+        model = parse_any_model(self.model_text, self.model_file, {**dict(self.overrides), **point}, self.candidate)
         assert isinstance(model, RecastModel)
         return model
 
@@ -683,7 +686,7 @@ class ModelSweepSpec(_AxesGrid):
         exact = self.parameters_at(coords)
         if not isinstance(self.model, Model):
             point = {k: exact_decimal(float(v)) for k, v in exact.items()}
-            return parse_any_model(self.model_text, self.model_file, {**dict(self.overrides), **point})
+            return parse_any_model(self.model_text, self.model_file, {**dict(self.overrides), **point}, self.candidate)
         model = with_parameters(self.model, exact)
         return replace(model, overrides={**model.overrides, **{k: exact_decimal(float(v)) for k, v in exact.items()}})
 
@@ -764,11 +767,17 @@ def _readable(axis: ModelAxis, where: str) -> ModelAxis:
     return axis
 
 
-def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[str, ...]:
+def _model_classes(raw: object, mode: str, model: Model | RecastModel, candidate: str | None = None
+                   ) -> tuple[str, ...]:
     polynomial = isinstance(model, Model)
     allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES  # (the same on every loop)
+    # the user's V, where the spec gives it (``candidate = "..."``): one V for every point and box, so the class is
+    # taken in both modes, on every kind of loop (certify --box takes --candidate on each); never by default
+    user = MODEL_USER_CLASSES if candidate is not None else ()
+    allowed = tuple(c for c in model_classes.NAMES if c in allowed or c in user)
     if is_discrete(model):  # a map: only the classes with a discrete-time condition (every other not_applicable)
-        allowed = tuple(c for c in allowed if c in (map_classes(model) if mode == "points" else map_box_classes(model)))
+        allowed = tuple(c for c in allowed if c in (map_classes(model) if mode == "points"
+                                                    else (*map_box_classes(model), *user)))
     # (any loop: barrier with its sets only, reach_avoid with its goal too; a class the model cannot ask is
     # not picked by default, and naming it is refused here rather than at the first point)
     if not ("initial" in model.sets and "unsafe" in model.sets):
@@ -777,7 +786,11 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         allowed = tuple(c for c in allowed if c != "reach_avoid")
     disturbances = model.disturbances
     if raw is None:
-        return tuple(c for c in allowed if c != "sos_bound" or disturbances)
+        return tuple(c for c in allowed if (c != "sos_bound" or disturbances) and c not in MODEL_USER_CLASSES)
+    if candidate is None and isinstance(raw, list) and any(c in MODEL_USER_CLASSES for c in raw):
+        named = next(c for c in raw if c in MODEL_USER_CLASSES)
+        raise InvalidParameter("sweep.classes", f"classes without '{named}' unless [sweep] gives your V: add "
+                               'candidate = "..." (an expression of the states, as certify --candidate takes it)', raw)
     if not isinstance(raw, list) or not raw or any(c not in allowed for c in raw) or len(set(raw)) != len(raw):
         kind = "" if polynomial else " of a loop with functions"
         others = ""
@@ -793,6 +806,45 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel) -> tuple[
         raise InvalidParameter("sweep.classes", "classes that apply to the model: sos_bound needs [disturbances] "
                                "in the model file", raw)
     return tuple(c for c in allowed if c in raw)  # canonical order: cheapest first
+
+
+def _candidate(raw: object, model: Model | RecastModel, swept: Sequence[str], model_text: str, model_file: str,
+               fixed: Mapping[str, str]) -> str | None:
+    """``[sweep] candidate``: the user's V, checked now (one line naming ``sweep.candidate``, exit 2) rather than
+    at the first point. It is one V for every value of the sweep: a text naming a swept parameter is refused (read
+    off the whitelist parser's syntax tree, never evaluated); the rest is what ``certify --candidate`` checks, by
+    its own reader (:func:`lyapcheck.models.surfaces.certify.parse_candidate`; a loop with functions: the model
+    read again with the candidate recast along), at the file's values and ``[sweep.set]``."""
+    import ast
+
+    from lyapcheck.models.language.expressions import ExpressionError, parse_quietly
+    from lyapcheck.models.language.modelfile import parse_any_model
+    from lyapcheck.models.surfaces.certify import parse_candidate
+
+    if raw is None:
+        return None
+    expected = "your V: a non-empty expression of the model's states, as certify --candidate takes it"
+    if not isinstance(raw, str) or not raw.strip():
+        raise InvalidParameter("sweep.candidate", expected, raw)
+    try:
+        tree = parse_quietly(raw)
+    except (SyntaxError, ValueError, RecursionError, ExpressionError) as exc:
+        raise InvalidParameter("sweep.candidate", f"{expected} (it does not parse: "
+                               f"{exc.msg if isinstance(exc, SyntaxError) else exc})",
+                               raw) from None
+    named = sorted({node.id for node in ast.walk(tree) if isinstance(node, ast.Name)} & set(swept))
+    if named:
+        raise InvalidParameter("sweep.candidate", "a V of the states alone, one V for every value of the sweep (it "
+                               f"names the swept parameter {', '.join(named)})", raw)
+    try:
+        if isinstance(model, Model):
+            parse_candidate(model, raw)
+        else:
+            parse_any_model(model_text, model_file, fixed or None, raw)
+    except ModelFileError as exc:
+        why = str(exc).removeprefix(f"{exc.source}: {exc.key}: ")
+        raise InvalidParameter("sweep.candidate", f"{expected} ({why})", raw) from None
+    return raw
 
 
 def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
@@ -811,7 +863,7 @@ def map_classes(model: Model | RecastModel) -> tuple[str, ...]:
 #: certified boxes the sweep cross-checks by iterating at the box's corners and random points (a global V that
 #: never rises, a Stein ``P`` along the Jacobian's iterates, a set {V <= c} its starts never leave, a bound under
 #: disturbances within its envelope, starts in the initial set never unsafe and, for reach_avoid, in the goal
-#: within the certified steps); ``candidate`` needs the user's V and is never swept
+#: within the certified steps); ``candidate`` (the user's V) is added where the spec gives it
 MAP_BOX_SWEPT: Final = ("linearization", "quadratic", "sos_gas", "roa", "sos_bound", "barrier", "reach_avoid")
 
 
@@ -973,7 +1025,8 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
     names = [a.name for a in axes]
     if len(set(names)) != len(names):
         raise InvalidParameter("sweep.axes", "distinct parameter names", names)
-    classes = _model_classes(sweep.get("classes"), str(mode), model)
+    candidate = _candidate(sweep.get("candidate"), model, names, model_text, model_file, fixed)
+    classes = _model_classes(sweep.get("classes"), str(mode), model, candidate)
     chunk = int_field("sweep.chunk_size", sweep.get("chunk_size", DEFAULT_MODEL_CHUNK[str(mode)]), 1, MAX_MODEL_CHUNK)
     boxes = None
     if mode == "boxes":
@@ -991,7 +1044,7 @@ def parse_model_spec(text: str, *, source: str = "spec", model_text: str | None 
                                        "variables (rename it in the model file)", name)
     spec = ModelSweepSpec(text=text, model_file=model_file, model_text=model_text, model=model,
                           overrides=tuple(fixed.items()), axes=axes, classes=classes, mode=str(mode), chunk_size=chunk,
-                          simulation=_model_simulation(data.get("simulation")), boxes=boxes)
+                          simulation=_model_simulation(data.get("simulation")), boxes=boxes, candidate=candidate)
     if check:
         _check_defined(spec, source)
     return spec

@@ -9,8 +9,9 @@ of their pieces are its own:
 target  its specs                               its classes                                      layouts
 ======  ======================================  ===============================================  ==============
 model   ``[sweep] model = "FILE.toml"``         :data:`lyapcheck.models.classes.registry.CLASSES`         points, boxes
-        (any polynomial or rational model,      (but ``candidate``; boxes: those with box
-        or a loop with functions)               certificates; the same on every loop)
+        (any polynomial or rational model,      (``candidate`` with ``[sweep] candidate``;
+        or a loop with functions)               boxes: those with box certificates; the same
+                                                on every loop)
 paper   the paper's sections (gains, swimmer,   the paper's condition classes                    points (and its
         ...) with ``[[sweep.axes]]``            (:data:`sweeps.schema.CLASSES`; boxes:           quadtree), boxes
                                                 :data:`sweeps.spec.BOX_CLASSES`)

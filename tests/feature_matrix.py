@@ -135,11 +135,12 @@ MODELS: Mapping[str, str] = {"polynomial": POLYNOMIAL, "rational": RATIONAL, "fu
                              "disturbances": DISTURBANCES, "box": POLYNOMIAL, "discrete": DISCRETE,
                              "map_functions": MAP_FUNCTIONS}
 
-#: the point sweeps' and box sweeps' specs (the class list and the model file's name are filled in)
+#: the point sweeps' and box sweeps' specs (the class list and the model file's name are filled in, and the user's V,
+#: ``candidate = "..."``, where the class list has ``candidate``)
 POINTS_SPEC = """[sweep]
 model = "{model}"
 classes = {classes}
-chunk_size = 2
+{candidate}chunk_size = 2
 [[sweep.axes]]
 name = "a"
 values = [0.8, 1.2]
@@ -150,7 +151,7 @@ BOXES_SPEC = """[sweep]
 model = "{model}"
 mode = "boxes"
 classes = {classes}
-chunk_size = 1
+{candidate}chunk_size = 1
 [[sweep.axes]]
 name = "a"
 start = 0.8
@@ -208,8 +209,6 @@ REFUSALS: tuple[Refusal, ...] = (
             ("has no [disturbances]", "needs [disturbances]"),
             "`sos_bound` bounds how far bounded disturbances push the outputs; a loop without `[disturbances]` "
             "has nothing to bound (its stability classes say where it converges)."),
-    Refusal(cells(KINDS, ("candidate",), ("sweep points", "sweep boxes")), ("Got ['candidate']",),
-            "A sweep spec has no field for your V: `candidate` is asked with `certify --candidate` at each point."),
 )
 
 
@@ -388,7 +387,8 @@ def sweep_cells(directory: Path, kind: str, mode: str) -> dict[str, Outcome]:
 
     def spec(classes: Sequence[str], name: str) -> Path:
         path = where / f"{name}.toml"
-        path.write_text(template.format(model=model.name, classes=json.dumps(list(classes))))
+        given = f"candidate = {json.dumps(CANDIDATE)}\n" if "candidate" in classes else ""
+        path.write_text(template.format(model=model.name, classes=json.dumps(list(classes)), candidate=given))
         return path
 
     outcomes: dict[str, Outcome] = {}

@@ -133,13 +133,14 @@ AXIS = '[[sweep.axes]]\nname = "a"\nstart = 0.5\nstop = 2\nnum = 3\n'
      "'sweep.axes[0].stop' parameter must be larger than start"),
     ('[sweep]\nmodel = "m.toml"\n[[sweep.axes]]\nname = "a"\nstart = -1\nstop = 1\nnum = 3\nscale = "log"\n', LINEAR,
      "'sweep.axes[0].start' parameter must be positive on a log axis"),
-    ('[sweep]\nmodel = "m.toml"\nclasses = ["candidate"]\n' + AXIS, LINEAR, "'sweep.classes' parameter must be"),
+    ('[sweep]\nmodel = "m.toml"\nclasses = ["candidate"]\n' + AXIS, LINEAR, 'add candidate = "..."'),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["sos_bound"]\n' + AXIS, LINEAR, "sos_bound needs [disturbances]"),
     # a model without [sets] cannot ask the safety questions: refused by the spec, not at the first point
     ('[sweep]\nmodel = "m.toml"\nclasses = ["barrier"]\n' + AXIS, LINEAR, "'sweep.classes' parameter must be"),
     ('[sweep]\nmodel = "m.toml"\nclasses = ["reach_avoid"]\n' + AXIS, LINEAR, "'sweep.classes' parameter must be"),
+    # (without [sweep] candidate = "...", in either mode: the refusal asks for the user's V)
     ('[sweep]\nmodel = "m.toml"\nmode = "boxes"\nclasses = ["candidate"]\n' + AXIS, LINEAR,
-     "in a boxes sweep, a list of distinct names from 'linearization', 'quadratic'"),
+     "'sweep.classes' parameter must be classes without 'candidate' unless [sweep] gives your V: add candidate"),
     ('[sweep]\nmodel = "m.toml"\n[sweep.set]\nq = 1\n' + AXIS, LINEAR, "'sweep.set.q' parameter must be a parameter "
      "or disturbance declared in the model"),
     ('[sweep]\nmodel = "m.toml"\n[sweep.boxes]\nmax_boxes = 4\n' + AXIS, LINEAR, "'sweep.boxes' parameter must be "

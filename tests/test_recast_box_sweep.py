@@ -121,7 +121,9 @@ def test_a_box_sweep_of_a_loop_with_functions_is_no_longer_refused_and_takes_the
     assert spec.mode == "boxes" and spec.has_functions
     assert spec.classes == ("linearization", "quadratic", "sos_gas", "roa")  # no [disturbances]: no sos_bound
     with pytest.raises(InvalidParameter, match="in a boxes sweep of a loop with functions"):
-        load_model_spec(write(tmp_path, BOXES.replace('["roa"]', '["candidate"]')))
+        load_model_spec(write(tmp_path, BOXES.replace('["roa"]', '["roa", "sos_bound_x"]')))
+    with pytest.raises(InvalidParameter, match='unless \\[sweep\\] gives your V: add candidate = "..."'):
+        load_model_spec(write(tmp_path, BOXES.replace('["roa"]', '["candidate"]')))  # (the user's V: the key)
 
 
 def test_a_box_whose_parameter_stays_a_variable_of_the_certificate_is_stored_with_why_it_is_not_simulated(

@@ -9,7 +9,7 @@ name                                              derived from
 ================================================  =================================================
 :data:`lyapcheck.models.surfaces.certify.MODEL_CLASSES`    :data:`NAMES`: the selection and its order
 :data:`lyapcheck.models.surfaces.certify.CLEARED_CLASSES`  :data:`CLEARED`: the field multiplied through
-:data:`sweeps.spec.MODEL_USER_CLASSES`            :data:`USER_GIVEN`: a sweep cannot run them
+:data:`sweeps.spec.MODEL_USER_CLASSES`            :data:`USER_GIVEN`: swept only with ``[sweep] candidate``
 :data:`sweeps.spec.MODEL_POINT_ONLY_CLASSES`      :data:`POINT_ONLY`: ``not_applicable`` over a box
 :data:`sweeps.spec.MODEL_POINT_CLASSES`           every class but :data:`USER_GIVEN`
 :data:`sweeps.spec.MODEL_BOX_CLASSES`             :data:`OVER_BOX`: those with box certificates
@@ -131,15 +131,15 @@ class ModelClass:
     #: it certifies every parameter value of a ``--box`` (:mod:`lyapcheck.models.loop.boxes`) and a box sweep
     #: runs it; else it certifies a point only and is ``not_applicable`` over a box (a polynomial map's own
     #: list is :data:`lyapcheck.models.classes.discrete_lyapunov.BOX_CLASSES`). ``candidate`` is the one class
-    #: needing the user's input: never swept, it is False here, yet ``certify --box`` takes it on every kind of
-    #: loop but a map with functions (the user's V for every value of the box)
+    #: needing the user's input: False here (a sweep runs it only where its spec gives the V, ``[sweep]
+    #: candidate``), yet ``certify --box`` takes it on every kind of loop (the user's V for every value of the box)
     over_box: bool
     #: it proves a stability property of the equilibrium: an unstable equilibrium (the linearization
     #: refuted, exactly) refutes it
     stability: bool
     #: it needs the field multiplied through by its denominators (each proved of one sign)
     cleared: bool = True
-    #: it needs the user's input (``--candidate``): a sweep cannot run it
+    #: it needs the user's input (``--candidate``): a sweep runs it only with its spec's ``candidate`` key
     user_given: bool = False
     #: it proves its claim with the disturbances at 0 only: a certified claim of it covering every
     #: disturbance (``"all"``) is refused by ``verify`` where a disturbance enters the loop
@@ -219,7 +219,10 @@ CLASSES: Final[tuple[ModelClass, ...]] = (
                verify_field=_field.verify_lyapunov, verify_functions=_functions.verify_region,
                run_map=_discrete.candidate_map, verify_map=_vdiscrete.verify_region_map,
                run_map_functions=_discrete.candidate_map_functions,
-               verify_map_functions=_vdiscrete.verify_candidate_map_functions),
+               verify_map_functions=_vdiscrete.verify_candidate_map_functions,
+               # (stored by a sweep with the spec's V as roa's are: the certified set {V <= level})
+               figures=(Figure("level", "level", "the certified region of attraction is {V <= level} (your V)"),
+                        Figure("ball_radius", "ball_radius", "largest ball |x - x_eq| <= r certified inside it, SI"))),
     ModelClass("sos_bound", "output_bound", "ultimate_bound", over_box=True, stability=False,
                run_field=_runs.sos_bound_field, run_functions=_runs.sos_bound_functions,
                verify_field=_field.verify_sos_bound, verify_functions=_functions.verify_sos_bound,
