@@ -772,7 +772,8 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel, candidate
     polynomial = isinstance(model, Model)
     allowed = MODEL_POINT_CLASSES if mode == "points" else MODEL_BOX_CLASSES  # (the same on every loop)
     # the user's V, where the spec gives it (``candidate = "..."``): one V for every point and box, so the class is
-    # taken in both modes, on every kind of loop (certify --box takes --candidate on each); never by default
+    # taken in both modes, on every kind of loop (certify --box takes --candidate on each); run by default only
+    # where the spec gives the V (a key given and not used is refused: the user meant it to run)
     user = MODEL_USER_CLASSES if candidate is not None else ()
     allowed = tuple(c for c in model_classes.NAMES if c in allowed or c in user)
     if is_discrete(model):  # a map: only the classes with a discrete-time condition (every other not_applicable)
@@ -785,8 +786,13 @@ def _model_classes(raw: object, mode: str, model: Model | RecastModel, candidate
     if not ("initial" in model.sets and "unsafe" in model.sets and "goal" in model.sets):
         allowed = tuple(c for c in allowed if c != "reach_avoid")
     disturbances = model.disturbances
-    if raw is None:
-        return tuple(c for c in allowed if (c != "sos_bound" or disturbances) and c not in MODEL_USER_CLASSES)
+    if raw is None:  # the defaults, and your V's class where the spec gives your V (you asked for it)
+        return tuple(c for c in allowed if (c != "sos_bound" or disturbances)
+                     and (c not in MODEL_USER_CLASSES or candidate is not None))
+    if candidate is not None and isinstance(raw, list) and not any(c in MODEL_USER_CLASSES for c in raw):
+        raise InvalidParameter("sweep.candidate", "given only where sweep.classes names 'candidate' (or gives no "
+                               "list: then the default classes and candidate run); your V would not be used",
+                               candidate)
     if candidate is None and isinstance(raw, list) and any(c in MODEL_USER_CLASSES for c in raw):
         named = next(c for c in raw if c in MODEL_USER_CLASSES)
         raise InvalidParameter("sweep.classes", f"classes without '{named}' unless [sweep] gives your V: add "

@@ -4,7 +4,8 @@ The spec's V is read at load time by the reader ``certify --candidate`` uses (on
 ``sweep.candidate``, exit 2, for a V that does not parse, names an unknown symbol or a swept parameter);
 ``classes`` may then name ``candidate``, which runs at every point (as ``certify --candidate`` at that value)
 and over every box (as ``certify --box --candidate``), its level stored as roa's and its set cross-checked
-from starts inside it. Without the key, naming ``candidate`` is refused; it is never picked by default.
+from starts inside it. Without the key, naming ``candidate`` is refused; with the key and no class list it
+runs with the default classes.
 """
 
 from __future__ import annotations
@@ -116,16 +117,23 @@ def test_a_map_with_functions_takes_the_candidate_at_points_and_over_a_box(tmp_p
     assert not data["soundness_violation"].any() and data["cross_check_trajectories"][done][0] > 0
 
 
-def test_the_candidate_is_never_picked_by_default(tmp_path: Path) -> None:
+def test_the_candidate_runs_where_the_spec_gives_your_v(tmp_path: Path) -> None:
+    """With the key and no class list, the default classes and candidate run; a class list naming candidate is
+    kept as given; a list that leaves candidate out while the key is given is refused (the V would be unused);
+    without the key candidate is never a default."""
     from sweeps.spec import load_model_spec
 
     path = spec(tmp_path, VDP, "d", 'name = "mu"\nvalues = [1]', candidate=VDP_V, classes='["roa"]')
+    assert_refused(path, "'sweep.candidate' parameter must be given only where sweep.classes names 'candidate'")
     path.write_text(path.read_text().replace('classes = ["roa"]\n', ""))
     loaded = load_model_spec(path)
-    assert "candidate" not in loaded.classes and "roa" in loaded.classes and loaded.candidate == VDP_V
+    assert "candidate" in loaded.classes and "roa" in loaded.classes and loaded.candidate == VDP_V
     named = load_model_spec(spec(tmp_path, VDP, "n", 'name = "mu"\nvalues = [1]', candidate=VDP_V,
                                  classes='["roa", "candidate"]'))
     assert named.classes == ("roa", "candidate")
+    plain = spec(tmp_path, VDP, "p", 'name = "mu"\nvalues = [1]', candidate=None, classes='["roa"]')
+    plain.write_text(plain.read_text().replace('classes = ["roa"]\n', ""))
+    assert "candidate" not in load_model_spec(plain).classes
 
 
 @pytest.mark.parametrize(("candidate", "classes", "mode", "needle"), [
