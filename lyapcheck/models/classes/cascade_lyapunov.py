@@ -467,21 +467,15 @@ def verify(c: Mapping[str, Any], cert: Mapping[str, Any], scaled: "ScaledField",
            ) -> tuple[bool, str]:
     """The exact re-check of a certificate of :data:`KIND` on the field verify re-derived."""
     from lyapcheck.models.classes.lyapunov import stated_v
+    from lyapcheck.models.classes.vector_lyapunov import stated_groups
     from lyapcheck.models.engines.recast_sos import poly_from_json
 
     if field.p or field.disturbances:
         return False, "a cascade certificate is for a field without box coordinates or disturbances"
     ring, nv = field.ring, field.ring.nvars
     names = list(ring.names[:field.n])
-    for key in ("groups", "V_groups", "gram_V", "W_coordinates", "W_weights", "gram_R", "gram_sigma"):
-        if not isinstance(cert.get(key), list):
-            raise ValueError(f"{key}: a cascade certificate has a list '{key}'")
-    groups = []
-    for group in cert["groups"]:
-        if not isinstance(group, list) or any(s not in names for s in group):
-            raise ValueError(f"groups: {group!r} is not a list of the model's states")
-        groups.append([names.index(s) for s in group])
-    Vs = [GramPoly.from_json(part, nv) for part in cert["gram_V"]]
+    groups, Vs = stated_groups(cert, field, ("V_groups", "W_coordinates", "W_weights", "gram_R", "gram_sigma"),
+                               "a cascade certificate")
     phis = []
     for coords in cert["W_coordinates"]:
         if not isinstance(coords, list) or any(not isinstance(x, list) or len(x) != 2 or x[0] not in names

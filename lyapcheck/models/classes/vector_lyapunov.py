@@ -475,6 +475,23 @@ def certified(scaled: "ScaledField", field: StateField, name: str, found: Mappin
                            certificate=certificate_json(scaled, field, found), solver=solver, property="GAS")
 
 
+def stated_groups(cert: Mapping[str, Any], field: StateField, keys: Sequence[str], what: str
+                  ) -> tuple[list[list[int]], list[GramPoly]]:
+    """A certificate's subsystems (``groups``: lists of the model's states, as indices) and their ``V_i``
+    (``gram_V``), read for the exact re-check of a vector or a cascade certificate; ``keys``: the other lists
+    it must have. ValueError (the verify row's words) on a malformed one."""
+    names = list(field.ring.names[:field.n])
+    for key in ("groups", "gram_V", *keys):
+        if not isinstance(cert.get(key), list):
+            raise ValueError(f"{key}: {what} has a list '{key}'")
+    groups = []
+    for group in cert["groups"]:
+        if not isinstance(group, list) or any(s not in names for s in group):
+            raise ValueError(f"groups: {group!r} is not a list of the model's states")
+        groups.append([names.index(s) for s in group])
+    return groups, [GramPoly.from_json(part, field.ring.nvars) for part in cert["gram_V"]]
+
+
 def verify(c: Mapping[str, Any], cert: Mapping[str, Any], scaled: "ScaledField", field: StateField
            ) -> tuple[bool, str]:
     """The exact re-check of a certificate of :data:`KIND` on the field verify re-derived."""
@@ -483,16 +500,7 @@ def verify(c: Mapping[str, Any], cert: Mapping[str, Any], scaled: "ScaledField",
     if field.p or field.disturbances:
         return False, "a vector Lyapunov certificate is for a field without box coordinates or disturbances"
     ring, nv = field.ring, field.ring.nvars
-    names = list(ring.names[:field.n])
-    for key in ("groups", "gram_V", "A", "d", "gram_sigma"):
-        if not isinstance(cert.get(key), list):
-            raise ValueError(f"{key}: a vector Lyapunov certificate has a list '{key}'")
-    groups = []
-    for group in cert["groups"]:
-        if not isinstance(group, list) or any(s not in names for s in group):
-            raise ValueError(f"groups: {group!r} is not a list of the model's states")
-        groups.append([names.index(s) for s in group])
-    Vs = [GramPoly.from_json(part, nv) for part in cert["gram_V"]]
+    groups, Vs = stated_groups(cert, field, ("A", "d", "gram_sigma"), "a vector Lyapunov certificate")
     if any(not isinstance(parts, list) for parts in cert["gram_sigma"]):
         raise ValueError("gram_sigma: one list of Gram matrices per group")
     sigmas = [[GramPoly.from_json(part, nv) for part in parts] for parts in cert["gram_sigma"]]
