@@ -44,8 +44,8 @@ from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
 from lyapcheck.models.classes.claims import DISCRETE_REACH_KIND, discrete_reach_sentence
 from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations
-from lyapcheck.models.classes.map_relations_safety import check_iterate_functions, falsify, map_sets, read_map, \
-    relations_and_sets, sets_view, stated_box, step_multipliers, step_supports
+from lyapcheck.models.classes.map_relations_safety import check_iterate_functions, falsify, map_sets, \
+    relations_and_sets, sets_view, stated_map, step_multipliers, step_supports
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, one, param, why_none
 from lyapcheck.results import ConditionResult
@@ -341,17 +341,11 @@ def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = 
     if c.get("status") != "certified":
         return False, f"a map with functions' reach_avoid is certified or refuted, not {c.get('status')}"
     try:
-        cert = c["certificate"]
-        if cert.get("kind") != KIND or cert.get("time") != "discrete":
-            return False, f"not a reach_avoid certificate of a discrete-time map (kind {cert.get('kind')!r})"
-        ok, why = stated_box(cert, box, model)
-        if not ok:
-            return False, why
-        m = read_map(model, box)
+        read = stated_map(model, c, box, KIND, "reach_avoid", ("initial", "unsafe", "goal"))
+        if isinstance(read, str):
+            return False, read
+        cert, m, sets = read
         ring = m.ring
-        if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != m.system.definitions():
-            return False, "the certificate's variables or functions are not the map's"
-        sets = map_sets(model, m, ("initial", "unsafe", "goal"), box)
         V = poly_from_json(ring, cert["V"], "V")
         eps, C = read_rational(cert["eps"], "eps"), read_rational(cert["C"], "C")
         wanted = conditions(m, V, eps, C, sets["initial"], sets["unsafe"], sets["goal"][0])

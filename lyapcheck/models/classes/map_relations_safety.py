@@ -370,6 +370,24 @@ def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pi
 
 # -- the class -------------------------------------------------------------------------------------------
 
+def stated_map(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None", kind: str, name: str,
+               keys: Sequence[str]) -> tuple[Mapping[str, Any], MapOnRelations, dict[str, list[list[Poly]]]] | str:
+    """The first steps of re-checking a certified safety class of a map with functions (``barrier``, ``reach_avoid``):
+    the certificate (of ``kind``, a discrete-time one), its ``parameter_box`` (:func:`stated_box`), the map read on
+    its relations again (over ``box``), the certificate's variables and functions the map's, and the sets named
+    ``keys`` in its ring; or why not (one line)."""
+    cert = c["certificate"]
+    if cert.get("kind") != kind or cert.get("time") != "discrete":
+        return f"not a {name} certificate of a discrete-time map (kind {cert.get('kind')!r})"
+    ok, why = stated_box(cert, box, model)
+    if not ok:
+        return why
+    m = read_map(model, box)
+    if cert.get("variables") != list(m.ring.names) or cert.get("auxiliaries") != m.system.definitions():
+        return "the certificate's variables or functions are not the map's"
+    return cert, m, map_sets(model, m, keys, box)
+
+
 def stated_box(cert: Mapping[str, Any], box: "ModelBox | None", model: "RecastModel") -> tuple[bool, str]:
     """A certificate's ``parameter_box``: the document's box over a box (whose parameters no set names),
     absent at a point."""
@@ -476,17 +494,11 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | 
         except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
             return False, f"malformed refutation: {exc}"
     try:
-        cert = c["certificate"]
-        if cert.get("kind") != KIND or cert.get("time") != "discrete":
-            return False, f"not a barrier certificate of a discrete-time map (kind {cert.get('kind')!r})"
-        ok, why = stated_box(cert, box, model)
-        if not ok:
-            return False, why
-        m = read_map(model, box)
+        read = stated_map(model, c, box, KIND, "barrier", ("initial", "unsafe"))
+        if isinstance(read, str):
+            return False, read
+        cert, m, sets = read
         ring = m.ring
-        if cert.get("variables") != list(ring.names) or cert.get("auxiliaries") != m.system.definitions():
-            return False, "the certificate's variables or functions are not the map's"
-        sets = map_sets(model, m, box=box)
         B = poly_from_json(ring, cert["B"], "B")
         lam = read_rational(cert["lambda"], "lambda")
         wanted = conditions(m.field, B, lam, sets["initial"], sets["unsafe"], step_of(m, B, lam))
