@@ -172,7 +172,7 @@ def test_a_tiny_boxes_sweep_of_a_loop_with_functions_certifies_a_barrier_per_box
 
     (tmp_path / "m.toml").write_text(COUPLED)
     spec = tmp_path / "spec.toml"
-    spec.write_text(BOXES_SPEC.format(model="m.toml", classes='["barrier"]'))
+    spec.write_text(BOXES_SPEC.format(model="m.toml", classes='["barrier"]', candidate=""))
     out = tmp_path / "out.zarr"
     run(spec, out)
     data = arrays(out)
