@@ -44,8 +44,8 @@ from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
 from lyapcheck.models.classes.claims import DISCRETE_REACH_KIND, discrete_reach_sentence
 from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations
-from lyapcheck.models.classes.map_relations_safety import check_iterate_functions, falsify, map_sets, \
-    relations_and_sets, sets_view, stated_map, step_multipliers, step_supports
+from lyapcheck.models.classes.map_relations_safety import check_iterate_functions, map_sets, \
+    refuted_first, relations_and_sets, sets_view, stated_map, step_multipliers, step_supports
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, one, param, why_none
 from lyapcheck.results import ConditionResult
@@ -275,14 +275,9 @@ def run(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None,
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
-    if refute is not None:
-        refuted = refute()
-        if refuted is not None:
-            return refuted
-    else:
-        found_cx = falsify(model, m, sets["initial"], sets["unsafe"], sets["goal"][0])
-        if found_cx is not None:
-            return ds.refuted_result("reach_avoid", model, found_cx, " before any iterate is in the goal")
+    refuted = refuted_first("reach_avoid", model, m, sets, refute)
+    if refuted is not None:
+        return refuted
     search = Search(m.ring, budget)
     try:
         found, tried = search_reach(m, sets, search)

@@ -318,6 +318,20 @@ def check_iterate_functions(model: "RecastModel", m: MapOnRelations, initial: Pi
     return False, f"iterate {steps} of the start is not proved to lie in the unsafe set (ball arithmetic)"
 
 
+def refuted_first(name: str, model: "RecastModel", m: MapOnRelations, sets: Mapping[str, Any],
+                  refute: "Callable[[], ConditionResult | None] | None") -> ConditionResult | None:
+    """A safety class's refutation before its search: over a box ``refute`` (its corners and centre), else the
+    point's falsification (:func:`falsify`; for ``reach_avoid`` an unsafe iterate before any in the goal),
+    each re-derived in ball arithmetic; None where none was found."""
+    if refute is not None:
+        return refute()
+    goal = sets["goal"][0] if name == "reach_avoid" else None
+    found = falsify(model, m, sets["initial"], sets["unsafe"], goal)
+    if found is None:
+        return None
+    return ds.refuted_result(name, model, found, " before any iterate is in the goal" if goal is not None else "")
+
+
 def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces,
             goal: Sequence[Poly] | None = None) -> ds.Counterexample | None:
     """The true map iterated in floating point (each function by numpy,
@@ -434,14 +448,9 @@ def run_barrier(model: "RecastModel", budget: Budget, box: "ModelBox | None" = N
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
-    if refute is not None:
-        refuted = refute()
-        if refuted is not None:
-            return refuted
-    else:
-        found_cx = falsify(model, m, sets["initial"], sets["unsafe"])
-        if found_cx is not None:
-            return ds.refuted_result("barrier", model, found_cx)
+    refuted = refuted_first("barrier", model, m, sets, refute)
+    if refuted is not None:
+        return refuted
     search = Search(m.ring, budget)
     try:
         found, tried = search_barrier(m, sets["initial"], sets["unsafe"], search)

@@ -181,19 +181,16 @@ def box_candidate(model: RecastModel, loop: Loop, proved: Loop, box: ModelBox, V
 
 
 def in_ring(source: Any, target: Any, p: Poly) -> Poly | None:
-    """``p`` moved from ``source`` to ``target`` by the variables' names; None where it uses one ``target``
-    lacks (an auxiliary the other recasting names differently)."""
-    index = {name: k for k, name in enumerate(target.names)}
-    terms = {}
-    for m, c in source.terms(p).items():
-        out = [0] * target.nvars
-        for k, e in enumerate(m):
-            if e:
-                if source.names[k] not in index:
-                    return None
-                out[index[source.names[k]]] = e
-        terms[tuple(out)] = c
-    return target.from_terms(terms)
+    """``p`` moved from ``source`` to ``target`` by the variables' names (:meth:`Ring.restrict` to the names they
+    share, then :meth:`Ring.embed`); None where it uses one ``target`` lacks (an auxiliary the other recasting
+    names differently)."""
+    from lyapcheck.sos.polynomials import Ring
+
+    shared = Ring(tuple(name for name in source.names if name in target.names))
+    try:
+        return shared.embed(source.restrict(p, shared), target)
+    except ValueError:
+        return None
 
 
 def robust_of(model: RecastModel) -> Any:

@@ -19,8 +19,8 @@ builder                sentence
 :func:`reason`         any other "what was tried" with its "what to try next"
 =====================  ==============================================================================
 
-The few ``not_applicable`` sentences that both kinds of loop print (:data:`NOT_OVER_A_BOX`,
-:data:`NEEDS_CANDIDATE`) are worded here too, once.
+The few ``not_applicable`` sentences that every kind of loop prints (:data:`NEEDS_CANDIDATE`,
+:data:`NO_DISTURBANCES`) are worded here too, once.
 """
 
 from __future__ import annotations
@@ -63,11 +63,6 @@ DEGREE: Final = re.compile(r"\bdegree (\d+)\b")
 #: the degree words of the common degrees (others: "of degree 6")
 DEGREE_WORDS: Final[Mapping[int, str]] = {2: "quadratic", 4: "quartic"}
 
-#: why a class that certifies a point is ``not_applicable`` over a ``--box``: one sentence per class (today
-#: ``candidate`` on a discrete-time map with functions only; every other kind takes it over a box)
-NOT_OVER_A_BOX: Final[Mapping[str, str]] = {
-    "candidate": "not over a box (the candidate class certifies a point: certify one with --set NAME=VALUE)",
-}
 #: why ``candidate`` asked for without ``--candidate`` is ``not_applicable`` (on every kind of loop)
 NEEDS_CANDIDATE: Final = 'needs --candidate "EXPR" (the user\'s V); not run'
 #: why ``sos_bound`` on a model without ``[disturbances]`` is ``not_applicable`` (on a loop and on a map)
@@ -210,6 +205,6 @@ def numerical_trouble(thing: str, detail: str | Iterable[str]) -> Reason:
                   detail)
 
 
-__all__ = ["NEXT", "SEARCHED_FOR", "NOT_OVER_A_BOX", "NEEDS_CANDIDATE", "NO_DISTURBANCES", "Reason", "searched_for", "size_limit",
+__all__ = ["NEXT", "SEARCHED_FOR", "NEEDS_CANDIDATE", "NO_DISTURBANCES", "Reason", "searched_for", "size_limit",
            "size_limits", "reason", "not_found", "out_of_time", "with_budget", "numerical_trouble", "advice",
            "degree_words"]

@@ -110,7 +110,7 @@ def verify_document(doc: dict[str, Any]) -> list[Row]:
                              f"reads {SCHEMA_VERSION}")
     try:
         # (a sampled-data loop is read by its own reader, then runs the same steps: its kind, verify.SAMPLED)
-        model, rows = _read_sampled(doc) if isinstance(doc.get("sampling"), dict) else _read_model(doc)
+        model, rows = _read_model(doc)
         if model is None:
             return rows
         from lyapcheck.models.surfaces.verify import verify_model
@@ -123,69 +123,47 @@ def verify_document(doc: dict[str, Any]) -> list[Row]:
 
 def _read_model(doc: dict[str, Any]) -> tuple[Any, list[Row]]:
     """The document's model, read again from its text (with its ``--set`` overrides and, on a loop with
-    functions, its candidate recast along), and the rows every document starts with: the text's
-    SHA-256, its parse, its kind (a ``recast`` table exactly when the loop has functions), the stated
-    parameters and equilibrium, and the declared figures; (None, rows) when the rest cannot be
-    checked."""
+    functions, its candidate recast along; a sampled-data loop's, a ``sampling`` table in its document, by the
+    sampled-data reader :func:`lyapcheck.models.language.sampling.parse_sampled`), and the rows every document
+    starts with: the text's SHA-256, its parse, its kind (a ``recast`` table exactly when the loop has
+    functions), the stated parameters and equilibrium (a sampled-data loop never has disturbances nor a
+    candidate), the declared figures and the networks' files; (None, rows) when the rest cannot be checked."""
     from lyapcheck.errors import ModelFileError
     from lyapcheck.models.language.modelfile import parse_any_model
     from lyapcheck.models.language.recast import RecastModel
-    from lyapcheck.models.surfaces.stated import check_declared
-
-    part = doc["model"]
-    text = part["text"]
-    if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
-        return None, [("model", False, "the model text does not match its SHA-256: the text was changed")]
-    try:
-        model = parse_any_model(text, part.get("file", "<certificate>"), doc.get("overrides") or {},
-                                candidate=doc.get("candidate"))
-    except ModelFileError as exc:
-        return None, [("model", False, f"the stored model text no longer parses: {exc}")]
-    recast = isinstance(doc.get("recast"), dict)
-    if recast != isinstance(model, RecastModel):
-        return None, [("model", False, "the stored model has no functions: it is not a recast loop" if recast else
-                       "the stored model uses functions: its certificate must state its recasting ('recast')")]
-    rows: list[Row] = [("model", True, "the model text matches its SHA-256, parses and is recast again from it"
-                        if recast else "the model text matches its SHA-256 and parses")]
-    same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
-            and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"])
-    rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
-                 "the stated parameters or equilibrium differ from the model text's"))
-    rows.append(check_declared(doc, model))
-    if getattr(model, "networks", ()) or "networks" in part:
-        from lyapcheck.models.language.networks import check_stated_files
-
-        rows.append(("networks", *check_stated_files(part.get("networks"), getattr(model, "networks", ()))))
-    return model, rows
-
-
-def _read_sampled(doc: dict[str, Any]) -> tuple[Any, list[Row]]:
-    """:func:`_read_model` for a sampled-data loop's document (a ``sampling`` table): the model text read
-    again by the sampled-data reader (:func:`lyapcheck.models.language.sampling.parse_sampled`) and the same
-    first rows (its SHA-256 and parse, the stated parameters and equilibrium, with no disturbances and no
-    candidate, which such a loop never has; the declared states; the networks' files)."""
-    from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.language.networks import check_stated_files
     from lyapcheck.models.language.sampling import parse_sampled
     from lyapcheck.models.surfaces.stated import check_declared
 
     part = doc["model"]
     text = part["text"]
+    sampled = isinstance(doc.get("sampling"), dict)
     if hashlib.sha256(text.encode()).hexdigest() != part["sha256"]:
         return None, [("model", False, "the model text does not match its SHA-256: the text was changed")]
+    file, overrides = part.get("file", "<certificate>"), doc.get("overrides") or {}
     try:
-        model = parse_sampled(text, part.get("file", "<certificate>"), doc.get("overrides") or {})
+        model = (parse_sampled(text, file, overrides) if sampled else
+                 parse_any_model(text, file, overrides, candidate=doc.get("candidate")))
     except ModelFileError as exc:
-        return None, [("model", False, f"the stored model text no longer parses as a sampled-data loop: {exc}")]
-    rows: list[Row] = [("model", True, "the model text matches its SHA-256 and parses as a sampled-data loop")]
+        kind = " as a sampled-data loop" if sampled else ""
+        return None, [("model", False, f"the stored model text no longer parses{kind}: {exc}")]
+    recast = isinstance(doc.get("recast"), dict)
+    if not sampled and recast != isinstance(model, RecastModel):
+        return None, [("model", False, "the stored model has no functions: it is not a recast loop" if recast else
+                       "the stored model uses functions: its certificate must state its recasting ('recast')")]
+    rows: list[Row] = [("model", True, "the model text matches its SHA-256 and parses as a sampled-data loop"
+                        if sampled else "the model text matches its SHA-256, parses and is recast again from it"
+                        if recast else "the model text matches its SHA-256 and parses")]
     same = ({k: str(v) for k, v in model.parameters.items()} == doc["parameters"]
             and {s: str(v) for s, v in zip(model.states, model.equilibrium)} == doc["equilibrium"]
-            and doc.get("disturbances") == {} and doc.get("candidate") is None)
+            and (not sampled or (doc.get("disturbances") == {} and doc.get("candidate") is None)))
     rows.append(("parameters", same, "parameters and equilibrium as stated" if same else
-                 "the stated parameters, equilibrium, disturbances or candidate differ from the model text's"))
+                 "the stated parameters, equilibrium, disturbances or candidate differ from the model text's"
+                 if sampled else "the stated parameters or equilibrium differ from the model text's"))
     rows.append(check_declared(doc, model))
-    if model.networks or "networks" in part:  # the files read again now are the ones certified
-        rows.append(("networks", *check_stated_files(part.get("networks"), model.networks)))
+    if getattr(model, "networks", ()) or "networks" in part:  # the files read again now are the ones certified
+        from lyapcheck.models.language.networks import check_stated_files
+
+        rows.append(("networks", *check_stated_files(part.get("networks"), getattr(model, "networks", ()))))
     return model, rows
 
 

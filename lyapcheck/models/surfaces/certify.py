@@ -258,7 +258,7 @@ def certify_model(model: "Model | RecastModel", *, classes: str | Sequence[str] 
             ctx.nominal_covers = ("all" if not ctx.enters else "zero") if model.disturbances else None
 
     def decide(entry: ModelClass) -> ConditionResult | None:
-        given = _needs_input(entry.name, None, cand)  # (the user's V is proved over a box too)
+        given = _needs_input(entry.name, cand)  # (the user's V is proved over a box too)
         if given is not None:
             return given
         if entry.cleared and uncleared is not None:
@@ -350,11 +350,9 @@ def _timed(name: str, compute: Callable[[Budget], ConditionResult], results: dic
 SETS_NAME_BOX = "over a box the sets may not depend on a parameter of the box (they are read at the model's values)"
 
 
-def _needs_input(name: str, box: "ModelBox | None", cand: object | None) -> ConditionResult | None:
-    """``candidate`` is ``not_applicable`` without ``--candidate``, on every kind of loop, and over a box
-    (``box`` given) on a kind that certifies it at a point only (a map with functions); None otherwise."""
-    if name == "candidate" and box is not None:
-        return ConditionResult("candidate", "not_applicable", reasons.NOT_OVER_A_BOX["candidate"])
+def _needs_input(name: str, cand: object | None) -> ConditionResult | None:
+    """``candidate`` is ``not_applicable`` without ``--candidate``, on every kind of loop (at a point and over
+    a box alike: every kind proves the user's V over a box); None otherwise."""
     if name == "candidate" and cand is None:
         return ConditionResult("candidate", "not_applicable", reasons.NEEDS_CANDIDATE)
     return None
@@ -466,7 +464,7 @@ def _certify_map_functions(model: "RecastModel", classes: str | Sequence[str] | 
 
     def decide(entry: ModelClass) -> ConditionResult | None:
         if box is not None:
-            given = _needs_input(entry.name, None, cand)  # (a candidate over a box: one V for every value)
+            given = _needs_input(entry.name, cand)  # (a candidate over a box: one V for every value)
             if given is not None:
                 return given
             if entry.run_map_functions is not None and entry.name not in BOX_CLASSES:
@@ -504,7 +502,7 @@ def _discrete_rule(entry: ModelClass, run: object, not_taken: str, results: dict
     if run is None:
         return ConditionResult(entry.name, "not_applicable", not_taken)
     zero: Disturbances | None = "zero" if disturbed else None
-    return _needs_input(entry.name, None, cand) or (roa_after_gas(results, zero, nominal=zero, over_box=over_box)
+    return _needs_input(entry.name, cand) or (roa_after_gas(results, zero, nominal=zero, over_box=over_box)
                                                     if entry.name == "roa" else None)
 
 
@@ -529,7 +527,7 @@ def _certify_functions(model: "RecastModel", classes: str | Sequence[str] | None
     def decide(entry: ModelClass) -> ConditionResult | None:
         # roa after GAS, weighed as on a polynomial loop; GAS with d = 0 answers at once here (this loop's roa
         # has no route that tries a region for every disturbance alone first)
-        return _needs_input(entry.name, None, cand) or (  # (the user's V is proved over a box too)
+        return _needs_input(entry.name, cand) or (  # (the user's V is proved over a box too)
             roa_after_gas(results, "all" if model.disturbances else None, nominal, box is not None)
             or roa_after_gas(results, "zero", nominal, box is not None) if entry.name == "roa" else None)
 
