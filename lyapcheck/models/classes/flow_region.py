@@ -268,6 +268,9 @@ def check_flow(loop: "Loop", cert: dict[str, Any]) -> tuple[bool, str]:
             pieces = entry["pieces"]
             if not isinstance(pieces, int) or not 1 <= pieces <= FLOW_MAX_PIECES:
                 return False, f"flow box {k}: pieces must be an integer from 1 to {FLOW_MAX_PIECES}"
+            if work + steps > FLOW_STEP_BUDGET:  # (before integrating: a forged tiny step must not make verify run on)
+                return False, (f"flow: the boxes take more than the {FLOW_STEP_BUDGET} steps certify may spend "
+                               "(lyapcheck.tolerances.FLOW_STEP_BUDGET)")
             # the same deterministic integration, with the pieces the box was cut into and no other limit
             outcome = flow_into(field, lo, hi, h, target, int(steps), float("inf"), max_pieces=pieces)
             work += outcome.taken
