@@ -37,7 +37,9 @@ MEANING: Final = {
     "not_certified": "no class certified; nothing is proved either way (the box may be at the minimum width or the "
                      "sweep at its box budget)",
     "refuted": "the equilibrium is proved unstable, exactly (the linearization has an eigenvalue with positive real "
-               "part) at the point or at a corner of the box: no stability certificate can exist there",
+               "part) at the point or at a corner of the box: no stability certificate can exist there; or a safety "
+               "class (barrier, reach_avoid) is refuted by an unsafe trajectory proved at the point or at a value of "
+               "the box (named in the note): its claim for every value of the box is false",
 }
 #: leaves listed when there is no map (three swept parameters)
 MAX_LEAF_ROWS: Final = 200
