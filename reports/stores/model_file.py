@@ -24,6 +24,7 @@ from typing import Any, Final, Sequence
 
 import numpy as np
 
+from lyapcheck.models.language.parameter_box import box_text
 from reports import figures
 from reports.stores.common import LEAF_NAMES, BoxAxis, Leaves, box_map, mpl, provenance, window_percent
 from reports.views import fmt_float
@@ -38,8 +39,8 @@ MEANING: Final = {
                      "sweep at its box budget)",
     "refuted": "the equilibrium is proved unstable, exactly (the linearization has an eigenvalue with positive real "
                "part) at the point or at a corner of the box: no stability certificate can exist there; or a safety "
-               "class (barrier, reach_avoid) is refuted by an unsafe trajectory proved at the point or at a value of "
-               "the box (named in the note): its claim for every value of the box is false",
+               "class (barrier, reach_avoid) is refuted: a start in the initial set is proved to reach the unsafe set "
+               "at the point or at a value of the box (named in the note), so its claim for every value is false",
 }
 #: leaves listed when there is no map (three swept parameters)
 MAX_LEAF_ROWS: Final = 200
@@ -54,7 +55,7 @@ def _span(values: list[float] | None, unit: str = "") -> str:
 
 
 def _where_box(dims: Sequence[str], lo: Sequence[float], hi: Sequence[float]) -> str:
-    return ", ".join(f"{d} in [{fmt_float(float(a), 5)}, {fmt_float(float(b), 5)}]" for d, a, b in zip(dims, lo, hi))
+    return box_text(((d, float(a), float(b)) for d, a, b in zip(dims, lo, hi)), digits=5)
 
 
 def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
@@ -121,7 +122,7 @@ def _violations(summary: ModelSweepSummary) -> tuple[list[tuple[str, str]], int]
         if "more" in entry:
             more += int(entry["more"])
             continue
-        where = ", ".join(f"{k} in [{fmt_float(v[0], 5)}, {fmt_float(v[1], 5)}]" if isinstance(v, list) else
+        where = ", ".join(box_text([(k, float(v[0]), float(v[1]))], digits=5) if isinstance(v, list) else
                           f"{k} = {fmt_float(float(v), 6)}" for k, v in entry.items() if k not in ("box", "detail"))
         if "box" in entry:
             where = f"box {entry['box']}: {where}"

@@ -63,6 +63,7 @@ from lyapcheck.models.classes import discrete_functions as dfn
 from lyapcheck.models.classes import discrete_linearization
 from lyapcheck.models.classes.claims import BOX_BALL_STEIN_METHOD, box_ball_stein_sentence, discrete_interval_sentence
 from lyapcheck.models.engines.interval_field import BallLoop, Jet, ball
+from lyapcheck.models.language.parameter_box import box_text
 from lyapcheck.results import ConditionResult
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -191,7 +192,7 @@ def prove_over_box(system: "RecastSystem", box: "ModelBox", P: list[list[Fractio
         part = stack.pop()
         count += 1
         if count > tolerances.MAP_BOX_PIECES:
-            words = ", ".join(f"{k} in [{float(lo):.6g}, {float(hi):.6g}]" for k, (lo, hi) in part.items())
+            words = box_text((k, lo, hi) for k, (lo, hi) in part.items())
             return False, count - 1, (f"not proved on the part {words} after {tolerances.MAP_BOX_PIECES} parts of the "
                                       "box (lyapcheck.tolerances.MAP_BOX_PIECES)"), proved
         A = jacobian_balls(boxed_map(system, part))
