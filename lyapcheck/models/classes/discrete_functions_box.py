@@ -141,35 +141,13 @@ def jacobian_balls(loop: BallLoop) -> list[list[Any]] | None:
     return rows
 
 
-def _endpoints(x: Any) -> Interval:
-    """A finite ball's exact ends."""
-    def exact(e: Any) -> Fraction:
-        mantissa, exponent = e.man_exp()
-        return Fraction(int(mantissa)) * Fraction(2) ** int(exponent)
-
-    return exact(x.lower()), exact(x.upper())
-
-
 def stein_margin_proved(P: list[list[Fraction]], A: list[list[Any]]) -> bool:
     """``P - A^T P A > 0`` for every matrix of the ball matrix ``A`` (module docstring: midpoints, radii, an
-    induced norm's bound, then an exact test)."""
-    from lyapcheck.sos.definiteness import is_positive_definite
+    induced norm's bound, then an exact test): the sampled-data loop's test
+    (:func:`lyapcheck.models.classes.sampled_regions.stein_margin`) with no margin."""
+    from lyapcheck.models.classes.sampled_regions import stein_margin
 
-    n = len(P)
-    Pb = [[ball(x) for x in row] for row in P]
-    PA = [[sum((Pb[k][l] * A[l][j] for l in range(n)), flint.arb(0)) for j in range(n)] for k in range(n)]
-    C = [[Fraction(0)] * n for _ in range(n)]
-    R = [[Fraction(0)] * n for _ in range(n)]
-    for i in range(n):
-        for j in range(i, n):
-            m = Pb[i][j] - sum((A[k][i] * PA[k][j] for k in range(n)), flint.arb(0))
-            if not m.is_finite():
-                return False
-            lo, hi = _endpoints(m)
-            C[i][j] = C[j][i] = (lo + hi) / 2
-            R[i][j] = R[j][i] = (hi - lo) / 2
-    r = max(sum(row) for row in R)
-    return is_positive_definite([[C[i][j] - (r if i == j else 0) for j in range(n)] for i in range(n)])
+    return stein_margin(P, A, Fraction(0))
 
 
 def _halves(part: dict[str, Interval]) -> tuple[dict[str, Interval], dict[str, Interval]]:
