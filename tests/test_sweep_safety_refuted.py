@@ -101,3 +101,35 @@ def test_a_refuted_box_is_split_only_while_another_class_over_it_is_open(
     for status, split in (("not_certified", True), ("certified", False)):
         code = np.array([BOX_STATUS_CODES[status]])
         assert safety.undecided({**held, "status": code, "unstable_corners": np.array([-1])}, 0) is split
+
+
+def test_a_point_refuted_by_its_barrier_is_refuted_and_the_page_says_unsafe(tmp_path: Path) -> None:
+    """The same map over points: each point's barrier refuted makes the point ``refuted`` (counted); the page says
+    what such a refutation is, and the map's legend calls the points unsafe (no stability class was asked)."""
+    from reports.render import sweep_html
+    from reports.stores.model_file import _refuted_words
+    from sweeps.store import open_results
+    from tests.test_model_sweeps import arrays, run, write
+
+    spec = SPEC.format(classes='["barrier"]').replace('mode = "boxes"', 'mode = "points"')
+    spec = spec[:spec.index("[sweep.boxes]")]
+    result = run(write(tmp_path, spec, model=_with_gain(UNSAFE)), tmp_path / "points.zarr")
+    data = arrays(tmp_path / "points.zarr")
+    assert list(data["status"]) == [STATUS_CODES["refuted"]] * 3 == list(data["status_barrier"])
+    assert all(str(note).startswith("barrier refuted: ") for note in data["note"])
+    assert result.summary.counts["refuted"] == 3
+    page = sweep_html(str(tmp_path / "points.zarr"))  # (the map's legend is drawn, not text: its words are asked)
+    assert "a safety class (barrier, reach_avoid) is refuted" in page
+    assert _refuted_words(open_results(tmp_path / "points.zarr")) == "unsafe"
+
+
+@pytest.mark.parametrize("classes, words", [(["linearization", "roa"], "unstable"), (["barrier", "reach_avoid"], "unsafe"),
+                                            (["quadratic", "barrier"], "unstable or unsafe"),
+                                            (["sos_bound", "barrier"], "unsafe")])
+def test_the_legend_names_what_a_refuted_point_can_be(classes: list[str], words: str) -> None:
+    import json
+    from types import SimpleNamespace
+
+    from reports.stores.model_file import _refuted_words
+
+    assert _refuted_words(SimpleNamespace(attrs={"classes": json.dumps(classes)})) == words

@@ -2,7 +2,8 @@
 
 A model sweep's store (:mod:`sweeps.schema`) holds, per grid point or per box of a
 refinement tree, the status (``certified``: a class of the model proved its property, for every
-parameter value of a box; ``refuted``: the equilibrium is proved unstable there, exactly;
+parameter value of a box; ``refuted``: the equilibrium is proved unstable there, exactly, or a safety class's
+claim is proved false there (an initial start reaching the unsafe set);
 ``not_certified``: nothing decided), each class's status and key figures, the certificate document
 and the simulation cross-check. The page draws the map over the swept parameters:
 
@@ -93,6 +94,16 @@ def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
                      ("deepest refinement level", str(int(data["level"][done].max())) if done.any() else "—")]}
 
 
+def _refuted_words(ds: Any) -> str:
+    """What a refuted point of this sweep is: unstable (a stability class asked), unsafe (a safety class), or
+    either (both kinds asked)."""
+    from lyapcheck.models.classes.registry import SAFETY, STABILITY
+
+    classes = json_list(ds, "classes")
+    unsafe, unstable = any(c in SAFETY for c in classes), any(c in STABILITY for c in classes)
+    return "unstable or unsafe" if unsafe and unstable else "unsafe" if unsafe else "unstable"
+
+
 def _point_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
     dims = summary.dims
     axes = [figures.Axis(d, mpl(d), np.asarray(ds.coords[d].values, dtype=float), summary.scales[d] == "log")
@@ -101,7 +112,7 @@ def _point_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
     violation = np.asarray(ds["soundness_violation"].transpose(*dims).values).astype(bool)
     legend = [(1, "certified", figures.STATUS_COLOURS["certified"]),
               (0, "not certified", figures.STATUS_COLOURS["not_certified"]),
-              (2, "refuted (unstable)", figures.STATUS_COLOURS["refuted"]),
+              (2, f"refuted ({_refuted_words(ds)})", figures.STATUS_COLOURS["refuted"]),
               (-1, "not computed", figures.STATUS_COLOURS["not_computed"])]
     present = [entry for entry in legend if np.any(codes == entry[0])] or legend[:1]
     svg = figures.category_map(codes, axes, title=mpl(f"{summary.model.get('name') or 'model'}: status at each grid "
