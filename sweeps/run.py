@@ -34,7 +34,7 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 import numpy as np
 
 from sweeps.evaluate import (
-    MODEL_STABILITY_CLASSES, Evaluator, evaluate_boxes, evaluate_model_boxes, evaluate_model_points, evaluate_unit,
+    MODEL_SAFETY_CLASSES, MODEL_STABILITY_CLASSES, Evaluator, evaluate_boxes, evaluate_model_boxes, evaluate_model_points, evaluate_unit,
 )
 from sweeps.refine import coarse_cells, coarse_points, split
 from sweeps.runners import Runner, make_runner
@@ -381,14 +381,14 @@ def run_boxes(spec: SweepSpec, out: str | Path, *, runner: Runner, progress: Pro
 def model_box_tree(spec: ModelSweepSpec) -> BoxTree:
     """A model file's boxes: the widest axis halved (:func:`sweeps.spec.split_cell`), undecided while
     ``not_certified``, or ``refuted`` with a class still open: a stability class where a corner is not unstable
-    (the part that is stable may still be proved), or a class that is neither stability nor refuted (a ``sos_bound``
-    not certified, a safety class not refuted beside one that is). A safety class refuted at a value of the box
+    (the part that is stable may still be proved, as before), or a safety class neither certified nor refuted
+    (beside a refuted one, or beside unstable corners). A safety class refuted at a value of the box
     (:data:`sweeps.evaluate.MODEL_SAFETY_CLASSES`) has its claim for every value of the box decided: the box is not
-    split for it."""
+    split for it. (``sos_bound`` beside a refutation does not split a box: as before, it is not a reason.)"""
     undecided = (BOX_STATUS_CODES["not_certified"], BOX_STATUS_CODES["split"])
     all_corners = 2 ** len(spec.axes)
     stability = [c for c in spec.classes if c in MODEL_STABILITY_CLASSES]
-    others = [c for c in spec.classes if c not in MODEL_STABILITY_CLASSES]
+    safety = [c for c in spec.classes if c in MODEL_SAFETY_CLASSES]
     # (not_applicable is not open: splitting the box does not make the class apply)
     open_codes = (STATUS_CODES["not_certified"], STATUS_CODES["inconclusive"])
 
@@ -399,14 +399,14 @@ def model_box_tree(spec: ModelSweepSpec) -> BoxTree:
         if status != BOX_STATUS_CODES["refuted"]:
             return False
         return bool((stability and 0 <= held["unstable_corners"][i] < all_corners)
-                    or any(held[f"status_{c}"][i] in open_codes for c in others))
+                    or any(held[f"status_{c}"][i] in open_codes for c in safety))
 
     return BoxTree(
         initial=initial_cells(spec), split=lambda cell: split_cell(cell, spec.axes),
         width=lambda cell: max(relative_width(cell, spec.axes).values()),
         edges=lambda cell: {name: (float(lo), float(hi)) for name, (lo, hi) in cell.items()},
         payload=lambda cell: {name: [str(lo), str(hi)] for name, (lo, hi) in cell.items()},
-        unit=evaluate_model_boxes, tracked=("status", "unstable_corners", *(f"status_{c}" for c in others)),
+        unit=evaluate_model_boxes, tracked=("status", "unstable_corners", *(f"status_{c}" for c in safety)),
         undecided=is_undecided)
 
 
