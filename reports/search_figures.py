@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Final, Sequence
 
+from lyapcheck.models.language.parameter_box import box_text, interval_ends
 from reports import figures
 from reports.figures import Figure
 from reports.stores.common import mpl
@@ -189,7 +190,7 @@ def box_map(names: Sequence[str], box: Sequence[tuple[float, float]], tried: Seq
     ax.set_xlabel(mpl(names[0]))
     _legend(fig, has, neighbourhood is not None, bool(failed_tries))
     fig.suptitle(mpl(title), fontsize=10)
-    shown = " x ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in zip(names, box))
+    shown = box_text(((n, lo, hi) for n, (lo, hi) in zip(names, box)), " x ")
     if one_d:
         caption = (f"The figure proved at each point tried over {shown} (a line between the proved points only "
                    "guides the eye: nothing is claimed between them). The star is the winner"
@@ -296,7 +297,7 @@ def bisection(parameter: str, direction: str, low: float, high: float, steps: Se
     ax.legend(fontsize=7, loc="best")
     fig.suptitle(mpl(title), fontsize=10)
     word = "largest" if direction == "max" else "smallest"
-    caption = (f"Each value of {parameter} tried in [{low:.6g}, {high:.6g}], in order, with its outcome: proved "
+    caption = (f"Each value of {parameter} tried in [{', '.join(interval_ends(low, high))}], in order, with its outcome: proved "
                "(certify succeeds there, exactly), refuted (a question answered negatively, exactly) or not proved. "
                f"The {word} value proved and the first value that failed beyond it bound the answer; the grey band "
                "between them was not decided.")

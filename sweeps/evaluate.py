@@ -56,8 +56,10 @@ uninterrupted one).
   the box is refuted (whether to split it), cross-checked at random parameter points (a map with functions:
   its true map iterated at the box's corners too); either by :func:`sweeps.crosscheck.cross_check_box`.
 
-A point or box is ``certified`` when any class certified; ``refuted`` when the equilibrium is proved
-unstable there (the linearization, exactly) and nothing certified; else ``not_certified``. Every
+A point or box is ``certified`` when any class certified; ``refuted`` when nothing certified and the
+equilibrium is proved unstable there (the linearization, exactly) or a safety class (``barrier``,
+``reach_avoid``: :data:`MODEL_SAFETY_CLASSES`) is refuted there (an unsafe trajectory proved at a value of it, named
+in the note); else ``not_certified``. Every
 certified one is cross-checked by simulation (:mod:`sweeps.crosscheck`) and its certificate
 document is returned as JSON, without the solver logs (their wall times would make the store's
 bytes depend on the machine's load; ``verify`` does not read them). A class's figures are stored
@@ -398,6 +400,9 @@ def _box_bound(spec: SweepSpec, box: ParameterBox, box_id: int, out: dict[str, n
 #: the classes whose certificate proves a stability property (an unstable point refutes them), as
 #: :data:`lyapcheck.models.classes.registry.CLASSES` declares them
 MODEL_STABILITY_CLASSES: Final = model_classes.STABILITY
+#: the classes whose ``refuted`` is a proved unsafe trajectory (:data:`lyapcheck.models.classes.registry.SAFETY`):
+#: a point or box where one is refuted (and nothing certified) is ``refuted``, and a box is not split for it
+MODEL_SAFETY_CLASSES: Final = model_classes.SAFETY
 
 
 def _model_empty(spec: ModelSweepSpec, n: int) -> dict[str, np.ndarray]:
@@ -438,6 +443,10 @@ def _model_record(spec: ModelSweepSpec, result: Any, out: dict[str, np.ndarray],
         if c in statuses:
             out[f"status_{c}"][j] = STATUS_CODES.get(statuses[c], STATUS_CODES["inconclusive"])
     certified = [c for c in spec.classes if statuses.get(c) == "certified"]
+    # a safety class refuted is an unsafe trajectory proved at a value of the point or box: its claim for every
+    # value is false there, as an unstable corner's is for the stability classes (the value is in its summary)
+    unsafe = [c for c in spec.classes if c in MODEL_SAFETY_CLASSES and statuses.get(c) == "refuted"
+              and c in result.results]
     for c in certified:
         numbers = result.results[c].numbers
         for suffix, key, _ in class_figures(c, spec.discrete):
@@ -451,9 +460,11 @@ def _model_record(spec: ModelSweepSpec, result: Any, out: dict[str, np.ndarray],
         out["note"][j] = "certified by " + ", ".join(
             f"{c} ({result.results[c].proves()}{', d = 0' if result.results[c].disturbances == 'zero' else ''})"
             for c in certified)
-    elif refuted is not None or statuses.get("linearization") == "refuted":
+    elif refuted is not None or statuses.get("linearization") == "refuted" or unsafe:
         status = "refuted"
-        out["note"][j] = (refuted or {}).get("note") or result.results["linearization"].summary
+        notes = [(refuted or {}).get("note") or result.results["linearization"].summary] \
+            if refuted is not None or statuses.get("linearization") == "refuted" else []
+        out["note"][j] = "; ".join(notes + [f"{c} refuted: {result.results[c].summary}" for c in unsafe])
     else:
         status = "not_certified"
         out["note"][j] = "no class certified: " + ", ".join(f"{c} {statuses.get(c, 'not computed')}"
@@ -711,4 +722,4 @@ def _recast_box(spec: ModelSweepSpec, box_id: int, cell: Mapping[str, tuple[Frac
 
 __all__ = ["evaluate", "evaluate_unit", "certify_point", "simulate_points", "empty_result", "Evaluator", "evaluate_boxes",
            "evaluate_model_points", "evaluate_model_boxes", "certificate_json", "box_seed", "unstable_corners",
-           "classes_left", "MODEL_STABILITY_CLASSES", "UNIT_LOCK"]
+           "classes_left", "MODEL_STABILITY_CLASSES", "MODEL_SAFETY_CLASSES", "UNIT_LOCK"]

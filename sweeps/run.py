@@ -33,7 +33,9 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from sweeps.evaluate import Evaluator, evaluate_boxes, evaluate_model_boxes, evaluate_model_points, evaluate_unit
+from sweeps.evaluate import (
+    MODEL_SAFETY_CLASSES, MODEL_STABILITY_CLASSES, Evaluator, evaluate_boxes, evaluate_model_boxes, evaluate_model_points, evaluate_unit,
+)
 from sweeps.refine import coarse_cells, coarse_points, split
 from sweeps.runners import Runner, make_runner
 from sweeps.schema import BOX_STATUS_CODES, BOXES_MODE, POINTS_MODE, STATUS_CODES
@@ -378,22 +380,34 @@ def run_boxes(spec: SweepSpec, out: str | Path, *, runner: Runner, progress: Pro
 # -- a model file ---------------------------------------------------------------------------------
 def model_box_tree(spec: ModelSweepSpec) -> BoxTree:
     """A model file's boxes: the widest axis halved (:func:`sweeps.spec.split_cell`), undecided while
-    ``not_certified``, or ``refuted`` with a corner that is not unstable (the part that is stable may
-    still be proved)."""
+    ``not_certified``, or ``refuted`` with a class still open: a stability class where a corner is not unstable
+    (the part that is stable may still be proved, as before), or a safety class neither certified nor refuted
+    (beside a refuted one, or beside unstable corners). A safety class refuted at a value of the box
+    (:data:`sweeps.evaluate.MODEL_SAFETY_CLASSES`) has its claim for every value of the box decided: the box is not
+    split for it. (``sos_bound`` beside a refutation does not split a box: as before, it is not a reason.)"""
     undecided = (BOX_STATUS_CODES["not_certified"], BOX_STATUS_CODES["split"])
     all_corners = 2 ** len(spec.axes)
+    stability = [c for c in spec.classes if c in MODEL_STABILITY_CLASSES]
+    safety = [c for c in spec.classes if c in MODEL_SAFETY_CLASSES]
+    # (not_applicable is not open: splitting the box does not make the class apply)
+    open_codes = (STATUS_CODES["not_certified"], STATUS_CODES["inconclusive"])
 
     def is_undecided(held: Mapping[str, np.ndarray], i: int) -> bool:
         status = held["status"][i]
-        return bool(status in undecided or (status == BOX_STATUS_CODES["refuted"]
-                                            and 0 <= held["unstable_corners"][i] < all_corners))
+        if status in undecided:
+            return True
+        if status != BOX_STATUS_CODES["refuted"]:
+            return False
+        return bool((stability and 0 <= held["unstable_corners"][i] < all_corners)
+                    or any(held[f"status_{c}"][i] in open_codes for c in safety))
 
     return BoxTree(
         initial=initial_cells(spec), split=lambda cell: split_cell(cell, spec.axes),
         width=lambda cell: max(relative_width(cell, spec.axes).values()),
         edges=lambda cell: {name: (float(lo), float(hi)) for name, (lo, hi) in cell.items()},
         payload=lambda cell: {name: [str(lo), str(hi)] for name, (lo, hi) in cell.items()},
-        unit=evaluate_model_boxes, tracked=("status", "unstable_corners"), undecided=is_undecided)
+        unit=evaluate_model_boxes, tracked=("status", "unstable_corners", *(f"status_{c}" for c in safety)),
+        undecided=is_undecided)
 
 
 def run_model_sweep(spec: ModelSweepSpec, out: str | Path, *, runner: Runner, progress: Progress | None = None,

@@ -42,7 +42,8 @@ Variables (``<c>`` a class of the sweep, ``<y>`` an output of the model):
 
 * ``status`` int8: 1 certified (a class proved its property for the point, or for every point
   of the box), 2 refuted (the equilibrium is proved unstable, exactly, at the point or at a
-  corner of the box: no stability class can hold there), 0 not certified, 3 split (boxes: halved
+  corner of the box: no stability class can hold there; or a safety class is refuted by an unsafe trajectory
+  proved at the point or at a value of the box, named in ``note``), 0 not certified, 3 split (boxes: halved
   further), -1 not computed;
 * ``status_<c>`` int8: each class's own status (:data:`sweeps.schema.STATUS_CODES`: 0
   not_certified, 1 certified, 2 refuted, 3 inconclusive, 4 not_applicable; -1 not computed);
@@ -370,7 +371,7 @@ def _figures(classes: Sequence[str], outputs: Sequence[str], discrete: bool = Fa
 
 def _model_common(classes: Sequence[str], outputs: Sequence[str], what: str, discrete: bool = False) -> list[Variable]:
     i8, i16, i32, f8, b1 = (np.dtype(t) for t in ("int8", "int16", "int32", "float64", "bool"))
-    out = [Variable("status", i8, NOT_COMPUTED, "1 certified, 2 refuted (unstable, exactly), 0 not certified, "
+    out = [Variable("status", i8, NOT_COMPUTED, "1 certified, 2 refuted (unstable, or unsafe, exactly), 0 not certified, "
                     "3 split, -1 not computed")]
     out += [Variable(f"status_{c}", i8, NOT_COMPUTED, f"{c} over the {what}: 0 not_certified, 1 certified, 2 refuted, "
                      "3 inconclusive, 4 not_applicable, -1 not computed") for c in classes]

@@ -943,7 +943,9 @@ def split_cell(cell: Cell, axes: Sequence[ModelAxis]) -> tuple[Cell, Cell]:
 
 
 def _describe(bounds: Mapping[str, tuple[Fraction, Fraction]]) -> str:
-    return ", ".join(f"{name} in [{float(lo):.6g}, {float(hi):.6g}]" for name, (lo, hi) in bounds.items())
+    from lyapcheck.models.language.parameter_box import box_text
+
+    return box_text((name, lo, hi) for name, (lo, hi) in bounds.items())
 
 
 def _check_defined(spec: ModelSweepSpec, source: str) -> None:

@@ -2,7 +2,8 @@
 
 A model sweep's store (:mod:`sweeps.schema`) holds, per grid point or per box of a
 refinement tree, the status (``certified``: a class of the model proved its property, for every
-parameter value of a box; ``refuted``: the equilibrium is proved unstable there, exactly;
+parameter value of a box; ``refuted``: the equilibrium is proved unstable there, exactly, or a safety class's
+claim is proved false there (an initial start reaching the unsafe set);
 ``not_certified``: nothing decided), each class's status and key figures, the certificate document
 and the simulation cross-check. The page draws the map over the swept parameters:
 
@@ -24,6 +25,7 @@ from typing import Any, Final, Sequence
 
 import numpy as np
 
+from lyapcheck.models.language.parameter_box import box_text
 from reports import figures
 from reports.stores.common import LEAF_NAMES, BoxAxis, Leaves, box_map, mpl, provenance, window_percent
 from reports.views import fmt_float
@@ -37,7 +39,9 @@ MEANING: Final = {
     "not_certified": "no class certified; nothing is proved either way (the box may be at the minimum width or the "
                      "sweep at its box budget)",
     "refuted": "the equilibrium is proved unstable, exactly (the linearization has an eigenvalue with positive real "
-               "part) at the point or at a corner of the box: no stability certificate can exist there",
+               "part) at the point or at a corner of the box: no stability certificate can exist there; or a safety "
+               "class (barrier, reach_avoid) is refuted: a start in the initial set is proved to reach the unsafe set "
+               "at the point or at a value of the box (named in the note), so its claim for every value is false",
 }
 #: leaves listed when there is no map (three swept parameters)
 MAX_LEAF_ROWS: Final = 200
@@ -52,7 +56,7 @@ def _span(values: list[float] | None, unit: str = "") -> str:
 
 
 def _where_box(dims: Sequence[str], lo: Sequence[float], hi: Sequence[float]) -> str:
-    return ", ".join(f"{d} in [{fmt_float(float(a), 5)}, {fmt_float(float(b), 5)}]" for d, a, b in zip(dims, lo, hi))
+    return box_text(((d, float(a), float(b)) for d, a, b in zip(dims, lo, hi)), digits=5)
 
 
 def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
@@ -90,6 +94,16 @@ def _box_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
                      ("deepest refinement level", str(int(data["level"][done].max())) if done.any() else "—")]}
 
 
+def _refuted_words(ds: Any) -> str:
+    """What a refuted point of this sweep is: unstable (a stability class asked), unsafe (a safety class), or
+    either (both kinds asked)."""
+    from lyapcheck.models.classes.registry import SAFETY, STABILITY
+
+    classes = json_list(ds, "classes")
+    unsafe, unstable = any(c in SAFETY for c in classes), any(c in STABILITY for c in classes)
+    return "unstable or unsafe" if unsafe and unstable else "unsafe" if unsafe else "unstable"
+
+
 def _point_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
     dims = summary.dims
     axes = [figures.Axis(d, mpl(d), np.asarray(ds.coords[d].values, dtype=float), summary.scales[d] == "log")
@@ -98,7 +112,7 @@ def _point_part(ds: Any, summary: ModelSweepSummary) -> dict[str, Any]:
     violation = np.asarray(ds["soundness_violation"].transpose(*dims).values).astype(bool)
     legend = [(1, "certified", figures.STATUS_COLOURS["certified"]),
               (0, "not certified", figures.STATUS_COLOURS["not_certified"]),
-              (2, "refuted (unstable)", figures.STATUS_COLOURS["refuted"]),
+              (2, f"refuted ({_refuted_words(ds)})", figures.STATUS_COLOURS["refuted"]),
               (-1, "not computed", figures.STATUS_COLOURS["not_computed"])]
     present = [entry for entry in legend if np.any(codes == entry[0])] or legend[:1]
     svg = figures.category_map(codes, axes, title=mpl(f"{summary.model.get('name') or 'model'}: status at each grid "
@@ -119,7 +133,7 @@ def _violations(summary: ModelSweepSummary) -> tuple[list[tuple[str, str]], int]
         if "more" in entry:
             more += int(entry["more"])
             continue
-        where = ", ".join(f"{k} in [{fmt_float(v[0], 5)}, {fmt_float(v[1], 5)}]" if isinstance(v, list) else
+        where = ", ".join(box_text([(k, float(v[0]), float(v[1]))], digits=5) if isinstance(v, list) else
                           f"{k} = {fmt_float(float(v), 6)}" for k, v in entry.items() if k not in ("box", "detail"))
         if "box" in entry:
             where = f"box {entry['box']}: {where}"

@@ -22,6 +22,7 @@ from typing import Any, Final, Mapping, Sequence
 import numpy as np
 
 from lyapcheck.errors import InputFileError, LyapcheckError
+from lyapcheck.models.language.parameter_box import box_text
 from reports import figures
 from reports.stores.common import (
     LEAF_NAMES, LEAF_STATUSES, BoxAxis, Leaves, box_map, json_attr, mpl, provenance, value_range, window_percent,
@@ -166,8 +167,7 @@ def _paper(axes: Sequence[BoxAxis], paper: Any) -> list[float] | None:
 # ----------------------------------------------------------------------------------------------
 def _box_text(axes: Sequence[BoxAxis], lo: Sequence[float], hi: Sequence[float]) -> str:
     """``alpha_d (1/s) in [150, 375], ...`` (display units)."""
-    return ", ".join(f"{a.label} in [{fmt_float(float(l), 5)}, {fmt_float(float(h), 5)}]"
-                     for a, l, h in zip(axes, lo, hi))
+    return box_text(((a.label, float(l), float(h)) for a, l, h in zip(axes, lo, hi)), digits=5)
 
 
 def _at_paper(axes: Sequence[BoxAxis], leaves: Leaves, paper: Sequence[float] | None,

@@ -63,6 +63,7 @@ from lyapcheck.models.classes import discrete_functions as dfn
 from lyapcheck.models.classes import discrete_linearization
 from lyapcheck.models.classes.claims import BOX_BALL_STEIN_METHOD, box_ball_stein_sentence, discrete_interval_sentence
 from lyapcheck.models.engines.interval_field import BallLoop, Jet, ball
+from lyapcheck.models.language.parameter_box import box_text
 from lyapcheck.results import ConditionResult
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -140,35 +141,13 @@ def jacobian_balls(loop: BallLoop) -> list[list[Any]] | None:
     return rows
 
 
-def _endpoints(x: Any) -> Interval:
-    """A finite ball's exact ends."""
-    def exact(e: Any) -> Fraction:
-        mantissa, exponent = e.man_exp()
-        return Fraction(int(mantissa)) * Fraction(2) ** int(exponent)
-
-    return exact(x.lower()), exact(x.upper())
-
-
 def stein_margin_proved(P: list[list[Fraction]], A: list[list[Any]]) -> bool:
     """``P - A^T P A > 0`` for every matrix of the ball matrix ``A`` (module docstring: midpoints, radii, an
-    induced norm's bound, then an exact test)."""
-    from lyapcheck.sos.definiteness import is_positive_definite
+    induced norm's bound, then an exact test): the sampled-data loop's test
+    (:func:`lyapcheck.models.classes.sampled_regions.stein_margin`) with no margin."""
+    from lyapcheck.models.classes.sampled_regions import stein_margin
 
-    n = len(P)
-    Pb = [[ball(x) for x in row] for row in P]
-    PA = [[sum((Pb[k][l] * A[l][j] for l in range(n)), flint.arb(0)) for j in range(n)] for k in range(n)]
-    C = [[Fraction(0)] * n for _ in range(n)]
-    R = [[Fraction(0)] * n for _ in range(n)]
-    for i in range(n):
-        for j in range(i, n):
-            m = Pb[i][j] - sum((A[k][i] * PA[k][j] for k in range(n)), flint.arb(0))
-            if not m.is_finite():
-                return False
-            lo, hi = _endpoints(m)
-            C[i][j] = C[j][i] = (lo + hi) / 2
-            R[i][j] = R[j][i] = (hi - lo) / 2
-    r = max(sum(row) for row in R)
-    return is_positive_definite([[C[i][j] - (r if i == j else 0) for j in range(n)] for i in range(n)])
+    return stein_margin(P, A, Fraction(0))
 
 
 def _halves(part: dict[str, Interval]) -> tuple[dict[str, Interval], dict[str, Interval]]:
@@ -191,7 +170,7 @@ def prove_over_box(system: "RecastSystem", box: "ModelBox", P: list[list[Fractio
         part = stack.pop()
         count += 1
         if count > tolerances.MAP_BOX_PIECES:
-            words = ", ".join(f"{k} in [{float(lo):.6g}, {float(hi):.6g}]" for k, (lo, hi) in part.items())
+            words = box_text((k, lo, hi) for k, (lo, hi) in part.items())
             return False, count - 1, (f"not proved on the part {words} after {tolerances.MAP_BOX_PIECES} parts of the "
                                       "box (lyapcheck.tolerances.MAP_BOX_PIECES)"), proved
         A = jacobian_balls(boxed_map(system, part))

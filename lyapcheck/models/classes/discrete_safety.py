@@ -246,23 +246,42 @@ def _step_support(ring: Ring, F: Sequence[Poly], m: Monomial) -> list[Monomial]:
     return sorted(set(ring.support(compose(ring, ring.monomial(m), F))) | {m})
 
 
-def _on_sets_program(ring: Ring, F: Sequence[Poly], basis: Sequence[Monomial], degree: int, initial: Pieces,
-                     unsafe: Pieces, drop: frozenset[tuple[str, Monomial]]
-                     ) -> tuple[list[Scalar], list[Gram], list[Identity]] | str:
-    """What a map's barrier and reach_avoid programs share: a free polynomial on ``basis`` (its coefficients
-    the scalars ``b0, b1, ...``) with the sets' identities of the continuous barrier
-    (:func:`lyapcheck.models.classes.barrier.set_identities`, on the map's ring without disturbances or
-    relations): the scalars, the Gram matrices so far and those identities, or why there are none."""
+def _on_sets_program(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces,
+                     drop: frozenset[tuple[str, Monomial]]
+                     ) -> tuple[list[Monomial], list[Scalar], list[Gram], list[Identity]] | str:
+    """What a map's barrier and reach_avoid programs share: a free polynomial of the states of this degree
+    (:func:`state_basis`, its coefficients the scalars ``b0, b1, ...``) with the sets' identities of the
+    continuous barrier (:func:`lyapcheck.models.classes.barrier.set_identities`, on the map's ring without
+    disturbances or relations): the basis, the scalars, the Gram matrices so far and those identities, or why
+    there are none."""
     from lyapcheck.models.classes.barrier import set_identities
     from lyapcheck.models.loop.field import StateField
 
+    basis = state_basis(ring, len(F), degree)
     field = StateField(ring=ring, g=tuple(F), D=ring.constant(1))
     scalars = [Scalar(f"b{k}") for k in range(len(basis))]
     grams: list[Gram] = []
     on_sets = set_identities(field, basis, degree, initial, unsafe, grams, drop, scalars)
     if isinstance(on_sets, str):
         return on_sets
-    return scalars, grams, list(on_sets)
+    return basis, scalars, grams, list(on_sets)
+
+
+def _step_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, prefix: str,
+                 lam: Fraction) -> ParameterValues:
+    """What a map's barrier and reach_avoid parameters share: the sets' inequalities (the continuous class's) and
+    each monomial's step coefficient ``lam e^m - (e^m)(F)`` as ``<prefix><i>`` (barrier: ``sB`` at its rate;
+    reach_avoid: ``sV`` at 1)."""
+    from lyapcheck.models.classes.barrier import set_values
+    from lyapcheck.models.loop.field import StateField
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    values = ParameterValues()
+    set_values(StateField(ring=ring, g=tuple(F), D=ring.constant(1)), values, initial, unsafe)
+    for i, m in enumerate(state_basis(ring, len(F), degree)):
+        zm = ring.monomial(m)
+        values.set_poly(ring, f"{prefix}{i}", zm * to_fmpq(lam) - compose(ring, zm, F), _step_support(ring, F, m))
+    return values
 
 
 def _affordable_program(n: int, grams: Sequence[Gram], scalars: Sequence[Scalar], identities: Sequence[Identity]
@@ -284,11 +303,10 @@ def barrier_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Pi
 
     nv = ring.nvars
     zero = tuple([0] * nv)
-    b_basis = state_basis(ring, len(F), degree)
-    sets = _on_sets_program(ring, F, b_basis, degree, initial, unsafe, drop)
+    sets = _on_sets_program(ring, F, degree, initial, unsafe, drop)
     if isinstance(sets, str):
         return sets
-    scalars, grams, on_sets = sets
+    b_basis, scalars, grams, on_sets = sets
     terms = []
     target: set[Monomial] = set()
     for i, m in enumerate(b_basis):
@@ -332,17 +350,8 @@ def _box_multipliers(ring: Ring, n: int, target: set[Monomial], prefix: str,
 def barrier_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction
                    ) -> ParameterValues:
     """The program's parameters: the sets' inequalities (the continuous class's) and each of B's
-    monomials' step coefficient ``lam e^m - (e^m)(F)``."""
-    from lyapcheck.models.classes.barrier import set_values
-    from lyapcheck.models.loop.field import StateField
-    from lyapcheck.sos.polynomials import to_fmpq
-
-    values = ParameterValues()
-    set_values(StateField(ring=ring, g=tuple(F), D=ring.constant(1)), values, initial, unsafe)
-    for i, m in enumerate(state_basis(ring, len(F), degree)):
-        zm = ring.monomial(m)
-        values.set_poly(ring, f"sB{i}", zm * to_fmpq(lam) - compose(ring, zm, F), _step_support(ring, F, m))
-    return values
+    monomials' step coefficient ``lam e^m - (e^m)(F)`` (:func:`_step_values`)."""
+    return _step_values(ring, F, degree, initial, unsafe, "sB", lam)
 
 
 def attempt(ring: Ring, F: Sequence[Poly], structure: Structure, degree: int, initial: Pieces, unsafe: Pieces,
@@ -632,12 +641,10 @@ def reach_structure(ring: Ring, F: Sequence[Poly], initial: Pieces, unsafe: Piec
 
     n = ring.nvars
     zero = tuple([0] * n)
-    v_basis = state_basis(ring, len(F), degree)
-    sets = _on_sets_program(ring, F, v_basis, degree, initial, unsafe, drop)
+    sets = _on_sets_program(ring, F, degree, initial, unsafe, drop)
     if isinstance(sets, str):
         return sets
-    scalars, grams, on_sets = sets
-    identities = list(on_sets)
+    v_basis, scalars, grams, identities = sets
     step_support: set[Monomial] = set()
     for m in v_basis:
         step_support |= set(_step_support(ring, F, m))
@@ -687,15 +694,8 @@ def goal_box(structure: Structure, grams: Mapping[str, GramPoly], ring: Ring, n:
 def reach_values(ring: Ring, F: Sequence[Poly], degree: int, initial: Pieces, unsafe: Pieces, goal: Sequence[Poly]
                  ) -> ParameterValues:
     """The program's parameters: the sets' inequalities, each of V's monomials' step coefficient
-    ``e^m - (e^m)(F)`` and each goal inequality."""
-    from lyapcheck.models.classes.barrier import set_values
-    from lyapcheck.models.loop.field import StateField
-
-    values = ParameterValues()
-    set_values(StateField(ring=ring, g=tuple(F), D=ring.constant(1)), values, initial, unsafe)
-    for i, m in enumerate(state_basis(ring, len(F), degree)):
-        zm = ring.monomial(m)
-        values.set_poly(ring, f"sV{i}", zm - compose(ring, zm, F), _step_support(ring, F, m))
+    ``e^m - (e^m)(F)`` (:func:`_step_values` at 1) and each goal inequality."""
+    values = _step_values(ring, F, degree, initial, unsafe, "sV", Fraction(1))
     for k, q in enumerate(goal):
         values.set_poly(ring, f"q{k}", q, ring.support(q))
     return values

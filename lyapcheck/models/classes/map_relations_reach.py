@@ -43,14 +43,14 @@ from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 from lyapcheck.models.classes import discrete_lyapunov as dl
 from lyapcheck.models.classes import discrete_safety as ds
 from lyapcheck.models.classes.claims import DISCRETE_REACH_KIND, discrete_reach_sentence
-from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken, on_relations
-from lyapcheck.models.classes.map_relations_safety import check_iterate_functions, map_sets, \
-    refuted_first, relations_and_sets, sets_view, stated_map, step_multipliers, step_supports
+from lyapcheck.models.classes.map_relations import MapOnRelations, NotTaken
+from lyapcheck.models.classes.map_relations_safety import searched_on, sets_view, stated_map, step_multipliers, \
+    step_program, step_values, verify_refuted
 from lyapcheck.models.engines import reasons
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, ParameterValues, Search, one, param, why_none
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos import bases
-from lyapcheck.sos.polynomials import Monomial, Poly, to_fmpq
+from lyapcheck.sos.polynomials import Poly
 from lyapcheck.sos.structure import Gram, Identity, Scalar, Structure, Term, full_blocks
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -123,7 +123,6 @@ def reach_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, goal: Se
     """The program for ``V`` of this degree (the sets' identities a barrier's on relations, each goal
     inequality's step identity with the relations' and the failing inequality's multipliers, the bound
     below), or why there is none (a size limit, named)."""
-    from lyapcheck.models.classes.barrier import _b_basis, set_identities
     from lyapcheck.models.classes.bounds import relation_multipliers
     from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
     from lyapcheck.models.classes.reach_avoid import outside_goal_view
@@ -133,14 +132,11 @@ def reach_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, goal: Se
     ring, view = m.ring, m.field
     nv = ring.nvars
     zero = tuple([0] * nv)
-    v_basis = _b_basis(view, degree)
-    scalars = [Scalar(f"b{k}") for k in range(len(v_basis))]
-    grams: list[Gram] = []
-    on_sets = set_identities(sets_view(m), v_basis, degree, initial, unsafe, grams, frozenset(), scalars)
-    if isinstance(on_sets, str):
-        return on_sets
-    identities = list(on_sets)
-    step_support = step_supports(m, v_basis)
+    program = step_program(m, initial, unsafe, degree)
+    if isinstance(program, str):
+        return program
+    v_basis, scalars, grams, identities, step_support = (program.basis, program.scalars, program.grams,
+                                                          program.identities, program.supports)
     for k, q in enumerate(goal):
         terms = [Term(param(f"sV{i}", support), f"b{i}") for i, support in step_support.items()]
         terms.append(Term(one(ring, -1), "eps"))
@@ -168,17 +164,9 @@ def reach_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, goal: Se
 
 
 def reach_values(m: MapOnRelations, degree: int, initial: Pieces, unsafe: Pieces) -> ParameterValues:
-    """The program's parameters: the sets' inequalities and each of V's monomials' step ``e^q - (e^q)(F)``."""
-    from lyapcheck.models.classes.barrier import _b_basis, set_values
-
-    ring = m.ring
-    values = ParameterValues()
-    set_values(m.field, values, initial, unsafe)
-    for i, q in enumerate(_b_basis(m.field, degree)):
-        zq = ring.monomial(q)
-        after = dl.compose(ring, zq, m.F)
-        values.set_poly(ring, f"sV{i}", zq - after, sorted(set(ring.support(after)) | {q}))
-    return values
+    """The program's parameters: the sets' inequalities and each of V's monomials' step ``e^q - (e^q)(F)``
+    (:func:`~lyapcheck.models.classes.map_relations_safety.step_values` at rate 1)."""
+    return step_values(m, degree, initial, unsafe, "sV", Fraction(1))
 
 
 def attempt(m: MapOnRelations, structure: Structure, degree: int, sets: Mapping[str, Any], search: Search,
@@ -270,14 +258,11 @@ def run(model: "RecastModel", budget: Budget, box: "ModelBox | None" = None,
     one_piece = goal_of_one_piece(model.sets["goal"])
     if one_piece is not None:
         return one_piece
-    ready = relations_and_sets("reach_avoid", model, "reach-avoid certificate", "reach_avoid",
-                               ("initial", "unsafe", "goal"), box)
+    ready = searched_on("reach_avoid", model, "reach-avoid certificate", "reach_avoid", ("initial", "unsafe", "goal"),
+                        box, refute)
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
-    refuted = refuted_first("reach_avoid", model, m, sets, refute)
-    if refuted is not None:
-        return refuted
     search = Search(m.ring, budget)
     try:
         found, tried = search_reach(m, sets, search)
@@ -321,18 +306,8 @@ def verify(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None" = 
         return False, "the model has no [sets] initial, unsafe and goal for reach_avoid"
     if len(model.sets["goal"]) != 1:
         return False, "a map's reach_avoid takes a goal of one piece"
-    if c.get("status") == "refuted" and box is not None:  # (verify_discrete sends it to map_relations_safety_box)
-        return False, "a refutation over a box is re-checked at its value of the box"
     if c.get("status") == "refuted":  # the stated start's unsafe iterate before the goal, re-derived
-        try:
-            m = on_relations(model)
-            sets = map_sets(model, m, ("initial", "unsafe", "goal"))
-            return ds.verify_refutation(model, c, lambda start, steps: check_iterate_functions(
-                model, m, sets["initial"], sets["unsafe"], start, steps, sets["goal"][0]))
-        except NotTaken as exc:
-            return False, str(exc)
-        except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
-            return False, f"malformed refutation: {exc}"
+        return verify_refuted(model, c, box, ("initial", "unsafe", "goal"))
     if c.get("status") != "certified":
         return False, f"a map with functions' reach_avoid is certified or refuted, not {c.get('status')}"
     try:

@@ -27,6 +27,7 @@ from its rounded start in ball arithmetic through the true functions (:func:`che
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final, Mapping, Sequence
 
@@ -152,6 +153,51 @@ def step_of(m: MapOnRelations, B: Poly, lam: Fraction) -> Poly:
     return B * to_fmpq(lam) - dl.compose(m.ring, B, m.F)
 
 
+@dataclass
+class StepProgram:
+    """What a step program of ``barrier`` and of ``reach_avoid`` starts from (:func:`step_program`): the basis of
+    ``B`` (``V``), its coefficients ``b<k>``, the sets' identities with their Gram matrices, and each basis
+    monomial's step support (:func:`step_supports`); each class adds its step identities to these lists."""
+
+    basis: list[Monomial]
+    scalars: list[Scalar]
+    grams: list[Gram]
+    identities: list[Identity]
+    supports: dict[int, list[Monomial]]
+
+
+def step_program(m: MapOnRelations, initial: Pieces, unsafe: Pieces, degree: int) -> StepProgram | str:
+    """The set-up both safety classes of a map with functions share: ``B`` (``V``) of this degree on the map's
+    view, its coefficients, ``B <= 0`` on the initial set and ``B >= 1`` on the unsafe set on the relations' view
+    (:func:`sets_view`), and its monomials' steps; or why there is none (a size limit, named)."""
+    from lyapcheck.models.classes.barrier import _b_basis, set_identities
+
+    basis = _b_basis(m.field, degree)
+    scalars = [Scalar(f"b{k}") for k in range(len(basis))]
+    grams: list[Gram] = []
+    on_sets = set_identities(sets_view(m), basis, degree, initial, unsafe, grams, frozenset(), scalars)
+    if isinstance(on_sets, str):
+        return on_sets
+    return StepProgram(basis, scalars, grams, list(on_sets), step_supports(m, basis))
+
+
+def step_values(m: MapOnRelations, degree: int, initial: Pieces, unsafe: Pieces, prefix: str, lam: Fraction
+                ) -> ParameterValues:
+    """A step program's parameters: the sets' inequalities, and for each monomial ``e^q`` of ``B``'s (``V``'s)
+    basis its step ``lam e^q - (e^q)(F)`` as ``<prefix><i>`` (``barrier``: ``sB`` at its rate; ``reach_avoid``:
+    ``sV`` at 1)."""
+    from lyapcheck.models.classes.barrier import _b_basis, set_values
+
+    ring = m.ring
+    values = ParameterValues()
+    set_values(m.field, values, initial, unsafe)
+    for i, q in enumerate(_b_basis(m.field, degree)):
+        zq = ring.monomial(q)
+        after = dl.compose(ring, zq, m.F)
+        values.set_poly(ring, f"{prefix}{i}", zq * to_fmpq(lam) - after, sorted(set(ring.support(after)) | {q}))
+    return values
+
+
 # -- the exact check -------------------------------------------------------------------------------------
 
 def check_map_barrier(m: MapOnRelations, B: Poly, lam: Fraction, initial: Pieces, unsafe: Pieces,
@@ -182,20 +228,16 @@ def barrier_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, degree
     remainder's basis holds no constant and the multipliers vanish there (facial reduction by construction:
     else the remainder's constant diagonal is 0 and so is the program's margin, which the exact check
     rejects)."""
-    from lyapcheck.models.classes.barrier import _b_basis, set_identities
     from lyapcheck.models.classes.lyapunov import TARGET_LIMIT
     from lyapcheck.models.engines.reasons import size_limit
 
     ring, view = m.ring, m.field
     nv = ring.nvars
     zero = tuple([0] * nv)
-    b_basis = _b_basis(view, degree)
-    scalars = [Scalar(f"b{k}") for k in range(len(b_basis))]
-    grams: list[Gram] = []
-    on_sets = set_identities(sets_view(m), b_basis, degree, initial, unsafe, grams, frozenset(), scalars)
-    if isinstance(on_sets, str):
-        return on_sets
-    supports = step_supports(m, b_basis)
+    program = step_program(m, initial, unsafe, degree)
+    if isinstance(program, str):
+        return program
+    grams, scalars, supports = program.grams, program.scalars, program.supports
     terms = [Term(param(f"sB{i}", support), f"b{i}") for i, support in supports.items()]
     target = {q for support in supports.values() for q in support}
     rel_grams, rel_scalars, rel_terms, added = step_multipliers(m, view, "D", target, vanishing=at_fixed)
@@ -210,21 +252,13 @@ def barrier_structure(m: MapOnRelations, initial: Pieces, unsafe: Pieces, degree
         return size_limit(len(step_basis), "monomials per sum-of-squares matrix", ds.MAX_GRAM_ROWS, "MAX_GRAM_ROWS")
     grams.append(Gram("RD", tuple(step_basis), full_blocks(step_basis)))
     terms.append(Term(one(ring, -1), "RD"))
-    return ds._affordable_program(nv, grams, scalars, [*on_sets, Identity("D", tuple(terms), None, "RD")])
+    return ds._affordable_program(nv, grams, scalars, [*program.identities, Identity("D", tuple(terms), None, "RD")])
 
 
 def barrier_values(m: MapOnRelations, degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction
                    ) -> ParameterValues:
-    from lyapcheck.models.classes.barrier import _b_basis, set_values
-
-    ring = m.ring
-    values = ParameterValues()
-    set_values(m.field, values, initial, unsafe)
-    for i, q in enumerate(_b_basis(m.field, degree)):
-        zq = ring.monomial(q)
-        after = dl.compose(ring, zq, m.F)
-        values.set_poly(ring, f"sB{i}", zq * to_fmpq(lam) - after, sorted(set(ring.support(after)) | {q}))
-    return values
+    """The barrier program's parameters at rate ``lam`` (:func:`step_values`, ``sB``)."""
+    return step_values(m, degree, initial, unsafe, "sB", lam)
 
 
 def attempt(m: MapOnRelations, structure: Structure, degree: int, initial: Pieces, unsafe: Pieces, lam: Fraction,
@@ -330,6 +364,39 @@ def refuted_first(name: str, model: "RecastModel", m: MapOnRelations, sets: Mapp
     if found is None:
         return None
     return ds.refuted_result(name, model, found, " before any iterate is in the goal" if goal is not None else "")
+
+
+def searched_on(name: str, model: "RecastModel", what: str, prop: "Property", keys: Sequence[str],
+                box: "ModelBox | None", refute: "Callable[[], ConditionResult | None] | None"
+                ) -> tuple[MapOnRelations, dict[str, list[list[Poly]]]] | ConditionResult:
+    """The first steps of both safety classes of a map with functions: the relations and the sets
+    (:func:`relations_and_sets`), then the refutation (:func:`refuted_first`); what the search runs on, or the
+    class's result where it does not run (not taken, too large, refuted)."""
+    ready = relations_and_sets(name, model, what, prop, keys, box)
+    if isinstance(ready, ConditionResult):
+        return ready
+    refuted = refuted_first(name, model, ready[0], ready[1], refute)
+    return ready if refuted is None else refuted
+
+
+def verify_refuted(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | None", keys: Sequence[str]
+                   ) -> tuple[bool, str]:
+    """Re-check a refuted ``barrier`` (``keys`` initial, unsafe) or ``reach_avoid`` (initial, unsafe, goal: no
+    iterate in the goal before the unsafe one) of a map with functions at the model's point: the stated start's
+    iterate re-derived in ball arithmetic (:func:`check_iterate_functions`). Over a box the refutation is
+    re-checked at its value of the box (:mod:`lyapcheck.models.classes.map_relations_safety_box`), not here."""
+    if box is not None:  # (verify_discrete sends it to map_relations_safety_box)
+        return False, "a refutation over a box is re-checked at its value of the box"
+    try:
+        m = on_relations(model)
+        sets = map_sets(model, m, keys)
+        goal = sets["goal"][0] if "goal" in keys else None
+        return ds.verify_refutation(model, c, lambda start, steps: check_iterate_functions(
+            model, m, sets["initial"], sets["unsafe"], start, steps, goal))
+    except NotTaken as exc:
+        return False, str(exc)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
+        return False, f"malformed refutation: {exc}"
 
 
 def falsify(model: "RecastModel", m: MapOnRelations, initial: Pieces, unsafe: Pieces,
@@ -444,13 +511,10 @@ def run_barrier(model: "RecastModel", budget: Budget, box: "ModelBox | None" = N
     ruled = ds.no_sets("barrier", model)
     if ruled is not None:
         return ruled
-    ready = relations_and_sets("barrier", model, "barrier", "safety", ("initial", "unsafe"), box)
+    ready = searched_on("barrier", model, "barrier", "safety", ("initial", "unsafe"), box, refute)
     if isinstance(ready, ConditionResult):
         return ready
     m, sets = ready
-    refuted = refuted_first("barrier", model, m, sets, refute)
-    if refuted is not None:
-        return refuted
     search = Search(m.ring, budget)
     try:
         found, tried = search_barrier(m, sets["initial"], sets["unsafe"], search)
@@ -490,18 +554,8 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | 
         return False, f"a barrier claim is about safety, not {c.get('property')}"
     if ds.no_sets("barrier", model) is not None:
         return False, "the model has no [sets] initial and unsafe for barrier"
-    if c.get("status") == "refuted" and box is not None:  # (verify_discrete sends it to map_relations_safety_box)
-        return False, "a refutation over a box is re-checked at its value of the box"
     if c.get("status") == "refuted":
-        try:
-            m = on_relations(model)
-            sets = map_sets(model, m)
-            return ds.verify_refutation(model, c, lambda start, steps: check_iterate_functions(
-                model, m, sets["initial"], sets["unsafe"], start, steps))
-        except NotTaken as exc:
-            return False, str(exc)
-        except (KeyError, TypeError, ValueError, ZeroDivisionError, AttributeError) as exc:
-            return False, f"malformed refutation: {exc}"
+        return verify_refuted(model, c, box, ("initial", "unsafe"))
     try:
         read = stated_map(model, c, box, KIND, "barrier", ("initial", "unsafe"))
         if isinstance(read, str):
@@ -533,6 +587,7 @@ def verify_barrier(model: "RecastModel", c: Mapping[str, Any], box: "ModelBox | 
     return True, why
 
 
-__all__ = ["KIND", "map_sets", "read_map", "relations_and_sets", "sets_view", "step_multipliers", "step_supports",
+__all__ = ["KIND", "map_sets", "read_map", "relations_and_sets", "searched_on", "verify_refuted", "StepProgram",
+           "step_program", "step_values", "sets_view", "step_multipliers", "step_supports",
            "stated_box", "without_box_words", "step_of", "check_map_barrier", "barrier_structure", "search_barrier",
            "check_iterate_functions", "falsify", "run_barrier", "verify_barrier"]

@@ -14,6 +14,7 @@ name                                              derived from
 :data:`sweeps.spec.MODEL_POINT_CLASSES`           every class but :data:`USER_GIVEN`
 :data:`sweeps.spec.MODEL_BOX_CLASSES`             :data:`OVER_BOX`: those with box certificates
 :data:`sweeps.evaluate.MODEL_STABILITY_CLASSES`   :data:`STABILITY`: an unstable point refutes them
+:data:`sweeps.evaluate.MODEL_SAFETY_CLASSES`      :data:`SAFETY`: a refutation is a proved unsafe trajectory
 :data:`sweeps.schema.FIGURES`                     each class's ``figures``, stored per point or box
 :data:`sweeps.schema.OUTPUT_FIGURES`              each class's ``output_figure``
 :data:`ZERO_DISTURBANCE_ONLY`                     ``zero_disturbance_only``: ``verify`` refuses their
@@ -262,6 +263,9 @@ OVER_BOX: Final = _names(over_box=True)
 POINT_ONLY: Final = _names(point_only=True)
 #: the classes whose certificate proves a stability property (an unstable point refutes them)
 STABILITY: Final = _names(stability=True)
+#: the classes of the ``safety`` family: their ``refuted`` is a proved counterexample to their own claim (an
+#: unsafe trajectory from the initial set, at a value of the box), which refutes it for a box containing the value
+SAFETY: Final = tuple(c.name for c in CLASSES if c.family == "safety")
 #: the classes that need the user's input (``--candidate``)
 USER_GIVEN: Final = _names(user_given=True)
 #: the classes with a discrete-time condition (they run on a polynomial map: their ``run_map``)
@@ -321,5 +325,5 @@ def verify(name: str, c: dict[str, Any],
 
 
 __all__ = ["Figure", "OutputFigure", "ModelClass", "CLASSES", "NAMES", "CLEARED", "OVER_BOX", "POINT_ONLY",
-           "STABILITY", "USER_GIVEN", "DISCRETE", "MAP_FUNCTIONS", "SAMPLED", "ZERO_DISTURBANCE_ONLY", "BY_NAME",
+           "STABILITY", "SAFETY", "USER_GIVEN", "DISCRETE", "MAP_FUNCTIONS", "SAMPLED", "ZERO_DISTURBANCE_ONLY", "BY_NAME",
            "verify"]

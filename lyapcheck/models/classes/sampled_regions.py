@@ -403,7 +403,9 @@ def _spectral(M: list[list[Any]]) -> Any:
 def stein_margin(P: Matrix, AT: list[list[Any]], lam: Fraction) -> bool:
     """``P - A^T P A - lam I`` positive definite for every matrix ``A`` of the balls ``AT``: the centre's exact
     test after subtracting the radii's Gershgorin bound (every symmetric matrix of the balls is the centre
-    plus a perturbation of spectral norm at most its largest absolute row sum of radii)."""
+    plus a perturbation of spectral norm at most its largest absolute row sum of radii). A map with functions'
+    test over a box is this one with ``lam = 0``
+    (:func:`lyapcheck.models.classes.discrete_functions_box.stein_margin_proved`)."""
     from lyapcheck.sos.definiteness import is_positive_definite
 
     n = len(P)

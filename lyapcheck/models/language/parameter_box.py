@@ -1,8 +1,14 @@
-"""A box of a model's parameters: closed intervals, exact, in the model's order (pure data).
+"""A box of a model's parameters: closed intervals, exact, in the model's order (pure data), and the one way a
+box or an interval is written in a message (:func:`interval_ends`, :func:`box_text`).
 
 Its own module so that the modules that take a box (:mod:`lyapcheck.models.loop.field`,
 :mod:`lyapcheck.models.surfaces.certify`) need not import :mod:`lyapcheck.models.loop.boxes`, which parses and
 checks boxes with them.
+
+An interval is written with :data:`SHORT_DIGITS` significant digits, and more where its two ends would then read the
+same (a split box narrower than that, ``k in [1, 1]``): each end gets as many as it takes for the two texts to
+differ, up to a double's 17, then the exact rational (two values closer than a double tells apart). The paper's
+boxes, the sweeps' notes and the reports' tables print parameter boxes through it.
 """
 
 from __future__ import annotations
@@ -10,7 +16,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Final, Iterator, Mapping, Sequence
+from typing import Final, Iterable, Iterator, Mapping, Sequence
+
+#: significant digits of an interval's ends in a message, where they tell the two ends apart (:func:`interval_ends`)
+SHORT_DIGITS: Final = 6
+#: the most significant digits of a double's shortest text: two different doubles differ within these
+DOUBLE_DIGITS: Final = 17
+
+#: an end of an interval: exact, or a float read back from a store
+End = Fraction | float | int
 
 #: a random point of a box (:meth:`ModelBox.points`): the uniform fraction of each interval on a grid
 #: of this many steps, and a log-uniform value to this many significant digits (its exact decimal is
@@ -93,8 +107,31 @@ class ModelBox:
         return ModelBox(left), ModelBox(right)
 
     def describe(self, separator: str = ", ") -> str:
-        """``mu in [0.8, 1.2], k in [1, 2]``: each bound to 6 significant digits."""
-        return separator.join(f"{name} in [{float(lo):.6g}, {float(hi):.6g}]" for name, lo, hi in self.bounds)
+        """``mu in [0.8, 1.2], k in [1, 2]``: each bound to 6 significant digits, more where the two ends of an
+        interval would read the same (:func:`box_text`)."""
+        return box_text(self.bounds, separator)
 
     def __iter__(self) -> Iterator[tuple[str, Fraction, Fraction]]:
         return iter(self.bounds)
+
+
+def interval_ends(lo: End, hi: End, digits: int = SHORT_DIGITS) -> tuple[str, str]:
+    """The two ends of ``[lo, hi]`` as text: ``digits`` significant digits each (``%g``), more where the two would
+    read the same although the ends differ, up to :data:`DOUBLE_DIGITS`; two ends that no double tells apart are
+    written as exact rationals ``p/q``. Equal ends, and an end that is not finite, are written as given."""
+    a, b = float(lo), float(hi)
+    short = f"{a:.{digits}g}", f"{b:.{digits}g}"
+    if lo == hi or not (math.isfinite(a) and math.isfinite(b)) or short[0] != short[1]:
+        return short
+    for more in range(digits + 1, DOUBLE_DIGITS + 1):
+        texts = f"{a:.{more}g}", f"{b:.{more}g}"
+        if texts[0] != texts[1]:
+            return texts
+    # (the two ends round to one double: only their exact values differ)
+    return str(Fraction(lo)), str(Fraction(hi))
+
+
+def box_text(bounds: Iterable[tuple[str, End, End]], separator: str = ", ", digits: int = SHORT_DIGITS) -> str:
+    """``k in [1.00002, 1.00003], mu in [0.8, 1.2]``: each ``(name, lo, hi)`` as :func:`interval_ends` writes it."""
+    return separator.join(f"{name} in [{a}, {b}]" for name, lo, hi in bounds for a, b in [interval_ends(lo, hi, digits)])
+

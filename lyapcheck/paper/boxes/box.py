@@ -58,7 +58,11 @@ class ParameterBox:
         return max(float(hi / lo) - 1 for _, lo, hi in self.bounds)
 
     def describe(self) -> str:
-        return ", ".join(f"{name} in [{float(lo):.6g}, {float(hi):.6g}]" for name, lo, hi in self.bounds)
+        """``alpha_d in [540, 660], ...`` (SI), as every parameter box is written
+        (:func:`lyapcheck.models.language.parameter_box.box_text`: the ends of a narrow interval told apart)."""
+        from lyapcheck.models.language.parameter_box import box_text
+
+        return box_text(self.bounds)
 
 
 def parse_box(specs: Sequence[str]) -> ParameterBox:
