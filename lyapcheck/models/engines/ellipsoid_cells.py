@@ -60,6 +60,12 @@ from lyapcheck.models.engines.interval_field import LieDerivative, ball, negativ
 HESSIAN_ZONE_MIN_WIDTH: Final = Fraction(1, 8)
 #: the finest split of the shell's phase, as a fraction of the ellipsoid's box in each coordinate
 SHELL_MIN_WIDTH: Final = Fraction(1, 2 ** 12)
+#: the outer slabs a shell cell that meets the boundary of ``{V <= level}`` loses before its Taylor form:
+#: on each side the outer half, quarter, ... of the cell, down to 2^-TRIM_DEPTH of it, the largest proved
+#: outside the set (one enclosure of V each, far cheaper than the field's)
+TRIM_DEPTH: Final = 3
+#: the most halvings by which a shell cell failing at first order is cut at once (2^this pieces)
+MAX_PIECES_HALVINGS: Final = 2
 
 Cell = tuple[tuple[float, float], ...]
 
@@ -244,8 +250,12 @@ class _Geometry:
         ``H`` is proved negative definite, also by ``g(m) + grad . t`` (``t^T H t <= 0``)."""
         if self.taylor_upper(value, grad, H[0], cell) < 0:
             return True
-        if not H[1]:
-            return False
+        return H[1] and self.first_order_negative(value, grad, cell)
+
+    def first_order_negative(self, value: Any, grad: list[Any], cell: Cell) -> bool:
+        """``g(m) + grad g(m) . t < 0`` for every ``|t_i| <= r_i``: ``g < 0`` on the cell where ``g`` is
+        concave there, and otherwise the least a Taylor form's bound can be (its Hessian's terms' enclosures
+        contain 0, so they never lower it)."""
         zero = flint.arb(0)
         total = value
         for gi, (a, b) in zip(grad, cell):
@@ -317,13 +327,57 @@ def _split(cell: Cell, min_width: list[float], weights: list[float] | None = Non
     return cell[:k] + ((a, m),) + cell[k + 1:], cell[:k] + ((m, b),) + cell[k + 1:]
 
 
-def _weights(grad: list[Any], H: list[list[Any]], cell: Cell) -> list[float]:
+def _pieces(cell: Cell, min_width: list[float], weights: list[float], margin: float) -> tuple[Cell, ...] | None:
+    """A cell whose Taylor form fails already at first order cut at once into the pieces its halvings would
+    reach: the side of the largest weight times width halved (as :func:`_split`) until the spread
+    ``sum_i weight_i r_i`` falls below ``margin`` (``-g`` at the centre, floats: an estimate that only
+    chooses the cuts) or MAX_PIECES_HALVINGS halvings are made; the pieces between are never examined.
+    None when every side is at the finest width."""
+    widths = [b - a for a, b in cell]
+    cuts = [0] * len(cell)
+    for _ in range(MAX_PIECES_HALVINGS):
+        sides = [i for i in range(len(cell)) if widths[i] > min_width[i]]
+        if not sides or (sum(cuts) > 0 and sum(w * x / 2 for w, x in zip(weights, widths)) < margin):
+            break
+        k = max(sides, key=lambda i: widths[i] * weights[i])
+        widths[k] /= 2
+        cuts[k] += 1
+    if not any(cuts):
+        return None
+    pieces: list[Cell] = [()]
+    for (a, b), k in zip(cell, cuts):
+        step = (b - a) / 2 ** k
+        pieces = [p + ((a + j * step, b if j == 2 ** k - 1 else a + (j + 1) * step),) for p in pieces
+                  for j in range(2 ** k)]
+    return tuple(pieces)
+
+
+def _trim(geo: Any, cell: Cell, c: Any) -> Cell:
+    """The cell less its outer slabs proved outside ``{V <= level}`` (``c``: the level), side by side, from
+    the end farther from the equilibrium: the largest of the outer half, quarter, ... (TRIM_DEPTH) of the
+    side whose slab ``geo.outside`` proves outside the set. The slabs hold no point of the set, so ``g < 0``
+    on the rest of the cell is the claim on the whole cell, and a Taylor form over the smaller cell is
+    tighter (its corners no longer reach far outside the set, where ``g`` is largest). The cuts are at
+    the cell's own dyadic points: the same cells on every machine."""
+    for i in range(len(cell)):
+        a, b = cell[i]
+        upper = abs(b) >= abs(a)
+        for k in range(1, TRIM_DEPTH + 1):
+            w = (b - a) / 2 ** k
+            piece = cell[:i] + (((b - w, b) if upper else (a, a + w)),) + cell[i + 1:]
+            if geo.outside(geo.quadratic(piece), piece, c):
+                cell = cell[:i] + (((a, b - w) if upper else (a + w, b)),) + cell[i + 1:]
+                break
+    return cell
+
+
+def _weights(grad: list[Any], H: list[list[Any]] | None, cell: Cell) -> list[float]:
     """Each side's share of the Taylor form's spread per unit of its width: ``|g_i| + sum_j |H_ij| r_j``
-    (floats: they only choose the side to split, the proof never rests on them)."""
+    (``|g_i|`` alone without ``H``; floats: they only choose the side to split, the proof never rests on
+    them)."""
     radii = [(b - a) / 2 for a, b in cell]
-    return [abs(float(gi.mid())) + float(gi.rad()) + sum((abs(float(h.mid())) + float(h.rad())) * r
-                                                         for h, r in zip(row, radii))
-            for gi, row in zip(grad, H)]
+    return [abs(float(gi.mid())) + float(gi.rad()) + (0.0 if H is None else sum(
+        (abs(float(h.mid())) + float(h.rad())) * r for h, r in zip(H[i], radii))) for i, gi in enumerate(grad)]
 
 
 def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[Fraction], level: Fraction,
@@ -445,6 +499,8 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         q = geo.quadratic(cell)
         if geo.outside(q, cell, c) or inside(q, cell):
             continue  # outside E, or inside E_1 or N's ellipsoid
+        if not q <= c:  # the cell meets the boundary of E: only its part in E needs g < 0
+            cell = _trim(geo, cell, c)
         count += 1
         if (why := over()) is not None:
             return EllipsoidProof(False, why, count, level_1)
@@ -453,13 +509,20 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
             return refuted
         if grad is not None and H is not None and geo.negative(value, grad, H, cell):
             continue
-        own_H = geo.hessian_y(lie, cell) if grad is not None else None
+        # the cell's own Hessian only where it can help: when g(m) + grad g(m) . t already reaches 0 on the
+        # cell, no Hessian makes the Taylor form negative (its terms' enclosures all contain 0), and the
+        # halves keep the ancestor's (which contains them)
+        hopeless = grad is not None and not geo.first_order_negative(value, grad, cell)
+        own_H = geo.hessian_y(lie, cell) if grad is not None and not hopeless else None
         own = None if own_H is None else (own_H, negative_definite_preconditioned(own_H))
         if grad is not None and own is not None and geo.negative(value, grad, own, cell):
             continue
         inherited = own if own is not None else H
-        halves = _split(cell, shell_width, None if grad is None or inherited is None else
-                        _weights(grad, inherited[0], cell))
+        weights = None if grad is None else _weights(grad, None if inherited is None else inherited[0], cell)
+        if hopeless and weights is not None and float(value.mid()) < 0:
+            halves = _pieces(cell, shell_width, weights, -float(value.mid()))
+        else:
+            halves = _split(cell, shell_width, weights)
         if halves is None:
             where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
             return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates, at the "
