@@ -492,8 +492,10 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         if inside(q, cell):
             continue  # g < 0 by the Hessian
         pending.append((cell, (H, True)))
-    # phase 3: the shell, by Taylor forms; depth first, in a fixed order
-    stack = list(reversed(pending))
+    # phase 3: the shell, by Taylor forms; depth first, in a fixed order: the outermost cells first (the same
+    # cells in any order, but where V' >= 0 near the boundary of a level too large, the attempt ends sooner)
+    far = [float(geo.quadratic(cell).upper()) for cell, _ in pending]
+    stack = [pending[k] for k in sorted(range(len(pending)), key=lambda k: (far[k], -k))]
     while stack:
         cell, H = stack.pop()
         q = geo.quadratic(cell)
@@ -519,6 +521,15 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
             continue
         inherited = own if own is not None else H
         weights = None if grad is None else _weights(grad, None if inherited is None else inherited[0], cell)
+        if hopeless and weights is not None and 0 < -float(value.mid()) <= \
+                sum(w * x / 2 for w, x in zip(weights, shell_width)):
+            # g(m) + grad g(m) . t reaches 0 even over a cell of the finest width around m: V' is too close to 0
+            # here for the finest cells (an estimate: giving up is never unsound), so the attempt ends now
+            # rather than after every cell down to that width
+            where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
+            return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates: V' is "
+                                  f"{float(value.mid()):.3g} at the centre, too close to 0 for the finest cells)",
+                                  count, level_1)
         if hopeless and weights is not None and float(value.mid()) < 0:
             halves = _pieces(cell, shell_width, weights, -float(value.mid()))
         else:
