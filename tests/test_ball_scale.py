@@ -136,6 +136,7 @@ def test_the_cartpole_cost_to_go_gets_a_larger_level_than_the_box_cells_within_t
     loop, V, _, _ = cartpole()
     monkeypatch.setattr(tolerances, "BALL_LEVEL_CELLS", 4_000)
     monkeypatch.setattr(tolerances, "BALL_LEVEL_TOTAL_CELLS", 8_000)
+    monkeypatch.setattr(tolerances, "ELLIPSOID_LEVEL_TOTAL_CELLS", 8_000)
     levels = {}
     result: Any = None
     for states in (5, 4):  # 5: the box's cells and the search from the local level at 4 states (as before

@@ -66,6 +66,9 @@ SHELL_MIN_WIDTH: Final = Fraction(1, 2 ** 12)
 TRIM_DEPTH: Final = 3
 #: the most halvings by which a shell cell failing at first order is cut at once (2^this pieces)
 MAX_PIECES_HALVINGS: Final = 2
+#: a shell cell within 2^this of the finest width whose first-order bound fails even at the finest width
+#: around its centre ends the attempt (V' too close to 0 there for the finest cells)
+BOTTOM_HALVINGS: Final = 3
 
 Cell = tuple[tuple[float, float], ...]
 
@@ -352,6 +355,15 @@ def _pieces(cell: Cell, min_width: list[float], weights: list[float], margin: fl
     return tuple(pieces)
 
 
+def _at_the_bottom(cell: Cell, min_width: list[float], value: Any, grad: list[Any]) -> bool:
+    """Every side of the cell is within 2^BOTTOM_HALVINGS of the finest width, ``g(m) < 0`` and the first
+    order spread ``sum_i |g_i| w_i / 2`` over a cell of the finest widths ``w`` around ``m`` is at least
+    ``-g(m)`` (floats: an estimate that only decides when an attempt gives up)."""
+    margin = -float(value.mid())
+    return margin > 0 and all(b - a <= w * 2 ** BOTTOM_HALVINGS for (a, b), w in zip(cell, min_width)) and \
+        sum(abs(float(gi.mid())) * w / 2 for gi, w in zip(grad, min_width)) >= margin
+
+
 def _trim(geo: Any, cell: Cell, c: Any) -> Cell:
     """The cell less its outer slabs proved outside ``{V <= level}`` (``c``: the level), side by side, from
     the end farther from the equilibrium: the largest of the outer half, quarter, ... (TRIM_DEPTH) of the
@@ -521,11 +533,10 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
             continue
         inherited = own if own is not None else H
         weights = None if grad is None else _weights(grad, None if inherited is None else inherited[0], cell)
-        if hopeless and weights is not None and 0 < -float(value.mid()) <= \
-                sum(w * x / 2 for w, x in zip(weights, shell_width)):
-            # g(m) + grad g(m) . t reaches 0 even over a cell of the finest width around m: V' is too close to 0
-            # here for the finest cells (an estimate: giving up is never unsound), so the attempt ends now
-            # rather than after every cell down to that width
+        if hopeless and grad is not None and _at_the_bottom(cell, shell_width, value, grad):
+            # near the finest width, g(m) + grad g(m) . t reaches 0 even over a cell of the finest width around
+            # m: V' is too close to 0 here for the finest cells (an estimate: giving up is never unsound), so the
+            # attempt ends now rather than after every cell down to that width
             where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
             return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates: V' is "
                                   f"{float(value.mid()):.3g} at the centre, too close to 0 for the finest cells)",
