@@ -29,7 +29,14 @@ condition number in the thousands) and bounds ``g`` by plain intervals. Here ins
    ``y``; where ``H`` is proved negative definite, ``t^T H t <= 0`` and ``g(m) + grad g(m) . t`` bounds
    ``g``. A cell that fails is split across the side whose width adds most to the bound (where the
    margin is thin), not merely the widest. A centre with ``g >= 0`` proved inside ``E`` ends the
-   proof: the claim is false at this level.
+   proof: the claim is false at this level. Three economies (issue 42), none of which a claim rests on:
+   a cell meeting the boundary of ``E`` first loses its outer slabs proved outside ``E`` (:func:`_trim`);
+   a cell whose bound fails already at first order (``g(m) + grad g(m) . t``, which no Hessian lowers)
+   gets no Hessian of its own and is cut at once into the pieces its halvings would reach
+   (:func:`_pieces`, at most 4); and the outermost cells go first, with an attempt given up near the
+   finest width where ``V'`` is too close to 0 for it (:func:`_at_the_bottom`), so that a level too
+   large fails within a few thousand cells. The cells examined by an attempt that succeeds do not
+   depend on the order.
 
 The enclosures keep the ellipsoid's correlations: ``grad V = 2 P z`` is enclosed as ``2 W y`` with
 ``W = P M`` exact, never as ``P`` times the ball enclosure of ``M`` times a cell (whose corners lie far
@@ -504,10 +511,13 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         if inside(q, cell):
             continue  # g < 0 by the Hessian
         pending.append((cell, (H, True)))
-    # phase 3: the shell, by Taylor forms; depth first, in a fixed order: the outermost cells first (the same
-    # cells in any order, but where V' >= 0 near the boundary of a level too large, the attempt ends sooner)
+    # phase 3: the shell, by Taylor forms; depth first, in a fixed order: the innermost and the outermost cells
+    # by turns (the same cells in any order, but a level too large fails near the equilibrium or near the
+    # boundary, and the attempt then ends sooner)
     far = [float(geo.quadratic(cell).upper()) for cell, _ in pending]
-    stack = [pending[k] for k in sorted(range(len(pending)), key=lambda k: (far[k], -k))]
+    ranked = [pending[k] for k in sorted(range(len(pending)), key=lambda k: (far[k], k))]
+    turns = [ranked[k // 2] if k % 2 == 0 else ranked[-1 - k // 2] for k in range(len(ranked))]
+    stack = list(reversed(turns))
     while stack:
         cell, H = stack.pop()
         q = geo.quadratic(cell)
