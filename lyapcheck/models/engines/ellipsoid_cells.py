@@ -484,7 +484,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         # near the equilibrium (a cell wider than its distance from it) down to the shell's finest width:
         # there the Hessian is negative definite on small enough cells, and the zone must reach beyond N
         near = max(b - a for a, b in cell) > max(float(q.lower()), 0.0) ** 0.5
-        halves = _split(cell, shell_width if near else zone_width)
+        halves: tuple[Cell, ...] | None = _split(cell, shell_width if near else zone_width)
         if halves is not None:
             for half in halves:
                 lows[half] = geo.quadratic(half)
