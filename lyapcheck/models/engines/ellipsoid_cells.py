@@ -33,9 +33,9 @@ condition number in the thousands) and bounds ``g`` by plain intervals. Here ins
    a cell meeting the boundary of ``E`` first loses its outer slabs proved outside ``E`` (:func:`_trim`);
    a cell whose bound fails already at first order (``g(m) + grad g(m) . t``, which no Hessian lowers)
    gets no Hessian of its own and is cut at once into the pieces its halvings would reach
-   (:func:`_pieces`, at most 4); and the outermost cells go first, with an attempt given up near the
-   finest width where ``V'`` is too close to 0 for it (:func:`_at_the_bottom`), so that a level too
-   large fails within a few thousand cells. The cells examined by an attempt that succeeds do not
+   (:func:`_pieces`, at most 4); and the innermost and outermost cells go by turns, with an attempt
+   given up near the finest width where ``V'`` is too close to 0 for it (:func:`_at_the_bottom`), so
+   that a level too large fails within a few thousand cells. The cells examined by an attempt that succeeds do not
    depend on the order.
 
 The enclosures keep the ellipsoid's correlations: ``grad V = 2 P z`` is enclosed as ``2 W y`` with
