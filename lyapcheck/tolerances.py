@@ -262,6 +262,13 @@ BALL_LEVEL_CELLS: Final = 30_000
 #: largest level proved when they are spent is the answer; the whole search stays within about 40 s of
 #: one core, inside MODEL_CLASS_TIME_LIMIT_S (issue 42 raised it from 20,000)
 BALL_LEVEL_TOTAL_CELLS: Final = 40_000
+#: the same from 4 states (lyapcheck.models.classes.recast_ball_level.ELLIPSOID_JUMP_STATES), in cells of the
+#: 4-state cart-pole's cost: the search there tries the sampled level, its double and bisections, and an
+#: attempt at a level too large now ends within a few thousand cells (the shell takes its innermost and
+#: outermost cells by turns), so the cart-pole's roa proves its third level, 0.0789 (22,948 cells; issue 42,
+#: 2026-11-30: 40,000 -> 48,000; its search's 42,855 cells about 35 s of one core, its whole certify run
+#: 29 to 46 s on the loaded 2-core machine)
+ELLIPSOID_LEVEL_TOTAL_CELLS: Final = 48_000
 #: significant bits of each entry of V's matrix P on a discrete-time map with functions
 #: (lyapcheck.models.classes.discrete_functions: the Stein solution of A^T P A - P = -I rounded to a
 #: short dyadic). Short entries keep V's balls exact at a cell's dyadic corners (no widening from V

@@ -136,6 +136,7 @@ def test_the_cartpole_cost_to_go_gets_a_larger_level_than_the_box_cells_within_t
     loop, V, _, _ = cartpole()
     monkeypatch.setattr(tolerances, "BALL_LEVEL_CELLS", 4_000)
     monkeypatch.setattr(tolerances, "BALL_LEVEL_TOTAL_CELLS", 8_000)
+    monkeypatch.setattr(tolerances, "ELLIPSOID_LEVEL_TOTAL_CELLS", 8_000)
     levels = {}
     result: Any = None
     for states in (5, 4):  # 5: the box's cells and the search from the local level at 4 states (as before
@@ -149,3 +150,42 @@ def test_the_cartpole_cost_to_go_gets_a_larger_level_than_the_box_cells_within_t
     ok, why = check_interval(loop, {"certificate": result.certificate, "level": result.numbers["level"],
                                     "summary": covered(None, result.summary)})
     assert ok, why
+
+
+def test_trimming_a_cell_keeps_every_point_of_the_ellipsoid_and_cuts_what_lies_outside() -> None:
+    _, _, lie, P = cartpole()
+    level = Fraction(1, 20)
+    w = ec.whitening(P, level)
+    assert w is not None
+    geo = ec._Geometry(w, P, lie)
+    Q = np.array(w.Q, dtype=float)
+    c = flint.arb(float(level))
+    rng = np.random.default_rng(3)
+    trimmed = 0
+    for _ in range(40):
+        u = rng.normal(size=4)
+        centre = u / np.linalg.norm(u) * float(level) ** 0.5  # on the boundary of E (Q near the identity)
+        r = 2.0 ** -int(rng.integers(3, 7))
+        cell = tuple((float(x - r), float(x + r)) for x in centre)
+        cut = ec._trim(geo, cell, c)
+        assert all(a <= a2 <= b2 <= b for (a, b), (a2, b2) in zip(cell, cut))
+        trimmed += cut != cell
+        for _ in range(200):
+            y = centre + rng.uniform(-r, r, 4)
+            if y @ Q @ y <= float(level) * (1 - 1e-9):
+                assert all(a2 <= yi <= b2 for yi, (a2, b2) in zip(y, cut))
+    assert trimmed >= 10  # cells across the boundary lose slabs
+
+
+def test_the_pieces_of_a_cell_tile_it_and_are_cut_where_the_weights_are() -> None:
+    cell = ((-0.5, 0.5), (0.0, 0.25), (1.0, 2.0))
+    pieces = ec._pieces(cell, [1e-3] * 3, [1.0, 0.0, 10.0], margin=1e-6)
+    assert pieces is not None and len(pieces) == 2 ** ec.MAX_PIECES_HALVINGS
+    volume = sum(np.prod([b - a for a, b in p]) for p in pieces)
+    assert volume == pytest.approx(np.prod([b - a for a, b in cell]))
+    assert all(a >= lo and b <= hi for p in pieces for (a, b), (lo, hi) in zip(p, cell))
+    assert all(p[0] == cell[0] and p[1] == cell[1] for p in pieces)  # the heavy side takes both halvings
+    assert sorted(p[2] for p in pieces) == [(1.0, 1.25), (1.25, 1.5), (1.5, 1.75), (1.75, 2.0)]
+    # a margin the first halving already meets: two pieces, as a split
+    assert len(ec._pieces(cell, [1e-3] * 3, [1.0, 0.0, 10.0], margin=100.0) or ()) == 2
+    assert ec._pieces(cell, [10.0] * 3, [1.0, 1.0, 1.0], margin=1e-6) is None  # every side at the finest

@@ -10,7 +10,8 @@ local Lyapunov function (``V' `` with a negative definite Hessian at the equilib
 linearization's ``P`` has) always gets that level, however many states the loop has. Larger levels
 are the same claim over a larger box, whose faces are proved exactly (``level (P^-1)_ii < c^2``)
 and whose cells outside ``N`` are bisected (each attempt within :data:`~lyapcheck.tolerances.BALL_LEVEL_CELLS`
-cells, the whole search within :data:`~lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS`);
+cells, the whole search within :data:`~lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS`, from 4 states
+:data:`~lyapcheck.tolerances.ELLIPSOID_LEVEL_TOTAL_CELLS`);
 :func:`~lyapcheck.models.classes.level_search.largest_proved_level` keeps the largest level proved. The certificate is the ball-arithmetic route's (``kind`` "interval", ``"boundary": "exact"``):
 ``verify`` runs the same proof again.
 
@@ -93,14 +94,17 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robu
 
     spent = [0]  # the cells of every attempt so far: the search stops at BALL_LEVEL_TOTAL_CELLS (a count)
     scale = cell_cost(lie.loop)  # from 4 states, the budgets are in cells of the cart-pole's cost
-    total, each = int(tolerances.BALL_LEVEL_TOTAL_CELLS / scale), int(tolerances.BALL_LEVEL_CELLS / scale)
+    whole = tolerances.BALL_LEVEL_TOTAL_CELLS if loop.n < ELLIPSOID_JUMP_STATES else \
+        tolerances.ELLIPSOID_LEVEL_TOTAL_CELLS
+    total, each = int(whole / scale), int(tolerances.BALL_LEVEL_CELLS / scale)
     scaled = "" if scale == 1 else f", over {float(scale):.3g} for this loop's cost of a cell"
 
     def attempt(level: Fraction) -> tuple[IntervalClaim, Any] | None:
         left = total - spent[0]
         if left <= 0:
-            raise BudgetExhausted(f"the search's {total} cells were spent "
-                                  f"(lyapcheck.tolerances.BALL_LEVEL_TOTAL_CELLS{scaled})")
+            raise BudgetExhausted(f"the search's {total} cells were spent (lyapcheck.tolerances."
+                                  f"{'BALL_LEVEL' if loop.n < ELLIPSOID_JUMP_STATES else 'ELLIPSOID_LEVEL'}"
+                                  f"_TOTAL_CELLS{scaled})")
         if budget.left() <= 0:
             raise BudgetExhausted(budget.reached())
         claim = claim_at(level)

@@ -29,7 +29,14 @@ condition number in the thousands) and bounds ``g`` by plain intervals. Here ins
    ``y``; where ``H`` is proved negative definite, ``t^T H t <= 0`` and ``g(m) + grad g(m) . t`` bounds
    ``g``. A cell that fails is split across the side whose width adds most to the bound (where the
    margin is thin), not merely the widest. A centre with ``g >= 0`` proved inside ``E`` ends the
-   proof: the claim is false at this level.
+   proof: the claim is false at this level. Three economies (issue 42), none of which a claim rests on:
+   a cell meeting the boundary of ``E`` first loses its outer slabs proved outside ``E`` (:func:`_trim`);
+   a cell whose bound fails already at first order (``g(m) + grad g(m) . t``, which no Hessian lowers)
+   gets no Hessian of its own and is cut at once into the pieces its halvings would reach
+   (:func:`_pieces`, at most 4); and the innermost and outermost cells go by turns, with an attempt
+   given up near the finest width where ``V'`` is too close to 0 for it (:func:`_at_the_bottom`), so
+   that a level too large fails within a few thousand cells. The cells examined by an attempt that succeeds do not
+   depend on the order.
 
 The enclosures keep the ellipsoid's correlations: ``grad V = 2 P z`` is enclosed as ``2 W y`` with
 ``W = P M`` exact, never as ``P`` times the ball enclosure of ``M`` times a cell (whose corners lie far
@@ -60,6 +67,15 @@ from lyapcheck.models.engines.interval_field import LieDerivative, ball, negativ
 HESSIAN_ZONE_MIN_WIDTH: Final = Fraction(1, 8)
 #: the finest split of the shell's phase, as a fraction of the ellipsoid's box in each coordinate
 SHELL_MIN_WIDTH: Final = Fraction(1, 2 ** 12)
+#: the outer slabs a shell cell that meets the boundary of ``{V <= level}`` loses before its Taylor form:
+#: on each side the outer half, quarter, ... of the cell, down to 2^-TRIM_DEPTH of it, the largest proved
+#: outside the set (one enclosure of V each, far cheaper than the field's)
+TRIM_DEPTH: Final = 3
+#: the most halvings by which a shell cell failing at first order is cut at once (2^this pieces)
+MAX_PIECES_HALVINGS: Final = 2
+#: a shell cell within 2^this of the finest width whose first-order bound fails even at the finest width
+#: around its centre ends the attempt (V' too close to 0 there for the finest cells)
+BOTTOM_HALVINGS: Final = 3
 
 Cell = tuple[tuple[float, float], ...]
 
@@ -244,8 +260,12 @@ class _Geometry:
         ``H`` is proved negative definite, also by ``g(m) + grad . t`` (``t^T H t <= 0``)."""
         if self.taylor_upper(value, grad, H[0], cell) < 0:
             return True
-        if not H[1]:
-            return False
+        return H[1] and self.first_order_negative(value, grad, cell)
+
+    def first_order_negative(self, value: Any, grad: list[Any], cell: Cell) -> bool:
+        """``g(m) + grad g(m) . t < 0`` for every ``|t_i| <= r_i``: ``g < 0`` on the cell where ``g`` is
+        concave there, and otherwise the least a Taylor form's bound can be (its Hessian's terms' enclosures
+        contain 0, so they never lower it)."""
         zero = flint.arb(0)
         total = value
         for gi, (a, b) in zip(grad, cell):
@@ -317,13 +337,66 @@ def _split(cell: Cell, min_width: list[float], weights: list[float] | None = Non
     return cell[:k] + ((a, m),) + cell[k + 1:], cell[:k] + ((m, b),) + cell[k + 1:]
 
 
-def _weights(grad: list[Any], H: list[list[Any]], cell: Cell) -> list[float]:
+def _pieces(cell: Cell, min_width: list[float], weights: list[float], margin: float) -> tuple[Cell, ...] | None:
+    """A cell whose Taylor form fails already at first order cut at once into the pieces its halvings would
+    reach: the side of the largest weight times width halved (as :func:`_split`) until the spread
+    ``sum_i weight_i r_i`` falls below ``margin`` (``-g`` at the centre, floats: an estimate that only
+    chooses the cuts) or MAX_PIECES_HALVINGS halvings are made; the pieces between are never examined.
+    None when every side is at the finest width."""
+    widths = [b - a for a, b in cell]
+    cuts = [0] * len(cell)
+    for _ in range(MAX_PIECES_HALVINGS):
+        sides = [i for i in range(len(cell)) if widths[i] > min_width[i]]
+        if not sides or (sum(cuts) > 0 and sum(w * x / 2 for w, x in zip(weights, widths)) < margin):
+            break
+        k = max(sides, key=lambda i: widths[i] * weights[i])
+        widths[k] /= 2
+        cuts[k] += 1
+    if not any(cuts):
+        return None
+    pieces: list[Cell] = [()]
+    for (a, b), k in zip(cell, cuts):
+        step = (b - a) / 2 ** k
+        pieces = [p + ((a + j * step, b if j == 2 ** k - 1 else a + (j + 1) * step),) for p in pieces
+                  for j in range(2 ** k)]
+    return tuple(pieces)
+
+
+def _at_the_bottom(cell: Cell, min_width: list[float], value: Any, grad: list[Any]) -> bool:
+    """Every side of the cell is within 2^BOTTOM_HALVINGS of the finest width, ``g(m) < 0`` and the first
+    order spread ``sum_i |g_i| w_i / 2`` over a cell of the finest widths ``w`` around ``m`` is at least
+    ``-g(m)`` (floats: an estimate that only decides when an attempt gives up)."""
+    margin = -float(value.mid())
+    return margin > 0 and all(b - a <= w * 2 ** BOTTOM_HALVINGS for (a, b), w in zip(cell, min_width)) and \
+        sum(abs(float(gi.mid())) * w / 2 for gi, w in zip(grad, min_width)) >= margin
+
+
+def _trim(geo: Any, cell: Cell, c: Any) -> Cell:
+    """The cell less its outer slabs proved outside ``{V <= level}`` (``c``: the level), side by side, from
+    the end farther from the equilibrium: the largest of the outer half, quarter, ... (TRIM_DEPTH) of the
+    side whose slab ``geo.outside`` proves outside the set. The slabs hold no point of the set, so ``g < 0``
+    on the rest of the cell is the claim on the whole cell, and a Taylor form over the smaller cell is
+    tighter (its corners no longer reach far outside the set, where ``g`` is largest). The cuts are at
+    the cell's own dyadic points: the same cells on every machine."""
+    for i in range(len(cell)):
+        a, b = cell[i]
+        upper = abs(b) >= abs(a)
+        for k in range(1, TRIM_DEPTH + 1):
+            w = (b - a) / 2 ** k
+            piece = cell[:i] + (((b - w, b) if upper else (a, a + w)),) + cell[i + 1:]
+            if geo.outside(geo.quadratic(piece), piece, c):
+                cell = cell[:i] + (((a, b - w) if upper else (a + w, b)),) + cell[i + 1:]
+                break
+    return cell
+
+
+def _weights(grad: list[Any], H: list[list[Any]] | None, cell: Cell) -> list[float]:
     """Each side's share of the Taylor form's spread per unit of its width: ``|g_i| + sum_j |H_ij| r_j``
-    (floats: they only choose the side to split, the proof never rests on them)."""
+    (``|g_i|`` alone without ``H``; floats: they only choose the side to split, the proof never rests on
+    them)."""
     radii = [(b - a) / 2 for a, b in cell]
-    return [abs(float(gi.mid())) + float(gi.rad()) + sum((abs(float(h.mid())) + float(h.rad())) * r
-                                                         for h, r in zip(row, radii))
-            for gi, row in zip(grad, H)]
+    return [abs(float(gi.mid())) + float(gi.rad()) + (0.0 if H is None else sum(
+        (abs(float(h.mid())) + float(h.rad())) * r for h, r in zip(H[i], radii))) for i, gi in enumerate(grad)]
 
 
 def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[Fraction], level: Fraction,
@@ -411,7 +484,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         # near the equilibrium (a cell wider than its distance from it) down to the shell's finest width:
         # there the Hessian is negative definite on small enough cells, and the zone must reach beyond N
         near = max(b - a for a, b in cell) > max(float(q.lower()), 0.0) ** 0.5
-        halves = _split(cell, shell_width if near else zone_width)
+        halves: tuple[Cell, ...] | None = _split(cell, shell_width if near else zone_width)
         if halves is not None:
             for half in halves:
                 lows[half] = geo.quadratic(half)
@@ -438,13 +511,20 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         if inside(q, cell):
             continue  # g < 0 by the Hessian
         pending.append((cell, (H, True)))
-    # phase 3: the shell, by Taylor forms; depth first, in a fixed order
-    stack = list(reversed(pending))
+    # phase 3: the shell, by Taylor forms; depth first, in a fixed order: the innermost and the outermost cells
+    # by turns (the same cells in any order, but a level too large fails near the equilibrium or near the
+    # boundary, and the attempt then ends sooner)
+    far = [float(geo.quadratic(cell).upper()) for cell, _ in pending]
+    ranked = [pending[k] for k in sorted(range(len(pending)), key=lambda k: (far[k], k))]
+    turns = [ranked[k // 2] if k % 2 == 0 else ranked[-1 - k // 2] for k in range(len(ranked))]
+    stack = list(reversed(turns))
     while stack:
         cell, H = stack.pop()
         q = geo.quadratic(cell)
         if geo.outside(q, cell, c) or inside(q, cell):
             continue  # outside E, or inside E_1 or N's ellipsoid
+        if not q <= c:  # the cell meets the boundary of E: only its part in E needs g < 0
+            cell = _trim(geo, cell, c)
         count += 1
         if (why := over()) is not None:
             return EllipsoidProof(False, why, count, level_1)
@@ -453,13 +533,28 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
             return refuted
         if grad is not None and H is not None and geo.negative(value, grad, H, cell):
             continue
-        own_H = geo.hessian_y(lie, cell) if grad is not None else None
+        # the cell's own Hessian only where it can help: when g(m) + grad g(m) . t already reaches 0 on the
+        # cell, no Hessian makes the Taylor form negative (its terms' enclosures all contain 0), and the
+        # halves keep the ancestor's (which contains them)
+        hopeless = grad is not None and not geo.first_order_negative(value, grad, cell)
+        own_H = geo.hessian_y(lie, cell) if grad is not None and not hopeless else None
         own = None if own_H is None else (own_H, negative_definite_preconditioned(own_H))
         if grad is not None and own is not None and geo.negative(value, grad, own, cell):
             continue
         inherited = own if own is not None else H
-        halves = _split(cell, shell_width, None if grad is None or inherited is None else
-                        _weights(grad, inherited[0], cell))
+        weights = None if grad is None else _weights(grad, None if inherited is None else inherited[0], cell)
+        if hopeless and grad is not None and _at_the_bottom(cell, shell_width, value, grad):
+            # near the finest width, g(m) + grad g(m) . t reaches 0 even over a cell of the finest width around
+            # m: V' is too close to 0 here for the finest cells (an estimate: giving up is never unsound), so the
+            # attempt ends now rather than after every cell down to that width
+            where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
+            return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates: V' is "
+                                  f"{float(value.mid()):.3g} at the centre, too close to 0 for the finest cells)",
+                                  count, level_1)
+        if hopeless and weights is not None and float(value.mid()) < 0:
+            halves = _pieces(cell, shell_width, weights, -float(value.mid()))
+        else:
+            halves = _split(cell, shell_width, weights)
         if halves is None:
             where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
             return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates, at the "
