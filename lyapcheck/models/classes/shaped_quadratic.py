@@ -55,6 +55,13 @@ SHAPE_TRUST_MIN: Final = 1.02
 #: fixed multiplier of (V - 1) that relaxes the points outside the new ellipsoid
 SHAPE_MARGIN: Final = 0.02
 SHAPE_KAPPA: Final = 1.0
+#: the linearization's decrease asked of the new P: J^T P + P J <= -SHAPE_LOCAL_RATE mu P (V decays at
+#: least at that share of the best rate any quadratic V has near the equilibrium: the exact local level,
+#: whose box of a negative definite Hessian of V' grows with that rate, then covers more of the set)
+SHAPE_LOCAL_RATE: Final = 0.3
+#: the level a P is scored at: the smallest sampled V with V' >= -SHAPE_SCORE_RATE mu V (a decrease
+#: with room: the ball arithmetic proves a level with little room only on very many cells)
+SHAPE_SCORE_RATE: Final = 0.1
 #: the ellipsoid at level 1 stays inside the [domain] box widened by this factor (it may reach past the
 #: box, whose share is what is compared, but not without bound)
 SHAPE_BOX_ROOM: Final = 2.0
@@ -102,22 +109,35 @@ class _Sampler:
         with np.errstate(all="ignore"):
             return np.asarray(self.field(Z + self.eq))
 
-    def critical_level(self, P: np.ndarray) -> float:
-        """The smallest sampled ``V = z^T P z`` with ``V' >= 0`` (or not finite), along rays of the whitened
-        coordinates at levels in ratio CRITICAL_RATIO, CRITICAL_DECADES decades either side of 1."""
+    def critical_level(self, P: np.ndarray, rate: float = 0.0) -> float:
+        """The smallest sampled ``V = z^T P z`` with ``V' >= -rate V`` (or not finite), along rays of the
+        whitened coordinates: levels in ratio 2 from 10^-CRITICAL_DECADES, then in ratio CRITICAL_RATIO
+        between the last good one and the first bad; 10^CRITICAL_DECADES when none is bad."""
         L = np.linalg.cholesky(np.linalg.inv(P))
-        for level in np.exp(np.arange(-CRITICAL_DECADES, CRITICAL_DECADES, np.log10(CRITICAL_RATIO)) * np.log(10)):
-            Z = (self.directions * np.sqrt(level)) @ L.T
+        D = self.directions @ L.T
+        DP = D @ P
+
+        def good(level: float) -> bool:
+            Z = D * np.sqrt(level)
             with np.errstate(all="ignore"):
-                g = 2 * np.einsum("ij,jk,ik->i", Z, P, self.f(Z))
-            if not np.all(g < 0):
-                return float(level)
-        return float(10.0 ** CRITICAL_DECADES)
+                g = 2 * np.sum((DP * np.sqrt(level)) * self.f(Z), axis=1)
+            return bool(np.all(g < -rate * level))
+
+        top = 10.0 ** CRITICAL_DECADES
+        level = 10.0 ** -CRITICAL_DECADES
+        while level < top and good(level):
+            level *= 2
+        if level >= top:
+            return top
+        low = level / 2
+        while low * CRITICAL_RATIO < level and good(low * CRITICAL_RATIO):
+            low *= CRITICAL_RATIO
+        return float(min(low * CRITICAL_RATIO, level))
 
     def share(self, P: np.ndarray, level: float) -> float:
         """The share of the box's uniform samples inside ``{z^T P z <= level}``."""
         X = self.box_points
-        return float(np.mean(np.einsum("ij,jk,ik->i", X, P, X) <= level))
+        return float(np.mean(np.sum((X @ P) * X, axis=1) <= level))
 
     def points(self, L: np.ndarray, rho: float) -> np.ndarray:
         """SHAPE_POINTS in ``{y^T y <= rho}`` (whitened), half of them in its shell beyond SHAPE_SHELL."""
@@ -149,14 +169,17 @@ def _round(sampler: _Sampler, Pk: np.ndarray, J: np.ndarray, mu: float, rho: flo
     Jy = Li @ J @ L
     cons = [A.reshape(len(Y), -1) @ cp.vec(W, order="C") <= -mu * (SHAPE_KAPPA + SHAPE_MARGIN) * q,
             W >> np.eye(n) / rho,
-            Jy.T @ W + W @ Jy << -SHAPE_MARGIN * mu * np.eye(n)]
+            Jy.T @ W + W @ Jy << -SHAPE_LOCAL_RATE * mu * W]
     widths = SHAPE_BOX_ROOM * np.minimum(-sampler.lo, sampler.hi)
     for i in range(n):  # z_i^2 <= width_i^2 on {y^T W y <= 1}: (L^T e_i)^T W^-1 (L^T e_i) <= width_i^2
         c = L[i, :].reshape(n, 1)
         cons.append(cp.bmat([[W, c], [c.T, np.array([[widths[i] ** 2]])]]) >> 0)
+    tangent = cp.Parameter((n, n), symmetric=True)  # (one compilation for the round's steps)
+    problem = cp.Problem(cp.Minimize(cp.trace(tangent @ W)), cons)
     current, solved = np.eye(n), False
     for _ in range(SHAPE_MAJORIZATION_STEPS):
-        problem = cp.Problem(cp.Minimize(cp.trace(np.linalg.inv(current) @ W)), cons)
+        inverse = np.linalg.inv(current)
+        tangent.value = (inverse + inverse.T) / 2
         try:
             problem.solve(solver=cp.CLARABEL)
         except cp.error.SolverError:
@@ -190,7 +213,8 @@ def shaped_quadratic(loop: Loop, J: list[list[Fraction]], box: tuple[Any, Any], 
     if mu <= 0:
         return None
     sampler = _Sampler(loop, box)
-    c0 = sampler.critical_level(P0)
+    rate = SHAPE_SCORE_RATE * mu
+    c0 = sampler.critical_level(P0, rate)
     best = P0 / c0
     first = best_share = sampler.share(best, 1.0)
     best_volume = -np.linalg.slogdet(best)[1]
@@ -204,8 +228,9 @@ def shaped_quadratic(loop: Loop, J: list[list[Fraction]], box: tuple[Any, Any], 
             rho = float(np.sqrt(rho))
             continue
         P = (P + P.T) / 2
-        c = sampler.critical_level(P)
+        c = sampler.critical_level(P, rate)
         share, volume = sampler.share(P / c, 1.0), -np.linalg.slogdet(P / c)[1]
+        notes.append(f"round {rounds}: share {share:.4g} at level {c:.4g} (trust {rho:.3g})")
         if share > best_share or (share == best_share and volume > best_volume):
             best, best_share, best_volume, improved = P / c, share, volume, True
             Pk, rho = best, SHAPE_TRUST
