@@ -270,6 +270,7 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
                                  [skipped, f"{label}: level {float(first.level):.6g}{stopped}", *tried], box, search)
     if result.status == "certified":
         simulated_check(loop, result, box)
+        result = with_shaped(loop, J, budget, box, result)
     return result
 
 
@@ -558,16 +559,51 @@ def quadratic_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any
         if isinstance(kept, ConditionResult):
             kept.numbers["other_quadratic"] = str(other)
         return kept
-    kept, other = (shaped, linear) if region_key(loop, shaped) >= region_key(loop, linear) else (linear, shaped)
-    kept.numbers["other_quadratic"] = (f"{other.numbers['V_from']}: level {other.numbers['level']:.6g}, roa_share "
-                                       f"{other.numbers.get('roa_share', '-')} (not kept)")
+    kept, other = (shaped, linear) if not larger(loop, linear, shaped) else (linear, shaped)
+    kept.numbers["other_quadratic"] = not_kept(other)
     return kept
 
 
-def region_key(loop: Loop, result: ConditionResult) -> tuple[float, float]:
-    """How two certified ellipsoids ``{z^T P z <= level}`` compare: the share of the simulated region of
-    attraction (``roa_share``, 0 where none was measured), then the log of the volume
-    (``n/2 log level - 1/2 log det P``, floats: a comparison of two proved sets, not a claim)."""
+def with_shaped(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any], result: ConditionResult
+                ) -> ConditionResult:
+    """A region the SOS route certified at 4 to 6 states against the shaped V's
+    (:func:`shaped_ball_level`, in the time left): the shaped one only where it covers more of the
+    simulated region of attraction (or as much with a larger volume, both volumes known); the other's
+    outcome in ``numbers["other_quadratic"]``."""
+    from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
+
+    if loop.n not in SHAPE_STATES:
+        return result
+    shaped = shaped_ball_level(loop, J, budget, box)
+    if isinstance(shaped, ConditionResult) and larger(loop, shaped, result):
+        shaped.numbers["other_quadratic"] = not_kept(result)
+        return shaped
+    result.numbers["other_quadratic"] = shaped if isinstance(shaped, str) else not_kept(shaped)
+    return result
+
+
+def not_kept(other: ConditionResult) -> str:
+    """One line on a certified region the class did not keep."""
+    return (f"{other.numbers.get('V_from')}: level {float(other.numbers.get('level', 0.0)):.6g}, roa_share "
+            f"{other.numbers.get('roa_share', '-')} (not kept)")
+
+
+def larger(loop: Loop, a: ConditionResult, b: ConditionResult) -> bool:
+    """Whether the certified ``a`` covers more than ``b``: a larger share of the simulated region of
+    attraction (``roa_share``), or the same share and a larger volume where both sets are ellipsoids of
+    the states (:func:`region_key`); otherwise not (``b`` stays)."""
+    share_a, volume_a = region_key(loop, a)
+    share_b, volume_b = region_key(loop, b)
+    if share_a != share_b:
+        return share_a > share_b
+    return volume_a is not None and volume_b is not None and volume_a > volume_b
+
+
+def region_key(loop: Loop, result: ConditionResult) -> tuple[float, float | None]:
+    """How two certified sets compare: the share of the simulated region of attraction (``roa_share``, 0
+    where none was measured), then, for an ellipsoid ``{z^T P z <= level}`` of the states, the log of its
+    volume (``n/2 log level - 1/2 log det P``, floats: a comparison of two proved sets, not a claim; None
+    for any other V)."""
     import numpy as np
 
     from lyapcheck.models.engines.interval_region import quadratic_form
@@ -575,6 +611,6 @@ def region_key(loop: Loop, result: ConditionResult) -> tuple[float, float]:
 
     P = quadratic_form(loop.ring, poly_from_json(loop.ring, result.certificate["V"], "V"), loop.n)
     level = float(Fraction(result.certificate["level"]))
-    volume = -np.inf if P is None or level <= 0 else \
-        loop.n / 2 * np.log(level) - np.linalg.slogdet(np.array([[float(x) for x in row] for row in P]))[1] / 2
-    return float(result.numbers.get("roa_share", 0.0)), float(volume)
+    volume = None if P is None or level <= 0 else \
+        loop.n / 2 * float(np.log(level)) - float(np.linalg.slogdet(np.array([[float(x) for x in row] for row in P]))[1]) / 2
+    return float(result.numbers.get("roa_share", 0.0)), volume
