@@ -31,6 +31,7 @@ Every random draw has a fixed seed: the same model gives the same ``P``.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Final
@@ -181,7 +182,9 @@ def _round(sampler: _Sampler, Pk: np.ndarray, J: np.ndarray, mu: float, rho: flo
         inverse = np.linalg.inv(current)
         tangent.value = (inverse + inverse.T) / 2
         try:
-            problem.solve(solver=cp.CLARABEL)
+            with warnings.catch_warnings():  # "may be inaccurate": the status is read below, the proof decides
+                warnings.simplefilter("ignore", UserWarning)
+                problem.solve(solver=cp.CLARABEL)
         except cp.error.SolverError:
             break
         # (a proposal only: an inaccurate point is tried too, the sampled level and then the proof decide)
