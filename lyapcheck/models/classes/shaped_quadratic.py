@@ -79,8 +79,8 @@ SHAPE_DIGITS: Final = 6
 @dataclass
 class Shaped:
     """The proposal: ``P`` (floats, scaled so that its sampled critical level is 1), the share of the box
-    inside ``{z^T P z <= 1}``, the linearization's share at its own critical level, the rounds run and
-    whether the solver ever returned a point (for the reason when the shaping gave nothing better)."""
+    inside ``{z^T P z <= 1}``, the linearization's share at its own critical level, the rounds run,
+    whether a round improved on the linearization's ``P`` (``P`` is that one otherwise) and a line per round."""
 
     P: np.ndarray
     share: float
@@ -231,7 +231,12 @@ def shaped_quadratic(loop: Loop, J: list[list[Fraction]], box: tuple[Any, Any], 
             rho = float(np.sqrt(rho))
             continue
         P = (P + P.T) / 2
-        c = sampler.critical_level(P, rate)
+        try:
+            c = sampler.critical_level(P, rate)
+        except np.linalg.LinAlgError:  # (a P too ill-conditioned to whiten: the round is not kept)
+            notes.append(f"round {rounds}: the solver's P could not be whitened")
+            rho = float(np.sqrt(rho))
+            continue
         share, volume = sampler.share(P / c, 1.0), -np.linalg.slogdet(P / c)[1]
         notes.append(f"round {rounds}: share {share:.4g} at level {c:.4g} (trust {rho:.3g})")
         if share > best_share or (share == best_share and volume > best_volume):
