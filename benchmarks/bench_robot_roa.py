@@ -19,7 +19,12 @@ class run: the example, its number of states, the class, its status, the process
 share of the simulated region of attraction within the ``[domain]`` box that the certified set covers
 (``roa_share`` of the condition's JSON: lyapcheck's own simulation of the true loop on a grid of the
 set's box), the certified level of ``V`` and the largest ball ``|x - x_eq| <= r`` inside the set
-(``ball_radius``, where the certificate states one). Then, per example, issue 42's targets (a
+(``ball_radius``, where the certificate states one), the share of the ``[domain]`` box inside the certified
+set (uniform samples) and which V the class kept (``V_from``: at 4 to 6 states ``roa`` proves both a
+quadratic V shaped for volume, ``lyapcheck/models/classes/shaped_quadratic.py``, and the linearization's,
+and keeps the set covering more). Then Drake's Taylor-model level of ``z' S z`` (issue 42's anchor, 3.97
+for the cart-pole; ``benchmarks/drake_level_check.py``): the share of the box inside it and a point of the
+true loop below it where ``V' > 0``, confirmed by ball arithmetic. Then, per example, issue 42's targets (a
 certified region of attraction in under 120 s covering at least 25 % of the simulated region), and
 the summary and the reason of each class that did not certify. A crash (exit 3) or an unreadable output is printed
 with its command and its stderr.
@@ -46,10 +51,12 @@ import sys
 import tempfile
 import time
 from dataclasses import dataclass
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import drake_level_check  # noqa: E402  (beside this file)
 import robot_lqr  # noqa: E402  (beside this file)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -127,6 +134,40 @@ def ball_text(cond: dict[str, Any]) -> str:
     return format(max(radii), ".4g") if radii else "-"
 
 
+#: uniform samples of the [domain] box for the share of it inside a certified set
+BOX_SAMPLES = 400_000
+
+
+def box_share(cond: dict[str, Any], stem: str) -> float | None:
+    """The share of BOX_SAMPLES uniform points of the ``[domain]`` box (fixed seed) inside the certified set
+    ``{V <= level}`` (within the certificate's box, where it states one), V read from the certificate's terms;
+    None where the condition is not certified or its V involves more than the states."""
+    import numpy as np
+
+    cert = cond.get("certificate") or {}
+    if cond.get("status") != "certified" or "V" not in cert or "level" not in cert:
+        return None
+    lo, hi = drake_level_check.domain_box(stem)
+    n = len(lo)
+    X = lo + (hi - lo) * np.random.default_rng(0).random((BOX_SAMPLES, n))
+    value = np.zeros(len(X))
+    for coefficient, exponents in cert["V"]["terms"]:
+        if any(exponents[n:]):
+            return None
+        value += float(Fraction(coefficient)) * np.prod(X ** np.array(exponents[:n]), axis=1)
+    inside = value <= float(Fraction(cert["level"]))
+    states = cert.get("variables", [])[:n]
+    if cert.get("box") and states:
+        for i, name in enumerate(states):
+            a, b = (float(Fraction(x)) for x in cert["box"][name])
+            inside &= (X[:, i] >= a) & (X[:, i] <= b)
+    return float(np.mean(inside))
+
+
+def box_text(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:.3g} %"
+
+
 def share_text(cond: dict[str, Any]) -> str:
     value = cond.get("roa_share")
     return "-" if value is None else f"{100 * float(value):.1f} %"
@@ -178,6 +219,33 @@ def rounded_cost_to_go(stem: str) -> "Any":
     R = np.array([[float(f"{S[i, j] * (1 if i == j else 2):.6g}") / (1 if i == j else 2) for j in range(len(S))]
                   for i in range(len(S))])
     return np.triu(R) + np.triu(R, 1).T
+
+
+def drake_levels(runs: list[Run], examples: list[tuple[str, str, int, bool]]) -> None:
+    """Issue 42's Drake levels of ``z' S z`` (``drake_level_check.DRAKE_TAYLOR_LEVELS``, from the cubic Taylor
+    model): the share of the [domain] box inside each, whether it is valid on the true loop (a point with
+    ``V' > 0`` below it, confirmed by ball arithmetic) and the share of the box in lyapcheck's certified roa."""
+    rows = [(label, stem) for label, stem, _, lqr in examples if lqr and stem in drake_level_check.DRAKE_TAYLOR_LEVELS]
+    if not rows:
+        return
+    print("Drake's Taylor-model level of z' S z (issue 42's anchor) on the true loop:")
+    for label, stem in rows:
+        level = drake_level_check.DRAKE_TAYLOR_LEVELS[stem]
+        S = rounded_cost_to_go(stem)
+        share = drake_level_check.box_share(stem, S, level)
+        found = drake_level_check.decrease_counterexample(stem, S)
+        if found is None:
+            valid = "no point with V' >= 0 found below it (not shown invalid)"
+        elif found["V"] < level:
+            valid = (f"NOT valid: V' in [{found['V_dot_ball'][0]:.4g}, {found['V_dot_ball'][1]:.4g}] > 0 (ball arithmetic) "
+                     f"at z = ({', '.join(f'{float(Fraction(x)):.6g}' for x in found['point'])}), V = {float(found['V']):.4g}")
+        else:
+            valid = f"the lowest point found with V' > 0 has V = {float(found['V']):.4g} (above the level)"
+        mine = next((r for r in runs if r.label == label and r.klass == "roa"), None)
+        ours = None if mine is None else box_share(mine.condition(), stem)
+        print(f"  {label:<17} level {level:g}: {100 * share:.3g} % of the box; {valid}; lyapcheck's certified roa: "
+              f"{box_text(ours)} of the box")
+    print()
 
 
 def drake_comparison(drake_python: str, runs: list[Run], examples: list[tuple[str, str, int, bool]]) -> None:
@@ -249,7 +317,7 @@ def main() -> int:
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start; "
           f"--time-limit {args.time_limit:g} s per class\n")
     head = (f"{'example':<17} {'states':>6}  {'class':<9}  {'status':<13} {'time s':>7}  {'share of sim. ROA':>17}  "
-            f"{'level':>9}  {'ball radius':>11}")
+            f"{'share of box':>12}  {'level':>9}  {'ball radius':>11}  V kept")
     print(head)
     print("-" * len(head))
     runs: list[Run] = []
@@ -262,10 +330,16 @@ def main() -> int:
             runs.append(r)
             cond = r.condition()
             status = cond.get("status", f"exit {r.exit}" if r.doc is None else "absent")
+            v_from = str(cond.get("V_from", "-"))
+            kept = "shaped" if "shaped" in v_from else "linearization" if v_from.startswith("the linearization") \
+                else v_from.split(" (")[0].split(",")[0]
             print(f"{label:<17} {states:>6}  {klass:<9}  {status:<13} {r.wall:7.1f}  {share_text(cond):>17}  "
-                  f"{figure(cond, 'level', '.4g'):>9}  {ball_text(cond):>11}", flush=True)
+                  f"{box_text(box_share(cond, stem)):>12}  {figure(cond, 'level', '.4g'):>9}  {ball_text(cond):>11}  "
+                  f"{kept[:30]}", flush=True)
     print("(time: the whole certify process with --classes linearization,CLASS, imports included; share: roa_share, "
-          "the share of lyapcheck's simulated region of attraction in the [domain] box inside the certified set)\n")
+          "the share of lyapcheck's simulated region of attraction in the [domain] box inside the certified set; share "
+          f"of box: of {BOX_SAMPLES} uniform points of the [domain] box)\n")
+    drake_levels(runs, examples)
 
     if args.drake_python:
         drake_comparison(args.drake_python, runs, examples)

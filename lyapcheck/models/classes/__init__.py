@@ -22,6 +22,8 @@
   :mod:`~lyapcheck.models.classes.recast_interval` and :mod:`~lyapcheck.models.classes.fitted_v`
   (the ball-arithmetic region), :mod:`~lyapcheck.models.classes.recast_ball_level` (a quadratic V's
   largest level by ball arithmetic, from its exact local level, at any number of states),
+  :mod:`~lyapcheck.models.classes.shaped_quadratic` (a quadratic V shaped for a large region at 4 to 6
+  states: a floating-point proposal that route proves),
   :mod:`~lyapcheck.models.classes.flow_region` (that region enlarged by boxes proved, by validated
   integration, to flow into it);
 - :mod:`~lyapcheck.models.classes.sampled` (a sampled-data loop's linearization over one period, in ball arithmetic);

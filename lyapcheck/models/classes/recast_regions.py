@@ -260,7 +260,7 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
                                    ("time", "domain"))
         return ConditionResult("roa", "inconclusive", late.summary, numbers=late.numbers(), property="ROA")
     if isinstance(first, str):
-        ball = linearization_ball_level(loop, J, budget, box)
+        ball = quadratic_ball_level(loop, J, budget, box)
         if isinstance(ball, ConditionResult):
             return ball
         return regions.best_region(loop, [], [skipped, f"{label}: {first}", ball], box, search)
@@ -270,6 +270,7 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
                                  [skipped, f"{label}: level {float(first.level):.6g}{stopped}", *tried], box, search)
     if result.status == "certified":
         simulated_check(loop, result, box)
+        result = with_shaped(loop, J, budget, box, result)
     return result
 
 
@@ -501,3 +502,115 @@ def linearization_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any,
     if isinstance(found, ConditionResult):
         simulated_check(loop, found, box)
     return found
+
+
+def shaped_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+    """``roa`` from a quadratic V shaped for a large region (4 to 6 states: the proposal of
+    :func:`lyapcheck.models.classes.shaped_quadratic.shaped_quadratic`, floating point), rounded to
+    rationals, checked positive definite exactly and its largest level proved by ball arithmetic on the
+    true loop (:func:`~lyapcheck.models.classes.recast_ball_level.ball_level`, the same proof as the
+    linearization's V); why not otherwise (one line: the class then keeps the linearization's)."""
+    import time
+
+    from lyapcheck.models.classes.recast_ball_level import ball_level
+    from lyapcheck.models.classes.shaped_quadratic import rational_form, shaped_quadratic
+    from lyapcheck.sos.polynomials import to_fmpq
+
+    if isinstance(J, str):
+        return f"a shaped quadratic V: no Jacobian ({J})"
+    # (the design's work is bounded by its rounds; the class's time is only its safety net)
+    shaped = shaped_quadratic(loop, J, box, deadline=time.perf_counter() + max(budget.left(), 0.0))
+    if shaped is None:
+        return "a shaped quadratic V: the linearization gives no positive definite P to start from"
+    if not shaped.improved:
+        return (f"a shaped quadratic V: no round of the design improved on the linearization's V (sampled share "
+                f"of the box {100 * shaped.linearization_share:.3g} %)")
+    P = rational_form(shaped.P)
+    if P is None:
+        return "a shaped quadratic V: the proposed P, rounded to rationals, is not positive definite (exact)"
+    ring = loop.ring
+    z = [ring.gen(s) for s in loop.system.states]
+    V = sum((z[i] * z[j] * to_fmpq(P[i][j]) for i in range(loop.n) for j in range(loop.n)), ring.zero())
+    found = ball_level(loop, V, budget, "roa", "a quadratic V shaped for volume on samples of the true field "
+                                               "(lyapcheck.models.classes.shaped_quadratic), proved by ball "
+                                               "arithmetic from its exact local level upwards")
+    if isinstance(found, str):
+        return f"a shaped quadratic V: {found}"
+    found.numbers["shaping"] = {"rounds": shaped.rounds, "sampled_share_of_box": shaped.share,
+                                "linearization_sampled_share_of_box": shaped.linearization_share}
+    simulated_check(loop, found, box)
+    return found
+
+
+def quadratic_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+    """``roa`` by a quadratic V's level proved by ball arithmetic where the SOS route proved none: at 4 to 6
+    states the shaped V (:func:`shaped_ball_level`) and then the linearization's
+    (:func:`linearization_ball_level`, in the time left), the certified set covering the larger share of
+    the simulated region of attraction kept (``roa_share``; tie: the larger volume), the other's outcome
+    in ``numbers["other_quadratic"]``; below 4 states or above 6 the linearization's alone."""
+    from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
+
+    if loop.n not in SHAPE_STATES:
+        return linearization_ball_level(loop, J, budget, box)
+    shaped = shaped_ball_level(loop, J, budget, box)
+    linear = linearization_ball_level(loop, J, budget, box)
+    if isinstance(shaped, str) or isinstance(linear, str):
+        kept, other = (linear, shaped) if isinstance(shaped, str) else (shaped, linear)
+        if isinstance(kept, ConditionResult):
+            kept.numbers["other_quadratic"] = str(other)
+        return kept
+    kept, other = (shaped, linear) if not larger(loop, linear, shaped) else (linear, shaped)
+    kept.numbers["other_quadratic"] = not_kept(other)
+    return kept
+
+
+def with_shaped(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any], result: ConditionResult
+                ) -> ConditionResult:
+    """A region the SOS route certified at 4 to 6 states against the shaped V's
+    (:func:`shaped_ball_level`, in the time left): the shaped one only where it covers more of the
+    simulated region of attraction (or as much with a larger volume, both volumes known); the other's
+    outcome in ``numbers["other_quadratic"]``."""
+    from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
+
+    if loop.n not in SHAPE_STATES:
+        return result
+    shaped = shaped_ball_level(loop, J, budget, box)
+    if isinstance(shaped, ConditionResult) and larger(loop, shaped, result):
+        shaped.numbers["other_quadratic"] = not_kept(result)
+        return shaped
+    result.numbers["other_quadratic"] = shaped if isinstance(shaped, str) else not_kept(shaped)
+    return result
+
+
+def not_kept(other: ConditionResult) -> str:
+    """One line on a certified region the class did not keep."""
+    return (f"{other.numbers.get('V_from')}: level {float(other.numbers.get('level', 0.0)):.6g}, roa_share "
+            f"{other.numbers.get('roa_share', '-')} (not kept)")
+
+
+def larger(loop: Loop, a: ConditionResult, b: ConditionResult) -> bool:
+    """Whether the certified ``a`` covers more than ``b``: a larger share of the simulated region of
+    attraction (``roa_share``), or the same share and a larger volume where both sets are ellipsoids of
+    the states (:func:`region_key`); otherwise not (``b`` stays)."""
+    share_a, volume_a = region_key(loop, a)
+    share_b, volume_b = region_key(loop, b)
+    if share_a != share_b:
+        return share_a > share_b
+    return volume_a is not None and volume_b is not None and volume_a > volume_b
+
+
+def region_key(loop: Loop, result: ConditionResult) -> tuple[float, float | None]:
+    """How two certified sets compare: the share of the simulated region of attraction (``roa_share``, 0
+    where none was measured), then, for an ellipsoid ``{z^T P z <= level}`` of the states, the log of its
+    volume (``n/2 log level - 1/2 log det P``, floats: a comparison of two proved sets, not a claim; None
+    for any other V)."""
+    import numpy as np
+
+    from lyapcheck.models.engines.interval_region import quadratic_form
+    from lyapcheck.models.engines.recast_sos import poly_from_json
+
+    P = quadratic_form(loop.ring, poly_from_json(loop.ring, result.certificate["V"], "V"), loop.n)
+    level = float(Fraction(result.certificate["level"]))
+    volume = None if P is None or level <= 0 else \
+        loop.n / 2 * float(np.log(level)) - float(np.linalg.slogdet(np.array([[float(x) for x in row] for row in P]))[1]) / 2
+    return float(result.numbers.get("roa_share", 0.0)), volume

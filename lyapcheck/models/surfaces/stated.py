@@ -80,6 +80,9 @@ ESTIMATES: Final[Mapping[str, str]] = {
     "history": "the region search's rounds: each level and its share",
     "fitted_domain_share": "the share of the domain (about the equilibrium) the proved V was fitted to, where V "
                            "fitted over the whole domain proved nothing (sampled_share is then of that part)",
+    "shaping": "the design of a quadratic V shaped for a large region (floating point, a proposal the proof then "
+               "decided): its rounds and the sampled shares of the box inside its and the linearization's V at the "
+               "levels where sampling first sees V' stop decreasing",
     "local_level": "the ball-arithmetic level search's first level (the ellipsoid in the box where the Hessian of V' is "
                    "negative definite); the certified level is at least this",
     # records of the proof's work

@@ -1,0 +1,264 @@
+"""A quadratic ``V = z^T P z`` shaped for a large region of attraction on the true loop (issue 42), at 4
+to 6 states: a PROPOSAL only, in floating point. The proof is
+:func:`~lyapcheck.models.classes.recast_ball_level.ball_level` on the rounded ``P`` (exactly positive
+definite, its level proved by ball arithmetic); nothing here is a certificate.
+
+The linearization's ``P`` (``J^T P + P J = -I``) decreases only on a thin ellipsoid of a loop whose
+slow and fast modes differ (the cart-pole: a level whose ellipsoid reaches 0.14 in ``x`` of a box of
+half-width 2). :func:`shaped_quadratic` looks for a ``P`` whose ellipsoid ``{z^T P z <= 1}`` has the
+largest volume (``log det P^-1``) subject to ``V' < 0`` at sampled points of it on the true field, by
+rounds from the linearization's ``P``:
+
+1. ``P_k`` is scaled so that its sampled critical level (the smallest ``V`` at which a sample has
+   ``V' >= 0``, :func:`critical_level`) is 1; points are drawn in ``E = {z^T P_k z <= rho}`` (``rho``
+   the round's trust region, half of them near its boundary);
+2. a small SDP (cvxpy, Clarabel) in the whitened coordinates ``z = L y`` of ``P_k`` (``L L^T = P_k^-1``;
+   ``P_k`` is then the identity: the solver sees a well-scaled problem) asks, LINEARLY in ``P``,
+   ``V'(z) = 2 z^T P f(z) <= mu q(z) (kappa (z^T P z - 1) - margin)`` at every point (``q(z) = z^T P_k z``,
+   ``mu`` the linearization's slowest decay rate: a fixed multiplier ``kappa`` relaxes the points
+   outside the new ellipsoid, and at its boundary ``V' <= -margin mu q``), ``J^T P + P J <= -margin mu
+   P_k`` (the exact local level needs the linearization's decrease), ``{z^T P z <= 1}`` inside ``E`` (the
+   points cover it) and inside the ``[domain]`` box widened by SHAPE_BOX_ROOM; its objective, the
+   volume, by majorization: ``log det P`` is concave, so minimizing its tangent ``tr(P_j^-1 P)`` a few
+   times lowers it monotonically;
+3. the new ``P`` is kept when the share of the ``[domain]`` box inside ``{V <= its critical level}``
+   (uniform samples, fixed seed) is larger (the region compared is the box's); otherwise the trust
+   region shrinks.
+
+Every random draw has a fixed seed: the same model gives the same ``P``.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any, Final
+
+import numpy as np
+
+from lyapcheck.models.classes.recast_classes import Loop
+
+#: the number of states the shaping is tried at (below 4 the fitted-V route of recast_interval runs)
+SHAPE_STATES: Final = range(4, 7)
+#: rounds of sample-and-solve at most, and the inner majorization steps of each round's volume
+SHAPE_ROUNDS: Final = 16
+SHAPE_MAJORIZATION_STEPS: Final = 4
+#: the points drawn in each round's trust region (half of them in its outer shell)
+SHAPE_POINTS: Final = 3000
+SHAPE_SHELL: Final = 0.7
+#: the trust region: the new ellipsoid at level 1 lies in the last one's at this level; a round that
+#: does not improve shrinks it to its square root, down to SHAPE_TRUST_MIN
+SHAPE_TRUST: Final = 1.5
+SHAPE_TRUST_MIN: Final = 1.02
+#: the decrease asked at the boundary, in units of the linearization's slowest rate times q, and the
+#: fixed multiplier of (V - 1) that relaxes the points outside the new ellipsoid
+SHAPE_MARGIN: Final = 0.02
+SHAPE_KAPPA: Final = 1.0
+#: the linearization's decrease asked of the new P: J^T P + P J <= -SHAPE_LOCAL_RATE mu P (V decays at
+#: least at that share of the best rate any quadratic V has near the equilibrium: the exact local level,
+#: whose box of a negative definite Hessian of V' grows with that rate, then covers more of the set)
+SHAPE_LOCAL_RATE: Final = 0.3
+#: the level a P is scored at: the smallest sampled V with V' >= -SHAPE_SCORE_RATE mu V (a decrease
+#: with room: the ball arithmetic proves a level with little room only on very many cells)
+SHAPE_SCORE_RATE: Final = 0.1
+#: the ellipsoid at level 1 stays inside the [domain] box widened by this factor (it may reach past the
+#: box, whose share is what is compared, but not without bound)
+SHAPE_BOX_ROOM: Final = 2.0
+#: the critical level's sampling: directions (whitened coordinates) and the ratio of successive levels
+CRITICAL_DIRECTIONS: Final = 4000
+CRITICAL_RATIO: Final = 1.05
+CRITICAL_DECADES: Final = 6.0
+#: uniform samples of the [domain] box for the share compared
+SHARE_SAMPLES: Final = 50_000
+#: significant digits of P's entries once rounded to rationals
+SHAPE_DIGITS: Final = 6
+
+
+@dataclass
+class Shaped:
+    """The proposal: ``P`` (floats, scaled so that its sampled critical level is 1), the share of the box
+    inside ``{z^T P z <= 1}``, the linearization's share at its own critical level, the rounds run,
+    whether a round improved on the linearization's ``P`` (``P`` is that one otherwise) and a line per round."""
+
+    P: np.ndarray
+    share: float
+    linearization_share: float
+    rounds: int
+    improved: bool
+    notes: list[str] = field(default_factory=list)
+
+
+class _Sampler:
+    """The true field in deviations and the fixed samples the rounds share."""
+
+    def __init__(self, loop: Loop, box: tuple[Any, Any]) -> None:
+        from lyapcheck.models.engines.recast_numeric import FloatLoop
+
+        self.n = loop.n
+        self.eq = np.array([float(loop.system.values[s]) for s in loop.system.states])
+        self.field = FloatLoop(loop.system)
+        lo, hi = (np.asarray(b, dtype=float) for b in box)
+        self.lo, self.hi = lo, hi
+        self.box_points = lo + (hi - lo) * np.random.default_rng(1).random((SHARE_SAMPLES, self.n))
+        directions = np.random.default_rng(2).normal(size=(CRITICAL_DIRECTIONS, self.n))
+        self.directions = directions / np.linalg.norm(directions, axis=1)[:, None]
+        self.rng = np.random.default_rng(0)
+
+    def f(self, Z: np.ndarray) -> np.ndarray:
+        with np.errstate(all="ignore"):
+            return np.asarray(self.field(Z + self.eq))
+
+    def critical_level(self, P: np.ndarray, rate: float = 0.0) -> float:
+        """The smallest sampled ``V = z^T P z`` with ``V' >= -rate V`` (or not finite), along rays of the
+        whitened coordinates: levels in ratio 2 from 10^-CRITICAL_DECADES, then in ratio CRITICAL_RATIO
+        between the last good one and the first bad; 10^CRITICAL_DECADES when none is bad."""
+        L = np.linalg.cholesky(np.linalg.inv(P))
+        D = self.directions @ L.T
+        DP = D @ P
+
+        def good(level: float) -> bool:
+            Z = D * np.sqrt(level)
+            with np.errstate(all="ignore"):
+                g = 2 * np.sum((DP * np.sqrt(level)) * self.f(Z), axis=1)
+            return bool(np.all(g < -rate * level))
+
+        top = 10.0 ** CRITICAL_DECADES
+        level = 10.0 ** -CRITICAL_DECADES
+        while level < top and good(level):
+            level *= 2
+        if level >= top:
+            return top
+        low = level / 2
+        while low * CRITICAL_RATIO < level and good(low * CRITICAL_RATIO):
+            low *= CRITICAL_RATIO
+        return float(min(low * CRITICAL_RATIO, level))
+
+    def share(self, P: np.ndarray, level: float) -> float:
+        """The share of the box's uniform samples inside ``{z^T P z <= level}``."""
+        X = self.box_points
+        return float(np.mean(np.sum((X @ P) * X, axis=1) <= level))
+
+    def points(self, L: np.ndarray, rho: float) -> np.ndarray:
+        """SHAPE_POINTS in ``{y^T y <= rho}`` (whitened), half of them in its shell beyond SHAPE_SHELL."""
+        U = self.rng.normal(size=(SHAPE_POINTS, self.n))
+        U /= np.linalg.norm(U, axis=1)[:, None]
+        r = self.rng.random(SHAPE_POINTS) ** (1 / self.n)
+        half = SHAPE_POINTS // 2
+        r[:half] = SHAPE_SHELL + (1 - SHAPE_SHELL) * self.rng.random(half)
+        return (U * (np.sqrt(rho) * r)[:, None]) @ L.T
+
+
+def _round(sampler: _Sampler, Pk: np.ndarray, J: np.ndarray, mu: float, rho: float) -> np.ndarray | None:
+    """One round's SDP (module docstring, step 2): the new ``P`` (floats), or None when the solver gives
+    no point."""
+    import cvxpy as cp
+
+    n = sampler.n
+    L = np.linalg.cholesky(np.linalg.inv(Pk))  # z = L y: P_k becomes the identity
+    Li = np.linalg.inv(L)
+    Z = sampler.points(L, rho)
+    F = sampler.f(Z)
+    keep = np.all(np.isfinite(F), axis=1)
+    Y, G = Z[keep] @ Li.T, F[keep] @ Li.T  # the points and the field in whitened coordinates
+    q = np.sum(Y * Y, axis=1)
+    # V'(z) - mu kappa q (V - 1) = <A_i, W> + mu kappa q, with W = L^T P L and A_i symmetric
+    A = np.einsum("ij,ik->ijk", Y, G)
+    A = A + A.transpose(0, 2, 1) - mu * SHAPE_KAPPA * q[:, None, None] * np.einsum("ij,ik->ijk", Y, Y)
+    W = cp.Variable((n, n), symmetric=True)
+    Jy = Li @ J @ L
+    cons = [A.reshape(len(Y), -1) @ cp.vec(W, order="C") <= -mu * (SHAPE_KAPPA + SHAPE_MARGIN) * q,
+            W >> np.eye(n) / rho,
+            Jy.T @ W + W @ Jy << -SHAPE_LOCAL_RATE * mu * W]
+    widths = SHAPE_BOX_ROOM * np.minimum(-sampler.lo, sampler.hi)
+    for i in range(n):  # z_i^2 <= width_i^2 on {y^T W y <= 1}: (L^T e_i)^T W^-1 (L^T e_i) <= width_i^2
+        c = L[i, :].reshape(n, 1)
+        cons.append(cp.bmat([[W, c], [c.T, np.array([[widths[i] ** 2]])]]) >> 0)
+    tangent = cp.Parameter((n, n), symmetric=True)  # (one compilation for the round's steps)
+    problem = cp.Problem(cp.Minimize(cp.trace(tangent @ W)), cons)
+    current, solved = np.eye(n), False
+    for _ in range(SHAPE_MAJORIZATION_STEPS):
+        inverse = np.linalg.inv(current)
+        tangent.value = (inverse + inverse.T) / 2
+        try:
+            with warnings.catch_warnings():  # "may be inaccurate": the status is read below, the proof decides
+                warnings.simplefilter("ignore", UserWarning)
+                problem.solve(solver=cp.CLARABEL)
+        except cp.error.SolverError:
+            break
+        # (a proposal only: an inaccurate point is tried too, the sampled level and then the proof decide)
+        if problem.status not in ("optimal", "optimal_inaccurate") or W.value is None:
+            break
+        point = (W.value + W.value.T) / 2
+        if np.min(np.linalg.eigvalsh(point)) <= 0:
+            break
+        current, solved = point, True
+    return Li.T @ current @ Li if solved else None
+
+
+def shaped_quadratic(loop: Loop, J: list[list[Fraction]], box: tuple[Any, Any], deadline: float) -> Shaped | None:
+    """The rounds of the module docstring from the linearization's ``P`` until SHAPE_ROUNDS, a trust
+    region below SHAPE_TRUST_MIN or ``deadline`` (``time.perf_counter()``); None where the linearization
+    gives no positive definite ``P`` or the loop is not of SHAPE_STATES."""
+    from lyapcheck.models.classes.linearization import lyapunov_solution
+
+    if loop.n not in SHAPE_STATES:
+        return None
+    exact = lyapunov_solution(J)
+    if exact is None:
+        return None
+    P0 = np.array([[float(x) for x in row] for row in exact])
+    Jf = np.array([[float(x) for x in row] for row in J])
+    if np.min(np.linalg.eigvalsh(P0)) <= 0:
+        return None
+    mu = 2 * float(np.min(-np.linalg.eigvals(Jf).real))
+    if mu <= 0:
+        return None
+    sampler = _Sampler(loop, box)
+    rate = SHAPE_SCORE_RATE * mu
+    c0 = sampler.critical_level(P0, rate)
+    best = P0 / c0
+    first = best_share = sampler.share(best, 1.0)
+    best_volume = -np.linalg.slogdet(best)[1]
+    rho, rounds, improved, notes = SHAPE_TRUST, 0, False, []
+    Pk = best
+    while rounds < SHAPE_ROUNDS and rho >= SHAPE_TRUST_MIN and time.perf_counter() < deadline:
+        rounds += 1
+        P = _round(sampler, Pk, Jf, mu, rho)
+        if P is None:
+            notes.append(f"round {rounds}: no point from the solver")
+            rho = float(np.sqrt(rho))
+            continue
+        P = (P + P.T) / 2
+        try:
+            c = sampler.critical_level(P, rate)
+        except np.linalg.LinAlgError:  # (a P too ill-conditioned to whiten: the round is not kept)
+            notes.append(f"round {rounds}: the solver's P could not be whitened")
+            rho = float(np.sqrt(rho))
+            continue
+        share, volume = sampler.share(P / c, 1.0), -np.linalg.slogdet(P / c)[1]
+        notes.append(f"round {rounds}: share {share:.4g} at level {c:.4g} (trust {rho:.3g})")
+        if share > best_share or (share == best_share and volume > best_volume):
+            best, best_share, best_volume, improved = P / c, share, volume, True
+            Pk, rho = best, SHAPE_TRUST
+        else:
+            rho = float(np.sqrt(rho))
+            Pk = best
+    return Shaped(P=best, share=best_share, linearization_share=first, rounds=rounds, improved=improved, notes=notes)
+
+
+def rational_form(P: np.ndarray) -> list[list[Fraction]] | None:
+    """``P`` rounded to SHAPE_DIGITS significant digits, symmetric, as exact rationals; None unless it is
+    positive definite exactly (:func:`lyapcheck.sos.definiteness.is_positive_definite`)."""
+    from lyapcheck.sos.definiteness import is_positive_definite
+
+    n = len(P)
+    R = [[Fraction(0)] * n for _ in range(n)]
+    for i in range(n):
+        for j in range(i, n):
+            R[i][j] = R[j][i] = Fraction(format(float(P[i][j]), f".{SHAPE_DIGITS}g"))
+    return R if is_positive_definite(R) else None
+
+
+__all__ = ["Shaped", "rational_form", "shaped_quadratic"]
