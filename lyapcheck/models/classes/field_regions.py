@@ -3,9 +3,11 @@ the disturbances a stability class's claim covers.
 
 ``roa`` (:func:`run_roa`): the linearization's quadratic V and its sublevel sets enlarged by SOS
 (:mod:`lyapcheck.models.classes.regions`), the certified set compared with, and cross-checked
-against, simulations of the true loop. ``candidate`` (:func:`run_candidate`): the user's V, GAS where
-its decrease holds everywhere, else its largest certified level. :func:`covering_disturbances`: a
-stability class tried robustly first (one V for every disturbance value), then nominally.
+against, simulations of the true loop (:class:`FieldSimulation`). ``candidate`` (:func:`run_candidate`):
+the user's V, GAS where its decrease holds everywhere, else its largest certified level. Each is a list
+of routes run by the one driver of the region classes (:mod:`lyapcheck.models.classes.region_driver`).
+:func:`covering_disturbances`: a stability class tried robustly first (one V for every disturbance
+value), then nominally.
 """
 
 from __future__ import annotations

@@ -12,6 +12,11 @@ never loses a proved level:
 
 Halving from a failed first level is the same path the former bisection on ``(0, first]`` took, so a
 level this search returns is never below the one that bisection returned with the same budget.
+
+A route may take other steps (:class:`LevelSteps`): the polynomial loops' level program
+(:func:`lyapcheck.models.classes.regions.largest_level`) goes down by quarters, bisects geometrically and
+stops at a relative width or a count of solves; there an attempt is a level the solver finds feasible, and
+the exact checks follow the search.
 """
 
 from __future__ import annotations

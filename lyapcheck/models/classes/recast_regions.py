@@ -8,10 +8,11 @@ given them in one :class:`~lyapcheck.models.classes.contexts.FunctionsRun`, in t
 :mod:`lyapcheck.models.classes.registry`, by the one runner
 (:func:`lyapcheck.models.surfaces.certify.certify_model`).
 
-``roa`` (:func:`run_roa`; over a box :func:`box_roa`) and ``candidate`` (:func:`run_candidate`): the
-ball-arithmetic region on the true field first, then the SOS route of
-:mod:`lyapcheck.models.classes.regions` (the classes' one SOS implementation, both kinds of loop), each
-certified set simulated on the true loop (:func:`simulated_check`).
+``roa`` (:func:`run_roa`; over a box :func:`box_roa`) and ``candidate`` (:func:`run_candidate`; over a box
+:func:`box_candidate`): lists of routes run by the one driver of the region classes
+(:mod:`lyapcheck.models.classes.region_driver`): the ball-arithmetic region on the true field first, then
+the SOS route of :mod:`lyapcheck.models.classes.regions` (the classes' one SOS implementation, both kinds
+of loop), the set kept simulated on the true loop (:class:`LoopSimulation`, :func:`simulated_check`).
 """
 
 from __future__ import annotations
