@@ -67,6 +67,13 @@ def test_largest_share_runs_the_comparing_routes_and_keeps_the_set_covering_most
     kept = drive("roa", routes, Budget(10.0, "test"), loop, failed, LATE, policy=LARGEST_SHARE)
     assert kept is large and ran == ["b", "c"]  # ("d" does not compare: not run after a proof)
     assert loop.simulated == [large]
+    # a comparing route that proves nothing, ends or refuses leaves the proof in hand
+    ran.clear()
+    refusal = ConditionResult("roa", "not_applicable", "a denominator is not proved positive")
+    routes = [route("b", small, ran), route("c", refusal, ran, compare=True),
+              route("d", Ends("no V", ("candidate",)), ran, compare=True), route("e", "e: none", ran, compare=True)]
+    assert drive("roa", routes, Budget(10.0, "test"), Loop(), failed, LATE, policy=LARGEST_SHARE) is small
+    assert ran == ["b", "c", "d", "e"]
 
 
 def test_every_reason_in_order_reaches_the_class_sentence_when_nothing_is_proved() -> None:

@@ -153,20 +153,25 @@ class FieldSimulation:
 
         return np.array([float(v) for v in self.scaled.cleared.shifted.model.equilibrium])
 
-    def _set(self, result: ConditionResult) -> tuple[Callable[[np.ndarray], np.ndarray], float]:
-        """The certified set's V (of the scaled states, on rows) and level, from its certificate."""
+    def _set(self, result: ConditionResult) -> tuple[Callable[[np.ndarray], np.ndarray], float, np.ndarray]:
+        """The certified set's V (of the scaled states, on rows) and level, from its certificate, and which
+        starts lie in it."""
         from lyapcheck.models.classes import regions
         from lyapcheck.sos.certificates import GramPoly
 
         ring = self.field.ring
-        V = regions.NumericPoly(ring, GramPoly.from_json(result.certificate["gram_V"], ring.nvars).poly(ring))
-        return (lambda Z: V(regions.on_states(self.field, Z))), float(Fraction(result.certificate["level_scaled"]))
+        poly = regions.NumericPoly(ring, GramPoly.from_json(result.certificate["gram_V"], ring.nvars).poly(ring))
+
+        def V(Z: np.ndarray) -> np.ndarray:
+            return poly(regions.on_states(self.field, Z))
+
+        level = float(Fraction(result.certificate["level_scaled"]))
+        return V, level, V(self.samples) <= level
 
     def share(self, result: ConditionResult) -> float:
         import numpy as np
 
-        V, level = self._set(result)
-        inside = V(self.samples) <= level
+        _, _, inside = self._set(result)
         return float(np.mean(inside[self.converged])) if self.converged.any() else 0.0
 
     def simulate(self, result: ConditionResult) -> None:
@@ -175,8 +180,7 @@ class FieldSimulation:
         import numpy as np
 
         model = self.scaled.cleared.shifted.model
-        V, level = self._set(result)
-        inside = V(self.samples) <= level
+        V, level, inside = self._set(result)
         converged = self.converged
         numbers = result.numbers
         numbers["simulated_starts"] = int(len(self.starts))

@@ -125,18 +125,17 @@ def drive(name: str, routes: Sequence[Route], budget: Budget, loop: SimulatedLoo
         if isinstance(found, str):
             tried.append(found)
             continue
+        if kept is not None and (isinstance(found, Ends) or found.status != "certified"):
+            continue  # (a comparing route that proved nothing: the proof in hand stands)
         if isinstance(found, Ends):
             why = reasons.reason(found.sentence, found.steps, [*tried, *([found.line] if found.line else [])])
             return ConditionResult(name, "not_certified", why.summary, numbers=why.numbers(), property="ROA")
         if found.status != "certified":
             return found
-        if kept is None:
-            kept = found
-            kept_share = loop.share(found) if policy == LARGEST_SHARE else 0.0
-        else:  # (largest share: a later route's set kept only where it covers more)
-            share = loop.share(found)
-            if share > kept_share:
-                kept, kept_share = found, share
+        # (largest share: a later route's result kept only where it covers more; GAS covers everything)
+        share = 0.0 if policy == FIRST else 1.0 if found.proves() != "ROA" else loop.share(found)
+        if kept is None or share > kept_share:
+            kept, kept_share = found, share
     if kept is None:
         return failed(tried)
     if kept.proves() == "ROA":  # (a set to simulate; a GAS claim holds everywhere)
