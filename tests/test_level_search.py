@@ -138,3 +138,36 @@ def test_the_cartpole_lqr_cost_to_go_gets_a_level_at_4_states(monkeypatch: Any) 
     ok, why = check_interval(loop, {"certificate": result.certificate, "level": result.numbers["level"],
                                     "summary": covered(None, result.summary)})
     assert ok, why
+
+
+def test_other_steps_bracket_the_truth_geometrically_and_stop_where_asked() -> None:
+    """``LevelSteps`` (regions.largest_level's search): down by quarters from a failed first level, a geometric
+    bisection, and ``more`` ending it at a relative width; never a level above the truth, never lost."""
+    import math
+
+    from lyapcheck.models.classes.level_search import LevelSteps
+
+    truth = Fraction(3, 1000)
+    tried: list[Fraction] = []
+
+    def attempt(level: Fraction) -> Fraction | None:
+        tried.append(level)
+        return level if level <= truth else None
+
+    def more(lo: Fraction | None, hi: Fraction | None) -> bool:
+        return hi is None or lo is None or (hi - lo) > hi / 100
+
+    steps = LevelSteps(down=lambda c: c / 4, between=lambda lo, hi: Fraction(math.sqrt(lo * hi)).limit_denominator(10**9),
+                       above=Fraction(1), more=more)
+    found = largest_proved_level(attempt, Fraction(1), growth=Fraction(8), growth_steps=1, halvings=30,
+                                 bisections=30, steps=steps)
+    assert tried[:5] == [Fraction(1), Fraction(1, 4), Fraction(1, 16), Fraction(1, 64), Fraction(1, 256)]
+    assert found.level is not None and found.level <= truth and found.failed is not None
+    assert found.failed - found.level <= found.failed / 100  # stopped by ``more``, at the width asked
+    assert found.level == max(t for t in tried if t <= truth)
+    # a first level proved with ``above`` as the bracket's top: the bisection starts between them
+    tried.clear()
+    found = largest_proved_level(attempt, Fraction(1, 1000), growth=Fraction(8), growth_steps=1, halvings=30,
+                                 bisections=30, steps=LevelSteps(above=Fraction(1, 100), more=more))
+    assert tried[0] == Fraction(1, 1000) and Fraction(1, 1000) < tried[1] < Fraction(1, 100)
+    assert found.level is not None and truth * Fraction(99, 100) <= found.level <= truth

@@ -27,6 +27,8 @@
   :mod:`~lyapcheck.models.classes.flow_region` (that region enlarged by boxes proved, by validated
   integration, to flow into it);
 - :mod:`~lyapcheck.models.classes.sampled` (a sampled-data loop's linearization over one period, in ball arithmetic);
+- :mod:`~lyapcheck.models.classes.region_driver` (the one driver of ``roa`` and ``candidate`` on continuous
+  loops: their routes in order, the result kept, the reasons stated, the kept set simulated once);
 - :mod:`~lyapcheck.models.classes.level_search` (the one monotone search of a fixed V's largest proved level);
 - :mod:`~lyapcheck.models.classes.region_size` (a certified region's largest ball and reach along each axis, exact);
 - :mod:`~lyapcheck.models.classes.falsify` (counterexamples to safety) and

@@ -3,13 +3,16 @@ the disturbances a stability class's claim covers.
 
 ``roa`` (:func:`run_roa`): the linearization's quadratic V and its sublevel sets enlarged by SOS
 (:mod:`lyapcheck.models.classes.regions`), the certified set compared with, and cross-checked
-against, simulations of the true loop. ``candidate`` (:func:`run_candidate`): the user's V, GAS where
-its decrease holds everywhere, else its largest certified level. :func:`covering_disturbances`: a
-stability class tried robustly first (one V for every disturbance value), then nominally.
+against, simulations of the true loop (:class:`FieldSimulation`). ``candidate`` (:func:`run_candidate`):
+the user's V, GAS where its decrease holds everywhere, else its largest certified level. Each is a list
+of routes run by the one driver of the region classes (:mod:`lyapcheck.models.classes.region_driver`).
+:func:`covering_disturbances`: a stability class tried robustly first (one V for every disturbance
+value), then nominally.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable, Final
 
@@ -111,69 +114,140 @@ def roa_starts(model: Model, seed: int = 0) -> np.ndarray:
     return grid_starts(model.domain, model.states, per_axis, per_axis ** model.n, seed=seed)
 
 
+@dataclass
+class FieldSimulation:
+    """A polynomial loop's simulated region (:class:`~lyapcheck.models.classes.region_driver.SimulatedLoop`):
+    the starts simulated (declared states, rows), which converged (:func:`simulated_region`), and a certified
+    set's share of them and cross-check (:meth:`simulate`)."""
+
+    scaled: ScaledField
+    field: StateField
+    starts: np.ndarray
+    converged: np.ndarray
+
+    @classmethod
+    def of(cls, scaled: ScaledField, field_: StateField, memo: dict[str, Any]) -> "FieldSimulation":
+        """The starts of ``memo`` (simulated once, kept there for the next attempt on the same loop: the
+        robust and the nominal one simulate it with the disturbances at 0)."""
+        import numpy as np
+
+        model = scaled.cleared.shifted.model
+        if "starts" not in memo:
+            if model.domain:
+                starts = roa_starts(model)
+            else:
+                A = np.array([[float(x) for x in row] for row in scaled.scaling.matrix()])
+                eq = np.array([float(v) for v in model.equilibrium])
+                rng = np.random.default_rng(0)
+                starts = eq + rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n)) @ A.T
+            memo["starts"], memo["converged"] = starts, simulated_region(scaled, starts)
+        return cls(scaled, field_, memo["starts"], memo["converged"])
+
+    @property
+    def samples(self) -> np.ndarray:
+        """The starts in the scaled states (deviations)."""
+        return self.scaled.scaling.to_scaled(self.starts - self._equilibrium())
+
+    def _equilibrium(self) -> np.ndarray:
+        import numpy as np
+
+        return np.array([float(v) for v in self.scaled.cleared.shifted.model.equilibrium])
+
+    def _set(self, result: ConditionResult) -> tuple[Callable[[np.ndarray], np.ndarray], float, np.ndarray]:
+        """The certified set's V (of the scaled states, on rows) and level, from its certificate, and which
+        starts lie in it."""
+        from lyapcheck.models.classes import regions
+        from lyapcheck.sos.certificates import GramPoly
+
+        ring = self.field.ring
+        poly = regions.NumericPoly(ring, GramPoly.from_json(result.certificate["gram_V"], ring.nvars).poly(ring))
+
+        def V(Z: np.ndarray) -> np.ndarray:
+            return poly(regions.on_states(self.field, Z))
+
+        level = float(Fraction(result.certificate["level_scaled"]))
+        return V, level, V(self.samples) <= level
+
+    def share(self, result: ConditionResult) -> float:
+        import numpy as np
+
+        _, _, inside = self._set(result)
+        return float(np.mean(inside[self.converged])) if self.converged.any() else 0.0
+
+    def simulate(self, result: ConditionResult) -> None:
+        """The share of the simulated region the set covers, and every start in it that did not converge
+        simulated far longer, V watched (:func:`simulated_region_long`)."""
+        import numpy as np
+
+        model = self.scaled.cleared.shifted.model
+        V, level, inside = self._set(result)
+        converged = self.converged
+        numbers = result.numbers
+        numbers["simulated_starts"] = int(len(self.starts))
+        if model.domain:
+            if converged.any():  # (no simulated start converged in the horizon: no share to state, not a share of 0)
+                numbers["roa_share"] = float(np.mean(inside[converged]))
+            numbers["simulated_roa_share_of_domain"] = float(np.mean(converged))
+        suspicious = inside & ~converged
+        if suspicious.any():  # a start in a proved set that did not converge: simulate it far longer, V watched
+            eq = self._equilibrium()
+
+            def value(X: np.ndarray) -> np.ndarray:
+                return V(self.scaled.scaling.to_scaled(np.atleast_2d(X) - eq))
+
+            try:
+                again = simulated_region_long(self.scaled, self.starts[suspicious], value, level)
+            except ClassTimeLimit:  # the hard stop may end this check, never the proof before it
+                numbers["long_simulation"] = "stopped by the class's hard time limit"
+            else:
+                numbers.update(again.numbers())
+
+
 def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult | None,
             field_: StateField | None = None, memo: dict[str, Any] | None = None) -> ConditionResult:
     """The ``roa`` class on ``field_`` (default: the nominal :func:`state_field`; the robust one
-    proves a set common to every disturbance value). ``memo`` keeps the simulated starts between
+    proves a set common to every disturbance value), by the routes of
+    :func:`~lyapcheck.models.classes.region_driver.drive`. ``memo`` keeps the simulated starts between
     the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0)."""
-    import numpy as np
-
     from lyapcheck.models.engines import reasons
     from lyapcheck.models.classes import regions
+    from lyapcheck.models.classes.region_driver import OutOfTime, Route, drive
 
-    model = scaled.cleared.shifted.model
     if field_ is None:
         field_ = state_field(scaled)
-    search = Search(field_.ring, budget)
-    A = np.array([[float(x) for x in row] for row in scaled.scaling.matrix()])
-    eq = np.array([float(v) for v in model.equilibrium])
-    if regions.lyapunov_quadratic(field_) is None:
+    on = field_
+    search = Search(on.ring, budget)
+    if regions.lyapunov_quadratic(on) is None:
         why = reasons.reason("the Jacobian at the equilibrium is not Hurwitz"
-                             + (" at the box's centre" if field_.p > field_.disturbances
-                                else " with the disturbances at 0" if field_.p else "")
+                             + (" at the box's centre" if on.p > on.disturbances
+                                else " with the disturbances at 0" if on.p else "")
                              + ", so no quadratic Lyapunov function starts the search (see linearization)",
                              ("candidate",))
         return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
-    memo = {} if memo is None else memo
-    if "starts" not in memo:
-        if model.domain:
-            starts = roa_starts(model)
-        else:
-            rng = np.random.default_rng(0)
-            starts = eq + rng.uniform(-4, 4, size=(ROA_RANDOM_STARTS if model.n > 2 else 2500, model.n)) @ A.T
-        memo["starts"], memo["converged"] = starts, simulated_region(scaled, starts)
-    starts, converged = memo["starts"], memo["converged"]
-    samples = scaled.scaling.to_scaled(starts - eq)
-    outcome = regions.enlarge(field_, search, samples, converged)
-    if outcome.certificate is None:
+    simulation = FieldSimulation.of(scaled, on, {} if memo is None else memo)
+    history: list[dict[str, Any]] = []
+
+    def sos(budget: Budget) -> ConditionResult | str:
+        """The linearization's quadratic V, its sublevel sets enlarged by SOS (:func:`regions.enlarge`)."""
+        outcome = regions.enlarge(on, search, simulation.samples, simulation.converged)
+        history[:] = outcome.history
+        if outcome.certificate is None:
+            return "no sublevel set passed the exact check"
+        cert = outcome.certificate
+        return regions.level_result("roa", scaled, on, cert, search,
+                                    {"degree": 2 * max(sum(m) for m in cert.V.basis), "rounds": outcome.history},
+                                    "region of attraction")
+
+    routes = [Route("the linearization's quadratic V enlarged by SOS", sos)]
+    # (a further route, e.g. a region by ball arithmetic on the true field, is one more Route here)
+
+    def failed(tried: list[str]) -> ConditionResult:
         why = reasons.reason("no region of attraction was proved: no level set of the linearization's quadratic V "
-                             "could be proved to shrink", ("domain", "candidate", "time"),
-                             "no sublevel set passed the exact check")
+                             "could be proved to shrink", ("domain", "candidate", "time"), tried)
         return ConditionResult("roa", "not_certified", why.summary, property="ROA",
-                               solver={"solves": search.log}, numbers=why.numbers({"history": outcome.history}))
-    cert = outcome.certificate
-    inside = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))(regions.on_states(field_, samples)) \
-        <= float(cert.level)
-    numbers: dict[str, Any] = {"degree": 2 * max(sum(m) for m in cert.V.basis), "simulated_starts": int(len(starts))}
-    if model.domain:
-        if converged.any():  # (no simulated start converged in the horizon: no share to state, not a share of 0)
-            numbers["roa_share"] = float(np.mean(inside[converged]))
-        numbers["simulated_roa_share_of_domain"] = float(np.mean(converged))
-    suspicious = inside & ~converged
-    if suspicious.any():  # a start in a proved set that did not converge: simulate it far longer, V watched
-        V = regions.NumericPoly(field_.ring, cert.V.poly(field_.ring))
+                               solver={"solves": search.log}, numbers=why.numbers({"history": history}))
 
-        def value(X: np.ndarray) -> np.ndarray:
-            return V(regions.on_states(field_, scaled.scaling.to_scaled(np.atleast_2d(X) - eq)))
-
-        try:
-            again = simulated_region_long(scaled, starts[suspicious], value, float(cert.level))
-        except ClassTimeLimit:  # the hard stop may end this check, never the proof before it
-            numbers["long_simulation"] = "stopped by the class's hard time limit"
-        else:
-            numbers.update(again.numbers())
-    numbers["rounds"] = outcome.history
-    return regions.level_result("roa", scaled, field_, cert, search, numbers, "region of attraction")
+    return drive("roa", routes, budget, simulation, failed, OutOfTime("a region of attraction", ("time",)))
 
 
 def simulated_region_long(scaled: ScaledField, starts: np.ndarray, value: Callable[[np.ndarray], np.ndarray],
@@ -204,16 +278,18 @@ def simulated_region_long(scaled: ScaledField, starts: np.ndarray, value: Callab
 
 
 def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget) -> ConditionResult:
-    """The user's V on the nominal field: GAS where its decrease is proved everywhere, else its largest
-    level proved (:func:`lyapcheck.models.classes.regions.largest_level`). Over a box (the field's ring
-    carries the box's normalized parameters after the states, :attr:`StateField.p`) V is of the states
-    alone and both proofs hold for every value of the box at once: the box's multipliers join the
-    decrease's identity and the level program's, and the certificate states the box (``parameter_box``)."""
+    """The user's V on the nominal field, by the routes of :func:`~lyapcheck.models.classes.region_driver.drive`:
+    GAS where its decrease is proved everywhere, else its largest level proved
+    (:func:`lyapcheck.models.classes.regions.largest_level`). Over a box (the field's ring carries the box's
+    normalized parameters after the states, :attr:`StateField.p`) V is of the states alone and both proofs hold
+    for every value of the box at once: the box's multipliers join the decrease's identity and the level
+    program's, and the certificate states the box (``parameter_box``)."""
     import numpy as np
 
     from lyapcheck.models.engines import reasons
     from lyapcheck.models.classes import regions
     from lyapcheck.models.classes.lyapunov import best_decay_rate, stated_v
+    from lyapcheck.models.classes.region_driver import NotSimulated, OutOfTime, Route, drive
     from lyapcheck.sos.polynomials import to_fmpq
 
     assert cand is not None
@@ -242,10 +318,16 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
                              "pure power of every state")
         return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
                                solver={"solves": search.log}, property="ROA")
-    decrease = regions.global_decrease(field_, V, Fraction(0), search)
-    if decrease is not None:
+    gram = V
+
+    def gas(budget: Budget) -> ConditionResult | str:
+        """V' < 0 away from the equilibrium everywhere (for every value of a box), its best decay rate."""
+        decrease = regions.global_decrease(field_, gram, Fraction(0), search)
+        if decrease is None:
+            return f"V' < 0 was not proved everywhere{every}"
+
         def attempt(mu: Fraction) -> dict[str, Any] | None:
-            s = regions.global_decrease(field_, V, mu, search)
+            s = regions.global_decrease(field_, gram, mu, search)
             return None if s is None else {"found": s, "mu": mu}
 
         best = best_decay_rate(attempt, {"found": decrease, "mu": Fraction(0)})
@@ -253,7 +335,7 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
         rate = float(best["mu"] / scaled.scaling.time)
         tail = f", V' <= -{rate:.4g} V" if best["mu"] > 0 else ""
         certificate: dict[str, Any] = {"kind": "lyapunov", "mu_scaled": str(best["mu"]),
-                                       "V": stated_v(scaled, field_, V.poly(ring)), "gram_V": V.to_json(),
+                                       "V": stated_v(scaled, field_, gram.poly(ring)), "gram_V": gram.to_json(),
                                        "gram_sigma": found.sigma.to_json()}
         if found.box:
             certificate["box_multipliers"] = [{"variable": j, "gram": r.to_json()} for j, r in found.box]
@@ -261,36 +343,52 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
                                                          f"{every} (checked exactly)",
                                numbers={"decay_rate_V_per_s": rate}, certificate={**certificate, **stamp},
                                solver={"solves": search.log}, property="GAS")
-    radius = float(np.max(np.abs(scaled.scaling.to_scaled(np.diag(_half_widths(model)))))) * 4
-    top = regions.supremum_estimate(field_, V, radius)  # (over a box: at its centre and corners)
-    if top is None:
-        # no sample with V' >= 0 out to 4 half-widths: search the level upwards from V's largest
-        # value there, each step an SOS lower bound of min {V : V' >= 0} (no sample needed)
-        rng = np.random.default_rng(0)
-        ball = rng.normal(size=(200, field_.n))
-        ball *= radius / np.linalg.norm(ball, axis=1, keepdims=True)
-        guess = float(np.max(regions.NumericPoly(ring, V.poly(ring))(regions.on_states(field_, ball))))
-        cert = regions.largest_level(field_, V, search, guess, regions.symmetry(field_), grow=True)
+
+    #: the level route's sentence and figures where it proves none (which search it ran)
+    missed: dict[str, Any] = {}
+
+    def level(budget: Budget) -> ConditionResult | str:
+        """V's largest level proved: below the sampled points where V' >= 0, or upwards where none was sampled."""
+        radius = float(np.max(np.abs(scaled.scaling.to_scaled(np.diag(_half_widths(model)))))) * 4
+        top = regions.supremum_estimate(field_, gram, radius)  # (over a box: at its centre and corners)
+        if top is None:
+            # no sample with V' >= 0 out to 4 half-widths: search the level upwards from V's largest
+            # value there, each step an SOS lower bound of min {V : V' >= 0} (no sample needed)
+            rng = np.random.default_rng(0)
+            ball = rng.normal(size=(200, field_.n))
+            ball *= radius / np.linalg.norm(ball, axis=1, keepdims=True)
+            guess = float(np.max(regions.NumericPoly(ring, gram.poly(ring))(regions.on_states(field_, ball))))
+            cert = regions.largest_level(field_, gram, search, guess, regions.symmetry(field_), grow=True)
+            if cert is None:
+                missed.update(sentence=f"V' < 0 could not be proved everywhere{every}, nor on any level set "
+                                       "{V <= c} (no point with V' >= 0 was sampled)",
+                              steps=("other_candidate", "domain", "time"), numbers={})
+                return f"no level from {guess:.6g} upwards passed the level program"
+            return _stamped(regions.level_result("candidate", scaled, field_, cert, search,
+                                                 {"level_search": "upwards, by SOS"}, "the user's V"), stamp)
+        cert = regions.largest_level(field_, gram, search, top, regions.symmetry(field_))
         if cert is None:
-            why = reasons.reason(f"V' < 0 could not be proved everywhere{every}, nor on any level set {{V <= c}} (no "
-                                 "point with V' >= 0 was sampled)", ("other_candidate", "domain", "time"),
-                                 f"no level from {guess:.6g} upwards passed the level program")
-            return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(),
-                                   solver={"solves": search.log}, property="ROA")
+            where = " (sampled at the box's centre and corners)" if box is not None else ""
+            missed.update(sentence=f"V' < 0 could not be proved everywhere{every}, nor on any level set {{V <= c}} "
+                                   f"below the sampled points where V' >= 0 (V = {top:.6g}){where}",
+                          steps=("other_candidate", "time"), numbers={"level_supremum_estimate": top})
+            return f"no level of V passed the exact check (sampled supremum {top:.6g})"
         return _stamped(regions.level_result("candidate", scaled, field_, cert, search,
-                                             {"level_search": "upwards, by SOS"}, "the user's V"), stamp)
-    cert = regions.largest_level(field_, V, search, top, regions.symmetry(field_))
-    if cert is None:
-        where = " (sampled at the box's centre and corners)" if box is not None else ""
-        why = reasons.reason(f"V' < 0 could not be proved everywhere{every}, nor on any level set {{V <= c}} below "
-                             f"the sampled points where V' >= 0 (V = {top:.6g}){where}", ("other_candidate", "time"),
-                             f"no level of V passed the exact check (sampled supremum {top:.6g})")
-        return ConditionResult("candidate", "not_certified", why.summary,
-                               numbers=why.numbers({"level_supremum_estimate": top}),
+                                             {"level_supremum_estimate": top,
+                                              "level_ratio_to_estimate": float(cert.level) / top}, "the user's V"),
+                        stamp)
+
+    routes = [Route("GAS: V decreasing everywhere, by SOS", gas), Route("V's largest level, by SOS", level)]
+
+    def failed(tried: list[str]) -> ConditionResult:
+        # (the level route is the last to run: its sentence says what neither proved)
+        why = reasons.reason(missed["sentence"], missed["steps"], tried)
+        return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(missed["numbers"]),
                                solver={"solves": search.log}, property="ROA")
-    return _stamped(regions.level_result("candidate", scaled, field_, cert, search,
-                                         {"level_supremum_estimate": top,
-                                          "level_ratio_to_estimate": float(cert.level) / top}, "the user's V"), stamp)
+
+    # (the user's V is proved, not compared with a simulated region: no simulation, as before the driver)
+    return drive("candidate", routes, budget, NotSimulated(), failed,
+                 OutOfTime("a proof with the candidate V", ("time",)))
 
 
 def _stamped(result: ConditionResult, stamp: dict[str, Any]) -> ConditionResult:
@@ -300,4 +398,4 @@ def _stamped(result: ConditionResult, stamp: dict[str, Any]) -> ConditionResult:
 
 
 __all__ = ["ROA_GRID", "ROA_RANDOM_STARTS", "ROA_HORIZON", "covering_disturbances", "covers", "simulated_region",
-           "parameter_points", "roa_starts", "run_roa", "simulated_region_long", "run_candidate"]
+           "parameter_points", "roa_starts", "FieldSimulation", "run_roa", "simulated_region_long", "run_candidate"]

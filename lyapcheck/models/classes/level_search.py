@@ -12,6 +12,11 @@ never loses a proved level:
 
 Halving from a failed first level is the same path the former bisection on ``(0, first]`` took, so a
 level this search returns is never below the one that bisection returned with the same budget.
+
+A route may take other steps (:class:`LevelSteps`): the polynomial loops' level program
+(:func:`lyapcheck.models.classes.regions.largest_level`) goes down by quarters, bisects geometrically and
+stops at a relative width or a count of solves; there an attempt is a level the solver finds feasible, and
+the exact checks follow the search.
 """
 
 from __future__ import annotations
@@ -38,14 +43,37 @@ class LevelSearch(Generic[T]):
     tried: list[tuple[Fraction, bool]] = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class LevelSteps:
+    """Other steps for :func:`largest_proved_level` than its own (each None: the search's own): ``up``, the
+    next level upwards from a proved one (own: ``rounded(level * growth)``); ``down``, the next level
+    downwards from a failed one (own: ``rounded(level / 2)``); ``between``, the level tried in a bracket
+    ``(lo, hi)`` (own: ``rounded((lo + hi) / 2)``); ``above``, the bracket's top where no level above the
+    proved one failed (own: the next level upwards); ``more``, whether to try another level, asked before
+    each one downwards and in the bracket (with the largest proved level, None before one, and the
+    bracket's top; own: always, until ``halvings`` and ``bisections`` are spent)."""
+
+    up: Callable[[Fraction], Fraction] | None = None
+    down: Callable[[Fraction], Fraction] | None = None
+    between: Callable[[Fraction, Fraction], Fraction] | None = None
+    above: Fraction | None = None
+    more: Callable[[Fraction | None, Fraction | None], bool] | None = None
+
+
 def largest_proved_level(attempt: Callable[[Fraction], T | None], first: Fraction, *, growth: Fraction,
                          growth_steps: int, halvings: int, bisections: int,
-                         rounded: Callable[[Fraction], Fraction] = lambda x: x) -> LevelSearch[T]:
+                         rounded: Callable[[Fraction], Fraction] = lambda x: x,
+                         steps: LevelSteps | None = None) -> LevelSearch[T]:
     """The largest level ``attempt`` proves (module docstring). ``growth_steps``: levels tried upwards
     at most; ``halvings``: levels tried downwards from a failed first one at most; ``bisections``:
     halvings of the bracket between the proved and the failed level; ``rounded``: a level as tried
-    (short numbers), never above its argument."""
+    (short numbers), never above its argument; ``steps``: other steps than these (:class:`LevelSteps`)."""
     out: LevelSearch[T] = LevelSearch(None, None, None)
+    steps = LevelSteps() if steps is None else steps
+    up = steps.up or (lambda c: rounded(c * growth))
+    down = steps.down or (lambda c: rounded(c / 2))
+    between = steps.between or (lambda lo, hi: rounded((lo + hi) / 2))
+    more = steps.more or (lambda lo, hi: True)
 
     def run(level: Fraction) -> bool:
         proof = attempt(level)
@@ -61,18 +89,21 @@ def largest_proved_level(attempt: Callable[[Fraction], T | None], first: Fractio
         level = first
         if run(level):
             for _ in range(growth_steps - 1):  # grow while it works
-                level = rounded(level * growth)
+                level = up(level)
                 if out.level is None or level <= out.level or not run(level):
                     break
         else:
             for _ in range(halvings):  # down from a failed first level: the first proved one
-                level = rounded(level / 2)
-                if level <= 0 or run(level):
+                level = down(level)
+                if level <= 0 or not more(None, out.failed) or run(level):
                     break
         if out.level is not None:
-            hi = out.failed if out.failed is not None and out.failed > out.level else out.level * growth
+            hi = out.failed if out.failed is not None and out.failed > out.level else \
+                steps.above if steps.above is not None else up(out.level) if steps.up else out.level * growth
             for _ in range(bisections):
-                mid = rounded((out.level + hi) / 2)
+                if not more(out.level, hi):
+                    break
+                mid = between(out.level, hi)
                 if not out.level < mid < hi:
                     break
                 if not run(mid):
@@ -84,4 +115,4 @@ def largest_proved_level(attempt: Callable[[Fraction], T | None], first: Fractio
     return out
 
 
-__all__ = ["LevelSearch", "largest_proved_level"]
+__all__ = ["LevelSearch", "LevelSteps", "largest_proved_level"]

@@ -8,14 +8,16 @@ given them in one :class:`~lyapcheck.models.classes.contexts.FunctionsRun`, in t
 :mod:`lyapcheck.models.classes.registry`, by the one runner
 (:func:`lyapcheck.models.surfaces.certify.certify_model`).
 
-``roa`` (:func:`run_roa`; over a box :func:`box_roa`) and ``candidate`` (:func:`run_candidate`): the
-ball-arithmetic region on the true field first, then the SOS route of
-:mod:`lyapcheck.models.classes.regions` (the classes' one SOS implementation, both kinds of loop), each
-certified set simulated on the true loop (:func:`simulated_check`).
+``roa`` (:func:`run_roa`; over a box :func:`box_roa`) and ``candidate`` (:func:`run_candidate`; over a box
+:func:`box_candidate`): lists of routes run by the one driver of the region classes
+(:mod:`lyapcheck.models.classes.region_driver`): the ball-arithmetic region on the true field first, then
+the SOS route of :mod:`lyapcheck.models.classes.regions` (the classes' one SOS implementation, both kinds
+of loop), the set kept simulated on the true loop (:class:`LoopSimulation`, :func:`simulated_check`).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Final, Sequence
 
@@ -28,7 +30,7 @@ from lyapcheck.models.classes.recast_classes import (EPSILONS, Loop, base_loop,
                                              quadratic_candidate,
                                              certificate_head, for_v, state_square, v_names)
 from lyapcheck.models.classes import regions
-from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
+from lyapcheck.models.engines.search import Budget, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, to_fmpq
 from lyapcheck.tolerances import CONVERGED_BALL_RADIUS
@@ -118,23 +120,49 @@ def box_robust(model: RecastModel, box: ModelBox, system: Any = None, disturbed:
     return Robust(system, bounds, box)
 
 
+@dataclass(frozen=True)
+class LoopSimulation:
+    """A loop with functions simulated from a grid of ``box`` (deviations ``lo``, ``hi``): a certified set
+    checked on the true loop (:func:`simulated_check`) and its share of the box
+    (:class:`~lyapcheck.models.classes.region_driver.SimulatedLoop`)."""
+
+    loop: Loop
+    box: tuple[Any, Any]
+
+    def simulate(self, result: ConditionResult) -> None:
+        simulated_check(self.loop, result, self.box)
+
+    def share(self, result: ConditionResult) -> float:
+        """The share of fixed uniform samples of the box in the certified set (as :func:`regions.box_share`)."""
+        import numpy as np
+
+        lo, hi = self.box
+        Z = lo + (hi - lo) * np.random.default_rng(0).random((4000, self.loop.n))
+        eq = np.array([float(self.loop.system.values[s]) for s in self.loop.system.states])
+        value, = certified_value(self.loop, result)
+        return float(np.mean(value(Z + eq) <= float(Fraction(result.certificate["level"]))))
+
+
 def box_roa(model: RecastModel, loop: Loop, box: ModelBox, budget: Budget) -> ConditionResult:
     """``roa`` over a box: the ball-arithmetic route with the parameters as balls (no other route
     proves a set for every value of a box here)."""
     from lyapcheck.models.classes.recast_interval import interval_roa
+    from lyapcheck.models.classes.region_driver import OutOfTime, Route, drive
+    from lyapcheck.models.engines import reasons
 
     robust = box_robust(model, box)
     if not robust.vanishes():  # a disturbance moves the equilibrium: the set for every value of the box, d = 0
         robust = box_robust(model, box, disturbed=False)
-    found = interval_roa(loop, budget, comparison_box(model, loop), robust)
-    if isinstance(found, str):
-        from lyapcheck.models.engines import reasons
+    domain = comparison_box(model, loop)
 
+    def failed(tried: list[str]) -> ConditionResult:
         why = reasons.reason("no region of attraction was proved for every value of the box (over a box only ball "
-                             "arithmetic proves one, on loops of 1 to 3 states)", ("box", "domain", "time"), found)
+                             "arithmetic proves one, on loops of 1 to 3 states)", ("box", "domain", "time"), tried)
         return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
-    simulated_check(loop, found, comparison_box(model, loop))
-    return found
+
+    routes = [Route("ball arithmetic, the parameters as balls", lambda b: interval_roa(loop, b, domain, robust))]
+    return drive("roa", routes, budget, LoopSimulation(loop, domain), failed,
+                 OutOfTime("a region of attraction", ("time",)))
 
 
 def box_candidate(model: RecastModel, loop: Loop, proved: Loop, box: ModelBox, V: Poly, budget: Budget
@@ -148,36 +176,41 @@ def box_candidate(model: RecastModel, loop: Loop, proved: Loop, box: ModelBox, V
     Each certificate states the box (``parameter_box``); the simulated figures are the centre's."""
     from lyapcheck.models.classes.recast_ball_level import ball_level
     from lyapcheck.models.classes.recast_interval import interval_candidate
+    from lyapcheck.models.classes.region_driver import OutOfTime, Route, drive
     from lyapcheck.models.engines import reasons
 
-    tried: list[str] = []
-    boxed_v = in_ring(loop.ring, proved.ring, V)
-    if boxed_v is None:
-        tried.append("on the relations: V uses a function the loop recast with the box's parameters does not have")
-    else:
+    def relations(budget: Budget) -> ConditionResult | str:
+        boxed_v = in_ring(loop.ring, proved.ring, V)
+        if boxed_v is None:
+            return "on the relations: V uses a function the loop recast with the box's parameters does not have"
         found = global_candidate(proved, boxed_v, Search(proved.ring, budget))
         if isinstance(found, ConditionResult) and found.status == "certified":
             found.certificate["parameter_box"] = box.to_json()
             return found
-        tried.append("on the relations with the box's parameters bounded: " + (
+        # (a denominator not proved positive on these relations refuses this route only: ball arithmetic follows)
+        return "on the relations with the box's parameters bounded: " + (
             found.summary if isinstance(found, ConditionResult) else
-            "V' < 0 was not proved everywhere" if found else "V was not proved positive definite"))
+            "V' < 0 was not proved everywhere" if found else "V was not proved positive definite")
+
     # the disturbances at 0, as at a point (a candidate's claim never covers every disturbance value:
     # registry.ZERO_DISTURBANCE_ONLY), the box's parameters as balls
     robust = box_robust(model, box, disturbed=False)
     domain = comparison_box(model, loop)
-    for route in (lambda: interval_candidate(loop, V, budget, domain, robust),
-                  lambda: ball_level(loop, V, budget, "candidate", "the candidate, proved by ball arithmetic from "
-                                     "its exact local level upwards, for every value of the box", robust)):
-        result = route()
-        if isinstance(result, ConditionResult):
-            simulated_check(loop, result, domain)
-            return result
-        tried.append(result)
-    why = reasons.reason("the candidate V was not proved a Lyapunov function for every value of the box, nor any "
-                         "level set of it a region of attraction for every value (ball arithmetic with the box's "
-                         "parameters as balls)", ("other_candidate", "box", "domain", "time"), tried)
-    return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
+    routes = [Route("GAS on the relations, the parameters bounded", relations),
+              Route("ball arithmetic, the parameters as balls",
+                    lambda b: interval_candidate(loop, V, b, domain, robust)),
+              Route("ball arithmetic from the local level",
+                    lambda b: ball_level(loop, V, b, "candidate", "the candidate, proved by ball arithmetic from its "
+                                         "exact local level upwards, for every value of the box", robust))]
+
+    def failed(tried: list[str]) -> ConditionResult:
+        why = reasons.reason("the candidate V was not proved a Lyapunov function for every value of the box, nor any "
+                             "level set of it a region of attraction for every value (ball arithmetic with the box's "
+                             "parameters as balls)", ("other_candidate", "box", "domain", "time"), tried)
+        return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
+
+    return drive("candidate", routes, budget, LoopSimulation(loop, domain), failed,
+                 OutOfTime("a proof with the candidate V", ("time",)))
 
 
 def in_ring(source: Any, target: Any, p: Poly) -> Poly | None:
@@ -219,59 +252,84 @@ def comparison_box(model: RecastModel, loop: Loop) -> tuple[Any, Any]:
 
 def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, Any], interval: bool = True,
             robust: Any = None, flow: bool = False) -> ConditionResult:
-    """``roa``: first a V fitted to simulations and proved by ball arithmetic on the true field
+    """``roa``, by the routes of :func:`~lyapcheck.models.classes.region_driver.drive`: first a V fitted to
+    simulations and proved by ball arithmetic on the true field
     (:mod:`lyapcheck.models.classes.recast_interval`; loops of 1 to 3 states), the set it proves then
     enlarged, with ``flow`` (a model with a ``[domain]``), by boxes of the domain proved by validated
     integration to flow into it (:mod:`lyapcheck.models.classes.flow_region`); where that proves nothing,
     the linearization's V and its largest level on the recasting's relations, then the V-s
-    iteration from it, and the region covering most of the box (``interval`` False: that route only)."""
-    from lyapcheck.models.classes.recast_interval import interval_roa
-
-    first_route = interval_roa(loop, budget, box, robust) if interval else "ball arithmetic: not tried"
-    if isinstance(first_route, ConditionResult):
-        from lyapcheck.models.classes.flow_region import extend
-
-        if flow:  # (boxes proved to flow into the set: the region only grows)
-            extend(loop, first_route, budget, box, certified_value(loop, first_route)[0])
-        simulated_check(loop, first_route, box)
-        return first_route
-    skipped = first_route
-    search = Search(loop.ring, budget)
-    J = jacobian(loop)
-    V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
+    iteration from it, and the region covering most of the box (``interval`` False: that route only);
+    where the relations prove no level of it, that V's largest level by ball arithmetic."""
+    from lyapcheck.models.classes.region_driver import Ends, OutOfTime, Route, drive
     from lyapcheck.models.engines import reasons
 
-    if V0 is None and isinstance(J, str):  # (a kink at the equilibrium: linearization may still prove LES)
-        why = reasons.reason(f"no region of attraction was proved: the Jacobian does not exist at the equilibrium "
-                             f"({J}), so the SOS route has no quadratic V to start from, and a piecewise-linear "
-                             "proof of linearization holds in a neighbourhood whose size it does not bound",
-                             ("candidate",), [skipped, f"no Jacobian: {J}"])
-        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
-    if V0 is None:
-        why = reasons.reason("no region of attraction was proved: the linearization gives no quadratic V to start "
-                             "the search from (see linearization)", ("candidate",),
-                             [skipped, f"the linearization gives no quadratic V ({lin.summary})"])
-        return ConditionResult("roa", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
+    from functools import cache
+
+    search = Search(loop.ring, budget)
+
+    @cache
+    def linearized() -> Any:
+        """The Jacobian at the equilibrium (or why none exists), once: the relations' and the last route's V."""
+        return jacobian(loop)
+
     label = "the linearization (J^T P + P J = -I)"
-    try:
+
+    def ball(budget: Budget) -> ConditionResult | str:
+        """A V fitted to simulations, proved by ball arithmetic; with ``flow``, the boxes flowing into its set."""
+        from lyapcheck.models.classes.recast_interval import interval_roa
+
+        if not interval:
+            return "ball arithmetic: not tried"
+        found = interval_roa(loop, budget, box, robust)
+        if isinstance(found, ConditionResult) and flow:  # (boxes proved to flow into the set: the region only grows)
+            from lyapcheck.models.classes.flow_region import extend
+
+            extend(loop, found, budget, box, certified_value(loop, found)[0])
+        return found
+
+    def relations(budget: Budget) -> ConditionResult | Ends | str:
+        """The linearization's V, its largest level on the recasting's relations, then enlarged
+        (:func:`regions.relations_enlarge`); the region covering most of the box."""
+        J = linearized()
+        V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
+        if V0 is None and isinstance(J, str):  # (a kink at the equilibrium: linearization may still prove LES)
+            return Ends(f"no region of attraction was proved: the Jacobian does not exist at the equilibrium ({J}), "
+                        "so the SOS route has no quadratic V to start from, and a piecewise-linear proof of "
+                        "linearization holds in a neighbourhood whose size it does not bound", ("candidate",),
+                        f"no Jacobian: {J}")
+        if V0 is None:
+            return Ends("no region of attraction was proved: the linearization gives no quadratic V to start the "
+                        "search from (see linearization)", ("candidate",),
+                        f"the linearization gives no quadratic V ({lin.summary})")
         first = regions.certify_region(loop, V0, search, label)
-    except BudgetExhausted as exc:
-        late = reasons.out_of_time("a region of attraction", budget.seconds, [skipped, f"{label}: {exc}"],
-                                   ("time", "domain"))
-        return ConditionResult("roa", "inconclusive", late.summary, numbers=late.numbers(), property="ROA")
-    if isinstance(first, str):
-        ball = quadratic_ball_level(loop, J, budget, box)
-        if isinstance(ball, ConditionResult):
-            return ball
-        return regions.best_region(loop, [], [skipped, f"{label}: {first}", ball], box, search)
-    more, tried = regions.relations_enlarge(loop, first, budget, box)
-    stopped = f" (the largest proved when {first.stopped})" if first.stopped else ""
-    result = regions.best_region(loop, [first, *more],
-                                 [skipped, f"{label}: level {float(first.level):.6g}{stopped}", *tried], box, search)
-    if result.status == "certified":
-        simulated_check(loop, result, box)
-        result = with_shaped(loop, J, budget, box, result)
-    return result
+        if isinstance(first, str):
+            return f"{label}: {first}"
+        more, tried = regions.relations_enlarge(loop, first, budget, box)
+        stopped = f" (the largest proved when {first.stopped})" if first.stopped else ""
+        result = regions.best_region(loop, [first, *more], [*skipped, f"{label}: level {float(first.level):.6g}"
+                                                                      f"{stopped}", *tried], box, search)
+        from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
+
+        if result.status == "certified" and loop.n in SHAPE_STATES:  # (4 to 6 states: against the shaped V's)
+            simulated_check(loop, result, box)
+            result = with_shaped(loop, linearized(), budget, box, result)
+        return result
+
+    def local(budget: Budget) -> ConditionResult | str:
+        """A quadratic V's largest level by ball arithmetic from the exact local one: the linearization's, and at
+        4 to 6 states the shaped V's beside it (:func:`quadratic_ball_level`)."""
+        return quadratic_ball_level(loop, linearized(), budget, box)
+
+    routes = [Route("ball arithmetic on the true field", ball), Route(label, relations),
+              Route("ball arithmetic from the local level", local)]
+    skipped: list[str] = []  # (every route's reason so far: the relations' certified result quotes them)
+
+    def failed(tried: list[str]) -> ConditionResult:
+        return regions.best_region(loop, [], tried, box, search)
+
+    return drive("roa", routes, budget, LoopSimulation(loop, box), failed,
+                 OutOfTime("a region of attraction", ("time", "domain")), tried=skipped)
+
 
 
 #: starts per state of the grid over the box on which a certified region is simulated (2 states; the
@@ -435,60 +493,73 @@ def global_candidate(loop: Loop, V: Poly, search: Search) -> ConditionResult | b
 
 
 def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult:
-    """The user's V (shifted): a global decrease first (GAS), else its largest certified level (ROA)."""
-    found = global_candidate(loop, V, Search(loop.ring, budget))
-    if isinstance(found, ConditionResult):
-        return found
-    positive = found
-    loop = for_v(loop, V)
+    """The user's V (shifted), by the routes of :func:`~lyapcheck.models.classes.region_driver.drive`: a global
+    decrease first (GAS), else its largest certified level (ROA): by ball arithmetic on the true field (no global
+    positivity needed: the set is compact and V' < 0 on it), on the recasting's relations, then, for a quadratic
+    V, by ball arithmetic from its exact local level upwards."""
+    from lyapcheck.models.classes.recast_ball_level import ball_level
     from lyapcheck.models.classes.recast_interval import interval_candidate
-
-    # a sublevel set on the true field (no global positivity needed: the set is compact and V' < 0 on it)
-    interval = interval_candidate(loop, V, budget, box)
-    if isinstance(interval, ConditionResult):
-        simulated_check(loop, interval, box)
-        return interval
+    from lyapcheck.models.classes.region_driver import Ends, OutOfTime, Route, drive
     from lyapcheck.models.engines import reasons
 
-    if not positive:
-        why = reasons.reason("the candidate V could not be proved positive definite (V >= eps |x - x_eq|^2), and no "
-                             "level set of it was proved a region of attraction on the true loop",
-                             ("other_candidate", "domain"), interval)
-        return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(), property="ROA")
-    region = regions.region_of_attraction(loop, budget, [("the candidate", V)], box, name="candidate")
-    region.numbers.setdefault("tried_first", interval)
-    if region.status != "certified":
-        ball = candidate_ball_level(loop, V, budget, box)
-        if isinstance(ball, ConditionResult):
-            return ball
-        detail = [interval, *region.numbers.get("detail", []), ball]
+    on = for_v(loop, V)
+    # what the relations route found (its search's result: the failure's figures and solves)
+    region: list[ConditionResult] = []
+    tried: list[str] = []
+    positive: list[bool] = []  # (whether the first route proved V positive definite on the relations)
+
+    def relations_gas(budget: Budget) -> ConditionResult | str:
+        """V decreasing everywhere on the recasting's relations (GAS); a denominator not proved positive ends it."""
+        found = global_candidate(loop, V, Search(loop.ring, budget))
+        if isinstance(found, ConditionResult):
+            return found
+        positive.append(found)
+        return ("on the recasting's relations: V' < 0 was not proved everywhere" if found
+                else "on the recasting's relations: V was not proved positive definite")
+
+    def interval(budget: Budget) -> ConditionResult | str:
+        return interval_candidate(on, V, budget, box)
+
+    def relations_level(budget: Budget) -> ConditionResult | Ends | str:
+        """V's largest level on the recasting's relations (where V is proved positive definite there)."""
+        if not positive[-1]:
+            return Ends("the candidate V could not be proved positive definite (V >= eps |x - x_eq|^2), and no level "
+                        "set of it was proved a region of attraction on the true loop", ("other_candidate", "domain"))
+        found = regions.region_of_attraction(on, budget, [("the candidate", V)], box, name="candidate")
+        found.numbers.setdefault("tried_first", tried[-1])
+        if found.status == "certified":
+            return found
+        region.append(found)
+        return "; ".join(found.numbers.get("detail", []))
+
+    def local(budget: Budget) -> ConditionResult | str:
+        return ball_level(on, V, budget, "candidate", "the candidate, proved by ball arithmetic from its exact local "
+                                                      "level upwards")
+
+    routes = [Route("GAS on the recasting's relations", relations_gas),
+              Route("ball arithmetic on the true field", interval),
+              Route("the candidate's level on the recasting's relations", relations_level),
+              Route("ball arithmetic from the local level", local)]
+
+    def failed(tried: list[str]) -> ConditionResult:
+        result = region[-1]  # (the relations' search: its figures and solves stand)
         if budget.left() <= 0:  # the time limit cut the search: inconclusive, as a class at its limit is
-            why = reasons.out_of_time("a region of attraction from the candidate", budget.seconds, detail,
+            why = reasons.out_of_time("a region of attraction from the candidate", budget.seconds, tried,
                                       ("time", "other_candidate"))
-            region.status = "inconclusive"
+            result.status = "inconclusive"
         else:
             why = reasons.reason("the candidate's derivative could not be proved negative definite (V' <= 0 alone "
                                  "needs LaSalle's argument, which this class does not make), and no level set of it "
-                                 "was proved a region of attraction", ("other_candidate", "domain", "time"), detail)
-        region.summary = why.summary
-        region.numbers["detail"] = why.detail
-    return region
+                                 "was proved a region of attraction", ("other_candidate", "domain", "time"), tried)
+        result.summary = why.summary
+        result.numbers["detail"] = why.detail
+        return result
+
+    return drive("candidate", routes, budget, LoopSimulation(on, box), failed,
+                 OutOfTime("a proof with the candidate V", ("time",)), tried=tried)
 
 
-def candidate_ball_level(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
-    """A quadratic candidate's largest level by ball arithmetic at any number of states
-    (:func:`lyapcheck.models.classes.recast_ball_level.ball_level`: from the exact local level upwards),
-    for when the SOS route proved none; why not otherwise."""
-    from lyapcheck.models.classes.recast_ball_level import ball_level
-
-    found = ball_level(loop, V, budget, "candidate", "the candidate, proved by ball arithmetic from its exact "
-                                                     "local level upwards")
-    if isinstance(found, ConditionResult):
-        simulated_check(loop, found, box)
-    return found
-
-
-def linearization_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+def linearization_ball_level(loop: Loop, J: Any, budget: Budget) -> ConditionResult | str:
     """``roa`` where the SOS route proved no level of the linearization's V: ``z^T P z`` over the states
     (``J^T P + P J = -I``), its largest level by ball arithmetic from the exact local one
     (:func:`lyapcheck.models.classes.recast_ball_level.ball_level`, any number of states); why not otherwise."""
@@ -497,11 +568,8 @@ def linearization_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any,
     V = None if isinstance(J, str) else state_quadratic(loop, J)
     if V is None:
         return "ball arithmetic from the local level: the linearization gives no quadratic V in the states"
-    found = ball_level(loop, V, budget, "roa", "the linearization (J^T P + P J = -I) in the states, proved by ball "
-                                               "arithmetic from its exact local level upwards")
-    if isinstance(found, ConditionResult):
-        simulated_check(loop, found, box)
-    return found
+    return ball_level(loop, V, budget, "roa", "the linearization (J^T P + P J = -I) in the states, proved by ball "
+                                              "arithmetic from its exact local level upwards")
 
 
 def shaped_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
@@ -550,10 +618,12 @@ def quadratic_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any
     in ``numbers["other_quadratic"]``; below 4 states or above 6 the linearization's alone."""
     from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
 
-    if loop.n not in SHAPE_STATES:
-        return linearization_ball_level(loop, J, budget, box)
+    if loop.n not in SHAPE_STATES:  # (the driver simulates the set it keeps)
+        return linearization_ball_level(loop, J, budget)
     shaped = shaped_ball_level(loop, J, budget, box)
-    linear = linearization_ball_level(loop, J, budget, box)
+    linear = linearization_ball_level(loop, J, budget)
+    if isinstance(linear, ConditionResult):  # (simulated here: the two are compared by their shares)
+        simulated_check(loop, linear, box)
     if isinstance(shaped, str) or isinstance(linear, str):
         kept, other = (linear, shaped) if isinstance(shaped, str) else (shaped, linear)
         if isinstance(kept, ConditionResult):

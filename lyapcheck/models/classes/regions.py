@@ -335,61 +335,88 @@ LEVEL_GROW_STEPS: Final = 16
 
 def largest_level(field: StateField, V: GramPoly, search: Search, c_top: float,
                   generators: Sequence[Sequence[int]], grow: bool = False) -> LevelCertificate | None:
-    """The largest certified level below ``c_top`` (bisection on feasibility, then exact checks).
+    """The largest certified level below ``c_top``: the levels the level program finds feasible (a margin
+    above :data:`LEVEL_MARGIN_MIN`, floating point), searched by
+    :func:`~lyapcheck.models.classes.level_search.largest_proved_level` (down by quarters from a failed
+    ``c_top``, then a geometric bisection to :data:`LEVEL_REL_TOL`, :data:`LEVEL_MAX_SOLVES` solves at most),
+    then every feasible level tried exactly, largest first.
 
     With ``grow``, ``c_top`` is only a first guess (no sample had ``V' >= 0``): while the level
     program is feasible there the level is multiplied by :data:`LEVEL_GROWTH`, and the bisection
     runs between the last feasible and the first infeasible level. Each feasible level is an SOS
     lower bound of ``min {V : V' >= 0, x != 0}``, so the set needs no sample of the boundary."""
-    drop: frozenset[Monomial] = frozenset()
-    structure = level_structure(field, V, generators)
-    if structure is None:
+    from lyapcheck.models.classes.level_search import LevelSteps, largest_proved_level
+
+    first_program = level_structure(field, V, generators)
+    if first_program is None or not c_top > 0:
         return None
+    program: Structure = first_program
+    drop: frozenset[Monomial] = frozenset()
     feasible: list[Fraction] = []
-    lo, hi = 0.0, c_top
-    c = Fraction(c_top).limit_denominator(10**9)
+    # the bisection's solves (at most LEVEL_MAX_SOLVES; the steps upwards of ``grow`` are not counted), and
+    # with ``grow`` the levels tried upwards so far (None once the search no longer goes up)
     solves = 0
-    if grow:
-        for _ in range(LEVEL_GROW_STEPS):
-            search.budget.check()
-            _, solution = level_attempt(field, structure, V, c, search, exact=False)
+    upwards: int | None = 0 if grow else None
+    stopped: list[BudgetExhausted] = []  # what ended the search early, raised as it came
+
+    def short(x: float) -> Fraction:
+        return Fraction(x).limit_denominator(10**9)
+
+    def attempt(c: Fraction) -> Fraction | None:
+        """Whether level ``c`` is feasible (numerically; the exact checks come after); while no level is, the
+        program reduced by the Gram monomials its solve found vanishing (facial reduction) and ``c`` tried
+        again, :data:`FACIAL_ROUNDS` times at most."""
+        nonlocal drop, program, solves, upwards
+        while True:
+            try:
+                search.budget.check()
+                _, solution = level_attempt(field, program, V, c, search, exact=False)
+            except BudgetExhausted as exc:
+                stopped.append(exc)
+                raise
             solves += 1
-            if not (solution.usable and solution.scalars.get("t", 0.0) > LEVEL_MARGIN_MIN):
-                break
-            feasible.append(c)
-            c = Fraction(float(c) * LEVEL_GROWTH).limit_denominator(10**9)
-        lo, hi = (float(feasible[-1]) if feasible else 0.0), float(c)
-        if feasible and lo < hi:
-            c = Fraction(math.sqrt(lo * hi)).limit_denominator(10**9)
-        solves = 0
-    # the top itself first (often feasible when the estimate is of a V' < 0 set with no boundary)
-    while solves < LEVEL_MAX_SOLVES and (hi - lo) > LEVEL_REL_TOL * hi:
-        search.budget.check()
-        cert, solution = level_attempt(field, structure, V, c, search, exact=False)
-        solves += 1
-        ok = solution.usable and solution.scalars.get("t", 0.0) > LEVEL_MARGIN_MIN
-        if not ok and not feasible and solves <= FACIAL_ROUNDS:
-            vanishing = vanishing_monomials(structure.gram("sigma"), solution)
-            if vanishing:
-                reduced = level_structure(field, V, generators, drop | vanishing)
+            ok = bool(solution.usable and solution.scalars.get("t", 0.0) > LEVEL_MARGIN_MIN)
+            if upwards is not None:  # going up: no reduction, and the bisection's solves start when it ends
+                upwards += 1
+                if ok and upwards < LEVEL_GROW_STEPS:
+                    feasible.append(c)
+                    return c
+                # (where the first level failed, its solve counts as the bisection's first: it starts there)
+                upwards, solves = None, 0 if ok or feasible else 1
+                if ok:
+                    feasible.append(c)
+                    return c
+            if not ok and not feasible and solves <= FACIAL_ROUNDS:
+                vanishing = vanishing_monomials(program.gram("sigma"), solution)
+                reduced = level_structure(field, V, generators, drop | vanishing) if vanishing else None
                 if reduced is not None:
-                    drop, structure = drop | vanishing, reduced
-                    continue
-        if ok:
-            feasible.append(c)
-            lo = float(c)
-        else:
-            hi = float(c)
-        c = Fraction(math.sqrt(lo * hi) if lo > 0 else hi / 4).limit_denominator(10**9)
-        if lo == 0 and hi < c_top * 1e-6:
-            break
+                    drop, program = drop | vanishing, reduced
+                    if solves < LEVEL_MAX_SOLVES:
+                        continue
+            if ok:
+                feasible.append(c)
+            return c if ok else None
+
+    def more(lo: Fraction | None, hi: Fraction | None) -> bool:
+        low, high = float(lo or 0), float(c_top if hi is None else hi)
+        return solves < LEVEL_MAX_SOLVES and (high - low) > LEVEL_REL_TOL * high and \
+            not (low == 0 and high < c_top * 1e-6)
+
+    steps = LevelSteps(up=lambda c: short(float(c) * LEVEL_GROWTH), down=lambda c: short(float(c) / 4),
+                       between=lambda lo, hi: short(math.sqrt(float(lo) * float(hi))),
+                       above=None if grow else Fraction(c_top), more=more)
+    found = largest_proved_level(attempt, short(c_top), growth=Fraction(LEVEL_GROWTH),
+                                 growth_steps=LEVEL_GROW_STEPS if grow else 1, halvings=LEVEL_MAX_SOLVES,
+                                 bisections=LEVEL_MAX_SOLVES, steps=steps)
+    if stopped:  # (out of time, or a budget of solves spent: the feasible levels are not proved, so none is lost)
+        raise stopped[-1]
     # every feasible level, largest first, then levels below the smallest: a level that rounds to an exact
     # certificate is never lost because the larger ones (thinner margins) did not (issue 42, item 2)
     tries = sorted(feasible, reverse=True)
     if tries:
         tries += [tries[-1] / 2 ** (k + 1) for k in range(LEVEL_EXACT_HALVINGS)]
     for c in tries:
-        cert, _ = level_attempt(field, structure, V, c, search, exact=True)
+        cert, _ = level_attempt(field, program, V, c, search, exact=True)
         if cert is not None:
             return cert
     return None

@@ -91,13 +91,18 @@ def as_recast(model: "Model") -> "RecastModel":
 def recording(compute: Callable[[Budget], ConditionResult], stopped: list[BaseException]
               ) -> Callable[[Budget], ConditionResult]:
     """``compute``, noting in ``stopped`` what ended it when it raises (the class's guard then makes
-    its ``inconclusive``): :func:`tried_after` reads whether that was the time limit."""
+    its ``inconclusive``), or when it returns ``inconclusive`` with the class's time spent (the region
+    classes' driver, :func:`lyapcheck.models.classes.region_driver.drive`, words the time limit itself):
+    :func:`sos_ended` reads whether that was the time limit."""
     def run(budget: Budget) -> ConditionResult:
         try:
-            return compute(budget)
+            found = compute(budget)
         except BaseException as exc:
             stopped.append(exc)
             raise
+        if found.status == "inconclusive" and budget.left() <= 0:
+            stopped.append(BudgetExhausted(budget.reached()))
+        return found
     return run
 
 
