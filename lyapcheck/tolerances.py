@@ -294,6 +294,12 @@ MAP_BOX_GRID: Final = 5
 #: loops need a few hundred steps over the fit's 30 s horizon. Loops with functions keep
 #: SIM_MAX_STEPS (their shipped figures were fitted with it)
 BALL_FALLBACK_FIT_STEPS: Final = 2_000
+#: the seconds of roa's class budget that must be left after the SOS route certified a set on a polynomial
+#: or rational loop of 1 to 3 states for the ball-arithmetic route to be tried beside it
+#: (lyapcheck.models.classes.field_ball_route.larger_region); with less, the SOS set stands and its
+#: ``tried`` says so. The ball route's own work is bounded by counts (INTERVAL_ATTEMPT_CELLS); this only
+#: keeps it from starting where the class's time limit (its safety net) would cut it
+BALL_ROUTE_MIN_SECONDS: Final = 15.0
 #: the solves one template of the recast sos_gas / quadratic search (a degree and a set of V
 #: variables: its margins eps and its face reductions together; lyapcheck.models.classes.recast_classes)
 #: may spend before the next template has its turn. It replaced a 10 s wall-clock limit per

@@ -173,7 +173,12 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
         else:
             numbers.update(again.numbers())
     numbers["rounds"] = outcome.history
-    return regions.level_result("roa", scaled, field_, cert, search, numbers, "region of attraction")
+    found = regions.level_result("roa", scaled, field_, cert, search, numbers, "region of attraction")
+    from lyapcheck.models.classes import field_ball_route
+
+    if field_ball_route.takes(model, field_.p == 0):  # the ball route's set where it covers more (issue 41)
+        return field_ball_route.larger_region(model, found, budget, starts, converged)
+    return found
 
 
 def simulated_region_long(scaled: ScaledField, starts: np.ndarray, value: Callable[[np.ndarray], np.ndarray],

@@ -80,6 +80,9 @@ ESTIMATES: Final[Mapping[str, str]] = {
     "history": "the region search's rounds: each level and its share",
     "fitted_domain_share": "the share of the domain (about the equilibrium) the proved V was fitted to, where V "
                            "fitted over the whole domain proved nothing (sampled_share is then of that part)",
+    "other_route": "roa on a polynomial loop: the figures of the other route's set (its level, ball_radius and "
+                   "roa_share over the same simulated starts), which the kept set covered no less than "
+                   "(lyapcheck.models.classes.field_ball_route)",
     "local_level": "the ball-arithmetic level search's first level (the ellipsoid in the box where the Hessian of V' is "
                    "negative definite); the certified level is at least this",
     # records of the proof's work
