@@ -120,3 +120,26 @@ def test_verify_re_checks_the_kept_ball_region_and_refuses_a_changed_level_or_v(
         failed = tampered(edit)
         assert failed.exit_code == 1, (edit.__name__, failed.output)
         assert "roa" in failed.output and "ball-arithmetic proof does not go through" in failed.output, failed.output
+
+
+def test_the_ball_route_is_skipped_when_too_little_of_the_class_budget_is_left(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With less than BALL_ROUTE_MIN_SECONDS left the SOS set stands, ``tried`` saying why the ball
+    route did not run (and it does not)."""
+    import numpy as np
+
+    from lyapcheck.models.classes import field_ball_route
+    from lyapcheck.models.engines.search import Budget
+    from lyapcheck.results import ConditionResult
+    from lyapcheck.tolerances import BALL_ROUTE_MIN_SECONDS
+
+    def never(*args: Any, **kwargs: Any) -> Any:
+        raise AssertionError("the ball route ran with too little time left")
+
+    monkeypatch.setattr(field_ball_route, "ball_region", never)
+    model = parse_model(SADDLE, "<saddle>")
+    assert field_ball_route.takes(model, nominal=True) and not field_ball_route.takes(model, nominal=False)
+    sos = ConditionResult("roa", "certified", "region of attraction: ...", numbers={"roa_share": 0.5}, property="ROA")
+    budget = Budget(BALL_ROUTE_MIN_SECONDS / 2, "lyapcheck.tolerances.MODEL_CLASS_TIME_LIMIT_S")
+    kept = field_ball_route.larger_region(model, sos, budget, np.zeros((4, 2)), np.ones(4, dtype=bool))
+    assert kept is sos and kept.numbers["route"] == SOS_ROUTE and "other_route" not in kept.numbers
+    assert "BALL_ROUTE_MIN_SECONDS" in kept.numbers["tried"][-1] and "not tried" in kept.numbers["tried"][-1]

@@ -3,7 +3,8 @@ the disturbances a stability class's claim covers.
 
 ``roa`` (:func:`run_roa`): the linearization's quadratic V and its sublevel sets enlarged by SOS
 (:mod:`lyapcheck.models.classes.regions`), the certified set compared with, and cross-checked
-against, simulations of the true loop. ``candidate`` (:func:`run_candidate`): the user's V, GAS where
+against, simulations of the true loop; on a nominal loop of 1 to 3 states, the ball-arithmetic
+route's set beside it, the one covering more kept (:mod:`lyapcheck.models.classes.field_ball_route`). ``candidate`` (:func:`run_candidate`): the user's V, GAS where
 its decrease holds everywhere, else its largest certified level. :func:`covering_disturbances`: a
 stability class tried robustly first (one V for every disturbance value), then nominally.
 """
@@ -115,7 +116,9 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
             field_: StateField | None = None, memo: dict[str, Any] | None = None) -> ConditionResult:
     """The ``roa`` class on ``field_`` (default: the nominal :func:`state_field`; the robust one
     proves a set common to every disturbance value). ``memo`` keeps the simulated starts between
-    the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0)."""
+    the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0).
+    On a nominal loop of 1 to 3 states a certified SOS set is compared with the ball-arithmetic
+    route's over the same simulated starts (:func:`~lyapcheck.models.classes.field_ball_route.larger_region`)."""
     import numpy as np
 
     from lyapcheck.models.engines import reasons
