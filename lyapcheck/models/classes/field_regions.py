@@ -4,8 +4,9 @@ the disturbances a stability class's claim covers.
 ``roa`` (:func:`run_roa`): the linearization's quadratic V and its sublevel sets enlarged by SOS
 (:mod:`lyapcheck.models.classes.regions`), the certified set compared with, and cross-checked
 against, simulations of the true loop; on a nominal loop of 1 to 3 states, the ball-arithmetic
-route's set beside it, the one covering more kept (:mod:`lyapcheck.models.classes.field_ball_route`). ``candidate`` (:func:`run_candidate`): the user's V, GAS where
-its decrease holds everywhere, else its largest certified level. :func:`covering_disturbances`: a
+route's set beside it, the one covering more kept (:mod:`lyapcheck.models.classes.field_ball_route`).
+``candidate`` (:func:`run_candidate`): the user's V, GAS where its decrease holds everywhere, else its
+largest certified level. :func:`covering_disturbances`: a
 stability class tried robustly first (one V for every disturbance value), then nominally.
 """
 

@@ -148,4 +148,5 @@ def verify_ball_roa(name: str, c: dict[str, Any], model: "Model", box: Any) -> t
     return check_interval(loop, {**c, "certificate": {**cert, "V_text": v_text(loop.system, V)}}, robust_of(recast))
 
 
-__all__ = ["ENGINE", "BALL_STATES", "WHOLE_SET_CELLS", "as_recast", "recording", "sos_ended", "takes", "after_sos", "is_ball_region", "verify_ball_roa"]
+__all__ = ["ENGINE", "BALL_STATES", "WHOLE_SET_CELLS", "as_recast", "recording", "sos_ended", "takes", "after_sos",
+           "is_ball_region", "verify_ball_roa"]
