@@ -301,6 +301,17 @@ MAP_BOX_GRID: Final = 5
 #: loops need a few hundred steps over the fit's 30 s horizon. Loops with functions keep
 #: SIM_MAX_STEPS (their shipped figures were fitted with it)
 BALL_FALLBACK_FIT_STEPS: Final = 2_000
+#: the seconds of roa's class budget that must be left after the SOS route certified a set on a polynomial
+#: or rational loop of 1 to 3 states for the ball-arithmetic route to be tried beside it
+#: (lyapcheck.models.classes.field_ball_route.larger_region); with less, the SOS set stands and its
+#: ``tried`` says so. The ball route's own work is bounded by counts (INTERVAL_ATTEMPT_CELLS); this only
+#: keeps it from starting where the class's time limit (its safety net) would cut it
+BALL_ROUTE_MIN_SECONDS: Final = 15.0
+#: the ball-arithmetic roa route runs beside a certified SOS set of a polynomial loop only where that set
+#: covers less than this share of the simulated region of attraction in the [domain] (measured: on every
+#: shipped polynomial example of 1 to 3 states the SOS set covers 0.977 to 1.0 and the ball route, 3 to 17 s
+#: more per run, never covered more; on a loop whose SOS set covered 0.64 the ball route's covered 0.985)
+BALL_ROUTE_BESIDE_SHARE: Final = 0.95
 #: the solves one template of the recast sos_gas / quadratic search (a degree and a set of V
 #: variables: its margins eps and its face reductions together; lyapcheck.models.classes.recast_classes)
 #: may spend before the next template has its turn. It replaced a 10 s wall-clock limit per

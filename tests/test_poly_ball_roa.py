@@ -2,8 +2,8 @@
 (issue 41: the SOS route and the ball-arithmetic route are two engines of one class).
 
 The ball route (:mod:`lyapcheck.models.surfaces.ball_roa`) is the recast route's, on the loop read as a loop
-with no auxiliaries. It is a fallback: where the SOS route certifies, its certificate and figures
-stand. A rational loop whose denominator changes sign away from the equilibrium gets no SOS class
+with no auxiliaries. Here it is a fallback, where the SOS route does not certify (beside a certified
+SOS set, the larger of the two is kept: tests/test_field_ball_route.py). A rational loop whose denominator changes sign away from the equilibrium gets no SOS class
 at all (the field cannot be multiplied through); ball arithmetic evaluates the true field and proves
 a region. ``verify`` runs the same proof again from the certificate alone, and refuses an edit.
 """
@@ -146,8 +146,9 @@ def test_a_tampered_ball_region_is_refused(pole: tuple[Path, Doc, Any]) -> None:
 
 
 def test_a_loop_sos_certifies_keeps_its_sos_region(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The ball route is a fallback: where the SOS route certifies it is not even tried, and the
-    condition is the SOS route's (its certificate kind, no ``engine``)."""
+    """Where the SOS route certifies a set holding every converging simulated start (drake-cubic), the
+    fallback is not tried and no ball route runs beside it (no set can cover more: tests/test_field_ball_route.py
+    has the loops where both run), and the condition is the SOS route's (its certificate kind, no ``engine``)."""
     def never(*args: Any, **kwargs: Any) -> Any:
         raise AssertionError("the ball route was tried after the SOS route certified")
 
@@ -156,6 +157,7 @@ def test_a_loop_sos_certifies_keeps_its_sos_region(monkeypatch: pytest.MonkeyPat
     roa = result.results["roa"]
     assert roa.status == "certified" and roa.certificate["kind"] in ("sublevel", "quadratic_ball")
     assert "engine" not in roa.numbers and "tried" not in roa.numbers
+    assert roa.numbers["route"] == "sos" and roa.numbers["roa_share"] == 1.0 and "not tried" in roa.numbers["other_route"]
 
 
 def test_the_ball_route_is_not_tried_once_the_sos_route_spent_the_time_limit(monkeypatch: pytest.MonkeyPatch) -> None:

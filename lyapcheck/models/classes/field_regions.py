@@ -3,7 +3,9 @@ the disturbances a stability class's claim covers.
 
 ``roa`` (:func:`run_roa`): the linearization's quadratic V and its sublevel sets enlarged by SOS
 (:mod:`lyapcheck.models.classes.regions`), the certified set compared with, and cross-checked
-against, simulations of the true loop (:class:`FieldSimulation`). ``candidate`` (:func:`run_candidate`):
+against, simulations of the true loop (:class:`FieldSimulation`); on a nominal loop of 1 to 3 states with a
+``[domain]``, the ball-arithmetic route's set beside it, the one covering more kept
+(:mod:`lyapcheck.models.classes.field_ball_route`). ``candidate`` (:func:`run_candidate`):
 the user's V, GAS where its decrease holds everywhere, else its largest certified level. Each is a list
 of routes run by the one driver of the region classes (:mod:`lyapcheck.models.classes.region_driver`).
 :func:`covering_disturbances`: a stability class tried robustly first (one V for every disturbance
@@ -208,7 +210,9 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
     """The ``roa`` class on ``field_`` (default: the nominal :func:`state_field`; the robust one
     proves a set common to every disturbance value), by the routes of
     :func:`~lyapcheck.models.classes.region_driver.drive`. ``memo`` keeps the simulated starts between
-    the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0)."""
+    the robust and the nominal attempt (they simulate the same loop, with the disturbances at 0).
+    On a nominal loop of 1 to 3 states a certified SOS set is compared with the ball-arithmetic
+    route's over the same simulated starts (:func:`~lyapcheck.models.classes.field_ball_route.larger_region`)."""
     from lyapcheck.models.engines import reasons
     from lyapcheck.models.classes import regions
     from lyapcheck.models.classes.region_driver import OutOfTime, Route, drive
@@ -234,12 +238,20 @@ def run_roa(scaled: ScaledField, budget: Budget, linearization: ConditionResult 
         if outcome.certificate is None:
             return "no sublevel set passed the exact check"
         cert = outcome.certificate
-        return regions.level_result("roa", scaled, on, cert, search,
-                                    {"degree": 2 * max(sum(m) for m in cert.V.basis), "rounds": outcome.history},
-                                    "region of attraction")
+        found = regions.level_result("roa", scaled, on, cert, search,
+                                     {"degree": 2 * max(sum(m) for m in cert.V.basis), "rounds": outcome.history},
+                                     "region of attraction")
+        from lyapcheck.models.classes import field_ball_route
+
+        model = scaled.cleared.shifted.model
+        if not field_ball_route.takes(model, on.p == 0):
+            return found
+        # the ball route's set where it covers more (issue 41), compared over the same simulated starts: the
+        # SOS set is simulated first, and the driver keeps whichever is returned as simulated
+        simulation.simulate(found)
+        return field_ball_route.larger_region(model, found, budget, simulation.starts, simulation.converged)
 
     routes = [Route("the linearization's quadratic V enlarged by SOS", sos)]
-    # (a further route, e.g. a region by ball arithmetic on the true field, is one more Route here)
 
     def failed(tried: list[str]) -> ConditionResult:
         why = reasons.reason("no region of attraction was proved: no level set of the linearization's quadratic V "

@@ -1,14 +1,11 @@
 """``roa`` of a polynomial or rational loop by ball arithmetic: the recast route's engine on the
 loop read as a loop with no auxiliaries (issue 41).
 
-A polynomial or rational model file's ``[dynamics]``, read by the recasting's own parser
-(:func:`lyapcheck.models.language.recast.recast_dynamics`), is a recast loop whose ring holds the states
-alone: no function, so no auxiliary and no relation. The ball-arithmetic region of attraction of
-loops with functions (:func:`lyapcheck.models.classes.recast_interval.interval_roa`: a ``V`` fitted to
-simulations, proved on the true field with python-flint's ``arb`` balls, within the work budget
-:data:`~lyapcheck.tolerances.INTERVAL_ATTEMPT_CELLS`) then runs on it unchanged, and so does its
-exact re-check (:func:`lyapcheck.models.classes.recast_interval.check_interval`). The sum-of-squares route
-and the ball-arithmetic route are two engines of one class:
+The loop read as a loop with no auxiliaries and the route on it are
+:mod:`lyapcheck.models.classes.field_ball_route`'s (:func:`~lyapcheck.models.classes.field_ball_route.as_recast`,
+:func:`~lyapcheck.models.classes.field_ball_route.ball_region`); the exact re-check is the recast route's
+(:func:`lyapcheck.models.classes.recast_interval.check_interval`). The sum-of-squares route and the
+ball-arithmetic route are two engines of one class:
 
 ===================  ================================  ==============================================
 engine               when                              what a ``certified`` proves
@@ -17,75 +14,37 @@ engine               when                              what a ``certified`` prov
                      multiplied through its
                      denominators
 ``ball_arithmetic``  1 to 3 states, no box, a Hurwitz  ``{V <= level}``, the whole sublevel set
-                     Jacobian, where the SOS route     (``whole``: ``V > level`` outside the proof's
-                     did not certify                   box, ``V' < 0`` on the set but at the
-                                                       equilibrium), on the true field
+                     Jacobian: where the SOS route     (``whole``: ``V > level`` outside the proof's
+                     did not certify (here), and on a  box, ``V' < 0`` on the set but at the
+                     nominal loop beside a certified   equilibrium), on the true field
+                     SOS set, the larger kept
+                     (field_ball_route.larger_region)
 ===================  ================================  ==============================================
 
-The ball route is a fallback: where the SOS route certifies, its figures stand as before. It is
-not tried where the SOS route stopped at the class's time limit (the time is spent), only where
-it ended ``not_certified``, ``inconclusive`` on a work budget or numerical trouble, or
-``not_applicable`` because a denominator of the field is not proved of one sign (the field cannot
-be multiplied through; ball arithmetic evaluates the true field, and a cell where a denominator may
-vanish is simply not proved). It has a time budget of its own, the class's limit again. A region it
-proves is taken only when the whole sublevel set is proved to lie in its box, so that the claim is
-``{V <= level}`` as every polynomial ``roa`` states it (reports draw that set, sweeps simulate
-from it). The condition says which engine proved it: ``engine`` = ``"ball_arithmetic"`` (the SOS
-route's conditions carry no ``engine`` key, so that their documents stay as they were); its
-sentence is the recast route's (:func:`lyapcheck.models.classes.claims.interval_sentence`).
+Here, where the SOS route did not certify: the ball route is not tried where the SOS route stopped
+at the class's time limit (the time is spent), only where it ended ``not_certified``,
+``inconclusive`` on a work budget or numerical trouble, or ``not_applicable`` because a denominator
+of the field is not proved of one sign (the field cannot be multiplied through; ball arithmetic
+evaluates the true field, and a cell where a denominator may vanish is simply not proved). It has a
+time budget of its own, the class's limit again. A region it proves is taken only when the whole
+sublevel set is proved to lie in its box, so that the claim is ``{V <= level}`` as every polynomial
+``roa`` states it (reports draw that set, sweeps simulate from it). The condition says which engine
+proved it: ``engine`` = ``"ball_arithmetic"`` (the SOS route's conditions carry no ``engine`` key);
+its sentence is the recast route's (:func:`lyapcheck.models.classes.claims.interval_sentence`).
 """
 
 from __future__ import annotations
 
-import tomllib
-from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Callable, Final
+from typing import TYPE_CHECKING, Any, Callable
 
+from lyapcheck.models.classes.field_ball_route import BALL_STATES, ENGINE, WHOLE_SET_CELLS, as_recast, ball_region
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, SolvesSpent
 from lyapcheck.results import ConditionResult
 from lyapcheck.timing import ClassTimeLimit
-from lyapcheck.tolerances import BALL_FALLBACK_FIT_STEPS, INTERVAL_ATTEMPT_CELLS
 
 if TYPE_CHECKING:  # pragma: no cover
     from lyapcheck.models.language.modelfile import Model
     from lyapcheck.models.language.parameter_box import ModelBox
-    from lyapcheck.models.language.recast import RecastModel
-
-#: the condition's ``engine`` where the ball-arithmetic route proved the region
-ENGINE: Final = "ball_arithmetic"
-#: the numbers of states the ball route takes (its sampling grids: lyapcheck.models.classes.fitted_v.FIT_GRID)
-BALL_STATES: Final = (1, 2, 3)
-#: the cells the proof that the whole sublevel set lies in the box may take, where the certificate's
-#: own try (WHOLE_SET_CELL_LIMIT) did not go through: a polynomial loop's region is that whole set.
-#: A count, the work budget of one attempt of the region's proof, so the outcome is the same anywhere
-WHOLE_SET_CELLS: Final = INTERVAL_ATTEMPT_CELLS
-
-
-def as_recast(model: "Model") -> "RecastModel":
-    """The polynomial or rational loop as a loop with functions that has none: its ``[dynamics]``
-    texts recast at the model's parameter values (``model.parameters``, which a sweep may have
-    replaced), every disturbance at 0; and, with disturbances, the loop with them as its last
-    states without a flow (:attr:`~lyapcheck.models.language.recast.RecastModel.robust`), as
-    :mod:`lyapcheck.models.language.modelfile` reads a loop with functions."""
-    from lyapcheck.errors import ModelFileError
-    from lyapcheck.models.language.recast import RecastModel, recast_dynamics
-
-    table = tomllib.loads(model.text)["dynamics"]
-    texts = {s: table[s] for s in model.states}
-    zero = {d: Fraction(0) for d in model.disturbances}
-    system, _ = recast_dynamics(model.source, model.states, texts, {**model.parameters, **zero}, model.equilibrium)
-    robust = None
-    if model.disturbances:
-        try:
-            robust, _ = recast_dynamics(model.source, model.states + tuple(model.disturbances),
-                                        {**texts, **{d: "0" for d in model.disturbances}}, dict(model.parameters),
-                                        tuple(model.equilibrium) + (Fraction(0),) * len(model.disturbances))
-        except ModelFileError:  # (a disturbance the recasting cannot keep: claims with it at 0 only)
-            robust = None
-    return RecastModel(source=model.source, text=model.text, name=model.name, origin=model.origin,
-                       states=model.states, parameters=dict(model.parameters), equilibrium=model.equilibrium,
-                       domain=model.domain, system=system, overrides=dict(model.overrides),
-                       disturbances=dict(model.disturbances), robust=robust)
 
 
 def recording(compute: Callable[[Budget], ConditionResult], stopped: list[BaseException]
@@ -139,29 +98,10 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
     ``certified`` (the condition says ``engine``, and ``tried`` starts with the SOS route's reason),
     or ``sos`` again with its reason saying that ball arithmetic proved none either (a
     ``not_applicable`` becomes ``not_certified``: the class was tried)."""
-    from lyapcheck.models.classes.claims import covered
-    from lyapcheck.models.engines.interval_region import prove_bounded
-    from lyapcheck.models.classes.claims import interval_sentence
-    from lyapcheck.models.classes.recast_interval import METHOD, claim_of, interval_roa
-    from lyapcheck.models.classes.recast_regions import comparison_box, proved_loop, robust_of, simulated_check
+    from lyapcheck.models.classes.claims import covered, interval_sentence
+    from lyapcheck.models.classes.recast_interval import METHOD
 
-    recast = as_recast(model)
-    loop = proved_loop(recast, budget.seconds)  # (no square root to prove: the loop has no auxiliary)
-    box = comparison_box(recast, loop)
-    found = interval_roa(loop, budget, box, robust_of(recast), fit_steps=BALL_FALLBACK_FIT_STEPS)
-    if isinstance(found, ConditionResult) and not found.certificate.get("whole"):
-        import time
-
-        # the whole set, with the work budget of an attempt (the certificate's own try had fewer cells)
-        whole, why, cells, R = prove_bounded(loop.system, claim_of(loop, found.certificate),
-                                             deadline=time.perf_counter() + max(budget.left(), 0.0),
-                                             cell_limit=WHOLE_SET_CELLS)
-        if whole:
-            found.certificate.update({"whole": True, "outer_radius": str(R), "outer_cells": cells})
-        else:
-            found = (f"ball arithmetic: level {found.numbers['level']:.6g} was proved within a box, not the whole "
-                     f"sublevel set {{V <= level}} that a polynomial loop's region states ({why}, within "
-                     f"{WHOLE_SET_CELLS} cells)")
+    _, found = ball_region(model, budget)
     if isinstance(found, str):
         head, sep, advice = sos.summary.partition("; try ")
         if sos.status == "not_applicable":
@@ -170,19 +110,11 @@ def after_sos(model: "Model", sos: ConditionResult, budget: Budget) -> Condition
         sos.summary = f"{head}; nor was one proved by {METHOD}{sep}{advice}"
         sos.numbers["detail"] = [*sos.numbers.get("detail", []), found]
         return sos
-    if recast.domain is not None:  # boxes of the domain proved to flow into the set (the region only grows)
-        from lyapcheck.models.classes.flow_region import extend
-        from lyapcheck.models.classes.recast_regions import certified_value
-
-        extend(loop, found, budget, box, certified_value(loop, found)[0])
-    simulated_check(loop, found, box, max_steps=BALL_FALLBACK_FIT_STEPS)
     if found.disturbances is None and model.disturbances:
         found.disturbances = "zero"  # proved on the loop with its disturbances at 0
     # the recast route's sentence, from the certificate as it now stands (whole), with the coverage
     found.summary = covered(found.disturbances, interval_sentence(found.certificate))
-    V = found.certificate["V"]["terms"]
-    found.numbers.update({"engine": ENGINE, "degree": max(sum(e[:model.n]) for _, e in V),
-                          "tried": [f"sums of squares: {sos.summary}", *found.numbers.get("tried", [])]})
+    found.numbers["tried"] = [f"sums of squares: {sos.summary}", *found.numbers.get("tried", [])]
     return found
 
 
@@ -221,4 +153,5 @@ def verify_ball_roa(name: str, c: dict[str, Any], model: "Model", box: Any) -> t
     return check_interval(loop, {**c, "certificate": {**cert, "V_text": v_text(loop.system, V)}}, robust_of(recast))
 
 
-__all__ = ["ENGINE", "BALL_STATES", "as_recast", "recording", "sos_ended", "takes", "after_sos", "is_ball_region", "verify_ball_roa"]
+__all__ = ["ENGINE", "BALL_STATES", "WHOLE_SET_CELLS", "as_recast", "recording", "sos_ended", "takes", "after_sos",
+           "is_ball_region", "verify_ball_roa"]

@@ -83,6 +83,9 @@ ESTIMATES: Final[Mapping[str, str]] = {
     "shaping": "the design of a quadratic V shaped for a large region (floating point, a proposal the proof then "
                "decided): its rounds and the sampled shares of the box inside its and the linearization's V at the "
                "levels where sampling first sees V' stop decreasing",
+    "other_route": "roa on a polynomial loop: the figures of the other route's set (its level, ball_radius and "
+                   "roa_share over the same simulated starts), which the kept set covered no less than "
+                   "(lyapcheck.models.classes.field_ball_route)",
     "local_level": "the ball-arithmetic level search's first level (the ellipsoid in the box where the Hessian of V' is "
                    "negative definite); the certified level is at least this",
     # records of the proof's work
