@@ -290,9 +290,8 @@ def grid_points(box: "ModelBox") -> list[dict[str, Interval]]:
 
 def common_p(system: "RecastSystem", box: "ModelBox") -> list[list[Fraction]] | None:
     """A ``P`` with ``A^T P A - P <= -I`` at every Jacobian of the box's grid (a small SDP; None where the
-    solver finds none), rounded to short dyadics: a proposal only, which :func:`prove_over_box` decides over
-    the whole box."""
-    import cvxpy as cp
+    solver finds none: :func:`~lyapcheck.models.classes.fitted_v.common_lyapunov`), rounded to short dyadics: a
+    proposal only, which :func:`prove_over_box` decides over the whole box."""
     import numpy as np
 
     from lyapcheck.models.engines.ellipsoid_cells import _short
@@ -303,17 +302,12 @@ def common_p(system: "RecastSystem", box: "ModelBox") -> list[list[Fraction]] | 
         if A is None:
             return None
         jacobians.append(np.array([[float(a.mid()) for a in row] for row in A]))
-    n = jacobians[0].shape[0]
-    P = cp.Variable((n, n), symmetric=True)
-    cons = [P >> np.eye(n)] + [A.T @ P @ A - P << -np.eye(n) for A in jacobians]
-    problem = cp.Problem(cp.Minimize(cp.trace(P)), cons)
-    try:
-        problem.solve(solver=cp.CLARABEL)
-    except cp.error.SolverError:
+    from lyapcheck.models.classes.fitted_v import common_lyapunov
+
+    value = common_lyapunov(jacobians, discrete=True, floor=1.0)
+    if value is None:
         return None
-    if problem.status != "optimal" or P.value is None:
-        return None
-    value = (P.value + P.value.T) / 2
+    n = value.shape[0]
     return [[_short(Fraction(float(value[min(i, j), max(i, j)])), tolerances.P_BITS) for j in range(n)]
             for i in range(n)]
 

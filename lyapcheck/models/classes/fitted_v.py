@@ -239,14 +239,20 @@ class Corners:
         return ok
 
 
-def common_lyapunov(jacobians: Sequence[np.ndarray]) -> np.ndarray | None:
-    """A ``P`` with ``J^T P + P J <= -I`` for every Jacobian (a small SDP; None where there is none):
-    the quadratic part of a V common to a box, whose Jacobian is affine in the parameters there."""
+def common_lyapunov(jacobians: Sequence[np.ndarray], discrete: bool = False, floor: float = 1e-6
+                    ) -> np.ndarray | None:
+    """A ``P >= floor I`` with ``J^T P + P J <= -I`` (``discrete``: ``J^T P J - P <= -I``) for every
+    Jacobian (a small SDP, least trace; None where the solver finds none or its point misses half the
+    margin): the quadratic part of a V common to a box, whose Jacobian is affine in the parameters there.
+    A proposal only: the proof decides."""
     import cvxpy as cp
+
+    def decrease(J: Any, P: Any) -> Any:
+        return J.T @ P @ J - P if discrete else J.T @ P + P @ J
 
     n = jacobians[0].shape[0]
     P = cp.Variable((n, n), symmetric=True)
-    cons = [P >> 1e-6 * np.eye(n)] + [J.T @ P + P @ J << -np.eye(n) for J in jacobians]
+    cons = [P >> floor * np.eye(n)] + [decrease(J, P) << -np.eye(n) for J in jacobians]
     problem = cp.Problem(cp.Minimize(cp.trace(P)), cons)
     try:
         problem.solve(solver=cp.CLARABEL)
@@ -255,9 +261,9 @@ def common_lyapunov(jacobians: Sequence[np.ndarray]) -> np.ndarray | None:
     if problem.status != "optimal" or P.value is None:
         return None
     value = (P.value + P.value.T) / 2
-    if any(np.max(np.linalg.eigvalsh(J.T @ value + value @ J)) >= -0.5 for J in jacobians):
+    if any(np.max(np.linalg.eigvalsh(decrease(J, value))) >= -0.5 for J in jacobians):
         return None  # (the solver's point, checked: the proof decides in any case)
-    return value
+    return np.asarray(value)
 
 
 def fit_excluded(system: RecastSystem, any_size: bool = False) -> str | None:
