@@ -116,7 +116,8 @@ def largest_proved_level(attempt: Callable[[Fraction], T | None], first: Fractio
                 if not out.level < mid < hi:
                     break
                 if not run(mid):
-                    hi = mid if out.failed is None else min(mid, out.failed)
+                    known = min(failed_at(mid), mid)
+                    hi = known if known > out.level else mid
     except BudgetExhausted as exc:
         if out.level is None:
             raise

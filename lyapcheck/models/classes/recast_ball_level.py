@@ -21,7 +21,7 @@ level: the search then starts at JUMP_SHARE of the level at which sampling first
 (:func:`sampled_jump`; it only proposes, the proof decides), doubles it once proved and bisects, and
 where that first attempt fails grows from the local level as below 4 states (:func:`jumped_search`). That
 first attempt has fewer cells (:data:`~lyapcheck.tolerances.ELLIPSOID_JUMP_CELLS`), so that a sampled level
-too large for the cells leaves the growth most of them; an attempt that fails at a point proved in the set
+too large for the cells leaves the growth more of them; an attempt that fails at a point proved in the set
 where ``V' >= 0`` lowers the top of the search's bracket to ``V`` there.
 Its budgets count cells of the cart-pole's cost (:func:`cell_cost`).
 """
