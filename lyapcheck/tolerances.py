@@ -269,6 +269,14 @@ BALL_LEVEL_TOTAL_CELLS: Final = 40_000
 #: 2026-11-30: 40,000 -> 48,000; its search's 42,855 cells about 35 s of one core, its whole certify run
 #: 29 to 46 s on the loaded 2-core machine)
 ELLIPSOID_LEVEL_TOTAL_CELLS: Final = 48_000
+#: the cells of the first attempt of that search, at the sampled level (in the same cells of the cart-pole's
+#: cost): that level only proposes, and where it is too large for the cells (the acrobot's and the pendubot's
+#: shaped V, issue 42: their attempts fail by the cells, not by a point where V' >= 0) a failure there cost a
+#: whole BALL_LEVEL_CELLS attempt, about 60 % of the search, before the growth from the local level began.
+#: The cart-pole's sampled levels take 8,190 cells (its shaped V, 0.344) and 20,484 (its LQR cost-to-go as a
+#: candidate, 0.207; 2026-11-30): 10,000 cost the candidate that level (0.414 -> 0.0397), so about 10 % above
+#: the larger. It then saves the pendubot a quarter of an attempt, enough for one more level; not the acrobot
+ELLIPSOID_JUMP_CELLS: Final = 22_500
 #: significant bits of each entry of V's matrix P on a discrete-time map with functions
 #: (lyapcheck.models.classes.discrete_functions: the Stein solution of A^T P A - P = -I rounded to a
 #: short dyadic). Short entries keep V's balls exact at a cell's dyadic corners (no widening from V

@@ -171,3 +171,57 @@ def test_other_steps_bracket_the_truth_geometrically_and_stop_where_asked() -> N
                                  bisections=30, steps=LevelSteps(above=Fraction(1, 100), more=more))
     assert tried[0] == Fraction(1, 1000) and Fraction(1, 1000) < tried[1] < Fraction(1, 100)
     assert found.level is not None and truth * Fraction(99, 100) <= found.level <= truth
+
+
+def test_a_failure_that_names_a_smaller_failing_level_lowers_the_bracket_at_once() -> None:
+    from lyapcheck.models.classes.level_search import LevelSteps
+
+    truth, refuted_from = Fraction(9), Fraction(10)  # levels above 9 fail; each failure shows a point at V = 10
+
+    def run(failed_at: Any) -> tuple[Any, list[Fraction]]:
+        tried: list[Fraction] = []
+
+        def attempt(level: Fraction) -> Fraction | None:
+            tried.append(level)
+            return level if level <= truth else None
+
+        found = largest_proved_level(attempt, Fraction(1), growth=Fraction(4), growth_steps=10, halvings=0,
+                                     bisections=3, steps=LevelSteps(failed_at=failed_at))
+        return found, tried
+
+    plain, plain_tried = run(None)
+    lowered, lowered_tried = run(lambda c: min(c, refuted_from))
+    # without it the bracket is (4, 16] and the middles are 10, 7, 8.5; with it (4, 10]: 7, 8.5, 9.25
+    assert plain_tried[:3] == lowered_tried[:3] == [1, 4, 16]
+    assert plain.failed == 10 and lowered.failed == 9.25  # (the plain one failed at its first middle, 10)
+    assert all(t < refuted_from for t in lowered_tried[3:]) and any(t >= refuted_from for t in plain_tried[3:])
+    assert lowered.level is not None and plain.level is not None and lowered.level >= plain.level
+    assert lowered.level == max(t for t in lowered_tried if t <= truth)
+
+
+def test_a_failing_level_below_a_proved_one_does_not_move_the_bracket_under_it() -> None:
+    from lyapcheck.models.classes.level_search import LevelSteps
+
+    def attempt(level: Fraction) -> Fraction | None:
+        return level if level <= 6 else None
+
+    # a route's smaller failing level at or below a proved level (a float's rounding) is ignored
+    found = largest_proved_level(attempt, Fraction(1), growth=Fraction(4), growth_steps=10, halvings=0,
+                                 bisections=3, steps=LevelSteps(failed_at=lambda c: Fraction(2)))
+    assert found.level is not None and found.level > 4 and found.failed is not None and found.failed > found.level
+
+
+def test_the_jumped_search_caps_only_the_sampled_level_and_grows_from_the_local_one_after_it_fails() -> None:
+    from lyapcheck.models.classes.recast_ball_level import jumped_search
+
+    calls: list[tuple[Fraction, int | None]] = []
+
+    def attempt(level: Fraction, cap: int | None = None) -> Fraction | None:
+        calls.append((level, cap))
+        return level if level <= Fraction(1, 100) else None  # the sampled level 1 is far too large
+
+    found = jumped_search(attempt, Fraction(1, 10 ** 6), Fraction(1), lambda x: x, jump_cells=123)
+    assert calls[1] == (Fraction(1), 123)  # the sampled level, within the jump's cells
+    assert all(cap is None for level, cap in calls if level != 1)  # every other attempt with the whole cells
+    assert found.level is not None and Fraction(1, 400) < found.level <= Fraction(1, 100)
+    assert found.level == max(level for level, _ in calls if level <= Fraction(1, 100))

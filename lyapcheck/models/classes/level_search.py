@@ -6,7 +6,9 @@ never loses a proved level:
 
 - from the first level it grows (times ``growth``) while the attempts succeed, or halves while they
   fail, until it holds a proved level ``lo`` and a failed one ``hi``;
-- then it bisects between them; a failure at a larger level only lowers ``hi``, never ``lo``;
+- then it bisects between them; a failure at a larger level only lowers ``hi``, never ``lo``; where a
+  failure says that a smaller level fails too (a route's ``failed_at``: a point proved in the set where
+  ``V' >= 0``, at ``V = v``, fails every level from ``v``), ``hi`` falls to that level at once;
 - when the work runs out (:class:`~lyapcheck.models.engines.search.BudgetExhausted` from an attempt),
   the largest level proved so far is the answer (the exception only propagates when none was).
 
@@ -51,13 +53,16 @@ class LevelSteps:
     ``(lo, hi)`` (own: ``rounded((lo + hi) / 2)``); ``above``, the bracket's top where no level above the
     proved one failed (own: the next level upwards); ``more``, whether to try another level, asked before
     each one downwards and in the bracket (with the largest proved level, None before one, and the
-    bracket's top; own: always, until ``halvings`` and ``bisections`` are spent)."""
+    bracket's top; own: always, until ``halvings`` and ``bisections`` are spent); ``failed_at``, the
+    smallest level known to fail once ``level`` failed (own: ``level``; never above it), which becomes the
+    bracket's top. Only the order of the attempts rests on it: a level is reported only when proved."""
 
     up: Callable[[Fraction], Fraction] | None = None
     down: Callable[[Fraction], Fraction] | None = None
     between: Callable[[Fraction, Fraction], Fraction] | None = None
     above: Fraction | None = None
     more: Callable[[Fraction | None, Fraction | None], bool] | None = None
+    failed_at: Callable[[Fraction], Fraction] | None = None
 
 
 def largest_proved_level(attempt: Callable[[Fraction], T | None], first: Fraction, *, growth: Fraction,
@@ -74,12 +79,16 @@ def largest_proved_level(attempt: Callable[[Fraction], T | None], first: Fractio
     down = steps.down or (lambda c: rounded(c / 2))
     between = steps.between or (lambda lo, hi: rounded((lo + hi) / 2))
     more = steps.more or (lambda lo, hi: True)
+    failed_at = steps.failed_at or (lambda c: c)
 
     def run(level: Fraction) -> bool:
         proof = attempt(level)
         out.tried.append((level, proof is not None))
         if proof is None:
-            out.failed = level if out.failed is None else min(out.failed, level)
+            known = min(failed_at(level), level)
+            if out.level is not None and known <= out.level:
+                known = level  # (a smaller failing level than a proved one: a float's rounding, ignored)
+            out.failed = known if out.failed is None else min(out.failed, known)
             return False
         if out.level is None or level > out.level:
             out.level, out.proof = level, proof
@@ -107,7 +116,8 @@ def largest_proved_level(attempt: Callable[[Fraction], T | None], first: Fractio
                 if not out.level < mid < hi:
                     break
                 if not run(mid):
-                    hi = mid
+                    known = min(failed_at(mid), mid)
+                    hi = known if known > out.level else mid
     except BudgetExhausted as exc:
         if out.level is None:
             raise

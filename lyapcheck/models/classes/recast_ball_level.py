@@ -19,7 +19,10 @@ From 4 states (issue 42) the decrease is proved on cells of the ellipsoid's own 
 (:mod:`lyapcheck.models.engines.ellipsoid_cells`), where an attempt costs about the same cells at any
 level: the search then starts at JUMP_SHARE of the level at which sampling first sees ``V' >= 0``
 (:func:`sampled_jump`; it only proposes, the proof decides), doubles it once proved and bisects, and
-where that first attempt fails grows from the local level as below 4 states (:func:`jumped_search`).
+where that first attempt fails grows from the local level as below 4 states (:func:`jumped_search`). That
+first attempt has fewer cells (:data:`~lyapcheck.tolerances.ELLIPSOID_JUMP_CELLS`), so that a sampled level
+too large for the cells leaves the growth more of them; an attempt that fails at a point proved in the set
+where ``V' >= 0`` lowers the top of the search's bracket to ``V`` there.
 Its budgets count cells of the cart-pole's cost (:func:`cell_cost`).
 """
 
@@ -61,7 +64,7 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robu
     centre) every level is proved for every value of the box (the local level is the centre's, a first
     level to try), and the certificate states the box."""
     from lyapcheck.models.classes.claims import interval_sentence
-    from lyapcheck.models.classes.level_search import largest_proved_level
+    from lyapcheck.models.classes.level_search import LevelSteps, largest_proved_level
     from lyapcheck.models.classes.recast_classes import _dyadic
     from lyapcheck.models.classes.recast_interval import METHOD, certificate, prove
     from lyapcheck.models.engines.interval_field import BallLoop, LieDerivative
@@ -99,7 +102,9 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robu
     total, each = int(whole / scale), int(tolerances.BALL_LEVEL_CELLS / scale)
     scaled = "" if scale == 1 else f", over {float(scale):.3g} for this loop's cost of a cell"
 
-    def attempt(level: Fraction) -> tuple[IntervalClaim, Any] | None:
+    refuted: dict[Fraction, Fraction] = {}  # a failed level -> V at a point of its set proved to have V' >= 0
+
+    def attempt(level: Fraction, cap: int | None = None) -> tuple[IntervalClaim, Any] | None:
         left = total - spent[0]
         if left <= 0:
             raise BudgetExhausted(f"the search's {total} cells were spent (lyapcheck.tolerances."
@@ -108,9 +113,12 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robu
         if budget.left() <= 0:
             raise BudgetExhausted(budget.reached())
         claim = claim_at(level)
-        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), robust=robust, cells=min(each, left),
-                      cells_name=f"lyapcheck.tolerances.BALL_LEVEL_CELLS{scaled}")
+        cells, cells_name = (each, "BALL_LEVEL_CELLS") if cap is None or cap >= each else (cap, "ELLIPSOID_JUMP_CELLS")
+        proof = prove(loop, claim, deadline=time.perf_counter() + budget.left(), robust=robust, cells=min(cells, left),
+                      cells_name=f"lyapcheck.tolerances.{cells_name}{scaled}")
         spent[0] += proof.cells + proof.boundary_cells
+        if not proof.ok and proof.counterexample_v is not None:
+            refuted[level] = Fraction(proof.counterexample_v)
         return (claim, proof) if proof.ok else None
 
     # (over a box the jump's search takes the centre's local level as proved: it grows from there instead)
@@ -120,9 +128,12 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robu
             found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH,
                                          growth_steps=BALL_LEVEL_GROWTH_STEPS,
                                          halvings=0 if robust is None else BALL_LEVEL_BOX_HALVINGS,
-                                         bisections=BALL_LEVEL_BISECTIONS, rounded=lambda x: _dyadic(x, LEVEL_BITS))
+                                         bisections=BALL_LEVEL_BISECTIONS, rounded=lambda x: _dyadic(x, LEVEL_BITS),
+                                         steps=LevelSteps(failed_at=lambda c: refuted.get(c, c)))
         else:
-            found = jumped_search(attempt, first, _dyadic(jump, LEVEL_BITS), lambda x: _dyadic(x, LEVEL_BITS))
+            found = jumped_search(attempt, first, _dyadic(jump, LEVEL_BITS), lambda x: _dyadic(x, LEVEL_BITS),
+                                  failed_at=lambda c: refuted.get(c, c),
+                                  jump_cells=int(tolerances.ELLIPSOID_JUMP_CELLS / scale))
     except BudgetExhausted as exc:
         return f"{METHOD}: {exc}"
     if found.proof is None or found.level is None:
@@ -212,17 +223,32 @@ def sampled_jump(loop: Loop, P: list[list[Fraction]], first: Fraction) -> Fracti
     return level if level > first else None
 
 
-def jumped_search(attempt: Any, first: Fraction, start: Fraction, rounded: Any) -> Any:
+def jumped_search(attempt: Any, first: Fraction, start: Fraction, rounded: Any, failed_at: Any = None,
+                  jump_cells: int | None = None) -> Any:
     """The level search from the sampled level ``start``: the local level ``first`` (proved without a
-    cell), then ``start`` and, proved, its double and JUMP_BISECTIONS bisections; failed, the search of
+    cell), then ``start`` (within ``jump_cells`` cells, :data:`~lyapcheck.tolerances.ELLIPSOID_JUMP_CELLS`:
+    ``attempt(level, cap)``) and, proved, its double and JUMP_BISECTIONS bisections; failed, the search of
     fewer states (growing from ``first`` by BALL_LEVEL_GROWTH) with the cells left. The largest proved
-    level is kept (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`): none is lost."""
-    from lyapcheck.models.classes.level_search import largest_proved_level
+    level is kept (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`): none is lost.
+    ``failed_at``: a failed level's smaller level known to fail (a proved point where ``V' >= 0``), the
+    top of the bracket then (:class:`~lyapcheck.models.classes.level_search.LevelSteps`).
+
+    Growing from the local level, not bisecting (in log scale) between it and a failed ``start``: at the
+    acrobot's and the pendubot's shaped V (issue 42) the attempts fail by their cells, whose count grows with
+    the level beyond the Hessian zone (about 1.5 times per factor 4), while those below it cost a cell or a
+    few hundred; the bracket's middle there (the geometric mean, 1e-5 to 1e-4 of ``start``) then spends the
+    rest on one failure, where the growth proves each level up to the last one the cells reach."""
+    from lyapcheck.models.classes.level_search import LevelSteps, largest_proved_level
+
+    steps = LevelSteps(failed_at=failed_at)
+
+    def jump_attempt(level: Fraction) -> Any:
+        return attempt(level, jump_cells) if level == start and jump_cells is not None else attempt(level)
 
     local = largest_proved_level(attempt, first, growth=Fraction(1), growth_steps=1, halvings=0, bisections=0)
     try:
-        found = largest_proved_level(attempt, start, growth=Fraction(2), growth_steps=2, halvings=0,
-                                     bisections=JUMP_BISECTIONS, rounded=rounded)
+        found = largest_proved_level(jump_attempt, start, growth=Fraction(2), growth_steps=2, halvings=0,
+                                     bisections=JUMP_BISECTIONS, rounded=rounded, steps=steps)
     except BudgetExhausted as exc:  # (the class's time, before anything above the local level was proved)
         local.stopped = str(exc)
         return local
@@ -231,7 +257,7 @@ def jumped_search(attempt: Any, first: Fraction, start: Fraction, rounded: Any) 
         try:
             found = largest_proved_level(attempt, first, growth=BALL_LEVEL_GROWTH,
                                          growth_steps=BALL_LEVEL_GROWTH_STEPS, halvings=0,
-                                         bisections=BALL_LEVEL_BISECTIONS, rounded=rounded)
+                                         bisections=BALL_LEVEL_BISECTIONS, rounded=rounded, steps=steps)
             tried += found.tried[1:]  # (the local level again: proved without a cell)
         except BudgetExhausted as exc:  # (the local level is proved: only a spent search raises here)
             local.stopped = str(exc)
