@@ -131,12 +131,20 @@ def ball_derivative(stem: str, S: list[list[Fraction]], point: list[Fraction]) -
 
 
 def main() -> int:
-    stem = sys.argv[1] if len(sys.argv) > 1 else "robot-cart-pole-lqr"
+    import argparse
+
+    parser = argparse.ArgumentParser(description="Whether a level of an LQR robot's z' S z is valid on its true loop.")
+    parser.add_argument("stem", nargs="?", default="robot-cart-pole-lqr", choices=sorted(robot_lqr.PLANTS),
+                        help="the example's file stem (default robot-cart-pole-lqr)")
+    parser.add_argument("level", nargs="?", type=float, default=None,
+                        help="the level of z' S z to check (default: Drake's Taylor-model level, 3.97 for the cart-pole)")
+    args = parser.parse_args()  # (bad input: argparse's one-line error, exit 2)
+    stem = args.stem
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from bench_robot_roa import rounded_cost_to_go
 
     S = rounded_cost_to_go(stem)
-    level = float(sys.argv[2]) if len(sys.argv) > 2 else DRAKE_TAYLOR_LEVELS.get(stem, 3.97)
+    level = args.level if args.level is not None else DRAKE_TAYLOR_LEVELS.get(stem, 3.97)
     print(f"{stem}: share of the [domain] box in {{z' S z <= {level:g}}}: {100 * box_share(stem, S, level):.4g} % "
           f"({BOX_SAMPLES} uniform samples)")
     found = decrease_counterexample(stem, S)

@@ -137,13 +137,14 @@ def takes(model: "Model", nominal: bool) -> bool:
 def larger_region(model: "Model", sos: ConditionResult, budget: Budget, starts: "np.ndarray",
                   converged: "np.ndarray") -> ConditionResult:
     """Of the SOS route's certified set ``sos`` and the ball route's (:func:`ball_region`), the one
-    covering more of the simulated region of attraction: with a ``[domain]``, the share of the
-    converging simulated starts (``starts``, declared states, rows; ``converged``: which converged,
-    the SOS route's own simulation) in each set; without one, the larger ball ``|x - x_eq| <= r``
-    each set is proved to hold (:mod:`lyapcheck.models.classes.region_size`). The SOS set is kept on a
-    tie and whenever the ball route proves less or nothing, so a loop only gains. The kept condition
-    says ``route`` and, in ``other_route``, the other route's figures (or why it proved none); the
-    ball route is skipped, saying so in ``tried``, where less than
+    covering more of the simulated region of attraction: the share of the converging simulated starts
+    (``starts``, declared states, rows; ``converged``: which converged, the SOS route's own simulation)
+    in each set; where none converged, the larger ball ``|x - x_eq| <= r`` each set is proved to hold
+    (:mod:`lyapcheck.models.classes.region_size`). The SOS set is kept on a tie and whenever the ball
+    route proves less or nothing, so a loop only gains. The kept condition says ``route`` and, in
+    ``other_route``, the other route's figures (or why it proved none or was not tried: a model without
+    a ``[domain]``, an SOS set holding :data:`~lyapcheck.tolerances.BALL_ROUTE_BESIDE_SHARE` of the
+    simulated region); the ball route is skipped, saying so in ``tried``, where less than
     :data:`~lyapcheck.tolerances.BALL_ROUTE_MIN_SECONDS` of the class's budget is left."""
     import numpy as np
 
@@ -186,11 +187,11 @@ def larger_region(model: "Model", sos: ConditionResult, budget: Budget, starts: 
                             "ball_radius": None if radii[0] is None else float(radii[0])}
     mine: dict[str, Any] = {"route": SOS_ROUTE, "level": sos.numbers.get("level"),
                             "ball_radius": None if radii[1] is None else float(radii[1])}
-    if model.domain and converged.any():
+    if converged.any():  # (model.domain is given: the route is not tried without one)
         ball["roa_share"] = float(np.mean(inside[converged]))
         mine["roa_share"] = sos.numbers.get("roa_share")
         gains = mine["roa_share"] is None or ball["roa_share"] > mine["roa_share"]
-    else:  # no domain to share: the larger ball each set is proved to hold
+    else:  # no converging start to share: the larger ball each set is proved to hold
         gains = ball["ball_radius"] is not None and ball["ball_radius"] > (mine["ball_radius"] or 0.0)
     if not gains:
         sos.numbers["other_route"] = ball
