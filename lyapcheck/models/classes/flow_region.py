@@ -46,7 +46,7 @@ METHOD: Final = FLOW_METHOD
 #: the states the route takes (the integrator itself takes any number; at 3 states, recast-pendulum-actuator, 12,000
 #: steps proved 8 boxes that added nothing to the share, and took its roa from 40 s to 56 s; at 4 to 6 states, the
 #: issue-42 robots, no box outside the set proved within 60 s: steps of 1/256 to 1/16,384 from their Jacobians'
-#: inf-norms, enclosures growing 16x long before entry; benchmarks/bench_flow_robots.py, benchmarks/README.md)
+#: inf-norms, enclosures past the domain's size long before entry; benchmarks/bench_flow_robots.py and its README)
 FLOW_STATES: Final = (2,)
 
 
