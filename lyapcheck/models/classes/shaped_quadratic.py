@@ -257,12 +257,12 @@ def shaped_quadratic(loop: Loop, J: list[list[Fraction]], box: tuple[Any, Any], 
     best_volume = -np.linalg.slogdet(best)[1]
     rho, rounds, improved, notes = SHAPE_TRUST, 0, False, []
     start = "the linearization's P"
-    for name, P in starts(Jf, mu, box):  # (scored as the rounds are: the best one starts)
-        c = sampler.critical_level(P, rate)
-        share, volume = sampler.share(P / c, 1.0), -np.linalg.slogdet(P / c)[1]
+    for name, S in starts(Jf, mu, box):  # (scored as the rounds are: the best one starts)
+        c = sampler.critical_level(S, rate)
+        share, volume = sampler.share(S / c, 1.0), -np.linalg.slogdet(S / c)[1]
         notes.append(f"start {name}: share {share:.4g}")
         if share > best_share or (share == best_share and volume > best_volume):
-            best, best_share, best_volume, improved, start = P / c, share, volume, True, name
+            best, best_share, best_volume, improved, start = S / c, share, volume, True, name
     start_share = best_share
     Pk = best
     while rounds < SHAPE_ROUNDS and rho >= SHAPE_TRUST_MIN and time.perf_counter() < deadline:
