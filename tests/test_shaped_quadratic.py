@@ -69,6 +69,48 @@ def test_the_design_improves_the_sampled_share_of_the_box_over_the_linearization
     assert sampler.critical_level(shaped.P) > 0.5
 
 
+#: a box long in the angles, short in the rates: the starts score differently and the best sets of the
+#: coupled pendulums reach far past its short sides
+LOPSIDED = (-np.array([2.5, 0.3, 2.5, 0.3]), np.array([2.5, 0.3, 2.5, 0.3]))
+
+
+def test_the_best_scored_start_begins_the_rounds(monkeypatch: Any) -> None:
+    loop, J, _ = coupled()
+    import time
+
+    monkeypatch.setattr(shaped_quadratic, "SHAPE_ROUNDS", 0)  # (the start alone)
+    shaped = shaped_quadratic.shaped_quadratic(loop, J, LOPSIDED, deadline=time.perf_counter() + 60)
+    assert shaped is not None and shaped.rounds == 0
+    # each start scored independently, as the design scores it: the share of the box at its critical level
+    Jf = np.array([[float(x) for x in row] for row in J])
+    mu = 2 * float(np.min(-np.linalg.eigvals(Jf).real))
+    sampler = shaped_quadratic._Sampler(loop, LOPSIDED)
+    scores = {}
+    for name, P in shaped_quadratic.starts(Jf, mu, LOPSIDED):
+        c = sampler.critical_level(P, shaped_quadratic.SHAPE_SCORE_RATE * mu)
+        scores[name] = sampler.share(P / c, 1.0)
+    assert len(set(scores.values())) > 1  # (the starts differ: the choice is a choice)
+    best = max(scores, key=lambda k: scores[k])
+    assert shaped.start == best and shaped.share == shaped.start_share == scores[best]
+    assert shaped.improved and shaped.share > shaped.linearization_share
+
+
+@pytest.mark.slow
+def test_the_shaped_set_reaches_past_the_box_where_that_covers_more() -> None:
+    """The rounds do not keep the set inside the [domain] box (nor inside it widened twice, as before):
+    the set kept reaches past the box's short sides, and covers more of the box than the start did."""
+    loop, J, _ = coupled()
+    import time
+
+    shaped = shaped_quadratic.shaped_quadratic(loop, J, LOPSIDED, deadline=time.perf_counter() + 60)
+    assert shaped is not None and shaped.rounds >= 1
+    assert shaped.share > shaped.start_share
+    extent = np.sqrt(np.diag(np.linalg.inv(shaped.P)))  # {z^T P z <= 1}'s half-width along each state
+    assert np.max(extent / LOPSIDED[1]) > 2
+    sampler = shaped_quadratic._Sampler(loop, LOPSIDED)
+    assert sampler.critical_level(shaped.P) > 0.5
+
+
 def test_a_shaped_v_whose_proof_fails_is_not_kept(monkeypatch: Any) -> None:
     """A proposed P positive definite but whose V' has no negative definite Hessian at the equilibrium
     (J^T P + P J indefinite): ball arithmetic proves no level, the class keeps the linearization's V."""

@@ -591,20 +591,21 @@ def shaped_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) 
     if shaped is None:
         return "a shaped quadratic V: the linearization gives no positive definite P to start from"
     if not shaped.improved:
-        return (f"a shaped quadratic V: no round of the design improved on the linearization's V (sampled share "
-                f"of the box {100 * shaped.linearization_share:.3g} %)")
+        return (f"a shaped quadratic V: no start or round of the design improved on the linearization's V (sampled "
+                f"share of the box {100 * shaped.linearization_share:.3g} %)")
     P = rational_form(shaped.P)
     if P is None:
         return "a shaped quadratic V: the proposed P, rounded to rationals, is not positive definite (exact)"
     ring = loop.ring
     z = [ring.gen(s) for s in loop.system.states]
     V = sum((z[i] * z[j] * to_fmpq(P[i][j]) for i in range(loop.n) for j in range(loop.n)), ring.zero())
-    found = ball_level(loop, V, budget, "roa", "a quadratic V shaped for volume on samples of the true field "
+    found = ball_level(loop, V, budget, "roa", "a quadratic V shaped to cover the box on samples of the true field "
                                                "(lyapcheck.models.classes.shaped_quadratic), proved by ball "
                                                "arithmetic from its exact local level upwards")
     if isinstance(found, str):
         return f"a shaped quadratic V: {found}"
-    found.numbers["shaping"] = {"rounds": shaped.rounds, "sampled_share_of_box": shaped.share,
+    found.numbers["shaping"] = {"rounds": shaped.rounds, "start": shaped.start,
+                                "sampled_share_of_box": shaped.share,
                                 "linearization_sampled_share_of_box": shaped.linearization_share}
     simulated_check(loop, found, box)
     return found
