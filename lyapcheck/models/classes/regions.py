@@ -909,12 +909,12 @@ class LevelPlan:
 #: quadratic V at 4 to 6 states, where each attempt is a solve of seconds): the first level is
 #: RELATIONS_CRITICAL_START times that critical level, the next ones double (the critical level next, which
 #: sampling says fails: then the bracket is one doubling wide), and 6 bisections put the level within 1/64
-#: of the largest provable one in the range the search covers. The default plan from V at a tenth of a
-#: state (growth 4, 7 bisections: within 3/128) took the quadrotor's shaped V 18 solves and 480 s on the
-#: loaded machine; the halvings are the default's, so a critical level far too high still reaches a
-#: provable one
+#: of the largest provable one anywhere from 2^-16 to 2^7 times the first level (the halvings are the
+#: default's: a sampled level far too high still reaches a provable one; 8 levels upwards: one far too low
+#: is not a ceiling). The default plan from V at a tenth of a state (growth 4, 7 bisections: within 3/128)
+#: took the quadrotor's shaped V 18 solves and 480 s on the loaded machine (with the coupling entries)
 RELATIONS_CRITICAL_START: Final = Fraction(1, 2)
-CRITICAL_PLAN: Final = LevelPlan(growth=Fraction(2), growth_steps=4, halvings=RELATIONS_LEVEL_HALVINGS, bisections=6)
+CRITICAL_PLAN: Final = LevelPlan(growth=Fraction(2), growth_steps=8, halvings=RELATIONS_LEVEL_HALVINGS, bisections=6)
 
 
 def critical_start(critical: float) -> Fraction:
