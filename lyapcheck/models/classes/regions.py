@@ -911,8 +911,9 @@ class LevelPlan:
 #: sampling says fails: then the bracket is one doubling wide), and 6 bisections put the level within 1/64
 #: of the largest provable one anywhere from 2^-16 to 2^7 times the first level (the halvings are the
 #: default's: a sampled level far too high still reaches a provable one; 8 levels upwards: one far too low
-#: is not a ceiling). The default plan from V at a tenth of a state (growth 4, 7 bisections: within 3/128)
-#: took the quadrotor's shaped V 18 solves and 480 s on the loaded machine (with the coupling entries)
+#: is not a ceiling). The quadrotor's shaped V (its invariant part): 9 solves, 2.4 s, level 0.9525; the default
+#: plan from V at a tenth of a state (growth 4, 7 bisections: within 3/128) 17 solves, 7.6 s, level 0.9402
+#: (2026-11-30, load about 3; with the coupling entries 18 solves of 10 to 48 s each)
 RELATIONS_CRITICAL_START: Final = Fraction(1, 2)
 CRITICAL_PLAN: Final = LevelPlan(growth=Fraction(2), growth_steps=8, halvings=RELATIONS_LEVEL_HALVINGS, bisections=6)
 
