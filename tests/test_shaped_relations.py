@@ -19,6 +19,7 @@ from lyapcheck.models.classes.level_search import largest_proved_level
 from lyapcheck.models.classes.recast_classes import _dyadic
 from lyapcheck.models.engines.search import Budget, BudgetExhausted, Search
 from lyapcheck.models.language.modelfile import parse_any_model
+from lyapcheck.models.language.recast import RecastModel
 
 #: a damped pendulum driving a damped oscillator through a product (4 states, one angle): the
 #: linearization's V decreases only on a thin ellipsoid (about 2 % of the box at its proved level), and
@@ -43,6 +44,7 @@ BOX = (-np.ones(4), np.ones(4))
 
 def driven() -> tuple[Any, Any]:
     model = parse_any_model(DRIVEN, "driven.toml")
+    assert isinstance(model, RecastModel)  # (a loop with functions: sin)
     loop = rc.base_loop(model.system)
     J = rc.jacobian(loop)
     assert not isinstance(J, str)
