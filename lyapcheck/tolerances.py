@@ -351,6 +351,11 @@ VS_LEVEL_SOLVES: Final = 40
 #: wall-clock limit per V step, and its level steps); it replaced "stop when less than 35 % of the
 #: class's time is left". Calibrated on the same pendulum: 88 solves in all (4-8 s of one core)
 VS_SOLVES: Final = 150
+#: the solves of the shaped quadratic V's level search on the recasting's relations at 4 to 6 states
+#: (lyapcheck.models.classes.recast_regions.shaped_relations: its denominators, positivity, and each level
+#: with its face reductions; issue 42). A count, so that a loaded machine gets the same level. The planar
+#: quadrotor's search from half the sampled critical level takes about 12 (measured 2026-11-30)
+SHAPED_RELATIONS_SOLVES: Final = 30
 #: the solves of the enlarging rounds of the polynomial roa class (its V steps and their level-1
 #: multipliers; lyapcheck.models.classes.regions.enlarge; the exact check of the best set and its ball
 #: come after, not counted); it replaced "stop when less than 35 % of the class's time is left".

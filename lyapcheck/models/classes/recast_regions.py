@@ -38,6 +38,7 @@ from lyapcheck.exact import read_rational
 
 if TYPE_CHECKING:
     from lyapcheck.models.classes.contexts import FunctionsRun
+    from lyapcheck.models.classes.shaped_quadratic import Shaped
     from lyapcheck.models.engines.numeric import SetCrossCheck
 
 # -- the loop they run on ------------------------------------------------------------------------------
@@ -258,9 +259,13 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
     enlarged, with ``flow`` (a model with a ``[domain]``), by boxes of the domain proved by validated
     integration to flow into it (:mod:`lyapcheck.models.classes.flow_region`); where that proves nothing,
     the linearization's V and its largest level on the recasting's relations, then the V-s
-    iteration from it, and the region covering most of the box (``interval`` False: that route only);
-    where the relations prove no level of it, that V's largest level by ball arithmetic."""
+    iteration from it, at 4 to 6 states the shaped quadratic V's level on the relations too
+    (:func:`shaped_relations`), and the region covering most of the box (``interval`` False: that route
+    only), at 4 to 6 states against the shaped V's proved by ball arithmetic (:func:`with_shaped`);
+    where the relations prove no level, the quadratic Vs' largest levels by ball arithmetic
+    (:func:`quadratic_ball_level`). The shaped V is designed once (:func:`shaped_design`) for all of them."""
     from lyapcheck.models.classes.region_driver import Ends, OutOfTime, Route, drive
+    from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
     from lyapcheck.models.engines import reasons
 
     from functools import cache
@@ -271,6 +276,12 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
     def linearized() -> Any:
         """The Jacobian at the equilibrium (or why none exists), once: the relations' and the last route's V."""
         return jacobian(loop)
+
+    @cache
+    def designed() -> Shaped | str:
+        """The shaped quadratic V at 4 to 6 states (:func:`shaped_design`), once: the relations' second V and
+        the ball-arithmetic proofs' (or why there is none)."""
+        return shaped_design(loop, linearized(), budget, box)
 
     label = "the linearization (J^T P + P J = -I)"
 
@@ -289,7 +300,8 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
 
     def relations(budget: Budget) -> ConditionResult | Ends | str:
         """The linearization's V, its largest level on the recasting's relations, then enlarged
-        (:func:`regions.relations_enlarge`); the region covering most of the box."""
+        (:func:`regions.relations_enlarge`), and at 4 to 6 states the shaped V's level there; the region
+        covering most of the box, then kept against the shaped V's by ball arithmetic where that covers more."""
         J = linearized()
         V0 = None if isinstance(J, str) else quadratic_candidate(loop, J)
         if V0 is None and isinstance(J, str):  # (a kink at the equilibrium: linearization may still prove LES)
@@ -302,23 +314,35 @@ def run_roa(loop: Loop, lin: ConditionResult, budget: Budget, box: tuple[Any, An
                         "search from (see linearization)", ("candidate",),
                         f"the linearization gives no quadratic V ({lin.summary})")
         first = regions.certify_region(loop, V0, search, label)
-        if isinstance(first, str):
-            return f"{label}: {first}"
-        more, tried = regions.relations_enlarge(loop, first, budget, box)
-        stopped = f" (the largest proved when {first.stopped})" if first.stopped else ""
-        result = regions.best_region(loop, [first, *more], [*skipped, f"{label}: level {float(first.level):.6g}"
-                                                                      f"{stopped}", *tried], box, search)
-        from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
-
-        if result.status == "certified" and loop.n in SHAPE_STATES:  # (4 to 6 states: against the shaped V's)
+        shaped: regions.Region | str | None = None
+        if loop.n in SHAPE_STATES:  # (4 to 6 states: the shaped V's level too, where its program is built)
+            shaped = shaped_relations(loop, designed(), search, box)
+        if isinstance(first, str) and not isinstance(shaped, regions.Region):
+            return f"{label}: {first}" + ("" if shaped is None else f"; {SHAPED_RELATIONS_LABEL}: {shaped}")
+        found: list[regions.Region] = []
+        lines: list[str] = []
+        if isinstance(first, regions.Region):
+            more, tried = regions.relations_enlarge(loop, first, budget, box)
+            found += [first, *more]
+            lines += [f"{label}: level {float(first.level):.6g}{proved_when(first)}", *tried]
+        else:
+            lines.append(f"{label}: {first}")
+        if isinstance(shaped, regions.Region):
+            found.append(shaped)
+            lines.append(f"{SHAPED_RELATIONS_LABEL}: level {float(shaped.level):.6g}{proved_when(shaped)}")
+        elif shaped is not None:
+            lines.append(f"{SHAPED_RELATIONS_LABEL}: {shaped}")
+        result = regions.best_region(loop, found, [*skipped, *lines], box, search)
+        if result.status == "certified" and loop.n in SHAPE_STATES:  # (against the shaped V's by ball arithmetic)
             simulated_check(loop, result, box)
-            result = with_shaped(loop, linearized(), budget, box, result)
+            result = with_shaped(loop, linearized(), budget, box, result, designed())
         return result
 
     def local(budget: Budget) -> ConditionResult | str:
         """A quadratic V's largest level by ball arithmetic from the exact local one: the linearization's, and at
         4 to 6 states the shaped V's beside it (:func:`quadratic_ball_level`)."""
-        return quadratic_ball_level(loop, linearized(), budget, box)
+        return quadratic_ball_level(loop, linearized(), budget, box,
+                                    designed() if loop.n in SHAPE_STATES else None)
 
     routes = [Route("ball arithmetic on the true field", ball), Route(label, relations),
               Route("ball arithmetic from the local level", local)]
@@ -343,6 +367,11 @@ SIMULATED_HORIZON: Final = 30.0
 SIMULATED_ESCAPE: Final = 10.0
 #: converged: ending this close to the equilibrium
 CONVERGED_RADIUS: Final = CONVERGED_BALL_RADIUS
+
+
+def proved_when(region: regions.Region) -> str:
+    """`` (the largest proved when ...)`` where a budget ended the region's level search, "" otherwise."""
+    return f" (the largest proved when {region.stopped})" if region.stopped else ""
 
 
 def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any], max_steps: int | None = None) -> None:
@@ -572,17 +601,14 @@ def linearization_ball_level(loop: Loop, J: Any, budget: Budget) -> ConditionRes
                                               "arithmetic from its exact local level upwards")
 
 
-def shaped_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
-    """``roa`` from a quadratic V shaped for a large region (4 to 6 states: the proposal of
-    :func:`lyapcheck.models.classes.shaped_quadratic.shaped_quadratic`, floating point), rounded to
-    rationals, checked positive definite exactly and its largest level proved by ball arithmetic on the
-    true loop (:func:`~lyapcheck.models.classes.recast_ball_level.ball_level`, the same proof as the
-    linearization's V); why not otherwise (one line: the class then keeps the linearization's)."""
+def shaped_design(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> Shaped | str:
+    """The quadratic V shaped for a large region (4 to 6 states: the proposal of
+    :func:`lyapcheck.models.classes.shaped_quadratic.shaped_quadratic`, floating point), or why there is none
+    (one line). ``roa`` designs it once per run (:func:`run_roa`): the SOS route and the ball-arithmetic
+    proofs of the same V take it from there."""
     import time
 
-    from lyapcheck.models.classes.recast_ball_level import ball_level
-    from lyapcheck.models.classes.shaped_quadratic import rational_form, shaped_quadratic
-    from lyapcheck.sos.polynomials import to_fmpq
+    from lyapcheck.models.classes.shaped_quadratic import shaped_quadratic
 
     if isinstance(J, str):
         return f"a shaped quadratic V: no Jacobian ({J})"
@@ -593,15 +619,36 @@ def shaped_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) 
     if not shaped.improved:
         return (f"a shaped quadratic V: no start or round of the design improved on the linearization's V (sampled "
                 f"share of the box {100 * shaped.linearization_share:.3g} %)")
+    return shaped
+
+
+def state_form(loop: Loop, P: Sequence[Sequence[Fraction]]) -> Poly:
+    """``z^T P z`` over the states (deviations), a polynomial of the loop's ring."""
+    ring = loop.ring
+    z = [ring.gen(s) for s in loop.system.states]
+    return sum((z[i] * z[j] * to_fmpq(P[i][j]) for i in range(loop.n) for j in range(loop.n)), ring.zero())
+
+
+def shaped_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any],
+                      design: Shaped | str | None = None) -> ConditionResult | str:
+    """``roa`` from a quadratic V shaped for a large region (``design``, :func:`shaped_design`'s, designed
+    here when None), rounded to rationals, checked positive definite exactly and its largest level proved
+    by ball arithmetic on the true loop (:func:`~lyapcheck.models.classes.recast_ball_level.ball_level`, the
+    same proof as the linearization's V); why not otherwise (one line: the class then keeps the
+    linearization's)."""
+    from lyapcheck.models.classes.recast_ball_level import ball_level
+    from lyapcheck.models.classes.shaped_quadratic import rational_form
+
+    shaped = shaped_design(loop, J, budget, box) if design is None else design
+    if isinstance(shaped, str):
+        return shaped
     P = rational_form(shaped.P)
     if P is None:
         return "a shaped quadratic V: the proposed P, rounded to rationals, is not positive definite (exact)"
-    ring = loop.ring
-    z = [ring.gen(s) for s in loop.system.states]
-    V = sum((z[i] * z[j] * to_fmpq(P[i][j]) for i in range(loop.n) for j in range(loop.n)), ring.zero())
-    found = ball_level(loop, V, budget, "roa", "a quadratic V shaped to cover the box on samples of the true field "
-                                               "(lyapcheck.models.classes.shaped_quadratic), proved by ball "
-                                               "arithmetic from its exact local level upwards")
+    found = ball_level(loop, state_form(loop, P), budget, "roa", "a quadratic V shaped to cover the box on samples "
+                                                                 "of the true field (lyapcheck.models.classes."
+                                                                 "shaped_quadratic), proved by ball arithmetic "
+                                                                 "from its exact local level upwards")
     if isinstance(found, str):
         return f"a shaped quadratic V: {found}"
     found.numbers["shaping"] = {"rounds": shaped.rounds, "start": shaped.start,
@@ -611,9 +658,52 @@ def shaped_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) 
     return found
 
 
-def quadratic_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> ConditionResult | str:
+#: the shaped V's level on the recasting's relations: its label (``V_from``)
+SHAPED_RELATIONS_LABEL: Final = ("a quadratic V shaped to cover the box on samples of the true field "
+                                 "(lyapcheck.models.classes.shaped_quadratic), its part invariant under the "
+                                 "loop's sign symmetries, level proved on the recasting's relations")
+
+
+def shaped_relations(loop: Loop, design: Shaped | str, search: Search, box: tuple[Any, Any]
+                     ) -> regions.Region | str:
+    """The shaped V's largest level on the recasting's relations (SOS, exact check; issue 42), or why none
+    (one line). The design's ``P`` (floats) keeps only the entries that couple states the loop's sign
+    symmetries change alike (:func:`regions.state_characters`): the block-diagonal part of a positive
+    definite matrix is positive definite, and an invariant V keeps the level program's symmetry blocks (the
+    quadrotor's attempts: 0.3 to 2 s each instead of 10 to 48 s with the coupling entries of about 1 %).
+    The search starts at half the sampled critical level of the V tried
+    (:data:`regions.CRITICAL_PLAN`), within :data:`~lyapcheck.tolerances.SHAPED_RELATIONS_SOLVES` solves."""
+    import numpy as np
+
+    from lyapcheck import tolerances
+    from lyapcheck.models.classes.shaped_quadratic import _Sampler, rational_form
+    from lyapcheck.models.engines.search import BudgetExhausted
+
+    if isinstance(design, str):
+        return design
+    characters = regions.state_characters(loop)
+    n = loop.n
+    invariant = np.array([[design.P[i][j] if characters[i] == characters[j] else 0.0 for j in range(n)]
+                          for i in range(n)])
+    P = rational_form(invariant)
+    if P is None:
+        return "a shaped quadratic V: its invariant part, rounded to rationals, is not positive definite (exact)"
+    # the level at which sampling first sees V' >= 0 (rate 0: the SOS decrease's margin is eps |z|^2, tiny);
+    # only the order of the attempts rests on it
+    critical = _Sampler(loop, box).critical_level(np.array([[float(x) for x in row] for row in P]), 0.0)
+    within = search.within(tolerances.SHAPED_RELATIONS_SOLVES, "for the shaped V's level on the relations",
+                           "lyapcheck.tolerances.SHAPED_RELATIONS_SOLVES")
+    try:
+        return regions.certify_region(loop, state_form(loop, P), within, SHAPED_RELATIONS_LABEL,
+                                      start=regions.critical_start(critical), plan=regions.CRITICAL_PLAN)
+    except BudgetExhausted as exc:  # (no level proved before the solves or the class's time ran out)
+        return f"no level proved: {exc}"
+
+
+def quadratic_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any],
+                         design: Shaped | str | None = None) -> ConditionResult | str:
     """``roa`` by a quadratic V's level proved by ball arithmetic where the SOS route proved none: at 4 to 6
-    states the shaped V (:func:`shaped_ball_level`) and then the linearization's
+    states the shaped V (:func:`shaped_ball_level`, from ``design`` where given) and then the linearization's
     (:func:`linearization_ball_level`, in the time left), the certified set covering the larger share of
     the simulated region of attraction kept (``roa_share``; tie: the larger volume), the other's outcome
     in ``numbers["other_quadratic"]``; below 4 states or above 6 the linearization's alone."""
@@ -621,7 +711,7 @@ def quadratic_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any
 
     if loop.n not in SHAPE_STATES:  # (the driver simulates the set it keeps)
         return linearization_ball_level(loop, J, budget)
-    shaped = shaped_ball_level(loop, J, budget, box)
+    shaped = shaped_ball_level(loop, J, budget, box, design)
     linear = linearization_ball_level(loop, J, budget)
     if isinstance(linear, ConditionResult):  # (simulated here: the two are compared by their shares)
         simulated_check(loop, linear, box)
@@ -635,17 +725,22 @@ def quadratic_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any
     return kept
 
 
-def with_shaped(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any], result: ConditionResult
-                ) -> ConditionResult:
-    """A region the SOS route certified at 4 to 6 states against the shaped V's
-    (:func:`shaped_ball_level`, in the time left): the shaped one only where it covers more of the
-    simulated region of attraction (or as much with a larger volume, both volumes known); the other's
-    outcome in ``numbers["other_quadratic"]``."""
+def with_shaped(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any], result: ConditionResult,
+                design: Shaped | str | None = None) -> ConditionResult:
+    """A region the SOS route certified at 4 to 6 states against the shaped V's proved by ball arithmetic
+    (:func:`shaped_ball_level`, from ``design`` where given, in the time left): the ball-arithmetic one only
+    where it covers more of the simulated region of attraction (or as much with a larger volume, both
+    volumes known); the other's outcome in ``numbers["other_quadratic"]``. A ball-arithmetic proof cut by
+    the class's time keeps ``result`` (a proof in hand)."""
     from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
+    from lyapcheck.models.engines.search import BudgetExhausted
 
     if loop.n not in SHAPE_STATES:
         return result
-    shaped = shaped_ball_level(loop, J, budget, box)
+    try:
+        shaped: ConditionResult | str = shaped_ball_level(loop, J, budget, box, design)
+    except BudgetExhausted as exc:
+        shaped = f"a shaped quadratic V by ball arithmetic: {exc}"
     if isinstance(shaped, ConditionResult) and larger(loop, shaped, result):
         shaped.numbers["other_quadratic"] = not_kept(result)
         return shaped

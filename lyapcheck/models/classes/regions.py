@@ -893,6 +893,37 @@ RELATIONS_LEVEL_GROWTH_STEPS: Final = 10
 RELATIONS_LEVEL_HALVINGS: Final = 16
 
 
+@dataclass(frozen=True)
+class LevelPlan:
+    """The steps of :func:`relations_level`'s search
+    (:func:`~lyapcheck.models.classes.level_search.largest_proved_level`): the ratio of the levels tried
+    upwards and their count, the halvings from a failed first level and the bisections of the bracket."""
+
+    growth: Fraction = Fraction(RELATIONS_LEVEL_GROWTH)
+    growth_steps: int = RELATIONS_LEVEL_GROWTH_STEPS
+    halvings: int = RELATIONS_LEVEL_HALVINGS
+    bisections: int = RELATIONS_LEVEL_BISECTIONS
+
+
+#: the search from a level near the largest (issue 42: a V whose sampled critical level is known, the shaped
+#: quadratic V at 4 to 6 states, where each attempt is a solve of seconds): the first level is
+#: RELATIONS_CRITICAL_START times that critical level, the next ones double (the critical level next, which
+#: sampling says fails: then the bracket is one doubling wide), and 6 bisections put the level within 1/64
+#: of the largest provable one anywhere from 2^-16 to 2^7 times the first level (the halvings are the
+#: default's: a sampled level far too high still reaches a provable one; 8 levels upwards: one far too low
+#: is not a ceiling). The quadrotor's shaped V (its invariant part): 9 solves, 2.4 s, level 0.9525; the default
+#: plan from V at a tenth of a state (growth 4, 7 bisections: within 3/128) 17 solves, 7.6 s, level 0.9402
+#: (2026-11-30, load about 3; with the coupling entries 18 solves of 10 to 48 s each)
+RELATIONS_CRITICAL_START: Final = Fraction(1, 2)
+CRITICAL_PLAN: Final = LevelPlan(growth=Fraction(2), growth_steps=8, halvings=RELATIONS_LEVEL_HALVINGS, bisections=6)
+
+
+def critical_start(critical: float) -> Fraction:
+    """The first level of :data:`CRITICAL_PLAN`'s search from a sampled critical level (floats: it only
+    orders the attempts, every level reported is proved)."""
+    return _dyadic(Fraction(critical) * RELATIONS_CRITICAL_START)
+
+
 @dataclass
 class Region:
     """A certified sublevel set ``{V <= level}``: its V, its certificate (JSON) and its multiplier rho."""
@@ -907,9 +938,10 @@ class Region:
     stopped: str = ""
 
 
-def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fraction | None = None) -> Region | str:
-    """The largest certified level of a fixed ``V`` (bisection), or why there is none."""
-    found = relations_level(loop, V, search, state_square(loop), start)
+def certify_region(loop: Loop, V: Poly, search: Search, label: str, start: Fraction | None = None,
+                   plan: LevelPlan = LevelPlan()) -> Region | str:
+    """The largest certified level of a fixed ``V`` (from ``start``, by ``plan``'s steps), or why there is none."""
+    found = relations_level(loop, V, search, state_square(loop), start, plan)
     if isinstance(found, str):
         return found
     level, cert = found
@@ -1011,6 +1043,21 @@ def relations_level_symmetry(field: "BoundField", V: Poly, F: Poly) -> list[tupl
     odd += [(ring.support(field.relations[j].poly), None) for j in field.multiplied]
     odd += [(ring.support(V), None), (ring.support(F), None)]
     return bases.sign_symmetries(ring.nvars, odd)
+
+
+def state_characters(loop: Loop) -> list[tuple[int, ...]]:
+    """How each state changes under the sign changes of the loop's variables that leave its level program
+    invariant for every V invariant under them (:func:`relations_level_symmetry` with ``V = |z|^2``, which
+    any sign change keeps): one GF(2) character per state, in the states' order. A quadratic form of the
+    states couples two states only where their characters agree, or the program loses that symmetry."""
+    ring = loop.ring
+    z = [ring.gen(s) for s in loop.system.states]
+    V = sum((zi * zi for zi in z), ring.zero())
+    names = v_names(loop, V)
+    N, D, _ = common_denominator(loop, names)
+    generators = relations_level_symmetry(level_field(loop, names, N, D), V, ring.zero())
+    return [bases.character(tuple(int(k == ring.names.index(s)) for k in range(ring.nvars)), generators)
+            for s in loop.system.states]
 
 
 def relations_level_structure(field: "BoundField", V: Poly, F: Poly, generators: Sequence[Sequence[int]],
@@ -1117,8 +1164,11 @@ def relations_level_attempt(field: "BoundField", V: Poly, F: Poly, level: Fracti
     return None
 
 
-def relations_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fraction | None = None
-                   ) -> tuple[Fraction, dict[str, Any]] | str:
+def relations_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fraction | None = None,
+                    plan: LevelPlan = LevelPlan()) -> tuple[Fraction, dict[str, Any]] | str:
+    """``V``'s largest level proved on the recasting's relations (its positivity, then the level program
+    at each level :func:`~lyapcheck.models.classes.level_search.largest_proved_level` tries from ``start``,
+    V at a tenth of a state by default, with ``plan``'s steps): the level and its certificate, or why none."""
     ring = loop.ring
     names = v_names(loop, V)
     N, D, distinct = common_denominator(loop, names)
@@ -1157,10 +1207,9 @@ def relations_level(loop: Loop, V: Poly, search: Search, l2: Poly, start: Fracti
         return f"the level program was not built: {program}"
     from lyapcheck.models.classes.level_search import largest_proved_level
 
-    found = largest_proved_level(attempt, _scale_of(loop, V) if start is None else start,
-                                 growth=Fraction(RELATIONS_LEVEL_GROWTH),
-                                 growth_steps=RELATIONS_LEVEL_GROWTH_STEPS, halvings=RELATIONS_LEVEL_HALVINGS,
-                                 bisections=RELATIONS_LEVEL_BISECTIONS, rounded=_dyadic)
+    found = largest_proved_level(attempt, _scale_of(loop, V) if start is None else start, growth=plan.growth,
+                                 growth_steps=plan.growth_steps, halvings=plan.halvings,
+                                 bisections=plan.bisections, rounded=_dyadic)
     if found.level is None or found.proof is None:
         return f"no level found (the smallest tried was {float(found.failed or 0):.3g})"
     best = (found.level, found.proof)
