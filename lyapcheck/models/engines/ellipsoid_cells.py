@@ -71,7 +71,7 @@ from typing import Any, Final
 import flint
 
 from lyapcheck.models.engines.interval_field import LieDerivative, ball, negative_definite
-from lyapcheck.tolerances import FACTORED_MAX_SLABS
+from lyapcheck.tolerances import FACTORED_MAX_SLABS, FACTORED_REACH
 
 #: the finest split of the Hessian zone's phase: a cell whose Hessian is not proved negative definite
 #: is split while its widest side is above this fraction of the ellipsoid's box (then it bounds the zone)
@@ -638,7 +638,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
             continue
         # the factored test (module docstring, part 4) where the Taylor form failed: no cost on the cells the
         # Taylor form proves, and it holds where V' ~ |z|^2 is too small for a Taylor form's spread
-        if geo.factored_negative(cell):
+        if float(q.upper()) <= FACTORED_REACH * float(level) and geo.factored_negative(cell):
             continue
         inherited = own if own is not None else H
         weights = None if grad is None else _weights(grad, None if inherited is None else inherited[0], cell)
