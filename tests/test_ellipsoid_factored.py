@@ -78,8 +78,8 @@ def test_a_cell_across_a_kink_never_passes_and_one_beside_it_may() -> None:
     geo = geometry(f, P)
     across = ((-0.25, 0.25), (0.1, 0.2))
     assert not geo.factored_negative(across)
-    # beside the kink, t z also crosses it (t in [0, 1] reaches z0 = 0 only at t = 0 when z0 > 0: the slab
-    # [0, 1/K] touches the kink, so the test does not pass either); the cell's own jets are fine
+    # beside a kink through the equilibrium the segments t z, t in [0, 1], reach it at t = 0: the slab
+    # [0, 1/K] touches the kink, so the test does not pass there either
     beside = ((0.1, 0.2), (0.1, 0.2))
     assert not geo.factored_negative(beside)
     assert geo.factored_y(beside) is None
@@ -100,8 +100,7 @@ def test_the_enclosure_holds_the_sampled_matrix_on_a_nonlinear_loop() -> None:
         return np.array([[0.0, 1.0], [-2 * np.cos(z[0]) - 0.5 * z[1], -1.0 - 0.5 * z[0]]])
 
     geo = geometry(f, P2)
-    M = np.array(geo.M, dtype=float) if not hasattr(geo.M[0][0], "mid") else \
-        np.array([[float(x.mid()) for x in row] for row in geo.M])
+    M = np.array([[float(x.mid()) for x in row] for row in geo.M])  # (exact: M's entries are floats)
     Pf = np.array(P2, dtype=float)
     rng = np.random.default_rng(3)
     for cell in cells(geo):
