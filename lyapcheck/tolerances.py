@@ -277,6 +277,16 @@ ELLIPSOID_LEVEL_TOTAL_CELLS: Final = 48_000
 #: candidate, 0.207; 2026-11-30): 10,000 cost the candidate that level (0.414 -> 0.0397), so about 10 % above
 #: the larger. It then saves the pendubot a quarter of an attempt, enough for one more level; not the acrobot
 ELLIPSOID_JUMP_CELLS: Final = 22_500
+#: the most slabs of t in [0, 1] over which the factored cell test of the ellipsoid cells
+#: (lyapcheck.models.engines.ellipsoid_cells, V' = z^T (Abar^T P + P Abar) z with Abar(z) = int_0^1 J(t z) dt)
+#: encloses the Jacobian: a cell far from the equilibrium takes about its distance over its width, a power
+#: of 2 up to this (more slabs: a tighter Abar for a field evaluation more each). Soundness never depends on it
+FACTORED_MAX_SLABS: Final = 16
+#: the share of the level below which (the cell's upper bound of V) a shell cell whose Taylor form fails tries
+#: the factored test: it passes mostly there, where V' ~ |z|^2 is small for a Taylor form (cart-pole, acrobot:
+#: about 10 % of the tries pass above 0.9 of the level, where most cells are, so trying there cost a failing
+#: level 50 % more time). A choice of work, never of soundness
+FACTORED_REACH: Final = 0.5
 #: significant bits of each entry of V's matrix P on a discrete-time map with functions
 #: (lyapcheck.models.classes.discrete_functions: the Stein solution of A^T P A - P = -I rounded to a
 #: short dyadic). Short entries keep V's balls exact at a cell's dyadic corners (no widening from V

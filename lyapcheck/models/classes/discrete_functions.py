@@ -142,6 +142,8 @@ class MapGeometry(_Geometry):
     (``z = M y``, ``M`` exact), so its gradient and Hessian come out in ``y`` by the chain rule. ``V(z)`` is
     ``y^T Q y`` (``Q = M^T P M``, exact), ``V(F(z))`` the quadratic form of ``P`` on the map's image."""
 
+    factored = False  # (g is a difference along a map, not a Lie derivative: the factored test does not apply)
+
     def __init__(self, w: Whitening, P: list[list[Fraction]], diff: MapDifference) -> None:
         super().__init__(w, P, diff)  # type: ignore[arg-type]
         self.diff = diff

@@ -37,6 +37,16 @@ condition number in the thousands) and bounds ``g`` by plain intervals. Here ins
    given up near the finest width where ``V'`` is too close to 0 for it (:func:`_at_the_bottom`), so
    that a level too large fails within a few thousand cells. The cells examined by an attempt that succeeds do not
    depend on the order.
+4. **The factored test**, on a shell cell whose Taylor form fails (before it is split). ``f(0) = 0``, so
+   ``f(z) = Abar(z) z`` with ``Abar(z) = int_0^1 J(t z) dt`` and ``g(z) = z^T (Abar^T P + P Abar) z``
+   exactly: where every symmetric matrix of an enclosure of ``M^T (Abar^T P + P Abar) M`` over the cell is
+   negative definite, ``g < 0`` on the cell except at the equilibrium, whatever its position (cells holding
+   the equilibrium included), a claim on the cell alone. ``t`` is cut into K slabs (1 for a cell holding the
+   equilibrium, about its distance over its width elsewhere, FACTORED_MAX_SLABS at most); on each,
+   ``int_slab J(t z) dt`` lies in ``J(t_m z) / K`` plus ``[-1, 1] rad(G) / (4 K^2)``, ``G`` the derivative in
+   ``t`` of ``J(t z)`` enclosed over the slab (the midpoint form: ``int (t - t_m) dt = 0``; without second
+   derivatives on the slab, ``J`` enclosed over it). A field with no first derivative on a slab (a kink, a
+   pole) fails the test. A geometry of another ``V`` or another ``g`` turns it off (``factored``).
 
 The enclosures keep the ellipsoid's correlations: ``grad V = 2 P z`` is enclosed as ``2 W y`` with
 ``W = P M`` exact, never as ``P`` times the ball enclosure of ``M`` times a cell (whose corners lie far
@@ -61,6 +71,7 @@ from typing import Any, Final
 import flint
 
 from lyapcheck.models.engines.interval_field import LieDerivative, ball, negative_definite
+from lyapcheck.tolerances import FACTORED_MAX_SLABS, FACTORED_REACH
 
 #: the finest split of the Hessian zone's phase: a cell whose Hessian is not proved negative definite
 #: is split while its widest side is above this fraction of the ellipsoid's box (then it bounds the zone)
@@ -229,6 +240,85 @@ class _Geometry:
             return None
         return H
 
+    #: ``g`` is the Lie derivative of ``V = z^T P z`` along the loop's field, the premise of
+    #: :meth:`factored_negative`; a geometry with another ``V`` or another ``g`` turns the test off
+    factored: bool = True
+
+    def slabs(self, cell: Cell) -> int:
+        """How many slabs of ``t`` the factored test of the cell takes: 1 for a cell holding the
+        equilibrium (``t C`` lies in ``C`` for every ``t`` in [0, 1]), else about its distance from the
+        equilibrium over its width (so that a slab's hull ``[a, b] C`` is not much wider than the cell), a
+        power of 2 up to FACTORED_MAX_SLABS (floats of the dyadic cell: the same on every machine)."""
+        if all(a <= 0 <= b for a, b in cell):
+            return 1
+        distance = max(max(-a, b) for a, b in cell)
+        width = max(b - a for a, b in cell)
+        k = 1
+        while k < FACTORED_MAX_SLABS and k * width < distance:
+            k *= 2
+        return k
+
+    def _jets(self, zs: list[Any], order: int) -> list[Any] | None:
+        """The field as jets in ``z`` (up to ``order``) over the balls ``zs``, or None where it has no first
+        derivatives there (the second are None where it has none)."""
+        from lyapcheck.models.engines.interval_field import Jet
+
+        n = self.n
+        f = [fi if isinstance(fi, Jet) else Jet.constant(fi, n, order)
+             for fi in self.loop.field([Jet.variable(zi, i, n, order) for i, zi in enumerate(zs)])]
+        return None if any(fi.grad is None for fi in f) else f
+
+    def factored_y(self, cell: Cell) -> list[list[Any]] | None:
+        """An enclosure of ``2 M^T (Abar^T P + P Abar) M`` over the cell, ``Abar(z) = int_0^1 Jf(t z) dt``
+        (module docstring, part 4), or None where the field is not differentiable on a slab. ``t`` in
+        [0, 1] is cut into slabs [k/K, (k+1)/K]; over a slab ``t z`` (``z`` in the cell's z-box) lies in the
+        box whose sides are the hulls of the four products of the slab's and the side's ends (``t z`` is
+        bilinear), and ``int_slab Jf(t z) dt`` in the midpoint form over it; ``Abar`` is the sum."""
+        n = self.n
+        K = self.slabs(cell)
+        # the z-box of the cell first, then t times it: M (t y) = t (M y), and t times the z-box keeps the
+        # cancellations of M y that a y-box of the products t y_i would lose
+        Z = [(zi.lower(), zi.upper()) for zi in self.z_of([flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell])]
+        total: Any = None
+        for k in range(K):
+            ta, tb = flint.arb(k) / K, flint.arb(k + 1) / K  # exact: K is a power of 2
+            tm = (ta + tb) / 2
+            slab = [(ta * lo).union(tb * lo).union(ta * hi).union(tb * hi) for lo, hi in Z]
+            zc = [lo.union(hi) for lo, hi in Z]
+            f2 = self._jets(slab, 2)
+            if f2 is None:
+                return None  # a kink or a pole on this slab: the cell is not proved by this test
+            if all(fi.hess is not None for fi in f2):
+                # the midpoint form: J(t z) = J(tm z) + (t - tm) G with G = d/dt J(s z) at some s of the slab
+                # (entry by entry), G_ik = sum_l (d2 f_i / dz_k dz_l) z_l enclosed over the slab; since
+                # int (t - tm) dt = 0, int_slab J(t z) dt lies in J(tm z) / K + [-1, 1] rad(G) / (4 K^2)
+                fm = self._jets([tm * lo.union(hi) for lo, hi in Z], 1)
+                if fm is None:
+                    return None
+                spread = flint.arb(1) / (4 * K * K)
+                unit = flint.arb(0, 1)  # [-1, 1]
+                J = flint.arb_mat([[fm[i].grad[m] / K + _deviation(sum(
+                    (f2[i].hess[m][l] * zc[l] for l in range(n)), flint.arb(0))) * unit * spread
+                    for m in range(n)] for i in range(n)])
+            else:  # first derivatives only (a field twice differentiable nowhere on the slab): J over the slab
+                J = flint.arb_mat([[g / K for g in fi.grad] for fi in f2])
+            total = J if total is None else total + J
+        X = self.W2t * total * self.Mmat  # M^T (2 P) Abar M, with M^T 2P = 2 W^T exact
+        N = [[X[i, j] + X[j, i] for j in range(n)] for i in range(n)]
+        if not all(x.is_finite() for row in N for x in row):
+            return None
+        return N
+
+    def factored_negative(self, cell: Cell) -> bool:
+        """``g < 0`` on the cell except at the equilibrium, by ``g(z) = z^T (Abar^T P + P Abar) z``
+        (``f(0) = 0``, so ``f(z) = Abar(z) z``): every symmetric matrix of :meth:`factored_y`'s enclosure is
+        proved negative definite. Needs first derivatives of the field only, and holds down to the
+        equilibrium, cells holding it included."""
+        if not self.factored:
+            return False
+        N = self.factored_y(cell)
+        return N is not None and negative_definite_preconditioned(N)
+
     def at_centre(self, lie: LieDerivative, cell: Cell) -> tuple[Any, list[Any] | None]:
         """``g`` and its gradient in ``y`` at the cell's centre: ``2 W^T f + M^T Jf^T p``."""
         n = self.n
@@ -285,6 +375,11 @@ class _Geometry:
                 p = radii[i] * radii[j]
                 total = total + H[i][j] * p.union(-p)
         return total
+
+def _deviation(g: Any) -> Any:
+    """A ball holding ``x - mid(g)`` for every ``x`` in the ball ``g`` (``mid(g)`` exact)."""
+    return g - flint.arb(g.mid())
+
 
 def _inverse_cholesky_transpose(S: list[list[float]]) -> list[list[float]] | None:
     """``L^-T`` for the Cholesky factor ``L`` of ``S`` (``S = L L^T``), in Python floats, None when ``S``
@@ -540,6 +635,10 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         own_H = geo.hessian_y(lie, cell) if grad is not None and not hopeless else None
         own = None if own_H is None else (own_H, negative_definite_preconditioned(own_H))
         if grad is not None and own is not None and geo.negative(value, grad, own, cell):
+            continue
+        # the factored test (module docstring, part 4) where the Taylor form failed: no cost on the cells the
+        # Taylor form proves, and it holds where V' ~ |z|^2 is too small for a Taylor form's spread
+        if float(q.upper()) <= FACTORED_REACH * float(level) and geo.factored_negative(cell):
             continue
         inherited = own if own is not None else H
         weights = None if grad is None else _weights(grad, None if inherited is None else inherited[0], cell)

@@ -65,6 +65,8 @@ class QuarticGeometry(_Geometry):
     """The ellipsoid engine's cells for ``V = z^T P z + R``: its enclosures of the quadratic part's ``g``
     plus those of ``grad R . f`` (module docstring, part 2)."""
 
+    factored = False  # (V is not z^T P z: the factored test of the quadratic part alone proves nothing of V)
+
     def __init__(self, w: Whitening, P: list[list[Fraction]], lie: LieDerivative, ring: Ring, R: Poly) -> None:
         from lyapcheck.models.engines.interval_field import _PolynomialBank
         from lyapcheck.sos.polynomials import to_fmpq
