@@ -70,7 +70,7 @@ def main() -> None:
         assert not isinstance(J, str), J
         box = comparison_box(model, loop)
         Z, conv = converging(loop, box)
-        sampler = sq._Sampler(loop, box)
+        sampler = sq.Sampler(loop, box)
         exact = lyapunov_solution(J)
         assert exact is not None
         P0 = np.array([[float(x) for x in row] for row in exact])

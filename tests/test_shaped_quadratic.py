@@ -65,7 +65,7 @@ def test_the_design_improves_the_sampled_share_of_the_box_over_the_linearization
     assert shaped is not None and shaped.rounds >= 1
     assert shaped.improved and shaped.share > shaped.linearization_share
     # the proposal is scaled to its sampled critical level: a sampled point of {V <= 1/2} decreases
-    sampler = shaped_quadratic._Sampler(loop, box)
+    sampler = shaped_quadratic.Sampler(loop, box)
     assert sampler.critical_level(shaped.P) > 0.5
 
 
@@ -84,7 +84,7 @@ def test_the_best_scored_start_begins_the_rounds(monkeypatch: Any) -> None:
     # each start scored independently, as the design scores it: the share of the box at its critical level
     Jf = np.array([[float(x) for x in row] for row in J])
     mu = 2 * float(np.min(-np.linalg.eigvals(Jf).real))
-    sampler = shaped_quadratic._Sampler(loop, LOPSIDED)
+    sampler = shaped_quadratic.Sampler(loop, LOPSIDED)
     scores = {}
     for name, P in shaped_quadratic.starts(Jf, mu, LOPSIDED):
         c = sampler.critical_level(P, shaped_quadratic.SHAPE_SCORE_RATE * mu)
@@ -107,7 +107,7 @@ def test_the_shaped_set_reaches_past_the_box_where_that_covers_more() -> None:
     assert shaped.share > shaped.start_share
     extent = np.sqrt(np.diag(np.linalg.inv(shaped.P)))  # {z^T P z <= 1}'s half-width along each state
     assert np.max(extent / LOPSIDED[1]) > 2
-    sampler = shaped_quadratic._Sampler(loop, LOPSIDED)
+    sampler = shaped_quadratic.Sampler(loop, LOPSIDED)
     assert sampler.critical_level(shaped.P) > 0.5
 
 

@@ -181,3 +181,38 @@ def test_a_ball_proof_cut_by_the_clock_keeps_the_sos_set(monkeypatch: Any) -> No
     monkeypatch.setattr(recast_regions, "shaped_ball_level", out_of_time)
     kept = recast_regions.with_shaped(loop, J, Budget(120, "test"), BOX, result, "a design (test)")
     assert kept is result and "time limit of the test" in kept.numbers["other_quadratic"]
+
+
+def test_a_quadratic_candidate_at_4_states_is_searched_from_its_critical_level() -> None:
+    """``candidate``'s SOS level search of a user's ``z^T S z`` starts from its sampled critical level
+    (:func:`recast_regions.critical_plan`); a V that is not a quadratic form in the states, or a loop below 4
+    states, keeps the default search."""
+    loop, J = driven()
+    design = recast_regions.shaped_design(loop, J, Budget(120, "test"), BOX)
+    assert not isinstance(design, str), design
+    V = recast_regions.state_form(loop, [[Fraction(x).limit_denominator(10 ** 6) for x in row] for row in design.P])
+    plan = recast_regions.critical_plan(loop, V, BOX)
+    assert plan["plan"] == regions.CRITICAL_PLAN and plan["start"] > 0
+    ring = loop.ring
+    assert recast_regions.critical_plan(loop, V + ring.gen("a") ** 4, BOX) == {}  # not a quadratic form
+    found = regions.region_of_attraction(loop, Budget(120, "test"), [("the candidate", V)], BOX, name="candidate",
+                                         **plan)
+    assert found.status == "certified", found.summary
+    # the same level as the default search's, to its last bisection
+    free = regions.certify_region(loop, V, Search(ring, Budget(120, "test")), "default")
+    assert isinstance(free, regions.Region), free
+    assert Fraction(found.certificate["level"]) >= free.level * (1 - Fraction(1, 2 ** regions.CRITICAL_PLAN.bisections))
+    pendulum = rc.base_loop(parse_any_model(PENDULUM_2, "p.toml").system)  # type: ignore[union-attr]
+    z = [pendulum.ring.gen(s) for s in pendulum.system.states]
+    assert recast_regions.critical_plan(pendulum, z[0] ** 2 + z[1] ** 2, (BOX[0][:2], BOX[1][:2])) == {}
+
+
+#: a 2-state loop: below the sizes at which the candidate's search starts from the critical level
+PENDULUM_2 = """
+[model]
+name = "a damped pendulum"
+states = ["a", "u"]
+[dynamics]
+a = "u"
+u = "-sin(a) - u"
+"""

@@ -554,7 +554,8 @@ def run_candidate(loop: Loop, V: Poly, budget: Budget, box: tuple[Any, Any]) -> 
         if not positive[-1]:
             return Ends("the candidate V could not be proved positive definite (V >= eps |x - x_eq|^2), and no level "
                         "set of it was proved a region of attraction on the true loop", ("other_candidate", "domain"))
-        found = regions.region_of_attraction(on, budget, [("the candidate", V)], box, name="candidate")
+        found = regions.region_of_attraction(on, budget, [("the candidate", V)], box, name="candidate",
+                                             **critical_plan(on, V, box))
         found.numbers.setdefault("tried_first", tried[-1])
         if found.status == "certified":
             return found
@@ -664,6 +665,33 @@ SHAPED_RELATIONS_LABEL: Final = ("a quadratic V shaped to cover the box on sampl
                                  "loop's sign symmetries, level proved on the recasting's relations")
 
 
+def critical_start_of(loop: Loop, P: Sequence[Sequence[Fraction]], box: tuple[Any, Any]) -> Fraction:
+    """Where the SOS level search of ``V = z^T P z`` on the relations starts (:data:`regions.CRITICAL_PLAN`):
+    from the level at which sampling the true field first sees ``V' >= 0`` (rate 0: the SOS decrease's
+    margin is ``eps |z|^2``, tiny). Floats: only the order of the attempts rests on it."""
+    import numpy as np
+
+    from lyapcheck.models.classes.shaped_quadratic import Sampler
+
+    critical = Sampler(loop, box).critical_level(np.array([[float(x) for x in row] for row in P]), 0.0)
+    return regions.critical_start(critical)
+
+
+def critical_plan(loop: Loop, V: Poly, box: tuple[Any, Any]) -> dict[str, Any]:
+    """The SOS level search's start and steps for a user's ``V`` (``candidate``): at 4 to 6 states, where ``V``
+    is a quadratic form in the states (an LQR cost-to-go ``z^T S z``), from its sampled critical level
+    (:func:`critical_start_of`, :data:`regions.CRITICAL_PLAN`: the quadrotor's ``z^T S z`` reaches level
+    2.76 in 11 solves, where the search from V's value at a tenth of the states was cut by the class's
+    time at 2e-4); otherwise the default search (no arguments)."""
+    from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
+    from lyapcheck.models.engines.interval_region import quadratic_form
+
+    P = quadratic_form(loop.ring, V, loop.n) if loop.n in SHAPE_STATES else None
+    if P is None:
+        return {}
+    return {"start": critical_start_of(loop, P, box), "plan": regions.CRITICAL_PLAN}
+
+
 def shaped_relations(loop: Loop, design: Shaped | str, search: Search, box: tuple[Any, Any]
                      ) -> regions.Region | str:
     """The shaped V's largest level on the recasting's relations (SOS, exact check; issue 42), or why none
@@ -676,7 +704,7 @@ def shaped_relations(loop: Loop, design: Shaped | str, search: Search, box: tupl
     import numpy as np
 
     from lyapcheck import tolerances
-    from lyapcheck.models.classes.shaped_quadratic import _Sampler, rational_form
+    from lyapcheck.models.classes.shaped_quadratic import rational_form
     from lyapcheck.models.engines.search import BudgetExhausted
 
     if isinstance(design, str):
@@ -688,14 +716,11 @@ def shaped_relations(loop: Loop, design: Shaped | str, search: Search, box: tupl
     P = rational_form(invariant)
     if P is None:
         return "a shaped quadratic V: its invariant part, rounded to rationals, is not positive definite (exact)"
-    # the level at which sampling first sees V' >= 0 (rate 0: the SOS decrease's margin is eps |z|^2, tiny);
-    # only the order of the attempts rests on it
-    critical = _Sampler(loop, box).critical_level(np.array([[float(x) for x in row] for row in P]), 0.0)
     within = search.within(tolerances.SHAPED_RELATIONS_SOLVES, "for the shaped V's level on the relations",
                            "lyapcheck.tolerances.SHAPED_RELATIONS_SOLVES")
     try:
         return regions.certify_region(loop, state_form(loop, P), within, SHAPED_RELATIONS_LABEL,
-                                      start=regions.critical_start(critical), plan=regions.CRITICAL_PLAN)
+                                      start=critical_start_of(loop, P, box), plan=regions.CRITICAL_PLAN)
     except BudgetExhausted as exc:  # (no level proved before the solves or the class's time ran out)
         return f"no level proved: {exc}"
 

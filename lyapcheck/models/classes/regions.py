@@ -993,15 +993,17 @@ def best_region(loop: Loop, regions: Sequence[Region], tried: Sequence[str], box
 
 
 def region_of_attraction(loop: Loop, budget: Budget, candidates: Sequence[tuple[str, Poly]], box: tuple[Any, Any],
-                         name: str = "roa") -> ConditionResult:
-    """Each fixed ``V``'s largest certified level on the recasting's relations; the region covering most of
-    the box is the answer (``candidate``: the user's V alone)."""
+                         name: str = "roa", start: Fraction | None = None, plan: LevelPlan = LevelPlan()
+                         ) -> ConditionResult:
+    """Each fixed ``V``'s largest certified level on the recasting's relations (the search from ``start`` by
+    ``plan``'s steps, as :func:`certify_region`'s); the region covering most of the box is the answer
+    (``candidate``: the user's V alone)."""
     search = Search(loop.ring, budget)
     regions: list[Region] = []
     tried: list[str] = []
     for label, V in candidates:
         try:
-            found = certify_region(loop, V, search, label)
+            found = certify_region(loop, V, search, label, start, plan)
         except BudgetExhausted as exc:
             tried.append(f"{label}: {exc}")
             break

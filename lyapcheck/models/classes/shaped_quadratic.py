@@ -104,7 +104,7 @@ class Shaped:
     start_share: float = 0.0
 
 
-class _Sampler:
+class Sampler:
     """The true field in deviations and the fixed samples the rounds share."""
 
     def __init__(self, loop: Loop, box: tuple[Any, Any]) -> None:
@@ -164,7 +164,7 @@ class _Sampler:
         return (U * (np.sqrt(rho) * r)[:, None]) @ L.T
 
 
-def _round(sampler: _Sampler, Pk: np.ndarray, J: np.ndarray, mu: float, rho: float) -> np.ndarray | None:
+def _round(sampler: Sampler, Pk: np.ndarray, J: np.ndarray, mu: float, rho: float) -> np.ndarray | None:
     """One round's SDP (module docstring, step 2): the new ``P`` (floats), or None when the solver gives
     no point."""
     import cvxpy as cp
@@ -251,7 +251,7 @@ def shaped_quadratic(loop: Loop, J: list[list[Fraction]], box: tuple[Any, Any], 
     mu = 2 * float(np.min(-np.linalg.eigvals(Jf).real))
     if mu <= 0:
         return None
-    sampler = _Sampler(loop, box)
+    sampler = Sampler(loop, box)
     rate = SHAPE_SCORE_RATE * mu
     c0 = sampler.critical_level(P0, rate)
     best = P0 / c0
