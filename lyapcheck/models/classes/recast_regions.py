@@ -686,10 +686,16 @@ def critical_plan(loop: Loop, V: Poly, box: tuple[Any, Any]) -> dict[str, Any]:
     from lyapcheck.models.classes.shaped_quadratic import SHAPE_STATES
     from lyapcheck.models.engines.interval_region import quadratic_form
 
+    import numpy as np
+
     P = quadratic_form(loop.ring, V, loop.n) if loop.n in SHAPE_STATES else None
     if P is None:
         return {}
-    return {"start": critical_start_of(loop, P, box), "plan": regions.CRITICAL_PLAN}
+    try:
+        start = critical_start_of(loop, P, box)
+    except np.linalg.LinAlgError:  # (P proved positive definite, yet singular in floats: the default search)
+        return {}
+    return {"start": start, "plan": regions.CRITICAL_PLAN}
 
 
 def shaped_relations(loop: Loop, design: Shaped | str, search: Search, box: tuple[Any, Any]
