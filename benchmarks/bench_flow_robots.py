@@ -132,7 +132,7 @@ def per_box(stem: str, doc: dict, level: str, width: float, count: int, max_step
     from lyapcheck.models.classes.flow_region import step_of
     from lyapcheck.models.classes.recast_regions import comparison_box
     from lyapcheck.models.engines.interval_region import quadratic_form
-    from lyapcheck.models.engines.recast_numeric import FloatLoop
+    from lyapcheck.models.engines.recast_numeric import FloatLoop, rk4_step
     from lyapcheck.models.engines.recast_sos import poly_from_json
     from lyapcheck.models.engines.validated_flow import LipschitzLoop, flow_into, precision
 
@@ -167,10 +167,7 @@ def per_box(stem: str, doc: dict, level: str, width: float, count: int, max_step
             entered[(entered < 0) & (np.einsum("ni,ij,nj->n", D, P, D) <= c)] = k * dt
             if (entered >= 0).all():
                 break
-            k1 = f(X)
-            k2 = f(X + dt / 2 * k1)
-            k3 = f(X + dt / 2 * k2)
-            X = X + dt / 6 * (k1 + 2 * k2 + 2 * k3 + f(X + dt * k3))
+            X = rk4_step(f, X, dt)
     outside = entered > 0
     print(f"{stem}: step {h}, level {c:g} (SAMPLED, NOT PROVED), the set's share of the box "
           f"{np.mean(entered == 0):.3f}, starts entering within 12: {np.mean(entered >= 0):.3f}, median entry time of "

@@ -202,7 +202,7 @@ def _entry_steps(loop: "Loop", value: Callable[[Any], Any], level: float,
     where to spend the step budget, never part of a proof)."""
     import numpy as np
 
-    from lyapcheck.models.engines.recast_numeric import FloatLoop
+    from lyapcheck.models.engines.recast_numeric import FloatLoop, rk4_step
 
     if not boxes:
         return []
@@ -223,10 +223,7 @@ def _entry_steps(loop: "Loop", value: Callable[[Any], Any], level: float,
             entered[newly] = k * SIMULATION_STRIDE
             if (entered >= 0).all():
                 break
-            k1 = f(X)
-            k2 = f(X + dt / 2 * k1)
-            k3 = f(X + dt / 2 * k2)
-            X = X + dt / 6 * (k1 + 2 * k2 + 2 * k3 + f(X + dt * k3))
+            X = rk4_step(f, X, dt)
             X[~np.isfinite(X).all(axis=1)] = np.inf
     per_box = entered.reshape(len(boxes), len(corners))
     return [None if (row < 0).any() else int(row.max()) for row in per_box]

@@ -21,6 +21,16 @@ _NUMPY: Final[dict[str, Callable[[np.ndarray], np.ndarray]]] = {"sin": np.sin, "
                  "atan": np.arctan, "tanh": np.tanh, "abs": np.abs}
 
 
+def rk4_step(f: Callable[[np.ndarray], np.ndarray], X: np.ndarray, dt: float) -> np.ndarray:
+    """One classical Runge-Kutta step of ``x' = f(x)`` for a batch of states (rows of ``X``): a fixed step
+    for figures and for picking boxes, never for a verdict (the adaptive integrator of
+    :mod:`lyapcheck.integrator` is the one that controls its error)."""
+    k1 = f(X)
+    k2 = f(X + dt / 2 * k1)
+    k3 = f(X + dt / 2 * k2)
+    return X + dt / 6 * (k1 + 2 * k2 + 2 * k3 + f(X + dt * k3))
+
+
 def poly_values(ring: Ring, p: Poly, columns: dict[str, np.ndarray], rows: int) -> np.ndarray:
     """``p`` at many points: ``columns[name]`` the values of each variable it uses."""
     out = np.zeros(rows)
