@@ -224,7 +224,7 @@ def test_a_region_search_cut_by_the_time_limit_is_inconclusive(monkeypatch: pyte
     from lyapcheck.models.engines.search import BudgetExhausted, Search
     from tests.recast_loops import PENDULUM
 
-    def out_of_time(loop: Any, V: Any, search: Search, label: str, start: Any = None) -> Any:
+    def out_of_time(loop: Any, V: Any, search: Search, label: str, start: Any = None, plan: Any = None) -> Any:
         search.budget.start -= search.budget.seconds + 1.0  # the whole limit spent inside this search
         raise BudgetExhausted(search.budget.reached())
 
