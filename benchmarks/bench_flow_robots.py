@@ -189,7 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json-dir", required=True, type=Path)
     parser.add_argument("--only", nargs="*", choices=sorted(ROBOTS), default=sorted(ROBOTS))
     parser.add_argument("--seconds", type=float, default=60.0)
-    parser.add_argument("--level", default=None, help="a sampled level in place of the proved one (not proved)")
+    parser.add_argument("--level", type=Fraction, default=None, help="a sampled level in place of the proved one (not proved)")
     parser.add_argument("--steps", type=int, default=None, help="the step budget in place of FLOW_STEP_BUDGET")
     parser.add_argument("--per-box", type=float, default=None, metavar="WIDTH",
                         help="single boxes of this share of the domain's widths (needs --level)")

@@ -693,8 +693,8 @@ def critical_plan(loop: Loop, V: Poly, box: tuple[Any, Any]) -> dict[str, Any]:
         return {}
     try:
         start = critical_start_of(loop, P, box)
-    except np.linalg.LinAlgError:  # (P proved positive definite, yet singular in floats: the default search)
-        return {}
+    except (np.linalg.LinAlgError, ValueError, OverflowError):  # (P proved positive definite, yet singular or
+        return {}  # not finite in floats, so no sampled level: the default search)
     return {"start": start, "plan": regions.CRITICAL_PLAN}
 
 

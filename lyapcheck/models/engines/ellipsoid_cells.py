@@ -279,12 +279,12 @@ class _Geometry:
         # the z-box of the cell first, then t times it: M (t y) = t (M y), and t times the z-box keeps the
         # cancellations of M y that a y-box of the products t y_i would lose
         Z = [(zi.lower(), zi.upper()) for zi in self.z_of([flint.arb((a + b) / 2, (b - a) / 2) for a, b in cell])]
+        zc = [lo.union(hi) for lo, hi in Z]  # the cell's z-box as balls
         total: Any = None
         for k in range(K):
             ta, tb = flint.arb(k) / K, flint.arb(k + 1) / K  # exact: K is a power of 2
             tm = (ta + tb) / 2
             slab = [(ta * lo).union(tb * lo).union(ta * hi).union(tb * hi) for lo, hi in Z]
-            zc = [lo.union(hi) for lo, hi in Z]
             f2 = self._jets(slab, 2)
             if f2 is None:
                 return None  # a kink or a pole on this slab: the cell is not proved by this test
@@ -292,7 +292,7 @@ class _Geometry:
                 # the midpoint form: J(t z) = J(tm z) + (t - tm) G with G = d/dt J(s z) at some s of the slab
                 # (entry by entry), G_ik = sum_l (d2 f_i / dz_k dz_l) z_l enclosed over the slab; since
                 # int (t - tm) dt = 0, int_slab J(t z) dt lies in J(tm z) / K + [-1, 1] rad(G) / (4 K^2)
-                fm = self._jets([tm * lo.union(hi) for lo, hi in Z], 1)
+                fm = self._jets([tm * zi for zi in zc], 1)
                 if fm is None:
                     return None
                 spread = flint.arb(1) / (4 * K * K)
