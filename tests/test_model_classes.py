@@ -270,10 +270,26 @@ def test_candidate_in_one_dimension_reaches_the_supremum() -> None:
     assert Fraction(99, 100) <= level < 1  # V' = -2x^2 (1 - x^2) < 0 exactly on 0 < x^2 < 1
 
 
+def test_candidate_level_set_states_its_share_of_the_simulated_region() -> None:
+    """``x' = -x + x^3`` converges exactly from ``|x| < 1``; ``V = x^2``'s certified set ``{x^2 <= c}``,
+    ``c`` just below 1, holds nearly all the converging starts of the domain ``[-2, 2]`` (issue 42, item 5:
+    the polynomial ``candidate`` states its size as ``roa`` does), and none of them fails to converge."""
+    text = model_text(["x"], {"x": "-x + x**3"}) + "[domain]\nx = [-2, 2]\n"
+    cand = run(text, classes="candidate", candidate="x**2").results["candidate"]
+    assert cand.status == "certified" and cand.proves() == "ROA"
+    level = float(Fraction(cand.certificate["level"]))
+    assert cand.numbers["simulated_starts"] > 0
+    assert 0.25 < cand.numbers["simulated_roa_share_of_domain"] < 0.75  # about half of [-2, 2] converges
+    # the starts in (-sqrt(c), sqrt(c)) over those in (-1, 1): about sqrt(c), up to the grid's spacing
+    assert abs(cand.numbers["roa_share"] - level ** 0.5) < 0.05
+    assert "starts_in_set_not_converged" not in cand.numbers  # every start of the set converged at once
+
+
 def test_candidate_that_decreases_everywhere_is_gas() -> None:
     result = certify_model(load_model(MODELS / "fossil-poly2.toml"), classes="candidate", candidate="x**2 + y**2")
     cand = result.results["candidate"]
     assert cand.status == "certified" and cand.proves() == "GAS"
+    assert "simulated_starts" not in cand.numbers  # (GAS: no set to simulate, no time spent on one)
 
 
 def test_candidate_that_is_not_positive_definite_is_not_certified() -> None:

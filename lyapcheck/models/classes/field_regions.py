@@ -301,7 +301,7 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
     from lyapcheck.models.engines import reasons
     from lyapcheck.models.classes import regions
     from lyapcheck.models.classes.lyapunov import best_decay_rate, stated_v
-    from lyapcheck.models.classes.region_driver import NotSimulated, OutOfTime, Route, drive
+    from lyapcheck.models.classes.region_driver import OutOfTime, Route, drive
     from lyapcheck.sos.polynomials import to_fmpq
 
     assert cand is not None
@@ -398,9 +398,26 @@ def run_candidate(scaled: ScaledField, cand: "Candidate | None", budget: Budget)
         return ConditionResult("candidate", "not_certified", why.summary, numbers=why.numbers(missed["numbers"]),
                                solver={"solves": search.log}, property="ROA")
 
-    # (the user's V is proved, not compared with a simulated region: no simulation, as before the driver)
-    return drive("candidate", routes, budget, NotSimulated(), failed,
+    # (one route is kept, never compared by its share: the loop is simulated only for a certified level set,
+    # whose share of the simulated region of attraction the result then states, as roa's does)
+    return drive("candidate", routes, budget, SimulatedWhenCertified(scaled, field_), failed,
                  OutOfTime("a proof with the candidate V", ("time",)))
+
+
+@dataclass
+class SimulatedWhenCertified:
+    """A :class:`~lyapcheck.models.classes.region_driver.SimulatedLoop` that simulates the loop only when a
+    set is certified (``candidate``: the user's V is proved, not compared with other sets, so a run that
+    proves nothing, or proves GAS, spends no time simulating); then as :class:`FieldSimulation`."""
+
+    scaled: ScaledField
+    field: StateField
+
+    def simulate(self, result: ConditionResult) -> None:
+        FieldSimulation.of(self.scaled, self.field, {}).simulate(result)
+
+    def share(self, result: ConditionResult) -> float:
+        return FieldSimulation.of(self.scaled, self.field, {}).share(result)
 
 
 def _stamped(result: ConditionResult, stamp: dict[str, Any]) -> ConditionResult:
@@ -410,4 +427,5 @@ def _stamped(result: ConditionResult, stamp: dict[str, Any]) -> ConditionResult:
 
 
 __all__ = ["ROA_GRID", "ROA_RANDOM_STARTS", "ROA_HORIZON", "covering_disturbances", "covers", "simulated_region",
-           "parameter_points", "roa_starts", "FieldSimulation", "run_roa", "simulated_region_long", "run_candidate"]
+           "parameter_points", "roa_starts", "FieldSimulation", "SimulatedWhenCertified", "run_roa",
+           "simulated_region_long", "run_candidate"]

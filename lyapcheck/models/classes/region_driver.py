@@ -82,18 +82,6 @@ class SimulatedLoop(Protocol):
 
 
 @dataclass(frozen=True)
-class NotSimulated:
-    """A loop whose class does not simulate its sets (``candidate`` on a polynomial loop: the user's V is
-    proved, no region is estimated to compare it with); no share to compare either."""
-
-    def simulate(self, result: ConditionResult) -> None:
-        return None
-
-    def share(self, result: ConditionResult) -> float:
-        raise ValueError("a loop that is not simulated has no share to compare results by")
-
-
-@dataclass(frozen=True)
 class OutOfTime:
     """How the class says it ran out of time: what it searched for and the steps to try next
     (:func:`~lyapcheck.models.engines.reasons.out_of_time`)."""
@@ -146,5 +134,5 @@ def drive(name: str, routes: Sequence[Route], budget: Budget, loop: SimulatedLoo
     return kept
 
 
-__all__ = ["FIRST", "LARGEST_SHARE", "Policy", "Ends", "Outcome", "Route", "SimulatedLoop", "NotSimulated",
+__all__ = ["FIRST", "LARGEST_SHARE", "Policy", "Ends", "Outcome", "Route", "SimulatedLoop",
            "OutOfTime", "drive"]
