@@ -469,3 +469,6 @@ FLOW_APRIORI_FLOOR: Final = 1e-12
 FLOW_SPLIT_GROWTH: Final = 2.0
 #: the floating-point simulation that picks the boxes worth integrating takes this many validated steps at once
 FLOW_SIMULATION_STRIDE: Final = 4
+#: a simulated start of a flow box that did not converge is simulated up to its box's stated time and must then
+#: have V <= level (1 + this): the float simulation's error is far below it, a forged or false time far above
+FLOW_CHECK_MARGIN: Final = 1e-6

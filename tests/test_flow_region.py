@@ -146,3 +146,60 @@ def test_a_polynomial_loops_ball_region_gets_boxes_too(tmp_path: Path) -> None:
               X, 40.0, step=0.01)
     assert np.all(np.hypot(end[:, 0], end[:, 1]) < 1e-3)
     assert api.verify(result).valid
+
+
+def test_the_guide_simulation_stops_when_the_class_time_is_spent() -> None:
+    """The floating-point guide of where to spend the validated steps (``_entry_steps``) reads the class's
+    clock: with time left, a box around the equilibrium enters the set within the horizon and a far box's
+    step is counted; with none left, it returns at once (nothing entered: None), so that the caller stops
+    by the same budget instead of simulating its whole horizon first."""
+    from lyapcheck.models.classes import flow_region
+    from lyapcheck.models.classes.recast_classes import base_loop
+    from lyapcheck.models.engines.search import Budget
+    from lyapcheck.models.language.modelfile import load_any_model
+
+    loop = base_loop(load_any_model(INVERTED).system)
+
+    def value(X: np.ndarray) -> np.ndarray:
+        return np.sum(X ** 2, axis=1)
+
+    boxes = [((Fraction(-1, 100), Fraction(-1, 100)), (Fraction(1, 100), Fraction(1, 100))),
+             ((Fraction(1, 2), Fraction(0)), (Fraction(6, 10), Fraction(1, 10)))]
+    h = Fraction(1, 256)
+    with_time = flow_region._entry_steps(loop, value, 1e-2, boxes, h, 4096, Budget(60.0, "test"))
+    assert with_time[0] == 0 and with_time[1] is not None and with_time[1] > 0
+    spent = flow_region._entry_steps(loop, value, 1e-2, boxes, h, 10 ** 9, Budget(0.0, "test"))
+    assert spent == [0, None]  # (the horizon of 10^9 steps would take hours)
+
+
+@pytest.mark.slow
+def test_a_box_start_not_in_the_set_at_its_time_is_a_soundness_alarm(inverted) -> None:
+    """The simulated check of a flow region follows a box's start that did not converge up to its box's
+    stated time: with the true times none is outside the set then; a box claimed to reach the set at once
+    from far outside it (a false time) gets every start that did not converge counted and the alarm. (This
+    loop's starts all converge: a step budget of 5 stops every first simulation, so every start of a box
+    counts as not converged and is followed up to its box's time.)"""
+    from lyapcheck.models.classes import recast_regions
+    from lyapcheck.models.classes.recast_classes import base_loop
+    from lyapcheck.models.language.modelfile import load_any_model
+    from lyapcheck.results import ConditionResult
+
+    loop = base_loop(load_any_model(INVERTED).system)
+    box = (np.array([-3.0, -3.0]), np.array([3.0, 3.0]))
+    cert = copy.deepcopy(inverted.conditions["roa"].certificate)
+    # a far box, (2.5, 2.5) to (3, 3), far outside the set: claimed to be in it after one step, t = 1/256
+    cert["flow"]["boxes"].append({"box": {"theta": ["5/2", "3"], "omega": ["5/2", "3"]}, "t": "1/256", "pieces": 1})
+    forged = ConditionResult("roa", "certified", "forged", certificate=cert, property="ROA")
+    recast_regions.simulated_check(loop, forged, box, max_steps=5)
+    assert forged.numbers["flow_box_starts_not_converged"] > 0
+    # the far box's starts, and only they (the true boxes' starts are in the set at their times)
+    grid = np.linspace(-3, 3, recast_regions.SIMULATED_GRID)
+    far = int(np.sum((grid >= 2.5) & (grid <= 3))) ** 2
+    assert forged.numbers["flow_box_starts_not_in_set_at_their_time"] == far > 0
+    assert forged.numbers["soundness_violation"] is True
+    honest = ConditionResult("roa", "certified", "honest", certificate=copy.deepcopy(inverted.conditions["roa"].certificate),
+                             property="ROA")
+    recast_regions.simulated_check(loop, honest, box, max_steps=5)
+    assert honest.numbers["flow_box_starts_not_converged"] > 0
+    assert "soundness_violation" not in honest.numbers
+    assert honest.numbers.get("flow_box_starts_not_in_set_at_their_time", 0) == 0

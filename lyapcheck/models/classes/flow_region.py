@@ -145,7 +145,7 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
         while queue and not stopped:
             # where the box's corners and centre, simulated in floating point, all enter the set: the
             # validated integration is spent on the boxes that can get there, for about as long as they take
-            estimates = _entry_steps(loop, value, level, queue, h, horizon_steps)
+            estimates = _entry_steps(loop, value, level, queue, h, horizon_steps, budget)
             halves: list[tuple[tuple[Fraction, ...], tuple[Fraction, ...]]] = []
             # the boxes expected to enter soonest first: the budget proves the most boxes it can
             order = sorted(range(len(queue)), key=lambda i: (estimates[i] is None, estimates[i] or 0, i))
@@ -192,14 +192,18 @@ def extend(loop: "Loop", result: ConditionResult, budget: "Budget", box: tuple[A
 
 
 SIMULATION_STRIDE: Final = FLOW_SIMULATION_STRIDE
+#: how many steps of the guide simulation (:func:`_entry_steps`) run between two readings of the class's clock
+GUIDE_CLOCK_STEPS: Final = 64
 
 
 def _entry_steps(loop: "Loop", value: Callable[[Any], Any], level: float,
                  boxes: Sequence[tuple[tuple[Fraction, ...], tuple[Fraction, ...]]], h: Fraction,
-                 horizon_steps: int) -> list[int | None]:
+                 horizon_steps: int, budget: "Budget") -> list[int | None]:
     """For each box, the validated step by which its corners and centre, simulated on the true loop in
     floating point (RK4), all lie in the set; None where one does not within the horizon (a guide for
-    where to spend the step budget, never part of a proof)."""
+    where to spend the step budget, never part of a proof). The simulation ends early, its boxes not yet
+    entered None, when the class's time runs out (``budget``): then the caller stops at once, by its own
+    test of the same budget."""
     import numpy as np
 
     from lyapcheck.models.engines.recast_numeric import FloatLoop, rk4_step
@@ -221,7 +225,7 @@ def _entry_steps(loop: "Loop", value: Callable[[Any], Any], level: float,
         for k in range(0, horizon_steps // SIMULATION_STRIDE + 1):
             newly = (entered < 0) & (value(X) <= level)
             entered[newly] = k * SIMULATION_STRIDE
-            if (entered >= 0).all():
+            if (entered >= 0).all() or (k % GUIDE_CLOCK_STEPS == 0 and budget.left() <= 0):
                 break
             X = rk4_step(f, X, dt)
             X[~np.isfinite(X).all(axis=1)] = np.inf

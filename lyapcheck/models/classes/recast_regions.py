@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Final, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Final, Sequence
 
 from lyapcheck.errors import ModelFileError
 from lyapcheck.models.language.parameter_box import ModelBox
@@ -33,7 +33,7 @@ from lyapcheck.models.classes import regions
 from lyapcheck.models.engines.search import Budget, Search
 from lyapcheck.results import ConditionResult
 from lyapcheck.sos.polynomials import Poly, to_fmpq
-from lyapcheck.tolerances import CONVERGED_BALL_RADIUS
+from lyapcheck.tolerances import CONVERGED_BALL_RADIUS, FLOW_CHECK_MARGIN
 from lyapcheck.exact import read_rational
 
 if TYPE_CHECKING:
@@ -412,11 +412,48 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any], m
     result.numbers["simulated_roa_share_of_box"] = float(np.mean(to_zero))
     # a region proved by ball arithmetic claims convergence to the equilibrium itself, not modulo 2 pi
     angles = () if result.certificate.get("kind") == "interval" else tuple(loop.angles)
-    if "flow" in result.certificate:  # a start in a proved box that does not converge: a soundness alarm
-        result.numbers["flow_box_starts_not_converged"] = int(np.sum(inside & ~in_set & ~to_zero))
     suspicious = in_set & ~(to_zero if not angles else modulo)
-    if suspicious.any():
-        result.numbers.update(set_cross_check(loop, result, Z[suspicious] + eq, angles).numbers())
+    again = Z[suspicious] + eq
+    if "flow" in result.certificate:  # a start in a proved box that does not converge: checked again, below
+        stray = inside & ~in_set & ~to_zero
+        result.numbers["flow_box_starts_not_converged"] = int(np.sum(stray))
+        if stray.any():
+            arrived, left_out = flow_cross_check(loop, result, Z[stray] + eq, value)
+            result.numbers["flow_box_starts_not_in_set_at_their_time"] = int(np.sum(left_out))
+            if left_out.any():
+                result.numbers["soundness_violation"] = True
+            again = np.concatenate([again, arrived])  # (now in the set: the set's own check follows them)
+    if len(again):  # (its figures add soundness_violation only where it is found, never remove one)
+        result.numbers.update(set_cross_check(loop, result, again, angles).numbers())
+
+
+def flow_cross_check(loop: Loop, result: ConditionResult, starts: Any, value: Callable[[Any], Any]
+                     ) -> tuple[Any, Any]:
+    """Starts (states, rows) in the certificate's flow boxes that did not converge in the first simulation,
+    each simulated up to the least time stated for a box holding it (the claim: every start of the box is
+    in the set ``{V <= level}`` by then; the set is invariant, so the least time is the one to test). Returns
+    the states reached by the starts that are then in the set (rows, for the set's own cross-check) and which
+    starts are not (floats, with a relative margin of FLOW_CHECK_MARGIN: a soundness alarm)."""
+    import numpy as np
+
+    from lyapcheck.models.engines.recast_numeric import simulate_ends
+
+    system = loop.system
+    eq = np.array([float(system.values[s]) for s in system.states])
+    level = float(Fraction(result.certificate["level"]))
+    times = np.full(len(starts), np.inf)
+    for entry in result.certificate["flow"]["boxes"]:
+        lo = np.array([float(read_rational(entry["box"][s][0])) for s in system.states])
+        hi = np.array([float(read_rational(entry["box"][s][1])) for s in system.states])
+        held = np.all((starts - eq >= lo) & (starts - eq <= hi), axis=1)
+        times[held] = np.minimum(times[held], float(read_rational(entry["t"])))
+    ends = np.array(starts, dtype=np.float64)
+    for t in np.unique(times[np.isfinite(times)]):
+        rows = times == t
+        dev, _ = simulate_ends(system, starts[rows], float(t))
+        ends[rows] = dev + eq
+    left_out = np.isfinite(times) & ~(value(ends) <= level * (1 + FLOW_CHECK_MARGIN))
+    return ends[np.isfinite(times) & ~left_out], left_out
 
 
 def certified_value(loop: Loop, result: ConditionResult, *others: Poly) -> list[Any]:

@@ -67,7 +67,9 @@ ESTIMATES: Final[Mapping[str, str]] = {
     "soundness_violation": "the simulation contradicts the certified claim (a soundness alarm)",
     "sampled_share": "the share of sampled points where the fitted V decreases",
     "flow_box_starts_not_converged": "simulated starts in a box proved to flow into the set that did not converge "
-                                     "(a soundness alarm)",
+                                     "in the first simulation (each then simulated up to its box's stated time)",
+    "flow_box_starts_not_in_set_at_their_time": "of those, the starts not in the set at their box's stated time "
+                                                "(a soundness alarm)",
     "box_share_estimate": "the share of sampled points of the box in the certified set",
     "level_supremum_estimate": "the largest level where sampling sees V' < 0",
     "level_ratio_to_estimate": "the certified level over level_supremum_estimate",
