@@ -287,6 +287,19 @@ FACTORED_MAX_SLABS: Final = 16
 #: about 10 % of the tries pass above 0.9 of the level, where most cells are, so trying there cost a failing
 #: level 50 % more time). A choice of work, never of soundness
 FACTORED_REACH: Final = 0.5
+#: the polynomial model of V' in the ellipsoid's coordinates (lyapcheck.models.engines.polynomial_cells): the
+#: total degree kept (the terms above it join its error bound), the Taylor degrees of sin (odd) and of
+#: cos - 1 (even) whose remainders join it too, and the most coefficients of its dense tensor, (degree + 1)^n
+#: (a cell costs 2n contractions of it: 15^4 = 50,625 at 4 states takes a few milliseconds)
+POLY_CELL_DEGREE: Final = 14
+POLY_CELL_SIN_DEGREE: Final = 9
+POLY_CELL_COS_DEGREE: Final = 10
+POLY_CELL_MAX_ENTRIES: Final = 60_000
+#: the condition number of V's matrix P from which the ellipsoid cells use the polynomial model alone: there
+#: ball enclosures over the tilted cells are hundreds of times too wide (the acrobot's shaped P, 48,000; the
+#: pendubot's, 8,000), below it the ball tests cost less per cell and prove about as many (the cart-pole's,
+#: 584: 16,078 cells in 9.3 s at level 0.6 against 31,654 in 30 s with the model). A choice of work only
+POLY_CELL_MIN_CONDITION: Final = 2_000.0
 #: significant bits of each entry of V's matrix P on a discrete-time map with functions
 #: (lyapcheck.models.classes.discrete_functions: the Stein solution of A^T P A - P = -I rounded to a
 #: short dyadic). Short entries keep V's balls exact at a cell's dyadic corners (no widening from V

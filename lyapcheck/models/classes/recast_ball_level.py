@@ -96,7 +96,7 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robu
         return "the Hessian of V' is not proved negative definite on any box around the equilibrium"
 
     spent = [0]  # the cells of every attempt so far: the search stops at BALL_LEVEL_TOTAL_CELLS (a count)
-    scale = cell_cost(lie.loop)  # from 4 states, the budgets are in cells of the cart-pole's cost
+    scale = cell_cost(lie.loop, P)  # from 4 states, the budgets are in cells of the cart-pole's cost
     whole = tolerances.BALL_LEVEL_TOTAL_CELLS if loop.n < ELLIPSOID_JUMP_STATES else \
         tolerances.ELLIPSOID_LEVEL_TOTAL_CELLS
     total, each = int(whole / scale), int(tolerances.BALL_LEVEL_CELLS / scale)
@@ -156,12 +156,14 @@ def ball_level(loop: Loop, V: Poly, budget: Budget, name: str, v_from: str, robu
 #: search starts at this share of the level sampling sees V' < 0 up to, rather than growing from the
 #: local level by BALL_LEVEL_GROWTH (each level proved on the way would cost a whole attempt)
 ELLIPSOID_JUMP_STATES: Final = 4
-JUMP_SHARE: Final = Fraction(1, 4)
-#: sampled directions (in the ellipsoid's coordinates, a fixed seed) and radii along each
+JUMP_SHARE: Final = Fraction(1, 2)
+#: sampled directions (in the ellipsoid's coordinates, a fixed seed) and radii along each, out to 4^JUMP_RANGE
+#: times the local level (the acrobot's local level is about 1e-8 of its sampled one: 4^12 fell short)
 JUMP_DIRECTIONS: Final = 4000
-JUMP_RADII: Final = 48
+JUMP_RADII: Final = 64
+JUMP_RANGE: Final = 18
 #: bisections of the bracket above a proved sampled level
-JUMP_BISECTIONS: Final = 2
+JUMP_BISECTIONS: Final = 3
 
 
 #: the cost of a cell of the cart-pole (robot-cart-pole-lqr.toml) in CELL_COST's units: the budgets of
@@ -169,15 +171,19 @@ JUMP_BISECTIONS: Final = 2
 REFERENCE_CELL_COST: Final = 3712
 
 
-def cell_cost(loop: Any) -> Fraction:
+def cell_cost(loop: Any, P: list[list[Fraction]] | None = None) -> Fraction:
     """How many of the reference's cells one cell of this loop counts for, from ELLIPSOID_JUMP_STATES
     states (1 below): the terms' factors of the field's polynomials (its numerators, denominators and
     auxiliaries' arguments, each function 4) times ``n^3`` (a Hessian's entries, and the products of
     ``n x n`` matrices), over REFERENCE_CELL_COST, at least 1. A count from the model alone, so that the
     budget decides the same way on any machine: a cell of the 4-state acrobot or of the 6-state planar
-    quadrotor takes about 2.5 times the cart-pole's time."""
+    quadrotor takes about 2.5 times the cart-pole's time. Where the cells use the polynomial model alone
+    (:func:`~lyapcheck.models.engines.ellipsoid_cells.uses_model`, with V's matrix ``P``), 1: a cell's cost is
+    then the model's, about the cart-pole's cell at any such loop."""
+    from lyapcheck.models.engines.ellipsoid_cells import uses_model
+
     n = loop.n
-    if n < ELLIPSOID_JUMP_STATES:
+    if n < ELLIPSOID_JUMP_STATES or (P is not None and uses_model(loop, P)):
         return Fraction(1)
     polys = list(loop.numerators) + [d for d in loop.denominators if d is not None] + \
         [a[3] for a in loop.auxiliaries if a[3] is not None]
@@ -206,7 +212,7 @@ def sampled_jump(loop: Loop, P: list[list[Fraction]], first: Fraction) -> Fracti
     eq = np.array([float(loop.system.values[s]) for s in loop.system.states])
     U = np.random.default_rng(0).normal(size=(JUMP_DIRECTIONS, n))
     U /= np.linalg.norm(U, axis=1)[:, None]
-    top = float(first) * 4.0 ** 12  # the largest level sampled: a factor 4^12 above the local one
+    top = float(first) * 4.0 ** JUMP_RANGE  # the largest level sampled, a factor 4^JUMP_RANGE above the local one
     radii = np.sqrt(np.geomspace(float(first), top, JUMP_RADII))
     bad = top
     with np.errstate(all="ignore"):
