@@ -295,10 +295,10 @@ POLY_CELL_DEGREE: Final = 14
 POLY_CELL_SIN_DEGREE: Final = 9
 POLY_CELL_COS_DEGREE: Final = 10
 POLY_CELL_MAX_ENTRIES: Final = 60_000
-#: the condition number of V's matrix P from which the ellipsoid cells use the polynomial model alone: there
+#: the condition number of V's matrix P from which the ellipsoid cells try the polynomial model first: there
 #: ball enclosures over the tilted cells are hundreds of times too wide (the acrobot's shaped P, 48,000; the
-#: pendubot's, 8,000), below it the ball tests cost less per cell and prove about as many (the cart-pole's,
-#: 584: 16,078 cells in 9.3 s at level 0.6 against 31,654 in 30 s with the model). A choice of work only
+#: pendubot's, 8,000), below it the ball tests alone cost less (the cart-pole's shaped P, 584: 16,078 cells
+#: in 9.3 s at level 0.6, against 11,926 in 16.2 s with the model first). A choice of work only
 POLY_CELL_MIN_CONDITION: Final = 2_000.0
 #: significant bits of each entry of V's matrix P on a discrete-time map with functions
 #: (lyapcheck.models.classes.discrete_functions: the Stein solution of A^T P A - P = -I rounded to a

@@ -197,8 +197,8 @@ def test_a_box_start_not_in_the_set_at_its_time_is_a_soundness_alarm(inverted) -
     far = int(np.sum((grid >= 2.5) & (grid <= 3))) ** 2
     assert forged.numbers["flow_box_starts_not_in_set_at_their_time"] == far > 0
     assert forged.numbers["soundness_violation"] is True
-    honest = ConditionResult("roa", "certified", "honest", certificate=copy.deepcopy(inverted.conditions["roa"].certificate),
-                             property="ROA")
+    honest = ConditionResult("roa", "certified", "honest",
+                             certificate=copy.deepcopy(inverted.conditions["roa"].certificate), property="ROA")
     recast_regions.simulated_check(loop, honest, box, max_steps=5)
     assert honest.numbers["flow_box_starts_not_converged"] > 0
     assert "soundness_violation" not in honest.numbers

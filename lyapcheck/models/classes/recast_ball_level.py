@@ -177,9 +177,9 @@ def cell_cost(loop: Any, P: list[list[Fraction]] | None = None) -> Fraction:
     auxiliaries' arguments, each function 4) times ``n^3`` (a Hessian's entries, and the products of
     ``n x n`` matrices), over REFERENCE_CELL_COST, at least 1. A count from the model alone, so that the
     budget decides the same way on any machine: a cell of the 4-state acrobot or of the 6-state planar
-    quadrotor takes about 2.5 times the cart-pole's time. Where the cells use the polynomial model alone
-    (:func:`~lyapcheck.models.engines.ellipsoid_cells.uses_model`, with V's matrix ``P``), 1: a cell's cost is
-    then the model's, about the cart-pole's cell at any such loop."""
+    quadrotor takes about 2.5 times the cart-pole's time. Where the cells try the polynomial model first
+    (:func:`~lyapcheck.models.engines.ellipsoid_cells.uses_model`, with V's matrix ``P``), 1: most cells then
+    end at the model, whose cost is about the cart-pole's cell at any such loop."""
     from lyapcheck.models.engines.ellipsoid_cells import uses_model
 
     n = loop.n

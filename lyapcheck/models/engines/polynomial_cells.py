@@ -18,8 +18,9 @@ over it. Here the change of variables is made once, exactly, on polynomials inst
    h^alpha`` of ``u(M y)``) and ``|r| <= U^(k+2) / (k+2)!``; ``|q|`` and the terms of ``p`` above the degree
    kept (POLY_CELL_DEGREE) are bounded the same way, and so is the rounding of ``p``'s coefficients to
    floats: ``|G(M y) - p~(y)| <= error`` on the box, exactly, then rounded up. Each ``D_i`` is proved
-   positive on the box the same way (its constant term above the sum of its other terms' bounds and its
-   remainders'); otherwise the model is not made.
+   positive on the box by ball arithmetic on the true functions (the states' balls about the equilibrium,
+   arb's sine and cosine of their arguments' balls, in the model file's own variables); otherwise the
+   model is not made.
 3. **A cell.** ``p~`` is expanded about the cell's centre ``m`` (``p~(m + t) = sum A_alpha t^alpha``, the
    Taylor shift one axis at a time, in floats) and bounded over ``|t_i| <= w_i``: ``A_0 + sum |A_alpha|
    w^alpha``, a term of even exponents counting only where ``A_alpha > 0``. The floating-point error of
@@ -29,8 +30,14 @@ over it. Here the change of variables is made once, exactly, on polynomials inst
    on the cell. The expansion's first-order term is the gradient at the centre, exact up to rounding: the
    bound's spread is the polynomial's own variation over the cell, not that of enclosures.
 
-The model is made once per ellipsoid (a few seconds at most; exact). A cell costs a few tensor contractions
-of ``(degree + 1)^n`` floats, so the model is kept for loops where that is at most POLY_CELL_MAX_ENTRIES.
+4. **A ball about the equilibrium** (:func:`decreasing_ball`): ``G`` has no constant or linear term, so
+   with its quadratic part at most ``-mu |y|^2`` and its other terms bounded by ``C_k |y|^k``, ``G < 0``
+   on a shell ``inner <= |y| <= rho`` where the cells need not go.
+
+The exact part (1) is made once per loop, ``P`` and ``M`` (a fraction of a second at 4 states) and kept
+for the search's other levels; the error (2) is a polynomial evaluation per box. A cell costs 2n products
+of a ``(degree + 1) x (degree + 1)`` matrix with the ``(degree + 1)^n`` floats, so the model is kept for
+loops where that tensor has at most POLY_CELL_MAX_ENTRIES entries (4 states at degree 14).
 """
 
 from __future__ import annotations
@@ -43,6 +50,7 @@ from typing import Any, Final, Sequence
 import flint
 import numpy as np
 
+from lyapcheck.models.engines.interval_field import negative_definite
 from lyapcheck.models.language.recast import RecastSystem
 from lyapcheck.tolerances import POLY_CELL_COS_DEGREE, POLY_CELL_DEGREE, POLY_CELL_MAX_ENTRIES, POLY_CELL_SIN_DEGREE
 
@@ -71,8 +79,9 @@ class PolynomialModel:
     degree: int
     #: the exponents whose every entry is even (``t^alpha >= 0``), the shape of ``coefficients``
     even: np.ndarray
-    #: ``|coefficients|``, and :func:`_binomials` of the degree (made once)
+    #: ``|coefficients|``, each exponent's total degree, and :func:`_binomials` of the degree (made once)
     magnitudes: np.ndarray
+    order: np.ndarray
     binomials: tuple[np.ndarray, np.ndarray] | None = None
 
 
@@ -271,7 +280,8 @@ def polynomial_model(system: RecastSystem, P: Sequence[Sequence[Fraction]], M: S
         coefficients[exps] = cf
     error = Fraction(int(error.p), int(error.q))
     even = np.all(np.indices(shape) % 2 == 0, axis=0)
-    return PolynomialModel(coefficients, _upper_float(error), degree, even, np.abs(coefficients), _binomials(degree))
+    return PolynomialModel(coefficients, _upper_float(error), degree, even, np.abs(coefficients),
+                           np.indices(shape).sum(axis=0), _binomials(degree))
 
 
 def decreasing_ball(system: RecastSystem, P: Sequence[Sequence[Fraction]], M: Sequence[Sequence[float]],
@@ -405,6 +415,7 @@ def cell_bound(model: PolynomialModel, cell: Cell) -> "CellBound":
     rounded up."""
     n = model.coefficients.ndim
     D = model.degree
+    order = model.order
     binomials, gap = _binomials(D) if model.binomials is None else model.binomials
     A = model.coefficients
     B = model.magnitudes
@@ -427,7 +438,21 @@ def cell_bound(model: PolynomialModel, cell: Cell) -> "CellBound":
     origin = (0,) * n
     centre = float(A[origin])
     spread[origin] = 0.0  # (its error stays: B's constant term)
-    terms = (spread + shift_error * B) * R
+    errors = shift_error * B
+    # the quadratic part t^T H t: where every matrix of its enclosure (each coefficient within its error) is
+    # negative definite, it is <= 0 on the whole cell and adds nothing (the Taylor form's concavity; its cross
+    # terms would otherwise each add |A_alpha| w^alpha)
+    H = [[flint.arb(0)] * n for _ in range(n)]
+    for i in range(n):
+        for j in range(i, n):
+            alpha = tuple(int(k == i) + int(k == j) for k in range(n))
+            value = flint.arb(float(A[alpha]), float(errors[alpha]) * (1 + 4 * UNIT_ROUNDOFF) + UNDERFLOW_FLOOR)
+            H[i][j] = H[j][i] = value if i == j else value / 2
+    if negative_definite(H):
+        quadratic = order == 2
+        spread[quadratic] = 0.0
+        errors = np.where(quadratic, 0.0, errors)
+    terms = (spread + errors) * R
     # the powers of the radii (n D products), the products above, and the sum of every term
     total = float(np.sum(terms)) * (1 + gamma(terms.size + n * D + 4)) + UNDERFLOW_FLOOR
     at_centre = (shift_error * float(B[origin]) + model.error) * (1 + 4 * UNIT_ROUNDOFF) + UNDERFLOW_FLOOR
@@ -462,4 +487,5 @@ def negative_on(model: PolynomialModel, cell: Cell) -> bool:
     return cell_bound(model, cell).negative
 
 
-__all__ = ["PolynomialModel", "refusal", "polynomial_model", "decreasing_ball", "cell_bound", "CellBound", "negative_on", "gamma"]
+__all__ = ["PolynomialModel", "refusal", "polynomial_model", "decreasing_ball", "cell_bound", "CellBound", "negative_on",
+           "gamma"]
