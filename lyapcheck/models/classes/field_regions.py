@@ -414,7 +414,10 @@ class SimulatedWhenCertified:
     field: StateField
 
     def simulate(self, result: ConditionResult) -> None:
-        FieldSimulation.of(self.scaled, self.field, {}).simulate(result)
+        try:
+            FieldSimulation.of(self.scaled, self.field, {}).simulate(result)
+        except ClassTimeLimit:  # (the hard stop may end the simulation, never the proof before it)
+            result.numbers["simulation"] = "stopped by the class's hard time limit"
 
     def share(self, result: ConditionResult) -> float:
         return FieldSimulation.of(self.scaled, self.field, {}).share(result)

@@ -433,7 +433,8 @@ def flow_cross_check(loop: Loop, result: ConditionResult, starts: Any, value: Ca
     each simulated up to the least time stated for a box holding it (the claim: every start of the box is
     in the set ``{V <= level}`` by then; the set is invariant, so the least time is the one to test). Returns
     the states reached by the starts that are then in the set (rows, for the set's own cross-check) and which
-    starts are not (floats, with a relative margin of FLOW_CHECK_MARGIN: a soundness alarm)."""
+    starts are not (floats, with a relative margin of FLOW_CHECK_MARGIN: a soundness alarm); a start whose
+    integration stopped before its time (a step budget, an escape) is neither."""
     import numpy as np
 
     from lyapcheck.models.engines.recast_numeric import simulate_ends
@@ -448,12 +449,14 @@ def flow_cross_check(loop: Loop, result: ConditionResult, starts: Any, value: Ca
         held = np.all((starts - eq >= lo) & (starts - eq <= hi), axis=1)
         times[held] = np.minimum(times[held], float(read_rational(entry["t"])))
     ends = np.array(starts, dtype=np.float64)
+    reached = np.zeros(len(starts), dtype=bool)  # (a row the integrator stopped before its time is not judged)
     for t in np.unique(times[np.isfinite(times)]):
         rows = times == t
-        dev, _ = simulate_ends(system, starts[rows], float(t))
+        dev, simulated = simulate_ends(system, starts[rows], float(t))
         ends[rows] = dev + eq
-    left_out = np.isfinite(times) & ~(value(ends) <= level * (1 + FLOW_CHECK_MARGIN))
-    return ends[np.isfinite(times) & ~left_out], left_out
+        reached[rows] = simulated.ok
+    inside = value(ends) <= level * (1 + FLOW_CHECK_MARGIN)
+    return ends[reached & inside], reached & ~inside
 
 
 def certified_value(loop: Loop, result: ConditionResult, *others: Poly) -> list[Any]:
