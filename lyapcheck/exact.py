@@ -207,6 +207,18 @@ def dyadic_ceil(x: Fraction, bits: int = DYADIC_BITS) -> Fraction:
     return Fraction(math.ceil(x * scale), scale)
 
 
+def float_above(x: Fraction) -> float:
+    """The least float at least ``x`` (``float`` of a Fraction is correctly rounded: one step at most)."""
+    f = float(x)
+    return math.nextafter(f, math.inf) if Fraction(f) < x else f
+
+
+def float_below(x: Fraction) -> float:
+    """The largest float at most ``x``."""
+    f = float(x)
+    return math.nextafter(f, -math.inf) if Fraction(f) > x else f
+
+
 def quadratic_matrix(terms: Mapping[tuple[int, ...], Fraction], n: int) -> list[list[Fraction]]:
     """The symmetric ``P`` with ``z^T P z`` the terms of degree 2 in the first ``n`` variables alone
     (``terms``: exponents to coefficient; every other term is left out)."""

@@ -50,8 +50,10 @@ from typing import Any, Final, Sequence
 import flint
 import numpy as np
 
+from lyapcheck.exact import float_above
 from lyapcheck.models.engines.interval_field import negative_definite
 from lyapcheck.models.language.recast import RecastSystem
+from lyapcheck.sos.polynomials import degree_in
 from lyapcheck.tolerances import POLY_CELL_COS_DEGREE, POLY_CELL_DEGREE, POLY_CELL_MAX_ENTRIES, POLY_CELL_SIN_DEGREE
 
 #: the unit roundoff of IEEE doubles (round to nearest)
@@ -82,7 +84,7 @@ class PolynomialModel:
     #: ``|coefficients|``, each exponent's total degree, and :func:`_binomials` of the degree (made once)
     magnitudes: np.ndarray
     order: np.ndarray
-    binomials: tuple[np.ndarray, np.ndarray] | None = None
+    binomials: tuple[np.ndarray, np.ndarray]
 
 
 def _abs_bound(p: Any, bounds: Sequence[Fraction]) -> Fraction:
@@ -123,14 +125,6 @@ def _remainder(function: str, bound: Fraction) -> Fraction:
     is at most 1 in absolute value)."""
     nxt = _order(function) + 2
     return bound ** nxt / math.factorial(nxt)
-
-
-def _upper_float(x: Fraction) -> float:
-    """The least float at least ``x`` (a rational)."""
-    f = float(x)
-    while Fraction(f) < x:
-        f = math.nextafter(f, math.inf)
-    return f
 
 
 @dataclass(frozen=True)
@@ -178,8 +172,7 @@ def refusal(system: RecastSystem, degree: int = POLY_CELL_DEGREE) -> str | None:
     for a in system.auxiliaries:
         if a.function not in ("sin", "cos") or a.argument is None or not a.smooth:
             return f"the auxiliary {a.name} = {a.definition} is not a sine or cosine of the states"
-        used = [name for name, e in zip(ring.names, _max_exponents(a.argument, len(ring.names))) if e]
-        if any(name not in system.states for name in used):
+        if any(degree_in(ring, a.argument, [name]) > 0 for name in ring.names if name not in system.states):
             return f"the auxiliary {a.name} = {a.definition} has an argument beyond the states"
     return None
 
@@ -264,7 +257,7 @@ def polynomial_model(system: RecastSystem, P: Sequence[Sequence[Fraction]], M: S
     # the denominators' signs, from the true functions: every variable of the recasting over the box in balls,
     # the states x_eq + M y and each auxiliary the sine or cosine of its argument's ball, in the model file's
     # own (unshifted) variables, where cos^2 <= 1 is not lost to the dependency of c - 1 and (c - 1)^2
-    box_values = [flint.arb(_fmpq(system.values[s])) + flint.arb(0, _upper_float(
+    box_values = [flint.arb(_fmpq(system.values[s])) + flint.arb(0, float_above(
         sum((abs(Mq[i][j]) * ybounds[j] for j in range(n)), Fraction(0)))) for i, s in enumerate(system.states)]
     for a in system.auxiliaries:
         assert a.argument is not None
@@ -280,7 +273,7 @@ def polynomial_model(system: RecastSystem, P: Sequence[Sequence[Fraction]], M: S
         coefficients[exps] = cf
     error = Fraction(int(error.p), int(error.q))
     even = np.all(np.indices(shape) % 2 == 0, axis=0)
-    return PolynomialModel(coefficients, _upper_float(error), degree, even, np.abs(coefficients),
+    return PolynomialModel(coefficients, float_above(error), degree, even, np.abs(coefficients),
                            np.indices(shape).sum(axis=0), _binomials(degree))
 
 
@@ -386,13 +379,6 @@ def _fmpq(x: Fraction) -> Any:
     return flint.fmpq(x.numerator, x.denominator)
 
 
-def _max_exponents(p: Any, nvars: int) -> list[int]:
-    out = [0] * nvars
-    for exps in p.monoms():
-        out = [max(a, b) for a, b in zip(out, exps)]
-    return out
-
-
 def _powers(x: float, degree: int) -> np.ndarray:
     """``x^0, ..., x^degree`` by repeated multiplication (``x^e`` within ``gamma_e`` of the exact power)."""
     out = np.empty(degree + 1)
@@ -416,7 +402,7 @@ def cell_bound(model: PolynomialModel, cell: Cell) -> "CellBound":
     n = model.coefficients.ndim
     D = model.degree
     order = model.order
-    binomials, gap = _binomials(D) if model.binomials is None else model.binomials
+    binomials, gap = model.binomials
     A = model.coefficients
     B = model.magnitudes
     # the shift along each axis in turn: the axis contracted is the first; the result's axes rotate so
@@ -482,10 +468,5 @@ class CellBound:
         return [x / max((b - a) / 2, 1e-300) for x, (a, b) in zip(shares, cell)]
 
 
-def negative_on(model: PolynomialModel, cell: Cell) -> bool:
-    """``V' < 0`` on the cell, by :func:`cell_bound`."""
-    return cell_bound(model, cell).negative
-
-
-__all__ = ["PolynomialModel", "refusal", "polynomial_model", "decreasing_ball", "cell_bound", "CellBound", "negative_on",
+__all__ = ["PolynomialModel", "refusal", "polynomial_model", "decreasing_ball", "cell_bound", "CellBound",
            "gamma"]

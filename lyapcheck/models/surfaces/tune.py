@@ -50,7 +50,6 @@ between the grid's are not claimed, except inside a certified neighbourhood.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -299,12 +298,13 @@ class Point:
 def weaker_float(x: Fraction, sense: str) -> float:
     """``x`` as a float on the side of the weaker claim (not above a maximized figure, not below a
     minimized one), so that a printed or stored float never claims more than the exact value."""
-    f = float(x)
-    if sense == "max" and Fraction(f) > x:
-        return math.nextafter(f, -math.inf)
-    if sense == "min" and Fraction(f) < x:
-        return math.nextafter(f, math.inf)
-    return f
+    from lyapcheck.exact import float_above, float_below
+
+    if sense == "max":
+        return float_below(x)
+    if sense == "min":
+        return float_above(x)
+    return float(x)
 
 
 Evaluate = Callable[[dict[str, Fraction]], tuple[Fraction | None, str, dict[str, Any]]]
