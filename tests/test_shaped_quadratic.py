@@ -69,6 +69,28 @@ def test_the_design_improves_the_sampled_share_of_the_box_over_the_linearization
     assert sampler.critical_level(shaped.P) > 0.5
 
 
+def test_the_design_aims_at_the_converging_samples_when_a_simulation_is_given() -> None:
+    """With ``converges``, the targets are the first SHAPE_TARGET_STARTS box samples it calls converging (here
+    a ball of radius 1: the design's share is then the share of that ball at the critical level, not the
+    box's); where fewer than SHAPE_MIN_TARGETS converge, the box's samples stay the targets."""
+    loop, J, box = coupled()
+    import time
+
+    def in_ball(starts: np.ndarray) -> np.ndarray:
+        return np.sum(starts ** 2, axis=1) <= 1.0
+
+    sampler = shaped_quadratic.Sampler(loop, box, in_ball)
+    first = sampler.box_points[:shaped_quadratic.SHAPE_TARGET_STARTS]
+    assert sampler.aimed_at == shaped_quadratic.TARGET_SIMULATED
+    assert np.array_equal(sampler.targets, first[in_ball(first)])
+    shaped = shaped_quadratic.shaped_quadratic(loop, J, box, deadline=time.perf_counter() + 60, converges=in_ball)
+    assert shaped is not None and shaped.aimed_at == shaped_quadratic.TARGET_SIMULATED
+    assert shaped.share == sampler.share(shaped.P, 1.0)
+    assert shaped.share != shaped_quadratic.Sampler(loop, box).share(shaped.P, 1.0)
+    none = shaped_quadratic.Sampler(loop, box, lambda starts: np.zeros(len(starts), dtype=bool))
+    assert none.aimed_at == shaped_quadratic.TARGET_BOX and none.targets is none.box_points
+
+
 #: a box long in the angles, short in the rates: the starts score differently and the best sets of the
 #: coupled pendulums reach far past its short sides
 LOPSIDED = (-np.array([2.5, 0.3, 2.5, 0.3]), np.array([2.5, 0.3, 2.5, 0.3]))
@@ -152,8 +174,9 @@ def test_the_larger_quadratic_set_is_kept_and_verify_rechecks_the_shaped_one(mon
     shaped = recast_regions.shaped_ball_level(loop, J, Budget(300, "test"), box)
     assert not isinstance(shaped, str), shaped
     assert shaped.numbers["V_from"].startswith("a quadratic V shaped")
-    assert shaped.numbers["shaping"]["sampled_share_of_box"] > shaped.numbers["shaping"][
-        "linearization_sampled_share_of_box"]
+    shaping = shaped.numbers["shaping"]
+    assert shaping["aimed_at"] == shaped_quadratic.TARGET_SIMULATED
+    assert shaping["sampled_share"] > shaping["linearization_sampled_share"]
     result = shaped
     stated = {"certificate": result.certificate, "level": result.numbers["level"],
               "summary": covered(None, result.summary)}

@@ -374,6 +374,26 @@ def proved_when(region: regions.Region) -> str:
     return f" (the largest proved when {region.stopped})" if region.stopped else ""
 
 
+def converging(loop: Loop, starts: Any, box: tuple[Any, Any], max_steps: int | None = None) -> tuple[Any, Any]:
+    """Which starts (deviations, rows) of the true loop converge in :data:`SIMULATED_HORIZON`: to the
+    equilibrium, and to it modulo 2 pi in an angle (two boolean arrays). A start farther than
+    :data:`SIMULATED_ESCAPE` times the ``box``'s largest width is stopped there; ``max_steps``: each row's step
+    budget (a row it stops has not converged). The simulated region of attraction of :func:`simulated_check`
+    and of the shaped V's design (:mod:`lyapcheck.models.classes.shaped_quadratic`)."""
+    import numpy as np
+
+    from lyapcheck.models.engines.recast_numeric import distances, simulate_ends
+
+    system = loop.system
+    lo, hi = box
+    eq = np.array([float(system.values[s]) for s in system.states])
+    dev, simulated = simulate_ends(system, np.asarray(starts) + eq, SIMULATED_HORIZON,
+                                   escape=SIMULATED_ESCAPE * float(np.max(np.asarray(hi) - np.asarray(lo))),
+                                   max_steps=max_steps)
+    return (simulated.ok & (distances(system, dev) < CONVERGED_RADIUS),
+            simulated.ok & (distances(system, dev, tuple(loop.angles)) < CONVERGED_RADIUS))
+
+
 def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any], max_steps: int | None = None) -> None:
     """Simulate the true loop from a grid of the box: the share of the simulated region of
     attraction the certified set covers (``roa_share``, with the box the ``[domain]``), and every
@@ -382,8 +402,6 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any], m
     ``max_steps``: each row's step budget (a row it stops counts as not converged: a start in the
     set is then checked again)."""
     import numpy as np
-
-    from lyapcheck.models.engines.recast_numeric import distances, simulate_ends
 
     system = loop.system
     lo, hi = box
@@ -401,11 +419,7 @@ def simulated_check(loop: Loop, result: ConditionResult, box: tuple[Any, Any], m
         from lyapcheck.models.classes.flow_region import in_boxes
 
         inside = in_set | in_boxes(result.certificate, system.states, Z)
-    dev, simulated = simulate_ends(system, Z + eq, SIMULATED_HORIZON,
-                                   escape=SIMULATED_ESCAPE * float(np.max(np.asarray(hi) - np.asarray(lo))),
-                                   max_steps=max_steps)
-    to_zero = simulated.ok & (distances(system, dev) < CONVERGED_RADIUS)
-    modulo = simulated.ok & (distances(system, dev, tuple(loop.angles)) < CONVERGED_RADIUS)
+    to_zero, modulo = converging(loop, Z, box, max_steps)
     result.numbers["simulated_starts"] = int(len(Z))
     if to_zero.any():  # (no simulated start converged in the horizon: no share to state, not a share of 0)
         result.numbers["roa_share"] = float(np.mean(inside[to_zero]))
@@ -654,12 +668,13 @@ def shaped_design(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any]) -> S
     if isinstance(J, str):
         return f"a shaped quadratic V: no Jacobian ({J})"
     # (the design's work is bounded by its rounds; the class's time is only its safety net)
-    shaped = shaped_quadratic(loop, J, box, deadline=time.perf_counter() + max(budget.left(), 0.0))
+    shaped = shaped_quadratic(loop, J, box, deadline=time.perf_counter() + max(budget.left(), 0.0),
+                              converges=lambda starts: converging(loop, starts, box)[0])
     if shaped is None:
         return "a shaped quadratic V: the linearization gives no positive definite P to start from"
     if not shaped.improved:
         return (f"a shaped quadratic V: no start or round of the design improved on the linearization's V (sampled "
-                f"share of the box {100 * shaped.linearization_share:.3g} %)")
+                f"share of {shaped.aimed_at} {100 * shaped.linearization_share:.3g} %)")
     return shaped
 
 
@@ -686,21 +701,21 @@ def shaped_ball_level(loop: Loop, J: Any, budget: Budget, box: tuple[Any, Any],
     P = rational_form(shaped.P)
     if P is None:
         return "a shaped quadratic V: the proposed P, rounded to rationals, is not positive definite (exact)"
-    found = ball_level(loop, state_form(loop, P), budget, "roa", "a quadratic V shaped to cover the box on samples "
-                                                                 "of the true field (lyapcheck.models.classes."
-                                                                 "shaped_quadratic), proved by ball arithmetic "
-                                                                 "from its exact local level upwards")
+    found = ball_level(loop, state_form(loop, P), budget, "roa", f"a quadratic V shaped to cover {shaped.aimed_at} "
+                                                                 "on samples of the true field (lyapcheck.models."
+                                                                 "classes.shaped_quadratic), proved by ball "
+                                                                 "arithmetic from its exact local level upwards")
     if isinstance(found, str):
         return f"a shaped quadratic V: {found}"
     found.numbers["shaping"] = {"rounds": shaped.rounds, "start": shaped.start,
-                                "sampled_share_of_box": shaped.share,
-                                "linearization_sampled_share_of_box": shaped.linearization_share}
+                                "aimed_at": shaped.aimed_at, "sampled_share": shaped.share,
+                                "linearization_sampled_share": shaped.linearization_share}
     simulated_check(loop, found, box)
     return found
 
 
 #: the shaped V's level on the recasting's relations: its label (``V_from``)
-SHAPED_RELATIONS_LABEL: Final = ("a quadratic V shaped to cover the box on samples of the true field "
+SHAPED_RELATIONS_LABEL: Final = ("a quadratic V shaped for a large region on samples of the true field "
                                  "(lyapcheck.models.classes.shaped_quadratic), its part invariant under the "
                                  "loop's sign symmetries, level proved on the recasting's relations")
 
