@@ -158,3 +158,59 @@ def test_loops_the_model_does_not_take_are_refused_in_one_line(top: str, k: str,
 def test_a_large_model_is_refused_before_it_is_made() -> None:
     model = load_any_model(ROOT / "examples" / "models" / "robot-planar-quadrotor-lqr.toml")
     assert "too large" in (pc.refusal(model.system) or "")
+
+
+def test_upper_sum_is_above_the_exact_sum_even_where_terms_underflow() -> None:
+    """``upper_sum`` against the sum in exact rationals: never below it, within a few units of rounding of it
+    where nothing underflows; tiny bounds (terms far below 2^-1022) give a bound of at most a few subnormals
+    above the exact sum, and an overflow gives inf, never a finite number below the truth."""
+    rng = np.random.default_rng(4)
+    for scale in (1.0, 1e-3, 1e-40, 1e3):
+        for _ in range(20):
+            E = rng.integers(0, 12, size=(300, 6))
+            c = rng.random(300) * 10.0 ** rng.integers(-8, 8, size=300)
+            b = list(rng.random(6) * scale)
+            exact = sum(Fraction(float(ci)) * np.prod([Fraction(x) ** int(e) for x, e in zip(b, row)])
+                        for ci, row in zip(c, E))
+            got = pc.upper_sum(E, c, b)
+            assert Fraction(got) >= exact
+            if scale >= 1e-3:
+                assert got <= float(exact) * (1 + 1e-9) + 1e-300
+    assert pc.upper_sum(np.array([[400]]), np.array([1.0]), [10.0]) == np.inf
+
+
+def test_a_cells_own_error_is_above_the_exact_error_there(acrobot) -> None:
+    """``local_error`` against the model's exact error terms summed in rationals at the cell's bounds (each
+    remainder from its argument's exact bound there): never below, and far below the box's error for small
+    cells away from the box's corners (the point of it)."""
+    loop, P = acrobot["loop"], acrobot["P"]
+    w = whitening(P, Fraction(4))
+    model = pc.polynomial_model(loop.system, P, w.M, w.half)
+    assert not isinstance(model, str), model
+    exact = pc._exact(loop.system, P, w.M, model.degree)
+    assert not isinstance(exact, str)
+    half = np.array([float(h) for h in w.half])
+    rng = np.random.default_rng(5)
+    smaller = 0
+    for _ in range(30):
+        centre = (rng.random(4) * 2 - 1) * half * 0.6
+        radius = half * 10 ** rng.uniform(-4, -1.5, size=4)
+        cell = tuple((float(c - r), float(c + r)) for c, r in zip(centre, radius))
+        b = [Fraction(max(abs(lo), abs(hi))) for lo, hi in cell]
+        rb = [pc._remainder(f, pc._abs_bound(u, b + [Fraction(0)] * len(exact.arguments)))
+              for f, u in exact.arguments]
+        at = [pc._fmpq(x) for x in b + rb]
+        truth = exact.dropped(*at) + exact.rounding(*at)
+        local = pc.local_error(model, cell)
+        assert Fraction(local) >= Fraction(int(truth.p), int(truth.q))
+        smaller += local < model.error / 100
+    assert smaller >= 20
+    # and a cell's bound, with its own error where the box's fails it, stays above the true V' D
+    true_g = acrobot["true_g"]
+    for _ in range(100):
+        centre = (rng.random(4) * 2 - 1) * half * 0.6
+        radius = half * 10 ** rng.uniform(-3, -1, size=4)
+        cell = tuple((float(c - r), float(c + r)) for c, r in zip(centre, radius))
+        bound = pc.cell_bound(model, cell)
+        points = centre + (rng.random((50, 4)) * 2 - 1) * radius
+        assert np.all(true_g(points) <= bound.centre + bound.spread + 1e-9), cell
