@@ -54,8 +54,8 @@ condition number in the thousands) and bounds ``g`` by plain intervals. Here ins
    denominator is an exact polynomial in ``y`` within a proved error on the ellipsoid's box, bounded on a
    cell by its expansion about the cell's centre (its quadratic part dropped where proved negative
    definite). No enclosure of the field over the cell enters, so the tilted coordinates cost nothing: the
-   acrobot's shaped V (condition number 48,000) is proved at level 1.0 in about 7,000 cells, where the
-   ball-arithmetic tests stopped below 0.001. A cell it fails goes on to the tests of parts 3 and 4 (the
+   acrobot's shaped V aimed at the box (condition number 48,000) is proved at level 1.0 in about 7,000
+   cells, where the ball-arithmetic tests stopped below 0.001. A cell it fails goes on to the tests of parts 3 and 4 (the
    cart-pole's LQR ``z'Sz``, condition number 48,500: 6,500 cells at level 0.387 with both, 19,000 with
    the model alone, 12,000 without it). The model also proves a ball ``inner <= |y| <= rho`` about the
    equilibrium (:func:`~lyapcheck.models.engines.polynomial_cells.decreasing_ball`, ``|y| < inner`` inside

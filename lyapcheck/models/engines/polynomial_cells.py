@@ -565,8 +565,9 @@ def cell_bound(model: PolynomialModel, cell: Cell) -> "CellBound":
     # the powers of the radii (n D products), the products above, and the sum of every term
     total = float(np.sum(terms)) * (1 + gamma(terms.size + n * D + 4)) + UNDERFLOW_FLOOR
     error = model.error
-    if not (total + error) * (1 + 4 * UNIT_ROUNDOFF) + UNDERFLOW_FLOOR < -centre:
-        error = min(error, local_error(model, cell))  # (the cell's own error: only where the box's fails it)
+    if (total + error) * (1 + 4 * UNIT_ROUNDOFF) + UNDERFLOW_FLOOR >= -centre > total:
+        # the cell's own error, only where the box's alone fails the cell (a cell its spread fails gains nothing)
+        error = min(error, local_error(model, cell))
     at_centre = (shift_error * float(B[origin]) + error) * (1 + 4 * UNIT_ROUNDOFF) + UNDERFLOW_FLOOR
     return CellBound(centre, (total + error) * (1 + 4 * UNIT_ROUNDOFF) + UNDERFLOW_FLOOR, at_centre, terms)
 
