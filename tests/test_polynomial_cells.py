@@ -205,6 +205,8 @@ def test_a_cells_own_error_is_above_the_exact_error_there(acrobot) -> None:
         assert Fraction(local) >= Fraction(int(truth.p), int(truth.q))
         smaller += local < model.error / 100
     assert smaller >= 20
+    beyond = tuple((float(h) * 0.5, float(h) * 1.01) for h in half)  # (past the model's box: no bound there)
+    assert pc.local_error(model, beyond) == np.inf
     # and a cell's bound, with its own error where the box's fails it, stays above the true V' D
     true_g = acrobot["true_g"]
     for _ in range(100):

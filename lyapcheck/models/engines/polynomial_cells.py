@@ -108,9 +108,11 @@ class PolynomialModel:
     magnitudes: np.ndarray
     order: np.ndarray
     binomials: tuple[np.ndarray, np.ndarray]
-    #: the error on a smaller box (a cell's, :func:`local_error`): the terms it sums and the others' bound
+    #: the error on a smaller box (a cell's, :func:`local_error`): the terms it sums, the others' bound on
+    #: the model's box and that box's half-widths
     error_terms: ErrorTerms
     error_floor: float
+    half: tuple[float, ...]
 
 
 def _abs_bound(p: Any, bounds: Sequence[Fraction]) -> Fraction:
@@ -356,8 +358,11 @@ def local_error(model: "PolynomialModel", cell: Cell) -> float:
     cell within the model's box: each auxiliary's ``|u| <= U`` and ``|r| <= U^(k+2)/(k+2)!`` there, the
     error's larger terms at those bounds and the others' bound on the box (:func:`_split_terms`), all rounded
     up (:func:`upper_sum`)."""
+    bounds = [max(abs(a), abs(b)) for a, b in cell]
+    if any(b > h for b, h in zip(bounds, model.half)):
+        return math.inf  # (beyond the model's box neither the floor nor the denominators' sign holds)
     terms = model.error_terms
-    own = upper_sum(terms.exponents, terms.coefficients, _bounds(terms, [max(abs(a), abs(b)) for a, b in cell]))
+    own = upper_sum(terms.exponents, terms.coefficients, _bounds(terms, bounds))
     return float(np.nextafter(own + model.error_floor, math.inf))
 
 
@@ -395,9 +400,10 @@ def polynomial_model(system: RecastSystem, P: Sequence[Sequence[Fraction]], M: S
         coefficients[exps] = cf
     error = Fraction(int(error.p), int(error.q))
     even = np.all(np.indices(shape) % 2 == 0, axis=0)
-    terms, floor = _split_terms(exact.error_terms, [float(h) for h in half], float(error))
+    box = tuple(float_above(Fraction(h)) for h in half)  # (the cells' ellipsoid box: dyadics, exact)
+    terms, floor = _split_terms(exact.error_terms, box, float(error))
     return PolynomialModel(coefficients, float_above(error), degree, even, np.abs(coefficients),
-                           np.indices(shape).sum(axis=0), _binomials(degree), terms, floor)
+                           np.indices(shape).sum(axis=0), _binomials(degree), terms, floor, box)
 
 
 def decreasing_ball(system: RecastSystem, P: Sequence[Sequence[Fraction]], M: Sequence[Sequence[float]],
