@@ -147,7 +147,7 @@ def box_share(cond: dict[str, Any], stem: str) -> float | None:
     cert = cond.get("certificate") or {}
     if cond.get("status") != "certified" or "V" not in cert or "level" not in cert:
         return None
-    lo, hi = drake_level_check.domain_box(stem)
+    lo, hi = model_box(stem)
     n = len(lo)
     X = lo + (hi - lo) * np.random.default_rng(0).random((BOX_SAMPLES, n))
     value = np.zeros(len(X))
@@ -162,6 +162,21 @@ def box_share(cond: dict[str, Any], stem: str) -> float | None:
             a, b = (float(Fraction(x)) for x in cert["box"][name])
             inside &= (X[:, i] >= a) & (X[:, i] <= b)
     return float(np.mean(inside))
+
+
+def model_box(stem: str) -> tuple[Any, Any]:
+    """The model file's ``[domain]`` box in its declared states' order (floats). Every example's equilibrium
+    is the origin (checked: a file with an ``[equilibrium]`` table is refused), so the box is also the
+    deviations' that the certificate's V is written in."""
+    import tomllib
+
+    import numpy as np
+
+    data = tomllib.loads((MODELS / f"{stem}.toml").read_text())
+    if "equilibrium" in data:
+        raise SystemExit(f"{stem}: an [equilibrium] table; the box share reads V at the states themselves")
+    states, domain = data["model"]["states"], data["domain"]
+    return (np.array([float(domain[s][0]) for s in states]), np.array([float(domain[s][1]) for s in states]))
 
 
 def box_text(value: float | None) -> str:
