@@ -22,12 +22,12 @@ set's box), the certified level of ``V`` and the largest ball ``|x - x_eq| <= r`
 (``ball_radius``, where the certificate states one), the share of the ``[domain]`` box inside the certified
 set (uniform samples) and which V the class kept (``V_from``: at 4 to 6 states ``roa`` proves both a
 quadratic V shaped to cover the simulated region, ``lyapcheck/models/classes/shaped_quadratic.py``, and
-the linearization's, and keeps the set covering more). Then Drake's Taylor-model level of ``z' S z`` (issue 42's anchor, 3.97
-for the cart-pole; ``benchmarks/drake_level_check.py``): the share of the box inside it and a point of the
-true loop below it where ``V' > 0``, confirmed by ball arithmetic. Then, per example, issue 42's targets (a
-certified region of attraction in under 120 s covering at least 25 % of the simulated region), and
-the summary and the reason of each class that did not certify. A crash (exit 3) or an unreadable output is printed
-with its command and its stderr.
+the linearization's, and keeps the set covering more). Then Drake's Taylor-model level of ``z' S z``
+(issue 42's anchor, 3.97 for the cart-pole; ``benchmarks/drake_level_check.py``): the share of the box
+inside it and a point of the true loop below it where ``V' > 0``, confirmed by ball arithmetic. Then, per
+example, issue 42's targets (a certified region of attraction in under 120 s covering at least 25 % of the
+simulated region), and the summary and the reason of each class that did not certify. A crash (exit 3) or
+an unreadable output is printed with its command and its stderr.
 
 With ``--drake-python PYTHON`` (a Python with ``pydrake``: ``pip install drake==1.51.1``, an optional
 extra, never the tests'), it then runs Drake's ``RegionOfAttraction`` on each LQR example's cubic

@@ -55,12 +55,15 @@ condition number in the thousands) and bounds ``g`` by plain intervals. Here ins
    cell by its expansion about the cell's centre (its quadratic part dropped where proved negative
    definite). No enclosure of the field over the cell enters, so the tilted coordinates cost nothing: the
    acrobot's shaped V aimed at the box (condition number 48,000) is proved at level 1.0 in about 7,000
-   cells, where the ball-arithmetic tests stopped below 0.001. A cell it fails goes on to the tests of parts 3 and 4 (the
-   cart-pole's LQR ``z'Sz``, condition number 48,500: 6,500 cells at level 0.387 with both, 19,000 with
-   the model alone, 12,000 without it). The model also proves a ball ``inner <= |y| <= rho`` about the
+   cells, where the ball-arithmetic tests stopped below 0.001. A cell it fails goes on to the tests of
+   parts 3 and 4 (the cart-pole's LQR ``z'Sz``, condition number 48,500: 6,500 cells at level 0.387 with
+   both, 19,000 with the model alone, 12,000 without it). The model also proves a ball ``inner <= |y| <= rho`` about the
    equilibrium (:func:`~lyapcheck.models.engines.polynomial_cells.decreasing_ball`, ``|y| < inner`` inside
    ``N``'s or ``E_1``'s ellipsoid), whose cells the zone's phase and the shell skip; a cell whose centre has
-   ``V' > 0`` proved by the model ends the attempt. On a well-conditioned ``P`` (the cart-pole's shaped
+   ``V' > 0`` proved by the model ends the attempt. Where the ball tests prove none of the first
+   BALL_AFTER_MODEL_TRIAL cells the model failed, only every BALL_AFTER_MODEL_EVERY-th such cell gets them
+   (all again after one they prove); the others are split across the side whose width adds most to the
+   model's bound. A choice of work only: every cell is still proved by one test or split. On a well-conditioned ``P`` (the cart-pole's shaped
    one, 584) parts 3 and 4 alone cost less.
 
 The enclosures keep the ellipsoid's correlations: ``grad V = 2 P z`` is enclosed as ``2 W y`` with
@@ -105,6 +108,13 @@ MAX_PIECES_HALVINGS: Final = 2
 #: a shell cell within 2^this of the finest width whose first-order bound fails even at the finest width
 #: around its centre ends the attempt (V' too close to 0 there for the finest cells)
 BOTTOM_HALVINGS: Final = 3
+#: where the polynomial model runs (part 5), the ball tests of parts 3 and 4 on the cells it fails: once the first
+#: BALL_AFTER_MODEL_TRIAL such cells gave them none, only every BALL_AFTER_MODEL_EVERY-th gets them, until one
+#: proves a cell (then all again). On the acrobot's shaped V they proved none of 2,486 (level 0.56) to 4,970
+#: (0.985) and took half the time; on the cart-pole's z'Sz 2 to 15 % of 1,000 to 7,000, the first 500 of level
+#: 0.68 none (stopping them for good there: level 0.58 instead of 0.68)
+BALL_AFTER_MODEL_TRIAL: Final = 500
+BALL_AFTER_MODEL_EVERY: Final = 8
 
 Cell = tuple[tuple[float, float], ...]
 
@@ -689,6 +699,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
     # boundary, and the attempt then ends sooner)
     far = [float(geo.quadratic(cell).upper()) for cell, _ in pending]
     ranked = [pending[k] for k in sorted(range(len(pending)), key=lambda k: (far[k], k))]
+    failed = balls_tried = balls_proved = 0  # (cells the model failed, the ball tests on them: BALL_AFTER_MODEL_TRIAL)
     turns = [ranked[k // 2] if k % 2 == 0 else ranked[-1 - k // 2] for k in range(len(ranked))]
     stack = list(reversed(turns))
     while stack:
@@ -709,10 +720,23 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
                 refuted = counterexample(cell, flint.arb(bound.centre, bound.error))
                 if refuted is not None:
                     return refuted
+            failed += 1
+            if balls_tried >= BALL_AFTER_MODEL_TRIAL and balls_proved == 0 and failed % BALL_AFTER_MODEL_EVERY:
+                # the ball tests prove nothing the model does not here: the cell is split across the side whose
+                # width adds most to the model's bound
+                halves = _split(cell, shell_width, bound.weights(cell))
+                if halves is None:
+                    where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
+                    return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates, at "
+                                          "the finest cells of the polynomial model)", count, level_1)
+                stack.extend((half, H) for half in reversed(halves))
+                continue
+            balls_tried += 1
         value, grad = geo.at_centre(lie, cell)
         if (refuted := counterexample(cell, value)) is not None:
             return refuted
         if grad is not None and H is not None and geo.negative(value, grad, H, cell):
+            balls_proved += model is not None
             continue
         # the cell's own Hessian only where it can help: when g(m) + grad g(m) . t already reaches 0 on the
         # cell, no Hessian makes the Taylor form negative (its terms' enclosures all contain 0), and the
@@ -721,10 +745,12 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         own_H = geo.hessian_y(lie, cell) if grad is not None and not hopeless else None
         own = None if own_H is None else (own_H, negative_definite_preconditioned(own_H))
         if grad is not None and own is not None and geo.negative(value, grad, own, cell):
+            balls_proved += model is not None
             continue
         # the factored test (module docstring, part 4) where the Taylor form failed: no cost on the cells the
         # Taylor form proves, and it holds where V' ~ |z|^2 is too small for a Taylor form's spread
         if float(q.upper()) <= FACTORED_REACH * float(level) and geo.factored_negative(cell):
+            balls_proved += model is not None
             continue
         inherited = own if own is not None else H
         weights = None if grad is None else _weights(grad, None if inherited is None else inherited[0], cell)
