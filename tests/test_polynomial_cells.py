@@ -63,6 +63,15 @@ def p_tilde(model: pc.PolynomialModel, Y: np.ndarray) -> np.ndarray:
     return out
 
 
+def random_cell(rng: np.random.Generator, half: np.ndarray, reach: float, sizes: tuple[float, float]
+                ) -> tuple[np.ndarray, np.ndarray, tuple[tuple[float, float], ...]]:
+    """A cell centred within ``reach`` of the box ``|y_i| <= half_i``, its half-widths ``half`` times 10 to a
+    power uniform in ``sizes``: its centre, its radii and the cell."""
+    centre = (rng.random(4) * 2 - 1) * half * reach
+    radius = half * 10 ** rng.uniform(*sizes, size=4)
+    return centre, radius, tuple((float(c - r), float(c + r)) for c, r in zip(centre, radius))
+
+
 def test_the_model_is_v_dot_times_the_denominator_within_its_error(acrobot) -> None:
     rng = np.random.default_rng(0)
     Y = (rng.random((3000, 4)) * 2 - 1) * acrobot["half"]
@@ -80,9 +89,7 @@ def test_a_cell_bound_is_above_every_sampled_true_value(acrobot) -> None:
     rng = np.random.default_rng(1)
     proved = 0
     for _ in range(200):
-        centre = (rng.random(4) * 2 - 1) * half * 0.9
-        radius = half * 10 ** rng.uniform(-4, -0.3, size=4)
-        cell = tuple((float(c - r), float(c + r)) for c, r in zip(centre, radius))
+        centre, radius, cell = random_cell(rng, half, 0.9, (-4, -0.3))
         bound = pc.cell_bound(model, cell)
         corners = np.array([[c + (r if (k >> j) & 1 else -r) for j, (c, r) in enumerate(zip(centre, radius))]
                             for k in range(16)])
@@ -193,9 +200,7 @@ def test_a_cells_own_error_is_above_the_exact_error_there(acrobot) -> None:
     rng = np.random.default_rng(5)
     smaller = 0
     for _ in range(30):
-        centre = (rng.random(4) * 2 - 1) * half * 0.6
-        radius = half * 10 ** rng.uniform(-4, -1.5, size=4)
-        cell = tuple((float(c - r), float(c + r)) for c, r in zip(centre, radius))
+        _, _, cell = random_cell(rng, half, 0.6, (-4, -1.5))
         b = [Fraction(max(abs(lo), abs(hi))) for lo, hi in cell]
         rb = [pc._remainder(f, pc._abs_bound(u, b + [Fraction(0)] * len(exact.arguments)))
               for f, u in exact.arguments]
@@ -210,9 +215,28 @@ def test_a_cells_own_error_is_above_the_exact_error_there(acrobot) -> None:
     # and a cell's bound, with its own error where the box's fails it, stays above the true V' D
     true_g = acrobot["true_g"]
     for _ in range(100):
-        centre = (rng.random(4) * 2 - 1) * half * 0.6
-        radius = half * 10 ** rng.uniform(-3, -1, size=4)
-        cell = tuple((float(c - r), float(c + r)) for c, r in zip(centre, radius))
+        centre, radius, cell = random_cell(rng, half, 0.6, (-3, -1))
         bound = pc.cell_bound(model, cell)
         points = centre + (rng.random((50, 4)) * 2 - 1) * radius
         assert np.all(true_g(points) <= bound.centre + bound.spread + 1e-9), cell
+
+
+@pytest.mark.slow
+def test_the_cells_the_model_alone_splits_still_prove_and_refuse(acrobot, monkeypatch) -> None:
+    """With the ball tests' trial at 0 (``ellipsoid_cells.BALL_AFTER_MODEL_TRIAL``: from the first cell the model
+    fails, only every 8th gets the ball tests, the others are split by the model's own weights) a small level of
+    the acrobot's V (condition number about 73,000: the model runs) is still proved, and a level holding points
+    where the model has V' D > 0 is still refused."""
+    from lyapcheck.models.engines import ellipsoid_cells as ec
+    from lyapcheck.models.classes import recast_regions
+    from lyapcheck.models.engines.interval_field import BallLoop, LieDerivative
+    from lyapcheck.models.engines.interval_region import inverse_diagonal
+
+    monkeypatch.setattr(ec, "BALL_AFTER_MODEL_TRIAL", 0)
+    loop, P = acrobot["loop"], acrobot["P"]
+    lie = LieDerivative(BallLoop(loop.system), loop.ring, recast_regions.state_form(loop, P))
+    assert ec.uses_model(lie.loop, P)
+    proof = ec.prove_ellipsoid(lie, P, inverse_diagonal(P), Fraction(1, 1000), [], 20000, 20000)
+    assert proof.ok, proof.why
+    refused = ec.prove_ellipsoid(lie, P, inverse_diagonal(P), Fraction(32), [], 20000, 20000)
+    assert not refused.ok
