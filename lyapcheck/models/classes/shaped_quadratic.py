@@ -76,8 +76,8 @@ SHAPE_LOCAL_RATE: Final = 0.3
 #: the level a P is scored at: the smallest sampled V with V' >= -SHAPE_SCORE_RATE mu V (a decrease
 #: with room: the ball arithmetic proves a level with little room only on very many cells)
 SHAPE_SCORE_RATE: Final = 0.1
-#: the box's uniform samples (the first of the share's) whose distance outside {z^T P z <= 1} the rounds
-#: minimize (the objective: a convex stand-in for the share of the box compared, issue 42's figure)
+#: the targets (the first of the share's: the converging box samples, or the box's) whose distance outside
+#: {z^T P z <= 1} the rounds minimize (the objective: a convex stand-in for the share of the targets covered)
 SHAPE_BOX_POINTS: Final = 2000
 #: the critical level's sampling: directions (whitened coordinates) and the ratio of successive levels
 CRITICAL_DIRECTIONS: Final = 4000
@@ -99,6 +99,11 @@ SHAPE_DIGITS: Final = 6
 SHAPE_START_SHIFTS: Final = (0.0, 0.3, 0.6)
 
 
+#: what the design's targets are (:attr:`Shaped.aimed_at`)
+TARGET_SIMULATED: Final = "the simulated region of attraction"
+TARGET_BOX: Final = "the box"
+
+
 @dataclass
 class Shaped:
     """The proposal: ``P`` (floats, scaled so that its sampled critical level is 1), the share of the
@@ -116,12 +121,7 @@ class Shaped:
     start: str = "the linearization's P"
     start_share: float = 0.0
     #: the targets (module docstring): TARGET_SIMULATED or TARGET_BOX
-    aimed_at: str = "the box"
-
-
-#: what the design's targets are (:attr:`Shaped.aimed_at`)
-TARGET_SIMULATED: Final = "the simulated region of attraction"
-TARGET_BOX: Final = "the box"
+    aimed_at: str = TARGET_BOX
 
 
 class Sampler:

@@ -63,8 +63,8 @@ condition number in the thousands) and bounds ``g`` by plain intervals. Here ins
    ``V' > 0`` proved by the model ends the attempt. Where the ball tests prove none of the first
    BALL_AFTER_MODEL_TRIAL cells the model failed, only every BALL_AFTER_MODEL_EVERY-th such cell gets them
    (all again after one they prove); the others are split across the side whose width adds most to the
-   model's bound. A choice of work only: every cell is still proved by one test or split. On a well-conditioned ``P`` (the cart-pole's shaped
-   one, 584) parts 3 and 4 alone cost less.
+   model's bound. A choice of work only: every cell is still proved by one test or split. On a
+   well-conditioned ``P`` (the cart-pole's shaped one, 584) parts 3 and 4 alone cost less.
 
 The enclosures keep the ellipsoid's correlations: ``grad V = 2 P z`` is enclosed as ``2 W y`` with
 ``W = P M`` exact, never as ``P`` times the ball enclosure of ``M`` times a cell (whose corners lie far
@@ -572,6 +572,11 @@ def _weights(grad: list[Any], H: list[list[Any]] | None, cell: Cell) -> list[flo
         (abs(float(h.mid())) + float(h.rad())) * r for h, r in zip(H[i], radii))) for i, gi in enumerate(grad)]
 
 
+def _where(cell: Cell) -> str:
+    """A cell in the ellipsoid's coordinates, for a reason given in one line."""
+    return ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
+
+
 def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[Fraction], level: Fraction,
                     local: list[Fraction], cell_budget: int | None, cell_limit: int, deadline: float | None = None,
                     stopped: str = "stopped at the deadline", geometry: Any = None,
@@ -726,9 +731,8 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
                 # width adds most to the model's bound
                 halves = _split(cell, shell_width, bound.weights(cell))
                 if halves is None:
-                    where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
-                    return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates, at "
-                                          "the finest cells of the polynomial model)", count, level_1)
+                    return EllipsoidProof(False, f"V' < 0 is not proved at {_where(cell)} (the ellipsoid's "
+                                          "coordinates, at the finest cells of the polynomial model)", count, level_1)
                 stack.extend((half, H) for half in reversed(halves))
                 continue
             balls_tried += 1
@@ -758,8 +762,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
             # near the finest width, g(m) + grad g(m) . t reaches 0 even over a cell of the finest width around
             # m: V' is too close to 0 here for the finest cells (an estimate: giving up is never unsound), so the
             # attempt ends now rather than after every cell down to that width
-            where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
-            return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates: V' is "
+            return EllipsoidProof(False, f"V' < 0 is not proved at {_where(cell)} (the ellipsoid's coordinates: V' is "
                                   f"{float(value.mid()):.3g} at the centre, too close to 0 for the finest cells)",
                                   count, level_1)
         if hopeless and weights is not None and float(value.mid()) < 0:
@@ -767,8 +770,7 @@ def prove_ellipsoid(lie: LieDerivative, P: list[list[Fraction]], diagonal: list[
         else:
             halves = _split(cell, shell_width, weights)
         if halves is None:
-            where = ", ".join(f"y{i} in [{a:.6g}, {b:.6g}]" for i, (a, b) in enumerate(cell))
-            return EllipsoidProof(False, f"V' < 0 is not proved at {where} (the ellipsoid's coordinates, at the "
+            return EllipsoidProof(False, f"V' < 0 is not proved at {_where(cell)} (the ellipsoid's coordinates, at the "
                                   "finest cells)", count, level_1)
         stack.extend((half, inherited) for half in reversed(halves))
     return EllipsoidProof(True, "proved", count, level_1)
